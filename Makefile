@@ -1,0 +1,48 @@
+# luv-physics -- rigid spheres in a block world, written as the literate page physics.org.
+# Run 'make help' for the targets.  GNU Make; Debian 12 with sbcl, emacs-nox, cl-fiveam.
+
+EMACS  ?= emacs
+SBCL   ?= sbcl
+ANCHOR ?=
+
+ORG    := physics.org
+OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
+LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
+
+.PHONY: help setup tangle check-tangle check-anchors test demo clean
+.NOTPARALLEL:
+
+help:
+	@echo "make demo           install what is missing (as root), tangle, run the default scene"
+	@echo "make test           check tangling and anchors, then run every claim"
+	@echo "make test ANCHOR=ID run only the claims of section ID"
+	@echo "make setup          install sbcl, emacs-nox, cl-fiveam if missing (apt-get, as root)"
+	@echo "make tangle         write $(OUT) from $(ORG)"
+	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
+	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
+	@echo "make clean          remove editor backups and this repository's compiled files"
+
+setup:
+	@tools/setup "$(SBCL)" "$(EMACS)"
+
+tangle:
+	@command -v "$(EMACS)" >/dev/null 2>&1 || { echo "tangle: Emacs not found (EMACS=$(EMACS)); run 'make setup' as root, or set EMACS=/path/to/emacs" >&2; exit 1; }
+	@"$(EMACS)" -Q --batch -l tools/tangle.el $(ORG)
+
+check-tangle:
+	@tools/check-tangle "$(EMACS)" $(ORG) $(OUT)
+
+check-anchors:
+	@$(LISP) --load tools/check-anchors.lisp
+
+test: setup check-tangle check-anchors
+	@ANCHOR="$(ANCHOR)" $(LISP) --load tests/run.lisp
+
+demo: setup tangle
+	@$(LISP) --load tools/demo.lisp
+
+clean:
+	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f
+	rm -rf report
+	@$(LISP) --eval '(require :asdf)' \
+	  --eval '(let ((cache (asdf:apply-output-translations (truename "./")))) (format t "rm -rf ~A~%" cache) (uiop:delete-directory-tree cache :validate t :if-does-not-exist :ignore))'
