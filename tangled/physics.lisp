@@ -10,7 +10,37 @@
    #:anchor-definitions
    #:definition-anchor
    ;; Which wide instructions this machine offers (#JKM0PY)
-   #:available-kernel-families))
+   #:available-kernel-families
+   ;; Types, the hot-loop policy and the parameters (#V0CAB5)
+   #:*physics-contact-hertz* #:*physics-contact-damping-ratio* #:*physics-contact-push-max*
+   #:*physics-linear-slop* #:*physics-speculative-margin* #:*physics-restitution-threshold*
+   #:*physics-hit-speed* #:*physics-sleep-speed* #:*physics-time-to-sleep* #:*physics-wake-speed*
+   #:*physics-reach-limit* #:*physics-max-speed* #:+physics-coordinate-limit+
+   ;; Bad input is a condition that names the value (#C0ND1T)
+   #:physics-error #:invalid-physics-number #:invalid-physics-radius #:invalid-physics-parameter
+   #:stale-physics-handle #:physics-world-busy #:physics-world-invalid
+   ;; Terrain (#H2W9DJ)
+   #:voxel-terrain #:make-voxel-terrain #:terrain-solid-p #:terrain-resident-p #:fill-terrain
+   ;; The world, kernel families, making worlds and bodies (#W0RLD7, #R9M4PV, #M4K3WD)
+   #:physics-world #:physics-world-event-handler #:physics-world-step-count
+   #:kernel-family #:scalar-kernels #:make-physics-world #:add-physics-body
+   #:physics-body-alive-p #:physics-body-awake-p #:physics-body-position #:physics-body-velocity
+   #:physics-body-angular-velocity #:physics-body-orientation #:physics-body-radius
+   #:physics-world-awake-count #:physics-world-sleeping-count
+   ;; Events, sleep, boxes (#E7V3NT, #QKS4GZ, #K1N3BX)
+   #:map-physics-events #:remove-physics-body #:set-physics-body-velocity
+   #:wake-physics-bodies-near #:post-physics-box
+   ;; The solver's entry points (#K3RNLS)
+   #:physics-integrate-velocities #:physics-warm-start #:physics-solve-contacts
+   #:physics-integrate-positions #:physics-apply-restitution
+   ;; The step, determinism, validation, bodies as objects (#IDVK7G, #S6T2MV, #V4L1D8, #B0DY0B)
+   #:step-physics-world #:*physics-phases* #:physics-world-last-step-contact-count
+   #:physics-world-last-step-color-count #:physics-world-last-step-real-seconds
+   #:physics-world-max-penetration #:physics-world-max-approach-speed #:physics-world-overflow-count
+   #:physics-world-state-hash #:validate-physics-world
+   #:physics-body #:physics-body-world #:physics-body-handle
+   ;; Scenes (#B4S1NS, #D3M0SC, #B3NCH5)
+   #:make-basin-terrain #:make-basin-world #:run-default-scene #:run-basin-benchmark))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -270,6 +300,2441 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
         (values (getf record :anchor) (getf record :org-line))
         (values nil nil))))
 ;; Register a file and answer by anchor or by name:1 ends here
+
+;; [[file:../physics.org::#V0CAB5][Types, the hot-loop policy and the parameters:1]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +kernel-policy+ '(optimize (speed 3) (safety 0) (debug 0))
+    "The policy of every hot loop: speed, no run-time checks; inputs are checked at the API. #V0CAB5"))
+
+(deftype f32 ()
+  "The float of every number the solver touches. #V0CAB5"
+  'single-float)
+
+(deftype f32-column ()
+  "A column of single-floats. #V0CAB5"
+  '(simple-array single-float (*)))
+
+(deftype fixnum-column ()
+  "A column of fixnums. #V0CAB5"
+  '(simple-array fixnum (*)))
+
+(deftype index ()
+  "A row number or an array index. #V0CAB5"
+  '(integer 0 #.(1- (ash 1 40))))
+
+(declaim (inline f32))
+(defun f32 (x)
+  "X as a single-float. #V0CAB5"
+  (coerce x 'single-float))
+
+(defparameter *physics-contact-hertz* 30.0
+  "Stiffness of a contact between two awake bodies, in Hz; static contacts get twice it. #V0CAB5")
+
+(defparameter *physics-contact-damping-ratio* 10.0
+  "Damping ratio of the soft contact spring (critically damped is 1). #V0CAB5")
+
+(defparameter *physics-contact-push-max* 3.0
+  "Fastest speed, m/s, at which the solver pushes overlapping bodies apart. #V0CAB5")
+
+(defparameter *physics-linear-slop* 0.005
+  "Penetration, m, allowed at rest; a resting ball sits this far into its support. #V0CAB5")
+
+(defparameter *physics-speculative-margin* 0.1
+  "Gap, m, under which a contact is made before touching (speculative contact). #V0CAB5")
+
+(defparameter *physics-restitution-threshold* 1.0
+  "Approach speed, m/s, below which a contact does not bounce. #V0CAB5")
+
+(defparameter *physics-hit-speed* 1.0
+  "Approach speed, m/s, above which a pushing contact reports a hit. #V0CAB5")
+
+(defparameter *physics-sleep-speed* 0.05
+  "Speed, m/s, under which a body counts as still. #V0CAB5")
+
+(defparameter *physics-time-to-sleep* 0.5
+  "Seconds a body must stay still before it is put to sleep. #V0CAB5")
+
+(defparameter *physics-wake-speed* 0.1
+  "Speed, m/s, above which an awake body wakes the sleepers it reaches. #V0CAB5")
+
+(defparameter *physics-reach-limit* 0.98
+  "Largest reach (radius plus margin), in cells; it keeps every contact's cells adjacent. #V0CAB5")
+
+(defparameter *physics-max-speed* 400.0
+  "Speed, m/s, at which a body's velocity is clamped each substep. #V0CAB5")
+
+(defconstant +physics-max-colors+ 24
+  "Colours available to the constraint graph; colour 24 is the overflow colour. #V0CAB5")
+
+(defconstant +physics-dynamic-colors+ 20
+  "Colours 0..19 take two-body contacts; one-sided contacts take any of the 24 from the top. #V0CAB5")
+
+(defconstant +physics-coordinate-limit+ 65536
+  "Bodies live within this distance, in metres, of the origin on every axis. #V0CAB5")
+
+(declaim (inline fsqrt))
+(defun fsqrt (x)
+  "The square root of the non-negative single-float X, as one SQRTSS. #V0CAB5"
+  (declare (type single-float x))
+  (sqrt (the (single-float 0.0) x)))
+
+(declaim (inline clock-ns))
+(defun clock-ns ()
+  "Nanoseconds on the monotonic clock (CLOCK_MONOTONIC, id 1 on Linux), as a fixnum. #V0CAB5"
+  (multiple-value-bind (s ns) (sb-unix::clock-gettime 1)
+    (declare (type (unsigned-byte 40) s) (type (unsigned-byte 31) ns))
+    (+ (* s 1000000000) ns)))
+;; Types, the hot-loop policy and the parameters:1 ends here
+
+;; [[file:../physics.org::#C0ND1T][Bad input is a condition that names the value:1]]
+(define-condition physics-error (error)
+  ((world :initarg :world :initform nil :reader physics-error-world))
+  (:documentation "Every error the engine signals for bad input; the world is left untouched. #C0ND1T"))
+
+(define-condition invalid-physics-number (physics-error)
+  ((name :initarg :name :reader invalid-physics-number-name)
+   (value :initarg :value :reader invalid-physics-number-value))
+  (:report (lambda (c s)
+             (format s "~A must be a finite real number, not ~S"
+                     (invalid-physics-number-name c) (invalid-physics-number-value c))))
+  (:documentation "A NaN, an infinity or a non-number where a finite number is needed. #C0ND1T"))
+
+(define-condition invalid-physics-radius (physics-error)
+  ((value :initarg :value :reader invalid-physics-radius-value)
+   (limit :initarg :limit :reader invalid-physics-radius-limit))
+  (:report (lambda (c s)
+             (format s "radius ~S is out of range: it must be > 0 and at most ~,3F so that ~
+                        radius plus margin stays under one cell"
+                     (invalid-physics-radius-value c) (invalid-physics-radius-limit c))))
+  (:documentation "A radius of zero or less, or one whose reach would span a cell. #C0ND1T"))
+
+(define-condition invalid-physics-parameter (physics-error)
+  ((name :initarg :name :reader invalid-physics-parameter-name)
+   (value :initarg :value :reader invalid-physics-parameter-value)
+   (expected :initarg :expected :reader invalid-physics-parameter-expected))
+  (:report (lambda (c s)
+             (format s "~A is ~S but must be ~A" (invalid-physics-parameter-name c)
+                     (invalid-physics-parameter-value c) (invalid-physics-parameter-expected c))))
+  (:documentation "A parameter outside its documented range: a mass <= 0, a negative friction. #C0ND1T"))
+
+(define-condition stale-physics-handle (physics-error)
+  ((handle :initarg :handle :reader stale-physics-handle-handle)
+   (reason :initarg :reason :reader stale-physics-handle-reason))
+  (:report (lambda (c s)
+             (format s "handle ~S is ~A" (stale-physics-handle-handle c)
+                     (ecase (stale-physics-handle-reason c)
+                       (:malformed "not a physics handle")
+                       (:foreign "from another world")
+                       (:removed "of a body that was removed or expired")))))
+  (:documentation "A handle that names no live body of this world. #C0ND1T"))
+
+(define-condition physics-world-busy (physics-error)
+  ((operation :initarg :operation :reader physics-world-busy-operation))
+  (:report (lambda (c s)
+             (format s "~A was called while the world is stepping (from an event handler?); ~
+                        make the change after step-physics-world returns"
+                     (physics-world-busy-operation c))))
+  (:documentation "An edit or a step attempted while a step is in flight. #C0ND1T"))
+
+(define-condition physics-world-invalid (physics-error)
+  ((invariant :initarg :invariant :reader physics-world-invalid-invariant))
+  (:report (lambda (c s)
+             (format s "physics world invariant broken: ~A" (physics-world-invalid-invariant c))))
+  (:documentation "Signalled by validate-physics-world, naming the first broken invariant. #C0ND1T"))
+
+(declaim (inline finite-f32))
+(defun finite-f32 (name value &optional world)
+  "VALUE as a single-float, or an invalid-physics-number error naming NAME. #C0ND1T"
+  (if (and (realp value)
+           (< (abs value) most-positive-single-float)
+           (not (and (floatp value) (sb-ext:float-nan-p value))))
+      (coerce value 'single-float)
+      (error 'invalid-physics-number :name name :value value :world world)))
+;; Bad input is a condition that names the value:1 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:1]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-symbol (&rest parts)
+    "Intern the concatenation of PARTS in the current package. #L4Y0UT"
+    (intern (format nil "~{~A~}" parts)))
+  (defun column-array-type (element-type)
+    "The specialised array type that holds a column of ELEMENT-TYPE. #L4Y0UT"
+    `(simple-array ,element-type (*)))
+  (defun column-zero (element-type)
+    "The zero of ELEMENT-TYPE. #L4Y0UT"
+    (ecase element-type (single-float 0.0) (fixnum 0)))
+  (defun expand-layout-bindings (layout columns wanted buffer body)
+    "The LET* that binds each WANTED column of BUFFER, a LAYOUT, as its declared array. #L4Y0UT"
+    (let ((b (gensym "BUFFER")))
+      `(let* ((,b ,buffer)
+              ,@(loop for w in wanted
+                      for var = (if (consp w) (first w) w)
+                      for c = (if (consp w) (second w) w)
+                      for spec = (or (find (symbol-name c) columns
+                                           :key (lambda (s) (symbol-name (first s)))
+                                           :test #'string=)
+                                     (error "layout ~A has no column ~A" layout c))
+                      collect `(,var (the ,(column-array-type (second spec)) (,(third spec) ,b)))))
+         (declare (ignorable ,b))
+         ,@body))))
+
+(defmacro define-physics-layout (name docstring &rest columns)
+  "Define the columnar layout NAME: a buffer struct of one specialised array per column of
+COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
+NAME-copy-row, NAME-ensure-capacity, NAME-clear and WITH-NAME, which binds columns by name
+or as (VARIABLE COLUMN). #L4Y0UT"
+  (let* ((make (layout-symbol "%MAKE-" name))
+         (ctor (layout-symbol "MAKE-" name))
+         (len (layout-symbol name "-LENGTH"))
+         (cap (layout-symbol name "-CAPACITY"))
+         (spare (layout-symbol name "-SPARE"))
+         (ensure (layout-symbol name "-ENSURE-CAPACITY"))
+         (append (layout-symbol name "-APPEND"))
+         (remove (layout-symbol name "-SWAP-REMOVE"))
+         (copy (layout-symbol name "-COPY-ROW"))
+         (zero (layout-symbol name "-ZERO-ROW"))
+         (clear (layout-symbol name "-CLEAR"))
+         (with (layout-symbol "WITH-" name))
+         (names (layout-symbol "+" name "-COLUMN-NAMES+"))
+         (bytes (layout-symbol "+" name "-ROW-BYTES+"))
+         (accessors (loop for (c) in columns collect (layout-symbol name "-" c))))
+    `(progn
+       (defstruct (,name (:constructor ,make) (:copier nil) (:predicate nil))
+         ,docstring
+         (length 0 :type index)
+         (capacity 0 :type index)
+         (spare 0 :type index)
+         ,@(loop for (c type) in columns
+                 collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
+       (defparameter ,names ',(mapcar #'first columns)
+         ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
+       (defparameter ,bytes ,(loop for (nil type) in columns sum (ecase type (single-float 4) (fixnum 8)))
+         ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name))
+       (defun ,ctor (&key (capacity 16) (spare 0))
+         ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
+         (let ((size (+ capacity spare)))
+           (,make :capacity capacity :spare spare
+                  ,@(loop for (c type) in columns
+                          append `(,(intern (symbol-name c) :keyword)
+                                   (make-array size :element-type ',type
+                                                    :initial-element ,(column-zero type)))))))
+       (defun ,ensure (buffer rows)
+         ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
+         (declare (type ,name buffer) (type index rows))
+         (when (> rows (,cap buffer))
+           (let* ((new (max rows (* 2 (,cap buffer)) 16))
+                  (size (+ new (,spare buffer))))
+             ,@(loop for (c type) in columns for acc in accessors
+                     collect `(let ((fresh (make-array size :element-type ',type
+                                                            :initial-element ,(column-zero type))))
+                                (replace fresh (,acc buffer))
+                                (setf (,acc buffer) fresh)))
+             (setf (,cap buffer) new)))
+         buffer)
+       (declaim (inline ,append))
+       (defun ,append (buffer)
+         ,(format nil "Add a row to BUFFER, a ~A, and return its index; the row reads as zeros. #L4Y0UT" name)
+         (declare (type ,name buffer))
+         (let ((row (,len buffer)))
+           (when (>= row (,cap buffer)) (,ensure buffer (1+ row)))
+           (setf (,len buffer) (1+ row))
+           row))
+       (defun ,zero (buffer row)
+         ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
+         (declare (type ,name buffer) (type index row) #.+kernel-policy+)
+         ,@(loop for (nil type) in columns for acc in accessors
+                 collect `(setf (aref (,acc buffer) row) ,(column-zero type)))
+         buffer)
+       (defun ,copy (from from-row to to-row)
+         ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
+         (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
+         ,@(loop for acc in accessors
+                 collect `(setf (aref (,acc to) to-row) (aref (,acc from) from-row)))
+         to)
+       (defun ,remove (buffer row)
+         ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
+row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #L4Y0UT" name)
+         (declare (type ,name buffer) (type index row))
+         (let ((last (1- (,len buffer))))
+           (declare (type fixnum last))
+           (assert (<= 0 row last) () "row ~D is outside ~A of length ~D" row ',name (1+ last))
+           (unless (= row last) (,copy buffer last buffer row))
+           (,zero buffer last)
+           (setf (,len buffer) last)
+           (if (= row last) -1 last)))
+       (defun ,clear (buffer)
+         ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
+         (declare (type ,name buffer))
+         (let ((n (+ (,len buffer) (,spare buffer))))
+           ,@(loop for (nil type) in columns for acc in accessors
+                   collect `(fill (,acc buffer) ,(column-zero type) :end (min n (length (,acc buffer))))))
+         (setf (,len buffer) 0)
+         buffer)
+       (defmacro ,with ((&rest cols) buffer &body body)
+         ,(format nil "Run BODY with each of COLS bound to that column of the ~A BUFFER. #L4Y0UT" name)
+         (expand-layout-bindings ',name ',(loop for (c type) in columns for acc in accessors
+                                                collect (list c type acc))
+                                 cols buffer body))
+       ',name)))
+;; One macro generates every columnar layout:1 ends here
+
+;; [[file:../physics.org::#B5N8JT][Bodies are rows; a handle is a forwarding address:1]]
+(define-physics-layout body-columns
+  "Bodies of one set (awake or sleeping), one specialised array per column. #B5N8JT"
+  (x single-float) (y single-float) (z single-float)
+  (vx single-float) (vy single-float) (vz single-float)
+  (wx single-float) (wy single-float) (wz single-float)
+  (qw single-float) (qx single-float) (qy single-float) (qz single-float)
+  (radius single-float) (inverse-mass single-float) (inverse-inertia single-float)
+  (restitution single-float) (friction single-float) (rolling-resistance single-float)
+  (sleep-time single-float) (age single-float) (life single-float)
+  (flags fixnum) (handle fixnum) (kind fixnum))
+
+(defconstant +flag-report-hits+ 1 "Body flag: report :hit events for its hard arrivals. #B5N8JT")
+
+(defconstant +flag-terrain-only+ 2 "Body flag: meets terrain and boxes but no other body. #B5N8JT")
+
+(defconstant +set-free+ 0 "Handle-table set of a free slot. #B5N8JT")
+
+(defconstant +set-awake+ 1 "Handle-table set of an awake body. #B5N8JT")
+
+(defconstant +set-sleeping+ 2 "Handle-table set of a sleeping body. #B5N8JT")
+
+(defconstant +no-body+ -1 "The handle of no body: the other side of a one-sided contact. #B5N8JT")
+
+(defconstant +handle-index-bits+ 24 "Bits of a handle that index the handle table. #B5N8JT")
+
+(defconstant +handle-generation-bits+ 20 "Bits of a handle that count reuses of its slot. #B5N8JT")
+
+(defconstant +handle-tag-bits+ 16 "Bits of a handle that name its world. #B5N8JT")
+
+(declaim (inline handle-index handle-generation handle-tag make-handle))
+(defun handle-index (handle)
+  "The handle-table slot HANDLE names. #B5N8JT"
+  (declare (type fixnum handle))
+  (ldb (byte +handle-index-bits+ 0) handle))
+
+(defun handle-generation (handle)
+  "The generation HANDLE was issued with. #B5N8JT"
+  (declare (type fixnum handle))
+  (ldb (byte +handle-generation-bits+ +handle-index-bits+) handle))
+
+(defun handle-tag (handle)
+  "The tag of the world that issued HANDLE. #B5N8JT"
+  (declare (type fixnum handle))
+  (ldb (byte +handle-tag-bits+ (+ +handle-index-bits+ +handle-generation-bits+)) handle))
+
+(defun make-handle (tag generation index)
+  "The handle of slot INDEX at GENERATION in the world tagged TAG. #B5N8JT"
+  (logior (ash tag (+ +handle-index-bits+ +handle-generation-bits+))
+          (ash generation +handle-index-bits+)
+          index))
+
+(defstruct (handle-table (:constructor %make-handle-table))
+  "The forwarding addresses: for each slot, the set and row of its body, and its generation. #B5N8JT"
+  (set (make-array 16 :element-type 'fixnum :initial-element +set-free+) :type fixnum-column)
+  (local (make-array 16 :element-type 'fixnum :initial-element -1) :type fixnum-column)
+  (generation (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (count 0 :type index)
+  (free -1 :type fixnum)
+  (tag 0 :type fixnum))
+
+(defvar *world-tag-counter* 0 "The tag the next world's handles carry (mod 2^16). #B5N8JT")
+
+(defun make-handle-table ()
+  "An empty handle table with a fresh world tag. #B5N8JT"
+  (%make-handle-table :tag (ldb (byte +handle-tag-bits+ 0) (incf *world-tag-counter*))))
+
+(defun handle-table-allocate (table set local)
+  "Take a free slot of TABLE for a body at SET and row LOCAL; return its new handle. #B5N8JT"
+  (let ((slot (handle-table-free table)))
+    (if (>= slot 0)
+        (setf (handle-table-free table) (aref (handle-table-local table) slot))
+        (progn
+          (setf slot (handle-table-count table))
+          (when (>= slot (ash 1 +handle-index-bits+))
+            (error 'physics-error))
+          (when (>= slot (length (handle-table-set table)))
+            (let ((n (* 2 (length (handle-table-set table)))))
+              (flet ((grow (a init) (let ((b (make-array n :element-type 'fixnum :initial-element init)))
+                                      (replace b a) b)))
+                (setf (handle-table-set table) (grow (handle-table-set table) +set-free+)
+                      (handle-table-local table) (grow (handle-table-local table) -1)
+                      (handle-table-generation table) (grow (handle-table-generation table) 0)))))
+          (incf (handle-table-count table))))
+    (setf (aref (handle-table-set table) slot) set
+          (aref (handle-table-local table) slot) local)
+    (make-handle (handle-table-tag table) (aref (handle-table-generation table) slot) slot)))
+
+(defun handle-table-release (table handle)
+  "Free the slot of HANDLE in TABLE and bump its generation, so HANDLE goes stale. #B5N8JT"
+  (let ((slot (handle-index handle)))
+    (setf (aref (handle-table-set table) slot) +set-free+
+          (aref (handle-table-local table) slot) (handle-table-free table)
+          (aref (handle-table-generation table) slot)
+          (ldb (byte +handle-generation-bits+ 0) (1+ (aref (handle-table-generation table) slot)))
+          (handle-table-free table) slot)
+    table))
+
+(defun handle-status (table handle)
+  "NIL when HANDLE names a live body of TABLE, else why not (:malformed :foreign :removed). #B5N8JT"
+  (cond ((not (and (typep handle 'fixnum) (>= handle 0))) :malformed)
+        ((/= (handle-tag handle) (handle-table-tag table)) :foreign)
+        ((or (>= (handle-index handle) (handle-table-count table))
+             (= (aref (handle-table-set table) (handle-index handle)) +set-free+)
+             (/= (aref (handle-table-generation table) (handle-index handle))
+                 (handle-generation handle)))
+         :removed)
+        (t nil)))
+;; Bodies are rows; a handle is a forwarding address:1 ends here
+
+;; [[file:../physics.org::#H2W9DJ][Terrain: chunks of cells, and missing is a wall:1]]
+(defconstant +chunk-bits+ 4 "A chunk is 2^4 = 16 cells along each axis. #H2W9DJ")
+
+(defconstant +chunk-size+ 16 "Cells along one edge of a chunk. #H2W9DJ")
+
+(defconstant +chunk-cells+ 4096 "Cells in a chunk. #H2W9DJ")
+
+(defconstant +cell-limit+ (ash 1 22) "Cell coordinates must lie in (-2^22, 2^22). #H2W9DJ")
+
+(deftype chunk-storage ()
+  "The cells of one chunk, a byte each, nonzero when solid. #H2W9DJ"
+  '(simple-array (unsigned-byte 8) (4096)))
+
+(deftype cell ()
+  "A cell coordinate. #H2W9DJ"
+  '(integer #.(- (ash 1 22)) #.(ash 1 22)))
+
+(defvar +wall-chunk+ (make-array +chunk-cells+ :element-type '(unsigned-byte 8) :initial-element 1)
+  "The storage every non-resident chunk reads as: solid throughout. #H2W9DJ")
+
+(defstruct (voxel-terrain (:constructor %make-voxel-terrain))
+  "A lattice of unit cells in 16^3 chunks; a chunk that is not resident reads as solid. #H2W9DJ"
+  (chunks (make-hash-table :test 'eql) :type hash-table)
+  (lock 0 :type fixnum)
+  (pending '() :type list)
+  (edits 0 :type fixnum))
+
+(defun make-voxel-terrain ()
+  "A terrain with no resident chunk: every cell reads as solid until a fill makes it resident. #H2W9DJ"
+  (%make-voxel-terrain))
+
+(declaim (inline chunk-key cell-offset))
+(defun chunk-key (x y z)
+  "The packed key of the chunk that holds cell X Y Z. #H2W9DJ"
+  (declare (type cell x y z))
+  (logior (ash (ldb (byte 19 0) (ash x -4)) 38)
+          (ash (ldb (byte 19 0) (ash y -4)) 19)
+          (ldb (byte 19 0) (ash z -4))))
+
+(defun cell-offset (x y z)
+  "The index of cell X Y Z inside its chunk's storage. #H2W9DJ"
+  (declare (type cell x y z))
+  (logior (logand x 15) (ash (logand z 15) 4) (ash (logand y 15) 8)))
+
+(defun check-cell (name v)
+  "V as a cell coordinate, or an error naming NAME. #H2W9DJ"
+  (unless (and (integerp v) (< (- +cell-limit+) v +cell-limit+))
+    (error 'invalid-physics-parameter :name name :value v
+                                      :expected (format nil "an integer of magnitude under ~D" +cell-limit+)))
+  v)
+
+(defun terrain-solid-p (terrain x y z)
+  "True when cell X Y Z of TERRAIN is solid; a cell of a non-resident chunk is solid. #H2W9DJ"
+  (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
+  (let ((chunk (gethash (chunk-key x y z) (voxel-terrain-chunks terrain))))
+    (if chunk (plusp (aref (the chunk-storage chunk) (cell-offset x y z))) t)))
+
+(defun terrain-resident-p (terrain x y z)
+  "True when the chunk holding cell X Y Z of TERRAIN is resident. #H2W9DJ"
+  (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
+  (nth-value 1 (gethash (chunk-key x y z) (voxel-terrain-chunks terrain))))
+
+(defun %resident-chunk (terrain x y z)
+  "The storage of the chunk holding X Y Z, made resident (all air) if it was not. #H2W9DJ"
+  (let ((key (chunk-key x y z)) (table (voxel-terrain-chunks terrain)))
+    (or (gethash key table)
+        (setf (gethash key table)
+              (make-array +chunk-cells+ :element-type '(unsigned-byte 8) :initial-element 0)))))
+
+(defun %set-cell (terrain x y z solid-p)
+  "Write one cell, making its chunk resident. #H2W9DJ"
+  (setf (aref (the chunk-storage (%resident-chunk terrain x y z)) (cell-offset x y z))
+        (if solid-p 1 0))
+  (incf (voxel-terrain-edits terrain)))
+
+(defun (setf terrain-solid-p) (solid-p terrain x y z)
+  "Make cell X Y Z of TERRAIN solid or air. During a step the edit waits for the step's end. #H2W9DJ"
+  (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
+  (if (plusp (voxel-terrain-lock terrain))
+      (push (list x y z solid-p) (voxel-terrain-pending terrain))
+      (%set-cell terrain x y z solid-p))
+  solid-p)
+
+(defun fill-terrain (terrain x0 y0 z0 x1 y1 z1 solid-p)
+  "Set every cell of the half-open box [X0,X1)x[Y0,Y1)x[Z0,Z1) of TERRAIN to SOLID-P, making
+the chunks it touches resident. Return TERRAIN. #H2W9DJ"
+  (loop for (n v) on (list 'x0 x0 'y0 y0 'z0 z0 'x1 x1 'y1 y1 'z1 z1) by #'cddr do (check-cell n v))
+  (loop for x from x0 below x1 do
+    (loop for y from y0 below y1 do
+      (loop for z from z0 below z1 do
+        (setf (terrain-solid-p terrain x y z) solid-p))))
+  terrain)
+
+(defun lock-terrain (terrain)
+  "Mark TERRAIN as read by a step in flight; edits are queued until it is unlocked. #H2W9DJ"
+  (incf (voxel-terrain-lock terrain)))
+
+(defun unlock-terrain (terrain)
+  "Release one lock on TERRAIN and apply the edits queued while it was locked, in order. #H2W9DJ"
+  (when (zerop (decf (voxel-terrain-lock terrain)))
+    (let ((edits (reverse (voxel-terrain-pending terrain))))
+      (setf (voxel-terrain-pending terrain) '())
+      (loop for (x y z solid-p) in edits do (%set-cell terrain x y z solid-p))))
+  terrain)
+
+(defstruct (terrain-probe (:constructor make-terrain-probe))
+  "Up to eight chunks' storage borrowed for one step, evicted round-robin. #H2W9DJ"
+  (keys (make-array 8 :element-type 'fixnum :initial-element -1) :type fixnum-column)
+  (chunks (make-array 8 :initial-element +wall-chunk+) :type simple-vector)
+  (next 0 :type (integer 0 7))
+  (terrain nil))
+
+(defun reset-terrain-probe (probe terrain)
+  "Forget every chunk PROBE borrowed and point it at TERRAIN. #H2W9DJ"
+  (fill (terrain-probe-keys probe) -1)
+  (fill (terrain-probe-chunks probe) +wall-chunk+)
+  (setf (terrain-probe-next probe) 0
+        (terrain-probe-terrain probe) terrain)
+  probe)
+
+(declaim (inline probe-chunk))
+(defun probe-chunk (probe key)
+  "The storage of the chunk with KEY, borrowed through PROBE. #H2W9DJ"
+  (declare (type terrain-probe probe) (type fixnum key) #.+kernel-policy+)
+  (let ((keys (terrain-probe-keys probe)))
+    (dotimes (i 8 (%probe-miss probe key))
+      (when (= (aref keys i) key)
+        (return (svref (terrain-probe-chunks probe) i))))))
+
+(defun %probe-miss (probe key)
+  "Borrow the chunk with KEY into PROBE's next slot; a missing chunk borrows the wall. #H2W9DJ"
+  (declare (type terrain-probe probe) (type fixnum key))
+  (let ((chunk (or (gethash key (voxel-terrain-chunks (terrain-probe-terrain probe))) +wall-chunk+))
+        (slot (terrain-probe-next probe)))
+    (setf (aref (terrain-probe-keys probe) slot) key
+          (svref (terrain-probe-chunks probe) slot) chunk
+          (terrain-probe-next probe) (logand (1+ slot) 7))
+    chunk))
+
+(declaim (inline probe-solid-p))
+(defun probe-solid-p (probe x y z)
+  "True when cell X Y Z is solid, as PROBE sees the terrain this step. #H2W9DJ"
+  (declare (type terrain-probe probe) (type cell x y z) #.+kernel-policy+)
+  (plusp (aref (the chunk-storage (probe-chunk probe (chunk-key x y z))) (cell-offset x y z))))
+;; Terrain: chunks of cells, and missing is a wall:1 ends here
+
+;; [[file:../physics.org::#Y5H8KC][Contacts persist between steps, keyed by a packed pair:1]]
+(define-physics-layout contact-columns
+  "Persistent contacts, one row per touching or nearly touching pair, keyed by a packed pair. #Y5H8KC"
+  (handle-a fixnum) (handle-b fixnum) (kind fixnum) (key fixnum) (seen fixnum) (touching fixnum)
+  (nx single-float) (ny single-float) (nz single-float) (separation single-float)
+  (px single-float) (py single-float) (pz single-float)
+  (kvx single-float) (kvy single-float) (kvz single-float)
+  (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
+  (rolling-impulse-x single-float) (rolling-impulse-y single-float) (rolling-impulse-z single-float))
+
+(defconstant +contact-pair+ 0 "Contact kind: two bodies. #Y5H8KC")
+
+(defconstant +contact-terrain+ 1 "Contact kind: a body and a solid cell. #Y5H8KC")
+
+(defconstant +contact-box+ 2 "Contact kind: a body and a posted kinematic box. #Y5H8KC")
+
+(declaim (inline pair-key terrain-key box-key))
+(defun pair-key (index-a index-b)
+  "The key of the contact between the bodies in handle slots INDEX-A < INDEX-B. #Y5H8KC"
+  (declare (type (unsigned-byte 24) index-a index-b))
+  (logior (ash +contact-pair+ 58) (ash index-a 34) index-b))
+
+(defun terrain-key (index x y z)
+  "The key of the contact between the body in handle slot INDEX and cell X Y Z. #Y5H8KC"
+  (declare (type (unsigned-byte 24) index) (type cell x y z))
+  (logior (ash +contact-terrain+ 58) (ash index 34)
+          (ash (ldb (byte 12 0) x) 22) (ash (ldb (byte 10 0) y) 12) (ldb (byte 12 0) z)))
+
+(defun box-key (index box-id)
+  "The key of the contact between the body in handle slot INDEX and box BOX-ID. #Y5H8KC"
+  (declare (type (unsigned-byte 24) index) (type (unsigned-byte 34) box-id))
+  (logior (ash +contact-box+ 58) (ash index 34) box-id))
+
+(defstruct (contact-table (:constructor %make-contact-table))
+  "An open-addressing map from contact key to contact row, with linear probing. #Y5H8KC"
+  (keys (make-array 64 :element-type 'fixnum :initial-element -1) :type fixnum-column)
+  (rows (make-array 64 :element-type 'fixnum :initial-element -1) :type fixnum-column)
+  (mask 63 :type fixnum)
+  (count 0 :type index))
+
+(defun make-contact-table () "An empty contact table. #Y5H8KC" (%make-contact-table))
+
+(declaim (inline contact-slot-hash))
+(defun contact-slot-hash (key mask)
+  "The home slot of KEY in a table of MASK+1 slots. #Y5H8KC"
+  (declare (type fixnum key mask) #.+kernel-policy+)
+  (let* ((h (logxor key (ash key -29) (ash key -47)))
+         (p (* (logand h #x1FFFFFFF) 2654435761)))
+    (declare (type fixnum h) (type (unsigned-byte 62) p))
+    (logand (ash p -13) mask)))
+
+(defun contact-table-find (table key)
+  "The contact row stored under KEY, or -1. #Y5H8KC"
+  (declare (type contact-table table) (type fixnum key) #.+kernel-policy+)
+  (let ((keys (contact-table-keys table)) (mask (contact-table-mask table)))
+    (loop for i of-type fixnum = (contact-slot-hash key mask) then (logand (1+ i) mask)
+          for k of-type fixnum = (aref keys i)
+          do (cond ((= k key) (return (aref (contact-table-rows table) i)))
+                   ((= k -1) (return -1))))))
+
+(defun contact-table-grow (table)
+  "Double TABLE's slots and re-insert every entry. #Y5H8KC"
+  (let* ((old-keys (contact-table-keys table)) (old-rows (contact-table-rows table))
+         (n (* 2 (length old-keys))))
+    (setf (contact-table-keys table) (make-array n :element-type 'fixnum :initial-element -1)
+          (contact-table-rows table) (make-array n :element-type 'fixnum :initial-element -1)
+          (contact-table-mask table) (1- n)
+          (contact-table-count table) 0)
+    (loop for k across old-keys for r across old-rows
+          unless (= k -1) do (contact-table-put table k r))
+    table))
+
+(defun contact-table-put (table key row)
+  "Map KEY to ROW in TABLE, adding or replacing the entry. #Y5H8KC"
+  (declare (type contact-table table) (type fixnum key row))
+  (when (>= (* 2 (1+ (contact-table-count table))) (length (contact-table-keys table)))
+    (contact-table-grow table))
+  (let ((keys (contact-table-keys table)) (mask (contact-table-mask table)))
+    (loop for i of-type fixnum = (contact-slot-hash key mask) then (logand (1+ i) mask)
+          for k of-type fixnum = (aref keys i)
+          do (cond ((= k key) (setf (aref (contact-table-rows table) i) row) (return))
+                   ((= k -1)
+                    (setf (aref keys i) key (aref (contact-table-rows table) i) row)
+                    (incf (contact-table-count table))
+                    (return)))))
+  table)
+
+(defun contact-table-delete (table key)
+  "Remove KEY from TABLE, shifting later entries of its probe run back so no tombstone is left. #Y5H8KC"
+  (declare (type contact-table table) (type fixnum key) #.+kernel-policy+)
+  (let* ((keys (contact-table-keys table)) (rows (contact-table-rows table))
+         (mask (contact-table-mask table))
+         (i (loop for i of-type fixnum = (contact-slot-hash key mask) then (logand (1+ i) mask)
+                  for k of-type fixnum = (aref keys i)
+                  do (cond ((= k key) (return i)) ((= k -1) (return -1))))))
+    (declare (type fixnum i))
+    (when (>= i 0)
+      (decf (contact-table-count table))
+      (loop with hole of-type fixnum = i
+            for j of-type fixnum = (logand (1+ hole) mask) then (logand (1+ j) mask)
+            for k of-type fixnum = (aref keys j)
+            do (when (= k -1)
+                 (setf (aref keys hole) -1 (aref rows hole) -1)
+                 (return))
+               (let ((home (contact-slot-hash k mask)))
+                 ;; move K back into the hole unless its home lies cyclically in (hole, j]
+                 (unless (if (<= hole j) (and (< hole home) (<= home j)) (or (< hole home) (<= home j)))
+                   (setf (aref keys hole) k (aref rows hole) (aref rows j) hole j)))))
+    table))
+;; Contacts persist between steps, keyed by a packed pair:1 ends here
+
+;; [[file:../physics.org::#D9W4CH][The block world is the static tree; bodies need a hash grid:1]]
+(defstruct (hash-grid (:constructor make-hash-grid))
+  "Items bucketed by the cell of their centre, counting-sorted so a cell's items are one run. #D9W4CH"
+  (inv-cell 1.0 :type single-float)
+  (count 0 :type index)
+  (mask 0 :type fixnum)
+  (starts (make-array 2 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (items (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (keys (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (item-keys (make-array 0 :element-type 'fixnum) :type fixnum-column))
+
+(declaim (inline cell-floor grid-cell-key grid-bucket))
+(defun cell-floor (v)
+  "The integer floor of V, clamped to the range a cell coordinate may take. #D9W4CH"
+  (declare (type single-float v) #.+kernel-policy+)
+  (let* ((c (max -4.0e6 (min 4.0e6 v)))
+         (i (truncate c)))
+    (declare (type (single-float -4.0e6 4.0e6) c) (type fixnum i))
+    (if (< c (float i 1.0)) (1- i) i)))
+
+(defun grid-cell-key (cx cy cz)
+  "The packed key of grid cell CX CY CZ (each taken modulo 2^20). #D9W4CH"
+  (declare (type fixnum cx cy cz))
+  (logior (ash (ldb (byte 20 0) cx) 40) (ash (ldb (byte 20 0) cy) 20) (ldb (byte 20 0) cz)))
+
+(defun grid-bucket (key mask)
+  "The bucket of cell KEY in a grid of MASK+1 buckets. #D9W4CH"
+  (declare (type fixnum key mask) #.+kernel-policy+)
+  (let* ((h (logxor key (ash key -21) (ash key -43)))
+         (p (* (logand h #x1FFFFFFF) 2654435761)))
+    (declare (type fixnum h) (type (unsigned-byte 62) p))
+    (logand (ash p -11) mask)))
+
+(defun build-hash-grid (grid cell-size n xs ys zs ids)
+  "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID. #D9W4CH"
+  (declare (type hash-grid grid) (type single-float cell-size) (type index n)
+           (type f32-column xs ys zs) (type fixnum-column ids) #.+kernel-policy+)
+  (let* ((buckets (max 16 (ash 1 (integer-length (* 2 n)))))
+         (mask (1- buckets))
+         (inv (/ 1.0 cell-size)))
+    (when (< (length (hash-grid-starts grid)) (1+ buckets))
+      (setf (hash-grid-starts grid) (make-array (1+ buckets) :element-type 'fixnum)))
+    (when (< (length (hash-grid-items grid)) n)
+      (let ((m (max n (* 2 (length (hash-grid-items grid))))))
+        (setf (hash-grid-items grid) (make-array m :element-type 'fixnum)
+              (hash-grid-keys grid) (make-array m :element-type 'fixnum)
+              (hash-grid-item-keys grid) (make-array m :element-type 'fixnum))))
+    (setf (hash-grid-inv-cell grid) inv (hash-grid-mask grid) mask (hash-grid-count grid) n)
+    (let ((starts (hash-grid-starts grid)) (items (hash-grid-items grid))
+          (keys (hash-grid-keys grid)) (item-keys (hash-grid-item-keys grid)))
+      (fill starts 0 :end (1+ buckets))
+      (dotimes (i n)
+        (let ((key (grid-cell-key (cell-floor (* (aref xs i) inv)) (cell-floor (* (aref ys i) inv))
+                                  (cell-floor (* (aref zs i) inv)))))
+          (setf (aref item-keys i) key)
+          (incf (aref starts (1+ (grid-bucket key mask))))))
+      (loop for b of-type fixnum from 1 to buckets
+            do (incf (aref starts b) (aref starts (1- b))))
+      ;; place items by decrementing the end of their bucket, walking backwards, so each
+      ;; bucket lists its items in increasing order
+      (loop for i of-type fixnum from (1- n) downto 0
+            do (let* ((key (aref item-keys i))
+                      (b (1+ (grid-bucket key mask)))
+                      (at (decf (aref starts b))))
+                 (setf (aref items at) (aref ids i) (aref keys at) key)))
+      ;; now starts[b+1] is the beginning of bucket b; shift so starts[b] begins bucket b
+      (replace starts starts :start1 0 :start2 1 :end2 (1+ buckets))
+      (setf (aref starts buckets) n))
+    grid))
+
+(defmacro do-grid-neighbours ((item grid x y z &key (span 1)) &body body)
+  "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
+of point X Y Z, cell by cell in a fixed order. #D9W4CH"
+  (let ((g (gensym "GRID")) (cx (gensym)) (cy (gensym)) (cz (gensym)) (i (gensym)) (j (gensym))
+        (k (gensym)) (key (gensym)) (b (gensym)) (e (gensym)) (inv (gensym)) (s (gensym))
+        (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS")) (mask (gensym "MASK")))
+    `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s ,span)
+            (,cx (cell-floor (* ,x ,inv))) (,cy (cell-floor (* ,y ,inv))) (,cz (cell-floor (* ,z ,inv)))
+            (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g))
+            (,mask (hash-grid-mask ,g)))
+       (declare (type fixnum ,cx ,cy ,cz ,s ,mask) (type fixnum-column ,starts ,items ,keys))
+       (unless (zerop (hash-grid-count ,g))
+         (loop for ,k of-type fixnum from (- ,cz ,s) to (+ ,cz ,s) do
+           (loop for ,j of-type fixnum from (- ,cy ,s) to (+ ,cy ,s) do
+             (loop for ,i of-type fixnum from (- ,cx ,s) to (+ ,cx ,s) do
+               (let* ((,key (grid-cell-key ,i ,j ,k))
+                      (,b (grid-bucket ,key ,mask)))
+                 (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
+                       when (= (aref ,keys ,e) ,key)
+                         do (let ((,item (aref ,items ,e))) (declare (type fixnum ,item)) ,@body))))))))))
+;; The block world is the static tree; bodies need a hash grid:1 ends here
+
+;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:1]]
+(defconstant +solver-stride+ 8
+  "Floats per body in the solver's velocity array: vx vy vz wx wy wz and two spare. #W0RLD7")
+
+(defconstant +delta-stride+ 4
+  "Floats per body in the solver's delta array: dx dy dz and one spare. #W0RLD7")
+
+(defclass kernel-family () ()
+  (:documentation "A way of running the solver phases; the world holds one and every phase
+dispatches on it once per call. #W0RLD7"))
+
+(defclass scalar-kernels (kernel-family) ()
+  (:documentation "The reference family: one constraint at a time, in buffer order. #W0RLD7"))
+
+(defclass physics-world ()
+  ((terrain :initarg :terrain :initform nil :accessor physics-world-terrain)
+   (probe :initform (make-terrain-probe) :reader physics-world-probe)
+   (kernels :initarg :kernels :accessor physics-world-kernels)
+   (awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
+   (sleeping :initform (make-body-columns) :reader physics-world-sleeping)
+   (ids :initform (make-handle-table) :reader physics-world-ids)
+   (contacts :initform (make-contact-columns) :reader physics-world-contacts)
+   (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
+   (constraints :initform (make-constraint-columns) :reader physics-world-constraints)
+   (events :initform (make-event-columns) :reader physics-world-events)
+   (event-data :initform (make-array 16 :initial-element nil) :accessor physics-world-event-data)
+   (boxes :initform (make-box-columns) :reader physics-world-boxes)
+   (box-owners :initform (make-array 16 :initial-element nil) :accessor physics-world-box-owners)
+   (box-ids :initform (make-hash-table :test 'eq) :reader physics-world-box-ids)
+   (velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
+   (deltas :initform (make-array 0 :element-type 'single-float) :accessor physics-world-deltas)
+   (color-starts :initform (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
+                 :reader physics-world-color-starts)
+   (color-masks :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-color-masks)
+   (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
+   (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
+   (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
+   (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
+   (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
+   (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
+   (substeps :initarg :substeps :type fixnum :accessor physics-world-substeps)
+   (gravity-x :initarg :gravity-x :type single-float :accessor physics-world-gravity-x)
+   (gravity-y :initarg :gravity-y :type single-float :accessor physics-world-gravity-y)
+   (gravity-z :initarg :gravity-z :type single-float :accessor physics-world-gravity-z)
+   (contact-hertz :initform *physics-contact-hertz* :accessor physics-world-contact-hertz)
+   (damping-ratio :initform *physics-contact-damping-ratio* :accessor physics-world-damping-ratio)
+   (push-max :initform *physics-contact-push-max* :accessor physics-world-push-max)
+   (slop :initform *physics-linear-slop* :accessor physics-world-slop)
+   (margin :initform *physics-speculative-margin* :accessor physics-world-margin)
+   (restitution-threshold :initform *physics-restitution-threshold*
+                          :accessor physics-world-restitution-threshold)
+   (hit-speed :initform *physics-hit-speed* :accessor physics-world-hit-speed)
+   (sleep-speed :initform *physics-sleep-speed* :accessor physics-world-sleep-speed)
+   (time-to-sleep :initform *physics-time-to-sleep* :accessor physics-world-time-to-sleep)
+   (wake-speed :initform *physics-wake-speed* :accessor physics-world-wake-speed)
+   (sleep-enabled :initarg :sleep-enabled :initform t :accessor physics-world-sleep-enabled)
+   (current-dt :initform (/ 1.0 60) :type single-float :accessor physics-world-current-dt)
+   (current-h :initform (/ 1.0 240) :type single-float :accessor physics-world-current-h)
+   (step-count :initform 0 :type fixnum :accessor physics-world-step-count)
+   (stepping :initform nil :accessor physics-world-stepping)
+   (event-handler :initform nil :accessor physics-world-event-handler)
+   (statistics :initform (make-array 8 :element-type 'double-float :initial-element 0d0)
+               :reader physics-world-statistics))
+  (:documentation "A simulated world of spheres over a voxel terrain: the CLOS side of the seam,
+holding the columnar buffers, the parameters, the events and the kernel family. #W0RLD7"))
+;; The world holds every buffer and its own parameters:1 ends here
+
+;; [[file:../physics.org::#R9M4PV][Choose the phase once: kernel families:1]]
+(defvar *kernel-families* '((:scalar scalar-kernels))
+  "Kernel families by name: (NAME CLASS &optional INSTRUCTION-SET), narrowest first. #R9M4PV")
+
+(defun kernel-family-available-p (entry)
+  "True when the CPU runs the instruction set the family ENTRY needs. #R9M4PV"
+  (let ((set (third entry)))
+    (or (null set)
+        (sb-simd-internals:instruction-set-available-p (sb-simd-internals:find-instruction-set set)))))
+
+(defun make-kernel-family (name)
+  "The kernel family NAME (:scalar, a wide one, or :auto for the widest this CPU runs). #R9M4PV"
+  (if (eq name :auto)
+      (make-instance (second (car (last (remove-if-not #'kernel-family-available-p *kernel-families*)))))
+      (let ((entry (assoc name *kernel-families*)))
+        (unless (and entry (kernel-family-available-p entry))
+          (error 'invalid-physics-parameter
+                 :name :kernels :value name
+                 :expected (format nil "one of ~{~S~^, ~} or :auto on this CPU"
+                                   (mapcar #'first (remove-if-not #'kernel-family-available-p
+                                                                  *kernel-families*)))))
+        (make-instance (second entry)))))
+;; Choose the phase once: kernel families:1 ends here
+
+;; [[file:../physics.org::#M4K3WD][Making a world and adding bodies:1]]
+(defun make-physics-world (&key terrain (step-seconds 1/60) (substeps 4) (gravity '(0 -9.81 0))
+                                (kernels :scalar) (sleep t))
+  "A new empty world over TERRAIN (a voxel-terrain or NIL), stepping STEP-SECONDS in SUBSTEPS
+substeps under GRAVITY (a list of three numbers), solving with the kernel family KERNELS. #M4K3WD"
+  (unless (or (null terrain) (typep terrain 'voxel-terrain))
+    (error 'invalid-physics-parameter :name :terrain :value terrain :expected "a voxel-terrain or NIL"))
+  (let ((dt (finite-f32 :step-seconds step-seconds)))
+    (unless (< 0 dt 1.0)
+      (error 'invalid-physics-parameter :name :step-seconds :value step-seconds :expected "in (0, 1) seconds"))
+    (unless (and (integerp substeps) (<= 1 substeps 64))
+      (error 'invalid-physics-parameter :name :substeps :value substeps :expected "an integer from 1 to 64"))
+    (unless (and (listp gravity) (= (length gravity) 3))
+      (error 'invalid-physics-parameter :name :gravity :value gravity :expected "a list of three numbers"))
+    (make-instance 'physics-world
+                   :terrain terrain :step-seconds dt :substeps substeps
+                   :gravity-x (finite-f32 :gravity (first gravity))
+                   :gravity-y (finite-f32 :gravity (second gravity))
+                   :gravity-z (finite-f32 :gravity (third gravity))
+                   :kernels (make-kernel-family kernels)
+                   :sleep-enabled sleep)))
+
+(defun check-idle (world operation)
+  "Signal physics-world-busy unless WORLD is between steps. #M4K3WD"
+  (when (physics-world-stepping world)
+    (error 'physics-world-busy :world world :operation operation)))
+
+(defun resolve-handle (world handle)
+  "The set and row of HANDLE's body, or a stale-physics-handle error. #M4K3WD"
+  (let* ((table (physics-world-ids world))
+         (status (handle-status table handle)))
+    (when status (error 'stale-physics-handle :world world :handle handle :reason status))
+    (let ((slot (handle-index handle)))
+      (values (aref (handle-table-set table) slot) (aref (handle-table-local table) slot)))))
+
+(defun set-buffer (world set)
+  "The body buffer of SET in WORLD. #M4K3WD"
+  (if (= set +set-awake+) (physics-world-awake world) (physics-world-sleeping world)))
+
+(defun physics-body-alive-p (world handle)
+  "True when HANDLE names a body of WORLD that has not been removed or expired. #M4K3WD"
+  (null (handle-status (physics-world-ids world) handle)))
+
+(defun physics-body-awake-p (world handle)
+  "True when HANDLE's body is in the awake set. #M4K3WD"
+  (= (resolve-handle world handle) +set-awake+))
+
+(defun physics-body-position (world handle)
+  "The centre of HANDLE's body, as three values. #M4K3WD"
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (let ((b (set-buffer world set)))
+      (with-body-columns (x y z) b
+        (values (aref x row) (aref y row) (aref z row))))))
+
+(defun physics-body-velocity (world handle)
+  "The linear velocity of HANDLE's body, as three values. #M4K3WD"
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (let ((b (set-buffer world set)))
+      (with-body-columns (vx vy vz) b
+        (values (aref vx row) (aref vy row) (aref vz row))))))
+
+(defun physics-body-angular-velocity (world handle)
+  "The angular velocity of HANDLE's body, as three values. #M4K3WD"
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (let ((b (set-buffer world set)))
+      (with-body-columns (wx wy wz) b
+        (values (aref wx row) (aref wy row) (aref wz row))))))
+
+(defun physics-body-orientation (world handle)
+  "The orientation of HANDLE's body as a unit quaternion W X Y Z, four values. #M4K3WD"
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (let ((b (set-buffer world set)))
+      (with-body-columns (qw qx qy qz) b
+        (values (aref qw row) (aref qx row) (aref qy row) (aref qz row))))))
+
+(defun physics-body-radius (world handle)
+  "The radius of HANDLE's body. #M4K3WD"
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (aref (body-columns-radius (set-buffer world set)) row)))
+
+(defun physics-world-awake-count (world)
+  "How many bodies of WORLD are awake. #M4K3WD"
+  (body-columns-length (physics-world-awake world)))
+
+(defun physics-world-sleeping-count (world)
+  "How many bodies of WORLD are asleep. #M4K3WD"
+  (body-columns-length (physics-world-sleeping world)))
+
+(defun max-radius-for (world)
+  "The largest radius a body of WORLD may have: reach (radius plus margin) stays under a cell. #M4K3WD"
+  (- *physics-reach-limit* (physics-world-margin world)))
+
+(defun add-physics-body (world x y z &key (radius 0.25) (mass 1.0) (restitution 0.0) (friction 0.6)
+                                       (rolling-resistance 0.0) (vx 0.0) (vy 0.0) (vz 0.0)
+                                       life (collide-with-bodies t) report-hits (kind 0))
+  "Add an awake sphere centred at X Y Z to WORLD and return its handle. LIFE, when given, is the
+number of seconds after which it expires. #M4K3WD"
+  (check-idle world 'add-physics-body)
+  (let* ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
+         (r (finite-f32 :radius radius world)) (m (finite-f32 :mass mass world))
+         (e (finite-f32 :restitution restitution world)) (mu (finite-f32 :friction friction world))
+         (rho (finite-f32 :rolling-resistance rolling-resistance world))
+         (vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world))
+         (life (if life (finite-f32 :life life world) 0.0))
+         (limit (max-radius-for world)))
+    (loop for (name v) in (list (list :x x) (list :y y) (list :z z))
+          unless (< (abs v) +physics-coordinate-limit+)
+            do (error 'invalid-physics-parameter :world world :name name :value v
+                                                 :expected (format nil "of magnitude under ~D m" +physics-coordinate-limit+)))
+    (unless (and (> r 0) (<= r limit))
+      (error 'invalid-physics-radius :world world :value radius :limit limit))
+    (unless (> m 0) (error 'invalid-physics-parameter :world world :name :mass :value mass :expected "> 0"))
+    (unless (<= 0 e 1) (error 'invalid-physics-parameter :world world :name :restitution :value restitution :expected "in [0, 1]"))
+    (unless (>= mu 0) (error 'invalid-physics-parameter :world world :name :friction :value friction :expected ">= 0"))
+    (unless (>= rho 0) (error 'invalid-physics-parameter :world world :name :rolling-resistance :value rolling-resistance :expected ">= 0"))
+    (when (and (not (eql life 0.0)) (<= life 0))
+      (error 'invalid-physics-parameter :world world :name :life :value life :expected "> 0 seconds, or NIL"))
+    (unless (typep kind 'fixnum) (error 'invalid-physics-parameter :world world :name :kind :value kind :expected "a fixnum"))
+    (let* ((awake (physics-world-awake world))
+           (row (body-columns-append awake))
+           (handle (handle-table-allocate (physics-world-ids world) +set-awake+ row)))
+      (with-body-columns ((bx x) (by y) (bz z) (bvx vx) (bvy vy) (bvz vz) qw (radius-c radius)
+                          inverse-mass inverse-inertia (restitution-c restitution) (friction-c friction)
+                          (rolling-resistance-c rolling-resistance) (life-c life) flags
+                          (handle-c handle) (kind-c kind))
+          awake
+        (setf (aref bx row) x (aref by row) y (aref bz row) z
+              (aref bvx row) vx (aref bvy row) vy (aref bvz row) vz
+              (aref qw row) 1.0
+              (aref radius-c row) r (aref inverse-mass row) (/ 1.0 m)
+              (aref inverse-inertia row) (/ 5.0 (* 2.0 m r r))
+              (aref restitution-c row) e (aref friction-c row) mu (aref rolling-resistance-c row) rho
+              (aref life-c row) life
+              (aref flags row) (logior (if report-hits +flag-report-hits+ 0)
+                                       (if collide-with-bodies 0 +flag-terrain-only+))
+              (aref handle-c row) handle (aref kind-c row) kind))
+      (setf (physics-world-max-radius world) (max (physics-world-max-radius world) r))
+      handle)))
+;; Making a world and adding bodies:1 ends here
+
+;; [[file:../physics.org::#E7V3NT][Events are rows too:1]]
+(define-physics-layout event-columns
+  "What happened during the last step, one row per event. #E7V3NT"
+  (kind fixnum) (handle-a fixnum) (handle-b fixnum)
+  (x single-float) (y single-float) (z single-float) (speed single-float))
+
+(defun push-event (world kind handle-a handle-b x y z speed &optional datum)
+  "Record an event of KIND (a fixnum code) in WORLD's event buffer. #E7V3NT"
+  (declare (type fixnum kind handle-a handle-b) (type single-float x y z speed))
+  (let* ((events (physics-world-events world))
+         (row (event-columns-append events)))
+    (with-event-columns ((k kind) (a handle-a) (b handle-b) (ex x) (ey y) (ez z) (s speed)) events
+      (setf (aref k row) kind (aref a row) handle-a (aref b row) handle-b
+            (aref ex row) x (aref ey row) y (aref ez row) z (aref s row) speed))
+    (when datum
+      (let ((data (physics-world-event-data world)))
+        (when (>= row (length data))
+          (setf data (replace (make-array (* 2 (1+ row)) :initial-element nil) data)
+                (physics-world-event-data world) data))
+        (setf (svref data row) datum)))
+    row))
+
+(defconstant +event-begin+ 0 "Event code of :begin. #E7V3NT")
+
+(defconstant +event-end+ 1 "Event code of :end. #E7V3NT")
+
+(defconstant +event-hit+ 2 "Event code of :hit. #E7V3NT")
+
+(defconstant +event-slept+ 3 "Event code of :slept. #E7V3NT")
+
+(defconstant +event-woke+ 4 "Event code of :woke. #E7V3NT")
+
+(defconstant +event-expired+ 5 "Event code of :expired. #E7V3NT")
+
+(defparameter +event-kinds+ #(:begin :end :hit :slept :woke :expired)
+  "Event kind keywords by code. #E7V3NT")
+
+(defun map-physics-events (function world)
+  "Call FUNCTION on each event of WORLD's last step with the kind (:begin :end :hit :slept
+:woke :expired), the two handles (the second -1 when none), the point X Y Z, the approach
+speed, and the datum (a box's owner, or NIL). #E7V3NT"
+  (let ((events (physics-world-events world)) (data (physics-world-event-data world)))
+    (with-event-columns (kind handle-a handle-b x y z speed) events
+      (dotimes (i (event-columns-length events))
+        (funcall function (svref +event-kinds+ (aref kind i)) (aref handle-a i) (aref handle-b i)
+                 (aref x i) (aref y i) (aref z i) (aref speed i)
+                 (and (< i (length data)) (svref data i)))))
+    (values)))
+;; Events are rows too:1 ends here
+
+;; [[file:../physics.org::#QKS4GZ][Sleep is relocation; boxes, throws and edits wake:1]]
+(defun relocate-body (world from-set row to-set)
+  "Move the body at ROW of FROM-SET to the end of TO-SET, patching the forwarding address of
+the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
+  (let* ((ids (physics-world-ids world))
+         (from (set-buffer world from-set))
+         (to (set-buffer world to-set))
+         (handle (aref (body-columns-handle from) row))
+         (new-row (body-columns-append to)))
+    (body-columns-copy-row from row to new-row)
+    (let ((moved (body-columns-swap-remove from row)))
+      (setf (aref (handle-table-set ids) (handle-index handle)) to-set
+            (aref (handle-table-local ids) (handle-index handle)) new-row)
+      (when (>= moved 0)
+        (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle from) row))) row)))
+    new-row))
+
+(defun sleep-physics-body (world row)
+  "Put the awake body at ROW to sleep: relocate it, zero its motion, note :slept. #QKS4GZ"
+  (let* ((handle (aref (body-columns-handle (physics-world-awake world)) row))
+         (new (relocate-body world +set-awake+ row +set-sleeping+))
+         (s (physics-world-sleeping world)))
+    (with-body-columns (vx vy vz wx wy wz sleep-time) s
+      (setf (aref vx new) 0.0 (aref vy new) 0.0 (aref vz new) 0.0
+            (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0))
+    (setf (physics-world-sleeping-grid-dirty world) t)
+    (push-event world +event-slept+ handle +no-body+ 0.0 0.0 0.0 0.0)
+    new))
+
+(defun wake-physics-body (world row)
+  "Wake the sleeping body at ROW: relocate it to the end of the awake set, note :woke. #QKS4GZ"
+  (let* ((handle (aref (body-columns-handle (physics-world-sleeping world)) row))
+         (new (relocate-body world +set-sleeping+ row +set-awake+)))
+    (setf (aref (body-columns-sleep-time (physics-world-awake world)) new) 0.0)
+    (push-event world +event-woke+ handle +no-body+ 0.0 0.0 0.0 0.0)
+    new))
+
+(defun wake-handle (world handle)
+  "Wake HANDLE's body if it sleeps; return its awake row. #QKS4GZ"
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (if (= set +set-awake+) row (wake-physics-body world row))))
+
+(defun %remove-body (world set row)
+  "Remove the body at ROW of SET and free its handle; its contacts are pruned next step. #QKS4GZ"
+  (let* ((ids (physics-world-ids world))
+         (buffer (set-buffer world set))
+         (handle (aref (body-columns-handle buffer) row))
+         (moved (body-columns-swap-remove buffer row)))
+    (when (>= moved 0)
+      (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle buffer) row))) row))
+    (handle-table-release ids handle)
+    handle))
+
+(defun remove-physics-body (world handle)
+  "Remove HANDLE's body from WORLD; HANDLE goes stale. #QKS4GZ"
+  (check-idle world 'remove-physics-body)
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (%remove-body world set row)
+    (values)))
+
+(defun set-physics-body-velocity (world handle vx vy vz)
+  "Set the linear velocity of HANDLE's body, waking it. #QKS4GZ"
+  (check-idle world 'set-physics-body-velocity)
+  (let ((vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world)))
+    (resolve-handle world handle)
+    (let ((row (wake-handle world handle)) (awake (physics-world-awake world)))
+      (with-body-columns ((bvx vx) (bvy vy) (bvz vz) sleep-time) awake
+        (setf (aref bvx row) vx (aref bvy row) vy (aref bvz row) vz (aref sleep-time row) 0.0)))
+    (values)))
+
+(defun wake-physics-bodies-near (world x y z radius)
+  "Wake every sleeping body of WORLD whose surface lies within RADIUS of point X Y Z; return
+how many woke. Call it after editing terrain near bodies. #QKS4GZ"
+  (check-idle world 'wake-physics-bodies-near)
+  (let ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
+        (radius (finite-f32 :radius radius world))
+        (s (physics-world-sleeping world)) (count 0))
+    (loop with row = (1- (body-columns-length s))
+          while (>= row 0)
+          do (with-body-columns ((sx x) (sy y) (sz z) (r radius)) s
+               (let ((dx (- (aref sx row) x)) (dy (- (aref sy row) y)) (dz (- (aref sz row) z))
+                     (reach (+ radius (aref r row))))
+                 (when (<= (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))
+                   (wake-physics-body world row)
+                   (incf count))))
+             (decf row))
+    count))
+;; Sleep is relocation; boxes, throws and edits wake:1 ends here
+
+;; [[file:../physics.org::#K1N3BX][Kinematic boxes are posted for one step:1]]
+(define-physics-layout box-columns
+  "Kinematic boxes posted by the client for the next step. #K1N3BX"
+  (min-x single-float) (min-y single-float) (min-z single-float)
+  (max-x single-float) (max-y single-float) (max-z single-float)
+  (vx single-float) (vy single-float) (vz single-float) (id fixnum))
+
+(defun post-physics-box (world x y z hx hy hz &key (vx 0) (vy 0) (vz 0) owner)
+  "Post a kinematic box centred at X Y Z with half-extents HX HY HZ, moving at VX VY VZ, for the
+next step only. OWNER, any object, keeps the box's contacts persistent across steps and comes
+back with its hit events. #K1N3BX"
+  (check-idle world 'post-physics-box)
+  (let ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
+        (hx (finite-f32 :hx hx world)) (hy (finite-f32 :hy hy world)) (hz (finite-f32 :hz hz world))
+        (vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world)))
+    (loop for (name v) in (list (list :hx hx) (list :hy hy) (list :hz hz))
+          unless (< 0 v 1024)
+            do (error 'invalid-physics-parameter :world world :name name :value v :expected "in (0, 1024) m"))
+    (let* ((boxes (physics-world-boxes world))
+           (row (box-columns-append boxes))
+           (ids (physics-world-box-ids world))
+           (id (if owner
+                   (or (gethash owner ids) (setf (gethash owner ids) (1+ (hash-table-count ids))))
+                   (logior (ash 1 33) row))))
+      (with-box-columns (min-x min-y min-z max-x max-y max-z (bvx vx) (bvy vy) (bvz vz) (bid id)) boxes
+        (setf (aref min-x row) (- x hx) (aref min-y row) (- y hy) (aref min-z row) (- z hz)
+              (aref max-x row) (+ x hx) (aref max-y row) (+ y hy) (aref max-z row) (+ z hz)
+              (aref bvx row) vx (aref bvy row) vy (aref bvz row) vz (aref bid row) id))
+      (let ((owners (physics-world-box-owners world)))
+        (when (>= row (length owners))
+          (setf owners (replace (make-array (* 2 (1+ row)) :initial-element nil) owners)
+                (physics-world-box-owners world) owners))
+        (setf (svref owners row) owner))
+      row)))
+
+(defun box-owner (world key)
+  "The owner of the posted box named in contact KEY, or NIL. #K1N3BX"
+  (let ((id (ldb (byte 34 0) key)) (boxes (physics-world-boxes world)))
+    (dotimes (b (box-columns-length boxes))
+      (when (= (aref (box-columns-id boxes) b) id)
+        (return (svref (physics-world-box-owners world) b))))))
+;; Kinematic boxes are posted for one step:1 ends here
+
+;; [[file:../physics.org::#G3NCNT][Contacts are made speculatively:1]]
+(defun touch-contact (world key kind handle-a handle-b nx ny nz separation px py pz kvx kvy kvz)
+  "Refresh the contact under KEY with this step's geometry, or add it with zero impulses. #G3NCNT"
+  (declare (type fixnum key kind handle-a handle-b)
+           (type single-float nx ny nz separation px py pz kvx kvy kvz) #.+kernel-policy+)
+  (let* ((contacts (physics-world-contacts world))
+         (table (physics-world-contact-table world))
+         (step (physics-world-step-count world))
+         (row (contact-table-find table key)))
+    (declare (type fixnum row step) (type contact-columns contacts) (type contact-table table))
+    (when (< row 0)
+      (setf row (contact-columns-append contacts))
+      (contact-table-put table key row)
+      (with-contact-columns ((a handle-a) (b handle-b) (k kind) (ky key)) contacts
+        (setf (aref a row) handle-a (aref b row) handle-b (aref k row) kind (aref ky row) key)))
+    (with-contact-columns (seen (cnx nx) (cny ny) (cnz nz) (sep separation) (cpx px) (cpy py) (cpz pz)
+                                (ckx kvx) (cky kvy) (ckz kvz))
+        contacts
+      (unless (= (aref seen row) step)
+        (setf (aref seen row) step
+              (aref cnx row) nx (aref cny row) ny (aref cnz row) nz (aref sep row) separation
+              (aref cpx row) px (aref cpy row) py (aref cpz row) pz
+              (aref ckx row) kvx (aref cky row) kvy (aref ckz row) kvz)))
+    row))
+
+(declaim (inline speculative-distance))
+(defun speculative-distance (approach dt slop margin gravity-step)
+  "How wide a gap a contact may have and still be made this step: four slops, plus the
+distance the pair can close in DT at APPROACH speed grown by one step of gravity, but no
+more than MARGIN. #G3NCNT"
+  (declare (type single-float approach dt slop margin gravity-step))
+  (min margin (+ (* 4.0 slop) (* (+ (max approach 0.0) gravity-step) dt))))
+;; Contacts are made speculatively:1 ends here
+
+;; [[file:../physics.org::#G4R1D5][The grids of the awake and of the sleeping:1]]
+(defun grid-cell-size (world)
+  "The grid's cell edge: the largest diameter plus the margin, so every pair within reach
+lies in neighbouring cells. #G4R1D5"
+  (+ (* 2 (physics-world-max-radius world)) (physics-world-margin world)))
+
+(defun ensure-sleeping-grid (world)
+  "Rebuild the grid of sleeping bodies if a body fell asleep or the cell size changed. #G4R1D5"
+  (let ((grid (physics-world-sleeping-grid world))
+        (size (grid-cell-size world)))
+    (when (or (physics-world-sleeping-grid-dirty world)
+              (/= (hash-grid-inv-cell grid) (/ 1.0 size)))
+      (let ((s (physics-world-sleeping world)))
+        (build-hash-grid grid size (body-columns-length s) (body-columns-x s) (body-columns-y s)
+                         (body-columns-z s) (body-columns-handle s)))
+      (setf (physics-world-sleeping-grid-dirty world) nil))
+    grid))
+
+(defun grid-phase (world)
+  "Phase 3: bucket the awake bodies by cell. #G4R1D5"
+  (let ((awake (physics-world-awake world)))
+    (build-hash-grid (physics-world-awake-grid world) (grid-cell-size world)
+                     (body-columns-length awake) (body-columns-x awake) (body-columns-y awake)
+                     (body-columns-z awake)
+                     ;; the awake grid's items are rows: an identity column of row numbers
+                     (awake-row-identities world (body-columns-length awake)))
+    (ensure-sleeping-grid world)))
+
+(defvar *row-identities* (make-array 0 :element-type 'fixnum)
+  "0, 1, 2, ...: the identity column the awake grid is built from. #G4R1D5")
+
+(defun awake-row-identities (world n)
+  "A fixnum column holding 0 .. N-1. #G4R1D5"
+  (declare (ignore world))
+  (when (< (length *row-identities*) n)
+    (let ((ids (make-array (max n (* 2 (length *row-identities*)) 1024) :element-type 'fixnum)))
+      (dotimes (i (length ids)) (setf (aref ids i) i))
+      (setf *row-identities* ids)))
+  *row-identities*)
+;; The grids of the awake and of the sleeping:1 ends here
+
+;; [[file:../physics.org::#W4K3PH][Fast bodies and moving boxes wake what they reach:1]]
+(defun wake-phase (world)
+  "Phase 2: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
+sleepers they reach. Return how many woke. #W4K3PH"
+  (let ((sleeping (physics-world-sleeping world))
+        (woken 0))
+    (declare (type fixnum woken))
+    (when (plusp (body-columns-length sleeping))
+      (let* ((grid (ensure-sleeping-grid world))
+             (ids (physics-world-ids world))
+             (awake (body-columns-ensure-capacity
+                     (physics-world-awake world)
+                     (+ (body-columns-length (physics-world-awake world)) (body-columns-length sleeping))))
+             (n (body-columns-length awake))
+             (margin (physics-world-margin world))
+             (wake2 (expt (physics-world-wake-speed world) 2)))
+        (declare (type single-float margin wake2))
+        (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
+                 (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
+                 (do-grid-neighbours (h grid x y z :span span)
+                   (let ((slot (handle-index h)))
+                     (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+                                (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+                       (let* ((row (aref (handle-table-local ids) slot))
+                              (sx (aref (body-columns-x sleeping) row))
+                              (sy (aref (body-columns-y sleeping) row))
+                              (sz (aref (body-columns-z sleeping) row))
+                              (sr (aref (body-columns-radius sleeping) row)))
+                         (when (if box-p
+                                   (let ((dx (- sx (max min-x (min max-x sx))))
+                                         (dy (- sy (max min-y (min max-y sy))))
+                                         (dz (- sz (max min-z (min max-z sz)))))
+                                     (<= (+ (* dx dx) (* dy dy) (* dz dz)) (* sr sr)))
+                                   (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
+                                         (reach (+ sr reach-extra)))
+                                     (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))))
+                           (wake-physics-body world row)
+                           (incf woken))))))))
+          (with-body-columns (x y z vx vy vz radius flags) awake
+            (dotimes (i n)
+              (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                               (* (aref vz i) (aref vz i)))
+                            wake2)
+                         (zerop (logand (aref flags i) +flag-terrain-only+)))
+                (wake-near (aref x i) (aref y i) (aref z i) (+ (aref radius i) margin) 1
+                           nil 0.0 0.0 0.0 0.0 0.0 0.0))))
+          (let ((boxes (physics-world-boxes world))
+                (inv (hash-grid-inv-cell grid)))
+            (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
+              (dotimes (b (box-columns-length boxes))
+                (when (or (/= 0 (aref vx b)) (/= 0 (aref vy b)) (/= 0 (aref vz b)))
+                  (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
+                         (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
+                         (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
+                         (half (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz)))
+                         (span (1+ (ceiling (* half inv)))))
+                    (wake-near cx cy cz 0.0 span t (aref min-x b) (aref min-y b) (aref min-z b)
+                               (aref max-x b) (aref max-y b) (aref max-z b))))))))))
+    woken))
+;; Fast bodies and moving boxes wake what they reach:1 ends here
+
+;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:1]]
+(defun pair-phase (world)
+  "Phase 4: contacts between awake bodies (each pair once, from the lower row) and lean
+contacts from slow awake bodies onto the sleepers they reach. A candidate within reach becomes
+a contact only when its gap is under the speculative distance. #P41RS7"
+  (let* ((awake (physics-world-awake world))
+         (sleeping (physics-world-sleeping world))
+         (ids (physics-world-ids world))
+         (grid (physics-world-awake-grid world))
+         (sgrid (physics-world-sleeping-grid world))
+         (any-sleeping (plusp (body-columns-length sleeping)))
+         (n (body-columns-length awake))
+         (margin (f32 (physics-world-margin world)))
+         (slop (f32 (physics-world-slop world)))
+         (dt (physics-world-current-dt world))
+         (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
+                               (expt (physics-world-gravity-z world) 2))))))
+    (declare (type single-float margin slop dt gstep) (type index n) (type body-columns awake sleeping)
+             (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+)
+    (with-body-columns (x y z vx vy vz radius flags handle) awake
+      (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj)
+               (declare (type single-float xi yi zi ri xj yj zj rj vxi vyi vzi vxj vyj vzj)
+                        (type fixnum hi hj))
+               (let* ((dx (- xj xi)) (dy (- yj yi)) (dz (- zj zi))
+                      (d2 (+ (* dx dx) (* dy dy) (* dz dz)))
+                      (reach (+ ri rj margin)))
+                 (when (< d2 (* reach reach))
+                   (let* ((d (fsqrt d2))
+                          (far (> d 1e-6))
+                          (inv (if far (/ 1.0 d) 0.0))
+                          (nx (if far (* dx inv) 0.0))
+                          (ny (if far (* dy inv) 1.0))
+                          (nz (if far (* dz inv) 0.0))
+                          (sep (- d ri rj))
+                          (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
+                     (when (< sep (speculative-distance approach dt slop margin gstep))
+                       ;; orient every pair contact from the lower handle slot to the higher
+                       (if (< (handle-index hi) (handle-index hj))
+                           (touch-contact world (pair-key (handle-index hi) (handle-index hj))
+                                          +contact-pair+ hi hj nx ny nz sep
+                                          (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)) 0.0 0.0 0.0)
+                           (touch-contact world (pair-key (handle-index hj) (handle-index hi))
+                                          +contact-pair+ hj hi (- nx) (- ny) (- nz) sep
+                                          (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))
+                                          0.0 0.0 0.0))))))))
+        (declare (inline pair))
+        (dotimes (i n)
+          (when (zerop (logand (aref flags i) +flag-terrain-only+))
+            (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i))
+                  (hi (aref handle i)) (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
+              (do-grid-neighbours (j grid xi yi zi)
+                (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+)))
+                  (pair xi yi zi ri hi vxi vyi vzi
+                        (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
+                        (aref vx j) (aref vy j) (aref vz j))))
+              (when any-sleeping
+                (do-grid-neighbours (h sgrid xi yi zi)
+                  (let ((slot (handle-index h)))
+                    (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+                               (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+                      (let ((row (aref (handle-table-local ids) slot)))
+                        (when (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
+                          (pair xi yi zi ri hi vxi vyi vzi
+                                (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
+                                (aref (body-columns-z sleeping) row)
+                                (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0))))))))))))
+    world))
+;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
+
+;; [[file:../physics.org::#MYWH16][Sphere against cells: the overshoot rule keeps seams smooth:1]]
+(defmacro with-cell-closest-point ((nx ny nz px py pz separation d2 ox oy oz)
+                                   (cx cy cz r minx miny minz maxx maxy maxz) outside inside)
+  "Bind the closest point of box MIN..MAX to centre C. When C is outside the box, run OUTSIDE with
+the overshoot signs OX OY OZ, the squared distance D2 and the point; NX..SEPARATION are
+computed lazily by OUTSIDE itself through the local function FINISH. When C is inside, run
+INSIDE. #MYWH16"
+  `(let* ((,px (max ,minx (min ,maxx ,cx)))
+          (,py (max ,miny (min ,maxy ,cy)))
+          (,pz (max ,minz (min ,maxz ,cz)))
+          (,ox (cond ((< ,cx ,minx) -1) ((> ,cx ,maxx) 1) (t 0)))
+          (,oy (cond ((< ,cy ,miny) -1) ((> ,cy ,maxy) 1) (t 0)))
+          (,oz (cond ((< ,cz ,minz) -1) ((> ,cz ,maxz) 1) (t 0)))
+          (,d2 (+ (* (- ,px ,cx) (- ,px ,cx)) (* (- ,py ,cy) (- ,py ,cy)) (* (- ,pz ,cz) (- ,pz ,cz)))))
+     (declare (type single-float ,px ,py ,pz ,d2) (type (integer -1 1) ,ox ,oy ,oz))
+     (if (or (/= ,ox 0) (/= ,oy 0) (/= ,oz 0))
+         (flet ((finish ()
+                  (let* ((d (fsqrt ,d2)) (inv (/ 1.0 (max d 1e-12))))
+                    (values (* (- ,px ,cx) inv) (* (- ,py ,cy) inv) (* (- ,pz ,cz) inv) (- d ,r)))))
+           (declare (inline finish) (ignorable #'finish))
+           ,outside)
+         (let ((,nx 0.0) (,ny 0.0) (,nz 0.0) (,separation 0.0))
+           (declare (ignorable ,nx ,ny ,nz ,separation))
+           ,inside))))
+
+(defun inside-face (probe cx cy cz r ix iy iz)
+  "For a centre CX CY CZ inside cell IX IY IZ: the face to push it out through (the shallowest
+whose neighbour is air, else the shallowest), as normal, point and separation. #MYWH16"
+  (declare (type single-float cx cy cz r) (type cell ix iy iz))
+  (let ((best-depth most-positive-single-float) (best -1) (best-open nil)
+        (faces (vector (- cx ix) (- (1+ ix) cx) (- cy iy) (- (1+ iy) cy) (- cz iz) (- (1+ iz) cz))))
+    (dotimes (f 6)
+      (let* ((depth (svref faces f))
+             (open (not (probe-solid-p probe
+                                       (+ ix (case f (0 -1) (1 1) (t 0)))
+                                       (+ iy (case f (2 -1) (3 1) (t 0)))
+                                       (+ iz (case f (4 -1) (5 1) (t 0)))))))
+        (when (or (and open (not best-open))
+                  (and (eq open best-open) (< depth best-depth)))
+          (setf best f best-depth depth best-open open))))
+    (let ((fx (case best (0 -1.0) (1 1.0) (t 0.0)))
+          (fy (case best (2 -1.0) (3 1.0) (t 0.0)))
+          (fz (case best (4 -1.0) (5 1.0) (t 0.0))))
+      (values (- fx) (- fy) (- fz)
+              (+ cx (* best-depth fx)) (+ cy (* best-depth fy)) (+ cz (* best-depth fz))
+              (- (+ best-depth r))))))
+
+(defun terrain-phase (world)
+  "Phase 5: each awake body gathers the solid cells within its reach into a 27-bit mask and
+offers one contact per cell whose face, edge or corner passes the overshoot rule and whose gap
+is under the speculative distance. #MYWH16"
+  (declare #.+kernel-policy+)
+  (let ((terrain (physics-world-terrain world)))
+    (when terrain
+      (let* ((awake (physics-world-awake world))
+             (probe (physics-world-probe world))
+             (n (body-columns-length awake))
+             (margin (f32 (physics-world-margin world)))
+             (slop (f32 (physics-world-slop world)))
+             (dt (physics-world-current-dt world))
+             (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
+                                   (expt (physics-world-gravity-z world) 2)))))
+             (limit (f32 *physics-reach-limit*)))
+        (declare (type single-float margin limit slop dt gstep))
+        (with-body-columns (x y z vx vy vz radius handle) awake
+          (dotimes (i n)
+            (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+                   (reach (min limit (+ r margin)))
+                   (x0 (cell-floor (- cx reach))) (x1 (cell-floor (+ cx reach)))
+                   (y0 (cell-floor (- cy reach))) (y1 (cell-floor (+ cy reach)))
+                   (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach)))
+                   (mask 0))
+              (declare (type fixnum x0 x1 y0 y1 z0 z1) (type (unsigned-byte 27) mask))
+              ;; gather the solid cells of the (at most) 3x3x3 neighbourhood
+              (if (and (= (ash x0 -4) (ash x1 -4)) (= (ash y0 -4) (ash y1 -4)) (= (ash z0 -4) (ash z1 -4)))
+                  (let ((chunk (probe-chunk probe (chunk-key x0 y0 z0))))
+                    (declare (type chunk-storage chunk))
+                    (loop for iz of-type fixnum from z0 to z1 do
+                      (loop for iy of-type fixnum from y0 to y1 do
+                        (loop for ix of-type fixnum from x0 to x1 do
+                          (when (plusp (aref chunk (cell-offset ix iy iz)))
+                            (setf mask (logior mask (ash 1 (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))
+                  (loop for iz of-type fixnum from z0 to z1 do
+                    (loop for iy of-type fixnum from y0 to y1 do
+                      (loop for ix of-type fixnum from x0 to x1 do
+                        (when (probe-solid-p probe ix iy iz)
+                          (setf mask (logior mask (ash 1 (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))
+              (unless (zerop mask)
+                (flet ((solid (ix iy iz)
+                         (declare (type fixnum ix iy iz))
+                         (logbitp (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))) mask)))
+                  (declare (inline solid))
+                  (loop for iz of-type fixnum from z0 to z1 do
+                    (loop for iy of-type fixnum from y0 to y1 do
+                      (loop for ix of-type fixnum from x0 to x1 do
+                        (when (solid ix iy iz)
+                          (let ((fx (float ix 1.0)) (fy (float iy 1.0)) (fz (float iz 1.0))
+                                (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
+                            (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
+                                (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
+                              ;; outside: the overshoot rule, then the contact
+                              (when (and (<= d2 (* reach reach))
+                                         (not (or (and (/= ox 0) (solid (+ ix ox) iy iz))
+                                                  (and (/= oy 0) (solid ix (+ iy oy) iz))
+                                                  (and (/= oz 0) (solid ix iy (+ iz oz)))
+                                                  (and (/= ox 0) (/= oy 0) (solid (+ ix ox) (+ iy oy) iz))
+                                                  (and (/= ox 0) (/= oz 0) (solid (+ ix ox) iy (+ iz oz)))
+                                                  (and (/= oy 0) (/= oz 0) (solid ix (+ iy oy) (+ iz oz)))
+                                                  (and (/= ox 0) (/= oy 0) (/= oz 0)
+                                                       (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
+                                (multiple-value-bind (nx ny nz sep) (finish)
+                                  (when (< sep (speculative-distance
+                                                (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
+                                                dt slop margin gstep))
+                                    (touch-contact world key +contact-terrain+ (aref handle i) +no-body+
+                                                   nx ny nz sep px py pz 0.0 0.0 0.0))))
+                              ;; inside: push out through a face
+                              (multiple-value-bind (nx ny nz px py pz sep)
+                                  (inside-face probe cx cy cz r ix iy iz)
+                                (touch-contact world key +contact-terrain+ (aref handle i) +no-body+
+                                               nx ny nz sep px py pz 0.0 0.0 0.0)))))))))))))))
+    world))
+;; Sphere against cells: the overshoot rule keeps seams smooth:1 ends here
+
+;; [[file:../physics.org::#B0XPH5][Boxes touch as moving terrain:1]]
+(defun box-phase (world)
+  "Phase 6: posted kinematic boxes touch the awake bodies near them as moving terrain. #B0XPH5"
+  (let* ((boxes (physics-world-boxes world))
+         (awake (physics-world-awake world))
+         (grid (physics-world-awake-grid world))
+         (margin (physics-world-margin world))
+         (limit (f32 *physics-reach-limit*)))
+    (when (plusp (box-columns-length boxes))
+      (with-body-columns (x y z radius handle) awake
+        (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz id) boxes
+          (dotimes (b (box-columns-length boxes))
+            (let* ((bx0 (aref min-x b)) (by0 (aref min-y b)) (bz0 (aref min-z b))
+                   (bx1 (aref max-x b)) (by1 (aref max-y b)) (bz1 (aref max-z b))
+                   (ccx (* 0.5 (+ bx0 bx1))) (ccy (* 0.5 (+ by0 by1))) (ccz (* 0.5 (+ bz0 bz1)))
+                   (half (max (- bx1 ccx) (- by1 ccy) (- bz1 ccz)))
+                   (span (1+ (ceiling (* half (hash-grid-inv-cell grid))))))
+              (do-grid-neighbours (i grid ccx ccy ccz :span span)
+                (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+                       (reach (min limit (+ r margin)))
+                       (key (box-key (handle-index (aref handle i)) (aref id b))))
+                  (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
+                      (cx cy cz r bx0 by0 bz0 bx1 by1 bz1)
+                    (when (<= d2 (* reach reach))
+                      (multiple-value-bind (nx ny nz sep) (finish)
+                        (touch-contact world key +contact-box+ (aref handle i) +no-body+
+                                       nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))
+                    (let* ((faces (list (cons (- cx bx0) 0) (cons (- bx1 cx) 1) (cons (- cy by0) 2)
+                                        (cons (- by1 cy) 3) (cons (- cz bz0) 4) (cons (- bz1 cz) 5)))
+                           (best (reduce (lambda (a c) (if (< (car c) (car a)) c a)) faces))
+                           (depth (car best)) (f (cdr best))
+                           (fx (case f (0 -1.0) (1 1.0) (t 0.0)))
+                           (fy (case f (2 -1.0) (3 1.0) (t 0.0)))
+                           (fz (case f (4 -1.0) (5 1.0) (t 0.0))))
+                      (touch-contact world key +contact-box+ (aref handle i) +no-body+
+                                     (- fx) (- fy) (- fz) (- (+ depth r))
+                                     (+ cx (* depth fx)) (+ cy (* depth fy)) (+ cz (* depth fz))
+                                     (aref vx b) (aref vy b) (aref vz b)))))))))))
+    world))
+;; Boxes touch as moving terrain:1 ends here
+
+;; [[file:../physics.org::#PRUN3D][Contacts not found this step are pruned:1]]
+(defun prune-phase (world)
+  "Phase 7: drop every contact not seen this step, patching the table entry of the row that
+fills its hole; a touching one ends with an :end event. #PRUN3D"
+  (let* ((contacts (physics-world-contacts world))
+         (table (physics-world-contact-table world))
+         (step (physics-world-step-count world)))
+    (loop for row of-type fixnum from (1- (contact-columns-length contacts)) downto 0
+          do (with-contact-columns (seen touching key handle-a handle-b px py pz) contacts
+               (unless (= (aref seen row) step)
+                 (when (= (aref touching row) 1)
+                   (push-event world +event-end+ (aref handle-a row) (aref handle-b row)
+                               (aref px row) (aref py row) (aref pz row) 0.0))
+                 (contact-table-delete table (aref key row))
+                 (let ((moved (contact-columns-swap-remove contacts row)))
+                   (when (>= moved 0)
+                     (contact-table-put table (aref key row) row))))))
+    world))
+;; Contacts not found this step are pruned:1 ends here
+
+;; [[file:../physics.org::#SSMPYW][Colours are the lanes:1]]
+(define-physics-layout constraint-columns
+  "The contacts of one step as solver rows, written in colour order. #SSMPYW"
+  (contact fixnum) (body-a fixnum) (body-b fixnum)
+  (nx single-float) (ny single-float) (nz single-float)
+  (t1x single-float) (t1y single-float) (t1z single-float)
+  (t2x single-float) (t2y single-float) (t2z single-float)
+  (ra single-float) (rb single-float)
+  (ima single-float) (imb single-float) (iia single-float) (iib single-float)
+  (separation single-float) (kvn single-float) (kvt1 single-float) (kvt2 single-float)
+  (normal-mass single-float) (tangent-mass single-float) (rolling-mass single-float)
+  (friction single-float) (rolling-limit single-float) (restitution single-float)
+  (relative-velocity single-float) (max-normal-impulse single-float)
+  (bias-rate single-float) (mass-scale single-float) (impulse-scale single-float)
+  (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
+  (rolling-impulse-x single-float) (rolling-impulse-y single-float) (rolling-impulse-z single-float))
+
+(defun ensure-solver-scratch (world n contacts)
+  "Size WORLD's per-step scratch for N awake bodies (plus the dummy) and CONTACTS contacts. #SSMPYW"
+  (when (< (length (physics-world-velocities world)) (* +solver-stride+ (1+ n)))
+    (let ((rows (max (1+ n) (* 2 (floor (length (physics-world-velocities world)) +solver-stride+)) 64)))
+      (setf (physics-world-velocities world)
+            (make-array (* +solver-stride+ rows) :element-type 'single-float :initial-element 0.0)
+            (physics-world-deltas world)
+            (make-array (* +delta-stride+ rows) :element-type 'single-float :initial-element 0.0)
+            (physics-world-color-masks world)
+            (make-array rows :element-type 'fixnum :initial-element 0))))
+  (when (< (length (physics-world-contact-colors world)) contacts)
+    (setf (physics-world-contact-colors world)
+          (make-array (max contacts (* 2 (length (physics-world-contact-colors world))) 64)
+                      :element-type 'fixnum :initial-element 0)))
+  (constraint-columns-ensure-capacity (physics-world-constraints world) contacts)
+  world)
+
+(declaim (inline lowest-bit highest-bit))
+(defun lowest-bit (x)
+  "The index of the lowest set bit of X > 0. #SSMPYW"
+  (declare (type (unsigned-byte 32) x))
+  (1- (integer-length (logand x (- x)))))
+
+(defun highest-bit (x)
+  "The index of the highest set bit of X > 0. #SSMPYW"
+  (declare (type (unsigned-byte 32) x))
+  (1- (integer-length x)))
+
+(defun color-contacts (world)
+  "Greedy colouring: a two-body contact takes the lowest of colours 0-19 free at both bodies, a
+one-sided contact the highest of colours 0-23 free at its awake body, anything else the
+overflow colour 24. Fills the colour of each contact and the colour starts; returns the
+number of colours used. #SSMPYW"
+  (let* ((contacts (physics-world-contacts world))
+         (m (contact-columns-length contacts))
+         (ids (physics-world-ids world))
+         (n (body-columns-length (physics-world-awake world)))
+         (masks (physics-world-color-masks world))
+         (colors (physics-world-contact-colors world))
+         (starts (physics-world-color-starts world))
+         (sets (handle-table-set ids))
+         (locals (handle-table-local ids)))
+    (declare (type fixnum-column masks colors starts sets locals) (type index m n) #.+kernel-policy+)
+    (fill masks 0 :end (1+ n))
+    (fill starts 0)
+    (with-contact-columns (handle-a handle-b) contacts
+      (dotimes (c m)
+        (let* ((ha (aref handle-a c)) (hb (aref handle-b c))
+               (la (if (= (aref sets (handle-index ha)) +set-awake+) (aref locals (handle-index ha)) -1))
+               (lb (if (and (>= hb 0) (= (aref sets (handle-index hb)) +set-awake+))
+                       (aref locals (handle-index hb)) -1))
+               (color +physics-max-colors+))
+          (declare (type fixnum ha hb la lb color))
+          (cond ((and (>= la 0) (>= lb 0))
+                 (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
+                                     (1- (ash 1 +physics-dynamic-colors+)))))
+                   (unless (zerop free)
+                     (setf color (lowest-bit free))
+                     (setf (aref masks la) (logior (aref masks la) (ash 1 color))
+                           (aref masks lb) (logior (aref masks lb) (ash 1 color))))))
+                (t
+                 (let* ((l (max la lb))
+                        (free (logand (lognot (aref masks l)) (1- (ash 1 +physics-max-colors+)))))
+                   (unless (zerop free)
+                     (setf color (highest-bit free))
+                     (setf (aref masks l) (logior (aref masks l) (ash 1 color)))))))
+          (setf (aref colors c) color)
+          (incf (aref starts (1+ color))))))
+    (loop for c from 1 below (length starts) do (incf (aref starts c) (aref starts (1- c))))
+    (loop for c from 0 to +physics-max-colors+ count (< (aref starts c) (aref starts (1+ c))))))
+
+(defun physics-world-overflow-count (world)
+  "How many of the last step's contacts fell into the overflow colour. #SSMPYW"
+  (let ((starts (physics-world-color-starts world)))
+    (- (aref starts (1+ +physics-max-colors+)) (aref starts +physics-max-colors+))))
+;; Colours are the lanes:1 ends here
+
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:1]]
+(defun prepare-phase (world)
+  "Phase 8: colour the contacts, then write the constraint buffer in colour order, and load the
+awake bodies' velocities into the solver. Return the number of colours used. #PR3PAR"
+  (declare #.+kernel-policy+)
+  (let* ((h (physics-world-current-h world))
+         (contacts (physics-world-contacts world))
+         (m (contact-columns-length contacts))
+         (awake (physics-world-awake world))
+         (sleeping (physics-world-sleeping world))
+         (n (body-columns-length awake)))
+    (declare (type body-columns awake sleeping) (type contact-columns contacts) (type single-float h)
+             (type index m n))
+    (ensure-solver-scratch world n m)
+    (let ((color-count (color-contacts world))
+          (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 (the single-float h))))
+          (zeta (f32 (physics-world-damping-ratio world)))
+          (ids (physics-world-ids world))
+          (cbuf (physics-world-constraints world))
+          (colors (physics-world-contact-colors world))
+          (v (physics-world-velocities world))
+          (d (physics-world-deltas world))
+          (slop (f32 (physics-world-slop world))))
+      (declare (type f32-column v d) (type fixnum-column colors) (type single-float slop hertz zeta)
+               (type handle-table ids) (type constraint-columns cbuf))
+      (multiple-value-bind (dyn-bias dyn-mass dyn-impulse) (physics-softness hertz zeta h)
+        (multiple-value-bind (st-bias st-mass st-impulse) (physics-softness (* 2.0 hertz) zeta h)
+          (setf (constraint-columns-length cbuf) m)
+          ;; the solver's body state: velocities of awake rows, zero deltas, a zero dummy row
+          (with-body-columns (vx vy vz wx wy wz) awake
+            (dotimes (i n)
+              (let ((o (* i +solver-stride+)))
+                (setf (aref v o) (aref vx i) (aref v (+ o 1)) (aref vy i) (aref v (+ o 2)) (aref vz i)
+                      (aref v (+ o 3)) (aref wx i) (aref v (+ o 4)) (aref wy i) (aref v (+ o 5)) (aref wz i)))))
+          (fill v 0.0 :start (* n +solver-stride+) :end (* (1+ n) +solver-stride+))
+          (fill d 0.0 :end (* (1+ n) +delta-stride+))
+          (let ((cursor (make-array (+ +physics-max-colors+ 1) :element-type 'fixnum))
+                (sets (handle-table-set ids)) (locals (handle-table-local ids)))
+            (declare (dynamic-extent cursor) (type fixnum-column sets locals))
+            (replace cursor (physics-world-color-starts world))
+            (with-contact-columns ((ha handle-a) (hb handle-b) (cnx nx) (cny ny) (cnz nz) (csep separation)
+                                   (ckx kvx) (cky kvy) (ckz kvz) (cl normal-impulse) (cl1 tangent-impulse-1)
+                                   (cl2 tangent-impulse-2) (crx rolling-impulse-x) (cry rolling-impulse-y)
+                                   (crz rolling-impulse-z))
+                contacts
+              (with-constraint-columns (contact body-a body-b nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb
+                                        iia iib separation kvn kvt1 kvt2 normal-mass tangent-mass rolling-mass
+                                        friction rolling-limit restitution relative-velocity max-normal-impulse
+                                        bias-rate mass-scale impulse-scale normal-impulse tangent-impulse-1
+                                        tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z)
+                  cbuf
+                (dotimes (c m)
+                  (let* ((k (aref cursor (aref colors c)))
+                         (a (aref ha c)) (b (aref hb c))
+                         (set-a (aref sets (handle-index a)))
+                         (set-b (if (>= b 0) (aref sets (handle-index b)) +set-free+))
+                         (la (aref locals (handle-index a)))
+                         (lb (if (>= b 0) (aref locals (handle-index b)) 0))
+                         (buf-a (if (= set-a +set-awake+) awake sleeping))
+                         (buf-b (if (= set-b +set-awake+) awake sleeping))
+                         (sets sets) (locals locals)
+                         (dyn-a (= set-a +set-awake+)) (dyn-b (= set-b +set-awake+))
+                         (two-sided (and dyn-a dyn-b))
+                         (x (aref cnx c)) (y (aref cny c)) (z (aref cnz c)))
+                    (declare (type fixnum k a b set-a set-b la lb) (type single-float x y z)
+                             (type body-columns buf-a buf-b) (type fixnum-column sets locals) (ignorable sets locals))
+                    (incf (aref cursor (aref colors c)))
+                    (setf (aref contact k) c
+                          (aref body-a k) (if dyn-a la n)
+                          (aref body-b k) (if dyn-b lb n)
+                          (aref nx k) x (aref ny k) y (aref nz k) z)
+                    ;; tangent frame: t1 perpendicular to n, built from the axis least aligned with it
+                    (multiple-value-bind (tx ty tz)
+                        (if (> (abs y) 0.9)
+                            (let ((s (/ 1.0 (fsqrt (+ (* z z) (* y y)))))) (values 0.0 (* z s) (- (* y s))))
+                            (let ((s (/ 1.0 (fsqrt (+ (* z z) (* x x)))))) (values (- (* z s)) 0.0 (* x s))))
+                      (setf (aref t1x k) tx (aref t1y k) ty (aref t1z k) tz
+                            (aref t2x k) (- (* y tz) (* z ty))
+                            (aref t2y k) (- (* z tx) (* x tz))
+                            (aref t2z k) (- (* x ty) (* y tx))))
+                    (let* ((r-a (aref (body-columns-radius buf-a) la))
+                           (r-b (if (>= b 0) (aref (body-columns-radius buf-b) lb) 0.0))
+                           (im-a (if dyn-a (aref (body-columns-inverse-mass awake) la) 0.0))
+                           (im-b (if dyn-b (aref (body-columns-inverse-mass awake) lb) 0.0))
+                           (ii-a (if dyn-a (aref (body-columns-inverse-inertia awake) la) 0.0))
+                           (ii-b (if dyn-b (aref (body-columns-inverse-inertia awake) lb) 0.0))
+                           (kx (aref ckx c)) (ky (aref cky c)) (kz (aref ckz c))
+                           (mass-sum (+ im-a im-b))
+                           (tangent-sum (+ im-a im-b (* ii-a r-a r-a) (* ii-b r-b r-b)))
+                           (rolling-sum (+ ii-a ii-b))
+                           (va (if dyn-a (* la +solver-stride+) (* n +solver-stride+)))
+                           (vb (if dyn-b (* lb +solver-stride+) (* n +solver-stride+))))
+                      (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz))
+                      (setf (aref ra k) r-a (aref rb k) r-b
+                            (aref ima k) im-a (aref imb k) im-b (aref iia k) ii-a (aref iib k) ii-b
+                            (aref separation k) (+ (aref csep c) slop)
+                            (aref kvn k) (+ (* kx x) (* ky y) (* kz z))
+                            (aref kvt1 k) (+ (* kx (aref t1x k)) (* ky (aref t1y k)) (* kz (aref t1z k)))
+                            (aref kvt2 k) (+ (* kx (aref t2x k)) (* ky (aref t2y k)) (* kz (aref t2z k)))
+                            (aref normal-mass k) (if (> mass-sum 0.0) (/ 1.0 mass-sum) 0.0)
+                            (aref tangent-mass k) (if (> tangent-sum 0.0) (/ 1.0 tangent-sum) 0.0)
+                            (aref rolling-mass k) (if (> rolling-sum 0.0) (/ 1.0 rolling-sum) 0.0))
+                      (if (>= b 0)
+                          (setf (aref friction k) (fsqrt (* (aref (body-columns-friction buf-a) la)
+                                                           (aref (body-columns-friction buf-b) lb)))
+                                (aref restitution k) (max (aref (body-columns-restitution buf-a) la)
+                                                          (aref (body-columns-restitution buf-b) lb))
+                                (aref rolling-limit k) (* (max (aref (body-columns-rolling-resistance buf-a) la)
+                                                               (aref (body-columns-rolling-resistance buf-b) lb))
+                                                          (max r-a r-b)))
+                          (setf (aref friction k) (aref (body-columns-friction buf-a) la)
+                                (aref restitution k) (aref (body-columns-restitution buf-a) la)
+                                (aref rolling-limit k) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)))
+                      (setf (aref relative-velocity k)
+                            (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
+                               (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
+                               (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z))))
+                    (if two-sided
+                        (setf (aref bias-rate k) dyn-bias (aref mass-scale k) dyn-mass
+                              (aref impulse-scale k) dyn-impulse)
+                        (setf (aref bias-rate k) st-bias (aref mass-scale k) st-mass
+                              (aref impulse-scale k) st-impulse))
+                    (setf (aref max-normal-impulse k) 0.0
+                          (aref normal-impulse k) (aref cl c)
+                          (aref tangent-impulse-1 k) (aref cl1 c) (aref tangent-impulse-2 k) (aref cl2 c)
+                          (aref rolling-impulse-x k) (aref crx c) (aref rolling-impulse-y k) (aref cry c)
+                          (aref rolling-impulse-z k) (aref crz c)))))))))
+      color-count)))
+;; Preparing the constraints:1 ends here
+
+;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
+(defun physics-softness (hertz zeta h)
+  "The soft-constraint coefficients of a spring of HERTZ and damping ratio ZETA over substep H:
+bias rate, mass scale and impulse scale, as three values. #G7Q3XR"
+  (declare (type single-float hertz zeta h))
+  (if (= hertz 0.0)
+      (values 0.0 1.0 0.0)
+      (let* ((omega (* 2.0 (f32 pi) hertz))
+             (a1 (+ (* 2.0 zeta) (* h omega)))
+             (a2 (* h omega a1))
+             (a3 (/ 1.0 (+ 1.0 a2))))
+        (values (/ omega a1) (* a2 a3) a3))))
+;; Soft contacts:1 ends here
+
+;; [[file:../physics.org::#K3RNLS][The kernel entry points, and integration:1]]
+(defgeneric physics-integrate-velocities (kernels world h)
+  (:documentation "Substep stage 1: add gravity over H to every awake velocity, clamping speed. #K3RNLS"))
+
+(defgeneric physics-warm-start (kernels world)
+  (:documentation "Substep stage 2: apply every constraint's carried impulses. #K3RNLS"))
+
+(defgeneric physics-solve-contacts (kernels world inv-h use-bias elapsed)
+  (:documentation "Substep stages 3 and 5: one pass over the constraints in colour order, with
+the soft bias (solve) or without it (relax). #K3RNLS"))
+
+(defgeneric physics-integrate-positions (kernels world h)
+  (:documentation "Substep stage 4: move every awake body's delta by its velocity over H. #K3RNLS"))
+
+(defgeneric physics-apply-restitution (kernels world threshold)
+  (:documentation "After the substeps: bounce the contacts that pushed and arrived faster than
+THRESHOLD. #K3RNLS"))
+
+(defun integrate-velocities-range (v start end h gx gy gz max-speed)
+  "Add H times gravity to velocity rows START..END of V and clamp their speed to MAX-SPEED. #K3RNLS"
+  (declare (type f32-column v) (type index start end) (type single-float h gx gy gz max-speed)
+           #.+kernel-policy+)
+  (let ((dvx (* h gx)) (dvy (* h gy)) (dvz (* h gz)) (max2 (* max-speed max-speed)))
+    (loop for i of-type index from start below end
+          for o of-type index = (* i +solver-stride+)
+          do (let* ((x (+ (aref v o) dvx)) (y (+ (aref v (+ o 1)) dvy)) (z (+ (aref v (+ o 2)) dvz))
+                    (s2 (+ (* x x) (* y y) (* z z))))
+               (when (> s2 max2)
+                 (let ((s (/ max-speed (fsqrt s2))))
+                   (setf x (* x s) y (* y s) z (* z s))))
+               (setf (aref v o) x (aref v (+ o 1)) y (aref v (+ o 2)) z)))))
+
+(defun integrate-positions-range (v d start end h)
+  "Add H times velocity to delta rows START..END of D. #K3RNLS"
+  (declare (type f32-column v d) (type index start end) (type single-float h) #.+kernel-policy+)
+  (loop for i of-type index from start below end
+        for o of-type index = (* i +solver-stride+)
+        for p of-type index = (* i +delta-stride+)
+        do (setf (aref d p) (+ (aref d p) (* h (aref v o)))
+                 (aref d (+ p 1)) (+ (aref d (+ p 1)) (* h (aref v (+ o 1))))
+                 (aref d (+ p 2)) (+ (aref d (+ p 2)) (* h (aref v (+ o 2)))))))
+;; The kernel entry points, and integration:1 ends here
+
+;; [[file:../physics.org::#W4RMST][Warm start:1]]
+(defmacro with-solver-columns (cbuf &body body)
+  "Bind every constraint column of CBUF that the kernels read, by its own name. #W4RMST"
+  `(with-constraint-columns (body-a body-b nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib
+                             separation kvn kvt1 kvt2 normal-mass tangent-mass rolling-mass friction
+                             rolling-limit restitution relative-velocity max-normal-impulse bias-rate
+                             mass-scale impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2
+                             rolling-impulse-x rolling-impulse-y rolling-impulse-z)
+       ,cbuf
+     (declare (ignorable body-a body-b nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib
+                         separation kvn kvt1 kvt2 normal-mass tangent-mass rolling-mass friction
+                         rolling-limit restitution relative-velocity max-normal-impulse bias-rate
+                         mass-scale impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2
+                         rolling-impulse-x rolling-impulse-y rolling-impulse-z))
+     ,@body))
+
+(defun warm-start-range (cbuf v start end)
+  "Apply the carried normal, friction and rolling impulses of constraints START..END. #W4RMST"
+  (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
+  (with-solver-columns cbuf
+    (loop for k of-type index from start below end do
+      (let* ((a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
+             (x (aref nx k)) (y (aref ny k)) (z (aref nz k))
+             (l (aref normal-impulse k)) (l1 (aref tangent-impulse-1 k)) (l2 (aref tangent-impulse-2 k))
+             (px (+ (* l x) (* l1 (aref t1x k)) (* l2 (aref t2x k))))
+             (py (+ (* l y) (* l1 (aref t1y k)) (* l2 (aref t2y k))))
+             (pz (+ (* l z) (* l1 (aref t1z k)) (* l2 (aref t2z k))))
+             ;; n x P = l1 t2 - l2 t1: the torque arm of the friction part
+             (cx (- (* l1 (aref t2x k)) (* l2 (aref t1x k))))
+             (cy (- (* l1 (aref t2y k)) (* l2 (aref t1y k))))
+             (cz (- (* l1 (aref t2z k)) (* l2 (aref t1z k))))
+             (ma (aref ima k)) (mb (aref imb k)) (ia (aref iia k)) (ib (aref iib k))
+             (ar (aref ra k)) (br (aref rb k))
+             (rx (aref rolling-impulse-x k)) (ry (aref rolling-impulse-y k)) (rz (aref rolling-impulse-z k)))
+        (declare (type index a b))
+        (setf (aref v a) (- (aref v a) (* ma px))
+              (aref v (+ a 1)) (- (aref v (+ a 1)) (* ma py))
+              (aref v (+ a 2)) (- (aref v (+ a 2)) (* ma pz))
+              (aref v (+ a 3)) (- (aref v (+ a 3)) (* ia (+ (* ar cx) rx)))
+              (aref v (+ a 4)) (- (aref v (+ a 4)) (* ia (+ (* ar cy) ry)))
+              (aref v (+ a 5)) (- (aref v (+ a 5)) (* ia (+ (* ar cz) rz)))
+              (aref v b) (+ (aref v b) (* mb px))
+              (aref v (+ b 1)) (+ (aref v (+ b 1)) (* mb py))
+              (aref v (+ b 2)) (+ (aref v (+ b 2)) (* mb pz))
+              (aref v (+ b 3)) (+ (aref v (+ b 3)) (* ib (- rx (* br cx))))
+              (aref v (+ b 4)) (+ (aref v (+ b 4)) (* ib (- ry (* br cy))))
+              (aref v (+ b 5)) (+ (aref v (+ b 5)) (* ib (- rz (* br cz)))))))))
+;; Warm start:1 ends here
+
+;; [[file:../physics.org::#S0LV3R][Solve and relax:1]]
+(defun solve-range (cbuf v d start end inv-h use-bias elapsed push-max)
+  "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
+when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
+  (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
+           (type single-float inv-h elapsed push-max) #.+kernel-policy+)
+  (with-solver-columns cbuf
+    (loop for k of-type index from start below end do
+      (let* ((ia8 (aref body-a k)) (ib8 (aref body-b k))
+             (a (* ia8 +solver-stride+)) (b (* ib8 +solver-stride+))
+             (da (* ia8 +delta-stride+)) (db (* ib8 +delta-stride+))
+             (x (aref nx k)) (y (aref ny k)) (z (aref nz k))
+             (ma (aref ima k)) (mb (aref imb k)) (iam (aref iia k)) (ibm (aref iib k))
+             (ar (aref ra k)) (br (aref rb k))
+             (vax (aref v a)) (vay (aref v (+ a 1))) (vaz (aref v (+ a 2)))
+             (wax (aref v (+ a 3))) (way (aref v (+ a 4))) (waz (aref v (+ a 5)))
+             (vbx (aref v b)) (vby (aref v (+ b 1))) (vbz (aref v (+ b 2)))
+             (wbx (aref v (+ b 3))) (wby (aref v (+ b 4))) (wbz (aref v (+ b 5)))
+             ;; current separation: the prepared gap moved by both deltas and the box's travel
+             (s (+ (aref separation k)
+                   (+ (* (- (aref d db) (aref d da)) x)
+                      (* (- (aref d (+ db 1)) (aref d (+ da 1))) y)
+                      (* (- (aref d (+ db 2)) (aref d (+ da 2))) z))
+                   (* (aref kvn k) elapsed)))
+             (bias 0.0) (mscale 1.0) (iscale 0.0))
+        (declare (type index a b da db) (type single-float bias mscale iscale))
+        (cond ((> s 0.0) (setf bias (* s inv-h)))
+              (use-bias (setf bias (max (* (aref bias-rate k) s) (- push-max))
+                              mscale (aref mass-scale k) iscale (aref impulse-scale k))))
+        ;; normal
+        (let* ((vn (+ (* (- vbx vax) x) (* (- vby vay) y) (* (- vbz vaz) z) (aref kvn k)))
+               (l (aref normal-impulse k))
+               (new (max (- l (* (aref normal-mass k) mscale (+ vn bias)) (* iscale l)) 0.0))
+               (dl (- new l)))
+          (setf (aref normal-impulse k) new
+                (aref max-normal-impulse k) (max (aref max-normal-impulse k) new))
+          (setf vax (- vax (* ma dl x)) vay (- vay (* ma dl y)) vaz (- vaz (* ma dl z))
+                vbx (+ vbx (* mb dl x)) vby (+ vby (* mb dl y)) vbz (+ vbz (* mb dl z)))
+          ;; friction, inside the cone |l1,l2| <= friction * normal impulse
+          (let* ((ux (aref t1x k)) (uy (aref t1y k)) (uz (aref t1z k))
+                 (qx (aref t2x k)) (qy (aref t2y k)) (qz (aref t2z k))
+                 (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
+                 (dvx (- vbx vax)) (dvy (- vby vay)) (dvz (- vbz vaz))
+                 (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (aref kvt1 k)) (+ (* wx qx) (* wy qy) (* wz qz))))
+                 (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (aref kvt2 k) (+ (* wx ux) (* wy uy) (* wz uz))))
+                 (l1 (aref tangent-impulse-1 k)) (l2 (aref tangent-impulse-2 k))
+                 (tm (aref tangent-mass k))
+                 (n1 (- l1 (* tm vt1))) (n2 (- l2 (* tm vt2)))
+                 (limit (* (aref friction k) new))
+                 (len2 (+ (* n1 n1) (* n2 n2))))
+            (when (> len2 (* limit limit))
+              (let ((scale (/ limit (fsqrt len2))))
+                (setf n1 (* n1 scale) n2 (* n2 scale))))
+            (let* ((d1 (- n1 l1)) (d2 (- n2 l2))
+                   (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
+                   (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz))))
+              (setf (aref tangent-impulse-1 k) n1 (aref tangent-impulse-2 k) n2)
+              (setf vax (- vax (* ma px)) vay (- vay (* ma py)) vaz (- vaz (* ma pz))
+                    vbx (+ vbx (* mb px)) vby (+ vby (* mb py)) vbz (+ vbz (* mb pz))
+                    wax (- wax (* iam ar cx)) way (- way (* iam ar cy)) waz (- waz (* iam ar cz))
+                    wbx (- wbx (* ibm br cx)) wby (- wby (* ibm br cy)) wbz (- wbz (* ibm br cz)))))
+          ;; rolling resistance: an angular impulse inside |R| <= rolling-limit * normal impulse
+          (let ((rlimit (* (aref rolling-limit k) new)))
+            (when (> (aref rolling-limit k) 0.0)
+              (let* ((rm (aref rolling-mass k))
+                     (rx (aref rolling-impulse-x k)) (ry (aref rolling-impulse-y k)) (rz (aref rolling-impulse-z k))
+                     (nrx (- rx (* rm (- wbx wax)))) (nry (- ry (* rm (- wby way)))) (nrz (- rz (* rm (- wbz waz))))
+                     (len2 (+ (* nrx nrx) (* nry nry) (* nrz nrz))))
+                (when (> len2 (* rlimit rlimit))
+                  (let ((scale (/ rlimit (fsqrt len2))))
+                    (setf nrx (* nrx scale) nry (* nry scale) nrz (* nrz scale))))
+                (let ((dx (- nrx rx)) (dy (- nry ry)) (dz (- nrz rz)))
+                  (setf (aref rolling-impulse-x k) nrx (aref rolling-impulse-y k) nry
+                        (aref rolling-impulse-z k) nrz)
+                  (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
+                        wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz))))))))
+        (setf (aref v a) vax (aref v (+ a 1)) vay (aref v (+ a 2)) vaz
+              (aref v (+ a 3)) wax (aref v (+ a 4)) way (aref v (+ a 5)) waz
+              (aref v b) vbx (aref v (+ b 1)) vby (aref v (+ b 2)) vbz
+              (aref v (+ b 3)) wbx (aref v (+ b 4)) wby (aref v (+ b 5)) wbz)))))
+;; Solve and relax:1 ends here
+
+;; [[file:../physics.org::#R3ST1T][Restitution, once:1]]
+(defun restitution-range (cbuf v start end threshold)
+  "Bounce constraints START..END that pushed and arrived faster than THRESHOLD. #R3ST1T"
+  (declare (type constraint-columns cbuf) (type f32-column v) (type index start end)
+           (type single-float threshold) #.+kernel-policy+)
+  (with-solver-columns cbuf
+    (loop for k of-type index from start below end do
+      (let ((e (aref restitution k)) (rv (aref relative-velocity k)))
+        (unless (or (= e 0.0) (> rv (- threshold)) (= (aref max-normal-impulse k) 0.0))
+          (let* ((a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
+                 (x (aref nx k)) (y (aref ny k)) (z (aref nz k))
+                 (ma (aref ima k)) (mb (aref imb k))
+                 (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
+                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (aref kvn k)))
+                 (l (aref normal-impulse k))
+                 (new (max (- l (* (aref normal-mass k) (+ vn (* e rv)))) 0.0))
+                 (dl (- new l)))
+            (declare (type index a b))
+            (setf (aref normal-impulse k) new
+                  (aref max-normal-impulse k) (max (aref max-normal-impulse k) new))
+            (setf (aref v a) (- (aref v a) (* ma dl x))
+                  (aref v (+ a 1)) (- (aref v (+ a 1)) (* ma dl y))
+                  (aref v (+ a 2)) (- (aref v (+ a 2)) (* ma dl z))
+                  (aref v b) (+ (aref v b) (* mb dl x))
+                  (aref v (+ b 1)) (+ (aref v (+ b 1)) (* mb dl y))
+                  (aref v (+ b 2)) (+ (aref v (+ b 2)) (* mb dl z)))))))))
+;; Restitution, once:1 ends here
+
+;; [[file:../physics.org::#SC4L4R][The scalar family:1]]
+(defmethod physics-integrate-velocities ((kernels scalar-kernels) world h)
+  (integrate-velocities-range (physics-world-velocities world) 0
+                              (body-columns-length (physics-world-awake world)) h
+                              (physics-world-gravity-x world) (physics-world-gravity-y world)
+                              (physics-world-gravity-z world) (f32 *physics-max-speed*)))
+
+(defmethod physics-warm-start ((kernels scalar-kernels) world)
+  (let ((cbuf (physics-world-constraints world)))
+    (warm-start-range cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf))))
+
+(defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
+  (let ((cbuf (physics-world-constraints world)))
+    (solve-range cbuf (physics-world-velocities world) (physics-world-deltas world)
+                 0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+                 (f32 (physics-world-push-max world)))))
+
+(defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
+  (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
+                             (body-columns-length (physics-world-awake world)) h))
+
+(defmethod physics-apply-restitution ((kernels scalar-kernels) world threshold)
+  (let ((cbuf (physics-world-constraints world)))
+    (restitution-range cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf)
+                       threshold)))
+;; The scalar family:1 ends here
+
+;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
+(defun store-phase (world)
+  "Phase 11: copy each constraint's impulses back to its contact, note touching flips as :begin
+and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
+speed. #ST0R3S"
+  (let* ((cbuf (physics-world-constraints world))
+         (contacts (physics-world-contacts world))
+         (d (physics-world-deltas world))
+         (v (physics-world-velocities world))
+         (ids (physics-world-ids world))
+         (awake (physics-world-awake world))
+         (sleeping (physics-world-sleeping world))
+         (hit-speed (f32 (physics-world-hit-speed world)))
+         (dt (physics-world-current-dt world))
+         (max-penetration 0.0) (max-approach 0.0))
+    (declare (type f32-column d v) (type single-float hit-speed dt max-penetration max-approach))
+    (with-constraint-columns (contact body-a body-b nx ny nz kvn relative-velocity max-normal-impulse
+                              normal-impulse tangent-impulse-1 tangent-impulse-2 rolling-impulse-x
+                              rolling-impulse-y rolling-impulse-z)
+        cbuf
+      (with-contact-columns ((cl normal-impulse) (cl1 tangent-impulse-1) (cl2 tangent-impulse-2)
+                             (crx rolling-impulse-x) (cry rolling-impulse-y) (crz rolling-impulse-z)
+                             touching kind handle-a handle-b px py pz separation key)
+          contacts
+        (dotimes (k (constraint-columns-length cbuf))
+          (let* ((c (aref contact k))
+                 (pushed (> (aref max-normal-impulse k) 0.0))
+                 (da (* (aref body-a k) +delta-stride+)) (db (* (aref body-b k) +delta-stride+))
+                 (a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
+                 (x (aref nx k)) (y (aref ny k)) (z (aref nz k))
+                 (gap (+ (aref separation c)
+                         (* (- (aref d db) (aref d da)) x) (* (- (aref d (+ db 1)) (aref d (+ da 1))) y)
+                         (* (- (aref d (+ db 2)) (aref d (+ da 2))) z) (* (aref kvn k) dt)))
+                 (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
+                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (aref kvn k))))
+            (declare (type fixnum c))
+            (setf (aref cl c) (aref normal-impulse k)
+                  (aref cl1 c) (aref tangent-impulse-1 k) (aref cl2 c) (aref tangent-impulse-2 k)
+                  (aref crx c) (aref rolling-impulse-x k) (aref cry c) (aref rolling-impulse-y k)
+                  (aref crz c) (aref rolling-impulse-z k))
+            (when (< gap 0.0)
+              (setf max-penetration (max max-penetration (- gap))
+                    max-approach (max max-approach (- vn))))
+            (unless (eq pushed (= (aref touching c) 1))
+              (setf (aref touching c) (if pushed 1 0))
+              (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
+                          (aref px c) (aref py c) (aref pz c) (- (aref relative-velocity k))
+                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))
+            (when (and pushed (> (- (aref relative-velocity k)) hit-speed)
+                       (or (= (aref kind c) +contact-box+)
+                           (flet ((reports (h)
+                                    (and (>= h 0)
+                                         (let ((set (aref (handle-table-set ids) (handle-index h)))
+                                               (row (aref (handle-table-local ids) (handle-index h))))
+                                           (logtest +flag-report-hits+
+                                                    (aref (body-columns-flags (if (= set +set-awake+) awake sleeping))
+                                                          row))))))
+                             (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
+              (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
+                          (aref px c) (aref py c) (aref pz c) (- (aref relative-velocity k))
+                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))))
+    (let ((stats (physics-world-statistics world)))
+      (setf (aref stats 3) (coerce max-penetration 'double-float)
+            (aref stats 4) (coerce max-approach 'double-float)))
+    world))
+;; Store impulses, events and the step's error:1 ends here
+
+;; [[file:../physics.org::#F1NAL5][Finalize: positions, orientation, age and sleep:1]]
+(defun finalize-phase (world)
+  "Phase 12: fold deltas into positions and solver velocities into the rows, turn orientations,
+age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
+sleep. Rows are visited from the last down, so relocation never skips one. #F1NAL5"
+  (let* ((awake (physics-world-awake world))
+         (sleeping (physics-world-sleeping world))
+         (v (physics-world-velocities world))
+         (d (physics-world-deltas world))
+         (dt (physics-world-current-dt world))
+         (inv-dt (/ 1.0 dt))
+         (sleep-p (physics-world-sleep-enabled world))
+         (sleep-speed (f32 (physics-world-sleep-speed world)))
+         (time-to-sleep (f32 (physics-world-time-to-sleep world))))
+    (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep))
+    (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
+      (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz radius sleep-time age life handle) awake
+        (let* ((o (* i +solver-stride+)) (p (* i +delta-stride+))
+               (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
+               (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5))))
+          (setf (aref x i) (+ (aref x i) ddx) (aref y i) (+ (aref y i) ddy) (aref z i) (+ (aref z i) ddz)
+                (aref vx i) (aref v o) (aref vy i) (aref v (+ o 1)) (aref vz i) (aref v (+ o 2))
+                (aref wx i) ax (aref wy i) ay (aref wz i) az)
+          ;; q += dt/2 (0,w) q, then normalise
+          (let* ((hw (* 0.5 dt)) (w0 (aref qw i)) (x0 (aref qx i)) (y0 (aref qy i)) (z0 (aref qz i))
+                 (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
+                 (nx (+ x0 (* hw (+ (* ax w0) (- (* ay z0) (* az y0))))))
+                 (ny (+ y0 (* hw (+ (* ay w0) (- (* az x0) (* ax z0))))))
+                 (nz (+ z0 (* hw (+ (* az w0) (- (* ax y0) (* ay x0))))))
+                 (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
+            (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))
+          (cond ((and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
+                 (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+                 (%remove-body world +set-awake+ i))
+                (sleep-p
+                 (let* ((speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                           (* (aref vz i) (aref vz i))))
+                                  (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
+                        (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
+                   (if (< (max speed drift) sleep-speed)
+                       (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
+                         (sleep-physics-body world i))
+                       (setf (aref sleep-time i) 0.0))))))))
+    (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
+      (with-body-columns (x y z age life handle) sleeping
+        (when (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
+          (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+          (%remove-body world +set-sleeping+ i))))
+    world))
+;; Finalize: positions, orientation, age and sleep:1 ends here
+
+;; [[file:../physics.org::#IDVK7G][The step as built:1]]
+(defun reset-phase (world)
+  "Phase 1: empty the event buffer and make the probe forget its borrowed chunks. #IDVK7G"
+  (event-columns-clear (physics-world-events world))
+  (fill (physics-world-event-data world) nil)
+  (reset-terrain-probe (physics-world-probe world) (physics-world-terrain world))
+  (incf (physics-world-step-count world))
+  world)
+
+(defun substep-phase (world)
+  "Phase 9: the Soft Step substeps: integrate velocities, warm start, solve with bias,
+integrate positions, relax without bias. #IDVK7G"
+  (let* ((kernels (physics-world-kernels world))
+         (h (physics-world-current-h world))
+         (inv-h (/ 1.0 h)))
+    (declare (type single-float h inv-h))
+    (dotimes (i (physics-world-substeps world))
+      (let ((elapsed (* h (float i 1.0))))
+        (physics-integrate-velocities kernels world h)
+        (physics-warm-start kernels world)
+        (physics-solve-contacts kernels world inv-h t elapsed)
+        (physics-integrate-positions kernels world h)
+        (physics-solve-contacts kernels world inv-h nil (+ elapsed h))))
+    world))
+
+(defun restitution-phase (world)
+  "Phase 10: bounce, once, the contacts that pushed and arrived above the threshold. #IDVK7G"
+  (physics-apply-restitution (physics-world-kernels world) world
+                             (f32 (physics-world-restitution-threshold world)))
+  world)
+
+(defparameter *physics-phases*
+  '(reset-phase wake-phase grid-phase pair-phase terrain-phase box-phase prune-phase
+    prepare-phase substep-phase restitution-phase store-phase finalize-phase)
+  "The phases of a step, in order; each is a function of the world. #IDVK7G")
+
+(defun step-physics-world (world &optional dt)
+  "Advance WORLD by DT seconds (its step length by default) through *physics-phases* and return
+it. The step's events stay readable until the next step begins. #IDVK7G"
+  (check-idle world 'step-physics-world)
+  (let* ((dt (if dt (finite-f32 :dt dt world) (physics-world-step-seconds world)))
+         (terrain (physics-world-terrain world))
+         (started (clock-ns)))
+    (unless (< 0.0 dt 1.0)
+      (error 'invalid-physics-parameter :world world :name :dt :value dt :expected "in (0, 1) seconds"))
+    (setf (physics-world-current-dt world) dt
+          (physics-world-current-h world) (/ dt (float (physics-world-substeps world) 1.0))
+          (physics-world-stepping world) t)
+    (when terrain (lock-terrain terrain))
+    (unwind-protect
+         (progn
+           (sb-int:with-float-traps-masked (:inexact :underflow)
+             (run-physics-phases world))
+           (let ((stats (physics-world-statistics world)))
+             (setf (aref stats 0) (coerce (constraint-columns-length (physics-world-constraints world)) 'double-float)
+                   (aref stats 2) (* 1d-9 (coerce (the fixnum (- (clock-ns) started)) 'double-float))))
+           (let ((handler (physics-world-event-handler world)))
+             (when handler (map-physics-events handler world))))
+      (when terrain (unlock-terrain terrain))
+      (box-columns-clear (physics-world-boxes world))
+      (fill (physics-world-box-owners world) nil)
+      (setf (physics-world-stepping world) nil))
+    world))
+
+(defun run-physics-phases (world)
+  "Run each phase of *physics-phases* on WORLD, in order. #IDVK7G"
+  (dolist (phase *physics-phases*)
+    (let ((result (funcall phase world)))
+      (when (eq phase 'prepare-phase)
+        (setf (aref (physics-world-statistics world) 1) (coerce (the fixnum result) 'double-float)))))
+  world)
+
+(defun physics-world-last-step-contact-count (world)
+  "How many contacts the last step solved. #IDVK7G"
+  (round (aref (physics-world-statistics world) 0)))
+
+(defun physics-world-last-step-color-count (world)
+  "How many colours the last step's contacts used, overflow included. #IDVK7G"
+  (round (aref (physics-world-statistics world) 1)))
+
+(defun physics-world-last-step-real-seconds (world)
+  "Wall-clock seconds the last step took. #IDVK7G"
+  (aref (physics-world-statistics world) 2))
+
+(defun physics-world-max-penetration (world)
+  "The deepest overlap, in metres, left at the end of the last step. #IDVK7G"
+  (aref (physics-world-statistics world) 3))
+
+(defun physics-world-max-approach-speed (world)
+  "The fastest approach speed, m/s, of an overlapping contact at the end of the last step. #IDVK7G"
+  (aref (physics-world-statistics world) 4))
+;; The step as built:1 ends here
+
+;; [[file:../physics.org::#S6T2MV][Determinism is chosen: same code, same start, same hash:1]]
+(defun physics-world-state-hash (world)
+  "A 62-bit FNV-style hash of the bits of every body's position, velocity and angular
+velocity, awake set first, each set in row order. Equal hashes mean bit-equal states. #S6T2MV"
+  (let ((hash 0))
+    (declare (type (unsigned-byte 62) hash))
+    (dolist (buffer (list (physics-world-awake world) (physics-world-sleeping world)))
+      (with-body-columns (x y z vx vy vz wx wy wz) buffer
+        (dotimes (i (body-columns-length buffer))
+          (dolist (column (list x y z vx vy vz wx wy wz))
+            (setf hash (ldb (byte 62 0)
+                            (+ (* hash 1099511628211)
+                               (ldb (byte 32 0) (sb-kernel:single-float-bits (aref column i))))))))))
+    hash))
+;; Determinism is chosen: same code, same start, same hash:1 ends here
+
+;; [[file:../physics.org::#V4L1D8][The validation walker:1]]
+(defun validate-physics-world (world)
+  "Walk every forwarding address and contact key of WORLD; return T, or signal
+physics-world-invalid naming the first broken invariant. #V4L1D8"
+  (flet ((fail (fmt &rest args)
+           (error 'physics-world-invalid :world world :invariant (apply #'format nil fmt args))))
+    (let* ((ids (physics-world-ids world))
+           (sets (handle-table-set ids)) (locals (handle-table-local ids))
+           (awake (physics-world-awake world))
+           (seen (make-hash-table)))
+      ;; every row's handle points back at that row
+      (loop for (set buffer) in (list (list +set-awake+ awake)
+                                      (list +set-sleeping+ (physics-world-sleeping world)))
+            do (dotimes (row (body-columns-length buffer))
+                 (let ((h (aref (body-columns-handle buffer) row)))
+                   (when (handle-status ids h)
+                     (fail "row ~D of set ~D holds handle ~D, which is ~(~A~)" row set h (handle-status ids h)))
+                   (when (gethash h seen) (fail "handle ~D appears in two rows" h))
+                   (setf (gethash h seen) t)
+                   (unless (and (= (aref sets (handle-index h)) set) (= (aref locals (handle-index h)) row))
+                     (fail "handle ~D forwards to set ~D row ~D but lives in set ~D row ~D"
+                           h (aref sets (handle-index h)) (aref locals (handle-index h)) set row)))))
+      ;; every live slot is some row's; free slots chain through the free list
+      (let ((live 0) (free 0))
+        (dotimes (slot (handle-table-count ids))
+          (if (= (aref sets slot) +set-free+) (incf free) (incf live)))
+        (unless (= live (hash-table-count seen))
+          (fail "~D live handle slots but ~D body rows" live (hash-table-count seen)))
+        (loop with slot = (handle-table-free ids) and steps = 0
+              while (>= slot 0)
+              do (unless (= (aref sets slot) +set-free+) (fail "free list reaches live slot ~D" slot))
+                 (when (> (incf steps) free) (fail "the free list is longer than the ~D free slots" free))
+                 (setf slot (aref locals slot))
+              finally (unless (= steps free) (fail "the free list holds ~D of ~D free slots" steps free))))
+      ;; the dummy row past the awake set is zero
+      (let ((n (body-columns-length awake)))
+        (dolist (column +body-columns-column-names+)
+          (let ((value (aref (slot-value awake column) n)))
+            (unless (zerop value) (fail "dummy row column ~A is ~S, not zero" column value)))))
+      ;; every contact row is in the table under its key, and nothing else is
+      (let ((contacts (physics-world-contacts world)) (table (physics-world-contact-table world)))
+        (dotimes (row (contact-columns-length contacts))
+          (let ((found (contact-table-find table (aref (contact-columns-key contacts) row))))
+            (unless (= found row)
+              (fail "contact row ~D's key maps to row ~D" row found))))
+        (unless (= (contact-table-count table) (contact-columns-length contacts))
+          (fail "contact table holds ~D keys for ~D contacts"
+                (contact-table-count table) (contact-columns-length contacts))))
+      (unless (>= (body-columns-capacity awake) (body-columns-length awake))
+        (fail "awake capacity below its length"))
+      t)))
+;; The validation walker:1 ends here
+
+;; [[file:../physics.org::#B0DY0B][A body as an object:1]]
+(defclass physics-body ()
+  ((world :initarg :world :reader physics-body-world)
+   (handle :initarg :handle :reader physics-body-handle))
+  (:documentation "A body as an object: a world and a handle. Its numbers live in the world's
+columns; describe shows that row as if it were slots. #B0DY0B"))
+
+(defun physics-body (world handle)
+  "The physics-body object for HANDLE in WORLD. #B0DY0B"
+  (resolve-handle world handle)
+  (make-instance 'physics-body :world world :handle handle))
+
+(defmethod print-object ((body physics-body) stream)
+  (print-unreadable-object (body stream :type t)
+    (let ((w (physics-body-world body)) (h (physics-body-handle body)))
+      (if (physics-body-alive-p w h)
+          (multiple-value-bind (x y z) (physics-body-position w h)
+            (format stream "~D ~:[asleep~;awake~] at (~,3F ~,3F ~,3F)" (handle-index h)
+                    (physics-body-awake-p w h) x y z))
+          (format stream "~D removed" (handle-index h))))))
+
+(defmethod describe-object ((body physics-body) stream)
+  (let ((w (physics-body-world body)) (h (physics-body-handle body)))
+    (format stream "~&~S~%  handle ~D (slot ~D, generation ~D)~%" body h (handle-index h) (handle-generation h))
+    (when (physics-body-alive-p w h)
+      (multiple-value-bind (set row) (resolve-handle w h)
+        (format stream "  lives in the ~:[sleeping~;awake~] set, row ~D~%" (= set +set-awake+) row)
+        (let ((buffer (set-buffer w set)))
+          (dolist (column +body-columns-column-names+)
+            (format stream "  ~(~22A~) = ~S~%" column (aref (slot-value buffer column) row))))))))
+;; A body as an object:1 ends here
+
+;; [[file:../physics.org::#B4S1NS][The basin:1]]
+(defun make-basin-terrain (&key (wall-height 6) (air-height 48))
+  "The basin: a floor of cells reaching well past walls one cell thick around an 8 m x 8 m
+interior [0,8) x [0,8), walls WALL-HEIGHT cells high, air resident up to AIR-HEIGHT. #B4S1NS"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -8 0 -8 16 air-height 16 nil)
+    (fill-terrain terrain -8 -1 -8 16 0 16 t)
+    (fill-terrain terrain -1 0 -1 9 wall-height 0 t)
+    (fill-terrain terrain -1 0 8 9 wall-height 9 t)
+    (fill-terrain terrain -1 0 0 0 wall-height 8 t)
+    (fill-terrain terrain 8 0 0 9 wall-height 8 t)
+    terrain))
+
+(defun basin-spawn-point (i)
+  "The centre of the I-th ball of the basin lattice: 14 x 14 per layer at 0.55 m spacing from
+0.5 m above the floor upward, jittered by at most 0.025 m per axis, deterministically. #B4S1NS"
+  (multiple-value-bind (layer k) (floor i 196)
+    (multiple-value-bind (row col) (floor k 14)
+      (flet ((jitter (salt)
+               ;; a fixed integer hash of (i, salt) mapped into [-0.025, 0.025]
+               (let ((h (ldb (byte 32 0) (* (+ (* i 7919) (* salt 104729) 12345) 2654435761))))
+                 (* 0.025 (- (* 2.0 (/ (ldb (byte 16 8) h) 65535.0)) 1.0)))))
+        (values (+ 0.3 (* col 0.55) (jitter 1))
+                (+ 0.5 (* layer 0.55) (jitter 2))
+                (+ 0.3 (* row 0.55) (jitter 3)))))))
+
+(defun make-basin-world (count &key (kernels :scalar) (sleep nil) (step-seconds 1/60) (substeps 4))
+  "The basin scene with COUNT balls of radius 0.25 m, mass 1 kg, friction 0.6, restitution 0.
+Walls are 30 cells high when COUNT exceeds 3000, else 6. #B4S1NS"
+  (let ((world (make-physics-world :terrain (make-basin-terrain :wall-height (if (> count 3000) 30 6))
+                                   :kernels kernels :sleep sleep :step-seconds step-seconds
+                                   :substeps substeps)))
+    (dotimes (i count world)
+      (multiple-value-bind (x y z) (basin-spawn-point i)
+        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0)))))
+;; The basin:1 ends here
+
+;; [[file:../physics.org::#D3M0SC][The main job:1]]
+(defun run-default-scene (&key (balls 1000) (seconds 8) (stream *standard-output*))
+  "The main job: drop BALLS balls into the basin, let the pile settle and sleep, throw one ball
+into it, and print a line per simulated second and a summary. Return the world. #D3M0SC"
+  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep t))
+         (steps-per-second 60) (thrown nil) (step-ms 0d0) (max-ms 0d0))
+    (dotimes (i balls)
+      (multiple-value-bind (x y z) (basin-spawn-point i)
+        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6)))
+    (format stream "~&basin: ~D balls, ~,4F s steps, ~D substeps, kernels ~(~A~)~%"
+            balls (physics-world-step-seconds world) (physics-world-substeps world)
+            (class-name (class-of (physics-world-kernels world))))
+    (format stream "~&  time   awake sleeping contacts colours  ms/step (mean over the second)~%")
+    (dotimes (second seconds)
+      (when (= second (floor seconds 2))
+        (setf thrown (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0))
+        (format stream "~&  -- a ball is thrown down into the pile at 7 m/s~%"))
+      (setf step-ms 0d0)
+      (dotimes (s steps-per-second)
+        (step-physics-world world)
+        (let ((ms (* 1000 (physics-world-last-step-real-seconds world))))
+          (incf step-ms ms) (setf max-ms (max max-ms ms))))
+      (format stream "~&  ~4D s ~7D ~8D ~8D ~7D ~8,3F~%" (1+ second)
+              (physics-world-awake-count world) (physics-world-sleeping-count world)
+              (physics-world-last-step-contact-count world) (physics-world-last-step-color-count world)
+              (/ step-ms steps-per-second)))
+    (validate-physics-world world)
+    (format stream "~&summary: ~D bodies, ~D awake, ~D asleep after ~D s; slowest step ~,3F ms; ~
+                    the world validates; state hash ~D~%"
+            (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
+            (physics-world-awake-count world) (physics-world-sleeping-count world) seconds max-ms
+            (physics-world-state-hash world))
+    (values world thrown)))
+;; The main job:1 ends here
+
+;; [[file:../physics.org::#B3NCH5][What a step costs:1]]
+(defun median (values)
+  "The median of the list of reals VALUES. #B3NCH5"
+  (let* ((v (sort (copy-list values) #'<)) (n (length v)))
+    (if (oddp n) (nth (floor n 2) v) (/ (+ (nth (1- (floor n 2)) v) (nth (floor n 2) v)) 2))))
+
+(defun measure-basin (count &key (kernels :scalar) (from 120) (to 300))
+  "Step the basin scene of COUNT awake balls TO times and return a plist of the mean and median
+ms per step over steps FROM..TO, contacts, colours, overflow and bytes consed per step. #B3NCH5"
+  (let ((world (make-basin-world count :kernels kernels)) (times '()) (consed 0))
+    (dotimes (i to)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (step-physics-world world)
+        (when (>= i from)
+          (incf consed (- (sb-ext:get-bytes-consed) before))
+          (push (* 1000 (physics-world-last-step-real-seconds world)) times))))
+    (list :balls count :kernels kernels
+          :mean (/ (reduce #'+ times) (length times)) :median (median times)
+          :contacts (physics-world-last-step-contact-count world)
+          :colours (physics-world-last-step-color-count world)
+          :overflow (physics-world-overflow-count world)
+          :consed (round consed (length times))
+          :awake (physics-world-awake-count world))))
+
+(defun run-basin-benchmark (&key (counts '(1000 3000 10000)) (stream *standard-output*))
+  "Print, as an Org table, the basin measured at each of COUNTS for every kernel family this
+CPU runs, with the machine's model and load. #B3NCH5"
+  (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A~%"
+          (or (ignore-errors (with-open-file (s "/proc/cpuinfo")
+                               (loop for line = (read-line s nil) while line
+                                     when (search "model name" line)
+                                       return (string-trim " " (subseq line (1+ (position #\: line)))))))
+              "unknown CPU")
+          (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
+  (format stream "~&| balls | family | mean ms | median ms | contacts | colours | overflow | bytes consed/step |~%")
+  (format stream "~&|-------+--------+---------+-----------+----------+---------+----------+-------------------|~%")
+  (dolist (count counts)
+    (dolist (family (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*)))
+      (let ((m (measure-basin count :kernels family)))
+        (format stream "~&| ~5D | ~6A | ~7,3F | ~9,3F | ~8D | ~7D | ~8D | ~17D |~%"
+                count (string-downcase family) (getf m :mean) (getf m :median) (getf m :contacts) (getf m :colours)
+                (getf m :overflow) (getf m :consed))
+        (finish-output stream)))))
+;; What a step costs:1 ends here
 
 ;; [[file:../physics.org::#O07FDP][Closing the files:1]]
 (register-tangled-file #.(or *compile-file-truename* *load-truename*))
