@@ -9,7 +9,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test demo clean
+.PHONY: help setup tangle check-tangle check-anchors test demo bench clean
 .NOTPARALLEL:
 
 help:
@@ -20,6 +20,7 @@ help:
 	@echo "make tangle         write $(OUT) from $(ORG)"
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
+	@echo "make bench          measure the basin per kernel family; write the table into $(ORG)"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:
@@ -40,6 +41,11 @@ test: setup check-tangle check-anchors
 
 demo: setup tangle
 	@$(LISP) --load tools/demo.lisp
+
+bench: setup tangle
+	@mkdir -p report
+	@$(LISP) --load tools/bench.lisp | tee report/bench.org
+	@$(SBCL) --script tools/splice.lisp bench-basin report/bench.org
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f
