@@ -1015,23 +1015,29 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
       (setf (aref starts buckets) n))
     grid))
 
-(defmacro do-grid-neighbours ((item grid x y z &key (span 1)) &body body)
+(defmacro do-grid-neighbours ((item grid x y z &key (span 1) half own) &body body)
   "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
-of point X Y Z, cell by cell in a fixed order. #D9W4CH"
+of point X Y Z, cell by cell in a fixed order. With HALF, visit only the point's own cell and
+the cells after it in that order (13 of the 26 neighbours), so a walk from every item meets
+each pair of cells once; OWN, if given, names a variable true in the point's own cell. #D9W4CH"
   (let ((g (gensym "GRID")) (cx (gensym)) (cy (gensym)) (cz (gensym)) (i (gensym)) (j (gensym))
         (k (gensym)) (key (gensym)) (b (gensym)) (e (gensym)) (inv (gensym)) (s (gensym))
-        (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS")) (mask (gensym "MASK")))
+        (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS")) (mask (gensym "MASK"))
+        (own (or own (gensym "OWN"))))
     `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s ,span)
             (,cx (cell-floor (* ,x ,inv))) (,cy (cell-floor (* ,y ,inv))) (,cz (cell-floor (* ,z ,inv)))
             (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g))
             (,mask (hash-grid-mask ,g)))
        (declare (type fixnum ,cx ,cy ,cz ,s ,mask) (type fixnum-column ,starts ,items ,keys))
        (unless (zerop (hash-grid-count ,g))
-         (loop for ,k of-type fixnum from (- ,cz ,s) to (+ ,cz ,s) do
-           (loop for ,j of-type fixnum from (- ,cy ,s) to (+ ,cy ,s) do
-             (loop for ,i of-type fixnum from (- ,cx ,s) to (+ ,cx ,s) do
+         (loop for ,k of-type fixnum from ,(if half cz `(- ,cz ,s)) to (+ ,cz ,s) do
+           (loop for ,j of-type fixnum from ,(if half `(if (= ,k ,cz) ,cy (- ,cy ,s)) `(- ,cy ,s)) to (+ ,cy ,s) do
+             (loop for ,i of-type fixnum from ,(if half `(if (and (= ,k ,cz) (= ,j ,cy)) ,cx (- ,cx ,s)) `(- ,cx ,s))
+                     to (+ ,cx ,s) do
                (let* ((,key (grid-cell-key ,i ,j ,k))
-                      (,b (grid-bucket ,key ,mask)))
+                      (,b (grid-bucket ,key ,mask))
+                      (,own (and (= ,i ,cx) (= ,j ,cy) (= ,k ,cz))))
+                 (declare (ignorable ,own))
                  (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
                        when (= (aref ,keys ,e) ,key)
                          do (let ((,item (aref ,items ,e))) (declare (type fixnum ,item)) ,@body))))))))))
@@ -1636,8 +1642,8 @@ a contact only when its gap is under the speculative distance. #P41RS7"
           (when (zerop (logand (aref flags i) +flag-terrain-only+))
             (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i))
                   (hi (aref handle i)) (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
-              (do-grid-neighbours (j grid xi yi zi)
-                (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+)))
+              (do-grid-neighbours (j grid xi yi zi :half t :own own)
+                (when (and (or (not own) (> j i)) (zerop (logand (aref flags j) +flag-terrain-only+)))
                   (pair xi yi zi ri hi vxi vyi vzi
                         (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
                         (aref vx j) (aref vy j) (aref vz j))))
