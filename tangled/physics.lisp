@@ -1847,21 +1847,64 @@ fills its hole; a touching one ends with an :end event. #PRUN3D"
 ;; Contacts not found this step are pruned:1 ends here
 
 ;; [[file:../physics.org::#SSMPYW][Colours are the lanes:1]]
-(define-physics-layout constraint-columns
-  "The contacts of one step as solver rows, written in colour order. #SSMPYW"
-  (contact fixnum) (body-a fixnum) (body-b fixnum)
-  (nx single-float) (ny single-float) (nz single-float)
-  (t1x single-float) (t1y single-float) (t1z single-float)
-  (t2x single-float) (t2y single-float) (t2z single-float)
-  (ra single-float) (rb single-float)
-  (ima single-float) (imb single-float) (iia single-float) (iib single-float)
-  (separation single-float) (kvn single-float) (kvt1 single-float) (kvt2 single-float)
-  (normal-mass single-float) (tangent-mass single-float) (rolling-mass single-float)
-  (friction single-float) (rolling-limit single-float) (restitution single-float)
-  (relative-velocity single-float) (max-normal-impulse single-float)
-  (bias-rate single-float) (mass-scale single-float) (impulse-scale single-float)
-  (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
-  (rolling-impulse-x single-float) (rolling-impulse-y single-float) (rolling-impulse-z single-float))
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +constraint-columns+
+    '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation kvn kvt1 kvt2
+      normal-mass tangent-mass rolling-mass friction rolling-limit restitution relative-velocity
+      max-normal-impulse bias-rate mass-scale impulse-scale normal-impulse tangent-impulse-1
+      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z)
+    "The float columns of a constraint, in the order they sit in a block. #SSMPYW")
+  (defun constraint-offset (column)
+    "Where COLUMN's eight lanes begin inside a block of constraints. #SSMPYW"
+    (* 8 (or (position column +constraint-columns+ :test #'string= :key #'symbol-name)
+             (error "no constraint column ~A" column)))))
+
+(defconstant +constraint-block+ (* 8 36)
+  "Floats in a block of eight constraints: 36 columns of eight lanes. #SSMPYW")
+
+(defstruct (constraint-columns (:constructor make-constraint-columns ()))
+  "The contacts of one step as solver rows, written in colour order: three fixnum columns, and
+the float columns in blocks of eight rows, each column's eight lanes contiguous. #SSMPYW"
+  (length 0 :type index)
+  (capacity 0 :type index)
+  (data (make-array 0 :element-type 'single-float) :type f32-column)
+  (contact (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (body-a (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (body-b (make-array 0 :element-type 'fixnum) :type fixnum-column))
+
+(defun constraint-columns-ensure-capacity (buffer rows)
+  "Grow BUFFER to hold ROWS constraints, in whole blocks; return it. #SSMPYW"
+  (when (> rows (constraint-columns-capacity buffer))
+    (let ((new (* 8 (ceiling (max rows (* 2 (constraint-columns-capacity buffer)) 64) 8))))
+      (flet ((grow (old type n)
+               (let ((fresh (make-array n :element-type type :initial-element (coerce 0 type))))
+                 (replace fresh old) fresh)))
+        (setf (constraint-columns-data buffer)
+              (grow (constraint-columns-data buffer) 'single-float (* (floor new 8) +constraint-block+))
+              (constraint-columns-contact buffer) (grow (constraint-columns-contact buffer) 'fixnum new)
+              (constraint-columns-body-a buffer) (grow (constraint-columns-body-a buffer) 'fixnum new)
+              (constraint-columns-body-b buffer) (grow (constraint-columns-body-b buffer) 'fixnum new)
+              (constraint-columns-capacity buffer) new))))
+  buffer)
+
+(declaim (inline constraint-base))
+(defun constraint-base (k)
+  "The index of constraint K's lane of the first column of its block. #SSMPYW"
+  (declare (type index k))
+  (+ (* (ash k -3) +constraint-block+) (logand k 7)))
+
+(defmacro with-constraint-block ((&rest fixnum-columns) buffer &body body)
+  "Run BODY with DATA bound to BUFFER's float blocks, each of FIXNUM-COLUMNS (contact, body-a,
+body-b) bound to its column, and (@ COLUMN) naming COLUMN of the constraint whose base is the
+variable BASE. #SSMPYW"
+  (let ((b (gensym "BUFFER")))
+    `(let* ((,b ,buffer)
+            (data (constraint-columns-data ,b))
+            ,@(loop for c in fixnum-columns
+                    collect `(,c (,(intern (format nil "CONSTRAINT-COLUMNS-~A" c)) ,b))))
+       (declare (type f32-column data) (type fixnum-column ,@fixnum-columns) (ignorable data))
+       (macrolet ((@ (column) `(aref data (+ base ,(constraint-offset column)))))
+         ,@body))))
 
 (defun ensure-solver-scratch (world n contacts)
   "Size WORLD's per-step scratch for N awake bodies (plus the dummy) and CONTACTS contacts. #SSMPYW"
@@ -1985,14 +2028,10 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                                    (cl2 tangent-impulse-2) (crx rolling-impulse-x) (cry rolling-impulse-y)
                                    (crz rolling-impulse-z))
                 contacts
-              (with-constraint-columns (contact body-a body-b nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb
-                                        iia iib separation kvn kvt1 kvt2 normal-mass tangent-mass rolling-mass
-                                        friction rolling-limit restitution relative-velocity max-normal-impulse
-                                        bias-rate mass-scale impulse-scale normal-impulse tangent-impulse-1
-                                        tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z)
-                  cbuf
+              (with-constraint-block (contact body-a body-b) cbuf
                 (dotimes (c m)
                   (let* ((k (aref cursor (aref colors c)))
+                         (base (constraint-base k))
                          (a (aref ha c)) (b (aref hb c))
                          (set-a (aref sets (handle-index a)))
                          (set-b (if (>= b 0) (aref sets (handle-index b)) +set-free+))
@@ -2004,22 +2043,22 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                          (dyn-a (= set-a +set-awake+)) (dyn-b (= set-b +set-awake+))
                          (two-sided (and dyn-a dyn-b))
                          (x (aref cnx c)) (y (aref cny c)) (z (aref cnz c)))
-                    (declare (type fixnum k a b set-a set-b la lb) (type single-float x y z)
+                    (declare (type fixnum k a b set-a set-b la lb) (type index base) (type single-float x y z)
                              (type body-columns buf-a buf-b) (type fixnum-column sets locals) (ignorable sets locals))
                     (incf (aref cursor (aref colors c)))
                     (setf (aref contact k) c
                           (aref body-a k) (if dyn-a la n)
                           (aref body-b k) (if dyn-b lb n)
-                          (aref nx k) x (aref ny k) y (aref nz k) z)
+                          (@ nx) x (@ ny) y (@ nz) z)
                     ;; tangent frame: t1 perpendicular to n, built from the axis least aligned with it
                     (multiple-value-bind (tx ty tz)
                         (if (> (abs y) 0.9)
                             (let ((s (/ 1.0 (fsqrt (+ (* z z) (* y y)))))) (values 0.0 (* z s) (- (* y s))))
                             (let ((s (/ 1.0 (fsqrt (+ (* z z) (* x x)))))) (values (- (* z s)) 0.0 (* x s))))
-                      (setf (aref t1x k) tx (aref t1y k) ty (aref t1z k) tz
-                            (aref t2x k) (- (* y tz) (* z ty))
-                            (aref t2y k) (- (* z tx) (* x tz))
-                            (aref t2z k) (- (* x ty) (* y tx))))
+                      (setf (@ t1x) tx (@ t1y) ty (@ t1z) tz
+                            (@ t2x) (- (* y tz) (* z ty))
+                            (@ t2y) (- (* z tx) (* x tz))
+                            (@ t2z) (- (* x ty) (* y tx))))
                     (let* ((r-a (aref (body-columns-radius buf-a) la))
                            (r-b (if (>= b 0) (aref (body-columns-radius buf-b) lb) 0.0))
                            (im-a (if dyn-a (aref (body-columns-inverse-mass awake) la) 0.0))
@@ -2033,40 +2072,40 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                            (va (if dyn-a (* la +solver-stride+) (* n +solver-stride+)))
                            (vb (if dyn-b (* lb +solver-stride+) (* n +solver-stride+))))
                       (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz))
-                      (setf (aref ra k) r-a (aref rb k) r-b
-                            (aref ima k) im-a (aref imb k) im-b (aref iia k) ii-a (aref iib k) ii-b
-                            (aref separation k) (+ (aref csep c) slop)
-                            (aref kvn k) (+ (* kx x) (* ky y) (* kz z))
-                            (aref kvt1 k) (+ (* kx (aref t1x k)) (* ky (aref t1y k)) (* kz (aref t1z k)))
-                            (aref kvt2 k) (+ (* kx (aref t2x k)) (* ky (aref t2y k)) (* kz (aref t2z k)))
-                            (aref normal-mass k) (if (> mass-sum 0.0) (/ 1.0 mass-sum) 0.0)
-                            (aref tangent-mass k) (if (> tangent-sum 0.0) (/ 1.0 tangent-sum) 0.0)
-                            (aref rolling-mass k) (if (> rolling-sum 0.0) (/ 1.0 rolling-sum) 0.0))
+                      (setf (@ ra) r-a (@ rb) r-b
+                            (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
+                            (@ separation) (+ (aref csep c) slop)
+                            (@ kvn) (+ (* kx x) (* ky y) (* kz z))
+                            (@ kvt1) (+ (* kx (@ t1x)) (* ky (@ t1y)) (* kz (@ t1z)))
+                            (@ kvt2) (+ (* kx (@ t2x)) (* ky (@ t2y)) (* kz (@ t2z)))
+                            (@ normal-mass) (if (> mass-sum 0.0) (/ 1.0 mass-sum) 0.0)
+                            (@ tangent-mass) (if (> tangent-sum 0.0) (/ 1.0 tangent-sum) 0.0)
+                            (@ rolling-mass) (if (> rolling-sum 0.0) (/ 1.0 rolling-sum) 0.0))
                       (if (>= b 0)
-                          (setf (aref friction k) (fsqrt (* (aref (body-columns-friction buf-a) la)
+                          (setf (@ friction) (fsqrt (* (aref (body-columns-friction buf-a) la)
                                                            (aref (body-columns-friction buf-b) lb)))
-                                (aref restitution k) (max (aref (body-columns-restitution buf-a) la)
+                                (@ restitution) (max (aref (body-columns-restitution buf-a) la)
                                                           (aref (body-columns-restitution buf-b) lb))
-                                (aref rolling-limit k) (* (max (aref (body-columns-rolling-resistance buf-a) la)
+                                (@ rolling-limit) (* (max (aref (body-columns-rolling-resistance buf-a) la)
                                                                (aref (body-columns-rolling-resistance buf-b) lb))
                                                           (max r-a r-b)))
-                          (setf (aref friction k) (aref (body-columns-friction buf-a) la)
-                                (aref restitution k) (aref (body-columns-restitution buf-a) la)
-                                (aref rolling-limit k) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)))
-                      (setf (aref relative-velocity k)
+                          (setf (@ friction) (aref (body-columns-friction buf-a) la)
+                                (@ restitution) (aref (body-columns-restitution buf-a) la)
+                                (@ rolling-limit) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)))
+                      (setf (@ relative-velocity)
                             (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
                                (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
                                (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z))))
                     (if two-sided
-                        (setf (aref bias-rate k) dyn-bias (aref mass-scale k) dyn-mass
-                              (aref impulse-scale k) dyn-impulse)
-                        (setf (aref bias-rate k) st-bias (aref mass-scale k) st-mass
-                              (aref impulse-scale k) st-impulse))
-                    (setf (aref max-normal-impulse k) 0.0
-                          (aref normal-impulse k) (aref cl c)
-                          (aref tangent-impulse-1 k) (aref cl1 c) (aref tangent-impulse-2 k) (aref cl2 c)
-                          (aref rolling-impulse-x k) (aref crx c) (aref rolling-impulse-y k) (aref cry c)
-                          (aref rolling-impulse-z k) (aref crz c)))))))))
+                        (setf (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass
+                              (@ impulse-scale) dyn-impulse)
+                        (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
+                              (@ impulse-scale) st-impulse))
+                    (setf (@ max-normal-impulse) 0.0
+                          (@ normal-impulse) (aref cl c)
+                          (@ tangent-impulse-1) (aref cl1 c) (@ tangent-impulse-2) (aref cl2 c)
+                          (@ rolling-impulse-x) (aref crx c) (@ rolling-impulse-y) (aref cry c)
+                          (@ rolling-impulse-z) (aref crz c)))))))))
       color-count)))
 ;; Preparing the constraints:1 ends here
 
@@ -2129,39 +2168,29 @@ THRESHOLD. #K3RNLS"))
 
 ;; [[file:../physics.org::#W4RMST][Warm start:1]]
 (defmacro with-solver-columns (cbuf &body body)
-  "Bind every constraint column of CBUF that the kernels read, by its own name. #W4RMST"
-  `(with-constraint-columns (body-a body-b nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib
-                             separation kvn kvt1 kvt2 normal-mass tangent-mass rolling-mass friction
-                             rolling-limit restitution relative-velocity max-normal-impulse bias-rate
-                             mass-scale impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2
-                             rolling-impulse-x rolling-impulse-y rolling-impulse-z)
-       ,cbuf
-     (declare (ignorable body-a body-b nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib
-                         separation kvn kvt1 kvt2 normal-mass tangent-mass rolling-mass friction
-                         rolling-limit restitution relative-velocity max-normal-impulse bias-rate
-                         mass-scale impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2
-                         rolling-impulse-x rolling-impulse-y rolling-impulse-z))
-     ,@body))
+  "Run BODY over the constraint buffer CBUF: its blocks, its body columns, and (@ COLUMN). #W4RMST"
+  `(with-constraint-block (body-a body-b) ,cbuf ,@body))
 
 (defun warm-start-range (cbuf v start end)
   "Apply the carried normal, friction and rolling impulses of constraints START..END. #W4RMST"
   (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
-      (let* ((a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
-             (x (aref nx k)) (y (aref ny k)) (z (aref nz k))
-             (l (aref normal-impulse k)) (l1 (aref tangent-impulse-1 k)) (l2 (aref tangent-impulse-2 k))
-             (px (+ (* l x) (* l1 (aref t1x k)) (* l2 (aref t2x k))))
-             (py (+ (* l y) (* l1 (aref t1y k)) (* l2 (aref t2y k))))
-             (pz (+ (* l z) (* l1 (aref t1z k)) (* l2 (aref t2z k))))
+      (let* ((base (constraint-base k))
+             (a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
+             (x (@ nx)) (y (@ ny)) (z (@ nz))
+             (l (@ normal-impulse)) (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
+             (px (+ (* l x) (* l1 (@ t1x)) (* l2 (@ t2x))))
+             (py (+ (* l y) (* l1 (@ t1y)) (* l2 (@ t2y))))
+             (pz (+ (* l z) (* l1 (@ t1z)) (* l2 (@ t2z))))
              ;; n x P = l1 t2 - l2 t1: the torque arm of the friction part
-             (cx (- (* l1 (aref t2x k)) (* l2 (aref t1x k))))
-             (cy (- (* l1 (aref t2y k)) (* l2 (aref t1y k))))
-             (cz (- (* l1 (aref t2z k)) (* l2 (aref t1z k))))
-             (ma (aref ima k)) (mb (aref imb k)) (ia (aref iia k)) (ib (aref iib k))
-             (ar (aref ra k)) (br (aref rb k))
-             (rx (aref rolling-impulse-x k)) (ry (aref rolling-impulse-y k)) (rz (aref rolling-impulse-z k)))
-        (declare (type index a b))
+             (cx (- (* l1 (@ t2x)) (* l2 (@ t1x))))
+             (cy (- (* l1 (@ t2y)) (* l2 (@ t1y))))
+             (cz (- (* l1 (@ t2z)) (* l2 (@ t1z))))
+             (ma (@ ima)) (mb (@ imb)) (ia (@ iia)) (ib (@ iib))
+             (ar (@ ra)) (br (@ rb))
+             (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z)))
+        (declare (type index a b base))
         (setf (aref v a) (- (aref v a) (* ma px))
               (aref v (+ a 1)) (- (aref v (+ a 1)) (* ma py))
               (aref v (+ a 2)) (- (aref v (+ a 2)) (* ma pz))
@@ -2184,47 +2213,48 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
            (type single-float inv-h elapsed push-max) #.+kernel-policy+)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
-      (let* ((ia8 (aref body-a k)) (ib8 (aref body-b k))
+      (let* ((base (constraint-base k))
+             (ia8 (aref body-a k)) (ib8 (aref body-b k))
              (a (* ia8 +solver-stride+)) (b (* ib8 +solver-stride+))
              (da (* ia8 +delta-stride+)) (db (* ib8 +delta-stride+))
-             (x (aref nx k)) (y (aref ny k)) (z (aref nz k))
-             (ma (aref ima k)) (mb (aref imb k)) (iam (aref iia k)) (ibm (aref iib k))
-             (ar (aref ra k)) (br (aref rb k))
+             (x (@ nx)) (y (@ ny)) (z (@ nz))
+             (ma (@ ima)) (mb (@ imb)) (iam (@ iia)) (ibm (@ iib))
+             (ar (@ ra)) (br (@ rb))
              (vax (aref v a)) (vay (aref v (+ a 1))) (vaz (aref v (+ a 2)))
              (wax (aref v (+ a 3))) (way (aref v (+ a 4))) (waz (aref v (+ a 5)))
              (vbx (aref v b)) (vby (aref v (+ b 1))) (vbz (aref v (+ b 2)))
              (wbx (aref v (+ b 3))) (wby (aref v (+ b 4))) (wbz (aref v (+ b 5)))
              ;; current separation: the prepared gap moved by both deltas and the box's travel
-             (s (+ (aref separation k)
+             (s (+ (@ separation)
                    (+ (* (- (aref d db) (aref d da)) x)
                       (* (- (aref d (+ db 1)) (aref d (+ da 1))) y)
                       (* (- (aref d (+ db 2)) (aref d (+ da 2))) z))
-                   (* (aref kvn k) elapsed)))
+                   (* (@ kvn) elapsed)))
              (bias 0.0) (mscale 1.0) (iscale 0.0))
-        (declare (type index a b da db) (type single-float bias mscale iscale))
+        (declare (type index a b da db base) (type single-float bias mscale iscale))
         (cond ((> s 0.0) (setf bias (* s inv-h)))
-              (use-bias (setf bias (max (* (aref bias-rate k) s) (- push-max))
-                              mscale (aref mass-scale k) iscale (aref impulse-scale k))))
+              (use-bias (setf bias (max (* (@ bias-rate) s) (- push-max))
+                              mscale (@ mass-scale) iscale (@ impulse-scale))))
         ;; normal
-        (let* ((vn (+ (* (- vbx vax) x) (* (- vby vay) y) (* (- vbz vaz) z) (aref kvn k)))
-               (l (aref normal-impulse k))
-               (new (max (- l (* (aref normal-mass k) mscale (+ vn bias)) (* iscale l)) 0.0))
+        (let* ((vn (+ (* (- vbx vax) x) (* (- vby vay) y) (* (- vbz vaz) z) (@ kvn)))
+               (l (@ normal-impulse))
+               (new (max (- l (* (@ normal-mass) mscale (+ vn bias)) (* iscale l)) 0.0))
                (dl (- new l)))
-          (setf (aref normal-impulse k) new
-                (aref max-normal-impulse k) (max (aref max-normal-impulse k) new))
+          (setf (@ normal-impulse) new
+                (@ max-normal-impulse) (max (@ max-normal-impulse) new))
           (setf vax (- vax (* ma dl x)) vay (- vay (* ma dl y)) vaz (- vaz (* ma dl z))
                 vbx (+ vbx (* mb dl x)) vby (+ vby (* mb dl y)) vbz (+ vbz (* mb dl z)))
           ;; friction, inside the cone |l1,l2| <= friction * normal impulse
-          (let* ((ux (aref t1x k)) (uy (aref t1y k)) (uz (aref t1z k))
-                 (qx (aref t2x k)) (qy (aref t2y k)) (qz (aref t2z k))
+          (let* ((ux (@ t1x)) (uy (@ t1y)) (uz (@ t1z))
+                 (qx (@ t2x)) (qy (@ t2y)) (qz (@ t2z))
                  (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
                  (dvx (- vbx vax)) (dvy (- vby vay)) (dvz (- vbz vaz))
-                 (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (aref kvt1 k)) (+ (* wx qx) (* wy qy) (* wz qz))))
-                 (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (aref kvt2 k) (+ (* wx ux) (* wy uy) (* wz uz))))
-                 (l1 (aref tangent-impulse-1 k)) (l2 (aref tangent-impulse-2 k))
-                 (tm (aref tangent-mass k))
+                 (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (@ kvt1)) (+ (* wx qx) (* wy qy) (* wz qz))))
+                 (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (@ kvt2) (+ (* wx ux) (* wy uy) (* wz uz))))
+                 (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
+                 (tm (@ tangent-mass))
                  (n1 (- l1 (* tm vt1))) (n2 (- l2 (* tm vt2)))
-                 (limit (* (aref friction k) new))
+                 (limit (* (@ friction) new))
                  (len2 (+ (* n1 n1) (* n2 n2))))
             (when (> len2 (* limit limit))
               (let ((scale (/ limit (fsqrt len2))))
@@ -2232,24 +2262,24 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
             (let* ((d1 (- n1 l1)) (d2 (- n2 l2))
                    (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
                    (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz))))
-              (setf (aref tangent-impulse-1 k) n1 (aref tangent-impulse-2 k) n2)
+              (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
               (setf vax (- vax (* ma px)) vay (- vay (* ma py)) vaz (- vaz (* ma pz))
                     vbx (+ vbx (* mb px)) vby (+ vby (* mb py)) vbz (+ vbz (* mb pz))
                     wax (- wax (* iam ar cx)) way (- way (* iam ar cy)) waz (- waz (* iam ar cz))
                     wbx (- wbx (* ibm br cx)) wby (- wby (* ibm br cy)) wbz (- wbz (* ibm br cz)))))
           ;; rolling resistance: an angular impulse inside |R| <= rolling-limit * normal impulse
-          (let ((rlimit (* (aref rolling-limit k) new)))
-            (when (> (aref rolling-limit k) 0.0)
-              (let* ((rm (aref rolling-mass k))
-                     (rx (aref rolling-impulse-x k)) (ry (aref rolling-impulse-y k)) (rz (aref rolling-impulse-z k))
+          (let ((rlimit (* (@ rolling-limit) new)))
+            (when (> (@ rolling-limit) 0.0)
+              (let* ((rm (@ rolling-mass))
+                     (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z))
                      (nrx (- rx (* rm (- wbx wax)))) (nry (- ry (* rm (- wby way)))) (nrz (- rz (* rm (- wbz waz))))
                      (len2 (+ (* nrx nrx) (* nry nry) (* nrz nrz))))
                 (when (> len2 (* rlimit rlimit))
                   (let ((scale (/ rlimit (fsqrt len2))))
                     (setf nrx (* nrx scale) nry (* nry scale) nrz (* nrz scale))))
                 (let ((dx (- nrx rx)) (dy (- nry ry)) (dz (- nrz rz)))
-                  (setf (aref rolling-impulse-x k) nrx (aref rolling-impulse-y k) nry
-                        (aref rolling-impulse-z k) nrz)
+                  (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry
+                        (@ rolling-impulse-z) nrz)
                   (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
                         wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz))))))))
         (setf (aref v a) vax (aref v (+ a 1)) vay (aref v (+ a 2)) vaz
@@ -2265,19 +2295,20 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
            (type single-float threshold) #.+kernel-policy+)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
-      (let ((e (aref restitution k)) (rv (aref relative-velocity k)))
-        (unless (or (= e 0.0) (> rv (- threshold)) (= (aref max-normal-impulse k) 0.0))
+      (let* ((base (constraint-base k)) (e (@ restitution)) (rv (@ relative-velocity)))
+        (declare (type index base))
+        (unless (or (= e 0.0) (> rv (- threshold)) (= (@ max-normal-impulse) 0.0))
           (let* ((a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
-                 (x (aref nx k)) (y (aref ny k)) (z (aref nz k))
-                 (ma (aref ima k)) (mb (aref imb k))
+                 (x (@ nx)) (y (@ ny)) (z (@ nz))
+                 (ma (@ ima)) (mb (@ imb))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
-                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (aref kvn k)))
-                 (l (aref normal-impulse k))
-                 (new (max (- l (* (aref normal-mass k) (+ vn (* e rv)))) 0.0))
+                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn)))
+                 (l (@ normal-impulse))
+                 (new (max (- l (* (@ normal-mass) (+ vn (* e rv)))) 0.0))
                  (dl (- new l)))
             (declare (type index a b))
-            (setf (aref normal-impulse k) new
-                  (aref max-normal-impulse k) (max (aref max-normal-impulse k) new))
+            (setf (@ normal-impulse) new
+                  (@ max-normal-impulse) (max (@ max-normal-impulse) new))
             (setf (aref v a) (- (aref v a) (* ma dl x))
                   (aref v (+ a 1)) (- (aref v (+ a 1)) (* ma dl y))
                   (aref v (+ a 2)) (- (aref v (+ a 2)) (* ma dl z))
@@ -2329,39 +2360,37 @@ speed. #ST0R3S"
          (dt (physics-world-current-dt world))
          (max-penetration 0.0) (max-approach 0.0))
     (declare (type f32-column d v) (type single-float hit-speed dt max-penetration max-approach))
-    (with-constraint-columns (contact body-a body-b nx ny nz kvn relative-velocity max-normal-impulse
-                              normal-impulse tangent-impulse-1 tangent-impulse-2 rolling-impulse-x
-                              rolling-impulse-y rolling-impulse-z)
-        cbuf
+    (with-constraint-block (contact body-a body-b) cbuf
       (with-contact-columns ((cl normal-impulse) (cl1 tangent-impulse-1) (cl2 tangent-impulse-2)
                              (crx rolling-impulse-x) (cry rolling-impulse-y) (crz rolling-impulse-z)
                              touching kind handle-a handle-b px py pz separation key)
           contacts
         (dotimes (k (constraint-columns-length cbuf))
-          (let* ((c (aref contact k))
-                 (pushed (> (aref max-normal-impulse k) 0.0))
+          (let* ((base (constraint-base k))
+                 (c (aref contact k))
+                 (pushed (> (@ max-normal-impulse) 0.0))
                  (da (* (aref body-a k) +delta-stride+)) (db (* (aref body-b k) +delta-stride+))
                  (a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
-                 (x (aref nx k)) (y (aref ny k)) (z (aref nz k))
+                 (x (@ nx)) (y (@ ny)) (z (@ nz))
                  (gap (+ (aref separation c)
                          (* (- (aref d db) (aref d da)) x) (* (- (aref d (+ db 1)) (aref d (+ da 1))) y)
-                         (* (- (aref d (+ db 2)) (aref d (+ da 2))) z) (* (aref kvn k) dt)))
+                         (* (- (aref d (+ db 2)) (aref d (+ da 2))) z) (* (@ kvn) dt)))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
-                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (aref kvn k))))
-            (declare (type fixnum c))
-            (setf (aref cl c) (aref normal-impulse k)
-                  (aref cl1 c) (aref tangent-impulse-1 k) (aref cl2 c) (aref tangent-impulse-2 k)
-                  (aref crx c) (aref rolling-impulse-x k) (aref cry c) (aref rolling-impulse-y k)
-                  (aref crz c) (aref rolling-impulse-z k))
+                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn))))
+            (declare (type fixnum c) (type index base))
+            (setf (aref cl c) (@ normal-impulse)
+                  (aref cl1 c) (@ tangent-impulse-1) (aref cl2 c) (@ tangent-impulse-2)
+                  (aref crx c) (@ rolling-impulse-x) (aref cry c) (@ rolling-impulse-y)
+                  (aref crz c) (@ rolling-impulse-z))
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))
                     max-approach (max max-approach (- vn))))
             (unless (eq pushed (= (aref touching c) 1))
               (setf (aref touching c) (if pushed 1 0))
               (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
-                          (aref px c) (aref py c) (aref pz c) (- (aref relative-velocity k))
+                          (aref px c) (aref py c) (aref pz c) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))
-            (when (and pushed (> (- (aref relative-velocity k)) hit-speed)
+            (when (and pushed (> (- (@ relative-velocity)) hit-speed)
                        (or (= (aref kind c) +contact-box+)
                            (flet ((reports (h)
                                     (and (>= h 0)
@@ -2372,7 +2401,7 @@ speed. #ST0R3S"
                                                           row))))))
                              (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
               (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
-                          (aref px c) (aref py c) (aref pz c) (- (aref relative-velocity k))
+                          (aref px c) (aref py c) (aref pz c) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))))
     (let ((stats (physics-world-statistics world)))
       (setf (aref stats 3) (coerce max-penetration 'double-float)
