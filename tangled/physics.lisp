@@ -1937,8 +1937,8 @@ variable BASE. #SSMPYW"
 (defun color-contacts (world)
   "Greedy colouring: a two-body contact takes the lowest of colours 0-19 free at both bodies, a
 one-sided contact the highest of colours 0-23 free at its awake body, anything else the
-overflow colour 24. Fills the colour of each contact and the colour starts; returns the
-number of colours used. #SSMPYW"
+overflow colour 24. Fills the colour of each contact and the colour starts, each colour but
+the overflow starting on a multiple of eight; returns the number of colours used. #SSMPYW"
   (let* ((contacts (physics-world-contacts world))
          (m (contact-columns-length contacts))
          (ids (physics-world-ids world))
@@ -1974,8 +1974,15 @@ number of colours used. #SSMPYW"
                      (setf (aref masks l) (logior (aref masks l) (ash 1 color)))))))
           (setf (aref colors c) color)
           (incf (aref starts (1+ color))))))
-    (loop for c from 1 below (length starts) do (incf (aref starts c) (aref starts (1- c))))
-    (loop for c from 0 to +physics-max-colors+ count (< (aref starts c) (aref starts (1+ c))))))
+    ;; prefix sums, each colour but the overflow padded to a whole block of eight rows
+    (loop with at of-type index = 0
+          for c from 0 to +physics-max-colors+
+          for count of-type index = (aref starts (1+ c))
+          do (setf (aref starts c) at)
+             (incf at (if (< c +physics-max-colors+) (* 8 (ceiling count 8)) count))
+          count (plusp count) into used
+          finally (setf (aref starts (1+ +physics-max-colors+)) at)
+                  (return used))))
 
 (defun physics-world-overflow-count (world)
   "How many of the last step's contacts fell into the overflow colour. #SSMPYW"
@@ -2010,7 +2017,10 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                (type handle-table ids) (type constraint-columns cbuf))
       (multiple-value-bind (dyn-bias dyn-mass dyn-impulse) (physics-softness hertz zeta h)
         (multiple-value-bind (st-bias st-mass st-impulse) (physics-softness (* 2.0 hertz) zeta h)
-          (setf (constraint-columns-length cbuf) m)
+          (constraint-columns-ensure-capacity
+           cbuf (aref (physics-world-color-starts world) (1+ +physics-max-colors+)))
+          (setf (constraint-columns-length cbuf)
+                (aref (physics-world-color-starts world) (1+ +physics-max-colors+)))
           ;; the solver's body state: velocities of awake rows, zero deltas, a zero dummy row
           (with-body-columns (vx vy vz wx wy wz) awake
             (dotimes (i n)
@@ -2105,7 +2115,14 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                           (@ normal-impulse) (aref cl c)
                           (@ tangent-impulse-1) (aref cl1 c) (@ tangent-impulse-2) (aref cl2 c)
                           (@ rolling-impulse-x) (aref crx c) (@ rolling-impulse-y) (aref cry c)
-                          (@ rolling-impulse-z) (aref crz c)))))))))
+                          (@ rolling-impulse-z) (aref crz c))))
+                ;; padding rows: no contact, the dummy on both sides, every float zero
+                (let ((starts (physics-world-color-starts world)))
+                  (dotimes (color +physics-max-colors+)
+                    (loop for k of-type index from (aref cursor color) below (aref starts (1+ color))
+                          do (let ((base (constraint-base k)))
+                               (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
+                               (dotimes (o 36) (setf (aref data (+ base (* 8 o))) 0.0)))))))))))
       color-count)))
 ;; Preparing the constraints:1 ends here
 
@@ -2365,7 +2382,8 @@ speed. #ST0R3S"
                              (crx rolling-impulse-x) (cry rolling-impulse-y) (crz rolling-impulse-z)
                              touching kind handle-a handle-b px py pz separation key)
           contacts
-        (dotimes (k (constraint-columns-length cbuf))
+        (loop for k of-type index below (constraint-columns-length cbuf)
+              unless (< (aref contact k) 0) do
           (let* ((base (constraint-base k))
                  (c (aref contact k))
                  (pushed (> (@ max-normal-impulse) 0.0))
@@ -2514,7 +2532,7 @@ it. The step's events stay readable until the next step begins. #IDVK7G"
            (sb-int:with-float-traps-masked (:inexact :underflow)
              (run-physics-phases world))
            (let ((stats (physics-world-statistics world)))
-             (setf (aref stats 0) (coerce (constraint-columns-length (physics-world-constraints world)) 'double-float)
+             (setf (aref stats 0) (coerce (contact-columns-length (physics-world-contacts world)) 'double-float)
                    (aref stats 2) (* 1d-9 (coerce (the fixnum (- (clock-ns) started)) 'double-float))))
            (let ((handler (physics-world-event-handler world)))
              (when handler (map-physics-events handler world))))
