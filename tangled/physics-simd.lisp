@@ -23,6 +23,309 @@
                 collect family)))
 ;; Which wide instructions this machine offers:2 ends here
 
+;; [[file:../physics.org::#R0WS8T][Gathering rows into lanes:1]]
+(defmacro transpose-8 (rows columns)
+  "Bind COLUMNS to the 8x8 transpose of the f32.8 values ROWS (a LET* binding list). #R0WS8T"
+  (destructuring-bind (r0 r1 r2 r3 r4 r5 r6 r7) rows
+    (destructuring-bind (c0 c1 c2 c3 c4 c5 c6 c7) columns
+      (let ((tt (loop repeat 8 collect (gensym "T"))) (u (loop repeat 8 collect (gensym "U"))))
+        (destructuring-bind (t0 t1 t2 t3 t4 t5 t6 t7) tt
+          (destructuring-bind (u0 u1 u2 u3 u4 u5 u6 u7) u
+            `((,t0 (sb-simd-avx:f32.8-unpacklo ,r0 ,r1)) (,t1 (sb-simd-avx:f32.8-unpackhi ,r0 ,r1))
+              (,t2 (sb-simd-avx:f32.8-unpacklo ,r2 ,r3)) (,t3 (sb-simd-avx:f32.8-unpackhi ,r2 ,r3))
+              (,t4 (sb-simd-avx:f32.8-unpacklo ,r4 ,r5)) (,t5 (sb-simd-avx:f32.8-unpackhi ,r4 ,r5))
+              (,t6 (sb-simd-avx:f32.8-unpacklo ,r6 ,r7)) (,t7 (sb-simd-avx:f32.8-unpackhi ,r6 ,r7))
+              (,u0 (sb-simd-avx:f32.8-shuffle ,t0 ,t2 #x44)) (,u1 (sb-simd-avx:f32.8-shuffle ,t0 ,t2 #xEE))
+              (,u2 (sb-simd-avx:f32.8-shuffle ,t1 ,t3 #x44)) (,u3 (sb-simd-avx:f32.8-shuffle ,t1 ,t3 #xEE))
+              (,u4 (sb-simd-avx:f32.8-shuffle ,t4 ,t6 #x44)) (,u5 (sb-simd-avx:f32.8-shuffle ,t4 ,t6 #xEE))
+              (,u6 (sb-simd-avx:f32.8-shuffle ,t5 ,t7 #x44)) (,u7 (sb-simd-avx:f32.8-shuffle ,t5 ,t7 #xEE))
+              (,c0 (sb-simd-avx:f32.8-permute128 ,u0 ,u4 #x20)) (,c1 (sb-simd-avx:f32.8-permute128 ,u1 ,u5 #x20))
+              (,c2 (sb-simd-avx:f32.8-permute128 ,u2 ,u6 #x20)) (,c3 (sb-simd-avx:f32.8-permute128 ,u3 ,u7 #x20))
+              (,c4 (sb-simd-avx:f32.8-permute128 ,u0 ,u4 #x31)) (,c5 (sb-simd-avx:f32.8-permute128 ,u1 ,u5 #x31))
+              (,c6 (sb-simd-avx:f32.8-permute128 ,u2 ,u6 #x31)) (,c7 (sb-simd-avx:f32.8-permute128 ,u3 ,u7 #x31)))))))))
+
+(defmacro with-rows-8 ((v index k &rest columns) &body body)
+  "Run BODY with COLUMNS bound to the eight solver rows of V named by INDEX[K..K+7], as the
+columns of the 8x8 transpose. #R0WS8T"
+  (let ((rows (loop repeat 8 collect (gensym "ROW"))))
+    `(let* (,@(loop for r in rows for l from 0
+                    collect `(,r (sb-simd-avx:f32.8-aref ,v (* (aref ,index (+ ,k ,l)) +solver-stride+))))
+            ,@(macroexpand-1 `(transpose-8 ,rows ,columns)))
+       ,@body)))
+
+(defmacro scatter-rows-8 (v index k &rest columns)
+  "Store COLUMNS back, transposed, as the eight solver rows of V named by INDEX[K..K+7]. #R0WS8T"
+  (let ((rows (loop repeat 8 collect (gensym "ROW"))))
+    `(let* (,@(macroexpand-1 `(transpose-8 ,columns ,rows)))
+       ,@(loop for r in rows for l from 0
+               collect `(setf (sb-simd-avx:f32.8-aref ,v (* (aref ,index (+ ,k ,l)) +solver-stride+)) ,r)))))
+
+(defmacro transpose-4 (rows columns)
+  "Bind COLUMNS to the 4x4 transpose of the f32.4 values ROWS (a LET* binding list). #R0WS8T"
+  (destructuring-bind (r0 r1 r2 r3) rows
+    (destructuring-bind (c0 c1 c2 c3) columns
+      (let ((t0 (gensym)) (t1 (gensym)) (t2 (gensym)) (t3 (gensym)))
+        `((,t0 (sb-simd-sse:f32.4-shuffle ,r0 ,r1 #x44)) (,t2 (sb-simd-sse:f32.4-shuffle ,r0 ,r1 #xEE))
+          (,t1 (sb-simd-sse:f32.4-shuffle ,r2 ,r3 #x44)) (,t3 (sb-simd-sse:f32.4-shuffle ,r2 ,r3 #xEE))
+          (,c0 (sb-simd-sse:f32.4-shuffle ,t0 ,t1 #x88)) (,c1 (sb-simd-sse:f32.4-shuffle ,t0 ,t1 #xDD))
+          (,c2 (sb-simd-sse:f32.4-shuffle ,t2 ,t3 #x88)) (,c3 (sb-simd-sse:f32.4-shuffle ,t2 ,t3 #xDD)))))))
+
+(defmacro with-rows-4 ((v index k &rest columns) &body body)
+  "Run BODY with COLUMNS (eight names) bound to the four solver rows of V named by
+INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest from the high. #R0WS8T"
+  (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI"))))
+    `(let* (,@(loop for r in lo for l from 0
+                    collect `(,r (sb-simd-sse:f32.4-aref ,v (* (aref ,index (+ ,k ,l)) +solver-stride+))))
+            ,@(loop for r in hi for l from 0
+                    collect `(,r (sb-simd-sse:f32.4-aref ,v (+ 4 (* (aref ,index (+ ,k ,l)) +solver-stride+)))))
+            ,@(macroexpand-1 `(transpose-4 ,lo ,(subseq columns 0 4)))
+            ,@(macroexpand-1 `(transpose-4 ,hi ,(subseq columns 4 8))))
+       ,@body)))
+
+(defmacro scatter-rows-4 (v index k &rest columns)
+  "Store the eight COLUMNS back, transposed, as the four solver rows of V named by INDEX[K..K+3]. #R0WS8T"
+  (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI"))))
+    `(let* (,@(macroexpand-1 `(transpose-4 ,(subseq columns 0 4) ,lo))
+            ,@(macroexpand-1 `(transpose-4 ,(subseq columns 4 8) ,hi)))
+       ,@(loop for r in lo for l from 0
+               collect `(setf (sb-simd-sse:f32.4-aref ,v (* (aref ,index (+ ,k ,l)) +solver-stride+)) ,r))
+       ,@(loop for r in hi for l from 0
+               collect `(setf (sb-simd-sse:f32.4-aref ,v (+ 4 (* (aref ,index (+ ,k ,l)) +solver-stride+))) ,r)))))
+
+(declaim (inline f32.4-select))
+(defun f32.4-select (mask a b)
+  "Lane by lane, A where MASK is set and B elsewhere, with SSE's and/andnot/or: the mask stays
+in any register. #R0WS8T"
+  (let ((m (sb-simd-sse2::f32.4!-from-p128 mask)))
+    (sb-simd-sse:f32.4-or (sb-simd-sse:f32.4-and m a) (sb-simd-sse:f32.4-andc1 m b))))
+;; Gathering rows into lanes:1 ends here
+
+;; [[file:../physics.org::#W1D3KF][One kernel text, two widths:1]]
+(defmacro define-wide-kernels (family width documentation
+                               &key pack load broadcast add sub mul div sqrt gt eq if* or* transpose)
+  "Define the solver kernels of FAMILY for lanes of WIDTH, described by DOCUMENTATION: the
+operator keywords name the sb-simd functions the width-neutral operators stand for. #W1D3KF"
+  (declare (ignore documentation))
+  (let ((ws (intern (format nil "WARM-START-BLOCKS/~A" family)))
+        (so (intern (format nil "SOLVE-BLOCKS/~A" family)))
+        (re (intern (format nil "RESTITUTION-BLOCKS/~A" family))))
+    `(macrolet ((w+ (a b) `(,',add ,a ,b)) (w- (a b) `(,',sub ,a ,b)) (w* (a b) `(,',mul ,a ,b))
+                (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
+                (w= (a b) `(,',eq ,a ,b)) (wif (m a b) `(,',if* ,m ,a ,b)) (wor (a b) `(,',or* ,a ,b))
+                (wc (x) `(,',broadcast ,x))
+                (@w (column) `(,',load data (+ base ,(constraint-offset column))))
+                (@w! (column value) `(setf (,',load data (+ base ,(constraint-offset column))) ,value)))
+       (defun ,ws (cbuf v start end)
+         ,(format nil "Warm start constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
+         (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
+         (with-solver-columns cbuf
+           (loop for k of-type index from start below end by ,width do
+             (let ((base (constraint-base k)))
+               (declare (type index base))
+               (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
+                (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+               (let* ((x (@w nx)) (y (@w ny)) (z (@w nz))
+                      (l (@w normal-impulse)) (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2))
+                      (px (w+ (w+ (w* l x) (w* l1 (@w t1x))) (w* l2 (@w t2x))))
+                      (py (w+ (w+ (w* l y) (w* l1 (@w t1y))) (w* l2 (@w t2y))))
+                      (pz (w+ (w+ (w* l z) (w* l1 (@w t1z))) (w* l2 (@w t2z))))
+                      (cx (w- (w* l1 (@w t2x)) (w* l2 (@w t1x))))
+                      (cy (w- (w* l1 (@w t2y)) (w* l2 (@w t1y))))
+                      (cz (w- (w* l1 (@w t2z)) (w* l2 (@w t1z))))
+                      (ma (@w ima)) (mb (@w imb)) (ia (@w iia)) (ib (@w iib))
+                      (ar (@w ra)) (br (@w rb))
+                      (rx (@w rolling-impulse-x)) (ry (@w rolling-impulse-y)) (rz (@w rolling-impulse-z)))
+                 (setf vax (w- vax (w* ma px)) vay (w- vay (w* ma py)) vaz (w- vaz (w* ma pz))
+                       wax (w- wax (w* ia (w+ (w* ar cx) rx)))
+                       way (w- way (w* ia (w+ (w* ar cy) ry)))
+                       waz (w- waz (w* ia (w+ (w* ar cz) rz)))
+                       vbx (w+ vbx (w* mb px)) vby (w+ vby (w* mb py)) vbz (w+ vbz (w* mb pz))
+                       wbx (w+ wbx (w* ib (w- rx (w* br cx))))
+                       wby (w+ wby (w* ib (w- ry (w* br cy))))
+                       wbz (w+ wbz (w* ib (w- rz (w* br cz))))))
+               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-a k vax vay vaz wax way waz a6 a7)
+               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-b k vbx vby vbz wbx wby wbz b6 b7)))))))
+       (defun ,so (cbuf v d start end inv-h use-bias elapsed push-max)
+         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
+         (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
+                  (type single-float inv-h elapsed push-max) #.+kernel-policy+)
+         (with-solver-columns cbuf
+           (loop for k of-type index from start below end by ,width do
+             (let ((base (constraint-base k)))
+               (declare (type index base))
+               (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
+                (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+               (let* ((x (@w nx)) (y (@w ny)) (z (@w nz))
+                      (ma (@w ima)) (mb (@w imb)) (iam (@w iia)) (ibm (@w iib))
+                      (ar (@w ra)) (br (@w rb))
+                      (s (w+ (w+ (@w separation)
+                                 (w+ (w+ (w* (,pack ,@(loop for l below width collect
+                                                         `(- (aref d (* (aref body-b (+ k ,l)) +delta-stride+))
+                                                             (aref d (* (aref body-a (+ k ,l)) +delta-stride+)))))
+                                             x)
+                                         (w* (,pack ,@(loop for l below width collect
+                                                         `(- (aref d (+ 1 (* (aref body-b (+ k ,l)) +delta-stride+)))
+                                                             (aref d (+ 1 (* (aref body-a (+ k ,l)) +delta-stride+))))))
+                                             y))
+                                     (w* (,pack ,@(loop for l below width collect
+                                                     `(- (aref d (+ 2 (* (aref body-b (+ k ,l)) +delta-stride+)))
+                                                         (aref d (+ 2 (* (aref body-a (+ k ,l)) +delta-stride+))))))
+                                         z)))
+                             (w* (@w kvn) (wc elapsed))))
+                      (positive (w> s (wc 0.0)))
+                      (bias (if use-bias
+                                (let ((soft (w* (@w bias-rate) s)) (cap (wc (- push-max))))
+                                  (wif positive (w* s (wc inv-h)) (wif (w> soft cap) soft cap)))
+                                (wif positive (w* s (wc inv-h)) (wc 0.0))))
+                      (mscale (if use-bias (wif positive (wc 1.0) (@w mass-scale)) (wc 1.0)))
+                      (iscale (if use-bias (wif positive (wc 0.0) (@w impulse-scale)) (wc 0.0)))
+                      (vn (w+ (w+ (w+ (w* (w- vbx vax) x) (w* (w- vby vay) y)) (w* (w- vbz vaz) z)) (@w kvn)))
+                      (l (@w normal-impulse))
+                      (raw (w- (w- l (w* (w* (@w normal-mass) mscale) (w+ vn bias))) (w* iscale l)))
+                      (new (wif (w> raw (wc 0.0)) raw (wc 0.0)))
+                      (dl (w- new l))
+                      (mni (@w max-normal-impulse)))
+                 (@w! normal-impulse new)
+                 (@w! max-normal-impulse (wif (w> mni new) mni new))
+                 (setf vax (w- vax (w* (w* ma dl) x)) vay (w- vay (w* (w* ma dl) y)) vaz (w- vaz (w* (w* ma dl) z))
+                       vbx (w+ vbx (w* (w* mb dl) x)) vby (w+ vby (w* (w* mb dl) y)) vbz (w+ vbz (w* (w* mb dl) z)))
+                 (let* ((ux (@w t1x)) (uy (@w t1y)) (uz (@w t1z))
+                        (qx (@w t2x)) (qy (@w t2y)) (qz (@w t2z))
+                        (wx (w+ (w* ar wax) (w* br wbx))) (wy (w+ (w* ar way) (w* br wby)))
+                        (wz (w+ (w* ar waz) (w* br wbz)))
+                        (dvx (w- vbx vax)) (dvy (w- vby vay)) (dvz (w- vbz vaz))
+                        (vt1 (w- (w+ (w+ (w+ (w* dvx ux) (w* dvy uy)) (w* dvz uz)) (@w kvt1))
+                                 (w+ (w+ (w* wx qx) (w* wy qy)) (w* wz qz))))
+                        (vt2 (w+ (w+ (w+ (w+ (w* dvx qx) (w* dvy qy)) (w* dvz qz)) (@w kvt2))
+                                 (w+ (w+ (w* wx ux) (w* wy uy)) (w* wz uz))))
+                        (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2))
+                        (tm (@w tangent-mass))
+                        (n1 (w- l1 (w* tm vt1))) (n2 (w- l2 (w* tm vt2)))
+                        (limit (w* (@w friction) new))
+                        (len2 (w+ (w* n1 n1) (w* n2 n2)))
+                        (over (w> len2 (w* limit limit)))
+                        (scale (w/ limit (wsqrt (wif over len2 (wc 1.0))))))
+                   (setf n1 (wif over (w* n1 scale) n1) n2 (wif over (w* n2 scale) n2))
+                   (let* ((d1 (w- n1 l1)) (d2 (w- n2 l2))
+                          (px (w+ (w* d1 ux) (w* d2 qx))) (py (w+ (w* d1 uy) (w* d2 qy)))
+                          (pz (w+ (w* d1 uz) (w* d2 qz)))
+                          (cx (w- (w* d1 qx) (w* d2 ux))) (cy (w- (w* d1 qy) (w* d2 uy)))
+                          (cz (w- (w* d1 qz) (w* d2 uz))))
+                     (@w! tangent-impulse-1 n1) (@w! tangent-impulse-2 n2)
+                     (setf vax (w- vax (w* ma px)) vay (w- vay (w* ma py)) vaz (w- vaz (w* ma pz))
+                           vbx (w+ vbx (w* mb px)) vby (w+ vby (w* mb py)) vbz (w+ vbz (w* mb pz))
+                           wax (w- wax (w* (w* iam ar) cx)) way (w- way (w* (w* iam ar) cy))
+                           waz (w- waz (w* (w* iam ar) cz))
+                           wbx (w- wbx (w* (w* ibm br) cx)) wby (w- wby (w* (w* ibm br) cy))
+                           wbz (w- wbz (w* (w* ibm br) cz)))))
+                 (let* ((rl (@w rolling-limit))
+                        (rolling (w> rl (wc 0.0)))
+                        (rlimit (w* rl new))
+                        (rm (@w rolling-mass))
+                        (rx (@w rolling-impulse-x)) (ry (@w rolling-impulse-y)) (rz (@w rolling-impulse-z))
+                        (nrx (w- rx (w* rm (w- wbx wax)))) (nry (w- ry (w* rm (w- wby way))))
+                        (nrz (w- rz (w* rm (w- wbz waz))))
+                        (len2 (w+ (w+ (w* nrx nrx) (w* nry nry)) (w* nrz nrz)))
+                        (over (w> len2 (w* rlimit rlimit)))
+                        (scale (w/ rlimit (wsqrt (wif over len2 (wc 1.0))))))
+                   (setf nrx (wif over (w* nrx scale) nrx) nry (wif over (w* nry scale) nry)
+                         nrz (wif over (w* nrz scale) nrz))
+                   (let ((dx (w- nrx rx)) (dy (w- nry ry)) (dz (w- nrz rz)))
+                     (@w! rolling-impulse-x (wif rolling nrx rx))
+                     (@w! rolling-impulse-y (wif rolling nry ry))
+                     (@w! rolling-impulse-z (wif rolling nrz rz))
+                     (setf wax (wif rolling (w- wax (w* iam dx)) wax) way (wif rolling (w- way (w* iam dy)) way)
+                           waz (wif rolling (w- waz (w* iam dz)) waz)
+                           wbx (wif rolling (w+ wbx (w* ibm dx)) wbx) wby (wif rolling (w+ wby (w* ibm dy)) wby)
+                           wbz (wif rolling (w+ wbz (w* ibm dz)) wbz)))))
+               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-a k vax vay vaz wax way waz a6 a7)
+               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-b k vbx vby vbz wbx wby wbz b6 b7)))))))
+       (defun ,re (cbuf v start end threshold)
+         ,(format nil "Restitution over constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
+         (declare (type constraint-columns cbuf) (type f32-column v) (type index start end)
+                  (type single-float threshold) #.+kernel-policy+)
+         (with-solver-columns cbuf
+           (loop for k of-type index from start below end by ,width do
+             (let ((base (constraint-base k)))
+               (declare (type index base))
+               (let* ((e (@w restitution)) (rv (@w relative-velocity)) (mni (@w max-normal-impulse))
+                      (skip (wor (wor (w= e (wc 0.0)) (w> rv (wc (- threshold)))) (w= mni (wc 0.0)))))
+                 (unless (zerop (,(if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask)
+                                 (wif skip (wc 0.0) (wc -1.0))))
+                   (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
+                (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+                   (let* ((x (@w nx)) (y (@w ny)) (z (@w nz)) (ma (@w ima)) (mb (@w imb))
+                          (vn (w+ (w+ (w+ (w* (w- vbx vax) x) (w* (w- vby vay) y)) (w* (w- vbz vaz) z)) (@w kvn)))
+                          (l (@w normal-impulse))
+                          (raw (w- l (w* (@w normal-mass) (w+ vn (w* e rv)))))
+                          (new (wif (w> raw (wc 0.0)) raw (wc 0.0)))
+                          (dl (w- new l)))
+                     (@w! normal-impulse (wif skip l new))
+                     (@w! max-normal-impulse (wif skip mni (wif (w> mni new) mni new)))
+                     (setf vax (wif skip vax (w- vax (w* (w* ma dl) x))) vay (wif skip vay (w- vay (w* (w* ma dl) y)))
+                           vaz (wif skip vaz (w- vaz (w* (w* ma dl) z)))
+                           vbx (wif skip vbx (w+ vbx (w* (w* mb dl) x))) vby (wif skip vby (w+ vby (w* (w* mb dl) y)))
+                           vbz (wif skip vbz (w+ vbz (w* (w* mb dl) z)))))
+                   (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-a k vax vay vaz wax way waz a6 a7)
+                   (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-b k vbx vby vbz wbx wby wbz b6 b7))))))))))))
+;; One kernel text, two widths:1 ends here
+
+;; [[file:../physics.org::#F4M1LY][The SSE and AVX2 families:1]]
+(define-wide-kernels avx2 8
+  "Eight lanes of AVX2: f32.8 arithmetic, vblendvps selection. #F4M1LY"
+  :pack sb-simd-avx:make-f32.8 :load sb-simd-avx:f32.8-aref :broadcast sb-simd-avx:f32.8
+  :add sb-simd-avx:f32.8+ :sub sb-simd-avx:f32.8- :mul sb-simd-avx:f32.8* :div sb-simd-avx:f32.8/
+  :sqrt sb-simd-avx:f32.8-sqrt :gt sb-simd-avx:f32.8> :eq sb-simd-avx:f32.8= :if* sb-simd-avx:f32.8-if
+  :or* sb-simd-avx2:u32.8-or :transpose with-rows-8)
+
+(define-wide-kernels sse 4
+  "Four lanes of SSE4.1: f32.4 arithmetic, and/and-not/or selection. #F4M1LY"
+  :pack sb-simd-sse:make-f32.4 :load sb-simd-sse:f32.4-aref :broadcast sb-simd-sse:f32.4
+  :add sb-simd-sse:f32.4+ :sub sb-simd-sse:f32.4- :mul sb-simd-sse:f32.4* :div sb-simd-sse:f32.4/
+  :sqrt sb-simd-sse:f32.4-sqrt :gt sb-simd-sse2:f32.4> :eq sb-simd-sse2:f32.4= :if* f32.4-select
+  :or* sb-simd-sse2:u32.4-or :transpose with-rows-4)
+
+(defclass wide-kernels (scalar-kernels) ()
+  (:documentation "A family that solves each colour's blocks in lanes and the overflow colour
+with the scalar kernels. #F4M1LY"))
+(defclass sse-kernels (wide-kernels) ()
+  (:documentation "Four lanes of SSE4.1 f32.4. #F4M1LY"))
+(defclass avx2-kernels (wide-kernels) ()
+  (:documentation "Eight lanes of AVX2 f32.8. #F4M1LY"))
+
+(defmacro do-colour-runs ((start end world) wide-form overflow-form)
+  "Run WIDE-FORM for each colour's run START..END of WORLD's constraints, then OVERFLOW-FORM for
+the overflow colour's run. #F4M1LY"
+  (let ((starts (gensym)) (c (gensym)))
+    `(let ((,starts (physics-world-color-starts ,world)))
+       (dotimes (,c +physics-max-colors+)
+         (let ((,start (aref ,starts ,c)) (,end (aref ,starts (1+ ,c))))
+           (when (< ,start ,end) ,wide-form)))
+       (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
+         (when (< ,start ,end) ,overflow-form)))))
+
+(macrolet ((define-family-methods (class ws so re)
+             `(progn
+                (defmethod physics-warm-start ((kernels ,class) world)
+                  (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world)))
+                    (do-colour-runs (s e world) (,ws cbuf v s e) (warm-start-range cbuf v s e))))
+                (defmethod physics-solve-contacts ((kernels ,class) world inv-h use-bias elapsed)
+                  (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world))
+                        (d (physics-world-deltas world)) (push-max (f32 (physics-world-push-max world))))
+                    (do-colour-runs (s e world)
+                      (,so cbuf v d s e inv-h use-bias elapsed push-max)
+                      (solve-range cbuf v d s e inv-h use-bias elapsed push-max))))
+                (defmethod physics-apply-restitution ((kernels ,class) world threshold)
+                  (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world)))
+                    (do-colour-runs (s e world) (,re cbuf v s e threshold)
+                      (restitution-range cbuf v s e threshold)))))))
+  (define-family-methods sse-kernels warm-start-blocks/sse solve-blocks/sse restitution-blocks/sse)
+  (define-family-methods avx2-kernels warm-start-blocks/avx2 solve-blocks/avx2 restitution-blocks/avx2))
+
+(register-kernel-family :sse 'sse-kernels :sse4.1)
+(register-kernel-family :avx2 'avx2-kernels :avx2)
+;; The SSE and AVX2 families:1 ends here
+
 ;; [[file:../physics.org::#O07FDP][Closing the files:2]]
 (register-tangled-file #.(or *compile-file-truename* *load-truename*))
 ;; Closing the files:2 ends here

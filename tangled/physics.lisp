@@ -39,6 +39,8 @@
    #:physics-world-max-penetration #:physics-world-max-approach-speed #:physics-world-overflow-count
    #:physics-world-state-hash #:validate-physics-world
    #:physics-body #:physics-body-world #:physics-body-handle
+   ;; Kernel families (#R9M4PV, #F4M1LY)
+   #:register-kernel-family #:sse-kernels #:avx2-kernels
    ;; Scenes (#B4S1NS, #D3M0SC, #B3NCH5)
    #:make-basin-terrain #:make-basin-world #:run-default-scene #:run-basin-benchmark))
 
@@ -1119,6 +1121,15 @@ holding the columnar buffers, the parameters, the events and the kernel family. 
   (let ((set (third entry)))
     (or (null set)
         (sb-simd-internals:instruction-set-available-p (sb-simd-internals:find-instruction-set set)))))
+
+(defun register-kernel-family (name class &optional instruction-set)
+  "Make the kernel family NAME, an instance of CLASS needing INSTRUCTION-SET, available to
+make-physics-world, replacing an earlier entry of that NAME; families register narrowest
+first, so :auto takes the last one the CPU runs. #R9M4PV"
+  (setf *kernel-families*
+        (append (remove name *kernel-families* :key #'first)
+                (list (if instruction-set (list name class instruction-set) (list name class)))))
+  name)
 
 (defun make-kernel-family (name)
   "The kernel family NAME (:scalar, a wide one, or :auto for the widest this CPU runs). #R9M4PV"
@@ -2250,15 +2261,18 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
              (bias 0.0) (mscale 1.0) (iscale 0.0))
         (declare (type index a b da db base) (type single-float bias mscale iscale))
         (cond ((> s 0.0) (setf bias (* s inv-h)))
-              (use-bias (setf bias (max (* (@ bias-rate) s) (- push-max))
+              (use-bias (setf bias (let ((soft (* (@ bias-rate) s)) (cap (- push-max)))
+                                     (if (> soft cap) soft cap))
                               mscale (@ mass-scale) iscale (@ impulse-scale))))
         ;; normal
         (let* ((vn (+ (* (- vbx vax) x) (* (- vby vay) y) (* (- vbz vaz) z) (@ kvn)))
                (l (@ normal-impulse))
-               (new (max (- l (* (@ normal-mass) mscale (+ vn bias)) (* iscale l)) 0.0))
-               (dl (- new l)))
+               (raw (- l (* (@ normal-mass) mscale (+ vn bias)) (* iscale l)))
+               (new (if (> raw 0.0) raw 0.0))
+               (dl (- new l))
+               (mni (@ max-normal-impulse)))
           (setf (@ normal-impulse) new
-                (@ max-normal-impulse) (max (@ max-normal-impulse) new))
+                (@ max-normal-impulse) (if (> mni new) mni new))
           (setf vax (- vax (* ma dl x)) vay (- vay (* ma dl y)) vaz (- vaz (* ma dl z))
                 vbx (+ vbx (* mb dl x)) vby (+ vby (* mb dl y)) vbz (+ vbz (* mb dl z)))
           ;; friction, inside the cone |l1,l2| <= friction * normal impulse
@@ -2321,11 +2335,13 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
                         (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn)))
                  (l (@ normal-impulse))
-                 (new (max (- l (* (@ normal-mass) (+ vn (* e rv)))) 0.0))
-                 (dl (- new l)))
+                 (raw (- l (* (@ normal-mass) (+ vn (* e rv)))))
+                 (new (if (> raw 0.0) raw 0.0))
+                 (dl (- new l))
+                 (mni (@ max-normal-impulse)))
             (declare (type index a b))
             (setf (@ normal-impulse) new
-                  (@ max-normal-impulse) (max (@ max-normal-impulse) new))
+                  (@ max-normal-impulse) (if (> mni new) mni new))
             (setf (aref v a) (- (aref v a) (* ma dl x))
                   (aref v (+ a 1)) (- (aref v (+ a 1)) (* ma dl y))
                   (aref v (+ a 2)) (- (aref v (+ a 2)) (* ma dl z))

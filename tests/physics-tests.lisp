@@ -233,6 +233,35 @@
                         family (member family families) listed needed))))))
 ;; JKM0PY-families-match-cpuinfo ends here
 
+;; [[file:../physics.org::#7PAQ3M][7PAQ3M-families-agree-bit-for-bit]]
+(define-claim "7PAQ3M" families-agree-bit-for-bit
+    "Each available family's hash equals the scalar hash on the 200-ball and 1000-ball piles."
+  (flet ((hash-after (balls steps kernels)
+           (let ((world (make-basin-world balls :kernels kernels)))
+             (dotimes (i steps) (step-physics-world world))
+             (physics-world-state-hash world))))
+    (let ((families (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p
+                                                   luv-physics::*kernel-families*))))
+      (check (member :avx2 families) "the AVX2 family is registered and this CPU runs it")
+      (loop for (balls steps) in '((200 120) (1000 200))
+            for reference = (hash-after balls steps :scalar)
+            do (dolist (family (remove :scalar families))
+                 (check (= reference (hash-after balls steps family))
+                        "~A differs from scalar after ~D steps of ~D balls" family steps balls))))))
+;; 7PAQ3M-families-agree-bit-for-bit ends here
+
+;; [[file:../physics.org::#7PAQ3M][7PAQ3M-choosing-a-family]]
+(define-claim "7PAQ3M" choosing-a-family
+    "An unknown family signals; :auto is the last available family."
+  (check (typep (handler-case (make-physics-world :kernels :neon) (error (e) e))
+                'invalid-physics-parameter))
+  (let ((widest (car (last (remove-if-not #'luv-physics::kernel-family-available-p
+                                          luv-physics::*kernel-families*)))))
+    (check (eq (second widest)
+               (class-name (class-of (luv-physics::physics-world-kernels
+                                      (make-physics-world :kernels :auto))))))))
+;; 7PAQ3M-choosing-a-family ends here
+
 ;; [[file:../physics.org::#O07FDP][O07FDP-both-files-registered]]
 (define-claim "O07FDP" both-files-registered
     "The registry holds tangled/physics.lisp and tangled/physics-simd.lisp, in load order."
