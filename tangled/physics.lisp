@@ -1106,6 +1106,7 @@ dispatches on it once per call. #W0RLD7"))
    (step-count :initform 0 :type fixnum :accessor physics-world-step-count)
    (stepping :initform nil :accessor physics-world-stepping)
    (event-handler :initform nil :accessor physics-world-event-handler)
+   (phase-clock :initform nil :accessor physics-world-phase-clock)
    (statistics :initform (make-array 8 :element-type 'double-float :initial-element 0d0)
                :reader physics-world-statistics))
   (:documentation "A simulated world of spheres over a voxel terrain: the CLOS side of the seam,
@@ -2559,11 +2560,18 @@ it. The step's events stay readable until the next step begins. #IDVK7G"
     world))
 
 (defun run-physics-phases (world)
-  "Run each phase of *physics-phases* on WORLD, in order. #IDVK7G"
-  (dolist (phase *physics-phases*)
-    (let ((result (funcall phase world)))
-      (when (eq phase 'prepare-phase)
-        (setf (aref (physics-world-statistics world) 1) (coerce (the fixnum result) 'double-float)))))
+  "Run each phase of *physics-phases* on WORLD, in order; when the world's phase clock is on,
+add each phase's nanoseconds to it under the phase's position. #IDVK7G"
+  (let ((clock (physics-world-phase-clock world)) (i 0))
+    (declare (type (or null fixnum-column) clock) (type fixnum i))
+    (dolist (phase *physics-phases*)
+      (let* ((start (if clock (clock-ns) 0))
+             (result (funcall phase world)))
+        (when (eq phase 'prepare-phase)
+          (setf (aref (physics-world-statistics world) 1) (coerce (the fixnum result) 'double-float)))
+        (when (and clock (< i (length clock)))
+          (incf (aref clock i) (- (clock-ns) start)))
+        (incf i))))
   world)
 
 (defun physics-world-last-step-contact-count (world)
@@ -2768,9 +2776,12 @@ into it, and print a line per simulated second and a summary. Return the world. 
 
 (defun measure-basin (count &key (kernels :scalar) (from 120) (to 300))
   "Step the basin scene of COUNT awake balls TO times and return a plist of the mean and median
-ms per step over steps FROM..TO, contacts, colours, overflow and bytes consed per step. #B3NCH5"
-  (let ((world (make-basin-world count :kernels kernels)) (times '()) (consed 0))
+ms per step over steps FROM..TO, contacts, colours, overflow, bytes consed per step, and the
+mean ms of each phase (:phases, an alist). #B3NCH5"
+  (let ((world (make-basin-world count :kernels kernels)) (times '()) (consed 0)
+        (clock (make-array (length *physics-phases*) :element-type 'fixnum :initial-element 0)))
     (dotimes (i to)
+      (when (= i from) (setf (physics-world-phase-clock world) clock))
       (let ((before (sb-ext:get-bytes-consed)))
         (step-physics-world world)
         (when (>= i from)
@@ -2782,27 +2793,51 @@ ms per step over steps FROM..TO, contacts, colours, overflow and bytes consed pe
           :colours (physics-world-last-step-color-count world)
           :overflow (physics-world-overflow-count world)
           :consed (round consed (length times))
-          :awake (physics-world-awake-count world))))
+          :phases (loop for phase in *physics-phases* for ns across clock
+                        collect (cons phase (/ ns 1d6 (- to from)))))))
+
+(defparameter +bench-phase-groups+
+  '(("wake+grid+pairs" wake-phase grid-phase pair-phase) ("terrain" terrain-phase) ("boxes" box-phase)
+    ("prune" prune-phase) ("prepare" prepare-phase) ("substeps" substep-phase)
+    ("restitution+store" restitution-phase store-phase) ("finalize" reset-phase finalize-phase))
+  "How the benchmark groups the phases into columns. #B3NCH5")
 
 (defun run-basin-benchmark (&key (counts '(1000 3000 10000)) (stream *standard-output*))
-  "Print, as an Org table, the basin measured at each of COUNTS for every kernel family this
-CPU runs, with the machine's model and load. #B3NCH5"
-  (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A~%"
-          (or (ignore-errors (with-open-file (s "/proc/cpuinfo")
-                               (loop for line = (read-line s nil) while line
-                                     when (search "model name" line)
-                                       return (string-trim " " (subseq line (1+ (position #\: line)))))))
-              "unknown CPU")
-          (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
-  (format stream "~&| balls | family | mean ms | median ms | contacts | colours | overflow | bytes consed/step |~%")
-  (format stream "~&|-------+--------+---------+-----------+----------+---------+----------+-------------------|~%")
-  (dolist (count counts)
-    (dolist (family (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*)))
-      (let ((m (measure-basin count :kernels family)))
-        (format stream "~&| ~5D | ~6A | ~7,3F | ~9,3F | ~8D | ~7D | ~8D | ~17D |~%"
-                count (string-downcase family) (getf m :mean) (getf m :median) (getf m :contacts) (getf m :colours)
-                (getf m :overflow) (getf m :consed))
-        (finish-output stream)))))
+  "Print, as Org tables, the basin measured at each of COUNTS for every kernel family this CPU
+runs, each family's time as a fraction of the scalar family's measured in the same run, and
+each phase's share; with the machine's model and load. #B3NCH5"
+  (let ((families (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*)))
+        (rows '()))
+    (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A~%"
+            (or (ignore-errors (with-open-file (s "/proc/cpuinfo")
+                                 (loop for line = (read-line s nil) while line
+                                       when (search "model name" line)
+                                         return (string-trim " " (subseq line (1+ (position #\: line)))))))
+                "unknown CPU")
+            (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
+    (format stream "~&| balls | family | mean ms | median ms | / scalar | contacts | colours | overflow | bytes consed/step |~%")
+    (format stream "~&|-------+--------+---------+-----------+----------+----------+---------+----------+-------------------|~%")
+    (dolist (count counts)
+      (let ((scalar nil))
+        (dolist (family families)
+          (let ((m (measure-basin count :kernels family)))
+            (unless scalar (setf scalar (getf m :median)))
+            (push m rows)
+            (format stream "~&| ~5D | ~6A | ~7,3F | ~9,3F | ~8,2F | ~8D | ~7D | ~8D | ~17D |~%"
+                    count (string-downcase family) (getf m :mean) (getf m :median)
+                    (/ (getf m :median) scalar) (getf m :contacts) (getf m :colours)
+                    (getf m :overflow) (getf m :consed))
+            (finish-output stream)))))
+    (format stream "~&~%#+caption: mean ms per step of each phase group~%| balls | family |~{ ~A |~}~%"
+            (mapcar #'first +bench-phase-groups+))
+    (format stream "~&|-------+--------+~{~A~}~%"
+            (mapcar (lambda (g) (format nil "~A+" (make-string (+ 2 (length (first g))) :initial-element #\-)))
+                    +bench-phase-groups+))
+    (dolist (m (reverse rows))
+      (format stream "~&| ~5D | ~6A |~{ ~A |~}~%" (getf m :balls) (string-downcase (getf m :kernels))
+              (loop for (name . phases) in +bench-phase-groups+
+                    collect (format nil "~v,3F" (length name)
+                                    (loop for p in phases sum (cdr (assoc p (getf m :phases))))))))))
 ;; What a step costs:1 ends here
 
 ;; [[file:../physics.org::#O07FDP][Closing the files:1]]
