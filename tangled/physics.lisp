@@ -447,9 +447,10 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
 (declaim (inline finite-f32))
 (defun finite-f32 (name value &optional world)
   "VALUE as a single-float, or an invalid-physics-number error naming NAME. #C0ND1T"
+  ;; NaN first: comparing a NaN would itself trap
   (if (and (realp value)
-           (< (abs value) most-positive-single-float)
-           (not (and (floatp value) (sb-ext:float-nan-p value))))
+           (not (and (floatp value) (sb-ext:float-nan-p value)))
+           (< (abs value) most-positive-single-float))
       (coerce value 'single-float)
       (error 'invalid-physics-number :name name :value value :world world)))
 ;; Bad input is a condition that names the value:1 ends here
@@ -1546,7 +1547,8 @@ lies in neighbouring cells. #G4R1D5"
 ;; [[file:../physics.org::#W4K3PH][Fast bodies and moving boxes wake what they reach:1]]
 (defun wake-phase (world)
   "Phase 2: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
-sleepers they reach. Return how many woke. #W4K3PH"
+sleepers they can reach this step: within the margin plus one step's travel. Return how many
+woke. #W4K3PH"
   (let ((sleeping (physics-world-sleeping world))
         (woken 0))
     (declare (type fixnum woken))
@@ -1557,9 +1559,10 @@ sleepers they reach. Return how many woke. #W4K3PH"
                      (physics-world-awake world)
                      (+ (body-columns-length (physics-world-awake world)) (body-columns-length sleeping))))
              (n (body-columns-length awake))
-             (margin (physics-world-margin world))
-             (wake2 (expt (physics-world-wake-speed world) 2)))
-        (declare (type single-float margin wake2))
+             (margin (f32 (physics-world-margin world)))
+             (dt (physics-world-current-dt world))
+             (wake2 (f32 (expt (physics-world-wake-speed world) 2))))
+        (declare (type single-float margin wake2 dt))
         (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
                  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
                  (do-grid-neighbours (h grid x y z :span span)
@@ -1575,7 +1578,8 @@ sleepers they reach. Return how many woke. #W4K3PH"
                                    (let ((dx (- sx (max min-x (min max-x sx))))
                                          (dy (- sy (max min-y (min max-y sy))))
                                          (dz (- sz (max min-z (min max-z sz)))))
-                                     (<= (+ (* dx dx) (* dy dy) (* dz dz)) (* sr sr)))
+                                     (<= (+ (* dx dx) (* dy dy) (* dz dz))
+                                         (* (+ sr reach-extra) (+ sr reach-extra))))
                                    (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
                                          (reach (+ sr reach-extra)))
                                      (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))))
@@ -1587,8 +1591,11 @@ sleepers they reach. Return how many woke. #W4K3PH"
                                (* (aref vz i) (aref vz i)))
                             wake2)
                          (zerop (logand (aref flags i) +flag-terrain-only+)))
-                (wake-near (aref x i) (aref y i) (aref z i) (+ (aref radius i) margin) 1
-                           nil 0.0 0.0 0.0 0.0 0.0 0.0))))
+                (wake-near (aref x i) (aref y i) (aref z i)
+                           (+ (aref radius i) margin
+                              (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                              (* (aref vz i) (aref vz i))))))
+                           1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))
           (let ((boxes (physics-world-boxes world))
                 (inv (hash-grid-inv-cell grid)))
             (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
@@ -1597,9 +1604,11 @@ sleepers they reach. Return how many woke. #W4K3PH"
                   (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
                          (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
                          (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
-                         (half (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz)))
+                         (travel (+ margin (* dt (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
+                                                           (* (aref vz b) (aref vz b)))))))
+                         (half (+ travel (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz))))
                          (span (1+ (ceiling (* half inv)))))
-                    (wake-near cx cy cz 0.0 span t (aref min-x b) (aref min-y b) (aref min-z b)
+                    (wake-near cx cy cz travel span t (aref min-x b) (aref min-y b) (aref min-z b)
                                (aref max-x b) (aref max-y b) (aref max-z b))))))))))
     woken))
 ;; Fast bodies and moving boxes wake what they reach:1 ends here
@@ -1947,10 +1956,12 @@ variable BASE. #SSMPYW"
   (1- (integer-length x)))
 
 (defun color-contacts (world)
-  "Greedy colouring: a two-body contact takes the lowest of colours 0-19 free at both bodies, a
-one-sided contact the highest of colours 0-23 free at its awake body, anything else the
-overflow colour 24. Fills the colour of each contact and the colour starts, each colour but
-the overflow starting on a multiple of eight; returns the number of colours used. #SSMPYW"
+  "Greedy colouring in two passes. First every two-body contact takes the lowest of colours
+0-19 free at both its bodies. Then every one-sided contact takes, at its awake body, the
+highest free colour among those the two-body contacts used, or failing that the lowest free
+colour above them. Anything else goes to the overflow colour 24. Fills the colour of each
+contact and the colour starts, each colour but the overflow starting on a multiple of eight;
+returns the number of colours used. #SSMPYW"
   (let* ((contacts (physics-world-contacts world))
          (m (contact-columns-length contacts))
          (ids (physics-world-ids world))
@@ -1959,33 +1970,50 @@ the overflow starting on a multiple of eight; returns the number of colours used
          (colors (physics-world-contact-colors world))
          (starts (physics-world-color-starts world))
          (sets (handle-table-set ids))
-         (locals (handle-table-local ids)))
-    (declare (type fixnum-column masks colors starts sets locals) (type index m n) #.+kernel-policy+)
+         (locals (handle-table-local ids))
+         (top -1))
+    (declare (type fixnum-column masks colors starts sets locals) (type index m n)
+             (type fixnum top) #.+kernel-policy+)
     (fill masks 0 :end (1+ n))
     (fill starts 0)
     (with-contact-columns (handle-a handle-b) contacts
-      (dotimes (c m)
-        (let* ((ha (aref handle-a c)) (hb (aref handle-b c))
-               (la (if (= (aref sets (handle-index ha)) +set-awake+) (aref locals (handle-index ha)) -1))
-               (lb (if (and (>= hb 0) (= (aref sets (handle-index hb)) +set-awake+))
-                       (aref locals (handle-index hb)) -1))
-               (color +physics-max-colors+))
-          (declare (type fixnum ha hb la lb color))
-          (cond ((and (>= la 0) (>= lb 0))
-                 (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
-                                     (1- (ash 1 +physics-dynamic-colors+)))))
-                   (unless (zerop free)
-                     (setf color (lowest-bit free))
-                     (setf (aref masks la) (logior (aref masks la) (ash 1 color))
-                           (aref masks lb) (logior (aref masks lb) (ash 1 color))))))
-                (t
-                 (let* ((l (max la lb))
-                        (free (logand (lognot (aref masks l)) (1- (ash 1 +physics-max-colors+)))))
-                   (unless (zerop free)
-                     (setf color (highest-bit free))
-                     (setf (aref masks l) (logior (aref masks l) (ash 1 color)))))))
-          (setf (aref colors c) color)
-          (incf (aref starts (1+ color))))))
+      (flet ((awake-row (h)
+               (declare (type fixnum h))
+               (if (and (>= h 0) (= (aref sets (handle-index h)) +set-awake+))
+                   (aref locals (handle-index h))
+                   -1)))
+        (declare (inline awake-row))
+        ;; pass one: two-body contacts, lowest free colour
+        (dotimes (c m)
+          (let ((la (awake-row (aref handle-a c))) (lb (awake-row (aref handle-b c))))
+            (declare (type fixnum la lb))
+            (setf (aref colors c) -1)
+            (when (and (>= la 0) (>= lb 0))
+              (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
+                                  (1- (ash 1 +physics-dynamic-colors+))))
+                    (color +physics-max-colors+))
+                (declare (type fixnum color))
+                (unless (zerop free)
+                  (setf color (lowest-bit free)
+                        top (max top color))
+                  (setf (aref masks la) (logior (aref masks la) (ash 1 color))
+                        (aref masks lb) (logior (aref masks lb) (ash 1 color))))
+                (setf (aref colors c) color)))))
+        ;; pass two: one-sided contacts, as late among the used colours as their body allows
+        (let ((used (1- (ash 1 (1+ top)))))
+          (declare (type (unsigned-byte 32) used))
+          (dotimes (c m)
+            (when (= (aref colors c) -1)
+              (let* ((l (max (awake-row (aref handle-a c)) (awake-row (aref handle-b c))))
+                     (free (logand (lognot (aref masks l)) (1- (ash 1 +physics-max-colors+))))
+                     (color +physics-max-colors+))
+                (declare (type fixnum l color))
+                (cond ((plusp (logand free used)) (setf color (highest-bit (logand free used))))
+                      ((plusp free) (setf color (lowest-bit free))))
+                (when (< color +physics-max-colors+)
+                  (setf (aref masks l) (logior (aref masks l) (ash 1 color))))
+                (setf (aref colors c) color))))))
+      (dotimes (c m) (incf (aref starts (1+ (aref colors c))))))
     ;; prefix sums, each colour but the overflow padded to a whole block of eight rows
     (loop with at of-type index = 0
           for c from 0 to +physics-max-colors+

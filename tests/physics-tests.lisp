@@ -233,6 +233,855 @@
                         family (member family families) listed needed))))))
 ;; JKM0PY-families-match-cpuinfo ends here
 
+;; [[file:../physics.org::#T3STK1][A kit for the claims:1]]
+(defun make-floor-world (&key (sleep t) (gravity '(0 -9.81 0)))
+  "A world over a terrain whose cells [-16,32)^3 are resident air except a floor one cell thick,
+y in [-1,0), so a resting ball of radius R has its centre at R - slop. Return the world and
+the terrain. #T3STK1"
+  (let ((terrain (luv-physics::make-voxel-terrain)))
+    (luv-physics::fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (luv-physics::fill-terrain terrain -16 -1 -16 32 0 32 t)
+    (values (luv-physics::make-physics-world :terrain terrain :sleep sleep :gravity gravity)
+            terrain)))
+
+(defun make-lcg (seed)
+  "A function returning uniform doubles in [0,1) from a 48-bit linear congruential generator
+started at the integer SEED, independent of CL's random state. #T3STK1"
+  (let ((state (ldb (byte 48 0) seed)))
+    (lambda ()
+      (setf state (ldb (byte 48 0) (+ (* state 25214903917) 11)))
+      (/ (float (ldb (byte 31 17) state) 1d0) (float (ash 1 31) 1d0)))))
+
+(defun step-events (world)
+  "Step WORLD once and return its events as a list of (KIND HANDLE-A HANDLE-B SPEED DATUM). #T3STK1"
+  (luv-physics::step-physics-world world)
+  (let ((events '()))
+    (luv-physics::map-physics-events
+     (lambda (kind a b x y z speed datum)
+       (declare (ignore x y z))
+       (push (list kind a b speed datum) events))
+     world)
+    (nreverse events)))
+
+(defun body-y (world handle)
+  "The height of HANDLE's centre. #T3STK1"
+  (nth-value 1 (luv-physics::physics-body-position world handle)))
+
+(defun terrain-contacts (world handle)
+  "HANDLE's terrain contacts, as a list of plists (:row :nx :ny :nz :touching :impulse). #T3STK1"
+  (let ((c (luv-physics::physics-world-contacts world)))
+    (loop for row below (luv-physics::contact-columns-length c)
+          when (and (= (aref (luv-physics::contact-columns-handle-a c) row) handle)
+                    (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-terrain+))
+            collect (list :row row
+                          :nx (aref (luv-physics::contact-columns-nx c) row)
+                          :ny (aref (luv-physics::contact-columns-ny c) row)
+                          :nz (aref (luv-physics::contact-columns-nz c) row)
+                          :touching (aref (luv-physics::contact-columns-touching c) row)
+                          :impulse (aref (luv-physics::contact-columns-normal-impulse c) row)))))
+
+(defun world-fingerprint (world)
+  "The awake count, the sleeping count and the state hash of WORLD, as a list. #T3STK1"
+  (list (luv-physics::physics-world-awake-count world)
+        (luv-physics::physics-world-sleeping-count world)
+        (luv-physics::physics-world-state-hash world)))
+;; A kit for the claims:1 ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-non-finite-numbers]]
+(define-claim "C0ND1T" non-finite-numbers
+    "NaN and ±infinity signal invalid-physics-number and leave the world untouched."
+  (let* ((w (make-floor-world))
+         (nan (sb-kernel:make-single-float -4194304))
+         (inf sb-ext:single-float-positive-infinity)
+         (-inf sb-ext:single-float-negative-infinity)
+         (h (luv-physics::add-physics-body w 3.5 1.0 3.5)))
+    (luv-physics::add-physics-body w 5.5 0.245 3.5)
+    (dotimes (i 10) (luv-physics::step-physics-world w))
+    (let ((before (world-fingerprint w)) (wrong '()))
+      (dolist (bad (list nan inf -inf))
+        (dolist (call (list (lambda () (luv-physics::add-physics-body w bad 1 1))
+                            (lambda () (luv-physics::add-physics-body w 1 bad 1))
+                            (lambda () (luv-physics::add-physics-body w 1 1 bad))
+                            (lambda () (luv-physics::add-physics-body w 1 1 1 :vx bad))
+                            (lambda () (luv-physics::add-physics-body w 1 1 1 :vy bad))
+                            (lambda () (luv-physics::add-physics-body w 1 1 1 :vz bad))
+                            (lambda () (luv-physics::add-physics-body w 1 1 1 :radius bad))
+                            (lambda () (luv-physics::add-physics-body w 1 1 1 :mass bad))
+                            (lambda () (luv-physics::set-physics-body-velocity w h bad 0 0))
+                            (lambda () (luv-physics::post-physics-box w bad 1 1 0.5 0.5 0.5))
+                            (lambda () (luv-physics::post-physics-box w 1 1 1 0.5 0.5 0.5 :vy bad))
+                            (lambda () (luv-physics::wake-physics-bodies-near w 1 bad 1 1))))
+          (let ((outcome (handler-case (progn (funcall call) :no-error)
+                           (error (e) (type-of e)))))
+            (unless (eq outcome 'luv-physics::invalid-physics-number)
+              (push (list (prin1-to-string bad) outcome) wrong)))))
+      (check (null wrong) "~D of 36 bad calls did not signal invalid-physics-number; they gave ~S"
+             (length wrong) (remove-duplicates wrong :test #'equal))
+      (check (equal before (world-fingerprint w)) "the world changed: ~S -> ~S" before (world-fingerprint w))
+      (check (= 0 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))) "a box was posted")
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; C0ND1T-non-finite-numbers ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-bad-radius-and-mass]]
+(define-claim "C0ND1T" bad-radius-and-mass
+    "Radius <= 0 or over the limit -> invalid-physics-radius; mass <= 0 -> invalid-physics-parameter."
+  (let ((w (make-floor-world)))
+    (luv-physics::add-physics-body w 3.5 1.0 3.5)
+    (luv-physics::step-physics-world w)
+    (let ((before (world-fingerprint w)))
+      (flet ((outcome (&rest args)
+               (handler-case (progn (apply #'luv-physics::add-physics-body w 8.5 1 8.5 args) :no-error)
+                 (error (e) (type-of e)))))
+        (check (< (abs (- (luv-physics::max-radius-for w) 0.88)) 1e-6))
+        (dolist (r '(0 0.0 -0.1 0.881 1.0 100))
+          (check (eq 'luv-physics::invalid-physics-radius (outcome :radius r)) "radius ~S gave ~S" r (outcome :radius r)))
+        (dolist (m '(0 0.0 -1))
+          (check (eq 'luv-physics::invalid-physics-parameter (outcome :mass m)) "mass ~S gave ~S" m (outcome :mass m)))
+        (check (equal before (world-fingerprint w)))
+        (check (eq t (luv-physics::validate-physics-world w)))
+        (check (eq :no-error (outcome :radius (luv-physics::max-radius-for w))) "the limit radius itself is refused")))))
+;; C0ND1T-bad-radius-and-mass ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-stale-handles]]
+(define-claim "C0ND1T" stale-handles
+    "Removed, foreign and malformed handles signal stale-physics-handle with :removed, :foreign, :malformed."
+  (let* ((w (make-floor-world))
+         (other (make-floor-world))
+         (foreign (luv-physics::add-physics-body other 3.5 1 3.5))
+         (removed (luv-physics::add-physics-body w 2.5 1 2.5)))
+    (luv-physics::add-physics-body w 3.5 1 3.5)
+    (luv-physics::remove-physics-body w removed)
+    (luv-physics::step-physics-world w)
+    (let ((before (world-fingerprint w)))
+      (loop for (handle reason) in (list (list removed :removed) (list foreign :foreign)
+                                         (list -5 :malformed) (list :foo :malformed))
+            do (dolist (call (list (lambda () (luv-physics::physics-body-position w handle))
+                                   (lambda () (luv-physics::physics-body-velocity w handle))
+                                   (lambda () (luv-physics::remove-physics-body w handle))
+                                   (lambda () (luv-physics::set-physics-body-velocity w handle 1 0 0))
+                                   (lambda () (luv-physics::physics-body w handle))))
+                 (let ((got (handler-case (progn (funcall call) :no-error)
+                              (luv-physics::stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e))
+                              (error (e) (type-of e)))))
+                   (check (eq reason got) "handle ~S: expected ~S, got ~S" handle reason got))))
+      (check (not (luv-physics::physics-body-alive-p w foreign)))
+      (check (equal before (world-fingerprint w)))
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; C0ND1T-stale-handles ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-busy-during-step]]
+(define-claim "C0ND1T" busy-during-step
+    "Steps and edits from the event handler signal physics-world-busy and change nothing."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.5 0.24 3.5)) ; touches the floor: a :begin event
+         (outcomes '()) (ran nil))
+    (setf (luv-physics::physics-world-event-handler w)
+          (lambda (&rest event)
+            (declare (ignore event))
+            (unless ran
+              (setf ran t)
+              (dolist (call (list (lambda () (luv-physics::step-physics-world w))
+                                  (lambda () (luv-physics::add-physics-body w 1 1 1))
+                                  (lambda () (luv-physics::remove-physics-body w h))
+                                  (lambda () (luv-physics::set-physics-body-velocity w h 1 0 0))
+                                  (lambda () (luv-physics::post-physics-box w 1 1 1 0.5 0.5 0.5))
+                                  (lambda () (luv-physics::wake-physics-bodies-near w 1 1 1 1))))
+                (push (handler-case (progn (funcall call) :no-error) (error (e) (type-of e))) outcomes)))))
+    (let ((steps (luv-physics::physics-world-step-count w)))
+      (luv-physics::step-physics-world w)
+      (check (eq t ran) "the handler never ran")
+      (check (equal outcomes (make-list 6 :initial-element 'luv-physics::physics-world-busy))
+             "outcomes ~S" (reverse outcomes))
+      (check (= (1+ steps) (luv-physics::physics-world-step-count w)))
+      (check (= 1 (luv-physics::physics-world-awake-count w)))
+      (check (luv-physics::physics-body-alive-p w h))
+      (check (= 0 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
+      (check (not (luv-physics::physics-world-stepping w)))
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; C0ND1T-busy-during-step ends here
+
+;; [[file:../physics.org::#L4Y0UT][L4Y0UT-swap-remove-and-growth]]
+(define-claim "L4Y0UT" swap-remove-and-growth
+    "event-columns: swap-remove fills the hole from the end and zeroes it; growth keeps rows."
+  (let ((e (luv-physics::make-event-columns :capacity 2 :spare 1)))
+    (flet ((put (i)
+             (let ((row (luv-physics::event-columns-append e)))
+               (setf (aref (luv-physics::event-columns-kind e) row) (+ 10 i)
+                     (aref (luv-physics::event-columns-handle-a e) row) (* 100 i)
+                     (aref (luv-physics::event-columns-x e) row) (+ 0.5 i)
+                     (aref (luv-physics::event-columns-speed e) row) (* -1.5 i))
+               row))
+           (row-values (row)
+             (list (aref (luv-physics::event-columns-kind e) row)
+                   (aref (luv-physics::event-columns-handle-a e) row)
+                   (aref (luv-physics::event-columns-x e) row)
+                   (aref (luv-physics::event-columns-speed e) row))))
+      (check (equal '(0 1 2 3 4) (loop for i below 5 collect (put i))) "append returns 0, 1, 2, ...")
+      (check (>= (luv-physics::event-columns-capacity e) 5))
+      (check (equal (loop for i below 5 collect (row-values i))
+                    (loop for i below 5 collect (list (+ 10 i) (* 100 i) (+ 0.5 i) (* -1.5 i))))
+             "rows changed while growing")
+      (check (equal '(0 0 0.0 0.0)
+                    (row-values (luv-physics::event-columns-capacity e)))
+             "the spare row is not zero")
+      (check (= 4 (luv-physics::event-columns-swap-remove e 1)) "the moved row's old index")
+      (check (= 4 (luv-physics::event-columns-length e)))
+      (check (equal (row-values 1) (list 14 400 4.5 -6.0)) "the hole holds ~S" (row-values 1))
+      (check (equal (row-values 4) '(0 0 0.0 0.0)) "the vacated row holds ~S" (row-values 4))
+      (check (= -1 (luv-physics::event-columns-swap-remove e 3)) "removing the last row")
+      (check (equal (row-values 3) '(0 0 0.0 0.0)))
+      (check (equal (loop for i below 3 collect (first (row-values i))) '(10 14 12))))))
+;; L4Y0UT-swap-remove-and-growth ends here
+
+;; [[file:../physics.org::#B5N8JT][B5N8JT-handle-generations]]
+(define-claim "B5N8JT" handle-generations
+    "A reused slot gets a new generation: the old handle is stale, the new one works."
+  (let* ((w (make-floor-world))
+         (keep (luv-physics::add-physics-body w 1.5 0.245 1.5))
+         (old (luv-physics::add-physics-body w 2.5 0.245 2.5)))
+    (luv-physics::remove-physics-body w old)
+    (let ((new (luv-physics::add-physics-body w 4.5 1.25 4.5)))
+      (check (= (luv-physics::handle-index old) (luv-physics::handle-index new)) "the slot was not reused")
+      (check (> (luv-physics::handle-generation new) (luv-physics::handle-generation old)))
+      (check (not (luv-physics::physics-body-alive-p w old)))
+      (check (eq :removed (handler-case (progn (luv-physics::physics-body-position w old) :no-error)
+                            (luv-physics::stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e)))))
+      (check (equal '(4.5 1.25 4.5) (multiple-value-list (luv-physics::physics-body-position w new))))
+      (check (equal '(1.5 0.245 1.5) (multiple-value-list (luv-physics::physics-body-position w keep))))
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; B5N8JT-handle-generations ends here
+
+;; [[file:../physics.org::#B5N8JT][B5N8JT-describe-live-row]]
+(define-claim "B5N8JT" describe-live-row
+    "describe shows the body's current y, before and after a step."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.5 2.0 3.5))
+         (body (luv-physics::physics-body w h)))
+    (flet ((y-line-shows-y ()
+             (let ((text (with-output-to-string (s) (describe body s)))
+                   (y (body-y w h)))
+               (with-input-from-string (in text)
+                 (loop for line = (read-line in nil) while line
+                       thereis (let ((parts (uiop:split-string (string-trim " " line) :separator "=")))
+                                 (and (= 2 (length parts))
+                                      (string= "y" (string-trim " " (first parts)))
+                                      (string= (prin1-to-string y) (string-trim " " (second parts))))))))))
+      (check (y-line-shows-y) "before the step: ~A" (with-output-to-string (s) (describe body s)))
+      (luv-physics::step-physics-world w)
+      (check (/= 2.0 (body-y w h)))
+      (check (y-line-shows-y) "after the step: ~A" (with-output-to-string (s) (describe body s))))))
+;; B5N8JT-describe-live-row ends here
+
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-non-resident-is-wall]]
+(define-claim "H2W9DJ" non-resident-is-wall
+    "Non-resident chunks read solid and a ball dropped onto one rests on it."
+  (let ((terrain (luv-physics::make-voxel-terrain)))
+    (luv-physics::fill-terrain terrain 0 0 0 16 16 16 nil)
+    (check (not (luv-physics::terrain-resident-p terrain 8 -1 8)))
+    (check (luv-physics::terrain-solid-p terrain 8 -1 8))
+    (check (luv-physics::terrain-solid-p terrain 1000 -1000 1000))
+    (check (not (luv-physics::terrain-solid-p terrain 8 0 8)))
+    (let* ((w (luv-physics::make-physics-world :terrain terrain))
+           (h (luv-physics::add-physics-body w 8.5 3.0 8.5)))
+      (dotimes (i 180) (luv-physics::step-physics-world w))
+      (check (< (abs (- (body-y w h) 0.245)) 0.002) "the ball is at y = ~,5F" (body-y w h))
+      (check (not (luv-physics::terrain-resident-p terrain 8 -1 8)) "the step made the wall resident"))))
+;; H2W9DJ-non-resident-is-wall ends here
+
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-edit-during-step-deferred]]
+(define-claim "H2W9DJ" edit-during-step-deferred
+    "A terrain edit from the event handler is applied when the step ends, not during it."
+  (multiple-value-bind (w terrain) (make-floor-world)
+    (let ((inside :not-run))
+      (luv-physics::add-physics-body w 3.5 0.24 3.5)   ; touches the floor: a :begin event
+      (setf (luv-physics::physics-world-event-handler w)
+            (lambda (&rest event)
+              (declare (ignore event))
+              (when (eq inside :not-run)
+                (setf (luv-physics::terrain-solid-p terrain 10 5 10) t)
+                (luv-physics::fill-terrain terrain 11 5 10 13 6 11 t)
+                (setf inside (list (luv-physics::terrain-solid-p terrain 10 5 10)
+                                   (luv-physics::terrain-solid-p terrain 12 5 10))))))
+      (check (not (luv-physics::terrain-solid-p terrain 10 5 10)))
+      (luv-physics::step-physics-world w)
+      (check (equal inside '(nil nil)) "inside the handler the cells read ~S" inside)
+      (check (luv-physics::terrain-solid-p terrain 10 5 10) "the edit was lost")
+      (check (luv-physics::terrain-solid-p terrain 12 5 10) "the fill was lost"))))
+;; H2W9DJ-edit-during-step-deferred ends here
+
+;; [[file:../physics.org::#Y5H8KC][Y5H8KC-resting-contact-persists]]
+(define-claim "Y5H8KC" resting-contact-persists
+    "A resting ball keeps one terrain contact row whose normal impulse is m*g*h within 5%."
+  (let* ((w (make-floor-world :sleep nil))
+         (h (luv-physics::add-physics-body w 3.5 0.3 3.5 :mass 1.0))
+         (key (luv-physics::terrain-key (luv-physics::handle-index h) 3 -1 3))
+         (table (luv-physics::physics-world-contact-table w))
+         (expected (* 1.0 9.81 (/ 1.0 60 4)))
+         (rows '()) (worst 0.0))
+    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (dotimes (i 60)
+      (luv-physics::step-physics-world w)
+      (let ((row (luv-physics::contact-table-find table key)))
+        (pushnew row rows)
+        (when (>= row 0)
+          (setf worst (max worst (abs (- (aref (luv-physics::contact-columns-normal-impulse
+                                                (luv-physics::physics-world-contacts w))
+                                               row)
+                                         expected)))))))
+    (check (equal rows '(0)) "the contact lived in rows ~S" rows)
+    (check (= 1 (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
+    (check (<= worst (* 0.05 expected)) "the impulse strayed ~,5F from ~,5F" worst expected)))
+;; Y5H8KC-resting-contact-persists ends here
+
+;; [[file:../physics.org::#Y5H8KC][Y5H8KC-stale-contacts-pruned]]
+(define-claim "Y5H8KC" stale-contacts-pruned
+    "Contacts of a removed body and of a body that left the floor are pruned; the table stays consistent."
+  (let* ((w (make-floor-world :sleep nil))
+         (hs (loop for i below 5 collect (luv-physics::add-physics-body w (+ 1.5 i) 0.245 3.5)))
+         (c (luv-physics::physics-world-contacts w))
+         (table (luv-physics::physics-world-contact-table w))
+         (ended 0))
+    (dotimes (i 30) (luv-physics::step-physics-world w))
+    (check (= 5 (luv-physics::contact-columns-length c)))
+    (luv-physics::remove-physics-body w (second hs))
+    (luv-physics::set-physics-body-velocity w (fourth hs) 0 4 0)
+    (dotimes (i 10)
+      (loop for (kind) in (step-events w) when (eq kind :end) do (incf ended)))
+    (check (= 3 (luv-physics::contact-columns-length c)) "~D contacts remain" (luv-physics::contact-columns-length c))
+    (check (= 3 (luv-physics::contact-table-count table)))
+    (check (= 2 ended) "~D :end events" ended)
+    (check (equal (sort (loop for row below (luv-physics::contact-columns-length c)
+                              collect (aref (luv-physics::contact-columns-handle-a c) row))
+                        #'<)
+                  (sort (list (first hs) (third hs) (fifth hs)) #'<)))
+    (check (loop for row below (luv-physics::contact-columns-length c)
+                 always (= row (luv-physics::contact-table-find table (aref (luv-physics::contact-columns-key c) row)))))
+    (check (eq t (luv-physics::validate-physics-world w)))))
+;; Y5H8KC-stale-contacts-pruned ends here
+
+;; [[file:../physics.org::#D9W4CH][D9W4CH-pairs-match-brute-force]]
+(define-claim "D9W4CH" pairs-match-brute-force
+    "Generated pair contacts = brute-force pairs with gap < 0.02 m in a 300-ball cloud; none beyond the margin."
+  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
+         (next (make-lcg 7))
+         (balls '()))                   ; (handle x y z r), in doubles
+    (flet ((gap (p q)
+             (- (sqrt (+ (expt (- (second p) (second q)) 2) (expt (- (third p) (third q)) 2)
+                         (expt (- (fourth p) (fourth q)) 2)))
+                (fifth p) (fifth q)))
+           (direction ()
+             (loop for v = (list (- (* 2 (funcall next)) 1) (- (* 2 (funcall next)) 1)
+                                 (- (* 2 (funcall next)) 1))
+                   for l = (sqrt (reduce #'+ (mapcar (lambda (c) (* c c)) v)))
+                   when (< 0.1 l 1) return (mapcar (lambda (c) (/ c l)) v))))
+      ;; place candidates near an existing ball (gap 0.001-0.019) or anywhere in a 6 m cube,
+      ;; keeping only those whose every gap is under 0.02 or over 0.1
+      (loop while (< (length balls) 300)
+            do (let* ((r (+ 0.1 (* 0.2 (funcall next))))
+                      (candidate
+                        (if (and balls (< (funcall next) 0.6))
+                            (let* ((anchor (nth (floor (* (funcall next) (length balls))) balls))
+                                   (d (+ (fifth anchor) r 0.001 (* 0.018 (funcall next))))
+                                   (u (direction)))
+                              (list nil (+ (second anchor) (* d (first u))) (+ (third anchor) (* d (second u)))
+                                    (+ (fourth anchor) (* d (third u))) r))
+                            (list nil (* 6 (funcall next)) (* 6 (funcall next)) (* 6 (funcall next)) r))))
+                 (when (every (lambda (b) (let ((g (gap candidate b))) (or (< 0.0005 g 0.0195) (> g 0.105))))
+                              balls)
+                   (push candidate balls))))
+      ;; add them and re-read the stored single-float centres
+      (setf balls (mapcar (lambda (b)
+                            (let ((h (luv-physics::add-physics-body w (second b) (third b) (fourth b)
+                                                                    :radius (fifth b))))
+                              (multiple-value-bind (x y z) (luv-physics::physics-body-position w h)
+                                (list h (float x 1d0) (float y 1d0) (float z 1d0)
+                                      (float (luv-physics::physics-body-radius w h) 1d0)))))
+                          balls))
+      (luv-physics::step-physics-world w)
+      (let ((generated (make-hash-table :test 'equal))
+            (expected (make-hash-table :test 'equal))
+            (by-slot (make-hash-table))
+            (c (luv-physics::physics-world-contacts w))
+            (margin (luv-physics::physics-world-margin w)))
+        (dolist (b balls) (setf (gethash (luv-physics::handle-index (first b)) by-slot) b))
+        (dotimes (row (luv-physics::contact-columns-length c))
+          (when (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-pair+)
+            (let ((a (luv-physics::handle-index (aref (luv-physics::contact-columns-handle-a c) row)))
+                  (b (luv-physics::handle-index (aref (luv-physics::contact-columns-handle-b c) row))))
+              (setf (gethash (list (min a b) (max a b)) generated) t))))
+        (loop for (p . rest) on balls
+              do (dolist (q rest)
+                   (when (< (gap p q) 0.02)
+                     (let ((a (luv-physics::handle-index (first p))) (b (luv-physics::handle-index (first q))))
+                       (setf (gethash (list (min a b) (max a b)) expected) t)))))
+        (check (> (hash-table-count expected) 100) "only ~D close pairs in the cloud" (hash-table-count expected))
+        (let ((missed (loop for k being the hash-keys of expected unless (gethash k generated) collect k))
+              (too-far (loop for k being the hash-keys of generated
+                             when (> (gap (gethash (first k) by-slot) (gethash (second k) by-slot)) margin)
+                               collect k)))
+          (check (null missed) "~D close pairs have no contact, e.g. ~S" (length missed) (first missed))
+          (check (null too-far) "~D contacts span a gap over the margin, e.g. ~S" (length too-far) (first too-far))
+          (check (= (hash-table-count generated) (hash-table-count expected))
+                 "~D pair contacts for ~D close pairs" (hash-table-count generated) (hash-table-count expected)))))))
+;; D9W4CH-pairs-match-brute-force ends here
+
+;; [[file:../physics.org::#E7V3NT][E7V3NT-mortal-body-events]]
+(define-claim "E7V3NT" mortal-body-events
+    "A 1 s mortal ball: :begin, then :end, then :expired on step 60; afterwards its handle is stale."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.5 0.75 3.5 :life 1.0))
+         (begin nil) (end nil) (expired nil))
+    (loop for step from 1 to 61
+          do (loop for (kind a b) in (step-events w)
+                   when (= a h)
+                     do (case kind
+                          (:begin (unless begin (setf begin step)) (check (= b -1)))
+                          (:end (unless end (setf end step)))
+                          (:expired (check (not expired) "two :expired events") (setf expired step)))))
+    (check (and begin end (< begin end)) ":begin at step ~S, :end at step ~S" begin end)
+    (check (eql expired 60) ":expired at step ~S, not 60" expired)
+    (check (and end (<= end expired)))
+    (check (not (luv-physics::physics-body-alive-p w h)))
+    (check (= 0 (+ (luv-physics::physics-world-awake-count w) (luv-physics::physics-world-sleeping-count w))))
+    (check (eq :removed (handler-case (progn (luv-physics::physics-body-position w h) :no-error)
+                          (luv-physics::stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e)))))
+    (check (eq t (luv-physics::validate-physics-world w)))))
+;; E7V3NT-mortal-body-events ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-pile-sleeps-wakes-sleeps]]
+(define-claim "QKS4GZ" pile-sleeps-wakes-sleeps
+    "A six-ball pile sleeps within 2 s, a thrown ball wakes the ball it hits, and the pile sleeps again within 5 s."
+  (let* ((w (make-floor-world))
+         (y0 0.245)
+         (pile (append
+                (loop for (dx dz) in '((0 0) (0.5 0) (0 0.5) (0.5 0.5))
+                      collect (luv-physics::add-physics-body w (+ 3.25 dx) y0 (+ 3.25 dz)
+                                                             :rolling-resistance 0.05))
+                (list (luv-physics::add-physics-body w 3.5 (+ y0 (* 0.5 (sqrt 2))) 3.5
+                                                     :rolling-resistance 0.05)
+                      (luv-physics::add-physics-body w 4.25 y0 3.25 :rolling-resistance 0.05))))
+         (asleep-at nil))
+    (flet ((all-asleep () (notany (lambda (h) (luv-physics::physics-body-awake-p w h)) pile)))
+      (dotimes (i 120)
+        (luv-physics::step-physics-world w)
+        (when (and (not asleep-at) (all-asleep)) (setf asleep-at i)))
+      (check (not (null asleep-at)) "the pile is not asleep after 2 s")
+      (check (= 6 (luv-physics::physics-world-sleeping-count w)))
+      ;; the thrown ball rolls along z = 3.25 into the first ball of the square
+      (let ((thrown (luv-physics::add-physics-body w 1.5 y0 3.25 :vx 4.0 :rolling-resistance 0.05))
+            (woken '()) (first-wake nil) (again nil))
+        (dotimes (i 420)
+          (loop for (kind a) in (step-events w)
+                when (eq kind :woke) do (pushnew a woken) (unless first-wake (setf first-wake i)))
+          (when (and first-wake (not again) (all-asleep)) (setf again i)))
+        (check (member (first pile) woken) "the hit ball never woke (woken: ~S)" woken)
+        (check (eq t (luv-physics::validate-physics-world w)))
+        (check (and again (<= (- again first-wake) 300))
+               "the pile was not asleep again within 5 s of the first wake (again at ~S, woke at ~S)"
+               again first-wake)
+        (check (luv-physics::physics-body-alive-p w thrown))))))
+;; QKS4GZ-pile-sleeps-wakes-sleeps ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-edit-needs-wake]]
+(define-claim "QKS4GZ" edit-needs-wake
+    "Removing the cell under a sleeper needs wake-physics-bodies-near; once woken the ball falls through."
+  (multiple-value-bind (w terrain) (make-floor-world)
+    (let ((h (luv-physics::add-physics-body w 3.5 0.5 3.5))
+          (other (luv-physics::add-physics-body w 6.5 0.5 3.5)))
+      (dotimes (i 120) (luv-physics::step-physics-world w))
+      (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+      (setf (luv-physics::terrain-solid-p terrain 3 -1 3) nil)
+      (dotimes (i 10) (luv-physics::step-physics-world w))
+      (check (not (luv-physics::physics-body-awake-p w h)) "the sleeper woke by itself")
+      (check (< (abs (- (body-y w h) 0.245)) 0.002) "the sleeper moved to ~,4F" (body-y w h))
+      (check (= 1 (luv-physics::wake-physics-bodies-near w 3.5 -0.5 3.5 0.5)))
+      (check (luv-physics::physics-body-awake-p w h))
+      (check (not (luv-physics::physics-body-awake-p w other)) "the far ball woke too")
+      (dotimes (i 30) (luv-physics::step-physics-world w))
+      (check (< (body-y w h) -0.5) "the woken ball is at y = ~,4F, not through the hole" (body-y w h))
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; QKS4GZ-edit-needs-wake ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-relocation-stress]]
+(define-claim "QKS4GZ" relocation-stress
+    "500 random adds, removes, sleeps, wakes and steps keep validate-physics-world true throughout."
+  (let* ((w (make-floor-world))
+         (next (make-lcg 20240611))
+         (live '()) (failures 0) (first-failure nil) (ops (make-hash-table)))
+    (flet ((pick () (nth (floor (* (funcall next) (length live))) live)))
+      (dotimes (i 500)
+        (let ((op (if live (floor (* (funcall next) 6)) 0)))
+          (incf (gethash op ops 0))
+          (handler-case
+              (let ((before (unless (member op '(0 5))
+                              (mapcar (lambda (h)
+                                        (cons h (multiple-value-list
+                                                 (luv-physics::physics-body-position w h))))
+                                      live))))
+                (case op
+                  (0 (push (luv-physics::add-physics-body
+                            w (+ 1 (* 8 (funcall next))) (+ 0.3 (* 2 (funcall next))) (+ 1 (* 8 (funcall next)))
+                            :radius (+ 0.1 (* 0.3 (funcall next))))
+                           live))
+                  (1 (let ((h (pick)))
+                       (luv-physics::remove-physics-body w h)
+                       (setf live (remove h live))))
+                  (2 (multiple-value-bind (set row) (luv-physics::resolve-handle w (pick))
+                       (when (= set luv-physics::+set-awake+)
+                         (luv-physics::sleep-physics-body w row))))
+                  (3 (luv-physics::wake-handle w (pick)))
+                  (4 (luv-physics::set-physics-body-velocity w (pick) (- (funcall next) 0.5) 1.0 0.0))
+                  (5 (dotimes (k 3) (luv-physics::step-physics-world w))))
+                (luv-physics::validate-physics-world w)
+                (setf live (remove-if-not (lambda (h) (luv-physics::physics-body-alive-p w h)) live))
+                (loop for (h . position) in before
+                      when (and (luv-physics::physics-body-alive-p w h)
+                                (not (equal position (multiple-value-list
+                                                      (luv-physics::physics-body-position w h)))))
+                        do (error "handle ~D reads ~S, not ~S" h
+                                  (multiple-value-list (luv-physics::physics-body-position w h))
+                                  position)))
+            (error (e)
+              (incf failures)
+              (unless first-failure (setf first-failure (format nil "op ~D (~D): ~A" i op e))))))))
+    (check (= 0 failures) "~D operations failed; first: ~A" failures first-failure)
+    (check (and (= (hash-table-count ops) 6) (loop for n being the hash-values of ops always (> n 40)))
+           "operations ran ~S times (add remove sleep wake velocity step)"
+           (loop for op below 6 collect (gethash op ops 0)))
+    (check (> (luv-physics::physics-world-step-count w) 150) "only ~D steps" (luv-physics::physics-world-step-count w))
+    (check (= (length live) (+ (luv-physics::physics-world-awake-count w)
+                               (luv-physics::physics-world-sleeping-count w))))))
+;; QKS4GZ-relocation-stress ends here
+
+;; [[file:../physics.org::#K1N3BX][K1N3BX-box-pushes-awake-ball]]
+(define-claim "K1N3BX" box-pushes-awake-ball
+    "A box walking at 1 m/s pushes an awake ball ahead, overlapping it by at most slop + 0.001 m."
+  (let* ((w (make-floor-world :sleep nil))
+         (h (luv-physics::add-physics-body w 3.0 0.245 3.5))
+         (dt (/ 1.0 60)) (bx 2.0) (x0 nil) (worst 0.0))
+    (dotimes (i 30) (luv-physics::step-physics-world w))
+    (setf x0 (luv-physics::physics-body-position w h))
+    (dotimes (i 180)
+      (luv-physics::post-physics-box w bx 0.5 3.5 0.25 0.5 0.5 :vx 1.0 :owner :pusher)
+      (luv-physics::step-physics-world w)
+      (setf bx (+ bx dt))
+      (setf worst (max worst (- (+ bx 0.25) (- (luv-physics::physics-body-position w h) 0.25)))))
+    (check (> (- (luv-physics::physics-body-position w h) x0) 2.0)
+           "the ball moved only ~,3F m" (- (luv-physics::physics-body-position w h) x0))
+    (check (<= worst (+ (luv-physics::physics-world-slop w) 0.001))
+           "the box overlapped the ball by ~,5F m" worst)))
+;; K1N3BX-box-pushes-awake-ball ends here
+
+;; [[file:../physics.org::#K1N3BX][K1N3BX-box-pushes-sleeping-ball]]
+(define-claim "K1N3BX" box-pushes-sleeping-ball
+    "A box walking at 1 m/s into a sleeping ball wakes it before overlapping it by more than slop + 0.001 m."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.0 0.245 3.5))
+         (dt (/ 1.0 60)) (bx 2.0) (x0 nil) (worst 0.0))
+    (dotimes (i 90) (luv-physics::step-physics-world w))
+    (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+    (setf x0 (luv-physics::physics-body-position w h))
+    (dotimes (i 180)
+      (luv-physics::post-physics-box w bx 0.5 3.5 0.25 0.5 0.5 :vx 1.0 :owner :pusher)
+      (luv-physics::step-physics-world w)
+      (setf bx (+ bx dt))
+      (setf worst (max worst (- (+ bx 0.25) (- (luv-physics::physics-body-position w h) 0.25)))))
+    (check (> (- (luv-physics::physics-body-position w h) x0) 2.0)
+           "the ball moved only ~,3F m" (- (luv-physics::physics-body-position w h) x0))
+    (check (<= worst (+ (luv-physics::physics-world-slop w) 0.001))
+           "the box overlapped the ball by ~,5F m" worst)))
+;; K1N3BX-box-pushes-sleeping-ball ends here
+
+;; [[file:../physics.org::#K1N3BX][K1N3BX-hit-carries-owner]]
+(define-claim "K1N3BX" hit-carries-owner
+    "A hard arrival at a box gives :hit (and :begin) events carrying the box's owner."
+  (let* ((w (make-floor-world))
+         (owner (list :wall 7))
+         (h (luv-physics::add-physics-body w 2.5 0.245 3.5 :vx 6.0))
+         (hits '()) (begins '()))
+    (dotimes (i 30)
+      (luv-physics::post-physics-box w 4.0 0.5 3.5 0.25 0.5 0.5 :owner owner)
+      (loop for (kind a b speed datum) in (step-events w)
+            when (and (= a h) datum)
+              do (case kind (:hit (push (list speed datum) hits)) (:begin (push datum begins)))))
+    (setf hits (reverse hits))
+    (check (not (null hits)) "no :hit event carried a datum")
+    (check (every (lambda (hit) (eq owner (second hit))) hits) "hit data ~S" (mapcar #'second hits))
+    (check (> (or (first (first hits)) 0) 4.0) "the first hit arrived at only ~S m/s" (first (first hits)))
+    (check (and begins (every (lambda (d) (eq d owner)) begins)))))
+;; K1N3BX-hit-carries-owner ends here
+
+;; [[file:../physics.org::#MYWH16][MYWH16-seams-are-flat]]
+(define-claim "MYWH16" seams-are-flat
+    "A ball rolling at 3 m/s over six seams stays within 0.005 m of rest height and keeps 99% of its speed."
+  (let* ((w (make-floor-world :sleep nil))
+         (r 0.25) (vx 3.0)
+         (h (luv-physics::add-physics-body w 0.5 (- r 0.005) 0.5 :radius r :vx vx :rolling-resistance 0.0))
+         (rest (- r (luv-physics::physics-world-slop w)))
+         (highest 0.0))
+    (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
+      (declare (ignore set))
+      (setf (aref (luv-physics::body-columns-wz (luv-physics::physics-world-awake w)) row) (/ (- vx) r)))
+    (dotimes (i 120)
+      (luv-physics::step-physics-world w)
+      (setf highest (max highest (- (body-y w h) rest))))
+    (multiple-value-bind (x) (luv-physics::physics-body-position w h)
+      (check (> x 6.0) "the ball crossed only ~D seams (x = ~,3F)" (- (floor x) 0) x))
+    (check (<= highest 0.005) "the ball rose ~,5F m above rest" highest)
+    (multiple-value-bind (ux uy uz) (luv-physics::physics-body-velocity w h)
+      (declare (ignore uy))
+      (check (>= (sqrt (+ (* ux ux) (* uz uz))) (* 0.99 vx)) "speed after the seams ~,4F m/s" (sqrt (+ (* ux ux) (* uz uz)))))))
+;; MYWH16-seams-are-flat ends here
+
+;; [[file:../physics.org::#MYWH16][MYWH16-one-contact-per-support]]
+(define-claim "MYWH16" one-contact-per-support
+    "Contacts on a flat floor: 1 mid-cell, 1 just past a seam, 2 on a seam, 4 on a corner; all vertical."
+  (loop for (x z expected) in '((3.5 3.5 1) (3.1 3.5 1) (3.5 2.9 1) (3.0 3.5 2) (3.5 3.0 2) (3.0 3.0 4))
+        do (let* ((w (make-floor-world :sleep nil))
+                  (h (luv-physics::add-physics-body w x 0.3 z)))
+             (dotimes (i 60) (luv-physics::step-physics-world w))
+             (let ((contacts (terrain-contacts w h)))
+               (check (= expected (length contacts)) "at (~A, ~A): ~D contacts, expected ~D" x z (length contacts) expected)
+               (check (= expected (luv-physics::physics-world-last-step-contact-count w)))
+               (check (every (lambda (c) (and (< (abs (getf c :nx)) 1e-6) (< (abs (getf c :nz)) 1e-6) (< (abs (+ 1 (getf c :ny))) 1e-6))) contacts)
+                      "at (~A, ~A) a normal is not vertical: ~S" x z contacts)
+               (check (< (abs (- (body-y w h) 0.245)) 0.002) "at (~A, ~A) the ball rests at ~,5F" x z (body-y w h))))))
+;; MYWH16-one-contact-per-support ends here
+
+;; [[file:../physics.org::#MYWH16][MYWH16-rolls-over-ledge]]
+(define-claim "MYWH16" rolls-over-ledge
+    "Rolling off a one-cell ledge, the edge contact tilts diagonal while pushing; the ball lands below."
+  (multiple-value-bind (w terrain) (make-floor-world :sleep nil)
+    ;; the floor top is at y = 0 for x < 5 and at y = -1 for x >= 5
+    (luv-physics::fill-terrain terrain 5 -1 -16 32 0 32 nil)
+    (luv-physics::fill-terrain terrain -16 -2 -16 32 -1 32 t)
+    (let* ((v 0.5) (r 0.25)
+           (h (luv-physics::add-physics-body w 4.6 0.245 3.5 :radius r :vx v))
+           (key (luv-physics::terrain-key (luv-physics::handle-index h) 4 -1 3))
+           (diagonal nil))
+      (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
+        (declare (ignore set))
+        (setf (aref (luv-physics::body-columns-wz (luv-physics::physics-world-awake w)) row) (/ (- v) r)))
+      (dotimes (i 180)
+        (luv-physics::step-physics-world w)
+        (let ((row (luv-physics::contact-table-find (luv-physics::physics-world-contact-table w) key))
+              (c (luv-physics::physics-world-contacts w)))
+          (when (and (> (luv-physics::physics-body-position w h) 5.05) (>= row 0)
+                     (= 1 (aref (luv-physics::contact-columns-touching c) row))
+                     (> (abs (aref (luv-physics::contact-columns-nx c) row)) 0.3)
+                     (> (abs (aref (luv-physics::contact-columns-ny c) row)) 0.3))
+            (setf diagonal t))))
+      (check (eq t diagonal) "no pushing diagonal edge contact once past the edge")
+      (check (> (luv-physics::physics-body-position w h) 5.25))
+      (check (< (abs (- (body-y w h) -0.755)) 0.002) "the ball ends at y = ~,5F" (body-y w h)))))
+;; MYWH16-rolls-over-ledge ends here
+
+;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
+(define-claim "SSMPYW" colours-disjoint
+    "In a 300-ball pile no colour below 24 holds two constraints on the same awake body."
+  (let ((w (luv-physics::make-basin-world 300)))
+    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (let* ((cbuf (luv-physics::physics-world-constraints w))
+           (starts (luv-physics::physics-world-color-starts w))
+           (dummy (luv-physics::physics-world-awake-count w))
+           (clashes 0) (two-sided-high 0))
+      (check (> (luv-physics::constraint-columns-length cbuf) 300))
+      (dotimes (c luv-physics::+physics-max-colors+)
+        (let ((seen (make-hash-table)))
+          (loop for k from (aref starts c) below (aref starts (1+ c))
+                for a = (aref (luv-physics::constraint-columns-body-a cbuf) k)
+                for b = (aref (luv-physics::constraint-columns-body-b cbuf) k)
+                do (when (and (/= a dummy) (/= b dummy) (>= c luv-physics::+physics-dynamic-colors+))
+                     (incf two-sided-high))
+                   (dolist (body (list a b))
+                     (unless (= body dummy)
+                       (when (gethash body seen) (incf clashes))
+                       (setf (gethash body seen) t))))))
+      (check (= 0 clashes) "~D constraints share a body with another of their colour" clashes)
+      (check (= 0 two-sided-high) "~D two-body constraints sit in colours 20..23" two-sided-high))))
+;; SSMPYW-colours-disjoint ends here
+
+;; [[file:../physics.org::#SSMPYW][SSMPYW-one-sided-late-among-used]]
+(define-claim "SSMPYW" one-sided-late-among-used
+    "A body's one-sided colours are the highest used colours it leaves free, then those above."
+  (let ((w (luv-physics::make-basin-world 300)))
+    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (let* ((cbuf (luv-physics::physics-world-constraints w))
+           (starts (luv-physics::physics-world-color-starts w))
+           (dummy (luv-physics::physics-world-awake-count w))
+           (one-sided (make-hash-table)) (two-body (make-hash-table))
+           (top -1) (bad '()) (bodies 0))
+      (dotimes (c luv-physics::+physics-max-colors+)
+        (loop for k from (aref starts c) below (aref starts (1+ c))
+              for a = (aref (luv-physics::constraint-columns-body-a cbuf) k)
+              for b = (aref (luv-physics::constraint-columns-body-b cbuf) k)
+              for contact = (aref (luv-physics::constraint-columns-contact cbuf) k)
+              when (>= contact 0)
+                do (if (or (= a dummy) (= b dummy))
+                       (push c (gethash (if (= a dummy) b a) one-sided))
+                       (progn (setf top (max top c))
+                              (push c (gethash a two-body)) (push c (gethash b two-body))))))
+      (maphash (lambda (body cs)
+                 (let* ((used (gethash body two-body))
+                        (order (append (loop for c from top downto 0 unless (member c used) collect c)
+                                       (loop for c from (1+ top) below luv-physics::+physics-max-colors+
+                                             collect c))))
+                   (incf bodies)
+                   (unless (equal (sort (copy-list cs) #'>)
+                                  (sort (subseq order 0 (length cs)) #'>))
+                     (push (list body cs used) bad))))
+               one-sided)
+      (check (> bodies 150) "only ~D bodies have one-sided constraints" bodies)
+      (check (null bad) "~D bodies break the rule, e.g. ~S" (length bad) (first bad)))))
+;; SSMPYW-one-sided-late-among-used ends here
+
+;; [[file:../physics.org::#SSMPYW][SSMPYW-big-pile-colours]]
+(define-claim "SSMPYW" big-pile-colours
+    "3000 awake balls after 200 steps: <= 12 colours, nothing in overflow."
+  (let ((w (luv-physics::make-basin-world 3000 :sleep nil))
+        (most-colours 0) (most-overflow 0))
+    (dotimes (i 200)
+      (luv-physics::step-physics-world w)
+      (when (>= i 100)
+        (setf most-colours (max most-colours (luv-physics::physics-world-last-step-color-count w))
+              most-overflow (max most-overflow (luv-physics::physics-world-overflow-count w)))))
+    (check (= 3000 (luv-physics::physics-world-awake-count w)))
+    (check (<= (luv-physics::physics-world-last-step-color-count w) 12)
+           "step 200 used ~D colours (most over steps 100-200: ~D)"
+           (luv-physics::physics-world-last-step-color-count w) most-colours)
+    (check (= 0 (luv-physics::physics-world-overflow-count w))
+           "~D constraints overflowed at step 200 (most over steps 100-200: ~D)"
+           (luv-physics::physics-world-overflow-count w) most-overflow)))
+;; SSMPYW-big-pile-colours ends here
+
+;; [[file:../physics.org::#IDVK7G][IDVK7G-ball-rests-and-sleeps]]
+(define-claim "IDVK7G" ball-rests-and-sleeps
+    "A dropped ball rests at floor + r - slop (±0.002 m) and sleeps, with a :slept event, within 3 s."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.5 1.0 3.5 :radius 0.25))
+         (rest (- 0.25 (luv-physics::physics-world-slop w)))
+         (slept-at nil))
+    (dotimes (i 180)
+      (loop for (kind a) in (step-events w)
+            when (and (eq kind :slept) (= a h) (not slept-at)) do (setf slept-at i)))
+    (check (< (abs (- (body-y w h) rest)) 0.002)
+           "rest height ~,5F, expected ~,5F ± 0.002" (body-y w h) rest)
+    (check (not (null slept-at)) "no :slept event for the ball within 180 steps")
+    (check (not (luv-physics::physics-body-awake-p w h)) "the ball is still in the awake set")
+    (check (= 1 (luv-physics::physics-world-sleeping-count w)))))
+;; IDVK7G-ball-rests-and-sleeps ends here
+
+;; [[file:../physics.org::#IDVK7G][IDVK7G-bounce-and-no-bounce]]
+(define-claim "IDVK7G" bounce-and-no-bounce
+    "Restitution 0.8 from 2 m rebounds over 0.5 m; restitution 0 stays within 0.01 m of rest after contact."
+  (flet ((peak-after-contact (e)
+           (let* ((w (make-floor-world :sleep nil))
+                  (h (luv-physics::add-physics-body w 3.5 2.0 3.5 :radius 0.25 :restitution e))
+                  (begun nil) (peak most-negative-single-float))
+             (dotimes (i 240)
+               (let ((events (step-events w)))
+                 (when (find-if (lambda (ev) (and (eq (first ev) :begin) (= (second ev) h))) events)
+                   (setf begun t))
+                 (when begun (setf peak (max peak (body-y w h))))))
+             (values (- peak (- 0.25 (luv-physics::physics-world-slop w))) begun))))
+    (multiple-value-bind (rise begun) (peak-after-contact 0.8)
+      (check (not (null begun)) "the bouncing ball never began a contact")
+      (check (> rise 0.5) "restitution 0.8 rebounds only ~,4F m above rest" rise))
+    (multiple-value-bind (rise begun) (peak-after-contact 0.0)
+      (check (not (null begun)) "the dead ball never began a contact")
+      (check (<= rise 0.01) "restitution 0 climbs ~,4F m above rest after contact" rise))))
+;; IDVK7G-bounce-and-no-bounce ends here
+
+;; [[file:../physics.org::#IDVK7G][IDVK7G-basin-reproducible]]
+(define-claim "IDVK7G" basin-reproducible
+    "Two 200-ball basin runs hash equal after 120 steps; the hash after 119 steps differs."
+  (flet ((run ()
+           (let ((w (luv-physics::make-basin-world 200)) (h119 nil))
+             (dotimes (i 120)
+               (luv-physics::step-physics-world w)
+               (when (= i 118) (setf h119 (luv-physics::physics-world-state-hash w))))
+             (values (luv-physics::physics-world-state-hash w) h119))))
+    (multiple-value-bind (a a119) (run)
+      (multiple-value-bind (b b119) (run)
+        (check (= a b) "run 1 hashes ~D, run 2 hashes ~D" a b)
+        (check (= a119 b119))
+        (check (/= a a119) "the hash did not change from step 119 to step 120")))))
+;; IDVK7G-basin-reproducible ends here
+
+;; [[file:../physics.org::#IDVK7G][IDVK7G-phase-order]]
+(define-claim "IDVK7G" phase-order
+    "One step calls each phase of *physics-phases* once, in list order, then the event handler."
+  (let* ((w (make-floor-world))
+         (log '())
+         (phases luv-physics::*physics-phases*))
+    (luv-physics::add-physics-body w 3.5 0.24 3.5)
+    (setf (luv-physics::physics-world-event-handler w)
+          (lambda (&rest args) (declare (ignore args)) (push :handler log)))
+    (unwind-protect
+         (progn
+           (dolist (p phases)
+             (let ((p p))
+               (sb-int:encapsulate p 'claim-phase-order
+                                   (lambda (f &rest args) (push p log) (apply f args)))))
+           (luv-physics::step-physics-world w))
+      (dolist (p phases) (sb-int:unencapsulate p 'claim-phase-order)))
+    (let ((calls (reverse log)))
+      (check (equal (remove :handler calls) phases) "phases ran as ~S" (remove :handler calls))
+      (check (eq :handler (car (last calls))) "the event handler did not run after the last phase: ~S" calls)
+      (check (equal phases '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                             luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
+                             luv-physics::prune-phase luv-physics::prepare-phase luv-physics::substep-phase
+                             luv-physics::restitution-phase luv-physics::store-phase
+                             luv-physics::finalize-phase))
+             "*physics-phases* is ~S" phases))))
+;; IDVK7G-phase-order ends here
+
+;; [[file:../physics.org::#IDVK7G][IDVK7G-step-statistics]]
+(define-claim "IDVK7G" step-statistics
+    "Last-step contact count, colour count and real seconds are consistent with the step's buffers."
+  (let ((w (luv-physics::make-basin-world 200)))
+    (dotimes (i 120) (luv-physics::step-physics-world w))
+    (let ((contacts (luv-physics::physics-world-last-step-contact-count w))
+          (colours (luv-physics::physics-world-last-step-color-count w))
+          (seconds (luv-physics::physics-world-last-step-real-seconds w))
+          (starts (luv-physics::physics-world-color-starts w)))
+      (check (= contacts (let ((cbuf (luv-physics::physics-world-constraints w)))
+                           (count-if-not #'minusp (luv-physics::constraint-columns-contact cbuf)
+                                         :end (luv-physics::constraint-columns-length cbuf))))
+             "every contact is one constraint row; padding rows name no contact")
+      (check (= contacts (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
+      (check (> contacts 200) "only ~D contacts in a pile of 200" contacts)
+      (check (= colours (loop for c from 0 to luv-physics::+physics-max-colors+
+                              count (< (aref starts c) (aref starts (1+ c))))))
+      (check (<= 2 colours 25) "~D colours" colours)
+      (check (< 0d0 seconds 1d0) "the step took ~,6F s" seconds))))
+;; IDVK7G-step-statistics ends here
+
+;; [[file:../physics.org::#S6T2MV][S6T2MV-one-ulp-changes-hash]]
+(define-claim "S6T2MV" one-ulp-changes-hash
+    "One ulp of a position or velocity, awake or asleep, changes physics-world-state-hash."
+  (let ((w (make-floor-world)))
+    (luv-physics::add-physics-body w 3.5 0.245 3.5)
+    (dotimes (i 120) (luv-physics::step-physics-world w))
+    (luv-physics::add-physics-body w 5.5 1.0 3.5 :vx 0.5)
+    (luv-physics::step-physics-world w)
+    (check (= 1 (luv-physics::physics-world-sleeping-count w)))
+    (check (= 1 (luv-physics::physics-world-awake-count w)))
+    (let ((h0 (luv-physics::physics-world-state-hash w)))
+      (flet ((bump (column row)
+               (let ((old (aref column row)))
+                 (setf (aref column row)
+                       (sb-kernel:make-single-float (1+ (sb-kernel:single-float-bits old))))
+                 (prog1 (luv-physics::physics-world-state-hash w)
+                   (setf (aref column row) old)))))
+        (let ((awake (luv-physics::physics-world-awake w))
+              (sleeping (luv-physics::physics-world-sleeping w)))
+          (check (/= h0 (bump (luv-physics::body-columns-x awake) 0)) "awake x")
+          (check (/= h0 (bump (luv-physics::body-columns-vx awake) 0)) "awake vx")
+          (check (/= h0 (bump (luv-physics::body-columns-y sleeping) 0)) "sleeping y")
+          (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits"))))))
+;; S6T2MV-one-ulp-changes-hash ends here
+
 ;; [[file:../physics.org::#7PAQ3M][7PAQ3M-families-agree-bit-for-bit]]
 (define-claim "7PAQ3M" families-agree-bit-for-bit
     "Each available family's hash equals the scalar hash on the 200-ball and 1000-ball piles."
