@@ -950,10 +950,15 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
 
 ;; [[file:../physics.org::#D9W4CH][The block world is the static tree; bodies need a hash grid:1]]
 (defstruct (hash-grid (:constructor make-hash-grid))
-  "Items bucketed by the cell of their centre, counting-sorted so a cell's items are one run. #D9W4CH"
+  "Items bucketed by the cell of their centre, counting-sorted so a cell's items are one run.
+When the items' cells fill a small enough box, the buckets are that box's cells themselves
+(DENSE), x fastest; otherwise they are hashed. #D9W4CH"
   (inv-cell 1.0 :type single-float)
   (count 0 :type index)
   (mask 0 :type fixnum)
+  (dense nil :type boolean)
+  (ox 0 :type fixnum) (oy 0 :type fixnum) (oz 0 :type fixnum)
+  (nx 1 :type fixnum) (ny 1 :type fixnum) (nz 1 :type fixnum)
   (starts (make-array 2 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (items (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (keys (make-array 0 :element-type 'fixnum) :type fixnum-column)
@@ -982,68 +987,125 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
     (logand (ash p -11) mask)))
 
 (defun build-hash-grid (grid cell-size n xs ys zs ids)
-  "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID. #D9W4CH"
+  "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID: densely
+when the box of their cells, one cell of padding around, has at most 4N+64 cells, else by
+hash. #D9W4CH"
   (declare (type hash-grid grid) (type single-float cell-size) (type index n)
            (type f32-column xs ys zs) (type fixnum-column ids) #.+kernel-policy+)
-  (let* ((buckets (max 16 (ash 1 (integer-length (* 2 n)))))
-         (mask (1- buckets))
-         (inv (/ 1.0 cell-size)))
-    (when (< (length (hash-grid-starts grid)) (1+ buckets))
-      (setf (hash-grid-starts grid) (make-array (1+ buckets) :element-type 'fixnum)))
+  (let ((inv (/ 1.0 cell-size)))
     (when (< (length (hash-grid-items grid)) n)
       (let ((m (max n (* 2 (length (hash-grid-items grid))))))
         (setf (hash-grid-items grid) (make-array m :element-type 'fixnum)
               (hash-grid-keys grid) (make-array m :element-type 'fixnum)
               (hash-grid-item-keys grid) (make-array m :element-type 'fixnum))))
-    (setf (hash-grid-inv-cell grid) inv (hash-grid-mask grid) mask (hash-grid-count grid) n)
-    (let ((starts (hash-grid-starts grid)) (items (hash-grid-items grid))
-          (keys (hash-grid-keys grid)) (item-keys (hash-grid-item-keys grid)))
-      (fill starts 0 :end (1+ buckets))
+    (setf (hash-grid-inv-cell grid) inv (hash-grid-count grid) n)
+    ;; the box of occupied cells decides the mode
+    (let ((x0 most-positive-fixnum) (y0 most-positive-fixnum) (z0 most-positive-fixnum)
+          (x1 most-negative-fixnum) (y1 most-negative-fixnum) (z1 most-negative-fixnum))
+      (declare (type fixnum x0 y0 z0 x1 y1 z1))
       (dotimes (i n)
-        (let ((key (grid-cell-key (cell-floor (* (aref xs i) inv)) (cell-floor (* (aref ys i) inv))
-                                  (cell-floor (* (aref zs i) inv)))))
-          (setf (aref item-keys i) key)
-          (incf (aref starts (1+ (grid-bucket key mask))))))
-      (loop for b of-type fixnum from 1 to buckets
-            do (incf (aref starts b) (aref starts (1- b))))
-      ;; place items by decrementing the end of their bucket, walking backwards, so each
-      ;; bucket lists its items in increasing order
-      (loop for i of-type fixnum from (1- n) downto 0
-            do (let* ((key (aref item-keys i))
-                      (b (1+ (grid-bucket key mask)))
-                      (at (decf (aref starts b))))
-                 (setf (aref items at) (aref ids i) (aref keys at) key)))
-      ;; now starts[b+1] is the beginning of bucket b; shift so starts[b] begins bucket b
-      (replace starts starts :start1 0 :start2 1 :end2 (1+ buckets))
-      (setf (aref starts buckets) n))
+        (let ((cx (cell-floor (* (aref xs i) inv))) (cy (cell-floor (* (aref ys i) inv)))
+              (cz (cell-floor (* (aref zs i) inv))))
+          (setf x0 (min x0 cx) x1 (max x1 cx) y0 (min y0 cy) y1 (max y1 cy) z0 (min z0 cz) z1 (max z1 cz))))
+      (let* ((nx (if (plusp n) (+ 3 (- x1 x0)) 1)) (ny (if (plusp n) (+ 3 (- y1 y0)) 1))
+             (nz (if (plusp n) (+ 3 (- z1 z0)) 1))
+             (cells (if (and (< nx 4096) (< ny 4096) (< nz 4096)) (* nx ny nz) most-positive-fixnum))
+             (dense (and (plusp n) (<= cells (+ 64 (* 4 n)))))
+             (buckets (if dense cells (max 16 (ash 1 (integer-length (* 2 n))))))
+             (mask (1- buckets)))
+        (declare (type fixnum nx ny nz cells buckets mask))
+        (setf (hash-grid-dense grid) dense (hash-grid-mask grid) mask
+              (hash-grid-ox grid) (1- x0) (hash-grid-oy grid) (1- y0) (hash-grid-oz grid) (1- z0)
+              (hash-grid-nx grid) nx (hash-grid-ny grid) ny (hash-grid-nz grid) nz)
+        (when (< (length (hash-grid-starts grid)) (1+ buckets))
+          (setf (hash-grid-starts grid) (make-array (max (1+ buckets) (* 2 (length (hash-grid-starts grid))))
+                                                    :element-type 'fixnum)))
+        (let ((starts (hash-grid-starts grid)) (items (hash-grid-items grid))
+              (keys (hash-grid-keys grid)) (item-keys (hash-grid-item-keys grid))
+              (ox (1- x0)) (oy (1- y0)) (oz (1- z0)))
+          (declare (type fixnum ox oy oz))
+          (fill starts 0 :end (1+ buckets))
+          ;; the bucket of each item: its cell's index in the box, or its hashed cell key
+          (dotimes (i n)
+            (let* ((cx (cell-floor (* (aref xs i) inv))) (cy (cell-floor (* (aref ys i) inv)))
+                   (cz (cell-floor (* (aref zs i) inv)))
+                   (key (grid-cell-key cx cy cz))
+                   (bucket (if dense
+                               (+ (- cx ox) (* nx (+ (- cy oy) (* ny (- cz oz)))))
+                               (grid-bucket key mask))))
+              (declare (type fixnum bucket))
+              (setf (aref item-keys i) key)
+              (incf (aref starts (1+ bucket)))))
+          (loop for b of-type fixnum from 1 to buckets
+                do (incf (aref starts b) (aref starts (1- b))))
+          ;; place items by decrementing the end of their bucket, walking backwards, so each
+          ;; bucket lists its items in increasing order
+          (loop for i of-type fixnum from (1- n) downto 0
+                do (let* ((key (aref item-keys i))
+                          (b (1+ (if dense
+                                     (+ (- (cell-floor (* (aref xs i) inv)) ox)
+                                        (* nx (+ (- (cell-floor (* (aref ys i) inv)) oy)
+                                                 (* ny (- (cell-floor (* (aref zs i) inv)) oz)))))
+                                     (grid-bucket key mask))))
+                          (at (decf (aref starts b))))
+                     (setf (aref items at) (aref ids i) (aref keys at) key)))
+          ;; now starts[b+1] is the beginning of bucket b; shift so starts[b] begins bucket b
+          (replace starts starts :start1 0 :start2 1 :end2 (1+ buckets))
+          (setf (aref starts buckets) n))))
     grid))
 
 (defmacro do-grid-neighbours ((item grid x y z &key (span 1) half own) &body body)
   "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
 of point X Y Z, cell by cell in a fixed order. With HALF, visit only the point's own cell and
 the cells after it in that order (13 of the 26 neighbours), so a walk from every item meets
-each pair of cells once; OWN, if given, names a variable true in the point's own cell. #D9W4CH"
+each pair of cells once; OWN, if given, names a variable true in the point's own cell. A dense
+grid visits each row of cells along x as one run of its items. #D9W4CH"
   (let ((g (gensym "GRID")) (cx (gensym)) (cy (gensym)) (cz (gensym)) (i (gensym)) (j (gensym))
         (k (gensym)) (key (gensym)) (b (gensym)) (e (gensym)) (inv (gensym)) (s (gensym))
         (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS")) (mask (gensym "MASK"))
-        (own (or own (gensym "OWN"))))
+        (own (or own (gensym "OWN"))) (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW"))
+        (own-start (gensym)) (own-end (gensym)) (visit (gensym "VISIT")))
     `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s ,span)
             (,cx (cell-floor (* ,x ,inv))) (,cy (cell-floor (* ,y ,inv))) (,cz (cell-floor (* ,z ,inv)))
             (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g))
             (,mask (hash-grid-mask ,g)))
        (declare (type fixnum ,cx ,cy ,cz ,s ,mask) (type fixnum-column ,starts ,items ,keys))
-       (unless (zerop (hash-grid-count ,g))
-         (loop for ,k of-type fixnum from ,(if half cz `(- ,cz ,s)) to (+ ,cz ,s) do
-           (loop for ,j of-type fixnum from ,(if half `(if (= ,k ,cz) ,cy (- ,cy ,s)) `(- ,cy ,s)) to (+ ,cy ,s) do
-             (loop for ,i of-type fixnum from ,(if half `(if (and (= ,k ,cz) (= ,j ,cy)) ,cx (- ,cx ,s)) `(- ,cx ,s))
-                     to (+ ,cx ,s) do
-               (let* ((,key (grid-cell-key ,i ,j ,k))
-                      (,b (grid-bucket ,key ,mask))
-                      (,own (and (= ,i ,cx) (= ,j ,cy) (= ,k ,cz))))
-                 (declare (ignorable ,own))
-                 (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
-                       when (= (aref ,keys ,e) ,key)
-                         do (let ((,item (aref ,items ,e))) (declare (type fixnum ,item)) ,@body))))))))))
+       (flet ((,visit (,item ,own) (declare (type fixnum ,item) (ignorable ,own)) ,@body))
+         (declare (inline ,visit))
+         (cond
+           ((zerop (hash-grid-count ,g)))
+           ((hash-grid-dense ,g)
+            ;; rows of cells along x are contiguous runs of items
+            (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
+                   (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g))
+                   (,own-start 0) (,own-end 0))
+              (declare (type fixnum ox oy oz nx ny nz ,own-start ,own-end))
+              (when (and (< -1 (- ,cx ox) nx) (< -1 (- ,cy oy) ny) (< -1 (- ,cz oz) nz))
+                (let ((c (+ (- ,cx ox) (* nx (+ (- ,cy oy) (* ny (- ,cz oz)))))))
+                  (setf ,own-start (aref ,starts c) ,own-end (aref ,starts (1+ c)))))
+              (loop for ,k of-type fixnum from (max oz ,(if half cz `(- ,cz ,s))) to (min (+ oz nz -1) (+ ,cz ,s)) do
+                (loop for ,j of-type fixnum from (max oy ,(if half `(if (= ,k ,cz) ,cy (- ,cy ,s)) `(- ,cy ,s)))
+                        to (min (+ oy ny -1) (+ ,cy ,s)) do
+                  (let* ((,lo (max ox ,(if half `(if (and (= ,k ,cz) (= ,j ,cy)) ,cx (- ,cx ,s)) `(- ,cx ,s))))
+                         (,hi (min (+ ox nx -1) (+ ,cx ,s))))
+                    (declare (type fixnum ,lo ,hi))
+                    (when (<= ,lo ,hi)
+                      (let ((,row (* nx (+ (- ,j oy) (* ny (- ,k oz))))))
+                        (declare (type fixnum ,row))
+                        (loop for ,e of-type fixnum from (aref ,starts (+ ,row (- ,lo ox)))
+                                below (aref ,starts (+ ,row (- ,hi ox) 1))
+                              do (,visit (aref ,items ,e) (and (>= ,e ,own-start) (< ,e ,own-end)))))))))))
+           (t
+            (loop for ,k of-type fixnum from ,(if half cz `(- ,cz ,s)) to (+ ,cz ,s) do
+              (loop for ,j of-type fixnum from ,(if half `(if (= ,k ,cz) ,cy (- ,cy ,s)) `(- ,cy ,s)) to (+ ,cy ,s) do
+                (loop for ,i of-type fixnum from ,(if half `(if (and (= ,k ,cz) (= ,j ,cy)) ,cx (- ,cx ,s)) `(- ,cx ,s))
+                        to (+ ,cx ,s) do
+                  (let* ((,key (grid-cell-key ,i ,j ,k))
+                         (,b (grid-bucket ,key ,mask))
+                         (,own (and (= ,i ,cx) (= ,j ,cy) (= ,k ,cz))))
+                    (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
+                          when (= (aref ,keys ,e) ,key)
+                            do (,visit (aref ,items ,e) ,own))))))))))))
 ;; The block world is the static tree; bodies need a hash grid:1 ends here
 
 ;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:1]]
