@@ -9,7 +9,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test demo bench clean
+.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers clean
 .NOTPARALLEL:
 
 help:
@@ -21,6 +21,7 @@ help:
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
 	@echo "make bench          measure the basin per kernel family; write the table into $(ORG)"
+	@echo "make bench-peers    the basin here and in Debian's Bullet, one run; table in report/peers.org"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:
@@ -46,6 +47,17 @@ bench: setup tangle
 	@mkdir -p report
 	@$(LISP) --load tools/bench.lisp | tee report/bench.org
 	@$(SBCL) --script tools/splice.lisp bench-basin report/bench.org
+	@$(LISP) --load tools/bench-scenes.lisp | tee report/bench-scenes.org
+	@$(SBCL) --script tools/splice.lisp bench-scenes report/bench-scenes.org
+
+# Bullet's side is tools/peers/bullet-basin.cpp, built without -march=native like Debian's Bullet.
+bench-peers: setup tangle
+	@tools/peers/setup-bullet
+	@mkdir -p report/peers
+	@$(CXX) -O2 -o report/peers/bullet-basin tools/peers/bullet-basin.cpp $$(pkg-config --cflags --libs bullet)
+	@rm -f report/peers/failed
+	@{ BULLET_BASIN=report/peers/bullet-basin $(LISP) --load tools/peers/bench-peers.lisp || touch report/peers/failed; } | tee report/peers.org
+	@test ! -e report/peers/failed
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f

@@ -2928,6 +2928,86 @@ each phase's share; with the machine's model and load. #B3NCH5"
               (loop for (name . phases) in +bench-phase-groups+
                     collect (format nil "~v,3F" (length name)
                                     (loop for p in phases sum (cdr (assoc p (getf m :phases))))))))))
+(defun measure-settled-pile (&key (balls 1000) (kernels :scalar) (steps 100))
+  "Drop BALLS balls into the basin with sleep on, step until every one sleeps (at most 20 s),
+then return the mean ms and bytes consed per step over STEPS more steps, and the steps it
+took to settle. #B3NCH5"
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
+        (settle 0) (ms 0d0) (consed 0))
+    (dotimes (i balls)
+      (multiple-value-bind (x y z) (basin-spawn-point i)
+        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)))
+    (loop while (and (plusp (physics-world-awake-count world)) (< settle 1200))
+          do (step-physics-world world) (incf settle))
+    (dotimes (i steps)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (step-physics-world world)
+        (incf consed (- (sb-ext:get-bytes-consed) before))
+        (incf ms (* 1000 (physics-world-last-step-real-seconds world)))))
+    (list :settle-steps settle :awake (physics-world-awake-count world)
+          :mean (/ ms steps) :consed (round consed steps))))
+
+(defun measure-churn (&key (balls 3000) (kernels :scalar) (from 120) (to 300))
+  "The awake basin pile of BALLS, where from step FROM on every step removes the oldest ball
+and drops a new one in from above: mean ms and bytes consed per step over FROM..TO. #B3NCH5"
+  (let* ((world (make-basin-world balls :kernels kernels))
+         (handles (make-array balls :adjustable t :fill-pointer 0)) (ms 0d0) (consed 0))
+    (dotimes (i (physics-world-awake-count world))
+      (vector-push-extend (aref (body-columns-handle (physics-world-awake world)) i) handles))
+    (dotimes (i to)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (when (>= i from)
+          (remove-physics-body world (aref handles (- i from)))
+          (multiple-value-bind (x y z) (basin-spawn-point (mod i 196))
+            (vector-push-extend (add-physics-body world x (+ y 6.0) z :radius 0.25 :mass 1.0 :friction 0.6)
+                                handles)))
+        (step-physics-world world)
+        (when (>= i from)
+          (incf consed (- (sb-ext:get-bytes-consed) before))
+          (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
+    (list :mean (/ ms (- to from)) :consed (round consed (- to from)))))
+
+(defun measure-fountain (&key (kernels :scalar) (per-step 2) (life 2.6) (from 300) (to 600))
+  "A fountain on the basin floor emitting PER-STEP water drops a step (radius 0.06 m, 5 g,
+meeting only terrain, living LIFE seconds) in a 20-degree cone at 4-6 m/s, deterministically
+from a counter: mean ms, bytes consed per step over FROM..TO, and the drops alive. #B3NCH5"
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
+        (count 0) (ms 0d0) (consed 0))
+    (dotimes (i to)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (dotimes (k per-step)
+          (let* ((h (ldb (byte 32 0) (* (+ (* (incf count) 7919) 12345) 2654435761)))
+                 (angle (* 2 pi (/ (ldb (byte 12 0) h) 4096.0)))
+                 (tilt (* (/ 20 180) pi (/ (ldb (byte 10 12) h) 1024.0)))
+                 (speed (+ 4.0 (* 2.0 (/ (ldb (byte 10 22) h) 1024.0)))))
+            (add-physics-body world 4.0 0.1 4.0 :radius 0.06 :mass 0.005 :friction 0.1 :life life
+                              :collide-with-bodies nil
+                              :vx (* speed (sin tilt) (cos angle)) :vy (* speed (cos tilt))
+                              :vz (* speed (sin tilt) (sin angle)))))
+        (step-physics-world world)
+        (when (>= i from)
+          (incf consed (- (sb-ext:get-bytes-consed) before))
+          (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
+    (list :mean (/ ms (- to from)) :consed (round consed (- to from))
+          :alive (+ (physics-world-awake-count world) (physics-world-sleeping-count world)))))
+
+(defun run-scene-benchmark (&key (stream *standard-output*))
+  "Print, as an Org table, the settled pile, the churning pile and the fountain for every
+kernel family this CPU runs. #B3NCH5"
+  (format stream "~&#+caption: other scenes; load ~A~%"
+          (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
+  (format stream "~&| scene | family | mean ms/step | bytes consed/step | note |~%|-------+--------+------+------+------|~%")
+  (dolist (family (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*)))
+    (let ((m (measure-settled-pile :kernels family)))
+      (format stream "~&| 1000 balls settled | ~A | ~,4F | ~D | asleep after ~D steps, ~D awake |~%"
+              (string-downcase family) (getf m :mean) (getf m :consed) (getf m :settle-steps) (getf m :awake)))
+    (let ((m (measure-churn :kernels family)))
+      (format stream "~&| 3000 balls, one replaced a step | ~A | ~,3F | ~D | |~%"
+              (string-downcase family) (getf m :mean) (getf m :consed)))
+    (let ((m (measure-fountain :kernels family)))
+      (format stream "~&| fountain, 2 drops a step | ~A | ~,3F | ~D | ~D drops alive |~%"
+              (string-downcase family) (getf m :mean) (getf m :consed) (getf m :alive)))
+    (finish-output stream)))
 ;; What a step costs:1 ends here
 
 ;; [[file:../physics.org::#O07FDP][Closing the files:1]]
