@@ -485,7 +485,7 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
   "Define the columnar layout NAME: a buffer struct of one specialised array per column of
 COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
 NAME-copy-row, NAME-ensure-capacity, NAME-clear and WITH-NAME, which binds columns by name
-or as (VARIABLE COLUMN). #L4Y0UT"
+or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
   (let* ((make (layout-symbol "%MAKE-" name))
          (ctor (layout-symbol "MAKE-" name))
          (len (layout-symbol name "-LENGTH"))
@@ -511,25 +511,26 @@ or as (VARIABLE COLUMN). #L4Y0UT"
                  collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
        (defparameter ,names ',(mapcar #'first columns)
          ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
-       (defparameter ,bytes ,(loop for (nil type) in columns sum (ecase type (single-float 4) (fixnum 8)))
+       (defparameter ,bytes ,(loop for (nil type width) in columns
+                                   sum (* (or width 1) (ecase type (single-float 4) (fixnum 8))))
          ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name))
        (defun ,ctor (&key (capacity 16) (spare 0))
          ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
          (let ((size (+ capacity spare)))
            (,make :capacity capacity :spare spare
-                  ,@(loop for (c type) in columns
+                  ,@(loop for (c type width) in columns
                           append `(,(intern (symbol-name c) :keyword)
-                                   (make-array size :element-type ',type
-                                                    :initial-element ,(column-zero type)))))))
+                                   (make-array (* size ,(or width 1)) :element-type ',type
+                                                                      :initial-element ,(column-zero type)))))))
        (defun ,ensure (buffer rows)
          ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
          (declare (type ,name buffer) (type index rows))
          (when (> rows (,cap buffer))
            (let* ((new (max rows (* 2 (,cap buffer)) 16))
                   (size (+ new (,spare buffer))))
-             ,@(loop for (c type) in columns for acc in accessors
-                     collect `(let ((fresh (make-array size :element-type ',type
-                                                            :initial-element ,(column-zero type))))
+             ,@(loop for (c type width) in columns for acc in accessors
+                     collect `(let ((fresh (make-array (* size ,(or width 1)) :element-type ',type
+                                                                              :initial-element ,(column-zero type))))
                                 (replace fresh (,acc buffer))
                                 (setf (,acc buffer) fresh)))
              (setf (,cap buffer) new)))
@@ -545,14 +546,21 @@ or as (VARIABLE COLUMN). #L4Y0UT"
        (defun ,zero (buffer row)
          ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
          (declare (type ,name buffer) (type index row) #.+kernel-policy+)
-         ,@(loop for (nil type) in columns for acc in accessors
-                 collect `(setf (aref (,acc buffer) row) ,(column-zero type)))
+         ,@(loop for (nil type width) in columns for acc in accessors
+                 collect (if width
+                             `(fill (,acc buffer) ,(column-zero type)
+                                    :start (* row ,width) :end (* (1+ row) ,width))
+                             `(setf (aref (,acc buffer) row) ,(column-zero type))))
          buffer)
        (defun ,copy (from from-row to to-row)
          ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
          (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
-         ,@(loop for acc in accessors
-                 collect `(setf (aref (,acc to) to-row) (aref (,acc from) from-row)))
+         ,@(loop for (nil nil width) in columns for acc in accessors
+                 collect (if width
+                             `(replace (,acc to) (,acc from) :start1 (* to-row ,width)
+                                                              :start2 (* from-row ,width)
+                                                              :end2 (* (1+ from-row) ,width))
+                             `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
          to)
        (defun ,remove (buffer row)
          ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
@@ -569,8 +577,9 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
          ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
          (declare (type ,name buffer))
          (let ((n (+ (,len buffer) (,spare buffer))))
-           ,@(loop for (nil type) in columns for acc in accessors
-                   collect `(fill (,acc buffer) ,(column-zero type) :end (min n (length (,acc buffer))))))
+           ,@(loop for (nil type width) in columns for acc in accessors
+                   collect `(fill (,acc buffer) ,(column-zero type)
+                                  :end (min (* n ,(or width 1)) (length (,acc buffer))))))
          (setf (,len buffer) 0)
          buffer)
        (defmacro ,with ((&rest cols) buffer &body body)
@@ -841,11 +850,18 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
 (define-physics-layout contact-columns
   "Persistent contacts, one row per touching or nearly touching pair, keyed by a packed pair. #Y5H8KC"
   (handle-a fixnum) (handle-b fixnum) (kind fixnum) (key fixnum) (seen fixnum) (touching fixnum)
-  (nx single-float) (ny single-float) (nz single-float) (separation single-float)
-  (px single-float) (py single-float) (pz single-float)
-  (kvx single-float) (kvy single-float) (kvz single-float)
-  (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
-  (rolling-impulse-x single-float) (rolling-impulse-y single-float) (rolling-impulse-z single-float))
+  (geometry single-float 16))
+
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +contact-fields+
+    '(nx ny nz separation px py pz kvx kvy kvz normal-impulse tangent-impulse-1 tangent-impulse-2
+      rolling-impulse-x rolling-impulse-y rolling-impulse-z)
+    "The sixteen floats of a contact, side by side in its 64-byte row of the geometry column. #Y5H8KC"))
+
+(defmacro contact@ (geometry row field)
+  "The FIELD (one of +contact-fields+) of contact ROW in the GEOMETRY column. #Y5H8KC"
+  `(aref ,geometry (+ (* ,row 16) ,(or (position field +contact-fields+ :test #'string= :key #'symbol-name)
+                                         (error "no contact field ~A" field)))))
 
 (defconstant +contact-pair+ 0 "Contact kind: two bodies. #Y5H8KC")
 
@@ -1546,14 +1562,12 @@ back with its hit events. #K1N3BX"
       (contact-table-put table key row)
       (with-contact-columns ((a handle-a) (b handle-b) (k kind) (ky key)) contacts
         (setf (aref a row) handle-a (aref b row) handle-b (aref k row) kind (aref ky row) key)))
-    (with-contact-columns (seen (cnx nx) (cny ny) (cnz nz) (sep separation) (cpx px) (cpy py) (cpz pz)
-                                (ckx kvx) (cky kvy) (ckz kvz))
-        contacts
+    (with-contact-columns (seen geometry) contacts
       (unless (= (aref seen row) step)
         (setf (aref seen row) step
-              (aref cnx row) nx (aref cny row) ny (aref cnz row) nz (aref sep row) separation
-              (aref cpx row) px (aref cpy row) py (aref cpz row) pz
-              (aref ckx row) kvx (aref cky row) kvy (aref ckz row) kvz)))
+              (contact@ geometry row nx) nx (contact@ geometry row ny) ny (contact@ geometry row nz) nz (contact@ geometry row separation) separation
+              (contact@ geometry row px) px (contact@ geometry row py) py (contact@ geometry row pz) pz
+              (contact@ geometry row kvx) kvx (contact@ geometry row kvy) kvy (contact@ geometry row kvz) kvz)))
     row))
 
 (declaim (inline speculative-distance))
@@ -1917,11 +1931,11 @@ fills its hole; a touching one ends with an :end event. #PRUN3D"
          (table (physics-world-contact-table world))
          (step (physics-world-step-count world)))
     (loop for row of-type fixnum from (1- (contact-columns-length contacts)) downto 0
-          do (with-contact-columns (seen touching key handle-a handle-b px py pz) contacts
+          do (with-contact-columns (seen touching key handle-a handle-b geometry) contacts
                (unless (= (aref seen row) step)
                  (when (= (aref touching row) 1)
                    (push-event world +event-end+ (aref handle-a row) (aref handle-b row)
-                               (aref px row) (aref py row) (aref pz row) 0.0))
+                               (contact@ geometry row px) (contact@ geometry row py) (contact@ geometry row pz) 0.0))
                  (contact-table-delete table (aref key row))
                  (let ((moved (contact-columns-swap-remove contacts row)))
                    (when (>= moved 0)
@@ -2135,11 +2149,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                 (sets (handle-table-set ids)) (locals (handle-table-local ids)))
             (declare (dynamic-extent cursor) (type fixnum-column sets locals))
             (replace cursor (physics-world-color-starts world))
-            (with-contact-columns ((ha handle-a) (hb handle-b) (cnx nx) (cny ny) (cnz nz) (csep separation)
-                                   (ckx kvx) (cky kvy) (ckz kvz) (cl normal-impulse) (cl1 tangent-impulse-1)
-                                   (cl2 tangent-impulse-2) (crx rolling-impulse-x) (cry rolling-impulse-y)
-                                   (crz rolling-impulse-z))
-                contacts
+            (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
               (with-constraint-block (contact body-a body-b) cbuf
                 (dotimes (c m)
                   (let* ((k (aref cursor (aref colors c)))
@@ -2154,7 +2164,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                          (sets sets) (locals locals)
                          (dyn-a (= set-a +set-awake+)) (dyn-b (= set-b +set-awake+))
                          (two-sided (and dyn-a dyn-b))
-                         (x (aref cnx c)) (y (aref cny c)) (z (aref cnz c)))
+                         (x (contact@ geometry c nx)) (y (contact@ geometry c ny)) (z (contact@ geometry c nz)))
                     (declare (type fixnum k a b set-a set-b la lb) (type index base) (type single-float x y z)
                              (type body-columns buf-a buf-b) (type fixnum-column sets locals) (ignorable sets locals))
                     (incf (aref cursor (aref colors c)))
@@ -2177,7 +2187,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                            (im-b (if dyn-b (aref (body-columns-inverse-mass awake) lb) 0.0))
                            (ii-a (if dyn-a (aref (body-columns-inverse-inertia awake) la) 0.0))
                            (ii-b (if dyn-b (aref (body-columns-inverse-inertia awake) lb) 0.0))
-                           (kx (aref ckx c)) (ky (aref cky c)) (kz (aref ckz c))
+                           (kx (contact@ geometry c kvx)) (ky (contact@ geometry c kvy)) (kz (contact@ geometry c kvz))
                            (mass-sum (+ im-a im-b))
                            (tangent-sum (+ im-a im-b (* ii-a r-a r-a) (* ii-b r-b r-b)))
                            (rolling-sum (+ ii-a ii-b))
@@ -2186,7 +2196,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                       (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz))
                       (setf (@ ra) r-a (@ rb) r-b
                             (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
-                            (@ separation) (+ (aref csep c) slop)
+                            (@ separation) (+ (contact@ geometry c separation) slop)
                             (@ kvn) (+ (* kx x) (* ky y) (* kz z))
                             (@ kvt1) (+ (* kx (@ t1x)) (* ky (@ t1y)) (* kz (@ t1z)))
                             (@ kvt2) (+ (* kx (@ t2x)) (* ky (@ t2y)) (* kz (@ t2z)))
@@ -2214,10 +2224,10 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                         (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
                               (@ impulse-scale) st-impulse))
                     (setf (@ max-normal-impulse) 0.0
-                          (@ normal-impulse) (aref cl c)
-                          (@ tangent-impulse-1) (aref cl1 c) (@ tangent-impulse-2) (aref cl2 c)
-                          (@ rolling-impulse-x) (aref crx c) (@ rolling-impulse-y) (aref cry c)
-                          (@ rolling-impulse-z) (aref crz c))))
+                          (@ normal-impulse) (contact@ geometry c normal-impulse)
+                          (@ tangent-impulse-1) (contact@ geometry c tangent-impulse-1) (@ tangent-impulse-2) (contact@ geometry c tangent-impulse-2)
+                          (@ rolling-impulse-x) (contact@ geometry c rolling-impulse-x) (@ rolling-impulse-y) (contact@ geometry c rolling-impulse-y)
+                          (@ rolling-impulse-z) (contact@ geometry c rolling-impulse-z))))
                 ;; padding rows: no contact, the dummy on both sides, every float zero
                 (let ((starts (physics-world-color-starts world)))
                   (dotimes (color +physics-max-colors+)
@@ -2485,10 +2495,7 @@ speed. #ST0R3S"
          (max-penetration 0.0) (max-approach 0.0))
     (declare (type f32-column d v) (type single-float hit-speed dt max-penetration max-approach))
     (with-constraint-block (contact body-a body-b) cbuf
-      (with-contact-columns ((cl normal-impulse) (cl1 tangent-impulse-1) (cl2 tangent-impulse-2)
-                             (crx rolling-impulse-x) (cry rolling-impulse-y) (crz rolling-impulse-z)
-                             touching kind handle-a handle-b px py pz separation key)
-          contacts
+      (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
         (loop for k of-type index below (constraint-columns-length cbuf)
               unless (< (aref contact k) 0) do
           (let* ((base (constraint-base k))
@@ -2497,23 +2504,23 @@ speed. #ST0R3S"
                  (da (* (aref body-a k) +delta-stride+)) (db (* (aref body-b k) +delta-stride+))
                  (a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
-                 (gap (+ (aref separation c)
+                 (gap (+ (contact@ geometry c separation)
                          (* (- (aref d db) (aref d da)) x) (* (- (aref d (+ db 1)) (aref d (+ da 1))) y)
                          (* (- (aref d (+ db 2)) (aref d (+ da 2))) z) (* (@ kvn) dt)))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
                         (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn))))
             (declare (type fixnum c) (type index base))
-            (setf (aref cl c) (@ normal-impulse)
-                  (aref cl1 c) (@ tangent-impulse-1) (aref cl2 c) (@ tangent-impulse-2)
-                  (aref crx c) (@ rolling-impulse-x) (aref cry c) (@ rolling-impulse-y)
-                  (aref crz c) (@ rolling-impulse-z))
+            (setf (contact@ geometry c normal-impulse) (@ normal-impulse)
+                  (contact@ geometry c tangent-impulse-1) (@ tangent-impulse-1) (contact@ geometry c tangent-impulse-2) (@ tangent-impulse-2)
+                  (contact@ geometry c rolling-impulse-x) (@ rolling-impulse-x) (contact@ geometry c rolling-impulse-y) (@ rolling-impulse-y)
+                  (contact@ geometry c rolling-impulse-z) (@ rolling-impulse-z))
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))
                     max-approach (max max-approach (- vn))))
             (unless (eq pushed (= (aref touching c) 1))
               (setf (aref touching c) (if pushed 1 0))
               (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
-                          (aref px c) (aref py c) (aref pz c) (- (@ relative-velocity))
+                          (contact@ geometry c px) (contact@ geometry c py) (contact@ geometry c pz) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))
             (when (and pushed (> (- (@ relative-velocity)) hit-speed)
                        (or (= (aref kind c) +contact-box+)
@@ -2526,7 +2533,7 @@ speed. #ST0R3S"
                                                           row))))))
                              (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
               (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
-                          (aref px c) (aref py c) (aref pz c) (- (@ relative-velocity))
+                          (contact@ geometry c px) (contact@ geometry c py) (contact@ geometry c pz) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))))
     (let ((stats (physics-world-statistics world)))
       (setf (aref stats 3) (coerce max-penetration 'double-float)

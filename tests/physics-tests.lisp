@@ -274,11 +274,12 @@ started at the integer SEED, independent of CL's random state. #T3STK1"
           when (and (= (aref (luv-physics::contact-columns-handle-a c) row) handle)
                     (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-terrain+))
             collect (list :row row
-                          :nx (aref (luv-physics::contact-columns-nx c) row)
-                          :ny (aref (luv-physics::contact-columns-ny c) row)
-                          :nz (aref (luv-physics::contact-columns-nz c) row)
+                          :nx (luv-physics::contact@ (luv-physics::contact-columns-geometry c) row nx)
+                          :ny (luv-physics::contact@ (luv-physics::contact-columns-geometry c) row ny)
+                          :nz (luv-physics::contact@ (luv-physics::contact-columns-geometry c) row nz)
                           :touching (aref (luv-physics::contact-columns-touching c) row)
-                          :impulse (aref (luv-physics::contact-columns-normal-impulse c) row)))))
+                          :impulse (luv-physics::contact@ (luv-physics::contact-columns-geometry c) row
+                                                          normal-impulse)))))
 
 (defun world-fingerprint (world)
   "The awake count, the sleeping count and the state hash of WORLD, as a list. #T3STK1"
@@ -524,9 +525,10 @@ started at the integer SEED, independent of CL's random state. #T3STK1"
       (let ((row (luv-physics::contact-table-find table key)))
         (pushnew row rows)
         (when (>= row 0)
-          (setf worst (max worst (abs (- (aref (luv-physics::contact-columns-normal-impulse
-                                                (luv-physics::physics-world-contacts w))
-                                               row)
+          (setf worst (max worst (abs (- (luv-physics::contact@
+                                          (luv-physics::contact-columns-geometry
+                                           (luv-physics::physics-world-contacts w))
+                                          row normal-impulse)
                                          expected)))))))
     (check (equal rows '(0)) "the contact lived in rows ~S" rows)
     (check (= 1 (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
@@ -868,8 +870,8 @@ started at the integer SEED, independent of CL's random state. #T3STK1"
               (c (luv-physics::physics-world-contacts w)))
           (when (and (> (luv-physics::physics-body-position w h) 5.05) (>= row 0)
                      (= 1 (aref (luv-physics::contact-columns-touching c) row))
-                     (> (abs (aref (luv-physics::contact-columns-nx c) row)) 0.3)
-                     (> (abs (aref (luv-physics::contact-columns-ny c) row)) 0.3))
+                     (> (abs (luv-physics::contact@ (luv-physics::contact-columns-geometry c) row nx)) 0.3)
+                     (> (abs (luv-physics::contact@ (luv-physics::contact-columns-geometry c) row ny)) 0.3))
             (setf diagonal t))))
       (check (eq t diagonal) "no pushing diagonal edge contact once past the edge")
       (check (> (luv-physics::physics-body-position w h) 5.25))
