@@ -1,0 +1,146 @@
+;;;; tools/peers/bench-peers.lisp -- the basin in our engine and in Bullet, side by side
+;;;; (make bench-peers).
+;;;;
+;;;; For each ball count it measures our basin with the widest kernel family this CPU runs and
+;;;; with the scalar family (measure-basin, #B3NCH5), then runs tools/peers/bullet-basin.cpp's
+;;;; binary on the same scene, one after the other in this one run, and prints Org tables.
+;;;; The binary is BULLET_BASIN in the environment, else report/peers/bullet-basin; the counts
+;;;; are 1000, 3000 and 10000, or those PEER_COUNTS names.
+
+(load (merge-pathnames "../boot.lisp" *load-truename*))
+
+(in-package #:cl-user)
+
+(when (luv-load-systems "luv-physics")
+  (sb-ext:exit :code 2))
+
+(defparameter *peer-counts*
+  (or (ignore-errors
+       (let ((env (sb-ext:posix-getenv "PEER_COUNTS")))
+         (and env (mapcar #'parse-integer (uiop:split-string env :separator " ")))))
+      '(1000 3000 10000))
+  "The ball counts measured: those PEER_COUNTS names (\"1000 3000\"), else make bench's.")
+
+(defparameter *peer-steps* 300 "Steps per run.")
+(defparameter *peer-from* 120 "The first step timed.")
+
+(defparameter *bullet-binary*
+  (let ((env (sb-ext:posix-getenv "BULLET_BASIN")))
+    (if (and env (plusp (length env)))
+        (pathname env)
+        (merge-pathnames "report/peers/bullet-basin" *luv-root*)))
+  "The compiled tools/peers/bullet-basin.cpp.")
+
+(defun peer-first-line (program &rest args)
+  "The first line PROGRAM ARGS prints, or NIL when it cannot run or fails."
+  (ignore-errors
+   (let* ((out (make-string-output-stream))
+          (p (sb-ext:run-program program args :search t :output out :error nil)))
+     (when (zerop (sb-ext:process-exit-code p))
+       (let ((text (get-output-stream-string out)))
+         (subseq text 0 (or (position #\Newline text) (length text))))))))
+
+(defun parse-key-values (line)
+  "A plist of the key=value words of LINE: keywords to numbers where they read as numbers."
+  (loop for word in (uiop:split-string line :separator " ")
+        for eq = (position #\= word)
+        when eq
+          append (let ((value (subseq word (1+ eq))))
+                   (list (intern (string-upcase (subseq word 0 eq)) :keyword)
+                         (let ((n (ignore-errors
+                                   (let ((*read-default-float-format* 'double-float)
+                                         (*read-eval* nil))
+                                     (read-from-string value)))))
+                           (if (realp n) n value))))))
+
+(defun measure-bullet (count)
+  "Run the Bullet binary on the basin of COUNT balls; its key=value line as a plist."
+  (let* ((out (make-string-output-stream))
+         (p (sb-ext:run-program (namestring *bullet-binary*)
+                                (mapcar #'princ-to-string (list count *peer-steps* *peer-from*))
+                                :output out :error *error-output*))
+         (line (string-trim '(#\Newline) (get-output-stream-string out))))
+    (unless (and (zerop (sb-ext:process-exit-code p)) (search "bullet " line))
+      (format *error-output* "~&error: ~A ~D failed (exit ~D): ~A~%"
+              (namestring *bullet-binary*) count (sb-ext:process-exit-code p) line)
+      (sb-ext:exit :code 1))
+    (parse-key-values line)))
+
+(defun our-basin-sanity (count kernels)
+  "Mean and lowest centre height and the number of balls outside the interior [0,8] x [0,8] or
+below the floor's top, after *PEER-STEPS* steps of the basin of COUNT balls: the world make-basin-world
+builds, rebuilt here to keep the handles."
+  (let* ((world (physics:make-physics-world
+                 :terrain (physics:make-basin-terrain :wall-height (if (> count 3000) 30 6))
+                 :kernels kernels))
+         (handles (loop for i below count
+                        collect (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+                                  (physics:add-physics-body world x y z :radius 0.25 :mass 1.0
+                                                                        :friction 0.6 :restitution 0.0)))))
+    (dotimes (i *peer-steps*) (physics:step-physics-world world))
+    (let ((sum-y 0d0) (min-y (if handles most-positive-single-float 0.0)) (escaped 0))
+      (dolist (h handles)
+        (multiple-value-bind (x y z) (physics:physics-body-position world h)
+          (incf sum-y y)
+          (setf min-y (min min-y y))
+          (when (or (< x 0) (> x 8) (< z 0) (> z 8) (< y 0)) (incf escaped))))
+      (values (/ sum-y count) min-y escaped))))
+
+(defun first-matching-line (path key)
+  "The value after the colon of the first line of PATH containing KEY, or NIL."
+  (ignore-errors
+   (with-open-file (s path)
+     (loop for line = (read-line s nil) while line
+           when (search key line)
+             return (string-trim " " (subseq line (1+ (position #\: line))))))))
+
+(defun run-peer-benchmark (&key (counts *peer-counts*) (stream *standard-output*))
+  "Print the side-by-side table and the sanity table."
+  (let* ((auto (first (car (last (remove-if-not #'luv-physics::kernel-family-available-p
+                                                luv-physics::*kernel-families*)))))
+         (engines (remove-duplicates (list auto :scalar) :from-end t))
+         (sanity '()))
+    (format stream "~&#+caption: basin, 60 Hz, all awake, one thread; ms per step over steps ~D-~D; ~
+                    luv-physics (4 substeps) on SBCL ~A vs Bullet ~A (Debian's single-precision build; ~
+                    btDiscreteDynamicsWorld, stepSimulation(1/60, 0), 10 solver iterations; its ~
+                    driver g++ -O2, no -march=native); ~A; load ~A~%"
+            *peer-from* *peer-steps* (lisp-implementation-version)
+            (or (peer-first-line "pkg-config" "--modversion" "bullet") "?")
+            (or (first-matching-line "/proc/cpuinfo" "model name") "unknown CPU")
+            (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
+    (format stream "~&| balls | engine             | mean ms | median ms | / Bullet (median) |~%")
+    (format stream "~&|-------+--------------------+---------+-----------+-------------------|~%")
+    (finish-output stream)
+    (dolist (count counts)
+      (let ((ours (loop for family in engines
+                        collect (cons family (luv-physics::measure-basin
+                                              count :kernels family
+                                              :from *peer-from* :to *peer-steps*))))
+            (bullet (measure-bullet count)))
+        (flet ((row (name mean median)
+                 (format stream "~&| ~5D | ~18A | ~7,3F | ~9,3F | ~17,2F |~%"
+                         count name mean median (/ median (getf bullet :median_ms)))))
+          (loop for (family . m) in ours
+                do (row (format nil "luv-physics ~(~A~)" family) (getf m :mean) (getf m :median)))
+          (row "Bullet 10 iter." (getf bullet :mean_ms) (getf bullet :median_ms)))
+        (finish-output stream)
+        (push (list count ours bullet) sanity)))
+    ;; where the piles ended: an untimed run of ours (widest family) next to Bullet's own figures
+    (format stream "~&~%#+caption: after ~D steps: contacts in the last step (ours: contact ~
+                    constraints; Bullet: points in its manifolds, and the manifolds), mean and ~
+                    lowest ball centre height, balls outside the interior [0,8]x[0,8] or below the floor~%"
+            *peer-steps*)
+    (format stream "~&| balls | engine             | contacts | manifolds | mean y m | min y m | escaped |~%")
+    (format stream "~&|-------+--------------------+----------+-----------+----------+---------+---------|~%")
+    (dolist (entry (reverse sanity))
+      (destructuring-bind (count ours bullet) entry
+        (multiple-value-bind (mean-y min-y escaped) (our-basin-sanity count auto)
+          (format stream "~&| ~5D | ~18A | ~8D | ~9A | ~8,3F | ~7,3F | ~7D |~%"
+                  count (format nil "luv-physics ~(~A~)" auto)
+                  (getf (cdr (assoc auto ours)) :contacts) "" mean-y min-y escaped))
+        (format stream "~&| ~5D | ~18A | ~8D | ~9D | ~8,3F | ~7,3F | ~7D |~%"
+                count "Bullet 10 iter." (getf bullet :points) (getf bullet :manifolds)
+                (getf bullet :mean_y) (getf bullet :min_y) (getf bullet :escaped))
+        (finish-output stream)))))
+
+(run-peer-benchmark)
