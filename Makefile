@@ -21,7 +21,7 @@ help:
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
 	@echo "make bench          measure the basin per kernel family; write the table into $(ORG)"
-	@echo "make bench-peers    the basin here and in Debian's Bullet, one run; table in report/peers.org"
+	@echo "make bench-peers    the basin here and in Debian's Bullet, one run; table into $(ORG)"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:
@@ -58,6 +58,7 @@ bench-peers: setup tangle
 	@rm -f report/peers/failed
 	@{ BULLET_BASIN=report/peers/bullet-basin $(LISP) --load tools/peers/bench-peers.lisp || touch report/peers/failed; } | tee report/peers.org
 	@test ! -e report/peers/failed
+	@$(SBCL) --script tools/splice.lisp bench-peers report/peers.org
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f
