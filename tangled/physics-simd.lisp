@@ -45,12 +45,13 @@
               (,c6 (sb-simd-avx:f32.8-permute128 ,u2 ,u6 #x31)) (,c7 (sb-simd-avx:f32.8-permute128 ,u3 ,u7 #x31)))))))))
 
 (defmacro with-rows-8 ((v index k &rest columns) &body body)
-  "Run BODY with COLUMNS bound to the eight solver rows of V named by INDEX[K..K+7], as the
-columns of the 8x8 transpose. #R0WS8T"
+  "Run BODY with COLUMNS bound to the eight solver rows of V (velocities or deltas, both eight
+floats a row) named by INDEX[K..K+7], as the columns of the 8x8 transpose. #R0WS8T"
   (let ((rows (loop repeat 8 collect (gensym "ROW"))))
     `(let* (,@(loop for r in rows for l from 0
                     collect `(,r (sb-simd-avx:f32.8-aref ,v (* (aref ,index (+ ,k ,l)) +solver-stride+))))
             ,@(macroexpand-1 `(transpose-8 ,rows ,columns)))
+       (declare (ignorable ,@columns))
        ,@body)))
 
 (defmacro scatter-rows-8 (v index k &rest columns)
@@ -80,6 +81,7 @@ INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest fr
                     collect `(,r (sb-simd-sse:f32.4-aref ,v (+ 4 (* (aref ,index (+ ,k ,l)) +solver-stride+)))))
             ,@(macroexpand-1 `(transpose-4 ,lo ,(subseq columns 0 4)))
             ,@(macroexpand-1 `(transpose-4 ,hi ,(subseq columns 4 8))))
+       (declare (ignorable ,@columns))
        ,@body)))
 
 (defmacro scatter-rows-4 (v index k &rest columns)
@@ -155,22 +157,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                (declare (type index base))
                (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
                 (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+                 (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
+                  (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
                (let* ((x (@w nx)) (y (@w ny)) (z (@w nz))
                       (ma (@w ima)) (mb (@w imb)) (iam (@w iia)) (ibm (@w iib))
                       (ar (@w ra)) (br (@w rb))
                       (s (w+ (w+ (@w separation)
-                                 (w+ (w+ (w* (,pack ,@(loop for l below width collect
-                                                         `(- (aref d (* (aref body-b (+ k ,l)) +delta-stride+))
-                                                             (aref d (* (aref body-a (+ k ,l)) +delta-stride+)))))
-                                             x)
-                                         (w* (,pack ,@(loop for l below width collect
-                                                         `(- (aref d (+ 1 (* (aref body-b (+ k ,l)) +delta-stride+)))
-                                                             (aref d (+ 1 (* (aref body-a (+ k ,l)) +delta-stride+))))))
-                                             y))
-                                     (w* (,pack ,@(loop for l below width collect
-                                                     `(- (aref d (+ 2 (* (aref body-b (+ k ,l)) +delta-stride+)))
-                                                         (aref d (+ 2 (* (aref body-a (+ k ,l)) +delta-stride+))))))
-                                         z)))
+                                 (w+ (w+ (w* (w- dbx dax) x) (w* (w- dby day) y)) (w* (w- dbz daz) z)))
                              (w* (@w kvn) (wc elapsed))))
                       (positive (w> s (wc 0.0)))
                       (bias (if use-bias
@@ -239,7 +232,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            wbx (wif rolling (w+ wbx (w* ibm dx)) wbx) wby (wif rolling (w+ wby (w* ibm dy)) wby)
                            wbz (wif rolling (w+ wbz (w* ibm dz)) wbz)))))
                (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-a k vax vay vaz wax way waz a6 a7)
-               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-b k vbx vby vbz wbx wby wbz b6 b7)))))))
+               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-b k vbx vby vbz wbx wby wbz b6 b7)))))))))
        (defun ,re (cbuf v start end threshold)
          ,(format nil "Restitution over constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v) (type index start end)
@@ -293,34 +286,39 @@ with the scalar kernels. #F4M1LY"))
 (defclass avx2-kernels (wide-kernels) ()
   (:documentation "Eight lanes of AVX2 f32.8. #F4M1LY"))
 
-(defmacro do-colour-runs ((start end world) wide-form overflow-form)
-  "Run WIDE-FORM for each colour's run START..END of WORLD's constraints, then OVERFLOW-FORM for
-the overflow colour's run. #F4M1LY"
+(defmacro do-colour-runs ((start end world &optional settle) wide-form overflow-form)
+  "Run WIDE-FORM for each colour's run START..END of WORLD's constraints, then SETTLE, then
+OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
   (let ((starts (gensym)) (c (gensym)))
     `(let ((,starts (physics-world-color-starts ,world)))
        (dotimes (,c +physics-max-colors+)
          (let ((,start (aref ,starts ,c)) (,end (aref ,starts (1+ ,c))))
            (when (< ,start ,end) ,wide-form)))
+       ,@(when settle (list settle))
        (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
          (when (< ,start ,end) ,overflow-form)))))
 
-(macrolet ((define-family-methods (class ws so re)
+(macrolet ((define-family-methods (class ws so re &optional settle)
              `(progn
                 (defmethod physics-warm-start ((kernels ,class) world)
                   (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world)))
-                    (do-colour-runs (s e world) (,ws cbuf v s e) (warm-start-range cbuf v s e))))
+                    (do-colour-runs (s e world ,settle) (,ws cbuf v s e) (warm-start-range cbuf v s e))))
                 (defmethod physics-solve-contacts ((kernels ,class) world inv-h use-bias elapsed)
                   (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world))
                         (d (physics-world-deltas world)) (push-max (f32 (physics-world-push-max world))))
-                    (do-colour-runs (s e world)
+                    (do-colour-runs (s e world ,settle)
                       (,so cbuf v d s e inv-h use-bias elapsed push-max)
                       (solve-range cbuf v d s e inv-h use-bias elapsed push-max))))
                 (defmethod physics-apply-restitution ((kernels ,class) world threshold)
                   (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world)))
-                    (do-colour-runs (s e world) (,re cbuf v s e threshold)
+                    (do-colour-runs (s e world ,settle) (,re cbuf v s e threshold)
                       (restitution-range cbuf v s e threshold)))))))
   (define-family-methods sse-kernels warm-start-blocks/sse solve-blocks/sse restitution-blocks/sse)
-  (define-family-methods avx2-kernels warm-start-blocks/avx2 solve-blocks/avx2 restitution-blocks/avx2))
+  ;; after 256-bit code, clear the upper halves of the ymm registers before any legacy SSE
+  ;; instruction runs: the scalar code SBCL emits is legacy SSE, and on this CPU it ran three
+  ;; times slower for the rest of the step without it
+  (define-family-methods avx2-kernels warm-start-blocks/avx2 solve-blocks/avx2 restitution-blocks/avx2
+    (sb-simd-avx:vzeroupper)))
 
 (register-kernel-family :sse 'sse-kernels :sse4.1)
 (register-kernel-family :avx2 'avx2-kernels :avx2)

@@ -1128,8 +1128,9 @@ grid visits each row of cells along x as one run of its items. #D9W4CH"
 (defconstant +solver-stride+ 8
   "Floats per body in the solver's velocity array: vx vy vz wx wy wz and two spare. #W0RLD7")
 
-(defconstant +delta-stride+ 4
-  "Floats per body in the solver's delta array: dx dy dz and one spare. #W0RLD7")
+(defconstant +delta-stride+ 8
+  "Floats per body in the solver's delta array: dx dy dz and five spare, so a wide kernel
+gathers deltas exactly as it gathers velocities. #W0RLD7")
 
 (defclass kernel-family () ()
   (:documentation "A way of running the solver phases; the world holds one and every phase
