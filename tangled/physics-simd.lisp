@@ -104,7 +104,7 @@ in any register. #R0WS8T"
 
 ;; [[file:../physics.org::#W1D3KF][One kernel text, two widths:1]]
 (defmacro define-wide-kernels (family width documentation
-                               &key pack load broadcast add sub mul div sqrt gt eq if* or* transpose)
+                               &key load broadcast add sub mul div sqrt gt eq if* or* transpose)
   "Define the solver kernels of FAMILY for lanes of WIDTH, described by DOCUMENTATION: the
 operator keywords name the sb-simd functions the width-neutral operators stand for. #W1D3KF"
   (declare (ignore documentation))
@@ -266,14 +266,14 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
 ;; [[file:../physics.org::#F4M1LY][The SSE and AVX2 families:1]]
 (define-wide-kernels avx2 8
   "Eight lanes of AVX2: f32.8 arithmetic, vblendvps selection. #F4M1LY"
-  :pack sb-simd-avx:make-f32.8 :load sb-simd-avx:f32.8-aref :broadcast sb-simd-avx:f32.8
+  :load sb-simd-avx:f32.8-aref :broadcast sb-simd-avx:f32.8
   :add sb-simd-avx:f32.8+ :sub sb-simd-avx:f32.8- :mul sb-simd-avx:f32.8* :div sb-simd-avx:f32.8/
   :sqrt sb-simd-avx:f32.8-sqrt :gt sb-simd-avx:f32.8> :eq sb-simd-avx:f32.8= :if* sb-simd-avx:f32.8-if
   :or* sb-simd-avx2:u32.8-or :transpose with-rows-8)
 
 (define-wide-kernels sse 4
   "Four lanes of SSE4.1: f32.4 arithmetic, and/and-not/or selection. #F4M1LY"
-  :pack sb-simd-sse:make-f32.4 :load sb-simd-sse:f32.4-aref :broadcast sb-simd-sse:f32.4
+  :load sb-simd-sse:f32.4-aref :broadcast sb-simd-sse:f32.4
   :add sb-simd-sse:f32.4+ :sub sb-simd-sse:f32.4- :mul sb-simd-sse:f32.4* :div sb-simd-sse:f32.4/
   :sqrt sb-simd-sse:f32.4-sqrt :gt sb-simd-sse2:f32.4> :eq sb-simd-sse2:f32.4= :if* f32.4-select
   :or* sb-simd-sse2:u32.4-or :transpose with-rows-4)

@@ -1846,6 +1846,12 @@ is under the speculative distance. #MYWH16"
                       (loop for ix of-type fixnum from x0 to x1 do
                         (when (probe-solid-p probe ix iy iz)
                           (setf mask (logior mask (ash 1 (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))
+              ;; a body that can travel past its margin this step also sweeps its path
+              (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                                      (* (aref vz i) (aref vz i))))))))
+                (when (> travel margin)
+                  (sweep-terrain-contact world probe (aref handle i) cx cy cz r
+                                         (aref vx i) (aref vy i) (aref vz i) (+ travel r))))
               (unless (zerop mask)
                 (flet ((solid (ix iy iz)
                          (declare (type fixnum ix iy iz))
@@ -1882,6 +1888,54 @@ is under the speculative distance. #MYWH16"
                                                nx ny nz sep px py pz 0.0 0.0 0.0)))))))))))))))
     world))
 ;; Sphere against cells: the overshoot rule keeps seams smooth:1 ends here
+
+;; [[file:../physics.org::#SW33P7][Fast bodies sweep their path through the cells:1]]
+(defun sweep-terrain-contact (world probe handle cx cy cz r vx vy vz length)
+  "Walk the cells along the ray from CX CY CZ in the direction of VX VY VZ for LENGTH metres;
+at the first solid cell, make HANDLE's body a speculative contact with the face the ray
+enters it through. #SW33P7"
+  (declare (type single-float cx cy cz r vx vy vz length) (type fixnum handle) #.+kernel-policy+)
+  (let* ((speed (fsqrt (+ (* vx vx) (* vy vy) (* vz vz))))
+         (inv (/ 1.0 (max speed 1e-12)))
+         (dx (* vx inv)) (dy (* vy inv)) (dz (* vz inv))
+         (ix (cell-floor cx)) (iy (cell-floor cy)) (iz (cell-floor cz))
+         (sx (if (> dx 0.0) 1 -1)) (sy (if (> dy 0.0) 1 -1)) (sz (if (> dz 0.0) 1 -1))
+         (big 1e30))
+    (declare (type single-float speed inv dx dy dz big) (type fixnum ix iy iz sx sy sz))
+    (flet ((first-crossing (c i d s)
+             (declare (type single-float c d) (type fixnum i s))
+             (if (< (abs d) 1e-12) big (/ (- (float (if (> s 0) (1+ i) i) 1.0) c) d)))
+           (per-cell (d) (declare (type single-float d)) (if (< (abs d) 1e-12) big (/ 1.0 (abs d)))))
+      (let ((tx (first-crossing cx ix dx sx)) (ty (first-crossing cy iy dy sy)) (tz (first-crossing cz iz dz sz))
+            (ex (per-cell dx)) (ey (per-cell dy)) (ez (per-cell dz)))
+        (declare (type single-float tx ty tz ex ey ez))
+        (unless (probe-solid-p probe ix iy iz)
+          (loop repeat 4096
+                do (let ((axis (cond ((and (<= tx ty) (<= tx tz)) 0) ((<= ty tz) 1) (t 2))))
+                     (declare (type (integer 0 2) axis))
+                     (let ((at (case axis (0 tx) (1 ty) (t tz))))
+                       (declare (type single-float at))
+                       (when (> at length) (return))
+                       (case axis
+                         (0 (incf ix sx) (incf tx ex))
+                         (1 (incf iy sy) (incf ty ey))
+                         (t (incf iz sz) (incf tz ez)))
+                       (when (probe-solid-p probe ix iy iz)
+                         ;; the face entered: its plane, the normal towards the cell
+                         (multiple-value-bind (nx ny nz gap)
+                             (case axis
+                               (0 (values (float sx 1.0) 0.0 0.0
+                                          (* (float sx 1.0) (- (float (if (> sx 0) ix (1+ ix)) 1.0) cx))))
+                               (1 (values 0.0 (float sy 1.0) 0.0
+                                          (* (float sy 1.0) (- (float (if (> sy 0) iy (1+ iy)) 1.0) cy))))
+                               (t (values 0.0 0.0 (float sz 1.0)
+                                          (* (float sz 1.0) (- (float (if (> sz 0) iz (1+ iz)) 1.0) cz)))))
+                           (declare (type single-float nx ny nz gap))
+                           (touch-contact world (terrain-key (handle-index handle) ix iy iz) +contact-terrain+
+                                          handle +no-body+ nx ny nz (- gap r)
+                                          (+ cx (* gap nx)) (+ cy (* gap ny)) (+ cz (* gap nz)) 0.0 0.0 0.0))
+                         (return))))))))))
+;; Fast bodies sweep their path through the cells:1 ends here
 
 ;; [[file:../physics.org::#B0XPH5][Boxes touch as moving terrain:1]]
 (defun box-phase (world)

@@ -878,6 +878,23 @@ started at the integer SEED, independent of CL's random state. #T3STK1"
       (check (< (abs (- (body-y w h) -0.755)) 0.002) "the ball ends at y = ~,5F" (body-y w h)))))
 ;; MYWH16-rolls-over-ledge ends here
 
+;; [[file:../physics.org::#SW33P7][SW33P7-no-tunnelling-to-100]]
+(define-claim "SW33P7" no-tunnelling-to-100
+    "Balls at up to 100 m/s stop at a one-cell wall from every phase of the step."
+  (dolist (speed '(10 20 50 100))
+    (dotimes (k 10)
+      (let ((terrain (make-voxel-terrain)))
+        (fill-terrain terrain -16 -1 -16 32 16 32 nil)
+        (fill-terrain terrain -16 -1 -16 32 0 32 t)
+        (fill-terrain terrain 10 0 -16 11 16 32 t)
+        (let* ((world (make-physics-world :terrain terrain :gravity '(0 0 0)))
+               (ball (add-physics-body world (* k 0.137) 2.0 0.5 :radius 0.25 :vx speed)))
+          (dotimes (i 90) (step-physics-world world))
+          (let ((x (physics-body-position world ball)))
+            (check (< (abs (- x (- 10 0.25))) 0.01)
+                   "at ~D m/s from x = ~,3F the ball ended at x = ~,4F" speed (* k 0.137) x)))))))
+;; SW33P7-no-tunnelling-to-100 ends here
+
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
 (define-claim "SSMPYW" colours-disjoint
     "In a 300-ball pile no colour below 24 holds two constraints on the same awake body."
