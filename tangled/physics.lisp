@@ -1691,6 +1691,30 @@ woke. #W4K3PH"
 ;; Fast bodies and moving boxes wake what they reach:1 ends here
 
 ;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:1]]
+(defparameter +unit-directions+
+  (let ((v (make-array 78 :element-type 'single-float)) (k 0))
+    (loop for dz from -1 to 1 do
+      (loop for dy from -1 to 1 do
+        (loop for dx from -1 to 1 do
+          (unless (= 0 dx dy dz)
+            (let ((l (sqrt (float (+ (* dx dx) (* dy dy) (* dz dz)) 1.0))))
+              (setf (aref v k) (/ dx l) (aref v (+ k 1)) (/ dy l) (aref v (+ k 2)) (/ dz l))
+              (incf k 3))))))
+    v)
+  "The 26 unit directions towards the neighbours of a cell, three floats each. #P41RS7")
+
+(declaim (inline coincident-direction))
+(defun coincident-direction (ha hb)
+  "For two bodies whose centres coincide, the offset in +unit-directions+ of the direction,
+from body HA to body HB, that the pair is pushed apart along: fixed for the pair, varied
+across pairs, and opposite when the two are named the other way round. #P41RS7"
+  (declare (type fixnum ha hb))
+  (let* ((lo (min (handle-index ha) (handle-index hb))) (hi (max (handle-index ha) (handle-index hb)))
+         (k (mod (logxor (* lo 73856093) (* hi 19349663)) 26)))
+    (declare (type (unsigned-byte 24) lo hi) (type (integer 0 25) k))
+    ;; direction k and direction 25-k are opposite
+    (* 3 (if (< (handle-index ha) (handle-index hb)) k (- 25 k)))))
+
 (defun pair-phase (world)
   "Phase 4: contacts between awake bodies (each pair once, from the lower row) and lean
 contacts from slow awake bodies onto the sleepers they reach. A candidate within reach becomes
@@ -1720,9 +1744,10 @@ a contact only when its gap is under the speculative distance. #P41RS7"
                    (let* ((d (fsqrt d2))
                           (far (> d 1e-6))
                           (inv (if far (/ 1.0 d) 0.0))
-                          (nx (if far (* dx inv) 0.0))
-                          (ny (if far (* dy inv) 1.0))
-                          (nz (if far (* dz inv) 0.0))
+                          (cn (if far 0 (coincident-direction hi hj)))
+                          (nx (if far (* dx inv) (aref +unit-directions+ cn)))
+                          (ny (if far (* dy inv) (aref +unit-directions+ (+ cn 1))))
+                          (nz (if far (* dz inv) (aref +unit-directions+ (+ cn 2))))
                           (sep (- d ri rj))
                           (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
                      (when (< sep (speculative-distance approach dt slop margin gstep))
