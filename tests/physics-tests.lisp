@@ -813,6 +813,32 @@ started at the integer SEED, independent of CL's random state. #T3STK1"
     (check (and begins (every (lambda (d) (eq d owner)) begins)))))
 ;; K1N3BX-hit-carries-owner ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-coincident-pair-separates]]
+(define-claim "P41RS7" coincident-pair-separates
+    "Coincident balls separate along their pair's direction at <= the push-out speed."
+  (let* ((world (make-physics-world :gravity '(0 0 0)))
+         (a (add-physics-body world 0 0 0 :radius 0.25))
+         (b (add-physics-body world 0 0 0 :radius 0.25))
+         (k (luv-physics::coincident-direction a b))
+         (dir (list (aref luv-physics::+unit-directions+ k) (aref luv-physics::+unit-directions+ (+ k 1))
+                    (aref luv-physics::+unit-directions+ (+ k 2))))
+         (fastest 0.0))
+    (dotimes (i 60)
+      (step-physics-world world)
+      (multiple-value-bind (vx vy vz) (physics-body-velocity world b)
+        (multiple-value-bind (ux uy uz) (physics-body-velocity world a)
+          (setf fastest (max fastest (sqrt (+ (expt (- vx ux) 2) (expt (- vy uy) 2) (expt (- vz uz) 2))))))))
+    (multiple-value-bind (bx by bz) (physics-body-position world b)
+      (multiple-value-bind (ax ay az) (physics-body-position world a)
+        (let* ((d (list (- bx ax) (- by ay) (- bz az)))
+               (len (sqrt (reduce #'+ (mapcar (lambda (c) (* c c)) d)))))
+          (check (> len 0.45) "the centres are only ~,3F m apart" len)
+          (check (> (/ (reduce #'+ (mapcar #'* d dir)) len) 0.999)
+                 "they separated along ~S, not their pair's direction ~S" d dir))))
+    (check (<= fastest (+ luv-physics::*physics-contact-push-max* 0.01))
+           "they parted at ~,3F m/s" fastest)))
+;; P41RS7-coincident-pair-separates ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-seams-are-flat]]
 (define-claim "MYWH16" seams-are-flat
     "A ball rolling at 3 m/s over six seams stays within 0.005 m of rest height and keeps 99% of its speed."
