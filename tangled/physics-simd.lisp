@@ -108,7 +108,8 @@ in any register. #R0WS8T"
   "Define the solver kernels of FAMILY for lanes of WIDTH, described by DOCUMENTATION: the
 operator keywords name the sb-simd functions the width-neutral operators stand for. #W1D3KF"
   (declare (ignore documentation))
-  (let ((ws (intern (format nil "WARM-START-BLOCKS/~A" family)))
+  (let ((scatter (intern (format nil "SCATTER-ROWS-~D" width)))
+        (ws (intern (format nil "WARM-START-BLOCKS/~A" family)))
         (so (intern (format nil "SOLVE-BLOCKS/~A" family)))
         (re (intern (format nil "RESTITUTION-BLOCKS/~A" family))))
     `(macrolet ((w+ (a b) `(,',add ,a ,b)) (w- (a b) `(,',sub ,a ,b)) (w* (a b) `(,',mul ,a ,b))
@@ -116,7 +117,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 (w= (a b) `(,',eq ,a ,b)) (wif (m a b) `(,',if* ,m ,a ,b)) (wor (a b) `(,',or* ,a ,b))
                 (wc (x) `(,',broadcast ,x))
                 (@w (column) `(,',load data (+ base ,(constraint-offset column))))
-                (@w! (column value) `(setf (,',load data (+ base ,(constraint-offset column))) ,value)))
+                (@w! (column value) `(setf (,',load data (+ base ,(constraint-offset column))) ,value))
+                (with-body-rows (&body body)
+                  `(,',transpose (v body-a k vax vay vaz wax way waz a6 a7)
+                     (,',transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+                       ,@body
+                       (,',scatter v body-a k vax vay vaz wax way waz a6 a7)
+                       (,',scatter v body-b k vbx vby vbz wbx wby wbz b6 b7)))))
        (defun ,ws (cbuf v start end)
          ,(format nil "Warm start constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
@@ -124,8 +131,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
            (loop for k of-type index from start below end by ,width do
              (let ((base (constraint-base k)))
                (declare (type index base))
-               (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
-                (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+               (with-body-rows
                (let* ((x (@w nx)) (y (@w ny)) (z (@w nz))
                       (l (@w normal-impulse)) (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2))
                       (px (w+ (w+ (w* l x) (w* l1 (@w t1x))) (w* l2 (@w t2x))))
@@ -145,8 +151,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                        wbx (w+ wbx (w* ib (w- rx (w* br cx))))
                        wby (w+ wby (w* ib (w- ry (w* br cy))))
                        wbz (w+ wbz (w* ib (w- rz (w* br cz))))))
-               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-a k vax vay vaz wax way waz a6 a7)
-               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-b k vbx vby vbz wbx wby wbz b6 b7)))))))
+               )))))
        (defun ,so (cbuf v d start end inv-h use-bias elapsed push-max)
          ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
@@ -155,8 +160,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
            (loop for k of-type index from start below end by ,width do
              (let ((base (constraint-base k)))
                (declare (type index base))
-               (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
-                (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+               (with-body-rows
                  (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
                   (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
                (let* ((x (@w nx)) (y (@w ny)) (z (@w nz))
@@ -231,8 +235,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            waz (wif rolling (w- waz (w* iam dz)) waz)
                            wbx (wif rolling (w+ wbx (w* ibm dx)) wbx) wby (wif rolling (w+ wby (w* ibm dy)) wby)
                            wbz (wif rolling (w+ wbz (w* ibm dz)) wbz)))))
-               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-a k vax vay vaz wax way waz a6 a7)
-               (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-b k vbx vby vbz wbx wby wbz b6 b7)))))))))
+               )))))))
        (defun ,re (cbuf v start end threshold)
          ,(format nil "Restitution over constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v) (type index start end)
@@ -245,8 +248,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                       (skip (wor (wor (w= e (wc 0.0)) (w> rv (wc (- threshold)))) (w= mni (wc 0.0)))))
                  (unless (zerop (,(if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask)
                                  (wif skip (wc 0.0) (wc -1.0))))
-                   (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
-                (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+                   (with-body-rows
                    (let* ((x (@w nx)) (y (@w ny)) (z (@w nz)) (ma (@w ima)) (mb (@w imb))
                           (vn (w+ (w+ (w+ (w* (w- vbx vax) x) (w* (w- vby vay) y)) (w* (w- vbz vaz) z)) (@w kvn)))
                           (l (@w normal-impulse))
@@ -259,8 +261,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            vaz (wif skip vaz (w- vaz (w* (w* ma dl) z)))
                            vbx (wif skip vbx (w+ vbx (w* (w* mb dl) x))) vby (wif skip vby (w+ vby (w* (w* mb dl) y)))
                            vbz (wif skip vbz (w+ vbz (w* (w* mb dl) z)))))
-                   (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-a k vax vay vaz wax way waz a6 a7)
-                   (,(intern (format nil "SCATTER-ROWS-~D" width)) v body-b k vbx vby vbz wbx wby wbz b6 b7))))))))))))
+                   ))))))))))
 ;; One kernel text, two widths:1 ends here
 
 ;; [[file:../physics.org::#F4M1LY][The SSE and AVX2 families:1]]
