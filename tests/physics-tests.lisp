@@ -999,6 +999,27 @@ started at the integer SEED, independent of CL's random state. #T3STK1"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
 
+;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
+(define-claim "ST0R3S" error-figures
+    "Resting: penetration = slop, approach ~ 0; nothing touching: zeros; landing: > slop."
+  (let* ((world (make-floor-world :sleep nil))
+         (ball (add-physics-body world 2.5 2.0 2.5 :radius 0.25))
+         (deepest 0d0))
+    (declare (ignorable ball))
+    (step-physics-world world)
+    (check (= 0d0 (physics-world-max-penetration world) (physics-world-max-approach-speed world))
+           "in free fall the figures read ~,5F m and ~,5F m/s"
+           (physics-world-max-penetration world) (physics-world-max-approach-speed world))
+    (dotimes (i 180)
+      (step-physics-world world)
+      (when (< i 60) (setf deepest (max deepest (physics-world-max-penetration world)))))
+    (check (> deepest luv-physics::*physics-linear-slop*) "landing reached only ~,5F m" deepest)
+    (check (< (abs (- (physics-world-max-penetration world) luv-physics::*physics-linear-slop*)) 0.001)
+           "at rest the penetration reads ~,5F m" (physics-world-max-penetration world))
+    (check (< (physics-world-max-approach-speed world) 0.01)
+           "at rest the approach speed reads ~,5F m/s" (physics-world-max-approach-speed world))))
+;; ST0R3S-error-figures ends here
+
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-ball-rests-and-sleeps]]
 (define-claim "IDVK7G" ball-rests-and-sleeps
     "A dropped ball rests at floor + r - slop (±0.002 m) and sleeps, with a :slept event, within 3 s."
