@@ -369,7 +369,7 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
   "Colours available to the constraint graph; colour 24 is the overflow colour. #V0CAB5")
 
 (defconstant +physics-dynamic-colors+ 20
-  "Colours 0..19 take two-body contacts; one-sided contacts take any of the 24 from the top. #V0CAB5")
+  "Colours 0..19 may take two-body contacts; one-sided contacts may take any of the 24. #V0CAB5")
 
 (defconstant +physics-coordinate-limit+ 65536
   "Bodies live within this distance, in metres, of the origin on every axis. #V0CAB5")
