@@ -9,7 +9,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers clean
+.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report clean
 .NOTPARALLEL:
 
 help:
@@ -22,6 +22,7 @@ help:
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
 	@echo "make bench          measure the basin per kernel family; write the table into $(ORG)"
 	@echo "make bench-peers    the basin here and in Debian's Bullet, one run; table into $(ORG)"
+	@echo "make report         run the stiff and extreme cases; write the table into $(ORG)"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:
@@ -59,6 +60,11 @@ bench-peers: setup tangle
 	@{ BULLET_BASIN=report/peers/bullet-basin $(LISP) --load tools/peers/bench-peers.lisp || touch report/peers/failed; } | tee report/peers.org
 	@test ! -e report/peers/failed
 	@$(SBCL) --script tools/splice.lisp bench-peers report/peers.org
+
+report: setup tangle
+	@mkdir -p report
+	@$(LISP) --load tools/report.lisp | tee report/stability.org
+	@$(SBCL) --script tools/splice.lisp stability-table report/stability.org
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f

@@ -3098,6 +3098,104 @@ kernel family this CPU runs. #B3NCH5"
     (finish-output stream)))
 ;; What a step costs:1 ends here
 
+;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]
+(defun make-shaft-world ()
+  "A solid block with a one-cell shaft, x and z in [0,1), open from y = 0 upwards. #X7R3M5"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -8 -1 -8 8 40 8 t)
+    (fill-terrain terrain 0 0 0 1 40 1 nil)
+    (make-physics-world :terrain terrain)))
+
+(defun stack-in-shaft (masses &key (radius 0.45) (seconds 10))
+  "Stack balls of MASSES, bottom first, in the shaft; run SECONDS; return the deepest
+penetration seen, the fastest speed seen, and the top ball's drop below its ideal height. #X7R3M5"
+  (let* ((world (make-shaft-world))
+         (balls (loop for m in masses for i from 0
+                      collect (add-physics-body world 0.5 (+ radius (* i 2.02 radius)) 0.5
+                                                :radius radius :mass m)))
+         (deepest 0d0) (fastest 0.0))
+    (dotimes (i (* 60 seconds))
+      (step-physics-world world)
+      (setf deepest (max deepest (physics-world-max-penetration world)))
+      (dolist (b balls)
+        (multiple-value-bind (vx vy vz) (physics-body-velocity world b)
+          (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))))
+    (values deepest fastest
+            (- (- (* (length masses) 2 radius) radius)
+               (nth-value 1 (physics-body-position world (car (last balls))))))))
+
+(defun heap-at-one-point (count &key (steps 300))
+  "Spawn COUNT balls at one point in the basin; return the fastest speed seen and the deepest
+penetration left after STEPS steps. #X7R3M5"
+  (let ((world (make-physics-world :terrain (make-basin-terrain))) (balls '()) (fastest 0.0))
+    (dotimes (i count) (push (add-physics-body world 4.0 2.0 4.0 :radius 0.25) balls))
+    (dotimes (i steps)
+      (step-physics-world world)
+      (dolist (b balls)
+        (multiple-value-bind (vx vy vz) (physics-body-velocity world b)
+          (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))))
+    (values fastest (physics-world-max-penetration world))))
+
+(defun throw-at-wall (speed start)
+  "Throw a ball of radius 0.25 m at SPEED along x, without gravity, from x = START at a wall one
+cell thick at x in [10,11); return where it is after 1.5 s. #X7R3M5"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 -1 -16 32 16 32 nil)
+    (fill-terrain terrain 10 0 -16 11 16 32 t)
+    (let* ((world (make-physics-world :terrain terrain :gravity '(0 0 0)))
+           (ball (add-physics-body world start 2.0 0.5 :radius 0.25 :vx speed)))
+      (dotimes (i 90) (step-physics-world world))
+      (physics-body-position world ball))))
+
+(defun rest-on-floor (&key (radius 0.25) (step-seconds 1/60) (x 0.5) (seconds 5))
+  "Drop a ball of RADIUS from 2 m at X onto a floor, stepping STEP-SECONDS for SECONDS; return
+its final height less its ideal resting height (radius less a slop), and whether it sleeps. #X7R3M5"
+  (let ((terrain (make-voxel-terrain)) (x0 (floor x)))
+    (fill-terrain terrain (- x0 16) -1 -16 (+ x0 16) 32 16 nil)
+    (fill-terrain terrain (- x0 16) -1 -16 (+ x0 16) 0 16 t)
+    (let* ((world (make-physics-world :terrain terrain :step-seconds step-seconds))
+           (ball (add-physics-body world x 2.0 0.5 :radius radius)))
+      (dotimes (i (round seconds step-seconds)) (step-physics-world world))
+      (values (- (nth-value 1 (physics-body-position world ball)) (- radius *physics-linear-slop*))
+              (not (physics-body-awake-p world ball))))))
+
+(defun run-stability-table (&key (stream *standard-output*))
+  "Print, as an Org table, what each stiff or extreme scene measured and whether it held. #X7R3M5"
+  (format stream "~&| case | measured | held |~%|------+----------+------|~%")
+  (flet ((row (case held fmt &rest args)
+           (format stream "~&| ~A | ~? | ~:[no~;yes~] |~%" case fmt args held)
+           (finish-output stream)))
+    (multiple-value-bind (pen speed drop) (stack-in-shaft '(1.0 1000.0))
+      (row "1000 kg ball on a 1 kg ball" (< pen 0.02) "deepest ~,4F m, fastest ~,3F m/s, top ~,4F m low" pen speed drop))
+    (multiple-value-bind (pen speed drop) (stack-in-shaft '(1000.0 1.0))
+      (row "1 kg ball on a 1000 kg ball" (< pen 0.02) "deepest ~,4F m, fastest ~,3F m/s, top ~,4F m low" pen speed drop))
+    (multiple-value-bind (pen speed drop) (stack-in-shaft (make-list 20 :initial-element 1.0))
+      (row "column of 20 balls" (< pen 0.05) "deepest ~,4F m, fastest ~,3F m/s, top ~,4F m low" pen speed drop))
+    (multiple-value-bind (speed pen) (heap-at-one-point 100)
+      (row "100 balls spawned at one point" (<= speed (+ *physics-contact-push-max* 0.5))
+           "fastest ~,3F m/s, deepest left ~,4F m" speed pen))
+    (dolist (v '(20 50 100 200))
+      (let ((ends (loop for k below 10 collect (throw-at-wall v (* k 0.137)))))
+        (row (format nil "ball at ~D m/s at a one-cell wall" v) (every (lambda (x) (< x 10)) ends)
+             "~D of 10 starts held" (count-if (lambda (x) (< x 10)) ends))))
+    (dolist (r (list 0.01 (- *physics-reach-limit* *physics-speculative-margin*)))
+      (multiple-value-bind (err asleep) (rest-on-floor :radius r)
+        (row (format nil "radius ~,2F m at rest" r) (and asleep (< (abs err) 0.002))
+             "height error ~,5F m, ~:[awake~;asleep~]" err asleep)))
+    (dolist (dt '(1/10 1/2000))
+      (multiple-value-bind (err asleep) (rest-on-floor :step-seconds dt)
+        (row (format nil "step of ~A s" dt) (and asleep (< (abs err) 0.002))
+             "height error ~,5F m, ~:[awake~;asleep~]" err asleep)))
+    (dolist (x '(1e4 6e4))
+      (multiple-value-bind (err asleep) (rest-on-floor :x x)
+        (row (format nil "at x = ~D m" (round x)) (and asleep (< (abs err) 0.002))
+             "height error ~,5F m, ~:[awake~;asleep~]" err asleep)))
+    (let ((refused (handler-case (progn (rest-on-floor :x 1e5) nil)
+                     (invalid-physics-parameter () t))))
+      (row "at x = 100000 m" refused "~:[accepted~;refused with invalid-physics-parameter: the limit is ~D m~]"
+           refused +physics-coordinate-limit+))))
+;; Stiff and extreme cases:1 ends here
+
 ;; [[file:../physics.org::#O07FDP][Closing the files:1]]
 (register-tangled-file #.(or *compile-file-truename* *load-truename*))
 ;; Closing the files:1 ends here

@@ -1148,6 +1148,32 @@ started at the integer SEED, independent of CL's random state. #T3STK1"
           (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits"))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
 
+;; [[file:../physics.org::#X7R3M5][X7R3M5-extremes-that-hold]]
+(define-claim "X7R3M5" extremes-that-hold
+    "Extreme radii, steps and coordinates still rest a slop deep and sleep; 1e5 m is refused."
+  (flet ((holds (label &rest args)
+           (multiple-value-bind (err asleep) (apply #'luv-physics::rest-on-floor args)
+             (check (and asleep (< (abs err) 0.002)) "~A: height error ~,5F m, ~:[awake~;asleep~]"
+                    label err asleep))))
+    (holds "radius 0.01" :radius 0.01)
+    (holds "largest radius" :radius (- luv-physics::*physics-reach-limit* luv-physics::*physics-speculative-margin*))
+    (holds "step 1/10" :step-seconds 1/10)
+    (holds "step 1/2000" :step-seconds 1/2000 :seconds 3)
+    (holds "x = 10 km" :x 1e4))
+  (check (typep (handler-case (luv-physics::rest-on-floor :x 1e5) (error (e) e))
+                'invalid-physics-parameter)))
+;; X7R3M5-extremes-that-hold ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-columns-stand]]
+(define-claim "X7R3M5" columns-stand
+    "Twenty balls in a shaft stand; a light ball on a heavy one rests a slop deep."
+  (multiple-value-bind (pen speed) (luv-physics::stack-in-shaft (make-list 20 :initial-element 1.0))
+    (check (< pen 0.05) "the column overlapped by ~,4F m" pen)
+    (check (< speed 3.0) "a ball of the column reached ~,3F m/s" speed))
+  (multiple-value-bind (pen) (luv-physics::stack-in-shaft '(1000.0 1.0) :seconds 4)
+    (check (< pen 0.02) "the light ball on the heavy one sank ~,4F m" pen)))
+;; X7R3M5-columns-stand ends here
+
 ;; [[file:../physics.org::#7PAQ3M][7PAQ3M-families-agree-bit-for-bit]]
 (define-claim "7PAQ3M" families-agree-bit-for-bit
     "Each available family's hash equals the scalar hash on the 200-ball and 1000-ball piles."
