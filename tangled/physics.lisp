@@ -978,7 +978,10 @@ When the items' cells fill a small enough box, the buckets are that box's cells 
   (starts (make-array 2 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (items (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (keys (make-array 0 :element-type 'fixnum) :type fixnum-column)
-  (item-keys (make-array 0 :element-type 'fixnum) :type fixnum-column))
+  (item-keys (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (xs (make-array 0 :element-type 'single-float) :type f32-column)
+  (ys (make-array 0 :element-type 'single-float) :type f32-column)
+  (zs (make-array 0 :element-type 'single-float) :type f32-column))
 
 (declaim (inline cell-floor grid-cell-key grid-bucket))
 (defun cell-floor (v)
@@ -1005,7 +1008,8 @@ When the items' cells fill a small enough box, the buckets are that box's cells 
 (defun build-hash-grid (grid cell-size n xs ys zs ids)
   "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID: densely
 when the box of their cells, one cell of padding around, has at most 4N+64 cells, else by
-hash. #D9W4CH"
+hash. The grid keeps its own copy of the centres in its order, so a walk over neighbouring
+cells reads positions from one run of memory. #D9W4CH"
   (declare (type hash-grid grid) (type single-float cell-size) (type index n)
            (type f32-column xs ys zs) (type fixnum-column ids) #.+kernel-policy+)
   (let ((inv (/ 1.0 cell-size)))
@@ -1013,7 +1017,10 @@ hash. #D9W4CH"
       (let ((m (max n (* 2 (length (hash-grid-items grid))))))
         (setf (hash-grid-items grid) (make-array m :element-type 'fixnum)
               (hash-grid-keys grid) (make-array m :element-type 'fixnum)
-              (hash-grid-item-keys grid) (make-array m :element-type 'fixnum))))
+              (hash-grid-item-keys grid) (make-array m :element-type 'fixnum)
+              (hash-grid-xs grid) (make-array m :element-type 'single-float)
+              (hash-grid-ys grid) (make-array m :element-type 'single-float)
+              (hash-grid-zs grid) (make-array m :element-type 'single-float))))
     (setf (hash-grid-inv-cell grid) inv (hash-grid-count grid) n)
     ;; the box of occupied cells decides the mode
     (let ((x0 most-positive-fixnum) (y0 most-positive-fixnum) (z0 most-positive-fixnum)
@@ -1038,6 +1045,7 @@ hash. #D9W4CH"
                                                     :element-type 'fixnum)))
         (let ((starts (hash-grid-starts grid)) (items (hash-grid-items grid))
               (keys (hash-grid-keys grid)) (item-keys (hash-grid-item-keys grid))
+              (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
               (ox (1- x0)) (oy (1- y0)) (oz (1- z0)))
           (declare (type fixnum ox oy oz))
           (fill starts 0 :end (1+ buckets))
@@ -1064,29 +1072,32 @@ hash. #D9W4CH"
                                                  (* ny (- (cell-floor (* (aref zs i) inv)) oz)))))
                                      (grid-bucket key mask))))
                           (at (decf (aref starts b))))
-                     (setf (aref items at) (aref ids i) (aref keys at) key)))
+                     (setf (aref items at) (aref ids i) (aref keys at) key
+                           (aref gx at) (aref xs i) (aref gy at) (aref ys i) (aref gz at) (aref zs i))))
           ;; now starts[b+1] is the beginning of bucket b; shift so starts[b] begins bucket b
           (replace starts starts :start1 0 :start2 1 :end2 (1+ buckets))
           (setf (aref starts buckets) n))))
     grid))
 
-(defmacro do-grid-neighbours ((item grid x y z &key (span 1) half own) &body body)
+(defmacro do-grid-neighbours ((item grid x y z &key (span 1) half own entry) &body body)
   "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
 of point X Y Z, cell by cell in a fixed order. With HALF, visit only the point's own cell and
 the cells after it in that order (13 of the 26 neighbours), so a walk from every item meets
-each pair of cells once; OWN, if given, names a variable true in the point's own cell. A dense
-grid visits each row of cells along x as one run of its items. #D9W4CH"
+each pair of cells once; OWN, if given, names a variable true in the point's own cell, and
+ENTRY one bound to the item's place in the grid's order (its centre is at that place of the
+grid's XS YS ZS). A dense grid visits each row of cells along x as one run of its items. #D9W4CH"
   (let ((g (gensym "GRID")) (cx (gensym)) (cy (gensym)) (cz (gensym)) (i (gensym)) (j (gensym))
         (k (gensym)) (key (gensym)) (b (gensym)) (e (gensym)) (inv (gensym)) (s (gensym))
         (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS")) (mask (gensym "MASK"))
-        (own (or own (gensym "OWN"))) (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW"))
+        (own (or own (gensym "OWN"))) (entry (or entry (gensym "ENTRY")))
+        (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW"))
         (own-start (gensym)) (own-end (gensym)) (visit (gensym "VISIT")))
     `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s ,span)
             (,cx (cell-floor (* ,x ,inv))) (,cy (cell-floor (* ,y ,inv))) (,cz (cell-floor (* ,z ,inv)))
             (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g))
             (,mask (hash-grid-mask ,g)))
        (declare (type fixnum ,cx ,cy ,cz ,s ,mask) (type fixnum-column ,starts ,items ,keys))
-       (flet ((,visit (,item ,own) (declare (type fixnum ,item) (ignorable ,own)) ,@body))
+       (flet ((,visit (,item ,own ,entry) (declare (type fixnum ,item ,entry) (ignorable ,own ,entry)) ,@body))
          (declare (inline ,visit))
          (cond
            ((zerop (hash-grid-count ,g)))
@@ -1110,7 +1121,7 @@ grid visits each row of cells along x as one run of its items. #D9W4CH"
                         (declare (type fixnum ,row))
                         (loop for ,e of-type fixnum from (aref ,starts (+ ,row (- ,lo ox)))
                                 below (aref ,starts (+ ,row (- ,hi ox) 1))
-                              do (,visit (aref ,items ,e) (and (>= ,e ,own-start) (< ,e ,own-end)))))))))))
+                              do (,visit (aref ,items ,e) (and (>= ,e ,own-start) (< ,e ,own-end)) ,e)))))))))
            (t
             (loop for ,k of-type fixnum from ,(if half cz `(- ,cz ,s)) to (+ ,cz ,s) do
               (loop for ,j of-type fixnum from ,(if half `(if (= ,k ,cz) ,cy (- ,cy ,s)) `(- ,cy ,s)) to (+ ,cy ,s) do
@@ -1121,7 +1132,7 @@ grid visits each row of cells along x as one run of its items. #D9W4CH"
                          (,own (and (= ,i ,cx) (= ,j ,cy) (= ,k ,cz))))
                     (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
                           when (= (aref ,keys ,e) ,key)
-                            do (,visit (aref ,items ,e) ,own))))))))))))
+                            do (,visit (aref ,items ,e) ,own ,e))))))))))))
 ;; The block world is the static tree; bodies need a hash grid:1 ends here
 
 ;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:1]]
@@ -1730,8 +1741,11 @@ a contact only when its gap is under the speculative distance. #P41RS7"
          (slop (f32 (physics-world-slop world)))
          (dt (physics-world-current-dt world))
          (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
-                               (expt (physics-world-gravity-z world) 2))))))
-    (declare (type single-float margin slop dt gstep) (type index n) (type body-columns awake sleeping)
+                               (expt (physics-world-gravity-z world) 2)))))
+         (rmax (f32 (physics-world-max-radius world)))
+         (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid)))
+    (declare (type single-float margin slop dt gstep rmax) (type f32-column gx gy gz)
+             (type index n) (type body-columns awake sleeping)
              (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+)
     (with-body-columns (x y z vx vy vz radius flags handle) awake
       (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj)
@@ -1763,13 +1777,19 @@ a contact only when its gap is under the speculative distance. #P41RS7"
         (declare (inline pair))
         (dotimes (i n)
           (when (zerop (logand (aref flags i) +flag-terrain-only+))
-            (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i))
-                  (hi (aref handle i)) (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
-              (do-grid-neighbours (j grid xi yi zi :half t :own own)
-                (when (and (or (not own) (> j i)) (zerop (logand (aref flags j) +flag-terrain-only+)))
-                  (pair xi yi zi ri hi vxi vyi vzi
-                        (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
-                        (aref vx j) (aref vy j) (aref vz j))))
+            (let* ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i))
+                   (hi (aref handle i)) (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i))
+                   (widest (+ ri rmax margin)) (widest2 (* widest widest)))
+              (declare (type single-float widest widest2))
+              (do-grid-neighbours (j grid xi yi zi :half t :own own :entry e)
+                ;; a first test on the grid's own copy of the centres, against the widest reach,
+                ;; before any of the neighbour's columns is read
+                (let ((dx (- (aref gx e) xi)) (dy (- (aref gy e) yi)) (dz (- (aref gz e) zi)))
+                  (when (and (< (+ (* dx dx) (* dy dy) (* dz dz)) widest2)
+                             (or (not own) (> j i)) (zerop (logand (aref flags j) +flag-terrain-only+)))
+                    (pair xi yi zi ri hi vxi vyi vzi
+                          (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
+                          (aref vx j) (aref vy j) (aref vz j)))))
               (when any-sleeping
                 (do-grid-neighbours (h sgrid xi yi zi)
                   (let ((slot (handle-index h)))
