@@ -2757,17 +2757,21 @@ it. The step's events stay readable until the next step begins. #IDVK7G"
     world))
 
 (defun run-physics-phases (world)
-  "Run each phase of *physics-phases* on WORLD, in order; when the world's phase clock is on,
-add each phase's nanoseconds to it under the phase's position. #IDVK7G"
-  (let ((clock (physics-world-phase-clock world)) (i 0))
-    (declare (type (or null fixnum-column) clock) (type fixnum i))
+  "Run each phase of *physics-phases* on WORLD, in order; when the world's phase clock is on (a
+fixnum array of twice as many entries as phases), add each phase's nanoseconds to it under the
+phase's position, and the bytes it consed under that position plus the number of phases. #IDVK7G"
+  (let* ((clock (physics-world-phase-clock world)) (i 0)
+         (phases (if clock (floor (length clock) 2) 0)))
+    (declare (type (or null fixnum-column) clock) (type fixnum i phases))
     (dolist (phase *physics-phases*)
       (let* ((start (if clock (clock-ns) 0))
+             (consed (if clock (sb-ext:get-bytes-consed) 0))
              (result (funcall phase world)))
         (when (eq phase 'prepare-phase)
           (setf (aref (physics-world-statistics world) 1) (coerce (the fixnum result) 'double-float)))
-        (when (and clock (< i (length clock)))
-          (incf (aref clock i) (- (clock-ns) start)))
+        (when (and clock (< i phases))
+          (incf (aref clock i) (- (clock-ns) start))
+          (incf (aref clock (+ i phases)) (- (sb-ext:get-bytes-consed) consed)))
         (incf i))))
   world)
 
@@ -2977,7 +2981,7 @@ KERNELS (the widest this CPU runs by default). Return the world and the thrown b
 ms per step over steps FROM..TO, contacts, colours, overflow, bytes consed per step, and the
 mean ms of each phase (:phases, an alist). #B3NCH5"
   (let ((world (make-basin-world count :kernels kernels)) (times '()) (consed 0)
-        (clock (make-array (length *physics-phases*) :element-type 'fixnum :initial-element 0)))
+        (clock (make-array (* 2 (length *physics-phases*)) :element-type 'fixnum :initial-element 0)))
     (dotimes (i to)
       (when (= i from) (setf (physics-world-phase-clock world) clock))
       (let ((before (sb-ext:get-bytes-consed)))
@@ -2992,7 +2996,10 @@ mean ms of each phase (:phases, an alist). #B3NCH5"
           :overflow (physics-world-overflow-count world)
           :consed (round consed (length times))
           :phases (loop for phase in *physics-phases* for ns across clock
-                        collect (cons phase (/ ns 1d6 (- to from)))))))
+                        collect (cons phase (/ ns 1d6 (- to from))))
+          :phase-bytes (loop for phase in *physics-phases*
+                             for k from (length *physics-phases*)
+                             collect (cons phase (round (aref clock k) (- to from)))))))
 
 (defparameter +bench-phase-groups+
   '(("wake+grid+pairs" wake-phase grid-phase pair-phase) ("terrain" terrain-phase) ("boxes" box-phase)
@@ -3035,7 +3042,17 @@ each phase's share; with the machine's model and load. #B3NCH5"
       (format stream "~&| ~5D | ~6A |~{ ~A |~}~%" (getf m :balls) (string-downcase (getf m :kernels))
               (loop for (name . phases) in +bench-phase-groups+
                     collect (format nil "~v,3F" (length name)
-                                    (loop for p in phases sum (cdr (assoc p (getf m :phases))))))))))
+                                    (loop for p in phases sum (cdr (assoc p (getf m :phases))))))))
+    (format stream "~&~%#+caption: bytes consed per step by each phase group (sb-ext:get-bytes-consed around each phase)~%| balls | family |~{ ~A |~}~%"
+            (mapcar #'first +bench-phase-groups+))
+    (format stream "~&|-------+--------+~{~A~}~%"
+            (mapcar (lambda (g) (format nil "~A+" (make-string (+ 2 (length (first g))) :initial-element #\-)))
+                    +bench-phase-groups+))
+    (dolist (m (reverse rows))
+      (format stream "~&| ~5D | ~6A |~{ ~A |~}~%" (getf m :balls) (string-downcase (getf m :kernels))
+              (loop for (name . phases) in +bench-phase-groups+
+                    collect (format nil "~vD" (length name)
+                                    (loop for p in phases sum (cdr (assoc p (getf m :phase-bytes))))))))))
 (defun measure-settled-pile (&key (balls 1000) (kernels :scalar) (steps 100))
   "Drop BALLS balls into the basin with sleep on, step until every one sleeps (at most 20 s),
 then return the mean ms and bytes consed per step over STEPS more steps, and the steps it
