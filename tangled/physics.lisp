@@ -1576,6 +1576,14 @@ back with its hit events. #K1N3BX"
         (setf (aref a row) handle-a (aref b row) handle-b (aref k row) kind (aref ky row) key)))
     (with-contact-columns (seen geometry) contacts
       (unless (= (aref seen row) step)
+        ;; carried impulses only make sense along a normal close to the one they were found on
+        (when (< (+ (* nx (contact@ geometry row nx)) (* ny (contact@ geometry row ny))
+                    (* nz (contact@ geometry row nz)))
+                 0.9)
+          (setf (contact@ geometry row normal-impulse) 0.0
+                (contact@ geometry row tangent-impulse-1) 0.0 (contact@ geometry row tangent-impulse-2) 0.0
+                (contact@ geometry row rolling-impulse-x) 0.0 (contact@ geometry row rolling-impulse-y) 0.0
+                (contact@ geometry row rolling-impulse-z) 0.0))
         (setf (aref seen row) step
               (contact@ geometry row nx) nx (contact@ geometry row ny) ny (contact@ geometry row nz) nz (contact@ geometry row separation) separation
               (contact@ geometry row px) px (contact@ geometry row py) py (contact@ geometry row pz) pz
