@@ -1735,7 +1735,7 @@ across pairs, and opposite when the two are named the other way round. #P41RS7"
     (* 3 (if (< (handle-index ha) (handle-index hb)) k (- 25 k)))))
 
 (defun pair-phase (world)
-  "Phase 4: contacts between awake bodies (each pair once, from the lower row) and lean
+  "Phase 4: contacts between awake bodies (each pair once, walking half the neighbour cells) and lean
 contacts from slow awake bodies onto the sleepers they reach. A candidate within reach becomes
 a contact only when its gap is under the speculative distance. #P41RS7"
   (let* ((awake (physics-world-awake world))
