@@ -263,6 +263,17 @@ started at the integer SEED, independent of CL's random state. #T3STK1"
      world)
     (nreverse events)))
 
+(defun walk-box-into (world handle &key (steps 180))
+  "Walk a 0.5 x 1 x 1 box at 1 m/s along +x from x = 2 into HANDLE's ball for STEPS steps; return
+how far the ball moved and the deepest the box's leading face got past the ball's back. #T3STK1"
+  (let ((dt (/ 1.0 60)) (bx 2.0) (x0 (luv-physics::physics-body-position world handle)) (worst 0.0))
+    (dotimes (i steps)
+      (luv-physics::post-physics-box world bx 0.5 3.5 0.25 0.5 0.5 :vx 1.0 :owner :pusher)
+      (luv-physics::step-physics-world world)
+      (setf bx (+ bx dt))
+      (setf worst (max worst (- (+ bx 0.25) (- (luv-physics::physics-body-position world handle) 0.25)))))
+    (values (- (luv-physics::physics-body-position world handle) x0) worst)))
+
 (defun body-y (world handle)
   "The height of HANDLE's centre. #T3STK1"
   (nth-value 1 (luv-physics::physics-body-position world handle)))
@@ -759,39 +770,25 @@ started at the integer SEED, independent of CL's random state. #T3STK1"
 (define-claim "K1N3BX" box-pushes-awake-ball
     "A box walking at 1 m/s pushes an awake ball ahead, overlapping it by at most slop + 0.001 m."
   (let* ((w (make-floor-world :sleep nil))
-         (h (luv-physics::add-physics-body w 3.0 0.245 3.5))
-         (dt (/ 1.0 60)) (bx 2.0) (x0 nil) (worst 0.0))
+         (h (luv-physics::add-physics-body w 3.0 0.245 3.5)))
     (dotimes (i 30) (luv-physics::step-physics-world w))
-    (setf x0 (luv-physics::physics-body-position w h))
-    (dotimes (i 180)
-      (luv-physics::post-physics-box w bx 0.5 3.5 0.25 0.5 0.5 :vx 1.0 :owner :pusher)
-      (luv-physics::step-physics-world w)
-      (setf bx (+ bx dt))
-      (setf worst (max worst (- (+ bx 0.25) (- (luv-physics::physics-body-position w h) 0.25)))))
-    (check (> (- (luv-physics::physics-body-position w h) x0) 2.0)
-           "the ball moved only ~,3F m" (- (luv-physics::physics-body-position w h) x0))
-    (check (<= worst (+ (luv-physics::physics-world-slop w) 0.001))
-           "the box overlapped the ball by ~,5F m" worst)))
+    (multiple-value-bind (moved worst) (walk-box-into w h)
+      (check (> moved 2.0) "the ball moved only ~,3F m" moved)
+      (check (<= worst (+ (luv-physics::physics-world-slop w) 0.001))
+             "the box overlapped the ball by ~,5F m" worst))))
 ;; K1N3BX-box-pushes-awake-ball ends here
 
 ;; [[file:../physics.org::#K1N3BX][K1N3BX-box-pushes-sleeping-ball]]
 (define-claim "K1N3BX" box-pushes-sleeping-ball
     "A box walking at 1 m/s into a sleeping ball wakes it before overlapping it by more than slop + 0.001 m."
   (let* ((w (make-floor-world))
-         (h (luv-physics::add-physics-body w 3.0 0.245 3.5))
-         (dt (/ 1.0 60)) (bx 2.0) (x0 nil) (worst 0.0))
+         (h (luv-physics::add-physics-body w 3.0 0.245 3.5)))
     (dotimes (i 90) (luv-physics::step-physics-world w))
     (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
-    (setf x0 (luv-physics::physics-body-position w h))
-    (dotimes (i 180)
-      (luv-physics::post-physics-box w bx 0.5 3.5 0.25 0.5 0.5 :vx 1.0 :owner :pusher)
-      (luv-physics::step-physics-world w)
-      (setf bx (+ bx dt))
-      (setf worst (max worst (- (+ bx 0.25) (- (luv-physics::physics-body-position w h) 0.25)))))
-    (check (> (- (luv-physics::physics-body-position w h) x0) 2.0)
-           "the ball moved only ~,3F m" (- (luv-physics::physics-body-position w h) x0))
-    (check (<= worst (+ (luv-physics::physics-world-slop w) 0.001))
-           "the box overlapped the ball by ~,5F m" worst)))
+    (multiple-value-bind (moved worst) (walk-box-into w h)
+      (check (> moved 2.0) "the ball moved only ~,3F m" moved)
+      (check (<= worst (+ (luv-physics::physics-world-slop w) 0.001))
+             "the box overlapped the ball by ~,5F m" worst))))
 ;; K1N3BX-box-pushes-sleeping-ball ends here
 
 ;; [[file:../physics.org::#K1N3BX][K1N3BX-hit-carries-owner]]
