@@ -703,7 +703,6 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
 ;; [[file:../physics.org::#H2W9DJ][Terrain: chunks of cells, and missing is a wall:1]]
 (defconstant +chunk-bits+ 4 "A chunk is 2^4 = 16 cells along each axis. #H2W9DJ")
 
-(defconstant +chunk-size+ 16 "Cells along one edge of a chunk. #H2W9DJ")
 
 (defconstant +chunk-cells+ 4096 "Cells in a chunk. #H2W9DJ")
 
@@ -735,14 +734,16 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
 (defun chunk-key (x y z)
   "The packed key of the chunk that holds cell X Y Z. #H2W9DJ"
   (declare (type cell x y z))
-  (logior (ash (ldb (byte 19 0) (ash x -4)) 38)
-          (ash (ldb (byte 19 0) (ash y -4)) 19)
-          (ldb (byte 19 0) (ash z -4))))
+  (logior (ash (ldb (byte 19 0) (ash x (- +chunk-bits+))) 38)
+          (ash (ldb (byte 19 0) (ash y (- +chunk-bits+))) 19)
+          (ldb (byte 19 0) (ash z (- +chunk-bits+)))))
 
 (defun cell-offset (x y z)
   "The index of cell X Y Z inside its chunk's storage. #H2W9DJ"
   (declare (type cell x y z))
-  (logior (logand x 15) (ash (logand z 15) 4) (ash (logand y 15) 8)))
+  (logior (ldb (byte +chunk-bits+ 0) x)
+          (ash (ldb (byte +chunk-bits+ 0) z) +chunk-bits+)
+          (ash (ldb (byte +chunk-bits+ 0) y) (* 2 +chunk-bits+))))
 
 (defun check-cell (name v)
   "V as a cell coordinate, or an error naming NAME. #H2W9DJ"
@@ -1837,18 +1838,23 @@ INSIDE. #MYWH16"
            (declare (ignorable ,nx ,ny ,nz ,separation))
            ,inside))))
 
-(defun inside-face (probe cx cy cz r ix iy iz)
-  "For a centre CX CY CZ inside cell IX IY IZ: the face to push it out through (the shallowest
-whose neighbour is air, else the shallowest), as normal, point and separation. #MYWH16"
-  (declare (type single-float cx cy cz r) (type cell ix iy iz))
-  (let ((best-depth most-positive-single-float) (best -1) (best-open nil)
-        (faces (vector (- cx ix) (- (1+ ix) cx) (- cy iy) (- (1+ iy) cy) (- cz iz) (- (1+ iz) cz))))
+(defun inside-face (probe cx cy cz r minx miny minz maxx maxy maxz ix iy iz)
+  "For a centre CX CY CZ inside the box MIN..MAX: the face to push it out through, as normal,
+point and separation. With a PROBE, the box is cell IX IY IZ and the shallowest face whose
+neighbour cell is air wins over the shallowest; without one (a posted box) every face is
+open. #MYWH16"
+  (declare (type single-float cx cy cz r minx miny minz maxx maxy maxz) (type cell ix iy iz))
+  (let ((best-depth most-positive-single-float) (best 0) (best-open nil))
+    (declare (type single-float best-depth) (type (integer 0 5) best))
     (dotimes (f 6)
-      (let* ((depth (svref faces f))
-             (open (not (probe-solid-p probe
-                                       (+ ix (case f (0 -1) (1 1) (t 0)))
-                                       (+ iy (case f (2 -1) (3 1) (t 0)))
-                                       (+ iz (case f (4 -1) (5 1) (t 0)))))))
+      (let ((depth (case f (0 (- cx minx)) (1 (- maxx cx)) (2 (- cy miny))
+                         (3 (- maxy cy)) (4 (- cz minz)) (t (- maxz cz))))
+            (open (or (null probe)
+                      (not (probe-solid-p probe
+                                          (+ ix (case f (0 -1) (1 1) (t 0)))
+                                          (+ iy (case f (2 -1) (3 1) (t 0)))
+                                          (+ iz (case f (4 -1) (5 1) (t 0))))))))
+        (declare (type single-float depth))
         (when (or (and open (not best-open))
                   (and (eq open best-open) (< depth best-depth)))
           (setf best f best-depth depth best-open open))))
@@ -1886,7 +1892,9 @@ is under the speculative distance. #MYWH16"
                    (mask 0))
               (declare (type fixnum x0 x1 y0 y1 z0 z1) (type (unsigned-byte 27) mask))
               ;; gather the solid cells of the (at most) 3x3x3 neighbourhood
-              (if (and (= (ash x0 -4) (ash x1 -4)) (= (ash y0 -4) (ash y1 -4)) (= (ash z0 -4) (ash z1 -4)))
+              (if (and (= (ash x0 (- +chunk-bits+)) (ash x1 (- +chunk-bits+)))
+                       (= (ash y0 (- +chunk-bits+)) (ash y1 (- +chunk-bits+)))
+                       (= (ash z0 (- +chunk-bits+)) (ash z1 (- +chunk-bits+))))
                   (let ((chunk (probe-chunk probe (chunk-key x0 y0 z0))))
                     (declare (type chunk-storage chunk))
                     (loop for iz of-type fixnum from z0 to z1 do
@@ -1936,7 +1944,8 @@ is under the speculative distance. #MYWH16"
                                                    nx ny nz sep px py pz 0.0 0.0 0.0))))
                               ;; inside: push out through a face
                               (multiple-value-bind (nx ny nz px py pz sep)
-                                  (inside-face probe cx cy cz r ix iy iz)
+                                  (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
+                                               ix iy iz)
                                 (touch-contact world key +contact-terrain+ (aref handle i) +no-body+
                                                nx ny nz sep px py pz 0.0 0.0 0.0)))))))))))))))
     world))
@@ -2017,17 +2026,10 @@ enters it through. #SW33P7"
                       (multiple-value-bind (nx ny nz sep) (finish)
                         (touch-contact world key +contact-box+ (aref handle i) +no-body+
                                        nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))
-                    (let* ((faces (list (cons (- cx bx0) 0) (cons (- bx1 cx) 1) (cons (- cy by0) 2)
-                                        (cons (- by1 cy) 3) (cons (- cz bz0) 4) (cons (- bz1 cz) 5)))
-                           (best (reduce (lambda (a c) (if (< (car c) (car a)) c a)) faces))
-                           (depth (car best)) (f (cdr best))
-                           (fx (case f (0 -1.0) (1 1.0) (t 0.0)))
-                           (fy (case f (2 -1.0) (3 1.0) (t 0.0)))
-                           (fz (case f (4 -1.0) (5 1.0) (t 0.0))))
+                    (multiple-value-bind (nx ny nz px py pz sep)
+                        (inside-face nil cx cy cz r bx0 by0 bz0 bx1 by1 bz1 0 0 0)
                       (touch-contact world key +contact-box+ (aref handle i) +no-body+
-                                     (- fx) (- fy) (- fz) (- (+ depth r))
-                                     (+ cx (* depth fx)) (+ cy (* depth fy)) (+ cz (* depth fz))
-                                     (aref vx b) (aref vy b) (aref vz b)))))))))))
+                                     nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b)))))))))))
     world))
 ;; Boxes touch as moving terrain:1 ends here
 
