@@ -22,7 +22,8 @@ help:
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
 	@echo "make bench          measure the basin per kernel family; write the table into $(ORG)"
 	@echo "make bench-peers    the basin here and in Debian's Bullet, one run; table into $(ORG)"
-	@echo "make report         run the stiff and extreme cases; write the table into $(ORG)"
+	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
+	@echo "                    diagrams into report/wp-*.svg"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:
@@ -61,13 +62,17 @@ bench-peers: setup tangle
 	@test ! -e report/peers/failed
 	@$(SBCL) --script tools/splice.lisp bench-peers report/peers.org
 
+# The diagrams report/wp-*.svg are kept in git: the page links to them.
 report: setup tangle
 	@mkdir -p report
-	@$(LISP) --load tools/report.lisp | tee report/stability.org
+	@REPORT=stability $(LISP) --load tools/report.lisp | tee report/stability.org
 	@$(SBCL) --script tools/splice.lisp stability-table report/stability.org
+	@REPORT=accuracy $(LISP) --load tools/report.lisp
+	@$(SBCL) --script tools/splice.lisp work-precision-best report/work-precision-best.org
+	@$(SBCL) --script tools/splice.lisp work-precision-table report/work-precision.org
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f
-	rm -rf report
+	find report -type f ! -name 'wp-*.svg' -delete 2>/dev/null || true
 	@$(LISP) --eval '(require :asdf)' \
 	  --eval '(let ((cache (asdf:apply-output-translations (truename "./")))) (format t "rm -rf ~A~%" cache) (uiop:delete-directory-tree cache :validate t :if-does-not-exist :ignore))'

@@ -13,7 +13,7 @@
    #:available-kernel-families
    ;; Types, the hot-loop policy and the parameters (#V0CAB5)
    #:*physics-contact-hertz* #:*physics-contact-damping-ratio* #:*physics-contact-push-max*
-   #:*physics-linear-slop* #:*physics-speculative-margin* #:*physics-restitution-threshold*
+   #:*physics-load-stiffening* #:*physics-linear-slop* #:*physics-speculative-margin* #:*physics-restitution-threshold*
    #:*physics-hit-speed* #:*physics-sleep-speed* #:*physics-time-to-sleep* #:*physics-wake-speed*
    #:*physics-reach-limit* #:*physics-max-speed* #:+physics-coordinate-limit+
    ;; Bad input is a condition that names the value (#C0ND1T)
@@ -337,6 +337,10 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
 
 (defparameter *physics-contact-push-max* 3.0
   "Fastest speed, m/s, at which the solver pushes overlapping bodies apart. #V0CAB5")
+
+(defparameter *physics-load-stiffening* 10000.0
+  "Largest factor by which the load a contact with something static carries, as a mass over the
+contact's effective mass, may divide the contact's impulse scale, and so its give at rest. #V0CAB5")
 
 (defparameter *physics-linear-slop* 0.005
   "Penetration, m, allowed at rest; a resting ball sits this far into its support. #V0CAB5")
@@ -1203,6 +1207,11 @@ dispatches on it once per call. #W0RLD7"))
                :reader physics-world-statistics))
   (:documentation "A simulated world of spheres over a voxel terrain: the CLOS side of the seam,
 holding the columnar buffers, the parameters, the events and the kernel family. #W0RLD7"))
+
+(declaim (inline world-statistics))
+(defun world-statistics (world)
+  "WORLD's statistics as the double-float array it is, so the step writes them unboxed. #W0RLD7"
+  (the (simple-array double-float (8)) (physics-world-statistics world)))
 ;; The world holds every buffer and its own parameters:1 ends here
 
 ;; [[file:../physics.org::#R9M4PV][Choose the phase once: kernel families:1]]
@@ -1343,10 +1352,11 @@ number of seconds after which it expires. #M4K3WD"
          (vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world))
          (life (if life (finite-f32 :life life world) 0.0))
          (limit (max-radius-for world)))
-    (loop for (name v) in (list (list :x x) (list :y y) (list :z z))
-          unless (< (abs v) +physics-coordinate-limit+)
-            do (error 'invalid-physics-parameter :world world :name name :value v
-                                                 :expected (format nil "of magnitude under ~D m" +physics-coordinate-limit+)))
+    (flet ((within-limit (name v)
+             (unless (< (abs v) +physics-coordinate-limit+)
+               (error 'invalid-physics-parameter :world world :name name :value v
+                                                 :expected (format nil "of magnitude under ~D m" +physics-coordinate-limit+)))))
+      (within-limit :x x) (within-limit :y y) (within-limit :z z))
     (unless (and (> r 0) (<= r limit))
       (error 'invalid-physics-radius :world world :value radius :limit limit))
     (unless (> m 0) (error 'invalid-physics-parameter :world world :name :mass :value mass :expected "> 0"))
@@ -2238,8 +2248,15 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
           (colors (physics-world-contact-colors world))
           (v (physics-world-velocities world))
           (d (physics-world-deltas world))
-          (slop (f32 (physics-world-slop world))))
-      (declare (type f32-column v d) (type fixnum-column colors) (type single-float slop hertz zeta)
+          (slop (f32 (physics-world-slop world)))
+          ;; 1/(|g| h) turns a substep's normal impulse into the mass it holds up
+          (load-scale (let ((g (fsqrt (+ (expt (physics-world-gravity-x world) 2)
+                                          (expt (physics-world-gravity-y world) 2)
+                                          (expt (physics-world-gravity-z world) 2)))))
+                        (if (> g 1e-3) (/ 1.0 (* g h)) 0.0)))
+          (load-limit (f32 *physics-load-stiffening*)))
+      (declare (type f32-column v d) (type fixnum-column colors)
+               (type single-float slop hertz zeta load-scale load-limit)
                (type handle-table ids) (type constraint-columns cbuf))
       (multiple-value-bind (dyn-bias dyn-mass dyn-impulse) (physics-softness hertz zeta h)
         (multiple-value-bind (st-bias st-mass st-impulse) (physics-softness (* 2.0 hertz) zeta h)
@@ -2327,12 +2344,22 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                       (setf (@ relative-velocity)
                             (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
                                (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
-                               (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z))))
-                    (if two-sided
-                        (setf (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass
-                              (@ impulse-scale) dyn-impulse)
-                        (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
-                              (@ impulse-scale) st-impulse))
+                               (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z)))
+                      ;; a one-sided contact's carried load, as the mass it holds up, over its
+                      ;; own effective mass: above 1 it divides the spring's give
+                      (let ((load (if two-sided
+                                      0.0
+                                      (min load-limit (* (contact@ geometry c normal-impulse) mass-sum load-scale)))))
+                        (declare (type single-float load))
+                        (cond ((> load 1.0)
+                               (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
+                                     (@ impulse-scale) (/ st-impulse load)))
+                              (two-sided
+                               (setf (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass
+                                     (@ impulse-scale) dyn-impulse))
+                              (t
+                               (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
+                                     (@ impulse-scale) st-impulse)))))
                     (setf (@ max-normal-impulse) 0.0
                           (@ normal-impulse) (contact@ geometry c normal-impulse)
                           (@ tangent-impulse-1) (contact@ geometry c tangent-impulse-1) (@ tangent-impulse-2) (contact@ geometry c tangent-impulse-2)
@@ -2645,7 +2672,7 @@ speed. #ST0R3S"
               (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
                           (contact@ geometry c px) (contact@ geometry c py) (contact@ geometry c pz) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))))
-    (let ((stats (physics-world-statistics world)))
+    (let ((stats (world-statistics world)))
       (setf (aref stats 3) (coerce max-penetration 'double-float)
             (aref stats 4) (coerce max-approach 'double-float)))
     world))
@@ -2755,7 +2782,7 @@ it. The step's events stay readable until the next step begins. #IDVK7G"
          (progn
            (sb-int:with-float-traps-masked (:inexact :underflow)
              (run-physics-phases world))
-           (let ((stats (physics-world-statistics world)))
+           (let ((stats (world-statistics world)))
              (setf (aref stats 0) (coerce (contact-columns-length (physics-world-contacts world)) 'double-float)
                    (aref stats 2) (* 1d-9 (coerce (the fixnum (- (clock-ns) started)) 'double-float))))
            (let ((handler (physics-world-event-handler world)))
@@ -2778,7 +2805,7 @@ phase's position, and the bytes it consed under that position plus the number of
              (consed (if clock (sb-ext:get-bytes-consed) 0))
              (result (funcall phase world)))
         (when (eq phase 'prepare-phase)
-          (setf (aref (physics-world-statistics world) 1) (coerce (the fixnum result) 'double-float)))
+          (setf (aref (world-statistics world) 1) (coerce (the fixnum result) 'double-float)))
         (when (and clock (< i phases))
           (incf (aref clock i) (- (clock-ns) start))
           (incf (aref clock (+ i phases)) (- (sb-ext:get-bytes-consed) consed)))
@@ -2981,6 +3008,18 @@ KERNELS (the widest this CPU runs by default). Return the world and the thrown b
 ;; The main job:1 ends here
 
 ;; [[file:../physics.org::#B3NCH5][What a step costs:1]]
+(defun cpu-model-name ()
+  "The CPU's model name from /proc/cpuinfo, or \"unknown CPU\". #B3NCH5"
+  (or (ignore-errors (with-open-file (s "/proc/cpuinfo")
+                       (loop for line = (read-line s nil) while line
+                             when (search "model name" line)
+                               return (string-trim " " (subseq line (1+ (position #\: line)))))))
+      "unknown CPU"))
+
+(defun load-average ()
+  "The three load averages of /proc/loadavg, as a string, or \"?\". #B3NCH5"
+  (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
+
 (defun median (values)
   "The median of the list of reals VALUES. #B3NCH5"
   (let* ((v (sort (copy-list values) #'<)) (n (length v)))
@@ -3024,12 +3063,7 @@ each phase's share; with the machine's model and load. #B3NCH5"
   (let ((families (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*)))
         (rows '()))
     (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A~%"
-            (or (ignore-errors (with-open-file (s "/proc/cpuinfo")
-                                 (loop for line = (read-line s nil) while line
-                                       when (search "model name" line)
-                                         return (string-trim " " (subseq line (1+ (position #\: line)))))))
-                "unknown CPU")
-            (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
+            (cpu-model-name) (load-average))
     (format stream "~&| balls | family | mean ms | median ms | / scalar | contacts | colours | overflow | bytes consed/step |~%")
     (format stream "~&|-------+--------+---------+-----------+----------+----------+---------+----------+-------------------|~%")
     (dolist (count counts)
@@ -3102,23 +3136,28 @@ and drops a new one in from above: mean ms and bytes consed per step over FROM..
           (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
     (list :mean (/ ms (- to from)) :consed (round consed (- to from)))))
 
+(defun emit-fountain-drop (world counter &key (life 2.6))
+  "Add the COUNTER-th drop of the fountain on the basin floor: a water drop (radius 0.06 m, 5 g,
+meeting only terrain, living LIFE seconds) thrown at 4-6 m/s within 20 degrees of straight up,
+its direction and speed a fixed hash of COUNTER. Return its handle. #B3NCH5"
+  (let* ((h (ldb (byte 32 0) (* (+ (* counter 7919) 12345) 2654435761)))
+         (angle (* 2 (f32 pi) (/ (ldb (byte 12 0) h) 4096.0)))
+         (tilt (* (f32 (/ pi 9)) (/ (ldb (byte 10 12) h) 1024.0)))
+         (speed (+ 4.0 (* 2.0 (/ (ldb (byte 10 22) h) 1024.0)))))
+    (declare (type single-float angle tilt speed))
+    (add-physics-body world 4.0 0.1 4.0 :radius 0.06 :mass 0.005 :friction 0.1 :life life
+                      :collide-with-bodies nil
+                      :vx (* speed (sin tilt) (cos angle)) :vy (* speed (cos tilt))
+                      :vz (* speed (sin tilt) (sin angle)))))
+
 (defun measure-fountain (&key (kernels :scalar) (per-step 2) (life 2.6) (from 300) (to 600))
-  "A fountain on the basin floor emitting PER-STEP water drops a step (radius 0.06 m, 5 g,
-meeting only terrain, living LIFE seconds) in a 20-degree cone at 4-6 m/s, deterministically
-from a counter: mean ms, bytes consed per step over FROM..TO, and the drops alive. #B3NCH5"
+  "The fountain emitting PER-STEP drops a step, each living LIFE seconds: mean ms, bytes consed
+per step over FROM..TO, and the drops alive. #B3NCH5"
   (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
         (count 0) (ms 0d0) (consed 0))
     (dotimes (i to)
       (let ((before (sb-ext:get-bytes-consed)))
-        (dotimes (k per-step)
-          (let* ((h (ldb (byte 32 0) (* (+ (* (incf count) 7919) 12345) 2654435761)))
-                 (angle (* 2 pi (/ (ldb (byte 12 0) h) 4096.0)))
-                 (tilt (* (/ 20 180) pi (/ (ldb (byte 10 12) h) 1024.0)))
-                 (speed (+ 4.0 (* 2.0 (/ (ldb (byte 10 22) h) 1024.0)))))
-            (add-physics-body world 4.0 0.1 4.0 :radius 0.06 :mass 0.005 :friction 0.1 :life life
-                              :collide-with-bodies nil
-                              :vx (* speed (sin tilt) (cos angle)) :vy (* speed (cos tilt))
-                              :vz (* speed (sin tilt) (sin angle)))))
+        (dotimes (k per-step) (emit-fountain-drop world (incf count) :life life))
         (step-physics-world world)
         (when (>= i from)
           (incf consed (- (sb-ext:get-bytes-consed) before))
@@ -3129,8 +3168,7 @@ from a counter: mean ms, bytes consed per step over FROM..TO, and the drops aliv
 (defun run-scene-benchmark (&key (stream *standard-output*))
   "Print, as an Org table, the settled pile, the churning pile and the fountain for every
 kernel family this CPU runs. #B3NCH5"
-  (format stream "~&#+caption: other scenes; load ~A~%"
-          (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
+  (format stream "~&#+caption: other scenes; load ~A~%" (load-average))
   (format stream "~&| scene | family | mean ms/step | bytes consed/step | note |~%|-------+--------+------+------+------|~%")
   (dolist (family (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*)))
     (let ((m (measure-settled-pile :kernels family)))
@@ -3146,16 +3184,23 @@ kernel family this CPU runs. #B3NCH5"
 ;; What a step costs:1 ends here
 
 ;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]
-(defun make-shaft-world ()
-  "A solid block with a one-cell shaft, x and z in [0,1), open from y = 0 upwards. #X7R3M5"
+(defun speed-of (world handle)
+  "The speed of HANDLE's body. #X7R3M5"
+  (multiple-value-bind (vx vy vz) (physics-body-velocity world handle)
+    (sqrt (+ (* vx vx) (* vy vy) (* vz vz)))))
+
+(defun make-shaft-world (&rest world-args)
+  "A solid block with a one-cell shaft, x and z in [0,1), open from y = 0 upwards; WORLD-ARGS go
+to make-physics-world. #X7R3M5"
   (let ((terrain (make-voxel-terrain)))
     (fill-terrain terrain -8 -1 -8 8 40 8 t)
     (fill-terrain terrain 0 0 0 1 40 1 nil)
-    (make-physics-world :terrain terrain)))
+    (apply #'make-physics-world :terrain terrain world-args)))
 
 (defun stack-in-shaft (masses &key (radius 0.45) (seconds 10))
   "Stack balls of MASSES, bottom first, in the shaft; run SECONDS; return the deepest
-penetration seen, the fastest speed seen, and the top ball's drop below its ideal height. #X7R3M5"
+penetration seen, the fastest speed seen, the top ball's drop below its ideal height, and the
+deepest overlap between neighbours (or with the floor) at the end. #X7R3M5"
   (let* ((world (make-shaft-world))
          (balls (loop for m in masses for i from 0
                       collect (add-physics-body world 0.5 (+ radius (* i 2.02 radius)) 0.5
@@ -3165,23 +3210,108 @@ penetration seen, the fastest speed seen, and the top ball's drop below its idea
       (step-physics-world world)
       (setf deepest (max deepest (physics-world-max-penetration world)))
       (dolist (b balls)
-        (multiple-value-bind (vx vy vz) (physics-body-velocity world b)
-          (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))))
-    (values deepest fastest
-            (- (- (* (length masses) 2 radius) radius)
-               (nth-value 1 (physics-body-position world (car (last balls))))))))
+        (setf fastest (max fastest (speed-of world b)))))
+    (let ((heights (mapcar (lambda (b) (nth-value 1 (physics-body-position world b))) balls)))
+      (values deepest fastest
+              (- (- (* (length masses) 2 radius) radius) (car (last heights)))
+              (max (- radius (first heights))
+                   (loop for (a b) on heights while b maximize (- (* 2 radius) (- b a))))))))
 
 (defun heap-at-one-point (count &key (steps 300))
-  "Spawn COUNT balls at one point in the basin; return the fastest speed seen and the deepest
-penetration left after STEPS steps. #X7R3M5"
-  (let ((world (make-physics-world :terrain (make-basin-terrain))) (balls '()) (fastest 0.0))
-    (dotimes (i count) (push (add-physics-body world 4.0 2.0 4.0 :radius 0.25) balls))
+  "Spawn COUNT balls of radius 0.25 m at one point in the basin and run STEPS steps; return the
+fastest speed seen, the fastest any overlapping pair moved apart, and the deepest overlap left
+at the end. #X7R3M5"
+  (let* ((world (make-physics-world :terrain (make-basin-terrain)))
+         (balls (loop repeat count collect (add-physics-body world 4.0 2.0 4.0 :radius 0.25)))
+         (fastest 0.0) (parting 0.0))
     (dotimes (i steps)
       (step-physics-world world)
-      (dolist (b balls)
-        (multiple-value-bind (vx vy vz) (physics-body-velocity world b)
-          (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))))
-    (values fastest (physics-world-max-penetration world))))
+      (loop for (a . rest) on balls
+            do (setf fastest (max fastest (speed-of world a)))
+               (multiple-value-bind (ax ay az) (physics-body-position world a)
+                 (multiple-value-bind (avx avy avz) (physics-body-velocity world a)
+                   (dolist (b rest)
+                     (multiple-value-bind (bx by bz) (physics-body-position world b)
+                       (let ((d (sqrt (+ (expt (- bx ax) 2) (expt (- by ay) 2) (expt (- bz az) 2)))))
+                         (when (< 1e-6 d 0.5)
+                           (multiple-value-bind (bvx bvy bvz) (physics-body-velocity world b)
+                             (setf parting (max parting (/ (+ (* (- bx ax) (- bvx avx)) (* (- by ay) (- bvy avy))
+                                                              (* (- bz az) (- bvz avz)))
+                                                           d))))))))))))
+    (values fastest parting (physics-world-max-penetration world))))
+
+(defun buried-ball (depth &key (seconds 3))
+  "Spawn a ball of radius 0.25 m with its centre DEPTH metres down in a floor three cells thick,
+over resident air, and run SECONDS. Return the fastest it moved between two steps (its
+displacement over the step), its height at the end, and the height of a ball resting on the
+floor. #X7R3M5"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (fill-terrain terrain -16 -3 -16 32 0 32 t)
+    (let* ((world (make-physics-world :terrain terrain))
+           (ball (add-physics-body world 0.5 (- depth) 0.5 :radius 0.25))
+           (dt (float (physics-world-step-seconds world) 1d0))
+           (fastest 0d0))
+      (multiple-value-bind (x0 y0 z0) (physics-body-position world ball)
+        (dotimes (i (round seconds dt))
+          (step-physics-world world)
+          (multiple-value-bind (x y z) (physics-body-position world ball)
+            (setf fastest (max fastest (/ (sqrt (+ (expt (- x x0) 2) (expt (- y y0) 2) (expt (- z z0) 2))) dt))
+                  x0 x y0 y z0 z))))
+      (values fastest (nth-value 1 (physics-body-position world ball)) (- 0.25 *physics-linear-slop*)))))
+
+(defun crowd-in-one-cell (count &key (radius 0.05) (side 1.0) (seconds 3) (kernels :auto))
+  "Spawn COUNT balls of RADIUS (mass 0.01 kg) at fixed pseudo-random points of a cube of SIDE
+metres in the basin, overlapping by the dozen, and run SECONDS. Return the contacts in the
+overflow colour on the first step, the seconds until the overflow colour stays empty, the
+fastest speed seen, the deepest overlap at the end, and whether every number stayed finite and
+the world valid. #X7R3M5"
+  (let* ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels))
+         (seed 12345) (first-overflow nil) (cleared nil) (fastest 0.0)
+         (balls (flet ((next () (setf seed (ldb (byte 48 0) (+ (* seed 25214903917) 11)))
+                         (* side (/ (ldb (byte 31 17) seed) (float (ash 1 31) 1d0)))))
+                  (loop repeat count
+                        collect (add-physics-body world (+ 4.0 (next) (* -0.5 side)) (+ 0.5 (next))
+                                                  (+ 4.0 (next) (* -0.5 side)) :radius radius :mass 0.01)))))
+    (dotimes (i (* 60 seconds))
+      (step-physics-world world)
+      (let ((overflow (physics-world-overflow-count world)))
+        (unless first-overflow (setf first-overflow overflow))
+        (cond ((plusp overflow) (setf cleared nil))
+              ((null cleared) (setf cleared (/ (1+ i) 60.0)))))
+      (dolist (b balls) (setf fastest (max fastest (speed-of world b)))))
+    (values first-overflow cleared fastest (physics-world-max-penetration world)
+            (and (world-finite-p world) (validate-physics-world world)))))
+
+(defun world-finite-p (world)
+  "Whether every position, velocity and angular velocity of WORLD's bodies is a finite number. #X7R3M5"
+  (flet ((finite (column) (every (lambda (v) (< (abs v) most-positive-single-float)) column)))
+    (loop for buffer in (list (physics-world-awake world) (physics-world-sleeping world))
+          always (with-body-columns (x y z vx vy vz wx wy wz) buffer
+                   (let ((n (body-columns-length buffer)))
+                     (every (lambda (column) (finite (subseq column 0 n))) (list x y z vx vy vz wx wy wz)))))))
+
+(defun fountain-long-run (&key (minutes 10) (per-step 2))
+  "Run the fountain of the benchmarks (#B3NCH5) for MINUTES simulated minutes. Return the drops
+alive at the end, whether every number stayed finite, the bytes consed per step after the first
+minute, and the growth of the heap in bytes, after a full collection, from the end of the first
+minute to the end. #X7R3M5"
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t))
+        (count 0) (finite t) (consed 0) (heap-1 0))
+    (dotimes (i (* minutes 3600))
+      (when (= i 3600)
+        (sb-ext:gc :full t)
+        (setf heap-1 (sb-kernel:dynamic-usage)))
+      (let ((before (sb-ext:get-bytes-consed)))
+        (dotimes (k per-step) (emit-fountain-drop world (incf count)))
+        (step-physics-world world)
+        (when (>= i 3600) (incf consed (- (sb-ext:get-bytes-consed) before))))
+      (when (zerop (mod i 600)) (setf finite (and finite (world-finite-p world)))))
+    (sb-ext:gc :full t)
+    (values (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
+            (and finite (world-finite-p world))
+            (round consed (* (1- minutes) 3600))
+            (- (sb-kernel:dynamic-usage) heap-1))))
 
 (defun throw-at-wall (speed start)
   "Throw a ball of radius 0.25 m at SPEED along x, without gravity, from x = START at a wall one
@@ -3208,19 +3338,32 @@ its final height less its ideal resting height (radius less a slop), and whether
 
 (defun run-stability-table (&key (stream *standard-output*))
   "Print, as an Org table, what each stiff or extreme scene measured and whether it held. #X7R3M5"
+  (format stream "~&#+caption: stiff and extreme cases; ~A; load ~A~%" (cpu-model-name) (load-average))
   (format stream "~&| case | measured | held |~%|------+----------+------|~%")
   (flet ((row (case held fmt &rest args)
            (format stream "~&| ~A | ~? | ~:[no~;yes~] |~%" case fmt args held)
            (finish-output stream)))
-    (multiple-value-bind (pen speed drop) (stack-in-shaft '(1.0 1000.0))
-      (row "1000 kg ball on a 1 kg ball" (< pen 0.02) "deepest ~,4F m, fastest ~,3F m/s, top ~,4F m low" pen speed drop))
-    (multiple-value-bind (pen speed drop) (stack-in-shaft '(1000.0 1.0))
-      (row "1 kg ball on a 1000 kg ball" (< pen 0.02) "deepest ~,4F m, fastest ~,3F m/s, top ~,4F m low" pen speed drop))
-    (multiple-value-bind (pen speed drop) (stack-in-shaft (make-list 20 :initial-element 1.0))
-      (row "column of 20 balls" (< pen 0.05) "deepest ~,4F m, fastest ~,3F m/s, top ~,4F m low" pen speed drop))
-    (multiple-value-bind (speed pen) (heap-at-one-point 100)
-      (row "100 balls spawned at one point" (<= speed (+ *physics-contact-push-max* 0.5))
-           "fastest ~,3F m/s, deepest left ~,4F m" speed pen))
+    (multiple-value-bind (pen speed drop left) (stack-in-shaft '(1.0 1000.0))
+      (row "1000 kg ball on a 1 kg ball" (< pen 0.02)
+           "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
+    (multiple-value-bind (pen speed drop left) (stack-in-shaft '(1000.0 1.0))
+      (row "1 kg ball on a 1000 kg ball" (< pen 0.02)
+           "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
+    (multiple-value-bind (pen speed drop left) (stack-in-shaft (make-list 20 :initial-element 1.0))
+      (row "column of 20 balls" (< pen 0.05)
+           "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
+    (multiple-value-bind (speed parting pen) (heap-at-one-point 100)
+      (row "100 balls spawned at one point" (<= parting (+ *physics-contact-push-max* 0.01))
+           "fastest ball ~,3F m/s, fastest parting pair ~,3F m/s, deepest left ~,4F m" speed parting pen))
+    (dolist (depth '(0.2 0.5))
+      (multiple-value-bind (speed y rest) (buried-ball depth)
+        (row (format nil "ball spawned ~,1F m deep in the floor" depth)
+             (and (<= speed (+ *physics-contact-push-max* 0.01)) (< (abs (- y rest)) 0.002))
+             "left at ~,3F m/s at most; ends ~,4F m from its resting height" speed (- y rest))))
+    (multiple-value-bind (overflow cleared speed pen ok) (crowd-in-one-cell 10000)
+      (row "10000 balls of 0.05 m in one 1 m cell" (and ok cleared (< pen 0.02))
+           "~D contacts in the overflow colour at first, none from ~:[never~;~:*~,2F s~]; fastest ~,3F m/s; ~
+            deepest left ~,4F m; ~:[not finite or invalid~;finite and valid~]" overflow cleared speed pen ok))
     (dolist (v '(20 50 100 200))
       (let ((ends (loop for k below 10 collect (throw-at-wall v (* k 0.137)))))
         (row (format nil "ball at ~D m/s at a one-cell wall" v) (every (lambda (x) (< x 10)) ends)
@@ -3240,8 +3383,353 @@ its final height less its ideal resting height (radius less a slop), and whether
     (let ((refused (handler-case (progn (rest-on-floor :x 1e5) nil)
                      (invalid-physics-parameter () t))))
       (row "at x = 100000 m" refused "~:[accepted~;refused with invalid-physics-parameter: the limit is ~D m~]"
-           refused +physics-coordinate-limit+))))
+           refused +physics-coordinate-limit+))
+    (multiple-value-bind (alive finite consed growth) (fountain-long-run)
+      (row "fountain, 10 simulated minutes" (and finite (zerop consed) (< growth 1000000))
+           "~D drops alive at the end; ~:[a number went non-finite~;all finite~]; ~D bytes consed per step ~
+            after the first minute; heap ~@D bytes from minute 1 to 10" alive finite consed growth))))
 ;; Stiff and extreme cases:1 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:1]]
+(defun open-air-world (&key floor (gravity '(0 -9.81 0)) (step-seconds 1/60) (substeps 4) (kernels :scalar))
+  "A world over resident air in the cells [-16,32)^3 with, when FLOOR, a floor one cell thick at
+y in [-1,0): a ball of radius R at rest on it has its centre at R less a slop. #W9PREC"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (when floor (fill-terrain terrain -16 -1 -16 32 0 32 t))
+    (make-physics-world :terrain terrain :gravity gravity :step-seconds step-seconds
+                        :substeps substeps :kernels kernels)))
+
+(defvar *driven-seconds* 0d0
+  "Simulated seconds stepped by drive since the last reset. #W9PREC")
+
+(defun drive (world seconds &optional observe)
+  "Step WORLD through SECONDS of simulated time, calling OBSERVE with the simulated time after
+each step; return the wall-clock seconds the steps themselves took. #W9PREC"
+  (let ((dt (float (physics-world-step-seconds world) 1d0)) (wall 0d0))
+    (dotimes (i (round seconds dt) wall)
+      (step-physics-world world)
+      (incf wall (physics-world-last-step-real-seconds world))
+      (incf *driven-seconds* dt)
+      (when observe (funcall observe (* (1+ i) dt))))))
+
+(defvar *accuracy-scenes* '()
+  "The reference scenes of the sweep in the order defined, each (NAME FUNCTION MEASURE TOLERANCE). #W9PREC")
+
+(defmacro define-accuracy-scene (name (measure tolerance) doc &body body)
+  "Define the reference scene NAME, as the function ACCURACY-SCENE-NAME, whose error is the
+MEASURE (a string) and good enough under TOLERANCE: BODY runs with WORLD-ARGS bound to the setting's keywords for make-physics-world and
+returns the error, the wall seconds its steps took, the world and a short note. #W9PREC"
+  (let ((function (intern (format nil "ACCURACY-SCENE-~A" name))))
+    `(progn
+       (defun ,function (world-args)
+         ,doc
+         (declare (ignorable world-args))
+         ,@body)
+       (setf *accuracy-scenes*
+             (append (remove ',name *accuracy-scenes* :key #'first)
+                     (list (list ',name ',function ,measure ,tolerance))))
+       ',name)))
+;; Error against run time:1 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:2]]
+(define-accuracy-scene free-fall ("largest height error, m" 0.01)
+  "A ball falls from rest for 1 s in open air: the largest distance from y = -g t^2/2. #W9PREC"
+  (let* ((world (apply #'open-air-world world-args))
+         (ball (add-physics-body world 0.5 0.0 0.5))
+         (worst 0d0)
+         (wall (drive world 1.0 (lambda (time)
+                                  (setf worst (max worst (abs (+ (nth-value 1 (physics-body-position world ball))
+                                                                 (* 0.5d0 9.81d0 time time)))))))))
+    (values worst wall world "")))
+
+(define-accuracy-scene bounce ("largest relative apex error" 0.05)
+  "A ball of restitution 0.8 dropped from 2 m onto the floor: its first three apex heights against
+0.8^(2n) times 2 m. #W9PREC"
+  (let* ((world (apply #'open-air-world :floor t world-args))
+         (r 0.25) (ball (add-physics-body world 0.5 (+ 2.0 r) 0.5 :radius r :restitution 0.8))
+         (apexes '()) (rising nil)
+         (wall (drive world 4.0 (lambda (time)
+                                  (declare (ignore time))
+                                  (let ((vy (nth-value 1 (physics-body-velocity world ball))))
+                                    (when (and rising (<= vy 0))
+                                      (push (- (nth-value 1 (physics-body-position world ball)) r) apexes))
+                                    (setf rising (> vy 0)))))))
+    (setf apexes (reverse apexes))
+    (values (if (< (length apexes) 3)
+                1d0
+                (loop for n from 1 to 3 for h in apexes
+                      maximize (let ((ideal (* 2d0 (expt 0.8d0 (* 2 n))))) (/ (abs (- h ideal)) ideal))))
+            wall world
+            (format nil "apexes ~{~,3F~^ ~} m" (subseq apexes 0 (min 3 (length apexes)))))))
+
+(define-accuracy-scene slide-to-roll ("largest speed error / v0" 0.01)
+  "A ball launched sliding at 4 m/s, friction 0.4: speed v0 - mu g t until t = 2 v0/(7 mu g), then
+5/7 v0; the largest speed error over 1 s, and when rolling began. #W9PREC"
+  (let* ((world (apply #'open-air-world :floor t world-args))
+         (r 0.25) (v0 4d0) (mu 0.4d0) (g 9.81d0)
+         (ball (add-physics-body world 0.5 (- r *physics-linear-slop*) 0.5 :radius r :friction mu :vx v0))
+         (t-roll (/ (* 2 v0) (* 7 mu g))) (began nil) (worst 0d0)
+         (wall (drive world 1.0 (lambda (time)
+                                  (multiple-value-bind (vx) (physics-body-velocity world ball)
+                                    (let ((ideal (if (< time t-roll) (- v0 (* mu g time)) (* 5/7 v0)))
+                                          (wz (nth-value 2 (physics-body-angular-velocity world ball))))
+                                      (setf worst (max worst (/ (abs (- vx ideal)) v0)))
+                                      (when (and (not began) (< (abs (+ vx (* wz r))) 0.01))
+                                        (setf began time))))))))
+    (values worst wall world
+            (format nil "rolling from ~:[never~;~:*~,3F s~] (ideal ~,3F s)" began t-roll)
+            began)))
+;; Error against run time:2 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:3]]
+(define-accuracy-scene seams ("largest height error, m" 0.001)
+  "A ball rolls across the floor's cell seams from 3 m/s for 3 s: the largest distance of its
+centre from its resting height after the first 0.5 s, and its speed lost from 1 s to 3 s. #W9PREC"
+  (let* ((world (apply #'open-air-world :floor t world-args))
+         (r 0.25) (rest (- r *physics-linear-slop*))
+         (ball (add-physics-body world 0.5 rest 0.5 :radius r :vx 3.0))
+         (worst 0d0) (v1 nil) (v3 0d0)
+         (wall (drive world 3.0 (lambda (time)
+                                  (when (>= time 0.5)
+                                    (setf worst (max worst (abs (- (nth-value 1 (physics-body-position world ball)) rest)))))
+                                  (when (and (null v1) (>= time 1.0)) (setf v1 (speed-of world ball)))
+                                  (setf v3 (speed-of world ball))))))
+    (values worst wall world (format nil "speed lost 1-3 s: ~,3F %" (* 100 (/ (- v1 v3) v1))))))
+
+(define-accuracy-scene resting ("largest |depth - slop|, m" 0.001)
+  "A ball dropped 0.2 m onto the floor: over its third second, how far its depth strays from the
+slop it should rest at. #W9PREC"
+  (let* ((world (apply #'open-air-world :floor t world-args))
+         (r 0.25) (ball (add-physics-body world 0.5 (+ r 0.2) 0.5 :radius r))
+         (worst 0d0)
+         (wall (drive world 3.0 (lambda (time)
+                                  (when (>= time 2.0)
+                                    (setf worst (max worst (abs (- (- r (nth-value 1 (physics-body-position world ball)))
+                                                                   *physics-linear-slop*)))))))))
+    (values worst wall world (format nil "~:[awake~;asleep~] at 3 s" (not (physics-body-awake-p world ball))))))
+;; Error against run time:3 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:4]]
+(define-accuracy-scene head-on ("largest velocity error / approach speed" 0.01)
+  "Balls of 1 kg and 2 kg meet head-on at 3 m/s each, restitution 0.5, without gravity: their
+velocities after 1 s against momentum conservation and the restitution law (-3 and 0 m/s). #W9PREC"
+  (let* ((world (apply #'open-air-world :gravity '(0 0 0) world-args))
+         (a (add-physics-body world -1.0 0.5 0.5 :mass 1.0 :restitution 0.5 :vx 3.0))
+         (b (add-physics-body world 1.0 0.5 0.5 :mass 2.0 :restitution 0.5 :vx -3.0))
+         (wall (drive world 1.0))
+         (va (physics-body-velocity world a)) (vb (physics-body-velocity world b)))
+    (values (/ (max (abs (- va -3d0)) (abs vb)) 6d0) wall world
+            (format nil "momentum ~,4F (ideal -3) kg m/s" (+ va (* 2 vb))))))
+
+(define-accuracy-scene shaft-stack ("top's height error + drift, m" 0.01)
+  "Six balls of radius 0.45 m stacked in a one-cell shaft for 10 s: how far the top ball ends from
+its ideal height (every contact a slop deep) plus how far it drifted sideways. #W9PREC"
+  (let* ((world (apply #'make-shaft-world world-args))
+         (r 0.45) (s *physics-linear-slop*)
+         (balls (loop for i below 6 collect (add-physics-body world 0.5 (+ r (* i 2.02 r)) 0.5 :radius r)))
+         (wall (drive world 10.0)))
+    (multiple-value-bind (x y z) (physics-body-position world (car (last balls)))
+      (let ((drop (- (+ (- r s) (* 5 (- (* 2 r) s))) y))
+            (drift (sqrt (+ (expt (- x 0.5) 2) (expt (- z 0.5) 2)))))
+        (values (+ (abs drop) drift) wall world (format nil "top ~,4F m low, ~,4F m aside" drop drift))))))
+
+(defun pile-energy (world balls)
+  "The potential (above y = 0) plus kinetic energy of the 1 kg BALLS, J. #W9PREC"
+  (loop for b in balls
+        sum (+ (* 9.81d0 (nth-value 1 (physics-body-position world b))) (* 0.5d0 (expt (speed-of world b) 2)))))
+
+(defun basin-pile (world-args)
+  "The basin with 1000 balls dropped in, sleeping on, after 4 s: its energy, the deepest overlap
+seen, the wall seconds and the world. #W9PREC"
+  (let* ((world (apply #'make-basin-world 1000 :sleep t world-args))
+         (balls (let ((hs '()))
+                  (dotimes (row (body-columns-length (physics-world-awake world)) (nreverse hs))
+                    (push (aref (body-columns-handle (physics-world-awake world)) row) hs))))
+         (deepest 0d0)
+         (wall (drive world 4.0 (lambda (time) (declare (ignore time))
+                                  (setf deepest (max deepest (physics-world-max-penetration world)))))))
+    (values (pile-energy world balls) deepest wall world)))
+
+(defvar *converged-pile-energy* nil
+  "The energy of the basin pile stepped at 240 Hz with 16 substeps, once computed. #W9PREC")
+
+(define-accuracy-scene pile ("worst of |dE|/E and overlap / radius" 0.05)
+  "The 1000-ball basin pile after 4 s: the worse of its energy's relative error against a
+converged run (240 Hz, 16 substeps) and the deepest overlap seen as a fraction of the balls'
+radius. #W9PREC"
+  (let ((reference (or *converged-pile-energy*
+                       (let ((*driven-seconds* 0d0))
+                         (setf *converged-pile-energy* (basin-pile '(:step-seconds 1/240 :substeps 16)))))))
+    (multiple-value-bind (energy deepest wall world) (basin-pile world-args)
+      (let ((energy-error (/ (abs (- energy reference)) reference)))
+        (values (max energy-error (/ deepest 0.25d0)) wall world
+                (format nil "deepest ~,4F m; energy ~,1F J against ~,1F J (~,2,,,,,'eE)"
+                        deepest energy reference energy-error))))))
+;; Error against run time:4 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:5]]
+(defparameter +sweep-rates+ '(30 60 120 240)
+  "Step rates of the sweep, Hz. #W9PREC")
+
+(defparameter +sweep-substeps+ '(1 2 4 8)
+  "Substep counts of the sweep. #W9PREC")
+
+(defun run-accuracy-point (scene hz substeps family)
+  "Run SCENE twice at HZ, SUBSTEPS and FAMILY; return its plist: :error, :ms (the faster run's
+wall milliseconds per simulated second), :note, :hash, and :repeated (whether the second run
+reached the same error and state hash). #W9PREC"
+  (flet ((once ()
+           (let ((*driven-seconds* 0d0))
+             (multiple-value-bind (err wall world note)
+                 (funcall (second (assoc scene *accuracy-scenes*)) (list :step-seconds (/ 1 hz) :substeps substeps :kernels family))
+               (list :scene scene :hz hz :substeps substeps :family family :error (float err 1d0)
+                     :ms (/ (* 1000 wall) *driven-seconds*) :note note
+                     :hash (physics-world-state-hash world))))))
+    (let ((a (once)) (b (once)))
+      (list* :repeated (and (= (getf a :hash) (getf b :hash)) (= (getf a :error) (getf b :error)))
+             :ms (min (getf a :ms) (getf b :ms))
+             a))))
+
+(defun run-accuracy-sweep (&key (scenes (mapcar #'first *accuracy-scenes*)) (rates +sweep-rates+)
+                                (substeps +sweep-substeps+)
+                                (families (mapcar #'first (remove-if-not #'kernel-family-available-p
+                                                                         *kernel-families*))))
+  "Run every scene of SCENES at every step rate of RATES, substep count of SUBSTEPS and kernel
+family of FAMILIES; return one plist per point, families innermost (see run-accuracy-point). #W9PREC"
+  (loop for scene in scenes
+        nconc (loop for hz in rates
+                    nconc (loop for n in substeps
+                                nconc (loop for family in families
+                                            collect (run-accuracy-point scene hz n family))))))
+;; Error against run time:5 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:6]]
+(defun point-label (p)
+  "A setting as it is named in the tables: family, rate and substeps. #W9PREC"
+  (format nil "~(~A~) ~D Hz x ~D" (getf p :family) (getf p :hz) (getf p :substeps)))
+
+(defun pareto-front (points)
+  "The points no other point beats on both run time and error, fastest first. #W9PREC"
+  (let ((best most-positive-double-float) (front '()))
+    (dolist (p (sort (copy-list points) #'< :key (lambda (p) (getf p :ms))) (nreverse front))
+      (when (< (getf p :error) best)
+        (setf best (getf p :error))
+        (push p front)))))
+
+(defun good-enough (points tolerance)
+  "The cheapest of POINTS whose error is within TOLERANCE, or, when none is, the most accurate:
+either way a point of the Pareto front. #W9PREC"
+  (let ((within (remove-if-not (lambda (p) (<= (getf p :error) tolerance)) points)))
+    (if within
+        (reduce (lambda (a b) (if (<= (getf a :ms) (getf b :ms)) a b)) within)
+        (reduce (lambda (a b) (if (or (< (getf a :error) (getf b :error))
+                                      (and (= (getf a :error) (getf b :error)) (<= (getf a :ms) (getf b :ms))))
+                                  a b))
+                points))))
+;; Error against run time:6 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:7]]
+(defun print-sweep-table (points stream)
+  "Print POINTS as an Org table: a row per scene and setting, the error, the note, the run time
+of each family, and whether every family reached the same state hash and error, twice. #W9PREC"
+  (let ((families (remove-duplicates (mapcar (lambda (p) (getf p :family)) points) :from-end t)))
+    (format stream "~&| scene | Hz | substeps | error | note |~{ ms/s ~(~A~) |~} same hash |~%" families)
+    (format stream "~&|-------+----+----------+-------+------+~{~*------+~}-----------|~%" families)
+    (loop for (p . rest) on points by (lambda (l) (nthcdr (length families) l))
+          do (let ((group (cons p (subseq rest 0 (1- (length families))))))
+               (format stream "~&| ~(~A~) | ~D | ~D | ~,3,,,,,'eE | ~A |~{ ~,2F |~} ~:[no~;yes~] |~%"
+                       (getf p :scene) (getf p :hz) (getf p :substeps) (getf p :error) (getf p :note)
+                       (mapcar (lambda (q) (getf q :ms)) group)
+                       (every (lambda (q) (and (getf q :repeated) (= (getf q :hash) (getf p :hash))
+                                               (= (getf q :error) (getf p :error))))
+                              group))))))
+
+(defun print-sweep-best (points stream)
+  "Print, a line per scene, the cheapest setting within the scene's tolerance and the settings of
+its Pareto front. #W9PREC"
+  (loop for (scene nil measure tolerance) in *accuracy-scenes*
+        for mine = (remove scene points :key (lambda (p) (getf p :scene)) :test-not #'eq)
+        when mine
+          do (let ((best (good-enough mine tolerance)))
+               (format stream "~&- ~(~A~) (~A): ~:[nothing is within ~A; the most accurate is~;~
+                               the cheapest within ~A is~] ~A, error ~,2,,,,,'eE at ~,2F ms/s.~
+                               ~%  Pareto front:~{ ~A~^,~}.~%"
+                       scene measure (<= (getf best :error) tolerance) tolerance (point-label best)
+                       (getf best :error) (getf best :ms) (mapcar #'point-label (pareto-front mine))))))
+;; Error against run time:7 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:8]]
+(defparameter +substep-colours+ '((1 . "#c0392b") (2 . "#d68910") (4 . "#1e8449") (8 . "#2471a3"))
+  "The colour of each substep count's curves in the diagrams. #W9PREC")
+
+(defparameter +family-dashes+ '((:scalar . "") (:sse . "7 3") (:avx2 . "2 2"))
+  "The dash pattern of each kernel family's curves in the diagrams. #W9PREC")
+
+(defun write-work-precision-svg (path title measure points)
+  "Write to PATH an SVG work-precision diagram of POINTS (one scene): log10 of the error against
+log10 of the wall milliseconds per simulated second, one curve per family and substep count
+through its step rates. Errors below 1e-9 are drawn at 1e-9. #W9PREC"
+  (let* ((x0 72) (x1 500) (y0 34) (y1 384) (width 690) (height 440)
+         (lx (lambda (p) (log (max 1d-3 (getf p :ms)) 10d0)))
+         (ly (lambda (p) (log (max 1d-9 (getf p :error)) 10d0)))
+         (xmin (floor (reduce #'min points :key lx))) (xmax (max (1+ xmin) (ceiling (reduce #'max points :key lx))))
+         (ymin (floor (reduce #'min points :key ly))) (ymax (max (1+ ymin) (ceiling (reduce #'max points :key ly)))))
+    (flet ((sx (v) (+ x0 (* (- x1 x0) (/ (- v xmin) (- xmax xmin)))))
+           (sy (v) (- y1 (* (- y1 y0) (/ (- v ymin) (- ymax ymin))))))
+      (with-open-file (out path :direction :output :if-exists :supersede)
+        (format out "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"~D\" height=\"~D\" viewBox=\"0 0 ~D ~D\" font-family=\"sans-serif\" font-size=\"11\">~%" width height width height)
+        (format out "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>~%")
+        (format out "<text x=\"~D\" y=\"18\" font-size=\"13\">~A</text>~%" x0 title)
+        (loop for k from xmin to xmax
+              do (format out "<line x1=\"~,1F\" y1=\"~D\" x2=\"~,1F\" y2=\"~D\" stroke=\"#ddd\"/><text x=\"~,1F\" y=\"~D\" text-anchor=\"middle\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
+                         (sx k) y0 (sx k) y1 (sx k) (+ y1 16) k))
+        (loop for k from ymin to ymax
+              do (format out "<line x1=\"~D\" y1=\"~,1F\" x2=\"~D\" y2=\"~,1F\" stroke=\"#ddd\"/><text x=\"~D\" y=\"~,1F\" text-anchor=\"end\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
+                         x0 (sy k) x1 (sy k) (- x0 6) (+ (sy k) 4) k))
+        (format out "<rect x=\"~D\" y=\"~D\" width=\"~D\" height=\"~D\" fill=\"none\" stroke=\"#444\"/>~%" x0 y0 (- x1 x0) (- y1 y0))
+        (format out "<text x=\"~D\" y=\"~D\" text-anchor=\"middle\">wall ms per simulated second</text>~%" (round (+ x0 x1) 2) (+ y1 34))
+        (format out "<text transform=\"translate(18 ~D) rotate(-90)\" text-anchor=\"middle\">~A</text>~%" (round (+ y0 y1) 2) measure)
+        (let ((row 0))
+          (dolist (family (remove-duplicates (mapcar (lambda (p) (getf p :family)) points) :from-end t))
+            (dolist (n (remove-duplicates (mapcar (lambda (p) (getf p :substeps)) points) :from-end t))
+              (let ((curve (sort (remove-if-not (lambda (p) (and (eq (getf p :family) family) (= (getf p :substeps) n)))
+                                                points)
+                                 #'< :key (lambda (p) (getf p :hz))))
+                    (colour (or (cdr (assoc n +substep-colours+)) "#555"))
+                    (dash (or (cdr (assoc family +family-dashes+)) "")))
+                (format out "<polyline fill=\"none\" stroke=\"~A\" stroke-width=\"1.6\" stroke-dasharray=\"~A\" points=\"~{~,1F,~,1F~^ ~}\"/>~%"
+                        colour dash (loop for p in curve collect (sx (funcall lx p)) collect (sy (funcall ly p))))
+                (dolist (p curve)
+                  (format out "<circle cx=\"~,1F\" cy=\"~,1F\" r=\"2.6\" fill=\"~A\"/>~%" (sx (funcall lx p)) (sy (funcall ly p)) colour))
+                (let ((y (+ y0 8 (* 15 row))))
+                  (format out "<line x1=\"~D\" y1=\"~D\" x2=\"~D\" y2=\"~D\" stroke=\"~A\" stroke-width=\"1.6\" stroke-dasharray=\"~A\"/><text x=\"~D\" y=\"~D\">~(~A~) x ~D substeps</text>~%"
+                          (+ x1 14) y (+ x1 44) y colour dash (+ x1 50) (+ y 4) family n))
+                (incf row)))))
+        (format out "<text x=\"~D\" y=\"~D\" font-size=\"10\" fill=\"#555\">points: 30, 60, 120, 240 Hz</text>~%" (+ x1 14) (- y1 4))
+        (format out "</svg>~%")))
+    path))
+;; Error against run time:8 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:9]]
+(defun run-accuracy-report (&key (directory "report/") (stream *standard-output*))
+  "The sweep, written as report/work-precision.org (the table), report/work-precision-best.org
+(the Pareto-best setting per scene) and one SVG diagram per scene, report/wp-SCENE.svg. Print
+the table to STREAM as well. #W9PREC"
+  (let ((points (run-accuracy-sweep)))
+    (with-open-file (out (merge-pathnames "work-precision.org" directory) :direction :output :if-exists :supersede)
+      (format out "#+caption: error and wall ms per simulated second; ~A; load ~A~%" (cpu-model-name) (load-average))
+      (print-sweep-table points out))
+    (print-sweep-table points stream)
+    (with-open-file (out (merge-pathnames "work-precision-best.org" directory) :direction :output :if-exists :supersede)
+      (print-sweep-best points out))
+    (print-sweep-best points stream)
+    (dolist (entry *accuracy-scenes*)
+      (write-work-precision-svg (merge-pathnames (format nil "wp-~(~A~).svg" (first entry)) directory)
+                                (format nil "~(~A~): error against run time" (first entry)) (third entry)
+                                (remove (first entry) points :key (lambda (p) (getf p :scene)) :test-not #'eq)))
+    points))
+;; Error against run time:9 ends here
 
 ;; [[file:../physics.org::#O07FDP][Closing the files:1]]
 (register-tangled-file #.(or *compile-file-truename* *load-truename*))

@@ -1145,6 +1145,35 @@ how far the ball moved and the deepest the box's leading face got past the ball'
           (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits"))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
 
+;; [[file:../physics.org::#B3NCH5][B3NCH5-steps-cons-nothing]]
+(define-claim "B3NCH5" steps-cons-nothing
+    "Thousands of steps of an awake pile, and of the fountain with drops added, cons 0 bytes."
+  (let ((world (luv-physics::make-basin-world 200)))
+    (dotimes (i 600) (luv-physics::step-physics-world world))
+    ;; a collection first closes the allocation region, so bytes consed before are counted
+    ;; before; the steps after it leave time for the collector's own after-work
+    (sb-ext:gc)
+    (dotimes (i 100) (luv-physics::step-physics-world world))
+    (let ((before (sb-ext:get-bytes-consed)))
+      (dotimes (i 3000) (luv-physics::step-physics-world world))
+      (check (= before (sb-ext:get-bytes-consed)) "the pile consed ~D bytes in 3000 steps"
+             (- (sb-ext:get-bytes-consed) before))))
+  (let ((world (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain))) (count 0))
+    (dotimes (i 600)
+      (dotimes (k 2) (luv-physics::emit-fountain-drop world (incf count)))
+      (luv-physics::step-physics-world world))
+    (sb-ext:gc)
+    (dotimes (i 100)
+      (dotimes (k 2) (luv-physics::emit-fountain-drop world (incf count)))
+      (luv-physics::step-physics-world world))
+    (let ((before (sb-ext:get-bytes-consed)))
+      (dotimes (i 3000)
+        (dotimes (k 2) (luv-physics::emit-fountain-drop world (incf count)))
+        (luv-physics::step-physics-world world))
+      (check (= before (sb-ext:get-bytes-consed)) "the fountain consed ~D bytes in 3000 steps"
+             (- (sb-ext:get-bytes-consed) before)))))
+;; B3NCH5-steps-cons-nothing ends here
+
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-extremes-that-hold]]
 (define-claim "X7R3M5" extremes-that-hold
     "Extreme radii, steps and coordinates still rest a slop deep and sleep; 1e5 m is refused."
@@ -1170,6 +1199,83 @@ how far the ball moved and the deepest the box's leading face got past the ball'
   (multiple-value-bind (pen) (luv-physics::stack-in-shaft '(1000.0 1.0) :seconds 4)
     (check (< pen 0.02) "the light ball on the heavy one sank ~,4F m" pen)))
 ;; X7R3M5-columns-stand ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-heavy-on-light-recovers]]
+(define-claim "X7R3M5" heavy-on-light-recovers
+    "A heavy ball on a light one dips while landing, then rests a slop deep."
+  (multiple-value-bind (deepest fastest drop overlap) (luv-physics::stack-in-shaft '(1.0 1000.0) :seconds 5)
+    (declare (ignore fastest))
+    (check (< deepest (* 0.8 0.45)) "the heavy ball sank ~,4F m into the light one" deepest)
+    (check (< (abs (- overlap luv-physics::*physics-linear-slop*)) 0.001) "an overlap of ~,4F m is left" overlap)
+    (check (< (abs (- drop (* 2 luv-physics::*physics-linear-slop*))) 0.002)
+           "the top ball rests ~,4F m below the top of two touching balls" drop)))
+;; X7R3M5-heavy-on-light-recovers ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-deep-overlap-resolves]]
+(define-claim "X7R3M5" deep-overlap-resolves
+    "A crowd spawned inside one cell, and a heap at one point, separate without exploding."
+  (multiple-value-bind (overflow cleared fastest deepest ok)
+      (luv-physics::crowd-in-one-cell 1000 :side 0.5 :seconds 2)
+    (check (plusp overflow) "the crowd put nothing in the overflow colour")
+    (check (and cleared (<= cleared 0.5)) "the overflow colour was ~:[never empty~;~:*empty only from ~,2F s~]" cleared)
+    (check (< fastest 10.0) "a ball of the crowd reached ~,3F m/s" fastest)
+    (check (< deepest 0.01) "the crowd still overlaps by ~,4F m" deepest)
+    (check (not (null ok)) "a number went non-finite or the world is invalid"))
+  (multiple-value-bind (fastest parting deepest) (luv-physics::heap-at-one-point 100)
+    (declare (ignore parting))
+    (check (< fastest 10.0) "a ball of the heap reached ~,3F m/s" fastest)
+    (check (< deepest 0.01) "the heap still overlaps by ~,4F m" deepest)))
+;; X7R3M5-deep-overlap-resolves ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-buried-ball-climbs-out]]
+(define-claim "X7R3M5" buried-ball-climbs-out
+    "A ball spawned inside the floor leaves at the push-out speed and rests on top."
+  (dolist (depth '(0.2 0.5))
+    (multiple-value-bind (speed y rest) (luv-physics::buried-ball depth)
+      (check (<= speed (+ luv-physics::*physics-contact-push-max* 0.01))
+             "from ~,1F m down it moved at ~,3F m/s" depth speed)
+      (check (< (abs (- y rest)) 0.002) "from ~,1F m down it ended at ~,4F m, not ~,4F m" depth y rest))))
+;; X7R3M5-buried-ball-climbs-out ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-fountain-runs-flat]]
+(define-claim "X7R3M5" fountain-runs-flat
+    "The fountain runs on without non-finite numbers or a growing heap."
+  (multiple-value-bind (alive finite consed growth) (luv-physics::fountain-long-run :minutes 2)
+    (check (> alive 100) "only ~D drops alive" alive)
+    (check (not (null finite)) "a number went non-finite")
+    (check (zerop consed) "~D bytes consed per step in the second minute" consed)
+    (check (< (abs growth) 65536) "the heap grew by ~D bytes" growth)))
+;; X7R3M5-fountain-runs-flat ends here
+
+;; [[file:../physics.org::#W9PREC][W9PREC-free-fall-is-first-order]]
+(define-claim "W9PREC" free-fall-is-first-order
+    "Free fall lags by g t h / 2: first order in the substep."
+  (dolist (n '(1 2 4))
+    (let* ((h (/ 1d0 (* 60 n)))
+           (ideal (* 0.5d0 9.81d0 1d0 h))
+           (err (luv-physics::accuracy-scene-free-fall (list :step-seconds 1/60 :substeps n))))
+      (check (< (abs (- err ideal)) (* 0.01 ideal))
+             "~D substeps: lag ~,6F m, expected g t h / 2 = ~,6F m" n err ideal))))
+;; W9PREC-free-fall-is-first-order ends here
+
+;; [[file:../physics.org::#W9PREC][W9PREC-slide-turns-to-roll]]
+(define-claim "W9PREC" slide-turns-to-roll
+    "A sliding ball follows v0 - mu g t, then rolls at 5/7 v0 from 2 v0/(7 mu g)."
+  (multiple-value-bind (err wall world note began)
+      (luv-physics::accuracy-scene-slide-to-roll (list :step-seconds 1/60 :substeps 4))
+    (declare (ignore wall world))
+    (check (< err 1d-4) "the speed strayed by ~,3E of v0" err)
+    (check (and began (< (abs (- began (/ 8d0 (* 7 0.4d0 9.81d0)))) (/ 1d0 60))) "~A" note)))
+;; W9PREC-slide-turns-to-roll ends here
+
+;; [[file:../physics.org::#W9PREC][W9PREC-head-on-is-exact]]
+(define-claim "W9PREC" head-on-is-exact
+    "Head-on collisions keep momentum and the restitution law at every setting."
+  (dolist (hz '(30 60 120 240))
+    (dolist (n '(1 2 4 8))
+      (let ((err (luv-physics::accuracy-scene-head-on (list :step-seconds (/ 1 hz) :substeps n))))
+        (check (< (* 6 err) 1d-6) "~D Hz x ~D: velocity error ~,3E m/s" hz n (* 6 err))))))
+;; W9PREC-head-on-is-exact ends here
 
 ;; [[file:../physics.org::#7PAQ3M][7PAQ3M-families-agree-bit-for-bit]]
 (define-claim "7PAQ3M" families-agree-bit-for-bit

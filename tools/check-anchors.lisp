@@ -8,7 +8,8 @@
 ;;;; What is checked:
 ;;;;  1. every heading has exactly one CUSTOM_ID, six uppercase letters or digits,
 ;;;;     and no two headings share one;
-;;;;  2. every [[#ID]] or [[#ID][text]] link outside blocks names a CUSTOM_ID;
+;;;;  2. every [[#ID]] or [[#ID][text]] link outside blocks names a CUSTOM_ID, and every
+;;;;     [[file:PATH]] link names a file that exists (relative to the page);
 ;;;;  3. every (define-claim "ID" ...) names the anchor of the section it is written in;
 ;;;;  4. every paragraph starting "Claim:" is followed by a named test block, and every
 ;;;;     test block (one that defines claims) says :tangle tests/physics-tests.lisp,
@@ -125,7 +126,16 @@
                     (id (subseq text (+ start 3) (or end (length text)))))
                (incf *link-count*)
                (unless (gethash id *anchors*)
-                 (page-problem n "dangling link [[#~A]]" id))))))
+                 (page-problem n "dangling link [[#~A]]" id))))
+    (loop for start = (search "[[file:" text) then (search "[[file:" text :start2 (1+ start))
+          while start
+          do (let* ((end (position #\] text :start start))
+                    (path (subseq text (+ start 7) (or end (length text)))))
+               ;; a link quoted inside verbatim text (=... [[file:...]] ...=) is an example
+               (unless (oddp (count #\= text :end start))
+                 (incf *link-count*)
+                 (unless (probe-file path)
+                   (page-problem n "link to a missing file [[file:~A]]" path)))))))
 
 (defun collect-blocks-and-links ()
   "Walk the page: check links outside blocks, and collect the source blocks."

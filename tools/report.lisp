@@ -1,4 +1,6 @@
-;;;; tools/report.lisp -- the stiff and extreme cases (make report).
+;;;; tools/report.lisp -- make report: the stiff and extreme cases (REPORT=stability) or the
+;;;; error-against-run-time sweep (REPORT=accuracy), which writes its tables and SVG diagrams
+;;;; under report/.
 
 (load (merge-pathnames "boot.lisp" *load-truename*))
 
@@ -7,4 +9,10 @@
 (when (luv-load-systems "luv-physics")
   (sb-ext:exit :code 2))
 
-(funcall (find-symbol "RUN-STABILITY-TABLE" '#:luv-physics))
+(let ((part (uiop:getenv "REPORT")))
+  (cond ((equal part "stability")
+         (funcall (find-symbol "RUN-STABILITY-TABLE" '#:luv-physics)))
+        ((equal part "accuracy")
+         (funcall (find-symbol "RUN-ACCURACY-REPORT" '#:luv-physics) :directory "report/"))
+        (t (format *error-output* "report: set REPORT to stability or accuracy~%")
+           (sb-ext:exit :code 2))))
