@@ -109,6 +109,7 @@ in any register. #R0WS8T"
 operator keywords name the sb-simd functions the width-neutral operators stand for. #W1D3KF"
   (declare (ignore documentation))
   (let ((scatter (intern (format nil "SCATTER-ROWS-~D" width)))
+        (movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask))
         (ws (intern (format nil "WARM-START-BLOCKS/~A" family)))
         (so (intern (format nil "SOLVE-BLOCKS/~A" family)))
         (re (intern (format nil "RESTITUTION-BLOCKS/~A" family))))
@@ -216,8 +217,11 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            wbx (w- wbx (w* (w* ibm br) cx)) wby (w- wby (w* (w* ibm br) cy))
                            wbz (w- wbz (w* (w* ibm br) cz)))))
                  (let* ((rl (@w rolling-limit))
-                        (rolling (w> rl (wc 0.0)))
-                        (rlimit (w* rl new))
+                        (rolling (w> rl (wc 0.0))))
+                  ;; a block none of whose lanes rolls against resistance skips the rolling part:
+                  ;; every lane would keep its old values anyway
+                  (unless (zerop (,movemask (wif rolling (wc -1.0) (wc 0.0))))
+                  (let* ((rlimit (w* rl new))
                         (rm (@w rolling-mass))
                         (rx (@w rolling-impulse-x)) (ry (@w rolling-impulse-y)) (rz (@w rolling-impulse-z))
                         (nrx (w- rx (w* rm (w- wbx wax)))) (nry (w- ry (w* rm (w- wby way))))
@@ -234,7 +238,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                      (setf wax (wif rolling (w- wax (w* iam dx)) wax) way (wif rolling (w- way (w* iam dy)) way)
                            waz (wif rolling (w- waz (w* iam dz)) waz)
                            wbx (wif rolling (w+ wbx (w* ibm dx)) wbx) wby (wif rolling (w+ wby (w* ibm dy)) wby)
-                           wbz (wif rolling (w+ wbz (w* ibm dz)) wbz)))))
+                           wbz (wif rolling (w+ wbz (w* ibm dz)) wbz)))))))
                )))))))
        (defun ,re (cbuf v start end threshold)
          ,(format nil "Restitution over constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
@@ -246,8 +250,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                (declare (type index base))
                (let* ((e (@w restitution)) (rv (@w relative-velocity)) (mni (@w max-normal-impulse))
                       (skip (wor (wor (w= e (wc 0.0)) (w> rv (wc (- threshold)))) (w= mni (wc 0.0)))))
-                 (unless (zerop (,(if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask)
-                                 (wif skip (wc 0.0) (wc -1.0))))
+                 (unless (zerop (,movemask (wif skip (wc 0.0) (wc -1.0))))
                    (with-body-rows
                    (let* ((x (@w nx)) (y (@w ny)) (z (@w nz)) (ma (@w ima)) (mb (@w imb))
                           (vn (w+ (w+ (w+ (w* (w- vbx vax) x) (w* (w- vby vay) y)) (w* (w- vbz vaz) z)) (@w kvn)))

@@ -1294,6 +1294,29 @@ how far the ball moved and the deepest the box's leading face got past the ball'
                         "~A differs from scalar after ~D steps of ~D balls" family steps balls))))))
 ;; 7PAQ3M-families-agree-bit-for-bit ends here
 
+;; [[file:../physics.org::#7PAQ3M][7PAQ3M-mixed-materials-agree]]
+(define-claim "7PAQ3M" mixed-materials-agree
+    "Families agree bit for bit on a pile of mixed radii, masses and materials."
+  (flet ((hash-after (kernels)
+           (let ((world (make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels kernels
+                                            :sleep nil))
+                 (next (make-lcg 2026)))
+             (dotimes (i 600)
+               (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+                 (add-physics-body world x y z
+                                   :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (* 2.5 (funcall next)))
+                                   :restitution (* 0.6 (funcall next)) :friction (+ 0.2 (* 0.6 (funcall next)))
+                                   :rolling-resistance (if (zerop (mod i 3)) (* 0.1 (funcall next)) 0.0)
+                                   :vx (* 3 (- (funcall next) 0.5)) :vy (* 3 (- (funcall next) 0.5))
+                                   :vz (* 3 (- (funcall next) 0.5)))))
+             (dotimes (i 240) (step-physics-world world))
+             (physics-world-state-hash world))))
+    (let ((reference (hash-after :scalar)))
+      (dolist (family (remove :scalar (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p
+                                                                     luv-physics::*kernel-families*))))
+        (check (= reference (hash-after family)) "~A differs from scalar on the mixed pile" family)))))
+;; 7PAQ3M-mixed-materials-agree ends here
+
 ;; [[file:../physics.org::#7PAQ3M][7PAQ3M-choosing-a-family]]
 (define-claim "7PAQ3M" choosing-a-family
     "An unknown family signals; :auto is the last available family."
