@@ -1244,7 +1244,10 @@ first, so :auto takes the last one the CPU runs. #R9M4PV"
 (defun make-kernel-family (name)
   "The kernel family NAME (:scalar, a wide one, or :auto for the widest this CPU runs). #R9M4PV"
   (if (eq name :auto)
-      (make-instance (second (car (last (remove-if-not #'kernel-family-available-p *kernel-families*)))))
+      ;; sb-simd names the widest instruction set this CPU runs; its family, when registered
+      (let ((widest (sb-simd:instruction-set-case (:avx2 :avx2) (:sse4.1 :sse) (:x86-64 :scalar)))
+            (available (remove-if-not #'kernel-family-available-p *kernel-families*)))
+        (make-instance (second (or (assoc widest available) (car (last available))))))
       (let ((entry (assoc name *kernel-families*)))
         (unless (and entry (kernel-family-available-p entry))
           (error 'invalid-physics-parameter
