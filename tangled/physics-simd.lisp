@@ -120,11 +120,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 (@w (column) `(,',load data (+ base ,(constraint-offset column))))
                 (@w! (column value) `(setf (,',load data (+ base ,(constraint-offset column))) ,value))
                 (with-body-rows (&body body)
+                  ;; the two spare floats of a velocity row are written back as zeros, so
+                  ;; they need no register while the kernel runs
                   `(,',transpose (v body-a k vax vay vaz wax way waz a6 a7)
                      (,',transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
                        ,@body
-                       (,',scatter v body-a k vax vay vaz wax way waz a6 a7)
-                       (,',scatter v body-b k vbx vby vbz wbx wby wbz b6 b7)))))
+                       (,',scatter v body-a k vax vay vaz wax way waz (wc 0.0) (wc 0.0))
+                       (,',scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0))))))
        (defun ,ws (cbuf v start end)
          ,(format nil "Warm start constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
