@@ -484,7 +484,7 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
 (defmacro define-physics-layout (name docstring &rest columns)
   "Define the columnar layout NAME: a buffer struct of one specialised array per column of
 COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
-NAME-copy-row, NAME-ensure-capacity, NAME-clear and WITH-NAME, which binds columns by name
+NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-clear and WITH-NAME, which binds columns by name
 or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
   (let* ((make (layout-symbol "%MAKE-" name))
          (ctor (layout-symbol "MAKE-" name))
@@ -495,6 +495,7 @@ or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, si
          (append (layout-symbol name "-APPEND"))
          (remove (layout-symbol name "-SWAP-REMOVE"))
          (copy (layout-symbol name "-COPY-ROW"))
+         (permute (layout-symbol name "-PERMUTE"))
          (zero (layout-symbol name "-ZERO-ROW"))
          (clear (layout-symbol name "-CLEAR"))
          (with (layout-symbol "WITH-" name))
@@ -562,6 +563,36 @@ or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, si
                                                               :end2 (* (1+ from-row) ,width))
                              `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
          to)
+       (defun ,permute (buffer scratch destinations count)
+         ,(format nil "Move each row R of BUFFER, a ~A, to row (aref DESTINATIONS R), or drop it where
+that is negative; the places taken must be exactly 0 .. COUNT-1. The rows are written into
+SCRATCH, a buffer of the same layout and spare, whose arrays BUFFER then takes in exchange
+for its own; rows past COUNT read as zeros. Return BUFFER. #L4Y0UT" name)
+         (declare (type ,name buffer scratch) (type fixnum-column destinations) (type index count)
+                  #.+kernel-policy+)
+         (,ensure scratch (max count (,cap buffer)))
+         (let ((n (,len buffer)) (stale (,len scratch)))
+           (declare (type index n stale))
+           ,@(loop for (nil type width) in columns for acc in accessors
+                   collect `(let ((from (,acc buffer)) (to (,acc scratch)))
+                              (declare (type ,(column-array-type type) from to))
+                              ;; rows the scratch held from its last use, past COUNT, become zeros
+                              (when (> stale count)
+                                (fill to ,(column-zero type) :start (* count ,(or width 1))
+                                                             :end (* stale ,(or width 1))))
+                              (dotimes (r n)
+                                (let ((d (aref destinations r)))
+                                  (declare (type fixnum d))
+                                  (when (>= d 0)
+                                    ,(if width
+                                         `(loop for k of-type fixnum from 0 below ,width
+                                                do (setf (aref to (+ (* d ,width) k))
+                                                         (aref from (+ (* r ,width) k))))
+                                         `(setf (aref to d) (aref from r))))))
+                              (setf (,acc scratch) from (,acc buffer) to)))
+           (rotatef (,cap buffer) (,cap scratch))
+           (setf (,len buffer) count (,len scratch) n))
+         buffer)
        (defun ,remove (buffer row)
          ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
 row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #L4Y0UT" name)
@@ -850,8 +881,8 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
 ;; [[file:../physics.org::#Y5H8KC][Contacts persist between steps, keyed by a packed pair:1]]
 (define-physics-layout contact-columns
   "Persistent contacts, one row per touching or nearly touching pair, keyed by a packed pair. #Y5H8KC"
-  (handle-a fixnum) (handle-b fixnum) (kind fixnum) (key fixnum) (seen fixnum) (touching fixnum)
-  (geometry single-float 16))
+  (handle-a fixnum) (handle-b fixnum) (kind fixnum) (key fixnum) (seen fixnum) (order fixnum)
+  (touching fixnum) (geometry single-float 16))
 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +contact-fields+
@@ -889,10 +920,17 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
 
 (defstruct (contact-table (:constructor %make-contact-table))
   "An open-addressing map from contact key to contact row, with linear probing; slot I keeps
-its key at 2I and its row at 2I+1, so a probe reads one cache line. #Y5H8KC"
+its key at 2I and its row at 2I+1, so a probe reads one cache line. It also keeps the step's
+walk through the rows: the step being found (STEP), the row expected next (CURSOR), how many
+rows have been found so far this step (TOUCHED), and how many finds the cursor failed to
+predict since the rows were last put in order (MISSES). #Y5H8KC"
   (slots (make-array 128 :element-type 'fixnum :initial-element -1) :type fixnum-column)
   (mask 63 :type fixnum)
-  (count 0 :type index))
+  (count 0 :type index)
+  (step 0 :type fixnum)
+  (cursor 0 :type index)
+  (touched 0 :type index)
+  (misses 0 :type index))
 
 (defun make-contact-table () "An empty contact table. #Y5H8KC" (%make-contact-table))
 
@@ -1160,6 +1198,7 @@ dispatches on it once per call. #W0RLD7"))
    (ids :initform (make-handle-table) :reader physics-world-ids)
    (contacts :initform (make-contact-columns) :reader physics-world-contacts)
    (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
+   (contact-scratch :initform (make-contact-columns) :reader physics-world-contact-scratch)
    (constraints :initform (make-constraint-columns) :reader physics-world-constraints)
    (events :initform (make-event-columns) :reader physics-world-events)
    (event-data :initform (make-array 16 :initial-element nil) :accessor physics-world-event-data)
@@ -1561,22 +1600,30 @@ back with its hit events. #K1N3BX"
 ;; Kinematic boxes are posted for one step:1 ends here
 
 ;; [[file:../physics.org::#G3NCNT][Contacts are made speculatively:1]]
-(defun touch-contact (world key kind handle-a handle-b nx ny nz separation px py pz kvx kvy kvz)
-  "Refresh the contact under KEY with this step's geometry, or add it with zero impulses. #G3NCNT"
-  (declare (type fixnum key kind handle-a handle-b)
+(defun touch-contact (contacts table key kind handle-a handle-b nx ny nz separation px py pz kvx kvy kvz)
+  "Refresh the contact under KEY in CONTACTS and TABLE with this step's geometry, or add it with
+zero impulses; the row under the table's cursor is tried before the table. #G3NCNT"
+  (declare (type contact-columns contacts) (type contact-table table) (type fixnum key kind handle-a handle-b)
            (type single-float nx ny nz separation px py pz kvx kvy kvz) #.+kernel-policy+)
-  (let* ((contacts (physics-world-contacts world))
-         (table (physics-world-contact-table world))
-         (step (physics-world-step-count world))
-         (row (contact-table-find table key)))
-    (declare (type fixnum row step) (type contact-columns contacts) (type contact-table table))
-    (when (< row 0)
-      (setf row (contact-columns-append contacts))
-      (contact-table-put table key row)
-      (with-contact-columns ((a handle-a) (b handle-b) (k kind) (ky key)) contacts
-        (setf (aref a row) handle-a (aref b row) handle-b (aref k row) kind (aref ky row) key)))
-    (with-contact-columns (seen geometry) contacts
+  (let* ((step (contact-table-step table))
+         (guess (contact-table-cursor table))
+         (row (if (and (< guess (contact-columns-length contacts))
+                       (= (aref (contact-columns-key contacts) guess) key))
+                  guess
+                  (progn (incf (contact-table-misses table))
+                         (contact-table-find table key)))))
+    (declare (type fixnum row step) (type index guess))
+    (if (< row 0)
+        (progn
+          (setf row (contact-columns-append contacts))
+          (contact-table-put table key row)
+          (with-contact-columns ((a handle-a) (b handle-b) (k kind) (ky key)) contacts
+            (setf (aref a row) handle-a (aref b row) handle-b (aref k row) kind (aref ky row) key)))
+        (setf (contact-table-cursor table) (1+ row)))
+    (with-contact-columns (seen order geometry) contacts
       (unless (= (aref seen row) step)
+        (setf (aref order row) (contact-table-touched table))
+        (incf (contact-table-touched table))
         ;; carried impulses only make sense along a normal close to the one they were found on
         (when (< (+ (* nx (contact@ geometry row nx)) (* ny (contact@ geometry row ny))
                     (* nz (contact@ geometry row nz)))
@@ -1752,9 +1799,12 @@ a contact only when its gap is under the speculative distance. #P41RS7"
          (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                (expt (physics-world-gravity-z world) 2)))))
          (rmax (f32 (physics-world-max-radius world)))
-         (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid)))
+         (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
+         (contacts (physics-world-contacts world))
+         (table (physics-world-contact-table world)))
     (declare (type single-float margin slop dt gstep rmax) (type f32-column gx gy gz)
              (type index n) (type body-columns awake sleeping)
+             (type contact-columns contacts) (type contact-table table)
              (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+)
     (with-body-columns (x y z vx vy vz radius flags handle) awake
       (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj)
@@ -1776,10 +1826,10 @@ a contact only when its gap is under the speculative distance. #P41RS7"
                      (when (< sep (speculative-distance approach dt slop margin gstep))
                        ;; orient every pair contact from the lower handle slot to the higher
                        (if (< (handle-index hi) (handle-index hj))
-                           (touch-contact world (pair-key (handle-index hi) (handle-index hj))
+                           (touch-contact contacts table (pair-key (handle-index hi) (handle-index hj))
                                           +contact-pair+ hi hj nx ny nz sep
                                           (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)) 0.0 0.0 0.0)
-                           (touch-contact world (pair-key (handle-index hj) (handle-index hi))
+                           (touch-contact contacts table (pair-key (handle-index hj) (handle-index hi))
                                           +contact-pair+ hj hi (- nx) (- ny) (- nz) sep
                                           (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))
                                           0.0 0.0 0.0))))))))
@@ -1880,8 +1930,11 @@ is under the speculative distance. #MYWH16"
              (dt (physics-world-current-dt world))
              (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                    (expt (physics-world-gravity-z world) 2)))))
-             (limit (f32 *physics-reach-limit*)))
-        (declare (type single-float margin limit slop dt gstep))
+             (limit (f32 *physics-reach-limit*))
+             (contacts (physics-world-contacts world))
+             (table (physics-world-contact-table world)))
+        (declare (type single-float margin limit slop dt gstep)
+                 (type contact-columns contacts) (type contact-table table))
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i n)
             (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
@@ -1911,7 +1964,7 @@ is under the speculative distance. #MYWH16"
               (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
                                                       (* (aref vz i) (aref vz i))))))))
                 (when (> travel margin)
-                  (sweep-terrain-contact world probe (aref handle i) cx cy cz r
+                  (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
                                          (aref vx i) (aref vy i) (aref vz i) (+ travel r))))
               (unless (zerop mask)
                 (flet ((solid (ix iy iz)
@@ -1940,23 +1993,24 @@ is under the speculative distance. #MYWH16"
                                   (when (< sep (speculative-distance
                                                 (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
                                                 dt slop margin gstep))
-                                    (touch-contact world key +contact-terrain+ (aref handle i) +no-body+
+                                    (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
                                                    nx ny nz sep px py pz 0.0 0.0 0.0))))
                               ;; inside: push out through a face
                               (multiple-value-bind (nx ny nz px py pz sep)
                                   (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
                                                ix iy iz)
-                                (touch-contact world key +contact-terrain+ (aref handle i) +no-body+
+                                (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
                                                nx ny nz sep px py pz 0.0 0.0 0.0)))))))))))))))
     world))
 ;; Sphere against cells: the overshoot rule keeps seams smooth:1 ends here
 
 ;; [[file:../physics.org::#SW33P7][Fast bodies sweep their path through the cells:1]]
-(defun sweep-terrain-contact (world probe handle cx cy cz r vx vy vz length)
+(defun sweep-terrain-contact (contacts table probe handle cx cy cz r vx vy vz length)
   "Walk the cells along the ray from CX CY CZ in the direction of VX VY VZ for LENGTH metres;
-at the first solid cell, make HANDLE's body a speculative contact with the face the ray
-enters it through. #SW33P7"
-  (declare (type single-float cx cy cz r vx vy vz length) (type fixnum handle) #.+kernel-policy+)
+at the first solid cell, make HANDLE's body a speculative contact, in CONTACTS and TABLE,
+with the face the ray enters it through. #SW33P7"
+  (declare (type contact-columns contacts) (type contact-table table)
+           (type single-float cx cy cz r vx vy vz length) (type fixnum handle) #.+kernel-policy+)
   (let* ((speed (fsqrt (+ (* vx vx) (* vy vy) (* vz vz))))
          (inv (/ 1.0 (max speed 1e-12)))
          (dx (* vx inv)) (dy (* vy inv)) (dz (* vz inv))
@@ -1993,7 +2047,7 @@ enters it through. #SW33P7"
                                (t (values 0.0 0.0 (float sz 1.0)
                                           (* (float sz 1.0) (- (float (if (> sz 0) iz (1+ iz)) 1.0) cz)))))
                            (declare (type single-float nx ny nz gap))
-                           (touch-contact world (terrain-key (handle-index handle) ix iy iz) +contact-terrain+
+                           (touch-contact contacts table (terrain-key (handle-index handle) ix iy iz) +contact-terrain+
                                           handle +no-body+ nx ny nz (- gap r)
                                           (+ cx (* gap nx)) (+ cy (* gap ny)) (+ cz (* gap nz)) 0.0 0.0 0.0))
                          (return))))))))))
@@ -2006,7 +2060,9 @@ enters it through. #SW33P7"
          (awake (physics-world-awake world))
          (grid (physics-world-awake-grid world))
          (margin (physics-world-margin world))
-         (limit (f32 *physics-reach-limit*)))
+         (limit (f32 *physics-reach-limit*))
+         (contacts (physics-world-contacts world))
+         (table (physics-world-contact-table world)))
     (when (plusp (box-columns-length boxes))
       (with-body-columns (x y z radius handle) awake
         (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz id) boxes
@@ -2024,32 +2080,49 @@ enters it through. #SW33P7"
                       (cx cy cz r bx0 by0 bz0 bx1 by1 bz1)
                     (when (<= d2 (* reach reach))
                       (multiple-value-bind (nx ny nz sep) (finish)
-                        (touch-contact world key +contact-box+ (aref handle i) +no-body+
+                        (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
                                        nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))
                     (multiple-value-bind (nx ny nz px py pz sep)
                         (inside-face nil cx cy cz r bx0 by0 bz0 bx1 by1 bz1 0 0 0)
-                      (touch-contact world key +contact-box+ (aref handle i) +no-body+
+                      (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
                                      nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b)))))))))))
     world))
 ;; Boxes touch as moving terrain:1 ends here
 
 ;; [[file:../physics.org::#PRUN3D][Contacts not found this step are pruned:1]]
 (defun prune-phase (world)
-  "Phase 7: drop every contact not seen this step, patching the table entry of the row that
-fills its hole; a touching one ends with an :end event. #PRUN3D"
+  "Phase 7: drop every contact not seen this step (a touching one ends with an :end event). When
+the table's cursor has missed as often as there are rows, put the rows found this step in the
+order they were found; otherwise swap-remove, patching the table entry of the row that fills
+the hole. #PRUN3D"
+  (declare #.+kernel-policy+)
   (let* ((contacts (physics-world-contacts world))
          (table (physics-world-contact-table world))
-         (step (physics-world-step-count world)))
+         (step (physics-world-step-count world))
+         (reorder (>= (contact-table-misses table) (max 64 (contact-columns-length contacts)))))
+    (declare (type contact-columns contacts) (type contact-table table) (type fixnum step))
     (loop for row of-type fixnum from (1- (contact-columns-length contacts)) downto 0
-          do (with-contact-columns (seen touching key handle-a handle-b geometry) contacts
+          do (with-contact-columns (seen order touching key handle-a handle-b geometry) contacts
                (unless (= (aref seen row) step)
                  (when (= (aref touching row) 1)
                    (push-event world +event-end+ (aref handle-a row) (aref handle-b row)
                                (contact@ geometry row px) (contact@ geometry row py) (contact@ geometry row pz) 0.0))
                  (contact-table-delete table (aref key row))
-                 (let ((moved (contact-columns-swap-remove contacts row)))
-                   (when (>= moved 0)
-                     (contact-table-put table (aref key row) row))))))
+                 (if reorder
+                     (setf (aref order row) -1)
+                     (let ((moved (contact-columns-swap-remove contacts row)))
+                       (when (>= moved 0)
+                         (contact-table-put table (aref key row) row)))))))
+    (when reorder
+      (let ((order (contact-columns-order contacts))
+            (slots (contact-table-slots table)))
+        ;; every key left in the table names a row found this step; point it at that row's place
+        (loop for i of-type fixnum from 0 below (length slots) by 2
+              unless (= (aref slots i) -1)
+                do (setf (aref slots (1+ i)) (aref order (aref slots (1+ i)))))
+        (contact-columns-permute contacts (physics-world-contact-scratch world) order
+                                 (contact-table-touched table))
+        (setf (contact-table-misses table) 0)))
     world))
 ;; Contacts not found this step are pruned:1 ends here
 
@@ -2704,11 +2777,15 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
 
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
 (defun reset-phase (world)
-  "Phase 1: empty the event buffer and make the probe forget its borrowed chunks. #IDVK7G"
+  "Phase 1: empty the event buffer, make the probe forget its borrowed chunks, count the step
+and start the contact table's walk of it. #IDVK7G"
   (event-columns-clear (physics-world-events world))
   (fill (physics-world-event-data world) nil)
   (reset-terrain-probe (physics-world-probe world) (physics-world-terrain world))
   (incf (physics-world-step-count world))
+  (let ((table (physics-world-contact-table world)))
+    (setf (contact-table-step table) (physics-world-step-count world)
+          (contact-table-cursor table) 0 (contact-table-touched table) 0))
   world)
 
 (defun substep-phase (world)
