@@ -1194,6 +1194,8 @@ dispatches on it once per call. #W0RLD7"))
    (probe :initform (make-terrain-probe) :reader physics-world-probe)
    (kernels :initarg :kernels :accessor physics-world-kernels)
    (awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
+   (awake-scratch :initform (make-body-columns :spare 1) :reader physics-world-awake-scratch)
+   (row-places :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-row-places)
    (sleeping :initform (make-body-columns) :reader physics-world-sleeping)
    (ids :initform (make-handle-table) :reader physics-world-ids)
    (contacts :initform (make-contact-columns) :reader physics-world-contacts)
@@ -1666,14 +1668,48 @@ lies in neighbouring cells. #G4R1D5"
     grid))
 
 (defun grid-phase (world)
-  "Phase 3: bucket the awake bodies by cell. #G4R1D5"
-  (let ((awake (physics-world-awake world)))
-    (build-hash-grid (physics-world-awake-grid world) (grid-cell-size world)
-                     (body-columns-length awake) (body-columns-x awake) (body-columns-y awake)
-                     (body-columns-z awake)
+  "Phase 3: bucket the awake bodies by cell, and put the awake rows in the grid's order when
+they have drifted out of it. #G4R1D5"
+  (let* ((awake (physics-world-awake world))
+         (grid (physics-world-awake-grid world))
+         (n (body-columns-length awake)))
+    (build-hash-grid grid (grid-cell-size world) n
+                     (body-columns-x awake) (body-columns-y awake) (body-columns-z awake)
                      ;; the awake grid's items are rows: an identity column of row numbers
-                     (awake-row-identities world (body-columns-length awake)))
+                     (awake-row-identities world n))
+    (when (> (grid-order-breaks grid n) (floor n 16))
+      (sort-awake-rows world grid n))
     (ensure-sleeping-grid world)))
+
+(defun grid-order-breaks (grid n)
+  "How many of the first N items of GRID's order do not follow the item before them. #G4R1D5"
+  (declare (type hash-grid grid) (type index n) #.+kernel-policy+)
+  (let ((items (hash-grid-items grid)) (breaks 0))
+    (declare (type fixnum breaks))
+    (loop for e of-type fixnum from 1 below n
+          unless (= (aref items e) (1+ (aref items (1- e)))) do (incf breaks))
+    breaks))
+
+(defun sort-awake-rows (world grid n)
+  "Move each of the N awake rows to its place in GRID's order, patch every awake handle's
+forwarding address, and make the grid's items the new rows. #G4R1D5"
+  (declare (type hash-grid grid) (type index n) #.+kernel-policy+)
+  (let ((awake (physics-world-awake world))
+        (items (hash-grid-items grid))
+        (locals (handle-table-local (physics-world-ids world))))
+    (declare (type body-columns awake) (type fixnum-column items locals))
+    (when (< (length (physics-world-row-places world)) n)
+      (setf (physics-world-row-places world)
+            (make-array (max n (* 2 (length (physics-world-row-places world)))) :element-type 'fixnum)))
+    (let ((places (physics-world-row-places world)))
+      (declare (type fixnum-column places))
+      (dotimes (e n) (setf (aref places (aref items e)) e))
+      (body-columns-permute awake (physics-world-awake-scratch world) places n)
+      (let ((handle (body-columns-handle awake)))
+        (dotimes (i n)
+          (setf (aref locals (handle-index (aref handle i))) i
+                (aref items i) i))))
+    world))
 
 (defvar *row-identities* (make-array 0 :element-type 'fixnum)
   "0, 1, 2, ...: the identity column the awake grid is built from. #G4R1D5")
