@@ -891,8 +891,8 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
     "The sixteen floats of a contact, side by side in its 64-byte row of the geometry column. #Y5H8KC"))
 
 (defmacro contact@ (geometry row field)
-  "The FIELD (one of +contact-fields+) of contact ROW in the GEOMETRY column. #Y5H8KC"
-  `(aref ,geometry (+ (* ,row 16) ,(or (position field +contact-fields+ :test #'string= :key #'symbol-name)
+  "The FIELD (one of +contact-fields+) of contact ROW, an index, in the GEOMETRY column. #Y5H8KC"
+  `(aref ,geometry (+ (* (the index ,row) 16) ,(or (position field +contact-fields+ :test #'string= :key #'symbol-name)
                                          (error "no contact field ~A" field)))))
 
 (defconstant +contact-pair+ 0 "Contact kind: two bodies. #Y5H8KC")
@@ -1007,7 +1007,8 @@ predict since the rows were last put in order (MISSES). #Y5H8KC"
 (defstruct (hash-grid (:constructor make-hash-grid))
   "Items bucketed by the cell of their centre, counting-sorted so a cell's items are one run.
 When the items' cells fill a small enough box, the buckets are that box's cells themselves
-(DENSE), x fastest; otherwise they are hashed. #D9W4CH"
+(DENSE), x fastest; otherwise they are hashed. NEAR is room for a walk to list the entries it
+keeps. #D9W4CH"
   (inv-cell 1.0 :type single-float)
   (count 0 :type index)
   (mask 0 :type fixnum)
@@ -1020,7 +1021,8 @@ When the items' cells fill a small enough box, the buckets are that box's cells 
   (item-keys (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (xs (make-array 0 :element-type 'single-float) :type f32-column)
   (ys (make-array 0 :element-type 'single-float) :type f32-column)
-  (zs (make-array 0 :element-type 'single-float) :type f32-column))
+  (zs (make-array 0 :element-type 'single-float) :type f32-column)
+  (near (make-array 0 :element-type 'fixnum) :type fixnum-column))
 
 (declaim (inline cell-floor grid-cell-key grid-bucket))
 (defun cell-floor (v)
@@ -1059,7 +1061,8 @@ cells reads positions from one run of memory. #D9W4CH"
               (hash-grid-item-keys grid) (make-array m :element-type 'fixnum)
               (hash-grid-xs grid) (make-array m :element-type 'single-float)
               (hash-grid-ys grid) (make-array m :element-type 'single-float)
-              (hash-grid-zs grid) (make-array m :element-type 'single-float))))
+              (hash-grid-zs grid) (make-array m :element-type 'single-float)
+              (hash-grid-near grid) (make-array m :element-type 'fixnum))))
     (setf (hash-grid-inv-cell grid) inv (hash-grid-count grid) n)
     ;; the box of occupied cells decides the mode
     (let ((x0 most-positive-fixnum) (y0 most-positive-fixnum) (z0 most-positive-fixnum)
@@ -1118,41 +1121,31 @@ cells reads positions from one run of memory. #D9W4CH"
           (setf (aref starts buckets) n))))
     grid))
 
-(defmacro do-grid-neighbours ((item grid x y z &key (span 1) half own entry) &body body)
+(defmacro do-grid-neighbours ((item grid x y z &key (span 1)) &body body)
   "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
-of point X Y Z, cell by cell in a fixed order. With HALF, visit only the point's own cell and
-the cells after it in that order (13 of the 26 neighbours), so a walk from every item meets
-each pair of cells once; OWN, if given, names a variable true in the point's own cell, and
-ENTRY one bound to the item's place in the grid's order (its centre is at that place of the
-grid's XS YS ZS). A dense grid visits each row of cells along x as one run of its items. #D9W4CH"
+of point X Y Z, cell by cell in a fixed order. A dense grid visits each row of cells along x
+as one run of its items. #D9W4CH"
   (let ((g (gensym "GRID")) (cx (gensym)) (cy (gensym)) (cz (gensym)) (i (gensym)) (j (gensym))
         (k (gensym)) (key (gensym)) (b (gensym)) (e (gensym)) (inv (gensym)) (s (gensym))
         (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS")) (mask (gensym "MASK"))
-        (own (or own (gensym "OWN"))) (entry (or entry (gensym "ENTRY")))
-        (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW"))
-        (own-start (gensym)) (own-end (gensym)) (visit (gensym "VISIT")))
+        (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW")) (visit (gensym "VISIT")))
     `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s ,span)
             (,cx (cell-floor (* ,x ,inv))) (,cy (cell-floor (* ,y ,inv))) (,cz (cell-floor (* ,z ,inv)))
             (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g))
             (,mask (hash-grid-mask ,g)))
        (declare (type fixnum ,cx ,cy ,cz ,s ,mask) (type fixnum-column ,starts ,items ,keys))
-       (flet ((,visit (,item ,own ,entry) (declare (type fixnum ,item ,entry) (ignorable ,own ,entry)) ,@body))
+       (flet ((,visit (,item) (declare (type fixnum ,item)) ,@body))
          (declare (inline ,visit))
          (cond
            ((zerop (hash-grid-count ,g)))
            ((hash-grid-dense ,g)
             ;; rows of cells along x are contiguous runs of items
             (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
-                   (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g))
-                   (,own-start 0) (,own-end 0))
-              (declare (type fixnum ox oy oz nx ny nz ,own-start ,own-end))
-              (when (and (< -1 (- ,cx ox) nx) (< -1 (- ,cy oy) ny) (< -1 (- ,cz oz) nz))
-                (let ((c (+ (- ,cx ox) (* nx (+ (- ,cy oy) (* ny (- ,cz oz)))))))
-                  (setf ,own-start (aref ,starts c) ,own-end (aref ,starts (1+ c)))))
-              (loop for ,k of-type fixnum from (max oz ,(if half cz `(- ,cz ,s))) to (min (+ oz nz -1) (+ ,cz ,s)) do
-                (loop for ,j of-type fixnum from (max oy ,(if half `(if (= ,k ,cz) ,cy (- ,cy ,s)) `(- ,cy ,s)))
-                        to (min (+ oy ny -1) (+ ,cy ,s)) do
-                  (let* ((,lo (max ox ,(if half `(if (and (= ,k ,cz) (= ,j ,cy)) ,cx (- ,cx ,s)) `(- ,cx ,s))))
+                   (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g)))
+              (declare (type fixnum ox oy oz nx ny nz))
+              (loop for ,k of-type fixnum from (max oz (- ,cz ,s)) to (min (+ oz nz -1) (+ ,cz ,s)) do
+                (loop for ,j of-type fixnum from (max oy (- ,cy ,s)) to (min (+ oy ny -1) (+ ,cy ,s)) do
+                  (let* ((,lo (max ox (- ,cx ,s)))
                          (,hi (min (+ ox nx -1) (+ ,cx ,s))))
                     (declare (type fixnum ,lo ,hi))
                     (when (<= ,lo ,hi)
@@ -1160,18 +1153,59 @@ grid's XS YS ZS). A dense grid visits each row of cells along x as one run of it
                         (declare (type fixnum ,row))
                         (loop for ,e of-type fixnum from (aref ,starts (+ ,row (- ,lo ox)))
                                 below (aref ,starts (+ ,row (- ,hi ox) 1))
-                              do (,visit (aref ,items ,e) (and (>= ,e ,own-start) (< ,e ,own-end)) ,e)))))))))
+                              do (,visit (aref ,items ,e))))))))))
            (t
-            (loop for ,k of-type fixnum from ,(if half cz `(- ,cz ,s)) to (+ ,cz ,s) do
-              (loop for ,j of-type fixnum from ,(if half `(if (= ,k ,cz) ,cy (- ,cy ,s)) `(- ,cy ,s)) to (+ ,cy ,s) do
-                (loop for ,i of-type fixnum from ,(if half `(if (and (= ,k ,cz) (= ,j ,cy)) ,cx (- ,cx ,s)) `(- ,cx ,s))
-                        to (+ ,cx ,s) do
+            (loop for ,k of-type fixnum from (- ,cz ,s) to (+ ,cz ,s) do
+              (loop for ,j of-type fixnum from (- ,cy ,s) to (+ ,cy ,s) do
+                (loop for ,i of-type fixnum from (- ,cx ,s) to (+ ,cx ,s) do
                   (let* ((,key (grid-cell-key ,i ,j ,k))
-                         (,b (grid-bucket ,key ,mask))
-                         (,own (and (= ,i ,cx) (= ,j ,cy) (= ,k ,cz))))
+                         (,b (grid-bucket ,key ,mask)))
                     (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
                           when (= (aref ,keys ,e) ,key)
-                            do (,visit (aref ,items ,e) ,own ,e))))))))))))
+                            do (,visit (aref ,items ,e)))))))))))))
+
+(defun grid-half-runs (grid entry runs)
+  "Fill RUNS with the half neighbourhood of the cell of ENTRY, a place in GRID's order, as
+triples (start end key) of places, and return how many triples. The first run starts at
+ENTRY+1 and covers the rest of the cell's own items (in a dense grid, the next cell along x
+too); the others cover the cells after it in the order z, y, x. A KEY of -1 means every item
+of the run belongs; otherwise (a hashed grid, whose runs are buckets) only items whose cell key
+is KEY do. #D9W4CH"
+  (declare (type hash-grid grid) (type index entry) (type fixnum-column runs) #.+kernel-policy+)
+  (let* ((inv (hash-grid-inv-cell grid)) (starts (hash-grid-starts grid))
+         (cx (cell-floor (* (aref (hash-grid-xs grid) entry) inv)))
+         (cy (cell-floor (* (aref (hash-grid-ys grid) entry) inv)))
+         (cz (cell-floor (* (aref (hash-grid-zs grid) entry) inv)))
+         (n 0))
+    (declare (type fixnum cx cy cz n))
+    (flet ((run (start end key)
+             (declare (type fixnum start end key))
+             (setf (aref runs (* 3 n)) start (aref runs (+ (* 3 n) 1)) end (aref runs (+ (* 3 n) 2)) key)
+             (incf n)))
+      (declare (inline run))
+      (if (hash-grid-dense grid)
+          ;; an occupied cell is at least one cell inside the padded box, so its neighbours are too
+          (let* ((nx (hash-grid-nx grid)) (nxy (* nx (hash-grid-ny grid)))
+                 (c (+ (- cx (hash-grid-ox grid))
+                       (* nx (- cy (hash-grid-oy grid))) (* nxy (- cz (hash-grid-oz grid))))))
+            (declare (type fixnum nx nxy c))
+            (run (1+ entry) (aref starts (+ c 2)) -1)
+            (let ((r (+ c nx -1))) (run (aref starts r) (aref starts (+ r 3)) -1))
+            (loop for dy of-type fixnum from -1 to 1
+                  do (let ((r (+ c nxy (* dy nx) -1))) (run (aref starts r) (aref starts (+ r 3)) -1))))
+          (let ((mask (hash-grid-mask grid)))
+            (flet ((cell (i j k)
+                     (declare (type fixnum i j k))
+                     (let* ((key (grid-cell-key i j k)) (b (grid-bucket key mask)))
+                       (run (aref starts b) (aref starts (1+ b)) key))))
+              (declare (inline cell))
+              (let* ((key (grid-cell-key cx cy cz)) (b (grid-bucket key mask)))
+                (run (1+ entry) (aref starts (1+ b)) key))
+              (cell (1+ cx) cy cz)
+              (loop for i of-type fixnum from (1- cx) to (1+ cx) do (cell i (1+ cy) cz))
+              (loop for j of-type fixnum from (1- cy) to (1+ cy)
+                    do (loop for i of-type fixnum from (1- cx) to (1+ cx) do (cell i j (1+ cz))))))))
+    n))
 ;; The block world is the static tree; bodies need a hash grid:1 ends here
 
 ;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:1]]
@@ -1602,6 +1636,7 @@ back with its hit events. #K1N3BX"
 ;; Kinematic boxes are posted for one step:1 ends here
 
 ;; [[file:../physics.org::#G3NCNT][Contacts are made speculatively:1]]
+(declaim (inline touch-contact))
 (defun touch-contact (contacts table key kind handle-a handle-b nx ny nz separation px py pz kvx kvy kvz)
   "Refresh the contact under KEY in CONTACTS and TABLE with this step's geometry, or add it with
 zero impulses; the row under the table's cursor is tried before the table. #G3NCNT"
@@ -1639,6 +1674,7 @@ zero impulses; the row under the table's cursor is tried before the table. #G3NC
               (contact@ geometry row px) px (contact@ geometry row py) py (contact@ geometry row pz) pz
               (contact@ geometry row kvx) kvx (contact@ geometry row kvy) kvy (contact@ geometry row kvz) kvz)))
     row))
+(declaim (notinline touch-contact))
 
 (declaim (inline speculative-distance))
 (defun speculative-distance (approach dt slop margin gravity-step)
@@ -1794,6 +1830,7 @@ woke. #W4K3PH"
 ;; Fast bodies and moving boxes wake what they reach:1 ends here
 
 ;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:1]]
+(declaim (type (simple-array single-float (78)) +unit-directions+))
 (defparameter +unit-directions+
   (let ((v (make-array 78 :element-type 'single-float)) (k 0))
     (loop for dz from -1 to 1 do
@@ -1819,16 +1856,16 @@ across pairs, and opposite when the two are named the other way round. #P41RS7"
     (* 3 (if (< (handle-index ha) (handle-index hb)) k (- 25 k)))))
 
 (defun pair-phase (world)
-  "Phase 4: contacts between awake bodies (each pair once, walking half the neighbour cells) and lean
-contacts from slow awake bodies onto the sleepers they reach. A candidate within reach becomes
-a contact only when its gap is under the speculative distance. #P41RS7"
+  "Phase 4: contacts between awake bodies (each pair once, walking the half neighbourhood of each
+body's cell in the grid's order) and lean contacts from slow awake bodies onto the sleepers they
+reach. A candidate within reach becomes a contact only when its gap is under the speculative
+distance. #P41RS7"
   (let* ((awake (physics-world-awake world))
          (sleeping (physics-world-sleeping world))
          (ids (physics-world-ids world))
          (grid (physics-world-awake-grid world))
          (sgrid (physics-world-sleeping-grid world))
          (any-sleeping (plusp (body-columns-length sleeping)))
-         (n (body-columns-length awake))
          (margin (f32 (physics-world-margin world)))
          (slop (f32 (physics-world-slop world)))
          (dt (physics-world-current-dt world))
@@ -1836,12 +1873,17 @@ a contact only when its gap is under the speculative distance. #P41RS7"
                                (expt (physics-world-gravity-z world) 2)))))
          (rmax (f32 (physics-world-max-radius world)))
          (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
+         (items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+         (hashed (not (hash-grid-dense grid)))
+         (runs (make-array 42 :element-type 'fixnum))
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world)))
     (declare (type single-float margin slop dt gstep rmax) (type f32-column gx gy gz)
-             (type index n) (type body-columns awake sleeping)
+             (type fixnum-column items keys near runs) (dynamic-extent runs)
+             (type body-columns awake sleeping)
              (type contact-columns contacts) (type contact-table table)
-             (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+)
+             (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+
+             (inline touch-contact))
     (with-body-columns (x y z vx vy vz radius flags handle) awake
       (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj)
                (declare (type single-float xi yi zi ri xj yj zj rj vxi vyi vzi vxj vyj vzj)
@@ -1850,52 +1892,72 @@ a contact only when its gap is under the speculative distance. #P41RS7"
                       (d2 (+ (* dx dx) (* dy dy) (* dz dz)))
                       (reach (+ ri rj margin)))
                  (when (< d2 (* reach reach))
-                   (let* ((d (fsqrt d2))
-                          (far (> d 1e-6))
-                          (inv (if far (/ 1.0 d) 0.0))
-                          (cn (if far 0 (coincident-direction hi hj)))
-                          (nx (if far (* dx inv) (aref +unit-directions+ cn)))
-                          (ny (if far (* dy inv) (aref +unit-directions+ (+ cn 1))))
-                          (nz (if far (* dz inv) (aref +unit-directions+ (+ cn 2))))
-                          (sep (- d ri rj))
-                          (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
+                   (let ((d (fsqrt d2)))
+                    (multiple-value-bind (nx ny nz)
+                        (if (> d 1e-6)
+                            (let ((inv (/ 1.0 d))) (values (* dx inv) (* dy inv) (* dz inv)))
+                            (let ((cn (coincident-direction hi hj)))
+                              (values (aref +unit-directions+ cn) (aref +unit-directions+ (+ cn 1))
+                                      (aref +unit-directions+ (+ cn 2)))))
+                     (declare (type single-float nx ny nz))
+                     (let ((sep (- d ri rj))
+                           (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
                      (when (< sep (speculative-distance approach dt slop margin gstep))
                        ;; orient every pair contact from the lower handle slot to the higher
-                       (if (< (handle-index hi) (handle-index hj))
-                           (touch-contact contacts table (pair-key (handle-index hi) (handle-index hj))
-                                          +contact-pair+ hi hj nx ny nz sep
-                                          (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)) 0.0 0.0 0.0)
-                           (touch-contact contacts table (pair-key (handle-index hj) (handle-index hi))
-                                          +contact-pair+ hj hi (- nx) (- ny) (- nz) sep
-                                          (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))
-                                          0.0 0.0 0.0))))))))
+                       (multiple-value-bind (ha hb s px py pz)
+                           (if (< (handle-index hi) (handle-index hj))
+                               (values hi hj 1.0 (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)))
+                               (values hj hi -1.0 (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))))
+                         (declare (type fixnum ha hb) (type single-float s px py pz))
+                         (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
+                                        +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
+                                        0.0 0.0 0.0))))))))))
         (declare (inline pair))
-        (dotimes (i n)
-          (when (zerop (logand (aref flags i) +flag-terrain-only+))
-            (let* ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i))
-                   (hi (aref handle i)) (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i))
-                   (widest (+ ri rmax margin)) (widest2 (* widest widest)))
-              (declare (type single-float widest widest2))
-              (do-grid-neighbours (j grid xi yi zi :half t :own own :entry e)
-                ;; a first test on the grid's own copy of the centres, against the widest reach,
-                ;; before any of the neighbour's columns is read
-                (let ((dx (- (aref gx e) xi)) (dy (- (aref gy e) yi)) (dz (- (aref gz e) zi)))
-                  (when (and (< (+ (* dx dx) (* dy dy) (* dz dz)) widest2)
-                             (or (not own) (> j i)) (zerop (logand (aref flags j) +flag-terrain-only+)))
-                    (pair xi yi zi ri hi vxi vyi vzi
-                          (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
-                          (aref vx j) (aref vy j) (aref vz j)))))
-              (when any-sleeping
-                (do-grid-neighbours (h sgrid xi yi zi)
-                  (let ((slot (handle-index h)))
-                    (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                               (= (aref (handle-table-generation ids) slot) (handle-generation h)))
-                      (let ((row (aref (handle-table-local ids) slot)))
-                        (when (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
-                          (pair xi yi zi ri hi vxi vyi vzi
-                                (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
-                                (aref (body-columns-z sleeping) row)
-                                (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0))))))))))))
+        (let ((cell-key -1) (run-count 0))
+          (declare (type fixnum cell-key run-count))
+          (dotimes (e (hash-grid-count grid))
+            ;; the items of one cell are consecutive in the grid's order and share its runs
+            (unless (= (aref keys e) cell-key)
+              (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
+            (let ((i (aref items e)))
+              (when (zerop (logand (aref flags i) +flag-terrain-only+))
+                (let* ((xi (aref gx e)) (yi (aref gy e)) (zi (aref gz e)) (ri (aref radius i))
+                       (hi (aref handle i)) (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i))
+                       (widest (+ ri rmax margin)) (widest2 (* widest widest))
+                       (found 0))
+                  (declare (type single-float widest widest2) (type index found))
+                  ;; list the entries of the half neighbourhood within the widest reach, reading
+                  ;; only the grid's copy of the centres; the count grows by the sign bit of
+                  ;; d2 - widest2, so the test costs no branch
+                  (dotimes (q run-count)
+                    (let ((start (if (= q 0) (1+ e) (aref runs (* 3 q))))
+                          (end (aref runs (+ (* 3 q) 1)))
+                          (key (aref runs (+ (* 3 q) 2))))
+                      (declare (type fixnum start end key))
+                      (loop for f of-type fixnum from start below end
+                            do (let ((dx (- (aref gx f) xi)) (dy (- (aref gy f) yi)) (dz (- (aref gz f) zi)))
+                                 (setf (aref near found) f)
+                                 (when (or (not hashed) (= key -1) (= (aref keys f) key))
+                                   (incf found (ldb (byte 1 31)
+                                                    (sb-kernel:single-float-bits
+                                                     (- (+ (* dx dx) (* dy dy) (* dz dz)) widest2)))))))))
+                  (dotimes (q found)
+                    (let* ((f (aref near q)) (j (aref items f)))
+                      (when (zerop (logand (aref flags j) +flag-terrain-only+))
+                        (pair xi yi zi ri hi vxi vyi vzi
+                              (aref gx f) (aref gy f) (aref gz f) (aref radius j) (aref handle j)
+                              (aref vx j) (aref vy j) (aref vz j)))))
+                  (when any-sleeping
+                    (do-grid-neighbours (h sgrid xi yi zi)
+                      (let ((slot (handle-index h)))
+                        (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+                                   (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+                          (let ((row (aref (handle-table-local ids) slot)))
+                            (when (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
+                              (pair xi yi zi ri hi vxi vyi vzi
+                                    (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
+                                    (aref (body-columns-z sleeping) row)
+                                    (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0))))))))))))))
     world))
 ;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
