@@ -1884,7 +1884,7 @@ distance. #P41RS7"
              (type contact-columns contacts) (type contact-table table)
              (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+
              (inline touch-contact))
-    (with-body-columns (x y z vx vy vz radius flags handle) awake
+    (with-body-columns (vx vy vz radius flags handle) awake
       (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj)
                (declare (type single-float xi yi zi ri xj yj zj rj vxi vyi vzi vxj vyj vzj)
                         (type fixnum hi hj))
