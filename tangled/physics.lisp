@@ -1129,11 +1129,12 @@ as one run of its items. #D9W4CH"
         (k (gensym)) (key (gensym)) (b (gensym)) (e (gensym)) (inv (gensym)) (s (gensym))
         (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS")) (mask (gensym "MASK"))
         (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW")) (visit (gensym "VISIT")))
-    `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s ,span)
+    `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s (min ,span ,(ash 1 22)))
             (,cx (cell-floor (* ,x ,inv))) (,cy (cell-floor (* ,y ,inv))) (,cz (cell-floor (* ,z ,inv)))
             (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g))
             (,mask (hash-grid-mask ,g)))
-       (declare (type fixnum ,cx ,cy ,cz ,s ,mask) (type fixnum-column ,starts ,items ,keys))
+       (declare (type cell ,cx ,cy ,cz) (type (integer 0 ,(ash 1 22)) ,s) (type fixnum ,mask)
+                (type fixnum-column ,starts ,items ,keys))
        (flet ((,visit (,item) (declare (type fixnum ,item)) ,@body))
          (declare (inline ,visit))
          (cond
@@ -1142,7 +1143,8 @@ as one run of its items. #D9W4CH"
             ;; rows of cells along x are contiguous runs of items
             (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
                    (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g)))
-              (declare (type fixnum ox oy oz nx ny nz))
+              ;; a dense grid's box is under 4096 cells a side
+              (declare (type cell ox oy oz) (type (integer 1 4096) nx ny nz))
               (loop for ,k of-type fixnum from (max oz (- ,cz ,s)) to (min (+ oz nz -1) (+ ,cz ,s)) do
                 (loop for ,j of-type fixnum from (max oy (- ,cy ,s)) to (min (+ oy ny -1) (+ ,cy ,s)) do
                   (let* ((,lo (max ox (- ,cx ,s)))
@@ -1185,10 +1187,11 @@ is KEY do. #D9W4CH"
       (declare (inline run))
       (if (hash-grid-dense grid)
           ;; an occupied cell is at least one cell inside the padded box, so its neighbours are too
-          (let* ((nx (hash-grid-nx grid)) (nxy (* nx (hash-grid-ny grid)))
-                 (c (+ (- cx (hash-grid-ox grid))
-                       (* nx (- cy (hash-grid-oy grid))) (* nxy (- cz (hash-grid-oz grid))))))
-            (declare (type fixnum nx nxy c))
+          (let* ((nx (the (integer 1 4096) (hash-grid-nx grid)))
+                 (nxy (* nx (the (integer 1 4096) (hash-grid-ny grid))))
+                 (c (+ (- cx (the cell (hash-grid-ox grid)))
+                       (* nx (- cy (the cell (hash-grid-oy grid)))) (* nxy (- cz (the cell (hash-grid-oz grid)))))))
+            (declare (type index c))
             (run (1+ entry) (aref starts (+ c 2)) -1)
             (let ((r (+ c nx -1))) (run (aref starts r) (aref starts (+ r 3)) -1))
             (loop for dy of-type fixnum from -1 to 1
@@ -1206,6 +1209,38 @@ is KEY do. #D9W4CH"
               (loop for j of-type fixnum from (1- cy) to (1+ cy)
                     do (loop for i of-type fixnum from (1- cx) to (1+ cx) do (cell i j (1+ cz))))))))
     n))
+
+(defun grid-list-near (grid entry runs run-count reach2)
+  "List in GRID's NEAR column the places of the RUN-COUNT RUNS (as grid-half-runs fills them for
+ENTRY) whose centres lie closer than the square root of REACH2 to the centre of ENTRY, in run
+order, and return how many. The list grows by the sign bit of the squared distance minus
+REACH2, so the test costs no branch. #D9W4CH"
+  (declare (type hash-grid grid) (type index entry) (type fixnum-column runs)
+           (type (integer 0 14) run-count) (type single-float reach2) #.+kernel-policy+)
+  (let* ((gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
+         (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+         (x (aref gx entry)) (y (aref gy entry)) (z (aref gz entry))
+         (found 0))
+    (declare (type index found))
+    (flet ((within (f)
+             (declare (type index f))
+             (let ((dx (- (aref gx f) x)) (dy (- (aref gy f) y)) (dz (- (aref gz f) z)))
+               (ldb (byte 1 31) (sb-kernel:single-float-bits (- (+ (* dx dx) (* dy dy) (* dz dz)) reach2))))))
+      (declare (inline within))
+      (dotimes (q run-count)
+        (let ((start (if (= q 0) (1+ entry) (aref runs (* 3 q))))
+              (end (aref runs (+ (* 3 q) 1)))
+              (key (aref runs (+ (* 3 q) 2))))
+          (declare (type index start end) (type fixnum key))
+          (if (= key -1)
+              (loop for f of-type index from start below end
+                    do (setf (aref near found) f)
+                       (incf found (within f)))
+              (loop for f of-type index from start below end
+                    do (when (= (aref keys f) key)
+                         (setf (aref near found) f)
+                         (incf found (within f))))))))
+    found))
 ;; The block world is the static tree; bodies need a hash grid:1 ends here
 
 ;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:1]]
@@ -1874,7 +1909,6 @@ distance. #P41RS7"
          (rmax (f32 (physics-world-max-radius world)))
          (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
          (items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
-         (hashed (not (hash-grid-dense grid)))
          (runs (make-array 42 :element-type 'fixnum))
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world)))
@@ -1914,7 +1948,7 @@ distance. #P41RS7"
                                         0.0 0.0 0.0))))))))))
         (declare (inline pair))
         (let ((cell-key -1) (run-count 0))
-          (declare (type fixnum cell-key run-count))
+          (declare (type fixnum cell-key) (type (integer 0 14) run-count))
           (dotimes (e (hash-grid-count grid))
             ;; the items of one cell are consecutive in the grid's order and share its runs
             (unless (= (aref keys e) cell-key)
@@ -1926,21 +1960,8 @@ distance. #P41RS7"
                        (widest (+ ri rmax margin)) (widest2 (* widest widest))
                        (found 0))
                   (declare (type single-float widest widest2) (type index found))
-                  ;; list the entries of the half neighbourhood within the widest reach, reading
-                  ;; only the grid's copy of the centres; the count grows by the sign bit of
-                  ;; d2 - widest2, so the test costs no branch
-                  (dotimes (q run-count)
-                    (let ((start (if (= q 0) (1+ e) (aref runs (* 3 q))))
-                          (end (aref runs (+ (* 3 q) 1)))
-                          (key (aref runs (+ (* 3 q) 2))))
-                      (declare (type fixnum start end key))
-                      (loop for f of-type fixnum from start below end
-                            do (let ((dx (- (aref gx f) xi)) (dy (- (aref gy f) yi)) (dz (- (aref gz f) zi)))
-                                 (setf (aref near found) f)
-                                 (when (or (not hashed) (= key -1) (= (aref keys f) key))
-                                   (incf found (ldb (byte 1 31)
-                                                    (sb-kernel:single-float-bits
-                                                     (- (+ (* dx dx) (* dy dy) (* dz dz)) widest2)))))))))
+                  ;; first the entries within the widest reach, from the grid's copy of the centres
+                  (setf found (grid-list-near grid e runs run-count widest2))
                   (dotimes (q found)
                     (let* ((f (aref near q)) (j (aref items f)))
                       (when (zerop (logand (aref flags j) +flag-terrain-only+))
