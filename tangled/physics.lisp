@@ -1090,15 +1090,20 @@ cells reads positions from one run of memory. #D9W4CH"
               (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
               (ox (1- x0)) (oy (1- y0)) (oz (1- z0)))
           (declare (type fixnum ox oy oz))
+          ;; a dense box is under 4096 cells a side, so its cell numbers stay small
+          (flet ((dense-bucket (cx cy cz)
+                   (declare (type cell cx cy cz))
+                   (+ (- cx (the cell ox))
+                      (* (the (integer 1 4096) nx)
+                         (+ (- cy (the cell oy)) (* (the (integer 1 4096) ny) (- cz (the cell oz))))))))
+            (declare (inline dense-bucket))
           (fill starts 0 :end (1+ buckets))
           ;; the bucket of each item: its cell's index in the box, or its hashed cell key
           (dotimes (i n)
             (let* ((cx (cell-floor (* (aref xs i) inv))) (cy (cell-floor (* (aref ys i) inv)))
                    (cz (cell-floor (* (aref zs i) inv)))
                    (key (grid-cell-key cx cy cz))
-                   (bucket (if dense
-                               (+ (- cx ox) (* nx (+ (- cy oy) (* ny (- cz oz)))))
-                               (grid-bucket key mask))))
+                   (bucket (if dense (dense-bucket cx cy cz) (grid-bucket key mask))))
               (declare (type fixnum bucket))
               (setf (aref item-keys i) key)
               (incf (aref starts (1+ bucket)))))
@@ -1109,16 +1114,15 @@ cells reads positions from one run of memory. #D9W4CH"
           (loop for i of-type fixnum from (1- n) downto 0
                 do (let* ((key (aref item-keys i))
                           (b (1+ (if dense
-                                     (+ (- (cell-floor (* (aref xs i) inv)) ox)
-                                        (* nx (+ (- (cell-floor (* (aref ys i) inv)) oy)
-                                                 (* ny (- (cell-floor (* (aref zs i) inv)) oz)))))
+                                     (dense-bucket (cell-floor (* (aref xs i) inv)) (cell-floor (* (aref ys i) inv))
+                                                   (cell-floor (* (aref zs i) inv)))
                                      (grid-bucket key mask))))
                           (at (decf (aref starts b))))
                      (setf (aref items at) (aref ids i) (aref keys at) key
                            (aref gx at) (aref xs i) (aref gy at) (aref ys i) (aref gz at) (aref zs i))))
           ;; now starts[b+1] is the beginning of bucket b; shift so starts[b] begins bucket b
           (replace starts starts :start1 0 :start2 1 :end2 (1+ buckets))
-          (setf (aref starts buckets) n))))
+          (setf (aref starts buckets) n)))))
     grid))
 
 (defmacro do-grid-neighbours ((item grid x y z &key (span 1)) &body body)
@@ -2178,10 +2182,11 @@ with the face the ray enters it through. #SW33P7"
   (let* ((boxes (physics-world-boxes world))
          (awake (physics-world-awake world))
          (grid (physics-world-awake-grid world))
-         (margin (physics-world-margin world))
+         (margin (f32 (physics-world-margin world)))
          (limit (f32 *physics-reach-limit*))
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world)))
+    (declare (type single-float margin limit))
     (when (plusp (box-columns-length boxes))
       (with-body-columns (x y z radius handle) awake
         (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz id) boxes
