@@ -2057,7 +2057,7 @@ is under the speculative distance. #MYWH16"
              (contacts (physics-world-contacts world))
              (table (physics-world-contact-table world)))
         (declare (type single-float margin limit slop dt gstep)
-                 (type contact-columns contacts) (type contact-table table))
+                 (type contact-columns contacts) (type contact-table table) (inline touch-contact))
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i n)
             (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
@@ -2077,12 +2077,12 @@ is under the speculative distance. #MYWH16"
                       (loop for iy of-type fixnum from y0 to y1 do
                         (loop for ix of-type fixnum from x0 to x1 do
                           (when (plusp (aref chunk (cell-offset ix iy iz)))
-                            (setf mask (logior mask (ash 1 (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))
+                            (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))))))))))))
                   (loop for iz of-type fixnum from z0 to z1 do
                     (loop for iy of-type fixnum from y0 to y1 do
                       (loop for ix of-type fixnum from x0 to x1 do
                         (when (probe-solid-p probe ix iy iz)
-                          (setf mask (logior mask (ash 1 (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))
+                          (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))))))))))))
               ;; a body that can travel past its margin this step also sweeps its path
               (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
                                                       (* (aref vz i) (aref vz i))))))))
