@@ -1752,6 +1752,11 @@ they have drifted out of it. #G4R1D5"
                      (body-columns-x awake) (body-columns-y awake) (body-columns-z awake)
                      ;; the awake grid's items are rows: an identity column of row numbers
                      (awake-row-identities world n))
+    ;; the room a sort needs grows with the awake buffer, so sorting itself never allocates
+    (body-columns-ensure-capacity (physics-world-awake-scratch world) (body-columns-capacity awake))
+    (when (< (length (physics-world-row-places world)) (body-columns-capacity awake))
+      (setf (physics-world-row-places world)
+            (make-array (body-columns-capacity awake) :element-type 'fixnum)))
     (when (> (grid-order-breaks grid n) (floor n 16))
       (sort-awake-rows world grid n))
     (ensure-sleeping-grid world)))
@@ -1773,9 +1778,6 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
         (items (hash-grid-items grid))
         (locals (handle-table-local (physics-world-ids world))))
     (declare (type body-columns awake) (type fixnum-column items locals))
-    (when (< (length (physics-world-row-places world)) n)
-      (setf (physics-world-row-places world)
-            (make-array (max n (* 2 (length (physics-world-row-places world)))) :element-type 'fixnum)))
     (let ((places (physics-world-row-places world)))
       (declare (type fixnum-column places))
       (dotimes (e n) (setf (aref places (aref items e)) e))
@@ -2225,6 +2227,8 @@ the hole. #PRUN3D"
          (step (physics-world-step-count world))
          (reorder (>= (contact-table-misses table) (max 64 (contact-columns-length contacts)))))
     (declare (type contact-columns contacts) (type contact-table table) (type fixnum step))
+    ;; the room a reordering needs grows with the contact buffer, so reordering never allocates
+    (contact-columns-ensure-capacity (physics-world-contact-scratch world) (contact-columns-capacity contacts))
     (loop for row of-type fixnum from (1- (contact-columns-length contacts)) downto 0
           do (with-contact-columns (seen order touching key handle-a handle-b geometry) contacts
                (unless (= (aref seen row) step)
