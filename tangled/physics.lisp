@@ -2866,9 +2866,11 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
          (sleep-p (physics-world-sleep-enabled world))
          (sleep-speed (f32 (physics-world-sleep-speed world)))
          (time-to-sleep (f32 (physics-world-time-to-sleep world))))
-    (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep))
-    (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
-      (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz radius sleep-time age life handle) awake
+    (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep)
+             (type body-columns awake sleeping) #.+kernel-policy+)
+    ;; removing or putting a row to sleep moves rows within the awake columns, never replaces them
+    (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz radius sleep-time age life handle) awake
+      (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
         (let* ((o (* i +solver-stride+)) (p (* i +delta-stride+))
                (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
                (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5))))
@@ -2895,8 +2897,8 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
                        (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
                          (sleep-physics-body world i))
                        (setf (aref sleep-time i) 0.0))))))))
-    (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
-      (with-body-columns (x y z age life handle) sleeping
+    (with-body-columns (x y z age life handle) sleeping
+      (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
         (when (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
           (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
           (%remove-body world +set-sleeping+ i))))
