@@ -1743,8 +1743,8 @@ lies in neighbouring cells. #G4R1D5"
     grid))
 
 (defun grid-phase (world)
-  "Phase 3: bucket the awake bodies by cell, and put the awake rows in the grid's order when
-they have drifted out of it. #G4R1D5"
+  "Phase 3: bucket the awake bodies by cell, and put the awake rows in the order of a dense grid
+when they have drifted out of it. #G4R1D5"
   (let* ((awake (physics-world-awake world))
          (grid (physics-world-awake-grid world))
          (n (body-columns-length awake)))
@@ -1757,7 +1757,7 @@ they have drifted out of it. #G4R1D5"
     (when (< (length (physics-world-row-places world)) (body-columns-capacity awake))
       (setf (physics-world-row-places world)
             (make-array (body-columns-capacity awake) :element-type 'fixnum)))
-    (when (> (grid-order-breaks grid n) (floor n 16))
+    (when (and (hash-grid-dense grid) (> (grid-order-breaks grid n) (floor n 16)))
       (sort-awake-rows world grid n))
     (ensure-sleeping-grid world)))
 
@@ -1956,11 +1956,11 @@ distance. #P41RS7"
         (let ((cell-key -1) (run-count 0))
           (declare (type fixnum cell-key) (type (integer 0 14) run-count))
           (dotimes (e (hash-grid-count grid))
-            ;; the items of one cell are consecutive in the grid's order and share its runs
-            (unless (= (aref keys e) cell-key)
-              (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
             (let ((i (aref items e)))
               (when (zerop (logand (aref flags i) +flag-terrain-only+))
+                ;; the items of one cell are consecutive in the grid's order and share its runs
+                (unless (= (aref keys e) cell-key)
+                  (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
                 (let* ((xi (aref gx e)) (yi (aref gy e)) (zi (aref gz e)) (ri (aref radius i))
                        (hi (aref handle i)) (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i))
                        (widest (+ ri rmax margin)) (widest2 (* widest widest))
