@@ -2806,7 +2806,8 @@ speed. #ST0R3S"
          (hit-speed (f32 (physics-world-hit-speed world)))
          (dt (physics-world-current-dt world))
          (max-penetration 0.0) (max-approach 0.0))
-    (declare (type f32-column d v) (type single-float hit-speed dt max-penetration max-approach))
+    (declare (type f32-column d v) (type single-float hit-speed dt max-penetration max-approach)
+             #.+kernel-policy+)
     (with-constraint-block (contact body-a body-b) cbuf
       (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
         (loop for k of-type index below (constraint-columns-length cbuf)
