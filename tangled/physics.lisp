@@ -1007,8 +1007,8 @@ predict since the rows were last put in order (MISSES). #Y5H8KC"
 (defstruct (hash-grid (:constructor make-hash-grid))
   "Items bucketed by the cell of their centre, counting-sorted so a cell's items are one run.
 When the items' cells fill a small enough box, the buckets are that box's cells themselves
-(DENSE), x fastest; otherwise they are hashed. NEAR is room for a walk to list the entries it
-keeps. #D9W4CH"
+(DENSE), x fastest; otherwise they are hashed. NEAR is scratch room: the build keeps each
+item's bucket there, and a walk lists the entries it keeps. #D9W4CH"
   (inv-cell 1.0 :type single-float)
   (count 0 :type index)
   (mask 0 :type fixnum)
@@ -1087,6 +1087,7 @@ cells reads positions from one run of memory. #D9W4CH"
                                                     :element-type 'fixnum)))
         (let ((starts (hash-grid-starts grid)) (items (hash-grid-items grid))
               (keys (hash-grid-keys grid)) (item-keys (hash-grid-item-keys grid))
+              (item-buckets (hash-grid-near grid))
               (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
               (ox (1- x0)) (oy (1- y0)) (oz (1- z0)))
           (declare (type fixnum ox oy oz))
@@ -1105,7 +1106,7 @@ cells reads positions from one run of memory. #D9W4CH"
                    (key (grid-cell-key cx cy cz))
                    (bucket (if dense (dense-bucket cx cy cz) (grid-bucket key mask))))
               (declare (type fixnum bucket))
-              (setf (aref item-keys i) key)
+              (setf (aref item-keys i) key (aref item-buckets i) bucket)
               (incf (aref starts (1+ bucket)))))
           (loop for b of-type fixnum from 1 to buckets
                 do (incf (aref starts b) (aref starts (1- b))))
@@ -1113,10 +1114,7 @@ cells reads positions from one run of memory. #D9W4CH"
           ;; bucket lists its items in increasing order
           (loop for i of-type fixnum from (1- n) downto 0
                 do (let* ((key (aref item-keys i))
-                          (b (1+ (if dense
-                                     (dense-bucket (cell-floor (* (aref xs i) inv)) (cell-floor (* (aref ys i) inv))
-                                                   (cell-floor (* (aref zs i) inv)))
-                                     (grid-bucket key mask))))
+                          (b (1+ (aref item-buckets i)))
                           (at (decf (aref starts b))))
                      (setf (aref items at) (aref ids i) (aref keys at) key
                            (aref gx at) (aref xs i) (aref gy at) (aref ys i) (aref gz at) (aref zs i))))
