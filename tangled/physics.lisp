@@ -496,7 +496,7 @@ colour, or one after a step that left an overlap deeper than *physics-crowded-de
 (defmacro define-physics-layout (name docstring &rest columns)
   "Define the columnar layout NAME: a buffer struct of one specialised array per column of
 COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
-NAME-copy-row, NAME-ensure-capacity, NAME-clear and WITH-NAME, which binds columns by name
+NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-clear and WITH-NAME, which binds columns by name
 or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
   (let* ((make (layout-symbol "%MAKE-" name))
          (ctor (layout-symbol "MAKE-" name))
@@ -507,6 +507,7 @@ or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, si
          (append (layout-symbol name "-APPEND"))
          (remove (layout-symbol name "-SWAP-REMOVE"))
          (copy (layout-symbol name "-COPY-ROW"))
+         (permute (layout-symbol name "-PERMUTE"))
          (zero (layout-symbol name "-ZERO-ROW"))
          (clear (layout-symbol name "-CLEAR"))
          (with (layout-symbol "WITH-" name))
@@ -574,6 +575,36 @@ or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, si
                                                               :end2 (* (1+ from-row) ,width))
                              `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
          to)
+       (defun ,permute (buffer scratch destinations count)
+         ,(format nil "Move each row R of BUFFER, a ~A, to row (aref DESTINATIONS R), or drop it where
+that is negative; the places taken must be exactly 0 .. COUNT-1. The rows are written into
+SCRATCH, a buffer of the same layout and spare, whose arrays BUFFER then takes in exchange
+for its own; rows past COUNT read as zeros. Return BUFFER. #L4Y0UT" name)
+         (declare (type ,name buffer scratch) (type fixnum-column destinations) (type index count)
+                  #.+kernel-policy+)
+         (,ensure scratch (max count (,cap buffer)))
+         (let ((n (,len buffer)) (stale (,len scratch)))
+           (declare (type index n stale))
+           ,@(loop for (nil type width) in columns for acc in accessors
+                   collect `(let ((from (,acc buffer)) (to (,acc scratch)))
+                              (declare (type ,(column-array-type type) from to))
+                              ;; rows the scratch held from its last use, past COUNT, become zeros
+                              (when (> stale count)
+                                (fill to ,(column-zero type) :start (* count ,(or width 1))
+                                                             :end (* stale ,(or width 1))))
+                              (dotimes (r n)
+                                (let ((d (aref destinations r)))
+                                  (declare (type fixnum d))
+                                  (when (>= d 0)
+                                    ,(if width
+                                         `(loop for k of-type fixnum from 0 below ,width
+                                                do (setf (aref to (+ (* d ,width) k))
+                                                         (aref from (+ (* r ,width) k))))
+                                         `(setf (aref to d) (aref from r))))))
+                              (setf (,acc scratch) from (,acc buffer) to)))
+           (rotatef (,cap buffer) (,cap scratch))
+           (setf (,len buffer) count (,len scratch) n))
+         buffer)
        (defun ,remove (buffer row)
          ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
 row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #L4Y0UT" name)
@@ -862,8 +893,8 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
 ;; [[file:../physics.org::#Y5H8KC][Contacts persist between steps, keyed by a packed pair:1]]
 (define-physics-layout contact-columns
   "Persistent contacts, one row per touching or nearly touching pair, keyed by a packed pair. #Y5H8KC"
-  (handle-a fixnum) (handle-b fixnum) (kind fixnum) (key fixnum) (seen fixnum) (touching fixnum)
-  (geometry single-float 16))
+  (handle-a fixnum) (handle-b fixnum) (kind fixnum) (key fixnum) (seen fixnum) (order fixnum)
+  (touching fixnum) (geometry single-float 16))
 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +contact-fields+
@@ -872,8 +903,8 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
     "The sixteen floats of a contact, side by side in its 64-byte row of the geometry column. #Y5H8KC"))
 
 (defmacro contact@ (geometry row field)
-  "The FIELD (one of +contact-fields+) of contact ROW in the GEOMETRY column. #Y5H8KC"
-  `(aref ,geometry (+ (* ,row 16) ,(or (position field +contact-fields+ :test #'string= :key #'symbol-name)
+  "The FIELD (one of +contact-fields+) of contact ROW, an index, in the GEOMETRY column. #Y5H8KC"
+  `(aref ,geometry (+ (* (the index ,row) 16) ,(or (position field +contact-fields+ :test #'string= :key #'symbol-name)
                                          (error "no contact field ~A" field)))))
 
 (defconstant +contact-pair+ 0 "Contact kind: two bodies. #Y5H8KC")
@@ -901,10 +932,17 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
 
 (defstruct (contact-table (:constructor %make-contact-table))
   "An open-addressing map from contact key to contact row, with linear probing; slot I keeps
-its key at 2I and its row at 2I+1, so a probe reads one cache line. #Y5H8KC"
+its key at 2I and its row at 2I+1, so a probe reads one cache line. It also keeps the step's
+walk through the rows: the step being found (STEP), the row expected next (CURSOR), how many
+rows have been found so far this step (TOUCHED), and how many finds the cursor failed to
+predict since the rows were last put in order (MISSES). #Y5H8KC"
   (slots (make-array 128 :element-type 'fixnum :initial-element -1) :type fixnum-column)
   (mask 63 :type fixnum)
-  (count 0 :type index))
+  (count 0 :type index)
+  (step 0 :type fixnum)
+  (cursor 0 :type index)
+  (touched 0 :type index)
+  (misses 0 :type index))
 
 (defun make-contact-table () "An empty contact table. #Y5H8KC" (%make-contact-table))
 
@@ -981,7 +1019,8 @@ its key at 2I and its row at 2I+1, so a probe reads one cache line. #Y5H8KC"
 (defstruct (hash-grid (:constructor make-hash-grid))
   "Items bucketed by the cell of their centre, counting-sorted so a cell's items are one run.
 When the items' cells fill a small enough box, the buckets are that box's cells themselves
-(DENSE), x fastest; otherwise they are hashed. #D9W4CH"
+(DENSE), x fastest; otherwise they are hashed. NEAR is scratch room: the build keeps each
+item's bucket there, and a walk lists the entries it keeps. #D9W4CH"
   (inv-cell 1.0 :type single-float)
   (count 0 :type index)
   (mask 0 :type fixnum)
@@ -994,7 +1033,8 @@ When the items' cells fill a small enough box, the buckets are that box's cells 
   (item-keys (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (xs (make-array 0 :element-type 'single-float) :type f32-column)
   (ys (make-array 0 :element-type 'single-float) :type f32-column)
-  (zs (make-array 0 :element-type 'single-float) :type f32-column))
+  (zs (make-array 0 :element-type 'single-float) :type f32-column)
+  (near (make-array 0 :element-type 'fixnum) :type fixnum-column))
 
 (declaim (inline cell-floor grid-cell-key grid-bucket))
 (defun cell-floor (v)
@@ -1033,7 +1073,8 @@ cells reads positions from one run of memory. #D9W4CH"
               (hash-grid-item-keys grid) (make-array m :element-type 'fixnum)
               (hash-grid-xs grid) (make-array m :element-type 'single-float)
               (hash-grid-ys grid) (make-array m :element-type 'single-float)
-              (hash-grid-zs grid) (make-array m :element-type 'single-float))))
+              (hash-grid-zs grid) (make-array m :element-type 'single-float)
+              (hash-grid-near grid) (make-array m :element-type 'fixnum))))
     (setf (hash-grid-inv-cell grid) inv (hash-grid-count grid) n)
     ;; the box of occupied cells decides the mode
     (let ((x0 most-positive-fixnum) (y0 most-positive-fixnum) (z0 most-positive-fixnum)
@@ -1058,20 +1099,26 @@ cells reads positions from one run of memory. #D9W4CH"
                                                     :element-type 'fixnum)))
         (let ((starts (hash-grid-starts grid)) (items (hash-grid-items grid))
               (keys (hash-grid-keys grid)) (item-keys (hash-grid-item-keys grid))
+              (item-buckets (hash-grid-near grid))
               (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
               (ox (1- x0)) (oy (1- y0)) (oz (1- z0)))
           (declare (type fixnum ox oy oz))
+          ;; a dense box is under 4096 cells a side, so its cell numbers stay small
+          (flet ((dense-bucket (cx cy cz)
+                   (declare (type cell cx cy cz))
+                   (+ (- cx (the cell ox))
+                      (* (the (integer 1 4096) nx)
+                         (+ (- cy (the cell oy)) (* (the (integer 1 4096) ny) (- cz (the cell oz))))))))
+            (declare (inline dense-bucket))
           (fill starts 0 :end (1+ buckets))
           ;; the bucket of each item: its cell's index in the box, or its hashed cell key
           (dotimes (i n)
             (let* ((cx (cell-floor (* (aref xs i) inv))) (cy (cell-floor (* (aref ys i) inv)))
                    (cz (cell-floor (* (aref zs i) inv)))
                    (key (grid-cell-key cx cy cz))
-                   (bucket (if dense
-                               (+ (- cx ox) (* nx (+ (- cy oy) (* ny (- cz oz)))))
-                               (grid-bucket key mask))))
+                   (bucket (if dense (dense-bucket cx cy cz) (grid-bucket key mask))))
               (declare (type fixnum bucket))
-              (setf (aref item-keys i) key)
+              (setf (aref item-keys i) key (aref item-buckets i) bucket)
               (incf (aref starts (1+ bucket)))))
           (loop for b of-type fixnum from 1 to buckets
                 do (incf (aref starts b) (aref starts (1- b))))
@@ -1079,54 +1126,42 @@ cells reads positions from one run of memory. #D9W4CH"
           ;; bucket lists its items in increasing order
           (loop for i of-type fixnum from (1- n) downto 0
                 do (let* ((key (aref item-keys i))
-                          (b (1+ (if dense
-                                     (+ (- (cell-floor (* (aref xs i) inv)) ox)
-                                        (* nx (+ (- (cell-floor (* (aref ys i) inv)) oy)
-                                                 (* ny (- (cell-floor (* (aref zs i) inv)) oz)))))
-                                     (grid-bucket key mask))))
+                          (b (1+ (aref item-buckets i)))
                           (at (decf (aref starts b))))
                      (setf (aref items at) (aref ids i) (aref keys at) key
                            (aref gx at) (aref xs i) (aref gy at) (aref ys i) (aref gz at) (aref zs i))))
           ;; now starts[b+1] is the beginning of bucket b; shift so starts[b] begins bucket b
           (replace starts starts :start1 0 :start2 1 :end2 (1+ buckets))
-          (setf (aref starts buckets) n))))
+          (setf (aref starts buckets) n)))))
     grid))
 
-(defmacro do-grid-neighbours ((item grid x y z &key (span 1) half own entry) &body body)
+(defmacro do-grid-neighbours ((item grid x y z &key (span 1)) &body body)
   "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
-of point X Y Z, cell by cell in a fixed order. With HALF, visit only the point's own cell and
-the cells after it in that order (13 of the 26 neighbours), so a walk from every item meets
-each pair of cells once; OWN, if given, names a variable true in the point's own cell, and
-ENTRY one bound to the item's place in the grid's order (its centre is at that place of the
-grid's XS YS ZS). A dense grid visits each row of cells along x as one run of its items. #D9W4CH"
+of point X Y Z, cell by cell in a fixed order. A dense grid visits each row of cells along x
+as one run of its items. #D9W4CH"
   (let ((g (gensym "GRID")) (cx (gensym)) (cy (gensym)) (cz (gensym)) (i (gensym)) (j (gensym))
         (k (gensym)) (key (gensym)) (b (gensym)) (e (gensym)) (inv (gensym)) (s (gensym))
         (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS")) (mask (gensym "MASK"))
-        (own (or own (gensym "OWN"))) (entry (or entry (gensym "ENTRY")))
-        (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW"))
-        (own-start (gensym)) (own-end (gensym)) (visit (gensym "VISIT")))
-    `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s ,span)
+        (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW")) (visit (gensym "VISIT")))
+    `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s (min ,span ,(ash 1 22)))
             (,cx (cell-floor (* ,x ,inv))) (,cy (cell-floor (* ,y ,inv))) (,cz (cell-floor (* ,z ,inv)))
             (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g))
             (,mask (hash-grid-mask ,g)))
-       (declare (type fixnum ,cx ,cy ,cz ,s ,mask) (type fixnum-column ,starts ,items ,keys))
-       (flet ((,visit (,item ,own ,entry) (declare (type fixnum ,item ,entry) (ignorable ,own ,entry)) ,@body))
+       (declare (type cell ,cx ,cy ,cz) (type (integer 0 ,(ash 1 22)) ,s) (type fixnum ,mask)
+                (type fixnum-column ,starts ,items ,keys))
+       (flet ((,visit (,item) (declare (type fixnum ,item)) ,@body))
          (declare (inline ,visit))
          (cond
            ((zerop (hash-grid-count ,g)))
            ((hash-grid-dense ,g)
             ;; rows of cells along x are contiguous runs of items
             (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
-                   (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g))
-                   (,own-start 0) (,own-end 0))
-              (declare (type fixnum ox oy oz nx ny nz ,own-start ,own-end))
-              (when (and (< -1 (- ,cx ox) nx) (< -1 (- ,cy oy) ny) (< -1 (- ,cz oz) nz))
-                (let ((c (+ (- ,cx ox) (* nx (+ (- ,cy oy) (* ny (- ,cz oz)))))))
-                  (setf ,own-start (aref ,starts c) ,own-end (aref ,starts (1+ c)))))
-              (loop for ,k of-type fixnum from (max oz ,(if half cz `(- ,cz ,s))) to (min (+ oz nz -1) (+ ,cz ,s)) do
-                (loop for ,j of-type fixnum from (max oy ,(if half `(if (= ,k ,cz) ,cy (- ,cy ,s)) `(- ,cy ,s)))
-                        to (min (+ oy ny -1) (+ ,cy ,s)) do
-                  (let* ((,lo (max ox ,(if half `(if (and (= ,k ,cz) (= ,j ,cy)) ,cx (- ,cx ,s)) `(- ,cx ,s))))
+                   (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g)))
+              ;; a dense grid's box is under 4096 cells a side
+              (declare (type cell ox oy oz) (type (integer 1 4096) nx ny nz))
+              (loop for ,k of-type fixnum from (max oz (- ,cz ,s)) to (min (+ oz nz -1) (+ ,cz ,s)) do
+                (loop for ,j of-type fixnum from (max oy (- ,cy ,s)) to (min (+ oy ny -1) (+ ,cy ,s)) do
+                  (let* ((,lo (max ox (- ,cx ,s)))
                          (,hi (min (+ ox nx -1) (+ ,cx ,s))))
                     (declare (type fixnum ,lo ,hi))
                     (when (<= ,lo ,hi)
@@ -1134,18 +1169,92 @@ grid's XS YS ZS). A dense grid visits each row of cells along x as one run of it
                         (declare (type fixnum ,row))
                         (loop for ,e of-type fixnum from (aref ,starts (+ ,row (- ,lo ox)))
                                 below (aref ,starts (+ ,row (- ,hi ox) 1))
-                              do (,visit (aref ,items ,e) (and (>= ,e ,own-start) (< ,e ,own-end)) ,e)))))))))
+                              do (,visit (aref ,items ,e))))))))))
            (t
-            (loop for ,k of-type fixnum from ,(if half cz `(- ,cz ,s)) to (+ ,cz ,s) do
-              (loop for ,j of-type fixnum from ,(if half `(if (= ,k ,cz) ,cy (- ,cy ,s)) `(- ,cy ,s)) to (+ ,cy ,s) do
-                (loop for ,i of-type fixnum from ,(if half `(if (and (= ,k ,cz) (= ,j ,cy)) ,cx (- ,cx ,s)) `(- ,cx ,s))
-                        to (+ ,cx ,s) do
+            (loop for ,k of-type fixnum from (- ,cz ,s) to (+ ,cz ,s) do
+              (loop for ,j of-type fixnum from (- ,cy ,s) to (+ ,cy ,s) do
+                (loop for ,i of-type fixnum from (- ,cx ,s) to (+ ,cx ,s) do
                   (let* ((,key (grid-cell-key ,i ,j ,k))
-                         (,b (grid-bucket ,key ,mask))
-                         (,own (and (= ,i ,cx) (= ,j ,cy) (= ,k ,cz))))
+                         (,b (grid-bucket ,key ,mask)))
                     (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
                           when (= (aref ,keys ,e) ,key)
-                            do (,visit (aref ,items ,e) ,own ,e))))))))))))
+                            do (,visit (aref ,items ,e)))))))))))))
+
+(defun grid-half-runs (grid entry runs)
+  "Fill RUNS with the half neighbourhood of the cell of ENTRY, a place in GRID's order, as
+triples (start end key) of places, and return how many triples. The first run starts at
+ENTRY+1 and covers the rest of the cell's own items (in a dense grid, the next cell along x
+too); the others cover the cells after it in the order z, y, x. A KEY of -1 means every item
+of the run belongs; otherwise (a hashed grid, whose runs are buckets) only items whose cell key
+is KEY do. #D9W4CH"
+  (declare (type hash-grid grid) (type index entry) (type fixnum-column runs) #.+kernel-policy+)
+  (let* ((inv (hash-grid-inv-cell grid)) (starts (hash-grid-starts grid))
+         (cx (cell-floor (* (aref (hash-grid-xs grid) entry) inv)))
+         (cy (cell-floor (* (aref (hash-grid-ys grid) entry) inv)))
+         (cz (cell-floor (* (aref (hash-grid-zs grid) entry) inv)))
+         (n 0))
+    (declare (type fixnum cx cy cz n))
+    (flet ((run (start end key)
+             (declare (type fixnum start end key))
+             (setf (aref runs (* 3 n)) start (aref runs (+ (* 3 n) 1)) end (aref runs (+ (* 3 n) 2)) key)
+             (incf n)))
+      (declare (inline run))
+      (if (hash-grid-dense grid)
+          ;; an occupied cell is at least one cell inside the padded box, so its neighbours are too
+          (let* ((nx (the (integer 1 4096) (hash-grid-nx grid)))
+                 (nxy (* nx (the (integer 1 4096) (hash-grid-ny grid))))
+                 (c (+ (- cx (the cell (hash-grid-ox grid)))
+                       (* nx (- cy (the cell (hash-grid-oy grid)))) (* nxy (- cz (the cell (hash-grid-oz grid)))))))
+            (declare (type index c))
+            (run (1+ entry) (aref starts (+ c 2)) -1)
+            (let ((r (+ c nx -1))) (run (aref starts r) (aref starts (+ r 3)) -1))
+            (loop for dy of-type fixnum from -1 to 1
+                  do (let ((r (+ c nxy (* dy nx) -1))) (run (aref starts r) (aref starts (+ r 3)) -1))))
+          (let ((mask (hash-grid-mask grid)))
+            (flet ((cell (i j k)
+                     (declare (type fixnum i j k))
+                     (let* ((key (grid-cell-key i j k)) (b (grid-bucket key mask)))
+                       (run (aref starts b) (aref starts (1+ b)) key))))
+              (declare (inline cell))
+              (let* ((key (grid-cell-key cx cy cz)) (b (grid-bucket key mask)))
+                (run (1+ entry) (aref starts (1+ b)) key))
+              (cell (1+ cx) cy cz)
+              (loop for i of-type fixnum from (1- cx) to (1+ cx) do (cell i (1+ cy) cz))
+              (loop for j of-type fixnum from (1- cy) to (1+ cy)
+                    do (loop for i of-type fixnum from (1- cx) to (1+ cx) do (cell i j (1+ cz))))))))
+    n))
+
+(defun grid-list-near (grid entry runs run-count reach2)
+  "List in GRID's NEAR column the places of the RUN-COUNT RUNS (as grid-half-runs fills them for
+ENTRY) whose centres lie closer than the square root of REACH2 to the centre of ENTRY, in run
+order, and return how many. The list grows by the sign bit of the squared distance minus
+REACH2, so the test costs no branch. #D9W4CH"
+  (declare (type hash-grid grid) (type index entry) (type fixnum-column runs)
+           (type (integer 0 14) run-count) (type single-float reach2) #.+kernel-policy+)
+  (let* ((gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
+         (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+         (x (aref gx entry)) (y (aref gy entry)) (z (aref gz entry))
+         (found 0))
+    (declare (type index found))
+    (flet ((within (f)
+             (declare (type index f))
+             (let ((dx (- (aref gx f) x)) (dy (- (aref gy f) y)) (dz (- (aref gz f) z)))
+               (ldb (byte 1 31) (sb-kernel:single-float-bits (- (+ (* dx dx) (* dy dy) (* dz dz)) reach2))))))
+      (declare (inline within))
+      (dotimes (q run-count)
+        (let ((start (if (= q 0) (1+ entry) (aref runs (* 3 q))))
+              (end (aref runs (+ (* 3 q) 1)))
+              (key (aref runs (+ (* 3 q) 2))))
+          (declare (type index start end) (type fixnum key))
+          (if (= key -1)
+              (loop for f of-type index from start below end
+                    do (setf (aref near found) f)
+                       (incf found (within f)))
+              (loop for f of-type index from start below end
+                    do (when (= (aref keys f) key)
+                         (setf (aref near found) f)
+                         (incf found (within f))))))))
+    found))
 ;; The block world is the static tree; bodies need a hash grid:1 ends here
 
 ;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:1]]
@@ -1168,10 +1277,13 @@ dispatches on it once per call. #W0RLD7"))
    (probe :initform (make-terrain-probe) :reader physics-world-probe)
    (kernels :initarg :kernels :accessor physics-world-kernels)
    (awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
+   (awake-scratch :initform (make-body-columns :spare 1) :reader physics-world-awake-scratch)
+   (row-places :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-row-places)
    (sleeping :initform (make-body-columns) :reader physics-world-sleeping)
    (ids :initform (make-handle-table) :reader physics-world-ids)
    (contacts :initform (make-contact-columns) :reader physics-world-contacts)
    (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
+   (contact-scratch :initform (make-contact-columns) :reader physics-world-contact-scratch)
    (constraints :initform (make-constraint-columns) :reader physics-world-constraints)
    (events :initform (make-event-columns) :reader physics-world-events)
    (event-data :initform (make-array 16 :initial-element nil) :accessor physics-world-event-data)
@@ -1582,22 +1694,31 @@ back with its hit events. #K1N3BX"
 ;; Kinematic boxes are posted for one step:1 ends here
 
 ;; [[file:../physics.org::#G3NCNT][Contacts are made speculatively:1]]
-(defun touch-contact (world key kind handle-a handle-b nx ny nz separation px py pz kvx kvy kvz)
-  "Refresh the contact under KEY with this step's geometry, or add it with zero impulses. #G3NCNT"
-  (declare (type fixnum key kind handle-a handle-b)
+(declaim (inline touch-contact))
+(defun touch-contact (contacts table key kind handle-a handle-b nx ny nz separation px py pz kvx kvy kvz)
+  "Refresh the contact under KEY in CONTACTS and TABLE with this step's geometry, or add it with
+zero impulses; the row under the table's cursor is tried before the table. #G3NCNT"
+  (declare (type contact-columns contacts) (type contact-table table) (type fixnum key kind handle-a handle-b)
            (type single-float nx ny nz separation px py pz kvx kvy kvz) #.+kernel-policy+)
-  (let* ((contacts (physics-world-contacts world))
-         (table (physics-world-contact-table world))
-         (step (physics-world-step-count world))
-         (row (contact-table-find table key)))
-    (declare (type fixnum row step) (type contact-columns contacts) (type contact-table table))
-    (when (< row 0)
-      (setf row (contact-columns-append contacts))
-      (contact-table-put table key row)
-      (with-contact-columns ((a handle-a) (b handle-b) (k kind) (ky key)) contacts
-        (setf (aref a row) handle-a (aref b row) handle-b (aref k row) kind (aref ky row) key)))
-    (with-contact-columns (seen geometry) contacts
+  (let* ((step (contact-table-step table))
+         (guess (contact-table-cursor table))
+         (row (if (and (< guess (contact-columns-length contacts))
+                       (= (aref (contact-columns-key contacts) guess) key))
+                  guess
+                  (progn (incf (contact-table-misses table))
+                         (contact-table-find table key)))))
+    (declare (type fixnum row step) (type index guess))
+    (if (< row 0)
+        (progn
+          (setf row (contact-columns-append contacts))
+          (contact-table-put table key row)
+          (with-contact-columns ((a handle-a) (b handle-b) (k kind) (ky key)) contacts
+            (setf (aref a row) handle-a (aref b row) handle-b (aref k row) kind (aref ky row) key)))
+        (setf (contact-table-cursor table) (1+ row)))
+    (with-contact-columns (seen order geometry) contacts
       (unless (= (aref seen row) step)
+        (setf (aref order row) (contact-table-touched table))
+        (incf (contact-table-touched table))
         ;; carried impulses only make sense along a normal close to the one they were found on
         (when (< (+ (* nx (contact@ geometry row nx)) (* ny (contact@ geometry row ny))
                     (* nz (contact@ geometry row nz)))
@@ -1611,6 +1732,7 @@ back with its hit events. #K1N3BX"
               (contact@ geometry row px) px (contact@ geometry row py) py (contact@ geometry row pz) pz
               (contact@ geometry row kvx) kvx (contact@ geometry row kvy) kvy (contact@ geometry row kvz) kvz)))
     row))
+(declaim (notinline touch-contact))
 
 (declaim (inline speculative-distance))
 (defun speculative-distance (approach dt slop margin gravity-step)
@@ -1618,7 +1740,9 @@ back with its hit events. #K1N3BX"
 distance the pair can close in DT at APPROACH speed grown by one step of gravity, but no
 more than MARGIN. #G3NCNT"
   (declare (type single-float approach dt slop margin gravity-step))
-  (min margin (+ (* 4.0 slop) (* (+ (max approach 0.0) gravity-step) dt))))
+  ;; (approach + |approach|)/2 is exactly max(approach, 0), without the branch that a pile's
+  ;; approach speeds, as often positive as not, would mispredict
+  (min margin (+ (* 4.0 slop) (* (+ (* 0.5 (+ approach (abs approach))) gravity-step) dt))))
 ;; Contacts are made speculatively:1 ends here
 
 ;; [[file:../physics.org::#G4R1D5][The grids of the awake and of the sleeping:1]]
@@ -1640,14 +1764,50 @@ lies in neighbouring cells. #G4R1D5"
     grid))
 
 (defun grid-phase (world)
-  "Phase 3: bucket the awake bodies by cell. #G4R1D5"
-  (let ((awake (physics-world-awake world)))
-    (build-hash-grid (physics-world-awake-grid world) (grid-cell-size world)
-                     (body-columns-length awake) (body-columns-x awake) (body-columns-y awake)
-                     (body-columns-z awake)
+  "Phase 3: bucket the awake bodies by cell, and put the awake rows in the order of a dense grid
+when they have drifted out of it. #G4R1D5"
+  (let* ((awake (physics-world-awake world))
+         (grid (physics-world-awake-grid world))
+         (n (body-columns-length awake)))
+    (build-hash-grid grid (grid-cell-size world) n
+                     (body-columns-x awake) (body-columns-y awake) (body-columns-z awake)
                      ;; the awake grid's items are rows: an identity column of row numbers
-                     (awake-row-identities world (body-columns-length awake)))
+                     (awake-row-identities world n))
+    ;; the room a sort needs grows with the awake buffer, so sorting itself never allocates
+    (body-columns-ensure-capacity (physics-world-awake-scratch world) (body-columns-capacity awake))
+    (when (< (length (physics-world-row-places world)) (body-columns-capacity awake))
+      (setf (physics-world-row-places world)
+            (make-array (body-columns-capacity awake) :element-type 'fixnum)))
+    (when (and (hash-grid-dense grid) (> (grid-order-breaks grid n) (floor n 16)))
+      (sort-awake-rows world grid n))
     (ensure-sleeping-grid world)))
+
+(defun grid-order-breaks (grid n)
+  "How many of the first N items of GRID's order do not follow the item before them. #G4R1D5"
+  (declare (type hash-grid grid) (type index n) #.+kernel-policy+)
+  (let ((items (hash-grid-items grid)) (breaks 0))
+    (declare (type fixnum breaks))
+    (loop for e of-type fixnum from 1 below n
+          unless (= (aref items e) (1+ (aref items (1- e)))) do (incf breaks))
+    breaks))
+
+(defun sort-awake-rows (world grid n)
+  "Move each of the N awake rows to its place in GRID's order, patch every awake handle's
+forwarding address, and make the grid's items the new rows. #G4R1D5"
+  (declare (type hash-grid grid) (type index n) #.+kernel-policy+)
+  (let ((awake (physics-world-awake world))
+        (items (hash-grid-items grid))
+        (locals (handle-table-local (physics-world-ids world))))
+    (declare (type body-columns awake) (type fixnum-column items locals))
+    (let ((places (physics-world-row-places world)))
+      (declare (type fixnum-column places))
+      (dotimes (e n) (setf (aref places (aref items e)) e))
+      (body-columns-permute awake (physics-world-awake-scratch world) places n)
+      (let ((handle (body-columns-handle awake)))
+        (dotimes (i n)
+          (setf (aref locals (handle-index (aref handle i))) i
+                (aref items i) i))))
+    world))
 
 (defvar *row-identities* (make-array 0 :element-type 'fixnum)
   "0, 1, 2, ...: the identity column the awake grid is built from. #G4R1D5")
@@ -1732,6 +1892,7 @@ woke. #W4K3PH"
 ;; Fast bodies and moving boxes wake what they reach:1 ends here
 
 ;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:1]]
+(declaim (type (simple-array single-float (78)) +unit-directions+))
 (defparameter +unit-directions+
   (let ((v (make-array 78 :element-type 'single-float)) (k 0))
     (loop for dz from -1 to 1 do
@@ -1757,27 +1918,34 @@ across pairs, and opposite when the two are named the other way round. #P41RS7"
     (* 3 (if (< (handle-index ha) (handle-index hb)) k (- 25 k)))))
 
 (defun pair-phase (world)
-  "Phase 4: contacts between awake bodies (each pair once, walking half the neighbour cells) and lean
-contacts from slow awake bodies onto the sleepers they reach. A candidate within reach becomes
-a contact only when its gap is under the speculative distance. #P41RS7"
+  "Phase 4: contacts between awake bodies (each pair once, walking the half neighbourhood of each
+body's cell in the grid's order) and lean contacts from slow awake bodies onto the sleepers they
+reach. A candidate within reach becomes a contact only when its gap is under the speculative
+distance. #P41RS7"
   (let* ((awake (physics-world-awake world))
          (sleeping (physics-world-sleeping world))
          (ids (physics-world-ids world))
          (grid (physics-world-awake-grid world))
          (sgrid (physics-world-sleeping-grid world))
          (any-sleeping (plusp (body-columns-length sleeping)))
-         (n (body-columns-length awake))
          (margin (f32 (physics-world-margin world)))
          (slop (f32 (physics-world-slop world)))
          (dt (physics-world-current-dt world))
          (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                (expt (physics-world-gravity-z world) 2)))))
          (rmax (f32 (physics-world-max-radius world)))
-         (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid)))
+         (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
+         (items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+         (runs (make-array 42 :element-type 'fixnum))
+         (contacts (physics-world-contacts world))
+         (table (physics-world-contact-table world)))
     (declare (type single-float margin slop dt gstep rmax) (type f32-column gx gy gz)
-             (type index n) (type body-columns awake sleeping)
-             (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+)
-    (with-body-columns (x y z vx vy vz radius flags handle) awake
+             (type fixnum-column items keys near runs) (dynamic-extent runs)
+             (type body-columns awake sleeping)
+             (type contact-columns contacts) (type contact-table table)
+             (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+
+             (inline touch-contact))
+    (with-body-columns (vx vy vz radius flags handle) awake
       (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj)
                (declare (type single-float xi yi zi ri xj yj zj rj vxi vyi vzi vxj vyj vzj)
                         (type fixnum hi hj))
@@ -1785,52 +1953,59 @@ a contact only when its gap is under the speculative distance. #P41RS7"
                       (d2 (+ (* dx dx) (* dy dy) (* dz dz)))
                       (reach (+ ri rj margin)))
                  (when (< d2 (* reach reach))
-                   (let* ((d (fsqrt d2))
-                          (far (> d 1e-6))
-                          (inv (if far (/ 1.0 d) 0.0))
-                          (cn (if far 0 (coincident-direction hi hj)))
-                          (nx (if far (* dx inv) (aref +unit-directions+ cn)))
-                          (ny (if far (* dy inv) (aref +unit-directions+ (+ cn 1))))
-                          (nz (if far (* dz inv) (aref +unit-directions+ (+ cn 2))))
-                          (sep (- d ri rj))
-                          (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
+                   (let ((d (fsqrt d2)))
+                    (multiple-value-bind (nx ny nz)
+                        (if (> d 1e-6)
+                            (let ((inv (/ 1.0 d))) (values (* dx inv) (* dy inv) (* dz inv)))
+                            (let ((cn (coincident-direction hi hj)))
+                              (values (aref +unit-directions+ cn) (aref +unit-directions+ (+ cn 1))
+                                      (aref +unit-directions+ (+ cn 2)))))
+                     (declare (type single-float nx ny nz))
+                     (let ((sep (- d ri rj))
+                           (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
                      (when (< sep (speculative-distance approach dt slop margin gstep))
                        ;; orient every pair contact from the lower handle slot to the higher
-                       (if (< (handle-index hi) (handle-index hj))
-                           (touch-contact world (pair-key (handle-index hi) (handle-index hj))
-                                          +contact-pair+ hi hj nx ny nz sep
-                                          (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)) 0.0 0.0 0.0)
-                           (touch-contact world (pair-key (handle-index hj) (handle-index hi))
-                                          +contact-pair+ hj hi (- nx) (- ny) (- nz) sep
-                                          (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))
-                                          0.0 0.0 0.0))))))))
+                       (multiple-value-bind (ha hb s px py pz)
+                           (if (< (handle-index hi) (handle-index hj))
+                               (values hi hj 1.0 (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)))
+                               (values hj hi -1.0 (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))))
+                         (declare (type fixnum ha hb) (type single-float s px py pz))
+                         (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
+                                        +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
+                                        0.0 0.0 0.0))))))))))
         (declare (inline pair))
-        (dotimes (i n)
-          (when (zerop (logand (aref flags i) +flag-terrain-only+))
-            (let* ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i))
-                   (hi (aref handle i)) (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i))
-                   (widest (+ ri rmax margin)) (widest2 (* widest widest)))
-              (declare (type single-float widest widest2))
-              (do-grid-neighbours (j grid xi yi zi :half t :own own :entry e)
-                ;; a first test on the grid's own copy of the centres, against the widest reach,
-                ;; before any of the neighbour's columns is read
-                (let ((dx (- (aref gx e) xi)) (dy (- (aref gy e) yi)) (dz (- (aref gz e) zi)))
-                  (when (and (< (+ (* dx dx) (* dy dy) (* dz dz)) widest2)
-                             (or (not own) (> j i)) (zerop (logand (aref flags j) +flag-terrain-only+)))
-                    (pair xi yi zi ri hi vxi vyi vzi
-                          (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
-                          (aref vx j) (aref vy j) (aref vz j)))))
-              (when any-sleeping
-                (do-grid-neighbours (h sgrid xi yi zi)
-                  (let ((slot (handle-index h)))
-                    (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                               (= (aref (handle-table-generation ids) slot) (handle-generation h)))
-                      (let ((row (aref (handle-table-local ids) slot)))
-                        (when (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
-                          (pair xi yi zi ri hi vxi vyi vzi
-                                (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
-                                (aref (body-columns-z sleeping) row)
-                                (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0))))))))))))
+        (let ((cell-key -1) (run-count 0))
+          (declare (type fixnum cell-key) (type (integer 0 14) run-count))
+          (dotimes (e (hash-grid-count grid))
+            (let ((i (aref items e)))
+              (when (zerop (logand (aref flags i) +flag-terrain-only+))
+                ;; the items of one cell are consecutive in the grid's order and share its runs
+                (unless (= (aref keys e) cell-key)
+                  (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
+                (let* ((xi (aref gx e)) (yi (aref gy e)) (zi (aref gz e)) (ri (aref radius i))
+                       (hi (aref handle i)) (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i))
+                       (widest (+ ri rmax margin)) (widest2 (* widest widest))
+                       (found 0))
+                  (declare (type single-float widest widest2) (type index found))
+                  ;; first the entries within the widest reach, from the grid's copy of the centres
+                  (setf found (grid-list-near grid e runs run-count widest2))
+                  (dotimes (q found)
+                    (let* ((f (aref near q)) (j (aref items f)))
+                      (when (zerop (logand (aref flags j) +flag-terrain-only+))
+                        (pair xi yi zi ri hi vxi vyi vzi
+                              (aref gx f) (aref gy f) (aref gz f) (aref radius j) (aref handle j)
+                              (aref vx j) (aref vy j) (aref vz j)))))
+                  (when any-sleeping
+                    (do-grid-neighbours (h sgrid xi yi zi)
+                      (let ((slot (handle-index h)))
+                        (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+                                   (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+                          (let ((row (aref (handle-table-local ids) slot)))
+                            (when (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
+                              (pair xi yi zi ri hi vxi vyi vzi
+                                    (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
+                                    (aref (body-columns-z sleeping) row)
+                                    (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0))))))))))))))
     world))
 ;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
@@ -1901,8 +2076,11 @@ is under the speculative distance. #MYWH16"
              (dt (physics-world-current-dt world))
              (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                    (expt (physics-world-gravity-z world) 2)))))
-             (limit (f32 *physics-reach-limit*)))
-        (declare (type single-float margin limit slop dt gstep))
+             (limit (f32 *physics-reach-limit*))
+             (contacts (physics-world-contacts world))
+             (table (physics-world-contact-table world)))
+        (declare (type single-float margin limit slop dt gstep)
+                 (type contact-columns contacts) (type contact-table table) (inline touch-contact))
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i n)
             (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
@@ -1922,17 +2100,17 @@ is under the speculative distance. #MYWH16"
                       (loop for iy of-type fixnum from y0 to y1 do
                         (loop for ix of-type fixnum from x0 to x1 do
                           (when (plusp (aref chunk (cell-offset ix iy iz)))
-                            (setf mask (logior mask (ash 1 (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))
+                            (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))))))))))))
                   (loop for iz of-type fixnum from z0 to z1 do
                     (loop for iy of-type fixnum from y0 to y1 do
                       (loop for ix of-type fixnum from x0 to x1 do
                         (when (probe-solid-p probe ix iy iz)
-                          (setf mask (logior mask (ash 1 (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))
+                          (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))))))))))))
               ;; a body that can travel past its margin this step also sweeps its path
               (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
                                                       (* (aref vz i) (aref vz i))))))))
                 (when (> travel margin)
-                  (sweep-terrain-contact world probe (aref handle i) cx cy cz r
+                  (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
                                          (aref vx i) (aref vy i) (aref vz i) (+ travel r))))
               (unless (zerop mask)
                 (flet ((solid (ix iy iz)
@@ -1961,23 +2139,24 @@ is under the speculative distance. #MYWH16"
                                   (when (< sep (speculative-distance
                                                 (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
                                                 dt slop margin gstep))
-                                    (touch-contact world key +contact-terrain+ (aref handle i) +no-body+
+                                    (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
                                                    nx ny nz sep px py pz 0.0 0.0 0.0))))
                               ;; inside: push out through a face
                               (multiple-value-bind (nx ny nz px py pz sep)
                                   (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
                                                ix iy iz)
-                                (touch-contact world key +contact-terrain+ (aref handle i) +no-body+
+                                (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
                                                nx ny nz sep px py pz 0.0 0.0 0.0)))))))))))))))
     world))
 ;; Sphere against cells: the overshoot rule keeps seams smooth:1 ends here
 
 ;; [[file:../physics.org::#SW33P7][Fast bodies sweep their path through the cells:1]]
-(defun sweep-terrain-contact (world probe handle cx cy cz r vx vy vz length)
+(defun sweep-terrain-contact (contacts table probe handle cx cy cz r vx vy vz length)
   "Walk the cells along the ray from CX CY CZ in the direction of VX VY VZ for LENGTH metres;
-at the first solid cell, make HANDLE's body a speculative contact with the face the ray
-enters it through. #SW33P7"
-  (declare (type single-float cx cy cz r vx vy vz length) (type fixnum handle) #.+kernel-policy+)
+at the first solid cell, make HANDLE's body a speculative contact, in CONTACTS and TABLE,
+with the face the ray enters it through. #SW33P7"
+  (declare (type contact-columns contacts) (type contact-table table)
+           (type single-float cx cy cz r vx vy vz length) (type fixnum handle) #.+kernel-policy+)
   (let* ((speed (fsqrt (+ (* vx vx) (* vy vy) (* vz vz))))
          (inv (/ 1.0 (max speed 1e-12)))
          (dx (* vx inv)) (dy (* vy inv)) (dz (* vz inv))
@@ -2014,7 +2193,7 @@ enters it through. #SW33P7"
                                (t (values 0.0 0.0 (float sz 1.0)
                                           (* (float sz 1.0) (- (float (if (> sz 0) iz (1+ iz)) 1.0) cz)))))
                            (declare (type single-float nx ny nz gap))
-                           (touch-contact world (terrain-key (handle-index handle) ix iy iz) +contact-terrain+
+                           (touch-contact contacts table (terrain-key (handle-index handle) ix iy iz) +contact-terrain+
                                           handle +no-body+ nx ny nz (- gap r)
                                           (+ cx (* gap nx)) (+ cy (* gap ny)) (+ cz (* gap nz)) 0.0 0.0 0.0))
                          (return))))))))))
@@ -2026,8 +2205,11 @@ enters it through. #SW33P7"
   (let* ((boxes (physics-world-boxes world))
          (awake (physics-world-awake world))
          (grid (physics-world-awake-grid world))
-         (margin (physics-world-margin world))
-         (limit (f32 *physics-reach-limit*)))
+         (margin (f32 (physics-world-margin world)))
+         (limit (f32 *physics-reach-limit*))
+         (contacts (physics-world-contacts world))
+         (table (physics-world-contact-table world)))
+    (declare (type single-float margin limit))
     (when (plusp (box-columns-length boxes))
       (with-body-columns (x y z radius handle) awake
         (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz id) boxes
@@ -2045,32 +2227,51 @@ enters it through. #SW33P7"
                       (cx cy cz r bx0 by0 bz0 bx1 by1 bz1)
                     (when (<= d2 (* reach reach))
                       (multiple-value-bind (nx ny nz sep) (finish)
-                        (touch-contact world key +contact-box+ (aref handle i) +no-body+
+                        (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
                                        nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))
                     (multiple-value-bind (nx ny nz px py pz sep)
                         (inside-face nil cx cy cz r bx0 by0 bz0 bx1 by1 bz1 0 0 0)
-                      (touch-contact world key +contact-box+ (aref handle i) +no-body+
+                      (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
                                      nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b)))))))))))
     world))
 ;; Boxes touch as moving terrain:1 ends here
 
 ;; [[file:../physics.org::#PRUN3D][Contacts not found this step are pruned:1]]
 (defun prune-phase (world)
-  "Phase 7: drop every contact not seen this step, patching the table entry of the row that
-fills its hole; a touching one ends with an :end event. #PRUN3D"
+  "Phase 7: drop every contact not seen this step (a touching one ends with an :end event). When
+the table's cursor has missed as often as there are rows, put the rows found this step in the
+order they were found; otherwise swap-remove, patching the table entry of the row that fills
+the hole. #PRUN3D"
+  (declare #.+kernel-policy+)
   (let* ((contacts (physics-world-contacts world))
          (table (physics-world-contact-table world))
-         (step (physics-world-step-count world)))
+         (step (physics-world-step-count world))
+         (reorder (>= (contact-table-misses table) (max 64 (contact-columns-length contacts)))))
+    (declare (type contact-columns contacts) (type contact-table table) (type fixnum step))
+    ;; the room a reordering needs grows with the contact buffer, so reordering never allocates
+    (contact-columns-ensure-capacity (physics-world-contact-scratch world) (contact-columns-capacity contacts))
     (loop for row of-type fixnum from (1- (contact-columns-length contacts)) downto 0
-          do (with-contact-columns (seen touching key handle-a handle-b geometry) contacts
+          do (with-contact-columns (seen order touching key handle-a handle-b geometry) contacts
                (unless (= (aref seen row) step)
                  (when (= (aref touching row) 1)
                    (push-event world +event-end+ (aref handle-a row) (aref handle-b row)
                                (contact@ geometry row px) (contact@ geometry row py) (contact@ geometry row pz) 0.0))
                  (contact-table-delete table (aref key row))
-                 (let ((moved (contact-columns-swap-remove contacts row)))
-                   (when (>= moved 0)
-                     (contact-table-put table (aref key row) row))))))
+                 (if reorder
+                     (setf (aref order row) -1)
+                     (let ((moved (contact-columns-swap-remove contacts row)))
+                       (when (>= moved 0)
+                         (contact-table-put table (aref key row) row)))))))
+    (when reorder
+      (let ((order (contact-columns-order contacts))
+            (slots (contact-table-slots table)))
+        ;; every key left in the table names a row found this step; point it at that row's place
+        (loop for i of-type fixnum from 0 below (length slots) by 2
+              unless (= (aref slots i) -1)
+                do (setf (aref slots (1+ i)) (aref order (aref slots (1+ i)))))
+        (contact-columns-permute contacts (physics-world-contact-scratch world) order
+                                 (contact-table-touched table))
+        (setf (contact-table-misses table) 0)))
     world))
 ;; Contacts not found this step are pruned:1 ends here
 
@@ -2641,7 +2842,8 @@ speed. #ST0R3S"
          (hit-speed (f32 (physics-world-hit-speed world)))
          (dt (physics-world-current-dt world))
          (max-penetration 0.0) (max-approach 0.0))
-    (declare (type f32-column d v) (type single-float hit-speed dt max-penetration max-approach))
+    (declare (type f32-column d v) (type single-float hit-speed dt max-penetration max-approach)
+             #.+kernel-policy+)
     (with-constraint-block (contact body-a body-b) cbuf
       (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
         (loop for k of-type index below (constraint-columns-length cbuf)
@@ -2703,9 +2905,11 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
          (sleep-p (physics-world-sleep-enabled world))
          (sleep-speed (f32 (physics-world-sleep-speed world)))
          (time-to-sleep (f32 (physics-world-time-to-sleep world))))
-    (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep))
-    (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
-      (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz radius sleep-time age life handle) awake
+    (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep)
+             (type body-columns awake sleeping) #.+kernel-policy+)
+    ;; removing or putting a row to sleep moves rows within the awake columns, never replaces them
+    (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz radius sleep-time age life handle) awake
+      (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
         (let* ((o (* i +solver-stride+)) (p (* i +delta-stride+))
                (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
                (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5))))
@@ -2732,8 +2936,8 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
                        (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
                          (sleep-physics-body world i))
                        (setf (aref sleep-time i) 0.0))))))))
-    (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
-      (with-body-columns (x y z age life handle) sleeping
+    (with-body-columns (x y z age life handle) sleeping
+      (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
         (when (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
           (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
           (%remove-body world +set-sleeping+ i))))
@@ -2742,11 +2946,15 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
 
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
 (defun reset-phase (world)
-  "Phase 1: empty the event buffer and make the probe forget its borrowed chunks. #IDVK7G"
+  "Phase 1: empty the event buffer, make the probe forget its borrowed chunks, count the step
+and start the contact table's walk of it. #IDVK7G"
   (event-columns-clear (physics-world-events world))
   (fill (physics-world-event-data world) nil)
   (reset-terrain-probe (physics-world-probe world) (physics-world-terrain world))
   (incf (physics-world-step-count world))
+  (let ((table (physics-world-contact-table world)))
+    (setf (contact-table-step table) (physics-world-step-count world)
+          (contact-table-cursor table) 0 (contact-table-touched table) 0))
   world)
 
 (defun substep-phase (world)

@@ -810,6 +810,34 @@ how far the ball moved and the deepest the box's leading face got past the ball'
     (check (and begins (every (lambda (d) (eq d owner)) begins)))))
 ;; K1N3BX-hit-carries-owner ends here
 
+;; [[file:../physics.org::#G4R1D5][G4R1D5-sorted-rows-keep-handles]]
+(define-claim "G4R1D5" sorted-rows-keep-handles
+    "After the grid phase sorts scrambled rows, each handle still names its own body."
+  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
+         (next (make-lcg 11))
+         (bodies (loop for i below 300
+                       collect (let ((x (* 4 (funcall next))) (y (* 4 (funcall next))) (z (* 4 (funcall next)))
+                                     (r (+ 0.1 (* 0.15 (funcall next)))))
+                                 (list (luv-physics::add-physics-body w x y z :radius r) x y z r))))
+         (awake (luv-physics::physics-world-awake w))
+         (grid (luv-physics::physics-world-awake-grid w)))
+    (luv-physics::reset-phase w)
+    (luv-physics::wake-phase w)
+    (luv-physics::grid-phase w)
+    (check (luv-physics::hash-grid-dense grid) "the cloud was gridded by hash")
+    (check (loop for e below 300 always (= e (aref (luv-physics::hash-grid-items grid) e)))
+           "the rows are not in the grid's order")
+    (check (loop for (h x y z r) in bodies
+                 always (and (equal (multiple-value-list (luv-physics::physics-body-position w h))
+                                    (list (float x 1.0) (float y 1.0) (float z 1.0)))
+                             (= (float r 1.0) (luv-physics::physics-body-radius w h))))
+           "a handle reads another body")
+    (check (not (loop for row below 300
+                      always (= (aref (luv-physics::body-columns-handle awake) row) (first (nth row bodies)))))
+           "no row moved")
+    (check (eq t (luv-physics::validate-physics-world w)))))
+;; G4R1D5-sorted-rows-keep-handles ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-coincident-pair-separates]]
 (define-claim "P41RS7" coincident-pair-separates
     "Coincident balls separate along their pair's direction at <= the push-out speed."
@@ -917,6 +945,44 @@ how far the ball moved and the deepest the box's leading face got past the ball'
             (check (< (abs (- x (- 10 0.25))) 0.01)
                    "at ~D m/s from x = ~,3F the ball ended at x = ~,4F" speed (* k 0.137) x)))))))
 ;; SW33P7-no-tunnelling-to-100 ends here
+
+;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-keeps-contacts]]
+(define-claim "PRUN3D" reorder-keeps-contacts
+    "A reordering prune keeps every contact found, unchanged, in found order, and the table consistent."
+  (let* ((w (luv-physics::make-basin-world 200))
+         (c (luv-physics::physics-world-contacts w))
+         (table (luv-physics::physics-world-contact-table w)))
+    (dotimes (i 90) (luv-physics::step-physics-world w))
+    (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                     luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase))
+      (funcall phase w))
+    (flet ((row-contents (row)
+             (list (aref (luv-physics::contact-columns-kind c) row)
+                   (aref (luv-physics::contact-columns-handle-a c) row)
+                   (aref (luv-physics::contact-columns-handle-b c) row)
+                   (aref (luv-physics::contact-columns-seen c) row)
+                   (aref (luv-physics::contact-columns-touching c) row)
+                   (loop for k below 16
+                         collect (aref (luv-physics::contact-columns-geometry c) (+ (* 16 row) k))))))
+      (let* ((step (luv-physics::physics-world-step-count w))
+             (before (loop for row below (luv-physics::contact-columns-length c)
+                           when (= (aref (luv-physics::contact-columns-seen c) row) step)
+                             collect (list (aref (luv-physics::contact-columns-order c) row)
+                                           (aref (luv-physics::contact-columns-key c) row)
+                                           (row-contents row))))
+             (found (luv-physics::contact-table-touched table)))
+        (check (> found 200) "only ~D contacts found" found)
+        (setf (luv-physics::contact-table-misses table) (* 2 (luv-physics::contact-columns-length c)))
+        (luv-physics::prune-phase w)
+        (check (zerop (luv-physics::contact-table-misses table)) "the prune did not reorder")
+        (check (= found (luv-physics::contact-columns-length c) (luv-physics::contact-table-count table)))
+        (check (loop for (place key contents) in before
+                     always (and (= key (aref (luv-physics::contact-columns-key c) place))
+                                 (= place (luv-physics::contact-table-find table key))
+                                 (equal contents (row-contents place))))
+               "a contact moved elsewhere than the place it was found at, or changed")
+        (check (eq t (luv-physics::validate-physics-world w)))))))
+;; PRUN3D-reorder-keeps-contacts ends here
 
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
 (define-claim "SSMPYW" colours-disjoint
