@@ -49,7 +49,7 @@
 floats a row) named by INDEX[K..K+7], as the columns of the 8x8 transpose. #R0WS8T"
   (let ((rows (loop repeat 8 collect (gensym "ROW"))))
     `(let* (,@(loop for r in rows for l from 0
-                    collect `(,r (sb-simd-avx:f32.8-aref ,v (* (aref ,index (+ ,k ,l)) +solver-stride+))))
+                    collect `(,r (sb-simd-avx:f32.8-aref ,v (* (the index (aref ,index (+ ,k ,l))) +solver-stride+))))
             ,@(macroexpand-1 `(transpose-8 ,rows ,columns)))
        (declare (ignorable ,@columns))
        ,@body)))
@@ -59,7 +59,7 @@ floats a row) named by INDEX[K..K+7], as the columns of the 8x8 transpose. #R0WS
   (let ((rows (loop repeat 8 collect (gensym "ROW"))))
     `(let* (,@(macroexpand-1 `(transpose-8 ,columns ,rows)))
        ,@(loop for r in rows for l from 0
-               collect `(setf (sb-simd-avx:f32.8-aref ,v (* (aref ,index (+ ,k ,l)) +solver-stride+)) ,r)))))
+               collect `(setf (sb-simd-avx:f32.8-aref ,v (* (the index (aref ,index (+ ,k ,l))) +solver-stride+)) ,r)))))
 
 (defmacro transpose-4 (rows columns)
   "Bind COLUMNS to the 4x4 transpose of the f32.4 values ROWS (a LET* binding list). #R0WS8T"
@@ -76,9 +76,9 @@ floats a row) named by INDEX[K..K+7], as the columns of the 8x8 transpose. #R0WS
 INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest from the high. #R0WS8T"
   (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI"))))
     `(let* (,@(loop for r in lo for l from 0
-                    collect `(,r (sb-simd-sse:f32.4-aref ,v (* (aref ,index (+ ,k ,l)) +solver-stride+))))
+                    collect `(,r (sb-simd-sse:f32.4-aref ,v (* (the index (aref ,index (+ ,k ,l))) +solver-stride+))))
             ,@(loop for r in hi for l from 0
-                    collect `(,r (sb-simd-sse:f32.4-aref ,v (+ 4 (* (aref ,index (+ ,k ,l)) +solver-stride+)))))
+                    collect `(,r (sb-simd-sse:f32.4-aref ,v (+ 4 (* (the index (aref ,index (+ ,k ,l))) +solver-stride+)))))
             ,@(macroexpand-1 `(transpose-4 ,lo ,(subseq columns 0 4)))
             ,@(macroexpand-1 `(transpose-4 ,hi ,(subseq columns 4 8))))
        (declare (ignorable ,@columns))
@@ -90,9 +90,9 @@ INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest fr
     `(let* (,@(macroexpand-1 `(transpose-4 ,(subseq columns 0 4) ,lo))
             ,@(macroexpand-1 `(transpose-4 ,(subseq columns 4 8) ,hi)))
        ,@(loop for r in lo for l from 0
-               collect `(setf (sb-simd-sse:f32.4-aref ,v (* (aref ,index (+ ,k ,l)) +solver-stride+)) ,r))
+               collect `(setf (sb-simd-sse:f32.4-aref ,v (* (the index (aref ,index (+ ,k ,l))) +solver-stride+)) ,r))
        ,@(loop for r in hi for l from 0
-               collect `(setf (sb-simd-sse:f32.4-aref ,v (+ 4 (* (aref ,index (+ ,k ,l)) +solver-stride+))) ,r)))))
+               collect `(setf (sb-simd-sse:f32.4-aref ,v (+ 4 (* (the index (aref ,index (+ ,k ,l))) +solver-stride+))) ,r)))))
 
 (declaim (inline f32.4-select))
 (defun f32.4-select (mask a b)
