@@ -3323,7 +3323,29 @@ each phase's share; with the machine's model and load. #B3NCH5"
       (format stream "~&| ~5D | ~6A |~{ ~A |~}~%" (getf m :balls) (string-downcase (getf m :kernels))
               (loop for (name . phases) in +bench-phase-groups+
                     collect (format nil "~vD" (length name)
-                                    (loop for p in phases sum (cdr (assoc p (getf m :phase-bytes))))))))))
+                                    (loop for p in phases sum (cdr (assoc p (getf m :phase-bytes))))))))
+    (print-basin-targets (reverse rows) (car (last families)) stream)))
+
+(defun print-basin-targets (rows widest stream)
+  "Print, as an Org table, the step-time targets of this machine against ROWS (the plists of
+run-basin-benchmark) for the scalar family and the WIDEST: measured median, target, and
+whether it is met; and the wide solve's speed-up over the scalar solve. #B3NCH5"
+  (flet ((row (balls family)
+           (find-if (lambda (m) (and (= (getf m :balls) balls) (eq (getf m :kernels) family))) rows))
+         (substeps (m) (cdr (assoc 'substep-phase (getf m :phases)))))
+    (format stream "~&~%#+caption: the targets of this machine, from the run above~%")
+    (format stream "~&| target | measured | met |~%|--------+----------+-----|~%")
+    (loop for (balls family limit) in (list (list 3000 :scalar 4.0) (list 3000 widest 1.5) (list 10000 widest 6.0))
+          for m = (row balls family)
+          when m
+            do (format stream "~&| ~D balls, ~(~A~), median <= ~,1F ms | ~,3F ms | ~:[no~;yes~] |~%"
+                       balls family limit (getf m :median) (<= (getf m :median) limit)))
+    (let ((scalar (row 3000 :scalar)) (wide (row 3000 widest)))
+      (when (and scalar wide (not (eq widest :scalar)))
+        (let ((ratio (/ (substeps scalar) (substeps wide))))
+          (format stream "~&| 3000 balls, ~(~A~) substeps >= 3x faster than scalar | ~,2Fx | ~:[no~;yes~] |~%"
+                  widest ratio (>= ratio 3)))))))
+
 (defun measure-settled-pile (&key (balls 1000) (kernels :scalar) (steps 100))
   "Drop BALLS balls into the basin with sleep on, step until every one sleeps (at most 20 s),
 then return the mean ms and bytes consed per step over STEPS more steps, and the steps it
