@@ -13,8 +13,7 @@
    #:available-kernel-families
    ;; Types, the hot-loop policy and the parameters (#V0CAB5)
    #:*physics-contact-hertz* #:*physics-contact-damping-ratio* #:*physics-contact-push-max*
-   #:*physics-load-stiffening* #:*physics-crowded-relax-passes* #:*physics-crowded-depth*
-   #:*physics-linear-slop* #:*physics-speculative-margin* #:*physics-restitution-threshold*
+   #:*physics-load-stiffening* #:*physics-crowded-relax-passes* #:*physics-linear-slop* #:*physics-speculative-margin* #:*physics-restitution-threshold*
    #:*physics-hit-speed* #:*physics-sleep-speed* #:*physics-time-to-sleep* #:*physics-wake-speed*
    #:*physics-reach-limit* #:*physics-max-speed* #:+physics-coordinate-limit+
    ;; Bad input is a condition that names the value (#C0ND1T)
@@ -345,10 +344,7 @@ contact's effective mass, may divide the contact's impulse scale, and so its giv
 
 (defparameter *physics-crowded-relax-passes* 3
   "Extra relax passes per substep in a crowded step: one whose contacts needed the overflow
-colour, or one after a step that left an overlap deeper than *physics-crowded-depth*. #V0CAB5")
-
-(defparameter *physics-crowded-depth* 0.05
-  "Overlap, m, beyond which the next step counts as crowded. #V0CAB5")
+colour. #V0CAB5")
 
 (defparameter *physics-linear-slop* 0.005
   "Penetration, m, allowed at rest; a resting ball sits this far into its support. #V0CAB5")
@@ -2961,13 +2957,11 @@ and start the contact table's walk of it. #IDVK7G"
 (defun substep-phase (world)
   "Phase 9: the Soft Step substeps: integrate velocities, warm start, solve with bias,
 integrate positions, relax without bias; in a crowded step (one with contacts in the overflow
-colour, or after a step that left an overlap deeper than *physics-crowded-depth*), relax
-*physics-crowded-relax-passes* more times. #IDVK7G"
+colour), relax *physics-crowded-relax-passes* more times. #IDVK7G"
   (let* ((kernels (physics-world-kernels world))
          (h (physics-world-current-h world))
          (inv-h (/ 1.0 h))
-         (relaxes (if (or (plusp (physics-world-overflow-count world))
-                          (> (f32 (aref (world-statistics world) 3)) (f32 *physics-crowded-depth*)))
+         (relaxes (if (plusp (physics-world-overflow-count world))
                       (1+ *physics-crowded-relax-passes*)
                       1)))
     (declare (type single-float h inv-h) (type fixnum relaxes))
