@@ -163,15 +163,18 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
            (loop for k of-type index from start below end by ,width do
              (let ((base (constraint-base k)))
                (declare (type index base))
+               ;; the gap first, from the deltas alone, so that they are dead before the
+               ;; velocity rows are gathered and fewer values compete for registers
+               (let ((s (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
+                          (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
+                            (w+ (w+ (@w separation)
+                                    (w+ (w+ (w* (w- dbx dax) (@w nx)) (w* (w- dby day) (@w ny)))
+                                        (w* (w- dbz daz) (@w nz))))
+                                (w* (@w kvn) (wc elapsed)))))))
                (with-body-rows
-                 (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
-                  (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
                (let* ((x (@w nx)) (y (@w ny)) (z (@w nz))
                       (ma (@w ima)) (mb (@w imb)) (iam (@w iia)) (ibm (@w iib))
                       (ar (@w ra)) (br (@w rb))
-                      (s (w+ (w+ (@w separation)
-                                 (w+ (w+ (w* (w- dbx dax) x) (w* (w- dby day) y)) (w* (w- dbz daz) z)))
-                             (w* (@w kvn) (wc elapsed))))
                       (positive (w> s (wc 0.0)))
                       (bias (if use-bias
                                 (let ((soft (w* (@w bias-rate) s)) (cap (wc (- push-max))))
@@ -241,7 +244,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            waz (wif rolling (w- waz (w* iam dz)) waz)
                            wbx (wif rolling (w+ wbx (w* ibm dx)) wbx) wby (wif rolling (w+ wby (w* ibm dy)) wby)
                            wbz (wif rolling (w+ wbz (w* ibm dz)) wbz)))))))
-               )))))))
+               ))))))
        (defun ,re (cbuf v start end threshold)
          ,(format nil "Restitution over constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v) (type index start end)
