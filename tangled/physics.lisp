@@ -2681,11 +2681,20 @@ THRESHOLD. #K3RNLS"))
 ;; Warm start:1 ends here
 
 ;; [[file:../physics.org::#S0LV3R][Solve and relax:1]]
+(defmacro unswitch-bias ((flag) &body body)
+  "BODY twice, once with the symbol BIASED standing for T and once for NIL, chosen by FLAG at run
+time: each solve kernel compiles a biased copy and a relaxing copy, and neither tests the flag
+per constraint. #S0LV3R"
+  `(if ,flag
+       (symbol-macrolet ((biased t)) ,@body)
+       (symbol-macrolet ((biased nil)) ,@body)))
+
 (defun solve-range (cbuf v d start end inv-h use-bias elapsed push-max)
   "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
 when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
            (type single-float inv-h elapsed push-max) #.+kernel-policy+)
+  (unswitch-bias (use-bias)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
       (let* ((base (constraint-base k))
@@ -2706,15 +2715,19 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
              (vbx (aref v b)) (vby (aref v (+ b 1))) (vbz (aref v (+ b 2)))
              (wbx (aref v (+ b 3))) (wby (aref v (+ b 4))) (wbz (aref v (+ b 5)))
              (bias 0.0) (mscale 1.0) (iscale 0.0))
-        (declare (type index a b da db base) (type single-float bias mscale iscale))
+        (declare (type index a b da db base) (type single-float bias mscale iscale)
+                 (ignorable mscale iscale))
         (cond ((> s 0.0) (setf bias (* s inv-h)))
-              (use-bias (setf bias (let ((soft (* (@ bias-rate) s)) (cap (- push-max)))
+              (biased (setf bias (let ((soft (* (@ bias-rate) s)) (cap (- push-max)))
                                      (if (> soft cap) soft cap))
                               mscale (@ mass-scale) iscale (@ impulse-scale))))
         ;; normal
         (let* ((vn (+ (* (- vbx vax) x) (* (- vby vay) y) (* (- vbz vaz) z) (@ kvn)))
                (l (@ normal-impulse))
-               (raw (- l (* (@ normal-mass) mscale (+ vn bias)) (* iscale l)))
+               (raw (if biased
+                        (- l (* (@ normal-mass) mscale (+ vn bias)) (* iscale l))
+                        ;; relaxing, the mass scale is 1 and the impulse scale 0: the same bits
+                        (- l (* (@ normal-mass) (+ vn bias)))))
                (new (if (> raw 0.0) raw 0.0))
                (dl (- new l))
                (mni (@ max-normal-impulse)))
@@ -2763,7 +2776,7 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
         (setf (aref v a) vax (aref v (+ a 1)) vay (aref v (+ a 2)) vaz
               (aref v (+ a 3)) wax (aref v (+ a 4)) way (aref v (+ a 5)) waz
               (aref v b) vbx (aref v (+ b 1)) vby (aref v (+ b 2)) vbz
-              (aref v (+ b 3)) wbx (aref v (+ b 4)) wby (aref v (+ b 5)) wbz)))))
+              (aref v (+ b 3)) wbx (aref v (+ b 4)) wby (aref v (+ b 5)) wbz))))))
 ;; Solve and relax:1 ends here
 
 ;; [[file:../physics.org::#R3ST1T][Restitution, once:1]]

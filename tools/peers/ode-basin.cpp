@@ -1,0 +1,203 @@
+// tools/peers/ode-basin.cpp -- the basin scene of physics.org (section "The basin", #B4S1NS)
+// built in the Open Dynamics Engine (ODE), stepped and timed like measure-basin (#B3NCH5) and
+// like tools/peers/bullet-basin.cpp.
+//
+// Build: g++ -O2 ode-basin.cpp $(pkg-config --cflags --libs ode) -o ode-basin
+// Usage: ode-basin [BALLS=3000] [STEPS=300] [FROM=120] [ITERATIONS=10]
+//
+// Prints one line:
+//   ode balls=N steps=S from=F iterations=I precision=P space=K mean_ms=.. median_ms=..
+//       contacts=.. mean_y=.. min_y=.. escaped=..
+// precision: single or double, as ODE's headers were built (Debian's libode-dev 0.16.2 is
+// double: its ode/precision.h defines dDOUBLE); space: the broad phase (below); mean_ms and
+// median_ms: milliseconds per full step -- dSpaceCollide, dWorldQuickStep, dJointGroupEmpty --
+// over steps FROM..STEPS-1 (steady_clock); contacts: contact joints created in the last step;
+// mean_y, min_y: mean and lowest height of the ball centres (0.25 for a ball resting on the
+// floor); escaped: balls whose centre lies outside the interior [0,8] x [0,8] or below the
+// floor's top (y < 0).
+//
+// The scene, as make-basin-world builds it (y up): a floor box x, z in [-8,16], y in [-1,0];
+// walls one unit thick around the interior [0,8) x [0,8), from y = 0 to 6 (30 above 3000 balls),
+// all static geoms without bodies; balls of radius 0.25 m, mass 1 kg (dMassSetSphereTotal), on
+// the lattice and jitter of basin-spawn-point; gravity (0,-9.81,0); no auto-disable (nothing
+// sleeps); one thread (no threading implementation attached to the world); 60 Hz.
+//
+// ODE used as one usually drives it for piles:
+//   - broad phase: a dHashSpace with ODE's default levels (cells 2^-3 .. 2^10); it measured
+//     faster here than a dQuadTreeSpace (which splits only x and y, ODE's z-up plane, and so
+//     suits this y-up scene badly): see the report of make bench-peers;
+//   - dSpaceCollide with a near callback that skips pairs of static geoms and calls
+//     dCollide(o1, o2, 4, ...): sphere-sphere and sphere-box give at most one contact each;
+//     every contact becomes a dJointCreateContact in one dJointGroup, emptied after the step;
+//   - contact surface: mode dContactApprox1 (friction pyramid scaled by the normal force),
+//     mu 0.6, no dContactBounce (restitution 0), no soft_erp/soft_cfm of its own;
+//   - world: dWorldSetERP 0.2, dWorldSetCFM 1e-5 (ODE's defaults for single precision; the
+//     double build's default CFM is 1e-10), contact max correcting velocity and contact
+//     surface layer left at ODE's defaults (unbounded, 0);
+//   - dWorldQuickStep(world, 1/60) with dWorldSetQuickStepNumIterations(ITERATIONS), 10 by
+//     default, like Bullet's 10 solver iterations; dWorldSetAutoDisableFlag(0).
+
+#include <ode/ode.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#ifndef BASIN_QUADTREE
+#define BASIN_QUADTREE 0
+#endif
+
+namespace {
+
+// basin-spawn-point's jitter: a fixed integer hash of (i, salt) mapped into [-0.025, 0.025]
+float jitter(uint64_t i, uint64_t salt) {
+  uint64_t h = ((i * 7919u + salt * 104729u + 12345u) * 2654435761u) & 0xFFFFFFFFu;
+  return 0.025f * (2.0f * (static_cast<float>((h >> 8) & 0xFFFFu) / 65535.0f) - 1.0f);
+}
+
+void spawn_point(int i, float p[3]) {
+  int layer = i / 196, k = i % 196, row = k / 14, col = k % 14;
+  p[0] = 0.3f + 0.55f * col + jitter(i, 1);
+  p[1] = 0.5f + 0.55f * layer + jitter(i, 2);
+  p[2] = 0.3f + 0.55f * row + jitter(i, 3);
+}
+
+int arg(int argc, char** argv, int n, int fallback) {
+  if (argc <= n) return fallback;
+  char* end = nullptr;
+  long v = std::strtol(argv[n], &end, 10);
+  if (*end != '\0' || v < 0) {
+    std::fprintf(stderr, "ode-basin: argument %d is not a count: %s\n", n, argv[n]);
+    std::exit(2);
+  }
+  return static_cast<int>(v);
+}
+
+const int kMaxContacts = 4;  // per pair; sphere-sphere and sphere-box produce at most 1
+
+struct Scene {
+  dWorldID world;
+  dJointGroupID contacts;
+  int created;  // contact joints created in this step
+};
+
+void near_callback(void* data, dGeomID o1, dGeomID o2) {
+  Scene* scene = static_cast<Scene*>(data);
+  dBodyID b1 = dGeomGetBody(o1), b2 = dGeomGetBody(o2);
+  if (!b1 && !b2) return;  // floor and walls: static against static
+  dContactGeom geoms[kMaxContacts];
+  int n = dCollide(o1, o2, kMaxContacts, geoms, sizeof(dContactGeom));
+  for (int i = 0; i < n; ++i) {
+    dContact c = {};
+    c.surface.mode = dContactApprox1;
+    c.surface.mu = 0.6;
+    c.geom = geoms[i];
+    dJointID j = dJointCreateContact(scene->world, scene->contacts, &c);
+    dJointAttach(j, b1, b2);
+  }
+  scene->created += n;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int balls = arg(argc, argv, 1, 3000);
+  const int steps = arg(argc, argv, 2, 300);
+  const int from = arg(argc, argv, 3, 120);
+  const int iterations = arg(argc, argv, 4, 10);
+  if (from >= steps) {
+    std::fprintf(stderr, "ode-basin: FROM (%d) must be below STEPS (%d)\n", from, steps);
+    return 2;
+  }
+
+  dInitODE2(0);
+  dWorldID world = dWorldCreate();
+  dWorldSetGravity(world, 0, -9.81, 0);
+  dWorldSetERP(world, 0.2);
+  dWorldSetCFM(world, 1e-5);
+  dWorldSetAutoDisableFlag(world, 0);
+  dWorldSetQuickStepNumIterations(world, iterations);
+
+  const float wall = balls > 3000 ? 30 : 6;
+#if BASIN_QUADTREE
+  // ODE's quadtree splits x and y (its z-up plane): centre and half extents of the scene
+  const char* space_name = "quadtree";
+  dVector3 centre = {4, wall / 2, 4}, extents = {12, wall / 2 + 1, 12};
+  dSpaceID space = dQuadTreeSpaceCreate(0, centre, extents, BASIN_QUADTREE);
+#else
+  const char* space_name = "hash";
+  dSpaceID space = dHashSpaceCreate(0);
+#endif
+  Scene scene = {world, dJointGroupCreate(0), 0};
+
+  // a static box covering [x0,x1] x [y0,y1] x [z0,z1]
+  auto add_box = [&](float x0, float y0, float z0, float x1, float y1, float z1) {
+    dGeomID g = dCreateBox(space, x1 - x0, y1 - y0, z1 - z0);
+    dGeomSetPosition(g, (x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2);
+  };
+  add_box(-8, -1, -8, 16, 0, 16);       // floor
+  add_box(-1, 0, -1, 9, wall, 0);       // z in [-1,0), x in [-1,9)
+  add_box(-1, 0, 8, 9, wall, 9);        // z in [8,9),  x in [-1,9)
+  add_box(-1, 0, 0, 0, wall, 8);        // x in [-1,0), z in [0,8)
+  add_box(8, 0, 0, 9, wall, 8);         // x in [8,9),  z in [0,8)
+
+  std::vector<dBodyID> spheres;
+  dMass mass;
+  dMassSetSphereTotal(&mass, 1.0, 0.25);
+  for (int i = 0; i < balls; ++i) {
+    float p[3];
+    spawn_point(i, p);
+    dBodyID b = dBodyCreate(world);
+    dBodySetMass(b, &mass);
+    dBodySetPosition(b, p[0], p[1], p[2]);
+    dGeomSetBody(dCreateSphere(space, 0.25), b);
+    spheres.push_back(b);
+  }
+
+  std::vector<double> times;
+  for (int i = 0; i < steps; ++i) {
+    auto start = std::chrono::steady_clock::now();
+    scene.created = 0;
+    dSpaceCollide(space, &scene, near_callback);
+    dWorldQuickStep(world, 1 / 60.0);
+    dJointGroupEmpty(scene.contacts);
+    auto end = std::chrono::steady_clock::now();
+    if (i >= from) times.push_back(std::chrono::duration<double, std::milli>(end - start).count());
+  }
+
+  double mean = 0;
+  for (double t : times) mean += t;
+  mean /= times.size();
+  std::sort(times.begin(), times.end());
+  size_t n = times.size();
+  double median = n % 2 ? times[n / 2] : (times[n / 2 - 1] + times[n / 2]) / 2;
+
+  double sum_y = 0, min_y = balls ? 1e30 : 0;
+  int escaped = 0;
+  for (dBodyID b : spheres) {
+    const dReal* p = dBodyGetPosition(b);
+    sum_y += p[1];
+    min_y = std::min(min_y, static_cast<double>(p[1]));
+    if (!(p[0] >= 0 && p[0] <= 8 && p[2] >= 0 && p[2] <= 8 && p[1] >= 0)) ++escaped;
+  }
+
+#ifdef dDOUBLE
+  const char* precision = "double";
+#else
+  const char* precision = "single";
+#endif
+  std::printf("ode balls=%d steps=%d from=%d iterations=%d precision=%s space=%s mean_ms=%.3f "
+              "median_ms=%.3f contacts=%d mean_y=%.3f min_y=%.3f escaped=%d\n",
+              balls, steps, from, iterations, precision, space_name, mean, median,
+              scene.created, balls ? sum_y / balls : 0.0, min_y, escaped);
+
+  dJointGroupDestroy(scene.contacts);
+  dSpaceDestroy(space);
+  dWorldDestroy(world);
+  dCloseODE();
+  return 0;
+}
