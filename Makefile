@@ -21,7 +21,7 @@ help:
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
 	@echo "make bench          measure the basin per kernel family; write the table into $(ORG)"
-	@echo "make bench-peers    the basin here and in Debian's Bullet, one run; table into $(ORG)"
+	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
 	@echo "make clean          remove editor backups and this repository's compiled files"
@@ -52,13 +52,15 @@ bench: setup tangle
 	@$(LISP) --load tools/bench-scenes.lisp | tee report/bench-scenes.org
 	@$(SBCL) --script tools/splice.lisp bench-scenes report/bench-scenes.org
 
-# Bullet's side is tools/peers/bullet-basin.cpp, built without -march=native like Debian's Bullet.
+# Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
+# without -march=native like Debian's Bullet and ODE.
 bench-peers: setup tangle
-	@tools/peers/setup-bullet
+	@tools/peers/setup libbullet-dev libode-dev g++ pkg-config
 	@mkdir -p report/peers
 	@$(CXX) -O2 -o report/peers/bullet-basin tools/peers/bullet-basin.cpp $$(pkg-config --cflags --libs bullet)
+	@$(CXX) -O2 -o report/peers/ode-basin tools/peers/ode-basin.cpp $$(pkg-config --cflags --libs ode)
 	@rm -f report/peers/failed
-	@{ BULLET_BASIN=report/peers/bullet-basin $(LISP) --load tools/peers/bench-peers.lisp || touch report/peers/failed; } | tee report/peers.org
+	@{ BULLET_BASIN=report/peers/bullet-basin ODE_BASIN=report/peers/ode-basin $(LISP) --load tools/peers/bench-peers.lisp || touch report/peers/failed; } | tee report/peers.org
 	@test ! -e report/peers/failed
 	@$(SBCL) --script tools/splice.lisp bench-peers report/peers.org
 

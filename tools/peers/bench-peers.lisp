@@ -1,10 +1,11 @@
-;;;; tools/peers/bench-peers.lisp -- the basin in our engine and in Bullet, side by side
-;;;; (make bench-peers).
+;;;; tools/peers/bench-peers.lisp -- the basin in our engine, in Bullet and in ODE, side by
+;;;; side (make bench-peers).
 ;;;;
 ;;;; For each ball count it measures our basin with the widest kernel family this CPU runs and
-;;;; with the scalar family (measure-basin, #B3NCH5), then runs tools/peers/bullet-basin.cpp's
-;;;; binary on the same scene, one after the other in this one run, and prints Org tables.
-;;;; The binary is BULLET_BASIN in the environment, else report/peers/bullet-basin; the counts
+;;;; with the scalar family (measure-basin, #B3NCH5), then runs the binaries of
+;;;; tools/peers/bullet-basin.cpp and tools/peers/ode-basin.cpp on the same scene, one after the
+;;;; other in this one run, and prints Org tables.  The binaries are BULLET_BASIN and ODE_BASIN
+;;;; in the environment, else report/peers/bullet-basin and report/peers/ode-basin; the counts
 ;;;; are 1000, 3000 and 10000, or those PEER_COUNTS names.
 
 (load (merge-pathnames "../boot.lisp" *load-truename*))
@@ -23,6 +24,7 @@
 
 (defparameter *peer-steps* 300 "Steps per run.")
 (defparameter *peer-from* 120 "The first step timed.")
+(defparameter *peer-iterations* 10 "The solver iterations of the peers (Bullet's and ODE's).")
 
 (defparameter *bullet-binary*
   (let ((env (sb-ext:posix-getenv "BULLET_BASIN")))
@@ -30,6 +32,13 @@
         (pathname env)
         (merge-pathnames "report/peers/bullet-basin" *luv-root*)))
   "The compiled tools/peers/bullet-basin.cpp.")
+
+(defparameter *ode-binary*
+  (let ((env (sb-ext:posix-getenv "ODE_BASIN")))
+    (if (and env (plusp (length env)))
+        (pathname env)
+        (merge-pathnames "report/peers/ode-basin" *luv-root*)))
+  "The compiled tools/peers/ode-basin.cpp.")
 
 (defun peer-first-line (program &rest args)
   "The first line PROGRAM ARGS prints, or NIL when it cannot run or fails."
@@ -53,18 +62,29 @@
                                      (read-from-string value)))))
                            (if (realp n) n value))))))
 
-(defun measure-bullet (count)
-  "Run the Bullet binary on the basin of COUNT balls; its key=value line as a plist."
+(defun measure-peer (binary tag count &key (steps *peer-steps*) (from *peer-from*))
+  "Run the peer BINARY on the basin of COUNT balls; its key=value line, which starts with TAG
+and a space, as a plist."
   (let* ((out (make-string-output-stream))
-         (p (sb-ext:run-program (namestring *bullet-binary*)
-                                (mapcar #'princ-to-string (list count *peer-steps* *peer-from*))
+         (p (sb-ext:run-program (namestring binary)
+                                (mapcar #'princ-to-string
+                                        (list count steps from *peer-iterations*))
                                 :output out :error *error-output*))
          (line (string-trim '(#\Newline) (get-output-stream-string out))))
-    (unless (and (zerop (sb-ext:process-exit-code p)) (search "bullet " line))
+    (unless (and (zerop (sb-ext:process-exit-code p))
+                 (eql 0 (search (concatenate 'string tag " ") line)))
       (format *error-output* "~&error: ~A ~D failed (exit ~D): ~A~%"
-              (namestring *bullet-binary*) count (sb-ext:process-exit-code p) line)
+              (namestring binary) count (sb-ext:process-exit-code p) line)
       (sb-ext:exit :code 1))
     (parse-key-values line)))
+
+(defun measure-bullet (count)
+  "Run the Bullet binary on the basin of COUNT balls; its key=value line as a plist."
+  (measure-peer *bullet-binary* "bullet" count))
+
+(defun measure-ode (count)
+  "Run the ODE binary on the basin of COUNT balls; its key=value line as a plist."
+  (measure-peer *ode-binary* "ode" count))
 
 (defun our-basin-sanity (count kernels)
   "Mean and lowest centre height and the number of balls outside the interior [0,8] x [0,8] or
@@ -99,48 +119,63 @@ builds, rebuilt here to keep the handles."
   (let* ((auto (first (car (last (remove-if-not #'luv-physics::kernel-family-available-p
                                                 luv-physics::*kernel-families*)))))
          (engines (remove-duplicates (list auto :scalar) :from-end t))
-         (sanity '()))
+         (sanity '())
+         ;; a run of no balls and one step, for the precision and the space ODE's binary reports
+         (ode-build (measure-peer *ode-binary* "ode" 0 :steps 1 :from 0)))
     (format stream "~&#+caption: basin, 60 Hz, all awake, one thread; ms per step over steps ~D-~D; ~
                     luv-physics (4 substeps) on SBCL ~A vs Bullet ~A (Debian's single-precision build; ~
-                    btDiscreteDynamicsWorld, stepSimulation(1/60, 0), 10 solver iterations; its ~
-                    driver g++ -O2, no -march=native); ~A; load ~A~%"
+                    btDiscreteDynamicsWorld, stepSimulation(1/60, 0), ~D solver iterations) and ODE ~A ~
+                    (Debian's ~(~A~)-precision build; ~(~A~) space, dSpaceCollide, dContactApprox1 mu 0.6, ~
+                    ERP 0.2, CFM 1e-5, dWorldQuickStep(1/60), ~D iterations); their drivers g++ -O2, ~
+                    no -march=native; ~A; load ~A~%"
             *peer-from* *peer-steps* (lisp-implementation-version)
-            (or (peer-first-line "pkg-config" "--modversion" "bullet") "?")
+            (or (peer-first-line "pkg-config" "--modversion" "bullet") "?") *peer-iterations*
+            (or (peer-first-line "pkg-config" "--modversion" "ode") "?")
+            (getf ode-build :precision "?") (getf ode-build :space "?") *peer-iterations*
             (or (first-matching-line "/proc/cpuinfo" "model name") "unknown CPU")
             (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
-    (format stream "~&| balls | engine             | mean ms | median ms | / Bullet (median) |~%")
-    (format stream "~&|-------+--------------------+---------+-----------+-------------------|~%")
+    (format stream "~&| balls | engine             | mean ms | median ms | / Bullet (median) | / ODE (median) |~%")
+    (format stream "~&|-------+--------------------+---------+-----------+-------------------+----------------|~%")
     (finish-output stream)
     (dolist (count counts)
       (let ((ours (loop for family in engines
                         collect (cons family (luv-physics::measure-basin
                                               count :kernels family
                                               :from *peer-from* :to *peer-steps*))))
-            (bullet (measure-bullet count)))
+            (bullet (measure-bullet count))
+            (ode (measure-ode count)))
         (flet ((row (name mean median)
-                 (format stream "~&| ~5D | ~18A | ~7,3F | ~9,3F | ~17,2F |~%"
-                         count name mean median (/ median (getf bullet :median_ms)))))
+                 (format stream "~&| ~5D | ~18A | ~7,3F | ~9,3F | ~17,2F | ~14,2F |~%"
+                         count name mean median
+                         (/ median (getf bullet :median_ms)) (/ median (getf ode :median_ms)))))
           (loop for (family . m) in ours
                 do (row (format nil "luv-physics ~(~A~)" family) (getf m :mean) (getf m :median)))
-          (row "Bullet 10 iter." (getf bullet :mean_ms) (getf bullet :median_ms)))
+          (row (format nil "Bullet ~D iter." *peer-iterations*)
+               (getf bullet :mean_ms) (getf bullet :median_ms))
+          (row (format nil "ODE ~D iter." *peer-iterations*) (getf ode :mean_ms) (getf ode :median_ms)))
         (finish-output stream)
-        (push (list count ours bullet) sanity)))
-    ;; where the piles ended: an untimed run of ours (widest family) next to Bullet's own figures
+        (push (list count ours bullet ode) sanity)))
+    ;; where the piles ended: an untimed run of ours (widest family) next to the peers' own figures
     (format stream "~&~%#+caption: after ~D steps: contacts in the last step (ours: contact ~
-                    constraints; Bullet: points in its manifolds, and the manifolds), mean and ~
-                    lowest ball centre height, balls outside the interior [0,8]x[0,8] or below the floor~%"
+                    constraints; Bullet: points in its manifolds, and the manifolds; ODE: contact ~
+                    joints), mean and lowest ball centre height, balls outside the interior ~
+                    [0,8]x[0,8] or below the floor~%"
             *peer-steps*)
     (format stream "~&| balls | engine             | contacts | manifolds | mean y m | min y m | escaped |~%")
     (format stream "~&|-------+--------------------+----------+-----------+----------+---------+---------|~%")
     (dolist (entry (reverse sanity))
-      (destructuring-bind (count ours bullet) entry
+      (destructuring-bind (count ours bullet ode) entry
         (multiple-value-bind (mean-y min-y escaped) (our-basin-sanity count auto)
           (format stream "~&| ~5D | ~18A | ~8D | ~9A | ~8,3F | ~7,3F | ~7D |~%"
                   count (format nil "luv-physics ~(~A~)" auto)
                   (getf (cdr (assoc auto ours)) :contacts) "" mean-y min-y escaped))
         (format stream "~&| ~5D | ~18A | ~8D | ~9D | ~8,3F | ~7,3F | ~7D |~%"
-                count "Bullet 10 iter." (getf bullet :points) (getf bullet :manifolds)
+                count (format nil "Bullet ~D iter." *peer-iterations*)
+                (getf bullet :points) (getf bullet :manifolds)
                 (getf bullet :mean_y) (getf bullet :min_y) (getf bullet :escaped))
+        (format stream "~&| ~5D | ~18A | ~8D | ~9A | ~8,3F | ~7,3F | ~7D |~%"
+                count (format nil "ODE ~D iter." *peer-iterations*) (getf ode :contacts) ""
+                (getf ode :mean_y) (getf ode :min_y) (getf ode :escaped))
         (finish-output stream)))))
 
 (run-peer-benchmark)
