@@ -2902,6 +2902,35 @@ speed. #ST0R3S"
 ;; Store impulses, events and the step's error:1 ends here
 
 ;; [[file:../physics.org::#F1NAL5][Finalize: positions, orientation, age and sleep:1]]
+(defun fold-solver-state (awake v d dt)
+  "Fold the solver's deltas D into AWAKE's positions and its velocities V into the rows, and
+turn each orientation by its angular velocity over DT. Three loops that call nothing, each
+reading and writing at most eight arrays. #F1NAL5"
+  (declare (type body-columns awake) (type f32-column v d) (type single-float dt) #.+kernel-policy+)
+  (let ((n (body-columns-length awake)))
+    (with-body-columns (x y z) awake
+      (dotimes (i n)
+        (let ((p (* i +delta-stride+)))
+          (setf (aref x i) (+ (aref x i) (aref d p)) (aref y i) (+ (aref y i) (aref d (+ p 1)))
+                (aref z i) (+ (aref z i) (aref d (+ p 2)))))))
+    (with-body-columns (vx vy vz wx wy wz) awake
+      (dotimes (i n)
+        (let ((o (* i +solver-stride+)))
+          (setf (aref vx i) (aref v o) (aref vy i) (aref v (+ o 1)) (aref vz i) (aref v (+ o 2))
+                (aref wx i) (aref v (+ o 3)) (aref wy i) (aref v (+ o 4)) (aref wz i) (aref v (+ o 5))))))
+    ;; q += dt/2 (0,w) q, then normalise
+    (with-body-columns (qw qx qy qz) awake
+      (dotimes (i n)
+        (let* ((o (* i +solver-stride+))
+               (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5)))
+               (hw (* 0.5 dt)) (w0 (aref qw i)) (x0 (aref qx i)) (y0 (aref qy i)) (z0 (aref qz i))
+               (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
+               (nx (+ x0 (* hw (+ (* ax w0) (- (* ay z0) (* az y0))))))
+               (ny (+ y0 (* hw (+ (* ay w0) (- (* az x0) (* ax z0))))))
+               (nz (+ z0 (* hw (+ (* az w0) (- (* ax y0) (* ay x0))))))
+               (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
+          (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
+
 (defun finalize-phase (world)
   "Phase 12: fold deltas into positions and solver velocities into the rows, turn orientations,
 age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
@@ -2917,35 +2946,26 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
          (time-to-sleep (f32 (physics-world-time-to-sleep world))))
     (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep)
              (type body-columns awake sleeping) #.+kernel-policy+)
-    ;; removing or putting a row to sleep moves rows within the awake columns, never replaces them
-    (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz radius sleep-time age life handle) awake
+    (fold-solver-state awake v d dt)
+    ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
+    ;; moved, so the solver's rows still match it
+    (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle) awake
       (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
-        (let* ((o (* i +solver-stride+)) (p (* i +delta-stride+))
-               (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
-               (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5))))
-          (setf (aref x i) (+ (aref x i) ddx) (aref y i) (+ (aref y i) ddy) (aref z i) (+ (aref z i) ddz)
-                (aref vx i) (aref v o) (aref vy i) (aref v (+ o 1)) (aref vz i) (aref v (+ o 2))
-                (aref wx i) ax (aref wy i) ay (aref wz i) az)
-          ;; q += dt/2 (0,w) q, then normalise
-          (let* ((hw (* 0.5 dt)) (w0 (aref qw i)) (x0 (aref qx i)) (y0 (aref qy i)) (z0 (aref qz i))
-                 (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
-                 (nx (+ x0 (* hw (+ (* ax w0) (- (* ay z0) (* az y0))))))
-                 (ny (+ y0 (* hw (+ (* ay w0) (- (* az x0) (* ax z0))))))
-                 (nz (+ z0 (* hw (+ (* az w0) (- (* ax y0) (* ay x0))))))
-                 (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
-            (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))
-          (cond ((and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
-                 (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-                 (%remove-body world +set-awake+ i))
-                (sleep-p
-                 (let* ((speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                           (* (aref vz i) (aref vz i))))
-                                  (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
-                        (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
-                   (if (< (max speed drift) sleep-speed)
-                       (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
-                         (sleep-physics-body world i))
-                       (setf (aref sleep-time i) 0.0))))))))
+        (cond ((and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
+               (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+               (%remove-body world +set-awake+ i))
+              (sleep-p
+               (let* ((p (* i +delta-stride+))
+                      (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
+                      (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
+                      (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                         (* (aref vz i) (aref vz i))))
+                                (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
+                      (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
+                 (if (< (max speed drift) sleep-speed)
+                     (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
+                       (sleep-physics-body world i))
+                     (setf (aref sleep-time i) 0.0)))))))
     (with-body-columns (x y z age life handle) sleeping
       (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
         (when (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
