@@ -23,56 +23,29 @@
 
 #include <btBulletDynamicsCommon.h>
 
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <cstdint>
+#include "basin.h"
+
 #include <cstdio>
-#include <cstdlib>
 #include <memory>
 #include <vector>
 
 namespace {
 
-// basin-spawn-point's jitter: a fixed integer hash of (i, salt) mapped into [-0.025, 0.025]
-float jitter(uint64_t i, uint64_t salt) {
-  uint64_t h = ((i * 7919u + salt * 104729u + 12345u) * 2654435761u) & 0xFFFFFFFFu;
-  return 0.025f * (2.0f * (static_cast<float>((h >> 8) & 0xFFFFu) / 65535.0f) - 1.0f);
-}
-
 btVector3 spawn_point(int i) {
-  int layer = i / 196, k = i % 196, row = k / 14, col = k % 14;
-  return btVector3(0.3f + 0.55f * col + jitter(i, 1),
-                   0.5f + 0.55f * layer + jitter(i, 2),
-                   0.3f + 0.55f * row + jitter(i, 3));
+  float p[3];
+  basin_spawn_point(i, p);
+  return btVector3(p[0], p[1], p[2]);
 }
 
 btScalar combine_friction(const btCollisionObject* a, const btCollisionObject* b) {
   return btSqrt(a->getFriction() * b->getFriction());
 }
 
-int arg(int argc, char** argv, int n, int fallback) {
-  if (argc <= n) return fallback;
-  char* end = nullptr;
-  long v = std::strtol(argv[n], &end, 10);
-  if (*end != '\0' || v < 0) {
-    std::fprintf(stderr, "bullet-basin: argument %d is not a count: %s\n", n, argv[n]);
-    std::exit(2);
-  }
-  return static_cast<int>(v);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int balls = arg(argc, argv, 1, 3000);
-  const int steps = arg(argc, argv, 2, 300);
-  const int from = arg(argc, argv, 3, 120);
-  const int iterations = arg(argc, argv, 4, 10);
-  if (from >= steps) {
-    std::fprintf(stderr, "bullet-basin: FROM (%d) must be below STEPS (%d)\n", from, steps);
-    return 2;
-  }
+  const BasinArgs args = basin_args("bullet-basin", argc, argv);
+  const int balls = args.balls, steps = args.steps, from = args.from, iterations = args.iterations;
 
   gCalculateCombinedFrictionCallback = combine_friction;
 
@@ -108,38 +81,24 @@ int main(int argc, char** argv) {
     return body;
   };
 
-  // a static box covering [x0,x1] x [y0,y1] x [z0,z1]
-  auto add_box = [&](float x0, float y0, float z0, float x1, float y1, float z1) {
-    shapes.emplace_back(new btBoxShape(btVector3((x1 - x0) / 2, (y1 - y0) / 2, (z1 - z0) / 2)));
-    add_body(shapes.back().get(), 0, btVector3((x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2));
-  };
-
-  const float wall = balls > 3000 ? 30 : 6;
-  add_box(-8, -1, -8, 16, 0, 16);       // floor
-  add_box(-1, 0, -1, 9, wall, 0);       // z in [-1,0), x in [-1,9)
-  add_box(-1, 0, 8, 9, wall, 9);        // z in [8,9),  x in [-1,9)
-  add_box(-1, 0, 0, 0, wall, 8);        // x in [-1,0), z in [0,8)
-  add_box(8, 0, 0, 9, wall, 8);         // x in [8,9),  z in [0,8)
+  // the floor and walls: static boxes
+  for (const BasinBox& b : basin_boxes(balls)) {
+    shapes.emplace_back(new btBoxShape(btVector3((b.x1 - b.x0) / 2, (b.y1 - b.y0) / 2, (b.z1 - b.z0) / 2)));
+    add_body(shapes.back().get(), 0, btVector3((b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2, (b.z0 + b.z1) / 2));
+  }
 
   shapes.emplace_back(new btSphereShape(0.25f));
   btCollisionShape* sphere = shapes.back().get();
   std::vector<btRigidBody*> spheres;
   for (int i = 0; i < balls; ++i) spheres.push_back(add_body(sphere, 1.0f, spawn_point(i)));
 
-  std::vector<double> times;
+  BasinTimes times;
   for (int i = 0; i < steps; ++i) {
-    auto start = std::chrono::steady_clock::now();
-    world.stepSimulation(1 / 60.0f, 0);
-    auto end = std::chrono::steady_clock::now();
-    if (i >= from) times.push_back(std::chrono::duration<double, std::milli>(end - start).count());
+    if (i >= from)
+      times.time([&] { world.stepSimulation(1 / 60.0f, 0); });
+    else
+      world.stepSimulation(1 / 60.0f, 0);
   }
-
-  double mean = 0;
-  for (double t : times) mean += t;
-  mean /= times.size();
-  std::sort(times.begin(), times.end());
-  size_t n = times.size();
-  double median = n % 2 ? times[n / 2] : (times[n / 2 - 1] + times[n / 2]) / 2;
 
   int manifolds = dispatcher.getNumManifolds(), touching = 0, points = 0;
   for (int m = 0; m < manifolds; ++m) {
@@ -148,18 +107,15 @@ int main(int argc, char** argv) {
     if (c > 0) ++touching;
   }
 
-  double sum_y = 0, min_y = balls ? 1e30 : 0;
-  int escaped = 0;
+  BasinPile pile;
   for (btRigidBody* b : spheres) {
     const btVector3& p = b->getCenterOfMassPosition();
-    sum_y += p.y();
-    min_y = std::min(min_y, static_cast<double>(p.y()));
-    if (p.x() < 0 || p.x() > 8 || p.z() < 0 || p.z() > 8 || p.y() < 0) ++escaped;
+    pile.add(p.x(), p.y(), p.z());
   }
 
   std::printf("bullet balls=%d steps=%d from=%d iterations=%d mean_ms=%.3f median_ms=%.3f "
               "manifolds=%d touching=%d points=%d mean_y=%.3f min_y=%.3f escaped=%d\n",
-              balls, steps, from, iterations, mean, median, manifolds, touching, points,
-              balls ? sum_y / balls : 0.0, min_y, escaped);
+              balls, steps, from, iterations, times.mean(), times.median(), manifolds, touching,
+              points, pile.mean_y(), pile.lowest_y(), pile.escaped);
   return 0;
 }

@@ -39,12 +39,9 @@
 
 #include <ode/ode.h>
 
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <cstdint>
+#include "basin.h"
+
 #include <cstdio>
-#include <cstdlib>
 #include <vector>
 
 #ifndef BASIN_QUADTREE
@@ -52,30 +49,6 @@
 #endif
 
 namespace {
-
-// basin-spawn-point's jitter: a fixed integer hash of (i, salt) mapped into [-0.025, 0.025]
-float jitter(uint64_t i, uint64_t salt) {
-  uint64_t h = ((i * 7919u + salt * 104729u + 12345u) * 2654435761u) & 0xFFFFFFFFu;
-  return 0.025f * (2.0f * (static_cast<float>((h >> 8) & 0xFFFFu) / 65535.0f) - 1.0f);
-}
-
-void spawn_point(int i, float p[3]) {
-  int layer = i / 196, k = i % 196, row = k / 14, col = k % 14;
-  p[0] = 0.3f + 0.55f * col + jitter(i, 1);
-  p[1] = 0.5f + 0.55f * layer + jitter(i, 2);
-  p[2] = 0.3f + 0.55f * row + jitter(i, 3);
-}
-
-int arg(int argc, char** argv, int n, int fallback) {
-  if (argc <= n) return fallback;
-  char* end = nullptr;
-  long v = std::strtol(argv[n], &end, 10);
-  if (*end != '\0' || v < 0) {
-    std::fprintf(stderr, "ode-basin: argument %d is not a count: %s\n", n, argv[n]);
-    std::exit(2);
-  }
-  return static_cast<int>(v);
-}
 
 const int kMaxContacts = 4;  // per pair; sphere-sphere and sphere-box produce at most 1
 
@@ -105,14 +78,8 @@ void near_callback(void* data, dGeomID o1, dGeomID o2) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int balls = arg(argc, argv, 1, 3000);
-  const int steps = arg(argc, argv, 2, 300);
-  const int from = arg(argc, argv, 3, 120);
-  const int iterations = arg(argc, argv, 4, 10);
-  if (from >= steps) {
-    std::fprintf(stderr, "ode-basin: FROM (%d) must be below STEPS (%d)\n", from, steps);
-    return 2;
-  }
+  const BasinArgs args = basin_args("ode-basin", argc, argv);
+  const int balls = args.balls, steps = args.steps, from = args.from, iterations = args.iterations;
 
   dInitODE2(0);
   dWorldID world = dWorldCreate();
@@ -122,8 +89,8 @@ int main(int argc, char** argv) {
   dWorldSetAutoDisableFlag(world, 0);
   dWorldSetQuickStepNumIterations(world, iterations);
 
-  const float wall = balls > 3000 ? 30 : 6;
 #if BASIN_QUADTREE
+  const float wall = balls > 3000 ? 30 : 6;
   // ODE's quadtree splits x and y (its z-up plane): centre and half extents of the scene
   const char* space_name = "quadtree";
   dVector3 centre = {4, wall / 2, 4}, extents = {12, wall / 2 + 1, 12};
@@ -134,23 +101,18 @@ int main(int argc, char** argv) {
 #endif
   Scene scene = {world, dJointGroupCreate(0), 0};
 
-  // a static box covering [x0,x1] x [y0,y1] x [z0,z1]
-  auto add_box = [&](float x0, float y0, float z0, float x1, float y1, float z1) {
-    dGeomID g = dCreateBox(space, x1 - x0, y1 - y0, z1 - z0);
-    dGeomSetPosition(g, (x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2);
-  };
-  add_box(-8, -1, -8, 16, 0, 16);       // floor
-  add_box(-1, 0, -1, 9, wall, 0);       // z in [-1,0), x in [-1,9)
-  add_box(-1, 0, 8, 9, wall, 9);        // z in [8,9),  x in [-1,9)
-  add_box(-1, 0, 0, 0, wall, 8);        // x in [-1,0), z in [0,8)
-  add_box(8, 0, 0, 9, wall, 8);         // x in [8,9),  z in [0,8)
+  // the floor and walls: static boxes without bodies
+  for (const BasinBox& b : basin_boxes(balls)) {
+    dGeomID g = dCreateBox(space, b.x1 - b.x0, b.y1 - b.y0, b.z1 - b.z0);
+    dGeomSetPosition(g, (b.x0 + b.x1) / 2, (b.y0 + b.y1) / 2, (b.z0 + b.z1) / 2);
+  }
 
   std::vector<dBodyID> spheres;
   dMass mass;
   dMassSetSphereTotal(&mass, 1.0, 0.25);
   for (int i = 0; i < balls; ++i) {
     float p[3];
-    spawn_point(i, p);
+    basin_spawn_point(i, p);
     dBodyID b = dBodyCreate(world);
     dBodySetMass(b, &mass);
     dBodySetPosition(b, p[0], p[1], p[2]);
@@ -158,31 +120,24 @@ int main(int argc, char** argv) {
     spheres.push_back(b);
   }
 
-  std::vector<double> times;
-  for (int i = 0; i < steps; ++i) {
-    auto start = std::chrono::steady_clock::now();
+  auto step = [&] {
     scene.created = 0;
     dSpaceCollide(space, &scene, near_callback);
     dWorldQuickStep(world, 1 / 60.0);
     dJointGroupEmpty(scene.contacts);
-    auto end = std::chrono::steady_clock::now();
-    if (i >= from) times.push_back(std::chrono::duration<double, std::milli>(end - start).count());
+  };
+  BasinTimes times;
+  for (int i = 0; i < steps; ++i) {
+    if (i >= from)
+      times.time(step);
+    else
+      step();
   }
 
-  double mean = 0;
-  for (double t : times) mean += t;
-  mean /= times.size();
-  std::sort(times.begin(), times.end());
-  size_t n = times.size();
-  double median = n % 2 ? times[n / 2] : (times[n / 2 - 1] + times[n / 2]) / 2;
-
-  double sum_y = 0, min_y = balls ? 1e30 : 0;
-  int escaped = 0;
+  BasinPile pile;
   for (dBodyID b : spheres) {
     const dReal* p = dBodyGetPosition(b);
-    sum_y += p[1];
-    min_y = std::min(min_y, static_cast<double>(p[1]));
-    if (!(p[0] >= 0 && p[0] <= 8 && p[2] >= 0 && p[2] <= 8 && p[1] >= 0)) ++escaped;
+    pile.add(p[0], p[1], p[2]);
   }
 
 #ifdef dDOUBLE
@@ -192,8 +147,8 @@ int main(int argc, char** argv) {
 #endif
   std::printf("ode balls=%d steps=%d from=%d iterations=%d precision=%s space=%s mean_ms=%.3f "
               "median_ms=%.3f contacts=%d mean_y=%.3f min_y=%.3f escaped=%d\n",
-              balls, steps, from, iterations, precision, space_name, mean, median,
-              scene.created, balls ? sum_y / balls : 0.0, min_y, escaped);
+              balls, steps, from, iterations, precision, space_name, times.mean(), times.median(),
+              scene.created, pile.mean_y(), pile.lowest_y(), pile.escaped);
 
   dJointGroupDestroy(scene.contacts);
   dSpaceDestroy(space);
