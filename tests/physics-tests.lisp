@@ -1268,13 +1268,21 @@ how far the ball moved and the deepest the box's leading face got past the ball'
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-heavy-on-light-recovers]]
 (define-claim "X7R3M5" heavy-on-light-recovers
-    "A heavy ball on a light one dips while landing, then rests a slop deep."
+    "A heavy ball on a light one dips while landing and rests a slop deep once the light one sleeps; awake, at the spring's give."
   (multiple-value-bind (deepest fastest drop overlap) (luv-physics::stack-in-shaft '(1.0 1000.0) :seconds 5)
     (declare (ignore fastest))
     (check (< deepest (* 0.8 0.45)) "the heavy ball sank ~,4F m into the light one" deepest)
     (check (< (abs (- overlap luv-physics::*physics-linear-slop*)) 0.001) "an overlap of ~,4F m is left" overlap)
     (check (< (abs (- drop (* 2 luv-physics::*physics-linear-slop*))) 0.002)
-           "the top ball rests ~,4F m below the top of two touching balls" drop)))
+           "the top ball rests ~,4F m below the top of two touching balls" drop))
+  (multiple-value-bind (deepest fastest drop overlap)
+      (luv-physics::stack-in-shaft '(1.0 1000.0) :seconds 5 :sleep nil)
+    (declare (ignore deepest fastest drop))
+    (let* ((omega (* 2 pi luv-physics::*physics-contact-hertz*))
+           (m (/ 1 (+ (/ 1 1.0) (/ 1 1000.0))))
+           (give (+ (/ (* 1000 9.81) (* m omega omega)) luv-physics::*physics-linear-slop*)))
+      (check (< (abs (- overlap give)) 0.001)
+             "awake, the heavy ball rests ~,4F m deep where the spring gives ~,4F m" overlap give))))
 ;; X7R3M5-heavy-on-light-recovers ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-deep-overlap-resolves]]
