@@ -15,6 +15,7 @@
    #:*physics-contact-hertz* #:*physics-contact-damping-ratio* #:*physics-contact-push-max*
    #:*physics-load-stiffening* #:*physics-crowded-relax-passes* #:*physics-linear-slop* #:*physics-speculative-margin* #:*physics-restitution-threshold*
    #:*physics-hit-speed* #:*physics-sleep-speed* #:*physics-time-to-sleep* #:*physics-wake-speed*
+   #:*physics-brace-mass-ratio*
    #:*physics-reach-limit* #:*physics-max-speed* #:+physics-coordinate-limit+
    ;; Bad input is a condition that names the value (#C0ND1T)
    #:physics-error #:invalid-physics-number #:invalid-physics-radius #:invalid-physics-parameter
@@ -366,6 +367,10 @@ colour. #V0CAB5")
 
 (defparameter *physics-wake-speed* 0.1
   "Speed, m/s, above which an awake body wakes the sleepers it reaches. #V0CAB5")
+
+(defparameter *physics-brace-mass-ratio* 4.0
+  "How many times heavier than a braced body another must be to lean on it as on something
+static. #V0CAB5")
 
 (defparameter *physics-reach-limit* 0.98
   "Largest reach (radius plus margin), in cells; it keeps every contact's cells adjacent. #V0CAB5")
@@ -1292,6 +1297,7 @@ dispatches on it once per call. #W0RLD7"))
    (color-starts :initform (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
                  :reader physics-world-color-starts)
    (color-masks :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-color-masks)
+   (braced :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-braced)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
    (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
@@ -2341,6 +2347,8 @@ variable BASE. #SSMPYW"
             (physics-world-deltas world)
             (make-array (* +delta-stride+ rows) :element-type 'single-float :initial-element 0.0)
             (physics-world-color-masks world)
+            (make-array rows :element-type 'fixnum :initial-element 0)
+            (physics-world-braced world)
             (make-array rows :element-type 'fixnum :initial-element 0))))
   (when (< (length (physics-world-contact-colors world)) contacts)
     (setf (physics-world-contact-colors world)
@@ -2482,9 +2490,43 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
           (fill v 0.0 :start (* n +solver-stride+) :end (* (1+ n) +solver-stride+))
           (fill d 0.0 :end (* (1+ n) +delta-stride+))
           (let ((cursor (make-array (+ +physics-max-colors+ 1) :element-type 'fixnum))
-                (sets (handle-table-set ids)) (locals (handle-table-local ids)))
-            (declare (dynamic-extent cursor) (type fixnum-column sets locals))
+                (sets (handle-table-set ids)) (locals (handle-table-local ids))
+                (braced (physics-world-braced world))
+                (brace-ratio (f32 *physics-brace-mass-ratio*))
+                (still2 (f32 (expt (physics-world-sleep-speed world) 2)))
+                (inverse-mass (body-columns-inverse-mass awake))
+                ;; up, against gravity (zero without gravity: then nothing is braced)
+                (up-x 0.0) (up-y 0.0) (up-z 0.0))
+            (declare (dynamic-extent cursor) (type fixnum-column sets locals braced)
+                     (type single-float brace-ratio still2 up-x up-y up-z)
+                     (type f32-column inverse-mass))
+            (let ((g (fsqrt (+ (expt (f32 (physics-world-gravity-x world)) 2) (expt (f32 (physics-world-gravity-y world)) 2)
+                               (expt (f32 (physics-world-gravity-z world)) 2)))))
+              (when (> g 1e-3)
+                (setf up-x (/ (- (f32 (physics-world-gravity-x world))) g)
+                      up-y (/ (- (f32 (physics-world-gravity-y world))) g)
+                      up-z (/ (- (f32 (physics-world-gravity-z world))) g))))
             (replace cursor (physics-world-color-starts world))
+            ;; a body is braced when it is still and a one-sided contact carried load last step;
+            ;; when no awake body is that many times heavier than another, none is
+            (fill braced 0 :end (1+ n))
+            (when (and (plusp n)
+                       (let ((lo (aref inverse-mass 0)) (hi (aref inverse-mass 0)))
+                         (declare (type single-float lo hi))
+                         (dotimes (i n) (setf lo (min lo (aref inverse-mass i)) hi (max hi (aref inverse-mass i))))
+                         (> hi (* brace-ratio lo))))
+            (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
+              (dotimes (c m)
+                (let* ((a (aref ha c)) (b (aref hb c))
+                       (dyn-a (= (aref sets (handle-index a)) +set-awake+))
+                       (dyn-b (and (>= b 0) (= (aref sets (handle-index b)) +set-awake+))))
+                  (when (and (not (eq dyn-a dyn-b)) (> (contact@ geometry c normal-impulse) 0.0))
+                    (let* ((row (aref locals (handle-index (if dyn-a a b)))) (o (* row +solver-stride+)))
+                      (declare (type index row o))
+                      (when (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
+                                  (* (aref v (+ o 2)) (aref v (+ o 2))))
+                               still2)
+                        (setf (aref braced row) 1))))))))
             (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
               (with-constraint-block (contact body-a body-b) cbuf
                 (dotimes (c m)
@@ -2499,9 +2541,21 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                          (buf-b (if (= set-b +set-awake+) awake sleeping))
                          (sets sets) (locals locals)
                          (dyn-a (= set-a +set-awake+)) (dyn-b (= set-b +set-awake+))
-                         (two-sided (and dyn-a dyn-b))
-                         (x (contact@ geometry c nx)) (y (contact@ geometry c ny)) (z (contact@ geometry c nz)))
-                    (declare (type fixnum k a b set-a set-b la lb) (type index base) (type single-float x y z)
+                         (x (contact@ geometry c nx)) (y (contact@ geometry c ny)) (z (contact@ geometry c nz))
+                         ;; a braced body is static to a much heavier one above it, as a sleeper
+                         ;; is to the bodies that lean on it
+                         (rise (+ (* x up-x) (* y up-y) (* z up-z)))
+                         (brace (and dyn-a dyn-b
+                                     (cond ((and (= (aref braced la) 1) (> rise 0.7)
+                                                 (> (aref inverse-mass la) (* brace-ratio (aref inverse-mass lb))))
+                                            :a)
+                                           ((and (= (aref braced lb) 1) (< rise -0.7)
+                                                 (> (aref inverse-mass lb) (* brace-ratio (aref inverse-mass la))))
+                                            :b))))
+                         (dyn-a (and dyn-a (not (eq brace :a))))
+                         (dyn-b (and dyn-b (not (eq brace :b))))
+                         (two-sided (and dyn-a dyn-b)))
+                    (declare (type fixnum k a b set-a set-b) (type index la lb base) (type single-float x y z)
                              (type body-columns buf-a buf-b) (type fixnum-column sets locals) (ignorable sets locals))
                     (incf (aref cursor (aref colors c)))
                     (setf (aref contact k) c
