@@ -2546,10 +2546,10 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                          ;; is to the bodies that lean on it
                          (rise (+ (* x up-x) (* y up-y) (* z up-z)))
                          (brace (and dyn-a dyn-b
-                                     (cond ((and (= (aref braced la) 1) (> rise 0.7)
+                                     (cond ((and (= (aref braced la) 1) (> rise 0.9)
                                                  (> (aref inverse-mass la) (* brace-ratio (aref inverse-mass lb))))
                                             :a)
-                                           ((and (= (aref braced lb) 1) (< rise -0.7)
+                                           ((and (= (aref braced lb) 1) (< rise -0.9)
                                                  (> (aref inverse-mass lb) (* brace-ratio (aref inverse-mass la))))
                                             :b))))
                          (dyn-a (and dyn-a (not (eq brace :a))))
@@ -3591,6 +3591,29 @@ floor. #X7R3M5"
                   x0 x y0 y z0 z))))
       (values fastest (nth-value 1 (physics-body-position world ball)) (- 0.25 *physics-linear-slop*)))))
 
+(defun mixed-mass-pile (count &key (seconds 15) (brace-ratio *physics-brace-mass-ratio*))
+  "Drop COUNT balls of radius 0.25 m in the basin lattice, with sleeping off, their masses spread
+evenly in log from 0.32 to 32 kg by a fixed sequence, and run SECONDS with BRACE-RATIO. Return
+the deepest overlap seen after the first two seconds, the last second in which a ball moved
+faster than 0.1 m/s (0 if none after the first), the fastest speed in the last second, and
+whether the world stayed finite and valid. #X7R3M5"
+  (let ((*physics-brace-mass-ratio* brace-ratio)
+        (world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
+        (balls '()) (seed 7) (deepest 0.0) (last-moving 0) (fastest-last 0.0))
+    (dotimes (i count)
+      (multiple-value-bind (x y z) (basin-spawn-point i)
+        (setf seed (mod (+ (* seed 1103515245) 12345) 2147483648))
+        (push (add-physics-body world x y z :radius 0.25
+                                :mass (expt 10.0 (- (* 2.0 (/ seed 2147483648.0)) 0.5)))
+              balls)))
+    (dotimes (i (* 60 seconds))
+      (step-physics-world world)
+      (when (>= i 120) (setf deepest (max deepest (physics-world-max-penetration world))))
+      (let ((fastest (reduce #'max balls :key (lambda (b) (speed-of world b)))))
+        (when (and (>= i 60) (> fastest 0.1)) (setf last-moving (1+ (floor i 60))))
+        (when (>= i (* 60 (1- seconds))) (setf fastest-last (max fastest-last fastest)))))
+    (values deepest last-moving fastest-last (and (world-finite-p world) (validate-physics-world world)))))
+
 (defun crowd-in-one-cell (count &key (radius 0.05) (side 1.0) (seconds 3) (kernels :auto))
   "Spawn COUNT balls of RADIUS (mass 0.01 kg) at fixed pseudo-random points of a cube of SIDE
 metres in the basin, overlapping by the dozen, and run SECONDS. Return the contacts in the
@@ -3687,6 +3710,15 @@ its final height less its ideal resting height (radius less a slop), and whether
     (multiple-value-bind (pen speed drop left) (stack-in-shaft '(1000.0 1.0))
       (row "1 kg ball on a 1000 kg ball" (< pen 0.02)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
+    ;; bracing in a pile of many masses, and the same pile without it
+    (dolist (ratio (list *physics-brace-mass-ratio* 1e9))
+      (multiple-value-bind (deepest last fastest ok) (mixed-mass-pile 1000 :brace-ratio ratio)
+        (row (format nil "1000 balls of 0.32 to 32 kg, sleeping off, ~:[without bracing~;bracing~]"
+                     (< ratio 1e6))
+             (and ok (< deepest 0.06) (< fastest 0.05))
+             "deepest overlap after 2 s ~,4F m; a ball faster than 0.1 m/s until second ~D; ~
+              fastest in the last second ~,3F m/s; ~:[not finite or invalid~;finite and valid~]"
+             deepest last fastest ok)))
     (multiple-value-bind (pen speed drop left) (stack-in-shaft (make-list 20 :initial-element 1.0))
       (row "column of 20 balls" (< pen 0.05)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
