@@ -26,18 +26,17 @@
 (defparameter *peer-from* 120 "The first step timed.")
 (defparameter *peer-iterations* 10 "The solver iterations of the peers (Bullet's and ODE's).")
 
-(defparameter *bullet-binary*
-  (let ((env (sb-ext:posix-getenv "BULLET_BASIN")))
+(defun peer-binary (variable name)
+  "The path the environment VARIABLE names, else report/peers/NAME in this repository."
+  (let ((env (sb-ext:posix-getenv variable)))
     (if (and env (plusp (length env)))
         (pathname env)
-        (merge-pathnames "report/peers/bullet-basin" *luv-root*)))
+        (merge-pathnames (format nil "report/peers/~A" name) *luv-root*))))
+
+(defparameter *bullet-binary* (peer-binary "BULLET_BASIN" "bullet-basin")
   "The compiled tools/peers/bullet-basin.cpp.")
 
-(defparameter *ode-binary*
-  (let ((env (sb-ext:posix-getenv "ODE_BASIN")))
-    (if (and env (plusp (length env)))
-        (pathname env)
-        (merge-pathnames "report/peers/ode-basin" *luv-root*)))
+(defparameter *ode-binary* (peer-binary "ODE_BASIN" "ode-basin")
   "The compiled tools/peers/ode-basin.cpp.")
 
 (defun peer-first-line (program &rest args)

@@ -23,9 +23,9 @@
 // sleeps); one thread (no threading implementation attached to the world); 60 Hz.
 //
 // ODE used as one usually drives it for piles:
-//   - broad phase: a dHashSpace with ODE's default levels (cells 2^-3 .. 2^10); it measured
-//     faster here than a dQuadTreeSpace (which splits only x and y, ODE's z-up plane, and so
-//     suits this y-up scene badly): see the report of make bench-peers;
+//   - broad phase: a dHashSpace with ODE's default levels (cells 2^-3 .. 2^10), not a
+//     dQuadTreeSpace, which splits only x and y (ODE's z-up plane) and so suits this y-up
+//     scene badly;
 //   - dSpaceCollide with a near callback that skips pairs of static geoms and calls
 //     dCollide(o1, o2, 4, ...): sphere-sphere and sphere-box give at most one contact each;
 //     every contact becomes a dJointCreateContact in one dJointGroup, emptied after the step;
@@ -43,10 +43,6 @@
 
 #include <cstdio>
 #include <vector>
-
-#ifndef BASIN_QUADTREE
-#define BASIN_QUADTREE 0
-#endif
 
 namespace {
 
@@ -89,16 +85,8 @@ int main(int argc, char** argv) {
   dWorldSetAutoDisableFlag(world, 0);
   dWorldSetQuickStepNumIterations(world, iterations);
 
-#if BASIN_QUADTREE
-  const float wall = balls > 3000 ? 30 : 6;
-  // ODE's quadtree splits x and y (its z-up plane): centre and half extents of the scene
-  const char* space_name = "quadtree";
-  dVector3 centre = {4, wall / 2, 4}, extents = {12, wall / 2 + 1, 12};
-  dSpaceID space = dQuadTreeSpaceCreate(0, centre, extents, BASIN_QUADTREE);
-#else
   const char* space_name = "hash";
   dSpaceID space = dHashSpaceCreate(0);
-#endif
   Scene scene = {world, dJointGroupCreate(0), 0};
 
   // the floor and walls: static boxes without bodies
