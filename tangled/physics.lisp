@@ -13,7 +13,7 @@
    #:available-kernel-families
    ;; Types, the hot-loop policy and the parameters (#V0CAB5)
    #:*physics-contact-hertz* #:*physics-contact-damping-ratio* #:*physics-contact-push-max*
-   #:*physics-load-stiffening* #:*physics-crowded-relax-passes* #:*physics-linear-slop* #:*physics-speculative-margin* #:*physics-restitution-threshold*
+   #:*physics-load-stiffening* #:*physics-crowded-relax-passes* #:*physics-crowded-depth* #:*physics-linear-slop* #:*physics-speculative-margin* #:*physics-restitution-threshold*
    #:*physics-hit-speed* #:*physics-sleep-speed* #:*physics-time-to-sleep* #:*physics-wake-speed*
    #:*physics-brace-mass-ratio*
    #:*physics-reach-limit* #:*physics-max-speed* #:+physics-coordinate-limit+
@@ -345,7 +345,10 @@ contact's effective mass, may divide the contact's impulse scale, and so its giv
 
 (defparameter *physics-crowded-relax-passes* 3
   "Extra relax passes per substep in a crowded step: one whose contacts needed the overflow
-colour. #V0CAB5")
+colour, or one after a step that left an overlap deeper than *physics-crowded-depth*. #V0CAB5")
+
+(defparameter *physics-crowded-depth* 0.1
+  "Overlap, m, beyond which the next step counts as crowded. #V0CAB5")
 
 (defparameter *physics-linear-slop* 0.005
   "Penetration, m, allowed at rest; a resting ball sits this far into its support. #V0CAB5")
@@ -3041,11 +3044,13 @@ and start the contact table's walk of it. #IDVK7G"
 (defun substep-phase (world)
   "Phase 9: the Soft Step substeps: integrate velocities, warm start, solve with bias,
 integrate positions, relax without bias; in a crowded step (one with contacts in the overflow
-colour), relax *physics-crowded-relax-passes* more times. #IDVK7G"
+colour, or after a step that left an overlap deeper than *physics-crowded-depth*), relax
+*physics-crowded-relax-passes* more times. #IDVK7G"
   (let* ((kernels (physics-world-kernels world))
          (h (physics-world-current-h world))
          (inv-h (/ 1.0 h))
-         (relaxes (if (plusp (physics-world-overflow-count world))
+         (relaxes (if (or (plusp (physics-world-overflow-count world))
+                          (> (f32 (aref (world-statistics world) 3)) (f32 *physics-crowded-depth*)))
                       (1+ *physics-crowded-relax-passes*)
                       1)))
     (declare (type single-float h inv-h) (type fixnum relaxes))
@@ -3332,9 +3337,9 @@ KERNELS (the widest this CPU runs by default). Return the world and the thrown b
 
 (defun measure-basin (count &key (kernels :scalar) (from 120) (to 300))
   "Step the basin scene of COUNT awake balls TO times and return a plist of the mean and median
-ms per step over steps FROM..TO, contacts, colours, overflow, bytes consed per step, and the
-mean ms of each phase (:phases, an alist). #B3NCH5"
-  (let ((world (make-basin-world count :kernels kernels)) (times '()) (consed 0)
+ms per step over steps FROM..TO, contacts, colours, overflow, bytes consed per step, the deepest
+overlap any step left (:deepest), and the mean ms of each phase (:phases, an alist). #B3NCH5"
+  (let ((world (make-basin-world count :kernels kernels)) (times '()) (consed 0) (deepest 0.0)
         (clock (make-array (* 2 (length *physics-phases*)) :element-type 'fixnum :initial-element 0)))
     (dotimes (i to)
       (when (= i from) (setf (physics-world-phase-clock world) clock))
@@ -3342,13 +3347,14 @@ mean ms of each phase (:phases, an alist). #B3NCH5"
         (step-physics-world world)
         (when (>= i from)
           (incf consed (- (sb-ext:get-bytes-consed) before))
-          (push (* 1000 (physics-world-last-step-real-seconds world)) times))))
+          (push (* 1000 (physics-world-last-step-real-seconds world)) times))
+        (setf deepest (max deepest (physics-world-max-penetration world)))))
     (list :balls count :kernels kernels
           :mean (/ (reduce #'+ times) (length times)) :median (median times)
           :contacts (physics-world-last-step-contact-count world)
           :colours (physics-world-last-step-color-count world)
           :overflow (physics-world-overflow-count world)
-          :consed (round consed (length times))
+          :consed (round consed (length times)) :deepest deepest
           :phases (loop for phase in *physics-phases* for ns across clock
                         collect (cons phase (/ ns 1d6 (- to from))))
           :phase-bytes (loop for phase in *physics-phases*
@@ -3369,18 +3375,18 @@ each phase's share; with the machine's model and load. #B3NCH5"
         (rows '()))
     (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A~%"
             (cpu-model-name) (load-average))
-    (format stream "~&| balls | family | mean ms | median ms | / scalar | contacts | colours | overflow | bytes consed/step |~%")
-    (format stream "~&|-------+--------+---------+-----------+----------+----------+---------+----------+-------------------|~%")
+    (format stream "~&| balls | family | mean ms | median ms | / scalar | contacts | colours | overflow | bytes consed/step | deepest m |~%")
+    (format stream "~&|-------+--------+---------+-----------+----------+----------+---------+----------+-------------------+-----------|~%")
     (dolist (count counts)
       (let ((scalar nil))
         (dolist (family families)
           (let ((m (measure-basin count :kernels family)))
             (unless scalar (setf scalar (getf m :median)))
             (push m rows)
-            (format stream "~&| ~5D | ~6A | ~7,3F | ~9,3F | ~8,2F | ~8D | ~7D | ~8D | ~17D |~%"
+            (format stream "~&| ~5D | ~6A | ~7,3F | ~9,3F | ~8,2F | ~8D | ~7D | ~8D | ~17D | ~9,4F |~%"
                     count (string-downcase family) (getf m :mean) (getf m :median)
                     (/ (getf m :median) scalar) (getf m :contacts) (getf m :colours)
-                    (getf m :overflow) (getf m :consed))
+                    (getf m :overflow) (getf m :consed) (getf m :deepest))
             (finish-output stream)))))
     (format stream "~&~%#+caption: mean ms per step of each phase group~%| balls | family |~{ ~A |~}~%"
             (mapcar #'first +bench-phase-groups+))
@@ -3547,11 +3553,12 @@ end. #X7R3M5"
 
 (defun heap-at-one-point (count &key (steps 300) (gravity '(0 -9.81 0)))
   "Spawn COUNT balls of radius 0.25 m at one point in the basin, 2 m above its floor, under
-GRAVITY, and run STEPS steps; return the fastest speed seen, the fastest any overlapping pair
-moved apart, and the deepest overlap left at the end. #X7R3M5"
+GRAVITY, and run STEPS steps; return the fastest speed seen, the fastest any pair overlapping by
+more than the slop (where push-out acts) moved apart, and the deepest overlap left at the end.
+#X7R3M5"
   (let* ((world (make-physics-world :terrain (make-basin-terrain) :gravity gravity))
          (balls (loop repeat count collect (add-physics-body world 4.0 2.0 4.0 :radius 0.25)))
-         (fastest 0.0) (parting 0.0))
+         (fastest 0.0) (parting 0.0) (within (- 0.5 *physics-linear-slop*)))
     (dotimes (i steps)
       (step-physics-world world)
       (loop for (a . rest) on balls
@@ -3561,7 +3568,7 @@ moved apart, and the deepest overlap left at the end. #X7R3M5"
                    (dolist (b rest)
                      (multiple-value-bind (bx by bz) (physics-body-position world b)
                        (let ((d (sqrt (+ (expt (- bx ax) 2) (expt (- by ay) 2) (expt (- bz az) 2)))))
-                         (when (< 1e-6 d 0.5)
+                         (when (< 1e-6 d within)
                            (multiple-value-bind (bvx bvy bvz) (physics-body-velocity world b)
                              (setf parting (max parting (/ (+ (* (- bx ax) (- bvx avx)) (* (- by ay) (- bvy avy))
                                                               (* (- bz az) (- bvz avz)))
