@@ -24,6 +24,10 @@
 ;; Which wide instructions this machine offers:2 ends here
 
 ;; [[file:../physics.org::#R0WS8T][Gathering rows into lanes:1]]
+(defmacro row-at (index k l)
+  "Entry K+L of the fixnum column INDEX, L a constant folded into the load's address. #R0WS8T"
+  `(sb-kernel:data-vector-ref-with-offset ,index ,k ,l))
+
 (defmacro transpose-8 (rows columns)
   "Bind COLUMNS to the 8x8 transpose of the f32.8 values ROWS (a LET* binding list). #R0WS8T"
   (destructuring-bind (r0 r1 r2 r3 r4 r5 r6 r7) rows
@@ -49,7 +53,7 @@
 floats a row) named by INDEX[K..K+7], as the columns of the 8x8 transpose. #R0WS8T"
   (let ((rows (loop repeat 8 collect (gensym "ROW"))))
     `(let* (,@(loop for r in rows for l from 0
-                    collect `(,r (sb-simd-avx:f32.8-aref ,v (* (the index (aref ,index (+ ,k ,l))) +solver-stride+))))
+                    collect `(,r (sb-simd-avx:f32.8-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+))))
             ,@(macroexpand-1 `(transpose-8 ,rows ,columns)))
        (declare (ignorable ,@columns))
        ,@body)))
@@ -59,7 +63,7 @@ floats a row) named by INDEX[K..K+7], as the columns of the 8x8 transpose. #R0WS
   (let ((rows (loop repeat 8 collect (gensym "ROW"))))
     `(let* (,@(macroexpand-1 `(transpose-8 ,columns ,rows)))
        ,@(loop for r in rows for l from 0
-               collect `(setf (sb-simd-avx:f32.8-aref ,v (* (the index (aref ,index (+ ,k ,l))) +solver-stride+)) ,r)))))
+               collect `(setf (sb-simd-avx:f32.8-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+)) ,r)))))
 
 (defmacro transpose-4 (rows columns)
   "Bind COLUMNS to the 4x4 transpose of the f32.4 values ROWS (a LET* binding list). #R0WS8T"
@@ -76,9 +80,9 @@ floats a row) named by INDEX[K..K+7], as the columns of the 8x8 transpose. #R0WS
 INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest from the high. #R0WS8T"
   (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI"))))
     `(let* (,@(loop for r in lo for l from 0
-                    collect `(,r (sb-simd-sse:f32.4-aref ,v (* (the index (aref ,index (+ ,k ,l))) +solver-stride+))))
+                    collect `(,r (sb-simd-sse:f32.4-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+))))
             ,@(loop for r in hi for l from 0
-                    collect `(,r (sb-simd-sse:f32.4-aref ,v (+ 4 (* (the index (aref ,index (+ ,k ,l))) +solver-stride+)))))
+                    collect `(,r (sb-simd-sse::%f32.4-load ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+) 4)))
             ,@(macroexpand-1 `(transpose-4 ,lo ,(subseq columns 0 4)))
             ,@(macroexpand-1 `(transpose-4 ,hi ,(subseq columns 4 8))))
        (declare (ignorable ,@columns))
@@ -90,9 +94,9 @@ INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest fr
     `(let* (,@(macroexpand-1 `(transpose-4 ,(subseq columns 0 4) ,lo))
             ,@(macroexpand-1 `(transpose-4 ,(subseq columns 4 8) ,hi)))
        ,@(loop for r in lo for l from 0
-               collect `(setf (sb-simd-sse:f32.4-aref ,v (* (the index (aref ,index (+ ,k ,l))) +solver-stride+)) ,r))
+               collect `(setf (sb-simd-sse:f32.4-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+)) ,r))
        ,@(loop for r in hi for l from 0
-               collect `(setf (sb-simd-sse:f32.4-aref ,v (+ 4 (* (the index (aref ,index (+ ,k ,l))) +solver-stride+))) ,r)))))
+               collect `(sb-simd-sse::%f32.4-store ,r ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+) 4)))))
 
 (declaim (inline f32.4-select))
 (defun f32.4-select (mask a b)
@@ -104,7 +108,7 @@ in any register. #R0WS8T"
 
 ;; [[file:../physics.org::#W1D3KF][One kernel text, two widths:1]]
 (defmacro define-wide-kernels (family width documentation
-                               &key load broadcast add sub mul div sqrt gt eq if* or* transpose)
+                               &key load store broadcast add sub mul div sqrt gt eq if* or* transpose)
   "Define the solver kernels of FAMILY for lanes of WIDTH, described by DOCUMENTATION: the
 operator keywords name the sb-simd functions the width-neutral operators stand for. #W1D3KF"
   (declare (ignore documentation))
@@ -117,8 +121,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
                 (w= (a b) `(,',eq ,a ,b)) (wif (m a b) `(,',if* ,m ,a ,b)) (wor (a b) `(,',or* ,a ,b))
                 (wc (x) `(,',broadcast ,x))
-                (@w (column) `(,',load data (+ base ,(constraint-offset column))))
-                (@w! (column value) `(setf (,',load data (+ base ,(constraint-offset column))) ,value))
+                (@w (column) `(,',load data base ,(constraint-offset column)))
+                (@w! (column value) `(,',store ,value data base ,(constraint-offset column)))
                 (with-body-rows (&body body)
                   ;; the two spare floats of a velocity row are written back as zeros, so
                   ;; they need no register while the kernel runs
@@ -289,14 +293,14 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
 ;; [[file:../physics.org::#F4M1LY][The SSE and AVX2 families:1]]
 (define-wide-kernels avx2 8
   "Eight lanes of AVX2: f32.8 arithmetic, vblendvps selection. #F4M1LY"
-  :load sb-simd-avx:f32.8-aref :broadcast sb-simd-avx:f32.8
+  :load sb-simd-avx::%f32.8-load :store sb-simd-avx::%f32.8-store :broadcast sb-simd-avx:f32.8
   :add sb-simd-avx:f32.8+ :sub sb-simd-avx:f32.8- :mul sb-simd-avx:f32.8* :div sb-simd-avx:f32.8/
   :sqrt sb-simd-avx:f32.8-sqrt :gt sb-simd-avx:f32.8> :eq sb-simd-avx:f32.8= :if* sb-simd-avx:f32.8-if
   :or* sb-simd-avx2:u32.8-or :transpose with-rows-8)
 
 (define-wide-kernels sse 4
   "Four lanes of SSE4.1: f32.4 arithmetic, and/and-not/or selection. #F4M1LY"
-  :load sb-simd-sse:f32.4-aref :broadcast sb-simd-sse:f32.4
+  :load sb-simd-sse::%f32.4-load :store sb-simd-sse::%f32.4-store :broadcast sb-simd-sse:f32.4
   :add sb-simd-sse:f32.4+ :sub sb-simd-sse:f32.4- :mul sb-simd-sse:f32.4* :div sb-simd-sse:f32.4/
   :sqrt sb-simd-sse:f32.4-sqrt :gt sb-simd-sse2:f32.4> :eq sb-simd-sse2:f32.4= :if* f32.4-select
   :or* sb-simd-sse2:u32.4-or :transpose with-rows-4)

@@ -2328,6 +2328,16 @@ the float columns in blocks of eight rows, each column's eight lanes contiguous.
   (declare (type index k))
   (+ (* (ash k -3) +constraint-block+) (logand k 7)))
 
+(defmacro block-ref (data base offset)
+  "Float BASE+OFFSET of DATA, OFFSET a constant folded into the load's address (SBCL's internal,
+unchecked accessor; see [[#R0WS8T]]). #SSMPYW"
+  `(sb-kernel:data-vector-ref-with-offset ,data (the index ,base) ,offset))
+
+(defsetf block-ref (data base offset) (value)
+  "Store VALUE as float BASE+OFFSET of DATA, the offset folded as in block-ref. #SSMPYW"
+  `(progn (sb-kernel:data-vector-set-with-offset ,data (the index ,base) ,offset (the single-float ,value))
+          ,value))
+
 (defmacro with-constraint-block ((&rest fixnum-columns) buffer &body body)
   "Run BODY with DATA bound to BUFFER's float blocks, each of FIXNUM-COLUMNS (contact, body-a,
 body-b) bound to its column, and (@ COLUMN) naming COLUMN of the constraint whose base is the
@@ -2338,7 +2348,7 @@ variable BASE. #SSMPYW"
             ,@(loop for c in fixnum-columns
                     collect `(,c (,(intern (format nil "CONSTRAINT-COLUMNS-~A" c)) ,b))))
        (declare (type f32-column data) (type fixnum-column ,@fixnum-columns) (ignorable data))
-       (macrolet ((@ (column) `(aref data (+ base ,(constraint-offset column)))))
+       (macrolet ((@ (column) `(block-ref data base ,(constraint-offset column))))
          ,@body))))
 
 (defun ensure-solver-scratch (world n contacts)
@@ -2721,17 +2731,17 @@ THRESHOLD. #K3RNLS"))
              (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z)))
         (declare (type index a b base))
         (setf (aref v a) (- (aref v a) (* ma px))
-              (aref v (+ a 1)) (- (aref v (+ a 1)) (* ma py))
-              (aref v (+ a 2)) (- (aref v (+ a 2)) (* ma pz))
-              (aref v (+ a 3)) (- (aref v (+ a 3)) (* ia (+ (* ar cx) rx)))
-              (aref v (+ a 4)) (- (aref v (+ a 4)) (* ia (+ (* ar cy) ry)))
-              (aref v (+ a 5)) (- (aref v (+ a 5)) (* ia (+ (* ar cz) rz)))
+              (block-ref v a 1) (- (block-ref v a 1) (* ma py))
+              (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
+              (block-ref v a 3) (- (block-ref v a 3) (* ia (+ (* ar cx) rx)))
+              (block-ref v a 4) (- (block-ref v a 4) (* ia (+ (* ar cy) ry)))
+              (block-ref v a 5) (- (block-ref v a 5) (* ia (+ (* ar cz) rz)))
               (aref v b) (+ (aref v b) (* mb px))
-              (aref v (+ b 1)) (+ (aref v (+ b 1)) (* mb py))
-              (aref v (+ b 2)) (+ (aref v (+ b 2)) (* mb pz))
-              (aref v (+ b 3)) (+ (aref v (+ b 3)) (* ib (- rx (* br cx))))
-              (aref v (+ b 4)) (+ (aref v (+ b 4)) (* ib (- ry (* br cy))))
-              (aref v (+ b 5)) (+ (aref v (+ b 5)) (* ib (- rz (* br cz)))))))))
+              (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
+              (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))
+              (block-ref v b 3) (+ (block-ref v b 3) (* ib (- rx (* br cx))))
+              (block-ref v b 4) (+ (block-ref v b 4) (* ib (- ry (* br cy))))
+              (block-ref v b 5) (+ (block-ref v b 5) (* ib (- rz (* br cz)))))))))
 ;; Warm start:1 ends here
 
 ;; [[file:../physics.org::#S0LV3R][Solve and relax:1]]
@@ -2763,13 +2773,13 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
              ;; current separation: the prepared gap moved by both deltas and the box's travel
              (s (+ (@ separation)
                    (+ (* (- (aref d db) (aref d da)) x)
-                      (* (- (aref d (+ db 1)) (aref d (+ da 1))) y)
-                      (* (- (aref d (+ db 2)) (aref d (+ da 2))) z))
+                      (* (- (block-ref d db 1) (block-ref d da 1)) y)
+                      (* (- (block-ref d db 2) (block-ref d da 2)) z))
                    (* (@ kvn) elapsed)))
-             (vax (aref v a)) (vay (aref v (+ a 1))) (vaz (aref v (+ a 2)))
-             (wax (aref v (+ a 3))) (way (aref v (+ a 4))) (waz (aref v (+ a 5)))
-             (vbx (aref v b)) (vby (aref v (+ b 1))) (vbz (aref v (+ b 2)))
-             (wbx (aref v (+ b 3))) (wby (aref v (+ b 4))) (wbz (aref v (+ b 5)))
+             (vax (aref v a)) (vay (block-ref v a 1)) (vaz (block-ref v a 2))
+             (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
+             (vbx (aref v b)) (vby (block-ref v b 1)) (vbz (block-ref v b 2))
+             (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5))
              ;; normal
              (positive (> s 0.0))
              (bias (cond (positive (* s inv-h))
@@ -2827,10 +2837,10 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                 (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry (@ rolling-impulse-z) nrz)
                 (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
                       wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz)))))))
-        (setf (aref v a) vax (aref v (+ a 1)) vay (aref v (+ a 2)) vaz
-              (aref v (+ a 3)) wax (aref v (+ a 4)) way (aref v (+ a 5)) waz
-              (aref v b) vbx (aref v (+ b 1)) vby (aref v (+ b 2)) vbz
-              (aref v (+ b 3)) wbx (aref v (+ b 4)) wby (aref v (+ b 5)) wbz))))))
+        (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz
+              (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
+              (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz
+              (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))
 ;; Solve and relax:1 ends here
 
 ;; [[file:../physics.org::#R3ST1T][Restitution, once:1]]
@@ -2846,8 +2856,8 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
           (let* ((a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
                  (ma (@ ima)) (mb (@ imb))
-                 (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
-                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn)))
+                 (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (block-ref v b 1) (block-ref v a 1)) y)
+                        (* (- (block-ref v b 2) (block-ref v a 2)) z) (@ kvn)))
                  (l (@ normal-impulse))
                  (raw (- l (* (@ normal-mass) (+ vn (* e rv)))))
                  (new (if (> raw 0.0) raw 0.0))
@@ -2857,11 +2867,11 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
             (setf (@ normal-impulse) new
                   (@ max-normal-impulse) (if (> mni new) mni new))
             (setf (aref v a) (- (aref v a) (* ma dl x))
-                  (aref v (+ a 1)) (- (aref v (+ a 1)) (* ma dl y))
-                  (aref v (+ a 2)) (- (aref v (+ a 2)) (* ma dl z))
+                  (block-ref v a 1) (- (block-ref v a 1) (* ma dl y))
+                  (block-ref v a 2) (- (block-ref v a 2) (* ma dl z))
                   (aref v b) (+ (aref v b) (* mb dl x))
-                  (aref v (+ b 1)) (+ (aref v (+ b 1)) (* mb dl y))
-                  (aref v (+ b 2)) (+ (aref v (+ b 2)) (* mb dl z)))))))))
+                  (block-ref v b 1) (+ (block-ref v b 1) (* mb dl y))
+                  (block-ref v b 2) (+ (block-ref v b 2) (* mb dl z)))))))))
 ;; Restitution, once:1 ends here
 
 ;; [[file:../physics.org::#SC4L4R][The scalar family:1]]
