@@ -1073,13 +1073,14 @@ cells reads positions from one run of memory. #D9W4CH"
   (let ((inv (/ 1.0 cell-size)))
     (when (< (length (hash-grid-items grid)) n)
       (let ((m (max n (* 2 (length (hash-grid-items grid))))))
+        ;; centres and the near list keep four spare places for the four-lane listing
         (setf (hash-grid-items grid) (make-array m :element-type 'fixnum)
               (hash-grid-keys grid) (make-array m :element-type 'fixnum)
               (hash-grid-item-keys grid) (make-array m :element-type 'fixnum)
-              (hash-grid-xs grid) (make-array m :element-type 'single-float)
-              (hash-grid-ys grid) (make-array m :element-type 'single-float)
-              (hash-grid-zs grid) (make-array m :element-type 'single-float)
-              (hash-grid-near grid) (make-array m :element-type 'fixnum))))
+              (hash-grid-xs grid) (make-array (+ m 4) :element-type 'single-float :initial-element 0.0)
+              (hash-grid-ys grid) (make-array (+ m 4) :element-type 'single-float :initial-element 0.0)
+              (hash-grid-zs grid) (make-array (+ m 4) :element-type 'single-float :initial-element 0.0)
+              (hash-grid-near grid) (make-array (+ m 4) :element-type 'fixnum :initial-element 0))))
     (setf (hash-grid-inv-cell grid) inv (hash-grid-count grid) n)
     ;; the box of occupied cells decides the mode
     (let ((x0 most-positive-fixnum) (y0 most-positive-fixnum) (z0 most-positive-fixnum)
@@ -1229,11 +1230,23 @@ is KEY do. #D9W4CH"
                     do (loop for i of-type fixnum from (1- cx) to (1+ cx) do (cell i j (1+ cz))))))))
     n))
 
+(declaim (type (simple-array fixnum (64)) +lane-compress+))
+(defparameter +lane-compress+
+  (let ((table (make-array 64 :element-type 'fixnum :initial-element 0)))
+    (dotimes (mask 16 table)
+      (let ((k 0))
+        (dotimes (lane 4)
+          (when (logbitp lane mask)
+            (setf (aref table (+ (* 4 mask) k)) lane)
+            (incf k))))))
+  "For each 4-bit lane mask, its set lanes in rising order, four entries a mask. #D9W4CH")
+
 (defun grid-list-near (grid entry runs run-count reach2)
   "List in GRID's NEAR column the places of the RUN-COUNT RUNS (as grid-half-runs fills them for
 ENTRY) whose centres lie closer than the square root of REACH2 to the centre of ENTRY, in run
 order, and return how many. The list grows by the sign bit of the squared distance minus
-REACH2, so the test costs no branch. #D9W4CH"
+REACH2, so the test costs no branch; a dense grid's runs are tested four places at a time.
+#D9W4CH"
   (declare (type hash-grid grid) (type index entry) (type fixnum-column runs)
            (type (integer 0 14) run-count) (type single-float reach2) #.+kernel-policy+)
   (let* ((gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
@@ -1252,9 +1265,27 @@ REACH2, so the test costs no branch. #D9W4CH"
               (key (aref runs (+ (* 3 q) 2))))
           (declare (type index start end) (type fixnum key))
           (if (= key -1)
-              (loop for f of-type index from start below end
-                    do (setf (aref near found) f)
-                       (incf found (within f)))
+              ;; four at a time: the signs of four squared distances minus the reach, masked
+              ;; to the run, pick the lanes that +lane-compress+ writes, in order
+              (let ((x4 (sb-simd-sse:f32.4 x)) (y4 (sb-simd-sse:f32.4 y)) (z4 (sb-simd-sse:f32.4 z))
+                    (r4 (sb-simd-sse:f32.4 reach2)))
+                (loop for f of-type index from start below end by 4
+                      do (let* ((dx (sb-simd-sse:f32.4- (sb-simd-sse:f32.4-aref gx f) x4))
+                                (dy (sb-simd-sse:f32.4- (sb-simd-sse:f32.4-aref gy f) y4))
+                                (dz (sb-simd-sse:f32.4- (sb-simd-sse:f32.4-aref gz f) z4))
+                                (d2 (sb-simd-sse:f32.4+ (sb-simd-sse:f32.4+ (sb-simd-sse:f32.4* dx dx)
+                                                                            (sb-simd-sse:f32.4* dy dy))
+                                                        (sb-simd-sse:f32.4* dz dz)))
+                                (left (- end f))
+                                (mask (logand (sb-simd-sse:f32.4-movemask (sb-simd-sse:f32.4- d2 r4))
+                                              (if (>= left 4) 15 (1- (ash 1 left)))))
+                                (lanes (* 4 mask)))
+                           (declare (type (integer 0 15) mask) (type index left))
+                           (setf (aref near found) (+ f (aref +lane-compress+ lanes))
+                                 (aref near (+ found 1)) (+ f (aref +lane-compress+ (+ lanes 1)))
+                                 (aref near (+ found 2)) (+ f (aref +lane-compress+ (+ lanes 2)))
+                                 (aref near (+ found 3)) (+ f (aref +lane-compress+ (+ lanes 3))))
+                           (incf found (logcount mask)))))
               (loop for f of-type index from start below end
                     do (when (= (aref keys f) key)
                          (setf (aref near found) f)
