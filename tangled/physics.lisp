@@ -1454,38 +1454,29 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
   "True when HANDLE's body is in the awake set. #M4K3WD"
   (= (resolve-handle world handle) +set-awake+))
 
-(defun physics-body-position (world handle)
-  "The centre of HANDLE's body, as three values. #M4K3WD"
-  (multiple-value-bind (set row) (resolve-handle world handle)
-    (let ((b (set-buffer world set)))
-      (with-body-columns (x y z) b
-        (values (aref x row) (aref y row) (aref z row))))))
+(defmacro define-body-reader (name (&rest columns) documentation)
+  "Define NAME, a function of WORLD and HANDLE returning the values of COLUMNS in the row of
+HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3WD"
+  `(defun ,name (world handle)
+     ,documentation
+     (multiple-value-bind (set row) (resolve-handle world handle)
+       (with-body-columns ,columns (set-buffer world set)
+         (values ,@(loop for column in columns collect `(aref ,column row)))))))
 
-(defun physics-body-velocity (world handle)
-  "The linear velocity of HANDLE's body, as three values. #M4K3WD"
-  (multiple-value-bind (set row) (resolve-handle world handle)
-    (let ((b (set-buffer world set)))
-      (with-body-columns (vx vy vz) b
-        (values (aref vx row) (aref vy row) (aref vz row))))))
+(define-body-reader physics-body-position (x y z)
+  "The centre of HANDLE's body, as three values. #M4K3WD")
 
-(defun physics-body-angular-velocity (world handle)
-  "The angular velocity of HANDLE's body, as three values. #M4K3WD"
-  (multiple-value-bind (set row) (resolve-handle world handle)
-    (let ((b (set-buffer world set)))
-      (with-body-columns (wx wy wz) b
-        (values (aref wx row) (aref wy row) (aref wz row))))))
+(define-body-reader physics-body-velocity (vx vy vz)
+  "The linear velocity of HANDLE's body, as three values. #M4K3WD")
 
-(defun physics-body-orientation (world handle)
-  "The orientation of HANDLE's body as a unit quaternion W X Y Z, four values. #M4K3WD"
-  (multiple-value-bind (set row) (resolve-handle world handle)
-    (let ((b (set-buffer world set)))
-      (with-body-columns (qw qx qy qz) b
-        (values (aref qw row) (aref qx row) (aref qy row) (aref qz row))))))
+(define-body-reader physics-body-angular-velocity (wx wy wz)
+  "The angular velocity of HANDLE's body, as three values. #M4K3WD")
 
-(defun physics-body-radius (world handle)
-  "The radius of HANDLE's body. #M4K3WD"
-  (multiple-value-bind (set row) (resolve-handle world handle)
-    (aref (body-columns-radius (set-buffer world set)) row)))
+(define-body-reader physics-body-orientation (qw qx qy qz)
+  "The orientation of HANDLE's body as a unit quaternion W X Y Z, four values. #M4K3WD")
+
+(define-body-reader physics-body-radius (radius)
+  "The radius of HANDLE's body. #M4K3WD")
 
 (defun physics-world-awake-count (world)
   "How many bodies of WORLD are awake. #M4K3WD"
