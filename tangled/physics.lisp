@@ -3420,26 +3420,21 @@ each phase's share; with the machine's model and load. #B3NCH5"
                     (/ (getf m :median) scalar) (getf m :contacts) (getf m :colours)
                     (getf m :overflow) (getf m :consed) (getf m :deepest))
             (finish-output stream)))))
-    (format stream "~&~%#+caption: mean ms per step of each phase group~%| balls | family |~{ ~A |~}~%"
-            (mapcar #'first +bench-phase-groups+))
-    (format stream "~&|-------+--------+~{~A~}~%"
-            (mapcar (lambda (g) (format nil "~A+" (make-string (+ 2 (length (first g))) :initial-element #\-)))
-                    +bench-phase-groups+))
-    (dolist (m (reverse rows))
-      (format stream "~&| ~5D | ~6A |~{ ~A |~}~%" (getf m :balls) (string-downcase (getf m :kernels))
-              (loop for (name . phases) in +bench-phase-groups+
-                    collect (format nil "~v,3F" (length name)
-                                    (loop for p in phases sum (cdr (assoc p (getf m :phases))))))))
-    (format stream "~&~%#+caption: bytes consed per step by each phase group (sb-ext:get-bytes-consed around each phase)~%| balls | family |~{ ~A |~}~%"
-            (mapcar #'first +bench-phase-groups+))
-    (format stream "~&|-------+--------+~{~A~}~%"
-            (mapcar (lambda (g) (format nil "~A+" (make-string (+ 2 (length (first g))) :initial-element #\-)))
-                    +bench-phase-groups+))
-    (dolist (m (reverse rows))
-      (format stream "~&| ~5D | ~6A |~{ ~A |~}~%" (getf m :balls) (string-downcase (getf m :kernels))
-              (loop for (name . phases) in +bench-phase-groups+
-                    collect (format nil "~vD" (length name)
-                                    (loop for p in phases sum (cdr (assoc p (getf m :phase-bytes))))))))
+    ;; two tables of the phase groups: mean ms, then bytes consed
+    (flet ((phase-table (caption key cell)
+             (format stream "~&~%#+caption: ~A~%| balls | family |~{ ~A |~}~%"
+                     caption (mapcar #'first +bench-phase-groups+))
+             (format stream "~&|-------+--------+~{~A~}~%"
+                     (mapcar (lambda (g) (format nil "~A+" (make-string (+ 2 (length (first g))) :initial-element #\-)))
+                             +bench-phase-groups+))
+             (dolist (m (reverse rows))
+               (format stream "~&| ~5D | ~6A |~{ ~A |~}~%" (getf m :balls) (string-downcase (getf m :kernels))
+                       (loop for (name . phases) in +bench-phase-groups+
+                             collect (format nil cell (length name)
+                                             (loop for p in phases sum (cdr (assoc p (getf m key))))))))))
+      (phase-table "mean ms per step of each phase group" :phases "~v,3F")
+      (phase-table "bytes consed per step by each phase group (sb-ext:get-bytes-consed around each phase)"
+                   :phase-bytes "~vD"))
     (print-basin-targets (reverse rows) (car (last families)) stream)))
 
 (defun print-basin-targets (rows widest stream)
