@@ -43,7 +43,14 @@
    ;; Kernel families (#R9M4PV, #F4M1LY)
    #:register-kernel-family #:sse-kernels #:avx2-kernels
    ;; Scenes (#B4S1NS, #D3M0SC, #B3NCH5)
-   #:make-basin-terrain #:make-basin-world #:run-default-scene #:run-basin-benchmark))
+   #:make-basin-terrain #:make-basin-world #:run-default-scene #:run-basin-benchmark
+   ;; Kinds and springs (#JAU0EF), the player (#H7P4CX)
+   #:*physics-body-kinds* #:add-physics-body-of-kind #:physics-body-kind #:physics-body-kind-name
+   #:physics-spring #:make-physics-spring #:make-fountain #:make-lava-spring #:run-physics-springs
+   #:physics-player #:make-physics-player #:step-physics-player #:advance-physics-player
+   #:physics-player-x #:physics-player-y #:physics-player-z #:physics-player-vx #:physics-player-vy
+   #:physics-player-vz #:physics-player-grounded #:physics-player-eye #:post-physics-player
+   #:*physics-player-shape*))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -1477,6 +1484,9 @@ HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3W
 
 (define-body-reader physics-body-radius (radius)
   "The radius of HANDLE's body. #M4K3WD")
+
+(define-body-reader physics-body-kind (kind)
+  "The kind number of HANDLE's body: 0, or the place of its kind in *physics-body-kinds*. #M4K3WD")
 
 (defun physics-world-awake-count (world)
   "How many bodies of WORLD are awake. #M4K3WD"
@@ -3348,6 +3358,235 @@ KERNELS (the widest this CPU runs by default). Return the world and the thrown b
             (physics-world-state-hash world))
     (values world thrown)))
 ;; The main job:1 ends here
+
+;; [[file:../physics.org::#JAU0EF][Kinds of body, and the springs that emit them:1]]
+(defparameter *physics-body-kinds*
+  '((:ball        :radius 0.25 :mass 0.5   :restitution 0.6 :friction 0.6 :life nil)
+    (:marble      :radius 0.08 :mass 0.02  :restitution 0.4 :friction 0.4 :life 30)
+    (:water-drop  :radius 0.06 :mass 0.005 :restitution 0.0 :friction 0.1 :life 2.6
+                  :collide-with-bodies nil)
+    (:lava-gobbet :radius 0.12 :mass 0.05  :restitution 0.1 :friction 0.8 :life 4))
+  "The kinds of body, each a keyword and the keyword arguments it gives add-physics-body; a
+body's kind number is its kind's place in this list, from 1. #JAU0EF")
+
+(defun physics-kind-number (kind world)
+  "The number of KIND in *physics-body-kinds*, from 1, or an invalid-physics-parameter error
+naming it. #JAU0EF"
+  (let ((place (position kind *physics-body-kinds* :key #'first)))
+    (unless place
+      (error 'invalid-physics-parameter :world world :name :kind :value kind
+                                        :expected (format nil "one of ~{~S~^ ~}"
+                                                          (mapcar #'first *physics-body-kinds*))))
+    (1+ place)))
+
+(defun add-physics-body-of-kind (world kind x y z &key (vx 0.0) (vy 0.0) (vz 0.0) report-hits)
+  "Add a body of KIND (a keyword of *physics-body-kinds*) centred at X Y Z, moving at VX VY VZ,
+and return its handle. #JAU0EF"
+  (let ((number (physics-kind-number kind world)))
+    (apply #'add-physics-body world x y z :kind number :vx vx :vy vy :vz vz :report-hits report-hits
+           (rest (nth (1- number) *physics-body-kinds*)))))
+
+(defun physics-body-kind-name (world handle)
+  "The keyword of the kind of HANDLE's body, or NIL for a body added without a kind. #JAU0EF"
+  (let ((number (physics-body-kind world handle)))
+    (and (<= 1 number (length *physics-body-kinds*))
+         (first (nth (1- number) *physics-body-kinds*)))))
+
+(defstruct (physics-spring (:constructor %make-physics-spring (kind x y z per-step every)))
+  "A block at cell X Y Z that emits PER-STEP bodies of KIND on every EVERY-th call of
+run-physics-springs; CALLS and EMITTED count what it has done. #JAU0EF"
+  (kind :water-drop :type keyword)
+  (x 0 :type fixnum) (y 0 :type fixnum) (z 0 :type fixnum)
+  (per-step 1 :type (integer 1 64)) (every 1 :type (integer 1 3600))
+  (calls 0 :type fixnum) (emitted 0 :type fixnum))
+
+(defun make-physics-spring (kind x y z &key (per-step 1) (every 1))
+  "A spring of KIND at cell X Y Z emitting PER-STEP bodies every EVERY steps. #JAU0EF"
+  (physics-kind-number kind nil)
+  (dolist (check (list (list :x x 'fixnum) (list :y y 'fixnum) (list :z z 'fixnum)
+                       (list :per-step per-step '(integer 1 64)) (list :every every '(integer 1 3600))))
+    (destructuring-bind (name value type) check
+      (unless (typep value type)
+        (error 'invalid-physics-parameter :world nil :name name :value value
+                                          :expected (format nil "of type ~S" type)))))
+  (%make-physics-spring kind x y z per-step every))
+
+(defun make-fountain (x y z)
+  "A fountain at cell X Y Z: two water drops every step. #JAU0EF"
+  (make-physics-spring :water-drop x y z :per-step 2))
+
+(defun make-lava-spring (x y z)
+  "A lava spring at cell X Y Z: one gobbet every fourth step. #JAU0EF"
+  (make-physics-spring :lava-gobbet x y z :every 4))
+
+(defun spring-throw (x y z count)
+  "The direction (a unit vector within 20 degrees of +y) and the speed (4 to 6 m/s) of the
+COUNT-th body of the spring at cell X Y Z: a fixed hash of the four integers. #JAU0EF"
+  (let ((h (ldb (byte 32 0) (logxor (* (ldb (byte 32 0) x) 73856093) (* (ldb (byte 32 0) y) 19349663)
+                                    (* (ldb (byte 32 0) z) 83492791) (* count 2654435761)))))
+    ;; two rounds of multiply and shift spread every input bit over the 32
+    (dotimes (round 2)
+      (setf h (ldb (byte 32 0) (* (logxor h (ash h -16)) 2246822507))))
+    (let* ((angle (* 2 pi (/ (ldb (byte 12 0) h) 4096)))
+           (tilt (* (/ pi 9) (/ (ldb (byte 10 12) h) 1024)))
+           (speed (+ 4 (* 2 (/ (ldb (byte 10 22) h) 1024)))))
+      (values (* (sin tilt) (cos angle)) (cos tilt) (* (sin tilt) (sin angle)) speed))))
+
+(defun run-physics-springs (world springs)
+  "Let each of SPRINGS emit into WORLD what is due this call; return the handles emitted. #JAU0EF"
+  (let ((handles '()))
+    (dolist (spring springs (nreverse handles))
+      (when (zerop (mod (physics-spring-calls spring) (physics-spring-every spring)))
+        (let* ((kind (physics-spring-kind spring))
+               (radius (getf (rest (assoc kind *physics-body-kinds*)) :radius))
+               (x (physics-spring-x spring)) (y (physics-spring-y spring)) (z (physics-spring-z spring)))
+          (dotimes (k (physics-spring-per-step spring))
+            (multiple-value-bind (dx dy dz speed) (spring-throw x y z (physics-spring-emitted spring))
+              (incf (physics-spring-emitted spring))
+              (push (add-physics-body-of-kind world kind (+ x 0.5) (+ y 1 radius 0.01) (+ z 0.5)
+                                              :vx (* speed dx) :vy (* speed dy) :vz (* speed dz))
+                    handles)))))
+      (incf (physics-spring-calls spring)))))
+;; Kinds of body, and the springs that emit them:1 ends here
+
+;; [[file:../physics.org::#H7P4CX][The player: a box that walks:1]]
+(defstruct (physics-player (:constructor %make-physics-player (x y z)))
+  "The walker: the middle of its soles X Y Z, its velocity, whether it stands on something,
+whether the jump key was down at the last step, and the unspent time of its frames. #H7P4CX"
+  (x 0d0 :type double-float) (y 0d0 :type double-float) (z 0d0 :type double-float)
+  (vx 0d0 :type double-float) (vy 0d0 :type double-float) (vz 0d0 :type double-float)
+  (grounded nil :type boolean) (jump-held nil :type boolean)
+  (pending 0d0 :type double-float))
+
+(defparameter *physics-player-shape*
+  '(:half-width 0.3d0 :height 1.8d0 :eye 1.62d0 :gravity 9.81d0 :jump-speed 5d0
+    :walk-speed 4.3d0 :acceleration 40d0 :step-seconds 1/120 :steps-per-frame 8 :step-ahead 0.3d0)
+  "The walker's box and constants: half width and height (cells), eye height, gravity (m/s2),
+jump and walking speed (m/s), ground acceleration (m/s2), the step, the most steps one frame
+runs, and how far ahead the auto-jump looks. #H7P4CX")
+
+(defun player-constant (name)
+  "The walker constant NAME of *physics-player-shape*, as a double-float. #H7P4CX"
+  (coerce (getf *physics-player-shape* name) 'double-float))
+
+(defun make-physics-player (x y z)
+  "A walker standing with the middle of its soles at X Y Z. #H7P4CX"
+  (flet ((real-coordinate (name value)
+           (unless (and (realp value) (< (abs value) +physics-coordinate-limit+))
+             (error 'invalid-physics-parameter :world nil :name name :value value
+                                               :expected "a real within the coordinate limit"))
+           (coerce value 'double-float)))
+    (%make-physics-player (real-coordinate :x x) (real-coordinate :y y) (real-coordinate :z z))))
+
+(defconstant +player-epsilon+ 1d-9
+  "How far a face may sit inside a cell and still count as touching it, not overlapping. #H7P4CX")
+
+(defun box-cells-clear-p (terrain x0 y0 z0 x1 y1 z1)
+  "True when no solid cell of TERRAIN overlaps the open box X0..X1, Y0..Y1, Z0..Z1. #H7P4CX"
+  (loop for i from (floor (+ x0 +player-epsilon+)) below (ceiling (- x1 +player-epsilon+))
+        always (loop for j from (floor (+ y0 +player-epsilon+)) below (ceiling (- y1 +player-epsilon+))
+                     always (loop for k from (floor (+ z0 +player-epsilon+)) below (ceiling (- z1 +player-epsilon+))
+                                  never (terrain-solid-p terrain i j k)))))
+
+(defun player-box (player)
+  "The walker's box as six values: x0 y0 z0 x1 y1 z1. #H7P4CX"
+  (let ((w (player-constant :half-width)) (x (physics-player-x player))
+        (y (physics-player-y player)) (z (physics-player-z player)))
+    (values (- x w) y (- z w) (+ x w) (+ y (player-constant :height)) (+ z w))))
+
+(defun player-move-axis (player terrain axis distance)
+  "Move PLAYER along AXIS (0 x, 1 y, 2 z) by DISTANCE, or up to the first solid layer of cells in
+its path; return true when a cell stopped it. #H7P4CX"
+  (when (zerop distance) (return-from player-move-axis nil))
+  (multiple-value-bind (x0 y0 z0 x1 y1 z1) (player-box player)
+    (let* ((lo (vector x0 y0 z0)) (hi (vector x1 y1 z1))
+           (face (if (plusp distance) (aref hi axis) (aref lo axis)))
+           (target (+ face distance))
+           ;; the layers of cells the leading face enters, nearest first
+           (layers (if (plusp distance)
+                       (loop for c from (ceiling (- face +player-epsilon+)) below (ceiling (- target +player-epsilon+))
+                             collect c)
+                       (loop for c from (1- (floor (+ face +player-epsilon+))) downto (floor (+ target +player-epsilon+))
+                             collect c)))
+           (moved distance) (blocked nil))
+      (dolist (c layers)
+        (let ((l (copy-seq lo)) (h (copy-seq hi)))
+          (setf (aref l axis) (coerce c 'double-float) (aref h axis) (coerce (1+ c) 'double-float))
+          (unless (box-cells-clear-p terrain (aref l 0) (aref l 1) (aref l 2) (aref h 0) (aref h 1) (aref h 2))
+            (setf moved (if (plusp distance) (- c face) (- (1+ c) face)) blocked t)
+            (return))))
+      (ecase axis
+        (0 (incf (physics-player-x player) moved) (when blocked (setf (physics-player-vx player) 0d0)))
+        (1 (incf (physics-player-y player) moved) (when blocked (setf (physics-player-vy player) 0d0)))
+        (2 (incf (physics-player-z player) moved) (when blocked (setf (physics-player-vz player) 0d0))))
+      blocked)))
+
+(defun step-physics-player (player terrain &key (move-x 0) (move-z 0) jump)
+  "One 1/120 s step of PLAYER in TERRAIN with the input direction MOVE-X MOVE-Z (its length is
+capped at 1) and the jump key down when JUMP. Return PLAYER. #H7P4CX"
+  (let* ((dt (player-constant :step-seconds))
+         (length (sqrt (+ (* move-x move-x) (* move-z move-z))))
+         (scale (if (> length 1) (/ length) 1))
+         (want-x (* (player-constant :walk-speed) move-x scale))
+         (want-z (* (player-constant :walk-speed) move-z scale))
+         (dvx (- want-x (physics-player-vx player))) (dvz (- want-z (physics-player-vz player)))
+         (change (sqrt (+ (* dvx dvx) (* dvz dvz))))
+         (most (* (player-constant :acceleration) dt)))
+    ;; 1. turn the horizontal velocity towards the input, by at most the acceleration's share
+    (when (> change most)
+      (setf dvx (* dvx (/ most change)) dvz (* dvz (/ most change))))
+    (incf (physics-player-vx player) dvx)
+    (incf (physics-player-vz player) dvz)
+    ;; 2. a jump on the press, from the ground
+    (when (and jump (not (physics-player-jump-held player)) (physics-player-grounded player))
+      (setf (physics-player-vy player) (player-constant :jump-speed)))
+    (setf (physics-player-jump-held player) (and jump t))
+    ;; 3. gravity, and 4. y (by the mean of the speeds before and after it), then x, then z
+    (let* ((vy0 (physics-player-vy player))
+           (vy1 (decf (physics-player-vy player) (* (player-constant :gravity) dt)))
+           (dy (* 0.5d0 (+ vy0 vy1) dt))
+           (falling (minusp dy))
+           (y-blocked (player-move-axis player terrain 1 dy))
+           (step-x (* (physics-player-vx player) dt)) (step-z (* (physics-player-vz player) dt))
+           (x-blocked (player-move-axis player terrain 0 step-x))
+           (z-blocked (player-move-axis player terrain 2 step-z)))
+      (setf (physics-player-grounded player) (and falling y-blocked))
+      ;; 5. the auto-jump: stopped while walking on the ground, and a box one cell up is clear
+      (when (and (physics-player-grounded player) (or x-blocked z-blocked) (plusp length))
+        (let ((ahead (player-constant :step-ahead)))
+          (multiple-value-bind (x0 y0 z0 x1 y1 z1) (player-box player)
+            (let ((ox (if x-blocked (* ahead (signum step-x)) 0)) (oz (if z-blocked (* ahead (signum step-z)) 0)))
+              (when (box-cells-clear-p terrain (+ x0 ox) (+ y0 1) (+ z0 oz) (+ x1 ox) (+ y1 1) (+ z1 oz))
+                (setf (physics-player-vy player) (player-constant :jump-speed)
+                      (physics-player-grounded player) nil))))))))
+  player)
+
+(defun advance-physics-player (player terrain seconds &rest input)
+  "Run PLAYER for a frame of SECONDS at 120 Hz, carrying the remainder to the next frame and
+running at most eight steps; INPUT goes to step-physics-player. Return the steps run. #H7P4CX"
+  (let ((dt (player-constant :step-seconds)) (steps 0))
+    (setf (physics-player-pending player)
+          (min (+ (physics-player-pending player) seconds)
+               (* dt (player-constant :steps-per-frame))))
+    (loop while (>= (physics-player-pending player) (- dt 1d-12))
+          do (apply #'step-physics-player player terrain input)
+             (decf (physics-player-pending player) dt)
+             (incf steps))
+    steps))
+
+(defun physics-player-eye (player)
+  "Where the camera sits: the player's eye, as three values. #H7P4CX"
+  (values (physics-player-x player) (+ (physics-player-y player) (player-constant :eye))
+          (physics-player-z player)))
+
+(defun post-physics-player (world player)
+  "Post PLAYER into WORLD's next step as a kinematic box moving at its velocity. #H7P4CX"
+  (let ((w (player-constant :half-width)) (h (* 0.5 (player-constant :height))))
+    (post-physics-box world (physics-player-x player) (+ (physics-player-y player) h)
+                      (physics-player-z player) w h w
+                      :vx (physics-player-vx player) :vy (physics-player-vy player)
+                      :vz (physics-player-vz player) :owner player)))
+;; The player: a box that walks:1 ends here
 
 ;; [[file:../physics.org::#B3NCH5][What a step costs:1]]
 (defun cpu-model-name ()

@@ -1211,6 +1211,135 @@ how far the ball moved and the deepest the box's leading face got past the ball'
           (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits"))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
 
+;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
+(define-claim "JAU0EF" kinds-make-their-bodies
+    "Each kind gives its radius and name; a gobbet expires at 4 s; an unknown kind is refused."
+  (let ((w (make-floor-world)))
+    (loop for (kind . args) in luv-physics::*physics-body-kinds* for i from 0
+          do (let ((h (luv-physics::add-physics-body-of-kind w kind (+ 1.5 (* 2 i)) 3.0 1.5)))
+               (check (= (luv-physics::physics-body-radius w h) (float (getf args :radius) 1.0))
+                      "~S has radius ~A" kind (luv-physics::physics-body-radius w h))
+               (check (eq kind (luv-physics::physics-body-kind-name w h)))))
+    (check (null (luv-physics::physics-body-kind-name w (luv-physics::add-physics-body w 9.5 3.0 1.5))))
+    (let ((gobbet (luv-physics::add-physics-body-of-kind w :lava-gobbet 11.5 3.0 1.5))
+          (expired-at nil))
+      (dotimes (i 300)
+        (luv-physics::step-physics-world w)
+        (luv-physics::map-physics-events
+         (lambda (kind a b x y z speed datum)
+           (declare (ignore b x y z speed datum))
+           (when (and (eq kind :expired) (= a gobbet)) (setf expired-at (1+ i))))
+         w))
+      (check (and expired-at (<= 239 expired-at 241)) "the gobbet expired at step ~A" expired-at)
+      (check (not (luv-physics::physics-body-alive-p w gobbet))))
+    (let ((before (luv-physics::physics-world-state-hash w))
+          (e (handler-case (luv-physics::add-physics-body-of-kind w :anvil 1.5 3.0 1.5) (error (e) e))))
+      (check (typep e 'luv-physics:invalid-physics-parameter))
+      (check (eq :anvil (luv-physics::invalid-physics-parameter-value e)))
+      (check (= before (luv-physics::physics-world-state-hash w)))
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; JAU0EF-kinds-make-their-bodies ends here
+
+;; [[file:../physics.org::#JAU0EF][JAU0EF-springs-emit-by-rule]]
+(define-claim "JAU0EF" springs-emit-by-rule
+    "Fountain: 2 drops a step in the cone, drops never meet; lava: 1 in 4 steps; same hash twice."
+  (flet ((run ()
+           (let* ((w (make-floor-world))
+                  (springs (list (luv-physics::make-fountain 4 -1 4) (luv-physics::make-lava-spring 8 -1 8)))
+                  (drops 0) (gobbets 0) (pairs 0) (floor-contacts 0) (outside 0))
+             (dotimes (i 120)
+               (dolist (h (luv-physics::run-physics-springs w springs))
+                 (multiple-value-bind (vx vy vz) (luv-physics::physics-body-velocity w h)
+                   (let ((speed (sqrt (+ (* vx vx) (* vy vy) (* vz vz)))))
+                     (unless (and (<= 3.999 speed 6.001) (>= (/ vy speed) (- (cos (/ pi 9)) 1e-5)))
+                       (incf outside))))
+                 (ecase (luv-physics::physics-body-kind-name w h)
+                   (:water-drop (incf drops)) (:lava-gobbet (incf gobbets))))
+               (luv-physics::step-physics-world w)
+               (let ((contacts (luv-physics::physics-world-contacts w)))
+                 (dotimes (c (luv-physics::contact-columns-length contacts))
+                   (let ((kind (aref (luv-physics::contact-columns-kind contacts) c))
+                         (a (aref (luv-physics::contact-columns-handle-a contacts) c))
+                         (b (aref (luv-physics::contact-columns-handle-b contacts) c)))
+                     (cond ((and (= kind luv-physics::+contact-pair+)
+                                 (eq :water-drop (luv-physics::physics-body-kind-name w a))
+                                 (eq :water-drop (luv-physics::physics-body-kind-name w b)))
+                            (incf pairs))
+                           ((and (= kind luv-physics::+contact-terrain+)
+                                 (eq :water-drop (luv-physics::physics-body-kind-name w a)))
+                            (incf floor-contacts)))))))
+             (check (= drops 240) "~D drops in 120 steps" drops)
+             (check (= gobbets 30) "~D gobbets in 120 steps" gobbets)
+             (check (zerop outside) "~D bodies left outside the cone or the speed range" outside)
+             (check (zerop pairs) "~D contacts joined two drops" pairs)
+             (check (plusp floor-contacts) "no drop reached the floor")
+             (check (eq t (luv-physics::validate-physics-world w)))
+             (luv-physics::physics-world-state-hash w))))
+    (check (= (run) (run)) "two runs of the same springs differ")))
+;; JAU0EF-springs-emit-by-rule ends here
+
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-follows-the-rule]]
+(define-claim "H7P4CX" walker-follows-the-rule
+    "Walks at 4.3 m/s on the floor, jumps 1.27 cells once per press, climbs one block, not two."
+  (multiple-value-bind (world terrain) (make-floor-world)
+    (declare (ignore world))
+    (let ((p (luv-physics::make-physics-player 0.5 0 0.5)) (top 0d0) (landings 0) (was-grounded nil))
+      ;; walking
+      (dotimes (i 120) (luv-physics::step-physics-player p terrain :move-x 1))
+      (check (< (abs (- (luv-physics::physics-player-vx p) 4.3d0)) 1d-9) "speed ~A" (luv-physics::physics-player-vx p))
+      (check (and (luv-physics::physics-player-grounded p) (= 0 (luv-physics::physics-player-y p)))
+             "soles at ~A" (luv-physics::physics-player-y p))
+      ;; a held jump key: one jump, then the walker stays down
+      (dotimes (i 360)
+        (luv-physics::step-physics-player p terrain :jump t)
+        (setf top (max top (luv-physics::physics-player-y p)))
+        (when (and (luv-physics::physics-player-grounded p) (not was-grounded)) (incf landings))
+        (setf was-grounded (luv-physics::physics-player-grounded p)))
+      (check (< (abs (- top 1.274d0)) 0.02) "the jump rose ~,3F cells" top)
+      (check (= 1 landings) "~D landings with the key held" landings)
+      (luv-physics::step-physics-player p terrain)
+      (luv-physics::step-physics-player p terrain :jump t)
+      (check (plusp (luv-physics::physics-player-vy p)) "a new press did not jump"))
+    ;; a step one block high from x = 4, a wall two blocks high at z = 4
+    (luv-physics::fill-terrain terrain 4 0 0 16 1 2 t)
+    (luv-physics::fill-terrain terrain 0 0 4 2 2 5 t)
+    (let ((p (luv-physics::make-physics-player 2.5 0 1)))
+      (dotimes (i 240) (luv-physics::step-physics-player p terrain :move-x 1))
+      (check (and (= 1 (luv-physics::physics-player-y p)) (> (luv-physics::physics-player-x p) 4.5))
+             "the step was not climbed: x ~,3F, y ~,3F" (luv-physics::physics-player-x p) (luv-physics::physics-player-y p)))
+    (let ((p (luv-physics::make-physics-player 1 0 2.5)) (highest 0d0))
+      (dotimes (i 240)
+        (luv-physics::step-physics-player p terrain :move-z 1)
+        (setf highest (max highest (luv-physics::physics-player-y p))))
+      (check (and (< (abs (- (luv-physics::physics-player-z p) 3.7d0)) 1d-6) (= 0 highest))
+             "at the wall: z ~,3F, highest y ~,3F" (luv-physics::physics-player-z p) highest))
+    ;; the floor world is resident up to x = 32; beyond is a wall
+    (let ((p (luv-physics::make-physics-player 30 0 10.5)))
+      (dotimes (i 240) (luv-physics::step-physics-player p terrain :move-x 1))
+      (check (< (abs (- (luv-physics::physics-player-x p) 31.7d0)) 1d-6)
+             "the walker left the resident world: x ~,3F" (luv-physics::physics-player-x p)))))
+;; H7P4CX-walker-follows-the-rule ends here
+
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-kicks-balls]]
+(define-claim "H7P4CX" walker-kicks-balls
+    "Frames run at most 8 steps; the posted walker pushes a ball it walks into."
+  (multiple-value-bind (world terrain) (make-floor-world)
+    (let ((p (luv-physics::make-physics-player 1.5 0 5.5))
+          (ball (luv-physics::add-physics-body world 4.5 0.25 5.5 :radius 0.25)))
+      (check (= 2 (luv-physics::advance-physics-player p terrain 1/60)))
+      (check (= 8 (luv-physics::advance-physics-player p terrain 1.0)))
+      (check (= 0 (luv-physics::advance-physics-player p terrain 0.001)))
+      (dotimes (i 90)
+        (luv-physics::advance-physics-player p terrain 1/60 :move-x 1)
+        (luv-physics::post-physics-player world p)
+        (luv-physics::step-physics-world world))
+      (let ((x (luv-physics::physics-body-position world ball)))
+        (check (> x (+ (luv-physics::physics-player-x p) 0.3)) "the ball at ~,3F is not ahead of the walker at ~,3F"
+               x (luv-physics::physics-player-x p))
+        (check (> x 5.0) "the ball only reached x = ~,3F" x))
+      (check (eq t (luv-physics::validate-physics-world world))))))
+;; H7P4CX-walker-kicks-balls ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-steps-cons-nothing]]
 (define-claim "B3NCH5" steps-cons-nothing
     "Thousands of steps of an awake pile, and of the fountain with drops added, cons 0 bytes."
