@@ -3469,14 +3469,20 @@ runs, and how far ahead the auto-jump looks. #H7P4CX")
   "The walker constant NAME of *physics-player-shape*, as a double-float. #H7P4CX"
   (coerce (getf *physics-player-shape* name) 'double-float))
 
+(defun finite-double (name value)
+  "VALUE as a double-float, or an invalid-physics-number error naming NAME. #H7P4CX"
+  (finite-f32 name value)
+  (coerce value 'double-float))
+
 (defun make-physics-player (x y z)
   "A walker standing with the middle of its soles at X Y Z. #H7P4CX"
-  (flet ((real-coordinate (name value)
-           (unless (and (realp value) (< (abs value) +physics-coordinate-limit+))
-             (error 'invalid-physics-parameter :world nil :name name :value value
-                                               :expected "a real within the coordinate limit"))
-           (coerce value 'double-float)))
-    (%make-physics-player (real-coordinate :x x) (real-coordinate :y y) (real-coordinate :z z))))
+  (flet ((coordinate (name value)
+           (let ((v (finite-double name value)))
+             (unless (< (abs v) +physics-coordinate-limit+)
+               (error 'invalid-physics-parameter :world nil :name name :value value
+                                                 :expected "within the coordinate limit"))
+             v)))
+    (%make-physics-player (coordinate :x x) (coordinate :y y) (coordinate :z z))))
 
 (defconstant +player-epsilon+ 1d-9
   "How far a face may sit inside a cell and still count as touching it, not overlapping. #H7P4CX")
@@ -3525,6 +3531,7 @@ its path; return true when a cell stopped it. #H7P4CX"
   "One 1/120 s step of PLAYER in TERRAIN with the input direction MOVE-X MOVE-Z (its length is
 capped at 1) and the jump key down when JUMP. Return PLAYER. #H7P4CX"
   (let* ((dt (player-constant :step-seconds))
+         (move-x (finite-double :move-x move-x)) (move-z (finite-double :move-z move-z))
          (length (sqrt (+ (* move-x move-x) (* move-z move-z))))
          (scale (if (> length 1) (/ length) 1))
          (want-x (* (player-constant :walk-speed) move-x scale))
@@ -3564,7 +3571,9 @@ capped at 1) and the jump key down when JUMP. Return PLAYER. #H7P4CX"
 (defun advance-physics-player (player terrain seconds &rest input)
   "Run PLAYER for a frame of SECONDS at 120 Hz, carrying the remainder to the next frame and
 running at most eight steps; INPUT goes to step-physics-player. Return the steps run. #H7P4CX"
-  (let ((dt (player-constant :step-seconds)) (steps 0))
+  (let ((dt (player-constant :step-seconds)) (steps 0) (seconds (finite-double :seconds seconds)))
+    (when (minusp seconds)
+      (error 'invalid-physics-parameter :world nil :name :seconds :value seconds :expected "not negative"))
     (setf (physics-player-pending player)
           (min (+ (physics-player-pending player) seconds)
                (* dt (player-constant :steps-per-frame))))

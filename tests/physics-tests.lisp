@@ -1320,6 +1320,30 @@ how far the ball moved and the deepest the box's leading face got past the ball'
              "the walker left the resident world: x ~,3F" (luv-physics::physics-player-x p)))))
 ;; H7P4CX-walker-follows-the-rule ends here
 
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-refuses-bad-input]]
+(define-claim "H7P4CX" walker-refuses-bad-input
+    "NaN, infinite and out-of-range walker input signals a condition and changes nothing."
+  (multiple-value-bind (world terrain) (make-floor-world)
+    (declare (ignore world))
+    (let* ((p (luv-physics::make-physics-player 1.5 0 1.5))
+           (nan (sb-kernel:make-double-float -524288 0))
+           (before (copy-structure p)))
+      (flet ((refused (type thunk)
+               (check (typep (handler-case (progn (funcall thunk) nil) (error (e) e)) type)
+                      "not a ~S" type)
+               (check (equalp p before) "the walker changed")))
+        (refused 'luv-physics:invalid-physics-number
+                 (lambda () (luv-physics::step-physics-player p terrain :move-x nan)))
+        (refused 'luv-physics:invalid-physics-number
+                 (lambda () (luv-physics::step-physics-player p terrain :move-z sb-ext:single-float-negative-infinity)))
+        (refused 'luv-physics:invalid-physics-number
+                 (lambda () (luv-physics::advance-physics-player p terrain sb-ext:double-float-positive-infinity)))
+        (refused 'luv-physics:invalid-physics-parameter
+                 (lambda () (luv-physics::advance-physics-player p terrain -1/60)))
+        (refused 'luv-physics:invalid-physics-parameter (lambda () (luv-physics::make-physics-player 1e6 0 0)))
+        (refused 'luv-physics:invalid-physics-number (lambda () (luv-physics::make-physics-player 0 :up 0)))))))
+;; H7P4CX-walker-refuses-bad-input ends here
+
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-kicks-balls]]
 (define-claim "H7P4CX" walker-kicks-balls
     "Frames run at most 8 steps; the posted walker pushes a ball it walks into."
