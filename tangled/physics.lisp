@@ -3422,30 +3422,38 @@ run-physics-springs; CALLS and EMITTED count what it has done. #JAU0EF"
 (defun spring-throw (x y z count)
   "The direction (a unit vector within 20 degrees of +y) and the speed (4 to 6 m/s) of the
 COUNT-th body of the spring at cell X Y Z: a fixed hash of the four integers. #JAU0EF"
-  (let ((h (ldb (byte 32 0) (logxor (* (ldb (byte 32 0) x) 73856093) (* (ldb (byte 32 0) y) 19349663)
-                                    (* (ldb (byte 32 0) z) 83492791) (* count 2654435761)))))
+  (declare (type fixnum x y z count))
+  (let ((h (ldb (byte 32 0) (logxor (* (ldb (byte 26 0) x) 73856093) (* (ldb (byte 26 0) y) 19349663)
+                                    (* (ldb (byte 26 0) z) 83492791) (* (ldb (byte 29 0) count) 2654435761)))))
+    (declare (type (unsigned-byte 32) h))
     ;; two rounds of multiply and shift spread every input bit over the 32
     (dotimes (round 2)
       (setf h (ldb (byte 32 0) (* (logxor h (ash h -16)) 2246822507))))
-    (let* ((angle (* 2 pi (/ (ldb (byte 12 0) h) 4096)))
-           (tilt (* (/ pi 9) (/ (ldb (byte 10 12) h) 1024)))
-           (speed (+ 4 (* 2 (/ (ldb (byte 10 22) h) 1024)))))
+    (let ((angle (* 2.0 (f32 pi) (/ (float (ldb (byte 12 0) h) 1.0) 4096.0)))
+          (tilt (* (f32 (/ pi 9)) (/ (float (ldb (byte 10 12) h) 1.0) 1024.0)))
+          (speed (+ 4.0 (* 2.0 (/ (float (ldb (byte 10 22) h) 1.0) 1024.0)))))
+      (declare (type single-float angle tilt speed))
       (values (* (sin tilt) (cos angle)) (cos tilt) (* (sin tilt) (sin angle)) speed))))
 
-(defun run-physics-springs (world springs)
-  "Let each of SPRINGS emit into WORLD what is due this call; return the handles emitted. #JAU0EF"
-  (let ((handles '()))
-    (dolist (spring springs (nreverse handles))
+(defun run-physics-springs (world springs &optional function)
+  "Let each of SPRINGS emit into WORLD what is due this call, calling FUNCTION, when given, on
+the handle of each body emitted; return how many were emitted. Conses nothing. #JAU0EF"
+  (let ((emitted 0))
+    (declare (type fixnum emitted))
+    (dolist (spring springs emitted)
       (when (zerop (mod (physics-spring-calls spring) (physics-spring-every spring)))
         (let* ((kind (physics-spring-kind spring))
-               (radius (getf (rest (assoc kind *physics-body-kinds*)) :radius))
+               (radius (f32 (getf (rest (assoc kind *physics-body-kinds*)) :radius)))
                (x (physics-spring-x spring)) (y (physics-spring-y spring)) (z (physics-spring-z spring)))
+          (declare (type single-float radius))
           (dotimes (k (physics-spring-per-step spring))
             (multiple-value-bind (dx dy dz speed) (spring-throw x y z (physics-spring-emitted spring))
+              (declare (type single-float dx dy dz speed))
               (incf (physics-spring-emitted spring))
-              (push (add-physics-body-of-kind world kind (+ x 0.5) (+ y 1 radius 0.01) (+ z 0.5)
-                                              :vx (* speed dx) :vy (* speed dy) :vz (* speed dz))
-                    handles)))))
+              (let ((handle (add-physics-body-of-kind world kind (+ x 0.5) (+ y 1.0 radius 0.01) (+ z 0.5)
+                                                      :vx (* speed dx) :vy (* speed dy) :vz (* speed dz))))
+                (incf emitted)
+                (when function (funcall function handle)))))))
       (incf (physics-spring-calls spring)))))
 ;; Kinds of body, and the springs that emit them:1 ends here
 
@@ -3744,28 +3752,19 @@ and drops a new one in from above: mean ms and bytes consed per step over FROM..
           (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
     (list :mean (/ ms (- to from)) :consed (round consed (- to from)))))
 
-(defun emit-fountain-drop (world counter &key (life 2.6))
-  "Add the COUNTER-th drop of the fountain on the basin floor: a water drop (radius 0.06 m, 5 g,
-meeting only terrain, living LIFE seconds) thrown at 4-6 m/s within 20 degrees of straight up,
-its direction and speed a fixed hash of COUNTER. Return its handle. #B3NCH5"
-  (let* ((h (ldb (byte 32 0) (* (+ (* counter 7919) 12345) 2654435761)))
-         (angle (* 2 (f32 pi) (/ (ldb (byte 12 0) h) 4096.0)))
-         (tilt (* (f32 (/ pi 9)) (/ (ldb (byte 10 12) h) 1024.0)))
-         (speed (+ 4.0 (* 2.0 (/ (ldb (byte 10 22) h) 1024.0)))))
-    (declare (type single-float angle tilt speed))
-    (add-physics-body world 4.0 0.1 4.0 :radius 0.06 :mass 0.005 :friction 0.1 :life life
-                      :collide-with-bodies nil
-                      :vx (* speed (sin tilt) (cos angle)) :vy (* speed (cos tilt))
-                      :vz (* speed (sin tilt) (sin angle)))))
+(defun make-basin-fountain ()
+  "The fountain of the benchmarks: a fountain spring (make-fountain) in the floor cell at the
+middle of the basin, two water drops a step. #B3NCH5"
+  (make-fountain 4 -1 4))
 
-(defun measure-fountain (&key (kernels :scalar) (per-step 2) (life 2.6) (from 300) (to 600))
-  "The fountain emitting PER-STEP drops a step, each living LIFE seconds: mean ms, bytes consed
-per step over FROM..TO, and the drops alive. #B3NCH5"
+(defun measure-fountain (&key (kernels :scalar) (from 300) (to 600))
+  "The basin's fountain, its spring run before every step: mean ms and bytes consed per step
+(spring and step) over FROM..TO, and the drops alive. #B3NCH5"
   (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
-        (count 0) (ms 0d0) (consed 0))
+        (springs (list (make-basin-fountain))) (ms 0d0) (consed 0))
     (dotimes (i to)
       (let ((before (sb-ext:get-bytes-consed)))
-        (dotimes (k per-step) (emit-fountain-drop world (incf count) :life life))
+        (run-physics-springs world springs)
         (step-physics-world world)
         (when (>= i from)
           (incf consed (- (sb-ext:get-bytes-consed) before))
@@ -3930,19 +3929,19 @@ the world valid. #X7R3M5"
                    (let ((n (body-columns-length buffer)))
                      (every (lambda (column) (finite (subseq column 0 n))) (list x y z vx vy vz wx wy wz)))))))
 
-(defun fountain-long-run (&key (minutes 10) (per-step 2))
+(defun fountain-long-run (&key (minutes 10))
   "Run the fountain of the benchmarks (#B3NCH5) for MINUTES simulated minutes. Return the drops
 alive at the end, whether every number stayed finite, the bytes consed per step after the first
 minute, and the growth of the heap in bytes, after a full collection, from the end of the first
 minute to the end. #X7R3M5"
   (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t))
-        (count 0) (finite t) (consed 0) (heap-1 0))
+        (springs (list (make-basin-fountain))) (finite t) (consed 0) (heap-1 0))
     (dotimes (i (* minutes 3600))
       (when (= i 3600)
         (sb-ext:gc :full t)
         (setf heap-1 (sb-kernel:dynamic-usage)))
       (let ((before (sb-ext:get-bytes-consed)))
-        (dotimes (k per-step) (emit-fountain-drop world (incf count)))
+        (run-physics-springs world springs)
         (step-physics-world world)
         (when (>= i 3600) (incf consed (- (sb-ext:get-bytes-consed) before))))
       (when (zerop (mod i 600)) (setf finite (and finite (world-finite-p world)))))
