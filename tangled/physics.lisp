@@ -3458,29 +3458,41 @@ the handle of each body emitted; return how many were emitted. Conses nothing. #
 ;; Kinds of body, and the springs that emit them:1 ends here
 
 ;; [[file:../physics.org::#H7P4CX][The player: a box that walks:1]]
-(defstruct (physics-player (:constructor %make-physics-player (x y z)))
-  "The walker: the middle of its soles X Y Z, its velocity, whether it stands on something,
-whether the jump key was down at the last step, and the unspent time of its frames. #H7P4CX"
-  (x 0d0 :type double-float) (y 0d0 :type double-float) (z 0d0 :type double-float)
-  (vx 0d0 :type double-float) (vy 0d0 :type double-float) (vz 0d0 :type double-float)
-  (grounded nil :type boolean) (jump-held nil :type boolean)
-  (pending 0d0 :type double-float))
-
 (defparameter *physics-player-shape*
   '(:half-width 0.3d0 :height 1.8d0 :eye 1.62d0 :gravity 9.81d0 :jump-speed 5d0
     :walk-speed 4.3d0 :acceleration 40d0 :step-seconds 1/120 :steps-per-frame 8 :step-ahead 0.3d0)
-  "The walker's box and constants: half width and height (cells), eye height, gravity (m/s2),
-jump and walking speed (m/s), ground acceleration (m/s2), the step, the most steps one frame
-runs, and how far ahead the auto-jump looks. #H7P4CX")
+  "The walker's box and constants, read when a walker is made: half width and height (cells),
+eye height, gravity (m/s2), jump and walking speed (m/s), ground acceleration (m/s2), the step,
+the most steps one frame runs, and how far ahead the auto-jump looks. #H7P4CX")
 
-(defun player-constant (name)
-  "The walker constant NAME of *physics-player-shape*, as a double-float. #H7P4CX"
-  (coerce (getf *physics-player-shape* name) 'double-float))
+(defstruct (physics-player (:constructor %make-physics-player))
+  "The walker: the middle of its soles X Y Z, its velocity, whether it stands on something,
+whether the jump key was down at the last step, the unspent time of its frames, and its own
+copy of the constants of *physics-player-shape*. #H7P4CX"
+  (x 0d0 :type double-float) (y 0d0 :type double-float) (z 0d0 :type double-float)
+  (vx 0d0 :type double-float) (vy 0d0 :type double-float) (vz 0d0 :type double-float)
+  (grounded nil :type boolean) (jump-held nil :type boolean)
+  (pending 0d0 :type double-float)
+  (half-width 0.3d0 :type double-float) (height 1.8d0 :type double-float)
+  (eye-height 1.62d0 :type double-float)
+  (gravity 9.81d0 :type double-float) (jump-speed 5d0 :type double-float)
+  (walk-speed 4.3d0 :type double-float) (acceleration 40d0 :type double-float)
+  (step-seconds (/ 1d0 120) :type double-float) (steps-per-frame 8 :type (integer 1 1000))
+  (step-ahead 0.3d0 :type double-float))
 
 (defun finite-double (name value)
   "VALUE as a double-float, or an invalid-physics-number error naming NAME. #H7P4CX"
   (finite-f32 name value)
   (coerce value 'double-float))
+
+(declaim (inline player-input))
+(defun player-input (name value)
+  "VALUE as a double-float, or an invalid-physics-number error naming NAME. A double-float is
+checked in place and returned as it is, so the walker conses nothing for one. #H7P4CX"
+  (if (and (typep value 'double-float) (not (sb-ext:float-nan-p value))
+           (< (abs value) (float most-positive-single-float 1d0)))
+      value
+      (finite-double name value)))
 
 (defun make-physics-player (x y z)
   "A walker standing with the middle of its soles at X Y Z. #H7P4CX"
@@ -3489,116 +3501,148 @@ runs, and how far ahead the auto-jump looks. #H7P4CX")
              (unless (< (abs v) +physics-coordinate-limit+)
                (error 'invalid-physics-parameter :world nil :name name :value value
                                                  :expected "within the coordinate limit"))
-             v)))
-    (%make-physics-player (coordinate :x x) (coordinate :y y) (coordinate :z z))))
+             v))
+         (shape (name) (coerce (getf *physics-player-shape* name) 'double-float)))
+    (%make-physics-player
+     :x (coordinate :x x) :y (coordinate :y y) :z (coordinate :z z)
+     :half-width (shape :half-width) :height (shape :height) :eye-height (shape :eye)
+     :gravity (shape :gravity) :jump-speed (shape :jump-speed) :walk-speed (shape :walk-speed)
+     :acceleration (shape :acceleration) :step-seconds (shape :step-seconds)
+     :steps-per-frame (getf *physics-player-shape* :steps-per-frame)
+     :step-ahead (shape :step-ahead))))
 
 (defconstant +player-epsilon+ 1d-9
   "How far a face may sit inside a cell and still count as touching it, not overlapping. #H7P4CX")
 
+(deftype player-coordinate ()
+  "A walker's coordinate: within the coordinate limit, so its cells are fixnums. #H7P4CX"
+  `(double-float ,(- (* 2d0 +physics-coordinate-limit+)) ,(* 2d0 +physics-coordinate-limit+)))
+
+(declaim (inline box-cells-clear-p))
 (defun box-cells-clear-p (terrain x0 y0 z0 x1 y1 z1)
   "True when no solid cell of TERRAIN overlaps the open box X0..X1, Y0..Y1, Z0..Z1. #H7P4CX"
-  (loop for i from (floor (+ x0 +player-epsilon+)) below (ceiling (- x1 +player-epsilon+))
-        always (loop for j from (floor (+ y0 +player-epsilon+)) below (ceiling (- y1 +player-epsilon+))
-                     always (loop for k from (floor (+ z0 +player-epsilon+)) below (ceiling (- z1 +player-epsilon+))
-                                  never (terrain-solid-p terrain i j k)))))
+  (declare (type player-coordinate x0 y0 z0 x1 y1 z1))
+  (let ((e +player-epsilon+))
+    (loop for i of-type fixnum from (floor (+ x0 e)) below (ceiling (- x1 e))
+          always (loop for j of-type fixnum from (floor (+ y0 e)) below (ceiling (- y1 e))
+                       always (loop for k of-type fixnum from (floor (+ z0 e)) below (ceiling (- z1 e))
+                                    never (terrain-solid-p terrain i j k))))))
 
-(defun player-box (player)
-  "The walker's box as six values: x0 y0 z0 x1 y1 z1. #H7P4CX"
-  (let ((w (player-constant :half-width)) (x (physics-player-x player))
-        (y (physics-player-y player)) (z (physics-player-z player)))
-    (values (- x w) y (- z w) (+ x w) (+ y (player-constant :height)) (+ z w))))
+(defmacro with-player-box ((x0 y0 z0 x1 y1 z1) player &body body)
+  "Run BODY with X0..Z1 bound to the corners of PLAYER's box. #H7P4CX"
+  (let ((p (gensym "PLAYER")) (w (gensym "W")))
+    `(let* ((,p ,player) (,w (physics-player-half-width ,p))
+            (,x0 (- (physics-player-x ,p) ,w)) (,y0 (physics-player-y ,p)) (,z0 (- (physics-player-z ,p) ,w))
+            (,x1 (+ (physics-player-x ,p) ,w)) (,y1 (+ (physics-player-y ,p) (physics-player-height ,p)))
+            (,z1 (+ (physics-player-z ,p) ,w)))
+       (declare (type player-coordinate ,x0 ,y0 ,z0 ,x1 ,y1 ,z1) (ignorable ,x0 ,y0 ,z0 ,x1 ,y1 ,z1))
+       ,@body)))
 
+(declaim (inline player-move-axis))
 (defun player-move-axis (player terrain axis distance)
   "Move PLAYER along AXIS (0 x, 1 y, 2 z) by DISTANCE, or up to the first solid layer of cells in
 its path; return true when a cell stopped it. #H7P4CX"
+  (declare (type physics-player player) (type (integer 0 2) axis) (type (double-float -1d3 1d3) distance))
   (when (zerop distance) (return-from player-move-axis nil))
-  (multiple-value-bind (x0 y0 z0 x1 y1 z1) (player-box player)
-    (let* ((lo (vector x0 y0 z0)) (hi (vector x1 y1 z1))
-           (face (if (plusp distance) (aref hi axis) (aref lo axis)))
+  (with-player-box (x0 y0 z0 x1 y1 z1) player
+    (let* ((face (if (plusp distance)
+                     (case axis (0 x1) (1 y1) (t z1))
+                     (case axis (0 x0) (1 y0) (t z0))))
            (target (+ face distance))
-           ;; the layers of cells the leading face enters, nearest first
-           (layers (if (plusp distance)
-                       (loop for c from (ceiling (- face +player-epsilon+)) below (ceiling (- target +player-epsilon+))
-                             collect c)
-                       (loop for c from (1- (floor (+ face +player-epsilon+))) downto (floor (+ target +player-epsilon+))
-                             collect c)))
+           (e +player-epsilon+)
            (moved distance) (blocked nil))
-      (dolist (c layers)
-        (let ((l (copy-seq lo)) (h (copy-seq hi)))
-          (setf (aref l axis) (coerce c 'double-float) (aref h axis) (coerce (1+ c) 'double-float))
-          (unless (box-cells-clear-p terrain (aref l 0) (aref l 1) (aref l 2) (aref h 0) (aref h 1) (aref h 2))
-            (setf moved (if (plusp distance) (- c face) (- (1+ c) face)) blocked t)
-            (return))))
+      (declare (type player-coordinate face target) (type double-float moved))
+      ;; the layer of cells C across AXIS, over the box's extent along the other two
+      (flet ((layer-solid-p (c)
+               (declare (type fixnum c))
+               (let ((c0 (float c 1d0)) (c1 (float (1+ c) 1d0)))
+                 (not (box-cells-clear-p terrain (if (= axis 0) c0 x0) (if (= axis 1) c0 y0) (if (= axis 2) c0 z0)
+                                         (if (= axis 0) c1 x1) (if (= axis 1) c1 y1) (if (= axis 2) c1 z1))))))
+        (declare (inline layer-solid-p))
+        ;; the layers the leading face enters, nearest first
+        (if (plusp distance)
+            (loop for c of-type fixnum from (ceiling (- face e)) below (ceiling (- target e))
+                  when (layer-solid-p c) do (setf moved (- c face) blocked t) (return))
+            (loop for c of-type fixnum from (1- (floor (+ face e))) downto (floor (+ target e))
+                  when (layer-solid-p c) do (setf moved (- (1+ c) face) blocked t) (return))))
       (ecase axis
         (0 (incf (physics-player-x player) moved) (when blocked (setf (physics-player-vx player) 0d0)))
         (1 (incf (physics-player-y player) moved) (when blocked (setf (physics-player-vy player) 0d0)))
         (2 (incf (physics-player-z player) moved) (when blocked (setf (physics-player-vz player) 0d0))))
       blocked)))
 
-(defun step-physics-player (player terrain &key (move-x 0) (move-z 0) jump)
+(defun step-physics-player (player terrain &key (move-x 0d0) (move-z 0d0) jump)
   "One 1/120 s step of PLAYER in TERRAIN with the input direction MOVE-X MOVE-Z (its length is
-capped at 1) and the jump key down when JUMP. Return PLAYER. #H7P4CX"
-  (let* ((dt (player-constant :step-seconds))
-         (move-x (finite-double :move-x move-x)) (move-z (finite-double :move-z move-z))
-         (length (sqrt (+ (* move-x move-x) (* move-z move-z))))
-         (scale (if (> length 1) (/ length) 1))
-         (want-x (* (player-constant :walk-speed) move-x scale))
-         (want-z (* (player-constant :walk-speed) move-z scale))
-         (dvx (- want-x (physics-player-vx player))) (dvz (- want-z (physics-player-vz player)))
-         (change (sqrt (+ (* dvx dvx) (* dvz dvz))))
-         (most (* (player-constant :acceleration) dt)))
-    ;; 1. turn the horizontal velocity towards the input, by at most the acceleration's share
-    (when (> change most)
-      (setf dvx (* dvx (/ most change)) dvz (* dvz (/ most change))))
-    (incf (physics-player-vx player) dvx)
-    (incf (physics-player-vz player) dvz)
-    ;; 2. a jump on the press, from the ground
-    (when (and jump (not (physics-player-jump-held player)) (physics-player-grounded player))
-      (setf (physics-player-vy player) (player-constant :jump-speed)))
-    (setf (physics-player-jump-held player) (and jump t))
-    ;; 3. gravity, and 4. y (by the mean of the speeds before and after it), then x, then z
-    (let* ((vy0 (physics-player-vy player))
-           (vy1 (decf (physics-player-vy player) (* (player-constant :gravity) dt)))
-           (dy (* 0.5d0 (+ vy0 vy1) dt))
-           (falling (minusp dy))
-           (y-blocked (player-move-axis player terrain 1 dy))
-           (step-x (* (physics-player-vx player) dt)) (step-z (* (physics-player-vz player) dt))
-           (x-blocked (player-move-axis player terrain 0 step-x))
-           (z-blocked (player-move-axis player terrain 2 step-z)))
-      (setf (physics-player-grounded player) (and falling y-blocked))
-      ;; 5. the auto-jump: stopped while walking on the ground, and a box one cell up is clear
-      (when (and (physics-player-grounded player) (or x-blocked z-blocked) (plusp length))
-        (let ((ahead (player-constant :step-ahead)))
-          (multiple-value-bind (x0 y0 z0 x1 y1 z1) (player-box player)
-            (let ((ox (if x-blocked (* ahead (signum step-x)) 0)) (oz (if z-blocked (* ahead (signum step-z)) 0)))
-              (when (box-cells-clear-p terrain (+ x0 ox) (+ y0 1) (+ z0 oz) (+ x1 ox) (+ y1 1) (+ z1 oz))
-                (setf (physics-player-vy player) (player-constant :jump-speed)
+capped at 1) and the jump key down when JUMP. Return PLAYER. Conses nothing when the inputs are
+double-floats. #H7P4CX"
+  (declare (type physics-player player))
+  (let* ((dt (physics-player-step-seconds player))
+         (move-x (player-input :move-x move-x)) (move-z (player-input :move-z move-z)))
+    (declare (type double-float dt move-x move-z))
+    (let* ((length (sqrt (the (double-float 0d0) (+ (* move-x move-x) (* move-z move-z)))))
+           (scale (if (> length 1d0) (/ length) 1d0))
+           (want-x (* (physics-player-walk-speed player) move-x scale))
+           (want-z (* (physics-player-walk-speed player) move-z scale))
+           (dvx (- want-x (physics-player-vx player))) (dvz (- want-z (physics-player-vz player)))
+           (change (sqrt (the (double-float 0d0) (+ (* dvx dvx) (* dvz dvz)))))
+           (most (* (physics-player-acceleration player) dt)))
+      (declare (type (double-float 0d0) length change))
+      ;; 1. turn the horizontal velocity towards the input, by at most the acceleration's share
+      (when (> change most)
+        (setf dvx (* dvx (/ most change)) dvz (* dvz (/ most change))))
+      (incf (physics-player-vx player) dvx)
+      (incf (physics-player-vz player) dvz)
+      ;; 2. a jump on the press, from the ground
+      (when (and jump (not (physics-player-jump-held player)) (physics-player-grounded player))
+        (setf (physics-player-vy player) (physics-player-jump-speed player)))
+      (setf (physics-player-jump-held player) (and jump t))
+      ;; 3. gravity, and 4. y (by the mean of the speeds before and after it), then x, then z
+      (let* ((vy0 (physics-player-vy player))
+             (vy1 (decf (physics-player-vy player) (* (physics-player-gravity player) dt)))
+             (dy (* 0.5d0 (+ vy0 vy1) dt))
+             (falling (minusp dy))
+             (y-blocked (player-move-axis player terrain 1 dy))
+             (step-x (* (physics-player-vx player) dt)) (step-z (* (physics-player-vz player) dt))
+             (x-blocked (player-move-axis player terrain 0 step-x))
+             (z-blocked (player-move-axis player terrain 2 step-z)))
+        (setf (physics-player-grounded player) (and falling y-blocked))
+        ;; 5. the auto-jump: stopped while walking on the ground, and a box one cell up is clear
+        (when (and (physics-player-grounded player) (or x-blocked z-blocked) (plusp length))
+          (let* ((ahead (physics-player-step-ahead player))
+                 (ox (if x-blocked (* ahead (signum step-x)) 0d0))
+                 (oz (if z-blocked (* ahead (signum step-z)) 0d0)))
+            (with-player-box (x0 y0 z0 x1 y1 z1) player
+              (when (box-cells-clear-p terrain (+ x0 ox) (+ y0 1d0) (+ z0 oz) (+ x1 ox) (+ y1 1d0) (+ z1 oz))
+                (setf (physics-player-vy player) (physics-player-jump-speed player)
                       (physics-player-grounded player) nil))))))))
   player)
 
-(defun advance-physics-player (player terrain seconds &rest input)
+(defun advance-physics-player (player terrain seconds &key (move-x 0d0) (move-z 0d0) jump)
   "Run PLAYER for a frame of SECONDS at 120 Hz, carrying the remainder to the next frame and
-running at most eight steps; INPUT goes to step-physics-player. Return the steps run. #H7P4CX"
-  (let ((dt (player-constant :step-seconds)) (steps 0) (seconds (finite-double :seconds seconds)))
+running at most eight steps, each with the input MOVE-X MOVE-Z JUMP of step-physics-player.
+Return the steps run. #H7P4CX"
+  (let ((dt (physics-player-step-seconds player)) (steps 0)
+        (seconds (player-input :seconds seconds)))
+    (declare (type double-float dt seconds) (type fixnum steps))
     (when (minusp seconds)
       (error 'invalid-physics-parameter :world nil :name :seconds :value seconds :expected "not negative"))
     (setf (physics-player-pending player)
           (min (+ (physics-player-pending player) seconds)
-               (* dt (player-constant :steps-per-frame))))
+               (* dt (physics-player-steps-per-frame player))))
     (loop while (>= (physics-player-pending player) (- dt 1d-12))
-          do (apply #'step-physics-player player terrain input)
+          do (step-physics-player player terrain :move-x move-x :move-z move-z :jump jump)
              (decf (physics-player-pending player) dt)
              (incf steps))
     steps))
 
 (defun physics-player-eye (player)
   "Where the camera sits: the player's eye, as three values. #H7P4CX"
-  (values (physics-player-x player) (+ (physics-player-y player) (player-constant :eye))
+  (values (physics-player-x player) (+ (physics-player-y player) (physics-player-eye-height player))
           (physics-player-z player)))
 
 (defun post-physics-player (world player)
   "Post PLAYER into WORLD's next step as a kinematic box moving at its velocity. #H7P4CX"
-  (let ((w (player-constant :half-width)) (h (* 0.5 (player-constant :height))))
+  (let ((w (physics-player-half-width player)) (h (* 0.5d0 (physics-player-height player))))
     (post-physics-box world (physics-player-x player) (+ (physics-player-y player) h)
                       (physics-player-z player) w h w
                       :vx (physics-player-vx player) :vy (physics-player-vy player)

@@ -1346,6 +1346,28 @@ how far the ball moved and the deepest the box's leading face got past the ball'
         (refused 'luv-physics:invalid-physics-number (lambda () (luv-physics::make-physics-player 0 :up 0)))))))
 ;; H7P4CX-walker-refuses-bad-input ends here
 
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-conses-nothing]]
+(define-claim "H7P4CX" walker-conses-nothing
+    "Steps and frames of the walker, given double-floats, cons 0 bytes."
+  (multiple-value-bind (world terrain) (make-floor-world)
+    (declare (ignore world))
+    (luv-physics::fill-terrain terrain 4 0 0 16 1 2 t)
+    (let ((p (luv-physics::make-physics-player 0.5 0 1)))
+      (flet ((walk (n)
+               (dotimes (i n)
+                 (luv-physics::step-physics-player
+                  p terrain :move-x (if (< (luv-physics::physics-player-x p) 12) 1d0 -1d0) :move-z 0.3d0
+                  :jump (evenp (floor i 30))))))
+        (walk 100)
+        (sb-ext:gc)
+        (let ((before (sb-ext:get-bytes-consed)))
+          (walk 100000)
+          (dotimes (i 100000) (luv-physics::advance-physics-player p terrain (/ 1d0 60) :move-x 1d0))
+          (check (= before (sb-ext:get-bytes-consed)) "the walker consed ~D bytes"
+                 (- (sb-ext:get-bytes-consed) before)))
+        (check (> (luv-physics::physics-player-x p) 4) "the walker did not get onto the step")))))
+;; H7P4CX-walker-conses-nothing ends here
+
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-kicks-balls]]
 (define-claim "H7P4CX" walker-kicks-balls
     "Frames run at most 8 steps; the posted walker pushes a ball it walks into."
