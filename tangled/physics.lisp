@@ -1496,6 +1496,14 @@ HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3W
   "How many bodies of WORLD are asleep. #M4K3WD"
   (body-columns-length (physics-world-sleeping world)))
 
+(defun check-coordinate (name v &optional world)
+  "V, a finite real, or an invalid-physics-parameter error naming NAME when it lies beyond
++physics-coordinate-limit+. #M4K3WD"
+  (unless (< (abs v) +physics-coordinate-limit+)
+    (error 'invalid-physics-parameter :world world :name name :value v
+                                      :expected (format nil "of magnitude under ~D m" +physics-coordinate-limit+)))
+  v)
+
 (defun max-radius-for (world)
   "The largest radius a body of WORLD may have: reach (radius plus margin) stays under a cell. #M4K3WD"
   (- *physics-reach-limit* (physics-world-margin world)))
@@ -1513,11 +1521,7 @@ number of seconds after which it expires. #M4K3WD"
          (vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world))
          (life (if life (finite-f32 :life life world) 0.0))
          (limit (max-radius-for world)))
-    (flet ((within-limit (name v)
-             (unless (< (abs v) +physics-coordinate-limit+)
-               (error 'invalid-physics-parameter :world world :name name :value v
-                                                 :expected (format nil "of magnitude under ~D m" +physics-coordinate-limit+)))))
-      (within-limit :x x) (within-limit :y y) (within-limit :z z))
+    (check-coordinate :x x world) (check-coordinate :y y world) (check-coordinate :z z world)
     (unless (and (> r 0) (<= r limit))
       (error 'invalid-physics-radius :world world :value radius :limit limit))
     (unless (> m 0) (error 'invalid-physics-parameter :world world :name :mass :value mass :expected "> 0"))
@@ -3083,6 +3087,11 @@ and start the contact table's walk of it. #IDVK7G"
           (contact-table-cursor table) 0 (contact-table-touched table) 0))
   world)
 
+(declaim (inline physics-world-max-penetration))
+(defun physics-world-max-penetration (world)
+  "The deepest overlap, in metres, left at the end of the last step. #IDVK7G"
+  (aref (world-statistics world) 3))
+
 (defun substep-phase (world)
   "Phase 9: the Soft Step substeps: integrate velocities, warm start, solve with bias,
 integrate positions, relax without bias; in a crowded step (one with contacts in the overflow
@@ -3092,7 +3101,7 @@ colour, or after a step that left an overlap deeper than *physics-crowded-depth*
          (h (physics-world-current-h world))
          (inv-h (/ 1.0 h))
          (relaxes (if (or (plusp (physics-world-overflow-count world))
-                          (> (f32 (aref (world-statistics world) 3)) (f32 *physics-crowded-depth*)))
+                          (> (f32 (physics-world-max-penetration world)) (f32 *physics-crowded-depth*)))
                       (1+ *physics-crowded-relax-passes*)
                       1)))
     (declare (type single-float h inv-h) (type fixnum relaxes))
@@ -3175,10 +3184,6 @@ phase's position, and the bytes it consed under that position plus the number of
 (defun physics-world-last-step-real-seconds (world)
   "Wall-clock seconds the last step took. #IDVK7G"
   (aref (physics-world-statistics world) 2))
-
-(defun physics-world-max-penetration (world)
-  "The deepest overlap, in metres, left at the end of the last step. #IDVK7G"
-  (aref (physics-world-statistics world) 3))
 
 (defun physics-world-max-approach-speed (world)
   "The fastest approach speed, m/s, of an overlapping contact at the end of the last step. #IDVK7G"
@@ -3379,12 +3384,15 @@ naming it. #JAU0EF"
                                                           (mapcar #'first *physics-body-kinds*))))
     (1+ place)))
 
+(defun add-physics-body-of-kind-number (world number x y z vx vy vz report-hits)
+  "Add a body of the NUMBER-th kind of *physics-body-kinds* and return its handle. #JAU0EF"
+  (apply #'add-physics-body world x y z :kind number :vx vx :vy vy :vz vz :report-hits report-hits
+         (rest (nth (1- number) *physics-body-kinds*))))
+
 (defun add-physics-body-of-kind (world kind x y z &key (vx 0.0) (vy 0.0) (vz 0.0) report-hits)
   "Add a body of KIND (a keyword of *physics-body-kinds*) centred at X Y Z, moving at VX VY VZ,
 and return its handle. #JAU0EF"
-  (let ((number (physics-kind-number kind world)))
-    (apply #'add-physics-body world x y z :kind number :vx vx :vy vy :vz vz :report-hits report-hits
-           (rest (nth (1- number) *physics-body-kinds*)))))
+  (add-physics-body-of-kind-number world (physics-kind-number kind world) x y z vx vy vz report-hits))
 
 (defun physics-body-kind-name (world handle)
   "The keyword of the kind of HANDLE's body, or NIL for a body added without a kind. #JAU0EF"
@@ -3392,24 +3400,24 @@ and return its handle. #JAU0EF"
     (and (<= 1 number (length *physics-body-kinds*))
          (first (nth (1- number) *physics-body-kinds*)))))
 
-(defstruct (physics-spring (:constructor %make-physics-spring (kind x y z per-step every)))
-  "A block at cell X Y Z that emits PER-STEP bodies of KIND on every EVERY-th call of
-run-physics-springs; CALLS and EMITTED count what it has done. #JAU0EF"
-  (kind :water-drop :type keyword)
+(defstruct (physics-spring (:constructor %make-physics-spring (kind number x y z per-step every)))
+  "A block at cell X Y Z that emits PER-STEP bodies of KIND (the NUMBER-th kind) on every
+EVERY-th call of run-physics-springs; CALLS and EMITTED count what it has done. #JAU0EF"
+  (kind :water-drop :type keyword) (number 1 :type (integer 1 1000))
   (x 0 :type fixnum) (y 0 :type fixnum) (z 0 :type fixnum)
   (per-step 1 :type (integer 1 64)) (every 1 :type (integer 1 3600))
   (calls 0 :type fixnum) (emitted 0 :type fixnum))
 
 (defun make-physics-spring (kind x y z &key (per-step 1) (every 1))
   "A spring of KIND at cell X Y Z emitting PER-STEP bodies every EVERY steps. #JAU0EF"
-  (physics-kind-number kind nil)
-  (dolist (check (list (list :x x 'fixnum) (list :y y 'fixnum) (list :z z 'fixnum)
-                       (list :per-step per-step '(integer 1 64)) (list :every every '(integer 1 3600))))
-    (destructuring-bind (name value type) check
-      (unless (typep value type)
-        (error 'invalid-physics-parameter :world nil :name name :value value
-                                          :expected (format nil "of type ~S" type)))))
-  (%make-physics-spring kind x y z per-step every))
+  (flet ((count-in (name value high)
+           (unless (typep value `(integer 1 ,high))
+             (error 'invalid-physics-parameter :name name :value value
+                                               :expected (format nil "an integer from 1 to ~D" high)))
+           value))
+    (%make-physics-spring kind (physics-kind-number kind nil)
+                          (check-cell :x x) (check-cell :y y) (check-cell :z z)
+                          (count-in :per-step per-step 64) (count-in :every every 3600))))
 
 (defun make-fountain (x y z)
   "A fountain at cell X Y Z: two water drops every step. #JAU0EF"
@@ -3442,16 +3450,16 @@ the handle of each body emitted; return how many were emitted. Conses nothing. #
     (declare (type fixnum emitted))
     (dolist (spring springs emitted)
       (when (zerop (mod (physics-spring-calls spring) (physics-spring-every spring)))
-        (let* ((kind (physics-spring-kind spring))
-               (radius (f32 (getf (rest (assoc kind *physics-body-kinds*)) :radius)))
+        (let* ((number (physics-spring-number spring))
+               (radius (f32 (getf (rest (nth (1- number) *physics-body-kinds*)) :radius)))
                (x (physics-spring-x spring)) (y (physics-spring-y spring)) (z (physics-spring-z spring)))
           (declare (type single-float radius))
           (dotimes (k (physics-spring-per-step spring))
             (multiple-value-bind (dx dy dz speed) (spring-throw x y z (physics-spring-emitted spring))
               (declare (type single-float dx dy dz speed))
               (incf (physics-spring-emitted spring))
-              (let ((handle (add-physics-body-of-kind world kind (+ x 0.5) (+ y 1.0 radius 0.01) (+ z 0.5)
-                                                      :vx (* speed dx) :vy (* speed dy) :vz (* speed dz))))
+              (let ((handle (add-physics-body-of-kind-number world number (+ x 0.5) (+ y 1.0 radius 0.01) (+ z 0.5)
+                                                             (* speed dx) (* speed dy) (* speed dz) nil)))
                 (incf emitted)
                 (when function (funcall function handle)))))))
       (incf (physics-spring-calls spring)))))
@@ -3480,11 +3488,6 @@ copy of the constants of *physics-player-shape*. #H7P4CX"
   (step-seconds (/ 1d0 120) :type double-float) (steps-per-frame 8 :type (integer 1 1000))
   (step-ahead 0.3d0 :type double-float))
 
-(defun finite-double (name value)
-  "VALUE as a double-float, or an invalid-physics-number error naming NAME. #H7P4CX"
-  (finite-f32 name value)
-  (coerce value 'double-float))
-
 (declaim (inline player-input))
 (defun player-input (name value)
   "VALUE as a double-float, or an invalid-physics-number error naming NAME. A double-float is
@@ -3492,16 +3495,11 @@ checked in place and returned as it is, so the walker conses nothing for one. #H
   (if (and (typep value 'double-float) (not (sb-ext:float-nan-p value))
            (< (abs value) (float most-positive-single-float 1d0)))
       value
-      (finite-double name value)))
+      (progn (finite-f32 name value) (coerce value 'double-float))))
 
 (defun make-physics-player (x y z)
   "A walker standing with the middle of its soles at X Y Z. #H7P4CX"
-  (flet ((coordinate (name value)
-           (let ((v (finite-double name value)))
-             (unless (< (abs v) +physics-coordinate-limit+)
-               (error 'invalid-physics-parameter :world nil :name name :value value
-                                                 :expected "within the coordinate limit"))
-             v))
+  (flet ((coordinate (name value) (check-coordinate name (player-input name value)))
          (shape (name) (coerce (getf *physics-player-shape* name) 'double-float)))
     (%make-physics-player
      :x (coordinate :x x) :y (coordinate :y y) :z (coordinate :z z)

@@ -1285,9 +1285,12 @@ how far the ball moved and the deepest the box's leading face got past the ball'
     "Walks at 4.3 m/s on the floor, jumps 1.27 cells once per press, climbs one block, not two."
   (multiple-value-bind (world terrain) (make-floor-world)
     (declare (ignore world))
+    (flet ((walk (p steps &rest input)
+             (dotimes (i steps) (apply #'luv-physics::step-physics-player p terrain input))
+             p))
     (let ((p (luv-physics::make-physics-player 0.5 0 0.5)) (top 0d0) (landings 0) (was-grounded nil))
       ;; walking
-      (dotimes (i 120) (luv-physics::step-physics-player p terrain :move-x 1))
+      (walk p 120 :move-x 1)
       (check (< (abs (- (luv-physics::physics-player-vx p) 4.3d0)) 1d-9) "speed ~A" (luv-physics::physics-player-vx p))
       (check (and (luv-physics::physics-player-grounded p) (= 0 (luv-physics::physics-player-y p)))
              "soles at ~A" (luv-physics::physics-player-y p))
@@ -1299,14 +1302,13 @@ how far the ball moved and the deepest the box's leading face got past the ball'
         (setf was-grounded (luv-physics::physics-player-grounded p)))
       (check (< (abs (- top 1.274d0)) 0.02) "the jump rose ~,3F cells" top)
       (check (= 1 landings) "~D landings with the key held" landings)
-      (luv-physics::step-physics-player p terrain)
-      (luv-physics::step-physics-player p terrain :jump t)
+      (walk p 1)
+      (walk p 1 :jump t)
       (check (plusp (luv-physics::physics-player-vy p)) "a new press did not jump"))
     ;; a step one block high from x = 4, a wall two blocks high at z = 4
     (luv-physics::fill-terrain terrain 4 0 0 16 1 2 t)
     (luv-physics::fill-terrain terrain 0 0 4 2 2 5 t)
-    (let ((p (luv-physics::make-physics-player 2.5 0 1)))
-      (dotimes (i 240) (luv-physics::step-physics-player p terrain :move-x 1))
+    (let ((p (walk (luv-physics::make-physics-player 2.5 0 1) 240 :move-x 1)))
       (check (and (= 1 (luv-physics::physics-player-y p)) (> (luv-physics::physics-player-x p) 4.5))
              "the step was not climbed: x ~,3F, y ~,3F" (luv-physics::physics-player-x p) (luv-physics::physics-player-y p)))
     (let ((p (luv-physics::make-physics-player 1 0 2.5)) (highest 0d0))
@@ -1316,10 +1318,9 @@ how far the ball moved and the deepest the box's leading face got past the ball'
       (check (and (< (abs (- (luv-physics::physics-player-z p) 3.7d0)) 1d-6) (= 0 highest))
              "at the wall: z ~,3F, highest y ~,3F" (luv-physics::physics-player-z p) highest))
     ;; the floor world is resident up to x = 32; beyond is a wall
-    (let ((p (luv-physics::make-physics-player 30 0 10.5)))
-      (dotimes (i 240) (luv-physics::step-physics-player p terrain :move-x 1))
+    (let ((p (walk (luv-physics::make-physics-player 30 0 10.5) 240 :move-x 1)))
       (check (< (abs (- (luv-physics::physics-player-x p) 31.7d0)) 1d-6)
-             "the walker left the resident world: x ~,3F" (luv-physics::physics-player-x p)))))
+             "the walker left the resident world: x ~,3F" (luv-physics::physics-player-x p))))))
 ;; H7P4CX-walker-follows-the-rule ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-refuses-bad-input]]
