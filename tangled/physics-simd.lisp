@@ -116,7 +116,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
         (movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask))
         (ws (intern (format nil "WARM-START-BLOCKS/~A" family)))
         (so (intern (format nil "SOLVE-BLOCKS/~A" family)))
-        (re (intern (format nil "RESTITUTION-BLOCKS/~A" family))))
+        (re (intern (format nil "RESTITUTION-BLOCKS/~A" family)))
+        (pf (intern (format nil "PREPARE-FRAMES-BLOCKS/~A" family))))
     `(macrolet ((w+ (a b) `(,',add ,a ,b)) (w- (a b) `(,',sub ,a ,b)) (w* (a b) `(,',mul ,a ,b))
                 (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
                 (w= (a b) `(,',eq ,a ,b)) (wif (m a b) `(,',if* ,m ,a ,b)) (wor (a b) `(,',or* ,a ,b))
@@ -272,6 +273,40 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                          (st! 11 (wif rolling (w+ wbz (w* ibm dz)) wbz)))))))
                (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
                (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0)))))))))
+       (defun ,pf (cbuf start end)
+         ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
+         (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
+         (with-constraint-block () cbuf
+           (loop for k of-type index from start below end by ,width do
+             (let ((base (constraint-base k)))
+               (declare (type index base))
+               (macrolet ((inverse (v)
+                            ;; 1/v where v > 0, else 0; the divisor is 1 where v is not, so
+                            ;; no lane divides by zero
+                            `(let ((pos (w> ,v (wc 0.0))))
+                               (wif pos (w/ (wc 1.0) (wif pos ,v (wc 1.0))) (wc 0.0)))))
+                 (let* ((x (@w nx)) (y (@w ny)) (z (@w nz))
+                        ;; |y| > 0.9, as two comparisons
+                        (big (wor (w> y (wc 0.9)) (w> (wc -0.9) y)))
+                        (zz (w* z z))
+                        (q (wif big (w+ zz (w* y y)) (w+ zz (w* x x))))
+                        (s (w/ (wc 1.0) (wsqrt (wif (w> q (wc 0.0)) q (wc 1.0)))))
+                        (zs (w* z s))
+                        ;; times -1: the exact negation, the zero's sign included
+                        (tx (wif big (wc 0.0) (w* zs (wc -1.0))))
+                        (ty (wif big zs (wc 0.0)))
+                        (tz (wif big (w* (w* y s) (wc -1.0)) (w* x s)))
+                        (ux (w- (w* y tz) (w* z ty))) (uy (w- (w* z tx) (w* x tz))) (uz (w- (w* x ty) (w* y tx)))
+                        (kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
+                   (@w! t1x tx) (@w! t1y ty) (@w! t1z tz) (@w! t2x ux) (@w! t2y uy) (@w! t2z uz)
+                   (@w! kvn (w+ (w+ (w* kx x) (w* ky y)) (w* kz z)))
+                   (@w! kvt1 (w+ (w+ (w* kx tx) (w* ky ty)) (w* kz tz)))
+                   (@w! kvt2 (w+ (w+ (w* kx ux) (w* ky uy)) (w* kz uz))))
+                 (let* ((ra (@w ra)) (rb (@w rb)) (iia (@w iia)) (iib (@w iib))
+                        (mass-sum (w+ (@w ima) (@w imb))))
+                   (@w! normal-mass (inverse mass-sum))
+                   (@w! tangent-mass (inverse (w+ (w+ mass-sum (w* (w* iia ra) ra)) (w* (w* iib rb) rb))))
+                   (@w! rolling-mass (inverse (w+ iia iib)))))))))
        (defun ,re (cbuf v start end threshold)
          ,(format nil "Restitution over constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v) (type index start end)
@@ -334,8 +369,11 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
        (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
          (when (< ,start ,end) ,overflow-form)))))
 
-(macrolet ((define-family-methods (class ws so re &optional settle)
+(macrolet ((define-family-methods (class ws so re pf &optional settle)
              `(progn
+                (defmethod physics-prepare-frames ((kernels ,class) world)
+                  (let ((cbuf (physics-world-constraints world)))
+                    (do-colour-runs (s e world ,settle) (,pf cbuf s e) (prepare-frames-range cbuf s e))))
                 (defmethod physics-warm-start ((kernels ,class) world)
                   (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world)))
                     (do-colour-runs (s e world ,settle) (,ws cbuf v s e) (warm-start-range cbuf v s e))))
@@ -349,12 +387,13 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
                   (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world)))
                     (do-colour-runs (s e world ,settle) (,re cbuf v s e threshold)
                       (restitution-range cbuf v s e threshold)))))))
-  (define-family-methods sse-kernels warm-start-blocks/sse solve-blocks/sse restitution-blocks/sse)
+  (define-family-methods sse-kernels warm-start-blocks/sse solve-blocks/sse restitution-blocks/sse
+    prepare-frames-blocks/sse)
   ;; after 256-bit code, clear the upper halves of the ymm registers before any legacy SSE
   ;; instruction runs: the scalar code SBCL emits is legacy SSE, and on this CPU it ran three
   ;; times slower for the rest of the step without it
   (define-family-methods avx2-kernels warm-start-blocks/avx2 solve-blocks/avx2 restitution-blocks/avx2
-    (sb-simd-avx:vzeroupper)))
+    prepare-frames-blocks/avx2 (sb-simd-avx:vzeroupper)))
 
 (register-kernel-family :sse 'sse-kernels :sse4.1)
 (register-kernel-family :avx2 'avx2-kernels :avx2)

@@ -2536,6 +2536,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
           (fill v 0.0 :start (* n +solver-stride+) :end (* (1+ n) +solver-stride+))
           (fill d 0.0 :end (* (1+ n) +delta-stride+))
           (let ((cursor (make-array (+ +physics-max-colors+ 1) :element-type 'fixnum))
+                (color-starts (physics-world-color-starts world))
                 (sets (handle-table-set ids)) (locals (handle-table-local ids))
                 (braced (physics-world-braced world))
                 (brace-ratio (f32 *physics-brace-mass-ratio*))
@@ -2547,7 +2548,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                 (up-x (if (> g 1e-3) (/ (- (physics-world-gravity-x world)) g) 0.0))
                 (up-y (if (> g 1e-3) (/ (- (physics-world-gravity-y world)) g) 0.0))
                 (up-z (if (> g 1e-3) (/ (- (physics-world-gravity-z world)) g) 0.0)))
-            (declare (dynamic-extent cursor) (type fixnum-column sets locals braced)
+            (declare (dynamic-extent cursor) (type fixnum-column sets locals braced color-starts)
                      (type single-float brace-ratio still2 load-scale up-x up-y up-z)
                      (type f32-column inverse-mass))
             (replace cursor (physics-world-color-starts world))
@@ -2575,8 +2576,16 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                         (setf (aref braced row) 1))))))))
             (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
               (with-constraint-block (contact body-a body-b) cbuf
+                ;; each contact's place in its colour first; then the rows are filled in
+                ;; the buffer's order, so that a block of eight is written whole while its
+                ;; lines are in cache, not one row at a time among the other colours' blocks
                 (dotimes (c m)
-                  (let* ((k (aref cursor (aref colors c)))
+                  (let ((color (aref colors c)))
+                    (setf (aref contact (aref cursor color)) c)
+                    (incf (aref cursor color))))
+                (dotimes (color (1+ +physics-max-colors+))
+                 (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
+                  (let* ((c (aref contact k))
                          (base (constraint-base k))
                          (a (aref ha c)) (b (aref hb c))
                          (set-a (aref sets (handle-index a)))
@@ -2601,22 +2610,11 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                          (dyn-a (and dyn-a (not (eq brace :a))))
                          (dyn-b (and dyn-b (not (eq brace :b))))
                          (two-sided (and dyn-a dyn-b)))
-                    (declare (type fixnum k a b set-a set-b) (type index la lb base) (type single-float x y z)
+                    (declare (type fixnum a b set-a set-b) (type index c la lb base) (type single-float x y z)
                              (type body-columns buf-a buf-b) (type fixnum-column sets locals) (ignorable sets locals))
-                    (incf (aref cursor (aref colors c)))
-                    (setf (aref contact k) c
-                          (aref body-a k) (if dyn-a la n)
+                    (setf (aref body-a k) (if dyn-a la n)
                           (aref body-b k) (if dyn-b lb n)
                           (@ nx) x (@ ny) y (@ nz) z)
-                    ;; tangent frame: t1 perpendicular to n, built from the axis least aligned with it
-                    (multiple-value-bind (tx ty tz)
-                        (if (> (abs y) 0.9)
-                            (let ((s (/ 1.0 (fsqrt (+ (* z z) (* y y)))))) (values 0.0 (* z s) (- (* y s))))
-                            (let ((s (/ 1.0 (fsqrt (+ (* z z) (* x x)))))) (values (- (* z s)) 0.0 (* x s))))
-                      (setf (@ t1x) tx (@ t1y) ty (@ t1z) tz
-                            (@ t2x) (- (* y tz) (* z ty))
-                            (@ t2y) (- (* z tx) (* x tz))
-                            (@ t2z) (- (* x ty) (* y tx))))
                     (let* ((r-a (aref (body-columns-radius buf-a) la))
                            (r-b (if (>= b 0) (aref (body-columns-radius buf-b) lb) 0.0))
                            (im-a (if dyn-a (aref (body-columns-inverse-mass awake) la) 0.0))
@@ -2625,20 +2623,14 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                            (ii-b (if dyn-b (aref (body-columns-inverse-inertia awake) lb) 0.0))
                            (kx (contact@ geometry c kvx)) (ky (contact@ geometry c kvy)) (kz (contact@ geometry c kvz))
                            (mass-sum (+ im-a im-b))
-                           (tangent-sum (+ im-a im-b (* ii-a r-a r-a) (* ii-b r-b r-b)))
-                           (rolling-sum (+ ii-a ii-b))
                            (va (if dyn-a (* la +solver-stride+) (* n +solver-stride+)))
                            (vb (if dyn-b (* lb +solver-stride+) (* n +solver-stride+))))
                       (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz))
                       (setf (@ ra) r-a (@ rb) r-b
                             (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
                             (@ separation) (+ (contact@ geometry c separation) slop)
-                            (@ kvn) (+ (* kx x) (* ky y) (* kz z))
-                            (@ kvt1) (+ (* kx (@ t1x)) (* ky (@ t1y)) (* kz (@ t1z)))
-                            (@ kvt2) (+ (* kx (@ t2x)) (* ky (@ t2y)) (* kz (@ t2z)))
-                            (@ normal-mass) (if (> mass-sum 0.0) (/ 1.0 mass-sum) 0.0)
-                            (@ tangent-mass) (if (> tangent-sum 0.0) (/ 1.0 tangent-sum) 0.0)
-                            (@ rolling-mass) (if (> rolling-sum 0.0) (/ 1.0 rolling-sum) 0.0))
+                            ;; the box's velocity, until the frame pass resolves it
+                            (@ kvn) kx (@ kvt1) ky (@ kvt2) kz)
                       (if (>= b 0)
                           (setf (@ friction) (fsqrt (* (aref (body-columns-friction buf-a) la)
                                                            (aref (body-columns-friction buf-b) lb)))
@@ -2673,7 +2665,10 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                           (@ normal-impulse) (contact@ geometry c normal-impulse)
                           (@ tangent-impulse-1) (contact@ geometry c tangent-impulse-1) (@ tangent-impulse-2) (contact@ geometry c tangent-impulse-2)
                           (@ rolling-impulse-x) (contact@ geometry c rolling-impulse-x) (@ rolling-impulse-y) (contact@ geometry c rolling-impulse-y)
-                          (@ rolling-impulse-z) (contact@ geometry c rolling-impulse-z))))
+                          (@ rolling-impulse-z) (contact@ geometry c rolling-impulse-z)))))
+                ;; the frames, the box velocities along them and the effective masses,
+                ;; in lanes where the family has them
+                (physics-prepare-frames (physics-world-kernels world) world)
                 ;; padding rows: no contact, the dummy on both sides, every float zero
                 (let ((starts (physics-world-color-starts world)))
                   (dotimes (color +physics-max-colors+)
@@ -2683,6 +2678,48 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                                (dotimes (o 36) (setf (aref data (+ base (* 8 o))) 0.0))))))))))))
       color-count)))
 ;; Preparing the constraints:1 ends here
+
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:2]]
+(defgeneric physics-prepare-frames (kernels world)
+  (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
+velocity along the normal and the frame, and the effective masses. #PR3PAR"))
+
+(defun prepare-frames-range (cbuf start end)
+  "Complete constraints START..END of CBUF from their normal, radii, inverse masses and inertias,
+and the box velocity held in the KVN, KVT1 and KVT2 columns: the tangent frame t1, t2 (t1 from
+the axis least aligned with the normal), the box velocity resolved onto n, t1 and t2, and the
+normal, tangent and rolling masses (zero where nothing can move). #PR3PAR"
+  (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
+  (with-constraint-block () cbuf
+    (loop for k of-type index from start below end do
+      (let* ((base (constraint-base k))
+             (x (@ nx)) (y (@ ny)) (z (@ nz))
+             (big (> (abs y) 0.9))
+             (q (if big (+ (* z z) (* y y)) (+ (* z z) (* x x))))
+             ;; a padding row's zero normal: length one, so nothing divides by zero
+             (s (/ 1.0 (fsqrt (if (> q 0.0) q 1.0))))
+             (tx (if big 0.0 (- (* z s))))
+             (ty (if big (* z s) 0.0))
+             (tz (if big (- (* y s)) (* x s)))
+             (ux (- (* y tz) (* z ty))) (uy (- (* z tx) (* x tz))) (uz (- (* x ty) (* y tx)))
+             (kx (@ kvn)) (ky (@ kvt1)) (kz (@ kvt2))
+             (ima (@ ima)) (imb (@ imb)) (iia (@ iia)) (iib (@ iib)) (ra (@ ra)) (rb (@ rb))
+             (mass-sum (+ ima imb))
+             (tangent-sum (+ mass-sum (* iia ra ra) (* iib rb rb)))
+             (rolling-sum (+ iia iib)))
+        (declare (type index base))
+        (setf (@ t1x) tx (@ t1y) ty (@ t1z) tz (@ t2x) ux (@ t2y) uy (@ t2z) uz
+              (@ kvn) (+ (* kx x) (* ky y) (* kz z))
+              (@ kvt1) (+ (* kx tx) (* ky ty) (* kz tz))
+              (@ kvt2) (+ (* kx ux) (* ky uy) (* kz uz))
+              (@ normal-mass) (if (> mass-sum 0.0) (/ 1.0 mass-sum) 0.0)
+              (@ tangent-mass) (if (> tangent-sum 0.0) (/ 1.0 tangent-sum) 0.0)
+              (@ rolling-mass) (if (> rolling-sum 0.0) (/ 1.0 rolling-sum) 0.0))))))
+
+(defmethod physics-prepare-frames ((kernels scalar-kernels) world)
+  (let ((cbuf (physics-world-constraints world)))
+    (prepare-frames-range cbuf 0 (constraint-columns-length cbuf))))
+;; Preparing the constraints:2 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)
