@@ -2855,7 +2855,10 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                          (biased (let ((soft (* (@ bias-rate) s)) (cap (- push-max)))
                                    (if (> soft cap) soft cap)))
                          (t 0.0)))
-             (vn (+ (* (- vbx vax) x) (* (- vby vay) y) (* (- vbz vaz) z) (@ kvn)))
+             ;; the relative velocity before this constraint's impulses: the normal part
+             ;; and, below, friction both read it
+             (dvx (- vbx vax)) (dvy (- vby vay)) (dvz (- vbz vaz))
+             (vn (+ (* dvx x) (* dvy y) (* dvz z) (@ kvn)))
              (l (@ normal-impulse))
              (raw (if (and biased (not positive))
                       (- l (* (@ normal-mass) (@ mass-scale) (+ vn bias)) (* (@ impulse-scale) l))
@@ -2879,7 +2882,6 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5))
                (ux (@ t1x)) (uy (@ t1y)) (uz (@ t1z)) (qx (@ t2x)) (qy (@ t2y)) (qz (@ t2z))
                (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
-               (dvx (- vbx vax)) (dvy (- vby vay)) (dvz (- vbz vaz))
                (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (@ kvt1)) (+ (* wx qx) (* wy qy) (* wz qz))))
                (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (@ kvt2) (+ (* wx ux) (* wy uy) (* wz uz))))
                (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))

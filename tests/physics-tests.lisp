@@ -1062,6 +1062,33 @@ how far the ball moved and the deepest the box's leading face got past the ball'
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
 
+;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
+(define-claim "S0LV3R" frames-are-perpendicular
+    "Prepared tangent frames are orthonormal with their normals, in every family."
+  (dolist (family (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p
+                                                 luv-physics::*kernel-families*)))
+    (let ((world (make-basin-world 1000 :kernels family)) (worst 0.0) (rows 0))
+      (dotimes (i 60) (step-physics-world world))
+      (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                       luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
+                       luv-physics::prune-phase luv-physics::prepare-phase))
+        (funcall phase world))
+      (let* ((cbuf (luv-physics::physics-world-constraints world))
+             (data (luv-physics::constraint-columns-data cbuf)))
+        (dotimes (k (luv-physics::constraint-columns-length cbuf))
+          (when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
+            (incf rows)
+            (flet ((v (x y z)
+                     (let ((base (luv-physics::constraint-base k)))
+                       (mapcar (lambda (c) (aref data (+ base (luv-physics::constraint-offset c)))) (list x y z)))))
+              (let ((n (v 'nx 'ny 'nz)) (t1 (v 't1x 't1y 't1z)) (t2 (v 't2x 't2y 't2z)))
+                (flet ((dot (a b) (reduce #'+ (mapcar #'* a b))))
+                  (setf worst (max worst (abs (dot n t1)) (abs (dot n t2)) (abs (dot t1 t2))
+                                   (abs (- 1 (dot t1 t1))) (abs (- 1 (dot t2 t2))))))))))
+        (check (> rows 2000) "~A: only ~D constraints prepared" family rows)
+        (check (< worst 1e-6) "~A: a frame is off by ~,3E" family worst)))))
+;; S0LV3R-frames-are-perpendicular ends here
+
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
     "Resting: penetration = slop, approach ~ 0; nothing touching: zeros; landing: > slop."
