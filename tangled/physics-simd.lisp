@@ -217,6 +217,12 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                  (w+ (w+ (w* wx qx) (w* wy qy)) (w* wz qz))))
                         (vt2 (w+ (w+ (w+ (w+ (w* dvx qx) (w* dvy qy)) (w* dvz qz)) (@w kvt2))
                                  (w+ (w+ (w* wx ux) (w* wy uy)) (w* wz uz))))
+                        ;; the friction impulse before the cone, and its length, need no
+                        ;; normal impulse either
+                        (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2))
+                        (n1 (w- l1 (w* (@w tangent-mass) vt1))) (n2 (w- l2 (w* (@w tangent-mass) vt2)))
+                        (len2 (w+ (w* n1 n1) (w* n2 n2)))
+                        (root (wsqrt len2))
                         (l (@w normal-impulse))
                         (raw (if biased
                                  (w- (w- l (w* (w* (@w normal-mass) (wif positive (wc 1.0) (@w mass-scale)))
@@ -229,13 +235,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                    (let ((madl (w* ma dl)) (mbdl (w* mb dl)))
                      (st! 0 (w- vax (w* madl x))) (st! 1 (w- vay (w* madl y))) (st! 2 (w- vaz (w* madl z)))
                      (st! 6 (w+ vbx (w* mbdl x))) (st! 7 (w+ vby (w* mbdl y))) (st! 8 (w+ vbz (w* mbdl z))))
-                   (let* ((l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2))
-                          (tm (@w tangent-mass))
-                          (n1 (w- l1 (w* tm vt1))) (n2 (w- l2 (w* tm vt2)))
-                          (limit (w* (@w friction) new))
-                          (len2 (w+ (w* n1 n1) (w* n2 n2)))
+                   (let* ((limit (w* (@w friction) new))
                           (over (w> len2 (w* limit limit)))
-                          (scale (w/ limit (wsqrt (wif over len2 (wc 1.0)))))
+                          ;; outside the cone len2 > 0, so no lane divides by zero
+                          (scale (w/ limit (wif over root (wc 1.0))))
                           (n1 (wif over (w* n1 scale) n1)) (n2 (wif over (w* n2 scale) n2))
                           (d1 (w- n1 l1)) (d2 (w- n2 l2)))
                      (@w! normal-impulse new)
