@@ -180,14 +180,19 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
            (loop for k of-type index from start below end by ,width do
              (let ((base (constraint-base k)))
                (declare (type index base))
-               ;; the gap first, from the deltas alone, so that they are dead before the
-               ;; velocity rows are gathered
-               (let ((s (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
-                          (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
-                            (w+ (w+ (@w separation)
-                                    (w+ (w+ (w* (w- dbx dax) (@w nx)) (w* (w- dby day) (@w ny)))
-                                        (w* (w- dbz daz) (@w nz))))
-                                (w* (@w kvn) (wc elapsed)))))))
+               ;; the gap first: a relax pass computes it from the deltas alone, so that
+               ;; they are dead before the velocity rows are gathered, and keeps it; a solve
+               ;; reads the one its relax pass or the frame pass left
+               (let ((s (if biased
+                            (@w gap)
+                            (let ((s (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
+                                       (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
+                                         (w+ (w+ (@w separation)
+                                                 (w+ (w+ (w* (w- dbx dax) (@w nx)) (w* (w- dby day) (@w ny)))
+                                                     (w* (w- dbz daz) (@w nz))))
+                                             (w* (@w kvn) (wc elapsed)))))))
+                              (@w! gap s)
+                              s))))
                ;; the rows gathered into the stage; each read of a velocity below is a load
                ;; from it and each new value a store, so no velocity holds a register
                (,transpose (v body-a k gax gay gaz gwx gwy gwz a6 a7)
@@ -306,6 +311,9 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         (kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
                    (@w! t1x tx) (@w! t1y ty) (@w! t1z tz) (@w! t2x ux) (@w! t2y uy) (@w! t2z uz)
                    (@w! kvn (w+ (w+ (w* kx x) (w* ky y)) (w* kz z)))
+                   (@w! gap (w+ (w+ (@w separation)
+                                    (w+ (w+ (w* (wc 0.0) x) (w* (wc 0.0) y)) (w* (wc 0.0) z)))
+                                (w* (@w kvn) (wc 0.0))))
                    (@w! kvt1 (w+ (w+ (w* kx tx) (w* ky ty)) (w* kz tz)))
                    (@w! kvt2 (w+ (w+ (w* kx ux) (w* ky uy)) (w* kz uz))))
                  (let* ((ra (@w ra)) (rb (@w rb)) (iia (@w iia)) (iib (@w iib))

@@ -2323,15 +2323,15 @@ the hole. #PRUN3D"
     '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation kvn kvt1 kvt2
       normal-mass tangent-mass rolling-mass friction rolling-limit restitution relative-velocity
       max-normal-impulse bias-rate mass-scale impulse-scale normal-impulse tangent-impulse-1
-      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z)
+      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap)
     "The float columns of a constraint, in the order they sit in a block. #SSMPYW")
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints. #SSMPYW"
     (* 8 (or (position column +constraint-columns+ :test #'string= :key #'symbol-name)
              (error "no constraint column ~A" column)))))
 
-(defconstant +constraint-block+ (* 8 36)
-  "Floats in a block of eight constraints: 36 columns of eight lanes. #SSMPYW")
+(defconstant +constraint-block+ (* 8 (length +constraint-columns+))
+  "Floats in a block of eight constraints: eight lanes of each float column. #SSMPYW")
 
 (defstruct (constraint-columns (:constructor make-constraint-columns ()))
   "The contacts of one step as solver rows, written in colour order: three fixnum columns, and
@@ -2675,7 +2675,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                     (loop for k of-type index from (aref cursor color) below (aref starts (1+ color))
                           do (let ((base (constraint-base k)))
                                (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
-                               (dotimes (o 36) (setf (aref data (+ base (* 8 o))) 0.0))))))))))))
+                               (dotimes (o (floor +constraint-block+ 8)) (setf (aref data (+ base (* 8 o))) 0.0))))))))))))
       color-count)))
 ;; Preparing the constraints:1 ends here
 
@@ -2710,6 +2710,9 @@ normal, tangent and rolling masses (zero where nothing can move). #PR3PAR"
         (declare (type index base))
         (setf (@ t1x) tx (@ t1y) ty (@ t1z) tz (@ t2x) ux (@ t2y) uy (@ t2z) uz
               (@ kvn) (+ (* kx x) (* ky y) (* kz z))
+              ;; the gap the first substep's solve starts from: what the relax pass
+              ;; computes ([[#S0LV3R]]), with both deltas and the time elapsed zero
+              (@ gap) (+ (@ separation) (+ (* 0.0 x) (* 0.0 y) (* 0.0 z)) (* (@ kvn) 0.0))
               (@ kvt1) (+ (* kx tx) (* ky ty) (* kz tz))
               (@ kvt2) (+ (* kx ux) (* ky uy) (* kz uz))
               (@ normal-mass) (if (> mass-sum 0.0) (/ 1.0 mass-sum) 0.0)
@@ -2839,14 +2842,19 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
              (a (the index (* (the index (aref body-a k)) +solver-stride+)))
              (b (the index (* (the index (aref body-b k)) +solver-stride+)))
              (x (@ nx)) (y (@ ny)) (z (@ nz))
-             ;; current separation: the prepared gap moved by both deltas and the box's travel
-             (s (let ((da (the index (* (the index (aref body-a k)) +delta-stride+)))
-                      (db (the index (* (the index (aref body-b k)) +delta-stride+))))
-                  (+ (@ separation)
-                     (+ (* (- (aref d db) (aref d da)) x)
-                        (* (- (block-ref d db 1) (block-ref d da 1)) y)
-                        (* (- (block-ref d db 2) (block-ref d da 2)) z))
-                     (* (@ kvn) elapsed))))
+             ;; current separation: the prepared gap moved by both deltas and the box's
+             ;; travel. The relax pass computes it and keeps it; the next solve, which sees
+             ;; the same deltas and the same time, reads it back
+             (s (if biased
+                    (@ gap)
+                    (let ((da (the index (* (the index (aref body-a k)) +delta-stride+)))
+                          (db (the index (* (the index (aref body-b k)) +delta-stride+))))
+                      (setf (@ gap)
+                            (+ (@ separation)
+                               (+ (* (- (aref d db) (aref d da)) x)
+                                  (* (- (block-ref d db 1) (block-ref d da 1)) y)
+                                  (* (- (block-ref d db 2) (block-ref d da 2)) z))
+                               (* (@ kvn) elapsed))))))
              (vax (aref v a)) (vay (block-ref v a 1)) (vaz (block-ref v a 2))
              (vbx (aref v b)) (vby (block-ref v b 1)) (vbz (block-ref v b 2))
              ;; normal: only the linear velocities take part

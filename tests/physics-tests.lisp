@@ -1089,6 +1089,48 @@ how far the ball moved and the deepest the box's leading face got past the ball'
         (check (< worst 1e-6) "~A: a frame is off by ~,3E" family worst)))))
 ;; S0LV3R-frames-are-perpendicular ends here
 
+;; [[file:../physics.org::#S0LV3R][S0LV3R-kept-gap-is-current]]
+(define-claim "S0LV3R" kept-gap-is-current
+    "The kept gap equals the gap recomputed from the current deltas, before and after each substep."
+  (dolist (family (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p
+                                                 luv-physics::*kernel-families*)))
+    (let ((world (make-basin-world 1000 :kernels family)) (checked 0) (wrong 0))
+      (dotimes (i 60) (step-physics-world world))
+      (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                       luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
+                       luv-physics::prune-phase luv-physics::prepare-phase))
+        (funcall phase world))
+      (let* ((kernels (luv-physics::physics-world-kernels world))
+             (cbuf (luv-physics::physics-world-constraints world))
+             (data (luv-physics::constraint-columns-data cbuf))
+             (d (luv-physics::physics-world-deltas world))
+             (h (luv-physics::physics-world-current-h world)))
+        (flet ((check-gaps (elapsed)
+                 (dotimes (k (luv-physics::constraint-columns-length cbuf))
+                   (when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
+                     (flet ((col (c) (aref data (+ (luv-physics::constraint-base k) (luv-physics::constraint-offset c)))))
+                       (let* ((da (* (aref (luv-physics::constraint-columns-body-a cbuf) k) luv-physics::+delta-stride+))
+                              (db (* (aref (luv-physics::constraint-columns-body-b cbuf) k) luv-physics::+delta-stride+))
+                              (s (+ (col 'separation)
+                                    (+ (* (- (aref d db) (aref d da)) (col 'nx))
+                                       (* (- (aref d (+ db 1)) (aref d (+ da 1))) (col 'ny))
+                                       (* (- (aref d (+ db 2)) (aref d (+ da 2))) (col 'nz)))
+                                    (* (col 'kvn) elapsed))))
+                         (incf checked)
+                         (unless (eql s (col 'gap)) (incf wrong))))))))
+          (check-gaps 0.0)
+          (dotimes (i (luv-physics::physics-world-substeps world))
+            (let ((elapsed (* h (float i 1.0))))
+              (luv-physics::physics-integrate-velocities kernels world h)
+              (luv-physics::physics-warm-start kernels world)
+              (luv-physics::physics-solve-contacts kernels world (/ 1.0 h) t elapsed)
+              (luv-physics::physics-integrate-positions kernels world h)
+              (luv-physics::physics-solve-contacts kernels world (/ 1.0 h) nil (+ elapsed h))
+              (check-gaps (+ elapsed h))))))
+      (check (> checked 10000) "~A: only ~D gaps checked" family checked)
+      (check (zerop wrong) "~A: ~D of ~D kept gaps differ from the current gap" family wrong checked))))
+;; S0LV3R-kept-gap-is-current ends here
+
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
     "Resting: penetration = slop, approach ~ 0; nothing touching: zeros; landing: > slop."
