@@ -297,6 +297,20 @@ how far the ball moved and the deepest the box's leading face got past the ball'
   (list (luv-physics::physics-world-awake-count world)
         (luv-physics::physics-world-sleeping-count world)
         (luv-physics::physics-world-state-hash world)))
+
+(defun runnable-families ()
+  "The names of the kernel families this CPU runs, :SCALAR first. #T3STK1"
+  (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p luv-physics::*kernel-families*)))
+
+(defun prepared-basin-world (family &key (balls 1000) (steps 60))
+  "A basin of BALLS balls under FAMILY, stepped STEPS times, then run through the phases of one
+more step up to and including prepare: its constraints are ready for the substeps. #T3STK1"
+  (let ((world (make-basin-world balls :kernels family)))
+    (dotimes (i steps) (step-physics-world world))
+    (dolist (phase (ldiff luv-physics:*physics-phases*
+                          (rest (member 'luv-physics::prepare-phase luv-physics:*physics-phases*))))
+      (funcall phase world))
+    world))
 ;; A kit for the claims:1 ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-non-finite-numbers]]
@@ -1065,14 +1079,8 @@ how far the ball moved and the deepest the box's leading face got past the ball'
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
     "Prepared tangent frames are orthonormal with their normals, in every family."
-  (dolist (family (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p
-                                                 luv-physics::*kernel-families*)))
-    (let ((world (make-basin-world 1000 :kernels family)) (worst 0.0) (rows 0))
-      (dotimes (i 60) (step-physics-world world))
-      (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
-                       luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
-                       luv-physics::prune-phase luv-physics::prepare-phase))
-        (funcall phase world))
+  (dolist (family (runnable-families))
+    (let ((world (prepared-basin-world family)) (worst 0.0) (rows 0))
       (let* ((cbuf (luv-physics::physics-world-constraints world))
              (data (luv-physics::constraint-columns-data cbuf)))
         (dotimes (k (luv-physics::constraint-columns-length cbuf))
@@ -1092,14 +1100,8 @@ how far the ball moved and the deepest the box's leading face got past the ball'
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-kept-gap-is-current]]
 (define-claim "S0LV3R" kept-gap-is-current
     "The kept gap equals the gap recomputed from the current deltas, before and after each substep."
-  (dolist (family (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p
-                                                 luv-physics::*kernel-families*)))
-    (let ((world (make-basin-world 1000 :kernels family)) (checked 0) (wrong 0))
-      (dotimes (i 60) (step-physics-world world))
-      (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
-                       luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
-                       luv-physics::prune-phase luv-physics::prepare-phase))
-        (funcall phase world))
+  (dolist (family (runnable-families))
+    (let ((world (prepared-basin-world family)) (checked 0) (wrong 0))
       (let* ((kernels (luv-physics::physics-world-kernels world))
              (cbuf (luv-physics::physics-world-constraints world))
              (data (luv-physics::constraint-columns-data cbuf))
@@ -1630,8 +1632,7 @@ how far the ball moved and the deepest the box's leading face got past the ball'
            (let ((world (make-basin-world balls :kernels kernels)))
              (dotimes (i steps) (step-physics-world world))
              (physics-world-state-hash world))))
-    (let ((families (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p
-                                                   luv-physics::*kernel-families*))))
+    (let ((families (runnable-families)))
       (check (member :avx2 families) "the AVX2 family is registered and this CPU runs it")
       (loop for (balls steps) in '((200 120) (1000 200))
             for reference = (hash-after balls steps :scalar)
@@ -1658,8 +1659,7 @@ how far the ball moved and the deepest the box's leading face got past the ball'
              (dotimes (i 240) (step-physics-world world))
              (physics-world-state-hash world))))
     (let ((reference (hash-after :scalar)))
-      (dolist (family (remove :scalar (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p
-                                                                     luv-physics::*kernel-families*))))
+      (dolist (family (remove :scalar (runnable-families)))
         (check (= reference (hash-after family)) "~A differs from scalar on the mixed pile" family)))))
 ;; 7PAQ3M-mixed-materials-agree ends here
 
