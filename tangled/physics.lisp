@@ -2994,15 +2994,14 @@ and :end, hard arrivals as :hit, and measure the step's largest penetration and 
 speed. #ST0R3S"
   (let* ((cbuf (physics-world-constraints world))
          (contacts (physics-world-contacts world))
-         (d (physics-world-deltas world))
          (v (physics-world-velocities world))
          (ids (physics-world-ids world))
          (awake (physics-world-awake world))
          (sleeping (physics-world-sleeping world))
          (hit-speed (f32 (physics-world-hit-speed world)))
-         (dt (physics-world-current-dt world))
+         (slop (f32 (physics-world-slop world)))
          (max-penetration 0.0) (max-approach 0.0))
-    (declare (type f32-column d v) (type single-float hit-speed dt max-penetration max-approach)
+    (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
              #.+kernel-policy+)
     (with-constraint-block (contact body-a body-b) cbuf
       (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
@@ -3011,12 +3010,10 @@ speed. #ST0R3S"
           (let* ((base (constraint-base k))
                  (c (aref contact k))
                  (pushed (> (@ max-normal-impulse) 0.0))
-                 (da (* (aref body-a k) +delta-stride+)) (db (* (aref body-b k) +delta-stride+))
                  (a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
-                 (gap (+ (contact@ geometry c separation)
-                         (* (- (aref d db) (aref d da)) x) (* (- (aref d (+ db 1)) (aref d (+ da 1))) y)
-                         (* (- (aref d (+ db 2)) (aref d (+ da 2))) z) (* (@ kvn) dt)))
+                 ;; the gap the last relax pass kept, less the slop the prepared gap carries
+                 (gap (- (@ gap) slop))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
                         (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn))))
             (declare (type fixnum c) (type index base))
