@@ -2881,10 +2881,13 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
       ;; one straight chain of bindings, a name bound again where its value changes
-      (let* ((base (constraint-base k))
-             (a (the index (* (the index (aref body-a k)) +solver-stride+)))
+      (let ((base (constraint-base k)))
+       ;; the constraint's own columns are read from the block where they are used
+       (symbol-macrolet ((x (@ nx)) (y (@ ny)) (z (@ nz)) (ma (@ ima)) (mb (@ imb))
+                         (ar (@ ra)) (br (@ rb)) (iam (@ iia)) (ibm (@ iib))
+                         (ux (@ t1x)) (uy (@ t1y)) (uz (@ t1z)) (qx (@ t2x)) (qy (@ t2y)) (qz (@ t2z)))
+      (let* ((a (the index (* (the index (aref body-a k)) +solver-stride+)))
              (b (the index (* (the index (aref body-b k)) +solver-stride+)))
-             (x (@ nx)) (y (@ ny)) (z (@ nz))
              ;; current separation: the prepared gap moved by both deltas and the box's
              ;; travel. The relax pass computes it and keeps it; the next solve, which sees
              ;; the same deltas and the same time, reads it back
@@ -2918,7 +2921,6 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                       (- l (* (@ normal-mass) (+ vn bias)))))
              (new (if (> raw 0.0) raw 0.0))
              (dl (- new l))
-             (ma (@ ima)) (mb (@ imb))
              ;; (* ma dl x) is (* (* ma dl) x): forming ma dl once changes no bit
              (madl (* ma dl)) (mbdl (* mb dl))
              (vax (- vax (* madl x))) (vay (- vay (* madl y))) (vaz (- vaz (* madl z)))
@@ -2928,10 +2930,9 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                 (@ max-normal-impulse) (if (> mni new) mni new)))
         ;; friction, inside the cone |l1,l2| <= friction * normal impulse; the angular
         ;; velocities are read only now
-        (let* ((ar (@ ra)) (br (@ rb))
+        (let* (
                (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
                (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5))
-               (ux (@ t1x)) (uy (@ t1y)) (uz (@ t1z)) (qx (@ t2x)) (qy (@ t2y)) (qz (@ t2z))
                (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
                (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (@ kvt1)) (+ (* wx qx) (* wy qy) (* wz qz))))
                (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (@ kvt2) (+ (* wx ux) (* wy uy) (* wz uz))))
@@ -2947,7 +2948,6 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                (d1 (- n1 l1)) (d2 (- n2 l2))
                (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
                (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
-               (iam (@ iia)) (ibm (@ iib))
                (iar (* iam ar)) (ibr (* ibm br)))
           (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
           (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz))
@@ -2969,7 +2969,7 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                     (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
                           wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz)))))))
             (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                  (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))
+                  (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))
 ;; Solve and relax:1 ends here
 
 ;; [[file:../physics.org::#R3ST1T][Restitution, once:1]]
