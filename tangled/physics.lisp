@@ -4009,15 +4009,15 @@ the integer SEED: the same numbers on every run, whatever CL's random state. #X7
       (setf state (ldb (byte 48 0) (+ (* state 25214903917) 11)))
       (/ (ldb (byte 31 17) state) (float (ash 1 31) 1d0)))))
 
-(defun mixed-mass-pile (count &key (seconds 15) (brace-ratio *physics-brace-mass-ratio*))
+(defun mixed-mass-pile (count &key (seconds 15) (brace-ratio *physics-brace-mass-ratio*) (seed 7))
   "Drop COUNT balls of radius 0.25 m in the basin lattice, with sleeping off, their masses spread
-evenly in log from 0.32 to 32 kg by a fixed sequence, and run SECONDS with BRACE-RATIO. Return
+evenly in log from 0.32 to 32 kg by the fixed sequence of SEED, and run SECONDS with BRACE-RATIO. Return
 the deepest overlap seen after the first two seconds, the last second in which a ball moved
 faster than 0.1 m/s (0 if none after the first), the fastest speed in the last second, and
 whether the world stayed finite and valid. #X7R3M5"
   (let ((*physics-brace-mass-ratio* brace-ratio)
         (world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
-        (next (fixed-sequence 7)) (balls '()) (deepest 0.0) (last-moving 0) (fastest-last 0.0))
+        (next (fixed-sequence seed)) (balls '()) (deepest 0.0) (last-moving 0) (fastest-last 0.0))
     (dotimes (i count)
       (multiple-value-bind (x y z) (basin-spawn-point i)
         (push (add-physics-body world x y z :radius 0.25
@@ -4126,15 +4126,21 @@ its final height less its ideal resting height (radius less a slop), and whether
     (multiple-value-bind (pen speed drop left) (stack-in-shaft '(1000.0 1.0))
       (row "1 kg ball on a 1000 kg ball" (< pen 0.02)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
-    ;; bracing in a pile of many masses, and the same pile without it
+    ;; bracing in a pile of many masses, and the same pile without it, each from six starts:
+    ;; the deepest overlap of one start is the deepest of one moment, which one heavy landing sets
     (dolist (ratio (list *physics-brace-mass-ratio* 1e9))
-      (multiple-value-bind (deepest last fastest ok) (mixed-mass-pile 1000 :brace-ratio ratio)
-        (row (format nil "1000 balls of 0.32 to 32 kg, sleeping off, ~:[without bracing~;bracing~]"
-                     (< ratio 1e6))
-             (and ok (< deepest 0.06) (< fastest 0.05))
-             "deepest overlap after 2 s ~,4F m; a ball faster than 0.1 m/s until second ~D; ~
-              fastest in the last second ~,3F m/s; ~:[not finite or invalid~;finite and valid~]"
-             deepest last fastest ok)))
+      (let ((runs (loop for seed in '(7 11 13 17 19 23)
+                        collect (multiple-value-list (mixed-mass-pile 1000 :brace-ratio ratio :seed seed)))))
+        (flet ((all (key) (mapcar key runs)))
+          (let ((deepest (all #'first)) (last (reduce #'max (all #'second)))
+                (fastest (reduce #'max (all #'third))) (ok (every #'identity (all #'fourth))))
+            (row (format nil "1000 balls of 0.32 to 32 kg, sleeping off, ~:[without bracing~;bracing~], six starts"
+                         (< ratio 1e6))
+                 (and ok (< (median deepest) 0.06) (< fastest 0.05))
+                 "deepest overlap after 2 s ~,4F m in the median start, ~,4F m in the worst; a ball ~
+                  faster than 0.1 m/s until second ~D; fastest in the last second ~,3F m/s; ~
+                  ~:[not finite or invalid~;finite and valid~]"
+                 (median deepest) (reduce #'max deepest) last fastest ok)))))
     (multiple-value-bind (pen speed drop left) (stack-in-shaft (make-list 20 :initial-element 1.0))
       (row "column of 20 balls" (< pen 0.05)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
