@@ -2725,13 +2725,14 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
 ;; [[file:../physics.org::#PR3PAR][Preparing the constraints:2]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
-velocity along the normal and the frame, and the effective masses. #PR3PAR"))
+velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
 
 (defun prepare-frames-range (cbuf start end)
   "Complete constraints START..END of CBUF from their normal, radii, inverse masses and inertias,
 and the box velocity held in the KVN, KVT1 and KVT2 columns: the tangent frame t1, t2 (t1 from
-the axis least aligned with the normal), the box velocity resolved onto n, t1 and t2, and the
-normal, tangent and rolling masses (zero where nothing can move). #PR3PAR"
+the axis least aligned with the normal), the box velocity resolved onto n, t1 and t2, the
+normal, tangent and rolling masses (zero where nothing can move), and the gap the first
+substep's solve reads. #PR3PAR"
   (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
   (with-constraint-block () cbuf
     (loop for k of-type index from start below end do
