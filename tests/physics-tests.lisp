@@ -234,13 +234,18 @@
 ;; JKM0PY-families-match-cpuinfo ends here
 
 ;; [[file:../physics.org::#T3STK1][A kit for the claims:1]]
-(defun make-floor-world (&key (sleep t) (gravity '(0 -9.81 0)))
-  "A world over a terrain whose cells [-16,32)^3 are resident air except a floor one cell thick,
-y in [-1,0), so a resting ball of radius R has its centre at R - slop. Return the world and
-the terrain. #T3STK1"
+(defun make-floor-terrain ()
+  "A terrain whose cells [-16,32)^3 are resident air except a floor one cell thick, y in
+[-1,0). #T3STK1"
   (let ((terrain (luv-physics::make-voxel-terrain)))
     (luv-physics::fill-terrain terrain -16 -16 -16 32 32 32 nil)
     (luv-physics::fill-terrain terrain -16 -1 -16 32 0 32 t)
+    terrain))
+
+(defun make-floor-world (&key (sleep t) (gravity '(0 -9.81 0)))
+  "A world over a floor terrain (make-floor-terrain), so a resting ball of radius R has its centre
+at R - slop. Return the world and the terrain. #T3STK1"
+  (let ((terrain (make-floor-terrain)))
     (values (luv-physics::make-physics-world :terrain terrain :sleep sleep :gravity gravity)
             terrain)))
 
@@ -311,6 +316,17 @@ more step up to and including prepare: its constraints are ready for the substep
                           (rest (member 'luv-physics::prepare-phase luv-physics:*physics-phases*))))
       (funcall phase world))
     world))
+
+(defun map-prepared-constraints (function world)
+  "Call FUNCTION on each row K of WORLD's constraint buffer that names a contact, with K and a
+function of a column name that reads row K's float in that column. #T3STK1"
+  (let* ((cbuf (luv-physics::physics-world-constraints world))
+         (data (luv-physics::constraint-columns-data cbuf)))
+    (dotimes (k (luv-physics::constraint-columns-length cbuf))
+      (when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
+        (funcall function k
+                 (lambda (column)
+                   (aref data (+ (luv-physics::constraint-base k) (luv-physics::constraint-offset column)))))))))
 ;; A kit for the claims:1 ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-non-finite-numbers]]
@@ -1081,20 +1097,18 @@ more step up to and including prepare: its constraints are ready for the substep
     "Prepared tangent frames are orthonormal with their normals, in every family."
   (dolist (family (runnable-families))
     (let ((world (prepared-basin-world family)) (worst 0.0) (rows 0))
-      (let* ((cbuf (luv-physics::physics-world-constraints world))
-             (data (luv-physics::constraint-columns-data cbuf)))
-        (dotimes (k (luv-physics::constraint-columns-length cbuf))
-          (when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
-            (incf rows)
-            (flet ((v (x y z)
-                     (let ((base (luv-physics::constraint-base k)))
-                       (mapcar (lambda (c) (aref data (+ base (luv-physics::constraint-offset c)))) (list x y z)))))
-              (let ((n (v 'nx 'ny 'nz)) (t1 (v 't1x 't1y 't1z)) (t2 (v 't2x 't2y 't2z)))
-                (flet ((dot (a b) (reduce #'+ (mapcar #'* a b))))
-                  (setf worst (max worst (abs (dot n t1)) (abs (dot n t2)) (abs (dot t1 t2))
-                                   (abs (- 1 (dot t1 t1))) (abs (- 1 (dot t2 t2))))))))))
-        (check (> rows 2000) "~A: only ~D constraints prepared" family rows)
-        (check (< worst 1e-6) "~A: a frame is off by ~,3E" family worst)))))
+      (map-prepared-constraints
+       (lambda (k column)
+         (declare (ignore k))
+         (incf rows)
+         (flet ((v (&rest names) (mapcar column names))
+                (dot (a b) (reduce #'+ (mapcar #'* a b))))
+           (let ((n (v 'nx 'ny 'nz)) (t1 (v 't1x 't1y 't1z)) (t2 (v 't2x 't2y 't2z)))
+             (setf worst (max worst (abs (dot n t1)) (abs (dot n t2)) (abs (dot t1 t2))
+                              (abs (- 1 (dot t1 t1))) (abs (- 1 (dot t2 t2))))))))
+       world)
+      (check (> rows 2000) "~A: only ~D constraints prepared" family rows)
+      (check (< worst 1e-6) "~A: a frame is off by ~,3E" family worst))))
 ;; S0LV3R-frames-are-perpendicular ends here
 
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-kept-gap-is-current]]
@@ -1104,22 +1118,21 @@ more step up to and including prepare: its constraints are ready for the substep
     (let ((world (prepared-basin-world family)) (checked 0) (wrong 0))
       (let* ((kernels (luv-physics::physics-world-kernels world))
              (cbuf (luv-physics::physics-world-constraints world))
-             (data (luv-physics::constraint-columns-data cbuf))
              (d (luv-physics::physics-world-deltas world))
              (h (luv-physics::physics-world-current-h world)))
         (flet ((check-gaps (elapsed)
-                 (dotimes (k (luv-physics::constraint-columns-length cbuf))
-                   (when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
-                     (flet ((col (c) (aref data (+ (luv-physics::constraint-base k) (luv-physics::constraint-offset c)))))
-                       (let* ((da (* (aref (luv-physics::constraint-columns-body-a cbuf) k) luv-physics::+delta-stride+))
-                              (db (* (aref (luv-physics::constraint-columns-body-b cbuf) k) luv-physics::+delta-stride+))
-                              (s (+ (col 'separation)
-                                    (+ (* (- (aref d db) (aref d da)) (col 'nx))
-                                       (* (- (aref d (+ db 1)) (aref d (+ da 1))) (col 'ny))
-                                       (* (- (aref d (+ db 2)) (aref d (+ da 2))) (col 'nz)))
-                                    (* (col 'kvn) elapsed))))
-                         (incf checked)
-                         (unless (eql s (col 'gap)) (incf wrong))))))))
+                 (map-prepared-constraints
+                  (lambda (k col)
+                    (let* ((da (* (aref (luv-physics::constraint-columns-body-a cbuf) k) luv-physics::+delta-stride+))
+                           (db (* (aref (luv-physics::constraint-columns-body-b cbuf) k) luv-physics::+delta-stride+))
+                           (s (+ (funcall col 'separation)
+                                 (+ (* (- (aref d db) (aref d da)) (funcall col 'nx))
+                                    (* (- (aref d (+ db 1)) (aref d (+ da 1))) (funcall col 'ny))
+                                    (* (- (aref d (+ db 2)) (aref d (+ da 2))) (funcall col 'nz)))
+                                 (* (funcall col 'kvn) elapsed))))
+                      (incf checked)
+                      (unless (eql s (funcall col 'gap)) (incf wrong))))
+                  world)))
           (check-gaps 0.0)
           (dotimes (i (luv-physics::physics-world-substeps world))
             (let ((elapsed (* h (float i 1.0))))
@@ -1354,8 +1367,7 @@ more step up to and including prepare: its constraints are ready for the substep
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-follows-the-rule]]
 (define-claim "H7P4CX" walker-follows-the-rule
     "Walks at 4.3 m/s on the floor, jumps 1.27 cells once per press, climbs one block, not two."
-  (multiple-value-bind (world terrain) (make-floor-world)
-    (declare (ignore world))
+  (let ((terrain (make-floor-terrain)))
     (flet ((walk (p steps &rest input)
              (dotimes (i steps) (apply #'luv-physics::step-physics-player p terrain input))
              p))
@@ -1397,8 +1409,7 @@ more step up to and including prepare: its constraints are ready for the substep
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-refuses-bad-input]]
 (define-claim "H7P4CX" walker-refuses-bad-input
     "NaN, infinite and out-of-range walker input signals a condition and changes nothing."
-  (multiple-value-bind (world terrain) (make-floor-world)
-    (declare (ignore world))
+  (let ((terrain (make-floor-terrain)))
     (let* ((p (luv-physics::make-physics-player 1.5 0 1.5))
            (nan (sb-kernel:make-double-float -524288 0))
            (before (copy-structure p)))
@@ -1421,8 +1432,7 @@ more step up to and including prepare: its constraints are ready for the substep
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-conses-nothing]]
 (define-claim "H7P4CX" walker-conses-nothing
     "Steps and frames of the walker, given double-floats, cons 0 bytes."
-  (multiple-value-bind (world terrain) (make-floor-world)
-    (declare (ignore world))
+  (let ((terrain (make-floor-terrain)))
     (luv-physics::fill-terrain terrain 4 0 0 16 1 2 t)
     (let ((p (luv-physics::make-physics-player 0.5 0 1)))
       (flet ((walk (n)
