@@ -125,6 +125,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 (@w (column) `(,',load data base ,(constraint-offset column)))
                 (@w! (column value) `(,',store ,value data base ,(constraint-offset column)))
                 (st@ (i) `(,',load st 0 ,(* ,width i)))
+                ;; moved-gap ([[#PR3PAR]]) in lanes, for the relax pass and the frame pass
+                (wgap (ddx ddy ddz elapsed)
+                  `(w+ (w+ (@w separation) (w+ (w+ (w* ,ddx (@w nx)) (w* ,ddy (@w ny))) (w* ,ddz (@w nz))))
+                       (w* (@w kvn) ,elapsed)))
                 (st! (i value) `(,',store ,value st 0 ,(* ,width i)))
                 (with-body-rows (&body body)
                   ;; the two spare floats of a velocity row are written back as zeros, so
@@ -187,10 +191,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                             (@w gap)
                             (let ((s (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
                                        (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
-                                         (w+ (w+ (@w separation)
-                                                 (w+ (w+ (w* (w- dbx dax) (@w nx)) (w* (w- dby day) (@w ny)))
-                                                     (w* (w- dbz daz) (@w nz))))
-                                             (w* (@w kvn) (wc elapsed)))))))
+                                         (wgap (w- dbx dax) (w- dby day) (w- dbz daz) (wc elapsed))))))
                               (@w! gap s)
                               s))))
                ;; the rows gathered into the stage; each read of a velocity below is a load
@@ -311,9 +312,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         (kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
                    (@w! t1x tx) (@w! t1y ty) (@w! t1z tz) (@w! t2x ux) (@w! t2y uy) (@w! t2z uz)
                    (@w! kvn (w+ (w+ (w* kx x) (w* ky y)) (w* kz z)))
-                   (@w! gap (w+ (w+ (@w separation)
-                                    (w+ (w+ (w* (wc 0.0) x) (w* (wc 0.0) y)) (w* (wc 0.0) z)))
-                                (w* (@w kvn) (wc 0.0))))
+                   (@w! gap (wgap (wc 0.0) (wc 0.0) (wc 0.0) (wc 0.0)))
                    (@w! kvt1 (w+ (w+ (w* kx tx) (w* ky ty)) (w* kz tz)))
                    (@w! kvt2 (w+ (w+ (w* kx ux) (w* ky uy)) (w* kz uz))))
                  (let* ((ra (@w ra)) (rb (@w rb)) (iia (@w iia)) (iib (@w iib))

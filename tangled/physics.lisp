@@ -2727,6 +2727,14 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
 
+(declaim (inline moved-gap))
+(defun moved-gap (separation nx ny nz ddx ddy ddz kvn elapsed)
+  "The gap of a constraint whose prepared gap is SEPARATION along the normal NX NY NZ, after its
+bodies' deltas have drawn apart by DDX DDY DDZ and its box has moved at KVN for ELAPSED seconds:
+the one formula the relax pass ([[#S0LV3R]]) and the frame pass compute it by. #PR3PAR"
+  (declare (type single-float separation nx ny nz ddx ddy ddz kvn elapsed))
+  (+ separation (+ (* ddx nx) (* ddy ny) (* ddz nz)) (* kvn elapsed)))
+
 (defun prepare-frames-range (cbuf start end)
   "Complete constraints START..END of CBUF from their normal, radii, inverse masses and inertias,
 and the box velocity held in the KVN, KVT1 and KVT2 columns: the tangent frame t1, t2 (t1 from
@@ -2756,7 +2764,7 @@ substep's solve reads. #PR3PAR"
               (@ kvn) (+ (* kx x) (* ky y) (* kz z))
               ;; the gap the first substep's solve starts from: what the relax pass
               ;; computes ([[#S0LV3R]]), with both deltas and the time elapsed zero
-              (@ gap) (+ (@ separation) (+ (* 0.0 x) (* 0.0 y) (* 0.0 z)) (* (@ kvn) 0.0))
+              (@ gap) (moved-gap (@ separation) x y z 0.0 0.0 0.0 (@ kvn) 0.0)
               (@ kvt1) (+ (* kx tx) (* ky ty) (* kz tz))
               (@ kvt2) (+ (* kx ux) (* ky uy) (* kz uz))
               (@ normal-mass) (if (> mass-sum 0.0) (/ 1.0 mass-sum) 0.0)
@@ -2897,11 +2905,9 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                     (let ((da (the index (* (the index (aref body-a k)) +delta-stride+)))
                           (db (the index (* (the index (aref body-b k)) +delta-stride+))))
                       (setf (@ gap)
-                            (+ (@ separation)
-                               (+ (* (- (aref d db) (aref d da)) x)
-                                  (* (- (block-ref d db 1) (block-ref d da 1)) y)
-                                  (* (- (block-ref d db 2) (block-ref d da 2)) z))
-                               (* (@ kvn) elapsed))))))
+                            (moved-gap (@ separation) x y z
+                                       (- (aref d db) (aref d da)) (- (block-ref d db 1) (block-ref d da 1))
+                                       (- (block-ref d db 2) (block-ref d da 2)) (@ kvn) elapsed)))))
              (vax (aref v a)) (vay (block-ref v a 1)) (vaz (block-ref v a 2))
              (vbx (aref v b)) (vby (block-ref v b 1)) (vbz (block-ref v b 2))
              ;; normal: only the linear velocities take part
