@@ -2175,21 +2175,12 @@ is under the speculative distance. #MYWH16"
                                                   (solid-bit (+ o sy) 3) (solid-bit (+ o sx sy) 4)
                                                   (solid-bit (+ o sz) 9) (solid-bit (+ o sx sz) 10)
                                                   (solid-bit (+ o sy sz) 12) (solid-bit (+ o sx sy sz) 13))))))))
-                ((and (= (ash x0 (- +chunk-bits+)) (ash x1 (- +chunk-bits+)))
-                       (= (ash y0 (- +chunk-bits+)) (ash y1 (- +chunk-bits+)))
-                       (= (ash z0 (- +chunk-bits+)) (ash z1 (- +chunk-bits+))))
-                  (let ((chunk (chunk-at (chunk-key x0 y0 z0))))
-                    (declare (type chunk-storage chunk))
-                    (loop for iz of-type fixnum from z0 to z1 do
-                      (loop for iy of-type fixnum from y0 to y1 do
-                        (loop for ix of-type fixnum from x0 to x1 do
-                          (when (plusp (aref chunk (cell-offset ix iy iz)))
-                            (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))))
+                ;; otherwise cell by cell, each through the chunk it lies in
                 (t
                   (loop for iz of-type fixnum from z0 to z1 do
                     (loop for iy of-type fixnum from y0 to y1 do
                       (loop for ix of-type fixnum from x0 to x1 do
-                        (when (probe-solid-p probe ix iy iz)
+                        (when (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))
                           (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))))
               ;; a body that can travel past its margin this step also sweeps its path
               (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
