@@ -1415,6 +1415,13 @@ first, so :auto takes the last one the CPU runs. #R9M4PV"
 ;; Choose the phase once: kernel families:1 ends here
 
 ;; [[file:../physics.org::#M4K3WD][Making a world and adding bodies:1]]
+(defun check-count (name value high)
+  "VALUE, an integer from 1 to HIGH, or an invalid-physics-parameter error naming NAME. #M4K3WD"
+  (unless (and (integerp value) (<= 1 value high))
+    (error 'invalid-physics-parameter :name name :value value
+                                      :expected (format nil "an integer from 1 to ~D" high)))
+  value)
+
 (defun make-physics-world (&key terrain (step-seconds 1/60) (substeps 4) (gravity '(0 -9.81 0))
                                 (kernels :scalar) (sleep t))
   "A new empty world over TERRAIN (a voxel-terrain or NIL), stepping STEP-SECONDS in SUBSTEPS
@@ -1424,8 +1431,7 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
   (let ((dt (finite-f32 :step-seconds step-seconds)))
     (unless (< 0 dt 1.0)
       (error 'invalid-physics-parameter :name :step-seconds :value step-seconds :expected "in (0, 1) seconds"))
-    (unless (and (integerp substeps) (<= 1 substeps 64))
-      (error 'invalid-physics-parameter :name :substeps :value substeps :expected "an integer from 1 to 64"))
+    (check-count :substeps substeps 64)
     (unless (and (listp gravity) (= (length gravity) 3))
       (error 'invalid-physics-parameter :name :gravity :value gravity :expected "a list of three numbers"))
     (make-instance 'physics-world
@@ -2557,10 +2563,10 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                (type handle-table ids) (type constraint-columns cbuf))
       (multiple-value-bind (dyn-bias dyn-mass dyn-impulse) (physics-softness hertz zeta h)
         (multiple-value-bind (st-bias st-mass st-impulse) (physics-softness (* 2.0 hertz) zeta h)
-          (constraint-columns-ensure-capacity
-           cbuf (aref (physics-world-color-starts world) (1+ +physics-max-colors+)))
-          (setf (constraint-columns-length cbuf)
-                (aref (physics-world-color-starts world) (1+ +physics-max-colors+)))
+          ;; the buffer's rows: every colour's, padding included
+          (let ((rows (aref (physics-world-color-starts world) (1+ +physics-max-colors+))))
+            (constraint-columns-ensure-capacity cbuf rows)
+            (setf (constraint-columns-length cbuf) rows))
           ;; the solver's body state: velocities of awake rows, zero deltas, a zero dummy row
           (with-body-columns (vx vy vz wx wy wz) awake
             (dotimes (i n)
@@ -2585,7 +2591,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
             (declare (dynamic-extent cursor) (type fixnum-column sets locals braced color-starts)
                      (type single-float brace-ratio still2 load-scale up-x up-y up-z)
                      (type f32-column inverse-mass))
-            (replace cursor (physics-world-color-starts world))
+            (replace cursor color-starts)
             ;; a body is braced when it is still and a one-sided contact carried load last step.
             ;; Nothing is braced without gravity, or when no awake body is that many times
             ;; heavier than another: then the scene skips this pass and every test of it below
@@ -2704,12 +2710,11 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                 ;; in lanes where the family has them
                 (physics-prepare-frames (physics-world-kernels world) world)
                 ;; padding rows: no contact, the dummy on both sides, every float zero
-                (let ((starts (physics-world-color-starts world)))
-                  (dotimes (color +physics-max-colors+)
-                    (loop for k of-type index from (aref cursor color) below (aref starts (1+ color))
-                          do (let ((base (constraint-base k)))
-                               (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
-                               (dotimes (o (floor +constraint-block+ 8)) (setf (aref data (+ base (* 8 o))) 0.0))))))))))))
+                (dotimes (color +physics-max-colors+)
+                  (loop for k of-type index from (aref cursor color) below (aref color-starts (1+ color))
+                        do (let ((base (constraint-base k)))
+                             (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
+                             (dotimes (o (floor +constraint-block+ 8)) (setf (aref data (+ base (* 8 o))) 0.0)))))))))))
       color-count)))
 ;; Preparing the constraints:1 ends here
 
@@ -3472,10 +3477,15 @@ naming it. #JAU0EF"
                                                           (mapcar #'first *physics-body-kinds*))))
     (1+ place)))
 
+(declaim (inline physics-kind-entry))
+(defun physics-kind-entry (number)
+  "The entry of the NUMBER-th kind of *physics-body-kinds*: its keyword, then its arguments. #JAU0EF"
+  (nth (1- number) *physics-body-kinds*))
+
 (defun add-physics-body-of-kind-number (world number x y z vx vy vz report-hits)
   "Add a body of the NUMBER-th kind of *physics-body-kinds* and return its handle. #JAU0EF"
   (apply #'add-physics-body world x y z :kind number :vx vx :vy vy :vz vz :report-hits report-hits
-         (rest (nth (1- number) *physics-body-kinds*))))
+         (rest (physics-kind-entry number))))
 
 (defun add-physics-body-of-kind (world kind x y z &key (vx 0.0) (vy 0.0) (vz 0.0) report-hits)
   "Add a body of KIND (a keyword of *physics-body-kinds*) centred at X Y Z, moving at VX VY VZ,
@@ -3486,26 +3496,21 @@ and return its handle. #JAU0EF"
   "The keyword of the kind of HANDLE's body, or NIL for a body added without a kind. #JAU0EF"
   (let ((number (physics-body-kind world handle)))
     (and (<= 1 number (length *physics-body-kinds*))
-         (first (nth (1- number) *physics-body-kinds*)))))
+         (first (physics-kind-entry number)))))
 
-(defstruct (physics-spring (:constructor %make-physics-spring (kind number x y z per-step every)))
-  "A block at cell X Y Z that emits PER-STEP bodies of KIND (the NUMBER-th kind) on every
-EVERY-th call of run-physics-springs; CALLS and EMITTED count what it has done. #JAU0EF"
-  (kind :water-drop :type keyword) (number 1 :type (integer 1 1000))
+(defstruct (physics-spring (:constructor %make-physics-spring (number x y z per-step every)))
+  "A block at cell X Y Z that emits PER-STEP bodies of the NUMBER-th kind of *physics-body-kinds*
+on every EVERY-th call of run-physics-springs; CALLS and EMITTED count what it has done. #JAU0EF"
+  (number 1 :type (integer 1 1000))
   (x 0 :type fixnum) (y 0 :type fixnum) (z 0 :type fixnum)
   (per-step 1 :type (integer 1 64)) (every 1 :type (integer 1 3600))
   (calls 0 :type fixnum) (emitted 0 :type fixnum))
 
 (defun make-physics-spring (kind x y z &key (per-step 1) (every 1))
   "A spring of KIND at cell X Y Z emitting PER-STEP bodies every EVERY steps. #JAU0EF"
-  (flet ((count-in (name value high)
-           (unless (typep value `(integer 1 ,high))
-             (error 'invalid-physics-parameter :name name :value value
-                                               :expected (format nil "an integer from 1 to ~D" high)))
-           value))
-    (%make-physics-spring kind (physics-kind-number kind nil)
-                          (check-cell :x x) (check-cell :y y) (check-cell :z z)
-                          (count-in :per-step per-step 64) (count-in :every every 3600))))
+  (%make-physics-spring (physics-kind-number kind nil)
+                        (check-cell :x x) (check-cell :y y) (check-cell :z z)
+                        (check-count :per-step per-step 64) (check-count :every every 3600)))
 
 (defun make-fountain (x y z)
   "A fountain at cell X Y Z: two water drops every step. #JAU0EF"
@@ -3539,7 +3544,7 @@ the handle of each body emitted; return how many were emitted. Conses nothing. #
     (dolist (spring springs emitted)
       (when (zerop (mod (physics-spring-calls spring) (physics-spring-every spring)))
         (let* ((number (physics-spring-number spring))
-               (radius (f32 (getf (rest (nth (1- number) *physics-body-kinds*)) :radius)))
+               (radius (f32 (getf (rest (physics-kind-entry number)) :radius)))
                (x (physics-spring-x spring)) (y (physics-spring-y spring)) (z (physics-spring-z spring)))
           (declare (type single-float radius))
           (dotimes (k (physics-spring-per-step spring))
