@@ -2738,6 +2738,11 @@ the axis least aligned with the normal), the box velocity resolved onto n, t1 an
 normal, tangent and rolling masses (zero where nothing can move), and the gap the first
 substep's solve reads. #PR3PAR"
   (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
+  (flet ((inverse (v)
+           ;; 1/v where v > 0, else 0: zero where nothing can move
+           (declare (type single-float v))
+           (if (> v 0.0) (/ 1.0 v) 0.0)))
+    (declare (inline inverse))
   (with-constraint-block () cbuf
     (loop for k of-type index from start below end do
       (let* ((base (constraint-base k))
@@ -2763,9 +2768,9 @@ substep's solve reads. #PR3PAR"
               (@ gap) (moved-gap (@ separation) x y z 0.0 0.0 0.0 (@ kvn) 0.0)
               (@ kvt1) (+ (* kx tx) (* ky ty) (* kz tz))
               (@ kvt2) (+ (* kx ux) (* ky uy) (* kz uz))
-              (@ normal-mass) (if (> mass-sum 0.0) (/ 1.0 mass-sum) 0.0)
-              (@ tangent-mass) (if (> tangent-sum 0.0) (/ 1.0 tangent-sum) 0.0)
-              (@ rolling-mass) (if (> rolling-sum 0.0) (/ 1.0 rolling-sum) 0.0))))))
+              (@ normal-mass) (inverse mass-sum)
+              (@ tangent-mass) (inverse tangent-sum)
+              (@ rolling-mass) (inverse rolling-sum)))))))
 
 (defmethod physics-prepare-frames ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
