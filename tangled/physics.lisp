@@ -1070,11 +1070,16 @@ item's bucket there, and a walk lists the entries it keeps. #D9W4CH"
     (declare (type fixnum h) (type (unsigned-byte 62) p))
     (logand (ash p -11) mask)))
 
+(declaim (type (integer 0 1024) *physics-dense-grid-cells*))
+(defparameter *physics-dense-grid-cells* 64
+  "The most cells per item the box of a dense grid may have; a larger box is hashed. #D9W4CH")
+
 (defun build-hash-grid (grid cell-size n xs ys zs ids)
   "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID: densely
-when the box of their cells, one cell of padding around, has at most 4N+64 cells, else by
-hash. The grid keeps its own copy of the centres in its order, so a walk over neighbouring
-cells reads positions from one run of memory. #D9W4CH"
+when the box of their cells, one cell of padding around, has at most 64 more cells than
+*physics-dense-grid-cells* per item, else by hash. The grid keeps its own copy of the
+centres in its order, so a walk over neighbouring cells reads positions from one run of
+memory. #D9W4CH"
   (declare (type hash-grid grid) (type single-float cell-size) (type index n)
            (type f32-column xs ys zs) (type fixnum-column ids) #.+kernel-policy+)
   (let ((inv (/ 1.0 cell-size)))
@@ -1100,16 +1105,21 @@ cells reads positions from one run of memory. #D9W4CH"
       (let* ((nx (if (plusp n) (+ 3 (- x1 x0)) 1)) (ny (if (plusp n) (+ 3 (- y1 y0)) 1))
              (nz (if (plusp n) (+ 3 (- z1 z0)) 1))
              (cells (if (and (< nx 4096) (< ny 4096) (< nz 4096)) (* nx ny nz) most-positive-fixnum))
-             (dense (and (plusp n) (<= cells (+ 64 (* 4 n)))))
+             (dense (and (plusp n) (<= cells (+ 64 (* (the (integer 0 1024) *physics-dense-grid-cells*) n)))))
              (buckets (if dense cells (max 16 (ash 1 (integer-length (* 2 n))))))
              (mask (1- buckets)))
         (declare (type fixnum nx ny nz cells buckets mask))
         (setf (hash-grid-dense grid) dense (hash-grid-mask grid) mask
               (hash-grid-ox grid) (1- x0) (hash-grid-oy grid) (1- y0) (hash-grid-oz grid) (1- z0)
               (hash-grid-nx grid) nx (hash-grid-ny grid) ny (hash-grid-nz grid) nz)
+        ;; a dense box that outgrows the buckets takes at once the room of the largest box
+        ;; the bound allows at this item capacity, so a box that keeps growing (drops
+        ;; spreading from a fountain) reallocates once, not at every doubling
         (when (< (length (hash-grid-starts grid)) (1+ buckets))
-          (setf (hash-grid-starts grid) (make-array (max (1+ buckets) (* 2 (length (hash-grid-starts grid))))
-                                                    :element-type 'fixnum)))
+          (setf (hash-grid-starts grid)
+                (make-array (max (1+ buckets) (* 2 (length (hash-grid-starts grid)))
+                                 (if dense (+ 65 (* *physics-dense-grid-cells* (length (hash-grid-items grid)))) 0))
+                            :element-type 'fixnum)))
         (let ((starts (hash-grid-starts grid)) (items (hash-grid-items grid))
               (keys (hash-grid-keys grid)) (item-keys (hash-grid-item-keys grid))
               (item-buckets (hash-grid-near grid))
@@ -3892,6 +3902,24 @@ and drops a new one in from above: mean ms and bytes consed per step over FROM..
           (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
     (list :mean (/ ms (- to from)) :consed (round consed (- to from)))))
 
+(defun measure-spread-basin (&key (balls 3000) (kernels :scalar) (from 2400) (to 3000)
+                                  (cells *physics-dense-grid-cells*))
+  "The awake basin pile of BALLS left to run until some balls have rolled out over the walls,
+with *physics-dense-grid-cells* bound to CELLS throughout: mean ms and bytes consed per step
+over FROM..TO, whether the awake grid was dense at the end, and its box's cells per ball. #B3NCH5"
+  (let ((*physics-dense-grid-cells* cells)
+        (world (make-basin-world balls :kernels kernels)) (ms 0d0) (consed 0))
+    (dotimes (i to)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (step-physics-world world)
+        (when (>= i from)
+          (incf consed (- (sb-ext:get-bytes-consed) before))
+          (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
+    (let ((grid (physics-world-awake-grid world)))
+      (list :mean (/ ms (- to from)) :consed (round consed (- to from))
+            :dense (hash-grid-dense grid)
+            :cells-per-ball (round (* (hash-grid-nx grid) (hash-grid-ny grid) (hash-grid-nz grid)) balls)))))
+
 (defun make-basin-fountain ()
   "The fountain of the benchmarks: a fountain spring (make-fountain) in the floor cell at the
 middle of the basin, two water drops a step. #B3NCH5"
@@ -3914,7 +3942,7 @@ middle of the basin, two water drops a step. #B3NCH5"
 
 (defun run-scene-benchmark (&key (stream *standard-output*))
   "Print, as an Org table, the settled pile, the churning pile and the fountain for every
-kernel family this CPU runs. #B3NCH5"
+kernel family this CPU runs, and the spread pile under two dense-grid bounds for the widest. #B3NCH5"
   (format stream "~&#+caption: other scenes; load ~A~%" (load-average))
   (format stream "~&| scene | family | mean ms/step | bytes consed/step | note |~%|-------+--------+------+------+------|~%")
   (dolist (family (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*)))
@@ -3927,7 +3955,16 @@ kernel family this CPU runs. #B3NCH5"
     (let ((m (measure-fountain :kernels family)))
       (format stream "~&| fountain, 2 drops a step | ~A | ~,3F | ~D | ~D drops alive |~%"
               (string-downcase family) (getf m :mean) (getf m :consed) (getf m :alive)))
-    (finish-output stream)))
+    (finish-output stream))
+  ;; the spread pile, steps 2400-3000, for the widest family: the default bound of a dense
+  ;; grid, then a bound of four cells per ball, under which its grid is hashed
+  (let ((family (first (last (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*))))))
+    (dolist (cells (list *physics-dense-grid-cells* 4))
+      (let ((m (measure-spread-basin :kernels family :cells cells)))
+        (format stream "~&| 3000 balls spread, steps 2400-3000, dense bound ~D | ~A | ~,3F | ~D | grid ~:[hashed~;dense~], ~D cells per ball |~%"
+                cells (string-downcase family) (getf m :mean) (getf m :consed) (getf m :dense)
+                (getf m :cells-per-ball))
+        (finish-output stream)))))
 ;; What a step costs:1 ends here
 
 ;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]

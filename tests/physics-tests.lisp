@@ -604,8 +604,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#D9W4CH][D9W4CH-pairs-match-brute-force]]
 (define-claim "D9W4CH" pairs-match-brute-force
-    "Generated pair contacts = brute-force pairs with gap < 0.02 m in a 300-ball cloud; none beyond the margin."
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
+    "Generated pair contacts = brute-force pairs with gap < 0.02 m in a 300-ball cloud, dense or hashed; none beyond the margin."
+  (dolist (cells '(64 0))
+  (let* ((luv-physics::*physics-dense-grid-cells* cells)
+         (w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
          (next (make-lcg 7))
          (balls '()))                   ; (handle x y z r), in doubles
     (flet ((gap (p q)
@@ -641,6 +643,9 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                       (float (luv-physics::physics-body-radius w h) 1d0)))))
                           balls))
       (luv-physics::step-physics-world w)
+      (check (eq (plusp cells) (luv-physics::hash-grid-dense (luv-physics::physics-world-awake-grid w)))
+             "with ~D cells per item the grid is ~:[hashed~;dense~]" cells
+             (luv-physics::hash-grid-dense (luv-physics::physics-world-awake-grid w)))
       (let ((generated (make-hash-table :test 'equal))
             (expected (make-hash-table :test 'equal))
             (by-slot (make-hash-table))
@@ -665,7 +670,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
           (check (null missed) "~D close pairs have no contact, e.g. ~S" (length missed) (first missed))
           (check (null too-far) "~D contacts span a gap over the margin, e.g. ~S" (length too-far) (first too-far))
           (check (= (hash-table-count generated) (hash-table-count expected))
-                 "~D pair contacts for ~D close pairs" (hash-table-count generated) (hash-table-count expected)))))))
+                 "~D pair contacts for ~D close pairs" (hash-table-count generated) (hash-table-count expected))))))))
 ;; D9W4CH-pairs-match-brute-force ends here
 
 ;; [[file:../physics.org::#E7V3NT][E7V3NT-mortal-body-events]]
