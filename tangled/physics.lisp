@@ -1248,7 +1248,7 @@ is KEY do. #D9W4CH"
     n))
 
 (declaim (type (simple-array fixnum (64)) +lane-compress+))
-(defparameter +lane-compress+
+(sb-ext:defglobal +lane-compress+
   (let ((table (make-array 64 :element-type 'fixnum :initial-element 0)))
     (dotimes (mask 16 table)
       (let ((k 0))
@@ -1269,6 +1269,8 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
   (let* ((gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
          (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
          (x (aref gx entry)) (y (aref gy entry)) (z (aref gz entry))
+         ;; the table in a local, read once a call, not once a lane
+         (compress +lane-compress+)
          (found 0))
     (declare (type index found))
     (flet ((within (f)
@@ -1298,10 +1300,10 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
                                               (if (>= left 4) 15 (1- (ash 1 left)))))
                                 (lanes (* 4 mask)))
                            (declare (type (integer 0 15) mask) (type index left))
-                           (setf (aref near found) (+ f (aref +lane-compress+ lanes))
-                                 (aref near (+ found 1)) (+ f (aref +lane-compress+ (+ lanes 1)))
-                                 (aref near (+ found 2)) (+ f (aref +lane-compress+ (+ lanes 2)))
-                                 (aref near (+ found 3)) (+ f (aref +lane-compress+ (+ lanes 3))))
+                           (setf (aref near found) (+ f (aref compress lanes))
+                                 (aref near (+ found 1)) (+ f (aref compress (+ lanes 1)))
+                                 (aref near (+ found 2)) (+ f (aref compress (+ lanes 2)))
+                                 (aref near (+ found 3)) (+ f (aref compress (+ lanes 3))))
                            (incf found (logcount mask)))))
               (loop for f of-type index from start below end
                     do (when (= (aref keys f) key)
@@ -1951,7 +1953,7 @@ woke. #W4K3PH"
 
 ;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:1]]
 (declaim (type (simple-array single-float (78)) +unit-directions+))
-(defparameter +unit-directions+
+(sb-ext:defglobal +unit-directions+
   (let ((v (make-array 78 :element-type 'single-float)) (k 0))
     (loop for dz from -1 to 1 do
       (loop for dy from -1 to 1 do
@@ -2120,7 +2122,7 @@ open. #MYWH16"
               (- (+ best-depth r))))))
 
 (declaim (type (simple-array (unsigned-byte 27) (8)) +span-masks+))
-(defparameter +span-masks+
+(sb-ext:defglobal +span-masks+
   (let ((masks (make-array 8 :element-type '(unsigned-byte 27) :initial-element 0)))
     (dotimes (span 8 masks)
       (dotimes (dz 2)
