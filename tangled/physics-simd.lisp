@@ -59,9 +59,12 @@ floats a row) named by INDEX[K..K+7], as the columns of the 8x8 transpose. #R0WS
        ,@body)))
 
 (defmacro scatter-rows-8 (v index k &rest columns)
-  "Store COLUMNS back, transposed, as the eight solver rows of V named by INDEX[K..K+7]. #R0WS8T"
-  (let ((rows (loop repeat 8 collect (gensym "ROW"))))
-    `(let* (,@(macroexpand-1 `(transpose-8 ,columns ,rows)))
+  "Store COLUMNS back, transposed, as the eight solver rows of V named by INDEX[K..K+7]. Each
+column form is evaluated once: the transpose reads each of its inputs twice. #R0WS8T"
+  (let ((rows (loop repeat 8 collect (gensym "ROW")))
+        (names (loop repeat 8 collect (gensym "COLUMN"))))
+    `(let* (,@(mapcar #'list names columns)
+            ,@(macroexpand-1 `(transpose-8 ,names ,rows)))
        ,@(loop for r in rows for l from 0
                collect `(setf (sb-simd-avx:f32.8-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+)) ,r)))))
 
@@ -89,10 +92,13 @@ INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest fr
        ,@body)))
 
 (defmacro scatter-rows-4 (v index k &rest columns)
-  "Store the eight COLUMNS back, transposed, as the four solver rows of V named by INDEX[K..K+3]. #R0WS8T"
-  (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI"))))
-    `(let* (,@(macroexpand-1 `(transpose-4 ,(subseq columns 0 4) ,lo))
-            ,@(macroexpand-1 `(transpose-4 ,(subseq columns 4 8) ,hi)))
+  "Store the eight COLUMNS back, transposed, as the four solver rows of V named by INDEX[K..K+3].
+Each column form is evaluated once: the transpose reads each of its inputs twice. #R0WS8T"
+  (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI")))
+        (names (loop repeat 8 collect (gensym "COLUMN"))))
+    `(let* (,@(mapcar #'list names columns)
+            ,@(macroexpand-1 `(transpose-4 ,(subseq names 0 4) ,lo))
+            ,@(macroexpand-1 `(transpose-4 ,(subseq names 4 8) ,hi)))
        ,@(loop for r in lo for l from 0
                collect `(setf (sb-simd-sse:f32.4-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+)) ,r))
        ,@(loop for r in hi for l from 0
