@@ -602,6 +602,21 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; Y5H8KC-stale-contacts-pruned ends here
 
+;; [[file:../physics.org::#D9W4CH][D9W4CH-cell-floor-is-floor]]
+(define-claim "D9W4CH" cell-floor-is-floor
+    "cell-floor = floor of the clamped value, on signed zeros, integers, halves, bounds and 20000 samples."
+  (let* ((next (make-lcg 19))
+         (values (append (list 0.0 -0.0 1.0 -1.0 0.5 -0.5 2.5 -2.5 1e-30 -1e-30 3.9999998e6 -3.9999998e6
+                               4.0e6 -4.0e6 5.0e6 -5.0e6 most-positive-single-float most-negative-single-float)
+                         (loop repeat 20000
+                               collect (float (* (- (* 2 (funcall next)) 1) (expt 10 (- (* 8 (funcall next)) 2)))
+                                              1.0))))
+         (wrong (loop for v in values
+                      for want = (floor (max -4.0e6 (min 4.0e6 v)))
+                      unless (= want (luv-physics::cell-floor v)) collect (list v want (luv-physics::cell-floor v)))))
+    (check (null wrong) "~D values floored wrongly, e.g. ~S" (length wrong) (first wrong))))
+;; D9W4CH-cell-floor-is-floor ends here
+
 ;; [[file:../physics.org::#D9W4CH][D9W4CH-pairs-match-brute-force]]
 (define-claim "D9W4CH" pairs-match-brute-force
     "Generated pair contacts = brute-force pairs with gap < 0.02 m in a 300-ball cloud, dense or hashed; none beyond the margin."
