@@ -1050,15 +1050,12 @@ item's bucket there, and a walk lists the entries it keeps. #D9W4CH"
 
 (declaim (inline cell-floor grid-cell-key grid-bucket))
 (defun cell-floor (v)
-  "The integer floor of V, clamped to the range a cell coordinate may take, without a branch:
-MINSS and MAXSS clamp, and truncation toward zero is corrected by the sign of what it cut
-off. Adding 0.0 first makes -0.0 +0.0, whose floor is 0. #D9W4CH"
+  "The integer floor of V, clamped to the range a cell coordinate may take. #D9W4CH"
   (declare (type single-float v) #.+kernel-policy+)
-  (let* ((c (+ 0.0 (sb-simd-sse:f32-max -4.0e6 (sb-simd-sse:f32-min 4.0e6 v))))
+  (let* ((c (max -4.0e6 (min 4.0e6 v)))
          (i (truncate c)))
     (declare (type (single-float -4.0e6 4.0e6) c) (type fixnum i))
-    ;; |c| < 2^23, so (float i) is exact and c - (float i) is negative exactly when c < i
-    (- i (ldb (byte 1 31) (sb-kernel:single-float-bits (- c (float i 1.0)))))))
+    (if (< c (float i 1.0)) (1- i) i)))
 
 (defun grid-cell-key (cx cy cz)
   "The packed key of grid cell CX CY CZ (each taken modulo 2^20). #D9W4CH"
