@@ -254,19 +254,20 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                      (@w! max-normal-impulse (wif (w> mni new) mni new))
                      (@w! tangent-impulse-1 n1) (@w! tangent-impulse-2 n2)
                      ;; each velocity takes the normal impulse, then friction's, in one
-                     ;; expression: the same two roundings as two steps, one store
-                     (let ((madl (w* ma dl)) (mbdl (w* mb dl)))
-                       (macrolet ((linear (i j n u q)
-                                    `(let ((p (w+ (w* d1 ,u) (w* d2 ,q))))
+                     ;; expression: the same two roundings as two steps, one store; a
+                     ;; component at a time, so each frame column is read once
+                     (let ((madl (w* ma dl)) (mbdl (w* mb dl)) (iar (w* iam ar)) (ibr (w* ibm br))
+                           (ma ma) (mb mb))
+                       (macrolet ((component (i j k l n u q)
+                                    `(let* ((u ,u) (q ,q)
+                                            (p (w+ (w* d1 u) (w* d2 q)))
+                                            (c (w- (w* d1 q) (w* d2 u))))
                                        (st! ,i (w- (w- (st@ ,i) (w* madl ,n)) (w* ma p)))
-                                       (st! ,j (w+ (w+ (st@ ,j) (w* mbdl ,n)) (w* mb p))))))
-                         (linear 0 6 x ux qx) (linear 1 7 y uy qy) (linear 2 8 z uz qz)))
-                     (let ((iar (w* iam ar)) (ibr (w* ibm br)))
-                       (macrolet ((angular (i j u q)
-                                    `(let ((c (w- (w* d1 ,q) (w* d2 ,u))))
-                                       (st! ,i (w- (st@ ,i) (w* iar c)))
-                                       (st! ,j (w- (st@ ,j) (w* ibr c))))))
-                         (angular 3 9 ux qx) (angular 4 10 uy qy) (angular 5 11 uz qz))))
+                                       (st! ,j (w+ (w+ (st@ ,j) (w* mbdl ,n)) (w* mb p)))
+                                       (st! ,k (w- (st@ ,k) (w* iar c)))
+                                       (st! ,l (w- (st@ ,l) (w* ibr c))))))
+                         (component 0 6 3 9 x ux qx) (component 1 7 4 10 y uy qy)
+                         (component 2 8 5 11 z uz qz))))
                    ;; a block none of whose lanes rolls against resistance skips the rolling
                    ;; part: every lane would keep its old values anyway
                    (let* ((rl (@w rolling-limit))
