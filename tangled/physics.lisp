@@ -2857,7 +2857,7 @@ THRESHOLD. #K3RNLS"))
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
       (let* ((base (constraint-base k))
-             (a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
+             (a (* (the index (aref body-a k)) +solver-stride+)) (b (* (the index (aref body-b k)) +solver-stride+))
              (x (@ nx)) (y (@ ny)) (z (@ nz))
              (l (@ normal-impulse)) (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
              (px (+ (* l x) (* l1 (@ t1x)) (* l2 (@ t2x))))
@@ -3002,7 +3002,7 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
       (let* ((base (constraint-base k)) (e (@ restitution)) (rv (@ relative-velocity)))
         (declare (type index base))
         (unless (or (= e 0.0) (> rv (- threshold)) (= (@ max-normal-impulse) 0.0))
-          (let* ((a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
+          (let* ((a (* (the index (aref body-a k)) +solver-stride+)) (b (* (the index (aref body-b k)) +solver-stride+))
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
                  (ma (@ ima)) (mb (@ imb))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (block-ref v b 1) (block-ref v a 1)) y)
@@ -3073,7 +3073,7 @@ speed. #ST0R3S"
           (let* ((base (constraint-base k))
                  (c (aref contact k))
                  (pushed (> (@ max-normal-impulse) 0.0))
-                 (a (* (aref body-a k) +solver-stride+)) (b (* (aref body-b k) +solver-stride+))
+                 (a (* (the index (aref body-a k)) +solver-stride+)) (b (* (the index (aref body-b k)) +solver-stride+))
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
                  ;; the gap the last relax pass kept, less the slop the prepared gap carries
                  (gap (- (@ gap) slop))
