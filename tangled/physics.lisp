@@ -1076,8 +1076,8 @@ item's bucket there, and a walk lists the entries it keeps. #D9W4CH"
 
 (defun build-hash-grid (grid cell-size n xs ys zs ids)
   "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID: densely
-when the box of their cells, one cell of padding around, has at most 64 more cells than
-*physics-dense-grid-cells* per item, else by hash. The grid keeps its own copy of the
+when the box of their cells, one cell of padding around, has at most
+*physics-dense-grid-cells* cells per item, plus 64, else by hash. The grid keeps its own copy of the
 centres in its order, so a walk over neighbouring cells reads positions from one run of
 memory. #D9W4CH"
   (declare (type hash-grid grid) (type single-float cell-size) (type index n)
@@ -3913,7 +3913,7 @@ and drops a new one in from above: mean ms and bytes consed per step over FROM..
 
 (defun measure-spread-basin (&key (balls 3000) (kernels :scalar) (from 2400) (to 3000)
                                   (cells *physics-dense-grid-cells*))
-  "The awake basin pile of BALLS left to run until some balls have rolled out over the walls,
+  "The awake basin pile of BALLS left to run until a few balls have rolled out over the walls,
 with *physics-dense-grid-cells* bound to CELLS throughout: mean ms and bytes consed per step
 over FROM..TO, whether the awake grid was dense at the end, and its box's cells per ball. #B3NCH5"
   (let ((*physics-dense-grid-cells* cells)
