@@ -1074,12 +1074,18 @@ item's bucket there, and a walk lists the entries it keeps. #D9W4CH"
 (defparameter *physics-dense-grid-cells* 64
   "The most cells per item the box of a dense grid may have; a larger box is hashed. #D9W4CH")
 
+(declaim (inline dense-limit))
+(defun dense-limit (count)
+  "The most cells a dense grid of COUNT items may have: *physics-dense-grid-cells* per item,
+plus 64. #D9W4CH"
+  (declare (type index count))
+  (+ 64 (* *physics-dense-grid-cells* count)))
+
 (defun build-hash-grid (grid cell-size n xs ys zs ids)
   "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID: densely
-when the box of their cells, one cell of padding around, has at most
-*physics-dense-grid-cells* cells per item, plus 64, else by hash. The grid keeps its own copy of the
-centres in its order, so a walk over neighbouring cells reads positions from one run of
-memory. #D9W4CH"
+when the box of their cells, one cell of padding around, has at most (dense-limit N) cells,
+else by hash. The grid keeps its own copy of the centres in its order, so a walk over
+neighbouring cells reads positions from one run of memory. #D9W4CH"
   (declare (type hash-grid grid) (type single-float cell-size) (type index n)
            (type f32-column xs ys zs) (type fixnum-column ids) #.+kernel-policy+)
   (let ((inv (/ 1.0 cell-size)))
@@ -1108,7 +1114,7 @@ memory. #D9W4CH"
       (let* ((nx (if (plusp n) (+ 3 (- x1 x0)) 1)) (ny (if (plusp n) (+ 3 (- y1 y0)) 1))
              (nz (if (plusp n) (+ 3 (- z1 z0)) 1))
              (cells (if (and (< nx 4096) (< ny 4096) (< nz 4096)) (* nx ny nz) most-positive-fixnum))
-             (dense (and (plusp n) (<= cells (+ 64 (* (the (integer 0 1024) *physics-dense-grid-cells*) n)))))
+             (dense (and (plusp n) (<= cells (dense-limit n))))
              (buckets (if dense cells (max 16 (ash 1 (integer-length (* 2 n))))))
              (mask (1- buckets)))
         (declare (type fixnum nx ny nz cells buckets mask))
@@ -1121,7 +1127,7 @@ memory. #D9W4CH"
         (when (< (length (hash-grid-starts grid)) (1+ buckets))
           (setf (hash-grid-starts grid)
                 (make-array (max (1+ buckets) (* 2 (length (hash-grid-starts grid)))
-                                 (if dense (+ 65 (* *physics-dense-grid-cells* (length (hash-grid-items grid)))) 0))
+                                 (if dense (1+ (dense-limit (length (hash-grid-items grid)))) 0))
                             :element-type 'fixnum)))
         (let ((starts (hash-grid-starts grid)) (items (hash-grid-items grid))
               (keys (hash-grid-keys grid)) (item-keys (hash-grid-item-keys grid))
@@ -1407,6 +1413,10 @@ holding the columnar buffers, the parameters, the events and the kernel family. 
     (or (null set)
         (sb-simd-internals:instruction-set-available-p (sb-simd-internals:find-instruction-set set)))))
 
+(defun runnable-kernel-families ()
+  "The entries of *kernel-families* whose instruction sets this CPU runs, narrowest first. #R9M4PV"
+  (remove-if-not #'kernel-family-available-p *kernel-families*))
+
 (defun register-kernel-family (name class &optional instruction-set)
   "Make the kernel family NAME, an instance of CLASS needing INSTRUCTION-SET, available to
 make-physics-world, replacing an earlier entry of that NAME; families register narrowest
@@ -1421,15 +1431,14 @@ first, so :auto takes the last one the CPU runs. #R9M4PV"
   (if (eq name :auto)
       ;; sb-simd names the widest instruction set this CPU runs; its family, when registered
       (let ((widest (sb-simd:instruction-set-case (:avx2 :avx2) (:sse4.1 :sse) (:x86-64 :scalar)))
-            (available (remove-if-not #'kernel-family-available-p *kernel-families*)))
+            (available (runnable-kernel-families)))
         (make-instance (second (or (assoc widest available) (car (last available))))))
       (let ((entry (assoc name *kernel-families*)))
         (unless (and entry (kernel-family-available-p entry))
           (error 'invalid-physics-parameter
                  :name :kernels :value name
                  :expected (format nil "one of ~{~S~^, ~} or :auto on this CPU"
-                                   (mapcar #'first (remove-if-not #'kernel-family-available-p
-                                                                  *kernel-families*)))))
+                                   (mapcar #'first (runnable-kernel-families)))))
         (make-instance (second entry)))))
 ;; Choose the phase once: kernel families:1 ends here
 
@@ -3818,7 +3827,7 @@ overlap any step left (:deepest), and the mean ms of each phase (:phases, an ali
   "Print, as Org tables, the basin measured at each of COUNTS for every kernel family this CPU
 runs, each family's time as a fraction of the scalar family's measured in the same run, and
 each phase's share; with the machine's model and load. #B3NCH5"
-  (let ((families (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*)))
+  (let ((families (mapcar #'first (runnable-kernel-families)))
         (rows '()))
     (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A~%"
             (cpu-model-name) (load-average))
@@ -3872,62 +3881,63 @@ whether it is met; and the wide solve's speed-up over the scalar solve. #B3NCH5"
           (format stream "~&| 3000 balls, ~(~A~) substeps >= 3x faster than scalar | ~,2Fx | ~:[no~;yes~] |~%"
                   widest ratio (>= ratio 3)))))))
 
+(defun measure-steps (world from to &optional before-step)
+  "Step WORLD TO times, calling BEFORE-STEP first, when given, with the step's number. Return the
+mean ms and the bytes consed per step over steps FROM..TO, BEFORE-STEP's work included. #B3NCH5"
+  (let ((ms 0d0) (consed 0))
+    (dotimes (i to)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (when before-step (funcall before-step i))
+        (step-physics-world world)
+        (when (>= i from)
+          (incf consed (- (sb-ext:get-bytes-consed) before))
+          (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
+    (values (/ ms (- to from)) (round consed (- to from)))))
+
 (defun measure-settled-pile (&key (balls 1000) (kernels :scalar) (steps 100))
   "Drop BALLS balls into the basin with sleep on, step until every one sleeps (at most 20 s),
 then return the mean ms and bytes consed per step over STEPS more steps, and the steps it
 took to settle. #B3NCH5"
   (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
-        (settle 0) (ms 0d0) (consed 0))
+        (settle 0))
     (dotimes (i balls)
       (multiple-value-bind (x y z) (basin-spawn-point i)
         (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)))
     (loop while (and (plusp (physics-world-awake-count world)) (< settle 1200))
           do (step-physics-world world) (incf settle))
-    (dotimes (i steps)
-      (let ((before (sb-ext:get-bytes-consed)))
-        (step-physics-world world)
-        (incf consed (- (sb-ext:get-bytes-consed) before))
-        (incf ms (* 1000 (physics-world-last-step-real-seconds world)))))
-    (list :settle-steps settle :awake (physics-world-awake-count world)
-          :mean (/ ms steps) :consed (round consed steps))))
+    (multiple-value-bind (mean consed) (measure-steps world 0 steps)
+      (list :settle-steps settle :awake (physics-world-awake-count world) :mean mean :consed consed))))
 
 (defun measure-churn (&key (balls 3000) (kernels :scalar) (from 120) (to 300))
   "The awake basin pile of BALLS, where from step FROM on every step removes the oldest ball
 and drops a new one in from above: mean ms and bytes consed per step over FROM..TO. #B3NCH5"
   (let* ((world (make-basin-world balls :kernels kernels))
-         (handles (make-array balls :adjustable t :fill-pointer 0)) (ms 0d0) (consed 0))
+         (handles (make-array balls :adjustable t :fill-pointer 0)))
     (dotimes (i (physics-world-awake-count world))
       (vector-push-extend (aref (body-columns-handle (physics-world-awake world)) i) handles))
-    (dotimes (i to)
-      (let ((before (sb-ext:get-bytes-consed)))
-        (when (>= i from)
-          (remove-physics-body world (aref handles (- i from)))
-          (multiple-value-bind (x y z) (basin-spawn-point (mod i 196))
-            (vector-push-extend (add-physics-body world x (+ y 6.0) z :radius 0.25 :mass 1.0 :friction 0.6)
-                                handles)))
-        (step-physics-world world)
-        (when (>= i from)
-          (incf consed (- (sb-ext:get-bytes-consed) before))
-          (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
-    (list :mean (/ ms (- to from)) :consed (round consed (- to from)))))
+    (multiple-value-bind (mean consed)
+        (measure-steps world from to
+                       (lambda (i)
+                         (when (>= i from)
+                           (remove-physics-body world (aref handles (- i from)))
+                           (multiple-value-bind (x y z) (basin-spawn-point (mod i 196))
+                             (vector-push-extend (add-physics-body world x (+ y 6.0) z :radius 0.25 :mass 1.0
+                                                                                        :friction 0.6)
+                                                 handles)))))
+      (list :mean mean :consed consed))))
 
 (defun measure-spread-basin (&key (balls 3000) (kernels :scalar) (from 2400) (to 3000)
                                   (cells *physics-dense-grid-cells*))
   "The awake basin pile of BALLS left to run until a few balls have rolled out over the walls,
 with *physics-dense-grid-cells* bound to CELLS throughout: mean ms and bytes consed per step
 over FROM..TO, whether the awake grid was dense at the end, and its box's cells per ball. #B3NCH5"
-  (let ((*physics-dense-grid-cells* cells)
-        (world (make-basin-world balls :kernels kernels)) (ms 0d0) (consed 0))
-    (dotimes (i to)
-      (let ((before (sb-ext:get-bytes-consed)))
-        (step-physics-world world)
-        (when (>= i from)
-          (incf consed (- (sb-ext:get-bytes-consed) before))
-          (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
-    (let ((grid (physics-world-awake-grid world)))
-      (list :mean (/ ms (- to from)) :consed (round consed (- to from))
-            :dense (hash-grid-dense grid)
-            :cells-per-ball (round (* (hash-grid-nx grid) (hash-grid-ny grid) (hash-grid-nz grid)) balls)))))
+  (let* ((*physics-dense-grid-cells* cells)
+         (world (make-basin-world balls :kernels kernels)))
+    (multiple-value-bind (mean consed) (measure-steps world from to)
+      (let ((grid (physics-world-awake-grid world)))
+        (list :mean mean :consed consed
+              :dense (hash-grid-dense grid)
+              :cells-per-ball (round (* (hash-grid-nx grid) (hash-grid-ny grid) (hash-grid-nz grid)) balls))))))
 
 (defun make-basin-fountain ()
   "The fountain of the benchmarks: a fountain spring (make-fountain) in the floor cell at the
@@ -3938,23 +3948,19 @@ middle of the basin, two water drops a step. #B3NCH5"
   "The basin's fountain, its spring run before every step: mean ms and bytes consed per step
 (spring and step) over FROM..TO, and the drops alive. #B3NCH5"
   (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
-        (springs (list (make-basin-fountain))) (ms 0d0) (consed 0))
-    (dotimes (i to)
-      (let ((before (sb-ext:get-bytes-consed)))
-        (run-physics-springs world springs)
-        (step-physics-world world)
-        (when (>= i from)
-          (incf consed (- (sb-ext:get-bytes-consed) before))
-          (incf ms (* 1000 (physics-world-last-step-real-seconds world))))))
-    (list :mean (/ ms (- to from)) :consed (round consed (- to from))
-          :alive (+ (physics-world-awake-count world) (physics-world-sleeping-count world)))))
+        (springs (list (make-basin-fountain))))
+    (multiple-value-bind (mean consed)
+        (measure-steps world from to (lambda (i) (declare (ignore i)) (run-physics-springs world springs)))
+      (list :mean mean :consed consed
+            :alive (+ (physics-world-awake-count world) (physics-world-sleeping-count world))))))
 
 (defun run-scene-benchmark (&key (stream *standard-output*))
   "Print, as an Org table, the settled pile, the churning pile and the fountain for every
 kernel family this CPU runs, and the spread pile under two dense-grid bounds for the widest. #B3NCH5"
   (format stream "~&#+caption: other scenes; load ~A~%" (load-average))
   (format stream "~&| scene | family | mean ms/step | bytes consed/step | note |~%|-------+--------+------+------+------|~%")
-  (dolist (family (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*)))
+  (let ((families (mapcar #'first (runnable-kernel-families))))
+  (dolist (family families)
     (let ((m (measure-settled-pile :kernels family)))
       (format stream "~&| 1000 balls settled | ~A | ~,4F | ~D | asleep after ~D steps, ~D awake |~%"
               (string-downcase family) (getf m :mean) (getf m :consed) (getf m :settle-steps) (getf m :awake)))
@@ -3967,13 +3973,13 @@ kernel family this CPU runs, and the spread pile under two dense-grid bounds for
     (finish-output stream))
   ;; the spread pile, steps 2400-3000, for the widest family: the default bound of a dense
   ;; grid, then a bound of four cells per ball, under which its grid is hashed
-  (let ((family (first (last (mapcar #'first (remove-if-not #'kernel-family-available-p *kernel-families*))))))
+  (let ((family (car (last families))))
     (dolist (cells (list *physics-dense-grid-cells* 4))
       (let ((m (measure-spread-basin :kernels family :cells cells)))
         (format stream "~&| 3000 balls spread, steps 2400-3000, dense bound ~D | ~A | ~,3F | ~D | grid ~:[hashed~;dense~], ~D cells per ball |~%"
                 cells (string-downcase family) (getf m :mean) (getf m :consed) (getf m :dense)
                 (getf m :cells-per-ball))
-        (finish-output stream)))))
+        (finish-output stream))))))
 ;; What a step costs:1 ends here
 
 ;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]
@@ -4443,8 +4449,7 @@ reached the same error and state hash). #W9PREC"
 
 (defun run-accuracy-sweep (&key (scenes (mapcar #'first *accuracy-scenes*)) (rates +sweep-rates+)
                                 (substeps +sweep-substeps+)
-                                (families (mapcar #'first (remove-if-not #'kernel-family-available-p
-                                                                         *kernel-families*))))
+                                (families (mapcar #'first (runnable-kernel-families))))
   "Run every scene of SCENES at every step rate of RATES, substep count of SUBSTEPS and kernel
 family of FAMILIES; return one plist per point, families innermost (see run-accuracy-point). #W9PREC"
   (loop for scene in scenes

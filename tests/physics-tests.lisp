@@ -305,7 +305,7 @@ how far the ball moved and the deepest the box's leading face got past the ball'
 
 (defun runnable-families ()
   "The names of the kernel families this CPU runs, :SCALAR first. #T3STK1"
-  (mapcar #'first (remove-if-not #'luv-physics::kernel-family-available-p luv-physics::*kernel-families*)))
+  (mapcar #'first (luv-physics::runnable-kernel-families)))
 
 (defun prepared-basin-world (family &key (balls 1000) (steps 60))
   "A basin of BALLS balls under FAMILY, stepped STEPS times, then run through the phases of one
@@ -1698,8 +1698,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
     "An unknown family signals; :auto is the last available family."
   (check (typep (handler-case (make-physics-world :kernels :neon) (error (e) e))
                 'invalid-physics-parameter))
-  (let ((widest (car (last (remove-if-not #'luv-physics::kernel-family-available-p
-                                          luv-physics::*kernel-families*)))))
+  (let ((widest (car (last (luv-physics::runnable-kernel-families)))))
     (check (eq (second widest)
                (class-name (class-of (luv-physics::physics-world-kernels
                                       (make-physics-world :kernels :auto))))))))
