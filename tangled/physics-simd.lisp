@@ -53,7 +53,7 @@
 floats a row) named by INDEX[K..K+7], as the columns of the 8x8 transpose. #R0WS8T"
   (let ((rows (loop repeat 8 collect (gensym "ROW"))))
     `(let* (,@(loop for r in rows for l from 0
-                    collect `(,r (sb-simd-avx:f32.8-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+))))
+                    collect `(,r (sb-simd-avx:f32.8-aref ,v (solver-row (the index (row-at ,index ,k ,l))))))
             ,@(macroexpand-1 `(transpose-8 ,rows ,columns)))
        (declare (ignorable ,@columns))
        ,@body)))
@@ -66,7 +66,7 @@ column form is evaluated once: the transpose reads each of its inputs twice. #R0
     `(let* (,@(mapcar #'list names columns)
             ,@(macroexpand-1 `(transpose-8 ,names ,rows)))
        ,@(loop for r in rows for l from 0
-               collect `(setf (sb-simd-avx:f32.8-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+)) ,r)))))
+               collect `(setf (sb-simd-avx:f32.8-aref ,v (solver-row (the index (row-at ,index ,k ,l)))) ,r)))))
 
 (defmacro transpose-4 (rows columns)
   "Bind COLUMNS to the 4x4 transpose of the f32.4 values ROWS (a LET* binding list). #R0WS8T"
@@ -83,9 +83,9 @@ column form is evaluated once: the transpose reads each of its inputs twice. #R0
 INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest from the high. #R0WS8T"
   (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI"))))
     `(let* (,@(loop for r in lo for l from 0
-                    collect `(,r (sb-simd-sse:f32.4-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+))))
+                    collect `(,r (sb-simd-sse:f32.4-aref ,v (solver-row (the index (row-at ,index ,k ,l))))))
             ,@(loop for r in hi for l from 0
-                    collect `(,r (sb-simd-sse::%f32.4-load ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+) 4)))
+                    collect `(,r (sb-simd-sse::%f32.4-load ,v (solver-row (the index (row-at ,index ,k ,l))) 4)))
             ,@(macroexpand-1 `(transpose-4 ,lo ,(subseq columns 0 4)))
             ,@(macroexpand-1 `(transpose-4 ,hi ,(subseq columns 4 8))))
        (declare (ignorable ,@columns))
@@ -100,9 +100,9 @@ Each column form is evaluated once: the transpose reads each of its inputs twice
             ,@(macroexpand-1 `(transpose-4 ,(subseq names 0 4) ,lo))
             ,@(macroexpand-1 `(transpose-4 ,(subseq names 4 8) ,hi)))
        ,@(loop for r in lo for l from 0
-               collect `(setf (sb-simd-sse:f32.4-aref ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+)) ,r))
+               collect `(setf (sb-simd-sse:f32.4-aref ,v (solver-row (the index (row-at ,index ,k ,l)))) ,r))
        ,@(loop for r in hi for l from 0
-               collect `(sb-simd-sse::%f32.4-store ,r ,v (* (the index (row-at ,index ,k ,l)) +solver-stride+) 4)))))
+               collect `(sb-simd-sse::%f32.4-store ,r ,v (solver-row (the index (row-at ,index ,k ,l))) 4)))))
 
 (declaim (inline f32.4-select))
 (defun f32.4-select (mask a b)

@@ -1333,6 +1333,21 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
   "Floats per body in the solver's delta array: dx dy dz and five spare, so a wide kernel
 gathers deltas exactly as it gathers velocities. #W0RLD7")
 
+(defconstant +solver-origin+ 4
+  "Floats before the first row of a solver array, so that on an array whose data begin 16 bytes
+past a 64-byte boundary every 32-byte row starts on a 32-byte boundary. #W0RLD7")
+
+(declaim (inline solver-row delta-row))
+(defun solver-row (row)
+  "Where solver row ROW begins in the velocity array. #W0RLD7"
+  (declare (type index row))
+  (the index (+ +solver-origin+ (* row +solver-stride+))))
+
+(defun delta-row (row)
+  "Where solver row ROW begins in the delta array. #W0RLD7"
+  (declare (type index row))
+  (the index (+ +solver-origin+ (* row +delta-stride+))))
+
 (defclass kernel-family () ()
   (:documentation "A way of running the solver phases; the world holds one and every phase
 dispatches on it once per call. #W0RLD7"))
@@ -2401,6 +2416,11 @@ the hole. #PRUN3D"
 (defconstant +constraint-block+ (* 8 (length +constraint-columns+))
   "Floats in a block of eight constraints: eight lanes of each float column. #SSMPYW")
 
+(defconstant +constraint-origin+ 4
+  "Floats before the first block of the constraint buffer, so that on an array whose data
+begin 16 bytes past a 64-byte boundary every column's eight lanes start on a 32-byte
+boundary. #SSMPYW")
+
 (defstruct (constraint-columns (:constructor make-constraint-columns ()))
   "The contacts of one step as solver rows, written in colour order: three fixnum columns, and
 the float columns in blocks of eight rows, each column's eight lanes contiguous. #SSMPYW"
@@ -2419,7 +2439,8 @@ the float columns in blocks of eight rows, each column's eight lanes contiguous.
                (let ((fresh (make-array n :element-type type :initial-element (coerce 0 type))))
                  (replace fresh old) fresh)))
         (setf (constraint-columns-data buffer)
-              (grow (constraint-columns-data buffer) 'single-float (* (floor new 8) +constraint-block+))
+              (grow (constraint-columns-data buffer) 'single-float
+                    (+ +constraint-origin+ (* (floor new 8) +constraint-block+)))
               (constraint-columns-contact buffer) (grow (constraint-columns-contact buffer) 'fixnum new)
               (constraint-columns-body-a buffer) (grow (constraint-columns-body-a buffer) 'fixnum new)
               (constraint-columns-body-b buffer) (grow (constraint-columns-body-b buffer) 'fixnum new)
@@ -2430,7 +2451,7 @@ the float columns in blocks of eight rows, each column's eight lanes contiguous.
 (defun constraint-base (k)
   "The index of constraint K's lane of the first column of its block. #SSMPYW"
   (declare (type index k))
-  (+ (* (ash k -3) +constraint-block+) (logand k 7)))
+  (+ +constraint-origin+ (* (ash k -3) +constraint-block+) (logand k 7)))
 
 (defmacro block-ref (data base offset)
   "Float BASE+OFFSET of DATA, OFFSET a constant folded into the load's address (SBCL's internal,
@@ -2457,12 +2478,13 @@ variable BASE. #SSMPYW"
 
 (defun ensure-solver-scratch (world n contacts)
   "Size WORLD's per-step scratch for N awake bodies (plus the dummy) and CONTACTS contacts. #SSMPYW"
-  (when (< (length (physics-world-velocities world)) (* +solver-stride+ (1+ n)))
-    (let ((rows (max (1+ n) (* 2 (floor (length (physics-world-velocities world)) +solver-stride+)) 64)))
+  ;; the colour masks have one entry per solver row
+  (when (< (length (physics-world-color-masks world)) (1+ n))
+    (let ((rows (max (1+ n) (* 2 (length (physics-world-color-masks world))) 64)))
       (setf (physics-world-velocities world)
-            (make-array (* +solver-stride+ rows) :element-type 'single-float :initial-element 0.0)
+            (make-array (solver-row rows) :element-type 'single-float :initial-element 0.0)
             (physics-world-deltas world)
-            (make-array (* +delta-stride+ rows) :element-type 'single-float :initial-element 0.0)
+            (make-array (delta-row rows) :element-type 'single-float :initial-element 0.0)
             (physics-world-color-masks world)
             (make-array rows :element-type 'fixnum :initial-element 0)
             (physics-world-braced world)
@@ -2590,7 +2612,9 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                (type single-float slop hertz zeta g load-limit)
                (type handle-table ids) (type constraint-columns cbuf))
       (multiple-value-bind (dyn-bias dyn-mass dyn-impulse) (physics-softness hertz zeta h)
+        (declare (type single-float dyn-bias dyn-mass dyn-impulse))
         (multiple-value-bind (st-bias st-mass st-impulse) (physics-softness (* 2.0 hertz) zeta h)
+          (declare (type single-float st-bias st-mass st-impulse))
           ;; the buffer's rows: every colour's, padding included
           (let ((rows (aref (physics-world-color-starts world) (1+ +physics-max-colors+))))
             (constraint-columns-ensure-capacity cbuf rows)
@@ -2598,11 +2622,11 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
           ;; the solver's body state: velocities of awake rows, zero deltas, a zero dummy row
           (with-body-columns (vx vy vz wx wy wz) awake
             (dotimes (i n)
-              (let ((o (* i +solver-stride+)))
+              (let ((o (solver-row i)))
                 (setf (aref v o) (aref vx i) (aref v (+ o 1)) (aref vy i) (aref v (+ o 2)) (aref vz i)
                       (aref v (+ o 3)) (aref wx i) (aref v (+ o 4)) (aref wy i) (aref v (+ o 5)) (aref wz i)))))
-          (fill v 0.0 :start (* n +solver-stride+) :end (* (1+ n) +solver-stride+))
-          (fill d 0.0 :end (* (1+ n) +delta-stride+))
+          (fill v 0.0 :start (solver-row n) :end (solver-row (1+ n)))
+          (fill d 0.0 :end (delta-row (1+ n)))
           (let ((cursor (make-array (+ +physics-max-colors+ 1) :element-type 'fixnum))
                 (color-starts (physics-world-color-starts world))
                 (sets (handle-table-set ids)) (locals (handle-table-local ids))
@@ -2636,7 +2660,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                        (dyn-a (= (aref sets (handle-index a)) +set-awake+))
                        (dyn-b (and (>= b 0) (= (aref sets (handle-index b)) +set-awake+))))
                   (when (and (not (eq dyn-a dyn-b)) (> (contact@ geometry c normal-impulse) 0.0))
-                    (let* ((row (aref locals (handle-index (if dyn-a a b)))) (o (* row +solver-stride+)))
+                    (let* ((row (aref locals (handle-index (if dyn-a a b)))) (o (solver-row row)))
                       (declare (type index row o))
                       (when (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
                                   (* (aref v (+ o 2)) (aref v (+ o 2))))
@@ -2691,8 +2715,8 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                            (ii-b (if dyn-b (aref (body-columns-inverse-inertia awake) lb) 0.0))
                            (kx (contact@ geometry c kvx)) (ky (contact@ geometry c kvy)) (kz (contact@ geometry c kvz))
                            (mass-sum (+ im-a im-b))
-                           (va (if dyn-a (* la +solver-stride+) (* n +solver-stride+)))
-                           (vb (if dyn-b (* lb +solver-stride+) (* n +solver-stride+))))
+                           (va (solver-row (if dyn-a la n)))
+                           (vb (solver-row (if dyn-b lb n))))
                       (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz))
                       (setf (@ ra) r-a (@ rb) r-b
                             (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
@@ -2843,7 +2867,7 @@ THRESHOLD. #K3RNLS"))
            #.+kernel-policy+)
   (let ((dvx (* h gx)) (dvy (* h gy)) (dvz (* h gz)) (max2 (* max-speed max-speed)))
     (loop for i of-type index from start below end
-          for o of-type index = (* i +solver-stride+)
+          for o of-type index = (solver-row i)
           do (let* ((x (+ (aref v o) dvx)) (y (+ (aref v (+ o 1)) dvy)) (z (+ (aref v (+ o 2)) dvz))
                     (s2 (+ (* x x) (* y y) (* z z))))
                (when (> s2 max2)
@@ -2855,8 +2879,8 @@ THRESHOLD. #K3RNLS"))
   "Add H times velocity to delta rows START..END of D. #K3RNLS"
   (declare (type f32-column v d) (type index start end) (type single-float h) #.+kernel-policy+)
   (loop for i of-type index from start below end
-        for o of-type index = (* i +solver-stride+)
-        for p of-type index = (* i +delta-stride+)
+        for o of-type index = (solver-row i)
+        for p of-type index = (delta-row i)
         do (setf (aref d p) (+ (aref d p) (* h (aref v o)))
                  (aref d (+ p 1)) (+ (aref d (+ p 1)) (* h (aref v (+ o 1))))
                  (aref d (+ p 2)) (+ (aref d (+ p 2)) (* h (aref v (+ o 2)))))))
@@ -2873,7 +2897,7 @@ THRESHOLD. #K3RNLS"))
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
       (let* ((base (constraint-base k))
-             (a (* (the index (aref body-a k)) +solver-stride+)) (b (* (the index (aref body-b k)) +solver-stride+))
+             (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
              (x (@ nx)) (y (@ ny)) (z (@ nz))
              (l (@ normal-impulse)) (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
              (px (+ (* l x) (* l1 (@ t1x)) (* l2 (@ t2x))))
@@ -2924,15 +2948,15 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
        (symbol-macrolet ((x (@ nx)) (y (@ ny)) (z (@ nz)) (ma (@ ima)) (mb (@ imb))
                          (ar (@ ra)) (br (@ rb)) (iam (@ iia)) (ibm (@ iib))
                          (ux (@ t1x)) (uy (@ t1y)) (uz (@ t1z)) (qx (@ t2x)) (qy (@ t2y)) (qz (@ t2z)))
-      (let* ((a (the index (* (the index (aref body-a k)) +solver-stride+)))
-             (b (the index (* (the index (aref body-b k)) +solver-stride+)))
+      (let* ((a (the index (solver-row (aref body-a k))))
+             (b (the index (solver-row (aref body-b k))))
              ;; current separation: the prepared gap moved by both deltas and the box's
              ;; travel. The relax pass computes it and keeps it; the next solve, which sees
              ;; the same deltas and the same time, reads it back
              (s (if biased
                     (@ gap)
-                    (let ((da (the index (* (the index (aref body-a k)) +delta-stride+)))
-                          (db (the index (* (the index (aref body-b k)) +delta-stride+))))
+                    (let ((da (the index (delta-row (aref body-a k))))
+                          (db (the index (delta-row (aref body-b k)))))
                       (setf (@ gap)
                             (moved-gap (@ separation) x y z
                                        (- (aref d db) (aref d da)) (- (block-ref d db 1) (block-ref d da 1))
@@ -3018,7 +3042,7 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
       (let* ((base (constraint-base k)) (e (@ restitution)) (rv (@ relative-velocity)))
         (declare (type index base))
         (unless (or (= e 0.0) (> rv (- threshold)) (= (@ max-normal-impulse) 0.0))
-          (let* ((a (* (the index (aref body-a k)) +solver-stride+)) (b (* (the index (aref body-b k)) +solver-stride+))
+          (let* ((a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
                  (ma (@ ima)) (mb (@ imb))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (block-ref v b 1) (block-ref v a 1)) y)
@@ -3089,7 +3113,7 @@ speed. #ST0R3S"
           (let* ((base (constraint-base k))
                  (c (aref contact k))
                  (pushed (> (@ max-normal-impulse) 0.0))
-                 (a (* (the index (aref body-a k)) +solver-stride+)) (b (* (the index (aref body-b k)) +solver-stride+))
+                 (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
                  ;; the gap the last relax pass kept, less the slop the prepared gap carries
                  (gap (- (@ gap) slop))
@@ -3136,18 +3160,18 @@ reading and writing at most eight arrays. #F1NAL5"
   (let ((n (body-columns-length awake)))
     (with-body-columns (x y z) awake
       (dotimes (i n)
-        (let ((p (* i +delta-stride+)))
+        (let ((p (delta-row i)))
           (setf (aref x i) (+ (aref x i) (aref d p)) (aref y i) (+ (aref y i) (aref d (+ p 1)))
                 (aref z i) (+ (aref z i) (aref d (+ p 2)))))))
     (with-body-columns (vx vy vz wx wy wz) awake
       (dotimes (i n)
-        (let ((o (* i +solver-stride+)))
+        (let ((o (solver-row i)))
           (setf (aref vx i) (aref v o) (aref vy i) (aref v (+ o 1)) (aref vz i) (aref v (+ o 2))
                 (aref wx i) (aref v (+ o 3)) (aref wy i) (aref v (+ o 4)) (aref wz i) (aref v (+ o 5))))))
     ;; q += dt/2 (0,w) q, then normalise
     (with-body-columns (qw qx qy qz) awake
       (dotimes (i n)
-        (let* ((o (* i +solver-stride+))
+        (let* ((o (solver-row i))
                (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5)))
                (hw (* 0.5 dt)) (w0 (aref qw i)) (x0 (aref qx i)) (y0 (aref qy i)) (z0 (aref qz i))
                (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
@@ -3181,7 +3205,7 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
                (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
                (%remove-body world +set-awake+ i))
               (sleep-p
-               (let* ((p (* i +delta-stride+))
+               (let* ((p (delta-row i))
                       (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
                       (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
                       (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))

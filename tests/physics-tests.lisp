@@ -688,6 +688,34 @@ function of a column name that reads row K's float in that column. #T3STK1"
                  "~D pair contacts for ~D close pairs" (hash-table-count generated) (hash-table-count expected))))))))
 ;; D9W4CH-pairs-match-brute-force ends here
 
+;; [[file:../physics.org::#W0RLD7][W0RLD7-solver-rows-aligned]]
+(define-claim "W0RLD7" solver-rows-aligned
+    "Rows of large solver arrays and columns of large constraint blocks start on 32-byte boundaries."
+  (let* ((w (make-floor-world))
+         (n 5000) (m 20000))
+    (luv-physics::ensure-solver-scratch w n m)
+    (let ((v (luv-physics::physics-world-velocities w))
+          (d (luv-physics::physics-world-deltas w))
+          (data (luv-physics::constraint-columns-data (luv-physics::physics-world-constraints w))))
+      (dolist (a (list v d data))
+        (check (>= (* 4 (length a)) sb-vm:large-object-size) "an array of ~D floats is not large" (length a)))
+      (sb-sys:with-pinned-objects (v d data)
+        (flet ((misaligned (array indices)
+                 (let ((start (sb-sys:sap-int (sb-sys:vector-sap array))))
+                   (count-if-not (lambda (i) (zerop (mod (+ start (* 4 i)) 32))) indices))))
+          (let ((rows (loop for r to n collect r))
+                (last (* 8 (1- (floor m 8)))))
+            (let ((off-v (misaligned v (mapcar #'luv-physics::solver-row rows)))
+                  (off-d (misaligned d (mapcar #'luv-physics::delta-row rows)))
+                  (off-c (misaligned data
+                                     (loop for k in (list 0 last)
+                                           append (loop for c below 37
+                                                        collect (+ (luv-physics::constraint-base k) (* 8 c)))))))
+              (check (zerop off-v) "~D velocity rows start off a 32-byte boundary" off-v)
+              (check (zerop off-d) "~D delta rows start off a 32-byte boundary" off-d)
+              (check (zerop off-c) "~D constraint columns start off a 32-byte boundary" off-c))))))))
+;; W0RLD7-solver-rows-aligned ends here
+
 ;; [[file:../physics.org::#E7V3NT][E7V3NT-mortal-body-events]]
 (define-claim "E7V3NT" mortal-body-events
     "A 1 s mortal ball: :begin, then :end, then :expired on step 60; afterwards its handle is stale."
@@ -1143,8 +1171,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (flet ((check-gaps (elapsed)
                  (map-prepared-constraints
                   (lambda (k col)
-                    (let* ((da (* (aref (luv-physics::constraint-columns-body-a cbuf) k) luv-physics::+delta-stride+))
-                           (db (* (aref (luv-physics::constraint-columns-body-b cbuf) k) luv-physics::+delta-stride+))
+                    (let* ((da (luv-physics::delta-row (aref (luv-physics::constraint-columns-body-a cbuf) k)))
+                           (db (luv-physics::delta-row (aref (luv-physics::constraint-columns-body-b cbuf) k)))
                            (s (+ (funcall col 'separation)
                                  (+ (* (- (aref d db) (aref d da)) (funcall col 'nx))
                                     (* (- (aref d (+ db 1)) (aref d (+ da 1))) (funcall col 'ny))
