@@ -337,6 +337,16 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
   "X as a single-float. #V0CAB5"
   (coerce x 'single-float))
 
+(defmacro block-ref (data base offset)
+  "Float BASE+OFFSET of the f32-column DATA, OFFSET a constant folded into the load's address
+(SBCL's internal, unchecked accessor; see [[#R0WS8T]]). #V0CAB5"
+  `(sb-kernel:data-vector-ref-with-offset ,data (the index ,base) ,offset))
+
+(defsetf block-ref (data base offset) (value)
+  "Store VALUE as float BASE+OFFSET of DATA, the offset folded as in block-ref. #V0CAB5"
+  `(progn (sb-kernel:data-vector-set-with-offset ,data (the index ,base) ,offset (the single-float ,value))
+          ,value))
+
 (defparameter *physics-contact-hertz* 30.0
   "Stiffness of a contact between two awake bodies, in Hz; static contacts get twice it. #V0CAB5")
 
@@ -914,10 +924,22 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
       rolling-impulse-x rolling-impulse-y rolling-impulse-z)
     "The sixteen floats of a contact, side by side in its 64-byte row of the geometry column. #Y5H8KC"))
 
+(declaim (inline geometry-start))
+(defun geometry-start (row)
+  "Where the sixteen floats of contact ROW begin in the geometry column. #Y5H8KC"
+  (declare (type index row))
+  (the index (* row 16)))
+
+(defmacro contact-at (geometry start field)
+  "The FIELD (one of +contact-fields+) of the contact whose floats begin at START (from
+geometry-start) in the GEOMETRY column, the field's place folded into the address. #Y5H8KC"
+  `(block-ref ,geometry ,start
+              ,(or (position field +contact-fields+ :test #'string= :key #'symbol-name)
+                   (error "no contact field ~A" field))))
+
 (defmacro contact@ (geometry row field)
   "The FIELD (one of +contact-fields+) of contact ROW, an index, in the GEOMETRY column. #Y5H8KC"
-  `(aref ,geometry (+ (* (the index ,row) 16) ,(or (position field +contact-fields+ :test #'string= :key #'symbol-name)
-                                         (error "no contact field ~A" field)))))
+  `(contact-at ,geometry (geometry-start ,row) ,field))
 
 (defconstant +contact-pair+ 0 "Contact kind: two bodies. #Y5H8KC")
 
@@ -1807,21 +1829,22 @@ zero impulses; the row under the table's cursor is tried before the table. #G3NC
             (setf (aref a row) handle-a (aref b row) handle-b (aref k row) kind (aref ky row) key)))
         (setf (contact-table-cursor table) (1+ row)))
     (with-contact-columns (seen order geometry) contacts
+      (let ((g (geometry-start row)))
       (unless (= (aref seen row) step)
         (setf (aref order row) (contact-table-touched table))
         (incf (contact-table-touched table))
         ;; carried impulses only make sense along a normal close to the one they were found on
-        (when (< (+ (* nx (contact@ geometry row nx)) (* ny (contact@ geometry row ny))
-                    (* nz (contact@ geometry row nz)))
+        (when (< (+ (* nx (contact-at geometry g nx)) (* ny (contact-at geometry g ny))
+                    (* nz (contact-at geometry g nz)))
                  0.9)
-          (setf (contact@ geometry row normal-impulse) 0.0
-                (contact@ geometry row tangent-impulse-1) 0.0 (contact@ geometry row tangent-impulse-2) 0.0
-                (contact@ geometry row rolling-impulse-x) 0.0 (contact@ geometry row rolling-impulse-y) 0.0
-                (contact@ geometry row rolling-impulse-z) 0.0))
+          (setf (contact-at geometry g normal-impulse) 0.0
+                (contact-at geometry g tangent-impulse-1) 0.0 (contact-at geometry g tangent-impulse-2) 0.0
+                (contact-at geometry g rolling-impulse-x) 0.0 (contact-at geometry g rolling-impulse-y) 0.0
+                (contact-at geometry g rolling-impulse-z) 0.0))
         (setf (aref seen row) step
-              (contact@ geometry row nx) nx (contact@ geometry row ny) ny (contact@ geometry row nz) nz (contact@ geometry row separation) separation
-              (contact@ geometry row px) px (contact@ geometry row py) py (contact@ geometry row pz) pz
-              (contact@ geometry row kvx) kvx (contact@ geometry row kvy) kvy (contact@ geometry row kvz) kvz)))
+              (contact-at geometry g nx) nx (contact-at geometry g ny) ny (contact-at geometry g nz) nz (contact-at geometry g separation) separation
+              (contact-at geometry g px) px (contact-at geometry g py) py (contact-at geometry g pz) pz
+              (contact-at geometry g kvx) kvx (contact-at geometry g kvy) kvy (contact-at geometry g kvz) kvz))))
     row))
 (declaim (notinline touch-contact))
 
@@ -2453,16 +2476,6 @@ the float columns in blocks of eight rows, each column's eight lanes contiguous.
   (declare (type index k))
   (+ +constraint-origin+ (* (ash k -3) +constraint-block+) (logand k 7)))
 
-(defmacro block-ref (data base offset)
-  "Float BASE+OFFSET of DATA, OFFSET a constant folded into the load's address (SBCL's internal,
-unchecked accessor; see [[#R0WS8T]]). #SSMPYW"
-  `(sb-kernel:data-vector-ref-with-offset ,data (the index ,base) ,offset))
-
-(defsetf block-ref (data base offset) (value)
-  "Store VALUE as float BASE+OFFSET of DATA, the offset folded as in block-ref. #SSMPYW"
-  `(progn (sb-kernel:data-vector-set-with-offset ,data (the index ,base) ,offset (the single-float ,value))
-          ,value))
-
 (defmacro with-constraint-block ((&rest fixnum-columns) buffer &body body)
   "Run BODY with DATA bound to BUFFER's float blocks, each of FIXNUM-COLUMNS (contact, body-a,
 body-b) bound to its column, and (@ COLUMN) naming COLUMN of the constraint whose base is the
@@ -2678,6 +2691,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                 (dotimes (color (1+ +physics-max-colors+))
                  (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
                   (let* ((c (aref contact k))
+                         (g (geometry-start c))
                          (base (constraint-base k))
                          (a (aref ha c)) (b (aref hb c))
                          (set-a (aref sets (handle-index a)))
@@ -2688,7 +2702,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                          (buf-b (if (= set-b +set-awake+) awake sleeping))
                          (sets sets) (locals locals)
                          (dyn-a (= set-a +set-awake+)) (dyn-b (= set-b +set-awake+))
-                         (x (contact@ geometry c nx)) (y (contact@ geometry c ny)) (z (contact@ geometry c nz))
+                         (x (contact-at geometry g nx)) (y (contact-at geometry g ny)) (z (contact-at geometry g nz))
                          ;; a braced body is static to a much heavier one above it, as a sleeper
                          ;; is to the bodies that lean on it
                          (brace (and bracing dyn-a dyn-b
@@ -2713,14 +2727,14 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                            (im-b (if dyn-b (aref (body-columns-inverse-mass awake) lb) 0.0))
                            (ii-a (if dyn-a (aref (body-columns-inverse-inertia awake) la) 0.0))
                            (ii-b (if dyn-b (aref (body-columns-inverse-inertia awake) lb) 0.0))
-                           (kx (contact@ geometry c kvx)) (ky (contact@ geometry c kvy)) (kz (contact@ geometry c kvz))
+                           (kx (contact-at geometry g kvx)) (ky (contact-at geometry g kvy)) (kz (contact-at geometry g kvz))
                            (mass-sum (+ im-a im-b))
                            (va (solver-row (if dyn-a la n)))
                            (vb (solver-row (if dyn-b lb n))))
                       (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz))
                       (setf (@ ra) r-a (@ rb) r-b
                             (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
-                            (@ separation) (+ (contact@ geometry c separation) slop)
+                            (@ separation) (+ (contact-at geometry g separation) slop)
                             ;; the box's velocity, until the frame pass resolves it
                             (@ kvn) kx (@ kvt1) ky (@ kvt2) kz)
                       (if (>= b 0)
@@ -2742,7 +2756,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                       ;; own effective mass: above 1 it divides the spring's give
                       (let ((load (if two-sided
                                       0.0
-                                      (min load-limit (* (contact@ geometry c normal-impulse) mass-sum load-scale)))))
+                                      (min load-limit (* (contact-at geometry g normal-impulse) mass-sum load-scale)))))
                         (declare (type single-float load))
                         (cond ((> load 1.0)
                                (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
@@ -2754,10 +2768,10 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                                (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
                                      (@ impulse-scale) st-impulse)))))
                     (setf (@ max-normal-impulse) 0.0
-                          (@ normal-impulse) (contact@ geometry c normal-impulse)
-                          (@ tangent-impulse-1) (contact@ geometry c tangent-impulse-1) (@ tangent-impulse-2) (contact@ geometry c tangent-impulse-2)
-                          (@ rolling-impulse-x) (contact@ geometry c rolling-impulse-x) (@ rolling-impulse-y) (contact@ geometry c rolling-impulse-y)
-                          (@ rolling-impulse-z) (contact@ geometry c rolling-impulse-z)))))
+                          (@ normal-impulse) (contact-at geometry g normal-impulse)
+                          (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2)
+                          (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
+                          (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z)))))
                 ;; the frames, the box velocities along them and the effective masses,
                 ;; in lanes where the family has them
                 (physics-prepare-frames (physics-world-kernels world) world)
@@ -3112,6 +3126,7 @@ speed. #ST0R3S"
               unless (< (aref contact k) 0) do
           (let* ((base (constraint-base k))
                  (c (aref contact k))
+                 (g (geometry-start c))
                  (pushed (> (@ max-normal-impulse) 0.0))
                  (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
@@ -3119,18 +3134,18 @@ speed. #ST0R3S"
                  (gap (- (@ gap) slop))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
                         (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn))))
-            (declare (type fixnum c) (type index base))
-            (setf (contact@ geometry c normal-impulse) (@ normal-impulse)
-                  (contact@ geometry c tangent-impulse-1) (@ tangent-impulse-1) (contact@ geometry c tangent-impulse-2) (@ tangent-impulse-2)
-                  (contact@ geometry c rolling-impulse-x) (@ rolling-impulse-x) (contact@ geometry c rolling-impulse-y) (@ rolling-impulse-y)
-                  (contact@ geometry c rolling-impulse-z) (@ rolling-impulse-z))
+            (declare (type fixnum c) (type index base g))
+            (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
+                  (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2)
+                  (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
+                  (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z))
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))
                     max-approach (max max-approach (- vn))))
             (unless (eq pushed (= (aref touching c) 1))
               (setf (aref touching c) (if pushed 1 0))
               (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
-                          (contact@ geometry c px) (contact@ geometry c py) (contact@ geometry c pz) (- (@ relative-velocity))
+                          (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))
             (when (and pushed (> (- (@ relative-velocity)) hit-speed)
                        (or (= (aref kind c) +contact-box+)
@@ -3143,7 +3158,7 @@ speed. #ST0R3S"
                                                           row))))))
                              (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
               (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
-                          (contact@ geometry c px) (contact@ geometry c py) (contact@ geometry c pz) (- (@ relative-velocity))
+                          (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))))
     (let ((stats (world-statistics world)))
       (setf (aref stats 3) (coerce max-penetration 'double-float)
