@@ -2688,8 +2688,49 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                   (let ((color (aref colors c)))
                     (setf (aref contact (aref cursor color)) c)
                     (incf (aref cursor color))))
+                (with-body-columns ((radius-c radius) (im-c inverse-mass) (ii-c inverse-inertia)
+                                    (fr-c friction) (re-c restitution) (ro-c rolling-resistance))
+                    awake
                 (dotimes (color (1+ +physics-max-colors+))
                  (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
+                  (if (let ((c (aref contact k)))
+                        (and (not bracing) (>= (aref hb c) 0)
+                             (= (aref sets (handle-index (aref ha c))) +set-awake+)
+                             (= (aref sets (handle-index (aref hb c))) +set-awake+)))
+                   ;; the common case, two awake bodies and no bracing, on its own short path:
+                   ;; the same values by the same operations as the general path below
+                   (let* ((c (aref contact k))
+                          (g (geometry-start c)) (base (constraint-base k))
+                          (la (aref locals (handle-index (aref ha c))))
+                          (lb (aref locals (handle-index (aref hb c))))
+                          (x (contact-at geometry g nx)) (y (contact-at geometry g ny))
+                          (z (contact-at geometry g nz))
+                          (kx (contact-at geometry g kvx)) (ky (contact-at geometry g kvy))
+                          (kz (contact-at geometry g kvz))
+                          (r-a (aref radius-c la)) (r-b (aref radius-c lb))
+                          (va (solver-row la)) (vb (solver-row lb)))
+                     (declare (type index c g base la lb va vb) (type single-float x y z kx ky kz r-a r-b))
+                     (setf (aref body-a k) la (aref body-b k) lb
+                           (@ nx) x (@ ny) y (@ nz) z (@ ra) r-a (@ rb) r-b
+                           (@ ima) (aref im-c la) (@ imb) (aref im-c lb)
+                           (@ iia) (aref ii-c la) (@ iib) (aref ii-c lb)
+                           (@ separation) (+ (contact-at geometry g separation) slop)
+                           (@ kvn) kx (@ kvt1) ky (@ kvt2) kz
+                           (@ friction) (fsqrt (* (aref fr-c la) (aref fr-c lb)))
+                           (@ restitution) (max (aref re-c la) (aref re-c lb))
+                           (@ rolling-limit) (* (max (aref ro-c la) (aref ro-c lb)) (max r-a r-b))
+                           (@ relative-velocity)
+                           (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
+                              (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
+                              (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z))
+                           (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass (@ impulse-scale) dyn-impulse
+                           (@ max-normal-impulse) 0.0
+                           (@ normal-impulse) (contact-at geometry g normal-impulse)
+                           (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1)
+                           (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2)
+                           (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x)
+                           (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
+                           (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z)))
                   (let* ((c (aref contact k))
                          (g (geometry-start c))
                          (base (constraint-base k))
@@ -2771,7 +2812,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                           (@ normal-impulse) (contact-at geometry g normal-impulse)
                           (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2)
                           (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
-                          (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z)))))
+                          (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z)))))))
                 ;; the frames, the box velocities along them and the effective masses,
                 ;; in lanes where the family has them
                 (physics-prepare-frames (physics-world-kernels world) world)
