@@ -2596,6 +2596,10 @@ returns the number of colours used. #SSMPYW"
 ;; Colours are the lanes:1 ends here
 
 ;; [[file:../physics.org::#PR3PAR][Preparing the constraints:1]]
+(defvar *prepare-short-path* t
+  "When false, the prepare fill sends every row through its general path; the claim that the
+short path changes no bit compares the two. #PR3PAR")
+
 (defun prepare-phase (world)
   "Phase 8: colour the contacts, then write the constraint buffer in colour order, and load the
 awake bodies' velocities into the solver. Return the number of colours used. #PR3PAR"
@@ -2609,7 +2613,8 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
     (declare (type body-columns awake sleeping) (type contact-columns contacts) (type single-float h)
              (type index m n))
     (ensure-solver-scratch world n m)
-    (let ((color-count (color-contacts world))
+    (let ((short-path *prepare-short-path*)
+          (color-count (color-contacts world))
           (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 (the single-float h))))
           (zeta (f32 (physics-world-damping-ratio world)))
           (ids (physics-world-ids world))
@@ -2694,7 +2699,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                 (dotimes (color (1+ +physics-max-colors+))
                  (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
                   (if (let ((c (aref contact k)))
-                        (and (not bracing) (>= (aref hb c) 0)
+                        (and short-path (not bracing) (>= (aref hb c) 0)
                              (= (aref sets (handle-index (aref ha c))) +set-awake+)
                              (= (aref sets (handle-index (aref hb c))) +set-awake+)))
                    ;; the common case, two awake bodies and no bracing, on its own short path:
@@ -2825,7 +2830,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
       color-count)))
 ;; Preparing the constraints:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:2]]
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:3]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
@@ -2882,7 +2887,7 @@ substep's solve reads. #PR3PAR"
 (defmethod physics-prepare-frames ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
     (prepare-frames-range cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:2 ends here
+;; Preparing the constraints:3 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)

@@ -1140,6 +1140,48 @@ function of a column name that reads row K's float in that column. #T3STK1"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
 
+;; [[file:../physics.org::#PR3PAR][PR3PAR-short-path-same-bits]]
+(define-claim "PR3PAR" short-path-same-bits
+    "The fill's short path for two awake bodies writes the rows the general path writes, to the bit."
+  (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain)))
+        (seed 12345))
+    (flet ((next ()
+             (setf seed (mod (+ (* seed 1103515245) 12345) 2147483648))
+             (/ seed 2147483648.0)))
+      (dotimes (i 300)
+        (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+          (luv-physics::add-physics-body w x y z :radius (+ 0.2 (* 0.1 (next))) :mass (+ 0.5 (next))
+                                                 :friction (+ 0.3 (* 0.6 (next)))
+                                                 :restitution (* 0.5 (next))
+                                                 :rolling-resistance (* 0.05 (next))))))
+    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                     luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
+                     luv-physics::prune-phase))
+      (funcall phase w))
+    (flet ((filled (short)
+             (let ((luv-physics::*prepare-short-path* short))
+               (luv-physics::prepare-phase w))
+             (let ((cbuf (luv-physics::physics-world-constraints w)))
+               (list (map 'list #'sb-kernel:single-float-bits (luv-physics::constraint-columns-data cbuf))
+                     (copy-seq (luv-physics::constraint-columns-body-a cbuf))
+                     (copy-seq (luv-physics::constraint-columns-body-b cbuf))
+                     (luv-physics::constraint-columns-length cbuf)))))
+      (let* ((general (filled nil)) (short (filled t))
+             (cbuf (luv-physics::physics-world-constraints w))
+             (dummy (luv-physics::physics-world-awake-count w))
+             (two-awake (loop for k below (fourth short)
+                              count (and (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
+                                         (/= (aref (luv-physics::constraint-columns-body-a cbuf) k) dummy)
+                                         (/= (aref (luv-physics::constraint-columns-body-b cbuf) k) dummy)))))
+        (check (> two-awake (* 0.5 (fourth short))) "only ~D of ~D rows join two awake bodies" two-awake (fourth short))
+        (check (= (fourth general) (fourth short)))
+        (check (equalp (second general) (second short)) "the body-a columns differ")
+        (check (equalp (third general) (third short)) "the body-b columns differ")
+        (check (equal (first general) (first short)) "~D floats differ"
+               (count nil (mapcar #'= (first general) (first short))))))))
+;; PR3PAR-short-path-same-bits ends here
+
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
     "Prepared tangent frames are orthonormal with their normals, in every family."
