@@ -2195,11 +2195,10 @@ gap is under the speculative distance. #P41RS7"
                           (rows i j)))))))
               ;; build the list again: the half neighbourhood of each body's cell, in the
               ;; grid's order, within the widest reach plus the skin
-              (let ((gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
-                    (items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+              (let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
                     (runs (make-array 42 :element-type 'fixnum))
                     (cell-key -1) (run-count 0))
-                (declare (type f32-column gx gy gz) (type fixnum-column items keys near runs)
+                (declare (type fixnum-column items keys near runs)
                          (dynamic-extent runs) (type fixnum cell-key) (type (integer 0 14) run-count))
                 (setf (pair-list-count plist) 0)
                 (dotimes (e (hash-grid-count grid))
