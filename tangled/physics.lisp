@@ -2054,27 +2054,39 @@ with the strayed rows in order (LOOSE-ROWS). BUILDS counts the builds. #P41RS7"
   (builds 0 :type index))
 
 (defun pair-list-strays (plist awake n cell reach)
-  "Mark each of the N awake rows whose centre lies farther than REACH from its anchor as loose,
-list those rows in order, and return how many; or -1 when PLIST no longer describes the awake
-rows (another count, another handle in some row, another cell edge), so it must be built
-again. #P41RS7"
+  "Mark as loose each of the N awake rows that holds another body than when PLIST was built
+(another handle, or a row added since) or whose centre lies farther than REACH from its
+anchor, and each row the list knew that is gone; list the loose rows below N in order and
+return how many. Return -1 when the list was never built or the cell edge changed, so it must
+be built again. #P41RS7"
   (declare (type pair-list plist) (type body-columns awake) (type index n)
            (type single-float cell reach) #.+kernel-policy+)
-  (if (or (/= (pair-list-rows plist) n) (/= (pair-list-cell plist) cell))
-      -1
-      (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist))
-            (loose (pair-list-loose plist)) (loose-rows (pair-list-loose-rows plist))
-            (reach2 (* reach reach)) (count 0))
-        (declare (type index count))
-        (with-body-columns (x y z handle) awake
-          (dotimes (i n count)
-            (when (/= (aref handle i) (aref handles i)) (return -1))
-            (let* ((o (* 3 i))
-                   (dx (- (aref x i) (aref anchors o))) (dy (- (aref y i) (aref anchors (+ o 1))))
-                   (dz (- (aref z i) (aref anchors (+ o 2)))))
-              (if (> (+ (* dx dx) (* dy dy) (* dz dz)) reach2)
-                  (setf (aref loose i) 1 (aref loose-rows count) i count (1+ count))
-                  (setf (aref loose i) 0))))))))
+  (let ((known (pair-list-rows plist)))
+    (declare (type fixnum known))
+    (if (or (< known 0) (/= (pair-list-cell plist) cell))
+        -1
+        (progn
+          ;; room for a flag on every row, the list's and today's
+          (when (< (length (pair-list-loose plist)) (max n known))
+            (let ((rows (max n known (* 2 (length (pair-list-loose plist))))))
+              (setf (pair-list-loose plist) (make-array rows :element-type 'fixnum)
+                    (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum))))
+          (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist))
+                (loose (pair-list-loose plist)) (loose-rows (pair-list-loose-rows plist))
+                (reach2 (* reach reach)) (count 0))
+            (declare (type index count))
+            (with-body-columns (x y z handle) awake
+              (dotimes (i n)
+                (if (or (>= i known) (/= (aref handle i) (aref handles i))
+                        (let* ((o (* 3 i))
+                               (dx (- (aref x i) (aref anchors o))) (dy (- (aref y i) (aref anchors (+ o 1))))
+                               (dz (- (aref z i) (aref anchors (+ o 2)))))
+                          (> (+ (* dx dx) (* dy dy) (* dz dz)) reach2)))
+                    (setf (aref loose i) 1 (aref loose-rows count) i count (1+ count))
+                    (setf (aref loose i) 0))))
+            ;; rows the list names that no longer exist
+            (loop for i of-type index from n below known do (setf (aref loose i) 1))
+            count)))))
 
 (defun pair-list-anchor (plist awake n cell)
   "Make PLIST describe the N awake rows as they are now: their centres as anchors, their

@@ -922,7 +922,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
   (let* ((w (luv-physics::make-basin-world 300))
          (table (luv-physics::physics-world-contact-table w))
          (plist (luv-physics::physics-world-pair-list w))
-         (builds-before 0) (checked 0) (missing 0) (stale 0) (step 0))
+         (builds-at-start 0) (builds 0) (checked 0) (missing 0) (stale 0) (step 0))
     (flet ((check-pairs (world)
              (when (zerop (mod step 4))
                (incf checked)
@@ -966,12 +966,19 @@ function of a column name that reads row K's float in that column. #T3STK1"
               (loop for p in luv-physics::*physics-phases*
                     collect p
                     when (eq p 'luv-physics::pair-phase) collect #'check-pairs)))
-        (dotimes (i 240)
+        (dotimes (i 360)
           (setf step i)
-          (when (= i 0) (setf builds-before (luv-physics::pair-list-builds plist)))
+          (when (= i 0) (setf builds-at-start (luv-physics::pair-list-builds plist)))
+          (when (= i 240) (setf builds (- (luv-physics::pair-list-builds plist) builds-at-start)))
+          (when (and (> i 240) (zerop (mod i 5)))
+            ;; churn: one ball out, a new one in
+            (let ((a (luv-physics::physics-world-awake w)))
+              (luv-physics::remove-physics-body
+               w (aref (luv-physics::body-columns-handle a) (mod (* i 37) (luv-physics::body-columns-length a))))
+              (luv-physics::add-physics-body w (+ 2.0 (* 0.01 (mod i 400))) 4.0 4.0 :radius 0.25)))
           (luv-physics::step-physics-world w))))
-    (let ((builds (- (luv-physics::pair-list-builds plist) builds-before)))
-      (check (= checked 60))
+    (progn
+      (check (= checked 90))
       (check (zerop missing) "~D pairs under the speculative distance had no contact" missing)
       (check (zerop stale) "~D pairs over the speculative distance had a contact" stale)
       (check (< builds 120) "the list was built on ~D of 240 steps" builds)
