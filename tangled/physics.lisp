@@ -1420,7 +1420,7 @@ dispatches on it once per call. #W0RLD7"))
    (push-max :initform *physics-contact-push-max* :accessor physics-world-push-max)
    (slop :initform *physics-linear-slop* :accessor physics-world-slop)
    (margin :initform *physics-speculative-margin* :accessor physics-world-margin)
-   (pair-skin :initform *physics-pair-skin* :accessor physics-world-pair-skin)
+   (pair-skin :initarg :pair-skin :initform (f32 *physics-pair-skin*) :accessor physics-world-pair-skin)
    (pair-list :initform (make-pair-list) :reader physics-world-pair-list)
    (restitution-threshold :initform *physics-restitution-threshold*
                           :accessor physics-world-restitution-threshold)
@@ -1505,8 +1505,11 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
     (check-count :substeps substeps 64)
     (unless (and (listp gravity) (= (length gravity) 3))
       (error 'invalid-physics-parameter :name :gravity :value gravity :expected "a list of three numbers"))
+    (unless (<= 0.0 (finite-f32 :pair-skin *physics-pair-skin*) 0.5)
+      (error 'invalid-physics-parameter :name :pair-skin :value *physics-pair-skin* :expected "from 0 to 0.5 m"))
     (make-instance 'physics-world
                    :terrain terrain :step-seconds dt :substeps substeps
+                   :pair-skin (f32 *physics-pair-skin*)
                    :gravity-x (finite-f32 :gravity (first gravity))
                    :gravity-y (finite-f32 :gravity (second gravity))
                    :gravity-z (finite-f32 :gravity (third gravity))

@@ -384,6 +384,21 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (eq :no-error (outcome :radius (luv-physics::max-radius-for w))) "the limit radius itself is refused")))))
 ;; C0ND1T-bad-radius-and-mass ends here
 
+;; [[file:../physics.org::#C0ND1T][C0ND1T-bad-pair-skin]]
+(define-claim "C0ND1T" bad-pair-skin
+    "A pair skin outside 0..0.5 m, or not finite, is refused by name; 0 and 0.05 work."
+  (dolist (skin (list (sb-kernel:make-single-float -4194304) -0.01 2))
+    (let ((name (handler-case (let ((luv-physics:*physics-pair-skin* skin)) (make-floor-world) :accepted)
+                  (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+                  (luv-physics::invalid-physics-number (e) (luv-physics::invalid-physics-number-name e)))))
+      (check (eq name :pair-skin) "a skin of ~S gave ~S" skin name)))
+  (dolist (skin '(0 0.05))
+    (let* ((w (let ((luv-physics:*physics-pair-skin* skin)) (make-floor-world :sleep nil)))
+           (h (luv-physics::add-physics-body w 2.5 1.0 2.5)))
+      (dotimes (i 120) (luv-physics::step-physics-world w))
+      (check (< (abs (- (body-y w h) 0.245)) 0.002) "with a skin of ~S the ball ends at ~S" skin (body-y w h)))))
+;; C0ND1T-bad-pair-skin ends here
+
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-stale-handles]]
 (define-claim "C0ND1T" stale-handles
     "Removed, foreign and malformed handles signal stale-physics-handle with :removed, :foreign, :malformed."
