@@ -2045,7 +2045,10 @@ across pairs, and opposite when the two are named the other way round. #P41RS7"
 widest reach plus the skin when the list was built, packed as row A times 2^24 plus row B, in
 the order the build found them; each row's centre then (ANCHORS, three floats a row), the
 handle it held (HANDLES), the grid's cell edge, and per row whether it has strayed (LOOSE)
-with the strayed rows in order (LOOSE-ROWS). BUILDS counts the builds. #P41RS7"
+with the strayed rows in order (LOOSE-ROWS). BUILDS counts the builds. STEP is the step whose
+pair phase last used or built the list, BUILT-STEP the step that built it. CLEAR marks the rows
+with no solid cell within their reach plus 0.45 skins of their anchor, in TERRAIN as it was
+after TERRAIN-EDITS edits. #P41RS7"
   (pairs (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
   (rows -1 :type fixnum)
@@ -2054,7 +2057,12 @@ with the strayed rows in order (LOOSE-ROWS). BUILDS counts the builds. #P41RS7"
   (loose (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (loose-rows (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (cell 0.0 :type single-float)
-  (builds 0 :type index))
+  (builds 0 :type index)
+  (step -1 :type fixnum)
+  (built-step -1 :type fixnum)
+  (clear (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (terrain nil)
+  (terrain-edits -1 :type fixnum))
 
 (defun pair-list-strays (plist awake n cell reach)
   "Mark as loose each of the N awake rows that holds another body than when PLIST was built
@@ -2099,6 +2107,7 @@ handles, CELL as the cell edge, and no row loose; count a build. #P41RS7"
     (let ((rows (max n (* 2 (length (pair-list-handles plist))) 64)))
       (setf (pair-list-anchors plist) (make-array (* 3 rows) :element-type 'single-float)
             (pair-list-handles plist) (make-array rows :element-type 'fixnum)
+            (pair-list-clear plist) (make-array rows :element-type 'fixnum)
             (pair-list-loose plist) (make-array rows :element-type 'fixnum)
             (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum))))
   (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)))
@@ -2230,7 +2239,9 @@ gap is under the speculative distance. #P41RS7"
                             (when (zerop (logand (aref flags j) +flag-terrain-only+))
                               (pair-list-push plist i j)
                               (rows i j))))))))
-                (pair-list-anchor plist awake n cell))))
+                (pair-list-anchor plist awake n cell)
+                (setf (pair-list-built-step plist) (contact-table-step table)))))
+        (setf (pair-list-step plist) (contact-table-step table))
         ;; slow or fast, an awake body reaching a sleeper leans on it
         (when any-sleeping
           (dotimes (i n)
@@ -2333,10 +2344,21 @@ is under the speculative distance. #MYWH16"
              (contacts (physics-world-contacts world))
              (table (physics-world-contact-table world))
              ;; the bodies come in the grid's order, so most share the chunk of the one before
-             (last-key -1) (last-chunk nil))
-        (declare (type single-float margin limit slop dt gstep) (type fixnum last-key)
-                 (type (or null chunk-storage) last-chunk)
+             (last-key -1) (last-chunk nil)
+             ;; the pair list's rows this step: which are loose, and which were clear of
+             ;; solid cells around their anchors when it was built
+             (plist (physics-world-pair-list world))
+             (current (= (pair-list-step plist) (contact-table-step table)))
+             (fresh (and current (= (pair-list-built-step plist) (contact-table-step table))))
+             (use-clear (and current (not fresh) (eq (pair-list-terrain plist) terrain)
+                             (= (pair-list-terrain-edits plist) (voxel-terrain-edits terrain))))
+             (loose (pair-list-loose plist)) (clear (pair-list-clear plist))
+             (widen (* 0.45 (f32 (physics-world-pair-skin world)))))
+        (declare (type single-float margin limit slop dt gstep widen) (type fixnum last-key)
+                 (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear)
                  (type contact-columns contacts) (type contact-table table) (inline touch-contact))
+        (when fresh
+          (setf (pair-list-terrain plist) terrain (pair-list-terrain-edits plist) (voxel-terrain-edits terrain)))
         (flet ((chunk-at (key)
                  (declare (type fixnum key))
                  (if (= key last-key)
@@ -2352,7 +2374,9 @@ is under the speculative distance. #MYWH16"
                    (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach)))
                    (mask 0))
               (declare (type fixnum x0 x1 y0 y1 z0 z1) (type (unsigned-byte 27) mask))
-              ;; gather the solid cells of the (at most) 3x3x3 neighbourhood
+              ;; gather the solid cells of the (at most) 3x3x3 neighbourhood, unless the row
+              ;; stayed near its anchor and the anchor had no solid cell near it
+              (unless (and use-clear (zerop (aref loose i)) (= (aref clear i) 1))
               (cond
                 ;; the common case, at most two cells a side and a 2x2x2 block in one chunk:
                 ;; eight reads at fixed offsets, no loop, then only the cells in the span kept
@@ -2380,7 +2404,20 @@ is under the speculative distance. #MYWH16"
                     (loop for iy of-type fixnum from y0 to y1 do
                       (loop for ix of-type fixnum from x0 to x1 do
                         (when (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))
-                          (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))))
+                          (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))))))))))))))
+              ;; in the step that built the pair list, each row's anchor is its centre: note
+              ;; whether every cell within its reach plus 0.45 skins is air
+              (when fresh
+                (setf (aref clear i)
+                      (if (and (zerop mask)
+                               (let ((wide (+ reach widen)))
+                                 (loop for iz of-type fixnum from (cell-floor (- cz wide)) to (cell-floor (+ cz wide))
+                                       always (loop for iy of-type fixnum from (cell-floor (- cy wide)) to (cell-floor (+ cy wide))
+                                                    always (loop for ix of-type fixnum from (cell-floor (- cx wide))
+                                                                   to (cell-floor (+ cx wide))
+                                                                 never (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz)))
+                                                                                    (cell-offset ix iy iz))))))))
+                          1 0)))
               ;; a body that can travel past its margin this step also sweeps its path
               (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
                                                       (* (aref vz i) (aref vz i))))))))

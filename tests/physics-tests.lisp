@@ -1026,6 +1026,60 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "they parted at ~,3F m/s" fastest)))
 ;; P41RS7-coincident-pair-separates ends here
 
+;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
+(define-claim "MYWH16" clear-rows-skip-safely
+    "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
+  (let* ((w (luv-physics::make-basin-world 300))
+         (terrain (luv-physics::physics-world-terrain w))
+         (plist (luv-physics::physics-world-pair-list w))
+         (table (luv-physics::physics-world-contact-table w))
+         (margin (luv-physics::physics-world-margin w))
+         (wrong 0) (skipped 0) (rows 0) (checked-steps 0))
+    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (flet ((check-clear (world)
+             (when (and (= (luv-physics::pair-list-step plist) (luv-physics::contact-table-step table))
+                        (/= (luv-physics::pair-list-built-step plist) (luv-physics::contact-table-step table)))
+               (incf checked-steps)
+               (let ((a (luv-physics::physics-world-awake world)))
+                 (dotimes (i (luv-physics::body-columns-length a))
+                   (incf rows)
+                   (when (and (zerop (aref (luv-physics::pair-list-loose plist) i))
+                              (= 1 (aref (luv-physics::pair-list-clear plist) i)))
+                     (incf skipped)
+                     (let* ((cx (aref (luv-physics::body-columns-x a) i)) (cy (aref (luv-physics::body-columns-y a) i))
+                            (cz (aref (luv-physics::body-columns-z a) i))
+                            (reach (+ (aref (luv-physics::body-columns-radius a) i) margin)))
+                       (loop for ix from (floor (- cx reach)) to (floor (+ cx reach))
+                             do (loop for iy from (floor (- cy reach)) to (floor (+ cy reach))
+                                      do (loop for iz from (floor (- cz reach)) to (floor (+ cz reach))
+                                               when (luv-physics::terrain-solid-p terrain ix iy iz)
+                                                 do (incf wrong)))))))))
+             world))
+      (let ((luv-physics::*physics-phases*
+              (loop for p in luv-physics::*physics-phases* collect p
+                    when (eq p 'luv-physics::pair-phase) collect #'check-clear)))
+        (dotimes (i 60) (luv-physics::step-physics-world w))))
+    (check (> checked-steps 30) "only ~D steps reused the list" checked-steps)
+    (check (zerop wrong) "~D solid cells lay in reach of skipped rows" wrong)
+    (check (> skipped (* 0.2 rows)) "only ~D of ~D rows were skipped" skipped rows)
+    ;; a solid cell under a clear, settled ball
+    (let* ((a (luv-physics::physics-world-awake w))
+           (i (loop for i below (luv-physics::body-columns-length a)
+                    when (and (zerop (aref (luv-physics::pair-list-loose plist) i))
+                              (= 1 (aref (luv-physics::pair-list-clear plist) i))
+                              (< (luv-physics::speed-of w (aref (luv-physics::body-columns-handle a) i)) 0.05))
+                      return i))
+           (h (aref (luv-physics::body-columns-handle a) i))
+           (cx (floor (aref (luv-physics::body-columns-x a) i)))
+           (cy (floor (- (aref (luv-physics::body-columns-y a) i) 0.2)))
+           (cz (floor (aref (luv-physics::body-columns-z a) i)))
+           (key (luv-physics::terrain-key (luv-physics::handle-index h) cx cy cz)))
+      (setf (luv-physics::terrain-solid-p terrain cx cy cz) t)
+      (luv-physics::step-physics-world w)
+      (check (>= (luv-physics::contact-table-find table key) 0)
+             "the ball over the new cell ~D ~D ~D has no contact with it" cx cy cz))))
+;; MYWH16-clear-rows-skip-safely ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-seams-are-flat]]
 (define-claim "MYWH16" seams-are-flat
     "A ball rolling at 3 m/s over six seams stays within 0.005 m of rest height and keeps 99% of its speed."
