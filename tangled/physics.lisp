@@ -2359,12 +2359,16 @@ is under the speculative distance. #MYWH16"
                  (type contact-columns contacts) (type contact-table table) (inline touch-contact))
         (when fresh
           (setf (pair-list-terrain plist) terrain (pair-list-terrain-edits plist) (voxel-terrain-edits terrain)))
-        (flet ((chunk-at (key)
-                 (declare (type fixnum key))
-                 (if (= key last-key)
-                     (the chunk-storage last-chunk)
-                     (setf last-key key last-chunk (probe-chunk probe key)))))
-          (declare (inline chunk-at))
+        (labels ((chunk-at (key)
+                   (declare (type fixnum key))
+                   (if (= key last-key)
+                       (the chunk-storage last-chunk)
+                       (setf last-key key last-chunk (probe-chunk probe key))))
+                 (cell-solid-p (ix iy iz)
+                   ;; one cell, through the chunk it lies in
+                   (declare (type fixnum ix iy iz))
+                   (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))))
+          (declare (inline chunk-at cell-solid-p))
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i n)
             (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
@@ -2403,7 +2407,7 @@ is under the speculative distance. #MYWH16"
                   (loop for iz of-type fixnum from z0 to z1 do
                     (loop for iy of-type fixnum from y0 to y1 do
                       (loop for ix of-type fixnum from x0 to x1 do
-                        (when (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))
+                        (when (cell-solid-p ix iy iz)
                           (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))))))))))))))
               ;; in the step that built the pair list, each row's anchor is its centre: note
               ;; whether every cell within its reach plus 0.45 skins is air
@@ -2415,8 +2419,7 @@ is under the speculative distance. #MYWH16"
                                        always (loop for iy of-type fixnum from (cell-floor (- cy wide)) to (cell-floor (+ cy wide))
                                                     always (loop for ix of-type fixnum from (cell-floor (- cx wide))
                                                                    to (cell-floor (+ cx wide))
-                                                                 never (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz)))
-                                                                                    (cell-offset ix iy iz))))))))
+                                                                 never (cell-solid-p ix iy iz))))))
                           1 0)))
               ;; a body that can travel past its margin this step also sweeps its path
               (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))

@@ -317,6 +317,10 @@ more step up to and including prepare: its constraints are ready for the substep
       (funcall phase world))
     world))
 
+(defun phases-checked-after (phase function)
+  "*physics-phases* with FUNCTION, which takes the world and returns it, run right after PHASE. #T3STK1"
+  (loop for p in luv-physics:*physics-phases* collect p when (eq p phase) collect function))
+
 (defun map-prepared-constraints (function world)
   "Call FUNCTION on each row K of WORLD's constraint buffer that names a contact, with K and a
 function of a column name that reads row K's float in that column. #T3STK1"
@@ -977,10 +981,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                     (cond ((and (< sep (- spec 1d-4)) (not found)) (incf missing))
                                           ((and (> sep (+ spec 1d-4)) found) (incf stale)))))))))))
              world))
-      (let ((luv-physics::*physics-phases*
-              (loop for p in luv-physics::*physics-phases*
-                    collect p
-                    when (eq p 'luv-physics::pair-phase) collect #'check-pairs)))
+      (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::pair-phase #'check-pairs)))
         (dotimes (i 360)
           (setf step i)
           (when (= i 0) (setf builds-at-start (luv-physics::pair-list-builds plist)))
@@ -1055,9 +1056,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                                when (luv-physics::terrain-solid-p terrain ix iy iz)
                                                  do (incf wrong)))))))))
              world))
-      (let ((luv-physics::*physics-phases*
-              (loop for p in luv-physics::*physics-phases* collect p
-                    when (eq p 'luv-physics::pair-phase) collect #'check-clear)))
+      (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::pair-phase #'check-clear)))
         (dotimes (i 60) (luv-physics::step-physics-world w))))
     (check (> checked-steps 30) "only ~D steps reused the list" checked-steps)
     (check (zerop wrong) "~D solid cells lay in reach of skipped rows" wrong)
@@ -1282,16 +1281,13 @@ function of a column name that reads row K's float in that column. #T3STK1"
 (define-claim "PR3PAR" short-path-same-bits
     "The fill's short path for two awake bodies writes the rows the general path writes, to the bit."
   (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain)))
-        (seed 12345))
-    (flet ((next ()
-             (setf seed (mod (+ (* seed 1103515245) 12345) 2147483648))
-             (/ seed 2147483648.0)))
-      (dotimes (i 300)
-        (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
-          (luv-physics::add-physics-body w x y z :radius (+ 0.2 (* 0.1 (next))) :mass (+ 0.5 (next))
-                                                 :friction (+ 0.3 (* 0.6 (next)))
-                                                 :restitution (* 0.5 (next))
-                                                 :rolling-resistance (* 0.05 (next))))))
+        (next (make-lcg 12345)))
+    (dotimes (i 300)
+      (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+        (luv-physics::add-physics-body w x y z :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (funcall next))
+                                               :friction (+ 0.3 (* 0.6 (funcall next)))
+                                               :restitution (* 0.5 (funcall next))
+                                               :rolling-resistance (* 0.05 (funcall next)))))
     (dotimes (i 60) (luv-physics::step-physics-world w))
     (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
                      luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
