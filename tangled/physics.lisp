@@ -1407,6 +1407,7 @@ dispatches on it once per call. #W0RLD7"))
    (braced :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-braced)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
    (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
+   (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
    (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
@@ -1887,22 +1888,27 @@ pair within reach, or within the skin beyond it, lies in neighbouring cells. #G4
     grid))
 
 (defun grid-phase (world)
-  "Phase 3: bucket the awake bodies by cell, and put the awake rows in the order of a dense grid
-when they have drifted out of it. #G4R1D5"
+  "Phase 3: find the pair list's loose rows; unless the list holds and the awake grid still has
+the cells of the list's build, bucket the awake bodies by cell, and put the awake rows in the
+order of a dense grid when they have drifted out of it. #G4R1D5"
   (let* ((awake (physics-world-awake world))
          (grid (physics-world-awake-grid world))
          (n (body-columns-length awake)))
-    (build-hash-grid grid (grid-cell-size world) n
-                     (body-columns-x awake) (body-columns-y awake) (body-columns-z awake)
-                     ;; the awake grid's items are rows: an identity column of row numbers
-                     (awake-row-identities world n))
-    ;; the room a sort needs grows with the awake buffer, so sorting itself never allocates
-    (body-columns-ensure-capacity (physics-world-awake-scratch world) (body-columns-capacity awake))
-    (when (< (length (physics-world-row-places world)) (body-columns-capacity awake))
-      (setf (physics-world-row-places world)
-            (make-array (body-columns-capacity awake) :element-type 'fixnum)))
-    (when (and (hash-grid-dense grid) (> (grid-order-breaks grid n) (floor n 16)))
-      (sort-awake-rows world grid n))
+    (unless (pair-list-survey world)
+      (build-hash-grid grid (grid-cell-size world) n
+                       (body-columns-x awake) (body-columns-y awake) (body-columns-z awake)
+                       ;; the awake grid's items are rows: an identity column of row numbers
+                       (awake-row-identities world n))
+      (setf (physics-world-awake-grid-step world) (contact-table-step (physics-world-contact-table world)))
+      ;; the room a sort needs grows with the awake buffer, so sorting itself never allocates
+      (body-columns-ensure-capacity (physics-world-awake-scratch world) (body-columns-capacity awake))
+      (when (< (length (physics-world-row-places world)) (body-columns-capacity awake))
+        (setf (physics-world-row-places world)
+              (make-array (body-columns-capacity awake) :element-type 'fixnum)))
+      (when (and (hash-grid-dense grid) (> (grid-order-breaks grid n) (floor n 16)))
+        (sort-awake-rows world grid n)
+        ;; the moved rows hold other bodies now: count them loose
+        (pair-list-survey world)))
     (ensure-sleeping-grid world)))
 
 (defun grid-order-breaks (grid n)
@@ -2045,10 +2051,12 @@ across pairs, and opposite when the two are named the other way round. #P41RS7"
 widest reach plus the skin when the list was built, packed as row A times 2^24 plus row B, in
 the order the build found them; each row's centre then (ANCHORS, three floats a row), the
 handle it held (HANDLES), the grid's cell edge, and per row whether it has strayed (LOOSE)
-with the strayed rows in order (LOOSE-ROWS). BUILDS counts the builds. STEP is the step whose
-pair phase last used or built the list, BUILT-STEP the step that built it. CLEAR marks the rows
-with no solid cell within their reach plus 0.45 skins of their anchor, in TERRAIN as it was
-after TERRAIN-EDITS edits. #P41RS7"
+with the strayed rows in order (LOOSE-ROWS) and how many there are this step (LOOSE-COUNT,
+-1 when the list must be built again). BUILDS counts the builds. STEP is the step whose pair
+phase last used or built the list, BUILT-STEP the step that built it. CLEAR marks the rows with
+no solid cell within their reach plus 0.45 skins of their anchor, in TERRAIN as it was after
+TERRAIN-EDITS edits. LOOSE-GRID buckets the loose rows alone, from their centres gathered into
+LOOSE-X, LOOSE-Y and LOOSE-Z. #P41RS7"
   (pairs (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
   (rows -1 :type fixnum)
@@ -2062,7 +2070,12 @@ after TERRAIN-EDITS edits. #P41RS7"
   (built-step -1 :type fixnum)
   (clear (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (terrain nil)
-  (terrain-edits -1 :type fixnum))
+  (terrain-edits -1 :type fixnum)
+  (loose-count -1 :type fixnum)
+  (loose-grid (make-hash-grid) :type hash-grid)
+  (loose-x (make-array 0 :element-type 'single-float) :type f32-column)
+  (loose-y (make-array 0 :element-type 'single-float) :type f32-column)
+  (loose-z (make-array 0 :element-type 'single-float) :type f32-column))
 
 (defun pair-list-strays (plist awake n cell reach)
   "Mark as loose each of the N awake rows that holds another body than when PLIST was built
@@ -2081,7 +2094,10 @@ be built again. #P41RS7"
           (when (< (length (pair-list-loose plist)) (max n known))
             (let ((rows (max n known (* 2 (length (pair-list-loose plist))))))
               (setf (pair-list-loose plist) (make-array rows :element-type 'fixnum)
-                    (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum))))
+                    (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum)
+                    (pair-list-loose-x plist) (make-array rows :element-type 'single-float)
+                    (pair-list-loose-y plist) (make-array rows :element-type 'single-float)
+                    (pair-list-loose-z plist) (make-array rows :element-type 'single-float))))
           (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist))
                 (loose (pair-list-loose plist)) (loose-rows (pair-list-loose-rows plist))
                 (reach2 (* reach reach)) (count 0))
@@ -2109,7 +2125,10 @@ handles, CELL as the cell edge, and no row loose; count a build. #P41RS7"
             (pair-list-handles plist) (make-array rows :element-type 'fixnum)
             (pair-list-clear plist) (make-array rows :element-type 'fixnum)
             (pair-list-loose plist) (make-array rows :element-type 'fixnum)
-            (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum))))
+            (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum)
+            (pair-list-loose-x plist) (make-array rows :element-type 'single-float)
+            (pair-list-loose-y plist) (make-array rows :element-type 'single-float)
+            (pair-list-loose-z plist) (make-array rows :element-type 'single-float))))
   (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)))
     (with-body-columns (x y z handle) awake
       (dotimes (i n)
@@ -2130,6 +2149,29 @@ handles, CELL as the cell edge, and no row loose; count a build. #P41RS7"
         (setf (pair-list-pairs plist) fresh)))
     (setf (aref (pair-list-pairs plist) k) (logior (ash a 24) b)
           (pair-list-count plist) (1+ k))))
+
+(declaim (inline pair-list-holds-p))
+(defun pair-list-holds-p (loose-count n)
+  "True when a pair list with LOOSE-COUNT loose rows among N awake rows is still used: it was
+built for this cell edge, and at most one row in 32 (or 16 rows) is loose. #P41RS7"
+  (declare (type fixnum loose-count) (type index n))
+  (and (>= loose-count 0) (<= loose-count (max 16 (floor n 32)))))
+
+(defun pair-list-survey (world)
+  "Mark WORLD's loose rows for this step (pair-list-strays) and keep their count in the pair
+list. Return true when the list holds, no box is posted, and the awake grid was last built in
+the step that built the list: then the grid's cells still serve the pair phase. #P41RS7"
+  (let* ((plist (physics-world-pair-list world))
+         (awake (physics-world-awake world))
+         (n (body-columns-length awake))
+         (loose (pair-list-strays plist awake n (f32 (grid-cell-size world))
+                                  ;; a row may stray a little under half the skin: two such
+                                  ;; rows still meet only if the build listed them
+                                  (* 0.45 (f32 (physics-world-pair-skin world))))))
+    (setf (pair-list-loose-count plist) loose)
+    (and (pair-list-holds-p loose n)
+         (= (physics-world-awake-grid-step world) (pair-list-built-step plist))
+         (zerop (box-columns-length (physics-world-boxes world))))))
 
 (defun pair-phase (world)
   "Phase 4: contacts between awake bodies (each pair once) and lean contacts from awake bodies
@@ -2156,9 +2198,8 @@ gap is under the speculative distance. #P41RS7"
          (rmax (f32 (physics-world-max-radius world)))
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world))
-         ;; a row may stray a little under half the skin: two such rows still meet only if
-         ;; the build listed them
-         (strays (pair-list-strays plist awake n cell (* 0.45 skin))))
+         ;; the grid phase counted the loose rows
+         (strays (pair-list-loose-count plist)))
     (declare (type single-float margin skin cell slop dt gstep rmax) (type index n) (type fixnum strays)
              (type body-columns awake sleeping) (type pair-list plist)
              (type contact-columns contacts) (type contact-table table)
@@ -2199,9 +2240,11 @@ gap is under the speculative distance. #P41RS7"
                             (aref vx ,i) (aref vy ,i) (aref vz ,i)
                             (aref x ,j) (aref y ,j) (aref z ,j) (aref radius ,j) (aref handle ,j)
                             (aref vx ,j) (aref vy ,j) (aref vz ,j))))
-          (if (and (>= strays 0) (<= strays (max 16 (floor n 32))))
-              ;; the list holds: its pairs whose rows both stayed, then each loose row against
-              ;; the awake bodies of its 27 cells, a pair of loose rows from the lower row only
+          (if (pair-list-holds-p strays n)
+              ;; the list holds: its pairs whose rows both stayed; then each loose row against
+              ;; the rows of its 27 cells that are not loose, in the awake grid, whose cells
+              ;; may be the build's; then each pair of loose rows, from the lower row, in a
+              ;; grid of the loose rows alone
               (let ((pairs (pair-list-pairs plist)) (loose (pair-list-loose plist))
                     (loose-rows (pair-list-loose-rows plist)))
                 (declare (type fixnum-column pairs loose loose-rows))
@@ -2214,9 +2257,23 @@ gap is under the speculative distance. #P41RS7"
                   (let ((i (aref loose-rows q)))
                     (when (zerop (logand (aref flags i) +flag-terrain-only+))
                       (do-grid-neighbours (j grid (aref x i) (aref y i) (aref z i))
-                        (when (and (/= j i) (or (zerop (aref loose j)) (> j i))
+                        (when (and (zerop (aref loose j))
                                    (zerop (logand (aref flags j) +flag-terrain-only+)))
-                          (rows i j)))))))
+                          (rows i j))))))
+                (when (> strays 1)
+                  (let ((lgrid (pair-list-loose-grid plist)) (lx (pair-list-loose-x plist))
+                        (ly (pair-list-loose-y plist)) (lz (pair-list-loose-z plist)))
+                    (declare (type f32-column lx ly lz))
+                    (dotimes (q strays)
+                      (let ((i (aref loose-rows q)))
+                        (setf (aref lx q) (aref x i) (aref ly q) (aref y i) (aref lz q) (aref z i))))
+                    (build-hash-grid lgrid cell strays lx ly lz loose-rows)
+                    (dotimes (q strays)
+                      (let ((i (aref loose-rows q)))
+                        (when (zerop (logand (aref flags i) +flag-terrain-only+))
+                          (do-grid-neighbours (j lgrid (aref x i) (aref y i) (aref z i))
+                            (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+)))
+                              (rows i j)))))))))
               ;; build the list again: the half neighbourhood of each body's cell, in the
               ;; grid's order, within the widest reach plus the skin
               (let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
@@ -2240,7 +2297,8 @@ gap is under the speculative distance. #P41RS7"
                               (pair-list-push plist i j)
                               (rows i j))))))))
                 (pair-list-anchor plist awake n cell)
-                (setf (pair-list-built-step plist) (contact-table-step table)))))
+                (setf (pair-list-built-step plist) (contact-table-step table)
+                      (pair-list-loose-count plist) 0))))
         (setf (pair-list-step plist) (contact-table-step table))
         ;; slow or fast, an awake body reaching a sleeper leans on it
         (when any-sleeping

@@ -941,7 +941,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
   (let* ((w (luv-physics::make-basin-world 300))
          (table (luv-physics::physics-world-contact-table w))
          (plist (luv-physics::physics-world-pair-list w))
-         (builds-at-start 0) (builds 0) (checked 0) (missing 0) (stale 0) (step 0))
+         (builds-at-start 0) (builds 0) (grids-kept 0) (checked 0) (missing 0) (stale 0) (step 0))
     (flet ((check-pairs (world)
              (when (zerop (mod step 4))
                (incf checked)
@@ -992,12 +992,16 @@ function of a column name that reads row K's float in that column. #T3STK1"
               (luv-physics::remove-physics-body
                w (aref (luv-physics::body-columns-handle a) (mod (* i 37) (luv-physics::body-columns-length a))))
               (luv-physics::add-physics-body w (+ 2.0 (* 0.01 (mod i 400))) 4.0 4.0 :radius 0.25)))
-          (luv-physics::step-physics-world w))))
+          (luv-physics::step-physics-world w)
+          (when (and (< i 240) (/= (luv-physics::physics-world-awake-grid-step w)
+                                   (luv-physics::contact-table-step table)))
+            (incf grids-kept)))))
     (progn
       (check (= checked 90))
       (check (zerop missing) "~D pairs under the speculative distance had no contact" missing)
       (check (zerop stale) "~D pairs over the speculative distance had a contact" stale)
       (check (< builds 120) "the list was built on ~D of 240 steps" builds)
+      (check (> grids-kept 120) "the awake grid was kept on only ~D of 240 steps" grids-kept)
       (check (> builds 1) "the list was never rebuilt: the test saw no loose rows"))))
 ;; P41RS7-pair-list-finds-every-pair ends here
 
