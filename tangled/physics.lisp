@@ -4098,6 +4098,36 @@ Return the steps run. #H7P4CX"
   "The three load averages of /proc/loadavg, as a string, or \"?\". #B3NCH5"
   (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
 
+(defun probe-read-ns (bytes &key (hops 2000000))
+  "Nanoseconds per read when HOPS reads chase each other through a cycle over the 64-byte lines
+of an array of BYTES, in a fixed random order: the best of five passes. #B3NCH5"
+  (let* ((lines (max 2 (floor bytes 64)))
+         (next (make-array (* 8 lines) :element-type 'fixnum :initial-element 0))
+         (order (make-array lines :element-type 'fixnum))
+         (lcg 12345) (best most-positive-fixnum))
+    (declare (type fixnum-column next order) (type fixnum best))
+    (dotimes (i lines) (setf (aref order i) i))
+    ;; a fixed shuffle, so every run walks the same cycle
+    (loop for i from (1- lines) downto 1
+          do (setf lcg (mod (+ (* lcg 1103515245) 12345) 2147483648))
+             (rotatef (aref order i) (aref order (mod lcg (1+ i)))))
+    (dotimes (k lines)
+      (setf (aref next (* 8 (aref order k))) (* 8 (aref order (mod (1+ k) lines)))))
+    (dotimes (pass 5)
+      (let ((start (clock-ns)) (at 0))
+        (declare (type fixnum at))
+        (locally (declare #.+kernel-policy+)
+          (dotimes (h hops) (setf at (aref next at))))
+        (setf best (min best (- (clock-ns) start)))
+        ;; the chase's end is used, so the reads cannot be dropped
+        (when (minusp at) (error "probe cycle broken"))))
+    (/ best (float hops 1d0))))
+
+(defun machine-probe ()
+  "The probe of the machine's state, as a string: ns per chained read over 8 MB and over 32 KB. #B3NCH5"
+  (format nil "probe ~,1F ns a read over 8 MB, ~,1F over 32 KB"
+          (probe-read-ns (* 8 1024 1024)) (probe-read-ns (* 32 1024))))
+
 (defun median (values)
   "The median of the list of reals VALUES. #B3NCH5"
   (let* ((v (sort (copy-list values) #'<)) (n (length v)))
@@ -4141,8 +4171,8 @@ runs, each family's time as a fraction of the scalar family's measured in the sa
 each phase's share; with the machine's model and load. #B3NCH5"
   (let ((families (mapcar #'first (runnable-kernel-families)))
         (rows '()))
-    (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A~%"
-            (cpu-model-name) (load-average))
+    (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A; ~A~%"
+            (cpu-model-name) (load-average) (machine-probe))
     (format stream "~&| balls | family | mean ms | median ms | / scalar | contacts | colours | overflow | bytes consed/step | deepest m |~%")
     (format stream "~&|-------+--------+---------+-----------+----------+----------+---------+----------+-------------------+-----------|~%")
     (dolist (count counts)
@@ -4180,7 +4210,7 @@ whether it is met; and the wide solve's speed-up over the scalar solve. #B3NCH5"
   (flet ((row (balls family)
            (find-if (lambda (m) (and (= (getf m :balls) balls) (eq (getf m :kernels) family))) rows))
          (substeps (m) (cdr (assoc 'substep-phase (getf m :phases)))))
-    (format stream "~&~%#+caption: the targets of this machine, from the run above~%")
+    (format stream "~&~%#+caption: the targets of this machine, from the run above; after it, ~A~%" (machine-probe))
     (format stream "~&| target | measured | met |~%|--------+----------+-----|~%")
     (loop for (balls family limit) in (list (list 3000 :scalar 4.0) (list 3000 widest 1.5) (list 10000 widest 6.0))
           for m = (row balls family)

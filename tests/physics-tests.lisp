@@ -1698,6 +1698,15 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq t (luv-physics::validate-physics-world world))))))
 ;; H7P4CX-walker-kicks-balls ends here
 
+;; [[file:../physics.org::#B3NCH5][B3NCH5-probe-reaches-the-shared-cache]]
+(define-claim "B3NCH5" probe-reaches-the-shared-cache
+    "A chained read over 8 MB takes more than twice as long as over 32 KB."
+  (let ((far (luv-physics::probe-read-ns (* 8 1024 1024) :hops 500000))
+        (near (luv-physics::probe-read-ns (* 32 1024) :hops 500000)))
+    (check (> near 0))
+    (check (> far (* 2 near)) "8 MB: ~,2F ns a read, 32 KB: ~,2F ns" far near)))
+;; B3NCH5-probe-reaches-the-shared-cache ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-steps-cons-nothing]]
 (define-claim "B3NCH5" steps-cons-nothing
     "Thousands of steps of an awake pile, and of the fountain with drops added, cons 0 bytes."
