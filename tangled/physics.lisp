@@ -1107,24 +1107,40 @@ plus 64. #D9W4CH"
   (declare (type index count))
   (+ 64 (* *physics-dense-grid-cells* count)))
 
-(defun build-hash-grid (grid cell-size n xs ys zs ids)
+(declaim (inline hashed-buckets))
+(defun hashed-buckets (count)
+  "The buckets of a hashed grid of COUNT items: a power of two, at least twice COUNT and 16. #D9W4CH"
+  (declare (type index count))
+  (max 16 (ash 1 (integer-length (* 2 count)))))
+
+(defun hash-grid-reserve (grid n)
+  "Give GRID room for N items, hashed, so that building it with at most N items allocates
+nothing; return GRID. #D9W4CH"
+  (declare (type hash-grid grid) (type index n))
+  (when (< (length (hash-grid-items grid)) n)
+    (let ((m (max n (* 2 (length (hash-grid-items grid))))))
+      ;; centres and the near list keep four spare places for the four-lane listing
+      (setf (hash-grid-items grid) (make-array m :element-type 'fixnum)
+            (hash-grid-keys grid) (make-array m :element-type 'fixnum)
+            (hash-grid-item-keys grid) (make-array m :element-type 'fixnum)
+            (hash-grid-xs grid) (make-array (+ m 4) :element-type 'single-float :initial-element 0.0)
+            (hash-grid-ys grid) (make-array (+ m 4) :element-type 'single-float :initial-element 0.0)
+            (hash-grid-zs grid) (make-array (+ m 4) :element-type 'single-float :initial-element 0.0)
+            (hash-grid-near grid) (make-array (+ m 4) :element-type 'fixnum :initial-element 0))))
+  (when (< (length (hash-grid-starts grid)) (1+ (hashed-buckets n)))
+    (setf (hash-grid-starts grid) (make-array (1+ (hashed-buckets n)) :element-type 'fixnum)))
+  grid)
+
+(defun build-hash-grid (grid cell-size n xs ys zs ids &key (dense-allowed t))
   "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID: densely
-when the box of their cells, one cell of padding around, has at most (dense-limit N) cells,
-else by hash. The grid keeps its own copy of the centres in its order, so a walk over
-neighbouring cells reads positions from one run of memory. #D9W4CH"
+when DENSE-ALLOWED and the box of their cells, one cell of padding around, has at most
+(dense-limit N) cells, else by hash. The grid keeps its own copy of the centres in its order,
+so a walk over neighbouring cells reads positions from one run of memory. #D9W4CH"
   (declare (type hash-grid grid) (type single-float cell-size) (type index n)
            (type f32-column xs ys zs) (type fixnum-column ids) #.+kernel-policy+)
   (let ((inv (/ 1.0 cell-size)))
     (when (< (length (hash-grid-items grid)) n)
-      (let ((m (max n (* 2 (length (hash-grid-items grid))))))
-        ;; centres and the near list keep four spare places for the four-lane listing
-        (setf (hash-grid-items grid) (make-array m :element-type 'fixnum)
-              (hash-grid-keys grid) (make-array m :element-type 'fixnum)
-              (hash-grid-item-keys grid) (make-array m :element-type 'fixnum)
-              (hash-grid-xs grid) (make-array (+ m 4) :element-type 'single-float :initial-element 0.0)
-              (hash-grid-ys grid) (make-array (+ m 4) :element-type 'single-float :initial-element 0.0)
-              (hash-grid-zs grid) (make-array (+ m 4) :element-type 'single-float :initial-element 0.0)
-              (hash-grid-near grid) (make-array (+ m 4) :element-type 'fixnum :initial-element 0))))
+      (hash-grid-reserve grid n))
     (setf (hash-grid-inv-cell grid) inv (hash-grid-count grid) n)
     ;; the box of occupied cells decides the mode
     (let ((x0 most-positive-fixnum) (y0 most-positive-fixnum) (z0 most-positive-fixnum)
@@ -1140,8 +1156,8 @@ neighbouring cells reads positions from one run of memory. #D9W4CH"
       (let* ((nx (if (plusp n) (+ 3 (- x1 x0)) 1)) (ny (if (plusp n) (+ 3 (- y1 y0)) 1))
              (nz (if (plusp n) (+ 3 (- z1 z0)) 1))
              (cells (if (and (< nx 4096) (< ny 4096) (< nz 4096)) (* nx ny nz) most-positive-fixnum))
-             (dense (and (plusp n) (<= cells (dense-limit n))))
-             (buckets (if dense cells (max 16 (ash 1 (integer-length (* 2 n))))))
+             (dense (and dense-allowed (plusp n) (<= cells (dense-limit n))))
+             (buckets (if dense cells (hashed-buckets n)))
              (mask (1- buckets)))
         (declare (type fixnum nx ny nz cells buckets mask))
         (setf (hash-grid-dense grid) dense (hash-grid-mask grid) mask
@@ -2097,7 +2113,8 @@ be built again. #P41RS7"
                     (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum)
                     (pair-list-loose-x plist) (make-array rows :element-type 'single-float)
                     (pair-list-loose-y plist) (make-array rows :element-type 'single-float)
-                    (pair-list-loose-z plist) (make-array rows :element-type 'single-float))))
+                    (pair-list-loose-z plist) (make-array rows :element-type 'single-float))
+              (hash-grid-reserve (pair-list-loose-grid plist) rows)))
           (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist))
                 (loose (pair-list-loose plist)) (loose-rows (pair-list-loose-rows plist))
                 (reach2 (* reach reach)) (count 0))
@@ -2128,7 +2145,8 @@ handles, CELL as the cell edge, and no row loose; count a build. #P41RS7"
             (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum)
             (pair-list-loose-x plist) (make-array rows :element-type 'single-float)
             (pair-list-loose-y plist) (make-array rows :element-type 'single-float)
-            (pair-list-loose-z plist) (make-array rows :element-type 'single-float))))
+            (pair-list-loose-z plist) (make-array rows :element-type 'single-float))
+      (hash-grid-reserve (pair-list-loose-grid plist) rows)))
   (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)))
     (with-body-columns (x y z handle) awake
       (dotimes (i n)
@@ -2267,7 +2285,8 @@ gap is under the speculative distance. #P41RS7"
                     (dotimes (q strays)
                       (let ((i (aref loose-rows q)))
                         (setf (aref lx q) (aref x i) (aref ly q) (aref y i) (aref lz q) (aref z i))))
-                    (build-hash-grid lgrid cell strays lx ly lz loose-rows)
+                    ;; hashed: a dense box sized by the loose rows' spread could outgrow its room
+                    (build-hash-grid lgrid cell strays lx ly lz loose-rows :dense-allowed nil)
                     (dotimes (q strays)
                       (let ((i (aref loose-rows q)))
                         (when (zerop (logand (aref flags i) +flag-terrain-only+))
