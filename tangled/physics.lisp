@@ -4192,18 +4192,19 @@ each phase's share; with the machine's model and load. #B3NCH5"
         (rows '()))
     (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A; ~A~%"
             (cpu-model-name) (load-average) (machine-probe))
-    (format stream "~&| balls | family | mean ms | median ms | / scalar | contacts | colours | overflow | bytes consed/step | deepest m |~%")
-    (format stream "~&|-------+--------+---------+-----------+----------+----------+---------+----------+-------------------+-----------|~%")
+    (format stream "~&| balls | family | mean ms | median ms | / scalar | contacts | colours | overflow | bytes consed/step | deepest m | probe ns |~%")
+    (format stream "~&|-------+--------+---------+-----------+----------+----------+---------+----------+-------------------+-----------+----------|~%")
     (dolist (count counts)
       (let ((scalar nil))
         (dolist (family families)
-          (let ((m (measure-basin count :kernels family)))
+          (let* ((probe (probe-read-ns (* 8 1024 1024) :hops 500000))
+                 (m (measure-basin count :kernels family)))
             (unless scalar (setf scalar (getf m :median)))
-            (push m rows)
-            (format stream "~&| ~5D | ~6A | ~7,3F | ~9,3F | ~8,2F | ~8D | ~7D | ~8D | ~17D | ~9,4F |~%"
+            (push (list* :probe probe m) rows)
+            (format stream "~&| ~5D | ~6A | ~7,3F | ~9,3F | ~8,2F | ~8D | ~7D | ~8D | ~17D | ~9,4F | ~8,1F |~%"
                     count (string-downcase family) (getf m :mean) (getf m :median)
                     (/ (getf m :median) scalar) (getf m :contacts) (getf m :colours)
-                    (getf m :overflow) (getf m :consed) (getf m :deepest))
+                    (getf m :overflow) (getf m :consed) (getf m :deepest) probe)
             (finish-output stream)))))
     ;; two tables of the phase groups: mean ms, then bytes consed
     (flet ((phase-table (caption key cell)
@@ -4230,17 +4231,17 @@ whether it is met; and the wide solve's speed-up over the scalar solve. #B3NCH5"
            (find-if (lambda (m) (and (= (getf m :balls) balls) (eq (getf m :kernels) family))) rows))
          (substeps (m) (cdr (assoc 'substep-phase (getf m :phases)))))
     (format stream "~&~%#+caption: the targets of this machine, from the run above; after it, ~A~%" (machine-probe))
-    (format stream "~&| target | measured | met |~%|--------+----------+-----|~%")
+    (format stream "~&| target | measured | probe ns | met |~%|--------+----------+----------+-----|~%")
     (loop for (balls family limit) in (list (list 3000 :scalar 4.0) (list 3000 widest 1.5) (list 10000 widest 6.0))
           for m = (row balls family)
           when m
-            do (format stream "~&| ~D balls, ~(~A~), median <= ~,1F ms | ~,3F ms | ~:[no~;yes~] |~%"
-                       balls family limit (getf m :median) (<= (getf m :median) limit)))
+            do (format stream "~&| ~D balls, ~(~A~), median <= ~,1F ms | ~,3F ms | ~,1F | ~:[no~;yes~] |~%"
+                       balls family limit (getf m :median) (getf m :probe) (<= (getf m :median) limit)))
     (let ((scalar (row 3000 :scalar)) (wide (row 3000 widest)))
       (when (and scalar wide (not (eq widest :scalar)))
         (let ((ratio (/ (substeps scalar) (substeps wide))))
-          (format stream "~&| 3000 balls, ~(~A~) substeps >= 3x faster than scalar | ~,2Fx | ~:[no~;yes~] |~%"
-                  widest ratio (>= ratio 3)))))))
+          (format stream "~&| 3000 balls, ~(~A~) substeps >= 3x faster than scalar | ~,2Fx | ~,1F, ~,1F | ~:[no~;yes~] |~%"
+                  widest ratio (getf scalar :probe) (getf wide :probe) (>= ratio 3)))))))
 
 (defun measure-steps (world from to &optional before-step)
   "Step WORLD TO times, calling BEFORE-STEP first, when given, with the step's number. Return the
