@@ -17,7 +17,7 @@ help:
 	@echo "make test           check tangling and anchors, then run every claim"
 	@echo "make test ANCHOR=ID run only the claims of section ID"
 	@echo "make setup          install sbcl, emacs-nox, cl-fiveam if missing (apt-get, as root)"
-	@echo "make tangle         write $(OUT) from $(ORG)"
+	@echo "make tangle         write $(OUT) from $(ORG), each only if its text changed"
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
 	@echo "make bench          measure the basin per kernel family; write the table into $(ORG)"
@@ -30,8 +30,7 @@ setup:
 	@tools/setup "$(SBCL)" "$(EMACS)"
 
 tangle:
-	@command -v "$(EMACS)" >/dev/null 2>&1 || { echo "tangle: Emacs not found (EMACS=$(EMACS)); run 'make setup' as root, or set EMACS=/path/to/emacs" >&2; exit 1; }
-	@"$(EMACS)" -Q --batch -l tools/tangle.el $(ORG)
+	@tools/tangle-page "$(EMACS)" $(ORG)
 
 check-tangle:
 	@tools/check-tangle "$(EMACS)" $(ORG) $(OUT)
