@@ -1468,10 +1468,12 @@ holding the columnar buffers, the parameters, the events and the kernel family. 
   "Kernel families by name: (NAME CLASS &optional INSTRUCTION-SET), narrowest first. #R9M4PV")
 
 (defun kernel-family-available-p (entry)
-  "True when the CPU runs the instruction set the family ENTRY needs. #R9M4PV"
+  "True when the family ENTRY needs no instruction set, or sb-simd knows the one it needs and
+this processor and image run it. #R9M4PV"
   (let ((set (third entry)))
     (or (null set)
-        (sb-simd-internals:instruction-set-available-p (sb-simd-internals:find-instruction-set set)))))
+        (let ((known (sb-simd-internals:find-instruction-set set nil)))
+          (and known (sb-simd-internals:instruction-set-available-p known) t)))))
 
 (defun runnable-kernel-families ()
   "The entries of *kernel-families* whose instruction sets this CPU runs, narrowest first. #R9M4PV"

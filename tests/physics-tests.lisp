@@ -203,7 +203,7 @@
     (check (eq :scalar (first families)))
     (check (equal families (remove-duplicates families)))
     (check (subsetp (rest families)
-                    (mapcar #'first luv-physics::*kernel-family-instruction-sets*)))))
+                    (mapcar #'first luv-physics::*kernel-families*)))))
 ;; JKM0PY-scalar-first ends here
 
 ;; [[file:../physics.org::#JKM0PY][JKM0PY-families-match-cpuinfo]]
