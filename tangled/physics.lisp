@@ -1371,9 +1371,10 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
 (defconstant +solver-stride+ 8
   "Floats per body in the solver's velocity array: vx vy vz wx wy wz and two spare. #W0RLD7")
 
-(defconstant +delta-stride+ 8
-  "Floats per body in the solver's delta array: dx dy dz and five spare, so a wide kernel
-gathers deltas exactly as it gathers velocities. #W0RLD7")
+(defconstant +delta-stride+ +solver-stride+
+  "Floats per body in the solver's delta array: dx dy dz and five spare. It is the velocity
+array's stride by definition, because a wide kernel gathers deltas with the velocities' row
+addresses. #W0RLD7")
 
 (defconstant +solver-origin+ 4
   "Floats before the first row of a solver array, so that on an array whose data begin 16 bytes
