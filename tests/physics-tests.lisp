@@ -1005,6 +1005,39 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (> builds 1) "the list was never rebuilt: the test saw no loose rows"))))
 ;; P41RS7-pair-list-finds-every-pair ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-grid-between-builds-is-not-kept]]
+(define-claim "P41RS7" grid-between-builds-is-not-kept
+    "After a grid built between list builds, a loose ball still meets a ball that came back to its anchor."
+  (let* ((w (make-physics-world :terrain (luv-physics::make-basin-terrain)))
+         (balls (loop for k below 12 collect (add-physics-body w 1.0 0.25 (+ 0.5 (* 0.6 k)) :radius 0.25)))
+         (j (first balls))
+         (plist (luv-physics::physics-world-pair-list w))
+         (table (luv-physics::physics-world-contact-table w)))
+    (dotimes (i 30) (step-physics-world w))
+    (flet ((j-row () (nth-value 1 (luv-physics::resolve-handle w j)))
+           (j-x (row) (aref (luv-physics::body-columns-x (luv-physics::physics-world-awake w)) row)))
+      (let ((home (j-x (j-row))) (builds (luv-physics::pair-list-builds plist)))
+        (setf (aref (luv-physics::body-columns-x (luv-physics::physics-world-awake w)) (j-row)) (+ home 2.0))
+        (post-physics-box w 7.0 3.0 7.0 0.2 0.2 0.2)
+        (step-physics-world w)
+        (setf (aref (luv-physics::body-columns-x (luv-physics::physics-world-awake w)) (j-row)) home)
+        (multiple-value-bind (jx jy jz) (physics-body-position w j)
+          (declare (ignore jx))
+          (let ((k (add-physics-body w home jy (+ jz 0.45) :radius 0.25)))
+            (step-physics-world w)
+            (check (= builds (luv-physics::pair-list-builds plist)) "the list was built again")
+            (check (/= (luv-physics::physics-world-awake-grid-step w) (luv-physics::pair-list-built-step plist))
+                   "the grid was not built between list builds")
+            (let* ((c (luv-physics::physics-world-contacts w))
+                   (key (luv-physics::pair-key (min (luv-physics::handle-index j) (luv-physics::handle-index k))
+                                               (max (luv-physics::handle-index j) (luv-physics::handle-index k)))))
+              (check (loop for row below (luv-physics::contact-columns-length c)
+                           thereis (and (= (aref (luv-physics::contact-columns-key c) row) key)
+                                        (= (aref (luv-physics::contact-columns-seen c) row)
+                                           (luv-physics::contact-table-step table))))
+                     "K found no contact with J"))))))))
+;; P41RS7-grid-between-builds-is-not-kept ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-coincident-pair-separates]]
 (define-claim "P41RS7" coincident-pair-separates
     "Coincident balls separate along their pair's direction at <= the push-out speed."
