@@ -126,13 +126,14 @@ builds, rebuilt here to keep the handles."
                     btDiscreteDynamicsWorld, stepSimulation(1/60, 0), ~D solver iterations) and ODE ~A ~
                     (Debian's ~(~A~)-precision build; ~(~A~) space, dSpaceCollide, dContactApprox1 mu 0.6, ~
                     ERP 0.2, CFM 1e-5, dWorldQuickStep(1/60), ~D iterations); their drivers g++ -O2, ~
-                    no -march=native; ~A; load ~A~%"
+                    no -march=native; ~A; load ~A; ~A~%"
             *peer-from* *peer-steps* (lisp-implementation-version)
             (or (peer-first-line "pkg-config" "--modversion" "bullet") "?") *peer-iterations*
             (or (peer-first-line "pkg-config" "--modversion" "ode") "?")
             (getf ode-build :precision "?") (getf ode-build :space "?") *peer-iterations*
             (or (first-matching-line "/proc/cpuinfo" "model name") "unknown CPU")
-            (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?"))
+            (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?")
+            (luv-physics::machine-probe))
     (format stream "~&| balls | engine             | mean ms | median ms | / Bullet (median) | / ODE (median) |~%")
     (format stream "~&|-------+--------------------+---------+-----------+-------------------+----------------|~%")
     (finish-output stream)
