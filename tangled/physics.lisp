@@ -4351,6 +4351,26 @@ kernel family this CPU runs, and the spread pile under two dense-grid bounds for
 ;; What a step costs:1 ends here
 
 ;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]
+(defun pinch-between-sleepers (&key (seconds 2))
+  "Let two balls of radius 0.25 m fall asleep on the basin floor 0.8 m apart, spawn a third
+between them, overlapping each by 0.1 m, and run SECONDS. Return the largest normal impulse
+of any contact over the ball's weight times the substep, and the fastest the ball moved. #X7R3M5"
+  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep t))
+         (h (/ (physics-world-step-seconds world) (physics-world-substeps world)))
+         (largest 0.0) (fastest 0.0))
+    (add-physics-body world 3.6 0.25 4.0 :radius 0.25)
+    (add-physics-body world 4.4 0.25 4.0 :radius 0.25)
+    (loop repeat 120 until (= 2 (physics-world-sleeping-count world))
+          do (step-physics-world world))
+    (let ((ball (add-physics-body world 4.0 0.25 4.0 :radius 0.25 :mass 1.0)))
+      (dotimes (i (* 60 seconds))
+        (step-physics-world world)
+        (let* ((contacts (physics-world-contacts world)) (geometry (contact-columns-geometry contacts)))
+          (dotimes (k (contact-columns-length contacts))
+            (setf largest (max largest (contact@ geometry k normal-impulse)))))
+        (setf fastest (max fastest (speed-of world ball)))))
+    (values (/ largest (* 9.81 h)) fastest)))
+
 (defun speed-of (world handle)
   "The speed of HANDLE's body. #X7R3M5"
   (multiple-value-bind (vx vy vz) (physics-body-velocity world handle)
@@ -4592,6 +4612,10 @@ its final height less its ideal resting height (radius less a slop), and whether
       (row "heaps of 50 to 150 balls spawned at one point, no gravity" (and (< speed 10.0) (< pen 0.01))
            "fastest ball ~,3F m/s; fastest parting pair ~,3F m/s in the median heap, ~,3F m/s in the worst; ~
             deepest left ~,4F m" speed median worst pen))
+    (multiple-value-bind (load speed) (pinch-between-sleepers)
+      (row "ball spawned pinched between two sleeping balls"
+           (and (< load 100.0) (<= speed (+ *physics-contact-push-max* 0.01)))
+           "largest impulse ~D times the ball's weight over a substep; fastest ~,3F m/s" (round load) speed))
     (dolist (depth '(0.2 0.5))
       (multiple-value-bind (speed y rest) (buried-ball depth)
         (row (format nil "ball spawned ~,1F m deep in the floor" depth)
