@@ -4,13 +4,6 @@
 (in-package #:luv-physics)
 ;; Which wide instructions this machine offers:1 ends here
 
-;; [[file:../physics.org::#JKM0PY][Which wide instructions this machine offers:2]]
-(defun available-kernel-families ()
-  "The names of the registered kernel families this machine can run, narrowest first: :SCALAR,
-then each wide family whose instruction set sb-simd finds present. #JKM0PY"
-  (mapcar #'first (runnable-kernel-families)))
-;; Which wide instructions this machine offers:2 ends here
-
 ;; [[file:../physics.org::#R0WS8T][Gathering rows into lanes:1]]
 (defmacro row-at (index k l)
   "Entry K+L of the fixnum column INDEX, L a constant folded into the load's address. #R0WS8T"

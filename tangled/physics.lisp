@@ -9,7 +9,7 @@
    ;; The image knows its anchors (#BSOZ3U)
    #:anchor-definitions
    #:definition-anchor
-   ;; Which wide instructions this machine offers (#JKM0PY)
+   ;; Which wide instructions this machine offers (#JKM0PY), listed with the families (#R9M4PV)
    #:available-kernel-families
    ;; Types, the hot-loop policy and the parameters (#V0CAB5)
    #:*physics-contact-hertz* #:*physics-contact-damping-ratio* #:*physics-contact-push-max*
@@ -1480,6 +1480,11 @@ this processor and image run it. #R9M4PV"
   "The entries of *kernel-families* whose instruction sets this CPU runs, narrowest first. #R9M4PV"
   (remove-if-not #'kernel-family-available-p *kernel-families*))
 
+(defun available-kernel-families ()
+  "The names of the registered kernel families this machine can run, narrowest first: :SCALAR,
+then each wide family whose instruction set sb-simd finds present. #R9M4PV"
+  (mapcar #'first (runnable-kernel-families)))
+
 (defun register-kernel-family (name class &optional instruction-set)
   "Make the kernel family NAME, an instance of CLASS needing INSTRUCTION-SET, available to
 make-physics-world, replacing an earlier entry of that NAME; families register narrowest
@@ -1501,7 +1506,7 @@ first, so :auto takes the last one the CPU runs. #R9M4PV"
           (error 'invalid-physics-parameter
                  :name :kernels :value name
                  :expected (format nil "one of ~{~S~^, ~} or :auto on this CPU"
-                                   (mapcar #'first (runnable-kernel-families)))))
+                                   (available-kernel-families))))
         (make-instance (second entry)))))
 ;; Choose the phase once: kernel families:1 ends here
 
@@ -2096,6 +2101,26 @@ LOOSE-X, LOOSE-Y and LOOSE-Z. #P41RS7"
   (loose-y (make-array 0 :element-type 'single-float) :type f32-column)
   (loose-z (make-array 0 :element-type 'single-float) :type f32-column))
 
+(defun pair-list-room (plist rows)
+  "Give every per-row column of PLIST, and its grid of loose rows, room for ROWS rows, keeping
+what they hold and doubling when they grow, so that a step with no more rows than before
+allocates nothing. #P41RS7"
+  (declare (type pair-list plist) (type index rows))
+  (when (< (length (pair-list-handles plist)) rows)
+    (let ((rows (max rows (* 2 (length (pair-list-handles plist))) 64)))
+      (flet ((grow (old size)
+               (replace (make-array size :element-type (array-element-type old)) old)))
+        (setf (pair-list-anchors plist) (grow (pair-list-anchors plist) (* 3 rows))
+              (pair-list-handles plist) (grow (pair-list-handles plist) rows)
+              (pair-list-clear plist) (grow (pair-list-clear plist) rows)
+              (pair-list-loose plist) (grow (pair-list-loose plist) rows)
+              (pair-list-loose-rows plist) (grow (pair-list-loose-rows plist) rows)
+              (pair-list-loose-x plist) (grow (pair-list-loose-x plist) rows)
+              (pair-list-loose-y plist) (grow (pair-list-loose-y plist) rows)
+              (pair-list-loose-z plist) (grow (pair-list-loose-z plist) rows)))
+      (hash-grid-reserve (pair-list-loose-grid plist) rows)))
+  plist)
+
 (defun pair-list-strays (plist awake n cell reach)
   "Mark as loose each of the N awake rows that holds another body than when PLIST was built
 (another handle, or a row added since) or whose centre lies farther than REACH from its
@@ -2110,14 +2135,7 @@ be built again. #P41RS7"
         -1
         (progn
           ;; room for a flag on every row, the list's and today's
-          (when (< (length (pair-list-loose plist)) (max n known))
-            (let ((rows (max n known (* 2 (length (pair-list-loose plist))))))
-              (setf (pair-list-loose plist) (make-array rows :element-type 'fixnum)
-                    (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum)
-                    (pair-list-loose-x plist) (make-array rows :element-type 'single-float)
-                    (pair-list-loose-y plist) (make-array rows :element-type 'single-float)
-                    (pair-list-loose-z plist) (make-array rows :element-type 'single-float))
-              (hash-grid-reserve (pair-list-loose-grid plist) rows)))
+          (pair-list-room plist (max n known))
           (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist))
                 (loose (pair-list-loose plist)) (loose-rows (pair-list-loose-rows plist))
                 (reach2 (* reach reach)) (count 0))
@@ -2139,17 +2157,7 @@ be built again. #P41RS7"
   "Make PLIST describe the N awake rows as they are now: their centres as anchors, their
 handles, CELL as the cell edge, and no row loose; count a build. #P41RS7"
   (declare (type pair-list plist) (type body-columns awake) (type index n) (type single-float cell))
-  (when (< (length (pair-list-handles plist)) n)
-    (let ((rows (max n (* 2 (length (pair-list-handles plist))) 64)))
-      (setf (pair-list-anchors plist) (make-array (* 3 rows) :element-type 'single-float)
-            (pair-list-handles plist) (make-array rows :element-type 'fixnum)
-            (pair-list-clear plist) (make-array rows :element-type 'fixnum)
-            (pair-list-loose plist) (make-array rows :element-type 'fixnum)
-            (pair-list-loose-rows plist) (make-array rows :element-type 'fixnum)
-            (pair-list-loose-x plist) (make-array rows :element-type 'single-float)
-            (pair-list-loose-y plist) (make-array rows :element-type 'single-float)
-            (pair-list-loose-z plist) (make-array rows :element-type 'single-float))
-      (hash-grid-reserve (pair-list-loose-grid plist) rows)))
+  (pair-list-room plist n)
   (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)))
     (with-body-columns (x y z handle) awake
       (dotimes (i n)
@@ -4191,7 +4199,7 @@ overlap any step left (:deepest), and the mean ms of each phase (:phases, an ali
   "Print, as Org tables, the basin measured at each of COUNTS for every kernel family this CPU
 runs, each family's time as a fraction of the scalar family's measured in the same run, and
 each phase's share; with the machine's model and load. #B3NCH5"
-  (let ((families (mapcar #'first (runnable-kernel-families)))
+  (let ((families (available-kernel-families))
         (rows '()))
     (format stream "~&#+caption: basin, 60 Hz, 4 substeps, all awake; steps 120-300; ~A; load ~A; ~A~%"
             (cpu-model-name) (load-average) (machine-probe))
@@ -4327,7 +4335,7 @@ middle of the basin, two water drops a step. #B3NCH5"
 kernel family this CPU runs, and the spread pile under two dense-grid bounds for the widest. #B3NCH5"
   (format stream "~&#+caption: other scenes; load ~A~%" (load-average))
   (format stream "~&| scene | family | mean ms/step | bytes consed/step | note |~%|-------+--------+------+------+------|~%")
-  (let ((families (mapcar #'first (runnable-kernel-families))))
+  (let ((families (available-kernel-families)))
   (dolist (family families)
     (let ((m (measure-settled-pile :kernels family)))
       (format stream "~&| 1000 balls settled | ~A | ~,4F | ~D | asleep after ~D steps, ~D awake |~%"
@@ -4369,7 +4377,7 @@ of any contact over the ball's weight times the substep, and the fastest the bal
           (dotimes (k (contact-columns-length contacts))
             (setf largest (max largest (contact@ geometry k normal-impulse)))))
         (setf fastest (max fastest (speed-of world ball)))))
-    (values (/ largest (* 9.81 h)) fastest)))
+    (values (/ largest (* (abs (physics-world-gravity-y world)) h)) fastest)))
 
 (defun speed-of (world handle)
   "The speed of HANDLE's body. #X7R3M5"
@@ -4854,7 +4862,7 @@ reached the same error and state hash). #W9PREC"
 
 (defun run-accuracy-sweep (&key (scenes (mapcar #'first *accuracy-scenes*)) (rates +sweep-rates+)
                                 (substeps +sweep-substeps+)
-                                (families (mapcar #'first (runnable-kernel-families))))
+                                (families (available-kernel-families)))
   "Run every scene of SCENES at every step rate of RATES, substep count of SUBSTEPS and kernel
 family of FAMILIES; return one plist per point, families innermost (see run-accuracy-point). #W9PREC"
   (loop for scene in scenes

@@ -303,10 +303,6 @@ how far the ball moved and the deepest the box's leading face got past the ball'
         (luv-physics::physics-world-sleeping-count world)
         (luv-physics::physics-world-state-hash world)))
 
-(defun runnable-families ()
-  "The names of the kernel families this CPU runs, :SCALAR first. #T3STK1"
-  (mapcar #'first (luv-physics::runnable-kernel-families)))
-
 (defun prepared-basin-world (family &key (balls 1000) (steps 60))
   "A basin of BALLS balls under FAMILY, stepped STEPS times, then run through the phases of one
 more step up to and including prepare: its constraints are ready for the substeps. #T3STK1"
@@ -1356,7 +1352,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
     "Prepared tangent frames are orthonormal with their normals, in every family."
-  (dolist (family (runnable-families))
+  (dolist (family (available-kernel-families))
     (let ((world (prepared-basin-world family)) (worst 0.0) (rows 0))
       (map-prepared-constraints
        (lambda (k column)
@@ -1375,7 +1371,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-kept-gap-is-current]]
 (define-claim "S0LV3R" kept-gap-is-current
     "The kept gap equals the gap recomputed from the current deltas, before and after each substep."
-  (dolist (family (runnable-families))
+  (dolist (family (available-kernel-families))
     (let ((world (prepared-basin-world family)) (checked 0) (wrong 0))
       (let* ((kernels (luv-physics::physics-world-kernels world))
              (cbuf (luv-physics::physics-world-constraints world))
@@ -1914,7 +1910,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
            (let ((world (make-basin-world balls :kernels kernels)))
              (dotimes (i steps) (step-physics-world world))
              (physics-world-state-hash world))))
-    (let ((families (runnable-families)))
+    (let ((families (available-kernel-families)))
       (check (member :avx2 families) "the AVX2 family is registered and this CPU runs it")
       (loop for (balls steps) in '((200 120) (1000 200))
             for reference = (hash-after balls steps :scalar)
@@ -1941,7 +1937,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (dotimes (i 240) (step-physics-world world))
              (physics-world-state-hash world))))
     (let ((reference (hash-after :scalar)))
-      (dolist (family (remove :scalar (runnable-families)))
+      (dolist (family (remove :scalar (available-kernel-families)))
         (check (= reference (hash-after family)) "~A differs from scalar on the mixed pile" family)))))
 ;; 7PAQ3M-mixed-materials-agree ends here
 

@@ -105,18 +105,9 @@ builds, rebuilt here to keep the handles."
           (when (or (< x 0) (> x 8) (< z 0) (> z 8) (< y 0)) (incf escaped))))
       (values (/ sum-y count) min-y escaped))))
 
-(defun first-matching-line (path key)
-  "The value after the colon of the first line of PATH containing KEY, or NIL."
-  (ignore-errors
-   (with-open-file (s path)
-     (loop for line = (read-line s nil) while line
-           when (search key line)
-             return (string-trim " " (subseq line (1+ (position #\: line))))))))
-
 (defun run-peer-benchmark (&key (counts *peer-counts*) (stream *standard-output*))
   "Print the side-by-side table and the sanity table."
-  (let* ((auto (first (car (last (remove-if-not #'luv-physics::kernel-family-available-p
-                                                luv-physics::*kernel-families*)))))
+  (let* ((auto (car (last (luv-physics:available-kernel-families))))
          (engines (remove-duplicates (list auto :scalar) :from-end t))
          (sanity '())
          ;; a run of no balls and one step, for the precision and the space ODE's binary reports
@@ -131,8 +122,7 @@ builds, rebuilt here to keep the handles."
             (or (peer-first-line "pkg-config" "--modversion" "bullet") "?") *peer-iterations*
             (or (peer-first-line "pkg-config" "--modversion" "ode") "?")
             (getf ode-build :precision "?") (getf ode-build :space "?") *peer-iterations*
-            (or (first-matching-line "/proc/cpuinfo" "model name") "unknown CPU")
-            (or (ignore-errors (with-open-file (s "/proc/loadavg") (subseq (read-line s) 0 14))) "?")
+            (luv-physics::cpu-model-name) (luv-physics::load-average)
             (luv-physics::machine-probe))
     (format stream "~&| balls | engine             | mean ms | median ms | / Bullet (median) | / ODE (median) |~%")
     (format stream "~&|-------+--------------------+---------+-----------+-------------------+----------------|~%")
