@@ -17,9 +17,12 @@
    #:*physics-hit-speed* #:*physics-sleep-speed* #:*physics-time-to-sleep* #:*physics-wake-speed*
    #:*physics-brace-mass-ratio*
    #:*physics-reach-limit* #:*physics-max-speed* #:+physics-coordinate-limit+
+   #:*physics-body-budget* #:*physics-terrain-chunk-budget*
    ;; Bad input is a condition that names the value (#C0ND1T)
    #:physics-error #:invalid-physics-number #:invalid-physics-radius #:invalid-physics-parameter
-   #:stale-physics-handle #:physics-world-busy #:physics-world-invalid
+   #:stale-physics-handle #:physics-world-busy #:physics-world-invalid #:physics-budget-exceeded
+   #:+physics-min-radius+ #:+physics-min-mass+ #:+physics-max-mass+ #:+physics-max-friction+
+   #:+physics-max-gravity+ #:+physics-min-step-seconds+
    ;; Terrain (#H2W9DJ)
    #:voxel-terrain #:make-voxel-terrain #:terrain-solid-p #:terrain-resident-p #:fill-terrain
    ;; The world, kernel families, making worlds and bodies (#W0RLD7, #R9M4PV, #M4K3WD)
@@ -402,6 +405,12 @@ static. #V0CAB5")
 (defparameter *physics-max-speed* 400.0
   "Speed, m/s, at which a body's velocity is clamped each substep. #V0CAB5")
 
+(defparameter *physics-body-budget* 262144
+  "Most bodies a world holds, awake and asleep together; an add beyond it is refused. #V0CAB5")
+
+(defparameter *physics-terrain-chunk-budget* 32768
+  "Most resident chunks (4 KB each) a terrain holds; a fill beyond it is refused. #V0CAB5")
+
 (defconstant +physics-max-colors+ 24
   "Colours available to the constraint graph; colour 24 is the overflow colour. #V0CAB5")
 
@@ -427,6 +436,24 @@ single-float goes through double precision; both round correctly, so they agree)
 ;; Types, the hot-loop policy and the parameters:1 ends here
 
 ;; [[file:../physics.org::#C0ND1T][Bad input is a condition that names the value:1]]
+(defconstant +physics-min-radius+ 0.005
+  "Smallest radius, m, a body may have. #C0ND1T")
+
+(defconstant +physics-min-mass+ 0.001
+  "Smallest mass, kg, a body may have. #C0ND1T")
+
+(defconstant +physics-max-mass+ 100000.0
+  "Largest mass, kg, a body may have. #C0ND1T")
+
+(defconstant +physics-max-friction+ 10.0
+  "Largest friction or rolling-resistance coefficient a body may have. #C0ND1T")
+
+(defconstant +physics-max-gravity+ 1000.0
+  "Largest magnitude, m/s², of each component of a world's gravity. #C0ND1T")
+
+(defconstant +physics-min-step-seconds+ 0.0001
+  "Shortest step, s, a world may take. #C0ND1T")
+
 (define-condition physics-error (error)
   ((world :initarg :world :initform nil :reader physics-error-world))
   (:documentation "Every error the engine signals for bad input; the world is left untouched. #C0ND1T"))
@@ -443,9 +470,9 @@ single-float goes through double precision; both round correctly, so they agree)
   ((value :initarg :value :reader invalid-physics-radius-value)
    (limit :initarg :limit :reader invalid-physics-radius-limit))
   (:report (lambda (c s)
-             (format s "radius ~S is out of range: it must be > 0 and at most ~,3F so that ~
-                        radius plus margin stays under one cell"
-                     (invalid-physics-radius-value c) (invalid-physics-radius-limit c))))
+             (format s "radius ~S is out of range: it must be from ~,3F to ~,3F, so that the ~
+                        solver's arithmetic holds and radius plus margin stays under one cell"
+                     (invalid-physics-radius-value c) +physics-min-radius+ (invalid-physics-radius-limit c))))
   (:documentation "A radius of zero or less, or one whose reach would span a cell. #C0ND1T"))
 
 (define-condition invalid-physics-parameter (physics-error)
@@ -482,6 +509,18 @@ single-float goes through double precision; both round correctly, so they agree)
              (format s "physics world invariant broken: ~A" (physics-world-invalid-invariant c))))
   (:documentation "Signalled by validate-physics-world, naming the first broken invariant. #C0ND1T"))
 
+(define-condition physics-budget-exceeded (physics-error)
+  ((operation :initarg :operation :reader physics-budget-exceeded-operation)
+   (resource :initarg :resource :reader physics-budget-exceeded-resource)
+   (requested :initarg :requested :reader physics-budget-exceeded-requested)
+   (budget :initarg :budget :reader physics-budget-exceeded-budget))
+  (:report (lambda (c s)
+             (format s "~(~A~) would need ~D ~(~A~), beyond the budget of ~D"
+                     (physics-budget-exceeded-operation c) (physics-budget-exceeded-requested c)
+                     (physics-budget-exceeded-resource c) (physics-budget-exceeded-budget c))))
+  (:documentation "A request for more bodies, handles or terrain chunks than the documented
+budget; signalled before anything is allocated. #C0ND1T"))
+
 (declaim (inline finite-f32))
 (defun finite-f32 (name value &optional world)
   "VALUE as a single-float, or an invalid-physics-number error naming NAME. #C0ND1T"
@@ -491,6 +530,65 @@ single-float goes through double precision; both round correctly, so they agree)
            (< (abs value) most-positive-single-float))
       (coerce value 'single-float)
       (error 'invalid-physics-number :name name :value value :world world)))
+
+(defun ranged-f32 (name value low high &optional world)
+  "VALUE as a single-float from LOW to HIGH, or an error naming NAME: invalid-physics-number
+when it is not finite, invalid-physics-parameter when it lies outside. #C0ND1T"
+  (let ((v (finite-f32 name value world)))
+    (unless (<= low v high)
+      (error 'invalid-physics-parameter :world world :name name :value value
+                                        :expected (format nil "from ~A to ~A" low high)))
+    v))
+
+(defun check-velocity (vx vy vz max-speed &optional world)
+  "Signal invalid-physics-parameter naming :velocity unless the single-floats VX VY VZ make a
+speed of at most MAX-SPEED. Each component is bounded first, so the square cannot overflow. #C0ND1T"
+  (declare (type single-float vx vy vz max-speed))
+  (unless (and (<= (abs vx) max-speed) (<= (abs vy) max-speed) (<= (abs vz) max-speed)
+               (<= (+ (* vx vx) (* vy vy) (* vz vz)) (* max-speed max-speed)))
+    (error 'invalid-physics-parameter :world world :name :velocity :value (list vx vy vz)
+                                      :expected (format nil "a speed of at most ~A m/s" max-speed)))
+  (values))
+
+(defparameter +physics-parameters+
+  '((:contact-hertz *physics-contact-hertz* 0 1000)
+    (:contact-damping-ratio *physics-contact-damping-ratio* 0 1000)
+    (:contact-push-max *physics-contact-push-max* 0 100)
+    (:load-stiffening *physics-load-stiffening* 1 1000000)
+    (:crowded-relax-passes *physics-crowded-relax-passes* 0 16 integer)
+    (:crowded-depth *physics-crowded-depth* 0 1000000000)
+    (:linear-slop *physics-linear-slop* 0 0.05)
+    (:speculative-margin *physics-speculative-margin* 0 0.5)
+    (:pair-skin *physics-pair-skin* 0 0.5)
+    (:restitution-threshold *physics-restitution-threshold* 0 1000)
+    (:hit-speed *physics-hit-speed* 0 1000)
+    (:sleep-speed *physics-sleep-speed* 0 10)
+    (:time-to-sleep *physics-time-to-sleep* 0 1000000)
+    (:wake-speed *physics-wake-speed* 0 1000)
+    (:brace-mass-ratio *physics-brace-mass-ratio* 1 1000000)
+    (:reach-limit *physics-reach-limit* 0.01 0.99)
+    (:max-speed *physics-max-speed* 1 1000)
+    (:body-budget *physics-body-budget* 1 #.(1- (ash 1 24)) integer))
+  "Each parameter a world copies when it is made: its name, its special variable, the range it
+must lie in, and INTEGER when it counts something. #C0ND1T")
+
+(defun checked-physics-parameters ()
+  "The current value of every parameter of +physics-parameters+, checked against its range, as
+a plist by name (single-floats, or integers for counts); the speculative margin must also leave
+room under the reach limit for the smallest radius. #C0ND1T"
+  (let ((plist (loop for (name symbol low high kind) in +physics-parameters+
+                     for value = (symbol-value symbol)
+                     collect name
+                     collect (if (eq kind 'integer)
+                                 (if (and (integerp value) (<= low value high))
+                                     value
+                                     (error 'invalid-physics-parameter :name name :value value
+                                                                       :expected (format nil "an integer from ~D to ~D" low high)))
+                                 (ranged-f32 name value low high)))))
+    (unless (>= (getf plist :reach-limit) (+ (getf plist :speculative-margin) +physics-min-radius+))
+      (error 'invalid-physics-parameter :name :reach-limit :value (getf plist :reach-limit)
+                                        :expected (format nil "at least the speculative margin plus ~A m" +physics-min-radius+)))
+    plist))
 ;; Bad input is a condition that names the value:1 ends here
 
 ;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:1]]
@@ -726,6 +824,10 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
   "An empty handle table with a fresh world tag. #B5N8JT"
   (%make-handle-table :tag (ldb (byte +handle-tag-bits+ 0) (incf *world-tag-counter*))))
 
+(defun handle-table-full-p (table)
+  "True when TABLE has no free slot and no slot left to open. #B5N8JT"
+  (and (< (handle-table-free table) 0) (>= (handle-table-count table) (ash 1 +handle-index-bits+))))
+
 (defun handle-table-allocate (table set local)
   "Take a free slot of TABLE for a body at SET and row LOCAL; return its new handle. #B5N8JT"
   (let ((slot (handle-table-free table)))
@@ -733,8 +835,9 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
         (setf (handle-table-free table) (aref (handle-table-local table) slot))
         (progn
           (setf slot (handle-table-count table))
-          (when (>= slot (ash 1 +handle-index-bits+))
-            (error 'physics-error))
+          (when (handle-table-full-p table)
+            (error 'physics-budget-exceeded :operation 'handle-table-allocate :resource :handles
+                                            :requested (1+ slot) :budget (ash 1 +handle-index-bits+)))
           (when (>= slot (length (handle-table-set table)))
             (let ((n (* 2 (length (handle-table-set table)))))
               (flet ((grow (a init) (let ((b (make-array n :element-type 'fixnum :initial-element init)))
@@ -793,11 +896,25 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
   (chunks (make-hash-table :test 'eql) :type hash-table)
   (lock 0 :type fixnum)
   (pending '() :type list)
-  (edits 0 :type fixnum))
+  (edits 0 :type fixnum)
+  (budget 0 :type fixnum))
 
 (defun make-voxel-terrain ()
-  "A terrain with no resident chunk: every cell reads as solid until a fill makes it resident. #H2W9DJ"
-  (%make-voxel-terrain))
+  "A terrain with no resident chunk: every cell reads as solid until a fill makes it resident.
+It may hold *physics-terrain-chunk-budget* chunks, as that was when it was made. #H2W9DJ"
+  (let ((budget *physics-terrain-chunk-budget*))
+    (unless (and (integerp budget) (<= 1 budget (ash 1 24)))
+      (error 'invalid-physics-parameter :name :terrain-chunk-budget :value budget
+                                        :expected "an integer from 1 to 2^24"))
+    (%make-voxel-terrain :budget budget)))
+
+(defun check-chunk-room (terrain operation new)
+  "Signal physics-budget-exceeded, naming OPERATION, when NEW more chunks would take TERRAIN past
+its budget. #H2W9DJ"
+  (let ((count (+ new (hash-table-count (voxel-terrain-chunks terrain)))))
+    (when (> count (voxel-terrain-budget terrain))
+      (error 'physics-budget-exceeded :operation operation :resource :terrain-chunks
+                                      :requested count :budget (voxel-terrain-budget terrain)))))
 
 (declaim (inline chunk-key cell-offset))
 (defun chunk-key (x y z)
@@ -833,11 +950,13 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
   (nth-value 1 (gethash (chunk-key x y z) (voxel-terrain-chunks terrain))))
 
 (defun %resident-chunk (terrain x y z)
-  "The storage of the chunk holding X Y Z, made resident (all air) if it was not. #H2W9DJ"
+  "The storage of the chunk holding X Y Z, made resident (all air) if it was not and the budget
+has room. #H2W9DJ"
   (let ((key (chunk-key x y z)) (table (voxel-terrain-chunks terrain)))
     (or (gethash key table)
         (setf (gethash key table)
-              (make-array +chunk-cells+ :element-type '(unsigned-byte 8) :initial-element 0)))))
+              (progn (check-chunk-room terrain 'set-terrain-cell 1)
+              (make-array +chunk-cells+ :element-type '(unsigned-byte 8) :initial-element 0))))))
 
 (defun %set-cell (terrain x y z solid-p)
   "Write one cell, making its chunk resident. #H2W9DJ"
@@ -848,6 +967,8 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
 (defun (setf terrain-solid-p) (solid-p terrain x y z)
   "Make cell X Y Z of TERRAIN solid or air. During a step the edit waits for the step's end. #H2W9DJ"
   (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
+  (unless (nth-value 1 (gethash (chunk-key x y z) (voxel-terrain-chunks terrain)))
+    (check-chunk-room terrain '(setf terrain-solid-p) 1))
   (if (plusp (voxel-terrain-lock terrain))
       (push (list x y z solid-p) (voxel-terrain-pending terrain))
       (%set-cell terrain x y z solid-p))
@@ -857,6 +978,19 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
   "Set every cell of the half-open box [X0,X1)x[Y0,Y1)x[Z0,Z1) of TERRAIN to SOLID-P, making
 the chunks it touches resident. Return TERRAIN. #H2W9DJ"
   (loop for (n v) on (list 'x0 x0 'y0 y0 'z0 z0 'x1 x1 'y1 y1 'z1 z1) by #'cddr do (check-cell n v))
+  (when (and (< x0 x1) (< y0 y1) (< z0 z1))
+    ;; count the chunks the box would make resident before making any
+    (flet ((span (a b) (list (ash a (- +chunk-bits+)) (ash (1- b) (- +chunk-bits+)))))
+      (destructuring-bind ((cx0 cx1) (cy0 cy1) (cz0 cz1)) (list (span x0 x1) (span y0 y1) (span z0 z1))
+        (let ((touched (* (- cx1 cx0 -1) (- cy1 cy0 -1) (- cz1 cz0 -1)))
+              (chunks (voxel-terrain-chunks terrain)))
+          (when (> touched (voxel-terrain-budget terrain))
+            (check-chunk-room terrain 'fill-terrain touched))
+          (check-chunk-room terrain 'fill-terrain
+                            (loop for cx from cx0 to cx1
+                                  sum (loop for cy from cy0 to cy1
+                                            sum (loop for cz from cz0 to cz1
+                                                      count (not (nth-value 1 (gethash (chunk-key (ash cx +chunk-bits+) (ash cy +chunk-bits+) (ash cz +chunk-bits+)) chunks)))))))))))
   (loop for x from x0 below x1 do
     (loop for y from y0 below y1 do
       (loop for z from z0 below z1 do
@@ -1433,19 +1567,35 @@ dispatches on it once per call. #W0RLD7"))
    (gravity-x :initarg :gravity-x :type single-float :accessor physics-world-gravity-x)
    (gravity-y :initarg :gravity-y :type single-float :accessor physics-world-gravity-y)
    (gravity-z :initarg :gravity-z :type single-float :accessor physics-world-gravity-z)
-   (contact-hertz :initform *physics-contact-hertz* :accessor physics-world-contact-hertz)
-   (damping-ratio :initform *physics-contact-damping-ratio* :accessor physics-world-damping-ratio)
-   (push-max :initform *physics-contact-push-max* :accessor physics-world-push-max)
-   (slop :initform *physics-linear-slop* :accessor physics-world-slop)
-   (margin :initform *physics-speculative-margin* :accessor physics-world-margin)
-   (pair-skin :initarg :pair-skin :initform (f32 *physics-pair-skin*) :accessor physics-world-pair-skin)
+   ;; the parameters, copied and checked when the world is made (checked-physics-parameters)
+   (contact-hertz :initarg :contact-hertz :accessor physics-world-contact-hertz)
+   (damping-ratio :initarg :contact-damping-ratio :accessor physics-world-damping-ratio)
+   (push-max :initarg :contact-push-max :accessor physics-world-push-max)
+   (load-stiffening :initarg :load-stiffening :accessor physics-world-load-stiffening)
+   (crowded-relax-passes :initarg :crowded-relax-passes :accessor physics-world-crowded-relax-passes)
+   (crowded-depth :initarg :crowded-depth :accessor physics-world-crowded-depth)
+   (slop :initarg :linear-slop :accessor physics-world-slop)
+   (margin :initarg :speculative-margin :accessor physics-world-margin)
+   (pair-skin :initarg :pair-skin :accessor physics-world-pair-skin)
    (pair-list :initform (make-pair-list) :reader physics-world-pair-list)
-   (restitution-threshold :initform *physics-restitution-threshold*
-                          :accessor physics-world-restitution-threshold)
-   (hit-speed :initform *physics-hit-speed* :accessor physics-world-hit-speed)
-   (sleep-speed :initform *physics-sleep-speed* :accessor physics-world-sleep-speed)
-   (time-to-sleep :initform *physics-time-to-sleep* :accessor physics-world-time-to-sleep)
-   (wake-speed :initform *physics-wake-speed* :accessor physics-world-wake-speed)
+   (restitution-threshold :initarg :restitution-threshold :accessor physics-world-restitution-threshold)
+   (hit-speed :initarg :hit-speed :accessor physics-world-hit-speed)
+   (sleep-speed :initarg :sleep-speed :accessor physics-world-sleep-speed)
+   (time-to-sleep :initarg :time-to-sleep :accessor physics-world-time-to-sleep)
+   (wake-speed :initarg :wake-speed :accessor physics-world-wake-speed)
+   (brace-mass-ratio :initarg :brace-mass-ratio :accessor physics-world-brace-mass-ratio)
+   (reach-limit :initarg :reach-limit :accessor physics-world-reach-limit)
+   (max-speed :initarg :max-speed :accessor physics-world-max-speed)
+   (body-budget :initarg :body-budget :accessor physics-world-body-budget)
+   ;; what a step that fails before storing its impulses undoes (roll-back-step)
+   (undo-open :initform nil :accessor physics-world-undo-open)
+   (undo-step-count :initform 0 :type fixnum :accessor physics-world-undo-step-count)
+   (undo-woken :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-woken)
+   (undo-woken-count :initform 0 :type fixnum :accessor physics-world-undo-woken-count)
+   (undo-sorted :initform nil :accessor physics-world-undo-sorted)
+   (undo-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-rows)
+   (undo-statistics :initform (make-array 8 :element-type 'double-float :initial-element 0d0)
+                    :reader physics-world-undo-statistics)
    (sleep-enabled :initarg :sleep-enabled :initform t :accessor physics-world-sleep-enabled)
    (current-dt :initform (/ 1.0 60) :type single-float :accessor physics-world-current-dt)
    (current-h :initform (/ 1.0 240) :type single-float :accessor physics-world-current-h)
@@ -1489,6 +1639,13 @@ then each wide family whose instruction set sb-simd finds present. #R9M4PV"
   "Make the kernel family NAME, an instance of CLASS needing INSTRUCTION-SET, available to
 make-physics-world, replacing an earlier entry of that NAME; families register narrowest
 first, so :auto takes the last one the CPU runs. #R9M4PV"
+  (unless (and (keywordp name) (not (eq name :auto)))
+    (error 'invalid-physics-parameter :name :name :value name :expected "a keyword other than :auto"))
+  (unless (and (symbolp class) (find-class class nil) (subtypep class 'kernel-family))
+    (error 'invalid-physics-parameter :name :class :value class :expected "the name of a subclass of kernel-family"))
+  (unless (or (null instruction-set) (keywordp instruction-set))
+    (error 'invalid-physics-parameter :name :instruction-set :value instruction-set
+                                      :expected "NIL or an sb-simd instruction set's keyword"))
   (setf *kernel-families*
         (append (remove name *kernel-families* :key #'first)
                 (list (if instruction-set (list name class instruction-set) (list name class)))))
@@ -1525,21 +1682,26 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
   (unless (or (null terrain) (typep terrain 'voxel-terrain))
     (error 'invalid-physics-parameter :name :terrain :value terrain :expected "a voxel-terrain or NIL"))
   (let ((dt (finite-f32 :step-seconds step-seconds)))
-    (unless (< 0 dt 1.0)
-      (error 'invalid-physics-parameter :name :step-seconds :value step-seconds :expected "in (0, 1) seconds"))
+    (unless (and (<= +physics-min-step-seconds+ dt) (< dt 1.0))
+      (error 'invalid-physics-parameter :name :step-seconds :value step-seconds
+                                        :expected (format nil "from ~A to under 1 second" +physics-min-step-seconds+)))
     (check-count :substeps substeps 64)
     (unless (and (listp gravity) (= (length gravity) 3))
       (error 'invalid-physics-parameter :name :gravity :value gravity :expected "a list of three numbers"))
-    (unless (<= 0.0 (finite-f32 :pair-skin *physics-pair-skin*) 0.5)
-      (error 'invalid-physics-parameter :name :pair-skin :value *physics-pair-skin* :expected "from 0 to 0.5 m"))
-    (make-instance 'physics-world
-                   :terrain terrain :step-seconds dt :substeps substeps
-                   :pair-skin (f32 *physics-pair-skin*)
-                   :gravity-x (finite-f32 :gravity (first gravity))
-                   :gravity-y (finite-f32 :gravity (second gravity))
-                   :gravity-z (finite-f32 :gravity (third gravity))
-                   :kernels (make-kernel-family kernels)
-                   :sleep-enabled sleep)))
+    (let ((g (mapcar (lambda (v) (ranged-f32 :gravity v (- +physics-max-gravity+) +physics-max-gravity+))
+                     gravity))
+          (parameters (checked-physics-parameters)))
+      (apply #'make-instance 'physics-world
+             :terrain terrain :step-seconds dt :substeps substeps
+             :gravity-x (first g) :gravity-y (second g) :gravity-z (third g)
+             :kernels (make-kernel-family kernels)
+             :sleep-enabled sleep
+             parameters))))
+
+(defmethod (setf physics-world-event-handler) :before (handler (world physics-world))
+  (unless (or (null handler) (functionp handler) (and (symbolp handler) (fboundp handler)))
+    (error 'invalid-physics-parameter :world world :name :event-handler :value handler
+                                      :expected "NIL, a function, or the name of a function")))
 
 (defun check-idle (world operation)
   "Signal physics-world-busy unless WORLD is between steps. #M4K3WD"
@@ -1609,9 +1771,22 @@ HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3W
                                       :expected (format nil "of magnitude under ~D m" +physics-coordinate-limit+)))
   v)
 
+(defun check-body-room (world operation)
+  "Signal physics-budget-exceeded, naming OPERATION, unless WORLD has room for one more body:
+under its body budget, and a free slot in its handle table. #M4K3WD"
+  (let ((count (+ (physics-world-awake-count world) (physics-world-sleeping-count world)))
+        (ids (physics-world-ids world)))
+    (when (>= count (physics-world-body-budget world))
+      (error 'physics-budget-exceeded :world world :operation operation :resource :bodies
+                                      :requested (1+ count) :budget (physics-world-body-budget world)))
+    (when (handle-table-full-p ids)
+      (error 'physics-budget-exceeded :world world :operation operation :resource :handles
+                                      :requested (1+ (handle-table-count ids))
+                                      :budget (ash 1 +handle-index-bits+)))))
+
 (defun max-radius-for (world)
   "The largest radius a body of WORLD may have: reach (radius plus margin) stays under a cell. #M4K3WD"
-  (- *physics-reach-limit* (physics-world-margin world)))
+  (- (physics-world-reach-limit world) (physics-world-margin world)))
 
 (defun add-physics-body (world x y z &key (radius 0.25) (mass 1.0) (restitution 0.0) (friction 0.6)
                                        (rolling-resistance 0.0) (vx 0.0) (vy 0.0) (vz 0.0)
@@ -1627,15 +1802,23 @@ number of seconds after which it expires. #M4K3WD"
          (life (if life (finite-f32 :life life world) 0.0))
          (limit (max-radius-for world)))
     (check-coordinate :x x world) (check-coordinate :y y world) (check-coordinate :z z world)
-    (unless (and (> r 0) (<= r limit))
+    (unless (<= +physics-min-radius+ r limit)
       (error 'invalid-physics-radius :world world :value radius :limit limit))
-    (unless (> m 0) (error 'invalid-physics-parameter :world world :name :mass :value mass :expected "> 0"))
+    (unless (<= +physics-min-mass+ m +physics-max-mass+)
+      (error 'invalid-physics-parameter :world world :name :mass :value mass
+                                        :expected (format nil "from ~A to ~A kg" +physics-min-mass+ +physics-max-mass+)))
     (unless (<= 0 e 1) (error 'invalid-physics-parameter :world world :name :restitution :value restitution :expected "in [0, 1]"))
-    (unless (>= mu 0) (error 'invalid-physics-parameter :world world :name :friction :value friction :expected ">= 0"))
-    (unless (>= rho 0) (error 'invalid-physics-parameter :world world :name :rolling-resistance :value rolling-resistance :expected ">= 0"))
+    (unless (<= 0 mu +physics-max-friction+)
+      (error 'invalid-physics-parameter :world world :name :friction :value friction
+                                        :expected (format nil "from 0 to ~A" +physics-max-friction+)))
+    (unless (<= 0 rho +physics-max-friction+)
+      (error 'invalid-physics-parameter :world world :name :rolling-resistance :value rolling-resistance
+                                        :expected (format nil "from 0 to ~A" +physics-max-friction+)))
+    (check-velocity vx vy vz (physics-world-max-speed world) world)
     (when (and (not (eql life 0.0)) (<= life 0))
       (error 'invalid-physics-parameter :world world :name :life :value life :expected "> 0 seconds, or NIL"))
     (unless (typep kind 'fixnum) (error 'invalid-physics-parameter :world world :name :kind :value kind :expected "a fixnum"))
+    (check-body-room world 'add-physics-body)
     (let* ((awake (physics-world-awake world))
            (row (body-columns-append awake))
            (handle (handle-table-allocate (physics-world-ids world) +set-awake+ row)))
@@ -1692,12 +1875,14 @@ number of seconds after which it expires. #M4K3WD"
 
 (defconstant +event-expired+ 5 "Event code of :expired. #E7V3NT")
 
-(defparameter +event-kinds+ #(:begin :end :hit :slept :woke :expired)
+(defconstant +event-escaped+ 6 "Event code of :escaped. #E7V3NT")
+
+(defparameter +event-kinds+ #(:begin :end :hit :slept :woke :expired :escaped)
   "Event kind keywords by code. #E7V3NT")
 
 (defun map-physics-events (function world)
   "Call FUNCTION on each event of WORLD's last step with the kind (:begin :end :hit :slept
-:woke :expired), the two handles (the second -1 when none), the point X Y Z, the approach
+:woke :expired :escaped), the two handles (the second -1 when none), the point X Y Z, the approach
 speed, and the datum (a box's owner, or NIL). #E7V3NT"
   (let ((events (physics-world-events world)) (data (physics-world-event-data world)))
     (with-event-columns (kind handle-a handle-b x y z speed) events
@@ -1738,7 +1923,14 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
     new))
 
 (defun wake-physics-body (world row)
-  "Wake the sleeping body at ROW: relocate it to the end of the awake set, note :woke. #QKS4GZ"
+  "Wake the sleeping body at ROW: relocate it to the end of the awake set, note :woke. In a step,
+note ROW in the step's undo log too (roll-back-step). #QKS4GZ"
+  (when (physics-world-undo-open world)
+    (let ((log (physics-world-undo-woken world)) (k (physics-world-undo-woken-count world)))
+      (when (>= k (length log))
+        (setf log (replace (make-array (max 16 (* 2 k)) :element-type 'fixnum) log)
+              (physics-world-undo-woken world) log))
+      (setf (aref log k) row (physics-world-undo-woken-count world) (1+ k))))
   (let* ((handle (aref (body-columns-handle (physics-world-sleeping world)) row))
          (new (relocate-body world +set-sleeping+ row +set-awake+)))
     (setf (aref (body-columns-sleep-time (physics-world-awake world)) new) 0.0)
@@ -1773,6 +1965,7 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
   (check-idle world 'set-physics-body-velocity)
   (let ((vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world)))
     (resolve-handle world handle)
+    (check-velocity vx vy vz (physics-world-max-speed world) world)
     (let ((row (wake-handle world handle)) (awake (physics-world-awake world)))
       (with-body-columns ((bvx vx) (bvy vy) (bvz vz) sleep-time) awake
         (setf (aref bvx row) vx (aref bvy row) vy (aref bvz row) vz (aref sleep-time row) 0.0)))
@@ -1782,8 +1975,10 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
   "Wake every sleeping body of WORLD whose surface lies within RADIUS of point X Y Z; return
 how many woke. Call it after editing terrain near bodies. #QKS4GZ"
   (check-idle world 'wake-physics-bodies-near)
-  (let ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
-        (radius (finite-f32 :radius radius world))
+  (let ((x (check-coordinate :x (finite-f32 :x x world) world))
+        (y (check-coordinate :y (finite-f32 :y y world) world))
+        (z (check-coordinate :z (finite-f32 :z z world) world))
+        (radius (ranged-f32 :radius radius 0 (* 2 +physics-coordinate-limit+) world))
         (s (physics-world-sleeping world)) (count 0))
     (loop with row = (1- (body-columns-length s))
           while (>= row 0)
@@ -1815,6 +2010,8 @@ back with its hit events. #K1N3BX"
     (loop for (name v) in (list (list :hx hx) (list :hy hy) (list :hz hz))
           unless (< 0 v 1024)
             do (error 'invalid-physics-parameter :world world :name name :value v :expected "in (0, 1024) m"))
+    (check-coordinate :x x world) (check-coordinate :y y world) (check-coordinate :z z world)
+    (check-velocity vx vy vz (physics-world-max-speed world) world)
     (let* ((boxes (physics-world-boxes world))
            (row (box-columns-append boxes))
            (ids (physics-world-box-ids world))
@@ -1928,6 +2125,8 @@ order of a dense grid when they have drifted out of it. #G4R1D5"
       (body-columns-ensure-capacity (physics-world-awake-scratch world) (body-columns-capacity awake))
       (when (< (length (physics-world-row-places world)) (body-columns-capacity awake))
         (setf (physics-world-row-places world)
+              (make-array (body-columns-capacity awake) :element-type 'fixnum)
+              (physics-world-undo-rows world)
               (make-array (body-columns-capacity awake) :element-type 'fixnum)))
       (when (and (hash-grid-dense grid) (> (grid-order-breaks grid n) (floor n 16)))
         (sort-awake-rows world grid n)
@@ -1952,6 +2151,10 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
         (items (hash-grid-items grid))
         (locals (handle-table-local (physics-world-ids world))))
     (declare (type body-columns awake) (type fixnum-column items locals))
+    ;; in a step, what the row that each place receives was, so a failed step can undo the move
+    (when (physics-world-undo-open world)
+      (replace (the fixnum-column (physics-world-undo-rows world)) items :end2 n)
+      (setf (physics-world-undo-sorted world) n))
     (let ((places (physics-world-row-places world)))
       (declare (type fixnum-column places))
       (dotimes (e n) (setf (aref places (aref items e)) e))
@@ -2428,7 +2631,7 @@ is under the speculative distance. #MYWH16"
              (dt (physics-world-current-dt world))
              (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                    (expt (physics-world-gravity-z world) 2)))))
-             (limit (f32 *physics-reach-limit*))
+             (limit (f32 (physics-world-reach-limit world)))
              (contacts (physics-world-contacts world))
              (table (physics-world-contact-table world))
              ;; the bodies come in the grid's order, so most share the chunk of the one before
@@ -2609,7 +2812,7 @@ with the face the ray enters it through. #SW33P7"
          (awake (physics-world-awake world))
          (grid (physics-world-awake-grid world))
          (margin (f32 (physics-world-margin world)))
-         (limit (f32 *physics-reach-limit*))
+         (limit (f32 (physics-world-reach-limit world)))
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world)))
     (declare (type single-float margin limit))
@@ -2880,7 +3083,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
           (slop (f32 (physics-world-slop world)))
           (g (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                        (expt (physics-world-gravity-z world) 2))))
-          (load-limit (f32 *physics-load-stiffening*)))
+          (load-limit (f32 (physics-world-load-stiffening world))))
       (declare (type f32-column v d) (type fixnum-column colors)
                (type single-float slop hertz zeta g load-limit)
                (type handle-table ids) (type constraint-columns cbuf))
@@ -2904,7 +3107,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                 (color-starts (physics-world-color-starts world))
                 (sets (handle-table-set ids)) (locals (handle-table-local ids))
                 (braced (physics-world-braced world))
-                (brace-ratio (f32 *physics-brace-mass-ratio*))
+                (brace-ratio (f32 (physics-world-brace-mass-ratio world)))
                 (still2 (f32 (expt (physics-world-sleep-speed world) 2)))
                 (inverse-mass (body-columns-inverse-mass awake))
                 ;; 1/(|g| h) turns a substep's normal impulse into the mass it holds up
@@ -3176,6 +3379,65 @@ the soft bias (solve) or without it (relax). #K3RNLS"))
   (:documentation "After the substeps: bounce the contacts that pushed and arrived faster than
 THRESHOLD. #K3RNLS"))
 
+(defun check-solver-world (operation world)
+  "Signal invalid-physics-parameter naming OPERATION unless WORLD is a physics-world whose
+solver arrays hold its awake rows. Called once per phase, outside the hot loops. #K3RNLS"
+  (unless (typep world 'physics-world)
+    (error 'invalid-physics-parameter :name :world :value world :expected (format nil "a physics-world, in ~(~A~)" operation)))
+  (let ((rows (solver-row (1+ (body-columns-length (physics-world-awake world))))))
+    (unless (and (<= rows (length (physics-world-velocities world))) (<= rows (length (physics-world-deltas world))))
+      (error 'invalid-physics-parameter :world world :name :world :value world
+                                        :expected (format nil "a world stepped since its last add, in ~(~A~)" operation)))))
+
+(defun check-solver-number (operation name value low)
+  "Signal invalid-physics-parameter naming NAME, an argument of OPERATION, unless VALUE is a
+single-float from LOW to 1e7. #K3RNLS"
+  (unless (and (typep value 'single-float) (<= low value 1e7))
+    (error 'invalid-physics-parameter :name name :value value
+                                      :expected (format nil "a single-float from ~A to 1e7, in ~(~A~)" low operation))))
+
+(defmethod physics-integrate-velocities :before ((kernels kernel-family) world h)
+  (check-solver-world 'physics-integrate-velocities world)
+  (check-solver-number 'physics-integrate-velocities :h h least-positive-normalized-single-float))
+
+(defmethod physics-warm-start :before ((kernels kernel-family) world)
+  (check-solver-world 'physics-warm-start world))
+
+(defmethod physics-solve-contacts :before ((kernels kernel-family) world inv-h use-bias elapsed)
+  (check-solver-world 'physics-solve-contacts world)
+  (check-solver-number 'physics-solve-contacts :inv-h inv-h 1.0)
+  (check-solver-number 'physics-solve-contacts :elapsed elapsed 0.0)
+  (unless (typep use-bias 'boolean)
+    (error 'invalid-physics-parameter :world world :name :use-bias :value use-bias :expected "T or NIL")))
+
+(defmethod physics-integrate-positions :before ((kernels kernel-family) world h)
+  (check-solver-world 'physics-integrate-positions world)
+  (check-solver-number 'physics-integrate-positions :h h least-positive-normalized-single-float))
+
+(defmethod physics-apply-restitution :before ((kernels kernel-family) world threshold)
+  (check-solver-world 'physics-apply-restitution world)
+  (check-solver-number 'physics-apply-restitution :threshold threshold 0.0))
+
+(defun refuse-kernel-family (kernels operation)
+  "Signal invalid-physics-parameter: KERNELS, given to OPERATION, is no kernel family. #K3RNLS"
+  (error 'invalid-physics-parameter :name :kernels :value kernels
+                                    :expected (format nil "a kernel-family, in ~(~A~)" operation)))
+
+(defmethod physics-integrate-velocities ((kernels t) world h)
+  (refuse-kernel-family kernels 'physics-integrate-velocities))
+
+(defmethod physics-warm-start ((kernels t) world)
+  (refuse-kernel-family kernels 'physics-warm-start))
+
+(defmethod physics-solve-contacts ((kernels t) world inv-h use-bias elapsed)
+  (refuse-kernel-family kernels 'physics-solve-contacts))
+
+(defmethod physics-integrate-positions ((kernels t) world h)
+  (refuse-kernel-family kernels 'physics-integrate-positions))
+
+(defmethod physics-apply-restitution ((kernels t) world threshold)
+  (refuse-kernel-family kernels 'physics-apply-restitution))
+
 (defun integrate-velocities-range (v start end h gx gy gz max-speed)
   "Add H times gravity to velocity rows START..END of V and clamp their speed to MAX-SPEED. #K3RNLS"
   (declare (type f32-column v) (type index start end) (type single-float h gx gy gz max-speed)
@@ -3383,7 +3645,7 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
   (integrate-velocities-range (physics-world-velocities world) 0
                               (body-columns-length (physics-world-awake world)) h
                               (physics-world-gravity-x world) (physics-world-gravity-y world)
-                              (physics-world-gravity-z world) (f32 *physics-max-speed*)))
+                              (physics-world-gravity-z world) (f32 (physics-world-max-speed world))))
 
 (defmethod physics-warm-start ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
@@ -3409,7 +3671,8 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
 (defun store-phase (world)
   "Phase 11: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
-speed. #ST0R3S"
+speed. From here on the step changes what it cannot undo, so its undo log closes. #ST0R3S"
+  (setf (physics-world-undo-open world) nil)
   (let* ((cbuf (physics-world-constraints world))
          (contacts (physics-world-contacts world))
          (v (physics-world-velocities world))
@@ -3509,15 +3772,19 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
          (inv-dt (/ 1.0 dt))
          (sleep-p (physics-world-sleep-enabled world))
          (sleep-speed (f32 (physics-world-sleep-speed world)))
-         (time-to-sleep (f32 (physics-world-time-to-sleep world))))
-    (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep)
+         (time-to-sleep (f32 (physics-world-time-to-sleep world)))
+         (limit (f32 +physics-coordinate-limit+)))
+    (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep limit)
              (type body-columns awake sleeping) #.+kernel-policy+)
     (fold-solver-state awake v d dt)
     ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
     ;; moved, so the solver's rows still match it
     (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle) awake
       (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
-        (cond ((and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
+        (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
+               (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+               (%remove-body world +set-awake+ i))
+              ((and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
                (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
                (%remove-body world +set-awake+ i))
               (sleep-p
@@ -3567,8 +3834,8 @@ colour, or after a step that left an overlap deeper than *physics-crowded-depth*
          (h (physics-world-current-h world))
          (inv-h (/ 1.0 h))
          (relaxes (if (or (plusp (physics-world-overflow-count world))
-                          (> (f32 (physics-world-max-penetration world)) (f32 *physics-crowded-depth*)))
-                      (1+ *physics-crowded-relax-passes*)
+                          (> (f32 (physics-world-max-penetration world)) (f32 (physics-world-crowded-depth world))))
+                      (1+ (the fixnum (physics-world-crowded-relax-passes world)))
                       1)))
     (declare (type single-float h inv-h) (type fixnum relaxes))
     (dotimes (i (physics-world-substeps world))
@@ -3599,25 +3866,82 @@ it. The step's events stay readable until the next step begins. #IDVK7G"
   (let* ((dt (if dt (finite-f32 :dt dt world) (physics-world-step-seconds world)))
          (terrain (physics-world-terrain world))
          (started (clock-ns)))
-    (unless (< 0.0 dt 1.0)
-      (error 'invalid-physics-parameter :world world :name :dt :value dt :expected "in (0, 1) seconds"))
+    (unless (and (<= +physics-min-step-seconds+ dt) (< dt 1.0))
+      (error 'invalid-physics-parameter :world world :name :dt :value dt
+                                        :expected (format nil "from ~A to under 1 second" +physics-min-step-seconds+)))
     (setf (physics-world-current-dt world) dt
           (physics-world-current-h world) (/ dt (float (physics-world-substeps world) 1.0))
           (physics-world-stepping world) t)
+    (open-step-undo world)
     (when terrain (lock-terrain terrain))
     (unwind-protect
          (progn
            (sb-int:with-float-traps-masked (:inexact :underflow)
              (run-physics-phases world))
+           (setf (physics-world-undo-open world) nil)
            (let ((stats (world-statistics world)))
              (setf (aref stats 0) (coerce (contact-columns-length (physics-world-contacts world)) 'double-float)
                    (aref stats 2) (* 1d-9 (coerce (the fixnum (- (clock-ns) started)) 'double-float))))
            (let ((handler (physics-world-event-handler world)))
              (when handler (map-physics-events handler world))))
+      ;; the phases signalled before the store phase committed the step: undo it
+      (when (physics-world-undo-open world) (roll-back-step world))
       (when terrain (unlock-terrain terrain))
       (box-columns-clear (physics-world-boxes world))
       (fill (physics-world-box-owners world) nil)
       (setf (physics-world-stepping world) nil))
+    world))
+
+(defun open-step-undo (world)
+  "Start WORLD's undo log for the step about to run: no wakes, no sort, its step count and
+statistics as they are. #IDVK7G"
+  (setf (physics-world-undo-open world) t
+        (physics-world-undo-woken-count world) 0
+        (physics-world-undo-sorted world) nil
+        (physics-world-undo-step-count world) (physics-world-step-count world))
+  (replace (the (simple-array double-float (8)) (physics-world-undo-statistics world)) (world-statistics world))
+  world)
+
+(defun unwake-last-body (world row)
+  "Return the last awake body, woken this step from sleeping ROW, to that row, and the body that
+took ROW when it left back to the end of the sleeping set: relocate-body run backwards. #IDVK7G"
+  (let* ((ids (physics-world-ids world))
+         (awake (physics-world-awake world))
+         (sleeping (physics-world-sleeping world))
+         (last (1- (body-columns-length awake)))
+         (end (body-columns-append sleeping)))
+    (unless (= row end)
+      (body-columns-copy-row sleeping row sleeping end)
+      (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle sleeping) end))) end))
+    (body-columns-copy-row awake last sleeping row)
+    (let ((handle (aref (body-columns-handle sleeping) row)))
+      (setf (aref (handle-table-set ids) (handle-index handle)) +set-sleeping+
+            (aref (handle-table-local ids) (handle-index handle)) row))
+    (body-columns-swap-remove awake last)
+    world))
+
+(defun roll-back-step (world)
+  "Undo what a step that signalled before its store phase did to WORLD: put the awake rows back
+in the order they had, send the bodies it woke back to their sleeping rows (last woken first),
+and restore the step count and statistics. The step's events are dropped, and the pair list and
+grids are rebuilt by the next step. #IDVK7G"
+  (let* ((awake (physics-world-awake world))
+         (locals (handle-table-local (physics-world-ids world)))
+         (n (physics-world-undo-sorted world)))
+    (when n
+      (body-columns-permute awake (physics-world-awake-scratch world) (physics-world-undo-rows world) n)
+      (let ((handle (body-columns-handle awake)))
+        (dotimes (i n) (setf (aref locals (handle-index (aref handle i))) i))))
+    (loop for k from (1- (physics-world-undo-woken-count world)) downto 0
+          do (unwake-last-body world (aref (physics-world-undo-woken world) k)))
+    (setf (physics-world-step-count world) (physics-world-undo-step-count world)
+          (physics-world-undo-open world) nil
+          (pair-list-rows (physics-world-pair-list world)) -1
+          (physics-world-awake-grid-step world) -1
+          (physics-world-sleeping-grid-dirty world) t)
+    (replace (world-statistics world) (the (simple-array double-float (8)) (physics-world-undo-statistics world)))
+    (event-columns-clear (physics-world-events world))
+    (fill (physics-world-event-data world) nil)
     world))
 
 (defun run-physics-phases (world)

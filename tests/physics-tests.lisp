@@ -457,6 +457,234 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; C0ND1T-busy-during-step ends here
 
+;; [[file:../physics.org::#C0ND1T][C0ND1T-atomic-add]]
+(define-claim "C0ND1T" atomic-add
+    "Out-of-range radius, mass, friction, and a full handle table, are refused before any row exists."
+  (let ((w (make-floor-world)))
+    (luv-physics::add-physics-body w 3.5 1.0 3.5)
+    (luv-physics::step-physics-world w)
+    (let ((before (world-fingerprint w)) (wrong '()))
+      (loop for (name value) in '((:radius 1e-30) (:radius 1e-20) (:radius 0.001) (:mass 1e-40) (:mass 1e-6)
+                                  (:mass 1e7) (:mass 3e38) (:friction 1e30) (:rolling-resistance 1e30))
+            for outcome = (handler-case (progn (luv-physics::add-physics-body w 5.5 1 5.5 name value) :accepted)
+                            (luv-physics:physics-error (e) (princ-to-string e))
+                            (error (e) (type-of e)))
+            unless (and (stringp outcome) (search (string-downcase (symbol-name name)) (string-downcase outcome))
+                        (equal before (world-fingerprint w)) (handler-case (luv-physics::validate-physics-world w) (error () nil)))
+              do (push (list name value outcome) wrong))
+      (check (null wrong) "refused wrongly, or the world changed: ~S" wrong)
+      (let* ((ids (luv-physics::physics-world-ids w))
+             (count (luv-physics::handle-table-count ids)) (free (luv-physics::handle-table-free ids))
+             (outcome nil) (after nil))
+        (setf (luv-physics::handle-table-count ids) (ash 1 luv-physics::+handle-index-bits+)
+              (luv-physics::handle-table-free ids) -1)
+        (unwind-protect
+             (setf outcome (handler-case (progn (luv-physics::add-physics-body w 5.5 1 5.5) :accepted)
+                             (error (e) (list (type-of e) (princ-to-string e))))
+                   after (world-fingerprint w))
+          (setf (luv-physics::handle-table-count ids) count (luv-physics::handle-table-free ids) free))
+        (check (and (consp outcome) (eq (first outcome) 'luv-physics::physics-budget-exceeded)
+                    (search (format nil "~D" (ash 1 luv-physics::+handle-index-bits+)) (second outcome)))
+               "at the handle limit: ~S" outcome)
+        (check (equal after before) "the world changed at the handle limit: ~S -> ~S" before after)
+        (check (eq t (luv-physics::validate-physics-world w)))))))
+;; C0ND1T-atomic-add ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-huge-numbers-refused]]
+(define-claim "C0ND1T" huge-numbers-refused
+    "Finite but huge velocities, gravity, boxes, wake radii and steps are refused; the bounds themselves step."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.5 1.0 3.5)))
+    (luv-physics::step-physics-world w)
+    (let ((before (world-fingerprint w)) (wrong '()))
+      (loop for (label call) in (list (list :set-velocity (lambda () (luv-physics::set-physics-body-velocity w h 1e20 0 0)))
+                                      (list :add-vz (lambda () (luv-physics::add-physics-body w 5.5 1 5.5 :vz 1e20)))
+                                      (list :gravity (lambda () (make-floor-world :gravity '(0 -1e20 0))))
+                                      (list :box-place (lambda () (luv-physics::post-physics-box w 3e38 1 1 0.5 0.5 0.5)))
+                                      (list :box-speed (lambda () (luv-physics::post-physics-box w 1 1 1 0.5 0.5 0.5 :vx 1e20)))
+                                      (list :wake-radius (lambda () (luv-physics::wake-physics-bodies-near w 1 1 1 3e38)))
+                                      (list :step (lambda () (luv-physics::step-physics-world w 1e-38))))
+            for outcome = (handler-case (progn (funcall call) :accepted)
+                            (luv-physics:physics-error () :refused)
+                            (error (e) (type-of e)))
+            unless (and (eq outcome :refused) (equal before (world-fingerprint w))
+                        (= 0 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
+              do (push (list label outcome) wrong))
+      (check (null wrong) "not refused cleanly: ~S" wrong))
+    (let* ((top luv-physics:*physics-max-speed*)
+           (g (make-floor-world :gravity (list 0 (- luv-physics::+physics-max-gravity+) 0)))
+           (fast (luv-physics::add-physics-body g 3.5 1.0 3.5 :vx top)))
+      (luv-physics::set-physics-body-velocity w h 0 0 (- top))
+      (luv-physics::post-physics-box w (- luv-physics:+physics-coordinate-limit+ 1) 1 1 0.5 0.5 0.5 :vy top)
+      (let ((outcome (handler-case (progn (dotimes (i 10) (luv-physics::step-physics-world w) (luv-physics::step-physics-world g))
+                                          :stepped)
+                       (error (e) (princ-to-string e)))))
+        (check (eq outcome :stepped) "stepping at the bounds failed: ~A" outcome))
+      (check (and (luv-physics::world-finite-p w) (luv-physics::world-finite-p g)) "a number is not finite")
+      (check (luv-physics::physics-body-alive-p g fast)))))
+;; C0ND1T-huge-numbers-refused ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-failed-step-atomic]]
+(define-claim "C0ND1T" failed-step-atomic
+    "A step that signals from inside its phases is rolled back: hash, counts, step count, handles."
+  (dolist (after '(luv-physics::grid-phase luv-physics::substep-phase))
+    (let* ((w (make-floor-world))
+           (sleepers (list (luv-physics::add-physics-body w 6.5 0.245 6.5) (luv-physics::add-physics-body w 7.5 0.245 6.5))))
+      (dotimes (i 60) (luv-physics::step-physics-world w))
+      (let* ((next (make-lcg 5))
+             (balls (loop for i below 30
+                          collect (luv-physics::add-physics-body w (+ 1 (* 4 (funcall next))) (+ 1 (* 3 (funcall next)))
+                                                                 (+ 1 (* 4 (funcall next))) :radius 0.2))))
+        (luv-physics::add-physics-body w 5.9 0.245 6.5 :vx 5.0)
+        (let* ((before (world-fingerprint w))
+               (steps (luv-physics::physics-world-step-count w))
+               (where (mapcar (lambda (h) (multiple-value-list (luv-physics::physics-body-position w h)))
+                              (append sleepers balls)))
+               (reached nil)
+               (outcome (let ((luv-physics:*physics-phases*
+                                (phases-checked-after after (lambda (world)
+                                                              (setf reached (list (luv-physics::physics-world-awake-count world)
+                                                                                  (luv-physics::physics-world-state-hash world)))
+                                                              (error "a phase failed")))))
+                          (handler-case (progn (luv-physics::step-physics-world w) :stepped)
+                            (error () :failed)))))
+          (check (eq outcome :failed))
+          (check (and reached (/= (second reached) (third before))) "after ~A the step had changed nothing to undo" after)
+          (check (equal before (world-fingerprint w)) "after a failure past ~A: ~S -> ~S" after before (world-fingerprint w))
+          (check (= steps (luv-physics::physics-world-step-count w)))
+          (check (equal where (mapcar (lambda (h) (multiple-value-list (luv-physics::physics-body-position w h)))
+                                      (append sleepers balls)))
+                 "a handle names another body")
+          (check (eq t (luv-physics::validate-physics-world w)))
+          (luv-physics::step-physics-world w)
+          (check (eq t (luv-physics::validate-physics-world w))))))))
+;; C0ND1T-failed-step-atomic ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-parameters-checked]]
+(define-claim "C0ND1T" parameters-checked
+    "Every parameter is checked by name when a world is made, and the world keeps its own copy."
+  (let ((nan (sb-kernel:make-single-float -4194304)) (wrong '()))
+    (flet ((refusal (symbol value)
+             (progv (list symbol) (list value)
+               (handler-case (progn (make-floor-world) :accepted)
+                 (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+                 (luv-physics::invalid-physics-number (e) (luv-physics::invalid-physics-number-name e))
+                 (error (e) (type-of e))))))
+      (loop for (name symbol) in luv-physics::+physics-parameters+
+            do (dolist (bad (list "x" nan))
+                 (let ((got (refusal symbol bad)))
+                   (unless (eq got name) (push (list symbol bad got) wrong)))))
+      (check (>= (length luv-physics::+physics-parameters+) 17) "only ~D parameters are checked"
+             (length luv-physics::+physics-parameters+))
+      (check (null wrong) "~D bad values were not refused by name: ~S" (length wrong) wrong)
+      (check (eq :speculative-margin (refusal 'luv-physics:*physics-speculative-margin* -0.1)))
+      (check (eq :reach-limit (refusal 'luv-physics:*physics-reach-limit* 0.1))))
+    (let* ((w (make-floor-world))
+           (h (luv-physics::add-physics-body w 3.5 1.0 3.5))
+           (outcome (progv (mapcar #'second luv-physics::+physics-parameters+)
+                        (mapcar (constantly "x") luv-physics::+physics-parameters+)
+                      (handler-case (progn (dotimes (i 60) (luv-physics::step-physics-world w))
+                                           (luv-physics::add-physics-body w 5.5 1.0 5.5)
+                                           :stepped)
+                        (error (e) (princ-to-string e))))))
+      (check (eq outcome :stepped) "with the parameters rebound: ~A" outcome)
+      (check (< (abs (- (body-y w h) 0.245)) 0.002)))))
+;; C0ND1T-parameters-checked ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-event-handler-checked]]
+(define-claim "C0ND1T" event-handler-checked
+    "Setting the event handler to something that cannot be called is refused by name."
+  (let* ((w (make-floor-world))
+         (mine (lambda (&rest event) (declare (ignore event)))))
+    (setf (luv-physics::physics-world-event-handler w) mine)
+    (dolist (bad (list 42 "handler" (gensym "NO-FUNCTION")))
+      (let ((got (handler-case (progn (setf (luv-physics::physics-world-event-handler w) bad) :accepted)
+                   (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+                   (error (e) (type-of e)))))
+        (check (eq got :event-handler) "~S gave ~S" bad got)
+        (check (eq mine (luv-physics::physics-world-event-handler w)))))
+    (dolist (good (list nil #'list 'list))
+      (setf (luv-physics::physics-world-event-handler w) good)
+      (check (eq good (luv-physics::physics-world-event-handler w))))))
+;; C0ND1T-event-handler-checked ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-coordinate-limit-every-step]]
+(define-claim "C0ND1T" coordinate-limit-every-step
+    "Bodies crossing the coordinate limit are removed with :escaped, on the same step in every family."
+  (flet ((run (family)
+           (let* ((w (luv-physics::make-physics-world :kernels family))
+                  (limit luv-physics:+physics-coordinate-limit+)
+                  (down (luv-physics::add-physics-body w 0.5 (- 6 limit) 0.5 :vy (- luv-physics:*physics-max-speed*)))
+                  (side (luv-physics::add-physics-body w (- limit 0.1) 0.5 0.5 :vx 10))
+                  (stay (luv-physics::add-physics-body w 0.5 0.5 0.5))
+                  (log '()))
+             (dotimes (i 3)
+               (loop for (kind a) in (step-events w)
+                     when (eq kind :escaped) do (push (list i (cond ((= a down) :down) ((= a side) :side) (t a))) log)))
+             (list (reverse log)
+                   (list (luv-physics::physics-body-alive-p w down) (luv-physics::physics-body-alive-p w side)
+                         (luv-physics::physics-body-alive-p w stay))
+                   (luv-physics::validate-physics-world w)
+                   (luv-physics::physics-world-state-hash w)))))
+    (let ((scalar (run :scalar)))
+      (check (equal (first scalar) '((0 :side) (0 :down))) "escapes ~S" (first scalar))
+      (check (equal (second scalar) '(nil nil t)))
+      (check (eq t (third scalar)))
+      (dolist (family (rest (luv-physics:available-kernel-families)))
+        (check (equal scalar (run family)) "~S differs from :scalar" family)))))
+;; C0ND1T-coordinate-limit-every-step ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-budgets]]
+(define-claim "C0ND1T" budgets
+    "A terrain fill or a body count beyond its budget signals before allocating."
+  (let* ((terrain (luv-physics::make-voxel-terrain))
+         (got (handler-case (progn (luv-physics::fill-terrain terrain 0 0 0 1024 1024 1024 nil) :filled)
+                (error (e) (type-of e)))))
+    (check (eq got 'luv-physics::physics-budget-exceeded) "a 2^30-cell fill gave ~S" got)
+    (check (= 0 (hash-table-count (luv-physics::voxel-terrain-chunks terrain))) "chunks were made"))
+  (let ((w (let ((luv-physics::*physics-body-budget* 5)) (make-floor-world))))
+    (dotimes (i 5) (luv-physics::add-physics-body w (+ 1.5 i) 1 1.5))
+    (let* ((before (world-fingerprint w))
+           (got (handler-case (progn (luv-physics::add-physics-body w 8.5 1 8.5) :added)
+                  (luv-physics::physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-resource e))
+                  (error (e) (type-of e)))))
+      (check (eq got :bodies) "the sixth body gave ~S" got)
+      (check (equal before (world-fingerprint w)))
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; C0ND1T-budgets ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-registry-and-entry-points]]
+(define-claim "C0ND1T" registry-and-entry-points
+    "register-kernel-family refuses a non-class; the solver's entry points refuse wrong arguments."
+  (let ((saved luv-physics::*kernel-families*))
+    (unwind-protect
+         (let ((got (handler-case (progn (luv-physics:register-kernel-family :avx2 "not a class" :avx2) :registered)
+                      (luv-physics:physics-error () :refused)
+                      (error (e) (type-of e)))))
+           (check (eq got :refused) "registering a string gave ~S" got)
+           (check (equal saved luv-physics::*kernel-families*) "the registry changed")
+           (check (typep (luv-physics::physics-world-kernels (make-floor-world :gravity '(0 -9.81 0)))
+                         'luv-physics:kernel-family)))
+      (setf luv-physics::*kernel-families* saved)))
+  (let* ((w (make-floor-world))
+         (k (luv-physics::physics-world-kernels w))
+         (wrong '()))
+    (luv-physics::add-physics-body w 3.5 1.0 3.5)
+    (luv-physics::step-physics-world w)
+    (loop for (label call) in (list (list :family (lambda () (luv-physics:physics-warm-start :scalar w)))
+                                    (list :world (lambda () (luv-physics:physics-warm-start k :not-a-world)))
+                                    (list :h (lambda () (luv-physics:physics-integrate-velocities k w "x")))
+                                    (list :h-negative (lambda () (luv-physics:physics-integrate-positions k w -1.0)))
+                                    (list :inv-h (lambda () (luv-physics:physics-solve-contacts k w 2 t 0.0)))
+                                    (list :threshold (lambda () (luv-physics:physics-apply-restitution k w nil))))
+          for got = (handler-case (progn (funcall call) :ran)
+                      (luv-physics:physics-error () :refused)
+                      (error (e) (type-of e)))
+          unless (eq got :refused) do (push (list label got) wrong))
+    (check (null wrong) "entry points ran on wrong arguments: ~S" wrong)
+    (check (eq t (luv-physics::validate-physics-world w)))))
+;; C0ND1T-registry-and-entry-points ends here
+
 ;; [[file:../physics.org::#L4Y0UT][L4Y0UT-swap-remove-and-growth]]
 (define-claim "L4Y0UT" swap-remove-and-growth
     "event-columns: swap-remove fills the hole from the end and zeroes it; growth keeps rows."
