@@ -9,7 +9,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report clean
+.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -24,6 +24,8 @@ help:
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
+	@echo "make fuzz           random operation sequences (SEED=1 COUNT=1200 LENGTH=150); figures into $(ORG)"
+	@echo "make soak           a churning world for MINUTES=5 minutes; its heap curve into $(ORG)"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:
@@ -71,6 +73,19 @@ report: setup tangle
 	@REPORT=accuracy $(LISP) --load tools/report.lisp
 	@$(SBCL) --script tools/splice.lisp work-precision-best report/work-precision-best.org
 	@$(SBCL) --script tools/splice.lisp work-precision-table report/work-precision.org
+
+# Long campaigns, outside make test: the random operation sequences and the soak (#M9W5P7).
+fuzz: setup tangle
+	@mkdir -p report
+	@rm -f report/fuzz-failed
+	@{ SEED="$(SEED)" COUNT="$(COUNT)" LENGTH="$(LENGTH)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/fuzz.org
+	@$(SBCL) --script tools/splice.lisp fuzz-campaign report/fuzz.org
+	@test ! -e report/fuzz-failed
+
+soak: setup tangle
+	@mkdir -p report
+	@MINUTES="$(MINUTES)" nice $(LISP) --load tools/soak.lisp | tee report/soak.org
+	@$(SBCL) --script tools/splice.lisp soak-heap report/soak.org
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f

@@ -53,7 +53,9 @@
    #:physics-player #:make-physics-player #:step-physics-player #:advance-physics-player
    #:physics-player-x #:physics-player-y #:physics-player-z #:physics-player-vx #:physics-player-vy
    #:physics-player-vz #:physics-player-grounded #:physics-player-eye #:post-physics-player
-   #:*physics-player-shape*))
+   #:*physics-player-shape*
+   ;; Random operation sequences (#M9W5P7)
+   #:run-fuzz-campaign #:run-physics-soak))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -4080,6 +4082,300 @@ columns; describe shows that row as if it were slots. #B0DY0B"))
           (dolist (column +body-columns-column-names+)
             (format stream "  ~(~22A~) = ~S~%" column (aref (slot-value buffer column) row))))))))
 ;; A body as an object:1 ends here
+
+;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:1]]
+(defparameter +fuzz-bad-values+
+  (vector (sb-kernel:make-single-float -4194304) sb-ext:single-float-positive-infinity
+          sb-ext:single-float-negative-infinity 1e20 -1e20 3e38 1e-30 -1 0 "x" nil :foo)
+  "The arguments a hostile caller passes instead of a good one. #M9W5P7")
+
+(defparameter +fuzz-operation-kinds+
+  #(:add :add :add :remove :velocity :box :edit :fill :wake :step :step :step :step :spring :player
+    :handler :read)
+  "The operations a sequence draws from, each as often as it appears. #M9W5P7")
+
+(defstruct (fuzz-state (:constructor %make-fuzz-state))
+  "What a run of a sequence keeps: the world, its terrain, every handle issued (in order), what
+each live handle's radius was when added, the spring, the player, and what the checks count. #M9W5P7"
+  world terrain
+  (issued (make-array 16 :adjustable t :fill-pointer 0))
+  (radii (make-hash-table))
+  (live (make-hash-table))
+  spring player
+  (handler-edits 0)
+  (conditions (make-hash-table)))
+
+(defun make-fuzz-operation (next)
+  "A random operation drawn with NEXT, a function returning doubles in [0,1): a list of the
+operation's keyword and its arguments, about one in seven of them hostile. #M9W5P7"
+  (labels ((uniform (low high) (+ low (* (- high low) (funcall next))))
+           (arg (good)
+             (if (< (funcall next) 0.86)
+                 good
+                 (svref +fuzz-bad-values+ (floor (* (funcall next) (length +fuzz-bad-values+))))))
+           (handle () (arg (floor (uniform -1 40)))))
+    (let ((kind (svref +fuzz-operation-kinds+ (floor (* (funcall next) (length +fuzz-operation-kinds+))))))
+      (ecase kind
+        (:add (list :add (arg (uniform 1 11)) (arg (uniform 0.3 4)) (arg (uniform 1 11))
+                    :radius (arg (uniform 0.05 0.45)) :mass (arg (uniform 0.1 10))
+                    :vx (arg (uniform -5 5)) :vy (arg (uniform -5 5)) :vz (arg (uniform -5 5))
+                    :life (if (< (funcall next) 0.2) (arg (uniform 0.1 2)) nil)))
+        (:remove (list :remove (handle)))
+        (:velocity (list :velocity (handle) (arg (uniform -8 8)) (arg (uniform -8 8)) (arg (uniform -8 8))))
+        (:box (list :box (arg (uniform 1 11)) (arg (uniform 0.2 2)) (arg (uniform 1 11))
+                    (arg (uniform 0.1 1)) (arg (uniform 0.1 1)) (arg (uniform 0.1 1))
+                    :vx (arg (uniform -3 3)) :vy (arg (uniform -3 3)) :vz (arg (uniform -3 3))
+                    :owner (if (< (funcall next) 0.5) :pusher nil)))
+        (:edit (list :edit (arg (floor (uniform 0 12))) (arg (floor (uniform -1 3))) (arg (floor (uniform 0 12)))
+                     (< (funcall next) 0.5) (< (funcall next) 0.5)))
+        (:fill (let ((x (floor (uniform 0 10))) (z (floor (uniform 0 10))))
+                 (list :fill x (arg -1) z (+ x (floor (uniform 1 3))) (arg (floor (uniform 0 2))) (+ z (floor (uniform 1 3)))
+                       (< (funcall next) 0.3))))
+        (:wake (list :wake (arg (uniform 0 12)) (arg (uniform -1 3)) (arg (uniform 0 12)) (arg (uniform 0 3))))
+        (:step (list :step (if (< (funcall next) 0.5) nil (arg (uniform 0.002 0.05)))))
+        (:spring (list :spring))
+        (:player (list :player (arg (uniform -1 1)) (arg (uniform -1 1)) (< (funcall next) 0.2)))
+        (:handler (list :handler (arg (svref #(nil :add :remove :step :terrain :velocity)
+                                             (floor (uniform 0 6))))))
+        (:read (list :read (handle)))))))
+
+(defun make-fuzz-sequence (seed length)
+  "The LENGTH operations of the sequence of SEED. #M9W5P7"
+  (let ((next (fixed-sequence seed)))
+    (loop repeat length collect (make-fuzz-operation next))))
+
+(defun make-fuzz-state ()
+  "A fresh run: a floor world over resident air (cells [-16,32)^3, floor at y in [-1,0)), a
+fountain spring at cell 8 -1 8, and a player standing at 2 0 9. #M9W5P7"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (fill-terrain terrain -16 -1 -16 32 0 32 t)
+    (%make-fuzz-state :world (make-physics-world :terrain terrain) :terrain terrain
+                      :spring (make-fountain 8 -1 8) :player (make-physics-player 2 0 9))))
+
+(defun fuzz-handle (state index)
+  "The INDEX-th handle STATE issued, or INDEX itself (a made-up handle) when there is none. #M9W5P7"
+  (let ((issued (fuzz-state-issued state)))
+    (if (and (integerp index) (< -1 index (length issued))) (aref issued index) index)))
+
+(defun fuzz-note-body (state handle)
+  "Note HANDLE as issued and live, with the radius it reads back now. #M9W5P7"
+  (vector-push-extend handle (fuzz-state-issued state))
+  (setf (gethash handle (fuzz-state-live state)) t
+        (gethash handle (fuzz-state-radii state)) (physics-body-radius (fuzz-state-world state) handle)))
+
+(defun fuzz-handler (state mode)
+  "An event handler that, on each event, tries the edit MODE names from inside the step and
+counts in STATE each one that was not refused; a terrain edit is allowed (it waits for the
+step's end). #M9W5P7"
+  (let ((world (fuzz-state-world state)))
+    (lambda (kind a b x y z speed datum)
+      (declare (ignore kind b y speed datum))
+      (let ((refused (handler-case
+                         (progn
+                           (ecase mode
+                             (:add (add-physics-body world 5.5 2.0 5.5))
+                             (:remove (remove-physics-body world a))
+                             (:step (step-physics-world world))
+                             (:velocity (set-physics-body-velocity world a 0 1 0))
+                             (:terrain (setf (terrain-solid-p (fuzz-state-terrain state) (floor x) 1 (floor z)) nil)))
+                           nil)
+                       (physics-world-busy (e) e))))
+        (cond (refused (incf (gethash (type-of refused) (fuzz-state-conditions state) 0)))
+              ((not (eq mode :terrain)) (incf (fuzz-state-handler-edits state))))))))
+
+(defun fuzz-apply (state operation)
+  "Run OPERATION on STATE's world. Return :ok, or the physics-error it signalled. #M9W5P7"
+  (let ((world (fuzz-state-world state)) (terrain (fuzz-state-terrain state)))
+    (flet ((run (kind args)
+             (ecase kind
+               (:add (fuzz-note-body state (apply #'add-physics-body world args)))
+               (:remove (let ((h (fuzz-handle state (first args))))
+                          (remove-physics-body world h)
+                          (remhash h (fuzz-state-live state))))
+               (:velocity (apply #'set-physics-body-velocity world (fuzz-handle state (first args)) (rest args)))
+               (:box (apply #'post-physics-box world args))
+               (:edit (destructuring-bind (x y z solid wake) args
+                        (setf (terrain-solid-p terrain x y z) solid)
+                        (when wake (wake-physics-bodies-near world (+ x 0.5) (+ y 0.5) (+ z 0.5) 1.0))))
+               (:fill (apply #'fill-terrain terrain args))
+               (:wake (apply #'wake-physics-bodies-near world args))
+               (:step (step-physics-world world (first args))
+                (map-physics-events (lambda (kind a b x y z speed datum)
+                                      (declare (ignore b x y z speed datum))
+                                      (when (member kind '(:expired :escaped))
+                                        (remhash a (fuzz-state-live state))))
+                                    world))
+               (:spring (run-physics-springs world (list (fuzz-state-spring state))
+                                             (lambda (h) (fuzz-note-body state h))))
+               (:player (destructuring-bind (move-x move-z jump) args
+                          (step-physics-player (fuzz-state-player state) terrain
+                                               :move-x move-x :move-z move-z :jump jump)
+                          (post-physics-player world (fuzz-state-player state))))
+               (:handler (setf (physics-world-event-handler world)
+                               (let ((mode (first args)))
+                                 (if (member mode '(:add :remove :step :terrain :velocity))
+                                     (fuzz-handler state mode)
+                                     mode))))
+               (:read (let ((h (fuzz-handle state (first args))))
+                        (physics-body-position world h)
+                        (physics-body-velocity world h))))))
+      (handler-case (progn (run (first operation) (rest operation)) :ok)
+        (physics-error (e) e)))))
+
+(defun fuzz-finite-p (world)
+  "True when no position, velocity or angular velocity of WORLD's bodies is a NaN or an infinity,
+read from the bits, so a NaN is never compared. #M9W5P7"
+  (loop for buffer in (list (physics-world-awake world) (physics-world-sleeping world))
+        always (with-body-columns (x y z vx vy vz wx wy wz) buffer
+                 (loop for column in (list x y z vx vy vz wx wy wz)
+                       always (loop for i below (body-columns-length buffer)
+                                    never (= 255 (ldb (byte 8 23) (sb-kernel:single-float-bits (aref column i)))))))))
+
+(defun fuzz-fingerprint (state)
+  "The counts, the state hash and the posted boxes of STATE's world, as a list. #M9W5P7"
+  (let ((world (fuzz-state-world state)))
+    (list (physics-world-awake-count world) (physics-world-sleeping-count world)
+          (physics-world-state-hash world) (box-columns-length (physics-world-boxes world)))))
+
+(defun fuzz-violation (state before outcome)
+  "NIL when STATE's world keeps every promise after an operation that gave OUTCOME, starting
+from the fingerprint BEFORE; else a sentence naming the first promise broken. #M9W5P7"
+  (let ((world (fuzz-state-world state)))
+    (block check
+      (flet ((fail (control &rest args) (return-from check (apply #'format nil control args))))
+        (when (and (typep outcome 'physics-error) (not (equal before (fuzz-fingerprint state))))
+          (fail "a failed operation (~A) changed the world: ~S -> ~S" (type-of outcome) before (fuzz-fingerprint state)))
+        (handler-case (validate-physics-world world)
+          (physics-world-invalid (e) (fail "~A" e)))
+        (loop for h being the hash-keys of (fuzz-state-live state)
+              unless (physics-body-alive-p world h) do (fail "live handle ~D is stale" h)
+              unless (= (physics-body-radius world h) (gethash h (fuzz-state-radii state)))
+                do (fail "handle ~D names another body" h))
+        (loop for h across (fuzz-state-issued state)
+              when (and (not (gethash h (fuzz-state-live state))) (physics-body-alive-p world h))
+                do (fail "removed handle ~D still names a body" h))
+        (unless (= (hash-table-count (fuzz-state-live state))
+                   (+ (physics-world-awake-count world) (physics-world-sleeping-count world)))
+          (fail "~D live handles but ~D bodies" (hash-table-count (fuzz-state-live state))
+                (+ (physics-world-awake-count world) (physics-world-sleeping-count world))))
+        (unless (fuzz-finite-p world) (fail "a number is not finite"))
+        (when (plusp (fuzz-state-handler-edits state))
+          (fail "~D edits from an event handler went through" (fuzz-state-handler-edits state)))
+        nil))))
+
+(defun run-fuzz-operations (operations &key extra-check)
+  "Run OPERATIONS on a fresh fuzz state, checking every promise after each. Return NIL and the
+state when all hold; else the index of the first operation after which one broke, the sentence
+saying which, and the state. EXTRA-CHECK, a function of the state returning NIL or a sentence,
+is checked too. #M9W5P7"
+  (let ((state (make-fuzz-state)))
+    (loop for operation in operations
+          for i from 0
+          do (let* ((before (fuzz-fingerprint state))
+                    (outcome (handler-case (fuzz-apply state operation)
+                               (error (e) (return-from run-fuzz-operations
+                                            (values i (format nil "~A signalled ~A: ~A" (first operation) (type-of e) e) state)))))
+                    (problem (or (fuzz-violation state before outcome)
+                                 (and extra-check (funcall extra-check state)))))
+               (when (typep outcome 'physics-error)
+                 (incf (gethash (type-of outcome) (fuzz-state-conditions state) 0)))
+               (when problem (return-from run-fuzz-operations (values i problem state)))))
+    (values nil nil state)))
+
+(defun shrink-fuzz-operations (operations &key extra-check)
+  "The shortest sequence found by dropping chunks of OPERATIONS, halving in size down to one,
+while it still breaks a promise (run-fuzz-operations); OPERATIONS must break one. #M9W5P7"
+  (let ((ops (subseq operations 0 (1+ (run-fuzz-operations operations :extra-check extra-check)))))
+    (loop for size = (max 1 (floor (length ops) 2)) then (max 1 (floor size 2))
+          do (loop with start = 0
+                   while (< start (length ops))
+                   do (let ((fewer (append (subseq ops 0 start) (nthcdr (+ start size) ops))))
+                        (if (and fewer (run-fuzz-operations fewer :extra-check extra-check))
+                            (setf ops (subseq fewer 0 (1+ (run-fuzz-operations fewer :extra-check extra-check))))
+                            (incf start size))))
+          until (= size 1))
+    ops))
+
+(defun run-fuzz-campaign (&key (seed 1) (sequences 40) (length 100) extra-check (stream *standard-output*))
+  "Run SEQUENCES sequences of LENGTH operations, the I-th from seed SEED*1000003+I; print each
+failing seed and its shrunk sequence to STREAM. Return a plist of the figures: :sequences,
+:operations, :steps, :failures, :shrunk (the shrunk sequences), :kinds (operations run by kind)
+and :conditions (refusals by condition type). #M9W5P7"
+  (let ((operations 0) (steps 0) (failures 0) (shrunk '())
+        (kinds (make-hash-table)) (conditions (make-hash-table)))
+    (dotimes (i sequences)
+      (let* ((s (+ (* seed 1000003) i))
+             (ops (make-fuzz-sequence s length)))
+        (multiple-value-bind (at problem state) (run-fuzz-operations ops :extra-check extra-check)
+          (loop for op in (if at (subseq ops 0 (1+ at)) ops)
+                do (incf operations) (incf (gethash (first op) kinds 0))
+                   (when (eq (first op) :step) (incf steps)))
+          (maphash (lambda (k v) (incf (gethash k conditions 0) v)) (fuzz-state-conditions state))
+          (when at
+            (incf failures)
+            (let ((small (shrink-fuzz-operations ops :extra-check extra-check)))
+              (push small shrunk)
+              (format stream "~&seed ~D failed after operation ~D: ~A~%shrunk to ~D operations:~%~{  ~S~%~}"
+                      s at problem (length small) small))))))
+    (flet ((alist (table) (sort (loop for k being the hash-keys of table using (hash-value v) collect (cons k v))
+                                #'> :key #'cdr)))
+      (list :sequences sequences :operations operations :steps steps :failures failures
+            :shrunk (reverse shrunk) :kinds (alist kinds) :conditions (alist conditions)))))
+
+(defun print-fuzz-figures (figures seconds stream)
+  "Print the FIGURES of a campaign (run-fuzz-campaign) that took SECONDS as an Org table. #M9W5P7"
+  (format stream "~&| sequences | operations | steps | failures | seconds |~%|-~%| ~D | ~D | ~D | ~D | ~,1F |~%~%"
+          (getf figures :sequences) (getf figures :operations) (getf figures :steps)
+          (getf figures :failures) seconds)
+  (format stream "| refused with | times |~%|-~%~:{| ~(~A~) | ~D |~%~}"
+          (mapcar (lambda (c) (list (car c) (cdr c))) (getf figures :conditions)))
+  (format stream "~&~%| operation | times |~%|-~%~:{| ~(~S~) | ~D |~%~}"
+          (mapcar (lambda (c) (list (car c) (cdr c))) (getf figures :kinds))))
+;; Random operation sequences find what a hostile caller would:1 ends here
+
+;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:4]]
+(defun run-physics-soak (&key (minutes 5) (seed 1) (stream *standard-output*))
+  "Churn a fuzz world for MINUTES of wall-clock time: each step adds a ball, removes one of the
+oldest when more than 300 live, throws one, posts a walking box, edits a cell under the pile and
+lets the spring run. Print to STREAM, at every tenth of the run, the seconds, the steps, the
+bodies and the heap in MB after a full collection, as an Org table. Return the heap's growth in
+bytes from the second row (the first after the churn began) to the last. #M9W5P7"
+  (let* ((state (make-fuzz-state)) (world (fuzz-state-world state)) (terrain (fuzz-state-terrain state))
+         (next (fixed-sequence seed)) (handles (make-array 0 :adjustable t :fill-pointer 0))
+         (start (get-internal-real-time)) (span (* minutes 60 internal-time-units-per-second))
+         (steps 0) (row 0) (first-heap nil) (last-heap 0))
+    (format stream "~&| seconds | steps | bodies | heap MB |~%|-~%")
+    (loop
+      (let ((elapsed (- (get-internal-real-time) start)))
+        (when (>= elapsed (* row (/ span 10)))
+          (sb-ext:gc :full t)
+          (setf last-heap (sb-kernel:dynamic-usage))
+          ;; growth is counted from the second row, once the buffers have grown to the churn
+          (when (= row 1) (setf first-heap last-heap))
+          (format stream "| ~D | ~D | ~D | ~,2F |~%" (round elapsed internal-time-units-per-second) steps
+                  (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
+                  (/ last-heap 1048576.0))
+          (finish-output stream)
+          (when (> (incf row) 10) (return (- last-heap first-heap)))))
+      (vector-push-extend (add-physics-body world (+ 1 (* 10 (funcall next))) (+ 1 (* 3 (funcall next)))
+                                            (+ 1 (* 10 (funcall next))) :radius (+ 0.1 (* 0.3 (funcall next)))
+                                            :life (if (< (funcall next) 0.3) 2.0 nil))
+                          handles)
+      (setf handles (delete-if-not (lambda (h) (physics-body-alive-p world h)) handles))
+      (when (> (length handles) 300)
+        (remove-physics-body world (aref handles 0))
+        (setf handles (delete (aref handles 0) handles)))
+      (let ((h (aref handles (floor (* (funcall next) (length handles))))))
+        (set-physics-body-velocity world h (- (* 10 (funcall next)) 5) (* 5 (funcall next)) (- (* 10 (funcall next)) 5)))
+      (post-physics-box world (+ 1 (mod (* 0.05 steps) 10)) 0.5 5.5 0.5 0.5 0.5 :vx 3.0 :owner :walker)
+      (let ((x (floor (* 11 (funcall next)))) (z (floor (* 11 (funcall next)))))
+        (setf (terrain-solid-p terrain x 0 z) (< (funcall next) 0.5))
+        (wake-physics-bodies-near world (+ x 0.5) 0.5 (+ z 0.5) 1.0))
+      (run-physics-springs world (list (fuzz-state-spring state)))
+      (step-physics-world world)
+      (incf steps))))
+;; Random operation sequences find what a hostile caller would:4 ends here
 
 ;; [[file:../physics.org::#B4S1NS][The basin:1]]
 (defun make-basin-terrain (&key (wall-height 6) (air-height 48))

@@ -1780,6 +1780,36 @@ function of a column name that reads row K's float in that column. #T3STK1"
           (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits"))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
 
+;; [[file:../physics.org::#M9W5P7][M9W5P7-random-sequences-keep-promises]]
+(define-claim "M9W5P7" random-sequences-keep-promises
+    "A hundred seeded sequences of 100 operations break no promise after any operation."
+  (let* ((out (make-string-output-stream))
+         (figures (luv-physics::run-fuzz-campaign :seed 1 :sequences 100 :length 100 :stream out)))
+    (check (zerop (getf figures :failures)) "~D sequences failed:~%~A" (getf figures :failures)
+           (get-output-stream-string out))
+    (check (= 10000 (getf figures :operations)))
+    (check (= (length (remove-duplicates luv-physics::+fuzz-operation-kinds+)) (length (getf figures :kinds)))
+           "only ~S ran" (getf figures :kinds))
+    (check (>= (length (getf figures :conditions)) 5) "refusals ~S" (getf figures :conditions))
+    (check (assoc 'luv-physics:physics-world-busy (getf figures :conditions)) "no edit was tried from a handler")))
+;; M9W5P7-random-sequences-keep-promises ends here
+
+;; [[file:../physics.org::#M9W5P7][M9W5P7-failures-shrink]]
+(define-claim "M9W5P7" failures-shrink
+    "A deliberately broken promise is found, printed with its seed and shrunk to at most four adding operations."
+  (let* ((extra (lambda (state)
+                  (when (> (hash-table-count (luv-physics::fuzz-state-live state)) 3) "more than three bodies")))
+         (out (make-string-output-stream))
+         (figures (luv-physics::run-fuzz-campaign :seed 7 :sequences 3 :length 100 :extra-check extra :stream out))
+         (text (get-output-stream-string out)))
+    (check (= 3 (getf figures :failures)) "~D of 3 sequences failed" (getf figures :failures))
+    (check (search "seed 7000023 failed" text) "the seed is not printed: ~A" text)
+    (dolist (ops (getf figures :shrunk))
+      (check (and (<= (length ops) 4) (every (lambda (op) (member (first op) '(:add :spring))) ops))
+             "shrunk to ~S" ops)
+      (check (luv-physics::run-fuzz-operations ops :extra-check extra) "the shrunk sequence passes"))))
+;; M9W5P7-failures-shrink ends here
+
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
 (define-claim "JAU0EF" kinds-make-their-bodies
     "Each kind gives its radius and name; a gobbet expires at 4 s; an unknown kind is refused."
