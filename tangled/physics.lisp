@@ -3936,6 +3936,12 @@ grids are rebuilt by the next step. #IDVK7G"
         (dotimes (i n) (setf (aref locals (handle-index (aref handle i))) i))))
     (loop for k from (1- (physics-world-undo-woken-count world)) downto 0
           do (unwake-last-body world (aref (physics-world-undo-woken world) k)))
+    ;; contacts the attempt stamped seen count as seen by the step before, so the next step
+    ;; prunes every one it does not find again
+    (let ((seen (contact-columns-seen (physics-world-contacts world)))
+          (attempt (physics-world-step-count world)) (before (physics-world-undo-step-count world)))
+      (dotimes (row (contact-columns-length (physics-world-contacts world)))
+        (when (= (aref seen row) attempt) (setf (aref seen row) before))))
     (setf (physics-world-step-count world) (physics-world-undo-step-count world)
           (physics-world-undo-open world) nil
           (pair-list-rows (physics-world-pair-list world)) -1

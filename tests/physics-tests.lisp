@@ -535,8 +535,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (balls (loop for i below 30
                           collect (luv-physics::add-physics-body w (+ 1 (* 4 (funcall next))) (+ 1 (* 3 (funcall next)))
                                                                  (+ 1 (* 4 (funcall next))) :radius 0.2))))
-        (luv-physics::add-physics-body w 5.9 0.245 6.5 :vx 5.0)
-        (let* ((before (world-fingerprint w))
+        (let* ((fast (luv-physics::add-physics-body w 5.9 0.245 6.5 :vx 5.0))
+               (before (world-fingerprint w))
                (steps (luv-physics::physics-world-step-count w))
                (where (mapcar (lambda (h) (multiple-value-list (luv-physics::physics-body-position w h)))
                               (append sleepers balls)))
@@ -556,8 +556,15 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                       (append sleepers balls)))
                  "a handle names another body")
           (check (eq t (luv-physics::validate-physics-world w)))
+          ;; a body removed after the failure leaves no contact behind
+          (luv-physics::remove-physics-body w fast)
           (luv-physics::step-physics-world w)
-          (check (eq t (luv-physics::validate-physics-world w))))))))
+          (check (eq t (luv-physics::validate-physics-world w)))
+          (let ((c (luv-physics::physics-world-contacts w)) (gone fast))
+            (check (loop for row below (luv-physics::contact-columns-length c)
+                         never (or (= gone (aref (luv-physics::contact-columns-handle-a c) row))
+                                   (= gone (aref (luv-physics::contact-columns-handle-b c) row))))
+                   "a contact of the removed body survived")))))))
 ;; C0ND1T-failed-step-atomic ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-parameters-checked]]
