@@ -4340,7 +4340,7 @@ and :conditions (refusals by condition type). #M9W5P7"
           (mapcar (lambda (c) (list (car c) (cdr c))) (getf figures :kinds))))
 ;; Random operation sequences find what a hostile caller would:1 ends here
 
-;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:4]]
+;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:5]]
 (defun run-physics-soak (&key (minutes 5) (seed 1) (stream *standard-output*))
   "Churn a fuzz world for MINUTES of wall-clock time: each step adds a ball, removes one of the
 oldest when more than 300 live, throws one, posts a walking box, edits a cell under the pile and
@@ -4381,7 +4381,7 @@ bytes from the second row (the first after the churn began) to the last. #M9W5P7
       (run-physics-springs world (list (fuzz-state-spring state)))
       (step-physics-world world)
       (incf steps))))
-;; Random operation sequences find what a hostile caller would:4 ends here
+;; Random operation sequences find what a hostile caller would:5 ends here
 
 ;; [[file:../physics.org::#B4S1NS][The basin:1]]
 (defun make-basin-terrain (&key (wall-height 6) (air-height 48))

@@ -1817,6 +1817,21 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (luv-physics::run-fuzz-operations ops :extra-check extra) "the shrunk sequence passes"))))
 ;; M9W5P7-failures-shrink ends here
 
+;; [[file:../physics.org::#M9W5P7][M9W5P7-shrunk-failures-stay-fixed]]
+(define-claim "M9W5P7" shrunk-failures-stay-fixed
+    "Six shrunk sequences that used to trap or signal a type error now break no promise."
+  (dolist (ops '(((:add 7.2 0.64 6.8 :radius 0.16 :mass 7.1 :vx -1.3 :vy 1e20 :vz 2.2) (:step 0.04))
+                 ((:add 0 2.2 10.6 :radius 1e-30 :mass 7.4 :life 1e-30))
+                 ((:add 0 1.0 3.2 :radius 0.31 :mass 10) (:velocity 0 1e20 5.7 4.8) (:step 0.0074))
+                 ((:add 6.5 3.0 2.0 :radius 0.28 :mass 3e38))
+                 ((:box 1.7 0.41 3e38 0.3 0.19 0.94 :vx 1e-30 :vy -2.0 :vz -0.4 :owner :pusher) (:step 0.047))
+                 ((:spring) (:fill 8 -1 8 10 1 9 t) (:handler 3e38) (:step 0.0021))))
+    (multiple-value-bind (at problem state) (luv-physics::run-fuzz-operations ops)
+      (check (null at) "~S broke a promise at operation ~S: ~A" ops at problem)
+      (check (plusp (hash-table-count (luv-physics::fuzz-state-conditions state)))
+             "~S was refused nowhere" ops))))
+;; M9W5P7-shrunk-failures-stay-fixed ends here
+
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
 (define-claim "JAU0EF" kinds-make-their-bodies
     "Each kind gives its radius and name; a gobbet expires at 4 s; an unknown kind is refused."
