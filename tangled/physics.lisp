@@ -4150,13 +4150,14 @@ operation's keyword and its arguments, about one in seven of them hostile. #M9W5
   (let ((next (fixed-sequence seed)))
     (loop repeat length collect (make-fuzz-operation next))))
 
-(defun make-fuzz-state ()
-  "A fresh run: a floor world over resident air (cells [-16,32)^3, floor at y in [-1,0)), a
-fountain spring at cell 8 -1 8, and a player standing at 2 0 9. #M9W5P7"
+(defun make-fuzz-state (&optional (kernels :scalar))
+  "A fresh run: a floor world over resident air (cells [-16,32)^3, floor at y in [-1,0)) solved
+by the kernel family KERNELS, a fountain spring at cell 8 -1 8, and a player standing at
+2 0 9. #M9W5P7"
   (let ((terrain (make-voxel-terrain)))
     (fill-terrain terrain -16 -16 -16 32 32 32 nil)
     (fill-terrain terrain -16 -1 -16 32 0 32 t)
-    (%make-fuzz-state :world (make-physics-world :terrain terrain) :terrain terrain
+    (%make-fuzz-state :world (make-physics-world :terrain terrain :kernels kernels) :terrain terrain
                       :spring (make-fountain 8 -1 8) :player (make-physics-player 2 0 9))))
 
 (defun fuzz-handle (state index)
@@ -4270,12 +4271,12 @@ from the fingerprint BEFORE; else a sentence naming the first promise broken. #M
           (fail "~D edits from an event handler went through" (fuzz-state-handler-edits state)))
         nil))))
 
-(defun run-fuzz-operations (operations &key extra-check)
-  "Run OPERATIONS on a fresh fuzz state, checking every promise after each. Return NIL and the
-state when all hold; else the index of the first operation after which one broke, the sentence
-saying which, and the state. EXTRA-CHECK, a function of the state returning NIL or a sentence,
-is checked too. #M9W5P7"
-  (let ((state (make-fuzz-state)))
+(defun run-fuzz-operations (operations &key extra-check (kernels :scalar))
+  "Run OPERATIONS on a fresh fuzz state whose world KERNELS solves, checking every promise after
+each. Return NIL and the state when all hold; else the index of the first operation after which
+one broke, the sentence saying which, and the state. EXTRA-CHECK, a function of the state
+returning NIL or a sentence, is checked too. #M9W5P7"
+  (let ((state (make-fuzz-state kernels)))
     (loop for operation in operations
           for i from 0
           do (let* ((before (fuzz-fingerprint state))
@@ -4289,41 +4290,47 @@ is checked too. #M9W5P7"
                (when problem (return-from run-fuzz-operations (values i problem state)))))
     (values nil nil state)))
 
-(defun shrink-fuzz-operations (operations &key extra-check)
+(defun shrink-fuzz-operations (operations &key extra-check (kernels :scalar))
   "The shortest sequence found by dropping chunks of OPERATIONS, halving in size down to one,
-while it still breaks a promise (run-fuzz-operations); OPERATIONS must break one. #M9W5P7"
-  (let ((ops (subseq operations 0 (1+ (run-fuzz-operations operations :extra-check extra-check)))))
+while it still breaks a promise (run-fuzz-operations under KERNELS); OPERATIONS must break
+one. #M9W5P7"
+  (let ((ops (subseq operations 0 (1+ (run-fuzz-operations operations :extra-check extra-check
+                                                                      :kernels kernels)))))
     (loop for size = (max 1 (floor (length ops) 2)) then (max 1 (floor size 2))
           do (loop with start = 0
                    while (< start (length ops))
                    do (let ((fewer (append (subseq ops 0 start) (nthcdr (+ start size) ops))))
-                        (if (and fewer (run-fuzz-operations fewer :extra-check extra-check))
-                            (setf ops (subseq fewer 0 (1+ (run-fuzz-operations fewer :extra-check extra-check))))
+                        (if (and fewer (run-fuzz-operations fewer :extra-check extra-check :kernels kernels))
+                            (setf ops (subseq fewer 0 (1+ (run-fuzz-operations fewer :extra-check extra-check
+                                                                                     :kernels kernels))))
                             (incf start size))))
           until (= size 1))
     ops))
 
 (defun run-fuzz-campaign (&key (seed 1) (sequences 40) (length 100) extra-check (stream *standard-output*))
-  "Run SEQUENCES sequences of LENGTH operations, the I-th from seed SEED*1000003+I; print each
-failing seed and its shrunk sequence to STREAM. Return a plist of the figures: :sequences,
+  "Run SEQUENCES sequences of LENGTH operations, the I-th from seed SEED*1000003+I and solved by
+the I-th of the kernel families this CPU runs, in turn; print each failing seed, its family and
+its shrunk sequence to STREAM. Return a plist of the figures: :sequences,
 :operations, :steps, :failures, :shrunk (the shrunk sequences), :kinds (operations run by kind)
 and :conditions (refusals by condition type). #M9W5P7"
   (let ((operations 0) (steps 0) (failures 0) (shrunk '())
         (kinds (make-hash-table)) (conditions (make-hash-table)))
     (dotimes (i sequences)
       (let* ((s (+ (* seed 1000003) i))
+             (families (available-kernel-families))
+             (kernels (nth (mod i (length families)) families))
              (ops (make-fuzz-sequence s length)))
-        (multiple-value-bind (at problem state) (run-fuzz-operations ops :extra-check extra-check)
+        (multiple-value-bind (at problem state) (run-fuzz-operations ops :extra-check extra-check :kernels kernels)
           (loop for op in (if at (subseq ops 0 (1+ at)) ops)
                 do (incf operations) (incf (gethash (first op) kinds 0))
                    (when (eq (first op) :step) (incf steps)))
           (maphash (lambda (k v) (incf (gethash k conditions 0) v)) (fuzz-state-conditions state))
           (when at
             (incf failures)
-            (let ((small (shrink-fuzz-operations ops :extra-check extra-check)))
+            (let ((small (shrink-fuzz-operations ops :extra-check extra-check :kernels kernels)))
               (push small shrunk)
-              (format stream "~&seed ~D failed after operation ~D: ~A~%shrunk to ~D operations:~%~{  ~S~%~}"
-                      s at problem (length small) small))))))
+              (format stream "~&seed ~D (~(~S~)) failed after operation ~D: ~A~%shrunk to ~D operations:~%~{  ~S~%~}"
+                      s kernels at problem (length small) small))))))
     (flet ((alist (table) (sort (loop for k being the hash-keys of table using (hash-value v) collect (cons k v))
                                 #'> :key #'cdr)))
       (list :sequences sequences :operations operations :steps steps :failures failures
