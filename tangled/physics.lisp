@@ -993,11 +993,18 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
                                   sum (loop for cy from cy0 to cy1
                                             sum (loop for cz from cz0 to cz1
                                                       count (not (nth-value 1 (gethash (chunk-key (ash cx +chunk-bits+) (ash cy +chunk-bits+) (ash cz +chunk-bits+)) chunks)))))))))))
+  (if (plusp (voxel-terrain-lock terrain))
+      ;; a step is in flight: the whole fill waits as one edit
+      (push (list :fill x0 y0 z0 x1 y1 z1 solid-p) (voxel-terrain-pending terrain))
+      (%fill-cells terrain x0 y0 z0 x1 y1 z1 solid-p))
+  terrain)
+
+(defun %fill-cells (terrain x0 y0 z0 x1 y1 z1 solid-p)
+  "Write every cell of the box [X0,X1)x[Y0,Y1)x[Z0,Z1), making its chunks resident. #H2W9DJ"
   (loop for x from x0 below x1 do
     (loop for y from y0 below y1 do
       (loop for z from z0 below z1 do
-        (setf (terrain-solid-p terrain x y z) solid-p))))
-  terrain)
+        (%set-cell terrain x y z solid-p)))))
 
 (defun lock-terrain (terrain)
   "Mark TERRAIN as read by a step in flight; edits are queued until it is unlocked. #H2W9DJ"
@@ -1008,7 +1015,10 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
   (when (zerop (decf (voxel-terrain-lock terrain)))
     (let ((edits (reverse (voxel-terrain-pending terrain))))
       (setf (voxel-terrain-pending terrain) '())
-      (loop for (x y z solid-p) in edits do (%set-cell terrain x y z solid-p))))
+      (dolist (edit edits)
+        (if (eq (first edit) :fill)
+            (apply #'%fill-cells terrain (rest edit))
+            (apply #'%set-cell terrain edit)))))
   terrain)
 
 (defstruct (terrain-probe (:constructor make-terrain-probe))
