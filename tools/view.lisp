@@ -1,6 +1,6 @@
 ;;;; tools/view.lisp -- record a standard scene and write its viewer (make view SCENE=basin).
 ;;;; Environment: SCENE (basin, pile, fountain, lava, player; default basin), EVERY (steps a
-;;;; frame, default 2), OUT (default report/view-SCENE.html).
+;;;; frame, default 2), VIEW (the file to write, default report/view-SCENE.html).
 
 (load (merge-pathnames "boot.lisp" *load-truename*))
 
@@ -13,7 +13,7 @@
        (name (string-upcase (or (sb-ext:posix-getenv "SCENE") "basin")))
        (entry (find name scenes :key (lambda (e) (symbol-name (first e))) :test #'string=))
        (every (parse-integer (or (sb-ext:posix-getenv "EVERY") "2")))
-       (out (or (sb-ext:posix-getenv "OUT") (format nil "report/view-~(~A~).html" name))))
+       (out (or (sb-ext:posix-getenv "VIEW") (format nil "report/view-~(~A~).html" name))))
   (unless entry
     (format *error-output* "view: no scene ~A; the scenes are ~{~(~A~)~^, ~}~%" name (mapcar #'first scenes))
     (sb-ext:exit :code 1))
