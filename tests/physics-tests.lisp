@@ -2033,16 +2033,18 @@ time budget of 4 s; return its standard output. #RH7T05"
                               (format nil "--screenshot=~A" (namestring pathname)) url))
   (probe-file pathname))
 
-(defun pixels-differing (picture other)
-  "How many pixels of the PNG file PICTURE differ by more than 3% from the PNG file OTHER, or, when
-OTHER starts with #, from a picture of that colour; NIL when it cannot be counted. #RH7T05"
+(defun pixels-differing (picture other &key (fuzz 3))
+  "How many pixels of the PNG file PICTURE differ by more than FUZZ percent from the PNG file
+OTHER, or, when OTHER starts with #, from a picture of that colour; NIL when it cannot be
+counted. #RH7T05"
   (when (probe-file picture)
     (let ((second (if (and (stringp other) (char= (char other 0) #\#))
                       (list "-size" (string-trim '(#\Newline) (program-output "identify" (list "-format" "%wx%h" (namestring picture))))
                             (format nil "xc:~A" other))
                       (list (namestring other)))))
       (multiple-value-bind (out err)
-          (program-output "compare" (append (list "-metric" "AE" "-fuzz" "3%" (namestring picture))
+          (program-output "compare" (append (list "-metric" "AE" "-fuzz" (format nil "~D%" fuzz)
+                                                  (namestring picture))
                                             second (list "null:")))
         (declare (ignore out))
         ;; the count may come as 271482 or as 2.71482e+05
@@ -2095,9 +2097,13 @@ OTHER starts with #, from a picture of that colour; NIL when it cannot be counte
             (browser-screenshot chromium (format nil "file://~A#frame=~D" (namestring page) last) last-shot)
             (let ((all (* 960 640)))
               (dolist (shot (list first-shot last-shot))
-                (let ((drawn (pixels-differing shot "#20242b")))
+                (let ((drawn (pixels-differing shot "#20242b"))
+                      (other-than-balls (pixels-differing shot "#d9822b" :fuzz 20)))
                   (check (and drawn (> drawn (* 0.05 all))) "~A: ~A pixels differ from the background"
-                         (file-namestring shot) drawn)))
+                         (file-namestring shot) drawn)
+                  (check (and other-than-balls (> (- all other-than-balls) (* 0.05 all)))
+                         "~A: ~A pixels are near the awake balls' colour" (file-namestring shot)
+                         (and other-than-balls (- all other-than-balls)))))
               (let ((moved (pixels-differing first-shot last-shot)))
                 (check (and moved (> moved (* 0.01 all))) "the first and last frames differ in ~A pixels"
                        moved))))))))
