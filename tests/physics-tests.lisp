@@ -2202,9 +2202,9 @@ counted. #RH7T05"
       (check (search "| [[#M4K3WD][add-physics-body]] | function | ~(world x y z &key" (format nil "~{~A~%~}" lines))))))
 ;; LW3YHU-every-export-is-indexed ends here
 
-;; [[file:../physics.org::#LW3YHU][LW3YHU-links-reach-their-sections]]
-(define-claim "LW3YHU" links-reach-their-sections
-    "Clicking a link to an anchor in physics.html scrolls the section's heading to the top."
+;; [[file:../physics.org::#LW3YHU][LW3YHU-page-works-in-a-browser]]
+(define-claim "LW3YHU" page-works-in-a-browser
+    "physics.html: pictures load, code coloured, none cut off; a link scrolls its section to the top."
   (let ((chromium (chromium-program)) (page (repository-file "physics.html")))
     (cond ((null chromium)
            (format t "~&LW3YHU: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
@@ -2216,11 +2216,18 @@ counted. #RH7T05"
                     (text (luv-physics::read-file-text page))
                     (end (search "</body>" text :from-end t))
                     (script "<script>window.addEventListener('load', function () {
+  var images = Array.from(document.images), blocks = Array.from(document.querySelectorAll('pre'));
+  var shown = images.filter(function (i) { return i.complete && i.naturalWidth > 0; }).length;
+  var cut = blocks.filter(function (b) {
+    return b.scrollWidth > b.clientWidth && ['auto', 'scroll'].indexOf(getComputedStyle(b).overflowX) < 0;
+  }).length;
+  var keywords = document.querySelectorAll('.org-keyword').length;
   var link = document.querySelector('a[href=\"#3X6XN8\"]'), before = window.scrollY;
   link.click();
   setTimeout(function () {
     var note = document.createElement('pre'); note.id = 'link-check';
-    note.textContent = 'link-check ' + before + ' ' + window.scrollY + ' ' +
+    note.textContent = 'link-check ' + images.length + ' ' + shown + ' ' + keywords + ' ' + cut + ' ' +
+      before + ' ' + window.scrollY + ' ' +
       Math.round(document.getElementById('3X6XN8').getBoundingClientRect().top) + ' ' + location.hash;
     document.body.appendChild(note);
     // a headless screenshot of a scrolled window comes out blank: show the same place by
@@ -2241,17 +2248,22 @@ counted. #RH7T05"
                              (mark "id=\"link-check\">link-check ")
                              (at (search mark dom))
                              (note (and at (with-input-from-string (s dom :start (+ at (length mark)))
-                                             (list (read s) (read s) (read s) (read-line s))))))
-                        (check (not (null note)) "the page did not note where it went")
+                                             (list (read s) (read s) (read s) (read s) (read s) (read s)
+                                                   (read s) (read-line s))))))
+                        (check (not (null note)) "the page did not note what it shows")
                         (when note
-                          (destructuring-bind (before after top hash) note
+                          (destructuring-bind (images shown keywords cut before after top hash) note
+                            (check (and (integerp images) (>= images 13) (eql shown images))
+                                   "~A of ~A pictures loaded" shown images)
+                            (check (and (integerp keywords) (> keywords 1000)) "~A coloured keywords" keywords)
+                            (check (eql cut 0) "~A code blocks are cut off" cut)
                             (check (and (numberp before) (numberp after) (> (- after before) 2000))
                                    "the page went from ~A to ~A" before after)
                             (check (and (numberp top) (<= (abs top) 2)) "the heading is at ~A px" top)
                             (check (equal (string-trim " <" (subseq hash 0 (position #\< hash))) "#3X6XN8")
                                    "the address ends with ~S" hash)))))
                  (when (probe-file copy) (delete-file copy)))))))))
-;; LW3YHU-links-reach-their-sections ends here
+;; LW3YHU-page-works-in-a-browser ends here
 
 ;; [[file:../physics.org::#O07FDP][O07FDP-both-files-registered]]
 (define-claim "O07FDP" both-files-registered
