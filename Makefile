@@ -43,7 +43,7 @@ check-tangle:
 check-anchors:
 	@$(LISP) --load tools/check-anchors.lisp
 
-test: setup check-tangle check-anchors html
+test: setup check-tangle check-anchors physics.html
 	@ANCHOR="$(ANCHOR)" $(LISP) --load tests/run.lisp
 
 demo: setup tangle
@@ -78,9 +78,12 @@ report: setup tangle
 	@$(SBCL) --script tools/splice.lisp work-precision-table report/work-precision.org
 
 # The page as HTML: the index of the exported symbols comes from the loaded image
-# (report/api-index.org), then Org's export in batch Emacs writes physics.html.  It uses the
-# tangled files as they are: after editing the page, make tangle first.
-html: setup
+# (report/api-index.org), then Org's export in batch Emacs writes physics.html, again only when
+# the page, the tangled files or these tools changed.  It uses the tangled files as they are:
+# after editing the page, make tangle first.
+html: physics.html
+
+physics.html: $(ORG) $(OUT) luv-physics.asd tools/export.el tools/api-index.lisp | setup
 	@mkdir -p report
 	@$(LISP) --load tools/api-index.lisp
 	@$(EMACS) -Q --batch -l tools/export.el $(ORG) physics.html

@@ -2033,6 +2033,22 @@ time budget of 4 s; return its standard output. #RH7T05"
                               (format nil "--screenshot=~A" (namestring pathname)) url))
   (probe-file pathname))
 
+;; headless Chromium takes seconds to start and to start its software WebGL: one run for both
+(defun browser-screenshot-pair (chromium left right left-shot right-shot)
+  "Load LEFT and RIGHT (addresses relative to report/) side by side, each in a 960 x 640 frame,
+in one run of CHROMIUM, and write the screenshot of each frame to LEFT-SHOT and RIGHT-SHOT. #RH7T05"
+  (let ((pair (repository-file "report/viewer-check-pair.html"))
+        (both (repository-file "report/viewer-check-pair.png")))
+    (with-open-file (out pair :direction :output :if-exists :supersede)
+      (format out "<!DOCTYPE html><html><body style=\"margin: 0; display: flex\">~{<iframe src=\"~A\" ~
+                   style=\"border: 0; flex: none; width: 960px; height: 640px\"></iframe>~}</body></html>~%"
+              (list left right)))
+    (browser-screenshot chromium (format nil "file://~A" (namestring pair)) both :size "1920,640")
+    (loop for shot in (list left-shot right-shot) for x in '(0 960)
+          do (when (probe-file shot) (delete-file shot))
+             (program-output "convert" (list (namestring both) "-crop" (format nil "960x640+~D+0" x)
+                                             "+repage" (namestring shot))))))
+
 (defun pixels-differing (picture other &key (fuzz 3))
   "How many pixels of the PNG file PICTURE differ by more than FUZZ percent from the PNG file
 OTHER, or, when OTHER starts with #, from a picture of that colour; NIL when it cannot be
@@ -2093,8 +2109,8 @@ counted. #RH7T05"
                  (last-shot (repository-file "report/viewer-last.png")))
             (ensure-directories-exist page)
             (luv-physics::write-physics-viewer recording page :title "basin, 2 s")
-            (browser-screenshot chromium (format nil "file://~A#frame=0" (namestring page)) first-shot)
-            (browser-screenshot chromium (format nil "file://~A#frame=~D" (namestring page) last) last-shot)
+            (browser-screenshot-pair chromium "viewer-check.html#frame=0"
+                                     (format nil "viewer-check.html#frame=~D" last) first-shot last-shot)
             (let ((all (* 960 640)))
               (dolist (shot (list first-shot last-shot))
                 (let ((drawn (pixels-differing shot "#20242b"))
