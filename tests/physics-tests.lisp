@@ -1960,6 +1960,30 @@ function of a column name that reads row K's float in that column. #T3STK1"
                "the recorded boxes are not the player's")))))
 ;; G4WXCJ-recording-sees-boxes ends here
 
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-refusals-name-the-argument]]
+(define-claim "G4WXCJ" refusals-name-the-argument
+    "A second recording, EVERY 0, an unknown scene, a missing three.js: each refused by name."
+  (flet ((refusal (thunk)
+           (handler-case (progn (funcall thunk) nil)
+             (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+    (let* ((world (make-basin-world 50 :sleep t))
+           (recording (luv-physics::start-physics-recording world))
+           (hook (luv-physics::physics-world-step-hook world))
+           (before (luv-physics::physics-world-state-hash world)))
+      (check (eq :step-hook (refusal (lambda () (luv-physics::start-physics-recording world)))))
+      (check (eq hook (luv-physics::physics-world-step-hook world)))
+      (check (= before (luv-physics::physics-world-state-hash world)))
+      (luv-physics::stop-physics-recording world)
+      (check (eq :every (refusal (lambda () (luv-physics::start-physics-recording world :every 0)))))
+      (check (null (luv-physics::physics-world-step-hook world)))
+      (check (eq :scene (refusal (lambda () (luv-physics::run-physics-scene :volcano)))))
+      (let ((path (repository-file "report/refused-viewer.html")))
+        (when (probe-file path) (delete-file path))
+        (check (eq :three (refusal (lambda () (luv-physics::write-physics-viewer
+                                               recording path :three "/nonexistent/three/")))))
+        (check (not (probe-file path)))))))
+;; G4WXCJ-refusals-name-the-argument ends here
+
 ;; [[file:../physics.org::#3X6XN8][3X6XN8-scenes-do-what-they-say]]
 (define-claim "3X6XN8" scenes-do-what-they-say
     "Basin 1001 bodies mostly asleep; pile all asleep; drops in the air; 60 gobbets; the walker moves balls."
