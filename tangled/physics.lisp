@@ -5482,10 +5482,12 @@ section of its definition on the page, or the anchor its docstring ends with). #
     (sort entries #'string< :key (lambda (entry) (symbol-name (getf entry :symbol))))))
 
 (defun org-table-text (text)
-  "TEXT made safe for a cell of an Org table: no bar, no newline. #LW3YHU"
+  "TEXT made safe for a cell of an Org table: no bar, no newline, and no asterisk that Org could
+read as bold (a special variable's name has two). #LW3YHU"
   (with-output-to-string (out)
     (loop for c across text
-          do (case c (#\| (write-string "\\vert{}" out)) (#\Newline (write-char #\Space out))
+          do (case c (#\| (write-string "\\vert{}" out)) (#\* (write-string "\\ast{}" out))
+                   (#\Newline (write-char #\Space out))
                    (t (write-char c out))))))
 
 (defun write-api-index (pathname)
@@ -5496,8 +5498,8 @@ link to its section. Return the number of entries. #LW3YHU"
       (format out "#+caption: the ~D symbols of the package luv-physics, from the loaded image~%" (length entries))
       (format out "| name | kind | arguments | what it is |~%|-~%")
       (dolist (entry entries)
-        (format out "| [[#~A][~(~A~)]] | ~{~A~^, ~} | ~A | ~A |~%"
-                (getf entry :anchor) (org-table-text (symbol-name (getf entry :symbol)))
+        (format out "| [[#~A][=~(~A~)=]] | ~{~A~^, ~} | ~A | ~A |~%"
+                (getf entry :anchor) (symbol-name (getf entry :symbol))
                 (getf entry :kinds)
                 (let ((arguments (getf entry :arguments)))
                   (if arguments

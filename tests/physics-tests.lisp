@@ -2239,7 +2239,7 @@ counted. #RH7T05"
            (lines (with-open-file (in path) (loop for l = (read-line in nil) while l collect l))))
       (check (= rows (length exports)))
       (check (= rows (count-if (lambda (l) (search "| [[#" l)) lines)))
-      (check (search "| [[#M4K3WD][add-physics-body]] | function | ~(world x y z &key" (format nil "~{~A~%~}" lines))))))
+      (check (search "| [[#M4K3WD][=add-physics-body=]] | function | ~(world x y z &key" (format nil "~{~A~%~}" lines))))))
 ;; LW3YHU-every-export-is-indexed ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-page-works-in-a-browser]]
