@@ -23,7 +23,6 @@
       org-export-use-babel nil
       org-html-htmlize-output-type 'css
       org-html-validation-link nil
-      org-export-with-sub-superscripts '{}       ; a_b stays a_b; a_{b} is a subscript
       org-html-head-include-default-style t
       make-backup-files nil
       coding-system-for-write 'utf-8-unix)
