@@ -724,7 +724,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
                   (off-d (misaligned d (mapcar #'luv-physics::delta-row rows)))
                   (off-c (misaligned data
                                      (loop for k in (list 0 last)
-                                           append (loop for c below 37
+                                           append (loop for c below (length luv-physics::+constraint-columns+)
                                                         collect (+ (luv-physics::constraint-base k) (* 8 c)))))))
               (check (zerop off-v) "~D velocity rows start off a 32-byte boundary" off-v)
               (check (zerop off-d) "~D delta rows start off a 32-byte boundary" off-d)
@@ -1403,6 +1403,50 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (zerop wrong) "~A: ~D of ~D kept gaps differ from the current gap" family wrong checked))))
 ;; S0LV3R-kept-gap-is-current ends here
 
+;; [[file:../physics.org::#R3ST1T][R3ST1T-rebound-ratios]]
+(define-claim "R3ST1T" rebound-ratios
+    "Each rebound above the threshold climbs to within 2% of e^2 times the height before it."
+  (dolist (e '(0.2d0 0.5d0 0.9d0))
+    (dolist (drop '(0.25d0 1d0 5d0))
+      (let ((errors (luv-physics::rebound-errors '() e drop)))
+        (check (plusp (length errors)) "e ~,1F from ~,2F m: no rebound counted" e drop)
+        (check (every (lambda (x) (< x 0.02d0)) errors)
+               "e ~,1F from ~,2F m: rebound ratios off e^2 by ~{~,4F~^ ~}" e drop errors)))))
+;; R3ST1T-rebound-ratios ends here
+
+;; [[file:../physics.org::#R3ST1T][R3ST1T-struck-rows]]
+(define-claim "R3ST1T" struck-rows
+    "A touching cradle and a row on the floor pass a blow to their last ball."
+  (let ((hashes '()))
+    (dolist (family (available-kernel-families))
+      (multiple-value-bind (share others kept wall world) (luv-physics::struck-row (list :kernels family))
+        (declare (ignore wall))
+        (push (luv-physics::physics-world-state-hash world) hashes)
+        (check (>= share 0.9d0) "~A cradle: the last ball has ~,3F of the momentum" family share)
+        (check (<= others 0.05d0) "~A cradle: another ball leaves at ~,3F of the first's speed" family others)
+        (check (>= kept 0.9d0) "~A cradle: ~,3F of the energy kept" family kept)))
+    (check (= 1 (length (remove-duplicates hashes))) "the families' cradles end in ~D states" (length (remove-duplicates hashes))))
+  (multiple-value-bind (share others kept) (luv-physics::struck-row '() :balls 4 :floor t :speed 3d0)
+    (check (>= share 0.9d0) "row: the last ball has ~,3F of the momentum" share)
+    (check (<= others 0.05d0) "row: another ball leaves at ~,3F of the first's speed" others)
+    (check (>= kept 0.9d0) "row: ~,3F of the energy kept" kept)))
+;; R3ST1T-struck-rows ends here
+
+;; [[file:../physics.org::#R3ST1T][R3ST1T-resting-stack-stays]]
+(define-claim "R3ST1T" resting-stack-stays
+    "A stack of balls of restitution 1 comes to rest and stays there."
+  (let* ((world (luv-physics::make-shaft-world :sleep nil))
+         (r 0.45)
+         (balls (loop for i below 4 collect (luv-physics::add-physics-body world 0.5 (+ r (* i 2.02 r)) 0.5
+                                                                         :radius r :restitution 1.0)))
+         (fastest 0d0))
+    (dotimes (i 180)
+      (luv-physics::step-physics-world world)
+      (when (>= i 120)
+        (dolist (b balls) (setf fastest (max fastest (luv-physics::speed-of world b))))))
+    (check (< fastest 0.05d0) "a ball of the stack moves at ~,4F m/s in its third second" fastest)))
+;; R3ST1T-resting-stack-stays ends here
+
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
     "Resting: penetration = slop, approach ~ 0; nothing touching: zeros; landing: > slop."
@@ -1501,8 +1545,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (equal phases '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
                              luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
                              luv-physics::prune-phase luv-physics::prepare-phase luv-physics::substep-phase
-                             luv-physics::restitution-phase luv-physics::store-phase
-                             luv-physics::finalize-phase))
+                             luv-physics::store-phase luv-physics::finalize-phase))
              "*physics-phases* is ~S" phases))))
 ;; IDVK7G-phase-order ends here
 
