@@ -1882,6 +1882,30 @@ zero impulses; the row under the table's cursor is tried before the table. #G3NC
     row))
 (declaim (notinline touch-contact))
 
+(declaim (inline pair-impact-normal))
+(defun pair-impact-normal (dx dy dz wx wy wz reach dt nx ny nz separation)
+  "For two spheres whose centres are DX DY DZ apart, closing at the relative velocity WX WY WZ,
+that touch when their centres are REACH apart: the line of centres when they touch (or after DT,
+if later) as a unit normal, and the gap along it now. Without a touch ahead, NX NY NZ and
+SEPARATION. #G3NCNT"
+  (declare (type single-float dx dy dz wx wy wz reach dt nx ny nz separation))
+  (let* ((a (+ (* wx wx) (* wy wy) (* wz wz)))
+         (b (+ (* dx wx) (* dy wy) (* dz wz)))
+         (c (- (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))
+         (disc (- (* b b) (* a c))))
+    (declare (type single-float a b c disc))
+    (if (or (<= a 0.0) (<= disc 0.0) (>= b 0.0))
+        (values nx ny nz separation)
+        ;; |d + w t| = reach at the smaller root
+        (let* ((time (min dt (/ (- (- b) (fsqrt disc)) a)))
+               (qx (+ dx (* wx time))) (qy (+ dy (* wy time))) (qz (+ dz (* wz time)))
+               (q (fsqrt (+ (* qx qx) (* qy qy) (* qz qz)))))
+          (declare (type single-float time qx qy qz q))
+          (if (> q 1e-6)
+              (let ((mx (/ qx q)) (my (/ qy q)) (mz (/ qz q)))
+                (values mx my mz (- (+ (* dx mx) (* dy my) (* dz mz)) reach)))
+              (values nx ny nz separation))))))
+
 (declaim (inline speculative-distance))
 (defun speculative-distance (approach dt slop margin gravity-step)
   "How wide a gap a contact may have and still be made this step: four slops, plus the
@@ -2225,11 +2249,12 @@ gap is under the speculative distance. #P41RS7"
          (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                (expt (physics-world-gravity-z world) 2)))))
          (rmax (f32 (physics-world-max-radius world)))
+         (threshold (f32 (physics-world-restitution-threshold world)))
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world))
          ;; the grid phase counted the loose rows
          (strays (pair-list-loose-count plist)))
-    (declare (type single-float margin skin cell slop dt gstep rmax) (type index n) (type fixnum strays)
+    (declare (type single-float margin skin cell slop dt gstep rmax threshold) (type index n) (type fixnum strays)
              (type body-columns awake sleeping) (type pair-list plist)
              (type contact-columns contacts) (type contact-table table)
              (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+
@@ -2252,6 +2277,12 @@ gap is under the speculative distance. #P41RS7"
                      (declare (type single-float nx ny nz))
                      (let ((sep (- d ri rj))
                            (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
+                     (declare (type single-float sep approach))
+                     ;; a pair closing faster than the restitution threshold takes the normal of
+                     ;; the moment it will touch ([[#MYWH16]]): the line of centres then
+                     (when (and (> approach threshold) (> sep 0.0))
+                       (multiple-value-setq (nx ny nz sep)
+                         (pair-impact-normal dx dy dz (- vxj vxi) (- vyj vyi) (- vzj vzi) (+ ri rj) dt nx ny nz sep)))
                      (when (< sep (speculative-distance approach dt slop margin gstep))
                        ;; orient every pair contact from the lower handle slot to the higher
                        (multiple-value-bind (ha hb s px py pz)
@@ -2374,6 +2405,40 @@ INSIDE. #MYWH16"
            (declare (ignorable ,nx ,ny ,nz ,separation))
            ,inside))))
 
+(declaim (inline impact-normal))
+(defun impact-normal (nx ny nz separation cx cy cz r vx vy vz dt threshold minx miny minz maxx maxy maxz)
+  "The normal and separation of the contact between the box MIN..MAX and a sphere of radius R at
+CX CY CZ moving at VX VY VZ, whose closest point gives NX NY NZ and SEPARATION: when the sphere
+approaches faster than THRESHOLD, the normal at the point it will strike within DT (advanced
+three times along its path), and its gap along that normal. #MYWH16"
+  (declare (type single-float nx ny nz separation cx cy cz r vx vy vz dt threshold minx miny minz maxx maxy maxz))
+  (let ((approach (+ (* vx nx) (* vy ny) (* vz nz))))
+    (declare (type single-float approach threshold))
+    (if (or (<= approach threshold) (<= separation 0.0))
+        (values nx ny nz separation)
+        (let ((time 0.0) (mx nx) (my ny) (mz nz) (gap separation))
+          (declare (type single-float time mx my mz gap))
+          ;; conservative advancement: move along the path by the gap over the approach
+          ;; speed along the current normal, and take the closest point again from there
+          (dotimes (k 3)
+            (let ((closing (+ (* vx mx) (* vy my) (* vz mz))))
+              (declare (type single-float closing))
+              (when (and (> closing 0.0) (> gap 0.0))
+                (setf time (min dt (+ time (/ gap closing))))
+                (let* ((qx (+ cx (* vx time))) (qy (+ cy (* vy time))) (qz (+ cz (* vz time)))
+                       (px (max minx (min maxx qx))) (py (max miny (min maxy qy))) (pz (max minz (min maxz qz)))
+                       (ex (- px qx)) (ey (- py qy)) (ez (- pz qz))
+                       (d (fsqrt (+ (* ex ex) (* ey ey) (* ez ez)))))
+                  (declare (type single-float qx qy qz px py pz ex ey ez d))
+                  (when (> d 1e-6)
+                    (setf mx (/ ex d) my (/ ey d) mz (/ ez d)
+                          gap (- d r)))))))
+          ;; the gap along the new normal from where the sphere is now
+          (let ((px (max minx (min maxx (+ cx (* vx time)))))
+                (py (max miny (min maxy (+ cy (* vy time)))))
+                (pz (max minz (min maxz (+ cz (* vz time))))))
+            (values mx my mz (- (+ (* (- px cx) mx) (* (- py cy) my) (* (- pz cz) mz)) r)))))))
+
 (defun inside-face (probe cx cy cz r minx miny minz maxx maxy maxz ix iy iz)
   "For a centre CX CY CZ inside the box MIN..MAX: the face to push it out through, as normal,
 point and separation. With a PROBE, the box is cell IX IY IZ and the shallowest face whose
@@ -2429,6 +2494,7 @@ is under the speculative distance. #MYWH16"
              (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                    (expt (physics-world-gravity-z world) 2)))))
              (limit (f32 *physics-reach-limit*))
+             (threshold (f32 (physics-world-restitution-threshold world)))
              (contacts (physics-world-contacts world))
              (table (physics-world-contact-table world))
              ;; the bodies come in the grid's order, so most share the chunk of the one before
@@ -2442,7 +2508,7 @@ is under the speculative distance. #MYWH16"
                              (= (pair-list-terrain-edits plist) (voxel-terrain-edits terrain))))
              (loose (pair-list-loose plist)) (clear (pair-list-clear plist))
              (widen (* 0.45 (f32 (physics-world-pair-skin world)))))
-        (declare (type single-float margin limit slop dt gstep widen) (type fixnum last-key)
+        (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key)
                  (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear)
                  (type contact-columns contacts) (type contact-table table) (inline touch-contact))
         (when fresh
@@ -2460,7 +2526,12 @@ is under the speculative distance. #MYWH16"
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i n)
             (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                   (reach (min limit (+ r margin)))
+                   ;; how far the body can travel this step; a body faster than its margin a
+                   ;; step reaches that far, so that it meets an edge or a corner before it strikes
+                   (travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                                    (* (aref vz i) (aref vz i)))))))
+                   (ahead (max margin travel))
+                   (reach (min limit (+ r ahead)))
                    (x0 (cell-floor (- cx reach))) (x1 (cell-floor (+ cx reach)))
                    (y0 (cell-floor (- cy reach))) (y1 (cell-floor (+ cy reach)))
                    (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach)))
@@ -2510,11 +2581,9 @@ is under the speculative distance. #MYWH16"
                                                                  never (cell-solid-p ix iy iz))))))
                           1 0)))
               ;; a body that can travel past its margin this step also sweeps its path
-              (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                                      (* (aref vz i) (aref vz i))))))))
-                (when (> travel margin)
-                  (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
-                                         (aref vx i) (aref vy i) (aref vz i) (+ travel r))))
+              (when (> travel margin)
+                (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
+                                       (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
               (unless (zerop mask)
                 (flet ((solid (ix iy iz)
                          (declare (type fixnum ix iy iz))
@@ -2538,10 +2607,13 @@ is under the speculative distance. #MYWH16"
                                                   (and (/= oy 0) (/= oz 0) (solid ix (+ iy oy) (+ iz oz)))
                                                   (and (/= ox 0) (/= oy 0) (/= oz 0)
                                                        (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
-                                (multiple-value-bind (nx ny nz sep) (finish)
+                                (multiple-value-bind (nx ny nz sep)
+                                    (multiple-value-bind (nx ny nz sep) (finish)
+                                      (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
+                                                     threshold fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)))
                                   (when (< sep (speculative-distance
                                                 (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
-                                                dt slop margin gstep))
+                                                dt slop ahead gstep))
                                     (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
                                                    nx ny nz sep px py pz 0.0 0.0 0.0))))
                               ;; inside: push out through a face
@@ -4981,6 +5053,39 @@ CORNER): the largest impulse angle and outgoing angle, the wall seconds and the 
           (setf impulse (max impulse a) outgoing (max outgoing b) world last)
           (incf wall seconds))))
     (values impulse outgoing wall world)))
+
+(defun oblique-pair (world-args &key (speed 5d0) (offset 0.2d0) (restitution 0.5d0) (radius 0.25d0))
+  "In free space a frictionless ball of RESTITUTION moving at SPEED along x strikes a resting
+equal one whose centre lies OFFSET aside in y: the angles, degrees, of the struck ball's
+velocity (the impulse's direction) from the line of centres at the touch, and of the striker's
+velocity from the one the reflection law gives, then the wall seconds and the world. #W9PREC"
+  (let* ((world (apply #'open-air-world :gravity '(0 0 0) world-args))
+         (a (add-physics-body world 0.0d0 (+ 0.5d0 offset) 0.5d0 :radius radius :friction 0.0
+                                        :restitution restitution :vx speed))
+         (b (add-physics-body world 1.0d0 0.5d0 0.5d0 :radius radius :friction 0.0 :restitution restitution))
+         (reach (* 2 radius))
+         (n (list (/ (sqrt (- (* reach reach) (* offset offset))) reach) (/ (- offset) reach) 0d0))
+         (vn (* speed (first n)))
+         (ideal (list (- speed (* 0.5d0 (+ 1 restitution) vn (first n))) (- (* 0.5d0 (+ 1 restitution) vn (second n))) 0d0))
+         (wall (drive world 0.5)))
+    (flet ((angle (u v)
+             (let ((c (/ (reduce #'+ (mapcar #'* u v))
+                         (sqrt (* (reduce #'+ (mapcar #'* u u)) (reduce #'+ (mapcar #'* v v)))))))
+               (* (/ 180 pi) (acos (max -1d0 (min 1d0 c)))))))
+      (values (angle (multiple-value-list (physics-body-velocity world b)) n)
+              (angle (multiple-value-list (physics-body-velocity world a)) ideal)
+              wall world))))
+
+(define-accuracy-scene oblique-pair ("largest impulse angle from the line of centres, degrees" 1)
+  "oblique-pair at 2, 5 and 10 m/s and offsets of 0.1 to 0.4 m: the largest angle of the struck
+ball's velocity from the line of centres at the touch. #W9PREC"
+  (let ((impulse 0d0) (outgoing 0d0) (wall 0d0) (world nil))
+    (dolist (speed '(2d0 5d0 10d0))
+      (dolist (offset '(0.1d0 0.2d0 0.3d0 0.4d0))
+        (multiple-value-bind (i o seconds last) (oblique-pair world-args :speed speed :offset offset)
+          (setf impulse (max impulse i) outgoing (max outgoing o) world last)
+          (incf wall seconds))))
+    (values impulse wall world (format nil "striker off by up to ~,2F deg" outgoing))))
 
 (define-accuracy-scene edge-drop ("largest impulse angle from the normal, degrees" 1)
   "A frictionless ball of restitution 0.5 dropped onto a block's top edge (block-drops): the

@@ -903,6 +903,17 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (and begins (every (lambda (d) (eq d owner)) begins)))))
 ;; K1N3BX-hit-carries-owner ends here
 
+;; [[file:../physics.org::#G3NCNT][G3NCNT-oblique-blows-true]]
+(define-claim "G3NCNT" oblique-blows-true
+    "An off-centre blow between two balls acts along the line of centres at the touch."
+  (dolist (speed '(2d0 5d0 10d0))
+    (dolist (offset '(0.1d0 0.2d0 0.3d0 0.4d0))
+      (multiple-value-bind (impulse striker) (luv-physics::oblique-pair '() :speed speed :offset offset)
+        (check (< impulse 1d0) "~,1F m/s, ~,2F m aside: the struck ball leaves ~,2F deg off the line of centres"
+               speed offset impulse)
+        (check (< striker 2d0) "~,1F m/s, ~,2F m aside: the striker leaves ~,2F deg off" speed offset striker)))))
+;; G3NCNT-oblique-blows-true ends here
+
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sorted-rows-keep-handles]]
 (define-claim "G4R1D5" sorted-rows-keep-handles
     "After the grid phase sorts scrambled rows, each handle still names its own body."
@@ -1176,6 +1187,15 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (> (luv-physics::physics-body-position w h) 5.25))
       (check (< (abs (- (body-y w h) -0.755)) 0.002) "the ball ends at y = ~,5F" (body-y w h)))))
 ;; MYWH16-rolls-over-ledge ends here
+
+;; [[file:../physics.org::#MYWH16][MYWH16-edges-bounce-true]]
+(define-claim "MYWH16" edges-bounce-true
+    "Drops onto a block's edge and corner take their impulse along the normal at impact."
+  (dolist (corner '(nil t))
+    (multiple-value-bind (impulse outgoing) (luv-physics::block-drops '() corner)
+      (check (< impulse 1d0) "~:[edge~;corner~]: the impulse is up to ~,2F deg off the normal" corner impulse)
+      (check (< outgoing 2d0) "~:[edge~;corner~]: the ball leaves up to ~,2F deg off" corner outgoing))))
+;; MYWH16-edges-bounce-true ends here
 
 ;; [[file:../physics.org::#SW33P7][SW33P7-no-tunnelling-to-100]]
 (define-claim "SW33P7" no-tunnelling-to-100
