@@ -158,7 +158,11 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                   (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
          ;; the block's twelve velocity columns live here, on the stack, between the gather
          ;; and the scatter
-         (let ((st (make-array ,(* 12 width) :element-type 'single-float)))
+         (let ((st (make-array ,(* 12 width) :element-type 'single-float))
+               ;; the scalars, broadcast once: a scalar read back inside the loop would be a
+               ;; legacy SSE instruction among the 256-bit ones ([[#F4M1LY]])
+               (lower (wc (- threshold))) (ghx (wc hgx)) (ghy (wc hgy)) (ghz (wc hgz)) (ih (wc inv-h))
+               (el (wc elapsed)) (cap (wc (- push-max))))
            (declare (dynamic-extent st) (type (simple-array single-float (,(* 12 width))) st))
          (unswitch-bias (use-bias)
          (with-solver-columns cbuf
@@ -172,7 +176,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                             (@w gap)
                             (let ((s (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
                                        (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
-                                         (wgap (w- dbx dax) (w- dby day) (w- dbz daz) (wc elapsed))))))
+                                         (wgap (w- dbx dax) (w- dby day) (w- dbz daz) el)))))
                               (@w! gap s)
                               s))))
                ;; the rows gathered into the stage; each read of a velocity below is a load
@@ -190,9 +194,9 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                  (vbx (st@ 6)) (vby (st@ 7)) (vbz (st@ 8)) (wbx (st@ 9)) (wby (st@ 10)) (wbz (st@ 11)))
                  (let* ((positive (w> s (wc 0.0)))
                         (bias (if biased
-                                  (let ((soft (w* (@w bias-rate) s)) (cap (wc (- push-max))))
-                                    (wif positive (w* s (wc inv-h)) (wif (w> soft cap) soft cap)))
-                                  (wif positive (w* s (wc inv-h)) (wc 0.0))))
+                                  (let ((soft (w* (@w bias-rate) s)))
+                                    (wif positive (w* s ih) (wif (w> soft cap) soft cap)))
+                                  (wif positive (w* s ih) (wc 0.0))))
                         ;; the relative velocity before the impulses, for the normal part
                         ;; and for friction, whose two speeds are found here, before the
                         ;; normal impulse, which does not change them
@@ -218,16 +222,18 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                  (w- l (w* (@w normal-mass) (w+ vn bias)))))
                         (new (wif (w> raw (wc 0.0)) raw (wc 0.0)))
                         (mni (@w max-normal-impulse))
-                        ;; impacts and armed contacts ([[#R3ST1T]]): a block with no lane
-                        ;; approaching faster than the threshold and none armed skips them
+                        ;; impacts and armed contacts ([[#R3ST1T]]): a block with no lane that
+                        ;; has not pushed yet and approaches faster than the threshold, and
+                        ;; none armed, skips them
                         (bump (let ((armed (@w armed-speed)))
-                               (if (zerop (,movemask (wif (wor (w> (wc (- threshold)) vn) (w> armed (wc 0.0)))
-                                                          (wc -1.0) (wc 0.0))))
+                               (if (zerop (,movemask (wif (w= mni (wc 0.0))
+                                                               (wif (w> lower vn) (wc -1.0) (wc 0.0))
+                                                               (wif (w> armed (wc 0.0)) (wc -1.0) (wc 0.0)))))
                                    (wc 0.0)
                                    (let* ((e (@w restitution))
                                           (impact-f (wif (w= mni (wc 0.0))
                                                          (wif (w> new (wc 0.0))
-                                                              (wif (w> (wc (- threshold)) vn)
+                                                              (wif (w> lower vn)
                                                                    (wif (w> e (wc 0.0)) (wc 1.0) (wc 0.0))
                                                                    (wc 0.0))
                                                               (wc 0.0))
@@ -237,10 +243,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                           (sp (wif positive s (wc 0.0)))
                                           (dv (w* (w- (wif (w> mb (wc 0.0)) (wc 1.0) (wc 0.0))
                                                       (wif (w> ma (wc 0.0)) (wc 1.0) (wc 0.0)))
-                                                  (w+ (w+ (w* (wc hgx) x) (w* (wc hgy) y)) (w* (wc hgz) z))))
+                                                  (w+ (w+ (w* ghx x) (w* ghy y)) (w* ghz z))))
                                           (half (w* (wc 0.5) dv))
                                           (c (if biased (w- vn half) (w+ vn half)))
-                                          (k (w* (w* (w* (wc 2.0) dv) sp) (wc inv-h)))
+                                          (k (w* (w* (w* (wc 2.0) dv) sp) ih))
                                           (u2 (w- (w* c c) k))
                                           (uc (wif impact (wsqrt (wif (w> u2 (wc 0.0)) u2 (wc 0.0))) armed))
                                           (wc2 (w+ (w* (w* e e) (w* uc uc)) k))
