@@ -4919,7 +4919,7 @@ apex is the vertex of the parabola through a flight's first two positions a step
          (g 9.81d0) (dt (float (physics-world-step-seconds world) 1d0))
          (ys (list (float (nth-value 1 (physics-body-position world ball)) 1d0)))
          (apexes '()) (flying nil) (wall 0d0))
-    (loop repeat (round 12 dt) while (<= (length apexes) rounds) do
+    (loop repeat (round 12 dt) while (and (<= (length apexes) rounds) (physics-body-awake-p world ball)) do
       (step-physics-world world)
       (incf wall (physics-world-last-step-real-seconds world))
       (incf *driven-seconds* dt)
