@@ -225,11 +225,14 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         ;; impacts and armed contacts ([[#R3ST1T]]): a block with no lane that
                         ;; has not pushed yet and approaches faster than the threshold, and
                         ;; none armed, skips them
-                        (bump (let ((armed (@w armed-speed)))
+                        (dl (w- new l)))
+                   ;; the normal impulse to keep, the velocity change and what the contact pushed
+                   (multiple-value-bind (new dl pushed)
+                       (let ((armed (@w armed-speed)))
                                (if (zerop (,movemask (wif (w= mni (wc 0.0))
                                                                (wif (w> lower vn) (wc -1.0) (wc 0.0))
                                                                (wif (w> armed (wc 0.0)) (wc -1.0) (wc 0.0)))))
-                                   (wc 0.0)
+                                   (values new dl new)
                                    (let* ((e (@w restitution))
                                           (impact-f (wif (w= mni (wc 0.0))
                                                          (wif (w> new (wc 0.0))
@@ -258,10 +261,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                                       (wc 0.0)))
                                           (arm (w> (wif short impact-f (wc 0.0)) (wc 0.0))))
                                      (@w! armed-speed (wif bounce (wc 0.0) (wif arm uc armed)))
-                                     (wif bounce kick (wc 0.0))))))
-                        (bounced (w> bump (wc 0.0)))
-                        (new (wif bounced l new))
-                        (dl (wif bounced bump (w- new l))))
+                                     (let* ((bump (wif bounce kick (wc 0.0))) (bounced (w> bump (wc 0.0))))
+                                       (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))))
                    (let* ((limit (w* (@w friction) new))
                           (over (w> len2 (w* limit limit)))
                           ;; outside the cone len2 > 0, so no lane divides by zero
@@ -269,8 +270,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                           (n1 (wif over (w* n1 scale) n1)) (n2 (wif over (w* n2 scale) n2))
                           (d1 (w- n1 l1)) (d2 (w- n2 l2)))
                      (@w! normal-impulse new)
-                     (let ((pushed (wif bounced bump new)))
-                       (@w! max-normal-impulse (wif (w> mni pushed) mni pushed)))
+                     (@w! max-normal-impulse (wif (w> mni pushed) mni pushed))
                      (@w! tangent-impulse-1 n1) (@w! tangent-impulse-2 n2)
                      ;; each velocity takes the normal impulse, then friction's, in one
                      ;; expression: the same two roundings as two steps, one store; a
@@ -309,7 +309,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                          (st! 3 (wif rolling (w- wax (w* iam dx)) wax)) (st! 4 (wif rolling (w- way (w* iam dy)) way))
                          (st! 5 (wif rolling (w- waz (w* iam dz)) waz))
                          (st! 9 (wif rolling (w+ wbx (w* ibm dx)) wbx)) (st! 10 (wif rolling (w+ wby (w* ibm dy)) wby))
-                         (st! 11 (wif rolling (w+ wbz (w* ibm dz)) wbz)))))))
+                         (st! 11 (wif rolling (w+ wbz (w* ibm dz)) wbz))))))))
                (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
                (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0)))))))))
        (defun ,pf (cbuf start end)
