@@ -229,9 +229,11 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                    ;; the normal impulse to keep, the velocity change and what the contact pushed
                    (multiple-value-bind (new dl pushed)
                        (let ((armed (@w armed-speed)))
-                               (if (zerop (,movemask (wif (w= mni (wc 0.0))
-                                                               (wif (w> lower vn) (wc -1.0) (wc 0.0))
-                                                               (wif (w> armed (wc 0.0)) (wc -1.0) (wc 0.0)))))
+                               (if (zerop (,movemask
+                                                ;; lanes that have not pushed: vn; the others: an armed
+                                                ;; lane's speed times -1e30, below any threshold
+                                                (wif (w> lower (wif (w= mni (wc 0.0)) vn (w* armed (wc -1e30))))
+                                                     (wc -1.0) (wc 0.0))))
                                    (values new dl new)
                                    (let* ((e (@w restitution))
                                           (impact-f (wif (w= mni (wc 0.0))
