@@ -5480,12 +5480,18 @@ terrain probe of its own. #Q5V1EW"
   (declare (type index n))
   (max 16 (floor n 32)))
 
+(defconstant +strays-tested-one-by-one+ 64
+  "Up to this many strays a cast tests each; more are bucketed in a grid of their own. #Q5V1EW")
+
 (defun grid-strays (world view grid buffer strays count)
-  "Bucket the COUNT rows STRAYS of BUFFER into GRID (hashed, as the pair list buckets its loose
-rows: a dense box sized by scattered strays could be huge), items the rows themselves, so a cast
-walks the strays near its path instead of testing each. #Q5V1EW"
+  "When there are more than +strays-tested-one-by-one+ of them, bucket the COUNT rows STRAYS of
+BUFFER into GRID (hashed, as the pair list buckets its loose rows: a dense box sized by scattered
+strays could be huge), items the rows themselves, so a cast walks the strays near its path
+instead of testing each; else leave GRID empty. #Q5V1EW"
   (declare (type query-view view) (type hash-grid grid) (type body-columns buffer)
            (type fixnum-column strays) (type index count))
+  (setf (hash-grid-count grid) 0)
+  (when (> count +strays-tested-one-by-one+)
   (when (< (length (query-view-stray-x view)) count)
     (let ((n (max count (* 2 (length (query-view-stray-x view))) 64)))
       (setf (query-view-stray-x view) (make-array n :element-type 'single-float)
@@ -5497,7 +5503,7 @@ walks the strays near its path instead of testing each. #Q5V1EW"
         (let ((row (aref strays q)))
           (setf (aref xs q) (aref x row) (aref ys q) (aref y row) (aref zs q) (aref z row)))))
     (hash-grid-reserve grid count)
-    (build-hash-grid grid (f32 (grid-cell-size world)) count xs ys zs strays :dense-allowed nil)))
+    (build-hash-grid grid (f32 (grid-cell-size world)) count xs ys zs strays :dense-allowed nil))))
 
 (defun view-awake (world view)
   "Point VIEW at the awake rows of WORLD: the rows of the world's awake grid that have drifted at
@@ -6073,15 +6079,27 @@ the grid of its sleeping strays; the excluded body is passed over. #C4STRY"
   (let ((exclude (query-search-exclude s)) (radius (query-search-radius s)))
     (macrolet ((try (x y z r h)
                  `(unless (eql ,h exclude)
-                    (when (sweep-sphere s ,x ,y ,z (+ ,r radius)) (offer s +hit-body+ ,h)))))
+                    (when (sweep-sphere s ,x ,y ,z (+ ,r radius)) (offer s +hit-body+ ,h))))
+               (strays (buffer grid strays count handles-p)
+                 ;; a few strays are tested one by one, more are walked in their grid
+                 `(if (plusp (hash-grid-count ,grid))
+                      (do-view-bodies (x y z r h) (view world ,handles-p ,grid 0d0 t) (s)
+                        (try x y z r h))
+                      (with-body-columns ((cx x) (cy y) (cz z) (cr radius) (ch handle)) ,buffer
+                        (let ((rows ,strays))
+                          (declare (type fixnum-column rows))
+                          (dotimes (q ,count)
+                            (let ((row (aref rows q)))
+                              (try (float (aref cx row) 1d0) (float (aref cy row) 1d0) (float (aref cz row) 1d0)
+                                   (float (aref cr row) 1d0) (aref ch row)))))))))
       (do-view-bodies (x y z r h) (view world nil (query-view-awake-grid view) (query-view-awake-pad view)) (s)
         (try x y z r h))
-      (do-view-bodies (x y z r h) (view world nil (query-view-awake-stray-grid view) 0d0 t) (s)
-        (try x y z r h))
+      (strays (physics-world-awake world) (query-view-awake-stray-grid view) (query-view-awake-strays view)
+              (query-view-awake-stray-count view) nil)
       (do-view-bodies (x y z r h) (view world t (query-view-sleeping-grid view) 0d0) (s)
         (try x y z r h))
-      (do-view-bodies (x y z r h) (view world t (query-view-sleeping-stray-grid view) 0d0 t) (s)
-        (try x y z r h))))
+      (strays (physics-world-sleeping world) (query-view-sleeping-stray-grid view) (query-view-sleeping-strays view)
+              (query-view-sleeping-stray-count view) t)))
   s)
 
 (declaim (inline cast-argument))
