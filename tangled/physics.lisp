@@ -2684,7 +2684,7 @@ the hole. #PRUN3D"
     '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation kvn kvt1 kvt2
       normal-mass tangent-mass rolling-mass friction rolling-limit restitution relative-velocity
       max-normal-impulse bias-rate mass-scale impulse-scale normal-impulse tangent-impulse-1
-      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap)
+      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap spin-limit spin-impulse)
     "The float columns of a constraint, in the order they sit in a block. #SSMPYW")
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints. #SSMPYW"
@@ -2851,6 +2851,15 @@ returns the number of colours used. #SSMPYW"
 ;; Colours are the lanes:1 ends here
 
 ;; [[file:../physics.org::#PR3PAR][Preparing the constraints:1]]
+(declaim (inline spin-arm))
+(defun spin-arm (r-a r-b slop)
+  "The lever of spin friction for a contact of radii R-A and R-B (R-B zero for something flat)
+resting SLOP deep: two thirds of the radius of its contact patch, sqrt(2 R SLOP) with R the
+pair's effective radius. #PR3PAR"
+  (declare (type single-float r-a r-b slop))
+  (let ((r (if (> r-b 0.0) (/ (* r-a r-b) (+ r-a r-b)) r-a)))
+    (* (/ 2.0 3.0) (fsqrt (* 2.0 r slop)))))
+
 (defvar *prepare-short-path* t
   "When false, the prepare fill sends every row through its general path; the claim that the
 short path changes no bit compares the two. #PR3PAR")
@@ -2979,6 +2988,8 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                            (@ friction) (fsqrt (* (aref fr-c la) (aref fr-c lb)))
                            (@ restitution) (max (aref re-c la) (aref re-c lb))
                            (@ rolling-limit) (* (max (aref ro-c la) (aref ro-c lb)) (max r-a r-b))
+                           (@ spin-limit) (* (fsqrt (* (aref fr-c la) (aref fr-c lb))) (spin-arm r-a r-b slop))
+                           (@ spin-impulse) 0.0
                            (@ relative-velocity)
                            (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
                               (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
@@ -3045,10 +3056,13 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                                                           (aref (body-columns-restitution buf-b) lb))
                                 (@ rolling-limit) (* (max (aref (body-columns-rolling-resistance buf-a) la)
                                                                (aref (body-columns-rolling-resistance buf-b) lb))
-                                                          (max r-a r-b)))
+                                                          (max r-a r-b))
+                                (@ spin-limit) (* (@ friction) (spin-arm r-a r-b slop)))
                           (setf (@ friction) (aref (body-columns-friction buf-a) la)
                                 (@ restitution) (aref (body-columns-restitution buf-a) la)
-                                (@ rolling-limit) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)))
+                                (@ rolling-limit) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)
+                                (@ spin-limit) (* (@ friction) (spin-arm r-a 0.0 slop))))
+                      (setf (@ spin-impulse) 0.0)
                       (setf (@ relative-velocity)
                             (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
                                (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
@@ -3085,7 +3099,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
       color-count)))
 ;; Preparing the constraints:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:3]]
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:4]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
@@ -3142,7 +3156,7 @@ substep's solve reads. #PR3PAR"
 (defmethod physics-prepare-frames ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
     (prepare-frames-range cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:3 ends here
+;; Preparing the constraints:4 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)
@@ -3224,7 +3238,10 @@ THRESHOLD. #K3RNLS"))
              (cz (- (* l1 (@ t2z)) (* l2 (@ t1z))))
              (ma (@ ima)) (mb (@ imb)) (ia (@ iia)) (ib (@ iib))
              (ar (@ ra)) (br (@ rb))
-             (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z)))
+             ;; the spin impulse about the normal joins the rolling impulse: both are angular
+             (sp (@ spin-impulse))
+             (rx (+ (@ rolling-impulse-x) (* sp x))) (ry (+ (@ rolling-impulse-y) (* sp y)))
+             (rz (+ (@ rolling-impulse-z) (* sp z))))
         (declare (type index a b base))
         (setf (aref v a) (- (aref v a) (* ma px))
               (block-ref v a 1) (- (block-ref v a 1) (* ma py))
@@ -3343,6 +3360,19 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                     (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry (@ rolling-impulse-z) nrz)
                     (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
                           wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz)))))))
+            ;; spin friction: an angular impulse about the normal inside |S| <= spin-limit *
+            ;; normal impulse; the rolling mass is the spin's too, for a ball's inertia is
+            ;; the same about every axis
+            (let ((sl (@ spin-limit)))
+              (when (> sl 0.0)
+                (let* ((slimit (* sl new)) (sp (@ spin-impulse))
+                       (raw (- sp (* (@ rolling-mass)
+                                     (+ (+ (* (- wbx wax) x) (* (- wby way) y)) (* (- wbz waz) z)))))
+                       (nsp (if (> raw slimit) slimit (if (> (* slimit -1.0) raw) (* slimit -1.0) raw)))
+                       (ds (- nsp sp)))
+                  (setf (@ spin-impulse) nsp
+                        wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
+                        wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
             (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
                   (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))
 ;; Solve and relax:1 ends here
@@ -4378,6 +4408,53 @@ of any contact over the ball's weight times the substep, and the fastest the bal
             (setf largest (max largest (contact@ geometry k normal-impulse)))))
         (setf fastest (max fastest (speed-of world ball)))))
     (values (/ largest (* (abs (physics-world-gravity-y world)) h)) fastest)))
+
+(defun pile-kinetic-energy (world balls)
+  "The kinetic energy of BALLS in WORLD, in joules, translation and rotation, each a solid ball
+of its own mass and radius. #X7R3M5"
+  (let ((energy 0d0))
+    (dolist (b balls energy)
+      (multiple-value-bind (set row) (resolve-handle world b)
+        (let ((buffer (set-buffer world set)))
+          (with-body-columns (vx vy vz wx wy wz radius inverse-mass) buffer
+            (let ((m (/ 1d0 (aref inverse-mass row))) (r (aref radius row)))
+              (incf energy (* 0.5d0 m (+ (expt (aref vx row) 2) (expt (aref vy row) 2) (expt (aref vz row) 2)
+                                         (* 0.4d0 r r (+ (expt (aref wx row) 2) (expt (aref wy row) 2)
+                                                         (expt (aref wz row) 2)))))))))))))
+
+(defun dead-pile (count &key (seconds 10))
+  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0) in the basin lattice
+with sleeping off and run SECONDS. Return the kinetic energy at each whole second, in joules,
+and the fastest ball's speed at the end. #X7R3M5"
+  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
+         (balls (loop for i below count
+                      collect (multiple-value-bind (x y z) (basin-spawn-point i)
+                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6))))
+         (curve '()))
+    (dotimes (second seconds)
+      (dotimes (i 60) (step-physics-world world))
+      (push (pile-kinetic-energy world balls) curve))
+    (values (nreverse curve) (reduce #'max balls :key (lambda (b) (speed-of world b))))))
+
+(defun thrown-into-pile (count &key (seconds 8) (throw-at (floor seconds 2)) (shift 0.0) (seed nil))
+  "The default scene at COUNT balls: drop them in the basin lattice (each spawn point moved by up
+to 1 cm in x and z by the fixed sequence of SEED, when given), throw a ball into the pile at
+second THROW-AT from a point SHIFT metres along x from the default, and run SECONDS with sleeping
+on. Return the awake count at the end of each second. #X7R3M5"
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t :kernels :auto))
+        (next (and seed (fixed-sequence seed))) (counts '()))
+    (dotimes (i count)
+      (multiple-value-bind (x y z) (basin-spawn-point i)
+        (when next
+          (incf x (* 0.02 (- (funcall next) 0.5)))
+          (incf z (* 0.02 (- (funcall next) 0.5))))
+        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6)))
+    (dotimes (second seconds)
+      (when (= second throw-at)
+        (add-physics-body world (+ 1.0 shift) 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0))
+      (dotimes (i 60) (step-physics-world world))
+      (push (physics-world-awake-count world) counts))
+    (nreverse counts)))
 
 (defun speed-of (world handle)
   "The speed of HANDLE's body. #X7R3M5"

@@ -1310,6 +1310,25 @@ function of a column name that reads row K's float in that column. #T3STK1"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
 
+;; [[file:../physics.org::#PR3PAR][PR3PAR-spin-friction-rate]]
+(define-claim "PR3PAR" spin-friction-rate
+    "A ball spinning about the vertical on a floor slows at the patch's torque over its inertia."
+  (let* ((world (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain) :sleep nil))
+         (r 0.25) (mu 0.6) (slop luv-physics::*physics-linear-slop*)
+         (ball (add-physics-body world 4.0 (- r slop) 4.0 :radius r :mass 1.0 :friction mu))
+         (g (abs (luv-physics::physics-world-gravity-y world)))
+         (alpha (/ (* 2/3 mu (sqrt (* 2 r slop)) g) (* 0.4 r r))))
+    (flet ((spin () (multiple-value-bind (set row) (luv-physics::resolve-handle world ball)
+                      (aref (luv-physics::body-columns-wy (luv-physics::set-buffer world set)) row))))
+      (dotimes (i 30) (step-physics-world world))
+      (multiple-value-bind (set row) (luv-physics::resolve-handle world ball)
+        (setf (aref (luv-physics::body-columns-wy (luv-physics::set-buffer world set)) row) 10.0))
+      (dotimes (i 30) (step-physics-world world))
+      (let ((expected (- 10.0 (* alpha 0.5))))
+        (check (< (abs (- (spin) expected)) (* 0.01 expected))
+               "after 0.5 s the ball spins at ~,4F rad/s, not ~,4F" (spin) expected)))))
+;; PR3PAR-spin-friction-rate ends here
+
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-short-path-same-bits]]
 (define-claim "PR3PAR" short-path-same-bits
     "The fill's short path for two awake bodies writes the rows the general path writes, to the bit."
@@ -1740,7 +1759,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 (define-claim "B3NCH5" steps-cons-nothing
     "Thousands of steps of an awake pile, and of the fountain with drops added, cons 0 bytes."
   (let ((world (luv-physics::make-basin-world 200)))
-    (dotimes (i 600) (luv-physics::step-physics-world world))
+    (dotimes (i 1700) (luv-physics::step-physics-world world))
     ;; a collection first closes the allocation region, so bytes consed before are counted
     ;; before; the steps after it leave time for the collector's own after-work
     (sb-ext:gc)
@@ -1765,6 +1784,16 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= before (sb-ext:get-bytes-consed)) "the fountain consed ~D bytes in 3000 steps"
              (- (sb-ext:get-bytes-consed) before)))))
 ;; B3NCH5-steps-cons-nothing ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-piles-come-to-rest]]
+(define-claim "X7R3M5" piles-come-to-rest
+    "A dead pile loses its energy, and a pile hit by a thrown ball sleeps again, in every order."
+  (let ((curve (luv-physics::dead-pile 300 :seconds 8)))
+    (check (< (car (last curve)) 0.01) "the dead pile holds ~,3F mJ after 8 s" (* 1000 (car (last curve)))))
+  (dolist (shift '(0.0 0.001 0.002 0.003))
+    (let ((awake (car (last (luv-physics::thrown-into-pile 400 :seconds 6 :throw-at 3 :shift shift)))))
+      (check (<= awake 4) "thrown from ~,3F m aside: ~D of 401 balls awake at 6 s" shift awake))))
+;; X7R3M5-piles-come-to-rest ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-extremes-that-hold]]
 (define-claim "X7R3M5" extremes-that-hold
