@@ -1427,6 +1427,8 @@ dispatches on it once per call. #W0RLD7"))
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
+   (added :initform (make-array 16 :element-type 'fixnum :initial-element 0) :accessor physics-world-added)
+   (added-count :initform 0 :type fixnum :accessor physics-world-added-count)
    (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
    (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
    (substeps :initarg :substeps :type fixnum :accessor physics-world-substeps)
@@ -1655,6 +1657,7 @@ number of seconds after which it expires. #M4K3WD"
                                        (if collide-with-bodies 0 +flag-terrain-only+))
               (aref handle-c row) handle (aref kind-c row) kind))
       (setf (physics-world-max-radius world) (max (physics-world-max-radius world) r))
+      (note-added-body world handle)
       handle)))
 ;; Making a world and adding bodies:1 ends here
 
@@ -1978,8 +1981,8 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
 ;; [[file:../physics.org::#W4K3PH][Fast bodies and moving boxes wake what they reach:1]]
 (defun wake-phase (world)
   "Phase 2: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
-sleepers they can reach this step: within the margin plus one step's travel. Return how many
-woke. #W4K3PH"
+sleepers they can reach this step: within the margin plus one step's travel; bodies added since
+the last step wake the sleepers they overlap deeper than the slop. Return how many woke. #W4K3PH"
   (let ((sleeping (physics-world-sleeping world))
         (woken 0))
     (declare (type fixnum woken))
@@ -2016,6 +2019,20 @@ woke. #W4K3PH"
                                      (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))))
                            (wake-physics-body world row)
                            (incf woken))))))))
+          ;; a body added since the last step wakes the sleepers it overlaps deeper than the
+          ;; slop, so that it meets them as awake bodies from its first substep
+          (let ((added (physics-world-added world))
+                (slop (f32 (physics-world-slop world))))
+            (declare (type fixnum-column added) (type single-float slop))
+            (dotimes (k (physics-world-added-count world))
+              (let* ((h (aref added k)) (slot (handle-index h)))
+                (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
+                           (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+                  (let ((row (aref (handle-table-local ids) slot)))
+                    (with-body-columns (x y z radius flags) awake
+                      (when (zerop (logand (aref flags row) +flag-terrain-only+))
+                        (wake-near (aref x row) (aref y row) (aref z row) (- (aref radius row) slop)
+                                   1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
           (with-body-columns (x y z vx vy vz radius flags) awake
             (dotimes (i n)
               (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
@@ -2041,7 +2058,20 @@ woke. #W4K3PH"
                          (span (1+ (ceiling (* half inv)))))
                     (wake-near cx cy cz travel span t (aref min-x b) (aref min-y b) (aref min-z b)
                                (aref max-x b) (aref max-y b) (aref max-z b))))))))))
+    (setf (physics-world-added-count world) 0)
     woken))
+
+(defun note-added-body (world handle)
+  "Remember that HANDLE's body was added since the last step, for the wake phase. #W4K3PH"
+  (let ((added (physics-world-added world)) (count (physics-world-added-count world)))
+    (declare (type fixnum-column added) (type fixnum count))
+    (when (= count (length added))
+      (let ((grown (make-array (* 2 (length added)) :element-type 'fixnum :initial-element 0)))
+        (replace grown added)
+        (setf (physics-world-added world) grown added grown)))
+    (setf (aref added count) handle
+          (physics-world-added-count world) (1+ count))
+    handle))
 ;; Fast bodies and moving boxes wake what they reach:1 ends here
 
 ;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:1]]
@@ -4699,7 +4729,7 @@ its final height less its ideal resting height (radius less a slop), and whether
             deepest left ~,4F m" speed median worst pen))
     (multiple-value-bind (load speed) (pinch-between-sleepers)
       (row "ball spawned pinched between two sleeping balls"
-           (and (< load 100.0) (<= speed (+ *physics-contact-push-max* 0.01)))
+           (and (< load 50.0) (<= speed (+ *physics-contact-push-max* 0.01)))
            "largest impulse ~D times the ball's weight over a substep; fastest ~,3F m/s" (round load) speed))
     (dolist (depth '(0.2 0.5))
       (multiple-value-bind (speed y rest) (buried-ball depth)

@@ -1795,6 +1795,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (<= awake 4) "thrown from ~,3F m aside: ~D of 401 balls awake at 6 s" shift awake))))
 ;; X7R3M5-piles-come-to-rest ends here
 
+;; [[file:../physics.org::#X7R3M5][X7R3M5-pinch-holds]]
+(define-claim "X7R3M5" pinch-holds
+    "A ball spawned pinched between two sleepers is pushed out gently."
+  (multiple-value-bind (load speed) (luv-physics::pinch-between-sleepers :seconds 1)
+    (check (< load 50.0) "a contact carried ~,1F times the ball's weight over a substep" load)
+    (check (<= speed (+ luv-physics::*physics-contact-push-max* 0.01)) "the ball moved at ~,3F m/s" speed)))
+;; X7R3M5-pinch-holds ends here
+
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-extremes-that-hold]]
 (define-claim "X7R3M5" extremes-that-hold
     "Extreme radii, steps and coordinates still rest a slop deep and sleep; 1e5 m is refused."
