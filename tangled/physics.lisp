@@ -1427,6 +1427,7 @@ dispatches on it once per call. #W0RLD7"))
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
+   (mortal-sleepers :initform 0 :type fixnum :accessor physics-world-mortal-sleepers)
    (added :initform (make-array 16 :element-type 'fixnum :initial-element 0) :accessor physics-world-added)
    (added-count :initform 0 :type fixnum :accessor physics-world-added-count)
    (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
@@ -1733,9 +1734,10 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
   (let* ((handle (aref (body-columns-handle (physics-world-awake world)) row))
          (new (relocate-body world +set-awake+ row +set-sleeping+))
          (s (physics-world-sleeping world)))
-    (with-body-columns (vx vy vz wx wy wz sleep-time) s
+    (with-body-columns (vx vy vz wx wy wz sleep-time life) s
       (setf (aref vx new) 0.0 (aref vy new) 0.0 (aref vz new) 0.0
-            (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0))
+            (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0)
+      (when (> (aref life new) 0.0) (incf (physics-world-mortal-sleepers world))))
     (setf (physics-world-sleeping-grid-dirty world) t)
     (push-event world +event-slept+ handle +no-body+ 0.0 0.0 0.0 0.0)
     new))
@@ -1743,7 +1745,9 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
 (defun wake-physics-body (world row)
   "Wake the sleeping body at ROW: relocate it to the end of the awake set, note :woke. #QKS4GZ"
   (let* ((handle (aref (body-columns-handle (physics-world-sleeping world)) row))
-         (new (relocate-body world +set-sleeping+ row +set-awake+)))
+         (new (progn (when (> (aref (body-columns-life (physics-world-sleeping world)) row) 0.0)
+                       (decf (physics-world-mortal-sleepers world)))
+                     (relocate-body world +set-sleeping+ row +set-awake+))))
     (setf (aref (body-columns-sleep-time (physics-world-awake world)) new) 0.0)
     (push-event world +event-woke+ handle +no-body+ 0.0 0.0 0.0 0.0)
     new))
@@ -1758,7 +1762,9 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
   (let* ((ids (physics-world-ids world))
          (buffer (set-buffer world set))
          (handle (aref (body-columns-handle buffer) row))
-         (moved (body-columns-swap-remove buffer row)))
+         (moved (progn (when (and (= set +set-sleeping+) (> (aref (body-columns-life buffer) row) 0.0))
+                         (decf (physics-world-mortal-sleepers world)))
+                       (body-columns-swap-remove buffer row))))
     (when (>= moved 0)
       (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle buffer) row))) row))
     (handle-table-release ids handle)
@@ -2882,13 +2888,11 @@ returns the number of colours used. #SSMPYW"
 
 ;; [[file:../physics.org::#PR3PAR][Preparing the constraints:1]]
 (declaim (inline spin-arm))
-(defun spin-arm (r-a r-b slop)
-  "The lever of spin friction for a contact of radii R-A and R-B (R-B zero for something flat)
-resting SLOP deep: two thirds of the radius of its contact patch, sqrt(2 R SLOP) with R the
-pair's effective radius. #PR3PAR"
-  (declare (type single-float r-a r-b slop))
-  (let ((r (if (> r-b 0.0) (/ (* r-a r-b) (+ r-a r-b)) r-a)))
-    (* (/ 2.0 3.0) (fsqrt (* 2.0 r slop)))))
+(defun spin-arm (radius slop)
+  "The lever of spin friction for a ball of RADIUS resting SLOP deep on something flat: two
+thirds of the radius of its contact patch, sqrt(2 RADIUS SLOP). #PR3PAR"
+  (declare (type single-float radius slop))
+  (* (/ 2.0 3.0) (fsqrt (* 2.0 radius slop))))
 
 (defvar *prepare-short-path* t
   "When false, the prepare fill sends every row through its general path; the claim that the
@@ -3018,7 +3022,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                            (@ friction) (fsqrt (* (aref fr-c la) (aref fr-c lb)))
                            (@ restitution) (max (aref re-c la) (aref re-c lb))
                            (@ rolling-limit) (* (max (aref ro-c la) (aref ro-c lb)) (max r-a r-b))
-                           (@ spin-limit) (* (fsqrt (* (aref fr-c la) (aref fr-c lb))) (spin-arm r-a r-b slop))
+                           (@ spin-limit) 0.0
                            (@ spin-impulse) 0.0
                            (@ relative-velocity)
                            (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
@@ -3087,11 +3091,11 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                                 (@ rolling-limit) (* (max (aref (body-columns-rolling-resistance buf-a) la)
                                                                (aref (body-columns-rolling-resistance buf-b) lb))
                                                           (max r-a r-b))
-                                (@ spin-limit) (* (@ friction) (spin-arm r-a r-b slop)))
+                                (@ spin-limit) 0.0)
                           (setf (@ friction) (aref (body-columns-friction buf-a) la)
                                 (@ restitution) (aref (body-columns-restitution buf-a) la)
                                 (@ rolling-limit) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)
-                                (@ spin-limit) (* (@ friction) (spin-arm r-a 0.0 slop))))
+                                (@ spin-limit) (* (@ friction) (spin-arm r-a slop))))
                       (setf (@ spin-impulse) 0.0)
                       (setf (@ relative-velocity)
                             (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
@@ -3592,11 +3596,13 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
                      (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
                        (sleep-physics-body world i))
                      (setf (aref sleep-time i) 0.0)))))))
+    ;; only a world with a mortal sleeper walks the sleeping buffer
+    (when (plusp (physics-world-mortal-sleepers world))
     (with-body-columns (x y z age life handle) sleeping
       (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
         (when (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
           (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-          (%remove-body world +set-sleeping+ i))))
+          (%remove-body world +set-sleeping+ i)))))
     world))
 ;; Finalize: positions, orientation, age and sleep:1 ends here
 
@@ -3782,6 +3788,11 @@ physics-world-invalid naming the first broken invariant. #V4L1D8"
                 (contact-table-count table) (contact-columns-length contacts))))
       (unless (>= (body-columns-capacity awake) (body-columns-length awake))
         (fail "awake capacity below its length"))
+      ;; the count of mortal sleepers, which decides whether finalize ages the sleepers
+      (let* ((sleeping (physics-world-sleeping world))
+             (mortal (count-if #'plusp (body-columns-life sleeping) :end (body-columns-length sleeping))))
+        (unless (= mortal (physics-world-mortal-sleepers world))
+          (fail "~D mortal sleepers counted as ~D" mortal (physics-world-mortal-sleepers world))))
       t)))
 ;; The validation walker:1 ends here
 
