@@ -50,6 +50,8 @@ bench: setup tangle
 	@$(SBCL) --script tools/splice.lisp bench-basin report/bench.org
 	@$(LISP) --load tools/bench-scenes.lisp | tee report/bench-scenes.org
 	@$(SBCL) --script tools/splice.lisp bench-scenes report/bench-scenes.org
+	@$(LISP) --load tools/bench-sleeping.lisp | tee report/bench-sleeping.org
+	@$(SBCL) --script tools/splice.lisp bench-sleeping report/bench-sleeping.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
 # without -march=native like Debian's Bullet and ODE.

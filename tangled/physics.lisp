@@ -4429,6 +4429,61 @@ kernel family this CPU runs, and the spread pile under two dense-grid bounds for
         (finish-output stream))))))
 ;; What a step costs:1 ends here
 
+;; [[file:../physics.org::#B3NCH5][What a step costs:2]]
+(defun sleepers-beside-basin (sleepers &key (kernels :avx2))
+  "A basin world with SLEEPERS balls of radius 0.25 m asleep, one per 0.6 m square, on a floor
+beside the basin's east wall, each resting a slop deep and alone. Return the world. #B3NCH5"
+  (let* ((terrain (make-basin-terrain))
+         (per-row (max 1 (ceiling (sqrt sleepers))))
+         (side (ceiling (* 0.6 per-row))))
+    (fill-terrain terrain 16 0 0 (+ 17 side) 4 (1+ side) nil)
+    (fill-terrain terrain 16 -1 0 (+ 17 side) 0 (1+ side) t)
+    (let ((world (make-physics-world :terrain terrain :sleep t :kernels kernels)))
+      (dotimes (k sleepers)
+        (multiple-value-bind (i j) (floor k per-row)
+          (add-physics-body world (+ 16.3 (* 0.6 i)) (- 0.25 *physics-linear-slop*) (+ 0.3 (* 0.6 j))
+                            :radius 0.25 :mass 1.0 :friction 0.6)))
+      (loop for row from (1- (physics-world-awake-count world)) downto 0
+            do (sleep-physics-body world row))
+      world)))
+
+(defun measure-sleeping-scale (sleepers &key (kernels :avx2))
+  "Beside SLEEPERS settled sleepers: the mean ms per step idle (nothing awake, 100 steps), while
+1000 balls fall into the basin, settle and sleep (600 steps), and after a ball is thrown into
+that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
+  (sb-ext:gc :full t)
+  (let* ((before (sb-kernel:dynamic-usage))
+         (world (sleepers-beside-basin sleepers :kernels kernels)))
+    (step-physics-world world)
+    (sb-ext:gc :full t)
+    (let ((bytes (- (sb-kernel:dynamic-usage) before))
+          (idle (measure-steps world 0 100)))
+      (dotimes (i 1000)
+        (multiple-value-bind (x y z) (basin-spawn-point i)
+          (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)))
+      (let ((settling (measure-steps world 0 600)))
+        (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0)
+        (let ((wave (measure-steps world 0 300)))
+          (list :sleepers sleepers :idle idle :settling settling :wave wave
+                :bytes-per-sleeper (if (plusp sleepers) (round bytes sleepers) 0)
+                :awake (physics-world-awake-count world)))))))
+
+(defun run-sleeping-scale-benchmark (&key (counts '(0 10000 50000 100000 200000)) (stream *standard-output*))
+  "Print, as an Org table, what sleepers cost at each of COUNTS: idle, settling and wake-wave ms
+per step beside them, each against the same at no sleepers, and the heap's bytes per sleeper. #B3NCH5"
+  (format stream "~&#+caption: sleepers beside the basin, avx2; ~A; load ~A~%" (cpu-model-name) (load-average))
+  (format stream "~&| sleepers | idle ms/step | settling ms/step | / at 0 | wave ms/step | / at 0 | bytes per sleeper | awake at end |~%")
+  (format stream "~&|----------+--------------+------------------+--------+--------------+--------+-------------------+--------------|~%")
+  (let ((base nil))
+    (dolist (count counts)
+      (let ((m (measure-sleeping-scale count)))
+        (unless base (setf base m))
+        (format stream "~&| ~D | ~,4F | ~,3F | ~,2F | ~,3F | ~,2F | ~D | ~D |~%"
+                count (getf m :idle) (getf m :settling) (/ (getf m :settling) (getf base :settling))
+                (getf m :wave) (/ (getf m :wave) (getf base :wave)) (getf m :bytes-per-sleeper) (getf m :awake))
+        (finish-output stream)))))
+;; What a step costs:2 ends here
+
 ;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]
 (defun pinch-between-sleepers (&key (seconds 2))
   "Let two balls of radius 0.25 m fall asleep on the basin floor 0.8 m apart, spawn a third
@@ -4496,6 +4551,18 @@ on. Return the awake count at the end of each second. #X7R3M5"
       (dotimes (i 60) (step-physics-world world))
       (push (physics-world-awake-count world) counts))
     (nreverse counts)))
+
+(defun column-contact-depths (count &key (radius 0.45) (seconds 10))
+  "Stack COUNT balls of RADIUS and 1 kg in the shaft, sleeping on, and run SECONDS. Return each
+contact's overlap at the end, from the floor up, in slops. #X7R3M5"
+  (let* ((world (make-shaft-world :sleep t))
+         (balls (loop for i below count
+                      collect (add-physics-body world 0.5 (+ radius (* i 2.02 radius)) 0.5 :radius radius :mass 1.0))))
+    (dotimes (i (* 60 seconds)) (step-physics-world world))
+    (let ((heights (mapcar (lambda (b) (nth-value 1 (physics-body-position world b))) balls)))
+      (mapcar (lambda (overlap) (/ overlap *physics-linear-slop*))
+              (cons (- radius (first heights))
+                    (loop for (a b) on heights while b collect (- (* 2 radius) (- b a))))))))
 
 (defun speed-of (world handle)
   "The speed of HANDLE's body. #X7R3M5"
@@ -4711,15 +4778,15 @@ its final height less its ideal resting height (radius less a slop), and whether
     (multiple-value-bind (pen speed drop left) (stack-in-shaft '(1000.0 1.0))
       (row "1 kg ball on a 1000 kg ball" (< pen 0.02)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
-    ;; bracing in a pile of many masses, and the same pile without it, each from six starts:
+    ;; bracing in a pile of many masses, and the same pile without it, each from twelve starts:
     ;; the deepest overlap of one start is the deepest of one moment, which one heavy landing sets
     (dolist (ratio (list *physics-brace-mass-ratio* 1e9))
-      (let ((runs (loop for seed in '(7 11 13 17 19 23)
+      (let ((runs (loop for seed in '(7 11 13 17 19 23 29 31 37 41 43 47)
                         collect (multiple-value-list (mixed-mass-pile 1000 :brace-ratio ratio :seed seed)))))
         (flet ((all (key) (mapcar key runs)))
           (let ((deepest (all #'first)) (last (reduce #'max (all #'second)))
                 (fastest (reduce #'max (all #'third))) (ok (every #'identity (all #'fourth))))
-            (row (format nil "1000 balls of 0.32 to 32 kg, sleeping off, ~:[without bracing~;bracing~], six starts"
+            (row (format nil "1000 balls of 0.32 to 32 kg, sleeping off, ~:[without bracing~;bracing~], twelve starts"
                          (< ratio 1e6))
                  (and ok (< (median deepest) 0.06) (< fastest 0.05))
                  "deepest overlap after 2 s ~,4F m in the median start, ~,4F m in the worst; a ball ~
@@ -4729,6 +4796,23 @@ its final height less its ideal resting height (radius less a slop), and whether
     (multiple-value-bind (pen speed drop left) (stack-in-shaft (make-list 20 :initial-element 1.0))
       (row "column of 20 balls" (< pen 0.05)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
+    (let ((depths (column-contact-depths 20)))
+      (row "column of 20 balls, each contact against its design depth (one slop)"
+           (every (lambda (d) (<= d 1.1)) depths)
+           "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}" depths))
+    (let ((runs (append (loop for shift in '(0.0 0.001 0.002 0.003)
+                              collect (thrown-into-pile 1000 :seconds 12 :throw-at 4 :shift shift))
+                        (loop for seed from 1 to 10
+                              collect (thrown-into-pile 1000 :seconds 12 :throw-at 4 :seed seed)))))
+      (let ((at-8 (reduce #'max runs :key (lambda (r) (nth 7 r))))
+            (at-12 (reduce #'max runs :key (lambda (r) (nth 11 r)))))
+        (row "default scene, ball thrown at 4 s, 14 runs (throw 0-3 mm aside, 10 jittered spawns)"
+             (and (<= at-8 10) (zerop at-12))
+             "awake of 1001 in the worst run: ~D at 8 s, ~D at 12 s" at-8 at-12)))
+    (multiple-value-bind (curve fastest) (dead-pile 500 :seconds 10)
+      (row "500 dead balls, sleeping off" (and (< (car (last curve)) 1e-4) (< fastest 0.001))
+           "kinetic energy at 1 .. 10 s, mJ: ~{~,3F~^ ~}; fastest at 10 s ~,4F m/s"
+           (mapcar (lambda (e) (* 1000 e)) curve) fastest))
     (multiple-value-bind (speed median worst pen) (heaps-at-one-point)
       (row "heaps of 50 to 150 balls spawned at one point" (and (< speed 10.0) (< pen 0.01))
            "fastest ball ~,3F m/s; fastest parting pair ~,3F m/s in the median heap, ~,3F m/s in the worst; ~
