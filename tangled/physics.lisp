@@ -1427,6 +1427,16 @@ dispatches on it once per call. #W0RLD7"))
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
+   (fresh-grid :initform (make-hash-grid) :reader physics-world-fresh-grid)
+   (fresh-handles :initform (make-array 64 :element-type 'fixnum :initial-element 0)
+                  :accessor physics-world-fresh-handles)
+   (fresh-count :initform 0 :type fixnum :accessor physics-world-fresh-count)
+   (fresh-x :initform (make-array 0 :element-type 'single-float) :accessor physics-world-fresh-x)
+   (fresh-y :initform (make-array 0 :element-type 'single-float) :accessor physics-world-fresh-y)
+   (fresh-z :initform (make-array 0 :element-type 'single-float) :accessor physics-world-fresh-z)
+   (settled-count :initform 0 :type fixnum :accessor physics-world-settled-count)
+   (settled-stale :initform 0 :type fixnum :accessor physics-world-settled-stale)
+   (grid-of :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-grid-of)
    (mortal-sleepers :initform 0 :type fixnum :accessor physics-world-mortal-sleepers)
    (added :initform (make-array 16 :element-type 'fixnum :initial-element 0) :accessor physics-world-added)
    (added-count :initform 0 :type fixnum :accessor physics-world-added-count)
@@ -1738,7 +1748,7 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
       (setf (aref vx new) 0.0 (aref vy new) 0.0 (aref vz new) 0.0
             (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0)
       (when (> (aref life new) 0.0) (incf (physics-world-mortal-sleepers world))))
-    (setf (physics-world-sleeping-grid-dirty world) t)
+    (note-fresh-sleeper world handle)
     (push-event world +event-slept+ handle +no-body+ 0.0 0.0 0.0 0.0)
     new))
 
@@ -1749,6 +1759,7 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
                        (decf (physics-world-mortal-sleepers world)))
                      (relocate-body world +set-sleeping+ row +set-awake+))))
     (setf (aref (body-columns-sleep-time (physics-world-awake world)) new) 0.0)
+    (leave-sleeping-grids world handle)
     (push-event world +event-woke+ handle +no-body+ 0.0 0.0 0.0 0.0)
     new))
 
@@ -1764,6 +1775,7 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
          (handle (aref (body-columns-handle buffer) row))
          (moved (progn (when (and (= set +set-sleeping+) (> (aref (body-columns-life buffer) row) 0.0))
                          (decf (physics-world-mortal-sleepers world)))
+                       (when (= set +set-sleeping+) (leave-sleeping-grids world handle))
                        (body-columns-swap-remove buffer row))))
     (when (>= moved 0)
       (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle buffer) row))) row))
@@ -1908,17 +1920,114 @@ more than MARGIN. #G3NCNT"
 pair within reach, or within the skin beyond it, lies in neighbouring cells. #G4R1D5"
   (+ (* 2 (physics-world-max-radius world)) (physics-world-margin world) (physics-world-pair-skin world)))
 
+(defun sleeping-grid-of (world)
+  "For each handle slot, which sleeping grid holds its body's live entry: 1 the settled grid, 2
+the fresh one, 0 neither; grown to the handle table's slots. #G4R1D5"
+  (let ((of (physics-world-grid-of world))
+        (slots (length (handle-table-set (physics-world-ids world)))))
+    (declare (type fixnum-column of))
+    (if (>= (length of) slots)
+        of
+        (let ((grown (make-array slots :element-type 'fixnum :initial-element 0)))
+          (replace grown of)
+          (setf (physics-world-grid-of world) grown)))))
+
+(defun note-fresh-sleeper (world handle)
+  "Note that HANDLE's body fell asleep: the fresh grid takes it at its next build. #G4R1D5"
+  (let ((handles (physics-world-fresh-handles world)) (count (physics-world-fresh-count world))
+        (of (sleeping-grid-of world)))
+    (declare (type fixnum-column handles of) (type fixnum count))
+    (when (= (aref of (handle-index handle)) 1) (incf (physics-world-settled-stale world)))
+    (when (= count (length handles))
+      (let ((grown (make-array (* 2 count) :element-type 'fixnum :initial-element 0)))
+        (replace grown handles)
+        (setf (physics-world-fresh-handles world) grown handles grown)))
+    (setf (aref handles count) handle
+          (physics-world-fresh-count world) (1+ count)
+          (aref of (handle-index handle)) 2
+          (physics-world-sleeping-grid-dirty world) t)
+    handle))
+
+(defun leave-sleeping-grids (world handle)
+  "HANDLE's body leaves the sleeping set: its entry in either grid is dead from now on. #G4R1D5"
+  (let ((of (sleeping-grid-of world)) (slot (handle-index handle)))
+    (declare (type fixnum-column of))
+    (when (= (aref of slot) 1) (incf (physics-world-settled-stale world)))
+    (setf (aref of slot) 0)
+    handle))
+
 (defun ensure-sleeping-grid (world)
-  "Rebuild the grid of sleeping bodies if a body fell asleep or the cell size changed. #G4R1D5"
-  (let ((grid (physics-world-sleeping-grid world))
-        (size (grid-cell-size world)))
-    (when (or (physics-world-sleeping-grid-dirty world)
-              (/= (hash-grid-inv-cell grid) (/ 1.0 size)))
-      (let ((s (physics-world-sleeping world)))
-        (build-hash-grid grid size (body-columns-length s) (body-columns-x s) (body-columns-y s)
-                         (body-columns-z s) (body-columns-handle s)))
-      (setf (physics-world-sleeping-grid-dirty world) nil))
+  "Bring the sleeping grids up to date. Bodies that fell asleep since the settled grid was built
+go into the fresh grid, which is built again, from them alone, whenever one more falls asleep.
+The settled grid is built again from every sleeper, and the fresh one emptied, when the cell size
+changed, or when the fresh sleepers, or the settled grid's dead entries, outnumber an eighth of
+the settled grid (and 256). Return the settled grid. #G4R1D5"
+  (let* ((grid (physics-world-sleeping-grid world))
+         (fresh (physics-world-fresh-grid world))
+         (size (grid-cell-size world))
+         (s (physics-world-sleeping world))
+         (of (sleeping-grid-of world))
+         (bound (max 256 (floor (physics-world-settled-count world) 8))))
+    (declare (type fixnum-column of))
+    (cond ((or (/= (hash-grid-inv-cell grid) (/ 1.0 size))
+               (> (physics-world-fresh-count world) bound)
+               (> (physics-world-settled-stale world) bound))
+           (let ((n (body-columns-length s)) (handles (body-columns-handle s)))
+             (build-hash-grid grid size n (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
+             (dotimes (i n) (setf (aref of (handle-index (aref handles i))) 1))
+             (setf (physics-world-settled-count world) n
+                   (physics-world-settled-stale world) 0
+                   (physics-world-fresh-count world) 0)
+             (build-hash-grid fresh size 0 (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
+             (setf (physics-world-sleeping-grid-dirty world) nil)))
+          ((physics-world-sleeping-grid-dirty world)
+           ;; the fresh sleepers still asleep and in the fresh grid, each once: the handle list
+           ;; is compacted to them as it is read
+           (let* ((handles (physics-world-fresh-handles world))
+                  (ids (physics-world-ids world))
+                  (sets (handle-table-set ids)) (locals (handle-table-local ids))
+                  (generations (handle-table-generation ids))
+                  (count (physics-world-fresh-count world))
+                  (kept 0))
+             (declare (type fixnum-column handles sets locals generations) (type fixnum count kept))
+             (when (< (length (physics-world-fresh-x world)) count)
+               (setf (physics-world-fresh-x world) (make-array (length handles) :element-type 'single-float)
+                     (physics-world-fresh-y world) (make-array (length handles) :element-type 'single-float)
+                     (physics-world-fresh-z world) (make-array (length handles) :element-type 'single-float)))
+             (dotimes (k count)
+               (let* ((h (aref handles k)) (slot (handle-index h)))
+                 (when (and (= (aref sets slot) +set-sleeping+) (= (aref generations slot) (handle-generation h))
+                            (= (aref of slot) 2))
+                   ;; 3 marks it taken, so a body that slept twice is taken once
+                   (setf (aref of slot) 3 (aref handles kept) h)
+                   (incf kept))))
+             (let ((xs (physics-world-fresh-x world)) (ys (physics-world-fresh-y world))
+                   (zs (physics-world-fresh-z world)))
+               (declare (type f32-column xs ys zs))
+               (dotimes (k kept)
+                 (let* ((slot (handle-index (aref handles k))) (row (aref locals slot)))
+                   (setf (aref of slot) 2
+                         (aref xs k) (aref (body-columns-x s) row)
+                         (aref ys k) (aref (body-columns-y s) row)
+                         (aref zs k) (aref (body-columns-z s) row))))
+               (setf (physics-world-fresh-count world) kept)
+               (build-hash-grid fresh size kept xs ys zs handles))
+             (setf (physics-world-sleeping-grid-dirty world) nil))))
     grid))
+
+(defmacro do-sleeping-neighbours ((item world x y z &key (span 1)) &body body)
+  "Run BODY with ITEM bound to the handle of each live entry of WORLD's sleeping grids, settled
+and fresh, whose cell lies within SPAN cells of point X Y Z. An entry is live when its grid is the
+one that holds its body now; whether the handle still names a sleeper is BODY's to ask. #G4R1D5"
+  (let ((visit (gensym "VISIT")) (of (gensym "OF")))
+    `(let ((,of (physics-world-grid-of ,world)))
+       (declare (type fixnum-column ,of))
+       (flet ((,visit (,item) (declare (type fixnum ,item)) ,@body))
+         (declare (inline ,visit))
+         (do-grid-neighbours (,item (physics-world-sleeping-grid ,world) ,x ,y ,z :span ,span)
+           (when (= 1 (aref ,of (handle-index ,item))) (,visit ,item)))
+         (do-grid-neighbours (,item (physics-world-fresh-grid ,world) ,x ,y ,z :span ,span)
+           (when (= 2 (aref ,of (handle-index ,item))) (,visit ,item)))))))
 
 (defun grid-phase (world)
   "Phase 3: find the pair list's loose rows; unless the list holds and the awake grid still has
@@ -2005,7 +2114,7 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
         (declare (type single-float margin wake2 dt))
         (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
                  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
-                 (do-grid-neighbours (h grid x y z :span span)
+                 (do-sleeping-neighbours (h world x y z :span span)
                    (let ((slot (handle-index h)))
                      (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
                                 (= (aref (handle-table-generation ids) slot) (handle-generation h)))
@@ -2249,7 +2358,6 @@ gap is under the speculative distance. #P41RS7"
          (sleeping (physics-world-sleeping world))
          (ids (physics-world-ids world))
          (grid (physics-world-awake-grid world))
-         (sgrid (physics-world-sleeping-grid world))
          (plist (physics-world-pair-list world))
          (n (body-columns-length awake))
          (any-sleeping (plusp (body-columns-length sleeping)))
@@ -2268,7 +2376,7 @@ gap is under the speculative distance. #P41RS7"
     (declare (type single-float margin skin cell slop dt gstep rmax) (type index n) (type fixnum strays)
              (type body-columns awake sleeping) (type pair-list plist)
              (type contact-columns contacts) (type contact-table table)
-             (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+
+             (type handle-table ids) (type hash-grid grid) #.+kernel-policy+
              (inline touch-contact))
     (with-body-columns (x y z vx vy vz radius flags handle) awake
       (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj)
@@ -2372,7 +2480,7 @@ gap is under the speculative distance. #P41RS7"
             (when (zerop (logand (aref flags i) +flag-terrain-only+))
               (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i)) (hi (aref handle i))
                     (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
-                (do-grid-neighbours (h sgrid xi yi zi)
+                (do-sleeping-neighbours (h world xi yi zi)
                   (let ((slot (handle-index h)))
                     (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
                                (= (aref (handle-table-generation ids) slot) (handle-generation h)))

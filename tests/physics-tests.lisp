@@ -931,6 +931,40 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; G4R1D5-sorted-rows-keep-handles ends here
 
+;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grids-stay-lean]]
+(define-claim "G4R1D5" sleeping-grids-stay-lean
+    "Sleeping enters the fresh grid alone; removed sleepers leave the grids at the next step."
+  (let* ((w (luv-physics::sleepers-beside-basin 2000 :kernels :scalar))
+         (settled (luv-physics::physics-world-sleeping-grid w))
+         (fresh (luv-physics::physics-world-fresh-grid w)))
+    (step-physics-world w)
+    (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid holds ~D" (luv-physics::hash-grid-count settled))
+    (let ((ball (add-physics-body w 4.0 0.5 4.0 :radius 0.25)))
+      (loop repeat 240 while (luv-physics::physics-body-awake-p w ball) do (step-physics-world w))
+      (check (not (luv-physics::physics-body-awake-p w ball)) "the ball did not fall asleep")
+      (step-physics-world w)
+      (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid was built again: ~D entries"
+             (luv-physics::hash-grid-count settled))
+      (check (= 1 (luv-physics::hash-grid-count fresh)) "the fresh grid holds ~D" (luv-physics::hash-grid-count fresh)))
+    (let ((s (luv-physics::physics-world-sleeping w)))
+      (dolist (h (loop for i below 1000 collect (aref (luv-physics::body-columns-handle s) i)))
+        (luv-physics::remove-physics-body w h))
+      (step-physics-world w)
+      (check (= 1001 (luv-physics::hash-grid-count settled)) "after the removals the settled grid holds ~D"
+             (luv-physics::hash-grid-count settled))
+      (check (= 0 (luv-physics::hash-grid-count fresh)) "after the removals the fresh grid holds ~D"
+             (luv-physics::hash-grid-count fresh))
+      (check (loop for row below (luv-physics::body-columns-length s)
+                   always (let ((h (aref (luv-physics::body-columns-handle s) row)) (seen 0))
+                            (luv-physics::do-sleeping-neighbours (e w (aref (luv-physics::body-columns-x s) row)
+                                                                    (aref (luv-physics::body-columns-y s) row)
+                                                                    (aref (luv-physics::body-columns-z s) row))
+                              (when (= e h) (incf seen)))
+                            (= seen 1)))
+             "a sleeper is met other than once around itself")
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; G4R1D5-sleeping-grids-stay-lean ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
 (define-claim "P41RS7" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
