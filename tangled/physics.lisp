@@ -1955,10 +1955,17 @@ the fresh one, 0 neither; grown to the handle table's slots. #G4R1D5"
         (of (sleeping-grid-of world)))
     (declare (type fixnum-column handles of) (type fixnum count))
     (when (= (aref of (handle-index handle)) 1) (incf (physics-world-settled-stale world)))
+    ;; room for every body the world has a slot for, at once: the fresh list, its centres and
+    ;; its grid grow together, and seldom
     (when (= count (length handles))
-      (let ((grown (make-array (* 2 count) :element-type 'fixnum :initial-element 0)))
+      (let* ((room (max (* 2 count) (length of)))
+             (grown (make-array room :element-type 'fixnum :initial-element 0)))
         (replace grown handles)
-        (setf (physics-world-fresh-handles world) grown handles grown)))
+        (setf (physics-world-fresh-handles world) grown handles grown
+              (physics-world-fresh-x world) (make-array room :element-type 'single-float)
+              (physics-world-fresh-y world) (make-array room :element-type 'single-float)
+              (physics-world-fresh-z world) (make-array room :element-type 'single-float))
+        (hash-grid-reserve (physics-world-fresh-grid world) room)))
     (setf (aref handles count) handle
           (physics-world-fresh-count world) (1+ count)
           (aref of (handle-index handle)) 2
@@ -1990,6 +1997,8 @@ the settled grid (and 256). Return the settled grid. #G4R1D5"
                (> (physics-world-fresh-count world) bound)
                (> (physics-world-settled-stale world) bound))
            (let ((n (body-columns-length s)) (handles (body-columns-handle s)))
+             ;; room for every body the world has a slot for, so that the settled grid grows seldom
+             (hash-grid-reserve grid (max n (length of)))
              (build-hash-grid grid size n (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
              (dotimes (i n) (setf (aref of (handle-index (aref handles i))) 1))
              (setf (physics-world-settled-count world) n
