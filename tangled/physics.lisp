@@ -55,7 +55,9 @@
    ;; #G4WXCJ, #3X6XN8, #RH7T05, #UFK5EA), the index of the interface (#LW3YHU)
    #:physics-world-step-hook #:physics-recording #:start-physics-recording #:stop-physics-recording
    #:physics-recording-frame-count #:*physics-scenes* #:run-physics-scene
-   #:write-physics-viewer #:write-scene-picture #:write-api-index))
+   #:write-physics-viewer #:write-scene-picture #:write-api-index
+   ;; Giving back the room the buffers grew to (#QKS4GZ)
+   #:trim-physics-world))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -527,7 +529,7 @@ single-float goes through double precision; both round correctly, so they agree)
 (defmacro define-physics-layout (name docstring &rest columns)
   "Define the columnar layout NAME: a buffer struct of one specialised array per column of
 COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
-NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-clear and WITH-NAME, which binds columns by name
+NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
 or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
   (let* ((make (layout-symbol "%MAKE-" name))
          (ctor (layout-symbol "MAKE-" name))
@@ -535,6 +537,7 @@ or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, si
          (cap (layout-symbol name "-CAPACITY"))
          (spare (layout-symbol name "-SPARE"))
          (ensure (layout-symbol name "-ENSURE-CAPACITY"))
+         (trim (layout-symbol name "-TRIM"))
          (append (layout-symbol name "-APPEND"))
          (remove (layout-symbol name "-SWAP-REMOVE"))
          (copy (layout-symbol name "-COPY-ROW"))
@@ -578,6 +581,20 @@ or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, si
                                 (replace fresh (,acc buffer))
                                 (setf (,acc buffer) fresh)))
              (setf (,cap buffer) new)))
+         buffer)
+       (defun ,trim (buffer rows)
+         ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
+least 16), keeping every row; return BUFFER. #L4Y0UT" name)
+         (declare (type ,name buffer) (type index rows))
+         (let ((new (max rows (,len buffer) 16)))
+           (when (< new (,cap buffer))
+             (let ((size (+ new (,spare buffer))))
+               ,@(loop for (c type width) in columns for acc in accessors
+                       collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
+                                                                               :initial-element ,(column-zero type))))
+                                  (replace kept (,acc buffer))
+                                  (setf (,acc buffer) kept)))
+               (setf (,cap buffer) new))))
          buffer)
        (declaim (inline ,append))
        (defun ,append (buffer)
@@ -1798,6 +1815,43 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
       (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle buffer) row))) row))
     (handle-table-release ids handle)
     handle))
+
+(defun trim-physics-world (world)
+  "Give back the room WORLD's buffers grew to beyond what they hold: the awake buffer and its
+sorting scratch keep room for twice the awake rows, the sleeping buffer for its rows, and the
+solver's arrays, the fresh sleeping grid and its lists are let go, to grow again as the next
+steps need. Call it between steps, off the hot path, after a pile has fallen asleep or been
+removed. Return WORLD. #QKS4GZ"
+  (check-idle world 'trim-physics-world)
+  (let* ((awake (physics-world-awake world))
+         (n (body-columns-length awake))
+         (fresh (physics-world-fresh-grid world)))
+    (ensure-sleeping-grid world)
+    (body-columns-trim awake (* 2 n))
+    (body-columns-trim (physics-world-awake-scratch world) (body-columns-capacity awake))
+    (body-columns-trim (physics-world-sleeping world) 0)
+    (setf (physics-world-row-places world) (make-array 0 :element-type 'fixnum)
+          (physics-world-velocities world) (make-array 0 :element-type 'single-float)
+          (physics-world-deltas world) (make-array 0 :element-type 'single-float)
+          (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
+          (physics-world-braced world) (make-array 0 :element-type 'fixnum))
+    (let ((count (physics-world-fresh-count world)))
+      (setf (physics-world-fresh-handles world)
+            (replace (make-array (max 64 count) :element-type 'fixnum :initial-element 0)
+                     (physics-world-fresh-handles world) :end2 count)
+            (physics-world-fresh-x world) (make-array 0 :element-type 'single-float)
+            (physics-world-fresh-y world) (make-array 0 :element-type 'single-float)
+            (physics-world-fresh-z world) (make-array 0 :element-type 'single-float)
+            (hash-grid-items fresh) (make-array 0 :element-type 'fixnum)
+            (hash-grid-keys fresh) (make-array 0 :element-type 'fixnum)
+            (hash-grid-item-keys fresh) (make-array 0 :element-type 'fixnum)
+            (hash-grid-xs fresh) (make-array 0 :element-type 'single-float)
+            (hash-grid-ys fresh) (make-array 0 :element-type 'single-float)
+            (hash-grid-zs fresh) (make-array 0 :element-type 'single-float)
+            (hash-grid-near fresh) (make-array 0 :element-type 'fixnum)
+            (hash-grid-starts fresh) (make-array 2 :element-type 'fixnum :initial-element 0)
+            (physics-world-sleeping-grid-dirty world) t))
+    world))
 
 (defun remove-physics-body (world handle)
   "Remove HANDLE's body from WORLD; HANDLE goes stale. #QKS4GZ"

@@ -754,6 +754,24 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; E7V3NT-mortal-body-events ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trim-gives-room-back]]
+(define-claim "QKS4GZ" trim-gives-room-back
+    "After trim-physics-world, 20000 sleepers hold at most 500 bytes of heap each, and the world steps on."
+  (sb-ext:gc :full t)
+  (let* ((before (sb-kernel:dynamic-usage))
+         (w (luv-physics::sleepers-beside-basin 20000 :kernels :scalar)))
+    (step-physics-world w)
+    (luv-physics:trim-physics-world w)
+    (sb-ext:gc :full t)
+    (let ((per (round (- (sb-kernel:dynamic-usage) before) 20000)))
+      (check (<= per 500) "after trimming the heap holds ~D bytes a sleeper" per))
+    (check (eq t (luv-physics::validate-physics-world w)))
+    (let ((ball (add-physics-body w 4.0 1.0 4.0)))
+      (dotimes (i 120) (step-physics-world w))
+      (check (not (luv-physics::physics-body-awake-p w ball)) "the ball dropped after trimming is awake after 2 s")
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; QKS4GZ-trim-gives-room-back ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-pile-sleeps-wakes-sleeps]]
 (define-claim "QKS4GZ" pile-sleeps-wakes-sleeps
     "A six-ball pile sleeps within 2 s, a thrown ball wakes the ball it hits, and the pile sleeps again within 5 s."
