@@ -50,7 +50,9 @@
    #:physics-player #:make-physics-player #:step-physics-player #:advance-physics-player
    #:physics-player-x #:physics-player-y #:physics-player-z #:physics-player-vx #:physics-player-vy
    #:physics-player-vz #:physics-player-grounded #:physics-player-eye #:post-physics-player
-   #:*physics-player-shape*))
+   #:*physics-player-shape*
+   ;; Reading and reloading the page in a live image (#0QBGZO, #OWNJGP)
+   #:section #:reload-section #:reload-changed))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -293,6 +295,7 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
             *registered-files* (append (remove source *registered-files* :test #'equal)
                                        (list source))
             *page-pathname* (or page *page-pathname*))
+      (note-loaded-file file text records)
       (length records))))
 
 (defun anchor-definitions (anchor)
@@ -310,6 +313,432 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
         (values (getf record :anchor) (getf record :org-line))
         (values nil nil))))
 ;; Register a file and answer by anchor or by name:1 ends here
+
+;; [[file:../physics.org::#0QBGZO][Read a section's code from the page:1]]
+(defun header-tangle (text)
+  "The value of the :tangle header argument in TEXT, or NIL. #0QBGZO"
+  (let ((at (search ":tangle " text)))
+    (when at
+      (let ((start (position #\Space text :start (+ at 8) :test-not #'char=)))
+        (when start
+          (subseq text start (or (position #\Space text :start start) (length text))))))))
+
+(defun page-code-blocks (lines)
+  "Each Lisp block of the page LINES as (ANCHOR FILE BEGIN FIRST LAST): its section's anchor, the
+file it tangles to (\"no\" for none), and the lines of its #+begin_src, first and last code line. #0QBGZO"
+  (let ((headings '()) (default "no") (anchor nil) (drawer nil) (open nil) (blocks '()))
+    ;; HEADINGS: (level . tangle) of the enclosing headings, innermost first
+    (loop for i from 1 to (length lines)
+          for line = (aref lines (1- i))
+          for text = (string-trim '(#\Space #\Tab) line)
+          do (cond (open
+                    (when (string-equal "#+end_src" text)
+                      (push (append open (list (1- i))) blocks)
+                      (setf open nil)))
+                   ((heading-line-p line)
+                    (let ((level (position #\* line :test-not #'char=)))
+                      (loop while (and headings (>= (car (first headings)) level)) do (pop headings))
+                      (push (cons level nil) headings)
+                      (setf anchor nil drawer t)))
+                   ((and drawer (starts-with ":" text))
+                    (cond ((starts-with ":CUSTOM_ID:" text)
+                           (setf anchor (string-trim '(#\Space #\Tab) (subseq text 11))))
+                          ((starts-with ":header-args:lisp" text)
+                           (setf (cdr (first headings)) (or (header-tangle text) (cdr (first headings)))))))
+                   ((and (null headings) (starts-with "#+PROPERTY: header-args:lisp " text))
+                    (setf default (or (header-tangle text) default)))
+                   ((and (<= 16 (length text)) (string-equal "#+begin_src lisp" text :end2 16)
+                         (or (= 16 (length text)) (char= #\Space (char text 16))))
+                    (setf drawer nil
+                          open (list anchor
+                                     (or (header-tangle text)
+                                         (loop for (nil . file) in headings thereis file)
+                                         default)
+                                     i (1+ i))))
+                   (t (setf drawer nil))))
+    (nreverse blocks)))
+
+(defun block-forms (lines anchor file begin first last)
+  "The toplevel forms of page LINES FIRST..LAST, a block of section ANCHOR tangling to FILE whose
+header is line BEGIN, as property lists (:anchor :file :block :line :end :text :form). #0QBGZO"
+  (let* ((code (map 'vector #'unescape-org-line (subseq lines (1- first) last)))
+         (text (format nil "~{~A~^~%~}" (coerce code 'list)))
+         (*read-eval* t)
+         (forms '())
+         (position 0))
+    (loop
+      (let ((start (skip-blanks-and-comments text position)))
+        (when (>= start (length text))
+          (return (nreverse forms)))
+        (multiple-value-bind (form end) (read-from-string text t nil :start start)
+          (let ((from (count #\Newline text :end start))
+                (to (count #\Newline text :end (max start (1- end)))))
+            (when (and (consp form) (eq (car form) 'in-package))
+              (setf *package* (find-package (second form))))
+            (push (list :anchor anchor :file file :block begin
+                        :line (+ first from) :end (+ first to)
+                        :text (format nil "~{~A~^~%~}" (coerce (subseq code from (1+ to)) 'list))
+                        :form form)
+                  forms))
+          (setf position end))))))
+
+(defun page-forms (lines files)
+  "The forms of every block of the page LINES that tangles to one of FILES, in the order FILES
+are loaded and, within a file, in page order. #0QBGZO"
+  (let ((*package* (find-package '#:luv-physics)))
+    (loop for file in files
+          append (loop for (anchor target begin first last) in (page-code-blocks lines)
+                       when (equal target file)
+                         append (block-forms lines anchor file begin first last)))))
+
+(defun engine-files ()
+  "The tangled files of the loaded system, relative to the page, in load order. #0QBGZO"
+  (remove-duplicates (mapcar (lambda (record) (getf record :file)) *definitions*)
+                     :test #'equal :from-end t))
+
+(defun form-definitions (form)
+  "Each (NAME KIND) that FORM, a toplevel form, defines. #0QBGZO"
+  (loop for definition in (toplevel-definitions form)
+        for kind = (intern (symbol-name (car definition)) :keyword)
+        collect (list (definition-name kind definition) kind)))
+
+(defun page-lines-of (page)
+  "The lines of PAGE (by default the page the loaded files were tangled from), or an error. #0QBGZO"
+  (let ((page (or page *page-pathname*)))
+    (unless (and page (probe-file page))
+      (error "luv-physics: no page to read: ~S (load the system from its repository)" page))
+    (split-lines (read-file-text page))))
+
+(defun find-section (lines anchor)
+  "The (FIRST . LAST) lines of section ANCHOR (string or symbol, leading # ignored) in LINES, or an
+error naming the anchor. #0QBGZO"
+  (let ((id (string-left-trim "#" (string anchor))))
+    (or (gethash id (page-sections lines))
+        (error "luv-physics: the page has no section ~S" id))))
+
+(defun section (anchor &key page (stream *standard-output*))
+  "Print the title and lines of section ANCHOR of PAGE, its definitions with their lines on the
+page and in the tangled file, and its claims with their lines; return the title. #0QBGZO"
+  (let* ((lines (page-lines-of page))
+         (id (string-left-trim "#" (string anchor)))
+         (range (find-section lines id))
+         (heading (aref lines (1- (car range))))
+         (title (string-trim " *" (subseq heading 0 (or (search "   " heading) (length heading)))))
+         (prefix (format nil "#+name: ~A-" id)))
+    (format stream "~&~A  ~A~%  ~A:~D-~D~%" id title
+            (file-namestring (or page *page-pathname*)) (car range) (cdr range))
+    (let ((records (anchor-definitions id)))
+      (format stream "  ~D definition~:P~:[~;:~]~%" (length records) records)
+      (dolist (r records)
+        (format stream "    ~5D  ~(~14A~) ~(~S~)  ~A:~D~%" (getf r :org-line) (getf r :kind)
+                (getf r :name) (getf r :file) (getf r :line))))
+    (let ((claims (loop for i from (car range) to (cdr range)
+                        for text = (aref lines (1- i))
+                        when (starts-with prefix text)
+                          collect (cons (1+ i) (subseq text (length prefix))))))
+      (format stream "  ~D claim~:P~:[~;:~]~%" (length claims) claims)
+      (loop for (line . slug) in claims
+            do (format stream "    ~5D  ~A~%" line slug)))
+    title))
+;; Read a section's code from the page:1 ends here
+
+;; [[file:../physics.org::#OWNJGP][Reload a section into the running image:1]]
+(defvar *loaded-file-texts* (make-hash-table :test 'equal)
+  "The text of each registered tangled file (relative to the page) as it was loaded. #OWNJGP")
+
+(defvar *loaded-forms* nil
+  "A hash table from each loaded form's key to the text loaded under it, or NIL until a reload
+builds it from *loaded-file-texts*. #OWNJGP")
+
+(defvar *parameter-defaults* (make-hash-table :test 'eq)
+  "For each defparameter of the page, the value its last evaluation gave. #OWNJGP")
+
+(defun note-loaded-file (file text records)
+  "Keep TEXT, the loaded tangled FILE, and the value of each defparameter among its RECORDS. #OWNJGP"
+  (setf (gethash file *loaded-file-texts*) text
+        *loaded-forms* nil)
+  (dolist (record records)
+    (let ((name (getf record :name)))
+      (when (and (eq :defparameter (getf record :kind)) (symbolp name) (boundp name))
+        (setf (gethash name *parameter-defaults*) (symbol-value name))))))
+
+(defun form-keys (forms)
+  "The key of each of FORMS: (FILE ANCHOR NAMES N), N counting the earlier FORMS with the same
+file, anchor and names. #OWNJGP"
+  (let ((seen (make-hash-table :test 'equal)))
+    (mapcar (lambda (form)
+              (let ((base (list (getf form :file) (getf form :anchor)
+                                (form-definitions (getf form :form)))))
+                (append base (list (1- (incf (gethash base seen 0)))))))
+            forms)))
+
+(defun tangled-text-forms (file text)
+  "The toplevel forms of TEXT, the tangled FILE, as page-forms gives them (:block and :line being
+lines of the tangled file). #OWNJGP"
+  (let* ((lines (split-lines text))
+         (anchors (line-anchors lines))
+         (*package* (find-package '#:luv-physics)))
+    ;; chunks of one anchor, split where the link comment changes or repeats
+    (loop with start = 0
+          for i from 0 to (length lines)
+          when (or (= i (length lines)) (link-comment-anchor (aref lines i)))
+            append (prog1 (when (and (< start i) (aref anchors start))
+                            (block-forms lines (aref anchors start) file (1+ start) (1+ start) i))
+                     (setf start (1+ i))))))
+
+(defun loaded-forms ()
+  "The table of *loaded-forms*, built from the registered files' texts when it is NIL. #OWNJGP"
+  (or *loaded-forms*
+      (let ((table (make-hash-table :test 'equal)))
+        (loop for file in (engine-files)
+              for text = (gethash file *loaded-file-texts*)
+              when text
+                do (let ((forms (tangled-text-forms file text)))
+                     (loop for form in forms for key in (form-keys forms)
+                           do (setf (gethash key table) (getf form :text)))))
+        (setf *loaded-forms* table))))
+
+(defun form-expanders (form &optional compile-time)
+  "The names FORM defines that its users copy when they are compiled: macros, setf expanders,
+types, symbol macros, inline functions, and (COMPILE-TIME) whatever is defined at compile time;
+the page's own defining macros are expanded to see what they define. #OWNJGP"
+  (cond ((atom form) '())
+        ((member (car form) '(progn locally))
+         (loop for f in (cdr form) append (form-expanders f compile-time)))
+        ((eq (car form) 'eval-when)
+         (loop with now = (or compile-time (and (member :compile-toplevel (second form)) t))
+               for f in (cddr form) append (form-expanders f now)))
+        ((eq (car form) 'declaim)
+         (loop for spec in (cdr form)
+               when (and (consp spec) (eq (car spec) 'inline)) append (copy-list (cdr spec))))
+        ((member (car form) '(defmacro define-compiler-macro defsetf deftype define-symbol-macro
+                              define-modify-macro define-setf-expander))
+         (list (second form)))
+        ((and (eq (car form) 'defun)
+              (or compile-time (eq 'inline (sb-int:info :function :inlinep (second form)))))
+         (list (second form)))
+        ((and compile-time (defining-operator-p (car form)) (symbolp (second form)))
+         (list (second form)))
+        ((and (symbolp (car form)) (eq (symbol-package (car form)) (find-package '#:luv-physics))
+              (macro-function (car form)))
+         (form-expanders (macroexpand-1 form) compile-time))
+        (t '())))
+
+(defun form-tokens (form)
+  "The upcased words of FORM's text, as a hash table: the names it may mention. #OWNJGP"
+  (let ((tokens (make-hash-table :test 'equal))
+        (text (getf form :text)))
+    (loop with start = 0
+          for i from 0 to (length text)
+          when (or (= i (length text)) (member (char text i) '(#\Space #\Tab #\Newline #\( #\) #\' #\` #\, #\" #\# #\; #\|)))
+            do (when (< start i) (setf (gethash (string-upcase (subseq text start i)) tokens) t))
+               (setf start (1+ i)))
+    tokens))
+
+(defun reload-closure (selected forms)
+  "SELECTED, some of FORMS, with every form of FORMS that mentions a name they copy into their users
+(see form-expanders), and so on, in the order of FORMS. #OWNJGP"
+  (let ((chosen (make-hash-table :test 'eq))
+        (tokens (make-hash-table :test 'eq))
+        (queue (copy-list selected)))
+    (dolist (form selected) (setf (gethash form chosen) t))
+    (loop while queue
+          do (let ((names (remove-if-not #'symbolp (form-expanders (getf (pop queue) :form)))))
+               (when names
+                 (dolist (user forms)
+                   (unless (gethash user chosen)
+                     (let ((words (or (gethash user tokens) (setf (gethash user tokens) (form-tokens user)))))
+                       (when (some (lambda (name) (gethash (symbol-name name) words)) names)
+                         (setf (gethash user chosen) t)
+                         (push user queue))))))))
+    (remove-if-not (lambda (form) (gethash form chosen)) forms)))
+
+(defun line-position (lines line)
+  "The character position, counted from 1 as Emacs counts, where LINE of LINES starts. #OWNJGP"
+  (1+ (loop for i from 0 below (1- line) sum (1+ (length (aref lines i))))))
+
+(defun load-page-text (text page position)
+  "Compile TEXT, the page PAGE's text from character POSITION, in the engine's package with the
+page as its source, and load it; return the warnings, which are not printed. #OWNJGP"
+  (let* ((name (namestring page))
+         (source (merge-pathnames (format nil "luv-physics-reload-~36R.lisp" (random (expt 36 8) (make-random-state t)))
+                                  (or (sb-ext:posix-getenv "TMPDIR") "/tmp/")))
+         (fasl (compile-file-pathname source))
+         (warnings '()))
+    (unwind-protect
+         (progn
+           (with-open-file (out source :direction :output :if-exists :supersede :external-format :utf-8)
+             (write-string text out))
+           (handler-bind ((sb-ext:compiler-note #'muffle-warning)
+                          ;; a reload redefines on purpose
+                          (sb-kernel:redefinition-warning #'muffle-warning)
+                          (warning (lambda (w) (push w warnings) (muffle-warning w))))
+             (let ((*package* (find-package '#:luv-physics)) (*read-eval* t)
+                   (*compile-verbose* nil) (*compile-print* nil) (*load-verbose* nil)
+                   (*error-output* (make-broadcast-stream)))
+               (with-compilation-unit (:source-plist (list :emacs-buffer name :emacs-filename name
+                                                           :emacs-package "LUV-PHYSICS"
+                                                           :emacs-position position :emacs-string text)
+                                       :source-namestring name :allow-other-keys t)
+                 (load (compile-file source :output-file fasl :external-format :utf-8))))))
+      (when (probe-file source) (delete-file source))
+      (when (probe-file fasl) (delete-file fasl)))
+    (nreverse warnings)))
+
+(defun reload-forms (selected forms lines page label)
+  "Load SELECTED, forms of the page PAGE (whose LINES and FORMS are given), with every user they
+need recompiled, keeping the parameters the user changed; return and print one line of summary
+starting with LABEL. #OWNJGP"
+  (let* ((started (get-internal-real-time))
+         (selected (remove-if (lambda (form) (eq 'register-tangled-file (car (ensure-list* (getf form :form)))))
+                              selected))
+         (chosen (reload-closure selected forms))
+         (users (set-difference chosen selected))
+         (kept '()) (warnings '()) (failure nil))
+    (handler-case
+        (loop while chosen
+              do (let ((run (list (pop chosen))))
+                   ;; a run: forms next to each other in one block
+                   (loop while (and chosen
+                                    (eql (getf (first chosen) :block) (getf (first run) :block))
+                                    (eq (first chosen) (second (member (first run) forms))))
+                         do (push (pop chosen) run))
+                   (setf run (nreverse run))
+                   (let* ((parameters (loop for form in run
+                                            append (loop for (name kind) in (form-definitions (getf form :form))
+                                                         when (and (eq kind :defparameter) (boundp name))
+                                                           collect name)))
+                          (changed (remove-if (lambda (name)
+                                                (multiple-value-bind (default known) (gethash name *parameter-defaults*)
+                                                  (or (not known) (equal default (symbol-value name)))))
+                                              parameters))
+                          (saved (mapcar #'symbol-value changed))
+                          (first (getf (first run) :line)))
+                     (setf warnings (append warnings
+                                            (load-page-text (format nil "~{~A~^~%~}" (mapcar (lambda (f) (getf f :text)) run))
+                                                            page (line-position lines first))))
+                     (dolist (name parameters)
+                       (setf (gethash name *parameter-defaults*) (symbol-value name)))
+                     (loop for name in changed for value in saved
+                           do (setf (symbol-value name) value) (push name kept))
+                     (let ((table (loaded-forms)))
+                       (loop for form in forms for key in (form-keys forms)
+                             when (member form run) do (setf (gethash key table) (getf form :text)))))))
+      (error (e) (setf failure e)))
+    (refresh-page-lines forms)
+    (let ((summary
+            (format nil "~A: ~D form~:P~@[ (~A)~]~:[~*~;, ~:*~D user~:P recompiled (~{~A~^ ~})~]~
+                         ~@[, kept ~{~(~A~)~^ ~}~], ~D warning~:P~@[ (first: ~A)~], ~,2F s~@[; FAILED: ~A~]"
+                    label (length selected)
+                    (when selected
+                      (format nil "~A:~D-~D" (file-namestring page)
+                              (reduce #'min selected :key (lambda (f) (getf f :line)))
+                              (reduce #'max selected :key (lambda (f) (getf f :end)))))
+                    (and users (length users))
+                    (remove-duplicates (mapcar (lambda (f) (getf f :anchor)) users) :test #'equal :from-end t)
+                    (reverse kept)
+                    (length warnings)
+                    (when warnings (substitute #\Space #\Newline (princ-to-string (first warnings))))
+                    (/ (- (get-internal-real-time) started) internal-time-units-per-second 1.0)
+                    (when failure (substitute #\Space #\Newline (princ-to-string failure))))))
+      (format t "~&~A~%" summary)
+      summary)))
+
+(defun ensure-list* (x)
+  "X if it is a list, else a list of X. #OWNJGP"
+  (if (listp x) x (list x)))
+
+(defun refresh-page-lines (forms)
+  "Give every registered definition the page line of the form of FORMS that defines it now. #OWNJGP"
+  (let ((lines (make-hash-table :test 'equal)))
+    (dolist (form forms)
+      (loop for (name kind) in (form-definitions (getf form :form))
+            do (let ((key (list name kind (getf form :anchor))))
+                 (unless (gethash key lines) (setf (gethash key lines) (getf form :line))))))
+    (dolist (record *definitions*)
+      (let ((line (gethash (list (getf record :name) (getf record :kind) (getf record :anchor)) lines)))
+        (when line (setf (getf record :org-line) line))))))
+
+(defun reload-section (anchor &key page line)
+  "Compile and load the forms of section ANCHOR of PAGE (the loaded page by default), or with LINE
+only those of the block holding that page line, with the users they need recompiled; parameters the
+user changed keep their values. Print and return one line of summary. #OWNJGP"
+  (let* ((page (or page *page-pathname*))
+         (lines (page-lines-of page))
+         (id (string-left-trim "#" (string anchor)))
+         (range (find-section lines id))
+         (forms (page-forms lines (engine-files)))
+         (block (and line (find-if (lambda (b) (<= (third b) line (1+ (fifth b)))) (page-code-blocks lines))))
+         (selected (remove-if-not (lambda (form)
+                                    (and (equal id (getf form :anchor))
+                                         (<= (car range) (getf form :line) (cdr range))
+                                         (or (null line) (eql (getf form :block) (third block)))))
+                                  forms)))
+    (reload-forms selected forms lines page (format nil "reload ~A~@[ (block at line ~D)~]" id line))))
+
+(defun tangle-page (page)
+  "Tangle PAGE with tools/tangle-page in its directory (Emacs from $EMACS, or emacs); the files
+whose text changes are rewritten. Signal an error with the tool's output if it fails. #OWNJGP"
+  (let* ((directory (make-pathname :name nil :type nil :version nil :defaults (truename page)))
+         (output (make-string-output-stream))
+         (process (sb-ext:run-program "tools/tangle-page"
+                                      (list (or (sb-ext:posix-getenv "EMACS") "emacs") (file-namestring page))
+                                      :directory (namestring directory) :output output :error output
+                                      :search nil :wait t)))
+    (unless (eql 0 (sb-ext:process-exit-code process))
+      (error "luv-physics: tangling ~A failed: ~A" page (get-output-stream-string output)))
+    (get-output-stream-string output)))
+
+(defun reload-changed (&key page (tangle t))
+  "Tangle PAGE (unless TANGLE is NIL), then compile and load every form of it whose text differs
+from the one the image last loaded, with the users they need recompiled, and register the tangled
+files again. Print and return one line of summary. #OWNJGP"
+  (let* ((page (or page *page-pathname*)))
+    (when tangle (tangle-page page))
+    (let* ((lines (page-lines-of page))
+           (files (engine-files))
+           (forms (page-forms lines files))
+           (table (loaded-forms))
+           (changed (loop for form in forms for key in (form-keys forms)
+                          unless (equal (getf form :text) (gethash key table)) collect form))
+           (summary (reload-forms changed forms lines page "reload changed")))
+      (when tangle
+        (dolist (file files)
+          (register-tangled-file (merge-pathnames file page)))
+        (refresh-page-lines forms))
+      summary)))
+;; Reload a section into the running image:1 ends here
+
+;; [[file:../physics.org::#PYXPDY][Answers for the editor:1]]
+(defun editor-page ()
+  "For the editor: the page the loaded files were tangled from, as a namestring. #PYXPDY"
+  (and *page-pathname* (namestring *page-pathname*)))
+
+(defun editor-definitions (anchor)
+  "For the editor: each definition of section ANCHOR as (NAME KIND PAGE-LINE FILE LINE), the name
+printed in this package and the kind in lowercase. #PYXPDY"
+  (let ((*package* (find-package '#:luv-physics)) (*print-case* :downcase))
+    (mapcar (lambda (record)
+              (list (prin1-to-string (getf record :name)) (string-downcase (getf record :kind))
+                    (getf record :org-line) (getf record :file) (getf record :line)))
+            (anchor-definitions anchor))))
+
+(defun editor-page-line (name package)
+  "For the editor: (ANCHOR PAGE-LINE PAGE) for the definition of NAME, a symbol as written in a
+buffer whose package is named PACKAGE, or NIL when the page defines no such name. #PYXPDY"
+  (let* ((*package* (or (find-package (string-upcase (string-left-trim "#:" package)))
+                        (find-package '#:cl-user)))
+         (*read-eval* nil)
+         (symbol (ignore-errors (read-from-string name))))
+    (when (and symbol (symbolp symbol))
+      (loop for candidate in (list symbol (find-symbol (symbol-name symbol) '#:luv-physics))
+            do (multiple-value-bind (anchor line) (and candidate (definition-anchor candidate))
+                 (when anchor (return (list anchor line (editor-page)))))))))
+
+(defun editor-section (anchor page)
+  "For the editor: what section prints for ANCHOR of PAGE, as a string. #PYXPDY"
+  (with-output-to-string (s) (section anchor :page page :stream s)))
+;; Answers for the editor:1 ends here
 
 ;; [[file:../physics.org::#V0CAB5][Types, the hot-loop policy and the parameters:1]]
 (eval-when (:compile-toplevel :load-toplevel :execute)

@@ -196,6 +196,110 @@
   (check (null (anchor-definitions "ZZZZZ9"))))
 ;; BSOZ3U-anchor-definitions-by-section ends here
 
+;; [[file:../physics.org::#0QBGZO][0QBGZO-page-forms-match-registry]]
+(define-claim "0QBGZO" page-forms-match-registry
+    "Definitions read from the page's blocks equal the registry's, with the same page lines."
+  (let* ((lines (luv-physics::page-lines-of nil))
+         (forms (luv-physics::page-forms lines (luv-physics::engine-files)))
+         (from-page (loop for form in forms
+                          append (loop for (name kind) in (luv-physics::form-definitions (getf form :form))
+                                       collect (list name kind (getf form :anchor) (getf form :line)))))
+         (from-registry (mapcar (lambda (r) (list (getf r :name) (getf r :kind) (getf r :anchor) (getf r :org-line)))
+                                luv-physics::*definitions*)))
+    (check (< 300 (length from-page)) "only ~D definitions read from the page" (length from-page))
+    (check (equal from-page from-registry) "first difference: ~S"
+           (loop for a in from-page for b in from-registry unless (equal a b) return (list a b)))))
+;; 0QBGZO-page-forms-match-registry ends here
+
+;; [[file:../physics.org::#0QBGZO][0QBGZO-section-prints-definitions-and-claims]]
+(define-claim "0QBGZO" section-prints-definitions-and-claims
+    "(section \"BSOZ3U\") names its title, its three functions at their page lines, and its two claims."
+  (let* ((text (with-output-to-string (s) (section "BSOZ3U" :stream s)))
+         (lines (uiop:split-string text :separator '(#\Newline))))
+    (check (search "BSOZ3U  Register a file and answer by anchor or by name" text))
+    (dolist (name '(luv-physics::register-tangled-file anchor-definitions definition-anchor))
+      (let ((line (nth-value 1 (definition-anchor name))))
+        (check (find-if (lambda (l) (and (search (string-downcase (symbol-name name)) l)
+                                         (search (princ-to-string line) l)))
+                        lines)
+               "no line names ~(~A~) at page line ~D" name line)))
+    (check (search "2 claims:" text))
+    (check (search "definition-anchor-finds-its-section" text))
+    (check (search "anchor-definitions-by-section" text))
+    (check (eq :error (handler-case (section "ZZZZZ9" :stream (make-broadcast-stream)) (error () :error))))))
+;; 0QBGZO-section-prints-definitions-and-claims ends here
+
+;; [[file:../physics.org::#OWNJGP][OWNJGP-reload-keeps-changed-parameters]]
+(define-claim "OWNJGP" reload-keeps-changed-parameters
+    "A changed parameter survives a reload; an unchanged one takes the page's new default."
+  (let* ((page luv-physics::*page-pathname*)
+         (copy (merge-pathnames (format nil "luv-reload-claim-~D.org" (random 1000000 (make-random-state t)))
+                                (uiop:temporary-directory)))
+         (original luv-physics:*physics-phases*)
+         (text (luv-physics::read-file-text page))
+         (old "store-phase finalize-phase)")
+         (new "store-phase finalize-phase reload-claim-phase)")
+         ;; the words are split so that this claim's own text does not match them
+         (at (search old text :start2 (search (concatenate 'string "(defparameter " "*physics-phases*") text)))
+         (counted 0))
+    (check (< at (search (concatenate 'string "(defun " "step-physics-world") text)))
+    (with-open-file (out copy :direction :output :external-format :utf-8)
+      (progn
+        (write-string (concatenate 'string (subseq text 0 at) new (subseq text (+ at (length old)))) out)))
+    (setf (fdefinition 'luv-physics::reload-claim-phase) (lambda (world) (incf counted) world))
+    (unwind-protect
+         (let ((w (make-floor-world)))
+           ;; at its default: the page's new default is taken, and the step runs it at once
+           (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G" :page copy))
+           (check (eq 'luv-physics::reload-claim-phase (car (last luv-physics:*physics-phases*))))
+           (luv-physics::step-physics-world w)
+           (check (= 1 counted) "the new phase ran ~D times in one step" counted)
+           ;; changed at the REPL: kept
+           (setf luv-physics:*physics-phases* (remove 'luv-physics::restitution-phase original))
+           (let ((summary (with-output-to-string (*standard-output*)
+                            (luv-physics::reload-section "IDVK7G" :page copy))))
+             (check (search "kept *physics-phases*" summary) "summary: ~A" summary)
+             (check (search "0 warnings" summary) "summary: ~A" summary))
+           (check (equal luv-physics:*physics-phases* (remove 'luv-physics::restitution-phase original))))
+      ;; the page's own text back in the image
+      (setf luv-physics:*physics-phases* original)
+      (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G"))
+      (setf luv-physics:*physics-phases* original)
+      (delete-file copy))
+    (check (equal original luv-physics:*physics-phases*))))
+;; OWNJGP-reload-keeps-changed-parameters ends here
+
+;; [[file:../physics.org::#OWNJGP][OWNJGP-users-of-copied-definitions]]
+(define-claim "OWNJGP" users-of-copied-definitions
+    "The closure of W0RLD7 holds K3RNLS and S0LV3R; of W1D3KF holds F4M1LY; of BSOZ3U nothing more."
+  (let* ((lines (luv-physics::page-lines-of nil))
+         (forms (luv-physics::page-forms lines (luv-physics::engine-files))))
+    (flet ((anchors-of (anchor)
+             (remove-duplicates
+              (mapcar (lambda (f) (getf f :anchor))
+                      (luv-physics::reload-closure
+                       (remove anchor forms :key (lambda (f) (getf f :anchor)) :test-not #'equal) forms))
+              :test #'equal)))
+      (check (member 'luv-physics::solver-row (loop for f in forms append (luv-physics::form-expanders (getf f :form)))))
+      (check (subsetp '("W0RLD7" "K3RNLS" "S0LV3R") (anchors-of "W0RLD7") :test #'equal) "~S" (anchors-of "W0RLD7"))
+      (check (subsetp '("W1D3KF" "F4M1LY") (anchors-of "W1D3KF") :test #'equal) "~S" (anchors-of "W1D3KF"))
+      (check (equal '("BSOZ3U") (anchors-of "BSOZ3U")) "~S" (anchors-of "BSOZ3U")))))
+;; OWNJGP-users-of-copied-definitions ends here
+
+;; [[file:../physics.org::#PYXPDY][PYXPDY-editor-answers]]
+(define-claim "PYXPDY" editor-answers
+    "editor-definitions lists names as written; editor-page-line finds engine symbols from CL-USER."
+  (check (equal '("register-tangled-file" "defun")
+                (subseq (first (luv-physics::editor-definitions "BSOZ3U")) 0 2))
+         "~S" (first (luv-physics::editor-definitions "BSOZ3U")))
+  (check (equal (list "W0RLD7" (nth-value 1 (definition-anchor 'luv-physics::solver-row)) (luv-physics::editor-page))
+                (luv-physics::editor-page-line "solver-row" "COMMON-LISP-USER")))
+  (check (equal (luv-physics::editor-page-line "physics:step-physics-world" "#:luv-physics-tests")
+                (luv-physics::editor-page-line "step-physics-world" "CL-USER")))
+  (check (null (luv-physics::editor-page-line "no-such-definition-here" "CL-USER")))
+  (check (null (luv-physics::editor-page-line "(" "CL-USER"))))
+;; PYXPDY-editor-answers ends here
+
 ;; [[file:../physics.org::#JKM0PY][JKM0PY-scalar-first]]
 (define-claim "JKM0PY" scalar-first
     "AVAILABLE-KERNEL-FAMILIES starts with :SCALAR and lists known families once each."
