@@ -52,7 +52,11 @@
    #:physics-player-vz #:physics-player-grounded #:physics-player-eye #:post-physics-player
    #:*physics-player-shape*
    ;; Reading and reloading the page in a live image (#0QBGZO, #OWNJGP)
-   #:section #:reload-section #:reload-changed))
+   #:section #:reload-section #:reload-changed
+   ;; Exported functions refuse a non-world by name (#C0ND1T, #M4K3WD)
+   #:not-a-physics-world
+   ;; A world as an object, and both in the inspector (#4YDMX5)
+   #:install-swank-inspection))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -886,6 +890,14 @@ single-float goes through double precision; both round correctly, so they agree)
                      (invalid-physics-parameter-value c) (invalid-physics-parameter-expected c))))
   (:documentation "A parameter outside its documented range: a mass <= 0, a negative friction. #C0ND1T"))
 
+(define-condition not-a-physics-world (invalid-physics-parameter)
+  ((operation :initarg :operation :reader not-a-physics-world-operation))
+  (:report (lambda (c s)
+             (format s "~(~A~): its argument ~A is ~S, not a physics-world (make one with ~
+                        make-physics-world)" (not-a-physics-world-operation c)
+                     (invalid-physics-parameter-name c) (invalid-physics-parameter-value c))))
+  (:documentation "Something other than a world given to an exported function as its world. #C0ND1T"))
+
 (define-condition stale-physics-handle (physics-error)
   ((handle :initarg :handle :reader stale-physics-handle-handle)
    (reason :initarg :reason :reader stale-physics-handle-reason))
@@ -894,6 +906,7 @@ single-float goes through double precision; both round correctly, so they agree)
                      (ecase (stale-physics-handle-reason c)
                        (:malformed "not a physics handle")
                        (:foreign "from another world")
+                       (:unissued "a handle of no world: no world has given out its tag")
                        (:removed "of a body that was removed or expired")))))
   (:documentation "A handle that names no live body of this world. #C0ND1T"))
 
@@ -1149,11 +1162,15 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
   (free -1 :type fixnum)
   (tag 0 :type fixnum))
 
-(defvar *world-tag-counter* 0 "The tag the next world's handles carry (mod 2^16). #B5N8JT")
+(defvar *world-tag-counter* 0 "How many world tags have been given out; tags run from 1 to 2^16-1 and wrap. #B5N8JT")
 
 (defun make-handle-table ()
-  "An empty handle table with a fresh world tag. #B5N8JT"
-  (%make-handle-table :tag (ldb (byte +handle-tag-bits+ 0) (incf *world-tag-counter*))))
+  "An empty handle table with a fresh world tag, never 0. #B5N8JT"
+  (%make-handle-table :tag (1+ (mod (1- (incf *world-tag-counter*)) (1- (ash 1 +handle-tag-bits+))))))
+
+(defun tag-issued-p (tag)
+  "True when some world has been given TAG. #B5N8JT"
+  (and (plusp tag) (or (<= tag *world-tag-counter*) (>= *world-tag-counter* (1- (ash 1 +handle-tag-bits+))))))
 
 (defun handle-table-allocate (table set local)
   "Take a free slot of TABLE for a body at SET and row LOCAL; return its new handle. #B5N8JT"
@@ -1187,9 +1204,10 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
     table))
 
 (defun handle-status (table handle)
-  "NIL when HANDLE names a live body of TABLE, else why not (:malformed :foreign :removed). #B5N8JT"
+  "NIL when HANDLE names a live body of TABLE, else why not (:malformed :unissued :foreign :removed). #B5N8JT"
   (cond ((not (and (typep handle 'fixnum) (>= handle 0))) :malformed)
-        ((/= (handle-tag handle) (handle-table-tag table)) :foreign)
+        ((/= (handle-tag handle) (handle-table-tag table))
+         (if (tag-issued-p (handle-tag handle)) :foreign :unissued))
         ((or (>= (handle-index handle) (handle-table-count table))
              (= (aref (handle-table-set table) (handle-index handle)) +set-free+)
              (/= (aref (handle-table-generation table) (handle-index handle))
@@ -1970,8 +1988,18 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
                    :kernels (make-kernel-family kernels)
                    :sleep-enabled sleep)))
 
+(declaim (inline check-world))
+(defun check-world (world operation)
+  "Signal not-a-physics-world, naming OPERATION and its argument WORLD, unless WORLD is a
+physics-world: one type test, made once per call of an exported function. #M4K3WD"
+  (unless (typep world 'physics-world)
+    (error 'not-a-physics-world :operation operation :name 'world :value world
+                                :expected "a physics-world (from make-physics-world)")))
+
 (defun check-idle (world operation)
-  "Signal physics-world-busy unless WORLD is between steps. #M4K3WD"
+  "Signal not-a-physics-world unless WORLD is a world, and physics-world-busy unless it is between
+steps. #M4K3WD"
+  (check-world world operation)
   (when (physics-world-stepping world)
     (error 'physics-world-busy :world world :operation operation)))
 
@@ -1989,10 +2017,12 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
 
 (defun physics-body-alive-p (world handle)
   "True when HANDLE names a body of WORLD that has not been removed or expired. #M4K3WD"
+  (check-world world 'physics-body-alive-p)
   (null (handle-status (physics-world-ids world) handle)))
 
 (defun physics-body-awake-p (world handle)
   "True when HANDLE's body is in the awake set. #M4K3WD"
+  (check-world world 'physics-body-awake-p)
   (= (resolve-handle world handle) +set-awake+))
 
 (defmacro define-body-reader (name (&rest columns) documentation)
@@ -2000,6 +2030,7 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
 HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3WD"
   `(defun ,name (world handle)
      ,documentation
+     (check-world world ',name)
      (multiple-value-bind (set row) (resolve-handle world handle)
        (with-body-columns ,columns (set-buffer world set)
          (values ,@(loop for column in columns collect `(aref ,column row)))))))
@@ -2024,10 +2055,12 @@ HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3W
 
 (defun physics-world-awake-count (world)
   "How many bodies of WORLD are awake. #M4K3WD"
+  (check-world world 'physics-world-awake-count)
   (body-columns-length (physics-world-awake world)))
 
 (defun physics-world-sleeping-count (world)
   "How many bodies of WORLD are asleep. #M4K3WD"
+  (check-world world 'physics-world-sleeping-count)
   (body-columns-length (physics-world-sleeping world)))
 
 (defun check-coordinate (name v &optional world)
@@ -3275,6 +3308,7 @@ returns the number of colours used. #SSMPYW"
 
 (defun physics-world-overflow-count (world)
   "How many of the last step's contacts fell into the overflow colour. #SSMPYW"
+  (check-world world 'physics-world-overflow-count)
   (let ((starts (physics-world-color-starts world)))
     (- (aref starts (1+ +physics-max-colors+)) (aref starts +physics-max-colors+))))
 ;; Colours are the lanes:1 ends here
@@ -3985,6 +4019,7 @@ and start the contact table's walk of it. #IDVK7G"
 (declaim (inline physics-world-max-penetration))
 (defun physics-world-max-penetration (world)
   "The deepest overlap, in metres, left at the end of the last step. #IDVK7G"
+  (check-world world 'physics-world-max-penetration)
   (aref (world-statistics world) 3))
 
 (defun substep-phase (world)
@@ -4070,18 +4105,22 @@ phase's position, and the bytes it consed under that position plus the number of
 
 (defun physics-world-last-step-contact-count (world)
   "How many contacts the last step solved. #IDVK7G"
+  (check-world world 'physics-world-last-step-contact-count)
   (round (aref (physics-world-statistics world) 0)))
 
 (defun physics-world-last-step-color-count (world)
   "How many colours the last step's contacts used, overflow included. #IDVK7G"
+  (check-world world 'physics-world-last-step-color-count)
   (round (aref (physics-world-statistics world) 1)))
 
 (defun physics-world-last-step-real-seconds (world)
   "Wall-clock seconds the last step took. #IDVK7G"
+  (check-world world 'physics-world-last-step-real-seconds)
   (aref (physics-world-statistics world) 2))
 
 (defun physics-world-max-approach-speed (world)
   "The fastest approach speed, m/s, of an overlapping contact at the end of the last step. #IDVK7G"
+  (check-world world 'physics-world-max-approach-speed)
   (aref (physics-world-statistics world) 4))
 ;; The step as built:1 ends here
 
@@ -4089,6 +4128,7 @@ phase's position, and the bytes it consed under that position plus the number of
 (defun physics-world-state-hash (world)
   "A 62-bit FNV-style hash of the bits of every body's position, velocity and angular
 velocity, awake set first, each set in row order. Equal hashes mean bit-equal states. #S6T2MV"
+  (check-world world 'physics-world-state-hash)
   (let ((hash 0))
     (declare (type (unsigned-byte 62) hash))
     (dolist (buffer (list (physics-world-awake world) (physics-world-sleeping world)))
@@ -4105,6 +4145,7 @@ velocity, awake set first, each set in row order. Equal hashes mean bit-equal st
 (defun validate-physics-world (world)
   "Walk every forwarding address and contact key of WORLD; return T, or signal
 physics-world-invalid naming the first broken invariant. #V4L1D8"
+  (check-world world 'validate-physics-world)
   (flet ((fail (fmt &rest args)
            (error 'physics-world-invalid :world world :invariant (apply #'format nil fmt args))))
     (let* ((ids (physics-world-ids world))
@@ -4163,6 +4204,7 @@ columns; describe shows that row as if it were slots. #B0DY0B"))
 
 (defun physics-body (world handle)
   "The physics-body object for HANDLE in WORLD. #B0DY0B"
+  (check-world world 'physics-body)
   (resolve-handle world handle)
   (make-instance 'physics-body :world world :handle handle))
 
@@ -4175,16 +4217,113 @@ columns; describe shows that row as if it were slots. #B0DY0B"))
                     (physics-body-awake-p w h) x y z))
           (format stream "~D removed" (handle-index h))))))
 
+(defun body-summary (body)
+  "BODY's row as (LABEL TEXT VALUE) lines: position, velocity, angular velocity, radius, mass,
+material, awake, kind. #B0DY0B"
+  (let ((w (physics-body-world body)) (h (physics-body-handle body)))
+    (multiple-value-bind (set row) (resolve-handle w h)
+      (with-body-columns (restitution friction rolling-resistance inverse-mass) (set-buffer w set)
+        (flet ((triple (reader) (multiple-value-list (funcall reader w h))))
+          (let ((position (triple #'physics-body-position))
+                (velocity (triple #'physics-body-velocity))
+                (spin (triple #'physics-body-angular-velocity))
+                (radius (physics-body-radius w h))
+                (mass (/ 1.0 (aref inverse-mass row)))
+                (material (list (aref restitution row) (aref friction row) (aref rolling-resistance row)))
+                (awake (= set +set-awake+))
+                (kind (physics-body-kind w h)))
+            (list (list "position" (format nil "~{~,4F~^ ~} m" position) position)
+                  (list "velocity" (format nil "~{~,4F~^ ~} m/s" velocity) velocity)
+                  (list "angular velocity" (format nil "~{~,4F~^ ~} rad/s" spin) spin)
+                  (list "radius" (format nil "~A m" radius) radius)
+                  (list "mass" (format nil "~A kg" mass) mass)
+                  (list "material" (format nil "restitution ~A, friction ~A, rolling resistance ~A"
+                                           (first material) (second material) (third material))
+                        material)
+                  (list "awake" (if awake "yes" "no, asleep") awake)
+                  (list "kind" (format nil "~D~@[ ~(~S~)~]" kind (physics-body-kind-name w h)) kind))))))))
+
 (defmethod describe-object ((body physics-body) stream)
   (let ((w (physics-body-world body)) (h (physics-body-handle body)))
-    (format stream "~&~S~%  handle ~D (slot ~D, generation ~D)~%" body h (handle-index h) (handle-generation h))
+    (format stream "~&~S~%  handle ~D (slot ~D, generation ~D) of ~S~%" body h (handle-index h)
+            (handle-generation h) w)
     (when (physics-body-alive-p w h)
+      (loop for (label text) in (body-summary body)
+            do (format stream "  ~18A ~A~%" label text))
       (multiple-value-bind (set row) (resolve-handle w h)
-        (format stream "  lives in the ~:[sleeping~;awake~] set, row ~D~%" (= set +set-awake+) row)
+        (format stream "  Its row, ~:[sleeping~;awake~] set row ~D:~%" (= set +set-awake+) row)
         (let ((buffer (set-buffer w set)))
           (dolist (column +body-columns-column-names+)
             (format stream "  ~(~22A~) = ~S~%" column (aref (slot-value buffer column) row))))))))
 ;; A body as an object:1 ends here
+
+;; [[file:../physics.org::#4YDMX5][A world as an object, and both in the inspector:1]]
+(defun kernel-family-name (kernels)
+  "The name under which the kernel family object KERNELS is registered, or its class name. #4YDMX5"
+  (let ((class (class-name (class-of kernels))))
+    (or (car (find class *kernel-families* :key #'second)) class)))
+
+(defmethod print-object ((world physics-world) stream)
+  (if (slot-boundp world 'kernels)
+      (print-unreadable-object (world stream :type t)
+        (let ((awake (physics-world-awake-count world)))
+          (format stream "~D bod~:@P (~D awake) step ~D ~(~A~)"
+                  (+ awake (physics-world-sleeping-count world)) awake
+                  (physics-world-step-count world) (kernel-family-name (physics-world-kernels world)))))
+      (print-unreadable-object (world stream :type t :identity t))))
+
+(defun world-summary (world)
+  "WORLD's settings and last step, as (LABEL TEXT) lines for describe and the inspector. #4YDMX5"
+  (flet ((line (label format-control &rest arguments)
+           (list label (apply #'format nil format-control arguments))))
+    (list (line "step" "~,4F s in ~D substeps, gravity (~,2F ~,2F ~,2F) m/s^2, sleep ~:[off~;on~]"
+                (physics-world-step-seconds world) (physics-world-substeps world)
+                (physics-world-gravity-x world) (physics-world-gravity-y world) (physics-world-gravity-z world)
+                (physics-world-sleep-enabled world))
+          (line "terrain" "~:[none~;~:*~S~]" (physics-world-terrain world))
+          (line "last step" "~D contacts in ~D colours (~D overflowing), ~,6F s"
+                (physics-world-last-step-contact-count world) (physics-world-last-step-color-count world)
+                (physics-world-overflow-count world) (physics-world-last-step-real-seconds world))
+          (line "left" "deepest overlap ~,4F m, fastest approach ~,3F m/s"
+                (physics-world-max-penetration world) (physics-world-max-approach-speed world))
+          (line "contacts" "~A Hz, damping ratio ~A, push-out ~A m/s, slop ~A m, margin ~A m, pair skin ~A m"
+                (physics-world-contact-hertz world) (physics-world-damping-ratio world)
+                (physics-world-push-max world) (physics-world-slop world) (physics-world-margin world)
+                (physics-world-pair-skin world))
+          (line "speeds" "bounce above ~A m/s, hit above ~A m/s, still under ~A m/s for ~A s, wake above ~A m/s"
+                (physics-world-restitution-threshold world) (physics-world-hit-speed world)
+                (physics-world-sleep-speed world) (physics-world-time-to-sleep world)
+                (physics-world-wake-speed world))
+          (line "events" "~:[no handler~;handler ~:*~S~]" (physics-world-event-handler world)))))
+
+(defmethod describe-object ((world physics-world) stream)
+  (format stream "~&~S~%" world)
+  (loop for (label text) in (world-summary world)
+        do (format stream "  ~10A ~A~%" label text)))
+
+(defun inspection-parts (object)
+  "The SLIME inspector's content for OBJECT, a physics-world or a physics-body, in SWANK's format. #4YDMX5"
+  (etypecase object
+    (physics-world
+     (append (list (prin1-to-string object) '(:newline))
+             (loop for (label text) in (world-summary object)
+                   append (list (format nil "~10A " label) text '(:newline)))
+             (list "kernels    " (list :value (physics-world-kernels object)) '(:newline))))
+    (physics-body
+     (let ((world (physics-body-world object)))
+       (append (list (prin1-to-string object) '(:newline) "world      " (list :value world) '(:newline))
+               (loop for (label text value) in (body-summary object)
+                     append (list (format nil "~18A " label) (list :value value text) '(:newline))))))))
+
+(defun install-swank-inspection ()
+  "If SWANK is loaded, make its inspector show worlds and bodies by inspection-parts; true if it did. #4YDMX5"
+  (let ((inspect (and (find-package "SWANK") (find-symbol "EMACS-INSPECT" "SWANK"))))
+    (when (and inspect (fboundp inspect))
+      (dolist (class '(physics-world physics-body) t)
+        (eval `(defmethod ,inspect ((object ,class)) (inspection-parts object)))))))
+
+(install-swank-inspection)
+;; A world as an object, and both in the inspector:1 ends here
 
 ;; [[file:../physics.org::#B4S1NS][The basin:1]]
 (defun make-basin-terrain (&key (wall-height 6) (air-height 48))
@@ -4294,10 +4433,12 @@ naming it. #JAU0EF"
 (defun add-physics-body-of-kind (world kind x y z &key (vx 0.0) (vy 0.0) (vz 0.0) report-hits)
   "Add a body of KIND (a keyword of *physics-body-kinds*) centred at X Y Z, moving at VX VY VZ,
 and return its handle. #JAU0EF"
+  (check-world world 'add-physics-body-of-kind)
   (add-physics-body-of-kind-number world (physics-kind-number kind world) x y z vx vy vz report-hits))
 
 (defun physics-body-kind-name (world handle)
   "The keyword of the kind of HANDLE's body, or NIL for a body added without a kind. #JAU0EF"
+  (check-world world 'physics-body-kind-name)
   (let ((number (physics-body-kind world handle)))
     (and (<= 1 number (length *physics-body-kinds*))
          (first (physics-kind-entry number)))))
@@ -4343,6 +4484,7 @@ COUNT-th body of the spring at cell X Y Z: a fixed hash of the four integers. #J
 (defun run-physics-springs (world springs &optional function)
   "Let each of SPRINGS emit into WORLD what is due this call, calling FUNCTION, when given, on
 the handle of each body emitted; return how many were emitted. Conses nothing. #JAU0EF"
+  (check-world world 'run-physics-springs)
   (let ((emitted 0))
     (declare (type fixnum emitted))
     (dolist (spring springs emitted)
@@ -4537,6 +4679,7 @@ Return the steps run. #H7P4CX"
 
 (defun post-physics-player (world player)
   "Post PLAYER into WORLD's next step as a kinematic box moving at its velocity. #H7P4CX"
+  (check-world world 'post-physics-player)
   (let ((w (physics-player-half-width player)) (h (* 0.5d0 (physics-player-height player))))
     (post-physics-box world (physics-player-x player) (+ (physics-player-y player) h)
                       (physics-player-z player) w h w

@@ -530,6 +530,19 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; C0ND1T-stale-handles ends here
 
+;; [[file:../physics.org::#C0ND1T][C0ND1T-handle-of-no-world]]
+(define-claim "C0ND1T" handle-of-no-world
+    "12345 and a handle with an unissued tag signal stale-physics-handle :unissued, reported as of no world."
+  (let ((w (make-floor-world)))
+    (luv-physics::add-physics-body w 3.5 1 3.5)
+    (dolist (handle (list 12345 (luv-physics::make-handle (1+ luv-physics::*world-tag-counter*) 0 0)))
+      (let ((got (handler-case (progn (physics-body-position w handle) :no-error)
+                   (luv-physics::stale-physics-handle (e)
+                     (list (luv-physics::stale-physics-handle-reason e) (princ-to-string e))))))
+        (check (eq :unissued (first got)) "handle ~D gave ~S" handle got)
+        (check (and (consp got) (search "no world" (second got))) "handle ~D gave ~S" handle got)))))
+;; C0ND1T-handle-of-no-world ends here
+
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-busy-during-step]]
 (define-claim "C0ND1T" busy-during-step
     "Steps and edits from the event handler signal physics-world-busy and change nothing."
@@ -834,6 +847,28 @@ function of a column name that reads row K's float in that column. #T3STK1"
               (check (zerop off-d) "~D delta rows start off a 32-byte boundary" off-d)
               (check (zerop off-c) "~D constraint columns start off a 32-byte boundary" off-c))))))))
 ;; W0RLD7-solver-rows-aligned ends here
+
+;; [[file:../physics.org::#M4K3WD][M4K3WD-non-world-named]]
+(define-claim "M4K3WD" non-world-named
+    "Exported functions of a WORLD signal not-a-physics-world naming themselves and WORLD for a non-world."
+  (let ((checked 0) (wrong '()))
+    (do-external-symbols (s '#:luv-physics)
+      (when (and (fboundp s) (not (macro-function s)) (not (typep (fdefinition s) 'generic-function)))
+        (let ((lambda-list (sb-kernel:%fun-lambda-list (fdefinition s))))
+          (when (and (consp lambda-list) (string= "WORLD" (string (first lambda-list))))
+            (dolist (bad (list nil (luv-physics:make-voxel-terrain) 42))
+              (let* ((required (loop for p in (rest lambda-list) until (member p lambda-list-keywords) count t))
+                     (got (handler-case (progn (apply s bad (make-list required :initial-element 0)) :no-error)
+                            (luv-physics::not-a-physics-world (e)
+                              (list (luv-physics::not-a-physics-world-operation e)
+                                    (luv-physics::invalid-physics-parameter-name e)))
+                            (error (e) (type-of e)))))
+                (incf checked)
+                (unless (equal got (list s 'luv-physics::world))
+                  (push (list s bad got) wrong))))))))
+    (check (< 80 checked) "only ~D calls checked" checked)
+    (check (null wrong) "~D calls were not refused by name:~%~{  ~S~%~}" (length wrong) (reverse wrong))))
+;; M4K3WD-non-world-named ends here
 
 ;; [[file:../physics.org::#E7V3NT][E7V3NT-mortal-body-events]]
 (define-claim "E7V3NT" mortal-body-events
@@ -1655,6 +1690,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
           (check (/= h0 (bump (luv-physics::body-columns-y sleeping) 0)) "sleeping y")
           (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits"))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
+
+;; [[file:../physics.org::#4YDMX5][4YDMX5-world-and-body-summaries]]
+(define-claim "4YDMX5" world-and-body-summaries
+    "A world prints its counts, step and family; describe leads with that; the inspector shows a body's row."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
+    (luv-physics::add-physics-body w 5.5 1.0 5.5)
+    (luv-physics::add-physics-body w 1.5 0.245 1.5 :restitution 0.5)
+    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (let* ((awake (physics-world-awake-count w))
+           (printed (prin1-to-string w))
+           (described (with-output-to-string (s) (describe w s)))
+           (lines (uiop:split-string (string-right-trim '(#\Newline) described) :separator '(#\Newline))))
+      (check (string= printed (format nil "#<PHYSICS-WORLD 3 bodies (~D awake) step 60 scalar>" awake)) "~A" printed)
+      (check (string= printed (first lines)) "describe begins ~S" (first lines))
+      (check (<= (length lines) 12) "describe takes ~D lines" (length lines))
+      (dolist (word '("step " "terrain " "last step "))
+        (check (find-if (lambda (l) (search word l)) lines) "describe names no ~S" word)))
+    (let ((values (loop for part in (luv-physics::inspection-parts (physics-body w h))
+                        when (and (consp part) (eq :value (first part))) collect (second part))))
+      (check (member (multiple-value-list (physics-body-position w h)) values :test #'equal))
+      (check (member (multiple-value-list (physics-body-velocity w h)) values :test #'equal))
+      (check (member 1.0 values) "no mass of 1.0 in ~S" values)
+      (check (member w values)))))
+;; 4YDMX5-world-and-body-summaries ends here
 
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
 (define-claim "JAU0EF" kinds-make-their-bodies
