@@ -100,6 +100,8 @@
                            (and found (not (eq :error (car (cadr (car found))))))
                            found))
       (org-edit-src-abort)
+      (editor-test-check "... where a CL-USER buffer finds no solver-row"
+                         (null (slime-eval '(swank:find-definitions-for-emacs "solver-row") "COMMON-LISP-USER")))
 
       ;; Reload an edited phase into stepping worlds of every family this CPU runs.
       (editor-test-lisp "(progn
@@ -146,6 +148,14 @@
                              (and (equal buffer-file-name copy)
                                   (string-prefix-p "(defun substep-phase (world)" (editor-test-line)))
                              location (editor-test-line))))
+
+      ;; The inspector, set up when SLIME connected.
+      (editor-test-check "the SLIME inspector shows a body's position and mass"
+                         (editor-test-lisp "(let ((parts (swank::emacs-inspect
+                                                           (physics:physics-body (car (first *worlds*)) (cdr (first *worlds*))))))
+                                              (and (find \"position\" parts :test (lambda (a b) (and (stringp b) (search a b))))
+                                                   (find \"mass\" parts :test (lambda (a b) (and (stringp b) (search a b))))
+                                                   t))"))
 
       ;; The whole section, timed.
       (switch-to-buffer (find-buffer-visiting copy))

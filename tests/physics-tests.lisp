@@ -269,6 +269,33 @@
     (check (equal original luv-physics:*physics-phases*))))
 ;; OWNJGP-reload-keeps-changed-parameters ends here
 
+;; [[file:../physics.org::#OWNJGP][OWNJGP-reload-changed-loads-one-form]]
+(define-claim "OWNJGP" reload-changed-loads-one-form
+    "One edited docstring: reload-changed loads one form, and the page's text puts it back with one more."
+  (let* ((page luv-physics::*page-pathname*)
+         (copy (merge-pathnames (format nil "luv-changed-claim-~D.org" (random 1000000 (make-random-state t)))
+                                (uiop:temporary-directory)))
+         (text (luv-physics::read-file-text page))
+         (old (concatenate 'string "\"How many bodies of WORLD are " "awake."))
+         (at (search old text))
+         (original (documentation 'physics-world-awake-count 'function)))
+    (with-open-file (out copy :direction :output :external-format :utf-8)
+      (write-string (concatenate 'string (subseq text 0 at) "\"How many bodies of WORLD are awake now."
+                                 (subseq text (+ at (length old))))
+                    out))
+    (unwind-protect
+         (let ((edited (with-output-to-string (*standard-output*)
+                         (luv-physics::reload-changed :page copy :tangle nil))))
+           (check (search "reload changed: 1 form " edited) "~A" edited)
+           (check (eql 0 (search "How many bodies of WORLD are awake now."
+                                 (documentation 'physics-world-awake-count 'function)))))
+      (let ((back (with-output-to-string (*standard-output*)
+                    (luv-physics::reload-changed :page page :tangle nil))))
+        (check (search "reload changed: 1 form " back) "~A" back))
+      (delete-file copy))
+    (check (equal original (documentation 'physics-world-awake-count 'function)))))
+;; OWNJGP-reload-changed-loads-one-form ends here
+
 ;; [[file:../physics.org::#OWNJGP][OWNJGP-users-of-copied-definitions]]
 (define-claim "OWNJGP" users-of-copied-definitions
     "The closure of W0RLD7 holds K3RNLS and S0LV3R; of W1D3KF holds F4M1LY; of BSOZ3U nothing more."
