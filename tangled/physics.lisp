@@ -428,7 +428,8 @@ page and in the tangled file, and its claims with their lines; return the title.
          (range (find-section lines id))
          (heading (aref lines (1- (car range))))
          (title (string-trim " *" (subseq heading 0 (or (search "   " heading) (length heading)))))
-         (prefix (format nil "#+name: ~A-" id)))
+         (prefix (format nil "#+name: ~A-" id))
+         (*package* (find-package '#:luv-physics)))
     (format stream "~&~A  ~A~%  ~A:~D-~D~%" id title
             (file-namestring (or page *page-pathname*)) (car range) (cdr range))
     (let ((records (anchor-definitions id)))
@@ -443,6 +444,17 @@ page and in the tangled file, and its claims with their lines; return the title.
       (format stream "  ~D claim~:P~:[~;:~]~%" (length claims) claims)
       (loop for (line . slug) in claims
             do (format stream "    ~5D  ~A~%" line slug)))
+    (let* ((forms (page-forms lines (engine-files)))
+           (own (remove id forms :key (lambda (form) (getf form :anchor)) :test-not #'equal))
+           (copied (remove-duplicates (loop for form in own
+                                            append (remove-if-not #'symbolp (form-expanders (getf form :form))))))
+           (users (remove id (remove-duplicates (mapcar (lambda (form) (getf form :anchor)) (reload-closure own forms))
+                                                :test #'equal :from-end t)
+                          :test #'equal)))
+      (format stream "  ~:[Nothing it defines is copied into its users.~;Copied into its users: ~:*~{~(~A~)~^ ~}~]~%"
+              copied)
+      (when users
+        (format stream "  Reloading it also recompiles forms of ~{~A~^ ~}.~%" users)))
     title))
 ;; Read a section's code from the page:1 ends here
 

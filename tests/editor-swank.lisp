@@ -1,8 +1,8 @@
 ;;;; tests/editor-swank.lisp -- the image tools/editor-test talks to: luv-physics loaded, swank listening.
 ;;;;
 ;;;; Environment: SWANK_LOADER (Debian's swank-loader.lisp), SWANK_PORT_FILE (where the port
-;;;; swank listens on, on 127.0.0.1, is written).  Swank's compiled files go to ASDF's cache
-;;;; directory.  The process then sleeps until it is stopped.
+;;;; swank listens on, on 127.0.0.1, is written).  Swank's compiled files go where Debian's
+;;;; swank-loader puts them (ASDF's cache).  The process then sleeps until it is stopped.
 
 (load (merge-pathnames "../tools/boot.lisp" *load-truename*))
 
@@ -12,11 +12,11 @@
   (sb-ext:exit :code 2))
 
 (load (sb-ext:posix-getenv "SWANK_LOADER"))
-(setf (symbol-value (find-symbol "*FASL-DIRECTORY*" "SWANK-LOADER"))
-      (merge-pathnames "luv-physics/swank/" (uiop:xdg-cache-home)))
 (let ((*compile-verbose* nil) (*compile-print* nil) (*load-verbose* nil))
   (handler-bind ((warning #'muffle-warning))
-    (funcall (find-symbol "INIT" "SWANK-LOADER"))))
+    ;; swank itself, without its contribs (the checks use none) and without init files
+    (funcall (find-symbol "INIT" "SWANK-LOADER") :setup nil)
+    (funcall (find-symbol "INIT" "SWANK"))))
 (setf (symbol-value (find-symbol "*LOOPBACK-INTERFACE*" "SWANK")) "127.0.0.1"
       (symbol-value (find-symbol "*LOG-EVENTS*" "SWANK")) nil)
 (funcall (find-symbol "START-SERVER" "SWANK") (sb-ext:posix-getenv "SWANK_PORT_FILE") :dont-close t)
