@@ -208,13 +208,18 @@ the page; with a prefix argument TANGLED, in the tangled file."
         (nth 1 where))
     (let ((page (or (and (luv-physics-page-buffer) (buffer-file-name (luv-physics-page-buffer)))
                     (user-error "luv-physics: no page at hand and no image to ask"))))
-      (with-current-buffer (find-file-noselect page)
-        (save-excursion
-          (goto-char (point-min))
-          (if (re-search-forward (format "^[ \t]*(def[^ \t\n]*[ \t]+(?%s[ \t\n)]"
-                                         (regexp-quote (car (last (split-string name ":"))))) nil t)
-              (luv-physics-goto-line page (line-number-at-pos (match-beginning 0)))
-            (user-error "luv-physics: the page defines no %s" name)))))))
+      (let ((line (with-current-buffer (find-file-noselect page)
+                    (save-excursion
+                      (save-restriction
+                        (widen)
+                        (goto-char (point-min))
+                        (and (re-search-forward (format "^[ \t]*(def[^ \t\n]*[ \t]+(?%s[ \t\n)]"
+                                                        (regexp-quote (car (last (split-string name ":")))))
+                                                nil t)
+                             (line-number-at-pos (match-beginning 0))))))))
+        (unless line (user-error "luv-physics: the page defines no %s" name))
+        (push-mark nil t)
+        (luv-physics-goto-line page line)))))
 
 ;;; Sections and reloading
 
