@@ -601,12 +601,11 @@ page as its source, and load it; return the warnings, which are not printed. #OW
       (when (probe-file fasl) (delete-file fasl)))
     (nreverse warnings)))
 
-(defun reload-forms (selected forms lines page label)
+(defun reload-forms (selected forms lines page label &optional (started (get-internal-real-time)))
   "Load SELECTED, forms of the page PAGE (whose LINES and FORMS are given), with every user they
 need recompiled, keeping the parameters the user changed; return and print one line of summary
-starting with LABEL. #OWNJGP"
-  (let* ((started (get-internal-real-time))
-         (selected (remove-if (lambda (form) (eq 'register-tangled-file (car (ensure-list* (getf form :form)))))
+starting with LABEL and ending with the seconds since STARTED. #OWNJGP"
+  (let* ((selected (remove-if (lambda (form) (eq 'register-tangled-file (car (ensure-list* (getf form :form)))))
                               selected))
          (chosen (reload-closure selected forms))
          (users (set-difference chosen selected))
@@ -679,7 +678,8 @@ starting with LABEL. #OWNJGP"
   "Compile and load the forms of section ANCHOR of PAGE (the loaded page by default), or with LINE
 only those of the block holding that page line, with the users they need recompiled; parameters the
 user changed keep their values. Print and return one line of summary. #OWNJGP"
-  (let* ((page (or page *page-pathname*))
+  (let* ((started (get-internal-real-time))
+         (page (or page *page-pathname*))
          (lines (page-lines-of page))
          (id (string-left-trim "#" (string anchor)))
          (range (find-section lines id))
@@ -690,7 +690,7 @@ user changed keep their values. Print and return one line of summary. #OWNJGP"
                                          (<= (car range) (getf form :line) (cdr range))
                                          (or (null line) (eql (getf form :block) (third block)))))
                                   forms)))
-    (reload-forms selected forms lines page (format nil "reload ~A~@[ (block at line ~D)~]" id line))))
+    (reload-forms selected forms lines page (format nil "reload ~A~@[ (block at line ~D)~]" id line) started)))
 
 (defun tangle-page (page)
   "Tangle PAGE with tools/tangle-page in its directory (Emacs from $EMACS, or emacs); the files
@@ -709,7 +709,8 @@ whose text changes are rewritten. Signal an error with the tool's output if it f
   "Tangle PAGE (unless TANGLE is NIL), then compile and load every form of it whose text differs
 from the one the image last loaded, with the users they need recompiled, and register the tangled
 files again. Print and return one line of summary. #OWNJGP"
-  (let* ((page (or page *page-pathname*)))
+  (let* ((started (get-internal-real-time))
+         (page (or page *page-pathname*)))
     (when tangle (tangle-page page))
     (let* ((lines (page-lines-of page))
            (files (engine-files))
@@ -717,7 +718,8 @@ files again. Print and return one line of summary. #OWNJGP"
            (table (loaded-forms))
            (changed (loop for form in forms for key in (form-keys forms)
                           unless (equal (getf form :text) (gethash key table)) collect form))
-           (summary (reload-forms changed forms lines page "reload changed")))
+           (summary (reload-forms changed forms lines page
+                                  (if tangle "tangle and reload changed" "reload changed") started)))
       (when tangle
         (dolist (file files)
           (register-tangled-file (merge-pathnames file page)))

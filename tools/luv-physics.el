@@ -15,7 +15,7 @@
 ;;   C-c M-g   the page line where the symbol at point is defined
 ;;   C-c M-s   what the image knows of the section at point: definitions, claims
 ;;   C-c M-r   reload the section at point into the image (C-u: the block at point)
-;;   C-c C-c   on a Lisp block: reload that block
+;;   C-c C-c   on a Lisp block of the engine: reload that block
 ;;   C-c M-u   tangle the page and reload every form whose text changed
 ;;   C-c '     edit a block: the edit buffer is in the engine's package
 ;; In Lisp buffers with SLIME and in the REPL:
@@ -254,6 +254,9 @@ BLOCK-ONLY, only the block at point.  Show the image's one-line summary and retu
   (let ((element (org-element-at-point)))
     (when (and (eq 'src-block (org-element-type element))
                (equal "lisp" (org-element-property :language element))
+               ;; a claim's block belongs to the tests, not to the engine
+               (not (string-match-p ":tangle[ \t]+tests/"
+                                    (or (org-element-property :parameters element) "")))
                (luv-physics-image-ready-p))
       (luv-physics-reload-section t)
       t)))
