@@ -9,7 +9,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers report clean
+.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers report html view pictures clean
 .NOTPARALLEL:
 
 help:
@@ -17,7 +17,8 @@ help:
 	@echo "make test           check tangling and anchors, then run every claim"
 	@echo "make test ANCHOR=ID run only the claims of section ID (without the editor checks)"
 	@echo "make editor-test    Emacs with SLIME against a live image: jumps, edit buffers, reload"
-	@echo "make setup          install sbcl, emacs-nox, cl-fiveam, slime if missing (apt-get, as root)"
+	@echo "make setup          install what the page needs if missing (apt-get, as root): sbcl, emacs-nox,"
+	@echo "                    cl-fiveam, slime, elpa-htmlize, libjs-three; chromium, imagemagick for the browser claims"
 	@echo "make tangle         write $(OUT) from $(ORG), each only if its text changed"
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
@@ -25,6 +26,10 @@ help:
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
+	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface"
+	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player) and write"
+	@echo "                    report/view-SCENE.html, a 3D viewer of the run for any browser"
+	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:
@@ -39,7 +44,7 @@ check-tangle:
 check-anchors:
 	@$(LISP) --load tools/check-anchors.lisp
 
-test: setup check-tangle check-anchors
+test: setup check-tangle check-anchors physics.html
 	@ANCHOR="$(ANCHOR)" $(LISP) --load tests/run.lisp
 	@if [ -z "$(ANCHOR)" ]; then tools/editor-test "$(SBCL)" "$(EMACS)"; fi
 
@@ -77,8 +82,29 @@ report: setup tangle
 	@$(SBCL) --script tools/splice.lisp work-precision-best report/work-precision-best.org
 	@$(SBCL) --script tools/splice.lisp work-precision-table report/work-precision.org
 
+# The page as HTML: the index of the exported symbols comes from the loaded image
+# (report/api-index.org), then Org's export in batch Emacs writes physics.html, again only when
+# the page, the tangled files or these tools changed.  It uses the tangled files as they are:
+# after editing the page, make tangle first.
+html: physics.html
+
+physics.html: $(ORG) $(OUT) luv-physics.asd tools/export.el tools/api-index.lisp | setup
+	@mkdir -p report
+	@$(LISP) --load tools/api-index.lisp
+	@$(EMACS) -Q --batch -l tools/export.el $(ORG) physics.html
+
+SCENE ?= basin
+EVERY ?= 2
+view: setup
+	@SCENE="$(SCENE)" EVERY="$(EVERY)" $(LISP) --load tools/view.lisp
+
+# The pictures report/scene-*.svg are kept in git: the page shows them.
+pictures: setup
+	@$(LISP) --load tools/pictures.lisp
+
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f
-	find report -type f ! -name 'wp-*.svg' -delete 2>/dev/null || true
+	find report -type f ! -name 'wp-*.svg' ! -name 'scene-*.svg' ! -name 'screenshot-*.png' -delete 2>/dev/null || true
+	rm -f physics.html physics-link-check.html
 	@$(LISP) --eval '(require :asdf)' \
 	  --eval '(let ((cache (asdf:apply-output-translations (truename "./")))) (format t "rm -rf ~A~%" cache) (uiop:delete-directory-tree cache :validate t :if-does-not-exist :ignore))'

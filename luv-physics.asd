@@ -2,7 +2,7 @@
 
 (defsystem "luv-physics"
   :description "Rigid spheres in a voxel world, written as the literate page physics.org."
-  :depends-on ((:require "sb-simd"))
+  :depends-on ((:require "sb-simd") (:require "sb-introspect"))
   ;; one line per file compiled: the compiler's notes are for the page's authors
   :around-compile (lambda (compile)
                     (let* ((log (make-string-output-stream))
