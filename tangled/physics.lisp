@@ -556,12 +556,13 @@ the page's own defining macros are expanded to see what they define. #OWNJGP"
                (setf start (1+ i)))
     tokens))
 
-(defun reload-closure (selected forms)
-  "SELECTED, some of FORMS, with every form of FORMS that mentions a name they copy into their users
-(see form-expanders), and so on, in the order of FORMS. #OWNJGP"
+(defun reload-closure (selected forms &optional (seeds selected))
+  "SELECTED, some of FORMS, with every form of FORMS that mentions a name that SEEDS (by default
+SELECTED) copy into their users (see form-expanders), then the users of what those users copy, and
+so on, in the order of FORMS. #OWNJGP"
   (let ((chosen (make-hash-table :test 'eq))
         (tokens (make-hash-table :test 'eq))
-        (queue (copy-list selected)))
+        (queue (copy-list seeds)))
     (dolist (form selected) (setf (gethash form chosen) t))
     (loop while queue
           do (let ((names (remove-if-not #'symbolp (form-expanders (getf (pop queue) :form)))))
@@ -612,7 +613,12 @@ need recompiled, keeping the parameters the user changed; return and print one l
 starting with LABEL and ending with the seconds since STARTED. #OWNJGP"
   (let* ((selected (remove-if (lambda (form) (eq 'register-tangled-file (car (ensure-list* (getf form :form)))))
                               selected))
-         (chosen (reload-closure selected forms))
+         ;; only a form whose text changed can change what its users copy
+         (changed (let ((table (loaded-forms)))
+                    (loop for form in forms for key in (form-keys forms)
+                          when (and (member form selected) (not (equal (getf form :text) (gethash key table))))
+                            collect form)))
+         (chosen (reload-closure selected forms changed))
          (users (set-difference chosen selected))
          (kept '()) (warnings '()) (failure nil))
     (handler-case

@@ -296,6 +296,30 @@
     (check (equal original (documentation 'physics-world-awake-count 'function)))))
 ;; OWNJGP-reload-changed-loads-one-form ends here
 
+;; [[file:../physics.org::#OWNJGP][OWNJGP-changed-inline-recompiles-users]]
+(define-claim "OWNJGP" changed-inline-recompiles-users
+    "An edited inline function brings its users along; an unchanged reload brings none."
+  (let* ((page luv-physics::*page-pathname*)
+         (copy (merge-pathnames (format nil "luv-inline-claim-~D.org" (random 1000000 (make-random-state t)))
+                                (uiop:temporary-directory)))
+         (text (luv-physics::read-file-text page))
+         (old (concatenate 'string "\"The deepest overlap, in metres, left at the end " "of the last step."))
+         (at (search old text)))
+    (with-open-file (out copy :direction :output :external-format :utf-8)
+      (write-string (concatenate 'string (subseq text 0 at) "\"The deepest overlap, in metres, at the end of the last step."
+                                 (subseq text (+ at (length old))))
+                    out))
+    (flet ((reload (page) (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G" :page page))))
+      (unwind-protect
+           (let ((edited (reload copy)))
+             (check (and (search "users recompiled" edited) (search "4YDMX5" edited)) "~A" edited))
+        (let ((back (reload page)))
+          (check (search "4YDMX5" back) "~A" back))
+        (delete-file copy))
+      (let ((again (reload page)))
+        (check (not (search "users recompiled" again)) "~A" again)))))
+;; OWNJGP-changed-inline-recompiles-users ends here
+
 ;; [[file:../physics.org::#OWNJGP][OWNJGP-users-of-copied-definitions]]
 (define-claim "OWNJGP" users-of-copied-definitions
     "The closure of W0RLD7 holds K3RNLS and S0LV3R; of W1D3KF holds F4M1LY; of BSOZ3U nothing more."
