@@ -75,6 +75,16 @@
                               (string-prefix-p "(defun definition-anchor (name" (editor-test-line)))
                          buffer-file-name (editor-test-line))
 
+      ;; What the image knows of a section.
+      (switch-to-buffer (find-buffer-visiting copy))
+      (goto-char (point-min))
+      (re-search-forward "^:CUSTOM_ID: BSOZ3U$")
+      (luv-physics-section)
+      (editor-test-check "C-c M-s shows the section's definitions and claims"
+                         (with-current-buffer "*luv-physics section*"
+                           (and (string-match-p "definition-anchor-finds-its-section" (buffer-string))
+                                (string-match-p "register-tangled-file" (buffer-string)))))
+
       ;; Symbol -> page, from a Lisp buffer in CL-USER.
       (switch-to-buffer (get-buffer-create "*editor-test lisp*"))
       (lisp-mode)
