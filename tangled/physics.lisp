@@ -611,7 +611,9 @@ page as its source, and load it; return the warnings, which are not printed. #OW
   "Load SELECTED, forms of the page PAGE (whose LINES and FORMS are given), with every user they
 need recompiled, keeping the parameters the user changed; return and print one line of summary
 starting with LABEL and ending with the seconds since STARTED. #OWNJGP"
-  (let* ((selected (remove-if (lambda (form) (eq 'register-tangled-file (car (ensure-list* (getf form :form)))))
+  (let* ((selected (remove-if (lambda (form)
+                                (let ((read (getf form :form)))
+                                  (and (consp read) (eq 'register-tangled-file (car read)))))
                               selected))
          ;; only a form whose text changed can change what its users copy
          (changed (let ((table (loaded-forms)))
@@ -634,18 +636,18 @@ starting with LABEL and ending with the seconds since STARTED. #OWNJGP"
                                             append (loop for (name kind) in (form-definitions (getf form :form))
                                                          when (and (eq kind :defparameter) (boundp name))
                                                            collect name)))
-                          (changed (remove-if (lambda (name)
-                                                (multiple-value-bind (default known) (gethash name *parameter-defaults*)
-                                                  (or (not known) (equal default (symbol-value name)))))
-                                              parameters))
-                          (saved (mapcar #'symbol-value changed))
+                          (tuned (remove-if (lambda (name)
+                                              (multiple-value-bind (default known) (gethash name *parameter-defaults*)
+                                                (or (not known) (equal default (symbol-value name)))))
+                                            parameters))
+                          (saved (mapcar #'symbol-value tuned))
                           (first (getf (first run) :line)))
                      (setf warnings (append warnings
                                             (load-page-text (format nil "~{~A~^~%~}" (mapcar (lambda (f) (getf f :text)) run))
                                                             page (line-position lines first))))
                      (dolist (name parameters)
                        (setf (gethash name *parameter-defaults*) (symbol-value name)))
-                     (loop for name in changed for value in saved
+                     (loop for name in tuned for value in saved
                            do (setf (symbol-value name) value) (push name kept))
                      (let ((table (loaded-forms)))
                        (loop for form in forms for key in (form-keys forms)
@@ -669,10 +671,6 @@ starting with LABEL and ending with the seconds since STARTED. #OWNJGP"
                     (when failure (substitute #\Space #\Newline (princ-to-string failure))))))
       (format t "~&~A~%" summary)
       summary)))
-
-(defun ensure-list* (x)
-  "X if it is a list, else a list of X. #OWNJGP"
-  (if (listp x) x (list x)))
 
 (defun refresh-page-lines (forms)
   "Give every registered definition the page line of the form of FORMS that defines it now. #OWNJGP"
