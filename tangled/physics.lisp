@@ -4321,7 +4321,9 @@ material, awake, kind. #B0DY0B"
                 (physics-world-step-seconds world) (physics-world-substeps world)
                 (physics-world-gravity-x world) (physics-world-gravity-y world) (physics-world-gravity-z world)
                 (physics-world-sleep-enabled world))
-          (line "terrain" "~:[none~;~:*~S~]" (physics-world-terrain world))
+          (line "terrain" "~:[none~;~:*~D chunk~:P of 16^3 cells~]"
+                (let ((terrain (physics-world-terrain world)))
+                  (and terrain (hash-table-count (voxel-terrain-chunks terrain)))))
           (line "last step" "~D contacts in ~D colours (~D overflowing), ~,6F s"
                 (physics-world-last-step-contact-count world) (physics-world-last-step-color-count world)
                 (physics-world-overflow-count world) (physics-world-last-step-real-seconds world))
