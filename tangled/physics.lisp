@@ -2031,6 +2031,18 @@ physics-world: one type test, made once per call of an exported function. #M4K3W
     (error 'not-a-physics-world :operation operation :name 'world :value world
                                 :expected "a physics-world (from make-physics-world)")))
 
+(defmacro refuse-non-worlds (&rest accessors)
+  "Make each of ACCESSORS, exported generic functions of a world (the world last, as for a setf
+accessor), signal not-a-physics-world naming itself when given something else. #M4K3WD"
+  `(progn
+     ,@(loop for name in accessors
+             collect `(defmethod no-applicable-method ((function (eql (function ,name))) &rest arguments)
+                        (error 'not-a-physics-world :operation ',name :name 'world :value (car (last arguments))
+                                                    :expected "a physics-world (from make-physics-world)")))))
+
+(refuse-non-worlds physics-world-step-count physics-world-event-handler (setf physics-world-event-handler)
+                   physics-world-step-hook (setf physics-world-step-hook))
+
 (defun check-idle (world operation)
   "Signal not-a-physics-world unless WORLD is a world, and physics-world-busy unless it is between
 steps. #M4K3WD"

@@ -917,6 +917,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
                 (incf checked)
                 (unless (equal got (list s 'luv-physics::world))
                   (push (list s bad got) wrong))))))))
+    ;; the exported accessors, generic functions of the world
+    (dolist (call (list (lambda () (physics-world-step-count nil))
+                        (lambda () (setf (physics-world-event-handler 42) nil))))
+      (let ((got (handler-case (progn (funcall call) :no-error)
+                   (luv-physics::not-a-physics-world (e) (luv-physics::invalid-physics-parameter-name e))
+                   (error (e) (type-of e)))))
+        (incf checked)
+        (unless (eq got 'luv-physics::world) (push (list call got) wrong))))
     (check (< 80 checked) "only ~D calls checked" checked)
     (check (null wrong) "~D calls were not refused by name:~%~{  ~S~%~}" (length wrong) (reverse wrong))))
 ;; M4K3WD-non-world-named ends here
