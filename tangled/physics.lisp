@@ -33,7 +33,7 @@
    #:wake-physics-bodies-near #:post-physics-box
    ;; The solver's entry points (#K3RNLS)
    #:physics-integrate-velocities #:physics-warm-start #:physics-solve-contacts
-   #:physics-integrate-positions #:physics-apply-restitution
+   #:physics-integrate-positions
    ;; The step, determinism, validation, bodies as objects (#IDVK7G, #S6T2MV, #V4L1D8, #B0DY0B)
    #:step-physics-world #:*physics-phases* #:physics-world-last-step-contact-count
    #:physics-world-last-step-color-count #:physics-world-last-step-real-seconds
@@ -2391,6 +2391,30 @@ zero impulses; the row under the table's cursor is tried before the table. #G3NC
     row))
 (declaim (notinline touch-contact))
 
+(declaim (inline pair-impact-normal))
+(defun pair-impact-normal (dx dy dz wx wy wz reach dt nx ny nz separation)
+  "For two spheres whose centres are DX DY DZ apart, closing at the relative velocity WX WY WZ,
+that touch when their centres are REACH apart: the line of centres when they touch (or after DT,
+if later) as a unit normal, and the gap along it now. Without a touch ahead, NX NY NZ and
+SEPARATION. #G3NCNT"
+  (declare (type single-float dx dy dz wx wy wz reach dt nx ny nz separation))
+  (let* ((a (+ (* wx wx) (* wy wy) (* wz wz)))
+         (b (+ (* dx wx) (* dy wy) (* dz wz)))
+         (c (- (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))
+         (disc (- (* b b) (* a c))))
+    (declare (type single-float a b c disc))
+    (if (or (<= a 0.0) (<= disc 0.0) (>= b 0.0))
+        (values nx ny nz separation)
+        ;; |d + w t| = reach at the smaller root
+        (let* ((time (min dt (/ (- (- b) (fsqrt disc)) a)))
+               (qx (+ dx (* wx time))) (qy (+ dy (* wy time))) (qz (+ dz (* wz time)))
+               (q (fsqrt (+ (* qx qx) (* qy qy) (* qz qz)))))
+          (declare (type single-float time qx qy qz q))
+          (if (> q 1e-6)
+              (let ((mx (/ qx q)) (my (/ qy q)) (mz (/ qz q)))
+                (values mx my mz (- (+ (* dx mx) (* dy my) (* dz mz)) reach)))
+              (values nx ny nz separation))))))
+
 (declaim (inline speculative-distance))
 (defun speculative-distance (approach dt slop margin gravity-step)
   "How wide a gap a contact may have and still be made this step: four slops, plus the
@@ -2734,11 +2758,12 @@ gap is under the speculative distance. #P41RS7"
          (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                (expt (physics-world-gravity-z world) 2)))))
          (rmax (f32 (physics-world-max-radius world)))
+         (threshold (f32 (physics-world-restitution-threshold world)))
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world))
          ;; the grid phase counted the loose rows
          (strays (pair-list-loose-count plist)))
-    (declare (type single-float margin skin cell slop dt gstep rmax) (type index n) (type fixnum strays)
+    (declare (type single-float margin skin cell slop dt gstep rmax threshold) (type index n) (type fixnum strays)
              (type body-columns awake sleeping) (type pair-list plist)
              (type contact-columns contacts) (type contact-table table)
              (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+
@@ -2761,6 +2786,12 @@ gap is under the speculative distance. #P41RS7"
                      (declare (type single-float nx ny nz))
                      (let ((sep (- d ri rj))
                            (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
+                     (declare (type single-float sep approach))
+                     ;; a pair closing faster than the restitution threshold takes the normal of
+                     ;; the moment it will touch ([[#MYWH16]]): the line of centres then
+                     (when (and (> approach threshold) (> sep 0.0))
+                       (multiple-value-setq (nx ny nz sep)
+                         (pair-impact-normal dx dy dz (- vxj vxi) (- vyj vyi) (- vzj vzi) (+ ri rj) dt nx ny nz sep)))
                      (when (< sep (speculative-distance approach dt slop margin gstep))
                        ;; orient every pair contact from the lower handle slot to the higher
                        (multiple-value-bind (ha hb s px py pz)
@@ -2883,6 +2914,40 @@ INSIDE. #MYWH16"
            (declare (ignorable ,nx ,ny ,nz ,separation))
            ,inside))))
 
+(declaim (inline impact-normal))
+(defun impact-normal (nx ny nz separation cx cy cz r vx vy vz dt threshold minx miny minz maxx maxy maxz)
+  "The normal and separation of the contact between the box MIN..MAX and a sphere of radius R at
+CX CY CZ moving at VX VY VZ, whose closest point gives NX NY NZ and SEPARATION: when the sphere
+approaches faster than THRESHOLD, the normal at the point it will strike within DT (advanced
+three times along its path), and its gap along that normal. #MYWH16"
+  (declare (type single-float nx ny nz separation cx cy cz r vx vy vz dt threshold minx miny minz maxx maxy maxz))
+  (let ((approach (+ (* vx nx) (* vy ny) (* vz nz))))
+    (declare (type single-float approach threshold))
+    (if (or (<= approach threshold) (<= separation 0.0))
+        (values nx ny nz separation)
+        (let ((time 0.0) (mx nx) (my ny) (mz nz) (gap separation))
+          (declare (type single-float time mx my mz gap))
+          ;; conservative advancement: move along the path by the gap over the approach
+          ;; speed along the current normal, and take the closest point again from there
+          (dotimes (k 3)
+            (let ((closing (+ (* vx mx) (* vy my) (* vz mz))))
+              (declare (type single-float closing))
+              (when (and (> closing 0.0) (> gap 0.0))
+                (setf time (min dt (+ time (/ gap closing))))
+                (let* ((qx (+ cx (* vx time))) (qy (+ cy (* vy time))) (qz (+ cz (* vz time)))
+                       (px (max minx (min maxx qx))) (py (max miny (min maxy qy))) (pz (max minz (min maxz qz)))
+                       (ex (- px qx)) (ey (- py qy)) (ez (- pz qz))
+                       (d (fsqrt (+ (* ex ex) (* ey ey) (* ez ez)))))
+                  (declare (type single-float qx qy qz px py pz ex ey ez d))
+                  (when (> d 1e-6)
+                    (setf mx (/ ex d) my (/ ey d) mz (/ ez d)
+                          gap (- d r)))))))
+          ;; the gap along the new normal from where the sphere is now
+          (let ((px (max minx (min maxx (+ cx (* vx time)))))
+                (py (max miny (min maxy (+ cy (* vy time)))))
+                (pz (max minz (min maxz (+ cz (* vz time))))))
+            (values mx my mz (- (+ (* (- px cx) mx) (* (- py cy) my) (* (- pz cz) mz)) r)))))))
+
 (defun inside-face (probe cx cy cz r minx miny minz maxx maxy maxz ix iy iz)
   "For a centre CX CY CZ inside the box MIN..MAX: the face to push it out through, as normal,
 point and separation. With a PROBE, the box is cell IX IY IZ and the shallowest face whose
@@ -2938,6 +3003,7 @@ is under the speculative distance. #MYWH16"
              (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                    (expt (physics-world-gravity-z world) 2)))))
              (limit (f32 *physics-reach-limit*))
+             (threshold (f32 (physics-world-restitution-threshold world)))
              (contacts (physics-world-contacts world))
              (table (physics-world-contact-table world))
              ;; the bodies come in the grid's order, so most share the chunk of the one before
@@ -2951,7 +3017,7 @@ is under the speculative distance. #MYWH16"
                              (= (pair-list-terrain-edits plist) (voxel-terrain-edits terrain))))
              (loose (pair-list-loose plist)) (clear (pair-list-clear plist))
              (widen (* 0.45 (f32 (physics-world-pair-skin world)))))
-        (declare (type single-float margin limit slop dt gstep widen) (type fixnum last-key)
+        (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key)
                  (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear)
                  (type contact-columns contacts) (type contact-table table) (inline touch-contact))
         (when fresh
@@ -2969,7 +3035,12 @@ is under the speculative distance. #MYWH16"
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i n)
             (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                   (reach (min limit (+ r margin)))
+                   ;; how far the body can travel this step; a body faster than its margin a
+                   ;; step reaches that far, so that it meets an edge or a corner before it strikes
+                   (travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                                    (* (aref vz i) (aref vz i)))))))
+                   (ahead (max margin travel))
+                   (reach (min limit (+ r ahead)))
                    (x0 (cell-floor (- cx reach))) (x1 (cell-floor (+ cx reach)))
                    (y0 (cell-floor (- cy reach))) (y1 (cell-floor (+ cy reach)))
                    (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach)))
@@ -3019,11 +3090,9 @@ is under the speculative distance. #MYWH16"
                                                                  never (cell-solid-p ix iy iz))))))
                           1 0)))
               ;; a body that can travel past its margin this step also sweeps its path
-              (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                                      (* (aref vz i) (aref vz i))))))))
-                (when (> travel margin)
-                  (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
-                                         (aref vx i) (aref vy i) (aref vz i) (+ travel r))))
+              (when (> travel margin)
+                (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
+                                       (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
               (unless (zerop mask)
                 (flet ((solid (ix iy iz)
                          (declare (type fixnum ix iy iz))
@@ -3047,10 +3116,13 @@ is under the speculative distance. #MYWH16"
                                                   (and (/= oy 0) (/= oz 0) (solid ix (+ iy oy) (+ iz oz)))
                                                   (and (/= ox 0) (/= oy 0) (/= oz 0)
                                                        (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
-                                (multiple-value-bind (nx ny nz sep) (finish)
+                                (multiple-value-bind (nx ny nz sep)
+                                    (multiple-value-bind (nx ny nz sep) (finish)
+                                      (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
+                                                     threshold fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)))
                                   (when (< sep (speculative-distance
                                                 (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
-                                                dt slop margin gstep))
+                                                dt slop ahead gstep))
                                     (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
                                                    nx ny nz sep px py pz 0.0 0.0 0.0))))
                               ;; inside: push out through a face
@@ -3193,7 +3265,7 @@ the hole. #PRUN3D"
     '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation kvn kvt1 kvt2
       normal-mass tangent-mass rolling-mass friction rolling-limit restitution relative-velocity
       max-normal-impulse bias-rate mass-scale impulse-scale normal-impulse tangent-impulse-1
-      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap)
+      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap armed-speed)
     "The float columns of a constraint, in the order they sit in a block. #SSMPYW")
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints. #SSMPYW"
@@ -3494,7 +3566,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                               (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
                               (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z))
                            (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass (@ impulse-scale) dyn-impulse
-                           (@ max-normal-impulse) 0.0
+                           (@ max-normal-impulse) 0.0 (@ armed-speed) 0.0
                            (@ normal-impulse) (contact-at geometry g normal-impulse)
                            (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1)
                            (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2)
@@ -3578,7 +3650,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                               (t
                                (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
                                      (@ impulse-scale) st-impulse)))))
-                    (setf (@ max-normal-impulse) 0.0
+                    (setf (@ max-normal-impulse) 0.0 (@ armed-speed) 0.0
                           (@ normal-impulse) (contact-at geometry g normal-impulse)
                           (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2)
                           (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
@@ -3682,10 +3754,6 @@ the soft bias (solve) or without it (relax). #K3RNLS"))
 (defgeneric physics-integrate-positions (kernels world h)
   (:documentation "Substep stage 4: move every awake body's delta by its velocity over H. #K3RNLS"))
 
-(defgeneric physics-apply-restitution (kernels world threshold)
-  (:documentation "After the substeps: bounce the contacts that pushed and arrived faster than
-THRESHOLD. #K3RNLS"))
-
 (defun integrate-velocities-range (v start end h gx gy gz max-speed)
   "Add H times gravity to velocity rows START..END of V and clamp their speed to MAX-SPEED. #K3RNLS"
   (declare (type f32-column v) (type index start end) (type single-float h gx gy gz max-speed)
@@ -3759,11 +3827,12 @@ per constraint. #S0LV3R"
        (symbol-macrolet ((biased t)) ,@body)
        (symbol-macrolet ((biased nil)) ,@body)))
 
-(defun solve-range (cbuf v d start end inv-h use-bias elapsed push-max)
+(defun solve-range (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
   "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
-when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
+when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
+HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
-           (type single-float inv-h elapsed push-max) #.+kernel-policy+)
+           (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
   (unswitch-bias (use-bias)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
@@ -3805,14 +3874,46 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                       ;; scale 0, which the other branch would multiply and subtract to the same bits
                       (- l (* (@ normal-mass) (+ vn bias)))))
              (new (if (> raw 0.0) raw 0.0))
-             (dl (- new l))
+             (mni (@ max-normal-impulse))
+             ;; an impact ([[#R3ST1T]]): the first push of a contact approaching faster than
+             ;; the threshold; or an armed contact whose gap has closed. Its bounce, the
+             ;; impulse that makes the pair leave at the speed restitution gives, is a push
+             ;; of its own, not kept in the contact's impulse
+             (e (@ restitution))
+             (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold))))
+             (bump (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
+                      (let* ((sp (if positive s 0.0))
+                             ;; the change of vn over a substep under gravity
+                             (dv (* (- (if (> mb 0.0) 1.0 0.0) (if (> ma 0.0) 1.0 0.0))
+                                    (+ (* hgx x) (* hgy y) (* hgz z))))
+                             (half (* 0.5 dv))
+                             ;; vn now, and the speed of the impact when the gap closes
+                             (c (if biased (- vn half) (+ vn half)))
+                             (k (* (* (* 2.0 dv) sp) inv-h))
+                             (uc (if impact
+                                     (let ((u2 (- (* c c) k))) (fsqrt (if (> u2 0.0) u2 0.0)))
+                                     (@ armed-speed)))
+                             ;; the leaving speed squared, from here
+                             (wc2 (+ (* (* e e) (* uc uc)) k)))
+                        (if (> 0.0 wc2)
+                            ;; the rebound would not climb this gap: close it, bounce later
+                            (progn (setf (@ armed-speed) uc) 0.0)
+                            (let* ((root (fsqrt (if (> wc2 0.0) wc2 0.0)))
+                                   (w (if biased (+ root half) (- root half)))
+                                   (kick (* (@ normal-mass) (- w vn))))
+                              (when (> kick 0.0) (setf (@ armed-speed) 0.0))
+                              (if (> kick 0.0) kick 0.0))))
+                      0.0))
+             (bounced (> bump 0.0))
+             (new (if bounced l new))
+             (dl (if bounced bump (- new l)))
              ;; (* ma dl x) is (* (* ma dl) x): forming ma dl once changes no bit
              (madl (* ma dl)) (mbdl (* mb dl))
              (vax (- vax (* madl x))) (vay (- vay (* madl y))) (vaz (- vaz (* madl z)))
              (vbx (+ vbx (* mbdl x))) (vby (+ vby (* mbdl y))) (vbz (+ vbz (* mbdl z))))
-        (let ((mni (@ max-normal-impulse)))
+        (let ((pushed (if bounced bump new)))
           (setf (@ normal-impulse) new
-                (@ max-normal-impulse) (if (> mni new) mni new)))
+                (@ max-normal-impulse) (if (> mni pushed) mni pushed)))
         ;; friction, inside the cone |l1,l2| <= friction * normal impulse; the angular
         ;; velocities are read only now
         (let* (
@@ -3857,36 +3958,16 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                   (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))
 ;; Solve and relax:1 ends here
 
-;; [[file:../physics.org::#R3ST1T][Restitution, once:1]]
-(defun restitution-range (cbuf v start end threshold)
-  "Bounce constraints START..END that pushed and arrived faster than THRESHOLD. #R3ST1T"
-  (declare (type constraint-columns cbuf) (type f32-column v) (type index start end)
-           (type single-float threshold) #.+kernel-policy+)
-  (with-solver-columns cbuf
-    (loop for k of-type index from start below end do
-      (let* ((base (constraint-base k)) (e (@ restitution)) (rv (@ relative-velocity)))
-        (declare (type index base))
-        (unless (or (= e 0.0) (> rv (- threshold)) (= (@ max-normal-impulse) 0.0))
-          (let* ((a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
-                 (x (@ nx)) (y (@ ny)) (z (@ nz))
-                 (ma (@ ima)) (mb (@ imb))
-                 (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (block-ref v b 1) (block-ref v a 1)) y)
-                        (* (- (block-ref v b 2) (block-ref v a 2)) z) (@ kvn)))
-                 (l (@ normal-impulse))
-                 (raw (- l (* (@ normal-mass) (+ vn (* e rv)))))
-                 (new (if (> raw 0.0) raw 0.0))
-                 (dl (- new l))
-                 (mni (@ max-normal-impulse)))
-            (declare (type index a b))
-            (setf (@ normal-impulse) new
-                  (@ max-normal-impulse) (if (> mni new) mni new))
-            (setf (aref v a) (- (aref v a) (* ma dl x))
-                  (block-ref v a 1) (- (block-ref v a 1) (* ma dl y))
-                  (block-ref v a 2) (- (block-ref v a 2) (* ma dl z))
-                  (aref v b) (+ (aref v b) (* mb dl x))
-                  (block-ref v b 1) (+ (block-ref v b 1) (* mb dl y))
-                  (block-ref v b 2) (+ (block-ref v b 2) (* mb dl z)))))))))
-;; Restitution, once:1 ends here
+;; [[file:../physics.org::#R3ST1T][Restitution at impact:1]]
+(defun impact-parameters (world)
+  "The restitution threshold of WORLD and its gravity times its substep, as four single-floats:
+what a solve pass needs to bounce an impact. #R3ST1T"
+  (let ((h (physics-world-current-h world)))
+    (declare (type single-float h))
+    (values (f32 (physics-world-restitution-threshold world))
+            (* h (physics-world-gravity-x world)) (* h (physics-world-gravity-y world))
+            (* h (physics-world-gravity-z world)))))
+;; Restitution at impact:1 ends here
 
 ;; [[file:../physics.org::#SC4L4R][The scalar family:1]]
 (defmethod physics-integrate-velocities ((kernels scalar-kernels) world h)
@@ -3901,23 +3982,19 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
 
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
-    (solve-range cbuf (physics-world-velocities world) (physics-world-deltas world)
-                 0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-                 (f32 (physics-world-push-max world)))))
+    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+      (solve-range cbuf (physics-world-velocities world) (physics-world-deltas world)
+                   0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+                   (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
                              (body-columns-length (physics-world-awake world)) h))
-
-(defmethod physics-apply-restitution ((kernels scalar-kernels) world threshold)
-  (let ((cbuf (physics-world-constraints world)))
-    (restitution-range cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf)
-                       threshold)))
 ;; The scalar family:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (defun store-phase (world)
-  "Phase 11: copy each constraint's impulses back to its contact, note touching flips as :begin
+  "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
 speed. #ST0R3S"
   (let* ((cbuf (physics-world-constraints world))
@@ -4008,7 +4085,7 @@ reading and writing at most eight arrays. #F1NAL5"
           (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
 
 (defun finalize-phase (world)
-  "Phase 12: fold deltas into positions and solver velocities into the rows, turn orientations,
+  "Phase 11: fold deltas into positions and solver velocities into the rows, turn orientations,
 age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
 sleep. Rows are visited from the last down, so relocation never skips one. #F1NAL5"
   (let* ((awake (physics-world-awake world))
@@ -4092,15 +4169,9 @@ colour, or after a step that left an overlap deeper than *physics-crowded-depth*
           (physics-solve-contacts kernels world inv-h nil (+ elapsed h)))))
     world))
 
-(defun restitution-phase (world)
-  "Phase 10: bounce, once, the contacts that pushed and arrived above the threshold. #IDVK7G"
-  (physics-apply-restitution (physics-world-kernels world) world
-                             (f32 (physics-world-restitution-threshold world)))
-  world)
-
 (defparameter *physics-phases*
   '(reset-phase wake-phase grid-phase pair-phase terrain-phase box-phase prune-phase
-    prepare-phase substep-phase restitution-phase store-phase finalize-phase)
+    prepare-phase substep-phase store-phase finalize-phase)
   "The phases of a step, in order; each is a function of the world. #IDVK7G")
 
 (defun step-physics-world (world &optional dt)
@@ -4830,7 +4901,7 @@ overlap any step left (:deepest), and the mean ms of each phase (:phases, an ali
 (defparameter +bench-phase-groups+
   '(("wake+grid+pairs" wake-phase grid-phase pair-phase) ("terrain" terrain-phase) ("boxes" box-phase)
     ("prune" prune-phase) ("prepare" prepare-phase) ("substeps" substep-phase)
-    ("restitution+store" restitution-phase store-phase) ("finalize" reset-phase finalize-phase))
+    ("store" store-phase) ("finalize" reset-phase finalize-phase))
   "How the benchmark groups the phases into columns. #B3NCH5")
 
 (defun run-basin-benchmark (&key (counts '(1000 3000 10000)) (stream *standard-output*))
@@ -5476,6 +5547,198 @@ radius. #W9PREC"
 ;; Error against run time:4 ends here
 
 ;; [[file:../physics.org::#W9PREC][Error against run time:5]]
+(defun rebound-heights (world-args restitution drop &key (rounds 4) (radius 0.25))
+  "Drop a ball of RESTITUTION with its centre DROP metres above the contact level onto the
+floor: its flights' apex heights above that level, the drop first, up to ROUNDS rebounds. Each
+apex is the vertex of the parabola through a flight's first two positions a step apart. #W9PREC"
+  (let* ((world (apply #'open-air-world :floor t world-args))
+         (level (- radius *physics-linear-slop*))
+         (ball (add-physics-body world 0.5 (+ level drop) 0.5 :radius radius :restitution restitution))
+         (g 9.81d0) (dt (float (physics-world-step-seconds world) 1d0))
+         (ys (list (float (nth-value 1 (physics-body-position world ball)) 1d0)))
+         (apexes '()) (flying nil) (wall 0d0))
+    (loop repeat (round 12 dt) while (and (<= (length apexes) rounds) (physics-body-awake-p world ball)) do
+      (step-physics-world world)
+      (incf wall (physics-world-last-step-real-seconds world))
+      (incf *driven-seconds* dt)
+      (push (float (nth-value 1 (physics-body-position world ball)) 1d0) ys)
+      (when (cddr ys)
+        (destructuring-bind (y2 y1 y0 &rest older) ys
+          (declare (ignore older))
+          ;; a step in free flight has the second difference -g dt^2
+          (let ((free (< (abs (+ (- y0 (* 2 y1)) y2 (* g dt dt))) 1d-5)))
+            (when (and free (not flying))
+              (let ((b (+ (/ (- y1 y0) dt) (* 0.5d0 g dt))))
+                (push (- (+ y0 (/ (* b (abs b)) (* 2 g))) level) apexes)))
+            (setf flying free)))))
+    (values (nreverse apexes) wall world)))
+
+(defun rebound-errors (world-args restitution drop)
+  "The relative errors against RESTITUTION squared of the ratios of successive apex heights
+(rebound-heights) whose arrival speed exceeds the restitution threshold by a tenth; then the
+wall seconds and the world. #W9PREC"
+  (multiple-value-bind (heights wall world) (rebound-heights world-args restitution drop)
+    (let ((e2 (* restitution restitution)) (limit (* 1.1d0 *physics-restitution-threshold*)))
+      (values (loop for (before after) on heights while after
+                    while (> (sqrt (* 2 9.81d0 before)) limit)
+                    collect (/ (abs (- (/ after before) e2)) e2))
+              wall world))))
+
+(defparameter +bounce-restitutions+ '(0.2d0 0.3d0 0.4d0 0.5d0 0.6d0 0.7d0 0.8d0 0.9d0)
+  "Restitutions of the bounce series. #W9PREC")
+
+(defparameter +bounce-drops+ '(0.25d0 0.5d0 1d0 2d0 5d0)
+  "Drop heights of the bounce series, m. #W9PREC")
+
+(define-accuracy-scene bounce-series ("largest |rebound ratio - e^2| / e^2" 0.02)
+  "Balls of every restitution of +bounce-restitutions+ dropped from every height of
++bounce-drops+: the worst relative error of a rebound ratio against e^2. #W9PREC"
+  (let ((worst 0d0) (wall 0d0) (world nil) (count 0))
+    (dolist (e +bounce-restitutions+)
+      (dolist (drop +bounce-drops+)
+        (multiple-value-bind (errors seconds last) (rebound-errors world-args e drop)
+          (incf wall seconds) (setf world last) (incf count (length errors))
+          (setf worst (reduce #'max errors :initial-value (if errors worst 1d0))))))
+    (values worst wall world (format nil "~D rebounds" count))))
+
+(defun struck-row (world-args &key (balls 5) (floor nil) (speed 2d0) (radius 0.25))
+  "A row of BALLS touching balls of restitution 1 struck by its first: in free space, the first
+moving at SPEED; on the FLOOR, the first rolled into the rest from 1.5 m away at SPEED (launched
+sliding at 7/5 of it). Return the last ball's share of the row's momentum, the others' largest
+speed over SPEED and the kinetic energy kept, at the step the last ball is fastest within 1 s,
+then the wall seconds and the world. #W9PREC"
+  (let* ((world (apply #'open-air-world :floor floor :gravity (if floor '(0 -9.81 0) '(0 0 0)) world-args))
+         (y (if floor (- radius *physics-linear-slop*) 0.5))
+         (row (loop for i from 1 below balls
+                    collect (add-physics-body world (+ 2.0 (* i 2 radius)) y 0.5 :radius radius :restitution 1.0
+                                                    :friction (if floor 0.6 0.0))))
+         (first (add-physics-body world (if floor 0.5 2.0) y 0.5
+                                  :radius radius :restitution 1.0 :friction (if floor 0.6 0.0)
+                                  :vx (if floor (* 7/5 speed) speed)))
+         (all (cons first row)) (best nil))
+    (let ((wall (drive world 1.0 (lambda (time) (declare (ignore time))
+                                   (let ((vs (mapcar (lambda (h) (float (physics-body-velocity world h) 1d0)) all)))
+                                     (when (or (null best) (> (car (last vs)) (car (last best))))
+                                       (setf best vs)))))))
+      (let ((momentum (reduce #'+ best)))
+        (values (/ (car (last best)) momentum)
+                (/ (reduce #'max (mapcar #'abs (butlast best))) speed)
+                (/ (reduce #'+ (mapcar (lambda (v) (* v v)) best)) (* speed speed))
+                wall world)))))
+
+(define-accuracy-scene cradle ("worst of momentum and energy not in the last ball" 0.1)
+  "Five touching balls of restitution 1 in free space, the first struck at 2 m/s: the worse of
+the momentum share and the kinetic energy the last ball does not carry. #W9PREC"
+  (multiple-value-bind (share others kept wall world) (struck-row world-args)
+    (values (max (- 1 share) (- 1 kept)) wall world
+            (format nil "others ~,3F v0, energy ~,3F" others kept))))
+
+(define-accuracy-scene struck-row ("worst of momentum and energy not in the last ball" 0.1)
+  "A ball rolled at 3 m/s along the floor into a resting row of three, restitution 1: the worse
+of the momentum share and the kinetic energy the last ball does not carry. #W9PREC"
+  (multiple-value-bind (share others kept wall world) (struck-row world-args :balls 4 :floor t :speed 3d0)
+    (values (max (- 1 share) (- 1 kept)) wall world
+            (format nil "others ~,3F v0, energy ~,3F" others kept))))
+
+(defun drop-onto-block (world-args &key (speed 5d0) (dx 0.1d0) dz (restitution 0.5d0) (radius 0.25d0))
+  "Drop a frictionless ball of RESTITUTION straight down at SPEED onto the lone cell [0,1)^3:
+onto its top edge x = 1, y = 1 at the offset DX outside it, or with DZ onto its corner x = z = 1.
+Return the angles, degrees, of the impulse it took from the geometric normal at impact and of
+its outgoing velocity from the reflection law's, then the wall seconds and the world. #W9PREC"
+  (let* ((world (apply #'open-air-world world-args))
+         (g 9.81d0) (r radius) (oz (or dz 0d0))
+         (y-impact (+ 1d0 (sqrt (- (* r r) (* dx dx) (* oz oz)))))
+         (y0 (+ y-impact 0.3d0))
+         (ball (progn (fill-terrain (physics-world-terrain world) 0 0 0 1 1 1 t)
+                      (add-physics-body world (+ 1d0 dx) y0 (if dz (+ 1d0 dz) 0.5d0) :radius r :friction 0.0
+                                        :restitution restitution :vy (- speed))))
+         (u (sqrt (+ (* speed speed) (* 2 g (- y0 y-impact)))))
+         (t-impact (/ (- u speed) g))
+         (n (list (/ dx r) (/ (- y-impact 1d0) r) (/ oz r)))
+         (v-in (list 0d0 (- u) 0d0))
+         (vn (reduce #'+ (mapcar #'* v-in n)))
+         (ideal (mapcar (lambda (v k) (- v (* (+ 1 restitution) vn k))) v-in n))
+         (dt (float (physics-world-step-seconds world) 1d0))
+         (time 0d0) (hit nil) (out nil) (wall 0d0))
+    (loop repeat 120 until out do
+      (step-physics-world world)
+      (incf wall (physics-world-last-step-real-seconds world))
+      (incf *driven-seconds* dt)
+      (incf time dt)
+      (multiple-value-bind (vx vy vz) (physics-body-velocity world ball)
+        (cond ((and (not hit) (> (abs (- vy (- (- speed) (* g time)))) 1d-3)) (setf hit time))
+              ;; a step after the impact, its velocity taken back to the instant of impact
+              ((and hit (> time (+ hit dt)))
+               (setf out (list vx (+ vy (* g (- time t-impact))) vz))))))
+    (flet ((angle (a b)
+             (let ((c (/ (reduce #'+ (mapcar #'* a b))
+                         (sqrt (* (reduce #'+ (mapcar #'* a a)) (reduce #'+ (mapcar #'* b b)))))))
+               (* (/ 180 pi) (acos (max -1d0 (min 1d0 c)))))))
+      (if out
+          (values (angle (mapcar #'- out v-in) n) (angle out ideal) wall world)
+          (values 180d0 180d0 wall world)))))
+
+(defun block-drops (world-args corner)
+  "drop-onto-block at 2, 5 and 10 m/s and offsets 0.05 to 0.2 m (0.7 of that on each axis at a
+CORNER): the largest impulse angle and outgoing angle, the wall seconds and the last world. #W9PREC"
+  (let ((impulse 0d0) (outgoing 0d0) (wall 0d0) (world nil))
+    (dolist (speed '(2d0 5d0 10d0))
+      (dolist (offset '(0.05d0 0.1d0 0.15d0 0.2d0))
+        (multiple-value-bind (a b seconds last)
+            (if corner
+                (drop-onto-block world-args :speed speed :dx (* 0.7d0 offset) :dz (* 0.7d0 offset))
+                (drop-onto-block world-args :speed speed :dx offset))
+          (setf impulse (max impulse a) outgoing (max outgoing b) world last)
+          (incf wall seconds))))
+    (values impulse outgoing wall world)))
+
+(defun oblique-pair (world-args &key (speed 5d0) (offset 0.2d0) (restitution 0.5d0) (radius 0.25d0))
+  "In free space a frictionless ball of RESTITUTION moving at SPEED along x strikes a resting
+equal one whose centre lies OFFSET aside in y: the angles, degrees, of the struck ball's
+velocity (the impulse's direction) from the line of centres at the touch, and of the striker's
+velocity from the one the reflection law gives, then the wall seconds and the world. #W9PREC"
+  (let* ((world (apply #'open-air-world :gravity '(0 0 0) world-args))
+         (a (add-physics-body world 0.0d0 (+ 0.5d0 offset) 0.5d0 :radius radius :friction 0.0
+                                        :restitution restitution :vx speed))
+         (b (add-physics-body world 1.0d0 0.5d0 0.5d0 :radius radius :friction 0.0 :restitution restitution))
+         (reach (* 2 radius))
+         (n (list (/ (sqrt (- (* reach reach) (* offset offset))) reach) (/ (- offset) reach) 0d0))
+         (vn (* speed (first n)))
+         (ideal (list (- speed (* 0.5d0 (+ 1 restitution) vn (first n))) (- (* 0.5d0 (+ 1 restitution) vn (second n))) 0d0))
+         (wall (drive world 0.5)))
+    (flet ((angle (u v)
+             (let ((c (/ (reduce #'+ (mapcar #'* u v))
+                         (sqrt (* (reduce #'+ (mapcar #'* u u)) (reduce #'+ (mapcar #'* v v)))))))
+               (* (/ 180 pi) (acos (max -1d0 (min 1d0 c)))))))
+      (values (angle (multiple-value-list (physics-body-velocity world b)) n)
+              (angle (multiple-value-list (physics-body-velocity world a)) ideal)
+              wall world))))
+
+(define-accuracy-scene oblique-pair ("largest impulse angle from the line of centres, degrees" 1)
+  "oblique-pair at 2, 5 and 10 m/s and offsets of 0.1 to 0.4 m: the largest angle of the struck
+ball's velocity from the line of centres at the touch. #W9PREC"
+  (let ((impulse 0d0) (outgoing 0d0) (wall 0d0) (world nil))
+    (dolist (speed '(2d0 5d0 10d0))
+      (dolist (offset '(0.1d0 0.2d0 0.3d0 0.4d0))
+        (multiple-value-bind (i o seconds last) (oblique-pair world-args :speed speed :offset offset)
+          (setf impulse (max impulse i) outgoing (max outgoing o) world last)
+          (incf wall seconds))))
+    (values impulse wall world (format nil "striker off by up to ~,2F deg" outgoing))))
+
+(define-accuracy-scene edge-drop ("largest impulse angle from the normal, degrees" 1)
+  "A frictionless ball of restitution 0.5 dropped onto a block's top edge (block-drops): the
+largest angle of its impulse from the geometric normal at impact. #W9PREC"
+  (multiple-value-bind (impulse outgoing wall world) (block-drops world-args nil)
+    (values impulse wall world (format nil "outgoing off by up to ~,2F deg" outgoing))))
+
+(define-accuracy-scene corner-drop ("largest impulse angle from the normal, degrees" 1)
+  "A frictionless ball of restitution 0.5 dropped onto a block's top corner (block-drops): the
+largest angle of its impulse from the geometric normal at impact. #W9PREC"
+  (multiple-value-bind (impulse outgoing wall world) (block-drops world-args t)
+    (values impulse wall world (format nil "outgoing off by up to ~,2F deg" outgoing))))
+;; Error against run time:5 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:6]]
 (defparameter +sweep-rates+ '(30 60 120 240)
   "Step rates of the sweep, Hz. #W9PREC")
 
@@ -5508,9 +5771,9 @@ family of FAMILIES; return one plist per point, families innermost (see run-accu
                     nconc (loop for n in substeps
                                 nconc (loop for family in families
                                             collect (run-accuracy-point scene hz n family))))))
-;; Error against run time:5 ends here
+;; Error against run time:6 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:6]]
+;; [[file:../physics.org::#W9PREC][Error against run time:7]]
 (defun point-label (p)
   "A setting as it is named in the tables: family, rate and substeps. #W9PREC"
   (format nil "~(~A~) ~D Hz x ~D" (getf p :family) (getf p :hz) (getf p :substeps)))
@@ -5533,9 +5796,9 @@ either way a point of the Pareto front. #W9PREC"
                                       (and (= (getf a :error) (getf b :error)) (<= (getf a :ms) (getf b :ms))))
                                   a b))
                 points))))
-;; Error against run time:6 ends here
+;; Error against run time:7 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:7]]
+;; [[file:../physics.org::#W9PREC][Error against run time:8]]
 (defun print-sweep-table (points stream)
   "Print POINTS as an Org table: a row per scene and setting, the error, the note, the run time
 of each family, and whether every family reached the same state hash and error, twice. #W9PREC"
@@ -5563,9 +5826,9 @@ its Pareto front. #W9PREC"
                                ~%  Pareto front:~{ ~A~^,~}.~%"
                        scene measure (<= (getf best :error) tolerance) tolerance (point-label best)
                        (getf best :error) (getf best :ms) (mapcar #'point-label (pareto-front mine))))))
-;; Error against run time:7 ends here
+;; Error against run time:8 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:8]]
+;; [[file:../physics.org::#W9PREC][Error against run time:9]]
 (defparameter +substep-colours+ '((1 . "#c0392b") (2 . "#d68910") (4 . "#1e8449") (8 . "#2471a3"))
   "The colour of each substep count's curves in the diagrams. #W9PREC")
 
@@ -5615,9 +5878,9 @@ through its step rates. Errors below 1e-9 are drawn at 1e-9. #W9PREC"
         (format out "<text x=\"~D\" y=\"~D\" font-size=\"10\" fill=\"#555\">points: 30, 60, 120, 240 Hz</text>~%" (+ x1 14) (- y1 4))
         (format out "</svg>~%")))
     path))
-;; Error against run time:8 ends here
+;; Error against run time:9 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:9]]
+;; [[file:../physics.org::#W9PREC][Error against run time:10]]
 (defun run-accuracy-report (&key (directory "report/") (stream *standard-output*))
   "The sweep, written as report/work-precision.org (the table), report/work-precision-best.org
 (the Pareto-best setting per scene) and one SVG diagram per scene, report/wp-SCENE.svg. Print
@@ -5635,7 +5898,7 @@ the table to STREAM as well. #W9PREC"
                                 (format nil "~(~A~): error against run time" (first entry)) (third entry)
                                 (remove (first entry) points :key (lambda (p) (getf p :scene)) :test-not #'eq)))
     points))
-;; Error against run time:9 ends here
+;; Error against run time:10 ends here
 
 ;; [[file:../physics.org::#G4WXCJ][Watching a run: the recorder:1]]
 (defstruct (physics-recording (:constructor %make-physics-recording (terrain every)))
