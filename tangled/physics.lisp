@@ -64,7 +64,13 @@
    #:map-physics-bodies-in-sphere #:map-physics-bodies-in-box
    #:map-physics-cells-in-sphere #:map-physics-cells-in-box #:run-query-benchmark
    ;; Giving back the room the buffers grew to (#QKS4GZ)
-   #:trim-physics-world))
+   #:trim-physics-world
+   ;; Reading and reloading the page in a live image (#0QBGZO, #OWNJGP)
+   #:section #:reload-section #:reload-changed
+   ;; Exported functions refuse a non-world by name (#C0ND1T, #M4K3WD)
+   #:not-a-physics-world
+   ;; A world as an object, and both in the inspector (#4YDMX5)
+   #:install-swank-inspection))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -307,6 +313,7 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
             *registered-files* (append (remove source *registered-files* :test #'equal)
                                        (list source))
             *page-pathname* (or page *page-pathname*))
+      (note-loaded-file file text records)
       (length records))))
 
 (defun anchor-definitions (anchor)
@@ -324,6 +331,450 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
         (values (getf record :anchor) (getf record :org-line))
         (values nil nil))))
 ;; Register a file and answer by anchor or by name:1 ends here
+
+;; [[file:../physics.org::#0QBGZO][Read a section's code from the page:1]]
+(defun header-tangle (text)
+  "The value of the :tangle header argument in TEXT, or NIL. #0QBGZO"
+  (let ((at (search ":tangle " text)))
+    (when at
+      (let ((start (position #\Space text :start (+ at 8) :test-not #'char=)))
+        (when start
+          (subseq text start (or (position #\Space text :start start) (length text))))))))
+
+(defun page-code-blocks (lines)
+  "Each Lisp block of the page LINES as (ANCHOR FILE BEGIN FIRST LAST): its section's anchor, the
+file it tangles to (\"no\" for none), and the lines of its #+begin_src, first and last code line. #0QBGZO"
+  (let ((headings '()) (default "no") (anchor nil) (drawer nil) (open nil) (blocks '()))
+    ;; HEADINGS: (level . tangle) of the enclosing headings, innermost first
+    (loop for i from 1 to (length lines)
+          for line = (aref lines (1- i))
+          for text = (string-trim '(#\Space #\Tab) line)
+          do (cond (open
+                    (when (string-equal "#+end_src" text)
+                      (push (append open (list (1- i))) blocks)
+                      (setf open nil)))
+                   ((heading-line-p line)
+                    (let ((level (position #\* line :test-not #'char=)))
+                      (loop while (and headings (>= (car (first headings)) level)) do (pop headings))
+                      (push (cons level nil) headings)
+                      (setf anchor nil drawer t)))
+                   ((and drawer (starts-with ":" text))
+                    (cond ((starts-with ":CUSTOM_ID:" text)
+                           (setf anchor (string-trim '(#\Space #\Tab) (subseq text 11))))
+                          ((starts-with ":header-args:lisp" text)
+                           (setf (cdr (first headings)) (or (header-tangle text) (cdr (first headings)))))))
+                   ((and (null headings) (starts-with "#+PROPERTY: header-args:lisp " text))
+                    (setf default (or (header-tangle text) default)))
+                   ((and (<= 16 (length text)) (string-equal "#+begin_src lisp" text :end2 16)
+                         (or (= 16 (length text)) (char= #\Space (char text 16))))
+                    (setf drawer nil
+                          open (list anchor
+                                     (or (header-tangle text)
+                                         (loop for (nil . file) in headings thereis file)
+                                         default)
+                                     i (1+ i))))
+                   (t (setf drawer nil))))
+    (nreverse blocks)))
+
+(defun block-forms (lines anchor file begin first last)
+  "The toplevel forms of page LINES FIRST..LAST, a block of section ANCHOR tangling to FILE whose
+header is line BEGIN, as property lists (:anchor :file :block :line :end :text :form). #0QBGZO"
+  (let* ((code (map 'vector #'unescape-org-line (subseq lines (1- first) last)))
+         (text (format nil "~{~A~^~%~}" (coerce code 'list)))
+         (*read-eval* t)
+         (forms '())
+         (position 0))
+    (loop
+      (let ((start (skip-blanks-and-comments text position)))
+        (when (>= start (length text))
+          (return (nreverse forms)))
+        (multiple-value-bind (form end) (read-from-string text t nil :start start)
+          (let ((from (count #\Newline text :end start))
+                (to (count #\Newline text :end (max start (1- end)))))
+            (when (and (consp form) (eq (car form) 'in-package))
+              (setf *package* (find-package (second form))))
+            (push (list :anchor anchor :file file :block begin
+                        :line (+ first from) :end (+ first to)
+                        :text (format nil "~{~A~^~%~}" (coerce (subseq code from (1+ to)) 'list))
+                        :form form)
+                  forms))
+          (setf position end))))))
+
+(defun page-forms (lines files)
+  "The forms of every block of the page LINES that tangles to one of FILES, in the order FILES
+are loaded and, within a file, in page order. #0QBGZO"
+  (let ((*package* (find-package '#:luv-physics)))
+    (loop for file in files
+          append (loop for (anchor target begin first last) in (page-code-blocks lines)
+                       when (equal target file)
+                         append (block-forms lines anchor file begin first last)))))
+
+(defun engine-files ()
+  "The tangled files of the loaded system, relative to the page, in load order. #0QBGZO"
+  (remove-duplicates (mapcar (lambda (record) (getf record :file)) *definitions*)
+                     :test #'equal :from-end t))
+
+(defun form-definitions (form)
+  "Each (NAME KIND) that FORM, a toplevel form, defines. #0QBGZO"
+  (loop for definition in (toplevel-definitions form)
+        for kind = (intern (symbol-name (car definition)) :keyword)
+        collect (list (definition-name kind definition) kind)))
+
+(defun page-lines-of (page)
+  "The lines of PAGE (by default the page the loaded files were tangled from), or an error. #0QBGZO"
+  (let ((page (or page *page-pathname*)))
+    (unless (and page (probe-file page))
+      (error "luv-physics: no page to read: ~S (load the system from its repository)" page))
+    (split-lines (read-file-text page))))
+
+(defun find-section (lines anchor)
+  "The (FIRST . LAST) lines of section ANCHOR (string or symbol, leading # ignored) in LINES, or an
+error naming the anchor. #0QBGZO"
+  (let ((id (string-left-trim "#" (string anchor))))
+    (or (gethash id (page-sections lines))
+        (error "luv-physics: the page has no section ~S" id))))
+
+(defun section (anchor &key page (stream *standard-output*))
+  "Print the title and lines of section ANCHOR of PAGE, its definitions with their lines on the
+page and in the tangled file, and its claims with their lines; return the title. #0QBGZO"
+  (let* ((lines (page-lines-of page))
+         (id (string-left-trim "#" (string anchor)))
+         (range (find-section lines id))
+         (heading (aref lines (1- (car range))))
+         (title (string-trim " *" (subseq heading 0 (or (search "   " heading) (length heading)))))
+         (prefix (format nil "#+name: ~A-" id))
+         (*package* (find-package '#:luv-physics)))
+    (format stream "~&~A  ~A~%  ~A:~D-~D~%" id title
+            (file-namestring (or page *page-pathname*)) (car range) (cdr range))
+    (let ((records (anchor-definitions id)))
+      (format stream "  ~D definition~:P~:[~;:~]~%" (length records) records)
+      (dolist (r records)
+        (format stream "    ~5D  ~(~14A~) ~(~S~)  ~A:~D~%" (getf r :org-line) (getf r :kind)
+                (getf r :name) (getf r :file) (getf r :line))))
+    (let ((claims (loop for i from (car range) to (cdr range)
+                        for text = (aref lines (1- i))
+                        when (starts-with prefix text)
+                          collect (cons (1+ i) (subseq text (length prefix))))))
+      (format stream "  ~D claim~:P~:[~;:~]~%" (length claims) claims)
+      (loop for (line . slug) in claims
+            do (format stream "    ~5D  ~A~%" line slug)))
+    (let* ((forms (page-forms lines (engine-files)))
+           (own (remove id forms :key (lambda (form) (getf form :anchor)) :test-not #'equal))
+           (copied (remove-duplicates (loop for form in own
+                                            append (remove-if-not #'symbolp (form-expanders (getf form :form))))))
+           (users (remove id (remove-duplicates (mapcar (lambda (form) (getf form :anchor)) (reload-closure own forms))
+                                                :test #'equal :from-end t)
+                          :test #'equal)))
+      (format stream "  ~:[Nothing it defines is copied into its users.~;Copied into its users: ~:*~{~(~A~)~^ ~}~]~%"
+              copied)
+      (when users
+        (format stream "  Reloading it also recompiles forms of ~{~A~^ ~}.~%" users)))
+    title))
+;; Read a section's code from the page:1 ends here
+
+;; [[file:../physics.org::#OWNJGP][Reload a section into the running image:1]]
+(defvar *loaded-file-texts* (make-hash-table :test 'equal)
+  "The text of each registered tangled file (relative to the page) as it was loaded. #OWNJGP")
+
+(defvar *loaded-forms* nil
+  "A hash table from each loaded form's key to the text loaded under it, or NIL until a reload
+builds it from *loaded-file-texts*. #OWNJGP")
+
+(defvar *parameter-defaults* (make-hash-table :test 'eq)
+  "For each defparameter of the page, the value its last evaluation gave. #OWNJGP")
+
+(defun note-loaded-file (file text records)
+  "Keep TEXT, the loaded tangled FILE, and the value of each defparameter among its RECORDS. #OWNJGP"
+  (setf (gethash file *loaded-file-texts*) text
+        *loaded-forms* nil)
+  (dolist (record records)
+    (let ((name (getf record :name)))
+      (when (and (eq :defparameter (getf record :kind)) (symbolp name) (boundp name))
+        (setf (gethash name *parameter-defaults*) (symbol-value name))))))
+
+(defun form-keys (forms)
+  "The key of each of FORMS: (FILE ANCHOR NAMES N), N counting the earlier FORMS with the same
+file, anchor and names. #OWNJGP"
+  (let ((seen (make-hash-table :test 'equal)))
+    (mapcar (lambda (form)
+              (let ((base (list (getf form :file) (getf form :anchor)
+                                (form-definitions (getf form :form)))))
+                (append base (list (1- (incf (gethash base seen 0)))))))
+            forms)))
+
+(defun tangled-text-forms (file text)
+  "The toplevel forms of TEXT, the tangled FILE, as page-forms gives them (:block and :line being
+lines of the tangled file). #OWNJGP"
+  (let* ((lines (split-lines text))
+         (anchors (line-anchors lines))
+         (*package* (find-package '#:luv-physics)))
+    ;; chunks of one anchor, split where the link comment changes or repeats
+    (loop with start = 0
+          for i from 0 to (length lines)
+          when (or (= i (length lines)) (link-comment-anchor (aref lines i)))
+            append (prog1 (when (and (< start i) (aref anchors start))
+                            (block-forms lines (aref anchors start) file (1+ start) (1+ start) i))
+                     (setf start (1+ i))))))
+
+(defun loaded-forms ()
+  "The table of *loaded-forms*, built from the registered files' texts when it is NIL. #OWNJGP"
+  (or *loaded-forms*
+      (let ((table (make-hash-table :test 'equal)))
+        (loop for file in (engine-files)
+              for text = (gethash file *loaded-file-texts*)
+              when text
+                do (let ((forms (tangled-text-forms file text)))
+                     (loop for form in forms for key in (form-keys forms)
+                           do (setf (gethash key table) (getf form :text)))))
+        (setf *loaded-forms* table))))
+
+(defun form-expanders (form &optional compile-time)
+  "The names FORM defines that its users copy when they are compiled: macros, setf expanders,
+types, symbol macros, inline functions, and (COMPILE-TIME) whatever is defined at compile time;
+the page's own defining macros are expanded to see what they define. #OWNJGP"
+  (cond ((atom form) '())
+        ((member (car form) '(progn locally))
+         (loop for f in (cdr form) append (form-expanders f compile-time)))
+        ((eq (car form) 'eval-when)
+         (loop with now = (or compile-time (and (member :compile-toplevel (second form)) t))
+               for f in (cddr form) append (form-expanders f now)))
+        ((eq (car form) 'declaim)
+         (loop for spec in (cdr form)
+               when (and (consp spec) (eq (car spec) 'inline)) append (copy-list (cdr spec))))
+        ((member (car form) '(defmacro define-compiler-macro defsetf deftype define-symbol-macro
+                              define-modify-macro define-setf-expander))
+         (list (second form)))
+        ((and (eq (car form) 'defun)
+              (or compile-time (eq 'inline (sb-int:info :function :inlinep (second form)))))
+         (list (second form)))
+        ((and compile-time (defining-operator-p (car form)) (symbolp (second form)))
+         (list (second form)))
+        ((and (symbolp (car form)) (eq (symbol-package (car form)) (find-package '#:luv-physics))
+              (macro-function (car form)))
+         (form-expanders (macroexpand-1 form) compile-time))
+        (t '())))
+
+(defun form-tokens (form)
+  "The upcased words of FORM's text, as a hash table: the names it may mention. #OWNJGP"
+  (let ((tokens (make-hash-table :test 'equal))
+        (text (getf form :text)))
+    (loop with start = 0
+          for i from 0 to (length text)
+          when (or (= i (length text)) (member (char text i) '(#\Space #\Tab #\Newline #\( #\) #\' #\` #\, #\" #\# #\; #\|)))
+            do (when (< start i) (setf (gethash (string-upcase (subseq text start i)) tokens) t))
+               (setf start (1+ i)))
+    tokens))
+
+(defun reload-closure (selected forms &optional (seeds selected))
+  "SELECTED, some of FORMS, with every form of FORMS that mentions a name that SEEDS (by default
+SELECTED) copy into their users (see form-expanders), then the users of what those users copy, and
+so on, in the order of FORMS. #OWNJGP"
+  (let ((chosen (make-hash-table :test 'eq))
+        (tokens (make-hash-table :test 'eq))
+        (queue (copy-list seeds)))
+    (dolist (form selected) (setf (gethash form chosen) t))
+    (loop while queue
+          do (let ((names (remove-if-not #'symbolp (form-expanders (getf (pop queue) :form)))))
+               (when names
+                 (dolist (user forms)
+                   (unless (gethash user chosen)
+                     (let ((words (or (gethash user tokens) (setf (gethash user tokens) (form-tokens user)))))
+                       (when (some (lambda (name) (gethash (symbol-name name) words)) names)
+                         (setf (gethash user chosen) t)
+                         (push user queue))))))))
+    (remove-if-not (lambda (form) (gethash form chosen)) forms)))
+
+(defun line-position (lines line)
+  "The character position, counted from 1 as Emacs counts, where LINE of LINES starts. #OWNJGP"
+  (1+ (loop for i from 0 below (1- line) sum (1+ (length (aref lines i))))))
+
+(defun load-page-text (text page position)
+  "Compile TEXT, the page PAGE's text from character POSITION, in the engine's package with the
+page as its source, and load it; return the warnings, which are not printed. #OWNJGP"
+  (let* ((name (namestring page))
+         (source (merge-pathnames (format nil "luv-physics-reload-~36R.lisp" (random (expt 36 8) (make-random-state t)))
+                                  (or (sb-ext:posix-getenv "TMPDIR") "/tmp/")))
+         (fasl (compile-file-pathname source))
+         (warnings '()))
+    (unwind-protect
+         (progn
+           (with-open-file (out source :direction :output :if-exists :supersede :external-format :utf-8)
+             (write-string text out))
+           (handler-bind ((sb-ext:compiler-note #'muffle-warning)
+                          ;; a reload redefines on purpose
+                          (sb-kernel:redefinition-warning #'muffle-warning)
+                          (warning (lambda (w) (push w warnings) (muffle-warning w))))
+             (let ((*package* (find-package '#:luv-physics)) (*read-eval* t)
+                   (*compile-verbose* nil) (*compile-print* nil) (*load-verbose* nil)
+                   (*error-output* (make-broadcast-stream)))
+               (with-compilation-unit (:source-plist (list :emacs-buffer name :emacs-filename name
+                                                           :emacs-package "LUV-PHYSICS"
+                                                           :emacs-position position :emacs-string text)
+                                       :source-namestring name :allow-other-keys t)
+                 (load (compile-file source :output-file fasl :external-format :utf-8))))))
+      (when (probe-file source) (delete-file source))
+      (when (probe-file fasl) (delete-file fasl)))
+    (nreverse warnings)))
+
+(defun reload-forms (selected forms lines page label &optional (started (get-internal-real-time)))
+  "Load SELECTED, forms of the page PAGE (whose LINES and FORMS are given), with every user they
+need recompiled, keeping the parameters the user changed; return and print one line of summary
+starting with LABEL and ending with the seconds since STARTED. #OWNJGP"
+  (let* ((selected (remove-if (lambda (form)
+                                (let ((read (getf form :form)))
+                                  (and (consp read) (eq 'register-tangled-file (car read)))))
+                              selected))
+         ;; only a form whose text changed can change what its users copy
+         (changed (let ((table (loaded-forms)))
+                    (loop for form in forms for key in (form-keys forms)
+                          when (and (member form selected) (not (equal (getf form :text) (gethash key table))))
+                            collect form)))
+         (chosen (reload-closure selected forms changed))
+         (users (set-difference chosen selected))
+         (kept '()) (warnings '()) (failure nil))
+    (handler-case
+        (loop while chosen
+              do (let ((run (list (pop chosen))))
+                   ;; a run: forms next to each other in one block
+                   (loop while (and chosen
+                                    (eql (getf (first chosen) :block) (getf (first run) :block))
+                                    (eq (first chosen) (second (member (first run) forms))))
+                         do (push (pop chosen) run))
+                   (setf run (nreverse run))
+                   (let* ((parameters (loop for form in run
+                                            append (loop for (name kind) in (form-definitions (getf form :form))
+                                                         when (and (eq kind :defparameter) (boundp name))
+                                                           collect name)))
+                          (tuned (remove-if (lambda (name)
+                                              (multiple-value-bind (default known) (gethash name *parameter-defaults*)
+                                                (or (not known) (equal default (symbol-value name)))))
+                                            parameters))
+                          (saved (mapcar #'symbol-value tuned))
+                          (first (getf (first run) :line)))
+                     (setf warnings (append warnings
+                                            (load-page-text (format nil "~{~A~^~%~}" (mapcar (lambda (f) (getf f :text)) run))
+                                                            page (line-position lines first))))
+                     (dolist (name parameters)
+                       (setf (gethash name *parameter-defaults*) (symbol-value name)))
+                     (loop for name in tuned for value in saved
+                           do (setf (symbol-value name) value) (push name kept))
+                     (let ((table (loaded-forms)))
+                       (loop for form in forms for key in (form-keys forms)
+                             when (member form run) do (setf (gethash key table) (getf form :text)))))))
+      (error (e) (setf failure e)))
+    (refresh-page-lines forms)
+    (let ((summary
+            (format nil "~A: ~D form~:P~@[ (~A)~]~:[~*~;, ~:*~D user~:P recompiled (~{~A~^ ~})~]~
+                         ~@[, kept ~{~(~A~)~^ ~}~], ~D warning~:P~@[ (first: ~A)~], ~,2F s~@[; FAILED: ~A~]"
+                    label (length selected)
+                    (when selected
+                      (format nil "~A:~D-~D" (file-namestring page)
+                              (reduce #'min selected :key (lambda (f) (getf f :line)))
+                              (reduce #'max selected :key (lambda (f) (getf f :end)))))
+                    (and users (length users))
+                    (remove-duplicates (mapcar (lambda (f) (getf f :anchor)) users) :test #'equal :from-end t)
+                    (reverse kept)
+                    (length warnings)
+                    (when warnings (substitute #\Space #\Newline (princ-to-string (first warnings))))
+                    (/ (- (get-internal-real-time) started) internal-time-units-per-second 1.0)
+                    (when failure (substitute #\Space #\Newline (princ-to-string failure))))))
+      (format t "~&~A~%" summary)
+      summary)))
+
+(defun refresh-page-lines (forms)
+  "Give every registered definition the page line of the form of FORMS that defines it now. #OWNJGP"
+  (let ((lines (make-hash-table :test 'equal)))
+    (dolist (form forms)
+      (loop for (name kind) in (form-definitions (getf form :form))
+            do (let ((key (list name kind (getf form :anchor))))
+                 (unless (gethash key lines) (setf (gethash key lines) (getf form :line))))))
+    (dolist (record *definitions*)
+      (let ((line (gethash (list (getf record :name) (getf record :kind) (getf record :anchor)) lines)))
+        (when line (setf (getf record :org-line) line))))))
+
+(defun reload-section (anchor &key page line)
+  "Compile and load the forms of section ANCHOR of PAGE (the loaded page by default), or with LINE
+only those of the block holding that page line, with the users they need recompiled; parameters the
+user changed keep their values. Print and return one line of summary. #OWNJGP"
+  (let* ((started (get-internal-real-time))
+         (page (or page *page-pathname*))
+         (lines (page-lines-of page))
+         (id (string-left-trim "#" (string anchor)))
+         (range (find-section lines id))
+         (forms (page-forms lines (engine-files)))
+         (block (and line (find-if (lambda (b) (<= (third b) line (1+ (fifth b)))) (page-code-blocks lines))))
+         (selected (remove-if-not (lambda (form)
+                                    (and (equal id (getf form :anchor))
+                                         (<= (car range) (getf form :line) (cdr range))
+                                         (or (null line) (eql (getf form :block) (third block)))))
+                                  forms)))
+    (reload-forms selected forms lines page (format nil "reload ~A~@[ (block at line ~D)~]" id line) started)))
+
+(defun tangle-page (page)
+  "Tangle PAGE with tools/tangle-page in its directory (Emacs from $EMACS, or emacs); the files
+whose text changes are rewritten. Signal an error with the tool's output if it fails. #OWNJGP"
+  (let* ((directory (make-pathname :name nil :type nil :version nil :defaults (truename page)))
+         (output (make-string-output-stream))
+         (process (sb-ext:run-program "tools/tangle-page"
+                                      (list (or (sb-ext:posix-getenv "EMACS") "emacs") (file-namestring page))
+                                      :directory (namestring directory) :output output :error output
+                                      :search nil :wait t)))
+    (unless (eql 0 (sb-ext:process-exit-code process))
+      (error "luv-physics: tangling ~A failed: ~A" page (get-output-stream-string output)))
+    (get-output-stream-string output)))
+
+(defun reload-changed (&key page (tangle t))
+  "Tangle PAGE (unless TANGLE is NIL), then compile and load every form of it whose text differs
+from the one the image last loaded, with the users they need recompiled, and register the tangled
+files again. Print and return one line of summary. #OWNJGP"
+  (let* ((started (get-internal-real-time))
+         (page (or page *page-pathname*)))
+    (when tangle (tangle-page page))
+    (let* ((lines (page-lines-of page))
+           (files (engine-files))
+           (forms (page-forms lines files))
+           (table (loaded-forms))
+           (changed (loop for form in forms for key in (form-keys forms)
+                          unless (equal (getf form :text) (gethash key table)) collect form))
+           (summary (reload-forms changed forms lines page
+                                  (if tangle "tangle and reload changed" "reload changed") started)))
+      (when tangle
+        (dolist (file files)
+          (register-tangled-file (merge-pathnames file page)))
+        (refresh-page-lines forms))
+      summary)))
+;; Reload a section into the running image:1 ends here
+
+;; [[file:../physics.org::#PYXPDY][Answers for the editor:1]]
+(defun editor-page ()
+  "For the editor: the page the loaded files were tangled from, as a namestring. #PYXPDY"
+  (and *page-pathname* (namestring *page-pathname*)))
+
+(defun editor-definitions (anchor)
+  "For the editor: each definition of section ANCHOR as (NAME KIND PAGE-LINE FILE LINE), the name
+printed in this package and the kind in lowercase. #PYXPDY"
+  (let ((*package* (find-package '#:luv-physics)) (*print-case* :downcase))
+    (mapcar (lambda (record)
+              (list (prin1-to-string (getf record :name)) (string-downcase (getf record :kind))
+                    (getf record :org-line) (getf record :file) (getf record :line)))
+            (anchor-definitions anchor))))
+
+(defun editor-page-line (name package)
+  "For the editor: (ANCHOR PAGE-LINE PAGE) for the definition of NAME, a symbol as written in a
+buffer whose package is named PACKAGE, or NIL when the page defines no such name. #PYXPDY"
+  (let* ((*package* (or (find-package (string-upcase (string-left-trim "#:" package)))
+                        (find-package '#:cl-user)))
+         (*read-eval* nil)
+         (symbol (ignore-errors (read-from-string name))))
+    (when (and symbol (symbolp symbol))
+      (loop for candidate in (list symbol (find-symbol (symbol-name symbol) '#:luv-physics))
+            do (multiple-value-bind (anchor line) (and candidate (definition-anchor candidate))
+                 (when anchor (return (list anchor line (editor-page)))))))))
+
+(defun editor-section (anchor page)
+  "For the editor: what section prints for ANCHOR of PAGE, as a string. #PYXPDY"
+  (with-output-to-string (s) (section anchor :page page :stream s)))
+;; Answers for the editor:1 ends here
 
 ;; [[file:../physics.org::#V0CAB5][Types, the hot-loop policy and the parameters:1]]
 (eval-when (:compile-toplevel :load-toplevel :execute)
@@ -471,6 +922,14 @@ single-float goes through double precision; both round correctly, so they agree)
                      (invalid-physics-parameter-value c) (invalid-physics-parameter-expected c))))
   (:documentation "A parameter outside its documented range: a mass <= 0, a negative friction. #C0ND1T"))
 
+(define-condition not-a-physics-world (invalid-physics-parameter)
+  ((operation :initarg :operation :reader not-a-physics-world-operation))
+  (:report (lambda (c s)
+             (format s "~(~A~): its argument ~A is ~S, not a physics-world (make one with ~
+                        make-physics-world)" (not-a-physics-world-operation c)
+                     (invalid-physics-parameter-name c) (invalid-physics-parameter-value c))))
+  (:documentation "Something other than a world given to an exported function as its world. #C0ND1T"))
+
 (define-condition stale-physics-handle (physics-error)
   ((handle :initarg :handle :reader stale-physics-handle-handle)
    (reason :initarg :reason :reader stale-physics-handle-reason))
@@ -479,6 +938,7 @@ single-float goes through double precision; both round correctly, so they agree)
                      (ecase (stale-physics-handle-reason c)
                        (:malformed "not a physics handle")
                        (:foreign "from another world")
+                       (:unissued "a handle of no world: no world has given out its tag")
                        (:removed "of a body that was removed or expired")))))
   (:documentation "A handle that names no live body of this world. #C0ND1T"))
 
@@ -749,11 +1209,15 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
   (free -1 :type fixnum)
   (tag 0 :type fixnum))
 
-(defvar *world-tag-counter* 0 "The tag the next world's handles carry (mod 2^16). #B5N8JT")
+(defvar *world-tag-counter* 0 "How many world tags have been given out; tags run from 1 to 2^16-1 and wrap. #B5N8JT")
 
 (defun make-handle-table ()
-  "An empty handle table with a fresh world tag. #B5N8JT"
-  (%make-handle-table :tag (ldb (byte +handle-tag-bits+ 0) (incf *world-tag-counter*))))
+  "An empty handle table with a fresh world tag, never 0. #B5N8JT"
+  (%make-handle-table :tag (1+ (mod (1- (incf *world-tag-counter*)) (1- (ash 1 +handle-tag-bits+))))))
+
+(defun tag-issued-p (tag)
+  "True when some world has been given TAG. #B5N8JT"
+  (and (plusp tag) (or (<= tag *world-tag-counter*) (>= *world-tag-counter* (1- (ash 1 +handle-tag-bits+))))))
 
 (defun handle-table-allocate (table set local)
   "Take a free slot of TABLE for a body at SET and row LOCAL; return its new handle. #B5N8JT"
@@ -787,9 +1251,10 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
     table))
 
 (defun handle-status (table handle)
-  "NIL when HANDLE names a live body of TABLE, else why not (:malformed :foreign :removed). #B5N8JT"
+  "NIL when HANDLE names a live body of TABLE, else why not (:malformed :unissued :foreign :removed). #B5N8JT"
   (cond ((not (and (typep handle 'fixnum) (>= handle 0))) :malformed)
-        ((/= (handle-tag handle) (handle-table-tag table)) :foreign)
+        ((/= (handle-tag handle) (handle-table-tag table))
+         (if (tag-issued-p (handle-tag handle)) :foreign :unissued))
         ((or (>= (handle-index handle) (handle-table-count table))
              (= (aref (handle-table-set table) (handle-index handle)) +set-free+)
              (/= (aref (handle-table-generation table) (handle-index handle))
@@ -1597,8 +2062,30 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
                    :kernels (make-kernel-family kernels)
                    :sleep-enabled sleep)))
 
+(declaim (inline check-world))
+(defun check-world (world operation)
+  "Signal not-a-physics-world, naming OPERATION and its argument WORLD, unless WORLD is a
+physics-world: one type test, made once per call of an exported function. #M4K3WD"
+  (unless (typep world 'physics-world)
+    (error 'not-a-physics-world :operation operation :name 'world :value world
+                                :expected "a physics-world (from make-physics-world)")))
+
+(defmacro refuse-non-worlds (&rest accessors)
+  "Make each of ACCESSORS, exported generic functions of a world (the world last, as for a setf
+accessor), signal not-a-physics-world naming itself when given something else. #M4K3WD"
+  `(progn
+     ,@(loop for name in accessors
+             collect `(defmethod no-applicable-method ((function (eql (function ,name))) &rest arguments)
+                        (error 'not-a-physics-world :operation ',name :name 'world :value (car (last arguments))
+                                                    :expected "a physics-world (from make-physics-world)")))))
+
+(refuse-non-worlds physics-world-step-count physics-world-event-handler (setf physics-world-event-handler)
+                   physics-world-step-hook (setf physics-world-step-hook))
+
 (defun check-idle (world operation)
-  "Signal physics-world-busy unless WORLD is between steps. #M4K3WD"
+  "Signal not-a-physics-world unless WORLD is a world, and physics-world-busy unless it is between
+steps. #M4K3WD"
+  (check-world world operation)
   (when (physics-world-stepping world)
     (error 'physics-world-busy :world world :operation operation)))
 
@@ -1616,10 +2103,12 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
 
 (defun physics-body-alive-p (world handle)
   "True when HANDLE names a body of WORLD that has not been removed or expired. #M4K3WD"
+  (check-world world 'physics-body-alive-p)
   (null (handle-status (physics-world-ids world) handle)))
 
 (defun physics-body-awake-p (world handle)
   "True when HANDLE's body is in the awake set. #M4K3WD"
+  (check-world world 'physics-body-awake-p)
   (= (resolve-handle world handle) +set-awake+))
 
 (defmacro define-body-reader (name (&rest columns) documentation)
@@ -1627,6 +2116,7 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
 HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3WD"
   `(defun ,name (world handle)
      ,documentation
+     (check-world world ',name)
      (multiple-value-bind (set row) (resolve-handle world handle)
        (with-body-columns ,columns (set-buffer world set)
          (values ,@(loop for column in columns collect `(aref ,column row)))))))
@@ -1651,10 +2141,12 @@ HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3W
 
 (defun physics-world-awake-count (world)
   "How many bodies of WORLD are awake. #M4K3WD"
+  (check-world world 'physics-world-awake-count)
   (body-columns-length (physics-world-awake world)))
 
 (defun physics-world-sleeping-count (world)
   "How many bodies of WORLD are asleep. #M4K3WD"
+  (check-world world 'physics-world-sleeping-count)
   (body-columns-length (physics-world-sleeping world)))
 
 (defun check-coordinate (name v &optional world)
@@ -3155,6 +3647,7 @@ returns the number of colours used. #SSMPYW"
 
 (defun physics-world-overflow-count (world)
   "How many of the last step's contacts fell into the overflow colour. #SSMPYW"
+  (check-world world 'physics-world-overflow-count)
   (let ((starts (physics-world-color-starts world)))
     (- (aref starts (1+ +physics-max-colors+)) (aref starts +physics-max-colors+))))
 ;; Colours are the lanes:1 ends here
@@ -3901,6 +4394,7 @@ and start the contact table's walk of it. #IDVK7G"
 (declaim (inline physics-world-max-penetration))
 (defun physics-world-max-penetration (world)
   "The deepest overlap, in metres, left at the end of the last step. #IDVK7G"
+  (check-world world 'physics-world-max-penetration)
   (aref (world-statistics world) 3))
 
 (defun substep-phase (world)
@@ -3983,18 +4477,22 @@ phase's position, and the bytes it consed under that position plus the number of
 
 (defun physics-world-last-step-contact-count (world)
   "How many contacts the last step solved. #IDVK7G"
+  (check-world world 'physics-world-last-step-contact-count)
   (round (aref (physics-world-statistics world) 0)))
 
 (defun physics-world-last-step-color-count (world)
   "How many colours the last step's contacts used, overflow included. #IDVK7G"
+  (check-world world 'physics-world-last-step-color-count)
   (round (aref (physics-world-statistics world) 1)))
 
 (defun physics-world-last-step-real-seconds (world)
   "Wall-clock seconds the last step took. #IDVK7G"
+  (check-world world 'physics-world-last-step-real-seconds)
   (aref (physics-world-statistics world) 2))
 
 (defun physics-world-max-approach-speed (world)
   "The fastest approach speed, m/s, of an overlapping contact at the end of the last step. #IDVK7G"
+  (check-world world 'physics-world-max-approach-speed)
   (aref (physics-world-statistics world) 4))
 ;; The step as built:1 ends here
 
@@ -4002,6 +4500,7 @@ phase's position, and the bytes it consed under that position plus the number of
 (defun physics-world-state-hash (world)
   "A 62-bit FNV-style hash of the bits of every body's position, velocity and angular
 velocity, awake set first, each set in row order. Equal hashes mean bit-equal states. #S6T2MV"
+  (check-world world 'physics-world-state-hash)
   (let ((hash 0))
     (declare (type (unsigned-byte 62) hash))
     (dolist (buffer (list (physics-world-awake world) (physics-world-sleeping world)))
@@ -4018,6 +4517,7 @@ velocity, awake set first, each set in row order. Equal hashes mean bit-equal st
 (defun validate-physics-world (world)
   "Walk every forwarding address and contact key of WORLD; return T, or signal
 physics-world-invalid naming the first broken invariant. #V4L1D8"
+  (check-world world 'validate-physics-world)
   (flet ((fail (fmt &rest args)
            (error 'physics-world-invalid :world world :invariant (apply #'format nil fmt args))))
     (let* ((ids (physics-world-ids world))
@@ -4084,6 +4584,7 @@ columns; describe shows that row as if it were slots. #B0DY0B"))
 
 (defun physics-body (world handle)
   "The physics-body object for HANDLE in WORLD. #B0DY0B"
+  (check-world world 'physics-body)
   (resolve-handle world handle)
   (make-instance 'physics-body :world world :handle handle))
 
@@ -4096,16 +4597,115 @@ columns; describe shows that row as if it were slots. #B0DY0B"))
                     (physics-body-awake-p w h) x y z))
           (format stream "~D removed" (handle-index h))))))
 
+(defun body-summary (body)
+  "BODY's row as (LABEL TEXT VALUE) lines: position, velocity, angular velocity, radius, mass,
+material, awake, kind. #B0DY0B"
+  (let ((w (physics-body-world body)) (h (physics-body-handle body)))
+    (multiple-value-bind (set row) (resolve-handle w h)
+      (with-body-columns (restitution friction rolling-resistance inverse-mass) (set-buffer w set)
+        (flet ((triple (reader) (multiple-value-list (funcall reader w h))))
+          (let ((position (triple #'physics-body-position))
+                (velocity (triple #'physics-body-velocity))
+                (spin (triple #'physics-body-angular-velocity))
+                (radius (physics-body-radius w h))
+                (mass (/ 1.0 (aref inverse-mass row)))
+                (material (list (aref restitution row) (aref friction row) (aref rolling-resistance row)))
+                (awake (= set +set-awake+))
+                (kind (physics-body-kind w h)))
+            (list (list "position" (format nil "~{~,4F~^ ~} m" position) position)
+                  (list "velocity" (format nil "~{~,4F~^ ~} m/s" velocity) velocity)
+                  (list "angular velocity" (format nil "~{~,4F~^ ~} rad/s" spin) spin)
+                  (list "radius" (format nil "~A m" radius) radius)
+                  (list "mass" (format nil "~A kg" mass) mass)
+                  (list "material" (format nil "restitution ~A, friction ~A, rolling resistance ~A"
+                                           (first material) (second material) (third material))
+                        material)
+                  (list "awake" (if awake "yes" "no, asleep") awake)
+                  (list "kind" (format nil "~D~@[ ~(~S~)~]" kind (physics-body-kind-name w h)) kind))))))))
+
 (defmethod describe-object ((body physics-body) stream)
   (let ((w (physics-body-world body)) (h (physics-body-handle body)))
-    (format stream "~&~S~%  handle ~D (slot ~D, generation ~D)~%" body h (handle-index h) (handle-generation h))
+    (format stream "~&~S~%  handle ~D (slot ~D, generation ~D) of ~S~%" body h (handle-index h)
+            (handle-generation h) w)
     (when (physics-body-alive-p w h)
+      (loop for (label text) in (body-summary body)
+            do (format stream "  ~18A ~A~%" label text))
       (multiple-value-bind (set row) (resolve-handle w h)
-        (format stream "  lives in the ~:[sleeping~;awake~] set, row ~D~%" (= set +set-awake+) row)
+        (format stream "  Its row, ~:[sleeping~;awake~] set row ~D:~%" (= set +set-awake+) row)
         (let ((buffer (set-buffer w set)))
           (dolist (column +body-columns-column-names+)
             (format stream "  ~(~22A~) = ~S~%" column (aref (slot-value buffer column) row))))))))
 ;; A body as an object:1 ends here
+
+;; [[file:../physics.org::#4YDMX5][A world as an object, and both in the inspector:1]]
+(defun kernel-family-name (kernels)
+  "The name under which the kernel family object KERNELS is registered, or its class name. #4YDMX5"
+  (let ((class (class-name (class-of kernels))))
+    (or (car (find class *kernel-families* :key #'second)) class)))
+
+(defmethod print-object ((world physics-world) stream)
+  (if (slot-boundp world 'kernels)
+      (print-unreadable-object (world stream :type t)
+        (let ((awake (physics-world-awake-count world)))
+          (format stream "~D bod~:@P (~D awake) step ~D ~(~A~)"
+                  (+ awake (physics-world-sleeping-count world)) awake
+                  (physics-world-step-count world) (kernel-family-name (physics-world-kernels world)))))
+      (print-unreadable-object (world stream :type t :identity t))))
+
+(defun world-summary (world)
+  "WORLD's settings and last step, as (LABEL TEXT) lines for describe and the inspector. #4YDMX5"
+  (flet ((line (label format-control &rest arguments)
+           (list label (apply #'format nil format-control arguments))))
+    (list (line "step" "~,4F s in ~D substeps, gravity (~,2F ~,2F ~,2F) m/s^2, sleep ~:[off~;on~]"
+                (physics-world-step-seconds world) (physics-world-substeps world)
+                (physics-world-gravity-x world) (physics-world-gravity-y world) (physics-world-gravity-z world)
+                (physics-world-sleep-enabled world))
+          (line "terrain" "~:[none~;~:*~D chunk~:P of 16^3 cells~]"
+                (let ((terrain (physics-world-terrain world)))
+                  (and terrain (hash-table-count (voxel-terrain-chunks terrain)))))
+          (line "last step" "~D contacts in ~D colours (~D overflowing), ~,6F s"
+                (physics-world-last-step-contact-count world) (physics-world-last-step-color-count world)
+                (physics-world-overflow-count world) (physics-world-last-step-real-seconds world))
+          (line "left" "deepest overlap ~,4F m, fastest approach ~,3F m/s"
+                (physics-world-max-penetration world) (physics-world-max-approach-speed world))
+          (line "contacts" "~A Hz, damping ratio ~A, push-out ~A m/s, slop ~A m, margin ~A m, pair skin ~A m"
+                (physics-world-contact-hertz world) (physics-world-damping-ratio world)
+                (physics-world-push-max world) (physics-world-slop world) (physics-world-margin world)
+                (physics-world-pair-skin world))
+          (line "speeds" "bounce above ~A m/s, hit above ~A m/s, still under ~A m/s for ~A s, wake above ~A m/s"
+                (physics-world-restitution-threshold world) (physics-world-hit-speed world)
+                (physics-world-sleep-speed world) (physics-world-time-to-sleep world)
+                (physics-world-wake-speed world))
+          (line "events" "~:[no handler~;handler ~:*~S~]" (physics-world-event-handler world)))))
+
+(defmethod describe-object ((world physics-world) stream)
+  (format stream "~&~S~%" world)
+  (loop for (label text) in (world-summary world)
+        do (format stream "  ~10A ~A~%" label text)))
+
+(defun inspection-parts (object)
+  "The SLIME inspector's content for OBJECT, a physics-world or a physics-body, in SWANK's format. #4YDMX5"
+  (etypecase object
+    (physics-world
+     (append (list (prin1-to-string object) '(:newline))
+             (loop for (label text) in (world-summary object)
+                   append (list (format nil "~10A " label) text '(:newline)))
+             (list "kernels    " (list :value (physics-world-kernels object)) '(:newline))))
+    (physics-body
+     (let ((world (physics-body-world object)))
+       (append (list (prin1-to-string object) '(:newline) "world      " (list :value world) '(:newline))
+               (loop for (label text value) in (body-summary object)
+                     append (list (format nil "~18A " label) (list :value value text) '(:newline))))))))
+
+(defun install-swank-inspection ()
+  "If SWANK is loaded, make its inspector show worlds and bodies by inspection-parts; true if it did. #4YDMX5"
+  (let ((inspect (and (find-package "SWANK") (find-symbol "EMACS-INSPECT" "SWANK"))))
+    (when (and inspect (fboundp inspect))
+      (dolist (class '(physics-world physics-body) t)
+        (eval `(defmethod ,inspect ((object ,class)) (inspection-parts object)))))))
+
+(install-swank-inspection)
+;; A world as an object, and both in the inspector:1 ends here
 
 ;; [[file:../physics.org::#B4S1NS][The basin:1]]
 (defun make-basin-terrain (&key (wall-height 6) (air-height 48))
@@ -4215,10 +4815,12 @@ naming it. #JAU0EF"
 (defun add-physics-body-of-kind (world kind x y z &key (vx 0.0) (vy 0.0) (vz 0.0) report-hits)
   "Add a body of KIND (a keyword of *physics-body-kinds*) centred at X Y Z, moving at VX VY VZ,
 and return its handle. #JAU0EF"
+  (check-world world 'add-physics-body-of-kind)
   (add-physics-body-of-kind-number world (physics-kind-number kind world) x y z vx vy vz report-hits))
 
 (defun physics-body-kind-name (world handle)
   "The keyword of the kind of HANDLE's body, or NIL for a body added without a kind. #JAU0EF"
+  (check-world world 'physics-body-kind-name)
   (let ((number (physics-body-kind world handle)))
     (and (<= 1 number (length *physics-body-kinds*))
          (first (physics-kind-entry number)))))
@@ -4264,6 +4866,7 @@ COUNT-th body of the spring at cell X Y Z: a fixed hash of the four integers. #J
 (defun run-physics-springs (world springs &optional function)
   "Let each of SPRINGS emit into WORLD what is due this call, calling FUNCTION, when given, on
 the handle of each body emitted; return how many were emitted. Conses nothing. #JAU0EF"
+  (check-world world 'run-physics-springs)
   (let ((emitted 0))
     (declare (type fixnum emitted))
     (dolist (spring springs emitted)
@@ -4469,6 +5072,7 @@ Return the steps run. #H7P4CX"
 
 (defun post-physics-player (world player)
   "Post PLAYER into WORLD's next step as a kinematic box moving at its velocity. #H7P4CX"
+  (check-world world 'post-physics-player)
   (let ((w (physics-player-half-width player)) (h (* 0.5d0 (physics-player-height player))))
     (post-physics-box world (physics-player-x player) (+ (physics-player-y player) h)
                       (physics-player-z player) w h w
@@ -5742,6 +6346,7 @@ awake and sleeping counts, the contacts, the step's milliseconds and the simulat
 (defun start-physics-recording (world &key (every 1))
   "Record WORLD from now on: a frame of its present state, then a frame after every EVERY-th
 step, through its step hook (which must be free). Return the recording. #G4WXCJ"
+  (check-world world 'start-physics-recording)
   (check-count :every every 3600)
   (when (physics-world-step-hook world)
     (error 'invalid-physics-parameter :world world :name :step-hook
@@ -5757,6 +6362,7 @@ step, through its step hook (which must be free). Return the recording. #G4WXCJ"
 
 (defun stop-physics-recording (world)
   "Stop recording WORLD: its step hook is NIL again. Return WORLD. #G4WXCJ"
+  (check-world world 'stop-physics-recording)
   (setf (physics-world-step-hook world) nil)
   world)
 
@@ -6904,6 +7510,7 @@ or asleep), a solid cell or a box posted for the step, as a physics-hit (HIT, fi
 or NIL. BODIES, CELLS and BOXES choose the kinds; EXCLUDE, a handle or a box's owner, is passed
 through; FILTER, a function of the kind (:body :cell :box) and the handle, NIL or owner, keeps a
 hit when it returns true. #R4YC57"
+  (check-world world 'physics-ray-cast)
   (physics-cast 'physics-ray-cast world x y z 0 dx dy dz max-distance bodies cells boxes exclude filter hit))
 ;; Rays walk the cells in order:1 ends here
 
@@ -6947,6 +7554,7 @@ centre starts in a solid cell meets it at 0 with the normal against the cast. #S
   "The first thing a sphere of RADIUS moved from X Y Z along DX DY DZ meets before it has moved
 MAX-DISTANCE, as physics-ray-cast answers it: the distance moved, the point of contact and the
 normal out of what was met. #S9WEEP"
+  (check-world world 'physics-sphere-cast)
   (physics-cast 'physics-sphere-cast world x y z radius dx dy dz max-distance bodies cells boxes exclude filter hit))
 ;; Spheres swept along a path:1 ends here
 
