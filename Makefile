@@ -1,5 +1,5 @@
 # luv-physics -- rigid spheres in a block world, written as the literate page physics.org.
-# Run 'make help' for the targets.  GNU Make; Debian 12 with sbcl, emacs-nox, cl-fiveam.
+# Run 'make help' for the targets.  GNU Make; Debian 12 with sbcl, emacs-nox, cl-fiveam, slime.
 
 EMACS  ?= emacs
 SBCL   ?= sbcl
@@ -9,15 +9,16 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers report html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
 	@echo "make demo           install what is missing (as root), tangle, run the default scene"
 	@echo "make test           check tangling and anchors, then run every claim"
-	@echo "make test ANCHOR=ID run only the claims of section ID"
+	@echo "make test ANCHOR=ID run only the claims of section ID (without the editor checks)"
+	@echo "make editor-test    Emacs with SLIME against a live image: jumps, edit buffers, reload"
 	@echo "make setup          install what the page needs if missing (apt-get, as root): sbcl, emacs-nox,"
-	@echo "                    cl-fiveam, elpa-htmlize, libjs-three; chromium, imagemagick for the browser claims"
+	@echo "                    cl-fiveam, slime, elpa-htmlize, libjs-three; chromium, imagemagick for the browser claims"
 	@echo "make tangle         write $(OUT) from $(ORG), each only if its text changed"
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
@@ -47,6 +48,10 @@ check-anchors:
 
 test: setup check-tangle check-anchors physics.html
 	@ANCHOR="$(ANCHOR)" $(LISP) --load tests/run.lisp
+	@if [ -z "$(ANCHOR)" ]; then tools/editor-test "$(SBCL)" "$(EMACS)"; fi
+
+editor-test: setup
+	@tools/editor-test "$(SBCL)" "$(EMACS)"
 
 demo: setup tangle
 	@$(LISP) --load tools/demo.lisp
@@ -57,6 +62,8 @@ bench: setup tangle
 	@$(SBCL) --script tools/splice.lisp bench-basin report/bench.org
 	@$(LISP) --load tools/bench-scenes.lisp | tee report/bench-scenes.org
 	@$(SBCL) --script tools/splice.lisp bench-scenes report/bench-scenes.org
+	@$(LISP) --load tools/bench-sleeping.lisp | tee report/bench-sleeping.org
+	@$(SBCL) --script tools/splice.lisp bench-sleeping report/bench-sleeping.org
 	@$(LISP) --load tools/bench-queries.lisp | tee report/bench-queries.org
 	@$(SBCL) --script tools/splice.lisp bench-queries report/bench-queries.org
 

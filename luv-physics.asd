@@ -3,6 +3,23 @@
 (defsystem "luv-physics"
   :description "Rigid spheres in a voxel world, written as the literate page physics.org."
   :depends-on ((:require "sb-simd") (:require "sb-introspect"))
+  ;; one line per file compiled: the compiler's notes are for the page's authors
+  :around-compile (lambda (compile)
+                    (let* ((log (make-string-output-stream))
+                           (started (get-internal-real-time))
+                           (result (multiple-value-list
+                                    (let ((*standard-output* log) (*compile-verbose* t) (*compile-print* nil))
+                                      (handler-bind ((sb-ext:compiler-note #'muffle-warning))
+                                        (funcall compile)))))
+                           (text (get-output-stream-string log))
+                           (at (search "; compiling file \"" text))
+                           (file (if at
+                                     (subseq text (+ at 18) (position #\" text :start (+ at 18)))
+                                     "a file")))
+                      (format t "~&; luv-physics: compiled ~A in ~,1F s~%"
+                              (enough-namestring file (asdf:system-source-directory "luv-physics"))
+                              (/ (- (get-internal-real-time) started) internal-time-units-per-second))
+                      (values-list result)))
   :serial t
   :components ((:file "tangled/physics")
                (:file "tangled/physics-simd"))

@@ -66,6 +66,14 @@
    #:physics-ray-cast #:physics-sphere-cast
    #:map-physics-bodies-in-sphere #:map-physics-bodies-in-box
    #:map-physics-cells-in-sphere #:map-physics-cells-in-box #:run-query-benchmark
+   ;; Giving back the room the buffers grew to (#QKS4GZ)
+   #:trim-physics-world
+   ;; Reading and reloading the page in a live image (#0QBGZO, #OWNJGP)
+   #:section #:reload-section #:reload-changed
+   ;; Exported functions refuse a non-world by name (#C0ND1T, #M4K3WD)
+   #:not-a-physics-world
+   ;; A world as an object, and both in the inspector (#4YDMX5)
+   #:install-swank-inspection
    ;; Random operation sequences (#M9W5P7)
    #:run-fuzz-campaign #:run-physics-soak))
 
@@ -310,6 +318,7 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
             *registered-files* (append (remove source *registered-files* :test #'equal)
                                        (list source))
             *page-pathname* (or page *page-pathname*))
+      (note-loaded-file file text records)
       (length records))))
 
 (defun anchor-definitions (anchor)
@@ -327,6 +336,450 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
         (values (getf record :anchor) (getf record :org-line))
         (values nil nil))))
 ;; Register a file and answer by anchor or by name:1 ends here
+
+;; [[file:../physics.org::#0QBGZO][Read a section's code from the page:1]]
+(defun header-tangle (text)
+  "The value of the :tangle header argument in TEXT, or NIL. #0QBGZO"
+  (let ((at (search ":tangle " text)))
+    (when at
+      (let ((start (position #\Space text :start (+ at 8) :test-not #'char=)))
+        (when start
+          (subseq text start (or (position #\Space text :start start) (length text))))))))
+
+(defun page-code-blocks (lines)
+  "Each Lisp block of the page LINES as (ANCHOR FILE BEGIN FIRST LAST): its section's anchor, the
+file it tangles to (\"no\" for none), and the lines of its #+begin_src, first and last code line. #0QBGZO"
+  (let ((headings '()) (default "no") (anchor nil) (drawer nil) (open nil) (blocks '()))
+    ;; HEADINGS: (level . tangle) of the enclosing headings, innermost first
+    (loop for i from 1 to (length lines)
+          for line = (aref lines (1- i))
+          for text = (string-trim '(#\Space #\Tab) line)
+          do (cond (open
+                    (when (string-equal "#+end_src" text)
+                      (push (append open (list (1- i))) blocks)
+                      (setf open nil)))
+                   ((heading-line-p line)
+                    (let ((level (position #\* line :test-not #'char=)))
+                      (loop while (and headings (>= (car (first headings)) level)) do (pop headings))
+                      (push (cons level nil) headings)
+                      (setf anchor nil drawer t)))
+                   ((and drawer (starts-with ":" text))
+                    (cond ((starts-with ":CUSTOM_ID:" text)
+                           (setf anchor (string-trim '(#\Space #\Tab) (subseq text 11))))
+                          ((starts-with ":header-args:lisp" text)
+                           (setf (cdr (first headings)) (or (header-tangle text) (cdr (first headings)))))))
+                   ((and (null headings) (starts-with "#+PROPERTY: header-args:lisp " text))
+                    (setf default (or (header-tangle text) default)))
+                   ((and (<= 16 (length text)) (string-equal "#+begin_src lisp" text :end2 16)
+                         (or (= 16 (length text)) (char= #\Space (char text 16))))
+                    (setf drawer nil
+                          open (list anchor
+                                     (or (header-tangle text)
+                                         (loop for (nil . file) in headings thereis file)
+                                         default)
+                                     i (1+ i))))
+                   (t (setf drawer nil))))
+    (nreverse blocks)))
+
+(defun block-forms (lines anchor file begin first last)
+  "The toplevel forms of page LINES FIRST..LAST, a block of section ANCHOR tangling to FILE whose
+header is line BEGIN, as property lists (:anchor :file :block :line :end :text :form). #0QBGZO"
+  (let* ((code (map 'vector #'unescape-org-line (subseq lines (1- first) last)))
+         (text (format nil "~{~A~^~%~}" (coerce code 'list)))
+         (*read-eval* t)
+         (forms '())
+         (position 0))
+    (loop
+      (let ((start (skip-blanks-and-comments text position)))
+        (when (>= start (length text))
+          (return (nreverse forms)))
+        (multiple-value-bind (form end) (read-from-string text t nil :start start)
+          (let ((from (count #\Newline text :end start))
+                (to (count #\Newline text :end (max start (1- end)))))
+            (when (and (consp form) (eq (car form) 'in-package))
+              (setf *package* (find-package (second form))))
+            (push (list :anchor anchor :file file :block begin
+                        :line (+ first from) :end (+ first to)
+                        :text (format nil "~{~A~^~%~}" (coerce (subseq code from (1+ to)) 'list))
+                        :form form)
+                  forms))
+          (setf position end))))))
+
+(defun page-forms (lines files)
+  "The forms of every block of the page LINES that tangles to one of FILES, in the order FILES
+are loaded and, within a file, in page order. #0QBGZO"
+  (let ((*package* (find-package '#:luv-physics)))
+    (loop for file in files
+          append (loop for (anchor target begin first last) in (page-code-blocks lines)
+                       when (equal target file)
+                         append (block-forms lines anchor file begin first last)))))
+
+(defun engine-files ()
+  "The tangled files of the loaded system, relative to the page, in load order. #0QBGZO"
+  (remove-duplicates (mapcar (lambda (record) (getf record :file)) *definitions*)
+                     :test #'equal :from-end t))
+
+(defun form-definitions (form)
+  "Each (NAME KIND) that FORM, a toplevel form, defines. #0QBGZO"
+  (loop for definition in (toplevel-definitions form)
+        for kind = (intern (symbol-name (car definition)) :keyword)
+        collect (list (definition-name kind definition) kind)))
+
+(defun page-lines-of (page)
+  "The lines of PAGE (by default the page the loaded files were tangled from), or an error. #0QBGZO"
+  (let ((page (or page *page-pathname*)))
+    (unless (and page (probe-file page))
+      (error "luv-physics: no page to read: ~S (load the system from its repository)" page))
+    (split-lines (read-file-text page))))
+
+(defun find-section (lines anchor)
+  "The (FIRST . LAST) lines of section ANCHOR (string or symbol, leading # ignored) in LINES, or an
+error naming the anchor. #0QBGZO"
+  (let ((id (string-left-trim "#" (string anchor))))
+    (or (gethash id (page-sections lines))
+        (error "luv-physics: the page has no section ~S" id))))
+
+(defun section (anchor &key page (stream *standard-output*))
+  "Print the title and lines of section ANCHOR of PAGE, its definitions with their lines on the
+page and in the tangled file, and its claims with their lines; return the title. #0QBGZO"
+  (let* ((lines (page-lines-of page))
+         (id (string-left-trim "#" (string anchor)))
+         (range (find-section lines id))
+         (heading (aref lines (1- (car range))))
+         (title (string-trim " *" (subseq heading 0 (or (search "   " heading) (length heading)))))
+         (prefix (format nil "#+name: ~A-" id))
+         (*package* (find-package '#:luv-physics)))
+    (format stream "~&~A  ~A~%  ~A:~D-~D~%" id title
+            (file-namestring (or page *page-pathname*)) (car range) (cdr range))
+    (let ((records (anchor-definitions id)))
+      (format stream "  ~D definition~:P~:[~;:~]~%" (length records) records)
+      (dolist (r records)
+        (format stream "    ~5D  ~(~14A~) ~(~S~)  ~A:~D~%" (getf r :org-line) (getf r :kind)
+                (getf r :name) (getf r :file) (getf r :line))))
+    (let ((claims (loop for i from (car range) to (cdr range)
+                        for text = (aref lines (1- i))
+                        when (starts-with prefix text)
+                          collect (cons (1+ i) (subseq text (length prefix))))))
+      (format stream "  ~D claim~:P~:[~;:~]~%" (length claims) claims)
+      (loop for (line . slug) in claims
+            do (format stream "    ~5D  ~A~%" line slug)))
+    (let* ((forms (page-forms lines (engine-files)))
+           (own (remove id forms :key (lambda (form) (getf form :anchor)) :test-not #'equal))
+           (copied (remove-duplicates (loop for form in own
+                                            append (remove-if-not #'symbolp (form-expanders (getf form :form))))))
+           (users (remove id (remove-duplicates (mapcar (lambda (form) (getf form :anchor)) (reload-closure own forms))
+                                                :test #'equal :from-end t)
+                          :test #'equal)))
+      (format stream "  ~:[Nothing it defines is copied into its users.~;Copied into its users: ~:*~{~(~A~)~^ ~}~]~%"
+              copied)
+      (when users
+        (format stream "  Reloading it also recompiles forms of ~{~A~^ ~}.~%" users)))
+    title))
+;; Read a section's code from the page:1 ends here
+
+;; [[file:../physics.org::#OWNJGP][Reload a section into the running image:1]]
+(defvar *loaded-file-texts* (make-hash-table :test 'equal)
+  "The text of each registered tangled file (relative to the page) as it was loaded. #OWNJGP")
+
+(defvar *loaded-forms* nil
+  "A hash table from each loaded form's key to the text loaded under it, or NIL until a reload
+builds it from *loaded-file-texts*. #OWNJGP")
+
+(defvar *parameter-defaults* (make-hash-table :test 'eq)
+  "For each defparameter of the page, the value its last evaluation gave. #OWNJGP")
+
+(defun note-loaded-file (file text records)
+  "Keep TEXT, the loaded tangled FILE, and the value of each defparameter among its RECORDS. #OWNJGP"
+  (setf (gethash file *loaded-file-texts*) text
+        *loaded-forms* nil)
+  (dolist (record records)
+    (let ((name (getf record :name)))
+      (when (and (eq :defparameter (getf record :kind)) (symbolp name) (boundp name))
+        (setf (gethash name *parameter-defaults*) (symbol-value name))))))
+
+(defun form-keys (forms)
+  "The key of each of FORMS: (FILE ANCHOR NAMES N), N counting the earlier FORMS with the same
+file, anchor and names. #OWNJGP"
+  (let ((seen (make-hash-table :test 'equal)))
+    (mapcar (lambda (form)
+              (let ((base (list (getf form :file) (getf form :anchor)
+                                (form-definitions (getf form :form)))))
+                (append base (list (1- (incf (gethash base seen 0)))))))
+            forms)))
+
+(defun tangled-text-forms (file text)
+  "The toplevel forms of TEXT, the tangled FILE, as page-forms gives them (:block and :line being
+lines of the tangled file). #OWNJGP"
+  (let* ((lines (split-lines text))
+         (anchors (line-anchors lines))
+         (*package* (find-package '#:luv-physics)))
+    ;; chunks of one anchor, split where the link comment changes or repeats
+    (loop with start = 0
+          for i from 0 to (length lines)
+          when (or (= i (length lines)) (link-comment-anchor (aref lines i)))
+            append (prog1 (when (and (< start i) (aref anchors start))
+                            (block-forms lines (aref anchors start) file (1+ start) (1+ start) i))
+                     (setf start (1+ i))))))
+
+(defun loaded-forms ()
+  "The table of *loaded-forms*, built from the registered files' texts when it is NIL. #OWNJGP"
+  (or *loaded-forms*
+      (let ((table (make-hash-table :test 'equal)))
+        (loop for file in (engine-files)
+              for text = (gethash file *loaded-file-texts*)
+              when text
+                do (let ((forms (tangled-text-forms file text)))
+                     (loop for form in forms for key in (form-keys forms)
+                           do (setf (gethash key table) (getf form :text)))))
+        (setf *loaded-forms* table))))
+
+(defun form-expanders (form &optional compile-time)
+  "The names FORM defines that its users copy when they are compiled: macros, setf expanders,
+types, symbol macros, inline functions, and (COMPILE-TIME) whatever is defined at compile time;
+the page's own defining macros are expanded to see what they define. #OWNJGP"
+  (cond ((atom form) '())
+        ((member (car form) '(progn locally))
+         (loop for f in (cdr form) append (form-expanders f compile-time)))
+        ((eq (car form) 'eval-when)
+         (loop with now = (or compile-time (and (member :compile-toplevel (second form)) t))
+               for f in (cddr form) append (form-expanders f now)))
+        ((eq (car form) 'declaim)
+         (loop for spec in (cdr form)
+               when (and (consp spec) (eq (car spec) 'inline)) append (copy-list (cdr spec))))
+        ((member (car form) '(defmacro define-compiler-macro defsetf deftype define-symbol-macro
+                              define-modify-macro define-setf-expander))
+         (list (second form)))
+        ((and (eq (car form) 'defun)
+              (or compile-time (eq 'inline (sb-int:info :function :inlinep (second form)))))
+         (list (second form)))
+        ((and compile-time (defining-operator-p (car form)) (symbolp (second form)))
+         (list (second form)))
+        ((and (symbolp (car form)) (eq (symbol-package (car form)) (find-package '#:luv-physics))
+              (macro-function (car form)))
+         (form-expanders (macroexpand-1 form) compile-time))
+        (t '())))
+
+(defun form-tokens (form)
+  "The upcased words of FORM's text, as a hash table: the names it may mention. #OWNJGP"
+  (let ((tokens (make-hash-table :test 'equal))
+        (text (getf form :text)))
+    (loop with start = 0
+          for i from 0 to (length text)
+          when (or (= i (length text)) (member (char text i) '(#\Space #\Tab #\Newline #\( #\) #\' #\` #\, #\" #\# #\; #\|)))
+            do (when (< start i) (setf (gethash (string-upcase (subseq text start i)) tokens) t))
+               (setf start (1+ i)))
+    tokens))
+
+(defun reload-closure (selected forms &optional (seeds selected))
+  "SELECTED, some of FORMS, with every form of FORMS that mentions a name that SEEDS (by default
+SELECTED) copy into their users (see form-expanders), then the users of what those users copy, and
+so on, in the order of FORMS. #OWNJGP"
+  (let ((chosen (make-hash-table :test 'eq))
+        (tokens (make-hash-table :test 'eq))
+        (queue (copy-list seeds)))
+    (dolist (form selected) (setf (gethash form chosen) t))
+    (loop while queue
+          do (let ((names (remove-if-not #'symbolp (form-expanders (getf (pop queue) :form)))))
+               (when names
+                 (dolist (user forms)
+                   (unless (gethash user chosen)
+                     (let ((words (or (gethash user tokens) (setf (gethash user tokens) (form-tokens user)))))
+                       (when (some (lambda (name) (gethash (symbol-name name) words)) names)
+                         (setf (gethash user chosen) t)
+                         (push user queue))))))))
+    (remove-if-not (lambda (form) (gethash form chosen)) forms)))
+
+(defun line-position (lines line)
+  "The character position, counted from 1 as Emacs counts, where LINE of LINES starts. #OWNJGP"
+  (1+ (loop for i from 0 below (1- line) sum (1+ (length (aref lines i))))))
+
+(defun load-page-text (text page position)
+  "Compile TEXT, the page PAGE's text from character POSITION, in the engine's package with the
+page as its source, and load it; return the warnings, which are not printed. #OWNJGP"
+  (let* ((name (namestring page))
+         (source (merge-pathnames (format nil "luv-physics-reload-~36R.lisp" (random (expt 36 8) (make-random-state t)))
+                                  (or (sb-ext:posix-getenv "TMPDIR") "/tmp/")))
+         (fasl (compile-file-pathname source))
+         (warnings '()))
+    (unwind-protect
+         (progn
+           (with-open-file (out source :direction :output :if-exists :supersede :external-format :utf-8)
+             (write-string text out))
+           (handler-bind ((sb-ext:compiler-note #'muffle-warning)
+                          ;; a reload redefines on purpose
+                          (sb-kernel:redefinition-warning #'muffle-warning)
+                          (warning (lambda (w) (push w warnings) (muffle-warning w))))
+             (let ((*package* (find-package '#:luv-physics)) (*read-eval* t)
+                   (*compile-verbose* nil) (*compile-print* nil) (*load-verbose* nil)
+                   (*error-output* (make-broadcast-stream)))
+               (with-compilation-unit (:source-plist (list :emacs-buffer name :emacs-filename name
+                                                           :emacs-package "LUV-PHYSICS"
+                                                           :emacs-position position :emacs-string text)
+                                       :source-namestring name :allow-other-keys t)
+                 (load (compile-file source :output-file fasl :external-format :utf-8))))))
+      (when (probe-file source) (delete-file source))
+      (when (probe-file fasl) (delete-file fasl)))
+    (nreverse warnings)))
+
+(defun reload-forms (selected forms lines page label &optional (started (get-internal-real-time)))
+  "Load SELECTED, forms of the page PAGE (whose LINES and FORMS are given), with every user they
+need recompiled, keeping the parameters the user changed; return and print one line of summary
+starting with LABEL and ending with the seconds since STARTED. #OWNJGP"
+  (let* ((selected (remove-if (lambda (form)
+                                (let ((read (getf form :form)))
+                                  (and (consp read) (eq 'register-tangled-file (car read)))))
+                              selected))
+         ;; only a form whose text changed can change what its users copy
+         (changed (let ((table (loaded-forms)))
+                    (loop for form in forms for key in (form-keys forms)
+                          when (and (member form selected) (not (equal (getf form :text) (gethash key table))))
+                            collect form)))
+         (chosen (reload-closure selected forms changed))
+         (users (set-difference chosen selected))
+         (kept '()) (warnings '()) (failure nil))
+    (handler-case
+        (loop while chosen
+              do (let ((run (list (pop chosen))))
+                   ;; a run: forms next to each other in one block
+                   (loop while (and chosen
+                                    (eql (getf (first chosen) :block) (getf (first run) :block))
+                                    (eq (first chosen) (second (member (first run) forms))))
+                         do (push (pop chosen) run))
+                   (setf run (nreverse run))
+                   (let* ((parameters (loop for form in run
+                                            append (loop for (name kind) in (form-definitions (getf form :form))
+                                                         when (and (eq kind :defparameter) (boundp name))
+                                                           collect name)))
+                          (tuned (remove-if (lambda (name)
+                                              (multiple-value-bind (default known) (gethash name *parameter-defaults*)
+                                                (or (not known) (equal default (symbol-value name)))))
+                                            parameters))
+                          (saved (mapcar #'symbol-value tuned))
+                          (first (getf (first run) :line)))
+                     (setf warnings (append warnings
+                                            (load-page-text (format nil "~{~A~^~%~}" (mapcar (lambda (f) (getf f :text)) run))
+                                                            page (line-position lines first))))
+                     (dolist (name parameters)
+                       (setf (gethash name *parameter-defaults*) (symbol-value name)))
+                     (loop for name in tuned for value in saved
+                           do (setf (symbol-value name) value) (push name kept))
+                     (let ((table (loaded-forms)))
+                       (loop for form in forms for key in (form-keys forms)
+                             when (member form run) do (setf (gethash key table) (getf form :text)))))))
+      (error (e) (setf failure e)))
+    (refresh-page-lines forms)
+    (let ((summary
+            (format nil "~A: ~D form~:P~@[ (~A)~]~:[~*~;, ~:*~D user~:P recompiled (~{~A~^ ~})~]~
+                         ~@[, kept ~{~(~A~)~^ ~}~], ~D warning~:P~@[ (first: ~A)~], ~,2F s~@[; FAILED: ~A~]"
+                    label (length selected)
+                    (when selected
+                      (format nil "~A:~D-~D" (file-namestring page)
+                              (reduce #'min selected :key (lambda (f) (getf f :line)))
+                              (reduce #'max selected :key (lambda (f) (getf f :end)))))
+                    (and users (length users))
+                    (remove-duplicates (mapcar (lambda (f) (getf f :anchor)) users) :test #'equal :from-end t)
+                    (reverse kept)
+                    (length warnings)
+                    (when warnings (substitute #\Space #\Newline (princ-to-string (first warnings))))
+                    (/ (- (get-internal-real-time) started) internal-time-units-per-second 1.0)
+                    (when failure (substitute #\Space #\Newline (princ-to-string failure))))))
+      (format t "~&~A~%" summary)
+      summary)))
+
+(defun refresh-page-lines (forms)
+  "Give every registered definition the page line of the form of FORMS that defines it now. #OWNJGP"
+  (let ((lines (make-hash-table :test 'equal)))
+    (dolist (form forms)
+      (loop for (name kind) in (form-definitions (getf form :form))
+            do (let ((key (list name kind (getf form :anchor))))
+                 (unless (gethash key lines) (setf (gethash key lines) (getf form :line))))))
+    (dolist (record *definitions*)
+      (let ((line (gethash (list (getf record :name) (getf record :kind) (getf record :anchor)) lines)))
+        (when line (setf (getf record :org-line) line))))))
+
+(defun reload-section (anchor &key page line)
+  "Compile and load the forms of section ANCHOR of PAGE (the loaded page by default), or with LINE
+only those of the block holding that page line, with the users they need recompiled; parameters the
+user changed keep their values. Print and return one line of summary. #OWNJGP"
+  (let* ((started (get-internal-real-time))
+         (page (or page *page-pathname*))
+         (lines (page-lines-of page))
+         (id (string-left-trim "#" (string anchor)))
+         (range (find-section lines id))
+         (forms (page-forms lines (engine-files)))
+         (block (and line (find-if (lambda (b) (<= (third b) line (1+ (fifth b)))) (page-code-blocks lines))))
+         (selected (remove-if-not (lambda (form)
+                                    (and (equal id (getf form :anchor))
+                                         (<= (car range) (getf form :line) (cdr range))
+                                         (or (null line) (eql (getf form :block) (third block)))))
+                                  forms)))
+    (reload-forms selected forms lines page (format nil "reload ~A~@[ (block at line ~D)~]" id line) started)))
+
+(defun tangle-page (page)
+  "Tangle PAGE with tools/tangle-page in its directory (Emacs from $EMACS, or emacs); the files
+whose text changes are rewritten. Signal an error with the tool's output if it fails. #OWNJGP"
+  (let* ((directory (make-pathname :name nil :type nil :version nil :defaults (truename page)))
+         (output (make-string-output-stream))
+         (process (sb-ext:run-program "tools/tangle-page"
+                                      (list (or (sb-ext:posix-getenv "EMACS") "emacs") (file-namestring page))
+                                      :directory (namestring directory) :output output :error output
+                                      :search nil :wait t)))
+    (unless (eql 0 (sb-ext:process-exit-code process))
+      (error "luv-physics: tangling ~A failed: ~A" page (get-output-stream-string output)))
+    (get-output-stream-string output)))
+
+(defun reload-changed (&key page (tangle t))
+  "Tangle PAGE (unless TANGLE is NIL), then compile and load every form of it whose text differs
+from the one the image last loaded, with the users they need recompiled, and register the tangled
+files again. Print and return one line of summary. #OWNJGP"
+  (let* ((started (get-internal-real-time))
+         (page (or page *page-pathname*)))
+    (when tangle (tangle-page page))
+    (let* ((lines (page-lines-of page))
+           (files (engine-files))
+           (forms (page-forms lines files))
+           (table (loaded-forms))
+           (changed (loop for form in forms for key in (form-keys forms)
+                          unless (equal (getf form :text) (gethash key table)) collect form))
+           (summary (reload-forms changed forms lines page
+                                  (if tangle "tangle and reload changed" "reload changed") started)))
+      (when tangle
+        (dolist (file files)
+          (register-tangled-file (merge-pathnames file page)))
+        (refresh-page-lines forms))
+      summary)))
+;; Reload a section into the running image:1 ends here
+
+;; [[file:../physics.org::#PYXPDY][Answers for the editor:1]]
+(defun editor-page ()
+  "For the editor: the page the loaded files were tangled from, as a namestring. #PYXPDY"
+  (and *page-pathname* (namestring *page-pathname*)))
+
+(defun editor-definitions (anchor)
+  "For the editor: each definition of section ANCHOR as (NAME KIND PAGE-LINE FILE LINE), the name
+printed in this package and the kind in lowercase. #PYXPDY"
+  (let ((*package* (find-package '#:luv-physics)) (*print-case* :downcase))
+    (mapcar (lambda (record)
+              (list (prin1-to-string (getf record :name)) (string-downcase (getf record :kind))
+                    (getf record :org-line) (getf record :file) (getf record :line)))
+            (anchor-definitions anchor))))
+
+(defun editor-page-line (name package)
+  "For the editor: (ANCHOR PAGE-LINE PAGE) for the definition of NAME, a symbol as written in a
+buffer whose package is named PACKAGE, or NIL when the page defines no such name. #PYXPDY"
+  (let* ((*package* (or (find-package (string-upcase (string-left-trim "#:" package)))
+                        (find-package '#:cl-user)))
+         (*read-eval* nil)
+         (symbol (ignore-errors (read-from-string name))))
+    (when (and symbol (symbolp symbol))
+      (loop for candidate in (list symbol (find-symbol (symbol-name symbol) '#:luv-physics))
+            do (multiple-value-bind (anchor line) (and candidate (definition-anchor candidate))
+                 (when anchor (return (list anchor line (editor-page)))))))))
+
+(defun editor-section (anchor page)
+  "For the editor: what section prints for ANCHOR of PAGE, as a string. #PYXPDY"
+  (with-output-to-string (s) (section anchor :page page :stream s)))
+;; Answers for the editor:1 ends here
 
 ;; [[file:../physics.org::#V0CAB5][Types, the hot-loop policy and the parameters:1]]
 (eval-when (:compile-toplevel :load-toplevel :execute)
@@ -498,6 +951,14 @@ single-float goes through double precision; both round correctly, so they agree)
                      (invalid-physics-parameter-value c) (invalid-physics-parameter-expected c))))
   (:documentation "A parameter outside its documented range: a mass <= 0, a negative friction. #C0ND1T"))
 
+(define-condition not-a-physics-world (invalid-physics-parameter)
+  ((operation :initarg :operation :reader not-a-physics-world-operation))
+  (:report (lambda (c s)
+             (format s "~(~A~): its argument ~A is ~S, not a physics-world (make one with ~
+                        make-physics-world)" (not-a-physics-world-operation c)
+                     (invalid-physics-parameter-name c) (invalid-physics-parameter-value c))))
+  (:documentation "Something other than a world given to an exported function as its world. #C0ND1T"))
+
 (define-condition stale-physics-handle (physics-error)
   ((handle :initarg :handle :reader stale-physics-handle-handle)
    (reason :initarg :reason :reader stale-physics-handle-reason))
@@ -506,6 +967,7 @@ single-float goes through double precision; both round correctly, so they agree)
                      (ecase (stale-physics-handle-reason c)
                        (:malformed "not a physics handle")
                        (:foreign "from another world")
+                       (:unissued "a handle of no world: no world has given out its tag")
                        (:removed "of a body that was removed or expired")))))
   (:documentation "A handle that names no live body of this world. #C0ND1T"))
 
@@ -634,7 +1096,7 @@ room under the reach limit for the smallest radius. #C0ND1T"
 (defmacro define-physics-layout (name docstring &rest columns)
   "Define the columnar layout NAME: a buffer struct of one specialised array per column of
 COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
-NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-clear and WITH-NAME, which binds columns by name
+NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
 or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
   (let* ((make (layout-symbol "%MAKE-" name))
          (ctor (layout-symbol "MAKE-" name))
@@ -642,6 +1104,7 @@ or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, si
          (cap (layout-symbol name "-CAPACITY"))
          (spare (layout-symbol name "-SPARE"))
          (ensure (layout-symbol name "-ENSURE-CAPACITY"))
+         (trim (layout-symbol name "-TRIM"))
          (append (layout-symbol name "-APPEND"))
          (remove (layout-symbol name "-SWAP-REMOVE"))
          (copy (layout-symbol name "-COPY-ROW"))
@@ -685,6 +1148,20 @@ or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, si
                                 (replace fresh (,acc buffer))
                                 (setf (,acc buffer) fresh)))
              (setf (,cap buffer) new)))
+         buffer)
+       (defun ,trim (buffer rows)
+         ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
+least 16), keeping every row; return BUFFER. #L4Y0UT" name)
+         (declare (type ,name buffer) (type index rows))
+         (let ((new (max rows (,len buffer) 16)))
+           (when (< new (,cap buffer))
+             (let ((size (+ new (,spare buffer))))
+               ,@(loop for (c type width) in columns for acc in accessors
+                       collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
+                                                                               :initial-element ,(column-zero type))))
+                                  (replace kept (,acc buffer))
+                                  (setf (,acc buffer) kept)))
+               (setf (,cap buffer) new))))
          buffer)
        (declaim (inline ,append))
        (defun ,append (buffer)
@@ -832,11 +1309,15 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
   (free -1 :type fixnum)
   (tag 0 :type fixnum))
 
-(defvar *world-tag-counter* 0 "The tag the next world's handles carry (mod 2^16). #B5N8JT")
+(defvar *world-tag-counter* 0 "How many world tags have been given out; tags run from 1 to 2^16-1 and wrap. #B5N8JT")
 
 (defun make-handle-table ()
-  "An empty handle table with a fresh world tag. #B5N8JT"
-  (%make-handle-table :tag (ldb (byte +handle-tag-bits+ 0) (incf *world-tag-counter*))))
+  "An empty handle table with a fresh world tag, never 0. #B5N8JT"
+  (%make-handle-table :tag (1+ (mod (1- (incf *world-tag-counter*)) (1- (ash 1 +handle-tag-bits+))))))
+
+(defun tag-issued-p (tag)
+  "True when some world has been given TAG. #B5N8JT"
+  (and (plusp tag) (or (<= tag *world-tag-counter*) (>= *world-tag-counter* (1- (ash 1 +handle-tag-bits+))))))
 
 (defun handle-table-full-p (table)
   "True when TABLE has no free slot and no slot left to open. #B5N8JT"
@@ -875,9 +1356,10 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
     table))
 
 (defun handle-status (table handle)
-  "NIL when HANDLE names a live body of TABLE, else why not (:malformed :foreign :removed). #B5N8JT"
+  "NIL when HANDLE names a live body of TABLE, else why not (:malformed :unissued :foreign :removed). #B5N8JT"
   (cond ((not (and (typep handle 'fixnum) (>= handle 0))) :malformed)
-        ((/= (handle-tag handle) (handle-table-tag table)) :foreign)
+        ((/= (handle-tag handle) (handle-table-tag table))
+         (if (tag-issued-p (handle-tag handle)) :foreign :unissued))
         ((or (>= (handle-index handle) (handle-table-count table))
              (= (aref (handle-table-set table) (handle-index handle)) +set-free+)
              (/= (aref (handle-table-generation table) (handle-index handle))
@@ -1585,6 +2067,19 @@ dispatches on it once per call. #W0RLD7"))
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
+   (fresh-grid :initform (make-hash-grid) :reader physics-world-fresh-grid)
+   (fresh-handles :initform (make-array 64 :element-type 'fixnum :initial-element 0)
+                  :accessor physics-world-fresh-handles)
+   (fresh-count :initform 0 :type fixnum :accessor physics-world-fresh-count)
+   (fresh-x :initform (make-array 0 :element-type 'single-float) :accessor physics-world-fresh-x)
+   (fresh-y :initform (make-array 0 :element-type 'single-float) :accessor physics-world-fresh-y)
+   (fresh-z :initform (make-array 0 :element-type 'single-float) :accessor physics-world-fresh-z)
+   (settled-count :initform 0 :type fixnum :accessor physics-world-settled-count)
+   (settled-stale :initform 0 :type fixnum :accessor physics-world-settled-stale)
+   (grid-of :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-grid-of)
+   (mortal-sleepers :initform 0 :type fixnum :accessor physics-world-mortal-sleepers)
+   (added :initform (make-array 16 :element-type 'fixnum :initial-element 0) :accessor physics-world-added)
+   (added-count :initform 0 :type fixnum :accessor physics-world-added-count)
    (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
    (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
    (substeps :initarg :substeps :type fixnum :accessor physics-world-substeps)
@@ -1741,8 +2236,30 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
     (error 'invalid-physics-parameter :world world :name :event-handler :value handler
                                       :expected "NIL, a function, or the name of a function")))
 
+(declaim (inline check-world))
+(defun check-world (world operation)
+  "Signal not-a-physics-world, naming OPERATION and its argument WORLD, unless WORLD is a
+physics-world: one type test, made once per call of an exported function. #M4K3WD"
+  (unless (typep world 'physics-world)
+    (error 'not-a-physics-world :operation operation :name 'world :value world
+                                :expected "a physics-world (from make-physics-world)")))
+
+(defmacro refuse-non-worlds (&rest accessors)
+  "Make each of ACCESSORS, exported generic functions of a world (the world last, as for a setf
+accessor), signal not-a-physics-world naming itself when given something else. #M4K3WD"
+  `(progn
+     ,@(loop for name in accessors
+             collect `(defmethod no-applicable-method ((function (eql (function ,name))) &rest arguments)
+                        (error 'not-a-physics-world :operation ',name :name 'world :value (car (last arguments))
+                                                    :expected "a physics-world (from make-physics-world)")))))
+
+(refuse-non-worlds physics-world-step-count physics-world-event-handler (setf physics-world-event-handler)
+                   physics-world-step-hook (setf physics-world-step-hook))
+
 (defun check-idle (world operation)
-  "Signal physics-world-busy unless WORLD is between steps. #M4K3WD"
+  "Signal not-a-physics-world unless WORLD is a world, and physics-world-busy unless it is between
+steps. #M4K3WD"
+  (check-world world operation)
   (when (physics-world-stepping world)
     (error 'physics-world-busy :world world :operation operation)))
 
@@ -1760,10 +2277,12 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
 
 (defun physics-body-alive-p (world handle)
   "True when HANDLE names a body of WORLD that has not been removed or expired. #M4K3WD"
+  (check-world world 'physics-body-alive-p)
   (null (handle-status (physics-world-ids world) handle)))
 
 (defun physics-body-awake-p (world handle)
   "True when HANDLE's body is in the awake set. #M4K3WD"
+  (check-world world 'physics-body-awake-p)
   (= (resolve-handle world handle) +set-awake+))
 
 (defmacro define-body-reader (name (&rest columns) documentation)
@@ -1771,6 +2290,7 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
 HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3WD"
   `(defun ,name (world handle)
      ,documentation
+     (check-world world ',name)
      (multiple-value-bind (set row) (resolve-handle world handle)
        (with-body-columns ,columns (set-buffer world set)
          (values ,@(loop for column in columns collect `(aref ,column row)))))))
@@ -1795,10 +2315,12 @@ HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3W
 
 (defun physics-world-awake-count (world)
   "How many bodies of WORLD are awake. #M4K3WD"
+  (check-world world 'physics-world-awake-count)
   (body-columns-length (physics-world-awake world)))
 
 (defun physics-world-sleeping-count (world)
   "How many bodies of WORLD are asleep. #M4K3WD"
+  (check-world world 'physics-world-sleeping-count)
   (body-columns-length (physics-world-sleeping world)))
 
 (defun check-coordinate (name v &optional world)
@@ -1877,6 +2399,7 @@ number of seconds after which it expires. #M4K3WD"
                                        (if collide-with-bodies 0 +flag-terrain-only+))
               (aref handle-c row) handle (aref kind-c row) kind))
       (setf (physics-world-max-radius world) (max (physics-world-max-radius world) r))
+      (note-added-body world handle)
       handle)))
 ;; Making a world and adding bodies:1 ends here
 
@@ -1955,10 +2478,11 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
   (let* ((handle (aref (body-columns-handle (physics-world-awake world)) row))
          (new (relocate-body world +set-awake+ row +set-sleeping+))
          (s (physics-world-sleeping world)))
-    (with-body-columns (vx vy vz wx wy wz sleep-time) s
+    (with-body-columns (vx vy vz wx wy wz sleep-time life) s
       (setf (aref vx new) 0.0 (aref vy new) 0.0 (aref vz new) 0.0
-            (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0))
-    (setf (physics-world-sleeping-grid-dirty world) t)
+            (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0)
+      (when (> (aref life new) 0.0) (incf (physics-world-mortal-sleepers world))))
+    (note-fresh-sleeper world handle)
     (push-event world +event-slept+ handle +no-body+ 0.0 0.0 0.0 0.0)
     new))
 
@@ -1972,8 +2496,11 @@ note ROW in the step's undo log too (roll-back-step). #QKS4GZ"
               (physics-world-undo-woken world) log))
       (setf (aref log k) row (physics-world-undo-woken-count world) (1+ k))))
   (let* ((handle (aref (body-columns-handle (physics-world-sleeping world)) row))
-         (new (relocate-body world +set-sleeping+ row +set-awake+)))
+         (new (progn (when (> (aref (body-columns-life (physics-world-sleeping world)) row) 0.0)
+                       (decf (physics-world-mortal-sleepers world)))
+                     (relocate-body world +set-sleeping+ row +set-awake+))))
     (setf (aref (body-columns-sleep-time (physics-world-awake world)) new) 0.0)
+    (leave-sleeping-grids world handle)
     (push-event world +event-woke+ handle +no-body+ 0.0 0.0 0.0 0.0)
     new))
 
@@ -1987,12 +2514,52 @@ note ROW in the step's undo log too (roll-back-step). #QKS4GZ"
   (let* ((ids (physics-world-ids world))
          (buffer (set-buffer world set))
          (handle (aref (body-columns-handle buffer) row))
-         (moved (body-columns-swap-remove buffer row)))
+         (moved (progn (when (and (= set +set-sleeping+) (> (aref (body-columns-life buffer) row) 0.0))
+                         (decf (physics-world-mortal-sleepers world)))
+                       (when (= set +set-sleeping+) (leave-sleeping-grids world handle))
+                       (body-columns-swap-remove buffer row))))
     (incf (physics-world-rows-version world))
     (when (>= moved 0)
       (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle buffer) row))) row))
     (handle-table-release ids handle)
     handle))
+
+(defun trim-physics-world (world)
+  "Give back the room WORLD's buffers grew to beyond what they hold: the awake buffer and its
+sorting scratch keep room for twice the awake rows, the sleeping buffer for its rows, and the
+solver's arrays, the fresh sleeping grid and its lists are let go, to grow again as the next
+steps need. Call it between steps, off the hot path, after a pile has fallen asleep or been
+removed. Return WORLD. #QKS4GZ"
+  (check-idle world 'trim-physics-world)
+  (let* ((awake (physics-world-awake world))
+         (n (body-columns-length awake))
+         (fresh (physics-world-fresh-grid world)))
+    (ensure-sleeping-grid world)
+    (body-columns-trim awake (* 2 n))
+    (body-columns-trim (physics-world-awake-scratch world) (body-columns-capacity awake))
+    (body-columns-trim (physics-world-sleeping world) 0)
+    (setf (physics-world-row-places world) (make-array 0 :element-type 'fixnum)
+          (physics-world-velocities world) (make-array 0 :element-type 'single-float)
+          (physics-world-deltas world) (make-array 0 :element-type 'single-float)
+          (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
+          (physics-world-braced world) (make-array 0 :element-type 'fixnum))
+    (let ((count (physics-world-fresh-count world)))
+      (setf (physics-world-fresh-handles world)
+            (replace (make-array (max 64 count) :element-type 'fixnum :initial-element 0)
+                     (physics-world-fresh-handles world) :end2 count)
+            (physics-world-fresh-x world) (make-array 0 :element-type 'single-float)
+            (physics-world-fresh-y world) (make-array 0 :element-type 'single-float)
+            (physics-world-fresh-z world) (make-array 0 :element-type 'single-float)
+            (hash-grid-items fresh) (make-array 0 :element-type 'fixnum)
+            (hash-grid-keys fresh) (make-array 0 :element-type 'fixnum)
+            (hash-grid-item-keys fresh) (make-array 0 :element-type 'fixnum)
+            (hash-grid-xs fresh) (make-array 0 :element-type 'single-float)
+            (hash-grid-ys fresh) (make-array 0 :element-type 'single-float)
+            (hash-grid-zs fresh) (make-array 0 :element-type 'single-float)
+            (hash-grid-near fresh) (make-array 0 :element-type 'fixnum)
+            (hash-grid-starts fresh) (make-array 2 :element-type 'fixnum :initial-element 0)
+            (physics-world-sleeping-grid-dirty world) t))
+    world))
 
 (defun remove-physics-body (world handle)
   "Remove HANDLE's body from WORLD; HANDLE goes stale. #QKS4GZ"
@@ -2161,17 +2728,123 @@ more than MARGIN. #G3NCNT"
 pair within reach, or within the skin beyond it, lies in neighbouring cells. #G4R1D5"
   (+ (* 2 (physics-world-max-radius world)) (physics-world-margin world) (physics-world-pair-skin world)))
 
+(defun sleeping-grid-of (world)
+  "For each handle slot, which sleeping grid holds its body's live entry: 1 the settled grid, 2
+the fresh one, 0 neither; grown to the handle table's slots. #G4R1D5"
+  (let ((of (physics-world-grid-of world))
+        (slots (length (handle-table-set (physics-world-ids world)))))
+    (declare (type fixnum-column of))
+    (if (>= (length of) slots)
+        of
+        (let ((grown (make-array slots :element-type 'fixnum :initial-element 0)))
+          (replace grown of)
+          (setf (physics-world-grid-of world) grown)))))
+
+(defun note-fresh-sleeper (world handle)
+  "Note that HANDLE's body fell asleep: the fresh grid takes it at its next build. #G4R1D5"
+  (let ((handles (physics-world-fresh-handles world)) (count (physics-world-fresh-count world))
+        (of (sleeping-grid-of world)))
+    (declare (type fixnum-column handles of) (type fixnum count))
+    (when (= (aref of (handle-index handle)) 1) (incf (physics-world-settled-stale world)))
+    ;; room for every body the world has a slot for, at once: the fresh list, its centres and
+    ;; its grid grow together, and seldom
+    (when (= count (length handles))
+      (let* ((room (max (* 2 count) (length of)))
+             (grown (make-array room :element-type 'fixnum :initial-element 0)))
+        (replace grown handles)
+        (setf (physics-world-fresh-handles world) grown handles grown
+              (physics-world-fresh-x world) (make-array room :element-type 'single-float)
+              (physics-world-fresh-y world) (make-array room :element-type 'single-float)
+              (physics-world-fresh-z world) (make-array room :element-type 'single-float))
+        (hash-grid-reserve (physics-world-fresh-grid world) room)))
+    (setf (aref handles count) handle
+          (physics-world-fresh-count world) (1+ count)
+          (aref of (handle-index handle)) 2
+          (physics-world-sleeping-grid-dirty world) t)
+    handle))
+
+(defun leave-sleeping-grids (world handle)
+  "HANDLE's body leaves the sleeping set: its entry in either grid is dead from now on. #G4R1D5"
+  (let ((of (sleeping-grid-of world)) (slot (handle-index handle)))
+    (declare (type fixnum-column of))
+    (when (= (aref of slot) 1) (incf (physics-world-settled-stale world)))
+    (setf (aref of slot) 0)
+    handle))
+
 (defun ensure-sleeping-grid (world)
-  "Rebuild the grid of sleeping bodies if a body fell asleep or the cell size changed. #G4R1D5"
-  (let ((grid (physics-world-sleeping-grid world))
-        (size (grid-cell-size world)))
-    (when (or (physics-world-sleeping-grid-dirty world)
-              (/= (hash-grid-inv-cell grid) (/ 1.0 size)))
-      (let ((s (physics-world-sleeping world)))
-        (build-hash-grid grid size (body-columns-length s) (body-columns-x s) (body-columns-y s)
-                         (body-columns-z s) (body-columns-handle s)))
-      (setf (physics-world-sleeping-grid-dirty world) nil))
+  "Bring the sleeping grids up to date. Bodies that fell asleep since the settled grid was built
+go into the fresh grid, which is built again, from them alone, whenever one more falls asleep.
+The settled grid is built again from every sleeper, and the fresh one emptied, when the cell size
+changed, or when the fresh sleepers, or the settled grid's dead entries, outnumber an eighth of
+the settled grid (and 256). Return the settled grid. #G4R1D5"
+  (let* ((grid (physics-world-sleeping-grid world))
+         (fresh (physics-world-fresh-grid world))
+         (size (grid-cell-size world))
+         (s (physics-world-sleeping world))
+         (of (sleeping-grid-of world))
+         (bound (max 256 (floor (physics-world-settled-count world) 8))))
+    (declare (type fixnum-column of))
+    (cond ((or (/= (hash-grid-inv-cell grid) (/ 1.0 size))
+               (> (physics-world-fresh-count world) bound)
+               (> (physics-world-settled-stale world) bound))
+           (let ((n (body-columns-length s)) (handles (body-columns-handle s)))
+             ;; room for every body the world has a slot for, so that the settled grid grows seldom
+             (hash-grid-reserve grid (max n (length of)))
+             (build-hash-grid grid size n (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
+             (dotimes (i n) (setf (aref of (handle-index (aref handles i))) 1))
+             (setf (physics-world-settled-count world) n
+                   (physics-world-settled-stale world) 0
+                   (physics-world-fresh-count world) 0)
+             (build-hash-grid fresh size 0 (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
+             (setf (physics-world-sleeping-grid-dirty world) nil)))
+          ((physics-world-sleeping-grid-dirty world)
+           ;; the fresh sleepers still asleep and in the fresh grid, each once: the handle list
+           ;; is compacted to them as it is read
+           (let* ((handles (physics-world-fresh-handles world))
+                  (ids (physics-world-ids world))
+                  (sets (handle-table-set ids)) (locals (handle-table-local ids))
+                  (generations (handle-table-generation ids))
+                  (count (physics-world-fresh-count world))
+                  (kept 0))
+             (declare (type fixnum-column handles sets locals generations) (type fixnum count kept))
+             (when (< (length (physics-world-fresh-x world)) count)
+               (setf (physics-world-fresh-x world) (make-array (length handles) :element-type 'single-float)
+                     (physics-world-fresh-y world) (make-array (length handles) :element-type 'single-float)
+                     (physics-world-fresh-z world) (make-array (length handles) :element-type 'single-float)))
+             (dotimes (k count)
+               (let* ((h (aref handles k)) (slot (handle-index h)))
+                 (when (and (= (aref sets slot) +set-sleeping+) (= (aref generations slot) (handle-generation h))
+                            (= (aref of slot) 2))
+                   ;; 3 marks it taken, so a body that slept twice is taken once
+                   (setf (aref of slot) 3 (aref handles kept) h)
+                   (incf kept))))
+             (let ((xs (physics-world-fresh-x world)) (ys (physics-world-fresh-y world))
+                   (zs (physics-world-fresh-z world)))
+               (declare (type f32-column xs ys zs))
+               (dotimes (k kept)
+                 (let* ((slot (handle-index (aref handles k))) (row (aref locals slot)))
+                   (setf (aref of slot) 2
+                         (aref xs k) (aref (body-columns-x s) row)
+                         (aref ys k) (aref (body-columns-y s) row)
+                         (aref zs k) (aref (body-columns-z s) row))))
+               (setf (physics-world-fresh-count world) kept)
+               (build-hash-grid fresh size kept xs ys zs handles))
+             (setf (physics-world-sleeping-grid-dirty world) nil))))
     grid))
+
+(defmacro do-sleeping-neighbours ((item world x y z &key (span 1)) &body body)
+  "Run BODY with ITEM bound to the handle of each live entry of WORLD's sleeping grids, settled
+and fresh, whose cell lies within SPAN cells of point X Y Z. An entry is live when its grid is the
+one that holds its body now; whether the handle still names a sleeper is BODY's to ask. #G4R1D5"
+  (let ((visit (gensym "VISIT")) (of (gensym "OF")))
+    `(let ((,of (physics-world-grid-of ,world)))
+       (declare (type fixnum-column ,of))
+       (flet ((,visit (,item) (declare (type fixnum ,item)) ,@body))
+         (declare (inline ,visit))
+         (do-grid-neighbours (,item (physics-world-sleeping-grid ,world) ,x ,y ,z :span ,span)
+           (when (= 1 (aref ,of (handle-index ,item))) (,visit ,item)))
+         (do-grid-neighbours (,item (physics-world-fresh-grid ,world) ,x ,y ,z :span ,span)
+           (when (= 2 (aref ,of (handle-index ,item))) (,visit ,item)))))))
 
 (defun grid-phase (world)
   "Phase 3: find the pair list's loose rows; unless the list holds and the awake grid still has
@@ -2246,8 +2919,8 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
 ;; [[file:../physics.org::#W4K3PH][Fast bodies and moving boxes wake what they reach:1]]
 (defun wake-phase (world)
   "Phase 2: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
-sleepers they can reach this step: within the margin plus one step's travel. Return how many
-woke. #W4K3PH"
+sleepers they can reach this step: within the margin plus one step's travel; bodies added since
+the last step wake the sleepers they overlap deeper than the slop. Return how many woke. #W4K3PH"
   (let ((sleeping (physics-world-sleeping world))
         (woken 0))
     (declare (type fixnum woken))
@@ -2264,7 +2937,7 @@ woke. #W4K3PH"
         (declare (type single-float margin wake2 dt))
         (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
                  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
-                 (do-grid-neighbours (h grid x y z :span span)
+                 (do-sleeping-neighbours (h world x y z :span span)
                    (let ((slot (handle-index h)))
                      (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
                                 (= (aref (handle-table-generation ids) slot) (handle-generation h)))
@@ -2284,6 +2957,20 @@ woke. #W4K3PH"
                                      (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))))
                            (wake-physics-body world row)
                            (incf woken))))))))
+          ;; a body added since the last step wakes the sleepers it overlaps deeper than the
+          ;; slop, so that it meets them as awake bodies from its first substep
+          (let ((added (physics-world-added world))
+                (slop (f32 (physics-world-slop world))))
+            (declare (type fixnum-column added) (type single-float slop))
+            (dotimes (k (physics-world-added-count world))
+              (let* ((h (aref added k)) (slot (handle-index h)))
+                (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
+                           (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+                  (let ((row (aref (handle-table-local ids) slot)))
+                    (with-body-columns (x y z radius flags) awake
+                      (when (zerop (logand (aref flags row) +flag-terrain-only+))
+                        (wake-near (aref x row) (aref y row) (aref z row) (- (aref radius row) slop)
+                                   1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
           (with-body-columns (x y z vx vy vz radius flags) awake
             (dotimes (i n)
               (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
@@ -2309,7 +2996,20 @@ woke. #W4K3PH"
                          (span (1+ (ceiling (* half inv)))))
                     (wake-near cx cy cz travel span t (aref min-x b) (aref min-y b) (aref min-z b)
                                (aref max-x b) (aref max-y b) (aref max-z b))))))))))
+    (setf (physics-world-added-count world) 0)
     woken))
+
+(defun note-added-body (world handle)
+  "Remember that HANDLE's body was added since the last step, for the wake phase. #W4K3PH"
+  (let ((added (physics-world-added world)) (count (physics-world-added-count world)))
+    (declare (type fixnum-column added) (type fixnum count))
+    (when (= count (length added))
+      (let ((grown (make-array (* 2 (length added)) :element-type 'fixnum :initial-element 0)))
+        (replace grown added)
+        (setf (physics-world-added world) grown added grown)))
+    (setf (aref added count) handle
+          (physics-world-added-count world) (1+ count))
+    handle))
 ;; Fast bodies and moving boxes wake what they reach:1 ends here
 
 ;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:1]]
@@ -2481,7 +3181,6 @@ gap is under the speculative distance. #P41RS7"
          (sleeping (physics-world-sleeping world))
          (ids (physics-world-ids world))
          (grid (physics-world-awake-grid world))
-         (sgrid (physics-world-sleeping-grid world))
          (plist (physics-world-pair-list world))
          (n (body-columns-length awake))
          (any-sleeping (plusp (body-columns-length sleeping)))
@@ -2501,7 +3200,7 @@ gap is under the speculative distance. #P41RS7"
     (declare (type single-float margin skin cell slop dt gstep rmax threshold) (type index n) (type fixnum strays)
              (type body-columns awake sleeping) (type pair-list plist)
              (type contact-columns contacts) (type contact-table table)
-             (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+
+             (type handle-table ids) (type hash-grid grid) #.+kernel-policy+
              (inline touch-contact))
     (with-body-columns (x y z vx vy vz radius flags handle) awake
       (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj)
@@ -2611,7 +3310,7 @@ gap is under the speculative distance. #P41RS7"
             (when (zerop (logand (aref flags i) +flag-terrain-only+))
               (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i)) (hi (aref handle i))
                     (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
-                (do-grid-neighbours (h sgrid xi yi zi)
+                (do-sleeping-neighbours (h world xi yi zi)
                   (let ((slot (handle-index h)))
                     (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
                                (= (aref (handle-table-generation ids) slot) (handle-generation h)))
@@ -3000,7 +3699,8 @@ the hole. #PRUN3D"
     '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation kvn kvt1 kvt2
       normal-mass tangent-mass rolling-mass friction rolling-limit restitution relative-velocity
       max-normal-impulse bias-rate mass-scale impulse-scale normal-impulse tangent-impulse-1
-      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap armed-speed)
+      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap armed-speed
+      spin-limit spin-impulse)
     "The float columns of a constraint, in the order they sit in a block. #SSMPYW")
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints. #SSMPYW"
@@ -3162,11 +3862,19 @@ returns the number of colours used. #SSMPYW"
 
 (defun physics-world-overflow-count (world)
   "How many of the last step's contacts fell into the overflow colour. #SSMPYW"
+  (check-world world 'physics-world-overflow-count)
   (let ((starts (physics-world-color-starts world)))
     (- (aref starts (1+ +physics-max-colors+)) (aref starts +physics-max-colors+))))
 ;; Colours are the lanes:1 ends here
 
 ;; [[file:../physics.org::#PR3PAR][Preparing the constraints:1]]
+(declaim (inline spin-arm))
+(defun spin-arm (radius slop)
+  "The lever of spin friction for a ball of RADIUS resting SLOP deep on something flat: two
+thirds of the radius of its contact patch, sqrt(2 RADIUS SLOP). #PR3PAR"
+  (declare (type single-float radius slop))
+  (* (/ 2.0 3.0) (fsqrt (* 2.0 radius slop))))
+
 (defvar *prepare-short-path* t
   "When false, the prepare fill sends every row through its general path; the claim that the
 short path changes no bit compares the two. #PR3PAR")
@@ -3295,6 +4003,8 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                            (@ friction) (fsqrt (* (aref fr-c la) (aref fr-c lb)))
                            (@ restitution) (max (aref re-c la) (aref re-c lb))
                            (@ rolling-limit) (* (max (aref ro-c la) (aref ro-c lb)) (max r-a r-b))
+                           (@ spin-limit) 0.0
+                           (@ spin-impulse) 0.0
                            (@ relative-velocity)
                            (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
                               (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
@@ -3361,10 +4071,13 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                                                           (aref (body-columns-restitution buf-b) lb))
                                 (@ rolling-limit) (* (max (aref (body-columns-rolling-resistance buf-a) la)
                                                                (aref (body-columns-rolling-resistance buf-b) lb))
-                                                          (max r-a r-b)))
+                                                          (max r-a r-b))
+                                (@ spin-limit) 0.0)
                           (setf (@ friction) (aref (body-columns-friction buf-a) la)
                                 (@ restitution) (aref (body-columns-restitution buf-a) la)
-                                (@ rolling-limit) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)))
+                                (@ rolling-limit) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)
+                                (@ spin-limit) (* (@ friction) (spin-arm r-a slop))))
+                      (setf (@ spin-impulse) 0.0)
                       (setf (@ relative-velocity)
                             (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
                                (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
@@ -3401,7 +4114,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
       color-count)))
 ;; Preparing the constraints:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:3]]
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:4]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
@@ -3458,7 +4171,7 @@ substep's solve reads. #PR3PAR"
 (defmethod physics-prepare-frames ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
     (prepare-frames-range cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:3 ends here
+;; Preparing the constraints:4 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)
@@ -3507,7 +4220,7 @@ single-float from LOW to 1e7. #K3RNLS"
 
 (defmethod physics-integrate-velocities :before ((kernels kernel-family) world h)
   (check-solver-world 'physics-integrate-velocities world)
-  (check-solver-number 'physics-integrate-velocities :h h least-positive-normalized-single-float))
+  (check-solver-number 'physics-integrate-velocities :h h -1e7))
 
 (defmethod physics-warm-start :before ((kernels kernel-family) world)
   (check-solver-world 'physics-warm-start world))
@@ -3521,7 +4234,7 @@ single-float from LOW to 1e7. #K3RNLS"
 
 (defmethod physics-integrate-positions :before ((kernels kernel-family) world h)
   (check-solver-world 'physics-integrate-positions world)
-  (check-solver-number 'physics-integrate-positions :h h least-positive-normalized-single-float))
+  (check-solver-number 'physics-integrate-positions :h h -1e7))
 
 (defun refuse-kernel-family (kernels operation)
   "Signal invalid-physics-parameter: KERNELS, given to OPERATION, is no kernel family. #K3RNLS"
@@ -3588,7 +4301,10 @@ single-float from LOW to 1e7. #K3RNLS"
              (cz (- (* l1 (@ t2z)) (* l2 (@ t1z))))
              (ma (@ ima)) (mb (@ imb)) (ia (@ iia)) (ib (@ iib))
              (ar (@ ra)) (br (@ rb))
-             (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z)))
+             ;; the spin impulse about the normal joins the rolling impulse: both are angular
+             (sp (@ spin-impulse))
+             (rx (+ (@ rolling-impulse-x) (* sp x))) (ry (+ (@ rolling-impulse-y) (* sp y)))
+             (rz (+ (@ rolling-impulse-z) (* sp z))))
         (declare (type index a b base))
         (setf (aref v a) (- (aref v a) (* ma px))
               (block-ref v a 1) (- (block-ref v a 1) (* ma py))
@@ -3740,6 +4456,19 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
                     (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry (@ rolling-impulse-z) nrz)
                     (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
                           wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz)))))))
+            ;; spin friction: an angular impulse about the normal inside |S| <= spin-limit *
+            ;; normal impulse; the rolling mass is the spin's too, for a ball's inertia is
+            ;; the same about every axis
+            (let ((sl (@ spin-limit)))
+              (when (> sl 0.0)
+                (let* ((slimit (* sl new)) (sp (@ spin-impulse))
+                       (raw (- sp (* (@ rolling-mass)
+                                     (+ (+ (* (- wbx wax) x) (* (- wby way) y)) (* (- wbz waz) z)))))
+                       (nsp (if (> raw slimit) slimit (if (> (* slimit -1.0) raw) (* slimit -1.0) raw)))
+                       (ds (- nsp sp)))
+                  (setf (@ spin-impulse) nsp
+                        wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
+                        wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
             (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
                   (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))
 ;; Solve and relax:1 ends here
@@ -3910,11 +4639,13 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
                      (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
                        (sleep-physics-body world i))
                      (setf (aref sleep-time i) 0.0)))))))
+    ;; only a world with a mortal sleeper walks the sleeping buffer
+    (when (plusp (physics-world-mortal-sleepers world))
     (with-body-columns (x y z age life handle) sleeping
       (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
         (when (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
           (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-          (%remove-body world +set-sleeping+ i))))
+          (%remove-body world +set-sleeping+ i)))))
     world))
 ;; Finalize: positions, orientation, age and sleep:1 ends here
 
@@ -3935,6 +4666,7 @@ and start the contact table's walk of it. #IDVK7G"
 (declaim (inline physics-world-max-penetration))
 (defun physics-world-max-penetration (world)
   "The deepest overlap, in metres, left at the end of the last step. #IDVK7G"
+  (check-world world 'physics-world-max-penetration)
   (aref (world-statistics world) 3))
 
 (defun substep-phase (world)
@@ -4080,18 +4812,22 @@ phase's position, and the bytes it consed under that position plus the number of
 
 (defun physics-world-last-step-contact-count (world)
   "How many contacts the last step solved. #IDVK7G"
+  (check-world world 'physics-world-last-step-contact-count)
   (round (aref (physics-world-statistics world) 0)))
 
 (defun physics-world-last-step-color-count (world)
   "How many colours the last step's contacts used, overflow included. #IDVK7G"
+  (check-world world 'physics-world-last-step-color-count)
   (round (aref (physics-world-statistics world) 1)))
 
 (defun physics-world-last-step-real-seconds (world)
   "Wall-clock seconds the last step took. #IDVK7G"
+  (check-world world 'physics-world-last-step-real-seconds)
   (aref (physics-world-statistics world) 2))
 
 (defun physics-world-max-approach-speed (world)
   "The fastest approach speed, m/s, of an overlapping contact at the end of the last step. #IDVK7G"
+  (check-world world 'physics-world-max-approach-speed)
   (aref (physics-world-statistics world) 4))
 ;; The step as built:1 ends here
 
@@ -4099,6 +4835,7 @@ phase's position, and the bytes it consed under that position plus the number of
 (defun physics-world-state-hash (world)
   "A 62-bit FNV-style hash of the bits of every body's position, velocity and angular
 velocity, awake set first, each set in row order. Equal hashes mean bit-equal states. #S6T2MV"
+  (check-world world 'physics-world-state-hash)
   (let ((hash 0))
     (declare (type (unsigned-byte 62) hash))
     (dolist (buffer (list (physics-world-awake world) (physics-world-sleeping world)))
@@ -4115,6 +4852,7 @@ velocity, awake set first, each set in row order. Equal hashes mean bit-equal st
 (defun validate-physics-world (world)
   "Walk every forwarding address and contact key of WORLD; return T, or signal
 physics-world-invalid naming the first broken invariant. #V4L1D8"
+  (check-world world 'validate-physics-world)
   (flet ((fail (fmt &rest args)
            (error 'physics-world-invalid :world world :invariant (apply #'format nil fmt args))))
     (let* ((ids (physics-world-ids world))
@@ -4161,6 +4899,11 @@ physics-world-invalid naming the first broken invariant. #V4L1D8"
                 (contact-table-count table) (contact-columns-length contacts))))
       (unless (>= (body-columns-capacity awake) (body-columns-length awake))
         (fail "awake capacity below its length"))
+      ;; the count of mortal sleepers, which decides whether finalize ages the sleepers
+      (let* ((sleeping (physics-world-sleeping world))
+             (mortal (count-if #'plusp (body-columns-life sleeping) :end (body-columns-length sleeping))))
+        (unless (= mortal (physics-world-mortal-sleepers world))
+          (fail "~D mortal sleepers counted as ~D" mortal (physics-world-mortal-sleepers world))))
       t)))
 ;; The validation walker:1 ends here
 
@@ -4176,6 +4919,7 @@ columns; describe shows that row as if it were slots. #B0DY0B"))
 
 (defun physics-body (world handle)
   "The physics-body object for HANDLE in WORLD. #B0DY0B"
+  (check-world world 'physics-body)
   (resolve-handle world handle)
   (make-instance 'physics-body :world world :handle handle))
 
@@ -4188,16 +4932,115 @@ columns; describe shows that row as if it were slots. #B0DY0B"))
                     (physics-body-awake-p w h) x y z))
           (format stream "~D removed" (handle-index h))))))
 
+(defun body-summary (body)
+  "BODY's row as (LABEL TEXT VALUE) lines: position, velocity, angular velocity, radius, mass,
+material, awake, kind. #B0DY0B"
+  (let ((w (physics-body-world body)) (h (physics-body-handle body)))
+    (multiple-value-bind (set row) (resolve-handle w h)
+      (with-body-columns (restitution friction rolling-resistance inverse-mass) (set-buffer w set)
+        (flet ((triple (reader) (multiple-value-list (funcall reader w h))))
+          (let ((position (triple #'physics-body-position))
+                (velocity (triple #'physics-body-velocity))
+                (spin (triple #'physics-body-angular-velocity))
+                (radius (physics-body-radius w h))
+                (mass (/ 1.0 (aref inverse-mass row)))
+                (material (list (aref restitution row) (aref friction row) (aref rolling-resistance row)))
+                (awake (= set +set-awake+))
+                (kind (physics-body-kind w h)))
+            (list (list "position" (format nil "~{~,4F~^ ~} m" position) position)
+                  (list "velocity" (format nil "~{~,4F~^ ~} m/s" velocity) velocity)
+                  (list "angular velocity" (format nil "~{~,4F~^ ~} rad/s" spin) spin)
+                  (list "radius" (format nil "~A m" radius) radius)
+                  (list "mass" (format nil "~A kg" mass) mass)
+                  (list "material" (format nil "restitution ~A, friction ~A, rolling resistance ~A"
+                                           (first material) (second material) (third material))
+                        material)
+                  (list "awake" (if awake "yes" "no, asleep") awake)
+                  (list "kind" (format nil "~D~@[ ~(~S~)~]" kind (physics-body-kind-name w h)) kind))))))))
+
 (defmethod describe-object ((body physics-body) stream)
   (let ((w (physics-body-world body)) (h (physics-body-handle body)))
-    (format stream "~&~S~%  handle ~D (slot ~D, generation ~D)~%" body h (handle-index h) (handle-generation h))
+    (format stream "~&~S~%  handle ~D (slot ~D, generation ~D) of ~S~%" body h (handle-index h)
+            (handle-generation h) w)
     (when (physics-body-alive-p w h)
+      (loop for (label text) in (body-summary body)
+            do (format stream "  ~18A ~A~%" label text))
       (multiple-value-bind (set row) (resolve-handle w h)
-        (format stream "  lives in the ~:[sleeping~;awake~] set, row ~D~%" (= set +set-awake+) row)
+        (format stream "  Its row, ~:[sleeping~;awake~] set row ~D:~%" (= set +set-awake+) row)
         (let ((buffer (set-buffer w set)))
           (dolist (column +body-columns-column-names+)
             (format stream "  ~(~22A~) = ~S~%" column (aref (slot-value buffer column) row))))))))
 ;; A body as an object:1 ends here
+
+;; [[file:../physics.org::#4YDMX5][A world as an object, and both in the inspector:1]]
+(defun kernel-family-name (kernels)
+  "The name under which the kernel family object KERNELS is registered, or its class name. #4YDMX5"
+  (let ((class (class-name (class-of kernels))))
+    (or (car (find class *kernel-families* :key #'second)) class)))
+
+(defmethod print-object ((world physics-world) stream)
+  (if (slot-boundp world 'kernels)
+      (print-unreadable-object (world stream :type t)
+        (let ((awake (physics-world-awake-count world)))
+          (format stream "~D bod~:@P (~D awake) step ~D ~(~A~)"
+                  (+ awake (physics-world-sleeping-count world)) awake
+                  (physics-world-step-count world) (kernel-family-name (physics-world-kernels world)))))
+      (print-unreadable-object (world stream :type t :identity t))))
+
+(defun world-summary (world)
+  "WORLD's settings and last step, as (LABEL TEXT) lines for describe and the inspector. #4YDMX5"
+  (flet ((line (label format-control &rest arguments)
+           (list label (apply #'format nil format-control arguments))))
+    (list (line "step" "~,4F s in ~D substeps, gravity (~,2F ~,2F ~,2F) m/s^2, sleep ~:[off~;on~]"
+                (physics-world-step-seconds world) (physics-world-substeps world)
+                (physics-world-gravity-x world) (physics-world-gravity-y world) (physics-world-gravity-z world)
+                (physics-world-sleep-enabled world))
+          (line "terrain" "~:[none~;~:*~D chunk~:P of 16^3 cells~]"
+                (let ((terrain (physics-world-terrain world)))
+                  (and terrain (hash-table-count (voxel-terrain-chunks terrain)))))
+          (line "last step" "~D contacts in ~D colours (~D overflowing), ~,6F s"
+                (physics-world-last-step-contact-count world) (physics-world-last-step-color-count world)
+                (physics-world-overflow-count world) (physics-world-last-step-real-seconds world))
+          (line "left" "deepest overlap ~,4F m, fastest approach ~,3F m/s"
+                (physics-world-max-penetration world) (physics-world-max-approach-speed world))
+          (line "contacts" "~A Hz, damping ratio ~A, push-out ~A m/s, slop ~A m, margin ~A m, pair skin ~A m"
+                (physics-world-contact-hertz world) (physics-world-damping-ratio world)
+                (physics-world-push-max world) (physics-world-slop world) (physics-world-margin world)
+                (physics-world-pair-skin world))
+          (line "speeds" "bounce above ~A m/s, hit above ~A m/s, still under ~A m/s for ~A s, wake above ~A m/s"
+                (physics-world-restitution-threshold world) (physics-world-hit-speed world)
+                (physics-world-sleep-speed world) (physics-world-time-to-sleep world)
+                (physics-world-wake-speed world))
+          (line "events" "~:[no handler~;handler ~:*~S~]" (physics-world-event-handler world)))))
+
+(defmethod describe-object ((world physics-world) stream)
+  (format stream "~&~S~%" world)
+  (loop for (label text) in (world-summary world)
+        do (format stream "  ~10A ~A~%" label text)))
+
+(defun inspection-parts (object)
+  "The SLIME inspector's content for OBJECT, a physics-world or a physics-body, in SWANK's format. #4YDMX5"
+  (etypecase object
+    (physics-world
+     (append (list (prin1-to-string object) '(:newline))
+             (loop for (label text) in (world-summary object)
+                   append (list (format nil "~10A " label) text '(:newline)))
+             (list "kernels    " (list :value (physics-world-kernels object)) '(:newline))))
+    (physics-body
+     (let ((world (physics-body-world object)))
+       (append (list (prin1-to-string object) '(:newline) "world      " (list :value world) '(:newline))
+               (loop for (label text value) in (body-summary object)
+                     append (list (format nil "~18A " label) (list :value value text) '(:newline))))))))
+
+(defun install-swank-inspection ()
+  "If SWANK is loaded, make its inspector show worlds and bodies by inspection-parts; true if it did. #4YDMX5"
+  (let ((inspect (and (find-package "SWANK") (find-symbol "EMACS-INSPECT" "SWANK"))))
+    (when (and inspect (fboundp inspect))
+      (dolist (class '(physics-world physics-body) t)
+        (eval `(defmethod ,inspect ((object ,class)) (inspection-parts object)))))))
+
+(install-swank-inspection)
+;; A world as an object, and both in the inspector:1 ends here
 
 ;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:1]]
 (defparameter +fuzz-bad-values+
@@ -4608,10 +5451,12 @@ naming it. #JAU0EF"
 (defun add-physics-body-of-kind (world kind x y z &key (vx 0.0) (vy 0.0) (vz 0.0) report-hits)
   "Add a body of KIND (a keyword of *physics-body-kinds*) centred at X Y Z, moving at VX VY VZ,
 and return its handle. #JAU0EF"
+  (check-world world 'add-physics-body-of-kind)
   (add-physics-body-of-kind-number world (physics-kind-number kind world) x y z vx vy vz report-hits))
 
 (defun physics-body-kind-name (world handle)
   "The keyword of the kind of HANDLE's body, or NIL for a body added without a kind. #JAU0EF"
+  (check-world world 'physics-body-kind-name)
   (let ((number (physics-body-kind world handle)))
     (and (<= 1 number (length *physics-body-kinds*))
          (first (physics-kind-entry number)))))
@@ -4657,6 +5502,7 @@ COUNT-th body of the spring at cell X Y Z: a fixed hash of the four integers. #J
 (defun run-physics-springs (world springs &optional function)
   "Let each of SPRINGS emit into WORLD what is due this call, calling FUNCTION, when given, on
 the handle of each body emitted; return how many were emitted. Conses nothing. #JAU0EF"
+  (check-world world 'run-physics-springs)
   (let ((emitted 0))
     (declare (type fixnum emitted))
     (dolist (spring springs emitted)
@@ -4862,6 +5708,7 @@ Return the steps run. #H7P4CX"
 
 (defun post-physics-player (world player)
   "Post PLAYER into WORLD's next step as a kinematic box moving at its velocity. #H7P4CX"
+  (check-world world 'post-physics-player)
   (let ((w (physics-player-half-width player)) (h (* 0.5d0 (physics-player-height player))))
     (post-physics-box world (physics-player-x player) (+ (physics-player-y player) h)
                       (physics-player-z player) w h w
@@ -5112,6 +5959,61 @@ kernel family this CPU runs, and the spread pile under two dense-grid bounds for
         (finish-output stream))))))
 ;; What a step costs:1 ends here
 
+;; [[file:../physics.org::#B3NCH5][What a step costs:2]]
+(defun sleepers-beside-basin (sleepers &key (kernels :avx2))
+  "A basin world with SLEEPERS balls of radius 0.25 m asleep, one per 0.6 m square, on a floor
+beside the basin's east wall, each resting a slop deep and alone. Return the world. #B3NCH5"
+  (let* ((terrain (make-basin-terrain))
+         (per-row (max 1 (ceiling (sqrt sleepers))))
+         (side (ceiling (* 0.6 per-row))))
+    (fill-terrain terrain 16 0 0 (+ 17 side) 4 (1+ side) nil)
+    (fill-terrain terrain 16 -1 0 (+ 17 side) 0 (1+ side) t)
+    (let ((world (make-physics-world :terrain terrain :sleep t :kernels kernels)))
+      (dotimes (k sleepers)
+        (multiple-value-bind (i j) (floor k per-row)
+          (add-physics-body world (+ 16.3 (* 0.6 i)) (- 0.25 *physics-linear-slop*) (+ 0.3 (* 0.6 j))
+                            :radius 0.25 :mass 1.0 :friction 0.6)))
+      (loop for row from (1- (physics-world-awake-count world)) downto 0
+            do (sleep-physics-body world row))
+      world)))
+
+(defun measure-sleeping-scale (sleepers &key (kernels :avx2))
+  "Beside SLEEPERS settled sleepers: the mean ms per step idle (nothing awake, 100 steps), while
+1000 balls fall into the basin, settle and sleep (600 steps), and after a ball is thrown into
+that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
+  (sb-ext:gc :full t)
+  (let* ((before (sb-kernel:dynamic-usage))
+         (world (sleepers-beside-basin sleepers :kernels kernels)))
+    (step-physics-world world)
+    (sb-ext:gc :full t)
+    (let ((bytes (- (sb-kernel:dynamic-usage) before))
+          (idle (measure-steps world 0 100)))
+      (dotimes (i 1000)
+        (multiple-value-bind (x y z) (basin-spawn-point i)
+          (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)))
+      (let ((settling (measure-steps world 0 600)))
+        (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0)
+        (let ((wave (measure-steps world 0 300)))
+          (list :sleepers sleepers :idle idle :settling settling :wave wave
+                :bytes-per-sleeper (if (plusp sleepers) (round bytes sleepers) 0)
+                :awake (physics-world-awake-count world)))))))
+
+(defun run-sleeping-scale-benchmark (&key (counts '(0 10000 50000 100000 200000)) (stream *standard-output*))
+  "Print, as an Org table, what sleepers cost at each of COUNTS: idle, settling and wake-wave ms
+per step beside them, each against the same at no sleepers, and the heap's bytes per sleeper. #B3NCH5"
+  (format stream "~&#+caption: sleepers beside the basin, avx2; ~A; load ~A~%" (cpu-model-name) (load-average))
+  (format stream "~&| sleepers | idle ms/step | settling ms/step | / at 0 | wave ms/step | / at 0 | bytes per sleeper | awake at end |~%")
+  (format stream "~&|----------+--------------+------------------+--------+--------------+--------+-------------------+--------------|~%")
+  (let ((base nil))
+    (dolist (count counts)
+      (let ((m (measure-sleeping-scale count)))
+        (unless base (setf base m))
+        (format stream "~&| ~D | ~,4F | ~,3F | ~,2F | ~,3F | ~,2F | ~D | ~D |~%"
+                count (getf m :idle) (getf m :settling) (/ (getf m :settling) (getf base :settling))
+                (getf m :wave) (/ (getf m :wave) (getf base :wave)) (getf m :bytes-per-sleeper) (getf m :awake))
+        (finish-output stream)))))
+;; What a step costs:2 ends here
+
 ;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]
 (defun pinch-between-sleepers (&key (seconds 2))
   "Let two balls of radius 0.25 m fall asleep on the basin floor 0.8 m apart, spawn a third
@@ -5132,6 +6034,65 @@ of any contact over the ball's weight times the substep, and the fastest the bal
             (setf largest (max largest (contact@ geometry k normal-impulse)))))
         (setf fastest (max fastest (speed-of world ball)))))
     (values (/ largest (* (abs (physics-world-gravity-y world)) h)) fastest)))
+
+(defun pile-kinetic-energy (world balls)
+  "The kinetic energy of BALLS in WORLD, in joules, translation and rotation, each a solid ball
+of its own mass and radius. #X7R3M5"
+  (let ((energy 0d0))
+    (dolist (b balls energy)
+      (multiple-value-bind (set row) (resolve-handle world b)
+        (let ((buffer (set-buffer world set)))
+          (with-body-columns (vx vy vz wx wy wz radius inverse-mass) buffer
+            (let ((m (/ 1d0 (aref inverse-mass row))) (r (aref radius row)))
+              (incf energy (* 0.5d0 m (+ (expt (aref vx row) 2) (expt (aref vy row) 2) (expt (aref vz row) 2)
+                                         (* 0.4d0 r r (+ (expt (aref wx row) 2) (expt (aref wy row) 2)
+                                                         (expt (aref wz row) 2)))))))))))))
+
+(defun dead-pile (count &key (seconds 10))
+  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0) in the basin lattice
+with sleeping off and run SECONDS. Return the kinetic energy at each whole second, in joules,
+and the fastest ball's speed at the end. #X7R3M5"
+  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
+         (balls (loop for i below count
+                      collect (multiple-value-bind (x y z) (basin-spawn-point i)
+                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6))))
+         (curve '()))
+    (dotimes (second seconds)
+      (dotimes (i 60) (step-physics-world world))
+      (push (pile-kinetic-energy world balls) curve))
+    (values (nreverse curve) (reduce #'max balls :key (lambda (b) (speed-of world b))))))
+
+(defun thrown-into-pile (count &key (seconds 8) (throw-at (floor seconds 2)) (shift 0.0) (seed nil))
+  "The default scene at COUNT balls: drop them in the basin lattice (each spawn point moved by up
+to 1 cm in x and z by the fixed sequence of SEED, when given), throw a ball into the pile at
+second THROW-AT from a point SHIFT metres along x from the default, and run SECONDS with sleeping
+on. Return the awake count at the end of each second. #X7R3M5"
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t :kernels :auto))
+        (next (and seed (fixed-sequence seed))) (counts '()))
+    (dotimes (i count)
+      (multiple-value-bind (x y z) (basin-spawn-point i)
+        (when next
+          (incf x (* 0.02 (- (funcall next) 0.5)))
+          (incf z (* 0.02 (- (funcall next) 0.5))))
+        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6)))
+    (dotimes (second seconds)
+      (when (= second throw-at)
+        (add-physics-body world (+ 1.0 shift) 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0))
+      (dotimes (i 60) (step-physics-world world))
+      (push (physics-world-awake-count world) counts))
+    (nreverse counts)))
+
+(defun column-contact-depths (count &key (radius 0.45) (seconds 10))
+  "Stack COUNT balls of RADIUS and 1 kg in the shaft, sleeping on, and run SECONDS. Return each
+contact's overlap at the end, from the floor up, in slops. #X7R3M5"
+  (let* ((world (make-shaft-world :sleep t))
+         (balls (loop for i below count
+                      collect (add-physics-body world 0.5 (+ radius (* i 2.02 radius)) 0.5 :radius radius :mass 1.0))))
+    (dotimes (i (* 60 seconds)) (step-physics-world world))
+    (let ((heights (mapcar (lambda (b) (nth-value 1 (physics-body-position world b))) balls)))
+      (mapcar (lambda (overlap) (/ overlap *physics-linear-slop*))
+              (cons (- radius (first heights))
+                    (loop for (a b) on heights while b collect (- (* 2 radius) (- b a))))))))
 
 (defun speed-of (world handle)
   "The speed of HANDLE's body. #X7R3M5"
@@ -5347,15 +6308,15 @@ its final height less its ideal resting height (radius less a slop), and whether
     (multiple-value-bind (pen speed drop left) (stack-in-shaft '(1000.0 1.0))
       (row "1 kg ball on a 1000 kg ball" (< pen 0.02)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
-    ;; bracing in a pile of many masses, and the same pile without it, each from six starts:
+    ;; bracing in a pile of many masses, and the same pile without it, each from twelve starts:
     ;; the deepest overlap of one start is the deepest of one moment, which one heavy landing sets
     (dolist (ratio (list *physics-brace-mass-ratio* 1e9))
-      (let ((runs (loop for seed in '(7 11 13 17 19 23)
+      (let ((runs (loop for seed in '(7 11 13 17 19 23 29 31 37 41 43 47)
                         collect (multiple-value-list (mixed-mass-pile 1000 :brace-ratio ratio :seed seed)))))
         (flet ((all (key) (mapcar key runs)))
           (let ((deepest (all #'first)) (last (reduce #'max (all #'second)))
                 (fastest (reduce #'max (all #'third))) (ok (every #'identity (all #'fourth))))
-            (row (format nil "1000 balls of 0.32 to 32 kg, sleeping off, ~:[without bracing~;bracing~], six starts"
+            (row (format nil "1000 balls of 0.32 to 32 kg, sleeping off, ~:[without bracing~;bracing~], twelve starts"
                          (< ratio 1e6))
                  (and ok (< (median deepest) 0.06) (< fastest 0.05))
                  "deepest overlap after 2 s ~,4F m in the median start, ~,4F m in the worst; a ball ~
@@ -5365,6 +6326,23 @@ its final height less its ideal resting height (radius less a slop), and whether
     (multiple-value-bind (pen speed drop left) (stack-in-shaft (make-list 20 :initial-element 1.0))
       (row "column of 20 balls" (< pen 0.05)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
+    (let ((depths (column-contact-depths 20)))
+      (row "column of 20 balls, each contact against its design depth (one slop)"
+           (every (lambda (d) (<= d 1.1)) depths)
+           "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}" depths))
+    (let ((runs (append (loop for shift in '(0.0 0.001 0.002 0.003)
+                              collect (thrown-into-pile 1000 :seconds 12 :throw-at 4 :shift shift))
+                        (loop for seed from 1 to 10
+                              collect (thrown-into-pile 1000 :seconds 12 :throw-at 4 :seed seed)))))
+      (let ((at-8 (reduce #'max runs :key (lambda (r) (nth 7 r))))
+            (at-12 (reduce #'max runs :key (lambda (r) (nth 11 r)))))
+        (row "default scene, ball thrown at 4 s, 14 runs (throw 0-3 mm aside, 10 jittered spawns)"
+             (and (<= at-8 10) (zerop at-12))
+             "awake of 1001 in the worst run: ~D at 8 s, ~D at 12 s" at-8 at-12)))
+    (multiple-value-bind (curve fastest) (dead-pile 500 :seconds 10)
+      (row "500 dead balls, sleeping off" (and (< (car (last curve)) 1e-4) (< fastest 0.001))
+           "kinetic energy at 1 .. 10 s, mJ: ~{~,3F~^ ~}; fastest at 10 s ~,4F m/s"
+           (mapcar (lambda (e) (* 1000 e)) curve) fastest))
     (multiple-value-bind (speed median worst pen) (heaps-at-one-point)
       (row "heaps of 50 to 150 balls spawned at one point" (and (< speed 10.0) (< pen 0.01))
            "fastest ball ~,3F m/s; fastest parting pair ~,3F m/s in the median heap, ~,3F m/s in the worst; ~
@@ -5376,7 +6354,7 @@ its final height less its ideal resting height (radius less a slop), and whether
             deepest left ~,4F m" speed median worst pen))
     (multiple-value-bind (load speed) (pinch-between-sleepers)
       (row "ball spawned pinched between two sleeping balls"
-           (and (< load 100.0) (<= speed (+ *physics-contact-push-max* 0.01)))
+           (and (< load 50.0) (<= speed (+ *physics-contact-push-max* 0.01)))
            "largest impulse ~D times the ball's weight over a substep; fastest ~,3F m/s" (round load) speed))
     (dolist (depth '(0.2 0.5))
       (multiple-value-bind (speed y rest) (buried-ball depth)
@@ -6004,6 +6982,7 @@ awake and sleeping counts, the contacts, the step's milliseconds and the simulat
 (defun start-physics-recording (world &key (every 1))
   "Record WORLD from now on: a frame of its present state, then a frame after every EVERY-th
 step, through its step hook (which must be free). Return the recording. #G4WXCJ"
+  (check-world world 'start-physics-recording)
   (check-count :every every 3600)
   (when (physics-world-step-hook world)
     (error 'invalid-physics-parameter :world world :name :step-hook
@@ -6019,6 +6998,7 @@ step, through its step hook (which must be free). Return the recording. #G4WXCJ"
 
 (defun stop-physics-recording (world)
   "Stop recording WORLD: its step hook is NIL again. Return WORLD. #G4WXCJ"
+  (check-world world 'stop-physics-recording)
   (setf (physics-world-step-hook world) nil)
   world)
 
@@ -6459,7 +7439,10 @@ and when they are too many VIEW grids the sleepers itself. #Q5V1EW"
     (declare (type index n))
     (setf (query-view-sleeping-grid view) grid (query-view-sleeping-stray-count view) 0
           (hash-grid-count (query-view-sleeping-stray-grid view)) 0)
-    (when (physics-world-sleeping-grid-dirty world)
+    ;; the settled sleeping grid alone is exact only while the fresh grid is empty and it holds
+    ;; no dead entry ([[#G4R1D5][the grids]]); otherwise the view grids the sleepers itself
+    (when (or (physics-world-sleeping-grid-dirty world)
+              (plusp (physics-world-fresh-count world)) (plusp (physics-world-settled-stale world)))
       (let* ((marks (setf (query-view-marks view) (stray-room (query-view-marks view) n)))
              (strays (setf (query-view-sleeping-strays view) (stray-room (query-view-sleeping-strays view) n)))
              (ids (physics-world-ids world))
@@ -6479,7 +7462,8 @@ and when they are too many VIEW grids the sleepers itself. #Q5V1EW"
         (dotimes (row n)
           (when (zerop (aref marks row))
             (setf (aref strays count) row count (1+ count))))
-        (if (> count (strays-allowed n))
+        (if (or (> count (strays-allowed n))
+                (plusp (physics-world-fresh-count world)) (plusp (physics-world-settled-stale world)))
             (let ((own (query-view-own-sleeping view)))
               (build-hash-grid own (f32 (grid-cell-size world)) n (body-columns-x sleeping)
                                (body-columns-y sleeping) (body-columns-z sleeping) (body-columns-handle sleeping))
@@ -7162,6 +8146,7 @@ or asleep), a solid cell or a box posted for the step, as a physics-hit (HIT, fi
 or NIL. BODIES, CELLS and BOXES choose the kinds; EXCLUDE, a handle or a box's owner, is passed
 through; FILTER, a function of the kind (:body :cell :box) and the handle, NIL or owner, keeps a
 hit when it returns true. #R4YC57"
+  (check-world world 'physics-ray-cast)
   (physics-cast 'physics-ray-cast world x y z 0 dx dy dz max-distance bodies cells boxes exclude filter hit))
 ;; Rays walk the cells in order:1 ends here
 
@@ -7205,6 +8190,7 @@ centre starts in a solid cell meets it at 0 with the normal against the cast. #S
   "The first thing a sphere of RADIUS moved from X Y Z along DX DY DZ meets before it has moved
 MAX-DISTANCE, as physics-ray-cast answers it: the distance moved, the point of contact and the
 normal out of what was met. #S9WEEP"
+  (check-world world 'physics-sphere-cast)
   (physics-cast 'physics-sphere-cast world x y z radius dx dy dz max-distance bodies cells boxes exclude filter hit))
 ;; Spheres swept along a path:1 ends here
 

@@ -196,6 +196,161 @@
   (check (null (anchor-definitions "ZZZZZ9"))))
 ;; BSOZ3U-anchor-definitions-by-section ends here
 
+;; [[file:../physics.org::#0QBGZO][0QBGZO-page-forms-match-registry]]
+(define-claim "0QBGZO" page-forms-match-registry
+    "Definitions read from the page's blocks equal the registry's, with the same page lines."
+  (let* ((lines (luv-physics::page-lines-of nil))
+         (forms (luv-physics::page-forms lines (luv-physics::engine-files)))
+         (from-page (loop for form in forms
+                          append (loop for (name kind) in (luv-physics::form-definitions (getf form :form))
+                                       collect (list name kind (getf form :anchor) (getf form :line)))))
+         (from-registry (mapcar (lambda (r) (list (getf r :name) (getf r :kind) (getf r :anchor) (getf r :org-line)))
+                                luv-physics::*definitions*)))
+    (check (< 300 (length from-page)) "only ~D definitions read from the page" (length from-page))
+    (check (equal from-page from-registry) "first difference: ~S"
+           (loop for a in from-page for b in from-registry unless (equal a b) return (list a b)))))
+;; 0QBGZO-page-forms-match-registry ends here
+
+;; [[file:../physics.org::#0QBGZO][0QBGZO-section-prints-definitions-and-claims]]
+(define-claim "0QBGZO" section-prints-definitions-and-claims
+    "(section \"BSOZ3U\") names its title, its three functions at their page lines, and its two claims."
+  (let* ((text (with-output-to-string (s) (section "BSOZ3U" :stream s)))
+         (lines (uiop:split-string text :separator '(#\Newline))))
+    (check (search "BSOZ3U  Register a file and answer by anchor or by name" text))
+    (dolist (name '(luv-physics::register-tangled-file anchor-definitions definition-anchor))
+      (let ((line (nth-value 1 (definition-anchor name))))
+        (check (find-if (lambda (l) (and (search (string-downcase (symbol-name name)) l)
+                                         (search (princ-to-string line) l)))
+                        lines)
+               "no line names ~(~A~) at page line ~D" name line)))
+    (check (search "2 claims:" text))
+    (check (search "definition-anchor-finds-its-section" text))
+    (check (search "anchor-definitions-by-section" text))
+    (check (eq :error (handler-case (section "ZZZZZ9" :stream (make-broadcast-stream)) (error () :error))))))
+;; 0QBGZO-section-prints-definitions-and-claims ends here
+
+;; [[file:../physics.org::#OWNJGP][OWNJGP-reload-keeps-changed-parameters]]
+(define-claim "OWNJGP" reload-keeps-changed-parameters
+    "A changed parameter survives a reload; an unchanged one takes the page's new default."
+  (let* ((page luv-physics::*page-pathname*)
+         (copy (merge-pathnames (format nil "luv-reload-claim-~D.org" (random 1000000 (make-random-state t)))
+                                (uiop:temporary-directory)))
+         (original luv-physics:*physics-phases*)
+         (text (luv-physics::read-file-text page))
+         (old "store-phase finalize-phase)")
+         (new "store-phase finalize-phase reload-claim-phase)")
+         ;; the words are split so that this claim's own text does not match them
+         (at (search old text :start2 (search (concatenate 'string "(defparameter " "*physics-phases*") text)))
+         (counted 0))
+    (check (< at (search (concatenate 'string "(defun " "step-physics-world") text)))
+    (with-open-file (out copy :direction :output :external-format :utf-8)
+      (progn
+        (write-string (concatenate 'string (subseq text 0 at) new (subseq text (+ at (length old)))) out)))
+    (setf (fdefinition 'luv-physics::reload-claim-phase) (lambda (world) (incf counted) world))
+    (unwind-protect
+         (let ((w (make-floor-world)))
+           ;; at its default: the page's new default is taken, and the step runs it at once
+           (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G" :page copy))
+           (check (eq 'luv-physics::reload-claim-phase (car (last luv-physics:*physics-phases*))))
+           (luv-physics::step-physics-world w)
+           (check (= 1 counted) "the new phase ran ~D times in one step" counted)
+           ;; changed at the REPL: kept
+           (setf luv-physics:*physics-phases* (remove 'luv-physics::restitution-phase original))
+           (let ((summary (with-output-to-string (*standard-output*)
+                            (luv-physics::reload-section "IDVK7G" :page copy))))
+             (check (search "kept *physics-phases*" summary) "summary: ~A" summary)
+             (check (search "0 warnings" summary) "summary: ~A" summary))
+           (check (equal luv-physics:*physics-phases* (remove 'luv-physics::restitution-phase original))))
+      ;; the page's own text back in the image
+      (setf luv-physics:*physics-phases* original)
+      (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G"))
+      (setf luv-physics:*physics-phases* original)
+      (delete-file copy))
+    (check (equal original luv-physics:*physics-phases*))))
+;; OWNJGP-reload-keeps-changed-parameters ends here
+
+;; [[file:../physics.org::#OWNJGP][OWNJGP-reload-changed-loads-one-form]]
+(define-claim "OWNJGP" reload-changed-loads-one-form
+    "One edited docstring: reload-changed loads one form, and the page's text puts it back with one more."
+  (let* ((page luv-physics::*page-pathname*)
+         (copy (merge-pathnames (format nil "luv-changed-claim-~D.org" (random 1000000 (make-random-state t)))
+                                (uiop:temporary-directory)))
+         (text (luv-physics::read-file-text page))
+         (old (concatenate 'string "\"How many bodies of WORLD are " "awake."))
+         (at (search old text))
+         (original (documentation 'physics-world-awake-count 'function)))
+    (with-open-file (out copy :direction :output :external-format :utf-8)
+      (write-string (concatenate 'string (subseq text 0 at) "\"How many bodies of WORLD are awake now."
+                                 (subseq text (+ at (length old))))
+                    out))
+    (unwind-protect
+         (let ((edited (with-output-to-string (*standard-output*)
+                         (luv-physics::reload-changed :page copy :tangle nil))))
+           (check (search "reload changed: 1 form " edited) "~A" edited)
+           (check (eql 0 (search "How many bodies of WORLD are awake now."
+                                 (documentation 'physics-world-awake-count 'function)))))
+      (let ((back (with-output-to-string (*standard-output*)
+                    (luv-physics::reload-changed :page page :tangle nil))))
+        (check (search "reload changed: 1 form " back) "~A" back))
+      (delete-file copy))
+    (check (equal original (documentation 'physics-world-awake-count 'function)))))
+;; OWNJGP-reload-changed-loads-one-form ends here
+
+;; [[file:../physics.org::#OWNJGP][OWNJGP-changed-inline-recompiles-users]]
+(define-claim "OWNJGP" changed-inline-recompiles-users
+    "An edited inline function brings its users along; an unchanged reload brings none."
+  (let* ((page luv-physics::*page-pathname*)
+         (copy (merge-pathnames (format nil "luv-inline-claim-~D.org" (random 1000000 (make-random-state t)))
+                                (uiop:temporary-directory)))
+         (text (luv-physics::read-file-text page))
+         (old (concatenate 'string "\"The deepest overlap, in metres, left at the end " "of the last step."))
+         (at (search old text)))
+    (with-open-file (out copy :direction :output :external-format :utf-8)
+      (write-string (concatenate 'string (subseq text 0 at) "\"The deepest overlap, in metres, at the end of the last step."
+                                 (subseq text (+ at (length old))))
+                    out))
+    (flet ((reload (page) (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G" :page page))))
+      (unwind-protect
+           (let ((edited (reload copy)))
+             (check (and (search "users recompiled" edited) (search "4YDMX5" edited)) "~A" edited))
+        (let ((back (reload page)))
+          (check (search "4YDMX5" back) "~A" back))
+        (delete-file copy))
+      (let ((again (reload page)))
+        (check (not (search "users recompiled" again)) "~A" again)))))
+;; OWNJGP-changed-inline-recompiles-users ends here
+
+;; [[file:../physics.org::#OWNJGP][OWNJGP-users-of-copied-definitions]]
+(define-claim "OWNJGP" users-of-copied-definitions
+    "The closure of W0RLD7 holds K3RNLS and S0LV3R; of W1D3KF holds F4M1LY; of BSOZ3U nothing more."
+  (let* ((lines (luv-physics::page-lines-of nil))
+         (forms (luv-physics::page-forms lines (luv-physics::engine-files))))
+    (flet ((anchors-of (anchor)
+             (remove-duplicates
+              (mapcar (lambda (f) (getf f :anchor))
+                      (luv-physics::reload-closure
+                       (remove anchor forms :key (lambda (f) (getf f :anchor)) :test-not #'equal) forms))
+              :test #'equal)))
+      (check (member 'luv-physics::solver-row (loop for f in forms append (luv-physics::form-expanders (getf f :form)))))
+      (check (subsetp '("W0RLD7" "K3RNLS" "S0LV3R") (anchors-of "W0RLD7") :test #'equal) "~S" (anchors-of "W0RLD7"))
+      (check (subsetp '("W1D3KF" "F4M1LY") (anchors-of "W1D3KF") :test #'equal) "~S" (anchors-of "W1D3KF"))
+      (check (equal '("BSOZ3U") (anchors-of "BSOZ3U")) "~S" (anchors-of "BSOZ3U")))))
+;; OWNJGP-users-of-copied-definitions ends here
+
+;; [[file:../physics.org::#PYXPDY][PYXPDY-editor-answers]]
+(define-claim "PYXPDY" editor-answers
+    "editor-definitions lists names as written; editor-page-line finds engine symbols from CL-USER."
+  (check (equal '("register-tangled-file" "defun")
+                (subseq (first (luv-physics::editor-definitions "BSOZ3U")) 0 2))
+         "~S" (first (luv-physics::editor-definitions "BSOZ3U")))
+  (check (equal (list "W0RLD7" (nth-value 1 (definition-anchor 'luv-physics::solver-row)) (luv-physics::editor-page))
+                (luv-physics::editor-page-line "solver-row" "COMMON-LISP-USER")))
+  (check (equal (luv-physics::editor-page-line "physics:step-physics-world" "#:luv-physics-tests")
+                (luv-physics::editor-page-line "step-physics-world" "CL-USER")))
+  (check (null (luv-physics::editor-page-line "no-such-definition-here" "CL-USER")))
+  (check (null (luv-physics::editor-page-line "(" "CL-USER"))))
+;; PYXPDY-editor-answers ends here
+
 ;; [[file:../physics.org::#JKM0PY][JKM0PY-scalar-first]]
 (define-claim "JKM0PY" scalar-first
     "AVAILABLE-KERNEL-FAMILIES starts with :SCALAR and lists known families once each."
@@ -425,6 +580,19 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (equal before (world-fingerprint w)))
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; C0ND1T-stale-handles ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-handle-of-no-world]]
+(define-claim "C0ND1T" handle-of-no-world
+    "12345 and a handle with an unissued tag signal stale-physics-handle :unissued, reported as of no world."
+  (let ((w (make-floor-world)))
+    (luv-physics::add-physics-body w 3.5 1 3.5)
+    (dolist (handle (list 12345 (luv-physics::make-handle (1+ luv-physics::*world-tag-counter*) 0 0)))
+      (let ((got (handler-case (progn (physics-body-position w handle) :no-error)
+                   (luv-physics::stale-physics-handle (e)
+                     (list (luv-physics::stale-physics-handle-reason e) (princ-to-string e))))))
+        (check (eq :unissued (first got)) "handle ~D gave ~S" handle got)
+        (check (and (consp got) (search "no world" (second got))) "handle ~D gave ~S" handle got)))))
+;; C0ND1T-handle-of-no-world ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-busy-during-step]]
 (define-claim "C0ND1T" busy-during-step
@@ -681,7 +849,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (loop for (label call) in (list (list :family (lambda () (luv-physics:physics-warm-start :scalar w)))
                                     (list :world (lambda () (luv-physics:physics-warm-start k :not-a-world)))
                                     (list :h (lambda () (luv-physics:physics-integrate-velocities k w "x")))
-                                    (list :h-negative (lambda () (luv-physics:physics-integrate-positions k w -1.0)))
+                                    (list :h-huge (lambda () (luv-physics:physics-integrate-positions k w 1e30)))
                                     (list :inv-h (lambda () (luv-physics:physics-solve-contacts k w 2 t 0.0))))
           for got = (handler-case (progn (funcall call) :ran)
                       (luv-physics:physics-error () :refused)
@@ -985,6 +1153,36 @@ function of a column name that reads row K's float in that column. #T3STK1"
               (check (zerop off-c) "~D constraint columns start off a 32-byte boundary" off-c))))))))
 ;; W0RLD7-solver-rows-aligned ends here
 
+;; [[file:../physics.org::#M4K3WD][M4K3WD-non-world-named]]
+(define-claim "M4K3WD" non-world-named
+    "Exported functions of a WORLD signal not-a-physics-world naming themselves and WORLD for a non-world."
+  (let ((checked 0) (wrong '()))
+    (do-external-symbols (s '#:luv-physics)
+      (when (and (fboundp s) (not (macro-function s)) (not (typep (fdefinition s) 'generic-function)))
+        (let ((lambda-list (sb-kernel:%fun-lambda-list (fdefinition s))))
+          (when (and (consp lambda-list) (string= "WORLD" (string (first lambda-list))))
+            (dolist (bad (list nil (luv-physics:make-voxel-terrain) 42))
+              (let* ((required (loop for p in (rest lambda-list) until (member p lambda-list-keywords) count t))
+                     (got (handler-case (progn (apply s bad (make-list required :initial-element 0)) :no-error)
+                            (luv-physics::not-a-physics-world (e)
+                              (list (luv-physics::not-a-physics-world-operation e)
+                                    (luv-physics::invalid-physics-parameter-name e)))
+                            (error (e) (type-of e)))))
+                (incf checked)
+                (unless (equal got (list s 'luv-physics::world))
+                  (push (list s bad got) wrong))))))))
+    ;; the exported accessors, generic functions of the world
+    (dolist (call (list (lambda () (physics-world-step-count nil))
+                        (lambda () (setf (physics-world-event-handler 42) nil))))
+      (let ((got (handler-case (progn (funcall call) :no-error)
+                   (luv-physics::not-a-physics-world (e) (luv-physics::invalid-physics-parameter-name e))
+                   (error (e) (type-of e)))))
+        (incf checked)
+        (unless (eq got 'luv-physics::world) (push (list call got) wrong))))
+    (check (< 80 checked) "only ~D calls checked" checked)
+    (check (null wrong) "~D calls were not refused by name:~%~{  ~S~%~}" (length wrong) (reverse wrong))))
+;; M4K3WD-non-world-named ends here
+
 ;; [[file:../physics.org::#E7V3NT][E7V3NT-mortal-body-events]]
 (define-claim "E7V3NT" mortal-body-events
     "A 1 s mortal ball: :begin, then :end, then :expired on step 60; afterwards its handle is stale."
@@ -1007,6 +1205,24 @@ function of a column name that reads row K's float in that column. #T3STK1"
                           (luv-physics::stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e)))))
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; E7V3NT-mortal-body-events ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trim-gives-room-back]]
+(define-claim "QKS4GZ" trim-gives-room-back
+    "After trim-physics-world, 20000 sleepers hold at most 500 bytes of heap each, and the world steps on."
+  (sb-ext:gc :full t)
+  (let* ((before (sb-kernel:dynamic-usage))
+         (w (luv-physics::sleepers-beside-basin 20000 :kernels :scalar)))
+    (step-physics-world w)
+    (luv-physics:trim-physics-world w)
+    (sb-ext:gc :full t)
+    (let ((per (round (- (sb-kernel:dynamic-usage) before) 20000)))
+      (check (<= per 500) "after trimming the heap holds ~D bytes a sleeper" per))
+    (check (eq t (luv-physics::validate-physics-world w)))
+    (let ((ball (add-physics-body w 4.0 1.0 4.0)))
+      (dotimes (i 120) (step-physics-world w))
+      (check (not (luv-physics::physics-body-awake-p w ball)) "the ball dropped after trimming is awake after 2 s")
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; QKS4GZ-trim-gives-room-back ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-pile-sleeps-wakes-sleeps]]
 (define-claim "QKS4GZ" pile-sleeps-wakes-sleeps
@@ -1195,6 +1411,40 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "no row moved")
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; G4R1D5-sorted-rows-keep-handles ends here
+
+;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grids-stay-lean]]
+(define-claim "G4R1D5" sleeping-grids-stay-lean
+    "Sleeping enters the fresh grid alone; removed sleepers leave the grids at the next step."
+  (let* ((w (luv-physics::sleepers-beside-basin 2000 :kernels :scalar))
+         (settled (luv-physics::physics-world-sleeping-grid w))
+         (fresh (luv-physics::physics-world-fresh-grid w)))
+    (step-physics-world w)
+    (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid holds ~D" (luv-physics::hash-grid-count settled))
+    (let ((ball (add-physics-body w 4.0 0.5 4.0 :radius 0.25)))
+      (loop repeat 240 while (luv-physics::physics-body-awake-p w ball) do (step-physics-world w))
+      (check (not (luv-physics::physics-body-awake-p w ball)) "the ball did not fall asleep")
+      (step-physics-world w)
+      (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid was built again: ~D entries"
+             (luv-physics::hash-grid-count settled))
+      (check (= 1 (luv-physics::hash-grid-count fresh)) "the fresh grid holds ~D" (luv-physics::hash-grid-count fresh)))
+    (let ((s (luv-physics::physics-world-sleeping w)))
+      (dolist (h (loop for i below 1000 collect (aref (luv-physics::body-columns-handle s) i)))
+        (luv-physics::remove-physics-body w h))
+      (step-physics-world w)
+      (check (= 1001 (luv-physics::hash-grid-count settled)) "after the removals the settled grid holds ~D"
+             (luv-physics::hash-grid-count settled))
+      (check (= 0 (luv-physics::hash-grid-count fresh)) "after the removals the fresh grid holds ~D"
+             (luv-physics::hash-grid-count fresh))
+      (check (loop for row below (luv-physics::body-columns-length s)
+                   always (let ((h (aref (luv-physics::body-columns-handle s) row)) (seen 0))
+                            (luv-physics::do-sleeping-neighbours (e w (aref (luv-physics::body-columns-x s) row)
+                                                                    (aref (luv-physics::body-columns-y s) row)
+                                                                    (aref (luv-physics::body-columns-z s) row))
+                              (when (= e h) (incf seen)))
+                            (= seen 1)))
+             "a sleeper is met other than once around itself")
+      (check (eq t (luv-physics::validate-physics-world w))))))
+;; G4R1D5-sleeping-grids-stay-lean ends here
 
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
 (define-claim "P41RS7" pair-list-finds-every-pair
@@ -1584,6 +1834,25 @@ function of a column name that reads row K's float in that column. #T3STK1"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
 
+;; [[file:../physics.org::#PR3PAR][PR3PAR-spin-friction-rate]]
+(define-claim "PR3PAR" spin-friction-rate
+    "A ball spinning about the vertical on a floor slows at the patch's torque over its inertia."
+  (let* ((world (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain) :sleep nil))
+         (r 0.25) (mu 0.6) (slop luv-physics::*physics-linear-slop*)
+         (ball (add-physics-body world 4.0 (- r slop) 4.0 :radius r :mass 1.0 :friction mu))
+         (g (abs (luv-physics::physics-world-gravity-y world)))
+         (alpha (/ (* 2/3 mu (sqrt (* 2 r slop)) g) (* 0.4 r r))))
+    (flet ((spin () (multiple-value-bind (set row) (luv-physics::resolve-handle world ball)
+                      (aref (luv-physics::body-columns-wy (luv-physics::set-buffer world set)) row))))
+      (dotimes (i 30) (step-physics-world world))
+      (multiple-value-bind (set row) (luv-physics::resolve-handle world ball)
+        (setf (aref (luv-physics::body-columns-wy (luv-physics::set-buffer world set)) row) 10.0))
+      (dotimes (i 30) (step-physics-world world))
+      (let ((expected (- 10.0 (* alpha 0.5))))
+        (check (< (abs (- (spin) expected)) (* 0.01 expected))
+               "after 0.5 s the ball spins at ~,4F rad/s, not ~,4F" (spin) expected)))))
+;; PR3PAR-spin-friction-rate ends here
+
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-short-path-same-bits]]
 (define-claim "PR3PAR" short-path-same-bits
     "The fill's short path for two awake bodies writes the rows the general path writes, to the bit."
@@ -1869,6 +2138,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
           (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits"))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
 
+;; [[file:../physics.org::#4YDMX5][4YDMX5-world-and-body-summaries]]
+(define-claim "4YDMX5" world-and-body-summaries
+    "A world prints its counts, step and family; describe leads with that; the inspector shows a body's row."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
+    (luv-physics::add-physics-body w 5.5 1.0 5.5)
+    (luv-physics::add-physics-body w 1.5 0.245 1.5 :restitution 0.5)
+    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (let* ((awake (physics-world-awake-count w))
+           (printed (prin1-to-string w))
+           (described (with-output-to-string (s) (describe w s)))
+           (lines (uiop:split-string (string-right-trim '(#\Newline) described) :separator '(#\Newline))))
+      (check (string= printed (format nil "#<PHYSICS-WORLD 3 bodies (~D awake) step 60 scalar>" awake)) "~A" printed)
+      (check (string= printed (first lines)) "describe begins ~S" (first lines))
+      (check (<= (length lines) 12) "describe takes ~D lines" (length lines))
+      (dolist (word '("step " "terrain " "last step "))
+        (check (find-if (lambda (l) (search word l)) lines) "describe names no ~S" word)))
+    (let ((values (loop for part in (luv-physics::inspection-parts (physics-body w h))
+                        when (and (consp part) (eq :value (first part))) collect (second part))))
+      (check (member (multiple-value-list (physics-body-position w h)) values :test #'equal))
+      (check (member (multiple-value-list (physics-body-velocity w h)) values :test #'equal))
+      (check (member 1.0 values) "no mass of 1.0 in ~S" values)
+      (check (member w values)))))
+;; 4YDMX5-world-and-body-summaries ends here
+
 ;; [[file:../physics.org::#M9W5P7][M9W5P7-random-sequences-keep-promises]]
 (define-claim "M9W5P7" random-sequences-keep-promises
     "A hundred seeded sequences of 100 operations break no promise after any operation."
@@ -2102,7 +2396,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 (define-claim "B3NCH5" steps-cons-nothing
     "Thousands of steps of an awake pile, and of the fountain with drops added, cons 0 bytes."
   (let ((world (luv-physics::make-basin-world 200)))
-    (dotimes (i 600) (luv-physics::step-physics-world world))
+    (dotimes (i 1700) (luv-physics::step-physics-world world))
     ;; a collection first closes the allocation region, so bytes consed before are counted
     ;; before; the steps after it leave time for the collector's own after-work
     (sb-ext:gc)
@@ -2127,6 +2421,35 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= before (sb-ext:get-bytes-consed)) "the fountain consed ~D bytes in 3000 steps"
              (- (sb-ext:get-bytes-consed) before)))))
 ;; B3NCH5-steps-cons-nothing ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-piles-come-to-rest]]
+(define-claim "X7R3M5" piles-come-to-rest
+    "Floor balls of a dead pile stop spinning, and a pile hit by a thrown ball sleeps again, in every order."
+  (let* ((world (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain) :sleep nil
+                                                 :kernels :auto))
+         (balls (loop for i below 300
+                      collect (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6))))
+         (spin 0.0))
+    (dotimes (i 480) (step-physics-world world))
+    (dolist (b balls)
+      (multiple-value-bind (set row) (luv-physics::resolve-handle world b)
+        (let ((buffer (luv-physics::set-buffer world set)))
+          (when (< (aref (luv-physics::body-columns-y buffer) row) 0.25)
+            (setf spin (max spin (abs (aref (luv-physics::body-columns-wy buffer) row))))))))
+    (check (< spin 0.1) "a ball on the floor spins about the vertical at ~,4F rad/s after 8 s" spin))
+  (dolist (shift '(0.0 0.001 0.002 0.003))
+    (let ((awake (car (last (luv-physics::thrown-into-pile 400 :seconds 7 :throw-at 3 :shift shift)))))
+      (check (<= awake 2) "thrown from ~,3F m aside: ~D of 401 balls awake at 7 s" shift awake))))
+;; X7R3M5-piles-come-to-rest ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-pinch-holds]]
+(define-claim "X7R3M5" pinch-holds
+    "A ball spawned pinched between two sleepers is pushed out gently."
+  (multiple-value-bind (load speed) (luv-physics::pinch-between-sleepers :seconds 1)
+    (check (< load 50.0) "a contact carried ~,1F times the ball's weight over a substep" load)
+    (check (<= speed (+ luv-physics::*physics-contact-push-max* 0.01)) "the ball moved at ~,3F m/s" speed)))
+;; X7R3M5-pinch-holds ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-extremes-that-hold]]
 (define-claim "X7R3M5" extremes-that-hold
