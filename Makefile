@@ -4,12 +4,14 @@
 EMACS  ?= emacs
 SBCL   ?= sbcl
 ANCHOR ?=
+SEED   ?= 1
+COUNT  ?= 150
 
 ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report clean
+.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report mutate clean
 .NOTPARALLEL:
 
 help:
@@ -24,6 +26,8 @@ help:
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
+	@echo "make mutate         run the claims against COUNT=150 mutants of the engine (SEED=1, ANCHOR=ID"
+	@echo "                    for one section); the score table and the survivors into $(ORG)"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:
@@ -71,6 +75,15 @@ report: setup tangle
 	@REPORT=accuracy $(LISP) --load tools/report.lisp
 	@$(SBCL) --script tools/splice.lisp work-precision-best report/work-precision-best.org
 	@$(SBCL) --script tools/splice.lisp work-precision-table report/work-precision.org
+
+# Mutants are sampled from the tangled files as they are; the tables are spliced only after a
+# run over every section.
+mutate: setup tangle
+	@mkdir -p report
+	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" nice $(SBCL) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
+	@if [ -z "$(ANCHOR)" ]; then \
+	  $(SBCL) --script tools/splice.lisp mutate-score report/mutate-score.org && \
+	  $(SBCL) --script tools/splice.lisp mutate-survivors report/mutate-survivors.org; fi
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f

@@ -574,10 +574,12 @@ function of a column name that reads row K's float in that column. #T3STK1"
          (key (luv-physics::terrain-key (luv-physics::handle-index h) 3 -1 3))
          (table (luv-physics::physics-world-contact-table w))
          (expected (* 1.0 9.81 (/ 1.0 60 4)))
-         (rows '()) (worst 0.0))
-    (dotimes (i 60) (luv-physics::step-physics-world w))
+         (rows '()) (worst 0.0) (begins 0))
+    (flet ((step-counting ()
+             (incf begins (count :begin (step-events w) :key #'first))))
+    (dotimes (i 60) (step-counting))
     (dotimes (i 60)
-      (luv-physics::step-physics-world w)
+      (step-counting)
       (let ((row (luv-physics::contact-table-find table key)))
         (pushnew row rows)
         (when (>= row 0)
@@ -585,7 +587,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                           (luv-physics::contact-columns-geometry
                                            (luv-physics::physics-world-contacts w))
                                           row normal-impulse)
-                                         expected)))))))
+                                         expected))))))))
+    (check (= 1 begins) "~D begin events for one resting contact" begins)
     (check (equal rows '(0)) "the contact lived in rows ~S" rows)
     (check (= 1 (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
     (check (<= worst (* 0.05 expected)) "the impulse strayed ~,5F from ~,5F" worst expected)))
@@ -1349,6 +1352,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
                (count nil (mapcar #'= (first general) (first short))))))))
 ;; PR3PAR-short-path-same-bits ends here
 
+;; [[file:../physics.org::#G7Q3XR][G7Q3XR-softness-is-the-closed-form]]
+(define-claim "G7Q3XR" softness-is-the-closed-form
+    "PHYSICS-SOFTNESS gives omega/a1, a2/(1+a2) and 1/(1+a2); 0 Hz gives 0, 1, 0 exactly."
+  (loop for (hertz zeta h) in '((30.0 10.0 0.004166667) (5.0 0.7 0.016666668) (60.0 1.0 0.001))
+        do (let* ((omega (* 2 pi hertz))
+                  (a1 (+ (* 2 zeta) (* h omega)))
+                  (a2 (* h omega a1)))
+             (multiple-value-bind (bias mass impulse) (luv-physics::physics-softness hertz zeta h)
+               (loop for (got want what) in (list (list bias (/ omega a1) "bias rate")
+                                                  (list mass (/ a2 (+ 1 a2)) "mass scale")
+                                                  (list impulse (/ 1 (+ 1 a2)) "impulse scale"))
+                     do (check (< (abs (- got want)) (* 1d-6 (abs want)))
+                               "~A Hz, zeta ~A: ~A ~A, not ~A" hertz zeta what got want)))))
+  (check (equal '(0.0 1.0 0.0)
+                (multiple-value-list (luv-physics::physics-softness 0.0 0.7 0.004166667)))))
+;; G7Q3XR-softness-is-the-closed-form ends here
+
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
     "Prepared tangent frames are orthonormal with their normals, in every family."
@@ -1423,6 +1443,26 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (< (physics-world-max-approach-speed world) 0.01)
            "at rest the approach speed reads ~,5F m/s" (physics-world-max-approach-speed world))))
 ;; ST0R3S-error-figures ends here
+
+;; [[file:../physics.org::#F1NAL5][F1NAL5-spin-turns-by-the-half-angle]]
+(define-claim "F1NAL5" spin-turns-by-the-half-angle
+    "Free spin at omega for n steps gives q = (cos n*alpha, sin n*alpha * u), alpha = atan(|omega| dt/2)."
+  (let* ((w (make-floor-world :gravity '(0 0 0)))
+         (h (luv-physics::add-physics-body w 3.5 8.0 3.5))
+         (omega '(1d0 2d0 2d0)) (n 60) (dt (/ 1d0 60))
+         (alpha (atan (* 3d0 dt 0.5d0))))
+    (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
+      (declare (ignore set))
+      (luv-physics::with-body-columns (wx wy wz) (luv-physics::physics-world-awake w)
+        (setf (aref wx row) 1.0 (aref wy row) 2.0 (aref wz row) 2.0)))
+    (dotimes (i n) (luv-physics::step-physics-world w))
+    (let ((want (cons (cos (* n alpha)) (mapcar (lambda (c) (* (sin (* n alpha)) (/ c 3d0))) omega)))
+          (got (multiple-value-list (luv-physics::physics-body-orientation w h))))
+      (check (equal '(1.0 2.0 2.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h)))
+             "the spin changed in free flight")
+      (loop for g in got for e in want for name in '(w x y z)
+            do (check (< (abs (- g e)) 1d-5) "q~(~A~) is ~,6F, not ~,6F" name g e)))))
+;; F1NAL5-spin-turns-by-the-half-angle ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-ball-rests-and-sleeps]]
 (define-claim "IDVK7G" ball-rests-and-sleeps
@@ -1537,19 +1577,24 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (luv-physics::step-physics-world w)
     (check (= 1 (luv-physics::physics-world-sleeping-count w)))
     (check (= 1 (luv-physics::physics-world-awake-count w)))
-    (let ((h0 (luv-physics::physics-world-state-hash w)))
-      (flet ((bump (column row)
-               (let ((old (aref column row)))
+    (let ((h0 (luv-physics::physics-world-state-hash w)) (hashes '()))
+      (flet ((flip (column row bit)
+               (let* ((old (aref column row))
+                      (bits (logxor (ldb (byte 32 0) (sb-kernel:single-float-bits old)) (ash 1 bit))))
                  (setf (aref column row)
-                       (sb-kernel:make-single-float (1+ (sb-kernel:single-float-bits old))))
+                       (sb-kernel:make-single-float (if (logbitp 31 bits) (- bits (ash 1 32)) bits)))
                  (prog1 (luv-physics::physics-world-state-hash w)
                    (setf (aref column row) old)))))
-        (let ((awake (luv-physics::physics-world-awake w))
-              (sleeping (luv-physics::physics-world-sleeping w)))
-          (check (/= h0 (bump (luv-physics::body-columns-x awake) 0)) "awake x")
-          (check (/= h0 (bump (luv-physics::body-columns-vx awake) 0)) "awake vx")
-          (check (/= h0 (bump (luv-physics::body-columns-y sleeping) 0)) "sleeping y")
-          (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits"))))))
+        (dolist (set (list (luv-physics::physics-world-awake w) (luv-physics::physics-world-sleeping w)))
+          (loop for reader in '(luv-physics::body-columns-x luv-physics::body-columns-y luv-physics::body-columns-z
+                                luv-physics::body-columns-vx luv-physics::body-columns-vy luv-physics::body-columns-vz
+                                luv-physics::body-columns-wx luv-physics::body-columns-wy luv-physics::body-columns-wz)
+                do (dolist (bit '(0 31))
+                     (check (/= h0 (car (push (flip (funcall reader set) 0 bit) hashes)))
+                            "bit ~D of ~(~A~) of the ~:[sleeping~;awake~] ball is not hashed" bit reader
+                            (eq set (luv-physics::physics-world-awake w))))))
+        (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits")
+        (check (some (lambda (h) (logbitp 61 h)) (cons h0 hashes)) "no hash of ~S uses bit 61" (cons h0 hashes))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
 
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
