@@ -11,7 +11,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report mutate clean
+.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report mutate mutate-splice clean
 .NOTPARALLEL:
 
 help:
@@ -81,9 +81,13 @@ report: setup tangle
 mutate: setup tangle
 	@mkdir -p report
 	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" nice $(SBCL) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
-	@if [ -z "$(ANCHOR)" ]; then \
-	  $(SBCL) --script tools/splice.lisp mutate-score report/mutate-score.org && \
-	  $(SBCL) --script tools/splice.lisp mutate-survivors report/mutate-survivors.org; fi
+	@if [ -z "$(ANCHOR)" ]; then $(MAKE) --no-print-directory mutate-splice; fi
+
+# The last full run's tables into the page, the survivors' reasons read from the page as it is.
+mutate-splice:
+	@MUTATE_ANNOTATE=1 $(LISP) --load tools/mutate.lisp
+	@$(SBCL) --script tools/splice.lisp mutate-score report/mutate-score.org
+	@$(SBCL) --script tools/splice.lisp mutate-survivors report/mutate-survivors.org
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f

@@ -196,6 +196,25 @@
   (check (null (anchor-definitions "ZZZZZ9"))))
 ;; BSOZ3U-anchor-definitions-by-section ends here
 
+;; [[file:../physics.org::#BSOZ3U][BSOZ3U-registering-again-replaces]]
+(define-claim "BSOZ3U" registering-again-replaces
+    "REGISTER-TANGLED-FILE on the last registered file leaves the registry as it was."
+  (let* ((definitions (copy-list luv-physics::*definitions*))
+         (files (copy-list luv-physics::*registered-files*))
+         (last-file (car (last files)))
+         (n (luv-physics::register-tangled-file last-file)))
+    (check (= n (count "tangled/physics-simd.lisp" definitions
+                       :key (lambda (r) (getf r :file)) :test #'equal)))
+    (check (equal definitions luv-physics::*definitions*) "the records changed")
+    (check (equal files luv-physics::*registered-files*) "the files changed")
+    (let ((warned nil))
+      (check (eql 0 (handler-bind ((warning (lambda (w) (setf warned t) (muffle-warning w))))
+                      (luv-physics::register-tangled-file "tangled/no-such-file.lisp")))
+             "a missing file does not count 0")
+      (check (eq t warned) "a missing file is not warned about")
+      (check (equal definitions luv-physics::*definitions*) "a missing file changed the records"))))
+;; BSOZ3U-registering-again-replaces ends here
+
 ;; [[file:../physics.org::#JKM0PY][JKM0PY-scalar-first]]
 (define-claim "JKM0PY" scalar-first
     "AVAILABLE-KERNEL-FAMILIES starts with :SCALAR and lists known families once each."
@@ -1596,6 +1615,39 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits")
         (check (some (lambda (h) (logbitp 61 h)) (cons h0 hashes)) "no hash of ~S uses bit 61" (cons h0 hashes))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
+
+;; [[file:../physics.org::#B0DY0B][B0DY0B-body-prints-where-it-is]]
+(define-claim "B0DY0B" body-prints-where-it-is
+    "print-object shows slot, awake or asleep, and (x y z); describe shows set, row and every column."
+  (let* ((w (make-floor-world :gravity '(0 0 0)))
+         (first (luv-physics::add-physics-body w 1.5 2.0 3.25))
+         (h (luv-physics::add-physics-body w 4.5 6.0 7.125 :vx 0.5))
+         (body (luv-physics::physics-body w h)))
+    (luv-physics::remove-physics-body w first)
+    (check (string= (format nil "#<PHYSICS-BODY ~D awake at (4.500 6.000 7.125)>" (luv-physics::handle-index h))
+                    (prin1-to-string body))
+           "prints as ~A" (prin1-to-string body))
+    (let ((gone (make-instance 'luv-physics::physics-body :world w :handle first)))
+      (check (string= (format nil "#<PHYSICS-BODY ~D removed>" (luv-physics::handle-index first))
+                      (prin1-to-string gone)))
+      (check (string= (format nil "#<PHYSICS-BODY ~D removed>~%  handle ~D (slot ~D, generation ~D)~%"
+                              (luv-physics::handle-index first) first (luv-physics::handle-index first)
+                              (luv-physics::handle-generation first))
+                      (with-output-to-string (s) (describe gone s)))
+             "a removed body describes as ~S" (with-output-to-string (s) (describe gone s))))
+    (check (typep (handler-case (luv-physics::physics-body w first) (error (e) e))
+                  'luv-physics::stale-physics-handle)
+           "an object is made for a removed body")
+    (let ((text (with-output-to-string (s) (describe body s))))
+      (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
+        (declare (ignore set))
+        (check (search (format nil "lives in the awake set, row ~D" row) text) "~A" text)
+        (dolist (column luv-physics::+body-columns-column-names+)
+          (check (search (format nil "~(~22A~) = ~S" column
+                                 (aref (slot-value (luv-physics::physics-world-awake w) column) row))
+                         text)
+                 "no line for ~(~A~) in ~A" column text))))))
+;; B0DY0B-body-prints-where-it-is ends here
 
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
 (define-claim "JAU0EF" kinds-make-their-bodies

@@ -705,32 +705,88 @@ finished one.  Return the finished mutants that compiled, in the order they were
     reasons))
 
 (defun score-table (mutants parts stream)
+  (write-score-rows (loop for m in mutants
+                          collect (list (gethash (unit-anchor (mutant-unit m)) parts "?")
+                                        (unit-anchor (mutant-unit m)) nil nil nil (killed-p m)))
+                    stream))
+
+(defun write-score-rows (scored stream)
+  "SCORED holds one list per mutant: its part, its anchor, and last whether it was killed."
   (let ((rows '()))
-    (dolist (m mutants)
-      (let* ((part (gethash (unit-anchor (mutant-unit m)) parts "?"))
+    (dolist (x scored)
+      (let* ((part (first x)) (killed (car (last x)))
              (row (or (assoc part rows :test #'string=) (car (push (list part 0 0 '()) rows)))))
         (incf (second row))
-        (when (killed-p m) (incf (third row)))
-        (pushnew (unit-anchor (mutant-unit m)) (fourth row) :test #'string=)))
+        (when killed (incf (third row)))
+        (pushnew (second x) (fourth row) :test #'string=)))
     (setf rows (sort rows #'string< :key #'first))
     (format stream "| part | sections | mutants | killed | survived | score |~%|-~%")
     (dolist (r rows)
       (format stream "| ~A | ~D | ~D | ~D | ~D | ~,1F % |~%" (first r) (length (fourth r)) (second r) (third r)
               (- (second r) (third r)) (* 100 (/ (third r) (max 1 (second r))))))
-    (let ((n (length mutants)) (k (count-if #'killed-p mutants)))
+    (let ((n (length scored)) (k (count-if (lambda (x) (car (last x))) scored)))
       (format stream "|-~%| all | ~D | ~D | ~D | ~D | ~,1F % |~%"
-              (length (remove-duplicates (mapcar (lambda (m) (unit-anchor (mutant-unit m))) mutants) :test #'string=))
+              (length (remove-duplicates (mapcar #'second scored) :test #'string=))
               n k (- n k) (* 100 (/ k (max 1 n)))))))
 
-(defun survivors-list (mutants reasons stream)
-  (let ((survivors (remove-if #'killed-p mutants)))
-    (if (null survivors)
-        (format stream "No mutant survived.~%")
-        (dolist (m survivors)
-          (let ((key (mutant-key m)))
-            (format stream "- ~A ~A, ~A: ~A~%    ~A~%"
-                    (unit-anchor (mutant-unit m)) (mutant-operator m) (unit-file (mutant-unit m)) key
-                    (or (cdr (assoc key reasons :test #'string=)) "(no reason given on the page)")))))))
+(defun survivor-rows (mutants)
+  "One list (ANCHOR OPERATOR FILE KEY) per surviving mutant of MUTANTS."
+  (loop for m in (remove-if #'killed-p mutants)
+        collect (list (unit-anchor (mutant-unit m)) (mutant-operator m) (unit-file (mutant-unit m))
+                      (mutant-key m))))
+
+(defun survivors-list (rows reasons stream)
+  "Write the survivors ROWS, each with the page's reason from REASONS, to STREAM."
+  (if (null rows)
+      (format stream "No mutant survived.~%")
+      (loop for (anchor operator file key) in rows
+            do (format stream "- ~A ~A, ~A: ~A~%    ~A~%" anchor operator file key
+                       (or (cdr (assoc key reasons :test #'string=)) "(no reason given on the page)")))))
+
+(defun annotate-survivors ()
+  "Write report/mutate-survivors.org from report/mutate-survivors.tsv and the page's reasons,
+as they are now."
+  (let ((rows (with-open-file (in "report/mutate-survivors.tsv")
+                (loop for line = (read-line in nil) while line
+                      collect (uiop:split-string line :separator '(#\Tab))))))
+    (with-open-file (out "report/mutate-survivors.org" :direction :output :if-exists :supersede)
+      (survivors-list rows (page-reasons "physics.org") out))))
+
+;;; ------------------------------------------------------------------------------------
+;;; Tables from a log: the lines a run printed, for a run stopped before its end
+
+(defparameter *operators* '("comparison flip" "sign flip" "constant scaling" "off-by-one"
+                            "dropped form" "swapped arguments"))
+
+(defun tables-from-log (log parts)
+  "Read the mutant lines of the run logged in LOG and write the score table and the survivors
+as a finished run does.  Return the number of mutants read."
+  (let ((lines (with-open-file (in log) (loop for line = (read-line in nil) while line collect line)))
+        (rows '()))
+    (loop for (line next) on lines
+          when (and (physics::starts-with "[" line) (search "] " line) next)
+            do (let* ((head (+ 2 (search "] " line)))
+                      (anchor (subseq line head (position #\Space line :start head)))
+                      (name-start (+ head (length anchor) 1))
+                      (file-start (search " (tangled/" line :start2 name-start))
+                      (file-end (and file-start (position #\: line :start file-start)))
+                      (after (and file-end (+ 2 (position #\) line :start file-end))))
+                      (operator (and after (find-if (lambda (op) (eql after (search (concatenate 'string op ": ") line :start2 after)))
+                                                    *operators*))))
+                 (when operator
+                   (push (list anchor operator (subseq line (+ 2 file-start) file-end)
+                               (format nil "~A: ~A" (subseq line name-start file-start)
+                                       (subseq line (+ after (length operator) 2)))
+                               (not (search "SURVIVED" next)))
+                         rows))))
+    (setf rows (nreverse rows))
+    (with-open-file (out "report/mutate-score.org" :direction :output :if-exists :supersede)
+      (format out "~D mutants read from ~A, a run stopped before its end~%~%" (length rows) log)
+      (write-score-rows (mapcar (lambda (r) (cons (gethash (first r) parts "?") r)) rows) out))
+    (with-open-file (out "report/mutate-survivors.tsv" :direction :output :if-exists :supersede)
+      (loop for r in rows unless (fifth r) do (format out "~{~A~^	~}~%" (subseq r 0 4))))
+    (annotate-survivors)
+    (length rows)))
 
 ;;; ------------------------------------------------------------------------------------
 ;;; Main
@@ -781,10 +837,17 @@ finished one.  Return the finished mutants that compiled, in the order they were
           (format out "seed ~D, ~D mutants, ~,1F s a mutant on average (two at a time), ~,0F s in all~%~%"
                   seed (length mutants) (/ (reduce #'+ mutants :key #'mutant-seconds) (max 1 (length mutants))) wall)
           (score-table mutants parts out))
-        (with-open-file (out "report/mutate-survivors.org" :direction :output :if-exists :supersede)
-          (survivors-list mutants reasons out))
+        (with-open-file (out "report/mutate-survivors.tsv" :direction :output :if-exists :supersede)
+          (loop for row in (survivor-rows mutants) do (format out "~{~A~^	~}~%" row)))
+        (annotate-survivors)
         (score-table mutants parts *standard-output*)
         (terpri)
-        (survivors-list mutants reasons *standard-output*)))))
+        (survivors-list (survivor-rows mutants) reasons *standard-output*)))))
 
-(unless (sb-ext:posix-getenv "MUTATE_NO_MAIN") (main))
+(cond ((sb-ext:posix-getenv "MUTATE_NO_MAIN"))
+      ((sb-ext:posix-getenv "MUTATE_ANNOTATE") (annotate-survivors))
+      ((sb-ext:posix-getenv "MUTATE_FROM_LOG")
+       (format t "~&mutate: ~D mutants read from ~A~%"
+               (tables-from-log (sb-ext:posix-getenv "MUTATE_FROM_LOG") (anchor-parts "physics.org"))
+               (sb-ext:posix-getenv "MUTATE_FROM_LOG")))
+      (t (main)))
