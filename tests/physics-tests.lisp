@@ -953,6 +953,43 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; G4R1D5-sorted-rows-keep-handles ends here
 
+;; [[file:../physics.org::#W4K3PH][W4K3PH-box-wakes-within-its-reach]]
+(define-claim "W4K3PH" box-wakes-within-its-reach
+    "A box moving along one axis wakes a sleeper within margin + v dt, not beyond; a still box none."
+  (flet ((woken-p (velocity gap-past-reach)
+           (let* ((w (make-floor-world))
+                  (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
+             (loop repeat 300 while (luv-physics::physics-body-awake-p w h)
+                   do (luv-physics::step-physics-world w))
+             (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+             (let* ((reach (+ (luv-physics::physics-world-margin w)
+                              (* (/ 1.0 60) (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) velocity))))))
+                    (gap (+ reach gap-past-reach)))
+               (destructuring-bind (vx vy vz) velocity
+                 (luv-physics::post-physics-box w (+ 3.5 0.25 0.25 gap) 0.245 3.5 0.25 0.25 0.25
+                                                :vx vx :vy vy :vz vz))
+               (luv-physics::step-physics-world w)
+               (luv-physics::physics-body-awake-p w h)))))
+    (dolist (velocity '((1.0 0.0 0.0) (0.0 1.0 0.0) (0.0 0.0 1.0)))
+      (check (woken-p velocity -0.01) "a box moving at ~S did not wake the ball within reach" velocity)
+      (check (not (woken-p velocity 0.01)) "a box moving at ~S woke the ball beyond reach" velocity))
+    (check (not (woken-p '(0.0 0.0 0.0) -0.04)) "a still box woke the ball"))
+  (flet ((woken-by-ball-p (velocity gap-past-reach)
+           (let* ((w (make-floor-world))
+                  (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
+             (loop repeat 300 while (luv-physics::physics-body-awake-p w h)
+                   do (luv-physics::step-physics-world w))
+             (let* ((reach (+ 0.25 0.25 (luv-physics::physics-world-margin w)
+                              (* (/ 1.0 60) (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) velocity)))))))
+               (destructuring-bind (vx vy vz) velocity
+                 (luv-physics::add-physics-body w (- 3.5 reach gap-past-reach) 0.245 3.5 :vx vx :vy vy :vz vz))
+               (luv-physics::step-physics-world w)
+               (luv-physics::physics-body-awake-p w h)))))
+    (dolist (velocity '((3.0 0.0 0.0) (0.0 0.0 3.0)))
+      (check (woken-by-ball-p velocity -0.01) "a ball moving at ~S did not wake the ball within reach" velocity)
+      (check (not (woken-by-ball-p velocity 0.01)) "a ball moving at ~S woke the ball beyond reach" velocity))))
+;; W4K3PH-box-wakes-within-its-reach ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
 (define-claim "P41RS7" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
