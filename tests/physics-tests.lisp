@@ -1236,6 +1236,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (< (abs (- (body-y w h) -0.755)) 0.002) "the ball ends at y = ~,5F" (body-y w h)))))
 ;; MYWH16-rolls-over-ledge ends here
 
+;; [[file:../physics.org::#MYWH16][MYWH16-centre-on-the-face-is-inside]]
+(define-claim "MYWH16" centre-on-the-face-is-inside
+    "A ball centred exactly on the floor's top face is pushed up and comes to rest at r - slop."
+  (let* ((w (make-floor-world :sleep nil))
+         (h (luv-physics::add-physics-body w 3.5 0.0 3.5)))
+    (luv-physics::step-physics-world w)
+    (check (> (body-y w h) 0.0) "after one step the centre is at y = ~,5F" (body-y w h))
+    (let ((contacts (terrain-contacts w h)))
+      (check (and (= 1 (length contacts))
+                  (every #'= '(0.0 -1.0 0.0) (list (getf (first contacts) :nx) (getf (first contacts) :ny)
+                                                   (getf (first contacts) :nz))))
+             "the floor contacts are ~S" contacts))
+    (dotimes (i 59) (luv-physics::step-physics-world w))
+    (check (< (abs (- (body-y w h) (- 0.25 luv-physics::*physics-linear-slop*))) 0.002)
+           "the ball rests at y = ~,5F" (body-y w h))))
+;; MYWH16-centre-on-the-face-is-inside ends here
+
 ;; [[file:../physics.org::#SW33P7][SW33P7-no-tunnelling-to-100]]
 (define-claim "SW33P7" no-tunnelling-to-100
     "Balls at up to 100 m/s stop at a one-cell wall from every phase of the step."

@@ -476,7 +476,7 @@ watched by a probe."
 (defun show (unit x &optional (limit 60))
   (if (eq x :dropped)
       "nothing"
-      (let ((*package* (unit-package unit)) (*print-pretty* nil)
+      (let ((*package* (unit-package unit)) (*print-pretty* t) (*print-right-margin* 100000)
             (*print-length* 5) (*print-level* 3) (*print-case* :downcase))
         (one-line (prin1-to-string x) limit))))
 
