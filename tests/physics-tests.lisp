@@ -1270,6 +1270,42 @@ function of a column name that reads row K's float in that column. #T3STK1"
                    "at ~D m/s from x = ~,3F the ball ended at x = ~,4F" speed (* k 0.137) x)))))))
 ;; SW33P7-no-tunnelling-to-100 ends here
 
+;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
+(define-claim "B0XPH5" box-contact-geometry
+    "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
+  (flet ((box-contact (centre half)
+           (let* ((w (make-floor-world :gravity '(0 0 0)))
+                  (h (luv-physics::add-physics-body w 3.5 3.0 3.5))
+                  (c (luv-physics::physics-world-contacts w)))
+             (destructuring-bind (x y z) centre
+               (destructuring-bind (hx hy hz) half
+                 (luv-physics::post-physics-box w x y z hx hy hz :owner :probe)))
+             (luv-physics::step-physics-world w)
+             (loop for row below (luv-physics::contact-columns-length c)
+                   when (and (= (aref (luv-physics::contact-columns-handle-a c) row) h)
+                             (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-box+))
+                     collect (let ((g (luv-physics::contact-columns-geometry c)))
+                               (list (luv-physics::contact@ g row nx) (luv-physics::contact@ g row ny)
+                                     (luv-physics::contact@ g row nz) (luv-physics::contact@ g row separation)
+                                     (luv-physics::contact@ g row px) (luv-physics::contact@ g row py)
+                                     (luv-physics::contact@ g row pz)))))))
+    (let* ((d '(0.05 0.1 0.15)) (len (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) d))))
+           (cases
+             (list (list "outside" (list (+ 3.5 0.05 0.25) (+ 3.0 0.1 0.25) (+ 3.5 0.15 0.25)) '(0.25 0.25 0.25)
+                         (append (mapcar (lambda (v) (/ v len)) d) (list (- len 0.25))
+                                 (list (+ 3.5 0.05) (+ 3.0 0.1) (+ 3.5 0.15))))
+                   (list "inside, -z face" '(3.5 3.05 3.7) '(0.2 0.25 0.3)
+                         (list 0.0 0.0 1.0 (- (+ 0.1 0.25)) 3.5 3.0 3.4))
+                   (list "inside, +x face" '(3.4 3.0 3.5) '(0.2 0.2 0.25)
+                         (list -1.0 0.0 0.0 (- (+ 0.1 0.25)) 3.6 3.0 3.5)))))
+      (loop for (name centre half want) in cases
+            do (let ((got (box-contact centre half)))
+                 (check (= 1 (length got)) "~A: ~D box contacts" name (length got))
+                 (when got
+                   (check (every (lambda (g e) (< (abs (- g e)) 1e-5)) (first got) want)
+                          "~A: (nx ny nz separation px py pz) is ~S, not ~S" name (first got) want)))))))
+;; B0XPH5-box-contact-geometry ends here
+
 ;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-keeps-contacts]]
 (define-claim "PRUN3D" reorder-keeps-contacts
     "A reordering prune keeps every contact found, unchanged, in found order, and the table consistent."

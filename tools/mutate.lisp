@@ -337,13 +337,18 @@ but the last.  Declarations and docstrings stay."
                  when (same-kind-p (nth i x) (nth (1+ i) x))
                    do (let ((i i))
                         (let ((new (replace-nth (replace-nth x i (nth (1+ i) x)) (1+ i) (nth i x))))
-                          (site "swapped arguments" x new (lambda () (funcall rebuild new)))))))
+                          (flet ((text (a b)
+                                   (let ((*print-case* :downcase) (*print-pretty* t) (*print-right-margin* 100000)
+                                         (*print-length* 4) (*print-level* 2))
+                                     (format nil "(~S ~:[~;... ~]~S ~S~:[~; ...~])" op (> i 1) a b (< (+ i 2) n)))))
+                            (site "swapped arguments" (text (nth i x) (nth (1+ i) x)) (text (nth (1+ i) x) (nth i x))
+                                  (lambda () (funcall rebuild new))))))))
          (walk-elements x rebuild 1)
          (when (member op *body-operators*) (drop-sites x rebuild 1 (member op '(when unless)))))))))
 
 (defun unit-sites (unit)
   "Every site of UNIT's form, each (OPERATOR FROM TO REBUILD), in a fixed order."
-  (let ((*sites* '()))
+  (let ((*sites* '()) (*package* (unit-package unit)))
     (walk (unit-form unit) (lambda (new) new))
     (nreverse *sites*)))
 
@@ -474,11 +479,13 @@ watched by a probe."
   status claim reason seconds)
 
 (defun show (unit x &optional (limit 60))
-  (if (eq x :dropped)
-      "nothing"
+  (cond
+    ((eq x :dropped) "nothing")
+    ((stringp x) x)
+    (t
       (let ((*package* (unit-package unit)) (*print-pretty* t) (*print-right-margin* 100000)
             (*print-length* 5) (*print-level* 3) (*print-case* :downcase))
-        (one-line (prin1-to-string x) limit))))
+        (one-line (prin1-to-string x) limit)))))
 
 (defun mutant-key (m)
   "How the report and the page name mutant M: DEFINITION: FROM => TO."
