@@ -28,6 +28,7 @@ help:
 	@echo "                    diagrams into report/wp-*.svg"
 	@echo "make mutate         run the claims against COUNT=150 mutants of the engine (SEED=1, ANCHOR=ID"
 	@echo "                    for one section); the score table and the survivors into $(ORG)"
+	@echo "make mutate-splice  the last full run's tables into $(ORG), with the page's reasons for survivors"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:

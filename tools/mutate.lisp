@@ -280,7 +280,8 @@ but the last.  Declarations and docstrings stay."
          (when (and (consp op) (eq (car op) 'lambda)) (walk op (lambda (new) (funcall rebuild (cons new (cdr x))))))
          (walk-elements x rebuild 1))
         ((member op *type-operators*))
-        ((member op '(the coerce typep)) (walk-elements x rebuild (if (eq op 'the) 2 1) (if (eq op 'the) 3 2)))
+        ;; a type, or a prototype that only names a type, is not mutated
+        ((member op '(the coerce typep float)) (walk-elements x rebuild (if (eq op 'the) 2 1) (if (eq op 'the) 3 2)))
         ((eq op 'sb-int:quasiquote) (walk-elements x rebuild 1))
         ((member op '(defun defmacro)) (body 3))
         ((eq op 'defmethod)
