@@ -11,14 +11,15 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report mutate mutate-splice clean
+.PHONY: help setup tangle check-tangle check-anchors test demo bench bench-peers report mutate mutate-splice html view pictures clean
 .NOTPARALLEL:
 
 help:
 	@echo "make demo           install what is missing (as root), tangle, run the default scene"
 	@echo "make test           check tangling and anchors, then run every claim"
 	@echo "make test ANCHOR=ID run only the claims of section ID"
-	@echo "make setup          install sbcl, emacs-nox, cl-fiveam if missing (apt-get, as root)"
+	@echo "make setup          install what the page needs if missing (apt-get, as root): sbcl, emacs-nox,"
+	@echo "                    cl-fiveam, elpa-htmlize, libjs-three; chromium, imagemagick for the browser claims"
 	@echo "make tangle         write $(OUT) from $(ORG), each only if its text changed"
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
@@ -29,6 +30,10 @@ help:
 	@echo "make mutate         run the claims against COUNT=150 mutants of the engine (SEED=1, ANCHOR=ID"
 	@echo "                    for one section); the score table and the survivors into $(ORG)"
 	@echo "make mutate-splice  the last full run's tables into $(ORG), with the page's reasons for survivors"
+	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface"
+	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player) and write"
+	@echo "                    report/view-SCENE.html, a 3D viewer of the run for any browser"
+	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
 setup:
@@ -43,7 +48,7 @@ check-tangle:
 check-anchors:
 	@$(LISP) --load tools/check-anchors.lisp
 
-test: setup check-tangle check-anchors
+test: setup check-tangle check-anchors physics.html
 	@ANCHOR="$(ANCHOR)" $(LISP) --load tests/run.lisp
 
 demo: setup tangle
@@ -90,8 +95,29 @@ mutate-splice:
 	@$(SBCL) --script tools/splice.lisp mutate-score report/mutate-score.org
 	@$(SBCL) --script tools/splice.lisp mutate-survivors report/mutate-survivors.org
 
+# The page as HTML: the index of the exported symbols comes from the loaded image
+# (report/api-index.org), then Org's export in batch Emacs writes physics.html, again only when
+# the page, the tangled files or these tools changed.  It uses the tangled files as they are:
+# after editing the page, make tangle first.
+html: physics.html
+
+physics.html: $(ORG) $(OUT) luv-physics.asd tools/export.el tools/api-index.lisp | setup
+	@mkdir -p report
+	@$(LISP) --load tools/api-index.lisp
+	@$(EMACS) -Q --batch -l tools/export.el $(ORG) physics.html
+
+SCENE ?= basin
+EVERY ?= 2
+view: setup
+	@SCENE="$(SCENE)" EVERY="$(EVERY)" $(LISP) --load tools/view.lisp
+
+# The pictures report/scene-*.svg are kept in git: the page shows them.
+pictures: setup
+	@$(LISP) --load tools/pictures.lisp
+
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f
-	find report -type f ! -name 'wp-*.svg' -delete 2>/dev/null || true
+	find report -type f ! -name 'wp-*.svg' ! -name 'scene-*.svg' ! -name 'screenshot-*.png' -delete 2>/dev/null || true
+	rm -f physics.html physics-link-check.html
 	@$(LISP) --eval '(require :asdf)' \
 	  --eval '(let ((cache (asdf:apply-output-translations (truename "./")))) (format t "rm -rf ~A~%" cache) (uiop:delete-directory-tree cache :validate t :if-does-not-exist :ignore))'

@@ -2,7 +2,7 @@
 
 (defsystem "luv-physics"
   :description "Rigid spheres in a voxel world, written as the literate page physics.org."
-  :depends-on ((:require "sb-simd"))
+  :depends-on ((:require "sb-simd") (:require "sb-introspect"))
   :serial t
   :components ((:file "tangled/physics")
                (:file "tangled/physics-simd"))

@@ -50,7 +50,12 @@
    #:physics-player #:make-physics-player #:step-physics-player #:advance-physics-player
    #:physics-player-x #:physics-player-y #:physics-player-z #:physics-player-vx #:physics-player-vy
    #:physics-player-vz #:physics-player-grounded #:physics-player-eye #:post-physics-player
-   #:*physics-player-shape*))
+   #:*physics-player-shape*
+   ;; The step hook, the recorder, the standard scenes, the viewer and the pictures (#W0RLD7,
+   ;; #G4WXCJ, #3X6XN8, #RH7T05, #UFK5EA), the index of the interface (#LW3YHU)
+   #:physics-world-step-hook #:physics-recording #:start-physics-recording #:stop-physics-recording
+   #:physics-recording-frame-count #:*physics-scenes* #:run-physics-scene
+   #:write-physics-viewer #:write-scene-picture #:write-api-index))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -1452,11 +1457,23 @@ dispatches on it once per call. #W0RLD7"))
    (step-count :initform 0 :type fixnum :accessor physics-world-step-count)
    (stepping :initform nil :accessor physics-world-stepping)
    (event-handler :initform nil :accessor physics-world-event-handler)
+   (step-hook :initform nil :accessor physics-world-step-hook)
    (phase-clock :initform nil :accessor physics-world-phase-clock)
    (statistics :initform (make-array 8 :element-type 'double-float :initial-element 0d0)
                :reader physics-world-statistics))
   (:documentation "A simulated world of spheres over a voxel terrain: the CLOS side of the seam,
 holding the columnar buffers, the parameters, the events and the kernel family. #W0RLD7"))
+
+;; the documentation of the world's public accessors, which defclass cannot give
+(loop for (name text)
+        in '((physics-world-event-handler
+              "The function of WORLD called with each event of a step, as map-physics-events calls it,
+once the step's phases have run; or NIL. Settable. #W0RLD7")
+             (physics-world-step-count "The number of steps WORLD has taken. #W0RLD7")
+             (physics-world-step-hook
+              "The function of WORLD called with WORLD at the end of each of its steps, after the
+event handler, or NIL (the default: the step then calls nothing). Settable; a recording sets it. #W0RLD7"))
+      do (setf (documentation name 'function) text))
 
 (declaim (inline world-statistics))
 (defun world-statistics (world)
@@ -3594,7 +3611,8 @@ colour, or after a step that left an overlap deeper than *physics-crowded-depth*
 
 (defun step-physics-world (world &optional dt)
   "Advance WORLD by DT seconds (its step length by default) through *physics-phases* and return
-it. The step's events stay readable until the next step begins. #IDVK7G"
+it. The step's events stay readable until the next step begins; the world's event handler, then
+its step hook, when set, are called after the phases, while the step's boxes are still posted. #IDVK7G"
   (check-idle world 'step-physics-world)
   (let* ((dt (if dt (finite-f32 :dt dt world) (physics-world-step-seconds world)))
          (terrain (physics-world-terrain world))
@@ -3613,7 +3631,9 @@ it. The step's events stay readable until the next step begins. #IDVK7G"
              (setf (aref stats 0) (coerce (contact-columns-length (physics-world-contacts world)) 'double-float)
                    (aref stats 2) (* 1d-9 (coerce (the fixnum (- (clock-ns) started)) 'double-float))))
            (let ((handler (physics-world-event-handler world)))
-             (when handler (map-physics-events handler world))))
+             (when handler (map-physics-events handler world)))
+           (let ((hook (physics-world-step-hook world)))
+             (when hook (funcall hook world))))
       (when terrain (unlock-terrain terrain))
       (box-columns-clear (physics-world-boxes world))
       (fill (physics-world-box-owners world) nil)
@@ -3731,6 +3751,9 @@ physics-world-invalid naming the first broken invariant. #V4L1D8"
    (handle :initarg :handle :reader physics-body-handle))
   (:documentation "A body as an object: a world and a handle. Its numbers live in the world's
 columns; describe shows that row as if it were slots. #B0DY0B"))
+
+(setf (documentation 'physics-body-world 'function) "The world of the physics-body BODY. #B0DY0B"
+      (documentation 'physics-body-handle 'function) "The handle of the physics-body BODY. #B0DY0B")
 
 (defun physics-body (world handle)
   "The physics-body object for HANDLE in WORLD. #B0DY0B"
@@ -3955,6 +3978,17 @@ copy of the constants of *physics-player-shape*. #H7P4CX"
   (walk-speed 4.3d0 :type double-float) (acceleration 40d0 :type double-float)
   (step-seconds (/ 1d0 120) :type double-float) (steps-per-frame 8 :type (integer 1 1000))
   (step-ahead 0.3d0 :type double-float))
+
+;; the documentation of the walker's public readers, which defstruct cannot give
+(loop for (name text)
+        in '((physics-player-x "The x of the middle of PLAYER's soles, in cells. #H7P4CX")
+             (physics-player-y "The height of PLAYER's soles, in cells. #H7P4CX")
+             (physics-player-z "The z of the middle of PLAYER's soles, in cells. #H7P4CX")
+             (physics-player-vx "PLAYER's velocity along x, in cells a second. #H7P4CX")
+             (physics-player-vy "PLAYER's upward velocity, in cells a second. #H7P4CX")
+             (physics-player-vz "PLAYER's velocity along z, in cells a second. #H7P4CX")
+             (physics-player-grounded "True when PLAYER stands on something. #H7P4CX"))
+      do (setf (documentation name 'function) text))
 
 (declaim (inline player-input))
 (defun player-input (name value)
@@ -4998,6 +5032,485 @@ the table to STREAM as well. #W9PREC"
                                 (remove (first entry) points :key (lambda (p) (getf p :scene)) :test-not #'eq)))
     points))
 ;; Error against run time:9 ends here
+
+;; [[file:../physics.org::#G4WXCJ][Watching a run: the recorder:1]]
+(defstruct (physics-recording (:constructor %make-physics-recording (terrain every)))
+  "A run as it was stepped, one frame every EVERY steps: each body's centre (XYZ, three floats),
+RADIUS and STYLE (its kind's number times two, plus one for a sleeper); each frame's first body,
+body count and figures (FRAMES); the boxes posted for each recorded step (BOXES, a list of frame
+and centre and half extents); and the world's TERRAIN, to draw its cells. #G4WXCJ"
+  (terrain nil)
+  (every 1 :type (integer 1 3600))
+  (steps 0 :type fixnum)
+  (xyz (make-array 4096 :element-type 'single-float :adjustable t :fill-pointer 0))
+  (radius (make-array 1024 :element-type 'single-float :adjustable t :fill-pointer 0))
+  (style (make-array 1024 :element-type '(unsigned-byte 8) :adjustable t :fill-pointer 0))
+  (frames (make-array 64 :adjustable t :fill-pointer 0))
+  (boxes '()))
+
+(defun record-physics-frame (recording world)
+  "Append WORLD's present state to RECORDING as one frame: every body, awake ones first, the boxes
+posted for the step, and the frame's figures, a vector of the first body, the body count, the
+awake and sleeping counts, the contacts, the step's milliseconds and the simulated seconds. #G4WXCJ"
+  (let* ((xyz (physics-recording-xyz recording))
+         (first (floor (fill-pointer xyz) 3))
+         (frame (fill-pointer (physics-recording-frames recording))))
+    (flet ((take (buffer asleep)
+             (dotimes (row (body-columns-length buffer))
+               (vector-push-extend (aref (body-columns-x buffer) row) xyz)
+               (vector-push-extend (aref (body-columns-y buffer) row) xyz)
+               (vector-push-extend (aref (body-columns-z buffer) row) xyz)
+               (vector-push-extend (aref (body-columns-radius buffer) row) (physics-recording-radius recording))
+               (vector-push-extend (+ (* 2 (min 127 (max 0 (aref (body-columns-kind buffer) row))))
+                                      (if asleep 1 0))
+                                   (physics-recording-style recording)))))
+      (take (physics-world-awake world) nil)
+      (take (physics-world-sleeping world) t))
+    (let ((boxes (physics-world-boxes world)))
+      (dotimes (row (box-columns-length boxes))
+        (flet ((middle (lo hi) (* 0.5 (+ (aref lo row) (aref hi row))))
+               (half (lo hi) (* 0.5 (- (aref hi row) (aref lo row)))))
+          (push (list frame
+                      (middle (box-columns-min-x boxes) (box-columns-max-x boxes))
+                      (middle (box-columns-min-y boxes) (box-columns-max-y boxes))
+                      (middle (box-columns-min-z boxes) (box-columns-max-z boxes))
+                      (half (box-columns-min-x boxes) (box-columns-max-x boxes))
+                      (half (box-columns-min-y boxes) (box-columns-max-y boxes))
+                      (half (box-columns-min-z boxes) (box-columns-max-z boxes)))
+                (physics-recording-boxes recording)))))
+    (vector-push-extend
+     (vector first (- (floor (fill-pointer xyz) 3) first)
+             (physics-world-awake-count world) (physics-world-sleeping-count world)
+             (if (zerop (physics-world-step-count world)) 0 (physics-world-last-step-contact-count world))
+             (if (zerop (physics-world-step-count world))
+                 0d0
+                 (* 1000 (physics-world-last-step-real-seconds world)))
+             (* (physics-world-step-count world) (physics-world-step-seconds world)))
+     (physics-recording-frames recording))
+    recording))
+
+(defun start-physics-recording (world &key (every 1))
+  "Record WORLD from now on: a frame of its present state, then a frame after every EVERY-th
+step, through its step hook (which must be free). Return the recording. #G4WXCJ"
+  (check-count :every every 3600)
+  (when (physics-world-step-hook world)
+    (error 'invalid-physics-parameter :world world :name :step-hook
+                                      :value (physics-world-step-hook world)
+                                      :expected "NIL: a world is recorded by one recording at a time"))
+  (let ((recording (%make-physics-recording (physics-world-terrain world) every)))
+    (record-physics-frame recording world)
+    (setf (physics-world-step-hook world)
+          (lambda (world)
+            (when (zerop (mod (incf (physics-recording-steps recording)) (physics-recording-every recording)))
+              (record-physics-frame recording world))))
+    recording))
+
+(defun stop-physics-recording (world)
+  "Stop recording WORLD: its step hook is NIL again. Return WORLD. #G4WXCJ"
+  (setf (physics-world-step-hook world) nil)
+  world)
+
+(defun physics-recording-frame-count (recording)
+  "The number of frames RECORDING holds. #G4WXCJ"
+  (fill-pointer (physics-recording-frames recording)))
+;; Watching a run: the recorder:1 ends here
+
+;; [[file:../physics.org::#3X6XN8][The standard scenes:1]]
+(defparameter *physics-scenes*
+  '((:basin "1000 balls dropped into the basin; at 4 s a ball is thrown down into the pile"
+     8 (1 4.3 8))
+    (:pile "1000 balls with rolling resistance, left until the whole pile sleeps" 12 (1 4 12))
+    (:fountain "a fountain in the basin's floor: two water drops a step" 6 (0.6 2 6))
+    (:lava "a lava spring in the basin's floor: a gobbet every fourth step, each living 4 s"
+     8 (1 4 8))
+    (:player "the walker going round a square through two layers of balls" 8 (1 3.5 7)))
+  "The standard scenes: each a keyword, what it shows, its seconds at 60 Hz, and the moments, in
+seconds, of its picture. #3X6XN8")
+
+(defun basin-pile-world (balls &key (rolling-resistance 0.0))
+  "A world over the basin with sleep on and the widest kernel family, holding BALLS balls of the
+basin lattice with ROLLING-RESISTANCE. #3X6XN8"
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t :kernels :auto)))
+    (dotimes (i balls world)
+      (multiple-value-bind (x y z) (basin-spawn-point i)
+        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6
+                                      :rolling-resistance rolling-resistance)))))
+
+(defun player-scene-input (step)
+  "The walker's input at STEP of the player scene: still for the first second, then round a
+square, 1.5 s a side, as two values MOVE-X MOVE-Z. #3X6XN8"
+  (if (< step 60)
+      (values 0d0 0d0)
+      (ecase (mod (floor (- step 60) 90) 4)
+        (0 (values 1d0 0d0)) (1 (values 0d0 1d0)) (2 (values -1d0 0d0)) (3 (values 0d0 -1d0)))))
+
+(defun physics-scene (name)
+  "The world of the standard scene NAME of *physics-scenes*, and the function of the step's
+number to call before each step (or NIL), as two values. #3X6XN8"
+  (ecase name
+    (:basin (let ((world (basin-pile-world 1000)))
+              (values world (lambda (step)
+                              (when (= step 240)
+                                (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0
+                                                                    :vx 4.0 :vy -6.0))))))
+    (:pile (values (basin-pile-world 1000 :rolling-resistance 0.05) nil))
+    ((:fountain :lava)
+     (let ((world (basin-pile-world 0))
+           (springs (list (if (eq name :fountain) (make-basin-fountain) (make-lava-spring 4 -1 4)))))
+       (values world (lambda (step) (declare (ignore step)) (run-physics-springs world springs)))))
+    (:player
+     (let* ((world (basin-pile-world 392))
+            (terrain (physics-world-terrain world))
+            (player (make-physics-player 1d0 0d0 1d0)))
+       (values world (lambda (step)
+                       (multiple-value-bind (move-x move-z) (player-scene-input step)
+                         (advance-physics-player player terrain (/ 1d0 60) :move-x move-x :move-z move-z))
+                       (post-physics-player world player)))))))
+
+(defun run-physics-scene (name &key record (every 1) seconds)
+  "Run the standard scene NAME of *physics-scenes* for its seconds, or SECONDS; when RECORD is
+true, record it every EVERY steps. Return the world and the recording (or NIL). #3X6XN8"
+  (let ((entry (assoc name *physics-scenes*)))
+    (unless entry
+      (error 'invalid-physics-parameter :name :scene :value name
+                                        :expected (format nil "one of ~{~S~^ ~}" (mapcar #'first *physics-scenes*))))
+    (multiple-value-bind (world before-step) (physics-scene name)
+      (let ((recording (and record (start-physics-recording world :every every))))
+        (dotimes (step (round (* (or seconds (third entry)) 60)))
+          (when before-step (funcall before-step step))
+          (step-physics-world world))
+        (when recording (stop-physics-recording world))
+        (values world recording)))))
+;; The standard scenes:1 ends here
+
+;; [[file:../physics.org::#RH7T05][A viewer for the browser:1]]
+(defun write-base64 (octets stream)
+  "Write the vector of octets OCTETS to STREAM in base64 (RFC 4648, padded with =). #RH7T05"
+  (let ((alphabet "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/")
+        (n (length octets)))
+    (loop for i from 0 below n by 3
+          do (let ((word (logior (ash (aref octets i) 16)
+                                 (if (< (+ i 1) n) (ash (aref octets (+ i 1)) 8) 0)
+                                 (if (< (+ i 2) n) (aref octets (+ i 2)) 0))))
+               (write-char (char alphabet (ldb (byte 6 18) word)) stream)
+               (write-char (char alphabet (ldb (byte 6 12) word)) stream)
+               (write-char (if (< (+ i 1) n) (char alphabet (ldb (byte 6 6) word)) #\=) stream)
+               (write-char (if (< (+ i 2) n) (char alphabet (ldb (byte 6 0) word)) #\=) stream)))))
+
+(defun recording-bounds (recording &key (pad 0.5))
+  "The box of every centre RECORDING holds, grown by PAD on every side, as two lists of three
+single-floats, LO and HI. #RH7T05"
+  (let ((xyz (physics-recording-xyz recording))
+        (lo (list most-positive-single-float most-positive-single-float most-positive-single-float))
+        (hi (list most-negative-single-float most-negative-single-float most-negative-single-float)))
+    (loop for i from 0 below (fill-pointer xyz)
+          do (let ((axis (mod i 3)))
+               (setf (nth axis lo) (min (nth axis lo) (aref xyz i))
+                     (nth axis hi) (max (nth axis hi) (aref xyz i)))))
+    (if (zerop (fill-pointer xyz))
+        (values (list 0.0 0.0 0.0) (list 1.0 1.0 1.0))
+        (values (mapcar (lambda (v) (- v pad)) lo) (mapcar (lambda (v) (+ v pad)) hi)))))
+
+(defun recording-cells (recording)
+  "The resident solid cells of RECORDING's terrain with an air neighbour, inside the box of its
+centres grown by a cell on every side: a list of X Y Z, flat. #RH7T05"
+  (let ((terrain (physics-recording-terrain recording)) (cells '()))
+    (when (and terrain (plusp (fill-pointer (physics-recording-xyz recording))))
+      (multiple-value-bind (lo hi) (recording-bounds recording :pad 1.0)
+        (flet ((air-p (x y z) (and (terrain-resident-p terrain x y z) (not (terrain-solid-p terrain x y z)))))
+          (loop for x from (floor (first lo)) below (ceiling (first hi))
+                do (loop for y from (floor (second lo)) below (ceiling (second hi))
+                         do (loop for z from (floor (third lo)) below (ceiling (third hi))
+                                  when (and (terrain-resident-p terrain x y z) (terrain-solid-p terrain x y z)
+                                            (or (air-p (1+ x) y z) (air-p (1- x) y z) (air-p x (1+ y) z)
+                                                (air-p x (1- y) z) (air-p x y (1+ z)) (air-p x y (1- z))))
+                                    do (push z cells) (push y cells) (push x cells)))))))
+    cells))
+
+(defun recording-palette (recording)
+  "The distinct (radius kind sleeper) triples of RECORDING's bodies, radius to 0.1 mm, as a vector,
+and a vector of each body's index into it; at most 256 triples. #RH7T05"
+  (let* ((radius (physics-recording-radius recording)) (style (physics-recording-style recording))
+         (table (make-hash-table :test 'equal)) (palette (make-array 0 :adjustable t :fill-pointer t))
+         (indices (make-array (length style) :element-type '(unsigned-byte 8))))
+    (dotimes (i (length style))
+      (let ((key (list (/ (round (aref radius i) 1e-4) 1d4) (ash (aref style i) -1) (logand (aref style i) 1))))
+        (setf (aref indices i)
+              (or (gethash key table)
+                  (progn (when (= (length palette) 256)
+                           (error 'invalid-physics-parameter :name :recording :value recording
+                                                             :expected "at most 256 distinct radius, kind and sleep triples"))
+                         (vector-push-extend key palette)
+                         (setf (gethash key table) (1- (length palette))))))))
+    (values palette indices)))
+
+(defun recording-quanta (recording lo hi)
+  "RECORDING's centres as octets: three little-endian unsigned 16-bit numbers a body, each
+coordinate spread over LO..HI, computed in double-floats. #RH7T05"
+  (let* ((lo (mapcar (lambda (v) (float v 1d0)) lo)) (hi (mapcar (lambda (v) (float v 1d0)) hi))
+         (xyz (physics-recording-xyz recording))
+         (octets (make-array (* 2 (fill-pointer xyz)) :element-type '(unsigned-byte 8))))
+    (dotimes (i (fill-pointer xyz) octets)
+      (let* ((axis (mod i 3))
+             (q (max 0 (min 65535 (round (* 65535 (/ (- (float (aref xyz i) 1d0) (nth axis lo))
+                                                     (- (nth axis hi) (nth axis lo)))))))))
+        (setf (aref octets (* 2 i)) (ldb (byte 8 0) q)
+              (aref octets (1+ (* 2 i))) (ldb (byte 8 8) q))))))
+
+(defun write-recording-json (recording title stream)
+  "Write RECORDING to STREAM as the JavaScript object the viewer reads, titled TITLE. #RH7T05"
+  (multiple-value-bind (lo hi) (recording-bounds recording)
+    (multiple-value-bind (palette indices) (recording-palette recording)
+      (let ((frames (physics-recording-frames recording)))
+        (format stream "{\"title\": ~S,~%\"frameSeconds\": ~,6F,~%\"lo\": [~{~,4F~^, ~}], \"hi\": [~{~,4F~^, ~}],~%"
+                (remove-if (lambda (c) (find c "\"\\")) title)
+                (if (> (length frames) 1)
+                    (/ (- (aref (aref frames (1- (length frames))) 6) (aref (aref frames 0) 6))
+                       (1- (length frames)))
+                    (/ 1 60.0))
+                lo hi)
+        (format stream "\"kinds\": [\"body\"~{, \"~(~A~)\"~}],~%" (mapcar #'first *physics-body-kinds*))
+        (format stream "\"palette\": [~{[~{~,4F, ~D, ~D~}]~^, ~}],~%" (coerce palette 'list))
+        (format stream "\"frames\": [~%~{[~{~D, ~D, ~D, ~D, ~D, ~,4F, ~,4F~}]~^,~%~}],~%"
+                (map 'list (lambda (f) (coerce f 'list)) frames))
+        (format stream "\"boxes\": [~{[~{~D~@{, ~,4F~}~}]~^, ~}],~%" (reverse (physics-recording-boxes recording)))
+        (format stream "\"cells\": [~{~D~^,~}],~%" (recording-cells recording))
+        (format stream "\"positions\": \"")
+        (write-base64 (recording-quanta recording lo hi) stream)
+        (format stream "\",~%\"styles\": \"")
+        (write-base64 indices stream)
+        (format stream "\"}~%")))))
+
+(defun write-physics-viewer (recording pathname &key (title "a recorded run")
+                                                  (template (asdf:system-relative-pathname "luv-physics" "tools/viewer.html"))
+                                                  (three "/usr/share/javascript/three/"))
+  "Write RECORDING to PATHNAME as one HTML file that plays it back in 3D: TEMPLATE with its marker
+lines replaced by three.js and its orbit controls from the directory THREE (Debian's libjs-three)
+and by the recording, titled TITLE. Return PATHNAME. #RH7T05"
+  (let ((library (merge-pathnames "three.min.js" three))
+        (orbit (merge-pathnames "examples/js/controls/OrbitControls.js" three)))
+    (unless (and (probe-file library) (probe-file orbit))
+      (error 'invalid-physics-parameter :name :three :value three
+                                        :expected "a directory with three.min.js and examples/js/controls/OrbitControls.js (Debian: apt-get install libjs-three)"))
+    (with-open-file (out pathname :direction :output :if-exists :supersede :external-format :utf-8)
+      (with-open-file (in template :external-format :utf-8)
+        (loop for line = (read-line in nil) while line
+              do (let ((marker (string-trim " " line)))
+                   (cond ((string= marker "//@include three") (write-string (read-file-text library) out))
+                         ((string= marker "//@include orbit") (write-string (read-file-text orbit) out))
+                         ((string= marker "//@include data") (write-recording-json recording title out))
+                         (t (write-line line out)))))))
+    pathname))
+;; A viewer for the browser:1 ends here
+
+;; [[file:../physics.org::#UFK5EA][Pictures of the scenes:1]]
+(defun view-basis (azimuth elevation)
+  "The unit vectors across the picture, up the picture and towards the viewer of an orthographic
+view from AZIMUTH degrees round from +z about +y and ELEVATION degrees above the horizon, as
+three lists. #UFK5EA"
+  (let* ((a (* azimuth (/ pi 180))) (e (* elevation (/ pi 180)))
+         (d (list (* (cos e) (sin a)) (sin e) (* (cos e) (cos a))))
+         (across (let ((l (sqrt (+ (expt (third d) 2) (expt (first d) 2)))))
+                   (list (/ (third d) l) 0 (/ (- (first d)) l))))
+         (up (list (- (* (second d) (third across)) (* (third d) (second across)))
+                   (- (* (third d) (first across)) (* (first d) (third across)))
+                   (- (* (first d) (second across)) (* (second d) (first across))))))
+    (values across up d)))
+
+(defun shade (colour factor)
+  "The #RRGGBB colour COLOUR (an integer) with each channel times FACTOR, as a string. #UFK5EA"
+  (format nil "#~{~2,'0X~}"
+          (loop for shift in '(16 8 0)
+                collect (min 255 (round (* factor (ldb (byte 8 shift) colour)))))))
+
+(defun scene-picture-items (recording frame cells across up toward)
+  "What frame FRAME of RECORDING shows, as a list of (DEPTH KIND COLOUR . POINTS), deepest first:
+the faces of CELLS (a flat list of X Y Z) that look towards the viewer and touch air (KIND :wall
+for an upright face, else :face), discs (KIND :disc, POINTS the centre's projection and the
+radius) and boxes' faces (:face), projected on ACROSS and UP. #UFK5EA"
+  (let ((terrain (physics-recording-terrain recording)) (items '())
+        (xyz (physics-recording-xyz recording)) (f (aref (physics-recording-frames recording) frame)))
+    (labels ((dot (u x y z) (+ (* (first u) x) (* (second u) y) (* (third u) z)))
+             (project (x y z) (list (dot across x y z) (- (dot up x y z))))
+             (face (kind colour x y z axis sign sx sy sz)
+               ;; the face of the box at X Y Z with sizes SX SY SZ whose normal is SIGN along AXIS
+               (let* ((o (list x y z)) (s (list sx sy sz))
+                      (a (mod (1+ axis) 3)) (b (mod (+ 2 axis) 3)) (corners '()))
+                 (when (plusp sign) (incf (nth axis o) (nth axis s)))
+                 (dolist (uv '((0 0) (1 0) (1 1) (0 1)))
+                   (let ((p (copy-list o)))
+                     (incf (nth a p) (* (first uv) (nth a s))) (incf (nth b p) (* (second uv) (nth b s)))
+                     (push (apply #'project p) corners)))
+                 (let ((m (copy-list o)))
+                   (incf (nth a m) (* 0.5 (nth a s))) (incf (nth b m) (* 0.5 (nth b s)))
+                   (push (list* (apply #'dot toward m) kind colour corners) items)))))
+      (loop for (x y z) on cells by #'cdddr
+            do (loop for axis below 3 for colour in '(#x8f937f #xbcc0a8 #xa3a791)
+                     do (dolist (sign '(1 -1))
+                          (let ((n (list 0 0 0)))
+                            (setf (nth axis n) sign)
+                            (when (and (plusp (* sign (nth axis toward)))
+                                       (let ((nx (+ x (first n))) (ny (+ y (second n))) (nz (+ z (third n))))
+                                         (and (terrain-resident-p terrain nx ny nz)
+                                              (not (terrain-solid-p terrain nx ny nz)))))
+                              (face (if (= axis 1) :face :wall) colour x y z axis sign 1 1 1))))))
+      (loop for i from (aref f 0) below (+ (aref f 0) (aref f 1))
+            do (let* ((x (aref xyz (* 3 i))) (y (aref xyz (+ 1 (* 3 i)))) (z (aref xyz (+ 2 (* 3 i))))
+                      (style (aref (physics-recording-style recording) i))
+                      (colour (if (oddp style) #x6a7a98
+                                  (nth (min 4 (ash style -1)) '(#xd9822b #xe0a030 #xc8c8d0 #x3f8fe0 #xe8401c)))))
+                 (push (list (dot toward x y z) :disc colour (project x y z)
+                             (aref (physics-recording-radius recording) i))
+                       items)))
+      (dolist (box (physics-recording-boxes recording))
+        (destructuring-bind (at x y z hx hy hz) box
+          (when (= at frame)
+            (loop for axis below 3
+                  do (face :face #x45b36b (- x hx) (- y hy) (- z hz) axis (if (plusp (nth axis toward)) 1 -1)
+                           (* 2 hx) (* 2 hy) (* 2 hz)))))))
+    (sort items #'< :key #'first)))
+
+(defun frame-at (recording seconds)
+  "The frame of RECORDING nearest to SECONDS of simulated time. #UFK5EA"
+  (let ((frames (physics-recording-frames recording)))
+    (loop with best = 0 for i below (length frames)
+          when (< (abs (- (aref (aref frames i) 6) seconds)) (abs (- (aref (aref frames best) 6) seconds)))
+            do (setf best i)
+          finally (return best))))
+
+(defun write-scene-picture (recording pathname moments &key (title "") (width 300) (height 250)
+                                                         (azimuth 35) (elevation 40))
+  "Write an SVG picture to PATHNAME: a panel of WIDTH x HEIGHT for each of MOMENTS (seconds) of
+RECORDING, seen from AZIMUTH and ELEVATION, under TITLE. Return PATHNAME. #UFK5EA"
+  (multiple-value-bind (across up toward) (view-basis azimuth elevation)
+    (let* ((cells (recording-cells recording))
+           (frames (mapcar (lambda (s) (frame-at recording s)) moments))
+           (panels (mapcar (lambda (f) (scene-picture-items recording f cells across up toward)) frames))
+           (xs '()) (ys '()) (depths '()))
+      (dolist (items panels)
+        (dolist (item items)
+          (push (first item) depths)
+          (if (eq (second item) :disc)
+              (destructuring-bind ((x y) r) (cdddr item)
+                (push (- x r) xs) (push (+ x r) xs) (push (- y r) ys) (push (+ y r) ys))
+              (dolist (p (cdddr item)) (push (first p) xs) (push (second p) ys)))))
+      (let* ((x0 (reduce #'min xs :initial-value 0)) (x1 (reduce #'max xs :initial-value 1))
+             (y0 (reduce #'min ys :initial-value 0)) (y1 (reduce #'max ys :initial-value 1))
+             (d0 (reduce #'min depths :initial-value 0)) (d1 (reduce #'max depths :initial-value 1))
+             (top 22) (scale (min (/ (- width 10) (- x1 x0)) (/ (- height top 6) (- y1 y0)))))
+        (flet ((px (x panel) (+ (* panel width) 5 (* scale (- x x0))))
+               (py (y) (+ top (* scale (- y y0))))
+               (light (depth) (+ 0.55 (* 0.45 (/ (- depth d0) (max 1e-6 (- d1 d0)))))))
+          (with-open-file (out pathname :direction :output :if-exists :supersede)
+            (format out "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"~D\" height=\"~D\" viewBox=\"0 0 ~:*~:*~D ~D\" font-family=\"sans-serif\" font-size=\"12\">~%"
+                    (* width (length moments)) height)
+            (format out "<style>circle { stroke: #333; stroke-width: 0.3 } polygon { stroke: #555; stroke-width: 0.3 }
+ .wall { fill-opacity: 0.4 }</style>~%<rect width=\"100%\" height=\"100%\" fill=\"#fafaf7\"/>~%")
+            (loop for items in panels for frame in frames for panel from 0
+                  do (let ((f (aref (physics-recording-frames recording) frame)))
+                       (format out "<text x=\"~D\" y=\"15\">~A~,1F s: ~D awake, ~D asleep</text>~%"
+                               (+ 6 (* panel width)) (if (zerop panel) title "")
+                               (aref f 6) (aref f 2) (aref f 3)))
+                     (dolist (item items)
+                       (destructuring-bind (depth kind colour &rest points) item
+                         (if (eq kind :disc)
+                             (destructuring-bind ((x y) r) points
+                               (format out "<circle cx=\"~,1F\" cy=\"~,1F\" r=\"~,1F\" fill=\"~A\"/>~%"
+                                       (px x panel) (py y) (* scale r) (shade colour (light depth))))
+                             (format out "<polygon points=\"~{~{~,1F,~,1F~}~^ ~}\" fill=\"~A\"~:[~; class=\"wall\"~]/>~%"
+                                     (mapcar (lambda (p) (list (px (first p) panel) (py (second p)))) points)
+                                     (shade colour (light depth)) (eq kind :wall))))))
+            (format out "</svg>~%")))))
+    pathname))
+;; Pictures of the scenes:1 ends here
+
+;; [[file:../physics.org::#LW3YHU][The page as HTML, and an index of the interface:1]]
+(defun export-kinds (symbol)
+  "What SYMBOL names in the image, as a list of words: macro, generic function, function, constant,
+variable, condition, class, structure or type. #LW3YHU"
+  (let ((class (find-class symbol nil)))
+    (remove nil
+            (list (cond ((macro-function symbol) "macro")
+                        ((and (fboundp symbol) (typep (fdefinition symbol) 'generic-function)) "generic function")
+                        ((fboundp symbol) "function"))
+                  (cond ((constantp symbol) "constant")
+                        ((boundp symbol) "variable"))
+                  (cond ((null class) (and (sb-ext:valid-type-specifier-p symbol) "type"))
+                        ((subtypep class 'condition) "condition")
+                        ((typep class 'structure-class) "structure")
+                        (t "class"))))))
+
+(defun export-docstring (symbol)
+  "The first docstring SYMBOL has as a function, a variable, a type or a structure, or NIL. #LW3YHU"
+  (or (and (fboundp symbol) (documentation symbol 'function))
+      (and (boundp symbol) (documentation symbol 'variable))
+      (documentation symbol 'type)
+      (documentation symbol 'structure)))
+
+(defun docstring-anchor (docstring)
+  "The anchor DOCSTRING ends with (the six characters after its last #), or NIL. #LW3YHU"
+  (let* ((text (string-right-trim '(#\Space #\Newline) (or docstring "")))
+         (at (position #\# text :from-end t)))
+    (and at (= (- (length text) at) 7) (subseq text (1+ at)))))
+
+(defun docstring-summary (docstring)
+  "The first sentence of DOCSTRING, its lines joined, without the anchor at its end. #LW3YHU"
+  (let* ((text (substitute #\Space #\Newline (string-trim '(#\Space #\Newline) docstring)))
+         (anchor (docstring-anchor text))
+         (text (if anchor (string-right-trim " " (subseq text 0 (- (length text) 7))) text))
+         (end (loop for i from 0 below (1- (length text))
+                    when (and (char= (char text i) #\.) (char= (char text (1+ i)) #\Space)
+                              ;; not the point of an abbreviation such as e.g. or a number
+                              (> i 1) (char/= (char text (- i 2)) #\.) (alpha-char-p (char text (1- i)))
+                              (upper-case-p (char text (min (+ i 2) (1- (length text))))))
+                      return (1+ i))))
+    (string-trim " " (if end (subseq text 0 end) text))))
+
+(defun api-index ()
+  "One entry for each symbol the package luv-physics exports, sorted by name: a plist of :symbol,
+:kinds (export-kinds), :arguments (a lambda list, or NIL), :docstring, :summary and :anchor (the
+section of its definition on the page, or the anchor its docstring ends with). #LW3YHU"
+  (let ((entries '()))
+    (do-external-symbols (symbol '#:luv-physics)
+      (let ((docstring (export-docstring symbol)))
+        (push (list :symbol symbol :kinds (export-kinds symbol)
+                    :arguments (and (fboundp symbol) (list (sb-introspect:function-lambda-list symbol)))
+                    :docstring docstring
+                    :summary (and docstring (docstring-summary docstring))
+                    :anchor (or (definition-anchor symbol) (docstring-anchor docstring)))
+              entries)))
+    (sort entries #'string< :key (lambda (entry) (symbol-name (getf entry :symbol))))))
+
+(defun org-table-text (text)
+  "TEXT made safe for a cell of an Org table: no bar, no newline, and no asterisk that Org could
+read as bold (a special variable's name has two). #LW3YHU"
+  (with-output-to-string (out)
+    (loop for c across text
+          do (case c (#\| (write-string "\\vert{}" out)) (#\* (write-string "\\ast{}" out))
+                   (#\Newline (write-char #\Space out))
+                   (t (write-char c out))))))
+
+(defun write-api-index (pathname)
+  "Write the index of the exported symbols (api-index) to PATHNAME as an Org table, each name a
+link to its section. Return the number of entries. #LW3YHU"
+  (let ((entries (api-index)))
+    (with-open-file (out pathname :direction :output :if-exists :supersede :external-format :utf-8)
+      (format out "#+caption: the ~D symbols of the package luv-physics, from the loaded image~%" (length entries))
+      (format out "| name | kind | arguments | what it is |~%|-~%")
+      (dolist (entry entries)
+        (format out "| [[#~A][=~(~A~)=]] | ~{~A~^, ~} | ~A | ~A |~%"
+                (getf entry :anchor) (symbol-name (getf entry :symbol))
+                (getf entry :kinds)
+                (let ((arguments (getf entry :arguments)))
+                  (if arguments
+                      (format nil "~~~A~~"
+                              (org-table-text (let ((*package* (find-package '#:luv-physics))
+                                                    (*print-pretty* nil))
+                                                (if (first arguments) (format nil "~(~S~)" (first arguments)) "()"))))
+                      ""))
+                (org-table-text (or (getf entry :summary) "")))))
+    (length entries)))
+;; The page as HTML, and an index of the interface:1 ends here
 
 ;; [[file:../physics.org::#O07FDP][Closing the files:1]]
 (register-tangled-file #.(or *compile-file-truename* *load-truename*))

@@ -2090,6 +2090,271 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (< (* 6 err) 1d-6) "~D Hz x ~D: velocity error ~,3E m/s" hz n (* 6 err))))))
 ;; W9PREC-head-on-is-exact ends here
 
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-recording-changes-nothing]]
+(define-claim "G4WXCJ" recording-changes-nothing
+    "A recorded run has the unrecorded run's hash; frames hold the bodies; off, a step conses 0 B."
+  (let ((plain (make-basin-world 300 :sleep t))
+        (recorded (make-basin-world 300 :sleep t)))
+    (dotimes (i 120) (luv-physics::step-physics-world plain))
+    (let ((recording (luv-physics::start-physics-recording recorded)))
+      (dotimes (i 120) (luv-physics::step-physics-world recorded))
+      (luv-physics::stop-physics-recording recorded)
+      (check (= (luv-physics::physics-world-state-hash plain) (luv-physics::physics-world-state-hash recorded))
+             "recorded ~D, unrecorded ~D" (luv-physics::physics-world-state-hash recorded)
+             (luv-physics::physics-world-state-hash plain))
+      (check (= 121 (luv-physics::physics-recording-frame-count recording)))
+      (let* ((frames (luv-physics::physics-recording-frames recording))
+             (last (aref frames 120))
+             (xyz (luv-physics::physics-recording-xyz recording))
+             (awake (luv-physics::physics-world-awake recorded)))
+        (check (every (lambda (f) (= 300 (aref f 1))) frames))
+        (check (= (aref last 2) (luv-physics::physics-world-awake-count recorded)))
+        (check (loop for row below (luv-physics::body-columns-length awake)
+                     for k = (* 3 (+ (aref last 0) row))
+                     always (and (= (aref xyz k) (aref (luv-physics::body-columns-x awake) row))
+                                 (= (aref xyz (+ k 2)) (aref (luv-physics::body-columns-z awake) row))))
+               "the last frame's awake centres are not the world's"))
+      (check (null (luv-physics::physics-world-step-hook recorded)))
+      (luv-physics::step-physics-world recorded)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (dotimes (i 10) (luv-physics::step-physics-world recorded))
+        (check (zerop (- (sb-ext:get-bytes-consed) before))
+               "10 steps after the recording stopped consed ~D bytes" (- (sb-ext:get-bytes-consed) before))))))
+;; G4WXCJ-recording-changes-nothing ends here
+
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-recording-sees-boxes]]
+(define-claim "G4WXCJ" recording-sees-boxes
+    "Each recorded step holds the posted player box at the player's middle."
+  (multiple-value-bind (world terrain) (make-floor-world)
+    (let ((player (luv-physics::make-physics-player 2.5d0 0d0 2.5d0))
+          (recording (luv-physics::start-physics-recording world))
+          (middles '()))
+      (dotimes (i 30)
+        (luv-physics::advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
+        (luv-physics::post-physics-player world player)
+        (push (list (luv-physics::physics-player-x player) (+ 0.9d0 (luv-physics::physics-player-y player)))
+              middles)
+        (luv-physics::step-physics-world world))
+      (luv-physics::stop-physics-recording world)
+      (let ((boxes (reverse (luv-physics::physics-recording-boxes recording))))
+        (check (equal (loop for f from 1 to 30 collect f) (mapcar #'first boxes)))
+        (check (every (lambda (box middle)
+                        (destructuring-bind (frame x y z hx hy hz) box
+                          (declare (ignore frame z))
+                          (and (< (abs (- x (first middle))) 1e-5) (< (abs (- y (second middle))) 1e-5)
+                               (< (abs (- hx 0.3)) 1e-6) (< (abs (- hy 0.9)) 1e-6) (< (abs (- hz 0.3)) 1e-6))))
+                      boxes (reverse middles))
+               "the recorded boxes are not the player's")))))
+;; G4WXCJ-recording-sees-boxes ends here
+
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-refusals-name-the-argument]]
+(define-claim "G4WXCJ" refusals-name-the-argument
+    "A second recording, EVERY 0, an unknown scene, a missing three.js: each refused by name."
+  (flet ((refusal (thunk)
+           (handler-case (progn (funcall thunk) nil)
+             (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+    (let* ((world (make-basin-world 50 :sleep t))
+           (recording (luv-physics::start-physics-recording world))
+           (hook (luv-physics::physics-world-step-hook world))
+           (before (luv-physics::physics-world-state-hash world)))
+      (check (eq :step-hook (refusal (lambda () (luv-physics::start-physics-recording world)))))
+      (check (eq hook (luv-physics::physics-world-step-hook world)))
+      (check (= before (luv-physics::physics-world-state-hash world)))
+      (luv-physics::stop-physics-recording world)
+      (check (eq :every (refusal (lambda () (luv-physics::start-physics-recording world :every 0)))))
+      (check (null (luv-physics::physics-world-step-hook world)))
+      (check (eq :scene (refusal (lambda () (luv-physics::run-physics-scene :volcano)))))
+      (let ((path (repository-file "report/refused-viewer.html")))
+        (when (probe-file path) (delete-file path))
+        (check (eq :three (refusal (lambda () (luv-physics::write-physics-viewer
+                                               recording path :three "/nonexistent/three/")))))
+        (check (not (probe-file path)))))))
+;; G4WXCJ-refusals-name-the-argument ends here
+
+;; [[file:../physics.org::#3X6XN8][3X6XN8-scenes-do-what-they-say]]
+(define-claim "3X6XN8" scenes-do-what-they-say
+    "Basin 1001 bodies mostly asleep; pile all asleep; drops in the air; 60 gobbets; the walker moves balls."
+  (flet ((bodies (w) (+ (luv-physics::physics-world-awake-count w) (luv-physics::physics-world-sleeping-count w))))
+    (let ((w (luv-physics::run-physics-scene :basin)))
+      (check (= 1001 (bodies w)))
+      (check (> (luv-physics::physics-world-sleeping-count w) 800) "~D asleep"
+             (luv-physics::physics-world-sleeping-count w))
+      (check (eq t (luv-physics::validate-physics-world w))))
+    (let ((w (luv-physics::run-physics-scene :pile)))
+      (check (and (= 1000 (bodies w)) (zerop (luv-physics::physics-world-awake-count w)))
+             "~D awake at the end" (luv-physics::physics-world-awake-count w)))
+    (let ((w (luv-physics::run-physics-scene :fountain :seconds 2)))
+      (check (> (luv-physics::physics-world-awake-count w) 100) "~D drops awake"
+             (luv-physics::physics-world-awake-count w)))
+    (let ((w (luv-physics::run-physics-scene :lava)))
+      (check (<= 59 (bodies w) 61) "~D gobbets alive" (bodies w)))
+    (multiple-value-bind (w recording) (luv-physics::run-physics-scene :player :record t :every 60)
+      (let* ((xyz (luv-physics::physics-recording-xyz recording))
+             (frames (luv-physics::physics-recording-frames recording))
+             (first-second (aref frames 1)) (end (aref frames (1- (length frames))))
+             (farthest 0.0))
+        ;; bodies are rows in different orders per frame: compare each landed ball with its nearest at the end
+        (dotimes (i (aref first-second 1))
+          (let ((k (* 3 (+ (aref first-second 0) i))) (nearest most-positive-single-float))
+            (dotimes (j (aref end 1))
+              (let ((m (* 3 (+ (aref end 0) j))))
+                (setf nearest (min nearest (+ (expt (- (aref xyz k) (aref xyz m)) 2)
+                                              (expt (- (aref xyz (+ k 2)) (aref xyz (+ m 2))) 2))))))
+            (setf farthest (max farthest (sqrt nearest)))))
+        (check (> farthest 0.45) "no landed ball's place is empty at the end (~,3F m)" farthest)
+        (check (eq t (luv-physics::validate-physics-world w)))))))
+;; 3X6XN8-scenes-do-what-they-say ends here
+
+;; [[file:../physics.org::#RH7T05][A viewer for the browser:2]]
+(defun repository-file (name)
+  "The pathname of the file NAME of the repository. #RH7T05"
+  (asdf:system-relative-pathname "luv-physics" name))
+
+(defun program-output (program arguments)
+  "Run PROGRAM with ARGUMENTS, searching the PATH; return its standard output and its error
+output as two strings, and its exit code. #RH7T05"
+  (let* ((out (make-string-output-stream)) (err (make-string-output-stream))
+         (process (sb-ext:run-program program arguments :search t :output out :error err :input nil)))
+    (values (get-output-stream-string out) (get-output-stream-string err) (sb-ext:process-exit-code process))))
+
+(defun chromium-program ()
+  "The name of the Chromium program on the PATH, when ImageMagick's compare is there too; else
+NIL, and the browser claims are skipped. #RH7T05"
+  (flet ((found-p (name)
+           (zerop (nth-value 2 (program-output "sh" (list "-c" (format nil "command -v ~A" name)))))))
+    (and (found-p "compare")
+         (find-if #'found-p '("chromium" "chromium-browser" "google-chrome")))))
+
+(defun browser-run (chromium arguments)
+  "Run CHROMIUM headless with ARGUMENTS, a profile in a fresh temporary directory and a virtual
+time budget of 4 s; return its standard output. #RH7T05"
+  (let ((profile (format nil "/tmp/luv-physics-chromium-~36R" (random (expt 36 8) (make-random-state t)))))
+    (unwind-protect
+         (values (program-output chromium (append (list "--headless" "--no-sandbox" "--hide-scrollbars"
+                                                        "--mute-audio" "--no-first-run"
+                                                        (format nil "--user-data-dir=~A" profile)
+                                                        "--virtual-time-budget=4000")
+                                                  arguments)))
+      (program-output "rm" (list "-rf" profile)))))
+
+(defun browser-screenshot (chromium url pathname &key (size "960,640"))
+  "Load URL in CHROMIUM at SIZE and write its screenshot, a PNG, to PATHNAME. #RH7T05"
+  (when (probe-file pathname) (delete-file pathname))
+  (browser-run chromium (list (format nil "--window-size=~A" size)
+                              (format nil "--screenshot=~A" (namestring pathname)) url))
+  (probe-file pathname))
+
+;; headless Chromium takes seconds to start and to start its software WebGL: one run for both
+(defun browser-screenshot-pair (chromium left right left-shot right-shot)
+  "Load LEFT and RIGHT (addresses relative to report/) side by side, each in a 960 x 640 frame,
+in one run of CHROMIUM, and write the screenshot of each frame to LEFT-SHOT and RIGHT-SHOT. #RH7T05"
+  (let ((pair (repository-file "report/viewer-check-pair.html"))
+        (both (repository-file "report/viewer-check-pair.png")))
+    (with-open-file (out pair :direction :output :if-exists :supersede)
+      (format out "<!DOCTYPE html><html><body style=\"margin: 0; display: flex\">~{<iframe src=\"~A\" ~
+                   style=\"border: 0; flex: none; width: 960px; height: 640px\"></iframe>~}</body></html>~%"
+              (list left right)))
+    (browser-screenshot chromium (format nil "file://~A" (namestring pair)) both :size "1920,640")
+    (loop for shot in (list left-shot right-shot) for x in '(0 960)
+          do (when (probe-file shot) (delete-file shot))
+             (program-output "convert" (list (namestring both) "-crop" (format nil "960x640+~D+0" x)
+                                             "+repage" (namestring shot))))))
+
+(defun pixels-differing (picture other &key (fuzz 3))
+  "How many pixels of the PNG file PICTURE differ by more than FUZZ percent from the PNG file
+OTHER, or, when OTHER starts with #, from a picture of that colour; NIL when it cannot be
+counted. #RH7T05"
+  (when (probe-file picture)
+    (let ((second (if (and (stringp other) (char= (char other 0) #\#))
+                      (list "-size" (string-trim '(#\Newline) (program-output "identify" (list "-format" "%wx%h" (namestring picture))))
+                            (format nil "xc:~A" other))
+                      (list (namestring other)))))
+      (multiple-value-bind (out err)
+          (program-output "compare" (append (list "-metric" "AE" "-fuzz" (format nil "~D%" fuzz)
+                                                  (namestring picture))
+                                            second (list "null:")))
+        (declare (ignore out))
+        ;; the count may come as 271482 or as 2.71482e+05
+        (let ((number (ignore-errors (let ((*read-default-float-format* 'double-float))
+                                       (read-from-string err)))))
+          (and (realp number) (round number)))))))
+;; A viewer for the browser:2 ends here
+
+;; [[file:../physics.org::#RH7T05][RH7T05-recording-encodes-faithfully]]
+(define-claim "RH7T05" recording-encodes-faithfully
+    "base64 as RFC 4648; quanta within half a grid step; the palette splits awake from asleep."
+  (flet ((b64 (text) (with-output-to-string (s)
+                       (luv-physics::write-base64 (map '(vector (unsigned-byte 8)) #'char-code text) s))))
+    (check (equal '("TWFu" "TWE=" "TQ==" "") (mapcar #'b64 '("Man" "Ma" "M" "")))))
+  (multiple-value-bind (w recording) (luv-physics::run-physics-scene :basin :record t :every 30 :seconds 3)
+    (declare (ignore w))
+    (multiple-value-bind (lo hi) (luv-physics::recording-bounds recording)
+      (let ((octets (luv-physics::recording-quanta recording lo hi))
+            (xyz (luv-physics::physics-recording-xyz recording))
+            (worst 0.0))
+        (dotimes (i (fill-pointer xyz))
+          (let* ((axis (mod i 3)) (lo (float (nth axis lo) 1d0))
+                 (step (/ (- (float (nth axis hi) 1d0) lo) 65535))
+                 (q (+ (aref octets (* 2 i)) (* 256 (aref octets (1+ (* 2 i))))))
+                 (back (+ lo (* q step))))
+            (setf worst (max worst (/ (abs (- back (aref xyz i))) step)))))
+        (check (<= worst 0.5001) "a centre is ~,3F grid steps from its quantum" worst)))
+    (multiple-value-bind (palette indices) (luv-physics::recording-palette recording)
+      (check (equalp #((0.25d0 0 0) (0.25d0 0 1)) (sort (copy-seq palette) #'< :key #'third))
+             "palette ~S" palette)
+      (check (= (length indices) (length (luv-physics::physics-recording-style recording)))))))
+;; RH7T05-recording-encodes-faithfully ends here
+
+;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-the-scene]]
+(define-claim "RH7T05" viewer-draws-the-scene
+    "In headless Chromium the viewer's screenshots are not blank, and moving the slider changes them."
+  (let ((chromium (chromium-program)))
+    (if (null chromium)
+        (progn (format t "~&RH7T05: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
+               (check (null chromium)))
+        (multiple-value-bind (w recording) (luv-physics::run-physics-scene :basin :record t :every 6 :seconds 2)
+          (declare (ignore w))
+          (let* ((page (repository-file "report/viewer-check.html"))
+                 (last (1- (luv-physics::physics-recording-frame-count recording)))
+                 (first-shot (repository-file "report/viewer-first.png"))
+                 (last-shot (repository-file "report/viewer-last.png")))
+            (ensure-directories-exist page)
+            (luv-physics::write-physics-viewer recording page :title "basin, 2 s")
+            (browser-screenshot-pair chromium "viewer-check.html#frame=0"
+                                     (format nil "viewer-check.html#frame=~D" last) first-shot last-shot)
+            (let ((all (* 960 640)))
+              (dolist (shot (list first-shot last-shot))
+                (let ((drawn (pixels-differing shot "#20242b"))
+                      (other-than-balls (pixels-differing shot "#d9822b" :fuzz 20)))
+                  (check (and drawn (> drawn (* 0.05 all))) "~A: ~A pixels differ from the background"
+                         (file-namestring shot) drawn)
+                  (check (and other-than-balls (> (- all other-than-balls) (* 0.05 all)))
+                         "~A: ~A pixels are near the awake balls' colour" (file-namestring shot)
+                         (and other-than-balls (- all other-than-balls)))))
+              (let ((moved (pixels-differing first-shot last-shot)))
+                (check (and moved (> moved (* 0.01 all))) "the first and last frames differ in ~A pixels"
+                       moved))))))))
+;; RH7T05-viewer-draws-the-scene ends here
+
+;; [[file:../physics.org::#UFK5EA][UFK5EA-picture-draws-the-bodies]]
+(define-claim "UFK5EA" picture-draws-the-bodies
+    "Two panels of 300 discs each, captions with the figures, and terrain faces."
+  (let* ((world (make-basin-world 300 :sleep t))
+         (recording (luv-physics::start-physics-recording world :every 10)))
+    (dotimes (i 60) (luv-physics::step-physics-world world))
+    (luv-physics::stop-physics-recording world)
+    (let ((path (repository-file "report/picture-check.svg")))
+      (ensure-directories-exist path)
+      (luv-physics::write-scene-picture recording path '(0 1) :title "check ")
+      (let ((text (luv-physics::read-file-text path)))
+        (flet ((count-of (needle) (loop for at = (search needle text) then (search needle text :start2 (1+ at))
+                                        while at count t)))
+          (check (= 600 (count-of "<circle")) "~D discs" (count-of "<circle"))
+          (check (> (count-of "<polygon") 100) "~D faces" (count-of "<polygon"))
+          (check (search "check 0.0 s: 300 awake, 0 asleep" text))
+          (check (search (format nil "1.0 s: ~D awake" (luv-physics::physics-world-awake-count world)) text)))))))
+;; UFK5EA-picture-draws-the-bodies ends here
+
 ;; [[file:../physics.org::#7PAQ3M][7PAQ3M-families-agree-bit-for-bit]]
 (define-claim "7PAQ3M" families-agree-bit-for-bit
     "Each available family's hash equals the scalar hash on the 200-ball and 1000-ball piles."
@@ -2138,6 +2403,94 @@ function of a column name that reads row K's float in that column. #T3STK1"
                (class-name (class-of (luv-physics::physics-world-kernels
                                       (make-physics-world :kernels :auto))))))))
 ;; 7PAQ3M-choosing-a-family ends here
+
+;; [[file:../physics.org::#LW3YHU][LW3YHU-every-export-is-indexed]]
+(define-claim "LW3YHU" every-export-is-indexed
+    "Each export has a docstring ending with a heading's anchor and one index row linking there."
+  (let* ((page (luv-physics::read-file-text (repository-file "physics.org")))
+         (anchors (loop for at = (search ":CUSTOM_ID: " page) then (search ":CUSTOM_ID: " page :start2 (1+ at))
+                        while at collect (subseq page (+ at 12) (+ at 18))))
+         (entries (luv-physics::api-index))
+         (exports (let ((all '())) (do-external-symbols (s '#:luv-physics) (push s all)) all)))
+    (check (= (length exports) (length entries)))
+    (dolist (symbol exports)
+      (let ((entry (find symbol entries :key (lambda (e) (getf e :symbol)))))
+        (check (and entry (getf entry :docstring)) "~S has no docstring" symbol)
+        (when (and entry (getf entry :docstring))
+          (check (member (luv-physics::docstring-anchor (getf entry :docstring)) anchors :test #'equal)
+                 "~S: its docstring does not end with a heading's anchor" symbol)
+          (check (member (getf entry :anchor) anchors :test #'equal) "~S: index anchor ~S" symbol (getf entry :anchor))
+          (check (and (getf entry :kinds) (plusp (length (getf entry :summary))))))))
+    (let* ((path (repository-file "report/api-index-check.org"))
+           (rows (progn (ensure-directories-exist path) (luv-physics::write-api-index path)))
+           (lines (with-open-file (in path) (loop for l = (read-line in nil) while l collect l))))
+      (check (= rows (length exports)))
+      (check (= rows (count-if (lambda (l) (search "| [[#" l)) lines)))
+      (check (search "| [[#M4K3WD][=add-physics-body=]] | function | ~(world x y z &key" (format nil "~{~A~%~}" lines))))))
+;; LW3YHU-every-export-is-indexed ends here
+
+;; [[file:../physics.org::#LW3YHU][LW3YHU-page-works-in-a-browser]]
+(define-claim "LW3YHU" page-works-in-a-browser
+    "physics.html: pictures load, code coloured, none cut off; a link scrolls its section to the top."
+  (let ((chromium (chromium-program)) (page (repository-file "physics.html")))
+    (cond ((null chromium)
+           (format t "~&LW3YHU: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
+           (check (null chromium)))
+          (t
+           (check (probe-file page) "~A is missing: make html writes it" page)
+           (when (probe-file page)
+             (let* ((copy (repository-file "physics-link-check.html"))
+                    (text (luv-physics::read-file-text page))
+                    (end (search "</body>" text :from-end t))
+                    (script "<script>window.addEventListener('load', function () {
+  var images = Array.from(document.images), blocks = Array.from(document.querySelectorAll('pre'));
+  var shown = images.filter(function (i) { return i.complete && i.naturalWidth > 0; }).length;
+  var cut = blocks.filter(function (b) {
+    return b.scrollWidth > b.clientWidth && ['auto', 'scroll'].indexOf(getComputedStyle(b).overflowX) < 0;
+  }).length;
+  var keywords = document.querySelectorAll('.org-keyword').length;
+  var link = document.querySelector('a[href=\"#3X6XN8\"]'), before = window.scrollY;
+  link.click();
+  setTimeout(function () {
+    var note = document.createElement('pre'); note.id = 'link-check';
+    note.textContent = 'link-check ' + images.length + ' ' + shown + ' ' + keywords + ' ' + cut + ' ' +
+      before + ' ' + window.scrollY + ' ' +
+      Math.round(document.getElementById('3X6XN8').getBoundingClientRect().top) + ' ' + location.hash;
+    document.body.appendChild(note);
+    // a headless screenshot of a scrolled window comes out blank: show the same place by
+    // moving the page up instead
+    var y = window.scrollY; window.scrollTo(0, 0);
+    document.body.style.transform = 'translateY(-' + y + 'px)';
+  }, 300);
+});</script>"))
+               (unwind-protect
+                    (progn
+                      (with-open-file (out copy :direction :output :if-exists :supersede :external-format :utf-8)
+                        (write-string text out :end end) (write-string script out) (write-string text out :start end))
+                      ;; one run writes both the document it ends with and its screenshot
+                      (let* ((dom (browser-run chromium (list "--window-size=1200,900" "--dump-dom"
+                                                              (format nil "--screenshot=~A"
+                                                                      (namestring (repository-file "report/page-at-anchor.png")))
+                                                              (format nil "file://~A" (namestring copy)))))
+                             (mark "id=\"link-check\">link-check ")
+                             (at (search mark dom))
+                             (note (and at (with-input-from-string (s dom :start (+ at (length mark)))
+                                             (list (read s) (read s) (read s) (read s) (read s) (read s)
+                                                   (read s) (read-line s))))))
+                        (check (not (null note)) "the page did not note what it shows")
+                        (when note
+                          (destructuring-bind (images shown keywords cut before after top hash) note
+                            (check (and (integerp images) (>= images 13) (eql shown images))
+                                   "~A of ~A pictures loaded" shown images)
+                            (check (and (integerp keywords) (> keywords 1000)) "~A coloured keywords" keywords)
+                            (check (eql cut 0) "~A code blocks are cut off" cut)
+                            (check (and (numberp before) (numberp after) (> (- after before) 2000))
+                                   "the page went from ~A to ~A" before after)
+                            (check (and (numberp top) (<= (abs top) 2)) "the heading is at ~A px" top)
+                            (check (equal (string-trim " <" (subseq hash 0 (position #\< hash))) "#3X6XN8")
+                                   "the address ends with ~S" hash)))))
+                 (when (probe-file copy) (delete-file copy)))))))))
+;; LW3YHU-page-works-in-a-browser ends here
 
 ;; [[file:../physics.org::#O07FDP][O07FDP-both-files-registered]]
 (define-claim "O07FDP" both-files-registered

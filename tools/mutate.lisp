@@ -657,7 +657,12 @@ finished one.  Return the finished mutants that compiled, in the order they were
               do (loop while (and slots (< (length running) jobs))
                        do (let ((anchor (pop slots)))
                             (unless (launch anchor (incf index))
-                              (format t "~&(section ~A has no more mutants)~%" anchor))))
+                              ;; the slot goes to the next section that still has mutants
+                              (let* ((after (member anchor anchors :test #'string=))
+                                     (other (find-if (lambda (a) (cdr (assoc a queues :test #'string=)))
+                                                     (append (rest after) (ldiff anchors after)))))
+                                (format t "~&(section ~A has no more mutants~@[; its slot goes to ~A~])~%" anchor other)
+                                (when other (push other slots))))))
                  (dolist (job running)
                    (let ((m (poll-job job timeouts)))
                      (when m
@@ -842,8 +847,8 @@ as a finished run does.  Return the number of mutants read."
                   (load-average)))
         (ensure-directories-exist "report/")
         (with-open-file (out "report/mutate-score.org" :direction :output :if-exists :supersede)
-          (format out "seed ~D, ~D mutants, ~,1F s a mutant on average (two at a time), ~,0F s in all~%~%"
-                  seed (length mutants) (/ (reduce #'+ mutants :key #'mutant-seconds) (max 1 (length mutants))) wall)
+          (format out "seed ~D, ~D mutants, ~,1F s a mutant on average (two at a time), ~D s in all~%~%"
+                  seed (length mutants) (/ (reduce #'+ mutants :key #'mutant-seconds) (max 1 (length mutants))) (round wall))
           (score-table mutants parts out))
         (with-open-file (out "report/mutate-survivors.tsv" :direction :output :if-exists :supersede)
           (loop for row in (survivor-rows mutants) do (format out "~{~A~^	~}~%" row)))
