@@ -89,9 +89,10 @@ mutate: setup tangle
 	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" nice $(SBCL) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
 	@if [ -z "$(ANCHOR)" ]; then $(MAKE) --no-print-directory mutate-splice; fi
 
-# The last full run's tables into the page, the survivors' reasons read from the page as it is.
+# The last full run's tables, from its log, into the page; the survivors' reasons, and which
+# survivors are equivalent, are read from the page as it is.
 mutate-splice:
-	@MUTATE_ANNOTATE=1 $(LISP) --load tools/mutate.lisp
+	@MUTATE_FROM_LOG=report/mutate.log $(LISP) --load tools/mutate.lisp
 	@$(SBCL) --script tools/splice.lisp mutate-score report/mutate-score.org
 	@$(SBCL) --script tools/splice.lisp mutate-survivors report/mutate-survivors.org
 

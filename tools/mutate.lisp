@@ -718,29 +718,37 @@ finished one.  Return the finished mutants that compiled, in the order they were
     reasons))
 
 (defun score-table (mutants parts stream)
-  (write-score-rows (loop for m in mutants
-                          collect (list (gethash (unit-anchor (mutant-unit m)) parts "?")
-                                        (unit-anchor (mutant-unit m)) nil nil nil (killed-p m)))
-                    stream))
+  (let ((reasons (page-reasons "physics.org")))
+    (write-score-rows (loop for m in mutants
+                            collect (list (gethash (unit-anchor (mutant-unit m)) parts "?")
+                                          (unit-anchor (mutant-unit m))
+                                          (and (assoc (mutant-key m) reasons :test #'string=) t)
+                                          (killed-p m)))
+                      stream)))
 
 (defun write-score-rows (scored stream)
-  "SCORED holds one list per mutant: its part, its anchor, and last whether it was killed."
+  "SCORED holds one list per mutant: its part, its anchor, whether the page explains it as
+equivalent, and last whether it was killed.  The score of the rest leaves out the survivors
+the page explains as equivalent."
   (let ((rows '()))
     (dolist (x scored)
-      (let* ((part (first x)) (killed (car (last x)))
-             (row (or (assoc part rows :test #'string=) (car (push (list part 0 0 '()) rows)))))
+      (let* ((part (first x)) (killed (car (last x))) (equivalent (and (not killed) (third x)))
+             (row (or (assoc part rows :test #'string=) (car (push (list part 0 0 '() 0) rows)))))
         (incf (second row))
         (when killed (incf (third row)))
+        (when equivalent (incf (fifth row)))
         (pushnew (second x) (fourth row) :test #'string=)))
     (setf rows (sort rows #'string< :key #'first))
-    (format stream "| part | sections | mutants | killed | survived | score |~%|-~%")
-    (dolist (r rows)
-      (format stream "| ~A | ~D | ~D | ~D | ~D | ~,1F % |~%" (first r) (length (fourth r)) (second r) (third r)
-              (- (second r) (third r)) (* 100 (/ (third r) (max 1 (second r))))))
-    (let ((n (length scored)) (k (count-if (lambda (x) (car (last x))) scored)))
-      (format stream "|-~%| all | ~D | ~D | ~D | ~D | ~,1F % |~%"
-              (length (remove-duplicates (mapcar #'second scored) :test #'string=))
-              n k (- n k) (* 100 (/ k (max 1 n)))))))
+    (flet ((line (name sections n k e)
+             (format stream "| ~A | ~D | ~D | ~D | ~D | ~D | ~,1F % | ~,1F % |~%" name sections n k (- n k e) e
+                     (* 100 (/ k (max 1 n))) (* 100 (/ k (max 1 (- n e)))))))
+      (format stream "| part | sections | mutants | killed | survived | equivalent | score | score without equivalents |~%|-~%")
+      (dolist (r rows)
+        (line (first r) (length (fourth r)) (second r) (third r) (fifth r)))
+      (format stream "|-~%")
+      (line "all" (length (remove-duplicates (mapcar #'second scored) :test #'string=))
+            (length scored) (count-if (lambda (x) (car (last x))) scored)
+            (count-if (lambda (x) (and (not (car (last x))) (third x))) scored)))))
 
 (defun survivor-rows (mutants)
   "One list (ANCHOR OPERATOR FILE KEY) per surviving mutant of MUTANTS."
@@ -793,9 +801,16 @@ as a finished run does.  Return the number of mutants read."
                                (not (search "SURVIVED" next)))
                          rows))))
     (setf rows (nreverse rows))
-    (with-open-file (out "report/mutate-score.org" :direction :output :if-exists :supersede)
-      (format out "~D mutants read from ~A, a run stopped before its end~%~%" (length rows) log)
-      (write-score-rows (mapcar (lambda (r) (cons (gethash (first r) parts "?") r)) rows) out))
+    (let ((summary (find-if (lambda (l) (and (physics::starts-with "mutate: " l) (search "mutants killed" l))) lines))
+          (first-line (find-if (lambda (l) (physics::starts-with "mutate: seed" l)) lines))
+          (reasons (page-reasons "physics.org")))
+      (with-open-file (out "report/mutate-score.org" :direction :output :if-exists :supersede)
+        (format out "~A~%~A~%~%" (or first-line "") (or summary (format nil "~D mutants read from ~A, a run stopped before its end" (length rows) log)))
+        (write-score-rows (mapcar (lambda (r) (list (gethash (first r) parts "?") (first r)
+                                                    (and (assoc (fourth r) reasons :test #'string=) t)
+                                                    (fifth r)))
+                                  rows)
+                          out)))
     (with-open-file (out "report/mutate-survivors.tsv" :direction :output :if-exists :supersede)
       (loop for r in rows unless (fifth r) do (format out "~{~A~^	~}~%" (subseq r 0 4))))
     (annotate-survivors)
