@@ -830,6 +830,20 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; QKS4GZ-edit-needs-wake ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-wake-near-measures-to-the-surface]]
+(define-claim "QKS4GZ" wake-near-measures-to-the-surface
+    "WAKE-PHYSICS-BODIES-NEAR wakes a sleeper whose surface is within RADIUS of the point, not beyond."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
+    (loop repeat 300 while (luv-physics::physics-body-awake-p w h) do (luv-physics::step-physics-world w))
+    (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+    (let ((y (+ (body-y w h) 0.755)))
+      (check (= 0 (luv-physics::wake-physics-bodies-near w 3.5 y 3.5 0.49)))
+      (check (not (luv-physics::physics-body-awake-p w h)) "woken from 0.505 m by a radius of 0.49 m")
+      (check (= 1 (luv-physics::wake-physics-bodies-near w 3.5 y 3.5 0.52)))
+      (check (luv-physics::physics-body-awake-p w h) "not woken from 0.505 m by a radius of 0.52 m"))))
+;; QKS4GZ-wake-near-measures-to-the-surface ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-relocation-stress]]
 (define-claim "QKS4GZ" relocation-stress
     "500 random adds, removes, sleeps, wakes and steps keep validate-physics-world true throughout."
@@ -1477,6 +1491,18 @@ function of a column name that reads row K's float in that column. #T3STK1"
   (check (equal '(0.0 1.0 0.0)
                 (multiple-value-list (luv-physics::physics-softness 0.0 0.7 0.004166667)))))
 ;; G7Q3XR-softness-is-the-closed-form ends here
+
+;; [[file:../physics.org::#K3RNLS][K3RNLS-gravity-in-every-column]]
+(define-claim "K3RNLS" gravity-in-every-column
+    "One step under gravity (1 -2 3) gives a free ball the velocity g/60 in x, y and z."
+  (let* ((w (make-floor-world :gravity '(1 -2 3)))
+         (h (luv-physics::add-physics-body w 3.5 8.0 3.5)))
+    (luv-physics::step-physics-world w)
+    (loop for got in (multiple-value-list (luv-physics::physics-body-velocity w h))
+          for g in '(1 -2 3) for name in '(x y z)
+          do (check (< (abs (- got (/ g 60d0))) 1d-6) "v~(~A~) is ~,7F, not ~,7F" name got (/ g 60d0)))
+    (check (equal '(0.0 0.0 0.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h))))))
+;; K3RNLS-gravity-in-every-column ends here
 
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
