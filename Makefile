@@ -23,7 +23,7 @@ help:
 	@echo "make tangle         write $(OUT) from $(ORG), each only if its text changed"
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
-	@echo "make bench          measure the basin per kernel family; write the table into $(ORG)"
+	@echo "make bench          measure the basin per kernel family and the queries; write the tables into $(ORG)"
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
@@ -60,6 +60,8 @@ bench: setup tangle
 	@$(SBCL) --script tools/splice.lisp bench-basin report/bench.org
 	@$(LISP) --load tools/bench-scenes.lisp | tee report/bench-scenes.org
 	@$(SBCL) --script tools/splice.lisp bench-scenes report/bench-scenes.org
+	@$(LISP) --load tools/bench-queries.lisp | tee report/bench-queries.org
+	@$(SBCL) --script tools/splice.lisp bench-queries report/bench-queries.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
 # without -march=native like Debian's Bullet and ODE.

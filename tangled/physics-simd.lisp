@@ -103,7 +103,6 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
         (movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask))
         (ws (intern (format nil "WARM-START-BLOCKS/~A" family)))
         (so (intern (format nil "SOLVE-BLOCKS/~A" family)))
-        (re (intern (format nil "RESTITUTION-BLOCKS/~A" family)))
         (pf (intern (format nil "PREPARE-FRAMES-BLOCKS/~A" family))))
     `(macrolet ((w+ (a b) `(,',add ,a ,b)) (w- (a b) `(,',sub ,a ,b)) (w* (a b) `(,',mul ,a ,b))
                 (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
@@ -116,15 +115,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 (wgap (ddx ddy ddz elapsed)
                   `(w+ (w+ (@w separation) (w+ (w+ (w* ,ddx (@w nx)) (w* ,ddy (@w ny))) (w* ,ddz (@w nz))))
                        (w* (@w kvn) ,elapsed)))
-                (st! (i value) `(,',store ,value st 0 ,(* ,width i)))
-                (with-body-rows (&body body)
-                  ;; the two spare floats of a velocity row are written back as zeros, so
-                  ;; they need no register while the kernel runs
-                  `(,',transpose (v body-a k vax vay vaz wax way waz a6 a7)
-                     (,',transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
-                       ,@body
-                       (,',scatter v body-a k vax vay vaz wax way waz (wc 0.0) (wc 0.0))
-                       (,',scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0))))))
+                (st! (i value) `(,',store ,value st 0 ,(* ,width i))))
        (defun ,ws (cbuf v start end)
          ,(format nil "Warm start constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
@@ -161,13 +152,17 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                              wby (w+ wby (w* ib (w- ry (w* br cy))))
                              wbz (w+ wbz (w* ib (w- rz (w* br cz))))))
                      (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0)))))))))
-       (defun ,so (cbuf v d start end inv-h use-bias elapsed push-max)
+       (defun ,so (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
          ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
-                  (type single-float inv-h elapsed push-max) #.+kernel-policy+)
+                  (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
          ;; the block's twelve velocity columns live here, on the stack, between the gather
          ;; and the scatter
-         (let ((st (make-array ,(* 12 width) :element-type 'single-float)))
+         (let ((st (make-array ,(* 12 width) :element-type 'single-float))
+               ;; the scalars, broadcast once: a scalar read back inside the loop would be a
+               ;; legacy SSE instruction among the 256-bit ones ([[#F4M1LY]])
+               (lower (wc (- threshold))) (ghx (wc hgx)) (ghy (wc hgy)) (ghz (wc hgz)) (ih (wc inv-h))
+               (el (wc elapsed)) (cap (wc (- push-max))))
            (declare (dynamic-extent st) (type (simple-array single-float (,(* 12 width))) st))
          (unswitch-bias (use-bias)
          (with-solver-columns cbuf
@@ -181,7 +176,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                             (@w gap)
                             (let ((s (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
                                        (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
-                                         (wgap (w- dbx dax) (w- dby day) (w- dbz daz) (wc elapsed))))))
+                                         (wgap (w- dbx dax) (w- dby day) (w- dbz daz) el)))))
                               (@w! gap s)
                               s))))
                ;; the rows gathered into the stage; each read of a velocity below is a load
@@ -199,9 +194,9 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                  (vbx (st@ 6)) (vby (st@ 7)) (vbz (st@ 8)) (wbx (st@ 9)) (wby (st@ 10)) (wbz (st@ 11)))
                  (let* ((positive (w> s (wc 0.0)))
                         (bias (if biased
-                                  (let ((soft (w* (@w bias-rate) s)) (cap (wc (- push-max))))
-                                    (wif positive (w* s (wc inv-h)) (wif (w> soft cap) soft cap)))
-                                  (wif positive (w* s (wc inv-h)) (wc 0.0))))
+                                  (let ((soft (w* (@w bias-rate) s)))
+                                    (wif positive (w* s ih) (wif (w> soft cap) soft cap)))
+                                  (wif positive (w* s ih) (wc 0.0))))
                         ;; the relative velocity before the impulses, for the normal part
                         ;; and for friction, whose two speeds are found here, before the
                         ;; normal impulse, which does not change them
@@ -226,8 +221,50 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                      (w* (wif positive (wc 0.0) (@w impulse-scale)) l))
                                  (w- l (w* (@w normal-mass) (w+ vn bias)))))
                         (new (wif (w> raw (wc 0.0)) raw (wc 0.0)))
-                        (dl (w- new l))
-                        (mni (@w max-normal-impulse)))
+                        (mni (@w max-normal-impulse))
+                        ;; impacts and armed contacts ([[#R3ST1T]]): a block with no lane that
+                        ;; has not pushed yet and approaches faster than the threshold, and
+                        ;; none armed, skips them
+                        (dl (w- new l)))
+                   ;; the normal impulse to keep, the velocity change and what the contact pushed
+                   (multiple-value-bind (new dl pushed)
+                       (let ((armed (@w armed-speed)))
+                               (if (zerop (,movemask
+                                                ;; lanes that have not pushed: vn; the others: an armed
+                                                ;; lane's speed times -1e30, below any threshold
+                                                (wif (w> lower (wif (w= mni (wc 0.0)) vn (w* armed (wc -1e30))))
+                                                     (wc -1.0) (wc 0.0))))
+                                   (values new dl new)
+                                   (let* ((e (@w restitution))
+                                          (impact-f (wif (w= mni (wc 0.0))
+                                                         (wif (w> new (wc 0.0))
+                                                              (wif (w> lower vn)
+                                                                   (wif (w> e (wc 0.0)) (wc 1.0) (wc 0.0))
+                                                                   (wc 0.0))
+                                                              (wc 0.0))
+                                                         (wc 0.0)))
+                                          (armed-f (wif positive (wc 0.0) (wif (w> armed (wc 0.0)) (wc 1.0) (wc 0.0))))
+                                          (impact (w> impact-f (wc 0.0)))
+                                          (sp (wif positive s (wc 0.0)))
+                                          (dv (w* (w- (wif (w> mb (wc 0.0)) (wc 1.0) (wc 0.0))
+                                                      (wif (w> ma (wc 0.0)) (wc 1.0) (wc 0.0)))
+                                                  (w+ (w+ (w* ghx x) (w* ghy y)) (w* ghz z))))
+                                          (half (w* (wc 0.5) dv))
+                                          (c (if biased (w- vn half) (w+ vn half)))
+                                          (k (w* (w* (w* (wc 2.0) dv) sp) ih))
+                                          (u2 (w- (w* c c) k))
+                                          (uc (wif impact (wsqrt (wif (w> u2 (wc 0.0)) u2 (wc 0.0))) armed))
+                                          (wc2 (w+ (w* (w* e e) (w* uc uc)) k))
+                                          (short (w> (wc 0.0) wc2))
+                                          (root (wsqrt (wif (w> wc2 (wc 0.0)) wc2 (wc 0.0))))
+                                          (w (if biased (w+ root half) (w- root half)))
+                                          (kick (w* (@w normal-mass) (w- w vn)))
+                                          (bounce (w> (wif short (wc 0.0) (wif (w> kick (wc 0.0)) (w+ impact-f armed-f) (wc 0.0)))
+                                                      (wc 0.0)))
+                                          (arm (w> (wif short impact-f (wc 0.0)) (wc 0.0))))
+                                     (@w! armed-speed (wif bounce (wc 0.0) (wif arm uc armed)))
+                                     (let* ((bump (wif bounce kick (wc 0.0))) (bounced (w> bump (wc 0.0))))
+                                       (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))))
                    (let* ((limit (w* (@w friction) new))
                           (over (w> len2 (w* limit limit)))
                           ;; outside the cone len2 > 0, so no lane divides by zero
@@ -235,7 +272,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                           (n1 (wif over (w* n1 scale) n1)) (n2 (wif over (w* n2 scale) n2))
                           (d1 (w- n1 l1)) (d2 (w- n2 l2)))
                      (@w! normal-impulse new)
-                     (@w! max-normal-impulse (wif (w> mni new) mni new))
+                     (@w! max-normal-impulse (wif (w> mni pushed) mni pushed))
                      (@w! tangent-impulse-1 n1) (@w! tangent-impulse-2 n2)
                      ;; each velocity takes the normal impulse, then friction's, in one
                      ;; expression: the same two roundings as two steps, one store; a
@@ -274,7 +311,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                          (st! 3 (wif rolling (w- wax (w* iam dx)) wax)) (st! 4 (wif rolling (w- way (w* iam dy)) way))
                          (st! 5 (wif rolling (w- waz (w* iam dz)) waz))
                          (st! 9 (wif rolling (w+ wbx (w* ibm dx)) wbx)) (st! 10 (wif rolling (w+ wby (w* ibm dy)) wby))
-                         (st! 11 (wif rolling (w+ wbz (w* ibm dz)) wbz)))))))
+                         (st! 11 (wif rolling (w+ wbz (w* ibm dz)) wbz))))))))
                (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
                (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0)))))))))
        (defun ,pf (cbuf start end)
@@ -311,32 +348,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         (mass-sum (w+ (@w ima) (@w imb))))
                    (@w! normal-mass (inverse mass-sum))
                    (@w! tangent-mass (inverse (w+ (w+ mass-sum (w* (w* iia ra) ra)) (w* (w* iib rb) rb))))
-                   (@w! rolling-mass (inverse (w+ iia iib)))))))))
-       (defun ,re (cbuf v start end threshold)
-         ,(format nil "Restitution over constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
-         (declare (type constraint-columns cbuf) (type f32-column v) (type index start end)
-                  (type single-float threshold) #.+kernel-policy+)
-         (with-solver-columns cbuf
-           (loop for k of-type index from start below end by ,width do
-             (let ((base (constraint-base k)))
-               (declare (type index base))
-               (let* ((e (@w restitution)) (rv (@w relative-velocity)) (mni (@w max-normal-impulse))
-                      (skip (wor (wor (w= e (wc 0.0)) (w> rv (wc (- threshold)))) (w= mni (wc 0.0)))))
-                 (unless (zerop (,movemask (wif skip (wc 0.0) (wc -1.0))))
-                   (with-body-rows
-                   (let* ((x (@w nx)) (y (@w ny)) (z (@w nz)) (ma (@w ima)) (mb (@w imb))
-                          (vn (w+ (w+ (w+ (w* (w- vbx vax) x) (w* (w- vby vay) y)) (w* (w- vbz vaz) z)) (@w kvn)))
-                          (l (@w normal-impulse))
-                          (raw (w- l (w* (@w normal-mass) (w+ vn (w* e rv)))))
-                          (new (wif (w> raw (wc 0.0)) raw (wc 0.0)))
-                          (dl (w- new l)))
-                     (@w! normal-impulse (wif skip l new))
-                     (@w! max-normal-impulse (wif skip mni (wif (w> mni new) mni new)))
-                     (setf vax (wif skip vax (w- vax (w* (w* ma dl) x))) vay (wif skip vay (w- vay (w* (w* ma dl) y)))
-                           vaz (wif skip vaz (w- vaz (w* (w* ma dl) z)))
-                           vbx (wif skip vbx (w+ vbx (w* (w* mb dl) x))) vby (wif skip vby (w+ vby (w* (w* mb dl) y)))
-                           vbz (wif skip vbz (w+ vbz (w* (w* mb dl) z)))))
-                   ))))))))))
+                   (@w! rolling-mass (inverse (w+ iia iib))))))))))))
 ;; One kernel text, two widths:1 ends here
 
 ;; [[file:../physics.org::#F4M1LY][The SSE and AVX2 families:1]]
@@ -374,7 +386,7 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
        (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
          (when (< ,start ,end) ,overflow-form)))))
 
-(macrolet ((define-family-methods (class ws so re pf &optional settle)
+(macrolet ((define-family-methods (class ws so pf &optional settle)
              `(progn
                 (defmethod physics-prepare-frames ((kernels ,class) world)
                   (let ((cbuf (physics-world-constraints world)))
@@ -385,20 +397,16 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
                 (defmethod physics-solve-contacts ((kernels ,class) world inv-h use-bias elapsed)
                   (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world))
                         (d (physics-world-deltas world)) (push-max (f32 (physics-world-push-max world))))
-                    (do-colour-runs (s e world ,settle)
-                      (,so cbuf v d s e inv-h use-bias elapsed push-max)
-                      (solve-range cbuf v d s e inv-h use-bias elapsed push-max))))
-                (defmethod physics-apply-restitution ((kernels ,class) world threshold)
-                  (let ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world)))
-                    (do-colour-runs (s e world ,settle) (,re cbuf v s e threshold)
-                      (restitution-range cbuf v s e threshold)))))))
-  (define-family-methods sse-kernels warm-start-blocks/sse solve-blocks/sse restitution-blocks/sse
-    prepare-frames-blocks/sse)
+                    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+                      (do-colour-runs (s e world ,settle)
+                        (,so cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz)
+                        (solve-range cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz))))))))
+  (define-family-methods sse-kernels warm-start-blocks/sse solve-blocks/sse prepare-frames-blocks/sse)
   ;; after 256-bit code, clear the upper halves of the ymm registers before any legacy SSE
   ;; instruction runs: the scalar code SBCL emits is legacy SSE, and on this CPU it ran three
   ;; times slower for the rest of the step without it
-  (define-family-methods avx2-kernels warm-start-blocks/avx2 solve-blocks/avx2 restitution-blocks/avx2
-    prepare-frames-blocks/avx2 (sb-simd-avx:vzeroupper)))
+  (define-family-methods avx2-kernels warm-start-blocks/avx2 solve-blocks/avx2 prepare-frames-blocks/avx2
+    (sb-simd-avx:vzeroupper)))
 
 (register-kernel-family :sse 'sse-kernels :sse4.1)
 (register-kernel-family :avx2 'avx2-kernels :avx2)

@@ -33,7 +33,7 @@
    #:wake-physics-bodies-near #:post-physics-box
    ;; The solver's entry points (#K3RNLS)
    #:physics-integrate-velocities #:physics-warm-start #:physics-solve-contacts
-   #:physics-integrate-positions #:physics-apply-restitution
+   #:physics-integrate-positions
    ;; The step, determinism, validation, bodies as objects (#IDVK7G, #S6T2MV, #V4L1D8, #B0DY0B)
    #:step-physics-world #:*physics-phases* #:physics-world-last-step-contact-count
    #:physics-world-last-step-color-count #:physics-world-last-step-real-seconds
@@ -55,7 +55,14 @@
    ;; #G4WXCJ, #3X6XN8, #RH7T05, #UFK5EA), the index of the interface (#LW3YHU)
    #:physics-world-step-hook #:physics-recording #:start-physics-recording #:stop-physics-recording
    #:physics-recording-frame-count #:*physics-scenes* #:run-physics-scene
-   #:write-physics-viewer #:write-scene-picture #:write-api-index))
+   #:write-physics-viewer #:write-scene-picture #:write-api-index
+   ;; Asking the world (#C4STRY, #R4YC57, #S9WEEP, #OV3RLP, #QB3NCH)
+   #:physics-hit #:make-physics-hit #:physics-hit-kind #:physics-hit-handle #:physics-hit-owner
+   #:physics-hit-cell-x #:physics-hit-cell-y #:physics-hit-cell-z #:physics-hit-x #:physics-hit-y
+   #:physics-hit-z #:physics-hit-nx #:physics-hit-ny #:physics-hit-nz #:physics-hit-distance
+   #:physics-ray-cast #:physics-sphere-cast
+   #:map-physics-bodies-in-sphere #:map-physics-bodies-in-box
+   #:map-physics-cells-in-sphere #:map-physics-cells-in-box #:run-query-benchmark))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -1456,6 +1463,8 @@ dispatches on it once per call. #W0RLD7"))
    (current-h :initform (/ 1.0 240) :type single-float :accessor physics-world-current-h)
    (step-count :initform 0 :type fixnum :accessor physics-world-step-count)
    (stepping :initform nil :accessor physics-world-stepping)
+   (rows-version :initform 0 :type fixnum :accessor physics-world-rows-version)
+   (query-view :initform nil :accessor physics-world-query-view)
    (event-handler :initform nil :accessor physics-world-event-handler)
    (step-hook :initform nil :accessor physics-world-step-hook)
    (phase-clock :initform nil :accessor physics-world-phase-clock)
@@ -1656,6 +1665,7 @@ number of seconds after which it expires. #M4K3WD"
     (let* ((awake (physics-world-awake world))
            (row (body-columns-append awake))
            (handle (handle-table-allocate (physics-world-ids world) +set-awake+ row)))
+      (incf (physics-world-rows-version world))
       (with-body-columns ((bx x) (by y) (bz z) (bvx vx) (bvy vy) (bvz vz) qw (radius-c radius)
                           inverse-mass inverse-inertia (restitution-c restitution) (friction-c friction)
                           (rolling-resistance-c rolling-resistance) (life-c life) flags
@@ -1734,6 +1744,7 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
          (to (set-buffer world to-set))
          (handle (aref (body-columns-handle from) row))
          (new-row (body-columns-append to)))
+    (incf (physics-world-rows-version world))
     (body-columns-copy-row from row to new-row)
     (let ((moved (body-columns-swap-remove from row)))
       (setf (aref (handle-table-set ids) (handle-index handle)) to-set
@@ -1773,6 +1784,7 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
          (buffer (set-buffer world set))
          (handle (aref (body-columns-handle buffer) row))
          (moved (body-columns-swap-remove buffer row)))
+    (incf (physics-world-rows-version world))
     (when (>= moved 0)
       (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle buffer) row))) row))
     (handle-table-release ids handle)
@@ -1898,6 +1910,30 @@ zero impulses; the row under the table's cursor is tried before the table. #G3NC
               (contact-at geometry g kvx) kvx (contact-at geometry g kvy) kvy (contact-at geometry g kvz) kvz))))
     row))
 (declaim (notinline touch-contact))
+
+(declaim (inline pair-impact-normal))
+(defun pair-impact-normal (dx dy dz wx wy wz reach dt nx ny nz separation)
+  "For two spheres whose centres are DX DY DZ apart, closing at the relative velocity WX WY WZ,
+that touch when their centres are REACH apart: the line of centres when they touch (or after DT,
+if later) as a unit normal, and the gap along it now. Without a touch ahead, NX NY NZ and
+SEPARATION. #G3NCNT"
+  (declare (type single-float dx dy dz wx wy wz reach dt nx ny nz separation))
+  (let* ((a (+ (* wx wx) (* wy wy) (* wz wz)))
+         (b (+ (* dx wx) (* dy wy) (* dz wz)))
+         (c (- (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))
+         (disc (- (* b b) (* a c))))
+    (declare (type single-float a b c disc))
+    (if (or (<= a 0.0) (<= disc 0.0) (>= b 0.0))
+        (values nx ny nz separation)
+        ;; |d + w t| = reach at the smaller root
+        (let* ((time (min dt (/ (- (- b) (fsqrt disc)) a)))
+               (qx (+ dx (* wx time))) (qy (+ dy (* wy time))) (qz (+ dz (* wz time)))
+               (q (fsqrt (+ (* qx qx) (* qy qy) (* qz qz)))))
+          (declare (type single-float time qx qy qz q))
+          (if (> q 1e-6)
+              (let ((mx (/ qx q)) (my (/ qy q)) (mz (/ qz q)))
+                (values mx my mz (- (+ (* dx mx) (* dy my) (* dz mz)) reach)))
+              (values nx ny nz separation))))))
 
 (declaim (inline speculative-distance))
 (defun speculative-distance (approach dt slop margin gravity-step)
@@ -2242,11 +2278,12 @@ gap is under the speculative distance. #P41RS7"
          (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                (expt (physics-world-gravity-z world) 2)))))
          (rmax (f32 (physics-world-max-radius world)))
+         (threshold (f32 (physics-world-restitution-threshold world)))
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world))
          ;; the grid phase counted the loose rows
          (strays (pair-list-loose-count plist)))
-    (declare (type single-float margin skin cell slop dt gstep rmax) (type index n) (type fixnum strays)
+    (declare (type single-float margin skin cell slop dt gstep rmax threshold) (type index n) (type fixnum strays)
              (type body-columns awake sleeping) (type pair-list plist)
              (type contact-columns contacts) (type contact-table table)
              (type handle-table ids) (type hash-grid grid sgrid) #.+kernel-policy+
@@ -2269,6 +2306,12 @@ gap is under the speculative distance. #P41RS7"
                      (declare (type single-float nx ny nz))
                      (let ((sep (- d ri rj))
                            (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
+                     (declare (type single-float sep approach))
+                     ;; a pair closing faster than the restitution threshold takes the normal of
+                     ;; the moment it will touch ([[#MYWH16]]): the line of centres then
+                     (when (and (> approach threshold) (> sep 0.0))
+                       (multiple-value-setq (nx ny nz sep)
+                         (pair-impact-normal dx dy dz (- vxj vxi) (- vyj vyi) (- vzj vzi) (+ ri rj) dt nx ny nz sep)))
                      (when (< sep (speculative-distance approach dt slop margin gstep))
                        ;; orient every pair contact from the lower handle slot to the higher
                        (multiple-value-bind (ha hb s px py pz)
@@ -2391,6 +2434,40 @@ INSIDE. #MYWH16"
            (declare (ignorable ,nx ,ny ,nz ,separation))
            ,inside))))
 
+(declaim (inline impact-normal))
+(defun impact-normal (nx ny nz separation cx cy cz r vx vy vz dt threshold minx miny minz maxx maxy maxz)
+  "The normal and separation of the contact between the box MIN..MAX and a sphere of radius R at
+CX CY CZ moving at VX VY VZ, whose closest point gives NX NY NZ and SEPARATION: when the sphere
+approaches faster than THRESHOLD, the normal at the point it will strike within DT (advanced
+three times along its path), and its gap along that normal. #MYWH16"
+  (declare (type single-float nx ny nz separation cx cy cz r vx vy vz dt threshold minx miny minz maxx maxy maxz))
+  (let ((approach (+ (* vx nx) (* vy ny) (* vz nz))))
+    (declare (type single-float approach threshold))
+    (if (or (<= approach threshold) (<= separation 0.0))
+        (values nx ny nz separation)
+        (let ((time 0.0) (mx nx) (my ny) (mz nz) (gap separation))
+          (declare (type single-float time mx my mz gap))
+          ;; conservative advancement: move along the path by the gap over the approach
+          ;; speed along the current normal, and take the closest point again from there
+          (dotimes (k 3)
+            (let ((closing (+ (* vx mx) (* vy my) (* vz mz))))
+              (declare (type single-float closing))
+              (when (and (> closing 0.0) (> gap 0.0))
+                (setf time (min dt (+ time (/ gap closing))))
+                (let* ((qx (+ cx (* vx time))) (qy (+ cy (* vy time))) (qz (+ cz (* vz time)))
+                       (px (max minx (min maxx qx))) (py (max miny (min maxy qy))) (pz (max minz (min maxz qz)))
+                       (ex (- px qx)) (ey (- py qy)) (ez (- pz qz))
+                       (d (fsqrt (+ (* ex ex) (* ey ey) (* ez ez)))))
+                  (declare (type single-float qx qy qz px py pz ex ey ez d))
+                  (when (> d 1e-6)
+                    (setf mx (/ ex d) my (/ ey d) mz (/ ez d)
+                          gap (- d r)))))))
+          ;; the gap along the new normal from where the sphere is now
+          (let ((px (max minx (min maxx (+ cx (* vx time)))))
+                (py (max miny (min maxy (+ cy (* vy time)))))
+                (pz (max minz (min maxz (+ cz (* vz time))))))
+            (values mx my mz (- (+ (* (- px cx) mx) (* (- py cy) my) (* (- pz cz) mz)) r)))))))
+
 (defun inside-face (probe cx cy cz r minx miny minz maxx maxy maxz ix iy iz)
   "For a centre CX CY CZ inside the box MIN..MAX: the face to push it out through, as normal,
 point and separation. With a PROBE, the box is cell IX IY IZ and the shallowest face whose
@@ -2446,6 +2523,7 @@ is under the speculative distance. #MYWH16"
              (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                                    (expt (physics-world-gravity-z world) 2)))))
              (limit (f32 *physics-reach-limit*))
+             (threshold (f32 (physics-world-restitution-threshold world)))
              (contacts (physics-world-contacts world))
              (table (physics-world-contact-table world))
              ;; the bodies come in the grid's order, so most share the chunk of the one before
@@ -2459,7 +2537,7 @@ is under the speculative distance. #MYWH16"
                              (= (pair-list-terrain-edits plist) (voxel-terrain-edits terrain))))
              (loose (pair-list-loose plist)) (clear (pair-list-clear plist))
              (widen (* 0.45 (f32 (physics-world-pair-skin world)))))
-        (declare (type single-float margin limit slop dt gstep widen) (type fixnum last-key)
+        (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key)
                  (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear)
                  (type contact-columns contacts) (type contact-table table) (inline touch-contact))
         (when fresh
@@ -2477,7 +2555,12 @@ is under the speculative distance. #MYWH16"
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i n)
             (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                   (reach (min limit (+ r margin)))
+                   ;; how far the body can travel this step; a body faster than its margin a
+                   ;; step reaches that far, so that it meets an edge or a corner before it strikes
+                   (travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                                    (* (aref vz i) (aref vz i)))))))
+                   (ahead (max margin travel))
+                   (reach (min limit (+ r ahead)))
                    (x0 (cell-floor (- cx reach))) (x1 (cell-floor (+ cx reach)))
                    (y0 (cell-floor (- cy reach))) (y1 (cell-floor (+ cy reach)))
                    (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach)))
@@ -2527,11 +2610,9 @@ is under the speculative distance. #MYWH16"
                                                                  never (cell-solid-p ix iy iz))))))
                           1 0)))
               ;; a body that can travel past its margin this step also sweeps its path
-              (let ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                                      (* (aref vz i) (aref vz i))))))))
-                (when (> travel margin)
-                  (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
-                                         (aref vx i) (aref vy i) (aref vz i) (+ travel r))))
+              (when (> travel margin)
+                (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
+                                       (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
               (unless (zerop mask)
                 (flet ((solid (ix iy iz)
                          (declare (type fixnum ix iy iz))
@@ -2555,10 +2636,13 @@ is under the speculative distance. #MYWH16"
                                                   (and (/= oy 0) (/= oz 0) (solid ix (+ iy oy) (+ iz oz)))
                                                   (and (/= ox 0) (/= oy 0) (/= oz 0)
                                                        (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
-                                (multiple-value-bind (nx ny nz sep) (finish)
+                                (multiple-value-bind (nx ny nz sep)
+                                    (multiple-value-bind (nx ny nz sep) (finish)
+                                      (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
+                                                     threshold fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)))
                                   (when (< sep (speculative-distance
                                                 (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
-                                                dt slop margin gstep))
+                                                dt slop ahead gstep))
                                     (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
                                                    nx ny nz sep px py pz 0.0 0.0 0.0))))
                               ;; inside: push out through a face
@@ -2701,7 +2785,7 @@ the hole. #PRUN3D"
     '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation kvn kvt1 kvt2
       normal-mass tangent-mass rolling-mass friction rolling-limit restitution relative-velocity
       max-normal-impulse bias-rate mass-scale impulse-scale normal-impulse tangent-impulse-1
-      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap)
+      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap armed-speed)
     "The float columns of a constraint, in the order they sit in a block. #SSMPYW")
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints. #SSMPYW"
@@ -3001,7 +3085,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                               (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
                               (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z))
                            (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass (@ impulse-scale) dyn-impulse
-                           (@ max-normal-impulse) 0.0
+                           (@ max-normal-impulse) 0.0 (@ armed-speed) 0.0
                            (@ normal-impulse) (contact-at geometry g normal-impulse)
                            (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1)
                            (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2)
@@ -3085,7 +3169,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                               (t
                                (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
                                      (@ impulse-scale) st-impulse)))))
-                    (setf (@ max-normal-impulse) 0.0
+                    (setf (@ max-normal-impulse) 0.0 (@ armed-speed) 0.0
                           (@ normal-impulse) (contact-at geometry g normal-impulse)
                           (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2)
                           (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
@@ -3189,10 +3273,6 @@ the soft bias (solve) or without it (relax). #K3RNLS"))
 (defgeneric physics-integrate-positions (kernels world h)
   (:documentation "Substep stage 4: move every awake body's delta by its velocity over H. #K3RNLS"))
 
-(defgeneric physics-apply-restitution (kernels world threshold)
-  (:documentation "After the substeps: bounce the contacts that pushed and arrived faster than
-THRESHOLD. #K3RNLS"))
-
 (defun integrate-velocities-range (v start end h gx gy gz max-speed)
   "Add H times gravity to velocity rows START..END of V and clamp their speed to MAX-SPEED. #K3RNLS"
   (declare (type f32-column v) (type index start end) (type single-float h gx gy gz max-speed)
@@ -3266,11 +3346,12 @@ per constraint. #S0LV3R"
        (symbol-macrolet ((biased t)) ,@body)
        (symbol-macrolet ((biased nil)) ,@body)))
 
-(defun solve-range (cbuf v d start end inv-h use-bias elapsed push-max)
+(defun solve-range (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
   "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
-when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
+when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
+HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
-           (type single-float inv-h elapsed push-max) #.+kernel-policy+)
+           (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
   (unswitch-bias (use-bias)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
@@ -3312,14 +3393,46 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                       ;; scale 0, which the other branch would multiply and subtract to the same bits
                       (- l (* (@ normal-mass) (+ vn bias)))))
              (new (if (> raw 0.0) raw 0.0))
-             (dl (- new l))
+             (mni (@ max-normal-impulse))
+             ;; an impact ([[#R3ST1T]]): the first push of a contact approaching faster than
+             ;; the threshold; or an armed contact whose gap has closed. Its bounce, the
+             ;; impulse that makes the pair leave at the speed restitution gives, is a push
+             ;; of its own, not kept in the contact's impulse
+             (e (@ restitution))
+             (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold))))
+             (bump (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
+                      (let* ((sp (if positive s 0.0))
+                             ;; the change of vn over a substep under gravity
+                             (dv (* (- (if (> mb 0.0) 1.0 0.0) (if (> ma 0.0) 1.0 0.0))
+                                    (+ (* hgx x) (* hgy y) (* hgz z))))
+                             (half (* 0.5 dv))
+                             ;; vn now, and the speed of the impact when the gap closes
+                             (c (if biased (- vn half) (+ vn half)))
+                             (k (* (* (* 2.0 dv) sp) inv-h))
+                             (uc (if impact
+                                     (let ((u2 (- (* c c) k))) (fsqrt (if (> u2 0.0) u2 0.0)))
+                                     (@ armed-speed)))
+                             ;; the leaving speed squared, from here
+                             (wc2 (+ (* (* e e) (* uc uc)) k)))
+                        (if (> 0.0 wc2)
+                            ;; the rebound would not climb this gap: close it, bounce later
+                            (progn (setf (@ armed-speed) uc) 0.0)
+                            (let* ((root (fsqrt (if (> wc2 0.0) wc2 0.0)))
+                                   (w (if biased (+ root half) (- root half)))
+                                   (kick (* (@ normal-mass) (- w vn))))
+                              (when (> kick 0.0) (setf (@ armed-speed) 0.0))
+                              (if (> kick 0.0) kick 0.0))))
+                      0.0))
+             (bounced (> bump 0.0))
+             (new (if bounced l new))
+             (dl (if bounced bump (- new l)))
              ;; (* ma dl x) is (* (* ma dl) x): forming ma dl once changes no bit
              (madl (* ma dl)) (mbdl (* mb dl))
              (vax (- vax (* madl x))) (vay (- vay (* madl y))) (vaz (- vaz (* madl z)))
              (vbx (+ vbx (* mbdl x))) (vby (+ vby (* mbdl y))) (vbz (+ vbz (* mbdl z))))
-        (let ((mni (@ max-normal-impulse)))
+        (let ((pushed (if bounced bump new)))
           (setf (@ normal-impulse) new
-                (@ max-normal-impulse) (if (> mni new) mni new)))
+                (@ max-normal-impulse) (if (> mni pushed) mni pushed)))
         ;; friction, inside the cone |l1,l2| <= friction * normal impulse; the angular
         ;; velocities are read only now
         (let* (
@@ -3364,36 +3477,16 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
                   (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))
 ;; Solve and relax:1 ends here
 
-;; [[file:../physics.org::#R3ST1T][Restitution, once:1]]
-(defun restitution-range (cbuf v start end threshold)
-  "Bounce constraints START..END that pushed and arrived faster than THRESHOLD. #R3ST1T"
-  (declare (type constraint-columns cbuf) (type f32-column v) (type index start end)
-           (type single-float threshold) #.+kernel-policy+)
-  (with-solver-columns cbuf
-    (loop for k of-type index from start below end do
-      (let* ((base (constraint-base k)) (e (@ restitution)) (rv (@ relative-velocity)))
-        (declare (type index base))
-        (unless (or (= e 0.0) (> rv (- threshold)) (= (@ max-normal-impulse) 0.0))
-          (let* ((a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
-                 (x (@ nx)) (y (@ ny)) (z (@ nz))
-                 (ma (@ ima)) (mb (@ imb))
-                 (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (block-ref v b 1) (block-ref v a 1)) y)
-                        (* (- (block-ref v b 2) (block-ref v a 2)) z) (@ kvn)))
-                 (l (@ normal-impulse))
-                 (raw (- l (* (@ normal-mass) (+ vn (* e rv)))))
-                 (new (if (> raw 0.0) raw 0.0))
-                 (dl (- new l))
-                 (mni (@ max-normal-impulse)))
-            (declare (type index a b))
-            (setf (@ normal-impulse) new
-                  (@ max-normal-impulse) (if (> mni new) mni new))
-            (setf (aref v a) (- (aref v a) (* ma dl x))
-                  (block-ref v a 1) (- (block-ref v a 1) (* ma dl y))
-                  (block-ref v a 2) (- (block-ref v a 2) (* ma dl z))
-                  (aref v b) (+ (aref v b) (* mb dl x))
-                  (block-ref v b 1) (+ (block-ref v b 1) (* mb dl y))
-                  (block-ref v b 2) (+ (block-ref v b 2) (* mb dl z)))))))))
-;; Restitution, once:1 ends here
+;; [[file:../physics.org::#R3ST1T][Restitution at impact:1]]
+(defun impact-parameters (world)
+  "The restitution threshold of WORLD and its gravity times its substep, as four single-floats:
+what a solve pass needs to bounce an impact. #R3ST1T"
+  (let ((h (physics-world-current-h world)))
+    (declare (type single-float h))
+    (values (f32 (physics-world-restitution-threshold world))
+            (* h (physics-world-gravity-x world)) (* h (physics-world-gravity-y world))
+            (* h (physics-world-gravity-z world)))))
+;; Restitution at impact:1 ends here
 
 ;; [[file:../physics.org::#SC4L4R][The scalar family:1]]
 (defmethod physics-integrate-velocities ((kernels scalar-kernels) world h)
@@ -3408,23 +3501,19 @@ when USE-BIAS), then Coulomb friction, then rolling resistance. #S0LV3R"
 
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
-    (solve-range cbuf (physics-world-velocities world) (physics-world-deltas world)
-                 0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-                 (f32 (physics-world-push-max world)))))
+    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+      (solve-range cbuf (physics-world-velocities world) (physics-world-deltas world)
+                   0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+                   (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
                              (body-columns-length (physics-world-awake world)) h))
-
-(defmethod physics-apply-restitution ((kernels scalar-kernels) world threshold)
-  (let ((cbuf (physics-world-constraints world)))
-    (restitution-range cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf)
-                       threshold)))
 ;; The scalar family:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (defun store-phase (world)
-  "Phase 11: copy each constraint's impulses back to its contact, note touching flips as :begin
+  "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
 speed. #ST0R3S"
   (let* ((cbuf (physics-world-constraints world))
@@ -3515,7 +3604,7 @@ reading and writing at most eight arrays. #F1NAL5"
           (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
 
 (defun finalize-phase (world)
-  "Phase 12: fold deltas into positions and solver velocities into the rows, turn orientations,
+  "Phase 11: fold deltas into positions and solver velocities into the rows, turn orientations,
 age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
 sleep. Rows are visited from the last down, so relocation never skips one. #F1NAL5"
   (let* ((awake (physics-world-awake world))
@@ -3565,6 +3654,7 @@ and start the contact table's walk of it. #IDVK7G"
   (fill (physics-world-event-data world) nil)
   (reset-terrain-probe (physics-world-probe world) (physics-world-terrain world))
   (incf (physics-world-step-count world))
+  (incf (physics-world-rows-version world))
   (let ((table (physics-world-contact-table world)))
     (setf (contact-table-step table) (physics-world-step-count world)
           (contact-table-cursor table) 0 (contact-table-touched table) 0))
@@ -3598,15 +3688,9 @@ colour, or after a step that left an overlap deeper than *physics-crowded-depth*
           (physics-solve-contacts kernels world inv-h nil (+ elapsed h)))))
     world))
 
-(defun restitution-phase (world)
-  "Phase 10: bounce, once, the contacts that pushed and arrived above the threshold. #IDVK7G"
-  (physics-apply-restitution (physics-world-kernels world) world
-                             (f32 (physics-world-restitution-threshold world)))
-  world)
-
 (defparameter *physics-phases*
   '(reset-phase wake-phase grid-phase pair-phase terrain-phase box-phase prune-phase
-    prepare-phase substep-phase restitution-phase store-phase finalize-phase)
+    prepare-phase substep-phase store-phase finalize-phase)
   "The phases of a step, in order; each is a function of the world. #IDVK7G")
 
 (defun step-physics-world (world &optional dt)
@@ -4226,7 +4310,7 @@ overlap any step left (:deepest), and the mean ms of each phase (:phases, an ali
 (defparameter +bench-phase-groups+
   '(("wake+grid+pairs" wake-phase grid-phase pair-phase) ("terrain" terrain-phase) ("boxes" box-phase)
     ("prune" prune-phase) ("prepare" prepare-phase) ("substeps" substep-phase)
-    ("restitution+store" restitution-phase store-phase) ("finalize" reset-phase finalize-phase))
+    ("store" store-phase) ("finalize" reset-phase finalize-phase))
   "How the benchmark groups the phases into columns. #B3NCH5")
 
 (defun run-basin-benchmark (&key (counts '(1000 3000 10000)) (stream *standard-output*))
@@ -4872,6 +4956,198 @@ radius. #W9PREC"
 ;; Error against run time:4 ends here
 
 ;; [[file:../physics.org::#W9PREC][Error against run time:5]]
+(defun rebound-heights (world-args restitution drop &key (rounds 4) (radius 0.25))
+  "Drop a ball of RESTITUTION with its centre DROP metres above the contact level onto the
+floor: its flights' apex heights above that level, the drop first, up to ROUNDS rebounds. Each
+apex is the vertex of the parabola through a flight's first two positions a step apart. #W9PREC"
+  (let* ((world (apply #'open-air-world :floor t world-args))
+         (level (- radius *physics-linear-slop*))
+         (ball (add-physics-body world 0.5 (+ level drop) 0.5 :radius radius :restitution restitution))
+         (g 9.81d0) (dt (float (physics-world-step-seconds world) 1d0))
+         (ys (list (float (nth-value 1 (physics-body-position world ball)) 1d0)))
+         (apexes '()) (flying nil) (wall 0d0))
+    (loop repeat (round 12 dt) while (and (<= (length apexes) rounds) (physics-body-awake-p world ball)) do
+      (step-physics-world world)
+      (incf wall (physics-world-last-step-real-seconds world))
+      (incf *driven-seconds* dt)
+      (push (float (nth-value 1 (physics-body-position world ball)) 1d0) ys)
+      (when (cddr ys)
+        (destructuring-bind (y2 y1 y0 &rest older) ys
+          (declare (ignore older))
+          ;; a step in free flight has the second difference -g dt^2
+          (let ((free (< (abs (+ (- y0 (* 2 y1)) y2 (* g dt dt))) 1d-5)))
+            (when (and free (not flying))
+              (let ((b (+ (/ (- y1 y0) dt) (* 0.5d0 g dt))))
+                (push (- (+ y0 (/ (* b (abs b)) (* 2 g))) level) apexes)))
+            (setf flying free)))))
+    (values (nreverse apexes) wall world)))
+
+(defun rebound-errors (world-args restitution drop)
+  "The relative errors against RESTITUTION squared of the ratios of successive apex heights
+(rebound-heights) whose arrival speed exceeds the restitution threshold by a tenth; then the
+wall seconds and the world. #W9PREC"
+  (multiple-value-bind (heights wall world) (rebound-heights world-args restitution drop)
+    (let ((e2 (* restitution restitution)) (limit (* 1.1d0 *physics-restitution-threshold*)))
+      (values (loop for (before after) on heights while after
+                    while (> (sqrt (* 2 9.81d0 before)) limit)
+                    collect (/ (abs (- (/ after before) e2)) e2))
+              wall world))))
+
+(defparameter +bounce-restitutions+ '(0.2d0 0.3d0 0.4d0 0.5d0 0.6d0 0.7d0 0.8d0 0.9d0)
+  "Restitutions of the bounce series. #W9PREC")
+
+(defparameter +bounce-drops+ '(0.25d0 0.5d0 1d0 2d0 5d0)
+  "Drop heights of the bounce series, m. #W9PREC")
+
+(define-accuracy-scene bounce-series ("largest |rebound ratio - e^2| / e^2" 0.02)
+  "Balls of every restitution of +bounce-restitutions+ dropped from every height of
++bounce-drops+: the worst relative error of a rebound ratio against e^2. #W9PREC"
+  (let ((worst 0d0) (wall 0d0) (world nil) (count 0))
+    (dolist (e +bounce-restitutions+)
+      (dolist (drop +bounce-drops+)
+        (multiple-value-bind (errors seconds last) (rebound-errors world-args e drop)
+          (incf wall seconds) (setf world last) (incf count (length errors))
+          (setf worst (reduce #'max errors :initial-value (if errors worst 1d0))))))
+    (values worst wall world (format nil "~D rebounds" count))))
+
+(defun struck-row (world-args &key (balls 5) (floor nil) (speed 2d0) (radius 0.25))
+  "A row of BALLS touching balls of restitution 1 struck by its first: in free space, the first
+moving at SPEED; on the FLOOR, the first rolled into the rest from 1.5 m away at SPEED (launched
+sliding at 7/5 of it). Return the last ball's share of the row's momentum, the others' largest
+speed over SPEED and the kinetic energy kept, at the step the last ball is fastest within 1 s,
+then the wall seconds and the world. #W9PREC"
+  (let* ((world (apply #'open-air-world :floor floor :gravity (if floor '(0 -9.81 0) '(0 0 0)) world-args))
+         (y (if floor (- radius *physics-linear-slop*) 0.5))
+         (row (loop for i from 1 below balls
+                    collect (add-physics-body world (+ 2.0 (* i 2 radius)) y 0.5 :radius radius :restitution 1.0
+                                                    :friction (if floor 0.6 0.0))))
+         (first (add-physics-body world (if floor 0.5 2.0) y 0.5
+                                  :radius radius :restitution 1.0 :friction (if floor 0.6 0.0)
+                                  :vx (if floor (* 7/5 speed) speed)))
+         (all (cons first row)) (best nil))
+    (let ((wall (drive world 1.0 (lambda (time) (declare (ignore time))
+                                   (let ((vs (mapcar (lambda (h) (float (physics-body-velocity world h) 1d0)) all)))
+                                     (when (or (null best) (> (car (last vs)) (car (last best))))
+                                       (setf best vs)))))))
+      (let ((momentum (reduce #'+ best)))
+        (values (/ (car (last best)) momentum)
+                (/ (reduce #'max (mapcar #'abs (butlast best))) speed)
+                (/ (reduce #'+ (mapcar (lambda (v) (* v v)) best)) (* speed speed))
+                wall world)))))
+
+(define-accuracy-scene cradle ("worst of momentum and energy not in the last ball" 0.1)
+  "Five touching balls of restitution 1 in free space, the first struck at 2 m/s: the worse of
+the momentum share and the kinetic energy the last ball does not carry. #W9PREC"
+  (multiple-value-bind (share others kept wall world) (struck-row world-args)
+    (values (max (- 1 share) (- 1 kept)) wall world
+            (format nil "others ~,3F v0, energy ~,3F" others kept))))
+
+(define-accuracy-scene struck-row ("worst of momentum and energy not in the last ball" 0.1)
+  "A ball rolled at 3 m/s along the floor into a resting row of three, restitution 1: the worse
+of the momentum share and the kinetic energy the last ball does not carry. #W9PREC"
+  (multiple-value-bind (share others kept wall world) (struck-row world-args :balls 4 :floor t :speed 3d0)
+    (values (max (- 1 share) (- 1 kept)) wall world
+            (format nil "others ~,3F v0, energy ~,3F" others kept))))
+
+(defun drop-onto-block (world-args &key (speed 5d0) (dx 0.1d0) dz (restitution 0.5d0) (radius 0.25d0))
+  "Drop a frictionless ball of RESTITUTION straight down at SPEED onto the lone cell [0,1)^3:
+onto its top edge x = 1, y = 1 at the offset DX outside it, or with DZ onto its corner x = z = 1.
+Return the angles, degrees, of the impulse it took from the geometric normal at impact and of
+its outgoing velocity from the reflection law's, then the wall seconds and the world. #W9PREC"
+  (let* ((world (apply #'open-air-world world-args))
+         (g 9.81d0) (r radius) (oz (or dz 0d0))
+         (y-impact (+ 1d0 (sqrt (- (* r r) (* dx dx) (* oz oz)))))
+         (y0 (+ y-impact 0.3d0))
+         (ball (progn (fill-terrain (physics-world-terrain world) 0 0 0 1 1 1 t)
+                      (add-physics-body world (+ 1d0 dx) y0 (if dz (+ 1d0 dz) 0.5d0) :radius r :friction 0.0
+                                        :restitution restitution :vy (- speed))))
+         (u (sqrt (+ (* speed speed) (* 2 g (- y0 y-impact)))))
+         (t-impact (/ (- u speed) g))
+         (n (list (/ dx r) (/ (- y-impact 1d0) r) (/ oz r)))
+         (v-in (list 0d0 (- u) 0d0))
+         (vn (reduce #'+ (mapcar #'* v-in n)))
+         (ideal (mapcar (lambda (v k) (- v (* (+ 1 restitution) vn k))) v-in n))
+         (dt (float (physics-world-step-seconds world) 1d0))
+         (time 0d0) (hit nil) (out nil) (wall 0d0))
+    (loop repeat 120 until out do
+      (step-physics-world world)
+      (incf wall (physics-world-last-step-real-seconds world))
+      (incf *driven-seconds* dt)
+      (incf time dt)
+      (multiple-value-bind (vx vy vz) (physics-body-velocity world ball)
+        (cond ((and (not hit) (> (abs (- vy (- (- speed) (* g time)))) 1d-3)) (setf hit time))
+              ;; a step after the impact, its velocity taken back to the instant of impact
+              ((and hit (> time (+ hit dt)))
+               (setf out (list vx (+ vy (* g (- time t-impact))) vz))))))
+    (flet ((angle (a b)
+             (let ((c (/ (reduce #'+ (mapcar #'* a b))
+                         (sqrt (* (reduce #'+ (mapcar #'* a a)) (reduce #'+ (mapcar #'* b b)))))))
+               (* (/ 180 pi) (acos (max -1d0 (min 1d0 c)))))))
+      (if out
+          (values (angle (mapcar #'- out v-in) n) (angle out ideal) wall world)
+          (values 180d0 180d0 wall world)))))
+
+(defun block-drops (world-args corner)
+  "drop-onto-block at 2, 5 and 10 m/s and offsets 0.05 to 0.2 m (0.7 of that on each axis at a
+CORNER): the largest impulse angle and outgoing angle, the wall seconds and the last world. #W9PREC"
+  (let ((impulse 0d0) (outgoing 0d0) (wall 0d0) (world nil))
+    (dolist (speed '(2d0 5d0 10d0))
+      (dolist (offset '(0.05d0 0.1d0 0.15d0 0.2d0))
+        (multiple-value-bind (a b seconds last)
+            (if corner
+                (drop-onto-block world-args :speed speed :dx (* 0.7d0 offset) :dz (* 0.7d0 offset))
+                (drop-onto-block world-args :speed speed :dx offset))
+          (setf impulse (max impulse a) outgoing (max outgoing b) world last)
+          (incf wall seconds))))
+    (values impulse outgoing wall world)))
+
+(defun oblique-pair (world-args &key (speed 5d0) (offset 0.2d0) (restitution 0.5d0) (radius 0.25d0))
+  "In free space a frictionless ball of RESTITUTION moving at SPEED along x strikes a resting
+equal one whose centre lies OFFSET aside in y: the angles, degrees, of the struck ball's
+velocity (the impulse's direction) from the line of centres at the touch, and of the striker's
+velocity from the one the reflection law gives, then the wall seconds and the world. #W9PREC"
+  (let* ((world (apply #'open-air-world :gravity '(0 0 0) world-args))
+         (a (add-physics-body world 0.0d0 (+ 0.5d0 offset) 0.5d0 :radius radius :friction 0.0
+                                        :restitution restitution :vx speed))
+         (b (add-physics-body world 1.0d0 0.5d0 0.5d0 :radius radius :friction 0.0 :restitution restitution))
+         (reach (* 2 radius))
+         (n (list (/ (sqrt (- (* reach reach) (* offset offset))) reach) (/ (- offset) reach) 0d0))
+         (vn (* speed (first n)))
+         (ideal (list (- speed (* 0.5d0 (+ 1 restitution) vn (first n))) (- (* 0.5d0 (+ 1 restitution) vn (second n))) 0d0))
+         (wall (drive world 0.5)))
+    (flet ((angle (u v)
+             (let ((c (/ (reduce #'+ (mapcar #'* u v))
+                         (sqrt (* (reduce #'+ (mapcar #'* u u)) (reduce #'+ (mapcar #'* v v)))))))
+               (* (/ 180 pi) (acos (max -1d0 (min 1d0 c)))))))
+      (values (angle (multiple-value-list (physics-body-velocity world b)) n)
+              (angle (multiple-value-list (physics-body-velocity world a)) ideal)
+              wall world))))
+
+(define-accuracy-scene oblique-pair ("largest impulse angle from the line of centres, degrees" 1)
+  "oblique-pair at 2, 5 and 10 m/s and offsets of 0.1 to 0.4 m: the largest angle of the struck
+ball's velocity from the line of centres at the touch. #W9PREC"
+  (let ((impulse 0d0) (outgoing 0d0) (wall 0d0) (world nil))
+    (dolist (speed '(2d0 5d0 10d0))
+      (dolist (offset '(0.1d0 0.2d0 0.3d0 0.4d0))
+        (multiple-value-bind (i o seconds last) (oblique-pair world-args :speed speed :offset offset)
+          (setf impulse (max impulse i) outgoing (max outgoing o) world last)
+          (incf wall seconds))))
+    (values impulse wall world (format nil "striker off by up to ~,2F deg" outgoing))))
+
+(define-accuracy-scene edge-drop ("largest impulse angle from the normal, degrees" 1)
+  "A frictionless ball of restitution 0.5 dropped onto a block's top edge (block-drops): the
+largest angle of its impulse from the geometric normal at impact. #W9PREC"
+  (multiple-value-bind (impulse outgoing wall world) (block-drops world-args nil)
+    (values impulse wall world (format nil "outgoing off by up to ~,2F deg" outgoing))))
+
+(define-accuracy-scene corner-drop ("largest impulse angle from the normal, degrees" 1)
+  "A frictionless ball of restitution 0.5 dropped onto a block's top corner (block-drops): the
+largest angle of its impulse from the geometric normal at impact. #W9PREC"
+  (multiple-value-bind (impulse outgoing wall world) (block-drops world-args t)
+    (values impulse wall world (format nil "outgoing off by up to ~,2F deg" outgoing))))
+;; Error against run time:5 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:6]]
 (defparameter +sweep-rates+ '(30 60 120 240)
   "Step rates of the sweep, Hz. #W9PREC")
 
@@ -4904,9 +5180,9 @@ family of FAMILIES; return one plist per point, families innermost (see run-accu
                     nconc (loop for n in substeps
                                 nconc (loop for family in families
                                             collect (run-accuracy-point scene hz n family))))))
-;; Error against run time:5 ends here
+;; Error against run time:6 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:6]]
+;; [[file:../physics.org::#W9PREC][Error against run time:7]]
 (defun point-label (p)
   "A setting as it is named in the tables: family, rate and substeps. #W9PREC"
   (format nil "~(~A~) ~D Hz x ~D" (getf p :family) (getf p :hz) (getf p :substeps)))
@@ -4929,9 +5205,9 @@ either way a point of the Pareto front. #W9PREC"
                                       (and (= (getf a :error) (getf b :error)) (<= (getf a :ms) (getf b :ms))))
                                   a b))
                 points))))
-;; Error against run time:6 ends here
+;; Error against run time:7 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:7]]
+;; [[file:../physics.org::#W9PREC][Error against run time:8]]
 (defun print-sweep-table (points stream)
   "Print POINTS as an Org table: a row per scene and setting, the error, the note, the run time
 of each family, and whether every family reached the same state hash and error, twice. #W9PREC"
@@ -4959,9 +5235,9 @@ its Pareto front. #W9PREC"
                                ~%  Pareto front:~{ ~A~^,~}.~%"
                        scene measure (<= (getf best :error) tolerance) tolerance (point-label best)
                        (getf best :error) (getf best :ms) (mapcar #'point-label (pareto-front mine))))))
-;; Error against run time:7 ends here
+;; Error against run time:8 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:8]]
+;; [[file:../physics.org::#W9PREC][Error against run time:9]]
 (defparameter +substep-colours+ '((1 . "#c0392b") (2 . "#d68910") (4 . "#1e8449") (8 . "#2471a3"))
   "The colour of each substep count's curves in the diagrams. #W9PREC")
 
@@ -5011,9 +5287,9 @@ through its step rates. Errors below 1e-9 are drawn at 1e-9. #W9PREC"
         (format out "<text x=\"~D\" y=\"~D\" font-size=\"10\" fill=\"#555\">points: 30, 60, 120, 240 Hz</text>~%" (+ x1 14) (- y1 4))
         (format out "</svg>~%")))
     path))
-;; Error against run time:8 ends here
+;; Error against run time:9 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:9]]
+;; [[file:../physics.org::#W9PREC][Error against run time:10]]
 (defun run-accuracy-report (&key (directory "report/") (stream *standard-output*))
   "The sweep, written as report/work-precision.org (the table), report/work-precision-best.org
 (the Pareto-best setting per scene) and one SVG diagram per scene, report/wp-SCENE.svg. Print
@@ -5031,7 +5307,7 @@ the table to STREAM as well. #W9PREC"
                                 (format nil "~(~A~): error against run time" (first entry)) (third entry)
                                 (remove (first entry) points :key (lambda (p) (getf p :scene)) :test-not #'eq)))
     points))
-;; Error against run time:9 ends here
+;; Error against run time:10 ends here
 
 ;; [[file:../physics.org::#G4WXCJ][Watching a run: the recorder:1]]
 (defstruct (physics-recording (:constructor %make-physics-recording (terrain every)))
@@ -5423,6 +5699,1110 @@ RECORDING, seen from AZIMUTH and ELEVATION, under TITLE. Return PATHNAME. #UFK5E
             (format out "</svg>~%")))))
     pathname))
 ;; Pictures of the scenes:1 ends here
+
+;; [[file:../physics.org::#Q5V1EW][The bodies as a query sees them:1]]
+(defstruct (query-view (:constructor make-query-view ()))
+  "What a query walks to find bodies, valid while WORLD's rows are as they were at its making:
+the grid of the awake rows (the world's own, or OWN-AWAKE when too many rows have strayed from
+it), how far any row it holds has drifted from the centre the grid bucketed (AWAKE-PAD), the rows
+to test one by one (AWAKE-STRAYS); the same for the sleepers, whose grid holds handles; and a
+terrain probe of its own. #Q5V1EW"
+  (version -1 :type fixnum) (awake-count -1 :type fixnum) (sleeping-count -1 :type fixnum)
+  (steps -1 :type fixnum)
+  (awake-grid (make-hash-grid) :type hash-grid)
+  (awake-pad 0d0 :type double-float)
+  (awake-strays (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (awake-stray-count 0 :type index)
+  (awake-marks (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (sleeping-grid (make-hash-grid) :type hash-grid)
+  (sleeping-strays (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (sleeping-stray-count 0 :type index)
+  (awake-stray-grid (make-hash-grid) :type hash-grid)
+  (sleeping-stray-grid (make-hash-grid) :type hash-grid)
+  (stray-x (make-array 0 :element-type 'single-float) :type f32-column)
+  (stray-y (make-array 0 :element-type 'single-float) :type f32-column)
+  (stray-z (make-array 0 :element-type 'single-float) :type f32-column)
+  (own-awake (make-hash-grid) :type hash-grid)
+  (own-sleeping (make-hash-grid) :type hash-grid)
+  (marks (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (probe (make-terrain-probe) :type terrain-probe)
+  (terrain nil)
+  (terrain-edits -1 :type fixnum)
+  (search nil)
+  (busy nil :type boolean))
+
+(declaim (inline stray-room))
+
+(defun stray-room (column n)
+  "COLUMN if it holds N entries, else a fresh fixnum column of at least N. #Q5V1EW"
+  (declare (type fixnum-column column) (type index n))
+  (if (>= (length column) n) column (make-array (max n (* 2 (length column)) 64) :element-type 'fixnum)))
+
+(defun strays-allowed (n)
+  "How many rows of a set of N a view tests one by one before it grids the set itself. #Q5V1EW"
+  (declare (type index n))
+  (max 16 (floor n 32)))
+
+(defconstant +strays-tested-one-by-one+ 64
+  "Up to this many strays a cast tests each; more are bucketed in a grid of their own. #Q5V1EW")
+
+(defun grid-strays (world view grid buffer strays count)
+  "When there are more than +strays-tested-one-by-one+ of them, bucket the COUNT rows STRAYS of
+BUFFER into GRID (hashed, as the pair list buckets its loose rows: a dense box sized by scattered
+strays could be huge), items the rows themselves, so a cast walks the strays near its path
+instead of testing each; else leave GRID empty. #Q5V1EW"
+  (declare (type query-view view) (type hash-grid grid) (type body-columns buffer)
+           (type fixnum-column strays) (type index count))
+  (setf (hash-grid-count grid) 0)
+  (when (> count +strays-tested-one-by-one+)
+  (when (< (length (query-view-stray-x view)) count)
+    (let ((n (max count (* 2 (length (query-view-stray-x view))) 64)))
+      (setf (query-view-stray-x view) (make-array n :element-type 'single-float)
+            (query-view-stray-y view) (make-array n :element-type 'single-float)
+            (query-view-stray-z view) (make-array n :element-type 'single-float))))
+  (let ((xs (query-view-stray-x view)) (ys (query-view-stray-y view)) (zs (query-view-stray-z view)))
+    (with-body-columns (x y z) buffer
+      (dotimes (q count)
+        (let ((row (aref strays q)))
+          (setf (aref xs q) (aref x row) (aref ys q) (aref y row) (aref zs q) (aref z row)))))
+    (hash-grid-reserve grid count)
+    (build-hash-grid grid (f32 (grid-cell-size world)) count xs ys zs strays :dense-allowed nil))))
+
+(defun view-awake (world view)
+  "Point VIEW at the awake rows of WORLD: the rows of the world's awake grid that have drifted at
+most the drift limit from the centre it bucketed are walked through it, padded by the largest
+such drift, and the others are strays; when strays are too many, VIEW grids the rows itself. #Q5V1EW"
+  (declare (type query-view view) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world))
+         (n (body-columns-length awake))
+         (grid (physics-world-awake-grid world))
+         (m (hash-grid-count grid))
+         (limit (max 0.01 (f32 (physics-world-pair-skin world))))
+         (limit2 (* limit limit))
+         (strays (setf (query-view-awake-strays view) (stray-room (query-view-awake-strays view) n)))
+         (marks (setf (query-view-awake-marks view) (stray-room (query-view-awake-marks view) n)))
+         (count 0) (pad2 0.0))
+    (declare (type index n m count) (type single-float limit limit2 pad2) (type fixnum-column strays marks))
+    (fill marks 0 :end n)
+    (setf (hash-grid-count (query-view-awake-stray-grid view)) 0)
+    (with-body-columns (x y z) awake
+      (let ((items (hash-grid-items grid)) (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid))
+            (gz (hash-grid-zs grid)))
+        (dotimes (e m)
+          (let ((r (aref items e)))
+            (when (< r n)
+              (let* ((dx (- (aref x r) (aref gx e))) (dy (- (aref y r) (aref gy e)))
+                     (dz (- (aref z r) (aref gz e)))
+                     (d2 (+ (* dx dx) (* dy dy) (* dz dz))))
+                (if (<= d2 limit2)
+                    (setf pad2 (max pad2 d2))
+                    (setf (aref strays count) r (aref marks r) 1 count (1+ count)))))))
+        (loop for r of-type index from m below n
+              do (setf (aref strays count) r (aref marks r) 1 count (1+ count)))))
+    (if (> count (strays-allowed n))
+        (let ((own (query-view-own-awake view)))
+          (build-hash-grid own (f32 (grid-cell-size world)) n (body-columns-x awake) (body-columns-y awake)
+                           (body-columns-z awake) (awake-row-identities world n))
+          (setf (query-view-awake-grid view) own (query-view-awake-pad view) 0d0
+                (query-view-awake-stray-count view) 0))
+        (progn
+          (setf (query-view-awake-grid view) grid
+                (query-view-awake-pad view) (float (fsqrt pad2) 1d0)
+                (query-view-awake-stray-count view) count)
+          (grid-strays world view (query-view-awake-stray-grid view) awake strays count)))
+    view))
+
+(defun view-sleeping (world view)
+  "Point VIEW at the sleepers of WORLD: through the world's sleeping grid, which is exact unless a
+body fell asleep since it was built; then the sleepers it does not hold where they lie are strays,
+and when they are too many VIEW grids the sleepers itself. #Q5V1EW"
+  (declare (type query-view view) #.+kernel-policy+)
+  (let* ((sleeping (physics-world-sleeping world))
+         (n (body-columns-length sleeping))
+         (grid (physics-world-sleeping-grid world)))
+    (declare (type index n))
+    (setf (query-view-sleeping-grid view) grid (query-view-sleeping-stray-count view) 0
+          (hash-grid-count (query-view-sleeping-stray-grid view)) 0)
+    (when (physics-world-sleeping-grid-dirty world)
+      (let* ((marks (setf (query-view-marks view) (stray-room (query-view-marks view) n)))
+             (strays (setf (query-view-sleeping-strays view) (stray-room (query-view-sleeping-strays view) n)))
+             (ids (physics-world-ids world))
+             (sets (handle-table-set ids)) (gens (handle-table-generation ids)) (locals (handle-table-local ids))
+             (items (hash-grid-items grid)) (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid))
+             (gz (hash-grid-zs grid))
+             (count 0))
+        (declare (type fixnum-column marks strays) (type index count))
+        (fill marks 0 :end n)
+        (with-body-columns (x y z) sleeping
+          (dotimes (e (hash-grid-count grid))
+            (let* ((h (aref items e)) (slot (handle-index h)))
+              (when (and (= (aref sets slot) +set-sleeping+) (= (aref gens slot) (handle-generation h)))
+                (let ((row (aref locals slot)))
+                  (when (and (= (aref x row) (aref gx e)) (= (aref y row) (aref gy e)) (= (aref z row) (aref gz e)))
+                    (setf (aref marks row) 1)))))))
+        (dotimes (row n)
+          (when (zerop (aref marks row))
+            (setf (aref strays count) row count (1+ count))))
+        (if (> count (strays-allowed n))
+            (let ((own (query-view-own-sleeping view)))
+              (build-hash-grid own (f32 (grid-cell-size world)) n (body-columns-x sleeping)
+                               (body-columns-y sleeping) (body-columns-z sleeping) (body-columns-handle sleeping))
+              (setf (query-view-sleeping-grid view) own))
+            (progn
+              (setf (query-view-sleeping-stray-count view) count)
+              (grid-strays world view (query-view-sleeping-stray-grid view) sleeping strays count)))))
+    view))
+
+(defun world-query-view (world)
+  "WORLD's query view, made again if any row moved, appeared or went since it was made. #Q5V1EW"
+  (let ((view (or (physics-world-query-view world)
+                  (setf (physics-world-query-view world) (make-query-view)))))
+    (declare (type query-view view))
+    (unless (and (= (query-view-version view) (physics-world-rows-version world))
+                 (= (query-view-steps view) (physics-world-step-count world))
+                 (= (query-view-awake-count view) (body-columns-length (physics-world-awake world)))
+                 (= (query-view-sleeping-count view) (body-columns-length (physics-world-sleeping world))))
+      (view-awake world view)
+      (view-sleeping world view)
+      (setf (query-view-version view) (physics-world-rows-version world)
+            (query-view-steps view) (physics-world-step-count world)
+            (query-view-awake-count view) (body-columns-length (physics-world-awake world))
+            (query-view-sleeping-count view) (body-columns-length (physics-world-sleeping world))))
+    (let ((terrain (physics-world-terrain world)))
+      (unless (and (eq terrain (query-view-terrain view))
+                   (or (null terrain) (= (voxel-terrain-edits terrain) (query-view-terrain-edits view))))
+        (reset-terrain-probe (query-view-probe view) terrain)
+        (setf (query-view-terrain view) terrain
+              (query-view-terrain-edits view) (if terrain (voxel-terrain-edits terrain) -1))))
+    view))
+
+(declaim (inline dsqrt))
+
+(defun dsqrt (x)
+  "The square root of the non-negative double X. #Q5V1EW"
+  (declare (type double-float x))
+  (sqrt (the (double-float 0d0) x)))
+
+(declaim (inline dcell))
+
+(defun dcell (v)
+  "The floor of the double V, clamped to +-4e6, as a fixnum. #Q5V1EW"
+  (declare (type double-float v))
+  (let* ((c (max -4d6 (min 4d6 v)))
+         (i (truncate c)))
+    (declare (type (double-float -4d6 4d6) c) (type fixnum i))
+    (if (< c (float i 1d0)) (1- i) i)))
+
+(defmacro do-grid-box ((item grid x0 y0 z0 x1 y1 z1) &body body)
+  "Run BODY with ITEM bound to each item of GRID bucketed in a cell that meets the box from X0 Y0 Z0
+to X1 Y1 Z1 (doubles, in metres); ITEM may be a list (ITEM ENTRY), ENTRY then bound to the item's
+place in the grid's order, where the grid keeps its copy of the item's centre. A dense grid visits
+only the cells inside its own box, each row of cells along x as one run. #Q5V1EW"
+  (let* ((entry-var (if (consp item) (second item) (gensym "ENTRY")))
+         (item (if (consp item) (first item) item))
+         (g (gensym "GRID")) (inv (gensym)) (i (gensym)) (j (gensym)) (k (gensym)) (e (gensym))
+        (i0 (gensym)) (j0 (gensym)) (k0 (gensym)) (i1 (gensym)) (j1 (gensym)) (k1 (gensym))
+        (starts (gensym)) (items (gensym)) (keys (gensym)) (visit (gensym)) (key (gensym)) (b (gensym))
+        (row (gensym)))
+    `(let* ((,g ,grid) (,inv (float (hash-grid-inv-cell ,g) 1d0))
+            (,i0 (dcell (* ,x0 ,inv))) (,j0 (dcell (* ,y0 ,inv))) (,k0 (dcell (* ,z0 ,inv)))
+            (,i1 (dcell (* ,x1 ,inv))) (,j1 (dcell (* ,y1 ,inv))) (,k1 (dcell (* ,z1 ,inv)))
+            (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g)))
+       (declare (type fixnum ,i0 ,j0 ,k0 ,i1 ,j1 ,k1) (type fixnum-column ,starts ,items ,keys))
+       (flet ((,visit (,entry-var)
+                (declare (type index ,entry-var) (ignorable ,entry-var))
+                (let ((,item (aref ,items ,entry-var)))
+                  (declare (type fixnum ,item) (ignorable ,item))
+                  ,@body)))
+         (declare (inline ,visit))
+         (cond
+           ((zerop (hash-grid-count ,g)))
+           ((hash-grid-dense ,g)
+            (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
+                   (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g))
+                   (lo (max ox ,i0)) (hi (min (+ ox nx -1) ,i1)))
+              (declare (type cell ox oy oz) (type (integer 1 4096) nx ny nz) (type fixnum lo hi))
+              (when (<= lo hi)
+                (loop for ,k of-type fixnum from (max oz ,k0) to (min (+ oz nz -1) ,k1) do
+                  (loop for ,j of-type fixnum from (max oy ,j0) to (min (+ oy ny -1) ,j1) do
+                    (let ((,row (* nx (+ (- ,j oy) (* ny (- ,k oz))))))
+                      (declare (type fixnum ,row))
+                      (loop for ,e of-type fixnum from (aref ,starts (+ ,row (- lo ox)))
+                              below (aref ,starts (+ ,row (- hi ox) 1))
+                            do (,visit ,e))))))))
+           (t
+            (let ((mask (hash-grid-mask ,g)))
+              (loop for ,k of-type fixnum from ,k0 to ,k1 do
+                (loop for ,j of-type fixnum from ,j0 to ,j1 do
+                  (loop for ,i of-type fixnum from ,i0 to ,i1 do
+                    (let* ((,key (grid-cell-key ,i ,j ,k))
+                           (,b (grid-bucket ,key mask)))
+                      (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
+                            when (= (aref ,keys ,e) ,key)
+                              do (,visit ,e)))))))))))))
+
+(declaim (inline grid-box-cells))
+
+(defun grid-box-cells (grid x0 y0 z0 x1 y1 z1)
+  "How many cells of GRID the box from X0 Y0 Z0 to X1 Y1 Z1 meets (a dense grid: within its own
+box), as a double. #Q5V1EW"
+  (declare (type hash-grid grid) (type double-float x0 y0 z0 x1 y1 z1))
+  (let ((inv (float (hash-grid-inv-cell grid) 1d0)))
+    (flet ((span (a b lo n)
+             (declare (type double-float a b) (type fixnum lo n))
+             (let ((i0 (dcell (* a inv))) (i1 (dcell (* b inv))))
+               (when (hash-grid-dense grid) (setf i0 (max i0 lo) i1 (min i1 (+ lo n -1))))
+               (float (max 0 (1+ (- i1 i0))) 1d0))))
+      (* (span x0 x1 (hash-grid-ox grid) (hash-grid-nx grid))
+         (span y0 y1 (hash-grid-oy grid) (hash-grid-ny grid))
+         (span z0 z1 (hash-grid-oz grid) (hash-grid-nz grid))))))
+
+(declaim (inline view-row))
+
+(defun view-row (view world handles-p item)
+  "The row of the body ITEM names in a grid VIEW walks: ITEM itself for the awake grid (or -1 when
+that row is gone or is a stray, tested apart), the row of handle ITEM when it names a sleeper the
+grid holds where it lies, else -1. #Q5V1EW"
+  (declare (type query-view view) (type fixnum item) #.+kernel-policy+)
+  (if handles-p
+      (let* ((ids (physics-world-ids world)) (slot (handle-index item)))
+        (if (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+                 (= (aref (handle-table-generation ids) slot) (handle-generation item)))
+            (let ((row (aref (handle-table-local ids) slot)))
+              (if (and (plusp (query-view-sleeping-stray-count view))
+                       (zerop (aref (query-view-marks view) row)))
+                  -1
+                  row))
+            -1))
+      (if (and (< item (query-view-awake-count view))
+               (or (zerop (query-view-awake-stray-count view))
+                   (zerop (aref (query-view-awake-marks view) item))))
+          item
+          -1)))
+
+(defmacro with-chunk-reader ((solid-p probe) &body body)
+  "Run BODY with (SOLID-P X Y Z) a local function telling whether cell X Y Z is solid, through
+PROBE, remembering the last chunk it looked up. #Q5V1EW"
+  (let ((key (gensym "KEY")) (chunk (gensym "CHUNK")) (p (gensym "PROBE")))
+    `(let ((,p ,probe) (,key -1) (,chunk +wall-chunk+))
+       (declare (type terrain-probe ,p) (type fixnum ,key) (type chunk-storage ,chunk))
+       (flet ((,solid-p (x y z)
+                (declare (type cell x y z))
+                (let ((k (chunk-key x y z)))
+                  (unless (= k ,key)
+                    (setf ,key k ,chunk (probe-chunk ,p k)))
+                  (plusp (aref ,chunk (cell-offset x y z))))))
+         (declare (inline ,solid-p))
+         ,@body))))
+
+(defmacro with-world-held ((world) &body body)
+  "Run BODY with WORLD refusing edits (physics-world-busy), as it does while it steps, so a
+function a query calls cannot move the rows the query walks; the world's own state is restored
+however BODY ends. #Q5V1EW"
+  (let ((w (gensym "WORLD")) (was (gensym "WAS")))
+    `(let* ((,w ,world) (,was (physics-world-stepping ,w)))
+       (unwind-protect
+            (progn (unless ,was (setf (physics-world-stepping ,w) :query))
+                   ,@body)
+         (unless ,was (setf (physics-world-stepping ,w) nil))))))
+;; The bodies as a query sees them:1 ends here
+
+;; [[file:../physics.org::#C4STRY][Casts: a search, its hits and the shapes it meets:1]]
+(defstruct (physics-hit (:constructor make-physics-hit ()))
+  "The first thing a cast met: its KIND (:body, :cell or :box), the body's HANDLE (-1 for other
+kinds), the box's OWNER, the cell's coordinates CELL-X CELL-Y CELL-Z, the point X Y Z, the unit
+normal NX NY NZ pointing out of what was met, and the DISTANCE travelled along the cast. #C4STRY"
+  (kind nil) (handle -1 :type fixnum) (owner nil)
+  (cell-x 0 :type fixnum) (cell-y 0 :type fixnum) (cell-z 0 :type fixnum)
+  (x 0.0 :type single-float) (y 0.0 :type single-float) (z 0.0 :type single-float)
+  (nx 0.0 :type single-float) (ny 0.0 :type single-float) (nz 0.0 :type single-float)
+  (distance 0.0 :type single-float))
+
+;; the documentation of the hit's public readers and maker, which defstruct cannot give
+(loop for (name text)
+        in '((make-physics-hit "A physics-hit to pass as :hit, so a cast fills it instead of making one. #C4STRY")
+             (physics-hit-kind "What HIT met: :body, :cell or :box. #C4STRY")
+             (physics-hit-handle "The handle of the body HIT met, or -1. #C4STRY")
+             (physics-hit-owner "The owner of the box HIT met (NIL for a box posted without one). #C4STRY")
+             (physics-hit-cell-x "The x of the cell HIT met. #C4STRY")
+             (physics-hit-cell-y "The y of the cell HIT met. #C4STRY")
+             (physics-hit-cell-z "The z of the cell HIT met. #C4STRY")
+             (physics-hit-x "The x of HIT's point of contact. #C4STRY")
+             (physics-hit-y "The y of HIT's point of contact. #C4STRY")
+             (physics-hit-z "The z of HIT's point of contact. #C4STRY")
+             (physics-hit-nx "The x of HIT's unit normal, out of what was met. #C4STRY")
+             (physics-hit-ny "The y of HIT's unit normal, out of what was met. #C4STRY")
+             (physics-hit-nz "The z of HIT's unit normal, out of what was met. #C4STRY")
+             (physics-hit-distance "How far the cast went before HIT, in metres. #C4STRY"))
+      do (setf (documentation name 'function) text))
+
+(defconstant +hit-body+ 1 "Kind code of a body hit. #C4STRY")
+
+(defconstant +hit-cell+ 2 "Kind code of a cell hit. #C4STRY")
+
+(defconstant +hit-box+ 3 "Kind code of a box hit. #C4STRY")
+
+(defparameter +hit-kinds+ #(nil :body :cell :box)
+  "Hit kind keywords by code. #C4STRY")
+
+(defstruct (query-search (:constructor make-query-search ()))
+  "The state of one cast: origin O, unit direction U, the moving sphere's RADIUS (0 for a ray), the
+nearest hit so far (BEST, KIND, HANDLE, BOX, CX CY CZ, N) and the candidate being weighed (CT, CN),
+with the cast's choices of kinds, its excluded body or owner and its filter. #C4STRY"
+  (ox 0d0 :type double-float) (oy 0d0 :type double-float) (oz 0d0 :type double-float)
+  (ux 0d0 :type double-float) (uy 0d0 :type double-float) (uz 0d0 :type double-float)
+  (radius 0d0 :type double-float) (best 0d0 :type double-float)
+  (kind 0 :type fixnum) (handle -1 :type fixnum) (box -1 :type fixnum)
+  (cx 0 :type fixnum) (cy 0 :type fixnum) (cz 0 :type fixnum)
+  (nx 0d0 :type double-float) (ny 0d0 :type double-float) (nz 0d0 :type double-float)
+  (ct 0d0 :type double-float)
+  (cnx 0d0 :type double-float) (cny 0d0 :type double-float) (cnz 0d0 :type double-float)
+  (exclude nil) (filter nil) (owners #() :type simple-vector))
+
+(defmacro with-search ((&rest slots) search &body body)
+  "Run BODY with each of SLOTS (names of query-search slots) bound as a symbol macro to that slot
+of SEARCH. #C4STRY"
+  (let ((s (gensym "SEARCH")))
+    `(let ((,s ,search))
+       (declare (type query-search ,s) (ignorable ,s))
+       (symbol-macrolet ,(loop for slot in slots
+                               collect `(,slot (,(intern (format nil "QUERY-SEARCH-~A" slot) '#:luv-physics) ,s)))
+         ,@body))))
+
+(declaim (inline candidate))
+
+(defun candidate (s tt nx ny nz)
+  "Make distance TT and normal NX NY NZ the candidate of S; return T. #C4STRY"
+  (declare (type query-search s) (type double-float tt nx ny nz))
+  (setf (query-search-ct s) tt (query-search-cnx s) nx (query-search-cny s) ny (query-search-cnz s) nz)
+  t)
+
+(defun offer (s kind what)
+  "Make S's candidate its nearest hit, of KIND (a code) and WHAT (the handle or box row; for a cell
+unused), if it is nearer than the nearest so far and the filter keeps it. Return true if it did. #C4STRY"
+  (declare (type query-search s) (type fixnum kind what))
+  (with-search (ct best filter) s
+    (when (and (< ct best)
+               (or (null filter)
+                   (funcall (the function filter) (svref +hit-kinds+ kind)
+                            (cond ((= kind +hit-body+) what)
+                                  ((= kind +hit-box+) (svref (query-search-owners s) what))
+                                  (t nil)))))
+      (setf best ct
+            (query-search-kind s) kind
+            (query-search-nx s) (query-search-cnx s) (query-search-ny s) (query-search-cny s)
+            (query-search-nz s) (query-search-cnz s))
+      (if (= kind +hit-body+) (setf (query-search-handle s) what) (setf (query-search-box s) what))
+      t)))
+
+(declaim (inline sweep-sphere))
+
+(defun sweep-sphere (s cx cy cz rr)
+  "True when cast S meets the sphere of radius RR (the body's radius plus the cast's) about CX CY
+CZ nearer than its nearest hit so far; its distance and outward normal are then S's candidate. A
+cast that starts overlapping the sphere meets it at 0 when it heads deeper, else passes it. #C4STRY"
+  (declare (type query-search s) (type double-float cx cy cz rr) #.+kernel-policy+)
+  (with-search (ox oy oz ux uy uz best) s
+    (let* ((mx (- ox cx)) (my (- oy cy)) (mz (- oz cz))
+           (b (+ (* mx ux) (* my uy) (* mz uz)))
+           (m2 (+ (* mx mx) (* my my) (* mz mz)))
+           (r2 (* rr rr)))
+      (cond ((< m2 r2)
+             (cond ((= m2 0d0) (candidate s 0d0 (- ux) (- uy) (- uz)))
+                   ((< b 0d0) (let ((d (dsqrt m2))) (candidate s 0d0 (/ mx d) (/ my d) (/ mz d))))
+                   (t nil)))
+            ((>= b 0d0) nil)
+            (t
+             ;; the offset of the centre from the line, found directly, not as b^2 - c
+             (let* ((px (- mx (* b ux))) (py (- my (* b uy))) (pz (- mz (* b uz)))
+                    (h2 (- r2 (+ (* px px) (* py py) (* pz pz)))))
+               (when (>= h2 0d0)
+                 (let ((tt (- (- b) (dsqrt h2))))
+                   (when (< tt best)
+                     (let ((inv (/ 1d0 rr)))
+                       (candidate s tt (* inv (+ mx (* tt ux))) (* inv (+ my (* tt uy)))
+                                  (* inv (+ mz (* tt uz))))))))))))))
+
+(declaim (inline sweep-rounded-box))
+
+(defun sweep-rounded-box (s x0 y0 z0 x1 y1 z1 exposed)
+  "True when cast S meets the box X0..X1 Y0..Y1 Z0..Z1 grown by its radius nearer than its nearest
+hit so far, through a face whose bit is set in EXPOSED (bits 0-5: -x +x -y +y -z +z), an edge both
+of whose faces are exposed, or a corner all three of whose faces are; the distance and the outward
+normal are then S's candidate. A cast starting in or on the box, or within its radius of it,
+meets it at 0 when it heads deeper along the push-out normal of the nearest exposed feature, else
+passes it; inside a box with no exposed face, it meets it at 0 with the normal against the
+cast. #C4STRY"
+  (declare (type query-search s) (type double-float x0 y0 z0 x1 y1 z1) (type (unsigned-byte 6) exposed)
+           #.+kernel-policy+)
+  (with-search (ox oy oz ux uy uz radius best) s
+    (let* ((r radius)
+           (px (max x0 (min x1 ox))) (py (max y0 (min y1 oy))) (pz (max z0 (min z1 oz)))
+           (dx (- ox px)) (dy (- oy py)) (dz (- oz pz))
+           (d2 (+ (* dx dx) (* dy dy) (* dz dz))))
+      (cond
+        ((= d2 0d0)
+         ;; in the closed box: pushed out through the nearest exposed face
+         (let ((depth most-positive-double-float) (nx 0d0) (ny 0d0) (nz 0d0))
+           (declare (type double-float depth nx ny nz))
+           (macrolet ((face (bit d fx fy fz)
+                        `(when (and (logbitp ,bit exposed) (< ,d depth))
+                           (setf depth ,d nx ,fx ny ,fy nz ,fz))))
+             (face 0 (- ox x0) -1d0 0d0 0d0) (face 1 (- x1 ox) 1d0 0d0 0d0)
+             (face 2 (- oy y0) 0d0 -1d0 0d0) (face 3 (- y1 oy) 0d0 1d0 0d0)
+             (face 4 (- oz z0) 0d0 0d0 -1d0) (face 5 (- z1 oz) 0d0 0d0 1d0))
+           (cond ((= depth most-positive-double-float) (candidate s 0d0 (- ux) (- uy) (- uz)))
+                 ((< (+ (* ux nx) (* uy ny) (* uz nz)) 0d0) (candidate s 0d0 nx ny nz))
+                 (t nil))))
+        ((< d2 (* r r))
+         ;; overlapping: the nearest feature must be exposed and the cast head deeper
+         (let* ((d (dsqrt d2)) (nx (/ dx d)) (ny (/ dy d)) (nz (/ dz d)))
+           (and (or (>= ox x0) (logbitp 0 exposed)) (or (<= ox x1) (logbitp 1 exposed))
+                (or (>= oy y0) (logbitp 2 exposed)) (or (<= oy y1) (logbitp 3 exposed))
+                (or (>= oz z0) (logbitp 4 exposed)) (or (<= oz z1) (logbitp 5 exposed))
+                (< (+ (* ux nx) (* uy ny) (* uz nz)) 0d0)
+                (candidate s 0d0 nx ny nz))))
+        (t
+         (let ((bt best) (bnx 0d0) (bny 0d0) (bnz 0d0) (found nil))
+           (declare (type double-float bt bnx bny bnz))
+           (macrolet ((face (bit o u plane sign (o1 u1 lo1 hi1) (o2 u2 lo2 hi2) nx ny nz)
+                        ;; the plane of the face moved out by r, approached from outside
+                        `(when (and (logbitp ,bit exposed) (,(if (minusp sign) '> '<) ,u 0d0)
+                                    (,(if (minusp sign) '<= '>=) ,o ,plane))
+                           (let ((tt (/ (- ,plane ,o) ,u)))
+                             (when (< tt bt)
+                               (let ((a (+ ,o1 (* tt ,u1))) (b (+ ,o2 (* tt ,u2))))
+                                 (when (and (<= ,lo1 a ,hi1) (<= ,lo2 b ,hi2))
+                                   (setf bt tt bnx ,nx bny ,ny bnz ,nz found t)))))))
+                      (edge (bit1 bit2 (oa ua ea sa) (ob ub eb sb) (oc uc lo hi) nxf nyf nzf)
+                        ;; the quarter cylinder of radius r about an edge, entered from outside
+                        `(when (and (logbitp ,bit1 exposed) (logbitp ,bit2 exposed))
+                           (let* ((pa (- ,oa ,ea)) (pb (- ,ob ,eb))
+                                  (aa (+ (* ,ua ,ua) (* ,ub ,ub)))
+                                  (bb (+ (* pa ,ua) (* pb ,ub)))
+                                  (cc (- (+ (* pa pa) (* pb pb)) (* r r))))
+                             (when (and (> aa 0d0) (< bb 0d0) (>= cc 0d0))
+                               (let ((disc (- (* bb bb) (* aa cc))))
+                                 (when (>= disc 0d0)
+                                   (let ((tt (/ (- (- bb) (dsqrt disc)) aa)))
+                                     (when (< tt bt)
+                                       (let ((qa (+ pa (* tt ,ua))) (qb (+ pb (* tt ,ub)))
+                                             (c (+ ,oc (* tt ,uc))))
+                                         (when (and (>= (* qa ,sa) 0d0) (>= (* qb ,sb) 0d0) (<= ,lo c ,hi))
+                                           (let ((inv (/ 1d0 r)))
+                                             (setf bt tt bnx ,nxf bny ,nyf bnz ,nzf found t))))))))))))
+                      (corner (bx by bz cx cy cz sx sy sz)
+                        ;; the eighth of a sphere of radius r about a corner, entered from outside
+                        `(when (and (logbitp ,bx exposed) (logbitp ,by exposed) (logbitp ,bz exposed))
+                           (let* ((mx (- ox ,cx)) (my (- oy ,cy)) (mz (- oz ,cz))
+                                  (b (+ (* mx ux) (* my uy) (* mz uz))))
+                             (when (< b 0d0)
+                               (let* ((qx (- mx (* b ux))) (qy (- my (* b uy))) (qz (- mz (* b uz)))
+                                      (h2 (- (* r r) (+ (* qx qx) (* qy qy) (* qz qz)))))
+                                 (when (>= h2 0d0)
+                                   (let ((tt (- (- b) (dsqrt h2))))
+                                     (when (< tt bt)
+                                       (let ((hx (+ mx (* tt ux))) (hy (+ my (* tt uy))) (hz (+ mz (* tt uz))))
+                                         (when (and (>= (* hx ,sx) 0d0) (>= (* hy ,sy) 0d0) (>= (* hz ,sz) 0d0))
+                                           (let ((inv (/ 1d0 r)))
+                                             (setf bt tt bnx (* hx inv) bny (* hy inv) bnz (* hz inv)
+                                                   found t))))))))))))
+                      (edges ()
+                        `(progn
+                           ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
+                                   append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
+                                                collect `(edge ,bx ,by (ox ux ,ex ,sx) (oy uy ,ey ,sy) (oz uz z0 z1)
+                                                               (* qa inv) (* qb inv) 0d0)))
+                           ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
+                                   append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
+                                                collect `(edge ,bx ,bz (ox ux ,ex ,sx) (oz uz ,ez ,sz) (oy uy y0 y1)
+                                                               (* qa inv) 0d0 (* qb inv))))
+                           ,@(loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
+                                   append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
+                                                collect `(edge ,by ,bz (oy uy ,ey ,sy) (oz uz ,ez ,sz) (ox ux x0 x1)
+                                                               0d0 (* qa inv) (* qb inv))))))
+                      (corners ()
+                        `(progn
+                           ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
+                                   append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
+                                                append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
+                                                             collect `(corner ,bx ,by ,bz ,ex ,ey ,ez ,sx ,sy ,sz)))))))
+             (face 0 ox ux (- x0 r) -1 (oy uy y0 y1) (oz uz z0 z1) -1d0 0d0 0d0)
+             (face 1 ox ux (+ x1 r) 1 (oy uy y0 y1) (oz uz z0 z1) 1d0 0d0 0d0)
+             (face 2 oy uy (- y0 r) -1 (ox ux x0 x1) (oz uz z0 z1) 0d0 -1d0 0d0)
+             (face 3 oy uy (+ y1 r) 1 (ox ux x0 x1) (oz uz z0 z1) 0d0 1d0 0d0)
+             (face 4 oz uz (- z0 r) -1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 -1d0)
+             (face 5 oz uz (+ z1 r) 1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 1d0)
+             (when (> r 0d0)
+               (edges)
+               (corners)))
+           (when found (candidate s bt bnx bny bnz))))))))
+
+(defun sweep-boxes (s world)
+  "Sweep cast S against every box posted for the step (all faces exposed), skipping a box whose
+owner is the excluded one. #C4STRY"
+  (declare (type query-search s))
+  (let ((boxes (physics-world-boxes world)) (exclude (query-search-exclude s))
+        (owners (physics-world-box-owners world)))
+    (with-box-columns (min-x min-y min-z max-x max-y max-z) boxes
+      (dotimes (b (box-columns-length boxes))
+        (unless (and exclude (eql exclude (svref owners b)))
+          (when (sweep-rounded-box s (float (aref min-x b) 1d0) (float (aref min-y b) 1d0) (float (aref min-z b) 1d0)
+                                   (float (aref max-x b) 1d0) (float (aref max-y b) 1d0) (float (aref max-z b) 1d0)
+                                   63)
+            (offer s +hit-box+ b))))))
+  s)
+
+(declaim (inline segment-box-range))
+
+(defun segment-box-range (s x0 y0 z0 x1 y1 z1 t-max)
+  "The part [T-IN, T-OUT] of cast S's path from 0 to T-MAX inside the box X0..X1 Y0..Y1 Z0..Z1, as two
+values; T-IN > T-OUT when it misses. #C4STRY"
+  (declare (type query-search s) (type double-float x0 y0 z0 x1 y1 z1 t-max))
+  (let ((lo 0d0) (hi t-max))
+    (declare (type double-float lo hi))
+    (macrolet ((slab (o u a b)
+                 `(let ((o (,o s)) (u (,u s)))
+                    (if (= u 0d0)
+                        (unless (<= ,a o ,b) (setf lo 1d0 hi 0d0))
+                        (let* ((inv (/ 1d0 u)) (ta (* (- ,a o) inv)) (tb (* (- ,b o) inv)))
+                          (setf lo (max lo (min ta tb)) hi (min hi (max ta tb))))))))
+      (slab query-search-ox query-search-ux x0 x1)
+      (slab query-search-oy query-search-uy y0 y1)
+      (slab query-search-oz query-search-uz z0 z1))
+    (values lo hi)))
+
+(defmacro do-view-bodies ((x y z r handle) (view world handles-p grid pad &optional direct) (s) &body body)
+  "For cast S, run BODY with X Y Z R HANDLE bound to the centre, radius and handle of each body
+held by GRID (of handles when HANDLES-P, else of awake rows) that may lie within the cast's reach
+of its path, a cell's length of path at a time while the path is shorter than the nearest hit
+so far; PAD is how far a body may have drifted from where GRID holds it. An item is first
+judged by the grid's own copy of its centre, which lies in one run of memory with its
+neighbours': it is passed over when that centre is farther from the path's line than the reach
+grown by PAD, or lies wholly behind the cast or beyond its nearest hit. With DIRECT, GRID's items
+are rows of the set, all to be tested (a grid of the view's strays). #C4STRY"
+  (let ((g (gensym "G")) (t0 (gensym "T0")) (t1 (gensym "T1")) (rho (gensym "RHO")) (item (gensym "ITEM"))
+        (lo (gensym)) (hi (gensym)) (len (gensym)) (row (gensym "ROW")) (entry (gensym "ENTRY"))
+        (cx (gensym)) (cy (gensym)) (cz (gensym)) (cr (gensym)) (ch (gensym))
+        (gx (gensym)) (gy (gensym)) (gz (gensym)) (ox (gensym)) (oy (gensym)) (oz (gensym))
+        (ux (gensym)) (uy (gensym)) (uz (gensym)) (rho2 (gensym)))
+    `(let* ((,g ,grid)
+            (,rho (+ (float (the single-float (physics-world-max-radius ,world)) 1d0) ,pad (query-search-radius ,s) 1d-4))
+            (,rho2 (* ,rho ,rho))
+            (,len (/ 1d0 (float (hash-grid-inv-cell ,g) 1d0))))
+       (declare (type double-float ,rho ,rho2 ,len))
+       (unless (zerop (hash-grid-count ,g))
+         (with-body-columns ((,cx x) (,cy y) (,cz z) (,cr radius) (,ch handle))
+             (if ,handles-p (physics-world-sleeping ,world) (physics-world-awake ,world))
+           (let ((,gx (hash-grid-xs ,g)) (,gy (hash-grid-ys ,g)) (,gz (hash-grid-zs ,g))
+                 (,ox (query-search-ox ,s)) (,oy (query-search-oy ,s)) (,oz (query-search-oz ,s))
+                 (,ux (query-search-ux ,s)) (,uy (query-search-uy ,s)) (,uz (query-search-uz ,s)))
+             (declare (type f32-column ,gx ,gy ,gz) (type double-float ,ox ,oy ,oz ,ux ,uy ,uz))
+             (multiple-value-bind (,lo ,hi)
+                 (if (hash-grid-dense ,g)
+                     (segment-box-range ,s (- (* ,len (hash-grid-ox ,g)) ,rho) (- (* ,len (hash-grid-oy ,g)) ,rho)
+                                        (- (* ,len (hash-grid-oz ,g)) ,rho)
+                                        (+ (* ,len (+ (hash-grid-ox ,g) (hash-grid-nx ,g))) ,rho)
+                                        (+ (* ,len (+ (hash-grid-oy ,g) (hash-grid-ny ,g))) ,rho)
+                                        (+ (* ,len (+ (hash-grid-oz ,g) (hash-grid-nz ,g))) ,rho)
+                                        (query-search-best ,s))
+                     (values 0d0 (query-search-best ,s)))
+               (declare (type double-float ,lo ,hi))
+               (loop with ,t0 of-type double-float = ,lo
+                     while (and (<= ,t0 ,hi) (< ,t0 (query-search-best ,s)))
+                     do (let* ((,t1 (min (query-search-best ,s) ,hi (+ ,t0 ,len)))
+                               (ax (+ ,ox (* ,t0 ,ux))) (bx (+ ,ox (* ,t1 ,ux)))
+                               (ay (+ ,oy (* ,t0 ,uy))) (by (+ ,oy (* ,t1 ,uy)))
+                               (az (+ ,oz (* ,t0 ,uz))) (bz (+ ,oz (* ,t1 ,uz))))
+                          (declare (type double-float ,t1 ax bx ay by az bz))
+                          (do-grid-box ((,item ,entry) ,g (- (min ax bx) ,rho) (- (min ay by) ,rho) (- (min az bz) ,rho)
+                                        (+ (max ax bx) ,rho) (+ (max ay by) ,rho) (+ (max az bz) ,rho))
+                            (let* ((mx (- (float (aref ,gx ,entry) 1d0) ,ox))
+                                   (my (- (float (aref ,gy ,entry) 1d0) ,oy))
+                                   (mz (- (float (aref ,gz ,entry) 1d0) ,oz))
+                                   (along (+ (* mx ,ux) (* my ,uy) (* mz ,uz))))
+                              (when (and (> along (- ,rho)) (< (- along ,rho) (query-search-best ,s))
+                                         (<= (- (+ (* mx mx) (* my my) (* mz mz)) (* along along)) ,rho2))
+                                (let ((,row ,(if direct item `(view-row ,view ,world ,handles-p ,item))))
+                                  (declare (type fixnum ,row))
+                                  (when (>= ,row 0)
+                                    (let ((,x (float (aref ,cx ,row) 1d0)) (,y (float (aref ,cy ,row) 1d0))
+                                          (,z (float (aref ,cz ,row) 1d0)) (,r (float (aref ,cr ,row) 1d0))
+                                          (,handle (aref ,ch ,row)))
+                                      (declare (ignorable ,x ,y ,z ,r ,handle))
+                                      ,@body))))))
+                          (when (or (<= (query-search-best ,s) ,t1) (>= ,t1 ,hi)) (return))
+                          (setf ,t0 ,t1))))))))))
+
+(defun sweep-bodies (s view world)
+  "Sweep cast S against the bodies of VIEW: the awake ones through its awake grid padded by their
+drift and then through the grid of its awake strays, the sleepers through its sleeping grid and
+the grid of its sleeping strays; the excluded body is passed over. #C4STRY"
+  (declare (type query-search s) (type query-view view) #.+kernel-policy+)
+  (let ((exclude (query-search-exclude s)) (radius (query-search-radius s)))
+    (macrolet ((try (x y z r h)
+                 `(unless (eql ,h exclude)
+                    (when (sweep-sphere s ,x ,y ,z (+ ,r radius)) (offer s +hit-body+ ,h))))
+               (strays (buffer grid strays count handles-p)
+                 ;; a few strays are tested one by one, more are walked in their grid
+                 `(if (plusp (hash-grid-count ,grid))
+                      (do-view-bodies (x y z r h) (view world ,handles-p ,grid 0d0 t) (s)
+                        (try x y z r h))
+                      (with-body-columns ((cx x) (cy y) (cz z) (cr radius) (ch handle)) ,buffer
+                        (let ((rows ,strays))
+                          (declare (type fixnum-column rows))
+                          (dotimes (q ,count)
+                            (let ((row (aref rows q)))
+                              (try (float (aref cx row) 1d0) (float (aref cy row) 1d0) (float (aref cz row) 1d0)
+                                   (float (aref cr row) 1d0) (aref ch row)))))))))
+      (do-view-bodies (x y z r h) (view world nil (query-view-awake-grid view) (query-view-awake-pad view)) (s)
+        (try x y z r h))
+      (strays (physics-world-awake world) (query-view-awake-stray-grid view) (query-view-awake-strays view)
+              (query-view-awake-stray-count view) nil)
+      (do-view-bodies (x y z r h) (view world t (query-view-sleeping-grid view) 0d0) (s)
+        (try x y z r h))
+      (strays (physics-world-sleeping world) (query-view-sleeping-stray-grid view) (query-view-sleeping-strays view)
+              (query-view-sleeping-stray-count view) t)))
+  s)
+
+(declaim (inline cast-argument))
+
+(defun cast-argument (world name value)
+  "VALUE as a double-float, after checking it is finite (invalid-physics-number naming NAME). A
+single float, the common case, is tested by its exponent bits, which is what finite-f32 decides
+through generic arithmetic. #C4STRY"
+  (if (and (typep value 'single-float)
+           (/= 255 (ldb (byte 8 23) (sb-kernel:single-float-bits value))))
+      (float value 1d0)
+      (float (finite-f32 name value world) 1d0)))
+
+(declaim (inline cast-coordinate))
+
+(defun cast-coordinate (world name value)
+  "VALUE as a double-float, after checking it is finite and within the coordinate limit. #C4STRY"
+  (let ((v (cast-argument world name value)))
+    (declare (type double-float v))
+    (unless (< (abs v) (float +physics-coordinate-limit+ 1d0))
+      (check-coordinate name (float v 1.0) world))
+    v))
+
+(defun physics-cast (operation world x y z radius dx dy dz max-distance bodies cells boxes exclude filter hit)
+  "The cast of OPERATION: check every argument, then walk the boxes, the cells and the bodies in
+turn, each up to the nearest hit so far. Fill HIT (or a fresh physics-hit) and return it, or
+return NIL. #C4STRY"
+  (unless (typep world 'physics-world)
+    (error 'invalid-physics-parameter :name :world :value world :expected "a physics-world"))
+  (let* ((x (cast-coordinate world :x x)) (y (cast-coordinate world :y y)) (z (cast-coordinate world :z z))
+         (ddx (cast-argument world :dx dx)) (ddy (cast-argument world :dy dy)) (ddz (cast-argument world :dz dz))
+         (r (cast-argument world :radius radius))
+         (limit (cast-argument world :max-distance max-distance))
+         (length (dsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz)))))
+    (declare (type double-float x y z ddx ddy ddz r limit length))
+    (when (= length 0d0)
+      (error 'invalid-physics-parameter :world world :name :direction :value (list dx dy dz)
+                                        :expected "a direction of non-zero length"))
+    (unless (<= 0d0 limit (float +physics-coordinate-limit+ 1d0))
+      (error 'invalid-physics-parameter :world world :name :max-distance :value max-distance
+                                        :expected (format nil "from 0 to ~D m" +physics-coordinate-limit+)))
+    (unless (or (eq operation 'physics-ray-cast) (< 0d0 r 8.000001d0))
+      (error 'invalid-physics-parameter :world world :name :radius :value radius :expected "in (0, 8] m"))
+    (unless (or (null filter) (functionp filter))
+      (error 'invalid-physics-parameter :world world :name :filter :value filter
+                                        :expected "a function of a kind and a handle or owner, or NIL"))
+    (unless (or (null hit) (physics-hit-p hit))
+      (error 'invalid-physics-parameter :world world :name :hit :value hit :expected "a physics-hit or NIL"))
+    (let* ((view (world-query-view world))
+           (nested (query-view-busy view))
+           (s (if (or nested (null (query-view-search view)))
+                  (let ((fresh (make-query-search)))
+                    (unless nested (setf (query-view-search view) fresh))
+                    fresh)
+                  (query-view-search view))))
+      (declare (type query-search s))
+      (setf (query-search-ox s) x (query-search-oy s) y (query-search-oz s) z
+            (query-search-ux s) (/ ddx length) (query-search-uy s) (/ ddy length) (query-search-uz s) (/ ddz length)
+            (query-search-radius s) r (query-search-best s) limit (query-search-kind s) 0
+            (query-search-handle s) -1 (query-search-box s) -1
+            (query-search-exclude s) exclude (query-search-filter s) filter
+            (query-search-owners s) (physics-world-box-owners world))
+      (flet ((walk ()
+               (when boxes (sweep-boxes s world))
+               (when bodies (sweep-bodies s view world))
+               (when (and cells (physics-world-terrain world))
+                 (if (eq operation 'physics-ray-cast)
+                     (ray-cells s (query-view-probe view))
+                     (sweep-cells s (query-view-probe view))))))
+        (unwind-protect
+             (progn (setf (query-view-busy view) t)
+                    (if filter (with-world-held (world) (walk)) (walk)))
+          (unless nested (setf (query-view-busy view) nil))))
+      (let ((kind (query-search-kind s)))
+        (declare (type fixnum kind))
+        (unless (zerop kind)
+          ;; the numbers are read back from the search: a double live across the
+          ;; unwind-protect above would be boxed
+          (let ((hit (or hit (make-physics-hit)))
+                (tt (query-search-best s)) (nx (query-search-nx s)) (ny (query-search-ny s)) (nz (query-search-nz s))
+                (x (query-search-ox s)) (y (query-search-oy s)) (z (query-search-oz s)) (r (query-search-radius s)))
+            (declare (type double-float tt nx ny nz x y z r))
+            (setf (physics-hit-kind hit) (svref +hit-kinds+ kind)
+                  (physics-hit-handle hit) (if (= kind +hit-body+) (query-search-handle s) -1)
+                  (physics-hit-owner hit) (if (= kind +hit-box+) (svref (query-search-owners s) (query-search-box s)) nil)
+                  (physics-hit-cell-x hit) (if (= kind +hit-cell+) (query-search-cx s) 0)
+                  (physics-hit-cell-y hit) (if (= kind +hit-cell+) (query-search-cy s) 0)
+                  (physics-hit-cell-z hit) (if (= kind +hit-cell+) (query-search-cz s) 0)
+                  (physics-hit-x hit) (coerce (- (+ x (* tt (query-search-ux s))) (* r nx)) 'single-float)
+                  (physics-hit-y hit) (coerce (- (+ y (* tt (query-search-uy s))) (* r ny)) 'single-float)
+                  (physics-hit-z hit) (coerce (- (+ z (* tt (query-search-uz s))) (* r nz)) 'single-float)
+                  (physics-hit-nx hit) (coerce nx 'single-float) (physics-hit-ny hit) (coerce ny 'single-float)
+                  (physics-hit-nz hit) (coerce nz 'single-float) (physics-hit-distance hit) (coerce tt 'single-float))
+            hit))))))
+;; Casts: a search, its hits and the shapes it meets:1 ends here
+
+;; [[file:../physics.org::#R4YC57][Rays walk the cells in order:1]]
+(defun ray-cells (s probe)
+  "Walk the cells cast S passes through, in order (Amanatides and Woo's traversal), up to its
+nearest hit so far, and make the first solid one the filter keeps its nearest hit: the cell it
+starts in at 0 with the normal against the cast, or one it enters at the distance it crosses
+into it, with the normal of the face crossed. Where the ray leaves a cell through an edge or a
+corner, every cell that meets that edge or corner is tried, fewest steps first. #R4YC57"
+  (declare (type query-search s) (type terrain-probe probe) #.+kernel-policy+)
+  (with-search (ox oy oz ux uy uz best cx cy cz) s
+    (with-chunk-reader (solid-p probe)
+      (let ((ix (dcell ox)) (iy (dcell oy)) (iz (dcell oz)))
+        (declare (type cell ix iy iz))
+        (flet ((try (x y z tt axis)
+                 (declare (type cell x y z) (type double-float tt) (type (integer 0 3) axis))
+                 ;; axis 3: the cell the ray starts in
+                 (when (and (solid-p x y z)
+                            (case axis
+                              (0 (candidate s tt (if (> ux 0d0) -1d0 1d0) 0d0 0d0))
+                              (1 (candidate s tt 0d0 (if (> uy 0d0) -1d0 1d0) 0d0))
+                              (2 (candidate s tt 0d0 0d0 (if (> uz 0d0) -1d0 1d0)))
+                              (t (candidate s tt (- ux) (- uy) (- uz))))
+                            (offer s +hit-cell+ 0))
+                   (setf cx x cy y cz z)
+                   t)))
+          (declare (inline try))
+          (unless (try ix iy iz 0d0 3)
+            (let* ((sx (cond ((> ux 0d0) 1) ((< ux 0d0) -1) (t 0)))
+                   (sy (cond ((> uy 0d0) 1) ((< uy 0d0) -1) (t 0)))
+                   (sz (cond ((> uz 0d0) 1) ((< uz 0d0) -1) (t 0)))
+                   (huge 1d300)
+                   (tx (if (= sx 0) huge (/ (- (float (if (> sx 0) (1+ ix) ix) 1d0) ox) ux)))
+                   (ty (if (= sy 0) huge (/ (- (float (if (> sy 0) (1+ iy) iy) 1d0) oy) uy)))
+                   (tz (if (= sz 0) huge (/ (- (float (if (> sz 0) (1+ iz) iz) 1d0) oz) uz)))
+                   (ddx (if (= sx 0) 0d0 (/ 1d0 (abs ux))))
+                   (ddy (if (= sy 0) 0d0 (/ 1d0 (abs uy))))
+                   (ddz (if (= sz 0) 0d0 (/ 1d0 (abs uz)))))
+              (declare (type fixnum sx sy sz) (type double-float tx ty tz ddx ddy ddz))
+              (loop
+                (let ((tn (min tx ty tz)))
+                  (when (>= tn best) (return))
+                  (let ((mx (= tx tn)) (my (= ty tn)) (mz (= tz tn)))
+                    (when (if (and (not (and mx my)) (not (and mx mz)) (not (and my mz)))
+                              ;; one face crossed
+                              (cond (mx (try (+ ix sx) iy iz tn 0))
+                                    (my (try ix (+ iy sy) iz tn 1))
+                                    (t (try ix iy (+ iz sz) tn 2)))
+                              ;; an edge or a corner: every cell meeting it, fewest steps first
+                              (let ((ax (if mx sx 0)) (ay (if my sy 0)) (az (if mz sz 0)))
+                                (or (and mx (try (+ ix ax) iy iz tn 0))
+                                    (and my (try ix (+ iy ay) iz tn 1))
+                                    (and mz (try ix iy (+ iz az) tn 2))
+                                    (and mx my (try (+ ix ax) (+ iy ay) iz tn 0))
+                                    (and mx mz (try (+ ix ax) iy (+ iz az) tn 0))
+                                    (and my mz (try ix (+ iy ay) (+ iz az) tn 1))
+                                    (and mx my mz (try (+ ix ax) (+ iy ay) (+ iz az) tn 0)))))
+                      (return))
+                    (when mx (setf ix (+ ix sx) tx (+ tx ddx)))
+                    (when my (setf iy (+ iy sy) ty (+ ty ddy)))
+                    (when mz (setf iz (+ iz sz) tz (+ tz ddz))))))))))))
+    s)
+
+(defun physics-ray-cast (world x y z dx dy dz max-distance &key (bodies t) (cells t) (boxes t) exclude filter hit)
+  "The first thing the ray from X Y Z along DX DY DZ meets closer than MAX-DISTANCE: a body (awake
+or asleep), a solid cell or a box posted for the step, as a physics-hit (HIT, filled, when given),
+or NIL. BODIES, CELLS and BOXES choose the kinds; EXCLUDE, a handle or a box's owner, is passed
+through; FILTER, a function of the kind (:body :cell :box) and the handle, NIL or owner, keeps a
+hit when it returns true. #R4YC57"
+  (physics-cast 'physics-ray-cast world x y z 0 dx dy dz max-distance bodies cells boxes exclude filter hit))
+;; Rays walk the cells in order:1 ends here
+
+;; [[file:../physics.org::#S9WEEP][Spheres swept along a path:1]]
+(defun sweep-cells (s probe)
+  "Find the first solid cell the sphere of cast S meets along its path, up to its nearest hit so
+far: walking the path a metre at a time, every solid cell within the radius of that metre is
+swept (sweep-rounded-box) with the faces it shares with air as its exposed faces; a cast whose
+centre starts in a solid cell meets it at 0 with the normal against the cast. #S9WEEP"
+  (declare (type query-search s) (type terrain-probe probe) #.+kernel-policy+)
+  (with-search (ox oy oz ux uy uz radius best cx cy cz) s
+    (with-chunk-reader (solid-p probe)
+      (let ((ix (dcell ox)) (iy (dcell oy)) (iz (dcell oz)) (r radius))
+        (declare (type cell ix iy iz))
+        (if (solid-p ix iy iz)
+            (when (and (candidate s 0d0 (- ux) (- uy) (- uz)) (offer s +hit-cell+ 0))
+              (setf cx ix cy iy cz iz))
+            (loop with t0 of-type double-float = 0d0
+                  while (< t0 best)
+                  do (let* ((t1 (min best (+ t0 1d0)))
+                            (ax (+ ox (* t0 ux))) (bx (+ ox (* t1 ux)))
+                            (ay (+ oy (* t0 uy))) (by (+ oy (* t1 uy)))
+                            (az (+ oz (* t0 uz))) (bz (+ oz (* t1 uz))))
+                       (loop for k of-type fixnum from (dcell (- (min az bz) r)) to (dcell (+ (max az bz) r)) do
+                         (loop for j of-type fixnum from (dcell (- (min ay by) r)) to (dcell (+ (max ay by) r)) do
+                           (loop for i of-type fixnum from (dcell (- (min ax bx) r)) to (dcell (+ (max ax bx) r)) do
+                             (when (solid-p i j k)
+                               (let ((exposed (logior (if (solid-p (1- i) j k) 0 1) (if (solid-p (1+ i) j k) 0 2)
+                                                      (if (solid-p i (1- j) k) 0 4) (if (solid-p i (1+ j) k) 0 8)
+                                                      (if (solid-p i j (1- k)) 0 16) (if (solid-p i j (1+ k)) 0 32)))
+                                     (x0 (float i 1d0)) (y0 (float j 1d0)) (z0 (float k 1d0)))
+                                 (when (and (sweep-rounded-box s x0 y0 z0 (+ x0 1d0) (+ y0 1d0) (+ z0 1d0) exposed)
+                                            (offer s +hit-cell+ 0))
+                                   (setf cx i cy j cz k)))))))
+                       (when (<= best t1) (return))
+                       (setf t0 t1)))))))
+  s)
+
+(defun physics-sphere-cast (world x y z radius dx dy dz max-distance
+                            &key (bodies t) (cells t) (boxes t) exclude filter hit)
+  "The first thing a sphere of RADIUS moved from X Y Z along DX DY DZ meets before it has moved
+MAX-DISTANCE, as physics-ray-cast answers it: the distance moved, the point of contact and the
+normal out of what was met. #S9WEEP"
+  (physics-cast 'physics-sphere-cast world x y z radius dx dy dz max-distance bodies cells boxes exclude filter hit))
+;; Spheres swept along a path:1 ends here
+
+;; [[file:../physics.org::#OV3RLP][Bodies and cells in a region:1]]
+(defmacro do-bodies-in-region ((buf row) (view world x0 y0 z0 x1 y1 z1) &body body)
+  "Run BODY with BUF and ROW bound to the buffer and row of every body of VIEW, awake or asleep,
+whose centre may lie in the box X0..X1 Y0..Y1 Z0..Z1 (doubles) grown by the largest radius and
+by the awake rows' drift, each once: through the grids, or row by row when the region meets
+more cells of a grid than its set has bodies. #OV3RLP"
+  (let ((v (gensym "VIEW")) (w (gensym "WORLD")))
+    `(let ((,v ,view) (,w ,world))
+       (declare (type query-view ,v))
+       ,@(loop for handles-p in '(nil t)
+               collect
+               (let ((grow (gensym "GROW")) (item (gensym "ITEM")) (q (gensym)) (grid (gensym "GRID"))
+                     (strays (gensym)) (count (gensym)))
+                 `(let* ((,buf ,(if handles-p `(physics-world-sleeping ,w) `(physics-world-awake ,w)))
+                         (,grid ,(if handles-p `(query-view-sleeping-grid ,v) `(query-view-awake-grid ,v)))
+                         (,grow (+ (float (the single-float (physics-world-max-radius ,w)) 1d0)
+                                   ,(if handles-p 0d0 `(query-view-awake-pad ,v)) 1d-4))
+                         (,strays ,(if handles-p `(query-view-sleeping-strays ,v) `(query-view-awake-strays ,v)))
+                         (,count ,(if handles-p `(query-view-sleeping-stray-count ,v)
+                                      `(query-view-awake-stray-count ,v))))
+                    (declare (type body-columns ,buf) (type double-float ,grow) (type fixnum-column ,strays)
+                             (type index ,count))
+                    (flet ((visit (,row) (declare (type index ,row)) ,@body))
+                      (declare (inline visit))
+                      (if (> (grid-box-cells ,grid (- ,x0 ,grow) (- ,y0 ,grow) (- ,z0 ,grow) (+ ,x1 ,grow)
+                                             (+ ,y1 ,grow) (+ ,z1 ,grow))
+                             (float (body-columns-length ,buf) 1d0))
+                          (dotimes (,q (body-columns-length ,buf)) (visit ,q))
+                          (progn
+                            (do-grid-box (,item ,grid (- ,x0 ,grow) (- ,y0 ,grow) (- ,z0 ,grow) (+ ,x1 ,grow)
+                                                (+ ,y1 ,grow) (+ ,z1 ,grow))
+                              (let ((,row (view-row ,v ,w ,handles-p ,item)))
+                                (declare (type fixnum ,row))
+                                (when (>= ,row 0) (visit ,row))))
+                            (dotimes (,q ,count) (visit (aref ,strays ,q))))))))))))
+
+(declaim (inline region-size))
+
+(defun region-size (world name value)
+  "VALUE, a radius or a half-extent, as a double, after checking it is finite and from 0 to 1024 m. #OV3RLP"
+  (let ((f (finite-f32 name value world)))
+    (unless (<= 0 f 1024)
+      (error 'invalid-physics-parameter :world world :name name :value value :expected "from 0 to 1024 m"))
+    f))
+
+(defmacro with-region-arguments ((world function (&rest coordinates) (&rest sizes)) &body body)
+  "Check WORLD, FUNCTION, the centre COORDINATES and the SIZES of a region query, then run BODY
+with each of them bound to its value as a double, and WORLD refusing edits. The doubles are
+bound inside with-world-held's unwind-protect: a double live across it would be boxed. #OV3RLP"
+  (flet ((key (symbol) (intern (symbol-name symbol) '#:keyword)))
+    `(progn
+       (unless (typep ,world 'physics-world)
+         (error 'invalid-physics-parameter :name :world :value ,world :expected "a physics-world"))
+       (unless (functionp ,function)
+         (error 'invalid-physics-parameter :world ,world :name :function :value ,function :expected "a function"))
+       (let (,@(loop for c in coordinates
+                     collect `(,c (let ((v (finite-f32 ,(key c) ,c ,world))) (check-coordinate ,(key c) v ,world) v)))
+             ,@(loop for s in sizes collect `(,s (region-size ,world ,(key s) ,s))))
+         (declare (type single-float ,@coordinates ,@sizes))
+         (with-world-held (,world)
+           (let (,@(loop for v in (append coordinates sizes) collect `(,v (float ,v 1d0))))
+             (declare (type double-float ,@coordinates ,@sizes))
+             ,@body))))))
+
+(defun map-physics-bodies-in-sphere (function world x y z radius)
+  "Call FUNCTION with the handle of each body of WORLD, awake or asleep, that meets the sphere of
+RADIUS about X Y Z (centres no farther apart than the two radii); return how many. The world
+refuses edits while FUNCTION runs. #OV3RLP"
+  (with-region-arguments (world function (x y z) (radius))
+    (let ((view (world-query-view world)) (count 0))
+      (declare (type index count))
+      (progn
+        (do-bodies-in-region (buf row) (view world (- x radius) (- y radius) (- z radius)
+                                             (+ x radius) (+ y radius) (+ z radius))
+          (let* ((dx (- (float (aref (body-columns-x buf) row) 1d0) x))
+                 (dy (- (float (aref (body-columns-y buf) row) 1d0) y))
+                 (dz (- (float (aref (body-columns-z buf) row) 1d0) z))
+                 (reach (+ radius (float (aref (body-columns-radius buf) row) 1d0))))
+            (when (<= (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))
+              (incf count)
+              (funcall function (aref (body-columns-handle buf) row))))))
+      count)))
+
+(defun map-physics-bodies-in-box (function world x y z hx hy hz)
+  "Call FUNCTION with the handle of each body of WORLD, awake or asleep, that meets the box about
+X Y Z with half-extents HX HY HZ (its nearest point of the box no farther than its radius);
+return how many. The world refuses edits while FUNCTION runs. #OV3RLP"
+  (with-region-arguments (world function (x y z) (hx hy hz))
+    (let ((view (world-query-view world)) (count 0))
+      (declare (type index count))
+      (progn
+        (do-bodies-in-region (buf row) (view world (- x hx) (- y hy) (- z hz) (+ x hx) (+ y hy) (+ z hz))
+          (let* ((bx (float (aref (body-columns-x buf) row) 1d0))
+                 (by (float (aref (body-columns-y buf) row) 1d0))
+                 (bz (float (aref (body-columns-z buf) row) 1d0))
+                 (dx (- bx (max (- x hx) (min (+ x hx) bx))))
+                 (dy (- by (max (- y hy) (min (+ y hy) by))))
+                 (dz (- bz (max (- z hz) (min (+ z hz) bz))))
+                 (r (float (aref (body-columns-radius buf) row) 1d0)))
+            (when (<= (+ (* dx dx) (* dy dy) (* dz dz)) (* r r))
+              (incf count)
+              (funcall function (aref (body-columns-handle buf) row))))))
+      count)))
+
+(defmacro do-solid-cells ((i j k) (view world x0 y0 z0 x1 y1 z1) &body body)
+  "Run BODY with I J K bound to each solid cell of WORLD's terrain whose closed unit box meets the
+box X0..X1 Y0..Y1 Z0..Z1 (doubles), z slowest and x fastest. #OV3RLP"
+  `(when (physics-world-terrain ,world)
+     (with-chunk-reader (solid-p (query-view-probe ,view))
+       (loop for ,k of-type fixnum from (1- (dcell ,z0)) to (dcell ,z1) do
+         (loop for ,j of-type fixnum from (1- (dcell ,y0)) to (dcell ,y1) do
+           (loop for ,i of-type fixnum from (1- (dcell ,x0)) to (dcell ,x1) do
+             (when (and (>= (float (1+ ,i) 1d0) ,x0) (>= (float (1+ ,j) 1d0) ,y0) (>= (float (1+ ,k) 1d0) ,z0)
+                        (solid-p ,i ,j ,k))
+               ,@body)))))))
+
+(defun map-physics-cells-in-sphere (function world x y z radius)
+  "Call FUNCTION with the coordinates of each solid cell of WORLD's terrain (a cell of a chunk that
+is not resident is solid) within RADIUS of X Y Z; return how many. #OV3RLP"
+  (with-region-arguments (world function (x y z) (radius))
+    (let ((view (world-query-view world)) (count 0))
+      (declare (type index count))
+      (progn
+        (do-solid-cells (i j k) (view world (- x radius) (- y radius) (- z radius)
+                                      (+ x radius) (+ y radius) (+ z radius))
+          (let* ((dx (- x (max (float i 1d0) (min (float (1+ i) 1d0) x))))
+                 (dy (- y (max (float j 1d0) (min (float (1+ j) 1d0) y))))
+                 (dz (- z (max (float k 1d0) (min (float (1+ k) 1d0) z)))))
+            (when (<= (+ (* dx dx) (* dy dy) (* dz dz)) (* radius radius))
+              (incf count)
+              (funcall function i j k)))))
+      count)))
+
+(defun map-physics-cells-in-box (function world x y z hx hy hz)
+  "Call FUNCTION with the coordinates of each solid cell of WORLD's terrain (a cell of a chunk that
+is not resident is solid) that meets the box about X Y Z with half-extents HX HY HZ; return how
+many. #OV3RLP"
+  (with-region-arguments (world function (x y z) (hx hy hz))
+    (let ((view (world-query-view world)) (count 0))
+      (declare (type index count))
+      (progn
+        (do-solid-cells (i j k) (view world (- x hx) (- y hy) (- z hz) (+ x hx) (+ y hy) (+ z hz))
+          (incf count)
+          (funcall function i j k)))
+      count)))
+;; Bodies and cells in a region:1 ends here
+
+;; [[file:../physics.org::#QB3NCH][What a query costs:1]]
+(defun query-benchmark-inputs (count seed)
+  "COUNT random queries for the basin, as an f32-column of seven floats each: a point of the
+interior [0,8] x [0,6] x [0,8] and a direction, uniform over the sphere, and a spare. #QB3NCH"
+  (let ((q (make-array (* 7 count) :element-type 'single-float))
+        (state (sb-ext:seed-random-state seed)))
+    (dotimes (i count q)
+      (setf (aref q (* 7 i)) (random 8.0 state) (aref q (+ (* 7 i) 1)) (random 6.0 state)
+            (aref q (+ (* 7 i) 2)) (random 8.0 state))
+      (loop for (dx dy dz) = (list (- (random 2.0 state) 1.0) (- (random 2.0 state) 1.0) (- (random 2.0 state) 1.0))
+            for l2 = (+ (* dx dx) (* dy dy) (* dz dz))
+            when (< 0.01 l2 1.0)
+              do (setf (aref q (+ (* 7 i) 3)) dx (aref q (+ (* 7 i) 4)) dy (aref q (+ (* 7 i) 5)) dz)
+                 (return)))))
+
+(defun time-queries (inputs count function)
+  "Run FUNCTION on each of the COUNT queries of INPUTS, over and over until at least half a second
+has passed; return the queries per second of wall time, per second of this process's processor
+time, and the bytes consed per query. #QB3NCH"
+  (declare (type f32-column inputs) (type function function))
+  (funcall function inputs 0)
+  (sb-ext:gc)
+  (let ((start (clock-ns)) (cpu (get-internal-run-time)) (before (sb-ext:get-bytes-consed)) (done 0))
+    (declare (type fixnum done))
+    (loop do (dotimes (i count) (funcall function inputs (* 7 i)))
+             (incf done count)
+          until (> (- (clock-ns) start) 500000000))
+    (values (/ done (* 1d-9 (- (clock-ns) start)))
+            (/ done (/ (float (- (get-internal-run-time) cpu) 1d0) internal-time-units-per-second))
+            (/ (float (- (sb-ext:get-bytes-consed) before) 1d0) done))))
+
+(defun measure-queries (world)
+  "Rays, sphere casts of radius 0.25 m and overlap queries (the bodies within 1 m of a point) per
+second of wall time and of processor time in WORLD, and bytes consed per query, as a plist of
+lists (wall cpu bytes). #QB3NCH"
+  (let* ((count 20000) (inputs (query-benchmark-inputs count 2026)) (hit (make-physics-hit))
+         (found 0) (counter (lambda (h) (declare (ignore h)) (incf found))))
+    (declare (type fixnum found))
+    (flet ((measure (kind)
+             (multiple-value-list
+              (time-queries inputs count
+                            (ecase kind
+                              (:ray (lambda (q i)
+                                      (declare (type f32-column q) (type fixnum i))
+                                      (physics-ray-cast world (aref q i) (aref q (+ i 1)) (aref q (+ i 2)) (aref q (+ i 3))
+                                                        (aref q (+ i 4)) (aref q (+ i 5)) 10.0 :hit hit)))
+                              (:sphere (lambda (q i)
+                                         (declare (type f32-column q) (type fixnum i))
+                                         (physics-sphere-cast world (aref q i) (aref q (+ i 1)) (aref q (+ i 2)) 0.25
+                                                              (aref q (+ i 3)) (aref q (+ i 4)) (aref q (+ i 5)) 10.0 :hit hit)))
+                              (:overlap (lambda (q i)
+                                          (declare (type f32-column q) (type fixnum i))
+                                          (map-physics-bodies-in-sphere counter world (aref q i) (aref q (+ i 1))
+                                                                        (aref q (+ i 2)) 1.0))))))))
+      (list :rays (measure :ray) :spheres (measure :sphere) :overlaps (measure :overlap)))))
+
+(defun settled-basin-world (count sleep)
+  "The basin of COUNT balls after 300 steps, awake (SLEEP false), or, with SLEEP, stepped on until
+every ball sleeps or 3000 steps have passed. #QB3NCH"
+  (let ((world (make-basin-world count :kernels :auto :sleep sleep)))
+    (dotimes (i 300) (step-physics-world world))
+    (when sleep
+      (loop repeat 2700 until (zerop (physics-world-awake-count world)) do (step-physics-world world)))
+    world))
+
+(defun run-query-benchmark (&optional (stream *standard-output*))
+  "Measure ray casts, sphere casts and overlap queries against the settled basin of 3000 and of
+10000 balls, awake and asleep, and print an Org table to STREAM. #QB3NCH"
+  (format stream "~&#+caption: queries against the basin pile, one thread: 10 m rays and sphere casts (radius 0.25 m) from random points of the interior [0,8] x [0,6] x [0,8] in random directions, and the bodies within 1 m of such a point; thousands of queries per second of wall time and per second of the process's processor time, and bytes consed per query; ~A; load ~A; ~A~%"
+          (cpu-model-name) (load-average) (machine-probe))
+  (format stream "| balls | state | awake | asleep | rays k/s | rays k/cpu-s | B/ray | casts k/s | casts k/cpu-s | B/cast | overlaps k/s | overlaps k/cpu-s | B/overlap |~%")
+  (format stream "|-------+-------+-------+--------+----------+--------------+-------+-----------+---------------+--------+--------------+------------------+-----------|~%")
+  (dolist (count '(3000 10000))
+    (dolist (sleep '(nil t))
+      (let* ((world (settled-basin-world count sleep))
+             (m (measure-queries world)))
+        (format stream "| ~D | ~A | ~D | ~D ~{~{| ~D | ~D | ~,1F ~}~}|~%"
+                count (if sleep "asleep" "awake") (physics-world-awake-count world) (physics-world-sleeping-count world)
+                (loop for key in '(:rays :spheres :overlaps)
+                      collect (destructuring-bind (wall cpu bytes) (getf m key)
+                                (list (round wall 1000) (round cpu 1000) bytes))))
+        (finish-output stream))))
+  (format stream "~&after the run: load ~A~%" (load-average)))
+;; What a query costs:1 ends here
 
 ;; [[file:../physics.org::#LW3YHU][The page as HTML, and an index of the interface:1]]
 (defun export-kinds (symbol)
