@@ -50,8 +50,7 @@ check-anchors:
 	@$(LISP) --load tools/check-anchors.lisp
 
 test: setup check-tangle check-anchors physics.html
-	@ANCHOR="$(ANCHOR)" $(LISP) --load tests/run.lisp
-	@if [ -z "$(ANCHOR)" ]; then tools/editor-test "$(SBCL)" "$(EMACS)"; fi
+	@ANCHOR="$(ANCHOR)" tools/run-tests "$(SBCL)" "$(EMACS)"
 
 editor-test: setup
 	@tools/editor-test "$(SBCL)" "$(EMACS)"
