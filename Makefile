@@ -4,12 +4,14 @@
 EMACS  ?= emacs
 SBCL   ?= sbcl
 ANCHOR ?=
+SEED   ?= 1
+COUNT  ?= 150
 
 ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers report html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers report mutate mutate-splice html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -26,6 +28,9 @@ help:
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
+	@echo "make mutate         run the claims against COUNT=150 mutants of the engine (SEED=1, ANCHOR=ID"
+	@echo "                    for one section); the score table and the survivors into $(ORG)"
+	@echo "make mutate-splice  the last full run's tables into $(ORG), with the page's reasons for survivors"
 	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface"
 	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player) and write"
 	@echo "                    report/view-SCENE.html, a 3D viewer of the run for any browser"
@@ -47,8 +52,7 @@ check-anchors:
 	@$(LISP) --load tools/check-anchors.lisp
 
 test: setup check-tangle check-anchors physics.html
-	@ANCHOR="$(ANCHOR)" $(LISP) --load tests/run.lisp
-	@if [ -z "$(ANCHOR)" ]; then tools/editor-test "$(SBCL)" "$(EMACS)"; fi
+	@ANCHOR="$(ANCHOR)" tools/run-tests "$(SBCL)" "$(EMACS)"
 
 editor-test: setup
 	@tools/editor-test "$(SBCL)" "$(EMACS)"
@@ -87,6 +91,20 @@ report: setup tangle
 	@REPORT=accuracy $(LISP) --load tools/report.lisp
 	@$(SBCL) --script tools/splice.lisp work-precision-best report/work-precision-best.org
 	@$(SBCL) --script tools/splice.lisp work-precision-table report/work-precision.org
+
+# Mutants are sampled from the tangled files as they are; the tables are spliced only after a
+# run over every section.
+mutate: setup tangle
+	@mkdir -p report
+	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" nice $(SBCL) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
+	@if [ -z "$(ANCHOR)" ]; then $(MAKE) --no-print-directory mutate-splice; fi
+
+# The last full run's tables, from its log, into the page; the survivors' reasons, and which
+# survivors are equivalent, are read from the page as it is.
+mutate-splice:
+	@MUTATE_FROM_LOG=report/mutate.log $(LISP) --load tools/mutate.lisp
+	@$(SBCL) --script tools/splice.lisp mutate-score report/mutate-score.org
+	@$(SBCL) --script tools/splice.lisp mutate-survivors report/mutate-survivors.org
 
 # The page as HTML: the index of the exported symbols comes from the loaded image
 # (report/api-index.org), then Org's export in batch Emacs writes physics.html, again only when

@@ -196,6 +196,25 @@
   (check (null (anchor-definitions "ZZZZZ9"))))
 ;; BSOZ3U-anchor-definitions-by-section ends here
 
+;; [[file:../physics.org::#BSOZ3U][BSOZ3U-registering-again-replaces]]
+(define-claim "BSOZ3U" registering-again-replaces
+    "REGISTER-TANGLED-FILE on the last registered file leaves the registry as it was."
+  (let* ((definitions (copy-list luv-physics::*definitions*))
+         (files (copy-list luv-physics::*registered-files*))
+         (last-file (car (last files)))
+         (n (luv-physics::register-tangled-file last-file)))
+    (check (= n (count "tangled/physics-simd.lisp" definitions
+                       :key (lambda (r) (getf r :file)) :test #'equal)))
+    (check (equal definitions luv-physics::*definitions*) "the records changed")
+    (check (equal files luv-physics::*registered-files*) "the files changed")
+    (let ((warned nil))
+      (check (eql 0 (handler-bind ((warning (lambda (w) (setf warned t) (muffle-warning w))))
+                      (luv-physics::register-tangled-file "tangled/no-such-file.lisp")))
+             "a missing file does not count 0")
+      (check (eq t warned) "a missing file is not warned about")
+      (check (equal definitions luv-physics::*definitions*) "a missing file changed the records"))))
+;; BSOZ3U-registering-again-replaces ends here
+
 ;; [[file:../physics.org::#0QBGZO][0QBGZO-page-forms-match-registry]]
 (define-claim "0QBGZO" page-forms-match-registry
     "Definitions read from the page's blocks equal the registry's, with the same page lines."
@@ -213,7 +232,7 @@
 
 ;; [[file:../physics.org::#0QBGZO][0QBGZO-section-prints-definitions-and-claims]]
 (define-claim "0QBGZO" section-prints-definitions-and-claims
-    "(section \"BSOZ3U\") names its title, its three functions at their page lines, and its two claims."
+    "(section \"BSOZ3U\") names its title, its three functions at their page lines, and each of its claims."
   (let* ((text (with-output-to-string (s) (section "BSOZ3U" :stream s)))
          (lines (uiop:split-string text :separator '(#\Newline))))
     (check (search "BSOZ3U  Register a file and answer by anchor or by name" text))
@@ -223,9 +242,10 @@
                                          (search (princ-to-string line) l)))
                         lines)
                "no line names ~(~A~) at page line ~D" name line)))
-    (check (search "2 claims:" text))
-    (check (search "definition-anchor-finds-its-section" text))
-    (check (search "anchor-definitions-by-section" text))
+    (let ((claims (remove "BSOZ3U" *claims* :key #'car :test-not #'string=)))
+      (check (search (format nil "~D claims:" (length claims)) text) "the count of ~D claims" (length claims))
+      (dolist (claim claims)
+        (check (search (string-downcase (symbol-name (cdr claim))) text) "no line names ~(~A~)" (cdr claim))))
     (check (eq :error (handler-case (section "ZZZZZ9" :stream (make-broadcast-stream)) (error () :error))))))
 ;; 0QBGZO-section-prints-definitions-and-claims ends here
 
@@ -996,10 +1016,12 @@ function of a column name that reads row K's float in that column. #T3STK1"
          (key (luv-physics::terrain-key (luv-physics::handle-index h) 3 -1 3))
          (table (luv-physics::physics-world-contact-table w))
          (expected (* 1.0 9.81 (/ 1.0 60 4)))
-         (rows '()) (worst 0.0))
-    (dotimes (i 60) (luv-physics::step-physics-world w))
+         (rows '()) (worst 0.0) (begins 0))
+    (flet ((step-counting ()
+             (incf begins (count :begin (step-events w) :key #'first))))
+    (dotimes (i 60) (step-counting))
     (dotimes (i 60)
-      (luv-physics::step-physics-world w)
+      (step-counting)
       (let ((row (luv-physics::contact-table-find table key)))
         (pushnew row rows)
         (when (>= row 0)
@@ -1007,7 +1029,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                           (luv-physics::contact-columns-geometry
                                            (luv-physics::physics-world-contacts w))
                                           row normal-impulse)
-                                         expected)))))))
+                                         expected))))))))
+    (check (= 1 begins) "~D begin events for one resting contact" begins)
     (check (equal rows '(0)) "the contact lived in rows ~S" rows)
     (check (= 1 (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
     (check (<= worst (* 0.05 expected)) "the impulse strayed ~,5F from ~,5F" worst expected)))
@@ -1278,6 +1301,20 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; QKS4GZ-edit-needs-wake ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-wake-near-measures-to-the-surface]]
+(define-claim "QKS4GZ" wake-near-measures-to-the-surface
+    "WAKE-PHYSICS-BODIES-NEAR wakes a sleeper whose surface is within RADIUS of the point, not beyond."
+  (let* ((w (make-floor-world))
+         (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
+    (loop repeat 300 while (luv-physics::physics-body-awake-p w h) do (luv-physics::step-physics-world w))
+    (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+    (let ((y (+ (body-y w h) 0.755)))
+      (check (= 0 (luv-physics::wake-physics-bodies-near w 3.5 y 3.5 0.49)))
+      (check (not (luv-physics::physics-body-awake-p w h)) "woken from 0.505 m by a radius of 0.49 m")
+      (check (= 1 (luv-physics::wake-physics-bodies-near w 3.5 y 3.5 0.52)))
+      (check (luv-physics::physics-body-awake-p w h) "not woken from 0.505 m by a radius of 0.52 m"))))
+;; QKS4GZ-wake-near-measures-to-the-surface ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-relocation-stress]]
 (define-claim "QKS4GZ" relocation-stress
     "500 random adds, removes, sleeps, wakes and steps keep validate-physics-world true throughout."
@@ -1445,6 +1482,43 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "a sleeper is met other than once around itself")
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; G4R1D5-sleeping-grids-stay-lean ends here
+
+;; [[file:../physics.org::#W4K3PH][W4K3PH-box-wakes-within-its-reach]]
+(define-claim "W4K3PH" box-wakes-within-its-reach
+    "A box moving along one axis wakes a sleeper within margin + v dt, not beyond; a still box none."
+  (flet ((woken-p (velocity gap-past-reach)
+           (let* ((w (make-floor-world))
+                  (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
+             (loop repeat 300 while (luv-physics::physics-body-awake-p w h)
+                   do (luv-physics::step-physics-world w))
+             (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+             (let* ((reach (+ (luv-physics::physics-world-margin w)
+                              (* (/ 1.0 60) (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) velocity))))))
+                    (gap (+ reach gap-past-reach)))
+               (destructuring-bind (vx vy vz) velocity
+                 (luv-physics::post-physics-box w (+ 3.5 0.25 0.25 gap) 0.245 3.5 0.25 0.25 0.25
+                                                :vx vx :vy vy :vz vz))
+               (luv-physics::step-physics-world w)
+               (luv-physics::physics-body-awake-p w h)))))
+    (dolist (velocity '((1.0 0.0 0.0) (0.0 1.0 0.0) (0.0 0.0 1.0)))
+      (check (woken-p velocity -0.01) "a box moving at ~S did not wake the ball within reach" velocity)
+      (check (not (woken-p velocity 0.01)) "a box moving at ~S woke the ball beyond reach" velocity))
+    (check (not (woken-p '(0.0 0.0 0.0) -0.04)) "a still box woke the ball"))
+  (flet ((woken-by-ball-p (velocity gap-past-reach)
+           (let* ((w (make-floor-world))
+                  (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
+             (loop repeat 300 while (luv-physics::physics-body-awake-p w h)
+                   do (luv-physics::step-physics-world w))
+             (let* ((reach (+ 0.25 0.25 (luv-physics::physics-world-margin w)
+                              (* (/ 1.0 60) (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) velocity)))))))
+               (destructuring-bind (vx vy vz) velocity
+                 (luv-physics::add-physics-body w (- 3.5 reach gap-past-reach) 0.245 3.5 :vx vx :vy vy :vz vz))
+               (luv-physics::step-physics-world w)
+               (luv-physics::physics-body-awake-p w h)))))
+    (dolist (velocity '((3.0 0.0 0.0) (0.0 0.0 3.0)))
+      (check (woken-by-ball-p velocity -0.01) "a ball moving at ~S did not wake the ball within reach" velocity)
+      (check (not (woken-by-ball-p velocity 0.01)) "a ball moving at ~S woke the ball beyond reach" velocity))))
+;; W4K3PH-box-wakes-within-its-reach ends here
 
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
 (define-claim "P41RS7" pair-list-finds-every-pair
@@ -1692,6 +1766,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (< (abs (- (body-y w h) -0.755)) 0.002) "the ball ends at y = ~,5F" (body-y w h)))))
 ;; MYWH16-rolls-over-ledge ends here
 
+;; [[file:../physics.org::#MYWH16][MYWH16-centre-on-the-face-is-inside]]
+(define-claim "MYWH16" centre-on-the-face-is-inside
+    "A ball centred exactly on the floor's top face is pushed up and comes to rest at r - slop."
+  (let* ((w (make-floor-world :sleep nil))
+         (h (luv-physics::add-physics-body w 3.5 0.0 3.5)))
+    (luv-physics::step-physics-world w)
+    (check (> (body-y w h) 0.0) "after one step the centre is at y = ~,5F" (body-y w h))
+    (let ((contacts (terrain-contacts w h)))
+      (check (and (= 1 (length contacts))
+                  (every #'= '(0.0 -1.0 0.0) (list (getf (first contacts) :nx) (getf (first contacts) :ny)
+                                                   (getf (first contacts) :nz))))
+             "the floor contacts are ~S" contacts))
+    (dotimes (i 59) (luv-physics::step-physics-world w))
+    (check (< (abs (- (body-y w h) (- 0.25 luv-physics::*physics-linear-slop*))) 0.002)
+           "the ball rests at y = ~,5F" (body-y w h))))
+;; MYWH16-centre-on-the-face-is-inside ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-edges-bounce-true]]
 (define-claim "MYWH16" edges-bounce-true
     "Drops onto a block's edge and corner take their impulse along the normal at impact."
@@ -1717,6 +1808,42 @@ function of a column name that reads row K's float in that column. #T3STK1"
             (check (< (abs (- x (- 10 0.25))) 0.01)
                    "at ~D m/s from x = ~,3F the ball ended at x = ~,4F" speed (* k 0.137) x)))))))
 ;; SW33P7-no-tunnelling-to-100 ends here
+
+;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
+(define-claim "B0XPH5" box-contact-geometry
+    "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
+  (flet ((box-contact (centre half)
+           (let* ((w (make-floor-world :gravity '(0 0 0)))
+                  (h (luv-physics::add-physics-body w 3.5 3.0 3.5))
+                  (c (luv-physics::physics-world-contacts w)))
+             (destructuring-bind (x y z) centre
+               (destructuring-bind (hx hy hz) half
+                 (luv-physics::post-physics-box w x y z hx hy hz :owner :probe)))
+             (luv-physics::step-physics-world w)
+             (loop for row below (luv-physics::contact-columns-length c)
+                   when (and (= (aref (luv-physics::contact-columns-handle-a c) row) h)
+                             (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-box+))
+                     collect (let ((g (luv-physics::contact-columns-geometry c)))
+                               (list (luv-physics::contact@ g row nx) (luv-physics::contact@ g row ny)
+                                     (luv-physics::contact@ g row nz) (luv-physics::contact@ g row separation)
+                                     (luv-physics::contact@ g row px) (luv-physics::contact@ g row py)
+                                     (luv-physics::contact@ g row pz)))))))
+    (let* ((d '(0.05 0.1 0.15)) (len (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) d))))
+           (cases
+             (list (list "outside" (list (+ 3.5 0.05 0.25) (+ 3.0 0.1 0.25) (+ 3.5 0.15 0.25)) '(0.25 0.25 0.25)
+                         (append (mapcar (lambda (v) (/ v len)) d) (list (- len 0.25))
+                                 (list (+ 3.5 0.05) (+ 3.0 0.1) (+ 3.5 0.15))))
+                   (list "inside, -z face" '(3.5 3.05 3.7) '(0.2 0.25 0.3)
+                         (list 0.0 0.0 1.0 (- (+ 0.1 0.25)) 3.5 3.0 3.4))
+                   (list "inside, +x face" '(3.4 3.0 3.5) '(0.2 0.2 0.25)
+                         (list -1.0 0.0 0.0 (- (+ 0.1 0.25)) 3.6 3.0 3.5)))))
+      (loop for (name centre half want) in cases
+            do (let ((got (box-contact centre half)))
+                 (check (= 1 (length got)) "~A: ~D box contacts" name (length got))
+                 (when got
+                   (check (every (lambda (g e) (< (abs (- g e)) 1e-5)) (first got) want)
+                          "~A: (nx ny nz separation px py pz) is ~S, not ~S" name (first got) want)))))))
+;; B0XPH5-box-contact-geometry ends here
 
 ;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-keeps-contacts]]
 (define-claim "PRUN3D" reorder-keeps-contacts
@@ -1892,6 +2019,35 @@ function of a column name that reads row K's float in that column. #T3STK1"
                (count nil (mapcar #'= (first general) (first short))))))))
 ;; PR3PAR-short-path-same-bits ends here
 
+;; [[file:../physics.org::#G7Q3XR][G7Q3XR-softness-is-the-closed-form]]
+(define-claim "G7Q3XR" softness-is-the-closed-form
+    "PHYSICS-SOFTNESS gives omega/a1, a2/(1+a2) and 1/(1+a2); 0 Hz gives 0, 1, 0 exactly."
+  (loop for (hertz zeta h) in '((30.0 10.0 0.004166667) (5.0 0.7 0.016666668) (60.0 1.0 0.001))
+        do (let* ((omega (* 2 pi hertz))
+                  (a1 (+ (* 2 zeta) (* h omega)))
+                  (a2 (* h omega a1)))
+             (multiple-value-bind (bias mass impulse) (luv-physics::physics-softness hertz zeta h)
+               (loop for (got want what) in (list (list bias (/ omega a1) "bias rate")
+                                                  (list mass (/ a2 (+ 1 a2)) "mass scale")
+                                                  (list impulse (/ 1 (+ 1 a2)) "impulse scale"))
+                     do (check (< (abs (- got want)) (* 1d-6 (abs want)))
+                               "~A Hz, zeta ~A: ~A ~A, not ~A" hertz zeta what got want)))))
+  (check (equal '(0.0 1.0 0.0)
+                (multiple-value-list (luv-physics::physics-softness 0.0 0.7 0.004166667)))))
+;; G7Q3XR-softness-is-the-closed-form ends here
+
+;; [[file:../physics.org::#K3RNLS][K3RNLS-gravity-in-every-column]]
+(define-claim "K3RNLS" gravity-in-every-column
+    "One step under gravity (1 -2 3) gives a free ball the velocity g/60 in x, y and z."
+  (let* ((w (make-floor-world :gravity '(1 -2 3)))
+         (h (luv-physics::add-physics-body w 3.5 8.0 3.5)))
+    (luv-physics::step-physics-world w)
+    (loop for got in (multiple-value-list (luv-physics::physics-body-velocity w h))
+          for g in '(1 -2 3) for name in '(x y z)
+          do (check (< (abs (- got (/ g 60d0))) 1d-6) "v~(~A~) is ~,7F, not ~,7F" name got (/ g 60d0)))
+    (check (equal '(0.0 0.0 0.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h))))))
+;; K3RNLS-gravity-in-every-column ends here
+
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
     "Prepared tangent frames are orthonormal with their normals, in every family."
@@ -2011,6 +2167,26 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "at rest the approach speed reads ~,5F m/s" (physics-world-max-approach-speed world))))
 ;; ST0R3S-error-figures ends here
 
+;; [[file:../physics.org::#F1NAL5][F1NAL5-spin-turns-by-the-half-angle]]
+(define-claim "F1NAL5" spin-turns-by-the-half-angle
+    "Free spin at omega for n steps gives q = (cos n*alpha, sin n*alpha * u), alpha = atan(|omega| dt/2)."
+  (let* ((w (make-floor-world :gravity '(0 0 0)))
+         (h (luv-physics::add-physics-body w 3.5 8.0 3.5))
+         (omega '(1d0 2d0 2d0)) (n 60) (dt (/ 1d0 60))
+         (alpha (atan (* 3d0 dt 0.5d0))))
+    (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
+      (declare (ignore set))
+      (luv-physics::with-body-columns (wx wy wz) (luv-physics::physics-world-awake w)
+        (setf (aref wx row) 1.0 (aref wy row) 2.0 (aref wz row) 2.0)))
+    (dotimes (i n) (luv-physics::step-physics-world w))
+    (let ((want (cons (cos (* n alpha)) (mapcar (lambda (c) (* (sin (* n alpha)) (/ c 3d0))) omega)))
+          (got (multiple-value-list (luv-physics::physics-body-orientation w h))))
+      (check (equal '(1.0 2.0 2.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h)))
+             "the spin changed in free flight")
+      (loop for g in got for e in want for name in '(w x y z)
+            do (check (< (abs (- g e)) 1d-5) "q~(~A~) is ~,6F, not ~,6F" name g e)))))
+;; F1NAL5-spin-turns-by-the-half-angle ends here
+
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-ball-rests-and-sleeps]]
 (define-claim "IDVK7G" ball-rests-and-sleeps
     "A dropped ball rests at floor + r - slop (±0.002 m) and sleeps, with a :slept event, within 3 s."
@@ -2123,20 +2299,58 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (luv-physics::step-physics-world w)
     (check (= 1 (luv-physics::physics-world-sleeping-count w)))
     (check (= 1 (luv-physics::physics-world-awake-count w)))
-    (let ((h0 (luv-physics::physics-world-state-hash w)))
-      (flet ((bump (column row)
-               (let ((old (aref column row)))
+    (let ((h0 (luv-physics::physics-world-state-hash w)) (hashes '()))
+      (flet ((flip (column row bit)
+               (let* ((old (aref column row))
+                      (bits (logxor (ldb (byte 32 0) (sb-kernel:single-float-bits old)) (ash 1 bit))))
                  (setf (aref column row)
-                       (sb-kernel:make-single-float (1+ (sb-kernel:single-float-bits old))))
+                       (sb-kernel:make-single-float (if (logbitp 31 bits) (- bits (ash 1 32)) bits)))
                  (prog1 (luv-physics::physics-world-state-hash w)
                    (setf (aref column row) old)))))
-        (let ((awake (luv-physics::physics-world-awake w))
-              (sleeping (luv-physics::physics-world-sleeping w)))
-          (check (/= h0 (bump (luv-physics::body-columns-x awake) 0)) "awake x")
-          (check (/= h0 (bump (luv-physics::body-columns-vx awake) 0)) "awake vx")
-          (check (/= h0 (bump (luv-physics::body-columns-y sleeping) 0)) "sleeping y")
-          (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits"))))))
+        (dolist (set (list (luv-physics::physics-world-awake w) (luv-physics::physics-world-sleeping w)))
+          (loop for reader in '(luv-physics::body-columns-x luv-physics::body-columns-y luv-physics::body-columns-z
+                                luv-physics::body-columns-vx luv-physics::body-columns-vy luv-physics::body-columns-vz
+                                luv-physics::body-columns-wx luv-physics::body-columns-wy luv-physics::body-columns-wz)
+                do (dolist (bit '(0 31))
+                     (check (/= h0 (car (push (flip (funcall reader set) 0 bit) hashes)))
+                            "bit ~D of ~(~A~) of the ~:[sleeping~;awake~] ball is not hashed" bit reader
+                            (eq set (luv-physics::physics-world-awake w))))))
+        (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits")
+        (check (some (lambda (h) (logbitp 61 h)) (cons h0 hashes)) "no hash of ~S uses bit 61" (cons h0 hashes))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
+
+;; [[file:../physics.org::#B0DY0B][B0DY0B-body-prints-where-it-is]]
+(define-claim "B0DY0B" body-prints-where-it-is
+    "print-object shows slot, awake or asleep, and (x y z); describe shows set, row and every column."
+  (let* ((w (make-floor-world :gravity '(0 0 0)))
+         (first (luv-physics::add-physics-body w 1.5 2.0 3.25))
+         (h (luv-physics::add-physics-body w 4.5 6.0 7.125 :vx 0.5))
+         (body (luv-physics::physics-body w h)))
+    (luv-physics::remove-physics-body w first)
+    (check (string= (format nil "#<PHYSICS-BODY ~D awake at (4.500 6.000 7.125)>" (luv-physics::handle-index h))
+                    (prin1-to-string body))
+           "prints as ~A" (prin1-to-string body))
+    (let ((gone (make-instance 'luv-physics::physics-body :world w :handle first)))
+      (check (string= (format nil "#<PHYSICS-BODY ~D removed>" (luv-physics::handle-index first))
+                      (prin1-to-string gone)))
+      (check (string= (format nil "#<PHYSICS-BODY ~D removed>~%  handle ~D (slot ~D, generation ~D) of ~A~%"
+                              (luv-physics::handle-index first) first (luv-physics::handle-index first)
+                              (luv-physics::handle-generation first) w)
+                      (with-output-to-string (s) (describe gone s)))
+             "a removed body describes as ~S" (with-output-to-string (s) (describe gone s))))
+    (check (typep (handler-case (luv-physics::physics-body w first) (error (e) e))
+                  'luv-physics::stale-physics-handle)
+           "an object is made for a removed body")
+    (let ((text (with-output-to-string (s) (describe body s))))
+      (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
+        (declare (ignore set))
+        (check (search (format nil "Its row, awake set row ~D:" row) text) "~A" text)
+        (dolist (column luv-physics::+body-columns-column-names+)
+          (check (search (format nil "~(~22A~) = ~S" column
+                                 (aref (slot-value (luv-physics::physics-world-awake w) column) row))
+                         text)
+                 "no line for ~(~A~) in ~A" column text))))))
+;; B0DY0B-body-prints-where-it-is ends here
 
 ;; [[file:../physics.org::#4YDMX5][4YDMX5-world-and-body-summaries]]
 (define-claim "4YDMX5" world-and-body-summaries

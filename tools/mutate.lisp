@@ -1,0 +1,881 @@
+;;;; tools/mutate.lisp -- make mutate: how many plausible defects do the claims notice?
+;;;;
+;;;; Usage (from the repository): make mutate [SEED=n] [COUNT=n] [ANCHOR=ID] [JOBS=n]
+;;;; The section "How the claims are tested" of physics.org explains the method.  In short:
+;;;; this image loads the engine and the claims once, times every claim on the unchanged
+;;;; engine, and then, for each sampled mutant (one operator applied at one place of one
+;;;; definition of the tangled engine), forks a child that evaluates the mutated definition
+;;;; and every form that inlines it or is generated from it, and runs the claims, cheapest
+;;;; first, until one fails.  Two children run at a time.  Output: one line per mutant, then
+;;;; the score per part; the tables go to report/mutate-score.org and
+;;;; report/mutate-survivors.org, which make mutate splices into the page.
+
+(load (merge-pathnames "boot.lisp" *load-truename*))
+(require :sb-posix)
+
+(in-package #:cl-user)
+
+(when (luv-load-systems "luv-physics/tests")
+  (sb-ext:exit :code 2))
+
+(defpackage #:luv-mutate
+  (:use #:cl)
+  (:local-nicknames (#:5am #:fiveam) (#:physics #:luv-physics)))
+
+(in-package #:luv-mutate)
+
+(defparameter *engine-files* '("tangled/physics.lisp" "tangled/physics-simd.lisp")
+  "The tangled files whose definitions are mutated.")
+
+(defparameter *dependent-files* '("tangled/physics.lisp" "tangled/physics-simd.lisp"
+                                  "tests/physics-tests.lisp")
+  "The files whose forms may inline, or be generated from, a mutated definition.")
+
+(defparameter *mutable-kinds* '(defun defmacro defmethod defparameter)
+  "Standard defining operators whose forms are mutated; any operator of the page's own
+whose name starts with DEF (a macro of the engine's package) is mutated too.")
+
+;;; ------------------------------------------------------------------------------------
+;;; Reading the tangled files: one record per toplevel form
+
+(defstruct unit
+  form          ; the form as read
+  file line anchor package
+  name          ; the first definition's name, for the report
+  kind          ; its operator
+  symbols       ; every symbol the form mentions (a hash set)
+  defines       ; the names it defines
+  mutable)      ; true if it is mutated
+
+(defun comma-p (x) (typep x 'sb-impl::comma))
+
+(defun map-tree-symbols (function tree)
+  "Call FUNCTION on every symbol in TREE, looking inside backquote commas."
+  (let ((seen (make-hash-table :test #'eq)))
+    (labels ((walk (x)
+               (cond ((symbolp x) (funcall function x))
+                     ((comma-p x) (walk (sb-impl::comma-expr x)))
+                     ((consp x)
+                      (unless (gethash x seen)
+                        (setf (gethash x seen) t)
+                        (walk (car x)) (walk (cdr x)))))))
+      (walk tree))))
+
+(defun engine-defining-operator-p (operator)
+  (and (symbolp operator)
+       (or (member operator *mutable-kinds*)
+           (and (eq (symbol-package operator) (find-package '#:luv-physics))
+                (physics::defining-operator-p operator)
+                (macro-function operator)))))
+
+(defun defined-names (form)
+  "The names FORM defines, looking through PROGN, EVAL-WHEN, LOCALLY and the expansions of
+the page's own defining macros, and the names it declaims inline."
+  (let ((names '()))
+    (labels ((walk (form depth)
+               (when (and (consp form) (symbolp (car form)) (< depth 20))
+                 (let ((op (car form)))
+                   (cond ((member op '(progn locally)) (dolist (f (cdr form)) (walk f depth)))
+                         ((eq op 'eval-when) (dolist (f (cddr form)) (walk f depth)))
+                         ((eq op 'declaim)
+                          (dolist (spec (cdr form))
+                            (when (and (consp spec) (eq (car spec) 'inline))
+                              (dolist (n (cdr spec)) (push n names)))))
+                         ((member op '(defun defmacro define-compiler-macro defgeneric defmethod
+                                       defparameter defvar defconstant define-symbol-macro
+                                       deftype))
+                          (push (second form) names))
+                         ((eq op 'defstruct)
+                          (push (if (consp (second form)) (first (second form)) (second form)) names))
+                         ((and (macro-function op) (not (eq (symbol-package op) (find-package :cl))))
+                          (walk (ignore-errors (macroexpand-1 form)) (1+ depth))))))))
+      (walk form 0))
+    names))
+
+(defun read-units (file)
+  "The toplevel forms of FILE, each a UNIT, in order."
+  (let* ((text (physics::read-file-text file))
+         (lines (physics::split-lines text))
+         (anchors (physics::line-anchors lines))
+         (*package* (find-package '#:cl-user))
+         (*read-eval* t)
+         (units '()) (position 0) (line 1))
+    (loop
+      (let ((start (physics::skip-blanks-and-comments text position)))
+        (when (>= start (length text)) (return (nreverse units)))
+        (incf line (count #\Newline text :start position :end start))
+        (multiple-value-bind (form end) (read-from-string text t nil :start start)
+          (when (and (consp form) (eq (car form) 'in-package))
+            (setf *package* (find-package (second form))))
+          (let* ((definition (first (physics::toplevel-definitions form)))
+                 (symbols (make-hash-table :test #'eq)))
+            (map-tree-symbols (lambda (s) (setf (gethash s symbols) t)) form)
+            (push (make-unit :form form :file file :line line :anchor (aref anchors (1- line))
+                             :package *package*
+                             :name (and definition (physics::definition-name
+                                                    (intern (symbol-name (car definition)) :keyword)
+                                                    definition))
+                             :kind (and definition (car definition))
+                             :symbols symbols
+                             :defines (defined-names form)
+                             :mutable (and definition (eq definition form)
+                                           (member file *engine-files* :test #'string=)
+                                           (engine-defining-operator-p (car form))))
+                  units))
+          (incf line (count #\Newline text :start start :end end))
+          (setf position end))))))
+
+;;; ------------------------------------------------------------------------------------
+;;; Who must be compiled again: inlined functions, macros, and what they generate
+
+(defvar *inline-names* (make-hash-table :test #'equal)
+  "Every name some form of the files declares or declaims inline, even where a later
+declamation makes it not inline by default: callers may still ask for it.")
+
+(defun note-inline-names (units)
+  "Fill *INLINE-NAMES* from the (INLINE name...) specifiers anywhere in UNITS' forms."
+  (dolist (u units)
+    (labels ((walk (x)
+               (when (consp x)
+                 (when (and (eq (car x) 'inline) (proper-list-p x))
+                   (dolist (n (cdr x)) (when (symbolp n) (setf (gethash n *inline-names*) t))))
+                 (when (proper-list-p x) (mapc #'walk x)))))
+      (walk (unit-form u)))))
+
+(defun inlined-name-p (name)
+  "True if a change to NAME's definition reaches the code of its callers: a macro, a
+compiler macro, a symbol macro or a function declared inline."
+  (and (symbolp name)
+       (or (gethash name *inline-names*)
+           (and (fboundp name) (macro-function name))
+           (compiler-macro-function name)
+           (eq (sb-int:info :function :inlinep name) 'inline)
+           (eq (sb-int:info :variable :kind name) :macro))))
+
+(defun dependents (unit units)
+  "The units other than UNIT that must be evaluated again after UNIT is: those mentioning a
+name UNIT defines that is inlined or expanded, and so on transitively; in file order."
+  (let ((pending (remove-if-not #'inlined-name-p (unit-defines unit)))
+        (done (make-hash-table :test #'eq))
+        (chosen (make-hash-table :test #'eq)))
+    (loop while pending
+          do (let ((name (pop pending)))
+               (unless (gethash name done)
+                 (setf (gethash name done) t)
+                 (dolist (u units)
+                   (when (and (not (eq u unit)) (not (gethash u chosen))
+                              (gethash name (unit-symbols u))
+                              (not (member name (unit-defines u))))
+                     (setf (gethash u chosen) t)
+                     (dolist (n (unit-defines u))
+                       (when (inlined-name-p n) (push n pending))))))))
+    (remove-if-not (lambda (u) (gethash u chosen)) units)))
+
+;;; ------------------------------------------------------------------------------------
+;;; Operators.  A site is (OPERATOR FROM TO REBUILD): REBUILD returns the whole toplevel form
+;;; with TO in place of FROM.
+
+(defparameter *comparison-flips*
+  '((< . <=) (<= . <) (> . >=) (>= . >) (= . /=) (/= . =) (min . max) (max . min)
+    (plusp . minusp) (minusp . plusp))
+  "Comparison flips: a boundary moved, an equality negated, a bound of the other side.")
+
+(defparameter *commutative* '(+ * = /= max min logand logior logxor eq eql equal and or list
+                              values vector)
+  "Operators whose arguments are not swapped: the swap means the same thing, or lists data.")
+
+(defparameter *body-operators* '(progn when unless let let* dolist dotimes multiple-value-bind
+                                 flet labels lambda defun defmethod defmacro locally
+                                 destructuring-bind)
+  "Operators with a body whose statements may be dropped: the forms of a WHEN or UNLESS, and
+the forms before the last of the others.")
+
+(defparameter *type-operators* '(declare declaim deftype check-type quote function
+                                 in-package sb-ext:truly-the)
+  "Forms not walked: types, declarations and literal data.")
+
+(defvar *sites*)
+
+(defun site (operator from to rebuild)
+  (push (list operator from to rebuild) *sites*))
+
+(defun variable-symbol-p (x)
+  (and (symbolp x) x (not (eq x t)) (not (keywordp x)) (not (constantp x))))
+
+(defun same-kind-p (a b)
+  "True if A and B are worth swapping: two variables, or two different numbers of one type."
+  (or (and (variable-symbol-p a) (variable-symbol-p b) (not (eq a b)))
+      (and (numberp a) (numberp b) (eq (type-of a) (type-of b)) (/= a b))))
+
+(defun replace-nth (list n new)
+  (append (subseq list 0 n) (list new) (nthcdr (1+ n) list)))
+
+(defun remove-nth (list n)
+  (append (subseq list 0 n) (nthcdr (1+ n) list)))
+
+(defun proper-list-p (x)
+  (handler-case (list-length x) (error () nil)))
+
+(defun walk (x rebuild &optional parent index)
+  "Collect the sites of the evaluated form X, which REBUILD puts back into the toplevel form.
+PARENT, if given, is the list holding X at INDEX; a literal's site shows it."
+  (flet ((literal (operator new)
+           (site operator (or parent x) (if parent (replace-nth parent index new) new)
+                 (lambda () (funcall rebuild new)))))
+    (cond ((comma-p x)
+           (walk (sb-impl::comma-expr x)
+                 (lambda (new) (funcall rebuild (sb-impl::unquote new (sb-impl::comma-kind x))))))
+          ((typep x 'integer)
+           (literal "off-by-one" (1+ x))
+           (literal "off-by-one" (1- x)))
+          ((typep x 'float)
+           (unless (zerop x)
+             (literal "constant scaling" (* x 2))
+             (literal "constant scaling" (/ x 2))
+             (literal "sign flip" (- x))))
+          ((and (consp x) (proper-list-p x))
+           (walk-call x rebuild)))))
+
+(defun walk-elements (x rebuild start &optional end)
+  "Walk elements START to END of the list X as evaluated forms."
+  (loop for i from start below (or end (length x))
+        do (let ((i i))
+             (walk (nth i x) (lambda (new) (funcall rebuild (replace-nth x i new))) x i))))
+
+(defun drop-sites (x rebuild start every)
+  "Dropped-form sites for the body of X that starts at START: every form if EVERY, else all
+but the last.  Declarations and docstrings stay."
+  (let ((n (length x)))
+    (loop for i from start below (if every n (1- n))
+          for form = (nth i x)
+          unless (or (stringp form) (and (consp form) (eq (car form) 'declare)) (atom form))
+            do (site "dropped form" form :dropped
+                     (let ((i i)) (lambda () (funcall rebuild (remove-nth x i))))))))
+
+(defun walk-bindings (x index rebuild)
+  "Walk the init forms of the binding list at INDEX of X (LET, LET*)."
+  (let ((bindings (nth index x)))
+    (when (proper-list-p bindings)
+      (loop for j from 0 below (length bindings)
+            for b = (nth j bindings)
+            when (and (consp b) (cdr b))
+              do (let ((j j) (b b))
+                   (walk (second b)
+                         (lambda (new)
+                           (funcall rebuild
+                                    (replace-nth x index
+                                                 (replace-nth bindings j (list (first b) new)))))))))))
+
+(defun walk-call (x rebuild)
+  (let ((op (car x)) (n (length x)))
+    (flet ((swap-operator (operator new)
+             (let ((new (cons new (cdr x))))
+               (site operator x new (lambda () (funcall rebuild new)))))
+           (body (start)
+             (walk-elements x rebuild start)
+             (when (member op *body-operators*)
+               (drop-sites x rebuild start (member op '(when unless))))))
+      (cond
+        ((not (symbolp op))
+         (when (and (consp op) (eq (car op) 'lambda)) (walk op (lambda (new) (funcall rebuild (cons new (cdr x))))))
+         (walk-elements x rebuild 1))
+        ((member op *type-operators*))
+        ;; a type, or a prototype that only names a type, is not mutated
+        ((member op '(the coerce typep float)) (walk-elements x rebuild (if (eq op 'the) 2 1) (if (eq op 'the) 3 2)))
+        ((eq op 'sb-int:quasiquote) (walk-elements x rebuild 1))
+        ((member op '(defun defmacro)) (body 3))
+        ((eq op 'defmethod)
+         (let ((args (position-if #'listp x :start 2))) (when args (body (1+ args)))))
+        ((eq op 'defparameter) (walk (third x) (lambda (new) (funcall rebuild (replace-nth x 2 new)))))
+        ((eq op 'lambda) (body 2))
+        ((member op '(let let*)) (walk-bindings x 1 rebuild) (body 2))
+        ((member op '(flet labels macrolet))
+         (let ((defs (second x)))
+           (when (proper-list-p defs)
+             (loop for j from 0 below (length defs)
+                   for d = (nth j defs)
+                   when (and (consp d) (proper-list-p d))
+                     do (let ((j j) (d d))
+                          (walk-elements d (lambda (new) (funcall rebuild (replace-nth x 1 (replace-nth defs j new))))
+                                         2)))))
+         (body 2))
+        ((member op '(dolist dotimes))
+         (let ((spec (second x)))
+           (when (and (consp spec) (proper-list-p spec))
+             (walk-elements spec (lambda (new) (funcall rebuild (replace-nth x 1 new))) 1)))
+         (body 2))
+        ((member op '(multiple-value-bind destructuring-bind))
+         (walk-elements x rebuild 2 3) (body 3))
+        ((member op '(typecase etypecase ctypecase case ecase ccase handler-case))
+         (walk (second x) (lambda (new) (funcall rebuild (replace-nth x 1 new))))
+         (loop for j from 2 below n
+               for clause = (nth j x)
+               when (and (consp clause) (proper-list-p clause))
+                 do (let ((j j) (clause clause))
+                      (walk-elements clause (lambda (new) (funcall rebuild (replace-nth x j new)))
+                                     (if (eq op 'handler-case) 2 1)))))
+        ((eq op 'cond)
+         (loop for j from 1 below n
+               for clause = (nth j x)
+               when (and (consp clause) (proper-list-p clause))
+                 do (let ((j j) (clause clause))
+                      (walk-elements clause (lambda (new) (funcall rebuild (replace-nth x j new))) 0))))
+        (t
+         (let ((flip (cdr (assoc op *comparison-flips*))))
+           (when flip (site "comparison flip" x (cons flip (cdr x)) (lambda () (funcall rebuild (cons flip (cdr x)))))))
+         (case op
+           (+ (when (>= n 3) (swap-operator "sign flip" '-)))
+           (- (if (= n 2)
+                  (site "sign flip" x (second x) (lambda () (funcall rebuild (second x))))
+                  (swap-operator "sign flip" '+)))
+           (incf (swap-operator "sign flip" 'decf))
+           (decf (swap-operator "sign flip" 'incf))
+           (1+ (swap-operator "off-by-one" '1-))
+           (1- (swap-operator "off-by-one" '1+)))
+         (when (and (fboundp op) (not (macro-function op)) (not (special-operator-p op))
+                    (not (member op *commutative*)) (>= n 3))
+           (loop for i from 1 below (1- n)
+                 when (same-kind-p (nth i x) (nth (1+ i) x))
+                   do (let ((i i))
+                        (let ((new (replace-nth (replace-nth x i (nth (1+ i) x)) (1+ i) (nth i x))))
+                          (flet ((text (a b)
+                                   (let ((*print-case* :downcase) (*print-pretty* t) (*print-right-margin* 100000)
+                                         (*print-length* 4) (*print-level* 2))
+                                     (format nil "(~S ~:[~;... ~]~S ~S~:[~; ...~])" op (> i 1) a b (< (+ i 2) n)))))
+                            (site "swapped arguments" (text (nth i x) (nth (1+ i) x)) (text (nth (1+ i) x) (nth i x))
+                                  (lambda () (funcall rebuild new))))))))
+         (walk-elements x rebuild 1)
+         (when (member op *body-operators*) (drop-sites x rebuild 1 (member op '(when unless)))))))))
+
+(defun unit-sites (unit)
+  "Every site of UNIT's form, each (OPERATOR FROM TO REBUILD), in a fixed order."
+  (let ((*sites* '()) (*package* (unit-package unit)))
+    (walk (unit-form unit) (lambda (new) new))
+    (nreverse *sites*)))
+
+;;; ------------------------------------------------------------------------------------
+;;; Parts of the page: the level-1 heading of each anchor, with four parts named apart
+
+(defparameter *named-parts*
+  '(("P5SOLV" . "solver") ("P4CONT" . "contact phases") ("QKS4GZ" . "sleep")
+    ("D9W4CH" . "hash") ("Y5H8KC" . "hash"))
+  "Anchors whose sections, or whose part's sections, form a part named here; any other section
+belongs to the part of its level-1 heading.")
+
+(defun anchor-parts (page)
+  "A hash table from each anchor of PAGE to the name of its part."
+  (let ((parts (make-hash-table :test #'equal))
+        (heading nil) (level 0) (part-anchor nil) (part-title nil))
+    (with-open-file (in page :external-format :utf-8)
+      (loop for line = (read-line in nil) while line
+            do (cond ((and (plusp (length line)) (char= (char line 0) #\*))
+                      (setf level (or (position #\Space line) 0)
+                            heading (string-trim " " (subseq line level)))
+                      (let ((tag (search "   :" heading))) (when tag (setf heading (string-trim " " (subseq heading 0 tag))))))
+                     ((physics::starts-with ":CUSTOM_ID:" (string-trim " " line))
+                      (let ((anchor (string-trim " " (subseq (string-trim " " line) 11))))
+                        (when (= level 1) (setf part-anchor anchor part-title heading))
+                        (setf (gethash anchor parts)
+                              (or (cdr (assoc anchor *named-parts* :test #'string=))
+                                  (cdr (assoc part-anchor *named-parts* :test #'string=))
+                                  part-title)))))))
+    parts))
+
+;;; ------------------------------------------------------------------------------------
+;;; Running the claims: the first failure ends the run
+
+(defun run-claim (name)
+  "Run claim NAME.  NIL if it passed; else a line saying how it failed."
+  (let ((5am:*on-error* :debug) (5am:*on-failure* :debug)
+        (5am:*test-dribble* (make-broadcast-stream)))
+    (block claim
+      (handler-bind ((5am::check-failure
+                       (lambda (c) (return-from claim
+                                     (format nil "~A" (or (5am::reason c) (5am::test-expr c))))))
+                     (serious-condition
+                       (lambda (c) (return-from claim
+                                     (format nil "~A: ~A" (type-of c) c)))))
+        (let ((results (5am:run name)))
+          (cond ((null results) "made no check")
+                ((every #'5am::test-passed-p results) nil)
+                (t "failed")))))))
+
+(defun one-line (string &optional (limit 100))
+  (let ((s (substitute #\Space #\Newline (princ-to-string string))))
+    (if (> (length s) limit) (concatenate 'string (subseq s 0 (- limit 3)) "...") s)))
+
+(defun time-claims (claims)
+  "Run each claim of CLAIMS, (ANCHOR . NAME), once on the unchanged engine.  Return those that
+pass, cheapest first, each (NAME . SECONDS), and the names of those that fail."
+  (let ((timed '()) (failing '()))
+    (dolist (claim claims)
+      (let* ((start (get-internal-real-time))
+             (why (run-claim (cdr claim)))
+             (seconds (/ (- (get-internal-real-time) start) internal-time-units-per-second)))
+        (if why
+            (push (cdr claim) failing)
+            (push (cons (cdr claim) (float seconds 1d0)) timed))))
+    (values (stable-sort (nreverse timed) #'< :key #'cdr) (nreverse failing))))
+
+;;; ------------------------------------------------------------------------------------
+;;; Which claims reach which definitions
+
+(defvar *reached* (make-hash-table :test #'equal :synchronized t)
+  "The function names called since the table was last cleared, while probes are set.")
+
+(defun probed-names (units)
+  "The function names the UNITS define that a probe can watch: functions and generic
+functions of the page, not macros, not the standard's own."
+  (remove-duplicates
+   (loop for u in units
+         append (remove-if-not
+                 (lambda (n)
+                   (and (or (and (symbolp n) (not (eq (symbol-package n) (find-package :cl)))
+                                 (not (macro-function n)) (not (special-operator-p n)))
+                            (and (consp n) (eq (car n) 'setf) (symbolp (second n))
+                                 (not (eq (symbol-package (second n)) (find-package :cl)))))
+                        (fboundp n)))
+                 (unit-defines u)))
+   :test #'equal))
+
+(defun claims-reach (order names)
+  "For each claim of ORDER, (NAME . SECONDS), the list of NAMES its run calls, found by
+running it once more with every one of NAMES wrapped in a probe."
+  (dolist (n names)
+    (let ((n n))
+      (sb-int:encapsulate n 'mutate-reach
+                          (lambda (f &rest args) (setf (gethash n *reached*) t) (apply f args)))))
+  (unwind-protect
+       (loop for (claim) in order
+             collect (progn (clrhash *reached*)
+                            (run-claim claim)
+                            (cons claim (loop for n being the hash-keys of *reached* collect n))))
+    (dolist (n names) (sb-int:unencapsulate n 'mutate-reach))))
+
+(defun claims-for (unit units order reach probed)
+  "The claims of ORDER that can observe a mutant of UNIT: those that call a function defined
+by UNIT or by a form compiled again with it, or, for a parameter, by a form that reads it, and
+those whose own text mentions one of those names.  All of ORDER if none of those functions is
+watched by a probe."
+  (let* ((touched (cons unit (dependents unit units)))
+         (touched (if (eq (unit-kind unit) 'defparameter)
+                      (append touched (remove-if-not (lambda (u) (gethash (unit-name unit) (unit-symbols u))) units))
+                      touched))
+         (names (remove-duplicates (loop for u in touched append (unit-defines u)) :test #'equal))
+         (watched (intersection names probed :test #'equal)))
+    (if (null watched)
+        order
+        (remove-if-not (lambda (claim)
+                         (or (intersection watched (cdr (assoc (car claim) reach)) :test #'equal)
+                             (some (lambda (u) (and (eq (unit-kind u) 'luv-physics-tests:define-claim)
+                                                    (eq (third (unit-form u)) (car claim))))
+                                   touched)))
+                       order))))
+
+;;; ------------------------------------------------------------------------------------
+;;; A mutant and its child
+
+(defstruct mutant
+  unit operator from to rebuild index claims
+  status claim reason seconds)
+
+(defun show (unit x &optional (limit 60))
+  (cond
+    ((eq x :dropped) "nothing")
+    ((stringp x) x)
+    (t
+      (let ((*package* (unit-package unit)) (*print-pretty* t) (*print-right-margin* 100000)
+            (*print-length* 5) (*print-level* 3) (*print-case* :downcase))
+        (one-line (prin1-to-string x) limit)))))
+
+(defun mutant-key (m)
+  "How the report and the page name mutant M: DEFINITION: FROM => TO."
+  (let ((u (mutant-unit m)))
+    (format nil "~(~A~): ~A => ~A" (let ((*package* (unit-package u))) (prin1-to-string (unit-name u)))
+            (show u (mutant-from m)) (show u (mutant-to m)))))
+
+(defun evaluate-in-child (mutant units)
+  "Evaluate MUTANT's definition, then every unit that inlines it or is generated from it.
+NIL if all compiled without a warning; else a line saying what went wrong."
+  (let* ((unit (mutant-unit mutant))
+         (forms (cons (cons unit (funcall (mutant-rebuild mutant)))
+                      (mapcar (lambda (u) (cons u (unit-form u))) (dependents unit units)))))
+    (block compile
+      (handler-bind ((style-warning #'muffle-warning)
+                     (warning (lambda (w) (return-from compile (format nil "warning: ~A" w))))
+                     (serious-condition (lambda (c) (return-from compile (format nil "~A: ~A" (type-of c) c)))))
+        (let ((*compile-verbose* nil) (*compile-print* nil) (sb-ext:*evaluator-mode* :compile))
+          (loop for (u . form) in forms
+                do (let ((*package* (unit-package u))
+                         (inline (remove-if-not (lambda (n) (and (symbolp n) (gethash n *inline-names*)))
+                                                (unit-defines u))))
+                     ;; a function declared inline only around its definition keeps its
+                     ;; expansion only if it is inline while the definition is evaluated
+                     (let ((saved (mapcar (lambda (n) (sb-int:info :function :inlinep n)) inline)))
+                       (when inline (proclaim `(inline ,@inline)))
+                       (eval form)
+                       (loop for n in inline for was in saved
+                             do (setf (sb-int:info :function :inlinep n) was))))))
+        nil))))
+
+(defun child (mutant units order status-path)
+  "The body of a forked child: compile MUTANT, then run the claims of ORDER until one fails,
+writing each step to STATUS-PATH.  Never returns."
+  (let ((null (sb-posix:open "/dev/null" sb-posix:o-rdwr)))
+    (sb-posix:dup2 null 1) (sb-posix:dup2 null 2))
+  (let ((*standard-output* (make-broadcast-stream)) (*error-output* (make-broadcast-stream))
+        (*trace-output* (make-broadcast-stream)))
+    (with-open-file (out status-path :direction :output :if-exists :supersede)
+      (flet ((say (control &rest arguments)
+               (format out "~?~%" control arguments) (finish-output out)))
+        (let ((problem (evaluate-in-child mutant units)))
+          (when problem
+            (say "UNCOMPILABLE ~A" (one-line problem 200))
+            (sb-ext:exit :code 0 :abort t)))
+        (say "COMPILED")
+        (dolist (claim order)
+          (say "START ~A" (symbol-name (car claim)))
+          (let ((why (run-claim (car claim))))
+            (when why
+              (say "KILLED ~A ~A" (symbol-name (car claim)) (one-line why 200))
+              (sb-ext:exit :code 0 :abort t))))
+        (say "SURVIVED")
+        (sb-ext:exit :code 0 :abort t)))))
+
+;;; ------------------------------------------------------------------------------------
+;;; Sampling: sections round robin, each section's sites in a seeded order
+
+(defun shuffle (list state)
+  (let ((v (coerce list 'vector)))
+    (loop for i from (1- (length v)) downto 1
+          do (rotatef (aref v i) (aref v (random (1+ i) state))))
+    (coerce v 'list)))
+
+(defun section-sites (units anchor-filter &optional match)
+  "An alist from anchor to the list of its mutants (not yet run), in file order."
+  (let ((table '()))
+    (dolist (u units)
+      (when (and (unit-mutable u) (unit-anchor u)
+                 (or (null anchor-filter) (string= anchor-filter (unit-anchor u))))
+        (let ((entry (or (assoc (unit-anchor u) table :test #'string=)
+                         (car (push (list (unit-anchor u)) table)))))
+          (dolist (s (unit-sites u))
+            (let ((m (make-mutant :unit u :operator (first s) :from (second s) :to (third s)
+                                  :rebuild (fourth s))))
+              (when (or (null match) (search match (mutant-key m)))
+                (push m (cdr entry))))))))
+    (mapcar (lambda (e) (cons (car e) (nreverse (cdr e)))) (nreverse table))))
+
+;;; ------------------------------------------------------------------------------------
+;;; The parent: two children at a time, timeouts, replacements
+
+(defparameter *compile-timeout* 300 "Seconds a child may take to compile its mutant.")
+
+(defun claim-timeout (seconds)
+  "How long a claim that takes SECONDS on the unchanged engine may run in a child."
+  (+ 20 (* 10 seconds)))
+
+(defun read-status (path)
+  (with-open-file (in path :if-does-not-exist nil)
+    (and in (loop for line = (read-line in nil) while line collect line))))
+
+(defun now () (/ (get-internal-real-time) (float internal-time-units-per-second 1d0)))
+
+(defun load-average ()
+  (with-open-file (in "/proc/loadavg") (read-line in)))
+
+(defun getenv-integer (name default)
+  (let ((v (sb-ext:posix-getenv name)))
+    (if (and v (plusp (length (string-trim " " v)))) (parse-integer v) default)))
+
+(defstruct job mutant pid path started claim claim-started lines)
+
+(defun finish-job (job status claim reason)
+  (let ((m (job-mutant job)))
+    (setf (mutant-status m) status (mutant-claim m) claim (mutant-reason m) reason
+          (mutant-seconds m) (- (now) (job-started job)))
+    m))
+
+(defun poll-job (job timeouts)
+  "The mutant of JOB if its child is done (or was stopped), else NIL."
+  (let* ((lines (read-status (job-path job)))
+         (last (car (last lines)))
+         (pid (job-pid job)))
+    (when (and last (physics::starts-with "START " last) (not (equal last (job-claim job))))
+      (setf (job-claim job) last (job-claim-started job) (now)))
+    (multiple-value-bind (done status) (sb-posix:waitpid pid sb-posix:wnohang)
+      (cond ((plusp done)
+             (let ((lines (read-status (job-path job))))
+               (let ((last (car (last lines))))
+                 (cond ((null last) (finish-job job :crashed nil (format nil "child ended with status ~D" status)))
+                       ((physics::starts-with "UNCOMPILABLE" last) (finish-job job :uncompilable nil (subseq last 13)))
+                       ((physics::starts-with "KILLED " last)
+                        (let* ((rest (subseq last 7))
+                               (space (position #\Space rest)))
+                          (finish-job job :killed (subseq rest 0 space) (if space (subseq rest (1+ space)) ""))))
+                       ((string= last "SURVIVED") (finish-job job :survived nil nil))
+                       (t (finish-job job :crashed (and (physics::starts-with "START " last) (subseq last 6))
+                                      (format nil "child died (status ~D)" status)))))))
+            (t
+             (let* ((claim (job-claim job))
+                    (limit (if claim
+                               (claim-timeout (or (cdr (assoc (subseq claim 6) timeouts :test #'string=)) 10))
+                               *compile-timeout*))
+                    (since (or (job-claim-started job) (job-started job))))
+               (when (> (- (now) since) limit)
+                 (ignore-errors (sb-posix:kill pid sb-posix:sigkill))
+                 (sb-posix:waitpid pid 0)
+                 (finish-job job :timeout (and claim (subseq claim 6))
+                             (format nil "no answer in ~,0F s" limit)))))))))
+
+(defun run-mutants (sections count units order reach probed jobs directory report)
+  "Run COUNT mutants drawn round robin from SECTIONS, JOBS at a time; call REPORT on each
+finished one.  Return the finished mutants that compiled, in the order they were drawn."
+  (let* ((anchors (mapcar #'car sections))
+         (queues (mapcar (lambda (s) (cons (car s) (cdr s))) sections))
+         (slots '()) (running '()) (finished '()) (serial 0) (parent (sb-posix:getpid))
+         (timeouts (mapcar (lambda (c) (cons (symbol-name (car c)) (cdr c))) order)))
+    ;; slot i belongs to the section i mod n of the anchors
+    (dotimes (i count) (push (nth (mod i (length anchors)) anchors) slots))
+    (setf slots (nreverse slots))
+    (flet ((launch (anchor index)
+             (let* ((queue (assoc anchor queues :test #'string=))
+                    (m (pop (cdr queue))))
+               (when m
+                 (setf (mutant-index m) index)
+                 (let ((claims (claims-for (mutant-unit m) units order reach probed)))
+                   (setf (mutant-claims m) (length claims))
+                 (let ((path (format nil "~A/m~D" directory (incf serial))))
+                   (finish-output *standard-output*) (finish-output *error-output*)
+                   (let ((pid (sb-posix:fork)))
+                     (when (zerop pid)
+                       (child m units claims path))
+                     (push (make-job :mutant m :pid pid :path path :started (now)) running))))))))
+      (let ((index 0))
+       (unwind-protect
+        (loop while (or slots running)
+              do (loop while (and slots (< (length running) jobs))
+                       do (let ((anchor (pop slots)))
+                            (unless (launch anchor (incf index))
+                              ;; the slot goes to the next section that still has mutants
+                              (let* ((after (member anchor anchors :test #'string=))
+                                     (other (find-if (lambda (a) (cdr (assoc a queues :test #'string=)))
+                                                     (append (rest after) (ldiff anchors after)))))
+                                (format t "~&(section ~A has no more mutants~@[; its slot goes to ~A~])~%" anchor other)
+                                (when other (push other slots))))))
+                 (dolist (job running)
+                   (let ((m (poll-job job timeouts)))
+                     (when m
+                       (setf running (remove job running))
+                       (ignore-errors (delete-file (job-path job)))
+                       (if (eq (mutant-status m) :uncompilable)
+                           (progn
+                             (format t "~&   (replaced: ~A ~A: ~A)~%" (unit-anchor (mutant-unit m)) (mutant-operator m)
+                                     (one-line (mutant-reason m) 80))
+                             (push (unit-anchor (mutant-unit m)) slots))
+                           (progn (push m finished) (funcall report m (length finished)))))))
+                 (sleep 0.05))
+         ;; if this image is stopped, its children go with it
+         (dolist (job (and (= parent (sb-posix:getpid)) running))
+           (ignore-errors (sb-posix:kill (job-pid job) sb-posix:sigkill))
+           (ignore-errors (sb-posix:waitpid (job-pid job) 0))))))
+      (sort finished #'< :key #'mutant-index)))
+
+;;; ------------------------------------------------------------------------------------
+;;; Reports
+
+(defun killed-p (m) (member (mutant-status m) '(:killed :timeout :crashed)))
+
+(defun print-mutant (m n count)
+  (let ((u (mutant-unit m)))
+    (format t "~&[~3D/~D] ~A ~A (~A:~D) ~A: ~A => ~A~%        ~A~A (~,1F s)~%"
+            n count (unit-anchor u) (show u (unit-name u)) (unit-file u) (unit-line u)
+            (mutant-operator m) (show u (mutant-from m)) (show u (mutant-to m))
+            (case (mutant-status m)
+              (:killed (format nil "killed by ~(~A~): " (mutant-claim m)))
+              (:timeout (format nil "killed by timeout~@[ in ~(~A~)~]: " (mutant-claim m)))
+              (:crashed (format nil "killed by a crash~@[ in ~(~A~)~]: " (mutant-claim m)))
+              (t (format nil "SURVIVED the ~D claims that reach it" (mutant-claims m))))
+            (if (killed-p m) (one-line (mutant-reason m) 70) "")
+            (mutant-seconds m))
+    (finish-output)))
+
+(defun page-reasons (page)
+  "Alist from mutant key to the sentence the page gives for it: paragraphs starting
+'Equivalent mutant ~KEY~:'."
+  (let ((text (physics::read-file-text page)) (reasons '()) (start 0)
+        (prefix "Equivalent mutant ~"))
+    (loop for at = (search prefix text :start2 start)
+          while at
+          do (let* ((key-start (+ at (length prefix)))
+                    (key-end (search "~:" text :start2 key-start))
+                    (end (or (search (format nil "~%~%") text :start2 key-start) (length text))))
+               (when (and key-end (< key-end end))
+                 (push (cons (subseq text key-start key-end)
+                             (one-line (string-trim " " (subseq text (+ key-end 2) end)) 400))
+                       reasons))
+               (setf start (1+ at))))
+    reasons))
+
+(defun score-table (mutants parts stream)
+  (let ((reasons (page-reasons "physics.org")))
+    (write-score-rows (loop for m in mutants
+                            collect (list (gethash (unit-anchor (mutant-unit m)) parts "?")
+                                          (unit-anchor (mutant-unit m))
+                                          (and (assoc (mutant-key m) reasons :test #'string=) t)
+                                          (killed-p m)))
+                      stream)))
+
+(defun write-score-rows (scored stream)
+  "SCORED holds one list per mutant: its part, its anchor, whether the page explains it as
+equivalent, and last whether it was killed.  The score of the rest leaves out the survivors
+the page explains as equivalent."
+  (let ((rows '()))
+    (dolist (x scored)
+      (let* ((part (first x)) (killed (car (last x))) (equivalent (and (not killed) (third x)))
+             (row (or (assoc part rows :test #'string=) (car (push (list part 0 0 '() 0) rows)))))
+        (incf (second row))
+        (when killed (incf (third row)))
+        (when equivalent (incf (fifth row)))
+        (pushnew (second x) (fourth row) :test #'string=)))
+    (setf rows (sort rows #'string< :key #'first))
+    (flet ((line (name sections n k e)
+             (format stream "| ~A | ~D | ~D | ~D | ~D | ~D | ~,1F % | ~,1F % |~%" name sections n k (- n k e) e
+                     (* 100 (/ k (max 1 n))) (* 100 (/ k (max 1 (- n e)))))))
+      (format stream "| part | sections | mutants | killed | survived | equivalent | score | score without equivalents |~%|-~%")
+      (dolist (r rows)
+        (line (first r) (length (fourth r)) (second r) (third r) (fifth r)))
+      (format stream "|-~%")
+      (line "all" (length (remove-duplicates (mapcar #'second scored) :test #'string=))
+            (length scored) (count-if (lambda (x) (car (last x))) scored)
+            (count-if (lambda (x) (and (not (car (last x))) (third x))) scored)))))
+
+(defun survivor-rows (mutants)
+  "One list (ANCHOR OPERATOR FILE KEY) per surviving mutant of MUTANTS."
+  (loop for m in (remove-if #'killed-p mutants)
+        collect (list (unit-anchor (mutant-unit m)) (mutant-operator m) (unit-file (mutant-unit m))
+                      (mutant-key m))))
+
+(defun survivors-list (rows reasons stream)
+  "Write the survivors ROWS, each with the page's reason from REASONS, to STREAM."
+  (if (null rows)
+      (format stream "No mutant survived.~%")
+      (loop for (anchor operator file key) in rows
+            do (format stream "- ~A ~A, ~A: ~A~%    ~A~%" anchor operator file key
+                       (or (cdr (assoc key reasons :test #'string=)) "(no reason given on the page)")))))
+
+(defun annotate-survivors ()
+  "Write report/mutate-survivors.org from report/mutate-survivors.tsv and the page's reasons,
+as they are now."
+  (let ((rows (with-open-file (in "report/mutate-survivors.tsv")
+                (loop for line = (read-line in nil) while line
+                      collect (uiop:split-string line :separator '(#\Tab))))))
+    (with-open-file (out "report/mutate-survivors.org" :direction :output :if-exists :supersede)
+      (survivors-list rows (page-reasons "physics.org") out))))
+
+;;; ------------------------------------------------------------------------------------
+;;; Tables from a log: the lines a run printed, for a run stopped before its end
+
+(defparameter *operators* '("comparison flip" "sign flip" "constant scaling" "off-by-one"
+                            "dropped form" "swapped arguments"))
+
+(defun tables-from-log (log parts)
+  "Read the mutant lines of the run logged in LOG and write the score table and the survivors
+as a finished run does.  Return the number of mutants read."
+  (let ((lines (with-open-file (in log) (loop for line = (read-line in nil) while line collect line)))
+        (rows '()))
+    (loop for (line next) on lines
+          when (and (physics::starts-with "[" line) (search "] " line) next)
+            do (let* ((head (+ 2 (search "] " line)))
+                      (anchor (subseq line head (position #\Space line :start head)))
+                      (name-start (+ head (length anchor) 1))
+                      (file-start (search " (tangled/" line :start2 name-start))
+                      (file-end (and file-start (position #\: line :start file-start)))
+                      (after (and file-end (+ 2 (position #\) line :start file-end))))
+                      (operator (and after (find-if (lambda (op) (eql after (search (concatenate 'string op ": ") line :start2 after)))
+                                                    *operators*))))
+                 (when operator
+                   (push (list anchor operator (subseq line (+ 2 file-start) file-end)
+                               (format nil "~A: ~A" (subseq line name-start file-start)
+                                       (subseq line (+ after (length operator) 2)))
+                               (not (search "SURVIVED" next)))
+                         rows))))
+    (setf rows (nreverse rows))
+    (let ((summary (find-if (lambda (l) (and (physics::starts-with "mutate: " l) (search "mutants killed" l))) lines))
+          (first-line (find-if (lambda (l) (physics::starts-with "mutate: seed" l)) lines))
+          (reasons (page-reasons "physics.org")))
+      (with-open-file (out "report/mutate-score.org" :direction :output :if-exists :supersede)
+        (format out "~A~%~A~%~%" (or first-line "") (or summary (format nil "~D mutants read from ~A, a run stopped before its end" (length rows) log)))
+        (write-score-rows (mapcar (lambda (r) (list (gethash (first r) parts "?") (first r)
+                                                    (and (assoc (fourth r) reasons :test #'string=) t)
+                                                    (fifth r)))
+                                  rows)
+                          out)))
+    (with-open-file (out "report/mutate-survivors.tsv" :direction :output :if-exists :supersede)
+      (loop for r in rows unless (fifth r) do (format out "~{~A~^	~}~%" (subseq r 0 4))))
+    (annotate-survivors)
+    (length rows)))
+
+;;; ------------------------------------------------------------------------------------
+;;; Main
+
+(defun main ()
+  (let* ((seed (getenv-integer "SEED" 1))
+         (count (getenv-integer "COUNT" 150))
+         (jobs (getenv-integer "JOBS" 2))
+         (anchor (let ((a (string-upcase (string-trim " #" (or (sb-ext:posix-getenv "ANCHOR") "")))))
+                   (and (plusp (length a)) a)))
+         (start (now))
+         (units (loop for file in *dependent-files* append (read-units file)))
+         (inline (note-inline-names units))
+         (parts (anchor-parts "physics.org"))
+         (state (sb-ext:seed-random-state seed))
+         (sections (mapcar (lambda (s) (cons (car s) (shuffle (cdr s) state)))
+                           (remove-if-not #'cdr (section-sites units anchor (sb-ext:posix-getenv "MATCH")))))
+         (sections (shuffle sections state)))
+    (when (null sections)
+      (format t "~&mutate: no definitions to mutate~@[ in section ~A~]~%" anchor)
+      (sb-ext:exit :code 1))
+    (format t "~&mutate: seed ~D, ~D mutants over ~D sections (~D sites), ~D at a time; load ~A~%"
+            seed count (length sections) (reduce #'+ sections :key (lambda (s) (length (cdr s)))) jobs
+            (load-average))
+    (multiple-value-bind (order failing) (time-claims luv-physics-tests:*claims*)
+      (format t "~&mutate: ~D claims pass on the unchanged engine in ~,1F s~@[; left out, failing: ~{~(~A~)~^ ~}~]~%"
+              (length order) (reduce #'+ order :key #'cdr) failing)
+      (finish-output)
+      (let* ((probed (probed-names units))
+             (reach (claims-reach order probed))
+             (dummy (format t "~&mutate: ~D functions watched by probes; each claim reaches ~D of them on average~%"
+                            (length probed) (round (reduce #'+ reach :key (lambda (r) (length (cdr r)))) (max 1 (length reach)))))
+             (directory (format nil "/tmp/luv-mutate-~D" (sb-posix:getpid)))
+             (mutants (progn (ensure-directories-exist (format nil "~A/" directory))
+                             (run-mutants sections count units order reach probed jobs directory
+                                          (lambda (m n) (print-mutant m n count)))))
+             (wall (- (now) start))
+             (reasons (page-reasons "physics.org")))
+        (declare (ignore dummy inline))
+        (ignore-errors (sb-ext:delete-directory directory :recursive t))
+        (let ((n (length mutants)) (k (count-if #'killed-p mutants)))
+          (format t "~&~%mutate: ~D of ~D mutants killed (~,1F %), ~D survived; ~,1F s in all, ~,1F s a mutant on average in its child; load ~A~%~%"
+                  k n (* 100 (/ k (max 1 n))) (- n k) wall
+                  (/ (reduce #'+ mutants :key #'mutant-seconds) (max 1 n))
+                  (load-average)))
+        (ensure-directories-exist "report/")
+        (with-open-file (out "report/mutate-score.org" :direction :output :if-exists :supersede)
+          (format out "seed ~D, ~D mutants, ~,1F s a mutant on average (two at a time), ~D s in all~%~%"
+                  seed (length mutants) (/ (reduce #'+ mutants :key #'mutant-seconds) (max 1 (length mutants))) (round wall))
+          (score-table mutants parts out))
+        (with-open-file (out "report/mutate-survivors.tsv" :direction :output :if-exists :supersede)
+          (loop for row in (survivor-rows mutants) do (format out "~{~A~^	~}~%" row)))
+        (annotate-survivors)
+        (score-table mutants parts *standard-output*)
+        (terpri)
+        (survivors-list (survivor-rows mutants) reasons *standard-output*)))))
+
+(cond ((sb-ext:posix-getenv "MUTATE_NO_MAIN"))
+      ((sb-ext:posix-getenv "MUTATE_ANNOTATE") (annotate-survivors))
+      ((sb-ext:posix-getenv "MUTATE_FROM_LOG")
+       (format t "~&mutate: ~D mutants read from ~A~%"
+               (tables-from-log (sb-ext:posix-getenv "MUTATE_FROM_LOG") (anchor-parts "physics.org"))
+               (sb-ext:posix-getenv "MUTATE_FROM_LOG")))
+      (t (main)))
