@@ -6197,9 +6197,9 @@ evenly in log from 0.32 to 32 kg by the fixed sequence of SEED, and run SECONDS 
 the deepest overlap seen after the first two seconds, the last second in which a ball moved
 faster than 0.1 m/s (0 if none after the first), the fastest speed in the last second, and
 whether the world stayed finite and valid. #X7R3M5"
-  (let ((*physics-brace-mass-ratio* brace-ratio)
-        (world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
-        (next (fixed-sequence seed)) (balls '()) (deepest 0.0) (last-moving 0) (fastest-last 0.0))
+  (let* ((*physics-brace-mass-ratio* brace-ratio)
+         (world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
+         (next (fixed-sequence seed)) (balls '()) (deepest 0.0) (last-moving 0) (fastest-last 0.0))
     (dotimes (i count)
       (multiple-value-bind (x y z) (basin-spawn-point i)
         (push (add-physics-body world x y z :radius 0.25
