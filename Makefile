@@ -64,11 +64,11 @@ bench: setup tangle
 	@mkdir -p report
 	@$(LISP) --load tools/bench.lisp | tee report/bench.org
 	@$(SBCL) --script tools/splice.lisp bench-basin report/bench.org
-	@$(LISP) --load tools/bench-scenes.lisp | tee report/bench-scenes.org
+	@BENCH=run-scene-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-scenes.org
 	@$(SBCL) --script tools/splice.lisp bench-scenes report/bench-scenes.org
-	@$(LISP) --load tools/bench-sleeping.lisp | tee report/bench-sleeping.org
+	@BENCH=run-sleeping-scale-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-sleeping.org
 	@$(SBCL) --script tools/splice.lisp bench-sleeping report/bench-sleeping.org
-	@$(LISP) --load tools/bench-queries.lisp | tee report/bench-queries.org
+	@BENCH=run-query-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-queries.org
 	@$(SBCL) --script tools/splice.lisp bench-queries report/bench-queries.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built

@@ -1,5 +1,9 @@
-;;;; tools/bench.lisp -- measure the basin for every kernel family (make bench).
-;;;; Prints an Org table; the Makefile also writes it into physics.org.
+;;;; tools/bench.lisp -- run one of the page's benchmarks (make bench) and print its Org table;
+;;;; the Makefile writes the table into physics.org.
+;;;;
+;;;; BENCH in the environment names the benchmark function of the luv-physics package:
+;;;; run-basin-benchmark (the default), run-scene-benchmark, run-sleeping-scale-benchmark or
+;;;; run-query-benchmark.
 
 (load (merge-pathnames "boot.lisp" *load-truename*))
 
@@ -8,4 +12,9 @@
 (when (luv-load-systems "luv-physics")
   (sb-ext:exit :code 2))
 
-(funcall (find-symbol "RUN-BASIN-BENCHMARK" '#:luv-physics))
+(let* ((name (string-upcase (or (sb-ext:posix-getenv "BENCH") "run-basin-benchmark")))
+       (benchmark (find-symbol name '#:luv-physics)))
+  (unless (and benchmark (fboundp benchmark))
+    (format *error-output* "~&bench: no benchmark ~A in luv-physics~%" name)
+    (sb-ext:exit :code 2))
+  (funcall benchmark))
