@@ -2446,6 +2446,7 @@ number of seconds after which it expires. #M4K3WD"
   "Call FUNCTION on each event of WORLD's last step with the kind (:begin :end :hit :slept
 :woke :expired :escaped), the two handles (the second -1 when none), the point X Y Z, the approach
 speed, and the datum (a box's owner, or NIL). #E7V3NT"
+  (check-world world 'map-physics-events)
   (let ((events (physics-world-events world)) (data (physics-world-event-data world)))
     (with-event-columns (kind handle-a handle-b x y z speed) events
       (dotimes (i (event-columns-length events))
@@ -8010,8 +8011,6 @@ through generic arithmetic. #C4STRY"
   "The cast of OPERATION: check every argument, then walk the boxes, the cells and the bodies in
 turn, each up to the nearest hit so far. Fill HIT (or a fresh physics-hit) and return it, or
 return NIL. #C4STRY"
-  (unless (typep world 'physics-world)
-    (error 'invalid-physics-parameter :name :world :value world :expected "a physics-world"))
   (let* ((x (cast-coordinate world :x x)) (y (cast-coordinate world :y y)) (z (cast-coordinate world :z z))
          (ddx (cast-argument world :dx dx)) (ddy (cast-argument world :dy dy)) (ddz (cast-argument world :dz dz))
          (r (cast-argument world :radius radius))
@@ -8239,14 +8238,14 @@ more cells of a grid than its set has bodies. #OV3RLP"
       (error 'invalid-physics-parameter :world world :name name :value value :expected "from 0 to 1024 m"))
     f))
 
-(defmacro with-region-arguments ((world function (&rest coordinates) (&rest sizes)) &body body)
-  "Check WORLD, FUNCTION, the centre COORDINATES and the SIZES of a region query, then run BODY
+(defmacro with-region-arguments ((world function operation (&rest coordinates) (&rest sizes)) &body body)
+  "Check WORLD (as every exported OPERATION does), FUNCTION, the centre COORDINATES and the SIZES of
+a region query, then run BODY
 with each of them bound to its value as a double, and WORLD refusing edits. The doubles are
 bound inside with-world-held's unwind-protect: a double live across it would be boxed. #OV3RLP"
   (flet ((key (symbol) (intern (symbol-name symbol) '#:keyword)))
     `(progn
-       (unless (typep ,world 'physics-world)
-         (error 'invalid-physics-parameter :name :world :value ,world :expected "a physics-world"))
+       (check-world ,world ',operation)
        (unless (functionp ,function)
          (error 'invalid-physics-parameter :world ,world :name :function :value ,function :expected "a function"))
        (let (,@(loop for c in coordinates
@@ -8262,7 +8261,7 @@ bound inside with-world-held's unwind-protect: a double live across it would be 
   "Call FUNCTION with the handle of each body of WORLD, awake or asleep, that meets the sphere of
 RADIUS about X Y Z (centres no farther apart than the two radii); return how many. The world
 refuses edits while FUNCTION runs. #OV3RLP"
-  (with-region-arguments (world function (x y z) (radius))
+  (with-region-arguments (world function map-physics-bodies-in-sphere (x y z) (radius))
     (let ((view (world-query-view world)) (count 0))
       (declare (type index count))
       (progn
@@ -8281,7 +8280,7 @@ refuses edits while FUNCTION runs. #OV3RLP"
   "Call FUNCTION with the handle of each body of WORLD, awake or asleep, that meets the box about
 X Y Z with half-extents HX HY HZ (its nearest point of the box no farther than its radius);
 return how many. The world refuses edits while FUNCTION runs. #OV3RLP"
-  (with-region-arguments (world function (x y z) (hx hy hz))
+  (with-region-arguments (world function map-physics-bodies-in-box (x y z) (hx hy hz))
     (let ((view (world-query-view world)) (count 0))
       (declare (type index count))
       (progn
@@ -8313,7 +8312,7 @@ box X0..X1 Y0..Y1 Z0..Z1 (doubles), z slowest and x fastest. #OV3RLP"
 (defun map-physics-cells-in-sphere (function world x y z radius)
   "Call FUNCTION with the coordinates of each solid cell of WORLD's terrain (a cell of a chunk that
 is not resident is solid) within RADIUS of X Y Z; return how many. #OV3RLP"
-  (with-region-arguments (world function (x y z) (radius))
+  (with-region-arguments (world function map-physics-cells-in-sphere (x y z) (radius))
     (let ((view (world-query-view world)) (count 0))
       (declare (type index count))
       (progn
@@ -8331,7 +8330,7 @@ is not resident is solid) within RADIUS of X Y Z; return how many. #OV3RLP"
   "Call FUNCTION with the coordinates of each solid cell of WORLD's terrain (a cell of a chunk that
 is not resident is solid) that meets the box about X Y Z with half-extents HX HY HZ; return how
 many. #OV3RLP"
-  (with-region-arguments (world function (x y z) (hx hy hz))
+  (with-region-arguments (world function map-physics-cells-in-box (x y z) (hx hy hz))
     (let ((view (world-query-view world)) (count 0))
       (declare (type index count))
       (progn
