@@ -275,12 +275,12 @@
            (luv-physics::step-physics-world w)
            (check (= 1 counted) "the new phase ran ~D times in one step" counted)
            ;; changed at the REPL: kept
-           (setf luv-physics:*physics-phases* (remove 'luv-physics::restitution-phase original))
+           (setf luv-physics:*physics-phases* (remove 'luv-physics::wake-phase original))
            (let ((summary (with-output-to-string (*standard-output*)
                             (luv-physics::reload-section "IDVK7G" :page copy))))
              (check (search "kept *physics-phases*" summary) "summary: ~A" summary)
              (check (search "0 warnings" summary) "summary: ~A" summary))
-           (check (equal luv-physics:*physics-phases* (remove 'luv-physics::restitution-phase original))))
+           (check (equal luv-physics:*physics-phases* (remove 'luv-physics::wake-phase original))))
       ;; the page's own text back in the image
       (setf luv-physics:*physics-phases* original)
       (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G"))
