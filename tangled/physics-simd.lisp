@@ -159,12 +159,12 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                   (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
          ;; the block's twelve velocity columns live here, on the stack, between the gather
          ;; and the scatter
-         (let ((st (make-array ,(* 12 width) :element-type 'single-float))
+         (let ((st (make-array ,(* 16 width) :element-type 'single-float))
                ;; the scalars, broadcast once: a scalar read back inside the loop would be a
                ;; legacy SSE instruction among the 256-bit ones ([[#F4M1LY]])
                (lower (wc (- threshold))) (ghx (wc hgx)) (ghy (wc hgy)) (ghz (wc hgz)) (ih (wc inv-h))
                (el (wc elapsed)) (cap (wc (- push-max))))
-           (declare (dynamic-extent st) (type (simple-array single-float (,(* 12 width))) st))
+           (declare (dynamic-extent st) (type (simple-array single-float (,(* 16 width))) st))
          (unswitch-bias (use-bias)
          (with-solver-columns cbuf
            (loop for k of-type index from start below end by ,width do
@@ -210,11 +210,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         (vt2 (w+ (w+ (w+ (w+ (w* dvx qx) (w* dvy qy)) (w* dvz qz)) (@w kvt2))
                                  (w+ (w+ (w* wx ux) (w* wy uy)) (w* wz uz))))
                         ;; the friction impulse before the cone, and its length, need no
-                        ;; normal impulse either
-                        (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2))
-                        (n1 (w- l1 (w* (@w tangent-mass) vt1))) (n2 (w- l2 (w* (@w tangent-mass) vt2)))
-                        (len2 (w+ (w* n1 n1) (w* n2 n2)))
-                        (root (wsqrt len2))
+                        ;; normal impulse either; they wait in the stage, so that no register
+                        ;; holds them across the impact part
+                        (staged (let* ((n1 (w- (@w tangent-impulse-1) (w* (@w tangent-mass) vt1)))
+                                       (n2 (w- (@w tangent-impulse-2) (w* (@w tangent-mass) vt2)))
+                                       (len2 (w+ (w* n1 n1) (w* n2 n2))))
+                                  (st! 12 n1) (st! 13 n2) (st! 14 len2) (st! 15 (wsqrt len2))
+                                  t))
                         (l (@w normal-impulse))
                         (raw (if biased
                                  (w- (w- l (w* (w* (@w normal-mass) (wif positive (wc 1.0) (@w mass-scale)))
@@ -227,6 +229,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         ;; has not pushed yet and approaches faster than the threshold, and
                         ;; none armed, skips them
                         (dl (w- new l)))
+                   (declare (ignorable staged))
                    ;; the normal impulse to keep, the velocity change and what the contact pushed
                    (multiple-value-bind (new dl pushed)
                        (let ((armed (@w armed-speed)))
@@ -266,6 +269,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                      (@w! armed-speed (wif bounce (wc 0.0) (wif arm uc armed)))
                                      (let* ((bump (wif bounce kick (wc 0.0))) (bounced (w> bump (wc 0.0))))
                                        (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))))
+                   (symbol-macrolet ((n1 (st@ 12)) (n2 (st@ 13)) (len2 (st@ 14)) (root (st@ 15))
+                                     (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2)))
                    (let* ((limit (w* (@w friction) new))
                           (over (w> len2 (w* limit limit)))
                           ;; outside the cone len2 > 0, so no lane divides by zero
@@ -289,7 +294,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                        (st! ,k (w- (st@ ,k) (w* iar c)))
                                        (st! ,l (w- (st@ ,l) (w* ibr c))))))
                          (component 0 6 3 9 x ux qx) (component 1 7 4 10 y uy qy)
-                         (component 2 8 5 11 z uz qz))))
+                         (component 2 8 5 11 z uz qz)))))
                    ;; a block none of whose lanes rolls against resistance skips the rolling
                    ;; part: every lane would keep its old values anyway
                    (let* ((rl (@w rolling-limit))

@@ -4332,16 +4332,21 @@ per constraint. #S0LV3R"
        (symbol-macrolet ((biased t)) ,@body)
        (symbol-macrolet ((biased nil)) ,@body)))
 
-(defun solve-range (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
-  "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
-when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
-HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
+(defmacro define-solve-range (name impacts documentation)
+  "Define NAME, described by DOCUMENTATION, as one Gauss-Seidel pass over constraints START..END:
+the soft normal impulse (with the bias when USE-BIAS), or an impact's bounce (an approach faster
+than THRESHOLD, under gravity HGX HGY HGZ times the substep), then Coulomb friction, then rolling
+resistance. With IMPACTS the pass bounces impacts itself; without, it hands each row that may
+strike, or is armed, to solve-impact-range, and solves every other row without the impact part. #S0LV3R"
+  `(defun ,name (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
+  ,documentation
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
            (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
   (unswitch-bias (use-bias)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
       ;; one straight chain of bindings, a name bound again where its value changes
+      (block row
       (let ((base (constraint-base k)))
        ;; the constraint's own columns are read from the block where they are used
        (symbol-macrolet ((x (@ nx)) (y (@ ny)) (z (@ nz)) (ma (@ ima)) (mb (@ imb))
@@ -4384,31 +4389,42 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
              ;; the threshold; or an armed contact whose gap has closed. Its bounce, the
              ;; impulse that makes the pair leave at the speed restitution gives, is a push
              ;; of its own, not kept in the contact's impulse
-             (e (@ restitution))
-             (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold))))
-             (bump (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
-                      (let* ((sp (if positive s 0.0))
-                             ;; the change of vn over a substep under gravity
-                             (dv (* (- (if (> mb 0.0) 1.0 0.0) (if (> ma 0.0) 1.0 0.0))
-                                    (+ (* hgx x) (* hgy y) (* hgz z))))
-                             (half (* 0.5 dv))
-                             ;; vn now, and the speed of the impact when the gap closes
-                             (c (if biased (- vn half) (+ vn half)))
-                             (k (* (* (* 2.0 dv) sp) inv-h))
-                             (uc (if impact
-                                     (let ((u2 (- (* c c) k))) (fsqrt (if (> u2 0.0) u2 0.0)))
-                                     (@ armed-speed)))
-                             ;; the leaving speed squared, from here
-                             (wc2 (+ (* (* e e) (* uc uc)) k)))
-                        (if (> 0.0 wc2)
-                            ;; the rebound would not climb this gap: close it, bounce later
-                            (progn (setf (@ armed-speed) uc) 0.0)
-                            (let* ((root (fsqrt (if (> wc2 0.0) wc2 0.0)))
-                                   (w (if biased (+ root half) (- root half)))
-                                   (kick (* (@ normal-mass) (- w vn))))
-                              (when (> kick 0.0) (setf (@ armed-speed) 0.0))
-                              (if (> kick 0.0) kick 0.0))))
-                      0.0))
+             (bump ,(if impacts
+                        '(let* ((e (@ restitution))
+                                (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold)))))
+                          (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
+                          (let* ((sp (if positive s 0.0))
+                                 ;; the change of vn over a substep under gravity
+                                 (dv (* (- (if (> mb 0.0) 1.0 0.0) (if (> ma 0.0) 1.0 0.0))
+                                        (+ (* hgx x) (* hgy y) (* hgz z))))
+                                 (half (* 0.5 dv))
+                                 ;; vn now, and the speed of the impact when the gap closes
+                                 (c (if biased (- vn half) (+ vn half)))
+                                 (k (* (* (* 2.0 dv) sp) inv-h))
+                                 (uc (if impact
+                                         (let ((u2 (- (* c c) k))) (fsqrt (if (> u2 0.0) u2 0.0)))
+                                         (@ armed-speed)))
+                                 ;; the leaving speed squared, from here
+                                 (wc2 (+ (* (* e e) (* uc uc)) k)))
+                            (if (> 0.0 wc2)
+                                ;; the rebound would not climb this gap: close it, bounce later
+                                (progn (setf (@ armed-speed) uc) 0.0)
+                                (let* ((root (fsqrt (if (> wc2 0.0) wc2 0.0)))
+                                       (w (if biased (+ root half) (- root half)))
+                                       (kick (* (@ normal-mass) (- w vn))))
+                                  (when (> kick 0.0) (setf (@ armed-speed) 0.0))
+                                  (if (> kick 0.0) kick 0.0))))
+                          0.0))
+                        ;; a row that may strike (it has not pushed yet, approaches faster than
+                        ;; the threshold and has restitution) or is armed goes to the pass with
+                        ;; the impact part, as it is: nothing of it has been written but the kept
+                        ;; gap, which that pass writes again with the same bits
+                        '(if (or (> (@ armed-speed) 0.0)
+                                 (and (< vn (- threshold)) (= mni 0.0) (> (@ restitution) 0.0)))
+                             (progn (solve-impact-range cbuf v d k (1+ k) inv-h use-bias elapsed
+                                                        push-max threshold hgx hgy hgz)
+                                    (return-from row))
+                             0.0)))
              (bounced (> bump 0.0))
              (new (if bounced l new))
              (dl (if bounced bump (- new l)))
@@ -4473,7 +4489,17 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
                         wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
                         wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
             (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                  (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))
+                  (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))))
+
+(define-solve-range solve-impact-range t
+  "One Gauss-Seidel pass over constraints START..END, bouncing impacts ([[#R3ST1T]]): the pass
+solve-range hands a row to when it may strike or is armed. #S0LV3R")
+
+(define-solve-range solve-range nil
+  "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
+when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
+HGZ times the substep) through solve-impact-range, then Coulomb friction, then rolling
+resistance. #S0LV3R")
 ;; Solve and relax:1 ends here
 
 ;; [[file:../physics.org::#R3ST1T][Restitution at impact:1]]
