@@ -1847,6 +1847,15 @@ function of a column name that reads row K's float in that column. #T3STK1"
                           "~A: (nx ny nz separation px py pz) is ~S, not ~S" name (first got) want)))))))
 ;; B0XPH5-box-contact-geometry ends here
 
+;; [[file:../physics.org::#B0XPH5][B0XPH5-box-edges-bounce-true]]
+(define-claim "B0XPH5" box-edges-bounce-true
+    "Drops onto a posted box's edge and corner take their impulse along the normal at impact."
+  (dolist (corner '(nil t))
+    (multiple-value-bind (impulse outgoing) (luv-physics::block-drops '() corner t)
+      (check (< impulse 1d0) "box ~:[edge~;corner~]: the impulse is up to ~,2F deg off the normal" corner impulse)
+      (check (< outgoing 2d0) "box ~:[edge~;corner~]: the ball leaves up to ~,2F deg off" corner outgoing))))
+;; B0XPH5-box-edges-bounce-true ends here
+
 ;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-keeps-contacts]]
 (define-claim "PRUN3D" reorder-keeps-contacts
     "A reordering prune keeps every contact found, unchanged, in found order, and the table consistent."
