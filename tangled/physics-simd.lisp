@@ -266,6 +266,9 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                           (bounce (w> (wif short (wc 0.0) (wif (w> kick (wc 0.0)) (w+ impact-f armed-f) (wc 0.0)))
                                                       (wc 0.0)))
                                           (arm (w> (wif short impact-f (wc 0.0)) (wc 0.0))))
+                                     ;; the events report the approach at impact: times -1 is
+                                     ;; the exact negation
+                                     (@w! relative-velocity (wif impact (w* uc (wc -1.0)) (@w relative-velocity)))
                                      (@w! armed-speed (wif bounce (wc 0.0) (wif arm uc armed)))
                                      (let* ((bump (wif bounce kick (wc 0.0))) (bounced (w> bump (wc 0.0))))
                                        (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))))

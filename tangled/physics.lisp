@@ -4420,6 +4420,8 @@ strike, or is armed, to solve-impact-range, and solves every other row without t
                                          (@ armed-speed)))
                                  ;; the leaving speed squared, from here
                                  (wc2 (+ (* (* e e) (* uc uc)) k)))
+                            ;; the events report the approach at impact
+                            (when impact (setf (@ relative-velocity) (- uc)))
                             (if (> 0.0 wc2)
                                 ;; the rebound would not climb this gap: close it, bounce later
                                 (progn (setf (@ armed-speed) uc) 0.0)

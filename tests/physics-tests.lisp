@@ -2157,6 +2157,29 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (< fastest 0.05d0) "a ball of the stack moves at ~,4F m/s in its third second" fastest)))
 ;; R3ST1T-resting-stack-stays ends here
 
+;; [[file:../physics.org::#R3ST1T][R3ST1T-hit-reports-impact-speed]]
+(define-claim "R3ST1T" hit-reports-impact-speed
+    "A bounce's :hit event carries the approach speed at impact."
+  (dolist (h '(0.3d0 1d0 2.5d0))
+    (let* ((world (luv-physics::open-air-world :floor t))
+           (r 0.25d0) (slop (float luv-physics::*physics-linear-slop* 1d0))
+           (ball (luv-physics::add-physics-body world 0.0 (+ r h) 0.0 :radius r :restitution 0.5
+                                                             :report-hits t))
+           (want (sqrt (* 2 9.81d0 (+ h slop))))
+           (got nil))
+      (loop repeat 120 until got do
+        (luv-physics::step-physics-world world)
+        (luv-physics::map-physics-events
+         (lambda (kind a b x y z speed datum)
+           (declare (ignore b x y z datum))
+           (when (and (eq kind :hit) (= a ball) (null got)) (setf got speed)))
+         world))
+      (check got "from ~,1F m: no hit reported" h)
+      (when got
+        (check (< (abs (- (/ got want) 1)) 0.002d0)
+               "from ~,1F m: the hit reports ~,4F m/s, the impact was at ~,4F" h got want)))))
+;; R3ST1T-hit-reports-impact-speed ends here
+
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
     "Resting: penetration = slop, approach ~ 0; nothing touching: zeros; landing: > slop."
