@@ -2556,6 +2556,42 @@ made by hand. #K5DF9S"
         (check (zerop consed) "the ~(~A~) scene's script consed ~D bytes in 300 steps" name consed)))))
 ;; K5DF9S-script-conses-nothing ends here
 
+;; [[file:../physics.org::#K5DF9S][K5DF9S-scenes-declare-what-they-use]]
+(defun scene-features-used (name &key (seconds 2) (every 30))
+  "The features the scene NAME uses in SECONDS of running, read from its world every EVERY steps,
+in the order of *physics-scene-features*. #K5DF9S"
+  (multiple-value-bind (world script) (make-scene-world name :throw-at 1)
+    (let ((used '()))
+      (flet ((use (feature) (pushnew feature used))
+             (any (column buffer) (some #'plusp (subseq column 0 (luv-physics::body-columns-length buffer)))))
+        (dotimes (step (* 60 seconds))
+          (funcall script step)
+          (when (plusp (luv-physics::box-columns-length (luv-physics::physics-world-boxes world))) (use :boxes))
+          (step-physics-world world)
+          (when (zerop (mod (1+ step) every))
+            (let ((contacts (luv-physics::physics-world-contacts world)))
+              (dotimes (c (luv-physics::contact-columns-length contacts))
+                (let ((kind (aref (luv-physics::contact-columns-kind contacts) c)))
+                  (cond ((= kind luv-physics::+contact-pair+) (use :body-contacts))
+                        ((= kind luv-physics::+contact-terrain+) (use :terrain))))))
+            (dolist (buffer (list (luv-physics::physics-world-awake world) (luv-physics::physics-world-sleeping world)))
+              (when (any (luv-physics::body-columns-friction buffer) buffer) (use :friction))
+              (when (any (luv-physics::body-columns-rolling-resistance buffer) buffer) (use :rolling-resistance))
+              (when (any (luv-physics::body-columns-restitution buffer) buffer) (use :restitution))
+              (when (any (luv-physics::body-columns-life buffer) buffer) (use :mortal)))))
+        (when (luv-physics::physics-world-sleep-enabled world) (use :sleep))
+        (when (physics-world-event-handler world) (use :events)))
+      (remove-if-not (lambda (f) (member f used)) luv-physics::*physics-scene-features*))))
+
+(define-claim "K5DF9S" scenes-declare-what-they-use
+    "Each standard scene uses, over 2 s, exactly the features it declares."
+  (dolist (name '(:awake-basin :basin :pile :fountain :lava :player))
+    (let ((declared (physics-scene-features (find-physics-scene name)))
+          (used (scene-features-used name)))
+      (check (and (subsetp used declared) (subsetp declared used))
+             "~(~A~) declares ~S and uses ~S" name declared used))))
+;; K5DF9S-scenes-declare-what-they-use ends here
+
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
 (define-claim "JAU0EF" kinds-make-their-bodies
     "Each kind gives its radius and name; a gobbet expires at 4 s; an unknown kind is refused."
