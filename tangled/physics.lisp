@@ -6379,17 +6379,27 @@ of its own mass and radius. #X7R3M5"
                                          (* 0.4d0 r r (+ (expt (aref wx row) 2) (expt (aref wy row) 2)
                                                          (expt (aref wz row) 2)))))))))))))
 
-(defun dead-pile (count &key (seconds 10))
-  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0) of the awake basin
-scene and run SECONDS. Return the kinetic energy at each whole second, in joules,
-and the fastest ball's speed at the end. #X7R3M5"
-  (let* ((world (make-basin-world count :kernels :auto))
-         (balls (physics-world-handles world))
+(defun dead-pile (count &key (seconds 10) (rolling-resistance 0.0))
+  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0, ROLLING-RESISTANCE)
+in the basin lattice with sleeping off and run SECONDS. Return the kinetic energy at each whole
+second, in joules, the fastest ball's speed at the end, and the speed of that ball's lowest
+point, which is zero when it rolls on the floor without slipping. #X7R3M5"
+  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
+         (balls (loop for i below count
+                      collect (multiple-value-bind (x y z) (basin-spawn-point i)
+                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6
+                                                              :rolling-resistance rolling-resistance))))
          (curve '()))
     (dotimes (second seconds)
       (dotimes (i 60) (step-physics-world world))
       (push (pile-kinetic-energy world balls) curve))
-    (values (nreverse curve) (reduce #'max balls :key (lambda (b) (speed-of world b))))))
+    (let ((fastest (reduce (lambda (a b) (if (>= (speed-of world a) (speed-of world b)) a b)) balls)))
+      (multiple-value-bind (vx vy vz) (physics-body-velocity world fastest)
+        (multiple-value-bind (wx wy wz) (physics-body-angular-velocity world fastest)
+          (declare (ignore wy))
+          ;; the lowest point moves at v + w x (0, -r, 0) = v + (r wz, 0, -r wx)
+          (values (nreverse curve) (speed-of world fastest)
+                  (sqrt (+ (expt (+ vx (* 0.25 wz)) 2) (* vy vy) (expt (- vz (* 0.25 wx)) 2)))))))))
 
 (defun thrown-into-pile (count &key (seconds 8) throw-at (shift 0.0) (seed nil))
   "The default scene at COUNT balls (each spawn point moved by up to 1 cm in x and z by the fixed
@@ -6404,10 +6414,10 @@ of each second. #X7R3M5"
                (step-physics-world world))
           collect (physics-world-awake-count world))))
 
-(defun column-contact-depths (count &key (radius 0.45) (seconds 10))
-  "Stack COUNT balls of RADIUS and 1 kg in the shaft, sleeping on, and run SECONDS. Return each
-contact's overlap at the end, from the floor up, in slops. #X7R3M5"
-  (let* ((world (make-shaft-world :sleep t))
+(defun column-contact-depths (count &key (radius 0.45) (seconds 10) (sleep t))
+  "Stack COUNT balls of RADIUS and 1 kg in the shaft of a world that lets bodies SLEEP or not, and
+run SECONDS. Return each contact's overlap at the end, from the floor up, in slops. #X7R3M5"
+  (let* ((world (make-shaft-world :sleep sleep))
          (balls (loop for i below count
                       collect (add-physics-body world 0.5 (+ radius (* i 2.02 radius)) 0.5 :radius radius :mass 1.0))))
     (dotimes (i (* 60 seconds)) (step-physics-world world))
@@ -6415,6 +6425,22 @@ contact's overlap at the end, from the floor up, in slops. #X7R3M5"
       (mapcar (lambda (overlap) (/ overlap *physics-linear-slop*))
               (cons (- radius (first heights))
                     (loop for (a b) on heights while b collect (- (* 2 radius) (- b a))))))))
+
+(defun soft-column-depths (count &key (mass 1.0))
+  "The overlaps, from the floor up and in slops, at which a column of COUNT awake balls of MASS in
+the shaft comes to rest by the soft contact's law ([[#G7Q3XR]]): each contact one slop plus its
+load over its effective mass times omega squared. The floor's contact is stiffened by its load
+and gives g over omega squared at twice the frequency; a contact between two balls, whose
+effective mass is half a ball, gives the weight of the balls above it over half a ball times
+omega squared. #X7R3M5"
+  (let* ((world (make-shaft-world))
+         (g (abs (physics-world-gravity-y world)))
+         (h (/ (f32 (physics-world-step-seconds world)) (physics-world-substeps world)))
+         (omega (* 2.0 (f32 pi) (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h))))
+         (slop (f32 (physics-world-slop world))))
+    (cons (/ (+ slop (/ g (expt (* 2.0 omega) 2))) slop)
+          (loop for above from (1- count) downto 1
+                collect (/ (+ slop (/ (* above mass g) (* 0.5 mass omega omega))) slop)))))
 
 (defun speed-of (world handle)
   "The speed of HANDLE's body. #X7R3M5"
@@ -6644,6 +6670,13 @@ its final height less its ideal resting height (radius less a slop), and whether
       (row "column of 20 balls, each contact against its design depth (one slop)"
            (every (lambda (d) (<= d 1.1)) depths)
            "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}" depths))
+    ;; awake, every contact gives by its load: the soft contact's law, against which it is held
+    (let* ((depths (column-contact-depths 20 :sleep nil)) (law (soft-column-depths 20))
+           (off (reduce #'max (mapcar (lambda (d w) (abs (- d w))) depths law))))
+      (row "column of 20 balls, sleeping off, each contact against the soft contact's law"
+           (<= off 0.02)
+           "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}; at most ~,3F slops from the law's ~
+            ~,2F .. ~,2F" depths off (second law) (car (last law))))
     (let ((runs (append (loop for shift in '(0.0 0.001 0.002 0.003)
                               collect (thrown-into-pile 1000 :seconds 12 :throw-at 4 :shift shift))
                         (loop for seed from 1 to 10
@@ -6653,10 +6686,12 @@ its final height less its ideal resting height (radius less a slop), and whether
         (row "default scene, ball thrown at 4 s, 14 runs (throw 0-3 mm aside, 10 jittered spawns)"
              (and (<= at-8 10) (zerop at-12))
              "awake of 1001 in the worst run: ~D at 8 s, ~D at 12 s" at-8 at-12)))
-    (multiple-value-bind (curve fastest) (dead-pile 500 :seconds 10)
-      (row "500 dead balls, sleeping off" (and (< (car (last curve)) 1e-4) (< fastest 0.001))
-           "kinetic energy at 1 .. 10 s, mJ: ~{~,3F~^ ~}; fastest at 10 s ~,4F m/s"
-           (mapcar (lambda (e) (* 1000 e)) curve) fastest))
+    (dolist (rho '(0.0 0.01))
+      (multiple-value-bind (curve fastest slip) (dead-pile 500 :seconds 10 :rolling-resistance rho)
+        (row (format nil "500 dead balls, sleeping off~:[~;, rolling resistance ~:*~,2F~]" (and (> rho 0) rho))
+             (and (< (car (last curve)) 1e-4) (< fastest 0.001))
+             "kinetic energy at 1 .. 10 s, mJ: ~{~,3F~^ ~}; fastest at 10 s ~,4F m/s, its lowest point ~
+              at ~,5F m/s" (mapcar (lambda (e) (* 1000 e)) curve) fastest slip)))
     (multiple-value-bind (speed median worst pen) (heaps-at-one-point)
       (row "heaps of 50 to 150 balls spawned at one point" (and (< speed 10.0) (< pen 0.01))
            "fastest ball ~,3F m/s; fastest parting pair ~,3F m/s in the median heap, ~,3F m/s in the worst; ~

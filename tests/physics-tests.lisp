@@ -2857,6 +2857,24 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (< pen 0.02) "the light ball on the heavy one sank ~,4F m" pen)))
 ;; X7R3M5-columns-stand ends here
 
+;; [[file:../physics.org::#X7R3M5][X7R3M5-column-gives-by-the-law]]
+(define-claim "X7R3M5" column-gives-by-the-law
+    "An awake column of twenty balls rests at the soft contact's deflection under each contact's load."
+  (let ((depths (luv-physics::column-contact-depths 20 :sleep nil :seconds 4))
+        (law (luv-physics::soft-column-depths 20)))
+    (check (= (length depths) (length law) 20))
+    (loop for d in depths for w in law for k from 0
+          do (check (< (abs (- d w)) 0.02) "contact ~D from the floor: ~,3F slops, the law gives ~,3F" k d w))))
+;; X7R3M5-column-gives-by-the-law ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-rolling-resistance-rests-a-pile]]
+(define-claim "X7R3M5" rolling-resistance-rests-a-pile
+    "A dead pile whose balls resist rolling comes to rest with sleeping off."
+  (multiple-value-bind (curve fastest) (luv-physics::dead-pile 200 :rolling-resistance 0.01)
+    (check (< (car (last curve)) 4e-5) "the pile holds ~,4F mJ after 10 s" (* 1000 (car (last curve))))
+    (check (< fastest 0.001) "a ball still moves at ~,5F m/s after 10 s" fastest)))
+;; X7R3M5-rolling-resistance-rests-a-pile ends here
+
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-heavy-on-light-recovers]]
 (define-claim "X7R3M5" heavy-on-light-recovers
     "A heavy ball on a light one rests a slop deep, asleep or awake; a heavy ball from the side pushes."
