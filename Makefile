@@ -70,6 +70,8 @@ bench: setup tangle
 	@$(SBCL) --script tools/splice.lisp bench-sleeping report/bench-sleeping.org
 	@BENCH=run-query-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-queries.org
 	@$(SBCL) --script tools/splice.lisp bench-queries report/bench-queries.org
+	@BENCH=run-feature-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-features.org
+	@$(SBCL) --script tools/splice.lisp bench-features report/bench-features.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
 # without -march=native like Debian's Bullet and ODE.
