@@ -77,8 +77,7 @@
    ;; Random operation sequences (#M9W5P7)
    #:run-fuzz-campaign #:run-physics-soak
    ;; Features: a world pays only for what it uses (#FEAT5X)
-   #:physics-world-features #:physics-feature-omitted #:physics-feature-omitted-feature
-   #:physics-feature-omitted-operation))
+   #:physics-world-features #:physics-feature-omitted))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -6301,13 +6300,13 @@ as two values. #FBNCH9"
 
 (defun measure-feature-scene (name &key (kernels :auto))
   "Step the feature scene NAME built general and specialised, in turn, and return a plist of the
-mean ms and bytes consed per step of each over its steps FROM..TO. #FBNCH9"
+median ms and the bytes consed per step of each over its steps FROM..TO. #FBNCH9"
   (destructuring-bind (what features from to) (rest (assoc name +feature-scenes+))
     (declare (ignore what))
     (multiple-value-bind (general general-step) (feature-scene name :kernels kernels)
       (multiple-value-bind (special special-step)
           (feature-scene name :kernels kernels :features (or features +physics-features+))
-        (let ((ms (list 0d0 0d0)) (consed (list 0 0)))
+        (let ((ms (list '() '())) (consed (list 0 0)))
           (dotimes (i to)
             (flet ((one (k world before)
                      (when before (funcall before i))
@@ -6315,12 +6314,12 @@ mean ms and bytes consed per step of each over its steps FROM..TO. #FBNCH9"
                        (step-physics-world world)
                        (when (>= i from)
                          (incf (nth k consed) (- (sb-ext:get-bytes-consed) bytes))
-                         (incf (nth k ms) (* 1000 (physics-world-last-step-real-seconds world)))))))
+                         (push (* 1000 (physics-world-last-step-real-seconds world)) (nth k ms))))))
               (if (evenp i)
                   (progn (one 0 general general-step) (one 1 special special-step))
                   (progn (one 1 special special-step) (one 0 general general-step)))))
           (let ((n (- to from)))
-            (list :general (/ (first ms) n) :specialised (/ (second ms) n)
+            (list :general (median (first ms)) :specialised (median (second ms))
                   :general-consed (round (first consed) n) :specialised-consed (round (second consed) n)
                   :bodies (+ (physics-world-awake-count special) (physics-world-sleeping-count special)))))))))
 
@@ -6330,7 +6329,7 @@ built for its features, in one run, with the machine's load. #FBNCH9"
   (let ((body-bytes (+ +body-columns-row-bytes+ (* 2 4 +solver-stride+)))
         (contact-bytes (+ +contact-columns-row-bytes+ (* 4 (length +constraint-columns+)) (* 3 8))))
     (format stream "~&#+caption: general and specialised steps, ~(~A~) family; load ~A~%" kernels (load-average))
-    (format stream "~&| scene | bodies | general ms | specialised ms | ratio | bytes consed/step | column bytes/body | column bytes/contact |~%")
+    (format stream "~&| scene | bodies | general median ms | specialised median ms | ratio | bytes consed/step | column bytes/body | column bytes/contact |~%")
     (format stream "~&|-------+--------+------------+----------------+-------+-------------------+-------------------+----------------------|~%")
     (dolist (scene +feature-scenes+)
       (let ((m (measure-feature-scene (first scene) :kernels kernels)))
