@@ -192,7 +192,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                   (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
          ;; the block's twelve velocity columns live here, on the stack, between the gather
          ;; and the scatter
-         (let ((st (make-array ,(* 16 width) :element-type 'single-float))
+         (let ((st (make-array ,(* 12 width) :element-type 'single-float))
                ;; the scalars, broadcast once: a scalar read back inside the loop would be a
                ;; legacy SSE instruction among the 256-bit ones ([[#F4M1LY]])
                (lower (wc (- threshold))) (ghx (wc hgx)) (ghy (wc hgy)) (ghz (wc hgz)) (ih (wc inv-h))
