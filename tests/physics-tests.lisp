@@ -1951,11 +1951,11 @@ function of a column name that reads row K's float in that column. #T3STK1"
     "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
   (flet ((box-contact (centre half shift)
            (let* ((w (make-floor-world :gravity '(0 0 0)))
-                  (h (luv-physics::add-physics-body w (+ 3.5 shift) 3.0 (+ 3.5 shift)))
+                  (h (luv-physics::add-physics-body w (+ 3.5 shift) (+ 3.0 shift) (+ 3.5 shift)))
                   (c (luv-physics::physics-world-contacts w)))
              (destructuring-bind (x y z) centre
                (destructuring-bind (hx hy hz) half
-                 (luv-physics::post-physics-box w (+ x shift) y (+ z shift) hx hy hz :owner :probe)))
+                 (luv-physics::post-physics-box w (+ x shift) (+ y shift) (+ z shift) hx hy hz :owner :probe)))
              (luv-physics::step-physics-world w)
              (loop for row below (luv-physics::contact-columns-length c)
                    when (and (= (aref (luv-physics::contact-columns-handle-a c) row) h)
@@ -1970,6 +1970,9 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (list (list "outside" (list (+ 3.5 0.05 0.25) (+ 3.0 0.1 0.25) (+ 3.5 0.15 0.25)) '(0.25 0.25 0.25)
                          (append (mapcar (lambda (v) (/ v len)) d) (list (- len 0.25))
                                  (list (+ 3.5 0.05) (+ 3.0 0.1) (+ 3.5 0.15))))
+                   (list "outside, a box 4 m long" (list (+ 3.5 0.05 0.25) (+ 3.0 0.1 0.25) (+ 3.5 0.15 2.0)) '(0.25 0.25 2.0)
+                         (append (mapcar (lambda (v) (/ v len)) d) (list (- len 0.25))
+                                 (list (+ 3.5 0.05) (+ 3.0 0.1) (+ 3.5 0.15))))
                    (list "inside, -z face" '(3.5 3.05 3.7) '(0.2 0.25 0.3)
                          (list 0.0 0.0 1.0 (- (+ 0.1 0.25)) 3.5 3.0 3.4))
                    (list "inside, +x face" '(3.4 3.0 3.5) '(0.2 0.2 0.25)
@@ -1978,7 +1981,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
             do (loop for (name centre half want) in cases
                      do (let ((got (box-contact centre half shift))
                               (want (append (subseq want 0 4)
-                                            (list (+ (fifth want) shift) (sixth want) (+ (seventh want) shift)))))
+                                            (list (+ (fifth want) shift) (+ (sixth want) shift) (+ (seventh want) shift)))))
                           (check (= 1 (length got)) "~A, moved by ~A: ~D box contacts" name shift (length got))
                           (when got
                             (check (every (lambda (g e) (< (abs (- g e)) 1e-5)) (first got) want)
