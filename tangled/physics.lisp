@@ -5808,11 +5808,13 @@ a scene's world before its first step, the order its bodies were added in. #K5DF
 
 (defun scene-world-arguments (scene overrides)
   "The arguments, after the terrain, with which SCENE's world is made: its :world clause, with
-each world argument of OVERRIDES (a plist of a run's options) in place of the scene's. #K5DF9S"
+each world argument of OVERRIDES (a plist of a run's options) in place of the scene's; a
+:features of T stands for the features SCENE declares. #K5DF9S"
   (let ((arguments (copy-list (physics-scene-world-arguments scene))))
     (loop for (key value) on overrides by #'cddr
-          when (member key '(:sleep :kernels :step-seconds :substeps :gravity))
-            do (setf (getf arguments key) value))
+          when (member key '(:sleep :kernels :step-seconds :substeps :gravity :features))
+            do (setf (getf arguments key)
+                     (if (and (eq key :features) (eq value t)) (physics-scene-features scene) value)))
     arguments))
 
 (defun add-scene-bodies (world group count seed)
@@ -5865,13 +5867,14 @@ line printed to STREAM, when given), its springs and its walker, whose frame is 
         (post-physics-player world player)))))
 
 (defun make-scene-world (name &rest options &key count seed (shift 0.0) throw-at stream
-                                                 kernels sleep step-seconds substeps gravity)
+                                                 kernels sleep step-seconds substeps gravity features)
   "Build the world of the scene NAME; return it, its script (the function of the step's number to
 call before each step) and the scene. OPTIONS change the run: COUNT, the first body clause's
 count; SEED, the seed of the spawn jitter; SHIFT and THROW-AT, where along x and when its actions
-act; STREAM, where their lines go; and KERNELS, SLEEP, STEP-SECONDS, SUBSTEPS and GRAVITY, the
-world's. #K5DF9S"
-  (declare (ignore kernels sleep step-seconds substeps gravity))
+act; STREAM, where their lines go; and KERNELS, SLEEP, STEP-SECONDS, SUBSTEPS, GRAVITY and
+FEATURES (T for the features the scene declares; every feature when not given), the world's.
+#K5DF9S"
+  (declare (ignore kernels sleep step-seconds substeps gravity features))
   (let* ((scene (find-physics-scene name 'make-scene-world))
          (groups (physics-scene-bodies scene))
          (counts (loop for group in groups for first = t then nil
@@ -6609,24 +6612,25 @@ basin benchmark's do, so all their balls are awake while they are measured. #FBN
                              (sleep (not (member name '(:dead-pile :basin)))))
   "The world of the feature scene NAME of +feature-scenes+ with FEATURES, solved by KERNELS (a
 pile holds BALLS balls; SLEEP, whether its bodies may sleep, is false for the piles), and the
-function of the step's number to call before each step, or NIL, as two values. #FBNCH9"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep sleep :features features)))
-    (ecase name
-      ((:dead-pile :basin)
-       (dotimes (i balls (values world nil))
-         (multiple-value-bind (x y z) (basin-spawn-point i)
-           (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0))))
-      ((:fountain :walker)
-       (let ((springs (list (make-basin-fountain)))
-             (player (and (eq name :walker) (make-physics-player 3d0 0d0 3d0))))
-         (values world
-                 (lambda (step)
-                   (run-physics-springs world springs)
-                   (when player
-                     (multiple-value-bind (move-x move-z) (player-scene-input step)
-                       (advance-physics-player player (physics-world-terrain world) (/ 1d0 60)
-                                               :move-x move-x :move-z move-z))
-                     (post-physics-player world player)))))))))
+function of the step's number to call before each step, as two values. The piles are the scene
+:awake-basin and the fountain the scene :fountain; the walker among the drops is no scene of its
+own. #FBNCH9"
+  (ecase name
+    ((:dead-pile :basin)
+     (make-scene-world :awake-basin :count balls :kernels kernels :sleep sleep :features features))
+    (:fountain (make-scene-world :fountain :kernels kernels :sleep sleep :features features))
+    (:walker
+     (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep sleep
+                                      :features features))
+           (springs (list (make-basin-fountain)))
+           (player (make-physics-player 3d0 0d0 3d0)))
+       (values world
+               (lambda (step)
+                 (run-physics-springs world springs)
+                 (multiple-value-bind (move-x move-z) (player-scene-input step)
+                   (advance-physics-player player (physics-world-terrain world) (/ 1d0 60)
+                                           :move-x move-x :move-z move-z))
+                 (post-physics-player world player)))))))
 
 (defun measure-feature-scene (name &key (kernels :auto))
   "Step the feature scene NAME built general and specialised, in turn, and return a plist of the
