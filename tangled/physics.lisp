@@ -2062,6 +2062,7 @@ dispatches on it once per call. #W0RLD7"))
                  :reader physics-world-color-starts)
    (color-masks :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-color-masks)
    (braced :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-braced)
+   (held :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-held)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
    (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
@@ -2457,6 +2458,9 @@ speed, and the datum (a box's owner, or NIL). #E7V3NT"
 ;; Events are rows too:1 ends here
 
 ;; [[file:../physics.org::#QKS4GZ][Sleep is relocation; boxes, throws and edits wake:1]]
+(defconstant +woken-sleep-credit+ 0.5
+  "The part of the time to sleep a woken body starts with already counted. #QKS4GZ")
+
 (defun relocate-body (world from-set row to-set)
   "Move the body at ROW of FROM-SET to the end of TO-SET, patching the forwarding address of
 the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
@@ -2488,8 +2492,9 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
     new))
 
 (defun wake-physics-body (world row)
-  "Wake the sleeping body at ROW: relocate it to the end of the awake set, note :woke. In a step,
-note ROW in the step's undo log too (roll-back-step). #QKS4GZ"
+  "Wake the sleeping body at ROW: relocate it to the end of the awake set, its stillness counted
+from +woken-sleep-credit+ of the time to sleep, and note :woke. In a step, note ROW in the step's
+undo log too (roll-back-step). #QKS4GZ"
   (when (physics-world-undo-open world)
     (let ((log (physics-world-undo-woken world)) (k (physics-world-undo-woken-count world)))
       (when (>= k (length log))
@@ -2500,7 +2505,9 @@ note ROW in the step's undo log too (roll-back-step). #QKS4GZ"
          (new (progn (when (> (aref (body-columns-life (physics-world-sleeping world)) row) 0.0)
                        (decf (physics-world-mortal-sleepers world)))
                      (relocate-body world +set-sleeping+ row +set-awake+))))
-    (setf (aref (body-columns-sleep-time (physics-world-awake world)) new) 0.0)
+    ;; a sleeper was still for the whole time to sleep: it wakes with half of it counted
+    (setf (aref (body-columns-sleep-time (physics-world-awake world)) new)
+          (* +woken-sleep-credit+ (f32 (physics-world-time-to-sleep world))))
     (leave-sleeping-grids world handle)
     (push-event world +event-woke+ handle +no-body+ 0.0 0.0 0.0 0.0)
     new))
@@ -2544,7 +2551,8 @@ removed. Return WORLD. #QKS4GZ"
           (physics-world-velocities world) (make-array 0 :element-type 'single-float)
           (physics-world-deltas world) (make-array 0 :element-type 'single-float)
           (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
-          (physics-world-braced world) (make-array 0 :element-type 'fixnum))
+          (physics-world-braced world) (make-array 0 :element-type 'fixnum)
+          (physics-world-held world) (make-array 0 :element-type 'fixnum))
     (let ((count (physics-world-fresh-count world)))
       (setf (physics-world-fresh-handles world)
             (replace (make-array (max 64 count) :element-type 'fixnum :initial-element 0)
@@ -3775,6 +3783,8 @@ variable BASE. #SSMPYW"
             (physics-world-color-masks world)
             (make-array rows :element-type 'fixnum :initial-element 0)
             (physics-world-braced world)
+            (make-array rows :element-type 'fixnum :initial-element 0)
+            (physics-world-held world)
             (make-array rows :element-type 'fixnum :initial-element 0))))
   (when (< (length (physics-world-contact-colors world)) contacts)
     (setf (physics-world-contact-colors world)
@@ -4511,10 +4521,35 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 ;; The scalar family:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
+(declaim (inline held-marking-p mark-held))
+(defun held-marking-p (world)
+  "True when this step's store phase marks which awake rows are held by sleepers alone: sleep is
+on and some body sleeps. #ST0R3S"
+  (and (physics-world-sleep-enabled world)
+       (plusp (body-columns-length (physics-world-sleeping world)))))
+
+(defun mark-held (held kind handle-a handle-b ids c row-a row-b n)
+  "Note in HELD what contact C, between solver rows ROW-A and ROW-B (N is the dummy row), tells
+of its awake side: bit 1 when it leans on a sleeper, bit 2 when its other side moves (an awake
+body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
+  (declare (type fixnum-column held kind handle-a handle-b) (type handle-table ids)
+           (type index c row-a row-b n))
+  (cond ((and (< row-a n) (< row-b n))
+         (setf (aref held row-a) (logior (aref held row-a) 2)
+               (aref held row-b) (logior (aref held row-b) 2)))
+        ((= (aref kind c) +contact-terrain+))
+        (t (let* ((row (min row-a row-b))
+                  (other (if (= row-a n) (aref handle-a c) (aref handle-b c)))
+                  (lean (and (= (aref kind c) +contact-pair+)
+                             (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
+             (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
+
 (defun store-phase (world)
   "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
-speed. From here on the step changes what it cannot undo, so its undo log closes. #ST0R3S"
+speed; in a world with sleepers, mark the awake rows that only sleepers and terrain touch
+(mark-held), for the finalize phase's sleep. From here on the step changes what it cannot undo,
+so its undo log closes. #ST0R3S"
   (setf (physics-world-undo-open world) nil)
   (let* ((cbuf (physics-world-constraints world))
          (contacts (physics-world-contacts world))
@@ -4524,9 +4559,14 @@ speed. From here on the step changes what it cannot undo, so its undo log closes
          (sleeping (physics-world-sleeping world))
          (hit-speed (f32 (physics-world-hit-speed world)))
          (slop (f32 (physics-world-slop world)))
-         (max-penetration 0.0) (max-approach 0.0))
+         (max-penetration 0.0) (max-approach 0.0)
+         (n (body-columns-length awake))
+         (held (physics-world-held world))
+         ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts
+         (marking (held-marking-p world)))
     (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
-             #.+kernel-policy+)
+             (type index n) (type fixnum-column held) #.+kernel-policy+)
+    (when marking (fill held 0 :end (1+ n)))
     (with-constraint-block (contact body-a body-b) cbuf
       (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
         (loop for k of-type index below (constraint-columns-length cbuf)
@@ -4546,6 +4586,7 @@ speed. From here on the step changes what it cannot undo, so its undo log closes
                   (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2)
                   (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
                   (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z))
+            (when marking (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))
                     max-approach (max max-approach (- vn))))
@@ -4616,9 +4657,12 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
          (sleep-p (physics-world-sleep-enabled world))
          (sleep-speed (f32 (physics-world-sleep-speed world)))
          (time-to-sleep (f32 (physics-world-time-to-sleep world)))
-         (limit (f32 +physics-coordinate-limit+)))
+         (limit (f32 +physics-coordinate-limit+))
+         ;; the store phase's marks, read before any row moves (held-marking-p)
+         (marked (and sleep-p (held-marking-p world)))
+         (held (physics-world-held world)))
     (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep limit)
-             (type body-columns awake sleeping) #.+kernel-policy+)
+             (type body-columns awake sleeping) (type fixnum-column held) #.+kernel-policy+)
     (fold-solver-state awake v d dt)
     ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
     ;; moved, so the solver's rows still match it
@@ -4638,7 +4682,8 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
                                          (* (aref vz i) (aref vz i))))
                                 (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
                       (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
-                 (if (< (max speed drift) sleep-speed)
+                 ;; a body only sleepers and terrain touch is judged by its displacement alone
+                 (if (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
                      (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
                        (sleep-physics-body world i))
                      (setf (aref sleep-time i) 0.0)))))))
@@ -4758,6 +4803,8 @@ took ROW when it left back to the end of the sleeping set: relocate-body run bac
       (body-columns-copy-row sleeping row sleeping end)
       (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle sleeping) end))) end))
     (body-columns-copy-row awake last sleeping row)
+    ;; a sleeper's count of stillness is zero (sleep-physics-body)
+    (setf (aref (body-columns-sleep-time sleeping) row) 0.0)
     (let ((handle (aref (body-columns-handle sleeping) row)))
       (setf (aref (handle-table-set ids) (handle-index handle)) +set-sleeping+
             (aref (handle-table-local ids) (handle-index handle)) row))

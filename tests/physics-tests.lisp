@@ -1249,6 +1249,50 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; QKS4GZ-trim-gives-room-back ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-woken-sleeps-again-sooner]]
+(define-claim "QKS4GZ" woken-sleeps-again-sooner
+    "A sleeper woken by a passing ball, and not moved, sleeps again within 0.3 s."
+  (let* ((w (make-floor-world))
+         (h (add-physics-body w 3.5 0.245 3.5 :radius 0.25)))
+    (loop repeat 120 while (luv-physics::physics-body-awake-p w h) do (step-physics-world w))
+    (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+    (let ((before (multiple-value-list (physics-body-position w h)))
+          (woke nil) (slept nil))
+      (add-physics-body w 1.5 0.245 4.05 :radius 0.25 :vx 2.0)
+      (loop for i below 120 until slept
+            do (loop for (kind a) in (step-events w)
+                     when (and (= a h) (eq kind :woke) (not woke)) do (setf woke i)
+                     when (and (= a h) (eq kind :slept) woke) do (setf slept i)))
+      (check (not (null woke)) "the passing ball did not wake the sleeper")
+      (check (<= (- (or slept 1000) (or woke 0)) 18)
+             "woken at step ~S, asleep again at step ~S" woke slept)
+      (check (< (reduce #'max (mapcar (lambda (a b) (abs (- a b))) before
+                                      (multiple-value-list (physics-body-position w h))))
+                1e-4)
+             "the woken ball moved from ~S to ~S" before (multiple-value-list (physics-body-position w h))))))
+;; QKS4GZ-woken-sleeps-again-sooner ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-held-by-sleepers-sleeps]]
+(define-claim "QKS4GZ" held-by-sleepers-sleeps
+    "A slow ball touching only sleepers and terrain sleeps by its displacement; alone it stays awake."
+  (flet ((rolled (beside)
+           (let* ((w (make-floor-world))
+                  (row (when beside
+                         (loop for k below 10 collect (add-physics-body w (+ 0.5 (* 0.5 k)) 0.245 3.0 :radius 0.25)))))
+             (loop repeat 120 until (= (length row) (luv-physics::physics-world-sleeping-count w))
+                   do (step-physics-world w))
+             (check (= (length row) (luv-physics::physics-world-sleeping-count w)) "the row did not fall asleep")
+             (let ((ball (add-physics-body w 0.5 0.245 3.505 :radius 0.25 :vx 0.1)) (asleep-at nil))
+               (loop for i below 120 until asleep-at
+                     do (step-physics-world w)
+                        (unless (luv-physics::physics-body-awake-p w ball) (setf asleep-at (/ (1+ i) 60.0))))
+               (values asleep-at (luv-physics::physics-world-sleeping-count w))))))
+    (multiple-value-bind (asleep-at sleepers) (rolled t)
+      (check (<= (or asleep-at 2.0) 0.6) "beside the sleepers the ball was ~:[still awake after 2 s~;~:*asleep only at ~,2F s~]" asleep-at)
+      (check (= sleepers 11) "~D sleepers, not the row and the ball" sleepers))
+    (check (null (rolled nil)) "alone on the floor the rolling ball fell asleep")))
+;; QKS4GZ-held-by-sleepers-sleeps ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-pile-sleeps-wakes-sleeps]]
 (define-claim "QKS4GZ" pile-sleeps-wakes-sleeps
     "A six-ball pile sleeps within 2 s, a thrown ball wakes the ball it hits, and the pile sleeps again within 5 s."
