@@ -1264,6 +1264,8 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
 
 (defconstant +flag-terrain-only+ 2 "Body flag: meets terrain and boxes but no other body. #B5N8JT")
 
+(defconstant +flag-braced+ 4 "Body flag: braced at the last step that ran the bracing pass. #B5N8JT")
+
 (defconstant +set-free+ 0 "Handle-table set of a free slot. #B5N8JT")
 
 (defconstant +set-awake+ 1 "Handle-table set of an awake body. #B5N8JT")
@@ -2063,6 +2065,7 @@ dispatches on it once per call. #W0RLD7"))
    (color-masks :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-color-masks)
    (braced :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-braced)
    (held :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-held)
+   (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
    (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
@@ -2483,9 +2486,11 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
   (let* ((handle (aref (body-columns-handle (physics-world-awake world)) row))
          (new (relocate-body world +set-awake+ row +set-sleeping+))
          (s (physics-world-sleeping world)))
-    (with-body-columns (vx vy vz wx wy wz sleep-time life) s
+    (with-body-columns (vx vy vz wx wy wz sleep-time life flags) s
       (setf (aref vx new) 0.0 (aref vy new) 0.0 (aref vz new) 0.0
-            (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0)
+            (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0
+            ;; bracing starts afresh when it wakes
+            (aref flags new) (logandc2 (aref flags new) +flag-braced+))
       (when (> (aref life new) 0.0) (incf (physics-world-mortal-sleepers world))))
     (note-fresh-sleeper world handle)
     (push-event world +event-slept+ handle +no-body+ 0.0 0.0 0.0 0.0)
@@ -3975,7 +3980,22 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                       (when (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
                                   (* (aref v (+ o 2)) (aref v (+ o 2))))
                                still2)
-                        (setf (aref braced row) 1))))))))
+                        (setf (aref braced row) 1)))))))
+              ;; a body braced at the step before stays braced while it is still, whatever its
+              ;; load: its load moves to the bodies below once it is braced (hysteresis)
+              (let ((flags (body-columns-flags awake))
+                    (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world)))))
+                (dotimes (i n)
+                  (let ((o (solver-row i)))
+                    (when (and kept (logtest (aref flags i) +flag-braced+)
+                               (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
+                                     (* (aref v (+ o 2)) (aref v (+ o 2))))
+                                  still2))
+                      (setf (aref braced i) 1))
+                    (setf (aref flags i) (if (= (aref braced i) 1)
+                                             (logior (aref flags i) +flag-braced+)
+                                             (logandc2 (aref flags i) +flag-braced+)))))
+                (setf (physics-world-braced-step world) (physics-world-step-count world))))
             (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
               (with-constraint-block (contact body-a body-b) cbuf
                 ;; each contact's place in its colour first; then the rows are filled in
@@ -4127,7 +4147,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
       color-count)))
 ;; Preparing the constraints:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:4]]
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:5]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
@@ -4184,7 +4204,7 @@ substep's solve reads. #PR3PAR"
 (defmethod physics-prepare-frames ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
     (prepare-frames-range cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:4 ends here
+;; Preparing the constraints:5 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)

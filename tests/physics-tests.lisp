@@ -2007,6 +2007,32 @@ function of a column name that reads row K's float in that column. #T3STK1"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
 
+;; [[file:../physics.org::#PR3PAR][PR3PAR-bracing-holds-while-still]]
+(define-claim "PR3PAR" bracing-holds-while-still
+    "A braced body stays braced while still, whatever its load; moving, it is unbraced."
+  (let* ((world (luv-physics::make-shaft-world :sleep nil))
+         (light (add-physics-body world 0.5 0.45 0.5 :radius 0.45 :mass 1.0)))
+    (add-physics-body world 0.5 1.36 0.5 :radius 0.45 :mass 1000.0)
+    (flet ((braced-p ()
+             (multiple-value-bind (set row) (luv-physics::resolve-handle world light)
+               (declare (ignore set))
+               (= 1 (aref (luv-physics::physics-world-braced world) row))))
+           (unload-floor ()
+             (let ((c (luv-physics::physics-world-contacts world)))
+               (dotimes (k (luv-physics::contact-columns-length c))
+                 (when (and (= (aref (luv-physics::contact-columns-handle-a c) k) light)
+                            (= (aref (luv-physics::contact-columns-kind c) k) luv-physics::+contact-terrain+))
+                   (setf (luv-physics::contact@ (luv-physics::contact-columns-geometry c) k normal-impulse) 0.0))))))
+      (dotimes (i 120) (step-physics-world world))
+      (check (braced-p) "the light ball under the heavy one is not braced at rest")
+      (unload-floor)
+      (step-physics-world world)
+      (check (braced-p) "with its floor contact unloaded the still light ball was unbraced")
+      (luv-physics::set-physics-body-velocity world light 0.1 0.0 0.0)
+      (step-physics-world world)
+      (check (not (braced-p)) "the light ball moving at 0.1 m/s stayed braced"))))
+;; PR3PAR-bracing-holds-while-still ends here
+
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-spin-friction-rate]]
 (define-claim "PR3PAR" spin-friction-rate
     "A ball spinning about the vertical on a floor slows at the patch's torque over its inertia."
