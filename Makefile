@@ -15,7 +15,9 @@ LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 .NOTPARALLEL:
 
 help:
-	@echo "make demo           install what is missing (as root), tangle, run the default scene"
+	@echo "make demo           install what is missing (as root), tangle, run the default scene;"
+	@echo "                    SCENE=name runs another scene of the page (basin, pile, fountain, lava,"
+	@echo "                    player, awake-basin)"
 	@echo "make test           check tangling and anchors, then run every claim"
 	@echo "make test ANCHOR=ID run only the claims of section ID (without the editor checks)"
 	@echo "make editor-test    Emacs with SLIME against a live image: jumps, edit buffers, reload"
@@ -32,7 +34,7 @@ help:
 	@echo "                    for one section); the score table and the survivors into $(ORG)"
 	@echo "make mutate-splice  the last full run's tables into $(ORG), with the page's reasons for survivors"
 	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface"
-	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player) and write"
+	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player, ...) and write"
 	@echo "                    report/view-SCENE.html, a 3D viewer of the run for any browser"
 	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
 	@echo "make fuzz           random operation sequences (SEED=1 COUNT=1200 LENGTH=150); figures into $(ORG)"
@@ -58,7 +60,7 @@ editor-test: setup
 	@tools/editor-test "$(SBCL)" "$(EMACS)"
 
 demo: setup tangle
-	@$(LISP) --load tools/demo.lisp
+	@SCENE="$(SCENE)" $(LISP) --load tools/demo.lisp
 
 bench: setup tangle
 	@mkdir -p report
@@ -70,6 +72,8 @@ bench: setup tangle
 	@$(SBCL) --script tools/splice.lisp bench-sleeping report/bench-sleeping.org
 	@BENCH=run-query-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-queries.org
 	@$(SBCL) --script tools/splice.lisp bench-queries report/bench-queries.org
+	@BENCH=run-feature-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-features.org
+	@$(SBCL) --script tools/splice.lisp bench-features report/bench-features.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
 # without -march=native like Debian's Bullet and ODE.

@@ -75,7 +75,13 @@
    ;; A world as an object, and both in the inspector (#4YDMX5)
    #:install-swank-inspection
    ;; Random operation sequences (#M9W5P7)
-   #:run-fuzz-campaign #:run-physics-soak))
+   #:run-fuzz-campaign #:run-physics-soak
+   ;; Scenes are definitions (#K5DF9S)
+   #:define-physics-scene #:physics-scene #:physics-scene-name #:physics-scene-features
+   #:physics-scene-seconds #:physics-scene-moments #:physics-scene-text #:find-physics-scene
+   #:make-scene-world #:physics-world-handles #:unknown-physics-scene #:invalid-physics-scene-clause
+   ;; Features: a world pays only for what it uses (#FEAT5X)
+   #:physics-world-features #:physics-feature-omitted))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -2010,6 +2016,12 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
 ;; The block world is the static tree; bodies need a hash grid:1 ends here
 
 ;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:1]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +physics-features+
+    '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :mortal
+      :hit-events :contact-events :expiry-events :sleep-events)
+    "Every feature a world may use ([[#FEAT5X]]), in the order physics-world-features lists them. #W0RLD7"))
+
 (defconstant +solver-stride+ 8
   "Floats per body in the solver's velocity array: vx vy vz wx wy wz and two spare. #W0RLD7")
 
@@ -2120,6 +2132,12 @@ dispatches on it once per call. #W0RLD7"))
    (undo-statistics :initform (make-array 8 :element-type 'double-float :initial-element 0d0)
                     :reader physics-world-undo-statistics)
    (sleep-enabled :initarg :sleep-enabled :initform t :accessor physics-world-sleep-enabled)
+   ;; what the world may use ([[#FEAT5X][features]]), and the step built for it
+   (features :initarg :features :initform +physics-features+ :reader world-features)
+   (event-mask :initarg :event-mask :initform -1 :type fixnum :reader world-event-mask)
+   (phases :initform nil :accessor world-phases-built)
+   (phases-source :initform nil :accessor world-phases-source)
+   (kernel-variant :initform nil :accessor world-kernel-variant-built)
    (current-dt :initform (/ 1.0 60) :type single-float :accessor physics-world-current-dt)
    (current-h :initform (/ 1.0 240) :type single-float :accessor physics-world-current-h)
    (step-count :initform 0 :type fixnum :accessor physics-world-step-count)
@@ -2213,9 +2231,11 @@ first, so :auto takes the last one the CPU runs. #R9M4PV"
   value)
 
 (defun make-physics-world (&key terrain (step-seconds 1/60) (substeps 4) (gravity '(0 -9.81 0))
-                                (kernels :scalar) (sleep t))
+                                (kernels :scalar) (sleep t) (features +physics-features+))
   "A new empty world over TERRAIN (a voxel-terrain or NIL), stepping STEP-SECONDS in SUBSTEPS
-substeps under GRAVITY (a list of three numbers), solving with the kernel family KERNELS. #M4K3WD"
+substeps under GRAVITY (a list of three numbers), solving with the kernel family KERNELS, using
+only FEATURES (a list of keywords of +physics-features+, or :events for every kind of event;
+every feature by default). #M4K3WD"
   (unless (or (null terrain) (typep terrain 'voxel-terrain))
     (error 'invalid-physics-parameter :name :terrain :value terrain :expected "a voxel-terrain or NIL"))
   (let ((dt (finite-f32 :step-seconds step-seconds)))
@@ -2228,17 +2248,24 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
     (let ((g (mapcar (lambda (v) (ranged-f32 :gravity v (- +physics-max-gravity+) +physics-max-gravity+))
                      gravity))
           (parameters (checked-physics-parameters)))
-      (apply #'make-instance 'physics-world
-             :terrain terrain :step-seconds dt :substeps substeps
-             :gravity-x (first g) :gravity-y (second g) :gravity-z (third g)
-             :kernels (make-kernel-family kernels)
-             :sleep-enabled sleep
-             parameters))))
+      (let ((features (checked-physics-features features sleep)))
+        (when (and terrain (not (member :terrain features)))
+          (error 'physics-feature-omitted :feature :terrain :operation 'make-physics-world))
+        (apply #'make-instance 'physics-world
+               :terrain terrain :step-seconds dt :substeps substeps
+               :gravity-x (first g) :gravity-y (second g) :gravity-z (third g)
+               :kernels (make-kernel-family kernels)
+               :sleep-enabled (and sleep (member :sleep features) t)
+               :features features :event-mask (feature-event-mask features)
+               parameters)))))
 
 (defmethod (setf physics-world-event-handler) :before (handler (world physics-world))
   (unless (or (null handler) (functionp handler) (and (symbolp handler) (fboundp handler)))
     (error 'invalid-physics-parameter :world world :name :event-handler :value handler
-                                      :expected "NIL, a function, or the name of a function")))
+                                      :expected "NIL, a function, or the name of a function"))
+  ;; a world that records no kind of event has nothing to hand a handler
+  (when (and handler (zerop (world-event-mask world)))
+    (error 'physics-feature-omitted :world world :feature :events :operation 'physics-world-event-handler)))
 
 (declaim (inline check-world))
 (defun check-world (world operation)
@@ -2382,6 +2409,14 @@ number of seconds after which it expires. #M4K3WD"
     (when (and (not (eql life 0.0)) (<= life 0))
       (error 'invalid-physics-parameter :world world :name :life :value life :expected "> 0 seconds, or NIL"))
     (unless (typep kind 'fixnum) (error 'invalid-physics-parameter :world world :name :kind :value kind :expected "a fixnum"))
+    ;; a body that needs a feature the world left out is refused, not quietly given less
+    (flet ((needs (feature) (require-physics-feature world feature 'add-physics-body)))
+      (when (> e 0) (needs :restitution))
+      (when (> mu 0) (needs :friction))
+      (when (> rho 0) (needs :rolling-resistance))
+      (when (> life 0) (needs :mortal))
+      (when collide-with-bodies (needs :body-contacts))
+      (when report-hits (needs :hit-events)))
     (check-body-room world 'add-physics-body)
     (let* ((awake (physics-world-awake world))
            (row (body-columns-append awake))
@@ -2414,8 +2449,10 @@ number of seconds after which it expires. #M4K3WD"
   (x single-float) (y single-float) (z single-float) (speed single-float))
 
 (defun push-event (world kind handle-a handle-b x y z speed &optional datum)
-  "Record an event of KIND (a fixnum code) in WORLD's event buffer. #E7V3NT"
+  "Record an event of KIND (a fixnum code) in WORLD's event buffer, when WORLD records events of
+that kind ([[#FEAT5X][its features]]). #E7V3NT"
   (declare (type fixnum kind handle-a handle-b) (type single-float x y z speed))
+  (when (logbitp kind (the fixnum (world-event-mask world)))
   (let* ((events (physics-world-events world))
          (row (event-columns-append events)))
     (with-event-columns ((k kind) (a handle-a) (b handle-b) (ex x) (ey y) (ez z) (s speed)) events
@@ -2427,7 +2464,7 @@ number of seconds after which it expires. #M4K3WD"
           (setf data (replace (make-array (* 2 (1+ row)) :initial-element nil) data)
                 (physics-world-event-data world) data))
         (setf (svref data row) datum)))
-    row))
+    row)))
 
 (defconstant +event-begin+ 0 "Event code of :begin. #E7V3NT")
 
@@ -2627,6 +2664,7 @@ how many woke. Call it after editing terrain near bodies. #QKS4GZ"
 next step only. OWNER, any object, keeps the box's contacts persistent across steps and comes
 back with its hit events. #K1N3BX"
   (check-idle world 'post-physics-box)
+  (require-physics-feature world :boxes 'post-physics-box)
   (let ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
         (hx (finite-f32 :hx hx world)) (hy (finite-f32 :hy hy world)) (hz (finite-f32 :hz hz world))
         (vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world)))
@@ -4311,12 +4349,59 @@ single-float from LOW to 1e7. #K3RNLS"
                  (aref d (+ p 2)) (+ (aref d (+ p 2)) (* h (aref v (+ o 2)))))))
 ;; The kernel entry points, and integration:1 ends here
 
+;; [[file:../physics.org::#KTXT7V][One kernel text for every feature set:1]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun split-definition-body (body)
+    "BODY of a definition as three values: its forms, its declarations and its docstring. #KTXT7V"
+    (let ((documentation (and (stringp (first body)) (rest body) (pop body))))
+      (loop while (and (consp (first body)) (eq (car (first body)) 'declare))
+            collect (pop body) into declarations
+            finally (return (values body declarations documentation)))))
+
+  (defun featured-kernel-form (name features)
+    "A form whose value is the kernel NAME (a define-featured-kernel) compiled for FEATURES: its
+text, with each if-feature resolved for FEATURES. #KTXT7V"
+    (destructuring-bind (operators lambda-list declarations forms tested) (get name 'featured-kernel)
+      (declare (ignore tested))
+      (let ((function `(lambda ,lambda-list ,@declarations (with-features ,features ,@forms))))
+        (if operators `(macrolet ,operators ,function) function))))
+
+  (defun kernel-feature-key (name features)
+    "The features among FEATURES that the kernel NAME tests, in the order of +physics-features+. #KTXT7V"
+    (let ((tested (fifth (get name 'featured-kernel))))
+      (remove-if-not (lambda (f) (and (member f tested) (member f features))) +physics-features+))))
+
+(defstruct (kernel-variant (:constructor make-kernel-variant (kernels warm-start solve wide-warm-start wide-solve)))
+  "The solver kernels a world of some features runs in the family KERNELS: each a function, or
+the name of the general kernel ([[#FEAT5X]]). #KTXT7V"
+  kernels warm-start solve wide-warm-start wide-solve)
+
+(defmacro with-features ((&rest features) &body body)
+  "Run BODY with (if-feature FEATURE THEN &optional ELSE) standing for THEN when FEATURE is one
+of FEATURES and for ELSE otherwise, chosen at macro-expansion. #KTXT7V"
+  `(macrolet ((if-feature (feature then &optional else)
+                (if (member feature ',features) then else)))
+     ,@body))
+
+(defmacro define-featured-kernel ((name &key features operators) lambda-list &body body)
+  "Define NAME, a function of LAMBDA-LIST, compiled with every feature; keep its text, which
+tests the FEATURES listed with if-feature, so that featured-kernel-form can compile it for
+fewer; OPERATORS, macrolet definitions, wrap the text wherever it is compiled. #KTXT7V"
+  (multiple-value-bind (forms declarations documentation) (split-definition-body body)
+    (let ((function `(defun ,name ,lambda-list ,@(when documentation (list documentation)) ,@declarations
+                       (with-features ,+physics-features+ ,@forms))))
+      `(progn
+         (eval-when (:compile-toplevel :load-toplevel :execute)
+           (setf (get ',name 'featured-kernel) '(,operators ,lambda-list ,declarations ,forms ,features)))
+         ,(if operators `(macrolet ,operators ,function) function)))))
+;; One kernel text for every feature set:1 ends here
+
 ;; [[file:../physics.org::#W4RMST][Warm start:1]]
 (defmacro with-solver-columns (cbuf &body body)
   "Run BODY over the constraint buffer CBUF: its blocks, its body columns, and (@ COLUMN). #W4RMST"
   `(with-constraint-block (body-a body-b) ,cbuf ,@body))
 
-(defun warm-start-range (cbuf v start end)
+(define-featured-kernel (warm-start-range :features (:friction :rolling-resistance)) (cbuf v start end)
   "Apply the carried normal, friction and rolling impulses of constraints START..END. #W4RMST"
   (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
   (with-solver-columns cbuf
@@ -4324,33 +4409,54 @@ single-float from LOW to 1e7. #K3RNLS"
       (let* ((base (constraint-base k))
              (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
              (x (@ nx)) (y (@ ny)) (z (@ nz))
-             (l (@ normal-impulse)) (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
-             (px (+ (* l x) (* l1 (@ t1x)) (* l2 (@ t2x))))
-             (py (+ (* l y) (* l1 (@ t1y)) (* l2 (@ t2y))))
-             (pz (+ (* l z) (* l1 (@ t1z)) (* l2 (@ t2z))))
-             ;; n x P = l1 t2 - l2 t1: the torque arm of the friction part
-             (cx (- (* l1 (@ t2x)) (* l2 (@ t1x))))
-             (cy (- (* l1 (@ t2y)) (* l2 (@ t1y))))
-             (cz (- (* l1 (@ t2z)) (* l2 (@ t1z))))
-             (ma (@ ima)) (mb (@ imb)) (ia (@ iia)) (ib (@ iib))
-             (ar (@ ra)) (br (@ rb))
-             ;; the spin impulse about the normal joins the rolling impulse: both are angular
-             (sp (@ spin-impulse))
-             (rx (+ (@ rolling-impulse-x) (* sp x))) (ry (+ (@ rolling-impulse-y) (* sp y)))
-             (rz (+ (@ rolling-impulse-z) (* sp z))))
+             (l (@ normal-impulse))
+             (ma (@ ima)) (mb (@ imb)))
         (declare (type index a b base))
-        (setf (aref v a) (- (aref v a) (* ma px))
-              (block-ref v a 1) (- (block-ref v a 1) (* ma py))
-              (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
-              (block-ref v a 3) (- (block-ref v a 3) (* ia (+ (* ar cx) rx)))
-              (block-ref v a 4) (- (block-ref v a 4) (* ia (+ (* ar cy) ry)))
-              (block-ref v a 5) (- (block-ref v a 5) (* ia (+ (* ar cz) rz)))
-              (aref v b) (+ (aref v b) (* mb px))
-              (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
-              (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))
-              (block-ref v b 3) (+ (block-ref v b 3) (* ib (- rx (* br cx))))
-              (block-ref v b 4) (+ (block-ref v b 4) (* ib (- ry (* br cy))))
-              (block-ref v b 5) (+ (block-ref v b 5) (* ib (- rz (* br cz)))))))))
+        (if-feature :friction
+          (let* ((l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
+                 (px (+ (* l x) (* l1 (@ t1x)) (* l2 (@ t2x))))
+                 (py (+ (* l y) (* l1 (@ t1y)) (* l2 (@ t2y))))
+                 (pz (+ (* l z) (* l1 (@ t1z)) (* l2 (@ t2z))))
+                 ;; n x P = l1 t2 - l2 t1: the torque arm of the friction part
+                 (cx (- (* l1 (@ t2x)) (* l2 (@ t1x))))
+                 (cy (- (* l1 (@ t2y)) (* l2 (@ t1y))))
+                 (cz (- (* l1 (@ t2z)) (* l2 (@ t1z))))
+                 (ia (@ iia)) (ib (@ iib)) (ar (@ ra)) (br (@ rb))
+                 ;; the spin impulse about the normal joins the rolling impulse: both are angular
+                 (sp (@ spin-impulse))
+                 (rx (if-feature :rolling-resistance (+ (@ rolling-impulse-x) (* sp x)) (* sp x)))
+                 (ry (if-feature :rolling-resistance (+ (@ rolling-impulse-y) (* sp y)) (* sp y)))
+                 (rz (if-feature :rolling-resistance (+ (@ rolling-impulse-z) (* sp z)) (* sp z))))
+            (setf (aref v a) (- (aref v a) (* ma px))
+                  (block-ref v a 1) (- (block-ref v a 1) (* ma py))
+                  (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
+                  (block-ref v a 3) (- (block-ref v a 3) (* ia (+ (* ar cx) rx)))
+                  (block-ref v a 4) (- (block-ref v a 4) (* ia (+ (* ar cy) ry)))
+                  (block-ref v a 5) (- (block-ref v a 5) (* ia (+ (* ar cz) rz)))
+                  (aref v b) (+ (aref v b) (* mb px))
+                  (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
+                  (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))
+                  (block-ref v b 3) (+ (block-ref v b 3) (* ib (- rx (* br cx))))
+                  (block-ref v b 4) (+ (block-ref v b 4) (* ib (- ry (* br cy))))
+                  (block-ref v b 5) (+ (block-ref v b 5) (* ib (- rz (* br cz))))))
+          ;; without friction the impulse is along the normal and turns nothing; only rolling
+          ;; resistance, when the world has it, turns the bodies
+          (let ((px (* l x)) (py (* l y)) (pz (* l z)))
+            (setf (aref v a) (- (aref v a) (* ma px))
+                  (block-ref v a 1) (- (block-ref v a 1) (* ma py))
+                  (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
+                  (aref v b) (+ (aref v b) (* mb px))
+                  (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
+                  (block-ref v b 2) (+ (block-ref v b 2) (* mb pz)))
+            (if-feature :rolling-resistance
+              (let ((ia (@ iia)) (ib (@ iib))
+                    (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z)))
+                (setf (block-ref v a 3) (- (block-ref v a 3) (* ia rx))
+                      (block-ref v a 4) (- (block-ref v a 4) (* ia ry))
+                      (block-ref v a 5) (- (block-ref v a 5) (* ia rz))
+                      (block-ref v b 3) (+ (block-ref v b 3) (* ib rx))
+                      (block-ref v b 4) (+ (block-ref v b 4) (* ib ry))
+                      (block-ref v b 5) (+ (block-ref v b 5) (* ib rz)))))))))))
 ;; Warm start:1 ends here
 
 ;; [[file:../physics.org::#S0LV3R][Solve and relax:1]]
@@ -4362,12 +4468,14 @@ per constraint. #S0LV3R"
        (symbol-macrolet ((biased t)) ,@body)
        (symbol-macrolet ((biased nil)) ,@body)))
 
-(defun solve-range (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
+(define-featured-kernel (solve-range :features (:friction :rolling-resistance :restitution))
+    (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
   "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
 when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
 HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
-           (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
+           (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+
+           (ignorable threshold hgx hgy hgz))
   (unswitch-bias (use-bias)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
@@ -4414,9 +4522,10 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
              ;; the threshold; or an armed contact whose gap has closed. Its bounce, the
              ;; impulse that makes the pair leave at the speed restitution gives, is a push
              ;; of its own, not kept in the contact's impulse
-             (e (@ restitution))
-             (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold))))
-             (bump (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
+             (bump (if-feature :restitution
+                    (let* ((e (@ restitution))
+                           (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold)))))
+                    (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
                       (let* ((sp (if positive s 0.0))
                              ;; the change of vn over a substep under gravity
                              (dv (* (- (if (> mb 0.0) 1.0 0.0) (if (> ma 0.0) 1.0 0.0))
@@ -4439,6 +4548,7 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
                               (when (> kick 0.0) (setf (@ armed-speed) 0.0))
                               (if (> kick 0.0) kick 0.0))))
                       0.0))
+                    0.0))
              (bounced (> bump 0.0))
              (new (if bounced l new))
              (dl (if bounced bump (- new l)))
@@ -4449,61 +4559,75 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
         (let ((pushed (if bounced bump new)))
           (setf (@ normal-impulse) new
                 (@ max-normal-impulse) (if (> mni pushed) mni pushed)))
-        ;; friction, inside the cone |l1,l2| <= friction * normal impulse; the angular
-        ;; velocities are read only now
-        (let* (
-               (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
-               (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5))
-               (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
-               (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (@ kvt1)) (+ (* wx qx) (* wy qy) (* wz qz))))
-               (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (@ kvt2) (+ (* wx ux) (* wy uy) (* wz uz))))
-               (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
-               (tm (@ tangent-mass))
-               (n1 (- l1 (* tm vt1))) (n2 (- l2 (* tm vt2)))
-               (limit (* (@ friction) new))
-               (len2 (+ (* n1 n1) (* n2 n2)))
-               (over (> len2 (* limit limit)))
-               ;; inside the cone the scale is 1, and multiplying by 1 changes no bit
-               (scale (if over (/ limit (fsqrt len2)) 1.0))
-               (n1 (if over (* n1 scale) n1)) (n2 (if over (* n2 scale) n2))
-               (d1 (- n1 l1)) (d2 (- n2 l2))
-               (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
-               (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
-               (iar (* iam ar)) (ibr (* ibm br)))
-          (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
-          (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz))
-                (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz)))
-          (let ((wax (- wax (* iar cx))) (way (- way (* iar cy))) (waz (- waz (* iar cz)))
-                (wbx (- wbx (* ibr cx))) (wby (- wby (* ibr cy))) (wbz (- wbz (* ibr cz))))
-            ;; rolling resistance: an angular impulse inside |R| <= rolling-limit * normal impulse
-            (let ((rl (@ rolling-limit)))
-              (when (> rl 0.0)
-                (let* ((rlimit (* rl new)) (rm (@ rolling-mass))
-                       (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z))
-                       (nrx (- rx (* rm (- wbx wax)))) (nry (- ry (* rm (- wby way)))) (nrz (- rz (* rm (- wbz waz))))
-                       (len2 (+ (* nrx nrx) (* nry nry) (* nrz nrz))))
-                  (when (> len2 (* rlimit rlimit))
-                    (let ((scale (/ rlimit (fsqrt len2))))
-                      (setf nrx (* nrx scale) nry (* nry scale) nrz (* nrz scale))))
-                  (let ((dx (- nrx rx)) (dy (- nry ry)) (dz (- nrz rz)))
-                    (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry (@ rolling-impulse-z) nrz)
-                    (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
-                          wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz)))))))
-            ;; spin friction: an angular impulse about the normal inside |S| <= spin-limit *
-            ;; normal impulse; the rolling mass is the spin's too, for a ball's inertia is
-            ;; the same about every axis
-            (let ((sl (@ spin-limit)))
-              (when (> sl 0.0)
-                (let* ((slimit (* sl new)) (sp (@ spin-impulse))
-                       (raw (- sp (* (@ rolling-mass)
-                                     (+ (+ (* (- wbx wax) x) (* (- wby way) y)) (* (- wbz waz) z)))))
-                       (nsp (if (> raw slimit) slimit (if (> (* slimit -1.0) raw) (* slimit -1.0) raw)))
-                       (ds (- nsp sp)))
-                  (setf (@ spin-impulse) nsp
-                        wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
-                        wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
-            (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                  (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))
+        ;; rolling resistance, written once for the two places it is compiled into
+        (macrolet ((rolling-resistance ()
+                     '(let ((rl (@ rolling-limit)))
+                       (when (> rl 0.0)
+                         (let* ((rlimit (* rl new)) (rm (@ rolling-mass))
+                                (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z))
+                                (nrx (- rx (* rm (- wbx wax)))) (nry (- ry (* rm (- wby way)))) (nrz (- rz (* rm (- wbz waz))))
+                                (len2 (+ (* nrx nrx) (* nry nry) (* nrz nrz))))
+                           (when (> len2 (* rlimit rlimit))
+                             (let ((scale (/ rlimit (fsqrt len2))))
+                               (setf nrx (* nrx scale) nry (* nry scale) nrz (* nrz scale))))
+                           (let ((dx (- nrx rx)) (dy (- nry ry)) (dz (- nrz rz)))
+                             (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry (@ rolling-impulse-z) nrz)
+                             (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
+                                   wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz)))))))))
+        (if-feature :friction
+          ;; friction, inside the cone |l1,l2| <= friction * normal impulse; the angular
+          ;; velocities are read only now
+          (let* (
+                 (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
+                 (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5))
+                 (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
+                 (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (@ kvt1)) (+ (* wx qx) (* wy qy) (* wz qz))))
+                 (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (@ kvt2) (+ (* wx ux) (* wy uy) (* wz uz))))
+                 (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
+                 (tm (@ tangent-mass))
+                 (n1 (- l1 (* tm vt1))) (n2 (- l2 (* tm vt2)))
+                 (limit (* (@ friction) new))
+                 (len2 (+ (* n1 n1) (* n2 n2)))
+                 (over (> len2 (* limit limit)))
+                 ;; inside the cone the scale is 1, and multiplying by 1 changes no bit
+                 (scale (if over (/ limit (fsqrt len2)) 1.0))
+                 (n1 (if over (* n1 scale) n1)) (n2 (if over (* n2 scale) n2))
+                 (d1 (- n1 l1)) (d2 (- n2 l2))
+                 (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
+                 (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
+                 (iar (* iam ar)) (ibr (* ibm br)))
+            (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
+            (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz))
+                  (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz)))
+            (let ((wax (- wax (* iar cx))) (way (- way (* iar cy))) (waz (- waz (* iar cz)))
+                  (wbx (- wbx (* ibr cx))) (wby (- wby (* ibr cy))) (wbz (- wbz (* ibr cz))))
+              (if-feature :rolling-resistance (rolling-resistance))
+              ;; spin friction: an angular impulse about the normal inside |S| <= spin-limit *
+              ;; normal impulse; the rolling mass is the spin's too, for a ball's inertia is
+              ;; the same about every axis
+              (let ((sl (@ spin-limit)))
+                (when (> sl 0.0)
+                  (let* ((slimit (* sl new)) (sp (@ spin-impulse))
+                         (raw (- sp (* (@ rolling-mass)
+                                       (+ (+ (* (- wbx wax) x) (* (- wby way) y)) (* (- wbz waz) z)))))
+                         (nsp (if (> raw slimit) slimit (if (> (* slimit -1.0) raw) (* slimit -1.0) raw)))
+                         (ds (- nsp sp)))
+                    (setf (@ spin-impulse) nsp
+                          wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
+                          wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
+              (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
+                    (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))
+          ;; without friction the tangent speeds are never read, and the angular velocities
+          ;; change only under rolling resistance
+          (progn
+            (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz
+                  (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz)
+            (if-feature :rolling-resistance
+              (let ((wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
+                    (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5)))
+                (rolling-resistance)
+                (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
+                      (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))))))))))))
 ;; Solve and relax:1 ends here
 
 ;; [[file:../physics.org::#R3ST1T][Restitution at impact:1]]
@@ -4526,14 +4650,16 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 
 (defmethod physics-warm-start ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
-    (warm-start-range cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf))))
+    (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
+             cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf))))
 
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
     (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-      (solve-range cbuf (physics-world-velocities world) (physics-world-deltas world)
-                   0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-                   (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
+      (funcall (kernel-variant-solve (world-kernel-variant world kernels))
+               cbuf (physics-world-velocities world) (physics-world-deltas world)
+               0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+               (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
@@ -4564,7 +4690,7 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
                              (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
              (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
 
-(defun store-phase (world)
+(define-featured-kernel (store-phase :features (:contact-events :hit-events)) (world)
   "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
 speed; in a world with sleepers, mark the awake rows that only sleepers and terrain touch
@@ -4585,10 +4711,12 @@ so its undo log closes. #ST0R3S"
          ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts
          (marking (held-marking-p world)))
     (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
-             (type index n) (type fixnum-column held) #.+kernel-policy+)
+             (type index n) (type fixnum-column held)
+             (ignorable ids awake sleeping hit-speed) #.+kernel-policy+)
     (when marking (fill held 0 :end (1+ n)))
     (with-constraint-block (contact body-a body-b) cbuf
       (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
+        (declare (ignorable touching kind handle-a handle-b key))
         (loop for k of-type index below (constraint-columns-length cbuf)
               unless (< (aref contact k) 0) do
           (let* ((base (constraint-base k))
@@ -4601,7 +4729,7 @@ so its undo log closes. #ST0R3S"
                  (gap (- (@ gap) slop))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
                         (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn))))
-            (declare (type fixnum c) (type index base g))
+            (declare (type fixnum c) (type index base g) (ignorable pushed))
             (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
                   (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2)
                   (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
@@ -4610,11 +4738,13 @@ so its undo log closes. #ST0R3S"
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))
                     max-approach (max max-approach (- vn))))
+            (if-feature :contact-events
             (unless (eq pushed (= (aref touching c) 1))
               (setf (aref touching c) (if pushed 1 0))
               (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
                           (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
-                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))
+                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))
+            (if-feature :hit-events
             (when (and pushed (> (- (@ relative-velocity)) hit-speed)
                        (or (= (aref kind c) +contact-box+)
                            (flet ((reports (h)
@@ -4627,7 +4757,7 @@ so its undo log closes. #ST0R3S"
                              (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
               (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
                           (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
-                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))))
+                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))))))
     (let ((stats (world-statistics world)))
       (setf (aref stats 3) (coerce max-penetration 'double-float)
             (aref stats 4) (coerce max-approach 'double-float)))
@@ -4862,16 +4992,18 @@ grids are rebuilt by the next step. #IDVK7G"
     world))
 
 (defun run-physics-phases (world)
-  "Run each phase of *physics-phases* on WORLD, in order; when the world's phase clock is on (a
+  "Run each phase of WORLD's step (*physics-phases*, less what its features leave out: see
+world-phases) on WORLD, in order; when the world's phase clock is on (a
 fixnum array of twice as many entries as phases), add each phase's nanoseconds to it under the
 phase's position, and the bytes it consed under that position plus the number of phases. #IDVK7G"
   (let* ((clock (physics-world-phase-clock world)) (i 0)
          (phases (if clock (floor (length clock) 2) 0)))
     (declare (type (or null fixnum-column) clock) (type fixnum i phases))
-    (dolist (phase *physics-phases*)
+    (dolist (phase (world-phases world))
       (let* ((start (if clock (clock-ns) 0))
              (consed (if clock (sb-ext:get-bytes-consed) 0))
-             (result (funcall phase world)))
+             ;; a phase the world's features leave out is NIL, and takes its place empty
+             (result (if phase (funcall phase world) 0)))
         (when (eq phase 'prepare-phase)
           (setf (aref (world-statistics world) 1) (coerce (the fixnum result) 'double-float)))
         (when (and clock (< i phases))
@@ -4900,6 +5032,128 @@ phase's position, and the bytes it consed under that position plus the number of
   (check-world world 'physics-world-max-approach-speed)
   (aref (physics-world-statistics world) 4))
 ;; The step as built:1 ends here
+
+;; [[file:../physics.org::#FEAT5X][Features: a world pays only for what it uses:1]]
+(define-condition physics-feature-omitted (physics-error)
+  ((feature :initarg :feature :reader physics-feature-omitted-feature)
+   (operation :initarg :operation :reader physics-feature-omitted-operation))
+  (:report (lambda (c s)
+             (format s "~(~A~) needs the feature ~S, which this world was made without (see its ~
+                        :features)" (physics-feature-omitted-operation c) (physics-feature-omitted-feature c))))
+  (:documentation "An operation that needs a feature the world's feature set leaves out. #FEAT5X"))
+
+(defparameter +event-features+
+  '((:contact-events 0 1) (:hit-events 2) (:sleep-events 3 4) (:expiry-events 5 6))
+  "Each event feature and the event codes it records. #FEAT5X")
+
+(defun checked-physics-features (features sleep)
+  "FEATURES (a list of keywords of +physics-features+, :events for every event kind) as a set in
+the order of +physics-features+, less :sleep and :sleep-events when SLEEP is false; the set of
+every feature is +physics-features+ itself. #FEAT5X"
+  (unless (and (listp features)
+               (every (lambda (f) (or (eq f :events) (member f +physics-features+))) features))
+    (error 'invalid-physics-parameter :name :features :value features
+                                      :expected (format nil "a list of ~{~S~^ ~} or :events" +physics-features+)))
+  (let* ((given (if (member :events features) (append (mapcar #'first +event-features+) features) features))
+         (set (remove-if-not (lambda (f) (and (member f given) (or sleep (not (member f '(:sleep :sleep-events))))))
+                             +physics-features+)))
+    (if (equal set +physics-features+) +physics-features+ set)))
+
+(defun feature-event-mask (features)
+  "The event codes FEATURES record, as bits of a fixnum. #FEAT5X"
+  (loop for (feature . codes) in +event-features+
+        when (member feature features)
+          sum (loop for code in codes sum (ash 1 code))))
+
+(defun physics-world-features (world)
+  "The features WORLD may use, a list of keywords of +physics-features+. #FEAT5X"
+  (check-world world 'physics-world-features)
+  (copy-list (world-features world)))
+
+(defun require-physics-feature (world feature operation)
+  "Signal physics-feature-omitted, naming FEATURE and OPERATION, unless WORLD has FEATURE. #FEAT5X"
+  (unless (member feature (world-features world))
+    (error 'physics-feature-omitted :world world :feature feature :operation operation)))
+
+(defun feature-phases (features phases)
+  "PHASES, a list of phase names, with NIL in place of each phase FEATURES leave out (so a phase
+keeps its place, where the phase clock counts it) and the store phase compiled for FEATURES. #FEAT5X"
+  (flet ((has (f) (member f features)))
+    (loop for phase in phases
+          collect (unless (case phase
+                            (wake-phase (not (has :sleep)))
+                            (grid-phase (not (or (has :body-contacts) (has :boxes))))
+                            (pair-phase (not (has :body-contacts)))
+                            (terrain-phase (not (has :terrain)))
+                            (box-phase (not (has :boxes))))
+                    (if (eq phase 'store-phase) (featured-kernel 'store-phase features) phase)))))
+
+(defun world-phases (world)
+  "The phases WORLD's step runs: *physics-phases* for a world of every feature, else those its
+features keep, found once for each value of *physics-phases*. #FEAT5X"
+  (let ((features (world-features world)))
+    (cond ((eq features +physics-features+) *physics-phases*)
+          ((eq (world-phases-source world) *physics-phases*) (world-phases-built world))
+          (t (setf (world-phases-built world) (feature-phases features *physics-phases*)
+                   (world-phases-source world) *physics-phases*)
+             (world-phases-built world)))))
+
+(defvar *featured-kernels* (make-hash-table :test 'equal)
+  "The variants of featured kernels: (NAME . FEATURES) to the function compiled for FEATURES. #FEAT5X")
+
+(defun featured-kernel (name features)
+  "The kernel NAME for a world of FEATURES: NAME itself when FEATURES hold all it tests, else its
+variant, compiled the first time it is asked for. #FEAT5X"
+  (let ((key (kernel-feature-key name features)))
+    (if (equal key (kernel-feature-key name +physics-features+))
+        name
+        (or (gethash (cons name key) *featured-kernels*)
+            (setf (gethash (cons name key) *featured-kernels*)
+                  ;; in the page's package, where the macros of the text intern their names
+                  (let ((*package* (find-package '#:luv-physics)))
+                    (funcall (compile nil `(lambda () ,(featured-kernel-form name key))))))))))
+
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +standard-feature-sets+
+    '((:terrain :friction :sleep :mortal)
+      (:terrain :body-contacts :friction :sleep))
+    "The feature sets whose variants are compiled with the page: drops that meet only the
+terrain, and a pile of balls with friction alone, neither recording events. #FEAT5X"))
+
+(defmacro precompile-featured-kernels ((&rest names))
+  "Compile, with the page, the variants of the kernels NAMES for +standard-feature-sets+, and
+keep them where featured-kernel finds them. #FEAT5X"
+  `(progn
+     ,@(loop for name in names
+             append (loop for key in (remove-duplicates
+                                      (mapcar (lambda (set) (kernel-feature-key name set)) +standard-feature-sets+)
+                                      :test #'equal)
+                          unless (equal key (kernel-feature-key name +physics-features+))
+                            collect `(setf (gethash '(,name . ,key) *featured-kernels*)
+                                           ,(featured-kernel-form name key))))))
+
+(precompile-featured-kernels (warm-start-range solve-range store-phase))
+
+(defgeneric wide-kernel-names (kernels)
+  (:documentation "The names of the featured warm start and solve of the wide family KERNELS, as
+two values, or NIL for a family without wide kernels. #FEAT5X"))
+
+(defmethod wide-kernel-names ((kernels scalar-kernels)) nil)
+
+(defun world-kernel-variant (world kernels)
+  "The kernels WORLD's features need in the family KERNELS, found once per family. #FEAT5X"
+  (let ((variant (world-kernel-variant-built world)))
+    (if (and variant (eq (kernel-variant-kernels variant) kernels))
+        variant
+        (let ((features (world-features world)))
+          (multiple-value-bind (ws so) (wide-kernel-names kernels)
+            (setf (world-kernel-variant-built world)
+                  (make-kernel-variant kernels
+                                       (featured-kernel 'warm-start-range features)
+                                       (featured-kernel 'solve-range features)
+                                       (and ws (featured-kernel ws features))
+                                       (and so (featured-kernel so features)))))))))
+;; Features: a world pays only for what it uses:1 ends here
 
 ;; [[file:../physics.org::#S6T2MV][Determinism is chosen: same code, same start, same hash:1]]
 (defun physics-world-state-hash (world)
@@ -5413,6 +5667,343 @@ bytes from the second row (the first after the churn began) to the last. #M9W5P7
       (incf steps))))
 ;; Random operation sequences find what a hostile caller would:5 ends here
 
+;; [[file:../physics.org::#K5DF9S][Scenes are definitions:1]]
+(define-condition unknown-physics-scene (invalid-physics-parameter)
+  ((operation :initarg :operation :reader unknown-physics-scene-operation))
+  (:report (lambda (c s)
+             (format s "~(~A~): there is no scene ~S; the name must be ~A"
+                     (unknown-physics-scene-operation c) (invalid-physics-parameter-value c)
+                     (invalid-physics-parameter-expected c))))
+  (:documentation "A scene name that no define-physics-scene defined; NAME is :scene. #K5DF9S"))
+
+(define-condition invalid-physics-scene-clause (invalid-physics-parameter)
+  ((scene :initarg :scene :reader invalid-physics-scene-clause-scene))
+  (:report (lambda (c s)
+             (format s "define-physics-scene ~S: the clause ~S must be ~A"
+                     (invalid-physics-scene-clause-scene c) (invalid-physics-parameter-value c)
+                     (invalid-physics-parameter-expected c))))
+  (:documentation "A clause of define-physics-scene that is unknown, or not of its shape; NAME is
+the clause's keyword, VALUE the clause. #K5DF9S"))
+
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter *physics-scene-features*
+    '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :events :mortal)
+    "The features a scene may declare it uses. #K5DF9S")
+
+  (defun scene-clause-error (scene clause expected)
+    "Signal invalid-physics-scene-clause for CLAUSE of the scene SCENE, which must be EXPECTED. #K5DF9S"
+    (error 'invalid-physics-scene-clause :scene scene :value clause :expected expected
+                                         :name (if (consp clause) (first clause) clause)))
+
+  (defun scene-arguments (scene clause arguments allowed)
+    "ARGUMENTS, a plist of CLAUSE whose keys must be among ALLOWED; or a clause error. #K5DF9S"
+    (unless (and (evenp (length arguments))
+                 (loop for key in arguments by #'cddr always (member key allowed)))
+      (scene-clause-error scene clause (format nil "followed by arguments among ~{~S~^ ~}" allowed)))
+    arguments)
+
+  (defun scene-clause-slots (scene clauses)
+    "The keyword arguments of make-physics-scene that CLAUSES, the clauses of the scene SCENE,
+declare, as forms; or a clause error for the first clause that is not of its shape. #K5DF9S"
+    (let ((slots '()) (bodies '()) (actions '())
+          (body-keys '(:radius :mass :restitution :friction :rolling-resistance :vx :vy :vz :life
+                       :collide-with-bodies :report-hits)))
+      (dolist (clause clauses)
+        (unless (and (consp clause) (keywordp (first clause)) (null (cdr (last clause))))
+          (scene-clause-error scene clause "a list headed by a clause's keyword"))
+        (destructuring-bind (key &rest rest) clause
+          (flet ((once (slot form)
+                   (when (getf slots slot)
+                     (scene-clause-error scene clause "given once"))
+                   (setf (getf slots slot) form))
+                 (require-shape (ok expected) (unless ok (scene-clause-error scene clause expected)))
+                 (point (p) (and (listp p) (= 3 (length p)) (every #'realp p))))
+            (case key
+              (:terrain
+               (require-shape (and rest (listp (first rest)) (<= (length (first rest)) 1)
+                           (every #'symbolp (first rest)) (rest rest))
+                      "(:terrain (count) form...), naming at most one variable")
+               (let ((count (or (first (first rest)) (gensym "COUNT"))))
+                 (once :terrain `(lambda (,count) (declare (ignorable ,count)) ,@(rest rest)))))
+              (:world
+               (once :world-arguments
+                     `(list ,@(scene-arguments scene clause rest
+                                               '(:sleep :kernels :step-seconds :substeps :gravity)))))
+              (:bodies
+               (require-shape (and rest (typep (first rest) '(integer 0))) "(:bodies count :spawn f ...)")
+               (let* ((options (scene-arguments scene clause (rest rest)
+                                                (list* :spawn :jitter :kind body-keys)))
+                      (spawn (getf options :spawn)))
+                 (require-shape (or (and spawn (symbolp spawn)) (and (consp spawn) (eq (first spawn) 'lambda)))
+                        "given :spawn, the name of a function of the body's index or a lambda form")
+                 (require-shape (typep (getf options :jitter 0) 'real) "given a real :jitter")
+                 (push `(make-scene-bodies
+                         :count ,(first rest)
+                         :spawn ,(if (symbolp spawn) `(lambda (i) (,spawn i)) spawn)
+                         :jitter ,(getf options :jitter) :kind ,(getf options :kind)
+                         :arguments (list ,@(loop for (k v) on options by #'cddr
+                                                  unless (member k '(:spawn :jitter :kind))
+                                                    append (list k v))))
+                       bodies)))
+              (:springs (once :springs `(lambda () (list ,@rest))))
+              (:player
+               (require-shape (and (= 2 (length rest)) (point (first rest)) (symbolp (second rest)))
+                      "(:player (x y z) input), INPUT a function's name")
+               (once :player `(list (lambda () (make-physics-player ,@(first rest)))
+                                    (lambda (step) (,(second rest) step)))))
+              (:throw
+               (require-shape (and (realp (first rest)) (>= (first rest) 0) (point (second rest)))
+                      "(:throw seconds (x y z) argument...)")
+               (let ((options (scene-arguments scene clause (cddr rest) (list* :say body-keys))))
+                 (destructuring-bind (x y z) (second rest)
+                   (push `(make-scene-action
+                           :seconds ,(first rest) :text ,(getf options :say)
+                           :function (lambda (world shift)
+                                       (add-physics-body world (+ ,x shift) ,y ,z
+                                                         ,@(loop for (k v) on options by #'cddr
+                                                                 unless (eq k :say) append (list k v)))))
+                         actions))))
+              (:at
+               (require-shape (and (realp (first rest)) (>= (first rest) 0) (listp (second rest))
+                           (= 1 (length (second rest))) (symbolp (first (second rest))))
+                      "(:at seconds (world) form...)")
+               (let ((shift (gensym "SHIFT")))
+                 (push `(make-scene-action
+                         :seconds ,(first rest)
+                         :function (lambda (,(first (second rest)) ,shift)
+                                     (declare (ignore ,shift))
+                                     ,@(cddr rest)))
+                       actions)))
+              (:seconds
+               (require-shape (and (= 1 (length rest)) (realp (first rest)) (plusp (first rest))) "(:seconds s), S > 0")
+               (once :seconds (first rest)))
+              (:pictures
+               (require-shape (every (lambda (s) (and (realp s) (>= s 0))) rest) "(:pictures seconds...)")
+               (once :moments `',rest))
+              (:features
+               (require-shape (and (every (lambda (f) (member f *physics-scene-features*)) rest)
+                           (= (length rest) (length (remove-duplicates rest))))
+                      (format nil "a list of distinct features among ~{~S~^ ~}" *physics-scene-features*))
+               (once :features `',rest))
+              (t (scene-clause-error
+                  scene clause
+                  "one of (:terrain ...) (:world ...) (:bodies ...) (:springs ...) (:player ...) (:throw ...) (:at ...) (:seconds ...) (:pictures ...) (:features ...)"))))))
+      (dolist (needed '(:terrain :seconds :features))
+        (unless (getf slots needed)
+          (scene-clause-error scene needed "given: every scene declares its terrain, its seconds and its features")))
+      (list* :bodies `(list ,@(reverse bodies)) :actions `(list ,@(reverse actions)) slots))))
+
+(defstruct (scene-bodies (:constructor make-scene-bodies (&key count spawn jitter kind arguments)))
+  "COUNT bodies of a scene at the points (SPAWN i), of KIND (a keyword of *physics-body-kinds*, or
+NIL) with the add-physics-body ARGUMENTS, each point moved by JITTER under a seed. #K5DF9S"
+  (count 0 :type (integer 0)) (spawn #'identity :type function) (jitter nil) (kind nil) (arguments '()))
+
+(defstruct (scene-action (:constructor make-scene-action (&key seconds text function)))
+  "What a scene does at SECONDS: FUNCTION of the world and the run's shift along x, and TEXT, a
+line to print when it happens. #K5DF9S"
+  (seconds 0) (text nil) (function #'identity :type function))
+
+(defstruct (physics-scene (:constructor make-physics-scene
+                              (&key name documentation terrain world-arguments bodies springs player
+                                    actions seconds moments features)))
+  "A scene as define-physics-scene declared it: its NAME and DOCUMENTATION; TERRAIN, a function of
+the number of bodies at the start returning the terrain; the WORLD-ARGUMENTS of make-physics-world;
+BODIES, a list of scene-bodies; SPRINGS, NIL or a function making the list of springs; PLAYER,
+NIL or a list of a function making the walker and its input function; ACTIONS, a list of
+scene-action; the SECONDS it runs; the MOMENTS of its picture; and the FEATURES it uses. #K5DF9S"
+  (name nil :type keyword) (documentation "" :type string) (terrain #'identity :type function)
+  (world-arguments '()) (bodies '()) (springs nil) (player nil) (actions '())
+  (seconds 1) (moments '()) (features '()))
+
+;; the documentation of the scene's public readers, which defstruct cannot give
+(loop for (name text)
+        in '((physics-scene-name "The keyword naming SCENE. #K5DF9S")
+             (physics-scene-features "The features SCENE declares it uses, a list of keywords. #K5DF9S")
+             (physics-scene-seconds "How many seconds SCENE runs. #K5DF9S")
+             (physics-scene-moments "The moments, in seconds, SCENE's picture shows. #K5DF9S"))
+      do (setf (documentation name 'function) text))
+
+(defvar *physics-scenes* '()
+  "The scenes defined by define-physics-scene, in the order first defined. #K5DF9S")
+
+(defun register-physics-scene (scene)
+  "Put SCENE into *physics-scenes*, in the place of a scene of its name if there is one; return
+its name. #K5DF9S"
+  (let ((name (physics-scene-name scene)))
+    (setf *physics-scenes*
+          (if (find name *physics-scenes* :key #'physics-scene-name)
+              (substitute scene name *physics-scenes* :key #'physics-scene-name)
+              (append *physics-scenes* (list scene))))
+    name))
+
+(defmacro define-physics-scene (name documentation &body clauses)
+  "Define the scene NAME, a keyword, described by DOCUMENTATION, from CLAUSES (the table of the
+section): the expansion makes a physics-scene of closures and registers it. #K5DF9S"
+  (unless (keywordp name) (scene-clause-error name name "a keyword naming the scene"))
+  (unless (stringp documentation) (scene-clause-error name documentation "a string describing the scene"))
+  `(register-physics-scene
+    (make-physics-scene :name ,name :documentation ,documentation
+                        ,@(scene-clause-slots name clauses))))
+
+(defun find-physics-scene (name &optional (operation 'find-physics-scene))
+  "The scene named NAME, or an unknown-physics-scene naming OPERATION and NAME. #K5DF9S"
+  (or (find name *physics-scenes* :key #'physics-scene-name)
+      (error 'unknown-physics-scene :operation operation :name :scene :value name
+                                    :expected (format nil "one of ~{~S~^ ~}"
+                                                      (mapcar #'physics-scene-name *physics-scenes*)))))
+
+(defun physics-scene-text (scene)
+  "What SCENE shows: its documentation without the trailing anchor. #K5DF9S"
+  (let* ((text (physics-scene-documentation scene))
+         (hash (search " #" text :from-end t)))
+    (if (and hash (= (length text) (+ hash 8))) (subseq text 0 hash) text)))
+
+(defun fixed-sequence (seed)
+  "A function returning doubles in [0,1) from a 48-bit linear congruential generator started at
+the integer SEED: the same numbers on every run, whatever CL's random state. #K5DF9S"
+  (let ((state (ldb (byte 48 0) seed)))
+    (lambda ()
+      (setf state (ldb (byte 48 0) (+ (* state 25214903917) 11)))
+      (/ (ldb (byte 31 17) state) (float (ash 1 31) 1d0)))))
+
+(defun physics-world-handles (world)
+  "The handles of WORLD's bodies, as a list: the awake rows in order, then the sleeping ones; for
+a scene's world before its first step, the order its bodies were added in. #K5DF9S"
+  (check-world world 'physics-world-handles)
+  (loop for buffer in (list (physics-world-awake world) (physics-world-sleeping world))
+        nconc (loop for row below (body-columns-length buffer)
+                    collect (aref (body-columns-handle buffer) row))))
+
+(defun scene-world-arguments (scene overrides)
+  "The arguments, after the terrain, with which SCENE's world is made: its :world clause, with
+each world argument of OVERRIDES (a plist of a run's options) in place of the scene's. #K5DF9S"
+  (let ((arguments (copy-list (physics-scene-world-arguments scene))))
+    (loop for (key value) on overrides by #'cddr
+          when (member key '(:sleep :kernels :step-seconds :substeps :gravity))
+            do (setf (getf arguments key) value))
+    arguments))
+
+(defun add-scene-bodies (world group count seed)
+  "Add to WORLD the first COUNT bodies of GROUP, a scene-bodies, their points jittered by the
+fixed sequence of SEED when SEED and the group's jitter are given. #K5DF9S"
+  (let ((next (and seed (scene-bodies-jitter group) (fixed-sequence seed)))
+        (jitter (scene-bodies-jitter group))
+        (arguments (let ((kind (scene-bodies-kind group)))
+                     ;; the group's own arguments first, so that they win over its kind's
+                     (if kind
+                         (let ((number (physics-kind-number kind world)))
+                           (declare (notinline physics-kind-entry))
+                           (append (scene-bodies-arguments group) (list :kind number)
+                                   (rest (physics-kind-entry number))))
+                         (scene-bodies-arguments group)))))
+    (dotimes (i count)
+      (multiple-value-bind (x y z) (funcall (scene-bodies-spawn group) i)
+        (when next
+          (incf x (* jitter (- (funcall next) 0.5)))
+          (incf z (* jitter (- (funcall next) 0.5))))
+        (apply #'add-physics-body world x y z arguments)))))
+
+(defun scene-script (scene world step-seconds &key (shift 0.0) throw-at stream)
+  "The function of a step's number that does, before that step of WORLD, what SCENE does: its due
+actions (at THROW-AT seconds, when given, with bodies moved SHIFT metres along x; each action's
+line printed to STREAM, when given), its springs and its walker, whose frame is STEP-SECONDS. #K5DF9S"
+  (let* ((dt (physics-world-step-seconds world))
+         (actions (coerce (sort (mapcar (lambda (a) (cons (round (or throw-at (scene-action-seconds a)) dt) a))
+                                        (physics-scene-actions scene))
+                                #'< :key #'car)
+                          'simple-vector))
+         (springs (and (physics-scene-springs scene) (funcall (physics-scene-springs scene))))
+         (player (and (physics-scene-player scene) (funcall (first (physics-scene-player scene)))))
+         (input (and player (second (physics-scene-player scene))))
+         (frame (float step-seconds 1d0))
+         (terrain (physics-world-terrain world))
+         (next 0))
+    (declare (type fixnum next) (type double-float frame))
+    (lambda (step)
+      (loop while (and (< next (length actions)) (<= (car (svref actions next)) step))
+            do (let ((action (cdr (svref actions next))))
+                 (funcall (scene-action-function action) world shift)
+                 (when (and stream (scene-action-text action))
+                   (format stream "~&  -- ~A~%" (scene-action-text action))))
+               (incf next))
+      (when springs (run-physics-springs world springs))
+      (when player
+        (multiple-value-bind (move-x move-z) (funcall input step)
+          (advance-physics-player player terrain frame :move-x move-x :move-z move-z))
+        (post-physics-player world player)))))
+
+(defun make-scene-world (name &rest options &key count seed (shift 0.0) throw-at stream
+                                                 kernels sleep step-seconds substeps gravity)
+  "Build the world of the scene NAME; return it, its script (the function of the step's number to
+call before each step) and the scene. OPTIONS change the run: COUNT, the first body clause's
+count; SEED, the seed of the spawn jitter; SHIFT and THROW-AT, where along x and when its actions
+act; STREAM, where their lines go; and KERNELS, SLEEP, STEP-SECONDS, SUBSTEPS and GRAVITY, the
+world's. #K5DF9S"
+  (declare (ignore kernels sleep step-seconds substeps gravity))
+  (let* ((scene (find-physics-scene name 'make-scene-world))
+         (groups (physics-scene-bodies scene))
+         (counts (loop for group in groups for first = t then nil
+                       collect (if (and first count)
+                                   (if (typep count '(integer 0))
+                                       count
+                                       (error 'invalid-physics-parameter :name :count :value count
+                                                                         :expected "a count of bodies, 0 or more"))
+                                   (scene-bodies-count group))))
+         (arguments (scene-world-arguments scene options))
+         (world (apply #'make-physics-world :terrain (funcall (physics-scene-terrain scene) (reduce #'+ counts))
+                       arguments)))
+    (loop for group in groups for n in counts do (add-scene-bodies world group n seed))
+    (values world
+            (scene-script scene world (getf arguments :step-seconds 1/60)
+                          :shift shift :throw-at throw-at :stream stream)
+            scene)))
+
+(defun run-physics-scene (name &rest options &key record (every 1) seconds stream &allow-other-keys)
+  "Run the scene NAME for its seconds, or SECONDS, with the OPTIONS of make-scene-world; when
+RECORD is true, record it every EVERY steps; when STREAM is given, print to it a line per
+simulated second and a summary. Return the world and the recording (or NIL). #K5DF9S"
+  (find-physics-scene name 'run-physics-scene)
+  (multiple-value-bind (world script scene)
+      (apply #'make-scene-world name (loop for (key value) on options by #'cddr
+                                           unless (member key '(:record :every :seconds))
+                                             append (list key value)))
+    (let* ((dt (physics-world-step-seconds world))
+           (steps (round (or seconds (physics-scene-seconds scene)) dt))
+           (per-second (round 1 dt))
+           (recording (and record (start-physics-recording world :every every)))
+           (second-ms 0d0) (slowest 0d0))
+      (when stream
+        (format stream "~&~(~A~): ~D balls, ~,4F s steps, ~D substeps, kernels ~(~A~)~%"
+                (physics-scene-name scene)
+                (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
+                dt (physics-world-substeps world) (class-name (class-of (physics-world-kernels world))))
+        (format stream "~&  time   awake sleeping contacts colours  ms/step (mean over the second)~%")
+        ;; collect what loading and compiling left behind, so that no step pays for it
+        (sb-ext:gc :full t))
+      (dotimes (step steps)
+        (funcall script step)
+        (step-physics-world world)
+        (when stream
+          (let ((ms (* 1000 (physics-world-last-step-real-seconds world))))
+            (incf second-ms ms)
+            (setf slowest (max slowest ms)))
+          (when (zerop (mod (1+ step) per-second))
+            (format stream "~&  ~4D s ~7D ~8D ~8D ~7D ~8,3F~%" (floor (1+ step) per-second)
+                    (physics-world-awake-count world) (physics-world-sleeping-count world)
+                    (physics-world-last-step-contact-count world) (physics-world-last-step-color-count world)
+                    (/ second-ms per-second))
+            (setf second-ms 0d0))))
+      (when recording (stop-physics-recording world))
+      (when stream
+        (validate-physics-world world)
+        (format stream "~&summary: ~D bodies, ~D awake, ~D asleep after ~D s; slowest step ~,3F ms; ~
+                        the world validates; state hash ~D~%"
+                (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
+                (physics-world-awake-count world) (physics-world-sleeping-count world)
+                (or seconds (physics-scene-seconds scene)) slowest (physics-world-state-hash world)))
+      (values world recording))))
+;; Scenes are definitions:1 ends here
+
 ;; [[file:../physics.org::#B4S1NS][The basin:1]]
 (defun make-basin-terrain (&key (wall-height 6) (air-height 48))
   "The basin: a floor of cells reaching well past walls one cell thick around an 8 m x 8 m
@@ -5439,53 +6030,43 @@ interior [0,8) x [0,8), walls WALL-HEIGHT cells high, air resident up to AIR-HEI
                 (+ 0.5 (* layer 0.55) (jitter 2))
                 (+ 0.3 (* row 0.55) (jitter 3)))))))
 
+(define-physics-scene :awake-basin
+    "The benchmarks' pile: 1000 balls of radius 0.25 m, mass 1 kg, friction 0.6, restitution 0,
+dropped into the basin with sleeping off, so that every ball stays awake; the walls are 30 cells
+high when there are more than 3000 balls. #B4S1NS"
+  (:terrain (balls) (make-basin-terrain :wall-height (if (> balls 3000) 30 6)))
+  (:world :sleep nil :kernels :scalar)
+  (:bodies 1000 :spawn basin-spawn-point :jitter 0.02
+           :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0)
+  (:seconds 5)
+  (:features :terrain :body-contacts :friction))
+
 (defun make-basin-world (count &key (kernels :scalar) (sleep nil) (step-seconds 1/60) (substeps 4))
-  "The basin scene with COUNT balls of radius 0.25 m, mass 1 kg, friction 0.6, restitution 0.
-Walls are 30 cells high when COUNT exceeds 3000, else 6. #B4S1NS"
-  (let ((world (make-physics-world :terrain (make-basin-terrain :wall-height (if (> count 3000) 30 6))
-                                   :kernels kernels :sleep sleep :step-seconds step-seconds
-                                   :substeps substeps)))
-    (dotimes (i count world)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0)))))
+  "The world of the awake-basin scene with COUNT balls, solving with KERNELS, letting bodies SLEEP
+or not, stepping STEP-SECONDS in SUBSTEPS. #B4S1NS"
+  (values (make-scene-world :awake-basin :count count :kernels kernels :sleep sleep
+                                         :step-seconds step-seconds :substeps substeps)))
 ;; The basin:1 ends here
 
 ;; [[file:../physics.org::#D3M0SC][The main job:1]]
-(defun run-default-scene (&key (balls 1000) (seconds 8) (kernels :auto) (stream *standard-output*))
-  "The main job: drop BALLS balls into the basin, let the pile settle and sleep, throw one ball
-into it, and print a line per simulated second and a summary, solving with the kernel family
-KERNELS (the widest this CPU runs by default). Return the world and the thrown ball. #D3M0SC"
-  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep t :kernels kernels))
-         (steps-per-second 60) (thrown nil) (step-ms 0d0) (max-ms 0d0))
-    (dotimes (i balls)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6)))
-    (format stream "~&basin: ~D balls, ~,4F s steps, ~D substeps, kernels ~(~A~)~%"
-            balls (physics-world-step-seconds world) (physics-world-substeps world)
-            (class-name (class-of (physics-world-kernels world))))
-    (format stream "~&  time   awake sleeping contacts colours  ms/step (mean over the second)~%")
-    ;; collect what loading and compiling left behind, so that no step pays for it
-    (sb-ext:gc :full t)
-    (dotimes (second seconds)
-      (when (= second (floor seconds 2))
-        (setf thrown (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0))
-        (format stream "~&  -- a ball is thrown down into the pile at 7 m/s~%"))
-      (setf step-ms 0d0)
-      (dotimes (s steps-per-second)
-        (step-physics-world world)
-        (let ((ms (* 1000 (physics-world-last-step-real-seconds world))))
-          (incf step-ms ms) (setf max-ms (max max-ms ms))))
-      (format stream "~&  ~4D s ~7D ~8D ~8D ~7D ~8,3F~%" (1+ second)
-              (physics-world-awake-count world) (physics-world-sleeping-count world)
-              (physics-world-last-step-contact-count world) (physics-world-last-step-color-count world)
-              (/ step-ms steps-per-second)))
-    (validate-physics-world world)
-    (format stream "~&summary: ~D bodies, ~D awake, ~D asleep after ~D s; slowest step ~,3F ms; ~
-                    the world validates; state hash ~D~%"
-            (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
-            (physics-world-awake-count world) (physics-world-sleeping-count world) seconds max-ms
-            (physics-world-state-hash world))
-    (values world thrown)))
+(define-physics-scene :basin
+    "1000 balls dropped into the basin; at 4 s a ball is thrown down into the pile #D3M0SC"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 1000 :spawn basin-spawn-point :jitter 0.02 :radius 0.25 :mass 1.0 :friction 0.6)
+  (:throw 4 (1.0 7.5 4.0) :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0
+          :say "a ball is thrown down into the pile at 7 m/s")
+  (:seconds 8)
+  (:pictures 1 4.3 8)
+  (:features :terrain :body-contacts :friction :sleep))
+
+(defun run-default-scene (&key (scene :basin) balls seconds (kernels :auto) (stream *standard-output*))
+  "The main job, or the scene SCENE: build it (with BALLS bodies in its first body clause, when
+given), run it for its seconds or SECONDS, solving with the kernel family KERNELS (the widest
+this CPU runs by default), and print a line per simulated second and a summary. Return the
+world. #D3M0SC"
+  (values (apply #'run-physics-scene scene :stream stream :kernels kernels :seconds seconds
+                 (and balls (list :count balls)))))
 ;; The main job:1 ends here
 
 ;; [[file:../physics.org::#JAU0EF][Kinds of body, and the springs that emit them:1]]
@@ -5780,10 +6361,14 @@ Return the steps run. #H7P4CX"
   "Post PLAYER into WORLD's next step as a kinematic box moving at its velocity. #H7P4CX"
   (check-world world 'post-physics-player)
   (let ((w (physics-player-half-width player)) (h (* 0.5d0 (physics-player-height player))))
-    (post-physics-box world (physics-player-x player) (+ (physics-player-y player) h)
-                      (physics-player-z player) w h w
-                      :vx (physics-player-vx player) :vy (physics-player-vy player)
-                      :vz (physics-player-vz player) :owner player)))
+    ;; each double-float goes to post-physics-box as the single-float it would become there,
+    ;; which is passed unboxed: passed as a double-float, each would be consed. The walker's
+    ;; numbers are finite and far inside a single-float: it checks its input and keeps its box
+    ;; within the coordinate limit.
+    (post-physics-box world (f32 (physics-player-x player)) (f32 (+ (physics-player-y player) h))
+                      (f32 (physics-player-z player)) (f32 w) (f32 h) (f32 w)
+                      :vx (f32 (physics-player-vx player)) :vy (f32 (physics-player-vy player))
+                      :vz (f32 (physics-player-vz player)) :owner player)))
 ;; The player: a box that walks:1 ends here
 
 ;; [[file:../physics.org::#B3NCH5][What a step costs:1]]
@@ -5939,14 +6524,11 @@ mean ms and the bytes consed per step over steps FROM..TO, BEFORE-STEP's work in
     (values (/ ms (- to from)) (round consed (- to from)))))
 
 (defun measure-settled-pile (&key (balls 1000) (kernels :scalar) (steps 100))
-  "Drop BALLS balls into the basin with sleep on, step until every one sleeps (at most 20 s),
+  "Drop BALLS balls of the pile scene into the basin, step until every one sleeps (at most 20 s),
 then return the mean ms and bytes consed per step over STEPS more steps, and the steps it
 took to settle. #B3NCH5"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
+  (let ((world (make-scene-world :pile :count balls :kernels kernels))
         (settle 0))
-    (dotimes (i balls)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)))
     (loop while (and (plusp (physics-world-awake-count world)) (< settle 1200))
           do (step-physics-world world) (incf settle))
     (multiple-value-bind (mean consed) (measure-steps world 0 steps)
@@ -5956,9 +6538,8 @@ took to settle. #B3NCH5"
   "The awake basin pile of BALLS, where from step FROM on every step removes the oldest ball
 and drops a new one in from above: mean ms and bytes consed per step over FROM..TO. #B3NCH5"
   (let* ((world (make-basin-world balls :kernels kernels))
-         (handles (make-array balls :adjustable t :fill-pointer 0)))
-    (dotimes (i (physics-world-awake-count world))
-      (vector-push-extend (aref (body-columns-handle (physics-world-awake world)) i) handles))
+         (handles (make-array balls :adjustable t :fill-pointer t
+                                    :initial-contents (physics-world-handles world))))
     (multiple-value-bind (mean consed)
         (measure-steps world from to
                        (lambda (i)
@@ -5992,12 +6573,10 @@ middle of the basin, two water drops a step. #B3NCH5"
   (make-fountain 4 -1 4))
 
 (defun measure-fountain (&key (kernels :scalar) (from 300) (to 600))
-  "The basin's fountain, its spring run before every step: mean ms and bytes consed per step
+  "The fountain scene, its spring run before every step: mean ms and bytes consed per step
 (spring and step) over FROM..TO, and the drops alive. #B3NCH5"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
-        (springs (list (make-basin-fountain))))
-    (multiple-value-bind (mean consed)
-        (measure-steps world from to (lambda (i) (declare (ignore i)) (run-physics-springs world springs)))
+  (multiple-value-bind (world script) (make-scene-world :fountain :kernels kernels)
+    (multiple-value-bind (mean consed) (measure-steps world from to script)
       (list :mean mean :consed consed
             :alive (+ (physics-world-awake-count world) (physics-world-sleeping-count world))))))
 
@@ -6049,8 +6628,8 @@ beside the basin's east wall, each resting a slop deep and alone. Return the wor
 
 (defun measure-sleeping-scale (sleepers &key (kernels :avx2))
   "Beside SLEEPERS settled sleepers: the mean ms per step idle (nothing awake, 100 steps), while
-1000 balls fall into the basin, settle and sleep (600 steps), and after a ball is thrown into
-that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
+the 1000 balls of the pile scene fall into the basin, settle and sleep (600 steps), and after the
+main job's ball is thrown into that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
   (sb-ext:gc :full t)
   (let* ((before (sb-kernel:dynamic-usage))
          (world (sleepers-beside-basin sleepers :kernels kernels)))
@@ -6058,11 +6637,10 @@ that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
     (sb-ext:gc :full t)
     (let ((bytes (- (sb-kernel:dynamic-usage) before))
           (idle (measure-steps world 0 100)))
-      (dotimes (i 1000)
-        (multiple-value-bind (x y z) (basin-spawn-point i)
-          (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)))
+      ;; the pile scene's balls, then the main job's throw
+      (add-scene-bodies world (first (physics-scene-bodies (find-physics-scene :pile))) 1000 nil)
       (let ((settling (measure-steps world 0 600)))
-        (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0)
+        (funcall (scene-action-function (first (physics-scene-actions (find-physics-scene :basin)))) world 0.0)
         (let ((wave (measure-steps world 0 300)))
           (list :sleepers sleepers :idle idle :settling settling :wave wave
                 :bytes-per-sleeper (if (plusp sleepers) (round bytes sleepers) 0)
@@ -6083,6 +6661,84 @@ per step beside them, each against the same at no sleepers, and the heap's bytes
                 (getf m :wave) (/ (getf m :wave) (getf base :wave)) (getf m :bytes-per-sleeper) (getf m :awake))
         (finish-output stream)))))
 ;; What a step costs:2 ends here
+
+;; [[file:../physics.org::#FBNCH9][What leaving features out saves:1]]
+(defparameter +feature-scenes+
+  '((:fountain "water fountain, drops meet terrain only" (:terrain :friction :sleep :mortal) 300 600)
+    (:dead-pile "1000 dead balls: no restitution, rolling, events" (:terrain :body-contacts :friction) 120 300)
+    (:basin "1000-ball basin pile, every feature" nil 120 300)
+    (:walker "walker among the fountain's drops, no body contacts" (:terrain :boxes :friction :sleep :mortal)
+     300 600))
+  "The scenes of the feature benchmark: each a keyword, what it is, its features (NIL for every
+feature) and the steps FROM and TO it is measured over. The piles run without sleep, as the
+basin benchmark's do, so all their balls are awake while they are measured. #FBNCH9")
+
+(defun feature-scene (name &key (kernels :auto) (features +physics-features+) (balls 1000)
+                             (sleep (not (member name '(:dead-pile :basin)))))
+  "The world of the feature scene NAME of +feature-scenes+ with FEATURES, solved by KERNELS (a
+pile holds BALLS balls; SLEEP, whether its bodies may sleep, is false for the piles), and the
+function of the step's number to call before each step, or NIL, as two values. #FBNCH9"
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep sleep :features features)))
+    (ecase name
+      ((:dead-pile :basin)
+       (dotimes (i balls (values world nil))
+         (multiple-value-bind (x y z) (basin-spawn-point i)
+           (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0))))
+      ((:fountain :walker)
+       (let ((springs (list (make-basin-fountain)))
+             (player (and (eq name :walker) (make-physics-player 3d0 0d0 3d0))))
+         (values world
+                 (lambda (step)
+                   (run-physics-springs world springs)
+                   (when player
+                     (multiple-value-bind (move-x move-z) (player-scene-input step)
+                       (advance-physics-player player (physics-world-terrain world) (/ 1d0 60)
+                                               :move-x move-x :move-z move-z))
+                     (post-physics-player world player)))))))))
+
+(defun measure-feature-scene (name &key (kernels :auto))
+  "Step the feature scene NAME built general and specialised, in turn, and return a plist of the
+median ms and the bytes consed per step of each over its steps FROM..TO. #FBNCH9"
+  (destructuring-bind (what features from to) (rest (assoc name +feature-scenes+))
+    (declare (ignore what))
+    (multiple-value-bind (general general-step) (feature-scene name :kernels kernels)
+      (multiple-value-bind (special special-step)
+          (feature-scene name :kernels kernels :features (or features +physics-features+))
+        (let ((ms (list '() '())) (consed (list 0 0)))
+          (dotimes (i to)
+            (flet ((one (k world before)
+                     (when before (funcall before i))
+                     (let ((bytes (sb-ext:get-bytes-consed)))
+                       (step-physics-world world)
+                       (when (>= i from)
+                         (incf (nth k consed) (- (sb-ext:get-bytes-consed) bytes))
+                         (push (* 1000 (physics-world-last-step-real-seconds world)) (nth k ms))))))
+              (if (evenp i)
+                  (progn (one 0 general general-step) (one 1 special special-step))
+                  (progn (one 1 special special-step) (one 0 general general-step)))))
+          (let ((n (- to from)))
+            (list :general (median (first ms)) :specialised (median (second ms))
+                  :general-consed (round (first consed) n) :specialised-consed (round (second consed) n)
+                  :bodies (+ (physics-world-awake-count special) (physics-world-sleeping-count special)))))))))
+
+(defun run-feature-benchmark (&key (stream *standard-output*) (kernels :auto))
+  "Print, as an Org table, each scene of +feature-scenes+ under the general step and the step
+built for its features, in one run, with the machine's load. #FBNCH9"
+  (let ((body-bytes (+ +body-columns-row-bytes+ (* 2 4 +solver-stride+)))
+        (contact-bytes (+ +contact-columns-row-bytes+ (* 4 (length +constraint-columns+)) (* 3 8))))
+    (format stream "~&#+caption: general and specialised steps, ~(~A~) family; load ~A~%" kernels (load-average))
+    (format stream "~&| scene | bodies | general median ms | specialised median ms | ratio | bytes consed/step | column bytes/body | column bytes/contact |~%")
+    (format stream "~&|-------+--------+------------+----------------+-------+-------------------+-------------------+----------------------|~%")
+    (dolist (scene +feature-scenes+)
+      (let ((m (measure-feature-scene (first scene) :kernels kernels)))
+        (format stream "~&| ~A | ~D | ~,3F | ~,3F | ~,2F | ~D, ~D | ~D, ~D | ~D, ~D |~%"
+                (second scene) (getf m :bodies) (getf m :general) (getf m :specialised)
+                (/ (getf m :specialised) (getf m :general))
+                (getf m :general-consed) (getf m :specialised-consed)
+                body-bytes body-bytes contact-bytes contact-bytes)
+        (finish-output stream)))
+    (format stream "~&(after the run: load ~A)~%" (load-average))))
+;; What leaving features out saves:1 ends here
 
 ;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]
 (defun pinch-between-sleepers (&key (seconds 2))
@@ -6118,44 +6774,45 @@ of its own mass and radius. #X7R3M5"
                                          (* 0.4d0 r r (+ (expt (aref wx row) 2) (expt (aref wy row) 2)
                                                          (expt (aref wz row) 2)))))))))))))
 
-(defun dead-pile (count &key (seconds 10))
-  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0) in the basin lattice
-with sleeping off and run SECONDS. Return the kinetic energy at each whole second, in joules,
-and the fastest ball's speed at the end. #X7R3M5"
+(defun dead-pile (count &key (seconds 10) (rolling-resistance 0.0))
+  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0, ROLLING-RESISTANCE)
+in the basin lattice with sleeping off and run SECONDS. Return the kinetic energy at each whole
+second, in joules, the fastest ball's speed at the end, and the speed of that ball's lowest
+point, which is zero when it rolls on the floor without slipping. #X7R3M5"
   (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
          (balls (loop for i below count
                       collect (multiple-value-bind (x y z) (basin-spawn-point i)
-                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6))))
+                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6
+                                                              :rolling-resistance rolling-resistance))))
          (curve '()))
     (dotimes (second seconds)
       (dotimes (i 60) (step-physics-world world))
       (push (pile-kinetic-energy world balls) curve))
-    (values (nreverse curve) (reduce #'max balls :key (lambda (b) (speed-of world b))))))
+    (let ((fastest (reduce (lambda (a b) (if (>= (speed-of world a) (speed-of world b)) a b)) balls)))
+      (multiple-value-bind (vx vy vz) (physics-body-velocity world fastest)
+        (multiple-value-bind (wx wy wz) (physics-body-angular-velocity world fastest)
+          (declare (ignore wy))
+          ;; the lowest point moves at v + w x (0, -r, 0) = v + (r wz, 0, -r wx)
+          (values (nreverse curve) (speed-of world fastest)
+                  (sqrt (+ (expt (+ vx (* 0.25 wz)) 2) (* vy vy) (expt (- vz (* 0.25 wx)) 2)))))))))
 
-(defun thrown-into-pile (count &key (seconds 8) (throw-at (floor seconds 2)) (shift 0.0) (seed nil))
-  "The default scene at COUNT balls: drop them in the basin lattice (each spawn point moved by up
-to 1 cm in x and z by the fixed sequence of SEED, when given), throw a ball into the pile at
-second THROW-AT from a point SHIFT metres along x from the default, and run SECONDS with sleeping
-on. Return the awake count at the end of each second. #X7R3M5"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t :kernels :auto))
-        (next (and seed (fixed-sequence seed))) (counts '()))
-    (dotimes (i count)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (when next
-          (incf x (* 0.02 (- (funcall next) 0.5)))
-          (incf z (* 0.02 (- (funcall next) 0.5))))
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6)))
-    (dotimes (second seconds)
-      (when (= second throw-at)
-        (add-physics-body world (+ 1.0 shift) 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0))
-      (dotimes (i 60) (step-physics-world world))
-      (push (physics-world-awake-count world) counts))
-    (nreverse counts)))
+(defun thrown-into-pile (count &key (seconds 8) throw-at (shift 0.0) (seed nil))
+  "The default scene at COUNT balls (each spawn point moved by up to 1 cm in x and z by the fixed
+sequence of SEED, when given), its ball thrown at second THROW-AT (the scene's 4 s by default)
+from a point SHIFT metres along x from the scene's, run SECONDS. Return the awake count at the end
+of each second. #X7R3M5"
+  (multiple-value-bind (world script) (make-scene-world :basin :count count :seed seed :shift shift
+                                                               :throw-at throw-at)
+    (loop for second below seconds
+          do (dotimes (i 60)
+               (funcall script (+ (* 60 second) i))
+               (step-physics-world world))
+          collect (physics-world-awake-count world))))
 
-(defun column-contact-depths (count &key (radius 0.45) (seconds 10))
-  "Stack COUNT balls of RADIUS and 1 kg in the shaft, sleeping on, and run SECONDS. Return each
-contact's overlap at the end, from the floor up, in slops. #X7R3M5"
-  (let* ((world (make-shaft-world :sleep t))
+(defun column-contact-depths (count &key (radius 0.45) (seconds 10) (sleep t))
+  "Stack COUNT balls of RADIUS and 1 kg in the shaft of a world that lets bodies SLEEP or not, and
+run SECONDS. Return each contact's overlap at the end, from the floor up, in slops. #X7R3M5"
+  (let* ((world (make-shaft-world :sleep sleep))
          (balls (loop for i below count
                       collect (add-physics-body world 0.5 (+ radius (* i 2.02 radius)) 0.5 :radius radius :mass 1.0))))
     (dotimes (i (* 60 seconds)) (step-physics-world world))
@@ -6163,6 +6820,22 @@ contact's overlap at the end, from the floor up, in slops. #X7R3M5"
       (mapcar (lambda (overlap) (/ overlap *physics-linear-slop*))
               (cons (- radius (first heights))
                     (loop for (a b) on heights while b collect (- (* 2 radius) (- b a))))))))
+
+(defun soft-column-depths (count &key (mass 1.0))
+  "The overlaps, from the floor up and in slops, at which a column of COUNT awake balls of MASS in
+the shaft comes to rest by the soft contact's law ([[#G7Q3XR]]): each contact one slop plus its
+load over its effective mass times omega squared. The floor's contact is stiffened by its load
+and gives g over omega squared at twice the frequency; a contact between two balls, whose
+effective mass is half a ball, gives the weight of the balls above it over half a ball times
+omega squared. #X7R3M5"
+  (let* ((world (make-shaft-world))
+         (g (abs (physics-world-gravity-y world)))
+         (h (/ (f32 (physics-world-step-seconds world)) (physics-world-substeps world)))
+         (omega (* 2.0 (f32 pi) (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h))))
+         (slop (f32 (physics-world-slop world))))
+    (cons (/ (+ slop (/ g (expt (* 2.0 omega) 2))) slop)
+          (loop for above from (1- count) downto 1
+                collect (/ (+ slop (/ (* above mass g) (* 0.5 mass omega omega))) slop)))))
 
 (defun speed-of (world handle)
   "The speed of HANDLE's body. #X7R3M5"
@@ -6253,14 +6926,6 @@ floor. #X7R3M5"
                   x0 x y0 y z0 z))))
       (values fastest (nth-value 1 (physics-body-position world ball)) (- 0.25 *physics-linear-slop*)))))
 
-(defun fixed-sequence (seed)
-  "A function returning doubles in [0,1) from a 48-bit linear congruential generator started at
-the integer SEED: the same numbers on every run, whatever CL's random state. #X7R3M5"
-  (let ((state (ldb (byte 48 0) seed)))
-    (lambda ()
-      (setf state (ldb (byte 48 0) (+ (* state 25214903917) 11)))
-      (/ (ldb (byte 31 17) state) (float (ash 1 31) 1d0)))))
-
 (defun mixed-mass-pile (count &key (seconds 15) (brace-ratio *physics-brace-mass-ratio*) (seed 7))
   "Drop COUNT balls of radius 0.25 m in the basin lattice, with sleeping off, their masses spread
 evenly in log from 0.32 to 32 kg by the fixed sequence of SEED, and run SECONDS with BRACE-RATIO. Return
@@ -6318,22 +6983,22 @@ the world valid. #X7R3M5"
 alive at the end, whether every number stayed finite, the bytes consed per step after the first
 minute, and the growth of the heap in bytes, after a full collection, from the end of the first
 minute to the end. #X7R3M5"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t))
-        (springs (list (make-basin-fountain))) (finite t) (consed 0) (heap-1 0))
-    (dotimes (i (* minutes 3600))
-      (when (= i 3600)
-        (sb-ext:gc :full t)
-        (setf heap-1 (sb-kernel:dynamic-usage)))
-      (let ((before (sb-ext:get-bytes-consed)))
-        (run-physics-springs world springs)
-        (step-physics-world world)
-        (when (>= i 3600) (incf consed (- (sb-ext:get-bytes-consed) before))))
-      (when (zerop (mod i 600)) (setf finite (and finite (world-finite-p world)))))
-    (sb-ext:gc :full t)
-    (values (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
-            (and finite (world-finite-p world))
-            (round consed (* (1- minutes) 3600))
-            (- (sb-kernel:dynamic-usage) heap-1))))
+  (multiple-value-bind (world script) (make-scene-world :fountain :kernels :scalar)
+    (let ((finite t) (consed 0) (heap-1 0))
+      (dotimes (i (* minutes 3600))
+        (when (= i 3600)
+          (sb-ext:gc :full t)
+          (setf heap-1 (sb-kernel:dynamic-usage)))
+        (let ((before (sb-ext:get-bytes-consed)))
+          (funcall script i)
+          (step-physics-world world)
+          (when (>= i 3600) (incf consed (- (sb-ext:get-bytes-consed) before))))
+        (when (zerop (mod i 600)) (setf finite (and finite (world-finite-p world)))))
+      (sb-ext:gc :full t)
+      (values (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
+              (and finite (world-finite-p world))
+              (round consed (* (1- minutes) 3600))
+              (- (sb-kernel:dynamic-usage) heap-1)))))
 
 (defun throw-at-wall (speed start)
   "Throw a ball of radius 0.25 m at SPEED along x, without gravity, from x = START at a wall one
@@ -6400,6 +7065,13 @@ its final height less its ideal resting height (radius less a slop), and whether
       (row "column of 20 balls, each contact against its design depth (one slop)"
            (every (lambda (d) (<= d 1.1)) depths)
            "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}" depths))
+    ;; awake, every contact gives by its load: the soft contact's law, against which it is held
+    (let* ((depths (column-contact-depths 20 :sleep nil)) (law (soft-column-depths 20))
+           (off (reduce #'max (mapcar (lambda (d w) (abs (- d w))) depths law))))
+      (row "column of 20 balls, sleeping off, each contact against the soft contact's law"
+           (<= off 0.02)
+           "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}; at most ~,3F slops from the law's ~
+            ~,2F .. ~,2F" depths off (second law) (car (last law))))
     (let ((runs (append (loop for shift in '(0.0 0.001 0.002 0.003)
                               collect (thrown-into-pile 1000 :seconds 12 :throw-at 4 :shift shift))
                         (loop for seed from 1 to 10
@@ -6409,10 +7081,12 @@ its final height less its ideal resting height (radius less a slop), and whether
         (row "default scene, ball thrown at 4 s, 14 runs (throw 0-3 mm aside, 10 jittered spawns)"
              (and (<= at-8 10) (zerop at-12))
              "awake of 1001 in the worst run: ~D at 8 s, ~D at 12 s" at-8 at-12)))
-    (multiple-value-bind (curve fastest) (dead-pile 500 :seconds 10)
-      (row "500 dead balls, sleeping off" (and (< (car (last curve)) 1e-4) (< fastest 0.001))
-           "kinetic energy at 1 .. 10 s, mJ: ~{~,3F~^ ~}; fastest at 10 s ~,4F m/s"
-           (mapcar (lambda (e) (* 1000 e)) curve) fastest))
+    (dolist (rho '(0.0 0.01))
+      (multiple-value-bind (curve fastest slip) (dead-pile 500 :seconds 10 :rolling-resistance rho)
+        (row (format nil "500 dead balls, sleeping off~:[~;, rolling resistance ~:*~,2F~]" (and (> rho 0) rho))
+             (and (< (car (last curve)) 1e-4) (< fastest 0.001))
+             "kinetic energy at 1 .. 10 s, mJ: ~{~,3F~^ ~}; fastest at 10 s ~,4F m/s, its lowest point ~
+              at ~,5F m/s" (mapcar (lambda (e) (* 1000 e)) curve) fastest slip)))
     (multiple-value-bind (speed median worst pen) (heaps-at-one-point)
       (row "heaps of 50 to 150 balls spawned at one point" (and (< speed 10.0) (< pen 0.01))
            "fastest ball ~,3F m/s; fastest parting pair ~,3F m/s in the median heap, ~,3F m/s in the worst; ~
@@ -7078,25 +7752,42 @@ step, through its step hook (which must be free). Return the recording. #G4WXCJ"
 ;; Watching a run: the recorder:1 ends here
 
 ;; [[file:../physics.org::#3X6XN8][The standard scenes:1]]
-(defparameter *physics-scenes*
-  '((:basin "1000 balls dropped into the basin; at 4 s a ball is thrown down into the pile"
-     8 (1 4.3 8))
-    (:pile "1000 balls with rolling resistance, left until the whole pile sleeps" 12 (1 4 12))
-    (:fountain "a fountain in the basin's floor: two water drops a step" 6 (0.6 2 6))
-    (:lava "a lava spring in the basin's floor: a gobbet every fourth step, each living 4 s"
-     8 (1 4 8))
-    (:player "the walker going round a square through two layers of balls" 8 (1 3.5 7)))
-  "The standard scenes: each a keyword, what it shows, its seconds at 60 Hz, and the moments, in
-seconds, of its picture. #3X6XN8")
+(define-physics-scene :pile
+    "1000 balls with rolling resistance, left until the whole pile sleeps #3X6XN8"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 1000 :spawn basin-spawn-point :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)
+  (:seconds 12)
+  (:pictures 1 4 12)
+  (:features :terrain :body-contacts :friction :rolling-resistance :sleep))
 
-(defun basin-pile-world (balls &key (rolling-resistance 0.0))
-  "A world over the basin with sleep on and the widest kernel family, holding BALLS balls of the
-basin lattice with ROLLING-RESISTANCE. #3X6XN8"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t :kernels :auto)))
-    (dotimes (i balls world)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6
-                                      :rolling-resistance rolling-resistance)))))
+(define-physics-scene :fountain
+    "a fountain in the basin's floor: two water drops a step #3X6XN8"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:springs (make-basin-fountain))
+  (:seconds 6)
+  (:pictures 0.6 2 6)
+  (:features :terrain :friction :sleep :mortal))
+
+(define-physics-scene :lava
+    "a lava spring in the basin's floor: a gobbet every fourth step, each living 4 s #3X6XN8"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:springs (make-lava-spring 4 -1 4))
+  (:seconds 8)
+  (:pictures 1 4 8)
+  (:features :terrain :body-contacts :friction :restitution :sleep :mortal))
+
+(define-physics-scene :player
+    "the walker going round a square through two layers of balls #3X6XN8"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 392 :spawn basin-spawn-point :radius 0.25 :mass 1.0 :friction 0.6)
+  (:player (1d0 0d0 1d0) player-scene-input)
+  (:seconds 8)
+  (:pictures 1 3.5 7)
+  (:features :terrain :body-contacts :boxes :friction :sleep))
 
 (defun player-scene-input (step)
   "The walker's input at STEP of the player scene: still for the first second, then round a
@@ -7105,44 +7796,6 @@ square, 1.5 s a side, as two values MOVE-X MOVE-Z. #3X6XN8"
       (values 0d0 0d0)
       (ecase (mod (floor (- step 60) 90) 4)
         (0 (values 1d0 0d0)) (1 (values 0d0 1d0)) (2 (values -1d0 0d0)) (3 (values 0d0 -1d0)))))
-
-(defun physics-scene (name)
-  "The world of the standard scene NAME of *physics-scenes*, and the function of the step's
-number to call before each step (or NIL), as two values. #3X6XN8"
-  (ecase name
-    (:basin (let ((world (basin-pile-world 1000)))
-              (values world (lambda (step)
-                              (when (= step 240)
-                                (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0
-                                                                    :vx 4.0 :vy -6.0))))))
-    (:pile (values (basin-pile-world 1000 :rolling-resistance 0.05) nil))
-    ((:fountain :lava)
-     (let ((world (basin-pile-world 0))
-           (springs (list (if (eq name :fountain) (make-basin-fountain) (make-lava-spring 4 -1 4)))))
-       (values world (lambda (step) (declare (ignore step)) (run-physics-springs world springs)))))
-    (:player
-     (let* ((world (basin-pile-world 392))
-            (terrain (physics-world-terrain world))
-            (player (make-physics-player 1d0 0d0 1d0)))
-       (values world (lambda (step)
-                       (multiple-value-bind (move-x move-z) (player-scene-input step)
-                         (advance-physics-player player terrain (/ 1d0 60) :move-x move-x :move-z move-z))
-                       (post-physics-player world player)))))))
-
-(defun run-physics-scene (name &key record (every 1) seconds)
-  "Run the standard scene NAME of *physics-scenes* for its seconds, or SECONDS; when RECORD is
-true, record it every EVERY steps. Return the world and the recording (or NIL). #3X6XN8"
-  (let ((entry (assoc name *physics-scenes*)))
-    (unless entry
-      (error 'invalid-physics-parameter :name :scene :value name
-                                        :expected (format nil "one of ~{~S~^ ~}" (mapcar #'first *physics-scenes*))))
-    (multiple-value-bind (world before-step) (physics-scene name)
-      (let ((recording (and record (start-physics-recording world :every every))))
-        (dotimes (step (round (* (or seconds (third entry)) 60)))
-          (when before-step (funcall before-step step))
-          (step-physics-world world))
-        (when recording (stop-physics-recording world))
-        (values world recording)))))
 ;; The standard scenes:1 ends here
 
 ;; [[file:../physics.org::#RH7T05][A viewer for the browser:1]]
