@@ -1270,6 +1270,8 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
 
 (defconstant +flag-terrain-only+ 2 "Body flag: meets terrain and boxes but no other body. #B5N8JT")
 
+(defconstant +flag-braced+ 4 "Body flag: braced at the last step that ran the bracing pass. #B5N8JT")
+
 (defconstant +set-free+ 0 "Handle-table set of a free slot. #B5N8JT")
 
 (defconstant +set-awake+ 1 "Handle-table set of an awake body. #B5N8JT")
@@ -2074,6 +2076,8 @@ dispatches on it once per call. #W0RLD7"))
                  :reader physics-world-color-starts)
    (color-masks :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-color-masks)
    (braced :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-braced)
+   (held :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-held)
+   (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
    (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
@@ -2494,6 +2498,9 @@ speed, and the datum (a box's owner, or NIL). #E7V3NT"
 ;; Events are rows too:1 ends here
 
 ;; [[file:../physics.org::#QKS4GZ][Sleep is relocation; boxes, throws and edits wake:1]]
+(defconstant +woken-sleep-credit+ 0.5
+  "The part of the time to sleep a woken body starts with already counted. #QKS4GZ")
+
 (defun relocate-body (world from-set row to-set)
   "Move the body at ROW of FROM-SET to the end of TO-SET, patching the forwarding address of
 the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
@@ -2516,17 +2523,20 @@ the body and of the row that fills its hole. Return the body's new row. #QKS4GZ"
   (let* ((handle (aref (body-columns-handle (physics-world-awake world)) row))
          (new (relocate-body world +set-awake+ row +set-sleeping+))
          (s (physics-world-sleeping world)))
-    (with-body-columns (vx vy vz wx wy wz sleep-time life) s
+    (with-body-columns (vx vy vz wx wy wz sleep-time life flags) s
       (setf (aref vx new) 0.0 (aref vy new) 0.0 (aref vz new) 0.0
-            (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0)
+            (aref wx new) 0.0 (aref wy new) 0.0 (aref wz new) 0.0 (aref sleep-time new) 0.0
+            ;; bracing starts afresh when it wakes
+            (aref flags new) (logandc2 (aref flags new) +flag-braced+))
       (when (> (aref life new) 0.0) (incf (physics-world-mortal-sleepers world))))
     (note-fresh-sleeper world handle)
     (push-event world +event-slept+ handle +no-body+ 0.0 0.0 0.0 0.0)
     new))
 
 (defun wake-physics-body (world row)
-  "Wake the sleeping body at ROW: relocate it to the end of the awake set, note :woke. In a step,
-note ROW in the step's undo log too (roll-back-step). #QKS4GZ"
+  "Wake the sleeping body at ROW: relocate it to the end of the awake set, its stillness counted
+from +woken-sleep-credit+ of the time to sleep, and note :woke. In a step, note ROW in the step's
+undo log too (roll-back-step). #QKS4GZ"
   (when (physics-world-undo-open world)
     (let ((log (physics-world-undo-woken world)) (k (physics-world-undo-woken-count world)))
       (when (>= k (length log))
@@ -2537,7 +2547,9 @@ note ROW in the step's undo log too (roll-back-step). #QKS4GZ"
          (new (progn (when (> (aref (body-columns-life (physics-world-sleeping world)) row) 0.0)
                        (decf (physics-world-mortal-sleepers world)))
                      (relocate-body world +set-sleeping+ row +set-awake+))))
-    (setf (aref (body-columns-sleep-time (physics-world-awake world)) new) 0.0)
+    ;; a sleeper was still for the whole time to sleep: it wakes with half of it counted
+    (setf (aref (body-columns-sleep-time (physics-world-awake world)) new)
+          (* +woken-sleep-credit+ (f32 (physics-world-time-to-sleep world))))
     (leave-sleeping-grids world handle)
     (push-event world +event-woke+ handle +no-body+ 0.0 0.0 0.0 0.0)
     new))
@@ -2581,7 +2593,8 @@ removed. Return WORLD. #QKS4GZ"
           (physics-world-velocities world) (make-array 0 :element-type 'single-float)
           (physics-world-deltas world) (make-array 0 :element-type 'single-float)
           (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
-          (physics-world-braced world) (make-array 0 :element-type 'fixnum))
+          (physics-world-braced world) (make-array 0 :element-type 'fixnum)
+          (physics-world-held world) (make-array 0 :element-type 'fixnum))
     (let ((count (physics-world-fresh-count world)))
       (setf (physics-world-fresh-handles world)
             (replace (make-array (max 64 count) :element-type 'fixnum :initial-element 0)
@@ -3813,6 +3826,8 @@ variable BASE. #SSMPYW"
             (physics-world-color-masks world)
             (make-array rows :element-type 'fixnum :initial-element 0)
             (physics-world-braced world)
+            (make-array rows :element-type 'fixnum :initial-element 0)
+            (physics-world-held world)
             (make-array rows :element-type 'fixnum :initial-element 0))))
   (when (< (length (physics-world-contact-colors world)) contacts)
     (setf (physics-world-contact-colors world)
@@ -4003,7 +4018,22 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                       (when (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
                                   (* (aref v (+ o 2)) (aref v (+ o 2))))
                                still2)
-                        (setf (aref braced row) 1))))))))
+                        (setf (aref braced row) 1)))))))
+              ;; a body braced at the step before stays braced while it is still, whatever its
+              ;; load: its load moves to the bodies below once it is braced (hysteresis)
+              (let ((flags (body-columns-flags awake))
+                    (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world)))))
+                (dotimes (i n)
+                  (let ((o (solver-row i)))
+                    (when (and kept (logtest (aref flags i) +flag-braced+)
+                               (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
+                                     (* (aref v (+ o 2)) (aref v (+ o 2))))
+                                  still2))
+                      (setf (aref braced i) 1))
+                    (setf (aref flags i) (if (= (aref braced i) 1)
+                                             (logior (aref flags i) +flag-braced+)
+                                             (logandc2 (aref flags i) +flag-braced+)))))
+                (setf (physics-world-braced-step world) (physics-world-step-count world))))
             (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
               (with-constraint-block (contact body-a body-b) cbuf
                 ;; each contact's place in its colour first; then the rows are filled in
@@ -4155,7 +4185,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
       color-count)))
 ;; Preparing the constraints:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:4]]
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:5]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
@@ -4212,7 +4242,7 @@ substep's solve reads. #PR3PAR"
 (defmethod physics-prepare-frames ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
     (prepare-frames-range cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:4 ends here
+;; Preparing the constraints:5 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)
@@ -4637,10 +4667,35 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 ;; The scalar family:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
+(declaim (inline held-marking-p mark-held))
+(defun held-marking-p (world)
+  "True when this step's store phase marks which awake rows are held by sleepers alone: sleep is
+on and some body sleeps. #ST0R3S"
+  (and (physics-world-sleep-enabled world)
+       (plusp (body-columns-length (physics-world-sleeping world)))))
+
+(defun mark-held (held kind handle-a handle-b ids c row-a row-b n)
+  "Note in HELD what contact C, between solver rows ROW-A and ROW-B (N is the dummy row), tells
+of its awake side: bit 1 when it leans on a sleeper, bit 2 when its other side moves (an awake
+body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
+  (declare (type fixnum-column held kind handle-a handle-b) (type handle-table ids)
+           (type index c row-a row-b n))
+  (cond ((and (< row-a n) (< row-b n))
+         (setf (aref held row-a) (logior (aref held row-a) 2)
+               (aref held row-b) (logior (aref held row-b) 2)))
+        ((= (aref kind c) +contact-terrain+))
+        (t (let* ((row (min row-a row-b))
+                  (other (if (= row-a n) (aref handle-a c) (aref handle-b c)))
+                  (lean (and (= (aref kind c) +contact-pair+)
+                             (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
+             (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
+
 (define-featured-kernel (store-phase :features (:contact-events :hit-events)) (world)
   "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
-speed. From here on the step changes what it cannot undo, so its undo log closes. #ST0R3S"
+speed; in a world with sleepers, mark the awake rows that only sleepers and terrain touch
+(mark-held), for the finalize phase's sleep. From here on the step changes what it cannot undo,
+so its undo log closes. #ST0R3S"
   (setf (physics-world-undo-open world) nil)
   (let* ((cbuf (physics-world-constraints world))
          (contacts (physics-world-contacts world))
@@ -4650,9 +4705,15 @@ speed. From here on the step changes what it cannot undo, so its undo log closes
          (sleeping (physics-world-sleeping world))
          (hit-speed (f32 (physics-world-hit-speed world)))
          (slop (f32 (physics-world-slop world)))
-         (max-penetration 0.0) (max-approach 0.0))
+         (max-penetration 0.0) (max-approach 0.0)
+         (n (body-columns-length awake))
+         (held (physics-world-held world))
+         ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts
+         (marking (held-marking-p world)))
     (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
+             (type index n) (type fixnum-column held)
              (ignorable ids awake sleeping hit-speed) #.+kernel-policy+)
+    (when marking (fill held 0 :end (1+ n)))
     (with-constraint-block (contact body-a body-b) cbuf
       (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
         (declare (ignorable touching kind handle-a handle-b key))
@@ -4673,6 +4734,7 @@ speed. From here on the step changes what it cannot undo, so its undo log closes
                   (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2)
                   (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
                   (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z))
+            (when marking (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))
                     max-approach (max max-approach (- vn))))
@@ -4745,9 +4807,12 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
          (sleep-p (physics-world-sleep-enabled world))
          (sleep-speed (f32 (physics-world-sleep-speed world)))
          (time-to-sleep (f32 (physics-world-time-to-sleep world)))
-         (limit (f32 +physics-coordinate-limit+)))
+         (limit (f32 +physics-coordinate-limit+))
+         ;; the store phase's marks, read before any row moves (held-marking-p)
+         (marked (and sleep-p (held-marking-p world)))
+         (held (physics-world-held world)))
     (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep limit)
-             (type body-columns awake sleeping) #.+kernel-policy+)
+             (type body-columns awake sleeping) (type fixnum-column held) #.+kernel-policy+)
     (fold-solver-state awake v d dt)
     ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
     ;; moved, so the solver's rows still match it
@@ -4767,7 +4832,8 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
                                          (* (aref vz i) (aref vz i))))
                                 (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
                       (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
-                 (if (< (max speed drift) sleep-speed)
+                 ;; a body only sleepers and terrain touch is judged by its displacement alone
+                 (if (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
                      (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
                        (sleep-physics-body world i))
                      (setf (aref sleep-time i) 0.0)))))))
@@ -4887,6 +4953,8 @@ took ROW when it left back to the end of the sleeping set: relocate-body run bac
       (body-columns-copy-row sleeping row sleeping end)
       (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle sleeping) end))) end))
     (body-columns-copy-row awake last sleeping row)
+    ;; a sleeper's count of stillness is zero (sleep-physics-body)
+    (setf (aref (body-columns-sleep-time sleeping) row) 0.0)
     (let ((handle (aref (body-columns-handle sleeping) row)))
       (setf (aref (handle-table-set ids) (handle-index handle)) +set-sleeping+
             (aref (handle-table-local ids) (handle-index handle)) row))
