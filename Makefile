@@ -15,7 +15,9 @@ LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
 .NOTPARALLEL:
 
 help:
-	@echo "make demo           install what is missing (as root), tangle, run the default scene"
+	@echo "make demo           install what is missing (as root), tangle, run the default scene;"
+	@echo "                    SCENE=name runs another scene of the page (basin, pile, fountain, lava,"
+	@echo "                    player, awake-basin)"
 	@echo "make test           check tangling and anchors, then run every claim"
 	@echo "make test ANCHOR=ID run only the claims of section ID (without the editor checks)"
 	@echo "make editor-test    Emacs with SLIME against a live image: jumps, edit buffers, reload"
@@ -33,7 +35,7 @@ help:
 	@echo "                    for one section); the score table and the survivors into $(ORG)"
 	@echo "make mutate-splice  the last full run's tables into $(ORG), with the page's reasons for survivors"
 	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface"
-	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player) and write"
+	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player, ...) and write"
 	@echo "                    report/view-SCENE.html, a 3D viewer of the run for any browser"
 	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
 	@echo "make fuzz           random operation sequences (SEED=1 COUNT=1200 LENGTH=150); figures into $(ORG)"
@@ -59,7 +61,7 @@ editor-test: setup
 	@tools/editor-test "$(SBCL)" "$(EMACS)"
 
 demo: setup tangle
-	@$(LISP) --load tools/demo.lisp
+	@SCENE="$(SCENE)" $(LISP) --load tools/demo.lisp
 
 bench: setup tangle
 	@mkdir -p report

@@ -75,7 +75,11 @@
    ;; A world as an object, and both in the inspector (#4YDMX5)
    #:install-swank-inspection
    ;; Random operation sequences (#M9W5P7)
-   #:run-fuzz-campaign #:run-physics-soak))
+   #:run-fuzz-campaign #:run-physics-soak
+   ;; Scenes are definitions (#K5DF9S)
+   #:define-physics-scene #:physics-scene #:physics-scene-name #:physics-scene-features
+   #:physics-scene-seconds #:physics-scene-moments #:physics-scene-text #:find-physics-scene
+   #:make-scene-world #:physics-world-handles #:unknown-physics-scene #:invalid-physics-scene-clause))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -5400,6 +5404,343 @@ bytes from the second row (the first after the churn began) to the last. #M9W5P7
       (incf steps))))
 ;; Random operation sequences find what a hostile caller would:5 ends here
 
+;; [[file:../physics.org::#K5DF9S][Scenes are definitions:1]]
+(define-condition unknown-physics-scene (invalid-physics-parameter)
+  ((operation :initarg :operation :reader unknown-physics-scene-operation))
+  (:report (lambda (c s)
+             (format s "~(~A~): there is no scene ~S; the name must be ~A"
+                     (unknown-physics-scene-operation c) (invalid-physics-parameter-value c)
+                     (invalid-physics-parameter-expected c))))
+  (:documentation "A scene name that no define-physics-scene defined; NAME is :scene. #K5DF9S"))
+
+(define-condition invalid-physics-scene-clause (invalid-physics-parameter)
+  ((scene :initarg :scene :reader invalid-physics-scene-clause-scene))
+  (:report (lambda (c s)
+             (format s "define-physics-scene ~S: the clause ~S must be ~A"
+                     (invalid-physics-scene-clause-scene c) (invalid-physics-parameter-value c)
+                     (invalid-physics-parameter-expected c))))
+  (:documentation "A clause of define-physics-scene that is unknown, or not of its shape; NAME is
+the clause's keyword, VALUE the clause. #K5DF9S"))
+
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter *physics-scene-features*
+    '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :events :mortal)
+    "The features a scene may declare it uses. #K5DF9S")
+
+  (defun scene-clause-error (scene clause expected)
+    "Signal invalid-physics-scene-clause for CLAUSE of the scene SCENE, which must be EXPECTED. #K5DF9S"
+    (error 'invalid-physics-scene-clause :scene scene :value clause :expected expected
+                                         :name (if (consp clause) (first clause) clause)))
+
+  (defun scene-arguments (scene clause arguments allowed)
+    "ARGUMENTS, a plist of CLAUSE whose keys must be among ALLOWED; or a clause error. #K5DF9S"
+    (unless (and (evenp (length arguments))
+                 (loop for key in arguments by #'cddr always (member key allowed)))
+      (scene-clause-error scene clause (format nil "followed by arguments among ~{~S~^ ~}" allowed)))
+    arguments)
+
+  (defun scene-clause-slots (scene clauses)
+    "The keyword arguments of make-physics-scene that CLAUSES, the clauses of the scene SCENE,
+declare, as forms; or a clause error for the first clause that is not of its shape. #K5DF9S"
+    (let ((slots '()) (bodies '()) (actions '())
+          (body-keys '(:radius :mass :restitution :friction :rolling-resistance :vx :vy :vz :life
+                       :collide-with-bodies :report-hits)))
+      (dolist (clause clauses)
+        (unless (and (consp clause) (keywordp (first clause)) (null (cdr (last clause))))
+          (scene-clause-error scene clause "a list headed by a clause's keyword"))
+        (destructuring-bind (key &rest rest) clause
+          (flet ((once (slot form)
+                   (when (getf slots slot)
+                     (scene-clause-error scene clause "given once"))
+                   (setf (getf slots slot) form))
+                 (require-shape (ok expected) (unless ok (scene-clause-error scene clause expected)))
+                 (point (p) (and (listp p) (= 3 (length p)) (every #'realp p))))
+            (case key
+              (:terrain
+               (require-shape (and rest (listp (first rest)) (<= (length (first rest)) 1)
+                           (every #'symbolp (first rest)) (rest rest))
+                      "(:terrain (count) form...), naming at most one variable")
+               (let ((count (or (first (first rest)) (gensym "COUNT"))))
+                 (once :terrain `(lambda (,count) (declare (ignorable ,count)) ,@(rest rest)))))
+              (:world
+               (once :world-arguments
+                     `(list ,@(scene-arguments scene clause rest
+                                               '(:sleep :kernels :step-seconds :substeps :gravity)))))
+              (:bodies
+               (require-shape (and rest (typep (first rest) '(integer 0))) "(:bodies count :spawn f ...)")
+               (let* ((options (scene-arguments scene clause (rest rest)
+                                                (list* :spawn :jitter :kind body-keys)))
+                      (spawn (getf options :spawn)))
+                 (require-shape (or (and spawn (symbolp spawn)) (and (consp spawn) (eq (first spawn) 'lambda)))
+                        "given :spawn, the name of a function of the body's index or a lambda form")
+                 (require-shape (typep (getf options :jitter 0) 'real) "given a real :jitter")
+                 (push `(make-scene-bodies
+                         :count ,(first rest)
+                         :spawn ,(if (symbolp spawn) `(lambda (i) (,spawn i)) spawn)
+                         :jitter ,(getf options :jitter) :kind ,(getf options :kind)
+                         :arguments (list ,@(loop for (k v) on options by #'cddr
+                                                  unless (member k '(:spawn :jitter :kind))
+                                                    append (list k v))))
+                       bodies)))
+              (:springs (once :springs `(lambda () (list ,@rest))))
+              (:player
+               (require-shape (and (= 2 (length rest)) (point (first rest)) (symbolp (second rest)))
+                      "(:player (x y z) input), INPUT a function's name")
+               (once :player `(list (lambda () (make-physics-player ,@(first rest)))
+                                    (lambda (step) (,(second rest) step)))))
+              (:throw
+               (require-shape (and (realp (first rest)) (>= (first rest) 0) (point (second rest)))
+                      "(:throw seconds (x y z) argument...)")
+               (let ((options (scene-arguments scene clause (cddr rest) (list* :say body-keys))))
+                 (destructuring-bind (x y z) (second rest)
+                   (push `(make-scene-action
+                           :seconds ,(first rest) :text ,(getf options :say)
+                           :function (lambda (world shift)
+                                       (add-physics-body world (+ ,x shift) ,y ,z
+                                                         ,@(loop for (k v) on options by #'cddr
+                                                                 unless (eq k :say) append (list k v)))))
+                         actions))))
+              (:at
+               (require-shape (and (realp (first rest)) (>= (first rest) 0) (listp (second rest))
+                           (= 1 (length (second rest))) (symbolp (first (second rest))))
+                      "(:at seconds (world) form...)")
+               (let ((shift (gensym "SHIFT")))
+                 (push `(make-scene-action
+                         :seconds ,(first rest)
+                         :function (lambda (,(first (second rest)) ,shift)
+                                     (declare (ignore ,shift))
+                                     ,@(cddr rest)))
+                       actions)))
+              (:seconds
+               (require-shape (and (= 1 (length rest)) (realp (first rest)) (plusp (first rest))) "(:seconds s), S > 0")
+               (once :seconds (first rest)))
+              (:pictures
+               (require-shape (every (lambda (s) (and (realp s) (>= s 0))) rest) "(:pictures seconds...)")
+               (once :moments `',rest))
+              (:features
+               (require-shape (and (every (lambda (f) (member f *physics-scene-features*)) rest)
+                           (= (length rest) (length (remove-duplicates rest))))
+                      (format nil "a list of distinct features among ~{~S~^ ~}" *physics-scene-features*))
+               (once :features `',rest))
+              (t (scene-clause-error
+                  scene clause
+                  "one of (:terrain ...) (:world ...) (:bodies ...) (:springs ...) (:player ...) (:throw ...) (:at ...) (:seconds ...) (:pictures ...) (:features ...)"))))))
+      (dolist (needed '(:terrain :seconds :features))
+        (unless (getf slots needed)
+          (scene-clause-error scene needed "given: every scene declares its terrain, its seconds and its features")))
+      (list* :bodies `(list ,@(reverse bodies)) :actions `(list ,@(reverse actions)) slots))))
+
+(defstruct (scene-bodies (:constructor make-scene-bodies (&key count spawn jitter kind arguments)))
+  "COUNT bodies of a scene at the points (SPAWN i), of KIND (a keyword of *physics-body-kinds*, or
+NIL) with the add-physics-body ARGUMENTS, each point moved by JITTER under a seed. #K5DF9S"
+  (count 0 :type (integer 0)) (spawn #'identity :type function) (jitter nil) (kind nil) (arguments '()))
+
+(defstruct (scene-action (:constructor make-scene-action (&key seconds text function)))
+  "What a scene does at SECONDS: FUNCTION of the world and the run's shift along x, and TEXT, a
+line to print when it happens. #K5DF9S"
+  (seconds 0) (text nil) (function #'identity :type function))
+
+(defstruct (physics-scene (:constructor make-physics-scene
+                              (&key name documentation terrain world-arguments bodies springs player
+                                    actions seconds moments features)))
+  "A scene as define-physics-scene declared it: its NAME and DOCUMENTATION; TERRAIN, a function of
+the number of bodies at the start returning the terrain; the WORLD-ARGUMENTS of make-physics-world;
+BODIES, a list of scene-bodies; SPRINGS, NIL or a function making the list of springs; PLAYER,
+NIL or a list of a function making the walker and its input function; ACTIONS, a list of
+scene-action; the SECONDS it runs; the MOMENTS of its picture; and the FEATURES it uses. #K5DF9S"
+  (name nil :type keyword) (documentation "" :type string) (terrain #'identity :type function)
+  (world-arguments '()) (bodies '()) (springs nil) (player nil) (actions '())
+  (seconds 1) (moments '()) (features '()))
+
+;; the documentation of the scene's public readers, which defstruct cannot give
+(loop for (name text)
+        in '((physics-scene-name "The keyword naming SCENE. #K5DF9S")
+             (physics-scene-features "The features SCENE declares it uses, a list of keywords. #K5DF9S")
+             (physics-scene-seconds "How many seconds SCENE runs. #K5DF9S")
+             (physics-scene-moments "The moments, in seconds, SCENE's picture shows. #K5DF9S"))
+      do (setf (documentation name 'function) text))
+
+(defvar *physics-scenes* '()
+  "The scenes defined by define-physics-scene, in the order first defined. #K5DF9S")
+
+(defun register-physics-scene (scene)
+  "Put SCENE into *physics-scenes*, in the place of a scene of its name if there is one; return
+its name. #K5DF9S"
+  (let ((name (physics-scene-name scene)))
+    (setf *physics-scenes*
+          (if (find name *physics-scenes* :key #'physics-scene-name)
+              (substitute scene name *physics-scenes* :key #'physics-scene-name)
+              (append *physics-scenes* (list scene))))
+    name))
+
+(defmacro define-physics-scene (name documentation &body clauses)
+  "Define the scene NAME, a keyword, described by DOCUMENTATION, from CLAUSES (the table of the
+section): the expansion makes a physics-scene of closures and registers it. #K5DF9S"
+  (unless (keywordp name) (scene-clause-error name name "a keyword naming the scene"))
+  (unless (stringp documentation) (scene-clause-error name documentation "a string describing the scene"))
+  `(register-physics-scene
+    (make-physics-scene :name ,name :documentation ,documentation
+                        ,@(scene-clause-slots name clauses))))
+
+(defun find-physics-scene (name &optional (operation 'find-physics-scene))
+  "The scene named NAME, or an unknown-physics-scene naming OPERATION and NAME. #K5DF9S"
+  (or (find name *physics-scenes* :key #'physics-scene-name)
+      (error 'unknown-physics-scene :operation operation :name :scene :value name
+                                    :expected (format nil "one of ~{~S~^ ~}"
+                                                      (mapcar #'physics-scene-name *physics-scenes*)))))
+
+(defun physics-scene-text (scene)
+  "What SCENE shows: its documentation without the trailing anchor. #K5DF9S"
+  (let* ((text (physics-scene-documentation scene))
+         (hash (search " #" text :from-end t)))
+    (if (and hash (= (length text) (+ hash 8))) (subseq text 0 hash) text)))
+
+(defun fixed-sequence (seed)
+  "A function returning doubles in [0,1) from a 48-bit linear congruential generator started at
+the integer SEED: the same numbers on every run, whatever CL's random state. #K5DF9S"
+  (let ((state (ldb (byte 48 0) seed)))
+    (lambda ()
+      (setf state (ldb (byte 48 0) (+ (* state 25214903917) 11)))
+      (/ (ldb (byte 31 17) state) (float (ash 1 31) 1d0)))))
+
+(defun physics-world-handles (world)
+  "The handles of WORLD's bodies, as a list: the awake rows in order, then the sleeping ones; for
+a scene's world before its first step, the order its bodies were added in. #K5DF9S"
+  (check-world world 'physics-world-handles)
+  (loop for buffer in (list (physics-world-awake world) (physics-world-sleeping world))
+        nconc (loop for row below (body-columns-length buffer)
+                    collect (aref (body-columns-handle buffer) row))))
+
+(defun scene-world-arguments (scene overrides)
+  "The arguments, after the terrain, with which SCENE's world is made: its :world clause, with
+each world argument of OVERRIDES (a plist of a run's options) in place of the scene's. #K5DF9S"
+  (let ((arguments (copy-list (physics-scene-world-arguments scene))))
+    (loop for (key value) on overrides by #'cddr
+          when (member key '(:sleep :kernels :step-seconds :substeps :gravity))
+            do (setf (getf arguments key) value))
+    arguments))
+
+(defun add-scene-bodies (world group count seed)
+  "Add to WORLD the first COUNT bodies of GROUP, a scene-bodies, their points jittered by the
+fixed sequence of SEED when SEED and the group's jitter are given. #K5DF9S"
+  (let ((next (and seed (scene-bodies-jitter group) (fixed-sequence seed)))
+        (jitter (scene-bodies-jitter group))
+        (arguments (let ((kind (scene-bodies-kind group)))
+                     ;; the group's own arguments first, so that they win over its kind's
+                     (if kind
+                         (let ((number (physics-kind-number kind world)))
+                           (declare (notinline physics-kind-entry))
+                           (append (scene-bodies-arguments group) (list :kind number)
+                                   (rest (physics-kind-entry number))))
+                         (scene-bodies-arguments group)))))
+    (dotimes (i count)
+      (multiple-value-bind (x y z) (funcall (scene-bodies-spawn group) i)
+        (when next
+          (incf x (* jitter (- (funcall next) 0.5)))
+          (incf z (* jitter (- (funcall next) 0.5))))
+        (apply #'add-physics-body world x y z arguments)))))
+
+(defun scene-script (scene world step-seconds &key (shift 0.0) throw-at stream)
+  "The function of a step's number that does, before that step of WORLD, what SCENE does: its due
+actions (at THROW-AT seconds, when given, with bodies moved SHIFT metres along x; each action's
+line printed to STREAM, when given), its springs and its walker, whose frame is STEP-SECONDS. #K5DF9S"
+  (let* ((dt (physics-world-step-seconds world))
+         (actions (coerce (sort (mapcar (lambda (a) (cons (round (or throw-at (scene-action-seconds a)) dt) a))
+                                        (physics-scene-actions scene))
+                                #'< :key #'car)
+                          'simple-vector))
+         (springs (and (physics-scene-springs scene) (funcall (physics-scene-springs scene))))
+         (player (and (physics-scene-player scene) (funcall (first (physics-scene-player scene)))))
+         (input (and player (second (physics-scene-player scene))))
+         (frame (float step-seconds 1d0))
+         (terrain (physics-world-terrain world))
+         (next 0))
+    (declare (type fixnum next) (type double-float frame))
+    (lambda (step)
+      (loop while (and (< next (length actions)) (<= (car (svref actions next)) step))
+            do (let ((action (cdr (svref actions next))))
+                 (funcall (scene-action-function action) world shift)
+                 (when (and stream (scene-action-text action))
+                   (format stream "~&  -- ~A~%" (scene-action-text action))))
+               (incf next))
+      (when springs (run-physics-springs world springs))
+      (when player
+        (multiple-value-bind (move-x move-z) (funcall input step)
+          (advance-physics-player player terrain frame :move-x move-x :move-z move-z))
+        (post-physics-player world player)))))
+
+(defun make-scene-world (name &rest options &key count seed (shift 0.0) throw-at stream
+                                                 kernels sleep step-seconds substeps gravity)
+  "Build the world of the scene NAME; return it, its script (the function of the step's number to
+call before each step) and the scene. OPTIONS change the run: COUNT, the first body clause's
+count; SEED, the seed of the spawn jitter; SHIFT and THROW-AT, where along x and when its actions
+act; STREAM, where their lines go; and KERNELS, SLEEP, STEP-SECONDS, SUBSTEPS and GRAVITY, the
+world's. #K5DF9S"
+  (declare (ignore kernels sleep step-seconds substeps gravity))
+  (let* ((scene (find-physics-scene name 'make-scene-world))
+         (groups (physics-scene-bodies scene))
+         (counts (loop for group in groups for first = t then nil
+                       collect (if (and first count)
+                                   (if (typep count '(integer 0))
+                                       count
+                                       (error 'invalid-physics-parameter :name :count :value count
+                                                                         :expected "a count of bodies, 0 or more"))
+                                   (scene-bodies-count group))))
+         (arguments (scene-world-arguments scene options))
+         (world (apply #'make-physics-world :terrain (funcall (physics-scene-terrain scene) (reduce #'+ counts))
+                       arguments)))
+    (loop for group in groups for n in counts do (add-scene-bodies world group n seed))
+    (values world
+            (scene-script scene world (getf arguments :step-seconds 1/60)
+                          :shift shift :throw-at throw-at :stream stream)
+            scene)))
+
+(defun run-physics-scene (name &rest options &key record (every 1) seconds stream &allow-other-keys)
+  "Run the scene NAME for its seconds, or SECONDS, with the OPTIONS of make-scene-world; when
+RECORD is true, record it every EVERY steps; when STREAM is given, print to it a line per
+simulated second and a summary. Return the world and the recording (or NIL). #K5DF9S"
+  (find-physics-scene name 'run-physics-scene)
+  (multiple-value-bind (world script scene)
+      (apply #'make-scene-world name (loop for (key value) on options by #'cddr
+                                           unless (member key '(:record :every :seconds))
+                                             append (list key value)))
+    (let* ((dt (physics-world-step-seconds world))
+           (steps (round (or seconds (physics-scene-seconds scene)) dt))
+           (per-second (round 1 dt))
+           (recording (and record (start-physics-recording world :every every)))
+           (second-ms 0d0) (slowest 0d0))
+      (when stream
+        (format stream "~&~(~A~): ~D balls, ~,4F s steps, ~D substeps, kernels ~(~A~)~%"
+                (physics-scene-name scene)
+                (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
+                dt (physics-world-substeps world) (class-name (class-of (physics-world-kernels world))))
+        (format stream "~&  time   awake sleeping contacts colours  ms/step (mean over the second)~%")
+        ;; collect what loading and compiling left behind, so that no step pays for it
+        (sb-ext:gc :full t))
+      (dotimes (step steps)
+        (funcall script step)
+        (step-physics-world world)
+        (when stream
+          (let ((ms (* 1000 (physics-world-last-step-real-seconds world))))
+            (incf second-ms ms)
+            (setf slowest (max slowest ms)))
+          (when (zerop (mod (1+ step) per-second))
+            (format stream "~&  ~4D s ~7D ~8D ~8D ~7D ~8,3F~%" (floor (1+ step) per-second)
+                    (physics-world-awake-count world) (physics-world-sleeping-count world)
+                    (physics-world-last-step-contact-count world) (physics-world-last-step-color-count world)
+                    (/ second-ms per-second))
+            (setf second-ms 0d0))))
+      (when recording (stop-physics-recording world))
+      (when stream
+        (validate-physics-world world)
+        (format stream "~&summary: ~D bodies, ~D awake, ~D asleep after ~D s; slowest step ~,3F ms; ~
+                        the world validates; state hash ~D~%"
+                (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
+                (physics-world-awake-count world) (physics-world-sleeping-count world)
+                (or seconds (physics-scene-seconds scene)) slowest (physics-world-state-hash world)))
+      (values world recording))))
+;; Scenes are definitions:1 ends here
+
 ;; [[file:../physics.org::#B4S1NS][The basin:1]]
 (defun make-basin-terrain (&key (wall-height 6) (air-height 48))
   "The basin: a floor of cells reaching well past walls one cell thick around an 8 m x 8 m
@@ -5426,53 +5767,43 @@ interior [0,8) x [0,8), walls WALL-HEIGHT cells high, air resident up to AIR-HEI
                 (+ 0.5 (* layer 0.55) (jitter 2))
                 (+ 0.3 (* row 0.55) (jitter 3)))))))
 
+(define-physics-scene :awake-basin
+    "The benchmarks' pile: 1000 balls of radius 0.25 m, mass 1 kg, friction 0.6, restitution 0,
+dropped into the basin with sleeping off, so that every ball stays awake; the walls are 30 cells
+high when there are more than 3000 balls. #B4S1NS"
+  (:terrain (balls) (make-basin-terrain :wall-height (if (> balls 3000) 30 6)))
+  (:world :sleep nil :kernels :scalar)
+  (:bodies 1000 :spawn basin-spawn-point :jitter 0.02
+           :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0)
+  (:seconds 5)
+  (:features :terrain :body-contacts :friction))
+
 (defun make-basin-world (count &key (kernels :scalar) (sleep nil) (step-seconds 1/60) (substeps 4))
-  "The basin scene with COUNT balls of radius 0.25 m, mass 1 kg, friction 0.6, restitution 0.
-Walls are 30 cells high when COUNT exceeds 3000, else 6. #B4S1NS"
-  (let ((world (make-physics-world :terrain (make-basin-terrain :wall-height (if (> count 3000) 30 6))
-                                   :kernels kernels :sleep sleep :step-seconds step-seconds
-                                   :substeps substeps)))
-    (dotimes (i count world)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0)))))
+  "The world of the awake-basin scene with COUNT balls, solving with KERNELS, letting bodies SLEEP
+or not, stepping STEP-SECONDS in SUBSTEPS. #B4S1NS"
+  (values (make-scene-world :awake-basin :count count :kernels kernels :sleep sleep
+                                         :step-seconds step-seconds :substeps substeps)))
 ;; The basin:1 ends here
 
 ;; [[file:../physics.org::#D3M0SC][The main job:1]]
-(defun run-default-scene (&key (balls 1000) (seconds 8) (kernels :auto) (stream *standard-output*))
-  "The main job: drop BALLS balls into the basin, let the pile settle and sleep, throw one ball
-into it, and print a line per simulated second and a summary, solving with the kernel family
-KERNELS (the widest this CPU runs by default). Return the world and the thrown ball. #D3M0SC"
-  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep t :kernels kernels))
-         (steps-per-second 60) (thrown nil) (step-ms 0d0) (max-ms 0d0))
-    (dotimes (i balls)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6)))
-    (format stream "~&basin: ~D balls, ~,4F s steps, ~D substeps, kernels ~(~A~)~%"
-            balls (physics-world-step-seconds world) (physics-world-substeps world)
-            (class-name (class-of (physics-world-kernels world))))
-    (format stream "~&  time   awake sleeping contacts colours  ms/step (mean over the second)~%")
-    ;; collect what loading and compiling left behind, so that no step pays for it
-    (sb-ext:gc :full t)
-    (dotimes (second seconds)
-      (when (= second (floor seconds 2))
-        (setf thrown (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0))
-        (format stream "~&  -- a ball is thrown down into the pile at 7 m/s~%"))
-      (setf step-ms 0d0)
-      (dotimes (s steps-per-second)
-        (step-physics-world world)
-        (let ((ms (* 1000 (physics-world-last-step-real-seconds world))))
-          (incf step-ms ms) (setf max-ms (max max-ms ms))))
-      (format stream "~&  ~4D s ~7D ~8D ~8D ~7D ~8,3F~%" (1+ second)
-              (physics-world-awake-count world) (physics-world-sleeping-count world)
-              (physics-world-last-step-contact-count world) (physics-world-last-step-color-count world)
-              (/ step-ms steps-per-second)))
-    (validate-physics-world world)
-    (format stream "~&summary: ~D bodies, ~D awake, ~D asleep after ~D s; slowest step ~,3F ms; ~
-                    the world validates; state hash ~D~%"
-            (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
-            (physics-world-awake-count world) (physics-world-sleeping-count world) seconds max-ms
-            (physics-world-state-hash world))
-    (values world thrown)))
+(define-physics-scene :basin
+    "1000 balls dropped into the basin; at 4 s a ball is thrown down into the pile #D3M0SC"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 1000 :spawn basin-spawn-point :jitter 0.02 :radius 0.25 :mass 1.0 :friction 0.6)
+  (:throw 4 (1.0 7.5 4.0) :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0
+          :say "a ball is thrown down into the pile at 7 m/s")
+  (:seconds 8)
+  (:pictures 1 4.3 8)
+  (:features :terrain :body-contacts :friction :sleep))
+
+(defun run-default-scene (&key (scene :basin) balls seconds (kernels :auto) (stream *standard-output*))
+  "The main job, or the scene SCENE: build it (with BALLS bodies in its first body clause, when
+given), run it for its seconds or SECONDS, solving with the kernel family KERNELS (the widest
+this CPU runs by default), and print a line per simulated second and a summary. Return the
+world. #D3M0SC"
+  (values (apply #'run-physics-scene scene :stream stream :kernels kernels :seconds seconds
+                 (and balls (list :count balls)))))
 ;; The main job:1 ends here
 
 ;; [[file:../physics.org::#JAU0EF][Kinds of body, and the springs that emit them:1]]
@@ -5767,10 +6098,14 @@ Return the steps run. #H7P4CX"
   "Post PLAYER into WORLD's next step as a kinematic box moving at its velocity. #H7P4CX"
   (check-world world 'post-physics-player)
   (let ((w (physics-player-half-width player)) (h (* 0.5d0 (physics-player-height player))))
-    (post-physics-box world (physics-player-x player) (+ (physics-player-y player) h)
-                      (physics-player-z player) w h w
-                      :vx (physics-player-vx player) :vy (physics-player-vy player)
-                      :vz (physics-player-vz player) :owner player)))
+    ;; each double-float goes to post-physics-box as the single-float it would become there,
+    ;; which is passed unboxed: passed as a double-float, each would be consed. The walker's
+    ;; numbers are finite and far inside a single-float: it checks its input and keeps its box
+    ;; within the coordinate limit.
+    (post-physics-box world (f32 (physics-player-x player)) (f32 (+ (physics-player-y player) h))
+                      (f32 (physics-player-z player)) (f32 w) (f32 h) (f32 w)
+                      :vx (f32 (physics-player-vx player)) :vy (f32 (physics-player-vy player))
+                      :vz (f32 (physics-player-vz player)) :owner player)))
 ;; The player: a box that walks:1 ends here
 
 ;; [[file:../physics.org::#B3NCH5][What a step costs:1]]
@@ -5926,14 +6261,11 @@ mean ms and the bytes consed per step over steps FROM..TO, BEFORE-STEP's work in
     (values (/ ms (- to from)) (round consed (- to from)))))
 
 (defun measure-settled-pile (&key (balls 1000) (kernels :scalar) (steps 100))
-  "Drop BALLS balls into the basin with sleep on, step until every one sleeps (at most 20 s),
+  "Drop BALLS balls of the pile scene into the basin, step until every one sleeps (at most 20 s),
 then return the mean ms and bytes consed per step over STEPS more steps, and the steps it
 took to settle. #B3NCH5"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
+  (let ((world (make-scene-world :pile :count balls :kernels kernels))
         (settle 0))
-    (dotimes (i balls)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)))
     (loop while (and (plusp (physics-world-awake-count world)) (< settle 1200))
           do (step-physics-world world) (incf settle))
     (multiple-value-bind (mean consed) (measure-steps world 0 steps)
@@ -5943,9 +6275,8 @@ took to settle. #B3NCH5"
   "The awake basin pile of BALLS, where from step FROM on every step removes the oldest ball
 and drops a new one in from above: mean ms and bytes consed per step over FROM..TO. #B3NCH5"
   (let* ((world (make-basin-world balls :kernels kernels))
-         (handles (make-array balls :adjustable t :fill-pointer 0)))
-    (dotimes (i (physics-world-awake-count world))
-      (vector-push-extend (aref (body-columns-handle (physics-world-awake world)) i) handles))
+         (handles (make-array balls :adjustable t :fill-pointer t
+                                    :initial-contents (physics-world-handles world))))
     (multiple-value-bind (mean consed)
         (measure-steps world from to
                        (lambda (i)
@@ -5979,12 +6310,10 @@ middle of the basin, two water drops a step. #B3NCH5"
   (make-fountain 4 -1 4))
 
 (defun measure-fountain (&key (kernels :scalar) (from 300) (to 600))
-  "The basin's fountain, its spring run before every step: mean ms and bytes consed per step
+  "The fountain scene, its spring run before every step: mean ms and bytes consed per step
 (spring and step) over FROM..TO, and the drops alive. #B3NCH5"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep t))
-        (springs (list (make-basin-fountain))))
-    (multiple-value-bind (mean consed)
-        (measure-steps world from to (lambda (i) (declare (ignore i)) (run-physics-springs world springs)))
+  (multiple-value-bind (world script) (make-scene-world :fountain :kernels kernels)
+    (multiple-value-bind (mean consed) (measure-steps world from to script)
       (list :mean mean :consed consed
             :alive (+ (physics-world-awake-count world) (physics-world-sleeping-count world))))))
 
@@ -6036,8 +6365,8 @@ beside the basin's east wall, each resting a slop deep and alone. Return the wor
 
 (defun measure-sleeping-scale (sleepers &key (kernels :avx2))
   "Beside SLEEPERS settled sleepers: the mean ms per step idle (nothing awake, 100 steps), while
-1000 balls fall into the basin, settle and sleep (600 steps), and after a ball is thrown into
-that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
+the 1000 balls of the pile scene fall into the basin, settle and sleep (600 steps), and after the
+main job's ball is thrown into that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
   (sb-ext:gc :full t)
   (let* ((before (sb-kernel:dynamic-usage))
          (world (sleepers-beside-basin sleepers :kernels kernels)))
@@ -6045,11 +6374,10 @@ that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
     (sb-ext:gc :full t)
     (let ((bytes (- (sb-kernel:dynamic-usage) before))
           (idle (measure-steps world 0 100)))
-      (dotimes (i 1000)
-        (multiple-value-bind (x y z) (basin-spawn-point i)
-          (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)))
+      ;; the pile scene's balls, then the main job's throw
+      (add-scene-bodies world (first (physics-scene-bodies (find-physics-scene :pile))) 1000 nil)
       (let ((settling (measure-steps world 0 600)))
-        (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0)
+        (funcall (scene-action-function (first (physics-scene-actions (find-physics-scene :basin)))) world 0.0)
         (let ((wave (measure-steps world 0 300)))
           (list :sleepers sleepers :idle idle :settling settling :wave wave
                 :bytes-per-sleeper (if (plusp sleepers) (round bytes sleepers) 0)
@@ -6105,44 +6433,45 @@ of its own mass and radius. #X7R3M5"
                                          (* 0.4d0 r r (+ (expt (aref wx row) 2) (expt (aref wy row) 2)
                                                          (expt (aref wz row) 2)))))))))))))
 
-(defun dead-pile (count &key (seconds 10))
-  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0) in the basin lattice
-with sleeping off and run SECONDS. Return the kinetic energy at each whole second, in joules,
-and the fastest ball's speed at the end. #X7R3M5"
+(defun dead-pile (count &key (seconds 10) (rolling-resistance 0.0))
+  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0, ROLLING-RESISTANCE)
+in the basin lattice with sleeping off and run SECONDS. Return the kinetic energy at each whole
+second, in joules, the fastest ball's speed at the end, and the speed of that ball's lowest
+point, which is zero when it rolls on the floor without slipping. #X7R3M5"
   (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
          (balls (loop for i below count
                       collect (multiple-value-bind (x y z) (basin-spawn-point i)
-                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6))))
+                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6
+                                                              :rolling-resistance rolling-resistance))))
          (curve '()))
     (dotimes (second seconds)
       (dotimes (i 60) (step-physics-world world))
       (push (pile-kinetic-energy world balls) curve))
-    (values (nreverse curve) (reduce #'max balls :key (lambda (b) (speed-of world b))))))
+    (let ((fastest (reduce (lambda (a b) (if (>= (speed-of world a) (speed-of world b)) a b)) balls)))
+      (multiple-value-bind (vx vy vz) (physics-body-velocity world fastest)
+        (multiple-value-bind (wx wy wz) (physics-body-angular-velocity world fastest)
+          (declare (ignore wy))
+          ;; the lowest point moves at v + w x (0, -r, 0) = v + (r wz, 0, -r wx)
+          (values (nreverse curve) (speed-of world fastest)
+                  (sqrt (+ (expt (+ vx (* 0.25 wz)) 2) (* vy vy) (expt (- vz (* 0.25 wx)) 2)))))))))
 
-(defun thrown-into-pile (count &key (seconds 8) (throw-at (floor seconds 2)) (shift 0.0) (seed nil))
-  "The default scene at COUNT balls: drop them in the basin lattice (each spawn point moved by up
-to 1 cm in x and z by the fixed sequence of SEED, when given), throw a ball into the pile at
-second THROW-AT from a point SHIFT metres along x from the default, and run SECONDS with sleeping
-on. Return the awake count at the end of each second. #X7R3M5"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t :kernels :auto))
-        (next (and seed (fixed-sequence seed))) (counts '()))
-    (dotimes (i count)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (when next
-          (incf x (* 0.02 (- (funcall next) 0.5)))
-          (incf z (* 0.02 (- (funcall next) 0.5))))
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6)))
-    (dotimes (second seconds)
-      (when (= second throw-at)
-        (add-physics-body world (+ 1.0 shift) 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0))
-      (dotimes (i 60) (step-physics-world world))
-      (push (physics-world-awake-count world) counts))
-    (nreverse counts)))
+(defun thrown-into-pile (count &key (seconds 8) throw-at (shift 0.0) (seed nil))
+  "The default scene at COUNT balls (each spawn point moved by up to 1 cm in x and z by the fixed
+sequence of SEED, when given), its ball thrown at second THROW-AT (the scene's 4 s by default)
+from a point SHIFT metres along x from the scene's, run SECONDS. Return the awake count at the end
+of each second. #X7R3M5"
+  (multiple-value-bind (world script) (make-scene-world :basin :count count :seed seed :shift shift
+                                                               :throw-at throw-at)
+    (loop for second below seconds
+          do (dotimes (i 60)
+               (funcall script (+ (* 60 second) i))
+               (step-physics-world world))
+          collect (physics-world-awake-count world))))
 
-(defun column-contact-depths (count &key (radius 0.45) (seconds 10))
-  "Stack COUNT balls of RADIUS and 1 kg in the shaft, sleeping on, and run SECONDS. Return each
-contact's overlap at the end, from the floor up, in slops. #X7R3M5"
-  (let* ((world (make-shaft-world :sleep t))
+(defun column-contact-depths (count &key (radius 0.45) (seconds 10) (sleep t))
+  "Stack COUNT balls of RADIUS and 1 kg in the shaft of a world that lets bodies SLEEP or not, and
+run SECONDS. Return each contact's overlap at the end, from the floor up, in slops. #X7R3M5"
+  (let* ((world (make-shaft-world :sleep sleep))
          (balls (loop for i below count
                       collect (add-physics-body world 0.5 (+ radius (* i 2.02 radius)) 0.5 :radius radius :mass 1.0))))
     (dotimes (i (* 60 seconds)) (step-physics-world world))
@@ -6150,6 +6479,22 @@ contact's overlap at the end, from the floor up, in slops. #X7R3M5"
       (mapcar (lambda (overlap) (/ overlap *physics-linear-slop*))
               (cons (- radius (first heights))
                     (loop for (a b) on heights while b collect (- (* 2 radius) (- b a))))))))
+
+(defun soft-column-depths (count &key (mass 1.0))
+  "The overlaps, from the floor up and in slops, at which a column of COUNT awake balls of MASS in
+the shaft comes to rest by the soft contact's law ([[#G7Q3XR]]): each contact one slop plus its
+load over its effective mass times omega squared. The floor's contact is stiffened by its load
+and gives g over omega squared at twice the frequency; a contact between two balls, whose
+effective mass is half a ball, gives the weight of the balls above it over half a ball times
+omega squared. #X7R3M5"
+  (let* ((world (make-shaft-world))
+         (g (abs (physics-world-gravity-y world)))
+         (h (/ (f32 (physics-world-step-seconds world)) (physics-world-substeps world)))
+         (omega (* 2.0 (f32 pi) (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h))))
+         (slop (f32 (physics-world-slop world))))
+    (cons (/ (+ slop (/ g (expt (* 2.0 omega) 2))) slop)
+          (loop for above from (1- count) downto 1
+                collect (/ (+ slop (/ (* above mass g) (* 0.5 mass omega omega))) slop)))))
 
 (defun speed-of (world handle)
   "The speed of HANDLE's body. #X7R3M5"
@@ -6294,14 +6639,6 @@ floor. #X7R3M5"
                   x0 x y0 y z0 z))))
       (values fastest (nth-value 1 (physics-body-position world ball)) (- 0.25 *physics-linear-slop*)))))
 
-(defun fixed-sequence (seed)
-  "A function returning doubles in [0,1) from a 48-bit linear congruential generator started at
-the integer SEED: the same numbers on every run, whatever CL's random state. #X7R3M5"
-  (let ((state (ldb (byte 48 0) seed)))
-    (lambda ()
-      (setf state (ldb (byte 48 0) (+ (* state 25214903917) 11)))
-      (/ (ldb (byte 31 17) state) (float (ash 1 31) 1d0)))))
-
 (defun mixed-mass-pile (count &key (seconds 15) (brace-ratio *physics-brace-mass-ratio*) (seed 7))
   "Drop COUNT balls of radius 0.25 m in the basin lattice, with sleeping off, their masses spread
 evenly in log from 0.32 to 32 kg by the fixed sequence of SEED, and run SECONDS with BRACE-RATIO. Return
@@ -6359,22 +6696,22 @@ the world valid. #X7R3M5"
 alive at the end, whether every number stayed finite, the bytes consed per step after the first
 minute, and the growth of the heap in bytes, after a full collection, from the end of the first
 minute to the end. #X7R3M5"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t))
-        (springs (list (make-basin-fountain))) (finite t) (consed 0) (heap-1 0))
-    (dotimes (i (* minutes 3600))
-      (when (= i 3600)
-        (sb-ext:gc :full t)
-        (setf heap-1 (sb-kernel:dynamic-usage)))
-      (let ((before (sb-ext:get-bytes-consed)))
-        (run-physics-springs world springs)
-        (step-physics-world world)
-        (when (>= i 3600) (incf consed (- (sb-ext:get-bytes-consed) before))))
-      (when (zerop (mod i 600)) (setf finite (and finite (world-finite-p world)))))
-    (sb-ext:gc :full t)
-    (values (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
-            (and finite (world-finite-p world))
-            (round consed (* (1- minutes) 3600))
-            (- (sb-kernel:dynamic-usage) heap-1))))
+  (multiple-value-bind (world script) (make-scene-world :fountain :kernels :scalar)
+    (let ((finite t) (consed 0) (heap-1 0))
+      (dotimes (i (* minutes 3600))
+        (when (= i 3600)
+          (sb-ext:gc :full t)
+          (setf heap-1 (sb-kernel:dynamic-usage)))
+        (let ((before (sb-ext:get-bytes-consed)))
+          (funcall script i)
+          (step-physics-world world)
+          (when (>= i 3600) (incf consed (- (sb-ext:get-bytes-consed) before))))
+        (when (zerop (mod i 600)) (setf finite (and finite (world-finite-p world)))))
+      (sb-ext:gc :full t)
+      (values (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
+              (and finite (world-finite-p world))
+              (round consed (* (1- minutes) 3600))
+              (- (sb-kernel:dynamic-usage) heap-1)))))
 
 (defun throw-at-wall (speed start)
   "Throw a ball of radius 0.25 m at SPEED along x, without gravity, from x = START at a wall one
@@ -6441,6 +6778,13 @@ its final height less its ideal resting height (radius less a slop), and whether
       (row "column of 20 balls, each contact against its design depth (one slop)"
            (every (lambda (d) (<= d 1.1)) depths)
            "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}" depths))
+    ;; awake, every contact gives by its load: the soft contact's law, against which it is held
+    (let* ((depths (column-contact-depths 20 :sleep nil)) (law (soft-column-depths 20))
+           (off (reduce #'max (mapcar (lambda (d w) (abs (- d w))) depths law))))
+      (row "column of 20 balls, sleeping off, each contact against the soft contact's law"
+           (<= off 0.02)
+           "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}; at most ~,3F slops from the law's ~
+            ~,2F .. ~,2F" depths off (second law) (car (last law))))
     (let ((runs (append (loop for shift in '(0.0 0.001 0.002 0.003)
                               collect (thrown-into-pile 1000 :seconds 12 :throw-at 4 :shift shift))
                         (loop for seed from 1 to 10
@@ -6450,10 +6794,12 @@ its final height less its ideal resting height (radius less a slop), and whether
         (row "default scene, ball thrown at 4 s, 14 runs (throw 0-3 mm aside, 10 jittered spawns)"
              (and (<= at-8 10) (zerop at-12))
              "awake of 1001 in the worst run: ~D at 8 s, ~D at 12 s" at-8 at-12)))
-    (multiple-value-bind (curve fastest) (dead-pile 500 :seconds 10)
-      (row "500 dead balls, sleeping off" (and (< (car (last curve)) 1e-4) (< fastest 0.001))
-           "kinetic energy at 1 .. 10 s, mJ: ~{~,3F~^ ~}; fastest at 10 s ~,4F m/s"
-           (mapcar (lambda (e) (* 1000 e)) curve) fastest))
+    (dolist (rho '(0.0 0.01))
+      (multiple-value-bind (curve fastest slip) (dead-pile 500 :seconds 10 :rolling-resistance rho)
+        (row (format nil "500 dead balls, sleeping off~:[~;, rolling resistance ~:*~,2F~]" (and (> rho 0) rho))
+             (and (< (car (last curve)) 1e-4) (< fastest 0.001))
+             "kinetic energy at 1 .. 10 s, mJ: ~{~,3F~^ ~}; fastest at 10 s ~,4F m/s, its lowest point ~
+              at ~,5F m/s" (mapcar (lambda (e) (* 1000 e)) curve) fastest slip)))
     (multiple-value-bind (speed median worst pen) (heaps-at-one-point)
       (row "heaps of 50 to 150 balls spawned at one point" (and (< speed 10.0) (< pen 0.01))
            "fastest ball ~,3F m/s; fastest parting pair ~,3F m/s in the median heap, ~,3F m/s in the worst; ~
@@ -7119,25 +7465,42 @@ step, through its step hook (which must be free). Return the recording. #G4WXCJ"
 ;; Watching a run: the recorder:1 ends here
 
 ;; [[file:../physics.org::#3X6XN8][The standard scenes:1]]
-(defparameter *physics-scenes*
-  '((:basin "1000 balls dropped into the basin; at 4 s a ball is thrown down into the pile"
-     8 (1 4.3 8))
-    (:pile "1000 balls with rolling resistance, left until the whole pile sleeps" 12 (1 4 12))
-    (:fountain "a fountain in the basin's floor: two water drops a step" 6 (0.6 2 6))
-    (:lava "a lava spring in the basin's floor: a gobbet every fourth step, each living 4 s"
-     8 (1 4 8))
-    (:player "the walker going round a square through two layers of balls" 8 (1 3.5 7)))
-  "The standard scenes: each a keyword, what it shows, its seconds at 60 Hz, and the moments, in
-seconds, of its picture. #3X6XN8")
+(define-physics-scene :pile
+    "1000 balls with rolling resistance, left until the whole pile sleeps #3X6XN8"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 1000 :spawn basin-spawn-point :radius 0.25 :mass 1.0 :friction 0.6 :rolling-resistance 0.05)
+  (:seconds 12)
+  (:pictures 1 4 12)
+  (:features :terrain :body-contacts :friction :rolling-resistance :sleep))
 
-(defun basin-pile-world (balls &key (rolling-resistance 0.0))
-  "A world over the basin with sleep on and the widest kernel family, holding BALLS balls of the
-basin lattice with ROLLING-RESISTANCE. #3X6XN8"
-  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep t :kernels :auto)))
-    (dotimes (i balls world)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6
-                                      :rolling-resistance rolling-resistance)))))
+(define-physics-scene :fountain
+    "a fountain in the basin's floor: two water drops a step #3X6XN8"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:springs (make-basin-fountain))
+  (:seconds 6)
+  (:pictures 0.6 2 6)
+  (:features :terrain :friction :sleep :mortal))
+
+(define-physics-scene :lava
+    "a lava spring in the basin's floor: a gobbet every fourth step, each living 4 s #3X6XN8"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:springs (make-lava-spring 4 -1 4))
+  (:seconds 8)
+  (:pictures 1 4 8)
+  (:features :terrain :body-contacts :friction :restitution :sleep :mortal))
+
+(define-physics-scene :player
+    "the walker going round a square through two layers of balls #3X6XN8"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 392 :spawn basin-spawn-point :radius 0.25 :mass 1.0 :friction 0.6)
+  (:player (1d0 0d0 1d0) player-scene-input)
+  (:seconds 8)
+  (:pictures 1 3.5 7)
+  (:features :terrain :body-contacts :boxes :friction :sleep))
 
 (defun player-scene-input (step)
   "The walker's input at STEP of the player scene: still for the first second, then round a
@@ -7146,44 +7509,6 @@ square, 1.5 s a side, as two values MOVE-X MOVE-Z. #3X6XN8"
       (values 0d0 0d0)
       (ecase (mod (floor (- step 60) 90) 4)
         (0 (values 1d0 0d0)) (1 (values 0d0 1d0)) (2 (values -1d0 0d0)) (3 (values 0d0 -1d0)))))
-
-(defun physics-scene (name)
-  "The world of the standard scene NAME of *physics-scenes*, and the function of the step's
-number to call before each step (or NIL), as two values. #3X6XN8"
-  (ecase name
-    (:basin (let ((world (basin-pile-world 1000)))
-              (values world (lambda (step)
-                              (when (= step 240)
-                                (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0
-                                                                    :vx 4.0 :vy -6.0))))))
-    (:pile (values (basin-pile-world 1000 :rolling-resistance 0.05) nil))
-    ((:fountain :lava)
-     (let ((world (basin-pile-world 0))
-           (springs (list (if (eq name :fountain) (make-basin-fountain) (make-lava-spring 4 -1 4)))))
-       (values world (lambda (step) (declare (ignore step)) (run-physics-springs world springs)))))
-    (:player
-     (let* ((world (basin-pile-world 392))
-            (terrain (physics-world-terrain world))
-            (player (make-physics-player 1d0 0d0 1d0)))
-       (values world (lambda (step)
-                       (multiple-value-bind (move-x move-z) (player-scene-input step)
-                         (advance-physics-player player terrain (/ 1d0 60) :move-x move-x :move-z move-z))
-                       (post-physics-player world player)))))))
-
-(defun run-physics-scene (name &key record (every 1) seconds)
-  "Run the standard scene NAME of *physics-scenes* for its seconds, or SECONDS; when RECORD is
-true, record it every EVERY steps. Return the world and the recording (or NIL). #3X6XN8"
-  (let ((entry (assoc name *physics-scenes*)))
-    (unless entry
-      (error 'invalid-physics-parameter :name :scene :value name
-                                        :expected (format nil "one of ~{~S~^ ~}" (mapcar #'first *physics-scenes*))))
-    (multiple-value-bind (world before-step) (physics-scene name)
-      (let ((recording (and record (start-physics-recording world :every every))))
-        (dotimes (step (round (* (or seconds (third entry)) 60)))
-          (when before-step (funcall before-step step))
-          (step-physics-world world))
-        (when recording (stop-physics-recording world))
-        (values world recording)))))
 ;; The standard scenes:1 ends here
 
 ;; [[file:../physics.org::#RH7T05][A viewer for the browser:1]]

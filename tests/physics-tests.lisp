@@ -2450,6 +2450,174 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "~S was refused nowhere" ops))))
 ;; M9W5P7-shrunk-failures-stay-fixed ends here
 
+;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
+(defun solid-cell-count (terrain)
+  "The solid cells of TERRAIN in [-16,32)^3. #K5DF9S"
+  (loop for x from -16 below 32
+        sum (loop for y from -16 below 32
+                  sum (loop for z from -16 below 32
+                            count (luv-physics::terrain-solid-p terrain x y z)))))
+
+(defun bodies-of-kind (world handles)
+  "The HANDLES of WORLD whose bodies have a kind. #K5DF9S"
+  (remove-if-not (lambda (h) (physics-body-kind-name world h)) handles))
+
+(define-claim "K5DF9S" definition-builds-what-it-declares
+    "A defined scene's world has its bodies per kind, its cells, its world arguments and features; its actions act on time."
+  (define-physics-scene :claim-yard
+      "marbles and drops on the claims' floor, a lava spring, a ball thrown at 0.5 s #K5DF9S"
+    (:terrain () (make-floor-terrain))
+    (:world :sleep nil :substeps 2)
+    (:bodies 12 :spawn (lambda (i) (values (+ 0.5 i) 1.0 2.5)) :kind :marble)
+    (:bodies 5 :spawn (lambda (i) (values (+ 0.5 i) 2.0 5.5)) :kind :water-drop :friction 0.3)
+    (:springs (make-lava-spring 8 -1 8))
+    (:throw 0.5 (3.0 4.0 3.0) :radius 0.3 :vx 1.0)
+    (:seconds 1)
+    (:features :terrain :body-contacts :friction :restitution :mortal))
+  (unwind-protect
+       (multiple-value-bind (world script scene) (make-scene-world :claim-yard)
+         (flet ((bodies () (physics-world-handles world))
+                (friction (h)
+                  (multiple-value-bind (set row) (luv-physics::resolve-handle world h)
+                    (aref (luv-physics::body-columns-friction (luv-physics::set-buffer world set)) row))))
+           (let ((kinds (mapcar (lambda (h) (physics-body-kind-name world h)) (bodies))))
+             (check (and (= 17 (length kinds)) (= 12 (count :marble kinds)) (= 5 (count :water-drop kinds)))
+                    "kinds ~S" kinds))
+           (check (every (lambda (h) (or (eq :marble (physics-body-kind-name world h)) (= 0.3 (friction h))))
+                         (bodies)))
+           (check (= 2304 (solid-cell-count (luv-physics::physics-world-terrain world))
+                     (solid-cell-count (make-floor-terrain))))
+           (check (null (luv-physics::physics-world-sleep-enabled world)))
+           (check (= 2 (luv-physics::physics-world-substeps world)))
+           (check (equal '(:terrain :body-contacts :friction :restitution :mortal) (physics-scene-features scene)))
+           (check (eq scene (find-physics-scene :claim-yard)))
+           (dotimes (i 30) (funcall script i) (step-physics-world world))
+           (let ((kinds (mapcar (lambda (h) (physics-body-kind-name world h)) (bodies))))
+             (check (= 8 (count :lava-gobbet kinds)) "~D gobbets after 30 steps" (count :lava-gobbet kinds))
+             (check (= 25 (length kinds))))
+           (funcall script 30)
+           (let ((thrown (set-difference (bodies) (bodies-of-kind world (bodies)))))
+             (check (= 26 (length (bodies))))
+             (check (and (= 1 (length thrown)) (= 0.3 (physics-body-radius world (first thrown)))
+                         (equal '(3.0 4.0 3.0) (multiple-value-list (physics-body-position world (first thrown)))))
+                    "thrown ~S" thrown))))
+    (setf *physics-scenes* (remove :claim-yard *physics-scenes* :key #'physics-scene-name))))
+;; K5DF9S-definition-builds-what-it-declares ends here
+
+;; [[file:../physics.org::#K5DF9S][K5DF9S-same-bits-as-by-hand]]
+(defun hand-built-basin (balls &key (sleep t) (kernels :auto) seed)
+  "BALLS balls of the basin lattice, jittered by the fixed sequence of SEED when given, in a world
+made by hand. #K5DF9S"
+  (let ((world (luv-physics::make-physics-world :terrain (make-basin-terrain) :sleep sleep :kernels kernels))
+        (next (and seed (luv-physics::fixed-sequence seed))))
+    (dotimes (i balls world)
+      (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+        (when next
+          (incf x (* 0.02 (- (funcall next) 0.5)))
+          (incf z (* 0.02 (- (funcall next) 0.5))))
+        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6)))))
+
+(define-claim "K5DF9S" same-bits-as-by-hand
+    "The awake basin in every family and the main job, seeded or not, equal their hand-built runs bit for bit."
+  (dolist (family (available-kernel-families))
+    (let ((scene (make-basin-world 200 :kernels family))
+          (hand (hand-built-basin 200 :sleep nil :kernels family)))
+      (dotimes (i 90) (step-physics-world scene) (step-physics-world hand))
+      (check (= (physics-world-state-hash scene) (physics-world-state-hash hand)) "~(~A~) differs" family)))
+  (flet ((by-hand (seed throw)
+           (let ((world (hand-built-basin 300 :seed seed)))
+             (dotimes (i 120 (physics-world-state-hash world))
+               (when (and throw (= i 60))
+                 (add-physics-body world 1.0 7.5 4.0 :radius 0.25 :mass 1.0 :vx 4.0 :vy -6.0))
+               (step-physics-world world)))))
+    (dolist (seed '(nil 3))
+      (let ((scene (physics-world-state-hash
+                    (run-physics-scene :basin :count 300 :seed seed :throw-at 1 :seconds 2))))
+        (check (= scene (by-hand seed t)) "the main job, seed ~A, differs from its hand-built run" seed)
+        (check (/= scene (by-hand seed nil)))
+        (check (/= scene (by-hand (if seed nil 3) t)))))))
+;; K5DF9S-same-bits-as-by-hand ends here
+
+;; [[file:../physics.org::#K5DF9S][K5DF9S-refusals-name-the-clause]]
+(define-claim "K5DF9S" refusals-name-the-clause
+    "Bad clauses are refused naming the scene and the clause; unknown names naming the operation."
+  (let ((before (copy-list *physics-scenes*))
+        (terrain '(:terrain () (make-floor-terrain))) (seconds '(:seconds 1)) (features '(:features :terrain)))
+    (flet ((refusal (name &rest clauses)
+             (handler-case (progn (macroexpand-1 `(define-physics-scene ,name "a bad scene #K5DF9S" ,@clauses)) nil)
+               (invalid-physics-scene-clause (e)
+                 (list (luv-physics::invalid-physics-scene-clause-scene e)
+                       (luv-physics::invalid-physics-parameter-name e))))))
+      (check (equal '(:bad :colour) (refusal :bad terrain seconds features '(:colour :red))))
+      (check (equal '(:bad :features) (refusal :bad terrain seconds '(:features :terrain :magic))))
+      (check (equal '(:bad :bodies) (refusal :bad terrain seconds features
+                                             '(:bodies 3 :spawn luv-physics::basin-spawn-point :colour 1))))
+      (check (equal '(:bad :bodies) (refusal :bad terrain seconds features '(:bodies 3 :radius 0.25))))
+      (check (equal '(:bad :terrain) (refusal :bad '(:terrain (a b) (make-floor-terrain)) seconds features)))
+      (check (equal '(:bad :seconds) (refusal :bad terrain seconds seconds features)))
+      (check (equal '(:bad :seconds) (refusal :bad terrain features)))
+      (check (equal '(bad bad) (refusal 'bad terrain seconds features)))
+      (check (equal before *physics-scenes*)))
+    (dolist (operation '(make-scene-world run-physics-scene))
+      (let ((e (handler-case (funcall operation :volcano) (error (e) e))))
+        (check (typep e 'unknown-physics-scene))
+        (check (and (eq operation (luv-physics::unknown-physics-scene-operation e))
+                    (eq :volcano (luv-physics::invalid-physics-parameter-value e))
+                    (eq :scene (luv-physics::invalid-physics-parameter-name e)))
+               "~A: ~A" operation e)))))
+;; K5DF9S-refusals-name-the-clause ends here
+
+;; [[file:../physics.org::#K5DF9S][K5DF9S-script-conses-nothing]]
+(define-claim "K5DF9S" script-conses-nothing
+    "The scripts of the player and fountain scenes cons 0 bytes a step."
+  (dolist (name '(:player :fountain))
+    (multiple-value-bind (world script) (make-scene-world name)
+      (dotimes (i 240) (funcall script i) (step-physics-world world))
+      (let ((consed 0))
+        (loop for i from 240 below 540
+              do (let ((before (sb-ext:get-bytes-consed)))
+                   (funcall script i)
+                   (incf consed (- (sb-ext:get-bytes-consed) before)))
+                 (step-physics-world world))
+        (check (zerop consed) "the ~(~A~) scene's script consed ~D bytes in 300 steps" name consed)))))
+;; K5DF9S-script-conses-nothing ends here
+
+;; [[file:../physics.org::#K5DF9S][K5DF9S-scenes-declare-what-they-use]]
+(defun scene-features-used (name &key (seconds 2) (every 30))
+  "The features the scene NAME uses in SECONDS of running, read from its world every EVERY steps,
+in the order of *physics-scene-features*. #K5DF9S"
+  (multiple-value-bind (world script) (make-scene-world name :throw-at 1)
+    (let ((used '()))
+      (flet ((use (feature) (pushnew feature used))
+             (any (column buffer) (some #'plusp (subseq column 0 (luv-physics::body-columns-length buffer)))))
+        (dotimes (step (* 60 seconds))
+          (funcall script step)
+          (when (plusp (luv-physics::box-columns-length (luv-physics::physics-world-boxes world))) (use :boxes))
+          (step-physics-world world)
+          (when (zerop (mod (1+ step) every))
+            (let ((contacts (luv-physics::physics-world-contacts world)))
+              (dotimes (c (luv-physics::contact-columns-length contacts))
+                (let ((kind (aref (luv-physics::contact-columns-kind contacts) c)))
+                  (cond ((= kind luv-physics::+contact-pair+) (use :body-contacts))
+                        ((= kind luv-physics::+contact-terrain+) (use :terrain))))))
+            (dolist (buffer (list (luv-physics::physics-world-awake world) (luv-physics::physics-world-sleeping world)))
+              (when (any (luv-physics::body-columns-friction buffer) buffer) (use :friction))
+              (when (any (luv-physics::body-columns-rolling-resistance buffer) buffer) (use :rolling-resistance))
+              (when (any (luv-physics::body-columns-restitution buffer) buffer) (use :restitution))
+              (when (any (luv-physics::body-columns-life buffer) buffer) (use :mortal)))))
+        (when (luv-physics::physics-world-sleep-enabled world) (use :sleep))
+        (when (physics-world-event-handler world) (use :events)))
+      (remove-if-not (lambda (f) (member f used)) luv-physics::*physics-scene-features*))))
+
+(define-claim "K5DF9S" scenes-declare-what-they-use
+    "Each standard scene uses, over 2 s, exactly the features it declares."
+  (dolist (name '(:awake-basin :basin :pile :fountain :lava :player))
+    (let ((declared (physics-scene-features (find-physics-scene name)))
+          (used (scene-features-used name)))
+      (check (and (subsetp used declared) (subsetp declared used))
+             "~(~A~) declares ~S and uses ~S" name declared used))))
+;; K5DF9S-scenes-declare-what-they-use ends here
+
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
 (define-claim "JAU0EF" kinds-make-their-bodies
     "Each kind gives its radius and name; a gobbet expires at 4 s; an unknown kind is refused."
@@ -2647,19 +2815,18 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (dotimes (i 3000) (luv-physics::step-physics-world world))
       (check (= before (sb-ext:get-bytes-consed)) "the pile consed ~D bytes in 3000 steps"
              (- (sb-ext:get-bytes-consed) before))))
-  (let ((world (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain)))
-        (springs (list (luv-physics::make-basin-fountain))))
+  (multiple-value-bind (world script) (luv-physics::make-scene-world :fountain :kernels :scalar)
     (dotimes (i 600)
-      (luv-physics::run-physics-springs world springs)
+      (funcall script i)
       (luv-physics::step-physics-world world))
     (sb-ext:gc)
-    (dotimes (i 100)
-      (luv-physics::run-physics-springs world springs)
-      (luv-physics::step-physics-world world))
+    (loop for i from 600 below 700
+          do (funcall script i)
+             (luv-physics::step-physics-world world))
     (let ((before (sb-ext:get-bytes-consed)))
-      (dotimes (i 3000)
-        (luv-physics::run-physics-springs world springs)
-        (luv-physics::step-physics-world world))
+      (loop for i from 700 below 3700
+            do (funcall script i)
+               (luv-physics::step-physics-world world))
       (check (= before (sb-ext:get-bytes-consed)) "the fountain consed ~D bytes in 3000 steps"
              (- (sb-ext:get-bytes-consed) before)))))
 ;; B3NCH5-steps-cons-nothing ends here
@@ -2667,11 +2834,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-piles-come-to-rest]]
 (define-claim "X7R3M5" piles-come-to-rest
     "Floor balls of a dead pile stop spinning, and a pile hit by a thrown ball sleeps again, in every order."
-  (let* ((world (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain) :sleep nil
-                                                 :kernels :auto))
-         (balls (loop for i below 300
-                      collect (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
-                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6))))
+  (let* ((world (luv-physics::make-basin-world 300 :kernels :auto))
+         (balls (luv-physics::physics-world-handles world))
          (spin 0.0))
     (dotimes (i 480) (step-physics-world world))
     (dolist (b balls)
@@ -2718,6 +2882,24 @@ function of a column name that reads row K's float in that column. #T3STK1"
   (multiple-value-bind (pen) (luv-physics::stack-in-shaft '(1000.0 1.0) :seconds 4)
     (check (< pen 0.02) "the light ball on the heavy one sank ~,4F m" pen)))
 ;; X7R3M5-columns-stand ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-column-gives-by-the-law]]
+(define-claim "X7R3M5" column-gives-by-the-law
+    "An awake column of twenty balls rests at the soft contact's deflection under each contact's load."
+  (let ((depths (luv-physics::column-contact-depths 20 :sleep nil :seconds 4))
+        (law (luv-physics::soft-column-depths 20)))
+    (check (= (length depths) (length law) 20))
+    (loop for d in depths for w in law for k from 0
+          do (check (< (abs (- d w)) 0.02) "contact ~D from the floor: ~,3F slops, the law gives ~,3F" k d w))))
+;; X7R3M5-column-gives-by-the-law ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-rolling-resistance-rests-a-pile]]
+(define-claim "X7R3M5" rolling-resistance-rests-a-pile
+    "A dead pile whose balls resist rolling comes to rest with sleeping off."
+  (multiple-value-bind (curve fastest) (luv-physics::dead-pile 200 :rolling-resistance 0.01)
+    (check (< (car (last curve)) 4e-5) "the pile holds ~,4F mJ after 10 s" (* 1000 (car (last curve))))
+    (check (< fastest 0.001) "a ball still moves at ~,5F m/s after 10 s" fastest)))
+;; X7R3M5-rolling-resistance-rests-a-pile ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-heavy-on-light-recovers]]
 (define-claim "X7R3M5" heavy-on-light-recovers

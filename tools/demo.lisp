@@ -1,4 +1,5 @@
-;;;; tools/demo.lisp -- load luv-physics and run its default scene (make demo).
+;;;; tools/demo.lisp -- load luv-physics and run a scene of the page (make demo, SCENE=basin by
+;;;; default: the main job).
 
 (load (merge-pathnames "boot.lisp" *load-truename*))
 
@@ -7,9 +8,9 @@
 (when (luv-load-systems "luv-physics")
   (sb-ext:exit :code 2))
 
-(let ((scene (find-symbol "RUN-DEFAULT-SCENE" '#:luv-physics)))
-  (if (and scene (fboundp scene))
-      (funcall scene)
-      (format t "~&luv-physics is loaded (kernel families here: ~S), ~
-                 but the page does not define RUN-DEFAULT-SCENE yet.~%"
-              (funcall (find-symbol "AVAILABLE-KERNEL-FAMILIES" '#:luv-physics)))))
+(let ((run (find-symbol "RUN-DEFAULT-SCENE" '#:luv-physics))
+      (scene (intern (string-upcase (or (sb-ext:posix-getenv "SCENE") "basin")) :keyword)))
+  (handler-case (funcall run :scene scene)
+    (error (e)
+      (format *error-output* "demo: ~A~%" e)
+      (sb-ext:exit :code 1))))
