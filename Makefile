@@ -3,13 +3,15 @@
 
 EMACS  ?= emacs
 SBCL   ?= sbcl
+# compiling the kernels' feature variants needs more than SBCL's default 1 GB heap
+HEAP   ?= 4Gb
 ANCHOR ?=
 SEED   ?= 1
 COUNT  ?= 150
 
 ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
-LISP   := $(SBCL) --noinform --non-interactive --no-sysinit --no-userinit
+LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
 .PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers report heaps mutate mutate-splice html view pictures fuzz soak clean
 .NOTPARALLEL:
@@ -55,10 +57,10 @@ check-anchors:
 	@$(LISP) --load tools/check-anchors.lisp
 
 test: setup check-tangle check-anchors physics.html
-	@ANCHOR="$(ANCHOR)" tools/run-tests "$(SBCL)" "$(EMACS)"
+	@ANCHOR="$(ANCHOR)" LUV_HEAP="$(HEAP)" tools/run-tests "$(SBCL)" "$(EMACS)"
 
 editor-test: setup
-	@tools/editor-test "$(SBCL)" "$(EMACS)"
+	@LUV_HEAP="$(HEAP)" tools/editor-test "$(SBCL)" "$(EMACS)"
 
 demo: setup tangle
 	@SCENE="$(SCENE)" $(LISP) --load tools/demo.lisp
@@ -66,13 +68,15 @@ demo: setup tangle
 bench: setup tangle
 	@mkdir -p report
 	@$(LISP) --load tools/bench.lisp | tee report/bench.org
-	@$(SBCL) --script tools/splice.lisp bench-basin report/bench.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-basin report/bench.org
 	@BENCH=run-scene-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-scenes.org
-	@$(SBCL) --script tools/splice.lisp bench-scenes report/bench-scenes.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-scenes report/bench-scenes.org
 	@BENCH=run-sleeping-scale-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-sleeping.org
-	@$(SBCL) --script tools/splice.lisp bench-sleeping report/bench-sleeping.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-sleeping report/bench-sleeping.org
 	@BENCH=run-query-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-queries.org
-	@$(SBCL) --script tools/splice.lisp bench-queries report/bench-queries.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-queries report/bench-queries.org
+	@BENCH=run-feature-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-features.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-features report/bench-features.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
 # without -march=native like Debian's Bullet and ODE.
@@ -84,16 +88,16 @@ bench-peers: setup tangle
 	@rm -f report/peers/failed
 	@{ BULLET_BASIN=report/peers/bullet-basin ODE_BASIN=report/peers/ode-basin $(LISP) --load tools/peers/bench-peers.lisp || touch report/peers/failed; } | tee report/peers.org
 	@test ! -e report/peers/failed
-	@$(SBCL) --script tools/splice.lisp bench-peers report/peers.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-peers report/peers.org
 
 # The diagrams report/wp-*.svg are kept in git: the page links to them.
 report: setup tangle
 	@mkdir -p report
 	@REPORT=stability $(LISP) --load tools/report.lisp | tee report/stability.org
-	@$(SBCL) --script tools/splice.lisp stability-table report/stability.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp stability-table report/stability.org
 	@REPORT=accuracy $(LISP) --load tools/report.lisp
-	@$(SBCL) --script tools/splice.lisp work-precision-best report/work-precision-best.org
-	@$(SBCL) --script tools/splice.lisp work-precision-table report/work-precision.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp work-precision-best report/work-precision-best.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp work-precision-table report/work-precision.org
 
 # Heaps spawned at one point, 1000 to 20000 balls: memory per body and speeds (#X7R3M5).
 heaps: setup tangle
@@ -108,15 +112,15 @@ heaps: setup tangle
 # run over every section.
 mutate: setup tangle
 	@mkdir -p report
-	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" nice $(SBCL) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
+	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" nice $(SBCL) --dynamic-space-size $(HEAP) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
 	@if [ -z "$(ANCHOR)" ]; then $(MAKE) --no-print-directory mutate-splice; fi
 
 # The last full run's tables, from its log, into the page; the survivors' reasons, and which
 # survivors are equivalent, are read from the page as it is.
 mutate-splice:
 	@MUTATE_FROM_LOG=report/mutate.log $(LISP) --load tools/mutate.lisp
-	@$(SBCL) --script tools/splice.lisp mutate-score report/mutate-score.org
-	@$(SBCL) --script tools/splice.lisp mutate-survivors report/mutate-survivors.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp mutate-score report/mutate-score.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp mutate-survivors report/mutate-survivors.org
 
 # The page as HTML: the index of the exported symbols comes from the loaded image
 # (report/api-index.org), then Org's export in batch Emacs writes physics.html, again only when
@@ -143,13 +147,13 @@ fuzz: setup tangle
 	@mkdir -p report
 	@rm -f report/fuzz-failed
 	@{ SEED="$(SEED)" COUNT="$(COUNT)" LENGTH="$(LENGTH)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/fuzz.org
-	@$(SBCL) --script tools/splice.lisp fuzz-campaign report/fuzz.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp fuzz-campaign report/fuzz.org
 	@test ! -e report/fuzz-failed
 
 soak: setup tangle
 	@mkdir -p report
 	@MINUTES="$(MINUTES)" nice $(LISP) --load tools/soak.lisp | tee report/soak.org
-	@$(SBCL) --script tools/splice.lisp soak-heap report/soak.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp soak-heap report/soak.org
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f

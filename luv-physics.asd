@@ -4,7 +4,10 @@
   :description "Rigid spheres in a voxel world, written as the literate page physics.org."
   :depends-on ((:require "sb-simd") (:require "sb-introspect"))
   ;; one line per file compiled: the compiler's notes are for the page's authors
+  ;; each file is compiled after a full collection, so the second file's compilation does not
+  ;; run in a heap still holding the garbage of the first
   :around-compile (lambda (compile)
+                    (sb-ext:gc :full t)
                     (let* ((log (make-string-output-stream))
                            (started (get-internal-real-time))
                            (result (multiple-value-list

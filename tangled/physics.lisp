@@ -79,7 +79,9 @@
    ;; Scenes are definitions (#K5DF9S)
    #:define-physics-scene #:physics-scene #:physics-scene-name #:physics-scene-features
    #:physics-scene-seconds #:physics-scene-moments #:physics-scene-text #:find-physics-scene
-   #:make-scene-world #:physics-world-handles #:unknown-physics-scene #:invalid-physics-scene-clause))
+   #:make-scene-world #:physics-world-handles #:unknown-physics-scene #:invalid-physics-scene-clause
+   ;; Features: a world pays only for what it uses (#FEAT5X)
+   #:physics-world-features #:physics-feature-omitted))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -2037,6 +2039,12 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
 ;; The block world is the static tree; bodies need a hash grid:1 ends here
 
 ;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:1]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +physics-features+
+    '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :mortal
+      :hit-events :contact-events :expiry-events :sleep-events)
+    "Every feature a world may use ([[#FEAT5X]]), in the order physics-world-features lists them. #W0RLD7"))
+
 (defconstant +solver-stride+ 8
   "Floats per body in the solver's velocity array: vx vy vz wx wy wz and two spare. #W0RLD7")
 
@@ -2145,6 +2153,12 @@ dispatches on it once per call. #W0RLD7"))
    (undo-statistics :initform (make-array 8 :element-type 'double-float :initial-element 0d0)
                     :reader physics-world-undo-statistics)
    (sleep-enabled :initarg :sleep-enabled :initform t :accessor physics-world-sleep-enabled)
+   ;; what the world may use ([[#FEAT5X][features]]), and the step built for it
+   (features :initarg :features :initform +physics-features+ :reader world-features)
+   (event-mask :initarg :event-mask :initform -1 :type fixnum :reader world-event-mask)
+   (phases :initform nil :accessor world-phases-built)
+   (phases-source :initform nil :accessor world-phases-source)
+   (kernel-variant :initform nil :accessor world-kernel-variant-built)
    (current-dt :initform (/ 1.0 60) :type single-float :accessor physics-world-current-dt)
    (current-h :initform (/ 1.0 240) :type single-float :accessor physics-world-current-h)
    (step-count :initform 0 :type fixnum :accessor physics-world-step-count)
@@ -2238,9 +2252,11 @@ first, so :auto takes the last one the CPU runs. #R9M4PV"
   value)
 
 (defun make-physics-world (&key terrain (step-seconds 1/60) (substeps 4) (gravity '(0 -9.81 0))
-                                (kernels :scalar) (sleep t))
+                                (kernels :scalar) (sleep t) (features +physics-features+))
   "A new empty world over TERRAIN (a voxel-terrain or NIL), stepping STEP-SECONDS in SUBSTEPS
-substeps under GRAVITY (a list of three numbers), solving with the kernel family KERNELS. #M4K3WD"
+substeps under GRAVITY (a list of three numbers), solving with the kernel family KERNELS, using
+only FEATURES (a list of keywords of +physics-features+, or :events for every kind of event;
+every feature by default). #M4K3WD"
   (unless (or (null terrain) (typep terrain 'voxel-terrain))
     (error 'invalid-physics-parameter :name :terrain :value terrain :expected "a voxel-terrain or NIL"))
   (let ((dt (finite-f32 :step-seconds step-seconds)))
@@ -2253,17 +2269,24 @@ substeps under GRAVITY (a list of three numbers), solving with the kernel family
     (let ((g (mapcar (lambda (v) (ranged-f32 :gravity v (- +physics-max-gravity+) +physics-max-gravity+))
                      gravity))
           (parameters (checked-physics-parameters)))
-      (apply #'make-instance 'physics-world
-             :terrain terrain :step-seconds dt :substeps substeps
-             :gravity-x (first g) :gravity-y (second g) :gravity-z (third g)
-             :kernels (make-kernel-family kernels)
-             :sleep-enabled sleep
-             parameters))))
+      (let ((features (checked-physics-features features sleep)))
+        (when (and terrain (not (member :terrain features)))
+          (error 'physics-feature-omitted :feature :terrain :operation 'make-physics-world))
+        (apply #'make-instance 'physics-world
+               :terrain terrain :step-seconds dt :substeps substeps
+               :gravity-x (first g) :gravity-y (second g) :gravity-z (third g)
+               :kernels (make-kernel-family kernels)
+               :sleep-enabled (and sleep (member :sleep features) t)
+               :features features :event-mask (feature-event-mask features)
+               parameters)))))
 
 (defmethod (setf physics-world-event-handler) :before (handler (world physics-world))
   (unless (or (null handler) (functionp handler) (and (symbolp handler) (fboundp handler)))
     (error 'invalid-physics-parameter :world world :name :event-handler :value handler
-                                      :expected "NIL, a function, or the name of a function")))
+                                      :expected "NIL, a function, or the name of a function"))
+  ;; a world that records no kind of event has nothing to hand a handler
+  (when (and handler (zerop (world-event-mask world)))
+    (error 'physics-feature-omitted :world world :feature :events :operation 'physics-world-event-handler)))
 
 (declaim (inline check-world))
 (defun check-world (world operation)
@@ -2407,6 +2430,14 @@ number of seconds after which it expires. #M4K3WD"
     (when (and (not (eql life 0.0)) (<= life 0))
       (error 'invalid-physics-parameter :world world :name :life :value life :expected "> 0 seconds, or NIL"))
     (unless (typep kind 'fixnum) (error 'invalid-physics-parameter :world world :name :kind :value kind :expected "a fixnum"))
+    ;; a body that needs a feature the world left out is refused, not quietly given less
+    (flet ((needs (feature) (require-physics-feature world feature 'add-physics-body)))
+      (when (> e 0) (needs :restitution))
+      (when (> mu 0) (needs :friction))
+      (when (> rho 0) (needs :rolling-resistance))
+      (when (> life 0) (needs :mortal))
+      (when collide-with-bodies (needs :body-contacts))
+      (when report-hits (needs :hit-events)))
     (check-body-room world 'add-physics-body)
     (let* ((awake (physics-world-awake world))
            (row (body-columns-append awake))
@@ -2439,8 +2470,10 @@ number of seconds after which it expires. #M4K3WD"
   (x single-float) (y single-float) (z single-float) (speed single-float))
 
 (defun push-event (world kind handle-a handle-b x y z speed &optional datum)
-  "Record an event of KIND (a fixnum code) in WORLD's event buffer. #E7V3NT"
+  "Record an event of KIND (a fixnum code) in WORLD's event buffer, when WORLD records events of
+that kind ([[#FEAT5X][its features]]). #E7V3NT"
   (declare (type fixnum kind handle-a handle-b) (type single-float x y z speed))
+  (when (logbitp kind (the fixnum (world-event-mask world)))
   (let* ((events (physics-world-events world))
          (row (event-columns-append events)))
     (with-event-columns ((k kind) (a handle-a) (b handle-b) (ex x) (ey y) (ez z) (s speed)) events
@@ -2452,7 +2485,7 @@ number of seconds after which it expires. #M4K3WD"
           (setf data (replace (make-array (* 2 (1+ row)) :initial-element nil) data)
                 (physics-world-event-data world) data))
         (setf (svref data row) datum)))
-    row))
+    row)))
 
 (defconstant +event-begin+ 0 "Event code of :begin. #E7V3NT")
 
@@ -2643,6 +2676,7 @@ how many woke. Call it after editing terrain near bodies. #QKS4GZ"
 next step only. OWNER, any object, keeps the box's contacts persistent across steps and comes
 back with its hit events. #K1N3BX"
   (check-idle world 'post-physics-box)
+  (require-physics-feature world :boxes 'post-physics-box)
   (let ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
         (hx (finite-f32 :hx hx world)) (hy (finite-f32 :hy hy world)) (hz (finite-f32 :hz hz world))
         (vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world)))
@@ -4339,12 +4373,59 @@ single-float from LOW to 1e7. #K3RNLS"
                  (aref d (+ p 2)) (+ (aref d (+ p 2)) (* h (aref v (+ o 2)))))))
 ;; The kernel entry points, and integration:1 ends here
 
+;; [[file:../physics.org::#KTXT7V][One kernel text for every feature set:1]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun split-definition-body (body)
+    "BODY of a definition as three values: its forms, its declarations and its docstring. #KTXT7V"
+    (let ((documentation (and (stringp (first body)) (rest body) (pop body))))
+      (loop while (and (consp (first body)) (eq (car (first body)) 'declare))
+            collect (pop body) into declarations
+            finally (return (values body declarations documentation)))))
+
+  (defun featured-kernel-form (name features)
+    "A form whose value is the kernel NAME (a define-featured-kernel) compiled for FEATURES: its
+text, with each if-feature resolved for FEATURES. #KTXT7V"
+    (destructuring-bind (operators lambda-list declarations forms tested) (get name 'featured-kernel)
+      (declare (ignore tested))
+      (let ((function `(lambda ,lambda-list ,@declarations (with-features ,features ,@forms))))
+        (if operators `(macrolet ,operators ,function) function))))
+
+  (defun kernel-feature-key (name features)
+    "The features among FEATURES that the kernel NAME tests, in the order of +physics-features+. #KTXT7V"
+    (let ((tested (fifth (get name 'featured-kernel))))
+      (remove-if-not (lambda (f) (and (member f tested) (member f features))) +physics-features+))))
+
+(defstruct (kernel-variant (:constructor make-kernel-variant (kernels warm-start solve wide-warm-start wide-solve)))
+  "The solver kernels a world of some features runs in the family KERNELS: each a function, or
+the name of the general kernel ([[#FEAT5X]]). #KTXT7V"
+  kernels warm-start solve wide-warm-start wide-solve)
+
+(defmacro with-features ((&rest features) &body body)
+  "Run BODY with (if-feature FEATURE THEN &optional ELSE) standing for THEN when FEATURE is one
+of FEATURES and for ELSE otherwise, chosen at macro-expansion. #KTXT7V"
+  `(macrolet ((if-feature (feature then &optional else)
+                (if (member feature ',features) then else)))
+     ,@body))
+
+(defmacro define-featured-kernel ((name &key features operators) lambda-list &body body)
+  "Define NAME, a function of LAMBDA-LIST, compiled with every feature; keep its text, which
+tests the FEATURES listed with if-feature, so that featured-kernel-form can compile it for
+fewer; OPERATORS, macrolet definitions, wrap the text wherever it is compiled. #KTXT7V"
+  (multiple-value-bind (forms declarations documentation) (split-definition-body body)
+    (let ((function `(defun ,name ,lambda-list ,@(when documentation (list documentation)) ,@declarations
+                       (with-features ,+physics-features+ ,@forms))))
+      `(progn
+         (eval-when (:compile-toplevel :load-toplevel :execute)
+           (setf (get ',name 'featured-kernel) '(,operators ,lambda-list ,declarations ,forms ,features)))
+         ,(if operators `(macrolet ,operators ,function) function)))))
+;; One kernel text for every feature set:1 ends here
+
 ;; [[file:../physics.org::#W4RMST][Warm start:1]]
 (defmacro with-solver-columns (cbuf &body body)
   "Run BODY over the constraint buffer CBUF: its blocks, its body columns, and (@ COLUMN). #W4RMST"
   `(with-constraint-block (body-a body-b) ,cbuf ,@body))
 
-(defun warm-start-range (cbuf v start end)
+(define-featured-kernel (warm-start-range :features (:friction :rolling-resistance)) (cbuf v start end)
   "Apply the carried normal, friction and rolling impulses of constraints START..END. #W4RMST"
   (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
   (with-solver-columns cbuf
@@ -4352,33 +4433,54 @@ single-float from LOW to 1e7. #K3RNLS"
       (let* ((base (constraint-base k))
              (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
              (x (@ nx)) (y (@ ny)) (z (@ nz))
-             (l (@ normal-impulse)) (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
-             (px (+ (* l x) (* l1 (@ t1x)) (* l2 (@ t2x))))
-             (py (+ (* l y) (* l1 (@ t1y)) (* l2 (@ t2y))))
-             (pz (+ (* l z) (* l1 (@ t1z)) (* l2 (@ t2z))))
-             ;; n x P = l1 t2 - l2 t1: the torque arm of the friction part
-             (cx (- (* l1 (@ t2x)) (* l2 (@ t1x))))
-             (cy (- (* l1 (@ t2y)) (* l2 (@ t1y))))
-             (cz (- (* l1 (@ t2z)) (* l2 (@ t1z))))
-             (ma (@ ima)) (mb (@ imb)) (ia (@ iia)) (ib (@ iib))
-             (ar (@ ra)) (br (@ rb))
-             ;; the spin impulse about the normal joins the rolling impulse: both are angular
-             (sp (@ spin-impulse))
-             (rx (+ (@ rolling-impulse-x) (* sp x))) (ry (+ (@ rolling-impulse-y) (* sp y)))
-             (rz (+ (@ rolling-impulse-z) (* sp z))))
+             (l (@ normal-impulse))
+             (ma (@ ima)) (mb (@ imb)))
         (declare (type index a b base))
-        (setf (aref v a) (- (aref v a) (* ma px))
-              (block-ref v a 1) (- (block-ref v a 1) (* ma py))
-              (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
-              (block-ref v a 3) (- (block-ref v a 3) (* ia (+ (* ar cx) rx)))
-              (block-ref v a 4) (- (block-ref v a 4) (* ia (+ (* ar cy) ry)))
-              (block-ref v a 5) (- (block-ref v a 5) (* ia (+ (* ar cz) rz)))
-              (aref v b) (+ (aref v b) (* mb px))
-              (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
-              (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))
-              (block-ref v b 3) (+ (block-ref v b 3) (* ib (- rx (* br cx))))
-              (block-ref v b 4) (+ (block-ref v b 4) (* ib (- ry (* br cy))))
-              (block-ref v b 5) (+ (block-ref v b 5) (* ib (- rz (* br cz)))))))))
+        (if-feature :friction
+          (let* ((l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
+                 (px (+ (* l x) (* l1 (@ t1x)) (* l2 (@ t2x))))
+                 (py (+ (* l y) (* l1 (@ t1y)) (* l2 (@ t2y))))
+                 (pz (+ (* l z) (* l1 (@ t1z)) (* l2 (@ t2z))))
+                 ;; n x P = l1 t2 - l2 t1: the torque arm of the friction part
+                 (cx (- (* l1 (@ t2x)) (* l2 (@ t1x))))
+                 (cy (- (* l1 (@ t2y)) (* l2 (@ t1y))))
+                 (cz (- (* l1 (@ t2z)) (* l2 (@ t1z))))
+                 (ia (@ iia)) (ib (@ iib)) (ar (@ ra)) (br (@ rb))
+                 ;; the spin impulse about the normal joins the rolling impulse: both are angular
+                 (sp (@ spin-impulse))
+                 (rx (if-feature :rolling-resistance (+ (@ rolling-impulse-x) (* sp x)) (* sp x)))
+                 (ry (if-feature :rolling-resistance (+ (@ rolling-impulse-y) (* sp y)) (* sp y)))
+                 (rz (if-feature :rolling-resistance (+ (@ rolling-impulse-z) (* sp z)) (* sp z))))
+            (setf (aref v a) (- (aref v a) (* ma px))
+                  (block-ref v a 1) (- (block-ref v a 1) (* ma py))
+                  (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
+                  (block-ref v a 3) (- (block-ref v a 3) (* ia (+ (* ar cx) rx)))
+                  (block-ref v a 4) (- (block-ref v a 4) (* ia (+ (* ar cy) ry)))
+                  (block-ref v a 5) (- (block-ref v a 5) (* ia (+ (* ar cz) rz)))
+                  (aref v b) (+ (aref v b) (* mb px))
+                  (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
+                  (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))
+                  (block-ref v b 3) (+ (block-ref v b 3) (* ib (- rx (* br cx))))
+                  (block-ref v b 4) (+ (block-ref v b 4) (* ib (- ry (* br cy))))
+                  (block-ref v b 5) (+ (block-ref v b 5) (* ib (- rz (* br cz))))))
+          ;; without friction the impulse is along the normal and turns nothing; only rolling
+          ;; resistance, when the world has it, turns the bodies
+          (let ((px (* l x)) (py (* l y)) (pz (* l z)))
+            (setf (aref v a) (- (aref v a) (* ma px))
+                  (block-ref v a 1) (- (block-ref v a 1) (* ma py))
+                  (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
+                  (aref v b) (+ (aref v b) (* mb px))
+                  (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
+                  (block-ref v b 2) (+ (block-ref v b 2) (* mb pz)))
+            (if-feature :rolling-resistance
+              (let ((ia (@ iia)) (ib (@ iib))
+                    (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z)))
+                (setf (block-ref v a 3) (- (block-ref v a 3) (* ia rx))
+                      (block-ref v a 4) (- (block-ref v a 4) (* ia ry))
+                      (block-ref v a 5) (- (block-ref v a 5) (* ia rz))
+                      (block-ref v b 3) (+ (block-ref v b 3) (* ib rx))
+                      (block-ref v b 4) (+ (block-ref v b 4) (* ib ry))
+                      (block-ref v b 5) (+ (block-ref v b 5) (* ib rz)))))))))))
 ;; Warm start:1 ends here
 
 ;; [[file:../physics.org::#S0LV3R][Solve and relax:1]]
@@ -4390,12 +4492,14 @@ per constraint. #S0LV3R"
        (symbol-macrolet ((biased t)) ,@body)
        (symbol-macrolet ((biased nil)) ,@body)))
 
-(defun solve-range (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
+(define-featured-kernel (solve-range :features (:friction :rolling-resistance :restitution))
+    (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
   "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
 when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
 HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
-           (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
+           (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+
+           (ignorable threshold hgx hgy hgz))
   (unswitch-bias (use-bias)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
@@ -4442,9 +4546,10 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
              ;; the threshold; or an armed contact whose gap has closed. Its bounce, the
              ;; impulse that makes the pair leave at the speed restitution gives, is a push
              ;; of its own, not kept in the contact's impulse
-             (e (@ restitution))
-             (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold))))
-             (bump (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
+             (bump (if-feature :restitution
+                    (let* ((e (@ restitution))
+                           (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold)))))
+                    (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
                       (let* ((sp (if positive s 0.0))
                              ;; the change of vn over a substep under gravity
                              (dv (* (- (if (> mb 0.0) 1.0 0.0) (if (> ma 0.0) 1.0 0.0))
@@ -4467,6 +4572,7 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
                               (when (> kick 0.0) (setf (@ armed-speed) 0.0))
                               (if (> kick 0.0) kick 0.0))))
                       0.0))
+                    0.0))
              (bounced (> bump 0.0))
              (new (if bounced l new))
              (dl (if bounced bump (- new l)))
@@ -4477,61 +4583,75 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
         (let ((pushed (if bounced bump new)))
           (setf (@ normal-impulse) new
                 (@ max-normal-impulse) (if (> mni pushed) mni pushed)))
-        ;; friction, inside the cone |l1,l2| <= friction * normal impulse; the angular
-        ;; velocities are read only now
-        (let* (
-               (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
-               (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5))
-               (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
-               (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (@ kvt1)) (+ (* wx qx) (* wy qy) (* wz qz))))
-               (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (@ kvt2) (+ (* wx ux) (* wy uy) (* wz uz))))
-               (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
-               (tm (@ tangent-mass))
-               (n1 (- l1 (* tm vt1))) (n2 (- l2 (* tm vt2)))
-               (limit (* (@ friction) new))
-               (len2 (+ (* n1 n1) (* n2 n2)))
-               (over (> len2 (* limit limit)))
-               ;; inside the cone the scale is 1, and multiplying by 1 changes no bit
-               (scale (if over (/ limit (fsqrt len2)) 1.0))
-               (n1 (if over (* n1 scale) n1)) (n2 (if over (* n2 scale) n2))
-               (d1 (- n1 l1)) (d2 (- n2 l2))
-               (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
-               (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
-               (iar (* iam ar)) (ibr (* ibm br)))
-          (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
-          (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz))
-                (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz)))
-          (let ((wax (- wax (* iar cx))) (way (- way (* iar cy))) (waz (- waz (* iar cz)))
-                (wbx (- wbx (* ibr cx))) (wby (- wby (* ibr cy))) (wbz (- wbz (* ibr cz))))
-            ;; rolling resistance: an angular impulse inside |R| <= rolling-limit * normal impulse
-            (let ((rl (@ rolling-limit)))
-              (when (> rl 0.0)
-                (let* ((rlimit (* rl new)) (rm (@ rolling-mass))
-                       (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z))
-                       (nrx (- rx (* rm (- wbx wax)))) (nry (- ry (* rm (- wby way)))) (nrz (- rz (* rm (- wbz waz))))
-                       (len2 (+ (* nrx nrx) (* nry nry) (* nrz nrz))))
-                  (when (> len2 (* rlimit rlimit))
-                    (let ((scale (/ rlimit (fsqrt len2))))
-                      (setf nrx (* nrx scale) nry (* nry scale) nrz (* nrz scale))))
-                  (let ((dx (- nrx rx)) (dy (- nry ry)) (dz (- nrz rz)))
-                    (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry (@ rolling-impulse-z) nrz)
-                    (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
-                          wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz)))))))
-            ;; spin friction: an angular impulse about the normal inside |S| <= spin-limit *
-            ;; normal impulse; the rolling mass is the spin's too, for a ball's inertia is
-            ;; the same about every axis
-            (let ((sl (@ spin-limit)))
-              (when (> sl 0.0)
-                (let* ((slimit (* sl new)) (sp (@ spin-impulse))
-                       (raw (- sp (* (@ rolling-mass)
-                                     (+ (+ (* (- wbx wax) x) (* (- wby way) y)) (* (- wbz waz) z)))))
-                       (nsp (if (> raw slimit) slimit (if (> (* slimit -1.0) raw) (* slimit -1.0) raw)))
-                       (ds (- nsp sp)))
-                  (setf (@ spin-impulse) nsp
-                        wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
-                        wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
-            (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                  (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))
+        ;; rolling resistance, written once for the two places it is compiled into
+        (macrolet ((rolling-resistance ()
+                     '(let ((rl (@ rolling-limit)))
+                       (when (> rl 0.0)
+                         (let* ((rlimit (* rl new)) (rm (@ rolling-mass))
+                                (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z))
+                                (nrx (- rx (* rm (- wbx wax)))) (nry (- ry (* rm (- wby way)))) (nrz (- rz (* rm (- wbz waz))))
+                                (len2 (+ (* nrx nrx) (* nry nry) (* nrz nrz))))
+                           (when (> len2 (* rlimit rlimit))
+                             (let ((scale (/ rlimit (fsqrt len2))))
+                               (setf nrx (* nrx scale) nry (* nry scale) nrz (* nrz scale))))
+                           (let ((dx (- nrx rx)) (dy (- nry ry)) (dz (- nrz rz)))
+                             (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry (@ rolling-impulse-z) nrz)
+                             (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
+                                   wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz)))))))))
+        (if-feature :friction
+          ;; friction, inside the cone |l1,l2| <= friction * normal impulse; the angular
+          ;; velocities are read only now
+          (let* (
+                 (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
+                 (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5))
+                 (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
+                 (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (@ kvt1)) (+ (* wx qx) (* wy qy) (* wz qz))))
+                 (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (@ kvt2) (+ (* wx ux) (* wy uy) (* wz uz))))
+                 (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
+                 (tm (@ tangent-mass))
+                 (n1 (- l1 (* tm vt1))) (n2 (- l2 (* tm vt2)))
+                 (limit (* (@ friction) new))
+                 (len2 (+ (* n1 n1) (* n2 n2)))
+                 (over (> len2 (* limit limit)))
+                 ;; inside the cone the scale is 1, and multiplying by 1 changes no bit
+                 (scale (if over (/ limit (fsqrt len2)) 1.0))
+                 (n1 (if over (* n1 scale) n1)) (n2 (if over (* n2 scale) n2))
+                 (d1 (- n1 l1)) (d2 (- n2 l2))
+                 (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
+                 (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
+                 (iar (* iam ar)) (ibr (* ibm br)))
+            (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
+            (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz))
+                  (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz)))
+            (let ((wax (- wax (* iar cx))) (way (- way (* iar cy))) (waz (- waz (* iar cz)))
+                  (wbx (- wbx (* ibr cx))) (wby (- wby (* ibr cy))) (wbz (- wbz (* ibr cz))))
+              (if-feature :rolling-resistance (rolling-resistance))
+              ;; spin friction: an angular impulse about the normal inside |S| <= spin-limit *
+              ;; normal impulse; the rolling mass is the spin's too, for a ball's inertia is
+              ;; the same about every axis
+              (let ((sl (@ spin-limit)))
+                (when (> sl 0.0)
+                  (let* ((slimit (* sl new)) (sp (@ spin-impulse))
+                         (raw (- sp (* (@ rolling-mass)
+                                       (+ (+ (* (- wbx wax) x) (* (- wby way) y)) (* (- wbz waz) z)))))
+                         (nsp (if (> raw slimit) slimit (if (> (* slimit -1.0) raw) (* slimit -1.0) raw)))
+                         (ds (- nsp sp)))
+                    (setf (@ spin-impulse) nsp
+                          wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
+                          wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
+              (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
+                    (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))
+          ;; without friction the tangent speeds are never read, and the angular velocities
+          ;; change only under rolling resistance
+          (progn
+            (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz
+                  (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz)
+            (if-feature :rolling-resistance
+              (let ((wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
+                    (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5)))
+                (rolling-resistance)
+                (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
+                      (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))))))))))))
 ;; Solve and relax:1 ends here
 
 ;; [[file:../physics.org::#R3ST1T][Restitution at impact:1]]
@@ -4554,14 +4674,16 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 
 (defmethod physics-warm-start ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
-    (warm-start-range cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf))))
+    (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
+             cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf))))
 
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
     (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-      (solve-range cbuf (physics-world-velocities world) (physics-world-deltas world)
-                   0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-                   (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
+      (funcall (kernel-variant-solve (world-kernel-variant world kernels))
+               cbuf (physics-world-velocities world) (physics-world-deltas world)
+               0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+               (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
@@ -4569,7 +4691,7 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 ;; The scalar family:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
-(defun store-phase (world)
+(define-featured-kernel (store-phase :features (:contact-events :hit-events)) (world)
   "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
 speed. From here on the step changes what it cannot undo, so its undo log closes. #ST0R3S"
@@ -4584,9 +4706,10 @@ speed. From here on the step changes what it cannot undo, so its undo log closes
          (slop (f32 (physics-world-slop world)))
          (max-penetration 0.0) (max-approach 0.0))
     (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
-             #.+kernel-policy+)
+             (ignorable ids awake sleeping hit-speed) #.+kernel-policy+)
     (with-constraint-block (contact body-a body-b) cbuf
       (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
+        (declare (ignorable touching kind handle-a handle-b key))
         (loop for k of-type index below (constraint-columns-length cbuf)
               unless (< (aref contact k) 0) do
           (let* ((base (constraint-base k))
@@ -4599,7 +4722,7 @@ speed. From here on the step changes what it cannot undo, so its undo log closes
                  (gap (- (@ gap) slop))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
                         (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn))))
-            (declare (type fixnum c) (type index base g))
+            (declare (type fixnum c) (type index base g) (ignorable pushed))
             (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
                   (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2)
                   (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
@@ -4607,11 +4730,13 @@ speed. From here on the step changes what it cannot undo, so its undo log closes
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))
                     max-approach (max max-approach (- vn))))
+            (if-feature :contact-events
             (unless (eq pushed (= (aref touching c) 1))
               (setf (aref touching c) (if pushed 1 0))
               (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
                           (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
-                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))
+                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))
+            (if-feature :hit-events
             (when (and pushed (> (- (@ relative-velocity)) hit-speed)
                        (or (= (aref kind c) +contact-box+)
                            (flet ((reports (h)
@@ -4624,7 +4749,7 @@ speed. From here on the step changes what it cannot undo, so its undo log closes
                              (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
               (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
                           (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
-                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))))
+                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))))))
     (let ((stats (world-statistics world)))
       (setf (aref stats 3) (coerce max-penetration 'double-float)
             (aref stats 4) (coerce max-approach 'double-float)))
@@ -4853,16 +4978,18 @@ grids are rebuilt by the next step. #IDVK7G"
     world))
 
 (defun run-physics-phases (world)
-  "Run each phase of *physics-phases* on WORLD, in order; when the world's phase clock is on (a
+  "Run each phase of WORLD's step (*physics-phases*, less what its features leave out: see
+world-phases) on WORLD, in order; when the world's phase clock is on (a
 fixnum array of twice as many entries as phases), add each phase's nanoseconds to it under the
 phase's position, and the bytes it consed under that position plus the number of phases. #IDVK7G"
   (let* ((clock (physics-world-phase-clock world)) (i 0)
          (phases (if clock (floor (length clock) 2) 0)))
     (declare (type (or null fixnum-column) clock) (type fixnum i phases))
-    (dolist (phase *physics-phases*)
+    (dolist (phase (world-phases world))
       (let* ((start (if clock (clock-ns) 0))
              (consed (if clock (sb-ext:get-bytes-consed) 0))
-             (result (funcall phase world)))
+             ;; a phase the world's features leave out is NIL, and takes its place empty
+             (result (if phase (funcall phase world) 0)))
         (when (eq phase 'prepare-phase)
           (setf (aref (world-statistics world) 1) (coerce (the fixnum result) 'double-float)))
         (when (and clock (< i phases))
@@ -4891,6 +5018,128 @@ phase's position, and the bytes it consed under that position plus the number of
   (check-world world 'physics-world-max-approach-speed)
   (aref (physics-world-statistics world) 4))
 ;; The step as built:1 ends here
+
+;; [[file:../physics.org::#FEAT5X][Features: a world pays only for what it uses:1]]
+(define-condition physics-feature-omitted (physics-error)
+  ((feature :initarg :feature :reader physics-feature-omitted-feature)
+   (operation :initarg :operation :reader physics-feature-omitted-operation))
+  (:report (lambda (c s)
+             (format s "~(~A~) needs the feature ~S, which this world was made without (see its ~
+                        :features)" (physics-feature-omitted-operation c) (physics-feature-omitted-feature c))))
+  (:documentation "An operation that needs a feature the world's feature set leaves out. #FEAT5X"))
+
+(defparameter +event-features+
+  '((:contact-events 0 1) (:hit-events 2) (:sleep-events 3 4) (:expiry-events 5 6))
+  "Each event feature and the event codes it records. #FEAT5X")
+
+(defun checked-physics-features (features sleep)
+  "FEATURES (a list of keywords of +physics-features+, :events for every event kind) as a set in
+the order of +physics-features+, less :sleep and :sleep-events when SLEEP is false; the set of
+every feature is +physics-features+ itself. #FEAT5X"
+  (unless (and (listp features)
+               (every (lambda (f) (or (eq f :events) (member f +physics-features+))) features))
+    (error 'invalid-physics-parameter :name :features :value features
+                                      :expected (format nil "a list of ~{~S~^ ~} or :events" +physics-features+)))
+  (let* ((given (if (member :events features) (append (mapcar #'first +event-features+) features) features))
+         (set (remove-if-not (lambda (f) (and (member f given) (or sleep (not (member f '(:sleep :sleep-events))))))
+                             +physics-features+)))
+    (if (equal set +physics-features+) +physics-features+ set)))
+
+(defun feature-event-mask (features)
+  "The event codes FEATURES record, as bits of a fixnum. #FEAT5X"
+  (loop for (feature . codes) in +event-features+
+        when (member feature features)
+          sum (loop for code in codes sum (ash 1 code))))
+
+(defun physics-world-features (world)
+  "The features WORLD may use, a list of keywords of +physics-features+. #FEAT5X"
+  (check-world world 'physics-world-features)
+  (copy-list (world-features world)))
+
+(defun require-physics-feature (world feature operation)
+  "Signal physics-feature-omitted, naming FEATURE and OPERATION, unless WORLD has FEATURE. #FEAT5X"
+  (unless (member feature (world-features world))
+    (error 'physics-feature-omitted :world world :feature feature :operation operation)))
+
+(defun feature-phases (features phases)
+  "PHASES, a list of phase names, with NIL in place of each phase FEATURES leave out (so a phase
+keeps its place, where the phase clock counts it) and the store phase compiled for FEATURES. #FEAT5X"
+  (flet ((has (f) (member f features)))
+    (loop for phase in phases
+          collect (unless (case phase
+                            (wake-phase (not (has :sleep)))
+                            (grid-phase (not (or (has :body-contacts) (has :boxes))))
+                            (pair-phase (not (has :body-contacts)))
+                            (terrain-phase (not (has :terrain)))
+                            (box-phase (not (has :boxes))))
+                    (if (eq phase 'store-phase) (featured-kernel 'store-phase features) phase)))))
+
+(defun world-phases (world)
+  "The phases WORLD's step runs: *physics-phases* for a world of every feature, else those its
+features keep, found once for each value of *physics-phases*. #FEAT5X"
+  (let ((features (world-features world)))
+    (cond ((eq features +physics-features+) *physics-phases*)
+          ((eq (world-phases-source world) *physics-phases*) (world-phases-built world))
+          (t (setf (world-phases-built world) (feature-phases features *physics-phases*)
+                   (world-phases-source world) *physics-phases*)
+             (world-phases-built world)))))
+
+(defvar *featured-kernels* (make-hash-table :test 'equal)
+  "The variants of featured kernels: (NAME . FEATURES) to the function compiled for FEATURES. #FEAT5X")
+
+(defun featured-kernel (name features)
+  "The kernel NAME for a world of FEATURES: NAME itself when FEATURES hold all it tests, else its
+variant, compiled the first time it is asked for. #FEAT5X"
+  (let ((key (kernel-feature-key name features)))
+    (if (equal key (kernel-feature-key name +physics-features+))
+        name
+        (or (gethash (cons name key) *featured-kernels*)
+            (setf (gethash (cons name key) *featured-kernels*)
+                  ;; in the page's package, where the macros of the text intern their names
+                  (let ((*package* (find-package '#:luv-physics)))
+                    (funcall (compile nil `(lambda () ,(featured-kernel-form name key))))))))))
+
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +standard-feature-sets+
+    '((:terrain :friction :sleep :mortal)
+      (:terrain :body-contacts :friction :sleep))
+    "The feature sets whose variants are compiled with the page: drops that meet only the
+terrain, and a pile of balls with friction alone, neither recording events. #FEAT5X"))
+
+(defmacro precompile-featured-kernels ((&rest names))
+  "Compile, with the page, the variants of the kernels NAMES for +standard-feature-sets+, and
+keep them where featured-kernel finds them. #FEAT5X"
+  `(progn
+     ,@(loop for name in names
+             append (loop for key in (remove-duplicates
+                                      (mapcar (lambda (set) (kernel-feature-key name set)) +standard-feature-sets+)
+                                      :test #'equal)
+                          unless (equal key (kernel-feature-key name +physics-features+))
+                            collect `(setf (gethash '(,name . ,key) *featured-kernels*)
+                                           ,(featured-kernel-form name key))))))
+
+(precompile-featured-kernels (warm-start-range solve-range store-phase))
+
+(defgeneric wide-kernel-names (kernels)
+  (:documentation "The names of the featured warm start and solve of the wide family KERNELS, as
+two values, or NIL for a family without wide kernels. #FEAT5X"))
+
+(defmethod wide-kernel-names ((kernels scalar-kernels)) nil)
+
+(defun world-kernel-variant (world kernels)
+  "The kernels WORLD's features need in the family KERNELS, found once per family. #FEAT5X"
+  (let ((variant (world-kernel-variant-built world)))
+    (if (and variant (eq (kernel-variant-kernels variant) kernels))
+        variant
+        (let ((features (world-features world)))
+          (multiple-value-bind (ws so) (wide-kernel-names kernels)
+            (setf (world-kernel-variant-built world)
+                  (make-kernel-variant kernels
+                                       (featured-kernel 'warm-start-range features)
+                                       (featured-kernel 'solve-range features)
+                                       (and ws (featured-kernel ws features))
+                                       (and so (featured-kernel so features)))))))))
+;; Features: a world pays only for what it uses:1 ends here
 
 ;; [[file:../physics.org::#S6T2MV][Determinism is chosen: same code, same start, same hash:1]]
 (defun physics-world-state-hash (world)
@@ -6398,6 +6647,84 @@ per step beside them, each against the same at no sleepers, and the heap's bytes
                 (getf m :wave) (/ (getf m :wave) (getf base :wave)) (getf m :bytes-per-sleeper) (getf m :awake))
         (finish-output stream)))))
 ;; What a step costs:2 ends here
+
+;; [[file:../physics.org::#FBNCH9][What leaving features out saves:1]]
+(defparameter +feature-scenes+
+  '((:fountain "water fountain, drops meet terrain only" (:terrain :friction :sleep :mortal) 300 600)
+    (:dead-pile "1000 dead balls: no restitution, rolling, events" (:terrain :body-contacts :friction) 120 300)
+    (:basin "1000-ball basin pile, every feature" nil 120 300)
+    (:walker "walker among the fountain's drops, no body contacts" (:terrain :boxes :friction :sleep :mortal)
+     300 600))
+  "The scenes of the feature benchmark: each a keyword, what it is, its features (NIL for every
+feature) and the steps FROM and TO it is measured over. The piles run without sleep, as the
+basin benchmark's do, so all their balls are awake while they are measured. #FBNCH9")
+
+(defun feature-scene (name &key (kernels :auto) (features +physics-features+) (balls 1000)
+                             (sleep (not (member name '(:dead-pile :basin)))))
+  "The world of the feature scene NAME of +feature-scenes+ with FEATURES, solved by KERNELS (a
+pile holds BALLS balls; SLEEP, whether its bodies may sleep, is false for the piles), and the
+function of the step's number to call before each step, or NIL, as two values. #FBNCH9"
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep sleep :features features)))
+    (ecase name
+      ((:dead-pile :basin)
+       (dotimes (i balls (values world nil))
+         (multiple-value-bind (x y z) (basin-spawn-point i)
+           (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0))))
+      ((:fountain :walker)
+       (let ((springs (list (make-basin-fountain)))
+             (player (and (eq name :walker) (make-physics-player 3d0 0d0 3d0))))
+         (values world
+                 (lambda (step)
+                   (run-physics-springs world springs)
+                   (when player
+                     (multiple-value-bind (move-x move-z) (player-scene-input step)
+                       (advance-physics-player player (physics-world-terrain world) (/ 1d0 60)
+                                               :move-x move-x :move-z move-z))
+                     (post-physics-player world player)))))))))
+
+(defun measure-feature-scene (name &key (kernels :auto))
+  "Step the feature scene NAME built general and specialised, in turn, and return a plist of the
+median ms and the bytes consed per step of each over its steps FROM..TO. #FBNCH9"
+  (destructuring-bind (what features from to) (rest (assoc name +feature-scenes+))
+    (declare (ignore what))
+    (multiple-value-bind (general general-step) (feature-scene name :kernels kernels)
+      (multiple-value-bind (special special-step)
+          (feature-scene name :kernels kernels :features (or features +physics-features+))
+        (let ((ms (list '() '())) (consed (list 0 0)))
+          (dotimes (i to)
+            (flet ((one (k world before)
+                     (when before (funcall before i))
+                     (let ((bytes (sb-ext:get-bytes-consed)))
+                       (step-physics-world world)
+                       (when (>= i from)
+                         (incf (nth k consed) (- (sb-ext:get-bytes-consed) bytes))
+                         (push (* 1000 (physics-world-last-step-real-seconds world)) (nth k ms))))))
+              (if (evenp i)
+                  (progn (one 0 general general-step) (one 1 special special-step))
+                  (progn (one 1 special special-step) (one 0 general general-step)))))
+          (let ((n (- to from)))
+            (list :general (median (first ms)) :specialised (median (second ms))
+                  :general-consed (round (first consed) n) :specialised-consed (round (second consed) n)
+                  :bodies (+ (physics-world-awake-count special) (physics-world-sleeping-count special)))))))))
+
+(defun run-feature-benchmark (&key (stream *standard-output*) (kernels :auto))
+  "Print, as an Org table, each scene of +feature-scenes+ under the general step and the step
+built for its features, in one run, with the machine's load. #FBNCH9"
+  (let ((body-bytes (+ +body-columns-row-bytes+ (* 2 4 +solver-stride+)))
+        (contact-bytes (+ +contact-columns-row-bytes+ (* 4 (length +constraint-columns+)) (* 3 8))))
+    (format stream "~&#+caption: general and specialised steps, ~(~A~) family; load ~A~%" kernels (load-average))
+    (format stream "~&| scene | bodies | general median ms | specialised median ms | ratio | bytes consed/step | column bytes/body | column bytes/contact |~%")
+    (format stream "~&|-------+--------+------------+----------------+-------+-------------------+-------------------+----------------------|~%")
+    (dolist (scene +feature-scenes+)
+      (let ((m (measure-feature-scene (first scene) :kernels kernels)))
+        (format stream "~&| ~A | ~D | ~,3F | ~,3F | ~,2F | ~D, ~D | ~D, ~D | ~D, ~D |~%"
+                (second scene) (getf m :bodies) (getf m :general) (getf m :specialised)
+                (/ (getf m :specialised) (getf m :general))
+                (getf m :general-consed) (getf m :specialised-consed)
+                body-bytes body-bytes contact-bytes contact-bytes)
+        (finish-output stream)))
+    (format stream "~&(after the run: load ~A)~%" (load-average))))
+;; What leaving features out saves:1 ends here
 
 ;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]
 (defun pinch-between-sleepers (&key (seconds 2))

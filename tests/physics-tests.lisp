@@ -2317,6 +2317,86 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (< 0d0 seconds 1d0) "the step took ~,6F s" seconds))))
 ;; IDVK7G-step-statistics ends here
 
+;; [[file:../physics.org::#FEAT5X][FEAT5X-features-are-a-value]]
+(define-claim "FEAT5X" features-are-a-value
+    "Default, inferred and expanded feature sets; the fountain's step lacks phases and code, and conses nothing."
+  (let ((all luv-physics::+physics-features+))
+    (check (equal all (physics-world-features (make-physics-world))))
+    (check (eq luv-physics::*physics-phases* (luv-physics::world-phases (make-physics-world))))
+    (let ((features (physics-world-features (make-physics-world :sleep nil))))
+      (check (equal features (remove :sleep (remove :sleep-events all))) "with :sleep nil: ~S" features))
+    (check (equal '(:terrain :hit-events :contact-events :expiry-events :sleep-events)
+                  (physics-world-features (make-physics-world :features '(:events :terrain)))))
+    (check (typep (handler-case (make-physics-world :features '(:terrain :magnetism)) (error (e) e))
+                  'invalid-physics-parameter)))
+  (flet ((code-bytes (f) (sb-kernel:%code-code-size (sb-kernel:fun-code-header (coerce f 'function)))))
+    (dolist (family (available-kernel-families))
+      (let* ((world (make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels family
+                                        :features '(:terrain :friction :sleep :mortal)))
+             (kernels (luv-physics::physics-world-kernels world))
+             (variant (luv-physics::world-kernel-variant world kernels))
+             (general (luv-physics::world-kernel-variant (make-physics-world :kernels family) kernels))
+             (phases (remove nil (luv-physics::world-phases world))))
+        (dolist (absent '(luv-physics::grid-phase luv-physics::pair-phase luv-physics::box-phase))
+          (check (not (member absent phases)) "~A runs ~A" family absent))
+        (check (functionp (find-if-not #'symbolp phases)) "no store phase compiled for the fountain")
+        (dolist (reader (list #'luv-physics::kernel-variant-warm-start #'luv-physics::kernel-variant-solve
+                              #'luv-physics::kernel-variant-wide-warm-start #'luv-physics::kernel-variant-wide-solve))
+          (let ((mine (funcall reader variant)) (theirs (funcall reader general)))
+            (when theirs
+              (check (functionp mine) "~A: the fountain runs the general ~A" family theirs)
+              (check (< (code-bytes mine) (code-bytes theirs))
+                     "~A: the fountain's ~A has ~D bytes of code, the general ~D"
+                     family theirs (code-bytes mine) (code-bytes theirs))))))))
+  (multiple-value-bind (world before) (luv-physics::feature-scene :fountain :features '(:terrain :friction :sleep :mortal))
+    (dotimes (i 240) (funcall before i) (step-physics-world world))
+    (let ((bytes (sb-ext:get-bytes-consed)))
+      (loop for i from 240 below 360 do (funcall before i) (step-physics-world world))
+      (check (= bytes (sb-ext:get-bytes-consed)) "120 fountain steps consed ~D bytes"
+             (- (sb-ext:get-bytes-consed) bytes)))))
+;; FEAT5X-features-are-a-value ends here
+
+;; [[file:../physics.org::#FEAT5X][FEAT5X-omitted-feature-refused]]
+(define-claim "FEAT5X" omitted-feature-refused
+    "Operations needing an omitted feature signal physics-feature-omitted; world valid, hash unchanged."
+  (let* ((world (make-physics-world :terrain (make-floor-terrain) :features '(:terrain :friction :sleep)))
+         (ball (add-physics-body world 3.5 1.0 3.5 :collide-with-bodies nil)))
+    (declare (ignore ball))
+    (dotimes (i 30) (step-physics-world world))
+    (let ((hash (physics-world-state-hash world)))
+      (loop for (feature operation thunk)
+              in (list (list :restitution 'add-physics-body
+                             (lambda () (add-physics-body world 1.5 1 1.5 :collide-with-bodies nil :restitution 0.5)))
+                       (list :rolling-resistance 'add-physics-body
+                             (lambda () (add-physics-body world 1.5 1 1.5 :collide-with-bodies nil :rolling-resistance 0.1)))
+                       (list :mortal 'add-physics-body
+                             (lambda () (add-physics-body world 1.5 1 1.5 :collide-with-bodies nil :life 2)))
+                       (list :hit-events 'add-physics-body
+                             (lambda () (add-physics-body world 1.5 1 1.5 :collide-with-bodies nil :report-hits t)))
+                       (list :body-contacts 'add-physics-body (lambda () (add-physics-body world 1.5 1 1.5)))
+                       (list :boxes 'post-physics-box (lambda () (post-physics-box world 1.5 1 1.5 0.5 0.5 0.5)))
+                       (list :events 'physics-world-event-handler
+                             (lambda () (setf (physics-world-event-handler world) (lambda (&rest r) r)))))
+            do (let ((e (handler-case (progn (funcall thunk) nil) (error (e) e))))
+                 (check (typep e 'physics-feature-omitted) "~A without ~S: ~A" operation feature e)
+                 (check (typep e 'luv-physics::physics-error))
+                 (when (typep e 'physics-feature-omitted)
+                   (check (eq feature (luv-physics::physics-feature-omitted-feature e)))
+                   (check (eq operation (luv-physics::physics-feature-omitted-operation e))))
+                 (check (eq t (validate-physics-world world)))
+                 (check (= hash (physics-world-state-hash world)) "refusing ~S changed the hash" feature)
+                 (check (= 1 (+ (luv-physics::physics-world-awake-count world)
+                                (luv-physics::physics-world-sleeping-count world)))))))
+    (check (null (physics-world-event-handler world))))
+  (let ((world (make-physics-world :features '(:body-contacts))))
+    (check (typep (handler-case (add-physics-body world 0 0 0) (error (e) e)) 'physics-feature-omitted)
+           "a body with friction joined a world without it")
+    (check (= 0 (luv-physics::physics-world-awake-count world))))
+  (let ((e (handler-case (make-physics-world :terrain (make-floor-terrain) :features '(:friction))
+             (error (e) e))))
+    (check (and (typep e 'physics-feature-omitted) (eq :terrain (luv-physics::physics-feature-omitted-feature e))))))
+;; FEAT5X-omitted-feature-refused ends here
+
 ;; [[file:../physics.org::#S6T2MV][S6T2MV-one-ulp-changes-hash]]
 (define-claim "S6T2MV" one-ulp-changes-hash
     "One ulp of a position or velocity, awake or asleep, changes physics-world-state-hash."
@@ -2830,6 +2910,49 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (= before (sb-ext:get-bytes-consed)) "the fountain consed ~D bytes in 3000 steps"
              (- (sb-ext:get-bytes-consed) before)))))
 ;; B3NCH5-steps-cons-nothing ends here
+
+;; [[file:../physics.org::#FBNCH9][FBNCH9-same-answers]]
+(define-claim "FBNCH9" same-answers
+    "Four scenes, every family: the specialised step's state hash equals the general step's."
+  (flet ((run (name family features &key (balls 300) rolling (restitution 0.0))
+           (let ((luv-physics::*physics-dense-grid-cells* (if (eq name :fountain) 0 luv-physics::*physics-dense-grid-cells*))
+                 (box-contacts 0))
+             (multiple-value-bind (world before)
+                 (luv-physics::feature-scene (if (eq name :bouncy) :basin name) :kernels family
+                                             :features features :balls (if (member name '(:dead-pile)) balls 0))
+               (when (eq name :bouncy)
+                 (dotimes (i balls)
+                   (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+                     (add-physics-body world x y z :friction 0.6 :restitution restitution
+                                                   :rolling-resistance (if rolling 0.05 0.0)))))
+               (dotimes (i 240)
+                 (when before (funcall before i))
+                 (step-physics-world world)
+                 (let ((contacts (luv-physics::physics-world-contacts world)))
+                   (incf box-contacts (count luv-physics::+contact-box+ (luv-physics::contact-columns-kind contacts)
+                                             :end (luv-physics::contact-columns-length contacts)))))
+               (values (physics-world-state-hash world) box-contacts)))))
+    (let ((all luv-physics::+physics-features+) (specialised '()))
+      (dolist (family (available-kernel-families))
+        (loop for (name features . options)
+                in '((:fountain (:terrain :friction :sleep :mortal))
+                     (:dead-pile (:terrain :body-contacts :friction :sleep))
+                     (:walker (:terrain :boxes :friction :sleep :mortal))
+                     (:bouncy (:terrain :body-contacts :friction :restitution :rolling-resistance :sleep)
+                      :restitution 0.5 :rolling t))
+              do (multiple-value-bind (general touched) (apply #'run name family all options)
+                   (let ((special (apply #'run name family features options)))
+                     (push (cons name special) specialised)
+                     (check (= general special) "~A ~A: general ~D, specialised ~D" family name general special)
+                     (when (eq name :walker)
+                       (check (plusp touched) "~A: the walker's box touched no drop" family))))))
+      (dolist (name '(:fountain :dead-pile :walker :bouncy))
+        (check (= 1 (length (remove-duplicates (remove name specialised :key #'car :test-not #'eq) :key #'cdr)))
+               "the families' specialised ~A end in different states" name))
+      (check (= (run :bouncy :scalar all :restitution 0.5)
+                (run :bouncy :scalar '(:terrain :body-contacts :friction :restitution :sleep) :restitution 0.5))
+             "the bouncing pile compiled at run time differs from the general step"))))
+;; FBNCH9-same-answers ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-piles-come-to-rest]]
 (define-claim "X7R3M5" piles-come-to-rest

@@ -2,8 +2,8 @@
 ;;;; the Makefile writes the table into physics.org.
 ;;;;
 ;;;; BENCH in the environment names the benchmark function of the luv-physics package:
-;;;; run-basin-benchmark (the default), run-scene-benchmark, run-sleeping-scale-benchmark or
-;;;; run-query-benchmark.
+;;;; run-basin-benchmark (the default), run-scene-benchmark, run-sleeping-scale-benchmark,
+;;;; run-query-benchmark or run-feature-benchmark.
 
 (load (merge-pathnames "boot.lisp" *load-truename*))
 
