@@ -103,8 +103,7 @@ report: setup tangle
 heaps: setup tangle
 	@mkdir -p report
 	@rm -f report/heaps-failed
-	@{ REPORT=heaps nice $(SBCL) --dynamic-space-size 4096 --noinform --non-interactive --no-sysinit --no-userinit \
-	  --load tools/report.lisp || touch report/heaps-failed; } | tee report/heaps.org
+	@{ REPORT=heaps nice $(LISP) --load tools/report.lisp || touch report/heaps-failed; } | tee report/heaps.org
 	@test ! -e report/heaps-failed
 	@$(SBCL) --script tools/splice.lisp heap-sizes report/heaps.org
 
