@@ -1400,6 +1400,8 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
   (chunks (make-hash-table :test 'eql) :type hash-table)
   (lock 0 :type fixnum)
   (pending '() :type list)
+  (pending-chunks (make-hash-table :test 'eql) :type hash-table)
+  (pending-fill-chunks 0 :type fixnum)
   (edits 0 :type fixnum)
   (budget 0 :type fixnum))
 
@@ -1414,8 +1416,10 @@ It may hold *physics-terrain-chunk-budget* chunks, as that was when it was made.
 
 (defun check-chunk-room (terrain operation new)
   "Signal physics-budget-exceeded, naming OPERATION, when NEW more chunks would take TERRAIN past
-its budget. #H2W9DJ"
-  (let ((count (+ new (hash-table-count (voxel-terrain-chunks terrain)))))
+its budget, counting the chunks its queued edits will make resident. #H2W9DJ"
+  (let ((count (+ new (hash-table-count (voxel-terrain-chunks terrain))
+                  (hash-table-count (voxel-terrain-pending-chunks terrain))
+                  (voxel-terrain-pending-fill-chunks terrain))))
     (when (> count (voxel-terrain-budget terrain))
       (error 'physics-budget-exceeded :operation operation :resource :terrain-chunks
                                       :requested count :budget (voxel-terrain-budget terrain)))))
@@ -1471,11 +1475,14 @@ has room. #H2W9DJ"
 (defun (setf terrain-solid-p) (solid-p terrain x y z)
   "Make cell X Y Z of TERRAIN solid or air. During a step the edit waits for the step's end. #H2W9DJ"
   (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
-  (unless (nth-value 1 (gethash (chunk-key x y z) (voxel-terrain-chunks terrain)))
-    (check-chunk-room terrain '(setf terrain-solid-p) 1))
-  (if (plusp (voxel-terrain-lock terrain))
-      (push (list x y z solid-p) (voxel-terrain-pending terrain))
-      (%set-cell terrain x y z solid-p))
+  (let ((key (chunk-key x y z)))
+    (unless (or (nth-value 1 (gethash key (voxel-terrain-chunks terrain)))
+                (nth-value 1 (gethash key (voxel-terrain-pending-chunks terrain))))
+      (check-chunk-room terrain '(setf terrain-solid-p) 1))
+    (if (plusp (voxel-terrain-lock terrain))
+        (setf (gethash key (voxel-terrain-pending-chunks terrain)) t
+              (voxel-terrain-pending terrain) (cons (list x y z solid-p) (voxel-terrain-pending terrain)))
+        (%set-cell terrain x y z solid-p)))
   solid-p)
 
 (defun fill-terrain (terrain x0 y0 z0 x1 y1 z1 solid-p)
@@ -1487,14 +1494,30 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
     (flet ((span (a b) (list (ash a (- +chunk-bits+)) (ash (1- b) (- +chunk-bits+)))))
       (destructuring-bind ((cx0 cx1) (cy0 cy1) (cz0 cz1)) (list (span x0 x1) (span y0 y1) (span z0 z1))
         (let ((touched (* (- cx1 cx0 -1) (- cy1 cy0 -1) (- cz1 cz0 -1)))
-              (chunks (voxel-terrain-chunks terrain)))
+              (chunks (voxel-terrain-chunks terrain))
+              (pending (voxel-terrain-pending-chunks terrain))
+              (locked (plusp (voxel-terrain-lock terrain))))
           (when (> touched (voxel-terrain-budget terrain))
             (check-chunk-room terrain 'fill-terrain touched))
-          (check-chunk-room terrain 'fill-terrain
-                            (loop for cx from cx0 to cx1
-                                  sum (loop for cy from cy0 to cy1
-                                            sum (loop for cz from cz0 to cz1
-                                                      count (not (nth-value 1 (gethash (chunk-key (ash cx +chunk-bits+) (ash cy +chunk-bits+) (ash cz +chunk-bits+)) chunks)))))))))))
+          (flet ((each-new-chunk (f)
+                   ;; the chunks of the box neither resident nor made so by a queued edit
+                   (loop for cx from cx0 to cx1
+                         do (loop for cy from cy0 to cy1
+                                  do (loop for cz from cz0 to cz1
+                                           do (let ((key (chunk-key (ash cx +chunk-bits+) (ash cy +chunk-bits+)
+                                                                    (ash cz +chunk-bits+))))
+                                                (unless (or (nth-value 1 (gethash key chunks))
+                                                            (nth-value 1 (gethash key pending)))
+                                                  (funcall f key))))))))
+            (let ((new 0))
+              (declare (type fixnum new))
+              (each-new-chunk (lambda (key) (declare (ignore key)) (incf new)))
+              (check-chunk-room terrain 'fill-terrain new)
+              ;; a step is in flight: the fill waits, and its new chunks count against the
+              ;; budget until it is applied (counted, not noted one by one, so that queueing
+              ;; a large fill conses nothing)
+              (when locked
+                (incf (voxel-terrain-pending-fill-chunks terrain) new))))))))
   (if (plusp (voxel-terrain-lock terrain))
       ;; a step is in flight: the whole fill waits as one edit
       (push (list :fill x0 y0 z0 x1 y1 z1 solid-p) (voxel-terrain-pending terrain))
@@ -1517,6 +1540,8 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
   (when (zerop (decf (voxel-terrain-lock terrain)))
     (let ((edits (reverse (voxel-terrain-pending terrain))))
       (setf (voxel-terrain-pending terrain) '())
+      (clrhash (voxel-terrain-pending-chunks terrain))
+      (setf (voxel-terrain-pending-fill-chunks terrain) 0)
       (dolist (edit edits)
         (if (eq (first edit) :fill)
             (apply #'%fill-cells terrain (rest edit))
@@ -3102,7 +3127,7 @@ with the strayed rows in order (LOOSE-ROWS) and how many there are this step (LO
 phase last used or built the list, BUILT-STEP the step that built it. CLEAR marks the rows with
 no solid cell within their reach plus 0.45 skins of their anchor, in TERRAIN as it was after
 TERRAIN-EDITS edits. LOOSE-GRID buckets the loose rows alone, from their centres gathered into
-LOOSE-X, LOOSE-Y and LOOSE-Z. #P41RS7"
+LOOSE-X, LOOSE-Y and LOOSE-Z. OVERLAPS counts, per row, the overlapping pairs taken this step against it. #P41RS7"
   (pairs (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
   (rows -1 :type fixnum)
@@ -3121,7 +3146,8 @@ LOOSE-X, LOOSE-Y and LOOSE-Z. #P41RS7"
   (loose-grid (make-hash-grid) :type hash-grid)
   (loose-x (make-array 0 :element-type 'single-float) :type f32-column)
   (loose-y (make-array 0 :element-type 'single-float) :type f32-column)
-  (loose-z (make-array 0 :element-type 'single-float) :type f32-column))
+  (loose-z (make-array 0 :element-type 'single-float) :type f32-column)
+  (overlaps (make-array 0 :element-type 'fixnum) :type fixnum-column))
 
 (defun pair-list-room (plist rows)
   "Give every per-row column of PLIST, and its grid of loose rows, room for ROWS rows, keeping
@@ -3139,7 +3165,8 @@ allocates nothing. #P41RS7"
               (pair-list-loose-rows plist) (grow (pair-list-loose-rows plist) rows)
               (pair-list-loose-x plist) (grow (pair-list-loose-x plist) rows)
               (pair-list-loose-y plist) (grow (pair-list-loose-y plist) rows)
-              (pair-list-loose-z plist) (grow (pair-list-loose-z plist) rows)))
+              (pair-list-loose-z plist) (grow (pair-list-loose-z plist) rows)
+              (pair-list-overlaps plist) (grow (pair-list-overlaps plist) rows)))
       (hash-grid-reserve (pair-list-loose-grid plist) rows)))
   plist)
 
@@ -3224,6 +3251,26 @@ the step that built the list: then the grid's cells still serve the pair phase. 
          (= (physics-world-awake-grid-step world) (pair-list-built-step plist))
          (zerop (box-columns-length (physics-world-boxes world))))))
 
+(defconstant +overlaps-per-body+ 32
+  "Most overlapping pairs with bodies no smaller than itself an awake body takes in one step;
+past it the body is crowded and takes no more pairs with such bodies. #P41RS7")
+
+(declaim (inline overlap-room))
+(defun overlap-room (overlaps i j x y z radius)
+  "True when the pair of awake rows I and J may be taken this step: the smaller row (both, for
+equal radii) is not crowded, having taken fewer than +overlaps-per-body+ overlapping pairs as
+OVERLAPS counts them. A taken pair that overlaps is counted against the smaller row. #P41RS7"
+  (declare (type fixnum-column overlaps) (type index i j) (type f32-column x y z radius) #.+kernel-policy+)
+  (let ((ri (aref radius i)) (rj (aref radius j)))
+    (and (or (> ri rj) (< (aref overlaps i) +overlaps-per-body+))
+         (or (< ri rj) (< (aref overlaps j) +overlaps-per-body+))
+         (let ((dx (- (aref x j) (aref x i))) (dy (- (aref y j) (aref y i))) (dz (- (aref z j) (aref z i)))
+               (r (+ ri rj)))
+           (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* r r))
+             (unless (> ri rj) (incf (aref overlaps i)))
+             (unless (< ri rj) (incf (aref overlaps j))))
+           t))))
+
 (defun pair-phase (world)
   "Phase 4: contacts between awake bodies (each pair once) and lean contacts from awake bodies
 onto the sleepers they reach. The pairs come from the pair list while it still holds: the
@@ -3291,12 +3338,18 @@ gap is under the speculative distance. #P41RS7"
                                         +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
                                         0.0 0.0 0.0))))))))))
         (declare (inline pair))
-        (macrolet ((rows (i j)
+        (pair-list-room plist n)
+        (fill (pair-list-overlaps plist) 0 :end n)
+        (macrolet ((pair-of-rows (i j)
                      ;; the pair of awake rows I and J
                      `(pair (aref x ,i) (aref y ,i) (aref z ,i) (aref radius ,i) (aref handle ,i)
                             (aref vx ,i) (aref vy ,i) (aref vz ,i)
                             (aref x ,j) (aref y ,j) (aref z ,j) (aref radius ,j) (aref handle ,j)
-                            (aref vx ,j) (aref vy ,j) (aref vz ,j))))
+                            (aref vx ,j) (aref vy ,j) (aref vz ,j)))
+                   (rows (i j)
+                     ;; the same, unless they overlap and the smaller has its share of overlaps
+                     `(when (overlap-room (pair-list-overlaps plist) ,i ,j x y z radius)
+                        (pair-of-rows ,i ,j))))
           (if (pair-list-holds-p strays n)
               ;; the list holds: its pairs whose rows both stayed; then each loose row against
               ;; the rows of its 27 cells that are not loose, in the awake grid, whose cells
@@ -3351,9 +3404,10 @@ gap is under the speculative distance. #P41RS7"
                         (declare (type single-float widest) (type index found))
                         (dotimes (q found)
                           (let ((j (aref items (aref near q))))
-                            (when (zerop (logand (aref flags j) +flag-terrain-only+))
+                            (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
+                                       (overlap-room (pair-list-overlaps plist) i j x y z radius))
                               (pair-list-push plist i j)
-                              (rows i j))))))))
+                              (pair-of-rows i j))))))))
                 (pair-list-anchor plist awake n cell)
                 (setf (pair-list-built-step plist) (contact-table-step table)
                       (pair-list-loose-count plist) 0))))
@@ -6899,6 +6953,60 @@ more than the slop (where push-out acts) moved apart, and the deepest overlap le
                                                            d))))))))))))
     (values fastest parting (physics-world-max-penetration world))))
 
+(defun heap-footprint (count &key (steps 60) (gravity '(0 0 0)) (every 10))
+  "Spawn COUNT balls of radius 0.25 m at one point in the basin, 2 m above its floor, under
+GRAVITY, and run STEPS steps. Return the bytes the world holds per body after a full
+collection, the fastest ball's speed, the fastest any pair overlapping by more than the slop
+moved apart at every EVERY-th step, and the deepest overlap left at the end. #X7R3M5"
+  (sb-ext:gc :full t)
+  (let* ((before (sb-kernel:dynamic-usage))
+         (world (make-physics-world :terrain (make-basin-terrain) :gravity gravity))
+         (balls (loop repeat count collect (add-physics-body world 4.0 2.0 4.0 :radius 0.25)))
+         (within (- 0.5d0 *physics-linear-slop*))
+         (fastest 0d0) (parting 0d0))
+    (declare (type double-float fastest parting within))
+    (let ((p (make-array (* 3 count) :element-type 'double-float))
+          (v (make-array (* 3 count) :element-type 'double-float)))
+    (dotimes (i steps)
+      (step-physics-world world)
+      (loop for b in balls for k of-type index from 0 by 3
+            do (multiple-value-bind (x y z) (physics-body-position world b)
+                 (setf (aref p k) (float x 1d0) (aref p (+ k 1)) (float y 1d0) (aref p (+ k 2)) (float z 1d0)))
+               (multiple-value-bind (x y z) (physics-body-velocity world b)
+                 (setf (aref v k) (float x 1d0) (aref v (+ k 1)) (float y 1d0) (aref v (+ k 2)) (float z 1d0)
+                       fastest (max fastest (sqrt (float (+ (* x x) (* y y) (* z z)) 1d0))))))
+      (when (zerop (mod (1+ i) every))
+        (loop for a of-type index from 0 below (* 3 count) by 3
+              do (loop for b of-type index from (+ a 3) below (* 3 count) by 3
+                       do (let* ((dx (- (aref p b) (aref p a))) (dy (- (aref p (+ b 1)) (aref p (+ a 1))))
+                                 (dz (- (aref p (+ b 2)) (aref p (+ a 2))))
+                                 (d (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))
+                            (when (< 1d-6 d within)
+                              (setf parting (max parting (/ (+ (* dx (- (aref v b) (aref v a)))
+                                                               (* dy (- (aref v (+ b 1)) (aref v (+ a 1))))
+                                                               (* dz (- (aref v (+ b 2)) (aref v (+ a 2)))))
+                                                            d))))))))))
+    (sb-ext:gc :full t)
+    (values (round (- (sb-kernel:dynamic-usage) before) count) fastest parting
+            (physics-world-max-penetration world))))
+
+(defun run-heap-table (&key (sizes '(1000 2000 5000 20000)))
+  "Print an Org table of heaps spawned at one point without gravity (heap-footprint): for each
+of SIZES the steps run (120, or 3 from 20000 balls up, where a step takes seconds), the bytes
+held per body, the fastest ball, the fastest parting pair (not sampled from 20000 up), the
+deepest overlap left, and the seconds per step. #X7R3M5"
+  (format t "| bodies | steps | bytes a body | fastest ball m/s | fastest parting pair m/s | deepest left m | s a step |~%|-~%")
+  (dolist (count sizes)
+    (let* ((steps (if (>= count 20000) 3 120))
+           (started (get-internal-real-time)))
+      (multiple-value-bind (bytes fastest parting deepest)
+          (heap-footprint count :steps steps :every (if (>= count 20000) (1+ steps) 10))
+        (format t "| ~D | ~D | ~D | ~,2F | ~:[~,2F~;-~] | ~,3F | ~,2F |~%" count steps bytes fastest
+                (>= count 20000) parting deepest
+                (/ (- (get-internal-real-time) started) internal-time-units-per-second steps))
+        (finish-output))))
+  (format t "~%load average at the end: ~A~%" (uiop:read-file-line "/proc/loadavg")))
+
 (defun heaps-at-one-point (&key (sizes '(50 60 70 80 90 100 110 120 130 140 150)) (gravity '(0 -9.81 0)))
   "Run heap-at-one-point for each of SIZES under GRAVITY; return the fastest speed any heap saw,
 the median and the largest over the heaps of their fastest parting pair, and the deepest overlap
@@ -8166,38 +8274,42 @@ and when they are too many VIEW grids the sleepers itself. #Q5V1EW"
     (declare (type index n))
     (setf (query-view-sleeping-grid view) grid (query-view-sleeping-stray-count view) 0
           (hash-grid-count (query-view-sleeping-stray-grid view)) 0)
-    ;; the settled sleeping grid alone is exact only while the fresh grid is empty and it holds
-    ;; no dead entry ([[#G4R1D5][the grids]]); otherwise the view grids the sleepers itself
-    (when (or (physics-world-sleeping-grid-dirty world)
-              (plusp (physics-world-fresh-count world)) (plusp (physics-world-settled-stale world)))
-      (let* ((marks (setf (query-view-marks view) (stray-room (query-view-marks view) n)))
-             (strays (setf (query-view-sleeping-strays view) (stray-room (query-view-sleeping-strays view) n)))
-             (ids (physics-world-ids world))
-             (sets (handle-table-set ids)) (gens (handle-table-generation ids)) (locals (handle-table-local ids))
-             (items (hash-grid-items grid)) (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid))
-             (gz (hash-grid-zs grid))
-             (count 0))
-        (declare (type fixnum-column marks strays) (type index count))
-        (fill marks 0 :end n)
-        (with-body-columns (x y z) sleeping
-          (dotimes (e (hash-grid-count grid))
-            (let* ((h (aref items e)) (slot (handle-index h)))
-              (when (and (= (aref sets slot) +set-sleeping+) (= (aref gens slot) (handle-generation h)))
-                (let ((row (aref locals slot)))
-                  (when (and (= (aref x row) (aref gx e)) (= (aref y row) (aref gy e)) (= (aref z row) (aref gz e)))
-                    (setf (aref marks row) 1)))))))
-        (dotimes (row n)
-          (when (zerop (aref marks row))
-            (setf (aref strays count) row count (1+ count))))
-        (if (or (> count (strays-allowed n))
-                (plusp (physics-world-fresh-count world)) (plusp (physics-world-settled-stale world)))
-            (let ((own (query-view-own-sleeping view)))
-              (build-hash-grid own (f32 (grid-cell-size world)) n (body-columns-x sleeping)
-                               (body-columns-y sleeping) (body-columns-z sleeping) (body-columns-handle sleeping))
-              (setf (query-view-sleeping-grid view) own))
-            (progn
-              (setf (query-view-sleeping-stray-count view) count)
-              (grid-strays world view (query-view-sleeping-stray-grid view) sleeping strays count)))))
+    (flet ((grid-all ()
+             (let ((own (query-view-own-sleeping view)))
+               (build-hash-grid own (f32 (grid-cell-size world)) n (body-columns-x sleeping)
+                                (body-columns-y sleeping) (body-columns-z sleeping) (body-columns-handle sleeping))
+               (setf (query-view-sleeping-grid view) own))))
+      ;; the settled sleeping grid alone is exact only while the fresh grid is empty and it holds
+      ;; no dead entry ([[#G4R1D5][the grids]]); otherwise the view grids the sleepers itself,
+      ;; without first marking which the settled grid holds where they lie
+      (cond
+        ((or (plusp (physics-world-fresh-count world)) (plusp (physics-world-settled-stale world)))
+         (grid-all))
+        ((physics-world-sleeping-grid-dirty world)
+         (let* ((marks (setf (query-view-marks view) (stray-room (query-view-marks view) n)))
+                (strays (setf (query-view-sleeping-strays view) (stray-room (query-view-sleeping-strays view) n)))
+                (ids (physics-world-ids world))
+                (sets (handle-table-set ids)) (gens (handle-table-generation ids)) (locals (handle-table-local ids))
+                (items (hash-grid-items grid)) (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid))
+                (gz (hash-grid-zs grid))
+                (count 0))
+           (declare (type fixnum-column marks strays) (type index count))
+           (fill marks 0 :end n)
+           (with-body-columns (x y z) sleeping
+             (dotimes (e (hash-grid-count grid))
+               (let* ((h (aref items e)) (slot (handle-index h)))
+                 (when (and (= (aref sets slot) +set-sleeping+) (= (aref gens slot) (handle-generation h)))
+                   (let ((row (aref locals slot)))
+                     (when (and (= (aref x row) (aref gx e)) (= (aref y row) (aref gy e)) (= (aref z row) (aref gz e)))
+                       (setf (aref marks row) 1)))))))
+           (dotimes (row n)
+             (when (zerop (aref marks row))
+               (setf (aref strays count) row count (1+ count))))
+           (if (> count (strays-allowed n))
+               (grid-all)
+               (progn
+                 (setf (query-view-sleeping-stray-count view) count)
+                 (grid-strays world view (query-view-sleeping-stray-grid view) sleeping strays count)))))))
     view))
 
 (defun world-query-view (world)
@@ -9123,12 +9235,13 @@ lists (wall cpu bytes). #QB3NCH"
       (list :rays (measure :ray) :spheres (measure :sphere) :overlaps (measure :overlap)))))
 
 (defun settled-basin-world (count sleep)
-  "The basin of COUNT balls after 300 steps, awake (SLEEP false), or, with SLEEP, stepped on until
-every ball sleeps or 3000 steps have passed. #QB3NCH"
+  "The basin of COUNT balls after 300 steps, awake; with SLEEP, every ball of that pile then put
+to sleep where it lies. #QB3NCH"
   (let ((world (make-basin-world count :kernels :auto :sleep sleep)))
     (dotimes (i 300) (step-physics-world world))
     (when sleep
-      (loop repeat 2700 until (zerop (physics-world-awake-count world)) do (step-physics-world world)))
+      (loop for row from (1- (physics-world-awake-count world)) downto 0
+            do (sleep-physics-body world row)))
     world))
 
 (defun run-query-benchmark (&optional (stream *standard-output*))

@@ -1008,6 +1008,32 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "the fill was not applied"))))
 ;; H2W9DJ-fill-during-step-one-edit ends here
 
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-queued-edits-share-the-budget]]
+(define-claim "H2W9DJ" queued-edits-share-the-budget
+    "Two queued fills that fit the chunk budget alone but not together: the second is refused when made."
+  (let* ((terrain (let ((luv-physics:*physics-terrain-chunk-budget* 4)) (luv-physics::make-voxel-terrain)))
+         (w (progn (luv-physics::fill-terrain terrain 0 0 0 16 16 16 nil)
+                   (luv-physics::fill-terrain terrain 0 0 0 16 1 16 t)
+                   (make-physics-world :terrain terrain)))
+         (outcomes '()))
+    (luv-physics::add-physics-body w 8 1.24 8 :radius 0.25)   ; touches the floor: a :begin event
+    (setf (luv-physics::physics-world-event-handler w)
+          (lambda (&rest event)
+            (declare (ignore event))
+            (unless outcomes
+              (dolist (x0 '(16 48))
+                (push (handler-case (progn (luv-physics::fill-terrain terrain x0 0 0 (+ x0 32) 16 16 nil) :queued)
+                        (luv-physics::physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-operation e)))
+                      outcomes)))))
+    (let ((stepped (handler-case (progn (step-physics-world w) t)
+                     (error (e) (format nil "~A" e)))))
+      (check (eq stepped t) "the step signalled: ~A" stepped))
+    (check (equal (reverse outcomes) '(:queued luv-physics::fill-terrain)) "the fills gave ~S" (reverse outcomes))
+    (check (= 3 (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
+           "the terrain holds ~D chunks" (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
+    (check (not (luv-physics::terrain-solid-p terrain 20 5 5)) "the first fill was not applied")))
+;; H2W9DJ-queued-edits-share-the-budget ends here
+
 ;; [[file:../physics.org::#Y5H8KC][Y5H8KC-resting-contact-persists]]
 (define-claim "Y5H8KC" resting-contact-persists
     "A resting ball keeps one terrain contact row whose normal impulse is m*g*h within 5%."
@@ -3128,6 +3154,17 @@ in the order of *physics-scene-features*. #K5DF9S"
              "without the depth test the weightless heaps' median parting is ~,3F m/s, not above ~,3F m/s"
              without weightless))))
 ;; X7R3M5-deep-overlap-resolves ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-heap-at-one-point-bounded]]
+(define-claim "X7R3M5" heap-at-one-point-bounded
+    "A heap of 800 spawned at one point holds bytes per body like one of 100, and parts at the push-out speed."
+  (let ((small (luv-physics::heap-footprint 100)))
+    (multiple-value-bind (bytes fastest parting) (luv-physics::heap-footprint 800)
+      (check (<= bytes (* 1.5 small)) "800 balls hold ~D bytes a body, 100 balls ~D" bytes small)
+      (check (< fastest 10.0) "a ball of the heap reached ~,3F m/s" fastest)
+      (check (<= parting (* 1.25 luv-physics::*physics-contact-push-max*))
+             "a pair overlapping by more than the slop parted at ~,3F m/s" parting))))
+;; X7R3M5-heap-at-one-point-bounded ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-buried-ball-climbs-out]]
 (define-claim "X7R3M5" buried-ball-climbs-out
