@@ -1025,6 +1025,32 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "the fill was not applied"))))
 ;; H2W9DJ-fill-during-step-one-edit ends here
 
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-queued-edits-share-the-budget]]
+(define-claim "H2W9DJ" queued-edits-share-the-budget
+    "Two queued fills that fit the chunk budget alone but not together: the second is refused when made."
+  (let* ((terrain (let ((luv-physics:*physics-terrain-chunk-budget* 4)) (luv-physics::make-voxel-terrain)))
+         (w (progn (luv-physics::fill-terrain terrain 0 0 0 16 16 16 nil)
+                   (luv-physics::fill-terrain terrain 0 0 0 16 1 16 t)
+                   (make-physics-world :terrain terrain)))
+         (outcomes '()))
+    (luv-physics::add-physics-body w 8 1.24 8 :radius 0.25)   ; touches the floor: a :begin event
+    (setf (luv-physics::physics-world-event-handler w)
+          (lambda (&rest event)
+            (declare (ignore event))
+            (unless outcomes
+              (dolist (x0 '(16 48))
+                (push (handler-case (progn (luv-physics::fill-terrain terrain x0 0 0 (+ x0 32) 16 16 nil) :queued)
+                        (luv-physics::physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-operation e)))
+                      outcomes)))))
+    (let ((stepped (handler-case (progn (step-physics-world w) t)
+                     (error (e) (format nil "~A" e)))))
+      (check (eq stepped t) "the step signalled: ~A" stepped))
+    (check (equal (reverse outcomes) '(:queued luv-physics::fill-terrain)) "the fills gave ~S" (reverse outcomes))
+    (check (= 3 (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
+           "the terrain holds ~D chunks" (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
+    (check (not (luv-physics::terrain-solid-p terrain 20 5 5)) "the first fill was not applied")))
+;; H2W9DJ-queued-edits-share-the-budget ends here
+
 ;; [[file:../physics.org::#Y5H8KC][Y5H8KC-resting-contact-persists]]
 (define-claim "Y5H8KC" resting-contact-persists
     "A resting ball keeps one terrain contact row whose normal impulse is m*g*h within 5%."
@@ -1265,6 +1291,50 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (not (luv-physics::physics-body-awake-p w ball)) "the ball dropped after trimming is awake after 2 s")
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; QKS4GZ-trim-gives-room-back ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-woken-sleeps-again-sooner]]
+(define-claim "QKS4GZ" woken-sleeps-again-sooner
+    "A sleeper woken by a passing ball, and not moved, sleeps again within 0.3 s."
+  (let* ((w (make-floor-world))
+         (h (add-physics-body w 3.5 0.245 3.5 :radius 0.25)))
+    (loop repeat 120 while (luv-physics::physics-body-awake-p w h) do (step-physics-world w))
+    (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+    (let ((before (multiple-value-list (physics-body-position w h)))
+          (woke nil) (slept nil))
+      (add-physics-body w 1.5 0.245 4.05 :radius 0.25 :vx 2.0)
+      (loop for i below 120 until slept
+            do (loop for (kind a) in (step-events w)
+                     when (and (= a h) (eq kind :woke) (not woke)) do (setf woke i)
+                     when (and (= a h) (eq kind :slept) woke) do (setf slept i)))
+      (check (not (null woke)) "the passing ball did not wake the sleeper")
+      (check (<= (- (or slept 1000) (or woke 0)) 18)
+             "woken at step ~S, asleep again at step ~S" woke slept)
+      (check (< (reduce #'max (mapcar (lambda (a b) (abs (- a b))) before
+                                      (multiple-value-list (physics-body-position w h))))
+                1e-4)
+             "the woken ball moved from ~S to ~S" before (multiple-value-list (physics-body-position w h))))))
+;; QKS4GZ-woken-sleeps-again-sooner ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-held-by-sleepers-sleeps]]
+(define-claim "QKS4GZ" held-by-sleepers-sleeps
+    "A slow ball touching only sleepers and terrain sleeps by its displacement; alone it stays awake."
+  (flet ((rolled (beside)
+           (let* ((w (make-floor-world))
+                  (row (when beside
+                         (loop for k below 10 collect (add-physics-body w (+ 0.5 (* 0.5 k)) 0.245 3.0 :radius 0.25)))))
+             (loop repeat 120 until (= (length row) (luv-physics::physics-world-sleeping-count w))
+                   do (step-physics-world w))
+             (check (= (length row) (luv-physics::physics-world-sleeping-count w)) "the row did not fall asleep")
+             (let ((ball (add-physics-body w 0.5 0.245 3.505 :radius 0.25 :vx 0.1)) (asleep-at nil))
+               (loop for i below 120 until asleep-at
+                     do (step-physics-world w)
+                        (unless (luv-physics::physics-body-awake-p w ball) (setf asleep-at (/ (1+ i) 60.0))))
+               (values asleep-at (luv-physics::physics-world-sleeping-count w))))))
+    (multiple-value-bind (asleep-at sleepers) (rolled t)
+      (check (<= (or asleep-at 2.0) 0.6) "beside the sleepers the ball was ~:[still awake after 2 s~;~:*asleep only at ~,2F s~]" asleep-at)
+      (check (= sleepers 11) "~D sleepers, not the row and the ball" sleepers))
+    (check (null (rolled nil)) "alone on the floor the rolling ball fell asleep")))
+;; QKS4GZ-held-by-sleepers-sleeps ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-pile-sleeps-wakes-sleeps]]
 (define-claim "QKS4GZ" pile-sleeps-wakes-sleeps
@@ -2104,6 +2174,32 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "~D constraints overflowed at step 200 (most over steps 100-200: ~D)"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
+
+;; [[file:../physics.org::#PR3PAR][PR3PAR-bracing-holds-while-still]]
+(define-claim "PR3PAR" bracing-holds-while-still
+    "A braced body stays braced while still, whatever its load; moving, it is unbraced."
+  (let* ((world (luv-physics::make-shaft-world :sleep nil))
+         (light (add-physics-body world 0.5 0.45 0.5 :radius 0.45 :mass 1.0)))
+    (add-physics-body world 0.5 1.36 0.5 :radius 0.45 :mass 1000.0)
+    (flet ((braced-p ()
+             (multiple-value-bind (set row) (luv-physics::resolve-handle world light)
+               (declare (ignore set))
+               (= 1 (aref (luv-physics::physics-world-braced world) row))))
+           (unload-floor ()
+             (let ((c (luv-physics::physics-world-contacts world)))
+               (dotimes (k (luv-physics::contact-columns-length c))
+                 (when (and (= (aref (luv-physics::contact-columns-handle-a c) k) light)
+                            (= (aref (luv-physics::contact-columns-kind c) k) luv-physics::+contact-terrain+))
+                   (setf (luv-physics::contact@ (luv-physics::contact-columns-geometry c) k normal-impulse) 0.0))))))
+      (dotimes (i 120) (step-physics-world world))
+      (check (braced-p) "the light ball under the heavy one is not braced at rest")
+      (unload-floor)
+      (step-physics-world world)
+      (check (braced-p) "with its floor contact unloaded the still light ball was unbraced")
+      (luv-physics::set-physics-body-velocity world light 0.1 0.0 0.0)
+      (step-physics-world world)
+      (check (not (braced-p)) "the light ball moving at 0.1 m/s stayed braced"))))
+;; PR3PAR-bracing-holds-while-still ends here
 
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-spin-friction-rate]]
 (define-claim "PR3PAR" spin-friction-rate
@@ -3234,6 +3330,17 @@ in the order of *physics-scene-features*. #K5DF9S"
              "without the depth test the weightless heaps' median parting is ~,3F m/s, not above ~,3F m/s"
              without weightless))))
 ;; X7R3M5-deep-overlap-resolves ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-heap-at-one-point-bounded]]
+(define-claim "X7R3M5" heap-at-one-point-bounded
+    "A heap of 800 spawned at one point holds bytes per body like one of 100, and parts at the push-out speed."
+  (let ((small (luv-physics::heap-footprint 100)))
+    (multiple-value-bind (bytes fastest parting) (luv-physics::heap-footprint 800)
+      (check (<= bytes (* 1.5 small)) "800 balls hold ~D bytes a body, 100 balls ~D" bytes small)
+      (check (< fastest 10.0) "a ball of the heap reached ~,3F m/s" fastest)
+      (check (<= parting (* 1.25 luv-physics::*physics-contact-push-max*))
+             "a pair overlapping by more than the slop parted at ~,3F m/s" parting))))
+;; X7R3M5-heap-at-one-point-bounded ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-buried-ball-climbs-out]]
 (define-claim "X7R3M5" buried-ball-climbs-out
