@@ -13,7 +13,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers report mutate mutate-splice html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers report heaps mutate mutate-splice html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -32,6 +32,7 @@ help:
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
+	@echo "make heaps          heaps of 1000 to 20000 balls spawned at one point; table into $(ORG)"
 	@echo "make mutate         run the claims against COUNT=150 mutants of the engine (SEED=1, ANCHOR=ID"
 	@echo "                    for one section); the score table and the survivors into $(ORG)"
 	@echo "make mutate-splice  the last full run's tables into $(ORG), with the page's reasons for survivors"
@@ -97,6 +98,14 @@ report: setup tangle
 	@REPORT=accuracy $(LISP) --load tools/report.lisp
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp work-precision-best report/work-precision-best.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp work-precision-table report/work-precision.org
+
+# Heaps spawned at one point, 1000 to 20000 balls: memory per body and speeds (#X7R3M5).
+heaps: setup tangle
+	@mkdir -p report
+	@rm -f report/heaps-failed
+	@{ REPORT=heaps nice $(LISP) --load tools/report.lisp || touch report/heaps-failed; } | tee report/heaps.org
+	@test ! -e report/heaps-failed
+	@$(SBCL) --script tools/splice.lisp heap-sizes report/heaps.org
 
 # Mutants are sampled from the tangled files as they are; the tables are spliced only after a
 # run over every section.

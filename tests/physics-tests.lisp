@@ -92,6 +92,15 @@
                     (loop for key in record by #'cddr collect key))))))
 ;; HAPODD-records-have-the-documented-keys ends here
 
+;; [[file:../physics.org::#2HB3Y9][2HB3Y9-block-comments-nest]]
+(define-claim "2HB3Y9" block-comments-nest
+    "Block comments end at their matching |#, nested ones counted; an open one runs to the end."
+  (check (= 17 (luv-physics::block-comment-end "#| a #| b |# c |# d" 2)))
+  (check (= 7 (luv-physics::block-comment-end "#| a |#" 2)))
+  (check (= 9 (luv-physics::block-comment-end "#| a #| b" 2)))
+  (check (= 10 (luv-physics::skip-blanks-and-comments (format nil "  #| x |# (defun") 0))))
+;; 2HB3Y9-block-comments-nest ends here
+
 ;; [[file:../physics.org::#2HB3Y9][2HB3Y9-scan-finds-definitions]]
 (define-claim "2HB3Y9" scan-finds-definitions
     "Scanning tangled text yields name, kind, line, anchor and docstring of each definition."
@@ -930,6 +939,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; B5N8JT-handle-generations ends here
 
+;; [[file:../physics.org::#B5N8JT][B5N8JT-tags-wrap-within-their-bits]]
+(define-claim "B5N8JT" tags-wrap-within-their-bits
+    "World tags wrap from 2^16 - 1 to 1."
+  (let ((tags (let ((luv-physics::*world-tag-counter* (- (ash 1 16) 3)))
+                (loop repeat 4 collect (luv-physics::handle-table-tag (luv-physics::make-handle-table))))))
+    (check (equal '(65534 65535 1 2) tags) "the tags are ~S" tags)))
+;; B5N8JT-tags-wrap-within-their-bits ends here
+
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-describe-live-row]]
 (define-claim "B5N8JT" describe-live-row
     "describe shows the body's current y, before and after a step."
@@ -1007,6 +1024,32 @@ function of a column name that reads row K's float in that column. #T3STK1"
                   (luv-physics::terrain-solid-p terrain 0 30 0))
              "the fill was not applied"))))
 ;; H2W9DJ-fill-during-step-one-edit ends here
+
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-queued-edits-share-the-budget]]
+(define-claim "H2W9DJ" queued-edits-share-the-budget
+    "Two queued fills that fit the chunk budget alone but not together: the second is refused when made."
+  (let* ((terrain (let ((luv-physics:*physics-terrain-chunk-budget* 4)) (luv-physics::make-voxel-terrain)))
+         (w (progn (luv-physics::fill-terrain terrain 0 0 0 16 16 16 nil)
+                   (luv-physics::fill-terrain terrain 0 0 0 16 1 16 t)
+                   (make-physics-world :terrain terrain)))
+         (outcomes '()))
+    (luv-physics::add-physics-body w 8 1.24 8 :radius 0.25)   ; touches the floor: a :begin event
+    (setf (luv-physics::physics-world-event-handler w)
+          (lambda (&rest event)
+            (declare (ignore event))
+            (unless outcomes
+              (dolist (x0 '(16 48))
+                (push (handler-case (progn (luv-physics::fill-terrain terrain x0 0 0 (+ x0 32) 16 16 nil) :queued)
+                        (luv-physics::physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-operation e)))
+                      outcomes)))))
+    (let ((stepped (handler-case (progn (step-physics-world w) t)
+                     (error (e) (format nil "~A" e)))))
+      (check (eq stepped t) "the step signalled: ~A" stepped))
+    (check (equal (reverse outcomes) '(:queued luv-physics::fill-terrain)) "the fills gave ~S" (reverse outcomes))
+    (check (= 3 (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
+           "the terrain holds ~D chunks" (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
+    (check (not (luv-physics::terrain-solid-p terrain 20 5 5)) "the first fill was not applied")))
+;; H2W9DJ-queued-edits-share-the-budget ends here
 
 ;; [[file:../physics.org::#Y5H8KC][Y5H8KC-resting-contact-persists]]
 (define-claim "Y5H8KC" resting-contact-persists
@@ -1249,6 +1292,50 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; QKS4GZ-trim-gives-room-back ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-woken-sleeps-again-sooner]]
+(define-claim "QKS4GZ" woken-sleeps-again-sooner
+    "A sleeper woken by a passing ball, and not moved, sleeps again within 0.3 s."
+  (let* ((w (make-floor-world))
+         (h (add-physics-body w 3.5 0.245 3.5 :radius 0.25)))
+    (loop repeat 120 while (luv-physics::physics-body-awake-p w h) do (step-physics-world w))
+    (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+    (let ((before (multiple-value-list (physics-body-position w h)))
+          (woke nil) (slept nil))
+      (add-physics-body w 1.5 0.245 4.05 :radius 0.25 :vx 2.0)
+      (loop for i below 120 until slept
+            do (loop for (kind a) in (step-events w)
+                     when (and (= a h) (eq kind :woke) (not woke)) do (setf woke i)
+                     when (and (= a h) (eq kind :slept) woke) do (setf slept i)))
+      (check (not (null woke)) "the passing ball did not wake the sleeper")
+      (check (<= (- (or slept 1000) (or woke 0)) 18)
+             "woken at step ~S, asleep again at step ~S" woke slept)
+      (check (< (reduce #'max (mapcar (lambda (a b) (abs (- a b))) before
+                                      (multiple-value-list (physics-body-position w h))))
+                1e-4)
+             "the woken ball moved from ~S to ~S" before (multiple-value-list (physics-body-position w h))))))
+;; QKS4GZ-woken-sleeps-again-sooner ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-held-by-sleepers-sleeps]]
+(define-claim "QKS4GZ" held-by-sleepers-sleeps
+    "A slow ball touching only sleepers and terrain sleeps by its displacement; alone it stays awake."
+  (flet ((rolled (beside)
+           (let* ((w (make-floor-world))
+                  (row (when beside
+                         (loop for k below 10 collect (add-physics-body w (+ 0.5 (* 0.5 k)) 0.245 3.0 :radius 0.25)))))
+             (loop repeat 120 until (= (length row) (luv-physics::physics-world-sleeping-count w))
+                   do (step-physics-world w))
+             (check (= (length row) (luv-physics::physics-world-sleeping-count w)) "the row did not fall asleep")
+             (let ((ball (add-physics-body w 0.5 0.245 3.505 :radius 0.25 :vx 0.1)) (asleep-at nil))
+               (loop for i below 120 until asleep-at
+                     do (step-physics-world w)
+                        (unless (luv-physics::physics-body-awake-p w ball) (setf asleep-at (/ (1+ i) 60.0))))
+               (values asleep-at (luv-physics::physics-world-sleeping-count w))))))
+    (multiple-value-bind (asleep-at sleepers) (rolled t)
+      (check (<= (or asleep-at 2.0) 0.6) "beside the sleepers the ball was ~:[still awake after 2 s~;~:*asleep only at ~,2F s~]" asleep-at)
+      (check (= sleepers 11) "~D sleepers, not the row and the ball" sleepers))
+    (check (null (rolled nil)) "alone on the floor the rolling ball fell asleep")))
+;; QKS4GZ-held-by-sleepers-sleeps ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-pile-sleeps-wakes-sleeps]]
 (define-claim "QKS4GZ" pile-sleeps-wakes-sleeps
     "A six-ball pile sleeps within 2 s, a thrown ball wakes the ball it hits, and the pile sleeps again within 5 s."
@@ -1314,7 +1401,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= 0 (luv-physics::wake-physics-bodies-near w 3.5 y 3.5 0.49)))
       (check (not (luv-physics::physics-body-awake-p w h)) "woken from 0.505 m by a radius of 0.49 m")
       (check (= 1 (luv-physics::wake-physics-bodies-near w 3.5 y 3.5 0.52)))
-      (check (luv-physics::physics-body-awake-p w h) "not woken from 0.505 m by a radius of 0.52 m"))))
+      (check (luv-physics::physics-body-awake-p w h) "not woken from 0.505 m by a radius of 0.52 m"))
+    (loop repeat 300 while (luv-physics::physics-body-awake-p w h) do (luv-physics::step-physics-world w))
+    (multiple-value-bind (sx sy sz) (luv-physics::physics-body-position w h)
+      ;; D is the single-float distance the engine computes; D - r + r is D again
+      (let* ((y (+ sy 1.0)) (d (- y sy)) (radius (- d 0.25)))
+        (check (= d (+ radius 0.25)))
+        (check (= 1 (luv-physics::wake-physics-bodies-near w sx y sz radius))
+               "a radius of exactly the distance to the surface did not wake the ball")))))
 ;; QKS4GZ-wake-near-measures-to-the-surface ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-relocation-stress]]
@@ -1401,6 +1495,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
          (h (luv-physics::add-physics-body w 2.5 0.245 3.5 :vx 6.0))
          (hits '()) (begins '()))
     (dotimes (i 30)
+      (dotimes (k 19)
+        (luv-physics::post-physics-box w -10.0 0.5 (- (* 0.6 k) 12.0) 0.25 0.25 0.25 :owner (list :other k)))
       (luv-physics::post-physics-box w 4.0 0.5 3.5 0.25 0.5 0.5 :owner owner)
       (loop for (kind a b speed datum) in (step-events w)
             when (and (= a h) datum)
@@ -1411,6 +1507,21 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (> (or (first (first hits)) 0) 4.0) "the first hit arrived at only ~S m/s" (first (first hits)))
     (check (and begins (every (lambda (d) (eq d owner)) begins)))))
 ;; K1N3BX-hit-carries-owner ends here
+
+;; [[file:../physics.org::#K1N3BX][K1N3BX-box-extents-checked]]
+(define-claim "K1N3BX" box-extents-checked
+    "Half-extents of 0 or 1024 m are refused, naming the axis; 0.001 and 1023 are posted."
+  (let ((w (make-floor-world)))
+    (dolist (axis '(:hx :hy :hz))
+      (dolist (bad '(0 1024))
+        (let ((extents (mapcar (lambda (a) (if (eq a axis) bad 0.5)) '(:hx :hy :hz))))
+          (check (eq axis (handler-case (progn (apply #'luv-physics::post-physics-box w 3.5 3.0 3.5 extents) nil)
+                            (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+                 "~A = ~A was not refused by its name" axis bad))))
+    (check (zerop (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))) "a refused box was posted")
+    (luv-physics::post-physics-box w 3.5 3.0 3.5 0.001 1023 0.5)
+    (check (= 1 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))))
+;; K1N3BX-box-extents-checked ends here
 
 ;; [[file:../physics.org::#G3NCNT][G3NCNT-oblique-blows-true]]
 (define-claim "G3NCNT" oblique-blows-true
@@ -1484,6 +1595,41 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "a sleeper is met other than once around itself")
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; G4R1D5-sleeping-grids-stay-lean ends here
+
+;; [[file:../physics.org::#G4R1D5][G4R1D5-dead-entries-counted-once]]
+(define-claim "G4R1D5" dead-entries-counted-once
+    "Waking settled sleepers counts each dead entry once, and sleeping again adds none."
+  (let* ((w (make-floor-world))
+         (balls (loop for x in '(2.5 5.5 8.5 11.5) collect (add-physics-body w x 0.245 3.5)))
+         (settled (luv-physics::physics-world-sleeping-grid w)))
+    (flet ((settle ()
+             (loop repeat 400 while (some (lambda (h) (luv-physics::physics-body-awake-p w h)) balls)
+                   do (step-physics-world w))
+             (step-physics-world w)
+             (check (notany (lambda (h) (luv-physics::physics-body-awake-p w h)) balls) "a ball stayed awake"))
+           (stale () (luv-physics::physics-world-settled-stale w)))
+      (settle)
+      (add-physics-body w 20.5 0.3 3.5 :radius 0.3)
+      (step-physics-world w)
+      (check (and (= 4 (luv-physics::hash-grid-count settled)) (= 0 (stale)))
+             "the settled grid holds ~D with ~D dead" (luv-physics::hash-grid-count settled) (stale))
+      (luv-physics::wake-handle w (first balls))
+      (luv-physics::wake-handle w (third balls))
+      (check (= 2 (stale)) "two woken leave ~D dead entries" (stale))
+      (settle)
+      (check (= 2 (stale)) "after sleeping again the count of dead entries is ~D" (stale))
+      (check (= 4 (luv-physics::hash-grid-count settled)) "the settled grid was built again")
+      (luv-physics::ensure-sleeping-grid w)
+      (let ((s (luv-physics::physics-world-sleeping w)))
+        (check (loop for row below (luv-physics::body-columns-length s)
+                     always (let ((h (aref (luv-physics::body-columns-handle s) row)) (seen 0))
+                              (luv-physics::do-sleeping-neighbours (e w (aref (luv-physics::body-columns-x s) row)
+                                                                      (aref (luv-physics::body-columns-y s) row)
+                                                                      (aref (luv-physics::body-columns-z s) row))
+                                (when (= e h) (incf seen)))
+                              (= seen 1)))
+               "a sleeper is met other than once around itself")))))
+;; G4R1D5-dead-entries-counted-once ends here
 
 ;; [[file:../physics.org::#W4K3PH][W4K3PH-box-wakes-within-its-reach]]
 (define-claim "W4K3PH" box-wakes-within-its-reach
@@ -1651,6 +1797,43 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "they parted at ~,3F m/s" fastest)))
 ;; P41RS7-coincident-pair-separates ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-pair-contact-geometry]]
+(define-claim "P41RS7" pair-contact-geometry
+    "A pair contact's normal, separation and point are the spheres', whichever ball has the lower slot."
+  (let* ((u '(2/7 3/7 6/7)) (gap 0.01) (ra 0.25) (rb 0.2)
+         (a '(3.0 3.0 3.0)) (b (mapcar (lambda (p n) (+ p (* n (+ ra rb gap)))) a u)))
+    (dolist (a-first '(t nil))
+      (let* ((w (make-physics-world :gravity '(0 0 0)))
+             (ha nil) (hb nil))
+        (if a-first
+            (setf ha (apply #'add-physics-body w (append a (list :radius ra)))
+                  hb (apply #'add-physics-body w (append b (list :radius rb))))
+            (setf hb (apply #'add-physics-body w (append b (list :radius rb)))
+                  ha (apply #'add-physics-body w (append a (list :radius ra)))))
+        (step-physics-world w)
+        (let* ((c (luv-physics::physics-world-contacts w)) (g (luv-physics::contact-columns-geometry c))
+               (rows (loop for row below (luv-physics::contact-columns-length c)
+                           when (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-pair+)
+                             collect row))
+               (a-low (< (luv-physics::handle-index ha) (luv-physics::handle-index hb)))
+               (sign (if a-low 1 -1))
+               (want (append (mapcar (lambda (n) (* sign n)) u) (list gap)
+                             (if a-low
+                                 (mapcar (lambda (p n) (+ p (* ra n))) a u)
+                                 (mapcar (lambda (p n) (- p (* rb n))) b u)))))
+          (check (= 1 (length rows)) "~:[b~;a~] first: ~D pair contacts" a-first (length rows))
+          (when rows
+            (let* ((row (first rows))
+                   (got (list (luv-physics::contact@ g row nx) (luv-physics::contact@ g row ny)
+                              (luv-physics::contact@ g row nz) (luv-physics::contact@ g row separation)
+                              (luv-physics::contact@ g row px) (luv-physics::contact@ g row py)
+                              (luv-physics::contact@ g row pz))))
+              (check (= (aref (luv-physics::contact-columns-handle-a c) row) (if a-low ha hb))
+                     "~:[b~;a~] first: the contact is not from the lower slot" a-first)
+              (check (every (lambda (x e) (< (abs (- x e)) 1e-5)) got want)
+                     "~:[b~;a~] first: (nx ny nz separation px py pz) is ~S, not ~S" a-first got want))))))))
+;; P41RS7-pair-contact-geometry ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
 (define-claim "MYWH16" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
@@ -1811,16 +1994,38 @@ function of a column name that reads row K's float in that column. #T3STK1"
                    "at ~D m/s from x = ~,3F the ball ended at x = ~,4F" speed (* k 0.137) x)))))))
 ;; SW33P7-no-tunnelling-to-100 ends here
 
+;; [[file:../physics.org::#SW33P7][SW33P7-sweep-reaches-its-travel]]
+(define-claim "SW33P7" sweep-reaches-its-travel
+    "A fast ball's sweep finds a wall 5 cm inside travel + radius, and not one 5 cm beyond."
+  (dolist (axis '(0 1 2))
+    (dolist (direction '(1 -1))
+      (dolist (distance '(1.25 1.35))
+        (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+          (flet ((on-axis (along other) (loop for k below 3 collect (if (= k axis) along other))))
+            (destructuring-bind (x0 y0 z0) (on-axis (if (plusp direction) 5 4) -16)
+              (destructuring-bind (x1 y1 z1) (on-axis (if (plusp direction) 6 5) 32)
+                (fill-terrain terrain x0 y0 z0 x1 y1 z1 t)))
+            (let* ((centre (loop for k below 3 for c in '(3.5 3.0 3.5)
+                                 collect (if (= k axis) (- 5 (* direction distance)) c)))
+                   (velocity (on-axis (* direction 60.0) 0.0))
+                   (h (add-physics-body w (first centre) (second centre) (third centre) :radius 0.3
+                                        :vx (first velocity) :vy (second velocity) :vz (third velocity))))
+              (step-physics-world w)
+              (check (eq (< distance 1.3) (not (null (terrain-contacts w h))))
+                     "moving ~:[-~;+~]~A with the wall ~,2F m ahead: ~D terrain contacts"
+                     (plusp direction) (elt "xyz" axis) distance (length (terrain-contacts w h))))))))))
+;; SW33P7-sweep-reaches-its-travel ends here
+
 ;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
 (define-claim "B0XPH5" box-contact-geometry
     "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
-  (flet ((box-contact (centre half)
+  (flet ((box-contact (centre half shift)
            (let* ((w (make-floor-world :gravity '(0 0 0)))
-                  (h (luv-physics::add-physics-body w 3.5 3.0 3.5))
+                  (h (luv-physics::add-physics-body w (+ 3.5 shift) (+ 3.0 shift) (+ 3.5 shift)))
                   (c (luv-physics::physics-world-contacts w)))
              (destructuring-bind (x y z) centre
                (destructuring-bind (hx hy hz) half
-                 (luv-physics::post-physics-box w x y z hx hy hz :owner :probe)))
+                 (luv-physics::post-physics-box w (+ x shift) (+ y shift) (+ z shift) hx hy hz :owner :probe)))
              (luv-physics::step-physics-world w)
              (loop for row below (luv-physics::contact-columns-length c)
                    when (and (= (aref (luv-physics::contact-columns-handle-a c) row) h)
@@ -1835,16 +2040,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (list (list "outside" (list (+ 3.5 0.05 0.25) (+ 3.0 0.1 0.25) (+ 3.5 0.15 0.25)) '(0.25 0.25 0.25)
                          (append (mapcar (lambda (v) (/ v len)) d) (list (- len 0.25))
                                  (list (+ 3.5 0.05) (+ 3.0 0.1) (+ 3.5 0.15))))
+                   (list "outside, a box 4 m long" (list (+ 3.5 0.05 0.25) (+ 3.0 0.1 0.25) (+ 3.5 0.15 2.0)) '(0.25 0.25 2.0)
+                         (append (mapcar (lambda (v) (/ v len)) d) (list (- len 0.25))
+                                 (list (+ 3.5 0.05) (+ 3.0 0.1) (+ 3.5 0.15))))
                    (list "inside, -z face" '(3.5 3.05 3.7) '(0.2 0.25 0.3)
                          (list 0.0 0.0 1.0 (- (+ 0.1 0.25)) 3.5 3.0 3.4))
                    (list "inside, +x face" '(3.4 3.0 3.5) '(0.2 0.2 0.25)
                          (list -1.0 0.0 0.0 (- (+ 0.1 0.25)) 3.6 3.0 3.5)))))
-      (loop for (name centre half want) in cases
-            do (let ((got (box-contact centre half)))
-                 (check (= 1 (length got)) "~A: ~D box contacts" name (length got))
-                 (when got
-                   (check (every (lambda (g e) (< (abs (- g e)) 1e-5)) (first got) want)
-                          "~A: (nx ny nz separation px py pz) is ~S, not ~S" name (first got) want)))))))
+      (loop for shift in '(0.0 -7.0)
+            do (loop for (name centre half want) in cases
+                     do (let ((got (box-contact centre half shift))
+                              (want (append (subseq want 0 4)
+                                            (list (+ (fifth want) shift) (+ (sixth want) shift) (+ (seventh want) shift)))))
+                          (check (= 1 (length got)) "~A, moved by ~A: ~D box contacts" name shift (length got))
+                          (when got
+                            (check (every (lambda (g e) (< (abs (- g e)) 1e-5)) (first got) want)
+                                   "~A, moved by ~A: (nx ny nz separation px py pz) is ~S, not ~S"
+                                   name shift (first got) want))))))))
 ;; B0XPH5-box-contact-geometry ends here
 
 ;; [[file:../physics.org::#B0XPH5][B0XPH5-box-edges-bounce-true]]
@@ -1971,6 +2183,32 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "~D constraints overflowed at step 200 (most over steps 100-200: ~D)"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
+
+;; [[file:../physics.org::#PR3PAR][PR3PAR-bracing-holds-while-still]]
+(define-claim "PR3PAR" bracing-holds-while-still
+    "A braced body stays braced while still, whatever its load; moving, it is unbraced."
+  (let* ((world (luv-physics::make-shaft-world :sleep nil))
+         (light (add-physics-body world 0.5 0.45 0.5 :radius 0.45 :mass 1.0)))
+    (add-physics-body world 0.5 1.36 0.5 :radius 0.45 :mass 1000.0)
+    (flet ((braced-p ()
+             (multiple-value-bind (set row) (luv-physics::resolve-handle world light)
+               (declare (ignore set))
+               (= 1 (aref (luv-physics::physics-world-braced world) row))))
+           (unload-floor ()
+             (let ((c (luv-physics::physics-world-contacts world)))
+               (dotimes (k (luv-physics::contact-columns-length c))
+                 (when (and (= (aref (luv-physics::contact-columns-handle-a c) k) light)
+                            (= (aref (luv-physics::contact-columns-kind c) k) luv-physics::+contact-terrain+))
+                   (setf (luv-physics::contact@ (luv-physics::contact-columns-geometry c) k normal-impulse) 0.0))))))
+      (dotimes (i 120) (step-physics-world world))
+      (check (braced-p) "the light ball under the heavy one is not braced at rest")
+      (unload-floor)
+      (step-physics-world world)
+      (check (braced-p) "with its floor contact unloaded the still light ball was unbraced")
+      (luv-physics::set-physics-body-velocity world light 0.1 0.0 0.0)
+      (step-physics-world world)
+      (check (not (braced-p)) "the light ball moving at 0.1 m/s stayed braced"))))
+;; PR3PAR-bracing-holds-while-still ends here
 
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-spin-friction-rate]]
 (define-claim "PR3PAR" spin-friction-rate
@@ -2704,6 +2942,40 @@ in the order of *physics-scene-features*. #K5DF9S"
              "~(~A~) declares ~S and uses ~S" name declared used))))
 ;; K5DF9S-scenes-declare-what-they-use ends here
 
+;; [[file:../physics.org::#B4S1NS][B4S1NS-basin-as-described]]
+(define-claim "B4S1NS" basin-as-described
+    "The basin's cells, chunks and spawn lattice are those the text gives."
+  (dolist (height '(6 30))
+    (let ((terrain (luv-physics::make-basin-terrain :wall-height height)) (wrong '()))
+      (loop for x from -32 below 32
+            do (loop for y from -16 below 64
+                     do (loop for z from -32 below 32
+                              do (let* ((resident (and (<= -16 x 15) (<= -16 z 15) (<= -16 y 47)))
+                                        (ring (and (<= -1 x 8) (<= -1 z 8) (not (and (<= 0 x 7) (<= 0 z 7)))))
+                                        (want (or (not resident)
+                                                  (and (= y -1) (<= -8 x 15) (<= -8 z 15))
+                                                  (and ring (<= 0 y (1- height))))))
+                                   (unless (and (eq resident (luv-physics::terrain-resident-p terrain x y z))
+                                                (eq want (luv-physics::terrain-solid-p terrain x y z)))
+                                     (push (list x y z) wrong))))))
+      (check (null wrong) "walls ~D high: ~D cells differ, such as ~S" height (length wrong) (first wrong))))
+  (let ((spread (list (list 1.0 -1.0) (list 1.0 -1.0) (list 1.0 -1.0))) (far 0.0))
+    (dotimes (i 392)
+      (multiple-value-bind (layer k) (floor i 196)
+        (multiple-value-bind (row col) (floor k 14)
+          (loop for got in (multiple-value-list (luv-physics::basin-spawn-point i))
+                for want in (list (+ 0.3 (* col 0.55)) (+ 0.5 (* layer 0.55)) (+ 0.3 (* row 0.55)))
+                for s in spread
+                do (let ((jitter (- got want)))
+                     (setf far (max far (abs jitter))
+                           (first s) (min (first s) jitter) (second s) (max (second s) jitter)))))))
+    (check (<= far 0.0251) "a ball is ~,4F m off its lattice point" far)
+    (check (every (lambda (s) (> (- (second s) (first s)) 0.04)) spread) "the jitter spans only ~S" spread))
+  (let ((w (luv-physics::make-basin-world 3)))
+    (check (= 3 (luv-physics::physics-world-awake-count w)))
+    (check (= 0.25 (luv-physics:physics-body-radius w (aref (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 2))))))
+;; B4S1NS-basin-as-described ends here
+
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
 (define-claim "JAU0EF" kinds-make-their-bodies
     "Each kind gives its radius and name; a gobbet expires at 4 s; an unknown kind is refused."
@@ -3090,6 +3362,17 @@ in the order of *physics-scene-features*. #K5DF9S"
              "without the depth test the weightless heaps' median parting is ~,3F m/s, not above ~,3F m/s"
              without weightless))))
 ;; X7R3M5-deep-overlap-resolves ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-heap-at-one-point-bounded]]
+(define-claim "X7R3M5" heap-at-one-point-bounded
+    "A heap of 800 spawned at one point holds bytes per body like one of 100, and parts at the push-out speed."
+  (let ((small (luv-physics::heap-footprint 100)))
+    (multiple-value-bind (bytes fastest parting) (luv-physics::heap-footprint 800)
+      (check (<= bytes (* 1.5 small)) "800 balls hold ~D bytes a body, 100 balls ~D" bytes small)
+      (check (< fastest 10.0) "a ball of the heap reached ~,3F m/s" fastest)
+      (check (<= parting (* 1.25 luv-physics::*physics-contact-push-max*))
+             "a pair overlapping by more than the slop parted at ~,3F m/s" parting))))
+;; X7R3M5-heap-at-one-point-bounded ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-buried-ball-climbs-out]]
 (define-claim "X7R3M5" buried-ball-climbs-out

@@ -229,9 +229,12 @@ PARENT, if given, is the list holding X at INDEX; a literal's site shows it."
            (literal "off-by-one" (1+ x))
            (literal "off-by-one" (1- x)))
           ((typep x 'float)
-           (unless (zerop x)
-             (literal "constant scaling" (* x 2))
-             (literal "constant scaling" (/ x 2))
+           ;; an infinity, or a literal whose double or half overflows, is only scaled
+           ;; where the result is still a float
+           (unless (or (zerop x) (sb-ext:float-infinity-p x) (sb-ext:float-nan-p x))
+             (dolist (scaled (list (ignore-errors (* x 2)) (ignore-errors (/ x 2))))
+               (when (and scaled (not (sb-ext:float-infinity-p scaled)) (not (zerop scaled)))
+                 (literal "constant scaling" scaled)))
              (literal "sign flip" (- x))))
           ((and (consp x) (proper-list-p x))
            (walk-call x rebuild)))))
@@ -452,6 +455,53 @@ running it once more with every one of NAMES wrapped in a probe."
                             (cons claim (loop for n being the hash-keys of *reached* collect n))))
     (dolist (n names) (sb-int:unencapsulate n 'mutate-reach))))
 
+(defun claims-reach-in-child (claims names path)
+  "Fork a child that finds, as CLAIMS-REACH does, the NAMES each of CLAIMS (ANCHOR . NAME)
+calls, and writes them to PATH; return its process id.  The parent meanwhile times the claims
+on the other core."
+  (finish-output *standard-output*) (finish-output *error-output*)
+  (let ((pid (sb-posix:fork)))
+    (when (zerop pid)
+      (let ((null (sb-posix:open "/dev/null" sb-posix:o-rdwr)))
+        (sb-posix:dup2 null 1) (sb-posix:dup2 null 2))
+      (let ((*standard-output* (make-broadcast-stream)) (*error-output* (make-broadcast-stream))
+            (reach (claims-reach (mapcar (lambda (c) (cons (cdr c) 0)) claims) names)))
+        (with-open-file (out (format nil "~A.tmp" path) :direction :output :if-exists :supersede)
+          (with-standard-io-syntax
+            (let ((*package* (find-package :keyword)))
+              (prin1 reach out))))
+        (rename-file (format nil "~A.tmp" path) path)
+        (sb-ext:exit :code 0 :abort t)))
+    pid))
+
+(defun read-reach (pid path order)
+  "Wait for the child PID, and return what it wrote to PATH for the claims of ORDER."
+  (sb-posix:waitpid pid 0)
+  (let ((reach (with-open-file (in path)
+                 (with-standard-io-syntax
+                   (let ((*package* (find-package :keyword))) (read in))))))
+    (ignore-errors (delete-file path))
+    (remove-if-not (lambda (r) (assoc (car r) order)) reach)))
+
+(defvar *slow* 0.05
+  "The share of all the claims' time on the unchanged engine above which one claim is a
+campaign: it runs only against mutants of its own part.  A share, not seconds, so that the
+same claims are campaigns at any load.")
+
+(defvar *claims-seconds* 1d0 "All the passing claims' time on the unchanged engine.")
+
+(defvar *parts* (make-hash-table :test #'equal) "Anchor to part, as ANCHOR-PARTS gives it.")
+
+(defvar *claim-anchors* (make-hash-table :test #'eq) "Claim name to its section's anchor.")
+
+(defun within-reach-of-time (claims unit)
+  "CLAIMS, each (NAME . SECONDS), without the campaigns of other parts than UNIT's."
+  (let ((part (gethash (unit-anchor unit) *parts*)))
+    (remove-if (lambda (claim)
+                 (and (> (cdr claim) (* *slow* *claims-seconds*))
+                      (not (equal part (gethash (gethash (car claim) *claim-anchors*) *parts*)))))
+               claims)))
+
 (defun claims-for (unit units order reach probed)
   "The claims of ORDER that can observe a mutant of UNIT: those that call a function defined
 by UNIT or by a form compiled again with it, or, for a parameter, by a form that reads it, and
@@ -477,7 +527,9 @@ watched by a probe."
 
 (defstruct mutant
   unit operator from to rebuild index claims
-  status claim reason seconds)
+  status claim reason seconds
+  (compile-seconds 0d0)   ; how long its child took to evaluate it and what depends on it
+  (claims-run 0))         ; how many claims its child started
 
 (defun show (unit x &optional (limit 60))
   (cond
@@ -528,11 +580,12 @@ writing each step to STATUS-PATH.  Never returns."
     (with-open-file (out status-path :direction :output :if-exists :supersede)
       (flet ((say (control &rest arguments)
                (format out "~?~%" control arguments) (finish-output out)))
-        (let ((problem (evaluate-in-child mutant units)))
+        (let* ((start (now))
+               (problem (evaluate-in-child mutant units)))
           (when problem
             (say "UNCOMPILABLE ~A" (one-line problem 200))
-            (sb-ext:exit :code 0 :abort t)))
-        (say "COMPILED")
+            (sb-ext:exit :code 0 :abort t))
+          (say "COMPILED ~,2F" (- (now) start)))
         (dolist (claim order)
           (say "START ~A" (symbol-name (car claim)))
           (let ((why (run-claim (car claim))))
@@ -556,13 +609,15 @@ writing each step to STATUS-PATH.  Never returns."
   (let ((table '()))
     (dolist (u units)
       (when (and (unit-mutable u) (unit-anchor u)
-                 (or (null anchor-filter) (string= anchor-filter (unit-anchor u))))
+                 (or (null anchor-filter)
+                     (member (unit-anchor u) (uiop:split-string anchor-filter :separator "|")
+                             :test #'string=)))
         (let ((entry (or (assoc (unit-anchor u) table :test #'string=)
                          (car (push (list (unit-anchor u)) table)))))
           (dolist (s (unit-sites u))
             (let ((m (make-mutant :unit u :operator (first s) :from (second s) :to (third s)
                                   :rebuild (fourth s))))
-              (when (or (null match) (search match (mutant-key m)))
+              (when (or (null match) (some (lambda (one) (search one (mutant-key m))) (uiop:split-string match :separator "|")))
                 (push m (cdr entry))))))))
     (mapcar (lambda (e) (cons (car e) (nreverse (cdr e)))) (nreverse table))))
 
@@ -591,9 +646,16 @@ writing each step to STATUS-PATH.  Never returns."
 (defstruct job mutant pid path started claim claim-started lines)
 
 (defun finish-job (job status claim reason)
-  (let ((m (job-mutant job)))
+  (let* ((m (job-mutant job))
+         (lines (read-status (job-path job)))
+         (compiled (find-if (lambda (l) (physics::starts-with "COMPILED " l)) lines)))
     (setf (mutant-status m) status (mutant-claim m) claim (mutant-reason m) reason
-          (mutant-seconds m) (- (now) (job-started job)))
+          (mutant-seconds m) (- (now) (job-started job))
+          (mutant-claims-run m) (count-if (lambda (l) (physics::starts-with "START " l)) lines))
+    (when compiled
+      (setf (mutant-compile-seconds m)
+            (let ((*read-default-float-format* 'double-float))
+              (float (read-from-string (subseq compiled 9)) 1d0))))
     m))
 
 (defun poll-job (job timeouts)
@@ -628,12 +690,62 @@ writing each step to STATUS-PATH.  Never returns."
                  (finish-job job :timeout (and claim (subseq claim 6))
                              (format nil "no answer in ~,0F s" limit)))))))))
 
+(defparameter *record-file* "report/mutate-claims.tsv"
+  "Each claim's tries and kills over the runs so far, which order the claims of the next run.")
+
+(defvar *record* (make-hash-table :test #'equal)
+  "Claim name to (TRIES KILLS), read from *RECORD-FILE* and counted on in this run.")
+
+(defun read-record ()
+  (clrhash *record*)
+  (with-open-file (in *record-file* :if-does-not-exist nil)
+    (when in
+      (loop for line = (read-line in nil) while line
+            do (destructuring-bind (name tries kills) (uiop:split-string line :separator '(#\Tab))
+                 (setf (gethash name *record*) (list (parse-integer tries) (parse-integer kills)))))))
+  *record*)
+
+(defun write-record ()
+  (with-open-file (out *record-file* :direction :output :if-exists :supersede)
+    (loop for (name . entry) in (sort (loop for k being the hash-keys of *record* using (hash-value v)
+                                           collect (cons k v))
+                                     #'string< :key #'car)
+          do (format out "~A	~D	~D~%" name (first entry) (second entry)))))
+
+(defun note-claims (record job m)
+  "Count in RECORD, for each claim JOB's child started, one more try, and one more kill for
+the claim that killed mutant M."
+  (dolist (line (read-status (job-path job)))
+    (when (physics::starts-with "START " line)
+      (incf (car (or (gethash (subseq line 6) record)
+                     (setf (gethash (subseq line 6) record) (list 0 0)))))))
+  (when (and (eq (mutant-status m) :killed) (mutant-claim m))
+    (let ((entry (or (gethash (mutant-claim m) record)
+                     (setf (gethash (mutant-claim m) record) (list 1 0)))))
+      (incf (second entry)))))
+
+(defun by-promise (claims record anchor)
+  "CLAIMS, each (NAME . SECONDS), in the order that stops soonest on average: first the claims
+of the mutated section ANCHOR, written against its definitions, cheapest first; then the rest
+by SECONDS over the share of earlier mutants the claim killed when it ran (RECORD holds its
+tries and kills), with one kill in four tries granted to every claim so that an untried claim
+ranks by its cost."
+  (flet ((cost (claim)
+           (destructuring-bind (&optional (tries 0) (kills 0))
+               (gethash (symbol-name (car claim)) record)
+             (/ (cdr claim) (/ (+ kills 1) (+ tries 4)))))
+         (own-p (claim) (equal anchor (gethash (car claim) *claim-anchors*))))
+    (let ((own (remove-if-not #'own-p claims)))
+      (append (stable-sort own #'< :key #'cdr)
+              (stable-sort (remove-if #'own-p claims) #'< :key #'cost)))))
+
 (defun run-mutants (sections count units order reach probed jobs directory report)
   "Run COUNT mutants drawn round robin from SECTIONS, JOBS at a time; call REPORT on each
 finished one.  Return the finished mutants that compiled, in the order they were drawn."
   (let* ((anchors (mapcar #'car sections))
          (queues (mapcar (lambda (s) (cons (car s) (cdr s))) sections))
          (slots '()) (running '()) (finished '()) (serial 0) (parent (sb-posix:getpid))
+         (record *record*)
          (timeouts (mapcar (lambda (c) (cons (symbol-name (car c)) (cdr c))) order)))
     ;; slot i belongs to the section i mod n of the anchors
     (dotimes (i count) (push (nth (mod i (length anchors)) anchors) slots))
@@ -643,7 +755,10 @@ finished one.  Return the finished mutants that compiled, in the order they were
                     (m (pop (cdr queue))))
                (when m
                  (setf (mutant-index m) index)
-                 (let ((claims (claims-for (mutant-unit m) units order reach probed)))
+                 (let ((claims (by-promise (within-reach-of-time
+                                            (claims-for (mutant-unit m) units order reach probed)
+                                            (mutant-unit m))
+                                           record (unit-anchor (mutant-unit m)))))
                    (setf (mutant-claims m) (length claims))
                  (let ((path (format nil "~A/m~D" directory (incf serial))))
                    (finish-output *standard-output*) (finish-output *error-output*)
@@ -668,6 +783,7 @@ finished one.  Return the finished mutants that compiled, in the order they were
                      (when m
                        (setf running (remove job running))
                        (ignore-errors (delete-file (job-path job)))
+                       (note-claims record job m)
                        (if (eq (mutant-status m) :uncompilable)
                            (progn
                              (format t "~&   (replaced: ~A ~A: ~A)~%" (unit-anchor (mutant-unit m)) (mutant-operator m)
@@ -688,7 +804,7 @@ finished one.  Return the finished mutants that compiled, in the order they were
 
 (defun print-mutant (m n count)
   (let ((u (mutant-unit m)))
-    (format t "~&[~3D/~D] ~A ~A (~A:~D) ~A: ~A => ~A~%        ~A~A (~,1F s)~%"
+    (format t "~&[~3D/~D] ~A ~A (~A:~D) ~A: ~A => ~A~%        ~A~A (~,1F s: ~,1F s compiling, ~D of ~D claims)~%"
             n count (unit-anchor u) (show u (unit-name u)) (unit-file u) (unit-line u)
             (mutant-operator m) (show u (mutant-from m)) (show u (mutant-to m))
             (case (mutant-status m)
@@ -697,7 +813,7 @@ finished one.  Return the finished mutants that compiled, in the order they were
               (:crashed (format nil "killed by a crash~@[ in ~(~A~)~]: " (mutant-claim m)))
               (t (format nil "SURVIVED the ~D claims that reach it" (mutant-claims m))))
             (if (killed-p m) (one-line (mutant-reason m) 70) "")
-            (mutant-seconds m))
+            (mutant-seconds m) (mutant-compile-seconds m) (mutant-claims-run m) (mutant-claims m))
     (finish-output)))
 
 (defun page-reasons (page)
@@ -717,12 +833,22 @@ finished one.  Return the finished mutants that compiled, in the order they were
                (setf start (1+ at))))
     reasons))
 
+(defun page-reason (key reasons)
+  "The page's sentence for the mutant named KEY: the one given for KEY itself, or for a name
+ending in ': *', which stands for every mutant of that definition."
+  (cdr (or (assoc key reasons :test #'string=)
+           (find-if (lambda (entry)
+                      (let ((name (car entry)))
+                        (and (>= (length name) 3) (string= ": *" name :start2 (- (length name) 3))
+                             (physics::starts-with (subseq name 0 (- (length name) 1)) key))))
+                    reasons))))
+
 (defun score-table (mutants parts stream)
   (let ((reasons (page-reasons "physics.org")))
     (write-score-rows (loop for m in mutants
                             collect (list (gethash (unit-anchor (mutant-unit m)) parts "?")
                                           (unit-anchor (mutant-unit m))
-                                          (and (assoc (mutant-key m) reasons :test #'string=) t)
+                                          (and (page-reason (mutant-key m) reasons) t)
                                           (killed-p m)))
                       stream)))
 
@@ -762,7 +888,7 @@ the page explains as equivalent."
       (format stream "No mutant survived.~%")
       (loop for (anchor operator file key) in rows
             do (format stream "- ~A ~A, ~A: ~A~%    ~A~%" anchor operator file key
-                       (or (cdr (assoc key reasons :test #'string=)) "(no reason given on the page)")))))
+                       (or (page-reason key reasons) "(no reason given on the page)")))))
 
 (defun annotate-survivors ()
   "Write report/mutate-survivors.org from report/mutate-survivors.tsv and the page's reasons,
@@ -807,7 +933,7 @@ as a finished run does.  Return the number of mutants read."
       (with-open-file (out "report/mutate-score.org" :direction :output :if-exists :supersede)
         (format out "~A~%~A~%~%" (or first-line "") (or summary (format nil "~D mutants read from ~A, a run stopped before its end" (length rows) log)))
         (write-score-rows (mapcar (lambda (r) (list (gethash (first r) parts "?") (first r)
-                                                    (and (assoc (fourth r) reasons :test #'string=) t)
+                                                    (and (page-reason (fourth r) reasons) t)
                                                     (fifth r)))
                                   rows)
                           out)))
@@ -828,7 +954,9 @@ as a finished run does.  Return the number of mutants read."
          (start (now))
          (units (loop for file in *dependent-files* append (read-units file)))
          (inline (note-inline-names units))
-         (parts (anchor-parts "physics.org"))
+         (parts (setf *parts* (anchor-parts "physics.org")))
+         (slow (setf *slow* (let ((v (sb-ext:posix-getenv "SLOW")))
+                              (if (and v (plusp (length v))) (float (read-from-string v) 1d0) *slow*))))
          (state (sb-ext:seed-random-state seed))
          (sections (mapcar (lambda (s) (cons (car s) (shuffle (cdr s) state)))
                            (remove-if-not #'cdr (section-sites units anchor (sb-ext:posix-getenv "MATCH")))))
@@ -836,24 +964,34 @@ as a finished run does.  Return the number of mutants read."
     (when (null sections)
       (format t "~&mutate: no definitions to mutate~@[ in section ~A~]~%" anchor)
       (sb-ext:exit :code 1))
-    (format t "~&mutate: seed ~D, ~D mutants over ~D sections (~D sites), ~D at a time; load ~A~%"
-            seed count (length sections) (reduce #'+ sections :key (lambda (s) (length (cdr s)))) jobs
+    (dolist (c luv-physics-tests:*claims*) (setf (gethash (cdr c) *claim-anchors*) (car c)))
+    (read-record)
+    (format t "~&mutate: seed ~D, ~D mutants over ~D sections (~D sites), ~D at a time, claims over ~,0F % of the claims' time only in their own part; load ~A~%"
+            seed count (length sections) (reduce #'+ sections :key (lambda (s) (length (cdr s)))) jobs (* 100 slow)
             (load-average))
-    (multiple-value-bind (order failing) (time-claims luv-physics-tests:*claims*)
+    (multiple-value-bind (order failing reach)
+        (let* ((path (format nil "/tmp/luv-mutate-reach-~D.sexp" (sb-posix:getpid)))
+               (pid (claims-reach-in-child luv-physics-tests:*claims* (probed-names units) path)))
+          (multiple-value-bind (order failing) (time-claims luv-physics-tests:*claims*)
+            (values order failing (read-reach pid path order))))
       (format t "~&mutate: ~D claims pass on the unchanged engine in ~,1F s~@[; left out, failing: ~{~(~A~)~^ ~}~]~%"
               (length order) (reduce #'+ order :key #'cdr) failing)
+      (setf *claims-seconds* (reduce #'+ order :key #'cdr))
+      (format t "~&mutate: the slowest: ~{~{~(~A~) ~,1F s~}~^, ~}~%"
+              (mapcar (lambda (c) (list (car c) (cdr c))) (reverse (last order 12))))
       (finish-output)
       (let* ((probed (probed-names units))
-             (reach (claims-reach order probed))
+             (reach (or reach (claims-reach order probed)))
              (dummy (format t "~&mutate: ~D functions watched by probes; each claim reaches ~D of them on average~%"
                             (length probed) (round (reduce #'+ reach :key (lambda (r) (length (cdr r)))) (max 1 (length reach)))))
              (directory (format nil "/tmp/luv-mutate-~D" (sb-posix:getpid)))
              (mutants (progn (ensure-directories-exist (format nil "~A/" directory))
                              (run-mutants sections count units order reach probed jobs directory
                                           (lambda (m n) (print-mutant m n count)))))
+             (saved (progn (ensure-directories-exist "report/") (write-record)))
              (wall (- (now) start))
              (reasons (page-reasons "physics.org")))
-        (declare (ignore dummy inline))
+        (declare (ignore dummy inline saved))
         (ignore-errors (sb-ext:delete-directory directory :recursive t))
         (let ((n (length mutants)) (k (count-if #'killed-p mutants)))
           (format t "~&~%mutate: ~D of ~D mutants killed (~,1F %), ~D survived; ~,1F s in all, ~,1F s a mutant on average in its child; load ~A~%~%"
