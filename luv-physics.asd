@@ -19,7 +19,7 @@
                            (file (if at
                                      (subseq text (+ at 18) (position #\" text :start (+ at 18)))
                                      "a file")))
-                      (format t "~&; luv-physics: compiled ~A in ~,1F s~%"
+                      (format *error-output* "~&; luv-physics: compiled ~A in ~,1F s~%"
                               (enough-namestring file (asdf:system-source-directory "luv-physics"))
                               (/ (- (get-internal-real-time) started) internal-time-units-per-second))
                       (values-list result)))
