@@ -191,13 +191,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
          (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
                   (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
          ;; the block's twelve velocity columns live here, on the stack, between the gather
-         ;; and the scatter
-         (let ((st (make-array ,(* 12 width) :element-type 'single-float))
+         ;; and the scatter, and after them friction's four values before the cone
+         (let ((st (make-array ,(* 16 width) :element-type 'single-float))
                ;; the scalars, broadcast once: a scalar read back inside the loop would be a
                ;; legacy SSE instruction among the 256-bit ones ([[#F4M1LY]])
                (lower (wc (- threshold))) (ghx (wc hgx)) (ghy (wc hgy)) (ghz (wc hgz)) (ih (wc inv-h))
                (el (wc elapsed)) (cap (wc (- push-max))))
-           (declare (dynamic-extent st) (type (simple-array single-float (,(* 12 width))) st)
+           (declare (dynamic-extent st) (type (simple-array single-float (,(* 16 width))) st)
                     (ignorable lower ghx ghy ghz))
          (unswitch-bias (use-bias)
          (with-solver-columns cbuf
@@ -250,13 +250,15 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                    (w+ (w+ (w* wx ux) (w* wy uy)) (w* wz uz)))
                                (wc 0.0)))
                         ;; the friction impulse before the cone, and its length, need no
-                        ;; normal impulse either
-                        (l1 (if-feature :friction (@w tangent-impulse-1) (wc 0.0)))
-                        (l2 (if-feature :friction (@w tangent-impulse-2) (wc 0.0)))
-                        (n1 (if-feature :friction (w- l1 (w* (@w tangent-mass) vt1)) (wc 0.0)))
-                        (n2 (if-feature :friction (w- l2 (w* (@w tangent-mass) vt2)) (wc 0.0)))
-                        (len2 (if-feature :friction (w+ (w* n1 n1) (w* n2 n2)) (wc 0.0)))
-                        (root (if-feature :friction (wsqrt len2) (wc 0.0)))
+                        ;; normal impulse either; they wait in the stage, so that no register
+                        ;; holds them across the impact part
+                        (staged (if-feature :friction
+                                  (let* ((n1 (w- (@w tangent-impulse-1) (w* (@w tangent-mass) vt1)))
+                                         (n2 (w- (@w tangent-impulse-2) (w* (@w tangent-mass) vt2)))
+                                         (len2 (w+ (w* n1 n1) (w* n2 n2))))
+                                    (st! 12 n1) (st! 13 n2) (st! 14 len2) (st! 15 (wsqrt len2))
+                                    t)
+                                  nil))
                         (l (@w normal-impulse))
                         (raw (if biased
                                  (w- (w- l (w* (w* (@w normal-mass) (wif positive (wc 1.0) (@w mass-scale)))
@@ -269,7 +271,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         ;; has not pushed yet and approaches faster than the threshold, and
                         ;; none armed, skips them
                         (dl (w- new l)))
-                   (declare (ignorable wx wy wz vt1 vt2 l1 l2 n1 n2 len2 root))
+                   (declare (ignorable wx wy wz vt1 vt2 staged))
                    ;; the normal impulse to keep, the velocity change and what the contact pushed
                    (multiple-value-bind (new dl pushed)
                        (if-feature :restitution
@@ -315,6 +317,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                          (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))))
                          (values new dl new))
                    (if-feature :friction
+                     (symbol-macrolet ((n1 (st@ 12)) (n2 (st@ 13)) (len2 (st@ 14)) (root (st@ 15))
+                                       (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2)))
                      (let* ((limit (w* (@w friction) new))
                             (over (w> len2 (w* limit limit)))
                             ;; outside the cone len2 > 0, so no lane divides by zero
@@ -338,7 +342,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                          (st! ,k (w- (st@ ,k) (w* iar c)))
                                          (st! ,l (w- (st@ ,l) (w* ibr c))))))
                            (component 0 6 3 9 x ux qx) (component 1 7 4 10 y uy qy)
-                           (component 2 8 5 11 z uz qz))))
+                           (component 2 8 5 11 z uz qz)))))
                      ;; without friction only the normal impulse moves the bodies
                      (progn
                        (@w! normal-impulse new)
