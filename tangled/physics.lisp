@@ -3256,20 +3256,15 @@ the step that built the list: then the grid's cells still serve the pair phase. 
 past it the body is crowded and takes no more pairs with such bodies. #P41RS7")
 
 (declaim (inline overlap-room))
-(defun overlap-room (overlaps i j x y z radius)
+(defun overlap-room (overlaps i j radius)
   "True when the pair of awake rows I and J may be taken this step: the smaller row (both, for
 equal radii) is not crowded, having taken fewer than +overlaps-per-body+ overlapping pairs as
-OVERLAPS counts them. A taken pair that overlaps is counted against the smaller row. #P41RS7"
-  (declare (type fixnum-column overlaps) (type index i j) (type f32-column x y z radius) #.+kernel-policy+)
+OVERLAPS counts them. The pair phase counts a taken pair that overlaps against the smaller row,
+from the distance it finds for the contact anyway. #P41RS7"
+  (declare (type fixnum-column overlaps) (type index i j) (type f32-column radius) #.+kernel-policy+)
   (let ((ri (aref radius i)) (rj (aref radius j)))
     (and (or (> ri rj) (< (aref overlaps i) +overlaps-per-body+))
-         (or (< ri rj) (< (aref overlaps j) +overlaps-per-body+))
-         (let ((dx (- (aref x j) (aref x i))) (dy (- (aref y j) (aref y i))) (dz (- (aref z j) (aref z i)))
-               (r (+ ri rj)))
-           (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* r r))
-             (unless (> ri rj) (incf (aref overlaps i)))
-             (unless (< ri rj) (incf (aref overlaps j))))
-           t))))
+         (or (< ri rj) (< (aref overlaps j) +overlaps-per-body+)))))
 
 (defun pair-phase (world)
   "Phase 4: contacts between awake bodies (each pair once) and lean contacts from awake bodies
@@ -3304,12 +3299,18 @@ gap is under the speculative distance. #P41RS7"
              (type handle-table ids) (type hash-grid grid) #.+kernel-policy+
              (inline touch-contact))
     (with-body-columns (x y z vx vy vz radius flags handle) awake
-      (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj)
+      (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
+               ;; CI and CJ: the awake rows of a pair taken after overlap-room, whose overlap
+               ;; is counted here; -1 for a sleeper's pair, which is not counted
                (declare (type single-float xi yi zi ri xj yj zj rj vxi vyi vzi vxj vyj vzj)
-                        (type fixnum hi hj))
+                        (type fixnum hi hj ci cj))
                (let* ((dx (- xj xi)) (dy (- yj yi)) (dz (- zj zi))
                       (d2 (+ (* dx dx) (* dy dy) (* dz dz)))
                       (reach (+ ri rj margin)))
+                 (when (and (>= ci 0) (< d2 (* (+ ri rj) (+ ri rj))))
+                   (let ((overlaps (pair-list-overlaps plist)))
+                     (unless (> ri rj) (incf (aref overlaps ci)))
+                     (unless (< ri rj) (incf (aref overlaps cj)))))
                  (when (< d2 (* reach reach))
                    (let ((d (fsqrt d2)))
                     (multiple-value-bind (nx ny nz)
@@ -3345,10 +3346,10 @@ gap is under the speculative distance. #P41RS7"
                      `(pair (aref x ,i) (aref y ,i) (aref z ,i) (aref radius ,i) (aref handle ,i)
                             (aref vx ,i) (aref vy ,i) (aref vz ,i)
                             (aref x ,j) (aref y ,j) (aref z ,j) (aref radius ,j) (aref handle ,j)
-                            (aref vx ,j) (aref vy ,j) (aref vz ,j)))
+                            (aref vx ,j) (aref vy ,j) (aref vz ,j) ,i ,j))
                    (rows (i j)
                      ;; the same, unless they overlap and the smaller has its share of overlaps
-                     `(when (overlap-room (pair-list-overlaps plist) ,i ,j x y z radius)
+                     `(when (overlap-room (pair-list-overlaps plist) ,i ,j radius)
                         (pair-of-rows ,i ,j))))
           (if (pair-list-holds-p strays n)
               ;; the list holds: its pairs whose rows both stayed; then each loose row against
@@ -3405,7 +3406,7 @@ gap is under the speculative distance. #P41RS7"
                         (dotimes (q found)
                           (let ((j (aref items (aref near q))))
                             (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
-                                       (overlap-room (pair-list-overlaps plist) i j x y z radius))
+                                       (overlap-room (pair-list-overlaps plist) i j radius))
                               (pair-list-push plist i j)
                               (pair-of-rows i j))))))))
                 (pair-list-anchor plist awake n cell)
@@ -3427,7 +3428,7 @@ gap is under the speculative distance. #P41RS7"
                           (pair xi yi zi ri hi vxi vyi vzi
                                 (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
                                 (aref (body-columns-z sleeping) row)
-                                (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0))))))))))))
+                                (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0 -1 -1))))))))))))
     world))
 ;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
