@@ -2156,7 +2156,7 @@ dispatches on it once per call. #W0RLD7"))
    (undo-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-rows)
    (undo-statistics :initform (make-array 8 :element-type 'double-float :initial-element 0d0)
                     :reader physics-world-undo-statistics)
-   (sleep-enabled :initarg :sleep-enabled :initform t :accessor physics-world-sleep-enabled)
+   (sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
    ;; what the world may use ([[#FEAT5X][features]]), and the step built for it
    (features :initarg :features :initform +physics-features+ :reader world-features)
    (event-mask :initarg :event-mask :initform -1 :type fixnum :reader world-event-mask)
