@@ -2459,6 +2459,20 @@ function of a column name that reads row K's float in that column. #T3STK1"
             do (check (< (abs (- g e)) 1d-5) "q~(~A~) is ~,6F, not ~,6F" name g e)))))
 ;; F1NAL5-spin-turns-by-the-half-angle ends here
 
+;; [[file:../physics.org::#F1NAL5][F1NAL5-sleeps-after-its-time]]
+(define-claim "F1NAL5" sleeps-after-its-time
+    "A still ball sleeps once it has been still for the world's time to sleep, not before."
+  (flet ((awake-at (steps time-to-sleep)
+           (let* ((luv-physics::*physics-time-to-sleep* time-to-sleep)
+                  (w (make-floor-world))
+                  (h (luv-physics::add-physics-body w 3.5 (- 0.25 luv-physics::*physics-linear-slop*) 3.5)))
+             (dotimes (i steps) (luv-physics::step-physics-world w))
+             (luv-physics::physics-body-awake-p w h))))
+    (check (awake-at 27 0.5) "the still ball slept before 0.45 s")
+    (check (not (awake-at 33 0.5)) "the still ball was still awake at 0.55 s")
+    (check (awake-at 57 1.0) "with a time to sleep of 1 s the ball slept before 0.95 s")))
+;; F1NAL5-sleeps-after-its-time ends here
+
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-ball-rests-and-sleeps]]
 (define-claim "IDVK7G" ball-rests-and-sleeps
     "A dropped ball rests at floor + r - slop (±0.002 m) and sleeps, with a :slept event, within 3 s."
