@@ -2089,7 +2089,7 @@ dispatches on it once per call. #W0RLD7"))
    (contacts :initform (make-contact-columns) :reader physics-world-contacts)
    (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
    (contact-scratch :initform (make-contact-columns) :reader physics-world-contact-scratch)
-   (constraints :initform (make-constraint-columns) :reader physics-world-constraints)
+   (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints)
    (events :initform (make-event-columns) :reader physics-world-events)
    (event-data :initform (make-array 16 :initial-element nil) :accessor physics-world-event-data)
    (boxes :initform (make-box-columns) :reader physics-world-boxes)
@@ -2282,6 +2282,7 @@ every feature by default). #M4K3WD"
                :kernels (make-kernel-family kernels)
                :sleep-enabled (and sleep (member :sleep features) t)
                :features features :event-mask (feature-event-mask features)
+               :constraints (make-constraint-columns (constraint-block-floats features))
                parameters)))))
 
 (defmethod (setf physics-world-event-handler) :before (handler (world physics-world))
@@ -3829,11 +3830,14 @@ the hole. #PRUN3D"
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +constraint-columns+
     '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation kvn kvt1 kvt2
-      normal-mass tangent-mass rolling-mass friction rolling-limit restitution relative-velocity
-      max-normal-impulse bias-rate mass-scale impulse-scale normal-impulse tangent-impulse-1
-      tangent-impulse-2 rolling-impulse-x rolling-impulse-y rolling-impulse-z gap armed-speed
-      spin-limit spin-impulse)
-    "The float columns of a constraint, in the order they sit in a block. #SSMPYW")
+      normal-mass tangent-mass rolling-mass friction max-normal-impulse bias-rate mass-scale
+      impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2 gap spin-limit spin-impulse
+      ;; the columns only some worlds have ([[#FEAT5X]]): the approach speed the events
+      ;; report, rolling resistance's, and restitution's
+      relative-velocity rolling-limit rolling-impulse-x rolling-impulse-y rolling-impulse-z
+      restitution armed-speed)
+    "The float columns of a constraint, in the order they sit in a block: those every world
+needs, then those a world's features may leave out, last. #SSMPYW")
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints. #SSMPYW"
     (* 8 (or (position column +constraint-columns+ :test #'string= :key #'symbol-name)
@@ -3847,9 +3851,11 @@ the hole. #PRUN3D"
 begin 16 bytes past a 64-byte boundary every column's eight lanes start on a 32-byte
 boundary. #SSMPYW")
 
-(defstruct (constraint-columns (:constructor make-constraint-columns ()))
+(defstruct (constraint-columns (:constructor make-constraint-columns (&optional (block +constraint-block+))))
   "The contacts of one step as solver rows, written in colour order: three fixnum columns, and
-the float columns in blocks of eight rows, each column's eight lanes contiguous. #SSMPYW"
+the float columns in blocks of eight rows, each column's eight lanes contiguous; BLOCK floats a
+block, the first BLOCK/8 columns of +constraint-columns+. #SSMPYW"
+  (block +constraint-block+ :type index)
   (length 0 :type index)
   (capacity 0 :type index)
   (data (make-array 0 :element-type 'single-float) :type f32-column)
@@ -3866,7 +3872,7 @@ the float columns in blocks of eight rows, each column's eight lanes contiguous.
                  (replace fresh old) fresh)))
         (setf (constraint-columns-data buffer)
               (grow (constraint-columns-data buffer) 'single-float
-                    (+ +constraint-origin+ (* (floor new 8) +constraint-block+)))
+                    (+ +constraint-origin+ (* (floor new 8) (constraint-columns-block buffer))))
               (constraint-columns-contact buffer) (grow (constraint-columns-contact buffer) 'fixnum new)
               (constraint-columns-body-a buffer) (grow (constraint-columns-body-a buffer) 'fixnum new)
               (constraint-columns-body-b buffer) (grow (constraint-columns-body-b buffer) 'fixnum new)
@@ -3874,22 +3880,26 @@ the float columns in blocks of eight rows, each column's eight lanes contiguous.
   buffer)
 
 (declaim (inline constraint-base))
-(defun constraint-base (k)
-  "The index of constraint K's lane of the first column of its block. #SSMPYW"
-  (declare (type index k))
-  (+ +constraint-origin+ (* (ash k -3) +constraint-block+) (logand k 7)))
+(defun constraint-base (k &optional (block +constraint-block+))
+  "The index of constraint K's lane of the first column of its block, in blocks of BLOCK floats. #SSMPYW"
+  (declare (type index k block))
+  (+ +constraint-origin+ (* (ash k -3) block) (logand k 7)))
 
 (defmacro with-constraint-block ((&rest fixnum-columns) buffer &body body)
-  "Run BODY with DATA bound to BUFFER's float blocks, each of FIXNUM-COLUMNS (contact, body-a,
-body-b) bound to its column, and (@ COLUMN) naming COLUMN of the constraint whose base is the
-variable BASE. #SSMPYW"
+  "Run BODY with DATA bound to BUFFER's float blocks, STRIDE to the floats of a block, each of
+FIXNUM-COLUMNS (contact, body-a, body-b) bound to its column, (constraint-base K) naming the
+base of constraint K in BUFFER's blocks, and (@ COLUMN) naming COLUMN of the constraint whose
+base is the variable BASE. #SSMPYW"
   (let ((b (gensym "BUFFER")))
     `(let* ((,b ,buffer)
             (data (constraint-columns-data ,b))
+            (stride (constraint-columns-block ,b))
             ,@(loop for c in fixnum-columns
                     collect `(,c (,(intern (format nil "CONSTRAINT-COLUMNS-~A" c)) ,b))))
-       (declare (type f32-column data) (type fixnum-column ,@fixnum-columns) (ignorable data))
-       (macrolet ((@ (column) `(block-ref data base ,(constraint-offset column))))
+       (declare (type f32-column data) (type fixnum-column ,@fixnum-columns) (type index stride)
+                (ignorable data stride))
+       (macrolet ((@ (column) `(block-ref data base ,(constraint-offset column)))
+                  (constraint-base (k) `(+ +constraint-origin+ (* (ash ,k -3) stride) (logand ,k 7))))
          ,@body))))
 
 (defun ensure-solver-scratch (world n contacts)
@@ -4329,7 +4339,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                   (loop for k of-type index from (aref cursor color) below (aref color-starts (1+ color))
                         do (let ((base (constraint-base k)))
                              (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
-                             (dotimes (o (floor +constraint-block+ 8)) (setf (aref data (+ base (* 8 o))) 0.0)))))))))))
+                             (dotimes (o (floor stride 8)) (setf (aref data (+ base (* 8 o))) 0.0)))))))))))
       (setf (aref (world-statistics world) 1) (coerce (the fixnum color-count) 'double-float))
       color-count)))
 ;; Preparing the constraints:1 ends here
@@ -5189,6 +5199,14 @@ every feature is +physics-features+ itself. #FEAT5X"
          (set (remove-if-not (lambda (f) (and (member f given) (or sleep (not (member f '(:sleep :sleep-events))))))
                              +physics-features+)))
     (if (equal set +physics-features+) +physics-features+ set)))
+
+(defun constraint-block-floats (features)
+  "The floats of a block of eight constraints in a world of FEATURES: the columns of
++constraint-columns+ up to the last one a kernel of FEATURES reads. #FEAT5X"
+  (+ 8 (constraint-offset (cond ((member :restitution features) 'armed-speed)
+                                ((member :rolling-resistance features) 'rolling-impulse-z)
+                                ((intersection '(:contact-events :hit-events) features) 'relative-velocity)
+                                (t 'spin-impulse)))))
 
 (defun feature-event-mask (features)
   "The event codes FEATURES record, as bits of a fixnum. #FEAT5X"
@@ -6873,23 +6891,28 @@ median ms and the bytes consed per step of each over its steps FROM..TO. #FBNCH9
           (let ((n (- to from)))
             (list :general (median (first ms)) :specialised (median (second ms))
                   :general-consed (round (first consed) n) :specialised-consed (round (second consed) n)
+                  :general-block (constraint-columns-block (physics-world-constraints general))
+                  :specialised-block (constraint-columns-block (physics-world-constraints special))
                   :bodies (+ (physics-world-awake-count special) (physics-world-sleeping-count special)))))))))
 
 (defun run-feature-benchmark (&key (stream *standard-output*) (kernels :auto))
   "Print, as an Org table, each scene of +feature-scenes+ under the general step and the step
 built for its features, in one run, with the machine's load. #FBNCH9"
-  (let ((body-bytes (+ +body-columns-row-bytes+ (* 2 4 +solver-stride+)))
-        (contact-bytes (+ +contact-columns-row-bytes+ (* 4 (length +constraint-columns+)) (* 3 8))))
+  (let ((body-bytes (+ +body-columns-row-bytes+ (* 2 4 +solver-stride+))))
     (format stream "~&#+caption: general and specialised steps, ~(~A~) family; load ~A~%" kernels (load-average))
     (format stream "~&| scene | bodies | general median ms | specialised median ms | ratio | bytes consed/step | column bytes/body | column bytes/contact |~%")
     (format stream "~&|-------+--------+------------+----------------+-------+-------------------+-------------------+----------------------|~%")
     (dolist (scene +feature-scenes+)
       (let ((m (measure-feature-scene (first scene) :kernels kernels)))
-        (format stream "~&| ~A | ~D | ~,3F | ~,3F | ~,2F | ~D, ~D | ~D, ~D | ~D, ~D |~%"
-                (second scene) (getf m :bodies) (getf m :general) (getf m :specialised)
-                (/ (getf m :specialised) (getf m :general))
-                (getf m :general-consed) (getf m :specialised-consed)
-                body-bytes body-bytes contact-bytes contact-bytes)
+        (flet ((contact-bytes (block)
+                 ;; the persistent row, the constraint's floats and its three fixnums
+                 (+ +contact-columns-row-bytes+ (* 4 (floor block 8)) (* 3 8))))
+          (format stream "~&| ~A | ~D | ~,3F | ~,3F | ~,2F | ~D, ~D | ~D, ~D | ~D, ~D |~%"
+                  (second scene) (getf m :bodies) (getf m :general) (getf m :specialised)
+                  (/ (getf m :specialised) (getf m :general))
+                  (getf m :general-consed) (getf m :specialised-consed)
+                  body-bytes body-bytes
+                  (contact-bytes (getf m :general-block)) (contact-bytes (getf m :specialised-block))))
         (finish-output stream)))
     (format stream "~&(after the run: load ~A)~%" (load-average))))
 ;; What leaving features out saves:1 ends here

@@ -510,7 +510,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
         (funcall function k
                  (lambda (column)
-                   (aref data (+ (luv-physics::constraint-base k) (luv-physics::constraint-offset column)))))))))
+                   (aref data (+ (luv-physics::constraint-base k (luv-physics::constraint-columns-block cbuf))
+                                 (luv-physics::constraint-offset column)))))))))
 ;; A kit for the claims:1 ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-non-finite-numbers]]
@@ -2613,6 +2614,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= bytes (sb-ext:get-bytes-consed)) "120 fountain steps consed ~D bytes"
              (- (sb-ext:get-bytes-consed) bytes)))))
 ;; FEAT5X-features-are-a-value ends here
+
+;; [[file:../physics.org::#FEAT5X][FEAT5X-columns-by-features]]
+(define-claim "FEAT5X" columns-by-features
+    "Constraint blocks end after the last column a world's features read: 33, 34, 38 or 40 columns."
+  (flet ((columns (features)
+           (/ (luv-physics::constraint-columns-block
+               (luv-physics::physics-world-constraints (make-physics-world :features features)))
+              8)))
+    (check (= 33 (columns '(:terrain :friction :sleep :mortal))))
+    (check (= 33 (columns '(:terrain :body-contacts :friction))))
+    (check (= 34 (columns '(:terrain :friction :hit-events))))
+    (check (= 38 (columns '(:terrain :friction :rolling-resistance))))
+    (check (= 40 (columns '(:terrain :restitution))))
+    (check (= 40 (columns luv-physics::+physics-features+))))
+  (dolist (case (list (list '(:terrain :friction :sleep :mortal) 33) (list luv-physics::+physics-features+ 40)))
+    (destructuring-bind (features columns) case
+      (multiple-value-bind (world before) (luv-physics::feature-scene :fountain :features features)
+        (dotimes (i 120) (funcall before i) (step-physics-world world))
+        (let ((cbuf (luv-physics::physics-world-constraints world)))
+          (check (plusp (luv-physics::constraint-columns-length cbuf)) "the fountain has no constraints")
+          (check (= (length (luv-physics::constraint-columns-data cbuf))
+                    (+ luv-physics::+constraint-origin+ (* columns (luv-physics::constraint-columns-capacity cbuf))))
+                 "~D columns: ~D floats for ~D rows" columns (length (luv-physics::constraint-columns-data cbuf))
+                 (luv-physics::constraint-columns-capacity cbuf)))))))
+;; FEAT5X-columns-by-features ends here
 
 ;; [[file:../physics.org::#FEAT5X][FEAT5X-omitted-feature-refused]]
 (define-claim "FEAT5X" omitted-feature-refused
