@@ -2410,17 +2410,19 @@ under its body budget, and a free slot in its handle table. #M4K3WD"
 single-floats or NILs, once each given value is finite and in its range (restitution in [0, 1],
 the others from 0 to +physics-max-friction+) and WORLD has the feature a value above zero needs;
 else the error, naming OPERATION where a feature is missing. #M4K3WD"
-  (flet ((one (name value high feature expected)
+  (flet ((one (name value high feature)
            (when value
              (let ((f (finite-f32 name value world)))
                (unless (<= 0 f high)
-                 (error 'invalid-physics-parameter :world world :name name :value value :expected expected))
+                 (error 'invalid-physics-parameter :world world :name name :value value
+                                                   :expected (if (eq name :restitution)
+                                                                 "in [0, 1]"
+                                                                 (format nil "from 0 to ~A" high))))
                (when (> f 0) (require-physics-feature world feature operation))
                f))))
-    (let ((high (format nil "from 0 to ~A" +physics-max-friction+)))
-      (values (one :restitution restitution 1.0 :restitution "in [0, 1]")
-              (one :friction friction +physics-max-friction+ :friction high)
-              (one :rolling-resistance rolling-resistance +physics-max-friction+ :rolling-resistance high)))))
+    (values (one :restitution restitution 1.0 :restitution)
+            (one :friction friction +physics-max-friction+ :friction)
+            (one :rolling-resistance rolling-resistance +physics-max-friction+ :rolling-resistance))))
 
 (defun add-physics-body (world x y z &key (radius 0.25) (mass 1.0) (restitution 0.0) (friction 0.6)
                                        (rolling-resistance 0.0) (vx 0.0) (vy 0.0) (vz 0.0)
