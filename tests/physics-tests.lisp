@@ -2598,7 +2598,16 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (phases (remove nil (luv-physics::world-phases world))))
         (dolist (absent '(luv-physics::grid-phase luv-physics::pair-phase luv-physics::box-phase))
           (check (not (member absent phases)) "~A runs ~A" family absent))
-        (check (functionp (find-if-not #'symbolp phases)) "no store phase compiled for the fountain")
+        (check (equal '(luv-physics::prepare-phase luv-physics::store-phase)
+                      (loop for name in luv-physics::*physics-phases*
+                            for phase in (luv-physics::world-phases world)
+                            when (functionp phase) collect name))
+               "the fountain's own phases are not its prepare and store phases")
+        (loop for name in luv-physics::*physics-phases*
+              for phase in (luv-physics::world-phases world)
+              when (functionp phase)
+                do (check (< (code-bytes phase) (code-bytes name)) "the fountain's ~A has ~D bytes of code, the general ~D"
+                          name (code-bytes phase) (code-bytes name)))
         (dolist (reader (list #'luv-physics::kernel-variant-warm-start #'luv-physics::kernel-variant-solve
                               #'luv-physics::kernel-variant-wide-warm-start #'luv-physics::kernel-variant-wide-solve))
           (let ((mine (funcall reader variant)) (theirs (funcall reader general)))
