@@ -108,11 +108,11 @@ heaps: setup tangle
 	@$(SBCL) --script tools/splice.lisp heap-sizes report/heaps.org
 
 # Mutants are sampled from the tangled files as they are; the tables are spliced only after a
-# run over every section.
+# run over every section and every part (no ANCHOR, PART, MATCH or LIST).
 mutate: setup tangle
 	@mkdir -p report
-	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" nice $(SBCL) --dynamic-space-size $(HEAP) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
-	@if [ -z "$(ANCHOR)" ]; then $(MAKE) --no-print-directory mutate-splice; fi
+	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" PART="$(PART)" LIST="$(LIST)" nice $(SBCL) --dynamic-space-size $(HEAP) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
+	@if [ -z "$(ANCHOR)$(PART)$(LIST)$$MATCH" ]; then $(MAKE) --no-print-directory mutate-splice; fi
 
 # The last full run's tables, from its log, into the page; the survivors' reasons, and which
 # survivors are equivalent, are read from the page as it is.

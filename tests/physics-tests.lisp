@@ -2297,6 +2297,54 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (equal '(0.0 0.0 0.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h))))))
 ;; K3RNLS-gravity-in-every-column ends here
 
+;; [[file:../physics.org::#K3RNLS][K3RNLS-entry-ranges-exact]]
+(define-claim "K3RNLS" entry-ranges-exact
+    "Each solver entry point takes its numbers at both ends of their ranges and refuses the nearest beyond."
+  (let* ((w (make-floor-world))
+         (k (luv-physics::physics-world-kernels w))
+         (below-one (- 1.0 (scale-float 1.0 -24))))
+    (luv-physics::add-physics-body w 3.5 1.0 3.5)
+    (luv-physics::step-physics-world w)
+    (flet ((answer (call)
+             (handler-case (progn (funcall call) :ran)
+               (invalid-physics-parameter (e) (list :refused (luv-physics::invalid-physics-parameter-name e)))
+               (error (e) (type-of e)))))
+      (loop for (label want call)
+              in (list (list "velocities h -1e7" :ran (lambda () (luv-physics:physics-integrate-velocities k w -1e7)))
+                       (list "velocities h 1e7" :ran (lambda () (luv-physics:physics-integrate-velocities k w 1e7)))
+                       (list "velocities h -10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-velocities k w -10000001.0)))
+                       (list "velocities h 10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-velocities k w 10000001.0)))
+                       (list "positions h -1e7" :ran (lambda () (luv-physics:physics-integrate-positions k w -1e7)))
+                       (list "positions h 1e7" :ran (lambda () (luv-physics:physics-integrate-positions k w 1e7)))
+                       (list "positions h -10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-positions k w -10000001.0)))
+                       (list "positions h 10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-positions k w 10000001.0)))
+                       (list "solve inv-h 1" :ran (lambda () (luv-physics:physics-solve-contacts k w 1.0 t 0.0)))
+                       (list "solve inv-h 1e7" :ran (lambda () (luv-physics:physics-solve-contacts k w 1e7 nil 0.0)))
+                       (list "solve inv-h below 1" '(:refused :inv-h) (lambda () (luv-physics:physics-solve-contacts k w below-one t 0.0)))
+                       (list "solve inv-h 10000001" '(:refused :inv-h) (lambda () (luv-physics:physics-solve-contacts k w 10000001.0 t 0.0)))
+                       (list "solve elapsed 1e7" :ran (lambda () (luv-physics:physics-solve-contacts k w 60.0 t 1e7)))
+                       (list "solve elapsed below 0" '(:refused :elapsed) (lambda () (luv-physics:physics-solve-contacts k w 60.0 t (- least-positive-normalized-single-float))))
+                       (list "solve elapsed 10000001" '(:refused :elapsed) (lambda () (luv-physics:physics-solve-contacts k w 60.0 t 10000001.0))))
+            do (let ((got (answer call)))
+                 (check (equal want got) "~A: ~S, not ~S" label got want))))))
+;; K3RNLS-entry-ranges-exact ends here
+
+;; [[file:../physics.org::#KTXT7V][KTXT7V-kernel-is-its-text]]
+(define-claim "KTXT7V" kernel-is-its-text
+    "Featured kernels keep their docstrings and texts; the text compiled for every feature is the kernel."
+  (loop for (name anchor features)
+          in '((luv-physics::warm-start-range "#W4RMST" (:friction :rolling-resistance))
+               (luv-physics::solve-range "#S0LV3R" (:friction :rolling-resistance :restitution))
+               (luv-physics::store-phase "#ST0R3S" (:contact-events :hit-events))
+               (luv-physics::warm-start-blocks/sse "#W1D3KF" (:friction :rolling-resistance))
+               (luv-physics::solve-blocks/sse "#W1D3KF" (:friction :rolling-resistance :restitution))
+               (luv-physics::warm-start-blocks/avx2 "#W1D3KF" (:friction :rolling-resistance))
+               (luv-physics::solve-blocks/avx2 "#W1D3KF" (:friction :rolling-resistance :restitution)))
+        do (let ((doc (documentation name 'function)) (text (get name 'luv-physics::featured-kernel)))
+             (check (and (stringp doc) (let ((n (length anchor))) (and (>= (length doc) n) (string= anchor doc :start2 (- (length doc) n))))) "~(~A~)'s docstring is ~S" name doc)
+             (check (and (= 5 (length text)) (equal features (fifth text))) "~(~A~) keeps ~S" name text))))
+;; KTXT7V-kernel-is-its-text ends here
+
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
     "Prepared tangent frames are orthonormal with their normals, in every family."
