@@ -1534,6 +1534,58 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (< striker 2d0) "~,1F m/s, ~,2F m aside: the striker leaves ~,2F deg off" speed offset striker)))))
 ;; G3NCNT-oblique-blows-true ends here
 
+;; [[file:../physics.org::#G3NCNT][G3NCNT-touch-normal-closed-form]]
+(define-claim "G3NCNT" touch-normal-closed-form
+    "pair-impact-normal: the line of centres at the touch, exactly; the given normal when not closing, at b = 0 too."
+  (flet ((normal (dx dy dz wx wy wz)
+           (multiple-value-list
+            (luv-physics::pair-impact-normal dx dy dz wx wy wz 0.5 (/ 1.0 60) 1.0 0.0 0.0 -0.2)))
+         (closed (dx dy wx)
+           ;; in double precision: the smaller root, capped at the step
+           (let* ((a (* wx wx)) (b (* dx wx)) (c (- (+ (* dx dx) (* dy dy)) 0.25d0))
+                  (time (min (/ 1d0 60) (/ (- (- b) (sqrt (- (* b b) (* a c)))) a)))
+                  (qx (+ dx (* wx time))) (q (sqrt (+ (* qx qx) (* dy dy))))
+                  (mx (/ qx q)) (my (/ dy q)))
+             (list mx my 0d0 (- (+ (* dx mx) (* dy my)) 0.5d0)))))
+    (check (every (lambda (got want) (< (abs (- got want)) 1d-6))
+                  (normal 1.0 0.3 0.0 -60.0 0.0 0.0) '(0.8d0 0.6d0 0d0 0.48d0))
+           "touch within the step: ~S" (normal 1.0 0.3 0.0 -60.0 0.0 0.0))
+    (check (every (lambda (got want) (< (abs (- got want)) 1d-6))
+                  (normal 1.0 0.3 0.0 -30.0 0.0 0.0) (closed 1d0 0.3d0 -30d0))
+           "touch after the step: ~S, not ~S" (normal 1.0 0.3 0.0 -30.0 0.0 0.0) (closed 1d0 0.3d0 -30d0))
+    (loop for (what . motion) in '(("at rest" 0.3 0.0 0.0 0.0 0.0 0.0)
+                                   ("moving apart" 0.3 0.0 0.0 2.0 1.0 0.0)
+                                   ("moving across, overlapping" 0.3 0.0 0.0 0.0 2.0 0.0)
+                                   ("passing by" 1.0 0.6 0.0 -60.0 0.0 0.0))
+          do (check (equal '(1.0 0.0 0.0 -0.2) (apply #'normal motion))
+                    "~A: ~S" what (apply #'normal motion)))))
+;; G3NCNT-touch-normal-closed-form ends here
+
+;; [[file:../physics.org::#G3NCNT][G3NCNT-impulses-kept-within-cone]]
+(define-claim "G3NCNT" impulses-kept-within-cone
+    "touch-contact keeps the impulses when the normal turned to a cosine of exactly 0.9, drops them below."
+  (let* ((contacts (luv-physics::make-contact-columns))
+         (table (luv-physics::make-contact-table))
+         (geometry (luv-physics::contact-columns-geometry contacts))
+         (s (sqrt (- 1.0 (* 0.9 0.9))))
+         (row -1))
+    (flet ((touch (step nx ny)
+             (setf (luv-physics::contact-table-step table) step
+                   (luv-physics::contact-table-cursor table) 0)
+             (setf row (luv-physics::touch-contact contacts table 7 luv-physics::+contact-terrain+ 5 -1
+                                                   nx ny 0.0 0.01 0.0 0.0 0.0 0.0 0.0 0.0)))
+           (impulse () (luv-physics::contact@ geometry row luv-physics::normal-impulse)))
+      (touch 1 1.0 0.0)
+      (setf (luv-physics::contact@ geometry row luv-physics::normal-impulse) 1.0)
+      (touch 2 0.9 s)
+      (check (= 1.0 (impulse)) "turned to a cosine of exactly 0.9: impulse ~A" (impulse))
+      ;; back along x, shortened by one part in 2^24: a cosine with the last normal just under 0.9
+      (let ((nx (- 1.0 single-float-epsilon)))
+        (check (< (* nx 0.9) 0.9) "the second turn is not past the cone")
+        (touch 3 nx 0.0))
+      (check (= 0.0 (impulse)) "turned past the cone: impulse ~A" (impulse)))))
+;; G3NCNT-impulses-kept-within-cone ends here
+
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sorted-rows-keep-handles]]
 (define-claim "G4R1D5" sorted-rows-keep-handles
     "After the grid phase sorts scrambled rows, each handle still names its own body."
@@ -1834,6 +1886,21 @@ function of a column name that reads row K's float in that column. #T3STK1"
                      "~:[b~;a~] first: (nx ny nz separation px py pz) is ~S, not ~S" a-first got want))))))))
 ;; P41RS7-pair-contact-geometry ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-gone-rows-loose]]
+(define-claim "P41RS7" gone-rows-loose
+    "pair-list-strays over fewer rows than the list knew marks the rows gone loose."
+  (let* ((w (make-floor-world)))
+    (dotimes (i 5) (add-physics-body w (+ 1.5 (* 1.0 i)) 0.5 3.5))
+    (step-physics-world w)
+    (let* ((plist (luv-physics::physics-world-pair-list w))
+           (awake (luv-physics::physics-world-awake w))
+           (count (luv-physics::pair-list-strays plist awake 3 (luv-physics::pair-list-cell plist) 0.01)))
+      (check (= 5 (luv-physics::pair-list-rows plist)) "the list knows ~D rows" (luv-physics::pair-list-rows plist))
+      (check (= 0 count) "~D of the three rows left are loose" count)
+      (check (equal '(0 0 0 1 1) (coerce (subseq (luv-physics::pair-list-loose plist) 0 5) 'list))
+             "loose flags ~S" (subseq (luv-physics::pair-list-loose plist) 0 5)))))
+;; P41RS7-gone-rows-loose ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
 (define-claim "MYWH16" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
@@ -2106,6 +2173,25 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (eq t (luv-physics::validate-physics-world w)))))))
 ;; PRUN3D-reorder-keeps-contacts ends here
 
+;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-threshold]]
+(define-claim "PRUN3D" reorder-threshold
+    "A world of five contacts reorders at 64 misses, not at 63 and not at five."
+  (let* ((w (make-floor-world))
+         (table (luv-physics::physics-world-contact-table w)))
+    (dotimes (i 5) (add-physics-body w (+ 1.5 (* 1.0 i)) 0.5 3.5 :collide-with-bodies nil))
+    (dotimes (i 30) (step-physics-world w))
+    (check (= 5 (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
+    (loop for (misses after) in '((63 63) (64 0))
+          do (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                              luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase))
+               (funcall phase w))
+             (setf (luv-physics::contact-table-misses table) misses)
+             (luv-physics::prune-phase w)
+             (check (= after (luv-physics::contact-table-misses table))
+                    "after ~D misses among five contacts the prune left ~D, not ~D"
+                    misses (luv-physics::contact-table-misses table) after))))
+;; PRUN3D-reorder-threshold ends here
+
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
 (define-claim "SSMPYW" colours-disjoint
     "In a 300-ball pile no colour below 24 holds two constraints on the same awake body."
@@ -2344,6 +2430,45 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (check (and (stringp doc) (let ((n (length anchor))) (and (>= (length doc) n) (string= anchor doc :start2 (- (length doc) n))))) "~(~A~)'s docstring is ~S" name doc)
              (check (and (= 5 (length text)) (equal features (fifth text))) "~(~A~) keeps ~S" name text))))
 ;; KTXT7V-kernel-is-its-text ends here
+
+;; [[file:../physics.org::#W4RMST][W4RMST-warm-start-formula]]
+(define-claim "W4RMST" warm-start-formula
+    "warm-start-range applies P and the torques of the closed form to all twelve columns, in each variant."
+  (let* ((cbuf (luv-physics::make-constraint-columns))
+         (given '((nx 0.6) (ny 0.8) (nz 0.0) (t1x 0.8) (t1y -0.6) (t1z 0.0) (t2x 0.0) (t2y 0.0) (t2z 1.0)
+                   (normal-impulse 2.0) (tangent-impulse-1 3.0) (tangent-impulse-2 5.0) (spin-impulse 7.0)
+                   (rolling-impulse-x 11.0) (rolling-impulse-y 13.0) (rolling-impulse-z 17.0)
+                   (ima 0.5) (imb 0.25) (iia 0.1) (iib 0.2) (ra 0.3) (rb 0.4))))
+    (luv-physics::constraint-columns-ensure-capacity cbuf 8)
+    (setf (luv-physics::constraint-columns-length cbuf) 1
+          (aref (luv-physics::constraint-columns-body-a cbuf) 0) 0
+          (aref (luv-physics::constraint-columns-body-b cbuf) 0) 1)
+    (loop for (column value) in given
+          do (setf (aref (luv-physics::constraint-columns-data cbuf)
+                         (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset column)))
+                   value))
+    (flet ((at (column) (float (second (assoc column given)) 1d0)))
+      (dolist (features '((:friction :rolling-resistance) (:friction) (:rolling-resistance) ()))
+        (let* ((friction (member :friction features)) (rolling (member :rolling-resistance features))
+               (kernel (luv-physics::featured-kernel 'luv-physics::warm-start-range features))
+               (v (make-array 32 :element-type 'single-float :initial-element 0.0))
+               (n (list (at 'nx) (at 'ny) (at 'nz)))
+               (t1 (list (at 't1x) (at 't1y) (at 't1z))) (t2 (list (at 't2x) (at 't2y) (at 't2z)))
+               (l1 (if friction (at 'tangent-impulse-1) 0d0)) (l2 (if friction (at 'tangent-impulse-2) 0d0))
+               (p (mapcar (lambda (n t1 t2) (+ (* (at 'normal-impulse) n) (* l1 t1) (* l2 t2))) n t1 t2))
+               (c (mapcar (lambda (t1 t2) (- (* l1 t2) (* l2 t1))) t1 t2))
+               (r (mapcar (lambda (roll n) (+ (if rolling roll 0d0) (if friction (* (at 'spin-impulse) n) 0d0)))
+                          (list (at 'rolling-impulse-x) (at 'rolling-impulse-y) (at 'rolling-impulse-z)) n))
+               (want (append (mapcar (lambda (p) (- (* (at 'ima) p))) p)
+                             (mapcar (lambda (c r) (- (* (at 'iia) (+ (* (at 'ra) c) r)))) c r)
+                             (mapcar (lambda (p) (* (at 'imb) p)) p)
+                             (mapcar (lambda (c r) (* (at 'iib) (- r (* (at 'rb) c)))) c r))))
+          (funcall kernel cbuf v 0 1)
+          (let ((got (append (loop for j below 6 collect (aref v (+ (luv-physics::solver-row 0) j)))
+                             (loop for j below 6 collect (aref v (+ (luv-physics::solver-row 1) j))))))
+            (check (every (lambda (g w) (<= (abs (- g w)) (* 1d-6 (max 1d0 (abs w))))) got want)
+                   "~S: the velocities ~S, not ~S" features got want)))))))
+;; W4RMST-warm-start-formula ends here
 
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
