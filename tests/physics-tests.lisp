@@ -1990,6 +1990,25 @@ function of a column name that reads row K's float in that column. #T3STK1"
                (check (< (abs (- (body-y w h) 0.245)) 0.002) "at (~A, ~A) the ball rests at ~,5F" x z (body-y w h))))))
 ;; MYWH16-one-contact-per-support ends here
 
+;; [[file:../physics.org::#MYWH16][MYWH16-overshoot-every-side]]
+(define-claim "MYWH16" overshoot-every-side
+    "A cell touching the centre's solid cell only at an edge or corner is silent, on every side of every axis."
+  (loop for ox from -1 to 1
+        do (loop for oy from -1 to 1
+                 do (loop for oz from -1 to 1
+                          when (>= (count 0 (list ox oy oz) :test-not #'eql) 2)
+                            do (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+                                 ;; D at (4 4 4); C = D - o, so that the centre overshoots C by o
+                                 (fill-terrain terrain 4 4 4 5 5 5 t)
+                                 (fill-terrain terrain (- 4 ox) (- 4 oy) (- 4 oz) (- 5 ox) (- 5 oy) (- 5 oz) t)
+                                 (flet ((at (o) (+ 4 (case o (1 0.15) (-1 0.85) (t 0.5)))))
+                                   (let ((h (add-physics-body w (at ox) (at oy) (at oz) :radius 0.3)))
+                                     (step-physics-world w)
+                                     (check (= 1 (length (terrain-contacts w h)))
+                                            "overshoot (~D ~D ~D): ~D terrain contacts" ox oy oz
+                                            (length (terrain-contacts w h))))))))))
+;; MYWH16-overshoot-every-side ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-rolls-over-ledge]]
 (define-claim "MYWH16" rolls-over-ledge
     "Rolling off a one-cell ledge, the edge contact tilts diagonal while pushing; the ball lands below."
@@ -2082,6 +2101,17 @@ function of a column name that reads row K's float in that column. #T3STK1"
                      "moving ~:[-~;+~]~A with the wall ~,2F m ahead: ~D terrain contacts"
                      (plusp direction) (elt "xyz" axis) distance (length (terrain-contacts w h))))))))))
 ;; SW33P7-sweep-reaches-its-travel ends here
+
+;; [[file:../physics.org::#SW33P7][SW33P7-parallel-only-below-threshold]]
+(define-claim "SW33P7" parallel-only-below-threshold
+    "A ray on a cell boundary drifting at exactly 1e-12 crosses it at once and finds that column's cell."
+  (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+    (fill-terrain terrain 4 0 -16 5 1 32 t)
+    ;; a power of two for the speed, so that the direction's x is exactly -1e-12
+    (let ((h (add-physics-body w 5.0 2.2 3.5 :radius 0.3 :vx (* 64 -1e-12) :vy -64.0)))
+      (step-physics-world w)
+      (check (= 1 (length (terrain-contacts w h))) "~D terrain contacts" (length (terrain-contacts w h))))))
+;; SW33P7-parallel-only-below-threshold ends here
 
 ;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
 (define-claim "B0XPH5" box-contact-geometry
