@@ -675,7 +675,7 @@ writing each step to STATUS-PATH.  Never returns."
 ;;; ------------------------------------------------------------------------------------
 ;;; The parent: two children at a time, timeouts, replacements
 
-(defparameter *compile-timeout* 300 "Seconds a child may take to compile its mutant.")
+(defparameter *compile-timeout* 600 "Seconds a child may take to compile its mutant: a mutant of the kernel template compiles both wide families and their variants again, minutes on a loaded machine.")
 
 (defun claim-timeout (seconds)
   "How long a claim that takes SECONDS on the unchanged engine may run in a child."
