@@ -1535,6 +1535,58 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (< striker 2d0) "~,1F m/s, ~,2F m aside: the striker leaves ~,2F deg off" speed offset striker)))))
 ;; G3NCNT-oblique-blows-true ends here
 
+;; [[file:../physics.org::#G3NCNT][G3NCNT-touch-normal-closed-form]]
+(define-claim "G3NCNT" touch-normal-closed-form
+    "pair-impact-normal: the line of centres at the touch, exactly; the given normal when not closing, at b = 0 too."
+  (flet ((normal (dx dy dz wx wy wz)
+           (multiple-value-list
+            (luv-physics::pair-impact-normal dx dy dz wx wy wz 0.5 (/ 1.0 60) 1.0 0.0 0.0 -0.2)))
+         (closed (dx dy wx)
+           ;; in double precision: the smaller root, capped at the step
+           (let* ((a (* wx wx)) (b (* dx wx)) (c (- (+ (* dx dx) (* dy dy)) 0.25d0))
+                  (time (min (/ 1d0 60) (/ (- (- b) (sqrt (- (* b b) (* a c)))) a)))
+                  (qx (+ dx (* wx time))) (q (sqrt (+ (* qx qx) (* dy dy))))
+                  (mx (/ qx q)) (my (/ dy q)))
+             (list mx my 0d0 (- (+ (* dx mx) (* dy my)) 0.5d0)))))
+    (check (every (lambda (got want) (< (abs (- got want)) 1d-6))
+                  (normal 1.0 0.3 0.0 -60.0 0.0 0.0) '(0.8d0 0.6d0 0d0 0.48d0))
+           "touch within the step: ~S" (normal 1.0 0.3 0.0 -60.0 0.0 0.0))
+    (check (every (lambda (got want) (< (abs (- got want)) 1d-6))
+                  (normal 1.0 0.3 0.0 -30.0 0.0 0.0) (closed 1d0 0.3d0 -30d0))
+           "touch after the step: ~S, not ~S" (normal 1.0 0.3 0.0 -30.0 0.0 0.0) (closed 1d0 0.3d0 -30d0))
+    (loop for (what . motion) in '(("at rest" 0.3 0.0 0.0 0.0 0.0 0.0)
+                                   ("moving apart" 0.3 0.0 0.0 2.0 1.0 0.0)
+                                   ("moving across, overlapping" 0.3 0.0 0.0 0.0 2.0 0.0)
+                                   ("passing by" 1.0 0.6 0.0 -60.0 0.0 0.0))
+          do (check (equal '(1.0 0.0 0.0 -0.2) (apply #'normal motion))
+                    "~A: ~S" what (apply #'normal motion)))))
+;; G3NCNT-touch-normal-closed-form ends here
+
+;; [[file:../physics.org::#G3NCNT][G3NCNT-impulses-kept-within-cone]]
+(define-claim "G3NCNT" impulses-kept-within-cone
+    "touch-contact keeps the impulses when the normal turned to a cosine of exactly 0.9, drops them below."
+  (let* ((contacts (luv-physics::make-contact-columns))
+         (table (luv-physics::make-contact-table))
+         (geometry (luv-physics::contact-columns-geometry contacts))
+         (s (sqrt (- 1.0 (* 0.9 0.9))))
+         (row -1))
+    (flet ((touch (step nx ny)
+             (setf (luv-physics::contact-table-step table) step
+                   (luv-physics::contact-table-cursor table) 0)
+             (setf row (luv-physics::touch-contact contacts table 7 luv-physics::+contact-terrain+ 5 -1
+                                                   nx ny 0.0 0.01 0.0 0.0 0.0 0.0 0.0 0.0)))
+           (impulse () (luv-physics::contact@ geometry row luv-physics::normal-impulse)))
+      (touch 1 1.0 0.0)
+      (setf (luv-physics::contact@ geometry row luv-physics::normal-impulse) 1.0)
+      (touch 2 0.9 s)
+      (check (= 1.0 (impulse)) "turned to a cosine of exactly 0.9: impulse ~A" (impulse))
+      ;; back along x, shortened by one part in 2^24: a cosine with the last normal just under 0.9
+      (let ((nx (- 1.0 single-float-epsilon)))
+        (check (< (* nx 0.9) 0.9) "the second turn is not past the cone")
+        (touch 3 nx 0.0))
+      (check (= 0.0 (impulse)) "turned past the cone: impulse ~A" (impulse)))))
+;; G3NCNT-impulses-kept-within-cone ends here
+
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sorted-rows-keep-handles]]
 (define-claim "G4R1D5" sorted-rows-keep-handles
     "After the grid phase sorts scrambled rows, each handle still names its own body."
@@ -1835,6 +1887,21 @@ function of a column name that reads row K's float in that column. #T3STK1"
                      "~:[b~;a~] first: (nx ny nz separation px py pz) is ~S, not ~S" a-first got want))))))))
 ;; P41RS7-pair-contact-geometry ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-gone-rows-loose]]
+(define-claim "P41RS7" gone-rows-loose
+    "pair-list-strays over fewer rows than the list knew marks the rows gone loose."
+  (let* ((w (make-floor-world)))
+    (dotimes (i 5) (add-physics-body w (+ 1.5 (* 1.0 i)) 0.5 3.5))
+    (step-physics-world w)
+    (let* ((plist (luv-physics::physics-world-pair-list w))
+           (awake (luv-physics::physics-world-awake w))
+           (count (luv-physics::pair-list-strays plist awake 3 (luv-physics::pair-list-cell plist) 0.01)))
+      (check (= 5 (luv-physics::pair-list-rows plist)) "the list knows ~D rows" (luv-physics::pair-list-rows plist))
+      (check (= 0 count) "~D of the three rows left are loose" count)
+      (check (equal '(0 0 0 1 1) (coerce (subseq (luv-physics::pair-list-loose plist) 0 5) 'list))
+             "loose flags ~S" (subseq (luv-physics::pair-list-loose plist) 0 5)))))
+;; P41RS7-gone-rows-loose ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
 (define-claim "MYWH16" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
@@ -1923,6 +1990,25 @@ function of a column name that reads row K's float in that column. #T3STK1"
                       "at (~A, ~A) a normal is not vertical: ~S" x z contacts)
                (check (< (abs (- (body-y w h) 0.245)) 0.002) "at (~A, ~A) the ball rests at ~,5F" x z (body-y w h))))))
 ;; MYWH16-one-contact-per-support ends here
+
+;; [[file:../physics.org::#MYWH16][MYWH16-overshoot-every-side]]
+(define-claim "MYWH16" overshoot-every-side
+    "A cell touching the centre's solid cell only at an edge or corner is silent, on every side of every axis."
+  (loop for ox from -1 to 1
+        do (loop for oy from -1 to 1
+                 do (loop for oz from -1 to 1
+                          when (>= (count 0 (list ox oy oz) :test-not #'eql) 2)
+                            do (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+                                 ;; D at (4 4 4); C = D - o, so that the centre overshoots C by o
+                                 (fill-terrain terrain 4 4 4 5 5 5 t)
+                                 (fill-terrain terrain (- 4 ox) (- 4 oy) (- 4 oz) (- 5 ox) (- 5 oy) (- 5 oz) t)
+                                 (flet ((at (o) (+ 4 (case o (1 0.15) (-1 0.85) (t 0.5)))))
+                                   (let ((h (add-physics-body w (at ox) (at oy) (at oz) :radius 0.3)))
+                                     (step-physics-world w)
+                                     (check (= 1 (length (terrain-contacts w h)))
+                                            "overshoot (~D ~D ~D): ~D terrain contacts" ox oy oz
+                                            (length (terrain-contacts w h))))))))))
+;; MYWH16-overshoot-every-side ends here
 
 ;; [[file:../physics.org::#MYWH16][MYWH16-rolls-over-ledge]]
 (define-claim "MYWH16" rolls-over-ledge
@@ -2017,6 +2103,17 @@ function of a column name that reads row K's float in that column. #T3STK1"
                      (plusp direction) (elt "xyz" axis) distance (length (terrain-contacts w h))))))))))
 ;; SW33P7-sweep-reaches-its-travel ends here
 
+;; [[file:../physics.org::#SW33P7][SW33P7-parallel-only-below-threshold]]
+(define-claim "SW33P7" parallel-only-below-threshold
+    "A ray on a cell boundary drifting at exactly 1e-12 crosses it at once and finds that column's cell."
+  (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+    (fill-terrain terrain 4 0 -16 5 1 32 t)
+    ;; a power of two for the speed, so that the direction's x is exactly -1e-12
+    (let ((h (add-physics-body w 5.0 2.2 3.5 :radius 0.3 :vx (* 64 -1e-12) :vy -64.0)))
+      (step-physics-world w)
+      (check (= 1 (length (terrain-contacts w h))) "~D terrain contacts" (length (terrain-contacts w h))))))
+;; SW33P7-parallel-only-below-threshold ends here
+
 ;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
 (define-claim "B0XPH5" box-contact-geometry
     "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
@@ -2107,6 +2204,25 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (eq t (luv-physics::validate-physics-world w)))))))
 ;; PRUN3D-reorder-keeps-contacts ends here
 
+;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-threshold]]
+(define-claim "PRUN3D" reorder-threshold
+    "A world of five contacts reorders at 64 misses, not at 63 and not at five."
+  (let* ((w (make-floor-world))
+         (table (luv-physics::physics-world-contact-table w)))
+    (dotimes (i 5) (add-physics-body w (+ 1.5 (* 1.0 i)) 0.5 3.5 :collide-with-bodies nil))
+    (dotimes (i 30) (step-physics-world w))
+    (check (= 5 (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
+    (loop for (misses after) in '((63 63) (64 0))
+          do (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                              luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase))
+               (funcall phase w))
+             (setf (luv-physics::contact-table-misses table) misses)
+             (luv-physics::prune-phase w)
+             (check (= after (luv-physics::contact-table-misses table))
+                    "after ~D misses among five contacts the prune left ~D, not ~D"
+                    misses (luv-physics::contact-table-misses table) after))))
+;; PRUN3D-reorder-threshold ends here
+
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
 (define-claim "SSMPYW" colours-disjoint
     "In a 300-ball pile no colour below 24 holds two constraints on the same awake body."
@@ -2184,6 +2300,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "~D constraints overflowed at step 200 (most over steps 100-200: ~D)"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
+
+;; [[file:../physics.org::#KTXT7V][KTXT7V-kernel-is-its-text]]
+(define-claim "KTXT7V" kernel-is-its-text
+    "Featured kernels keep their docstrings and texts; the text compiled for every feature is the kernel."
+  (loop for (name anchor features)
+          in '((luv-physics::warm-start-range "#W4RMST" (:friction :rolling-resistance))
+               (luv-physics::solve-range "#S0LV3R" (:friction :rolling-resistance :restitution))
+               (luv-physics::prepare-phase "#PR3PAR" (:restitution :rolling-resistance :contact-events :hit-events))
+               (luv-physics::store-phase "#ST0R3S" (:contact-events :hit-events :rolling-resistance))
+               (luv-physics::warm-start-blocks/sse "#W1D3KF" (:friction :rolling-resistance))
+               (luv-physics::solve-blocks/sse "#W1D3KF" (:friction :rolling-resistance :restitution))
+               (luv-physics::warm-start-blocks/avx2 "#W1D3KF" (:friction :rolling-resistance))
+               (luv-physics::solve-blocks/avx2 "#W1D3KF" (:friction :rolling-resistance :restitution)))
+        do (let ((doc (documentation name 'function)) (text (get name 'luv-physics::featured-kernel)))
+             (check (and (stringp doc) (let ((n (length anchor))) (and (>= (length doc) n) (string= anchor doc :start2 (- (length doc) n))))) "~(~A~)'s docstring is ~S" name doc)
+             (check (and (= 5 (length text)) (equal features (fifth text))) "~(~A~) keeps ~S" name text))))
+;; KTXT7V-kernel-is-its-text ends here
 
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-bracing-holds-while-still]]
 (define-claim "PR3PAR" bracing-holds-while-still
@@ -2313,6 +2446,82 @@ function of a column name that reads row K's float in that column. #T3STK1"
           do (check (< (abs (- got (/ g 60d0))) 1d-6) "v~(~A~) is ~,7F, not ~,7F" name got (/ g 60d0)))
     (check (equal '(0.0 0.0 0.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h))))))
 ;; K3RNLS-gravity-in-every-column ends here
+
+;; [[file:../physics.org::#K3RNLS][K3RNLS-entry-ranges-exact]]
+(define-claim "K3RNLS" entry-ranges-exact
+    "Each solver entry point takes its numbers at both ends of their ranges and refuses the nearest beyond."
+  (let* ((w (make-floor-world))
+         (k (luv-physics::physics-world-kernels w))
+         (below-one (- 1.0 (scale-float 1.0 -24))))
+    (luv-physics::add-physics-body w 3.5 1.0 3.5)
+    (luv-physics::step-physics-world w)
+    (flet ((answer (call)
+             (handler-case (progn (funcall call) :ran)
+               (invalid-physics-parameter (e) (list :refused (luv-physics::invalid-physics-parameter-name e)))
+               (error (e) (type-of e)))))
+      (loop for (label want call)
+              in (list (list "velocities h -1e7" :ran (lambda () (luv-physics:physics-integrate-velocities k w -1e7)))
+                       (list "velocities h 1e7" :ran (lambda () (luv-physics:physics-integrate-velocities k w 1e7)))
+                       (list "velocities h -10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-velocities k w -10000001.0)))
+                       (list "velocities h 10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-velocities k w 10000001.0)))
+                       (list "positions h -1e7" :ran (lambda () (luv-physics:physics-integrate-positions k w -1e7)))
+                       (list "positions h 1e7" :ran (lambda () (luv-physics:physics-integrate-positions k w 1e7)))
+                       (list "positions h -10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-positions k w -10000001.0)))
+                       (list "positions h 10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-positions k w 10000001.0)))
+                       (list "solve inv-h 1" :ran (lambda () (luv-physics:physics-solve-contacts k w 1.0 t 0.0)))
+                       (list "solve inv-h 1e7" :ran (lambda () (luv-physics:physics-solve-contacts k w 1e7 nil 0.0)))
+                       (list "solve inv-h below 1" '(:refused :inv-h) (lambda () (luv-physics:physics-solve-contacts k w below-one t 0.0)))
+                       (list "solve inv-h 10000001" '(:refused :inv-h) (lambda () (luv-physics:physics-solve-contacts k w 10000001.0 t 0.0)))
+                       (list "solve elapsed 1e7" :ran (lambda () (luv-physics:physics-solve-contacts k w 60.0 t 1e7)))
+                       (list "solve elapsed below 0" '(:refused :elapsed) (lambda () (luv-physics:physics-solve-contacts k w 60.0 t (- least-positive-normalized-single-float))))
+                       (list "solve elapsed 10000001" '(:refused :elapsed) (lambda () (luv-physics:physics-solve-contacts k w 60.0 t 10000001.0))))
+            do (let ((got (answer call)))
+                 (check (equal want got) "~A: ~S, not ~S" label got want))))))
+;; K3RNLS-entry-ranges-exact ends here
+
+;; [[file:../physics.org::#W4RMST][W4RMST-warm-start-formula]]
+(define-claim "W4RMST" warm-start-formula
+    "warm-start-range applies P and the torques of the closed form to all twelve columns, in each variant."
+  (let* ((cbuf (luv-physics::make-constraint-columns))
+         (given '((nx 0.6) (ny 0.8) (nz 0.0) (t1x 0.8) (t1y -0.6) (t1z 0.0) (t2x 0.0) (t2y 0.0) (t2z 1.0)
+                   (normal-impulse 2.0) (tangent-impulse-1 3.0) (tangent-impulse-2 5.0) (spin-impulse 7.0)
+                   (rolling-impulse-x 11.0) (rolling-impulse-y 13.0) (rolling-impulse-z 17.0)
+                   (ima 0.5) (imb 0.25) (iia 0.1) (iib 0.2) (ra 0.3) (rb 0.4))))
+    (luv-physics::constraint-columns-ensure-capacity cbuf 8)
+    (setf (luv-physics::constraint-columns-length cbuf) 1
+          (aref (luv-physics::constraint-columns-body-a cbuf) 0) 0
+          (aref (luv-physics::constraint-columns-body-b cbuf) 0) 1)
+    (loop for (column value) in given
+          do (setf (aref (luv-physics::constraint-columns-data cbuf)
+                         (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset column)))
+                   value))
+    (flet ((at (column) (float (second (assoc column given)) 1d0)))
+      (dolist (features '((:friction :rolling-resistance) (:friction) (:rolling-resistance) ()))
+        (let* ((friction (member :friction features)) (rolling (member :rolling-resistance features))
+               (kernel (luv-physics::featured-kernel 'luv-physics::warm-start-range features))
+               (v (let ((v (make-array 32 :element-type 'single-float)))
+                    ;; every column starts from its own velocity, so that a column read for another shows
+                    (dotimes (j 32 v) (setf (aref v j) (* 0.125 (1+ j))))))
+               (start (loop for j below 32 collect (float (aref v j) 1d0)))
+               (n (list (at 'nx) (at 'ny) (at 'nz)))
+               (t1 (list (at 't1x) (at 't1y) (at 't1z))) (t2 (list (at 't2x) (at 't2y) (at 't2z)))
+               (l1 (if friction (at 'tangent-impulse-1) 0d0)) (l2 (if friction (at 'tangent-impulse-2) 0d0))
+               (p (mapcar (lambda (n t1 t2) (+ (* (at 'normal-impulse) n) (* l1 t1) (* l2 t2))) n t1 t2))
+               (c (mapcar (lambda (t1 t2) (- (* l1 t2) (* l2 t1))) t1 t2))
+               (r (mapcar (lambda (roll n) (+ (if rolling roll 0d0) (if friction (* (at 'spin-impulse) n) 0d0)))
+                          (list (at 'rolling-impulse-x) (at 'rolling-impulse-y) (at 'rolling-impulse-z)) n))
+               (want (append (mapcar (lambda (p) (- (* (at 'ima) p))) p)
+                             (mapcar (lambda (c r) (- (* (at 'iia) (+ (* (at 'ra) c) r)))) c r)
+                             (mapcar (lambda (p) (* (at 'imb) p)) p)
+                             (mapcar (lambda (c r) (* (at 'iib) (- r (* (at 'rb) c)))) c r))))
+          (funcall kernel cbuf v 0 1)
+          (let ((got (append (loop for j below 6 for o = (+ (luv-physics::solver-row 0) j)
+                                   collect (- (aref v o) (nth o start)))
+                             (loop for j below 6 for o = (+ (luv-physics::solver-row 1) j)
+                                   collect (- (aref v o) (nth o start))))))
+            (check (every (lambda (g w) (<= (abs (- g w)) (* 1d-6 (max 1d0 (abs w))))) got want)
+                   "~S: the velocities changed by ~S, not ~S" features got want)))))))
+;; W4RMST-warm-start-formula ends here
 
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
