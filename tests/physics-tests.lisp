@@ -1251,6 +1251,99 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (null wrong) "~D calls were not refused by name:~%~{  ~S~%~}" (length wrong) (reverse wrong))))
 ;; M4K3WD-non-world-named ends here
 
+;; [[file:../physics.org::#M4K3WD][M4K3WD-limits-and-every-column]]
+(define-claim "M4K3WD" limits-and-every-column
+    "Arguments are accepted at their limits and refused just past them; a new row holds exactly what it was given."
+  (flet ((outcome (thunk)
+           (handler-case (progn (funcall thunk) :accepted)
+             (luv-physics::invalid-physics-radius () :radius)
+             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+             (error (e) (type-of e)))))
+    (let ((wrong '()))
+      (flet ((world-with (want &rest arguments)
+               (let ((got (outcome (lambda () (apply #'make-physics-world arguments)))))
+                 (unless (eq got want) (push (list arguments got) wrong)))))
+        (world-with :accepted :step-seconds 0.0001) (world-with :step-seconds :step-seconds 0.000099)
+        (world-with :accepted :step-seconds 0.9999) (world-with :step-seconds :step-seconds 1.0)
+        (world-with :accepted :substeps 1) (world-with :accepted :substeps 64)
+        (world-with :substeps :substeps 0) (world-with :substeps :substeps 65)
+        (world-with :accepted :gravity '(1000 -1000 1000)) (world-with :gravity :gravity '(0 -1000.1 0))
+        (world-with :gravity :gravity '(0 -9.81))
+        (loop for (want dt) in '((:accepted 0.0001) (:dt 0.000099) (:accepted 0.9999) (:dt 1.0))
+              do (let ((got (outcome (lambda () (step-physics-world (make-physics-world) dt)))))
+                   (unless (eq got want) (push (list :step dt got) wrong)))))
+      (let ((w (make-physics-world :step-seconds 1/50 :substeps 7 :gravity '(1.5 -3 0.25))))
+        (check (equal (list (luv-physics::physics-world-step-seconds w) (luv-physics::physics-world-substeps w)
+                            (luv-physics::physics-world-gravity-x w) (luv-physics::physics-world-gravity-y w)
+                            (luv-physics::physics-world-gravity-z w))
+                      (list (float 1/50 1.0) 7 1.5 -3.0 0.25))
+               "the world keeps ~S" (luv-physics::physics-world-step-seconds w)))
+      (let* ((w (make-floor-world)) (limit (luv-physics::max-radius-for w))
+             (speed (luv-physics::physics-world-max-speed w)) (diagonal (* speed (/ (sqrt 3.0)) 0.99999))
+             (far (* luv-physics::+physics-coordinate-limit+ 0.99999)))
+        (dotimes (i 3) (add-physics-body w (+ 1.5 i) 1.0 1.5))
+        (let ((before (world-fingerprint w)))
+          (loop for (want . arguments)
+                  in `((:accepted :radius ,luv-physics::+physics-min-radius+)
+                       (:radius :radius ,(* 0.999 luv-physics::+physics-min-radius+))
+                       (:accepted :radius ,limit) (:radius :radius ,(* 1.001 limit))
+                       (:accepted :mass ,luv-physics::+physics-min-mass+)
+                       (:mass :mass ,(* 0.999 luv-physics::+physics-min-mass+))
+                       (:accepted :mass ,luv-physics::+physics-max-mass+)
+                       (:mass :mass ,(* 1.001 luv-physics::+physics-max-mass+))
+                       (:accepted :restitution 0.0) (:accepted :restitution 1.0)
+                       (:restitution :restitution -0.001) (:restitution :restitution 1.001)
+                       (:accepted :friction 0.0) (:accepted :friction ,luv-physics::+physics-max-friction+)
+                       (:friction :friction -0.001) (:friction :friction ,(* 1.001 luv-physics::+physics-max-friction+))
+                       (:accepted :rolling-resistance 0.0)
+                       (:accepted :rolling-resistance ,luv-physics::+physics-max-friction+)
+                       (:rolling-resistance :rolling-resistance -0.001)
+                       (:rolling-resistance :rolling-resistance ,(* 1.001 luv-physics::+physics-max-friction+))
+                       (:accepted :vx ,speed) (:accepted :vy ,(- speed)) (:accepted :vz ,speed)
+                       (:velocity :vx ,(* 1.001 speed)) (:velocity :vy ,(* -1.001 speed))
+                       (:velocity :vz ,(* 1.001 speed))
+                       (:accepted :vx ,diagonal :vy ,diagonal :vz ,diagonal)
+                       (:velocity :vx ,(* 1.001 diagonal) :vy ,(* 1.001 diagonal) :vz ,(* 1.001 diagonal))
+                       (:accepted :life 0.001) (:life :life -0.001) (:kind :kind 1.5))
+                do (let* ((probe (make-physics-world))
+                          (got (outcome (lambda () (apply #'add-physics-body probe 0.0 0.0 0.0 arguments)))))
+                     (unless (eq got want) (push (list arguments got) wrong))
+                     (unless (eq want :accepted)
+                       (let ((again (outcome (lambda () (apply #'add-physics-body w 4.0 1.0 4.0 arguments)))))
+                         (unless (eq again want) (push (list :in-a-world arguments again) wrong))))))
+          (dolist (axis '(:x :y :z))
+            (dolist (sign '(1 -1))
+              (flet ((at (v) (outcome (lambda () (apply #'add-physics-body (make-physics-world)
+                                                        (mapcar (lambda (a) (if (eq a axis) v 0.0)) '(:x :y :z)))))))
+                (unless (eq :accepted (at (* sign far))) (push (list axis (* sign far) (at (* sign far))) wrong))
+                (let ((v (* sign luv-physics::+physics-coordinate-limit+)))
+                  (unless (eq axis (at v)) (push (list axis v (at v)) wrong))))))
+          (check (equal before (world-fingerprint w)) "a refusal changed the world"))
+        (check (null wrong) "~D arguments answered wrongly: ~S" (length wrong) (reverse wrong))
+        (let* ((version (luv-physics::physics-world-rows-version w))
+               (h (add-physics-body w 1.25 2.5 -3.75 :radius 0.3 :mass 2.5 :restitution 0.4 :friction 0.7
+                                                     :rolling-resistance 0.05 :vx 1 :vy -2 :vz 3 :life 4.5
+                                                     :report-hits t :collide-with-bodies nil :kind 7))
+               (plain (add-physics-body w 5.0 1.0 5.0 :radius 0.2))
+               (awake (luv-physics::physics-world-awake w)))
+          (check (= (+ version 2) (luv-physics::physics-world-rows-version w)) "two additions counted ~D changes"
+                 (- (luv-physics::physics-world-rows-version w) version))
+          (check (= 0.3 (luv-physics::physics-world-max-radius w)) "largest radius ~S" (luv-physics::physics-world-max-radius w))
+          (flet ((row-of (handle)
+                   (let ((row (nth-value 1 (luv-physics::resolve-handle w handle))))
+                     (loop for column in '(x y z vx vy vz wx wy wz qw qx qy qz radius inverse-mass inverse-inertia
+                                           restitution friction rolling-resistance sleep-time age life flags handle kind)
+                           collect (aref (funcall (intern (format nil "BODY-COLUMNS-~A" column) '#:luv-physics) awake)
+                                         row)))))
+            (let ((want (list 1.25 2.5 -3.75 1.0 -2.0 3.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.3 (/ 1.0 2.5)
+                              (/ 5.0 (* 2.0 2.5 0.3 0.3)) 0.4 0.7 0.05 0.0 0.0 4.5
+                              (logior luv-physics::+flag-report-hits+ luv-physics::+flag-terrain-only+) h 7)))
+              (check (equal (row-of h) want) "the row holds~%  ~S~%not~%  ~S" (row-of h) want))
+            (let ((want (list 5.0 1.0 5.0 0.0 0.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.2 1.0 (/ 5.0 (* 2.0 1.0 0.2 0.2))
+                              0.0 0.6 0.0 0.0 0.0 0.0 0 plain 0)))
+              (check (equal (row-of plain) want) "the default row holds~%  ~S~%not~%  ~S" (row-of plain) want))))))))
+;; M4K3WD-limits-and-every-column ends here
+
 ;; [[file:../physics.org::#E7V3NT][E7V3NT-mortal-body-events]]
 (define-claim "E7V3NT" mortal-body-events
     "A 1 s mortal ball: :begin, then :end, then :expired on step 60; afterwards its handle is stale."
@@ -1493,14 +1586,19 @@ function of a column name that reads row K's float in that column. #T3STK1"
   (let* ((w (make-floor-world))
          (owner (list :wall 7))
          (h (luv-physics::add-physics-body w 2.5 0.245 3.5 :vx 6.0))
-         (hits '()) (begins '()))
+         (other (luv-physics::add-physics-body w 2.5 0.245 6.5 :vx 6.0))
+         (hits '()) (begins '()) (other-hits '()))
     (dotimes (i 30)
       (dotimes (k 19)
         (luv-physics::post-physics-box w -10.0 0.5 (- (* 0.6 k) 12.0) 0.25 0.25 0.25 :owner (list :other k)))
       (luv-physics::post-physics-box w 4.0 0.5 3.5 0.25 0.5 0.5 :owner owner)
+      (luv-physics::post-physics-box w 4.0 0.5 6.5 0.25 0.5 0.5)
       (loop for (kind a b speed datum) in (step-events w)
+            when (and (= a other) (eq kind :hit))
+              do (push datum other-hits)
             when (and (= a h) datum)
               do (case kind (:hit (push (list speed datum) hits)) (:begin (push datum begins)))))
+    (check (and other-hits (every #'null other-hits)) "the box without an owner gave hits with data ~S" other-hits)
     (setf hits (reverse hits))
     (check (not (null hits)) "no :hit event carried a datum")
     (check (every (lambda (hit) (eq owner (second hit))) hits) "hit data ~S" (mapcar #'second hits))
@@ -2557,8 +2655,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-step-statistics]]
 (define-claim "IDVK7G" step-statistics
     "Last-step contact count, colour count and real seconds are consistent with the step's buffers."
-  (let ((w (luv-physics::make-basin-world 200)))
-    (dotimes (i 120) (luv-physics::step-physics-world w))
+  (let ((w (luv-physics::make-basin-world 200))
+        (clock (make-array (* 2 (length luv-physics::*physics-phases*)) :element-type 'fixnum :initial-element 0)))
+    (dotimes (i 120)
+      (when (= i 100) (setf (luv-physics::physics-world-phase-clock w) clock))
+      (luv-physics::step-physics-world w))
+    (setf (luv-physics::physics-world-phase-clock w) nil)
+    (check (every #'plusp (subseq clock 0 (length luv-physics::*physics-phases*)))
+           "the phase clock counted ~S" clock)
     (let ((contacts (luv-physics::physics-world-last-step-contact-count w))
           (colours (luv-physics::physics-world-last-step-color-count w))
           (seconds (luv-physics::physics-world-last-step-real-seconds w))
@@ -2587,6 +2691,20 @@ function of a column name that reads row K's float in that column. #T3STK1"
                   (physics-world-features (make-physics-world :features '(:events :terrain)))))
     (check (typep (handler-case (make-physics-world :features '(:terrain :magnetism)) (error (e) e))
                   'invalid-physics-parameter)))
+  (let* ((table luv-physics::*featured-kernels*) (kept (hash-table-count table)))
+    (dolist (set luv-physics::+standard-feature-sets+)
+      (dolist (name '(luv-physics::warm-start-range luv-physics::solve-range luv-physics::store-phase))
+        (let* ((key (luv-physics::kernel-feature-key name set))
+               (stored (gethash (cons name key) table)))
+          (unless (equal key (luv-physics::kernel-feature-key name luv-physics::+physics-features+))
+            (check (and stored (eq stored (luv-physics::featured-kernel name set)))
+                   "the variant of ~A for ~S was not compiled with the page" name set)))))
+    (check (= kept (hash-table-count table)) "asking for the standard variants compiled ~D more"
+           (- (hash-table-count table) kept))
+    (let ((first (luv-physics::featured-kernel 'luv-physics::warm-start-range '(:terrain :rolling-resistance))))
+      (check (functionp first))
+      (check (eq first (luv-physics::featured-kernel 'luv-physics::warm-start-range '(:terrain :rolling-resistance)))
+             "a variant asked for twice was compiled twice")))
   (flet ((code-bytes (f) (sb-kernel:%code-code-size (sb-kernel:fun-code-header (coerce f 'function)))))
     (dolist (family (available-kernel-families))
       (let* ((world (make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels family
@@ -2684,6 +2802,64 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits")
         (check (some (lambda (h) (logbitp 61 h)) (cons h0 hashes)) "no hash of ~S uses bit 61" (cons h0 hashes))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
+
+;; [[file:../physics.org::#V4L1D8][V4L1D8-each-invariant-named]]
+(define-claim "V4L1D8" each-invariant-named
+    "A valid world broken in each of ten ways signals physics-world-invalid naming that invariant."
+  (labels ((build ()
+             (let* ((w (make-floor-world))
+                    (balls (loop for i below 5 collect (add-physics-body w (+ 2.0 (* 0.5 i)) 0.245 3.5
+                                                                         :life (if (= i 3) 100.0 nil))))
+                    (gone (add-physics-body w 8.0 0.245 8.0)))
+               (dotimes (i 5) (step-physics-world w))
+               (remove-physics-body w gone)
+               (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w (nth 3 balls))))
+               (values w balls gone)))
+           (named (corrupt)
+             (multiple-value-bind (w balls gone) (build)
+               (let* ((ids (luv-physics::physics-world-ids w))
+                      (awake (luv-physics::physics-world-awake w))
+                      (handles (luv-physics::body-columns-handle awake))
+                      (contacts (luv-physics::physics-world-contacts w)))
+                 (funcall corrupt w ids awake handles contacts balls gone)
+                 (handler-case (progn (validate-physics-world w) :valid)
+                   (physics-world-invalid (e) (luv-physics::physics-world-invalid-invariant e)))))))
+    (multiple-value-bind (w balls) (build)
+      (check (eq t (validate-physics-world w)))
+      (check (= 1 (physics-world-sleeping-count w)) "~D sleepers" (physics-world-sleeping-count w))
+      (check (plusp (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
+      (check (= 1 (luv-physics::physics-world-mortal-sleepers w)))
+      (check (= 5 (length balls))))
+    (loop for (words corrupt)
+            in (list (list "which is" (lambda (w ids awake handles c b gone) (declare (ignore w ids awake c b))
+                                        (setf (aref handles 0) gone)))
+                     (list "two rows" (lambda (w ids awake handles c b gone) (declare (ignore w ids awake c b gone))
+                                        (setf (aref handles 1) (aref handles 0))))
+                     (list "forwards" (lambda (w ids awake handles c b gone) (declare (ignore w awake c b gone))
+                                        (let ((l (luv-physics::handle-table-local ids)))
+                                          (rotatef (aref l (luv-physics::handle-index (aref handles 0)))
+                                                   (aref l (luv-physics::handle-index (aref handles 1)))))))
+                     (list "forwards" (lambda (w ids awake handles c b gone) (declare (ignore w awake handles c gone))
+                                        (setf (aref (luv-physics::handle-table-set ids) (luv-physics::handle-index (nth 3 b)))
+                                              luv-physics::+set-awake+)))
+                     (list "live handle slots" (lambda (w ids awake handles c b gone) (declare (ignore w awake handles c b))
+                                                 (setf (aref (luv-physics::handle-table-set ids) (luv-physics::handle-index gone))
+                                                       luv-physics::+set-awake+)))
+                     (list "free list holds" (lambda (w ids awake handles c b gone) (declare (ignore w awake handles c b gone))
+                                               (setf (luv-physics::handle-table-free ids) -1)))
+                     (list "dummy row" (lambda (w ids awake handles c b gone) (declare (ignore w ids handles c b gone))
+                                         (setf (aref (luv-physics::body-columns-vy awake) (luv-physics::body-columns-length awake))
+                                               1.0)))
+                     (list "maps to row" (lambda (w ids awake handles c b gone) (declare (ignore w ids awake handles b gone))
+                                           (incf (aref (luv-physics::contact-columns-key c) 0) 12345)))
+                     (list "contact table holds" (lambda (w ids awake handles c b gone) (declare (ignore ids awake handles c b gone))
+                                                   (luv-physics::contact-table-put (luv-physics::physics-world-contact-table w)
+                                                                                   123456789 0)))
+                     (list "mortal sleepers" (lambda (w ids awake handles c b gone) (declare (ignore ids awake handles c b gone))
+                                               (incf (luv-physics::physics-world-mortal-sleepers w)))))
+          do (let ((said (named corrupt)))
+               (check (and (stringp said) (search words said)) "broken to give ~S, the walker said ~S" words said)))))
+;; V4L1D8-each-invariant-named ends here
 
 ;; [[file:../physics.org::#B0DY0B][B0DY0B-body-prints-where-it-is]]
 (define-claim "B0DY0B" body-prints-where-it-is
@@ -4017,6 +4193,54 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
       (check (null out) "outward from inside met ~S" (answer out)))))
 ;; R4YC57-edges-corners-and-starts ends here
 
+;; [[file:../physics.org::#R4YC57][R4YC57-every-edge-and-corner-cell]]
+(define-claim "R4YC57" every-edge-and-corner-cell
+    "Along the 8 diagonals and 12 plane diagonals, each cell at the corner or edge is met alone, and together they are met fewest steps first, x before y before z."
+  (let* ((terrain (luv-physics::make-voxel-terrain))
+         (w (progn (luv-physics::fill-terrain terrain -4 -4 -4 4 4 4 nil) (make-physics-world :terrain terrain)))
+         (wrong '()) (casts 0))
+    (flet ((ordered-offsets (direction)
+             ;; the cells meeting the corner or edge, fewest steps first, x before y before z
+             (stable-sort (loop for mask from 1 below 8
+                                for cell = (loop for a below 3 collect (if (logbitp a mask) (nth a direction) 0))
+                                when (= (count-if-not #'zerop cell) (logcount mask))
+                                  collect cell)
+                          #'< :key (lambda (c) (count-if-not #'zerop c))))
+           (cast (direction)
+             (incf casts)
+             (apply #'physics-ray-cast w 0.5 0.5 0.5 (append direction (list 3)))))
+      (let ((directions (loop for x in '(-1 0 1)
+                              append (loop for y in '(-1 0 1)
+                                           append (loop for z in '(-1 0 1)
+                                                        when (>= (count-if-not #'zerop (list x y z)) 2)
+                                                          collect (list x y z))))))
+        (check (= 20 (length directions)))
+        (dolist (d directions)
+          (let* ((cells (ordered-offsets d))
+                 (distance (float (/ (sqrt (count-if-not #'zerop d)) 2) 1.0)))
+            (flet ((answer-ok (hit cell)
+                     (let ((axis (position-if-not #'zerop cell)))
+                       (and hit (eq :cell (physics-hit-kind hit)) (equal (hit-what hit) cell)
+                            (< (abs (- (physics-hit-distance hit) distance)) 1e-6)
+                            (equal (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))
+                                   (loop for a below 3 collect (if (= a axis) (float (- (nth a d)) 1.0) 0.0)))))))
+              ;; each cell alone
+              (dolist (c cells)
+                (setf (apply #'luv-physics::terrain-solid-p terrain c) t)
+                (let ((hit (cast d)))
+                  (unless (answer-ok hit c) (push (list :alone d c (and hit (hit-what hit))) wrong)))
+                (setf (apply #'luv-physics::terrain-solid-p terrain c) nil))
+              ;; all of them, made air one by one as they are met
+              (dolist (c cells) (setf (apply #'luv-physics::terrain-solid-p terrain c) t))
+              (dolist (c cells)
+                (let ((hit (cast d)))
+                  (unless (answer-ok hit c) (push (list :in-order d c (and hit (hit-what hit))) wrong)))
+                (setf (apply #'luv-physics::terrain-solid-p terrain c) nil))
+              (when (cast d) (push (list :empty d) wrong)))))
+        (check (= casts (+ 20 (* 2 (+ (* 8 7) (* 12 3))))) "~D casts" casts)
+        (check (null wrong) "~D casts met the wrong cell: ~S" (length wrong) (reverse wrong))))))
+;; R4YC57-every-edge-and-corner-cell ends here
+
 ;; [[file:../physics.org::#R4YC57][R4YC57-eye-picks-the-ball]]
 (define-claim "R4YC57" eye-picks-the-ball
     "A ray from the walker's eye towards a ball returns that ball, not the one behind it or the walker's own box."
@@ -4171,6 +4395,29 @@ within reach of something. #S9WEEP"
                   (< (abs (- (physics-hit-distance hit) 2.75)) 1e-5) (= -1.0 (physics-hit-nx hit)))
              "the resting ball swept along the floor met ~S" (and hit (list (hit-what hit) (physics-hit-distance hit)))))))
 ;; S9WEEP-throw-lands-where-predicted ends here
+
+;; [[file:../physics.org::#S9WEEP][S9WEEP-slides-along-every-face]]
+(define-claim "S9WEEP" slides-along-every-face
+    "A sphere touching the floor, the roof or a wall of thick terrain, swept along it either way, meets no seam."
+  (let* ((terrain (luv-physics::make-voxel-terrain))
+         (w (progn (luv-physics::fill-terrain terrain -3 -3 -3 19 7 19 t)
+                   (luv-physics::fill-terrain terrain 0 0 0 16 4 16 nil)
+                   (make-physics-world :terrain terrain)))
+         (r 0.25) (d 0.245) (met '()) (casts 0))
+    ;; each face: the axis across it, the coordinate of the centre, and the middle of the face
+    (loop for (axis at) in `((1 ,d) (1 ,(- 4 d)) (0 ,d) (0 ,(- 16 d)) (2 ,d) (2 ,(- 16 d)))
+          do (dolist (along (remove axis '(0 1 2)))
+               (dolist (sign '(1 -1))
+                 (let ((o (list 8.0 2.0 8.0)) (u (list 0 0 0)))
+                   (setf (nth axis o) (float at 1.0)
+                         (nth along o) (if (= along 1) (if (plusp sign) 1.0 3.0) (if (plusp sign) 6.0 10.0))
+                         (nth along u) sign)
+                   (incf casts)
+                   (let ((hit (apply #'physics-sphere-cast w (append o (list r) u (list 2.5)))))
+                     (when hit (push (list o u (hit-what hit) (physics-hit-distance hit)) met)))))))
+    (check (= casts 24))
+    (check (null met) "~D sweeps met a seam: ~S" (length met) (reverse met))))
+;; S9WEEP-slides-along-every-face ends here
 
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-regions-match-brute-force]]
 (define-claim "OV3RLP" regions-match-brute-force
