@@ -3316,6 +3316,13 @@ in the order of *physics-scene-features*. #K5DF9S"
         (setf highest (max highest (luv-physics::physics-player-y p))))
       (check (and (< (abs (- (luv-physics::physics-player-z p) 3.7d0)) 1d-6) (= 0 highest))
              "at the wall: z ~,3F, highest y ~,3F" (luv-physics::physics-player-z p) highest))
+    (let ((low (make-floor-terrain)) (p (luv-physics::make-physics-player 10.5 0 10.5)) (top 0d0))
+      (luv-physics::fill-terrain low 8 3 8 13 4 13 t)
+      (dotimes (i 120)
+        (luv-physics::step-physics-player p low :jump (<= 10 i 14))
+        (setf top (max top (luv-physics::physics-player-y p))))
+      (check (< (abs (- top (- 3 (luv-physics::physics-player-height p)))) 1d-6)
+             "under the ceiling the soles rose to ~,4F" top))
     ;; the floor world is resident up to x = 32; beyond is a wall
     (let ((p (walk (luv-physics::make-physics-player 30 0 10.5) 240 :move-x 1)))
       (check (< (abs (- (luv-physics::physics-player-x p) 31.7d0)) 1d-6)
@@ -3719,6 +3726,45 @@ in the order of *physics-scene-features*. #K5DF9S"
                       boxes (reverse middles))
                "the recorded boxes are not the player's")))))
 ;; G4WXCJ-recording-sees-boxes ends here
+
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-frames-hold-every-column]]
+(define-claim "G4WXCJ" frames-hold-every-column
+    "Frames hold each body's centre, radius and clamped style, and the step's figures, first frame and last."
+  (let* ((w (make-floor-world))
+         (hs (loop for (kind r x) in '((-5 0.1 2.5) (7 0.2 4.5) (300 0.3 6.5))
+                   collect (add-physics-body w x (- r 0.005) 3.5 :radius r :kind kind))))
+    (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w (third hs))))
+    (let ((recording (luv-physics::start-physics-recording w)))
+      (dotimes (i 3) (step-physics-world w))
+      (luv-physics::stop-physics-recording w)
+      (let* ((frames (luv-physics::physics-recording-frames recording))
+             (xyz (luv-physics::physics-recording-xyz recording))
+             (radius (luv-physics::physics-recording-radius recording))
+             (style (luv-physics::physics-recording-style recording))
+             (last (aref frames 3)))
+        (check (= 4 (length frames)))
+        (check (equalp (aref frames 0) (vector 0 3 2 1 0 0d0 0.0)) "the first frame's figures: ~S" (aref frames 0))
+        (check (every (lambda (f) (= 3 (aref f 1))) frames))
+        (check (equal (loop for f across frames collect (aref f 0)) '(0 3 6 9)))
+        (check (equalp last (vector 9 3 (physics-world-awake-count w) (physics-world-sleeping-count w)
+                                    (luv-physics::physics-world-last-step-contact-count w)
+                                    (* 1000 (luv-physics::physics-world-last-step-real-seconds w))
+                                    (* 3 (luv-physics::physics-world-step-seconds w))))
+               "the last frame's figures: ~S" last)
+        (let ((k 9))
+          (dolist (buffer (list (luv-physics::physics-world-awake w) (luv-physics::physics-world-sleeping w)))
+            (dotimes (row (luv-physics::body-columns-length buffer))
+              (let ((kind (aref (luv-physics::body-columns-kind buffer) row)))
+                (check (equal (list (aref xyz (* 3 k)) (aref xyz (+ (* 3 k) 1)) (aref xyz (+ (* 3 k) 2))
+                                    (aref radius k) (aref style k))
+                              (list (aref (luv-physics::body-columns-x buffer) row) (aref (luv-physics::body-columns-y buffer) row)
+                                    (aref (luv-physics::body-columns-z buffer) row) (aref (luv-physics::body-columns-radius buffer) row)
+                                    (+ (* 2 (min 127 (max 0 kind)))
+                                       (if (eq buffer (luv-physics::physics-world-sleeping w)) 1 0))))
+                       "body ~D of the last frame" k))
+              (incf k))))
+        (check (equal (sort (coerce (subseq style 9 12) 'list) #'<) '(0 14 255)))))))
+;; G4WXCJ-frames-hold-every-column ends here
 
 ;; [[file:../physics.org::#G4WXCJ][G4WXCJ-refusals-name-the-argument]]
 (define-claim "G4WXCJ" refusals-name-the-argument
