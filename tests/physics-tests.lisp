@@ -305,6 +305,8 @@
            ;; at its default: the page's new default is taken, and the step runs it at once
            (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G" :page copy))
            (check (eq 'luv-physics::reload-claim-phase (car (last luv-physics:*physics-phases*))))
+           (check (equal luv-physics:*physics-phases* (gethash 'luv-physics:*physics-phases* luv-physics::*parameter-defaults*))
+                  "the page's new default is not the one a later reload compares with")
            (luv-physics::step-physics-world w)
            (check (= 1 counted) "the new phase ran ~D times in one step" counted)
            ;; changed at the REPL: kept
@@ -4754,6 +4756,21 @@ within reach of something. #S9WEEP"
                (class-name (class-of (luv-physics::physics-world-kernels
                                       (make-physics-world :kernels :auto))))))))
 ;; 7PAQ3M-choosing-a-family ends here
+
+;; [[file:../physics.org::#LW3YHU][LW3YHU-summary-is-the-first-sentence]]
+(define-claim "LW3YHU" summary-is-the-first-sentence
+    "docstring-summary cuts at the first sentence's point, past abbreviations, initials and numbers."
+  (loop for (docstring want) in `(("Add a ball. It rolls. #M4K3WD" "Add a ball.")
+                                  ("The mass, e.g. Two kg, of it. More." "The mass, e.g. Two kg, of it.")
+                                  ("X. Y is next." "X. Y is next.")
+                                  ("A step of 1.5 s. Then" "A step of 1.5 s.")
+                                  (,(format nil "Two lines joined~%here. Next") "Two lines joined here.")
+                                  ("no capital. after" "no capital. after")
+                                  ("  No point at all #LW3YHU  " "No point at all")
+                                  ("Ab. Cd" "Ab.") ("Ends here#LW3YHU" "Ends here"))
+        do (let ((got (luv-physics::docstring-summary docstring)))
+             (check (equal got want) "~S summarised as ~S, not ~S" docstring got want))))
+;; LW3YHU-summary-is-the-first-sentence ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-every-export-is-indexed]]
 (define-claim "LW3YHU" every-export-is-indexed
