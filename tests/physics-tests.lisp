@@ -4092,6 +4092,59 @@ counted. #RH7T05"
       (check (loop for v being the hash-values of seen always (= v 1))))))
 ;; Q5V1EW-view-uses-world-grids ends here
 
+;; [[file:../physics.org::#C4STRY][C4STRY-box-faces-edges-and-corners]]
+(define-claim "C4STRY" box-faces-edges-and-corners
+    "Casts at a posted box: faces at the exact distance, normal and point; from inside or overlapping, 0 or nothing; edges and corners along their diagonals."
+  (let* ((w (make-physics-world)) (half '(1.0 2.0 3.0)) (wrong '()) (casts 0))
+    (post-physics-box w 0.0 0.0 0.0 1.0 2.0 3.0)
+    (flet ((cast (r o u limit)
+             (incf casts)
+             (if (zerop r)
+                 (apply #'physics-ray-cast w (append o u (list limit)))
+                 (apply #'physics-sphere-cast w (append o (list r) u (list limit)))))
+           (answer (hit) (and hit (list (physics-hit-distance hit)
+                                        (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))
+                                        (list (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit)))))
+           (near (a b) (< (abs (- a b)) 2e-6)))
+      (flet ((expect (what hit distance normal point)
+               (let ((a (answer hit)))
+                 (unless (and a (eq :box (physics-hit-kind hit)) (near (first a) distance)
+                              (every #'near (second a) normal) (or (null point) (every #'near (third a) point)))
+                   (push (list what a (list distance normal point)) wrong))))
+             (expect-none (what hit) (when hit (push (list what :met (answer hit)) wrong))))
+        (dotimes (axis 3)
+          (dolist (sign '(1.0 -1.0))
+            (let* ((h (nth axis half))
+                   (n (loop for a below 3 collect (if (= a axis) sign 0.0)))
+                   (in (mapcar (lambda (v) (- v)) n))
+                   (at (lambda (d) (loop for a below 3 collect (if (= a axis) (* sign (+ h d)) 0.0)))))
+              (dolist (r '(0.0 0.25))
+                (expect (list :face axis sign r) (cast r (funcall at 1.0) in 5.0) (- 1.0 r) n (funcall at 0.0))
+                (expect (list :inside-deeper axis sign r) (cast r (funcall at -0.2) in 5.0) 0.0 n nil)
+                (expect-none (list :inside-out axis sign r) (cast r (funcall at -0.2) n 5.0)))
+              (expect (list :overlap-deeper axis sign) (cast 0.25 (funcall at 0.1) in 5.0) 0.0 n nil)
+              (expect-none (list :overlap-out axis sign) (cast 0.25 (funcall at 0.1) n 5.0)))))
+        ;; edges: two axes at a corner of their faces, the third axis at the middle; corners: all three
+        (dolist (signs (loop for sx in '(1.0 -1.0) append
+                          (loop for sy in '(1.0 -1.0 0.0) append
+                            (loop for sz in '(1.0 -1.0 0.0)
+                                  when (>= (count-if-not #'zerop (list sx sy sz)) 2)
+                                    collect (list sx sy sz)))))
+          (let* ((edge (mapcar (lambda (s h) (* s h)) signs half))
+                 (k (count-if-not #'zerop signs))
+                 (n (mapcar (lambda (s) (/ s (sqrt (float k 1d0)))) signs))
+                 (o (mapcar (lambda (e s) (+ e s)) edge signs)))
+            (expect (list :edge-or-corner signs) (cast 0.25 o (mapcar #'- signs) 5.0)
+                    (- (sqrt (float k 1d0)) 0.25) n edge)))
+        (dolist (signs '((0.0 1.0 1.0) (0.0 -1.0 1.0) (0.0 1.0 -1.0) (0.0 -1.0 -1.0)))
+          (let* ((edge (mapcar (lambda (s h) (* s h)) signs half))
+                 (n (mapcar (lambda (s) (/ s (sqrt 2d0))) signs))
+                 (o (mapcar (lambda (e s) (+ e s)) edge signs)))
+            (expect (list :edge signs) (cast 0.25 o (mapcar #'- signs) 5.0) (- (sqrt 2d0) 0.25) n edge)))))
+    (check (= casts (+ (* 6 8) 20)) "~D casts" casts)
+    (check (null wrong) "~D casts answered wrongly: ~S" (length wrong) (reverse wrong))))
+;; C4STRY-box-faces-edges-and-corners ends here
+
 ;; [[file:../physics.org::#C4STRY][C4STRY-queries-check-and-change-nothing]]
 (define-claim "C4STRY" queries-check-and-change-nothing
     "Bad query arguments signal named errors; queries change nothing, work from handlers, and refuse edits from filters."
@@ -4594,7 +4647,18 @@ within reach of something. #S9WEEP"
                    (let ((hit (apply #'physics-sphere-cast w (append o (list r) u (list 2.5)))))
                      (when hit (push (list o u (hit-what hit) (physics-hit-distance hit)) met)))))))
     (check (= casts 24))
-    (check (null met) "~D sweeps met a seam: ~S" (length met) (reverse met))))
+    (check (null met) "~D sweeps met a seam: ~S" (length met) (reverse met))
+    (loop for (u distance cell point) in '(((0 -1 0) 2.25 (8 -1 8) (8.5 0.0 8.5)) ((0 1 0) 1.25 (8 4 8) (8.5 4.0 8.5))
+                                           ((-1 0 0) 8.25 (-1 2 8) (0.0 2.5 8.5)) ((1 0 0) 7.25 (16 2 8) (16.0 2.5 8.5))
+                                           ((0 0 -1) 8.25 (8 2 -1) (8.5 2.5 0.0)) ((0 0 1) 7.25 (8 2 16) (8.5 2.5 16.0)))
+          do (let ((hit (apply #'physics-sphere-cast w 8.5 2.5 8.5 r (append u (list 10)))))
+               (check (and hit (equal (hit-what hit) cell) (< (abs (- (physics-hit-distance hit) distance)) 1e-6)
+                           (equal (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))
+                                  (mapcar (lambda (v) (float (- v) 1.0)) u))
+                           (every (lambda (a b) (< (abs (- a b)) 1e-5))
+                                  (list (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit)) point))
+                      "cast along ~S: ~S" u (and hit (list (hit-what hit) (physics-hit-distance hit)
+                                                          (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit))))))))
 ;; S9WEEP-slides-along-every-face ends here
 
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-regions-match-brute-force]]
