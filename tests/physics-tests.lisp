@@ -4658,7 +4658,28 @@ within reach of something. #S9WEEP"
                            (every (lambda (a b) (< (abs (- a b)) 1e-5))
                                   (list (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit)) point))
                       "cast along ~S: ~S" u (and hit (list (hit-what hit) (physics-hit-distance hit)
-                                                          (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit))))))))
+                                                          (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit))))))
+    ;; each face: its axis, the plane, the normal out of it, the room's width across it
+    (loop for (axis plane n width) in '((1 0.0 1.0 4.0) (1 4.0 -1.0 4.0) (0 0.0 1.0 16.0) (0 16.0 -1.0 16.0)
+                                        (2 0.0 1.0 16.0) (2 16.0 -1.0 16.0))
+          do (dolist (depth (if (plusp n) (list 0.0 (- r d)) (list (- r d))))
+               (let ((o (list 8.5 2.5 8.5)) (into (list 0 0 0)) (normal (list 0.0 0.0 0.0)))
+                 (setf (nth axis o) (+ plane (* n (- r depth))) (nth axis into) (- n) (nth axis normal) n)
+                 (when (zerop depth) (setf (nth axis o) plane))
+                 (let ((in (apply #'physics-sphere-cast w (append o (list r) into (list 20))))
+                       (away (apply #'physics-sphere-cast w (append o (list r) (mapcar #'- into) (list 20)))))
+                   (check (and in (= 0.0 (physics-hit-distance in))
+                               (every #'= (list (physics-hit-nx in) (physics-hit-ny in) (physics-hit-nz in)) normal))
+                          "from ~S into the face: ~S" o (and in (list (hit-what in) (physics-hit-distance in))))
+                   (check (and away (< (abs (- (physics-hit-distance away)
+                                               (- width r (abs (- (nth axis o) plane)))))
+                                       1e-5))
+                          "from ~S away from the face: ~S" o (and away (list (hit-what away) (physics-hit-distance away))))))))
+    (loop for (x dx) in (list (list d -1) (list (- 16 d) 1))
+          do (let ((hit (physics-sphere-cast w x 0.0 8.5 r dx 0 0 5)))
+               (check (and hit (= 0.0 (physics-hit-distance hit)) (= (- dx) (physics-hit-nx hit)))
+                      "on the floor's plane into the wall at x ~A: ~S" x
+                      (and hit (list (hit-what hit) (physics-hit-distance hit) (physics-hit-nx hit))))))))
 ;; S9WEEP-slides-along-every-face ends here
 
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-regions-match-brute-force]]
