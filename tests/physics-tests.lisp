@@ -1010,6 +1010,40 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (not (luv-physics::terrain-resident-p terrain 8 -1 8)) "the step made the wall resident"))))
 ;; H2W9DJ-non-resident-is-wall ends here
 
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-cells-are-their-own]]
+(define-claim "H2W9DJ" cells-are-their-own
+    "Setting one cell of a chunk changes that cell alone, and no cell of the next chunk; the chunk budget is checked at its ends."
+  (let ((terrain (luv-physics::make-voxel-terrain)) (wrong '()))
+    (luv-physics::fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (flet ((solid-cells ()
+             (loop for x below 16 nconc (loop for y below 16 nconc (loop for z below 16
+                                                                         when (luv-physics::terrain-solid-p terrain x y z)
+                                                                           collect (list x y z))))))
+      (dolist (cell '((0 0 0) (15 0 0) (0 15 0) (0 0 15) (15 15 0) (15 0 15) (0 15 15) (15 15 15) (3 7 11) (11 3 7) (7 11 3)))
+        (setf (apply #'luv-physics::terrain-solid-p terrain cell) t)
+        (let ((got (solid-cells))) (unless (equal got (list cell)) (push (list cell got) wrong)))
+        (setf (apply #'luv-physics::terrain-solid-p terrain cell) nil)
+        (let ((got (solid-cells))) (when got (push (list :cleared cell got) wrong))))
+      (dolist (cell '((-1 5 5) (16 5 5) (5 -1 5) (5 16 5) (5 5 -1) (5 5 16)))
+        (setf (apply #'luv-physics::terrain-solid-p terrain cell) t)
+        (let ((got (solid-cells))) (when got (push (list :beside cell got) wrong)))
+        (check (apply #'luv-physics::terrain-solid-p terrain cell))))
+    (check (null wrong) "cells share storage: ~S" (reverse wrong)))
+  (flet ((budget (value)
+           (handler-case (let ((luv-physics:*physics-terrain-chunk-budget* value)) (luv-physics::make-voxel-terrain) :made)
+             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+    (check (equal (mapcar #'budget (list 1 (ash 1 24) 0 (1+ (ash 1 24)) "x"))
+                  '(:made :made :terrain-chunk-budget :terrain-chunk-budget :terrain-chunk-budget))))
+  (let ((terrain (let ((luv-physics:*physics-terrain-chunk-budget* 2)) (luv-physics::make-voxel-terrain))))
+    (luv-physics::fill-terrain terrain 0 0 0 1 1 1 nil)
+    (flet ((set-cell (x)
+             (handler-case (progn (setf (luv-physics::terrain-solid-p terrain x 0 0) t) :set)
+               (luv-physics::physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-operation e)))))
+      (check (equal (list (set-cell 20) (set-cell 40)) '(:set (setf luv-physics::terrain-solid-p)))
+             "a budget of two chunks: ~S" (list (set-cell 20) (set-cell 40)))
+      (check (= 2 (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))))))
+;; H2W9DJ-cells-are-their-own ends here
+
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-edit-during-step-deferred]]
 (define-claim "H2W9DJ" edit-during-step-deferred
     "A terrain edit from the event handler is applied when the step ends, not during it."
@@ -1295,6 +1329,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (world-with :substeps :substeps 0) (world-with :substeps :substeps 65)
         (world-with :accepted :gravity '(1000 -1000 1000)) (world-with :gravity :gravity '(0 -1000.1 0))
         (world-with :gravity :gravity '(0 -9.81))
+        (world-with :kernels :kernels :no-such-family)
+        (let ((got (outcome (lambda () (luv-physics:register-kernel-family :claim-family 'luv-physics::scalar-kernels "sse")))))
+          (unless (eq got :instruction-set) (push (list :register got) wrong)))
+        (check (not (assoc :claim-family luv-physics::*kernel-families*)))
         (loop for (want dt) in '((:accepted 0.0001) (:dt 0.000099) (:accepted 0.9999) (:dt 1.0))
               do (let ((got (outcome (lambda () (step-physics-world (make-physics-world) dt)))))
                    (unless (eq got want) (push (list :step dt got) wrong)))))
@@ -1644,7 +1682,11 @@ function of a column name that reads row K's float in that column. #T3STK1"
                  "~A = ~A was not refused by its name" axis bad))))
     (check (zerop (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))) "a refused box was posted")
     (luv-physics::post-physics-box w 3.5 3.0 3.5 0.001 1023 0.5)
-    (check (= 1 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))))
+    (check (= 1 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
+    (let ((owners (loop for k below 40 collect (list :box k))))
+      (dolist (o owners) (luv-physics::post-physics-box w (+ 1.5 (* 0.1 (second o))) 3.0 3.5 0.05 0.05 0.05 :owner o))
+      (check (loop for o in owners for row from 1 always (eq o (svref (luv-physics::physics-world-box-owners w) row)))
+             "forty boxes posted in one step do not each keep their owner"))))
 ;; K1N3BX-box-extents-checked ends here
 
 ;; [[file:../physics.org::#G3NCNT][G3NCNT-oblique-blows-true]]
@@ -2684,11 +2726,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
   (let ((w (luv-physics::make-basin-world 200))
         (clock (make-array (* 2 (length luv-physics::*physics-phases*)) :element-type 'fixnum :initial-element 0)))
     (dotimes (i 120)
-      (when (= i 100) (setf (luv-physics::physics-world-phase-clock w) clock))
+      (when (= i 0) (setf (luv-physics::physics-world-phase-clock w) clock))
       (luv-physics::step-physics-world w))
     (setf (luv-physics::physics-world-phase-clock w) nil)
     (check (every #'plusp (subseq clock 0 (length luv-physics::*physics-phases*)))
            "the phase clock counted ~S" clock)
+    (check (and (every (lambda (b) (>= b 0)) (subseq clock (length luv-physics::*physics-phases*)))
+                (some #'plusp (subseq clock (length luv-physics::*physics-phases*))))
+           "the phase clock counted bytes ~S" (subseq clock (length luv-physics::*physics-phases*)))
     (let ((contacts (luv-physics::physics-world-last-step-contact-count w))
           (colours (luv-physics::physics-world-last-step-color-count w))
           (seconds (luv-physics::physics-world-last-step-real-seconds w))
