@@ -4854,6 +4854,30 @@ within reach of something. #S9WEEP"
         (check (plusp n))))))
 ;; QB3NCH-queries-cons-nothing ends here
 
+;; [[file:../physics.org::#QB3NCH][QB3NCH-benchmark-queries-as-described]]
+(define-claim "QB3NCH" benchmark-queries-as-described
+    "Query benchmark inputs: points fill the interior, directions uniform over the sphere, reproducible by seed."
+  (let* ((n 4000) (q (luv-physics::query-benchmark-inputs n 11))
+         (octants (make-array 8 :initial-element 0)) (sums (list 0.0 0.0 0.0))
+         (lows (list 9.0 9.0 9.0)) (highs (list -1.0 -1.0 -1.0)) (wrong 0))
+    (dotimes (i n)
+      (let ((p (loop for k below 3 collect (aref q (+ (* 7 i) k))))
+            (d (loop for k from 3 below 6 collect (aref q (+ (* 7 i) k)))))
+        (unless (and (every (lambda (v hi) (<= 0.0 v hi)) p '(8.0 6.0 8.0))
+                     (< 0.01 (reduce #'+ (mapcar #'* d d)) 1.0)
+                     (= 0.0 (aref q (+ (* 7 i) 6))))
+          (incf wrong))
+        (setf lows (mapcar #'min lows p) highs (mapcar #'max highs p) sums (mapcar #'+ sums d))
+        (incf (aref octants (+ (if (plusp (first d)) 1 0) (if (plusp (second d)) 2 0) (if (plusp (third d)) 4 0))))))
+    (check (zerop wrong) "~D queries outside the interior, the ball of directions or with a spare" wrong)
+    (check (and (every (lambda (v) (< v 0.1)) lows) (every (lambda (v hi) (> v (- hi 0.1))) highs '(8.0 6.0 8.0)))
+           "points span only ~S to ~S" lows highs)
+    (check (every (lambda (k) (< (* 0.10 n) k (* 0.15 n))) octants) "octants hold ~S" octants)
+    (check (every (lambda (s) (< (abs (/ s n)) 0.05)) sums) "mean direction ~S" (mapcar (lambda (s) (/ s n)) sums))
+    (check (equalp q (luv-physics::query-benchmark-inputs n 11)))
+    (check (not (equalp q (luv-physics::query-benchmark-inputs n 12))))))
+;; QB3NCH-benchmark-queries-as-described ends here
+
 ;; [[file:../physics.org::#7PAQ3M][7PAQ3M-families-agree-bit-for-bit]]
 (define-claim "7PAQ3M" families-agree-bit-for-bit
     "Each available family's hash equals the scalar hash on the 200-ball and 1000-ball piles."
