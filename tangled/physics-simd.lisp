@@ -103,6 +103,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
         (movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask))
         (ws (intern (format nil "WARM-START-BLOCKS/~A" family)))
         (so (intern (format nil "SOLVE-BLOCKS/~A" family)))
+        (soi (intern (format nil "SOLVE-IMPACT-BLOCKS/~A" family)))
         (pf (intern (format nil "PREPARE-FRAMES-BLOCKS/~A" family))))
     (let ((operators
             `((w+ (a b) `(,',add ,a ,b)) (w- (a b) `(,',sub ,a ,b)) (w* (a b) `(,',mul ,a ,b))
@@ -202,6 +203,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
          (unswitch-bias (use-bias)
          (with-solver-columns cbuf
            (loop for k of-type index from start below end by ,width do
+             (block wide-row
              (let ((base (constraint-base k)))
                (declare (type index base))
                ;; the gap first: a relax pass computes it from the deltas alone, so that
@@ -277,11 +279,15 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                        (if-feature :restitution
                          (let ((armed (@w armed-speed)))
                                  (if (zerop (,movemask
-                                                  ;; lanes that have not pushed: vn; the others: an armed
-                                                  ;; lane's speed times -1e30, below any threshold
-                                                  (wif (w> lower (wif (w= mni (wc 0.0)) vn (w* armed (wc -1e30))))
+                                                  ;; lanes that have not pushed: vn, or 0 without
+                                                  ;; restitution; the others: an armed lane's speed
+                                                  ;; times -1e30, below any threshold
+                                                  (wif (w> lower (wif (w= mni (wc 0.0))
+                                                                      (wif (w> (@w restitution) (wc 0.0)) vn (wc 0.0))
+                                                                      (w* armed (wc -1e30))))
                                                        (wc -1.0) (wc 0.0))))
                                      (values new dl new)
+                                     (if-feature :impact-part
                                      (let* ((e (@w restitution))
                                             (impact-f (wif (w= mni (wc 0.0))
                                                            (wif (w> new (wc 0.0))
@@ -314,7 +320,14 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                        (@w! relative-velocity (wif impact (w* uc (wc -1.0)) (@w relative-velocity)))
                                        (@w! armed-speed (wif bounce (wc 0.0) (wif arm uc armed)))
                                        (let* ((bump (wif bounce kick (wc 0.0))) (bounced (w> bump (wc 0.0))))
-                                         (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))))
+                                         (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))
+                                     ;; a block that may strike or is armed goes, as it is, to
+                                     ;; the copy with the impact part: nothing of it has been
+                                     ;; written but the kept gap, which the copy writes again
+                                     ;; with the same bits
+                                     (progn (,soi cbuf v d k (+ k ,width) inv-h use-bias elapsed
+                                                  push-max threshold hgx hgy hgz)
+                                            (return-from wide-row)))))
                          (values new dl new))
                    (if-feature :friction
                      (symbol-macrolet ((n1 (st@ 12)) (n2 (st@ 13)) (len2 (st@ 14)) (root (st@ 15))
@@ -395,7 +408,9 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            (st! 10 (wif spinning (w+ wby (w* ibm (w* ds y))) wby))
                            (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz)))))))))
                (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
-               (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0)))))))))
+               (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0))))))))))
+       (define-impact-copy ,soi ,so
+         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time, bouncing impacts ([[#R3ST1T]]): the pass ~(~A~) and its variants hand a block to when it may strike or is armed. #W1D3KF" width so))
        (macrolet ,operators
        (defun ,pf (cbuf start end)
          ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)

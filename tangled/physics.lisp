@@ -3292,7 +3292,10 @@ gap is under the speculative distance. #P41RS7"
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world))
          ;; the grid phase counted the loose rows
-         (strays (pair-list-loose-count plist)))
+         (strays (pair-list-loose-count plist))
+         ;; true once a row has taken +overlaps-per-body+ overlapping pairs this step: until
+         ;; then overlap-room is true of every pair and is not asked
+         (crowded nil))
     (declare (type single-float margin skin cell slop dt gstep rmax threshold) (type index n) (type fixnum strays)
              (type body-columns awake sleeping) (type pair-list plist)
              (type contact-columns contacts) (type contact-table table)
@@ -3307,10 +3310,18 @@ gap is under the speculative distance. #P41RS7"
                (let* ((dx (- xj xi)) (dy (- yj yi)) (dz (- zj zi))
                       (d2 (+ (* dx dx) (* dy dy) (* dz dz)))
                       (reach (+ ri rj margin)))
-                 (when (and (>= ci 0) (< d2 (* (+ ri rj) (+ ri rj))))
-                   (let ((overlaps (pair-list-overlaps plist)))
-                     (unless (> ri rj) (incf (aref overlaps ci)))
-                     (unless (< ri rj) (incf (aref overlaps cj)))))
+                 ;; the overlap is counted by the sign bit of d2 - (ri + rj)^2, not by a
+                 ;; branch: in a pile, half the pairs listed overlap, in no order a branch
+                 ;; predictor could learn
+                 (when (>= ci 0)
+                   (let ((overlaps (pair-list-overlaps plist))
+                         (bit (ldb (byte 1 31) (sb-kernel:single-float-bits (- d2 (* (+ ri rj) (+ ri rj)))))))
+                     (let ((oi (+ (aref overlaps ci) (if (> ri rj) 0 bit)))
+                           (oj (+ (aref overlaps cj) (if (< ri rj) 0 bit))))
+                       (declare (type fixnum oi oj))
+                       (setf (aref overlaps ci) oi (aref overlaps cj) oj)
+                       ;; from the first crowded row on, every pair asks overlap-room
+                       (when (>= (logior oi oj) +overlaps-per-body+) (setf crowded t)))))
                  (when (< d2 (* reach reach))
                    (let ((d (fsqrt d2)))
                     (multiple-value-bind (nx ny nz)
@@ -3325,9 +3336,11 @@ gap is under the speculative distance. #P41RS7"
                      (declare (type single-float sep approach))
                      ;; a pair closing faster than the restitution threshold takes the normal of
                      ;; the moment it will touch ([[#MYWH16]]): the line of centres then
-                     (when (and (> approach threshold) (> sep 0.0))
-                       (multiple-value-setq (nx ny nz sep)
-                         (pair-impact-normal dx dy dz (- vxj vxi) (- vyj vyi) (- vzj vzi) (+ ri rj) dt nx ny nz sep)))
+                     (multiple-value-bind (nx ny nz sep)
+                         (if (and (> approach threshold) (> sep 0.0))
+                             (pair-impact-normal dx dy dz (- vxj vxi) (- vyj vyi) (- vzj vzi) (+ ri rj) dt nx ny nz sep)
+                             (values nx ny nz sep))
+                       (declare (type single-float nx ny nz sep))
                      (when (< sep (speculative-distance approach dt slop margin gstep))
                        ;; orient every pair contact from the lower handle slot to the higher
                        (multiple-value-bind (ha hb s px py pz)
@@ -3337,7 +3350,7 @@ gap is under the speculative distance. #P41RS7"
                          (declare (type fixnum ha hb) (type single-float s px py pz))
                          (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
                                         +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
-                                        0.0 0.0 0.0))))))))))
+                                        0.0 0.0 0.0)))))))))))
         (declare (inline pair))
         (pair-list-room plist n)
         (fill (pair-list-overlaps plist) 0 :end n)
@@ -3349,7 +3362,7 @@ gap is under the speculative distance. #P41RS7"
                             (aref vx ,j) (aref vy ,j) (aref vz ,j) ,i ,j))
                    (rows (i j)
                      ;; the same, unless they overlap and the smaller has its share of overlaps
-                     `(when (overlap-room (pair-list-overlaps plist) ,i ,j radius)
+                     `(when (or (not crowded) (overlap-room (pair-list-overlaps plist) ,i ,j radius))
                         (pair-of-rows ,i ,j))))
           (if (pair-list-holds-p strays n)
               ;; the list holds: its pairs whose rows both stayed; then each loose row against
@@ -3406,7 +3419,7 @@ gap is under the speculative distance. #P41RS7"
                         (dotimes (q found)
                           (let ((j (aref items (aref near q))))
                             (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
-                                       (overlap-room (pair-list-overlaps plist) i j radius))
+                                       (or (not crowded) (overlap-room (pair-list-overlaps plist) i j radius)))
                               (pair-list-push plist i j)
                               (pair-of-rows i j))))))))
                 (pair-list-anchor plist awake n cell)
