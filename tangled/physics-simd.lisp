@@ -188,11 +188,12 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                    (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0)))))))))
        (define-featured-kernel (,so :features (:friction :rolling-resistance :restitution) :operators ,operators)
            (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
-         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
+         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. Return END, or the first block that may strike or is armed, left unsolved for solve-handing. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
                   (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
          ;; the block's twelve velocity columns live here, on the stack, between the gather
          ;; and the scatter, and after them friction's four values before the cone
+         (block solve-pass
          (let ((st (make-array ,(* 16 width) :element-type 'single-float))
                ;; the scalars, broadcast once: a scalar read back inside the loop would be a
                ;; legacy SSE instruction among the 256-bit ones ([[#F4M1LY]])
@@ -203,7 +204,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
          (unswitch-bias (use-bias)
          (with-solver-columns cbuf
            (loop for k of-type index from start below end by ,width do
-             (block wide-row
+             (progn
              (let ((base (constraint-base k)))
                (declare (type index base))
                ;; the gap first: a relax pass computes it from the deltas alone, so that
@@ -321,13 +322,12 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                        (@w! armed-speed (wif bounce (wc 0.0) (wif arm uc armed)))
                                        (let* ((bump (wif bounce kick (wc 0.0))) (bounced (w> bump (wc 0.0))))
                                          (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))
-                                     ;; a block that may strike or is armed goes, as it is, to
-                                     ;; the copy with the impact part: nothing of it has been
+                                     ;; a block that may strike or is armed ends the pass
+                                     ;; here, for solve-handing to run the copy with the
+                                     ;; impact part on it, as it is: nothing of it has been
                                      ;; written but the kept gap, which the copy writes again
                                      ;; with the same bits
-                                     (progn (,soi cbuf v d k (+ k ,width) inv-h use-bias elapsed
-                                                  push-max threshold hgx hgy hgz)
-                                            (return-from wide-row)))))
+                                     (return-from solve-pass k))))
                          (values new dl new))
                    (if-feature :friction
                      (symbol-macrolet ((n1 (st@ 12)) (n2 (st@ 13)) (len2 (st@ 14)) (root (st@ 15))
@@ -408,9 +408,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            (st! 10 (wif spinning (w+ wby (w* ibm (w* ds y))) wby))
                            (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz)))))))))
                (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
-               (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0))))))))))
+               (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0)))))))))
+         end))
        (define-impact-copy ,soi ,so
-         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time, bouncing impacts ([[#R3ST1T]]): the pass ~(~A~) and its variants hand a block to when it may strike or is armed. #W1D3KF" width so))
+         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time, bouncing impacts ([[#R3ST1T]]): solve-handing runs it on each block at which the pass ~(~A~) or a variant of it stops. #W1D3KF" width so))
        (macrolet ,operators
        (defun ,pf (cbuf start end)
          ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
@@ -484,7 +485,7 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
        (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
          (when (< ,start ,end) ,overflow-form)))))
 
-(macrolet ((define-family-methods (class ws so pf &optional settle)
+(macrolet ((define-family-methods (class width ws so si pf &optional settle)
              `(progn
                 (defmethod physics-prepare-frames ((kernels ,class) world)
                   (let ((cbuf (physics-world-constraints world)))
@@ -504,13 +505,16 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
                          (narrow (kernel-variant-solve variant)))
                     (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
                       (do-colour-runs (s e world ,settle)
-                        (funcall wide cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz)
-                        (funcall narrow cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz))))))))
-  (define-family-methods sse-kernels warm-start-blocks/sse solve-blocks/sse prepare-frames-blocks/sse)
+                        (solve-handing wide ',si ,width cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz)
+                        (solve-handing narrow 'solve-impact-range 1
+                                       cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz))))))))
+  (define-family-methods sse-kernels 4 warm-start-blocks/sse solve-blocks/sse solve-impact-blocks/sse
+    prepare-frames-blocks/sse)
   ;; after 256-bit code, clear the upper halves of the ymm registers before any legacy SSE
   ;; instruction runs: the scalar code SBCL emits is legacy SSE, and on this CPU it ran three
   ;; times slower for the rest of the step without it
-  (define-family-methods avx2-kernels warm-start-blocks/avx2 solve-blocks/avx2 prepare-frames-blocks/avx2
+  (define-family-methods avx2-kernels 8 warm-start-blocks/avx2 solve-blocks/avx2 solve-impact-blocks/avx2
+    prepare-frames-blocks/avx2
     (sb-simd-avx:vzeroupper)))
 
 (register-kernel-family :sse 'sse-kernels :sse4.1)

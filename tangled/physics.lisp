@@ -4554,15 +4554,17 @@ per constraint. #S0LV3R"
     (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
   "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
 when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
-HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
+HGZ times the substep), then Coulomb friction, then rolling resistance. Return END, or the
+first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
            (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+
            (ignorable threshold hgx hgy hgz))
+  (block solve-pass
   (unswitch-bias (use-bias)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
       ;; one straight chain of bindings, a name bound again where its value changes
-      (block row
+      (progn
       (let ((base (constraint-base k)))
        ;; the constraint's own columns are read from the block where they are used
        (symbol-macrolet ((x (@ nx)) (y (@ ny)) (z (@ nz)) (ma (@ ima)) (mb (@ imb))
@@ -4635,14 +4637,13 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
                               (if (> kick 0.0) kick 0.0))))
                       0.0))
                     ;; a row that may strike (it has not pushed yet, approaches faster than
-                    ;; the threshold and has restitution) or is armed goes to the pass with
-                    ;; the impact part, as it is: nothing of it has been written but the kept
-                    ;; gap, which that pass writes again with the same bits
+                    ;; the threshold and has restitution) or is armed ends the pass here, for
+                    ;; solve-handing to run the pass with the impact part on it, as it is:
+                    ;; nothing of it has been written but the kept gap, which that pass
+                    ;; writes again with the same bits
                     (if (or (> (@ armed-speed) 0.0)
                             (and (< vn (- threshold)) (= mni 0.0) (> (@ restitution) 0.0)))
-                        (progn (solve-impact-range cbuf v d k (1+ k) inv-h use-bias elapsed
-                                                   push-max threshold hgx hgy hgz)
-                               (return-from row))
+                        (return-from solve-pass k)
                         0.0))
                     0.0))
              (bounced (> bump 0.0))
@@ -4723,12 +4724,13 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
                     (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5)))
                 (rolling-resistance)
                 (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                      (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))))))
+                      (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))))))))))))
+  end))
 
 (defmacro define-impact-copy (name kernel documentation)
   "Define NAME, described by DOCUMENTATION, as the featured kernel KERNEL compiled with every
 feature and with its impact part (the pseudo-feature :impact-part), which KERNEL itself leaves
-out and hands each row that may strike to NAME. #S0LV3R"
+out: it stops at each row that may strike, for solve-handing to run NAME on it. #S0LV3R"
   (destructuring-bind (operators lambda-list declarations forms tested) (get kernel 'featured-kernel)
     (declare (ignore tested))
     (let ((function `(defun ,name ,lambda-list ,documentation ,@declarations
@@ -4736,8 +4738,21 @@ out and hands each row that may strike to NAME. #S0LV3R"
       (if operators `(macrolet ,operators ,function) function))))
 
 (define-impact-copy solve-impact-range solve-range
-  "One Gauss-Seidel pass over constraints START..END, bouncing impacts ([[#R3ST1T]]): the pass
-solve-range and its variants hand a row to when it may strike or is armed. #S0LV3R")
+  "One Gauss-Seidel pass over constraints START..END, bouncing impacts ([[#R3ST1T]]): solve-handing
+runs it on each row at which solve-range or a variant of it stops. #S0LV3R")
+
+(declaim (inline solve-handing))
+(defun solve-handing (solve impact width cbuf v d start end inv-h use-bias elapsed push-max
+                      threshold hgx hgy hgz)
+  "Run the solve kernel SOLVE over constraints START..END; each time it stops at a row (a block
+of WIDTH rows) that may strike, run IMPACT, its copy with the impact part, on that row or block,
+and go on with SOLVE after it. #S0LV3R"
+  (declare (type index start end width))
+  (loop for k of-type index = (funcall solve cbuf v d start end inv-h use-bias elapsed push-max
+                                       threshold hgx hgy hgz)
+        while (< k end)
+        do (funcall impact cbuf v d k (+ k width) inv-h use-bias elapsed push-max threshold hgx hgy hgz)
+           (setf start (+ k width))))
 ;; Solve and relax:1 ends here
 
 ;; [[file:../physics.org::#R3ST1T][Restitution at impact:1]]
@@ -4766,10 +4781,10 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
     (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-      (funcall (kernel-variant-solve (world-kernel-variant world kernels))
-               cbuf (physics-world-velocities world) (physics-world-deltas world)
-               0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-               (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
+      (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
+                     cbuf (physics-world-velocities world) (physics-world-deltas world)
+                     0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+                     (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
