@@ -99,12 +99,15 @@ in any register. #R0WS8T"
   "Define the solver kernels of FAMILY for lanes of WIDTH, described by DOCUMENTATION: the
 operator keywords name the sb-simd functions the width-neutral operators stand for. #W1D3KF"
   (declare (ignore documentation))
-  (let ((scatter (intern (format nil "SCATTER-ROWS-~D" width)))
-        (movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask))
-        (ws (intern (format nil "WARM-START-BLOCKS/~A" family)))
-        (so (intern (format nil "SOLVE-BLOCKS/~A" family)))
-        (soi (intern (format nil "SOLVE-IMPACT-BLOCKS/~A" family)))
-        (pf (intern (format nil "PREPARE-FRAMES-BLOCKS/~A" family))))
+  ;; the names go where FAMILY was read, whatever package is current when the form is expanded:
+  ;; define-impact-copy finds its kernel's text under the kernel's name
+  (let* ((home (symbol-package family))
+         (scatter (intern (format nil "SCATTER-ROWS-~D" width) home))
+         (movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask))
+         (ws (intern (format nil "WARM-START-BLOCKS/~A" family) home))
+         (so (intern (format nil "SOLVE-BLOCKS/~A" family) home))
+         (soi (intern (format nil "SOLVE-IMPACT-BLOCKS/~A" family) home))
+         (pf (intern (format nil "PREPARE-FRAMES-BLOCKS/~A" family) home)))
     (let ((operators
             `((w+ (a b) `(,',add ,a ,b)) (w- (a b) `(,',sub ,a ,b)) (w* (a b) `(,',mul ,a ,b))
                 (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
