@@ -3960,6 +3960,35 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
     (check (< worst-a 1d-4))))
 ;; R4YC57-rays-match-brute-force ends here
 
+;; [[file:../physics.org::#R4YC57][R4YC57-rays-match-in-hashed-grid]]
+(define-claim "R4YC57" rays-match-in-hashed-grid
+    "3000 rays among 60 balls scattered over 300 m (a hashed grid) meet the same body as brute force."
+  (let* ((w (make-physics-world)) (next (make-lcg 5)) (hit (make-physics-hit)) (wrong 0) (hits 0) (first-wrong nil))
+    (dotimes (i 60)
+      (add-physics-body w (- (* 300 (funcall next)) 150) (- (* 300 (funcall next)) 150) (- (* 300 (funcall next)) 150)
+                        :radius (+ 0.1 (* 0.4 (funcall next)))))
+    (dotimes (i 3) (step-physics-world w))
+    (check (not (luv-physics::hash-grid-dense (luv-physics::query-view-awake-grid (luv-physics::world-query-view w))))
+           "the view's awake grid is dense")
+    (let ((awake (luv-physics::physics-world-awake w)))
+      (dotimes (q 3000)
+        (let* ((row (floor (* (funcall next) (physics-world-awake-count w))))
+               (c (list (aref (luv-physics::body-columns-x awake) row) (aref (luv-physics::body-columns-y awake) row)
+                        (aref (luv-physics::body-columns-z awake) row)))
+               (o (mapcar (lambda (v) (float (+ v (- (* 16 (funcall next)) 8)) 1.0)) c))
+               (d (mapcar (lambda (cv ov) (float (- cv ov (- (funcall next) 0.5)) 1.0)) c o))
+               (want (apply #'brute-ray w (append (mapcar (lambda (v) (float v 1d0)) (append o d)) (list 20d0 :cells nil))))
+               (got (apply #'physics-ray-cast w (append o d (list 20.0 :cells nil :hit hit)))))
+          (when want (incf hits))
+          (unless (or (and (null want) (null got))
+                      (and want got (equal (second want) (hit-what got))
+                           (< (abs (- (third want) (physics-hit-distance got))) 1d-5)))
+            (incf wrong)
+            (unless first-wrong (setf first-wrong (list o d want (and got (list (hit-what got) (physics-hit-distance got))))))))))
+    (check (zerop wrong) "~D of 3000 rays differ from brute force; the first: ~S" wrong first-wrong)
+    (check (> hits 300) "only ~D rays met a body" hits)))
+;; R4YC57-rays-match-in-hashed-grid ends here
+
 ;; [[file:../physics.org::#R4YC57][R4YC57-no-cell-skipped]]
 (define-claim "R4YC57" no-cell-skipped
     "Sampling every 2 mm along 1000 rays finds no solid point before the cast's hit, and the hit's cell is where the ray enters."
