@@ -1886,50 +1886,65 @@ so a walk over neighbouring cells reads positions from one run of memory. #D9W4C
           (setf (aref starts buckets) n)))))
     grid))
 
-(defmacro do-grid-neighbours ((item grid x y z &key (span 1)) &body body)
-  "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
-of point X Y Z, cell by cell in a fixed order. A dense grid visits each row of cells along x
-as one run of its items. #D9W4CH"
-  (let ((g (gensym "GRID")) (cx (gensym)) (cy (gensym)) (cz (gensym)) (i (gensym)) (j (gensym))
-        (k (gensym)) (key (gensym)) (b (gensym)) (e (gensym)) (inv (gensym)) (s (gensym))
-        (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS")) (mask (gensym "MASK"))
-        (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW")) (visit (gensym "VISIT")))
-    `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s (min ,span ,(ash 1 22)))
-            (,cx (cell-floor (* ,x ,inv))) (,cy (cell-floor (* ,y ,inv))) (,cz (cell-floor (* ,z ,inv)))
-            (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g))
-            (,mask (hash-grid-mask ,g)))
-       (declare (type cell ,cx ,cy ,cz) (type (integer 0 ,(ash 1 22)) ,s) (type fixnum ,mask)
-                (type fixnum-column ,starts ,items ,keys))
-       (flet ((,visit (,item) (declare (type fixnum ,item)) ,@body))
-         (declare (inline ,visit))
-         (cond
-           ((zerop (hash-grid-count ,g)))
-           ((hash-grid-dense ,g)
-            ;; rows of cells along x are contiguous runs of items
-            (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
-                   (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g)))
-              ;; a dense grid's box is under 4096 cells a side
-              (declare (type cell ox oy oz) (type (integer 1 4096) nx ny nz))
-              (loop for ,k of-type fixnum from (max oz (- ,cz ,s)) to (min (+ oz nz -1) (+ ,cz ,s)) do
-                (loop for ,j of-type fixnum from (max oy (- ,cy ,s)) to (min (+ oy ny -1) (+ ,cy ,s)) do
-                  (let* ((,lo (max ox (- ,cx ,s)))
-                         (,hi (min (+ ox nx -1) (+ ,cx ,s))))
-                    (declare (type fixnum ,lo ,hi))
-                    (when (<= ,lo ,hi)
+(defmacro do-grid-cells (((item &optional entry) grid) (i0 j0 k0 i1 j1 k1) &body body)
+  "Run BODY with ITEM bound to each item of GRID bucketed in a cell from I0 J0 K0 to I1 J1 K1 (cell
+coordinates, fixnums), cell by cell in the order z, y, x; ENTRY, when given, is bound to the
+item's place in the grid's order, where the grid keeps its copy of the item's centre. A dense
+grid visits only the cells inside its own box, each row of cells along x as one run of its
+items. #D9W4CH"
+  (let ((g (gensym "GRID")) (i (gensym)) (j (gensym)) (k (gensym)) (e (gensym)) (key (gensym)) (b (gensym))
+        (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW")) (visit (gensym "VISIT"))
+        (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS"))
+        (ci0 (gensym)) (cj0 (gensym)) (ck0 (gensym)) (ci1 (gensym)) (cj1 (gensym)) (ck1 (gensym))
+        (entry (or entry (gensym "ENTRY"))))
+    `(let ((,g ,grid) (,ci0 ,i0) (,cj0 ,j0) (,ck0 ,k0) (,ci1 ,i1) (,cj1 ,j1) (,ck1 ,k1))
+       (declare (type fixnum ,ci0 ,cj0 ,ck0 ,ci1 ,cj1 ,ck1))
+       (let ((,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g)))
+         (declare (type fixnum-column ,starts ,items ,keys))
+         (flet ((,visit (,entry)
+                  (declare (type index ,entry) (ignorable ,entry))
+                  (let ((,item (aref ,items ,entry)))
+                    (declare (type fixnum ,item) (ignorable ,item))
+                    ,@body)))
+           (declare (inline ,visit))
+           (cond
+             ((zerop (hash-grid-count ,g)))
+             ((hash-grid-dense ,g)
+              ;; rows of cells along x are contiguous runs of items; a dense grid's box is under
+              ;; 4096 cells a side
+              (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
+                     (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g))
+                     (,lo (max ox ,ci0)) (,hi (min (+ ox nx -1) ,ci1)))
+                (declare (type cell ox oy oz) (type (integer 1 4096) nx ny nz) (type fixnum ,lo ,hi))
+                (when (<= ,lo ,hi)
+                  (loop for ,k of-type fixnum from (max oz ,ck0) to (min (+ oz nz -1) ,ck1) do
+                    (loop for ,j of-type fixnum from (max oy ,cj0) to (min (+ oy ny -1) ,cj1) do
                       (let ((,row (* nx (+ (- ,j oy) (* ny (- ,k oz))))))
                         (declare (type fixnum ,row))
                         (loop for ,e of-type fixnum from (aref ,starts (+ ,row (- ,lo ox)))
                                 below (aref ,starts (+ ,row (- ,hi ox) 1))
-                              do (,visit (aref ,items ,e))))))))))
-           (t
-            (loop for ,k of-type fixnum from (- ,cz ,s) to (+ ,cz ,s) do
-              (loop for ,j of-type fixnum from (- ,cy ,s) to (+ ,cy ,s) do
-                (loop for ,i of-type fixnum from (- ,cx ,s) to (+ ,cx ,s) do
-                  (let* ((,key (grid-cell-key ,i ,j ,k))
-                         (,b (grid-bucket ,key ,mask)))
-                    (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
-                          when (= (aref ,keys ,e) ,key)
-                            do (,visit (aref ,items ,e)))))))))))))
+                              do (,visit ,e))))))))
+             (t
+              (let ((mask (hash-grid-mask ,g)))
+                (declare (type fixnum mask))
+                (loop for ,k of-type fixnum from ,ck0 to ,ck1 do
+                  (loop for ,j of-type fixnum from ,cj0 to ,cj1 do
+                    (loop for ,i of-type fixnum from ,ci0 to ,ci1 do
+                      (let* ((,key (grid-cell-key ,i ,j ,k))
+                             (,b (grid-bucket ,key mask)))
+                        (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
+                              when (= (aref ,keys ,e) ,key)
+                                do (,visit ,e))))))))))))))
+
+(defmacro do-grid-neighbours ((item grid x y z &key (span 1)) &body body)
+  "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
+of point X Y Z, cell by cell in a fixed order (do-grid-cells). #D9W4CH"
+  (let ((g (gensym "GRID")) (cx (gensym)) (cy (gensym)) (cz (gensym)) (inv (gensym)) (s (gensym)))
+    `(let* ((,g ,grid) (,inv (hash-grid-inv-cell ,g)) (,s (min ,span ,(ash 1 22)))
+            (,cx (cell-floor (* ,x ,inv))) (,cy (cell-floor (* ,y ,inv))) (,cz (cell-floor (* ,z ,inv))))
+       (declare (type cell ,cx ,cy ,cz) (type (integer 0 ,(ash 1 22)) ,s))
+       (do-grid-cells ((,item) ,g) ((- ,cx ,s) (- ,cy ,s) (- ,cz ,s) (+ ,cx ,s) (+ ,cy ,s) (+ ,cz ,s))
+         ,@body))))
 
 (defun grid-half-runs (grid entry runs)
   "Fill RUNS with the half neighbourhood of the cell of ENTRY, a place in GRID's order, as
@@ -8361,26 +8376,22 @@ RECORDING, seen from AZIMUTH and ELEVATION, under TITLE. Return PATHNAME. #UFK5E
 ;; [[file:../physics.org::#Q5V1EW][The bodies as a query sees them:1]]
 (defstruct (query-view (:constructor make-query-view ()))
   "What a query walks to find bodies, valid while WORLD's rows are as they were at its making:
-the grid of the awake rows (the world's own, or OWN-AWAKE when too many rows have strayed from
-it), how far any row it holds has drifted from the centre the grid bucketed (AWAKE-PAD), the rows
-to test one by one (AWAKE-STRAYS); the same for the sleepers, whose grid holds handles; and a
+the view's own grid of the awake rows, bucketed from their centres of now, with each entry's
+radius and handle beside its centre in the grid's order (AWAKE-RADII, AWAKE-HANDLES); the
+sleepers' grid, which holds handles, and the sleepers to test apart (SLEEPING-STRAYS); and a
 terrain probe of its own. #Q5V1EW"
   (version -1 :type fixnum) (awake-count -1 :type fixnum) (sleeping-count -1 :type fixnum)
   (steps -1 :type fixnum)
   (awake-grid (make-hash-grid) :type hash-grid)
-  (awake-pad 0d0 :type double-float)
-  (awake-strays (make-array 0 :element-type 'fixnum) :type fixnum-column)
-  (awake-stray-count 0 :type index)
-  (awake-marks (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (awake-radii (make-array 0 :element-type 'single-float) :type f32-column)
+  (awake-handles (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (sleeping-grid (make-hash-grid) :type hash-grid)
   (sleeping-strays (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (sleeping-stray-count 0 :type index)
-  (awake-stray-grid (make-hash-grid) :type hash-grid)
   (sleeping-stray-grid (make-hash-grid) :type hash-grid)
   (stray-x (make-array 0 :element-type 'single-float) :type f32-column)
   (stray-y (make-array 0 :element-type 'single-float) :type f32-column)
   (stray-z (make-array 0 :element-type 'single-float) :type f32-column)
-  (own-awake (make-hash-grid) :type hash-grid)
   (own-sleeping (make-hash-grid) :type hash-grid)
   (marks (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (probe (make-terrain-probe) :type terrain-probe)
@@ -8427,47 +8438,28 @@ instead of testing each; else leave GRID empty. #Q5V1EW"
     (build-hash-grid grid (f32 (grid-cell-size world)) count xs ys zs strays :dense-allowed nil))))
 
 (defun view-awake (world view)
-  "Point VIEW at the awake rows of WORLD: the rows of the world's awake grid that have drifted at
-most the drift limit from the centre it bucketed are walked through it, padded by the largest
-such drift, and the others are strays; when strays are too many, VIEW grids the rows itself. #Q5V1EW"
+  "Grid the awake rows of WORLD into VIEW's own grid, at the world's cell size, from the centres
+they have now, items their rows; beside each entry's copy of its centre, keep its radius and
+handle, in the grid's order. #Q5V1EW"
   (declare (type query-view view) #.+kernel-policy+)
   (let* ((awake (physics-world-awake world))
          (n (body-columns-length awake))
-         (grid (physics-world-awake-grid world))
-         (m (hash-grid-count grid))
-         (limit (max 0.01 (f32 (physics-world-pair-skin world))))
-         (limit2 (* limit limit))
-         (strays (setf (query-view-awake-strays view) (stray-room (query-view-awake-strays view) n)))
-         (marks (setf (query-view-awake-marks view) (stray-room (query-view-awake-marks view) n)))
-         (count 0) (pad2 0.0))
-    (declare (type index n m count) (type single-float limit limit2 pad2) (type fixnum-column strays marks))
-    (fill marks 0 :end n)
-    (setf (hash-grid-count (query-view-awake-stray-grid view)) 0)
-    (with-body-columns (x y z) awake
-      (let ((items (hash-grid-items grid)) (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid))
-            (gz (hash-grid-zs grid)))
-        (dotimes (e m)
-          (let ((r (aref items e)))
-            (when (< r n)
-              (let* ((dx (- (aref x r) (aref gx e))) (dy (- (aref y r) (aref gy e)))
-                     (dz (- (aref z r) (aref gz e)))
-                     (d2 (+ (* dx dx) (* dy dy) (* dz dz))))
-                (if (<= d2 limit2)
-                    (setf pad2 (max pad2 d2))
-                    (setf (aref strays count) r (aref marks r) 1 count (1+ count)))))))
-        (loop for r of-type index from m below n
-              do (setf (aref strays count) r (aref marks r) 1 count (1+ count)))))
-    (if (> count (strays-allowed n))
-        (let ((own (query-view-own-awake view)))
-          (build-hash-grid own (f32 (grid-cell-size world)) n (body-columns-x awake) (body-columns-y awake)
-                           (body-columns-z awake) (awake-row-identities world n))
-          (setf (query-view-awake-grid view) own (query-view-awake-pad view) 0d0
-                (query-view-awake-stray-count view) 0))
-        (progn
-          (setf (query-view-awake-grid view) grid
-                (query-view-awake-pad view) (float (fsqrt pad2) 1d0)
-                (query-view-awake-stray-count view) count)
-          (grid-strays world view (query-view-awake-stray-grid view) awake strays count)))
+         (grid (query-view-awake-grid view)))
+    (declare (type index n))
+    (hash-grid-reserve grid n)
+    (build-hash-grid grid (f32 (grid-cell-size world)) n (body-columns-x awake) (body-columns-y awake)
+                     (body-columns-z awake) (awake-row-identities world n))
+    (when (< (length (query-view-awake-radii view)) n)
+      (let ((room (max n (* 2 (length (query-view-awake-radii view))) 64)))
+        (setf (query-view-awake-radii view) (make-array room :element-type 'single-float)
+              (query-view-awake-handles view) (make-array room :element-type 'fixnum))))
+    (let ((items (hash-grid-items grid)) (radii (query-view-awake-radii view))
+          (handles (query-view-awake-handles view)))
+      (declare (type fixnum-column items handles) (type f32-column radii))
+      (with-body-columns (radius handle) awake
+        (dotimes (e n)
+          (let ((row (aref items e)))
+            (setf (aref radii e) (aref radius row) (aref handles e) (aref handle row))))))
     view))
 
 (defun view-sleeping (world view)
@@ -8561,51 +8553,14 @@ and when they are too many VIEW grids the sleepers itself. #Q5V1EW"
 
 (defmacro do-grid-box ((item grid x0 y0 z0 x1 y1 z1) &body body)
   "Run BODY with ITEM bound to each item of GRID bucketed in a cell that meets the box from X0 Y0 Z0
-to X1 Y1 Z1 (doubles, in metres); ITEM may be a list (ITEM ENTRY), ENTRY then bound to the item's
-place in the grid's order, where the grid keeps its copy of the item's centre. A dense grid visits
-only the cells inside its own box, each row of cells along x as one run. #Q5V1EW"
-  (let* ((entry-var (if (consp item) (second item) (gensym "ENTRY")))
-         (item (if (consp item) (first item) item))
-         (g (gensym "GRID")) (inv (gensym)) (i (gensym)) (j (gensym)) (k (gensym)) (e (gensym))
-        (i0 (gensym)) (j0 (gensym)) (k0 (gensym)) (i1 (gensym)) (j1 (gensym)) (k1 (gensym))
-        (starts (gensym)) (items (gensym)) (keys (gensym)) (visit (gensym)) (key (gensym)) (b (gensym))
-        (row (gensym)))
-    `(let* ((,g ,grid) (,inv (float (hash-grid-inv-cell ,g) 1d0))
-            (,i0 (dcell (* ,x0 ,inv))) (,j0 (dcell (* ,y0 ,inv))) (,k0 (dcell (* ,z0 ,inv)))
-            (,i1 (dcell (* ,x1 ,inv))) (,j1 (dcell (* ,y1 ,inv))) (,k1 (dcell (* ,z1 ,inv)))
-            (,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g)))
-       (declare (type fixnum ,i0 ,j0 ,k0 ,i1 ,j1 ,k1) (type fixnum-column ,starts ,items ,keys))
-       (flet ((,visit (,entry-var)
-                (declare (type index ,entry-var) (ignorable ,entry-var))
-                (let ((,item (aref ,items ,entry-var)))
-                  (declare (type fixnum ,item) (ignorable ,item))
-                  ,@body)))
-         (declare (inline ,visit))
-         (cond
-           ((zerop (hash-grid-count ,g)))
-           ((hash-grid-dense ,g)
-            (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
-                   (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g))
-                   (lo (max ox ,i0)) (hi (min (+ ox nx -1) ,i1)))
-              (declare (type cell ox oy oz) (type (integer 1 4096) nx ny nz) (type fixnum lo hi))
-              (when (<= lo hi)
-                (loop for ,k of-type fixnum from (max oz ,k0) to (min (+ oz nz -1) ,k1) do
-                  (loop for ,j of-type fixnum from (max oy ,j0) to (min (+ oy ny -1) ,j1) do
-                    (let ((,row (* nx (+ (- ,j oy) (* ny (- ,k oz))))))
-                      (declare (type fixnum ,row))
-                      (loop for ,e of-type fixnum from (aref ,starts (+ ,row (- lo ox)))
-                              below (aref ,starts (+ ,row (- hi ox) 1))
-                            do (,visit ,e))))))))
-           (t
-            (let ((mask (hash-grid-mask ,g)))
-              (loop for ,k of-type fixnum from ,k0 to ,k1 do
-                (loop for ,j of-type fixnum from ,j0 to ,j1 do
-                  (loop for ,i of-type fixnum from ,i0 to ,i1 do
-                    (let* ((,key (grid-cell-key ,i ,j ,k))
-                           (,b (grid-bucket ,key mask)))
-                      (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
-                            when (= (aref ,keys ,e) ,key)
-                              do (,visit ,e)))))))))))))
+to X1 Y1 Z1 (doubles, in metres), as do-grid-cells visits them; ITEM may be a list (ITEM ENTRY),
+ENTRY then bound to the item's place in the grid's order. #Q5V1EW"
+  (let ((g (gensym "GRID")) (inv (gensym "INV")))
+    `(let* ((,g ,grid) (,inv (float (hash-grid-inv-cell ,g) 1d0)))
+       (do-grid-cells (,(if (consp item) item (list item)) ,g)
+           ((dcell (* ,x0 ,inv)) (dcell (* ,y0 ,inv)) (dcell (* ,z0 ,inv))
+            (dcell (* ,x1 ,inv)) (dcell (* ,y1 ,inv)) (dcell (* ,z1 ,inv)))
+         ,@body))))
 
 (declaim (inline grid-box-cells))
 
@@ -8626,9 +8581,8 @@ box), as a double. #Q5V1EW"
 (declaim (inline view-row))
 
 (defun view-row (view world handles-p item)
-  "The row of the body ITEM names in a grid VIEW walks: ITEM itself for the awake grid (or -1 when
-that row is gone or is a stray, tested apart), the row of handle ITEM when it names a sleeper the
-grid holds where it lies, else -1. #Q5V1EW"
+  "The row of the body ITEM names in a grid VIEW walks: ITEM itself for the awake grid, the row of
+handle ITEM when it names a sleeper the grid holds where it lies, else -1. #Q5V1EW"
   (declare (type query-view view) (type fixnum item) #.+kernel-policy+)
   (if handles-p
       (let* ((ids (physics-world-ids world)) (slot (handle-index item)))
@@ -8640,11 +8594,7 @@ grid holds where it lies, else -1. #Q5V1EW"
                   -1
                   row))
             -1))
-      (if (and (< item (query-view-awake-count view))
-               (or (zerop (query-view-awake-stray-count view))
-                   (zerop (aref (query-view-awake-marks view) item))))
-          item
-          -1)))
+      item))
 
 (defmacro with-chunk-reader ((solid-p probe) &body body)
   "Run BODY with (SOLID-P X Y Z) a local function telling whether cell X Y Z is solid, through
@@ -8938,98 +8888,146 @@ values; T-IN > T-OUT when it misses. #C4STRY"
       (slab query-search-oz query-search-uz z0 z1))
     (values lo hi)))
 
-(defmacro do-view-bodies ((x y z r handle) (view world handles-p grid pad &optional direct) (s) &body body)
-  "For cast S, run BODY with X Y Z R HANDLE bound to the centre, radius and handle of each body
-held by GRID (of handles when HANDLES-P, else of awake rows) that may lie within the cast's reach
-of its path, a cell's length of path at a time while the path is shorter than the nearest hit
-so far; PAD is how far a body may have drifted from where GRID holds it. An item is first
-judged by the grid's own copy of its centre, which lies in one run of memory with its
-neighbours': it is passed over when that centre is farther from the path's line than the reach
-grown by PAD, or lies wholly behind the cast or beyond its nearest hit. With DIRECT, GRID's items
-are rows of the set, all to be tested (a grid of the view's strays). #C4STRY"
-  (let ((g (gensym "G")) (t0 (gensym "T0")) (t1 (gensym "T1")) (rho (gensym "RHO")) (item (gensym "ITEM"))
-        (lo (gensym)) (hi (gensym)) (len (gensym)) (row (gensym "ROW")) (entry (gensym "ENTRY"))
-        (cx (gensym)) (cy (gensym)) (cz (gensym)) (cr (gensym)) (ch (gensym))
-        (gx (gensym)) (gy (gensym)) (gz (gensym)) (ox (gensym)) (oy (gensym)) (oz (gensym))
-        (ux (gensym)) (uy (gensym)) (uz (gensym)) (rho2 (gensym)))
-    `(let* ((,g ,grid)
-            (,rho (+ (float (the single-float (physics-world-max-radius ,world)) 1d0) ,pad (query-search-radius ,s) 1d-4))
-            (,rho2 (* ,rho ,rho))
-            (,len (/ 1d0 (float (hash-grid-inv-cell ,g) 1d0))))
-       (declare (type double-float ,rho ,rho2 ,len))
+(defconstant +path-part-cells+ 1.5d0
+  "How many cells' length of path a walk of the bodies takes at a time. #C4STRY")
+
+(defmacro do-path-entries ((entry) (s grid rho) &body body)
+  "For cast S, run BODY with ENTRY bound to the place, in GRID's order, of each item of GRID whose
+cell lies within RHO (a double: the farthest a centre can be from the path and still be met, per
+axis) of the path from 0 to the nearest hit so far, +path-part-cells+ cells' length of path at a
+time, until the nearest hit is no farther than the part walked. For each layer of cells along z,
+the part is cut to the piece within RHO of the layer, and the rows along y and the cells along x
+visited are those within RHO of that piece. #C4STRY"
+  (let ((g (gensym "G")) (inv (gensym "INV")) (c (gensym "C")) (t0 (gensym "T0")) (t1 (gensym "T1"))
+        (lo (gensym "LO")) (hi (gensym "HI")) (r (gensym "RHO")) (ox (gensym)) (oy (gensym)) (oz (gensym))
+        (ux (gensym)) (uy (gensym)) (uz (gensym)) (iuz (gensym)) (starts (gensym "STARTS"))
+        (keys (gensym "KEYS")) (visit (gensym "VISIT")))
+    `(let ((,g ,grid) (,r ,rho))
+       (declare (type hash-grid ,g) (type double-float ,r))
        (unless (zerop (hash-grid-count ,g))
-         (with-body-columns ((,cx x) (,cy y) (,cz z) (,cr radius) (,ch handle))
-             (if ,handles-p (physics-world-sleeping ,world) (physics-world-awake ,world))
-           (let ((,gx (hash-grid-xs ,g)) (,gy (hash-grid-ys ,g)) (,gz (hash-grid-zs ,g))
-                 (,ox (query-search-ox ,s)) (,oy (query-search-oy ,s)) (,oz (query-search-oz ,s))
-                 (,ux (query-search-ux ,s)) (,uy (query-search-uy ,s)) (,uz (query-search-uz ,s)))
-             (declare (type f32-column ,gx ,gy ,gz) (type double-float ,ox ,oy ,oz ,ux ,uy ,uz))
+         (let* ((,inv (float (hash-grid-inv-cell ,g) 1d0)) (,c (/ 1d0 ,inv))
+                (,ox (query-search-ox ,s)) (,oy (query-search-oy ,s)) (,oz (query-search-oz ,s))
+                (,ux (query-search-ux ,s)) (,uy (query-search-uy ,s)) (,uz (query-search-uz ,s))
+                (,iuz (if (= ,uz 0d0) 0d0 (/ 1d0 ,uz)))
+                (,starts (hash-grid-starts ,g)) (,keys (hash-grid-keys ,g))
+                (dense (hash-grid-dense ,g))
+                (gox (hash-grid-ox ,g)) (goy (hash-grid-oy ,g)) (goz (hash-grid-oz ,g))
+                (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g)) (mask (hash-grid-mask ,g)))
+           (declare (type double-float ,inv ,c ,ox ,oy ,oz ,ux ,uy ,uz ,iuz)
+                    (type fixnum-column ,starts ,keys) (type cell gox goy goz) (type (integer 1 4096) nx ny nz)
+                    (type fixnum mask))
+           (flet ((,visit (,entry) (declare (type index ,entry)) ,@body))
+             (declare (inline ,visit))
+             ;; a dense grid first cuts the path to its own box, grown by RHO
              (multiple-value-bind (,lo ,hi)
-                 (if (hash-grid-dense ,g)
-                     (segment-box-range ,s (- (* ,len (hash-grid-ox ,g)) ,rho) (- (* ,len (hash-grid-oy ,g)) ,rho)
-                                        (- (* ,len (hash-grid-oz ,g)) ,rho)
-                                        (+ (* ,len (+ (hash-grid-ox ,g) (hash-grid-nx ,g))) ,rho)
-                                        (+ (* ,len (+ (hash-grid-oy ,g) (hash-grid-ny ,g))) ,rho)
-                                        (+ (* ,len (+ (hash-grid-oz ,g) (hash-grid-nz ,g))) ,rho)
+                 (if dense
+                     (segment-box-range ,s (- (* ,c gox) ,r) (- (* ,c goy) ,r) (- (* ,c goz) ,r)
+                                        (+ (* ,c (+ gox nx)) ,r) (+ (* ,c (+ goy ny)) ,r) (+ (* ,c (+ goz nz)) ,r)
                                         (query-search-best ,s))
                      (values 0d0 (query-search-best ,s)))
                (declare (type double-float ,lo ,hi))
                (loop with ,t0 of-type double-float = ,lo
                      while (and (<= ,t0 ,hi) (< ,t0 (query-search-best ,s)))
-                     do (let* ((,t1 (min (query-search-best ,s) ,hi (+ ,t0 ,len)))
-                               (ax (+ ,ox (* ,t0 ,ux))) (bx (+ ,ox (* ,t1 ,ux)))
-                               (ay (+ ,oy (* ,t0 ,uy))) (by (+ ,oy (* ,t1 ,uy)))
-                               (az (+ ,oz (* ,t0 ,uz))) (bz (+ ,oz (* ,t1 ,uz))))
-                          (declare (type double-float ,t1 ax bx ay by az bz))
-                          (do-grid-box ((,item ,entry) ,g (- (min ax bx) ,rho) (- (min ay by) ,rho) (- (min az bz) ,rho)
-                                        (+ (max ax bx) ,rho) (+ (max ay by) ,rho) (+ (max az bz) ,rho))
-                            (let* ((mx (- (float (aref ,gx ,entry) 1d0) ,ox))
-                                   (my (- (float (aref ,gy ,entry) 1d0) ,oy))
-                                   (mz (- (float (aref ,gz ,entry) 1d0) ,oz))
-                                   (along (+ (* mx ,ux) (* my ,uy) (* mz ,uz))))
-                              (when (and (> along (- ,rho)) (< (- along ,rho) (query-search-best ,s))
-                                         (<= (- (+ (* mx mx) (* my my) (* mz mz)) (* along along)) ,rho2))
-                                (let ((,row ,(if direct item `(view-row ,view ,world ,handles-p ,item))))
-                                  (declare (type fixnum ,row))
-                                  (when (>= ,row 0)
-                                    (let ((,x (float (aref ,cx ,row) 1d0)) (,y (float (aref ,cy ,row) 1d0))
-                                          (,z (float (aref ,cz ,row) 1d0)) (,r (float (aref ,cr ,row) 1d0))
-                                          (,handle (aref ,ch ,row)))
-                                      (declare (ignorable ,x ,y ,z ,r ,handle))
-                                      ,@body))))))
+                     do (let* ((,t1 (min (query-search-best ,s) ,hi (+ ,t0 (* +path-part-cells+ ,c))))
+                               (az (+ ,oz (* ,t0 ,uz))) (bz (+ ,oz (* ,t1 ,uz)))
+                               (k0 (dcell (* (- (min az bz) ,r) ,inv))) (k1 (dcell (* (+ (max az bz) ,r) ,inv))))
+                          (declare (type double-float ,t1 az bz) (type fixnum k0 k1))
+                          (when dense (setf k0 (max k0 goz) k1 (min k1 (+ goz nz -1))))
+                          (loop for k of-type fixnum from k0 to k1 do
+                            ;; the piece of the part within RHO of layer K, up to the nearest hit
+                            (let ((ta ,t0) (tb (min ,t1 (query-search-best ,s))))
+                              (declare (type double-float ta tb))
+                              (unless (= ,uz 0d0)
+                                (let ((za (* (- (- (* ,c k) ,r) ,oz) ,iuz)) (zb (* (- (+ (* ,c (1+ k)) ,r) ,oz) ,iuz)))
+                                  (setf ta (max ta (min za zb)) tb (min tb (max za zb)))))
+                              (when (<= ta tb)
+                                (let* ((ya (+ ,oy (* ta ,uy))) (yb (+ ,oy (* tb ,uy)))
+                                       (xa (+ ,ox (* ta ,ux))) (xb (+ ,ox (* tb ,ux)))
+                                       (j0 (dcell (* (- (min ya yb) ,r) ,inv))) (j1 (dcell (* (+ (max ya yb) ,r) ,inv)))
+                                       (i0 (dcell (* (- (min xa xb) ,r) ,inv))) (i1 (dcell (* (+ (max xa xb) ,r) ,inv))))
+                                  (declare (type fixnum j0 j1 i0 i1))
+                                  (if dense
+                                      ;; each row of cells along x is one run of entries
+                                      (let ((i0 (max i0 gox)) (i1 (min i1 (+ gox nx -1))))
+                                        (when (<= i0 i1)
+                                          (loop for j of-type fixnum from (max j0 goy) to (min j1 (+ goy ny -1)) do
+                                            (let ((row (* nx (+ (- j goy) (* ny (- k goz))))))
+                                              (declare (type fixnum row))
+                                              (loop for e of-type fixnum from (aref ,starts (+ row (- i0 gox)))
+                                                      below (aref ,starts (+ row (- i1 gox) 1))
+                                                    do (,visit e))))))
+                                      (loop for j of-type fixnum from j0 to j1 do
+                                        (loop for i of-type fixnum from i0 to i1 do
+                                          (let* ((key (grid-cell-key i j k)) (b (grid-bucket key mask)))
+                                            (loop for e of-type fixnum from (aref ,starts b) below (aref ,starts (1+ b))
+                                                  when (= (aref ,keys e) key) do (,visit e))))))))))
                           (when (or (<= (query-search-best ,s) ,t1) (>= ,t1 ,hi)) (return))
                           (setf ,t0 ,t1))))))))))
 
-(defun sweep-bodies (s view world)
-  "Sweep cast S against the bodies of VIEW: the awake ones through its awake grid padded by their
-drift and then through the grid of its awake strays, the sleepers through its sleeping grid and
-the grid of its sleeping strays; the excluded body is passed over. #C4STRY"
+(defun sweep-awake (s view world)
+  "Sweep cast S against the awake bodies of VIEW, through its own grid, each entry tested from the
+grid's columns of centre, radius and handle; the excluded body is passed over. #C4STRY"
   (declare (type query-search s) (type query-view view) #.+kernel-policy+)
-  (let ((exclude (query-search-exclude s)) (radius (query-search-radius s)))
-    (macrolet ((try (x y z r h)
-                 `(unless (eql ,h exclude)
-                    (when (sweep-sphere s ,x ,y ,z (+ ,r radius)) (offer s +hit-body+ ,h))))
-               (strays (buffer grid strays count handles-p)
-                 ;; a few strays are tested one by one, more are walked in their grid
-                 `(if (plusp (hash-grid-count ,grid))
-                      (do-view-bodies (x y z r h) (view world ,handles-p ,grid 0d0 t) (s)
-                        (try x y z r h))
-                      (with-body-columns ((cx x) (cy y) (cz z) (cr radius) (ch handle)) ,buffer
-                        (let ((rows ,strays))
-                          (declare (type fixnum-column rows))
-                          (dotimes (q ,count)
-                            (let ((row (aref rows q)))
-                              (try (float (aref cx row) 1d0) (float (aref cy row) 1d0) (float (aref cz row) 1d0)
-                                   (float (aref cr row) 1d0) (aref ch row)))))))))
-      (do-view-bodies (x y z r h) (view world nil (query-view-awake-grid view) (query-view-awake-pad view)) (s)
-        (try x y z r h))
-      (strays (physics-world-awake world) (query-view-awake-stray-grid view) (query-view-awake-strays view)
-              (query-view-awake-stray-count view) nil)
-      (do-view-bodies (x y z r h) (view world t (query-view-sleeping-grid view) 0d0) (s)
-        (try x y z r h))
-      (strays (physics-world-sleeping world) (query-view-sleeping-stray-grid view) (query-view-sleeping-strays view)
-              (query-view-sleeping-stray-count view) t)))
+  (let* ((exclude (query-search-exclude s)) (radius (query-search-radius s))
+         (rho (+ (float (the single-float (physics-world-max-radius world)) 1d0) radius 1d-4))
+         (g (query-view-awake-grid view)) (gx (hash-grid-xs g)) (gy (hash-grid-ys g)) (gz (hash-grid-zs g))
+         (radii (query-view-awake-radii view)) (handles (query-view-awake-handles view)))
+    (declare (type double-float radius rho) (type f32-column gx gy gz radii) (type fixnum-column handles))
+    (do-path-entries (e) (s g rho)
+      (when (sweep-sphere s (float (aref gx e) 1d0) (float (aref gy e) 1d0) (float (aref gz e) 1d0)
+                          (+ (float (aref radii e) 1d0) radius))
+        (let ((h (aref handles e)))
+          (unless (eql h exclude) (offer s +hit-body+ h))))))
   s)
+
+(defun sweep-sleepers (s view world)
+  "Sweep cast S against the sleepers of VIEW: through its sleeping grid, each entry first judged by
+the grid's copy of its centre and then found through the handle table; then the sleeping strays,
+one by one or through their grid. The excluded body is passed over. #C4STRY"
+  (declare (type query-search s) (type query-view view) #.+kernel-policy+)
+  (let* ((exclude (query-search-exclude s)) (radius (query-search-radius s))
+         (rho (+ (float (the single-float (physics-world-max-radius world)) 1d0) radius 1d-4)))
+    (declare (type double-float radius rho))
+    (with-body-columns ((cx x) (cy y) (cz z) (cr radius) (ch handle)) (physics-world-sleeping world)
+      (flet ((try (row)
+               (declare (type index row))
+               (when (sweep-sphere s (float (aref cx row) 1d0) (float (aref cy row) 1d0) (float (aref cz row) 1d0)
+                                   (+ (float (aref cr row) 1d0) radius))
+                 (let ((h (aref ch row)))
+                   (unless (eql h exclude) (offer s +hit-body+ h))))))
+        (declare (inline try))
+        (macrolet ((walk (grid direct)
+                     ;; an item is first judged by the grid's copy of its centre, in one run of
+                     ;; memory with its neighbours': passed over when farther from the path's line
+                     ;; than RHO, or wholly behind the cast or beyond its nearest hit
+                     `(let* ((g ,grid) (gx (hash-grid-xs g)) (gy (hash-grid-ys g)) (gz (hash-grid-zs g))
+                             (items (hash-grid-items g)) (rho2 (* rho rho))
+                             (ox (query-search-ox s)) (oy (query-search-oy s)) (oz (query-search-oz s))
+                             (ux (query-search-ux s)) (uy (query-search-uy s)) (uz (query-search-uz s)))
+                        (declare (type f32-column gx gy gz) (type fixnum-column items)
+                                 (type double-float rho2 ox oy oz ux uy uz))
+                        (do-path-entries (e) (s g rho)
+                          (let* ((mx (- (float (aref gx e) 1d0) ox)) (my (- (float (aref gy e) 1d0) oy))
+                                 (mz (- (float (aref gz e) 1d0) oz))
+                                 (along (+ (* mx ux) (* my uy) (* mz uz))))
+                            (when (and (> along (- rho)) (< (- along rho) (query-search-best s))
+                                       (<= (- (+ (* mx mx) (* my my) (* mz mz)) (* along along)) rho2))
+                              (let ((row ,(if direct `(aref items e) `(view-row view world t (aref items e)))))
+                                (declare (type fixnum row))
+                                (when (>= row 0) (try row)))))))))
+          (walk (query-view-sleeping-grid view) nil)
+          (if (plusp (hash-grid-count (query-view-sleeping-stray-grid view)))
+              (walk (query-view-sleeping-stray-grid view) t)
+              (let ((rows (query-view-sleeping-strays view)))
+                (declare (type fixnum-column rows))
+                (dotimes (q (query-view-sleeping-stray-count view))
+                  (try (aref rows q)))))))))
+  s)
+
+(defun sweep-bodies (s view world)
+  "Sweep cast S against the bodies of VIEW, the awake ones and then the sleepers. #C4STRY"
+  (sweep-awake s view world)
+  (sweep-sleepers s view world))
 
 (declaim (inline cast-argument))
 
@@ -9241,25 +9239,19 @@ normal out of what was met. #S9WEEP"
 ;; [[file:../physics.org::#OV3RLP][Bodies and cells in a region:1]]
 (defmacro do-bodies-in-region ((buf row) (view world x0 y0 z0 x1 y1 z1) &body body)
   "Run BODY with BUF and ROW bound to the buffer and row of every body of VIEW, awake or asleep,
-whose centre may lie in the box X0..X1 Y0..Y1 Z0..Z1 (doubles) grown by the largest radius and
-by the awake rows' drift, each once: through the grids, or row by row when the region meets
-more cells of a grid than its set has bodies. #OV3RLP"
+whose centre may lie in the box X0..X1 Y0..Y1 Z0..Z1 (doubles) grown by the largest radius,
+each once: through the grids and the sleeping strays, or row by row when the region meets more
+cells of a grid than its set has bodies. #OV3RLP"
   (let ((v (gensym "VIEW")) (w (gensym "WORLD")))
     `(let ((,v ,view) (,w ,world))
        (declare (type query-view ,v))
        ,@(loop for handles-p in '(nil t)
                collect
-               (let ((grow (gensym "GROW")) (item (gensym "ITEM")) (q (gensym)) (grid (gensym "GRID"))
-                     (strays (gensym)) (count (gensym)))
+               (let ((grow (gensym "GROW")) (item (gensym "ITEM")) (q (gensym)) (grid (gensym "GRID")))
                  `(let* ((,buf ,(if handles-p `(physics-world-sleeping ,w) `(physics-world-awake ,w)))
                          (,grid ,(if handles-p `(query-view-sleeping-grid ,v) `(query-view-awake-grid ,v)))
-                         (,grow (+ (float (the single-float (physics-world-max-radius ,w)) 1d0)
-                                   ,(if handles-p 0d0 `(query-view-awake-pad ,v)) 1d-4))
-                         (,strays ,(if handles-p `(query-view-sleeping-strays ,v) `(query-view-awake-strays ,v)))
-                         (,count ,(if handles-p `(query-view-sleeping-stray-count ,v)
-                                      `(query-view-awake-stray-count ,v))))
-                    (declare (type body-columns ,buf) (type double-float ,grow) (type fixnum-column ,strays)
-                             (type index ,count))
+                         (,grow (+ (float (the single-float (physics-world-max-radius ,w)) 1d0) 1d-4)))
+                    (declare (type body-columns ,buf) (type double-float ,grow))
                     (flet ((visit (,row) (declare (type index ,row)) ,@body))
                       (declare (inline visit))
                       (if (> (grid-box-cells ,grid (- ,x0 ,grow) (- ,y0 ,grow) (- ,z0 ,grow) (+ ,x1 ,grow)
@@ -9272,7 +9264,11 @@ more cells of a grid than its set has bodies. #OV3RLP"
                               (let ((,row (view-row ,v ,w ,handles-p ,item)))
                                 (declare (type fixnum ,row))
                                 (when (>= ,row 0) (visit ,row))))
-                            (dotimes (,q ,count) (visit (aref ,strays ,q))))))))))))
+                            ,@(when handles-p
+                                `((let ((strays (query-view-sleeping-strays ,v)))
+                                    (declare (type fixnum-column strays))
+                                    (dotimes (,q (query-view-sleeping-stray-count ,v))
+                                      (visit (aref strays ,q)))))))))))))))
 
 (declaim (inline region-size))
 

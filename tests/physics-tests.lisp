@@ -4492,24 +4492,35 @@ counted. #RH7T05"
 ;; UFK5EA-picture-draws-the-bodies ends here
 
 ;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-uses-world-grids]]
-(define-claim "Q5V1EW" view-uses-world-grids
-    "The view walks the world's awake grid padded by the drift, with strays for new rows; a dirty sleeping grid still finds every sleeper once."
+(define-claim "Q5V1EW" view-grids-awake-rows-of-now
+    "The view's awake grid holds every awake row once, with its centre, radius and handle of now; none after the pile sleeps; a dirty sleeping grid still finds every sleeper once."
   (let ((w (luv-physics::make-basin-world 300)))
     (dotimes (i 200) (step-physics-world w))
-    (let ((view (luv-physics::world-query-view w)))
-      (check (eq (luv-physics::query-view-awake-grid view) (luv-physics::physics-world-awake-grid w))
-             "the view gridded the awake rows itself")
-      (check (< (luv-physics::query-view-awake-pad view) (max 0.01d0 (luv-physics::physics-world-pair-skin w)))
-             "pad ~S" (luv-physics::query-view-awake-pad view))
-      (check (<= (luv-physics::query-view-awake-stray-count view) (luv-physics::strays-allowed 300)))
-      (let ((h (add-physics-body w 4.0 5.5 4.0)))
-        (setf view (luv-physics::world-query-view w))
-        (check (eq (luv-physics::query-view-awake-grid view) (luv-physics::physics-world-awake-grid w)))
-        (check (member (nth-value 1 (luv-physics::resolve-handle w h))
-                       (coerce (subseq (luv-physics::query-view-awake-strays view) 0
-                                       (luv-physics::query-view-awake-stray-count view))
-                               'list))
-               "the new row is not a stray"))))
+    (flet ((wrong-entries ()
+             ;; the rows the view's awake grid misses or holds twice, and the entries unlike their row
+             (let* ((view (luv-physics::world-query-view w)) (g (luv-physics::query-view-awake-grid view))
+                    (awake (luv-physics::physics-world-awake w)) (n (physics-world-awake-count w))
+                    (seen (make-array n :initial-element 0)) (wrong 0))
+               (dotimes (e (luv-physics::hash-grid-count g))
+                 (let ((row (aref (luv-physics::hash-grid-items g) e)))
+                   (if (not (< -1 row n))
+                       (incf wrong)
+                       (progn
+                         (incf (aref seen row))
+                         (unless (and (= (aref (luv-physics::hash-grid-xs g) e) (aref (luv-physics::body-columns-x awake) row))
+                                      (= (aref (luv-physics::hash-grid-ys g) e) (aref (luv-physics::body-columns-y awake) row))
+                                      (= (aref (luv-physics::hash-grid-zs g) e) (aref (luv-physics::body-columns-z awake) row))
+                                      (= (aref (luv-physics::query-view-awake-radii view) e)
+                                         (aref (luv-physics::body-columns-radius awake) row))
+                                      (= (aref (luv-physics::query-view-awake-handles view) e)
+                                         (aref (luv-physics::body-columns-handle awake) row)))
+                           (incf wrong))))))
+               (list (luv-physics::hash-grid-count g) (+ wrong (count-if-not (lambda (k) (= k 1)) seen))))))
+      (check (equal (wrong-entries) '(300 0)) "300 rows: entries and wrong ~S" (wrong-entries))
+      (add-physics-body w 4.0 5.5 4.0)
+      (check (equal (wrong-entries) '(301 0)) "after an add: entries and wrong ~S" (wrong-entries))
+      (loop for row from (1- (physics-world-awake-count w)) downto 0 do (luv-physics::sleep-physics-body w row))
+      (check (equal (wrong-entries) '(0 0)) "after the pile slept: entries and wrong ~S" (wrong-entries))))
   (let ((w (make-floor-world)) (seen (make-hash-table)))
     (dotimes (i 6) (add-physics-body w (+ 1.5 (* 0.6 i)) 0.245 2.5))
     (step-physics-world w)
@@ -4785,6 +4796,35 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
     (check (< worst-d 1d-5))
     (check (< worst-a 1d-4))))
 ;; R4YC57-rays-match-brute-force ends here
+
+;; [[file:../physics.org::#R4YC57][R4YC57-rays-match-in-hashed-grid]]
+(define-claim "R4YC57" rays-match-in-hashed-grid
+    "3000 rays among 60 balls scattered over 300 m (a hashed grid) meet the same body as brute force."
+  (let* ((w (make-physics-world)) (next (make-lcg 5)) (hit (make-physics-hit)) (wrong 0) (hits 0) (first-wrong nil))
+    (dotimes (i 60)
+      (add-physics-body w (- (* 300 (funcall next)) 150) (- (* 300 (funcall next)) 150) (- (* 300 (funcall next)) 150)
+                        :radius (+ 0.1 (* 0.4 (funcall next)))))
+    (dotimes (i 3) (step-physics-world w))
+    (check (not (luv-physics::hash-grid-dense (luv-physics::query-view-awake-grid (luv-physics::world-query-view w))))
+           "the view's awake grid is dense")
+    (let ((awake (luv-physics::physics-world-awake w)))
+      (dotimes (q 3000)
+        (let* ((row (floor (* (funcall next) (physics-world-awake-count w))))
+               (c (list (aref (luv-physics::body-columns-x awake) row) (aref (luv-physics::body-columns-y awake) row)
+                        (aref (luv-physics::body-columns-z awake) row)))
+               (o (mapcar (lambda (v) (float (+ v (- (* 16 (funcall next)) 8)) 1.0)) c))
+               (d (mapcar (lambda (cv ov) (float (- cv ov (- (funcall next) 0.5)) 1.0)) c o))
+               (want (apply #'brute-ray w (append (mapcar (lambda (v) (float v 1d0)) (append o d)) (list 20d0 :cells nil))))
+               (got (apply #'physics-ray-cast w (append o d (list 20.0 :cells nil :hit hit)))))
+          (when want (incf hits))
+          (unless (or (and (null want) (null got))
+                      (and want got (equal (second want) (hit-what got))
+                           (< (abs (- (third want) (physics-hit-distance got))) 1d-5)))
+            (incf wrong)
+            (unless first-wrong (setf first-wrong (list o d want (and got (list (hit-what got) (physics-hit-distance got))))))))))
+    (check (zerop wrong) "~D of 3000 rays differ from brute force; the first: ~S" wrong first-wrong)
+    (check (> hits 300) "only ~D rays met a body" hits)))
+;; R4YC57-rays-match-in-hashed-grid ends here
 
 ;; [[file:../physics.org::#R4YC57][R4YC57-no-cell-skipped]]
 (define-claim "R4YC57" no-cell-skipped
