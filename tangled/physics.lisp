@@ -3127,7 +3127,8 @@ with the strayed rows in order (LOOSE-ROWS) and how many there are this step (LO
 phase last used or built the list, BUILT-STEP the step that built it. CLEAR marks the rows with
 no solid cell within their reach plus 0.45 skins of their anchor, in TERRAIN as it was after
 TERRAIN-EDITS edits. LOOSE-GRID buckets the loose rows alone, from their centres gathered into
-LOOSE-X, LOOSE-Y and LOOSE-Z. OVERLAPS counts, per row, the overlapping pairs taken this step against it. #P41RS7"
+LOOSE-X, LOOSE-Y and LOOSE-Z. OVERLAPS counts, per row, the overlapping pairs taken this step against it.
+EXAMINED counts the candidates within reach the last build listed. #P41RS7"
   (pairs (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
   (rows -1 :type fixnum)
@@ -3147,7 +3148,8 @@ LOOSE-X, LOOSE-Y and LOOSE-Z. OVERLAPS counts, per row, the overlapping pairs ta
   (loose-x (make-array 0 :element-type 'single-float) :type f32-column)
   (loose-y (make-array 0 :element-type 'single-float) :type f32-column)
   (loose-z (make-array 0 :element-type 'single-float) :type f32-column)
-  (overlaps (make-array 0 :element-type 'fixnum) :type fixnum-column))
+  (overlaps (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (examined 0 :type index))
 
 (defun pair-list-room (plist rows)
   "Give every per-row column of PLIST, and its grid of loose rows, room for ROWS rows, keeping
@@ -3393,7 +3395,7 @@ gap is under the speculative distance. #P41RS7"
                     (cell-key -1) (run-count 0))
                 (declare (type fixnum-column items keys near runs)
                          (dynamic-extent runs) (type fixnum cell-key) (type (integer 0 14) run-count))
-                (setf (pair-list-count plist) 0)
+                (setf (pair-list-count plist) 0 (pair-list-examined plist) 0)
                 (dotimes (e (hash-grid-count grid))
                   (let ((i (aref items e)))
                     (when (zerop (logand (aref flags i) +flag-terrain-only+))
@@ -3403,6 +3405,7 @@ gap is under the speculative distance. #P41RS7"
                       (let* ((widest (+ (aref radius i) rmax margin skin))
                              (found (grid-list-near grid e runs run-count (* widest widest))))
                         (declare (type single-float widest) (type index found))
+                        (incf (pair-list-examined plist) found)
                         (dotimes (q found)
                           (let ((j (aref items (aref near q))))
                             (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
