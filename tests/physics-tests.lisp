@@ -1799,13 +1799,13 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#P41RS7][P41RS7-crowded-walk-is-bounded]]
 (define-claim "P41RS7" crowded-walk-is-bounded
-    "The pair list's build in a heap of 3000 at one point lists at most 130 candidates a body."
+    "The pair list's build in a heap of 3000 at one point lists at most 100 candidates a body."
   (let* ((n 3000)
          (world (make-physics-world :terrain (luv-physics::make-basin-terrain) :gravity '(0 0 0)))
          (plist (luv-physics::physics-world-pair-list world)))
     (dotimes (i n) (add-physics-body world 4.0 2.0 4.0 :radius 0.25))
     (step-physics-world world)
-    (check (<= (luv-physics::pair-list-examined plist) (* 130 n))
+    (check (<= (luv-physics::pair-list-examined plist) (* 100 n))
            "the build listed ~D candidates for ~D balls" (luv-physics::pair-list-examined plist) n)))
 ;; P41RS7-crowded-walk-is-bounded ends here
 
