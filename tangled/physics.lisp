@@ -5000,9 +5000,10 @@ and start the contact table's walk of it. #IDVK7G"
   (aref (world-statistics world) 3))
 
 (defun mark-held-rows (world)
-  "Raise to +overlaps-per-body+ the overlap count of every awake row with a pair contact deeper
-than the slop, so that the count then marks every row a crowded step holds: those and the
-crowded ones. #IDVK7G"
+  "When an awake row of WORLD is crowded (its overlap count has reached +overlaps-per-body+),
+raise to that count the count of every awake row with a pair contact deeper than the slop, so
+that the count marks every row the step holds, and return true; else change nothing and return
+false. #IDVK7G"
   (declare #.+kernel-policy+)
   (let* ((contacts (physics-world-contacts world))
          (geometry (contact-columns-geometry contacts))
@@ -5019,10 +5020,12 @@ crowded ones. #IDVK7G"
                (when (= (aref sets slot) +set-awake+)
                  (setf (aref overlaps (aref locals slot)) +overlaps-per-body+)))))
       (declare (inline hold))
-      (dotimes (k (contact-columns-length contacts))
-        (when (and (= (aref kinds k) +contact-pair+) (< (contact@ geometry k separation) deep))
-          (hold (aref as k))
-          (hold (aref bs k)))))))
+      (when (loop for i of-type index below (body-columns-length (physics-world-awake world))
+                  thereis (>= (aref overlaps i) +overlaps-per-body+))
+        (dotimes (k (contact-columns-length contacts) t)
+          (when (and (= (aref kinds k) +contact-pair+) (< (contact@ geometry k separation) deep))
+            (hold (aref as k))
+            (hold (aref bs k))))))))
 
 (defun hold-crowded-speeds (world)
   "Scale the solver's linear velocity of every awake row whose overlap count has reached
@@ -5045,16 +5048,16 @@ crowded ones. #IDVK7G"
   "Phase 9: the Soft Step substeps: integrate velocities, warm start, solve with bias,
 integrate positions, relax without bias; in a crowded step (one with contacts in the overflow
 colour, or after a step that left an overlap deeper than *physics-crowded-depth*), relax
-*physics-crowded-relax-passes* more times and then hold the crowd's bodies to half the
-push-out speed. #IDVK7G"
+*physics-crowded-relax-passes* more times, and when a body is crowded, hold the crowd's
+bodies to half the push-out speed. #IDVK7G"
   (let* ((kernels (physics-world-kernels world))
          (h (physics-world-current-h world))
          (inv-h (/ 1.0 h))
          (crowded (or (plusp (physics-world-overflow-count world))
                       (> (f32 (physics-world-max-penetration world)) (f32 (physics-world-crowded-depth world)))))
-         (relaxes (if crowded (1+ (the fixnum (physics-world-crowded-relax-passes world))) 1)))
+         (relaxes (if crowded (1+ (the fixnum (physics-world-crowded-relax-passes world))) 1))
+         (held (and crowded (mark-held-rows world))))
     (declare (type single-float h inv-h) (type fixnum relaxes))
-    (when crowded (mark-held-rows world))
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
@@ -5063,7 +5066,7 @@ push-out speed. #IDVK7G"
         (physics-integrate-positions kernels world h)
         (dotimes (k relaxes)
           (physics-solve-contacts kernels world inv-h nil (+ elapsed h)))
-        (when crowded (hold-crowded-speeds world))))
+        (when held (hold-crowded-speeds world))))
     world))
 
 (defparameter *physics-phases*
