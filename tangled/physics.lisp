@@ -4035,6 +4035,20 @@ thirds of the radius of its contact patch, sqrt(2 RADIUS SLOP). #PR3PAR"
   (declare (type single-float radius slop))
   (* (/ 2.0 3.0) (fsqrt (* 2.0 radius slop))))
 
+(declaim (inline brace-side))
+(defun brace-side (braced inverse-mass brace-ratio la lb rise)
+  "Which side of a contact between awake rows LA and LB is static to the other: :a when LA is
+BRACED and at least BRACE-RATIO times lighter than LB, which rests on it from above (RISE, the
+upward part of the normal from LA to LB, above 0.9); :b the other way round; else nil. #PR3PAR"
+  (declare (type fixnum-column braced) (type f32-column inverse-mass) (type index la lb)
+           (type single-float brace-ratio rise))
+  (cond ((and (= (aref braced la) 1) (> rise 0.9)
+              (> (aref inverse-mass la) (* brace-ratio (aref inverse-mass lb))))
+         :a)
+        ((and (= (aref braced lb) 1) (< rise -0.9)
+              (> (aref inverse-mass lb) (* brace-ratio (aref inverse-mass la))))
+         :b)))
+
 (defvar *prepare-short-path* t
   "When false, the prepare fill sends every row through its general path; the claim that the
 short path changes no bit compares the two. #PR3PAR")
@@ -4137,7 +4151,22 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                     (setf (aref flags i) (if (= (aref braced i) 1)
                                              (logior (aref flags i) +flag-braced+)
                                              (logandc2 (aref flags i) +flag-braced+)))))
-                (setf (physics-world-braced-step world) (physics-world-step-count world))))
+                (setf (physics-world-braced-step world) (physics-world-step-count world)))
+              ;; a body that is static to a heavier one above it starts the step still, as the
+              ;; one-sided contact takes it to be: nothing else would stop it rolling out
+              (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
+                (dotimes (c m)
+                  (let ((a (aref ha c)) (b (aref hb c)))
+                    (when (and (>= b 0) (= (aref sets (handle-index a)) +set-awake+)
+                               (= (aref sets (handle-index b)) +set-awake+))
+                      (let* ((la (aref locals (handle-index a))) (lb (aref locals (handle-index b)))
+                             (side (brace-side braced inverse-mass brace-ratio la lb
+                                               (+ (* (contact@ geometry c nx) up-x) (* (contact@ geometry c ny) up-y)
+                                                  (* (contact@ geometry c nz) up-z)))))
+                        (declare (type index la lb))
+                        (when side
+                          (let ((o (solver-row (if (eq side :a) la lb))))
+                            (fill v 0.0 :start o :end (+ o 6))))))))))
             (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
               (with-constraint-block (contact body-a body-b) cbuf
                 ;; each contact's place in its colour first; then the rows are filled in
@@ -4208,13 +4237,8 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
                          ;; a braced body is static to a much heavier one above it, as a sleeper
                          ;; is to the bodies that lean on it
                          (brace (and bracing dyn-a dyn-b
-                                     (let ((rise (+ (* x up-x) (* y up-y) (* z up-z))))
-                                       (cond ((and (= (aref braced la) 1) (> rise 0.9)
-                                                   (> (aref inverse-mass la) (* brace-ratio (aref inverse-mass lb))))
-                                              :a)
-                                             ((and (= (aref braced lb) 1) (< rise -0.9)
-                                                   (> (aref inverse-mass lb) (* brace-ratio (aref inverse-mass la))))
-                                              :b)))))
+                                     (brace-side braced inverse-mass brace-ratio la lb
+                                                 (+ (* x up-x) (* y up-y) (* z up-z)))))
                          (dyn-a (and dyn-a (not (eq brace :a))))
                          (dyn-b (and dyn-b (not (eq brace :b))))
                          (two-sided (and dyn-a dyn-b)))
@@ -4289,7 +4313,7 @@ awake bodies' velocities into the solver. Return the number of colours used. #PR
       color-count)))
 ;; Preparing the constraints:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:5]]
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:6]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
@@ -4346,7 +4370,7 @@ substep's solve reads. #PR3PAR"
 (defmethod physics-prepare-frames ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
     (prepare-frames-range cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:5 ends here
+;; Preparing the constraints:6 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)

@@ -2222,6 +2222,22 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (not (braced-p)) "the light ball moving at 0.1 m/s stayed braced"))))
 ;; PR3PAR-bracing-holds-while-still ends here
 
+;; [[file:../physics.org::#PR3PAR][PR3PAR-braced-body-stays-put]]
+(define-claim "PR3PAR" braced-body-stays-put
+    "A braced body set rolling below the sleep speed stays under the heavy body that rests on it."
+  (let* ((world (luv-physics::make-shaft-world :sleep nil))
+         (light (add-physics-body world 0.5 0.45 0.5 :radius 0.45 :mass 1.0))
+         (heavy (add-physics-body world 0.5 1.36 0.5 :radius 0.45 :mass 1000.0)))
+    (dotimes (i 120) (step-physics-world world))
+    (luv-physics::set-physics-body-velocity world light 0.02 0.0 0.0)
+    (flet ((at (h) (multiple-value-list (physics-body-position world h))))
+      (let ((light-0 (at light)) (heavy-0 (at heavy)))
+        (dotimes (i 60) (step-physics-world world))
+        (flet ((moved (h from) (sqrt (reduce #'+ (mapcar (lambda (a b) (expt (- a b) 2)) (at h) from)))))
+          (check (< (moved light light-0) 0.0005) "the light ball moved ~,5F m" (moved light light-0))
+          (check (< (moved heavy heavy-0) 0.001) "the heavy ball moved ~,5F m" (moved heavy heavy-0)))))))
+;; PR3PAR-braced-body-stays-put ends here
+
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-spin-friction-rate]]
 (define-claim "PR3PAR" spin-friction-rate
     "A ball spinning about the vertical on a floor slows at the patch's torque over its inertia."
