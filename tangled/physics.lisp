@@ -7154,7 +7154,8 @@ step took. #X7R3M5"
            (steps (cond ((< count 20000) 120) (sampled 60) (t 5))))
       (multiple-value-bind (bytes fastest parting deepest seconds)
           (heap-footprint count :steps steps :every (cond ((< count 20000) 10) (sampled 20) (t (1+ steps))))
-        (format t "| ~D | ~D | ~D | ~,2F | ~:[-~;~,2F~] | ~,3F | ~,3F |~%" count steps bytes fastest
+        ;; an unsampled heap prints - and skips its parting figure
+        (format t "| ~D | ~D | ~D | ~,2F | ~:[-~*~;~,2F~] | ~,3F | ~,3F |~%" count steps bytes fastest
                 sampled parting deepest seconds)
         (finish-output))))
   (format t "~%load average at the end: ~A~%" (uiop:read-file-line "/proc/loadavg")))
