@@ -510,7 +510,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
         (funcall function k
                  (lambda (column)
-                   (aref data (+ (luv-physics::constraint-base k) (luv-physics::constraint-offset column)))))))))
+                   (aref data (+ (luv-physics::constraint-base k (luv-physics::constraint-columns-block cbuf))
+                                 (luv-physics::constraint-offset column)))))))))
 ;; A kit for the claims:1 ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-non-finite-numbers]]
@@ -2625,7 +2626,16 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (phases (remove nil (luv-physics::world-phases world))))
         (dolist (absent '(luv-physics::grid-phase luv-physics::pair-phase luv-physics::box-phase))
           (check (not (member absent phases)) "~A runs ~A" family absent))
-        (check (functionp (find-if-not #'symbolp phases)) "no store phase compiled for the fountain")
+        (check (equal '(luv-physics::prepare-phase luv-physics::store-phase)
+                      (loop for name in luv-physics::*physics-phases*
+                            for phase in (luv-physics::world-phases world)
+                            when (functionp phase) collect name))
+               "the fountain's own phases are not its prepare and store phases")
+        (loop for name in luv-physics::*physics-phases*
+              for phase in (luv-physics::world-phases world)
+              when (functionp phase)
+                do (check (< (code-bytes phase) (code-bytes name)) "the fountain's ~A has ~D bytes of code, the general ~D"
+                          name (code-bytes phase) (code-bytes name)))
         (dolist (reader (list #'luv-physics::kernel-variant-warm-start #'luv-physics::kernel-variant-solve
                               #'luv-physics::kernel-variant-wide-warm-start #'luv-physics::kernel-variant-wide-solve))
           (let ((mine (funcall reader variant)) (theirs (funcall reader general)))
@@ -2642,12 +2652,36 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (- (sb-ext:get-bytes-consed) bytes)))))
 ;; FEAT5X-features-are-a-value ends here
 
+;; [[file:../physics.org::#FEAT5X][FEAT5X-columns-by-features]]
+(define-claim "FEAT5X" columns-by-features
+    "Constraint blocks end after the last column a world's features read: 33, 34, 38 or 40 columns."
+  (flet ((columns (features)
+           (/ (luv-physics::constraint-columns-block
+               (luv-physics::physics-world-constraints (make-physics-world :features features)))
+              8)))
+    (check (= 33 (columns '(:terrain :friction :sleep :mortal))))
+    (check (= 33 (columns '(:terrain :body-contacts :friction))))
+    (check (= 34 (columns '(:terrain :friction :hit-events))))
+    (check (= 38 (columns '(:terrain :friction :rolling-resistance))))
+    (check (= 40 (columns '(:terrain :restitution))))
+    (check (= 40 (columns luv-physics::+physics-features+))))
+  (dolist (case (list (list '(:terrain :friction :sleep :mortal) 33) (list luv-physics::+physics-features+ 40)))
+    (destructuring-bind (features columns) case
+      (multiple-value-bind (world before) (luv-physics::feature-scene :fountain :features features)
+        (dotimes (i 120) (funcall before i) (step-physics-world world))
+        (let ((cbuf (luv-physics::physics-world-constraints world)))
+          (check (plusp (luv-physics::constraint-columns-length cbuf)) "the fountain has no constraints")
+          (check (= (length (luv-physics::constraint-columns-data cbuf))
+                    (+ luv-physics::+constraint-origin+ (* columns (luv-physics::constraint-columns-capacity cbuf))))
+                 "~D columns: ~D floats for ~D rows" columns (length (luv-physics::constraint-columns-data cbuf))
+                 (luv-physics::constraint-columns-capacity cbuf)))))))
+;; FEAT5X-columns-by-features ends here
+
 ;; [[file:../physics.org::#FEAT5X][FEAT5X-omitted-feature-refused]]
 (define-claim "FEAT5X" omitted-feature-refused
     "Operations needing an omitted feature signal physics-feature-omitted; world valid, hash unchanged."
   (let* ((world (make-physics-world :terrain (make-floor-terrain) :features '(:terrain :friction :sleep)))
          (ball (add-physics-body world 3.5 1.0 3.5 :collide-with-bodies nil)))
-    (declare (ignore ball))
     (dotimes (i 30) (step-physics-world world))
     (let ((hash (physics-world-state-hash world)))
       (loop for (feature operation thunk)
@@ -2660,6 +2694,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
                        (list :hit-events 'add-physics-body
                              (lambda () (add-physics-body world 1.5 1 1.5 :collide-with-bodies nil :report-hits t)))
                        (list :body-contacts 'add-physics-body (lambda () (add-physics-body world 1.5 1 1.5)))
+                       (list :restitution 'set-physics-body-material
+                             (lambda () (set-physics-body-material world ball :friction 0.2 :restitution 0.5)))
+                       (list :rolling-resistance 'set-physics-body-material
+                             (lambda () (set-physics-body-material world ball :rolling-resistance 0.1)))
                        (list :boxes 'post-physics-box (lambda () (post-physics-box world 1.5 1 1.5 0.5 0.5 0.5)))
                        (list :events 'physics-world-event-handler
                              (lambda () (setf (physics-world-event-handler world) (lambda (&rest r) r)))))
@@ -2673,6 +2711,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
                  (check (= hash (physics-world-state-hash world)) "refusing ~S changed the hash" feature)
                  (check (= 1 (+ (luv-physics::physics-world-awake-count world)
                                 (luv-physics::physics-world-sleeping-count world)))))))
+    (multiple-value-bind (set row) (luv-physics::resolve-handle world ball)
+      (let ((buffer (luv-physics::set-buffer world set)))
+        (check (= 0.6 (aref (luv-physics::body-columns-friction buffer) row))
+               "a refused material left the friction ~A" (aref (luv-physics::body-columns-friction buffer) row))))
     (check (null (physics-world-event-handler world))))
   (let ((world (make-physics-world :features '(:body-contacts))))
     (check (typep (handler-case (add-physics-body world 0 0 0) (error (e) e)) 'physics-feature-omitted)
@@ -2682,6 +2724,47 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (error (e) e))))
     (check (and (typep e 'physics-feature-omitted) (eq :terrain (luv-physics::physics-feature-omitted-feature e))))))
 ;; FEAT5X-omitted-feature-refused ends here
+
+;; [[file:../physics.org::#FEAT5X][FEAT5X-material-set]]
+(define-claim "FEAT5X" material-set
+    "set-physics-body-material wakes the body and writes all it is given or nothing; restitution set later bounces."
+  (let* ((world (make-floor-world))
+         (ball (add-physics-body world 3.5 0.245 3.5)))
+    (dotimes (i 120) (step-physics-world world))
+    (check (not (physics-body-awake-p world ball)) "the ball did not fall asleep")
+    (flet ((material ()
+             (multiple-value-bind (set row) (luv-physics::resolve-handle world ball)
+               (let ((b (luv-physics::set-buffer world set)))
+                 (list (aref (luv-physics::body-columns-restitution b) row)
+                       (aref (luv-physics::body-columns-friction b) row)
+                       (aref (luv-physics::body-columns-rolling-resistance b) row))))))
+      (set-physics-body-material world ball :friction 0.3 :restitution 0.8)
+      (check (physics-body-awake-p world ball) "setting the material left the ball asleep")
+      (check (equal '(0.8 0.3 0.0) (material)) "the material reads ~S" (material))
+      (check (typep (handler-case (set-physics-body-material world ball :friction 0.1 :restitution 1.5) (error (e) e))
+                    'invalid-physics-parameter))
+      (check (typep (handler-case (set-physics-body-material world ball :friction 0.1 :rolling-resistance
+                                                             (sb-kernel:make-single-float -4194304))
+                      (error (e) e))
+                    'luv-physics::invalid-physics-number))
+      (check (equal '(0.8 0.3 0.0) (material)) "a refused material changed it to ~S" (material))
+      (check (eq t (validate-physics-world world)))))
+  (flet ((rebound (e)
+           (let* ((world (make-floor-world :sleep nil))
+                  (ball (add-physics-body world 3.5 2.0 3.5 :radius 0.25))
+                  (touched nil) (high -10d0))
+             (when e (set-physics-body-material world ball :restitution e))
+             (dotimes (i 240)
+               (step-physics-world world)
+               (let ((y (nth-value 1 (physics-body-position world ball))))
+                 (when (< y 0.26) (setf touched t))
+                 (when touched (setf high (max high y)))))
+             ;; above where it rests, one slop deep
+             (- high (- 0.25 luv-physics::*physics-linear-slop*)))))
+    (let ((bounced (rebound 0.8)) (dead (rebound nil)))
+      (check (> bounced 0.5) "with restitution 0.8 set after adding, the ball rose ~,4F m" bounced)
+      (check (< dead 0.01) "the dead ball rose ~,4F m" dead))))
+;; FEAT5X-material-set ends here
 
 ;; [[file:../physics.org::#S6T2MV][S6T2MV-one-ulp-changes-hash]]
 (define-claim "S6T2MV" one-ulp-changes-hash
