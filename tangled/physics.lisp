@@ -5966,6 +5966,11 @@ the clause's keyword, VALUE the clause. #K5DF9S"))
     '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :events :mortal)
     "The features a scene may declare it uses. #K5DF9S")
 
+  (defparameter *scene-body-arguments*
+    '(:radius :mass :restitution :friction :rolling-resistance :vx :vy :vz :life
+      :collide-with-bodies :report-hits)
+    "The add-physics-body arguments a scene's bodies and a run's :body-arguments may give. #K5DF9S")
+
   (defun scene-clause-error (scene clause expected)
     "Signal invalid-physics-scene-clause for CLAUSE of the scene SCENE, which must be EXPECTED. #K5DF9S"
     (error 'invalid-physics-scene-clause :scene scene :value clause :expected expected
@@ -5981,9 +5986,7 @@ the clause's keyword, VALUE the clause. #K5DF9S"))
   (defun scene-clause-slots (scene clauses)
     "The keyword arguments of make-physics-scene that CLAUSES, the clauses of the scene SCENE,
 declare, as forms; or a clause error for the first clause that is not of its shape. #K5DF9S"
-    (let ((slots '()) (bodies '()) (actions '())
-          (body-keys '(:radius :mass :restitution :friction :rolling-resistance :vx :vy :vz :life
-                       :collide-with-bodies :report-hits)))
+    (let ((slots '()) (bodies '()) (actions '()) (body-keys *scene-body-arguments*))
       (dolist (clause clauses)
         (unless (and (consp clause) (keywordp (first clause)) (null (cdr (last clause))))
           (scene-clause-error scene clause "a list headed by a clause's keyword"))
@@ -6008,17 +6011,24 @@ declare, as forms; or a clause error for the first clause that is not of its sha
               (:bodies
                (require-shape (and rest (typep (first rest) '(integer 0))) "(:bodies count :spawn f ...)")
                (let* ((options (scene-arguments scene clause (rest rest)
-                                                (list* :spawn :jitter :kind body-keys)))
-                      (spawn (getf options :spawn)))
-                 (require-shape (or (and spawn (symbolp spawn)) (and (consp spawn) (eq (first spawn) 'lambda)))
-                        "given :spawn, the name of a function of the body's index or a lambda form")
+                                                (list* :spawn :jitter :kind :masses :asleep body-keys)))
+                      (spawn (getf options :spawn)) (masses (getf options :masses)))
+                 (flet ((function-p (f) (or (and f (symbolp f)) (and (consp f) (eq (first f) 'lambda)))))
+                   (require-shape (function-p spawn)
+                                  "given :spawn, the name of a function of the body's index or a lambda form")
+                   (require-shape (or (null masses) (function-p masses))
+                                  "given :masses, if at all, the name of a function or a lambda form"))
                  (require-shape (typep (getf options :jitter 0) 'real) "given a real :jitter")
                  (push `(make-scene-bodies
                          :count ,(first rest)
-                         :spawn ,(if (symbolp spawn) `(lambda (i) (,spawn i)) spawn)
-                         :jitter ,(getf options :jitter) :kind ,(getf options :kind)
+                         ;; every spawn is called with the index and the count
+                         :spawn ,(if (and (consp spawn) (= 2 (length (second spawn))))
+                                     spawn
+                                     `(lambda (i n) (declare (ignore n)) (funcall ,(if (symbolp spawn) `#',spawn spawn) i)))
+                         :masses ,(if (symbolp masses) (and masses `#',masses) masses)
+                         :jitter ,(getf options :jitter) :kind ,(getf options :kind) :asleep ,(getf options :asleep)
                          :arguments (list ,@(loop for (k v) on options by #'cddr
-                                                  unless (member k '(:spawn :jitter :kind))
+                                                  unless (member k '(:spawn :jitter :kind :masses :asleep))
                                                     append (list k v))))
                        bodies)))
               (:springs (once :springs `(lambda () (list ,@rest))))
@@ -6069,10 +6079,12 @@ declare, as forms; or a clause error for the first clause that is not of its sha
           (scene-clause-error scene needed "given: every scene declares its terrain, its seconds and its features")))
       (list* :bodies `(list ,@(reverse bodies)) :actions `(list ,@(reverse actions)) slots))))
 
-(defstruct (scene-bodies (:constructor make-scene-bodies (&key count spawn jitter kind arguments)))
-  "COUNT bodies of a scene at the points (SPAWN i), of KIND (a keyword of *physics-body-kinds*, or
-NIL) with the add-physics-body ARGUMENTS, each point moved by JITTER under a seed. #K5DF9S"
-  (count 0 :type (integer 0)) (spawn #'identity :type function) (jitter nil) (kind nil) (arguments '()))
+(defstruct (scene-bodies (:constructor make-scene-bodies (&key count spawn jitter kind arguments masses asleep)))
+  "COUNT bodies of a scene at the points (SPAWN i COUNT), of KIND (a keyword of *physics-body-kinds*,
+or NIL) with the add-physics-body ARGUMENTS, each point moved by JITTER under a seed, each mass
+(MASSES u) when MASSES is given, all put to sleep when ASLEEP. #K5DF9S"
+  (count 0 :type (integer 0)) (spawn #'identity :type function) (jitter nil) (kind nil) (arguments '())
+  (masses nil) (asleep nil))
 
 (defstruct (scene-action (:constructor make-scene-action (&key seconds text function)))
   "What a scene does at SECONDS: FUNCTION of the world and the run's shift along x, and TEXT, a
@@ -6161,25 +6173,33 @@ each world argument of OVERRIDES (a plist of a run's options) in place of the sc
                      (if (and (eq key :features) (eq value t)) (physics-scene-features scene) value)))
     arguments))
 
-(defun add-scene-bodies (world group count seed)
+(defun add-scene-bodies (world group count seed &optional overrides)
   "Add to WORLD the first COUNT bodies of GROUP, a scene-bodies, their points jittered by the
-fixed sequence of SEED when SEED and the group's jitter are given. #K5DF9S"
-  (let ((next (and seed (scene-bodies-jitter group) (fixed-sequence seed)))
-        (jitter (scene-bodies-jitter group))
-        (arguments (let ((kind (scene-bodies-kind group)))
-                     ;; the group's own arguments first, so that they win over its kind's
-                     (if kind
-                         (let ((number (physics-kind-number kind world)))
-                           (declare (notinline physics-kind-entry))
-                           (append (scene-bodies-arguments group) (list :kind number)
-                                   (rest (physics-kind-entry number))))
-                         (scene-bodies-arguments group)))))
+fixed sequence of SEED when SEED and the group's jitter are given, their masses drawn from that
+sequence (of seed 0 without SEED) when the group has masses, the add-physics-body arguments of
+OVERRIDES in place of the group's; asleep, when the group is. #K5DF9S"
+  (let* ((jitter (and seed (scene-bodies-jitter group)))
+         (masses (scene-bodies-masses group))
+         (next (and (or jitter masses) (fixed-sequence (or seed 0))))
+         (arguments (let ((kind (scene-bodies-kind group)))
+                      ;; the run's overrides first, then the group's own, so that they win over its kind's
+                      (append overrides
+                              (if kind
+                                  (let ((number (physics-kind-number kind world)))
+                                    (declare (notinline physics-kind-entry))
+                                    (append (scene-bodies-arguments group) (list :kind number)
+                                            (rest (physics-kind-entry number))))
+                                  (scene-bodies-arguments group))))))
     (dotimes (i count)
-      (multiple-value-bind (x y z) (funcall (scene-bodies-spawn group) i)
-        (when next
+      (multiple-value-bind (x y z) (funcall (scene-bodies-spawn group) i count)
+        (when jitter
           (incf x (* jitter (- (funcall next) 0.5)))
           (incf z (* jitter (- (funcall next) 0.5))))
-        (apply #'add-physics-body world x y z arguments)))))
+        (apply #'add-physics-body world x y z
+               (if masses (list* :mass (funcall masses (funcall next)) arguments) arguments))))
+    ;; the last awake row is the group's last body, so each goes to sleep from its own row
+    (when (scene-bodies-asleep group)
+      (loop repeat count do (sleep-physics-body world (1- (physics-world-awake-count world)))))))
 
 (defun scene-script (scene world step-seconds &key (shift 0.0) throw-at stream)
   "The function of a step's number that does, before that step of WORLD, what SCENE does: its due
@@ -6210,11 +6230,12 @@ line printed to STREAM, when given), its springs and its walker, whose frame is 
           (advance-physics-player player terrain frame :move-x move-x :move-z move-z))
         (post-physics-player world player)))))
 
-(defun make-scene-world (name &rest options &key count seed (shift 0.0) throw-at stream
+(defun make-scene-world (name &rest options &key count seed body-arguments (shift 0.0) throw-at stream
                                                  kernels sleep step-seconds substeps gravity features)
   "Build the world of the scene NAME; return it, its script (the function of the step's number to
 call before each step) and the scene. OPTIONS change the run: COUNT, the first body clause's
-count; SEED, the seed of the spawn jitter; SHIFT and THROW-AT, where along x and when its actions
+count; SEED, the seed of the spawn jitter and the masses; BODY-ARGUMENTS, add-physics-body
+arguments every body of the clauses takes in place of its own; SHIFT and THROW-AT, where along x and when its actions
 act; STREAM, where their lines go; and KERNELS, SLEEP, STEP-SECONDS, SUBSTEPS, GRAVITY and
 FEATURES (T for the features the scene declares; every feature when not given), the world's.
 #K5DF9S"
@@ -6228,10 +6249,17 @@ FEATURES (T for the features the scene declares; every feature when not given), 
                                        (error 'invalid-physics-parameter :name :count :value count
                                                                          :expected "a count of bodies, 0 or more"))
                                    (scene-bodies-count group))))
-         (arguments (scene-world-arguments scene options))
+         (arguments (progn
+                      (unless (and (evenp (length body-arguments))
+                                   (loop for key in body-arguments by #'cddr
+                                         always (member key *scene-body-arguments*)))
+                        (error 'invalid-physics-parameter :name :body-arguments :value body-arguments
+                                                          :expected (format nil "a plist of arguments among ~{~S~^ ~}"
+                                                                            *scene-body-arguments*)))
+                      (scene-world-arguments scene options)))
          (world (apply #'make-physics-world :terrain (funcall (physics-scene-terrain scene) (reduce #'+ counts))
                        arguments)))
-    (loop for group in groups for n in counts do (add-scene-bodies world group n seed))
+    (loop for group in groups for n in counts do (add-scene-bodies world group n seed body-arguments))
     (values world
             (scene-script scene world (getf arguments :step-seconds 1/60)
                           :shift shift :throw-at throw-at :stream stream)
@@ -6888,22 +6916,26 @@ kernel family this CPU runs, and the spread pile under two dense-grid bounds for
 ;; What a step costs:1 ends here
 
 ;; [[file:../physics.org::#B3NCH5][What a step costs:2]]
+(define-physics-scene :sleepers
+    "balls of radius 0.25 m asleep, one per 0.6 m square, on a floor beside the basin's east wall,
+each resting a slop deep and alone #B3NCH5"
+  (:terrain (sleepers)
+            (let* ((terrain (make-basin-terrain))
+                   (side (ceiling (* 0.6 (max 1 (ceiling (sqrt sleepers)))))))
+              (fill-terrain terrain 16 0 0 (+ 17 side) 4 (1+ side) nil)
+              (fill-terrain terrain 16 -1 0 (+ 17 side) 0 (1+ side) t)
+              terrain))
+  (:world :sleep t :kernels :avx2)
+  (:bodies 1000 :spawn (lambda (k sleepers)
+                         (multiple-value-bind (i j) (floor k (max 1 (ceiling (sqrt sleepers))))
+                           (values (+ 16.3 (* 0.6 i)) (- 0.25 *physics-linear-slop*) (+ 0.3 (* 0.6 j)))))
+           :radius 0.25 :mass 1.0 :friction 0.6 :asleep t)
+  (:seconds 1)
+  (:features :terrain :friction :sleep))
+
 (defun sleepers-beside-basin (sleepers &key (kernels :avx2))
-  "A basin world with SLEEPERS balls of radius 0.25 m asleep, one per 0.6 m square, on a floor
-beside the basin's east wall, each resting a slop deep and alone. Return the world. #B3NCH5"
-  (let* ((terrain (make-basin-terrain))
-         (per-row (max 1 (ceiling (sqrt sleepers))))
-         (side (ceiling (* 0.6 per-row))))
-    (fill-terrain terrain 16 0 0 (+ 17 side) 4 (1+ side) nil)
-    (fill-terrain terrain 16 -1 0 (+ 17 side) 0 (1+ side) t)
-    (let ((world (make-physics-world :terrain terrain :sleep t :kernels kernels)))
-      (dotimes (k sleepers)
-        (multiple-value-bind (i j) (floor k per-row)
-          (add-physics-body world (+ 16.3 (* 0.6 i)) (- 0.25 *physics-linear-slop*) (+ 0.3 (* 0.6 j))
-                            :radius 0.25 :mass 1.0 :friction 0.6)))
-      (loop for row from (1- (physics-world-awake-count world)) downto 0
-            do (sleep-physics-body world row))
-      world)))
+  "The world of the scene :sleepers with SLEEPERS balls, solved by KERNELS. #B3NCH5"
+  (values (make-scene-world :sleepers :count sleepers :kernels kernels)))
 
 (defun measure-sleeping-scale (sleepers &key (kernels :avx2))
   "Beside SLEEPERS settled sleepers: the mean ms per step idle (nothing awake, 100 steps), while
@@ -6957,24 +6989,21 @@ basin benchmark's do, so all their balls are awake while they are measured. #FBN
   "The world of the feature scene NAME of +feature-scenes+ with FEATURES, solved by KERNELS (a
 pile holds BALLS balls; SLEEP, whether its bodies may sleep, is false for the piles), and the
 function of the step's number to call before each step, as two values. The piles are the scene
-:awake-basin and the fountain the scene :fountain; the walker among the drops is no scene of its
-own. #FBNCH9"
+:awake-basin, the fountain the scene :fountain and the walker among the drops the scene :walker.
+#FBNCH9"
   (ecase name
     ((:dead-pile :basin)
      (make-scene-world :awake-basin :count balls :kernels kernels :sleep sleep :features features))
-    (:fountain (make-scene-world :fountain :kernels kernels :sleep sleep :features features))
-    (:walker
-     (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep sleep
-                                      :features features))
-           (springs (list (make-basin-fountain)))
-           (player (make-physics-player 3d0 0d0 3d0)))
-       (values world
-               (lambda (step)
-                 (run-physics-springs world springs)
-                 (multiple-value-bind (move-x move-z) (player-scene-input step)
-                   (advance-physics-player player (physics-world-terrain world) (/ 1d0 60)
-                                           :move-x move-x :move-z move-z))
-                 (post-physics-player world player)))))))
+    ((:fountain :walker) (make-scene-world name :kernels kernels :sleep sleep :features features))))
+
+(define-physics-scene :walker
+    "the walker among the fountain's drops: it meets drops, they meet no body #FBNCH9"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep t :kernels :auto)
+  (:springs (make-basin-fountain))
+  (:player (3d0 0d0 3d0) player-scene-input)
+  (:seconds 10)
+  (:features :terrain :boxes :friction :sleep :mortal))
 
 (defun measure-feature-scene (name &key (kernels :auto))
   "Step the feature scene NAME built general and specialised, in turn, and return a plist of the
@@ -7060,15 +7089,13 @@ of its own mass and radius. #X7R3M5"
                                                          (expt (aref wz row) 2)))))))))))))
 
 (defun dead-pile (count &key (seconds 10) (rolling-resistance 0.0))
-  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0, ROLLING-RESISTANCE)
-in the basin lattice with sleeping off and run SECONDS. Return the kinetic energy at each whole
+  "Drop COUNT dead balls (radius 0.25 m, 1 kg, friction 0.6, restitution 0, ROLLING-RESISTANCE),
+the scene :awake-basin unjittered, in the basin lattice with sleeping off and run SECONDS. Return the kinetic energy at each whole
 second, in joules, the fastest ball's speed at the end, and the speed of that ball's lowest
 point, which is zero when it rolls on the floor without slipping. #X7R3M5"
-  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
-         (balls (loop for i below count
-                      collect (multiple-value-bind (x y z) (basin-spawn-point i)
-                                (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6
-                                                              :rolling-resistance rolling-resistance))))
+  (let* ((world (make-scene-world :awake-basin :count count :kernels :auto
+                                               :body-arguments (list :rolling-resistance rolling-resistance)))
+         (balls (physics-world-handles world))
          (curve '()))
     (dotimes (second seconds)
       (dotimes (i 60) (step-physics-world world))
@@ -7269,20 +7296,24 @@ floor. #X7R3M5"
                   x0 x y0 y z0 z))))
       (values fastest (nth-value 1 (physics-body-position world ball)) (- 0.25 *physics-linear-slop*)))))
 
+(define-physics-scene :mixed-masses
+    "1000 balls of radius 0.25 m in the basin lattice, with sleeping off, their masses spread
+evenly in log from 0.32 to 32 kg by the fixed sequence of the run's seed #X7R3M5"
+  (:terrain () (make-basin-terrain))
+  (:world :sleep nil :kernels :auto)
+  (:bodies 1000 :spawn basin-spawn-point :radius 0.25 :masses (lambda (u) (expt 10.0 (- (* 2.0 u) 0.5))))
+  (:seconds 15)
+  (:features :terrain :body-contacts :friction))
+
 (defun mixed-mass-pile (count &key (seconds 15) (brace-ratio *physics-brace-mass-ratio*) (seed 7))
-  "Drop COUNT balls of radius 0.25 m in the basin lattice, with sleeping off, their masses spread
-evenly in log from 0.32 to 32 kg by the fixed sequence of SEED, and run SECONDS with BRACE-RATIO. Return
+  "Drop COUNT balls of the scene :mixed-masses, their masses drawn by the fixed sequence of SEED,
+and run SECONDS with BRACE-RATIO. Return
 the deepest overlap seen after the first two seconds, the last second in which a ball moved
 faster than 0.1 m/s (0 if none after the first), the fastest speed in the last second, and
 whether the world stayed finite and valid. #X7R3M5"
   (let* ((*physics-brace-mass-ratio* brace-ratio)
-         (world (make-physics-world :terrain (make-basin-terrain) :sleep nil :kernels :auto))
-         (next (fixed-sequence seed)) (balls '()) (deepest 0.0) (last-moving 0) (fastest-last 0.0))
-    (dotimes (i count)
-      (multiple-value-bind (x y z) (basin-spawn-point i)
-        (push (add-physics-body world x y z :radius 0.25
-                                :mass (expt 10.0 (- (* 2.0 (funcall next)) 0.5)))
-              balls)))
+         (world (make-scene-world :mixed-masses :count count :seed seed))
+         (balls (physics-world-handles world)) (deepest 0.0) (last-moving 0) (fastest-last 0.0))
     (dotimes (i (* 60 seconds))
       (step-physics-world world)
       (when (>= i 120) (setf deepest (max deepest (physics-world-max-penetration world))))

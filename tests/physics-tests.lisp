@@ -2954,17 +2954,20 @@ function of a column name that reads row K's float in that column. #T3STK1"
 ;; K5DF9S-definition-builds-what-it-declares ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-same-bits-as-by-hand]]
-(defun hand-built-basin (balls &key (sleep t) (kernels :auto) seed)
-  "BALLS balls of the basin lattice, jittered by the fixed sequence of SEED when given, in a world
-made by hand. #K5DF9S"
+(defun hand-built-basin (balls &key (sleep t) (kernels :auto) seed arguments masses)
+  "BALLS balls of the basin lattice, jittered by the fixed sequence of SEED when given, or without
+MASSES, with the mass (MASSES u) for u from that sequence, with the add-physics-body ARGUMENTS,
+in a world made by hand. #K5DF9S"
   (let ((world (luv-physics::make-physics-world :terrain (make-basin-terrain) :sleep sleep :kernels kernels))
         (next (and seed (luv-physics::fixed-sequence seed))))
     (dotimes (i balls world)
       (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
-        (when next
+        (when (and next (not masses))
           (incf x (* 0.02 (- (funcall next) 0.5)))
           (incf z (* 0.02 (- (funcall next) 0.5))))
-        (add-physics-body world x y z :radius 0.25 :mass 1.0 :friction 0.6)))))
+        (apply #'add-physics-body world x y z
+               (append arguments (and masses (list :mass (funcall masses (funcall next))))
+                       '(:radius 0.25 :mass 1.0 :friction 0.6)))))))
 
 (define-claim "K5DF9S" same-bits-as-by-hand
     "The awake basin in every family and the main job, seeded or not, equal their hand-built runs bit for bit."
@@ -2986,6 +2989,80 @@ made by hand. #K5DF9S"
         (check (/= scene (by-hand seed nil)))
         (check (/= scene (by-hand (if seed nil 3) t)))))))
 ;; K5DF9S-same-bits-as-by-hand ends here
+
+;; [[file:../physics.org::#K5DF9S][K5DF9S-builders-keep-their-bits]]
+(defun hand-built-sleepers (sleepers &key (asleep t))
+  "SLEEPERS balls one per 0.6 m square on a floor beside the basin, asleep when ASLEEP, and 200
+balls of the basin lattice, in a world made by hand. #K5DF9S"
+  (let* ((terrain (make-basin-terrain))
+         (per-row (max 1 (ceiling (sqrt sleepers))))
+         (side (ceiling (* 0.6 per-row))))
+    (fill-terrain terrain 16 0 0 (+ 17 side) 4 (1+ side) nil)
+    (fill-terrain terrain 16 -1 0 (+ 17 side) 0 (1+ side) t)
+    (let ((world (luv-physics::make-physics-world :terrain terrain :sleep t :kernels :scalar)))
+      (dotimes (k sleepers)
+        (multiple-value-bind (i j) (floor k per-row)
+          (add-physics-body world (+ 16.3 (* 0.6 i)) (- 0.25 luv-physics::*physics-linear-slop*)
+                            (+ 0.3 (* 0.6 j)) :radius 0.25 :mass 1.0 :friction 0.6)))
+      (when asleep
+        (loop for row from (1- (physics-world-awake-count world)) downto 0
+              do (luv-physics::sleep-physics-body world row)))
+      (with-dropped-pile world))))
+
+(defun with-dropped-pile (world)
+  "WORLD with the first 200 balls of the scene :pile added. #K5DF9S"
+  (luv-physics::add-scene-bodies world (first (luv-physics::physics-scene-bodies (find-physics-scene :pile))) 200 nil)
+  world)
+
+(defun hand-built-walker (&key (walk t))
+  "The fountain in the basin, and a walker (when WALK) at 3 0 3 posted before each step, made by
+hand: the world and the function to call before each step. #K5DF9S"
+  (let ((world (luv-physics::make-physics-world :terrain (make-basin-terrain) :kernels :scalar))
+        (springs (list (luv-physics::make-basin-fountain)))
+        (player (luv-physics::make-physics-player 3d0 0d0 3d0)))
+    (values world
+            (lambda (step)
+              (luv-physics::run-physics-springs world springs)
+              (when walk
+                (multiple-value-bind (move-x move-z) (luv-physics::player-scene-input step)
+                  (luv-physics::advance-physics-player player (luv-physics::physics-world-terrain world) (/ 1d0 60)
+                                                       :move-x move-x :move-z move-z))
+                (luv-physics::post-physics-player world player))))))
+
+(define-claim "K5DF9S" builders-keep-their-bits
+    "The dead pile, mixed-mass pile, sleepers and walker among drops equal their hand-built worlds."
+  (flet ((hash (world &optional script (steps 120))
+           (dotimes (i steps (physics-world-state-hash world))
+             (when script (funcall script i))
+             (step-physics-world world)))
+         (masses (u) (expt 10.0 (- (* 2.0 u) 0.5))))
+    (flet ((same (what scene hand other)
+             (check (= scene hand) "the ~A differs from its hand-built world" what)
+             (check (/= hand other) "the ~A's hand-built run does not move" what)))
+      (same "dead pile"
+            (hash (make-scene-world :awake-basin :count 200 :kernels :auto
+                                                 :body-arguments '(:rolling-resistance 0.01)))
+            (hash (hand-built-basin 200 :sleep nil :arguments '(:rolling-resistance 0.01)))
+            (hash (hand-built-basin 200 :sleep nil)))
+      (same "mixed-mass pile"
+            (hash (make-scene-world :mixed-masses :count 200 :seed 7))
+            (hash (hand-built-basin 200 :sleep nil :seed 7 :masses #'masses))
+            (hash (hand-built-basin 200 :sleep nil :seed 8 :masses #'masses)))
+      (same "sleepers"
+            (hash (with-dropped-pile (luv-physics::sleepers-beside-basin 300 :kernels :scalar)))
+            (hash (hand-built-sleepers 300))
+            (hash (hand-built-sleepers 300 :asleep nil)))
+      (flet ((walked (world script &rest scene)
+               (declare (ignore scene))
+               (hash world script 900)))
+        (same "walker"
+              (multiple-value-call #'walked (luv-physics::feature-scene :walker :kernels :scalar))
+              (multiple-value-call #'walked (hand-built-walker))
+              (multiple-value-call #'walked (hand-built-walker :walk nil)))))
+    (let ((e (handler-case (make-scene-world :awake-basin :count 3 :body-arguments '(:colour 1)) (error (e) e))))
+      (check (and (typep e 'invalid-physics-parameter) (eq :body-arguments (luv-physics::invalid-physics-parameter-name e)))
+             "an unknown body argument gave ~A" e))))
+;; K5DF9S-builders-keep-their-bits ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-refusals-name-the-clause]]
 (define-claim "K5DF9S" refusals-name-the-clause
