@@ -34,7 +34,8 @@ help:
 	@echo "                    diagrams into report/wp-*.svg"
 	@echo "make heaps          heaps of 1000 balls to the body budget spawned at one point; table into $(ORG)"
 	@echo "make mutate         run the claims against COUNT=150 mutants of the engine (SEED=1, ANCHOR=ID"
-	@echo "                    for one section); the score table and the survivors into $(ORG)"
+	@echo "                    for one section, PART='solver|hash' for the drawn mutants of some parts,"
+	@echo "                    LIST=1 to print the draw); the score table and the survivors into $(ORG)"
 	@echo "make mutate-splice  the last full run's tables into $(ORG), with the page's reasons for survivors"
 	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface"
 	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player, ...) and write"
@@ -108,11 +109,11 @@ heaps: setup tangle
 	@$(SBCL) --script tools/splice.lisp heap-sizes report/heaps.org
 
 # Mutants are sampled from the tangled files as they are; the tables are spliced only after a
-# run over every section.
+# run over every section and every part (no ANCHOR, PART, MATCH or LIST).
 mutate: setup tangle
 	@mkdir -p report
-	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" nice $(SBCL) --dynamic-space-size $(HEAP) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
-	@if [ -z "$(ANCHOR)" ]; then $(MAKE) --no-print-directory mutate-splice; fi
+	@SEED="$(SEED)" COUNT="$(COUNT)" ANCHOR="$(ANCHOR)" PART="$(PART)" LIST="$(LIST)" nice $(SBCL) --dynamic-space-size $(HEAP) --disable-ldb --lose-on-corruption --noinform --non-interactive --no-sysinit --no-userinit --load tools/mutate.lisp | tee report/mutate.log
+	@if [ -z "$(ANCHOR)$(PART)$(LIST)$$MATCH" ]; then $(MAKE) --no-print-directory mutate-splice; fi
 
 # The last full run's tables, from its log, into the page; the survivors' reasons, and which
 # survivors are equivalent, are read from the page as it is.

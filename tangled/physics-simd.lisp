@@ -99,11 +99,15 @@ in any register. #R0WS8T"
   "Define the solver kernels of FAMILY for lanes of WIDTH, described by DOCUMENTATION: the
 operator keywords name the sb-simd functions the width-neutral operators stand for. #W1D3KF"
   (declare (ignore documentation))
-  (let ((scatter (intern (format nil "SCATTER-ROWS-~D" width)))
-        (movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask))
-        (ws (intern (format nil "WARM-START-BLOCKS/~A" family)))
-        (so (intern (format nil "SOLVE-BLOCKS/~A" family)))
-        (pf (intern (format nil "PREPARE-FRAMES-BLOCKS/~A" family))))
+  ;; the names go where FAMILY was read, whatever package is current when the form is expanded:
+  ;; define-impact-copy finds its kernel's text under the kernel's name
+  (let* ((home (symbol-package family))
+         (scatter (intern (format nil "SCATTER-ROWS-~D" width) home))
+         (movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask))
+         (ws (intern (format nil "WARM-START-BLOCKS/~A" family) home))
+         (so (intern (format nil "SOLVE-BLOCKS/~A" family) home))
+         (soi (intern (format nil "SOLVE-IMPACT-BLOCKS/~A" family) home))
+         (pf (intern (format nil "PREPARE-FRAMES-BLOCKS/~A" family) home)))
     (let ((operators
             `((w+ (a b) `(,',add ,a ,b)) (w- (a b) `(,',sub ,a ,b)) (w* (a b) `(,',mul ,a ,b))
                 (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
@@ -187,11 +191,12 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                    (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0)))))))))
        (define-featured-kernel (,so :features (:friction :rolling-resistance :restitution) :operators ,operators)
            (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
-         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
+         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. Return END, or the first block that may strike or is armed, left unsolved for solve-handing. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
                   (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
          ;; the block's twelve velocity columns live here, on the stack, between the gather
          ;; and the scatter, and after them friction's four values before the cone
+         (block solve-pass
          (let ((st (make-array ,(* 16 width) :element-type 'single-float))
                ;; the scalars, broadcast once: a scalar read back inside the loop would be a
                ;; legacy SSE instruction among the 256-bit ones ([[#F4M1LY]])
@@ -202,6 +207,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
          (unswitch-bias (use-bias)
          (with-solver-columns cbuf
            (loop for k of-type index from start below end by ,width do
+             (progn
              (let ((base (constraint-base k)))
                (declare (type index base))
                ;; the gap first: a relax pass computes it from the deltas alone, so that
@@ -277,11 +283,15 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                        (if-feature :restitution
                          (let ((armed (@w armed-speed)))
                                  (if (zerop (,movemask
-                                                  ;; lanes that have not pushed: vn; the others: an armed
-                                                  ;; lane's speed times -1e30, below any threshold
-                                                  (wif (w> lower (wif (w= mni (wc 0.0)) vn (w* armed (wc -1e30))))
+                                                  ;; lanes that have not pushed: vn, or 0 without
+                                                  ;; restitution; the others: an armed lane's speed
+                                                  ;; times -1e30, below any threshold
+                                                  (wif (w> lower (wif (w= mni (wc 0.0))
+                                                                      (wif (w> (@w restitution) (wc 0.0)) vn (wc 0.0))
+                                                                      (w* armed (wc -1e30))))
                                                        (wc -1.0) (wc 0.0))))
                                      (values new dl new)
+                                     (if-feature :impact-part
                                      (let* ((e (@w restitution))
                                             (impact-f (wif (w= mni (wc 0.0))
                                                            (wif (w> new (wc 0.0))
@@ -314,7 +324,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                        (@w! relative-velocity (wif impact (w* uc (wc -1.0)) (@w relative-velocity)))
                                        (@w! armed-speed (wif bounce (wc 0.0) (wif arm uc armed)))
                                        (let* ((bump (wif bounce kick (wc 0.0))) (bounced (w> bump (wc 0.0))))
-                                         (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))))
+                                         (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))
+                                     ;; a block that may strike or is armed ends the pass
+                                     ;; here, for solve-handing to run the copy with the
+                                     ;; impact part on it, as it is: nothing of it has been
+                                     ;; written but the kept gap, which the copy writes again
+                                     ;; with the same bits
+                                     (return-from solve-pass k))))
                          (values new dl new))
                    (if-feature :friction
                      (symbol-macrolet ((n1 (st@ 12)) (n2 (st@ 13)) (len2 (st@ 14)) (root (st@ 15))
@@ -396,6 +412,9 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz)))))))))
                (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
                (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0)))))))))
+         end))
+       (define-impact-copy ,soi ,so
+         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time, bouncing impacts ([[#R3ST1T]]): solve-handing runs it on each block at which the pass ~(~A~) or a variant of it stops. #W1D3KF" width so))
        (macrolet ,operators
        (defun ,pf (cbuf start end)
          ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
@@ -469,7 +488,7 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
        (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
          (when (< ,start ,end) ,overflow-form)))))
 
-(macrolet ((define-family-methods (class ws so pf &optional settle)
+(macrolet ((define-family-methods (class width ws so si pf &optional settle)
              `(progn
                 (defmethod physics-prepare-frames ((kernels ,class) world)
                   (let ((cbuf (physics-world-constraints world)))
@@ -489,13 +508,16 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
                          (narrow (kernel-variant-solve variant)))
                     (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
                       (do-colour-runs (s e world ,settle)
-                        (funcall wide cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz)
-                        (funcall narrow cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz))))))))
-  (define-family-methods sse-kernels warm-start-blocks/sse solve-blocks/sse prepare-frames-blocks/sse)
+                        (solve-handing wide ',si ,width cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz)
+                        (solve-handing narrow 'solve-impact-range 1
+                                       cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz))))))))
+  (define-family-methods sse-kernels 4 warm-start-blocks/sse solve-blocks/sse solve-impact-blocks/sse
+    prepare-frames-blocks/sse)
   ;; after 256-bit code, clear the upper halves of the ymm registers before any legacy SSE
   ;; instruction runs: the scalar code SBCL emits is legacy SSE, and on this CPU it ran three
   ;; times slower for the rest of the step without it
-  (define-family-methods avx2-kernels warm-start-blocks/avx2 solve-blocks/avx2 prepare-frames-blocks/avx2
+  (define-family-methods avx2-kernels 8 warm-start-blocks/avx2 solve-blocks/avx2 solve-impact-blocks/avx2
+    prepare-frames-blocks/avx2
     (sb-simd-avx:vzeroupper)))
 
 (register-kernel-family :sse 'sse-kernels :sse4.1)

@@ -3309,7 +3309,10 @@ gap is under the speculative distance. #P41RS7"
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world))
          ;; the grid phase counted the loose rows
-         (strays (pair-list-loose-count plist)))
+         (strays (pair-list-loose-count plist))
+         ;; true once a row has taken +overlaps-per-body+ overlapping pairs this step: until
+         ;; then overlap-room is true of every pair and is not asked
+         (crowded nil))
     (declare (type single-float margin skin cell slop dt gstep rmax threshold) (type index n) (type fixnum strays)
              (type body-columns awake sleeping) (type pair-list plist)
              (type contact-columns contacts) (type contact-table table)
@@ -3324,10 +3327,18 @@ gap is under the speculative distance. #P41RS7"
                (let* ((dx (- xj xi)) (dy (- yj yi)) (dz (- zj zi))
                       (d2 (+ (* dx dx) (* dy dy) (* dz dz)))
                       (reach (+ ri rj margin)))
-                 (when (and (>= ci 0) (< d2 (* (+ ri rj) (+ ri rj))))
-                   (let ((overlaps (pair-list-overlaps plist)))
-                     (unless (> ri rj) (incf (aref overlaps ci)))
-                     (unless (< ri rj) (incf (aref overlaps cj)))))
+                 ;; the overlap is counted by the sign bit of d2 - (ri + rj)^2, not by a
+                 ;; branch: in a pile, half the pairs listed overlap, in no order a branch
+                 ;; predictor could learn
+                 (when (>= ci 0)
+                   (let ((overlaps (pair-list-overlaps plist))
+                         (bit (ldb (byte 1 31) (sb-kernel:single-float-bits (- d2 (* (+ ri rj) (+ ri rj)))))))
+                     (let ((oi (+ (aref overlaps ci) (if (> ri rj) 0 bit)))
+                           (oj (+ (aref overlaps cj) (if (< ri rj) 0 bit))))
+                       (declare (type fixnum oi oj))
+                       (setf (aref overlaps ci) oi (aref overlaps cj) oj)
+                       ;; from the first crowded row on, every pair asks overlap-room
+                       (when (>= (logior oi oj) +overlaps-per-body+) (setf crowded t)))))
                  (when (< d2 (* reach reach))
                    (let ((d (fsqrt d2)))
                     (multiple-value-bind (nx ny nz)
@@ -3342,9 +3353,11 @@ gap is under the speculative distance. #P41RS7"
                      (declare (type single-float sep approach))
                      ;; a pair closing faster than the restitution threshold takes the normal of
                      ;; the moment it will touch ([[#MYWH16]]): the line of centres then
-                     (when (and (> approach threshold) (> sep 0.0))
-                       (multiple-value-setq (nx ny nz sep)
-                         (pair-impact-normal dx dy dz (- vxj vxi) (- vyj vyi) (- vzj vzi) (+ ri rj) dt nx ny nz sep)))
+                     (multiple-value-bind (nx ny nz sep)
+                         (if (and (> approach threshold) (> sep 0.0))
+                             (pair-impact-normal dx dy dz (- vxj vxi) (- vyj vyi) (- vzj vzi) (+ ri rj) dt nx ny nz sep)
+                             (values nx ny nz sep))
+                       (declare (type single-float nx ny nz sep))
                      (when (< sep (speculative-distance approach dt slop margin gstep))
                        ;; orient every pair contact from the lower handle slot to the higher
                        (multiple-value-bind (ha hb s px py pz)
@@ -3354,7 +3367,7 @@ gap is under the speculative distance. #P41RS7"
                          (declare (type fixnum ha hb) (type single-float s px py pz))
                          (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
                                         +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
-                                        0.0 0.0 0.0))))))))))
+                                        0.0 0.0 0.0)))))))))))
         (declare (inline pair))
         (pair-list-room plist n)
         (fill (pair-list-overlaps plist) 0 :end n)
@@ -3367,7 +3380,7 @@ gap is under the speculative distance. #P41RS7"
                    (rows (i j &optional refused)
                      ;; the same, unless they overlap and the smaller has its share of
                      ;; overlaps: then REFUSED
-                     `(if (overlap-room (pair-list-overlaps plist) ,i ,j radius)
+                     `(if (or (not crowded) (overlap-room (pair-list-overlaps plist) ,i ,j radius))
                           (pair-of-rows ,i ,j)
                           ,refused)))
           (if (pair-list-holds-p strays n)
@@ -3438,7 +3451,7 @@ gap is under the speculative distance. #P41RS7"
                                    (dotimes (q found)
                                      (let ((j (aref items (aref near q))))
                                        (when (zerop (logand (aref flags j) +flag-terrain-only+))
-                                         (if (overlap-room (pair-list-overlaps plist) i j radius)
+                                         (if (or (not crowded) (overlap-room (pair-list-overlaps plist) i j radius))
                                              (progn (pair-list-push plist i j)
                                                     (pair-of-rows i j))
                                              (progn (setf crowd t)
@@ -4645,15 +4658,17 @@ per constraint. #S0LV3R"
     (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
   "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
 when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
-HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
+HGZ times the substep), then Coulomb friction, then rolling resistance. Return END, or the
+first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
            (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+
            (ignorable threshold hgx hgy hgz))
+  (block solve-pass
   (unswitch-bias (use-bias)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
       ;; one straight chain of bindings, a name bound again where its value changes
-      (block row
+      (progn
       (let ((base (constraint-base k)))
        ;; the constraint's own columns are read from the block where they are used
        (symbol-macrolet ((x (@ nx)) (y (@ ny)) (z (@ nz)) (ma (@ ima)) (mb (@ imb))
@@ -4726,14 +4741,13 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
                               (if (> kick 0.0) kick 0.0))))
                       0.0))
                     ;; a row that may strike (it has not pushed yet, approaches faster than
-                    ;; the threshold and has restitution) or is armed goes to the pass with
-                    ;; the impact part, as it is: nothing of it has been written but the kept
-                    ;; gap, which that pass writes again with the same bits
+                    ;; the threshold and has restitution) or is armed ends the pass here, for
+                    ;; solve-handing to run the pass with the impact part on it, as it is:
+                    ;; nothing of it has been written but the kept gap, which that pass
+                    ;; writes again with the same bits
                     (if (or (> (@ armed-speed) 0.0)
                             (and (< vn (- threshold)) (= mni 0.0) (> (@ restitution) 0.0)))
-                        (progn (solve-impact-range cbuf v d k (1+ k) inv-h use-bias elapsed
-                                                   push-max threshold hgx hgy hgz)
-                               (return-from row))
+                        (return-from solve-pass k)
                         0.0))
                     0.0))
              (bounced (> bump 0.0))
@@ -4814,12 +4828,13 @@ HGZ times the substep), then Coulomb friction, then rolling resistance. #S0LV3R"
                     (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5)))
                 (rolling-resistance)
                 (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                      (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))))))
+                      (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))))))))))))
+  end))
 
 (defmacro define-impact-copy (name kernel documentation)
   "Define NAME, described by DOCUMENTATION, as the featured kernel KERNEL compiled with every
 feature and with its impact part (the pseudo-feature :impact-part), which KERNEL itself leaves
-out and hands each row that may strike to NAME. #S0LV3R"
+out: it stops at each row that may strike, for solve-handing to run NAME on it. #S0LV3R"
   (destructuring-bind (operators lambda-list declarations forms tested) (get kernel 'featured-kernel)
     (declare (ignore tested))
     (let ((function `(defun ,name ,lambda-list ,documentation ,@declarations
@@ -4827,8 +4842,21 @@ out and hands each row that may strike to NAME. #S0LV3R"
       (if operators `(macrolet ,operators ,function) function))))
 
 (define-impact-copy solve-impact-range solve-range
-  "One Gauss-Seidel pass over constraints START..END, bouncing impacts ([[#R3ST1T]]): the pass
-solve-range and its variants hand a row to when it may strike or is armed. #S0LV3R")
+  "One Gauss-Seidel pass over constraints START..END, bouncing impacts ([[#R3ST1T]]): solve-handing
+runs it on each row at which solve-range or a variant of it stops. #S0LV3R")
+
+(declaim (inline solve-handing))
+(defun solve-handing (solve impact width cbuf v d start end inv-h use-bias elapsed push-max
+                      threshold hgx hgy hgz)
+  "Run the solve kernel SOLVE over constraints START..END; each time it stops at a row (a block
+of WIDTH rows) that may strike, run IMPACT, its copy with the impact part, on that row or block,
+and go on with SOLVE after it. #S0LV3R"
+  (declare (type index start end width))
+  (loop for k of-type index = (funcall solve cbuf v d start end inv-h use-bias elapsed push-max
+                                       threshold hgx hgy hgz)
+        while (< k end)
+        do (funcall impact cbuf v d k (+ k width) inv-h use-bias elapsed push-max threshold hgx hgy hgz)
+           (setf start (+ k width))))
 ;; Solve and relax:1 ends here
 
 ;; [[file:../physics.org::#R3ST1T][Restitution at impact:1]]
@@ -4857,10 +4885,10 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
     (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-      (funcall (kernel-variant-solve (world-kernel-variant world kernels))
-               cbuf (physics-world-velocities world) (physics-world-deltas world)
-               0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-               (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
+      (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
+                     cbuf (physics-world-velocities world) (physics-world-deltas world)
+                     0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+                     (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0

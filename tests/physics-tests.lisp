@@ -216,6 +216,19 @@
                        :key (lambda (r) (getf r :file)) :test #'equal)))
     (check (equal definitions luv-physics::*definitions*) "the records changed")
     (check (equal files luv-physics::*registered-files*) "the files changed")
+    (let* ((file "tangled/physics-simd.lisp")
+           (text (gethash file luv-physics::*loaded-file-texts*)))
+      (check (stringp text) "no text kept for ~A" file)
+      (unwind-protect
+           (progn
+             (setf luv-physics::*definitions*
+                   (remove file definitions :key (lambda (r) (getf r :file)) :test #'equal))
+             (remhash file luv-physics::*loaded-file-texts*)
+             (luv-physics::register-tangled-file last-file)
+             (check (equal definitions luv-physics::*definitions*) "the records taken out were not put back")
+             (check (equal text (gethash file luv-physics::*loaded-file-texts*)) "the file's text was not put back"))
+        (setf luv-physics::*definitions* definitions
+              (gethash file luv-physics::*loaded-file-texts*) text)))
     (let ((warned nil))
       (check (eql 0 (handler-bind ((warning (lambda (w) (setf warned t) (muffle-warning w))))
                       (luv-physics::register-tangled-file "tangled/no-such-file.lisp")))
@@ -251,6 +264,17 @@
                                          (search (princ-to-string line) l)))
                         lines)
                "no line names ~(~A~) at page line ~D" name line)))
+    (let ((*package* (find-package '#:luv-physics)))
+      (dolist (r (anchor-definitions "BSOZ3U"))
+        (let ((want (format nil "    ~5D  ~(~14A~) ~(~S~)  ~A:~D" (getf r :org-line) (getf r :kind) (getf r :name)
+                            (getf r :file) (getf r :line))))
+          (check (member want lines :test #'string=) "no line reads ~S" want))))
+    (let ((page (luv-physics::page-lines-of nil)))
+      (loop for i from 0 below (length page)
+            for text = (aref page i)
+            when (luv-physics::starts-with "#+name: BSOZ3U-" text)
+              do (let ((want (format nil "    ~5D  ~A" (+ i 2) (subseq text (length "#+name: BSOZ3U-")))))
+                   (check (member want lines :test #'string=) "no line reads ~S" want))))
     (let ((claims (remove "BSOZ3U" *claims* :key #'car :test-not #'string=)))
       (check (search (format nil "~D claims:" (length claims)) text) "the count of ~D claims" (length claims))
       (dolist (claim claims)
@@ -281,6 +305,8 @@
            ;; at its default: the page's new default is taken, and the step runs it at once
            (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G" :page copy))
            (check (eq 'luv-physics::reload-claim-phase (car (last luv-physics:*physics-phases*))))
+           (check (equal luv-physics:*physics-phases* (gethash 'luv-physics:*physics-phases* luv-physics::*parameter-defaults*))
+                  "the page's new default is not the one a later reload compares with")
            (luv-physics::step-physics-world w)
            (check (= 1 counted) "the new phase ran ~D times in one step" counted)
            ;; changed at the REPL: kept
@@ -985,6 +1011,40 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (not (luv-physics::terrain-resident-p terrain 8 -1 8)) "the step made the wall resident"))))
 ;; H2W9DJ-non-resident-is-wall ends here
 
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-cells-are-their-own]]
+(define-claim "H2W9DJ" cells-are-their-own
+    "Setting one cell of a chunk changes that cell alone, and no cell of the next chunk; the chunk budget is checked at its ends."
+  (let ((terrain (luv-physics::make-voxel-terrain)) (wrong '()))
+    (luv-physics::fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (flet ((solid-cells ()
+             (loop for x below 16 nconc (loop for y below 16 nconc (loop for z below 16
+                                                                         when (luv-physics::terrain-solid-p terrain x y z)
+                                                                           collect (list x y z))))))
+      (dolist (cell '((0 0 0) (15 0 0) (0 15 0) (0 0 15) (15 15 0) (15 0 15) (0 15 15) (15 15 15) (3 7 11) (11 3 7) (7 11 3)))
+        (setf (apply #'luv-physics::terrain-solid-p terrain cell) t)
+        (let ((got (solid-cells))) (unless (equal got (list cell)) (push (list cell got) wrong)))
+        (setf (apply #'luv-physics::terrain-solid-p terrain cell) nil)
+        (let ((got (solid-cells))) (when got (push (list :cleared cell got) wrong))))
+      (dolist (cell '((-1 5 5) (16 5 5) (5 -1 5) (5 16 5) (5 5 -1) (5 5 16)))
+        (setf (apply #'luv-physics::terrain-solid-p terrain cell) t)
+        (let ((got (solid-cells))) (when got (push (list :beside cell got) wrong)))
+        (check (apply #'luv-physics::terrain-solid-p terrain cell))))
+    (check (null wrong) "cells share storage: ~S" (reverse wrong)))
+  (flet ((budget (value)
+           (handler-case (let ((luv-physics:*physics-terrain-chunk-budget* value)) (luv-physics::make-voxel-terrain) :made)
+             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+    (check (equal (mapcar #'budget (list 1 (ash 1 24) 0 (1+ (ash 1 24)) "x"))
+                  '(:made :made :terrain-chunk-budget :terrain-chunk-budget :terrain-chunk-budget))))
+  (let ((terrain (let ((luv-physics:*physics-terrain-chunk-budget* 2)) (luv-physics::make-voxel-terrain))))
+    (luv-physics::fill-terrain terrain 0 0 0 1 1 1 nil)
+    (flet ((set-cell (x)
+             (handler-case (progn (setf (luv-physics::terrain-solid-p terrain x 0 0) t) :set)
+               (luv-physics::physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-operation e)))))
+      (check (equal (list (set-cell 20) (set-cell 40)) '(:set (setf luv-physics::terrain-solid-p)))
+             "a budget of two chunks: ~S" (list (set-cell 20) (set-cell 40)))
+      (check (= 2 (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))))))
+;; H2W9DJ-cells-are-their-own ends here
+
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-edit-during-step-deferred]]
 (define-claim "H2W9DJ" edit-during-step-deferred
     "A terrain edit from the event handler is applied when the step ends, not during it."
@@ -1252,6 +1312,103 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (null wrong) "~D calls were not refused by name:~%~{  ~S~%~}" (length wrong) (reverse wrong))))
 ;; M4K3WD-non-world-named ends here
 
+;; [[file:../physics.org::#M4K3WD][M4K3WD-limits-and-every-column]]
+(define-claim "M4K3WD" limits-and-every-column
+    "Arguments are accepted at their limits and refused just past them; a new row holds exactly what it was given."
+  (flet ((outcome (thunk)
+           (handler-case (progn (funcall thunk) :accepted)
+             (luv-physics::invalid-physics-radius () :radius)
+             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+             (error (e) (type-of e)))))
+    (let ((wrong '()))
+      (flet ((world-with (want &rest arguments)
+               (let ((got (outcome (lambda () (apply #'make-physics-world arguments)))))
+                 (unless (eq got want) (push (list arguments got) wrong)))))
+        (world-with :accepted :step-seconds 0.0001) (world-with :step-seconds :step-seconds 0.000099)
+        (world-with :accepted :step-seconds 0.9999) (world-with :step-seconds :step-seconds 1.0)
+        (world-with :accepted :substeps 1) (world-with :accepted :substeps 64)
+        (world-with :substeps :substeps 0) (world-with :substeps :substeps 65)
+        (world-with :accepted :gravity '(1000 -1000 1000)) (world-with :gravity :gravity '(0 -1000.1 0))
+        (world-with :gravity :gravity '(0 -9.81))
+        (world-with :kernels :kernels :no-such-family)
+        (let ((got (outcome (lambda () (luv-physics:register-kernel-family :claim-family 'luv-physics::scalar-kernels "sse")))))
+          (unless (eq got :instruction-set) (push (list :register got) wrong)))
+        (check (not (assoc :claim-family luv-physics::*kernel-families*)))
+        (loop for (want dt) in '((:accepted 0.0001) (:dt 0.000099) (:accepted 0.9999) (:dt 1.0))
+              do (let ((got (outcome (lambda () (step-physics-world (make-physics-world) dt)))))
+                   (unless (eq got want) (push (list :step dt got) wrong)))))
+      (let ((w (make-physics-world :step-seconds 1/50 :substeps 7 :gravity '(1.5 -3 0.25))))
+        (check (equal (list (luv-physics::physics-world-step-seconds w) (luv-physics::physics-world-substeps w)
+                            (luv-physics::physics-world-gravity-x w) (luv-physics::physics-world-gravity-y w)
+                            (luv-physics::physics-world-gravity-z w))
+                      (list (float 1/50 1.0) 7 1.5 -3.0 0.25))
+               "the world keeps ~S" (luv-physics::physics-world-step-seconds w)))
+      (let* ((w (make-floor-world)) (limit (luv-physics::max-radius-for w))
+             (speed (luv-physics::physics-world-max-speed w)) (diagonal (* speed (/ (sqrt 3.0)) 0.99999))
+             (far (* luv-physics::+physics-coordinate-limit+ 0.99999)))
+        (dotimes (i 3) (add-physics-body w (+ 1.5 i) 1.0 1.5))
+        (let ((before (world-fingerprint w)))
+          (loop for (want . arguments)
+                  in `((:accepted :radius ,luv-physics::+physics-min-radius+)
+                       (:radius :radius ,(* 0.999 luv-physics::+physics-min-radius+))
+                       (:accepted :radius ,limit) (:radius :radius ,(* 1.001 limit))
+                       (:accepted :mass ,luv-physics::+physics-min-mass+)
+                       (:mass :mass ,(* 0.999 luv-physics::+physics-min-mass+))
+                       (:accepted :mass ,luv-physics::+physics-max-mass+)
+                       (:mass :mass ,(* 1.001 luv-physics::+physics-max-mass+))
+                       (:accepted :restitution 0.0) (:accepted :restitution 1.0)
+                       (:restitution :restitution -0.001) (:restitution :restitution 1.001)
+                       (:accepted :friction 0.0) (:accepted :friction ,luv-physics::+physics-max-friction+)
+                       (:friction :friction -0.001) (:friction :friction ,(* 1.001 luv-physics::+physics-max-friction+))
+                       (:accepted :rolling-resistance 0.0)
+                       (:accepted :rolling-resistance ,luv-physics::+physics-max-friction+)
+                       (:rolling-resistance :rolling-resistance -0.001)
+                       (:rolling-resistance :rolling-resistance ,(* 1.001 luv-physics::+physics-max-friction+))
+                       (:accepted :vx ,speed) (:accepted :vy ,(- speed)) (:accepted :vz ,speed)
+                       (:velocity :vx ,(* 1.001 speed)) (:velocity :vy ,(* -1.001 speed))
+                       (:velocity :vz ,(* 1.001 speed))
+                       (:accepted :vx ,diagonal :vy ,diagonal :vz ,diagonal)
+                       (:velocity :vx ,(* 1.001 diagonal) :vy ,(* 1.001 diagonal) :vz ,(* 1.001 diagonal))
+                       (:accepted :life 0.001) (:life :life -0.001) (:kind :kind 1.5))
+                do (let* ((probe (make-physics-world))
+                          (got (outcome (lambda () (apply #'add-physics-body probe 0.0 0.0 0.0 arguments)))))
+                     (unless (eq got want) (push (list arguments got) wrong))
+                     (unless (eq want :accepted)
+                       (let ((again (outcome (lambda () (apply #'add-physics-body w 4.0 1.0 4.0 arguments)))))
+                         (unless (eq again want) (push (list :in-a-world arguments again) wrong))))))
+          (dolist (axis '(:x :y :z))
+            (dolist (sign '(1 -1))
+              (flet ((at (v) (outcome (lambda () (apply #'add-physics-body (make-physics-world)
+                                                        (mapcar (lambda (a) (if (eq a axis) v 0.0)) '(:x :y :z)))))))
+                (unless (eq :accepted (at (* sign far))) (push (list axis (* sign far) (at (* sign far))) wrong))
+                (let ((v (* sign luv-physics::+physics-coordinate-limit+)))
+                  (unless (eq axis (at v)) (push (list axis v (at v)) wrong))))))
+          (check (equal before (world-fingerprint w)) "a refusal changed the world"))
+        (check (null wrong) "~D arguments answered wrongly: ~S" (length wrong) (reverse wrong))
+        (let* ((version (luv-physics::physics-world-rows-version w))
+               (h (add-physics-body w 1.25 2.5 -3.75 :radius 0.3 :mass 2.5 :restitution 0.4 :friction 0.7
+                                                     :rolling-resistance 0.05 :vx 1 :vy -2 :vz 3 :life 4.5
+                                                     :report-hits t :collide-with-bodies nil :kind 7))
+               (plain (add-physics-body w 5.0 1.0 5.0 :radius 0.2))
+               (awake (luv-physics::physics-world-awake w)))
+          (check (= (+ version 2) (luv-physics::physics-world-rows-version w)) "two additions counted ~D changes"
+                 (- (luv-physics::physics-world-rows-version w) version))
+          (check (= 0.3 (luv-physics::physics-world-max-radius w)) "largest radius ~S" (luv-physics::physics-world-max-radius w))
+          (flet ((row-of (handle)
+                   (let ((row (nth-value 1 (luv-physics::resolve-handle w handle))))
+                     (loop for column in '(x y z vx vy vz wx wy wz qw qx qy qz radius inverse-mass inverse-inertia
+                                           restitution friction rolling-resistance sleep-time age life flags handle kind)
+                           collect (aref (funcall (intern (format nil "BODY-COLUMNS-~A" column) '#:luv-physics) awake)
+                                         row)))))
+            (let ((want (list 1.25 2.5 -3.75 1.0 -2.0 3.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.3 (/ 1.0 2.5)
+                              (/ 5.0 (* 2.0 2.5 0.3 0.3)) 0.4 0.7 0.05 0.0 0.0 4.5
+                              (logior luv-physics::+flag-report-hits+ luv-physics::+flag-terrain-only+) h 7)))
+              (check (equal (row-of h) want) "the row holds~%  ~S~%not~%  ~S" (row-of h) want))
+            (let ((want (list 5.0 1.0 5.0 0.0 0.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.2 1.0 (/ 5.0 (* 2.0 1.0 0.2 0.2))
+                              0.0 0.6 0.0 0.0 0.0 0.0 0 plain 0)))
+              (check (equal (row-of plain) want) "the default row holds~%  ~S~%not~%  ~S" (row-of plain) want))))))))
+;; M4K3WD-limits-and-every-column ends here
+
 ;; [[file:../physics.org::#E7V3NT][E7V3NT-mortal-body-events]]
 (define-claim "E7V3NT" mortal-body-events
     "A 1 s mortal ball: :begin, then :end, then :expired on step 60; afterwards its handle is stale."
@@ -1494,14 +1651,19 @@ function of a column name that reads row K's float in that column. #T3STK1"
   (let* ((w (make-floor-world))
          (owner (list :wall 7))
          (h (luv-physics::add-physics-body w 2.5 0.245 3.5 :vx 6.0))
-         (hits '()) (begins '()))
+         (other (luv-physics::add-physics-body w 2.5 0.245 6.5 :vx 6.0))
+         (hits '()) (begins '()) (other-hits '()))
     (dotimes (i 30)
       (dotimes (k 19)
         (luv-physics::post-physics-box w -10.0 0.5 (- (* 0.6 k) 12.0) 0.25 0.25 0.25 :owner (list :other k)))
       (luv-physics::post-physics-box w 4.0 0.5 3.5 0.25 0.5 0.5 :owner owner)
+      (luv-physics::post-physics-box w 4.0 0.5 6.5 0.25 0.5 0.5)
       (loop for (kind a b speed datum) in (step-events w)
+            when (and (= a other) (eq kind :hit))
+              do (push datum other-hits)
             when (and (= a h) datum)
               do (case kind (:hit (push (list speed datum) hits)) (:begin (push datum begins)))))
+    (check (and other-hits (every #'null other-hits)) "the box without an owner gave hits with data ~S" other-hits)
     (setf hits (reverse hits))
     (check (not (null hits)) "no :hit event carried a datum")
     (check (every (lambda (hit) (eq owner (second hit))) hits) "hit data ~S" (mapcar #'second hits))
@@ -1521,7 +1683,11 @@ function of a column name that reads row K's float in that column. #T3STK1"
                  "~A = ~A was not refused by its name" axis bad))))
     (check (zerop (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))) "a refused box was posted")
     (luv-physics::post-physics-box w 3.5 3.0 3.5 0.001 1023 0.5)
-    (check (= 1 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))))
+    (check (= 1 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
+    (let ((owners (loop for k below 40 collect (list :box k))))
+      (dolist (o owners) (luv-physics::post-physics-box w (+ 1.5 (* 0.1 (second o))) 3.0 3.5 0.05 0.05 0.05 :owner o))
+      (check (loop for o in owners for row from 1 always (eq o (svref (luv-physics::physics-world-box-owners w) row)))
+             "forty boxes posted in one step do not each keep their owner"))))
 ;; K1N3BX-box-extents-checked ends here
 
 ;; [[file:../physics.org::#G3NCNT][G3NCNT-oblique-blows-true]]
@@ -1534,6 +1700,58 @@ function of a column name that reads row K's float in that column. #T3STK1"
                speed offset impulse)
         (check (< striker 2d0) "~,1F m/s, ~,2F m aside: the striker leaves ~,2F deg off" speed offset striker)))))
 ;; G3NCNT-oblique-blows-true ends here
+
+;; [[file:../physics.org::#G3NCNT][G3NCNT-touch-normal-closed-form]]
+(define-claim "G3NCNT" touch-normal-closed-form
+    "pair-impact-normal: the line of centres at the touch, exactly; the given normal when not closing, at b = 0 too."
+  (flet ((normal (dx dy dz wx wy wz)
+           (multiple-value-list
+            (luv-physics::pair-impact-normal dx dy dz wx wy wz 0.5 (/ 1.0 60) 1.0 0.0 0.0 -0.2)))
+         (closed (dx dy wx)
+           ;; in double precision: the smaller root, capped at the step
+           (let* ((a (* wx wx)) (b (* dx wx)) (c (- (+ (* dx dx) (* dy dy)) 0.25d0))
+                  (time (min (/ 1d0 60) (/ (- (- b) (sqrt (- (* b b) (* a c)))) a)))
+                  (qx (+ dx (* wx time))) (q (sqrt (+ (* qx qx) (* dy dy))))
+                  (mx (/ qx q)) (my (/ dy q)))
+             (list mx my 0d0 (- (+ (* dx mx) (* dy my)) 0.5d0)))))
+    (check (every (lambda (got want) (< (abs (- got want)) 1d-6))
+                  (normal 1.0 0.3 0.0 -60.0 0.0 0.0) '(0.8d0 0.6d0 0d0 0.48d0))
+           "touch within the step: ~S" (normal 1.0 0.3 0.0 -60.0 0.0 0.0))
+    (check (every (lambda (got want) (< (abs (- got want)) 1d-6))
+                  (normal 1.0 0.3 0.0 -30.0 0.0 0.0) (closed 1d0 0.3d0 -30d0))
+           "touch after the step: ~S, not ~S" (normal 1.0 0.3 0.0 -30.0 0.0 0.0) (closed 1d0 0.3d0 -30d0))
+    (loop for (what . motion) in '(("at rest" 0.3 0.0 0.0 0.0 0.0 0.0)
+                                   ("moving apart" 0.3 0.0 0.0 2.0 1.0 0.0)
+                                   ("moving across, overlapping" 0.3 0.0 0.0 0.0 2.0 0.0)
+                                   ("passing by" 1.0 0.6 0.0 -60.0 0.0 0.0))
+          do (check (equal '(1.0 0.0 0.0 -0.2) (apply #'normal motion))
+                    "~A: ~S" what (apply #'normal motion)))))
+;; G3NCNT-touch-normal-closed-form ends here
+
+;; [[file:../physics.org::#G3NCNT][G3NCNT-impulses-kept-within-cone]]
+(define-claim "G3NCNT" impulses-kept-within-cone
+    "touch-contact keeps the impulses when the normal turned to a cosine of exactly 0.9, drops them below."
+  (let* ((contacts (luv-physics::make-contact-columns))
+         (table (luv-physics::make-contact-table))
+         (geometry (luv-physics::contact-columns-geometry contacts))
+         (s (sqrt (- 1.0 (* 0.9 0.9))))
+         (row -1))
+    (flet ((touch (step nx ny)
+             (setf (luv-physics::contact-table-step table) step
+                   (luv-physics::contact-table-cursor table) 0)
+             (setf row (luv-physics::touch-contact contacts table 7 luv-physics::+contact-terrain+ 5 -1
+                                                   nx ny 0.0 0.01 0.0 0.0 0.0 0.0 0.0 0.0)))
+           (impulse () (luv-physics::contact@ geometry row luv-physics::normal-impulse)))
+      (touch 1 1.0 0.0)
+      (setf (luv-physics::contact@ geometry row luv-physics::normal-impulse) 1.0)
+      (touch 2 0.9 s)
+      (check (= 1.0 (impulse)) "turned to a cosine of exactly 0.9: impulse ~A" (impulse))
+      ;; back along x, shortened by one part in 2^24: a cosine with the last normal just under 0.9
+      (let ((nx (- 1.0 single-float-epsilon)))
+        (check (< (* nx 0.9) 0.9) "the second turn is not past the cone")
+        (touch 3 nx 0.0))
+      (check (= 0.0 (impulse)) "turned past the cone: impulse ~A" (impulse)))))
+;; G3NCNT-impulses-kept-within-cone ends here
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sorted-rows-keep-handles]]
 (define-claim "G4R1D5" sorted-rows-keep-handles
@@ -1847,6 +2065,21 @@ function of a column name that reads row K's float in that column. #T3STK1"
                      "~:[b~;a~] first: (nx ny nz separation px py pz) is ~S, not ~S" a-first got want))))))))
 ;; P41RS7-pair-contact-geometry ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-gone-rows-loose]]
+(define-claim "P41RS7" gone-rows-loose
+    "pair-list-strays over fewer rows than the list knew marks the rows gone loose."
+  (let* ((w (make-floor-world)))
+    (dotimes (i 5) (add-physics-body w (+ 1.5 (* 1.0 i)) 0.5 3.5))
+    (step-physics-world w)
+    (let* ((plist (luv-physics::physics-world-pair-list w))
+           (awake (luv-physics::physics-world-awake w))
+           (count (luv-physics::pair-list-strays plist awake 3 (luv-physics::pair-list-cell plist) 0.01)))
+      (check (= 5 (luv-physics::pair-list-rows plist)) "the list knows ~D rows" (luv-physics::pair-list-rows plist))
+      (check (= 0 count) "~D of the three rows left are loose" count)
+      (check (equal '(0 0 0 1 1) (coerce (subseq (luv-physics::pair-list-loose plist) 0 5) 'list))
+             "loose flags ~S" (subseq (luv-physics::pair-list-loose plist) 0 5)))))
+;; P41RS7-gone-rows-loose ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
 (define-claim "MYWH16" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
@@ -1935,6 +2168,25 @@ function of a column name that reads row K's float in that column. #T3STK1"
                       "at (~A, ~A) a normal is not vertical: ~S" x z contacts)
                (check (< (abs (- (body-y w h) 0.245)) 0.002) "at (~A, ~A) the ball rests at ~,5F" x z (body-y w h))))))
 ;; MYWH16-one-contact-per-support ends here
+
+;; [[file:../physics.org::#MYWH16][MYWH16-overshoot-every-side]]
+(define-claim "MYWH16" overshoot-every-side
+    "A cell touching the centre's solid cell only at an edge or corner is silent, on every side of every axis."
+  (loop for ox from -1 to 1
+        do (loop for oy from -1 to 1
+                 do (loop for oz from -1 to 1
+                          when (>= (count 0 (list ox oy oz) :test-not #'eql) 2)
+                            do (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+                                 ;; D at (4 4 4); C = D - o, so that the centre overshoots C by o
+                                 (fill-terrain terrain 4 4 4 5 5 5 t)
+                                 (fill-terrain terrain (- 4 ox) (- 4 oy) (- 4 oz) (- 5 ox) (- 5 oy) (- 5 oz) t)
+                                 (flet ((at (o) (+ 4 (case o (1 0.15) (-1 0.85) (t 0.5)))))
+                                   (let ((h (add-physics-body w (at ox) (at oy) (at oz) :radius 0.3)))
+                                     (step-physics-world w)
+                                     (check (= 1 (length (terrain-contacts w h)))
+                                            "overshoot (~D ~D ~D): ~D terrain contacts" ox oy oz
+                                            (length (terrain-contacts w h))))))))))
+;; MYWH16-overshoot-every-side ends here
 
 ;; [[file:../physics.org::#MYWH16][MYWH16-rolls-over-ledge]]
 (define-claim "MYWH16" rolls-over-ledge
@@ -2029,6 +2281,17 @@ function of a column name that reads row K's float in that column. #T3STK1"
                      (plusp direction) (elt "xyz" axis) distance (length (terrain-contacts w h))))))))))
 ;; SW33P7-sweep-reaches-its-travel ends here
 
+;; [[file:../physics.org::#SW33P7][SW33P7-parallel-only-below-threshold]]
+(define-claim "SW33P7" parallel-only-below-threshold
+    "A ray on a cell boundary drifting at exactly 1e-12 crosses it at once and finds that column's cell."
+  (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+    (fill-terrain terrain 4 0 -16 5 1 32 t)
+    ;; a power of two for the speed, so that the direction's x is exactly -1e-12
+    (let ((h (add-physics-body w 5.0 2.2 3.5 :radius 0.3 :vx (* 64 -1e-12) :vy -64.0)))
+      (step-physics-world w)
+      (check (= 1 (length (terrain-contacts w h))) "~D terrain contacts" (length (terrain-contacts w h))))))
+;; SW33P7-parallel-only-below-threshold ends here
+
 ;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
 (define-claim "B0XPH5" box-contact-geometry
     "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
@@ -2119,6 +2382,25 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (eq t (luv-physics::validate-physics-world w)))))))
 ;; PRUN3D-reorder-keeps-contacts ends here
 
+;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-threshold]]
+(define-claim "PRUN3D" reorder-threshold
+    "A world of five contacts reorders at 64 misses, not at 63 and not at five."
+  (let* ((w (make-floor-world))
+         (table (luv-physics::physics-world-contact-table w)))
+    (dotimes (i 5) (add-physics-body w (+ 1.5 (* 1.0 i)) 0.5 3.5 :collide-with-bodies nil))
+    (dotimes (i 30) (step-physics-world w))
+    (check (= 5 (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
+    (loop for (misses after) in '((63 63) (64 0))
+          do (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                              luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase))
+               (funcall phase w))
+             (setf (luv-physics::contact-table-misses table) misses)
+             (luv-physics::prune-phase w)
+             (check (= after (luv-physics::contact-table-misses table))
+                    "after ~D misses among five contacts the prune left ~D, not ~D"
+                    misses (luv-physics::contact-table-misses table) after))))
+;; PRUN3D-reorder-threshold ends here
+
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
 (define-claim "SSMPYW" colours-disjoint
     "In a 300-ball pile no colour below 24 holds two constraints on the same awake body."
@@ -2196,6 +2478,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "~D constraints overflowed at step 200 (most over steps 100-200: ~D)"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
+
+;; [[file:../physics.org::#KTXT7V][KTXT7V-kernel-is-its-text]]
+(define-claim "KTXT7V" kernel-is-its-text
+    "Featured kernels keep their docstrings and texts; the text compiled for every feature is the kernel."
+  (loop for (name anchor features)
+          in '((luv-physics::warm-start-range "#W4RMST" (:friction :rolling-resistance))
+               (luv-physics::solve-range "#S0LV3R" (:friction :rolling-resistance :restitution))
+               (luv-physics::prepare-phase "#PR3PAR" (:restitution :rolling-resistance :contact-events :hit-events))
+               (luv-physics::store-phase "#ST0R3S" (:contact-events :hit-events :rolling-resistance))
+               (luv-physics::warm-start-blocks/sse "#W1D3KF" (:friction :rolling-resistance))
+               (luv-physics::solve-blocks/sse "#W1D3KF" (:friction :rolling-resistance :restitution))
+               (luv-physics::warm-start-blocks/avx2 "#W1D3KF" (:friction :rolling-resistance))
+               (luv-physics::solve-blocks/avx2 "#W1D3KF" (:friction :rolling-resistance :restitution)))
+        do (let ((doc (documentation name 'function)) (text (get name 'luv-physics::featured-kernel)))
+             (check (and (stringp doc) (let ((n (length anchor))) (and (>= (length doc) n) (string= anchor doc :start2 (- (length doc) n))))) "~(~A~)'s docstring is ~S" name doc)
+             (check (and (= 5 (length text)) (equal features (fifth text))) "~(~A~) keeps ~S" name text))))
+;; KTXT7V-kernel-is-its-text ends here
 
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-bracing-holds-while-still]]
 (define-claim "PR3PAR" bracing-holds-while-still
@@ -2325,6 +2624,82 @@ function of a column name that reads row K's float in that column. #T3STK1"
           do (check (< (abs (- got (/ g 60d0))) 1d-6) "v~(~A~) is ~,7F, not ~,7F" name got (/ g 60d0)))
     (check (equal '(0.0 0.0 0.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h))))))
 ;; K3RNLS-gravity-in-every-column ends here
+
+;; [[file:../physics.org::#K3RNLS][K3RNLS-entry-ranges-exact]]
+(define-claim "K3RNLS" entry-ranges-exact
+    "Each solver entry point takes its numbers at both ends of their ranges and refuses the nearest beyond."
+  (let* ((w (make-floor-world))
+         (k (luv-physics::physics-world-kernels w))
+         (below-one (- 1.0 (scale-float 1.0 -24))))
+    (luv-physics::add-physics-body w 3.5 1.0 3.5)
+    (luv-physics::step-physics-world w)
+    (flet ((answer (call)
+             (handler-case (progn (funcall call) :ran)
+               (invalid-physics-parameter (e) (list :refused (luv-physics::invalid-physics-parameter-name e)))
+               (error (e) (type-of e)))))
+      (loop for (label want call)
+              in (list (list "velocities h -1e7" :ran (lambda () (luv-physics:physics-integrate-velocities k w -1e7)))
+                       (list "velocities h 1e7" :ran (lambda () (luv-physics:physics-integrate-velocities k w 1e7)))
+                       (list "velocities h -10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-velocities k w -10000001.0)))
+                       (list "velocities h 10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-velocities k w 10000001.0)))
+                       (list "positions h -1e7" :ran (lambda () (luv-physics:physics-integrate-positions k w -1e7)))
+                       (list "positions h 1e7" :ran (lambda () (luv-physics:physics-integrate-positions k w 1e7)))
+                       (list "positions h -10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-positions k w -10000001.0)))
+                       (list "positions h 10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-positions k w 10000001.0)))
+                       (list "solve inv-h 1" :ran (lambda () (luv-physics:physics-solve-contacts k w 1.0 t 0.0)))
+                       (list "solve inv-h 1e7" :ran (lambda () (luv-physics:physics-solve-contacts k w 1e7 nil 0.0)))
+                       (list "solve inv-h below 1" '(:refused :inv-h) (lambda () (luv-physics:physics-solve-contacts k w below-one t 0.0)))
+                       (list "solve inv-h 10000001" '(:refused :inv-h) (lambda () (luv-physics:physics-solve-contacts k w 10000001.0 t 0.0)))
+                       (list "solve elapsed 1e7" :ran (lambda () (luv-physics:physics-solve-contacts k w 60.0 t 1e7)))
+                       (list "solve elapsed below 0" '(:refused :elapsed) (lambda () (luv-physics:physics-solve-contacts k w 60.0 t (- least-positive-normalized-single-float))))
+                       (list "solve elapsed 10000001" '(:refused :elapsed) (lambda () (luv-physics:physics-solve-contacts k w 60.0 t 10000001.0))))
+            do (let ((got (answer call)))
+                 (check (equal want got) "~A: ~S, not ~S" label got want))))))
+;; K3RNLS-entry-ranges-exact ends here
+
+;; [[file:../physics.org::#W4RMST][W4RMST-warm-start-formula]]
+(define-claim "W4RMST" warm-start-formula
+    "warm-start-range applies P and the torques of the closed form to all twelve columns, in each variant."
+  (let* ((cbuf (luv-physics::make-constraint-columns))
+         (given '((nx 0.6) (ny 0.8) (nz 0.0) (t1x 0.8) (t1y -0.6) (t1z 0.0) (t2x 0.0) (t2y 0.0) (t2z 1.0)
+                   (normal-impulse 2.0) (tangent-impulse-1 3.0) (tangent-impulse-2 5.0) (spin-impulse 7.0)
+                   (rolling-impulse-x 11.0) (rolling-impulse-y 13.0) (rolling-impulse-z 17.0)
+                   (ima 0.5) (imb 0.25) (iia 0.1) (iib 0.2) (ra 0.3) (rb 0.4))))
+    (luv-physics::constraint-columns-ensure-capacity cbuf 8)
+    (setf (luv-physics::constraint-columns-length cbuf) 1
+          (aref (luv-physics::constraint-columns-body-a cbuf) 0) 0
+          (aref (luv-physics::constraint-columns-body-b cbuf) 0) 1)
+    (loop for (column value) in given
+          do (setf (aref (luv-physics::constraint-columns-data cbuf)
+                         (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset column)))
+                   value))
+    (flet ((at (column) (float (second (assoc column given)) 1d0)))
+      (dolist (features '((:friction :rolling-resistance) (:friction) (:rolling-resistance) ()))
+        (let* ((friction (member :friction features)) (rolling (member :rolling-resistance features))
+               (kernel (luv-physics::featured-kernel 'luv-physics::warm-start-range features))
+               (v (let ((v (make-array 32 :element-type 'single-float)))
+                    ;; every column starts from its own velocity, so that a column read for another shows
+                    (dotimes (j 32 v) (setf (aref v j) (* 0.125 (1+ j))))))
+               (start (loop for j below 32 collect (float (aref v j) 1d0)))
+               (n (list (at 'nx) (at 'ny) (at 'nz)))
+               (t1 (list (at 't1x) (at 't1y) (at 't1z))) (t2 (list (at 't2x) (at 't2y) (at 't2z)))
+               (l1 (if friction (at 'tangent-impulse-1) 0d0)) (l2 (if friction (at 'tangent-impulse-2) 0d0))
+               (p (mapcar (lambda (n t1 t2) (+ (* (at 'normal-impulse) n) (* l1 t1) (* l2 t2))) n t1 t2))
+               (c (mapcar (lambda (t1 t2) (- (* l1 t2) (* l2 t1))) t1 t2))
+               (r (mapcar (lambda (roll n) (+ (if rolling roll 0d0) (if friction (* (at 'spin-impulse) n) 0d0)))
+                          (list (at 'rolling-impulse-x) (at 'rolling-impulse-y) (at 'rolling-impulse-z)) n))
+               (want (append (mapcar (lambda (p) (- (* (at 'ima) p))) p)
+                             (mapcar (lambda (c r) (- (* (at 'iia) (+ (* (at 'ra) c) r)))) c r)
+                             (mapcar (lambda (p) (* (at 'imb) p)) p)
+                             (mapcar (lambda (c r) (* (at 'iib) (- r (* (at 'rb) c)))) c r))))
+          (funcall kernel cbuf v 0 1)
+          (let ((got (append (loop for j below 6 for o = (+ (luv-physics::solver-row 0) j)
+                                   collect (- (aref v o) (nth o start)))
+                             (loop for j below 6 for o = (+ (luv-physics::solver-row 1) j)
+                                   collect (- (aref v o) (nth o start))))))
+            (check (every (lambda (g w) (<= (abs (- g w)) (* 1d-6 (max 1d0 (abs w))))) got want)
+                   "~S: the velocities changed by ~S, not ~S" features got want)))))))
+;; W4RMST-warm-start-formula ends here
 
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
 (define-claim "S0LV3R" frames-are-perpendicular
@@ -2586,8 +2961,17 @@ function of a column name that reads row K's float in that column. #T3STK1"
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-step-statistics]]
 (define-claim "IDVK7G" step-statistics
     "Last-step contact count, colour count and real seconds are consistent with the step's buffers."
-  (let ((w (luv-physics::make-basin-world 200)))
-    (dotimes (i 120) (luv-physics::step-physics-world w))
+  (let ((w (luv-physics::make-basin-world 200))
+        (clock (make-array (* 2 (length luv-physics::*physics-phases*)) :element-type 'fixnum :initial-element 0)))
+    (dotimes (i 120)
+      (when (= i 0) (setf (luv-physics::physics-world-phase-clock w) clock))
+      (luv-physics::step-physics-world w))
+    (setf (luv-physics::physics-world-phase-clock w) nil)
+    (check (every #'plusp (subseq clock 0 (length luv-physics::*physics-phases*)))
+           "the phase clock counted ~S" clock)
+    (check (and (every (lambda (b) (>= b 0)) (subseq clock (length luv-physics::*physics-phases*)))
+                (some #'plusp (subseq clock (length luv-physics::*physics-phases*))))
+           "the phase clock counted bytes ~S" (subseq clock (length luv-physics::*physics-phases*)))
     (let ((contacts (luv-physics::physics-world-last-step-contact-count w))
           (colours (luv-physics::physics-world-last-step-color-count w))
           (seconds (luv-physics::physics-world-last-step-real-seconds w))
@@ -2616,6 +3000,20 @@ function of a column name that reads row K's float in that column. #T3STK1"
                   (physics-world-features (make-physics-world :features '(:events :terrain)))))
     (check (typep (handler-case (make-physics-world :features '(:terrain :magnetism)) (error (e) e))
                   'invalid-physics-parameter)))
+  (let* ((table luv-physics::*featured-kernels*) (kept (hash-table-count table)))
+    (dolist (set luv-physics::+standard-feature-sets+)
+      (dolist (name '(luv-physics::warm-start-range luv-physics::solve-range luv-physics::store-phase))
+        (let* ((key (luv-physics::kernel-feature-key name set))
+               (stored (gethash (cons name key) table)))
+          (unless (equal key (luv-physics::kernel-feature-key name luv-physics::+physics-features+))
+            (check (and stored (eq stored (luv-physics::featured-kernel name set)))
+                   "the variant of ~A for ~S was not compiled with the page" name set)))))
+    (check (= kept (hash-table-count table)) "asking for the standard variants compiled ~D more"
+           (- (hash-table-count table) kept))
+    (let ((first (luv-physics::featured-kernel 'luv-physics::warm-start-range '(:terrain :rolling-resistance))))
+      (check (functionp first))
+      (check (eq first (luv-physics::featured-kernel 'luv-physics::warm-start-range '(:terrain :rolling-resistance)))
+             "a variant asked for twice was compiled twice")))
   (flet ((code-bytes (f) (sb-kernel:%code-code-size (sb-kernel:fun-code-header (coerce f 'function)))))
     (dolist (family (available-kernel-families))
       (let* ((world (make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels family
@@ -2795,6 +3193,64 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits")
         (check (some (lambda (h) (logbitp 61 h)) (cons h0 hashes)) "no hash of ~S uses bit 61" (cons h0 hashes))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
+
+;; [[file:../physics.org::#V4L1D8][V4L1D8-each-invariant-named]]
+(define-claim "V4L1D8" each-invariant-named
+    "A valid world broken in each of ten ways signals physics-world-invalid naming that invariant."
+  (labels ((build ()
+             (let* ((w (make-floor-world))
+                    (balls (loop for i below 5 collect (add-physics-body w (+ 2.0 (* 0.5 i)) 0.245 3.5
+                                                                         :life (if (= i 3) 100.0 nil))))
+                    (gone (add-physics-body w 8.0 0.245 8.0)))
+               (dotimes (i 5) (step-physics-world w))
+               (remove-physics-body w gone)
+               (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w (nth 3 balls))))
+               (values w balls gone)))
+           (named (corrupt)
+             (multiple-value-bind (w balls gone) (build)
+               (let* ((ids (luv-physics::physics-world-ids w))
+                      (awake (luv-physics::physics-world-awake w))
+                      (handles (luv-physics::body-columns-handle awake))
+                      (contacts (luv-physics::physics-world-contacts w)))
+                 (funcall corrupt w ids awake handles contacts balls gone)
+                 (handler-case (progn (validate-physics-world w) :valid)
+                   (physics-world-invalid (e) (luv-physics::physics-world-invalid-invariant e)))))))
+    (multiple-value-bind (w balls) (build)
+      (check (eq t (validate-physics-world w)))
+      (check (= 1 (physics-world-sleeping-count w)) "~D sleepers" (physics-world-sleeping-count w))
+      (check (plusp (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
+      (check (= 1 (luv-physics::physics-world-mortal-sleepers w)))
+      (check (= 5 (length balls))))
+    (loop for (words corrupt)
+            in (list (list "which is" (lambda (w ids awake handles c b gone) (declare (ignore w ids awake c b))
+                                        (setf (aref handles 0) gone)))
+                     (list "two rows" (lambda (w ids awake handles c b gone) (declare (ignore w ids awake c b gone))
+                                        (setf (aref handles 1) (aref handles 0))))
+                     (list "forwards" (lambda (w ids awake handles c b gone) (declare (ignore w awake c b gone))
+                                        (let ((l (luv-physics::handle-table-local ids)))
+                                          (rotatef (aref l (luv-physics::handle-index (aref handles 0)))
+                                                   (aref l (luv-physics::handle-index (aref handles 1)))))))
+                     (list "forwards" (lambda (w ids awake handles c b gone) (declare (ignore w awake handles c gone))
+                                        (setf (aref (luv-physics::handle-table-set ids) (luv-physics::handle-index (nth 3 b)))
+                                              luv-physics::+set-awake+)))
+                     (list "live handle slots" (lambda (w ids awake handles c b gone) (declare (ignore w awake handles c b))
+                                                 (setf (aref (luv-physics::handle-table-set ids) (luv-physics::handle-index gone))
+                                                       luv-physics::+set-awake+)))
+                     (list "free list holds" (lambda (w ids awake handles c b gone) (declare (ignore w awake handles c b gone))
+                                               (setf (luv-physics::handle-table-free ids) -1)))
+                     (list "dummy row" (lambda (w ids awake handles c b gone) (declare (ignore w ids handles c b gone))
+                                         (setf (aref (luv-physics::body-columns-vy awake) (luv-physics::body-columns-length awake))
+                                               1.0)))
+                     (list "maps to row" (lambda (w ids awake handles c b gone) (declare (ignore w ids awake handles b gone))
+                                           (incf (aref (luv-physics::contact-columns-key c) 0) 12345)))
+                     (list "contact table holds" (lambda (w ids awake handles c b gone) (declare (ignore ids awake handles c b gone))
+                                                   (luv-physics::contact-table-put (luv-physics::physics-world-contact-table w)
+                                                                                   123456789 0)))
+                     (list "mortal sleepers" (lambda (w ids awake handles c b gone) (declare (ignore ids awake handles c b gone))
+                                               (incf (luv-physics::physics-world-mortal-sleepers w)))))
+          do (let ((said (named corrupt)))
+               (check (and (stringp said) (search words said)) "broken to give ~S, the walker said ~S" words said)))))
+;; V4L1D8-each-invariant-named ends here
 
 ;; [[file:../physics.org::#B0DY0B][B0DY0B-body-prints-where-it-is]]
 (define-claim "B0DY0B" body-prints-where-it-is
@@ -3213,15 +3669,27 @@ in the order of *physics-scene-features*. #K5DF9S"
   (flet ((run ()
            (let* ((w (make-floor-world))
                   (springs (list (luv-physics::make-fountain 4 -1 4) (luv-physics::make-lava-spring 8 -1 8)))
-                  (drops 0) (gobbets 0) (pairs 0) (floor-contacts 0) (outside 0))
+                  (drops 0) (gobbets 0) (pairs 0) (floor-contacts 0) (outside 0) (misplaced 0)
+                  (slowest 10.0) (fastest 0.0) (widest 0.0) (quadrants '()))
              (dotimes (i 120)
                (luv-physics::run-physics-springs
                 w springs
                 (lambda (h)
                   (multiple-value-bind (vx vy vz) (luv-physics::physics-body-velocity w h)
                     (let ((speed (sqrt (+ (* vx vx) (* vy vy) (* vz vz)))))
+                      (setf slowest (min slowest speed) fastest (max fastest speed)
+                            widest (max widest (acos (min 1.0 (/ vy speed)))))
+                      (pushnew (list (plusp vx) (plusp vz)) quadrants :test #'equal)
                       (unless (and (<= 3.999 speed 6.001) (>= (/ vy speed) (- (cos (/ pi 9)) 1e-5)))
                         (incf outside))))
+                  (let ((spring (if (eq :water-drop (luv-physics::physics-body-kind-name w h)) (first springs) (second springs)))
+                        (r (luv-physics::physics-body-radius w h)))
+                    (unless (every (lambda (got want) (< (abs (- got want)) 1e-6))
+                                   (multiple-value-list (luv-physics::physics-body-position w h))
+                                   (list (+ (luv-physics::physics-spring-x spring) 0.5)
+                                         (+ (luv-physics::physics-spring-y spring) 1.0 r 0.01)
+                                         (+ (luv-physics::physics-spring-z spring) 0.5)))
+                      (incf misplaced)))
                   (ecase (luv-physics::physics-body-kind-name w h)
                     (:water-drop (incf drops)) (:lava-gobbet (incf gobbets)))))
                (luv-physics::step-physics-world w)
@@ -3240,11 +3708,20 @@ in the order of *physics-scene-features*. #K5DF9S"
              (check (= drops 240) "~D drops in 120 steps" drops)
              (check (= gobbets 30) "~D gobbets in 120 steps" gobbets)
              (check (zerop outside) "~D bodies left outside the cone or the speed range" outside)
+             (check (zerop misplaced) "~D bodies did not start just above their block's top face" misplaced)
+             (check (and (< slowest 4.2) (> fastest 5.8)) "speeds only from ~,3F to ~,3F m/s" slowest fastest)
+             (check (> widest (* 18 (/ pi 180))) "tilts only up to ~,2F rad" widest)
+             (check (= 4 (length quadrants)) "bearings in only ~D quadrants" (length quadrants))
              (check (zerop pairs) "~D contacts joined two drops" pairs)
              (check (plusp floor-contacts) "no drop reached the floor")
              (check (eq t (luv-physics::validate-physics-world w)))
              (luv-physics::physics-world-state-hash w))))
-    (check (= (run) (run)) "two runs of the same springs differ")))
+    (check (= (run) (run)) "two runs of the same springs differ"))
+  (flet ((refusal (&rest arguments)
+           (handler-case (progn (apply #'luv-physics::make-physics-spring :lava-gobbet 1 1 1 arguments) :made)
+             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+    (check (equal (list (refusal :per-step 64) (refusal :per-step 65) (refusal :every 3600) (refusal :every 3601))
+                  '(:made :per-step :made :every)))))
 ;; JAU0EF-springs-emit-by-rule ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-follows-the-rule]]
@@ -3283,6 +3760,13 @@ in the order of *physics-scene-features*. #K5DF9S"
         (setf highest (max highest (luv-physics::physics-player-y p))))
       (check (and (< (abs (- (luv-physics::physics-player-z p) 3.7d0)) 1d-6) (= 0 highest))
              "at the wall: z ~,3F, highest y ~,3F" (luv-physics::physics-player-z p) highest))
+    (let ((low (make-floor-terrain)) (p (luv-physics::make-physics-player 10.5 0 10.5)) (top 0d0))
+      (luv-physics::fill-terrain low 8 3 8 13 4 13 t)
+      (dotimes (i 120)
+        (luv-physics::step-physics-player p low :jump (<= 10 i 14))
+        (setf top (max top (luv-physics::physics-player-y p))))
+      (check (< (abs (- top (- 3 (luv-physics::physics-player-height p)))) 1d-6)
+             "under the ceiling the soles rose to ~,4F" top))
     ;; the floor world is resident up to x = 32; beyond is a wall
     (let ((p (walk (luv-physics::make-physics-player 30 0 10.5) 240 :move-x 1)))
       (check (< (abs (- (luv-physics::physics-player-x p) 31.7d0)) 1d-6)
@@ -3687,6 +4171,45 @@ in the order of *physics-scene-features*. #K5DF9S"
                "the recorded boxes are not the player's")))))
 ;; G4WXCJ-recording-sees-boxes ends here
 
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-frames-hold-every-column]]
+(define-claim "G4WXCJ" frames-hold-every-column
+    "Frames hold each body's centre, radius and clamped style, and the step's figures, first frame and last."
+  (let* ((w (make-floor-world))
+         (hs (loop for (kind r x) in '((-5 0.1 2.5) (7 0.2 4.5) (300 0.3 6.5))
+                   collect (add-physics-body w x (- r 0.005) 3.5 :radius r :kind kind))))
+    (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w (third hs))))
+    (let ((recording (luv-physics::start-physics-recording w)))
+      (dotimes (i 3) (step-physics-world w))
+      (luv-physics::stop-physics-recording w)
+      (let* ((frames (luv-physics::physics-recording-frames recording))
+             (xyz (luv-physics::physics-recording-xyz recording))
+             (radius (luv-physics::physics-recording-radius recording))
+             (style (luv-physics::physics-recording-style recording))
+             (last (aref frames 3)))
+        (check (= 4 (length frames)))
+        (check (equalp (aref frames 0) (vector 0 3 2 1 0 0d0 0.0)) "the first frame's figures: ~S" (aref frames 0))
+        (check (every (lambda (f) (= 3 (aref f 1))) frames))
+        (check (equal (loop for f across frames collect (aref f 0)) '(0 3 6 9)))
+        (check (equalp last (vector 9 3 (physics-world-awake-count w) (physics-world-sleeping-count w)
+                                    (luv-physics::physics-world-last-step-contact-count w)
+                                    (* 1000 (luv-physics::physics-world-last-step-real-seconds w))
+                                    (* 3 (luv-physics::physics-world-step-seconds w))))
+               "the last frame's figures: ~S" last)
+        (let ((k 9))
+          (dolist (buffer (list (luv-physics::physics-world-awake w) (luv-physics::physics-world-sleeping w)))
+            (dotimes (row (luv-physics::body-columns-length buffer))
+              (let ((kind (aref (luv-physics::body-columns-kind buffer) row)))
+                (check (equal (list (aref xyz (* 3 k)) (aref xyz (+ (* 3 k) 1)) (aref xyz (+ (* 3 k) 2))
+                                    (aref radius k) (aref style k))
+                              (list (aref (luv-physics::body-columns-x buffer) row) (aref (luv-physics::body-columns-y buffer) row)
+                                    (aref (luv-physics::body-columns-z buffer) row) (aref (luv-physics::body-columns-radius buffer) row)
+                                    (+ (* 2 (min 127 (max 0 kind)))
+                                       (if (eq buffer (luv-physics::physics-world-sleeping w)) 1 0))))
+                       "body ~D of the last frame" k))
+              (incf k))))
+        (check (equal (sort (coerce (subseq style 9 12) 'list) #'<) '(0 14 255)))))))
+;; G4WXCJ-frames-hold-every-column ends here
+
 ;; [[file:../physics.org::#G4WXCJ][G4WXCJ-refusals-name-the-argument]]
 (define-claim "G4WXCJ" refusals-name-the-argument
     "A second recording, EVERY 0, an unknown scene, a missing three.js: each refused by name."
@@ -3744,6 +4267,91 @@ in the order of *physics-scene-features*. #K5DF9S"
         (check (> farthest 0.45) "no landed ball's place is empty at the end (~,3F m)" farthest)
         (check (eq t (luv-physics::validate-physics-world w)))))))
 ;; 3X6XN8-scenes-do-what-they-say ends here
+
+;; [[file:../physics.org::#3X6XN8][3X6XN8-scenes-are-their-entries]]
+(define-claim "3X6XN8" scenes-are-their-entries
+    "Each standard scene's bodies, actions, springs, walker, input, seconds and picture moments are as the page says."
+  (flet ((rows (w)
+           (let ((a (luv-physics::physics-world-awake w)))
+             (loop for row below (luv-physics::body-columns-length a)
+                   collect (list (aref (luv-physics::body-columns-radius a) row)
+                                 (aref (luv-physics::body-columns-inverse-mass a) row)
+                                 (aref (luv-physics::body-columns-friction a) row)
+                                 (aref (luv-physics::body-columns-restitution a) row)
+                                 (aref (luv-physics::body-columns-rolling-resistance a) row)))))
+         (scene (name) (luv-physics::find-physics-scene name)))
+    (dolist (name '(:basin :pile :fountain :lava :player))
+      (let ((w (luv-physics::make-scene-world name)))
+        (check (= (float 1/60 1.0) (luv-physics::physics-world-step-seconds w)) "~A steps ~S s" name
+               (luv-physics::physics-world-step-seconds w))
+        (check (luv-physics::physics-world-sleep-enabled w) "~A sleeps not" name)
+        (check (eq (class-of (luv-physics::physics-world-kernels w))
+                   (class-of (luv-physics::make-kernel-family (car (last (available-kernel-families))))))
+               "~A solves with ~A" name (class-of (luv-physics::physics-world-kernels w)))))
+    (let ((basin (rows (luv-physics::make-scene-world :basin))))
+      (check (= 1000 (length basin)))
+      (check (every (lambda (r) (equal r '(0.25 1.0 0.6 0.0 0.0))) basin) "a basin ball reads ~S"
+             (find '(0.25 1.0 0.6 0.0 0.0) basin :test-not #'equal)))
+    (let ((pile (rows (luv-physics::make-scene-world :pile))))
+      (check (= 1000 (length pile)))
+      (check (every (lambda (r) (equal r '(0.25 1.0 0.6 0.0 0.05))) pile) "a pile ball reads ~S"
+             (find '(0.25 1.0 0.6 0.0 0.05) pile :test-not #'equal)))
+    (check (= 392 (length (rows (luv-physics::make-scene-world :player)))))
+    (let* ((w (luv-physics::make-scene-world :basin :seed 5))
+           (a (luv-physics::physics-world-awake w)) (next (luv-physics::fixed-sequence 5)) (worst 0.0))
+      (dotimes (i 1000)
+        (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+          (let ((want (list (+ x (* 0.02 (- (funcall next) 0.5))) y (+ z (* 0.02 (- (funcall next) 0.5))))))
+            (loop for got in (list (aref (luv-physics::body-columns-x a) i) (aref (luv-physics::body-columns-y a) i)
+                                   (aref (luv-physics::body-columns-z a) i))
+                  for v in want
+                  do (setf worst (max worst (abs (- got v))))))))
+      (check (< worst 1e-6) "a jittered ball lies ~,7F m from where the rule puts it" worst))
+    (let ((actions (luv-physics::physics-scene-actions (scene :basin)))
+          (w (make-physics-world)))
+      (check (= 1 (length actions)))
+      (check (= 4 (luv-physics::scene-action-seconds (first actions)) (/ (luv-physics::physics-scene-seconds (scene :basin)) 2)))
+      (funcall (luv-physics::scene-action-function (first actions)) w 0.0)
+      (let ((h (aref (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 0)))
+        (check (= 1 (physics-world-awake-count w)))
+        (check (equal (multiple-value-list (physics-body-position w h)) '(1.0 7.5 4.0))
+               "the throw starts at ~S" (multiple-value-list (physics-body-position w h)))
+        (check (equal (multiple-value-list (physics-body-velocity w h)) '(4.0 -6.0 0.0))
+               "the throw leaves at ~S" (multiple-value-list (physics-body-velocity w h)))
+        (check (= 0.25 (physics-body-radius w h)))))
+    (check (equal (mapcar (lambda (n) (luv-physics::physics-scene-seconds (scene n))) '(:basin :pile :fountain :lava :player))
+                  '(8 12 6 8 8)))
+    (flet ((spring (name)
+             (let ((springs (funcall (luv-physics::physics-scene-springs (scene name)))))
+               (check (= 1 (length springs)))
+               (let ((s (first springs)))
+                 (list (luv-physics::physics-spring-x s) (luv-physics::physics-spring-y s) (luv-physics::physics-spring-z s)
+                       (first (nth (1- (luv-physics::physics-spring-number s)) luv-physics::*physics-body-kinds*))
+                       (luv-physics::physics-spring-per-step s) (luv-physics::physics-spring-every s))))))
+      (check (equal (spring :fountain) '(4 -1 4 :water-drop 2 1)) "the fountain is ~S" (spring :fountain))
+      (check (equal (spring :lava) '(4 -1 4 :lava-gobbet 1 4)) "the lava spring is ~S" (spring :lava)))
+    (let ((walker (funcall (first (luv-physics::physics-scene-player (scene :player))))))
+      (check (equal (list (physics-player-x walker) (physics-player-y walker) (physics-player-z walker)) '(1d0 0d0 1d0))))
+    (let ((wrong (loop for step below 800
+                       for want = (if (< step 60)
+                                      '(0d0 0d0)
+                                      (nth (mod (floor (- step 60) 90) 4) '((1d0 0d0) (0d0 1d0) (-1d0 0d0) (0d0 -1d0))))
+                       for got = (multiple-value-list (luv-physics::player-scene-input step))
+                       unless (equal got want) collect (list step got want))))
+      (check (null wrong) "the walker's input at ~S" (first wrong)))
+    ;; the captions: "#+caption: the =NAME= scene ... at A, B and C s"
+    (let ((page (luv-physics::page-lines-of nil)))
+      (dolist (name '(:basin :pile :player))
+        (let* ((head (format nil "#+caption: the =~(~A~)= scene" name))
+               (line (find-if (lambda (l) (luv-physics::starts-with head l)) page))
+               (at (and line (search " at " line)))
+               (times (and at (let ((text (substitute #\Space #\, (subseq line (+ at 4) (search " s" line :start2 (+ at 4))))))
+                                (mapcar #'read-from-string
+                                        (remove "and" (uiop:split-string text :separator " ") :test (lambda (a b) (or (string= a b) (string= b ""))))))))
+               (moments (luv-physics::physics-scene-moments (scene name))))
+          (check (and times (= (length times) (length moments)) (every #'= times moments))
+                 "the ~(~A~) picture's caption says ~S, the scene draws ~S" name times moments))))))
+;; 3X6XN8-scenes-are-their-entries ends here
 
 ;; [[file:../physics.org::#RH7T05][A viewer for the browser:2]]
 (defun repository-file (name)
@@ -3925,6 +4533,59 @@ counted. #RH7T05"
       (check (= 6 (hash-table-count seen)))
       (check (loop for v being the hash-values of seen always (= v 1))))))
 ;; Q5V1EW-view-uses-world-grids ends here
+
+;; [[file:../physics.org::#C4STRY][C4STRY-box-faces-edges-and-corners]]
+(define-claim "C4STRY" box-faces-edges-and-corners
+    "Casts at a posted box: faces at the exact distance, normal and point; from inside or overlapping, 0 or nothing; edges and corners along their diagonals."
+  (let* ((w (make-physics-world)) (half '(1.0 2.0 3.0)) (wrong '()) (casts 0))
+    (post-physics-box w 0.0 0.0 0.0 1.0 2.0 3.0)
+    (flet ((cast (r o u limit)
+             (incf casts)
+             (if (zerop r)
+                 (apply #'physics-ray-cast w (append o u (list limit)))
+                 (apply #'physics-sphere-cast w (append o (list r) u (list limit)))))
+           (answer (hit) (and hit (list (physics-hit-distance hit)
+                                        (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))
+                                        (list (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit)))))
+           (near (a b) (< (abs (- a b)) 2e-6)))
+      (flet ((expect (what hit distance normal point)
+               (let ((a (answer hit)))
+                 (unless (and a (eq :box (physics-hit-kind hit)) (near (first a) distance)
+                              (every #'near (second a) normal) (or (null point) (every #'near (third a) point)))
+                   (push (list what a (list distance normal point)) wrong))))
+             (expect-none (what hit) (when hit (push (list what :met (answer hit)) wrong))))
+        (dotimes (axis 3)
+          (dolist (sign '(1.0 -1.0))
+            (let* ((h (nth axis half))
+                   (n (loop for a below 3 collect (if (= a axis) sign 0.0)))
+                   (in (mapcar (lambda (v) (- v)) n))
+                   (at (lambda (d) (loop for a below 3 collect (if (= a axis) (* sign (+ h d)) 0.0)))))
+              (dolist (r '(0.0 0.25))
+                (expect (list :face axis sign r) (cast r (funcall at 1.0) in 5.0) (- 1.0 r) n (funcall at 0.0))
+                (expect (list :inside-deeper axis sign r) (cast r (funcall at -0.2) in 5.0) 0.0 n nil)
+                (expect-none (list :inside-out axis sign r) (cast r (funcall at -0.2) n 5.0)))
+              (expect (list :overlap-deeper axis sign) (cast 0.25 (funcall at 0.1) in 5.0) 0.0 n nil)
+              (expect-none (list :overlap-out axis sign) (cast 0.25 (funcall at 0.1) n 5.0)))))
+        ;; edges: two axes at a corner of their faces, the third axis at the middle; corners: all three
+        (dolist (signs (loop for sx in '(1.0 -1.0) append
+                          (loop for sy in '(1.0 -1.0 0.0) append
+                            (loop for sz in '(1.0 -1.0 0.0)
+                                  when (>= (count-if-not #'zerop (list sx sy sz)) 2)
+                                    collect (list sx sy sz)))))
+          (let* ((edge (mapcar (lambda (s h) (* s h)) signs half))
+                 (k (count-if-not #'zerop signs))
+                 (n (mapcar (lambda (s) (/ s (sqrt (float k 1d0)))) signs))
+                 (o (mapcar (lambda (e s) (+ e s)) edge signs)))
+            (expect (list :edge-or-corner signs) (cast 0.25 o (mapcar #'- signs) 5.0)
+                    (- (sqrt (float k 1d0)) 0.25) n edge)))
+        (dolist (signs '((0.0 1.0 1.0) (0.0 -1.0 1.0) (0.0 1.0 -1.0) (0.0 -1.0 -1.0)))
+          (let* ((edge (mapcar (lambda (s h) (* s h)) signs half))
+                 (n (mapcar (lambda (s) (/ s (sqrt 2d0))) signs))
+                 (o (mapcar (lambda (e s) (+ e s)) edge signs)))
+            (expect (list :edge signs) (cast 0.25 o (mapcar #'- signs) 5.0) (- (sqrt 2d0) 0.25) n edge)))))
+    (check (= casts (+ (* 6 8) 20)) "~D casts" casts)
+    (check (null wrong) "~D casts answered wrongly: ~S" (length wrong) (reverse wrong))))
+;; C4STRY-box-faces-edges-and-corners ends here
 
 ;; [[file:../physics.org::#C4STRY][C4STRY-queries-check-and-change-nothing]]
 (define-claim "C4STRY" queries-check-and-change-nothing
@@ -4205,6 +4866,54 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
       (check (null out) "outward from inside met ~S" (answer out)))))
 ;; R4YC57-edges-corners-and-starts ends here
 
+;; [[file:../physics.org::#R4YC57][R4YC57-every-edge-and-corner-cell]]
+(define-claim "R4YC57" every-edge-and-corner-cell
+    "Along the 8 diagonals and 12 plane diagonals, each cell at the corner or edge is met alone, and together they are met fewest steps first, x before y before z."
+  (let* ((terrain (luv-physics::make-voxel-terrain))
+         (w (progn (luv-physics::fill-terrain terrain -4 -4 -4 4 4 4 nil) (make-physics-world :terrain terrain)))
+         (wrong '()) (casts 0))
+    (flet ((ordered-offsets (direction)
+             ;; the cells meeting the corner or edge, fewest steps first, x before y before z
+             (stable-sort (loop for mask from 1 below 8
+                                for cell = (loop for a below 3 collect (if (logbitp a mask) (nth a direction) 0))
+                                when (= (count-if-not #'zerop cell) (logcount mask))
+                                  collect cell)
+                          #'< :key (lambda (c) (count-if-not #'zerop c))))
+           (cast (direction)
+             (incf casts)
+             (apply #'physics-ray-cast w 0.5 0.5 0.5 (append direction (list 3)))))
+      (let ((directions (loop for x in '(-1 0 1)
+                              append (loop for y in '(-1 0 1)
+                                           append (loop for z in '(-1 0 1)
+                                                        when (>= (count-if-not #'zerop (list x y z)) 2)
+                                                          collect (list x y z))))))
+        (check (= 20 (length directions)))
+        (dolist (d directions)
+          (let* ((cells (ordered-offsets d))
+                 (distance (float (/ (sqrt (count-if-not #'zerop d)) 2) 1.0)))
+            (flet ((answer-ok (hit cell)
+                     (let ((axis (position-if-not #'zerop cell)))
+                       (and hit (eq :cell (physics-hit-kind hit)) (equal (hit-what hit) cell)
+                            (< (abs (- (physics-hit-distance hit) distance)) 1e-6)
+                            (equal (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))
+                                   (loop for a below 3 collect (if (= a axis) (float (- (nth a d)) 1.0) 0.0)))))))
+              ;; each cell alone
+              (dolist (c cells)
+                (setf (apply #'luv-physics::terrain-solid-p terrain c) t)
+                (let ((hit (cast d)))
+                  (unless (answer-ok hit c) (push (list :alone d c (and hit (hit-what hit))) wrong)))
+                (setf (apply #'luv-physics::terrain-solid-p terrain c) nil))
+              ;; all of them, made air one by one as they are met
+              (dolist (c cells) (setf (apply #'luv-physics::terrain-solid-p terrain c) t))
+              (dolist (c cells)
+                (let ((hit (cast d)))
+                  (unless (answer-ok hit c) (push (list :in-order d c (and hit (hit-what hit))) wrong)))
+                (setf (apply #'luv-physics::terrain-solid-p terrain c) nil))
+              (when (cast d) (push (list :empty d) wrong)))))
+        (check (= casts (+ 20 (* 2 (+ (* 8 7) (* 12 3))))) "~D casts" casts)
+        (check (null wrong) "~D casts met the wrong cell: ~S" (length wrong) (reverse wrong))))))
+;; R4YC57-every-edge-and-corner-cell ends here
+
 ;; [[file:../physics.org::#R4YC57][R4YC57-eye-picks-the-ball]]
 (define-claim "R4YC57" eye-picks-the-ball
     "A ray from the walker's eye towards a ball returns that ball, not the one behind it or the walker's own box."
@@ -4360,6 +5069,61 @@ within reach of something. #S9WEEP"
              "the resting ball swept along the floor met ~S" (and hit (list (hit-what hit) (physics-hit-distance hit)))))))
 ;; S9WEEP-throw-lands-where-predicted ends here
 
+;; [[file:../physics.org::#S9WEEP][S9WEEP-slides-along-every-face]]
+(define-claim "S9WEEP" slides-along-every-face
+    "A sphere touching the floor, the roof or a wall of thick terrain, swept along it either way, meets no seam."
+  (let* ((terrain (luv-physics::make-voxel-terrain))
+         (w (progn (luv-physics::fill-terrain terrain -3 -3 -3 19 7 19 t)
+                   (luv-physics::fill-terrain terrain 0 0 0 16 4 16 nil)
+                   (make-physics-world :terrain terrain)))
+         (r 0.25) (d 0.245) (met '()) (casts 0))
+    ;; each face: the axis across it, the coordinate of the centre, and the middle of the face
+    (loop for (axis at) in `((1 ,d) (1 ,(- 4 d)) (0 ,d) (0 ,(- 16 d)) (2 ,d) (2 ,(- 16 d)))
+          do (dolist (along (remove axis '(0 1 2)))
+               (dolist (sign '(1 -1))
+                 (let ((o (list 8.0 2.0 8.0)) (u (list 0 0 0)))
+                   (setf (nth axis o) (float at 1.0)
+                         (nth along o) (if (= along 1) (if (plusp sign) 1.0 3.0) (if (plusp sign) 6.0 10.0))
+                         (nth along u) sign)
+                   (incf casts)
+                   (let ((hit (apply #'physics-sphere-cast w (append o (list r) u (list 2.5)))))
+                     (when hit (push (list o u (hit-what hit) (physics-hit-distance hit)) met)))))))
+    (check (= casts 24))
+    (check (null met) "~D sweeps met a seam: ~S" (length met) (reverse met))
+    (loop for (u distance cell point) in '(((0 -1 0) 2.25 (8 -1 8) (8.5 0.0 8.5)) ((0 1 0) 1.25 (8 4 8) (8.5 4.0 8.5))
+                                           ((-1 0 0) 8.25 (-1 2 8) (0.0 2.5 8.5)) ((1 0 0) 7.25 (16 2 8) (16.0 2.5 8.5))
+                                           ((0 0 -1) 8.25 (8 2 -1) (8.5 2.5 0.0)) ((0 0 1) 7.25 (8 2 16) (8.5 2.5 16.0)))
+          do (let ((hit (apply #'physics-sphere-cast w 8.5 2.5 8.5 r (append u (list 10)))))
+               (check (and hit (equal (hit-what hit) cell) (< (abs (- (physics-hit-distance hit) distance)) 1e-6)
+                           (equal (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))
+                                  (mapcar (lambda (v) (float (- v) 1.0)) u))
+                           (every (lambda (a b) (< (abs (- a b)) 1e-5))
+                                  (list (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit)) point))
+                      "cast along ~S: ~S" u (and hit (list (hit-what hit) (physics-hit-distance hit)
+                                                          (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit))))))
+    ;; each face: its axis, the plane, the normal out of it, the room's width across it
+    (loop for (axis plane n width) in '((1 0.0 1.0 4.0) (1 4.0 -1.0 4.0) (0 0.0 1.0 16.0) (0 16.0 -1.0 16.0)
+                                        (2 0.0 1.0 16.0) (2 16.0 -1.0 16.0))
+          do (dolist (depth (if (plusp n) (list 0.0 (- r d)) (list (- r d))))
+               (let ((o (list 8.5 2.5 8.5)) (into (list 0 0 0)) (normal (list 0.0 0.0 0.0)))
+                 (setf (nth axis o) (+ plane (* n (- r depth))) (nth axis into) (- n) (nth axis normal) n)
+                 (when (zerop depth) (setf (nth axis o) plane))
+                 (let ((in (apply #'physics-sphere-cast w (append o (list r) into (list 20))))
+                       (away (apply #'physics-sphere-cast w (append o (list r) (mapcar #'- into) (list 20)))))
+                   (check (and in (= 0.0 (physics-hit-distance in))
+                               (every #'= (list (physics-hit-nx in) (physics-hit-ny in) (physics-hit-nz in)) normal))
+                          "from ~S into the face: ~S" o (and in (list (hit-what in) (physics-hit-distance in))))
+                   (check (and away (< (abs (- (physics-hit-distance away)
+                                               (- width r (abs (- (nth axis o) plane)))))
+                                       1e-5))
+                          "from ~S away from the face: ~S" o (and away (list (hit-what away) (physics-hit-distance away))))))))
+    (loop for (x dx) in (list (list d -1) (list (- 16 d) 1))
+          do (let ((hit (physics-sphere-cast w x 0.0 8.5 r dx 0 0 5)))
+               (check (and hit (= 0.0 (physics-hit-distance hit)) (= (- dx) (physics-hit-nx hit)))
+                      "on the floor's plane into the wall at x ~A: ~S" x
+                      (and hit (list (hit-what hit) (physics-hit-distance hit) (physics-hit-nx hit))))))))
+;; S9WEEP-slides-along-every-face ends here
+
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-regions-match-brute-force]]
 (define-claim "OV3RLP" regions-match-brute-force
     "Sphere and box queries for bodies and cells equal brute force at six moments of sleeps, wakes, removals, additions and edits."
@@ -4471,6 +5235,30 @@ within reach of something. #S9WEEP"
         (check (plusp n))))))
 ;; QB3NCH-queries-cons-nothing ends here
 
+;; [[file:../physics.org::#QB3NCH][QB3NCH-benchmark-queries-as-described]]
+(define-claim "QB3NCH" benchmark-queries-as-described
+    "Query benchmark inputs: points fill the interior, directions uniform over the sphere, reproducible by seed."
+  (let* ((n 4000) (q (luv-physics::query-benchmark-inputs n 11))
+         (octants (make-array 8 :initial-element 0)) (sums (list 0.0 0.0 0.0))
+         (lows (list 9.0 9.0 9.0)) (highs (list -1.0 -1.0 -1.0)) (wrong 0))
+    (dotimes (i n)
+      (let ((p (loop for k below 3 collect (aref q (+ (* 7 i) k))))
+            (d (loop for k from 3 below 6 collect (aref q (+ (* 7 i) k)))))
+        (unless (and (every (lambda (v hi) (<= 0.0 v hi)) p '(8.0 6.0 8.0))
+                     (< 0.01 (reduce #'+ (mapcar #'* d d)) 1.0)
+                     (= 0.0 (aref q (+ (* 7 i) 6))))
+          (incf wrong))
+        (setf lows (mapcar #'min lows p) highs (mapcar #'max highs p) sums (mapcar #'+ sums d))
+        (incf (aref octants (+ (if (plusp (first d)) 1 0) (if (plusp (second d)) 2 0) (if (plusp (third d)) 4 0))))))
+    (check (zerop wrong) "~D queries outside the interior, the ball of directions or with a spare" wrong)
+    (check (and (every (lambda (v) (< v 0.1)) lows) (every (lambda (v hi) (> v (- hi 0.1))) highs '(8.0 6.0 8.0)))
+           "points span only ~S to ~S" lows highs)
+    (check (every (lambda (k) (< (* 0.10 n) k (* 0.15 n))) octants) "octants hold ~S" octants)
+    (check (every (lambda (s) (< (abs (/ s n)) 0.05)) sums) "mean direction ~S" (mapcar (lambda (s) (/ s n)) sums))
+    (check (equalp q (luv-physics::query-benchmark-inputs n 11)))
+    (check (not (equalp q (luv-physics::query-benchmark-inputs n 12))))))
+;; QB3NCH-benchmark-queries-as-described ends here
+
 ;; [[file:../physics.org::#7PAQ3M][7PAQ3M-families-agree-bit-for-bit]]
 (define-claim "7PAQ3M" families-agree-bit-for-bit
     "Each available family's hash equals the scalar hash on the 200-ball and 1000-ball piles."
@@ -4519,6 +5307,21 @@ within reach of something. #S9WEEP"
                (class-name (class-of (luv-physics::physics-world-kernels
                                       (make-physics-world :kernels :auto))))))))
 ;; 7PAQ3M-choosing-a-family ends here
+
+;; [[file:../physics.org::#LW3YHU][LW3YHU-summary-is-the-first-sentence]]
+(define-claim "LW3YHU" summary-is-the-first-sentence
+    "docstring-summary cuts at the first sentence's point, past abbreviations, initials and numbers."
+  (loop for (docstring want) in `(("Add a ball. It rolls. #M4K3WD" "Add a ball.")
+                                  ("The mass, e.g. Two kg, of it. More." "The mass, e.g. Two kg, of it.")
+                                  ("X. Y is next." "X. Y is next.")
+                                  ("A step of 1.5 s. Then" "A step of 1.5 s.")
+                                  (,(format nil "Two lines joined~%here. Next") "Two lines joined here.")
+                                  ("no capital. after" "no capital. after")
+                                  ("  No point at all #LW3YHU  " "No point at all")
+                                  ("Ab. Cd" "Ab.") ("Ends here#LW3YHU" "Ends here"))
+        do (let ((got (luv-physics::docstring-summary docstring)))
+             (check (equal got want) "~S summarised as ~S, not ~S" docstring got want))))
+;; LW3YHU-summary-is-the-first-sentence ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-every-export-is-indexed]]
 (define-claim "LW3YHU" every-export-is-indexed

@@ -69,13 +69,14 @@ whose name starts with DEF (a macro of the engine's package) is mutated too.")
                 (macro-function operator)))))
 
 (defun defined-names (form)
-  "The names FORM defines, looking through PROGN, EVAL-WHEN, LOCALLY and the expansions of
+  "The names FORM defines, looking through PROGN, EVAL-WHEN, LOCALLY, MACROLET, SYMBOL-MACROLET and the expansions of
 the page's own defining macros, and the names it declaims inline."
   (let ((names '()))
     (labels ((walk (form depth)
                (when (and (consp form) (symbolp (car form)) (< depth 20))
                  (let ((op (car form)))
                    (cond ((member op '(progn locally)) (dolist (f (cdr form)) (walk f depth)))
+                         ((member op '(macrolet symbol-macrolet)) (dolist (f (cddr form)) (walk f depth)))
                          ((eq op 'eval-when) (dolist (f (cddr form)) (walk f depth)))
                          ((eq op 'declaim)
                           (dolist (spec (cdr form))
@@ -551,7 +552,12 @@ watched by a probe."
 NIL if all compiled without a warning; else a line saying what went wrong."
   (let* ((unit (mutant-unit mutant))
          (forms (cons (cons unit (funcall (mutant-rebuild mutant)))
-                      (mapcar (lambda (u) (cons u (unit-form u))) (dependents unit units)))))
+                      (mapcar (lambda (u) (cons u (unit-form u))) (dependents unit units))))
+         (texts (featured-texts)))
+    ;; a kernel whose defining form is evaluated again keeps the text that form keeps, or none
+    (loop for (name) in texts
+          when (some (lambda (f) (member name (unit-defines (car f)))) forms)
+            do (remprop name 'physics::featured-kernel))
     (block compile
       (handler-bind ((style-warning #'muffle-warning)
                      (warning (lambda (w) (return-from compile (format nil "warning: ~A" w))))
@@ -567,8 +573,53 @@ NIL if all compiled without a warning; else a line saying what went wrong."
                        (when inline (proclaim `(inline ,@inline)))
                        (eval form)
                        (loop for n in inline for was in saved
-                             do (setf (sb-int:info :function :inlinep n) was))))))
+                             do (setf (sb-int:info :function :inlinep n) was)))))
+          (renew-featured-variants (mapcar #'car forms) texts))
         nil))))
+
+;;; The variants of the featured kernels ([[#KTXT7V]], [[#FEAT5X]]) are compiled from a kernel's
+;;; text, kept on its name's plist, and held in physics::*featured-kernels*: those of the
+;;; standard feature sets since the page was loaded, the others since a claim first asked for
+;;; them, in this image before it forked.  Evaluating a mutant again does not touch that table.
+
+(defvar *precompiled-variants* '()
+  "The keys (NAME . FEATURES) the table of variants held when the engine was loaded, before any
+claim ran: the variants compiled with the page.")
+
+(defun featured-texts ()
+  "Each featured kernel's name with the text it keeps now, for every name in the table of variants."
+  (let ((names '()))
+    (maphash (lambda (key function) (declare (ignore function)) (pushnew (car key) names))
+             physics::*featured-kernels*)
+    (mapcar (lambda (name) (cons name (get name 'physics::featured-kernel))) names)))
+
+(defun renew-featured-variants (evaluated texts)
+  "After the forms EVALUATED (units) were evaluated again, compile again every variant held in the
+table whose kernel's text was replaced (TEXTS holds each name's text from before), the variant
+compiled with the page and those the claims compiled alike, so that the claims run the mutant in
+every feature set; and when EVALUATED define the function that compiles variants at run time,
+drop the variants it compiled, so that the mutant compiles them again as a fresh image would.
+A kernel that keeps no text after them cannot have its variants compiled, as the page could not
+be loaded: that is an error.  Return the number of variants compiled again."
+  (loop for (name) in texts
+        unless (get name 'physics::featured-kernel)
+          do (error "the featured kernel ~(~A~) keeps no text to compile its variants from" name))
+  (let ((stale '())
+        (builder (some (lambda (u) (member 'physics::featured-kernel (unit-defines u))) evaluated)))
+    (maphash (lambda (key function)
+               (declare (ignore function))
+               (let ((before (assoc (car key) texts)))
+                 (cond ((and before (not (eq (cdr before) (get (car key) 'physics::featured-kernel))))
+                        (push key stale))
+                       ((and builder (not (member key *precompiled-variants* :test #'equal)))
+                        (remhash key physics::*featured-kernels*)))))
+             physics::*featured-kernels*)
+    (dolist (key stale)
+      (remhash key physics::*featured-kernels*)
+      (let ((*package* (find-package '#:luv-physics)))
+        (setf (gethash key physics::*featured-kernels*)
+              (funcall (compile nil `(lambda () ,(physics::featured-kernel-form (car key) (cdr key))))))))
+    (length stale)))
 
 (defun child (mutant units order status-path)
   "The body of a forked child: compile MUTANT, then run the claims of ORDER until one fails,
@@ -624,7 +675,7 @@ writing each step to STATUS-PATH.  Never returns."
 ;;; ------------------------------------------------------------------------------------
 ;;; The parent: two children at a time, timeouts, replacements
 
-(defparameter *compile-timeout* 300 "Seconds a child may take to compile its mutant.")
+(defparameter *compile-timeout* 600 "Seconds a child may take to compile its mutant: a mutant of the kernel template compiles both wide families and their variants again, minutes on a loaded machine.")
 
 (defun claim-timeout (seconds)
   "How long a claim that takes SECONDS on the unchanged engine may run in a child."
@@ -739,9 +790,32 @@ ranks by its cost."
       (append (stable-sort own #'< :key #'cdr)
               (stable-sort (remove-if #'own-p claims) #'< :key #'cost)))))
 
-(defun run-mutants (sections count units order reach probed jobs directory report)
+(defun draw (sections count)
+  "The COUNT mutants a run draws from SECTIONS, as (ANCHOR . MUTANT) in the order it draws them,
+as if each compiled: slot I belongs to the section I mod the number of sections, and a section
+with no mutant left gives its slot to the next that has one."
+  (let* ((anchors (mapcar #'car sections))
+         (queues (mapcar (lambda (s) (cons (car s) (copy-list (cdr s)))) sections)))
+    (loop for i below count
+          for after = (member (nth (mod i (length anchors)) anchors) anchors :test #'string=)
+          for anchor = (find-if (lambda (a) (cdr (assoc a queues :test #'string=)))
+                                (append after (ldiff anchors after)))
+          when anchor
+            collect (cons anchor (pop (cdr (assoc anchor queues :test #'string=)))))))
+
+(defun list-draw (sections count parts)
+  "Print the COUNT mutants a run would draw from SECTIONS, without running any: one line each,
+with its place in the draw, its part, its section and its name."
+  (loop for (anchor . m) in (draw sections count)
+        for i from 1
+        do (format t "~&~3D ~A | ~A | ~A | ~A~%" i (gethash anchor parts "?") anchor
+                   (mutant-operator m) (mutant-key m))))
+
+(defun run-mutants (sections count units order reach probed jobs directory report &optional only)
   "Run COUNT mutants drawn round robin from SECTIONS, JOBS at a time; call REPORT on each
-finished one.  Return the finished mutants that compiled, in the order they were drawn."
+finished one.  Return the finished mutants that compiled, in the order they were drawn.  ONLY,
+if given, is the list of the sections' anchors, one per mutant, of the slots to run instead of
+the COUNT round robin ones."
   (let* ((anchors (mapcar #'car sections))
          (queues (mapcar (lambda (s) (cons (car s) (cdr s))) sections))
          (slots '()) (running '()) (finished '()) (serial 0) (parent (sb-posix:getpid))
@@ -749,7 +823,7 @@ finished one.  Return the finished mutants that compiled, in the order they were
          (timeouts (mapcar (lambda (c) (cons (symbol-name (car c)) (cdr c))) order)))
     ;; slot i belongs to the section i mod n of the anchors
     (dotimes (i count) (push (nth (mod i (length anchors)) anchors) slots))
-    (setf slots (nreverse slots))
+    (setf slots (if only (copy-list only) (nreverse slots)))
     (flet ((launch (anchor index)
              (let* ((queue (assoc anchor queues :test #'string=))
                     (m (pop (cdr queue))))
@@ -959,12 +1033,23 @@ as a finished run does.  Return the number of mutants read."
                               (if (and v (plusp (length v))) (float (read-from-string v) 1d0) *slow*))))
          (state (sb-ext:seed-random-state seed))
          (sections (mapcar (lambda (s) (cons (car s) (shuffle (cdr s) state)))
-                           (remove-if-not #'cdr (section-sites units anchor (sb-ext:posix-getenv "MATCH")))))
-         (sections (shuffle sections state)))
+                           (remove-if-not #'cdr (section-sites units anchor (let ((m (sb-ext:posix-getenv "MATCH"))) (and (plusp (length m)) m))))))
+         (sections (shuffle sections state))
+         (only-parts (let ((p (sb-ext:posix-getenv "PART")))
+                       (and p (plusp (length p)) (uiop:split-string p :separator "|"))))
+         (only '()))
     (when (null sections)
       (format t "~&mutate: no definitions to mutate~@[ in section ~A~]~%" anchor)
       (sb-ext:exit :code 1))
+    (when (plusp (length (sb-ext:posix-getenv "LIST")))
+      (list-draw sections count parts)
+      (sb-ext:exit :code 0))
+    (when only-parts
+      (setf only (loop for (anchor) in (draw sections count)
+                       when (member (gethash anchor parts) only-parts :test #'string=) collect anchor))
+      (format t "~&mutate: of the ~D mutants drawn, only the ~D of ~{~A~^, ~} run~%" count (length only) only-parts))
     (dolist (c luv-physics-tests:*claims*) (setf (gethash (cdr c) *claim-anchors*) (car c)))
+    (setf *precompiled-variants* (loop for key being the hash-keys of physics::*featured-kernels* collect key))
     (read-record)
     (format t "~&mutate: seed ~D, ~D mutants over ~D sections (~D sites), ~D at a time, claims over ~,0F % of the claims' time only in their own part; load ~A~%"
             seed count (length sections) (reduce #'+ sections :key (lambda (s) (length (cdr s)))) jobs (* 100 slow)
@@ -987,7 +1072,8 @@ as a finished run does.  Return the number of mutants read."
              (directory (format nil "/tmp/luv-mutate-~D" (sb-posix:getpid)))
              (mutants (progn (ensure-directories-exist (format nil "~A/" directory))
                              (run-mutants sections count units order reach probed jobs directory
-                                          (lambda (m n) (print-mutant m n count)))))
+                                          (lambda (m n) (print-mutant m n (if only (length only) count)))
+                                          only)))
              (saved (progn (ensure-directories-exist "report/") (write-record)))
              (wall (- (now) start))
              (reasons (page-reasons "physics.org")))
