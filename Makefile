@@ -32,7 +32,7 @@ help:
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
-	@echo "make heaps          heaps of 1000 to 20000 balls spawned at one point; table into $(ORG)"
+	@echo "make heaps          heaps of 1000 balls to the body budget spawned at one point; table into $(ORG)"
 	@echo "make mutate         run the claims against COUNT=150 mutants of the engine (SEED=1, ANCHOR=ID"
 	@echo "                    for one section, PART='solver|hash' for the drawn mutants of some parts,"
 	@echo "                    LIST=1 to print the draw); the score table and the survivors into $(ORG)"
@@ -100,7 +100,7 @@ report: setup tangle
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp work-precision-best report/work-precision-best.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp work-precision-table report/work-precision.org
 
-# Heaps spawned at one point, 1000 to 20000 balls: memory per body and speeds (#X7R3M5).
+# Heaps spawned at one point, 1000 balls to the body budget: memory per body and speeds (#X7R3M5).
 heaps: setup tangle
 	@mkdir -p report
 	@rm -f report/heaps-failed

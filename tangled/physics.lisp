@@ -3154,7 +3154,8 @@ with the strayed rows in order (LOOSE-ROWS) and how many there are this step (LO
 phase last used or built the list, BUILT-STEP the step that built it. CLEAR marks the rows with
 no solid cell within their reach plus 0.45 skins of their anchor, in TERRAIN as it was after
 TERRAIN-EDITS edits. LOOSE-GRID buckets the loose rows alone, from their centres gathered into
-LOOSE-X, LOOSE-Y and LOOSE-Z. OVERLAPS counts, per row, the overlapping pairs taken this step against it. #P41RS7"
+LOOSE-X, LOOSE-Y and LOOSE-Z. OVERLAPS counts, per row, the overlapping pairs taken this step against it.
+EXAMINED counts the candidates within reach the last build listed. #P41RS7"
   (pairs (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
   (rows -1 :type fixnum)
@@ -3174,7 +3175,8 @@ LOOSE-X, LOOSE-Y and LOOSE-Z. OVERLAPS counts, per row, the overlapping pairs ta
   (loose-x (make-array 0 :element-type 'single-float) :type f32-column)
   (loose-y (make-array 0 :element-type 'single-float) :type f32-column)
   (loose-z (make-array 0 :element-type 'single-float) :type f32-column)
-  (overlaps (make-array 0 :element-type 'fixnum) :type fixnum-column))
+  (overlaps (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (examined 0 :type index))
 
 (defun pair-list-room (plist rows)
   "Give every per-row column of PLIST, and its grid of loose rows, room for ROWS rows, keeping
@@ -3278,9 +3280,12 @@ the step that built the list: then the grid's cells still serve the pair phase. 
          (= (physics-world-awake-grid-step world) (pair-list-built-step plist))
          (zerop (box-columns-length (physics-world-boxes world))))))
 
-(defconstant +overlaps-per-body+ 32
+(defconstant +overlaps-per-body+ 16
   "Most overlapping pairs with bodies no smaller than itself an awake body takes in one step;
 past it the body is crowded and takes no more pairs with such bodies. #P41RS7")
+
+(defconstant +crowded-walk-chunk+ 64
+  "Places of a run a walk lists at a time once a walk of the same build has been refused. #P41RS7")
 
 (declaim (inline overlap-room))
 (defun overlap-room (overlaps i j radius)
@@ -3387,10 +3392,12 @@ gap is under the speculative distance. #P41RS7"
                             (aref vx ,i) (aref vy ,i) (aref vz ,i)
                             (aref x ,j) (aref y ,j) (aref z ,j) (aref radius ,j) (aref handle ,j)
                             (aref vx ,j) (aref vy ,j) (aref vz ,j) ,i ,j))
-                   (rows (i j)
-                     ;; the same, unless they overlap and the smaller has its share of overlaps
-                     `(when (or (not crowded) (overlap-room (pair-list-overlaps plist) ,i ,j radius))
-                        (pair-of-rows ,i ,j))))
+                   (rows (i j &optional refused)
+                     ;; the same, unless they overlap and the smaller has its share of
+                     ;; overlaps: then REFUSED
+                     `(if (or (not crowded) (overlap-room (pair-list-overlaps plist) ,i ,j radius))
+                          (pair-of-rows ,i ,j)
+                          ,refused)))
           (if (pair-list-holds-p strays n)
               ;; the list holds: its pairs whose rows both stayed; then each loose row against
               ;; the rows of its 27 cells that are not loose, in the awake grid, whose cells
@@ -3405,12 +3412,14 @@ gap is under the speculative distance. #P41RS7"
                     (when (zerop (logior (aref loose i) (aref loose j)))
                       (rows i j))))
                 (dotimes (q strays)
-                  (let ((i (aref loose-rows q)))
+                  (let ((i (aref loose-rows q)) (refused 0))
+                    (declare (type index refused))
                     (when (zerop (logand (aref flags i) +flag-terrain-only+))
-                      (do-grid-neighbours (j grid (aref x i) (aref y i) (aref z i))
-                        (when (and (zerop (aref loose j))
-                                   (zerop (logand (aref flags j) +flag-terrain-only+)))
-                          (rows i j))))))
+                      (block walk
+                        (do-grid-neighbours (j grid (aref x i) (aref y i) (aref z i))
+                          (when (and (zerop (aref loose j))
+                                     (zerop (logand (aref flags j) +flag-terrain-only+)))
+                            (rows i j (when (>= (incf refused) +overlaps-per-body+) (return-from walk)))))))))
                 (when (> strays 1)
                   (let ((lgrid (pair-list-loose-grid plist)) (lx (pair-list-loose-x plist))
                         (ly (pair-list-loose-y plist)) (lz (pair-list-loose-z plist)))
@@ -3421,34 +3430,60 @@ gap is under the speculative distance. #P41RS7"
                     ;; hashed: a dense box sized by the loose rows' spread could outgrow its room
                     (build-hash-grid lgrid cell strays lx ly lz loose-rows :dense-allowed nil)
                     (dotimes (q strays)
-                      (let ((i (aref loose-rows q)))
+                      (let ((i (aref loose-rows q)) (refused 0))
+                        (declare (type index refused))
                         (when (zerop (logand (aref flags i) +flag-terrain-only+))
-                          (do-grid-neighbours (j lgrid (aref x i) (aref y i) (aref z i))
-                            (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+)))
-                              (rows i j)))))))))
+                          (block walk
+                            (do-grid-neighbours (j lgrid (aref x i) (aref y i) (aref z i))
+                              (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+)))
+                                (rows i j (when (>= (incf refused) +overlaps-per-body+)
+                                            (return-from walk))))))))))))
               ;; build the list again: the half neighbourhood of each body's cell, in the
               ;; grid's order, within the widest reach plus the skin
               (let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
                     (runs (make-array 42 :element-type 'fixnum))
-                    (cell-key -1) (run-count 0))
-                (declare (type fixnum-column items keys near runs)
-                         (dynamic-extent runs) (type fixnum cell-key) (type (integer 0 14) run-count))
-                (setf (pair-list-count plist) 0)
+                    ;; a crowded walk's chunk: an empty first run, then a piece of one run
+                    (chunk (make-array 6 :element-type 'fixnum :initial-element 0))
+                    (cell-key -1) (run-count 0) (crowd nil))
+                (declare (type fixnum-column items keys near runs chunk)
+                         (dynamic-extent runs chunk) (type fixnum cell-key) (type (integer 0 14) run-count))
+                (setf (pair-list-count plist) 0 (pair-list-examined plist) 0)
                 (dotimes (e (hash-grid-count grid))
                   (let ((i (aref items e)))
                     (when (zerop (logand (aref flags i) +flag-terrain-only+))
                       ;; the items of one cell are consecutive in the grid's order and share its runs
                       (unless (= (aref keys e) cell-key)
                         (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
-                      (let* ((widest (+ (aref radius i) rmax margin skin))
-                             (found (grid-list-near grid e runs run-count (* widest widest))))
-                        (declare (type single-float widest) (type index found))
-                        (dotimes (q found)
-                          (let ((j (aref items (aref near q))))
-                            (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
-                                       (or (not crowded) (overlap-room (pair-list-overlaps plist) i j radius)))
-                              (pair-list-push plist i j)
-                              (pair-of-rows i j))))))))
+                      (let* ((widest (+ (aref radius i) rmax margin skin)) (reach2 (* widest widest))
+                             (refused 0))
+                        (declare (type single-float widest reach2) (type index refused))
+                        (block walk
+                          (flet ((take (found)
+                                   ;; the FOUND places listed in NEAR, in order; the walk stops
+                                   ;; at its +overlaps-per-body+th refusal
+                                   (declare (type index found))
+                                   (incf (pair-list-examined plist) found)
+                                   (dotimes (q found)
+                                     (let ((j (aref items (aref near q))))
+                                       (when (zerop (logand (aref flags j) +flag-terrain-only+))
+                                         (if (or (not crowded) (overlap-room (pair-list-overlaps plist) i j radius))
+                                             (progn (pair-list-push plist i j)
+                                                    (pair-of-rows i j))
+                                             (progn (setf crowd t)
+                                                    (when (>= (incf refused) +overlaps-per-body+)
+                                                      (return-from walk)))))))))
+                            (if (not crowd)
+                                (take (grid-list-near grid e runs run-count reach2))
+                                ;; once a walk of this build was refused, each run is listed a
+                                ;; chunk at a time, so a walk that stops lists little beyond it
+                                (dotimes (q run-count)
+                                  (let ((end (aref runs (+ (* 3 q) 1))))
+                                    (loop for start of-type fixnum from (if (= q 0) (1+ e) (aref runs (* 3 q)))
+                                            below end by +crowded-walk-chunk+
+                                          do (setf (aref chunk 1) (1+ e) (aref chunk 2) -1
+                                                   (aref chunk 3) start (aref chunk 4) (min end (+ start +crowded-walk-chunk+))
+                                                   (aref chunk 5) (aref runs (+ (* 3 q) 2)))
+                                             (take (grid-list-near grid e chunk 2 reach2))))))))))))
                 (pair-list-anchor plist awake n cell)
                 (setf (pair-list-built-step plist) (contact-table-step table)
                       (pair-list-loose-count plist) 0))))
@@ -5079,18 +5114,64 @@ and start the contact table's walk of it. #IDVK7G"
   (check-world world 'physics-world-max-penetration)
   (aref (world-statistics world) 3))
 
+(defun mark-held-rows (world)
+  "When an awake row of WORLD is crowded (its overlap count has reached +overlaps-per-body+),
+raise to that count the count of every awake row with a pair contact deeper than the slop, so
+that the count marks every row the step holds, and return true; else change nothing and return
+false. #IDVK7G"
+  (declare #.+kernel-policy+)
+  (let* ((contacts (physics-world-contacts world))
+         (geometry (contact-columns-geometry contacts))
+         (kinds (contact-columns-kind contacts))
+         (as (contact-columns-handle-a contacts)) (bs (contact-columns-handle-b contacts))
+         (ids (physics-world-ids world)) (sets (handle-table-set ids)) (locals (handle-table-local ids))
+         (overlaps (pair-list-overlaps (physics-world-pair-list world)))
+         (deep (- (f32 (physics-world-slop world)))))
+    (declare (type fixnum-column kinds as bs sets locals overlaps) (type f32-column geometry)
+             (type single-float deep))
+    (flet ((hold (h)
+             (declare (type fixnum h))
+             (let ((slot (handle-index h)))
+               (when (= (aref sets slot) +set-awake+)
+                 (setf (aref overlaps (aref locals slot)) +overlaps-per-body+)))))
+      (declare (inline hold))
+      (when (loop for i of-type index below (body-columns-length (physics-world-awake world))
+                  thereis (>= (aref overlaps i) +overlaps-per-body+))
+        (dotimes (k (contact-columns-length contacts) t)
+          (when (and (= (aref kinds k) +contact-pair+) (< (contact@ geometry k separation) deep))
+            (hold (aref as k))
+            (hold (aref bs k))))))))
+
+(defun hold-crowded-speeds (world)
+  "Scale the solver's linear velocity of every awake row whose overlap count has reached
++overlaps-per-body+ down to half the push-out speed, when it is faster. #IDVK7G"
+  (declare #.+kernel-policy+)
+  (let* ((v (physics-world-velocities world))
+         (overlaps (pair-list-overlaps (physics-world-pair-list world)))
+         (limit (* 0.5 (f32 (physics-world-push-max world))))
+         (limit2 (* limit limit)))
+    (declare (type f32-column v) (type fixnum-column overlaps) (type single-float limit limit2))
+    (dotimes (i (body-columns-length (physics-world-awake world)))
+      (when (>= (aref overlaps i) +overlaps-per-body+)
+        (let* ((o (solver-row i)) (x (aref v o)) (y (aref v (+ o 1))) (z (aref v (+ o 2)))
+               (s2 (+ (* x x) (* y y) (* z z))))
+          (when (> s2 limit2)
+            (let ((s (/ limit (fsqrt s2))))
+              (setf (aref v o) (* x s) (aref v (+ o 1)) (* y s) (aref v (+ o 2)) (* z s)))))))))
+
 (defun substep-phase (world)
   "Phase 9: the Soft Step substeps: integrate velocities, warm start, solve with bias,
 integrate positions, relax without bias; in a crowded step (one with contacts in the overflow
 colour, or after a step that left an overlap deeper than *physics-crowded-depth*), relax
-*physics-crowded-relax-passes* more times. #IDVK7G"
+*physics-crowded-relax-passes* more times, and when a body is crowded, hold the crowd's
+bodies to half the push-out speed. #IDVK7G"
   (let* ((kernels (physics-world-kernels world))
          (h (physics-world-current-h world))
          (inv-h (/ 1.0 h))
-         (relaxes (if (or (plusp (physics-world-overflow-count world))
-                          (> (f32 (physics-world-max-penetration world)) (f32 (physics-world-crowded-depth world))))
-                      (1+ (the fixnum (physics-world-crowded-relax-passes world)))
-                      1)))
+         (crowded (or (plusp (physics-world-overflow-count world))
+                      (> (f32 (physics-world-max-penetration world)) (f32 (physics-world-crowded-depth world)))))
+         (relaxes (if crowded (1+ (the fixnum (physics-world-crowded-relax-passes world))) 1))
+         (held (and crowded (mark-held-rows world))))
     (declare (type single-float h inv-h) (type fixnum relaxes))
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
@@ -5099,7 +5180,8 @@ colour, or after a step that left an overlap deeper than *physics-crowded-depth*
         (physics-solve-contacts kernels world inv-h t elapsed)
         (physics-integrate-positions kernels world h)
         (dotimes (k relaxes)
-          (physics-solve-contacts kernels world inv-h nil (+ elapsed h)))))
+          (physics-solve-contacts kernels world inv-h nil (+ elapsed h)))
+        (when held (hold-crowded-speeds world))))
     world))
 
 (defparameter *physics-phases*
@@ -7172,18 +7254,21 @@ more than the slop (where push-out acts) moved apart, and the deepest overlap le
   "Spawn COUNT balls of radius 0.25 m at one point in the basin, 2 m above its floor, under
 GRAVITY, and run STEPS steps. Return the bytes the world holds per body after a full
 collection, the fastest ball's speed, the fastest any pair overlapping by more than the slop
-moved apart at every EVERY-th step, and the deepest overlap left at the end. #X7R3M5"
+moved apart at every EVERY-th step, the deepest overlap left at the end, and the processor
+seconds a step took. #X7R3M5"
   (sb-ext:gc :full t)
   (let* ((before (sb-kernel:dynamic-usage))
          (world (make-physics-world :terrain (make-basin-terrain) :gravity gravity))
          (balls (loop repeat count collect (add-physics-body world 4.0 2.0 4.0 :radius 0.25)))
          (within (- 0.5d0 *physics-linear-slop*))
-         (fastest 0d0) (parting 0d0))
-    (declare (type double-float fastest parting within))
+         (fastest 0d0) (parting 0d0) (cpu 0))
+    (declare (type double-float fastest parting within) (type integer cpu))
     (let ((p (make-array (* 3 count) :element-type 'double-float))
           (v (make-array (* 3 count) :element-type 'double-float)))
     (dotimes (i steps)
-      (step-physics-world world)
+      (let ((started (get-internal-run-time)))
+        (step-physics-world world)
+        (incf cpu (- (get-internal-run-time) started)))
       (loop for b in balls for k of-type index from 0 by 3
             do (multiple-value-bind (x y z) (physics-body-position world b)
                  (setf (aref p k) (float x 1d0) (aref p (+ k 1)) (float y 1d0) (aref p (+ k 2)) (float z 1d0)))
@@ -7203,22 +7288,23 @@ moved apart at every EVERY-th step, and the deepest overlap left at the end. #X7
                                                             d))))))))))
     (sb-ext:gc :full t)
     (values (round (- (sb-kernel:dynamic-usage) before) count) fastest parting
-            (physics-world-max-penetration world))))
+            (physics-world-max-penetration world) (/ cpu internal-time-units-per-second steps 1.0))))
 
-(defun run-heap-table (&key (sizes '(1000 2000 5000 20000)))
+(defun run-heap-table (&key (sizes (list 1000 2000 5000 20000 *physics-body-budget*)))
   "Print an Org table of heaps spawned at one point without gravity (heap-footprint): for each
-of SIZES the steps run (120, or 3 from 20000 balls up, where a step takes seconds), the bytes
-held per body, the fastest ball, the fastest parting pair (not sampled from 20000 up), the
-deepest overlap left, and the seconds per step. #X7R3M5"
+of SIZES the steps run (120; 60 at 20000 balls, sampling the pairs every 20th step; 5 above,
+not sampling them, where the sampling alone would take hours), the bytes held per body, the
+fastest ball, the fastest parting pair, the deepest overlap left, and the processor seconds a
+step took. #X7R3M5"
   (format t "| bodies | steps | bytes a body | fastest ball m/s | fastest parting pair m/s | deepest left m | s a step |~%|-~%")
   (dolist (count sizes)
-    (let* ((steps (if (>= count 20000) 3 120))
-           (started (get-internal-real-time)))
-      (multiple-value-bind (bytes fastest parting deepest)
-          (heap-footprint count :steps steps :every (if (>= count 20000) (1+ steps) 10))
-        (format t "| ~D | ~D | ~D | ~,2F | ~:[~,2F~;-~] | ~,3F | ~,2F |~%" count steps bytes fastest
-                (>= count 20000) parting deepest
-                (/ (- (get-internal-real-time) started) internal-time-units-per-second steps))
+    (let* ((sampled (<= count 20000))
+           (steps (cond ((< count 20000) 120) (sampled 60) (t 5))))
+      (multiple-value-bind (bytes fastest parting deepest seconds)
+          (heap-footprint count :steps steps :every (cond ((< count 20000) 10) (sampled 20) (t (1+ steps))))
+        ;; an unsampled heap prints - and skips its parting figure
+        (format t "| ~D | ~D | ~D | ~,2F | ~:[-~*~;~,2F~] | ~,3F | ~,3F |~%" count steps bytes fastest
+                sampled parting deepest seconds)
         (finish-output))))
   (format t "~%load average at the end: ~A~%" (uiop:read-file-line "/proc/loadavg")))
 
