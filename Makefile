@@ -8,6 +8,8 @@ HEAP   ?= 4Gb
 ANCHOR ?=
 SEED   ?= 1
 COUNT  ?= 150
+# make fuzz runs 1200 sequences unless COUNT is given: the 150 above is make mutate's default
+FUZZ_COUNT := $(if $(filter command line environment,$(origin COUNT)),$(COUNT),1200)
 
 ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
@@ -146,7 +148,7 @@ pictures: setup
 fuzz: setup tangle
 	@mkdir -p report
 	@rm -f report/fuzz-failed
-	@{ SEED="$(SEED)" COUNT="$(COUNT)" LENGTH="$(LENGTH)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/fuzz.org
+	@{ SEED="$(SEED)" COUNT="$(FUZZ_COUNT)" LENGTH="$(LENGTH)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/fuzz.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp fuzz-campaign report/fuzz.org
 	@test ! -e report/fuzz-failed
 

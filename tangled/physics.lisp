@@ -9137,7 +9137,7 @@ through generic arithmetic. #C4STRY"
     v))
 
 (defun physics-cast (operation world x y z radius dx dy dz max-distance bodies cells boxes exclude filter hit)
-  "The cast of OPERATION: check every argument, then walk the boxes, the cells and the bodies in
+  "The cast of OPERATION: check every argument, then walk the boxes, the bodies and the cells in
 turn, each up to the nearest hit so far. Fill HIT (or a fresh physics-hit) and return it, or
 return NIL. #C4STRY"
   (let* ((x (cast-coordinate world :x x)) (y (cast-coordinate world :y y)) (z (cast-coordinate world :z z))
