@@ -7031,7 +7031,8 @@ basin benchmark's do, so all their balls are awake while they are measured. #FBN
                              (sleep (not (member name '(:dead-pile :basin)))))
   "The world of the feature scene NAME of +feature-scenes+ with FEATURES, solved by KERNELS (a
 pile holds BALLS balls; SLEEP, whether its bodies may sleep, is false for the piles), and the
-function of the step's number to call before each step, as two values. The piles are the scene
+function of the step's number to call before each step, as the first two values of
+make-scene-world. The piles are the scene
 :awake-basin, the fountain the scene :fountain and the walker among the drops the scene :walker.
 #FBNCH9"
   (ecase name
