@@ -2341,6 +2341,58 @@ function of a column name that reads row K's float in that column. #T3STK1"
                       "rows ~D and ~D of radii ~S with overlaps ~S: room ~S" i j radius counts (not want)))))))
 ;; P41RS7-overlap-room-charges-the-smaller ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-terrain-only-bodies-take-no-pairs]]
+(define-claim "P41RS7" terrain-only-bodies-take-no-pairs
+    "Drops that meet only terrain take no pair contact, whether found by the list's build, a loose row or two loose rows."
+  (let* ((w (make-floor-world :sleep nil))
+         (c (luv-physics::physics-world-contacts w))
+         (drops '()) (pairs-with-drops 0) (pairs 0))
+    (flet ((ball (x z) (add-physics-body w x 0.245 z :radius 0.25))
+           (drop (x z) (let ((h (add-physics-body w x 0.245 z :radius 0.25 :collide-with-bodies nil)))
+                         (push h drops) h))
+           (count-pairs ()
+             (dotimes (row (luv-physics::contact-columns-length c))
+               (when (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-pair+)
+                 (incf pairs)
+                 (when (or (member (aref (luv-physics::contact-columns-handle-a c) row) drops)
+                           (member (aref (luv-physics::contact-columns-handle-b c) row) drops))
+                   (incf pairs-with-drops))))))
+      ;; the list's build: drops overlapping balls, each added before and after its ball
+      (loop for k below 4 for x = (+ 2.5 k) do (if (evenp k) (progn (ball x 2.5) (drop (+ x 0.1) 2.5))
+                                                   (progn (drop x 2.5) (ball (+ x 0.1) 2.5))))
+      (ball 2.5 6.0) (ball 3.0 6.0)
+      (step-physics-world w) (count-pairs)
+      (dotimes (i 5) (step-physics-world w))
+      ;; a loose row against rows of the list: a new ball on a drop, a new drop on a ball
+      (ball 2.6 2.5) (drop 3.05 6.0)
+      (step-physics-world w) (count-pairs)
+      ;; two loose rows: a ball and a drop added together, in either order
+      (ball 8.0 8.0) (drop 8.1 8.0) (drop 10.0 8.0) (ball 10.1 8.0)
+      (step-physics-world w) (count-pairs)
+      ;; leaning on sleepers: a drop added on a sleeping ball
+      (let ((sleeper (ball 12.0 12.0)))
+        (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w sleeper)))
+        (drop 12.1 12.0) (ball 11.7 12.0))
+      (step-physics-world w) (count-pairs)
+      (check (plusp pairs) "no pair contact at all")
+      (check (zerop pairs-with-drops) "~D pair contacts with a drop" pairs-with-drops))))
+;; P41RS7-terrain-only-bodies-take-no-pairs ends here
+
+;; [[file:../physics.org::#P41RS7][P41RS7-heap-charges-every-pair]]
+(define-claim "P41RS7" heap-charges-every-pair
+    "In a heap of 40 equal balls at one point, no ball takes more than 16 pairs in a step."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (c (luv-physics::physics-world-contacts w))
+         (hs (loop repeat 40 collect (add-physics-body w 4.0 2.0 4.0 :radius 0.25))))
+    (step-physics-world w)
+    (let ((most (loop for h in hs
+                      maximize (loop for row below (luv-physics::contact-columns-length c)
+                                     count (and (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-pair+)
+                                                (or (= h (aref (luv-physics::contact-columns-handle-a c) row))
+                                                    (= h (aref (luv-physics::contact-columns-handle-b c) row))))))))
+      (check (= 16 most) "the most pairs a ball took is ~D" most))))
+;; P41RS7-heap-charges-every-pair ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
 (define-claim "MYWH16" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
