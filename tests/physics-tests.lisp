@@ -2801,6 +2801,30 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "along ~C the ball by the box's far end has no box contact" (char "xyz" axis)))))
 ;; B0XPH5-long-box-reaches-its-ends ends here
 
+;; [[file:../physics.org::#B0XPH5][B0XPH5-box-impact-normal-every-column]]
+(define-claim "B0XPH5" box-impact-normal-every-column
+    "A ball dropping onto a box's edge, off every diagonal, takes a normal within 5 deg of the one at impact."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         ;; the box spans x 4.3..5.3, y 1.6..2.6, z 0.3..6.3; its top edge along z at x 5.3, y 2.6
+         (h (add-physics-body w 5.45 2.88 1.0 :radius 0.25 :vy -3.0))
+         (c (luv-physics::physics-world-contacts w)))
+    (post-physics-box w 4.8 2.1 3.3 0.5 0.5 3.0)
+    (setf (luv-physics::physics-world-current-dt w) (/ 1.0 60))
+    (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                     luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase))
+      (funcall phase w))
+    (let ((rows (loop for row below (luv-physics::contact-columns-length c)
+                      when (and (= (aref (luv-physics::contact-columns-handle-a c) row) h)
+                                (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-box+))
+                        collect row)))
+      (check (= 1 (length rows)) "~D box contacts" (length rows))
+      (when rows
+        (let* ((g (luv-physics::contact-columns-geometry c)) (row (first rows))
+               (n (list (luv-physics::contact@ g row nx) (luv-physics::contact@ g row ny) (luv-physics::contact@ g row nz))))
+          (check (< (* (/ 180 pi) (acos (min 1d0 (reduce #'+ (mapcar #'* n '(-0.6d0 -0.8d0 0d0)))))) 5)
+                 "the normal is ~S, not within 5 deg of the one at impact, (-0.6 -0.8 0)" n))))))
+;; B0XPH5-box-impact-normal-every-column ends here
+
 ;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-keeps-contacts]]
 (define-claim "PRUN3D" reorder-keeps-contacts
     "A reordering prune keeps every contact found, unchanged, in found order, and the table consistent."
