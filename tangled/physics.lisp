@@ -3962,7 +3962,7 @@ base is the variable BASE. #SSMPYW"
             ,@(loop for c in fixnum-columns
                     collect `(,c (,(intern (format nil "CONSTRAINT-COLUMNS-~A" c)) ,b))))
        (declare (type f32-column data) (type fixnum-column ,@fixnum-columns) (type index stride)
-                (ignorable data stride))
+                (ignorable data stride ,@fixnum-columns))
        (macrolet ((@ (column) `(block-ref data base ,(constraint-offset column)))
                   (constraint-base (k) `(+ +constraint-origin+ (* (ash ,k -3) stride) (logand ,k 7))))
          ,@body))))
@@ -4000,9 +4000,10 @@ base is the variable BASE. #SSMPYW"
   (declare (type (unsigned-byte 32) x))
   (1- (integer-length x)))
 
-(defun color-contacts (world)
+(defun color-contacts (world &optional (two-body t))
   "Greedy colouring in two passes. First every two-body contact takes the lowest of colours
-0-19 free at both its bodies. Then every one-sided contact takes, at its awake body, the
+0-19 free at both its bodies (a world without body contacts, TWO-BODY false, has none: every
+contact is one-sided, and the pass only marks them so). Then every one-sided contact takes, at its awake body, the
 highest free colour among those the two-body contacts used, or failing that the lowest free
 colour above them. Anything else goes to the overflow colour 24. Fills the colour of each
 contact and the colour starts, each colour but the overflow starting on a multiple of eight;
@@ -4029,6 +4030,8 @@ returns the number of colours used. #SSMPYW"
                    -1)))
         (declare (inline awake-row))
         ;; pass one: two-body contacts, lowest free colour
+        (if (not two-body)
+          (fill colors -1 :end m)
         (dotimes (c m)
           (let ((la (awake-row (aref handle-a c))) (lb (awake-row (aref handle-b c))))
             (declare (type fixnum la lb))
@@ -4043,7 +4046,7 @@ returns the number of colours used. #SSMPYW"
                         top (max top color))
                   (setf (aref masks la) (logior (aref masks la) (ash 1 color))
                         (aref masks lb) (logior (aref masks lb) (ash 1 color))))
-                (setf (aref colors c) color)))))
+                (setf (aref colors c) color))))))
         ;; pass two: one-sided contacts, as late among the used colours as their body allows
         (let ((used (1- (ash 1 (1+ top)))))
           (declare (type (unsigned-byte 32) used))
@@ -4153,7 +4156,7 @@ upward part of the normal from LA to LB, above 0.9); :b the other way round; els
   "When false, the prepare fill sends every row through its general path; the claim that the
 short path changes no bit compares the two. #PR3PAR")
 
-(define-featured-kernel (prepare-phase :features (:restitution :rolling-resistance :contact-events :hit-events))
+(define-featured-kernel (prepare-phase :features (:body-contacts :restitution :rolling-resistance :contact-events :hit-events))
     (world)
   "Phase 8: colour the contacts, then write the constraint buffer in colour order, and load the
 awake bodies' velocities into the solver; note the number of colours used in the step's
@@ -4170,7 +4173,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
              (type index m n))
     (ensure-solver-scratch world n m)
     (let ((short-path *prepare-short-path*)
-          (color-count (color-contacts world))
+          (color-count (color-contacts world (if-feature :body-contacts t nil)))
           (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 (the single-float h))))
           (zeta (f32 (physics-world-damping-ratio world)))
           (ids (physics-world-ids world))
@@ -4602,8 +4605,9 @@ single-float from LOW to 1e7. #K3RNLS"
   "Run BODY over the constraint buffer CBUF: its blocks, its body columns, and (@ COLUMN). #W4RMST"
   `(with-constraint-block (body-a body-b) ,cbuf ,@body))
 
-(define-featured-kernel (warm-start-range :features (:friction :rolling-resistance)) (cbuf v start end)
-  "Apply the carried normal, friction and rolling impulses of constraints START..END. #W4RMST"
+(define-featured-kernel (warm-start-range :features (:body-contacts :friction :rolling-resistance)) (cbuf v start end)
+  "Apply the carried normal, friction and rolling impulses of constraints START..END; compiled
+without body contacts, only to body a, for body b is then the dummy row of every constraint. #W4RMST"
   (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
@@ -4612,7 +4616,7 @@ single-float from LOW to 1e7. #K3RNLS"
              (x (@ nx)) (y (@ ny)) (z (@ nz))
              (l (@ normal-impulse))
              (ma (@ ima)) (mb (@ imb)))
-        (declare (type index a b base))
+        (declare (type index a b base) (ignorable b mb))
         (if-feature :friction
           (let* ((l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
                  (px (+ (* l x) (* l1 (@ t1x)) (* l2 (@ t2x))))
@@ -4628,36 +4632,42 @@ single-float from LOW to 1e7. #K3RNLS"
                  (rx (if-feature :rolling-resistance (+ (@ rolling-impulse-x) (* sp x)) (* sp x)))
                  (ry (if-feature :rolling-resistance (+ (@ rolling-impulse-y) (* sp y)) (* sp y)))
                  (rz (if-feature :rolling-resistance (+ (@ rolling-impulse-z) (* sp z)) (* sp z))))
+            (declare (ignorable ib br))
             (setf (aref v a) (- (aref v a) (* ma px))
                   (block-ref v a 1) (- (block-ref v a 1) (* ma py))
                   (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
                   (block-ref v a 3) (- (block-ref v a 3) (* ia (+ (* ar cx) rx)))
                   (block-ref v a 4) (- (block-ref v a 4) (* ia (+ (* ar cy) ry)))
-                  (block-ref v a 5) (- (block-ref v a 5) (* ia (+ (* ar cz) rz)))
-                  (aref v b) (+ (aref v b) (* mb px))
-                  (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
-                  (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))
-                  (block-ref v b 3) (+ (block-ref v b 3) (* ib (- rx (* br cx))))
-                  (block-ref v b 4) (+ (block-ref v b 4) (* ib (- ry (* br cy))))
-                  (block-ref v b 5) (+ (block-ref v b 5) (* ib (- rz (* br cz))))))
+                  (block-ref v a 5) (- (block-ref v a 5) (* ia (+ (* ar cz) rz))))
+            ;; without body contacts body b is the dummy, whose zeros a zero mass keeps
+            (if-feature :body-contacts
+              (setf (aref v b) (+ (aref v b) (* mb px))
+                    (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
+                    (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))
+                    (block-ref v b 3) (+ (block-ref v b 3) (* ib (- rx (* br cx))))
+                    (block-ref v b 4) (+ (block-ref v b 4) (* ib (- ry (* br cy))))
+                    (block-ref v b 5) (+ (block-ref v b 5) (* ib (- rz (* br cz)))))))
           ;; without friction the impulse is along the normal and turns nothing; only rolling
           ;; resistance, when the world has it, turns the bodies
           (let ((px (* l x)) (py (* l y)) (pz (* l z)))
             (setf (aref v a) (- (aref v a) (* ma px))
                   (block-ref v a 1) (- (block-ref v a 1) (* ma py))
-                  (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
-                  (aref v b) (+ (aref v b) (* mb px))
-                  (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
-                  (block-ref v b 2) (+ (block-ref v b 2) (* mb pz)))
+                  (block-ref v a 2) (- (block-ref v a 2) (* ma pz)))
+            (if-feature :body-contacts
+              (setf (aref v b) (+ (aref v b) (* mb px))
+                    (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
+                    (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))))
             (if-feature :rolling-resistance
               (let ((ia (@ iia)) (ib (@ iib))
                     (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z)))
+                (declare (ignorable ib))
                 (setf (block-ref v a 3) (- (block-ref v a 3) (* ia rx))
                       (block-ref v a 4) (- (block-ref v a 4) (* ia ry))
-                      (block-ref v a 5) (- (block-ref v a 5) (* ia rz))
-                      (block-ref v b 3) (+ (block-ref v b 3) (* ib rx))
-                      (block-ref v b 4) (+ (block-ref v b 4) (* ib ry))
-                      (block-ref v b 5) (+ (block-ref v b 5) (* ib rz)))))))))))
+                      (block-ref v a 5) (- (block-ref v a 5) (* ia rz)))
+                (if-feature :body-contacts
+                  (setf (block-ref v b 3) (+ (block-ref v b 3) (* ib rx))
+                        (block-ref v b 4) (+ (block-ref v b 4) (* ib ry))
+                        (block-ref v b 5) (+ (block-ref v b 5) (* ib rz))))))))))))
 ;; Warm start:1 ends here
 
 ;; [[file:../physics.org::#S0LV3R][Solve and relax:1]]
@@ -4669,12 +4679,13 @@ per constraint. #S0LV3R"
        (symbol-macrolet ((biased t)) ,@body)
        (symbol-macrolet ((biased nil)) ,@body)))
 
-(define-featured-kernel (solve-range :features (:friction :rolling-resistance :restitution))
+(define-featured-kernel (solve-range :features (:body-contacts :friction :rolling-resistance :restitution))
     (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
   "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
 when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
 HGZ times the substep), then Coulomb friction, then rolling resistance. Return END, or the
-first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
+first row that may strike or is armed, left unsolved for solve-handing. Compiled without body
+contacts, it reads and writes body a alone: body b is then the dummy row, all zeros. #S0LV3R"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
            (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+
            (ignorable threshold hgx hgy hgz))
@@ -4686,8 +4697,12 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
       (progn
       (let ((base (constraint-base k)))
        ;; the constraint's own columns are read from the block where they are used
-       (symbol-macrolet ((x (@ nx)) (y (@ ny)) (z (@ nz)) (ma (@ ima)) (mb (@ imb))
-                         (ar (@ ra)) (br (@ rb)) (iam (@ iia)) (ibm (@ iib))
+       ;; without body contacts body b is the dummy row of every constraint: its velocities,
+       ;; deltas, mass, inertia and radius are zeros, written here as such, and it is not written
+       (symbol-macrolet ((x (@ nx)) (y (@ ny)) (z (@ nz)) (ma (@ ima))
+                         (mb (if-feature :body-contacts (@ imb) 0.0))
+                         (ar (@ ra)) (br (if-feature :body-contacts (@ rb) 0.0)) (iam (@ iia))
+                         (ibm (if-feature :body-contacts (@ iib) 0.0))
                          (ux (@ t1x)) (uy (@ t1y)) (uz (@ t1z)) (qx (@ t2x)) (qy (@ t2y)) (qz (@ t2z)))
       (let* ((a (the index (solver-row (aref body-a k))))
              (b (the index (solver-row (aref body-b k))))
@@ -4698,12 +4713,17 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
                     (@ gap)
                     (let ((da (the index (delta-row (aref body-a k))))
                           (db (the index (delta-row (aref body-b k)))))
+                      (declare (ignorable db))
                       (setf (@ gap)
                             (moved-gap (@ separation) x y z
-                                       (- (aref d db) (aref d da)) (- (block-ref d db 1) (block-ref d da 1))
-                                       (- (block-ref d db 2) (block-ref d da 2)) (@ kvn) elapsed)))))
+                                       (- (if-feature :body-contacts (aref d db) 0.0) (aref d da))
+                                       (- (if-feature :body-contacts (block-ref d db 1) 0.0) (block-ref d da 1))
+                                       (- (if-feature :body-contacts (block-ref d db 2) 0.0) (block-ref d da 2))
+                                       (@ kvn) elapsed)))))
              (vax (aref v a)) (vay (block-ref v a 1)) (vaz (block-ref v a 2))
-             (vbx (aref v b)) (vby (block-ref v b 1)) (vbz (block-ref v b 2))
+             (vbx (if-feature :body-contacts (aref v b) 0.0))
+             (vby (if-feature :body-contacts (block-ref v b 1) 0.0))
+             (vbz (if-feature :body-contacts (block-ref v b 2) 0.0))
              ;; normal: only the linear velocities take part
              (positive (> s 0.0))
              (bias (cond (positive (* s inv-h))
@@ -4772,6 +4792,7 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
              (madl (* ma dl)) (mbdl (* mb dl))
              (vax (- vax (* madl x))) (vay (- vay (* madl y))) (vaz (- vaz (* madl z)))
              (vbx (+ vbx (* mbdl x))) (vby (+ vby (* mbdl y))) (vbz (+ vbz (* mbdl z))))
+        (declare (ignorable b vbx vby vbz mbdl))
         (let ((pushed (if bounced bump new)))
           (setf (@ normal-impulse) new
                 (@ max-normal-impulse) (if (> mni pushed) mni pushed)))
@@ -4795,7 +4816,9 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
           ;; velocities are read only now
           (let* (
                  (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
-                 (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5))
+                 (wbx (if-feature :body-contacts (block-ref v b 3) 0.0))
+                 (wby (if-feature :body-contacts (block-ref v b 4) 0.0))
+                 (wbz (if-feature :body-contacts (block-ref v b 5) 0.0))
                  (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
                  (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (@ kvt1)) (+ (* wx qx) (* wy qy) (* wz qz))))
                  (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (@ kvt2) (+ (* wx ux) (* wy uy) (* wz uz))))
@@ -4813,8 +4836,9 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
                  (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
                  (iar (* iam ar)) (ibr (* ibm br)))
             (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
-            (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz))
-                  (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz)))
+            (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz)))
+            (if-feature :body-contacts
+              (setf (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz))))
             (let ((wax (- wax (* iar cx))) (way (- way (* iar cy))) (waz (- waz (* iar cz)))
                   (wbx (- wbx (* ibr cx))) (wby (- wby (* ibr cy))) (wbz (- wbz (* ibr cz))))
               (if-feature :rolling-resistance (rolling-resistance))
@@ -4831,19 +4855,24 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
                     (setf (@ spin-impulse) nsp
                           wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
                           wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
-              (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                    (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))
+              (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz)
+              (if-feature :body-contacts
+                (setf (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))
           ;; without friction the tangent speeds are never read, and the angular velocities
           ;; change only under rolling resistance
           (progn
-            (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz
-                  (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz)
+            (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz)
+            (if-feature :body-contacts
+              (setf (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz))
             (if-feature :rolling-resistance
               (let ((wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
-                    (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5)))
+                    (wbx (if-feature :body-contacts (block-ref v b 3) 0.0))
+                    (wby (if-feature :body-contacts (block-ref v b 4) 0.0))
+                    (wbz (if-feature :body-contacts (block-ref v b 5) 0.0)))
                 (rolling-resistance)
-                (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                      (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))))))))))))
+                (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz)
+                (if-feature :body-contacts
+                  (setf (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))))))
   end))
 
 (defmacro define-impact-copy (name kernel documentation)
