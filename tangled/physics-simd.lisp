@@ -119,7 +119,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 ;; moved-gap ([[#PR3PAR]]) in lanes, for the relax pass and the frame pass
                 (wgap (ddx ddy ddz elapsed)
                   `(w+ (w+ (@w separation) (w+ (w+ (w* ,ddx (@w nx)) (w* ,ddy (@w ny))) (w* ,ddz (@w nz))))
-                       (w* (@w kvn) ,elapsed)))
+                       (w* (if-feature :boxes (@w kvn) (wc 0.0)) ,elapsed)))
                 (st! (i value) `(,',store ,value st 0 ,(* ,width i))))))
     `(progn
        (define-featured-kernel (,ws :features (:body-contacts :friction :rolling-resistance) :operators ,operators)
@@ -193,7 +193,9 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                              wby (w+ wby (w* ib (@w rolling-impulse-y)))
                              wbz (w+ wbz (w* ib (@w rolling-impulse-z))))))
                    (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0))))))))))
-       (define-featured-kernel (,so :features (:body-contacts :friction :rolling-resistance :restitution) :operators ,operators)
+       (define-featured-kernel (,so :features (:body-contacts :boxes :friction :rolling-resistance :restitution
+                                               :hit-events :contact-events)
+                                    :operators ,operators)
            (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
          ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. Return END, or the first block that may strike or is armed, left unsolved for solve-handing. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
@@ -260,17 +262,17 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         ;; and for friction, whose two speeds are found here, before the
                         ;; normal impulse, which does not change them
                         (dvx (w- vbx vax)) (dvy (w- vby vay)) (dvz (w- vbz vaz))
-                        (vn (w+ (w+ (w+ (w* dvx x) (w* dvy y)) (w* dvz z)) (@w kvn)))
+                        (vn (w+ (w+ (w+ (w* dvx x) (w* dvy y)) (w* dvz z)) (if-feature :boxes (@w kvn) (wc 0.0))))
                         ;; (without friction these are constants nothing reads, and vanish)
                         (wx (if-feature :friction (w+ (w* ar wax) (w* br wbx)) (wc 0.0)))
                         (wy (if-feature :friction (w+ (w* ar way) (w* br wby)) (wc 0.0)))
                         (wz (if-feature :friction (w+ (w* ar waz) (w* br wbz)) (wc 0.0)))
                         (vt1 (if-feature :friction
-                               (w- (w+ (w+ (w+ (w* dvx ux) (w* dvy uy)) (w* dvz uz)) (@w kvt1))
+                               (w- (w+ (w+ (w+ (w* dvx ux) (w* dvy uy)) (w* dvz uz)) (if-feature :boxes (@w kvt1) (wc 0.0)))
                                    (w+ (w+ (w* wx qx) (w* wy qy)) (w* wz qz)))
                                (wc 0.0)))
                         (vt2 (if-feature :friction
-                               (w+ (w+ (w+ (w+ (w* dvx qx) (w* dvy qy)) (w* dvz qz)) (@w kvt2))
+                               (w+ (w+ (w+ (w+ (w* dvx qx) (w* dvy qy)) (w* dvz qz)) (if-feature :boxes (@w kvt2) (wc 0.0)))
                                    (w+ (w+ (w* wx ux) (w* wy uy)) (w* wz uz)))
                                (wc 0.0)))
                         ;; the friction impulse before the cone, and its length, need no
@@ -290,12 +292,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                      (w* (wif positive (wc 0.0) (@w impulse-scale)) l))
                                  (w- l (w* (@w normal-mass) (w+ vn bias)))))
                         (new (wif (w> raw (wc 0.0)) raw (wc 0.0)))
-                        (mni (@w max-normal-impulse))
+                        (mni (if-feature (:or :restitution :contact-events :hit-events)
+                                         (@w max-normal-impulse) (wc 0.0)))
                         ;; impacts and armed contacts ([[#R3ST1T]]): a block with no lane that
                         ;; has not pushed yet and approaches faster than the threshold, and
                         ;; none armed, skips them
                         (dl (w- new l)))
-                   (declare (ignorable wx wy wz vt1 vt2 staged))
+                   (declare (ignorable wx wy wz vt1 vt2 staged mni))
                    ;; the normal impulse to keep, the velocity change and what the contact pushed
                    (multiple-value-bind (new dl pushed)
                        (if-feature :restitution
@@ -350,6 +353,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                      ;; with the same bits
                                      (return-from solve-pass k))))
                          (values new dl new))
+                   (declare (ignorable pushed))
                    (if-feature :friction
                      (symbol-macrolet ((n1 (st@ 12)) (n2 (st@ 13)) (len2 (st@ 14)) (root (st@ 15))
                                        (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2)))
@@ -360,7 +364,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                             (n1 (wif over (w* n1 scale) n1)) (n2 (wif over (w* n2 scale) n2))
                             (d1 (w- n1 l1)) (d2 (w- n2 l2)))
                        (@w! normal-impulse new)
-                       (@w! max-normal-impulse (wif (w> mni pushed) mni pushed))
+                       (if-feature (:or :restitution :contact-events :hit-events)
+                         (@w! max-normal-impulse (wif (w> mni pushed) mni pushed)))
                        (@w! tangent-impulse-1 n1) (@w! tangent-impulse-2 n2)
                        ;; each velocity takes the normal impulse, then friction's, in one
                        ;; expression: the same two roundings as two steps, one store; a
@@ -382,7 +387,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                      ;; without friction only the normal impulse moves the bodies
                      (progn
                        (@w! normal-impulse new)
-                       (@w! max-normal-impulse (wif (w> mni pushed) mni pushed))
+                       (if-feature (:or :restitution :contact-events :hit-events)
+                         (@w! max-normal-impulse (wif (w> mni pushed) mni pushed)))
                        (let ((madl (w* ma dl)) (mbdl (w* mb dl)))
                          (declare (ignorable mbdl))
                          (st! 0 (w- (st@ 0) (w* madl x))) (st! 1 (w- (st@ 1) (w* madl y)))
@@ -442,9 +448,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
          end))
        (define-impact-copy ,soi ,so
          ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time, bouncing impacts ([[#R3ST1T]]): solve-handing runs it on each block at which the pass ~(~A~) or a variant of it stops. #W1D3KF" width so))
-       (macrolet ,operators
-       (defun ,pf (cbuf start end)
-         ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
+       (define-featured-kernel (,pf :features (:boxes) :operators ,operators) (cbuf start end)
+         ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~D lanes at a time; compiled without boxes, it has no box velocity to resolve. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
          (with-constraint-block () cbuf
            (loop for k of-type index from start below end by ,width do
@@ -466,18 +471,20 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         (tx (wif big (wc 0.0) (w* zs (wc -1.0))))
                         (ty (wif big zs (wc 0.0)))
                         (tz (wif big (w* (w* y s) (wc -1.0)) (w* x s)))
-                        (ux (w- (w* y tz) (w* z ty))) (uy (w- (w* z tx) (w* x tz))) (uz (w- (w* x ty) (w* y tx)))
-                        (kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
+                        (ux (w- (w* y tz) (w* z ty))) (uy (w- (w* z tx) (w* x tz))) (uz (w- (w* x ty) (w* y tx))))
                    (@w! t1x tx) (@w! t1y ty) (@w! t1z tz) (@w! t2x ux) (@w! t2y uy) (@w! t2z uz)
-                   (@w! kvn (w+ (w+ (w* kx x) (w* ky y)) (w* kz z)))
-                   (@w! gap (wgap (wc 0.0) (wc 0.0) (wc 0.0) (wc 0.0)))
-                   (@w! kvt1 (w+ (w+ (w* kx tx) (w* ky ty)) (w* kz tz)))
-                   (@w! kvt2 (w+ (w+ (w* kx ux) (w* ky uy)) (w* kz uz))))
+                   ;; without boxes there is no box velocity to resolve
+                   (if-feature :boxes
+                     (let ((kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
+                       (@w! kvn (w+ (w+ (w* kx x) (w* ky y)) (w* kz z)))
+                       (@w! kvt1 (w+ (w+ (w* kx tx) (w* ky ty)) (w* kz tz)))
+                       (@w! kvt2 (w+ (w+ (w* kx ux) (w* ky uy)) (w* kz uz)))))
+                   (@w! gap (wgap (wc 0.0) (wc 0.0) (wc 0.0) (wc 0.0))))
                  (let* ((ra (@w ra)) (rb (@w rb)) (iia (@w iia)) (iib (@w iib))
                         (mass-sum (w+ (@w ima) (@w imb))))
                    (@w! normal-mass (inverse mass-sum))
                    (@w! tangent-mass (inverse (w+ (w+ mass-sum (w* (w* iia ra) ra)) (w* (w* iib rb) rb))))
-                   (@w! rolling-mass (inverse (w+ iia iib))))))))))))))
+                   (@w! rolling-mass (inverse (w+ iia iib)))))))))))))
 ;; One kernel text, two widths:1 ends here
 
 ;; [[file:../physics.org::#F4M1LY][The SSE and AVX2 families:1]]
@@ -518,9 +525,12 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
 (macrolet ((define-family-methods (class width ws so si pf &optional settle)
              `(progn
                 (defmethod physics-prepare-frames ((kernels ,class) world)
-                  (let ((cbuf (physics-world-constraints world)))
-                    (do-colour-runs (s e world ,settle) (,pf cbuf s e) (prepare-frames-range cbuf s e))))
-                (defmethod wide-kernel-names ((kernels ,class)) (values ',ws ',so))
+                  (let* ((cbuf (physics-world-constraints world))
+                         (variant (world-kernel-variant world kernels))
+                         (wide (kernel-variant-wide-prepare-frames variant))
+                         (narrow (kernel-variant-prepare-frames variant)))
+                    (do-colour-runs (s e world ,settle) (funcall wide cbuf s e) (funcall narrow cbuf s e))))
+                (defmethod wide-kernel-names ((kernels ,class)) (values ',ws ',so ',pf))
                 (defmethod physics-warm-start ((kernels ,class) world)
                   (let* ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world))
                          (variant (world-kernel-variant world kernels))
@@ -551,7 +561,8 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
 (register-kernel-family :avx2 'avx2-kernels :avx2)
 
 ;; the wide kernels of the standard feature sets, compiled with the page ([[#FEAT5X]])
-(precompile-featured-kernels (warm-start-blocks/sse solve-blocks/sse warm-start-blocks/avx2 solve-blocks/avx2))
+(precompile-featured-kernels (warm-start-blocks/sse solve-blocks/sse prepare-frames-blocks/sse
+                              warm-start-blocks/avx2 solve-blocks/avx2 prepare-frames-blocks/avx2))
 ;; The SSE and AVX2 families:1 ends here
 
 ;; [[file:../physics.org::#O07FDP][Closing the files:2]]
