@@ -2625,6 +2625,29 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (equal '(0.0 0.0 0.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h))))))
 ;; K3RNLS-gravity-in-every-column ends here
 
+;; [[file:../physics.org::#K3RNLS][K3RNLS-speed-clamp-closed-form]]
+(define-claim "K3RNLS" speed-clamp-closed-form
+    "integrate-velocities-range adds hg and scales a row over the top speed back onto it, rows START..END only."
+  (let* ((v (make-array (luv-physics::solver-row 4) :element-type 'single-float))
+         (h (/ 1.0 60)) (g '(1.0 -2.0 3.0))
+         (given '((0 (1.0 2.0 3.0 4.0 5.0 6.0)) (1 (300.0 -300.0 200.0 0.5 -0.25 0.125))
+                  (2 (10.0 20.0 -30.0 7.0 8.0 9.0)) (3 (-1.0 -2.0 -3.0 -4.0 -5.0 -6.0)))))
+    (loop for (row values) in given
+          do (loop for x in values for j from 0 do (setf (aref v (+ (luv-physics::solver-row row) j)) x)))
+    (luv-physics::integrate-velocities-range v 1 3 h 1.0 -2.0 3.0 400.0)
+    (flet ((row (r) (loop for j below 6 collect (aref v (+ (luv-physics::solver-row r) j)))))
+      (check (equal (row 0) (second (assoc 0 given))) "row 0, before the range, is ~S" (row 0))
+      (check (equal (row 3) (second (assoc 3 given))) "row 3, after the range, is ~S" (row 3))
+      (let* ((moved (mapcar (lambda (x g) (+ (float x 1d0) (* (float h 1d0) g))) (subseq (second (assoc 1 given)) 0 3) g))
+             (speed (sqrt (reduce #'+ (mapcar (lambda (x) (* x x)) moved))))
+             (want (mapcar (lambda (x) (* x (/ 400d0 speed))) moved)))
+        (check (every (lambda (got want) (< (abs (- got want)) (* 1d-6 (abs want)))) (row 1) want)
+               "row 1 is ~S, not ~S" (row 1) want))
+      (check (equal (subseq (row 1) 3) '(0.5 -0.25 0.125)) "row 1's spin is ~S" (subseq (row 1) 3))
+      (check (equal (row 2) (append (mapcar (lambda (x g) (+ x (* h g))) '(10.0 20.0 -30.0) g) '(7.0 8.0 9.0)))
+             "row 2, below the top speed, is ~S" (row 2)))))
+;; K3RNLS-speed-clamp-closed-form ends here
+
 ;; [[file:../physics.org::#K3RNLS][K3RNLS-entry-ranges-exact]]
 (define-claim "K3RNLS" entry-ranges-exact
     "Each solver entry point takes its numbers at both ends of their ranges and refuses the nearest beyond."
@@ -2661,7 +2684,9 @@ function of a column name that reads row K's float in that column. #T3STK1"
 (define-claim "W4RMST" warm-start-formula
     "warm-start-range applies P and the torques of the closed form to all twelve columns, in each variant."
   (let* ((cbuf (luv-physics::make-constraint-columns))
-         (given '((nx 0.6) (ny 0.8) (nz 0.0) (t1x 0.8) (t1y -0.6) (t1z 0.0) (t2x 0.0) (t2y 0.0) (t2z 1.0)
+         ;; a frame none of whose nine components is zero, so that every product of a
+         ;; component shows in a column
+         (given '((nx 2/7) (ny 3/7) (nz 6/7) (t1x 3/7) (t1y -6/7) (t1z 2/7) (t2x 6/7) (t2y 2/7) (t2z -3/7)
                    (normal-impulse 2.0) (tangent-impulse-1 3.0) (tangent-impulse-2 5.0) (spin-impulse 7.0)
                    (rolling-impulse-x 11.0) (rolling-impulse-y 13.0) (rolling-impulse-z 17.0)
                    (ima 0.5) (imb 0.25) (iia 0.1) (iib 0.2) (ra 0.3) (rb 0.4))))
@@ -2672,8 +2697,9 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (loop for (column value) in given
           do (setf (aref (luv-physics::constraint-columns-data cbuf)
                          (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset column)))
-                   value))
-    (flet ((at (column) (float (second (assoc column given)) 1d0)))
+                   (float value 1.0)))
+    ;; the value as the buffer holds it, in single precision
+    (flet ((at (column) (float (float (second (assoc column given)) 1.0) 1d0)))
       (dolist (features '((:friction :rolling-resistance) (:friction) (:rolling-resistance) ()))
         (let* ((friction (member :friction features)) (rolling (member :rolling-resistance features))
                (kernel (luv-physics::featured-kernel 'luv-physics::warm-start-range features))
@@ -2876,6 +2902,22 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (not (awake-at 33 0.5)) "the still ball was still awake at 0.55 s")
     (check (awake-at 57 1.0) "with a time to sleep of 1 s the ball slept before 0.95 s")))
 ;; F1NAL5-sleeps-after-its-time ends here
+
+;; [[file:../physics.org::#F1NAL5][F1NAL5-limit-reached-is-crossed]]
+(define-claim "F1NAL5" limit-reached-is-crossed
+    "A centre landing exactly on the coordinate limit, on any axis and side, escapes in that step."
+  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
+         (inside (- luv-physics:+physics-coordinate-limit+ 0.5))
+         (balls (list (luv-physics::add-physics-body w inside 0.5 0.5 :vx 30)
+                      (luv-physics::add-physics-body w 0.5 (- inside) 0.5 :vy -30)
+                      (luv-physics::add-physics-body w 0.5 0.5 inside :vz 30)))
+         (short (luv-physics::add-physics-body w (- inside 0.25) 8.5 0.5 :vx 30))
+         (escaped (loop for (kind a) in (step-events w) when (eq kind :escaped) collect a)))
+    (check (null (set-exclusive-or escaped balls)) "escaped ~S, not ~S" escaped balls)
+    (check (luv-physics::physics-body-alive-p w short) "the ball left short of the limit was removed")
+    (check (= (- luv-physics:+physics-coordinate-limit+ 0.25) (luv-physics::physics-body-position w short))
+           "the ball left short is at ~F" (luv-physics::physics-body-position w short))))
+;; F1NAL5-limit-reached-is-crossed ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-ball-rests-and-sleeps]]
 (define-claim "IDVK7G" ball-rests-and-sleeps
@@ -5349,6 +5391,100 @@ within reach of something. #S9WEEP"
                (class-name (class-of (luv-physics::physics-world-kernels
                                       (make-physics-world :kernels :auto))))))))
 ;; 7PAQ3M-choosing-a-family ends here
+
+;; [[file:../physics.org::#W1D3KF][W1D3KF-lanes-are-scalar-rows]]
+(define-claim "W1D3KF" lanes-are-scalar-rows
+    "Every lane of each wide kernel and variant equals the scalar kernel on its row, bit for bit."
+  (let* ((rows 8) (next (make-lcg 77))
+         (cbuf (luv-physics::make-constraint-columns))
+         (v (make-array (luv-physics::solver-row (* 2 rows)) :element-type 'single-float :initial-element 0.0))
+         (d (make-array (luv-physics::delta-row (* 2 rows)) :element-type 'single-float :initial-element 0.0)))
+    (labels ((uniform (low high) (float (+ low (* (- high low) (funcall next))) 1.0))
+             (signed (low high) (* (if (< (funcall next) 0.5) -1.0 1.0) (uniform low high)))
+             (put (k column value)
+               (setf (aref (luv-physics::constraint-columns-data cbuf)
+                           (+ (luv-physics::constraint-base k) (luv-physics::constraint-offset column)))
+                     (float value 1.0)))
+             (direction ()
+               (let* ((u (list (signed 0.2 1.0) (signed 0.2 1.0) (signed 0.2 1.0)))
+                      (l (sqrt (reduce #'+ (mapcar #'* u u)))))
+                 (mapcar (lambda (c) (/ c l)) u))))
+      (luv-physics::constraint-columns-ensure-capacity cbuf rows)
+      (setf (luv-physics::constraint-columns-length cbuf) rows)
+      (dotimes (b (* 2 rows))
+        ;; bodies 0 and 1, of row 0, are at rest
+        (dotimes (j 6) (setf (aref v (+ (luv-physics::solver-row b) j)) (if (< b 2) 0.0 (signed 0.1 (if (< j 3) 2.0 5.0))))))
+      (dotimes (k rows)
+        (destructuring-bind (nx ny nz) (direction)
+          (let ((ma (if (= k 6) 0.0 (uniform 0.3 2.0))) (mb (if (= k 3) 0.0 (uniform 0.3 2.0)))
+                (ra (uniform 0.2 0.3)) (rb (uniform 0.2 0.3)))
+            (setf (aref (luv-physics::constraint-columns-body-a cbuf) k) (* 2 k)
+                  (aref (luv-physics::constraint-columns-body-b cbuf) k) (1+ (* 2 k))
+                  (aref (luv-physics::constraint-columns-contact cbuf) k) k)
+            (loop for (column value)
+                    in `((nx ,nx) (ny ,ny) (nz ,nz) (ra ,ra) (rb ,rb) (ima ,ma) (imb ,mb)
+                         (iia ,(/ (* 2.5 ma) (* ra ra))) (iib ,(/ (* 2.5 mb) (* rb rb)))
+                         (separation ,(cond ((= k 6) 0.0) ((evenp k) (uniform 0.001 0.02)) (t (- (uniform 0.001 0.03)))))
+                         (kvn ,(if (member k '(2 5)) (signed 0.1 1.0) 0.0))
+                         (kvt1 ,(if (member k '(2 5)) (signed 0.1 1.0) 0.0))
+                         (kvt2 ,(if (member k '(2 5)) (signed 0.1 1.0) 0.0))
+                         (friction ,(uniform 0.2 0.8)) (bias-rate ,(uniform 20.0 60.0))
+                         (mass-scale ,(uniform 0.5 0.9)) (impulse-scale ,(uniform 0.1 0.5))
+                         (normal-impulse ,(if (< k 2) 0.0 (uniform 0.01 0.2)))
+                         (max-normal-impulse ,(if (member k '(4 7)) 0.0 (uniform 0.2 0.4)))
+                         (tangent-impulse-1 ,(if (= k 0) 0.0 (signed 0.001 (if (oddp k) 0.3 0.01))))
+                         (tangent-impulse-2 ,(if (= k 0) 0.0 (signed 0.001 (if (oddp k) 0.3 0.01))))
+                         (spin-limit ,(if (member k '(0 3)) 0.0 (uniform 0.005 0.02)))
+                         (spin-impulse ,(if (member k '(0 3)) 0.0 (signed 0.0001 0.01)))
+                         (rolling-limit ,(if (member k '(1 4)) 0.0 (uniform 0.005 0.02)))
+                         (rolling-impulse-x ,(if (member k '(0 1 4)) 0.0 (signed 0.0001 0.01)))
+                         (rolling-impulse-y ,(if (member k '(0 1 4)) 0.0 (signed 0.0001 0.01)))
+                         (rolling-impulse-z ,(if (member k '(0 1 4)) 0.0 (signed 0.0001 0.01)))
+                         (restitution ,(if (member k '(4 5)) 0.5 0.0))
+                         (armed-speed ,(if (= k 5) 1.5 0.0)))
+                  do (put k column value))
+            (when (= k 4)
+              ;; row 4 strikes: body b approaches body a at 3 m/s along the normal
+              (loop for c in (list nx ny nz) for j from 0
+                    do (setf (aref v (+ (luv-physics::solver-row (1+ (* 2 k))) j))
+                             (- (aref v (+ (luv-physics::solver-row (* 2 k)) j)) (* 3.0 c)))))))))
+    (flet ((same (family what scalar wide)
+             (destructuring-bind (sc sv) scalar
+               (destructuring-bind (wc wv) wide
+                 (let ((cd (luv-physics::constraint-columns-data sc)) (wd (luv-physics::constraint-columns-data wc)))
+                   (check (every #'eql cd wd) "~A, ~A: constraint floats ~S differ" family what
+                          (loop for i below (length cd) unless (eql (aref cd i) (aref wd i)) collect i))
+                   (check (loop for b below (* 2 rows)
+                                always (loop for j below 6 for o = (+ (luv-physics::solver-row b) j)
+                                             always (eql (aref sv o) (aref wv o))))
+                          "~A, ~A: the velocities differ" family what)))))
+           (copy (c) (let ((n (luv-physics::copy-constraint-columns c)))
+                       (setf (luv-physics::constraint-columns-data n) (copy-seq (luv-physics::constraint-columns-data c)))
+                       n)))
+      (dolist (family (remove :scalar (available-kernel-families)))
+        (let* ((width (if (eq family :avx2) 8 4))
+               (name (lambda (stem) (find-symbol (format nil "~A/~A" stem family) :luv-physics))))
+          (dolist (features '((:friction :rolling-resistance :restitution) (:friction)))
+            (let ((scalar (list (copy cbuf) (copy-seq v))) (wide (list (copy cbuf) (copy-seq v)))
+                  (h (/ 1.0 240)) (moved (copy-seq d)))
+              (luv-physics::prepare-frames-range (first scalar) 0 rows)
+              (funcall (funcall name "PREPARE-FRAMES-BLOCKS") (first wide) 0 rows)
+              (same family (list features :frames) scalar wide)
+              (funcall (luv-physics::featured-kernel 'luv-physics::warm-start-range features) (first scalar) (second scalar) 0 rows)
+              (funcall (luv-physics::featured-kernel (funcall name "WARM-START-BLOCKS") features)
+                       (first wide) (second wide) 0 rows)
+              (same family (list features :warm-start) scalar wide)
+              (dotimes (b (* 2 rows))
+                (dotimes (j 3) (setf (aref moved (+ (luv-physics::delta-row b) j)) (float (- (* 0.02 (funcall next)) 0.01) 1.0))))
+              (loop for (biased elapsed deltas) in (list (list t 0.0 d) (list nil h moved))
+                    do (luv-physics::solve-handing (luv-physics::featured-kernel 'luv-physics::solve-range features)
+                                                   'luv-physics::solve-impact-range 1 (first scalar) (second scalar) deltas
+                                                   0 rows (/ 1.0 h) biased elapsed 3.0 1.0 0.0 (* h -9.81) 0.0)
+                       (luv-physics::solve-handing (luv-physics::featured-kernel (funcall name "SOLVE-BLOCKS") features)
+                                                   (funcall name "SOLVE-IMPACT-BLOCKS") width (first wide) (second wide) deltas
+                                                   0 rows (/ 1.0 h) biased elapsed 3.0 1.0 0.0 (* h -9.81) 0.0)
+                       (same family (list features (if biased :solve :relax)) scalar wide)))))))))
+;; W1D3KF-lanes-are-scalar-rows ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-summary-is-the-first-sentence]]
 (define-claim "LW3YHU" summary-is-the-first-sentence
