@@ -2869,6 +2869,49 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "at rest the approach speed reads ~,5F m/s" (physics-world-max-approach-speed world))))
 ;; ST0R3S-error-figures ends here
 
+;; [[file:../physics.org::#ST0R3S][ST0R3S-store-is-exact]]
+(define-claim "ST0R3S" store-is-exact
+    "store-phase copies each constraint's impulses to its contact and reads the figures as their formulas, to the bit."
+  (let ((world (make-basin-world 300)))
+    (dotimes (i 60) (step-physics-world world))
+    (dolist (phase (ldiff luv-physics:*physics-phases* (member 'luv-physics::store-phase luv-physics:*physics-phases*)))
+      (funcall phase world))
+    (let* ((cbuf (luv-physics::physics-world-constraints world))
+           (v (luv-physics::physics-world-velocities world))
+           (slop (luv-physics::f32 (luv-physics::physics-world-slop world)))
+           (deepest 0.0) (fastest 0.0) (overlapping 0) (impulses '()))
+      (map-prepared-constraints
+       (lambda (k column)
+         (let* ((a (luv-physics::solver-row (aref (luv-physics::constraint-columns-body-a cbuf) k)))
+                (b (luv-physics::solver-row (aref (luv-physics::constraint-columns-body-b cbuf) k)))
+                (gap (- (funcall column 'gap) slop))
+                (vn (+ (* (- (aref v b) (aref v a)) (funcall column 'nx))
+                       (* (- (aref v (+ b 1)) (aref v (+ a 1))) (funcall column 'ny))
+                       (* (- (aref v (+ b 2)) (aref v (+ a 2))) (funcall column 'nz))
+                       (funcall column 'kvn))))
+           (push (list (aref (luv-physics::constraint-columns-contact cbuf) k)
+                       (funcall column 'normal-impulse) (funcall column 'tangent-impulse-1)
+                       (funcall column 'tangent-impulse-2))
+                 impulses)
+           (when (< gap 0.0)
+             (incf overlapping)
+             (setf deepest (max deepest (- gap)) fastest (max fastest (- vn))))))
+       world)
+      (luv-physics::store-phase world)
+      (check (> overlapping 100) "only ~D constraints overlap" overlapping)
+      (check (= (coerce deepest 'double-float) (physics-world-max-penetration world))
+             "the largest penetration reads ~F, not ~F" (physics-world-max-penetration world) deepest)
+      (check (and (plusp fastest) (= (coerce fastest 'double-float) (physics-world-max-approach-speed world)))
+             "the fastest approach reads ~F, not ~F" (physics-world-max-approach-speed world) fastest)
+      (let ((geometry (luv-physics::contact-columns-geometry (luv-physics::physics-world-contacts world))))
+        (check (loop for (c n t1 t2) in impulses
+                     for g = (luv-physics::geometry-start c)
+                     always (and (eql n (luv-physics::contact-at geometry g normal-impulse))
+                                 (eql t1 (luv-physics::contact-at geometry g tangent-impulse-1))
+                                 (eql t2 (luv-physics::contact-at geometry g tangent-impulse-2))))
+               "a contact does not hold its constraint's impulses")))))
+;; ST0R3S-store-is-exact ends here
+
 ;; [[file:../physics.org::#F1NAL5][F1NAL5-spin-turns-by-the-half-angle]]
 (define-claim "F1NAL5" spin-turns-by-the-half-angle
     "Free spin at omega for n steps gives q = (cos n*alpha, sin n*alpha * u), alpha = atan(|omega| dt/2)."
