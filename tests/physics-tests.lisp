@@ -3043,6 +3043,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "*physics-phases* is ~S" phases))))
 ;; IDVK7G-phase-order ends here
 
+;; [[file:../physics.org::#IDVK7G][IDVK7G-crowd-held-closed-form]]
+(define-claim "IDVK7G" crowd-held-closed-form
+    "hold-crowded-speeds scales a crowded row faster than half the push-out speed onto it, and nothing else."
+  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))))
+    (dotimes (i 4) (luv-physics::add-physics-body w (+ 1.5 (* 2 i)) 1.0 1.5))
+    (luv-physics::step-physics-world w)
+    (let* ((v (luv-physics::physics-world-velocities w))
+           (overlaps (luv-physics::pair-list-overlaps (luv-physics::physics-world-pair-list w)))
+           (cap luv-physics::+overlaps-per-body+)
+           (limit (* 0.5 (luv-physics::f32 (luv-physics::physics-world-push-max w))))
+           (given (list (list 4.0 -3.0 2.0 0.25 0.5 0.75) (list 4.0 -3.0 2.0 0.25 0.5 0.75)
+                        (list 0.5 1.0 -1.0 0.25 0.5 0.75) (list limit 0.0 0.0 0.25 0.5 0.75))))
+      (loop for row from 0 for count in (list cap (1- cap) cap cap)
+            do (setf (aref overlaps row) count))
+      (loop for row from 0 for values in given
+            do (loop for x in values for j from 0 do (setf (aref v (+ (luv-physics::solver-row row) j)) x)))
+      (luv-physics::hold-crowded-speeds w)
+      (flet ((row (r) (loop for j below 6 collect (aref v (+ (luv-physics::solver-row r) j)))))
+        (let ((s (/ limit (sqrt (+ (* 4.0 4.0) (* -3.0 -3.0) (* 2.0 2.0))))))
+          (check (equal (row 0) (list (* 4.0 s) (* -3.0 s) (* 2.0 s) 0.25 0.5 0.75))
+                 "the crowded row 0 is ~S" (row 0)))
+        (loop for r from 1 to 3
+              do (check (equal (row r) (nth r given)) "row ~D became ~S" r (row r)))))))
+;; IDVK7G-crowd-held-closed-form ends here
+
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-step-statistics]]
 (define-claim "IDVK7G" step-statistics
     "Last-step contact count, colour count and real seconds are consistent with the step's buffers."
