@@ -3425,38 +3425,6 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (member w values)))))
 ;; 4YDMX5-world-and-body-summaries ends here
 
-;; [[file:../physics.org::#M9W5P7][M9W5P7-operations-span-their-ranges]]
-(define-claim "M9W5P7" operations-span-their-ranges
-    "make-fuzz-operation's arguments sit at their ranges' low ends for draws of 0 and at their middles for 0.5."
-  (flet ((drawn (kind later)
-           (let* ((kinds luv-physics::+fuzz-operation-kinds+)
-                  (first (/ (+ (position kind kinds) 0.5d0) (length kinds))) (started nil))
-             (luv-physics::make-fuzz-operation
-              (lambda () (if started later (progn (setf started t) first))))))
-         (same (got want)
-           (and (= (length got) (length want))
-                (every (lambda (g w) (if (and (realp g) (realp w)) (< (abs (- g w)) 1d-5) (eql g w))) got want))))
-    (loop for (kind low middle)
-            in '((:add (:add 1 0.3 1 :radius 0.05 :mass 0.1 :vx -5 :vy -5 :vz -5 :life 0.1)
-                       (:add 6 2.15 6 :radius 0.25 :mass 5.05 :vx 0 :vy 0 :vz 0 :life nil))
-                 (:remove (:remove -1) (:remove 19))
-                 (:velocity (:velocity -1 -8 -8 -8) (:velocity 19 0 0 0))
-                 (:box (:box 1 0.2 1 0.1 0.1 0.1 :vx -3 :vy -3 :vz -3 :owner :pusher)
-                       (:box 6 1.1 6 0.55 0.55 0.55 :vx 0 :vy 0 :vz 0 :owner nil))
-                 (:edit (:edit 0 -1 0 t t) (:edit 6 1 6 nil nil))
-                 (:fill (:fill 0 -1 0 1 0 1 t) (:fill 5 -1 5 7 1 7 nil))
-                 (:wake (:wake 0 -1 0 0) (:wake 6 1 6 1.5))
-                 (:step (:step nil) (:step 0.026))
-                 (:spring (:spring) (:spring))
-                 (:player (:player -1 -1 t) (:player 0 0 nil))
-                 (:handler (:handler nil) (:handler :step))
-                 (:read (:read -1) (:read 19)))
-          do (let ((at-0 (drawn kind 0d0)) (at-half (drawn kind 0.5d0)))
-               (check (same at-0 low) "with draws of 0, ~S, not ~S" at-0 low)
-               (check (same at-half middle) "with draws of 0.5, ~S, not ~S" at-half middle)))
-    (check (equal '(:velocity nil nil nil nil) (drawn :velocity 0.9d0)) "with draws of 0.9, ~S" (drawn :velocity 0.9d0))))
-;; M9W5P7-operations-span-their-ranges ends here
-
 ;; [[file:../physics.org::#M9W5P7][M9W5P7-random-sequences-keep-promises]]
 (define-claim "M9W5P7" random-sequences-keep-promises
     "A hundred seeded sequences of 100 operations break no promise after any operation."
@@ -3501,6 +3469,38 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (plusp (hash-table-count (luv-physics::fuzz-state-conditions state)))
              "~S was refused nowhere" ops))))
 ;; M9W5P7-shrunk-failures-stay-fixed ends here
+
+;; [[file:../physics.org::#M9W5P7][M9W5P7-operations-span-their-ranges]]
+(define-claim "M9W5P7" operations-span-their-ranges
+    "make-fuzz-operation's arguments sit at their ranges' low ends for draws of 0 and at their middles for 0.5."
+  (flet ((drawn (kind later)
+           (let* ((kinds luv-physics::+fuzz-operation-kinds+)
+                  (first (/ (+ (position kind kinds) 0.5d0) (length kinds))) (started nil))
+             (luv-physics::make-fuzz-operation
+              (lambda () (if started later (progn (setf started t) first))))))
+         (same (got want)
+           (and (= (length got) (length want))
+                (every (lambda (g w) (if (and (realp g) (realp w)) (< (abs (- g w)) 1d-5) (eql g w))) got want))))
+    (loop for (kind low middle)
+            in '((:add (:add 1 0.3 1 :radius 0.05 :mass 0.1 :vx -5 :vy -5 :vz -5 :life 0.1)
+                       (:add 6 2.15 6 :radius 0.25 :mass 5.05 :vx 0 :vy 0 :vz 0 :life nil))
+                 (:remove (:remove -1) (:remove 19))
+                 (:velocity (:velocity -1 -8 -8 -8) (:velocity 19 0 0 0))
+                 (:box (:box 1 0.2 1 0.1 0.1 0.1 :vx -3 :vy -3 :vz -3 :owner :pusher)
+                       (:box 6 1.1 6 0.55 0.55 0.55 :vx 0 :vy 0 :vz 0 :owner nil))
+                 (:edit (:edit 0 -1 0 t t) (:edit 6 1 6 nil nil))
+                 (:fill (:fill 0 -1 0 1 0 1 t) (:fill 5 -1 5 7 1 7 nil))
+                 (:wake (:wake 0 -1 0 0) (:wake 6 1 6 1.5))
+                 (:step (:step nil) (:step 0.026))
+                 (:spring (:spring) (:spring))
+                 (:player (:player -1 -1 t) (:player 0 0 nil))
+                 (:handler (:handler nil) (:handler :step))
+                 (:read (:read -1) (:read 19)))
+          do (let ((at-0 (drawn kind 0d0)) (at-half (drawn kind 0.5d0)))
+               (check (same at-0 low) "with draws of 0, ~S, not ~S" at-0 low)
+               (check (same at-half middle) "with draws of 0.5, ~S, not ~S" at-half middle)))
+    (check (equal '(:velocity nil nil nil nil) (drawn :velocity 0.9d0)) "with draws of 0.9, ~S" (drawn :velocity 0.9d0))))
+;; M9W5P7-operations-span-their-ranges ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
