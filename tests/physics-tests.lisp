@@ -2781,6 +2781,39 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (zerop wrong) "~A: ~D of ~D kept gaps differ from the current gap" family wrong checked))))
 ;; S0LV3R-kept-gap-is-current ends here
 
+;; [[file:../physics.org::#S0LV3R][S0LV3R-one-row-closed-form]]
+(define-claim "S0LV3R" one-row-closed-form
+    "One relax row: normal impulse 1.5 and velocities exactly; spin friction clamped to +-0.75 or kept inside."
+  (loop for (spin want) in '((1.0 -0.75) (-1.0 0.75) (0.5 -0.5))
+        do (let ((cbuf (luv-physics::make-constraint-columns))
+                 (v (make-array (luv-physics::solver-row 3) :element-type 'single-float :initial-element 0.0))
+                 (d (make-array (luv-physics::delta-row 3) :element-type 'single-float :initial-element 0.0)))
+             (luv-physics::constraint-columns-ensure-capacity cbuf 8)
+             (setf (luv-physics::constraint-columns-length cbuf) 1
+                   (aref (luv-physics::constraint-columns-body-a cbuf) 0) 0
+                   (aref (luv-physics::constraint-columns-body-b cbuf) 0) 1
+                   (aref (luv-physics::constraint-columns-contact cbuf) 0) 0)
+             (loop for (column value)
+                     in '((nx 0.0) (ny 1.0) (nz 0.0) (t1x 1.0) (t1y 0.0) (t1z 0.0) (t2x 0.0) (t2y 0.0) (t2z 1.0)
+                          (ra 0.25) (rb 0.25) (ima 1.0) (imb 1.0) (iia 0.5) (iib 0.5) (separation 0.25)
+                          (normal-mass 0.5) (tangent-mass 0.3) (rolling-mass 1.0) (friction 0.5)
+                          (max-normal-impulse 1.0) (normal-impulse 1.0) (spin-limit 0.5))
+                   do (setf (aref (luv-physics::constraint-columns-data cbuf)
+                                  (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset column)))
+                            value))
+             (setf (aref v (+ (luv-physics::solver-row 1) 1)) -2.0
+                   (aref v (+ (luv-physics::solver-row 1) 4)) spin)
+             (luv-physics::solve-range cbuf v d 0 1 4.0 nil 0.0 3.0 1.0 0.0 0.0 0.0)
+             (flet ((column (name) (aref (luv-physics::constraint-columns-data cbuf)
+                                         (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset name))))
+                    (row (r) (loop for j below 6 collect (aref v (+ (luv-physics::solver-row r) j)))))
+               (check (= 1.5 (column 'normal-impulse)) "the normal impulse is ~A" (column 'normal-impulse))
+               (check (= want (column 'spin-impulse)) "spinning at ~A the spin impulse is ~A, not ~A"
+                      spin (column 'spin-impulse) want)
+               (check (equal (row 0) (list 0.0 -0.5 0.0 0.0 (* -0.5 want) 0.0)) "spinning at ~A body a is ~S" spin (row 0))
+               (check (equal (row 1) (list 0.0 -1.5 0.0 0.0 (+ spin (* 0.5 want)) 0.0)) "spinning at ~A body b is ~S" spin (row 1))))))
+;; S0LV3R-one-row-closed-form ends here
+
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-rebound-ratios]]
 (define-claim "R3ST1T" rebound-ratios
     "Each rebound above the threshold climbs to within 2% of e^2 times the height before it."
@@ -5500,7 +5533,7 @@ within reach of something. #S9WEEP"
 ;; [[file:../physics.org::#W1D3KF][W1D3KF-lanes-are-scalar-rows]]
 (define-claim "W1D3KF" lanes-are-scalar-rows
     "Every lane of each wide kernel and variant equals the scalar kernel on its row, bit for bit."
-  (let* ((rows 8) (next (make-lcg 77))
+  (let* ((rows 16) (next (make-lcg 77))
          (cbuf (luv-physics::make-constraint-columns))
          (v (make-array (luv-physics::solver-row (* 2 rows)) :element-type 'single-float :initial-element 0.0))
          (d (make-array (luv-physics::delta-row (* 2 rows)) :element-type 'single-float :initial-element 0.0)))
@@ -5581,7 +5614,7 @@ within reach of something. #S9WEEP"
               (same family (list features :warm-start) scalar wide)
               (dotimes (b (* 2 rows))
                 (dotimes (j 3) (setf (aref moved (+ (luv-physics::delta-row b) j)) (float (- (* 0.02 (funcall next)) 0.01) 1.0))))
-              (loop for (biased elapsed deltas) in (list (list t 0.0 d) (list nil h moved))
+              (loop for (biased elapsed deltas) in (list (list t 0.0 d) (list nil h moved) (list t h moved) (list nil (* 2 h) moved))
                     do (luv-physics::solve-handing (luv-physics::featured-kernel 'luv-physics::solve-range features)
                                                    'luv-physics::solve-impact-range 1 (first scalar) (second scalar) deltas
                                                    0 rows (/ 1.0 h) biased elapsed 3.0 1.0 0.0 (* h -9.81) 0.0)
