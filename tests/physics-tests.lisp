@@ -2902,6 +2902,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "at rest the approach speed reads ~,5F m/s" (physics-world-max-approach-speed world))))
 ;; ST0R3S-error-figures ends here
 
+;; [[file:../physics.org::#ST0R3S][ST0R3S-begin-carries-approach-speed]]
+(define-claim "ST0R3S" begin-carries-approach-speed
+    "A landing ball's :begin event reports its arrival speed, positive."
+  (dolist (e '(0.5 0.0))
+    (let* ((world (luv-physics::open-air-world :floor t))
+           (r 0.25d0) (slop (float luv-physics::*physics-linear-slop* 1d0))
+           (ball (luv-physics::add-physics-body world 0.0 (+ r 1d0) 0.0 :radius r :restitution e))
+           (want (sqrt (* 2 9.81d0 (+ 1d0 slop))))
+           (got nil))
+      (loop repeat 120 until got do
+        (loop for (kind a b speed) in (step-events world)
+              when (and (eq kind :begin) (= a ball) (null got)) do (setf got speed)))
+      (check (and (numberp got)
+                  (if (plusp e) (< (abs (- (/ got want) 1)) 0.002d0) (< (- want 0.33d0) got want)))
+             "restitution ~A: the :begin event reports ~S m/s, the arrival is at ~,4F" e got want))))
+;; ST0R3S-begin-carries-approach-speed ends here
+
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-store-is-exact]]
 (define-claim "ST0R3S" store-is-exact
     "store-phase copies each constraint's impulses to its contact and reads the figures as their formulas, to the bit."
