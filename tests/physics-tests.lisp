@@ -6112,7 +6112,7 @@ within reach of something. #S9WEEP"
       (dolist (family (remove :scalar (available-kernel-families)))
         (let* ((width (if (eq family :avx2) 8 4))
                (name (lambda (stem) (find-symbol (format nil "~A/~A" stem family) :luv-physics))))
-          (dolist (features '((:friction :rolling-resistance :restitution) (:friction)))
+          (dolist (features (list luv-physics::+physics-features+ '(:terrain :body-contacts :friction :sleep)))
             (let ((scalar (list (copy cbuf) (copy-seq v))) (wide (list (copy cbuf) (copy-seq v)))
                   (h (/ 1.0 240)) (moved (copy-seq d)))
               (luv-physics::prepare-frames-range (first scalar) 0 rows)
