@@ -974,6 +974,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (equal '(65534 65535 1 2) tags) "the tags are ~S" tags)))
 ;; B5N8JT-tags-wrap-within-their-bits ends here
 
+;; [[file:../physics.org::#B5N8JT][B5N8JT-handle-table-limits]]
+(define-claim "B5N8JT" handle-table-limits
+    "Slot 0 is reused first; a release adds one to the generation, wrapping at 2^20; -1 is malformed."
+  (let* ((table (luv-physics::make-handle-table))
+         (h0 (luv-physics::handle-table-allocate table luv-physics::+set-awake+ 0))
+         (h1 (luv-physics::handle-table-allocate table luv-physics::+set-awake+ 1)))
+    (check (equal '(0 1) (list (luv-physics::handle-index h0) (luv-physics::handle-index h1))))
+    (luv-physics::handle-table-release table h0)
+    (let ((again (luv-physics::handle-table-allocate table luv-physics::+set-awake+ 0)))
+      (check (= 0 (luv-physics::handle-index again)) "slot 0 was freed, slot ~D was taken"
+             (luv-physics::handle-index again))
+      (check (= 1 (luv-physics::handle-generation again)) "generation ~D after one release"
+             (luv-physics::handle-generation again))
+      (check (= 2 (luv-physics::handle-table-count table)) "~D slots opened for two bodies"
+             (luv-physics::handle-table-count table))
+      (check (eq :removed (luv-physics::handle-status table h0)))
+      (check (null (luv-physics::handle-status table again))))
+    (setf (aref (luv-physics::handle-table-generation table) 1) (1- (ash 1 20)))
+    (luv-physics::handle-table-release table h1)
+    (check (= 0 (aref (luv-physics::handle-table-generation table) 1)) "the generation after 2^20 - 1 is ~D"
+           (aref (luv-physics::handle-table-generation table) 1))
+    (check (eq :malformed (luv-physics::handle-status table -1)) "-1 is ~S"
+           (luv-physics::handle-status table -1))))
+;; B5N8JT-handle-table-limits ends here
+
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-describe-live-row]]
 (define-claim "B5N8JT" describe-live-row
     "describe shows the body's current y, before and after a step."
@@ -1432,6 +1457,35 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; E7V3NT-mortal-body-events ends here
 
+;; [[file:../physics.org::#E7V3NT][E7V3NT-event-data-grow-once]]
+(define-claim "E7V3NT" event-data-grow-once
+    "Forty events with data grow the data vector once; forty more, a step later, cons 0 bytes and read back."
+  (let* ((w (make-floor-world))
+         (data (loop for k below 40 collect (list :datum k))))
+    (flet ((push-forty ()
+             (loop for d in data for k from 0
+                   do (luv-physics::push-event w luv-physics::+event-hit+ k -1 1.0 2.0 3.0 4.0 d))
+             (luv-physics::push-event w luv-physics::+event-hit+ 40 -1 1.0 2.0 3.0 4.0)))
+      (push-forty)
+      (check (<= 41 (length (luv-physics::physics-world-event-data w))))
+      (luv-physics::step-physics-world w)
+      (check (zerop (luv-physics::event-columns-length (luv-physics::physics-world-events w))))
+      (let ((before (sb-ext:get-bytes-consed)))
+        (push-forty)
+        (check (= before (sb-ext:get-bytes-consed)) "forty events with data consed ~D bytes"
+               (- (sb-ext:get-bytes-consed) before)))
+      (let ((read '()))
+        (luv-physics::map-physics-events (lambda (kind a b x y z speed datum)
+                                           (declare (ignore kind b x y z speed))
+                                           (push (cons a datum) read))
+                                         w)
+        (setf read (nreverse read))
+        (check (= 41 (length read)))
+        (check (loop for (a . datum) in read for k from 0
+                     always (and (= a k) (eq datum (nth k data))))
+               "the data read back are not those pushed")))))
+;; E7V3NT-event-data-grow-once ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trim-gives-room-back]]
 (define-claim "QKS4GZ" trim-gives-room-back
     "After trim-physics-world, 20000 sleepers hold at most 500 bytes of heap each, and the world steps on."
@@ -1650,9 +1704,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
     "A hard arrival at a box gives :hit (and :begin) events carrying the box's owner."
   (let* ((w (make-floor-world))
          (owner (list :wall 7))
-         (h (luv-physics::add-physics-body w 2.5 0.245 3.5 :vx 6.0))
          (other (luv-physics::add-physics-body w 2.5 0.245 6.5 :vx 6.0))
+         (h (luv-physics::add-physics-body w 2.5 0.245 3.5 :vx 6.0))
          (hits '()) (begins '()) (other-hits '()))
+    (check (= 1 (luv-physics::handle-index h)))
     (dotimes (i 30)
       (dotimes (k 19)
         (luv-physics::post-physics-box w -10.0 0.5 (- (* 0.6 k) 12.0) 0.25 0.25 0.25 :owner (list :other k)))
@@ -1681,6 +1736,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
           (check (eq axis (handler-case (progn (apply #'luv-physics::post-physics-box w 3.5 3.0 3.5 extents) nil)
                             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
                  "~A = ~A was not refused by its name" axis bad))))
+    (check (equal '(1.0 2.0 9999.0)
+                  (handler-case (progn (luv-physics::post-physics-box w 3.5 3.0 3.5 0.5 0.5 0.5 :vx 1 :vy 2 :vz 9999) nil)
+                    (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-value e))))
+           "a box too fast is not refused with its velocity in order")
     (check (zerop (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))) "a refused box was posted")
     (luv-physics::post-physics-box w 3.5 3.0 3.5 0.001 1023 0.5)
     (check (= 1 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
@@ -3773,6 +3832,17 @@ in the order of *physics-scene-features*. #K5DF9S"
              "the walker left the resident world: x ~,3F" (luv-physics::physics-player-x p))))))
 ;; H7P4CX-walker-follows-the-rule ends here
 
+;; [[file:../physics.org::#H7P4CX][H7P4CX-frame-rounding-allowance]]
+(define-claim "H7P4CX" frame-rounding-allowance
+    "A frame 0.7e-12 s short of a step runs it; 1.3e-12 s short, it does not."
+  (let* ((terrain (make-floor-terrain))
+         (dt (luv-physics::physics-player-step-seconds (luv-physics::make-physics-player 1.5 0 1.5))))
+    (flet ((steps (short)
+             (luv-physics::advance-physics-player (luv-physics::make-physics-player 1.5 0 1.5) terrain (- dt short))))
+      (check (= 1 (steps 0.7d-12)) "0.7e-12 s short: ~D steps" (steps 0.7d-12))
+      (check (= 0 (steps 1.3d-12)) "1.3e-12 s short: ~D steps" (steps 1.3d-12)))))
+;; H7P4CX-frame-rounding-allowance ends here
+
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-refuses-bad-input]]
 (define-claim "H7P4CX" walker-refuses-bad-input
     "NaN, infinite and out-of-range walker input signals a condition and changes nothing."
@@ -4455,6 +4525,21 @@ counted. #RH7T05"
       (check (= (length indices) (length (luv-physics::physics-recording-style recording)))))))
 ;; RH7T05-recording-encodes-faithfully ends here
 
+;; [[file:../physics.org::#RH7T05][RH7T05-recording-cells-touch-air]]
+(define-claim "RH7T05" recording-cells-touch-air
+    "Around one air cell in solid ground, the recording's cells are its six neighbours."
+  (let* ((terrain (luv-physics::make-voxel-terrain))
+         (w (progn (luv-physics::fill-terrain terrain -8 -8 -8 16 16 16 t)
+                   (luv-physics::fill-terrain terrain 4 1 5 5 2 6 nil)
+                   (luv-physics::make-physics-world :terrain terrain :gravity '(0 0 0)))))
+    (luv-physics::add-physics-body w 4.5 1.5 5.5 :radius 0.25)
+    (let* ((recording (prog1 (luv-physics::start-physics-recording w) (luv-physics::stop-physics-recording w)))
+           (cells (loop for (x y z) on (luv-physics::recording-cells recording) by #'cdddr collect (list x y z))))
+      (check (equal (sort (copy-list cells) #'< :key (lambda (c) (+ (* 100 (first c)) (* 10 (second c)) (third c))))
+                    '((3 1 5) (4 0 5) (4 1 4) (4 1 6) (4 2 5) (5 1 5)))
+             "the cells are ~S" cells))))
+;; RH7T05-recording-cells-touch-air ends here
+
 ;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-the-scene]]
 (define-claim "RH7T05" viewer-draws-the-scene
     "In headless Chromium the viewer's screenshots are not blank, and moving the slider changes them."
@@ -4504,6 +4589,65 @@ counted. #RH7T05"
           (check (search "check 0.0 s: 300 awake, 0 asleep" text))
           (check (search (format nil "1.0 s: ~D awake" (luv-physics::physics-world-awake-count world)) text)))))))
 ;; UFK5EA-picture-draws-the-bodies ends here
+
+;; [[file:../physics.org::#UFK5EA][UFK5EA-picture-of-one-cell]]
+(define-claim "UFK5EA" picture-of-one-cell
+    "One air cell in solid ground: a disc and three faces, exactly placed, deepest first; the drawing fills the panel's width."
+  (let* ((terrain (luv-physics::make-voxel-terrain))
+         (w (progn (luv-physics::fill-terrain terrain -8 -8 -8 16 16 16 t)
+                   (luv-physics::fill-terrain terrain 4 1 5 5 2 6 nil)
+                   (luv-physics::make-physics-world :terrain terrain :gravity '(0 0 0)))))
+    (luv-physics::add-physics-body w 4.5 1.5 5.5 :radius 0.25)
+    (let ((recording (luv-physics::start-physics-recording w)))
+      (luv-physics::stop-physics-recording w)
+      (multiple-value-bind (across up toward) (luv-physics::view-basis 35 40)
+        (labels ((dot (u p) (+ (* (first u) (first p)) (* (second u) (second p)) (* (third u) (third p))))
+                 (project (p) (list (dot across p) (- (dot up p))))
+                 (near (a b) (every (lambda (x y) (< (abs (- x y)) 1d-9)) a b))
+                 (expected-face (cell axis colour)
+                   ;; the face of CELL whose normal is +AXIS: its corners and its middle
+                   (let* ((o (copy-list cell)) (a (mod (1+ axis) 3)) (b (mod (+ 2 axis) 3)))
+                     (incf (nth axis o))
+                     (flet ((at (u v) (let ((p (copy-list o))) (incf (nth a p) u) (incf (nth b p) v) p)))
+                       (list (dot toward (at 0.5 0.5)) (if (= axis 1) :face :wall) colour
+                             (mapcar #'project (list (at 0 0) (at 1 0) (at 1 1) (at 0 1))))))))
+          (let* ((cells (luv-physics::recording-cells recording))
+                 (items (luv-physics::scene-picture-items recording 0 cells across up toward))
+                 (disc (find :disc items :key #'second))
+                 (faces (remove :disc items :key #'second))
+                 (want (list (expected-face '(3 1 5) 0 #x8f937f) (expected-face '(4 0 5) 1 #xbcc0a8)
+                             (expected-face '(4 1 4) 2 #xa3a791))))
+            (check (= 4 (length items)) "~D items" (length items))
+            (check (and disc (near (fourth disc) (project '(4.5 1.5 5.5))) (= 0.25 (fifth disc))
+                        (< (abs (- (first disc) (dot toward '(4.5 1.5 5.5)))) 1d-9)
+                        (= #xd9822b (third disc)))
+                   "the disc is ~S" disc)
+            (check (= 3 (length faces)) "~D faces" (length faces))
+            (dolist (f want)
+              (check (find-if (lambda (g)
+                                (and (< (abs (- (first f) (first g))) 1d-9) (eq (second f) (second g))
+                                     (= (third f) (third g)) (= 4 (length (cdddr g)))
+                                     (every (lambda (p) (find-if (lambda (q) (near p q)) (cdddr g))) (fourth f))))
+                              faces)
+                     "no item is the face ~S" f))
+            (check (equal (mapcar #'first items) (sort (mapcar #'first items) #'<)) "the items are not deepest first")))))
+    (let ((path (repository-file "report/picture-cell-check.svg")) (xs '()))
+      (ensure-directories-exist path)
+      (luv-physics::write-scene-picture (luv-physics::start-physics-recording w) path '(0) :width 300 :height 1000)
+      (luv-physics::stop-physics-recording w)
+      (let ((text (luv-physics::read-file-text path)) (*read-default-float-format* 'double-float))
+        (flet ((attribute (name at) (let* ((s (+ (search (format nil "~A=\"" name) text :start2 at) (length name) 2)))
+                                      (values (subseq text s (position #\" text :start s)) s))))
+          (loop for at = (search "<circle" text) then (search "<circle" text :start2 (1+ at)) while at
+                do (let ((cx (read-from-string (attribute "cx" at))) (r (read-from-string (attribute "r" at))))
+                     (push (- cx r) xs) (push (+ cx r) xs)))
+          (loop for at = (search "<polygon" text) then (search "<polygon" text :start2 (1+ at)) while at
+                do (dolist (point (uiop:split-string (attribute "points" at) :separator " "))
+                     (push (read-from-string (first (uiop:split-string point :separator ","))) xs)))))
+      (check (= 14 (length xs)) "~D ends of discs and corners of faces" (length xs))
+      (check (< (abs (- 5 (reduce #'min xs))) 0.11) "the leftmost point is at ~,1F" (reduce #'min xs))
+      (check (< (abs (- 295 (reduce #'max xs))) 0.11) "the rightmost point is at ~,1F" (reduce #'max xs)))))
+;; UFK5EA-picture-of-one-cell ends here
 
 ;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-uses-world-grids]]
 (define-claim "Q5V1EW" view-grids-awake-rows-of-now
