@@ -3579,6 +3579,22 @@ hand: the world and the function to call before each step. #K5DF9S"
              "an unknown body argument gave ~A" e))))
 ;; K5DF9S-builders-keep-their-bits ends here
 
+;; [[file:../physics.org::#K5DF9S][K5DF9S-fixed-sequence-is-java-random]]
+(define-claim "K5DF9S" fixed-sequence-is-java-random
+    "fixed-sequence draws java.util.Random's numbers: Random(42)'s first four, Random(42 + 2^47)'s first."
+  (flet ((java (seed &rest ints)
+           (let ((next (luv-physics::fixed-sequence (logxor seed 25214903917))))
+             (loop for int in ints
+                   always (= (/ (ash (ldb (byte 32 0) int) -1) (float (ash 1 31) 1d0)) (funcall next))))))
+    (check (java 42 -1170105035 234785527 -1360544799 205897768) "not Random(42)'s numbers")
+    (check (java (+ 42 (ash 1 47)) 977378613) "not Random(42 + 2^47)'s first number"))
+  (let* ((next (luv-physics::fixed-sequence 0))
+         (draws (loop repeat 1000 collect (funcall next))))
+    (check (every (lambda (v) (and (typep v 'double-float) (<= 0d0 v) (< v 1d0))) draws))
+    (check (< (reduce #'min draws) 0.01d0))
+    (check (> (reduce #'max draws) 0.99d0))))
+;; K5DF9S-fixed-sequence-is-java-random ends here
+
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-refusals-name-the-clause]]
 (define-claim "K5DF9S" refusals-name-the-clause
     "Bad clauses are refused naming the scene and the clause; unknown names naming the operation."
