@@ -948,6 +948,17 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (equal (loop for i below 3 collect (first (row-values i))) '(10 14 12))))))
 ;; L4Y0UT-swap-remove-and-growth ends here
 
+;; [[file:../physics.org::#L4Y0UT][L4Y0UT-row-bytes-count-every-column]]
+(define-claim "L4Y0UT" row-bytes-count-every-column
+    "Row bytes: body 112, contact 120, event 40, box 44."
+  (check (equal '(112 120 40 44)
+                (list luv-physics::+body-columns-row-bytes+ luv-physics::+contact-columns-row-bytes+
+                      luv-physics::+event-columns-row-bytes+ luv-physics::+box-columns-row-bytes+))
+         "row bytes ~S"
+         (list luv-physics::+body-columns-row-bytes+ luv-physics::+contact-columns-row-bytes+
+               luv-physics::+event-columns-row-bytes+ luv-physics::+box-columns-row-bytes+)))
+;; L4Y0UT-row-bytes-count-every-column ends here
+
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-handle-generations]]
 (define-claim "B5N8JT" handle-generations
     "A reused slot gets a new generation: the old handle is stale, the new one works."
@@ -4005,6 +4016,31 @@ in the order of *physics-scene-features*. #K5DF9S"
                 (run :bouncy :scalar '(:terrain :body-contacts :friction :restitution :sleep) :restitution 0.5))
              "the bouncing pile compiled at run time differs from the general step"))))
 ;; FBNCH9-same-answers ends here
+
+;; [[file:../physics.org::#FBNCH9][FBNCH9-benchmark-row-as-described]]
+(define-claim "FBNCH9" benchmark-row-as-described
+    "The feature benchmark's row over steps 1..3 of the fountain: its bodies, ratio and column bytes."
+  (let* ((text (let ((luv-physics::+feature-scenes+
+                       '((:fountain "fountain, 3 steps" (:terrain :friction :sleep :mortal) 1 3))))
+                 (with-output-to-string (s) (luv-physics::run-feature-benchmark :stream s :kernels :scalar))))
+         (row (find-if (lambda (line) (search "| fountain, 3 steps |" line))
+                       (uiop:split-string text :separator (string #\Newline))))
+         (cells (and row (mapcar (lambda (c) (string-trim " " c)) (rest (butlast (uiop:split-string row :separator "|"))))))
+         (bodies (multiple-value-bind (world before) (luv-physics::feature-scene :fountain :kernels :scalar)
+                   (dotimes (i 3) (funcall before i) (step-physics-world world))
+                   (+ (physics-world-awake-count world) (physics-world-sleeping-count world)))))
+    (check (= 8 (length cells)) "the row is ~S" row)
+    (when (= 8 (length cells))
+      (let ((*read-default-float-format* 'double-float))
+        (destructuring-bind (general special ratio) (mapcar #'read-from-string (list (third cells) (fourth cells) (fifth cells)))
+          (check (< (abs (- ratio (/ special general))) (+ 0.006 (* 0.05 (/ special general))))
+                 "ratio ~A for medians ~A and ~A" ratio special general)))
+      (check (plusp bodies))
+      (check (string= (second cells) (princ-to-string bodies)) "~A bodies, ~D in the fountain" (second cells) bodies)
+      (check (string= (seventh cells) (format nil "~D, ~:*~D" (+ 112 (* 2 4 8)))) "body bytes ~A" (seventh cells))
+      (check (string= (eighth cells) (format nil "~D, ~D" (+ 120 (* 4 40) 24) (+ 120 (* 4 33) 24)))
+             "contact bytes ~A" (eighth cells)))))
+;; FBNCH9-benchmark-row-as-described ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-piles-come-to-rest]]
 (define-claim "X7R3M5" piles-come-to-rest
