@@ -540,6 +540,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                  (luv-physics::constraint-offset column)))))))))
 ;; A kit for the claims:1 ends here
 
+;; [[file:../physics.org::#V0CAB5][V0CAB5-defaults-as-tabled]]
+(define-claim "V0CAB5" defaults-as-tabled
+    "The parameters' defaults are the table's; clock-ns counts nanoseconds."
+  (let ((wrong (loop for (name value) in '((*physics-contact-hertz* 30.0) (*physics-contact-damping-ratio* 10.0)
+                                           (*physics-contact-push-max* 3.0) (*physics-load-stiffening* 10000.0)
+                                           (*physics-crowded-relax-passes* 3) (*physics-crowded-depth* 0.1)
+                                           (*physics-linear-slop* 0.005) (*physics-speculative-margin* 0.1)
+                                           (*physics-pair-skin* 0.03) (*physics-restitution-threshold* 1.0)
+                                           (*physics-hit-speed* 1.0) (*physics-sleep-speed* 0.05)
+                                           (*physics-time-to-sleep* 0.5) (*physics-wake-speed* 0.1)
+                                           (*physics-brace-mass-ratio* 4.0) (*physics-reach-limit* 0.98)
+                                           (*physics-max-speed* 400.0) (*physics-body-budget* 262144)
+                                           (*physics-terrain-chunk-budget* 32768) (+physics-max-colors+ 24)
+                                           (+physics-dynamic-colors+ 20) (+physics-coordinate-limit+ 65536))
+                     for symbol = (find-symbol (symbol-name name) '#:luv-physics)
+                     unless (eql value (symbol-value symbol))
+                       collect (list name (symbol-value symbol)))))
+    (check (null wrong) "defaults unlike the table: ~S" wrong))
+  (let ((ns (luv-physics::clock-ns)) (real (get-internal-real-time)))
+    (sleep 0.2)
+    (let ((dns (- (luv-physics::clock-ns) ns))
+          (dreal (* (- (get-internal-real-time) real) (/ 1000000000 internal-time-units-per-second))))
+      (check (< (abs (- dns dreal)) 5000000) "clock-ns advanced ~D ns where SBCL's clock advanced ~D" dns dreal))))
+;; V0CAB5-defaults-as-tabled ends here
+
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-non-finite-numbers]]
 (define-claim "C0ND1T" non-finite-numbers
     "NaN and ±infinity signal invalid-physics-number and leave the world untouched."
@@ -791,6 +816,34 @@ function of a column name that reads row K's float in that column. #T3STK1"
                    "a contact of the removed body survived")))))))
 ;; C0ND1T-failed-step-atomic ends here
 
+;; [[file:../physics.org::#C0ND1T][C0ND1T-failed-step-keeps-sleepers-found]]
+(define-claim "C0ND1T" failed-step-keeps-sleepers-found
+    "A sleeper that a failed step woke and gave back is still woken and pushed by a ball rolled into it."
+  (dolist (fail '(nil t))
+    (let* ((w (make-floor-world))
+           (sleeper (luv-physics::add-physics-body w 6.5 0.245 6.5)))
+      (dotimes (i 60) (luv-physics::step-physics-world w))
+      (check (not (luv-physics::physics-body-awake-p w sleeper)) "the ball did not fall asleep")
+      (let ((fast (luv-physics::add-physics-body w 5.9 0.245 6.5 :vx 5.0)))
+        (when fail
+          (let ((luv-physics:*physics-phases*
+                  (phases-checked-after 'luv-physics::grid-phase
+                                        (lambda (world)
+                                          (check (luv-physics::physics-body-awake-p world sleeper) "the failing step did not wake the sleeper")
+                                          (error "a phase failed")))))
+            (check (eq :failed (handler-case (progn (luv-physics::step-physics-world w) :stepped) (error () :failed))))))
+        (luv-physics::remove-physics-body w fast)
+        (luv-physics::step-physics-world w)
+        (let ((ball (luv-physics::add-physics-body w 4.5 0.245 6.5 :vx 5.0)))
+          (dotimes (i 60) (luv-physics::step-physics-world w))
+          (let ((x (luv-physics::physics-body-position w sleeper)))
+            (check (> x 6.8) "~:[~;after a failed step, ~]the sleeper stayed at x = ~,3F" fail x)
+            (check (< (luv-physics::physics-body-position w ball) x)
+                   "~:[~;after a failed step, ~]the rolled ball at ~,3F passed the sleeper at ~,3F"
+                   fail (luv-physics::physics-body-position w ball) x)))
+        (check (eq t (luv-physics::validate-physics-world w)))))))
+;; C0ND1T-failed-step-keeps-sleepers-found ends here
+
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-parameters-checked]]
 (define-claim "C0ND1T" parameters-checked
     "Every parameter is checked by name when a world is made, and the world keeps its own copy."
@@ -821,6 +874,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq outcome :stepped) "with the parameters rebound: ~A" outcome)
       (check (< (abs (- (body-y w h) 0.245)) 0.002)))))
 ;; C0ND1T-parameters-checked ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-parameter-ranges-closed]]
+(define-claim "C0ND1T" parameter-ranges-closed
+    "Every parameter is accepted at both ends of its range and refused just past either."
+  (let ((wrong '()))
+    (loop for (name symbol low high kind) in luv-physics::+physics-parameters+
+          for step = (if (eq kind 'integer) 1 (* 0.001 (- high low)))
+          do (flet ((outcome (value)
+                      (progv (if (eq name :reach-limit) (list symbol 'luv-physics::*physics-speculative-margin*) (list symbol))
+                          (list value 0.001)
+                        (handler-case (progn (luv-physics::make-physics-world) :accepted)
+                          (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))))
+               (loop for value in (list low high) for past in (list (- low step) (+ high step))
+                     unless (and (eq :accepted (outcome value)) (eq name (outcome past)))
+                       do (push (list name value (outcome value) past (outcome past)) wrong))))
+    (check (null wrong) "not closed at its ends: ~S" wrong)))
+;; C0ND1T-parameter-ranges-closed ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-event-handler-checked]]
 (define-claim "C0ND1T" event-handler-checked
@@ -1316,6 +1386,18 @@ function of a column name that reads row K's float in that column. #T3STK1"
               (check (zerop off-c) "~D constraint columns start off a 32-byte boundary" off-c))))))))
 ;; W0RLD7-solver-rows-aligned ends here
 
+;; [[file:../physics.org::#R9M4PV][R9M4PV-registry-refuses-bad-names]]
+(define-claim "R9M4PV" registry-refuses-bad-names
+    "register-kernel-family refuses a string or :auto as the name and a string as the instruction set."
+  (let ((before (copy-tree luv-physics::*kernel-families*))
+        (class (second (first luv-physics::*kernel-families*))))
+    (loop for (name set expected) in `(("avx2" nil :name) (:auto nil :name) (:wide ,"sse" :instruction-set))
+          do (check (eq expected (handler-case (progn (luv-physics::register-kernel-family name class set) :registered)
+                                   (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+                    "~S ~S was not refused naming ~S" name set expected))
+    (check (equal before luv-physics::*kernel-families*) "the registry changed")))
+;; R9M4PV-registry-refuses-bad-names ends here
+
 ;; [[file:../physics.org::#M4K3WD][M4K3WD-non-world-named]]
 (define-claim "M4K3WD" non-world-named
     "Exported functions of a WORLD signal not-a-physics-world naming themselves and WORLD for a non-world."
@@ -1444,6 +1526,19 @@ function of a column name that reads row K's float in that column. #T3STK1"
                               0.0 0.6 0.0 0.0 0.0 0.0 0 plain 0)))
               (check (equal (row-of plain) want) "the default row holds~%  ~S~%not~%  ~S" (row-of plain) want))))))))
 ;; M4K3WD-limits-and-every-column ends here
+
+;; [[file:../physics.org::#M4K3WD][M4K3WD-life-zero-refused]]
+(define-claim "M4K3WD" life-zero-refused
+    "A life of 0, 0.0 or -0.0 seconds is refused; no life means immortal."
+  (let ((w (make-physics-world)))
+    (dolist (life (list 0 0.0 -0.0))
+      (check (eq :life (handler-case (progn (add-physics-body w 1.0 1.0 1.0 :life life) :accepted)
+                         (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+             "a life of ~S was not refused" life))
+    (check (= 0 (physics-world-awake-count w)))
+    (add-physics-body w 1.0 1.0 1.0)
+    (check (= 0.0 (aref (luv-physics::body-columns-life (luv-physics::physics-world-awake w)) 0)))))
+;; M4K3WD-life-zero-refused ends here
 
 ;; [[file:../physics.org::#E7V3NT][E7V3NT-mortal-body-events]]
 (define-claim "E7V3NT" mortal-body-events
@@ -3606,6 +3701,45 @@ hand: the world and the function to call before each step. #K5DF9S"
     (check (> (reduce #'max draws) 0.99d0))))
 ;; K5DF9S-fixed-sequence-is-java-random ends here
 
+;; [[file:../physics.org::#K5DF9S][K5DF9S-scene-text-drops-its-anchor]]
+(define-claim "K5DF9S" scene-text-drops-its-anchor
+    "Each scene's text is its documentation less ' #ANCHOR'."
+  (dolist (scene luv-physics::*physics-scenes*)
+    (let ((doc (luv-physics::physics-scene-documentation scene))
+          (text (luv-physics:physics-scene-text scene)))
+      (check (and (string= text (subseq doc 0 (- (length doc) 8))) (not (find #\# text))
+                  (string= " #" (subseq doc (- (length doc) 8) (- (length doc) 6))))
+             "~S: text ~S of ~S" (luv-physics::physics-scene-name scene) text doc))))
+;; K5DF9S-scene-text-drops-its-anchor ends here
+
+;; [[file:../physics.org::#K5DF9S][K5DF9S-run-reports-its-seconds]]
+(define-claim "K5DF9S" run-reports-its-seconds
+    "run-physics-scene's lines give each second's counts of the world and its final state hash."
+  (let* ((text (make-string-output-stream))
+         (world (luv-physics::run-physics-scene :awake-basin :count 20 :seconds 2 :stream text))
+         (lines (remove "" (uiop:split-string (get-output-stream-string text) :separator (string #\Newline))
+                        :test #'string=))
+         (want (multiple-value-bind (w script) (luv-physics::make-scene-world :awake-basin :count 20)
+                 (loop for second from 1 to 2
+                       do (dotimes (i 60) (funcall script (+ i (* 60 (1- second)))) (step-physics-world w))
+                       collect (format nil "~D ~D ~D ~D ~D" second (physics-world-awake-count w)
+                                       (physics-world-sleeping-count w)
+                                       (luv-physics::physics-world-last-step-contact-count w)
+                                       (luv-physics::physics-world-last-step-color-count w))))))
+    (check (= 5 (length lines)) "the report is ~S" lines)
+    (when (= 5 (length lines))
+      (check (search "awake-basin: 20 balls" (first lines)) "~S" (first lines))
+      (check (search "time   awake sleeping" (second lines)))
+      (loop for line in (subseq lines 2 4) for w in want
+            do (let ((fields (remove "" (uiop:split-string line :separator " ") :test #'string=)))
+                 (check (string= w (format nil "~{~A~^ ~}" (list (first fields) (third fields) (fourth fields)
+                                                                 (fifth fields) (sixth fields))))
+                        "line ~S, want ~S" line w)))
+      (check (search (format nil "summary: 20 bodies") (fifth lines)) "~S" (fifth lines))
+      (check (search (format nil "state hash ~D" (physics-world-state-hash world)) (fifth lines))
+             "~S does not end with the returned world's hash" (fifth lines)))))
+;; K5DF9S-run-reports-its-seconds ends here
+
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-refusals-name-the-clause]]
 (define-claim "K5DF9S" refusals-name-the-clause
     "Bad clauses are refused naming the scene and the clause; unknown names naming the operation."
@@ -3934,6 +4068,29 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (eq t (luv-physics::validate-physics-world world))))))
 ;; H7P4CX-walker-kicks-balls ends here
 
+;; [[file:../physics.org::#B3NCH5][B3NCH5-measure-basin-reports-the-world]]
+(define-claim "B3NCH5" measure-basin-reports-the-world
+    "measure-basin over steps 20..24 of 20 balls: the world's own contacts, colours, overflow and deepest; phases in order."
+  (let ((m (luv-physics::measure-basin 20 :from 20 :to 24))
+        (w (luv-physics::make-basin-world 20)) (deepest 0.0))
+    (dotimes (i 24)
+      (step-physics-world w)
+      (setf deepest (max deepest (luv-physics::physics-world-max-penetration w))))
+    (check (equal (list 20 :scalar (luv-physics::physics-world-last-step-contact-count w)
+                        (luv-physics::physics-world-last-step-color-count w)
+                        (luv-physics::physics-world-overflow-count w) deepest)
+                  (list (getf m :balls) (getf m :kernels) (getf m :contacts) (getf m :colours)
+                        (getf m :overflow) (getf m :deepest)))
+           "measured ~S" m)
+    (check (plusp (getf m :contacts)))
+    (check (equal luv-physics:*physics-phases* (mapcar #'car (getf m :phases))))
+    (check (equal luv-physics:*physics-phases* (mapcar #'car (getf m :phase-bytes))))
+    (check (every (lambda (p) (>= (cdr p) 0)) (getf m :phases)))
+    (check (<= (reduce #'+ (getf m :phases) :key #'cdr) (getf m :mean)) "phases ~S over a mean step of ~A ms"
+           (getf m :phases) (getf m :mean))
+    (check (< 0 (getf m :median)))))
+;; B3NCH5-measure-basin-reports-the-world ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-probe-reaches-the-shared-cache]]
 (define-claim "B3NCH5" probe-reaches-the-shared-cache
     "A chained read over 8 MB takes more than twice as long as over 32 KB."
@@ -4039,7 +4196,9 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (string= (second cells) (princ-to-string bodies)) "~A bodies, ~D in the fountain" (second cells) bodies)
       (check (string= (seventh cells) (format nil "~D, ~:*~D" (+ 112 (* 2 4 8)))) "body bytes ~A" (seventh cells))
       (check (string= (eighth cells) (format nil "~D, ~D" (+ 120 (* 4 40) 24) (+ 120 (* 4 33) 24)))
-             "contact bytes ~A" (eighth cells)))))
+             "contact bytes ~A" (eighth cells))
+      (check (every (lambda (n) (>= (parse-integer n) 0)) (remove "" (uiop:split-string (sixth cells) :separator ", ") :test #'string=))
+             "bytes consed ~A" (sixth cells)))))
 ;; FBNCH9-benchmark-row-as-described ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-piles-come-to-rest]]
@@ -4203,6 +4362,25 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (zerop consed) "~D bytes consed per step in the second minute" consed)
     (check (< (abs growth) 65536) "the heap grew by ~D bytes" growth)))
 ;; X7R3M5-fountain-runs-flat ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-finite-means-finite]]
+(define-claim "X7R3M5" finite-means-finite
+    "world-finite-p: the largest single-float is finite; an infinity or a NaN is not."
+  (let ((w (make-physics-world :gravity '(0 0 0))))
+    (add-physics-body w 1.0 1.0 1.0)
+    (let ((awake (luv-physics::physics-world-awake w)))
+      (flet ((finite-with (column value)
+               (let ((old (aref column 0)))
+                 (setf (aref column 0) value)
+                 (prog1 (luv-physics::world-finite-p w) (setf (aref column 0) old)))))
+        (check (luv-physics::world-finite-p w))
+        (check (finite-with (luv-physics::body-columns-vx awake) most-positive-single-float)
+               "the largest single-float is not finite")
+        (check (not (finite-with (luv-physics::body-columns-vx awake) sb-ext:single-float-positive-infinity)))
+        (let ((nan-finite (sb-int:with-float-traps-masked (:invalid)
+                            (finite-with (luv-physics::body-columns-y awake) (sb-kernel:make-single-float #x7FC00000)))))
+          (check (null nan-finite) "a NaN is finite"))))))
+;; X7R3M5-finite-means-finite ends here
 
 ;; [[file:../physics.org::#W9PREC][W9PREC-free-fall-is-first-order]]
 (define-claim "W9PREC" free-fall-is-first-order
@@ -4591,6 +4769,18 @@ counted. #RH7T05"
                     '((3 1 5) (4 0 5) (4 1 4) (4 1 6) (4 2 5) (5 1 5)))
              "the cells are ~S" cells))))
 ;; RH7T05-recording-cells-touch-air ends here
+
+;; [[file:../physics.org::#RH7T05][RH7T05-recording-bounds-hold-every-centre]]
+(define-claim "RH7T05" recording-bounds-hold-every-centre
+    "Bounds: every centre's box grown by the pad; the unit box for an empty recording."
+  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))))
+    (flet ((bounds () (let ((r (prog1 (luv-physics::start-physics-recording w) (luv-physics::stop-physics-recording w))))
+                        (multiple-value-list (luv-physics::recording-bounds r)))))
+      (check (equal '((0.0 0.0 0.0) (1.0 1.0 1.0)) (bounds)) "empty: ~S" (bounds))
+      (add-physics-body w 4.5 1.5 5.5 :radius 0.25)
+      (add-physics-body w 6.0 0.5 2.0 :radius 0.25)
+      (check (equal '((4.0 0.0 1.5) (6.5 2.0 6.0)) (bounds)) "two balls: ~S" (bounds)))))
+;; RH7T05-recording-bounds-hold-every-centre ends here
 
 ;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-the-scene]]
 (define-claim "RH7T05" viewer-draws-the-scene
@@ -5444,6 +5634,19 @@ within reach of something. #S9WEEP"
     (check (> found 2000) "the queries found only ~D things" found)))
 ;; OV3RLP-regions-match-brute-force ends here
 
+;; [[file:../physics.org::#OV3RLP][OV3RLP-no-terrain-no-cells]]
+(define-claim "OV3RLP" no-terrain-no-cells
+    "Without terrain the cell queries find nothing; the body queries still find the ball."
+  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))) (calls 0))
+    (add-physics-body w 0.5 0.5 0.5 :radius 0.25)
+    (flet ((counted (&rest cell) (declare (ignore cell)) (incf calls)))
+      (check (= 0 (map-physics-cells-in-sphere #'counted w 0.0 0.0 0.0 2.0)))
+      (check (= 0 (map-physics-cells-in-box #'counted w 0.0 0.0 0.0 2.0 2.0 2.0)))
+      (check (= 0 calls) "~D cells reported" calls)
+      (check (= 1 (map-physics-bodies-in-sphere #'counted w 0.0 0.0 0.0 2.0)))
+      (check (= 1 (map-physics-bodies-in-box #'counted w 0.0 0.0 0.0 2.0 2.0 2.0))))))
+;; OV3RLP-no-terrain-no-cells ends here
+
 ;; [[file:../physics.org::#QB3NCH][QB3NCH-queries-cons-nothing]]
 (define-claim "QB3NCH" queries-cons-nothing
     "Rays, sphere casts and region queries between steps cons 0 bytes once warm."
@@ -5472,6 +5675,47 @@ within reach of something. #S9WEEP"
                (- (sb-ext:get-bytes-consed) before))
         (check (plusp n))))))
 ;; QB3NCH-queries-cons-nothing ends here
+
+;; [[file:../physics.org::#QB3NCH][QB3NCH-benchmark-times-the-named-queries]]
+(define-claim "QB3NCH" benchmark-times-the-named-queries
+    "The benchmark's ray, cast and overlap give the API's answers for the query spelled out; time-queries visits every query."
+  (let* ((w (luv-physics::make-basin-world 300))
+         (q (luv-physics::query-benchmark-inputs 100 7))
+         (hit (make-physics-hit)) (found '()) (wrong 0) (hits 0)
+         (counter (lambda (h) (push h found))))
+    (dotimes (i 60) (step-physics-world w))
+    (let ((ray (luv-physics::benchmark-query w :ray hit counter))
+          (sphere (luv-physics::benchmark-query w :sphere hit counter))
+          (overlap (luv-physics::benchmark-query w :overlap hit counter)))
+      (flet ((same (got want)
+               (if (and got want)
+                   (progn (incf hits)
+                          (unless (and (eq (physics-hit-kind got) (physics-hit-kind want))
+                                       (= (physics-hit-handle got) (physics-hit-handle want))
+                                       (= (physics-hit-distance got) (physics-hit-distance want)))
+                            (incf wrong)))
+                   (unless (eq (null got) (null want)) (incf wrong)))))
+        (dotimes (k 100)
+          (destructuring-bind (x y z dx dy dz) (loop for o below 6 collect (aref q (+ (* 7 k) o)))
+            (same (funcall ray q (* 7 k)) (physics-ray-cast w x y z dx dy dz 10.0))
+            (same (funcall sphere q (* 7 k)) (physics-sphere-cast w x y z 0.25 dx dy dz 10.0))
+            (setf found '())
+            (funcall overlap q (* 7 k))
+            (let ((want '()))
+              (map-physics-bodies-in-sphere (lambda (h) (push h want)) w x y z 1.0)
+              (unless (equal (sort found #'<) (sort want #'<)) (incf wrong)))))))
+    (check (zerop wrong) "~D queries differ from the API's" wrong)
+    (check (> hits 50) "only ~D hits" hits))
+  (let ((seen (make-array 30 :element-type 'bit :initial-element 0)))
+    (multiple-value-bind (wall cpu bytes)
+        (luv-physics::time-queries (make-array 21 :element-type 'single-float) 3
+                                   (lambda (q i) (declare (ignore q) (type fixnum i)) (setf (sbit seen i) 1)))
+      (check (equal '(0 7 14) (loop for i below 30 when (= 1 (sbit seen i)) collect i)) "offsets ~S"
+             (loop for i below 30 when (= 1 (sbit seen i)) collect i))
+      (check (and (plusp wall) (plusp cpu)))
+      ;; the run's own few boxed numbers, over a million calls, are far below a byte a query
+      (check (<= 0 bytes 1) "~A bytes a query" bytes))))
+;; QB3NCH-benchmark-times-the-named-queries ends here
 
 ;; [[file:../physics.org::#QB3NCH][QB3NCH-benchmark-queries-as-described]]
 (define-claim "QB3NCH" benchmark-queries-as-described
