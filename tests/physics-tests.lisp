@@ -4472,7 +4472,7 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (plusp bodies))
       (check (string= (second cells) (princ-to-string bodies)) "~A bodies, ~D in the fountain" (second cells) bodies)
       (check (string= (seventh cells) (format nil "~D, ~:*~D" (+ 112 (* 2 4 8)))) "body bytes ~A" (seventh cells))
-      (check (string= (eighth cells) (format nil "~D, ~D" (+ 120 (* 4 40) 24) (+ 120 (* 4 33) 24)))
+      (check (string= (eighth cells) (format nil "~D, ~D" (+ 120 (* 4 40) 24) (+ 120 (* 4 29) 24)))
              "contact bytes ~A" (eighth cells))
       (check (every (lambda (n) (>= (parse-integer n) 0)) (remove "" (uiop:split-string (sixth cells) :separator ", ") :test #'string=))
              "bytes consed ~A" (sixth cells)))))
