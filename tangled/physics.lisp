@@ -3040,8 +3040,9 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
              (n (body-columns-length awake))
              (margin (f32 (physics-world-margin world)))
              (dt (physics-world-current-dt world))
-             (wake2 (f32 (expt (physics-world-wake-speed world) 2))))
-        (declare (type single-float margin wake2 dt))
+             (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
+             (rmax (f32 (physics-world-max-radius world))))
+        (declare (type single-float margin wake2 dt rmax))
         (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
                  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
                  (do-sleeping-neighbours (h world x y z :span span)
@@ -3084,11 +3085,15 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
                                (* (aref vz i) (aref vz i)))
                             wake2)
                          (zerop (logand (aref flags i) +flag-terrain-only+)))
-                (wake-near (aref x i) (aref y i) (aref z i)
-                           (+ (aref radius i) margin
-                              (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                              (* (aref vz i) (aref vz i))))))
-                           1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))
+                (let ((extra (+ (aref radius i) margin
+                                (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                                (* (aref vz i) (aref vz i))))))))
+                  ;; a sleeper within reach is at most EXTRA plus the largest radius away, so
+                  ;; its cell is at most that many cell edges from the body's, rounded up: one
+                  ;; cell unless the body travels more than the skin in a step
+                  (wake-near (aref x i) (aref y i) (aref z i) extra
+                             (ceiling (* (+ extra rmax) (hash-grid-inv-cell grid)))
+                             nil 0.0 0.0 0.0 0.0 0.0 0.0)))))
           (let ((boxes (physics-world-boxes world))
                 (inv (hash-grid-inv-cell grid)))
             (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes

@@ -1295,6 +1295,46 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; Y5H8KC-stale-contacts-pruned ends here
 
+;; [[file:../physics.org::#Y5H8KC][Y5H8KC-keys-name-one-contact]]
+(define-claim "Y5H8KC" keys-name-one-contact
+    "Two keys are equal exactly when kind, slots and cells modulo 2^12, 2^10, 2^12 are: checked over edge values."
+  (locally (declare (notinline luv-physics::pair-key luv-physics::terrain-key luv-physics::box-key))
+  (let ((seen (make-hash-table)) (clashes '()) (count 0)
+        (slots (list 0 1 2 (ash 1 23) (1- (ash 1 24)))))
+    (flet ((note (key name)
+             (incf count)
+             (let ((other (gethash key seen)))
+               (cond ((null other) (setf (gethash key seen) name))
+                     ((not (equal other name)) (push (list key other name) clashes))))))
+      (dolist (a slots)
+        (dolist (b slots)
+          (when (< a b) (note (luv-physics::pair-key a b) (list :pair a b))))
+        (dolist (id (list 0 1 2 (ash 1 33) (1- (ash 1 34))))
+          (note (luv-physics::box-key a id) (list :box a id)))
+        (dolist (x '(0 1 3 -1 2047 2048 4095 4096 -4096 6000))
+          (dolist (y '(0 1 -1 511 512 1023 1024 -1024))
+            (dolist (z '(0 1 -1 2047 2048 4095 4096 -4096))
+              (note (luv-physics::terrain-key a x y z) (list :terrain a (mod x 4096) (mod y 1024) (mod z 4096)))))))
+      (check (> count 2500))
+      (check (null clashes) "~D keys name two contacts, e.g. ~S" (length clashes) (first clashes))
+      ;; and the same contact always has the same key: cells equal modulo the field widths
+      (check (= (hash-table-count seen) (length (remove-duplicates (loop for v being the hash-values of seen collect v) :test #'equal)))
+             "one contact has two keys")))))
+;; Y5H8KC-keys-name-one-contact ends here
+
+;; [[file:../physics.org::#Y5H8KC][Y5H8KC-deleting-an-absent-key-changes-nothing]]
+(define-claim "Y5H8KC" deleting-an-absent-key-changes-nothing
+    "contact-table-delete of a key the table does not hold leaves every entry and the count as they were."
+  (let ((table (luv-physics::make-contact-table)))
+    (dotimes (k 20) (luv-physics::contact-table-put table (* 7919 (1+ k)) k))
+    (let ((before (copy-seq (luv-physics::contact-table-slots table))))
+      (luv-physics::contact-table-delete table 123456789)
+      (check (= 20 (luv-physics::contact-table-count table)) "the count is ~D" (luv-physics::contact-table-count table))
+      (check (equalp before (luv-physics::contact-table-slots table)) "the slots changed")
+      (check (loop for k below 20 always (= k (luv-physics::contact-table-find table (* 7919 (1+ k)))))
+             "a key no longer finds its row"))))
+;; Y5H8KC-deleting-an-absent-key-changes-nothing ends here
+
 ;; [[file:../physics.org::#D9W4CH][D9W4CH-cell-floor-is-floor]]
 (define-claim "D9W4CH" cell-floor-is-floor
     "cell-floor = floor of the clamped value, on signed zeros, integers, halves, bounds and 20000 samples."
@@ -1380,6 +1420,34 @@ function of a column name that reads row K's float in that column. #T3STK1"
           (check (= (hash-table-count generated) (hash-table-count expected))
                  "~D pair contacts for ~D close pairs" (hash-table-count generated) (hash-table-count expected))))))))
 ;; D9W4CH-pairs-match-brute-force ends here
+
+;; [[file:../physics.org::#D9W4CH][D9W4CH-dense-bounds-at-the-limit]]
+(define-claim "D9W4CH" dense-bounds-at-the-limit
+    "A grid is dense up to exactly 64 cells an item plus 64, and up to 4095 cells a side, and hashed past either."
+  (flet ((dense-p (centres)
+           (let* ((n (length centres))
+                  (col (lambda (k) (make-array (+ n 4) :element-type 'single-float :initial-contents
+                                               (append (mapcar (lambda (c) (float (nth k c) 1.0)) centres) '(0.0 0.0 0.0 0.0)))))
+                  (ids (make-array n :element-type 'fixnum :initial-contents (loop for i below n collect i)))
+                  (grid (luv-physics::make-hash-grid)))
+             (luv-physics::build-hash-grid grid 1.0 n (funcall col 0) (funcall col 1) (funcall col 2) ids)
+             (luv-physics::hash-grid-dense grid))))
+    ;; two items 5 cells apart in y and z: a padded box of 3 x 8 x 8 = 192 = 64 x 2 + 64 cells
+    (check (dense-p '((0.5 0.5 0.5) (0.5 5.5 5.5))) "a box of exactly the bound is hashed")
+    (check (not (dense-p '((0.5 0.5 0.5) (0.5 5.5 6.5)))) "a box over the bound is dense")
+    ;; five items in a padded box of 5 x 7 x 11 = 385 cells, one over 64 x 5 + 64
+    (check (not (dense-p '((0.5 0.5 0.5) (2.5 4.5 8.5) (1.5 1.5 1.5) (1.5 2.5 3.5) (0.5 3.5 5.5))))
+           "a box one cell over the bound is dense")
+    ;; 600 items along one axis over 4093 cells: a side of 4095 is dense, of 4096 hashed
+    (dotimes (axis 3)
+      (flet ((line (last)
+               (loop for i below 600
+                     collect (let ((c (list 0.5 0.5 0.5)))
+                               (setf (nth axis c) (+ 0.5 (floor (* i last) 599)))
+                               c))))
+        (check (dense-p (line 4092)) "axis ~D: a side of 4095 cells is hashed" axis)
+        (check (not (dense-p (line 4093))) "axis ~D: a side of 4096 cells is dense" axis)))))
+;; D9W4CH-dense-bounds-at-the-limit ends here
 
 ;; [[file:../physics.org::#W0RLD7][W0RLD7-solver-rows-aligned]]
 (define-claim "W0RLD7" solver-rows-aligned
@@ -1946,6 +2014,57 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= 0.0 (impulse)) "turned past the cone: impulse ~A" (impulse)))))
 ;; G3NCNT-impulses-kept-within-cone ends here
 
+;; [[file:../physics.org::#G3NCNT][G3NCNT-touch-normal-every-axis]]
+(define-claim "G3NCNT" touch-normal-every-axis
+    "pair-impact-normal: the closed form of the touch holds for a blow along y and along z as along x."
+  (locally (declare (notinline luv-physics::pair-impact-normal))
+  (flet ((normal (dx dy dz wx wy wz)
+           (multiple-value-list
+            (luv-physics::pair-impact-normal dx dy dz wx wy wz 0.5 (/ 1.0 60) 1.0 0.0 0.0 -0.2))))
+    (loop for (motion want) in '(((0.3 1.0 0.0 0.0 -60.0 0.0) (0.6d0 0.8d0 0d0 0.48d0))
+                                 ((0.0 0.3 1.0 0.0 0.0 -60.0) (0d0 0.6d0 0.8d0 0.48d0))
+                                 ((1.0 0.0 0.3 -60.0 0.0 0.0) (0.8d0 0d0 0.6d0 0.48d0)))
+          do (check (every (lambda (got want) (< (abs (- got want)) 1d-6)) (apply #'normal motion) want)
+                    "~S: ~S, not ~S" motion (apply #'normal motion) want))
+    ;; a path that grazes the reach (the discriminant exactly 0) does not touch: the given normal
+    (check (equal '(1.0 0.0 0.0 -0.2) (normal 1.0 0.5 0.0 -1.0 0.0 0.0))
+           "grazing: ~S" (normal 1.0 0.5 0.0 -1.0 0.0 0.0)))))
+;; G3NCNT-touch-normal-every-axis ends here
+
+;; [[file:../physics.org::#G3NCNT][G3NCNT-cursor-trusted-below-length]]
+(define-claim "G3NCNT" cursor-trusted-below-length
+    "touch-contact reads the row under the cursor only below the buffer's length, and counts each probe as a miss."
+  (let* ((contacts (luv-physics::make-contact-columns))
+         (table (luv-physics::make-contact-table)))
+    (flet ((start (step)
+             (setf (luv-physics::contact-table-step table) step
+                   (luv-physics::contact-table-cursor table) 0
+                   (luv-physics::contact-table-touched table) 0))
+           (touch (key)
+             (luv-physics::touch-contact contacts table key luv-physics::+contact-terrain+ key -1
+                                         0.0 -1.0 0.0 0.01 0.0 0.0 0.0 0.0 0.0 0.0))
+           (misses () (luv-physics::contact-table-misses table)))
+      (start 1)
+      (check (equal '(0 1 2) (mapcar #'touch '(11 22 33))) "three new keys")
+      (check (= 3 (misses)) "~D misses for three new keys" (misses))
+      ;; the contact under 11 leaves as pruning removes it: 33 fills its row, and a stale copy
+      ;; of 33 stays past the end of the buffer
+      (luv-physics::contact-table-delete table 11)
+      (check (= 2 (luv-physics::contact-columns-swap-remove contacts 0)) "the last row did not move")
+      (luv-physics::contact-table-put table 33 0)
+      (start 2)
+      ;; 22: the cursor's row 0 holds 33, a miss; 33: the cursor is at the end, so the table answers
+      (check (equal '(1 0) (mapcar #'touch '(22 33))) "the rows found")
+      (check (= 2 (luv-physics::contact-columns-length contacts)) "~D rows" (luv-physics::contact-columns-length contacts))
+      (check (= 5 (misses)) "~D misses after two more probes" (misses))
+      (check (equal '(1 0) (coerce (subseq (luv-physics::contact-columns-order contacts) 0 2) 'list))
+             "found order ~S" (subseq (luv-physics::contact-columns-order contacts) 0 2))
+      ;; the same walk again, now in found order under the cursor
+      (start 3)
+      (check (equal '(1 0) (mapcar #'touch '(22 33))) "the rows found again")
+      (check (= 1 (luv-physics::contact-table-cursor table)) "cursor ~D" (luv-physics::contact-table-cursor table)))))
+;; G3NCNT-cursor-trusted-below-length ends here
+
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sorted-rows-keep-handles]]
 (define-claim "G4R1D5" sorted-rows-keep-handles
     "After the grid phase sorts scrambled rows, each handle still names its own body."
@@ -2043,6 +2162,76 @@ function of a column name that reads row K's float in that column. #T3STK1"
                "a sleeper is met other than once around itself")))))
 ;; G4R1D5-dead-entries-counted-once ends here
 
+;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grid-bounds-at-the-limit]]
+(define-claim "G4R1D5" sleeping-grid-bounds-at-the-limit
+    "The settled grid is built again at 257 fresh sleepers or 257 dead entries, not at 256; the fresh list keeps only sleepers."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (handles (loop for i below 300
+                        collect (add-physics-body w (* 2.0 (mod i 10)) (* 2.0 (mod (floor i 10) 10)) (* 2.0 (floor i 100))
+                                                  :radius 0.25)))
+         (settled (luv-physics::physics-world-sleeping-grid w))
+         (fresh (luv-physics::physics-world-fresh-grid w)))
+    (flet ((put-to-sleep (h) (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h))))
+           (met-once ()
+             ;; a walk of the sleeping grids around each sleeper meets its handle once
+             (let ((s (luv-physics::physics-world-sleeping w)))
+          (loop for row below (luv-physics::body-columns-length s)
+                always (let ((h (aref (luv-physics::body-columns-handle s) row)) (seen 0))
+                         (luv-physics::do-sleeping-neighbours (e w (aref (luv-physics::body-columns-x s) row)
+                                                                 (aref (luv-physics::body-columns-y s) row)
+                                                                 (aref (luv-physics::body-columns-z s) row))
+                           (when (= e h) (incf seen)))
+                         (= seen 1))))))
+      ;; the grids take the world's cell size, with no sleeper yet
+      (luv-physics::ensure-sleeping-grid w)
+      ;; ten fall asleep, five of them wake, and one of those falls asleep again: the fresh
+      ;; list keeps the six, that one once
+      (mapc #'put-to-sleep (subseq handles 0 10))
+      (dolist (h (subseq handles 0 5)) (luv-physics::wake-handle w h))
+      (put-to-sleep (first handles))
+      (luv-physics::ensure-sleeping-grid w)
+      (check (= 6 (luv-physics::physics-world-fresh-count w) (luv-physics::hash-grid-count fresh))
+             "the fresh list holds ~D" (luv-physics::physics-world-fresh-count w))
+      (mapc #'put-to-sleep (subseq handles 10 260))
+      (luv-physics::ensure-sleeping-grid w)
+      (check (and (= 0 (luv-physics::hash-grid-count settled)) (= 256 (luv-physics::hash-grid-count fresh)))
+             "256 fresh sleepers: the settled grid holds ~D, the fresh ~D"
+             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh))
+      (check (met-once) "a fresh sleeper is met other than once around itself")
+      (put-to-sleep (nth 260 handles))
+      (luv-physics::ensure-sleeping-grid w)
+      (check (and (= 257 (luv-physics::hash-grid-count settled)) (= 0 (luv-physics::hash-grid-count fresh)))
+             "257 fresh sleepers: the settled grid holds ~D, the fresh ~D"
+             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh))
+      (dolist (h (subseq handles 5 261)) (luv-physics::wake-handle w h))
+      (luv-physics::ensure-sleeping-grid w)
+      (check (= 256 (luv-physics::physics-world-settled-stale w)) "~D dead entries" (luv-physics::physics-world-settled-stale w))
+      (check (= 257 (luv-physics::hash-grid-count settled)) "256 dead entries: the settled grid holds ~D"
+             (luv-physics::hash-grid-count settled))
+      (luv-physics::wake-handle w (first handles))
+      (luv-physics::ensure-sleeping-grid w)
+      (check (= 0 (luv-physics::hash-grid-count settled)) "257 dead entries: the settled grid holds ~D"
+             (luv-physics::hash-grid-count settled))))
+    ;; over 2048 settled sleepers the bound is an eighth of them: 2600 settled, 325 fresh
+    ;; keep the settled grid, 326 build it again
+    (let* ((w (make-physics-world :gravity '(0 0 0)))
+           (handles (loop for i below 2926
+                          collect (add-physics-body w (* 1.0 (mod i 20)) (* 1.0 (mod (floor i 20) 20)) (* 1.0 (floor i 400))
+                                                    :radius 0.25)))
+           (settled (luv-physics::physics-world-sleeping-grid w)))
+      (flet ((put-to-sleep (h) (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h)))))
+        (luv-physics::ensure-sleeping-grid w)
+        (mapc #'put-to-sleep (subseq handles 0 2600))
+        (luv-physics::ensure-sleeping-grid w)
+        (check (= 2600 (luv-physics::hash-grid-count settled)) "~D settled" (luv-physics::hash-grid-count settled))
+        (mapc #'put-to-sleep (subseq handles 2600 2925))
+        (luv-physics::ensure-sleeping-grid w)
+        (check (= 2600 (luv-physics::hash-grid-count settled)) "325 fresh beside 2600: ~D settled" (luv-physics::hash-grid-count settled))
+        (put-to-sleep (nth 2925 handles))
+        (luv-physics::ensure-sleeping-grid w)
+        (check (= 2926 (luv-physics::hash-grid-count settled)) "326 fresh beside 2600: ~D settled" (luv-physics::hash-grid-count settled)))))
+;; G4R1D5-sleeping-grid-bounds-at-the-limit ends here
+
 ;; [[file:../physics.org::#W4K3PH][W4K3PH-box-wakes-within-its-reach]]
 (define-claim "W4K3PH" box-wakes-within-its-reach
     "A box moving along one axis wakes a sleeper within margin + v dt, not beyond; a still box none."
@@ -2079,6 +2268,64 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (woken-by-ball-p velocity -0.01) "a ball moving at ~S did not wake the ball within reach" velocity)
       (check (not (woken-by-ball-p velocity 0.01)) "a ball moving at ~S woke the ball beyond reach" velocity))))
 ;; W4K3PH-box-wakes-within-its-reach ends here
+
+;; [[file:../physics.org::#W4K3PH][W4K3PH-wake-reach-at-the-limit]]
+(define-claim "W4K3PH" wake-reach-at-the-limit
+    "A moving box wakes a sleeper exactly at its reach, a fast ball only short of it, an added ball past the slop."
+  ;; binary fractions throughout, so that the distances equal the reaches exactly: a step of
+  ;; 1/64 s, a margin of 1/8 m, radii of 1/4 m, speeds of 8 m/s
+  (flet ((world-with-sleeper (x)
+           (let* ((w (let ((luv-physics::*physics-speculative-margin* 0.125))
+                       (make-physics-world :gravity '(0 0 0) :step-seconds 1/64)))
+                  (h (add-physics-body w x 2.0 2.0 :radius 0.25)))
+             ;; the step of 1/64 s, as step-physics-world sets it before its phases
+             (setf (luv-physics::physics-world-current-dt w) (/ 1.0 64))
+             (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h)))
+             (values w h))))
+    ;; a box moving at 8 m/s reaches the margin plus a step's travel, 1/4 m, past its face,
+    ;; and the sleeper's radius more: its centre 1/2 m from the face (x = 4) is reached
+    (dolist (past '(0.0 0.0078125))
+      (multiple-value-bind (w h) (world-with-sleeper (+ 4.5 past))
+        (post-physics-box w 3.75 2.0 2.0 0.25 0.25 0.25 :vx 8.0)
+        (luv-physics::wake-phase w)
+        (check (eq (zerop past) (luv-physics::physics-body-awake-p w h))
+               "a sleeper ~F m past a moving box's reach is ~:[asleep~;awake~]" past
+               (luv-physics::physics-body-awake-p w h))))
+    ;; a ball at 8 m/s reaches its radius, the margin and a step's travel, and the sleeper's
+    ;; radius: 3/4 m between centres is not within reach, a 128th of a metre less is
+    (dolist (short '(0.0 0.0078125))
+      (multiple-value-bind (w h) (world-with-sleeper 4.0)
+        (add-physics-body w (+ 3.25 short) 2.0 2.0 :radius 0.25 :vx 8.0)
+        (setf (luv-physics::physics-world-added-count w) 0)
+        (luv-physics::wake-phase w)
+        (check (eq (plusp short) (luv-physics::physics-body-awake-p w h))
+               "a sleeper ~F m within a fast ball's reach is ~:[asleep~;awake~]" short
+               (luv-physics::physics-body-awake-p w h))))
+    ;; a ball added at rest wakes a sleeper it overlaps by more than the slop, not by less
+    (let ((slop luv-physics::*physics-linear-slop*))
+      (dolist (overlap (list (- slop 0.001) (+ slop 0.001)))
+        (multiple-value-bind (w h) (world-with-sleeper 4.0)
+          (add-physics-body w (- 4.0 (- 0.5 overlap)) 2.0 2.0 :radius 0.25)
+          (luv-physics::wake-phase w)
+          (check (eq (> overlap slop) (luv-physics::physics-body-awake-p w h))
+                 "an added ball overlapping a sleeper by ~,4F m leaves it ~:[asleep~;awake~]" overlap
+                 (luv-physics::physics-body-awake-p w h)))))))
+;; W4K3PH-wake-reach-at-the-limit ends here
+
+;; [[file:../physics.org::#W4K3PH][W4K3PH-long-box-wakes-at-its-ends]]
+(define-claim "W4K3PH" long-box-wakes-at-its-ends
+    "A box 4 m long, moving, at negative coordinates, wakes a sleeper by its far end, along each axis."
+  (dotimes (axis 3)
+    (let* ((w (make-physics-world :gravity '(0 0 0)))
+           (at (lambda (along) (loop for k below 3 collect (if (= k axis) along -6.0))))
+           (h (apply #'add-physics-body w (append (funcall at -12.3) '(:radius 0.25)))))
+      (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h)))
+      (destructuring-bind (x y z) (funcall at -10.0)
+        (destructuring-bind (hx hy hz) (loop for k below 3 collect (if (= k axis) 2.0 0.25))
+          (post-physics-box w x y z hx hy hz :vx 0.0 :vy 0.0 :vz -1.0)))
+      (check (= 1 (luv-physics::wake-phase w)) "along ~C the box woke ~D" (char "xyz" axis) 0)
+      (check (luv-physics::physics-body-awake-p w h) "along ~C the sleeper by the box's end slept on" (char "xyz" axis)))))
+;; W4K3PH-long-box-wakes-at-its-ends ends here
 
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
 (define-claim "P41RS7" pair-list-finds-every-pair
@@ -2310,6 +2557,72 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "loose flags ~S" (subseq (luv-physics::pair-list-loose plist) 0 5)))))
 ;; P41RS7-gone-rows-loose ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-overlap-room-charges-the-smaller]]
+(define-claim "P41RS7" overlap-room-charges-the-smaller
+    "overlap-room: a pair is refused only when its smaller body (either, for equal radii) has 16 overlaps."
+  (locally (declare (notinline luv-physics::overlap-room))
+  (let ((radius (make-array 4 :element-type 'single-float :initial-contents '(0.5 0.25 0.25 0.5))))
+    (loop for (counts i j want) in '(((16 0 0 0) 0 1 t) ((0 16 0 0) 0 1 nil) ((16 0 0 0) 1 0 t) ((0 16 0 0) 1 0 nil)
+                                     ((0 15 0 0) 0 1 t) ((0 15 0 0) 1 0 t)
+                                     ((0 16 0 0) 1 2 nil) ((0 0 16 0) 1 2 nil) ((0 15 15 0) 1 2 t)
+                                     ((16 0 0 0) 0 3 nil) ((0 0 0 16) 0 3 nil) ((15 0 0 15) 3 0 t))
+          do (let ((overlaps (make-array 4 :element-type 'fixnum :initial-contents counts)))
+               (check (eq want (luv-physics::overlap-room overlaps i j radius))
+                      "rows ~D and ~D of radii ~S with overlaps ~S: room ~S" i j radius counts (not want)))))))
+;; P41RS7-overlap-room-charges-the-smaller ends here
+
+;; [[file:../physics.org::#P41RS7][P41RS7-terrain-only-bodies-take-no-pairs]]
+(define-claim "P41RS7" terrain-only-bodies-take-no-pairs
+    "Drops that meet only terrain take no pair contact, whether found by the list's build, a loose row or two loose rows."
+  (let* ((w (make-floor-world :sleep nil))
+         (c (luv-physics::physics-world-contacts w))
+         (drops '()) (pairs-with-drops 0) (pairs 0))
+    (flet ((ball (x z) (add-physics-body w x 0.245 z :radius 0.25))
+           (drop (x z) (let ((h (add-physics-body w x 0.245 z :radius 0.25 :collide-with-bodies nil)))
+                         (push h drops) h))
+           (count-pairs ()
+             (dotimes (row (luv-physics::contact-columns-length c))
+               (when (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-pair+)
+                 (incf pairs)
+                 (when (or (member (aref (luv-physics::contact-columns-handle-a c) row) drops)
+                           (member (aref (luv-physics::contact-columns-handle-b c) row) drops))
+                   (incf pairs-with-drops))))))
+      ;; the list's build: drops overlapping balls, each added before and after its ball
+      (loop for k below 4 for x = (+ 2.5 k) do (if (evenp k) (progn (ball x 2.5) (drop (+ x 0.1) 2.5))
+                                                   (progn (drop x 2.5) (ball (+ x 0.1) 2.5))))
+      (ball 2.5 6.0) (ball 3.0 6.0)
+      (step-physics-world w) (count-pairs)
+      (dotimes (i 5) (step-physics-world w))
+      ;; a loose row against rows of the list: a new ball on a drop, a new drop on a ball
+      (ball 2.6 2.5) (drop 3.05 6.0)
+      (step-physics-world w) (count-pairs)
+      ;; two loose rows: a ball and a drop added together, in either order
+      (ball 8.0 8.0) (drop 8.1 8.0) (drop 10.0 8.0) (ball 10.1 8.0)
+      (step-physics-world w) (count-pairs)
+      ;; leaning on sleepers: a drop added on a sleeping ball
+      (let ((sleeper (ball 12.0 12.0)))
+        (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w sleeper)))
+        (drop 12.1 12.0) (ball 11.7 12.0))
+      (step-physics-world w) (count-pairs)
+      (check (plusp pairs) "no pair contact at all")
+      (check (zerop pairs-with-drops) "~D pair contacts with a drop" pairs-with-drops))))
+;; P41RS7-terrain-only-bodies-take-no-pairs ends here
+
+;; [[file:../physics.org::#P41RS7][P41RS7-heap-charges-every-pair]]
+(define-claim "P41RS7" heap-charges-every-pair
+    "In a heap of 40 equal balls at one point, no ball takes more than 16 pairs in a step."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (c (luv-physics::physics-world-contacts w))
+         (hs (loop repeat 40 collect (add-physics-body w 4.0 2.0 4.0 :radius 0.25))))
+    (step-physics-world w)
+    (let ((most (loop for h in hs
+                      maximize (loop for row below (luv-physics::contact-columns-length c)
+                                     count (and (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-pair+)
+                                                (or (= h (aref (luv-physics::contact-columns-handle-a c) row))
+                                                    (= h (aref (luv-physics::contact-columns-handle-b c) row))))))))
+      (check (= 16 most) "the most pairs a ball took is ~D" most))))
+;; P41RS7-heap-charges-every-pair ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
 (define-claim "MYWH16" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
@@ -2522,6 +2835,62 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= 1 (length (terrain-contacts w h))) "~D terrain contacts" (length (terrain-contacts w h))))))
 ;; SW33P7-parallel-only-below-threshold ends here
 
+;; [[file:../physics.org::#SW33P7][SW33P7-sweep-contact-exact]]
+(define-claim "SW33P7" sweep-contact-exact
+    "A sweep's contact is the face it enters, at the exact gap, for every direction of every axis, off the diagonal of the cells."
+  ;; a ball of radius 0.5 at 64 m/s, a step of 1/64 s: it looks exactly 1.5 m ahead
+  (dolist (axis '(0 1 2))
+    (dolist (direction '(1 -1))
+      (dolist (distance '(0.375 1.25 1.5 1.625))
+        (let* ((terrain (make-voxel-terrain))
+               (face (if (plusp direction) 11 8))
+               (centre (loop for k below 3 for c in '(3.5 2.5 -0.5) collect (if (= k axis) (- face (* direction distance)) c))))
+          ;; air everywhere but a slab 3 cells thick, its near face DISTANCE ahead, and a floor
+          ;; under the cells at z = -1 that the ball's own cell is not
+          (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+          (let ((lo (loop for k below 3 collect (if (= k axis) (if (plusp direction) face (- face 3)) -16)))
+                (hi (loop for k below 3 collect (if (= k axis) (if (plusp direction) (+ face 3) face) 32))))
+            (apply #'fill-terrain terrain (append lo hi (list t))))
+          (let* ((w (make-physics-world :terrain terrain :gravity '(0 0 0) :step-seconds 1/64))
+                 (velocity (loop for k below 3 collect (if (= k axis) (* direction 64.0) 0.0)))
+                 (h (add-physics-body w (first centre) (second centre) (third centre) :radius 0.5
+                                      :vx (first velocity) :vy (second velocity) :vz (third velocity)))
+                 (c (luv-physics::physics-world-contacts w)))
+            (setf (luv-physics::physics-world-current-dt w) (/ 1.0 64))
+            (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                             luv-physics::pair-phase luv-physics::terrain-phase))
+              (funcall phase w))
+            (let ((rows (loop for row below (luv-physics::contact-columns-length c)
+                              when (= (aref (luv-physics::contact-columns-handle-a c) row) h) collect row))
+                  (want (append velocity (list (- distance 0.5))
+                                (loop for k below 3 collect (if (= k axis) (float face 1.0) (nth k centre))))))
+              (if (> distance 1.5)
+                  (check (null rows) "~:[-~;+~]~C, a face ~,3F m ahead: ~D contacts" (plusp direction) (char "xyz" axis) distance (length rows))
+                  (progn
+                    (check (= 1 (length rows)) "~:[-~;+~]~C, a face ~,3F m ahead: ~D contacts" (plusp direction) (char "xyz" axis) distance (length rows))
+                    (when rows
+                      (let* ((g (luv-physics::contact-columns-geometry c)) (row (first rows))
+                             (got (list (luv-physics::contact@ g row nx) (luv-physics::contact@ g row ny) (luv-physics::contact@ g row nz)
+                                        (luv-physics::contact@ g row separation) (luv-physics::contact@ g row px)
+                                        (luv-physics::contact@ g row py) (luv-physics::contact@ g row pz))))
+                        (setf want (cons (/ (first want) 64) (cons (/ (second want) 64) (cons (/ (third want) 64) (cdddr want)))))
+                        (check (every #'= got want) "~:[-~;+~]~C, a face ~,3F m ahead: (nx ny nz separation px py pz) ~S, not ~S"
+                               (plusp direction) (char "xyz" axis) distance got want))))))))))))
+;; SW33P7-sweep-contact-exact ends here
+
+;; [[file:../physics.org::#SW33P7][SW33P7-no-sweep-from-inside]]
+(define-claim "SW33P7" no-sweep-from-inside
+    "A fast ball whose centre lies in a solid cell makes no sweep contact with the cells ahead."
+  (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+    (declare (ignore terrain))
+    (let ((h (add-physics-body w 3.5 -0.5 3.5 :radius 0.3 :vx 60.0)))
+      (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                       luv-physics::pair-phase luv-physics::terrain-phase))
+        (funcall phase w))
+      (let ((normals (mapcar (lambda (c) (list (getf c :nx) (getf c :ny) (getf c :nz))) (terrain-contacts w h))))
+        (check (notany (lambda (n) (= 1.0 (first n))) normals) "a contact along +x: ~S" normals)))))
+;; SW33P7-no-sweep-from-inside ends here
+
 ;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
 (define-claim "B0XPH5" box-contact-geometry
     "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
@@ -2573,6 +2942,81 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (< impulse 1d0) "box ~:[edge~;corner~]: the impulse is up to ~,2F deg off the normal" corner impulse)
       (check (< outgoing 2d0) "box ~:[edge~;corner~]: the ball leaves up to ~,2F deg off" corner outgoing))))
 ;; B0XPH5-box-edges-bounce-true ends here
+
+;; [[file:../physics.org::#B0XPH5][B0XPH5-box-reach-at-its-limits]]
+(define-claim "B0XPH5" box-reach-at-its-limits
+    "A box reaches a ball to its radius plus the margin, a fast ball to its travel by relative velocity, and never past the reach limit."
+  (flet ((box-contact-p (gap velocity box-velocity)
+           ;; a ball of radius 0.25 m with its surface GAP from the +x face of a box, each moving
+           (let* ((w (make-physics-world :gravity '(0 0 0)))
+                  (h (apply #'add-physics-body w (+ -6.0 0.25 gap) -6.0 -6.0 :radius 0.25
+                            (mapcan #'list '(:vx :vy :vz) velocity))))
+             (apply #'post-physics-box w -6.25 -6.0 -6.0 0.25 0.25 0.25 (mapcan #'list '(:vx :vy :vz) box-velocity))
+             (setf (luv-physics::physics-world-current-dt w) (/ 1.0 60))
+             (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                              luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase))
+               (funcall phase w))
+             (loop for row below (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))
+                   thereis (and (= (aref (luv-physics::contact-columns-handle-a (luv-physics::physics-world-contacts w)) row) h)
+                                (= (aref (luv-physics::contact-columns-kind (luv-physics::physics-world-contacts w)) row)
+                                   luv-physics::+contact-box+))))))
+    (let ((margin luv-physics::*physics-speculative-margin*) (limit luv-physics::*physics-reach-limit*))
+      ;; at rest: the margin
+      (check (box-contact-p (- margin 0.01) '(0 0 0) '(0 0 0)) "a ball 1 cm inside the margin has no box contact")
+      (check (not (box-contact-p (+ margin 0.01) '(0 0 0) '(0 0 0))) "a ball 1 cm past the margin has a box contact")
+      ;; ball and box moving together at 30 m/s along each axis: still the margin
+      (dolist (v '((30 0 0) (0 30 0) (0 0 30)))
+        (check (not (box-contact-p (+ margin 0.01) v v)) "ball and box both at ~S: a contact past the margin" v))
+      ;; closing at 30 m/s, a step's travel 0.5 m: reached within it, not past it
+      (loop for (v bv) in '(((-30 0 0) (0 0 0)) ((-15 0 0) (15 0 0)) ((0 0 0) (30 0 0)))
+            do (check (box-contact-p 0.49 v bv) "ball at ~S, box at ~S: no contact 0.49 m off" v bv))
+      (check (not (box-contact-p 0.51 '(-30 0 0) '(0 0 0))) "closing at 30 m/s: a contact 0.51 m off")
+      ;; closing at 120 m/s, 2 m a step: reached to the limit, not past it
+      (check (box-contact-p (- limit 0.25 0.01) '(-120 0 0) '(0 0 0)) "at 120 m/s: no contact 1 cm inside the reach limit")
+      (check (not (box-contact-p (- limit 0.25 -0.01) '(-120 0 0) '(0 0 0))) "at 120 m/s: a contact 1 cm past the reach limit"))))
+;; B0XPH5-box-reach-at-its-limits ends here
+
+;; [[file:../physics.org::#B0XPH5][B0XPH5-long-box-reaches-its-ends]]
+(define-claim "B0XPH5" long-box-reaches-its-ends
+    "A box 4 m long, at negative coordinates, touches a ball by its far end, along each axis."
+  (dotimes (axis 3)
+    (let* ((w (make-physics-world :gravity '(0 0 0)))
+           (at (lambda (along) (loop for k below 3 collect (if (= k axis) along -6.0))))
+           (h (apply #'add-physics-body w (append (funcall at -12.3) '(:radius 0.25))))
+           (c (luv-physics::physics-world-contacts w)))
+      (destructuring-bind (x y z) (funcall at -10.0)
+        (destructuring-bind (hx hy hz) (loop for k below 3 collect (if (= k axis) 2.0 0.25))
+          (post-physics-box w x y z hx hy hz)))
+      (step-physics-world w)
+      (check (loop for row below (luv-physics::contact-columns-length c)
+                   thereis (and (= (aref (luv-physics::contact-columns-handle-a c) row) h)
+                                (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-box+)))
+             "along ~C the ball by the box's far end has no box contact" (char "xyz" axis)))))
+;; B0XPH5-long-box-reaches-its-ends ends here
+
+;; [[file:../physics.org::#B0XPH5][B0XPH5-box-impact-normal-every-column]]
+(define-claim "B0XPH5" box-impact-normal-every-column
+    "A ball dropping onto a box's edge, off every diagonal, takes a normal within 5 deg of the one at impact."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         ;; the box spans x 4.3..5.3, y 1.6..2.6, z 0.3..6.3; its top edge along z at x 5.3, y 2.6
+         (h (add-physics-body w 5.45 2.88 1.0 :radius 0.25 :vy -3.0))
+         (c (luv-physics::physics-world-contacts w)))
+    (post-physics-box w 4.8 2.1 3.3 0.5 0.5 3.0)
+    (setf (luv-physics::physics-world-current-dt w) (/ 1.0 60))
+    (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                     luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase))
+      (funcall phase w))
+    (let ((rows (loop for row below (luv-physics::contact-columns-length c)
+                      when (and (= (aref (luv-physics::contact-columns-handle-a c) row) h)
+                                (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-box+))
+                        collect row)))
+      (check (= 1 (length rows)) "~D box contacts" (length rows))
+      (when rows
+        (let* ((g (luv-physics::contact-columns-geometry c)) (row (first rows))
+               (n (list (luv-physics::contact@ g row nx) (luv-physics::contact@ g row ny) (luv-physics::contact@ g row nz))))
+          (check (< (* (/ 180 pi) (acos (min 1d0 (reduce #'+ (mapcar #'* n '(-0.6d0 -0.8d0 0d0)))))) 5)
+                 "the normal is ~S, not within 5 deg of the one at impact, (-0.6 -0.8 0)" n))))))
+;; B0XPH5-box-impact-normal-every-column ends here
 
 ;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-keeps-contacts]]
 (define-claim "PRUN3D" reorder-keeps-contacts
