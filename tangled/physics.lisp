@@ -2448,6 +2448,7 @@ number of seconds after which it expires. #M4K3WD"
   (let* ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
          (r (finite-f32 :radius radius world)) (m (finite-f32 :mass mass world))
          (vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world))
+         (mortal (and life t))
          (life (if life (finite-f32 :life life world) 0.0))
          (limit (max-radius-for world)))
     (check-coordinate :x x world) (check-coordinate :y y world) (check-coordinate :z z world)
@@ -2457,7 +2458,7 @@ number of seconds after which it expires. #M4K3WD"
       (error 'invalid-physics-parameter :world world :name :mass :value mass
                                         :expected (format nil "from ~A to ~A kg" +physics-min-mass+ +physics-max-mass+)))
     (check-velocity vx vy vz (physics-world-max-speed world) world)
-    (when (and (not (eql life 0.0)) (<= life 0))
+    (when (and mortal (<= life 0))
       (error 'invalid-physics-parameter :world world :name :life :value life :expected "> 0 seconds, or NIL"))
     (unless (typep kind 'fixnum) (error 'invalid-physics-parameter :world world :name :kind :value kind :expected "a fixnum"))
     ;; a body that needs a feature the world left out is refused, not quietly given less
@@ -5348,7 +5349,8 @@ statistics as they are. #IDVK7G"
 
 (defun unwake-last-body (world row)
   "Return the last awake body, woken this step from sleeping ROW, to that row, and the body that
-took ROW when it left back to the end of the sleeping set: relocate-body run backwards. #IDVK7G"
+took ROW when it left back to the end of the sleeping set: relocate-body run backwards. The body
+is noted as a fresh sleeper, for waking took it out of the sleeping grids. #IDVK7G"
   (let* ((ids (physics-world-ids world))
          (awake (physics-world-awake world))
          (sleeping (physics-world-sleeping world))
@@ -5362,7 +5364,8 @@ took ROW when it left back to the end of the sleeping set: relocate-body run bac
     (setf (aref (body-columns-sleep-time sleeping) row) 0.0)
     (let ((handle (aref (body-columns-handle sleeping) row)))
       (setf (aref (handle-table-set ids) (handle-index handle)) +set-sleeping+
-            (aref (handle-table-local ids) (handle-index handle)) row))
+            (aref (handle-table-local ids) (handle-index handle)) row)
+      (note-fresh-sleeper world handle))
     (body-columns-swap-remove awake last)
     world))
 
@@ -7504,7 +7507,7 @@ the world valid. #X7R3M5"
 
 (defun world-finite-p (world)
   "Whether every position, velocity and angular velocity of WORLD's bodies is a finite number. #X7R3M5"
-  (flet ((finite (column) (every (lambda (v) (< (abs v) most-positive-single-float)) column)))
+  (flet ((finite (column) (every (lambda (v) (<= (abs v) most-positive-single-float)) column)))
     (loop for buffer in (list (physics-world-awake world) (physics-world-sleeping world))
           always (with-body-columns (x y z vx vy vz wx wy wz) buffer
                    (let ((n (body-columns-length buffer)))
@@ -9613,6 +9616,25 @@ time, and the bytes consed per query. #QB3NCH"
             (/ done (/ (float (- (get-internal-run-time) cpu) 1d0) internal-time-units-per-second))
             (/ (float (- (sb-ext:get-bytes-consed) before) 1d0) done))))
 
+(defun benchmark-query (world kind hit counter)
+  "The query of KIND that measure-queries times in WORLD, as a function of an f32-column of
+queries, as query-benchmark-inputs writes them, and the index of one's first float: a 10 m ray
+(:ray) or a sphere cast of radius 0.25 m (:sphere) from its point along its direction, filling
+HIT, or the bodies within 1 m of its point (:overlap), each passed to COUNTER. #QB3NCH"
+  (declare (type function counter))
+  (ecase kind
+    (:ray (lambda (q i)
+            (declare (type f32-column q) (type fixnum i))
+            (physics-ray-cast world (aref q i) (aref q (+ i 1)) (aref q (+ i 2)) (aref q (+ i 3))
+                              (aref q (+ i 4)) (aref q (+ i 5)) 10.0 :hit hit)))
+    (:sphere (lambda (q i)
+               (declare (type f32-column q) (type fixnum i))
+               (physics-sphere-cast world (aref q i) (aref q (+ i 1)) (aref q (+ i 2)) 0.25
+                                    (aref q (+ i 3)) (aref q (+ i 4)) (aref q (+ i 5)) 10.0 :hit hit)))
+    (:overlap (lambda (q i)
+                (declare (type f32-column q) (type fixnum i))
+                (map-physics-bodies-in-sphere counter world (aref q i) (aref q (+ i 1)) (aref q (+ i 2)) 1.0)))))
+
 (defun measure-queries (world)
   "Rays, sphere casts of radius 0.25 m and overlap queries (the bodies within 1 m of a point) per
 second of wall time and of processor time in WORLD, and bytes consed per query, as a plist of
@@ -9621,21 +9643,7 @@ lists (wall cpu bytes). #QB3NCH"
          (found 0) (counter (lambda (h) (declare (ignore h)) (incf found))))
     (declare (type fixnum found))
     (flet ((measure (kind)
-             (multiple-value-list
-              (time-queries inputs count
-                            (ecase kind
-                              (:ray (lambda (q i)
-                                      (declare (type f32-column q) (type fixnum i))
-                                      (physics-ray-cast world (aref q i) (aref q (+ i 1)) (aref q (+ i 2)) (aref q (+ i 3))
-                                                        (aref q (+ i 4)) (aref q (+ i 5)) 10.0 :hit hit)))
-                              (:sphere (lambda (q i)
-                                         (declare (type f32-column q) (type fixnum i))
-                                         (physics-sphere-cast world (aref q i) (aref q (+ i 1)) (aref q (+ i 2)) 0.25
-                                                              (aref q (+ i 3)) (aref q (+ i 4)) (aref q (+ i 5)) 10.0 :hit hit)))
-                              (:overlap (lambda (q i)
-                                          (declare (type f32-column q) (type fixnum i))
-                                          (map-physics-bodies-in-sphere counter world (aref q i) (aref q (+ i 1))
-                                                                        (aref q (+ i 2)) 1.0))))))))
+             (multiple-value-list (time-queries inputs count (benchmark-query world kind hit counter)))))
       (list :rays (measure :ray) :spheres (measure :sphere) :overlaps (measure :overlap)))))
 
 (defun settled-basin-world (count sleep)

@@ -540,6 +540,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                  (luv-physics::constraint-offset column)))))))))
 ;; A kit for the claims:1 ends here
 
+;; [[file:../physics.org::#V0CAB5][V0CAB5-defaults-as-tabled]]
+(define-claim "V0CAB5" defaults-as-tabled
+    "The parameters' defaults are the table's; clock-ns counts nanoseconds."
+  (let ((wrong (loop for (name value) in '((*physics-contact-hertz* 30.0) (*physics-contact-damping-ratio* 10.0)
+                                           (*physics-contact-push-max* 3.0) (*physics-load-stiffening* 10000.0)
+                                           (*physics-crowded-relax-passes* 3) (*physics-crowded-depth* 0.1)
+                                           (*physics-linear-slop* 0.005) (*physics-speculative-margin* 0.1)
+                                           (*physics-pair-skin* 0.03) (*physics-restitution-threshold* 1.0)
+                                           (*physics-hit-speed* 1.0) (*physics-sleep-speed* 0.05)
+                                           (*physics-time-to-sleep* 0.5) (*physics-wake-speed* 0.1)
+                                           (*physics-brace-mass-ratio* 4.0) (*physics-reach-limit* 0.98)
+                                           (*physics-max-speed* 400.0) (*physics-body-budget* 262144)
+                                           (*physics-terrain-chunk-budget* 32768) (+physics-max-colors+ 24)
+                                           (+physics-dynamic-colors+ 20) (+physics-coordinate-limit+ 65536))
+                     for symbol = (find-symbol (symbol-name name) '#:luv-physics)
+                     unless (eql value (symbol-value symbol))
+                       collect (list name (symbol-value symbol)))))
+    (check (null wrong) "defaults unlike the table: ~S" wrong))
+  (let ((ns (luv-physics::clock-ns)) (real (get-internal-real-time)))
+    (sleep 0.2)
+    (let ((dns (- (luv-physics::clock-ns) ns))
+          (dreal (* (- (get-internal-real-time) real) (/ 1000000000 internal-time-units-per-second))))
+      (check (< (abs (- dns dreal)) 5000000) "clock-ns advanced ~D ns where SBCL's clock advanced ~D" dns dreal))))
+;; V0CAB5-defaults-as-tabled ends here
+
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-non-finite-numbers]]
 (define-claim "C0ND1T" non-finite-numbers
     "NaN and ±infinity signal invalid-physics-number and leave the world untouched."
@@ -791,6 +816,34 @@ function of a column name that reads row K's float in that column. #T3STK1"
                    "a contact of the removed body survived")))))))
 ;; C0ND1T-failed-step-atomic ends here
 
+;; [[file:../physics.org::#C0ND1T][C0ND1T-failed-step-keeps-sleepers-found]]
+(define-claim "C0ND1T" failed-step-keeps-sleepers-found
+    "A sleeper that a failed step woke and gave back is still woken and pushed by a ball rolled into it."
+  (dolist (fail '(nil t))
+    (let* ((w (make-floor-world))
+           (sleeper (luv-physics::add-physics-body w 6.5 0.245 6.5)))
+      (dotimes (i 60) (luv-physics::step-physics-world w))
+      (check (not (luv-physics::physics-body-awake-p w sleeper)) "the ball did not fall asleep")
+      (let ((fast (luv-physics::add-physics-body w 5.9 0.245 6.5 :vx 5.0)))
+        (when fail
+          (let ((luv-physics:*physics-phases*
+                  (phases-checked-after 'luv-physics::grid-phase
+                                        (lambda (world)
+                                          (check (luv-physics::physics-body-awake-p world sleeper) "the failing step did not wake the sleeper")
+                                          (error "a phase failed")))))
+            (check (eq :failed (handler-case (progn (luv-physics::step-physics-world w) :stepped) (error () :failed))))))
+        (luv-physics::remove-physics-body w fast)
+        (luv-physics::step-physics-world w)
+        (let ((ball (luv-physics::add-physics-body w 4.5 0.245 6.5 :vx 5.0)))
+          (dotimes (i 60) (luv-physics::step-physics-world w))
+          (let ((x (luv-physics::physics-body-position w sleeper)))
+            (check (> x 6.8) "~:[~;after a failed step, ~]the sleeper stayed at x = ~,3F" fail x)
+            (check (< (luv-physics::physics-body-position w ball) x)
+                   "~:[~;after a failed step, ~]the rolled ball at ~,3F passed the sleeper at ~,3F"
+                   fail (luv-physics::physics-body-position w ball) x)))
+        (check (eq t (luv-physics::validate-physics-world w)))))))
+;; C0ND1T-failed-step-keeps-sleepers-found ends here
+
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-parameters-checked]]
 (define-claim "C0ND1T" parameters-checked
     "Every parameter is checked by name when a world is made, and the world keeps its own copy."
@@ -821,6 +874,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq outcome :stepped) "with the parameters rebound: ~A" outcome)
       (check (< (abs (- (body-y w h) 0.245)) 0.002)))))
 ;; C0ND1T-parameters-checked ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-parameter-ranges-closed]]
+(define-claim "C0ND1T" parameter-ranges-closed
+    "Every parameter is accepted at both ends of its range and refused just past either."
+  (let ((wrong '()))
+    (loop for (name symbol low high kind) in luv-physics::+physics-parameters+
+          for step = (if (eq kind 'integer) 1 (* 0.001 (- high low)))
+          do (flet ((outcome (value)
+                      (progv (if (eq name :reach-limit) (list symbol 'luv-physics::*physics-speculative-margin*) (list symbol))
+                          (list value 0.001)
+                        (handler-case (progn (luv-physics::make-physics-world) :accepted)
+                          (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))))
+               (loop for value in (list low high) for past in (list (- low step) (+ high step))
+                     unless (and (eq :accepted (outcome value)) (eq name (outcome past)))
+                       do (push (list name value (outcome value) past (outcome past)) wrong))))
+    (check (null wrong) "not closed at its ends: ~S" wrong)))
+;; C0ND1T-parameter-ranges-closed ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-event-handler-checked]]
 (define-claim "C0ND1T" event-handler-checked
@@ -948,6 +1018,40 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (equal (loop for i below 3 collect (first (row-values i))) '(10 14 12))))))
 ;; L4Y0UT-swap-remove-and-growth ends here
 
+;; [[file:../physics.org::#L4Y0UT][L4Y0UT-clear-and-trim]]
+(define-claim "L4Y0UT" clear-and-trim
+    "clear zeroes the rows held and the spare ones; trim keeps every row and room for 16."
+  (let ((e (luv-physics::make-event-columns :capacity 8 :spare 1)))
+    (flet ((fill-rows (n) (dotimes (i n)
+                            (let ((row (luv-physics::event-columns-append e)))
+                              (setf (aref (luv-physics::event-columns-kind e) row) (+ 10 i)
+                                    (aref (luv-physics::event-columns-speed e) row) (+ 0.5 i))))))
+      (fill-rows 5)
+      (setf (aref (luv-physics::event-columns-kind e) 5) 99)
+      (luv-physics::event-columns-clear e)
+      (check (= 0 (luv-physics::event-columns-length e)))
+      (check (every #'zerop (luv-physics::event-columns-kind e)) "kinds after a clear: ~S" (luv-physics::event-columns-kind e))
+      (check (every #'zerop (luv-physics::event-columns-speed e)))
+      (fill-rows 40)
+      (loop repeat 37 do (luv-physics::event-columns-swap-remove e (1- (luv-physics::event-columns-length e))))
+      (luv-physics::event-columns-trim e 1)
+      (check (= 16 (luv-physics::event-columns-capacity e)) "capacity ~D" (luv-physics::event-columns-capacity e))
+      (check (equal '(10 11 12) (loop for r below 3 collect (aref (luv-physics::event-columns-kind e) r))))
+      (check (equal '(0.5 1.5 2.5) (loop for r below 3 collect (aref (luv-physics::event-columns-speed e) r))))
+      (check (= 17 (length (luv-physics::event-columns-kind e)))))))
+;; L4Y0UT-clear-and-trim ends here
+
+;; [[file:../physics.org::#L4Y0UT][L4Y0UT-row-bytes-count-every-column]]
+(define-claim "L4Y0UT" row-bytes-count-every-column
+    "Row bytes: body 112, contact 120, event 40, box 44."
+  (check (equal '(112 120 40 44)
+                (list luv-physics::+body-columns-row-bytes+ luv-physics::+contact-columns-row-bytes+
+                      luv-physics::+event-columns-row-bytes+ luv-physics::+box-columns-row-bytes+))
+         "row bytes ~S"
+         (list luv-physics::+body-columns-row-bytes+ luv-physics::+contact-columns-row-bytes+
+               luv-physics::+event-columns-row-bytes+ luv-physics::+box-columns-row-bytes+)))
+;; L4Y0UT-row-bytes-count-every-column ends here
+
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-handle-generations]]
 (define-claim "B5N8JT" handle-generations
     "A reused slot gets a new generation: the old handle is stale, the new one works."
@@ -973,6 +1077,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
                 (loop repeat 4 collect (luv-physics::handle-table-tag (luv-physics::make-handle-table))))))
     (check (equal '(65534 65535 1 2) tags) "the tags are ~S" tags)))
 ;; B5N8JT-tags-wrap-within-their-bits ends here
+
+;; [[file:../physics.org::#B5N8JT][B5N8JT-handle-table-limits]]
+(define-claim "B5N8JT" handle-table-limits
+    "Slot 0 is reused first; a release adds one to the generation, wrapping at 2^20; -1 is malformed."
+  (let* ((table (luv-physics::make-handle-table))
+         (h0 (luv-physics::handle-table-allocate table luv-physics::+set-awake+ 0))
+         (h1 (luv-physics::handle-table-allocate table luv-physics::+set-awake+ 1)))
+    (check (equal '(0 1) (list (luv-physics::handle-index h0) (luv-physics::handle-index h1))))
+    (luv-physics::handle-table-release table h0)
+    (let ((again (luv-physics::handle-table-allocate table luv-physics::+set-awake+ 0)))
+      (check (= 0 (luv-physics::handle-index again)) "slot 0 was freed, slot ~D was taken"
+             (luv-physics::handle-index again))
+      (check (= 1 (luv-physics::handle-generation again)) "generation ~D after one release"
+             (luv-physics::handle-generation again))
+      (check (= 2 (luv-physics::handle-table-count table)) "~D slots opened for two bodies"
+             (luv-physics::handle-table-count table))
+      (check (eq :removed (luv-physics::handle-status table h0)))
+      (check (null (luv-physics::handle-status table again))))
+    (setf (aref (luv-physics::handle-table-generation table) 1) (1- (ash 1 20)))
+    (luv-physics::handle-table-release table h1)
+    (check (= 0 (aref (luv-physics::handle-table-generation table) 1)) "the generation after 2^20 - 1 is ~D"
+           (aref (luv-physics::handle-table-generation table) 1))
+    (check (eq :malformed (luv-physics::handle-status table -1)) "-1 is ~S"
+           (luv-physics::handle-status table -1))))
+;; B5N8JT-handle-table-limits ends here
 
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-describe-live-row]]
 (define-claim "B5N8JT" describe-live-row
@@ -1348,6 +1477,18 @@ function of a column name that reads row K's float in that column. #T3STK1"
               (check (zerop off-c) "~D constraint columns start off a 32-byte boundary" off-c))))))))
 ;; W0RLD7-solver-rows-aligned ends here
 
+;; [[file:../physics.org::#R9M4PV][R9M4PV-registry-refuses-bad-names]]
+(define-claim "R9M4PV" registry-refuses-bad-names
+    "register-kernel-family refuses a string or :auto as the name and a string as the instruction set."
+  (let ((before (copy-tree luv-physics::*kernel-families*))
+        (class (second (first luv-physics::*kernel-families*))))
+    (loop for (name set expected) in `(("avx2" nil :name) (:auto nil :name) (:wide ,"sse" :instruction-set))
+          do (check (eq expected (handler-case (progn (luv-physics::register-kernel-family name class set) :registered)
+                                   (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+                    "~S ~S was not refused naming ~S" name set expected))
+    (check (equal before luv-physics::*kernel-families*) "the registry changed")))
+;; R9M4PV-registry-refuses-bad-names ends here
+
 ;; [[file:../physics.org::#M4K3WD][M4K3WD-non-world-named]]
 (define-claim "M4K3WD" non-world-named
     "Exported functions of a WORLD signal not-a-physics-world naming themselves and WORLD for a non-world."
@@ -1477,6 +1618,19 @@ function of a column name that reads row K's float in that column. #T3STK1"
               (check (equal (row-of plain) want) "the default row holds~%  ~S~%not~%  ~S" (row-of plain) want))))))))
 ;; M4K3WD-limits-and-every-column ends here
 
+;; [[file:../physics.org::#M4K3WD][M4K3WD-life-zero-refused]]
+(define-claim "M4K3WD" life-zero-refused
+    "A life of 0, 0.0 or -0.0 seconds is refused; no life means immortal."
+  (let ((w (make-physics-world)))
+    (dolist (life (list 0 0.0 -0.0))
+      (check (eq :life (handler-case (progn (add-physics-body w 1.0 1.0 1.0 :life life) :accepted)
+                         (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+             "a life of ~S was not refused" life))
+    (check (= 0 (physics-world-awake-count w)))
+    (add-physics-body w 1.0 1.0 1.0)
+    (check (= 0.0 (aref (luv-physics::body-columns-life (luv-physics::physics-world-awake w)) 0)))))
+;; M4K3WD-life-zero-refused ends here
+
 ;; [[file:../physics.org::#E7V3NT][E7V3NT-mortal-body-events]]
 (define-claim "E7V3NT" mortal-body-events
     "A 1 s mortal ball: :begin, then :end, then :expired on step 60; afterwards its handle is stale."
@@ -1499,6 +1653,40 @@ function of a column name that reads row K's float in that column. #T3STK1"
                           (luv-physics::stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e)))))
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; E7V3NT-mortal-body-events ends here
+
+;; [[file:../physics.org::#E7V3NT][E7V3NT-event-data-grow-once]]
+(define-claim "E7V3NT" event-data-grow-once
+    "Forty events with data grow the data vector once; forty more, a step later, cons 0 bytes and read back."
+  (let* ((w (make-floor-world))
+         (data (loop for k below 40 collect (list :datum k))))
+    (flet ((push-forty ()
+             (loop for d in data for k from 0
+                   do (luv-physics::push-event w luv-physics::+event-hit+ k -1 1.0 2.0 3.0 4.0 d))
+             (luv-physics::push-event w luv-physics::+event-hit+ 40 -1 1.0 2.0 3.0 4.0)))
+      (push-forty)
+      (check (<= 41 (length (luv-physics::physics-world-event-data w))))
+      (luv-physics::step-physics-world w)
+      (check (zerop (luv-physics::event-columns-length (luv-physics::physics-world-events w))))
+      (let ((before (sb-ext:get-bytes-consed)))
+        (push-forty)
+        (check (= before (sb-ext:get-bytes-consed)) "forty events with data consed ~D bytes"
+               (- (sb-ext:get-bytes-consed) before)))
+      (let ((read '()))
+        (luv-physics::map-physics-events (lambda (kind a b x y z speed datum)
+                                           (declare (ignore kind b x y z speed))
+                                           (push (cons a datum) read))
+                                         w)
+        (setf read (nreverse read))
+        (check (= 41 (length read)))
+        (check (loop for (a . datum) in read for k from 0
+                     always (and (= a k) (eq datum (nth k data))))
+               "the data read back are not those pushed"))))
+  ;; a world that records hits and nothing else keeps a :hit and drops a :begin
+  (let ((w (luv-physics::make-physics-world :features '(:terrain :hit-events))))
+    (check (null (luv-physics::push-event w luv-physics::+event-begin+ 1 -1 1.0 2.0 3.0 4.0)))
+    (check (eql 0 (luv-physics::push-event w luv-physics::+event-hit+ 1 -1 1.0 2.0 3.0 4.0)))
+    (check (= 1 (luv-physics::event-columns-length (luv-physics::physics-world-events w))))))
+;; E7V3NT-event-data-grow-once ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trim-gives-room-back]]
 (define-claim "QKS4GZ" trim-gives-room-back
@@ -1718,9 +1906,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
     "A hard arrival at a box gives :hit (and :begin) events carrying the box's owner."
   (let* ((w (make-floor-world))
          (owner (list :wall 7))
-         (h (luv-physics::add-physics-body w 2.5 0.245 3.5 :vx 6.0))
          (other (luv-physics::add-physics-body w 2.5 0.245 6.5 :vx 6.0))
+         (h (luv-physics::add-physics-body w 2.5 0.245 3.5 :vx 6.0))
          (hits '()) (begins '()) (other-hits '()))
+    (check (= 1 (luv-physics::handle-index h)))
     (dotimes (i 30)
       (dotimes (k 19)
         (luv-physics::post-physics-box w -10.0 0.5 (- (* 0.6 k) 12.0) 0.25 0.25 0.25 :owner (list :other k)))
@@ -1749,6 +1938,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
           (check (eq axis (handler-case (progn (apply #'luv-physics::post-physics-box w 3.5 3.0 3.5 extents) nil)
                             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
                  "~A = ~A was not refused by its name" axis bad))))
+    (check (equal '(1.0 2.0 9999.0)
+                  (handler-case (progn (luv-physics::post-physics-box w 3.5 3.0 3.5 0.5 0.5 0.5 :vx 1 :vy 2 :vz 9999) nil)
+                    (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-value e))))
+           "a box too fast is not refused with its velocity in order")
     (check (zerop (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))) "a refused box was posted")
     (luv-physics::post-physics-box w 3.5 3.0 3.5 0.001 1023 0.5)
     (check (= 1 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
@@ -4210,6 +4403,61 @@ hand: the world and the function to call before each step. #K5DF9S"
              "an unknown body argument gave ~A" e))))
 ;; K5DF9S-builders-keep-their-bits ends here
 
+;; [[file:../physics.org::#K5DF9S][K5DF9S-fixed-sequence-is-java-random]]
+(define-claim "K5DF9S" fixed-sequence-is-java-random
+    "fixed-sequence draws java.util.Random's numbers: Random(42)'s first four, Random(42 + 2^47)'s first."
+  (flet ((java (seed &rest ints)
+           (let ((next (luv-physics::fixed-sequence (logxor seed 25214903917))))
+             (loop for int in ints
+                   always (= (/ (ash (ldb (byte 32 0) int) -1) (float (ash 1 31) 1d0)) (funcall next))))))
+    (check (java 42 -1170105035 234785527 -1360544799 205897768) "not Random(42)'s numbers")
+    (check (java (+ 42 (ash 1 47)) 977378613) "not Random(42 + 2^47)'s first number"))
+  (let* ((next (luv-physics::fixed-sequence 0))
+         (draws (loop repeat 1000 collect (funcall next))))
+    (check (every (lambda (v) (and (typep v 'double-float) (<= 0d0 v) (< v 1d0))) draws))
+    (check (< (reduce #'min draws) 0.01d0))
+    (check (> (reduce #'max draws) 0.99d0))))
+;; K5DF9S-fixed-sequence-is-java-random ends here
+
+;; [[file:../physics.org::#K5DF9S][K5DF9S-scene-text-drops-its-anchor]]
+(define-claim "K5DF9S" scene-text-drops-its-anchor
+    "Each scene's text is its documentation less ' #ANCHOR'."
+  (dolist (scene luv-physics::*physics-scenes*)
+    (let ((doc (luv-physics::physics-scene-documentation scene))
+          (text (luv-physics:physics-scene-text scene)))
+      (check (and (string= text (subseq doc 0 (- (length doc) 8))) (not (find #\# text))
+                  (string= " #" (subseq doc (- (length doc) 8) (- (length doc) 6))))
+             "~S: text ~S of ~S" (luv-physics::physics-scene-name scene) text doc))))
+;; K5DF9S-scene-text-drops-its-anchor ends here
+
+;; [[file:../physics.org::#K5DF9S][K5DF9S-run-reports-its-seconds]]
+(define-claim "K5DF9S" run-reports-its-seconds
+    "run-physics-scene's lines give each second's counts of the world and its final state hash."
+  (let* ((text (make-string-output-stream))
+         (world (luv-physics::run-physics-scene :awake-basin :count 20 :seconds 2 :stream text))
+         (lines (remove "" (uiop:split-string (get-output-stream-string text) :separator (string #\Newline))
+                        :test #'string=))
+         (want (multiple-value-bind (w script) (luv-physics::make-scene-world :awake-basin :count 20)
+                 (loop for second from 1 to 2
+                       do (dotimes (i 60) (funcall script (+ i (* 60 (1- second)))) (step-physics-world w))
+                       collect (format nil "~D ~D ~D ~D ~D" second (physics-world-awake-count w)
+                                       (physics-world-sleeping-count w)
+                                       (luv-physics::physics-world-last-step-contact-count w)
+                                       (luv-physics::physics-world-last-step-color-count w))))))
+    (check (= 5 (length lines)) "the report is ~S" lines)
+    (when (= 5 (length lines))
+      (check (search "awake-basin: 20 balls" (first lines)) "~S" (first lines))
+      (check (search "time   awake sleeping" (second lines)))
+      (loop for line in (subseq lines 2 4) for w in want
+            do (let ((fields (remove "" (uiop:split-string line :separator " ") :test #'string=)))
+                 (check (string= w (format nil "~{~A~^ ~}" (list (first fields) (third fields) (fourth fields)
+                                                                 (fifth fields) (sixth fields))))
+                        "line ~S, want ~S" line w)))
+      (check (search (format nil "summary: 20 bodies") (fifth lines)) "~S" (fifth lines))
+      (check (search (format nil "state hash ~D" (physics-world-state-hash world)) (fifth lines))
+             "~S does not end with the returned world's hash" (fifth lines)))))
+;; K5DF9S-run-reports-its-seconds ends here
+
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-refusals-name-the-clause]]
 (define-claim "K5DF9S" refusals-name-the-clause
     "Bad clauses are refused naming the scene and the clause; unknown names naming the operation."
@@ -4463,6 +4711,17 @@ in the order of *physics-scene-features*. #K5DF9S"
              "the walker left the resident world: x ~,3F" (luv-physics::physics-player-x p))))))
 ;; H7P4CX-walker-follows-the-rule ends here
 
+;; [[file:../physics.org::#H7P4CX][H7P4CX-frame-rounding-allowance]]
+(define-claim "H7P4CX" frame-rounding-allowance
+    "A frame 0.7e-12 s short of a step runs it; 1.3e-12 s short, it does not."
+  (let* ((terrain (make-floor-terrain))
+         (dt (luv-physics::physics-player-step-seconds (luv-physics::make-physics-player 1.5 0 1.5))))
+    (flet ((steps (short)
+             (luv-physics::advance-physics-player (luv-physics::make-physics-player 1.5 0 1.5) terrain (- dt short))))
+      (check (= 1 (steps 0.7d-12)) "0.7e-12 s short: ~D steps" (steps 0.7d-12))
+      (check (= 0 (steps 1.3d-12)) "1.3e-12 s short: ~D steps" (steps 1.3d-12)))))
+;; H7P4CX-frame-rounding-allowance ends here
+
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-refuses-bad-input]]
 (define-claim "H7P4CX" walker-refuses-bad-input
     "NaN, infinite and out-of-range walker input signals a condition and changes nothing."
@@ -4526,6 +4785,29 @@ in the order of *physics-scene-features*. #K5DF9S"
         (check (> x 5.0) "the ball only reached x = ~,3F" x))
       (check (eq t (luv-physics::validate-physics-world world))))))
 ;; H7P4CX-walker-kicks-balls ends here
+
+;; [[file:../physics.org::#B3NCH5][B3NCH5-measure-basin-reports-the-world]]
+(define-claim "B3NCH5" measure-basin-reports-the-world
+    "measure-basin over steps 20..24 of 20 balls: the world's own contacts, colours, overflow and deepest; phases in order."
+  (let ((m (luv-physics::measure-basin 20 :from 20 :to 24))
+        (w (luv-physics::make-basin-world 20)) (deepest 0.0))
+    (dotimes (i 24)
+      (step-physics-world w)
+      (setf deepest (max deepest (luv-physics::physics-world-max-penetration w))))
+    (check (equal (list 20 :scalar (luv-physics::physics-world-last-step-contact-count w)
+                        (luv-physics::physics-world-last-step-color-count w)
+                        (luv-physics::physics-world-overflow-count w) deepest)
+                  (list (getf m :balls) (getf m :kernels) (getf m :contacts) (getf m :colours)
+                        (getf m :overflow) (getf m :deepest)))
+           "measured ~S" m)
+    (check (plusp (getf m :contacts)))
+    (check (equal luv-physics:*physics-phases* (mapcar #'car (getf m :phases))))
+    (check (equal luv-physics:*physics-phases* (mapcar #'car (getf m :phase-bytes))))
+    (check (every (lambda (p) (>= (cdr p) 0)) (getf m :phases)))
+    (check (<= (reduce #'+ (getf m :phases) :key #'cdr) (getf m :mean)) "phases ~S over a mean step of ~A ms"
+           (getf m :phases) (getf m :mean))
+    (check (< 0 (getf m :median)))))
+;; B3NCH5-measure-basin-reports-the-world ends here
 
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-probe-reaches-the-shared-cache]]
 (define-claim "B3NCH5" probe-reaches-the-shared-cache
@@ -4609,6 +4891,36 @@ in the order of *physics-scene-features*. #K5DF9S"
                 (run :bouncy :scalar '(:terrain :body-contacts :friction :restitution :sleep) :restitution 0.5))
              "the bouncing pile compiled at run time differs from the general step"))))
 ;; FBNCH9-same-answers ends here
+
+;; [[file:../physics.org::#FBNCH9][FBNCH9-benchmark-row-as-described]]
+(define-claim "FBNCH9" benchmark-row-as-described
+    "The feature benchmark's row over steps 1..3 of the fountain: its bodies, ratio and column bytes."
+  (let* ((text (let ((luv-physics::+feature-scenes+
+                       '((:fountain "fountain, 3 steps" (:terrain :friction :sleep :mortal) 1 3))))
+                 (with-output-to-string (s) (luv-physics::run-feature-benchmark :stream s :kernels :scalar))))
+         (row (find-if (lambda (line) (search "| fountain, 3 steps |" line))
+                       (uiop:split-string text :separator (string #\Newline))))
+         (cells (and row (mapcar (lambda (c) (string-trim " " c)) (rest (butlast (uiop:split-string row :separator "|"))))))
+         (bodies (multiple-value-bind (world before) (luv-physics::feature-scene :fountain :kernels :scalar)
+                   (dotimes (i 3) (funcall before i) (step-physics-world world))
+                   (+ (physics-world-awake-count world) (physics-world-sleeping-count world)))))
+    (check (= 8 (length cells)) "the row is ~S" row)
+    (when (= 8 (length cells))
+      (let ((*read-default-float-format* 'double-float))
+        (destructuring-bind (general special ratio) (mapcar #'read-from-string (list (third cells) (fourth cells) (fifth cells)))
+          ;; the medians are printed to 0.0005 ms and the ratio to 0.005
+          (check (<= (- (/ (max 0 (- special 0.0005)) (+ general 0.0005)) 0.005)
+                     ratio
+                     (if (> general 0.0005) (+ (/ (+ special 0.0005) (- general 0.0005)) 0.005) ratio))
+                 "ratio ~A for medians ~A and ~A" ratio special general)))
+      (check (plusp bodies))
+      (check (string= (second cells) (princ-to-string bodies)) "~A bodies, ~D in the fountain" (second cells) bodies)
+      (check (string= (seventh cells) (format nil "~D, ~:*~D" (+ 112 (* 2 4 8)))) "body bytes ~A" (seventh cells))
+      (check (string= (eighth cells) (format nil "~D, ~D" (+ 120 (* 4 40) 24) (+ 120 (* 4 29) 24)))
+             "contact bytes ~A" (eighth cells))
+      (check (every (lambda (n) (>= (parse-integer n) 0)) (remove "" (uiop:split-string (sixth cells) :separator ", ") :test #'string=))
+             "bytes consed ~A" (sixth cells)))))
+;; FBNCH9-benchmark-row-as-described ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-piles-come-to-rest]]
 (define-claim "X7R3M5" piles-come-to-rest
@@ -4771,6 +5083,25 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (zerop consed) "~D bytes consed per step in the second minute" consed)
     (check (< (abs growth) 65536) "the heap grew by ~D bytes" growth)))
 ;; X7R3M5-fountain-runs-flat ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-finite-means-finite]]
+(define-claim "X7R3M5" finite-means-finite
+    "world-finite-p: the largest single-float is finite; an infinity or a NaN is not."
+  (let ((w (make-physics-world :gravity '(0 0 0))))
+    (add-physics-body w 1.0 1.0 1.0)
+    (let ((awake (luv-physics::physics-world-awake w)))
+      (flet ((finite-with (column value)
+               (let ((old (aref column 0)))
+                 (setf (aref column 0) value)
+                 (prog1 (luv-physics::world-finite-p w) (setf (aref column 0) old)))))
+        (check (luv-physics::world-finite-p w))
+        (check (finite-with (luv-physics::body-columns-vx awake) most-positive-single-float)
+               "the largest single-float is not finite")
+        (check (not (finite-with (luv-physics::body-columns-vx awake) sb-ext:single-float-positive-infinity)))
+        (let ((nan-finite (sb-int:with-float-traps-masked (:invalid)
+                            (finite-with (luv-physics::body-columns-y awake) (sb-kernel:make-single-float #x7FC00000)))))
+          (check (null nan-finite) "a NaN is finite"))))))
+;; X7R3M5-finite-means-finite ends here
 
 ;; [[file:../physics.org::#W9PREC][W9PREC-free-fall-is-first-order]]
 (define-claim "W9PREC" free-fall-is-first-order
@@ -5145,6 +5476,33 @@ counted. #RH7T05"
       (check (= (length indices) (length (luv-physics::physics-recording-style recording)))))))
 ;; RH7T05-recording-encodes-faithfully ends here
 
+;; [[file:../physics.org::#RH7T05][RH7T05-recording-cells-touch-air]]
+(define-claim "RH7T05" recording-cells-touch-air
+    "Around one air cell in solid ground, the recording's cells are its six neighbours."
+  (let* ((terrain (luv-physics::make-voxel-terrain))
+         (w (progn (luv-physics::fill-terrain terrain -8 -8 -8 16 16 16 t)
+                   (luv-physics::fill-terrain terrain 4 1 5 5 2 6 nil)
+                   (luv-physics::make-physics-world :terrain terrain :gravity '(0 0 0)))))
+    (luv-physics::add-physics-body w 4.5 1.5 5.5 :radius 0.25)
+    (let* ((recording (prog1 (luv-physics::start-physics-recording w) (luv-physics::stop-physics-recording w)))
+           (cells (loop for (x y z) on (luv-physics::recording-cells recording) by #'cdddr collect (list x y z))))
+      (check (equal (sort (copy-list cells) #'< :key (lambda (c) (+ (* 100 (first c)) (* 10 (second c)) (third c))))
+                    '((3 1 5) (4 0 5) (4 1 4) (4 1 6) (4 2 5) (5 1 5)))
+             "the cells are ~S" cells))))
+;; RH7T05-recording-cells-touch-air ends here
+
+;; [[file:../physics.org::#RH7T05][RH7T05-recording-bounds-hold-every-centre]]
+(define-claim "RH7T05" recording-bounds-hold-every-centre
+    "Bounds: every centre's box grown by the pad; the unit box for an empty recording."
+  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))))
+    (flet ((bounds () (let ((r (prog1 (luv-physics::start-physics-recording w) (luv-physics::stop-physics-recording w))))
+                        (multiple-value-list (luv-physics::recording-bounds r)))))
+      (check (equal '((0.0 0.0 0.0) (1.0 1.0 1.0)) (bounds)) "empty: ~S" (bounds))
+      (add-physics-body w 4.5 1.5 5.5 :radius 0.25)
+      (add-physics-body w 6.0 0.5 2.0 :radius 0.25)
+      (check (equal '((4.0 0.0 1.5) (6.5 2.0 6.0)) (bounds)) "two balls: ~S" (bounds)))))
+;; RH7T05-recording-bounds-hold-every-centre ends here
+
 ;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-the-scene]]
 (define-claim "RH7T05" viewer-draws-the-scene
     "In headless Chromium the viewer's screenshots are not blank, and moving the slider changes them."
@@ -5194,6 +5552,89 @@ counted. #RH7T05"
           (check (search "check 0.0 s: 300 awake, 0 asleep" text))
           (check (search (format nil "1.0 s: ~D awake" (luv-physics::physics-world-awake-count world)) text)))))))
 ;; UFK5EA-picture-draws-the-bodies ends here
+
+;; [[file:../physics.org::#UFK5EA][UFK5EA-picture-of-one-cell]]
+(define-claim "UFK5EA" picture-of-one-cell
+    "One air cell in solid ground: a disc and three faces, exactly placed, deepest first; the drawing fills the panel's width."
+  (let* ((terrain (luv-physics::make-voxel-terrain))
+         (w (progn (luv-physics::fill-terrain terrain -8 -8 -8 16 16 16 t)
+                   (luv-physics::fill-terrain terrain 4 1 5 5 2 6 nil)
+                   (luv-physics::make-physics-world :terrain terrain :gravity '(0 0 0)))))
+    (luv-physics::add-physics-body w 4.5 1.5 5.5 :radius 0.25)
+    (luv-physics::add-physics-body w 4.25 1.75 5.2 :radius 0.1)
+    (let ((recording (luv-physics::start-physics-recording w)))
+      (luv-physics::stop-physics-recording w)
+      (multiple-value-bind (across up toward) (luv-physics::view-basis 35 40)
+        (labels ((dot (u p) (+ (* (first u) (first p)) (* (second u) (second p)) (* (third u) (third p))))
+                 (project (p) (list (dot across p) (- (dot up p))))
+                 (near (a b) (every (lambda (x y) (< (abs (- x y)) 1d-9)) a b))
+                 (expected-face (cell axis colour)
+                   ;; the face of CELL whose normal is +AXIS: its corners and its middle
+                   (let* ((o (copy-list cell)) (a (mod (1+ axis) 3)) (b (mod (+ 2 axis) 3)))
+                     (incf (nth axis o))
+                     (flet ((at (u v) (let ((p (copy-list o))) (incf (nth a p) u) (incf (nth b p) v) p)))
+                       (list (dot toward (at 0.5 0.5)) (if (= axis 1) :face :wall) colour
+                             (mapcar #'project (list (at 0 0) (at 1 0) (at 1 1) (at 0 1))))))))
+          (let* ((cells (luv-physics::recording-cells recording))
+                 (items (luv-physics::scene-picture-items recording 0 cells across up toward))
+                 (discs (remove :disc items :key #'second :test-not #'eq))
+                 (disc (find 0.25 discs :key #'fifth))
+                 (small (find 0.1 discs :key #'fifth))
+                 (faces (remove :disc items :key #'second))
+                 (want (list (expected-face '(3 1 5) 0 #x8f937f) (expected-face '(4 0 5) 1 #xbcc0a8)
+                             (expected-face '(4 1 4) 2 #xa3a791))))
+            (check (= 5 (length items)) "~D items" (length items))
+            (check (and small (near (fourth small) (project (list 4.25 1.75 (float 5.2 1d0)))))
+                   "the small disc is ~S" small)
+            (check (and disc (near (fourth disc) (project '(4.5 1.5 5.5))) (= 0.25 (fifth disc))
+                        (< (abs (- (first disc) (dot toward '(4.5 1.5 5.5)))) 1d-9)
+                        (= #xd9822b (third disc)))
+                   "the disc is ~S" disc)
+            (check (= 3 (length faces)) "~D faces" (length faces))
+            (dolist (f want)
+              (check (find-if (lambda (g)
+                                (and (< (abs (- (first f) (first g))) 1d-9) (eq (second f) (second g))
+                                     (= (third f) (third g)) (= 4 (length (cdddr g)))
+                                     (every (lambda (p) (find-if (lambda (q) (near p q)) (cdddr g))) (fourth f))))
+                              faces)
+                     "no item is the face ~S" f))
+            (check (equal (mapcar #'first items) (sort (mapcar #'first items) #'<)) "the items are not deepest first"))
+          ;; a posted box shows the three faces that look towards the viewer
+          (let* ((bw (luv-physics::make-physics-world :gravity '(0 0 0)))
+                 (recording (luv-physics::start-physics-recording bw)))
+            (luv-physics::post-physics-box bw 1.0 2.0 3.0 0.25 0.5 0.125)
+            (step-physics-world bw)
+            (luv-physics::stop-physics-recording bw)
+            (let ((faces (luv-physics::scene-picture-items recording 1 '() across up toward))
+                  (size '(0.5 1.0 0.25)))
+              (check (= 3 (length faces)) "~D box faces" (length faces))
+              (dotimes (axis 3)
+                (let* ((o (list 0.75 1.5 2.875)) (a (mod (1+ axis) 3)) (b (mod (+ 2 axis) 3)))
+                  (incf (nth axis o) (nth axis size))
+                  (flet ((at (u v) (let ((p (copy-list o))) (incf (nth a p) (* u (nth a size))) (incf (nth b p) (* v (nth b size))) p)))
+                    (check (find-if (lambda (g) (and (eq :face (second g)) (= #x45b36b (third g))
+                                                     (< (abs (- (first g) (dot toward (at 0.5 0.5)))) 1d-6)
+                                                     (every (lambda (p) (find-if (lambda (q) (every (lambda (x y) (< (abs (- x y)) 1d-6)) p q)) (cdddr g)))
+                                                            (mapcar #'project (list (at 0 0) (at 1 0) (at 1 1) (at 0 1))))))
+                                    faces)
+                           "no face of the box looks along +~D" axis)))))))))
+    (let ((path (repository-file "report/picture-cell-check.svg")) (xs '()))
+      (ensure-directories-exist path)
+      (luv-physics::write-scene-picture (luv-physics::start-physics-recording w) path '(0) :width 300 :height 1000)
+      (luv-physics::stop-physics-recording w)
+      (let ((text (luv-physics::read-file-text path)) (*read-default-float-format* 'double-float))
+        (flet ((attribute (name at) (let* ((s (+ (search (format nil "~A=\"" name) text :start2 at) (length name) 2)))
+                                      (values (subseq text s (position #\" text :start s)) s))))
+          (loop for at = (search "<circle" text) then (search "<circle" text :start2 (1+ at)) while at
+                do (let ((cx (read-from-string (attribute "cx" at))) (r (read-from-string (attribute "r" at))))
+                     (push (- cx r) xs) (push (+ cx r) xs)))
+          (loop for at = (search "<polygon" text) then (search "<polygon" text :start2 (1+ at)) while at
+                do (dolist (point (uiop:split-string (attribute "points" at) :separator " "))
+                     (push (read-from-string (first (uiop:split-string point :separator ","))) xs)))))
+      (check (= 16 (length xs)) "~D ends of discs and corners of faces" (length xs))
+      (check (< (abs (- 5 (reduce #'min xs))) 0.11) "the leftmost point is at ~,1F" (reduce #'min xs))
+      (check (< (abs (- 295 (reduce #'max xs))) 0.11) "the rightmost point is at ~,1F" (reduce #'max xs)))))
+;; UFK5EA-picture-of-one-cell ends here
 
 ;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-uses-world-grids]]
 (define-claim "Q5V1EW" view-grids-awake-rows-of-now
@@ -5938,6 +6379,24 @@ within reach of something. #S9WEEP"
     (check (> found 2000) "the queries found only ~D things" found)))
 ;; OV3RLP-regions-match-brute-force ends here
 
+;; [[file:../physics.org::#OV3RLP][OV3RLP-no-terrain-no-cells]]
+(define-claim "OV3RLP" no-terrain-no-cells
+    "Without terrain the cell queries find nothing; the body queries still find the ball."
+  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))) (calls 0))
+    (add-physics-body w 0.5 0.5 0.5 :radius 0.25)
+    (flet ((counted (&rest cell) (declare (ignore cell)) (incf calls)))
+      (check (= 0 (map-physics-cells-in-sphere #'counted w 0.0 0.0 0.0 2.0)))
+      (check (= 0 (map-physics-cells-in-box #'counted w 0.0 0.0 0.0 2.0 2.0 2.0)))
+      (check (= 0 calls) "~D cells reported" calls)
+      (check (= 1 (map-physics-bodies-in-sphere #'counted w 0.0 0.0 0.0 2.0)))
+      (check (= 1 (map-physics-bodies-in-box #'counted w 0.0 0.0 0.0 2.0 2.0 2.0)))))
+  ;; cells are closed boxes: those that only touch the region's faces meet it
+  (let ((w (make-floor-world)))
+    (check (= 16 (map-physics-cells-in-box (lambda (i j k) (declare (ignore i j k))) w 3.0 -0.5 3.0 1.0 0.4 1.0))
+           "~D floor cells meet the box [2,4] x [-0.9,-0.1] x [2,4]"
+           (map-physics-cells-in-box (lambda (i j k) (declare (ignore i j k))) w 3.0 -0.5 3.0 1.0 0.4 1.0))))
+;; OV3RLP-no-terrain-no-cells ends here
+
 ;; [[file:../physics.org::#QB3NCH][QB3NCH-queries-cons-nothing]]
 (define-claim "QB3NCH" queries-cons-nothing
     "Rays, sphere casts and region queries between steps cons 0 bytes once warm."
@@ -5966,6 +6425,47 @@ within reach of something. #S9WEEP"
                (- (sb-ext:get-bytes-consed) before))
         (check (plusp n))))))
 ;; QB3NCH-queries-cons-nothing ends here
+
+;; [[file:../physics.org::#QB3NCH][QB3NCH-benchmark-times-the-named-queries]]
+(define-claim "QB3NCH" benchmark-times-the-named-queries
+    "The benchmark's ray, cast and overlap give the API's answers for the query spelled out; time-queries visits every query."
+  (let* ((w (luv-physics::make-basin-world 300))
+         (q (luv-physics::query-benchmark-inputs 100 7))
+         (hit (make-physics-hit)) (found '()) (wrong 0) (hits 0)
+         (counter (lambda (h) (push h found))))
+    (dotimes (i 60) (step-physics-world w))
+    (let ((ray (luv-physics::benchmark-query w :ray hit counter))
+          (sphere (luv-physics::benchmark-query w :sphere hit counter))
+          (overlap (luv-physics::benchmark-query w :overlap hit counter)))
+      (flet ((same (got want)
+               (if (and got want)
+                   (progn (incf hits)
+                          (unless (and (eq (physics-hit-kind got) (physics-hit-kind want))
+                                       (= (physics-hit-handle got) (physics-hit-handle want))
+                                       (= (physics-hit-distance got) (physics-hit-distance want)))
+                            (incf wrong)))
+                   (unless (eq (null got) (null want)) (incf wrong)))))
+        (dotimes (k 100)
+          (destructuring-bind (x y z dx dy dz) (loop for o below 6 collect (aref q (+ (* 7 k) o)))
+            (same (funcall ray q (* 7 k)) (physics-ray-cast w x y z dx dy dz 10.0))
+            (same (funcall sphere q (* 7 k)) (physics-sphere-cast w x y z 0.25 dx dy dz 10.0))
+            (setf found '())
+            (funcall overlap q (* 7 k))
+            (let ((want '()))
+              (map-physics-bodies-in-sphere (lambda (h) (push h want)) w x y z 1.0)
+              (unless (equal (sort found #'<) (sort want #'<)) (incf wrong)))))))
+    (check (zerop wrong) "~D queries differ from the API's" wrong)
+    (check (> hits 50) "only ~D hits" hits))
+  (let ((seen (make-array 30 :element-type 'bit :initial-element 0)))
+    (multiple-value-bind (wall cpu bytes)
+        (luv-physics::time-queries (make-array 21 :element-type 'single-float) 3
+                                   (lambda (q i) (declare (ignore q) (type fixnum i)) (setf (sbit seen i) 1)))
+      (check (equal '(0 7 14) (loop for i below 30 when (= 1 (sbit seen i)) collect i)) "offsets ~S"
+             (loop for i below 30 when (= 1 (sbit seen i)) collect i))
+      (check (and (plusp wall) (plusp cpu)))
+      ;; the run's own few boxed numbers, over a million calls, are far below a byte a query
+      (check (<= 0 bytes 1) "~A bytes a query" bytes))))
+;; QB3NCH-benchmark-times-the-named-queries ends here
 
 ;; [[file:../physics.org::#QB3NCH][QB3NCH-benchmark-queries-as-described]]
 (define-claim "QB3NCH" benchmark-queries-as-described
