@@ -4934,6 +4934,18 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
                              (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
              (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
 
+(defparameter *physics-sleep-tie-rise* 0.9
+  "How near the vertical, as the upward part of its normal, a pushing contact between two awake
+bodies must be to tie their times to sleep together (tie-sleep-times). #ST0R3S")
+
+(declaim (inline tie-sleep-times))
+(defun tie-sleep-times (sleep-time row-a row-b)
+  "Give both awake rows ROW-A and ROW-B the smaller of their counts of stillness in SLEEP-TIME.
+#ST0R3S"
+  (declare (type f32-column sleep-time) (type index row-a row-b))
+  (let ((m (min (aref sleep-time row-a) (aref sleep-time row-b))))
+    (setf (aref sleep-time row-a) m (aref sleep-time row-b) m)))
+
 (define-featured-kernel (store-phase :features (:contact-events :hit-events :rolling-resistance)) (world)
   "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
@@ -4953,8 +4965,11 @@ so its undo log closes. #ST0R3S"
          (n (body-columns-length awake))
          (held (physics-world-held world))
          ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts
-         (marking (held-marking-p world)))
-    (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
+         (marking (held-marking-p world))
+         (tying (physics-world-sleep-enabled world))
+         (tie-rise (f32 *physics-sleep-tie-rise*))
+         (sleep-time (body-columns-sleep-time awake)))
+    (declare (type f32-column v sleep-time) (type single-float hit-speed slop max-penetration max-approach tie-rise)
              (type index n) (type fixnum-column held)
              (ignorable ids awake sleeping hit-speed) #.+kernel-policy+)
     (when marking (fill held 0 :end (1+ n)))
@@ -5005,6 +5020,16 @@ so its undo log closes. #ST0R3S"
               (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
                           (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))))))
+    ;; stacked awake bodies share their stillness, once the marks of every contact are in
+    (when tying
+      (with-constraint-block (contact body-a body-b) cbuf
+        (loop for k of-type index below (constraint-columns-length cbuf)
+              unless (< (aref contact k) 0) do
+          (let ((base (constraint-base k)) (a (aref body-a k)) (b (aref body-b k)))
+            (declare (type index base a b))
+            (when (and (< a n) (< b n) (> (@ max-normal-impulse) 0.0) (> (abs (@ ny)) tie-rise)
+                       (not (and marking (or (logtest (aref held a) 1) (logtest (aref held b) 1)))))
+              (tie-sleep-times sleep-time a b))))))
     (let ((stats (world-statistics world)))
       (setf (aref stats 3) (coerce max-penetration 'double-float)
             (aref stats 4) (coerce max-approach 'double-float)))
