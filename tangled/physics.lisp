@@ -2881,14 +2881,14 @@ the fresh one, 0 neither; grown to the handle table's slots. #G4R1D5"
   "Bring the sleeping grids up to date. Bodies that fell asleep since the settled grid was built
 go into the fresh grid, which is built again, from them alone, whenever one more falls asleep.
 The settled grid is built again from every sleeper, and the fresh one emptied, when the cell size
-changed, or when the fresh sleepers, or the settled grid's dead entries, outnumber the square
-root of the settled grid's count (and 64). Return the settled grid. #G4R1D5"
+changed, or when the fresh sleepers, or the settled grid's dead entries, outnumber an eighth of
+the settled grid (and 256). Return the settled grid. #G4R1D5"
   (let* ((grid (physics-world-sleeping-grid world))
          (fresh (physics-world-fresh-grid world))
          (size (grid-cell-size world))
          (s (physics-world-sleeping world))
          (of (sleeping-grid-of world))
-         (bound (max 64 (isqrt (physics-world-settled-count world)))))
+         (bound (max 256 (floor (physics-world-settled-count world) 8))))
     (declare (type fixnum-column of))
     (cond ((or (/= (hash-grid-inv-cell grid) (/ 1.0 size))
                (> (physics-world-fresh-count world) bound)

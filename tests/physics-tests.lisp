@@ -1781,22 +1781,6 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; G4R1D5-sorted-rows-keep-handles ends here
 
-;; [[file:../physics.org::#G4R1D5][G4R1D5-fresh-grid-stays-small]]
-(define-claim "G4R1D5" fresh-grid-stays-small
-    "Beside 10000 sleepers, a settled pile of 300 leaves at most 100 bodies in the fresh grid."
-  (let ((w (luv-physics::sleepers-beside-basin 10000 :kernels :scalar)))
-    (step-physics-world w)
-    (luv-physics::add-scene-bodies w (first (luv-physics::physics-scene-bodies (luv-physics::find-physics-scene :pile)))
-                                   300 nil)
-    (loop repeat 1200 while (plusp (luv-physics::physics-world-awake-count w)) do (step-physics-world w))
-    (step-physics-world w)
-    (check (zerop (luv-physics::physics-world-awake-count w)) "~D balls still awake" (luv-physics::physics-world-awake-count w))
-    (check (<= (luv-physics::physics-world-fresh-count w) 100) "the fresh grid holds ~D"
-           (luv-physics::physics-world-fresh-count w))
-    (check (= 10300 (+ (luv-physics::physics-world-fresh-count w) (luv-physics::physics-world-settled-count w)))
-           "the grids hold ~D and ~D" (luv-physics::physics-world-fresh-count w) (luv-physics::physics-world-settled-count w))))
-;; G4R1D5-fresh-grid-stays-small ends here
-
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grids-stay-lean]]
 (define-claim "G4R1D5" sleeping-grids-stay-lean
     "Sleeping enters the fresh grid alone; removed sleepers leave the grids at the next step."
