@@ -3298,6 +3298,106 @@ from the distance it finds for the contact anyway. #P41RS7"
     (and (or (> ri rj) (< (aref overlaps i) +overlaps-per-body+))
          (or (< ri rj) (< (aref overlaps j) +overlaps-per-body+)))))
 
+(declaim (inline pair-contact))
+(defun pair-contact (contacts table overlaps margin slop dt gstep threshold impact
+                     xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
+  "Make or refresh the contact of two spheres (centres, radii, handles, velocities) when their
+gap is under the speculative distance. CI and CJ, the awake rows of a pair taken after
+overlap-room, have its overlap counted in OVERLAPS; -1 for a pair not counted. Return, first,
+true when the count made a row crowded; second, true when the pair strikes (closes faster than
+THRESHOLD across a gap) and IMPACT is false: then it was counted but no contact was touched. #P41RS7"
+  (declare (type contact-columns contacts) (type contact-table table) (type fixnum-column overlaps)
+           (type single-float margin slop dt gstep threshold
+                 xi yi zi ri xj yj zj rj vxi vyi vzi vxj vyj vzj)
+           (type fixnum hi hj ci cj) #.+kernel-policy+ (inline touch-contact))
+  (let* ((dx (- xj xi)) (dy (- yj yi)) (dz (- zj zi))
+         (d2 (+ (* dx dx) (* dy dy) (* dz dz)))
+         (reach (+ ri rj margin))
+         (crowded nil))
+    ;; the overlap is counted by the sign bit of d2 - (ri + rj)^2, not by a
+    ;; branch: in a pile, half the pairs listed overlap, in no order a branch
+    ;; predictor could learn
+    (when (>= ci 0)
+      (let ((bit (ldb (byte 1 31) (sb-kernel:single-float-bits (- d2 (* (+ ri rj) (+ ri rj)))))))
+        (let ((oi (+ (aref overlaps ci) (if (> ri rj) 0 bit)))
+              (oj (+ (aref overlaps cj) (if (< ri rj) 0 bit))))
+          (declare (type fixnum oi oj))
+          (setf (aref overlaps ci) oi (aref overlaps cj) oj)
+          ;; from the first crowded row on, every pair asks overlap-room
+          (setf crowded (>= (logior oi oj) +overlaps-per-body+)))))
+    (if (< d2 (* reach reach))
+      (let ((d (fsqrt d2)))
+       (multiple-value-bind (nx ny nz)
+           (if (> d 1e-6)
+               (let ((inv (/ 1.0 d))) (values (* dx inv) (* dy inv) (* dz inv)))
+               (let ((cn (coincident-direction hi hj)))
+                 (values (aref +unit-directions+ cn) (aref +unit-directions+ (+ cn 1))
+                         (aref +unit-directions+ (+ cn 2)))))
+        (declare (type single-float nx ny nz))
+        (let ((sep (- d ri rj))
+              (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
+        (declare (type single-float sep approach))
+        (if (and (not impact) (> approach threshold) (> sep 0.0))
+        (values crowded t)
+        ;; a pair closing faster than the restitution threshold takes the normal of
+        ;; the moment it will touch ([[#MYWH16]]): the line of centres then
+        (multiple-value-bind (nx ny nz sep)
+            (if (and impact (> approach threshold) (> sep 0.0))
+                (pair-impact-normal dx dy dz (- vxj vxi) (- vyj vyi) (- vzj vzi) (+ ri rj) dt nx ny nz sep)
+                (values nx ny nz sep))
+          (declare (type single-float nx ny nz sep))
+        (when (< sep (speculative-distance approach dt slop margin gstep))
+          ;; orient every pair contact from the lower handle slot to the higher
+          (multiple-value-bind (ha hb s px py pz)
+              (if (< (handle-index hi) (handle-index hj))
+                  (values hi hj 1.0 (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)))
+                  (values hj hi -1.0 (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))))
+            (declare (type fixnum ha hb) (type single-float s px py pz))
+            (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
+                           +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
+                           0.0 0.0 0.0)))
+        (values crowded nil))))))
+      (values crowded nil))))
+
+(defun scan-listed-pairs (world start crowded)
+  "Take the listed pairs of WORLD's pair list from START on whose rows both stayed, as the pair
+phase takes them, CROWDED telling whether some row is crowded, but stop at a pair that strikes
+(pair-contact): return the place where the walk stopped (the list's count when it did not) and
+whether some row is crowded now. A function of its own, without the impact part, so that the
+walk keeps its values in registers. #P41RS7"
+  (declare (type index start) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world))
+         (plist (physics-world-pair-list world))
+         (margin (f32 (physics-world-margin world)))
+         (slop (f32 (physics-world-slop world)))
+         (dt (physics-world-current-dt world))
+         (gstep (* dt (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
+                               (expt (physics-world-gravity-z world) 2)))))
+         (threshold (f32 (physics-world-restitution-threshold world)))
+         (contacts (physics-world-contacts world))
+         (table (physics-world-contact-table world))
+         (overlaps (pair-list-overlaps plist))
+         (pairs (pair-list-pairs plist)) (loose (pair-list-loose plist))
+         (count (pair-list-count plist)))
+    (declare (type single-float margin slop dt gstep threshold) (type body-columns awake)
+             (type pair-list plist) (type contact-columns contacts) (type contact-table table)
+             (type fixnum-column overlaps pairs loose) (type index count))
+    (with-body-columns (x y z vx vy vz radius handle) awake
+      (loop for p of-type index from start below count do
+        (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
+          (declare (type index i j))
+          (when (and (zerop (logior (aref loose i) (aref loose j)))
+                     (or (not crowded) (overlap-room overlaps i j radius)))
+            (multiple-value-bind (full strikes)
+                (pair-contact contacts table overlaps margin slop dt gstep threshold nil
+                              (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
+                              (aref vx i) (aref vy i) (aref vz i)
+                              (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
+                              (aref vx j) (aref vy j) (aref vz j) i j)
+              (when full (setf crowded t))
+              (when strikes (return-from scan-listed-pairs (values p crowded)))))))
+      (values count crowded))))
+
 (defun pair-phase (world)
   "Phase 4: contacts between awake bodies (each pair once) and lean contacts from awake bodies
 onto the sleepers they reach. The pairs come from the pair list while it still holds: the
@@ -3335,54 +3435,11 @@ gap is under the speculative distance. #P41RS7"
              (inline touch-contact))
     (with-body-columns (x y z vx vy vz radius flags handle) awake
       (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
-               ;; CI and CJ: the awake rows of a pair taken after overlap-room, whose overlap
-               ;; is counted here; -1 for a sleeper's pair, which is not counted
                (declare (type single-float xi yi zi ri xj yj zj rj vxi vyi vzi vxj vyj vzj)
                         (type fixnum hi hj ci cj))
-               (let* ((dx (- xj xi)) (dy (- yj yi)) (dz (- zj zi))
-                      (d2 (+ (* dx dx) (* dy dy) (* dz dz)))
-                      (reach (+ ri rj margin)))
-                 ;; the overlap is counted by the sign bit of d2 - (ri + rj)^2, not by a
-                 ;; branch: in a pile, half the pairs listed overlap, in no order a branch
-                 ;; predictor could learn
-                 (when (>= ci 0)
-                   (let ((overlaps (pair-list-overlaps plist))
-                         (bit (ldb (byte 1 31) (sb-kernel:single-float-bits (- d2 (* (+ ri rj) (+ ri rj)))))))
-                     (let ((oi (+ (aref overlaps ci) (if (> ri rj) 0 bit)))
-                           (oj (+ (aref overlaps cj) (if (< ri rj) 0 bit))))
-                       (declare (type fixnum oi oj))
-                       (setf (aref overlaps ci) oi (aref overlaps cj) oj)
-                       ;; from the first crowded row on, every pair asks overlap-room
-                       (when (>= (logior oi oj) +overlaps-per-body+) (setf crowded t)))))
-                 (when (< d2 (* reach reach))
-                   (let ((d (fsqrt d2)))
-                    (multiple-value-bind (nx ny nz)
-                        (if (> d 1e-6)
-                            (let ((inv (/ 1.0 d))) (values (* dx inv) (* dy inv) (* dz inv)))
-                            (let ((cn (coincident-direction hi hj)))
-                              (values (aref +unit-directions+ cn) (aref +unit-directions+ (+ cn 1))
-                                      (aref +unit-directions+ (+ cn 2)))))
-                     (declare (type single-float nx ny nz))
-                     (let ((sep (- d ri rj))
-                           (approach (+ (* (- vxi vxj) nx) (* (- vyi vyj) ny) (* (- vzi vzj) nz))))
-                     (declare (type single-float sep approach))
-                     ;; a pair closing faster than the restitution threshold takes the normal of
-                     ;; the moment it will touch ([[#MYWH16]]): the line of centres then
-                     (multiple-value-bind (nx ny nz sep)
-                         (if (and (> approach threshold) (> sep 0.0))
-                             (pair-impact-normal dx dy dz (- vxj vxi) (- vyj vyi) (- vzj vzi) (+ ri rj) dt nx ny nz sep)
-                             (values nx ny nz sep))
-                       (declare (type single-float nx ny nz sep))
-                     (when (< sep (speculative-distance approach dt slop margin gstep))
-                       ;; orient every pair contact from the lower handle slot to the higher
-                       (multiple-value-bind (ha hb s px py pz)
-                           (if (< (handle-index hi) (handle-index hj))
-                               (values hi hj 1.0 (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)))
-                               (values hj hi -1.0 (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))))
-                         (declare (type fixnum ha hb) (type single-float s px py pz))
-                         (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
-                                        +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
-                                        0.0 0.0 0.0)))))))))))
+               (when (pair-contact contacts table (pair-list-overlaps plist) margin slop dt gstep threshold t
+                                   xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
+                 (setf crowded t))))
         (declare (inline pair))
         (pair-list-room plist n)
         (fill (pair-list-overlaps plist) 0 :end n)
@@ -3406,11 +3463,19 @@ gap is under the speculative distance. #P41RS7"
               (let ((pairs (pair-list-pairs plist)) (loose (pair-list-loose plist))
                     (loose-rows (pair-list-loose-rows plist)))
                 (declare (type fixnum-column pairs loose loose-rows))
-                (dotimes (p (pair-list-count plist))
-                  (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
-                    (declare (type index i j))
-                    (when (zerop (logior (aref loose i) (aref loose j)))
-                      (rows i j))))
+                ;; the walk stops at a pair that strikes, which is taken here again whole,
+                ;; its overlap already counted
+                (let ((p 0))
+                  (declare (type index p))
+                  (loop (multiple-value-setq (p crowded) (scan-listed-pairs world p crowded))
+                        (when (>= p (pair-list-count plist)) (return))
+                        (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
+                          (declare (type index i j))
+                          (pair (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
+                                (aref vx i) (aref vy i) (aref vz i)
+                                (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
+                                (aref vx j) (aref vy j) (aref vz j) -1 -1))
+                        (incf p)))
                 (dotimes (q strays)
                   (let ((i (aref loose-rows q)) (refused 0))
                     (declare (type index refused))

@@ -2065,6 +2065,43 @@ function of a column name that reads row K's float in that column. #T3STK1"
                      "~:[b~;a~] first: (nx ny nz separation px py pz) is ~S, not ~S" a-first got want))))))))
 ;; P41RS7-pair-contact-geometry ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-listed-pair-strikes]]
+(define-claim "P41RS7" listed-pair-strikes
+    "A listed pair that strikes takes the line of centres at its touch, as the build takes it."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (r 0.25) (gap 0.02) (speed 1.5)
+         (a (add-physics-body w 3.0 3.0 3.0 :radius r))
+         (b (add-physics-body w (+ 3.0 r r gap) 3.0 3.0 :radius r))
+         (plist (luv-physics::physics-world-pair-list w))
+         (builds 0) (normal nil))
+    (step-physics-world w)
+    (setf builds (luv-physics::pair-list-builds plist))
+    ;; B closes on A along x and slides along y: the normal at the touch leans towards +y
+    (set-physics-body-velocity w b (- speed) speed 0.0)
+    (flet ((read-normal (world)
+             (let* ((c (luv-physics::physics-world-contacts world)) (g (luv-physics::contact-columns-geometry c)))
+               (dotimes (row (luv-physics::contact-columns-length c))
+                 (when (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-pair+)
+                   (setf normal (list (luv-physics::contact@ g row nx) (luv-physics::contact@ g row ny)
+                                      (luv-physics::contact@ g row nz))))))
+             world))
+      (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::pair-phase #'read-normal)))
+        (step-physics-world w)))
+    ;; |(2r + gap - speed t, speed t)| = 2r at the smaller root, in double precision
+    (let* ((d0 (+ r r gap)) (reach (* 2d0 r)) (s (coerce speed 'double-float))
+           (qa (* 2 s s)) (qb (* -2 d0 s)) (qc (- (* d0 d0) (* reach reach)))
+           (time (/ (- (- qb) (sqrt (- (* qb qb) (* 4 qa qc)))) (* 2 qa)))
+           (want (list (/ (- d0 (* s time)) reach) (/ (* s time) reach) 0d0))
+           ;; A has the lower slot, so the contact's normal points from A to B
+           (sign (if (< (luv-physics::handle-index a) (luv-physics::handle-index b)) 1 -1)))
+      (check (= builds (luv-physics::pair-list-builds plist)) "the list was built again: no listed pair was taken")
+      (check (not (null normal)) "the pair made no contact")
+      (when normal
+        (check (every (lambda (x e) (< (abs (- (* sign x) e)) 1d-5)) normal want)
+               "the normal is ~S, not the line of centres at the touch ~S" normal want)
+        (check (> (abs (second normal)) 0.02) "the normal ~S is the line of centres now" normal)))))
+;; P41RS7-listed-pair-strikes ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-gone-rows-loose]]
 (define-claim "P41RS7" gone-rows-loose
     "pair-list-strays over fewer rows than the list knew marks the rows gone loose."
