@@ -2662,6 +2662,29 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (equal '(0.0 0.0 0.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h))))))
 ;; K3RNLS-gravity-in-every-column ends here
 
+;; [[file:../physics.org::#K3RNLS][K3RNLS-speed-clamp-closed-form]]
+(define-claim "K3RNLS" speed-clamp-closed-form
+    "integrate-velocities-range adds hg and scales a row over the top speed back onto it, rows START..END only."
+  (let* ((v (make-array (luv-physics::solver-row 4) :element-type 'single-float))
+         (h (/ 1.0 60)) (g '(1.0 -2.0 3.0))
+         (given '((0 (1.0 2.0 3.0 4.0 5.0 6.0)) (1 (300.0 -300.0 200.0 0.5 -0.25 0.125))
+                  (2 (10.0 20.0 -30.0 7.0 8.0 9.0)) (3 (-1.0 -2.0 -3.0 -4.0 -5.0 -6.0)))))
+    (loop for (row values) in given
+          do (loop for x in values for j from 0 do (setf (aref v (+ (luv-physics::solver-row row) j)) x)))
+    (luv-physics::integrate-velocities-range v 1 3 h 1.0 -2.0 3.0 400.0)
+    (flet ((row (r) (loop for j below 6 collect (aref v (+ (luv-physics::solver-row r) j)))))
+      (check (equal (row 0) (second (assoc 0 given))) "row 0, before the range, is ~S" (row 0))
+      (check (equal (row 3) (second (assoc 3 given))) "row 3, after the range, is ~S" (row 3))
+      (let* ((moved (mapcar (lambda (x g) (+ (float x 1d0) (* (float h 1d0) g))) (subseq (second (assoc 1 given)) 0 3) g))
+             (speed (sqrt (reduce #'+ (mapcar (lambda (x) (* x x)) moved))))
+             (want (mapcar (lambda (x) (* x (/ 400d0 speed))) moved)))
+        (check (every (lambda (got want) (< (abs (- got want)) (* 1d-6 (abs want)))) (row 1) want)
+               "row 1 is ~S, not ~S" (row 1) want))
+      (check (equal (subseq (row 1) 3) '(0.5 -0.25 0.125)) "row 1's spin is ~S" (subseq (row 1) 3))
+      (check (equal (row 2) (append (mapcar (lambda (x g) (+ x (* h g))) '(10.0 20.0 -30.0) g) '(7.0 8.0 9.0)))
+             "row 2, below the top speed, is ~S" (row 2)))))
+;; K3RNLS-speed-clamp-closed-form ends here
+
 ;; [[file:../physics.org::#K3RNLS][K3RNLS-entry-ranges-exact]]
 (define-claim "K3RNLS" entry-ranges-exact
     "Each solver entry point takes its numbers at both ends of their ranges and refuses the nearest beyond."
@@ -2698,7 +2721,9 @@ function of a column name that reads row K's float in that column. #T3STK1"
 (define-claim "W4RMST" warm-start-formula
     "warm-start-range applies P and the torques of the closed form to all twelve columns, in each variant."
   (let* ((cbuf (luv-physics::make-constraint-columns))
-         (given '((nx 0.6) (ny 0.8) (nz 0.0) (t1x 0.8) (t1y -0.6) (t1z 0.0) (t2x 0.0) (t2y 0.0) (t2z 1.0)
+         ;; a frame none of whose nine components is zero, so that every product of a
+         ;; component shows in a column
+         (given '((nx 2/7) (ny 3/7) (nz 6/7) (t1x 3/7) (t1y -6/7) (t1z 2/7) (t2x 6/7) (t2y 2/7) (t2z -3/7)
                    (normal-impulse 2.0) (tangent-impulse-1 3.0) (tangent-impulse-2 5.0) (spin-impulse 7.0)
                    (rolling-impulse-x 11.0) (rolling-impulse-y 13.0) (rolling-impulse-z 17.0)
                    (ima 0.5) (imb 0.25) (iia 0.1) (iib 0.2) (ra 0.3) (rb 0.4))))
@@ -2709,8 +2734,9 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (loop for (column value) in given
           do (setf (aref (luv-physics::constraint-columns-data cbuf)
                          (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset column)))
-                   value))
-    (flet ((at (column) (float (second (assoc column given)) 1d0)))
+                   (float value 1.0)))
+    ;; the value as the buffer holds it, in single precision
+    (flet ((at (column) (float (float (second (assoc column given)) 1.0) 1d0)))
       (dolist (features '((:friction :rolling-resistance) (:friction) (:rolling-resistance) ()))
         (let* ((friction (member :friction features)) (rolling (member :rolling-resistance features))
                (kernel (luv-physics::featured-kernel 'luv-physics::warm-start-range features))
@@ -2791,6 +2817,39 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (> checked 10000) "~A: only ~D gaps checked" family checked)
       (check (zerop wrong) "~A: ~D of ~D kept gaps differ from the current gap" family wrong checked))))
 ;; S0LV3R-kept-gap-is-current ends here
+
+;; [[file:../physics.org::#S0LV3R][S0LV3R-one-row-closed-form]]
+(define-claim "S0LV3R" one-row-closed-form
+    "One relax row: normal impulse 1.5 and velocities exactly; spin friction clamped to +-0.75 or kept inside."
+  (loop for (spin want) in '((1.0 -0.75) (-1.0 0.75) (0.5 -0.5))
+        do (let ((cbuf (luv-physics::make-constraint-columns))
+                 (v (make-array (luv-physics::solver-row 3) :element-type 'single-float :initial-element 0.0))
+                 (d (make-array (luv-physics::delta-row 3) :element-type 'single-float :initial-element 0.0)))
+             (luv-physics::constraint-columns-ensure-capacity cbuf 8)
+             (setf (luv-physics::constraint-columns-length cbuf) 1
+                   (aref (luv-physics::constraint-columns-body-a cbuf) 0) 0
+                   (aref (luv-physics::constraint-columns-body-b cbuf) 0) 1
+                   (aref (luv-physics::constraint-columns-contact cbuf) 0) 0)
+             (loop for (column value)
+                     in '((nx 0.0) (ny 1.0) (nz 0.0) (t1x 1.0) (t1y 0.0) (t1z 0.0) (t2x 0.0) (t2y 0.0) (t2z 1.0)
+                          (ra 0.25) (rb 0.25) (ima 1.0) (imb 1.0) (iia 0.5) (iib 0.5) (separation 0.25)
+                          (normal-mass 0.5) (tangent-mass 0.3) (rolling-mass 1.0) (friction 0.5)
+                          (max-normal-impulse 1.0) (normal-impulse 1.0) (spin-limit 0.5))
+                   do (setf (aref (luv-physics::constraint-columns-data cbuf)
+                                  (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset column)))
+                            value))
+             (setf (aref v (+ (luv-physics::solver-row 1) 1)) -2.0
+                   (aref v (+ (luv-physics::solver-row 1) 4)) spin)
+             (luv-physics::solve-range cbuf v d 0 1 4.0 nil 0.0 3.0 1.0 0.0 0.0 0.0)
+             (flet ((column (name) (aref (luv-physics::constraint-columns-data cbuf)
+                                         (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset name))))
+                    (row (r) (loop for j below 6 collect (aref v (+ (luv-physics::solver-row r) j)))))
+               (check (= 1.5 (column 'normal-impulse)) "the normal impulse is ~A" (column 'normal-impulse))
+               (check (= want (column 'spin-impulse)) "spinning at ~A the spin impulse is ~A, not ~A"
+                      spin (column 'spin-impulse) want)
+               (check (equal (row 0) (list 0.0 -0.5 0.0 0.0 (* -0.5 want) 0.0)) "spinning at ~A body a is ~S" spin (row 0))
+               (check (equal (row 1) (list 0.0 -1.5 0.0 0.0 (+ spin (* 0.5 want)) 0.0)) "spinning at ~A body b is ~S" spin (row 1))))))
+;; S0LV3R-one-row-closed-form ends here
 
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-rebound-ratios]]
 (define-claim "R3ST1T" rebound-ratios
@@ -2880,6 +2939,66 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "at rest the approach speed reads ~,5F m/s" (physics-world-max-approach-speed world))))
 ;; ST0R3S-error-figures ends here
 
+;; [[file:../physics.org::#ST0R3S][ST0R3S-begin-carries-approach-speed]]
+(define-claim "ST0R3S" begin-carries-approach-speed
+    "A landing ball's :begin event reports its arrival speed, positive."
+  (dolist (e '(0.5 0.0))
+    (let* ((world (luv-physics::open-air-world :floor t))
+           (r 0.25d0) (slop (float luv-physics::*physics-linear-slop* 1d0))
+           (ball (luv-physics::add-physics-body world 0.0 (+ r 1d0) 0.0 :radius r :restitution e))
+           (want (sqrt (* 2 9.81d0 (+ 1d0 slop))))
+           (got nil))
+      (loop repeat 120 until got do
+        (loop for (kind a b speed) in (step-events world)
+              when (and (eq kind :begin) (= a ball) (null got)) do (setf got speed)))
+      (check (and (numberp got)
+                  (if (plusp e) (< (abs (- (/ got want) 1)) 0.002d0) (< (- want 0.33d0) got want)))
+             "restitution ~A: the :begin event reports ~S m/s, the arrival is at ~,4F" e got want))))
+;; ST0R3S-begin-carries-approach-speed ends here
+
+;; [[file:../physics.org::#ST0R3S][ST0R3S-store-is-exact]]
+(define-claim "ST0R3S" store-is-exact
+    "store-phase copies each constraint's impulses to its contact and reads the figures as their formulas, to the bit."
+  (let ((world (make-basin-world 300)))
+    (dotimes (i 60) (step-physics-world world))
+    (dolist (phase (ldiff luv-physics:*physics-phases* (member 'luv-physics::store-phase luv-physics:*physics-phases*)))
+      (funcall phase world))
+    (let* ((cbuf (luv-physics::physics-world-constraints world))
+           (v (luv-physics::physics-world-velocities world))
+           (slop (luv-physics::f32 (luv-physics::physics-world-slop world)))
+           (deepest 0.0) (fastest 0.0) (overlapping 0) (impulses '()))
+      (map-prepared-constraints
+       (lambda (k column)
+         (let* ((a (luv-physics::solver-row (aref (luv-physics::constraint-columns-body-a cbuf) k)))
+                (b (luv-physics::solver-row (aref (luv-physics::constraint-columns-body-b cbuf) k)))
+                (gap (- (funcall column 'gap) slop))
+                (vn (+ (* (- (aref v b) (aref v a)) (funcall column 'nx))
+                       (* (- (aref v (+ b 1)) (aref v (+ a 1))) (funcall column 'ny))
+                       (* (- (aref v (+ b 2)) (aref v (+ a 2))) (funcall column 'nz))
+                       (funcall column 'kvn))))
+           (push (list (aref (luv-physics::constraint-columns-contact cbuf) k)
+                       (funcall column 'normal-impulse) (funcall column 'tangent-impulse-1)
+                       (funcall column 'tangent-impulse-2))
+                 impulses)
+           (when (< gap 0.0)
+             (incf overlapping)
+             (setf deepest (max deepest (- gap)) fastest (max fastest (- vn))))))
+       world)
+      (luv-physics::store-phase world)
+      (check (> overlapping 100) "only ~D constraints overlap" overlapping)
+      (check (= (coerce deepest 'double-float) (physics-world-max-penetration world))
+             "the largest penetration reads ~F, not ~F" (physics-world-max-penetration world) deepest)
+      (check (and (plusp fastest) (= (coerce fastest 'double-float) (physics-world-max-approach-speed world)))
+             "the fastest approach reads ~F, not ~F" (physics-world-max-approach-speed world) fastest)
+      (let ((geometry (luv-physics::contact-columns-geometry (luv-physics::physics-world-contacts world))))
+        (check (loop for (c n t1 t2) in impulses
+                     for g = (luv-physics::geometry-start c)
+                     always (and (eql n (luv-physics::contact-at geometry g normal-impulse))
+                                 (eql t1 (luv-physics::contact-at geometry g tangent-impulse-1))
+                                 (eql t2 (luv-physics::contact-at geometry g tangent-impulse-2))))
+               "a contact does not hold its constraint's impulses")))))
+;; ST0R3S-store-is-exact ends here
+
 ;; [[file:../physics.org::#F1NAL5][F1NAL5-spin-turns-by-the-half-angle]]
 (define-claim "F1NAL5" spin-turns-by-the-half-angle
     "Free spin at omega for n steps gives q = (cos n*alpha, sin n*alpha * u), alpha = atan(|omega| dt/2)."
@@ -2913,6 +3032,22 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (not (awake-at 33 0.5)) "the still ball was still awake at 0.55 s")
     (check (awake-at 57 1.0) "with a time to sleep of 1 s the ball slept before 0.95 s")))
 ;; F1NAL5-sleeps-after-its-time ends here
+
+;; [[file:../physics.org::#F1NAL5][F1NAL5-limit-reached-is-crossed]]
+(define-claim "F1NAL5" limit-reached-is-crossed
+    "A centre landing exactly on the coordinate limit, on any axis and side, escapes in that step."
+  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
+         (inside (- luv-physics:+physics-coordinate-limit+ 0.5))
+         (balls (list (luv-physics::add-physics-body w inside 0.5 0.5 :vx 30)
+                      (luv-physics::add-physics-body w 0.5 (- inside) 0.5 :vy -30)
+                      (luv-physics::add-physics-body w 0.5 0.5 inside :vz 30)))
+         (short (luv-physics::add-physics-body w (- inside 0.25) 8.5 0.5 :vx 30))
+         (escaped (loop for (kind a) in (step-events w) when (eq kind :escaped) collect a)))
+    (check (null (set-exclusive-or escaped balls)) "escaped ~S, not ~S" escaped balls)
+    (check (luv-physics::physics-body-alive-p w short) "the ball left short of the limit was removed")
+    (check (= (- luv-physics:+physics-coordinate-limit+ 0.25) (luv-physics::physics-body-position w short))
+           "the ball left short is at ~F" (luv-physics::physics-body-position w short))))
+;; F1NAL5-limit-reached-is-crossed ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-ball-rests-and-sleeps]]
 (define-claim "IDVK7G" ball-rests-and-sleeps
@@ -2994,6 +3129,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
                              luv-physics::store-phase luv-physics::finalize-phase))
              "*physics-phases* is ~S" phases))))
 ;; IDVK7G-phase-order ends here
+
+;; [[file:../physics.org::#IDVK7G][IDVK7G-crowd-held-closed-form]]
+(define-claim "IDVK7G" crowd-held-closed-form
+    "hold-crowded-speeds scales a crowded row faster than half the push-out speed onto it, and nothing else."
+  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))))
+    (dotimes (i 4) (luv-physics::add-physics-body w (+ 1.5 (* 2 i)) 1.0 1.5))
+    (luv-physics::step-physics-world w)
+    (let* ((v (luv-physics::physics-world-velocities w))
+           (overlaps (luv-physics::pair-list-overlaps (luv-physics::physics-world-pair-list w)))
+           (cap luv-physics::+overlaps-per-body+)
+           (limit (* 0.5 (luv-physics::f32 (luv-physics::physics-world-push-max w))))
+           (given (list (list 4.0 -3.0 2.0 0.25 0.5 0.75) (list 4.0 -3.0 2.0 0.25 0.5 0.75)
+                        (list 0.5 1.0 -1.0 0.25 0.5 0.75) (list limit 0.0 0.0 0.25 0.5 0.75))))
+      (loop for row from 0 for count in (list cap (1- cap) cap cap)
+            do (setf (aref overlaps row) count))
+      (loop for row from 0 for values in given
+            do (loop for x in values for j from 0 do (setf (aref v (+ (luv-physics::solver-row row) j)) x)))
+      (luv-physics::hold-crowded-speeds w)
+      (flet ((row (r) (loop for j below 6 collect (aref v (+ (luv-physics::solver-row r) j)))))
+        (let ((s (/ limit (sqrt (+ (* 4.0 4.0) (* -3.0 -3.0) (* 2.0 2.0))))))
+          (check (equal (row 0) (list (* 4.0 s) (* -3.0 s) (* 2.0 s) 0.25 0.5 0.75))
+                 "the crowded row 0 is ~S" (row 0)))
+        (loop for r from 1 to 3
+              do (check (equal (row r) (nth r given)) "row ~D became ~S" r (row r)))))))
+;; IDVK7G-crowd-held-closed-form ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-step-statistics]]
 (define-claim "IDVK7G" step-statistics
@@ -3183,7 +3343,12 @@ function of a column name that reads row K's float in that column. #T3STK1"
                       (error (e) e))
                     'luv-physics::invalid-physics-number))
       (check (equal '(0.8 0.3 0.0) (material)) "a refused material changed it to ~S" (material))
-      (check (eq t (validate-physics-world world)))))
+      (check (eq t (validate-physics-world world))))
+    (let ((gone (add-physics-body world 5.5 1.0 5.5)))
+      (luv-physics::remove-physics-body world gone)
+      (check (typep (handler-case (set-physics-body-material world gone :restitution 1.5) (error (e) e))
+                    'luv-physics::stale-physics-handle)
+             "a removed body's handle with a restitution out of range is not refused as stale")))
   (flet ((rebound (e)
            (let* ((world (make-floor-world :sleep nil))
                   (ball (add-physics-body world 3.5 2.0 3.5 :radius 0.25))
@@ -3391,6 +3556,38 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (plusp (hash-table-count (luv-physics::fuzz-state-conditions state)))
              "~S was refused nowhere" ops))))
 ;; M9W5P7-shrunk-failures-stay-fixed ends here
+
+;; [[file:../physics.org::#M9W5P7][M9W5P7-operations-span-their-ranges]]
+(define-claim "M9W5P7" operations-span-their-ranges
+    "make-fuzz-operation's arguments sit at their ranges' low ends for draws of 0 and at their middles for 0.5."
+  (flet ((drawn (kind later)
+           (let* ((kinds luv-physics::+fuzz-operation-kinds+)
+                  (first (/ (+ (position kind kinds) 0.5d0) (length kinds))) (started nil))
+             (luv-physics::make-fuzz-operation
+              (lambda () (if started later (progn (setf started t) first))))))
+         (same (got want)
+           (and (= (length got) (length want))
+                (every (lambda (g w) (if (and (realp g) (realp w)) (< (abs (- g w)) 1d-5) (eql g w))) got want))))
+    (loop for (kind low middle)
+            in '((:add (:add 1 0.3 1 :radius 0.05 :mass 0.1 :vx -5 :vy -5 :vz -5 :life 0.1)
+                       (:add 6 2.15 6 :radius 0.25 :mass 5.05 :vx 0 :vy 0 :vz 0 :life nil))
+                 (:remove (:remove -1) (:remove 19))
+                 (:velocity (:velocity -1 -8 -8 -8) (:velocity 19 0 0 0))
+                 (:box (:box 1 0.2 1 0.1 0.1 0.1 :vx -3 :vy -3 :vz -3 :owner :pusher)
+                       (:box 6 1.1 6 0.55 0.55 0.55 :vx 0 :vy 0 :vz 0 :owner nil))
+                 (:edit (:edit 0 -1 0 t t) (:edit 6 1 6 nil nil))
+                 (:fill (:fill 0 -1 0 1 0 1 t) (:fill 5 -1 5 7 1 7 nil))
+                 (:wake (:wake 0 -1 0 0) (:wake 6 1 6 1.5))
+                 (:step (:step nil) (:step 0.026))
+                 (:spring (:spring) (:spring))
+                 (:player (:player -1 -1 t) (:player 0 0 nil))
+                 (:handler (:handler nil) (:handler :step))
+                 (:read (:read -1) (:read 19)))
+          do (let ((at-0 (drawn kind 0d0)) (at-half (drawn kind 0.5d0)))
+               (check (same at-0 low) "with draws of 0, ~S, not ~S" at-0 low)
+               (check (same at-half middle) "with draws of 0.5, ~S, not ~S" at-half middle)))
+    (check (equal '(:velocity nil nil nil nil) (drawn :velocity 0.9d0)) "with draws of 0.9, ~S" (drawn :velocity 0.9d0))))
+;; M9W5P7-operations-span-their-ranges ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
@@ -5404,6 +5601,100 @@ within reach of something. #S9WEEP"
                (class-name (class-of (luv-physics::physics-world-kernels
                                       (make-physics-world :kernels :auto))))))))
 ;; 7PAQ3M-choosing-a-family ends here
+
+;; [[file:../physics.org::#W1D3KF][W1D3KF-lanes-are-scalar-rows]]
+(define-claim "W1D3KF" lanes-are-scalar-rows
+    "Every lane of each wide kernel and variant equals the scalar kernel on its row, bit for bit."
+  (let* ((rows 16) (next (make-lcg 77))
+         (cbuf (luv-physics::make-constraint-columns))
+         (v (make-array (luv-physics::solver-row (* 2 rows)) :element-type 'single-float :initial-element 0.0))
+         (d (make-array (luv-physics::delta-row (* 2 rows)) :element-type 'single-float :initial-element 0.0)))
+    (labels ((uniform (low high) (float (+ low (* (- high low) (funcall next))) 1.0))
+             (signed (low high) (* (if (< (funcall next) 0.5) -1.0 1.0) (uniform low high)))
+             (put (k column value)
+               (setf (aref (luv-physics::constraint-columns-data cbuf)
+                           (+ (luv-physics::constraint-base k) (luv-physics::constraint-offset column)))
+                     (float value 1.0)))
+             (direction ()
+               (let* ((u (list (signed 0.2 1.0) (signed 0.2 1.0) (signed 0.2 1.0)))
+                      (l (sqrt (reduce #'+ (mapcar #'* u u)))))
+                 (mapcar (lambda (c) (/ c l)) u))))
+      (luv-physics::constraint-columns-ensure-capacity cbuf rows)
+      (setf (luv-physics::constraint-columns-length cbuf) rows)
+      (dotimes (b (* 2 rows))
+        ;; bodies 0 and 1, of row 0, are at rest
+        (dotimes (j 6) (setf (aref v (+ (luv-physics::solver-row b) j)) (if (< b 2) 0.0 (signed 0.1 (if (< j 3) 2.0 5.0))))))
+      (dotimes (k rows)
+        (destructuring-bind (nx ny nz) (direction)
+          (let ((ma (if (= k 6) 0.0 (uniform 0.3 2.0))) (mb (if (= k 3) 0.0 (uniform 0.3 2.0)))
+                (ra (uniform 0.2 0.3)) (rb (uniform 0.2 0.3)))
+            (setf (aref (luv-physics::constraint-columns-body-a cbuf) k) (* 2 k)
+                  (aref (luv-physics::constraint-columns-body-b cbuf) k) (1+ (* 2 k))
+                  (aref (luv-physics::constraint-columns-contact cbuf) k) k)
+            (loop for (column value)
+                    in `((nx ,nx) (ny ,ny) (nz ,nz) (ra ,ra) (rb ,rb) (ima ,ma) (imb ,mb)
+                         (iia ,(/ (* 2.5 ma) (* ra ra))) (iib ,(/ (* 2.5 mb) (* rb rb)))
+                         (separation ,(cond ((= k 6) 0.0) ((evenp k) (uniform 0.001 0.02)) (t (- (uniform 0.001 0.03)))))
+                         (kvn ,(if (member k '(2 5)) (signed 0.1 1.0) 0.0))
+                         (kvt1 ,(if (member k '(2 5)) (signed 0.1 1.0) 0.0))
+                         (kvt2 ,(if (member k '(2 5)) (signed 0.1 1.0) 0.0))
+                         (friction ,(uniform 0.2 0.8)) (bias-rate ,(uniform 20.0 60.0))
+                         (mass-scale ,(uniform 0.5 0.9)) (impulse-scale ,(uniform 0.1 0.5))
+                         (normal-impulse ,(if (< k 2) 0.0 (uniform 0.01 0.2)))
+                         (max-normal-impulse ,(if (member k '(4 7)) 0.0 (uniform 0.2 0.4)))
+                         (tangent-impulse-1 ,(if (= k 0) 0.0 (signed 0.001 (if (oddp k) 0.3 0.01))))
+                         (tangent-impulse-2 ,(if (= k 0) 0.0 (signed 0.001 (if (oddp k) 0.3 0.01))))
+                         (spin-limit ,(if (member k '(0 3)) 0.0 (uniform 0.005 0.02)))
+                         (spin-impulse ,(if (member k '(0 3)) 0.0 (signed 0.0001 0.01)))
+                         (rolling-limit ,(if (member k '(1 4)) 0.0 (uniform 0.005 0.02)))
+                         (rolling-impulse-x ,(if (member k '(0 1 4)) 0.0 (signed 0.0001 0.01)))
+                         (rolling-impulse-y ,(if (member k '(0 1 4)) 0.0 (signed 0.0001 0.01)))
+                         (rolling-impulse-z ,(if (member k '(0 1 4)) 0.0 (signed 0.0001 0.01)))
+                         (restitution ,(if (member k '(4 5)) 0.5 0.0))
+                         (armed-speed ,(if (= k 5) 1.5 0.0)))
+                  do (put k column value))
+            (when (= k 4)
+              ;; row 4 strikes: body b approaches body a at 3 m/s along the normal
+              (loop for c in (list nx ny nz) for j from 0
+                    do (setf (aref v (+ (luv-physics::solver-row (1+ (* 2 k))) j))
+                             (- (aref v (+ (luv-physics::solver-row (* 2 k)) j)) (* 3.0 c)))))))))
+    (flet ((same (family what scalar wide)
+             (destructuring-bind (sc sv) scalar
+               (destructuring-bind (wc wv) wide
+                 (let ((cd (luv-physics::constraint-columns-data sc)) (wd (luv-physics::constraint-columns-data wc)))
+                   (check (every #'eql cd wd) "~A, ~A: constraint floats ~S differ" family what
+                          (loop for i below (length cd) unless (eql (aref cd i) (aref wd i)) collect i))
+                   (check (loop for b below (* 2 rows)
+                                always (loop for j below 6 for o = (+ (luv-physics::solver-row b) j)
+                                             always (eql (aref sv o) (aref wv o))))
+                          "~A, ~A: the velocities differ" family what)))))
+           (copy (c) (let ((n (luv-physics::copy-constraint-columns c)))
+                       (setf (luv-physics::constraint-columns-data n) (copy-seq (luv-physics::constraint-columns-data c)))
+                       n)))
+      (dolist (family (remove :scalar (available-kernel-families)))
+        (let* ((width (if (eq family :avx2) 8 4))
+               (name (lambda (stem) (find-symbol (format nil "~A/~A" stem family) :luv-physics))))
+          (dolist (features '((:friction :rolling-resistance :restitution) (:friction)))
+            (let ((scalar (list (copy cbuf) (copy-seq v))) (wide (list (copy cbuf) (copy-seq v)))
+                  (h (/ 1.0 240)) (moved (copy-seq d)))
+              (luv-physics::prepare-frames-range (first scalar) 0 rows)
+              (funcall (funcall name "PREPARE-FRAMES-BLOCKS") (first wide) 0 rows)
+              (same family (list features :frames) scalar wide)
+              (funcall (luv-physics::featured-kernel 'luv-physics::warm-start-range features) (first scalar) (second scalar) 0 rows)
+              (funcall (luv-physics::featured-kernel (funcall name "WARM-START-BLOCKS") features)
+                       (first wide) (second wide) 0 rows)
+              (same family (list features :warm-start) scalar wide)
+              (dotimes (b (* 2 rows))
+                (dotimes (j 3) (setf (aref moved (+ (luv-physics::delta-row b) j)) (float (- (* 0.02 (funcall next)) 0.01) 1.0))))
+              (loop for (biased elapsed deltas) in (list (list t 0.0 d) (list nil h moved) (list t h moved) (list nil (* 2 h) moved))
+                    do (luv-physics::solve-handing (luv-physics::featured-kernel 'luv-physics::solve-range features)
+                                                   'luv-physics::solve-impact-range 1 (first scalar) (second scalar) deltas
+                                                   0 rows (/ 1.0 h) biased elapsed 3.0 1.0 0.0 (* h -9.81) 0.0)
+                       (luv-physics::solve-handing (luv-physics::featured-kernel (funcall name "SOLVE-BLOCKS") features)
+                                                   (funcall name "SOLVE-IMPACT-BLOCKS") width (first wide) (second wide) deltas
+                                                   0 rows (/ 1.0 h) biased elapsed 3.0 1.0 0.0 (* h -9.81) 0.0)
+                       (same family (list features (if biased :solve :relax)) scalar wide)))))))))
+;; W1D3KF-lanes-are-scalar-rows ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-summary-is-the-first-sentence]]
 (define-claim "LW3YHU" summary-is-the-first-sentence

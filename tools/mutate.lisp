@@ -520,7 +520,13 @@ watched by a probe."
                          (or (intersection watched (cdr (assoc (car claim) reach)) :test #'equal)
                              (some (lambda (u) (and (eq (unit-kind u) 'luv-physics-tests:define-claim)
                                                     (eq (third (unit-form u)) (car claim))))
-                                   touched)))
+                                   touched)
+                             ;; a claim that names a definition without calling it, as one that
+                             ;; reads a kernel's docstring or text does
+                             (let ((u (find-if (lambda (u) (and (eq (unit-kind u) 'luv-physics-tests:define-claim)
+                                                               (eq (third (unit-form u)) (car claim))))
+                                               units)))
+                               (and u (some (lambda (n) (and (symbolp n) (gethash n (unit-symbols u)))) names)))))
                        order))))
 
 ;;; ------------------------------------------------------------------------------------
