@@ -119,10 +119,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 ;; moved-gap ([[#PR3PAR]]) in lanes, for the relax pass and the frame pass
                 (wgap (ddx ddy ddz elapsed)
                   `(w+ (w+ (@w separation) (w+ (w+ (w* ,ddx (@w nx)) (w* ,ddy (@w ny))) (w* ,ddz (@w nz))))
-                       (w* (@w kvn) ,elapsed)))
+                       (w* (if-feature :boxes (@w kvn) (wc 0.0)) ,elapsed)))
                 (st! (i value) `(,',store ,value st 0 ,(* ,width i))))))
     `(progn
-       (define-featured-kernel (,ws :features (:friction :rolling-resistance) :operators ,operators)
+       (define-featured-kernel (,ws :features (:body-contacts :friction :rolling-resistance) :operators ,operators)
            (cbuf v start end)
          ,(format nil "Warm start constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
@@ -160,13 +160,16 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                way (w- way (w* ia (w+ (w* ar cy) ry)))
                                waz (w- waz (w* ia (w+ (w* ar cz) rz)))))
                        (,scatter v body-a k vax vay vaz wax way waz (wc 0.0) (wc 0.0)))
+                     ;; without body contacts body b is the dummy row, which its zero
+                     ;; masses leave as it is: it is neither gathered nor scattered
+                     (if-feature :body-contacts
                      (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
                        (let ((mb mb) (ib ib) (br br))
                          (setf vbx (w+ vbx (w* mb px)) vby (w+ vby (w* mb py)) vbz (w+ vbz (w* mb pz))
                                wbx (w+ wbx (w* ib (w- rx (w* br cx))))
                                wby (w+ wby (w* ib (w- ry (w* br cy))))
                                wbz (w+ wbz (w* ib (w- rz (w* br cz))))))
-                       (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0)))))
+                       (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0))))))
                ;; without friction the impulse is along the normal and turns nothing; only
                ;; rolling resistance, when the world has it, turns the bodies
                (let* ((l (@w normal-impulse))
@@ -180,6 +183,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                              way (w- way (w* ia (@w rolling-impulse-y)))
                              waz (w- waz (w* ia (@w rolling-impulse-z))))))
                    (,scatter v body-a k vax vay vaz wax way waz (wc 0.0) (wc 0.0)))
+                 (if-feature :body-contacts
                  (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
                    (let ((mb (@w imb)))
                      (setf vbx (w+ vbx (w* mb px)) vby (w+ vby (w* mb py)) vbz (w+ vbz (w* mb pz))))
@@ -188,8 +192,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                        (setf wbx (w+ wbx (w* ib (@w rolling-impulse-x)))
                              wby (w+ wby (w* ib (@w rolling-impulse-y)))
                              wbz (w+ wbz (w* ib (@w rolling-impulse-z))))))
-                   (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0)))))))))
-       (define-featured-kernel (,so :features (:friction :rolling-resistance :restitution) :operators ,operators)
+                   (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0))))))))))
+       (define-featured-kernel (,so :features (:body-contacts :boxes :friction :rolling-resistance :restitution
+                                               :hit-events :contact-events)
+                                    :operators ,operators)
            (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
          ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. Return END, or the first block that may strike or is armed, left unsolved for solve-handing. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
@@ -216,23 +222,37 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                (let ((s (if biased
                             (@w gap)
                             (let ((s (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
-                                       (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
-                                         (wgap (w- dbx dax) (w- dby day) (w- dbz daz) el)))))
+                                       ;; without body contacts body b is the dummy, whose
+                                       ;; deltas are zeros
+                                       (if-feature :body-contacts
+                                         (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
+                                           (wgap (w- dbx dax) (w- dby day) (w- dbz daz) el))
+                                         (wgap (w- (wc 0.0) dax) (w- (wc 0.0) day) (w- (wc 0.0) daz) el)))))
                               (@w! gap s)
                               s))))
                ;; the rows gathered into the stage; each read of a velocity below is a load
                ;; from it and each new value a store, so no velocity holds a register
                (,transpose (v body-a k gax gay gaz gwx gwy gwz a6 a7)
                  (st! 0 gax) (st! 1 gay) (st! 2 gaz) (st! 3 gwx) (st! 4 gwy) (st! 5 gwz))
+               ;; without body contacts body b is the dummy row of every constraint: its
+               ;; velocities, mass, inertia and radius are zeros, named here as such, and it is
+               ;; neither gathered nor scattered
+               (if-feature :body-contacts
                (,transpose (v body-b k gbx gby gbz hwx hwy hwz b6 b7)
-                 (st! 6 gbx) (st! 7 gby) (st! 8 gbz) (st! 9 hwx) (st! 10 hwy) (st! 11 hwz))
+                 (st! 6 gbx) (st! 7 gby) (st! 8 gbz) (st! 9 hwx) (st! 10 hwy) (st! 11 hwz)))
                (symbol-macrolet ((x (@w nx)) (y (@w ny)) (z (@w nz))
-                                 (ma (@w ima)) (mb (@w imb)) (iam (@w iia)) (ibm (@w iib))
-                                 (ar (@w ra)) (br (@w rb))
+                                 (ma (@w ima)) (mb (if-feature :body-contacts (@w imb) (wc 0.0))) (iam (@w iia))
+                                 (ibm (if-feature :body-contacts (@w iib) (wc 0.0)))
+                                 (ar (@w ra)) (br (if-feature :body-contacts (@w rb) (wc 0.0)))
                                  (ux (@w t1x)) (uy (@w t1y)) (uz (@w t1z))
                                  (qx (@w t2x)) (qy (@w t2y)) (qz (@w t2z))
                                  (vax (st@ 0)) (vay (st@ 1)) (vaz (st@ 2)) (wax (st@ 3)) (way (st@ 4)) (waz (st@ 5))
-                                 (vbx (st@ 6)) (vby (st@ 7)) (vbz (st@ 8)) (wbx (st@ 9)) (wby (st@ 10)) (wbz (st@ 11)))
+                                 (vbx (if-feature :body-contacts (st@ 6) (wc 0.0)))
+                                 (vby (if-feature :body-contacts (st@ 7) (wc 0.0)))
+                                 (vbz (if-feature :body-contacts (st@ 8) (wc 0.0)))
+                                 (wbx (if-feature :body-contacts (st@ 9) (wc 0.0)))
+                                 (wby (if-feature :body-contacts (st@ 10) (wc 0.0)))
+                                 (wbz (if-feature :body-contacts (st@ 11) (wc 0.0))))
                  (let* ((positive (w> s (wc 0.0)))
                         (bias (if biased
                                   (let ((soft (w* (@w bias-rate) s)))
@@ -242,17 +262,17 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         ;; and for friction, whose two speeds are found here, before the
                         ;; normal impulse, which does not change them
                         (dvx (w- vbx vax)) (dvy (w- vby vay)) (dvz (w- vbz vaz))
-                        (vn (w+ (w+ (w+ (w* dvx x) (w* dvy y)) (w* dvz z)) (@w kvn)))
+                        (vn (w+ (w+ (w+ (w* dvx x) (w* dvy y)) (w* dvz z)) (if-feature :boxes (@w kvn) (wc 0.0))))
                         ;; (without friction these are constants nothing reads, and vanish)
                         (wx (if-feature :friction (w+ (w* ar wax) (w* br wbx)) (wc 0.0)))
                         (wy (if-feature :friction (w+ (w* ar way) (w* br wby)) (wc 0.0)))
                         (wz (if-feature :friction (w+ (w* ar waz) (w* br wbz)) (wc 0.0)))
                         (vt1 (if-feature :friction
-                               (w- (w+ (w+ (w+ (w* dvx ux) (w* dvy uy)) (w* dvz uz)) (@w kvt1))
+                               (w- (w+ (w+ (w+ (w* dvx ux) (w* dvy uy)) (w* dvz uz)) (if-feature :boxes (@w kvt1) (wc 0.0)))
                                    (w+ (w+ (w* wx qx) (w* wy qy)) (w* wz qz)))
                                (wc 0.0)))
                         (vt2 (if-feature :friction
-                               (w+ (w+ (w+ (w+ (w* dvx qx) (w* dvy qy)) (w* dvz qz)) (@w kvt2))
+                               (w+ (w+ (w+ (w+ (w* dvx qx) (w* dvy qy)) (w* dvz qz)) (if-feature :boxes (@w kvt2) (wc 0.0)))
                                    (w+ (w+ (w* wx ux) (w* wy uy)) (w* wz uz)))
                                (wc 0.0)))
                         ;; the friction impulse before the cone, and its length, need no
@@ -272,12 +292,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                      (w* (wif positive (wc 0.0) (@w impulse-scale)) l))
                                  (w- l (w* (@w normal-mass) (w+ vn bias)))))
                         (new (wif (w> raw (wc 0.0)) raw (wc 0.0)))
-                        (mni (@w max-normal-impulse))
+                        (mni (if-feature (:or :restitution :contact-events :hit-events)
+                                         (@w max-normal-impulse) (wc 0.0)))
                         ;; impacts and armed contacts ([[#R3ST1T]]): a block with no lane that
                         ;; has not pushed yet and approaches faster than the threshold, and
                         ;; none armed, skips them
                         (dl (w- new l)))
-                   (declare (ignorable wx wy wz vt1 vt2 staged))
+                   (declare (ignorable wx wy wz vt1 vt2 staged mni))
                    ;; the normal impulse to keep, the velocity change and what the contact pushed
                    (multiple-value-bind (new dl pushed)
                        (if-feature :restitution
@@ -332,6 +353,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                      ;; with the same bits
                                      (return-from solve-pass k))))
                          (values new dl new))
+                   (declare (ignorable pushed))
                    (if-feature :friction
                      (symbol-macrolet ((n1 (st@ 12)) (n2 (st@ 13)) (len2 (st@ 14)) (root (st@ 15))
                                        (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2)))
@@ -342,31 +364,38 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                             (n1 (wif over (w* n1 scale) n1)) (n2 (wif over (w* n2 scale) n2))
                             (d1 (w- n1 l1)) (d2 (w- n2 l2)))
                        (@w! normal-impulse new)
-                       (@w! max-normal-impulse (wif (w> mni pushed) mni pushed))
+                       (if-feature (:or :restitution :contact-events :hit-events)
+                         (@w! max-normal-impulse (wif (w> mni pushed) mni pushed)))
                        (@w! tangent-impulse-1 n1) (@w! tangent-impulse-2 n2)
                        ;; each velocity takes the normal impulse, then friction's, in one
                        ;; expression: the same two roundings as two steps, one store; a
                        ;; component at a time, so each frame column is read once
                        (let ((madl (w* ma dl)) (mbdl (w* mb dl)) (iar (w* iam ar)) (ibr (w* ibm br))
                              (ma ma) (mb mb))
+                         (declare (ignorable mbdl ibr mb))
                          (macrolet ((component (i j k l n u q)
                                       `(let* ((u ,u) (q ,q)
                                               (p (w+ (w* d1 u) (w* d2 q)))
                                               (c (w- (w* d1 q) (w* d2 u))))
                                          (st! ,i (w- (w- (st@ ,i) (w* madl ,n)) (w* ma p)))
-                                         (st! ,j (w+ (w+ (st@ ,j) (w* mbdl ,n)) (w* mb p)))
                                          (st! ,k (w- (st@ ,k) (w* iar c)))
-                                         (st! ,l (w- (st@ ,l) (w* ibr c))))))
+                                         (if-feature :body-contacts
+                                           (progn (st! ,j (w+ (w+ (st@ ,j) (w* mbdl ,n)) (w* mb p)))
+                                                  (st! ,l (w- (st@ ,l) (w* ibr c))))))))
                            (component 0 6 3 9 x ux qx) (component 1 7 4 10 y uy qy)
                            (component 2 8 5 11 z uz qz)))))
                      ;; without friction only the normal impulse moves the bodies
                      (progn
                        (@w! normal-impulse new)
-                       (@w! max-normal-impulse (wif (w> mni pushed) mni pushed))
+                       (if-feature (:or :restitution :contact-events :hit-events)
+                         (@w! max-normal-impulse (wif (w> mni pushed) mni pushed)))
                        (let ((madl (w* ma dl)) (mbdl (w* mb dl)))
-                         (st! 0 (w- (st@ 0) (w* madl x))) (st! 6 (w+ (st@ 6) (w* mbdl x)))
-                         (st! 1 (w- (st@ 1) (w* madl y))) (st! 7 (w+ (st@ 7) (w* mbdl y)))
-                         (st! 2 (w- (st@ 2) (w* madl z))) (st! 8 (w+ (st@ 8) (w* mbdl z))))))
+                         (declare (ignorable mbdl))
+                         (st! 0 (w- (st@ 0) (w* madl x))) (st! 1 (w- (st@ 1) (w* madl y)))
+                         (st! 2 (w- (st@ 2) (w* madl z)))
+                         (if-feature :body-contacts
+                           (progn (st! 6 (w+ (st@ 6) (w* mbdl x))) (st! 7 (w+ (st@ 7) (w* mbdl y)))
+                                  (st! 8 (w+ (st@ 8) (w* mbdl z))))))))
                    ;; a block none of whose lanes rolls against resistance skips the rolling
                    ;; part: every lane would keep its old values anyway
                    (if-feature :rolling-resistance
@@ -389,8 +418,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            (@w! rolling-impulse-z (wif rolling nrz rz))
                            (st! 3 (wif rolling (w- wax (w* iam dx)) wax)) (st! 4 (wif rolling (w- way (w* iam dy)) way))
                            (st! 5 (wif rolling (w- waz (w* iam dz)) waz))
-                           (st! 9 (wif rolling (w+ wbx (w* ibm dx)) wbx)) (st! 10 (wif rolling (w+ wby (w* ibm dy)) wby))
-                           (st! 11 (wif rolling (w+ wbz (w* ibm dz)) wbz))))))
+                           (if-feature :body-contacts
+                             (progn (st! 9 (wif rolling (w+ wbx (w* ibm dx)) wbx))
+                                    (st! 10 (wif rolling (w+ wby (w* ibm dy)) wby))
+                                    (st! 11 (wif rolling (w+ wbz (w* ibm dz)) wbz))))))))
                    ;; spin friction, skipped as the rolling part is by a block none of whose
                    ;; lanes has a spin limit
                    (if-feature :friction
@@ -407,17 +438,18 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            (st! 3 (wif spinning (w- wax (w* iam (w* ds x))) wax))
                            (st! 4 (wif spinning (w- way (w* iam (w* ds y))) way))
                            (st! 5 (wif spinning (w- waz (w* iam (w* ds z))) waz))
-                           (st! 9 (wif spinning (w+ wbx (w* ibm (w* ds x))) wbx))
-                           (st! 10 (wif spinning (w+ wby (w* ibm (w* ds y))) wby))
-                           (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz)))))))))
+                           (if-feature :body-contacts
+                             (progn (st! 9 (wif spinning (w+ wbx (w* ibm (w* ds x))) wbx))
+                                    (st! 10 (wif spinning (w+ wby (w* ibm (w* ds y))) wby))
+                                    (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz)))))))))))
                (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
-               (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0)))))))))
+               (if-feature :body-contacts
+                 (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0))))))))))
          end))
        (define-impact-copy ,soi ,so
          ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time, bouncing impacts ([[#R3ST1T]]): solve-handing runs it on each block at which the pass ~(~A~) or a variant of it stops. #W1D3KF" width so))
-       (macrolet ,operators
-       (defun ,pf (cbuf start end)
-         ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
+       (define-featured-kernel (,pf :features (:boxes) :operators ,operators) (cbuf start end)
+         ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~D lanes at a time; compiled without boxes, it has no box velocity to resolve. #W1D3KF" width)
          (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
          (with-constraint-block () cbuf
            (loop for k of-type index from start below end by ,width do
@@ -439,18 +471,20 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         (tx (wif big (wc 0.0) (w* zs (wc -1.0))))
                         (ty (wif big zs (wc 0.0)))
                         (tz (wif big (w* (w* y s) (wc -1.0)) (w* x s)))
-                        (ux (w- (w* y tz) (w* z ty))) (uy (w- (w* z tx) (w* x tz))) (uz (w- (w* x ty) (w* y tx)))
-                        (kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
+                        (ux (w- (w* y tz) (w* z ty))) (uy (w- (w* z tx) (w* x tz))) (uz (w- (w* x ty) (w* y tx))))
                    (@w! t1x tx) (@w! t1y ty) (@w! t1z tz) (@w! t2x ux) (@w! t2y uy) (@w! t2z uz)
-                   (@w! kvn (w+ (w+ (w* kx x) (w* ky y)) (w* kz z)))
-                   (@w! gap (wgap (wc 0.0) (wc 0.0) (wc 0.0) (wc 0.0)))
-                   (@w! kvt1 (w+ (w+ (w* kx tx) (w* ky ty)) (w* kz tz)))
-                   (@w! kvt2 (w+ (w+ (w* kx ux) (w* ky uy)) (w* kz uz))))
+                   ;; without boxes there is no box velocity to resolve
+                   (if-feature :boxes
+                     (let ((kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
+                       (@w! kvn (w+ (w+ (w* kx x) (w* ky y)) (w* kz z)))
+                       (@w! kvt1 (w+ (w+ (w* kx tx) (w* ky ty)) (w* kz tz)))
+                       (@w! kvt2 (w+ (w+ (w* kx ux) (w* ky uy)) (w* kz uz)))))
+                   (@w! gap (wgap (wc 0.0) (wc 0.0) (wc 0.0) (wc 0.0))))
                  (let* ((ra (@w ra)) (rb (@w rb)) (iia (@w iia)) (iib (@w iib))
                         (mass-sum (w+ (@w ima) (@w imb))))
                    (@w! normal-mass (inverse mass-sum))
                    (@w! tangent-mass (inverse (w+ (w+ mass-sum (w* (w* iia ra) ra)) (w* (w* iib rb) rb))))
-                   (@w! rolling-mass (inverse (w+ iia iib))))))))))))))
+                   (@w! rolling-mass (inverse (w+ iia iib)))))))))))))
 ;; One kernel text, two widths:1 ends here
 
 ;; [[file:../physics.org::#F4M1LY][The SSE and AVX2 families:1]]
@@ -491,9 +525,12 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
 (macrolet ((define-family-methods (class width ws so si pf &optional settle)
              `(progn
                 (defmethod physics-prepare-frames ((kernels ,class) world)
-                  (let ((cbuf (physics-world-constraints world)))
-                    (do-colour-runs (s e world ,settle) (,pf cbuf s e) (prepare-frames-range cbuf s e))))
-                (defmethod wide-kernel-names ((kernels ,class)) (values ',ws ',so))
+                  (let* ((cbuf (physics-world-constraints world))
+                         (variant (world-kernel-variant world kernels))
+                         (wide (kernel-variant-wide-prepare-frames variant))
+                         (narrow (kernel-variant-prepare-frames variant)))
+                    (do-colour-runs (s e world ,settle) (funcall wide cbuf s e) (funcall narrow cbuf s e))))
+                (defmethod wide-kernel-names ((kernels ,class)) (values ',ws ',so ',pf))
                 (defmethod physics-warm-start ((kernels ,class) world)
                   (let* ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world))
                          (variant (world-kernel-variant world kernels))
@@ -524,7 +561,8 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
 (register-kernel-family :avx2 'avx2-kernels :avx2)
 
 ;; the wide kernels of the standard feature sets, compiled with the page ([[#FEAT5X]])
-(precompile-featured-kernels (warm-start-blocks/sse solve-blocks/sse warm-start-blocks/avx2 solve-blocks/avx2))
+(precompile-featured-kernels (warm-start-blocks/sse solve-blocks/sse prepare-frames-blocks/sse
+                              warm-start-blocks/avx2 solve-blocks/avx2 prepare-frames-blocks/avx2))
 ;; The SSE and AVX2 families:1 ends here
 
 ;; [[file:../physics.org::#O07FDP][Closing the files:2]]

@@ -3959,11 +3959,13 @@ the hole. #PRUN3D"
 ;; [[file:../physics.org::#SSMPYW][Colours are the lanes:1]]
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +constraint-columns+
-    '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation kvn kvt1 kvt2
-      normal-mass tangent-mass rolling-mass friction max-normal-impulse bias-rate mass-scale
+    '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation
+      normal-mass tangent-mass rolling-mass friction bias-rate mass-scale
       impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2 gap spin-limit spin-impulse
-      ;; the columns only some worlds have ([[#FEAT5X]]): the approach speed the events
-      ;; report, rolling resistance's, and restitution's
+      ;; the columns only some worlds have ([[#FEAT5X]]): the box's velocity along the normal
+      ;; and the frame, the largest push the events and restitution read, the approach speed
+      ;; the events report, rolling resistance's, and restitution's
+      kvn kvt1 kvt2 max-normal-impulse
       relative-velocity rolling-limit rolling-impulse-x rolling-impulse-y rolling-impulse-z
       restitution armed-speed)
     "The float columns of a constraint, in the order they sit in a block: those every world
@@ -4027,7 +4029,7 @@ base is the variable BASE. #SSMPYW"
             ,@(loop for c in fixnum-columns
                     collect `(,c (,(intern (format nil "CONSTRAINT-COLUMNS-~A" c)) ,b))))
        (declare (type f32-column data) (type fixnum-column ,@fixnum-columns) (type index stride)
-                (ignorable data stride))
+                (ignorable data stride ,@fixnum-columns))
        (macrolet ((@ (column) `(block-ref data base ,(constraint-offset column)))
                   (constraint-base (k) `(+ +constraint-origin+ (* (ash ,k -3) stride) (logand ,k 7))))
          ,@body))))
@@ -4065,9 +4067,10 @@ base is the variable BASE. #SSMPYW"
   (declare (type (unsigned-byte 32) x))
   (1- (integer-length x)))
 
-(defun color-contacts (world)
+(defun color-contacts (world &optional (two-body t))
   "Greedy colouring in two passes. First every two-body contact takes the lowest of colours
-0-19 free at both its bodies. Then every one-sided contact takes, at its awake body, the
+0-19 free at both its bodies (a world without body contacts, TWO-BODY false, has none: every
+contact is one-sided, and the pass only marks them so). Then every one-sided contact takes, at its awake body, the
 highest free colour among those the two-body contacts used, or failing that the lowest free
 colour above them. Anything else goes to the overflow colour 24. Fills the colour of each
 contact and the colour starts, each colour but the overflow starting on a multiple of eight;
@@ -4094,6 +4097,8 @@ returns the number of colours used. #SSMPYW"
                    -1)))
         (declare (inline awake-row))
         ;; pass one: two-body contacts, lowest free colour
+        (if (not two-body)
+          (fill colors -1 :end m)
         (dotimes (c m)
           (let ((la (awake-row (aref handle-a c))) (lb (awake-row (aref handle-b c))))
             (declare (type fixnum la lb))
@@ -4108,7 +4113,7 @@ returns the number of colours used. #SSMPYW"
                         top (max top color))
                   (setf (aref masks la) (logior (aref masks la) (ash 1 color))
                         (aref masks lb) (logior (aref masks lb) (ash 1 color))))
-                (setf (aref colors c) color)))))
+                (setf (aref colors c) color))))))
         ;; pass two: one-sided contacts, as late among the used colours as their body allows
         (let ((used (1- (ash 1 (1+ top)))))
           (declare (type (unsigned-byte 32) used))
@@ -4163,10 +4168,11 @@ text, with each if-feature resolved for FEATURES. #KTXT7V"
     (let ((tested (fifth (get name 'featured-kernel))))
       (remove-if-not (lambda (f) (and (member f tested) (member f features))) +physics-features+))))
 
-(defstruct (kernel-variant (:constructor make-kernel-variant (kernels warm-start solve wide-warm-start wide-solve)))
+(defstruct (kernel-variant (:constructor make-kernel-variant (kernels warm-start solve prepare-frames
+                                                                wide-warm-start wide-solve wide-prepare-frames)))
   "The solver kernels a world of some features runs in the family KERNELS: each a function, or
 the name of the general kernel ([[#FEAT5X]]). #KTXT7V"
-  kernels warm-start solve wide-warm-start wide-solve)
+  kernels warm-start solve prepare-frames wide-warm-start wide-solve wide-prepare-frames)
 
 (defmacro with-features ((&rest features) &body body)
   "Run BODY with (if-feature FEATURE THEN &optional ELSE) standing for THEN when FEATURE is one
@@ -4218,7 +4224,7 @@ upward part of the normal from LA to LB, above 0.9); :b the other way round; els
   "When false, the prepare fill sends every row through its general path; the claim that the
 short path changes no bit compares the two. #PR3PAR")
 
-(define-featured-kernel (prepare-phase :features (:restitution :rolling-resistance :contact-events :hit-events))
+(define-featured-kernel (prepare-phase :features (:body-contacts :boxes :restitution :rolling-resistance :contact-events :hit-events))
     (world)
   "Phase 8: colour the contacts, then write the constraint buffer in colour order, and load the
 awake bodies' velocities into the solver; note the number of colours used in the step's
@@ -4235,7 +4241,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
              (type index m n))
     (ensure-solver-scratch world n m)
     (let ((short-path *prepare-short-path*)
-          (color-count (color-contacts world))
+          (color-count (color-contacts world (if-feature :body-contacts t nil)))
           (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 (the single-float h))))
           (zeta (f32 (physics-world-damping-ratio world)))
           (ids (physics-world-ids world))
@@ -4367,23 +4373,23 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                           (r-a (aref radius-c la)) (r-b (aref radius-c lb))
                           (va (solver-row la)) (vb (solver-row lb)))
                      (declare (type index c g base la lb va vb) (type single-float x y z kx ky kz r-a r-b)
-                              (ignorable va vb))
+                              (ignorable va vb kx ky kz))
                      (setf (aref body-a k) la (aref body-b k) lb
                            (@ nx) x (@ ny) y (@ nz) z (@ ra) r-a (@ rb) r-b
                            (@ ima) (aref im-c la) (@ imb) (aref im-c lb)
                            (@ iia) (aref ii-c la) (@ iib) (aref ii-c lb)
                            (@ separation) (+ (contact-at geometry g separation) slop)
-                           (@ kvn) kx (@ kvt1) ky (@ kvt2) kz
                            (@ friction) (fsqrt (* (aref fr-c la) (aref fr-c lb)))
                            (@ spin-limit) 0.0
                            (@ spin-impulse) 0.0
                            (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass (@ impulse-scale) dyn-impulse
-                           (@ max-normal-impulse) 0.0
                            (@ normal-impulse) (contact-at geometry g normal-impulse)
                            (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1)
                            (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
-                     ;; the columns of restitution, rolling resistance and the events, when
-                     ;; the world has them
+                     ;; the columns of boxes, restitution, rolling resistance and the events,
+                     ;; when the world has them
+                     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+                     (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
                      (if-feature :restitution
                        (setf (@ restitution) (max (aref re-c la) (aref re-c lb)) (@ armed-speed) 0.0))
                      (if-feature :rolling-resistance
@@ -4432,12 +4438,12 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                            (mass-sum (+ im-a im-b))
                            (va (solver-row (if dyn-a la n)))
                            (vb (solver-row (if dyn-b lb n))))
-                      (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz) (ignorable va vb))
+                      (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz) (ignorable va vb kx ky kz))
                       (setf (@ ra) r-a (@ rb) r-b
                             (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
-                            (@ separation) (+ (contact-at geometry g separation) slop)
-                            ;; the box's velocity, until the frame pass resolves it
-                            (@ kvn) kx (@ kvt1) ky (@ kvt2) kz)
+                            (@ separation) (+ (contact-at geometry g separation) slop))
+                      ;; the box's velocity, until the frame pass resolves it
+                      (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
                       (if (>= b 0)
                           (progn
                             (setf (@ friction) (fsqrt (* (aref (body-columns-friction buf-a) la)
@@ -4478,8 +4484,8 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                               (t
                                (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
                                      (@ impulse-scale) st-impulse)))))
-                    (setf (@ max-normal-impulse) 0.0
-                          (@ normal-impulse) (contact-at geometry g normal-impulse)
+                    (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
+                    (setf (@ normal-impulse) (contact-at geometry g normal-impulse)
                           (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
                     (if-feature :restitution (setf (@ armed-speed) 0.0))
                     (if-feature :rolling-resistance
@@ -4511,12 +4517,12 @@ the one formula the relax pass ([[#S0LV3R]]) and the frame pass compute it by. #
   (declare (type single-float separation nx ny nz ddx ddy ddz kvn elapsed))
   (+ separation (+ (* ddx nx) (* ddy ny) (* ddz nz)) (* kvn elapsed)))
 
-(defun prepare-frames-range (cbuf start end)
+(define-featured-kernel (prepare-frames-range :features (:boxes)) (cbuf start end)
   "Complete constraints START..END of CBUF from their normal, radii, inverse masses and inertias,
 and the box velocity held in the KVN, KVT1 and KVT2 columns: the tangent frame t1, t2 (t1 from
 the axis least aligned with the normal), the box velocity resolved onto n, t1 and t2, the
 normal, tangent and rolling masses (zero where nothing can move), and the gap the first
-substep's solve reads. #PR3PAR"
+substep's solve reads. Compiled without boxes, it has no box velocity to resolve. #PR3PAR"
   (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
   (flet ((inverse (v)
            ;; 1/v where v > 0, else 0: zero where nothing can move
@@ -4535,26 +4541,28 @@ substep's solve reads. #PR3PAR"
              (ty (if big (* z s) 0.0))
              (tz (if big (- (* y s)) (* x s)))
              (ux (- (* y tz) (* z ty))) (uy (- (* z tx) (* x tz))) (uz (- (* x ty) (* y tx)))
-             (kx (@ kvn)) (ky (@ kvt1)) (kz (@ kvt2))
              (ima (@ ima)) (imb (@ imb)) (iia (@ iia)) (iib (@ iib)) (ra (@ ra)) (rb (@ rb))
              (mass-sum (+ ima imb))
              (tangent-sum (+ mass-sum (* iia ra ra) (* iib rb rb)))
              (rolling-sum (+ iia iib)))
         (declare (type index base))
-        (setf (@ t1x) tx (@ t1y) ty (@ t1z) tz (@ t2x) ux (@ t2y) uy (@ t2z) uz
-              (@ kvn) (+ (* kx x) (* ky y) (* kz z))
-              ;; the gap the first substep's solve starts from: what the relax pass
+        (setf (@ t1x) tx (@ t1y) ty (@ t1z) tz (@ t2x) ux (@ t2y) uy (@ t2z) uz)
+        (if-feature :boxes
+          (let ((kx (@ kvn)) (ky (@ kvt1)) (kz (@ kvt2)))
+            (setf (@ kvn) (+ (* kx x) (* ky y) (* kz z))
+                  (@ kvt1) (+ (* kx tx) (* ky ty) (* kz tz))
+                  (@ kvt2) (+ (* kx ux) (* ky uy) (* kz uz)))))
+        (setf ;; the gap the first substep's solve starts from: what the relax pass
               ;; computes ([[#S0LV3R]]), with both deltas and the time elapsed zero
-              (@ gap) (moved-gap (@ separation) x y z 0.0 0.0 0.0 (@ kvn) 0.0)
-              (@ kvt1) (+ (* kx tx) (* ky ty) (* kz tz))
-              (@ kvt2) (+ (* kx ux) (* ky uy) (* kz uz))
+              (@ gap) (moved-gap (@ separation) x y z 0.0 0.0 0.0 (if-feature :boxes (@ kvn) 0.0) 0.0)
               (@ normal-mass) (inverse mass-sum)
               (@ tangent-mass) (inverse tangent-sum)
               (@ rolling-mass) (inverse rolling-sum)))))))
 
 (defmethod physics-prepare-frames ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
-    (prepare-frames-range cbuf 0 (constraint-columns-length cbuf))))
+    (funcall (kernel-variant-prepare-frames (world-kernel-variant world kernels))
+             cbuf 0 (constraint-columns-length cbuf))))
 ;; Preparing the constraints:6 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
@@ -4667,8 +4675,9 @@ single-float from LOW to 1e7. #K3RNLS"
   "Run BODY over the constraint buffer CBUF: its blocks, its body columns, and (@ COLUMN). #W4RMST"
   `(with-constraint-block (body-a body-b) ,cbuf ,@body))
 
-(define-featured-kernel (warm-start-range :features (:friction :rolling-resistance)) (cbuf v start end)
-  "Apply the carried normal, friction and rolling impulses of constraints START..END. #W4RMST"
+(define-featured-kernel (warm-start-range :features (:body-contacts :friction :rolling-resistance)) (cbuf v start end)
+  "Apply the carried normal, friction and rolling impulses of constraints START..END; compiled
+without body contacts, only to body a, for body b is then the dummy row of every constraint. #W4RMST"
   (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
@@ -4677,7 +4686,7 @@ single-float from LOW to 1e7. #K3RNLS"
              (x (@ nx)) (y (@ ny)) (z (@ nz))
              (l (@ normal-impulse))
              (ma (@ ima)) (mb (@ imb)))
-        (declare (type index a b base))
+        (declare (type index a b base) (ignorable b mb))
         (if-feature :friction
           (let* ((l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
                  (px (+ (* l x) (* l1 (@ t1x)) (* l2 (@ t2x))))
@@ -4693,36 +4702,42 @@ single-float from LOW to 1e7. #K3RNLS"
                  (rx (if-feature :rolling-resistance (+ (@ rolling-impulse-x) (* sp x)) (* sp x)))
                  (ry (if-feature :rolling-resistance (+ (@ rolling-impulse-y) (* sp y)) (* sp y)))
                  (rz (if-feature :rolling-resistance (+ (@ rolling-impulse-z) (* sp z)) (* sp z))))
+            (declare (ignorable ib br))
             (setf (aref v a) (- (aref v a) (* ma px))
                   (block-ref v a 1) (- (block-ref v a 1) (* ma py))
                   (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
                   (block-ref v a 3) (- (block-ref v a 3) (* ia (+ (* ar cx) rx)))
                   (block-ref v a 4) (- (block-ref v a 4) (* ia (+ (* ar cy) ry)))
-                  (block-ref v a 5) (- (block-ref v a 5) (* ia (+ (* ar cz) rz)))
-                  (aref v b) (+ (aref v b) (* mb px))
-                  (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
-                  (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))
-                  (block-ref v b 3) (+ (block-ref v b 3) (* ib (- rx (* br cx))))
-                  (block-ref v b 4) (+ (block-ref v b 4) (* ib (- ry (* br cy))))
-                  (block-ref v b 5) (+ (block-ref v b 5) (* ib (- rz (* br cz))))))
+                  (block-ref v a 5) (- (block-ref v a 5) (* ia (+ (* ar cz) rz))))
+            ;; without body contacts body b is the dummy, whose zeros a zero mass keeps
+            (if-feature :body-contacts
+              (setf (aref v b) (+ (aref v b) (* mb px))
+                    (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
+                    (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))
+                    (block-ref v b 3) (+ (block-ref v b 3) (* ib (- rx (* br cx))))
+                    (block-ref v b 4) (+ (block-ref v b 4) (* ib (- ry (* br cy))))
+                    (block-ref v b 5) (+ (block-ref v b 5) (* ib (- rz (* br cz)))))))
           ;; without friction the impulse is along the normal and turns nothing; only rolling
           ;; resistance, when the world has it, turns the bodies
           (let ((px (* l x)) (py (* l y)) (pz (* l z)))
             (setf (aref v a) (- (aref v a) (* ma px))
                   (block-ref v a 1) (- (block-ref v a 1) (* ma py))
-                  (block-ref v a 2) (- (block-ref v a 2) (* ma pz))
-                  (aref v b) (+ (aref v b) (* mb px))
-                  (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
-                  (block-ref v b 2) (+ (block-ref v b 2) (* mb pz)))
+                  (block-ref v a 2) (- (block-ref v a 2) (* ma pz)))
+            (if-feature :body-contacts
+              (setf (aref v b) (+ (aref v b) (* mb px))
+                    (block-ref v b 1) (+ (block-ref v b 1) (* mb py))
+                    (block-ref v b 2) (+ (block-ref v b 2) (* mb pz))))
             (if-feature :rolling-resistance
               (let ((ia (@ iia)) (ib (@ iib))
                     (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z)))
+                (declare (ignorable ib))
                 (setf (block-ref v a 3) (- (block-ref v a 3) (* ia rx))
                       (block-ref v a 4) (- (block-ref v a 4) (* ia ry))
-                      (block-ref v a 5) (- (block-ref v a 5) (* ia rz))
-                      (block-ref v b 3) (+ (block-ref v b 3) (* ib rx))
-                      (block-ref v b 4) (+ (block-ref v b 4) (* ib ry))
-                      (block-ref v b 5) (+ (block-ref v b 5) (* ib rz)))))))))))
+                      (block-ref v a 5) (- (block-ref v a 5) (* ia rz)))
+                (if-feature :body-contacts
+                  (setf (block-ref v b 3) (+ (block-ref v b 3) (* ib rx))
+                        (block-ref v b 4) (+ (block-ref v b 4) (* ib ry))
+                        (block-ref v b 5) (+ (block-ref v b 5) (* ib rz))))))))))))
 ;; Warm start:1 ends here
 
 ;; [[file:../physics.org::#S0LV3R][Solve and relax:1]]
@@ -4734,12 +4749,14 @@ per constraint. #S0LV3R"
        (symbol-macrolet ((biased t)) ,@body)
        (symbol-macrolet ((biased nil)) ,@body)))
 
-(define-featured-kernel (solve-range :features (:friction :rolling-resistance :restitution))
+(define-featured-kernel (solve-range :features (:body-contacts :boxes :friction :rolling-resistance :restitution
+                                                 :hit-events :contact-events))
     (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
   "One Gauss-Seidel pass over constraints START..END: the soft normal impulse (with the bias
 when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
 HGZ times the substep), then Coulomb friction, then rolling resistance. Return END, or the
-first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
+first row that may strike or is armed, left unsolved for solve-handing. Compiled without body
+contacts, it reads and writes body a alone: body b is then the dummy row, all zeros. #S0LV3R"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
            (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+
            (ignorable threshold hgx hgy hgz))
@@ -4751,8 +4768,12 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
       (progn
       (let ((base (constraint-base k)))
        ;; the constraint's own columns are read from the block where they are used
-       (symbol-macrolet ((x (@ nx)) (y (@ ny)) (z (@ nz)) (ma (@ ima)) (mb (@ imb))
-                         (ar (@ ra)) (br (@ rb)) (iam (@ iia)) (ibm (@ iib))
+       ;; without body contacts body b is the dummy row of every constraint: its velocities,
+       ;; deltas, mass, inertia and radius are zeros, written here as such, and it is not written
+       (symbol-macrolet ((x (@ nx)) (y (@ ny)) (z (@ nz)) (ma (@ ima))
+                         (mb (if-feature :body-contacts (@ imb) 0.0))
+                         (ar (@ ra)) (br (if-feature :body-contacts (@ rb) 0.0)) (iam (@ iia))
+                         (ibm (if-feature :body-contacts (@ iib) 0.0))
                          (ux (@ t1x)) (uy (@ t1y)) (uz (@ t1z)) (qx (@ t2x)) (qy (@ t2y)) (qz (@ t2z)))
       (let* ((a (the index (solver-row (aref body-a k))))
              (b (the index (solver-row (aref body-b k))))
@@ -4763,12 +4784,17 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
                     (@ gap)
                     (let ((da (the index (delta-row (aref body-a k))))
                           (db (the index (delta-row (aref body-b k)))))
+                      (declare (ignorable db))
                       (setf (@ gap)
                             (moved-gap (@ separation) x y z
-                                       (- (aref d db) (aref d da)) (- (block-ref d db 1) (block-ref d da 1))
-                                       (- (block-ref d db 2) (block-ref d da 2)) (@ kvn) elapsed)))))
+                                       (- (if-feature :body-contacts (aref d db) 0.0) (aref d da))
+                                       (- (if-feature :body-contacts (block-ref d db 1) 0.0) (block-ref d da 1))
+                                       (- (if-feature :body-contacts (block-ref d db 2) 0.0) (block-ref d da 2))
+                                       (if-feature :boxes (@ kvn) 0.0) elapsed)))))
              (vax (aref v a)) (vay (block-ref v a 1)) (vaz (block-ref v a 2))
-             (vbx (aref v b)) (vby (block-ref v b 1)) (vbz (block-ref v b 2))
+             (vbx (if-feature :body-contacts (aref v b) 0.0))
+             (vby (if-feature :body-contacts (block-ref v b 1) 0.0))
+             (vbz (if-feature :body-contacts (block-ref v b 2) 0.0))
              ;; normal: only the linear velocities take part
              (positive (> s 0.0))
              (bias (cond (positive (* s inv-h))
@@ -4778,7 +4804,8 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
              ;; the relative velocity before this constraint's impulses: the normal part
              ;; and, below, friction both read it
              (dvx (- vbx vax)) (dvy (- vby vay)) (dvz (- vbz vaz))
-             (vn (+ (* dvx x) (* dvy y) (* dvz z) (@ kvn)))
+             ;; without boxes the box's velocity is zero, and so written
+             (vn (+ (* dvx x) (* dvy y) (* dvz z) (if-feature :boxes (@ kvn) 0.0)))
              (l (@ normal-impulse))
              (raw (if (and biased (not positive))
                       (- l (* (@ normal-mass) (@ mass-scale) (+ vn bias)) (* (@ impulse-scale) l))
@@ -4786,7 +4813,8 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
                       ;; scale 0, which the other branch would multiply and subtract to the same bits
                       (- l (* (@ normal-mass) (+ vn bias)))))
              (new (if (> raw 0.0) raw 0.0))
-             (mni (@ max-normal-impulse))
+             ;; the largest push so far, which only restitution and the events read
+             (mni (if-feature (:or :restitution :contact-events :hit-events) (@ max-normal-impulse) 0.0))
              ;; an impact ([[#R3ST1T]]): the first push of a contact approaching faster than
              ;; the threshold; or an armed contact whose gap has closed. Its bounce, the
              ;; impulse that makes the pair leave at the speed restitution gives, is a push
@@ -4837,9 +4865,12 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
              (madl (* ma dl)) (mbdl (* mb dl))
              (vax (- vax (* madl x))) (vay (- vay (* madl y))) (vaz (- vaz (* madl z)))
              (vbx (+ vbx (* mbdl x))) (vby (+ vby (* mbdl y))) (vbz (+ vbz (* mbdl z))))
+        (declare (ignorable b vbx vby vbz mbdl mni))
         (let ((pushed (if bounced bump new)))
-          (setf (@ normal-impulse) new
-                (@ max-normal-impulse) (if (> mni pushed) mni pushed)))
+          (declare (ignorable pushed))
+          (setf (@ normal-impulse) new)
+          (if-feature (:or :restitution :contact-events :hit-events)
+            (setf (@ max-normal-impulse) (if (> mni pushed) mni pushed))))
         ;; rolling resistance, written once for the two places it is compiled into
         (macrolet ((rolling-resistance ()
                      '(let ((rl (@ rolling-limit)))
@@ -4860,10 +4891,14 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
           ;; velocities are read only now
           (let* (
                  (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
-                 (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5))
+                 (wbx (if-feature :body-contacts (block-ref v b 3) 0.0))
+                 (wby (if-feature :body-contacts (block-ref v b 4) 0.0))
+                 (wbz (if-feature :body-contacts (block-ref v b 5) 0.0))
                  (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
-                 (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (@ kvt1)) (+ (* wx qx) (* wy qy) (* wz qz))))
-                 (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (@ kvt2) (+ (* wx ux) (* wy uy) (* wz uz))))
+                 (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (if-feature :boxes (@ kvt1) 0.0))
+                         (+ (* wx qx) (* wy qy) (* wz qz))))
+                 (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (if-feature :boxes (@ kvt2) 0.0)
+                         (+ (* wx ux) (* wy uy) (* wz uz))))
                  (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
                  (tm (@ tangent-mass))
                  (n1 (- l1 (* tm vt1))) (n2 (- l2 (* tm vt2)))
@@ -4878,8 +4913,9 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
                  (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
                  (iar (* iam ar)) (ibr (* ibm br)))
             (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
-            (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz))
-                  (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz)))
+            (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz)))
+            (if-feature :body-contacts
+              (setf (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz))))
             (let ((wax (- wax (* iar cx))) (way (- way (* iar cy))) (waz (- waz (* iar cz)))
                   (wbx (- wbx (* ibr cx))) (wby (- wby (* ibr cy))) (wbz (- wbz (* ibr cz))))
               (if-feature :rolling-resistance (rolling-resistance))
@@ -4896,19 +4932,24 @@ first row that may strike or is armed, left unsolved for solve-handing. #S0LV3R"
                     (setf (@ spin-impulse) nsp
                           wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
                           wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
-              (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                    (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))
+              (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz)
+              (if-feature :body-contacts
+                (setf (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))
           ;; without friction the tangent speeds are never read, and the angular velocities
           ;; change only under rolling resistance
           (progn
-            (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz
-                  (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz)
+            (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz)
+            (if-feature :body-contacts
+              (setf (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz))
             (if-feature :rolling-resistance
               (let ((wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
-                    (wbx (block-ref v b 3)) (wby (block-ref v b 4)) (wbz (block-ref v b 5)))
+                    (wbx (if-feature :body-contacts (block-ref v b 3) 0.0))
+                    (wby (if-feature :body-contacts (block-ref v b 4) 0.0))
+                    (wbz (if-feature :body-contacts (block-ref v b 5) 0.0)))
                 (rolling-resistance)
-                (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz
-                      (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))))))))))))
+                (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz)
+                (if-feature :body-contacts
+                  (setf (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))))))
   end))
 
 (defmacro define-impact-copy (name kernel documentation)
@@ -5011,7 +5052,7 @@ bodies must be to tie their times to sleep together (tie-sleep-times). #ST0R3S")
   (let ((m (min (aref sleep-time row-a) (aref sleep-time row-b))))
     (setf (aref sleep-time row-a) m (aref sleep-time row-b) m)))
 
-(define-featured-kernel (store-phase :features (:contact-events :hit-events :rolling-resistance)) (world)
+(define-featured-kernel (store-phase :features (:boxes :contact-events :hit-events :rolling-resistance)) (world)
   "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
 speed; in a world with sleepers, mark the awake rows that only sleepers and terrain touch
@@ -5047,13 +5088,13 @@ what it cannot undo, so its undo log closes. #ST0R3S"
           (let* ((base (constraint-base k))
                  (c (aref contact k))
                  (g (geometry-start c))
-                 (pushed (> (@ max-normal-impulse) 0.0))
+                 (pushed (if-feature (:or :contact-events :hit-events) (> (@ max-normal-impulse) 0.0) nil))
                  (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
                  ;; the gap the last relax pass kept, less the slop the prepared gap carries
                  (gap (- (@ gap) slop))
                  (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
-                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (@ kvn))))
+                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (if-feature :boxes (@ kvn) 0.0))))
             (declare (type fixnum c) (type index base g) (ignorable pushed))
             (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
                   (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2))
@@ -5448,6 +5489,7 @@ every feature is +physics-features+ itself. #FEAT5X"
   (+ 8 (constraint-offset (cond ((member :restitution features) 'armed-speed)
                                 ((member :rolling-resistance features) 'rolling-impulse-z)
                                 ((intersection '(:contact-events :hit-events) features) 'relative-velocity)
+                                ((member :boxes features) 'kvt2)
                                 (t 'spin-impulse)))))
 
 (defun feature-event-mask (features)
@@ -5542,11 +5584,11 @@ keep them where featured-kernel finds them. #FEAT5X"
                             collect `(setf (gethash '(,name . ,key) *featured-kernels*)
                                            ,(featured-kernel-form name key))))))
 
-(precompile-featured-kernels (warm-start-range solve-range prepare-phase store-phase))
+(precompile-featured-kernels (warm-start-range solve-range prepare-frames-range prepare-phase store-phase))
 
 (defgeneric wide-kernel-names (kernels)
-  (:documentation "The names of the featured warm start and solve of the wide family KERNELS, as
-two values, or NIL for a family without wide kernels. #FEAT5X"))
+  (:documentation "The names of the featured warm start, solve and frame pass of the wide family
+KERNELS, as three values, or NIL for a family without wide kernels. #FEAT5X"))
 
 (defmethod wide-kernel-names ((kernels scalar-kernels)) nil)
 
@@ -5556,13 +5598,15 @@ two values, or NIL for a family without wide kernels. #FEAT5X"))
     (if (and variant (eq (kernel-variant-kernels variant) kernels))
         variant
         (let ((features (world-features world)))
-          (multiple-value-bind (ws so) (wide-kernel-names kernels)
+          (multiple-value-bind (ws so pf) (wide-kernel-names kernels)
             (setf (world-kernel-variant-built world)
                   (make-kernel-variant kernels
                                        (featured-kernel 'warm-start-range features)
                                        (featured-kernel 'solve-range features)
+                                       (featured-kernel 'prepare-frames-range features)
                                        (and ws (featured-kernel ws features))
-                                       (and so (featured-kernel so features)))))))))
+                                       (and so (featured-kernel so features))
+                                       (and pf (featured-kernel pf features)))))))))
 ;; Features: a world pays only for what it uses:1 ends here
 
 ;; [[file:../physics.org::#S6T2MV][Determinism is chosen: same code, same start, same hash:1]]

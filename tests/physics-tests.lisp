@@ -2520,14 +2520,20 @@ function of a column name that reads row K's float in that column. #T3STK1"
 (define-claim "KTXT7V" kernel-is-its-text
     "Featured kernels keep their docstrings and texts; the text compiled for every feature is the kernel."
   (loop for (name anchor features)
-          in '((luv-physics::warm-start-range "#W4RMST" (:friction :rolling-resistance))
-               (luv-physics::solve-range "#S0LV3R" (:friction :rolling-resistance :restitution))
-               (luv-physics::prepare-phase "#PR3PAR" (:restitution :rolling-resistance :contact-events :hit-events))
-               (luv-physics::store-phase "#ST0R3S" (:contact-events :hit-events :rolling-resistance))
-               (luv-physics::warm-start-blocks/sse "#W1D3KF" (:friction :rolling-resistance))
-               (luv-physics::solve-blocks/sse "#W1D3KF" (:friction :rolling-resistance :restitution))
-               (luv-physics::warm-start-blocks/avx2 "#W1D3KF" (:friction :rolling-resistance))
-               (luv-physics::solve-blocks/avx2 "#W1D3KF" (:friction :rolling-resistance :restitution)))
+          in '((luv-physics::warm-start-range "#W4RMST" (:body-contacts :friction :rolling-resistance))
+               (luv-physics::solve-range "#S0LV3R" (:body-contacts :boxes :friction :rolling-resistance :restitution
+                                                    :hit-events :contact-events))
+               (luv-physics::prepare-frames-range "#PR3PAR" (:boxes))
+               (luv-physics::prepare-phase "#PR3PAR" (:body-contacts :boxes :restitution :rolling-resistance :contact-events :hit-events))
+               (luv-physics::store-phase "#ST0R3S" (:boxes :contact-events :hit-events :rolling-resistance))
+               (luv-physics::warm-start-blocks/sse "#W1D3KF" (:body-contacts :friction :rolling-resistance))
+               (luv-physics::solve-blocks/sse "#W1D3KF" (:body-contacts :boxes :friction :rolling-resistance :restitution
+                                                         :hit-events :contact-events))
+               (luv-physics::prepare-frames-blocks/sse "#W1D3KF" (:boxes))
+               (luv-physics::warm-start-blocks/avx2 "#W1D3KF" (:body-contacts :friction :rolling-resistance))
+               (luv-physics::solve-blocks/avx2 "#W1D3KF" (:body-contacts :boxes :friction :rolling-resistance :restitution
+                                                          :hit-events :contact-events))
+               (luv-physics::prepare-frames-blocks/avx2 "#W1D3KF" (:boxes)))
         do (let ((doc (documentation name 'function)) (text (get name 'luv-physics::featured-kernel)))
              (check (and (stringp doc) (let ((n (length anchor))) (and (>= (length doc) n) (string= anchor doc :start2 (- (length doc) n))))) "~(~A~)'s docstring is ~S" name doc)
              (check (and (= 5 (length text)) (equal features (fifth text))) "~(~A~) keeps ~S" name text))))
@@ -2737,8 +2743,11 @@ function of a column name that reads row K's float in that column. #T3STK1"
                    (float value 1.0)))
     ;; the value as the buffer holds it, in single precision
     (flet ((at (column) (float (float (second (assoc column given)) 1.0) 1d0)))
-      (dolist (features '((:friction :rolling-resistance) (:friction) (:rolling-resistance) ()))
+      (dolist (features '((:body-contacts :friction :rolling-resistance) (:body-contacts :friction)
+                          (:body-contacts :rolling-resistance) (:body-contacts)
+                          (:friction :rolling-resistance) (:friction) (:rolling-resistance) ()))
         (let* ((friction (member :friction features)) (rolling (member :rolling-resistance features))
+               (two-body (member :body-contacts features))
                (kernel (luv-physics::featured-kernel 'luv-physics::warm-start-range features))
                (v (let ((v (make-array 32 :element-type 'single-float)))
                     ;; every column starts from its own velocity, so that a column read for another shows
@@ -2753,8 +2762,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
                           (list (at 'rolling-impulse-x) (at 'rolling-impulse-y) (at 'rolling-impulse-z)) n))
                (want (append (mapcar (lambda (p) (- (* (at 'ima) p))) p)
                              (mapcar (lambda (c r) (- (* (at 'iia) (+ (* (at 'ra) c) r)))) c r)
-                             (mapcar (lambda (p) (* (at 'imb) p)) p)
-                             (mapcar (lambda (c r) (* (at 'iib) (- r (* (at 'rb) c)))) c r))))
+                             (if two-body (mapcar (lambda (p) (* (at 'imb) p)) p) (list 0d0 0d0 0d0))
+                             (if two-body
+                                 (mapcar (lambda (c r) (* (at 'iib) (- r (* (at 'rb) c)))) c r)
+                                 (list 0d0 0d0 0d0)))))
           (funcall kernel cbuf v 0 1)
           (let ((got (append (loop for j below 6 for o = (+ (luv-physics::solver-row 0) j)
                                    collect (- (aref v o) (nth o start)))
@@ -3249,18 +3260,19 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#FEAT5X][FEAT5X-columns-by-features]]
 (define-claim "FEAT5X" columns-by-features
-    "Constraint blocks end after the last column a world's features read: 33, 34, 38 or 40 columns."
+    "Constraint blocks end after the last column a world's features read: 29, 32, 34, 38 or 40 columns."
   (flet ((columns (features)
            (/ (luv-physics::constraint-columns-block
                (luv-physics::physics-world-constraints (make-physics-world :features features)))
               8)))
-    (check (= 33 (columns '(:terrain :friction :sleep :mortal))))
-    (check (= 33 (columns '(:terrain :body-contacts :friction))))
+    (check (= 29 (columns '(:terrain :friction :sleep :mortal))))
+    (check (= 29 (columns '(:terrain :body-contacts :friction))))
+    (check (= 32 (columns '(:terrain :boxes :friction :sleep :mortal))))
     (check (= 34 (columns '(:terrain :friction :hit-events))))
     (check (= 38 (columns '(:terrain :friction :rolling-resistance))))
     (check (= 40 (columns '(:terrain :restitution))))
     (check (= 40 (columns luv-physics::+physics-features+))))
-  (dolist (case (list (list '(:terrain :friction :sleep :mortal) 33) (list luv-physics::+physics-features+ 40)))
+  (dolist (case (list (list '(:terrain :friction :sleep :mortal) 29) (list luv-physics::+physics-features+ 40)))
     (destructuring-bind (features columns) case
       (multiple-value-bind (world before) (luv-physics::feature-scene :fountain :features features)
         (dotimes (i 120) (funcall before i) (step-physics-world world))
