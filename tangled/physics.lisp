@@ -5046,25 +5046,12 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
                              (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
              (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
 
-(defparameter *physics-sleep-tie-rise* 0.9
-  "How near the vertical, as the upward part of its normal, a pushing contact between two awake
-bodies must be to tie their times to sleep together (tie-sleep-times). #ST0R3S")
-
-(declaim (inline tie-sleep-times))
-(defun tie-sleep-times (sleep-time row-a row-b)
-  "Give both awake rows ROW-A and ROW-B the smaller of their counts of stillness in SLEEP-TIME.
-#ST0R3S"
-  (declare (type f32-column sleep-time) (type index row-a row-b))
-  (let ((m (min (aref sleep-time row-a) (aref sleep-time row-b))))
-    (setf (aref sleep-time row-a) m (aref sleep-time row-b) m)))
-
 (define-featured-kernel (store-phase :features (:boxes :contact-events :hit-events :rolling-resistance)) (world)
   "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
 speed; in a world with sleepers, mark the awake rows that only sleepers and terrain touch
-(mark-held), for the finalize phase's sleep, and in a world that sleeps give stacked awake
-bodies the smaller of their counts of stillness (tie-sleep-times). From here on the step changes
-what it cannot undo, so its undo log closes. #ST0R3S"
+(mark-held), for the finalize phase's sleep. From here on the step changes what it cannot undo,
+so its undo log closes. #ST0R3S"
   (setf (physics-world-undo-open world) nil)
   (let* ((cbuf (physics-world-constraints world))
          (contacts (physics-world-contacts world))
@@ -5078,11 +5065,8 @@ what it cannot undo, so its undo log closes. #ST0R3S"
          (n (body-columns-length awake))
          (held (physics-world-held world))
          ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts
-         (marking (held-marking-p world))
-         (tying (physics-world-sleep-enabled world))
-         (tie-rise (f32 *physics-sleep-tie-rise*))
-         (sleep-time (body-columns-sleep-time awake)))
-    (declare (type f32-column v sleep-time) (type single-float hit-speed slop max-penetration max-approach tie-rise)
+         (marking (held-marking-p world)))
+    (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
              (type index n) (type fixnum-column held)
              (ignorable ids awake sleeping hit-speed) #.+kernel-policy+)
     (when marking (fill held 0 :end (1+ n)))
@@ -5133,16 +5117,6 @@ what it cannot undo, so its undo log closes. #ST0R3S"
               (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
                           (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))))))
-    ;; stacked awake bodies share their stillness, once the marks of every contact are in
-    (when tying
-      (with-constraint-block (contact body-a body-b) cbuf
-        (loop for k of-type index below (constraint-columns-length cbuf)
-              unless (< (aref contact k) 0) do
-          (let ((base (constraint-base k)) (a (aref body-a k)) (b (aref body-b k)))
-            (declare (type index base a b))
-            (when (and (< a n) (< b n) (> (@ max-normal-impulse) 0.0) (> (abs (@ ny)) tie-rise)
-                       (not (and marking (or (logtest (aref held a) 1) (logtest (aref held b) 1)))))
-              (tie-sleep-times sleep-time a b))))))
     (let ((stats (world-statistics world)))
       (setf (aref stats 3) (coerce max-penetration 'double-float)
             (aref stats 4) (coerce max-approach 'double-float)))
@@ -7123,28 +7097,22 @@ each resting a slop deep and alone #B3NCH5"
   "The world of the scene :sleepers with SLEEPERS balls, solved by KERNELS. #B3NCH5"
   (values (make-scene-world :sleepers :count sleepers :kernels kernels)))
 
-(defun cpu-ms-per-step (world steps)
-  "Step WORLD STEPS times; return the processor time this process spent, in ms per step. #B3NCH5"
-  (let ((start (get-internal-run-time)))
-    (dotimes (i steps) (step-physics-world world))
-    (/ (* 1000d0 (- (get-internal-run-time) start)) internal-time-units-per-second steps)))
-
 (defun measure-sleeping-scale (sleepers &key (kernels :avx2))
-  "Beside SLEEPERS settled sleepers: the processor ms per step idle (nothing awake, 2000 steps),
-while the 1000 balls of the pile scene fall into the basin, settle and sleep (600 steps), and after
-the main job's ball is thrown into that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
+  "Beside SLEEPERS settled sleepers: the mean ms per step idle (nothing awake, 100 steps), while
+the 1000 balls of the pile scene fall into the basin, settle and sleep (600 steps), and after the
+main job's ball is thrown into that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
   (sb-ext:gc :full t)
   (let* ((before (sb-kernel:dynamic-usage))
          (world (sleepers-beside-basin sleepers :kernels kernels)))
     (step-physics-world world)
     (sb-ext:gc :full t)
     (let ((bytes (- (sb-kernel:dynamic-usage) before))
-          (idle (cpu-ms-per-step world 2000)))
+          (idle (measure-steps world 0 100)))
       ;; the pile scene's balls, then the main job's throw
       (add-scene-bodies world (first (physics-scene-bodies (find-physics-scene :pile))) 1000 nil)
-      (let ((settling (cpu-ms-per-step world 600)))
+      (let ((settling (measure-steps world 0 600)))
         (funcall (scene-action-function (first (physics-scene-actions (find-physics-scene :basin)))) world 0.0)
-        (let ((wave (cpu-ms-per-step world 300)))
+        (let ((wave (measure-steps world 0 300)))
           (list :sleepers sleepers :idle idle :settling settling :wave wave
                 :bytes-per-sleeper (if (plusp sleepers) (round bytes sleepers) 0)
                 :awake (physics-world-awake-count world)))))))
@@ -7152,8 +7120,7 @@ the main job's ball is thrown into that pile (300 steps); and the heap's bytes p
 (defun run-sleeping-scale-benchmark (&key (counts '(0 10000 50000 100000 200000)) (stream *standard-output*))
   "Print, as an Org table, what sleepers cost at each of COUNTS: idle, settling and wake-wave ms
 per step beside them, each against the same at no sleepers, and the heap's bytes per sleeper. #B3NCH5"
-  (format stream "~&#+caption: sleepers beside the basin, avx2, processor time per step; ~A; load ~A~%"
-          (cpu-model-name) (load-average))
+  (format stream "~&#+caption: sleepers beside the basin, avx2; ~A; load ~A~%" (cpu-model-name) (load-average))
   (format stream "~&| sleepers | idle ms/step | settling ms/step | / at 0 | wave ms/step | / at 0 | bytes per sleeper | awake at end |~%")
   (format stream "~&|----------+--------------+------------------+--------+--------------+--------+-------------------+--------------|~%")
   (let ((base nil))
@@ -7629,14 +7596,10 @@ its final height less its ideal resting height (radius less a slop), and whether
     (multiple-value-bind (pen speed drop left) (stack-in-shaft (make-list 20 :initial-element 1.0))
       (row "column of 20 balls" (< pen 0.05)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
-    ;; asleep, the column falls asleep as a whole once still (tie-sleep-times), so at the same law
-    (let* ((depths (column-contact-depths 20)) (law (soft-column-depths 20))
-           (off (reduce #'max (mapcar (lambda (d w) (abs (- d w))) depths law))))
-      (row "column of 20 balls, sleeping on, each contact against the soft contact's law"
-           (<= off 0.1)
-           "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}; at most ~,3F slops from the law's ~
-            ~,2F .. ~,2F; against its design depth (one slop), at most ~,2F" depths off (second law)
-           (car (last law)) (reduce #'max depths)))
+    (let ((depths (column-contact-depths 20)))
+      (row "column of 20 balls, each contact against its design depth (one slop)"
+           (every (lambda (d) (<= d 1.1)) depths)
+           "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}" depths))
     ;; awake, every contact gives by its load: the soft contact's law, against which it is held
     (let* ((depths (column-contact-depths 20 :sleep nil)) (law (soft-column-depths 20))
            (off (reduce #'max (mapcar (lambda (d w) (abs (- d w))) depths law))))

@@ -4984,24 +4984,6 @@ in the order of *physics-scene-features*. #K5DF9S"
           do (check (< (abs (- d w)) 0.02) "contact ~D from the floor: ~,3F slops, the law gives ~,3F" k d w))))
 ;; X7R3M5-column-gives-by-the-law ends here
 
-;; [[file:../physics.org::#X7R3M5][X7R3M5-sleeping-column-keeps-the-law]]
-(define-claim "X7R3M5" sleeping-column-keeps-the-law
-    "A column of twenty balls with sleeping on falls asleep at the soft contact's deflection under each load."
-  (let* ((world (luv-physics::make-shaft-world))
-         (balls (loop for i below 20
-                      collect (add-physics-body world 0.5 (+ 0.45 (* i 2.02 0.45)) 0.5 :radius 0.45 :mass 1.0)))
-         (law (luv-physics::soft-column-depths 20)))
-    (dotimes (i 240) (step-physics-world world))
-    (check (notany (lambda (b) (physics-body-awake-p world b)) balls)
-           "~D of the 20 balls are awake at 4 s" (count-if (lambda (b) (physics-body-awake-p world b)) balls))
-    (let ((heights (mapcar (lambda (b) (nth-value 1 (physics-body-position world b))) balls)))
-      (loop for overlap in (cons (- 0.45 (first heights))
-                                 (loop for (a b) on heights while b collect (- 0.9 (- b a))))
-            for w in law for k from 0
-            for d = (/ overlap luv-physics::*physics-linear-slop*)
-            do (check (< (abs (- d w)) 0.1) "contact ~D from the floor: ~,3F slops, the law gives ~,3F" k d w)))))
-;; X7R3M5-sleeping-column-keeps-the-law ends here
-
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-rolling-resistance-rests-a-pile]]
 (define-claim "X7R3M5" rolling-resistance-rests-a-pile
     "A dead pile whose balls resist rolling comes to rest with sleeping off."
