@@ -7097,22 +7097,28 @@ each resting a slop deep and alone #B3NCH5"
   "The world of the scene :sleepers with SLEEPERS balls, solved by KERNELS. #B3NCH5"
   (values (make-scene-world :sleepers :count sleepers :kernels kernels)))
 
+(defun cpu-ms-per-step (world steps)
+  "Step WORLD STEPS times; return the processor time this process spent, in ms per step. #B3NCH5"
+  (let ((start (get-internal-run-time)))
+    (dotimes (i steps) (step-physics-world world))
+    (/ (* 1000d0 (- (get-internal-run-time) start)) internal-time-units-per-second steps)))
+
 (defun measure-sleeping-scale (sleepers &key (kernels :avx2))
-  "Beside SLEEPERS settled sleepers: the mean ms per step idle (nothing awake, 100 steps), while
-the 1000 balls of the pile scene fall into the basin, settle and sleep (600 steps), and after the
-main job's ball is thrown into that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
+  "Beside SLEEPERS settled sleepers: the processor ms per step idle (nothing awake, 2000 steps),
+while the 1000 balls of the pile scene fall into the basin, settle and sleep (600 steps), and after
+the main job's ball is thrown into that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
   (sb-ext:gc :full t)
   (let* ((before (sb-kernel:dynamic-usage))
          (world (sleepers-beside-basin sleepers :kernels kernels)))
     (step-physics-world world)
     (sb-ext:gc :full t)
     (let ((bytes (- (sb-kernel:dynamic-usage) before))
-          (idle (measure-steps world 0 100)))
+          (idle (cpu-ms-per-step world 2000)))
       ;; the pile scene's balls, then the main job's throw
       (add-scene-bodies world (first (physics-scene-bodies (find-physics-scene :pile))) 1000 nil)
-      (let ((settling (measure-steps world 0 600)))
+      (let ((settling (cpu-ms-per-step world 600)))
         (funcall (scene-action-function (first (physics-scene-actions (find-physics-scene :basin)))) world 0.0)
-        (let ((wave (measure-steps world 0 300)))
+        (let ((wave (cpu-ms-per-step world 300)))
           (list :sleepers sleepers :idle idle :settling settling :wave wave
                 :bytes-per-sleeper (if (plusp sleepers) (round bytes sleepers) 0)
                 :awake (physics-world-awake-count world)))))))
@@ -7120,7 +7126,8 @@ main job's ball is thrown into that pile (300 steps); and the heap's bytes per s
 (defun run-sleeping-scale-benchmark (&key (counts '(0 10000 50000 100000 200000)) (stream *standard-output*))
   "Print, as an Org table, what sleepers cost at each of COUNTS: idle, settling and wake-wave ms
 per step beside them, each against the same at no sleepers, and the heap's bytes per sleeper. #B3NCH5"
-  (format stream "~&#+caption: sleepers beside the basin, avx2; ~A; load ~A~%" (cpu-model-name) (load-average))
+  (format stream "~&#+caption: sleepers beside the basin, avx2, processor time per step; ~A; load ~A~%"
+          (cpu-model-name) (load-average))
   (format stream "~&| sleepers | idle ms/step | settling ms/step | / at 0 | wave ms/step | / at 0 | bytes per sleeper | awake at end |~%")
   (format stream "~&|----------+--------------+------------------+--------+--------------+--------+-------------------+--------------|~%")
   (let ((base nil))
