@@ -68,6 +68,7 @@
    #:map-physics-cells-in-sphere #:map-physics-cells-in-box #:run-query-benchmark
    ;; Giving back the room the buffers grew to (#QKS4GZ)
    #:trim-physics-world
+   #:physics-world-bytes
    ;; Reading and reloading the page in a live image (#0QBGZO, #OWNJGP)
    #:section #:reload-section #:reload-changed
    ;; Exported functions refuse a non-world by name (#C0ND1T, #M4K3WD)
@@ -1804,6 +1805,27 @@ nothing; return GRID. #D9W4CH"
     (setf (hash-grid-starts grid) (make-array (1+ (hashed-buckets n)) :element-type 'fixnum)))
   grid)
 
+(defun hash-grid-trim (grid)
+  "Shrink GRID's arrays to what its entries and buckets use, keeping every entry in its place;
+return GRID. #D9W4CH"
+  (declare (type hash-grid grid))
+  (let* ((n (hash-grid-count grid))
+         (buckets (if (hash-grid-dense grid)
+                      (* (hash-grid-nx grid) (hash-grid-ny grid) (hash-grid-nz grid))
+                      (1+ (hash-grid-mask grid)))))
+    (flet ((kept (array length)
+             (if (> (length array) length) (subseq array 0 length) array)))
+      (setf (hash-grid-items grid) (kept (hash-grid-items grid) n)
+            (hash-grid-keys grid) (kept (hash-grid-keys grid) n)
+            (hash-grid-item-keys grid) (kept (hash-grid-item-keys grid) n)
+            ;; the centres and the near list keep four spare places for the four-lane listing
+            (hash-grid-xs grid) (kept (hash-grid-xs grid) (+ n 4))
+            (hash-grid-ys grid) (kept (hash-grid-ys grid) (+ n 4))
+            (hash-grid-zs grid) (kept (hash-grid-zs grid) (+ n 4))
+            (hash-grid-near grid) (kept (hash-grid-near grid) (+ n 4))
+            (hash-grid-starts grid) (kept (hash-grid-starts grid) (max 2 (1+ buckets))))))
+  grid)
+
 (defun build-hash-grid (grid cell-size n xs ys zs ids &key (dense-allowed t))
   "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID: densely
 when DENSE-ALLOWED and the box of their cells, one cell of padding around, has at most
@@ -2124,6 +2146,11 @@ dispatches on it once per call. #W0RLD7"))
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
    (fresh-grid :initform (make-hash-grid) :reader physics-world-fresh-grid)
+   (newest-grid :initform (make-hash-grid) :reader physics-world-newest-grid)
+   (newest-handles :initform (make-array 64 :element-type 'fixnum :initial-element 0)
+                   :accessor physics-world-newest-handles)
+   (newest-count :initform 0 :type fixnum :accessor physics-world-newest-count)
+   (sleeping-grid-work :initform 0 :type fixnum :accessor physics-world-sleeping-grid-work)
    (fresh-handles :initform (make-array 64 :element-type 'fixnum :initial-element 0)
                   :accessor physics-world-fresh-handles)
    (fresh-count :initform 0 :type fixnum :accessor physics-world-fresh-count)
@@ -2629,18 +2656,22 @@ undo log too (roll-back-step). #QKS4GZ"
 
 (defun trim-physics-world (world)
   "Give back the room WORLD's buffers grew to beyond what they hold: the awake buffer and its
-sorting scratch keep room for twice the awake rows, the sleeping buffer for its rows, and the
-solver's arrays, the fresh sleeping grid and its lists are let go, to grow again as the next
-steps need. Call it between steps, off the hot path, after a pile has fallen asleep or been
-removed. Return WORLD. #QKS4GZ"
+sorting scratch keep room for twice the awake rows, the sleeping buffer and the sleeping grids
+for what they hold, the events and the lists for their rows, and the solver's arrays are let go,
+to grow again as the next steps need. Call it between steps, off the hot path, after a pile has
+fallen asleep or been removed. Return WORLD. #QKS4GZ"
   (check-idle world 'trim-physics-world)
   (let* ((awake (physics-world-awake world))
-         (n (body-columns-length awake))
-         (fresh (physics-world-fresh-grid world)))
+         (n (body-columns-length awake)))
     (ensure-sleeping-grid world)
     (body-columns-trim awake (* 2 n))
     (body-columns-trim (physics-world-awake-scratch world) (body-columns-capacity awake))
     (body-columns-trim (physics-world-sleeping world) 0)
+    ;; the events of the last step stay readable: trimming keeps every row
+    (event-columns-trim (physics-world-events world) 0)
+    (setf (physics-world-added world)
+          (replace (make-array (max 16 (physics-world-added-count world)) :element-type 'fixnum :initial-element 0)
+                   (physics-world-added world) :end2 (physics-world-added-count world)))
     (setf (physics-world-row-places world) (make-array 0 :element-type 'fixnum)
           (physics-world-undo-rows world) (make-array 0 :element-type 'fixnum)
           (physics-world-velocities world) (make-array 0 :element-type 'single-float)
@@ -2648,23 +2679,42 @@ removed. Return WORLD. #QKS4GZ"
           (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
           (physics-world-braced world) (make-array 0 :element-type 'fixnum)
           (physics-world-held world) (make-array 0 :element-type 'fixnum))
-    (let ((count (physics-world-fresh-count world)))
+    (flet ((list-room (handles count)
+             (replace (make-array (max 64 count) :element-type 'fixnum :initial-element 0) handles :end2 count)))
       (setf (physics-world-fresh-handles world)
-            (replace (make-array (max 64 count) :element-type 'fixnum :initial-element 0)
-                     (physics-world-fresh-handles world) :end2 count)
+            (list-room (physics-world-fresh-handles world) (physics-world-fresh-count world))
+            (physics-world-newest-handles world)
+            (list-room (physics-world-newest-handles world) (physics-world-newest-count world))
             (physics-world-fresh-x world) (make-array 0 :element-type 'single-float)
             (physics-world-fresh-y world) (make-array 0 :element-type 'single-float)
-            (physics-world-fresh-z world) (make-array 0 :element-type 'single-float)
-            (hash-grid-items fresh) (make-array 0 :element-type 'fixnum)
-            (hash-grid-keys fresh) (make-array 0 :element-type 'fixnum)
-            (hash-grid-item-keys fresh) (make-array 0 :element-type 'fixnum)
-            (hash-grid-xs fresh) (make-array 0 :element-type 'single-float)
-            (hash-grid-ys fresh) (make-array 0 :element-type 'single-float)
-            (hash-grid-zs fresh) (make-array 0 :element-type 'single-float)
-            (hash-grid-near fresh) (make-array 0 :element-type 'fixnum)
-            (hash-grid-starts fresh) (make-array 2 :element-type 'fixnum :initial-element 0)
-            (physics-world-sleeping-grid-dirty world) t))
+            (physics-world-fresh-z world) (make-array 0 :element-type 'single-float)))
+    ;; the grids keep every entry, in its place: the next walks meet what they met before
+    (hash-grid-trim (physics-world-sleeping-grid world))
+    (hash-grid-trim (physics-world-fresh-grid world))
+    (hash-grid-trim (physics-world-newest-grid world))
     world))
+
+(defun physics-world-bytes (world)
+  "The bytes WORLD's own storage takes: every array reachable from its slots, through the
+structures of columns, grids and tables, counted once, with the structures themselves; its terrain
+and kernel family not. As a second value, each slot's share, largest first, as an alist. #QKS4GZ"
+  (check-world world 'physics-world-bytes)
+  (let ((seen (make-hash-table :test 'eq)))
+    (labels ((bytes (object)
+               (cond ((or (not (typep object '(or array structure-object))) (gethash object seen)) 0)
+                     (t (setf (gethash object seen) t)
+                        (+ (sb-ext:primitive-object-size object)
+                           (typecase object
+                             (simple-vector (loop for item across object sum (bytes item)))
+                             (structure-object
+                              (loop for slot in (sb-mop:class-slots (class-of object))
+                                    sum (bytes (slot-value object (sb-mop:slot-definition-name slot)))))
+                             (t 0)))))))
+      (let ((shares (loop for slot in (sb-mop:class-slots (class-of world))
+                          for name = (sb-mop:slot-definition-name slot)
+                          unless (member name '(terrain probe kernels))
+                            collect (cons name (bytes (slot-value world name))))))
+        (values (reduce #'+ shares :key #'cdr) (sort shares #'> :key #'cdr))))))
 
 (defun remove-physics-body (world handle)
   "Remove HANDLE's body from WORLD; HANDLE goes stale. #QKS4GZ"
@@ -2845,7 +2895,7 @@ pair within reach, or within the skin beyond it, lies in neighbouring cells. #G4
 
 (defun sleeping-grid-of (world)
   "For each handle slot, which sleeping grid holds its body's live entry: 1 the settled grid, 2
-the fresh one, 0 neither; grown to the handle table's slots. #G4R1D5"
+the fresh one, 3 the newest one, 0 none; grown to the handle table's slots. #G4R1D5"
   (let ((of (physics-world-grid-of world))
         (slots (length (handle-table-set (physics-world-ids world)))))
     (declare (type fixnum-column of))
@@ -2856,101 +2906,131 @@ the fresh one, 0 neither; grown to the handle table's slots. #G4R1D5"
           (setf (physics-world-grid-of world) grown)))))
 
 (defun note-fresh-sleeper (world handle)
-  "Note that HANDLE's body fell asleep: the fresh grid takes it at its next build. #G4R1D5"
-  (let ((handles (physics-world-fresh-handles world)) (count (physics-world-fresh-count world))
+  "Note that HANDLE's body fell asleep: the newest grid takes it at its next build. #G4R1D5"
+  (let ((handles (physics-world-newest-handles world)) (count (physics-world-newest-count world))
         (of (sleeping-grid-of world)))
     (declare (type fixnum-column handles of) (type fixnum count))
     (when (= (aref of (handle-index handle)) 1) (incf (physics-world-settled-stale world)))
-    ;; room for every body the world has a slot for, at once: the fresh list, its centres and
-    ;; its grid grow together, and seldom
     (when (= count (length handles))
-      (let* ((room (max (* 2 count) (length of)))
-             (grown (make-array room :element-type 'fixnum :initial-element 0)))
+      (let ((grown (make-array (max 64 (* 2 count)) :element-type 'fixnum :initial-element 0)))
         (replace grown handles)
-        (setf (physics-world-fresh-handles world) grown handles grown
-              (physics-world-fresh-x world) (make-array room :element-type 'single-float)
-              (physics-world-fresh-y world) (make-array room :element-type 'single-float)
-              (physics-world-fresh-z world) (make-array room :element-type 'single-float))
-        (hash-grid-reserve (physics-world-fresh-grid world) room)))
+        (setf (physics-world-newest-handles world) grown handles grown)))
     (setf (aref handles count) handle
-          (physics-world-fresh-count world) (1+ count)
-          (aref of (handle-index handle)) 2
+          (physics-world-newest-count world) (1+ count)
+          (aref of (handle-index handle)) 3
           (physics-world-sleeping-grid-dirty world) t)
     handle))
 
 (defun leave-sleeping-grids (world handle)
-  "HANDLE's body leaves the sleeping set: its entry in either grid is dead from now on. #G4R1D5"
+  "HANDLE's body leaves the sleeping set: its entry in any grid is dead from now on. #G4R1D5"
   (let ((of (sleeping-grid-of world)) (slot (handle-index handle)))
     (declare (type fixnum-column of))
     (when (= (aref of slot) 1) (incf (physics-world-settled-stale world)))
     (setf (aref of slot) 0)
     handle))
 
+(defun take-listed-sleepers (world handles count mark)
+  "Compact the first COUNT handles of HANDLES to those that name a sleeper whose grid mark is MARK,
+each once, in their order; return how many are kept. #G4R1D5"
+  (declare (type fixnum-column handles) (type fixnum count mark))
+  (let* ((ids (physics-world-ids world))
+         (sets (handle-table-set ids)) (generations (handle-table-generation ids))
+         (of (sleeping-grid-of world))
+         (kept 0))
+    (declare (type fixnum-column sets generations of) (type fixnum kept))
+    (dotimes (k count)
+      (let* ((h (aref handles k)) (slot (handle-index h)))
+        (when (and (= (aref sets slot) +set-sleeping+) (= (aref generations slot) (handle-generation h))
+                   (= (aref of slot) mark))
+          ;; -1 marks it taken, so a body listed twice is taken once
+          (setf (aref of slot) -1 (aref handles kept) h)
+          (incf kept))))
+    (dotimes (k kept) (setf (aref of (handle-index (aref handles k))) mark))
+    kept))
+
+(defun build-listed-sleepers (world grid handles count)
+  "Build GRID from the sleepers named by the first COUNT handles of HANDLES, their centres gathered
+into the world's scratch columns; count them in the world's sleeping-grid work. #G4R1D5"
+  (declare (type fixnum-column handles) (type fixnum count))
+  (when (< (length (physics-world-fresh-x world)) count)
+    (let ((room (max count (* 2 (length (physics-world-fresh-x world))))))
+      (setf (physics-world-fresh-x world) (make-array room :element-type 'single-float)
+            (physics-world-fresh-y world) (make-array room :element-type 'single-float)
+            (physics-world-fresh-z world) (make-array room :element-type 'single-float))))
+  (let ((locals (handle-table-local (physics-world-ids world)))
+        (s (physics-world-sleeping world))
+        (xs (physics-world-fresh-x world)) (ys (physics-world-fresh-y world)) (zs (physics-world-fresh-z world)))
+    (declare (type fixnum-column locals) (type f32-column xs ys zs))
+    (dotimes (k count)
+      (let ((row (aref locals (handle-index (aref handles k)))))
+        (setf (aref xs k) (aref (body-columns-x s) row)
+              (aref ys k) (aref (body-columns-y s) row)
+              (aref zs k) (aref (body-columns-z s) row))))
+    (incf (physics-world-sleeping-grid-work world) count)
+    (build-hash-grid grid (f32 (grid-cell-size world)) count xs ys zs handles)))
+
 (defun ensure-sleeping-grid (world)
-  "Bring the sleeping grids up to date. Bodies that fell asleep since the settled grid was built
-go into the fresh grid, which is built again, from them alone, whenever one more falls asleep.
-The settled grid is built again from every sleeper, and the fresh one emptied, when the cell size
-changed, or when the fresh sleepers, or the settled grid's dead entries, outnumber an eighth of
-the settled grid (and 256). Return the settled grid. #G4R1D5"
+  "Bring the sleeping grids up to date. Bodies that fell asleep go into the newest grid, which is
+built again, from them alone, whenever one more falls asleep. The newest sleepers join the fresh
+grid, built again from both, when they outnumber an eighth of the fresh ones (and 32). The
+settled grid is built again from every sleeper, and the other two emptied, when the cell size
+changed, or when the fresh and newest sleepers, or the settled grid's dead entries, outnumber an
+eighth of the settled grid (and 256). Return the settled grid. #G4R1D5"
   (let* ((grid (physics-world-sleeping-grid world))
          (fresh (physics-world-fresh-grid world))
+         (newest (physics-world-newest-grid world))
          (size (grid-cell-size world))
          (s (physics-world-sleeping world))
          (of (sleeping-grid-of world))
          (bound (max 256 (floor (physics-world-settled-count world) 8))))
     (declare (type fixnum-column of))
     (cond ((or (/= (hash-grid-inv-cell grid) (/ 1.0 size))
-               (> (physics-world-fresh-count world) bound)
+               (> (+ (physics-world-fresh-count world) (physics-world-newest-count world)) bound)
                (> (physics-world-settled-stale world) bound))
            (let ((n (body-columns-length s)) (handles (body-columns-handle s)))
              ;; room for every body the world has a slot for, so that the settled grid grows seldom
              (hash-grid-reserve grid (max n (length of)))
              (build-hash-grid grid size n (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
              (dotimes (i n) (setf (aref of (handle-index (aref handles i))) 1))
+             (incf (physics-world-sleeping-grid-work world) n)
              (setf (physics-world-settled-count world) n
                    (physics-world-settled-stale world) 0
-                   (physics-world-fresh-count world) 0)
+                   (physics-world-fresh-count world) 0
+                   (physics-world-newest-count world) 0)
              (build-hash-grid fresh size 0 (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
+             (build-hash-grid newest size 0 (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
              (setf (physics-world-sleeping-grid-dirty world) nil)))
           ((physics-world-sleeping-grid-dirty world)
-           ;; the fresh sleepers still asleep and in the fresh grid, each once: the handle list
-           ;; is compacted to them as it is read
-           (let* ((handles (physics-world-fresh-handles world))
-                  (ids (physics-world-ids world))
-                  (sets (handle-table-set ids)) (locals (handle-table-local ids))
-                  (generations (handle-table-generation ids))
-                  (count (physics-world-fresh-count world))
-                  (kept 0))
-             (declare (type fixnum-column handles sets locals generations) (type fixnum count kept))
-             (when (< (length (physics-world-fresh-x world)) count)
-               (setf (physics-world-fresh-x world) (make-array (length handles) :element-type 'single-float)
-                     (physics-world-fresh-y world) (make-array (length handles) :element-type 'single-float)
-                     (physics-world-fresh-z world) (make-array (length handles) :element-type 'single-float)))
-             (dotimes (k count)
-               (let* ((h (aref handles k)) (slot (handle-index h)))
-                 (when (and (= (aref sets slot) +set-sleeping+) (= (aref generations slot) (handle-generation h))
-                            (= (aref of slot) 2))
-                   ;; 3 marks it taken, so a body that slept twice is taken once
-                   (setf (aref of slot) 3 (aref handles kept) h)
-                   (incf kept))))
-             (let ((xs (physics-world-fresh-x world)) (ys (physics-world-fresh-y world))
-                   (zs (physics-world-fresh-z world)))
-               (declare (type f32-column xs ys zs))
-               (dotimes (k kept)
-                 (let* ((slot (handle-index (aref handles k))) (row (aref locals slot)))
-                   (setf (aref of slot) 2
-                         (aref xs k) (aref (body-columns-x s) row)
-                         (aref ys k) (aref (body-columns-y s) row)
-                         (aref zs k) (aref (body-columns-z s) row))))
-               (setf (physics-world-fresh-count world) kept)
-               (build-hash-grid fresh size kept xs ys zs handles))
-             (setf (physics-world-sleeping-grid-dirty world) nil))))
+           (let ((kept (take-listed-sleepers world (physics-world-newest-handles world)
+                                             (physics-world-newest-count world) 3)))
+             (declare (type fixnum kept))
+             (setf (physics-world-newest-count world) kept)
+             (if (<= kept (max 32 (floor (physics-world-fresh-count world) 8)))
+                 (build-listed-sleepers world newest (physics-world-newest-handles world) kept)
+                 ;; the newest join the fresh list, which is compacted and built again
+                 (let* ((count (physics-world-fresh-count world))
+                        (handles (physics-world-fresh-handles world))
+                        (newest-handles (physics-world-newest-handles world)))
+                   (declare (type fixnum-column handles newest-handles) (type fixnum count))
+                   (when (< (length handles) (+ count kept))
+                     (setf handles (replace (make-array (max 64 (* 2 (+ count kept))) :element-type 'fixnum
+                                                                                       :initial-element 0)
+                                            handles :end2 count)
+                           (physics-world-fresh-handles world) handles))
+                   (dotimes (k kept)
+                     (let ((h (aref newest-handles k)))
+                       (setf (aref handles (+ count k)) h (aref of (handle-index h)) 2)))
+                   (let ((taken (take-listed-sleepers world handles (+ count kept) 2)))
+                     (setf (physics-world-fresh-count world) taken (physics-world-newest-count world) 0)
+                     (build-listed-sleepers world fresh handles taken)
+                     (build-listed-sleepers world newest newest-handles 0)))))
+           (setf (physics-world-sleeping-grid-dirty world) nil)))
     grid))
 
 (defmacro do-sleeping-neighbours ((item world x y z &key (span 1)) &body body)
-  "Run BODY with ITEM bound to the handle of each live entry of WORLD's sleeping grids, settled
-and fresh, whose cell lies within SPAN cells of point X Y Z. An entry is live when its grid is the
-one that holds its body now; whether the handle still names a sleeper is BODY's to ask. #G4R1D5"
+  "Run BODY with ITEM bound to the handle of each live entry of WORLD's sleeping grids, settled,
+fresh and newest, whose cell lies within SPAN cells of point X Y Z. An entry is live when its grid
+is the one that holds its body now; whether the handle still names a sleeper is BODY's to ask. #G4R1D5"
   (let ((visit (gensym "VISIT")) (of (gensym "OF")))
     `(let ((,of (physics-world-grid-of ,world)))
        (declare (type fixnum-column ,of))
@@ -2959,7 +3039,9 @@ one that holds its body now; whether the handle still names a sleeper is BODY's 
          (do-grid-neighbours (,item (physics-world-sleeping-grid ,world) ,x ,y ,z :span ,span)
            (when (= 1 (aref ,of (handle-index ,item))) (,visit ,item)))
          (do-grid-neighbours (,item (physics-world-fresh-grid ,world) ,x ,y ,z :span ,span)
-           (when (= 2 (aref ,of (handle-index ,item))) (,visit ,item)))))))
+           (when (= 2 (aref ,of (handle-index ,item))) (,visit ,item)))
+         (do-grid-neighbours (,item (physics-world-newest-grid ,world) ,x ,y ,z :span ,span)
+           (when (= 3 (aref ,of (handle-index ,item))) (,visit ,item)))))))
 
 (defun grid-phase (world)
   "Phase 3: find the pair list's loose rows; unless the list holds and the awake grid still has
@@ -3042,10 +3124,7 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
     (when (plusp (body-columns-length sleeping))
       (let* ((grid (ensure-sleeping-grid world))
              (ids (physics-world-ids world))
-             (awake (body-columns-ensure-capacity
-                     (physics-world-awake world)
-                     (+ (body-columns-length (physics-world-awake world)) (body-columns-length sleeping))))
-             (n (body-columns-length awake))
+             (n (body-columns-length (physics-world-awake world)))
              (margin (f32 (physics-world-margin world)))
              (dt (physics-world-current-dt world))
              (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
@@ -3083,12 +3162,14 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
                 (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
                            (= (aref (handle-table-generation ids) slot) (handle-generation h)))
                   (let ((row (aref (handle-table-local ids) slot)))
-                    (with-body-columns (x y z radius flags) awake
+                    (with-body-columns (x y z radius flags) (physics-world-awake world)
                       (when (zerop (logand (aref flags row) +flag-terrain-only+))
                         (wake-near (aref x row) (aref y row) (aref z row) (- (aref radius row) slop)
                                    1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
-          (with-body-columns (x y z vx vy vz radius flags) awake
-            (dotimes (i n)
+          ;; a body woken is appended to the awake buffer, which grows then: its columns are
+          ;; read again for each row
+          (dotimes (i n)
+            (with-body-columns (x y z vx vy vz radius flags) (physics-world-awake world)
               (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
                                (* (aref vz i) (aref vz i)))
                             wake2)
@@ -7108,39 +7189,52 @@ each resting a slop deep and alone #B3NCH5"
     (/ (* 1000d0 (- (get-internal-run-time) start)) internal-time-units-per-second steps)))
 
 (defun measure-sleeping-scale (sleepers &key (kernels :avx2))
-  "Beside SLEEPERS settled sleepers: the processor ms per step idle (nothing awake, 2000 steps),
-while the 1000 balls of the pile scene fall into the basin, settle and sleep (600 steps), and after
-the main job's ball is thrown into that pile (300 steps); and the heap's bytes per sleeper. #B3NCH5"
+  "Beside SLEEPERS settled sleepers: the heap's bytes per sleeper after the first step, and after
+trim-physics-world by the heap and by the world's own count; then the processor ms per step idle
+(nothing awake, 2000 steps), while the 1000 balls of the pile scene fall into the basin, settle
+and sleep (600 steps), and after the main job's ball is thrown into that pile (300 steps), with
+the entries the sleeping grids built in those 300 steps. #B3NCH5"
   (sb-ext:gc :full t)
   (let* ((before (sb-kernel:dynamic-usage))
          (world (sleepers-beside-basin sleepers :kernels kernels)))
     (step-physics-world world)
     (sb-ext:gc :full t)
-    (let ((bytes (- (sb-kernel:dynamic-usage) before))
-          (idle (cpu-ms-per-step world 2000)))
-      ;; the pile scene's balls, then the main job's throw
-      (add-scene-bodies world (first (physics-scene-bodies (find-physics-scene :pile))) 1000 nil)
-      (let ((settling (cpu-ms-per-step world 600)))
-        (funcall (scene-action-function (first (physics-scene-actions (find-physics-scene :basin)))) world 0.0)
-        (let ((wave (cpu-ms-per-step world 300)))
-          (list :sleepers sleepers :idle idle :settling settling :wave wave
-                :bytes-per-sleeper (if (plusp sleepers) (round bytes sleepers) 0)
-                :awake (physics-world-awake-count world)))))))
+    (let ((bytes (- (sb-kernel:dynamic-usage) before)))
+      (trim-physics-world world)
+      (sb-ext:gc :full t)
+      (let ((trimmed (- (sb-kernel:dynamic-usage) before))
+            (counted (physics-world-bytes world))
+            (idle (cpu-ms-per-step world 2000)))
+        (flet ((per-sleeper (b) (if (plusp sleepers) (round b sleepers) 0)))
+          ;; the pile scene's balls, then the main job's throw
+          (add-scene-bodies world (first (physics-scene-bodies (find-physics-scene :pile))) 1000 nil)
+          (let ((settling (cpu-ms-per-step world 600)))
+            (funcall (scene-action-function (first (physics-scene-actions (find-physics-scene :basin)))) world 0.0)
+            (let* ((work (physics-world-sleeping-grid-work world))
+                   (wave (cpu-ms-per-step world 300)))
+              (list :sleepers sleepers :idle idle :settling settling :wave wave
+                    :wave-grid-entries (- (physics-world-sleeping-grid-work world) work)
+                    :bytes-per-sleeper (per-sleeper bytes) :trimmed-per-sleeper (per-sleeper trimmed)
+                    :counted-per-sleeper (per-sleeper counted)
+                    :awake (physics-world-awake-count world)))))))))
 
 (defun run-sleeping-scale-benchmark (&key (counts '(0 10000 50000 100000 200000)) (stream *standard-output*))
   "Print, as an Org table, what sleepers cost at each of COUNTS: idle, settling and wake-wave ms
-per step beside them, each against the same at no sleepers, and the heap's bytes per sleeper. #B3NCH5"
+per step beside them, each against the same at no sleepers, the entries the sleeping grids built
+in the wave, and the bytes per sleeper, untrimmed and trimmed. #B3NCH5"
   (format stream "~&#+caption: sleepers beside the basin, avx2, processor time per step; ~A; load ~A~%"
           (cpu-model-name) (load-average))
-  (format stream "~&| sleepers | idle ms/step | settling ms/step | / at 0 | wave ms/step | / at 0 | bytes per sleeper | awake at end |~%")
-  (format stream "~&|----------+--------------+------------------+--------+--------------+--------+-------------------+--------------|~%")
+  (format stream "~&| sleepers | idle ms/step | settling ms/step | / at 0 | wave ms/step | / at 0 | wave grid entries | bytes per sleeper | trimmed | trimmed, world's count | awake at end |~%")
+  (format stream "~&|----------+--------------+------------------+--------+--------------+--------+-------------------+-------------------+---------+------------------------+--------------|~%")
   (let ((base nil))
     (dolist (count counts)
       (let ((m (measure-sleeping-scale count)))
         (unless base (setf base m))
-        (format stream "~&| ~D | ~,4F | ~,3F | ~,2F | ~,3F | ~,2F | ~D | ~D |~%"
+        (format stream "~&| ~D | ~,4F | ~,3F | ~,2F | ~,3F | ~,2F | ~D | ~D | ~D | ~D | ~D |~%"
                 count (getf m :idle) (getf m :settling) (/ (getf m :settling) (getf base :settling))
-                (getf m :wave) (/ (getf m :wave) (getf base :wave)) (getf m :bytes-per-sleeper) (getf m :awake))
+                (getf m :wave) (/ (getf m :wave) (getf base :wave)) (getf m :wave-grid-entries)
+                (getf m :bytes-per-sleeper) (getf m :trimmed-per-sleeper) (getf m :counted-per-sleeper)
+                (getf m :awake))
         (finish-output stream)))))
 ;; What a step costs:2 ends here
 
@@ -8697,7 +8791,8 @@ and when they are too many VIEW grids the sleepers itself. #Q5V1EW"
       ;; no dead entry ([[#G4R1D5][the grids]]); otherwise the view grids the sleepers itself,
       ;; without first marking which the settled grid holds where they lie
       (cond
-        ((or (plusp (physics-world-fresh-count world)) (plusp (physics-world-settled-stale world)))
+        ((or (plusp (physics-world-fresh-count world)) (plusp (physics-world-newest-count world))
+             (plusp (physics-world-settled-stale world)))
          (grid-all))
         ((physics-world-sleeping-grid-dirty world)
          (let* ((marks (setf (query-view-marks view) (stray-room (query-view-marks view) n)))

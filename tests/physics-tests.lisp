@@ -1706,6 +1706,47 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; QKS4GZ-trim-gives-room-back ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trimming-lasts]]
+(define-claim "QKS4GZ" trimming-lasts
+    "20000 trimmed sleepers take at most 350 bytes each by the world's count, through 60 steps that cons nothing after the first."
+  (sb-ext:gc :full t)
+  (let* ((before (sb-kernel:dynamic-usage))
+         (w (luv-physics::sleepers-beside-basin 20000 :kernels :scalar)))
+    (step-physics-world w)
+    (luv-physics:trim-physics-world w)
+    (check (<= (luv-physics:physics-world-bytes w) (* 350 20000))
+           "trimmed, the world counts ~D bytes a sleeper" (round (luv-physics:physics-world-bytes w) 20000))
+    (let ((first (sb-ext:get-bytes-consed)))
+      (step-physics-world w)
+      (let ((rest (sb-ext:get-bytes-consed)))
+        (dotimes (i 59) (step-physics-world w))
+        (check (< (- rest first) 4096) "the first step after the trim consed ~D bytes" (- rest first))
+        (check (= 0 (- (sb-ext:get-bytes-consed) rest)) "59 more steps consed ~D bytes"
+               (- (sb-ext:get-bytes-consed) rest))))
+    (check (<= (luv-physics::body-columns-capacity (luv-physics::physics-world-awake w)) 16)
+           "the awake buffer has room for ~D rows" (luv-physics::body-columns-capacity (luv-physics::physics-world-awake w)))
+    (check (<= (luv-physics:physics-world-bytes w) (* 350 20000))
+           "after 60 steps the world counts ~D bytes a sleeper" (round (luv-physics:physics-world-bytes w) 20000))
+    (sb-ext:gc :full t)
+    (check (<= (luv-physics:physics-world-bytes w) (- (sb-kernel:dynamic-usage) before))
+           "the world counts ~D bytes, the heap grew by ~D" (luv-physics:physics-world-bytes w)
+           (- (sb-kernel:dynamic-usage) before))))
+;; QKS4GZ-trimming-lasts ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trimming-keeps-the-hash]]
+(define-claim "QKS4GZ" trimming-keeps-the-hash
+    "A 200-ball pile trimmed every 15 steps ends with the hash of the same pile untrimmed."
+  (flet ((run (trim)
+           (let ((w (make-scene-world :pile :count 200 :kernels :scalar)))
+             (dotimes (i 300)
+               (step-physics-world w)
+               (when (and trim (= 14 (mod i 15))) (luv-physics:trim-physics-world w)))
+             (values (luv-physics:physics-world-state-hash w) (luv-physics::physics-world-sleeping-count w)))))
+    (multiple-value-bind (trimmed sleepers) (run t)
+      (check (plusp sleepers) "no ball of the trimmed pile sleeps")
+      (check (= trimmed (run nil)) "trimming changed the hash"))))
+;; QKS4GZ-trimming-keeps-the-hash ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-woken-sleeps-again-sooner]]
 (define-claim "QKS4GZ" woken-sleeps-again-sooner
     "A sleeper woken by a passing ball, and not moved, sleeps again within 0.3 s."
@@ -2095,10 +2136,11 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grids-stay-lean]]
 (define-claim "G4R1D5" sleeping-grids-stay-lean
-    "Sleeping enters the fresh grid alone; removed sleepers leave the grids at the next step."
+    "Sleeping enters the newest grid alone; removed sleepers leave the grids at the next step."
   (let* ((w (luv-physics::sleepers-beside-basin 2000 :kernels :scalar))
          (settled (luv-physics::physics-world-sleeping-grid w))
-         (fresh (luv-physics::physics-world-fresh-grid w)))
+         (fresh (luv-physics::physics-world-fresh-grid w))
+         (newest (luv-physics::physics-world-newest-grid w)))
     (step-physics-world w)
     (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid holds ~D" (luv-physics::hash-grid-count settled))
     (let ((ball (add-physics-body w 4.0 0.5 4.0 :radius 0.25)))
@@ -2107,15 +2149,17 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (step-physics-world w)
       (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid was built again: ~D entries"
              (luv-physics::hash-grid-count settled))
-      (check (= 1 (luv-physics::hash-grid-count fresh)) "the fresh grid holds ~D" (luv-physics::hash-grid-count fresh)))
+      (check (= 1 (luv-physics::hash-grid-count newest)) "the newest grid holds ~D" (luv-physics::hash-grid-count newest))
+      (check (= 0 (luv-physics::hash-grid-count fresh)) "the fresh grid holds ~D" (luv-physics::hash-grid-count fresh)))
     (let ((s (luv-physics::physics-world-sleeping w)))
       (dolist (h (loop for i below 1000 collect (aref (luv-physics::body-columns-handle s) i)))
         (luv-physics::remove-physics-body w h))
       (step-physics-world w)
       (check (= 1001 (luv-physics::hash-grid-count settled)) "after the removals the settled grid holds ~D"
              (luv-physics::hash-grid-count settled))
-      (check (= 0 (luv-physics::hash-grid-count fresh)) "after the removals the fresh grid holds ~D"
-             (luv-physics::hash-grid-count fresh))
+      (check (= 0 (luv-physics::hash-grid-count fresh) (luv-physics::hash-grid-count newest))
+             "after the removals the fresh grid holds ~D, the newest ~D"
+             (luv-physics::hash-grid-count fresh) (luv-physics::hash-grid-count newest))
       (check (loop for row below (luv-physics::body-columns-length s)
                    always (let ((h (aref (luv-physics::body-columns-handle s) row)) (seen 0))
                             (luv-physics::do-sleeping-neighbours (e w (aref (luv-physics::body-columns-x s) row)
@@ -2164,13 +2208,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grid-bounds-at-the-limit]]
 (define-claim "G4R1D5" sleeping-grid-bounds-at-the-limit
-    "The settled grid is built again at 257 fresh sleepers or 257 dead entries, not at 256; the fresh list keeps only sleepers."
+    "The settled grid is built again at 257 fresh sleepers or 257 dead entries, not at 256; the newest list keeps only sleepers."
   (let* ((w (make-physics-world :gravity '(0 0 0)))
          (handles (loop for i below 300
                         collect (add-physics-body w (* 2.0 (mod i 10)) (* 2.0 (mod (floor i 10) 10)) (* 2.0 (floor i 100))
                                                   :radius 0.25)))
          (settled (luv-physics::physics-world-sleeping-grid w))
-         (fresh (luv-physics::physics-world-fresh-grid w)))
+         (fresh (luv-physics::physics-world-fresh-grid w))
+         (newest (luv-physics::physics-world-newest-grid w)))
     (flet ((put-to-sleep (h) (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h))))
            (met-once ()
              ;; a walk of the sleeping grids around each sleeper meets its handle once
@@ -2190,19 +2235,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (dolist (h (subseq handles 0 5)) (luv-physics::wake-handle w h))
       (put-to-sleep (first handles))
       (luv-physics::ensure-sleeping-grid w)
-      (check (= 6 (luv-physics::physics-world-fresh-count w) (luv-physics::hash-grid-count fresh))
-             "the fresh list holds ~D" (luv-physics::physics-world-fresh-count w))
+      (check (= 6 (luv-physics::physics-world-newest-count w) (luv-physics::hash-grid-count newest))
+             "the newest list holds ~D" (luv-physics::physics-world-newest-count w))
       (mapc #'put-to-sleep (subseq handles 10 260))
       (luv-physics::ensure-sleeping-grid w)
-      (check (and (= 0 (luv-physics::hash-grid-count settled)) (= 256 (luv-physics::hash-grid-count fresh)))
-             "256 fresh sleepers: the settled grid holds ~D, the fresh ~D"
-             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh))
+      (check (and (= 0 (luv-physics::hash-grid-count settled))
+                  (= 256 (+ (luv-physics::hash-grid-count fresh) (luv-physics::hash-grid-count newest))))
+             "256 fresh sleepers: the settled grid holds ~D, the fresh ~D, the newest ~D"
+             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh)
+             (luv-physics::hash-grid-count newest))
       (check (met-once) "a fresh sleeper is met other than once around itself")
       (put-to-sleep (nth 260 handles))
       (luv-physics::ensure-sleeping-grid w)
-      (check (and (= 257 (luv-physics::hash-grid-count settled)) (= 0 (luv-physics::hash-grid-count fresh)))
-             "257 fresh sleepers: the settled grid holds ~D, the fresh ~D"
-             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh))
+      (check (and (= 257 (luv-physics::hash-grid-count settled)) (= 0 (luv-physics::hash-grid-count fresh))
+                  (= 0 (luv-physics::hash-grid-count newest)))
+             "257 fresh sleepers: the settled grid holds ~D, the fresh ~D, the newest ~D"
+             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh)
+             (luv-physics::hash-grid-count newest))
       (dolist (h (subseq handles 5 261)) (luv-physics::wake-handle w h))
       (luv-physics::ensure-sleeping-grid w)
       (check (= 256 (luv-physics::physics-world-settled-stale w)) "~D dead entries" (luv-physics::physics-world-settled-stale w))
@@ -2231,6 +2280,29 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (luv-physics::ensure-sleeping-grid w)
         (check (= 2926 (luv-physics::hash-grid-count settled)) "326 fresh beside 2600: ~D settled" (luv-physics::hash-grid-count settled)))))
 ;; G4R1D5-sleeping-grid-bounds-at-the-limit ends here
+
+;; [[file:../physics.org::#G4R1D5][G4R1D5-falling-asleep-builds-the-newest]]
+(define-claim "G4R1D5" falling-asleep-builds-the-newest
+    "300 balls falling asleep one by one beside 2600 or 26000 settled sleepers make the grids build 6274 entries."
+  (flet ((work-beside (settled-count)
+           (let* ((w (make-physics-world :gravity '(0 0 0)))
+                  (side (ceiling (sqrt (+ settled-count 300))))
+                  (handles (loop for i below (+ settled-count 300)
+                                 collect (add-physics-body w (* 1.0 (mod i side)) 0.5 (* 1.0 (floor i side)) :radius 0.25))))
+             (flet ((put-to-sleep (h) (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h)))))
+               (mapc #'put-to-sleep (subseq handles 0 settled-count))
+               (luv-physics::ensure-sleeping-grid w)
+               (check (= settled-count (luv-physics::hash-grid-count (luv-physics::physics-world-sleeping-grid w))))
+               (let ((before (luv-physics::physics-world-sleeping-grid-work w)))
+                 (dolist (h (subseq handles settled-count))
+                   (put-to-sleep h)
+                   (luv-physics::ensure-sleeping-grid w))
+                 (check (= settled-count (luv-physics::hash-grid-count (luv-physics::physics-world-sleeping-grid w)))
+                        "the settled grid was built again beside ~D" settled-count)
+                 (- (luv-physics::physics-world-sleeping-grid-work w) before))))))
+    (let ((near (work-beside 2600)) (far (work-beside 26000)))
+      (check (= 6274 near far) "the grids built ~D entries beside 2600 settled, ~D beside 26000" near far))))
+;; G4R1D5-falling-asleep-builds-the-newest ends here
 
 ;; [[file:../physics.org::#W4K3PH][W4K3PH-box-wakes-within-its-reach]]
 (define-claim "W4K3PH" box-wakes-within-its-reach
