@@ -2136,11 +2136,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grids-stay-lean]]
 (define-claim "G4R1D5" sleeping-grids-stay-lean
-    "Sleeping enters the newest grid alone; removed sleepers leave the grids at the next step."
+    "Sleeping enters the fresh grid alone; removed sleepers leave the grids at the next step."
   (let* ((w (luv-physics::sleepers-beside-basin 2000 :kernels :scalar))
          (settled (luv-physics::physics-world-sleeping-grid w))
-         (fresh (luv-physics::physics-world-fresh-grid w))
-         (newest (luv-physics::physics-world-newest-grid w)))
+         (fresh (luv-physics::physics-world-fresh-grid w)))
     (step-physics-world w)
     (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid holds ~D" (luv-physics::hash-grid-count settled))
     (let ((ball (add-physics-body w 4.0 0.5 4.0 :radius 0.25)))
@@ -2149,17 +2148,15 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (step-physics-world w)
       (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid was built again: ~D entries"
              (luv-physics::hash-grid-count settled))
-      (check (= 1 (luv-physics::hash-grid-count newest)) "the newest grid holds ~D" (luv-physics::hash-grid-count newest))
-      (check (= 0 (luv-physics::hash-grid-count fresh)) "the fresh grid holds ~D" (luv-physics::hash-grid-count fresh)))
+      (check (= 1 (luv-physics::hash-grid-count fresh)) "the fresh grid holds ~D" (luv-physics::hash-grid-count fresh)))
     (let ((s (luv-physics::physics-world-sleeping w)))
       (dolist (h (loop for i below 1000 collect (aref (luv-physics::body-columns-handle s) i)))
         (luv-physics::remove-physics-body w h))
       (step-physics-world w)
       (check (= 1001 (luv-physics::hash-grid-count settled)) "after the removals the settled grid holds ~D"
              (luv-physics::hash-grid-count settled))
-      (check (= 0 (luv-physics::hash-grid-count fresh) (luv-physics::hash-grid-count newest))
-             "after the removals the fresh grid holds ~D, the newest ~D"
-             (luv-physics::hash-grid-count fresh) (luv-physics::hash-grid-count newest))
+      (check (= 0 (luv-physics::hash-grid-count fresh)) "after the removals the fresh grid holds ~D"
+             (luv-physics::hash-grid-count fresh))
       (check (loop for row below (luv-physics::body-columns-length s)
                    always (let ((h (aref (luv-physics::body-columns-handle s) row)) (seen 0))
                             (luv-physics::do-sleeping-neighbours (e w (aref (luv-physics::body-columns-x s) row)
@@ -2208,14 +2205,13 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grid-bounds-at-the-limit]]
 (define-claim "G4R1D5" sleeping-grid-bounds-at-the-limit
-    "The settled grid is built again at 257 fresh sleepers or 257 dead entries, not at 256; the newest list keeps only sleepers."
+    "The settled grid is built again at 257 fresh sleepers or 257 dead entries, not at 256; the fresh list keeps only sleepers."
   (let* ((w (make-physics-world :gravity '(0 0 0)))
          (handles (loop for i below 300
                         collect (add-physics-body w (* 2.0 (mod i 10)) (* 2.0 (mod (floor i 10) 10)) (* 2.0 (floor i 100))
                                                   :radius 0.25)))
          (settled (luv-physics::physics-world-sleeping-grid w))
-         (fresh (luv-physics::physics-world-fresh-grid w))
-         (newest (luv-physics::physics-world-newest-grid w)))
+         (fresh (luv-physics::physics-world-fresh-grid w)))
     (flet ((put-to-sleep (h) (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h))))
            (met-once ()
              ;; a walk of the sleeping grids around each sleeper meets its handle once
@@ -2235,23 +2231,19 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (dolist (h (subseq handles 0 5)) (luv-physics::wake-handle w h))
       (put-to-sleep (first handles))
       (luv-physics::ensure-sleeping-grid w)
-      (check (= 6 (luv-physics::physics-world-newest-count w) (luv-physics::hash-grid-count newest))
-             "the newest list holds ~D" (luv-physics::physics-world-newest-count w))
+      (check (= 6 (luv-physics::physics-world-fresh-count w) (luv-physics::hash-grid-count fresh))
+             "the fresh list holds ~D" (luv-physics::physics-world-fresh-count w))
       (mapc #'put-to-sleep (subseq handles 10 260))
       (luv-physics::ensure-sleeping-grid w)
-      (check (and (= 0 (luv-physics::hash-grid-count settled))
-                  (= 256 (+ (luv-physics::hash-grid-count fresh) (luv-physics::hash-grid-count newest))))
-             "256 fresh sleepers: the settled grid holds ~D, the fresh ~D, the newest ~D"
-             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh)
-             (luv-physics::hash-grid-count newest))
+      (check (and (= 0 (luv-physics::hash-grid-count settled)) (= 256 (luv-physics::hash-grid-count fresh)))
+             "256 fresh sleepers: the settled grid holds ~D, the fresh ~D"
+             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh))
       (check (met-once) "a fresh sleeper is met other than once around itself")
       (put-to-sleep (nth 260 handles))
       (luv-physics::ensure-sleeping-grid w)
-      (check (and (= 257 (luv-physics::hash-grid-count settled)) (= 0 (luv-physics::hash-grid-count fresh))
-                  (= 0 (luv-physics::hash-grid-count newest)))
-             "257 fresh sleepers: the settled grid holds ~D, the fresh ~D, the newest ~D"
-             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh)
-             (luv-physics::hash-grid-count newest))
+      (check (and (= 257 (luv-physics::hash-grid-count settled)) (= 0 (luv-physics::hash-grid-count fresh)))
+             "257 fresh sleepers: the settled grid holds ~D, the fresh ~D"
+             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh))
       (dolist (h (subseq handles 5 261)) (luv-physics::wake-handle w h))
       (luv-physics::ensure-sleeping-grid w)
       (check (= 256 (luv-physics::physics-world-settled-stale w)) "~D dead entries" (luv-physics::physics-world-settled-stale w))
@@ -2280,29 +2272,6 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (luv-physics::ensure-sleeping-grid w)
         (check (= 2926 (luv-physics::hash-grid-count settled)) "326 fresh beside 2600: ~D settled" (luv-physics::hash-grid-count settled)))))
 ;; G4R1D5-sleeping-grid-bounds-at-the-limit ends here
-
-;; [[file:../physics.org::#G4R1D5][G4R1D5-falling-asleep-builds-the-newest]]
-(define-claim "G4R1D5" falling-asleep-builds-the-newest
-    "300 balls falling asleep one by one beside 2600 or 26000 settled sleepers make the grids build 6274 entries."
-  (flet ((work-beside (settled-count)
-           (let* ((w (make-physics-world :gravity '(0 0 0)))
-                  (side (ceiling (sqrt (+ settled-count 300))))
-                  (handles (loop for i below (+ settled-count 300)
-                                 collect (add-physics-body w (* 1.0 (mod i side)) 0.5 (* 1.0 (floor i side)) :radius 0.25))))
-             (flet ((put-to-sleep (h) (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h)))))
-               (mapc #'put-to-sleep (subseq handles 0 settled-count))
-               (luv-physics::ensure-sleeping-grid w)
-               (check (= settled-count (luv-physics::hash-grid-count (luv-physics::physics-world-sleeping-grid w))))
-               (let ((before (luv-physics::physics-world-sleeping-grid-work w)))
-                 (dolist (h (subseq handles settled-count))
-                   (put-to-sleep h)
-                   (luv-physics::ensure-sleeping-grid w))
-                 (check (= settled-count (luv-physics::hash-grid-count (luv-physics::physics-world-sleeping-grid w)))
-                        "the settled grid was built again beside ~D" settled-count)
-                 (- (luv-physics::physics-world-sleeping-grid-work w) before))))))
-    (let ((near (work-beside 2600)) (far (work-beside 26000)))
-      (check (= 6274 near far) "the grids built ~D entries beside 2600 settled, ~D beside 26000" near far))))
-;; G4R1D5-falling-asleep-builds-the-newest ends here
 
 ;; [[file:../physics.org::#W4K3PH][W4K3PH-box-wakes-within-its-reach]]
 (define-claim "W4K3PH" box-wakes-within-its-reach
@@ -2410,8 +2379,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (funcall before i)
         (let ((awake (physics-world-awake-count world)))
           (step-physics-world world)
-          (let ((fresh (+ (luv-physics::physics-world-fresh-count world)
-                          (luv-physics::physics-world-newest-count world))))
+          (let ((fresh (luv-physics::physics-world-fresh-count world)))
             (when (> fresh (+ (max 256 (floor (luv-physics::physics-world-settled-count world) 8)) awake))
               (incf over))
             (when (< fresh last) (incf falls))
