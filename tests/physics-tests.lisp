@@ -4659,9 +4659,14 @@ in the order of *physics-scene-features*. #K5DF9S"
     "Each kind gives its radius and name; a gobbet expires at 4 s; an unknown kind is refused."
   (let ((w (make-floor-world)))
     (loop for (kind . args) in luv-physics::*physics-body-kinds* for i from 0
-          do (let ((h (luv-physics::add-physics-body-of-kind w kind (+ 1.5 (* 2 i)) 3.0 1.5)))
+          do (let ((h (luv-physics::add-physics-body-of-kind w kind (+ 1.5 (* 2 i)) 3.0 1.25 :vx 0.5 :vy 0.25 :vz -0.75)))
                (check (= (luv-physics::physics-body-radius w h) (float (getf args :radius) 1.0))
                       "~S has radius ~A" kind (luv-physics::physics-body-radius w h))
+               (check (equal (list (multiple-value-list (luv-physics::physics-body-position w h))
+                                   (multiple-value-list (luv-physics::physics-body-velocity w h)))
+                             (list (list (float (+ 1.5 (* 2 i)) 1.0) 3.0 1.25) (list 0.5 0.25 -0.75)))
+                      "~S starts at ~S moving at ~S" kind (multiple-value-list (luv-physics::physics-body-position w h))
+                      (multiple-value-list (luv-physics::physics-body-velocity w h)))
                (check (eq kind (luv-physics::physics-body-kind-name w h)))))
     (check (null (luv-physics::physics-body-kind-name w (luv-physics::add-physics-body w 9.5 3.0 1.5))))
     (let ((gobbet (luv-physics::add-physics-body-of-kind w :lava-gobbet 11.5 3.0 1.5))
