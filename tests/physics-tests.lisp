@@ -4921,6 +4921,43 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (< 0 (getf m :median)))))
 ;; B3NCH5-measure-basin-reports-the-world ends here
 
+;; [[file:../physics.org::#B3NCH5][B3NCH5-benchmark-tables-line-up]]
+(define-claim "B3NCH5" benchmark-tables-line-up
+    "The basin benchmark over 20 balls: a row per family, and every table's lines with their bars under the header's."
+  (let* ((text (with-output-to-string (s) (luv-physics::run-basin-benchmark :counts '(20) :stream s)))
+         (lines (uiop:split-string text :separator (string #\Newline)))
+         (tables '()) (current nil)
+         (families (available-kernel-families)))
+    ;; the tables: runs of lines starting with a bar
+    (dolist (line lines)
+      (if (and (plusp (length line)) (char= #\| (char line 0)))
+          (push line current)
+          (when current (push (reverse current) tables) (setf current nil))))
+    (when current (push (reverse current) tables))
+    (setf tables (reverse tables))
+    (flet ((bars (line)
+             ;; a rule's columns meet at + or |; a header's or row's at | alone (a name may hold a +)
+             (let ((marks (if (and (> (length line) 1) (char= #\- (char line 1))) '(#\| #\+) '(#\|))))
+               (loop for i from 0 below (length line) when (member (char line i) marks) collect i)))
+           (cells (line) (mapcar (lambda (c) (string-trim " " c)) (rest (butlast (uiop:split-string line :separator "|"))))))
+      (check (= 4 (length tables)) "~D tables" (length tables))
+      (check (every (lambda (table) (every (lambda (line) (equal (bars line) (bars (first table)))) (rest table))) tables)
+             "a line's bars are not under its header's: ~S"
+             (loop for table in tables
+                   append (remove-if (lambda (line) (equal (bars line) (bars (first table)))) (rest table))))
+      (when (= 4 (length tables))
+        (destructuring-bind (main times bytes targets) tables
+          (declare (ignore targets))
+          (check (equal (mapcar (lambda (row) (subseq (cells row) 0 2)) (cddr main))
+                        (mapcar (lambda (f) (list "20" (string-downcase f))) families))
+                 "the main table's rows ~S" (cddr main))
+          (check (string= "1.00" (fifth (cells (third main)))) "the scalar row is at ~A of itself" (fifth (cells (third main))))
+          (dolist (table (list times bytes))
+            (check (equal (cddr (cells (first table))) (mapcar #'first luv-physics::+bench-phase-groups+))
+                   "phase columns ~S" (cells (first table)))
+            (check (= (length families) (length (cddr table))) "~D phase rows" (length (cddr table)))))))))
+;; B3NCH5-benchmark-tables-line-up ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-probe-reaches-the-shared-cache]]
 (define-claim "B3NCH5" probe-reaches-the-shared-cache
     "A chained read over 8 MB takes more than twice as long as over 32 KB."
