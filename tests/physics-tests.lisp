@@ -5317,6 +5317,44 @@ in the order of *physics-scene-features*. #K5DF9S"
         (check (< (* 6 err) 1d-6) "~D Hz x ~D: velocity error ~,3E m/s" hz n (* 6 err))))))
 ;; W9PREC-head-on-is-exact ends here
 
+;; [[file:../physics.org::#W9PREC][W9PREC-tables-pick-and-print]]
+(define-claim "W9PREC" tables-pick-and-print
+    "Pareto front, the cheapest within a tolerance, the sweep table's rows and the best-setting line, over ten made-up points."
+  (let* ((settings '((30 1 1d0 0.5d0) (60 1 2d0 0.05d0) (60 2 3d0 0.2d0) (120 1 4d0 0.005d0) (240 1 8d0 0.001d0)))
+         (entry (find "FREE-FALL" luv-physics::*accuracy-scenes* :key (lambda (e) (symbol-name (first e))) :test #'string=))
+         (points (loop for (hz n ms error) in settings
+                       append (loop for family in '(:scalar :sse) for scale in '(1 1.5d0)
+                                    collect (list :scene (first entry) :family family :hz hz :substeps n :ms (* scale ms)
+                                                  :error error :note "n" :repeated t
+                                                  :hash (if (and (eq family :sse) (= n 2)) 2 1))))))
+    (flet ((labels-of (ps) (mapcar #'luv-physics::point-label ps)))
+      (check (equal (labels-of (luv-physics::pareto-front points))
+                    '("scalar 30 Hz x 1" "scalar 60 Hz x 1" "scalar 120 Hz x 1" "scalar 240 Hz x 1"))
+             "the front is ~S" (labels-of (luv-physics::pareto-front points)))
+      (check (equal (labels-of (list (luv-physics::good-enough points 0.01d0) (luv-physics::good-enough points 1d-4)))
+                    '("scalar 120 Hz x 1" "scalar 240 Hz x 1"))
+             "good enough: ~S" (labels-of (list (luv-physics::good-enough points 0.01d0) (luv-physics::good-enough points 1d-4)))))
+    (let ((table (uiop:split-string (string-right-trim '(#\Newline)
+                                                       (with-output-to-string (s) (luv-physics::print-sweep-table points s)))
+                                    :separator '(#\Newline))))
+      (check (equal table
+                    '("| scene | Hz | substeps | error | note | ms/s scalar | ms/s sse | same hash |"
+                      "|-------+----+----------+-------+------+------+------+-----------|"
+                      "| free-fall | 30 | 1 | 5.000e-1 | n | 1.00 | 1.50 | yes |"
+                      "| free-fall | 60 | 1 | 5.000e-2 | n | 2.00 | 3.00 | yes |"
+                      "| free-fall | 60 | 2 | 2.000e-1 | n | 3.00 | 4.50 | no |"
+                      "| free-fall | 120 | 1 | 5.000e-3 | n | 4.00 | 6.00 | yes |"
+                      "| free-fall | 240 | 1 | 1.000e-3 | n | 8.00 | 12.00 | yes |"))
+             "the table is ~S" table))
+    (check (consp entry) "no free-fall scene")
+    (when entry
+      (check (string= (with-output-to-string (s) (luv-physics::print-sweep-best points s))
+                      (format nil "- free-fall (~A): the cheapest within ~A is scalar 120 Hz x 1, error 5.00e-3 at 4.00 ms/s.~%  ~
+                                   Pareto front: scalar 30 Hz x 1, scalar 60 Hz x 1, scalar 120 Hz x 1, scalar 240 Hz x 1.~%"
+                              (third entry) (fourth entry)))
+             "the best line is ~S" (with-output-to-string (s) (luv-physics::print-sweep-best points s))))))
+;; W9PREC-tables-pick-and-print ends here
+
 ;; [[file:../physics.org::#W9PREC][W9PREC-diagram-geometry]]
 (define-claim "W9PREC" diagram-geometry
     "Three points of a work-precision diagram at the frame's corners and middle; its grid, curves, titles and legend where the text says."
