@@ -6864,7 +6864,7 @@ within reach of something. #S9WEEP"
 
 ;; [[file:../physics.org::#QB3NCH][QB3NCH-benchmark-worlds-awake-and-asleep]]
 (define-claim "QB3NCH" benchmark-worlds-awake-and-asleep
-    "settled-basin-world: 20 balls after 300 steps, all awake, or all asleep where they lay."
+    "settled-basin-world: 20 balls after 300 steps, all awake, or all asleep where they lay; 3000 all put to sleep."
   (let ((awake (luv-physics::settled-basin-world 20 nil)))
     (check (equal (list 300 20 0) (list (luv-physics::physics-world-step-count awake) (physics-world-awake-count awake)
                                         (physics-world-sleeping-count awake)))))
@@ -6881,7 +6881,10 @@ within reach of something. #S9WEEP"
                                                     (aref (luv-physics::body-columns-z buf) row))))
                    (lambda (a b) (loop for p in a for q in b
                                        unless (= p q) return (< p q))))))
-      (check (equal (places w) (places asleep)) "the sleepers are not where the 300th step left them"))))
+      (check (equal (places w) (places asleep)) "the sleepers are not where the 300th step left them")))
+  (let ((big (luv-physics::settled-basin-world 3000 t)))
+    (check (equal (list 0 3000) (list (physics-world-awake-count big) (physics-world-sleeping-count big)))
+           "of 3000, ~D awake and ~D asleep" (physics-world-awake-count big) (physics-world-sleeping-count big))))
 ;; QB3NCH-benchmark-worlds-awake-and-asleep ends here
 
 ;; [[file:../physics.org::#QB3NCH][QB3NCH-benchmark-queries-as-described]]
