@@ -3805,6 +3805,26 @@ function of a column name that reads row K's float in that column. #T3STK1"
               do (check (equal (row r) (nth r given)) "row ~D became ~S" r (row r)))))))
 ;; IDVK7G-crowd-held-closed-form ends here
 
+;; [[file:../physics.org::#IDVK7G][IDVK7G-crowd-marks-both-sides]]
+(define-claim "IDVK7G" crowd-marks-both-sides
+    "mark-held-rows: nothing without a crowded row; with one, both balls of the deep pair raised to the cap."
+  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
+         (a (add-physics-body w 1.0 1.0 1.0 :radius 0.25))
+         (b (add-physics-body w 1.4 1.0 1.0 :radius 0.25))
+         (c (add-physics-body w 5.0 1.0 1.0 :radius 0.25))
+         (cap luv-physics::+overlaps-per-body+))
+    (step-physics-world w)
+    (let ((overlaps (luv-physics::pair-list-overlaps (luv-physics::physics-world-pair-list w))))
+      (flet ((count-of (h) (aref overlaps (nth-value 1 (luv-physics::resolve-handle w h)))))
+        (fill overlaps 0)
+        (check (null (luv-physics::mark-held-rows w)) "held without a crowded row")
+        (check (equal '(0 0 0) (mapcar #'count-of (list a b c))))
+        (setf (aref overlaps (nth-value 1 (luv-physics::resolve-handle w c))) cap)
+        (check (eq t (luv-physics::mark-held-rows w)))
+        (check (equal (list cap cap cap) (mapcar #'count-of (list a b c)))
+               "counts ~S, the cap ~D" (mapcar #'count-of (list a b c)) cap)))))
+;; IDVK7G-crowd-marks-both-sides ends here
+
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-step-statistics]]
 (define-claim "IDVK7G" step-statistics
     "Last-step contact count, colour count and real seconds are consistent with the step's buffers."
@@ -4281,6 +4301,31 @@ function of a column name that reads row K's float in that column. #T3STK1"
                   (<= (abs (- growth (* 1048576 (- (fourth (car (last rows))) (fourth (second rows)))))) (* 0.01 1048576)))
              "returned ~A for ~S" growth (mapcar #'fourth rows)))))
 ;; M9W5P7-soak-prints-its-table ends here
+
+;; [[file:../physics.org::#M9W5P7][M9W5P7-fuzz-state-as-described]]
+(define-claim "M9W5P7" fuzz-state-as-described
+    "make-fuzz-state: resident air [-16,32)^3 with a floor at y = -1, a fountain at 8 -1 8, the player at 2 0 9."
+  (let* ((state (luv-physics::make-fuzz-state :scalar))
+         (terrain (luv-physics::fuzz-state-terrain state)) (wrong '()))
+    (loop for x from -20 below 36
+          do (loop for y from -20 below 36
+                   do (loop for z from -20 below 36
+                            do (let ((want (or (not (and (<= -16 x 31) (<= -16 y 31) (<= -16 z 31))) (= y -1))))
+                                 (unless (eq want (luv-physics::terrain-solid-p terrain x y z))
+                                   (push (list x y z) wrong))))))
+    (check (null wrong) "~D cells differ, such as ~S" (length wrong) (first wrong))
+    (let ((spring (luv-physics::fuzz-state-spring state)) (player (luv-physics::fuzz-state-player state))
+          (world (luv-physics::fuzz-state-world state)))
+      (check (equal (list (luv-physics::physics-spring-x spring) (luv-physics::physics-spring-y spring)
+                          (luv-physics::physics-spring-z spring)
+                          (first (nth (1- (luv-physics::physics-spring-number spring)) luv-physics::*physics-body-kinds*))
+                          (luv-physics::physics-spring-per-step spring) (luv-physics::physics-spring-every spring))
+                    '(8 -1 8 :water-drop 2 1))
+             "the spring is ~S" spring)
+      (check (equal (list (physics-player-x player) (physics-player-y player) (physics-player-z player)) '(2d0 0d0 9d0)))
+      (check (eq terrain (luv-physics::physics-world-terrain world)))
+      (check (equal "scalar" (string-downcase (luv-physics::kernel-family-name (luv-physics::physics-world-kernels world))))))))
+;; M9W5P7-fuzz-state-as-described ends here
 
 ;; [[file:../physics.org::#M9W5P7][M9W5P7-operations-span-their-ranges]]
 (define-claim "M9W5P7" operations-span-their-ranges
