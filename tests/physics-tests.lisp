@@ -6003,6 +6003,31 @@ counted. #RH7T05"
             (check (< (abs (- (- cy r) 22)) 0.11) "the disc's top is at ~,2F" (- cy r))))))))
 ;; UFK5EA-disc-edges-bound-the-drawing ends here
 
+;; [[file:../physics.org::#UFK5EA][UFK5EA-discs-lit-by-depth]]
+(define-claim "UFK5EA" discs-lit-by-depth
+    "The deeper of two discs is drawn at 0.55 of its colour, the nearer at full colour."
+  (multiple-value-bind (across up toward) (luv-physics::view-basis 35 40)
+    (declare (ignore across up))
+    (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
+           (recording (progn (luv-physics::add-physics-body w 0.0 0.0 0.0 :radius 0.25)
+                             (apply #'luv-physics::add-physics-body w (append (mapcar (lambda (c) (float c 1.0)) toward)
+                                                                              (list :radius 0.25)))
+                             (luv-physics::start-physics-recording w)))
+           (path (repository-file "report/picture-light-check.svg")))
+      (step-physics-world w)
+      (luv-physics::stop-physics-recording w)
+      (ensure-directories-exist path)
+      (luv-physics::write-scene-picture recording path '(0))
+      (let* ((text (luv-physics::read-file-text path))
+             (colour (third (find :disc (luv-physics::scene-picture-items recording 0 '() '(1 0 0) '(0 1 0) toward)
+                                  :key #'second)))
+             (fills (loop for at = (search "<circle" text) then (search "<circle" text :start2 (1+ at)) while at
+                          collect (let ((s (+ (search "fill=\"" text :start2 at) 6)))
+                                    (subseq text s (position #\" text :start s))))))
+        (check (equal fills (list (luv-physics::shade colour 0.55) (luv-physics::shade colour 1.0)))
+               "the discs are filled ~S, the colour is ~6,'0X" fills colour)))))
+;; UFK5EA-discs-lit-by-depth ends here
+
 ;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-uses-world-grids]]
 (define-claim "Q5V1EW" view-grids-awake-rows-of-now
     "The view's awake grid holds every awake row once, with its centre, radius and handle of now; none after the pile sleeps; a dirty sleeping grid still finds every sleeper once."
