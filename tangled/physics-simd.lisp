@@ -115,10 +115,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 (wc (x) `(,',broadcast ,x))
                 ;; a side column ([[#SSMPYW]]) is read from the side block of the block at K
                 (@w (column) (if (constraint-side-column-p column)
-                                 `(,',load side (side-base k) ,(constraint-offset column))
+                                 `(,',load (side-floats) (side-base k) ,(constraint-offset column))
                                  `(,',load data base ,(constraint-offset column))))
                 (@w! (column value) (if (constraint-side-column-p column)
-                                        `(,',store ,value side (side-base k) ,(constraint-offset column))
+                                        `(,',store ,value (side-floats) (side-base k) ,(constraint-offset column))
                                         `(,',store ,value data base ,(constraint-offset column))))
                 ;; true when some lane of the block has no radius on side b, the only lanes
                 ;; whose spin columns may be other than zero ([[#SSMPYW]])
@@ -443,7 +443,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                    ;; spin friction, skipped as the rolling part is by a block none of whose
                    ;; lanes has a spin limit
                    (if-feature :friction
-                     (let* ((sl (if (some-one-sided) (@w spin-limit) (wc 0.0)))
+                     (when (some-one-sided)
+                     (let* ((sl (@w spin-limit))
                             (spinning (w> sl (wc 0.0))))
                        (unless (zerop (,movemask (wif spinning (wc -1.0) (wc 0.0))))
                          (let* ((slimit (w* sl new)) (sp (@w spin-impulse))
@@ -459,7 +460,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            (if-feature :body-contacts
                              (progn (st! 9 (wif spinning (w+ wbx (w* ibm (w* ds x))) wbx))
                                     (st! 10 (wif spinning (w+ wby (w* ibm (w* ds y))) wby))
-                                    (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz)))))))))))
+                                    (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz))))))))))))
                (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
                (if-feature :body-contacts
                  (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0))))))))))

@@ -4048,26 +4048,32 @@ first SIDE-BLOCK/8 of +constraint-side-columns+. #SSMPYW"
   (+ +constraint-origin+ (* (ash k -3) block) (logand k 7)))
 
 (defmacro with-constraint-block ((&rest fixnum-columns) buffer &body body)
-  "Run BODY with DATA bound to BUFFER's main blocks and SIDE to its side blocks, STRIDE and
-SIDE-STRIDE to the floats of each, each of FIXNUM-COLUMNS (contact, body-a, body-b) bound to its
-column, (constraint-base K) naming the base of constraint K in BUFFER's main blocks and
-(side-base K) in its side blocks, and (@ COLUMN) naming COLUMN of the constraint whose base is
-the variable BASE, or for a side column, of constraint K. #SSMPYW"
+  "Run BODY with DATA bound to BUFFER's main blocks, STRIDE to the floats of one, each of
+FIXNUM-COLUMNS (contact, body-a, body-b) bound to its column, (constraint-base K) naming the
+base of constraint K in BUFFER's main blocks, (side-floats) BUFFER's side blocks and (side-base
+K) the base of constraint K in them, and (@ COLUMN) naming COLUMN of the constraint whose base
+is the variable BASE, or for a side column, of constraint K. The side blocks are reached through
+BUFFER where they are read, not bound for the whole body: a kernel's loop keeps one more value
+alive, not two. #SSMPYW"
   (let ((b (gensym "BUFFER")))
     `(let* ((,b ,buffer)
             (data (constraint-columns-data ,b))
             (stride (constraint-columns-block ,b))
-            (side (constraint-columns-side ,b))
-            (side-stride (constraint-columns-side-block ,b))
             ,@(loop for c in fixnum-columns
                     collect `(,c (,(intern (format nil "CONSTRAINT-COLUMNS-~A" c)) ,b))))
-       (declare (type f32-column data side) (type fixnum-column ,@fixnum-columns) (type index stride side-stride)
-                (ignorable data stride side side-stride ,@fixnum-columns))
+       (declare (type f32-column data) (type fixnum-column ,@fixnum-columns) (type index stride)
+                (ignorable ,b data stride ,@fixnum-columns))
        (macrolet ((@ (column) (if (constraint-side-column-p column)
-                                  `(block-ref side (side-base k) ,(constraint-offset column))
+                                  `(block-ref (side-floats) (side-base k) ,(constraint-offset column))
                                   `(block-ref data base ,(constraint-offset column))))
                   (constraint-base (k) `(+ +constraint-origin+ (* (ash ,k -3) stride) (logand ,k 7)))
-                  (side-base (k) `(+ +constraint-origin+ (* (ash ,k -3) side-stride) (logand ,k 7))))
+                  (side-floats () '(constraint-columns-side ,b))
+                  ;; a side block holds at most 24 floats: bounded so, the base needs no
+                  ;; overflow test and no generic arithmetic
+                  (side-base (k) `(+ +constraint-origin+
+                                     (* (ash (the index ,k) -3) (the (integer 0 ,+constraint-side-block+)
+                                                                     (constraint-columns-side-block ,',b)))
+                                     (logand ,k 7))))
          ,@body))))
 
 (defun constraint-place (buffer k column)
@@ -4551,10 +4557,11 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                 ;; padding rows: no contact, the dummy on both sides, every float zero
                 (dotimes (color +physics-max-colors+)
                   (loop for k of-type index from (aref cursor color) below (aref color-starts (1+ color))
-                        do (let ((base (constraint-base k)) (side-base (side-base k)))
+                        do (let ((base (constraint-base k)) (side-base (side-base k)) (side (side-floats)))
                              (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
                              (dotimes (o (floor stride 8)) (setf (aref data (+ base (* 8 o))) 0.0))
-                             (dotimes (o (floor side-stride 8)) (setf (aref side (+ side-base (* 8 o))) 0.0)))))))))))
+                             (dotimes (o (floor (constraint-columns-side-block cbuf) 8))
+                               (setf (aref side (+ side-base (* 8 o))) 0.0)))))))))))
       (setf (aref (world-statistics world) 1) (coerce (the fixnum color-count) 'double-float))
       color-count)))
 ;; Preparing the constraints:1 ends here
