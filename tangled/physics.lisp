@@ -7295,8 +7295,11 @@ median ms and the bytes consed per step of each over its steps FROM..TO. #FBNCH9
           (let ((n (- to from)))
             (list :general (median (first ms)) :specialised (median (second ms))
                   :general-consed (round (first consed) n) :specialised-consed (round (second consed) n)
-                  :general-block (constraint-columns-block (physics-world-constraints general))
-                  :specialised-block (constraint-columns-block (physics-world-constraints special))
+                  ;; a constraint's floats: its main block's and its side block's
+                  :general-block (let ((c (physics-world-constraints general)))
+                                   (+ (constraint-columns-block c) (constraint-columns-side-block c)))
+                  :specialised-block (let ((c (physics-world-constraints special)))
+                                       (+ (constraint-columns-block c) (constraint-columns-side-block c)))
                   :bodies (+ (physics-world-awake-count special) (physics-world-sleeping-count special)))))))))
 
 (defun run-feature-benchmark (&key (stream *standard-output*) (kernels :auto))
