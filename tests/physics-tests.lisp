@@ -530,14 +530,10 @@ more step up to and including prepare: its constraints are ready for the substep
 (defun map-prepared-constraints (function world)
   "Call FUNCTION on each row K of WORLD's constraint buffer that names a contact, with K and a
 function of a column name that reads row K's float in that column. #T3STK1"
-  (let* ((cbuf (luv-physics::physics-world-constraints world))
-         (data (luv-physics::constraint-columns-data cbuf)))
+  (let ((cbuf (luv-physics::physics-world-constraints world)))
     (dotimes (k (luv-physics::constraint-columns-length cbuf))
       (when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
-        (funcall function k
-                 (lambda (column)
-                   (aref data (+ (luv-physics::constraint-base k (luv-physics::constraint-columns-block cbuf))
-                                 (luv-physics::constraint-offset column)))))))))
+        (funcall function k (lambda (column) (luv-physics::constraint-ref cbuf k column)))))))
 ;; A kit for the claims:1 ends here
 
 ;; [[file:../physics.org::#V0CAB5][V0CAB5-defaults-as-tabled]]
@@ -1459,10 +1455,11 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (luv-physics::ensure-solver-scratch w n m)
     (let ((v (luv-physics::physics-world-velocities w))
           (d (luv-physics::physics-world-deltas w))
-          (data (luv-physics::constraint-columns-data (luv-physics::physics-world-constraints w))))
-      (dolist (a (list v d data))
+          (data (luv-physics::constraint-columns-data (luv-physics::physics-world-constraints w)))
+          (side (luv-physics::constraint-columns-side (luv-physics::physics-world-constraints w))))
+      (dolist (a (list v d data side))
         (check (>= (* 4 (length a)) sb-vm:large-object-size) "an array of ~D floats is not large" (length a)))
-      (sb-sys:with-pinned-objects (v d data)
+      (sb-sys:with-pinned-objects (v d data side)
         (flet ((misaligned (array indices)
                  (let ((start (sb-sys:sap-int (sb-sys:vector-sap array))))
                    (count-if-not (lambda (i) (zerop (mod (+ start (* 4 i)) 32))) indices))))
@@ -1473,10 +1470,16 @@ function of a column name that reads row K's float in that column. #T3STK1"
                   (off-c (misaligned data
                                      (loop for k in (list 0 last)
                                            append (loop for c below (length luv-physics::+constraint-columns+)
-                                                        collect (+ (luv-physics::constraint-base k) (* 8 c)))))))
+                                                        collect (+ (luv-physics::constraint-base k) (* 8 c))))))
+                  (off-s (misaligned side
+                                     (loop for k in (list 0 last)
+                                           append (loop for c below (length luv-physics::+constraint-side-columns+)
+                                                        collect (+ (luv-physics::constraint-base k luv-physics::+constraint-side-block+)
+                                                                   (* 8 c)))))))
               (check (zerop off-v) "~D velocity rows start off a 32-byte boundary" off-v)
               (check (zerop off-d) "~D delta rows start off a 32-byte boundary" off-d)
-              (check (zerop off-c) "~D constraint columns start off a 32-byte boundary" off-c))))))))
+              (check (zerop off-c) "~D constraint columns start off a 32-byte boundary" off-c)
+              (check (zerop off-s) "~D side columns start off a 32-byte boundary" off-s))))))))
 ;; W0RLD7-solver-rows-aligned ends here
 
 ;; [[file:../physics.org::#R9M4PV][R9M4PV-registry-refuses-bad-names]]
@@ -3187,6 +3190,45 @@ function of a column name that reads row K's float in that column. #T3STK1"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
 
+;; [[file:../physics.org::#SSMPYW][SSMPYW-side-zero-where-unread]]
+(define-claim "SSMPYW" side-zero-where-unread
+    "Spin columns are zero where rb is not, armed speeds where restitution is zero: after every prepare and substep phase."
+  (dolist (family (available-kernel-families))
+    (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels family))
+          (next (make-lcg 4242))
+          (checked 0) (wrong 0) (limits 0) (impulses 0) (still 0))
+      (dotimes (i 300)
+        (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+          (luv-physics::add-physics-body w x y z :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (funcall next))
+                                                 :friction (+ 0.3 (* 0.6 (funcall next)))
+                                                 :restitution (if (evenp i) 0.0 (* 0.5 (funcall next)))
+                                                 :rolling-resistance (* 0.05 (funcall next)))))
+      (flet ((side-check (world)
+               (map-prepared-constraints
+                (lambda (k column)
+                  (declare (ignore k))
+                  (incf checked)
+                  (if (= (funcall column 'rb) 0.0)
+                      (progn (when (> (funcall column 'spin-limit) 0.0) (incf limits))
+                             (when (/= (funcall column 'spin-impulse) 0.0) (incf impulses)))
+                      (unless (and (= (funcall column 'spin-limit) 0.0) (= (funcall column 'spin-impulse) 0.0))
+                        (incf wrong)))
+                  (when (= (funcall column 'restitution) 0.0)
+                    (incf still)
+                    (unless (= (funcall column 'armed-speed) 0.0) (incf wrong))))
+                world)
+               world))
+        (let ((luv-physics::*physics-phases*
+                (phases-checked-after 'luv-physics::substep-phase #'side-check)))
+          (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::prepare-phase #'side-check)))
+            (dotimes (i 150) (step-physics-world w)))))
+      (check (> checked 20000) "~A: only ~D rows checked" family checked)
+      (check (> limits 1000) "~A: only ~D rows with a spin limit" family limits)
+      (check (> impulses 100) "~A: only ~D rows with a spin impulse" family impulses)
+      (check (> still 1000) "~A: only ~D rows without restitution" family still)
+      (check (zerop wrong) "~A: ~D rows hold a side value the kernels would not read" family wrong))))
+;; SSMPYW-side-zero-where-unread ends here
+
 ;; [[file:../physics.org::#KTXT7V][KTXT7V-kernel-is-its-text]]
 (define-claim "KTXT7V" kernel-is-its-text
     "Featured kernels keep their docstrings and texts; the text compiled for every feature is the kernel."
@@ -3195,7 +3237,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
                (luv-physics::solve-range "#S0LV3R" (:body-contacts :boxes :friction :rolling-resistance :restitution
                                                     :hit-events :contact-events))
                (luv-physics::prepare-frames-range "#PR3PAR" (:boxes))
-               (luv-physics::prepare-phase "#PR3PAR" (:body-contacts :boxes :restitution :rolling-resistance :contact-events :hit-events))
+               (luv-physics::prepare-phase "#PR3PAR" (:body-contacts :boxes :friction :restitution :rolling-resistance :contact-events :hit-events))
                (luv-physics::store-phase "#ST0R3S" (:body-contacts :boxes :contact-events :hit-events :rolling-resistance))
                (luv-physics::finalize-phase "#F1NAL5" (:body-contacts :boxes :sleep :mortal))
                (luv-physics::warm-start-blocks/sse "#W1D3KF" (:body-contacts :friction :rolling-resistance))
@@ -3295,7 +3337,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
                (list (map 'list #'sb-kernel:single-float-bits (luv-physics::constraint-columns-data cbuf))
                      (copy-seq (luv-physics::constraint-columns-body-a cbuf))
                      (copy-seq (luv-physics::constraint-columns-body-b cbuf))
-                     (luv-physics::constraint-columns-length cbuf)))))
+                     (luv-physics::constraint-columns-length cbuf)
+                     (map 'list #'sb-kernel:single-float-bits (luv-physics::constraint-columns-side cbuf))))))
       (let* ((general (filled nil)) (short (filled t))
              (cbuf (luv-physics::physics-world-constraints w))
              (dummy (luv-physics::physics-world-awake-count w))
@@ -3308,7 +3351,9 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (equalp (second general) (second short)) "the body-a columns differ")
         (check (equalp (third general) (third short)) "the body-b columns differ")
         (check (equal (first general) (first short)) "~D floats differ"
-               (count nil (mapcar #'= (first general) (first short))))))))
+               (count nil (mapcar #'= (first general) (first short))))
+        (check (equal (fifth general) (fifth short)) "~D side floats differ"
+               (count nil (mapcar #'= (fifth general) (fifth short))))))))
 ;; PR3PAR-short-path-same-bits ends here
 
 ;; [[file:../physics.org::#G7Q3XR][G7Q3XR-softness-is-the-closed-form]]
@@ -3410,11 +3455,11 @@ function of a column name that reads row K's float in that column. #T3STK1"
           (aref (luv-physics::constraint-columns-body-a cbuf) 0) 0
           (aref (luv-physics::constraint-columns-body-b cbuf) 0) 1)
     (loop for (column value) in given
-          do (setf (aref (luv-physics::constraint-columns-data cbuf)
-                         (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset column)))
-                   (float value 1.0)))
+          do (setf (luv-physics::constraint-ref cbuf 0 column) (float value 1.0)))
     ;; the value as the buffer holds it, in single precision
-    (flet ((at (column) (float (float (second (assoc column given)) 1.0) 1d0)))
+    (flet ((at (column) (float (luv-physics::constraint-ref cbuf 0 column) 1d0)))
+     (dolist (rb '(0.4 0.0))
+      (setf (luv-physics::constraint-ref cbuf 0 'rb) rb)
       (dolist (features '((:body-contacts :friction :rolling-resistance) (:body-contacts :friction)
                           (:body-contacts :rolling-resistance) (:body-contacts)
                           (:friction :rolling-resistance) (:friction) (:rolling-resistance) ()))
@@ -3430,7 +3475,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
                (l1 (if friction (at 'tangent-impulse-1) 0d0)) (l2 (if friction (at 'tangent-impulse-2) 0d0))
                (p (mapcar (lambda (n t1 t2) (+ (* (at 'normal-impulse) n) (* l1 t1) (* l2 t2))) n t1 t2))
                (c (mapcar (lambda (t1 t2) (- (* l1 t2) (* l2 t1))) t1 t2))
-               (r (mapcar (lambda (roll n) (+ (if rolling roll 0d0) (if friction (* (at 'spin-impulse) n) 0d0)))
+               (r (mapcar (lambda (roll n) (+ (if rolling roll 0d0)
+                                              (if (and friction (= rb 0.0)) (* (at 'spin-impulse) n) 0d0)))
                           (list (at 'rolling-impulse-x) (at 'rolling-impulse-y) (at 'rolling-impulse-z)) n))
                (want (append (mapcar (lambda (p) (- (* (at 'ima) p))) p)
                              (mapcar (lambda (c r) (- (* (at 'iia) (+ (* (at 'ra) c) r)))) c r)
@@ -3444,7 +3490,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
                              (loop for j below 6 for o = (+ (luv-physics::solver-row 1) j)
                                    collect (- (aref v o) (nth o start))))))
             (check (every (lambda (g w) (<= (abs (- g w)) (* 1d-6 (max 1d0 (abs w))))) got want)
-                   "~S: the velocities changed by ~S, not ~S" features got want)))))))
+                   "~S, rb ~A: the velocities changed by ~S, not ~S" features rb got want))))))))
 ;; W4RMST-warm-start-formula ends here
 
 ;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
@@ -3515,17 +3561,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
                    (aref (luv-physics::constraint-columns-contact cbuf) 0) 0)
              (loop for (column value)
                      in '((nx 0.0) (ny 1.0) (nz 0.0) (t1x 1.0) (t1y 0.0) (t1z 0.0) (t2x 0.0) (t2y 0.0) (t2z 1.0)
-                          (ra 0.25) (rb 0.25) (ima 1.0) (imb 1.0) (iia 0.5) (iib 0.5) (separation 0.25)
+                          (ra 0.25) (rb 0.0) (ima 1.0) (imb 1.0) (iia 0.5) (iib 0.5) (separation 0.25)
                           (normal-mass 0.5) (tangent-mass 0.3) (rolling-mass 1.0) (friction 0.5)
                           (max-normal-impulse 1.0) (normal-impulse 1.0) (spin-limit 0.5))
-                   do (setf (aref (luv-physics::constraint-columns-data cbuf)
-                                  (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset column)))
-                            value))
+                   do (setf (luv-physics::constraint-ref cbuf 0 column) value))
              (setf (aref v (+ (luv-physics::solver-row 1) 1)) -2.0
                    (aref v (+ (luv-physics::solver-row 1) 4)) spin)
              (luv-physics::solve-range cbuf v d 0 1 4.0 nil 0.0 3.0 1.0 0.0 0.0 0.0)
-             (flet ((column (name) (aref (luv-physics::constraint-columns-data cbuf)
-                                         (+ (luv-physics::constraint-base 0) (luv-physics::constraint-offset name))))
+             (flet ((column (name) (luv-physics::constraint-ref cbuf 0 name))
                     (row (r) (loop for j below 6 collect (aref v (+ (luv-physics::solver-row r) j)))))
                (check (= 1.5 (column 'normal-impulse)) "the normal impulse is ~A" (column 'normal-impulse))
                (check (= want (column 'spin-impulse)) "spinning at ~A the spin impulse is ~A, not ~A"
@@ -3983,20 +4026,21 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#FEAT5X][FEAT5X-columns-by-features]]
 (define-claim "FEAT5X" columns-by-features
-    "Constraint blocks end after the last column a world's features read: 29, 32, 34, 38 or 40 columns."
+    "Constraint blocks end after the last column a world's features read: 27, 30, 32, 36 or 37 columns, and 0, 2 or 3 beside."
   (flet ((columns (features)
-           (/ (luv-physics::constraint-columns-block
-               (luv-physics::physics-world-constraints (make-physics-world :features features)))
-              8)))
-    (check (= 29 (columns '(:terrain :friction :sleep :mortal))))
-    (check (= 29 (columns '(:terrain :body-contacts :friction))))
-    (check (= 32 (columns '(:terrain :boxes :friction :sleep :mortal))))
-    (check (= 34 (columns '(:terrain :friction :hit-events))))
-    (check (= 38 (columns '(:terrain :friction :rolling-resistance))))
-    (check (= 40 (columns '(:terrain :restitution))))
-    (check (= 40 (columns luv-physics::+physics-features+))))
-  (dolist (case (list (list '(:terrain :friction :sleep :mortal) 29) (list luv-physics::+physics-features+ 40)))
-    (destructuring-bind (features columns) case
+           (let ((cbuf (luv-physics::physics-world-constraints (make-physics-world :features features))))
+             (list (/ (luv-physics::constraint-columns-block cbuf) 8)
+                   (/ (luv-physics::constraint-columns-side-block cbuf) 8)))))
+    (check (equal '(27 2) (columns '(:terrain :friction :sleep :mortal))))
+    (check (equal '(27 2) (columns '(:terrain :body-contacts :friction))))
+    (check (equal '(27 0) (columns '(:terrain :body-contacts))))
+    (check (equal '(30 2) (columns '(:terrain :boxes :friction :sleep :mortal))))
+    (check (equal '(32 2) (columns '(:terrain :friction :hit-events))))
+    (check (equal '(36 2) (columns '(:terrain :friction :rolling-resistance))))
+    (check (equal '(37 3) (columns '(:terrain :restitution))))
+    (check (equal '(37 3) (columns luv-physics::+physics-features+))))
+  (dolist (case (list (list '(:terrain :friction :sleep :mortal) 27 2) (list luv-physics::+physics-features+ 37 3)))
+    (destructuring-bind (features columns side) case
       (multiple-value-bind (world before) (luv-physics::feature-scene :fountain :features features)
         (dotimes (i 120) (funcall before i) (step-physics-world world))
         (let ((cbuf (luv-physics::physics-world-constraints world)))
@@ -4004,6 +4048,10 @@ function of a column name that reads row K's float in that column. #T3STK1"
           (check (= (length (luv-physics::constraint-columns-data cbuf))
                     (+ luv-physics::+constraint-origin+ (* columns (luv-physics::constraint-columns-capacity cbuf))))
                  "~D columns: ~D floats for ~D rows" columns (length (luv-physics::constraint-columns-data cbuf))
+                 (luv-physics::constraint-columns-capacity cbuf))
+          (check (= (length (luv-physics::constraint-columns-side cbuf))
+                    (+ luv-physics::+constraint-origin+ (* side (luv-physics::constraint-columns-capacity cbuf))))
+                 "~D side columns: ~D floats for ~D rows" side (length (luv-physics::constraint-columns-side cbuf))
                  (luv-physics::constraint-columns-capacity cbuf)))))))
 ;; FEAT5X-columns-by-features ends here
 
@@ -7077,9 +7125,7 @@ within reach of something. #S9WEEP"
     (labels ((uniform (low high) (float (+ low (* (- high low) (funcall next))) 1.0))
              (signed (low high) (* (if (< (funcall next) 0.5) -1.0 1.0) (uniform low high)))
              (put (k column value)
-               (setf (aref (luv-physics::constraint-columns-data cbuf)
-                           (+ (luv-physics::constraint-base k) (luv-physics::constraint-offset column)))
-                     (float value 1.0)))
+               (setf (luv-physics::constraint-ref cbuf k column) (float value 1.0)))
              (direction ()
                (let* ((u (list (signed 0.2 1.0) (signed 0.2 1.0) (signed 0.2 1.0)))
                       (l (sqrt (reduce #'+ (mapcar #'* u u)))))
@@ -7091,14 +7137,18 @@ within reach of something. #S9WEEP"
         (dotimes (j 6) (setf (aref v (+ (luv-physics::solver-row b) j)) (if (< b 2) 0.0 (signed 0.1 (if (< j 3) 2.0 5.0))))))
       (dotimes (k rows)
         (destructuring-bind (nx ny nz) (direction)
-          (let ((ma (if (= k 6) 0.0 (uniform 0.3 2.0))) (mb (if (= k 3) 0.0 (uniform 0.3 2.0)))
-                (ra (uniform 0.2 0.3)) (rb (uniform 0.2 0.3)))
+          ;; rows 1, 2, 5 and 6 have nothing on side b (rb = 0), as a terrain contact, and
+          ;; only they a spin limit and impulse: lanes of the blocks of rows 0-7 mix the two
+          ;; kinds, and no lane of rows 8-15 reads a spin column
+          (let* ((ma (if (= k 6) 0.0 (uniform 0.3 2.0))) (mb (if (= k 3) 0.0 (uniform 0.3 2.0)))
+                 (ra (uniform 0.2 0.3)) (r (uniform 0.2 0.3)) (one-sided (member k '(1 2 5 6)))
+                 (rb (if one-sided 0.0 r)))
             (setf (aref (luv-physics::constraint-columns-body-a cbuf) k) (* 2 k)
                   (aref (luv-physics::constraint-columns-body-b cbuf) k) (1+ (* 2 k))
                   (aref (luv-physics::constraint-columns-contact cbuf) k) k)
             (loop for (column value)
                     in `((nx ,nx) (ny ,ny) (nz ,nz) (ra ,ra) (rb ,rb) (ima ,ma) (imb ,mb)
-                         (iia ,(/ (* 2.5 ma) (* ra ra))) (iib ,(/ (* 2.5 mb) (* rb rb)))
+                         (iia ,(/ (* 2.5 ma) (* ra ra))) (iib ,(/ (* 2.5 mb) (* r r)))
                          (separation ,(cond ((= k 6) 0.0) ((evenp k) (uniform 0.001 0.02)) (t (- (uniform 0.001 0.03)))))
                          (kvn ,(if (member k '(2 5)) (signed 0.1 1.0) 0.0))
                          (kvt1 ,(if (member k '(2 5)) (signed 0.1 1.0) 0.0))
@@ -7109,8 +7159,8 @@ within reach of something. #S9WEEP"
                          (max-normal-impulse ,(if (member k '(4 7)) 0.0 (uniform 0.2 0.4)))
                          (tangent-impulse-1 ,(if (= k 0) 0.0 (signed 0.001 (if (oddp k) 0.3 0.01))))
                          (tangent-impulse-2 ,(if (= k 0) 0.0 (signed 0.001 (if (oddp k) 0.3 0.01))))
-                         (spin-limit ,(if (member k '(0 3)) 0.0 (uniform 0.005 0.02)))
-                         (spin-impulse ,(if (member k '(0 3)) 0.0 (signed 0.0001 0.01)))
+                         (spin-limit ,(if one-sided (uniform 0.005 0.02) 0.0))
+                         (spin-impulse ,(if one-sided (signed 0.0001 0.01) 0.0))
                          (rolling-limit ,(if (member k '(1 4)) 0.0 (uniform 0.005 0.02)))
                          (rolling-impulse-x ,(if (member k '(0 1 4)) 0.0 (signed 0.0001 0.01)))
                          (rolling-impulse-y ,(if (member k '(0 1 4)) 0.0 (signed 0.0001 0.01)))
@@ -7126,15 +7176,19 @@ within reach of something. #S9WEEP"
     (flet ((same (family what scalar wide)
              (destructuring-bind (sc sv) scalar
                (destructuring-bind (wc wv) wide
-                 (let ((cd (luv-physics::constraint-columns-data sc)) (wd (luv-physics::constraint-columns-data wc)))
+                 (let ((cd (luv-physics::constraint-columns-data sc)) (wd (luv-physics::constraint-columns-data wc))
+                       (cs (luv-physics::constraint-columns-side sc)) (ws (luv-physics::constraint-columns-side wc)))
                    (check (every #'eql cd wd) "~A, ~A: constraint floats ~S differ" family what
                           (loop for i below (length cd) unless (eql (aref cd i) (aref wd i)) collect i))
+                   (check (every #'eql cs ws) "~A, ~A: side floats ~S differ" family what
+                          (loop for i below (length cs) unless (eql (aref cs i) (aref ws i)) collect i))
                    (check (loop for b below (* 2 rows)
                                 always (loop for j below 6 for o = (+ (luv-physics::solver-row b) j)
                                              always (eql (aref sv o) (aref wv o))))
                           "~A, ~A: the velocities differ" family what)))))
            (copy (c) (let ((n (luv-physics::copy-constraint-columns c)))
-                       (setf (luv-physics::constraint-columns-data n) (copy-seq (luv-physics::constraint-columns-data c)))
+                       (setf (luv-physics::constraint-columns-data n) (copy-seq (luv-physics::constraint-columns-data c))
+                             (luv-physics::constraint-columns-side n) (copy-seq (luv-physics::constraint-columns-side c)))
                        n)))
       (dolist (family (remove :scalar (available-kernel-families)))
         (let* ((width (if (eq family :avx2) 8 4))
