@@ -113,8 +113,18 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
                 (w= (a b) `(,',eq ,a ,b)) (wif (m a b) `(,',if* ,m ,a ,b)) (wor (a b) `(,',or* ,a ,b))
                 (wc (x) `(,',broadcast ,x))
-                (@w (column) `(,',load data base ,(constraint-offset column)))
-                (@w! (column value) `(,',store ,value data base ,(constraint-offset column)))
+                ;; a side column ([[#SSMPYW]]) is read from the side block of the block at K
+                (@w (column) (if (constraint-side-column-p column)
+                                 `(,',load (side-floats) (side-base k) ,(constraint-offset column))
+                                 `(,',load data base ,(constraint-offset column))))
+                (@w! (column value) (if (constraint-side-column-p column)
+                                        `(,',store ,value (side-floats) (side-base k) ,(constraint-offset column))
+                                        `(,',store ,value data base ,(constraint-offset column))))
+                ;; true when some lane of the block has no radius on side b, the only lanes
+                ;; whose spin columns may be other than zero ([[#SSMPYW]])
+                (some-one-sided () `(if-feature :body-contacts
+                                      (not (zerop (,',movemask (wif (w= (@w rb) (wc 0.0)) (wc -1.0) (wc 0.0)))))
+                                      t))
                 (st@ (i) `(,',load st 0 ,(* ,width i)))
                 ;; moved-gap ([[#PR3PAR]]) in lanes, for the relax pass and the frame pass
                 (wgap (ddx ddy ddz elapsed)
@@ -141,17 +151,21 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         (cx (w- (w* l1 (@w t2x)) (w* l2 (@w t1x))))
                         (cy (w- (w* l1 (@w t2y)) (w* l2 (@w t1y))))
                         (cz (w- (w* l1 (@w t2z)) (w* l2 (@w t1z)))))
+                   ;; the spin impulse, read only for a block with a lane that may have one
+                   ;; ([[#SSMPYW]]): every other lane's is zero, as is every lane's of the
+                   ;; blocks that do not read it
+                   (let ((sp (if (some-one-sided) (@w spin-impulse) (wc 0.0))))
                    (symbol-macrolet ((ma (@w ima)) (mb (@w imb)) (ia (@w iia)) (ib (@w iib))
                                      (ar (@w ra)) (br (@w rb))
                                      (rx (if-feature :rolling-resistance
-                                           (w+ (@w rolling-impulse-x) (w* (@w spin-impulse) (@w nx)))
-                                           (w* (@w spin-impulse) (@w nx))))
+                                           (w+ (@w rolling-impulse-x) (w* sp (@w nx)))
+                                           (w* sp (@w nx))))
                                      (ry (if-feature :rolling-resistance
-                                           (w+ (@w rolling-impulse-y) (w* (@w spin-impulse) (@w ny)))
-                                           (w* (@w spin-impulse) (@w ny))))
+                                           (w+ (@w rolling-impulse-y) (w* sp (@w ny)))
+                                           (w* sp (@w ny))))
                                      (rz (if-feature :rolling-resistance
-                                           (w+ (@w rolling-impulse-z) (w* (@w spin-impulse) (@w nz)))
-                                           (w* (@w spin-impulse) (@w nz)))))
+                                           (w+ (@w rolling-impulse-z) (w* sp (@w nz)))
+                                           (w* sp (@w nz)))))
                      ;; each body's three masses are read once, into registers
                      (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
                        (let ((ma ma) (ia ia) (ar ar))
@@ -169,7 +183,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                wbx (w+ wbx (w* ib (w- rx (w* br cx))))
                                wby (w+ wby (w* ib (w- ry (w* br cy))))
                                wbz (w+ wbz (w* ib (w- rz (w* br cz))))))
-                       (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0))))))
+                       (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0)))))))
                ;; without friction the impulse is along the normal and turns nothing; only
                ;; rolling resistance, when the world has it, turns the bodies
                (let* ((l (@w normal-impulse))
@@ -302,6 +316,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                    ;; the normal impulse to keep, the velocity change and what the contact pushed
                    (multiple-value-bind (new dl pushed)
                        (if-feature :restitution
+                         ;; only a lane with restitution is ever armed: a block with none reads
+                         ;; no armed speed ([[#SSMPYW]]), and no lane of it may strike
+                         (if (zerop (,movemask (wif (w> (@w restitution) (wc 0.0)) (wc -1.0) (wc 0.0))))
+                           (values new dl new)
                          (let ((armed (@w armed-speed)))
                                  (if (zerop (,movemask
                                                   ;; lanes that have not pushed: vn, or 0 without
@@ -329,10 +347,10 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                                     (w+ (w+ (w* ghx x) (w* ghy y)) (w* ghz z))))
                                             (half (w* (wc 0.5) dv))
                                             (c (if biased (w- vn half) (w+ vn half)))
-                                            (k (w* (w* (w* (wc 2.0) dv) sp) ih))
-                                            (u2 (w- (w* c c) k))
+                                            (fall (w* (w* (w* (wc 2.0) dv) sp) ih))
+                                            (u2 (w- (w* c c) fall))
                                             (uc (wif impact (wsqrt (wif (w> u2 (wc 0.0)) u2 (wc 0.0))) armed))
-                                            (wc2 (w+ (w* (w* e e) (w* uc uc)) k))
+                                            (wc2 (w+ (w* (w* e e) (w* uc uc)) fall))
                                             (short (w> (wc 0.0) wc2))
                                             (root (wsqrt (wif (w> wc2 (wc 0.0)) wc2 (wc 0.0))))
                                             (w (if biased (w+ root half) (w- root half)))
@@ -351,7 +369,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                      ;; impact part on it, as it is: nothing of it has been
                                      ;; written but the kept gap, which the copy writes again
                                      ;; with the same bits
-                                     (return-from solve-pass k))))
+                                     (return-from solve-pass k)))))
                          (values new dl new))
                    (declare (ignorable pushed))
                    (if-feature :friction
@@ -425,6 +443,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                    ;; spin friction, skipped as the rolling part is by a block none of whose
                    ;; lanes has a spin limit
                    (if-feature :friction
+                     (when (some-one-sided)
                      (let* ((sl (@w spin-limit))
                             (spinning (w> sl (wc 0.0))))
                        (unless (zerop (,movemask (wif spinning (wc -1.0) (wc 0.0))))
@@ -441,7 +460,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                            (if-feature :body-contacts
                              (progn (st! 9 (wif spinning (w+ wbx (w* ibm (w* ds x))) wbx))
                                     (st! 10 (wif spinning (w+ wby (w* ibm (w* ds y))) wby))
-                                    (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz)))))))))))
+                                    (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz))))))))))))
                (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
                (if-feature :body-contacts
                  (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0))))))))))

@@ -2320,7 +2320,8 @@ every feature by default). #M4K3WD"
                :kernels (make-kernel-family kernels)
                :sleep-enabled (and sleep (member :sleep features) t)
                :features features :event-mask (feature-event-mask features)
-               :constraints (make-constraint-columns (constraint-block-floats features))
+               :constraints (make-constraint-columns (constraint-block-floats features)
+                                                     (constraint-side-floats features))
                parameters)))))
 
 (defmethod (setf physics-world-event-handler) :before (handler (world physics-world))
@@ -4030,36 +4031,52 @@ the hole. #PRUN3D"
   (defparameter +constraint-columns+
     '(nx ny nz t1x t1y t1z t2x t2y t2z ra rb ima imb iia iib separation
       normal-mass tangent-mass rolling-mass friction bias-rate mass-scale
-      impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2 gap spin-limit spin-impulse
+      impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2 gap
       ;; the columns only some worlds have ([[#FEAT5X]]): the box's velocity along the normal
       ;; and the frame, the largest push the events and restitution read, the approach speed
       ;; the events report, rolling resistance's, and restitution's
       kvn kvt1 kvt2 max-normal-impulse
       relative-velocity rolling-limit rolling-impulse-x rolling-impulse-y rolling-impulse-z
-      restitution armed-speed)
-    "The float columns of a constraint, in the order they sit in a block: those every world
-needs, then those a world's features may leave out, last. #SSMPYW")
+      restitution)
+    "The float columns of a constraint's main block, in the order they sit in it: those every
+world needs, then those a world's features may leave out, last. #SSMPYW")
+  (defparameter +constraint-side-columns+
+    '(spin-limit spin-impulse armed-speed)
+    "The float columns of a constraint's side block, read only by the rows that need them:
+friction's two, then restitution's. #SSMPYW")
+  (defun constraint-side-column-p (column)
+    "True when COLUMN sits in the side block. #SSMPYW"
+    (member column +constraint-side-columns+ :test #'string= :key #'symbol-name))
   (defun constraint-offset (column)
-    "Where COLUMN's eight lanes begin inside a block of constraints. #SSMPYW"
+    "Where COLUMN's eight lanes begin inside a block of constraints, the main block's or, for a
+column of +constraint-side-columns+, the side block's. #SSMPYW"
     (* 8 (or (position column +constraint-columns+ :test #'string= :key #'symbol-name)
+             (position column +constraint-side-columns+ :test #'string= :key #'symbol-name)
              (error "no constraint column ~A" column)))))
 
 (defconstant +constraint-block+ (* 8 (length +constraint-columns+))
-  "Floats in a block of eight constraints: eight lanes of each float column. #SSMPYW")
+  "Floats in a main block of eight constraints: eight lanes of each float column. #SSMPYW")
+
+(defconstant +constraint-side-block+ (* 8 (length +constraint-side-columns+))
+  "Floats in a side block of eight constraints: eight lanes of each side column. #SSMPYW")
 
 (defconstant +constraint-origin+ 4
   "Floats before the first block of the constraint buffer, so that on an array whose data
 begin 16 bytes past a 64-byte boundary every column's eight lanes start on a 32-byte
 boundary. #SSMPYW")
 
-(defstruct (constraint-columns (:constructor make-constraint-columns (&optional (block +constraint-block+))))
+(defstruct (constraint-columns (:constructor make-constraint-columns
+                                  (&optional (block +constraint-block+) (side-block +constraint-side-block+))))
   "The contacts of one step as solver rows, written in colour order: three fixnum columns, and
 the float columns in blocks of eight rows, each column's eight lanes contiguous; BLOCK floats a
-block, the first BLOCK/8 columns of +constraint-columns+. #SSMPYW"
+main block, the first BLOCK/8 columns of +constraint-columns+, and SIDE-BLOCK a side block, the
+first SIDE-BLOCK/8 of +constraint-side-columns+. #SSMPYW"
   (block +constraint-block+ :type index)
+  (side-block +constraint-side-block+ :type index)
   (length 0 :type index)
   (capacity 0 :type index)
   (data (make-array 0 :element-type 'single-float) :type f32-column)
+  (side (make-array 0 :element-type 'single-float) :type f32-column)
   (contact (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (body-a (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (body-b (make-array 0 :element-type 'fixnum) :type fixnum-column))
@@ -4074,6 +4091,9 @@ block, the first BLOCK/8 columns of +constraint-columns+. #SSMPYW"
         (setf (constraint-columns-data buffer)
               (grow (constraint-columns-data buffer) 'single-float
                     (+ +constraint-origin+ (* (floor new 8) (constraint-columns-block buffer))))
+              (constraint-columns-side buffer)
+              (grow (constraint-columns-side buffer) 'single-float
+                    (+ +constraint-origin+ (* (floor new 8) (constraint-columns-side-block buffer))))
               (constraint-columns-contact buffer) (grow (constraint-columns-contact buffer) 'fixnum new)
               (constraint-columns-body-a buffer) (grow (constraint-columns-body-a buffer) 'fixnum new)
               (constraint-columns-body-b buffer) (grow (constraint-columns-body-b buffer) 'fixnum new)
@@ -4087,10 +4107,13 @@ block, the first BLOCK/8 columns of +constraint-columns+. #SSMPYW"
   (+ +constraint-origin+ (* (ash k -3) block) (logand k 7)))
 
 (defmacro with-constraint-block ((&rest fixnum-columns) buffer &body body)
-  "Run BODY with DATA bound to BUFFER's float blocks, STRIDE to the floats of a block, each of
+  "Run BODY with DATA bound to BUFFER's main blocks, STRIDE to the floats of one, each of
 FIXNUM-COLUMNS (contact, body-a, body-b) bound to its column, (constraint-base K) naming the
-base of constraint K in BUFFER's blocks, and (@ COLUMN) naming COLUMN of the constraint whose
-base is the variable BASE. #SSMPYW"
+base of constraint K in BUFFER's main blocks, (side-floats) BUFFER's side blocks and (side-base
+K) the base of constraint K in them, and (@ COLUMN) naming COLUMN of the constraint whose base
+is the variable BASE, or for a side column, of constraint K. The side blocks are reached through
+BUFFER where they are read, not bound for the whole body: a kernel's loop keeps one more value
+alive, not two. #SSMPYW"
   (let ((b (gensym "BUFFER")))
     `(let* ((,b ,buffer)
             (data (constraint-columns-data ,b))
@@ -4098,10 +4121,36 @@ base is the variable BASE. #SSMPYW"
             ,@(loop for c in fixnum-columns
                     collect `(,c (,(intern (format nil "CONSTRAINT-COLUMNS-~A" c)) ,b))))
        (declare (type f32-column data) (type fixnum-column ,@fixnum-columns) (type index stride)
-                (ignorable data stride ,@fixnum-columns))
-       (macrolet ((@ (column) `(block-ref data base ,(constraint-offset column)))
-                  (constraint-base (k) `(+ +constraint-origin+ (* (ash ,k -3) stride) (logand ,k 7))))
+                (ignorable ,b data stride ,@fixnum-columns))
+       (macrolet ((@ (column) (if (constraint-side-column-p column)
+                                  `(block-ref (side-floats) (side-base k) ,(constraint-offset column))
+                                  `(block-ref data base ,(constraint-offset column))))
+                  (constraint-base (k) `(+ +constraint-origin+ (* (ash ,k -3) stride) (logand ,k 7)))
+                  (side-floats () '(constraint-columns-side ,b))
+                  ;; a side block holds at most 24 floats: bounded so, the base needs no
+                  ;; overflow test and no generic arithmetic
+                  (side-base (k) `(+ +constraint-origin+
+                                     (* (ash (the index ,k) -3) (the (integer 0 ,+constraint-side-block+)
+                                                                     (constraint-columns-side-block ,',b)))
+                                     (logand ,k 7))))
          ,@body))))
+
+(defun constraint-place (buffer k column)
+  "The float column of BUFFER that holds COLUMN of constraint K, and the index in it: for the
+claims and the tools, which name a column rather than know its block. #SSMPYW"
+  (if (constraint-side-column-p column)
+      (values (constraint-columns-side buffer)
+              (+ (constraint-base k (constraint-columns-side-block buffer)) (constraint-offset column)))
+      (values (constraint-columns-data buffer)
+              (+ (constraint-base k (constraint-columns-block buffer)) (constraint-offset column)))))
+
+(defun constraint-ref (buffer k column)
+  "COLUMN of constraint K in BUFFER. #SSMPYW"
+  (multiple-value-bind (floats i) (constraint-place buffer k column) (aref floats i)))
+
+(defun (setf constraint-ref) (value buffer k column)
+  "Set COLUMN of constraint K in BUFFER to VALUE. #SSMPYW"
+  (multiple-value-bind (floats i) (constraint-place buffer k column) (setf (aref floats i) value)))
 
 (defun ensure-solver-scratch (world n contacts)
   "Size WORLD's per-step scratch for N awake bodies (plus the dummy) and CONTACTS contacts. #SSMPYW"
@@ -4293,7 +4342,7 @@ upward part of the normal from LA to LB, above 0.9); :b the other way round; els
   "When false, the prepare fill sends every row through its general path; the claim that the
 short path changes no bit compares the two. #PR3PAR")
 
-(define-featured-kernel (prepare-phase :features (:body-contacts :boxes :restitution :rolling-resistance :contact-events :hit-events))
+(define-featured-kernel (prepare-phase :features (:body-contacts :boxes :friction :restitution :rolling-resistance :contact-events :hit-events))
     (world)
   "Phase 8: colour the contacts, then write the constraint buffer in colour order, and load the
 awake bodies' velocities into the solver; note the number of colours used in the step's
@@ -4449,15 +4498,14 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                            (@ iia) (aref ii-c la) (@ iib) (aref ii-c lb)
                            (@ separation) (+ (contact-at geometry g separation) slop)
                            (@ friction) (fsqrt (* (aref fr-c la) (aref fr-c lb)))
-                           (@ spin-limit) 0.0
-                           (@ spin-impulse) 0.0
                            (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass (@ impulse-scale) dyn-impulse
                            (@ normal-impulse) (contact-at geometry g normal-impulse)
                            (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1)
                            (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
-                     ;; the columns of boxes, restitution, rolling resistance and the events,
-                     ;; when the world has them
+                     ;; the columns of boxes, spin friction, restitution, rolling resistance and
+                     ;; the events, when the world has them
                      (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+                     (if-feature :friction (setf (@ spin-limit) 0.0 (@ spin-impulse) 0.0))
                      (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
                      (if-feature :restitution
                        (setf (@ restitution) (max (aref re-c la) (aref re-c lb)) (@ armed-speed) 0.0))
@@ -4516,8 +4564,8 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                       (if (>= b 0)
                           (progn
                             (setf (@ friction) (fsqrt (* (aref (body-columns-friction buf-a) la)
-                                                         (aref (body-columns-friction buf-b) lb)))
-                                  (@ spin-limit) 0.0)
+                                                         (aref (body-columns-friction buf-b) lb))))
+                            (if-feature :friction (setf (@ spin-limit) 0.0))
                             (if-feature :restitution
                               (setf (@ restitution) (max (aref (body-columns-restitution buf-a) la)
                                                          (aref (body-columns-restitution buf-b) lb))))
@@ -4526,13 +4574,15 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                                                               (aref (body-columns-rolling-resistance buf-b) lb))
                                                          (max r-a r-b)))))
                           (progn
-                            (setf (@ friction) (aref (body-columns-friction buf-a) la)
-                                  (@ spin-limit) (* (@ friction) (spin-arm r-a slop)))
+                            (setf (@ friction) (aref (body-columns-friction buf-a) la))
+                            ;; a spin limit only here, where side b has no radius: the kernels
+                            ;; read the spin columns only where rb is zero ([[#SSMPYW]])
+                            (if-feature :friction (setf (@ spin-limit) (* (@ friction) (spin-arm r-a slop))))
                             (if-feature :restitution
                               (setf (@ restitution) (aref (body-columns-restitution buf-a) la)))
                             (if-feature :rolling-resistance
                               (setf (@ rolling-limit) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)))))
-                      (setf (@ spin-impulse) 0.0)
+                      (if-feature :friction (setf (@ spin-impulse) 0.0))
                       (if-feature (:or :contact-events :hit-events)
                         (setf (@ relative-velocity)
                               (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
@@ -4566,9 +4616,11 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                 ;; padding rows: no contact, the dummy on both sides, every float zero
                 (dotimes (color +physics-max-colors+)
                   (loop for k of-type index from (aref cursor color) below (aref color-starts (1+ color))
-                        do (let ((base (constraint-base k)))
+                        do (let ((base (constraint-base k)) (side-base (side-base k)) (side (side-floats)))
                              (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
-                             (dotimes (o (floor stride 8)) (setf (aref data (+ base (* 8 o))) 0.0)))))))))))
+                             (dotimes (o (floor stride 8)) (setf (aref data (+ base (* 8 o))) 0.0))
+                             (dotimes (o (floor (constraint-columns-side-block cbuf) 8))
+                               (setf (aref side (+ side-base (* 8 o))) 0.0)))))))))))
       (setf (aref (world-statistics world) 1) (coerce (the fixnum color-count) 'double-float))
       color-count)))
 ;; Preparing the constraints:1 ends here
@@ -4766,8 +4818,10 @@ without body contacts, only to body a, for body b is then the dummy row of every
                  (cy (- (* l1 (@ t2y)) (* l2 (@ t1y))))
                  (cz (- (* l1 (@ t2z)) (* l2 (@ t1z))))
                  (ia (@ iia)) (ib (@ iib)) (ar (@ ra)) (br (@ rb))
-                 ;; the spin impulse about the normal joins the rolling impulse: both are angular
-                 (sp (@ spin-impulse))
+                 ;; the spin impulse about the normal joins the rolling impulse: both are
+                 ;; angular. Only a row with no radius on side b has one ([[#SSMPYW]]); any
+                 ;; other's is zero, and is not read
+                 (sp (if (= br 0.0) (@ spin-impulse) 0.0))
                  (rx (if-feature :rolling-resistance (+ (@ rolling-impulse-x) (* sp x)) (* sp x)))
                  (ry (if-feature :rolling-resistance (+ (@ rolling-impulse-y) (* sp y)) (* sp y)))
                  (rz (if-feature :rolling-resistance (+ (@ rolling-impulse-z) (* sp z)) (* sp z))))
@@ -4900,12 +4954,12 @@ contacts, it reads and writes body a alone: body b is then the dummy row, all ze
                              (half (* 0.5 dv))
                              ;; vn now, and the speed of the impact when the gap closes
                              (c (if biased (- vn half) (+ vn half)))
-                             (k (* (* (* 2.0 dv) sp) inv-h))
+                             (fall (* (* (* 2.0 dv) sp) inv-h))
                              (uc (if impact
-                                     (let ((u2 (- (* c c) k))) (fsqrt (if (> u2 0.0) u2 0.0)))
+                                     (let ((u2 (- (* c c) fall))) (fsqrt (if (> u2 0.0) u2 0.0)))
                                      (@ armed-speed)))
                              ;; the leaving speed squared, from here
-                             (wc2 (+ (* (* e e) (* uc uc)) k)))
+                             (wc2 (+ (* (* e e) (* uc uc)) fall)))
                         ;; the events report the approach at impact
                         (when impact (setf (@ relative-velocity) (- uc)))
                         (if (> 0.0 wc2)
@@ -4921,9 +4975,11 @@ contacts, it reads and writes body a alone: body b is then the dummy row, all ze
                     ;; the threshold and has restitution) or is armed ends the pass here, for
                     ;; solve-handing to run the pass with the impact part on it, as it is:
                     ;; nothing of it has been written but the kept gap, which that pass
-                    ;; writes again with the same bits
-                    (if (or (> (@ armed-speed) 0.0)
-                            (and (< vn (- threshold)) (= mni 0.0) (> (@ restitution) 0.0)))
+                    ;; writes again with the same bits. Only a row with restitution is ever
+                    ;; armed, so its armed speed is read only then ([[#SSMPYW]])
+                    (if (and (> (@ restitution) 0.0)
+                             (or (> (@ armed-speed) 0.0)
+                                 (and (< vn (- threshold)) (= mni 0.0))))
                         (return-from solve-pass k)
                         0.0))
                     0.0))
@@ -4991,7 +5047,9 @@ contacts, it reads and writes body a alone: body b is then the dummy row, all ze
               ;; spin friction: an angular impulse about the normal inside |S| <= spin-limit *
               ;; normal impulse; the rolling mass is the spin's too, for a ball's inertia is
               ;; the same about every axis
-              (let ((sl (@ spin-limit)))
+              ;; only a row with no radius on side b has a spin limit ([[#SSMPYW]]); any
+              ;; other's is zero, and is not read
+              (let ((sl (if (= br 0.0) (@ spin-limit) 0.0)))
                 (when (> sl 0.0)
                   (let* ((slimit (* sl new)) (sp (@ spin-impulse))
                          (raw (- sp (* (@ rolling-mass)
@@ -5538,13 +5596,21 @@ every feature is +physics-features+ itself. #FEAT5X"
     (if (equal set +physics-features+) +physics-features+ set)))
 
 (defun constraint-block-floats (features)
-  "The floats of a block of eight constraints in a world of FEATURES: the columns of
+  "The floats of a main block of eight constraints in a world of FEATURES: the columns of
 +constraint-columns+ up to the last one a kernel of FEATURES reads. #FEAT5X"
-  (+ 8 (constraint-offset (cond ((member :restitution features) 'armed-speed)
+  (+ 8 (constraint-offset (cond ((member :restitution features) 'restitution)
                                 ((member :rolling-resistance features) 'rolling-impulse-z)
                                 ((intersection '(:contact-events :hit-events) features) 'relative-velocity)
                                 ((member :boxes features) 'kvt2)
-                                (t 'spin-impulse)))))
+                                (t 'gap)))))
+
+(defun constraint-side-floats (features)
+  "The floats of a side block of eight constraints in a world of FEATURES: the columns of
++constraint-side-columns+ up to the last one a kernel of FEATURES reads, none without friction
+and restitution. #FEAT5X"
+  (cond ((member :restitution features) (+ 8 (constraint-offset 'armed-speed)))
+        ((member :friction features) (+ 8 (constraint-offset 'spin-impulse)))
+        (t 0)))
 
 (defun feature-event-mask (features)
   "The event codes FEATURES record, as bits of a fixnum. #FEAT5X"
@@ -7286,8 +7352,11 @@ median ms and the bytes consed per step of each over its steps FROM..TO. #FBNCH9
           (let ((n (- to from)))
             (list :general (median (first ms)) :specialised (median (second ms))
                   :general-consed (round (first consed) n) :specialised-consed (round (second consed) n)
-                  :general-block (constraint-columns-block (physics-world-constraints general))
-                  :specialised-block (constraint-columns-block (physics-world-constraints special))
+                  ;; a constraint's floats: its main block's and its side block's
+                  :general-block (let ((c (physics-world-constraints general)))
+                                   (+ (constraint-columns-block c) (constraint-columns-side-block c)))
+                  :specialised-block (let ((c (physics-world-constraints special)))
+                                       (+ (constraint-columns-block c) (constraint-columns-side-block c)))
                   :bodies (+ (physics-world-awake-count special) (physics-world-sleeping-count special)))))))))
 
 (defun run-feature-benchmark (&key (stream *standard-output*) (kernels :auto))
