@@ -2683,9 +2683,11 @@ fallen asleep or been removed. Return WORLD. #QKS4GZ"
             (physics-world-fresh-x world) (make-array 0 :element-type 'single-float)
             (physics-world-fresh-y world) (make-array 0 :element-type 'single-float)
             (physics-world-fresh-z world) (make-array 0 :element-type 'single-float)))
-    ;; the grids keep every entry, in its place: the next walks meet what they met before
+    ;; the grids keep every entry, in its place: the next walks meet what they met before;
+    ;; they are marked for a check, as a query view reads the mark
     (hash-grid-trim (physics-world-sleeping-grid world))
     (hash-grid-trim (physics-world-fresh-grid world))
+    (setf (physics-world-sleeping-grid-dirty world) t)
     world))
 
 (defun physics-world-bytes (world)
