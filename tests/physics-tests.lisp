@@ -2468,6 +2468,51 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "the build listed ~D candidates for ~D balls" (luv-physics::pair-list-examined plist) n)))
 ;; P41RS7-crowded-walk-is-bounded ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-build-counts-its-candidates]]
+(define-claim "P41RS7" build-counts-its-candidates
+    "Two balls in reach and one far: a build lists one candidate and one pair, build after build."
+  (let* ((world (make-physics-world :gravity '(0 0 0)))
+         (plist (luv-physics::physics-world-pair-list world)))
+    (add-physics-body world 1.0 1.0 1.0 :radius 0.25)
+    (add-physics-body world 1.55 1.0 1.0 :radius 0.25)
+    (add-physics-body world 4.55 1.0 1.0 :radius 0.25)
+    (flet ((counted (when)
+             (check (= 1 (luv-physics::pair-list-count plist) (luv-physics::pair-list-examined plist))
+                    "~A, the build listed ~D candidates and took ~D pairs" when
+                    (luv-physics::pair-list-examined plist) (luv-physics::pair-list-count plist))))
+      (step-physics-world world)
+      (counted "at the first step")
+      (let ((builds (luv-physics::pair-list-builds plist)))
+        (add-physics-body world 8.05 1.0 1.0 :radius 0.5)
+        (step-physics-world world)
+        (check (= (1+ builds) (luv-physics::pair-list-builds plist)) "the wider cells did not build the list again")
+        (counted "after the cells widened")))))
+;; P41RS7-build-counts-its-candidates ends here
+
+;; [[file:../physics.org::#P41RS7][P41RS7-two-loose-rows-meet]]
+(define-claim "P41RS7" two-loose-rows-meet
+    "Two balls added together, the step's only loose rows, take their pair contact in that step."
+  (let* ((world (make-physics-world :gravity '(0 0 0)))
+         (plist (luv-physics::physics-world-pair-list world))
+         (c (luv-physics::physics-world-contacts world)))
+    (add-physics-body world 1.0 1.0 1.0 :radius 0.25)
+    (add-physics-body world 1.55 1.0 1.0 :radius 0.25)
+    (step-physics-world world)
+    (let* ((builds (luv-physics::pair-list-builds plist))
+           (a (add-physics-body world 4.0 1.0 1.0 :radius 0.25))
+           (b (add-physics-body world 4.45 1.0 1.0 :radius 0.25)))
+      (step-physics-world world)
+      (check (= builds (luv-physics::pair-list-builds plist)) "the list was built again")
+      (check (= 2 (luv-physics::pair-list-loose-count plist))
+             "~D loose rows, not the two added" (luv-physics::pair-list-loose-count plist))
+      (check (= 1 (loop for row below (luv-physics::contact-columns-length c)
+                        count (and (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-pair+)
+                                   (subsetp (list (aref (luv-physics::contact-columns-handle-a c) row)
+                                                  (aref (luv-physics::contact-columns-handle-b c) row))
+                                            (list a b)))))
+             "the two added balls have no pair contact"))))
+;; P41RS7-two-loose-rows-meet ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-contact-geometry]]
 (define-claim "P41RS7" pair-contact-geometry
     "A pair contact's normal, separation and point are the spheres', whichever ball has the lower slot."
@@ -3197,9 +3242,13 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (unload-floor)
       (step-physics-world world)
       (check (braced-p) "with its floor contact unloaded the still light ball was unbraced")
-      (luv-physics::set-physics-body-velocity world light 0.1 0.0 0.0)
-      (step-physics-world world)
-      (check (not (braced-p)) "the light ball moving at 0.1 m/s stayed braced"))))
+      (loop for (vx vy vz) in '((0.1 0.0 0.0) (0.0 0.1 0.0) (0.0 0.0 0.1))
+            do (luv-physics::set-physics-body-velocity world light vx vy vz)
+               (step-physics-world world)
+               (check (not (braced-p)) "the light ball moving at ~S m/s stayed braced" (list vx vy vz))
+               (luv-physics::set-physics-body-velocity world light 0.0 0.0 0.0)
+               (dotimes (i 30) (step-physics-world world))
+               (check (braced-p) "stopped after moving at ~S m/s, the light ball is not braced" (list vx vy vz))))))
 ;; PR3PAR-bracing-holds-while-still ends here
 
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-braced-body-stays-put]]
