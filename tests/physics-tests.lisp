@@ -2065,6 +2065,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= 1 (luv-physics::contact-table-cursor table)) "cursor ~D" (luv-physics::contact-table-cursor table)))))
 ;; G3NCNT-cursor-trusted-below-length ends here
 
+;; [[file:../physics.org::#G3NCNT][G3NCNT-gravity-step-every-axis]]
+(define-claim "G3NCNT" gravity-step-every-axis
+    "gravity-step is dt |g| exactly for gravity (3 4 12) in every order of its components, of either sign."
+  (dolist (g '((3 4 12) (12 3 4) (4 12 3) (-3 -4 -12) (12 -3 4)))
+    (let ((step (luv-physics::gravity-step (make-physics-world :gravity g) 0.5)))
+      (check (= 6.5 step) "gravity ~S: a half second's step of ~S m/s, not 6.5" g step))))
+;; G3NCNT-gravity-step-every-axis ends here
+
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sorted-rows-keep-handles]]
 (define-claim "G4R1D5" sorted-rows-keep-handles
     "After the grid phase sorts scrambled rows, each handle still names its own body."
