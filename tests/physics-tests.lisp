@@ -2879,13 +2879,15 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#SW33P7][SW33P7-parallel-only-below-threshold]]
 (define-claim "SW33P7" parallel-only-below-threshold
-    "A ray on a cell boundary drifting at exactly 1e-12 crosses it at once and finds that column's cell."
-  (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
-    (fill-terrain terrain 4 0 -16 5 1 32 t)
-    ;; a power of two for the speed, so that the direction's x is exactly -1e-12
-    (let ((h (add-physics-body w 5.0 2.2 3.5 :radius 0.3 :vx (* 64 -1e-12) :vy -64.0)))
-      (step-physics-world w)
-      (check (= 1 (length (terrain-contacts w h))) "~D terrain contacts" (length (terrain-contacts w h))))))
+    "A ray on a cell boundary drifting at exactly 1e-12 crosses it at once and finds that column's cell; at 2^-40, not."
+  ;; a power of two for the speed, so that the direction's x is exactly the drift
+  (loop for (drift contacts) in (list (list -1e-12 1) (list (- (expt 2.0 -40)) 0))
+        do (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+             (fill-terrain terrain 4 0 -16 5 1 32 t)
+             (let ((h (add-physics-body w 5.0 2.2 3.5 :radius 0.3 :vx (* 64 drift) :vy -64.0)))
+               (step-physics-world w)
+               (check (= contacts (length (terrain-contacts w h))) "drifting at ~A: ~D terrain contacts, not ~D"
+                      drift (length (terrain-contacts w h)) contacts)))))
 ;; SW33P7-parallel-only-below-threshold ends here
 
 ;; [[file:../physics.org::#SW33P7][SW33P7-sweep-contact-exact]]
@@ -3205,6 +3207,27 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "~D constraints overflowed at step 200 (most over steps 100-200: ~D)"
            (luv-physics::physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
+
+;; [[file:../physics.org::#SSMPYW][SSMPYW-one-sided-above-the-used]]
+(define-claim "SSMPYW" one-sided-above-the-used
+    "Two touching balls on a floor: the pair in colour 0, both floor contacts in colour 1, none in overflow."
+  (let* ((w (make-floor-world :sleep nil))
+         (cbuf (luv-physics::physics-world-constraints w))
+         (starts (luv-physics::physics-world-color-starts w)))
+    (add-physics-body w 2.5 0.245 2.5 :radius 0.25)
+    (add-physics-body w 2.99 0.245 2.5 :radius 0.25)
+    (step-physics-world w)
+    (let ((dummy (luv-physics::physics-world-awake-count w)) (seen '()))
+      (dotimes (c (1+ luv-physics::+physics-max-colors+))
+        (loop for k from (aref starts c) below (aref starts (1+ c))
+              when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
+                do (push (list c (if (or (= dummy (aref (luv-physics::constraint-columns-body-a cbuf) k))
+                                         (= dummy (aref (luv-physics::constraint-columns-body-b cbuf) k)))
+                                     :one-sided :pair))
+                         seen)))
+      (check (equal '((0 :pair) (1 :one-sided) (1 :one-sided)) (sort seen #'< :key #'first))
+             "colours of the constraints: ~S" seen))))
+;; SSMPYW-one-sided-above-the-used ends here
 
 ;; [[file:../physics.org::#KTXT7V][KTXT7V-kernel-is-its-text]]
 (define-claim "KTXT7V" kernel-is-its-text
