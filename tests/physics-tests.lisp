@@ -3282,6 +3282,22 @@ function of a column name that reads row K's float in that column. #T3STK1"
                (check (braced-p) "stopped after moving at ~S m/s, the light ball is not braced" (list vx vy vz))))))
 ;; PR3PAR-bracing-holds-while-still ends here
 
+;; [[file:../physics.org::#PR3PAR][PR3PAR-brace-side-at-its-limits]]
+(define-claim "PR3PAR" brace-side-at-its-limits
+    "brace-side: the lighter braced row under the other is static past 4x and 0.9, not at them."
+  (flet ((side (braced-a braced-b inverse-a inverse-b rise)
+           (luv-physics::brace-side
+            (make-array 2 :element-type 'fixnum :initial-contents (list braced-a braced-b))
+            (make-array 2 :element-type 'single-float :initial-contents (list inverse-a inverse-b))
+            4.0 0 1 rise)))
+    (loop for (case want) in '(((1 0 4.5 1.0 0.95) :a) ((1 0 4.5 1.0 0.9) nil) ((1 0 4.5 1.0 0.6) nil)
+                               ((1 0 4.0 1.0 0.95) nil) ((0 1 4.5 1.0 0.95) nil) ((1 0 4.5 1.0 -0.95) nil)
+                               ((0 1 1.0 4.5 -0.95) :b) ((0 1 1.0 4.5 -0.9) nil) ((0 1 1.0 4.5 -0.6) nil)
+                               ((0 1 1.0 4.0 -0.95) nil) ((1 0 1.0 4.5 -0.95) nil) ((0 1 1.0 4.5 0.95) nil))
+          do (check (eq want (apply #'side case)) "braced, inverse masses and rise ~S: ~S, not ~S"
+                    case (apply #'side case) want))))
+;; PR3PAR-brace-side-at-its-limits ends here
+
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-braced-body-stays-put]]
 (define-claim "PR3PAR" braced-body-stays-put
     "A braced body set rolling below the sleep speed stays under the heavy body that rests on it."
