@@ -2784,6 +2784,20 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                             (length (terrain-contacts w h))))))))))
 ;; MYWH16-overshoot-every-side ends here
 
+;; [[file:../physics.org::#MYWH16][MYWH16-three-layers-gathered]]
+(define-claim "MYWH16" three-layers-gathered
+    "A ball whose neighbourhood is three cells deep along x, y or z meets the one solid cell of the far layer."
+  (dotimes (axis 3)
+    (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+      (flet ((along (a others) (loop for k below 3 collect (if (= k axis) a others))))
+        (fill-terrain terrain -16 -1 -16 32 0 32 nil)
+        (destructuring-bind (x y z) (along -1 3) (fill-terrain terrain x y z (1+ x) (1+ y) (1+ z) t))
+        (let ((h (apply #'add-physics-body w (append (along -1.46 3.4) '(:radius 0.45)))))
+          (step-physics-world w)
+          (check (= 1 (length (terrain-contacts w h)))
+                 "three cells deep along ~C: ~D terrain contacts" (char "xyz" axis) (length (terrain-contacts w h))))))))
+;; MYWH16-three-layers-gathered ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-rolls-over-ledge]]
 (define-claim "MYWH16" rolls-over-ledge
     "Rolling off a one-cell ledge, the edge contact tilts diagonal while pushing; the ball lands below."
@@ -3129,6 +3143,22 @@ function of a column name that reads row K's float in that column. #T3STK1"
                     "after ~D misses among five contacts the prune left ~D, not ~D"
                     misses (luv-physics::contact-table-misses table) after))))
 ;; PRUN3D-reorder-threshold ends here
+
+;; [[file:../physics.org::#PRUN3D][PRUN3D-last-row-pruned-clean]]
+(define-claim "PRUN3D" last-row-pruned-clean
+    "The contact in the last row pruned, the table holds one key for one row."
+  (let* ((w (make-floor-world :sleep nil))
+         (c (luv-physics::physics-world-contacts w))
+         (table (luv-physics::physics-world-contact-table w)))
+    (dotimes (i 2) (add-physics-body w (+ 1.5 (* 2.0 i)) 0.245 3.5 :collide-with-bodies nil))
+    (dotimes (i 5) (step-physics-world w))
+    (check (= 2 (luv-physics::contact-columns-length c)))
+    (luv-physics::remove-physics-body w (aref (luv-physics::contact-columns-handle-a c) 1))
+    (step-physics-world w)
+    (check (= 1 (luv-physics::contact-columns-length c) (luv-physics::contact-table-count table))
+           "~D rows and ~D keys" (luv-physics::contact-columns-length c) (luv-physics::contact-table-count table))
+    (check (= 0 (luv-physics::contact-table-find table (aref (luv-physics::contact-columns-key c) 0))))))
+;; PRUN3D-last-row-pruned-clean ends here
 
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
 (define-claim "SSMPYW" colours-disjoint
