@@ -2101,6 +2101,27 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; G4R1D5-sorted-rows-keep-handles ends here
 
+;; [[file:../physics.org::#G4R1D5][G4R1D5-sort-room-kept]]
+(define-claim "G4R1D5" sort-room-kept
+    "A grid built again with the awake buffer no larger keeps the sort's columns."
+  (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+         (awake (luv-physics::physics-world-awake w)))
+    (add-physics-body w 1.0 1.0 1.0 :radius 0.25)
+    (add-physics-body w 1.55 1.0 1.0 :radius 0.25)
+    (step-physics-world w)
+    (let ((capacity (luv-physics::body-columns-capacity awake))
+          (places (luv-physics::physics-world-row-places w))
+          (undo (luv-physics::physics-world-undo-rows w))
+          (step (luv-physics::physics-world-awake-grid-step w)))
+      (add-physics-body w 8.05 1.0 1.0 :radius 0.5)
+      (step-physics-world w)
+      (check (/= step (luv-physics::physics-world-awake-grid-step w)) "the grid was not built again")
+      (check (= capacity (luv-physics::body-columns-capacity awake)) "the awake buffer grew")
+      (check (and (eq places (luv-physics::physics-world-row-places w))
+                  (eq undo (luv-physics::physics-world-undo-rows w)))
+             "the grid's build took new room for the sort"))))
+;; G4R1D5-sort-room-kept ends here
+
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grids-stay-lean]]
 (define-claim "G4R1D5" sleeping-grids-stay-lean
     "Sleeping enters the fresh grid alone; removed sleepers leave the grids at the next step."
