@@ -1335,6 +1335,27 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "a key no longer finds its row"))))
 ;; Y5H8KC-deleting-an-absent-key-changes-nothing ends here
 
+;; [[file:../physics.org::#Y5H8KC][Y5H8KC-deleting-keeps-the-rest]]
+(define-claim "Y5H8KC" deleting-keeps-the-rest
+    "300 keys put, every other one deleted: the rest find their rows, the deleted none, 150 slots used."
+  (let ((table (luv-physics::make-contact-table)))
+    (flet ((key (k) (* 7919 (1+ k))))
+      (dotimes (k 300) (luv-physics::contact-table-put table (key k) k))
+      (let* ((slots (luv-physics::contact-table-slots table)) (mask (luv-physics::contact-table-mask table)))
+        (check (> (loop for i below (1+ mask)
+                        count (and (/= -1 (aref slots (* 2 i)))
+                                   (/= i (luv-physics::contact-slot-hash (aref slots (* 2 i)) mask))))
+                  10)
+               "too few keys lie away from their home slot to test the shifting"))
+      (loop for k from 1 below 300 by 2 do (luv-physics::contact-table-delete table (key k)))
+      (check (= 150 (luv-physics::contact-table-count table)) "the count is ~D" (luv-physics::contact-table-count table))
+      (check (loop for k below 300 always (= (if (evenp k) k -1) (luv-physics::contact-table-find table (key k))))
+             "a kept key lost its row, or a deleted key still finds one")
+      (let ((slots (luv-physics::contact-table-slots table)))
+        (check (= 150 (loop for i from 0 below (length slots) by 2 count (/= -1 (aref slots i))))
+               "the slots do not hold exactly the 150 kept keys")))))
+;; Y5H8KC-deleting-keeps-the-rest ends here
+
 ;; [[file:../physics.org::#D9W4CH][D9W4CH-cell-floor-is-floor]]
 (define-claim "D9W4CH" cell-floor-is-floor
     "cell-floor = floor of the clamped value, on signed zeros, integers, halves, bounds and 20000 samples."
