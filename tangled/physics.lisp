@@ -2886,6 +2886,15 @@ the fresh one, 0 neither; grown to the handle table's slots. #G4R1D5"
     (setf (aref of slot) 0)
     handle))
 
+(defun sleeping-grids-spent-p (world)
+  "True when WORLD's settled sleeping grid must be built again from every sleeper: the cell size
+changed, or the fresh sleepers, or the settled grid's dead entries, outnumber an eighth of the
+settled grid (and 256). #G4R1D5"
+  (let ((bound (max 256 (floor (physics-world-settled-count world) 8))))
+    (or (/= (hash-grid-inv-cell (physics-world-sleeping-grid world)) (/ 1.0 (grid-cell-size world)))
+        (> (physics-world-fresh-count world) bound)
+        (> (physics-world-settled-stale world) bound))))
+
 (defun ensure-sleeping-grid (world)
   "Bring the sleeping grids up to date. Bodies that fell asleep since the settled grid was built
 go into the fresh grid, which is built again, from them alone, whenever one more falls asleep.
@@ -2896,12 +2905,9 @@ the settled grid (and 256). Return the settled grid. #G4R1D5"
          (fresh (physics-world-fresh-grid world))
          (size (grid-cell-size world))
          (s (physics-world-sleeping world))
-         (of (sleeping-grid-of world))
-         (bound (max 256 (floor (physics-world-settled-count world) 8))))
+         (of (sleeping-grid-of world)))
     (declare (type fixnum-column of))
-    (cond ((or (/= (hash-grid-inv-cell grid) (/ 1.0 size))
-               (> (physics-world-fresh-count world) bound)
-               (> (physics-world-settled-stale world) bound))
+    (cond ((sleeping-grids-spent-p world)
            (let ((n (body-columns-length s)) (handles (body-columns-handle s)))
              ;; room for every body the world has a slot for, so that the settled grid grows seldom
              (hash-grid-reserve grid (max n (length of)))
@@ -3118,6 +3124,15 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
                                (aref max-x b) (aref max-y b) (aref max-z b))))))))))
     (setf (physics-world-added-count world) 0)
     woken))
+
+(defun quiet-wake-phase (world)
+  "Phase 2 of a world without body contacts and boxes, where nothing reaches a sleeper: wake
+nothing, forget the bodies added since the last step, and build the sleeping grids again only
+when they are spent (sleeping-grids-spent-p), so that the fresh sleepers' list stays bounded.
+Return 0. #W4K3PH"
+  (when (sleeping-grids-spent-p world) (ensure-sleeping-grid world))
+  (setf (physics-world-added-count world) 0)
+  0)
 
 (defun note-added-body (world handle)
   "Remember that HANDLE's body was added since the last step, for the wake phase. #W4K3PH"
@@ -5050,7 +5065,7 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
                              (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
              (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
 
-(define-featured-kernel (store-phase :features (:boxes :contact-events :hit-events :rolling-resistance)) (world)
+(define-featured-kernel (store-phase :features (:body-contacts :boxes :contact-events :hit-events :rolling-resistance)) (world)
   "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
 speed; in a world with sleepers, mark the awake rows that only sleepers and terrain touch
@@ -5068,8 +5083,9 @@ so its undo log closes. #ST0R3S"
          (max-penetration 0.0) (max-approach 0.0)
          (n (body-columns-length awake))
          (held (physics-world-held world))
-         ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts
-         (marking (held-marking-p world)))
+         ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts;
+         ;; without body contacts and boxes every contact is terrain's, which marks nothing
+         (marking (if-feature (:or :body-contacts :boxes) (held-marking-p world) nil)))
     (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
              (type index n) (type fixnum-column held)
              (ignorable ids awake sleeping hit-speed) #.+kernel-policy+)
@@ -5087,9 +5103,13 @@ so its undo log closes. #ST0R3S"
                  (x (@ nx)) (y (@ ny)) (z (@ nz))
                  ;; the gap the last relax pass kept, less the slop the prepared gap carries
                  (gap (- (@ gap) slop))
-                 (vn (+ (* (- (aref v b) (aref v a)) x) (* (- (aref v (+ b 1)) (aref v (+ a 1))) y)
-                        (* (- (aref v (+ b 2)) (aref v (+ a 2))) z) (if-feature :boxes (@ kvn) 0.0))))
-            (declare (type fixnum c) (type index base g) (ignorable pushed))
+                 ;; without body contacts the other side is the dummy row, whose velocity is
+                 ;; the zero the prepare phase wrote, which no one-sided kernel changes
+                 (vn (+ (* (- (if-feature :body-contacts (aref v b) 0.0) (aref v a)) x)
+                        (* (- (if-feature :body-contacts (aref v (+ b 1)) 0.0) (aref v (+ a 1))) y)
+                        (* (- (if-feature :body-contacts (aref v (+ b 2)) 0.0) (aref v (+ a 2))) z)
+                        (if-feature :boxes (@ kvn) 0.0))))
+            (declare (type fixnum c) (type index base g) (ignorable pushed b))
             (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
                   (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2))
             ;; without rolling resistance the contact's rolling impulses stay the zeros it was
@@ -5157,34 +5177,38 @@ reading and writing at most eight arrays. #F1NAL5"
                (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
           (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
 
-(defun finalize-phase (world)
+(define-featured-kernel (finalize-phase :features (:body-contacts :boxes :sleep :mortal)) (world)
   "Phase 11: fold deltas into positions and solver velocities into the rows, turn orientations,
 age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
-sleep. Rows are visited from the last down, so relocation never skips one. #F1NAL5"
+sleep. Rows are visited from the last down, so relocation never skips one. Compiled for fewer
+features it holds no ageing without :mortal, no sleep without :sleep, and no reading of the
+store phase's marks without body contacts and boxes, which alone make them. #F1NAL5"
   (let* ((awake (physics-world-awake world))
          (sleeping (physics-world-sleeping world))
          (v (physics-world-velocities world))
          (d (physics-world-deltas world))
          (dt (physics-world-current-dt world))
          (inv-dt (/ 1.0 dt))
-         (sleep-p (physics-world-sleep-enabled world))
+         (sleep-p (if-feature :sleep (physics-world-sleep-enabled world) nil))
          (sleep-speed (f32 (physics-world-sleep-speed world)))
          (time-to-sleep (f32 (physics-world-time-to-sleep world)))
          (limit (f32 +physics-coordinate-limit+))
          ;; the store phase's marks, read before any row moves (held-marking-p)
-         (marked (and sleep-p (held-marking-p world)))
+         (marked (if-feature (:or :body-contacts :boxes) (and sleep-p (held-marking-p world)) nil))
          (held (physics-world-held world)))
     (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep limit)
-             (type body-columns awake sleeping) (type fixnum-column held) #.+kernel-policy+)
+             (type body-columns awake sleeping) (type fixnum-column held)
+             (ignorable inv-dt sleep-speed time-to-sleep held) #.+kernel-policy+)
     (fold-solver-state awake v d dt)
     ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
     ;; moved, so the solver's rows still match it
     (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle) awake
+      (declare (ignorable vx vy vz wx wy wz radius sleep-time age life))
       (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
         (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
                (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
                (%remove-body world +set-awake+ i))
-              ((and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
+              ((if-feature :mortal (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i))) nil)
                (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
                (%remove-body world +set-awake+ i))
               (sleep-p
@@ -5201,7 +5225,7 @@ sleep. Rows are visited from the last down, so relocation never skips one. #F1NA
                        (sleep-physics-body world i))
                      (setf (aref sleep-time i) 0.0)))))))
     ;; only a world with a mortal sleeper walks the sleeping buffer
-    (when (plusp (physics-world-mortal-sleepers world))
+    (when (if-feature :mortal (plusp (physics-world-mortal-sleepers world)) nil)
     (with-body-columns (x y z age life handle) sleeping
       (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
         (when (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
@@ -5514,8 +5538,9 @@ and the body is not woken. #FEAT5X"
 
 (defun feature-phases (features phases)
   "PHASES, a list of phase names, with NIL in place of each phase FEATURES leave out (so a phase
-keeps its place, where the phase clock counts it) and the prepare and store phases compiled for
-FEATURES. #FEAT5X"
+keeps its place, where the phase clock counts it), the prepare, store and finalize phases
+compiled for FEATURES, and quiet-wake-phase for the wake phase of a world without body contacts
+and boxes. #FEAT5X"
   (flet ((has (f) (member f features)))
     (loop for phase in phases
           collect (unless (case phase
@@ -5524,7 +5549,10 @@ FEATURES. #FEAT5X"
                             (pair-phase (not (has :body-contacts)))
                             (terrain-phase (not (has :terrain)))
                             (box-phase (not (has :boxes))))
-                    (if (member phase '(prepare-phase store-phase)) (featured-kernel phase features) phase)))))
+                    (cond ((member phase '(prepare-phase store-phase finalize-phase)) (featured-kernel phase features))
+                          ;; nothing a step moves reaches a sleeper
+                          ((and (eq phase 'wake-phase) (not (has :body-contacts)) (not (has :boxes))) 'quiet-wake-phase)
+                          (t phase))))))
 
 (defun world-phases (world)
   "The phases WORLD's step runs: *physics-phases* for a world of every feature, else those its
@@ -5570,7 +5598,8 @@ keep them where featured-kernel finds them. #FEAT5X"
                             collect `(setf (gethash '(,name . ,key) *featured-kernels*)
                                            ,(featured-kernel-form name key))))))
 
-(precompile-featured-kernels (warm-start-range solve-range prepare-frames-range prepare-phase store-phase))
+(precompile-featured-kernels (warm-start-range solve-range prepare-frames-range prepare-phase store-phase
+                                              finalize-phase))
 
 (defgeneric wide-kernel-names (kernels)
   (:documentation "The names of the featured warm start, solve and frame pass of the wide family

@@ -2377,6 +2377,38 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (luv-physics::physics-body-awake-p w h) "along ~C the sleeper by the box's end slept on" (char "xyz" axis)))))
 ;; W4K3PH-long-box-wakes-at-its-ends ends here
 
+;; [[file:../physics.org::#W4K3PH][W4K3PH-quiet-wake-bounded]]
+(define-claim "W4K3PH" quiet-wake-bounded
+    "The quiet wake phase builds the sleeping grids again when spent: the fresh list stays bounded, sleepers are found."
+  (multiple-value-bind (world before)
+      (luv-physics::feature-scene :fountain :features '(:terrain :friction :sleep :mortal))
+    (check (member 'luv-physics::quiet-wake-phase (luv-physics::world-phases world)))
+    (let ((highest 0) (falls 0) (last 0) (over 0) (asked 0) (missed 0))
+      (dotimes (i 9000)
+        (funcall before i)
+        (let ((awake (physics-world-awake-count world)))
+          (step-physics-world world)
+          (let ((fresh (luv-physics::physics-world-fresh-count world)))
+            (when (> fresh (+ (max 256 (floor (luv-physics::physics-world-settled-count world) 8)) awake))
+              (incf over))
+            (when (< fresh last) (incf falls))
+            (setf highest (max highest fresh) last fresh)))
+        ;; every 250 steps, each sleeper is looked for at its own centre
+        (when (zerop (mod (1+ i) 250))
+          (let ((sleeping (luv-physics::physics-world-sleeping world)))
+            (luv-physics::with-body-columns (x y z handle) sleeping
+              (dotimes (row (luv-physics::body-columns-length sleeping))
+                (let ((found nil) (h (aref handle row)))
+                  (map-physics-bodies-in-sphere (lambda (other) (when (= other h) (setf found t)))
+                                                world (aref x row) (aref y row) (aref z row) 0.01)
+                  (incf asked)
+                  (unless found (incf missed))))))))
+      (check (zerop over) "on ~D steps the fresh list outgrew its bound (~D at most)" over highest)
+      (check (plusp falls) "the fresh list never came back down (~D at most)" highest)
+      (check (plusp asked) "no sleeper was looked for")
+      (check (zerop missed) "~D of ~D sleepers were not found at their own centres" missed asked))))
+;; W4K3PH-quiet-wake-bounded ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
 (define-claim "P41RS7" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
@@ -3310,7 +3342,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                                     :hit-events :contact-events))
                (luv-physics::prepare-frames-range "#PR3PAR" (:boxes))
                (luv-physics::prepare-phase "#PR3PAR" (:body-contacts :boxes :restitution :rolling-resistance :contact-events :hit-events))
-               (luv-physics::store-phase "#ST0R3S" (:boxes :contact-events :hit-events :rolling-resistance))
+               (luv-physics::store-phase "#ST0R3S" (:body-contacts :boxes :contact-events :hit-events :rolling-resistance))
+               (luv-physics::finalize-phase "#F1NAL5" (:body-contacts :boxes :sleep :mortal))
                (luv-physics::warm-start-blocks/sse "#W1D3KF" (:body-contacts :friction :rolling-resistance))
                (luv-physics::solve-blocks/sse "#W1D3KF" (:body-contacts :boxes :friction :rolling-resistance :restitution
                                                          :hit-events :contact-events))
@@ -4037,11 +4070,15 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (phases (remove nil (luv-physics::world-phases world))))
         (dolist (absent '(luv-physics::grid-phase luv-physics::pair-phase luv-physics::box-phase))
           (check (not (member absent phases)) "~A runs ~A" family absent))
-        (check (equal '(luv-physics::prepare-phase luv-physics::store-phase)
+        (check (equal '(luv-physics::prepare-phase luv-physics::store-phase luv-physics::finalize-phase)
                       (loop for name in luv-physics::*physics-phases*
                             for phase in (luv-physics::world-phases world)
                             when (functionp phase) collect name))
-               "the fountain's own phases are not its prepare and store phases")
+               "the fountain's own phases are not its prepare, store and finalize phases")
+        (check (eq 'luv-physics::quiet-wake-phase
+                   (nth (position 'luv-physics::wake-phase luv-physics::*physics-phases*) (luv-physics::world-phases world)))
+               "~A: the fountain runs ~A as its wake phase" family
+               (nth (position 'luv-physics::wake-phase luv-physics::*physics-phases*) (luv-physics::world-phases world)))
         (loop for name in luv-physics::*physics-phases*
               for phase in (luv-physics::world-phases world)
               when (functionp phase)
