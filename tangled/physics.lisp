@@ -4329,7 +4329,7 @@ thirds of the radius of its contact patch, sqrt(2 RADIUS SLOP). #PR3PAR"
 (declaim (inline brace-side))
 (defun brace-side (braced inverse-mass brace-ratio la lb rise)
   "Which side of a contact between awake rows LA and LB is static to the other: :a when LA is
-BRACED and at least BRACE-RATIO times lighter than LB, which rests on it from above (RISE, the
+BRACED and more than BRACE-RATIO times lighter than LB, which rests on it from above (RISE, the
 upward part of the normal from LA to LB, above 0.9); :b the other way round; else nil. #PR3PAR"
   (declare (type fixnum-column braced) (type f32-column inverse-mass) (type index la lb)
            (type single-float brace-ratio rise))
@@ -4627,7 +4627,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
       color-count)))
 ;; Preparing the constraints:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:6]]
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:7]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
@@ -4686,7 +4686,7 @@ substep's solve reads. Compiled without boxes, it has no box velocity to resolve
   (let ((cbuf (physics-world-constraints world)))
     (funcall (kernel-variant-prepare-frames (world-kernel-variant world kernels))
              cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:6 ends here
+;; Preparing the constraints:7 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)

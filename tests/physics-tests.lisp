@@ -1333,6 +1333,27 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "a key no longer finds its row"))))
 ;; Y5H8KC-deleting-an-absent-key-changes-nothing ends here
 
+;; [[file:../physics.org::#Y5H8KC][Y5H8KC-deleting-keeps-the-rest]]
+(define-claim "Y5H8KC" deleting-keeps-the-rest
+    "300 keys put, every other one deleted: the rest find their rows, the deleted none, 150 slots used."
+  (let ((table (luv-physics::make-contact-table)))
+    (flet ((key (k) (* 7919 (1+ k))))
+      (dotimes (k 300) (luv-physics::contact-table-put table (key k) k))
+      (let* ((slots (luv-physics::contact-table-slots table)) (mask (luv-physics::contact-table-mask table)))
+        (check (> (loop for i below (1+ mask)
+                        count (and (/= -1 (aref slots (* 2 i)))
+                                   (/= i (luv-physics::contact-slot-hash (aref slots (* 2 i)) mask))))
+                  10)
+               "too few keys lie away from their home slot to test the shifting"))
+      (loop for k from 1 below 300 by 2 do (luv-physics::contact-table-delete table (key k)))
+      (check (= 150 (luv-physics::contact-table-count table)) "the count is ~D" (luv-physics::contact-table-count table))
+      (check (loop for k below 300 always (= (if (evenp k) k -1) (luv-physics::contact-table-find table (key k))))
+             "a kept key lost its row, or a deleted key still finds one")
+      (let ((slots (luv-physics::contact-table-slots table)))
+        (check (= 150 (loop for i from 0 below (length slots) by 2 count (/= -1 (aref slots i))))
+               "the slots do not hold exactly the 150 kept keys")))))
+;; Y5H8KC-deleting-keeps-the-rest ends here
+
 ;; [[file:../physics.org::#D9W4CH][D9W4CH-cell-floor-is-floor]]
 (define-claim "D9W4CH" cell-floor-is-floor
     "cell-floor = floor of the clamped value, on signed zeros, integers, halves, bounds and 20000 samples."
@@ -2111,6 +2132,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= 1 (luv-physics::contact-table-cursor table)) "cursor ~D" (luv-physics::contact-table-cursor table)))))
 ;; G3NCNT-cursor-trusted-below-length ends here
 
+;; [[file:../physics.org::#G3NCNT][G3NCNT-gravity-step-every-axis]]
+(define-claim "G3NCNT" gravity-step-every-axis
+    "gravity-step is dt |g| exactly for gravity (3 4 12) in every order of its components, of either sign."
+  (dolist (g '((3 4 12) (12 3 4) (4 12 3) (-3 -4 -12) (12 -3 4)))
+    (let ((step (luv-physics::gravity-step (make-physics-world :gravity g) 0.5)))
+      (check (= 6.5 step) "gravity ~S: a half second's step of ~S m/s, not 6.5" g step))))
+;; G3NCNT-gravity-step-every-axis ends here
+
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sorted-rows-keep-handles]]
 (define-claim "G4R1D5" sorted-rows-keep-handles
     "After the grid phase sorts scrambled rows, each handle still names its own body."
@@ -2138,6 +2167,27 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "no row moved")
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; G4R1D5-sorted-rows-keep-handles ends here
+
+;; [[file:../physics.org::#G4R1D5][G4R1D5-sort-room-kept]]
+(define-claim "G4R1D5" sort-room-kept
+    "A grid built again with the awake buffer no larger keeps the sort's columns."
+  (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+         (awake (luv-physics::physics-world-awake w)))
+    (add-physics-body w 1.0 1.0 1.0 :radius 0.25)
+    (add-physics-body w 1.55 1.0 1.0 :radius 0.25)
+    (step-physics-world w)
+    (let ((capacity (luv-physics::body-columns-capacity awake))
+          (places (luv-physics::physics-world-row-places w))
+          (undo (luv-physics::physics-world-undo-rows w))
+          (step (luv-physics::physics-world-awake-grid-step w)))
+      (add-physics-body w 8.05 1.0 1.0 :radius 0.5)
+      (step-physics-world w)
+      (check (/= step (luv-physics::physics-world-awake-grid-step w)) "the grid was not built again")
+      (check (= capacity (luv-physics::body-columns-capacity awake)) "the awake buffer grew")
+      (check (and (eq places (luv-physics::physics-world-row-places w))
+                  (eq undo (luv-physics::physics-world-undo-rows w)))
+             "the grid's build took new room for the sort"))))
+;; G4R1D5-sort-room-kept ends here
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grids-stay-lean]]
 (define-claim "G4R1D5" sleeping-grids-stay-lean
@@ -2546,6 +2596,51 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "the build listed ~D candidates for ~D balls" (luv-physics::pair-list-examined plist) n)))
 ;; P41RS7-crowded-walk-is-bounded ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-build-counts-its-candidates]]
+(define-claim "P41RS7" build-counts-its-candidates
+    "Two balls in reach and one far: a build lists one candidate and one pair, build after build."
+  (let* ((world (make-physics-world :gravity '(0 0 0)))
+         (plist (luv-physics::physics-world-pair-list world)))
+    (add-physics-body world 1.0 1.0 1.0 :radius 0.25)
+    (add-physics-body world 1.55 1.0 1.0 :radius 0.25)
+    (add-physics-body world 4.55 1.0 1.0 :radius 0.25)
+    (flet ((counted (when)
+             (check (= 1 (luv-physics::pair-list-count plist) (luv-physics::pair-list-examined plist))
+                    "~A, the build listed ~D candidates and took ~D pairs" when
+                    (luv-physics::pair-list-examined plist) (luv-physics::pair-list-count plist))))
+      (step-physics-world world)
+      (counted "at the first step")
+      (let ((builds (luv-physics::pair-list-builds plist)))
+        (add-physics-body world 8.05 1.0 1.0 :radius 0.5)
+        (step-physics-world world)
+        (check (= (1+ builds) (luv-physics::pair-list-builds plist)) "the wider cells did not build the list again")
+        (counted "after the cells widened")))))
+;; P41RS7-build-counts-its-candidates ends here
+
+;; [[file:../physics.org::#P41RS7][P41RS7-two-loose-rows-meet]]
+(define-claim "P41RS7" two-loose-rows-meet
+    "Two balls added together, the step's only loose rows, take their pair contact in that step."
+  (let* ((world (make-physics-world :gravity '(0 0 0)))
+         (plist (luv-physics::physics-world-pair-list world))
+         (c (luv-physics::physics-world-contacts world)))
+    (add-physics-body world 1.0 1.0 1.0 :radius 0.25)
+    (add-physics-body world 1.55 1.0 1.0 :radius 0.25)
+    (step-physics-world world)
+    (let* ((builds (luv-physics::pair-list-builds plist))
+           (a (add-physics-body world 4.0 1.0 1.0 :radius 0.25))
+           (b (add-physics-body world 4.45 1.0 1.0 :radius 0.25)))
+      (step-physics-world world)
+      (check (= builds (luv-physics::pair-list-builds plist)) "the list was built again")
+      (check (= 2 (luv-physics::pair-list-loose-count plist))
+             "~D loose rows, not the two added" (luv-physics::pair-list-loose-count plist))
+      (check (= 1 (loop for row below (luv-physics::contact-columns-length c)
+                        count (and (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-pair+)
+                                   (subsetp (list (aref (luv-physics::contact-columns-handle-a c) row)
+                                                  (aref (luv-physics::contact-columns-handle-b c) row))
+                                            (list a b)))))
+             "the two added balls have no pair contact"))))
+;; P41RS7-two-loose-rows-meet ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-contact-geometry]]
 (define-claim "P41RS7" pair-contact-geometry
     "A pair contact's normal, separation and point are the spheres', whichever ball has the lower slot."
@@ -2809,6 +2904,20 @@ function of a column name that reads row K's float in that column. #T3STK1"
                                             (length (terrain-contacts w h))))))))))
 ;; MYWH16-overshoot-every-side ends here
 
+;; [[file:../physics.org::#MYWH16][MYWH16-three-layers-gathered]]
+(define-claim "MYWH16" three-layers-gathered
+    "A ball whose neighbourhood is three cells deep along x, y or z meets the one solid cell of the far layer."
+  (dotimes (axis 3)
+    (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+      (flet ((along (a others) (loop for k below 3 collect (if (= k axis) a others))))
+        (fill-terrain terrain -16 -1 -16 32 0 32 nil)
+        (destructuring-bind (x y z) (along -1 3) (fill-terrain terrain x y z (1+ x) (1+ y) (1+ z) t))
+        (let ((h (apply #'add-physics-body w (append (along -1.46 3.4) '(:radius 0.45)))))
+          (step-physics-world w)
+          (check (= 1 (length (terrain-contacts w h)))
+                 "three cells deep along ~C: ~D terrain contacts" (char "xyz" axis) (length (terrain-contacts w h))))))))
+;; MYWH16-three-layers-gathered ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-rolls-over-ledge]]
 (define-claim "MYWH16" rolls-over-ledge
     "Rolling off a one-cell ledge, the edge contact tilts diagonal while pushing; the ball lands below."
@@ -2904,13 +3013,15 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#SW33P7][SW33P7-parallel-only-below-threshold]]
 (define-claim "SW33P7" parallel-only-below-threshold
-    "A ray on a cell boundary drifting at exactly 1e-12 crosses it at once and finds that column's cell."
-  (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
-    (fill-terrain terrain 4 0 -16 5 1 32 t)
-    ;; a power of two for the speed, so that the direction's x is exactly -1e-12
-    (let ((h (add-physics-body w 5.0 2.2 3.5 :radius 0.3 :vx (* 64 -1e-12) :vy -64.0)))
-      (step-physics-world w)
-      (check (= 1 (length (terrain-contacts w h))) "~D terrain contacts" (length (terrain-contacts w h))))))
+    "A ray on a cell boundary drifting at exactly 1e-12 crosses it at once and finds that column's cell; at 2^-40, not."
+  ;; a power of two for the speed, so that the direction's x is exactly the drift
+  (loop for (drift contacts) in (list (list -1e-12 1) (list (- (expt 2.0 -40)) 0))
+        do (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+             (fill-terrain terrain 4 0 -16 5 1 32 t)
+             (let ((h (add-physics-body w 5.0 2.2 3.5 :radius 0.3 :vx (* 64 drift) :vy -64.0)))
+               (step-physics-world w)
+               (check (= contacts (length (terrain-contacts w h))) "drifting at ~A: ~D terrain contacts, not ~D"
+                      drift (length (terrain-contacts w h)) contacts)))))
 ;; SW33P7-parallel-only-below-threshold ends here
 
 ;; [[file:../physics.org::#SW33P7][SW33P7-sweep-contact-exact]]
@@ -3153,6 +3264,22 @@ function of a column name that reads row K's float in that column. #T3STK1"
                     misses (luv-physics::contact-table-misses table) after))))
 ;; PRUN3D-reorder-threshold ends here
 
+;; [[file:../physics.org::#PRUN3D][PRUN3D-last-row-pruned-clean]]
+(define-claim "PRUN3D" last-row-pruned-clean
+    "The contact in the last row pruned, the table holds one key for one row."
+  (let* ((w (make-floor-world :sleep nil))
+         (c (luv-physics::physics-world-contacts w))
+         (table (luv-physics::physics-world-contact-table w)))
+    (dotimes (i 2) (add-physics-body w (+ 1.5 (* 2.0 i)) 0.245 3.5 :collide-with-bodies nil))
+    (dotimes (i 5) (step-physics-world w))
+    (check (= 2 (luv-physics::contact-columns-length c)))
+    (luv-physics::remove-physics-body w (aref (luv-physics::contact-columns-handle-a c) 1))
+    (step-physics-world w)
+    (check (= 1 (luv-physics::contact-columns-length c) (luv-physics::contact-table-count table))
+           "~D rows and ~D keys" (luv-physics::contact-columns-length c) (luv-physics::contact-table-count table))
+    (check (= 0 (luv-physics::contact-table-find table (aref (luv-physics::contact-columns-key c) 0))))))
+;; PRUN3D-last-row-pruned-clean ends here
+
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
 (define-claim "SSMPYW" colours-disjoint
     "In a 300-ball pile no colour below 24 holds two constraints on the same awake body."
@@ -3270,6 +3397,27 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (zerop wrong) "~A: ~D rows hold a side value the kernels would not read" family wrong))))
 ;; SSMPYW-side-zero-where-unread ends here
 
+;; [[file:../physics.org::#SSMPYW][SSMPYW-one-sided-above-the-used]]
+(define-claim "SSMPYW" one-sided-above-the-used
+    "Two touching balls on a floor: the pair in colour 0, both floor contacts in colour 1, none in overflow."
+  (let* ((w (make-floor-world :sleep nil))
+         (cbuf (luv-physics::physics-world-constraints w))
+         (starts (luv-physics::physics-world-color-starts w)))
+    (add-physics-body w 2.5 0.245 2.5 :radius 0.25)
+    (add-physics-body w 2.99 0.245 2.5 :radius 0.25)
+    (step-physics-world w)
+    (let ((dummy (luv-physics::physics-world-awake-count w)) (seen '()))
+      (dotimes (c (1+ luv-physics::+physics-max-colors+))
+        (loop for k from (aref starts c) below (aref starts (1+ c))
+              when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
+                do (push (list c (if (or (= dummy (aref (luv-physics::constraint-columns-body-a cbuf) k))
+                                         (= dummy (aref (luv-physics::constraint-columns-body-b cbuf) k)))
+                                     :one-sided :pair))
+                         seen)))
+      (check (equal '((0 :pair) (1 :one-sided) (1 :one-sided)) (sort seen #'< :key #'first))
+             "colours of the constraints: ~S" seen))))
+;; SSMPYW-one-sided-above-the-used ends here
+
 ;; [[file:../physics.org::#KTXT7V][KTXT7V-kernel-is-its-text]]
 (define-claim "KTXT7V" kernel-is-its-text
     "Featured kernels keep their docstrings and texts; the text compiled for every feature is the kernel."
@@ -3315,10 +3463,30 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (unload-floor)
       (step-physics-world world)
       (check (braced-p) "with its floor contact unloaded the still light ball was unbraced")
-      (luv-physics::set-physics-body-velocity world light 0.1 0.0 0.0)
-      (step-physics-world world)
-      (check (not (braced-p)) "the light ball moving at 0.1 m/s stayed braced"))))
+      (loop for (vx vy vz) in '((0.1 0.0 0.0) (0.0 0.1 0.0) (0.0 0.0 0.1))
+            do (luv-physics::set-physics-body-velocity world light vx vy vz)
+               (step-physics-world world)
+               (check (not (braced-p)) "the light ball moving at ~S m/s stayed braced" (list vx vy vz))
+               (luv-physics::set-physics-body-velocity world light 0.0 0.0 0.0)
+               (dotimes (i 30) (step-physics-world world))
+               (check (braced-p) "stopped after moving at ~S m/s, the light ball is not braced" (list vx vy vz))))))
 ;; PR3PAR-bracing-holds-while-still ends here
+
+;; [[file:../physics.org::#PR3PAR][PR3PAR-brace-side-at-its-limits]]
+(define-claim "PR3PAR" brace-side-at-its-limits
+    "brace-side: the lighter braced row under the other is static past 4x and 0.9, not at them."
+  (flet ((side (braced-a braced-b inverse-a inverse-b rise)
+           (luv-physics::brace-side
+            (make-array 2 :element-type 'fixnum :initial-contents (list braced-a braced-b))
+            (make-array 2 :element-type 'single-float :initial-contents (list inverse-a inverse-b))
+            4.0 0 1 rise)))
+    (loop for (case want) in '(((1 0 4.5 1.0 0.95) :a) ((1 0 4.5 1.0 0.9) nil) ((1 0 4.5 1.0 0.6) nil)
+                               ((1 0 4.0 1.0 0.95) nil) ((0 1 4.5 1.0 0.95) nil) ((1 0 4.5 1.0 -0.95) nil)
+                               ((0 1 1.0 4.5 -0.95) :b) ((0 1 1.0 4.5 -0.9) nil) ((0 1 1.0 4.5 -0.6) nil)
+                               ((0 1 1.0 4.0 -0.95) nil) ((1 0 1.0 4.5 -0.95) nil) ((0 1 1.0 4.5 0.95) nil))
+          do (check (eq want (apply #'side case)) "braced, inverse masses and rise ~S: ~S, not ~S"
+                    case (apply #'side case) want))))
+;; PR3PAR-brace-side-at-its-limits ends here
 
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-braced-body-stays-put]]
 (define-claim "PR3PAR" braced-body-stays-put
