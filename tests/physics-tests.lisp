@@ -2641,6 +2641,18 @@ function of a column name that reads row K's float in that column. #T3STK1"
              "the two added balls have no pair contact"))))
 ;; P41RS7-two-loose-rows-meet ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-holds-at-its-limits]]
+(define-claim "P41RS7" holds-at-its-limits
+    "The pair list holds with up to max(16, n/32) loose rows, and never with a negative count."
+  (flet ((holds (loose n) (funcall 'luv-physics::pair-list-holds-p loose n)))
+    (check (holds 16 100) "16 loose of 100 rows do not hold")
+    (check (not (holds 17 100)) "17 loose of 100 rows hold")
+    (check (holds 32 1024) "32 loose of 1024 rows do not hold")
+    (check (not (holds 33 1024)) "33 loose of 1024 rows hold")
+    (check (holds 0 0) "an empty list does not hold")
+    (check (not (holds -1 100)) "a list built for another edge holds")))
+;; P41RS7-holds-at-its-limits ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-contact-geometry]]
 (define-claim "P41RS7" pair-contact-geometry
     "A pair contact's normal, separation and point are the spheres', whichever ball has the lower slot."
@@ -2847,6 +2859,27 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (>= (luv-physics::contact-table-find table key) 0)
              "the ball over the new cell ~D ~D ~D has no contact with it" cx cy cz))))
 ;; MYWH16-clear-rows-skip-safely ends here
+
+;; [[file:../physics.org::#MYWH16][MYWH16-clear-means-clear-and-a-skin]]
+(define-claim "MYWH16" clear-means-clear-and-a-skin
+    "A row is noted clear only when its reach and 0.45 skins hold no solid cell."
+  (let* ((w (make-floor-world :sleep nil))
+         (plist (luv-physics::physics-world-pair-list w))
+         (high (add-physics-body w 1.5 2.0 1.5 :radius 0.25))
+         (low (add-physics-body w 3.5 0.36 1.5 :radius 0.25))
+         (noted nil))
+    (flet ((note-clear (world)
+             (let ((a (luv-physics::physics-world-awake world)))
+               (setf noted
+                     (loop for i below (luv-physics::body-columns-length a)
+                           collect (cons (aref (luv-physics::body-columns-handle a) i)
+                                         (aref (luv-physics::pair-list-clear plist) i)))))
+             world))
+      (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::terrain-phase #'note-clear)))
+        (step-physics-world w)))
+    (check (eql 1 (cdr (assoc high noted))) "the ball 2 m up is not noted clear: ~S" noted)
+    (check (eql 0 (cdr (assoc low noted))) "the ball a skin's width from reach of the floor is noted clear: ~S" noted)))
+;; MYWH16-clear-means-clear-and-a-skin ends here
 
 ;; [[file:../physics.org::#MYWH16][MYWH16-seams-are-flat]]
 (define-claim "MYWH16" seams-are-flat
