@@ -7058,6 +7058,21 @@ within reach of something. #S9WEEP"
                       (and hit (list (hit-what hit) (physics-hit-distance hit) (physics-hit-nx hit))))))))
 ;; S9WEEP-slides-along-every-face ends here
 
+;; [[file:../physics.org::#S9WEEP][S9WEEP-starts-inside-against-the-cast]]
+(define-claim "S9WEEP" starts-inside-against-the-cast
+    "A sphere cast starting inside a solid cell meets it at 0 with the normal against the cast, each axis."
+  (let ((w (make-floor-world :sleep nil)))
+    (dolist (d '((0.6 0.8 0.0) (0.0 0.6 -0.8) (-0.8 0.0 0.6)))
+      (let ((hit (apply #'physics-sphere-cast w 2.5 -0.5 2.5 0.2 (append d '(3.0)))))
+        (check (and hit (eq :cell (physics-hit-kind hit))) "the cast along ~S met ~S" d hit)
+        (when hit
+          (check (= 0.0 (physics-hit-distance hit)) "the cast along ~S met the cell at ~F" d (physics-hit-distance hit))
+          (check (every (lambda (n u) (< (abs (+ n u)) 1e-6))
+                        (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit)) d)
+                 "the cast along ~S has the normal ~S" d
+                 (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))))))))
+;; S9WEEP-starts-inside-against-the-cast ends here
+
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-regions-match-brute-force]]
 (define-claim "OV3RLP" regions-match-brute-force
     "Sphere and box queries for bodies and cells equal brute force at six moments of sleeps, wakes, removals, additions and edits."
