@@ -1714,6 +1714,22 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (= 1 (luv-physics::event-columns-length (luv-physics::physics-world-events w))))))
 ;; E7V3NT-event-data-grow-once ends here
 
+;; [[file:../physics.org::#E7V3NT][E7V3NT-events-past-the-data]]
+(define-claim "E7V3NT" events-past-the-data
+    "Twenty events without data, more than the data vector's 16, are all mapped, each with no datum."
+  (let ((w (make-floor-world)) (seen '()))
+    (dotimes (k 20)
+      (luv-physics::push-event w luv-physics::+event-hit+ k -1 1.0 2.0 3.0 4.0))
+    (check (< (length (luv-physics::physics-world-event-data w)) 20)
+           "the data vector has room for ~D" (length (luv-physics::physics-world-event-data w)))
+    (luv-physics:map-physics-events (lambda (kind a b x y z speed datum)
+                                      (declare (ignore kind b x y z speed))
+                                      (push (cons a datum) seen))
+                                    w)
+    (check (equal (loop for k below 20 collect (cons k nil)) (reverse seen))
+           "mapped: ~S" (reverse seen))))
+;; E7V3NT-events-past-the-data ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trim-gives-room-back]]
 (define-claim "QKS4GZ" trim-gives-room-back
     "After trim-physics-world, 20000 sleepers hold at most 500 bytes of heap each, and the world steps on."

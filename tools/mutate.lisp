@@ -896,11 +896,11 @@ the COUNT round robin ones."
             (mutant-seconds m) (mutant-compile-seconds m) (mutant-claims-run m) (mutant-claims m))
     (finish-output)))
 
-(defun page-reasons (page)
+(defun page-reasons (page &optional (prefix "Equivalent mutant ~"))
   "Alist from mutant key to the sentence the page gives for it: paragraphs starting
-'Equivalent mutant ~KEY~:'."
-  (let ((text (physics::read-file-text page)) (reasons '()) (start 0)
-        (prefix "Equivalent mutant ~"))
+'Equivalent mutant ~KEY~:', or with PREFIX 'Surviving mutant ~' those that say why a mutant
+that is not equivalent survives."
+  (let ((text (physics::read-file-text page)) (reasons '()) (start 0))
     (loop for at = (search prefix text :start2 start)
           while at
           do (let* ((key-start (+ at (length prefix)))
@@ -968,7 +968,10 @@ the page explains as equivalent."
       (format stream "No mutant survived.~%")
       (loop for (anchor operator file key) in rows
             do (format stream "- ~A ~A, ~A: ~A~%    ~A~%" anchor operator file key
-                       (or (page-reason key reasons) "(no reason given on the page)")))))
+                       (or (page-reason key reasons)
+                           (let ((why (page-reason key (page-reasons "physics.org" "Surviving mutant ~"))))
+                             (and why (format nil "not equivalent: ~A" why)))
+                           "(no reason given on the page)")))))
 
 (defun annotate-survivors ()
   "Write report/mutate-survivors.org from report/mutate-survivors.tsv and the page's reasons,
