@@ -459,6 +459,14 @@ at R - slop. Return the world and the terrain. #T3STK1"
     (values (luv-physics::make-physics-world :terrain terrain :sleep sleep :gravity gravity)
             terrain)))
 
+(defun one-air-cell-world ()
+  "A world without gravity whose terrain is solid from -8 to 16 on every axis but for the one air
+cell at 4 1 5. #T3STK1"
+  (let ((terrain (luv-physics::make-voxel-terrain)))
+    (luv-physics::fill-terrain terrain -8 -8 -8 16 16 16 t)
+    (luv-physics::fill-terrain terrain 4 1 5 5 2 6 nil)
+    (luv-physics::make-physics-world :terrain terrain :gravity '(0 0 0))))
+
 (defun make-lcg (seed)
   "A function returning uniform doubles in [0,1) from a 48-bit linear congruential generator
 started at the integer SEED, independent of CL's random state. #T3STK1"
@@ -6144,10 +6152,7 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#RH7T05][RH7T05-recording-cells-touch-air]]
 (define-claim "RH7T05" recording-cells-touch-air
     "Around one air cell in solid ground, the recording's cells are its six neighbours."
-  (let* ((terrain (luv-physics::make-voxel-terrain))
-         (w (progn (luv-physics::fill-terrain terrain -8 -8 -8 16 16 16 t)
-                   (luv-physics::fill-terrain terrain 4 1 5 5 2 6 nil)
-                   (luv-physics::make-physics-world :terrain terrain :gravity '(0 0 0)))))
+  (let* ((w (one-air-cell-world)))
     (luv-physics::add-physics-body w 4.5 1.5 5.5 :radius 0.25)
     (let* ((recording (prog1 (luv-physics::start-physics-recording w) (luv-physics::stop-physics-recording w)))
            (cells (loop for (x y z) on (luv-physics::recording-cells recording) by #'cdddr collect (list x y z))))
@@ -6221,10 +6226,7 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#UFK5EA][UFK5EA-picture-of-one-cell]]
 (define-claim "UFK5EA" picture-of-one-cell
     "One air cell in solid ground: a disc and three faces, exactly placed, deepest first; the drawing fills the panel's width."
-  (let* ((terrain (luv-physics::make-voxel-terrain))
-         (w (progn (luv-physics::fill-terrain terrain -8 -8 -8 16 16 16 t)
-                   (luv-physics::fill-terrain terrain 4 1 5 5 2 6 nil)
-                   (luv-physics::make-physics-world :terrain terrain :gravity '(0 0 0)))))
+  (let* ((w (one-air-cell-world)))
     (luv-physics::add-physics-body w 4.5 1.5 5.5 :radius 0.25)
     (luv-physics::add-physics-body w 4.25 1.75 5.2 :radius 0.1)
     (let ((recording (luv-physics::start-physics-recording w)))
