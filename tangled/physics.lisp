@@ -869,9 +869,9 @@ while no body strays from where it was built by more than about half this. #V0CA
 (defparameter *physics-wake-speed* 0.1
   "Speed, m/s, above which an awake body wakes the sleepers it reaches. #V0CAB5")
 
-(defparameter *physics-brace-mass-ratio* 1.0
-  "How many times as heavy as a braced body another must at least be to lean on it as on
-something static. #V0CAB5")
+(defparameter *physics-brace-mass-ratio* 4.0
+  "How many times heavier than a braced body another must be to lean on it as on something
+static. #V0CAB5")
 
 (defparameter *physics-reach-limit* 0.98
   "Largest reach (radius plus margin), in cells; it keeps every contact's cells adjacent. #V0CAB5")
@@ -4329,15 +4329,15 @@ thirds of the radius of its contact patch, sqrt(2 RADIUS SLOP). #PR3PAR"
 (declaim (inline brace-side))
 (defun brace-side (braced inverse-mass brace-ratio la lb rise)
   "Which side of a contact between awake rows LA and LB is static to the other: :a when LA is
-BRACED and LB, at least BRACE-RATIO times as heavy, rests on it from above (RISE, the upward part
-of the normal from LA to LB, above 0.9); :b the other way round; else nil. #PR3PAR"
+BRACED and more than BRACE-RATIO times lighter than LB, which rests on it from above (RISE, the
+upward part of the normal from LA to LB, above 0.9); :b the other way round; else nil. #PR3PAR"
   (declare (type fixnum-column braced) (type f32-column inverse-mass) (type index la lb)
            (type single-float brace-ratio rise))
-  (cond ((and (/= (aref braced la) 0) (> rise 0.9)
-              (>= (aref inverse-mass la) (* brace-ratio (aref inverse-mass lb))))
+  (cond ((and (= (aref braced la) 1) (> rise 0.9)
+              (> (aref inverse-mass la) (* brace-ratio (aref inverse-mass lb))))
          :a)
-        ((and (/= (aref braced lb) 0) (< rise -0.9)
-              (>= (aref inverse-mass lb) (* brace-ratio (aref inverse-mass la))))
+        ((and (= (aref braced lb) 1) (< rise -0.9)
+              (> (aref inverse-mass lb) (* brace-ratio (aref inverse-mass la))))
          :b)))
 
 (defvar *prepare-short-path* t
@@ -4416,7 +4416,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                                 (let ((lo (aref inverse-mass 0)) (hi (aref inverse-mass 0)))
                                   (declare (type single-float lo hi))
                                   (dotimes (i n) (setf lo (min lo (aref inverse-mass i)) hi (max hi (aref inverse-mass i))))
-                                  (>= hi (* brace-ratio lo))))))
+                                  (> hi (* brace-ratio lo))))))
             (when bracing
             (fill braced 0 :end (1+ n))
             (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
@@ -4430,29 +4430,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                       (when (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
                                   (* (aref v (+ o 2)) (aref v (+ o 2))))
                                still2)
-                        (setf (aref braced row) (max 1 (aref braced row))))))
-                  ;; a chain: resting from above on a body braced at the step before
-                  (when (and dyn-a dyn-b (> (contact@ geometry c normal-impulse) 0.0)
-                             (= (physics-world-braced-step world) (1- (physics-world-step-count world))))
-                    (let* ((la (aref locals (handle-index a))) (lb (aref locals (handle-index b)))
-                           (flags (body-columns-flags awake))
-                           (rise (+ (* (contact@ geometry c nx) up-x) (* (contact@ geometry c ny) up-y)
-                                    (* (contact@ geometry c nz) up-z)))
-                           (upper (cond ((and (logtest (aref flags la) +flag-braced+) (> rise 0.9)
-                                              (>= (aref inverse-mass la) (* brace-ratio (aref inverse-mass lb))))
-                                         lb)
-                                        ((and (logtest (aref flags lb) +flag-braced+) (< rise -0.9)
-                                              (>= (aref inverse-mass lb) (* brace-ratio (aref inverse-mass la))))
-                                         la)))
-                           (o (if upper (solver-row upper) 0)))
-                      (declare (type index la lb o) (type single-float rise))
-                      (when (and upper (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
-                                             (* (aref v (+ o 2)) (aref v (+ o 2))))
-                                          still2))
-                        (setf (aref braced upper)
-                              (if (or (= (aref braced upper) 2)
-                                      (< (contact@ geometry c separation) (* -1.05 slop)))
-                                  2 1))))))))
+                        (setf (aref braced row) 1)))))))
               ;; a body braced at the step before stays braced while it is still, whatever its
               ;; load: its load moves to the bodies below once it is braced (hysteresis)
               (let ((flags (body-columns-flags awake))
@@ -4463,8 +4441,8 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                                (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
                                      (* (aref v (+ o 2)) (aref v (+ o 2))))
                                   still2))
-                      (setf (aref braced i) (max 1 (aref braced i))))
-                    (setf (aref flags i) (if (/= (aref braced i) 0)
+                      (setf (aref braced i) 1))
+                    (setf (aref flags i) (if (= (aref braced i) 1)
                                              (logior (aref flags i) +flag-braced+)
                                              (logandc2 (aref flags i) +flag-braced+)))))
                 (setf (physics-world-braced-step world) (physics-world-step-count world)))
@@ -4499,12 +4477,9 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                 (dotimes (color (1+ +physics-max-colors+))
                  (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
                   (if (let ((c (aref contact k)))
-                        (and short-path (>= (aref hb c) 0)
+                        (and short-path (not bracing) (>= (aref hb c) 0)
                              (= (aref sets (handle-index (aref ha c))) +set-awake+)
-                             (= (aref sets (handle-index (aref hb c))) +set-awake+)
-                             (or (not bracing)
-                                 (and (= (aref braced (aref locals (handle-index (aref ha c)))) 0)
-                                      (= (aref braced (aref locals (handle-index (aref hb c)))) 0)))))
+                             (= (aref sets (handle-index (aref hb c))) +set-awake+)))
                    ;; the common case, two awake bodies and no bracing, on its own short path:
                    ;; the same values by the same operations as the general path below
                    (let* ((c (aref contact k))
@@ -5324,11 +5299,8 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
          (limit (f32 +physics-coordinate-limit+))
          ;; the store phase's marks, read before any row moves (held-marking-p)
          (marked (if-feature (:or :body-contacts :boxes) (and sleep-p (held-marking-p world)) nil))
-         (held (physics-world-held world))
-         (settling (physics-world-braced world))
-         (settle-p (= (physics-world-braced-step world) (physics-world-step-count world))))
+         (held (physics-world-held world)))
     (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep limit)
-             (type fixnum-column settling)
              (type body-columns awake sleeping) (type fixnum-column held)
              (ignorable inv-dt sleep-speed time-to-sleep held) #.+kernel-policy+)
     (fold-solver-state awake v d dt)
@@ -5352,8 +5324,7 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
                                 (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
                       (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
                  ;; a body only sleepers and terrain touch is judged by its displacement alone
-                 (if (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
-                          (not (and settle-p (= (aref settling i) 2))))
+                 (if (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
                      (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
                        (sleep-physics-body world i))
                      (setf (aref sleep-time i) 0.0)))))))
@@ -7479,24 +7450,33 @@ of each second. #X7R3M5"
                (step-physics-world world))
           collect (physics-world-awake-count world))))
 
-(defun column-contact-depths (count &key (radius 0.45) (seconds 10) (sleep t) (settle seconds))
+(defun column-contact-depths (count &key (radius 0.45) (seconds 10) (sleep t))
   "Stack COUNT balls of RADIUS and 1 kg in the shaft of a world that lets bodies SLEEP or not, and
-run SECONDS. Return each contact's overlap at the end, from the floor up, in slops, and as a second
-value each contact's deepest overlap at the end of any step from second SETTLE on. #X7R3M5"
+run SECONDS. Return each contact's overlap at the end, from the floor up, in slops. #X7R3M5"
   (let* ((world (make-shaft-world :sleep sleep))
          (balls (loop for i below count
-                      collect (add-physics-body world 0.5 (+ radius (* i 2.02 radius)) 0.5 :radius radius :mass 1.0)))
-         (deepest (make-list count :initial-element 0.0)))
-    (flet ((depths ()
-             (let ((heights (mapcar (lambda (b) (nth-value 1 (physics-body-position world b))) balls)))
-               (mapcar (lambda (overlap) (/ overlap *physics-linear-slop*))
-                       (cons (- radius (first heights))
-                             (loop for (a b) on heights while b collect (- (* 2 radius) (- b a))))))))
-      (dotimes (i (* 60 seconds))
-        (step-physics-world world)
-        (when (>= (1+ i) (* 60 settle))
-          (setf deepest (mapcar #'max deepest (depths)))))
-      (values (depths) deepest))))
+                      collect (add-physics-body world 0.5 (+ radius (* i 2.02 radius)) 0.5 :radius radius :mass 1.0))))
+    (dotimes (i (* 60 seconds)) (step-physics-world world))
+    (let ((heights (mapcar (lambda (b) (nth-value 1 (physics-body-position world b))) balls)))
+      (mapcar (lambda (overlap) (/ overlap *physics-linear-slop*))
+              (cons (- radius (first heights))
+                    (loop for (a b) on heights while b collect (- (* 2 radius) (- b a))))))))
+
+(defun soft-column-depths (count &key (mass 1.0))
+  "The overlaps, from the floor up and in slops, at which a column of COUNT awake balls of MASS in
+the shaft comes to rest by the soft contact's law ([[#G7Q3XR]]): each contact one slop plus its
+load over its effective mass times omega squared. The floor's contact is stiffened by its load
+and gives g over omega squared at twice the frequency; a contact between two balls, whose
+effective mass is half a ball, gives the weight of the balls above it over half a ball times
+omega squared. #X7R3M5"
+  (let* ((world (make-shaft-world))
+         (g (abs (physics-world-gravity-y world)))
+         (h (/ (f32 (physics-world-step-seconds world)) (physics-world-substeps world)))
+         (omega (* 2.0 (f32 pi) (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h))))
+         (slop (f32 (physics-world-slop world))))
+    (cons (/ (+ slop (/ g (expt (* 2.0 omega) 2))) slop)
+          (loop for above from (1- count) downto 1
+                collect (/ (+ slop (/ (* above mass g) (* 0.5 mass omega omega))) slop)))))
 
 (defun speed-of (world handle)
   "The speed of HANDLE's body. #X7R3M5"
@@ -7788,10 +7768,13 @@ its final height less its ideal resting height (radius less a slop), and whether
       (row "column of 20 balls, each contact against its design depth (one slop)"
            (every (lambda (d) (<= d 1.1)) depths)
            "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}" depths))
-    (let ((depths (column-contact-depths 20 :sleep nil)))
-      (row "column of 20 balls, sleeping off, each contact against its design depth (one slop)"
-           (every (lambda (d) (<= d 1.1)) depths)
-           "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}" depths))
+    ;; awake, every contact gives by its load: the soft contact's law, against which it is held
+    (let* ((depths (column-contact-depths 20 :sleep nil)) (law (soft-column-depths 20))
+           (off (reduce #'max (mapcar (lambda (d w) (abs (- d w))) depths law))))
+      (row "column of 20 balls, sleeping off, each contact against the soft contact's law"
+           (<= off 0.02)
+           "after 10 s, from the floor up, in slops: ~{~,2F~^ ~}; at most ~,3F slops from the law's ~
+            ~,2F .. ~,2F" depths off (second law) (car (last law))))
     (let ((runs (append (loop for shift in '(0.0 0.001 0.002 0.003)
                               collect (thrown-into-pile 1000 :seconds 12 :throw-at 4 :shift shift))
                         (loop for seed from 1 to 10
