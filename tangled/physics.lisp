@@ -3055,20 +3055,22 @@ is the one that holds its body now; whether the handle still names a sleeper is 
            (when (= 3 (aref ,of (handle-index ,item))) (,visit ,item)))))))
 
 ;; the 701 ... 1 gaps are Ciura's: a few sleepers are sorted by the last gap alone, as by insertion
-(declaim (inline sort-handles-by-slot))
-(defun sort-handles-by-slot (handles count)
-  "Sort the first COUNT handles of HANDLES by the slots they name, in place and allocating nothing
-(Shell's sort). #G4R1D5"
+(declaim (inline sort-sleepers-by-row))
+(defun sort-sleepers-by-row (world handles count)
+  "Sort the first COUNT handles of HANDLES, each naming one of WORLD's sleepers, by the sleepers'
+rows in the sleeping buffer, in place and allocating nothing (Shell's sort). #G4R1D5"
   (declare (type fixnum-column handles) (type index count) #.+kernel-policy+)
-  (dolist (gap '(701 301 132 57 23 10 4 1) handles)
-    (declare (type index gap))
-    (loop for i of-type index from gap below count
-          do (let* ((h (aref handles i)) (key (handle-index h)) (j i))
-               (declare (type fixnum h) (type index key j))
-               (loop while (and (>= j gap) (> (handle-index (aref handles (- j gap))) key))
-                     do (setf (aref handles j) (aref handles (- j gap)))
-                        (decf j gap))
-               (setf (aref handles j) h)))))
+  (let ((locals (handle-table-local (physics-world-ids world))))
+    (declare (type fixnum-column locals))
+    (dolist (gap '(701 301 132 57 23 10 4 1) handles)
+      (declare (type index gap))
+      (loop for i of-type index from gap below count
+            do (let* ((h (aref handles i)) (key (aref locals (handle-index h))) (j i))
+                 (declare (type fixnum h key) (type index j))
+                 (loop while (and (>= j gap) (> (aref locals (handle-index (aref handles (- j gap)))) key))
+                       do (setf (aref handles j) (aref handles (- j gap)))
+                          (decf j gap))
+                 (setf (aref handles j) h))))))
 
 (defun grow-sleepers-found (world)
   "Double WORLD's list of sleepers found near a point, keeping what it holds; return it. #G4R1D5"
@@ -3077,12 +3079,13 @@ is the one that holds its body now; whether the handle still names a sleeper is 
     (replace grown found)
     (setf (physics-world-sleepers-found world) grown)))
 
-(defmacro do-sleepers-in-slot-order ((item world x y z &key (span 1)) test &body body)
+(defmacro do-sleepers-in-row-order ((item world x y z &key (span 1)) test &body body)
   "Run BODY with ITEM bound to the handle of each live entry of WORLD's sleeping grids whose cell
 lies within SPAN cells of point X Y Z and for which TEST (ITEM bound) is true, in the order of
-the slots the handles name. TEST is asked of every entry before BODY runs for any, so BODY may
-wake the sleepers it is given; and what BODY meets, in what order, does not hang on which grid
-holds a sleeper or where in it. #G4R1D5"
+the sleepers' rows in the sleeping buffer as they were when TEST had been asked of every entry.
+TEST is asked of every entry before BODY runs for any, so BODY may wake the sleepers it is given
+(which moves rows); and what BODY meets, in what order, does not hang on which grid holds a
+sleeper or where in it. #G4R1D5"
   (let ((found (gensym "FOUND")) (count (gensym "COUNT")) (w (gensym "WORLD")) (k (gensym "K")))
     `(let* ((,w ,world) (,found (physics-world-sleepers-found ,w)) (,count 0))
        (declare (type fixnum-column ,found) (type index ,count))
@@ -3091,7 +3094,7 @@ holds a sleeper or where in it. #G4R1D5"
            (when (= ,count (length ,found)) (setf ,found (grow-sleepers-found ,w)))
            (setf (aref ,found ,count) ,item)
            (incf ,count)))
-       (sort-handles-by-slot ,found ,count)
+       (sort-sleepers-by-row ,w ,found ,count)
        (dotimes (,k ,count)
          (let ((,item (aref ,found ,k)))
            (declare (type fixnum ,item))
@@ -3186,9 +3189,9 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
         (declare (type single-float margin wake2 dt rmax))
         (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
                  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
-                 ;; the sleepers within reach are woken in the order of their slots, which
-                 ;; is the order they join the awake rows in: it does not hang on the grids
-                 (do-sleepers-in-slot-order
+                 ;; the sleepers within reach are woken in the order of their sleeping rows,
+                 ;; which is the order they join the awake rows in: it does not hang on the grids
+                 (do-sleepers-in-row-order
                      (h world x y z :span span)
                      (let ((slot (handle-index h)))
                        (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
@@ -3719,9 +3722,9 @@ gap is under the speculative distance. #P41RS7"
             (when (zerop (logand (aref flags i) +flag-terrain-only+))
               (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i)) (hi (aref handle i))
                     (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
-                ;; the sleepers within reach, in the order of their slots: the lean contacts
+                ;; the sleepers within reach, in the order of their rows: the lean contacts
                 ;; are touched, and so ordered, as they would be from any grids
-                (do-sleepers-in-slot-order
+                (do-sleepers-in-row-order
                     (h world xi yi zi)
                     (let ((slot (handle-index h)))
                       (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
