@@ -2146,6 +2146,12 @@ dispatches on it once per call. #W0RLD7"))
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
    (fresh-grid :initform (make-hash-grid) :reader physics-world-fresh-grid)
+   (newest-grid :initform (make-hash-grid) :reader physics-world-newest-grid)
+   (newest-handles :initform (make-array 64 :element-type 'fixnum :initial-element 0)
+                   :accessor physics-world-newest-handles)
+   (newest-count :initform 0 :type fixnum :accessor physics-world-newest-count)
+   (sleepers-found :initform (make-array 64 :element-type 'fixnum :initial-element 0)
+                   :accessor physics-world-sleepers-found)
    (sleeping-grid-work :initform 0 :type fixnum :accessor physics-world-sleeping-grid-work)
    (fresh-handles :initform (make-array 64 :element-type 'fixnum :initial-element 0)
                   :accessor physics-world-fresh-handles)
@@ -2680,6 +2686,8 @@ fallen asleep or been removed. Return WORLD. #QKS4GZ"
              (replace (make-array (max 64 count) :element-type 'fixnum :initial-element 0) handles :end2 count)))
       (setf (physics-world-fresh-handles world)
             (list-room (physics-world-fresh-handles world) (physics-world-fresh-count world))
+            (physics-world-newest-handles world)
+            (list-room (physics-world-newest-handles world) (physics-world-newest-count world))
             (physics-world-fresh-x world) (make-array 0 :element-type 'single-float)
             (physics-world-fresh-y world) (make-array 0 :element-type 'single-float)
             (physics-world-fresh-z world) (make-array 0 :element-type 'single-float)))
@@ -2687,6 +2695,7 @@ fallen asleep or been removed. Return WORLD. #QKS4GZ"
     ;; they are marked for a check, as a query view reads the mark
     (hash-grid-trim (physics-world-sleeping-grid world))
     (hash-grid-trim (physics-world-fresh-grid world))
+    (hash-grid-trim (physics-world-newest-grid world))
     (setf (physics-world-sleeping-grid-dirty world) t)
     world))
 
@@ -2891,7 +2900,7 @@ pair within reach, or within the skin beyond it, lies in neighbouring cells. #G4
 
 (defun sleeping-grid-of (world)
   "For each handle slot, which sleeping grid holds its body's live entry: 1 the settled grid, 2
-the fresh one, 0 neither; grown to the handle table's slots. #G4R1D5"
+the fresh one, 3 the newest one, 0 none; grown to the handle table's slots. #G4R1D5"
   (let ((of (physics-world-grid-of world))
         (slots (length (handle-table-set (physics-world-ids world)))))
     (declare (type fixnum-column of))
@@ -2902,53 +2911,88 @@ the fresh one, 0 neither; grown to the handle table's slots. #G4R1D5"
           (setf (physics-world-grid-of world) grown)))))
 
 (defun note-fresh-sleeper (world handle)
-  "Note that HANDLE's body fell asleep: the fresh grid takes it at its next build. #G4R1D5"
-  (let ((handles (physics-world-fresh-handles world)) (count (physics-world-fresh-count world))
+  "Note that HANDLE's body fell asleep: the newest grid takes it at its next build. #G4R1D5"
+  (let ((handles (physics-world-newest-handles world)) (count (physics-world-newest-count world))
         (of (sleeping-grid-of world)))
     (declare (type fixnum-column handles of) (type fixnum count))
     (when (= (aref of (handle-index handle)) 1) (incf (physics-world-settled-stale world)))
-    ;; room for every body the world has a slot for, at once: the fresh list, its centres and
-    ;; its grid grow together, and seldom
     (when (= count (length handles))
-      (let* ((room (max (* 2 count) (length of)))
-             (grown (make-array room :element-type 'fixnum :initial-element 0)))
+      (let ((grown (make-array (max 64 (* 2 count)) :element-type 'fixnum :initial-element 0)))
         (replace grown handles)
-        (setf (physics-world-fresh-handles world) grown handles grown
-              (physics-world-fresh-x world) (make-array room :element-type 'single-float)
-              (physics-world-fresh-y world) (make-array room :element-type 'single-float)
-              (physics-world-fresh-z world) (make-array room :element-type 'single-float))
-        (hash-grid-reserve (physics-world-fresh-grid world) room)))
+        (setf (physics-world-newest-handles world) grown handles grown)))
     (setf (aref handles count) handle
-          (physics-world-fresh-count world) (1+ count)
-          (aref of (handle-index handle)) 2
+          (physics-world-newest-count world) (1+ count)
+          (aref of (handle-index handle)) 3
           (physics-world-sleeping-grid-dirty world) t)
     handle))
 
 (defun leave-sleeping-grids (world handle)
-  "HANDLE's body leaves the sleeping set: its entry in either grid is dead from now on. #G4R1D5"
+  "HANDLE's body leaves the sleeping set: its entry in any grid is dead from now on. #G4R1D5"
   (let ((of (sleeping-grid-of world)) (slot (handle-index handle)))
     (declare (type fixnum-column of))
     (when (= (aref of slot) 1) (incf (physics-world-settled-stale world)))
     (setf (aref of slot) 0)
     handle))
 
+(defun take-listed-sleepers (world handles count mark)
+  "Compact the first COUNT handles of HANDLES to those that name a sleeper whose grid mark is MARK,
+each once, in their order; return how many are kept. #G4R1D5"
+  (declare (type fixnum-column handles) (type fixnum count mark))
+  (let* ((ids (physics-world-ids world))
+         (sets (handle-table-set ids)) (generations (handle-table-generation ids))
+         (of (sleeping-grid-of world))
+         (kept 0))
+    (declare (type fixnum-column sets generations of) (type fixnum kept))
+    (dotimes (k count)
+      (let* ((h (aref handles k)) (slot (handle-index h)))
+        (when (and (= (aref sets slot) +set-sleeping+) (= (aref generations slot) (handle-generation h))
+                   (= (aref of slot) mark))
+          ;; -1 marks it taken, so a body listed twice is taken once
+          (setf (aref of slot) -1 (aref handles kept) h)
+          (incf kept))))
+    (dotimes (k kept) (setf (aref of (handle-index (aref handles k))) mark))
+    kept))
+
+(defun build-listed-sleepers (world grid handles count)
+  "Build GRID from the sleepers named by the first COUNT handles of HANDLES, their centres gathered
+into the world's scratch columns; count them in the world's sleeping-grid work. #G4R1D5"
+  (declare (type fixnum-column handles) (type fixnum count))
+  (when (< (length (physics-world-fresh-x world)) count)
+    (let ((room (max count (* 2 (length (physics-world-fresh-x world))))))
+      (setf (physics-world-fresh-x world) (make-array room :element-type 'single-float)
+            (physics-world-fresh-y world) (make-array room :element-type 'single-float)
+            (physics-world-fresh-z world) (make-array room :element-type 'single-float))))
+  (let ((locals (handle-table-local (physics-world-ids world)))
+        (s (physics-world-sleeping world))
+        (xs (physics-world-fresh-x world)) (ys (physics-world-fresh-y world)) (zs (physics-world-fresh-z world)))
+    (declare (type fixnum-column locals) (type f32-column xs ys zs))
+    (dotimes (k count)
+      (let ((row (aref locals (handle-index (aref handles k)))))
+        (setf (aref xs k) (aref (body-columns-x s) row)
+              (aref ys k) (aref (body-columns-y s) row)
+              (aref zs k) (aref (body-columns-z s) row))))
+    (incf (physics-world-sleeping-grid-work world) count)
+    (build-hash-grid grid (f32 (grid-cell-size world)) count xs ys zs handles)))
+
 (defun sleeping-grids-spent-p (world)
   "True when WORLD's settled sleeping grid must be built again from every sleeper: the cell size
-changed, or the fresh sleepers, or the settled grid's dead entries, outnumber an eighth of the
-settled grid (and 256). #G4R1D5"
+changed, or the fresh and newest sleepers, or the settled grid's dead entries, outnumber an
+eighth of the settled grid (and 256). #G4R1D5"
   (let ((bound (max 256 (floor (physics-world-settled-count world) 8))))
     (or (/= (hash-grid-inv-cell (physics-world-sleeping-grid world)) (/ 1.0 (grid-cell-size world)))
-        (> (physics-world-fresh-count world) bound)
+        (> (+ (physics-world-fresh-count world) (physics-world-newest-count world)) bound)
         (> (physics-world-settled-stale world) bound))))
 
 (defun ensure-sleeping-grid (world)
-  "Bring the sleeping grids up to date. Bodies that fell asleep since the settled grid was built
-go into the fresh grid, which is built again, from them alone, whenever one more falls asleep.
-The settled grid is built again from every sleeper, and the fresh one emptied, when the cell size
-changed, or when the fresh sleepers, or the settled grid's dead entries, outnumber an eighth of
-the settled grid (and 256). Return the settled grid. #G4R1D5"
+  "Bring the sleeping grids up to date. Bodies that fell asleep go into the newest grid, which is
+built again, from them alone, whenever one more falls asleep. The newest sleepers join the fresh
+grid, built again from both, when they outnumber an eighth of the fresh ones (and 32). The
+settled grid is built again from every sleeper, and the other two emptied, when the cell size
+changed, or when the fresh and newest sleepers, or the settled grid's dead entries, outnumber an
+eighth of the settled grid (and 256). Return the settled grid. #G4R1D5"
   (let* ((grid (physics-world-sleeping-grid world))
          (fresh (physics-world-fresh-grid world))
+         (newest (physics-world-newest-grid world))
          (size (grid-cell-size world))
          (s (physics-world-sleeping world))
          (of (sleeping-grid-of world)))
@@ -2962,49 +3006,42 @@ the settled grid (and 256). Return the settled grid. #G4R1D5"
              (incf (physics-world-sleeping-grid-work world) n)
              (setf (physics-world-settled-count world) n
                    (physics-world-settled-stale world) 0
-                   (physics-world-fresh-count world) 0)
+                   (physics-world-fresh-count world) 0
+                   (physics-world-newest-count world) 0)
              (build-hash-grid fresh size 0 (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
+             (build-hash-grid newest size 0 (body-columns-x s) (body-columns-y s) (body-columns-z s) handles)
              (setf (physics-world-sleeping-grid-dirty world) nil)))
           ((physics-world-sleeping-grid-dirty world)
-           ;; the fresh sleepers still asleep and in the fresh grid, each once: the handle list
-           ;; is compacted to them as it is read
-           (let* ((handles (physics-world-fresh-handles world))
-                  (ids (physics-world-ids world))
-                  (sets (handle-table-set ids)) (locals (handle-table-local ids))
-                  (generations (handle-table-generation ids))
-                  (count (physics-world-fresh-count world))
-                  (kept 0))
-             (declare (type fixnum-column handles sets locals generations) (type fixnum count kept))
-             (when (< (length (physics-world-fresh-x world)) count)
-               (setf (physics-world-fresh-x world) (make-array (length handles) :element-type 'single-float)
-                     (physics-world-fresh-y world) (make-array (length handles) :element-type 'single-float)
-                     (physics-world-fresh-z world) (make-array (length handles) :element-type 'single-float)))
-             (dotimes (k count)
-               (let* ((h (aref handles k)) (slot (handle-index h)))
-                 (when (and (= (aref sets slot) +set-sleeping+) (= (aref generations slot) (handle-generation h))
-                            (= (aref of slot) 2))
-                   ;; 3 marks it taken, so a body that slept twice is taken once
-                   (setf (aref of slot) 3 (aref handles kept) h)
-                   (incf kept))))
-             (let ((xs (physics-world-fresh-x world)) (ys (physics-world-fresh-y world))
-                   (zs (physics-world-fresh-z world)))
-               (declare (type f32-column xs ys zs))
-               (dotimes (k kept)
-                 (let* ((slot (handle-index (aref handles k))) (row (aref locals slot)))
-                   (setf (aref of slot) 2
-                         (aref xs k) (aref (body-columns-x s) row)
-                         (aref ys k) (aref (body-columns-y s) row)
-                         (aref zs k) (aref (body-columns-z s) row))))
-               (setf (physics-world-fresh-count world) kept)
-               (incf (physics-world-sleeping-grid-work world) kept)
-               (build-hash-grid fresh size kept xs ys zs handles))
-             (setf (physics-world-sleeping-grid-dirty world) nil))))
+           (let ((kept (take-listed-sleepers world (physics-world-newest-handles world)
+                                             (physics-world-newest-count world) 3)))
+             (declare (type fixnum kept))
+             (setf (physics-world-newest-count world) kept)
+             (if (<= kept (max 32 (floor (physics-world-fresh-count world) 8)))
+                 (build-listed-sleepers world newest (physics-world-newest-handles world) kept)
+                 ;; the newest join the fresh list, which is compacted and built again
+                 (let* ((count (physics-world-fresh-count world))
+                        (handles (physics-world-fresh-handles world))
+                        (newest-handles (physics-world-newest-handles world)))
+                   (declare (type fixnum-column handles newest-handles) (type fixnum count))
+                   (when (< (length handles) (+ count kept))
+                     (setf handles (replace (make-array (max 64 (* 2 (+ count kept))) :element-type 'fixnum
+                                                                                       :initial-element 0)
+                                            handles :end2 count)
+                           (physics-world-fresh-handles world) handles))
+                   (dotimes (k kept)
+                     (let ((h (aref newest-handles k)))
+                       (setf (aref handles (+ count k)) h (aref of (handle-index h)) 2)))
+                   (let ((taken (take-listed-sleepers world handles (+ count kept) 2)))
+                     (setf (physics-world-fresh-count world) taken (physics-world-newest-count world) 0)
+                     (build-listed-sleepers world fresh handles taken)
+                     (build-listed-sleepers world newest newest-handles 0)))))
+           (setf (physics-world-sleeping-grid-dirty world) nil)))
     grid))
 
 (defmacro do-sleeping-neighbours ((item world x y z &key (span 1)) &body body)
-  "Run BODY with ITEM bound to the handle of each live entry of WORLD's sleeping grids, settled
-and fresh, whose cell lies within SPAN cells of point X Y Z. An entry is live when its grid is the
-one that holds its body now; whether the handle still names a sleeper is BODY's to ask. #G4R1D5"
+  "Run BODY with ITEM bound to the handle of each live entry of WORLD's sleeping grids, settled,
+fresh and newest, whose cell lies within SPAN cells of point X Y Z. An entry is live when its grid
+is the one that holds its body now; whether the handle still names a sleeper is BODY's to ask. #G4R1D5"
   (let ((visit (gensym "VISIT")) (of (gensym "OF")))
     `(let ((,of (physics-world-grid-of ,world)))
        (declare (type fixnum-column ,of))
@@ -3013,7 +3050,55 @@ one that holds its body now; whether the handle still names a sleeper is BODY's 
          (do-grid-neighbours (,item (physics-world-sleeping-grid ,world) ,x ,y ,z :span ,span)
            (when (= 1 (aref ,of (handle-index ,item))) (,visit ,item)))
          (do-grid-neighbours (,item (physics-world-fresh-grid ,world) ,x ,y ,z :span ,span)
-           (when (= 2 (aref ,of (handle-index ,item))) (,visit ,item)))))))
+           (when (= 2 (aref ,of (handle-index ,item))) (,visit ,item)))
+         (do-grid-neighbours (,item (physics-world-newest-grid ,world) ,x ,y ,z :span ,span)
+           (when (= 3 (aref ,of (handle-index ,item))) (,visit ,item)))))))
+
+;; the 701 ... 1 gaps are Ciura's: a few sleepers are sorted by the last gap alone, as by insertion
+(declaim (inline sort-sleepers-by-row))
+(defun sort-sleepers-by-row (world handles count)
+  "Sort the first COUNT handles of HANDLES, each naming one of WORLD's sleepers, by the sleepers'
+rows in the sleeping buffer, in place and allocating nothing (Shell's sort). #G4R1D5"
+  (declare (type fixnum-column handles) (type index count) #.+kernel-policy+)
+  (let ((locals (handle-table-local (physics-world-ids world))))
+    (declare (type fixnum-column locals))
+    (dolist (gap '(701 301 132 57 23 10 4 1) handles)
+      (declare (type index gap))
+      (loop for i of-type index from gap below count
+            do (let* ((h (aref handles i)) (key (aref locals (handle-index h))) (j i))
+                 (declare (type fixnum h key) (type index j))
+                 (loop while (and (>= j gap) (> (aref locals (handle-index (aref handles (- j gap)))) key))
+                       do (setf (aref handles j) (aref handles (- j gap)))
+                          (decf j gap))
+                 (setf (aref handles j) h))))))
+
+(defun grow-sleepers-found (world)
+  "Double WORLD's list of sleepers found near a point, keeping what it holds; return it. #G4R1D5"
+  (let* ((found (physics-world-sleepers-found world))
+         (grown (make-array (* 2 (length found)) :element-type 'fixnum :initial-element 0)))
+    (replace grown found)
+    (setf (physics-world-sleepers-found world) grown)))
+
+(defmacro do-sleepers-in-row-order ((item world x y z &key (span 1)) test &body body)
+  "Run BODY with ITEM bound to the handle of each live entry of WORLD's sleeping grids whose cell
+lies within SPAN cells of point X Y Z and for which TEST (ITEM bound) is true, in the order of
+the sleepers' rows in the sleeping buffer as they were when TEST had been asked of every entry.
+TEST is asked of every entry before BODY runs for any, so BODY may wake the sleepers it is given
+(which moves rows); and what BODY meets, in what order, does not hang on which grid holds a
+sleeper or where in it. #G4R1D5"
+  (let ((found (gensym "FOUND")) (count (gensym "COUNT")) (w (gensym "WORLD")) (k (gensym "K")))
+    `(let* ((,w ,world) (,found (physics-world-sleepers-found ,w)) (,count 0))
+       (declare (type fixnum-column ,found) (type index ,count))
+       (do-sleeping-neighbours (,item ,w ,x ,y ,z :span ,span)
+         (when ,test
+           (when (= ,count (length ,found)) (setf ,found (grow-sleepers-found ,w)))
+           (setf (aref ,found ,count) ,item)
+           (incf ,count)))
+       (sort-sleepers-by-row ,w ,found ,count)
+       (dotimes (,k ,count)
+         (let ((,item (aref ,found ,k)))
+           (declare (type fixnum ,item))
+           ,@body)))))
 
 (defun grid-phase (world)
   "Phase 3: find the pair list's loose rows; unless the list holds and the awake grid still has
@@ -3104,26 +3189,30 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
         (declare (type single-float margin wake2 dt rmax))
         (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
                  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
-                 (do-sleeping-neighbours (h world x y z :span span)
-                   (let ((slot (handle-index h)))
-                     (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                                (= (aref (handle-table-generation ids) slot) (handle-generation h)))
-                       (let* ((row (aref (handle-table-local ids) slot))
-                              (sx (aref (body-columns-x sleeping) row))
-                              (sy (aref (body-columns-y sleeping) row))
-                              (sz (aref (body-columns-z sleeping) row))
-                              (sr (aref (body-columns-radius sleeping) row)))
-                         (when (if box-p
-                                   (let ((dx (- sx (max min-x (min max-x sx))))
-                                         (dy (- sy (max min-y (min max-y sy))))
-                                         (dz (- sz (max min-z (min max-z sz)))))
-                                     (<= (+ (* dx dx) (* dy dy) (* dz dz))
-                                         (* (+ sr reach-extra) (+ sr reach-extra))))
-                                   (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
-                                         (reach (+ sr reach-extra)))
-                                     (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))))
-                           (wake-physics-body world row)
-                           (incf woken))))))))
+                 ;; the sleepers within reach are woken in the order of their sleeping rows,
+                 ;; which is the order they join the awake rows in: it does not hang on the grids
+                 (do-sleepers-in-row-order
+                     (h world x y z :span span)
+                     (let ((slot (handle-index h)))
+                       (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+                            (= (aref (handle-table-generation ids) slot) (handle-generation h))
+                            (let* ((row (aref (handle-table-local ids) slot))
+                                   (sx (aref (body-columns-x sleeping) row))
+                                   (sy (aref (body-columns-y sleeping) row))
+                                   (sz (aref (body-columns-z sleeping) row))
+                                   (sr (aref (body-columns-radius sleeping) row)))
+                              (if box-p
+                                  (let ((dx (- sx (max min-x (min max-x sx))))
+                                        (dy (- sy (max min-y (min max-y sy))))
+                                        (dz (- sz (max min-z (min max-z sz)))))
+                                    (<= (+ (* dx dx) (* dy dy) (* dz dz))
+                                        (* (+ sr reach-extra) (+ sr reach-extra))))
+                                  (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
+                                        (reach (+ sr reach-extra)))
+                                    (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
+                   ;; each still sleeps: waking one moves no other out of the sleeping set
+                   (wake-physics-body world (aref (handle-table-local ids) (handle-index h)))
+                   (incf woken))))
           ;; a body added since the last step wakes the sleepers it overlaps deeper than the
           ;; slop, so that it meets them as awake bodies from its first substep
           (let ((added (physics-world-added world))
@@ -3633,16 +3722,27 @@ gap is under the speculative distance. #P41RS7"
             (when (zerop (logand (aref flags i) +flag-terrain-only+))
               (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i)) (hi (aref handle i))
                     (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
-                (do-sleeping-neighbours (h world xi yi zi)
-                  (let ((slot (handle-index h)))
-                    (when (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                               (= (aref (handle-table-generation ids) slot) (handle-generation h)))
-                      (let ((row (aref (handle-table-local ids) slot)))
-                        (when (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
-                          (pair xi yi zi ri hi vxi vyi vzi
-                                (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
-                                (aref (body-columns-z sleeping) row)
-                                (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0 -1 -1))))))))))))
+                ;; the sleepers within reach, in the order of their rows: the lean contacts
+                ;; are touched, and so ordered, as they would be from any grids
+                (do-sleepers-in-row-order
+                    (h world xi yi zi)
+                    (let ((slot (handle-index h)))
+                      (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+                           (= (aref (handle-table-generation ids) slot) (handle-generation h))
+                           (let ((row (aref (handle-table-local ids) slot)))
+                             (and (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
+                                  ;; pair-contact's own first test: a pair farther apart than
+                                  ;; this touches no contact
+                                  (let ((dx (- (aref (body-columns-x sleeping) row) xi))
+                                        (dy (- (aref (body-columns-y sleeping) row) yi))
+                                        (dz (- (aref (body-columns-z sleeping) row) zi))
+                                        (reach (+ ri (aref (body-columns-radius sleeping) row) margin)))
+                                    (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
+                  (let ((row (aref (handle-table-local ids) (handle-index h))))
+                    (pair xi yi zi ri hi vxi vyi vzi
+                          (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
+                          (aref (body-columns-z sleeping) row)
+                          (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0 -1 -1)))))))))
     world))
 ;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
@@ -8854,7 +8954,8 @@ and when they are too many VIEW grids the sleepers itself. #Q5V1EW"
       ;; no dead entry ([[#G4R1D5][the grids]]); otherwise the view grids the sleepers itself,
       ;; without first marking which the settled grid holds where they lie
       (cond
-        ((or (plusp (physics-world-fresh-count world)) (plusp (physics-world-settled-stale world)))
+        ((or (plusp (physics-world-fresh-count world)) (plusp (physics-world-newest-count world))
+             (plusp (physics-world-settled-stale world)))
          (grid-all))
         ((physics-world-sleeping-grid-dirty world)
          (let* ((marks (setf (query-view-marks view) (stray-room (query-view-marks view) n)))

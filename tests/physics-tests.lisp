@@ -2218,10 +2218,11 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grids-stay-lean]]
 (define-claim "G4R1D5" sleeping-grids-stay-lean
-    "Sleeping enters the fresh grid alone; removed sleepers leave the grids at the next step."
+    "Sleeping enters the newest grid alone; removed sleepers leave the grids at the next step."
   (let* ((w (luv-physics::sleepers-beside-basin 2000 :kernels :scalar))
          (settled (luv-physics::physics-world-sleeping-grid w))
-         (fresh (luv-physics::physics-world-fresh-grid w)))
+         (fresh (luv-physics::physics-world-fresh-grid w))
+         (newest (luv-physics::physics-world-newest-grid w)))
     (step-physics-world w)
     (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid holds ~D" (luv-physics::hash-grid-count settled))
     (let ((ball (add-physics-body w 4.0 0.5 4.0 :radius 0.25)))
@@ -2230,15 +2231,17 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (step-physics-world w)
       (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid was built again: ~D entries"
              (luv-physics::hash-grid-count settled))
-      (check (= 1 (luv-physics::hash-grid-count fresh)) "the fresh grid holds ~D" (luv-physics::hash-grid-count fresh)))
+      (check (= 1 (luv-physics::hash-grid-count newest)) "the newest grid holds ~D" (luv-physics::hash-grid-count newest))
+      (check (= 0 (luv-physics::hash-grid-count fresh)) "the fresh grid holds ~D" (luv-physics::hash-grid-count fresh)))
     (let ((s (luv-physics::physics-world-sleeping w)))
       (dolist (h (loop for i below 1000 collect (aref (luv-physics::body-columns-handle s) i)))
         (luv-physics::remove-physics-body w h))
       (step-physics-world w)
       (check (= 1001 (luv-physics::hash-grid-count settled)) "after the removals the settled grid holds ~D"
              (luv-physics::hash-grid-count settled))
-      (check (= 0 (luv-physics::hash-grid-count fresh)) "after the removals the fresh grid holds ~D"
-             (luv-physics::hash-grid-count fresh))
+      (check (= 0 (luv-physics::hash-grid-count fresh) (luv-physics::hash-grid-count newest))
+             "after the removals the fresh grid holds ~D, the newest ~D"
+             (luv-physics::hash-grid-count fresh) (luv-physics::hash-grid-count newest))
       (check (loop for row below (luv-physics::body-columns-length s)
                    always (let ((h (aref (luv-physics::body-columns-handle s) row)) (seen 0))
                             (luv-physics::do-sleeping-neighbours (e w (aref (luv-physics::body-columns-x s) row)
@@ -2287,13 +2290,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sleeping-grid-bounds-at-the-limit]]
 (define-claim "G4R1D5" sleeping-grid-bounds-at-the-limit
-    "The settled grid is built again at 257 fresh sleepers or 257 dead entries, not at 256; the fresh list keeps only sleepers."
+    "The settled grid is built again at 257 fresh sleepers or 257 dead entries, not at 256; the newest list keeps only sleepers."
   (let* ((w (make-physics-world :gravity '(0 0 0)))
          (handles (loop for i below 300
                         collect (add-physics-body w (* 2.0 (mod i 10)) (* 2.0 (mod (floor i 10) 10)) (* 2.0 (floor i 100))
                                                   :radius 0.25)))
          (settled (luv-physics::physics-world-sleeping-grid w))
-         (fresh (luv-physics::physics-world-fresh-grid w)))
+         (fresh (luv-physics::physics-world-fresh-grid w))
+         (newest (luv-physics::physics-world-newest-grid w)))
     (flet ((put-to-sleep (h) (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h))))
            (met-once ()
              ;; a walk of the sleeping grids around each sleeper meets its handle once
@@ -2313,19 +2317,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (dolist (h (subseq handles 0 5)) (luv-physics::wake-handle w h))
       (put-to-sleep (first handles))
       (luv-physics::ensure-sleeping-grid w)
-      (check (= 6 (luv-physics::physics-world-fresh-count w) (luv-physics::hash-grid-count fresh))
-             "the fresh list holds ~D" (luv-physics::physics-world-fresh-count w))
+      (check (= 6 (luv-physics::physics-world-newest-count w) (luv-physics::hash-grid-count newest))
+             "the newest list holds ~D" (luv-physics::physics-world-newest-count w))
       (mapc #'put-to-sleep (subseq handles 10 260))
       (luv-physics::ensure-sleeping-grid w)
-      (check (and (= 0 (luv-physics::hash-grid-count settled)) (= 256 (luv-physics::hash-grid-count fresh)))
-             "256 fresh sleepers: the settled grid holds ~D, the fresh ~D"
-             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh))
+      (check (and (= 0 (luv-physics::hash-grid-count settled))
+                  (= 256 (+ (luv-physics::hash-grid-count fresh) (luv-physics::hash-grid-count newest))))
+             "256 fresh sleepers: the settled grid holds ~D, the fresh ~D, the newest ~D"
+             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh)
+             (luv-physics::hash-grid-count newest))
       (check (met-once) "a fresh sleeper is met other than once around itself")
       (put-to-sleep (nth 260 handles))
       (luv-physics::ensure-sleeping-grid w)
-      (check (and (= 257 (luv-physics::hash-grid-count settled)) (= 0 (luv-physics::hash-grid-count fresh)))
-             "257 fresh sleepers: the settled grid holds ~D, the fresh ~D"
-             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh))
+      (check (and (= 257 (luv-physics::hash-grid-count settled)) (= 0 (luv-physics::hash-grid-count fresh))
+                  (= 0 (luv-physics::hash-grid-count newest)))
+             "257 fresh sleepers: the settled grid holds ~D, the fresh ~D, the newest ~D"
+             (luv-physics::hash-grid-count settled) (luv-physics::hash-grid-count fresh)
+             (luv-physics::hash-grid-count newest))
       (dolist (h (subseq handles 5 261)) (luv-physics::wake-handle w h))
       (luv-physics::ensure-sleeping-grid w)
       (check (= 256 (luv-physics::physics-world-settled-stale w)) "~D dead entries" (luv-physics::physics-world-settled-stale w))
@@ -2354,6 +2362,84 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (luv-physics::ensure-sleeping-grid w)
         (check (= 2926 (luv-physics::hash-grid-count settled)) "326 fresh beside 2600: ~D settled" (luv-physics::hash-grid-count settled)))))
 ;; G4R1D5-sleeping-grid-bounds-at-the-limit ends here
+
+;; [[file:../physics.org::#G4R1D5][G4R1D5-falling-asleep-builds-the-newest]]
+(define-claim "G4R1D5" falling-asleep-builds-the-newest
+    "300 balls falling asleep one by one beside 2600 or 26000 settled sleepers make the grids build 6274 entries."
+  (flet ((work-beside (settled-count)
+           (let* ((w (make-physics-world :gravity '(0 0 0)))
+                  (side (ceiling (sqrt (+ settled-count 300))))
+                  (handles (loop for i below (+ settled-count 300)
+                                 collect (add-physics-body w (* 1.0 (mod i side)) 0.5 (* 1.0 (floor i side)) :radius 0.25))))
+             (flet ((put-to-sleep (h) (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h)))))
+               (mapc #'put-to-sleep (subseq handles 0 settled-count))
+               (luv-physics::ensure-sleeping-grid w)
+               (check (= settled-count (luv-physics::hash-grid-count (luv-physics::physics-world-sleeping-grid w))))
+               (let ((before (luv-physics::physics-world-sleeping-grid-work w)))
+                 (dolist (h (subseq handles settled-count))
+                   (put-to-sleep h)
+                   (luv-physics::ensure-sleeping-grid w))
+                 (check (= settled-count (luv-physics::hash-grid-count (luv-physics::physics-world-sleeping-grid w)))
+                        "the settled grid was built again beside ~D" settled-count)
+                 (- (luv-physics::physics-world-sleeping-grid-work w) before))))))
+    (let ((near (work-beside 2600)) (far (work-beside 26000)))
+      (check (= 6274 near far) "the grids built ~D entries beside 2600 settled, ~D beside 26000" near far))))
+;; G4R1D5-falling-asleep-builds-the-newest ends here
+
+;; [[file:../physics.org::#G4R1D5][G4R1D5-wake-order-ignores-the-grids]]
+(define-claim "G4R1D5" wake-order-ignores-the-grids
+    "A thrown ball wakes a pile's sleepers in one order, step for step bit-equal, whether the settled grid or the others hold them."
+  (flet ((pile (whole)
+           (let* ((w (make-floor-world))
+                  (handles (append (loop for i below 121
+                                         collect (add-physics-body w (+ 1.0 (* 0.5 (mod i 11))) 0.245
+                                                                   (+ 1.0 (* 0.5 (floor i 11))) :radius 0.25))
+                                   (loop for i below 100
+                                         collect (add-physics-body w (+ 1.25 (* 0.5 (mod i 10))) 0.5986
+                                                                   (+ 1.25 (* 0.5 (floor i 10))) :radius 0.25)))))
+             ;; put to sleep out of the order they were added (97 is prime to 221), so that
+             ;; neighbours fall into different grids
+             (dotimes (i 221)
+               (let ((h (nth (mod (* 97 i) 221) handles)))
+                 (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h)))
+                 (unless whole (luv-physics::ensure-sleeping-grid w))))
+             (when whole
+               ;; dead entries past the bound: the settled grid is built again from every sleeper
+               (setf (luv-physics::physics-world-settled-stale w) 257)
+               (luv-physics::ensure-sleeping-grid w))
+             (let ((of (luv-physics::physics-world-grid-of w)))
+               (values w (loop for h in handles collect (aref of (luv-physics::handle-index h))))))))
+    (multiple-value-bind (settled settled-marks) (pile t)
+      (multiple-value-bind (spread spread-marks) (pile nil)
+        (check (every (lambda (m) (= m 1)) settled-marks) "the settled grid does not hold every sleeper")
+        ;; the first sleeper is in the settled grid: the first build of all is whole
+        (check (and (<= (count 1 spread-marks) 1) (find 2 spread-marks) (find 3 spread-marks))
+               "the fresh and newest grids do not share the sleepers: marks ~S" (remove-duplicates spread-marks))
+        (dolist (w (list settled spread)) (add-physics-body w -1.0 0.6 3.6 :radius 0.25 :vx 8.0))
+        (let ((woken 0) (parted nil))
+          (dotimes (i 120)
+            ;; the two worlds' handles differ in their world's tag: their slots are compared
+            (let ((a (loop for (kind h) in (step-events settled)
+                           when (eq kind :woke) collect (luv-physics::handle-index h)))
+                  (b (loop for (kind h) in (step-events spread)
+                           when (eq kind :woke) collect (luv-physics::handle-index h))))
+              (incf woken (length a))
+              (unless (or parted (and (equal a b) (= (luv-physics::physics-world-state-hash settled)
+                                                     (luv-physics::physics-world-state-hash spread))))
+                (setf parted (list i a b)))))
+          (check (>= woken 40) "the thrown ball woke only ~D sleepers" woken)
+          (check (null parted) "on step ~D the settled pile woke ~S, the spread one ~S, or their hashes differ"
+                 (first parted) (second parted) (third parted)))))))
+;; G4R1D5-wake-order-ignores-the-grids ends here
+
+;; [[file:../physics.org::#G4R1D5][G4R1D5-wave-builds-bounded]]
+(define-claim "G4R1D5" wave-builds-bounded
+    "A wake wave beside 10000 or 40000 sleepers builds the same sleeping-grid entries, at most 4500."
+  (let ((near (getf (luv-physics::measure-sleeping-scale 10000 :kernels :scalar) :wave-grid-entries))
+        (far (getf (luv-physics::measure-sleeping-scale 40000 :kernels :scalar) :wave-grid-entries)))
+    (check (= near far) "the wave built ~D entries beside 10000 sleepers, ~D beside 40000" near far)
+    (check (<= near 4500) "the wave built ~D entries" near)))
+;; G4R1D5-wave-builds-bounded ends here
 
 ;; [[file:../physics.org::#W4K3PH][W4K3PH-box-wakes-within-its-reach]]
 (define-claim "W4K3PH" box-wakes-within-its-reach
@@ -2461,7 +2547,8 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (funcall before i)
         (let ((awake (physics-world-awake-count world)))
           (step-physics-world world)
-          (let ((fresh (luv-physics::physics-world-fresh-count world)))
+          (let ((fresh (+ (luv-physics::physics-world-fresh-count world)
+                          (luv-physics::physics-world-newest-count world))))
             (when (> fresh (+ (max 256 (floor (luv-physics::physics-world-settled-count world) 8)) awake))
               (incf over))
             (when (< fresh last) (incf falls))
