@@ -1800,6 +1800,25 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= trimmed (run nil)) "trimming changed the hash"))))
 ;; QKS4GZ-trimming-keeps-the-hash ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trimmed-scratch-regrows]]
+(define-claim "QKS4GZ" trimmed-scratch-regrows
+    "Trimmed with every body asleep and stepped, a world's solver scratch has room for the dummy row again."
+  (let ((w (make-floor-world)))
+    (add-physics-body w 3.5 0.245 3.5)
+    (dotimes (i 200) (step-physics-world w))
+    (check (= 1 (luv-physics::physics-world-sleeping-count w)) "the ball does not sleep")
+    (luv-physics:trim-physics-world w)
+    (dotimes (i 3) (step-physics-world w))
+    (let ((n (luv-physics::physics-world-awake-count w)))
+      (check (zerop n) "~D bodies awake" n)
+      (check (>= (length (luv-physics::physics-world-velocities w)) (luv-physics::solver-row (1+ n))))
+      (check (>= (length (luv-physics::physics-world-deltas w)) (luv-physics::delta-row (1+ n))))
+      (dolist (column (list (luv-physics::physics-world-color-masks w) (luv-physics::physics-world-braced w)
+                            (luv-physics::physics-world-held w)))
+        (check (>= (length column) (1+ n)) "a column of marks holds ~D entries" (length column))))
+    (check (eq t (luv-physics::validate-physics-world w)))))
+;; QKS4GZ-trimmed-scratch-regrows ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-woken-sleeps-again-sooner]]
 (define-claim "QKS4GZ" woken-sleeps-again-sooner
     "A sleeper woken by a passing ball, and not moved, sleeps again within 0.3 s."
@@ -2194,6 +2213,17 @@ function of a column name that reads row K's float in that column. #T3STK1"
            "no row moved")
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; G4R1D5-sorted-rows-keep-handles ends here
+
+;; [[file:../physics.org::#G4R1D5][G4R1D5-identities-cover-every-row]]
+(define-claim "G4R1D5" identities-cover-every-row
+    "awake-row-identities returns 0 .. N-1 at least, for N asked of an empty column and then of larger ones."
+  (let ((luv-physics::*row-identities* (make-array 0 :element-type 'fixnum)))
+    (loop for (n want) in '((10 1024) (1500 2048) (1501 2048) (5000 5000) (3 5000))
+          do (let ((ids (luv-physics::awake-row-identities nil n)))
+               (check (= want (length ids)) "asked for ~D rows, the column holds ~D, not ~D" n (length ids) want)
+               (check (loop for i below (length ids) always (= i (aref ids i)))
+                      "asked for ~D rows, the column is not 0, 1, 2, ..." n)))))
+;; G4R1D5-identities-cover-every-row ends here
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sort-room-kept]]
 (define-claim "G4R1D5" sort-room-kept
@@ -2870,6 +2900,36 @@ function of a column name that reads row K's float in that column. #T3STK1"
                       "rows ~D and ~D of radii ~S with overlaps ~S: room ~S" i j radius counts (not want)))))))
 ;; P41RS7-overlap-room-charges-the-smaller ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-overlaps-charged-to-the-smaller]]
+(define-claim "P41RS7" overlaps-charged-to-the-smaller
+    "After each of two steps, a row's overlap count is the overlapping pairs in which it is the smaller ball."
+  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
+         (balls (append '((2.0 2.0 2.0 0.5))
+                        (loop for (dx dy dz) in '((0.7 0 0) (-0.7 0 0) (0 0.7 0) (0 -0.7 0) (0 0 0.7) (0 0 -0.7))
+                              collect (list (+ 2.0 dx) (+ 2.0 dy) (+ 2.0 dz) 0.25))
+                        '((5.0 2.0 2.0 0.25) (5.4 2.0 2.0 0.25) (8.0 2.0 2.0 0.35) (8.5 2.0 2.0 0.25))))
+         (handles (loop for (x y z r) in balls collect (add-physics-body w x y z :radius r))))
+    (dotimes (s 2)
+      (let* ((at (mapcar (lambda (h) (multiple-value-list (physics-body-position w h))) handles))
+             (radii (mapcar #'fourth balls))
+             (want (make-list (length handles) :initial-element 0))
+             (close 0))
+        (loop for i from 0 for (xi yi zi) in at for ri in radii
+              do (loop for j from (1+ i) below (length handles)
+                       for (xj yj zj) = (nth j at) for rj = (nth j radii)
+                       for gap = (- (sqrt (+ (expt (- xj xi) 2) (expt (- yj yi) 2) (expt (- zj zi) 2))) ri rj)
+                       do (when (< (abs gap) 1d-4) (incf close))
+                          (when (< gap 0)
+                            (when (<= ri rj) (incf (nth i want)))
+                            (when (<= rj ri) (incf (nth j want))))))
+        (step-physics-world w)
+        (let* ((overlaps (luv-physics::pair-list-overlaps (luv-physics::physics-world-pair-list w)))
+               (got (mapcar (lambda (h) (aref overlaps (nth-value 1 (luv-physics::resolve-handle w h)))) handles)))
+          (check (zerop close) "step ~D: ~D pairs within 1e-4 m of touching" s close)
+          (check (plusp (reduce #'+ want)) "step ~D: no pair overlaps" s)
+          (check (equal want got) "step ~D: overlap counts ~S, by the centres ~S" s got want))))))
+;; P41RS7-overlaps-charged-to-the-smaller ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-terrain-only-bodies-take-no-pairs]]
 (define-claim "P41RS7" terrain-only-bodies-take-no-pairs
     "Drops that meet only terrain take no pair contact, whether found by the list's build, a loose row or two loose rows."
@@ -3392,6 +3452,34 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (check (eq t (luv-physics::validate-physics-world w)))))))
 ;; PRUN3D-reorder-keeps-contacts ends here
 
+;; [[file:../physics.org::#PRUN3D][PRUN3D-scratch-keeps-up]]
+(define-claim "PRUN3D" scratch-keeps-up
+    "After each step of a landing pile the reordering's scratch has the contact buffer's room; a later reordering conses nothing."
+  (let* ((w (luv-physics::make-basin-world 200)) (grew 0) (last 0)
+         (table (luv-physics::physics-world-contact-table w)))
+    (flet ((rooms () (values (luv-physics::contact-columns-capacity (luv-physics::physics-world-contacts w))
+                             (luv-physics::contact-columns-capacity (luv-physics::physics-world-contact-scratch w)))))
+      (dotimes (i 90)
+        (step-physics-world w)
+        (multiple-value-bind (room scratch) (rooms)
+          (when (> room last) (incf grew) (setf last room))
+          (check (>= scratch room) "step ~D: the scratch has room for ~D rows, the contacts ~D" i scratch room)))
+      (check (>= grew 2) "the contact buffer grew only ~D times" grew)
+      (let ((c (luv-physics::physics-world-contacts w)))
+        (luv-physics::contact-columns-ensure-capacity c (* 2 (luv-physics::contact-columns-capacity c))))
+      (setf (luv-physics::contact-table-misses table) 0)
+      (step-physics-world w)
+      (multiple-value-bind (room scratch) (rooms)
+        (check (>= scratch room) "after the buffer grew, the scratch has room for ~D rows, the contacts ~D" scratch room))
+      (setf (luv-physics::contact-table-misses table)
+            (* 2 (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w))))
+      (let ((before (sb-ext:get-bytes-consed)))
+        (step-physics-world w)
+        (check (= 0 (- (sb-ext:get-bytes-consed) before)) "the reordering step consed ~D bytes"
+               (- (sb-ext:get-bytes-consed) before)))
+      (check (zerop (luv-physics::contact-table-misses table)) "the step did not reorder"))))
+;; PRUN3D-scratch-keeps-up ends here
+
 ;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-threshold]]
 (define-claim "PRUN3D" reorder-threshold
     "A world of five contacts reorders at 64 misses, not at 63 and not at five."
@@ -3451,6 +3539,30 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (= 0 clashes) "~D constraints share a body with another of their colour" clashes)
       (check (= 0 two-sided-high) "~D two-body constraints sit in colours 20..23" two-sided-high))))
 ;; SSMPYW-colours-disjoint ends here
+
+;; [[file:../physics.org::#SSMPYW][SSMPYW-capacity-in-one-jump]]
+(define-claim "SSMPYW" capacity-in-one-jump
+    "constraint-columns-ensure-capacity gives 8 ceiling(max(rows, 2 old, 64)/8) rows, every column that long."
+  (dolist (rows '(1 63 64 65 1000 4097))
+    (let ((fresh (luv-physics::make-constraint-columns)) (grown (luv-physics::make-constraint-columns)))
+      (luv-physics::constraint-columns-ensure-capacity grown 100)
+      (loop for (cbuf old) in (list (list fresh 0) (list grown (luv-physics::constraint-columns-capacity grown)))
+            do (luv-physics::constraint-columns-ensure-capacity cbuf rows)
+               (let ((cap (luv-physics::constraint-columns-capacity cbuf))
+                     (want (if (> rows old) (* 8 (ceiling (max rows (* 2 old) 64) 8)) old)))
+                 (check (= cap want) "~D rows from ~D: capacity ~D, not ~D" rows old cap want)
+                 (check (= (length (luv-physics::constraint-columns-data cbuf))
+                           (+ luv-physics::+constraint-origin+ (* (floor cap 8) (luv-physics::constraint-columns-block cbuf))))
+                        "~D rows: the main blocks hold ~D floats" rows (length (luv-physics::constraint-columns-data cbuf)))
+                 (check (= (length (luv-physics::constraint-columns-side cbuf))
+                           (+ luv-physics::+constraint-origin+ (* (floor cap 8) (luv-physics::constraint-columns-side-block cbuf))))
+                        "~D rows: the side blocks hold ~D floats" rows (length (luv-physics::constraint-columns-side cbuf)))
+                 (check (= cap (length (luv-physics::constraint-columns-contact cbuf))
+                           (length (luv-physics::constraint-columns-body-a cbuf))
+                           (length (luv-physics::constraint-columns-body-b cbuf)))
+                        "~D rows: fixnum columns of ~D, ~D, ~D" rows (length (luv-physics::constraint-columns-contact cbuf))
+                        (length (luv-physics::constraint-columns-body-a cbuf)) (length (luv-physics::constraint-columns-body-b cbuf))))))))
+;; SSMPYW-capacity-in-one-jump ends here
 
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-one-sided-late-among-used]]
 (define-claim "SSMPYW" one-sided-late-among-used
