@@ -6644,6 +6644,25 @@ counted. #RH7T05"
       (check (= 300 (map-physics-bodies-in-sphere (lambda (g) (declare (ignore g))) w 4.0 2.0 4.0 20.0))))))
 ;; Q5V1EW-view-after-every-step ends here
 
+;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-after-an-edit]]
+(define-claim "Q5V1EW" view-after-an-edit
+    "After a removal and an add that keep the counts and the step, a sphere finds the new ball and not the removed one."
+  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
+         (a (add-physics-body w 1.0 1.0 1.0 :radius 0.25)))
+    (add-physics-body w 3.0 1.0 1.0 :radius 0.25)
+    (add-physics-body w 5.0 1.0 1.0 :radius 0.25)
+    (step-physics-world w)
+    (flet ((found (x y z) (let ((got '()))
+                            (map-physics-bodies-in-sphere (lambda (h) (push h got)) w x y z 0.1)
+                            got)))
+      (check (equal (list a) (found 1.0 1.0 1.0)) "before the edit the sphere finds ~S" (found 1.0 1.0 1.0))
+      (remove-physics-body w a)
+      (let ((b (add-physics-body w 11.0 1.0 1.0 :radius 0.25)))
+        (check (= 3 (physics-world-awake-count w)))
+        (check (null (found 1.0 1.0 1.0)) "the removed ball's place holds ~S" (found 1.0 1.0 1.0))
+        (check (equal (list b) (found 11.0 1.0 1.0)) "the new ball's place holds ~S, not ~S" (found 11.0 1.0 1.0) b)))))
+;; Q5V1EW-view-after-an-edit ends here
+
 ;; [[file:../physics.org::#C4STRY][C4STRY-box-faces-edges-and-corners]]
 (define-claim "C4STRY" box-faces-edges-and-corners
     "Casts at a posted box: faces at the exact distance, normal and point; from inside or overlapping, 0 or nothing; edges and corners along their diagonals."
