@@ -814,6 +814,20 @@ buffer whose package is named PACKAGE, or NIL when the page defines no such name
   "X as a single-float. #V0CAB5"
   (coerce x 'single-float))
 
+(declaim (inline fixnum-column-copy fixnum-room))
+(defun fixnum-column-copy (column size keep)
+  "A fresh fixnum column of SIZE entries: the first KEEP are COLUMN's, the rest 0. #V0CAB5"
+  (declare (type fixnum-column column) (type index size keep))
+  (replace (make-array size :element-type 'fixnum :initial-element 0) column :end2 keep))
+
+(defun fixnum-room (column need &key (keep (length column)) (least 64))
+  "COLUMN when it has room for NEED entries; else a fresh fixnum column of NEED entries, twice
+COLUMN's length or LEAST, whichever is most, holding COLUMN's first KEEP entries. #V0CAB5"
+  (declare (type fixnum-column column) (type index need keep least))
+  (if (>= (length column) need)
+      column
+      (fixnum-column-copy column (max need (* 2 (length column)) least) keep)))
+
 (defmacro block-ref (data base offset)
   "Float BASE+OFFSET of the f32-column DATA, OFFSET a constant folded into the load's address
 (SBCL's internal, unchecked accessor; see [[#R0WS8T]]). #V0CAB5"
@@ -2622,9 +2636,7 @@ from +woken-sleep-credit+ of the time to sleep, and note :woke. In a step, note 
 undo log too (roll-back-step). #QKS4GZ"
   (when (physics-world-undo-open world)
     (let ((log (physics-world-undo-woken world)) (k (physics-world-undo-woken-count world)))
-      (when (>= k (length log))
-        (setf log (replace (make-array (max 16 (* 2 k)) :element-type 'fixnum) log)
-              (physics-world-undo-woken world) log))
+      (setf log (fixnum-room log (1+ k) :least 16) (physics-world-undo-woken world) log)
       (setf (aref log k) row (physics-world-undo-woken-count world) (1+ k))))
   (let* ((handle (aref (body-columns-handle (physics-world-sleeping world)) row))
          (new (progn (when (> (aref (body-columns-life (physics-world-sleeping world)) row) 0.0)
@@ -2672,9 +2684,8 @@ fallen asleep or been removed. Return WORLD. #QKS4GZ"
     (body-columns-trim (physics-world-sleeping world) 0)
     ;; the events of the last step stay readable: trimming keeps every row
     (event-columns-trim (physics-world-events world) 0)
-    (setf (physics-world-added world)
-          (replace (make-array (max 16 (physics-world-added-count world)) :element-type 'fixnum :initial-element 0)
-                   (physics-world-added world) :end2 (physics-world-added-count world)))
+    (let ((count (physics-world-added-count world)))
+      (setf (physics-world-added world) (fixnum-column-copy (physics-world-added world) (max 16 count) count)))
     (setf (physics-world-row-places world) (make-array 0 :element-type 'fixnum)
           (physics-world-undo-rows world) (make-array 0 :element-type 'fixnum)
           (physics-world-velocities world) (make-array 0 :element-type 'single-float)
@@ -2682,8 +2693,7 @@ fallen asleep or been removed. Return WORLD. #QKS4GZ"
           (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
           (physics-world-braced world) (make-array 0 :element-type 'fixnum)
           (physics-world-held world) (make-array 0 :element-type 'fixnum))
-    (flet ((list-room (handles count)
-             (replace (make-array (max 64 count) :element-type 'fixnum :initial-element 0) handles :end2 count)))
+    (flet ((list-room (handles count) (fixnum-column-copy handles (max 64 count) count)))
       (setf (physics-world-fresh-handles world)
             (list-room (physics-world-fresh-handles world) (physics-world-fresh-count world))
             (physics-world-newest-handles world)
@@ -2906,9 +2916,7 @@ the fresh one, 3 the newest one, 0 none; grown to the handle table's slots. #G4R
     (declare (type fixnum-column of))
     (if (>= (length of) slots)
         of
-        (let ((grown (make-array slots :element-type 'fixnum :initial-element 0)))
-          (replace grown of)
-          (setf (physics-world-grid-of world) grown)))))
+        (setf (physics-world-grid-of world) (fixnum-room of slots :least 0)))))
 
 (defun note-fresh-sleeper (world handle)
   "Note that HANDLE's body fell asleep: the newest grid takes it at its next build. #G4R1D5"
@@ -2916,10 +2924,7 @@ the fresh one, 3 the newest one, 0 none; grown to the handle table's slots. #G4R
         (of (sleeping-grid-of world)))
     (declare (type fixnum-column handles of) (type fixnum count))
     (when (= (aref of (handle-index handle)) 1) (incf (physics-world-settled-stale world)))
-    (when (= count (length handles))
-      (let ((grown (make-array (max 64 (* 2 count)) :element-type 'fixnum :initial-element 0)))
-        (replace grown handles)
-        (setf (physics-world-newest-handles world) grown handles grown)))
+    (setf handles (fixnum-room handles (1+ count)) (physics-world-newest-handles world) handles)
     (setf (aref handles count) handle
           (physics-world-newest-count world) (1+ count)
           (aref of (handle-index handle)) 3
@@ -3020,14 +3025,10 @@ eighth of the settled grid (and 256). Return the settled grid. #G4R1D5"
                  (build-listed-sleepers world newest (physics-world-newest-handles world) kept)
                  ;; the newest join the fresh list, which is compacted and built again
                  (let* ((count (physics-world-fresh-count world))
-                        (handles (physics-world-fresh-handles world))
+                        (handles (setf (physics-world-fresh-handles world)
+                                       (fixnum-room (physics-world-fresh-handles world) (+ count kept) :keep count)))
                         (newest-handles (physics-world-newest-handles world)))
                    (declare (type fixnum-column handles newest-handles) (type fixnum count))
-                   (when (< (length handles) (+ count kept))
-                     (setf handles (replace (make-array (max 64 (* 2 (+ count kept))) :element-type 'fixnum
-                                                                                       :initial-element 0)
-                                            handles :end2 count)
-                           (physics-world-fresh-handles world) handles))
                    (dotimes (k kept)
                      (let ((h (aref newest-handles k)))
                        (setf (aref handles (+ count k)) h (aref of (handle-index h)) 2)))
@@ -3072,13 +3073,6 @@ rows in the sleeping buffer, in place and allocating nothing (Shell's sort). #G4
                           (decf j gap))
                  (setf (aref handles j) h))))))
 
-(defun grow-sleepers-found (world)
-  "Double WORLD's list of sleepers found near a point, keeping what it holds; return it. #G4R1D5"
-  (let* ((found (physics-world-sleepers-found world))
-         (grown (make-array (* 2 (length found)) :element-type 'fixnum :initial-element 0)))
-    (replace grown found)
-    (setf (physics-world-sleepers-found world) grown)))
-
 (defmacro do-sleepers-in-row-order ((item world x y z &key (span 1)) test &body body)
   "Run BODY with ITEM bound to the handle of each live entry of WORLD's sleeping grids whose cell
 lies within SPAN cells of point X Y Z and for which TEST (ITEM bound) is true, in the order of
@@ -3091,7 +3085,8 @@ sleeper or where in it. #G4R1D5"
        (declare (type fixnum-column ,found) (type index ,count))
        (do-sleeping-neighbours (,item ,w ,x ,y ,z :span ,span)
          (when ,test
-           (when (= ,count (length ,found)) (setf ,found (grow-sleepers-found ,w)))
+           (when (= ,count (length ,found))
+             (setf ,found (fixnum-room ,found (1+ ,count)) (physics-world-sleepers-found ,w) ,found))
            (setf (aref ,found ,count) ,item)
            (incf ,count)))
        (sort-sleepers-by-row ,w ,found ,count)
@@ -3274,10 +3269,7 @@ Return 0. #W4K3PH"
   "Remember that HANDLE's body was added since the last step, for the wake phase. #W4K3PH"
   (let ((added (physics-world-added world)) (count (physics-world-added-count world)))
     (declare (type fixnum-column added) (type fixnum count))
-    (when (= count (length added))
-      (let ((grown (make-array (* 2 (length added)) :element-type 'fixnum :initial-element 0)))
-        (replace grown added)
-        (setf (physics-world-added world) grown added grown)))
+    (setf added (fixnum-room added (1+ count) :least 16) (physics-world-added world) added)
     (setf (aref added count) handle
           (physics-world-added-count world) (1+ count))
     handle))
@@ -3416,9 +3408,7 @@ handles, CELL as the cell edge, and no row loose; count a build. #P41RS7"
   (declare (type pair-list plist) (type index a b) #.+kernel-policy+)
   (let ((k (pair-list-count plist)))
     (when (>= k (length (pair-list-pairs plist)))
-      (let ((fresh (make-array (max 1024 (* 2 k)) :element-type 'fixnum)))
-        (replace fresh (pair-list-pairs plist))
-        (setf (pair-list-pairs plist) fresh)))
+      (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) (1+ k) :least 1024)))
     (setf (aref (pair-list-pairs plist) k) (logior (ash a 24) b)
           (pair-list-count plist) (1+ k))))
 
@@ -4269,10 +4259,7 @@ claims and the tools, which name a column rather than know its block. #SSMPYW"
             (make-array rows :element-type 'fixnum :initial-element 0)
             (physics-world-held world)
             (make-array rows :element-type 'fixnum :initial-element 0))))
-  (when (< (length (physics-world-contact-colors world)) contacts)
-    (setf (physics-world-contact-colors world)
-          (make-array (max contacts (* 2 (length (physics-world-contact-colors world))) 64)
-                      :element-type 'fixnum :initial-element 0)))
+  (setf (physics-world-contact-colors world) (fixnum-room (physics-world-contact-colors world) contacts :keep 0))
   (constraint-columns-ensure-capacity (physics-world-constraints world) contacts)
   world)
 
@@ -8872,13 +8859,6 @@ terrain probe of its own. #Q5V1EW"
   (search nil)
   (busy nil :type boolean))
 
-(declaim (inline stray-room))
-
-(defun stray-room (column n)
-  "COLUMN if it holds N entries, else a fresh fixnum column of at least N. #Q5V1EW"
-  (declare (type fixnum-column column) (type index n))
-  (if (>= (length column) n) column (make-array (max n (* 2 (length column)) 64) :element-type 'fixnum)))
-
 (defun strays-allowed (n)
   "How many rows of a set of N a view tests one by one before it grids the set itself. #Q5V1EW"
   (declare (type index n))
@@ -8958,8 +8938,8 @@ and when they are too many VIEW grids the sleepers itself. #Q5V1EW"
              (plusp (physics-world-settled-stale world)))
          (grid-all))
         ((physics-world-sleeping-grid-dirty world)
-         (let* ((marks (setf (query-view-marks view) (stray-room (query-view-marks view) n)))
-                (strays (setf (query-view-sleeping-strays view) (stray-room (query-view-sleeping-strays view) n)))
+         (let* ((marks (setf (query-view-marks view) (fixnum-room (query-view-marks view) n :keep 0)))
+                (strays (setf (query-view-sleeping-strays view) (fixnum-room (query-view-sleeping-strays view) n :keep 0)))
                 (ids (physics-world-ids world))
                 (sets (handle-table-set ids)) (gens (handle-table-generation ids)) (locals (handle-table-local ids))
                 (items (hash-grid-items grid)) (gx (hash-grid-xs grid)) (gy (hash-grid-ys grid))

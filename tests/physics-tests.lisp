@@ -467,14 +467,6 @@ cell at 4 1 5. #T3STK1"
     (luv-physics::fill-terrain terrain 4 1 5 5 2 6 nil)
     (luv-physics::make-physics-world :terrain terrain :gravity '(0 0 0))))
 
-(defun make-lcg (seed)
-  "A function returning uniform doubles in [0,1) from a 48-bit linear congruential generator
-started at the integer SEED, independent of CL's random state. #T3STK1"
-  (let ((state (ldb (byte 48 0) seed)))
-    (lambda ()
-      (setf state (ldb (byte 48 0) (+ (* state 25214903917) 11)))
-      (/ (float (ldb (byte 31 17) state) 1d0) (float (ash 1 31) 1d0)))))
-
 (defun step-events (world)
   "Step WORLD once and return its events as a list of (KIND HANDLE-A HANDLE-B SPEED DATUM). #T3STK1"
   (luv-physics::step-physics-world world)
@@ -786,7 +778,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (let* ((w (make-floor-world))
            (sleepers (list (luv-physics::add-physics-body w 6.5 0.245 6.5) (luv-physics::add-physics-body w 7.5 0.245 6.5))))
       (dotimes (i 60) (luv-physics::step-physics-world w))
-      (let* ((next (make-lcg 5))
+      (let* ((next (luv-physics::fixed-sequence 5))
              (balls (loop for i below 30
                           collect (luv-physics::add-physics-body w (+ 1 (* 4 (funcall next))) (+ 1 (* 3 (funcall next)))
                                                                  (+ 1 (* 4 (funcall next))) :radius 0.2))))
@@ -1365,7 +1357,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 ;; [[file:../physics.org::#D9W4CH][D9W4CH-cell-floor-is-floor]]
 (define-claim "D9W4CH" cell-floor-is-floor
     "cell-floor = floor of the clamped value, on signed zeros, integers, halves, bounds and 20000 samples."
-  (let* ((next (make-lcg 19))
+  (let* ((next (luv-physics::fixed-sequence 19))
          (values (append (list 0.0 -0.0 1.0 -1.0 0.5 -0.5 2.5 -2.5 1e-30 -1e-30 3.9999998e6 -3.9999998e6
                                4.0e6 -4.0e6 5.0e6 -5.0e6 most-positive-single-float most-negative-single-float)
                          (loop repeat 20000
@@ -1383,7 +1375,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
   (dolist (cells '(64 0))
   (let* ((luv-physics::*physics-dense-grid-cells* cells)
          (w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
-         (next (make-lcg 7))
+         (next (luv-physics::fixed-sequence 7))
          (balls '()))                   ; (handle x y z r), in doubles
     (flet ((gap (p q)
              (- (sqrt (+ (expt (- (second p) (second q)) 2) (expt (- (third p) (third q)) 2)
@@ -1739,13 +1731,24 @@ function of a column name that reads row K's float in that column. #T3STK1"
 ;; E7V3NT-events-past-the-data ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trim-gives-room-back]]
-(define-claim "QKS4GZ" trim-gives-room-back
-    "After trim-physics-world, 20000 sleepers hold at most 500 bytes of heap each, and the world steps on."
+(defun trimmed-sleepers-beside-basin ()
+  "The heap in use after a full collection, made after clearing the unused part of the stack, and
+then a world of 20000 balls laid asleep beside the basin (scalar kernels), stepped once and trimmed:
+the start of the trimming claims, each with a world of its own. Return the world and the heap in
+use before it. #QKS4GZ"
+  ;; a stale pointer in the unused part of the stack can keep an earlier claim's arrays alive
+  ;; through this collection and let them go during the claim: clear it first
+  (sb-sys:scrub-control-stack)
   (sb-ext:gc :full t)
   (let* ((before (sb-kernel:dynamic-usage))
          (w (luv-physics::sleepers-beside-basin 20000 :kernels :scalar)))
     (step-physics-world w)
     (luv-physics:trim-physics-world w)
+    (values w before)))
+
+(define-claim "QKS4GZ" trim-gives-room-back
+    "After trim-physics-world, 20000 sleepers hold at most 500 bytes of heap each, and the world steps on."
+  (multiple-value-bind (w before) (trimmed-sleepers-beside-basin)
     (sb-ext:gc :full t)
     (let ((per (round (- (sb-kernel:dynamic-usage) before) 20000)))
       (check (<= per 500) "after trimming the heap holds ~D bytes a sleeper" per))
@@ -1759,14 +1762,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trimming-lasts]]
 (define-claim "QKS4GZ" trimming-lasts
     "20000 trimmed sleepers take at most 350 bytes each by the world's count, through 60 steps that cons nothing after the first."
-  ;; a stale pointer in the unused part of the stack can keep an earlier claim's arrays alive
-  ;; through this collection and let them go during the claim: clear it first
-  (sb-sys:scrub-control-stack)
-  (sb-ext:gc :full t)
-  (let* ((before (sb-kernel:dynamic-usage))
-         (w (luv-physics::sleepers-beside-basin 20000 :kernels :scalar)))
-    (step-physics-world w)
-    (luv-physics:trim-physics-world w)
+  (multiple-value-bind (w before) (trimmed-sleepers-beside-basin)
     (check (<= (luv-physics:physics-world-bytes w) (* 350 20000))
            "trimmed, the world counts ~D bytes a sleeper" (round (luv-physics:physics-world-bytes w) 20000))
     (let ((first (sb-ext:get-bytes-consed)))
@@ -1942,7 +1938,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 (define-claim "QKS4GZ" relocation-stress
     "500 random adds, removes, sleeps, wakes and steps keep validate-physics-world true throughout."
   (let* ((w (make-floor-world))
-         (next (make-lcg 20240611))
+         (next (luv-physics::fixed-sequence 20240611))
          (live '()) (failures 0) (first-failure nil) (ops (make-hash-table)))
     (flet ((pick () (nth (floor (* (funcall next) (length live))) live)))
       (dotimes (i 500)
@@ -2190,7 +2186,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 (define-claim "G4R1D5" sorted-rows-keep-handles
     "After the grid phase sorts scrambled rows, each handle still names its own body."
   (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
-         (next (make-lcg 11))
+         (next (luv-physics::fixed-sequence 11))
          (bodies (loop for i below 300
                        collect (let ((x (* 4 (funcall next))) (y (* 4 (funcall next))) (z (* 4 (funcall next)))
                                      (r (+ 0.1 (* 0.15 (funcall next)))))
@@ -3622,7 +3618,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
     "Spin columns are zero where rb is not, armed speeds where restitution is zero: after every prepare and substep phase."
   (dolist (family (available-kernel-families))
     (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels family))
-          (next (make-lcg 4242))
+          (next (luv-physics::fixed-sequence 4242))
           (checked 0) (wrong 0) (limits 0) (impulses 0) (still 0))
       (dotimes (i 300)
         (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
@@ -3786,7 +3782,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 (define-claim "PR3PAR" short-path-same-bits
     "The fill's short path for two awake bodies writes the rows the general path writes, to the bit."
   (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain)))
-        (next (make-lcg 12345)))
+        (next (luv-physics::fixed-sequence 12345)))
     (dotimes (i 300)
       (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
         (luv-physics::add-physics-body w x y z :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (funcall next))
@@ -6806,7 +6802,7 @@ counted. #RH7T05"
 outside the walls, 40 woken and thrown, 5 steps, and two boxes posted. Return the world. #R4YC57"
   (let* ((terrain (luv-physics::make-basin-terrain))
          (w (make-physics-world :terrain terrain))
-         (next (make-lcg 2217)))
+         (next (luv-physics::fixed-sequence 2217)))
     (luv-physics::fill-terrain terrain 2 0 2 3 3 3 t)
     (luv-physics::fill-terrain terrain 5 0 5 6 2 7 t)
     (luv-physics::fill-terrain terrain 3 -3 5 5 0 7 nil)
@@ -6911,7 +6907,7 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
 
 (define-claim "R4YC57" rays-match-brute-force
     "1500 rays x 2 in a carved basin with awake balls, sleepers and boxes: same first hit as brute force, within 1e-5 m and 1e-4 rad."
-  (let* ((w (query-test-scene)) (next (make-lcg 97)) (hit (make-physics-hit))
+  (let* ((w (query-test-scene)) (next (luv-physics::fixed-sequence 97)) (hit (make-physics-hit))
          (wrong 0) (first-wrong nil) (kinds (make-hash-table :test 'equal)) (worst-d 0d0) (worst-a 0d0))
     (check (> (physics-world-sleeping-count w) 50) "only ~D sleepers" (physics-world-sleeping-count w))
     (check (> (physics-world-awake-count w) 20) "only ~D awake" (physics-world-awake-count w))
@@ -6945,7 +6941,7 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
 ;; [[file:../physics.org::#R4YC57][R4YC57-rays-match-in-hashed-grid]]
 (define-claim "R4YC57" rays-match-in-hashed-grid
     "3000 rays among 60 balls scattered over 300 m (a hashed grid) meet the same body as brute force."
-  (let* ((w (make-physics-world)) (next (make-lcg 5)) (hit (make-physics-hit)) (wrong 0) (hits 0) (first-wrong nil))
+  (let* ((w (make-physics-world)) (next (luv-physics::fixed-sequence 5)) (hit (make-physics-hit)) (wrong 0) (hits 0) (first-wrong nil))
     (dotimes (i 60)
       (add-physics-body w (- (* 300 (funcall next)) 150) (- (* 300 (funcall next)) 150) (- (* 300 (funcall next)) 150)
                         :radius (+ 0.1 (* 0.4 (funcall next)))))
@@ -6975,7 +6971,7 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
 (define-claim "R4YC57" no-cell-skipped
     "Sampling every 2 mm along 1000 rays finds no solid point before the cast's hit, and the hit's cell is where the ray enters."
   (let* ((w (query-test-scene)) (terrain (luv-physics::physics-world-terrain w))
-         (next (make-lcg 31)) (late 0) (misplaced 0) (hits 0))
+         (next (luv-physics::fixed-sequence 31)) (late 0) (misplaced 0) (hits 0))
     (dotimes (q 1000)
       (let* ((o (list (float (- (* 14 (funcall next)) 3) 1.0) (float (* 7 (funcall next)) 1.0)
                       (float (- (* 14 (funcall next)) 3) 1.0)))
@@ -7176,7 +7172,7 @@ within reach of something. #S9WEEP"
 
 (define-claim "S9WEEP" sphere-casts-match-reference
     "2000 sphere casts in the carved basin: same first hit as the reference, within 1e-5 m and 1e-4 rad."
-  (let* ((w (query-test-scene)) (next (make-lcg 4242)) (hit (make-physics-hit))
+  (let* ((w (query-test-scene)) (next (luv-physics::fixed-sequence 4242)) (hit (make-physics-hit))
          (tested 0) (wrong 0) (first-wrong nil) (kinds (make-hash-table)))
     (loop while (< tested 2000)
           do (let* ((o (list (float (- (* 14 (funcall next)) 3) 1.0) (float (* 7 (funcall next)) 1.0)
@@ -7316,7 +7312,7 @@ within reach of something. #S9WEEP"
 (define-claim "OV3RLP" regions-match-brute-force
     "Sphere and box queries for bodies and cells equal brute force at six moments of sleeps, wakes, removals, additions and edits."
   (let* ((w (query-test-scene)) (terrain (luv-physics::physics-world-terrain w))
-         (next (make-lcg 555)) (wrong '()) (queries 0) (found 0))
+         (next (luv-physics::fixed-sequence 555)) (wrong '()) (queries 0) (found 0))
     (labels ((bodies ()
                (loop for buf in (list (luv-physics::physics-world-awake w) (luv-physics::physics-world-sleeping w))
                      append (loop for row below (luv-physics::body-columns-length buf)
@@ -7584,7 +7580,7 @@ within reach of something. #S9WEEP"
   (flet ((hash-after (kernels)
            (let ((world (make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels kernels
                                             :sleep nil))
-                 (next (make-lcg 2026)))
+                 (next (luv-physics::fixed-sequence 2026)))
              (dotimes (i 600)
                (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
                  (add-physics-body world x y z
@@ -7614,7 +7610,7 @@ within reach of something. #S9WEEP"
 ;; [[file:../physics.org::#W1D3KF][W1D3KF-lanes-are-scalar-rows]]
 (define-claim "W1D3KF" lanes-are-scalar-rows
     "Every lane of each wide kernel and variant equals the scalar kernel on its row, bit for bit."
-  (let* ((rows 16) (next (make-lcg 77))
+  (let* ((rows 16) (next (luv-physics::fixed-sequence 77))
          (cbuf (luv-physics::make-constraint-columns))
          (v (make-array (luv-physics::solver-row (* 2 rows)) :element-type 'single-float :initial-element 0.0))
          (d (make-array (luv-physics::delta-row (* 2 rows)) :element-type 'single-float :initial-element 0.0)))
