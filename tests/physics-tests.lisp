@@ -561,6 +561,29 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (< (abs (- dns dreal)) 5000000) "clock-ns advanced ~D ns where SBCL's clock advanced ~D" dns dreal))))
 ;; V0CAB5-defaults-as-tabled ends here
 
+;; [[file:../physics.org::#V0CAB5][V0CAB5-fixnum-room-doubles]]
+(define-claim "V0CAB5" fixnum-room-doubles
+    "fixnum-room keeps a column with room, consing nothing, and grows one without by doubling, keeping what it held."
+  (let ((column (make-array 100 :element-type 'fixnum :initial-element 7))
+        (empty (make-array 0 :element-type 'fixnum)))
+    (flet ((holds (grown size kept)
+             (and (= size (length grown))
+                  (every (lambda (v) (= v 7)) (subseq grown 0 kept))
+                  (every #'zerop (subseq grown kept)))))
+      (check (eq column (luv-physics::fixnum-room column 100)))
+      (check (eq column (luv-physics::fixnum-room column 0 :keep 0 :least 1000)))
+      (let ((before (sb-ext:get-bytes-consed)))
+        (dotimes (i 1000) (luv-physics::fixnum-room column (mod i 101)))
+        (check (= before (sb-ext:get-bytes-consed)) "a thousand calls with room consed ~D bytes"
+               (- (sb-ext:get-bytes-consed) before)))
+      (check (holds (luv-physics::fixnum-room column 101) 200 100))
+      (check (holds (luv-physics::fixnum-room column 101 :keep 10) 200 10))
+      (check (holds (luv-physics::fixnum-room column 450) 450 100))
+      (check (= 64 (length (luv-physics::fixnum-room empty 1))))
+      (check (= 16 (length (luv-physics::fixnum-room empty 1 :least 16))))
+      (check (holds (luv-physics::fixnum-column-copy column 30 20) 30 20)))))
+;; V0CAB5-fixnum-room-doubles ends here
+
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-non-finite-numbers]]
 (define-claim "C0ND1T" non-finite-numbers
     "NaN and ±infinity signal invalid-physics-number and leave the world untouched."
