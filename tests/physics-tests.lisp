@@ -1819,6 +1819,22 @@ use before it. #QKS4GZ"
       (check (= trimmed (run nil)) "trimming changed the hash"))))
 ;; QKS4GZ-trimming-keeps-the-hash ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trim-keeps-the-added]]
+(define-claim "QKS4GZ" trim-keeps-the-added
+    "Trimmed between 20 adds and the wake phase, a world still wakes each sleeper an added ball overlaps."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (sleepers (loop for k below 20
+                         collect (add-physics-body w (+ 1.0 k) 2.0 2.0 :radius 0.25))))
+    (dolist (h sleepers)
+      (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h))))
+    (setf (luv-physics::physics-world-added-count w) 0)
+    (loop for k below 20 do (add-physics-body w (+ 1.0 k) 2.0 2.49 :radius 0.25))
+    (luv-physics:trim-physics-world w)
+    (luv-physics::wake-phase w)
+    (let ((asleep (count-if-not (lambda (h) (luv-physics::physics-body-awake-p w h)) sleepers)))
+      (check (zerop asleep) "~D of the 20 sleepers an added ball overlaps sleep on" asleep))))
+;; QKS4GZ-trim-keeps-the-added ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trimmed-scratch-regrows]]
 (define-claim "QKS4GZ" trimmed-scratch-regrows
     "Trimmed with every body asleep and stepped, a world's solver scratch has room for the dummy row again."
