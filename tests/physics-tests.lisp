@@ -1835,6 +1835,25 @@ use before it. #QKS4GZ"
       (check (zerop asleep) "~D of the 20 sleepers an added ball overlaps sleep on" asleep))))
 ;; QKS4GZ-trim-keeps-the-added ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trim-gives-lists-back]]
+(define-claim "QKS4GZ" trim-gives-lists-back
+    "1000 balls put to sleep one by one grow the newest sleepers' list to 1024; trimmed, both lists hold 64."
+  (let ((w (make-physics-world :gravity '(0 0 0))))
+    (let ((handles (loop for k below 1000
+                         collect (add-physics-body w (* 0.6 (mod k 40)) 2.0 (* 0.6 (floor k 40)) :radius 0.25))))
+      (dolist (h handles)
+        (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h)))))
+    (check (= 1024 (length (luv-physics::physics-world-newest-handles w)))
+           "the newest sleepers' list holds ~D entries" (length (luv-physics::physics-world-newest-handles w)))
+    (luv-physics:trim-physics-world w)
+    (check (= 1000 (luv-physics::physics-world-settled-count w)))
+    (check (= 64 (length (luv-physics::physics-world-newest-handles w)) (length (luv-physics::physics-world-fresh-handles w)))
+           "trimmed, the lists hold ~D and ~D entries" (length (luv-physics::physics-world-newest-handles w))
+           (length (luv-physics::physics-world-fresh-handles w)))
+    (check (= 0 (length (luv-physics::physics-world-fresh-x w))))
+    (check (eq t (luv-physics::validate-physics-world w)))))
+;; QKS4GZ-trim-gives-lists-back ends here
+
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trimmed-scratch-regrows]]
 (define-claim "QKS4GZ" trimmed-scratch-regrows
     "Trimmed with every body asleep and stepped, a world's solver scratch has room for the dummy row again."
