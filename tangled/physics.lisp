@@ -4426,19 +4426,28 @@ thirds of the radius of its contact patch, sqrt(2 RADIUS SLOP). #PR3PAR"
   (declare (type single-float radius slop))
   (* (/ 2.0 3.0) (fsqrt (* 2.0 radius slop))))
 
+(declaim (inline rests-static-p))
+(defun rests-static-p (braced inverse-mass brace-ratio lower upper rise)
+  "Whether the awake row UPPER rests on the BRACED row LOWER as on something static: more than
+BRACE-RATIO times heavier and RISE (the upward part of the normal from LOWER to UPPER) above 0.9,
+or a link of a column (UPPER's mark in BRACED has the bit 2), at least as heavy and RISE above
+0.99. #PR3PAR"
+  (declare (type fixnum-column braced) (type f32-column inverse-mass) (type index lower upper)
+           (type single-float brace-ratio rise))
+  (and (logtest (aref braced lower) 1)
+       (or (and (> rise 0.9) (> (aref inverse-mass lower) (* brace-ratio (aref inverse-mass upper))))
+           (and (> rise 0.99) (logtest (aref braced upper) 2)
+                (>= (aref inverse-mass lower) (aref inverse-mass upper))))))
+
 (declaim (inline brace-side))
 (defun brace-side (braced inverse-mass brace-ratio la lb rise)
-  "Which side of a contact between awake rows LA and LB is static to the other: :a when LA is
-BRACED and more than BRACE-RATIO times lighter than LB, which rests on it from above (RISE, the
-upward part of the normal from LA to LB, above 0.9); :b the other way round; else nil. #PR3PAR"
+  "Which side of a contact between awake rows LA and LB is static to the other: :a when LB rests
+on LA as on something static (rests-static-p, RISE the upward part of the normal from LA to LB);
+:b the other way round; else nil. #PR3PAR"
   (declare (type fixnum-column braced) (type f32-column inverse-mass) (type index la lb)
            (type single-float brace-ratio rise))
-  (cond ((and (= (aref braced la) 1) (> rise 0.9)
-              (> (aref inverse-mass la) (* brace-ratio (aref inverse-mass lb))))
-         :a)
-        ((and (= (aref braced lb) 1) (< rise -0.9)
-              (> (aref inverse-mass lb) (* brace-ratio (aref inverse-mass la))))
-         :b)))
+  (cond ((rests-static-p braced inverse-mass brace-ratio la lb rise) :a)
+        ((rests-static-p braced inverse-mass brace-ratio lb la (- rise)) :b)))
 
 (defvar *prepare-short-path* t
   "When false, the prepare fill sends every row through its general path; the claim that the
@@ -4510,39 +4519,68 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                      (type f32-column inverse-mass))
             (replace cursor color-starts)
             ;; a body is braced when it is still and a one-sided contact carried load last step.
-            ;; Nothing is braced without gravity, or when no awake body is that many times
-            ;; heavier than another: then the scene skips this pass and every test of it below
-            (let ((bracing (and (> g 1e-3) (plusp n)
-                                (let ((lo (aref inverse-mass 0)) (hi (aref inverse-mass 0)))
-                                  (declare (type single-float lo hi))
-                                  (dotimes (i n) (setf lo (min lo (aref inverse-mass i)) hi (max hi (aref inverse-mass i))))
-                                  (> hi (* brace-ratio lo))))))
+            ;; Nothing is braced without gravity: then the scene skips this pass and every test
+            ;; of it below
+            (let ((bracing (and (> g 1e-3) (plusp n))))
             (when bracing
             (fill braced 0 :end (1+ n))
+            ;; the contacts' pass marks, in BRACED: 1 braced by a one-sided contact; 8 resting
+            ;; within 8 degrees of the vertical on a body at least as light braced at the step
+            ;; before, and 4 besides when that contact is deeper than 1.05 slops; and counts in
+            ;; 16s the body's supports, the contacts that carried load on it other than those of
+            ;; bodies resting on it from above
+            (let ((kept (= (physics-world-braced-step world) (1- (physics-world-step-count world))))
+                  (flags (body-columns-flags awake)))
+            (declare (type fixnum-column flags))
             (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
               (dotimes (c m)
                 (let* ((a (aref ha c)) (b (aref hb c))
                        (dyn-a (= (aref sets (handle-index a)) +set-awake+))
                        (dyn-b (and (>= b 0) (= (aref sets (handle-index b)) +set-awake+))))
-                  (when (and (not (eq dyn-a dyn-b)) (> (contact@ geometry c normal-impulse) 0.0))
-                    (let* ((row (aref locals (handle-index (if dyn-a a b)))) (o (solver-row row)))
-                      (declare (type index row o))
-                      (when (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
-                                  (* (aref v (+ o 2)) (aref v (+ o 2))))
-                               still2)
-                        (setf (aref braced row) 1)))))))
+                  (when (> (contact@ geometry c normal-impulse) 0.0)
+                    (if (not (eq dyn-a dyn-b))
+                        (let* ((row (aref locals (handle-index (if dyn-a a b)))) (o (solver-row row)))
+                          (declare (type index row o))
+                          (incf (aref braced row) 16)
+                          (when (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
+                                      (* (aref v (+ o 2)) (aref v (+ o 2))))
+                                   still2)
+                            (setf (aref braced row) (logior (aref braced row) 1))))
+                        (when dyn-a
+                          (let* ((la (aref locals (handle-index a))) (lb (aref locals (handle-index b)))
+                                 (rise (+ (* (contact@ geometry c nx) up-x) (* (contact@ geometry c ny) up-y)
+                                          (* (contact@ geometry c nz) up-z))))
+                            (declare (type index la lb) (type single-float rise))
+                            ;; the upper side gains a support, the lower none; sideways, both
+                            (flet ((support (lower upper rise)
+                                     (declare (type index lower upper) (type single-float rise))
+                                     (incf (aref braced upper) 16)
+                                     (when (and kept (> rise 0.99) (logtest (aref flags lower) +flag-braced+)
+                                                (>= (aref inverse-mass lower) (aref inverse-mass upper)))
+                                       (setf (aref braced upper)
+                                             (logior (aref braced upper)
+                                                     (if (< (contact@ geometry c separation) (* -1.05 slop)) 12 8))))))
+                              (cond ((> rise 0.9) (support la lb rise))
+                                    ((< rise -0.9) (support lb la (- rise)))
+                                    (t (incf (aref braced la) 16) (incf (aref braced lb) 16))))))))))))
               ;; a body braced at the step before stays braced while it is still, whatever its
-              ;; load: its load moves to the bodies below once it is braced (hysteresis)
+              ;; load: its load moves to the bodies below once it is braced (hysteresis). A
+              ;; still body whose one support is a braced body under it is a link of a column:
+              ;; braced (1), a link (2), and still being pushed out of the link below (4)
               (let ((flags (body-columns-flags awake))
                     (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world)))))
                 (dotimes (i n)
-                  (let ((o (solver-row i)))
-                    (when (and kept (logtest (aref flags i) +flag-braced+)
-                               (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
-                                     (* (aref v (+ o 2)) (aref v (+ o 2))))
-                                  still2))
-                      (setf (aref braced i) 1))
-                    (setf (aref flags i) (if (= (aref braced i) 1)
+                  (let* ((o (solver-row i))
+                         (mark (aref braced i))
+                         (still (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
+                                      (* (aref v (+ o 2)) (aref v (+ o 2))))
+                                   still2))
+                         (link (and still (logtest mark 8) (= (ash mark -4) 1))))
+                    (setf (aref braced i)
+                          (cond (link (if (logtest mark 4) 7 3))
+                                ((or (logtest mark 1) (and kept still (logtest (aref flags i) +flag-braced+))) 1)
+                                (t 0)))
+                    (setf (aref flags i) (if (/= (aref braced i) 0)
                                              (logior (aref flags i) +flag-braced+)
                                              (logandc2 (aref flags i) +flag-braced+)))))
                 (setf (physics-world-braced-step world) (physics-world-step-count world)))
@@ -4577,9 +4615,12 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                 (dotimes (color (1+ +physics-max-colors+))
                  (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
                   (if (let ((c (aref contact k)))
-                        (and short-path (not bracing) (>= (aref hb c) 0)
+                        (and short-path (>= (aref hb c) 0)
                              (= (aref sets (handle-index (aref ha c))) +set-awake+)
-                             (= (aref sets (handle-index (aref hb c))) +set-awake+)))
+                             (= (aref sets (handle-index (aref hb c))) +set-awake+)
+                             (or (not bracing)
+                                 (and (= (aref braced (aref locals (handle-index (aref ha c)))) 0)
+                                      (= (aref braced (aref locals (handle-index (aref hb c)))) 0)))))
                    ;; the common case, two awake bodies and no bracing, on its own short path:
                    ;; the same values by the same operations as the general path below
                    (let* ((c (aref contact k))
@@ -5399,8 +5440,11 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
          (limit (f32 +physics-coordinate-limit+))
          ;; the store phase's marks, read before any row moves (held-marking-p)
          (marked (if-feature (:or :body-contacts :boxes) (and sleep-p (held-marking-p world)) nil))
-         (held (physics-world-held world)))
+         (held (physics-world-held world))
+         (settling (physics-world-braced world))
+         (settle-p (= (physics-world-braced-step world) (physics-world-step-count world))))
     (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep limit)
+             (type fixnum-column settling)
              (type body-columns awake sleeping) (type fixnum-column held)
              (ignorable inv-dt sleep-speed time-to-sleep held) #.+kernel-policy+)
     (fold-solver-state awake v d dt)
@@ -5424,7 +5468,8 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
                                 (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
                       (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
                  ;; a body only sleepers and terrain touch is judged by its displacement alone
-                 (if (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
+                 (if (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
+                          (not (and settle-p (logtest (aref settling i) 4))))
                      (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
                        (sleep-physics-body world i))
                      (setf (aref sleep-time i) 0.0)))))))
