@@ -4526,8 +4526,15 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
             (replace cursor color-starts)
             ;; a body is braced when it is still and a one-sided contact carried load last step.
             ;; Nothing is braced without gravity: then the scene skips this pass and every test
-            ;; of it below
-            (let ((bracing (and (> g 1e-3) (plusp n))))
+            ;; of it below. No body is static to another unless one awake body is that many times
+            ;; heavier than another, or a column has a link: else the scene skips the tests of
+            ;; brace-side below
+            (let* ((bracing (and (> g 1e-3) (plusp n)))
+                   (static (and bracing
+                                (let ((lo (aref inverse-mass 0)) (hi (aref inverse-mass 0)))
+                                  (declare (type single-float lo hi))
+                                  (dotimes (i n) (setf lo (min lo (aref inverse-mass i)) hi (max hi (aref inverse-mass i))))
+                                  (> hi (* brace-ratio lo))))))
             (when bracing
             (fill braced 0 :end (1+ n))
             ;; the contacts' pass marks, in BRACED: 1 braced by a one-sided contact; 8 resting
@@ -4586,6 +4593,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                          (column (and still (logtest mark 8) (= (ash mark -4) 1)))
                          (count (if column (min 63 (1+ (if kept (ldb (byte 6 3) (aref flags i)) 0))) 0))
                          (link (and column (logtest mark 2) (>= count +column-wait+))))
+                    (when link (setf static t))
                     (setf (aref braced i)
                           (logior (cond (link 3)
                                         ((or (logtest mark 1) (and kept still (logtest (aref flags i) +flag-braced+))) 1)
@@ -4598,6 +4606,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                 (setf (physics-world-braced-step world) (physics-world-step-count world)))
               ;; a body that is static to a heavier one above it starts the step still, as the
               ;; one-sided contact takes it to be: nothing else would stop it rolling out
+              (when static
               (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
                 (dotimes (c m)
                   (let ((a (aref ha c)) (b (aref hb c)))
@@ -4610,7 +4619,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                         (declare (type index la lb))
                         (when side
                           (let ((o (solver-row (if (eq side :a) la lb))))
-                            (fill v 0.0 :start o :end (+ o 6))))))))))
+                            (fill v 0.0 :start o :end (+ o 6)))))))))))
             (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
               (with-constraint-block (contact body-a body-b) cbuf
                 ;; each contact's place in its colour first; then the rows are filled in
@@ -4630,7 +4639,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                         (and short-path (>= (aref hb c) 0)
                              (= (aref sets (handle-index (aref ha c))) +set-awake+)
                              (= (aref sets (handle-index (aref hb c))) +set-awake+)
-                             (or (not bracing)
+                             (or (not static)
                                  (and (= (aref braced (aref locals (handle-index (aref ha c)))) 0)
                                       (= (aref braced (aref locals (handle-index (aref hb c)))) 0)))))
                    ;; the common case, two awake bodies and no bracing, on its own short path:
@@ -4689,7 +4698,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                          (x (contact-at geometry g nx)) (y (contact-at geometry g ny)) (z (contact-at geometry g nz))
                          ;; a braced body is static to a much heavier one above it, as a sleeper
                          ;; is to the bodies that lean on it
-                         (brace (and bracing dyn-a dyn-b
+                         (brace (and static dyn-a dyn-b
                                      (brace-side braced inverse-mass brace-ratio la lb
                                                  (+ (* x up-x) (* y up-y) (* z up-z)))))
                          (dyn-a (and dyn-a (not (eq brace :a))))
