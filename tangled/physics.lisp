@@ -1279,6 +1279,10 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
 (defconstant +column-wait+ 30
   "Steps a body rests still on one support straight under it before it links a column. #B5N8JT")
 
+(defconstant +column-look+ 8
+  "Steps between the bracing passes of a world where no body can be static to another and no
+column is forming: a pass at every such step finds a column that starts to form. #B5N8JT")
+
 (defconstant +set-free+ 0 "Handle-table set of a free slot. #B5N8JT")
 
 (defconstant +set-awake+ 1 "Handle-table set of an awake body. #B5N8JT")
@@ -2146,6 +2150,7 @@ dispatches on it once per call. #W0RLD7"))
    (braced :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-braced)
    (held :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-held)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
+   (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
    (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
@@ -4529,12 +4534,17 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
             ;; of it below. No body is static to another unless one awake body is that many times
             ;; heavier than another, or a column has a link: else the scene skips the tests of
             ;; brace-side below
-            (let* ((bracing (and (> g 1e-3) (plusp n)))
-                   (static (and bracing
+            (let* ((static (and (> g 1e-3) (plusp n)
                                 (let ((lo (aref inverse-mass 0)) (hi (aref inverse-mass 0)))
                                   (declare (type single-float lo hi))
                                   (dotimes (i n) (setf lo (min lo (aref inverse-mass i)) hi (max hi (aref inverse-mass i))))
-                                  (> hi (* brace-ratio lo))))))
+                                  (> hi (* brace-ratio lo)))))
+                   ;; the pass runs at every step where a body may be static to another or a
+                   ;; column is forming (a body counting its steps on one support, or a link),
+                   ;; and else at every +column-look+th step, which finds a column starting
+                   (bracing (and (> g 1e-3) (plusp n)
+                                 (or static (physics-world-column-watch world)
+                                     (zerop (mod (physics-world-step-count world) +column-look+))))))
             (when bracing
             (fill braced 0 :end (1+ n))
             ;; the contacts' pass marks, in BRACED: 1 braced by a one-sided contact; 8 resting
@@ -4583,7 +4593,8 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
               ;; braced (1) and a link (2). Counting, it is not settled (4) while deeper than
               ;; 1.05 slops
               (let ((flags (body-columns-flags awake))
-                    (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world)))))
+                    (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world))))
+                    (watch nil))
                 (dotimes (i n)
                   (let* ((o (solver-row i))
                          (mark (aref braced i))
@@ -4593,6 +4604,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                          (column (and still (logtest mark 8) (= (ash mark -4) 1)))
                          (count (if column (min 63 (1+ (if kept (ldb (byte 6 3) (aref flags i)) 0))) 0))
                          (link (and column (logtest mark 2) (>= count +column-wait+))))
+                    (when column (setf watch t))
                     (when link (setf static t))
                     (setf (aref braced i)
                           (logior (cond (link 3)
@@ -4603,7 +4615,8 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                                               (if (logtest (aref braced i) 1)
                                                   (logior (aref flags i) +flag-braced+)
                                                   (logandc2 (aref flags i) +flag-braced+))))))
-                (setf (physics-world-braced-step world) (physics-world-step-count world)))
+                (setf (physics-world-braced-step world) (physics-world-step-count world)
+                      (physics-world-column-watch world) watch))
               ;; a body that is static to a heavier one above it starts the step still, as the
               ;; one-sided contact takes it to be: nothing else would stop it rolling out
               (when static
