@@ -4123,6 +4123,32 @@ use before it. #QKS4GZ"
                (check (equal (row 1) (list 0.0 -1.5 0.0 0.0 (+ spin (* 0.5 want)) 0.0)) "spinning at ~A body b is ~S" spin (row 1))))))
 ;; S0LV3R-one-row-closed-form ends here
 
+;; [[file:../physics.org::#S0LV3R][S0LV3R-frictionless-pair-shares]]
+(define-claim "S0LV3R" frictionless-pair-shares
+    "Without friction two equal balls meeting head-on without bounce leave together at half the speed."
+  (dolist (family (available-kernel-families))
+    (let* ((world (make-physics-world :terrain (make-floor-terrain) :features '(:terrain :body-contacts)
+                                      :kernels family :sleep nil))
+           (a (add-physics-body world 0.5 0.25 0.5 :radius 0.25 :mass 1.0 :friction 0.0))
+           (b (add-physics-body world 0.5 0.25 2.0 :radius 0.25 :mass 1.0 :friction 0.0)))
+      (set-physics-body-velocity world a 0.0 0.0 2.0)
+      (dotimes (i 60)
+        (step-physics-world world)
+        (let ((pz (+ (nth-value 2 (physics-body-velocity world a)) (nth-value 2 (physics-body-velocity world b))))
+              (spins (append (multiple-value-list (physics-body-angular-velocity world a))
+                             (multiple-value-list (physics-body-angular-velocity world b)))))
+          (check (< (abs (- pz 2.0)) 1e-5) "~(~A~): after step ~D the momentum along z is ~,6F" family (1+ i) pz)
+          (check (every (lambda (w) (< (abs w) 1e-5)) spins) "~(~A~): after step ~D the balls spin at ~{~,6F~^ ~}"
+                 family (1+ i) spins)))
+      (multiple-value-bind (ax ay az) (physics-body-velocity world a)
+        (multiple-value-bind (bx by bz) (physics-body-velocity world b)
+          (check (and (< (abs (- az 1.0)) 0.001) (< (abs (- bz 1.0)) 0.001))
+                 "~(~A~): the balls leave at ~,5F and ~,5F m/s, not 1" family az bz)
+          (check (every (lambda (u) (< (abs u) 1e-5)) (list ax ay bx by))
+                 "~(~A~): across z the balls move at ~{~,6F~^ ~}" family (list ax ay bx by))
+          (check (< (abs (- (+ az bz) 2.0)) 1e-5) "~(~A~): the momentum along z is ~,6F" family (+ az bz)))))))
+;; S0LV3R-frictionless-pair-shares ends here
+
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-rebound-ratios]]
 (define-claim "R3ST1T" rebound-ratios
     "Each rebound above the threshold climbs to within 2% of e^2 times the height before it."

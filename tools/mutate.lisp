@@ -547,11 +547,16 @@ watched by a probe."
             (*print-length* 5) (*print-level* 3) (*print-case* :downcase))
         (one-line (prin1-to-string x) limit)))))
 
+(defun unit-key-name (u)
+  "How the log, the report and the page name unit U: its name on one line, in lower case, whole
+(a featured kernel's name holds its feature list, longer than a line)."
+  (let ((*package* (unit-package u)) (*print-pretty* nil))
+    (string-downcase (prin1-to-string (unit-name u)))))
+
 (defun mutant-key (m)
   "How the report and the page name mutant M: DEFINITION: FROM => TO."
   (let ((u (mutant-unit m)))
-    (format nil "~(~A~): ~A => ~A" (let ((*package* (unit-package u))) (prin1-to-string (unit-name u)))
-            (show u (mutant-from m)) (show u (mutant-to m)))))
+    (format nil "~A: ~A => ~A" (unit-key-name u) (show u (mutant-from m)) (show u (mutant-to m)))))
 
 (defun evaluate-in-child (mutant units)
   "Evaluate MUTANT's definition, then every unit that inlines it or is generated from it.
@@ -885,7 +890,7 @@ the COUNT round robin ones."
 (defun print-mutant (m n count)
   (let ((u (mutant-unit m)))
     (format t "~&[~3D/~D] ~A ~A (~A:~D) ~A: ~A => ~A~%        ~A~A (~,1F s: ~,1F s compiling, ~D of ~D claims)~%"
-            n count (unit-anchor u) (show u (unit-name u)) (unit-file u) (unit-line u)
+            n count (unit-anchor u) (unit-key-name u) (unit-file u) (unit-line u)
             (mutant-operator m) (show u (mutant-from m)) (show u (mutant-to m))
             (case (mutant-status m)
               (:killed (format nil "killed by ~(~A~): " (mutant-claim m)))
@@ -992,7 +997,10 @@ as they are now."
   "Read the mutant lines of the run logged in LOG and write the score table and the survivors
 as a finished run does.  Return the number of mutants read."
   (let ((lines (with-open-file (in log) (loop for line = (read-line in nil) while line collect line)))
-        (rows '()))
+        (rows '())
+        ;; a log written before its names were whole cut a long name short with "...": such a
+        ;; name is the unit's whose whole name begins so
+        (names (mapcar #'unit-key-name (loop for file in *dependent-files* append (read-units file)))))
     (loop for (line next) on lines
           when (and (physics::starts-with "[" line) (search "] " line) next)
             do (let* ((head (+ 2 (search "] " line)))
@@ -1005,7 +1013,13 @@ as a finished run does.  Return the number of mutants read."
                                                     *operators*))))
                  (when operator
                    (push (list anchor operator (subseq line (+ 2 file-start) file-end)
-                               (format nil "~A: ~A" (subseq line name-start file-start)
+                               (format nil "~A: ~A"
+                                       (let ((name (subseq line name-start file-start)))
+                                         (if (and (> (length name) 3) (string= "..." name :start2 (- (length name) 3)))
+                                             (or (find-if (lambda (whole) (physics::starts-with (subseq name 0 (- (length name) 3)) whole))
+                                                          names)
+                                                 name)
+                                             name))
                                        (subseq line (+ after (length operator) 2)))
                                (not (search "SURVIVED" next)))
                          rows))))
