@@ -6151,6 +6151,28 @@ in the order of *physics-scene-features*. #K5DF9S"
                longest)))))
 ;; G4WXCJ-recording-changes-nothing ends here
 
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-recording-keeps-its-pace]]
+(define-claim "G4WXCJ" recording-keeps-its-pace
+    "Recorded every fourth step for 120 steps, a basin of 30 holds 31 frames, the last its final state."
+  (let* ((world (make-basin-world 30 :sleep t))
+         (recording (luv-physics::start-physics-recording world :every 4)))
+    (dotimes (i 120) (luv-physics::step-physics-world world))
+    (luv-physics::stop-physics-recording world)
+    (check (= 31 (luv-physics::physics-recording-frame-count recording))
+           "~D frames" (luv-physics::physics-recording-frame-count recording))
+    (let* ((frames (luv-physics::physics-recording-frames recording))
+           (last (aref frames (1- (fill-pointer frames))))
+           (xyz (luv-physics::physics-recording-xyz recording))
+           (awake (luv-physics::physics-world-awake world)))
+      (check (= (aref last 2) (luv-physics::physics-world-awake-count world)))
+      (check (loop for row below (luv-physics::body-columns-length awake)
+                   for k = (* 3 (+ (aref last 0) row))
+                   always (and (= (aref xyz k) (aref (luv-physics::body-columns-x awake) row))
+                               (= (aref xyz (+ k 1)) (aref (luv-physics::body-columns-y awake) row))
+                               (= (aref xyz (+ k 2)) (aref (luv-physics::body-columns-z awake) row))))
+             "the last frame's awake centres are not the world's"))))
+;; G4WXCJ-recording-keeps-its-pace ends here
+
 ;; [[file:../physics.org::#G4WXCJ][G4WXCJ-recording-sees-boxes]]
 (define-claim "G4WXCJ" recording-sees-boxes
     "Each recorded step holds the posted player box at the player's middle."
