@@ -4531,7 +4531,11 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                    ;; and else at every +column-look+th step, which finds a column starting
                    (bracing (and (> g 1e-3) (plusp n)
                                  (or static (physics-world-column-watch world)
-                                     (zerop (mod (physics-world-step-count world) +column-look+))))))
+                                     (zerop (mod (physics-world-step-count world) +column-look+)))))
+                   ;; whether the pass ran at the step before, and the awake bodies' flags
+                   (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world))))
+                   (flags (body-columns-flags awake)))
+            (declare (type fixnum-column flags))
             (when bracing
             (fill braced 0 :end (1+ n))
             ;; the contacts' pass marks, in BRACED: 1 braced by a one-sided contact; 8 resting
@@ -4539,9 +4543,6 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
             ;; body was braced at the step before, 4 when that contact is deeper than 1.05 slops;
             ;; and counts in 16s the body's supports, the contacts that carried load on it other
             ;; than those of bodies resting on it from above
-            (let ((kept (= (physics-world-braced-step world) (1- (physics-world-step-count world))))
-                  (flags (body-columns-flags awake)))
-            (declare (type fixnum-column flags))
             (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
               (dotimes (c m)
                 (let* ((a (aref ha c)) (b (aref hb c))
@@ -4572,16 +4573,14 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                                                      (if (and kept (logtest (aref flags lower) +flag-braced+)) 2 0))))))
                               (cond ((> rise 0.9) (support la lb rise))
                                     ((< rise -0.9) (support lb la (- rise)))
-                                    (t (incf (aref braced la) 16) (incf (aref braced lb) 16))))))))))))
+                                    (t (incf (aref braced la) 16) (incf (aref braced lb) 16)))))))))))
               ;; a body braced at the step before stays braced while it is still, whatever its
               ;; load: its load moves to the bodies below once it is braced (hysteresis). A
               ;; still body whose one support is a body under it counts its steps so in its
               ;; flags; from the column wait on, that body braced, it is a link of a column:
               ;; braced (1) and a link (2). Counting, it is not settled (4) while deeper than
               ;; 1.05 slops
-              (let ((flags (body-columns-flags awake))
-                    (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world))))
-                    (watch nil))
+              (let ((watch nil))
                 (dotimes (i n)
                   (let* ((o (solver-row i))
                          (mark (aref braced i))
@@ -4639,9 +4638,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                         (and short-path (>= (aref hb c) 0)
                              (= (aref sets (handle-index (aref ha c))) +set-awake+)
                              (= (aref sets (handle-index (aref hb c))) +set-awake+)
-                             (or (not static)
-                                 (and (= (aref braced (aref locals (handle-index (aref ha c)))) 0)
-                                      (= (aref braced (aref locals (handle-index (aref hb c)))) 0)))))
+                             (not static)))
                    ;; the common case, two awake bodies and no bracing, on its own short path:
                    ;; the same values by the same operations as the general path below
                    (let* ((c (aref contact k))
