@@ -1098,7 +1098,7 @@ room under the reach limit for the smallest radius. #C0ND1T"
     `(simple-array ,element-type (*)))
   (defun column-zero (element-type)
     "The zero of ELEMENT-TYPE. #L4Y0UT"
-    (ecase element-type (single-float 0.0) (fixnum 0)))
+    (ecase element-type (single-float 0.0) (double-float 0d0) (fixnum 0)))
   (defun expand-layout-bindings (layout columns wanted buffer body)
     "The LET* that binds each WANTED column of BUFFER, a LAYOUT, as its declared array. #L4Y0UT"
     (let ((b (gensym "BUFFER")))
@@ -1147,7 +1147,7 @@ or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, si
        (defparameter ,names ',(mapcar #'first columns)
          ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
        (defparameter ,bytes ,(loop for (nil type width) in columns
-                                   sum (* (or width 1) (ecase type (single-float 4) (fixnum 8))))
+                                   sum (* (or width 1) (ecase type (single-float 4) (double-float 8) (fixnum 8))))
          ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name))
        (defun ,ctor (&key (capacity 16) (spare 0))
          ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
@@ -1278,7 +1278,7 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
   (qw single-float) (qx single-float) (qy single-float) (qz single-float)
   (radius single-float) (inverse-mass single-float) (inverse-inertia single-float)
   (restitution single-float) (friction single-float) (rolling-resistance single-float)
-  (sleep-time single-float) (age single-float) (life single-float)
+  (sleep-time single-float) (age double-float) (life single-float)
   (flags fixnum) (handle fixnum) (kind fixnum))
 
 (defconstant +flag-report-hits+ 1 "Body flag: report :hit events for its hard arrivals. #B5N8JT")
@@ -4786,7 +4786,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
       color-count)))
 ;; Preparing the constraints:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:8]]
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:9]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
@@ -4845,7 +4845,7 @@ substep's solve reads. Compiled without boxes, it has no box velocity to resolve
   (let ((cbuf (physics-world-constraints world)))
     (funcall (kernel-variant-prepare-frames (world-kernel-variant world kernels))
              cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:8 ends here
+;; Preparing the constraints:9 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)
@@ -5460,9 +5460,12 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
          (marked (if-feature (:or :body-contacts :boxes) (and sleep-p (held-marking-p world)) nil))
          (held (physics-world-held world))
          (settling (physics-world-braced world))
-         (settle-p (= (physics-world-braced-step world) (physics-world-step-count world))))
+         (settle-p (= (physics-world-braced-step world) (physics-world-step-count world)))
+         ;; the sleepers before this step's fall asleep: a body falling asleep below was aged
+         ;; in the awake rows, and the sleepers' walk must not age it again
+         (asleep-before (body-columns-length sleeping)))
     (declare (type f32-column v d) (type single-float dt inv-dt sleep-speed time-to-sleep limit)
-             (type fixnum-column settling)
+             (type fixnum-column settling) (type index asleep-before) (ignorable asleep-before)
              (type body-columns awake sleeping) (type fixnum-column held)
              (ignorable inv-dt sleep-speed time-to-sleep held) #.+kernel-policy+)
     (fold-solver-state awake v d dt)
@@ -5491,10 +5494,12 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
                      (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
                        (sleep-physics-body world i))
                      (setf (aref sleep-time i) 0.0)))))))
-    ;; only a world with a mortal sleeper walks the sleeping buffer
+    ;; only a world with a mortal sleeper walks the sleeping buffer, and only its rows that
+    ;; slept before this step: a removal below moves the last row, one of them or one just
+    ;; asleep, into a place already walked
     (when (if-feature :mortal (plusp (physics-world-mortal-sleepers world)) nil)
     (with-body-columns (x y z age life handle) sleeping
-      (loop for i of-type fixnum from (1- (body-columns-length sleeping)) downto 0 do
+      (loop for i of-type fixnum from (1- asleep-before) downto 0 do
         (when (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
           (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
           (%remove-body world +set-sleeping+ i)))))
@@ -6368,7 +6373,7 @@ and :conditions (refusals by condition type). #M9W5P7"
           (mapcar (lambda (c) (list (car c) (cdr c))) (getf figures :kinds))))
 ;; Random operation sequences find what a hostile caller would:1 ends here
 
-;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:5]]
+;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:6]]
 (defun run-physics-soak (&key (minutes 5) (seed 1) (stream *standard-output*))
   "Churn a fuzz world for MINUTES of wall-clock time: each step adds a ball, removes one of the
 oldest when more than 300 live, throws one, posts a walking box, edits a cell under the pile and
@@ -6409,7 +6414,7 @@ bytes from the second row (the first after the churn began) to the last. #M9W5P7
       (run-physics-springs world (list (fuzz-state-spring state)))
       (step-physics-world world)
       (incf steps))))
-;; Random operation sequences find what a hostile caller would:5 ends here
+;; Random operation sequences find what a hostile caller would:6 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:1]]
 (define-condition unknown-physics-scene (invalid-physics-parameter)
