@@ -1161,6 +1161,27 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (check (not (luv-physics::terrain-resident-p terrain 8 -1 8)) "the step made the wall resident"))))
 ;; H2W9DJ-non-resident-is-wall ends here
 
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-cell-coordinates-bounded]]
+(define-claim "H2W9DJ" cell-coordinates-bounded
+    "Cells at ±(2^22 - 1) are read and written; at ±2^22 each coordinate is refused by its name."
+  (let ((terrain (luv-physics::make-voxel-terrain)) (wrong '()))
+    (flet ((outcome (f)
+             (handler-case (progn (funcall f) :accepted)
+               (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+      (loop for axis below 3
+            for name in '(luv-physics::x luv-physics::y luv-physics::z)
+            do (dolist (v (list (1- luv-physics::+cell-limit+) (- 1 luv-physics::+cell-limit+)
+                                luv-physics::+cell-limit+ (- luv-physics::+cell-limit+)))
+                 (let ((cell (list 0 0 0)) (want (if (< (abs v) luv-physics::+cell-limit+) :accepted name)))
+                   (setf (nth axis cell) v)
+                   (loop for (what f) in (list (list :solid (lambda () (apply #'luv-physics::terrain-solid-p terrain cell)))
+                                               (list :resident (lambda () (apply #'luv-physics::terrain-resident-p terrain cell)))
+                                               (list :set (lambda () (setf (apply #'luv-physics::terrain-solid-p terrain cell) nil))))
+                         for got = (outcome f)
+                         unless (eq got want) do (push (list what cell got) wrong))))))
+    (check (null wrong) "answered wrongly: ~S" (reverse wrong))))
+;; H2W9DJ-cell-coordinates-bounded ends here
+
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-cells-are-their-own]]
 (define-claim "H2W9DJ" cells-are-their-own
     "Setting one cell of a chunk changes that cell alone, and no cell of the next chunk; the chunk budget is checked at its ends."
