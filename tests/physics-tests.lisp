@@ -6262,12 +6262,18 @@ in the order of *physics-scene-features*. #K5DF9S"
 ;; G4WXCJ-recording-changes-nothing ends here
 
 ;; [[file:../physics.org::#G4WXCJ][G4WXCJ-recording-keeps-its-pace]]
+(defun recorded-basin (balls steps every)
+  "A sleeping basin of BALLS recorded every EVERY steps for STEPS steps: the recording, stopped,
+and the world. #G4WXCJ"
+  (let* ((world (make-basin-world balls :sleep t))
+         (recording (luv-physics::start-physics-recording world :every every)))
+    (dotimes (i steps) (luv-physics::step-physics-world world))
+    (luv-physics::stop-physics-recording world)
+    (values recording world)))
+
 (define-claim "G4WXCJ" recording-keeps-its-pace
     "Recorded every fourth step for 120 steps, a basin of 30 holds 31 frames, the last its final state."
-  (let* ((world (make-basin-world 30 :sleep t))
-         (recording (luv-physics::start-physics-recording world :every 4)))
-    (dotimes (i 120) (luv-physics::step-physics-world world))
-    (luv-physics::stop-physics-recording world)
+  (multiple-value-bind (recording world) (recorded-basin 30 120 4)
     (check (= 31 (luv-physics::physics-recording-frame-count recording))
            "~D frames" (luv-physics::physics-recording-frame-count recording))
     (let* ((frames (luv-physics::physics-recording-frames recording))
@@ -6648,10 +6654,7 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#UFK5EA][UFK5EA-picture-draws-the-bodies]]
 (define-claim "UFK5EA" picture-draws-the-bodies
     "Two panels of 300 discs each, captions with the figures, and terrain faces."
-  (let* ((world (make-basin-world 300 :sleep t))
-         (recording (luv-physics::start-physics-recording world :every 10)))
-    (dotimes (i 60) (luv-physics::step-physics-world world))
-    (luv-physics::stop-physics-recording world)
+  (multiple-value-bind (recording world) (recorded-basin 300 60 10)
     (let ((path (repository-file "report/picture-check.svg")))
       (ensure-directories-exist path)
       (luv-physics::write-scene-picture recording path '(0 1) :title "check ")
