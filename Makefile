@@ -15,7 +15,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers report heaps mutate mutate-splice html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers bench-against report heaps mutate mutate-splice html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -32,6 +32,8 @@ help:
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
 	@echo "make bench          measure the basin per kernel family and the queries; write the tables into $(ORG)"
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
+	@echo "make bench-against  this engine against the commits REVS='ce415a5 d9c8f94' in ROUNDS=5 rounds of"
+	@echo "                    alternating processes; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
 	@echo "make heaps          heaps of 1000 balls to the body budget spawned at one point; table into $(ORG)"
@@ -92,6 +94,14 @@ bench-peers: setup tangle
 	@{ BULLET_BASIN=report/peers/bullet-basin ODE_BASIN=report/peers/ode-basin $(LISP) --load tools/peers/bench-peers.lisp || touch report/peers/failed; } | tee report/peers.org
 	@test ! -e report/peers/failed
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-peers report/peers.org
+
+# This page's engine against the engines of earlier commits, in alternating processes (#B3NCH5).
+REVS ?= ce415a5 d9c8f94
+ROUNDS ?= 5
+bench-against: setup tangle
+	@mkdir -p report
+	@REVS="$(REVS)" ROUNDS="$(ROUNDS)" BENCH=run-against-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-against.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-against report/bench-against.org
 
 # The diagrams report/wp-*.svg are kept in git: the page links to them.
 report: setup tangle

@@ -7466,6 +7466,101 @@ in the wave, and the bytes per sleeper, untrimmed and trimmed. #B3NCH5"
         (finish-output stream)))))
 ;; What a step costs:2 ends here
 
+;; [[file:../physics.org::#B3NCH5][What a step costs:6]]
+(defun against-tree (rev directory)
+  "The commit REV of this repository unpacked into DIRECTORY/REV/ (once, with git archive), as
+a directory pathname. #B3NCH5"
+  (unless (every (lambda (c) (or (alphanumericp c) (find c "._-/~^"))) rev)
+    (error 'invalid-physics-parameter :name :rev :value rev
+                                      :expected "a commit name of letters, digits and ._-/~^"))
+  (let* ((here (asdf:system-source-directory "luv-physics"))
+         (root (merge-pathnames (format nil "~A/" (substitute #\_ #\/ rev)) directory)))
+    (unless (probe-file (merge-pathnames "luv-physics.asd" root))
+      (ensure-directories-exist root)
+      (let ((archive (merge-pathnames "tree.tar" root)))
+        (uiop:run-program (list "git" "-C" (namestring here) "archive" "--output" (namestring archive) rev)
+                          :error-output *error-output*)
+        (uiop:run-program (list "tar" "-x" "-f" (namestring archive) "-C" (namestring root))
+                          :error-output *error-output*)
+        (delete-file archive)))
+    root))
+
+(defun against-sample (root families balls from to)
+  "Run tools/against-one.lisp in a fresh SBCL on the engine in the directory ROOT: the basin of
+BALLS balls in each of FAMILIES (keywords), timed over steps FROM..TO. Return its lines as
+lists (family median-ms hash); BALLS 0 only loads, and so compiles, that engine. #B3NCH5"
+  (let* ((script (merge-pathnames "tools/against-one.lisp" (asdf:system-source-directory "luv-physics")))
+         (text (uiop:run-program (list "sbcl" "--dynamic-space-size" "4Gb" "--script" (namestring script)
+                                       (namestring root) (format nil "~{~(~A~)~^,~}" families)
+                                       (princ-to-string balls) (princ-to-string from) (princ-to-string to))
+                                 :output :string :error-output *error-output*)))
+    (loop for line in (uiop:split-string text :separator '(#\Newline))
+          for words = (remove "" (uiop:split-string line) :test #'string=)
+          when (and (= 4 (length words)) (string= (first words) "against"))
+            collect (list (intern (string-upcase (second words)) :keyword)
+                          (let ((*read-default-float-format* 'double-float) (*read-eval* nil))
+                            (coerce (read-from-string (third words)) 'double-float))
+                          (parse-integer (fourth words))))))
+
+(defun against-summary (samples)
+  "SAMPLES, lists (tree family ms hash) from the rounds, as one entry a family, in the order the
+families first appear: (family (tree median lowest highest hash) ...), the trees in the order
+they first appear. #B3NCH5"
+  (let ((families (remove-duplicates (mapcar #'second samples) :from-end t))
+        (trees (remove-duplicates (mapcar #'first samples) :from-end t :test #'equal)))
+    (loop for family in families
+          collect (cons family
+                        (loop for tree in trees
+                              for rows = (remove-if-not (lambda (s) (and (equal (first s) tree) (eq (second s) family)))
+                                                        samples)
+                              when rows
+                                collect (let ((ms (mapcar #'third rows)))
+                                          (list tree (median ms) (reduce #'min ms) (reduce #'max ms)
+                                                (fourth (first rows)))))))))
+
+(defun run-against-benchmark (&key (stream *standard-output*)
+                                   (revs (let ((r (sb-ext:posix-getenv "REVS")))
+                                           (if (and r (plusp (length r)))
+                                               (remove "" (uiop:split-string r) :test #'string=)
+                                               '("ce415a5"))))
+                                   (rounds (let ((r (sb-ext:posix-getenv "ROUNDS")))
+                                             (if (and r (plusp (length r))) (parse-integer r) 5)))
+                                   (balls 3000) (from 120) (to 300)
+                                   (families (available-kernel-families))
+                                   (directory (merge-pathnames "report/against/"
+                                                               (asdf:system-source-directory "luv-physics"))))
+  "Print, as an Org table, the basin's step in this page's engine and in the engines of the
+commits REVS, measured in ROUNDS rounds of alternating processes (against-sample), with the
+load before and after. #B3NCH5"
+  (let* ((trees (append (mapcar (lambda (rev) (cons rev (against-tree rev directory))) revs)
+                        (list (cons "this page" (asdf:system-source-directory "luv-physics")))))
+         (before (load-average))
+         (samples '()))
+    (dolist (tree trees) (against-sample (cdr tree) families 0 0 0))
+    (dotimes (round rounds)
+      (dolist (tree (if (evenp round) trees (reverse trees)))
+        (dolist (line (against-sample (cdr tree) families balls from to))
+          (push (cons (car tree) line) samples))))
+    (setf samples (reverse samples))
+    (let ((summary (against-summary samples)))
+      (format stream "~&#+caption: the ~D-ball basin, CPU ms a step over steps ~D-~D, median of ~D rounds of ~
+                      alternating processes (lowest-highest); ~A; load ~A before, ~A after~%"
+              balls from to rounds (cpu-model-name) before (load-average))
+      ;; every tree after the first over the first, the oldest engine named
+      (format stream "~&| family | ~{~A~^ | ~} | ~{~A / ~A~^ | ~} |~%" (mapcar #'car trees)
+              (loop for (tree) in (rest trees) append (list tree (first revs))))
+      (format stream "~&|--------+~{~A~^+~}|~%"
+              (loop repeat (+ (length trees) (length trees) -1) collect "--------"))
+      (loop for (family . rows) in summary
+            for base = (second (first rows))
+            do (format stream "~&| ~(~A~) | ~{~A~^ | ~} | ~{~A~^ | ~} |~%" family
+                       (loop for (nil median low high) in rows
+                             collect (format nil "~,3F (~,3F-~,3F)" median low high))
+                       (loop for (nil median) in (rest rows) collect (format nil "~,3F" (/ median base)))))
+      (format stream "~&state hash after ~D steps:~{ ~A ~D~^,~}~%" to
+              (loop for (tree nil nil nil hash) in (rest (first summary)) append (list tree hash))))))
+;; What a step costs:6 ends here
+
 ;; [[file:../physics.org::#FBNCH9][What leaving features out saves:1]]
 (defparameter +feature-scenes+
   '((:fountain "water fountain, drops meet terrain only" (:terrain :friction :sleep :mortal) 300 600)

@@ -5760,6 +5760,27 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (> far (* 2 near)) "8 MB: ~,2F ns a read, 32 KB: ~,2F ns" far near)))
 ;; B3NCH5-probe-reaches-the-shared-cache ends here
 
+;; [[file:../physics.org::#B3NCH5][B3NCH5-against-measures-this-tree]]
+(define-claim "B3NCH5" against-measures-this-tree
+    "A bench-against process on this tree reports this image's state hash; the summary takes medians and ranges per family and tree."
+  (let ((lines (luv-physics::against-sample (asdf:system-source-directory "luv-physics") '(:scalar) 200 5 20))
+        (w (luv-physics::make-basin-world 200 :kernels :scalar)))
+    (dotimes (i 20) (luv-physics::step-physics-world w))
+    (check (= 1 (length lines)) "~D lines: ~S" (length lines) lines)
+    (destructuring-bind (family ms hash) (first lines)
+      (check (eq family :scalar))
+      (check (< 0 ms 1000) "~,4F ms a step" ms)
+      (check (= hash (luv-physics::physics-world-state-hash w)) "the process's hash ~D, this image's ~D"
+             hash (luv-physics::physics-world-state-hash w))))
+  (let ((summary (luv-physics::against-summary
+                  '(("old" :scalar 4.0d0 7) ("new" :scalar 5.0d0 9) ("old" :avx2 1.0d0 7) ("new" :avx2 1.5d0 9)
+                    ("new" :scalar 4.0d0 9) ("old" :scalar 6.0d0 7) ("old" :avx2 3.0d0 7) ("new" :avx2 1.0d0 9)
+                    ("old" :scalar 5.0d0 7) ("new" :scalar 6.0d0 9) ("old" :avx2 2.0d0 7) ("new" :avx2 2.0d0 9)))))
+    (check (equal summary '((:scalar ("old" 5.0d0 4.0d0 6.0d0 7) ("new" 5.0d0 4.0d0 6.0d0 9))
+                            (:avx2 ("old" 2.0d0 1.0d0 3.0d0 7) ("new" 1.5d0 1.0d0 2.0d0 9))))
+           "~S" summary)))
+;; B3NCH5-against-measures-this-tree ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-steps-cons-nothing]]
 (define-claim "B3NCH5" steps-cons-nothing
     "Thousands of steps of an awake pile, and of the fountain with drops added, cons 0 bytes."
