@@ -2166,6 +2166,7 @@ dispatches on it once per call. #W0RLD7"))
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
+   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows)
    (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
@@ -3478,20 +3479,23 @@ THRESHOLD across a gap) and IMPACT is false: then it was counted but no contact 
            (type fixnum hi hj ci cj) #.+kernel-policy+ (inline touch-contact))
   (let* ((dx (- xj xi)) (dy (- yj yi)) (dz (- zj zi))
          (d2 (+ (* dx dx) (* dy dy) (* dz dz)))
-         (reach (+ ri rj margin))
-         (crowded nil))
-    ;; the overlap is counted by the sign bit of d2 - (ri + rj)^2, not by a
-    ;; branch: in a pile, half the pairs listed overlap, in no order a branch
-    ;; predictor could learn
-    (when (>= ci 0)
-      (let ((bit (ldb (byte 1 31) (sb-kernel:single-float-bits (- d2 (* (+ ri rj) (+ ri rj)))))))
-        (let ((oi (+ (aref overlaps ci) (if (> ri rj) 0 bit)))
-              (oj (+ (aref overlaps cj) (if (< ri rj) 0 bit))))
-          (declare (type fixnum oi oj))
-          (setf (aref overlaps ci) oi (aref overlaps cj) oj)
-          ;; from the first crowded row on, every pair asks overlap-room
-          (setf crowded (>= (logior oi oj) +overlaps-per-body+)))))
+         (reach (+ ri rj margin)))
+    ;; only a pair within reach is counted: beyond it d2 - (ri + rj)^2 is not below
+    ;; zero, so the count would add nothing, and every count at the bound has already
+    ;; made its row crowded
     (if (< d2 (* reach reach))
+      (let ((crowded nil))
+        ;; the overlap is counted by the sign bit of d2 - (ri + rj)^2, not by a
+        ;; branch: in a pile, half the pairs listed overlap, in no order a branch
+        ;; predictor could learn
+        (when (>= ci 0)
+          (let ((bit (ldb (byte 1 31) (sb-kernel:single-float-bits (- d2 (* (+ ri rj) (+ ri rj)))))))
+            (let ((oi (+ (aref overlaps ci) (if (> ri rj) 0 bit)))
+                  (oj (+ (aref overlaps cj) (if (< ri rj) 0 bit))))
+              (declare (type fixnum oi oj))
+              (setf (aref overlaps ci) oi (aref overlaps cj) oj)
+              ;; from the first crowded row on, every pair asks overlap-room
+              (setf crowded (>= (logior oi oj) +overlaps-per-body+)))))
       (let ((d (fsqrt d2)))
        (multiple-value-bind (nx ny nz)
            (if (> d 1e-6)
@@ -3522,8 +3526,8 @@ THRESHOLD across a gap) and IMPACT is false: then it was counted but no contact 
             (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
                            +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
                            0.0 0.0 0.0)))
-        (values crowded nil))))))
-      (values crowded nil))))
+        (values crowded nil)))))))
+      (values nil nil))))
 
 (defun scan-listed-pairs (world start crowded)
   "Take the listed pairs of WORLD's pair list from START on whose rows both stayed, as the pair
@@ -4270,7 +4274,8 @@ claims and the tools, which name a column rather than know its block. #SSMPYW"
             (make-array rows :element-type 'fixnum :initial-element 0)
             (physics-world-held world)
             (make-array rows :element-type 'fixnum :initial-element 0))))
-  (setf (physics-world-contact-colors world) (fixnum-room (physics-world-contact-colors world) contacts :keep 0))
+  (setf (physics-world-contact-colors world) (fixnum-room (physics-world-contact-colors world) contacts :keep 0)
+        (physics-world-contact-rows world) (fixnum-room (physics-world-contact-rows world) (* 2 contacts) :keep 0))
   (constraint-columns-ensure-capacity (physics-world-constraints world) contacts)
   world)
 
@@ -4291,7 +4296,9 @@ claims and the tools, which name a column rather than know its block. #SSMPYW"
 contact is one-sided, and the pass only marks them so). Then every one-sided contact takes, at its awake body, the
 highest free colour among those the two-body contacts used, or failing that the lowest free
 colour above them. Anything else goes to the overflow colour 24. Fills the colour of each
-contact and the colour starts, each colour but the overflow starting on a multiple of eight;
+contact, its two sides' awake rows (-1 for a side that is not an awake body) at 2c and 2c+1 of
+the world's contact rows, for the prepare phase to read instead of looking each handle up
+again, and the colour starts, each colour but the overflow starting on a multiple of eight;
 returns the number of colours used. #SSMPYW"
   (let* ((contacts (physics-world-contacts world))
          (m (contact-columns-length contacts))
@@ -4299,11 +4306,12 @@ returns the number of colours used. #SSMPYW"
          (n (body-columns-length (physics-world-awake world)))
          (masks (physics-world-color-masks world))
          (colors (physics-world-contact-colors world))
+         (rows (physics-world-contact-rows world))
          (starts (physics-world-color-starts world))
          (sets (handle-table-set ids))
          (locals (handle-table-local ids))
          (top -1))
-    (declare (type fixnum-column masks colors starts sets locals) (type index m n)
+    (declare (type fixnum-column masks colors rows starts sets locals) (type index m n)
              (type fixnum top) #.+kernel-policy+)
     (fill masks 0 :end (1+ n))
     (fill starts 0)
@@ -4320,7 +4328,7 @@ returns the number of colours used. #SSMPYW"
         (dotimes (c m)
           (let ((la (awake-row (aref handle-a c))) (lb (awake-row (aref handle-b c))))
             (declare (type fixnum la lb))
-            (setf (aref colors c) -1)
+            (setf (aref colors c) -1 (aref rows (* 2 c)) la (aref rows (1+ (* 2 c))) lb)
             (when (and (>= la 0) (>= lb 0))
               (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
                                   (1- (ash 1 +physics-dynamic-colors+))))
@@ -4337,7 +4345,12 @@ returns the number of colours used. #SSMPYW"
           (declare (type (unsigned-byte 32) used))
           (dotimes (c m)
             (when (= (aref colors c) -1)
-              (let* ((l (max (awake-row (aref handle-a c)) (awake-row (aref handle-b c))))
+              ;; the first pass noted the awake rows of every contact; without it, they are
+              ;; noted here
+              (unless two-body
+                (setf (aref rows (* 2 c)) (awake-row (aref handle-a c))
+                      (aref rows (1+ (* 2 c))) (awake-row (aref handle-b c))))
+              (let* ((l (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c)))))
                      (free (logand (lognot (aref masks l)) (1- (ash 1 +physics-max-colors+))))
                      (color +physics-max-colors+))
                 (declare (type fixnum l color))
@@ -4503,6 +4516,8 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                 (color-starts (physics-world-color-starts world))
                 (sets (handle-table-set ids)) (locals (handle-table-local ids))
                 (braced (physics-world-braced world))
+                ;; each contact's awake rows, as the colouring found them
+                (rows (physics-world-contact-rows world))
                 (brace-ratio (f32 (physics-world-brace-mass-ratio world)))
                 (still2 (f32 (expt (physics-world-sleep-speed world) 2)))
                 (inverse-mass (body-columns-inverse-mass awake))
@@ -4512,7 +4527,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                 (up-x (if (> g 1e-3) (/ (- (physics-world-gravity-x world)) g) 0.0))
                 (up-y (if (> g 1e-3) (/ (- (physics-world-gravity-y world)) g) 0.0))
                 (up-z (if (> g 1e-3) (/ (- (physics-world-gravity-z world)) g) 0.0)))
-            (declare (dynamic-extent cursor) (type fixnum-column sets locals braced color-starts)
+            (declare (dynamic-extent cursor) (type fixnum-column sets locals braced rows color-starts)
                      (type single-float brace-ratio still2 load-scale up-x up-y up-z)
                      (type f32-column inverse-mass))
             (replace cursor color-starts)
@@ -4543,14 +4558,16 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
             ;; body was braced at the step before, 4 when that contact is deeper than 1.05 slops;
             ;; and counts in 16s the body's supports, the contacts that carried load on it other
             ;; than those of bodies resting on it from above
-            (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
+            (with-contact-columns (geometry) contacts
               (dotimes (c m)
-                (let* ((a (aref ha c)) (b (aref hb c))
-                       (dyn-a (= (aref sets (handle-index a)) +set-awake+))
-                       (dyn-b (and (>= b 0) (= (aref sets (handle-index b)) +set-awake+))))
-                  (when (> (contact@ geometry c normal-impulse) 0.0)
+                ;; a contact that carried no load counts for nothing: its bodies are not
+                ;; looked up
+                (when (> (contact@ geometry c normal-impulse) 0.0)
+                  (let* ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c))))
+                         (dyn-a (>= la 0)) (dyn-b (>= lb 0)))
+                    (declare (type fixnum la lb))
                     (if (not (eq dyn-a dyn-b))
-                        (let* ((row (aref locals (handle-index (if dyn-a a b)))) (o (solver-row row)))
+                        (let* ((row (if dyn-a la lb)) (o (solver-row row)))
                           (declare (type index row o))
                           (incf (aref braced row) 16)
                           (when (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
@@ -4558,7 +4575,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                                    still2)
                             (setf (aref braced row) (logior (aref braced row) 1))))
                         (when dyn-a
-                          (let* ((la (aref locals (handle-index a))) (lb (aref locals (handle-index b)))
+                          (let* ((la la) (lb lb)
                                  (rise (+ (* (contact@ geometry c nx) up-x) (* (contact@ geometry c ny) up-y)
                                           (* (contact@ geometry c nz) up-z))))
                             (declare (type index la lb) (type single-float rise))
@@ -4606,12 +4623,12 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
               ;; a body that is static to a heavier one above it starts the step still, as the
               ;; one-sided contact takes it to be: nothing else would stop it rolling out
               (when static
-              (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
+              (with-contact-columns (geometry) contacts
                 (dotimes (c m)
-                  (let ((a (aref ha c)) (b (aref hb c)))
-                    (when (and (>= b 0) (= (aref sets (handle-index a)) +set-awake+)
-                               (= (aref sets (handle-index b)) +set-awake+))
-                      (let* ((la (aref locals (handle-index a))) (lb (aref locals (handle-index b)))
+                  (let ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c)))))
+                    (declare (type fixnum la lb))
+                    (when (and (>= la 0) (>= lb 0))
+                      (let* ((la la) (lb lb)
                              (side (brace-side braced inverse-mass brace-ratio la lb
                                                (+ (* (contact@ geometry c nx) up-x) (* (contact@ geometry c ny) up-y)
                                                   (* (contact@ geometry c nz) up-z)))))
@@ -4635,16 +4652,13 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                 (dotimes (color (1+ +physics-max-colors+))
                  (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
                   (if (let ((c (aref contact k)))
-                        (and short-path (>= (aref hb c) 0)
-                             (= (aref sets (handle-index (aref ha c))) +set-awake+)
-                             (= (aref sets (handle-index (aref hb c))) +set-awake+)
-                             (not static)))
+                        (and short-path (not static)
+                             (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
                    ;; the common case, two awake bodies and no bracing, on its own short path:
                    ;; the same values by the same operations as the general path below
                    (let* ((c (aref contact k))
                           (g (geometry-start c)) (base (constraint-base k))
-                          (la (aref locals (handle-index (aref ha c))))
-                          (lb (aref locals (handle-index (aref hb c))))
+                          (la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c))))
                           (x (contact-at geometry g nx)) (y (contact-at geometry g ny))
                           (z (contact-at geometry g nz))
                           (kx (contact-at geometry g kvx)) (ky (contact-at geometry g kvy))
