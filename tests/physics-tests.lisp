@@ -3846,6 +3846,38 @@ use before it. #QKS4GZ"
       (check (not (logtest (mark top) 2)) "the ball on two balls is a link (mark ~D)" (mark top)))))
 ;; PR3PAR-only-columns-link ends here
 
+;; [[file:../physics.org::#PR3PAR][PR3PAR-unloaded-contact-no-support]]
+(define-claim "PR3PAR" unloaded-contact-no-support
+    "A column of two balls a centimetre from a wall: the wall's contact pushes nothing, and the upper ball is a link."
+  (let ((terrain (luv-physics::make-voxel-terrain)))
+    (luv-physics::fill-terrain terrain -16 -1 -16 16 32 16 nil)
+    (luv-physics::fill-terrain terrain -16 -1 -16 16 0 16 t)
+    (luv-physics::fill-terrain terrain -1 0 -4 0 3 4 t)
+    (let* ((world (make-physics-world :terrain terrain :sleep nil))
+           (lower (add-physics-body world 0.26 0.25 0.5 :radius 0.25 :mass 1.0))
+           (upper (add-physics-body world 0.26 0.75 0.5 :radius 0.25 :mass 1.0)))
+      (flet ((mark (ball)
+               (multiple-value-bind (set row) (luv-physics::resolve-handle world ball)
+                 (check (= set luv-physics::+set-awake+))
+                 (aref (luv-physics::physics-world-braced world) row)))
+             (wall-contacts ()
+               ;; contacts with terrain whose normal points along x: the wall's
+               (let ((contacts (luv-physics::physics-world-contacts world)) (found 0) (pushed 0.0))
+                 (luv-physics::with-contact-columns (kind geometry) contacts
+                   (dotimes (c (luv-physics::contact-columns-length contacts))
+                     (when (and (= (aref kind c) luv-physics::+contact-terrain+)
+                                (> (abs (luv-physics::contact@ geometry c luv-physics::nx)) 0.9))
+                       (incf found)
+                       (setf pushed (max pushed (luv-physics::contact@ geometry c luv-physics::normal-impulse))))))
+                 (values found pushed))))
+        (dotimes (i 60) (step-physics-world world))
+        (multiple-value-bind (found pushed) (wall-contacts)
+          (check (= found 2) "~D contacts with the wall" found)
+          (check (zerop pushed) "the wall pushed with ~F N s" pushed))
+        (check (= (mark upper) 3) "the upper ball has the mark ~D, not 3" (mark upper))
+        (check (= (mark lower) 1) "the lower ball has the mark ~D, not 1" (mark lower))))))
+;; PR3PAR-unloaded-contact-no-support ends here
+
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-leaning-pair-makes-no-link]]
 (define-claim "PR3PAR" leaning-pair-makes-no-link
     "Two balls leaning on each other, each straight on a floor ball, are no links."
