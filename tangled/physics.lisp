@@ -7555,24 +7555,27 @@ load before and after. #B3NCH5"
       (dolist (tree (if (evenp round) trees (reverse trees)))
         (dolist (line (against-sample (cdr tree) families balls from to))
           (push (cons (car tree) line) samples))))
-    (setf samples (reverse samples))
-    (let ((summary (against-summary samples)))
-      (format stream "~&#+caption: the ~D-ball basin, CPU ms a step over steps ~D-~D, median of ~D rounds of ~
-                      alternating processes (lowest-highest); ~A; load ~A before, ~A after~%"
-              balls from to rounds (cpu-model-name) before (load-average))
-      ;; every tree after the first over the first, the oldest engine named
-      (format stream "~&| family | ~{~A~^ | ~} | ~{~A / ~A~^ | ~} |~%" (mapcar #'car trees)
-              (loop for (tree) in (rest trees) append (list tree (first revs))))
-      (format stream "~&|--------+~{~A~^+~}|~%"
-              (loop repeat (+ (length trees) (length trees) -1) collect "--------"))
-      (loop for (family . rows) in summary
-            for base = (second (first rows))
-            do (format stream "~&| ~(~A~) | ~{~A~^ | ~} | ~{~A~^ | ~} |~%" family
-                       (loop for (nil median low high) in rows
-                             collect (format nil "~,3F (~,3F-~,3F)" median low high))
-                       (loop for (nil median) in (rest rows) collect (format nil "~,3F" (/ median base)))))
-      (format stream "~&state hash after ~D steps:~{ ~A ~D~^,~}~%" to
-              (loop for (tree nil nil nil hash) in (rest (first summary)) append (list tree hash))))))
+    (format stream "~&#+caption: the ~D-ball basin, CPU ms a step over steps ~D-~D, median of ~D rounds of ~
+                    alternating processes (lowest-highest); ~A; load ~A before, ~A after~%"
+            balls from to rounds (cpu-model-name) before (load-average))
+    (print-against-table (against-summary (reverse samples)) to stream)))
+
+(defun print-against-table (summary steps stream)
+  "Print SUMMARY (against-summary) as the rows of an Org table: per family each tree's median
+(lowest-highest), then every tree after the first over the first; and the state hashes after
+STEPS steps. #B3NCH5"
+  (let ((trees (mapcar #'first (rest (first summary)))))
+    (format stream "~&| family | ~{~A~^ | ~} | ~{~A / ~A~^ | ~} |~%" trees
+            (loop for tree in (rest trees) append (list tree (first trees))))
+    (format stream "~&|--------+~{~A~^+~}|~%" (loop repeat (1- (* 2 (length trees))) collect "--------"))
+    (loop for (family . rows) in summary
+          for base = (second (first rows))
+          do (format stream "~&| ~(~A~) | ~{~A~^ | ~} | ~{~A~^ | ~} |~%" family
+                     (loop for (nil median low high) in rows
+                           collect (format nil "~,3F (~,3F-~,3F)" median low high))
+                     (loop for (nil median) in (rest rows) collect (format nil "~,3F" (/ median base)))))
+    (format stream "~&state hash after ~D steps:~{ ~A ~D~^,~}~%" steps
+            (loop for (tree nil nil nil hash) in (rest (first summary)) append (list tree hash)))))
 ;; What a step costs:6 ends here
 
 ;; [[file:../physics.org::#FBNCH9][What leaving features out saves:1]]

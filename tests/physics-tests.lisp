@@ -5794,7 +5794,7 @@ in the order of *physics-scene-features*. #K5DF9S"
 
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-against-measures-this-tree]]
 (define-claim "B3NCH5" against-measures-this-tree
-    "A bench-against process on this tree reports this image's state hash; the summary takes medians and ranges per family and tree."
+    "A bench-against process on this tree reports this image's state hash; the summary takes medians and ranges per family and tree, and the table divides by the oldest."
   (let ((lines (luv-physics::against-sample (asdf:system-source-directory "luv-physics") '(:scalar) 200 5 20))
         (w (luv-physics::make-basin-world 200 :kernels :scalar)))
     (dotimes (i 20) (luv-physics::step-physics-world w))
@@ -5810,7 +5810,14 @@ in the order of *physics-scene-features*. #K5DF9S"
                     ("old" :scalar 5.0d0 7) ("new" :scalar 6.0d0 9) ("old" :avx2 2.0d0 7) ("new" :avx2 2.0d0 9)))))
     (check (equal summary '((:scalar ("old" 5.0d0 4.0d0 6.0d0 7) ("new" 5.0d0 4.0d0 6.0d0 9))
                             (:avx2 ("old" 2.0d0 1.0d0 3.0d0 7) ("new" 1.5d0 1.0d0 2.0d0 9))))
-           "~S" summary)))
+           "~S" summary)
+    ;; the table: each tree's median and range, the newer over the older, the hashes
+    (let ((lines (uiop:split-string (with-output-to-string (s) (luv-physics::print-against-table summary 300 s))
+                                    :separator '(#\Newline))))
+      (check (string= (first lines) "| family | old | new | new / old |") "header ~S" (first lines))
+      (check (string= (third lines) "| scalar | 5.000 (4.000-6.000) | 5.000 (4.000-6.000) | 1.000 |") "~S" (third lines))
+      (check (string= (fourth lines) "| avx2 | 2.000 (1.000-3.000) | 1.500 (1.000-2.000) | 0.750 |") "~S" (fourth lines))
+      (check (string= (fifth lines) "state hash after 300 steps: old 7, new 9") "~S" (fifth lines)))))
 ;; B3NCH5-against-measures-this-tree ends here
 
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-steps-cons-nothing]]

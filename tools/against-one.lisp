@@ -7,7 +7,7 @@
 ;;;;
 ;;;; Usage: sbcl --script tools/against-one.lisp ROOT/ FAMILIES BALLS FROM TO
 ;;;; (FAMILIES as scalar,sse,avx2).  It uses only what every tree of the engine since the
-;;;; basin benchmark has: tools/boot.lisp, make-basin-world, step-physics-world and
+;;;; basin benchmark has: tools/boot.lisp, make-basin-world, step-physics-world, median and
 ;;;; physics-world-state-hash, so that one script measures old and new trees alike.
 
 (defvar *against-arguments* (rest sb-ext:*posix-argv*))
@@ -39,10 +39,6 @@
             (let ((start (against-cpu-ns)))
               (funcall step world)
               (when (>= i from) (push (/ (- (against-cpu-ns) start) 1d6) times))))
-          (let* ((sorted (sort times #'<)) (n (length sorted))
-                 (median (if (oddp n)
-                             (nth (floor n 2) sorted)
-                             (/ (+ (nth (1- (floor n 2)) sorted) (nth (floor n 2) sorted)) 2))))
-            (format t "~&against ~(~A~) ~,4F ~D~%" family median
-                    (funcall (find-symbol "PHYSICS-WORLD-STATE-HASH" :luv-physics) world))
-            (finish-output)))))))
+          (format t "~&against ~(~A~) ~,4F ~D~%" family (funcall (find-symbol "MEDIAN" :luv-physics) times)
+                  (funcall (find-symbol "PHYSICS-WORLD-STATE-HASH" :luv-physics) world))
+          (finish-output))))))
