@@ -883,7 +883,14 @@ function of a column name that reads row K's float in that column. #T3STK1"
              (length luv-physics::+physics-parameters+))
       (check (null wrong) "~D bad values were not refused by name: ~S" (length wrong) wrong)
       (check (eq :speculative-margin (refusal 'luv-physics:*physics-speculative-margin* -0.1)))
-      (check (eq :reach-limit (refusal 'luv-physics:*physics-reach-limit* 0.1))))
+      (check (eq :reach-limit (refusal 'luv-physics:*physics-reach-limit* 0.1)))
+      ;; the bound itself: room for the smallest radius under the margin, and not a float less
+      (let ((least (+ (float luv-physics:*physics-speculative-margin* 1.0) luv-physics:+physics-min-radius+)))
+        (check (eq :accepted (refusal 'luv-physics:*physics-reach-limit* least))
+               "a reach limit of the margin and the smallest radius, ~A, is refused" least)
+        (check (eq :reach-limit (refusal 'luv-physics:*physics-reach-limit*
+                                         (sb-kernel:make-single-float (1- (sb-kernel:single-float-bits least)))))
+               "a reach limit a float under the margin and the smallest radius is not refused by name")))
     (let* ((w (make-floor-world))
            (h (luv-physics::add-physics-body w 3.5 1.0 3.5))
            (outcome (progv (mapcar #'second luv-physics::+physics-parameters+)
@@ -4228,6 +4235,29 @@ use before it. #QKS4GZ"
           (check (< (abs (- (+ az bz) 2.0)) 1e-5) "~(~A~): the momentum along z is ~,6F" family (+ az bz)))))))
 ;; S0LV3R-frictionless-pair-shares ends here
 
+;; [[file:../physics.org::#S0LV3R][S0LV3R-frictionless-pile-alike]]
+(define-claim "S0LV3R" frictionless-pile-alike
+    "A pile without friction ends in one state in every family, and no ball turns."
+  (let ((hashes '()))
+    (dolist (family (available-kernel-families))
+      (let* ((world (luv-physics::make-scene-world :awake-basin :count 200 :kernels family
+                                                   :features '(:terrain :body-contacts)
+                                                   :body-arguments '(:friction 0.0)))
+             (balls (luv-physics::physics-world-handles world)))
+        (dotimes (i 150) (step-physics-world world))
+        (check (> (luv-physics::contact-columns-length (luv-physics::physics-world-contacts world)) 200)
+               "~(~A~): the pile has only ~D contacts" family
+               (luv-physics::contact-columns-length (luv-physics::physics-world-contacts world)))
+        (let ((turning (count-if (lambda (b)
+                                   (notevery #'zerop (multiple-value-list (physics-body-angular-velocity world b))))
+                                 balls)))
+          (check (zerop turning) "~(~A~): ~D balls turn without friction" family turning))
+        (push (cons family (luv-physics::physics-world-state-hash world)) hashes)))
+    (check (= 1 (length (remove-duplicates hashes :key #'cdr)))
+           "the families end in different states: ~{~(~A~) ~A~^, ~}"
+           (loop for (f . h) in (reverse hashes) collect f collect h))))
+;; S0LV3R-frictionless-pile-alike ends here
+
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-rebound-ratios]]
 (define-claim "R3ST1T" rebound-ratios
     "Each rebound above the threshold climbs to within 2% of e^2 times the height before it."
@@ -4256,6 +4286,31 @@ use before it. #QKS4GZ"
     (check (<= others 0.05d0) "row: another ball leaves at ~,3F of the first's speed" others)
     (check (>= kept 0.9d0) "row: ~,3F of the energy kept" kept)))
 ;; R3ST1T-struck-rows ends here
+
+;; [[file:../physics.org::#R3ST1T][R3ST1T-free-fall-pair-bounces]]
+(define-claim "R3ST1T" free-fall-pair-bounces
+    "Two balls meeting in free fall part at e times their approach speed, with gravity's momentum."
+  (dolist (family (available-kernel-families))
+    (dolist (line '((0.0 1.0 0.0) (0.6 0.8 0.0)))
+      (dolist (e '(0.3 0.8))
+        (destructuring-bind (nx ny nz) line
+          (let* ((world (luv-physics::open-air-world :kernels family))
+                 (a (add-physics-body world 4.0 8.0 4.0 :radius 0.25 :restitution e
+                                                        :vx (* 3 nx) :vy (* 3 ny) :vz (* 3 nz)))
+                 (b (add-physics-body world (+ 4.0 (* 0.8 nx)) (+ 8.0 (* 0.8 ny)) (+ 4.0 (* 0.8 nz))
+                                      :radius 0.25 :restitution e :vx (* -3 nx) :vy (* -3 ny) :vz (* -3 nz))))
+            (dotimes (i 12) (step-physics-world world))
+            (multiple-value-bind (ax ay az) (physics-body-velocity world a)
+              (multiple-value-bind (bx by bz) (physics-body-velocity world b)
+                (let ((parting (+ (* (- bx ax) nx) (* (- by ay) ny) (* (- bz az) nz)))
+                      (fall (* -2 9.81d0 0.2d0)))
+                  (check (< (abs (- parting (* 6 e))) (* 1d-4 6 e))
+                         "~(~A~), line ~A, e ~,1F: they part at ~,6F m/s, not ~,2F" family line e parting (* 6 e))
+                  (check (< (abs (- (+ ay by) fall)) (* 1d-4 (abs fall)))
+                         "~(~A~), line ~A, e ~,1F: momentum along y ~,6F, not ~,4F" family line e (+ ay by) fall)
+                  (check (< (+ (abs (+ ax bx)) (abs (+ az bz))) 1d-4)
+                         "~(~A~), line ~A, e ~,1F: momentum across y ~,6F ~,6F" family line e (+ ax bx) (+ az bz)))))))))))
+;; R3ST1T-free-fall-pair-bounces ends here
 
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-resting-stack-stays]]
 (define-claim "R3ST1T" resting-stack-stays
@@ -5513,6 +5568,20 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (eq t (luv-physics::validate-physics-world w))))))
 ;; JAU0EF-kinds-make-their-bodies ends here
 
+;; [[file:../physics.org::#JAU0EF][JAU0EF-throws-unpatterned]]
+(define-claim "JAU0EF" throws-unpatterned
+    "Successive throws of a spring have bearings as unrelated as chance makes them."
+  (dolist (cell '((4 -1 4) (-37 12 105)))
+    (let ((bearings (loop for count below 2000
+                          collect (multiple-value-bind (dx dy dz) (apply #'luv-physics::spring-throw (append cell (list count)))
+                                    (declare (ignore dy))
+                                    (atan dz dx)))))
+      (dolist (lag '(1 2))
+        (let ((mean (/ (loop for a in bearings for b in (nthcdr lag bearings) sum (cos (- b a)))
+                       (- 2000 lag))))
+          (check (< (abs mean) 0.1) "spring at ~S: bearings ~D apart have a mean cosine of ~,3F" cell lag mean))))))
+;; JAU0EF-throws-unpatterned ends here
+
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-springs-emit-by-rule]]
 (define-claim "JAU0EF" springs-emit-by-rule
     "Fountain: 2 drops a step in the cone, drops never meet; lava: 1 in 4 steps; same hash twice."
@@ -6046,7 +6115,8 @@ in the order of *physics-scene-features*. #K5DF9S"
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-rolling-resistance-rests-a-pile]]
 (define-claim "X7R3M5" rolling-resistance-rests-a-pile
     "A dead pile whose balls resist rolling comes to rest with sleeping off."
-  (multiple-value-bind (curve fastest) (luv-physics::dead-pile 200 :rolling-resistance 0.01)
+  (multiple-value-bind (curve speeds fastest) (luv-physics::dead-pile 200 :rolling-resistance 0.01)
+    (declare (ignore speeds))
     (check (< (car (last curve)) 4e-5) "the pile holds ~,4F mJ after 10 s" (* 1000 (car (last curve))))
     (check (< fastest 0.001) "a ball still moves at ~,5F m/s after 10 s" fastest)))
 ;; X7R3M5-rolling-resistance-rests-a-pile ends here
@@ -7598,6 +7668,26 @@ within reach of something. #S9WEEP"
                       "on the floor's plane into the wall at x ~A: ~S" x
                       (and hit (list (hit-what hit) (physics-hit-distance hit) (physics-hit-nx hit))))))))
 ;; S9WEEP-slides-along-every-face ends here
+
+;; [[file:../physics.org::#S9WEEP][S9WEEP-cast-excludes-and-filters]]
+(define-claim "S9WEEP" cast-excludes-and-filters
+    "A sphere cast passes over an excluded body and over what its filter refuses."
+  (let* ((w (luv-physics::open-air-world))
+         (balls (loop for x in '(2.0 3.0 4.0) collect (add-physics-body w x 4.0 4.0 :radius 0.25))))
+    (flet ((cast (&rest options)
+             (let ((hit (apply #'physics-sphere-cast w 0.5 4.0 4.0 0.1 1.0 0.0 0.0 10.0 options)))
+               (and hit (list (position (luv-physics::physics-hit-handle hit) balls)
+                              (physics-hit-distance hit)))))
+           (refuse (ball) (lambda (kind what) (not (and (eq kind :body) (eql what (nth ball balls)))))))
+      (loop for (options ball distance) in (list (list '() 0 1.15)
+                                                 (list (list :exclude (first balls)) 1 2.15)
+                                                 (list (list :exclude (first balls) :filter (refuse 1)) 2 3.15)
+                                                 (list (list :filter (refuse 0)) 1 2.15))
+            do (let ((got (apply #'cast options)))
+                 (check (and got (eql ball (first got)) (< (abs (- (second got) distance)) 1e-5))
+                        "with ~S the cast met ball ~S at ~S, not ball ~D at ~,2F" options
+                        (first got) (second got) ball distance))))))
+;; S9WEEP-cast-excludes-and-filters ends here
 
 ;; [[file:../physics.org::#S9WEEP][S9WEEP-starts-inside-against-the-cast]]
 (define-claim "S9WEEP" starts-inside-against-the-cast
