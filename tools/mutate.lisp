@@ -145,9 +145,11 @@ declamation makes it not inline by default: callers may still ask for it.")
 
 (defun inlined-name-p (name)
   "True if a change to NAME's definition reaches the code of its callers: a macro, a
-compiler macro, a symbol macro or a function declared inline."
+compiler macro, a symbol macro, a function declared inline, or a featured kernel, whose text
+define-impact-copy compiles again under another name."
   (and (symbolp name)
        (or (gethash name *inline-names*)
+           (get name 'physics::featured-kernel)
            (and (fboundp name) (macro-function name))
            (compiler-macro-function name)
            (eq (sb-int:info :function :inlinep name) 'inline)
