@@ -4460,6 +4460,18 @@ on LA as on something static (rests-static-p, RISE the upward part of the normal
   (cond ((rests-static-p braced inverse-mass brace-ratio la lb rise) :a)
         ((rests-static-p braced inverse-mass brace-ratio lb la (- rise)) :b)))
 
+(defun held-mass-bound (world)
+  "The most mass a contact of WORLD with something static can hold up this step: the awake bodies'
+mass, for a sleeper is static and holds itself up; while kinematic boxes are posted, which press
+with no mass of their own, 1e30 kg, beyond any world's. #PR3PAR"
+  (let ((awake (physics-world-awake world)) (mass 0.0))
+    (declare (type single-float mass))
+    (if (plusp (box-columns-length (physics-world-boxes world)))
+        1e30
+        (with-body-columns (inverse-mass) awake
+          (dotimes (i (body-columns-length awake) mass)
+            (incf mass (/ 1.0 (aref inverse-mass i))))))))
+
 (defvar *prepare-short-path* t
   "When false, the prepare fill sends every row through its general path; the claim that the
 short path changes no bit compares the two. #PR3PAR")
@@ -4492,9 +4504,10 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
           (slop (f32 (physics-world-slop world)))
           (g (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                        (expt (physics-world-gravity-z world) 2))))
-          (load-limit (f32 (physics-world-load-stiffening world))))
+          (load-limit (f32 (physics-world-load-stiffening world)))
+          (held-mass (held-mass-bound world)))
       (declare (type f32-column v d) (type fixnum-column colors)
-               (type single-float slop hertz zeta g load-limit)
+               (type single-float slop hertz zeta g load-limit held-mass)
                (type handle-table ids) (type constraint-columns cbuf))
       (multiple-value-bind (dyn-bias dyn-mass dyn-impulse) (physics-softness hertz zeta h)
         (declare (type single-float dyn-bias dyn-mass dyn-impulse))
@@ -4766,10 +4779,12 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                                  (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
                                  (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z))))
                       ;; a one-sided contact's carried load, as the mass it holds up, over its
-                      ;; own effective mass: above 1 it divides the spring's give
+                      ;; own effective mass: above 1 it divides the spring's give. It holds up
+                      ;; no more than every awake body's mass
                       (let ((load (if two-sided
                                       0.0
-                                      (min load-limit (* (contact-at geometry g normal-impulse) mass-sum load-scale)))))
+                                      (min load-limit (* (contact-at geometry g normal-impulse) mass-sum load-scale)
+                                           (* held-mass mass-sum)))))
                         (declare (type single-float load))
                         (cond ((> load 1.0)
                                (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
@@ -5396,8 +5411,10 @@ so its undo log closes. #ST0R3S"
             (if-feature :rolling-resistance
               (setf (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
                     (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z)))
-            ;; and the spin impulse, for the next step's first substep to start from it
-            (if-feature :friction (setf (contact-at geometry g spin-impulse) (@ spin-impulse)))
+            ;; and the spin impulse, for the next step's first substep to start from it: only
+            ;; a row with no radius on side b has one, and no other row's side block is read
+            (if-feature :friction
+              (when (= (@ rb) 0.0) (setf (contact-at geometry g spin-impulse) (@ spin-impulse))))
             (when marking (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))

@@ -6063,6 +6063,13 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (<= awake 2) "thrown from ~,3F m aside: ~D of 401 balls awake at 7 s" shift awake))))
 ;; X7R3M5-piles-come-to-rest ends here
 
+;; [[file:../physics.org::#X7R3M5][X7R3M5-pile-stays-asleep]]
+(define-claim "X7R3M5" pile-stays-asleep
+    "After the default scene's throw, from 2 mm aside, the pile sleeps through seconds 9 to 11."
+  (let ((awake (luv-physics::thrown-into-pile 1000 :seconds 11 :throw-at 4 :shift 0.002)))
+    (check (every #'zerop (last awake 3)) "awake at the end of seconds 9, 10 and 11: ~{~D~^, ~}" (last awake 3))))
+;; X7R3M5-pile-stays-asleep ends here
+
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-pinch-holds]]
 (define-claim "X7R3M5" pinch-holds
     "A ball spawned pinched between two sleepers is pushed out gently."
