@@ -847,7 +847,7 @@ COLUMN's length or LEAST, whichever is most, holding COLUMN's first KEEP entries
 (defparameter *physics-contact-push-max* 3.0
   "Fastest speed, m/s, at which the solver pushes overlapping bodies apart. #V0CAB5")
 
-(defparameter *physics-load-stiffening* 10000.0
+(defparameter *physics-load-stiffening* 100.0
   "Largest factor by which the load a contact with something static carries, as a mass over the
 contact's effective mass, may divide the contact's impulse scale, and so its give at rest. #V0CAB5")
 
