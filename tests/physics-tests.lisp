@@ -3784,6 +3784,19 @@ use before it. #QKS4GZ"
              (check (and (= 5 (length text)) (equal features (fifth text))) "~(~A~) keeps ~S" name text))))
 ;; KTXT7V-kernel-is-its-text ends here
 
+;; [[file:../physics.org::#PR3PAR][PR3PAR-held-mass-is-the-awake-mass]]
+(define-claim "PR3PAR" held-mass-is-the-awake-mass
+    "held-mass-bound: the awake bodies' mass, sleepers left out, no bound while a box is posted."
+  (let* ((world (make-physics-world :terrain (make-floor-terrain) :sleep t))
+         (balls (loop for mass in '(1.0 2.0 4.0) for x from 1.0
+                      collect (add-physics-body world x 0.25 1.0 :radius 0.25 :mass mass))))
+    (check (= 7.0 (luv-physics::held-mass-bound world)) "all awake: ~A kg" (luv-physics::held-mass-bound world))
+    (luv-physics::sleep-physics-body world (nth-value 1 (luv-physics::resolve-handle world (third balls))))
+    (check (= 3.0 (luv-physics::held-mass-bound world)) "the 4 kg ball asleep: ~A kg" (luv-physics::held-mass-bound world))
+    (post-physics-box world 5.0 2.0 5.0 0.25 0.25 0.25)
+    (check (= 1e30 (luv-physics::held-mass-bound world)) "a box posted: ~A kg" (luv-physics::held-mass-bound world))))
+;; PR3PAR-held-mass-is-the-awake-mass ends here
+
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-bracing-holds-while-still]]
 (define-claim "PR3PAR" bracing-holds-while-still
     "A braced body stays braced while still, whatever its load; moving, it is unbraced."
