@@ -1615,22 +1615,24 @@ the chunks it touches resident. Return TERRAIN. #H2W9DJ"
 ;; Terrain: chunks of cells, and missing is a wall:1 ends here
 
 ;; [[file:../physics.org::#Y5H8KC][Contacts persist between steps, keyed by a packed pair:1]]
-(define-physics-layout contact-columns
-  "Persistent contacts, one row per touching or nearly touching pair, keyed by a packed pair. #Y5H8KC"
-  (handle-a fixnum) (handle-b fixnum) (kind fixnum) (key fixnum) (seen fixnum) (order fixnum)
-  (touching fixnum) (geometry single-float 17))
-
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +contact-fields+
     '(nx ny nz separation px py pz kvx kvy kvz normal-impulse tangent-impulse-1 tangent-impulse-2
       rolling-impulse-x rolling-impulse-y rolling-impulse-z spin-impulse)
-    "The seventeen floats of a contact, side by side in its row of the geometry column. #Y5H8KC"))
+    "The floats of a contact, side by side in its row of the geometry column, as wide as this
+list is long. #Y5H8KC"))
+
+(define-physics-layout contact-columns
+  "Persistent contacts, one row per touching or nearly touching pair, keyed by a packed pair. #Y5H8KC"
+  (handle-a fixnum) (handle-b fixnum) (kind fixnum) (key fixnum) (seen fixnum) (order fixnum)
+  (touching fixnum) (geometry single-float #.(length +contact-fields+)))
 
 (declaim (inline geometry-start))
 (defun geometry-start (row)
-  "Where the seventeen floats of contact ROW begin in the geometry column. #Y5H8KC"
+  "Where the floats of contact ROW (one for each of +contact-fields+) begin in the geometry
+column. #Y5H8KC"
   (declare (type index row))
-  (the index (* row 17)))
+  (the index (* row #.(length +contact-fields+))))
 
 (defmacro contact-at (geometry start field)
   "The FIELD (one of +contact-fields+) of the contact whose floats begin at START (from

@@ -2186,7 +2186,7 @@ use before it. #QKS4GZ"
 
 ;; [[file:../physics.org::#G3NCNT][G3NCNT-impulses-kept-within-cone]]
 (define-claim "G3NCNT" impulses-kept-within-cone
-    "touch-contact keeps the impulses when the normal turned to a cosine of exactly 0.9, drops them below."
+    "touch-contact keeps all seven impulses when the normal turned to a cosine of exactly 0.9, drops them below."
   (let* ((contacts (luv-physics::make-contact-columns))
          (table (luv-physics::make-contact-table))
          (geometry (luv-physics::contact-columns-geometry contacts))
@@ -2197,16 +2197,27 @@ use before it. #QKS4GZ"
                    (luv-physics::contact-table-cursor table) 0)
              (setf row (luv-physics::touch-contact contacts table 7 luv-physics::+contact-terrain+ 5 -1
                                                    nx ny 0.0 0.01 0.0 0.0 0.0 0.0 0.0 0.0)))
-           (impulse () (luv-physics::contact@ geometry row luv-physics::normal-impulse)))
+           (impulse () (luv-physics::contact@ geometry row luv-physics::normal-impulse))
+           ;; the seven carried impulses, the last seven floats of the row
+           (carried () (loop for k from 10 below (length luv-physics::+contact-fields+)
+                             collect (aref geometry (+ (luv-physics::geometry-start row) k)))))
       (touch 1 1.0 0.0)
       (setf (luv-physics::contact@ geometry row luv-physics::normal-impulse) 1.0)
+      (check (equal (nthcdr 10 luv-physics::+contact-fields+)
+                    '(luv-physics::normal-impulse luv-physics::tangent-impulse-1 luv-physics::tangent-impulse-2
+                      luv-physics::rolling-impulse-x luv-physics::rolling-impulse-y luv-physics::rolling-impulse-z
+                      luv-physics::spin-impulse))
+             "the carried impulses are not the row's last seven floats: ~S" (nthcdr 10 luv-physics::+contact-fields+))
+      (loop for k from 10 below (length luv-physics::+contact-fields+) do (setf (aref geometry (+ (luv-physics::geometry-start row) k)) 1.0))
       (touch 2 0.9 s)
       (check (= 1.0 (impulse)) "turned to a cosine of exactly 0.9: impulse ~A" (impulse))
+      (check (every (lambda (x) (= x 1.0)) (carried)) "turned to a cosine of exactly 0.9: ~S" (carried))
       ;; back along x, shortened by one part in 2^24: a cosine with the last normal just under 0.9
       (let ((nx (- 1.0 single-float-epsilon)))
         (check (< (* nx 0.9) 0.9) "the second turn is not past the cone")
         (touch 3 nx 0.0))
-      (check (= 0.0 (impulse)) "turned past the cone: impulse ~A" (impulse)))))
+      (check (= 0.0 (impulse)) "turned past the cone: impulse ~A" (impulse))
+      (check (every #'zerop (carried)) "turned past the cone: ~S" (carried)))))
 ;; G3NCNT-impulses-kept-within-cone ends here
 
 ;; [[file:../physics.org::#G3NCNT][G3NCNT-touch-normal-every-axis]]
