@@ -1352,10 +1352,6 @@ column is forming: a pass at every such step finds a column that starts to form.
   "True when some world has been given TAG. #B5N8JT"
   (and (plusp tag) (or (<= tag *world-tag-counter*) (>= *world-tag-counter* (1- (ash 1 +handle-tag-bits+))))))
 
-(defun handle-table-full-p (table)
-  "True when TABLE has no free slot and no slot left to open. #B5N8JT"
-  (and (< (handle-table-free table) 0) (>= (handle-table-count table) (ash 1 +handle-index-bits+))))
-
 (defun handle-table-allocate (table set local)
   "Take a free slot of TABLE for a body at SET and row LOCAL; return its new handle. #B5N8JT"
   (let ((slot (handle-table-free table)))
@@ -1363,9 +1359,6 @@ column is forming: a pass at every such step finds a column that starts to form.
         (setf (handle-table-free table) (aref (handle-table-local table) slot))
         (progn
           (setf slot (handle-table-count table))
-          (when (handle-table-full-p table)
-            (error 'physics-budget-exceeded :operation 'handle-table-allocate :resource :handles
-                                            :requested (1+ slot) :budget (ash 1 +handle-index-bits+)))
           (when (>= slot (length (handle-table-set table)))
             (let ((n (* 2 (length (handle-table-set table)))))
               (flet ((grow (a init) (let ((b (make-array n :element-type 'fixnum :initial-element init)))
@@ -2462,17 +2455,12 @@ HANDLE's body, in whichever set it lives; DOCUMENTATION is its docstring. #M4K3W
   v)
 
 (defun check-body-room (world operation)
-  "Signal physics-budget-exceeded, naming OPERATION, unless WORLD has room for one more body:
-under its body budget, and a free slot in its handle table. #M4K3WD"
-  (let ((count (+ (physics-world-awake-count world) (physics-world-sleeping-count world)))
-        (ids (physics-world-ids world)))
+  "Signal physics-budget-exceeded, naming OPERATION, unless WORLD has room for one more body
+under its body budget; below the budget its handle table has a slot for it ([[#B5N8JT]]). #M4K3WD"
+  (let ((count (+ (physics-world-awake-count world) (physics-world-sleeping-count world))))
     (when (>= count (physics-world-body-budget world))
       (error 'physics-budget-exceeded :world world :operation operation :resource :bodies
-                                      :requested (1+ count) :budget (physics-world-body-budget world)))
-    (when (handle-table-full-p ids)
-      (error 'physics-budget-exceeded :world world :operation operation :resource :handles
-                                      :requested (1+ (handle-table-count ids))
-                                      :budget (ash 1 +handle-index-bits+)))))
+                                      :requested (1+ count) :budget (physics-world-body-budget world)))))
 
 (defun max-radius-for (world)
   "The largest radius a body of WORLD may have: reach (radius plus margin) stays under a cell. #M4K3WD"

@@ -729,7 +729,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-atomic-add]]
 (define-claim "C0ND1T" atomic-add
-    "Out-of-range radius, mass, friction, and a full handle table, are refused before any row exists."
+    "Out-of-range radius, mass, friction, and a body past the budget, are refused before any row exists."
   (let ((w (make-floor-world)))
     (luv-physics::add-physics-body w 3.5 1.0 3.5)
     (luv-physics::step-physics-world w)
@@ -743,20 +743,16 @@ function of a column name that reads row K's float in that column. #T3STK1"
                         (equal before (world-fingerprint w)) (handler-case (luv-physics::validate-physics-world w) (error () nil)))
               do (push (list name value outcome) wrong))
       (check (null wrong) "refused wrongly, or the world changed: ~S" wrong)
-      (let* ((ids (luv-physics::physics-world-ids w))
-             (count (luv-physics::handle-table-count ids)) (free (luv-physics::handle-table-free ids))
-             (outcome nil) (after nil))
-        (setf (luv-physics::handle-table-count ids) (ash 1 luv-physics::+handle-index-bits+)
-              (luv-physics::handle-table-free ids) -1)
-        (unwind-protect
-             (setf outcome (handler-case (progn (luv-physics::add-physics-body w 5.5 1 5.5) :accepted)
-                             (error (e) (list (type-of e) (princ-to-string e))))
-                   after (world-fingerprint w))
-          (setf (luv-physics::handle-table-count ids) count (luv-physics::handle-table-free ids) free))
+      ;; a budget of one body, which the world holds
+      (let ((outcome nil) (after nil))
+        (setf (luv-physics::physics-world-body-budget w) 1)
+        (setf outcome (handler-case (progn (luv-physics::add-physics-body w 5.5 1 5.5) :accepted)
+                        (error (e) (list (type-of e) (princ-to-string e))))
+              after (world-fingerprint w))
         (check (and (consp outcome) (eq (first outcome) 'luv-physics::physics-budget-exceeded)
-                    (search (format nil "~D" (ash 1 luv-physics::+handle-index-bits+)) (second outcome)))
-               "at the handle limit: ~S" outcome)
-        (check (equal after before) "the world changed at the handle limit: ~S -> ~S" before after)
+                    (search "the budget of 1" (second outcome)))
+               "at the body budget: ~S" outcome)
+        (check (equal after before) "the world changed at the body budget: ~S -> ~S" before after)
         (check (eq t (luv-physics::validate-physics-world w)))))))
 ;; C0ND1T-atomic-add ends here
 
