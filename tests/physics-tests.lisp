@@ -6844,7 +6844,9 @@ counted. #RH7T05"
           (check (= 600 (count-of "<circle")) "~D discs" (count-of "<circle"))
           (check (> (count-of "<polygon") 100) "~D faces" (count-of "<polygon"))
           (check (search "check 0.0 s: 300 awake, 0 asleep" text))
-          (check (search (format nil "1.0 s: ~D awake" (luv-physics::physics-world-awake-count world)) text)))))))
+          (check (search (format nil "1.0 s: ~D awake" (luv-physics::physics-world-awake-count world)) text)))))
+    (let ((frames (mapcar (lambda (s) (luv-physics::frame-at recording s)) '(0 0.2 0.45 0.9 1))))
+      (check (equal frames '(0 1 3 5 6)) "the moments 0, 0.2, 0.45, 0.9 and 1 s take frames ~S" frames))))
 ;; UFK5EA-picture-draws-the-bodies ends here
 
 ;; [[file:../physics.org::#UFK5EA][UFK5EA-picture-of-one-cell]]
