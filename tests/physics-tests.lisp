@@ -1104,7 +1104,7 @@ function of a column name that reads row K's float in that column. #T3STK1"
 
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-handle-table-limits]]
 (define-claim "B5N8JT" handle-table-limits
-    "Slot 0 is reused first; a release adds one to the generation, wrapping at 2^20; -1 is malformed."
+    "Slot 0 is reused first; a release adds one to the generation, wrapping at 2^20; -1 is malformed, 0 unissued."
   (let* ((table (luv-physics::make-handle-table))
          (h0 (luv-physics::handle-table-allocate table luv-physics::+set-awake+ 0))
          (h1 (luv-physics::handle-table-allocate table luv-physics::+set-awake+ 1)))
@@ -1124,7 +1124,9 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (= 0 (aref (luv-physics::handle-table-generation table) 1)) "the generation after 2^20 - 1 is ~D"
            (aref (luv-physics::handle-table-generation table) 1))
     (check (eq :malformed (luv-physics::handle-status table -1)) "-1 is ~S"
-           (luv-physics::handle-status table -1))))
+           (luv-physics::handle-status table -1))
+    (check (eq :unissued (luv-physics::handle-status table 0)) "0 is ~S"
+           (luv-physics::handle-status table 0))))
 ;; B5N8JT-handle-table-limits ends here
 
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-describe-live-row]]
