@@ -7089,6 +7089,41 @@ counted. #RH7T05"
         (check (equal (list b) (found 11.0 1.0 1.0)) "the new ball's place holds ~S, not ~S" (found 11.0 1.0 1.0) b)))))
 ;; Q5V1EW-view-after-an-edit ends here
 
+;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-after-a-relocation]]
+(define-claim "Q5V1EW" view-after-a-relocation
+    "After a wake and a sleep, then a wake, a sleep, an add and a removal, counts and step unchanged, each ball is found once at its place."
+  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
+         (balls (loop for x in '(1.0 3.0 5.0 7.0 9.0) collect (add-physics-body w x 1.0 1.0 :radius 0.25))))
+    (step-physics-world w)
+    (flet ((found (xs)
+             (loop for x in xs
+                   collect (let ((got '()))
+                             (map-physics-bodies-in-sphere (lambda (g) (push g got)) w x 1.0 1.0 0.1)
+                             got)))
+           (sleep-ball (h)
+             (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
+               (assert (= set luv-physics::+set-awake+))
+               (luv-physics::sleep-physics-body w row)))
+           (counts () (list (physics-world-awake-count w) (physics-world-sleeping-count w)
+                            (luv-physics::physics-world-step-count w))))
+      (sleep-ball (fifth balls)) (sleep-ball (fourth balls))
+      (let ((xs '(1.0 3.0 5.0 7.0 9.0)))
+        (check (equal (found xs) (mapcar #'list balls)) "with two asleep the spheres find ~S" (found xs))
+        (check (= 1 (wake-physics-bodies-near w 7.0 1.0 1.0 0.01)))
+        (sleep-ball (first balls))
+        (check (equal '(3 2 1) (counts)) "awake, asleep and steps ~S" (counts))
+        (check (equal (found xs) (mapcar #'list balls)) "after a wake and a sleep the spheres find ~S" (found xs)))
+      (check (= 1 (wake-physics-bodies-near w 1.0 1.0 1.0 0.01)))
+      (sleep-ball (third balls))
+      (let ((sixth (add-physics-body w 11.0 1.0 1.0 :radius 0.25))
+            (xs '(1.0 3.0 5.0 7.0 9.0 11.0)))
+        (remove-physics-body w (second balls))
+        (check (equal '(3 2 1) (counts)) "after the add and the removal ~S" (counts))
+        (check (equal (found xs) (list (list (first balls)) nil (list (third balls)) (list (fourth balls))
+                                       (list (fifth balls)) (list sixth)))
+               "after an add and a removal the spheres find ~S" (found xs))))))
+;; Q5V1EW-view-after-a-relocation ends here
+
 ;; [[file:../physics.org::#C4STRY][C4STRY-box-faces-edges-and-corners]]
 (define-claim "C4STRY" box-faces-edges-and-corners
     "Casts at a posted box: faces at the exact distance, normal and point; from inside or overlapping, 0 or nothing; edges and corners along their diagonals."
