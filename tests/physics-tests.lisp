@@ -1288,6 +1288,23 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (not (luv-physics::terrain-solid-p terrain 20 5 5)) "the first fill was not applied")))
 ;; H2W9DJ-queued-edits-share-the-budget ends here
 
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-edit-in-a-resident-chunk]]
+(define-claim "H2W9DJ" edit-in-a-resident-chunk
+    "At a budget of one chunk, a second cell of the resident chunk is set and a cell of another chunk refused."
+  (let ((terrain (let ((luv-physics:*physics-terrain-chunk-budget* 1)) (luv-physics::make-voxel-terrain))))
+    (setf (luv-physics::terrain-solid-p terrain 20 3 5) t)
+    (let ((second (handler-case (progn (setf (luv-physics::terrain-solid-p terrain 21 3 5) t) :set)
+                    (luv-physics::physics-budget-exceeded () :refused)))
+          (other (handler-case (progn (setf (luv-physics::terrain-solid-p terrain 3 20 5) t) :set)
+                   (luv-physics::physics-budget-exceeded () :refused))))
+      (check (equal (list second other) '(:set :refused)) "the cell beside ~S, the cell of another chunk ~S"
+             second other))
+    (check (= 1 (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
+           "the terrain holds ~D chunks" (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
+    (let ((cells (loop for x from 20 to 22 collect (luv-physics::terrain-solid-p terrain x 3 5))))
+      (check (equal cells '(t t nil)) "the cells at x = 20, 21 and 22 read ~S" cells))))
+;; H2W9DJ-edit-in-a-resident-chunk ends here
+
 ;; [[file:../physics.org::#Y5H8KC][Y5H8KC-resting-contact-persists]]
 (define-claim "Y5H8KC" resting-contact-persists
     "A resting ball keeps one terrain contact row whose normal impulse is m*g*h within 5%."
