@@ -3278,6 +3278,23 @@ use before it. #QKS4GZ"
            "the ball rests at y = ~,5F" (body-y w h))))
 ;; MYWH16-centre-on-the-face-is-inside ends here
 
+;; [[file:../physics.org::#MYWH16][MYWH16-inside-leaves-through-open-face]]
+(define-claim "MYWH16" inside-leaves-through-open-face
+    "A ball centred in a floor cell, nearest a face into floor, leaves through the air above, a block beside that air."
+  (multiple-value-bind (w terrain) (make-floor-world :sleep nil)
+    (setf (luv-physics::terrain-solid-p terrain 6 0 5) t (luv-physics::terrain-solid-p terrain 5 0 6) t)
+    (let ((h (luv-physics::add-physics-body w 5.1 -0.4 5.5 :radius 0.25)))
+      (luv-physics::step-physics-world w)
+      (let ((contacts (terrain-contacts w h)))
+        (check (and (= 1 (length contacts))
+                    (every #'= '(0.0 -1.0 0.0) (list (getf (first contacts) :nx) (getf (first contacts) :ny)
+                                                     (getf (first contacts) :nz))))
+               "the floor contacts are ~S" contacts))
+      (dotimes (i 60) (luv-physics::step-physics-world w))
+      (check (< (abs (- (body-y w h) (- 0.25 luv-physics::*physics-linear-slop*))) 0.002)
+             "the ball ends at y = ~,5F" (body-y w h)))))
+;; MYWH16-inside-leaves-through-open-face ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-edges-bounce-true]]
 (define-claim "MYWH16" edges-bounce-true
     "Drops onto a block's edge and corner take their impulse along the normal at impact."
