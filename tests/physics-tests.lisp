@@ -5648,12 +5648,15 @@ in the order of *physics-scene-features*. #K5DF9S"
 
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-throws-unpatterned]]
 (define-claim "JAU0EF" throws-unpatterned
-    "Successive throws of a spring have bearings as unrelated as chance makes them."
+    "Successive throws of a spring have bearings as unrelated as chance makes them, and speeds even over 4 to 6 m/s."
   (dolist (cell '((4 -1 4) (-37 12 105)))
-    (let ((bearings (loop for count below 2000
-                          collect (multiple-value-bind (dx dy dz) (apply #'luv-physics::spring-throw (append cell (list count)))
-                                    (declare (ignore dy))
-                                    (atan dz dx)))))
+    (let* ((throws (loop for count below 2000
+                         collect (multiple-value-list (apply #'luv-physics::spring-throw (append cell (list count))))))
+           (bearings (mapcar (lambda (throw) (atan (third throw) (first throw))) throws))
+           (speeds (mapcar #'fourth throws))
+           (mean-speed (/ (reduce #'+ speeds) 2000)))
+      (check (and (<= 4.0 (reduce #'min speeds)) (< (reduce #'max speeds) 6.0) (< (abs (- mean-speed 5.0)) 0.05))
+             "spring at ~S: speeds from ~,3F to ~,3F m/s, mean ~,3F" cell (reduce #'min speeds) (reduce #'max speeds) mean-speed)
       (dolist (lag '(1 2))
         (let ((mean (/ (loop for a in bearings for b in (nthcdr lag bearings) sum (cos (- b a)))
                        (- 2000 lag))))
@@ -6504,6 +6507,21 @@ and the world. #G4WXCJ"
                                (= (aref xyz (+ k 2)) (aref (luv-physics::body-columns-z awake) row))))
              "the last frame's awake centres are not the world's"))))
 ;; G4WXCJ-recording-keeps-its-pace ends here
+
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-recording-pace-bounded]]
+(define-claim "G4WXCJ" recording-pace-bounded
+    "A recording may take every step up to every 3600th; 0 and 3601 are refused, naming :every."
+  (let ((outcomes (loop for every in '(0 1 3600 3601)
+                        collect (let ((w (make-floor-world)))
+                                  (handler-case (progn (luv-physics::start-physics-recording w :every every)
+                                                       (luv-physics::stop-physics-recording w)
+                                                       :recorded)
+                                    (luv-physics::invalid-physics-parameter (e)
+                                      (if (search "every" (string-downcase (princ-to-string e)))
+                                          (and (null (luv-physics::physics-world-step-hook w)) :refused)
+                                          (princ-to-string e))))))))
+    (check (equal outcomes '(:refused :recorded :recorded :refused)) "every 0, 1, 3600 and 3601: ~S" outcomes)))
+;; G4WXCJ-recording-pace-bounded ends here
 
 ;; [[file:../physics.org::#G4WXCJ][G4WXCJ-recording-sees-boxes]]
 (define-claim "G4WXCJ" recording-sees-boxes
