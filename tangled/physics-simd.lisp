@@ -549,7 +549,7 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
                          (wide (kernel-variant-wide-prepare-frames variant))
                          (narrow (kernel-variant-prepare-frames variant)))
                     (do-colour-runs (s e world ,settle) (funcall wide cbuf s e) (funcall narrow cbuf s e))))
-                (defmethod wide-kernel-names ((kernels ,class)) (values ',ws ',so ',pf))
+                (defmethod wide-kernel-names ((kernels ,class)) (values ',ws ',so ',pf ',si))
                 (defmethod physics-warm-start ((kernels ,class) world)
                   (let* ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world))
                          (variant (world-kernel-variant world kernels))

@@ -4162,14 +4162,20 @@ column of +constraint-side-columns+, the side block's. #SSMPYW"
 begin 16 bytes past a 64-byte boundary every column's eight lanes start on a 32-byte
 boundary. #SSMPYW")
 
+(deftype constraint-block-size ()
+  "The floats of one block of constraints, main or side: at most a main block of every column.
+Bounded so, the base of a constraint (constraint-base) is a fixnum the compiler can see, and
+every column read in a kernel is fixnum arithmetic, not a call to generic addition. #SSMPYW"
+  `(integer 0 ,+constraint-block+))
+
 (defstruct (constraint-columns (:constructor make-constraint-columns
                                   (&optional (block +constraint-block+) (side-block +constraint-side-block+))))
   "The contacts of one step as solver rows, written in colour order: three fixnum columns, and
 the float columns in blocks of eight rows, each column's eight lanes contiguous; BLOCK floats a
 main block, the first BLOCK/8 columns of +constraint-columns+, and SIDE-BLOCK a side block, the
 first SIDE-BLOCK/8 of +constraint-side-columns+. #SSMPYW"
-  (block +constraint-block+ :type index)
-  (side-block +constraint-side-block+ :type index)
+  (block +constraint-block+ :type constraint-block-size)
+  (side-block +constraint-side-block+ :type constraint-block-size)
   (length 0 :type index)
   (capacity 0 :type index)
   (data (make-array 0 :element-type 'single-float) :type f32-column)
@@ -4200,7 +4206,7 @@ first SIDE-BLOCK/8 of +constraint-side-columns+. #SSMPYW"
 (declaim (inline constraint-base))
 (defun constraint-base (k &optional (block +constraint-block+))
   "The index of constraint K's lane of the first column of its block, in blocks of BLOCK floats. #SSMPYW"
-  (declare (type index k block))
+  (declare (type index k) (type constraint-block-size block))
   (+ +constraint-origin+ (* (ash k -3) block) (logand k 7)))
 
 (defmacro with-constraint-block ((&rest fixnum-columns) buffer &body body)
@@ -4217,7 +4223,8 @@ alive, not two. #SSMPYW"
             (stride (constraint-columns-block ,b))
             ,@(loop for c in fixnum-columns
                     collect `(,c (,(intern (format nil "CONSTRAINT-COLUMNS-~A" c)) ,b))))
-       (declare (type f32-column data) (type fixnum-column ,@fixnum-columns) (type index stride)
+       (declare (type f32-column data) (type fixnum-column ,@fixnum-columns)
+                (type constraint-block-size stride)
                 (ignorable ,b data stride ,@fixnum-columns))
        (macrolet ((@ (column) (if (constraint-side-column-p column)
                                   `(block-ref (side-floats) (side-base k) ,(constraint-offset column))
@@ -5908,7 +5915,8 @@ keep them where featured-kernel finds them. #FEAT5X"
 
 (defgeneric wide-kernel-names (kernels)
   (:documentation "The names of the featured warm start, solve and frame pass of the wide family
-KERNELS, as three values, or NIL for a family without wide kernels. #FEAT5X"))
+KERNELS, and of the solve's copy with the impact part, as four values, or NIL for a family
+without wide kernels. #FEAT5X"))
 
 (defmethod wide-kernel-names ((kernels scalar-kernels)) nil)
 

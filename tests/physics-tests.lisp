@@ -4132,6 +4132,38 @@ use before it. #QKS4GZ"
                  (check (equal want got) "~A: ~S, not ~S" label got want))))))
 ;; K3RNLS-entry-ranges-exact ends here
 
+;; [[file:../physics.org::#K3RNLS][K3RNLS-substep-kernels-call-no-generic-arithmetic]]
+(define-claim "K3RNLS" substep-kernels-call-no-generic-arithmetic
+    "No kernel a substep runs on every row, in any family or standard feature set, calls SBCL's generic arithmetic."
+  (let ((seen (make-hash-table :test 'eq)) (checked 0))
+    (flet ((generic-calls (kernel)
+             ;; the disassembler names each routine a call reaches; the generic ones are GENERIC-...
+             (let ((text (with-output-to-string (s) (disassemble kernel :stream s))))
+               (loop for at = (search "GENERIC-" text) then (search "GENERIC-" text :start2 (1+ at))
+                     while at collect (subseq text at (position #\Newline text :start at))))))
+      (dolist (family (luv-physics::available-kernel-families))
+        (dolist (features (cons luv-physics::+physics-features+ luv-physics::+standard-feature-sets+))
+          (let* ((world (luv-physics:make-physics-world :kernels family :features features))
+                 (kernels (luv-physics::physics-world-kernels world))
+                 (variant (luv-physics::world-kernel-variant world kernels)))
+            (dolist (kernel (list* (luv-physics::kernel-variant-warm-start variant)
+                                   (luv-physics::kernel-variant-solve variant)
+                                   (luv-physics::kernel-variant-prepare-frames variant)
+                                   (luv-physics::kernel-variant-wide-warm-start variant)
+                                   (luv-physics::kernel-variant-wide-solve variant)
+                                   (luv-physics::kernel-variant-wide-prepare-frames variant)
+                                   (nth-value 3 (luv-physics::wide-kernel-names kernels))
+                                   '(luv-physics::solve-impact-range luv-physics::integrate-velocities-range
+                                     luv-physics::integrate-positions-range)))
+              (when (and kernel (not (gethash kernel seen)))
+                (setf (gethash kernel seen) t)
+                (incf checked)
+                (let ((calls (generic-calls kernel)))
+                  (check (null calls) "~A (~(~A~), features ~S) calls ~{~A~^, ~}" kernel family features calls))))))))
+    ;; the scalar family alone has three kernels of each of three sets, and three shared
+    (check (>= checked 12) "only ~D kernels were disassembled" checked)))
+;; K3RNLS-substep-kernels-call-no-generic-arithmetic ends here
+
 ;; [[file:../physics.org::#W4RMST][W4RMST-warm-start-formula]]
 (define-claim "W4RMST" warm-start-formula
     "warm-start-range applies P and the torques of the closed form to all twelve columns, in each variant."
