@@ -9056,10 +9056,13 @@ RECORDING, seen from AZIMUTH and ELEVATION, under TITLE. Return PATHNAME. #UFK5E
               (destructuring-bind ((x y) r) (cdddr item)
                 (push (- x r) xs) (push (+ x r) xs) (push (- y r) ys) (push (+ y r) ys))
               (dolist (p (cdddr item)) (push (first p) xs) (push (second p) ys)))))
-      (let* ((x0 (reduce #'min xs :initial-value 0)) (x1 (reduce #'max xs :initial-value 1))
-             (y0 (reduce #'min ys :initial-value 0)) (y1 (reduce #'max ys :initial-value 1))
-             (d0 (reduce #'min depths :initial-value 0)) (d1 (reduce #'max depths :initial-value 1))
-             (top 22) (scale (min (/ (- width 10) (- x1 x0)) (/ (- height top 6) (- y1 y0)))))
+      ;; the drawing is fitted to what it shows, wherever that lies, and lit over the depths
+      ;; it shows; a picture with nothing in it takes the unit square and a unit of depth
+      (let* ((x0 (if xs (reduce #'min xs) 0)) (x1 (if xs (reduce #'max xs) 1))
+             (y0 (if ys (reduce #'min ys) 0)) (y1 (if ys (reduce #'max ys) 1))
+             (d0 (if depths (reduce #'min depths) 0)) (d1 (if depths (reduce #'max depths) 1))
+             ;; at least a metre each way, so that a lone small ball is not blown up to the panel
+             (top 22) (scale (min (/ (- width 10) (max 1 (- x1 x0))) (/ (- height top 6) (max 1 (- y1 y0))))))
         (flet ((px (x panel) (+ (* panel width) 5 (* scale (- x x0))))
                (py (y) (+ top (* scale (- y y0))))
                (light (depth) (+ 0.55 (* 0.45 (/ (- depth d0) (max 1e-6 (- d1 d0)))))))

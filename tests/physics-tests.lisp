@@ -164,6 +164,18 @@
                  "~S: ~A:~A is not physics.org:~A" name file line org-line))))))
 ;; UIQ8J5-page-line-matches-tangled-line ends here
 
+;; [[file:../physics.org::#UIQ8J5][UIQ8J5-sections-at-the-page-edges]]
+(define-claim "UIQ8J5" sections-at-the-page-edges
+    "page-sections finds a section headed on the page's first line and one ending on its last."
+  (let ((sections (luv-physics::page-sections
+                   (coerce '("* First" ":PROPERTIES:" ":CUSTOM_ID: AAAAA1" ":END:" "Its text."
+                             "** Second" ":PROPERTIES:" ":CUSTOM_ID: BBBBB2" ":END:")
+                           'vector))))
+    (check (equal '(1 . 5) (gethash "AAAAA1" sections)) "the first section: ~S" (gethash "AAAAA1" sections))
+    (check (equal '(6 . 9) (gethash "BBBBB2" sections)) "the second section: ~S" (gethash "BBBBB2" sections))
+    (check (= 2 (hash-table-count sections)) "~D sections" (hash-table-count sections))))
+;; UIQ8J5-sections-at-the-page-edges ends here
+
 ;; [[file:../physics.org::#UIQ8J5][UIQ8J5-unescape-removes-one-comma]]
 (define-claim "UIQ8J5" unescape-removes-one-comma
     "UNESCAPE-ORG-LINE drops one comma before *, #+ or more commas, keeping indentation."
@@ -1583,7 +1595,16 @@ function of a column name that reads row K's float in that column. #T3STK1"
           do (check (eq expected (handler-case (progn (luv-physics::register-kernel-family name class set) :registered)
                                    (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
                     "~S ~S was not refused naming ~S" name set expected))
-    (check (equal before luv-physics::*kernel-families*) "the registry changed")))
+    (check (equal before luv-physics::*kernel-families*) "the registry changed")
+    (unwind-protect
+         (progn
+           (check (eq :probe (luv-physics::register-kernel-family :probe class)))
+           (check (equal (append before (list (list :probe class))) luv-physics::*kernel-families*)
+                  "after :probe the registry is ~S" luv-physics::*kernel-families*)
+           (check (eq :probe (luv-physics::register-kernel-family :probe class :x86-64)))
+           (check (equal (append before (list (list :probe class :x86-64))) luv-physics::*kernel-families*)
+                  "after :probe again the registry is ~S" luv-physics::*kernel-families*))
+      (setf luv-physics::*kernel-families* before))))
 ;; R9M4PV-registry-refuses-bad-names ends here
 
 ;; [[file:../physics.org::#M4K3WD][M4K3WD-non-world-named]]
@@ -2326,6 +2347,35 @@ use before it. #QKS4GZ"
            "no row moved")
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; G4R1D5-sorted-rows-keep-handles ends here
+
+;; [[file:../physics.org::#G4R1D5][G4R1D5-sort-past-one-in-sixteen]]
+(define-claim "G4R1D5" sort-past-one-in-sixteen
+    "176 rows with 11 breaks of the grid's order stay as added; with 12 they are sorted."
+  (flet ((sorted-after-grid-phase (runs)
+           (let* ((n 176)
+                  (w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
+                  ;; the cell of a world of such balls: the grid's cell grows with the widest ball
+                  (cell (let ((one (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil)))
+                          (add-physics-body one 0.0 1.0 1.0 :radius 0.1)
+                          (luv-physics::grid-cell-size one)))
+                  ;; the rows of run c are those from (floor (* c n) runs); the runs lie along x last first
+                  (order (loop for c from (1- runs) downto 0
+                               append (loop for row from (floor (* c n) runs) below (floor (* (1+ c) n) runs)
+                                            collect row)))
+                  (grid (luv-physics::physics-world-awake-grid w)))
+             (dotimes (row n)
+               (add-physics-body w (* cell (+ 0.5 (position row order))) 1.0 1.0 :radius 0.1))
+             (luv-physics::reset-phase w)
+             (luv-physics::wake-phase w)
+             (luv-physics::grid-phase w)
+             (check (luv-physics::hash-grid-dense grid) "the line was gridded by hash")
+             (let ((items (subseq (luv-physics::hash-grid-items grid) 0 n)))
+               (cond ((every #'= items (loop for e below n collect e)) :sorted)
+                     ((every #'= items order) :as-added)
+                     (t items))))))
+    (check (eq :as-added (sorted-after-grid-phase 12)) "11 breaks: ~S" (sorted-after-grid-phase 12))
+    (check (eq :sorted (sorted-after-grid-phase 13)) "12 breaks: ~S" (sorted-after-grid-phase 13))))
+;; G4R1D5-sort-past-one-in-sixteen ends here
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-identities-cover-every-row]]
 (define-claim "G4R1D5" identities-cover-every-row
@@ -4728,13 +4778,17 @@ use before it. #QKS4GZ"
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-crowd-marks-both-sides]]
 (define-claim "IDVK7G" crowd-marks-both-sides
-    "mark-held-rows: nothing without a crowded row; with one, both balls of the deep pair raised to the cap."
+    "mark-held-rows: nothing without a crowded row; with one, both balls of the deep pair raised to the cap, a shallow pair not."
   (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
          (a (add-physics-body w 1.0 1.0 1.0 :radius 0.25))
          (b (add-physics-body w 1.4 1.0 1.0 :radius 0.25))
          (c (add-physics-body w 5.0 1.0 1.0 :radius 0.25))
+         (d (add-physics-body w 8.0 1.0 1.0 :radius 0.25))
+         (e (add-physics-body w 8.51 1.0 1.0 :radius 0.25))
          (cap luv-physics::+overlaps-per-body+))
     (step-physics-world w)
+    (check (= 2 (physics-world-last-step-contact-count w)) "~D contacts, not the deep and the shallow pair's"
+           (physics-world-last-step-contact-count w))
     (let ((overlaps (luv-physics::pair-list-overlaps (luv-physics::physics-world-pair-list w))))
       (flet ((count-of (h) (aref overlaps (nth-value 1 (luv-physics::resolve-handle w h)))))
         (fill overlaps 0)
@@ -4742,8 +4796,8 @@ use before it. #QKS4GZ"
         (check (equal '(0 0 0) (mapcar #'count-of (list a b c))))
         (setf (aref overlaps (nth-value 1 (luv-physics::resolve-handle w c))) cap)
         (check (eq t (luv-physics::mark-held-rows w)))
-        (check (equal (list cap cap cap) (mapcar #'count-of (list a b c)))
-               "counts ~S, the cap ~D" (mapcar #'count-of (list a b c)) cap)))))
+        (check (equal (list cap cap cap 0 0) (mapcar #'count-of (list a b c d e)))
+               "counts ~S, the cap ~D" (mapcar #'count-of (list a b c d e)) cap)))))
 ;; IDVK7G-crowd-marks-both-sides ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-step-statistics]]
@@ -5817,6 +5871,42 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (< (abs (- (luv-physics::physics-player-x p) 31.7d0)) 1d-6)
              "the walker left the resident world: x ~,3F" (luv-physics::physics-player-x p))))))
 ;; H7P4CX-walker-follows-the-rule ends here
+
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-meets-only-its-path]]
+(define-claim "H7P4CX" walker-meets-only-its-path
+    "Walls stop the walker on all four sides; a pit one cell wide takes it in; slabs beside its column do not cut its jump short."
+  (flet ((jump-top (terrain)
+           (let ((p (luv-physics::make-physics-player 10.5 0 10.5)) (top 0d0))
+             (dotimes (i 120)
+               (luv-physics::step-physics-player p terrain :jump (<= 10 i 14))
+               (setf top (max top (luv-physics::physics-player-y p))))
+             top)))
+    (let ((pen (make-floor-terrain)))
+      (luv-physics::fill-terrain pen 7 0 7 14 2 8 t)
+      (luv-physics::fill-terrain pen 7 0 13 14 2 14 t)
+      (luv-physics::fill-terrain pen 7 0 7 8 2 14 t)
+      (luv-physics::fill-terrain pen 13 0 7 14 2 14 t)
+      (loop for (move-x move-z reader want) in '((1 0 luv-physics::physics-player-x 12.7d0)
+                                                 (-1 0 luv-physics::physics-player-x 8.3d0)
+                                                 (0 1 luv-physics::physics-player-z 12.7d0)
+                                                 (0 -1 luv-physics::physics-player-z 8.3d0))
+            do (let ((p (luv-physics::make-physics-player 10.5 0 10.5)))
+                 (dotimes (i 240) (luv-physics::step-physics-player p pen :move-x move-x :move-z move-z))
+                 (check (< (abs (- (funcall reader p) want)) 1d-6) "walking (~D, ~D) it stopped at ~,6F, not ~,1F"
+                        move-x move-z (funcall reader p) want))))
+    (let ((pit (make-floor-terrain)) (p (luv-physics::make-physics-player 10.5 0 10.5)))
+      (luv-physics::fill-terrain pit 10 -1 10 11 0 11 nil)
+      (luv-physics::fill-terrain pit 10 -2 10 11 -1 11 t)
+      (dotimes (i 120) (luv-physics::step-physics-player p pit))
+      (check (and (= -1 (luv-physics::physics-player-y p)) (luv-physics::physics-player-grounded p))
+             "over the pit the soles stand at ~,4F" (luv-physics::physics-player-y p)))
+    (let ((open (jump-top (make-floor-terrain))) (beside (make-floor-terrain)))
+      (luv-physics::fill-terrain beside 3 3 10 6 4 11 t)
+      (luv-physics::fill-terrain beside 10 3 3 11 4 6 t)
+      (check (< (abs (- open 1.274d0)) 0.02) "on open ground the jump rose ~,3F cells" open)
+      (check (= open (jump-top beside)) "beside the slabs the jump rose ~,4F cells, on open ground ~,4F"
+             (jump-top beside) open))))
+;; H7P4CX-walker-meets-only-its-path ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-frame-rounding-allowance]]
 (define-claim "H7P4CX" frame-rounding-allowance
@@ -7041,9 +7131,9 @@ counted. #RH7T05"
 
 ;; [[file:../physics.org::#UFK5EA][UFK5EA-disc-edges-bound-the-drawing]]
 (define-claim "UFK5EA" disc-edges-bound-the-drawing
-    "A lone ball's disc touches the left margin and the top, at the scale its extent gives."
+    "A lone ball's disc, away from the origin, touches the left margin and the top, at the scale its extent gives."
   (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
-         (recording (progn (luv-physics::add-physics-body w 0.0 0.0 0.0 :radius 0.5)
+         (recording (progn (luv-physics::add-physics-body w 3.0 2.0 1.0 :radius 0.5)
                            (luv-physics::start-physics-recording w)))
          (path (repository-file "report/picture-disc-check.svg")))
     (step-physics-world w)
@@ -7057,7 +7147,7 @@ counted. #RH7T05"
         (flet ((attribute (name)
                  (let ((s (+ (search (format nil " ~A=\"" name) text :start2 at) (length name) 3)))
                    (read-from-string (subseq text s (position #\" text :start s))))))
-          (let ((cx (attribute "cx")) (cy (attribute "cy")) (r (attribute "r")) (scale (/ 290 1.5d0)))
+          (let ((cx (attribute "cx")) (cy (attribute "cy")) (r (attribute "r")) (scale 290))
             (check (< (abs (- r (* 0.5 scale))) 0.06) "radius ~A pixels" r)
             (check (< (abs (- (- cx r) 5)) 0.11) "the disc's left edge is at ~,2F" (- cx r))
             (check (< (abs (- (- cy r) 22)) 0.11) "the disc's top is at ~,2F" (- cy r))))))))
@@ -7065,12 +7155,12 @@ counted. #RH7T05"
 
 ;; [[file:../physics.org::#UFK5EA][UFK5EA-discs-lit-by-depth]]
 (define-claim "UFK5EA" discs-lit-by-depth
-    "The deeper of two discs is drawn at 0.55 of its colour, the nearer at full colour."
+    "The deeper of two discs away from the origin is drawn at 0.55 of its colour, the nearer at full colour."
   (multiple-value-bind (across up toward) (luv-physics::view-basis 35 40)
     (declare (ignore across up))
     (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
-           (recording (progn (luv-physics::add-physics-body w 0.0 0.0 0.0 :radius 0.25)
-                             (apply #'luv-physics::add-physics-body w (append (mapcar (lambda (c) (float c 1.0)) toward)
+           (recording (progn (luv-physics::add-physics-body w 4.0 1.0 2.0 :radius 0.25)
+                             (apply #'luv-physics::add-physics-body w (append (mapcar (lambda (c o) (float (+ c o) 1.0)) toward '(4 1 2))
                                                                               (list :radius 0.25)))
                              (luv-physics::start-physics-recording w)))
            (path (repository-file "report/picture-light-check.svg")))
@@ -8069,7 +8159,12 @@ within reach of something. #S9WEEP"
               (map-physics-bodies-in-sphere (lambda (h) (push h want)) w x y z 1.0)
               (unless (equal (sort found #'<) (sort want #'<)) (incf wrong)))))))
     (check (zerop wrong) "~D queries differ from the API's" wrong)
-    (check (> hits 50) "only ~D hits" hits))
+    (check (> hits 50) "only ~D hits" hits)
+    (let ((measured (luv-physics::measure-queries w)))
+      (dolist (kind '(:rays :spheres :overlaps))
+        (destructuring-bind (wall cpu bytes) (getf measured kind)
+          (declare (ignore bytes))
+          (check (and (plusp wall) (plusp cpu)) "~(~A~): ~A per second of wall, ~A of processor time" kind wall cpu)))))
   (let ((seen (make-array 30 :element-type 'bit :initial-element 0)))
     (multiple-value-bind (wall cpu bytes)
         (luv-physics::time-queries (make-array 21 :element-type 'single-float) 3
