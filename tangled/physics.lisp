@@ -4231,11 +4231,10 @@ alive, not two. #SSMPYW"
                                   `(block-ref data base ,(constraint-offset column))))
                   (constraint-base (k) `(+ +constraint-origin+ (* (ash ,k -3) stride) (logand ,k 7)))
                   (side-floats () '(constraint-columns-side ,b))
-                  ;; a side block holds at most 24 floats: bounded so, the base needs no
-                  ;; overflow test and no generic arithmetic
+                  ;; the side block's length is a constraint-block-size, as the main's: the
+                  ;; base needs no overflow test and no generic arithmetic
                   (side-base (k) `(+ +constraint-origin+
-                                     (* (ash (the index ,k) -3) (the (integer 0 ,+constraint-side-block+)
-                                                                     (constraint-columns-side-block ,',b)))
+                                     (* (ash (the index ,k) -3) (constraint-columns-side-block ,',b))
                                      (logand ,k 7))))
          ,@body))))
 

@@ -2373,8 +2373,9 @@ use before it. #QKS4GZ"
                (cond ((every #'= items (loop for e below n collect e)) :sorted)
                      ((every #'= items order) :as-added)
                      (t items))))))
-    (check (eq :as-added (sorted-after-grid-phase 12)) "11 breaks: ~S" (sorted-after-grid-phase 12))
-    (check (eq :sorted (sorted-after-grid-phase 13)) "12 breaks: ~S" (sorted-after-grid-phase 13))))
+    (let ((eleven (sorted-after-grid-phase 12)) (twelve (sorted-after-grid-phase 13)))
+      (check (eq :as-added eleven) "11 breaks: ~S" eleven)
+      (check (eq :sorted twelve) "12 breaks: ~S" twelve))))
 ;; G4R1D5-sort-past-one-in-sixteen ends here
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-identities-cover-every-row]]
@@ -5904,8 +5905,8 @@ in the order of *physics-scene-features*. #K5DF9S"
       (luv-physics::fill-terrain beside 3 3 10 6 4 11 t)
       (luv-physics::fill-terrain beside 10 3 3 11 4 6 t)
       (check (< (abs (- open 1.274d0)) 0.02) "on open ground the jump rose ~,3F cells" open)
-      (check (= open (jump-top beside)) "beside the slabs the jump rose ~,4F cells, on open ground ~,4F"
-             (jump-top beside) open))))
+      (let ((top (jump-top beside)))
+        (check (= open top) "beside the slabs the jump rose ~,4F cells, on open ground ~,4F" top open)))))
 ;; H7P4CX-walker-meets-only-its-path ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-frame-rounding-allowance]]
