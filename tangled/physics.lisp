@@ -7578,10 +7578,10 @@ load before and after. #B3NCH5"
             balls from to rounds (cpu-model-name) before (load-average))
     (print-against-table (against-summary (reverse samples)) to stream)))
 
-(defun print-against-table (summary steps stream)
+(defun print-against-table (summary steps stream &key (ranges t))
   "Print SUMMARY (against-summary) as the rows of an Org table: per family each tree's median
-(lowest-highest), then every tree after the first over the first; and the state hashes after
-STEPS steps. #B3NCH5"
+with its (lowest-highest) when RANGES, then every tree after the first over the first; and the
+state hashes after STEPS steps. #B3NCH5"
   (let ((trees (mapcar #'first (rest (first summary)))))
     (format stream "~&| family | ~{~A~^ | ~} | ~{~A / ~A~^ | ~} |~%" trees
             (loop for tree in (rest trees) append (list tree (first trees))))
@@ -7590,11 +7590,80 @@ STEPS steps. #B3NCH5"
           for base = (second (first rows))
           do (format stream "~&| ~(~A~) | ~{~A~^ | ~} | ~{~A~^ | ~} |~%" family
                      (loop for (nil median low high) in rows
-                           collect (format nil "~,3F (~,3F-~,3F)" median low high))
+                           collect (if ranges
+                                       (format nil "~,3F (~,3F-~,3F)" median low high)
+                                       (format nil "~,3F" median)))
                      (loop for (nil median) in (rest rows) collect (format nil "~,3F" (/ median base)))))
     (format stream "~&state hash after ~D steps:~{ ~A ~D~^,~}~%" steps
             (loop for (tree nil nil nil hash) in (rest (first summary)) append (list tree hash)))))
 ;; What a step costs:6 ends here
+
+;; [[file:../physics.org::#B3NCH5][What a step costs:8]]
+(defun cachegrind-instructions (text)
+  "The instructions a program ran, read from TEXT, what valgrind's cachegrind wrote to its
+standard error: the number after 'I refs:', its commas dropped; NIL when TEXT has no such line.
+#B3NCH5"
+  (loop for line in (uiop:split-string text :separator '(#\Newline))
+        for words = (remove "" (uiop:split-string line) :test #'string=)
+        for at = (position "refs:" words :test #'string=)
+        when (and at (plusp at) (string= (nth (1- at) words) "I") (nth (1+ at) words))
+          do (return (values (parse-integer (remove #\, (nth (1+ at) words)) :junk-allowed t)))))
+
+(defun count-sample (root family balls steps)
+  "Run tools/against-one.lisp under valgrind's cachegrind on the engine in the directory ROOT,
+the basin of BALLS balls in FAMILY stepped STEPS times, no collection starting in it. Return
+the instructions the whole process ran and the state hash it printed. #B3NCH5"
+  (let ((script (merge-pathnames "tools/against-one.lisp" (asdf:system-source-directory "luv-physics"))))
+    (multiple-value-bind (out err code)
+        (uiop:run-program (list "env" (format nil "AGAINST_NURSERY_BYTES=~D" (* 3 1024 1024 1024))
+                                "valgrind" "--tool=cachegrind" "--cache-sim=no" "--cachegrind-out-file=/dev/null"
+                                "sbcl" "--dynamic-space-size" "8Gb" "--script" (namestring script)
+                                (namestring root) (string-downcase family) (princ-to-string balls)
+                                (princ-to-string (1- steps)) (princ-to-string steps))
+                          :output :string :error-output :string :ignore-error-status t)
+      (let ((count (cachegrind-instructions err))
+            (hash (loop for line in (uiop:split-string out :separator '(#\Newline))
+                        for words = (remove "" (uiop:split-string line) :test #'string=)
+                        when (and (= 4 (length words)) (string= (first words) "against"))
+                          do (return (parse-integer (fourth words))))))
+        (unless (and (eql code 0) count hash)
+          (error "count-sample: no count from ~A, ~(~A~), ~D steps (exit ~A):~%~A" (namestring root) family
+                 steps code (subseq err (max 0 (- (length err) 2000)))))
+        (values count hash)))))
+
+(defun run-count-against (&key (stream *standard-output*)
+                                (revs (let ((r (sb-ext:posix-getenv "REVS")))
+                                        (if (and r (plusp (length r)))
+                                            (remove "" (uiop:split-string r) :test #'string=)
+                                            '("ce415a5"))))
+                                (balls 3000) (from 120) (to 300)
+                                (families (available-kernel-families))
+                                (directory (merge-pathnames "report/against/"
+                                                            (asdf:system-source-directory "luv-physics"))))
+  "Print, as an Org table, the millions of instructions a step of the basin runs in this page's
+engine and in the engines of the commits REVS, per family: a process's count stepping TO times
+less one's stepping FROM times (count-sample, the two run side by side), over TO - FROM; with
+each engine's state hash. #B3NCH5"
+  (let ((trees (append (mapcar (lambda (rev) (cons rev (against-tree rev directory))) revs)
+                       (list (cons "this page" (asdf:system-source-directory "luv-physics")))))
+        (before (load-average)))
+    ;; every engine compiled first, outside valgrind
+    (dolist (tree trees) (against-sample (cdr tree) families 0 0 0))
+    (let ((summary
+            (loop for family in families
+                  collect (cons family
+                                (loop for (name . root) in trees
+                                      collect (let ((early (sb-thread:make-thread
+                                                            (lambda () (count-sample root family balls from)))))
+                                                (multiple-value-bind (late hash) (count-sample root family balls to)
+                                                  (let ((per-step (/ (- late (sb-thread:join-thread early))
+                                                                     (* 1d6 (- to from)))))
+                                                    (list name per-step per-step per-step hash)))))))))
+      (format stream "~&#+caption: the ~D-ball basin, millions of instructions a step over steps ~D-~D ~
+                      (cachegrind: a process of ~D steps less one of ~D); ~A; load ~A before, ~A after~%"
+              balls from to to from (cpu-model-name) before (load-average))
+      (print-against-table summary to stream :ranges nil))))
+;; What a step costs:8 ends here
 
 ;; [[file:../physics.org::#FBNCH9][What leaving features out saves:1]]
 (defparameter +feature-scenes+

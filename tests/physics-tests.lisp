@@ -6096,6 +6096,23 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (string= (fifth lines) "state hash after 300 steps: old 7, new 9") "~S" (fifth lines)))))
 ;; B3NCH5-against-measures-this-tree ends here
 
+;; [[file:../physics.org::#B3NCH5][B3NCH5-count-read-as-written]]
+(define-claim "B3NCH5" count-read-as-written
+    "cachegrind's 'I refs:' line is read without its commas; a table of counts prints one figure per engine and the ratios."
+  (check (eql 11089452609 (luv-physics::cachegrind-instructions
+                           (format nil "==11854== Cachegrind, a cache and branch-prediction profiler~%==11854== ~%~
+                                        hash 7~%==11854== I   refs:      11,089,452,609~%"))))
+  (check (eql 9015 (luv-physics::cachegrind-instructions (format nil "==1== I refs: 9,015~%==1== D refs: 12~%"))))
+  (check (null (luv-physics::cachegrind-instructions (format nil "==1== D refs: 12~%fatal error~%"))))
+  (let ((lines (uiop:split-string
+                (with-output-to-string (s)
+                  (luv-physics::print-against-table '((:sse ("old" 27.6d0 27.6d0 27.6d0 7) ("new" 30.636d0 30.636d0 30.636d0 9)))
+                                                    300 s :ranges nil))
+                :separator '(#\Newline))))
+    (check (string= (third lines) "| sse | 27.600 | 30.636 | 1.110 |") "~S" (third lines))
+    (check (string= (fourth lines) "state hash after 300 steps: old 7, new 9") "~S" (fourth lines))))
+;; B3NCH5-count-read-as-written ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-steps-cons-nothing]]
 (define-claim "B3NCH5" steps-cons-nothing
     "Thousands of steps of an awake pile, and of the fountain with drops added, cons 0 bytes."

@@ -10,6 +10,13 @@
 ;;;; basin benchmark has: tools/boot.lisp, make-basin-world, step-physics-world, median and
 ;;;; physics-world-state-hash, so that one script measures old and new trees alike.
 
+;;;; Under valgrind (make count-against), a collection's signals stop the run: when
+;;;; AGAINST_NURSERY_BYTES is set, no collection starts before that many bytes are consed.
+
+(let ((bytes (sb-ext:posix-getenv "AGAINST_NURSERY_BYTES")))
+  (when (and bytes (plusp (length bytes)))
+    (setf (sb-ext:bytes-consed-between-gcs) (parse-integer bytes))))
+
 (defvar *against-arguments* (rest sb-ext:*posix-argv*))
 
 (unless (= 5 (length *against-arguments*))
