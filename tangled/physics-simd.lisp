@@ -20,14 +20,14 @@
               (,t2 (sb-simd-avx:f32.8-unpacklo ,r2 ,r3)) (,t3 (sb-simd-avx:f32.8-unpackhi ,r2 ,r3))
               (,t4 (sb-simd-avx:f32.8-unpacklo ,r4 ,r5)) (,t5 (sb-simd-avx:f32.8-unpackhi ,r4 ,r5))
               (,t6 (sb-simd-avx:f32.8-unpacklo ,r6 ,r7)) (,t7 (sb-simd-avx:f32.8-unpackhi ,r6 ,r7))
-              (,u0 (sb-simd-avx:f32.8-shuffle ,t0 ,t2 #x44)) (,u1 (sb-simd-avx:f32.8-shuffle ,t0 ,t2 #xEE))
-              (,u2 (sb-simd-avx:f32.8-shuffle ,t1 ,t3 #x44)) (,u3 (sb-simd-avx:f32.8-shuffle ,t1 ,t3 #xEE))
-              (,u4 (sb-simd-avx:f32.8-shuffle ,t4 ,t6 #x44)) (,u5 (sb-simd-avx:f32.8-shuffle ,t4 ,t6 #xEE))
-              (,u6 (sb-simd-avx:f32.8-shuffle ,t5 ,t7 #x44)) (,u7 (sb-simd-avx:f32.8-shuffle ,t5 ,t7 #xEE))
-              (,c0 (sb-simd-avx:f32.8-permute128 ,u0 ,u4 #x20)) (,c1 (sb-simd-avx:f32.8-permute128 ,u1 ,u5 #x20))
-              (,c2 (sb-simd-avx:f32.8-permute128 ,u2 ,u6 #x20)) (,c3 (sb-simd-avx:f32.8-permute128 ,u3 ,u7 #x20))
-              (,c4 (sb-simd-avx:f32.8-permute128 ,u0 ,u4 #x31)) (,c5 (sb-simd-avx:f32.8-permute128 ,u1 ,u5 #x31))
-              (,c6 (sb-simd-avx:f32.8-permute128 ,u2 ,u6 #x31)) (,c7 (sb-simd-avx:f32.8-permute128 ,u3 ,u7 #x31)))))))))
+              (,u0 (sb-simd-avx::%f32.8-shuffle ,t0 ,t2 #x44)) (,u1 (sb-simd-avx::%f32.8-shuffle ,t0 ,t2 #xEE))
+              (,u2 (sb-simd-avx::%f32.8-shuffle ,t1 ,t3 #x44)) (,u3 (sb-simd-avx::%f32.8-shuffle ,t1 ,t3 #xEE))
+              (,u4 (sb-simd-avx::%f32.8-shuffle ,t4 ,t6 #x44)) (,u5 (sb-simd-avx::%f32.8-shuffle ,t4 ,t6 #xEE))
+              (,u6 (sb-simd-avx::%f32.8-shuffle ,t5 ,t7 #x44)) (,u7 (sb-simd-avx::%f32.8-shuffle ,t5 ,t7 #xEE))
+              (,c0 (sb-simd-avx::%f32.8-permute128 ,u0 ,u4 #x20)) (,c1 (sb-simd-avx::%f32.8-permute128 ,u1 ,u5 #x20))
+              (,c2 (sb-simd-avx::%f32.8-permute128 ,u2 ,u6 #x20)) (,c3 (sb-simd-avx::%f32.8-permute128 ,u3 ,u7 #x20))
+              (,c4 (sb-simd-avx::%f32.8-permute128 ,u0 ,u4 #x31)) (,c5 (sb-simd-avx::%f32.8-permute128 ,u1 ,u5 #x31))
+              (,c6 (sb-simd-avx::%f32.8-permute128 ,u2 ,u6 #x31)) (,c7 (sb-simd-avx::%f32.8-permute128 ,u3 ,u7 #x31)))))))))
 
 (defmacro with-rows-8 ((v index k &rest columns) &body body)
   "Run BODY with COLUMNS bound to the eight solver rows of V (velocities or deltas, both eight
@@ -54,10 +54,10 @@ column form is evaluated once: the transpose reads each of its inputs twice. #R0
   (destructuring-bind (r0 r1 r2 r3) rows
     (destructuring-bind (c0 c1 c2 c3) columns
       (let ((t0 (gensym)) (t1 (gensym)) (t2 (gensym)) (t3 (gensym)))
-        `((,t0 (sb-simd-sse:f32.4-shuffle ,r0 ,r1 #x44)) (,t2 (sb-simd-sse:f32.4-shuffle ,r0 ,r1 #xEE))
-          (,t1 (sb-simd-sse:f32.4-shuffle ,r2 ,r3 #x44)) (,t3 (sb-simd-sse:f32.4-shuffle ,r2 ,r3 #xEE))
-          (,c0 (sb-simd-sse:f32.4-shuffle ,t0 ,t1 #x88)) (,c1 (sb-simd-sse:f32.4-shuffle ,t0 ,t1 #xDD))
-          (,c2 (sb-simd-sse:f32.4-shuffle ,t2 ,t3 #x88)) (,c3 (sb-simd-sse:f32.4-shuffle ,t2 ,t3 #xDD)))))))
+        `((,t0 (sb-simd-sse::%f32.4-shuffle ,r0 ,r1 #x44)) (,t2 (sb-simd-sse::%f32.4-shuffle ,r0 ,r1 #xEE))
+          (,t1 (sb-simd-sse::%f32.4-shuffle ,r2 ,r3 #x44)) (,t3 (sb-simd-sse::%f32.4-shuffle ,r2 ,r3 #xEE))
+          (,c0 (sb-simd-sse::%f32.4-shuffle ,t0 ,t1 #x88)) (,c1 (sb-simd-sse::%f32.4-shuffle ,t0 ,t1 #xDD))
+          (,c2 (sb-simd-sse::%f32.4-shuffle ,t2 ,t3 #x88)) (,c3 (sb-simd-sse::%f32.4-shuffle ,t2 ,t3 #xDD)))))))
 
 (defmacro with-rows-4 ((v index k &rest columns) &body body)
   "Run BODY with COLUMNS (eight names) bound to the four solver rows of V named by
