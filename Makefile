@@ -15,7 +15,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers bench-against count-against report heaps mutate mutate-splice html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers bench-against count-against count-features report heaps mutate mutate-splice html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -35,6 +35,7 @@ help:
 	@echo "make bench-against  this engine against the commits REVS='ce415a5 d9c8f94' in ROUNDS=5 rounds of"
 	@echo "                    alternating processes; table into $(ORG)"
 	@echo "make count-against  the same engines' instructions a step, counted by valgrind; table into $(ORG)"
+	@echo "make count-features the feature table's scenes as instructions a step, by valgrind; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
 	@echo "make heaps          heaps of 1000 balls to the body budget spawned at one point; table into $(ORG)"
@@ -113,6 +114,15 @@ count-against: setup tangle
 	@{ REVS="$(REVS)" BENCH=run-count-against $(LISP) --load tools/bench.lisp || touch report/count-against-failed; } | tee report/count-against.org
 	@test ! -e report/count-against-failed
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp count-against report/count-against.org
+
+# The feature table's scenes, general and specialised, as instructions a step (#FBNCH9).
+count-features: setup tangle
+	@mkdir -p report
+	@command -v valgrind >/dev/null 2>&1 || { echo "count-features: valgrind is not installed (make setup as root installs it)" >&2; exit 1; }
+	@rm -f report/count-features-failed
+	@{ BENCH=run-count-features $(LISP) --load tools/bench.lisp || touch report/count-features-failed; } | tee report/count-features.org
+	@test ! -e report/count-features-failed
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp count-features report/count-features.org
 
 # The diagrams report/wp-*.svg are kept in git: the page links to them.
 report: setup tangle

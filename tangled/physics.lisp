@@ -7609,27 +7609,34 @@ standard error: the number after 'I refs:', its commas dropped; NIL when TEXT ha
         when (and at (plusp at) (string= (nth (1- at) words) "I") (nth (1+ at) words))
           do (return (values (parse-integer (remove #\, (nth (1+ at) words)) :junk-allowed t)))))
 
-(defun count-sample (root family balls steps)
-  "Run tools/against-one.lisp under valgrind's cachegrind on the engine in the directory ROOT,
-the basin of BALLS balls in FAMILY stepped STEPS times, no collection starting in it. Return
-the instructions the whole process ran and the state hash it printed. #B3NCH5"
-  (let ((script (merge-pathnames "tools/against-one.lisp" (asdf:system-source-directory "luv-physics"))))
+(defun count-process (script &rest arguments)
+  "Run the tool SCRIPT of this tree in a fresh SBCL under valgrind's cachegrind with ARGUMENTS,
+no collection starting in it (a collection's signals stop a program under valgrind). Return the
+instructions the whole process ran and the lines it printed whose first word is SCRIPT's word
+(the first word of its report line: against, feature), each as a list of words. #B3NCH5"
+  (let ((path (merge-pathnames (format nil "tools/~A-one.lisp" script) (asdf:system-source-directory "luv-physics"))))
     (multiple-value-bind (out err code)
-        (uiop:run-program (list "env" (format nil "AGAINST_NURSERY_BYTES=~D" (* 3 1024 1024 1024))
-                                "valgrind" "--tool=cachegrind" "--cache-sim=no" "--cachegrind-out-file=/dev/null"
-                                "sbcl" "--dynamic-space-size" "8Gb" "--script" (namestring script)
-                                (namestring root) (string-downcase family) (princ-to-string balls)
-                                (princ-to-string (1- steps)) (princ-to-string steps))
+        (uiop:run-program (list* "env" (format nil "AGAINST_NURSERY_BYTES=~D" (* 3 1024 1024 1024))
+                                 "valgrind" "--tool=cachegrind" "--cache-sim=no" "--cachegrind-out-file=/dev/null"
+                                 "sbcl" "--dynamic-space-size" "8Gb" "--script" (namestring path) arguments)
                           :output :string :error-output :string :ignore-error-status t)
       (let ((count (cachegrind-instructions err))
-            (hash (loop for line in (uiop:split-string out :separator '(#\Newline))
-                        for words = (remove "" (uiop:split-string line) :test #'string=)
-                        when (and (= 4 (length words)) (string= (first words) "against"))
-                          do (return (parse-integer (fourth words))))))
-        (unless (and (eql code 0) count hash)
-          (error "count-sample: no count from ~A, ~(~A~), ~D steps (exit ~A):~%~A" (namestring root) family
-                 steps code (subseq err (max 0 (- (length err) 2000)))))
-        (values count hash)))))
+            (lines (loop for line in (uiop:split-string out :separator '(#\Newline))
+                         for words = (remove "" (uiop:split-string line) :test #'string=)
+                         when (and words (string= (first words) script)) collect words)))
+        (unless (and (eql code 0) count lines)
+          (error "count-process: no count from ~A ~{~A~^ ~} (exit ~A):~%~A" script arguments code
+                 (subseq err (max 0 (- (length err) 2000)))))
+        (values count lines)))))
+
+(defun count-sample (root family balls steps)
+  "The instructions of a process of make bench-against on the engine in the directory ROOT, the
+basin of BALLS balls in FAMILY stepped STEPS times (count-process), and the state hash it
+printed. #B3NCH5"
+  (multiple-value-bind (count lines)
+      (count-process "against" (namestring root) (string-downcase family) (princ-to-string balls)
+                     (princ-to-string (1- steps)) (princ-to-string steps))
+    (values count (parse-integer (fourth (first lines))))))
 
 (defun run-count-against (&key (stream *standard-output*)
                                 (revs (let ((r (sb-ext:posix-getenv "REVS")))
@@ -7749,6 +7756,42 @@ built for its features, in one run, with the machine's load. #FBNCH9"
         (finish-output stream)))
     (format stream "~&(after the run: load ~A)~%" (load-average))))
 ;; What leaving features out saves:1 ends here
+
+;; [[file:../physics.org::#FBNCH9][What leaving features out saves:2]]
+(defun run-count-features (&key (stream *standard-output*))
+  "Print, as an Org table, the millions of instructions a step of each scene of +feature-scenes+
+runs under the general step and under the step built for its features: a process of
+tools/feature-one.lisp stepping the scene TO times less one stepping it FROM times, over TO -
+FROM, counted by cachegrind (count-process), two processes at a time. #FBNCH9"
+  (let ((root (namestring (asdf:system-source-directory "luv-physics")))
+        (before (load-average)))
+    ;; the engine compiled first, outside valgrind
+    (against-sample root '(:scalar) 0 0 0)
+    (format stream "~&#+caption: feature scenes, millions of instructions a step over each scene's measured ~
+                    steps (cachegrind: a process stepping to their end less one stepping to their start), ~
+                    ~(~A~) family; ~A; load ~A~%"
+            (car (last (available-kernel-families))) (cpu-model-name) before)
+    (format stream "~&| scene | general | specialised | ratio | same state |~%")
+    (format stream "~&|-------+---------+-------------+-------+------------|~%")
+    (dolist (scene +feature-scenes+)
+      (destructuring-bind (name what features from to) scene
+        (declare (ignore features))
+        (flet ((per-step (kind)
+                 ;; the count to FROM in a thread beside the count to TO
+                 (flet ((one (steps)
+                          (multiple-value-bind (count lines)
+                              (count-process "feature" root (string-downcase name) kind (princ-to-string steps))
+                            (values count (parse-integer (fourth (first lines)))))))
+                   (let ((early (sb-thread:make-thread (lambda () (one from)))))
+                     (multiple-value-bind (late hash) (one to)
+                       (values (/ (- late (sb-thread:join-thread early)) (* 1d6 (- to from))) hash))))))
+          (multiple-value-bind (general general-hash) (per-step "general")
+            (multiple-value-bind (special special-hash) (per-step "specialised")
+              (format stream "~&| ~A | ~,3F | ~,3F | ~,3F | ~:[no~;yes~] |~%"
+                      what general special (/ special general) (= general-hash special-hash))
+              (finish-output stream))))))
+    (format stream "~&(after the run: load ~A)~%" (load-average))))
+;; What leaving features out saves:2 ends here
 
 ;; [[file:../physics.org::#X7R3M5][Stiff and extreme cases:1]]
 (defun pinch-between-sleepers (&key (seconds 2))

@@ -6177,6 +6177,23 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (< bytes 1000) "steps without the script read as ~D bytes a step" bytes))))
 ;; B3NCH5-measure-steps-counts-consing ends here
 
+;; [[file:../physics.org::#FBNCH9][FBNCH9-feature-process-runs-its-scene]]
+(define-claim "FBNCH9" feature-process-runs-its-scene
+    "tools/feature-one.lisp reports the state hash this image reaches for the same scene, features and steps."
+  (let* ((root (asdf:system-source-directory "luv-physics"))
+         (text (uiop:run-program (list "sbcl" "--dynamic-space-size" "4Gb" "--script"
+                                       (namestring (merge-pathnames "tools/feature-one.lisp" root))
+                                       (namestring root) "dead-pile" "specialised" "5")
+                                 :output :string :error-output :string))
+         (words (remove "" (uiop:split-string (string-trim '(#\Newline) text)) :test #'string=))
+         (features (third (assoc :dead-pile luv-physics::+feature-scenes+))))
+    (multiple-value-bind (world before) (luv-physics::feature-scene :dead-pile :features features)
+      (dotimes (i 5) (when before (funcall before i)) (step-physics-world world))
+      (check (equal (subseq words 0 3) '("feature" "dead-pile" "specialised")) "printed ~S" text)
+      (check (= (parse-integer (fourth words)) (luv-physics::physics-world-state-hash world))
+             "the process's hash ~A, this image's ~D" (fourth words) (luv-physics::physics-world-state-hash world)))))
+;; FBNCH9-feature-process-runs-its-scene ends here
+
 ;; [[file:../physics.org::#FBNCH9][FBNCH9-same-answers]]
 (define-claim "FBNCH9" same-answers
     "Four scenes, every family: the specialised step's state hash equals the general step's."

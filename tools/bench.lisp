@@ -3,7 +3,8 @@
 ;;;;
 ;;;; BENCH in the environment names the benchmark function of the luv-physics package:
 ;;;; run-basin-benchmark (the default), run-scene-benchmark, run-sleeping-scale-benchmark,
-;;;; run-query-benchmark, run-feature-benchmark, run-against-benchmark or run-count-against.
+;;;; run-query-benchmark, run-feature-benchmark, run-against-benchmark, run-count-against or
+;;;; run-count-features.
 
 (load (merge-pathnames "boot.lisp" *load-truename*))
 
