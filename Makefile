@@ -105,24 +105,16 @@ bench-against: setup tangle
 	@REVS="$(REVS)" ROUNDS="$(ROUNDS)" BENCH=run-against-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-against.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-against report/bench-against.org
 
-# The same engines' instructions a step, counted by valgrind's cachegrind, which the machine's
-# load does not move (#B3NCH5).
-count-against: setup tangle
+# Instructions a step, counted by valgrind's cachegrind, which the machine's load does not move:
+# count-against, the engines of REVS against this one (#B3NCH5); count-features, the feature
+# table's scenes general and specialised (#FBNCH9).
+count-against count-features: count-%: setup tangle
 	@mkdir -p report
-	@command -v valgrind >/dev/null 2>&1 || { echo "count-against: valgrind is not installed (make setup as root installs it)" >&2; exit 1; }
-	@rm -f report/count-against-failed
-	@{ REVS="$(REVS)" BENCH=run-count-against $(LISP) --load tools/bench.lisp || touch report/count-against-failed; } | tee report/count-against.org
-	@test ! -e report/count-against-failed
-	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp count-against report/count-against.org
-
-# The feature table's scenes, general and specialised, as instructions a step (#FBNCH9).
-count-features: setup tangle
-	@mkdir -p report
-	@command -v valgrind >/dev/null 2>&1 || { echo "count-features: valgrind is not installed (make setup as root installs it)" >&2; exit 1; }
-	@rm -f report/count-features-failed
-	@{ BENCH=run-count-features $(LISP) --load tools/bench.lisp || touch report/count-features-failed; } | tee report/count-features.org
-	@test ! -e report/count-features-failed
-	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp count-features report/count-features.org
+	@command -v valgrind >/dev/null 2>&1 || { echo "count-$*: valgrind is not installed (make setup as root installs it)" >&2; exit 1; }
+	@rm -f report/count-$*-failed
+	@{ REVS="$(REVS)" BENCH=run-count-$* $(LISP) --load tools/bench.lisp || touch report/count-$*-failed; } | tee report/count-$*.org
+	@test ! -e report/count-$*-failed
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp count-$* report/count-$*.org
 
 # The diagrams report/wp-*.svg are kept in git: the page links to them.
 report: setup tangle

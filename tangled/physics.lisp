@@ -7610,10 +7610,10 @@ standard error: the number after 'I refs:', its commas dropped; NIL when TEXT ha
           do (return (values (parse-integer (remove #\, (nth (1+ at) words)) :junk-allowed t)))))
 
 (defun count-process (script &rest arguments)
-  "Run the tool SCRIPT of this tree in a fresh SBCL under valgrind's cachegrind with ARGUMENTS,
-no collection starting in it (a collection's signals stop a program under valgrind). Return the
-instructions the whole process ran and the lines it printed whose first word is SCRIPT's word
-(the first word of its report line: against, feature), each as a list of words. #B3NCH5"
+  "Run the tool tools/SCRIPT-one.lisp of this tree in a fresh SBCL under valgrind's cachegrind
+with ARGUMENTS, no collection starting in it (a collection's signals stop a program under
+valgrind). Return the instructions the whole process ran and the state hash ending the first
+line it printed that begins with SCRIPT (against, feature). #B3NCH5"
   (let ((path (merge-pathnames (format nil "tools/~A-one.lisp" script) (asdf:system-source-directory "luv-physics"))))
     (multiple-value-bind (out err code)
         (uiop:run-program (list* "env" (format nil "AGAINST_NURSERY_BYTES=~D" (* 3 1024 1024 1024))
@@ -7621,22 +7621,23 @@ instructions the whole process ran and the lines it printed whose first word is 
                                  "sbcl" "--dynamic-space-size" "8Gb" "--script" (namestring path) arguments)
                           :output :string :error-output :string :ignore-error-status t)
       (let ((count (cachegrind-instructions err))
-            (lines (loop for line in (uiop:split-string out :separator '(#\Newline))
+            (words (loop for line in (uiop:split-string out :separator '(#\Newline))
                          for words = (remove "" (uiop:split-string line) :test #'string=)
-                         when (and words (string= (first words) script)) collect words)))
-        (unless (and (eql code 0) count lines)
+                         when (and words (string= (first words) script)) return words)))
+        (unless (and (eql code 0) count words)
           (error "count-process: no count from ~A ~{~A~^ ~} (exit ~A):~%~A" script arguments code
                  (subseq err (max 0 (- (length err) 2000)))))
-        (values count lines)))))
+        (values count (parse-integer (car (last words))))))))
 
-(defun count-sample (root family balls steps)
-  "The instructions of a process of make bench-against on the engine in the directory ROOT, the
-basin of BALLS balls in FAMILY stepped STEPS times (count-process), and the state hash it
-printed. #B3NCH5"
-  (multiple-value-bind (count lines)
-      (count-process "against" (namestring root) (string-downcase family) (princ-to-string balls)
-                     (princ-to-string (1- steps)) (princ-to-string steps))
-    (values count (parse-integer (fourth (first lines))))))
+(defun count-per-step (script from to arguments)
+  "The millions of instructions one step runs in the process of the tool SCRIPT (count-process)
+whose arguments for a run of STEPS steps are (funcall ARGUMENTS STEPS): a run of TO steps less
+a run of FROM, the two side by side, over TO - FROM; and the state hash the longer run printed.
+#B3NCH5"
+  (let ((early (sb-thread:make-thread
+                (lambda () (values (apply #'count-process script (funcall arguments from)))))))
+    (multiple-value-bind (late hash) (apply #'count-process script (funcall arguments to))
+      (values (/ (- late (sb-thread:join-thread early)) (* 1d6 (- to from))) hash))))
 
 (defun run-count-against (&key (stream *standard-output*)
                                 (revs (let ((r (sb-ext:posix-getenv "REVS")))
@@ -7649,8 +7650,7 @@ printed. #B3NCH5"
                                                             (asdf:system-source-directory "luv-physics"))))
   "Print, as an Org table, the millions of instructions a step of the basin runs in this page's
 engine and in the engines of the commits REVS, per family: a process's count stepping TO times
-less one's stepping FROM times (count-sample, the two run side by side), over TO - FROM; with
-each engine's state hash. #B3NCH5"
+less one's stepping FROM times (count-per-step); with each engine's state hash. #B3NCH5"
   (let ((trees (append (mapcar (lambda (rev) (cons rev (against-tree rev directory))) revs)
                        (list (cons "this page" (asdf:system-source-directory "luv-physics")))))
         (before (load-average)))
@@ -7660,12 +7660,15 @@ each engine's state hash. #B3NCH5"
             (loop for family in families
                   collect (cons family
                                 (loop for (name . root) in trees
-                                      collect (let ((early (sb-thread:make-thread
-                                                            (lambda () (count-sample root family balls from)))))
-                                                (multiple-value-bind (late hash) (count-sample root family balls to)
-                                                  (let ((per-step (/ (- late (sb-thread:join-thread early))
-                                                                     (* 1d6 (- to from)))))
-                                                    (list name per-step per-step per-step hash)))))))))
+                                      collect (multiple-value-bind (per-step hash)
+                                                  (count-per-step "against" from to
+                                                                  (lambda (steps)
+                                                                    ;; tools/against-one.lisp times the last step
+                                                                    (list (namestring root) (string-downcase family)
+                                                                          (princ-to-string balls)
+                                                                          (princ-to-string (1- steps))
+                                                                          (princ-to-string steps))))
+                                                (list name per-step per-step per-step hash)))))))
       (format stream "~&#+caption: the ~D-ball basin, millions of instructions a step over steps ~D-~D ~
                       (cachegrind: a process of ~D steps less one of ~D); ~A; load ~A before, ~A after~%"
               balls from to to from (cpu-model-name) before (load-average))
@@ -7762,7 +7765,7 @@ built for its features, in one run, with the machine's load. #FBNCH9"
   "Print, as an Org table, the millions of instructions a step of each scene of +feature-scenes+
 runs under the general step and under the step built for its features: a process of
 tools/feature-one.lisp stepping the scene TO times less one stepping it FROM times, over TO -
-FROM, counted by cachegrind (count-process), two processes at a time. #FBNCH9"
+FROM, counted by cachegrind (count-per-step). #FBNCH9"
   (let ((root (namestring (asdf:system-source-directory "luv-physics")))
         (before (load-average)))
     ;; the engine compiled first, outside valgrind
@@ -7777,14 +7780,8 @@ FROM, counted by cachegrind (count-process), two processes at a time. #FBNCH9"
       (destructuring-bind (name what features from to) scene
         (declare (ignore features))
         (flet ((per-step (kind)
-                 ;; the count to FROM in a thread beside the count to TO
-                 (flet ((one (steps)
-                          (multiple-value-bind (count lines)
-                              (count-process "feature" root (string-downcase name) kind (princ-to-string steps))
-                            (values count (parse-integer (fourth (first lines)))))))
-                   (let ((early (sb-thread:make-thread (lambda () (one from)))))
-                     (multiple-value-bind (late hash) (one to)
-                       (values (/ (- late (sb-thread:join-thread early)) (* 1d6 (- to from))) hash))))))
+                 (count-per-step "feature" from to
+                                 (lambda (steps) (list root (string-downcase name) kind (princ-to-string steps))))))
           (multiple-value-bind (general general-hash) (per-step "general")
             (multiple-value-bind (special special-hash) (per-step "specialised")
               (format stream "~&| ~A | ~,3F | ~,3F | ~,3F | ~:[no~;yes~] |~%"

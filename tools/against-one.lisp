@@ -10,23 +10,9 @@
 ;;;; basin benchmark has: tools/boot.lisp, make-basin-world, step-physics-world, median and
 ;;;; physics-world-state-hash, so that one script measures old and new trees alike.
 
-;;;; Under valgrind (make count-against), a collection's signals stop the run: when
-;;;; AGAINST_NURSERY_BYTES is set, no collection starts before that many bytes are consed.
+(load (merge-pathnames "one-process.lisp" *load-truename*))
 
-(let ((bytes (sb-ext:posix-getenv "AGAINST_NURSERY_BYTES")))
-  (when (and bytes (plusp (length bytes)))
-    (setf (sb-ext:bytes-consed-between-gcs) (parse-integer bytes))))
-
-(defvar *against-arguments* (rest sb-ext:*posix-argv*))
-
-(unless (= 5 (length *against-arguments*))
-  (format *error-output* "against-one: usage: against-one.lisp ROOT/ FAMILIES BALLS FROM TO~%")
-  (sb-ext:exit :code 2))
-
-(load (concatenate 'string (first *against-arguments*) "tools/boot.lisp"))
-
-(when (luv-load-systems "luv-physics")
-  (sb-ext:exit :code 2))
+(defvar *against-arguments* (one-process-arguments "against-one" "ROOT/ FAMILIES BALLS FROM TO" 5))
 
 (defun against-cpu-ns ()
   "This thread's CPU time in nanoseconds."

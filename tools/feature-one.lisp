@@ -2,25 +2,13 @@
 ;;;; engine of the tree ROOT, build the feature scene NAME of +feature-scenes+ with every feature
 ;;;; (KIND general) or with the scene's own (KIND specialised), step it STEPS times, and print
 ;;;;   feature NAME KIND HASH
-;;;; with the world's state hash.  As tools/against-one.lisp, it puts off every collection when
-;;;; AGAINST_NURSERY_BYTES is set, for a collection's signals stop a program under valgrind.
+;;;; with the world's state hash.  Its start, tools/one-process.lisp, is tools/against-one.lisp's.
 ;;;;
 ;;;; Usage: sbcl --script tools/feature-one.lisp ROOT/ NAME KIND STEPS
 
-(let ((bytes (sb-ext:posix-getenv "AGAINST_NURSERY_BYTES")))
-  (when (and bytes (plusp (length bytes)))
-    (setf (sb-ext:bytes-consed-between-gcs) (parse-integer bytes))))
+(load (merge-pathnames "one-process.lisp" *load-truename*))
 
-(defvar *feature-arguments* (rest sb-ext:*posix-argv*))
-
-(unless (= 4 (length *feature-arguments*))
-  (format *error-output* "feature-one: usage: feature-one.lisp ROOT/ NAME KIND STEPS~%")
-  (sb-ext:exit :code 2))
-
-(load (concatenate 'string (first *feature-arguments*) "tools/boot.lisp"))
-
-(when (luv-load-systems "luv-physics")
-  (sb-ext:exit :code 2))
+(defvar *feature-arguments* (one-process-arguments "feature-one" "ROOT/ NAME KIND STEPS" 4))
 
 (destructuring-bind (root name kind steps) *feature-arguments*
   (declare (ignore root))
