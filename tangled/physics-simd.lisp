@@ -62,11 +62,15 @@ column form is evaluated once: the transpose reads each of its inputs twice. #R0
 (defmacro with-rows-4 ((v index k &rest columns) &body body)
   "Run BODY with COLUMNS (eight names) bound to the four solver rows of V named by
 INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest from the high. #R0WS8T"
-  (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI"))))
-    `(let* (,@(loop for r in lo for l from 0
-                    collect `(,r (sb-simd-sse:f32.4-aref ,v (solver-row (the index (row-at ,index ,k ,l))))))
-            ,@(loop for r in hi for l from 0
-                    collect `(,r (sb-simd-sse::%f32.4-load ,v (solver-row (the index (row-at ,index ,k ,l))) 4)))
+  (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI")))
+        (at (loop repeat 4 collect (gensym "AT"))))
+    ;; each row's place is found once, for both its halves
+    `(let* (,@(loop for o in at for l from 0
+                    collect `(,o (solver-row (the index (row-at ,index ,k ,l)))))
+            ,@(loop for r in lo for o in at
+                    collect `(,r (sb-simd-sse:f32.4-aref ,v ,o)))
+            ,@(loop for r in hi for o in at
+                    collect `(,r (sb-simd-sse::%f32.4-load ,v ,o 4)))
             ,@(macroexpand-1 `(transpose-4 ,lo ,(subseq columns 0 4)))
             ,@(macroexpand-1 `(transpose-4 ,hi ,(subseq columns 4 8))))
        (declare (ignorable ,@columns))
@@ -76,14 +80,17 @@ INDEX[K..K+3], transposed: the first four from the rows' low halves, the rest fr
   "Store the eight COLUMNS back, transposed, as the four solver rows of V named by INDEX[K..K+3].
 Each column form is evaluated once: the transpose reads each of its inputs twice. #R0WS8T"
   (let ((lo (loop repeat 4 collect (gensym "LO"))) (hi (loop repeat 4 collect (gensym "HI")))
-        (names (loop repeat 8 collect (gensym "COLUMN"))))
+        (names (loop repeat 8 collect (gensym "COLUMN"))) (at (loop repeat 4 collect (gensym "AT"))))
     `(let* (,@(mapcar #'list names columns)
             ,@(macroexpand-1 `(transpose-4 ,(subseq names 0 4) ,lo))
-            ,@(macroexpand-1 `(transpose-4 ,(subseq names 4 8) ,hi)))
-       ,@(loop for r in lo for l from 0
-               collect `(setf (sb-simd-sse:f32.4-aref ,v (solver-row (the index (row-at ,index ,k ,l)))) ,r))
-       ,@(loop for r in hi for l from 0
-               collect `(sb-simd-sse::%f32.4-store ,r ,v (solver-row (the index (row-at ,index ,k ,l))) 4)))))
+            ,@(macroexpand-1 `(transpose-4 ,(subseq names 4 8) ,hi))
+            ;; each row's place is found once, for both its halves
+            ,@(loop for o in at for l from 0
+                    collect `(,o (solver-row (the index (row-at ,index ,k ,l))))))
+       ,@(loop for r in lo for o in at
+               collect `(setf (sb-simd-sse:f32.4-aref ,v ,o) ,r))
+       ,@(loop for r in hi for o in at
+               collect `(sb-simd-sse::%f32.4-store ,r ,v ,o 4)))))
 
 (declaim (inline f32.4-select))
 (defun f32.4-select (mask a b)
@@ -95,9 +102,11 @@ in any register. #R0WS8T"
 
 ;; [[file:../physics.org::#W1D3KF][One kernel text, two widths:1]]
 (defmacro define-wide-kernels (family width documentation
-                               &key load store broadcast add sub mul div sqrt gt eq if* or* transpose)
+                               &key load store broadcast add sub mul div sqrt gt eq if* or* transpose
+                                 max andc1 mask)
   "Define the solver kernels of FAMILY for lanes of WIDTH, described by DOCUMENTATION: the
-operator keywords name the sb-simd functions the width-neutral operators stand for. #W1D3KF"
+operator keywords name the sb-simd functions the width-neutral operators stand for (MASK, the
+one that reads a comparison's lanes as floats, bit for bit). #W1D3KF"
   (declare (ignore documentation))
   ;; the names go where FAMILY was read, whatever package is current when the form is expanded:
   ;; define-impact-copy finds its kernel's text under the kernel's name
@@ -113,6 +122,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
                 (w= (a b) `(,',eq ,a ,b)) (wif (m a b) `(,',if* ,m ,a ,b)) (wor (a b) `(,',or* ,a ,b))
                 (wc (x) `(,',broadcast ,x))
+                ;; three selections in one instruction each, to the bit: (wmax a b) is
+                ;; (wif (w> a b) a b), b where the two are equal or either is not a number;
+                ;; (wzero-where m b) is (wif m (wc 0.0) b); (wany m), whether some lane of
+                ;; the mask M is set, the sign bits of (wif m (wc -1.0) (wc 0.0)) read at once
+                (wmax (a b) `(,',max ,a ,b))
+                (wzero-where (m b) `(,',andc1 (,',mask ,m) ,b))
+                (wany (m) `(not (zerop (,',movemask (,',mask ,m)))))
                 ;; a side column ([[#SSMPYW]]) is read from the side block of the block at K
                 (@w (column) (if (constraint-side-column-p column)
                                  `(,',load (side-floats) (side-base k) ,(constraint-offset column))
@@ -123,7 +139,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                 ;; true when some lane of the block has no radius on side b, the only lanes
                 ;; whose spin columns may be other than zero ([[#SSMPYW]])
                 (some-one-sided () `(if-feature :body-contacts
-                                      (not (zerop (,',movemask (wif (w= (@w rb) (wc 0.0)) (wc -1.0) (wc 0.0)))))
+                                      (wany (w= (@w rb) (wc 0.0)))
                                       t))
                 (st@ (i) `(,',load st 0 ,(* ,width i)))
                 ;; moved-gap ([[#PR3PAR]]) in lanes, for the relax pass and the frame pass
@@ -270,8 +286,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                  (let* ((positive (w> s (wc 0.0)))
                         (bias (if biased
                                   (let ((soft (w* (@w bias-rate) s)))
-                                    (wif positive (w* s ih) (wif (w> soft cap) soft cap)))
-                                  (wif positive (w* s ih) (wc 0.0))))
+                                    (wif positive (w* s ih) (wmax soft cap)))
+                                  (wmax (w* s ih) (wc 0.0))))
                         ;; the relative velocity before the impulses, for the normal part
                         ;; and for friction, whose two speeds are found here, before the
                         ;; normal impulse, which does not change them
@@ -303,9 +319,9 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                         (raw (if biased
                                  (w- (w- l (w* (w* (@w normal-mass) (wif positive (wc 1.0) (@w mass-scale)))
                                                (w+ vn bias)))
-                                     (w* (wif positive (wc 0.0) (@w impulse-scale)) l))
+                                     (w* (wzero-where positive (@w impulse-scale)) l))
                                  (w- l (w* (@w normal-mass) (w+ vn bias)))))
-                        (new (wif (w> raw (wc 0.0)) raw (wc 0.0)))
+                        (new (wmax raw (wc 0.0)))
                         (mni (if-feature (:or :restitution :contact-events :hit-events)
                                          (@w max-normal-impulse) (wc 0.0)))
                         ;; impacts and armed contacts ([[#R3ST1T]]): a block with no lane that
@@ -318,17 +334,16 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                        (if-feature :restitution
                          ;; only a lane with restitution is ever armed: a block with none reads
                          ;; no armed speed ([[#SSMPYW]]), and no lane of it may strike
-                         (if (zerop (,movemask (wif (w> (@w restitution) (wc 0.0)) (wc -1.0) (wc 0.0))))
+                         (if (not (wany (w> (@w restitution) (wc 0.0))))
                            (values new dl new)
                          (let ((armed (@w armed-speed)))
-                                 (if (zerop (,movemask
+                                 (if (not (wany
                                                   ;; lanes that have not pushed: vn, or 0 without
                                                   ;; restitution; the others: an armed lane's speed
                                                   ;; times -1e30, below any threshold
-                                                  (wif (w> lower (wif (w= mni (wc 0.0))
-                                                                      (wif (w> (@w restitution) (wc 0.0)) vn (wc 0.0))
-                                                                      (w* armed (wc -1e30))))
-                                                       (wc -1.0) (wc 0.0))))
+                                                  (w> lower (wif (w= mni (wc 0.0))
+                                                                 (wif (w> (@w restitution) (wc 0.0)) vn (wc 0.0))
+                                                                 (w* armed (wc -1e30))))))
                                      (values new dl new)
                                      (if-feature :impact-part
                                      (let* ((e (@w restitution))
@@ -378,12 +393,13 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                      (let* ((limit (w* (@w friction) new))
                             (over (w> len2 (w* limit limit)))
                             ;; outside the cone len2 > 0, so no lane divides by zero
-                            (scale (w/ limit (wif over root (wc 1.0))))
-                            (n1 (wif over (w* n1 scale) n1)) (n2 (wif over (w* n2 scale) n2))
+                            ;; 1 inside the cone, where multiplying by it changes no bit
+                            (scale (wif over (w/ limit (wif over root (wc 1.0))) (wc 1.0)))
+                            (n1 (w* n1 scale)) (n2 (w* n2 scale))
                             (d1 (w- n1 l1)) (d2 (w- n2 l2)))
                        (@w! normal-impulse new)
                        (if-feature (:or :restitution :contact-events :hit-events)
-                         (@w! max-normal-impulse (wif (w> mni pushed) mni pushed)))
+                         (@w! max-normal-impulse (wmax mni pushed)))
                        (@w! tangent-impulse-1 n1) (@w! tangent-impulse-2 n2)
                        ;; each velocity takes the normal impulse, then friction's, in one
                        ;; expression: the same two roundings as two steps, one store; a
@@ -406,7 +422,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                      (progn
                        (@w! normal-impulse new)
                        (if-feature (:or :restitution :contact-events :hit-events)
-                         (@w! max-normal-impulse (wif (w> mni pushed) mni pushed)))
+                         (@w! max-normal-impulse (wmax mni pushed)))
                        (let ((madl (w* ma dl)) (mbdl (w* mb dl)))
                          (declare (ignorable mbdl))
                          (st! 0 (w- (st@ 0) (w* madl x))) (st! 1 (w- (st@ 1) (w* madl y)))
@@ -419,7 +435,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                    (if-feature :rolling-resistance
                      (let* ((rl (@w rolling-limit))
                             (rolling (w> rl (wc 0.0))))
-                       (unless (zerop (,movemask (wif rolling (wc -1.0) (wc 0.0))))
+                       (when (wany rolling)
                          (let* ((rlimit (w* rl new))
                                 (rm (@w rolling-mass))
                                 (rx (@w rolling-impulse-x)) (ry (@w rolling-impulse-y)) (rz (@w rolling-impulse-z))
@@ -427,9 +443,8 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                                 (nrz (w- rz (w* rm (w- wbz waz))))
                                 (len2 (w+ (w+ (w* nrx nrx) (w* nry nry)) (w* nrz nrz)))
                                 (over (w> len2 (w* rlimit rlimit)))
-                                (scale (w/ rlimit (wsqrt (wif over len2 (wc 1.0)))))
-                                (nrx (wif over (w* nrx scale) nrx)) (nry (wif over (w* nry scale) nry))
-                                (nrz (wif over (w* nrz scale) nrz))
+                                (scale (wif over (w/ rlimit (wsqrt (wif over len2 (wc 1.0)))) (wc 1.0)))
+                                (nrx (w* nrx scale)) (nry (w* nry scale)) (nrz (w* nrz scale))
                                 (dx (w- nrx rx)) (dy (w- nry ry)) (dz (w- nrz rz)))
                            (@w! rolling-impulse-x (wif rolling nrx rx))
                            (@w! rolling-impulse-y (wif rolling nry ry))
@@ -446,7 +461,7 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
                      (when (some-one-sided)
                      (let* ((sl (@w spin-limit))
                             (spinning (w> sl (wc 0.0))))
-                       (unless (zerop (,movemask (wif spinning (wc -1.0) (wc 0.0))))
+                       (when (wany spinning)
                          (let* ((slimit (w* sl new)) (sp (@w spin-impulse))
                                 (raw (w- sp (w* (@w rolling-mass)
                                                 (w+ (w+ (w* (w- wbx wax) x) (w* (w- wby way) y)) (w* (w- wbz waz) z)))))
@@ -512,14 +527,16 @@ operator keywords name the sb-simd functions the width-neutral operators stand f
   :load sb-simd-avx::%f32.8-load :store sb-simd-avx::%f32.8-store :broadcast sb-simd-avx:f32.8
   :add sb-simd-avx:f32.8+ :sub sb-simd-avx:f32.8- :mul sb-simd-avx:f32.8* :div sb-simd-avx:f32.8/
   :sqrt sb-simd-avx:f32.8-sqrt :gt sb-simd-avx:f32.8> :eq sb-simd-avx:f32.8= :if* sb-simd-avx:f32.8-if
-  :or* sb-simd-avx2:u32.8-or :transpose with-rows-8)
+  :or* sb-simd-avx2:u32.8-or :transpose with-rows-8
+  :max sb-simd-avx:f32.8-max :andc1 sb-simd-avx:f32.8-andc1 :mask sb-simd-avx::f32.8!-from-p256)
 
 (define-wide-kernels sse 4
   "Four lanes of SSE4.1: f32.4 arithmetic, and/and-not/or selection. #F4M1LY"
   :load sb-simd-sse::%f32.4-load :store sb-simd-sse::%f32.4-store :broadcast sb-simd-sse:f32.4
   :add sb-simd-sse:f32.4+ :sub sb-simd-sse:f32.4- :mul sb-simd-sse:f32.4* :div sb-simd-sse:f32.4/
   :sqrt sb-simd-sse:f32.4-sqrt :gt sb-simd-sse2:f32.4> :eq sb-simd-sse2:f32.4= :if* f32.4-select
-  :or* sb-simd-sse2:u32.4-or :transpose with-rows-4)
+  :or* sb-simd-sse2:u32.4-or :transpose with-rows-4
+  :max sb-simd-sse:f32.4-max :andc1 sb-simd-sse:f32.4-andc1 :mask sb-simd-sse2::f32.4!-from-p128)
 
 (defclass wide-kernels (scalar-kernels) ()
   (:documentation "A family that solves each colour's blocks in lanes and the overflow colour

@@ -5093,8 +5093,9 @@ contacts, it reads and writes body a alone: body b is then the dummy row, all ze
              ;; the same deltas and the same time, reads it back
              (s (if biased
                     (@ gap)
-                    (let ((da (the index (delta-row (aref body-a k))))
-                          (db (the index (delta-row (aref body-b k)))))
+                    ;; a row's place in the delta array is its place in the velocity
+                    ;; array ([[#W0RLD7]]), found above
+                    (let ((da a) (db b))
                       (declare (ignorable db))
                       (setf (@ gap)
                             (moved-gap (@ separation) x y z
@@ -5220,7 +5221,7 @@ contacts, it reads and writes body a alone: body b is then the dummy row, all ze
                  (over (> len2 (* limit limit)))
                  ;; inside the cone the scale is 1, and multiplying by 1 changes no bit
                  (scale (if over (/ limit (fsqrt len2)) 1.0))
-                 (n1 (if over (* n1 scale) n1)) (n2 (if over (* n2 scale) n2))
+                 (n1 (* n1 scale)) (n2 (* n2 scale))
                  (d1 (- n1 l1)) (d2 (- n2 l2))
                  (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
                  (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
