@@ -4654,6 +4654,13 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                   (let ((color (aref colors c)))
                     (setf (aref contact (aref cursor color)) c)
                     (incf (aref cursor color))))
+                ;; the side blocks start as zeros, padding rows' included: a row writes only
+                ;; the side columns that may be other than zero, the spin limit and impulse of
+                ;; a row with no radius on side b ([[#SSMPYW]])
+                (when (plusp (constraint-columns-length cbuf))
+                  (fill (side-floats) 0.0 :end (+ +constraint-origin+
+                                                  (* (ceiling (constraint-columns-length cbuf) 8)
+                                                     (constraint-columns-side-block cbuf)))))
                 (with-body-columns ((radius-c radius) (im-c inverse-mass) (ii-c inverse-inertia)
                                     (fr-c friction) (re-c restitution) (ro-c rolling-resistance))
                     awake
@@ -4686,13 +4693,13 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                            (@ normal-impulse) (contact-at geometry g normal-impulse)
                            (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1)
                            (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
-                     ;; the columns of boxes, spin friction, restitution, rolling resistance and
-                     ;; the events, when the world has them
+                     ;; the columns of boxes, restitution, rolling resistance and the events,
+                     ;; when the world has them (spin friction's and the armed speed are zeros
+                     ;; here, as the side block starts)
                      (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
-                     (if-feature :friction (setf (@ spin-limit) 0.0 (@ spin-impulse) 0.0))
                      (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
                      (if-feature :restitution
-                       (setf (@ restitution) (max (aref re-c la) (aref re-c lb)) (@ armed-speed) 0.0))
+                       (setf (@ restitution) (max (aref re-c la) (aref re-c lb))))
                      (if-feature :rolling-resistance
                        (setf (@ rolling-limit) (* (max (aref ro-c la) (aref ro-c lb)) (max r-a r-b))
                              (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x)
@@ -4749,7 +4756,6 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                           (progn
                             (setf (@ friction) (fsqrt (* (aref (body-columns-friction buf-a) la)
                                                          (aref (body-columns-friction buf-b) lb))))
-                            (if-feature :friction (setf (@ spin-limit) 0.0))
                             (if-feature :restitution
                               (setf (@ restitution) (max (aref (body-columns-restitution buf-a) la)
                                                          (aref (body-columns-restitution buf-b) lb))))
@@ -4794,21 +4800,19 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                     (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
                     (setf (@ normal-impulse) (contact-at geometry g normal-impulse)
                           (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
-                    (if-feature :restitution (setf (@ armed-speed) 0.0))
                     (if-feature :rolling-resistance
                       (setf (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
                             (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z))))))))
                 ;; the frames, the box velocities along them and the effective masses,
                 ;; in lanes where the family has them
                 (physics-prepare-frames (physics-world-kernels world) world)
-                ;; padding rows: no contact, the dummy on both sides, every float zero
+                ;; padding rows: no contact, the dummy on both sides, every float zero (their
+                ;; side columns are zeros from the start)
                 (dotimes (color +physics-max-colors+)
                   (loop for k of-type index from (aref cursor color) below (aref color-starts (1+ color))
-                        do (let ((base (constraint-base k)) (side-base (side-base k)) (side (side-floats)))
+                        do (let ((base (constraint-base k)))
                              (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
-                             (dotimes (o (floor stride 8)) (setf (aref data (+ base (* 8 o))) 0.0))
-                             (dotimes (o (floor (constraint-columns-side-block cbuf) 8))
-                               (setf (aref side (+ side-base (* 8 o))) 0.0)))))))))))
+                             (dotimes (o (floor stride 8)) (setf (aref data (+ base (* 8 o))) 0.0)))))))))))
       (setf (aref (world-statistics world) 1) (coerce (the fixnum color-count) 'double-float))
       color-count)))
 ;; Preparing the constraints:1 ends here
