@@ -4817,7 +4817,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
       color-count)))
 ;; Preparing the constraints:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:11]]
+;; [[file:../physics.org::#PR3PAR][Preparing the constraints:12]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
 velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
@@ -4876,7 +4876,7 @@ substep's solve reads. Compiled without boxes, it has no box velocity to resolve
   (let ((cbuf (physics-world-constraints world)))
     (funcall (kernel-variant-prepare-frames (world-kernel-variant world kernels))
              cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:11 ends here
+;; Preparing the constraints:12 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)

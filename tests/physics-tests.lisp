@@ -4115,6 +4115,46 @@ use before it. #QKS4GZ"
                (count nil (mapcar #'= (fifth general) (fifth short))))))))
 ;; PR3PAR-short-path-same-bits ends here
 
+;; [[file:../physics.org::#PR3PAR][PR3PAR-side-blocks-start-as-zeros]]
+(define-claim "PR3PAR" side-blocks-start-as-zeros
+    "Rows with a radius on side b, and padding rows, keep zero side columns whatever the buffer held."
+  (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain)))
+        (next (luv-physics::fixed-sequence 12345)))
+    (dotimes (i 300)
+      (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+        (luv-physics::add-physics-body w x y z :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (funcall next))
+                                               :restitution (* 0.5 (funcall next)))))
+    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
+                     luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
+                     luv-physics::prune-phase))
+      (funcall phase w))
+    (let ((cbuf (luv-physics::physics-world-constraints w)))
+      (fill (luv-physics::constraint-columns-side cbuf) 7.0)
+      (luv-physics::prepare-phase w)
+      (let ((data (luv-physics::constraint-columns-data cbuf)) (side (luv-physics::constraint-columns-side cbuf))
+            (block (luv-physics::constraint-columns-block cbuf))
+            (side-block (luv-physics::constraint-columns-side-block cbuf))
+            (columns '(luv-physics::spin-limit luv-physics::spin-impulse luv-physics::armed-speed))
+            (paired 0) (padding 0) (one-sided 0))
+        (flet ((at (array size k column)
+                 (aref array (+ luv-physics::+constraint-origin+ (* (floor k 8) size) (mod k 8)
+                                (luv-physics::constraint-offset column)))))
+          (dotimes (k (luv-physics::constraint-columns-length cbuf))
+            (cond ((< (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
+                   (incf padding)
+                   (dolist (c columns) (check (= 0.0 (at side side-block k c)) "padding row ~D: ~A" k c)))
+                  ((> (at data block k 'luv-physics::rb) 0.0)
+                   (incf paired)
+                   (dolist (c columns) (check (= 0.0 (at side side-block k c)) "row ~D: ~A ~F" k c (at side side-block k c))))
+                  (t (incf one-sided)
+                     (check (< 0.0 (at side side-block k 'luv-physics::spin-limit) 7.0) "row ~D: spin limit ~F"
+                            k (at side side-block k 'luv-physics::spin-limit))))))
+        (check (> paired 300) "~D rows with a radius on side b" paired)
+        (check (plusp padding) "no padding row")
+        (check (plusp one-sided) "no row with nothing on side b")))))
+;; PR3PAR-side-blocks-start-as-zeros ends here
+
 ;; [[file:../physics.org::#G7Q3XR][G7Q3XR-softness-is-the-closed-form]]
 (define-claim "G7Q3XR" softness-is-the-closed-form
     "PHYSICS-SOFTNESS gives omega/a1, a2/(1+a2) and 1/(1+a2); 0 Hz gives 0, 1, 0 exactly."
