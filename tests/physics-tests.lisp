@@ -4074,8 +4074,10 @@ use before it. #QKS4GZ"
 ;; PR3PAR-spin-friction-rate ends here
 
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-short-path-same-bits]]
-(define-claim "PR3PAR" short-path-same-bits
-    "The fill's short path for two awake bodies writes the rows the general path writes, to the bit."
+(defun mixed-pile-before-prepare ()
+  "A world of 300 balls of mixed radius (0.2 to 0.3 m), mass (0.5 to 1.5 kg), friction,
+restitution and rolling resistance dropped into the basin, stepped 60 times and then through
+the phases of a step before the prepare phase. #PR3PAR"
   (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain)))
         (next (luv-physics::fixed-sequence 12345)))
     (dotimes (i 300)
@@ -4087,8 +4089,13 @@ use before it. #QKS4GZ"
     (dotimes (i 60) (luv-physics::step-physics-world w))
     (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
                      luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
-                     luv-physics::prune-phase))
-      (funcall phase w))
+                     luv-physics::prune-phase)
+                   w)
+      (funcall phase w))))
+
+(define-claim "PR3PAR" short-path-same-bits
+    "The fill's short path for two awake bodies writes the rows the general path writes, to the bit."
+  (let ((w (mixed-pile-before-prepare)))
     (flet ((filled (short)
              (let ((luv-physics::*prepare-short-path* short))
                (luv-physics::prepare-phase w))
@@ -4118,17 +4125,7 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-side-blocks-start-as-zeros]]
 (define-claim "PR3PAR" side-blocks-start-as-zeros
     "Rows with a radius on side b, and padding rows, keep zero side columns whatever the buffer held."
-  (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain)))
-        (next (luv-physics::fixed-sequence 12345)))
-    (dotimes (i 300)
-      (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
-        (luv-physics::add-physics-body w x y z :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (funcall next))
-                                               :restitution (* 0.5 (funcall next)))))
-    (dotimes (i 60) (luv-physics::step-physics-world w))
-    (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
-                     luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
-                     luv-physics::prune-phase))
-      (funcall phase w))
+  (let ((w (mixed-pile-before-prepare)))
     (let ((cbuf (luv-physics::physics-world-constraints w)))
       (fill (luv-physics::constraint-columns-side cbuf) 7.0)
       (luv-physics::prepare-phase w)
