@@ -4724,6 +4724,165 @@ the phases of a step before the prepare phase. #PR3PAR"
     (check (eql step 36000) "the ball of life 600 s expired on step ~S, not 36000" step)))
 ;; F1NAL5-life-reached-is-over ends here
 
+;; [[file:../physics.org::#SQU33Z][SQU33Z-squeezed-balls-stay-out]]
+(defun squeeze-scene (family scene)
+  "Run SCENE (:step, :marbles, :far-step, :wall or :press) under FAMILY for 240 steps of 1/60 s; return the
+count of ball positions outside air cells of the resident world or below the floor less a slop,
+the lowest centre, the walker's final x and y (NIL for :press), and the state hash. #SQU33Z"
+  (let ((terrain (luv-physics::make-voxel-terrain)))
+    (luv-physics::fill-terrain terrain -16 0 -16 16 12 16 nil)
+    (luv-physics::fill-terrain terrain -16 -16 -16 16 0 16 t)
+    (case scene
+      (:step (luv-physics::fill-terrain terrain 6 0 -4 16 1 4 t))
+      (:marbles (luv-physics::fill-terrain terrain 6 0 -4 16 1 4 t))
+      (:far-step (luv-physics::fill-terrain terrain 8 0 -4 16 1 4 t))
+      (:wall (luv-physics::fill-terrain terrain 6 0 -4 16 3 4 t)))
+    (let* ((world (luv-physics::make-physics-world :terrain terrain :kernels family))
+           (player (luv-physics::make-physics-player 0d0 0d0 0d0))
+           (slop luv-physics::*physics-linear-slop*)
+           (balls (loop for x from 1.0 to 5.5 by 0.5
+                        collect (luv-physics::add-physics-body-of-kind world (if (eq scene :marbles) :marble :ball)
+                                                                       x 0.3 0.0)))
+           (outside 0) (lowest 100.0))
+      (dotimes (frame 240)
+        (if (eq scene :press)
+            (luv-physics::post-physics-box world 3.25 (max 0.7 (- 1.5 (* frame (/ 1.0 60)))) 0.0 2.0 0.5 1.0
+                                           :vy (if (> (- 1.5 (* frame (/ 1.0 60))) 0.7) -1.0 0.0) :owner :press)
+            (progn (luv-physics::advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
+                   (luv-physics::post-physics-player world player)))
+        (luv-physics::step-physics-world world)
+        (dolist (h balls)
+          (multiple-value-bind (x y z) (luv-physics::physics-body-position world h)
+            (setf lowest (min lowest y))
+            (unless (and (< -16 x 16) (< -16 z 16) (<= 0 y) (< y 12) (>= y (- slop))
+                         (not (luv-physics::terrain-solid-p terrain (floor x) (floor y) (floor z))))
+              (incf outside)))))
+      (values outside lowest
+              (and (not (eq scene :press)) (luv-physics::physics-player-x player))
+              (and (not (eq scene :press)) (luv-physics::physics-player-y player))
+              (luv-physics::physics-world-state-hash world)))))
+
+(defun lone-walker-path (scene)
+  "The walker's final x and y after the 240 steps of SCENE's walk with no ball in the world. #SQU33Z"
+  (let ((terrain (luv-physics::make-voxel-terrain))
+        (player (luv-physics::make-physics-player 0d0 0d0 0d0)))
+    (luv-physics::fill-terrain terrain -16 0 -16 16 12 16 nil)
+    (luv-physics::fill-terrain terrain -16 -16 -16 16 0 16 t)
+    (luv-physics::fill-terrain terrain (if (eq scene :far-step) 8 6) 0 -4 16 (if (eq scene :wall) 3 1) 4 t)
+    (dotimes (frame 240) (luv-physics::advance-physics-player player terrain (/ 1d0 60) :move-x 1d0))
+    (values (luv-physics::physics-player-x player) (luv-physics::physics-player-y player))))
+
+(define-claim "SQU33Z" squeezed-balls-stay-out
+    "Balls a walker or a box presses against cells stay in air cells of the resident world, in every family."
+  (dolist (scene '(:step :marbles :far-step :wall :press))
+    (let ((hashes '()))
+      (dolist (family (luv-physics:available-kernel-families))
+        (multiple-value-bind (outside lowest px py hash) (squeeze-scene family scene)
+          (push hash hashes)
+          (check (zerop outside) "~A, ~A: ~D ball positions outside the air of the resident world (lowest y ~,3F)"
+                 scene family outside lowest)
+          (unless (eq scene :press)
+            (multiple-value-bind (lx ly) (lone-walker-path scene)
+              (check (and (= px lx) (= py ly)) "~A, ~A: the walker ends at ~,3F ~,3F, alone at ~,3F ~,3F"
+                     scene family px py lx ly)
+              (check (= ly (if (eq scene :wall) 0d0 1d0)) "~A: the walker alone ends at y = ~,3F" scene ly)))))
+      (check (every (lambda (h) (= h (first hashes))) hashes) "~A: the families end with hashes ~S" scene hashes))))
+;; SQU33Z-squeezed-balls-stay-out ends here
+
+;; [[file:../physics.org::#SQU33Z][SQU33Z-box-rows-capped]]
+(define-claim "SQU33Z" box-rows-capped
+    "After the substeps every box row's normal impulse is within its cap, and the caps follow the rule."
+  (let ((terrain (luv-physics::make-voxel-terrain)) (over 0) (met 0) (wrong 0) (rows 0))
+    (luv-physics::fill-terrain terrain -16 0 -16 16 12 16 nil)
+    (luv-physics::fill-terrain terrain -16 -16 -16 16 0 16 t)
+    (luv-physics::fill-terrain terrain 6 0 -4 16 1 4 t)
+    (let* ((world (luv-physics::make-physics-world :terrain terrain))
+           (player (luv-physics::make-physics-player 0d0 0d0 0d0))
+           (luv-physics:*physics-phases*
+             (phases-checked-after
+              'luv-physics::substep-phase
+              (lambda (w)
+                (let* ((cbuf (luv-physics::physics-world-constraints w))
+                       (count (if (plusp (luv-physics::box-columns-length (luv-physics::physics-world-boxes w)))
+                                  (luv-physics::note-box-rows w) 0))
+                       (awake (luv-physics::physics-world-awake w))
+                       (h (luv-physics::physics-world-current-h w)))
+                  (dotimes (j count)
+                    (let* ((k (aref (luv-physics::physics-world-box-rows w) j))
+                           (cap (aref (luv-physics::physics-world-box-caps w) j))
+                           (a (aref (luv-physics::constraint-columns-body-a cbuf) k))
+                           (ref (lambda (column) (luv-physics::constraint-ref cbuf k column)))
+                           (closing (max 0.0 (- (+ (* (aref (luv-physics::body-columns-vx awake) a) (funcall ref 'luv-physics::nx))
+                                                   (* (aref (luv-physics::body-columns-vy awake) a) (funcall ref 'luv-physics::ny))
+                                                   (* (aref (luv-physics::body-columns-vz awake) a) (funcall ref 'luv-physics::nz)))
+                                                (funcall ref 'luv-physics::kvn))))
+                           (want (* (funcall ref 'luv-physics::normal-mass)
+                                    (+ closing luv-physics::*physics-contact-push-max* (* 9.81 h))))
+                           (l (funcall ref 'luv-physics::normal-impulse)))
+                      (incf rows)
+                      (when (> (abs (- cap want)) (* 1e-4 (max 1.0 want))) (incf wrong))
+                      (when (> l (* cap (+ 1 1e-6))) (incf over))
+                      (when (>= l (* cap (- 1 1e-6))) (incf met)))))
+                w))))
+      (dotimes (i 10) (luv-physics::add-physics-body-of-kind world :ball (+ 1.0 (* 0.5 i)) 0.3 0.0))
+      (dotimes (frame 240)
+        (luv-physics::advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
+        (luv-physics::post-physics-player world player)
+        (luv-physics::step-physics-world world)))
+    (check (> rows 100) "only ~D box rows were noted" rows)
+    (check (zerop wrong) "~D of ~D caps differ from the rule" wrong rows)
+    (check (zerop over) "~D box rows ended a step above their cap" over)
+    (check (plusp met) "no box row reached its cap: nothing was squeezed")))
+;; SQU33Z-box-rows-capped ends here
+
+;; [[file:../physics.org::#SQU33Z][SQU33Z-paths-cut-at-faces]]
+(define-claim "SQU33Z" paths-cut-at-faces
+    "A delta into a solid cell stops the body at its face, removes the velocity into it and reports :held-out."
+  (flet ((forced (x y z dx dy dz vx vy &optional wall)
+           ;; one step of a ball at X Y Z whose delta after the substeps is forced to DX DY DZ
+           ;; and its velocity to VX VY 0
+           (multiple-value-bind (w terrain) (make-floor-world :sleep nil :gravity '(0 0 0))
+             (when wall (luv-physics::fill-terrain terrain 4 0 0 5 4 8 t))
+             (let* ((h (luv-physics::add-physics-body w x y z :radius 0.25))
+                    (events '())
+                    (luv-physics:*physics-phases*
+                      (phases-checked-after
+                       'luv-physics::substep-phase
+                       (lambda (w)
+                         (let ((p (luv-physics::delta-row 0)) (o (luv-physics::solver-row 0))
+                               (d (luv-physics::physics-world-deltas w)) (v (luv-physics::physics-world-velocities w)))
+                           (setf (aref d p) dx (aref d (+ p 1)) dy (aref d (+ p 2)) dz
+                                 (aref v o) vx (aref v (+ o 1)) vy (aref v (+ o 2)) 0.0))
+                         w))))
+               (luv-physics::step-physics-world w)
+               (luv-physics::map-physics-events
+                (lambda (kind a b ex ey ez speed datum)
+                  (declare (ignore b ex ey ez datum))
+                  (push (list kind a speed) events))
+                w)
+               (multiple-value-bind (px py pz) (luv-physics::physics-body-position w h)
+                 (multiple-value-bind (wx wy) (luv-physics::physics-body-velocity w h)
+                   (list px py pz wx wy (luv-physics::physics-world-last-step-held-out-count w)
+                         (remove :held-out events :key #'first :test-not #'eq) h)))))))
+    (destructuring-bind (px py pz wx wy count held h) (forced 2.5 0.55 2.5 0.0 -0.6 0.0 1.0 -5.0)
+      (check (< (abs (- py 0.25)) 1e-5) "the ball forced into the floor ends at y = ~,6F" py)
+      (check (and (= px 2.5) (= pz 2.5)) "the ball forced into the floor moved sideways to ~,4F ~,4F" px pz)
+      (check (and (= wy 0.0) (= wx 1.0)) "its velocity is ~,3F ~,3F, not 1 and 0" wx wy)
+      (check (= count 1) "the step counts ~D bodies held" count)
+      (check (and (= 1 (length held)) (= (second (first held)) h) (< (abs (- (third (first held)) 5.0)) 1e-4))
+             "the :held-out events are ~S" held))
+    (destructuring-bind (px py pz wx wy count held h) (forced 3.05 2.5 2.5 0.9 0.0 0.0 0.0 0.0 t)
+      (declare (ignore pz wx wy h))
+      (check (< (abs (- px 3.75)) 1e-5) "the ball sent 0.9 m at the wall ends at x = ~,6F" px)
+      (check (and (= py 2.5) (= count 1) (= 1 (length held))) "at the wall: y ~,4F, ~D held, events ~S" py count held))
+    (dolist (case '((0.1 0.0 0.05) (0.45 0.0 0.0)))
+      (destructuring-bind (px py pz wx wy count held h) (apply #'forced 2.3 0.55 2.5 (append case '(1.0 0.0)))
+        (declare (ignore pz wx wy h))
+        (check (and (< (abs (- px (+ 2.3 (first case)))) 1e-5) (< (abs (- py 0.55)) 1e-5))
+               "a delta ~S within the air ends at ~,4F ~,4F" case px py)
+        (check (and (zerop count) (null held)) "a delta ~S within the air was held (~D, ~S)" case count held)))))
+;; SQU33Z-paths-cut-at-faces ends here
+
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-ball-rests-and-sleeps]]
 (define-claim "IDVK7G" ball-rests-and-sleeps
     "A dropped ball rests at floor + r - slop (±0.002 m) and sleeps, with a :slept event, within 3 s."
