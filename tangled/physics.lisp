@@ -2162,6 +2162,7 @@ dispatches on it once per call. #W0RLD7"))
    (box-caps :initform (make-array 16 :element-type 'single-float :initial-element 0.0)
              :accessor physics-world-box-caps)
    (held-out-count :initform 0 :type fixnum :accessor physics-world-held-out-count)
+   (squeezed :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-squeezed)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
@@ -5607,15 +5608,16 @@ in a substep. Return how many rows there are. #SQU33Z"
 
 (defun yield-box-pushes (world count)
   "Hold the accumulated normal impulse of each of WORLD's first COUNT box rows to its cap, and
-take back from its body the push beyond the cap. #SQU33Z"
+take back from its body the push beyond the cap. Return true when some row was held. #SQU33Z"
   (declare (type index count) #.+kernel-policy+)
   (let ((cbuf (physics-world-constraints world))
         (v (physics-world-velocities world))
         (rows (physics-world-box-rows world))
-        (caps (physics-world-box-caps world)))
+        (caps (physics-world-box-caps world))
+        (yielded nil))
     (declare (type f32-column v caps) (type fixnum-column rows))
     (with-constraint-block (contact body-a) cbuf
-      (dotimes (j count)
+      (dotimes (j count yielded)
         (let* ((k (aref rows j)) (base (constraint-base k))
                (l (@ normal-impulse)) (cap (aref caps j)))
           (declare (type index k base) (type single-float l cap))
@@ -5623,10 +5625,63 @@ take back from its body the push beyond the cap. #SQU33Z"
             ;; the pass pushed body a along -n by its inverse mass times the impulse
             (let ((o (solver-row (aref body-a k))) (back (* (@ ima) (- l cap))))
               (declare (type index o) (type single-float back))
-              (setf (@ normal-impulse) cap
+              (setf yielded t
+                    (@ normal-impulse) cap
                     (aref v o) (+ (aref v o) (* back (@ nx)))
                     (aref v (+ o 1)) (+ (aref v (+ o 1)) (* back (@ ny)))
                     (aref v (+ o 2)) (+ (aref v (+ o 2)) (* back (@ nz)))))))))))
+
+(defun mark-squeezed-rows (world count)
+  "Note in WORLD's squeezed column, for its awake rows, 1 for the body of each of its first COUNT
+box rows and for both bodies of each two-body constraint whose kept gap is deeper than the
+slop, and 0 for every other row. #SQU33Z"
+  (declare (type index count) #.+kernel-policy+)
+  (let* ((n (body-columns-length (physics-world-awake world)))
+         (cbuf (physics-world-constraints world))
+         (rows (physics-world-box-rows world))
+         (marks (let ((m (physics-world-squeezed world)))
+                  (if (> (length m) n)
+                      m
+                      (setf (physics-world-squeezed world) (make-array (* 2 (1+ n)) :element-type 'fixnum))))))
+    (declare (type index n) (type fixnum-column rows marks))
+    (fill marks 0 :end (1+ n))
+    (with-constraint-block (contact body-a body-b) cbuf
+      (dotimes (j count)
+        (setf (aref marks (aref body-a (aref rows j))) 1))
+      (dotimes (k (constraint-columns-length cbuf))
+        (let ((base (constraint-base k)) (a (aref body-a k)) (b (aref body-b k)))
+          (declare (type index base a b))
+          ;; the kept gap carries the slop ([[#ST0R3S]]): below zero, deeper than a slop
+          (when (and (< a n) (< b n) (< (@ gap) 0.0))
+            (setf (aref marks a) 1 (aref marks b) 1)))))
+    marks))
+
+(defun hold-squeezed-speeds (world limit)
+  "Scale the solver's linear velocity of every awake row WORLD's squeezed column marks down to
+LIMIT, when it is faster. #SQU33Z"
+  (declare (type single-float limit) #.+kernel-policy+)
+  (let ((v (physics-world-velocities world))
+        (marks (physics-world-squeezed world))
+        (limit2 (* limit limit)))
+    (declare (type f32-column v) (type fixnum-column marks) (type single-float limit2))
+    (dotimes (i (body-columns-length (physics-world-awake world)))
+      (when (= (aref marks i) 1)
+        (let* ((o (solver-row i)) (x (aref v o)) (y (aref v (+ o 1))) (z (aref v (+ o 2)))
+               (s2 (+ (* x x) (* y y) (* z z))))
+          (when (> s2 limit2)
+            (let ((s (/ limit (fsqrt s2))))
+              (setf (aref v o) (* x s) (aref v (+ o 1)) (* y s) (aref v (+ o 2)) (* z s)))))))))
+
+(defun squeeze-speed-limit (world)
+  "The fastest speed a squeezed body of WORLD may leave a substep with: the fastest box posted for
+the step plus the push-out speed. #SQU33Z"
+  (let ((boxes (physics-world-boxes world)) (fastest 0.0))
+    (declare (type single-float fastest))
+    (with-box-columns (vx vy vz) boxes
+      (dotimes (b (box-columns-length boxes))
+        (setf fastest (max fastest (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
+                                             (* (aref vz b) (aref vz b))))))))
+    (+ fastest (f32 (physics-world-push-max world)))))
 
 (defun hold-out-of-cells (world)
   "Stop each awake body of WORLD whose delta this step carries its centre into a solid cell, or,
@@ -5772,17 +5827,24 @@ bodies to half the push-out speed. #IDVK7G"
          ;; the box rows and their caps ([[#SQU33Z]]): none in a step with no box posted
          (boxed (if (plusp (box-columns-length (physics-world-boxes world))) (note-box-rows world) 0)))
     (declare (type single-float h inv-h) (type fixnum relaxes boxed))
+    (let ((squeezed nil))
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
         (physics-warm-start kernels world)
         (physics-solve-contacts kernels world inv-h t elapsed)
-        (when (plusp boxed) (yield-box-pushes world boxed))
-        (physics-integrate-positions kernels world h)
-        (dotimes (k relaxes)
-          (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
-          (when (plusp boxed) (yield-box-pushes world boxed)))
-        (when held (hold-crowded-speeds world))))
+        (flet ((yield-boxes ()
+                 ;; a box that yields squeezes what it presses: from then on the step holds it
+                 (when (and (yield-box-pushes world boxed) (not squeezed))
+                   (mark-squeezed-rows world boxed)
+                   (setf squeezed (squeeze-speed-limit world)))))
+          (when (plusp boxed) (yield-boxes))
+          (physics-integrate-positions kernels world h)
+          (dotimes (k relaxes)
+            (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
+            (when (plusp boxed) (yield-boxes))))
+        (when held (hold-crowded-speeds world))
+        (when squeezed (hold-squeezed-speeds world squeezed)))))
     world))
 
 (defparameter *physics-phases*

@@ -4728,7 +4728,8 @@ the phases of a step before the prepare phase. #PR3PAR"
 (defun squeeze-scene (family scene)
   "Run SCENE (:step, :marbles, :far-step, :wall or :press) under FAMILY for 240 steps of 1/60 s; return the
 count of ball positions outside air cells of the resident world or below the floor less a slop,
-the lowest centre, the walker's final x and y (NIL for :press), and the state hash. #SQU33Z"
+the lowest centre, the walker's final x and y (NIL for :press), the state hash and the fastest
+speed of any ball after any step. #SQU33Z"
   (let ((terrain (luv-physics::make-voxel-terrain)))
     (luv-physics::fill-terrain terrain -16 0 -16 16 12 16 nil)
     (luv-physics::fill-terrain terrain -16 -16 -16 16 0 16 t)
@@ -4743,7 +4744,7 @@ the lowest centre, the walker's final x and y (NIL for :press), and the state ha
            (balls (loop for x from 1.0 to 5.5 by 0.5
                         collect (luv-physics::add-physics-body-of-kind world (if (eq scene :marbles) :marble :ball)
                                                                        x 0.3 0.0)))
-           (outside 0) (lowest 100.0))
+           (outside 0) (lowest 100.0) (fastest 0.0))
       (dotimes (frame 240)
         (if (eq scene :press)
             (luv-physics::post-physics-box world 3.25 (max 0.7 (- 1.5 (* frame (/ 1.0 60)))) 0.0 2.0 0.5 1.0
@@ -4752,6 +4753,8 @@ the lowest centre, the walker's final x and y (NIL for :press), and the state ha
                    (luv-physics::post-physics-player world player)))
         (luv-physics::step-physics-world world)
         (dolist (h balls)
+          (multiple-value-bind (vx vy vz) (luv-physics::physics-body-velocity world h)
+            (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))
           (multiple-value-bind (x y z) (luv-physics::physics-body-position world h)
             (setf lowest (min lowest y))
             (unless (and (< -16 x 16) (< -16 z 16) (<= 0 y) (< y 12) (>= y (- slop))
@@ -4760,7 +4763,8 @@ the lowest centre, the walker's final x and y (NIL for :press), and the state ha
       (values outside lowest
               (and (not (eq scene :press)) (luv-physics::physics-player-x player))
               (and (not (eq scene :press)) (luv-physics::physics-player-y player))
-              (luv-physics::physics-world-state-hash world)))))
+              (luv-physics::physics-world-state-hash world)
+              fastest))))
 
 (defun lone-walker-path (scene)
   "The walker's final x and y after the 240 steps of SCENE's walk with no ball in the world. #SQU33Z"
@@ -4777,10 +4781,11 @@ the lowest centre, the walker's final x and y (NIL for :press), and the state ha
   (dolist (scene '(:step :marbles :far-step :wall :press))
     (let ((hashes '()))
       (dolist (family (luv-physics:available-kernel-families))
-        (multiple-value-bind (outside lowest px py hash) (squeeze-scene family scene)
+        (multiple-value-bind (outside lowest px py hash fastest) (squeeze-scene family scene)
           (push hash hashes)
           (check (zerop outside) "~A, ~A: ~D ball positions outside the air of the resident world (lowest y ~,3F)"
                  scene family outside lowest)
+          (check (<= fastest 10.0) "~A, ~A: a ball reached ~,2F m/s" scene family fastest)
           (unless (eq scene :press)
             (multiple-value-bind (lx ly) (lone-walker-path scene)
               (check (and (= px lx) (= py ly)) "~A, ~A: the walker ends at ~,3F ~,3F, alone at ~,3F ~,3F"
