@@ -47,7 +47,8 @@ help:
 	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player, ...) and write"
 	@echo "                    report/view-SCENE.html, a 3D viewer of the run for any browser"
 	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
-	@echo "make fuzz           random operation sequences (SEED=1 COUNT=1200 LENGTH=150); figures into $(ORG)"
+	@echo "make fuzz           random operation sequences (SEED=1 COUNT=1200 LENGTH=150), then random squeezes"
+	@echo "                    (SCENES=40 STEPS=300); figures into $(ORG)"
 	@echo "make soak           a churning world for MINUTES=5 minutes; its heap curve into $(ORG)"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
@@ -173,6 +174,8 @@ fuzz: setup tangle
 	@rm -f report/fuzz-failed
 	@{ SEED="$(SEED)" COUNT="$(FUZZ_COUNT)" LENGTH="$(LENGTH)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/fuzz.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp fuzz-campaign report/fuzz.org
+	@{ FUZZ=squeeze SEED="$(SEED)" SCENES="$(SCENES)" STEPS="$(STEPS)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/squeeze.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp squeeze-campaign report/squeeze.org
 	@test ! -e report/fuzz-failed
 
 soak: setup tangle

@@ -5746,6 +5746,106 @@ the velocity into the face and report a :held-out event. Return how many bodies 
   (physics-world-held-out-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:1 ends here
 
+;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:5]]
+(defun squeeze-scene-world (next kernels)
+  "A random scene for the squeeze campaign, drawn from the generator NEXT: a world solved by
+KERNELS over a floor three cells deep (top at y = 0) with blocks and pits in [-4, 4), and its
+bodies of one radius, mass and restitution. Return the world, its terrain, the bodies' handles
+and their restitution. #SQU33Z"
+  (flet ((pick (lo hi) (+ lo (* (- hi lo) (funcall next))))
+         (cell (lo hi) (+ lo (floor (* (- hi lo) (funcall next))))))
+    (let ((terrain (make-voxel-terrain)))
+      ;; the floor covers its chunks' whole extent: no edge for a body to fall from
+      (fill-terrain terrain -16 0 -16 16 16 16 nil)
+      (fill-terrain terrain -16 -3 -16 16 0 16 t)
+      (dotimes (k (cell 3 9))
+        (let ((x (cell -4 3)) (z (cell -4 3)))
+          (if (< (funcall next) 0.25)
+              (fill-terrain terrain x -1 z (+ x (cell 1 3)) 0 (+ z (cell 1 3)) nil)
+              (fill-terrain terrain x 0 z (+ x (cell 1 3)) (cell 1 4) (+ z (cell 1 3)) t))))
+      (let* ((world (make-physics-world :terrain terrain :kernels kernels))
+             (r (pick 0.08 0.4)) (e (float (* 0.1 (cell 0 10)) 1.0)) (mu (pick 0.0 0.8))
+             (bodies '()))
+        (loop repeat 200 while (< (length bodies) (cell 10 31))
+              do (let* ((x (pick -4.0 4.0)) (z (pick -4.0 4.0))
+                        (top (loop for y from 11 downto -3
+                                   when (terrain-solid-p terrain (floor x) y (floor z)) return (1+ y)
+                                   finally (return -3)))
+                        (y (+ top r 0.01)))
+                   (when (and (< y 11) (not (terrain-solid-p terrain (floor x) (floor y) (floor z))))
+                     (push (add-physics-body world x y z :radius r :mass 1.0 :restitution e :friction mu) bodies))))
+        (values world terrain (nreverse bodies) e)))))
+
+(defun run-squeeze-campaign (&key (seed 1) (scenes 40) (steps 300))
+  "Run SCENES random squeeze scenes (squeeze-scene-world) of STEPS steps, the I-th drawn from seed
+SEED*1000003+I and solved by the I-th kernel family this CPU runs, in turn. Return a plist of
+figures: :scenes, :box-steps, :body-steps, :inside (body positions outside the air of the
+resident world after a step), :over (speeds over the scene's energy bound), :worst (the largest
+speed over its bound, as a ratio), :fastest (m/s) and :held (bodies stopped at a cell's face). #SQU33Z"
+  (let ((box-steps 0) (body-steps 0) (inside 0) (over 0) (worst 0.0) (fastest 0.0) (held 0)
+        (g 9.81) (push-max *physics-contact-push-max*))
+    (dotimes (i scenes)
+      (let* ((next (fixed-sequence (+ (* seed 1000003) i)))
+             (families (available-kernel-families))
+             (kernels (nth (mod i (length families)) families)))
+        (multiple-value-bind (world terrain bodies e) (squeeze-scene-world next kernels)
+          (let* ((boxes (loop repeat (+ 1 (floor (* 3 (funcall next))))
+                              collect (list (vector (- (* 8 (funcall next)) 4) (+ 0.5 (* 3 (funcall next))) (- (* 8 (funcall next)) 4))
+                                            (vector (+ 0.2 (* 1.3 (funcall next))) (+ 0.2 (* 0.8 (funcall next))) (+ 0.2 (* 1.3 (funcall next))))
+                                            (vector 0 0 0) 0)))
+                 (top 0.0) (fastest-box 0.0) (dt (/ 1.0 60))
+                 ;; the top of the highest block
+                 (blocks (loop for y from 11 downto 0
+                               when (loop for x from -4 below 5 thereis
+                                      (loop for z from -4 below 5 thereis (terrain-solid-p terrain x (1- y) z)))
+                                 return y
+                               finally (return 0))))
+            (dotimes (step steps)
+              (dolist (b boxes)
+                (destructuring-bind (c h v turn) b
+                  (when (<= turn step)
+                    ;; a new velocity, up to 5 m/s, downward as often as up
+                    (let ((speed (* 5 (funcall next))) (ax (- (funcall next) 0.5)) (ay (- (funcall next) 0.5)) (az (- (funcall next) 0.5)))
+                      (let ((l (max 1e-6 (sqrt (+ (* ax ax) (* ay ay) (* az az))))))
+                        (setf (aref v 0) (* speed (/ ax l)) (aref v 1) (* speed (/ ay l)) (aref v 2) (* speed (/ az l)))))
+                    (setf (fourth b) (+ step 10 (floor (* 50 (funcall next))))))
+                  ;; the box stays over the blocks and above the floor's bottom
+                  (dotimes (k 3)
+                    (let ((lo (if (= k 1) (+ -2.5 (aref h 1)) -4.5)) (hi (if (= k 1) 4.0 4.5)))
+                      (when (or (and (< (aref c k) lo) (< (aref v k) 0)) (and (> (aref c k) hi) (> (aref v k) 0)))
+                        (setf (aref v k) (- (aref v k))))))
+                  (post-physics-box world (aref c 0) (aref c 1) (aref c 2) (aref h 0) (aref h 1) (aref h 2)
+                                    :vx (aref v 0) :vy (aref v 1) :vz (aref v 2) :owner b)
+                  (setf top (max top (+ (aref c 1) (aref h 1)))
+                        fastest-box (max fastest-box (sqrt (+ (expt (aref v 0) 2) (expt (aref v 1) 2) (expt (aref v 2) 2)))))
+                  (dotimes (k 3) (incf (aref c k) (* dt (aref v k))))
+                  (incf box-steps)))
+              (step-physics-world world)
+              (incf held (physics-world-last-step-held-out-count world))
+              (let ((bound2 (+ (expt (+ (* (+ 1 e) fastest-box) push-max) 2) (* 2 g (max top blocks)))))
+                (dolist (h bodies)
+                  (when (physics-body-alive-p world h)
+                    (incf body-steps)
+                    (multiple-value-bind (x y z) (physics-body-position world h)
+                      ;; a cell of a chunk that is not resident counts as solid
+                      (when (terrain-solid-p terrain (floor x) (floor y) (floor z))
+                        (incf inside)))
+                    (multiple-value-bind (vx vy vz) (physics-body-velocity world h)
+                      (let ((s2 (+ (* vx vx) (* vy vy) (* vz vz))))
+                        (setf fastest (max fastest (sqrt s2))
+                              worst (max worst (sqrt (/ s2 bound2))))
+                        (when (> s2 bound2) (incf over))))))))))))
+    (list :scenes scenes :box-steps box-steps :body-steps body-steps :inside inside :over over
+          :worst worst :fastest fastest :held held)))
+
+(defun print-squeeze-figures (figures seconds stream)
+  "Print the FIGURES of a squeeze campaign (run-squeeze-campaign) that took SECONDS as an Org
+table. #SQU33Z"
+  (format stream "~&| scenes | box-steps | body-steps | outside the air | over the bound | fastest / bound | fastest, m/s | held at a face | seconds |~%|-~%| ~D | ~D | ~D | ~D | ~D | ~,3F | ~,2F | ~D | ~,1F |~%"
+          (getf figures :scenes) (getf figures :box-steps) (getf figures :body-steps) (getf figures :inside)
+          (getf figures :over) (getf figures :worst) (getf figures :fastest) (getf figures :held) seconds))
+;; Squeezed between a box and the cells: the box yields, the cells hold:5 ends here
+
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
 (defun reset-phase (world)
   "Phase 1: empty the event buffer, make the probe forget its borrowed chunks, count the step
