@@ -27,7 +27,7 @@
    #:voxel-terrain #:make-voxel-terrain #:terrain-solid-p #:terrain-resident-p #:fill-terrain
    ;; The world, kernel families, making worlds and bodies (#W0RLD7, #R9M4PV, #M4K3WD)
    #:physics-world #:physics-world-event-handler #:physics-world-step-count
-   #:kernel-family #:scalar-kernels #:make-physics-world #:add-physics-body
+   #:kernel-family #:scalar-kernels #:make-physics-world #:add-physics-body #:physics-body-in-solid-cell
    #:physics-body-alive-p #:physics-body-awake-p #:physics-body-position #:physics-body-velocity
    #:physics-body-angular-velocity #:physics-body-orientation #:physics-body-radius
    #:physics-world-awake-count #:physics-world-sleeping-count
@@ -39,6 +39,7 @@
    #:physics-integrate-positions
    ;; The step, determinism, validation, bodies as objects (#IDVK7G, #S6T2MV, #V4L1D8, #B0DY0B)
    #:step-physics-world #:*physics-phases* #:physics-world-last-step-contact-count
+   #:physics-world-last-step-held-out-count
    #:physics-world-last-step-color-count #:physics-world-last-step-real-seconds
    #:physics-world-max-penetration #:physics-world-max-approach-speed #:physics-world-overflow-count
    #:physics-world-state-hash #:validate-physics-world
@@ -991,6 +992,19 @@ single-float goes through double precision; both round correctly, so they agree)
                        (:unissued "a handle of no world: no world has given out its tag")
                        (:removed "of a body that was removed or expired")))))
   (:documentation "A handle that names no live body of this world. #C0ND1T"))
+
+(define-condition physics-body-in-solid-cell (invalid-physics-parameter)
+  ((operation :initarg :operation :reader physics-body-in-solid-cell-operation)
+   (cell :initarg :cell :reader physics-body-in-solid-cell-cell)
+   (resident :initarg :resident :reader physics-body-in-solid-cell-resident))
+  (:report (lambda (c s)
+             (format s "~(~A~): the centre ~S lies in the ~:[non-resident~;solid~] cell ~S; a body starts ~
+                        in an air cell of the resident terrain, or is added with :inside-cells :push-out ~
+                        to be pushed out" (physics-body-in-solid-cell-operation c)
+                     (invalid-physics-parameter-value c) (physics-body-in-solid-cell-resident c)
+                     (physics-body-in-solid-cell-cell c))))
+  (:documentation "A body placed with its centre in a solid cell, or in a chunk that is not
+resident (which counts as solid). #C0ND1T"))
 
 (define-condition physics-world-busy (physics-error)
   ((operation :initarg :operation :reader physics-world-busy-operation))
@@ -2163,6 +2177,8 @@ dispatches on it once per call. #W0RLD7"))
              :accessor physics-world-box-caps)
    (held-out-count :initform 0 :type fixnum :accessor physics-world-held-out-count)
    (squeezed :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-squeezed)
+   (near-cells :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-near-cells)
+   (near-cells-step :initform -1 :type fixnum :accessor physics-world-near-cells-step)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
@@ -2490,11 +2506,30 @@ else the error, naming OPERATION where a feature is missing. #M4K3WD"
             (one :friction friction +physics-max-friction+ :friction)
             (one :rolling-resistance rolling-resistance +physics-max-friction+ :rolling-resistance))))
 
+(defun check-centre-in-air (world operation x y z inside-cells)
+  "Signal physics-body-in-solid-cell, naming OPERATION, when the centre X Y Z lies in a solid or
+non-resident cell of WORLD's terrain, unless INSIDE-CELLS is :push-out; signal
+invalid-physics-parameter when INSIDE-CELLS is neither that nor :refuse. #M4K3WD"
+  (unless (member inside-cells '(:refuse :push-out))
+    (error 'invalid-physics-parameter :world world :name :inside-cells :value inside-cells
+                                      :expected ":refuse or :push-out"))
+  (let ((terrain (physics-world-terrain world)))
+    (when (and terrain (eq inside-cells :refuse))
+      (let ((ix (floor x)) (iy (floor y)) (iz (floor z)))
+        (when (terrain-solid-p terrain ix iy iz)
+          (error 'physics-body-in-solid-cell :world world :operation operation :name :position
+                                             :value (list x y z) :cell (list ix iy iz)
+                                             :resident (terrain-resident-p terrain ix iy iz)
+                                             :expected "a centre in an air cell of the resident terrain"))))))
+
 (defun add-physics-body (world x y z &key (radius 0.25) (mass 1.0) (restitution 0.0) (friction 0.6)
                                        (rolling-resistance 0.0) (vx 0.0) (vy 0.0) (vz 0.0)
-                                       life (collide-with-bodies t) report-hits (kind 0))
+                                       life (collide-with-bodies t) report-hits (kind 0)
+                                       (inside-cells :refuse))
   "Add an awake sphere centred at X Y Z to WORLD and return its handle. LIFE, when given, is the
-number of seconds after which it expires. #M4K3WD"
+number of seconds after which it expires. A centre in a solid or non-resident cell is refused
+with physics-body-in-solid-cell, unless INSIDE-CELLS is :push-out: then the body is added and its
+cell's contact pushes it out through the shallowest face whose neighbour is air ([[#MYWH16]]). #M4K3WD"
   (check-idle world 'add-physics-body)
   (let* ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
          (r (finite-f32 :radius radius world)) (m (finite-f32 :mass mass world))
@@ -2503,6 +2538,7 @@ number of seconds after which it expires. #M4K3WD"
          (life (if life (finite-f32 :life life world) 0.0))
          (limit (max-radius-for world)))
     (check-coordinate :x x world) (check-coordinate :y y world) (check-coordinate :z z world)
+    (check-centre-in-air world 'add-physics-body x y z inside-cells)
     (unless (<= +physics-min-radius+ r limit)
       (error 'invalid-physics-radius :world world :value radius :limit limit))
     (unless (<= +physics-min-mass+ m +physics-max-mass+)
@@ -3874,12 +3910,19 @@ is under the speculative distance. #MYWH16"
              (use-clear (and current (not fresh) (eq (pair-list-terrain plist) terrain)
                              (= (pair-list-terrain-edits plist) (voxel-terrain-edits terrain))))
              (loose (pair-list-loose plist)) (clear (pair-list-clear plist))
-             (widen (* 0.45 (f32 (physics-world-pair-skin world)))))
+             (widen (* 0.45 (f32 (physics-world-pair-skin world))))
+             ;; which rows have a solid cell within their reach, for the finalize phase's
+             ;; check of their paths ([[#SQU33Z]])
+             (near (let ((a (physics-world-near-cells world)))
+                     (if (> (length a) n)
+                         a
+                         (setf (physics-world-near-cells world) (make-array (* 2 (1+ n)) :element-type 'fixnum))))))
         (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key)
-                 (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear)
+                 (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear near)
                  (type contact-columns contacts) (type contact-table table) (inline touch-contact))
         (when fresh
           (setf (pair-list-terrain plist) terrain (pair-list-terrain-edits plist) (voxel-terrain-edits terrain)))
+        (setf (physics-world-near-cells-step world) (contact-table-step table))
         (labels ((chunk-at (key)
                    (declare (type fixnum key))
                    (if (= key last-key)
@@ -3947,6 +3990,7 @@ is under the speculative distance. #MYWH16"
                                                                    to (cell-floor (+ cx wide))
                                                                  never (cell-solid-p ix iy iz))))))
                           1 0)))
+              (setf (aref near i) (if (or (/= mask 0) (> travel margin)) 1 0))
               ;; a body that can travel past its margin this step also sweeps its path
               (when (> travel margin)
                 (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
@@ -5699,14 +5743,24 @@ the velocity into the face and report a :held-out event. Return how many bodies 
              (margin (f32 (physics-world-margin world)))
              (limit (f32 (physics-world-reach-limit world)))
              (dt (physics-world-current-dt world))
-             (gstep (gravity-step world dt)))
-        (declare (type f32-column v d) (type single-float margin limit dt gstep))
+             (gstep (gravity-step world dt))
+             (margin2 (* margin margin))
+             ;; the terrain phase's note of the rows with a solid cell within reach, when it
+             ;; ran this step
+             (near (and (= (physics-world-near-cells-step world) (physics-world-step-count world))
+                        (physics-world-near-cells world))))
+        (declare (type f32-column v d) (type single-float margin limit dt gstep margin2)
+                 (type (or null fixnum-column) near))
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i (body-columns-length awake))
             (let* ((p (delta-row i))
                    (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
-                   (cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                   (moved2 (+ (* dx dx) (* dy dy) (* dz dz)))
+                   (moved2 (+ (* dx dx) (* dy dy) (* dz dz))))
+              (declare (type index p) (type single-float dx dy dz moved2))
+              ;; a row with no solid cell within its reach, on a path within its margin, ends
+              ;; in a cell within that reach: air
+              (when (or (null near) (/= (aref near i) 0) (> moved2 margin2))
+            (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                    ;; longer than the terrain phase looked: past its margin and past the travel
                    ;; the body's velocity at the start of the step promised
                    (long (and (> moved2 (* margin margin))
@@ -5714,7 +5768,7 @@ the velocity into the face and report a :held-out event. Return how many bodies 
                                                                       (* (aref vz i) (aref vz i)))))))
                                      (looked (- (min limit (+ r (max margin travel))) r)))
                                 (> moved2 (* looked looked))))))
-              (declare (type index p) (type single-float dx dy dz cx cy cz r moved2))
+              (declare (type single-float cx cy cz r))
               (when (or long
                         (/= (cell-floor cx) (cell-floor (+ cx dx)))
                         (/= (cell-floor cy) (cell-floor (+ cy dy)))
@@ -5736,7 +5790,7 @@ the velocity into the face and report a :held-out event. Return how many bodies 
                                 (aref v o) (- (aref v o) into))
                           (incf held)
                           (push-event world +event-held-out+ (aref handle i) +no-body+
-                                      (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into)))))))))))))
+                                      (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into)))))))))))))))
     (setf (physics-world-held-out-count world) held)
     held))
 
@@ -7226,16 +7280,16 @@ naming it. #JAU0EF"
   "The entry of the NUMBER-th kind of *physics-body-kinds*: its keyword, then its arguments. #JAU0EF"
   (nth (1- number) *physics-body-kinds*))
 
-(defun add-physics-body-of-kind-number (world number x y z vx vy vz report-hits)
+(defun add-physics-body-of-kind-number (world number x y z vx vy vz report-hits &optional (inside-cells :refuse))
   "Add a body of the NUMBER-th kind of *physics-body-kinds* and return its handle. #JAU0EF"
   (apply #'add-physics-body world x y z :kind number :vx vx :vy vy :vz vz :report-hits report-hits
-         (rest (physics-kind-entry number))))
+         :inside-cells inside-cells (rest (physics-kind-entry number))))
 
-(defun add-physics-body-of-kind (world kind x y z &key (vx 0.0) (vy 0.0) (vz 0.0) report-hits)
+(defun add-physics-body-of-kind (world kind x y z &key (vx 0.0) (vy 0.0) (vz 0.0) report-hits (inside-cells :refuse))
   "Add a body of KIND (a keyword of *physics-body-kinds*) centred at X Y Z, moving at VX VY VZ,
-and return its handle. #JAU0EF"
+and return its handle; INSIDE-CELLS as for add-physics-body. #JAU0EF"
   (check-world world 'add-physics-body-of-kind)
-  (add-physics-body-of-kind-number world (physics-kind-number kind world) x y z vx vy vz report-hits))
+  (add-physics-body-of-kind-number world (physics-kind-number kind world) x y z vx vy vz report-hits inside-cells))
 
 (defun physics-body-kind-name (world handle)
   "The keyword of the kind of HANDLE's body, or NIL for a body added without a kind. #JAU0EF"
@@ -8364,7 +8418,7 @@ floor. #X7R3M5"
     (fill-terrain terrain -16 -16 -16 32 32 32 nil)
     (fill-terrain terrain -16 -3 -16 32 0 32 t)
     (let* ((world (make-physics-world :terrain terrain))
-           (ball (add-physics-body world 0.5 (- depth) 0.5 :radius 0.25))
+           (ball (add-physics-body world 0.5 (- depth) 0.5 :radius 0.25 :inside-cells :push-out))
            (dt (float (physics-world-step-seconds world) 1d0))
            (fastest 0d0))
       (multiple-value-bind (x0 y0 z0) (physics-body-position world ball)

@@ -1607,6 +1607,41 @@ function of a column name that reads row K's float in that column. #T3STK1"
       (setf luv-physics::*kernel-families* before))))
 ;; R9M4PV-registry-refuses-bad-names ends here
 
+;; [[file:../physics.org::#M4K3WD][M4K3WD-centres-start-in-air]]
+(define-claim "M4K3WD" centres-start-in-air
+    "A centre in a solid or non-resident cell is refused by name and leaves the world as it was; :push-out adds it."
+  (let ((w (make-floor-world)))
+    (add-physics-body w 5.5 0.3 5.5)
+    (step-physics-world w)
+    (let ((before (world-fingerprint w)))
+      (loop for (x y z cell resident) in '((3.5 -0.3 3.5 (3 -1 3) t) (40.0 3.0 3.0 (40 3 3) nil))
+            do (dolist (add (list (lambda () (add-physics-body w x y z))
+                                  (lambda () (add-physics-body-of-kind w :ball x y z))))
+                 (let ((got (handler-case (progn (funcall add) :added)
+                              (physics-body-in-solid-cell (e)
+                                (list (luv-physics::physics-body-in-solid-cell-operation e)
+                                      (luv-physics::invalid-physics-parameter-name e)
+                                      (luv-physics::invalid-physics-parameter-value e)
+                                      (luv-physics::physics-body-in-solid-cell-cell e)
+                                      (luv-physics::physics-body-in-solid-cell-resident e))))))
+                   (check (and (consp got) (member (first got) '(add-physics-body add-physics-body-of-kind))
+                               (eq (second got) :position) (equal (third got) (list x y z))
+                               (equal (fourth got) cell) (eq (and (fifth got) t) resident))
+                          "a centre at ~S gave ~S" (list x y z) got)
+                   (check (equal before (world-fingerprint w)) "a refused body changed the world")
+                   (check (luv-physics::validate-physics-world w)))))
+      (check (eq :inside-cells (handler-case (progn (add-physics-body w 2.5 0.5 2.5 :inside-cells :yes) nil)
+                                 (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+             "an :inside-cells of :yes was not refused by its name")
+      (check (equal before (world-fingerprint w)) "a refused :inside-cells changed the world"))
+    (let ((h (add-physics-body w 3.5 -0.3 3.5 :inside-cells :push-out)))
+      (dotimes (i 120) (step-physics-world w))
+      (check (< (abs (- (body-y w h) (- 0.25 luv-physics::*physics-linear-slop*))) 0.002)
+             "the ball pushed out of the floor rests at y = ~,5F" (body-y w h)))
+    (check (add-physics-body w 2.5 0.5 2.5) "a centre in the air was refused")
+    (check (add-physics-body (make-physics-world) 40.0 -3.0 3.0) "a world without terrain refused a body")))
+;; M4K3WD-centres-start-in-air ends here
+
 ;; [[file:../physics.org::#M4K3WD][M4K3WD-non-world-named]]
 (define-claim "M4K3WD" non-world-named
     "Exported functions of a WORLD signal not-a-physics-world naming themselves and WORLD for a non-world."
@@ -3284,7 +3319,7 @@ use before it. #QKS4GZ"
                                  (fill-terrain terrain 4 4 4 5 5 5 t)
                                  (fill-terrain terrain (- 4 ox) (- 4 oy) (- 4 oz) (- 5 ox) (- 5 oy) (- 5 oz) t)
                                  (flet ((at (o) (+ 4 (case o (1 0.15) (-1 0.85) (t 0.5)))))
-                                   (let ((h (add-physics-body w (at ox) (at oy) (at oz) :radius 0.3)))
+                                   (let ((h (add-physics-body w (at ox) (at oy) (at oz) :radius 0.3 :inside-cells :push-out)))
                                      (step-physics-world w)
                                      (check (= 1 (length (terrain-contacts w h)))
                                             "overshoot (~D ~D ~D): ~D terrain contacts" ox oy oz
@@ -3360,7 +3395,7 @@ use before it. #QKS4GZ"
     "A ball centred in a floor cell, nearest a face into floor, leaves through the air above, a block beside that air."
   (multiple-value-bind (w terrain) (make-floor-world :sleep nil)
     (setf (luv-physics::terrain-solid-p terrain 6 0 5) t (luv-physics::terrain-solid-p terrain 5 0 6) t)
-    (let ((h (luv-physics::add-physics-body w 5.1 -0.4 5.5 :radius 0.25)))
+    (let ((h (luv-physics::add-physics-body w 5.1 -0.4 5.5 :radius 0.25 :inside-cells :push-out)))
       (luv-physics::step-physics-world w)
       (check-pushed-up-to-rest w h 60))))
 ;; MYWH16-inside-leaves-through-open-face ends here
@@ -3474,7 +3509,7 @@ use before it. #QKS4GZ"
     "A fast ball whose centre lies in a solid cell makes no sweep contact with the cells ahead."
   (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
     (declare (ignore terrain))
-    (let ((h (add-physics-body w 3.5 -0.5 3.5 :radius 0.3 :vx 60.0)))
+    (let ((h (add-physics-body w 3.5 -0.5 3.5 :radius 0.3 :vx 60.0 :inside-cells :push-out)))
       (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
                        luv-physics::pair-phase luv-physics::terrain-phase))
         (funcall phase w))
@@ -7717,7 +7752,8 @@ outside the walls, 40 woken and thrown, 5 steps, and two boxes posted. Return th
     (luv-physics::fill-terrain terrain 8 0 3 9 2 4 nil)
     (dotimes (i 400)
       (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
-        (add-physics-body w x y z :radius (+ 0.15 (* 0.1 (funcall next))))))
+        ;; the pillars stand where some spawn points are: those balls start pushed out
+        (add-physics-body w x y z :radius (+ 0.15 (* 0.1 (funcall next))) :inside-cells :push-out)))
     (dotimes (i 20) (add-physics-body w (- -2 (* 4 (funcall next))) 0.3 (* 8 (funcall next)) :radius 0.2))
     (dotimes (i 300) (step-physics-world w))
     (let ((s (luv-physics::physics-world-sleeping w)))
