@@ -39,7 +39,7 @@
    #:physics-integrate-positions
    ;; The step, determinism, validation, bodies as objects (#IDVK7G, #S6T2MV, #V4L1D8, #B0DY0B)
    #:step-physics-world #:*physics-phases* #:physics-world-last-step-contact-count
-   #:physics-world-last-step-held-out-count
+   #:physics-world-last-step-held-out-count #:physics-world-last-step-buried-count
    #:physics-world-last-step-color-count #:physics-world-last-step-real-seconds
    #:physics-world-max-penetration #:physics-world-max-approach-speed #:physics-world-overflow-count
    #:physics-world-state-hash #:validate-physics-world
@@ -2177,8 +2177,9 @@ dispatches on it once per call. #W0RLD7"))
              :accessor physics-world-box-caps)
    (held-out-count :initform 0 :type fixnum :accessor physics-world-held-out-count)
    (squeezed :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-squeezed)
-   (near-cells :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-near-cells)
+   (near-cells :initform (make-array 0 :element-type 'single-float) :accessor physics-world-near-cells)
    (near-cells-step :initform -1 :type fixnum :accessor physics-world-near-cells-step)
+   (buried-count :initform 0 :type fixnum :accessor physics-world-buried-count)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
@@ -3141,7 +3142,7 @@ sleeper or where in it. #G4R1D5"
            ,@body)))))
 
 (defun grid-phase (world)
-  "Phase 3: find the pair list's loose rows; unless the list holds and the awake grid still has
+  "The grid phase: find the pair list's loose rows; unless the list holds and the awake grid still has
 the cells of the list's build, bucket the awake bodies by cell, and put the awake rows in the
 order of a dense grid when they have drifted out of it. #G4R1D5"
   (let* ((awake (physics-world-awake world))
@@ -3212,7 +3213,7 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
 
 ;; [[file:../physics.org::#W4K3PH][Fast bodies and moving boxes wake what they reach:1]]
 (defun wake-phase (world)
-  "Phase 2: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
+  "The wake phase: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
 sleepers they can reach this step: within the margin plus one step's travel; bodies added since
 the last step wake the sleepers they overlap deeper than the slop. Return how many woke. #W4K3PH"
   (let ((sleeping (physics-world-sleeping world))
@@ -3302,7 +3303,7 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
     woken))
 
 (defun quiet-wake-phase (world)
-  "Phase 2 of a world without body contacts and boxes, where nothing reaches a sleeper: wake
+  "The wake phase of a world without body contacts and boxes, where nothing reaches a sleeper: wake
 nothing, forget the bodies added since the last step, and build the sleeping grids again only
 when they are spent (sleeping-grids-spent-p), so that the fresh sleepers' list stays bounded.
 Return 0. #W4K3PH"
@@ -3601,7 +3602,7 @@ walk keeps its values in registers. #P41RS7"
       (values count crowded))))
 
 (defun pair-phase (world)
-  "Phase 4: contacts between awake bodies (each pair once) and lean contacts from awake bodies
+  "The pair phase: contacts between awake bodies (each pair once) and lean contacts from awake bodies
 onto the sleepers they reach. The pairs come from the pair list while it still holds: the
 listed pairs whose rows both stayed near their anchors, and for each loose row the awake
 bodies of its 27 cells. Otherwise the list is built again, walking the half neighbourhood of
@@ -3883,7 +3884,7 @@ open. #MYWH16"
 the bits of the 27-bit neighbourhood mask that lie inside it. #MYWH16")
 
 (defun terrain-phase (world)
-  "Phase 5: each awake body gathers the solid cells within its reach into a 27-bit mask and
+  "The terrain phase: each awake body gathers the solid cells within its reach into a 27-bit mask and
 offers one contact per cell whose face, edge or corner passes the overshoot rule and whose gap
 is under the speculative distance. #MYWH16"
   (declare #.+kernel-policy+)
@@ -3911,14 +3912,16 @@ is under the speculative distance. #MYWH16"
                              (= (pair-list-terrain-edits plist) (voxel-terrain-edits terrain))))
              (loose (pair-list-loose plist)) (clear (pair-list-clear plist))
              (widen (* 0.45 (f32 (physics-world-pair-skin world))))
-             ;; which rows have a solid cell within their reach, for the finalize phase's
-             ;; check of their paths ([[#SQU33Z]])
+             ;; for each row, the square of the longest path the finalize phase may leave
+             ;; unchecked ([[#SQU33Z]]): as far as its reach, and short of the nearest solid cell
              (near (let ((a (physics-world-near-cells world)))
                      (if (> (length a) n)
                          a
-                         (setf (physics-world-near-cells world) (make-array (* 2 (1+ n)) :element-type 'fixnum))))))
-        (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key)
-                 (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear near)
+                         (setf (physics-world-near-cells world) (make-array (* 2 (1+ n)) :element-type 'single-float)))))
+             ;; the bodies whose centre lies in a solid cell
+             (buried 0))
+        (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key buried)
+                 (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear) (type f32-column near)
                  (type contact-columns contacts) (type contact-table table) (inline touch-contact))
         (when fresh
           (setf (pair-list-terrain plist) terrain (pair-list-terrain-edits plist) (voxel-terrain-edits terrain)))
@@ -3990,7 +3993,8 @@ is under the speculative distance. #MYWH16"
                                                                    to (cell-floor (+ cx wide))
                                                                  never (cell-solid-p ix iy iz))))))
                           1 0)))
-              (setf (aref near i) (if (or (/= mask 0) (> travel margin)) 1 0))
+              ;; as far as the cells gathered reach, until a solid one nearer is met below
+              (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
               ;; a body that can travel past its margin this step also sweeps its path
               (when (> travel margin)
                 (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
@@ -4008,7 +4012,10 @@ is under the speculative distance. #MYWH16"
                                 (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
                             (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
                                 (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
-                              ;; outside: the overshoot rule, then the contact
+                              ;; outside: the nearest solid cell so far, the overshoot rule, then
+                              ;; the contact
+                              (progn
+                              (when (< d2 (aref near i)) (setf (aref near i) d2))
                               (when (and (<= d2 (* reach reach))
                                          (not (or (and (/= ox 0) (solid (+ ix ox) iy iz))
                                                   (and (/= oy 0) (solid ix (+ iy oy) iz))
@@ -4026,13 +4033,17 @@ is under the speculative distance. #MYWH16"
                                                 (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
                                                 dt slop ahead gstep))
                                     (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
-                                                   nx ny nz sep px py pz 0.0 0.0 0.0))))
-                              ;; inside: push out through a face
-                              (multiple-value-bind (nx ny nz px py pz sep)
-                                  (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
-                                               ix iy iz)
-                                (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
-                                               nx ny nz sep px py pz 0.0 0.0 0.0))))))))))))))))
+                                                   nx ny nz sep px py pz 0.0 0.0 0.0)))))
+                              ;; inside: push out through a face, and count the body buried
+                              (progn
+                                (setf (aref near i) 0.0)
+                                (incf buried)
+                                (multiple-value-bind (nx ny nz px py pz sep)
+                                    (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
+                                                 ix iy iz)
+                                  (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
+                                                 nx ny nz sep px py pz 0.0 0.0 0.0))))))))))))))
+        (setf (physics-world-buried-count world) buried))))
     world))
 ;; Sphere against cells: the overshoot rule keeps seams smooth:1 ends here
 
@@ -4103,7 +4114,7 @@ with the face the ray enters it through. #SW33P7"
 
 ;; [[file:../physics.org::#B0XPH5][Boxes touch as moving terrain:1]]
 (defun box-phase (world)
-  "Phase 6: posted kinematic boxes touch the awake bodies near them as moving terrain. #B0XPH5"
+  "The box phase: posted kinematic boxes touch the awake bodies near them as moving terrain. #B0XPH5"
   (let* ((boxes (physics-world-boxes world))
          (awake (physics-world-awake world))
          (grid (physics-world-awake-grid world))
@@ -4153,7 +4164,7 @@ with the face the ray enters it through. #SW33P7"
 
 ;; [[file:../physics.org::#PRUN3D][Contacts not found this step are pruned:1]]
 (defun prune-phase (world)
-  "Phase 7: drop every contact not seen this step (a touching one ends with an :end event). When
+  "The prune phase: drop every contact not seen this step (a touching one ends with an :end event). When
 the table's cursor has missed as often as there are rows, put the rows found this step in the
 order they were found; otherwise swap-remove, patching the table entry of the row that fills
 the hole. #PRUN3D"
@@ -4541,7 +4552,7 @@ short path changes no bit compares the two. #PR3PAR")
 
 (define-featured-kernel (prepare-phase :features (:body-contacts :boxes :friction :restitution :rolling-resistance :contact-events :hit-events))
     (world)
-  "Phase 8: colour the contacts, then write the constraint buffer in colour order, and load the
+  "The prepare phase: colour the contacts, then write the constraint buffer in colour order, and load the
 awake bodies' velocities into the solver; note the number of colours used in the step's
 statistics, and return it. Compiled for fewer features, it writes no column the world's kernels
 do not read: restitution's, rolling resistance's, and the approach speed only events read. #PR3PAR"
@@ -5428,7 +5439,7 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
              (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
 
 (define-featured-kernel (store-phase :features (:body-contacts :boxes :friction :contact-events :hit-events :rolling-resistance)) (world)
-  "Phase 10: copy each constraint's impulses back to its contact, note touching flips as :begin
+  "The store phase: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
 speed; in a world with sleepers, mark the awake rows that only sleepers and terrain touch
 (mark-held), for the finalize phase's sleep. From here on the step changes what it cannot undo,
@@ -5544,7 +5555,7 @@ reading and writing at most eight arrays. #F1NAL5"
           (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
 
 (define-featured-kernel (finalize-phase :features (:body-contacts :boxes :sleep :mortal)) (world)
-  "Phase 11: fold deltas into positions and solver velocities into the rows, turn orientations,
+  "The finalize phase, last of the step: fold deltas into positions and solver velocities into the rows, turn orientations,
 age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
 sleep. Rows are visited from the last down, so relocation never skips one. Compiled for fewer
 features it holds no ageing without :mortal, no sleep without :sleep, and no reading of the
@@ -5744,22 +5755,21 @@ the velocity into the face and report a :held-out event. Return how many bodies 
              (limit (f32 (physics-world-reach-limit world)))
              (dt (physics-world-current-dt world))
              (gstep (gravity-step world dt))
-             (margin2 (* margin margin))
-             ;; the terrain phase's note of the rows with a solid cell within reach, when it
-             ;; ran this step
+             ;; the terrain phase's note of how near each row's nearest solid cell lies, when
+             ;; it ran this step
              (near (and (= (physics-world-near-cells-step world) (physics-world-step-count world))
                         (physics-world-near-cells world))))
-        (declare (type f32-column v d) (type single-float margin limit dt gstep margin2)
-                 (type (or null fixnum-column) near))
+        (declare (type f32-column v d) (type single-float margin limit dt gstep)
+                 (type (or null f32-column) near))
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i (body-columns-length awake))
             (let* ((p (delta-row i))
                    (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
                    (moved2 (+ (* dx dx) (* dy dy) (* dz dz))))
               (declare (type index p) (type single-float dx dy dz moved2))
-              ;; a row with no solid cell within its reach, on a path within its margin, ends
-              ;; in a cell within that reach: air
-              (when (or (null near) (/= (aref near i) 0) (> moved2 margin2))
+              ;; a path shorter than the way to the nearest solid cell the terrain phase
+              ;; gathered, and no longer than the way it looked, stays in the air
+              (when (or (null near) (> moved2 (aref near i)))
             (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                    ;; longer than the terrain phase looked: past its margin and past the travel
                    ;; the body's velocity at the start of the step promised
@@ -5769,10 +5779,7 @@ the velocity into the face and report a :held-out event. Return how many bodies 
                                      (looked (- (min limit (+ r (max margin travel))) r)))
                                 (> moved2 (* looked looked))))))
               (declare (type single-float cx cy cz r))
-              (when (or long
-                        (/= (cell-floor cx) (cell-floor (+ cx dx)))
-                        (/= (cell-floor cy) (cell-floor (+ cy dy)))
-                        (/= (cell-floor cz) (cell-floor (+ cz dz))))
+              (progn
                 (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
                        (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
                   (declare (type single-float len inv ux uy uz))
@@ -5794,10 +5801,80 @@ the velocity into the face and report a :held-out event. Return how many bodies 
     (setf (physics-world-held-out-count world) held)
     held))
 
+(defun squeeze-scene (family scene)
+  "Run SCENE (:step, :marbles, :far-step, :wall or :press) under FAMILY for 240 steps of 1/60 s; return the
+count of ball positions outside air cells of the resident world or below the floor less a slop,
+the lowest centre, the walker's final x and y (NIL for :press), the state hash, the fastest
+speed of any ball after any step, and the deepest any ball's surface reached into a solid cell
+and into the box. #SQU33Z"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 0 -16 16 12 16 nil)
+    (fill-terrain terrain -16 -16 -16 16 0 16 t)
+    (case scene
+      (:step (fill-terrain terrain 6 0 -4 16 1 4 t))
+      (:marbles (fill-terrain terrain 6 0 -4 16 1 4 t))
+      (:far-step (fill-terrain terrain 8 0 -4 16 1 4 t))
+      (:wall (fill-terrain terrain 6 0 -4 16 3 4 t)))
+    (let* ((world (make-physics-world :terrain terrain :kernels family))
+           (player (make-physics-player 0d0 0d0 0d0))
+           (slop *physics-linear-slop*)
+           (balls (loop for x from 1.0 to 5.5 by 0.5
+                        collect (add-physics-body-of-kind world (if (eq scene :marbles) :marble :ball) x 0.3 0.0)))
+           (outside 0) (lowest 100.0) (fastest 0.0) (cells 0.0) (box 0.0))
+      (let ((bounds (make-list 6)))
+      (flet ((note-box ()
+               ;; the box posted for the next step, where it will be at the step's end
+               (let ((b (physics-world-boxes world)) (dt (/ 1.0 60)))
+                 (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) b
+                   (setf bounds (list (+ (aref min-x 0) (* dt (aref vx 0))) (+ (aref min-y 0) (* dt (aref vy 0)))
+                                      (+ (aref min-z 0) (* dt (aref vz 0))) (+ (aref max-x 0) (* dt (aref vx 0)))
+                                      (+ (aref max-y 0) (* dt (aref vy 0))) (+ (aref max-z 0) (* dt (aref vz 0))))))))
+               (box-bounds () (values-list bounds)))
+      (dotimes (frame 240)
+        (if (eq scene :press)
+            (post-physics-box world 3.25 (max 0.7 (- 1.5 (* frame (/ 1.0 60)))) 0.0 2.0 0.5 1.0
+                              :vy (if (> (- 1.5 (* frame (/ 1.0 60))) 0.7) -1.0 0.0) :owner :press)
+            (progn (advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
+                   (post-physics-player world player)))
+        (note-box)
+        (step-physics-world world)
+        (dolist (h balls)
+          (multiple-value-bind (vx vy vz) (physics-body-velocity world h)
+            (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))
+          (multiple-value-bind (x y z) (physics-body-position world h)
+            (let ((r (physics-body-radius world h)))
+              ;; the deepest a ball's surface reaches into the solid cells around its centre
+              (loop for i from (1- (floor x)) to (1+ (floor x)) do
+                (loop for j from (1- (floor y)) to (1+ (floor y)) do
+                  (loop for k from (1- (floor z)) to (1+ (floor z)) do
+                    (when (terrain-solid-p terrain i j k)
+                      (let ((dx (- (max i (min (1+ i) x)) x)) (dy (- (max j (min (1+ j) y)) y))
+                            (dz (- (max k (min (1+ k) z)) z)))
+                        (setf cells (max cells (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))))
+              ;; and into the box that presses it
+              (multiple-value-bind (bx0 by0 bz0 bx1 by1 bz1) (box-bounds)
+                (let ((dx (- (max bx0 (min bx1 x)) x)) (dy (- (max by0 (min by1 y)) y)) (dz (- (max bz0 (min bz1 z)) z)))
+                  (setf box (max box (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))
+            (setf lowest (min lowest y))
+            ;; a cell of a chunk that is not resident counts as solid
+            (when (or (< y (- slop)) (terrain-solid-p terrain (floor x) (floor y) (floor z)))
+              (incf outside)))))
+      (values outside lowest
+              (and (not (eq scene :press)) (physics-player-x player))
+              (and (not (eq scene :press)) (physics-player-y player))
+              (physics-world-state-hash world)
+              fastest cells box))))))
+
 (defun physics-world-last-step-held-out-count (world)
   "How many bodies the last step stopped at the face of a solid cell. #SQU33Z"
   (check-world world 'physics-world-last-step-held-out-count)
   (physics-world-held-out-count world))
+
+(defun physics-world-last-step-buried-count (world)
+  "How many awake bodies began the last step with their centre in a solid cell, and were pushed
+toward the air by that cell's contact. #SQU33Z"
+  (check-world world 'physics-world-last-step-buried-count)
+  (physics-world-buried-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:1 ends here
 
 ;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:5]]
@@ -5902,7 +5979,7 @@ table. #SQU33Z"
 
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
 (defun reset-phase (world)
-  "Phase 1: empty the event buffer, make the probe forget its borrowed chunks, count the step
+  "The reset phase, first of the step: empty the event buffer, make the probe forget its borrowed chunks, count the step
 and start the contact table's walk of it. #IDVK7G"
   (event-columns-clear (physics-world-events world))
   (fill (physics-world-event-data world) nil)
@@ -5966,7 +6043,7 @@ false. #IDVK7G"
               (setf (aref v o) (* x s) (aref v (+ o 1)) (* y s) (aref v (+ o 2)) (* z s)))))))))
 
 (defun substep-phase (world)
-  "Phase 9: the Soft Step substeps: integrate velocities, warm start, solve with bias,
+  "The substep phase: the Soft Step substeps: integrate velocities, warm start, solve with bias,
 integrate positions, relax without bias; in a crowded step (one with contacts in the overflow
 colour, or after a step that left an overlap deeper than *physics-crowded-depth*), relax
 *physics-crowded-relax-passes* more times, and when a body is crowded, hold the crowd's
@@ -8655,6 +8732,16 @@ its final height less its ideal resting height (radius less a slop), and whether
                      (invalid-physics-parameter () t))))
       (row "at x = 100000 m" refused "~:[accepted~;refused with invalid-physics-parameter: the limit is ~D m~]"
            refused +physics-coordinate-limit+))
+    ;; bodies squeezed between a moving box and cells ([[#SQU33Z]])
+    (loop for (scene what) in '((:step "walker pressing 10 balls into a one-block step it climbs")
+                                (:marbles "walker pressing 10 marbles into a one-block step it climbs")
+                                (:wall "walker pressing 10 balls into a wall three blocks high")
+                                (:press "box pressed down at 1 m/s onto 10 balls on the floor"))
+          do (multiple-value-bind (outside lowest px py hash fastest cells box) (squeeze-scene :scalar scene)
+               (declare (ignore lowest px py hash))
+               (row what (and (zerop outside) (<= fastest 10.0))
+                    "~D of 2400 positions outside the air; fastest ~,2F m/s; deepest into the cells ~,4F m, ~
+                     into the box ~,4F m" outside fastest cells box)))
     (multiple-value-bind (alive finite consed growth) (fountain-long-run)
       (row "fountain, 10 simulated minutes" (and finite (zerop consed) (< growth 1000000))
            "~D drops alive at the end; ~:[a number went non-finite~;all finite~]; ~D bytes consed per step ~

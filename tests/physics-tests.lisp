@@ -4760,47 +4760,6 @@ the phases of a step before the prepare phase. #PR3PAR"
 ;; F1NAL5-life-reached-is-over ends here
 
 ;; [[file:../physics.org::#SQU33Z][SQU33Z-squeezed-balls-stay-out]]
-(defun squeeze-scene (family scene)
-  "Run SCENE (:step, :marbles, :far-step, :wall or :press) under FAMILY for 240 steps of 1/60 s; return the
-count of ball positions outside air cells of the resident world or below the floor less a slop,
-the lowest centre, the walker's final x and y (NIL for :press), the state hash and the fastest
-speed of any ball after any step. #SQU33Z"
-  (let ((terrain (luv-physics::make-voxel-terrain)))
-    (luv-physics::fill-terrain terrain -16 0 -16 16 12 16 nil)
-    (luv-physics::fill-terrain terrain -16 -16 -16 16 0 16 t)
-    (case scene
-      (:step (luv-physics::fill-terrain terrain 6 0 -4 16 1 4 t))
-      (:marbles (luv-physics::fill-terrain terrain 6 0 -4 16 1 4 t))
-      (:far-step (luv-physics::fill-terrain terrain 8 0 -4 16 1 4 t))
-      (:wall (luv-physics::fill-terrain terrain 6 0 -4 16 3 4 t)))
-    (let* ((world (luv-physics::make-physics-world :terrain terrain :kernels family))
-           (player (luv-physics::make-physics-player 0d0 0d0 0d0))
-           (slop luv-physics::*physics-linear-slop*)
-           (balls (loop for x from 1.0 to 5.5 by 0.5
-                        collect (luv-physics::add-physics-body-of-kind world (if (eq scene :marbles) :marble :ball)
-                                                                       x 0.3 0.0)))
-           (outside 0) (lowest 100.0) (fastest 0.0))
-      (dotimes (frame 240)
-        (if (eq scene :press)
-            (luv-physics::post-physics-box world 3.25 (max 0.7 (- 1.5 (* frame (/ 1.0 60)))) 0.0 2.0 0.5 1.0
-                                           :vy (if (> (- 1.5 (* frame (/ 1.0 60))) 0.7) -1.0 0.0) :owner :press)
-            (progn (luv-physics::advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
-                   (luv-physics::post-physics-player world player)))
-        (luv-physics::step-physics-world world)
-        (dolist (h balls)
-          (multiple-value-bind (vx vy vz) (luv-physics::physics-body-velocity world h)
-            (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))
-          (multiple-value-bind (x y z) (luv-physics::physics-body-position world h)
-            (setf lowest (min lowest y))
-            ;; a cell of a chunk that is not resident counts as solid
-            (when (or (< y (- slop)) (luv-physics::terrain-solid-p terrain (floor x) (floor y) (floor z)))
-              (incf outside)))))
-      (values outside lowest
-              (and (not (eq scene :press)) (luv-physics::physics-player-x player))
-              (and (not (eq scene :press)) (luv-physics::physics-player-y player))
-              (luv-physics::physics-world-state-hash world)
-              fastest))))
-
 (defun lone-walker-path (scene)
   "The walker's final x and y after the 240 steps of SCENE's walk with no ball in the world. #SQU33Z"
   (let ((terrain (luv-physics::make-voxel-terrain))
@@ -4816,7 +4775,7 @@ speed of any ball after any step. #SQU33Z"
   (dolist (scene '(:step :marbles :far-step :wall :press))
     (let ((hashes '()))
       (dolist (family (luv-physics:available-kernel-families))
-        (multiple-value-bind (outside lowest px py hash fastest) (squeeze-scene family scene)
+        (multiple-value-bind (outside lowest px py hash fastest) (luv-physics::squeeze-scene family scene)
           (push hash hashes)
           (check (zerop outside) "~A, ~A: ~D ball positions outside the air of the resident world (lowest y ~,3F)"
                  scene family outside lowest)
@@ -4932,6 +4891,45 @@ speed of any ball after any step. #SQU33Z"
     (check (zerop (getf figures :over)) "~D speeds over the bound, the worst ~,3F of it" (getf figures :over)
            (getf figures :worst))))
 ;; SQU33Z-random-squeezes-hold ends here
+
+;; [[file:../physics.org::#IDVK7G][IDVK7G-stage-table-is-the-step]]
+(define-claim "IDVK7G" stage-table-is-the-step
+    "The stage table lists *physics-phases* in order, links each to its section, and names the features that leave it out."
+  (let* ((page (luv-physics::page-lines-of nil))
+         (at (position "#+name: step-stage-table" page :test #'string=))
+         (rows (and at (loop for i from (+ at 3) below (length page)
+                             for line = (aref page i)
+                             while (luv-physics::starts-with "|" line)
+                             collect (mapcar (lambda (cell) (string-trim " " cell))
+                                             (rest (butlast (uiop:split-string line :separator "|"))))))))
+    (check (and at (< at 150)) "the stage table starts at line ~S, not within the first 150" at)
+    (check (equal (mapcar (lambda (row) (string-trim "=" (first row))) rows)
+                  (mapcar #'string-downcase luv-physics:*physics-phases*))
+           "the table's phases ~S are not *physics-phases*" (mapcar #'first rows))
+    (loop for row in rows
+          for phase in luv-physics:*physics-phases*
+          for place from 0
+          do (let* ((doc (documentation phase 'function))
+                    (anchor (subseq doc (1+ (position #\# doc :from-end t))))
+                    (features (fourth (rest row))))
+               (check (search (format nil "[[#~A]" anchor) (second row))
+                      "~(~A~) links ~A, not its section ~A" phase (second row) anchor)
+               (cond ((string= features "compiled per set")
+                      (check (get phase (quote luv-physics::featured-kernel))
+                             "~(~A~) is not a featured kernel" phase))
+                     ((string= features "")
+                      (dolist (f luv-physics::+physics-features+)
+                        (check (nth place (luv-physics::feature-phases (remove f luv-physics::+physics-features+)
+                                                                       luv-physics:*physics-phases*))
+                               "~(~A~) is left out without ~S" phase f)))
+                     (t
+                      (let ((named (mapcar (lambda (w) (intern (string-upcase (string-left-trim ":" w)) :keyword))
+                                           (remove "or" (uiop:split-string features :separator " ") :test #'string=))))
+                        (check (null (nth place (luv-physics::feature-phases
+                                                 (set-difference luv-physics::+physics-features+ named)
+                                                 luv-physics:*physics-phases*)))
+                               "~(~A~) is run without ~S" phase named))))))))
+;; IDVK7G-stage-table-is-the-step ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-ball-rests-and-sleeps]]
 (define-claim "IDVK7G" ball-rests-and-sleeps
