@@ -2180,6 +2180,7 @@ dispatches on it once per call. #W0RLD7"))
    (near-cells :initform (make-array 0 :element-type 'single-float) :accessor physics-world-near-cells)
    (near-cells-step :initform -1 :type fixnum :accessor physics-world-near-cells-step)
    (buried-count :initform 0 :type fixnum :accessor physics-world-buried-count)
+   (box-touch-step :initform -1 :type fixnum :accessor physics-world-box-touch-step)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
@@ -4012,10 +4013,9 @@ is under the speculative distance. #MYWH16"
                                 (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
                             (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
                                 (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
-                              ;; outside: the nearest solid cell so far, the overshoot rule, then
-                              ;; the contact
-                              (progn
-                              (when (< d2 (aref near i)) (setf (aref near i) d2))
+                              ;; outside: the overshoot rule, the nearest solid cell so far, then
+                              ;; the contact. A cell the rule silences has a solid cell nearer
+                              ;; the centre, so the nearest is among those it keeps
                               (when (and (<= d2 (* reach reach))
                                          (not (or (and (/= ox 0) (solid (+ ix ox) iy iz))
                                                   (and (/= oy 0) (solid ix (+ iy oy) iz))
@@ -4025,6 +4025,7 @@ is under the speculative distance. #MYWH16"
                                                   (and (/= oy 0) (/= oz 0) (solid ix (+ iy oy) (+ iz oz)))
                                                   (and (/= ox 0) (/= oy 0) (/= oz 0)
                                                        (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
+                                (when (< d2 (aref near i)) (setf (aref near i) d2))
                                 (multiple-value-bind (nx ny nz sep)
                                     (multiple-value-bind (nx ny nz sep) (finish)
                                       (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
@@ -4033,7 +4034,7 @@ is under the speculative distance. #MYWH16"
                                                 (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
                                                 dt slop ahead gstep))
                                     (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
-                                                   nx ny nz sep px py pz 0.0 0.0 0.0)))))
+                                                   nx ny nz sep px py pz 0.0 0.0 0.0))))
                               ;; inside: push out through a face, and count the body buried
                               (progn
                                 (setf (aref near i) 0.0)
@@ -4124,7 +4125,8 @@ with the face the ray enters it through. #SW33P7"
          (gstep (gravity-step world dt))
          (threshold (f32 (physics-world-restitution-threshold world)))
          (contacts (physics-world-contacts world))
-         (table (physics-world-contact-table world)))
+         (table (physics-world-contact-table world))
+         (touched nil))
     (declare (type single-float margin limit dt gstep threshold))
     (when (plusp (box-columns-length boxes))
       (with-body-columns (x y z (bvx vx) (bvy vy) (bvz vz) radius handle) awake
@@ -4153,12 +4155,16 @@ with the face the ray enters it through. #SW33P7"
                       (multiple-value-bind (nx ny nz sep)
                           (multiple-value-bind (nx ny nz sep) (finish)
                             (impact-normal nx ny nz sep cx cy cz r wx wy wz dt threshold bx0 by0 bz0 bx1 by1 bz1))
+                        (setf touched t)
                         (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
                                        nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))
                     (multiple-value-bind (nx ny nz px py pz sep)
                         (inside-face nil cx cy cz r bx0 by0 bz0 bx1 by1 bz1 0 0 0)
+                      (setf touched t)
                       (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
                                      nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b)))))))))))
+        ;; the step's squeeze rules look for box rows only when some body touched a box ([[#SQU33Z]])
+    (when touched (setf (physics-world-box-touch-step world) (physics-world-step-count world)))
     world))
 ;; Boxes touch as moving terrain:1 ends here
 
@@ -6055,8 +6061,10 @@ bodies to half the push-out speed. #IDVK7G"
                       (> (f32 (physics-world-max-penetration world)) (f32 (physics-world-crowded-depth world)))))
          (relaxes (if crowded (1+ (the fixnum (physics-world-crowded-relax-passes world))) 1))
          (held (and crowded (mark-held-rows world)))
-         ;; the box rows and their caps ([[#SQU33Z]]): none in a step with no box posted
-         (boxed (if (plusp (box-columns-length (physics-world-boxes world))) (note-box-rows world) 0)))
+         ;; the box rows and their caps ([[#SQU33Z]]): none in a step where no body touched a box
+         (boxed (if (= (physics-world-box-touch-step world) (physics-world-step-count world))
+                    (note-box-rows world)
+                    0)))
     (declare (type single-float h inv-h) (type fixnum relaxes boxed))
     (let ((squeezed nil))
     (dotimes (i (physics-world-substeps world))
