@@ -2517,8 +2517,10 @@ invalid-physics-parameter when INSIDE-CELLS is neither that nor :refuse. #M4K3WD
                                       :expected ":refuse or :push-out"))
   (let ((terrain (physics-world-terrain world)))
     (when (and terrain (eq inside-cells :refuse))
-      (let ((ix (floor x)) (iy (floor y)) (iz (floor z)))
-        (when (terrain-solid-p terrain ix iy iz)
+      ;; the coordinates are checked finite and within the limit: their cells are cells
+      (let* ((ix (cell-floor x)) (iy (cell-floor y)) (iz (cell-floor z))
+             (chunk (gethash (chunk-key ix iy iz) (voxel-terrain-chunks terrain))))
+        (when (or (null chunk) (plusp (aref (the chunk-storage chunk) (cell-offset ix iy iz))))
           (error 'physics-body-in-solid-cell :world world :operation operation :name :position
                                              :value (list x y z) :cell (list ix iy iz)
                                              :resident (terrain-resident-p terrain ix iy iz)
@@ -5763,10 +5765,9 @@ the velocity into the face and report a :held-out event. Return how many bodies 
              (gstep (gravity-step world dt))
              ;; the terrain phase's note of how near each row's nearest solid cell lies, when
              ;; it ran this step
-             (near (and (= (physics-world-near-cells-step world) (physics-world-step-count world))
-                        (physics-world-near-cells world))))
-        (declare (type f32-column v d) (type single-float margin limit dt gstep)
-                 (type (or null f32-column) near))
+             (noted (= (physics-world-near-cells-step world) (physics-world-step-count world)))
+             (near (physics-world-near-cells world)))
+        (declare (type f32-column v d near) (type single-float margin limit dt gstep))
         (with-body-columns (x y z vx vy vz radius handle) awake
           (dotimes (i (body-columns-length awake))
             (let* ((p (delta-row i))
@@ -5775,7 +5776,7 @@ the velocity into the face and report a :held-out event. Return how many bodies 
               (declare (type index p) (type single-float dx dy dz moved2))
               ;; a path shorter than the way to the nearest solid cell the terrain phase
               ;; gathered, and no longer than the way it looked, stays in the air
-              (when (or (null near) (> moved2 (aref near i)))
+              (when (or (not noted) (> moved2 (aref near i)))
             (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                    ;; longer than the terrain phase looked: past its margin and past the travel
                    ;; the body's velocity at the start of the step promised
@@ -5785,7 +5786,11 @@ the velocity into the face and report a :held-out event. Return how many bodies 
                                      (looked (- (min limit (+ r (max margin travel))) r)))
                                 (> moved2 (* looked looked))))))
               (declare (type single-float cx cy cz r))
-              (progn
+              ;; within the look-ahead, a path that stays in the centre's cell stays in the air
+              (when (or long
+                        (/= (cell-floor cx) (cell-floor (+ cx dx)))
+                        (/= (cell-floor cy) (cell-floor (+ cy dy)))
+                        (/= (cell-floor cz) (cell-floor (+ cz dz))))
                 (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
                        (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
                   (declare (type single-float len inv ux uy uz))
