@@ -2181,6 +2181,7 @@ dispatches on it once per call. #W0RLD7"))
    (near-cells-step :initform -1 :type fixnum :accessor physics-world-near-cells-step)
    (buried-count :initform 0 :type fixnum :accessor physics-world-buried-count)
    (box-touch-step :initform -1 :type fixnum :accessor physics-world-box-touch-step)
+   (held-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-held-rows)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
@@ -5533,17 +5534,27 @@ so its undo log closes. #ST0R3S"
 ;; Store impulses, events and the step's error:1 ends here
 
 ;; [[file:../physics.org::#F1NAL5][Finalize: positions, orientation, age and sleep:1]]
-(defun fold-solver-state (awake v d dt)
-  "Fold the solver's deltas D into AWAKE's positions and its velocities V into the rows, and
-turn each orientation by its angular velocity over DT. Three loops that call nothing, each
-reading and writing at most eight arrays. #F1NAL5"
-  (declare (type body-columns awake) (type f32-column v d) (type single-float dt) #.+kernel-policy+)
-  (let ((n (body-columns-length awake)))
+(defun fold-positions (awake d check near held)
+  "Fold the solver's deltas D into AWAKE's positions, in a loop that calls nothing. When CHECK, a
+row whose delta is longer than its note in NEAR (every row, when CHECK is :all) is not moved but
+listed in HELD, for hold-out-of-cells to check its path and fold it; return how many rows are
+listed. #F1NAL5"
+  (declare (type body-columns awake) (type f32-column d near) (type fixnum-column held) #.+kernel-policy+)
+  (let ((listed 0))
+    (declare (type index listed))
     (with-body-columns (x y z) awake
-      (dotimes (i n)
-        (let ((p (delta-row i)))
-          (setf (aref x i) (+ (aref x i) (aref d p)) (aref y i) (+ (aref y i) (aref d (+ p 1)))
-                (aref z i) (+ (aref z i) (aref d (+ p 2)))))))
+      (dotimes (i (body-columns-length awake) listed)
+        (let* ((p (delta-row i)) (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2))))
+          (if (and check (or (eq check :all) (> (+ (* dx dx) (* dy dy) (* dz dz)) (aref near i))))
+              (setf (aref held listed) i listed (1+ listed))
+              (setf (aref x i) (+ (aref x i) dx) (aref y i) (+ (aref y i) dy) (aref z i) (+ (aref z i) dz))))))))
+
+(defun fold-solver-state (awake v dt)
+  "Fold the solver's velocities V into AWAKE's rows, and turn each orientation by its angular
+velocity over DT. Two loops that call nothing, each reading and writing at most eight arrays;
+with fold-positions, three. #F1NAL5"
+  (declare (type body-columns awake) (type f32-column v) (type single-float dt) #.+kernel-policy+)
+  (let ((n (body-columns-length awake)))
     (with-body-columns (vx vy vz wx wy wz) awake
       (dotimes (i n)
         (let ((o (solver-row i)))
@@ -5590,9 +5601,11 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
              (type fixnum-column settling) (type index asleep-before) (ignorable asleep-before)
              (type body-columns awake sleeping) (type fixnum-column held)
              (ignorable inv-dt sleep-speed time-to-sleep held) #.+kernel-policy+)
-    ;; no path into a solid cell ([[#SQU33Z]]), then the deltas into the positions
-    (hold-out-of-cells world)
-    (fold-solver-state awake v d dt)
+    ;; the deltas into the positions, but for the rows whose path may meet a solid cell: their
+    ;; paths are checked first ([[#SQU33Z]])
+    (multiple-value-bind (check near held) (path-check-notes world)
+      (hold-out-of-cells world held (fold-positions awake d check near held)))
+    (fold-solver-state awake v dt)
     ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
     ;; moved, so the solver's rows still match it
     (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle) awake
@@ -5746,69 +5759,77 @@ the step plus the push-out speed. #SQU33Z"
                                              (* (aref vz b) (aref vz b))))))))
     (+ fastest (f32 (physics-world-push-max world)))))
 
-(defun hold-out-of-cells (world)
-  "Stop each awake body of WORLD whose delta this step carries its centre into a solid cell, or,
-on a path longer than the terrain phase looked along, its surface through the face of one: cut
-the delta where the surface reaches that face (at the start, if it is already past it), remove
-the velocity into the face and report a :held-out event. Return how many bodies were held. #SQU33Z"
-  (declare #.+kernel-policy+)
-  (let ((terrain (physics-world-terrain world)) (held 0))
+(defun path-check-notes (world)
+  "What the finalize phase needs to check WORLD's paths ([[#SQU33Z]]): whether to check them (NIL
+without terrain, :all when the terrain phase did not note this step's rows, else T), the terrain
+phase's notes, and the array for the rows held back, at least as long as the awake rows. #SQU33Z"
+  (let ((n (body-columns-length (physics-world-awake world))))
+    (when (< (length (physics-world-held-rows world)) (1+ n))
+      (setf (physics-world-held-rows world) (make-array (* 2 (1+ n)) :element-type 'fixnum :initial-element 0)))
+    (values (cond ((null (physics-world-terrain world)) nil)
+                  ((= (physics-world-near-cells-step world) (physics-world-step-count world)) t)
+                  (t :all))
+            (physics-world-near-cells world)
+            (physics-world-held-rows world))))
+
+(defun hold-out-of-cells (world rows count)
+  "Check the path of each of WORLD's awake rows listed in the first COUNT entries of ROWS, then fold
+its delta into its position: a path that carries the centre into a solid cell, or, longer than
+the terrain phase looked along, the surface through the face of one, is cut where the surface
+reaches that face (at the start, if it is already past it), the velocity into the face removed
+and a :held-out event reported. Return how many bodies were held. #SQU33Z"
+  (declare (type fixnum-column rows) (type index count) #.+kernel-policy+)
+  (let ((held 0))
     (declare (type fixnum held))
-    (when terrain
-      (let* ((awake (physics-world-awake world))
-             (probe (physics-world-probe world))
-             (v (physics-world-velocities world))
-             (d (physics-world-deltas world))
-             (margin (f32 (physics-world-margin world)))
-             (limit (f32 (physics-world-reach-limit world)))
-             (dt (physics-world-current-dt world))
-             (gstep (gravity-step world dt))
-             ;; the terrain phase's note of how near each row's nearest solid cell lies, when
-             ;; it ran this step
-             (noted (= (physics-world-near-cells-step world) (physics-world-step-count world)))
-             (near (physics-world-near-cells world)))
-        (declare (type f32-column v d near) (type single-float margin limit dt gstep))
-        (with-body-columns (x y z vx vy vz radius handle) awake
-          (dotimes (i (body-columns-length awake))
-            (let* ((p (delta-row i))
-                   (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
-                   (moved2 (+ (* dx dx) (* dy dy) (* dz dz))))
-              (declare (type index p) (type single-float dx dy dz moved2))
-              ;; a path shorter than the way to the nearest solid cell the terrain phase
-              ;; gathered, and no longer than the way it looked, stays in the air
-              (when (or (not noted) (> moved2 (aref near i)))
-            (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                   ;; longer than the terrain phase looked: past its margin and past the travel
-                   ;; the body's velocity at the start of the step promised
-                   (long (and (> moved2 (* margin margin))
-                              (let* ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                                                      (* (aref vz i) (aref vz i)))))))
-                                     (looked (- (min limit (+ r (max margin travel))) r)))
-                                (> moved2 (* looked looked))))))
-              (declare (type single-float cx cy cz r))
-              ;; within the look-ahead, a path that stays in the centre's cell stays in the air
-              (when (or long
-                        (/= (cell-floor cx) (cell-floor (+ cx dx)))
-                        (/= (cell-floor cy) (cell-floor (+ cy dy)))
-                        (/= (cell-floor cz) (cell-floor (+ cz dz))))
-                (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
-                       (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
-                  (declare (type single-float len inv ux uy uz))
-                  (multiple-value-bind (axis at) (first-solid-on-ray probe cx cy cz ux uy uz (if long (+ len r) len))
-                    (declare (type (integer -1 2) axis) (type single-float at))
-                    (unless (< axis 0)
-                      (let* ((along (case axis (0 ux) (1 uy) (t uz)))
-                             ;; where the surface reaches the face's plane, along the path
-                             (stop (max 0.0 (- at (/ r (max (abs along) 1e-6)))))
-                             (o (+ (solver-row i) axis))
-                             (into (if (> along 0.0) (max 0.0 (aref v o)) (min 0.0 (aref v o)))))
-                        (declare (type single-float along stop into) (type index o))
-                        (when (< stop len)
-                          (setf (aref d p) (* ux stop) (aref d (+ p 1)) (* uy stop) (aref d (+ p 2)) (* uz stop)
-                                (aref v o) (- (aref v o) into))
-                          (incf held)
-                          (push-event world +event-held-out+ (aref handle i) +no-body+
-                                      (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into)))))))))))))))
+    (let* ((awake (physics-world-awake world))
+           (probe (physics-world-probe world))
+           (v (physics-world-velocities world))
+           (d (physics-world-deltas world))
+           (margin (f32 (physics-world-margin world)))
+           (limit (f32 (physics-world-reach-limit world)))
+           (dt (physics-world-current-dt world))
+           (gstep (gravity-step world dt)))
+      (declare (type f32-column v d) (type single-float margin limit dt gstep))
+      (with-body-columns (x y z vx vy vz radius handle) awake
+        (dotimes (j count)
+          (let* ((i (aref rows j))
+                 (p (delta-row i))
+                 (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
+                 (moved2 (+ (* dx dx) (* dy dy) (* dz dz)))
+                 (cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+                 ;; longer than the terrain phase looked: past its margin and past the travel
+                 ;; the body's velocity at the start of the step promised
+                 (long (and (> moved2 (* margin margin))
+                            (let* ((travel (* dt (+ gstep (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                                                    (* (aref vz i) (aref vz i)))))))
+                                   (looked (- (min limit (+ r (max margin travel))) r)))
+                              (> moved2 (* looked looked))))))
+            (declare (type index i p) (type single-float dx dy dz moved2 cx cy cz r))
+            ;; within the look-ahead, a path that stays in the centre's cell stays in the air
+            (when (or long
+                      (/= (cell-floor cx) (cell-floor (+ cx dx)))
+                      (/= (cell-floor cy) (cell-floor (+ cy dy)))
+                      (/= (cell-floor cz) (cell-floor (+ cz dz))))
+              (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
+                     (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
+                (declare (type single-float len inv ux uy uz))
+                (multiple-value-bind (axis at) (first-solid-on-ray probe cx cy cz ux uy uz (if long (+ len r) len))
+                  (declare (type (integer -1 2) axis) (type single-float at))
+                  (unless (< axis 0)
+                    (let* ((along (case axis (0 ux) (1 uy) (t uz)))
+                           ;; where the surface reaches the face's plane, along the path
+                           (stop (max 0.0 (- at (/ r (max (abs along) 1e-6)))))
+                           (o (+ (solver-row i) axis))
+                           (into (if (> along 0.0) (max 0.0 (aref v o)) (min 0.0 (aref v o)))))
+                      (declare (type single-float along stop into) (type index o))
+                      (when (< stop len)
+                        (setf (aref d p) (* ux stop) (aref d (+ p 1)) (* uy stop) (aref d (+ p 2)) (* uz stop)
+                              (aref v o) (- (aref v o) into))
+                        (incf held)
+                        (push-event world +event-held-out+ (aref handle i) +no-body+
+                                    (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into))))))))
+            ;; then the fold, as for every other row
+            (setf (aref x i) (+ cx (aref d p)) (aref y i) (+ cy (aref d (+ p 1))) (aref z i) (+ cz (aref d (+ p 2))))))))
     (setf (physics-world-held-out-count world) held)
     held))
 
@@ -8754,7 +8775,8 @@ its final height less its ideal resting height (radius less a slop), and whether
                (declare (ignore lowest px py hash))
                (row what (and (zerop outside) (<= fastest 10.0))
                     "~D of 2400 positions outside the air; fastest ~,2F m/s; deepest into the cells ~,4F m, ~
-                     into the box ~,4F m" outside fastest cells box)))
+                     into the box ~,4F m~:[~; (a centre inside the box)~]" outside fastest cells box
+                    (>= box (- (if (eq scene :marbles) 0.08 0.25) 1e-6)))))
     (multiple-value-bind (alive finite consed growth) (fountain-long-run)
       (row "fountain, 10 simulated minutes" (and finite (zerop consed) (< growth 1000000))
            "~D drops alive at the end; ~:[a number went non-finite~;all finite~]; ~D bytes consed per step ~
