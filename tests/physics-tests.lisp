@@ -2296,6 +2296,21 @@ use before it. #QKS4GZ"
                                (luv-physics::physics-world-sleeping-count w))))))
 ;; QKS4GZ-relocation-stress ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-sleep-speed-is-the-edge]]
+(define-claim "QKS4GZ" sleep-speed-is-the-edge
+    "A ball drifting at 0.9 of the sleep speed sleeps after the time to sleep; at 1.1 of it, never."
+  (loop for (factor sleeps) in '((0.9 t) (1.1 nil))
+        do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
+                  (speed (* factor luv-physics::*physics-sleep-speed*))
+                  (ball (add-physics-body world 0.0 1.0 0.0 :vx speed))
+                  (slept nil))
+             (dotimes (i 120)
+               (step-physics-world world)
+               (unless (or slept (physics-body-awake-p world ball)) (setf slept (1+ i))))
+             (check (if sleeps (and slept (<= 30 slept 31)) (null slept))
+                    "drifting at ~,3F m/s the ball slept at step ~S" speed slept))))
+;; QKS4GZ-sleep-speed-is-the-edge ends here
+
 ;; [[file:../physics.org::#K1N3BX][K1N3BX-box-pushes-awake-ball]]
 (define-claim "K1N3BX" box-pushes-awake-ball
     "A box walking at 1 m/s pushes an awake ball ahead, overlapping it by at most slop + 0.001 m."
@@ -2964,6 +2979,24 @@ use before it. #QKS4GZ"
       (check (zerop missed) "~D of ~D sleepers were not found at their own centres" missed asked))))
 ;; W4K3PH-quiet-wake-bounded ends here
 
+;; [[file:../physics.org::#W4K3PH][W4K3PH-wake-speed-is-the-edge]]
+(define-claim "W4K3PH" wake-speed-is-the-edge
+    "A ball approaching a sleeper at 0.9 of the wake speed leaves it asleep; at 1.1 of it, wakes it as it comes within reach."
+  (loop for (factor wakes) in '((0.9 nil) (1.1 t))
+        do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
+                  (sleeper (add-physics-body world 0.0 1.0 0.0))
+                  (woken-at nil))
+             (dotimes (i 40) (step-physics-world world))
+             (check (not (physics-body-awake-p world sleeper)) "the sleeper did not fall asleep")
+             (let ((mover (add-physics-body world -0.8 1.0 0.0 :vx (* factor luv-physics::*physics-wake-speed*))))
+               (dotimes (i 360)
+                 (step-physics-world world)
+                 (when (and (null woken-at) (physics-body-awake-p world sleeper))
+                   (setf woken-at (physics-body-position world mover))))
+               (check (if wakes (and woken-at (< -0.61 woken-at -0.59)) (null woken-at))
+                      "at ~,1F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
+;; W4K3PH-wake-speed-is-the-edge ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
 (define-claim "P41RS7" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
@@ -3362,6 +3395,19 @@ use before it. #QKS4GZ"
                                                     (= h (aref (luv-physics::contact-columns-handle-b c) row))))))))
       (check (= 16 most) "the most pairs a ball took is ~D" most))))
 ;; P41RS7-heap-charges-every-pair ends here
+
+;; [[file:../physics.org::#P41RS7][P41RS7-pairs-on-every-side]]
+(define-claim "P41RS7" pairs-on-every-side
+    "An off-centre blow along x is the same blow along z, mirrored, a chunk away and with the two balls added the other way round."
+  (let* ((record (check-twins "blow" (lambda (twin)
+                                       (twin-scene-world twin '() '((3.5 3.0 4.5 :vx 4.0 :restitution 0.5)
+                                                                    (5.0 3.1 4.7 :restitution 0.5))
+                                                         :gravity '(0 0 0)))
+                              60))
+         (struck (twin-final-position record 1)))
+    (check (and (> (first struck) 5.5) (> (second struck) 3.1) (> (third struck) 4.7))
+           "the struck ball ends at ~S" struck)))
+;; P41RS7-pairs-on-every-side ends here
 
 ;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
 (define-claim "MYWH16" clear-rows-skip-safely
