@@ -1210,6 +1210,87 @@ return SCENE's record (run-twin). #T3STK1"
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; C0ND1T-registry-and-entry-points ends here
 
+;; [[file:../physics.org::#C0ND1T][C0ND1T-every-argument-guarded]]
+(define-claim "C0ND1T" every-argument-guarded
+    "Each numeric argument of each exported call, made NaN or out of range alone, is refused naming it; the world is untouched."
+  (let* ((nan (sb-kernel:make-single-float -4194304))
+         (world (make-floor-world))
+         (ball (add-physics-body world 3.5 0.5 3.5))
+         (terrain (luv-physics::physics-world-terrain world))
+         (player (make-physics-player 5.5 0 5.5))
+         ;; each call: a function of its argument list, the good arguments, and per argument
+         ;; (a place in the list or a keyword) the name a NaN there is refused with (NIL: no NaN is
+         ;; tried, the kind is no number) and a value out of range, with the name its refusal gives
+         (calls
+           `((add-physics-body ,(lambda (args) (apply #'add-physics-body world args))
+              (1.5 2.0 1.5 :radius 0.25 :mass 1.0 :restitution 0.2 :friction 0.5 :rolling-resistance 0.1
+               :vx 0.0 :vy 0.0 :vz 0.0 :life 5.0 :kind 0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (:vx :vx 1e20 :velocity) (:vy :vy 1e20 :velocity)
+               (:vz :vz 1e20 :velocity) (:radius :radius 5.0 :radius) (:mass :mass -1.0 :mass)
+               (:restitution :restitution 1.5 :restitution) (:friction :friction -1.0 :friction)
+               (:rolling-resistance :rolling-resistance -1.0 :rolling-resistance) (:life :life -1.0 :life)
+               (:kind nil :foo :kind)))
+             (set-physics-body-velocity ,(lambda (args) (apply #'set-physics-body-velocity world ball args))
+              (0.5 0.0 0.5)
+              ((0 :vx 1e20 :velocity) (1 :vy 1e20 :velocity) (2 :vz 1e20 :velocity)))
+             (post-physics-box ,(lambda (args) (apply #'post-physics-box world args))
+              (8.5 0.5 8.5 0.5 0.5 0.5 :vx 0.0 :vy 0.0 :vz 0.0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :hx 0.0 :hx) (3 :hx 2000.0 :hx) (4 :hy 0.0 :hy)
+               (4 :hy 2000.0 :hy) (5 :hz 0.0 :hz) (5 :hz 2000.0 :hz) (:vx :vx 1e20 :velocity)
+               (:vy :vy 1e20 :velocity) (:vz :vz 1e20 :velocity)))
+             (wake-physics-bodies-near ,(lambda (args) (apply #'wake-physics-bodies-near world args))
+              (3.5 0.5 3.5 1.0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :radius -1.0 :radius)))
+             (physics-ray-cast ,(lambda (args) (apply #'physics-ray-cast world args))
+              (1.5 2.0 1.5 1.0 -1.0 0.5 10.0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :dx nil nil) (4 :dy nil nil) (5 :dz nil nil)
+               (6 :max-distance -1.0 :max-distance)))
+             (physics-sphere-cast ,(lambda (args) (apply #'physics-sphere-cast world args))
+              (1.5 2.0 1.5 0.3 1.0 -1.0 0.5 10.0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :radius 9.0 :radius) (4 :dx nil nil)
+               (5 :dy nil nil) (6 :dz nil nil) (7 :max-distance -1.0 :max-distance)))
+             (make-physics-player ,(lambda (args) (apply #'make-physics-player args))
+              (5.5 0 5.5)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z)))
+             (step-physics-player ,(lambda (args) (apply #'step-physics-player player terrain args))
+              (:move-x 1.0 :move-z 0.0)
+              ((:move-x :move-x nil nil) (:move-z :move-z nil nil))))))
+    (labels ((with-argument (args place value)
+               (let ((args (copy-list args)))
+                 ;; a keyword's value follows the keyword, after the positional arguments
+                 (setf (nth (if (integerp place) place (1+ (position place args))) args) value)
+                 args))
+             (refusal (call args)
+               (handler-case (progn (funcall call args) nil) (physics-error (e) e)))
+             (named-p (e type name)
+               (and (typep e type)
+                    (or (null name)
+                        (eq name (if (typep e 'invalid-physics-number)
+                                     (luv-physics::invalid-physics-number-name e)
+                                     (luv-physics::invalid-physics-parameter-name e)))))))
+      (loop for (operation call good cases) in calls
+            do (let ((before (world-fingerprint world))
+                     (boxes (luv-physics::box-columns-length (luv-physics::physics-world-boxes world)))
+                     (player-before (copy-structure player)))
+                 (loop for (place nan-name bad bad-name) in cases
+                       do (when nan-name
+                            (let ((e (refusal call (with-argument good place nan))))
+                              (check (named-p e 'invalid-physics-number nan-name)
+                                     "~A: a NaN as ~S was answered ~S" operation place e)))
+                          (when bad
+                            (let ((e (refusal call (with-argument good place bad))))
+                              (check (if (eq bad-name :radius)
+                                         (or (named-p e 'invalid-physics-parameter :radius)
+                                             (typep e 'invalid-physics-radius))
+                                         (named-p e 'invalid-physics-parameter bad-name))
+                                     "~A: ~S as ~S was answered ~S" operation bad place e)))
+                          (check (equal before (world-fingerprint world)) "~A: a refusal changed the world" operation)
+                          (check (= boxes (luv-physics::box-columns-length (luv-physics::physics-world-boxes world))))
+                          (check (equalp player player-before) "~A: a refusal changed the walker" operation))
+                 (check (null (refusal call good)) "~A: the good call was refused" operation)))
+      (check (eq t (validate-physics-world world))))))
+;; C0ND1T-every-argument-guarded ends here
+
 ;; [[file:../physics.org::#L4Y0UT][L4Y0UT-swap-remove-and-growth]]
 (define-claim "L4Y0UT" swap-remove-and-growth
     "event-columns: swap-remove fills the hole from the end and zeroes it; growth keeps rows."
