@@ -7146,7 +7146,11 @@ double-floats. #H7P4CX"
                  (ox (if x-blocked (* ahead (signum step-x)) 0d0))
                  (oz (if z-blocked (* ahead (signum step-z)) 0d0)))
             (with-player-box (x0 y0 z0 x1 y1 z1) player
-              (when (box-cells-clear-p terrain (+ x0 ox) (+ y0 1d0) (+ z0 oz) (+ x1 ox) (+ y1 1d0) (+ z1 oz))
+              ;; something still stands a little further on, where the box stands now (the axis
+              ;; moved after the blocked one may have carried it past what blocked it), and one
+              ;; cell higher it is clear
+              (when (and (not (box-cells-clear-p terrain (+ x0 ox) y0 (+ z0 oz) (+ x1 ox) y1 (+ z1 oz)))
+                         (box-cells-clear-p terrain (+ x0 ox) (+ y0 1d0) (+ z0 oz) (+ x1 ox) (+ y1 1d0) (+ z1 oz)))
                 (setf (physics-player-vy player) (physics-player-jump-speed player)
                       (physics-player-grounded player) nil))))))))
   player)

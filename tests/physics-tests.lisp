@@ -6497,10 +6497,10 @@ in the order of *physics-scene-features*. #K5DF9S"
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-on-every-axis]]
 (define-claim "H7P4CX" walker-on-every-axis
-    "The walker climbs the step and stops at the wall the same when they are met along z, -x, -z or a chunk away."
-  (flet ((walk (twin x z move-x move-z)
+    "The walker climbs a step, stops at a wall and rounds a pillar the same when they are met along z, -x, -z or a chunk away."
+  (flet ((walk (twin fills x z move-x move-z)
            ;; the walker's soles' end, mapped back, and the highest its soles rose above the floor
-           (let ((terrain (twin-floor-terrain twin '(4 0 0 16 1 2 t) '(0 0 4 2 2 5 t)))
+           (let ((terrain (apply #'twin-floor-terrain twin fills))
                  (floor-y (nth-value 1 (twin-point twin 0d0 0d0 0d0))) (highest -1d0))
              (multiple-value-bind (px py pz) (twin-point twin (float x 1d0) 0d0 (float z 1d0))
                (multiple-value-bind (mx my mz) (twin-vector twin (float move-x 1d0) 0d0 (float move-z 1d0))
@@ -6512,14 +6512,21 @@ in the order of *physics-scene-features*. #K5DF9S"
                    (append (multiple-value-list
                             (twin-back-point twin (physics-player-x p) (physics-player-y p) (physics-player-z p)))
                            (list highest))))))))
-    (let ((step (walk nil 2.5 1 1 0)) (wall (walk nil 1 2.5 0 1)))
-      (check (and (= 1 (second step)) (> (first step) 4.5)) "the step was not climbed: ~S" step)
-      (check (and (< (abs (- (third wall) 3.7d0)) 1d-6) (= 0 (fourth wall))) "at the wall: ~S" wall)
-      (dolist (twin +geometric-twins+)
-        (loop for (name want got) in (list (list "step" step (walk twin 2.5 1 1 0))
-                                           (list "wall" wall (walk twin 1 2.5 0 1)))
-              do (check (every (lambda (a b) (< (abs (- a b)) 1d-6)) want got)
-                        "~A, ~A: the walker ends at ~S, not ~S" twin name got want))))))
+    (let* ((walls '((4 0 0 16 1 2 t) (0 0 4 2 2 5 t)))
+           (pillar '((6 0 6 8 2 8 t)))
+           (walks `(("step" ,walls 2.5 1 1 0) ("wall" ,walls 1 2.5 0 1)))
+           (ends (loop for (nil . walk) in walks collect (apply #'walk nil walk))))
+      (destructuring-bind (step wall) ends
+        (check (and (= 1 (second step)) (> (first step) 4.5)) "the step was not climbed: ~S" step)
+        (check (and (< (abs (- (third wall) 3.7d0)) 1d-6) (= 0 (fourth wall))) "at the wall: ~S" wall))
+      (dolist (twin (cons nil +geometric-twins+))
+        (let ((round (walk twin pillar 4.5 4.3 1 1)))
+          (check (and (= 0 (fourth round)) (> (first round) 8.3)) "~A: round the pillar: ~S" twin round))
+        (when twin
+          (loop for (name . walk) in walks for want in ends
+                for got = (apply #'walk twin walk)
+                do (check (every (lambda (a b) (< (abs (- a b)) 1d-6)) want got)
+                          "~A, ~A: the walker ends at ~S, not ~S" twin name got want)))))))
 ;; H7P4CX-walker-on-every-axis ends here
 
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-measure-basin-reports-the-world]]
