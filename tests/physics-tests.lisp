@@ -6529,6 +6529,42 @@ in the order of *physics-scene-features*. #K5DF9S"
                           "~A, ~A: the walker ends at ~S, not ~S" twin name got want)))))))
 ;; H7P4CX-walker-on-every-axis ends here
 
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-limits-at-their-edges]]
+(define-claim "H7P4CX" walker-limits-at-their-edges
+    "The walker gains 1/3 m/s a step up to 4.3; jumps once when it meets a step in the air; climbs under a ceiling 3 up, not 2 up."
+  (let ((terrain (make-floor-terrain)) (p (make-physics-player 8.5 0 8.5)))
+    (dotimes (i 2) (step-physics-player p terrain))
+    (check (and (physics-player-grounded p) (= 0 (physics-player-vy p))) "standing, vy ~A" (physics-player-vy p))
+    (loop for n from 1 to 13
+          do (step-physics-player p terrain :move-x 1d0)
+             (when (member n '(1 6 12 13))
+               (check (< (abs (- (physics-player-vx p) (min 4.3d0 (/ n 3d0)))) 1d-9)
+                      "after ~D steps the walker walks at ~A m/s" n (physics-player-vx p)))))
+  (let ((terrain (make-floor-terrain)) (p (make-physics-player 3.2 0 1)) (top 0d0) (met-in-air nil))
+    (fill-terrain terrain 4 0 0 16 1 2 t)
+    (dotimes (i 240)
+      (step-physics-player p terrain :move-x 1d0 :jump (= i 1))
+      (when (and (not (physics-player-grounded p)) (< (physics-player-y p) 1) (> i 2)
+                 (< (abs (- (physics-player-x p) 3.7d0)) 1d-9))
+        (setf met-in-air t))
+      (setf top (max top (physics-player-y p))))
+    (check (eq t met-in-air) "the walker did not meet the step's face in the air")
+    (check (< (abs (- top 1.274d0)) 0.02) "meeting the step in the air, the walker rose to ~,3F" top)
+    (check (= 1 (physics-player-y p)) "the walker ends at y = ~A, not on the step" (physics-player-y p)))
+  (loop for (ceiling climbs) in '((3 t) (2 nil))
+        do (let ((terrain (make-floor-terrain)) (p (make-physics-player 2.5 0 1)) (top 0d0))
+             (fill-terrain terrain 4 0 0 16 1 2 t)
+             (fill-terrain terrain 0 ceiling 0 16 (1+ ceiling) 2 t)
+             (dotimes (i 240)
+               (step-physics-player p terrain :move-x 1d0)
+               (setf top (max top (physics-player-y p))))
+             (check (if climbs
+                        (and (= 1 (physics-player-y p)) (> (physics-player-x p) 4.5))
+                        (and (= 0 top) (< (abs (- (physics-player-x p) 3.7d0)) 1d-9)))
+                    "under a ceiling ~D up the walker ends at ~,3F ~,3F, its soles as high as ~,3F"
+                    ceiling (physics-player-x p) (physics-player-y p) top))))
+;; H7P4CX-walker-limits-at-their-edges ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-measure-basin-reports-the-world]]
 (define-claim "B3NCH5" measure-basin-reports-the-world
     "measure-basin over steps 20..24 of 20 balls: the world's own contacts, colours, overflow and deepest; phases in order."
