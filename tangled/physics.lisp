@@ -3969,8 +3969,20 @@ is under the speculative distance. #MYWH16"
                                                        (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
                                 (multiple-value-bind (nx ny nz sep)
                                     (multiple-value-bind (nx ny nz sep) (finish)
-                                      (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
-                                                     threshold fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)))
+                                      ;; a fast approach strikes the cell joined with its solid face
+                                      ;; neighbours, which read through the chunk: they may lie
+                                      ;; outside the gathered span
+                                      (if (and (> (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz)) threshold)
+                                               (> sep 0.0))
+                                          (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
+                                                         threshold
+                                                         (if (cell-solid-p (- ix 1) iy iz) (- fx 1.0) fx)
+                                                         (if (cell-solid-p ix (- iy 1) iz) (- fy 1.0) fy)
+                                                         (if (cell-solid-p ix iy (- iz 1)) (- fz 1.0) fz)
+                                                         (if (cell-solid-p (+ ix 1) iy iz) (+ fx 2.0) (+ fx 1.0))
+                                                         (if (cell-solid-p ix (+ iy 1) iz) (+ fy 2.0) (+ fy 1.0))
+                                                         (if (cell-solid-p ix iy (+ iz 1)) (+ fz 2.0) (+ fz 1.0)))
+                                          (values nx ny nz sep)))
                                   (when (< sep (speculative-distance
                                                 (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
                                                 dt slop ahead gstep))

@@ -3710,6 +3710,27 @@ use before it. #QKS4GZ"
       (check (< outgoing 2d0) "~:[edge~;corner~]: the ball leaves up to ~,2F deg off" corner outgoing))))
 ;; MYWH16-edges-bounce-true ends here
 
+;; [[file:../physics.org::#MYWH16][MYWH16-fast-landings-flat]]
+(define-claim "MYWH16" fast-landings-flat
+    "Balls landing at 30 and 45 degrees at 5 to 20 m/s, at every place across a seam, sink no more than 1 mm."
+  (let ((worst 0.0) (where nil) (rest (- 0.25 luv-physics::*physics-linear-slop*)))
+    (dolist (angle '(30 45))
+      (dolist (speed '(5.0 10.0 15.1 20.0))
+        (dotimes (k 12)
+          (let* ((w (make-floor-world :gravity '(0 0 0) :sleep nil))
+                 (a (* angle (/ pi 180)))
+                 (x0 (+ 4.0 (/ k 12.0)))
+                 (h (add-physics-body w x0 0.9 4.5 :vx (float (* speed (cos a)) 1.0)
+                                                    :vy (float (- (* speed (sin a))) 1.0))))
+            ;; until 1.5 m of the way down is gone, and ten steps more
+            (dotimes (i (+ 10 (ceiling (/ 1.5 (* speed (sin a) (/ 1 60.0))))))
+              (step-physics-world w)
+              (let ((sink (- rest (body-y w h))))
+                (when (> sink worst) (setf worst sink where (list speed angle x0)))))))))
+    (check (<= worst 0.001) "a ball at ~A m/s and ~A deg from x = ~,3F sank ~,4F m below rest"
+           (first where) (second where) (third where) worst)))
+;; MYWH16-fast-landings-flat ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-contacts-on-every-side]]
 (define-claim "MYWH16" contacts-on-every-side
     "A face, an edge, a corner and a ledge met along x are met the same along z, mirrored and a chunk away."
