@@ -4031,8 +4031,20 @@ is under the speculative distance. #MYWH16"
                                 (when (< d2 (aref near i)) (setf (aref near i) d2))
                                 (multiple-value-bind (nx ny nz sep)
                                     (multiple-value-bind (nx ny nz sep) (finish)
-                                      (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
-                                                     threshold fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)))
+                                      ;; a fast approach strikes the cell joined with its solid face
+                                      ;; neighbours, which read through the chunk: they may lie
+                                      ;; outside the gathered span
+                                      (if (and (> (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz)) threshold)
+                                               (> sep 0.0))
+                                          (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
+                                                         threshold
+                                                         (if (cell-solid-p (- ix 1) iy iz) (- fx 1.0) fx)
+                                                         (if (cell-solid-p ix (- iy 1) iz) (- fy 1.0) fy)
+                                                         (if (cell-solid-p ix iy (- iz 1)) (- fz 1.0) fz)
+                                                         (if (cell-solid-p (+ ix 1) iy iz) (+ fx 2.0) (+ fx 1.0))
+                                                         (if (cell-solid-p ix (+ iy 1) iz) (+ fy 2.0) (+ fy 1.0))
+                                                         (if (cell-solid-p ix iy (+ iz 1)) (+ fz 2.0) (+ fz 1.0)))
+                                          (values nx ny nz sep)))
                                   (when (< sep (speculative-distance
                                                 (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
                                                 dt slop ahead gstep))
@@ -7626,7 +7638,11 @@ double-floats. #H7P4CX"
                  (ox (if x-blocked (* ahead (signum step-x)) 0d0))
                  (oz (if z-blocked (* ahead (signum step-z)) 0d0)))
             (with-player-box (x0 y0 z0 x1 y1 z1) player
-              (when (box-cells-clear-p terrain (+ x0 ox) (+ y0 1d0) (+ z0 oz) (+ x1 ox) (+ y1 1d0) (+ z1 oz))
+              ;; something still stands a little further on, where the box stands now (the axis
+              ;; moved after the blocked one may have carried it past what blocked it), and one
+              ;; cell higher it is clear
+              (when (and (not (box-cells-clear-p terrain (+ x0 ox) y0 (+ z0 oz) (+ x1 ox) y1 (+ z1 oz)))
+                         (box-cells-clear-p terrain (+ x0 ox) (+ y0 1d0) (+ z0 oz) (+ x1 ox) (+ y1 1d0) (+ z1 oz)))
                 (setf (physics-player-vy player) (physics-player-jump-speed player)
                       (physics-player-grounded player) nil))))))))
   player)

@@ -548,6 +548,198 @@ function of a column name that reads row K's float in that column. #T3STK1"
         (funcall function k (lambda (column) (luv-physics::constraint-ref cbuf k column)))))))
 ;; A kit for the claims:1 ends here
 
+;; [[file:../physics.org::#T3STK1][A kit for the claims:2]]
+(defparameter +geometric-twins+ '(:swap-xz :mirror-x :mirror-z :translate)
+  "The twins that move a scene: x and z swapped, x mirrored, z mirrored, moved by whole chunks. #T3STK1")
+
+(defparameter +twins+ (append +geometric-twins+ '(:reverse-order))
+  "Every twin: the geometric ones and the scene with its bodies added in the other order. #T3STK1")
+
+(defparameter +twin-shift+ '(-16 -16 -16)
+  "The translation of the :translate twin, in cells: one chunk down each axis. #T3STK1")
+
+(defparameter +twin-tolerance+ 1e-3
+  "How far, in metres, a twin's body may lie from the scene's, mapped back. #T3STK1")
+
+(defun twin-vector (twin x y z)
+  "The vector X Y Z as TWIN sees it (a translation leaves vectors alone), three values; each twin
+is its own inverse on vectors. #T3STK1"
+  (case twin
+    (:swap-xz (values z y x))
+    (:mirror-x (values (- x) y z))
+    (:mirror-z (values x y (- z)))
+    (t (values x y z))))
+
+(defun twin-point (twin x y z)
+  "The point X Y Z of the scene in TWIN, three values. #T3STK1"
+  (if (eq twin :translate)
+      (destructuring-bind (sx sy sz) +twin-shift+ (values (+ x sx) (+ y sy) (+ z sz)))
+      (twin-vector twin x y z)))
+
+(defun twin-back-point (twin x y z)
+  "The point of the scene that TWIN's point X Y Z stands for, three values. #T3STK1"
+  (if (eq twin :translate)
+      (destructuring-bind (sx sy sz) +twin-shift+ (values (- x sx) (- y sy) (- z sz)))
+      (twin-vector twin x y z)))
+
+(defun twin-back-cell (twin ix iy iz)
+  "The cell of the scene that TWIN's cell IX IY IZ stands for, three values: a mirror maps cell
+I to -1-I, the cell that holds the mirrored points of I. #T3STK1"
+  (case twin
+    (:swap-xz (values iz iy ix))
+    (:mirror-x (values (- -1 ix) iy iz))
+    (:mirror-z (values ix iy (- -1 iz)))
+    (:translate (destructuring-bind (sx sy sz) +twin-shift+ (values (- ix sx) (- iy sy) (- iz sz))))
+    (t (values ix iy iz))))
+
+(defun twin-fill (twin terrain x0 y0 z0 x1 y1 z1 solid-p)
+  "Fill, in TERRAIN, TWIN's image of the cells from X0 Y0 Z0 to before X1 Y1 Z1 with SOLID-P. #T3STK1"
+  (multiple-value-bind (a b c d e f)
+      (case twin
+        (:swap-xz (values z0 y0 x0 z1 y1 x1))
+        (:mirror-x (values (- x1) y0 z0 (- x0) y1 z1))
+        (:mirror-z (values x0 y0 (- z1) x1 y1 (- z0)))
+        (:translate (destructuring-bind (sx sy sz) +twin-shift+
+                      (values (+ x0 sx) (+ y0 sy) (+ z0 sz) (+ x1 sx) (+ y1 sy) (+ z1 sz))))
+        (t (values x0 y0 z0 x1 y1 z1)))
+    (fill-terrain terrain a b c d e f solid-p)))
+
+(defun twin-floor-terrain (twin &rest fills)
+  "TWIN's image of make-floor-terrain's terrain with FILLS, each (X0 Y0 Z0 X1 Y1 Z1 SOLID-P), made
+after it. #T3STK1"
+  (let ((terrain (make-voxel-terrain)))
+    (twin-fill twin terrain -16 -16 -16 32 32 32 nil)
+    (twin-fill twin terrain -16 -1 -16 32 0 32 t)
+    (loop for (x0 y0 z0 x1 y1 z1 solid-p) in fills
+          do (twin-fill twin terrain x0 y0 z0 x1 y1 z1 solid-p))
+    terrain))
+
+(defun twin-add-bodies (twin world specs)
+  "Add to WORLD a body for each of SPECS, (X Y Z . add-physics-body's keywords), moved into TWIN
+with its velocity, in the other order for :reverse-order; return their handles in SPECS' order. #T3STK1"
+  (let ((handles (make-array (length specs))))
+    (flet ((add (k)
+             (destructuring-bind (x y z &rest keys &key (vx 0.0) (vy 0.0) (vz 0.0) &allow-other-keys)
+                 (nth k specs)
+               (multiple-value-bind (x y z) (twin-point twin x y z)
+                 (multiple-value-bind (vx vy vz) (twin-vector twin vx vy vz)
+                   (setf (aref handles k)
+                         (apply #'add-physics-body world x y z :vx vx :vy vy :vz vz
+                                (loop for (key value) on keys by #'cddr
+                                      unless (member key '(:vx :vy :vz)) append (list key value)))))))))
+      (if (eq twin :reverse-order)
+          (loop for k from (1- (length specs)) downto 0 do (add k))
+          (dotimes (k (length specs)) (add k))))
+    (coerce handles 'list)))
+
+(defun twin-post-box (twin world x y z hx hy hz &key (vx 0.0) (vy 0.0) (vz 0.0) owner)
+  "Post in WORLD TWIN's image of the box at X Y Z with half-extents HX HY HZ moving at VX VY VZ. #T3STK1"
+  (multiple-value-bind (x y z) (twin-point twin x y z)
+    (multiple-value-bind (hx hy hz) (twin-vector twin hx hy hz)
+      (multiple-value-bind (vx vy vz) (twin-vector twin vx vy vz)
+        (post-physics-box world x y z (abs hx) (abs hy) (abs hz) :vx vx :vy vy :vz vz :owner owner)))))
+
+(defun twin-scene-world (twin fills specs &key (sleep t) (gravity '(0 -9.81 0)))
+  "A world over TWIN's floor terrain with FILLS and TWIN's bodies of SPECS; return the world and
+the handles in SPECS' order. #T3STK1"
+  (let ((world (make-physics-world :terrain (apply #'twin-floor-terrain twin fills)
+                                   :sleep sleep :gravity gravity)))
+    (values world (twin-add-bodies twin world specs))))
+
+(defun run-twin (twin scene steps)
+  "Run SCENE's TWIN for STEPS steps; per step, a list of the bodies' positions mapped back (or
+:gone), the step's contact count and its events, each (KIND (A B) SPEED POINT) with A and B the
+bodies' places in the scene, or -1, in increasing order, and POINT mapped back; the events
+sorted. #T3STK1"
+  (multiple-value-bind (world handles before-step) (funcall scene twin)
+    (flet ((place (handle) (or (position handle handles) -1)))
+      (loop for step below steps
+            collect (progn
+                      (when before-step (funcall before-step world step))
+                      (step-physics-world world)
+                      (let ((events '()))
+                        (map-physics-events (lambda (kind a b x y z speed datum)
+                                              (declare (ignore datum))
+                                              (push (list kind (sort (list (place a) (place b)) #'<) speed
+                                                          (multiple-value-list (twin-back-point twin x y z)))
+                                                    events))
+                                            world)
+                        (list (loop for h in handles
+                                    collect (if (physics-body-alive-p world h)
+                                                (multiple-value-list
+                                                 (multiple-value-call #'twin-back-point twin
+                                                   (physics-body-position world h)))
+                                                :gone))
+                              (physics-world-last-step-contact-count world)
+                              (sort events #'string< :key (lambda (e) (format nil "~S" (subseq e 0 2)))))))))))
+
+(defun twin-parting (twin original record)
+  "How RECORD, of TWIN, first parts from ORIGINAL, as a string, or NIL: a body further than
++twin-tolerance+, another contact count, other events, an event speed off by more than 5 mm/s
+and 0.1 %, or, in a geometric twin, a contact event's point further than +twin-tolerance+. #T3STK1"
+  (loop for (positions count events) in original
+        for (twin-positions twin-count twin-events) in record
+        for step from 1
+        do (loop for p in positions for q in twin-positions for k from 0
+                 do (cond ((or (eq p :gone) (eq q :gone))
+                           (unless (eq p q) (return-from twin-parting (format nil "~A: body ~D gone in one at step ~D" twin k step))))
+                          ((some (lambda (a b) (> (abs (- a b)) +twin-tolerance+)) p q)
+                           (return-from twin-parting
+                             (format nil "~A: body ~D at ~{~,4F~^ ~}, not ~{~,4F~^ ~}, at step ~D" twin k q p step)))))
+           (unless (= count twin-count)
+             (return-from twin-parting (format nil "~A: ~D contacts, not ~D, at step ~D" twin twin-count count step)))
+           (unless (and (= (length events) (length twin-events))
+                        (every (lambda (e f) (and (equal (subseq e 0 2) (subseq f 0 2))
+                                                  (<= (abs (- (third e) (third f))) (max 5e-3 (* 1e-3 (abs (third e)))))
+                                                  ;; a contact's point; a pair's lies on its lower
+                                                  ;; slot's body
+                                                  (or (eq twin :reverse-order)
+                                                      (not (member (first e) '(:begin :end :hit)))
+                                                      (every (lambda (a b) (<= (abs (- a b)) +twin-tolerance+))
+                                                             (fourth e) (fourth f)))))
+                               events twin-events))
+             (return-from twin-parting (format nil "~A: events ~S, not ~S, at step ~D" twin twin-events events step)))))
+
+(defun twin-final-position (record &optional (body 0))
+  "The position, a list of three numbers, of the BODY-th body of a run-twin RECORD after its last
+step. #T3STK1"
+  (nth body (first (first (last record)))))
+
+(defun check-twins (name scene steps &key (twins +twins+))
+  "Check that each of TWINS of SCENE, named NAME, run for STEPS steps, does what SCENE does;
+return SCENE's record (run-twin). #T3STK1"
+  (let ((original (run-twin nil scene steps)))
+    (dolist (twin twins original)
+      (let ((parting (twin-parting twin original (run-twin twin scene steps))))
+        (check (null parting) "~A: ~A" name parting)))))
+;; A kit for the claims:2 ends here
+
+;; [[file:../physics.org::#T3STK1][T3STK1-twins-are-rigid]]
+(define-claim "T3STK1" twins-are-rigid
+    "Each twin maps points, vectors and cells there and back to themselves, keeps gravity, and puts a point in its cell's twin."
+  (dolist (twin (cons nil +twins+))
+    (check (every #'= '(0.0 -9.81 0.0) (multiple-value-list (twin-vector twin 0.0 -9.81 0.0))))
+    (loop for (x y z) in '((3.25 0.5 7.75) (-2.5 -0.125 4.5) (0.375 5.5 -1.25) (15.999 16.5 -16.001))
+          do (check (equal (list x y z) (multiple-value-list
+                                         (multiple-value-call #'twin-back-point twin (twin-point twin x y z))))
+                    "~A: ~S there and back" twin (list x y z))
+             (check (equal (list x y z) (multiple-value-list
+                                         (multiple-value-call #'twin-vector twin (twin-vector twin x y z)))))
+             (let ((cell (list (floor x) (floor y) (floor z))))
+               ;; the twin's point lies in the cell whose scene cell is the point's
+               (check (equal cell (multiple-value-list
+                                   (multiple-value-call #'twin-back-cell twin
+                                     (multiple-value-call (lambda (a b c) (values (floor a) (floor b) (floor c)))
+                                       (twin-point twin x y z)))))
+                      "~A: the twin of ~S is not in the twin of cell ~S" twin (list x y z) cell)))
+    (unless (eq twin :translate)
+      (flet ((distance (p q) (sqrt (reduce #'+ (mapcar (lambda (a b) (expt (- a b) 2)) p q)))))
+        (let ((p '(3.25 0.5 7.75)) (q '(-2.5 -0.125 4.5)))
+          (check (= (distance p q)
+                    (distance (multiple-value-list (apply #'twin-point twin p))
+                              (multiple-value-list (apply #'twin-point twin q))))))))))
+;; T3STK1-twins-are-rigid ends here
+
 ;; [[file:../physics.org::#V0CAB5][V0CAB5-defaults-as-tabled]]
 (define-claim "V0CAB5" defaults-as-tabled
     "The parameters' defaults are the table's; clock-ns counts nanoseconds."
@@ -1025,6 +1217,87 @@ function of a column name that reads row K's float in that column. #T3STK1"
     (check (null wrong) "entry points ran on wrong arguments: ~S" wrong)
     (check (eq t (luv-physics::validate-physics-world w)))))
 ;; C0ND1T-registry-and-entry-points ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-every-argument-guarded]]
+(define-claim "C0ND1T" every-argument-guarded
+    "Each numeric argument of each exported call, made NaN or out of range alone, is refused naming it; the world is untouched."
+  (let* ((nan (sb-kernel:make-single-float -4194304))
+         (world (make-floor-world))
+         (ball (add-physics-body world 3.5 0.5 3.5))
+         (terrain (luv-physics::physics-world-terrain world))
+         (player (make-physics-player 5.5 0 5.5))
+         ;; each call: a function of its argument list, the good arguments, and per argument
+         ;; (a place in the list or a keyword) the name a NaN there is refused with (NIL: no NaN is
+         ;; tried, the kind is no number) and a value out of range, with the name its refusal gives
+         (calls
+           `((add-physics-body ,(lambda (args) (apply #'add-physics-body world args))
+              (1.5 2.0 1.5 :radius 0.25 :mass 1.0 :restitution 0.2 :friction 0.5 :rolling-resistance 0.1
+               :vx 0.0 :vy 0.0 :vz 0.0 :life 5.0 :kind 0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (:vx :vx 1e20 :velocity) (:vy :vy 1e20 :velocity)
+               (:vz :vz 1e20 :velocity) (:radius :radius 5.0 :radius) (:mass :mass -1.0 :mass)
+               (:restitution :restitution 1.5 :restitution) (:friction :friction -1.0 :friction)
+               (:rolling-resistance :rolling-resistance -1.0 :rolling-resistance) (:life :life -1.0 :life)
+               (:kind nil :foo :kind)))
+             (set-physics-body-velocity ,(lambda (args) (apply #'set-physics-body-velocity world ball args))
+              (0.5 0.0 0.5)
+              ((0 :vx 1e20 :velocity) (1 :vy 1e20 :velocity) (2 :vz 1e20 :velocity)))
+             (post-physics-box ,(lambda (args) (apply #'post-physics-box world args))
+              (8.5 0.5 8.5 0.5 0.5 0.5 :vx 0.0 :vy 0.0 :vz 0.0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :hx 0.0 :hx) (3 :hx 2000.0 :hx) (4 :hy 0.0 :hy)
+               (4 :hy 2000.0 :hy) (5 :hz 0.0 :hz) (5 :hz 2000.0 :hz) (:vx :vx 1e20 :velocity)
+               (:vy :vy 1e20 :velocity) (:vz :vz 1e20 :velocity)))
+             (wake-physics-bodies-near ,(lambda (args) (apply #'wake-physics-bodies-near world args))
+              (3.5 0.5 3.5 1.0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :radius -1.0 :radius)))
+             (physics-ray-cast ,(lambda (args) (apply #'physics-ray-cast world args))
+              (1.5 2.0 1.5 1.0 -1.0 0.5 10.0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :dx nil nil) (4 :dy nil nil) (5 :dz nil nil)
+               (6 :max-distance -1.0 :max-distance)))
+             (physics-sphere-cast ,(lambda (args) (apply #'physics-sphere-cast world args))
+              (1.5 2.0 1.5 0.3 1.0 -1.0 0.5 10.0)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :radius 9.0 :radius) (4 :dx nil nil)
+               (5 :dy nil nil) (6 :dz nil nil) (7 :max-distance -1.0 :max-distance)))
+             (make-physics-player ,(lambda (args) (apply #'make-physics-player args))
+              (5.5 0 5.5)
+              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z)))
+             (step-physics-player ,(lambda (args) (apply #'step-physics-player player terrain args))
+              (:move-x 1.0 :move-z 0.0)
+              ((:move-x :move-x nil nil) (:move-z :move-z nil nil))))))
+    (labels ((with-argument (args place value)
+               (let ((args (copy-list args)))
+                 ;; a keyword's value follows the keyword, after the positional arguments
+                 (setf (nth (if (integerp place) place (1+ (position place args))) args) value)
+                 args))
+             (refusal (call args)
+               (handler-case (progn (funcall call args) nil) (physics-error (e) e)))
+             (named-p (e type name)
+               (and (typep e type)
+                    (or (null name)
+                        (eq name (if (typep e 'invalid-physics-number)
+                                     (luv-physics::invalid-physics-number-name e)
+                                     (luv-physics::invalid-physics-parameter-name e)))))))
+      (loop for (operation call good cases) in calls
+            do (let ((before (world-fingerprint world))
+                     (boxes (luv-physics::box-columns-length (luv-physics::physics-world-boxes world)))
+                     (player-before (copy-structure player)))
+                 (loop for (place nan-name bad bad-name) in cases
+                       do (when nan-name
+                            (let ((e (refusal call (with-argument good place nan))))
+                              (check (named-p e 'invalid-physics-number nan-name)
+                                     "~A: a NaN as ~S was answered ~S" operation place e)))
+                          (when bad
+                            (let ((e (refusal call (with-argument good place bad))))
+                              (check (if (eq bad-name :radius)
+                                         (or (named-p e 'invalid-physics-parameter :radius)
+                                             (typep e 'invalid-physics-radius))
+                                         (named-p e 'invalid-physics-parameter bad-name))
+                                     "~A: ~S as ~S was answered ~S" operation bad place e)))
+                          (check (equal before (world-fingerprint world)) "~A: a refusal changed the world" operation)
+                          (check (= boxes (luv-physics::box-columns-length (luv-physics::physics-world-boxes world))))
+                          (check (equalp player player-before) "~A: a refusal changed the walker" operation))
+                 (check (null (refusal call good)) "~A: the good call was refused" operation)))
+      (check (eq t (validate-physics-world world))))))
+;; C0ND1T-every-argument-guarded ends here
 
 ;; [[file:../physics.org::#L4Y0UT][L4Y0UT-swap-remove-and-growth]]
 (define-claim "L4Y0UT" swap-remove-and-growth
@@ -2147,6 +2420,21 @@ use before it. #QKS4GZ"
                                (luv-physics::physics-world-sleeping-count w))))))
 ;; QKS4GZ-relocation-stress ends here
 
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-sleep-speed-is-the-edge]]
+(define-claim "QKS4GZ" sleep-speed-is-the-edge
+    "A ball drifting at 0.9 of the sleep speed sleeps after the time to sleep; at 1.1 of it, never."
+  (loop for (factor sleeps) in '((0.9 t) (1.1 nil))
+        do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
+                  (speed (* factor luv-physics::*physics-sleep-speed*))
+                  (ball (add-physics-body world 0.0 1.0 0.0 :vx speed))
+                  (slept nil))
+             (dotimes (i 120)
+               (step-physics-world world)
+               (unless (or slept (physics-body-awake-p world ball)) (setf slept (1+ i))))
+             (check (if sleeps (and slept (<= 30 slept 31)) (null slept))
+                    "drifting at ~,3F m/s the ball slept at step ~S" speed slept))))
+;; QKS4GZ-sleep-speed-is-the-edge ends here
+
 ;; [[file:../physics.org::#K1N3BX][K1N3BX-box-pushes-awake-ball]]
 (define-claim "K1N3BX" box-pushes-awake-ball
     "A box walking at 1 m/s pushes an awake ball ahead, overlapping it by at most slop + 0.001 m."
@@ -2221,6 +2509,23 @@ use before it. #QKS4GZ"
       (check (loop for o in owners for row from 1 always (eq o (svref (luv-physics::physics-world-box-owners w) row)))
              "forty boxes posted in one step do not each keep their owner"))))
 ;; K1N3BX-box-extents-checked ends here
+
+;; [[file:../physics.org::#K1N3BX][K1N3BX-boxes-push-on-every-axis]]
+(define-claim "K1N3BX" boxes-push-on-every-axis
+    "A box pushing a ball along +x pushes its twins' balls alike along +z, -x and -z."
+  (let* ((start 3.013)
+         (record (check-twins "pushed"
+                              (lambda (twin)
+                                (multiple-value-bind (world handles)
+                                    (twin-scene-world twin '() '((4.5 0.245 4.5)))
+                                  (values world handles
+                                          (lambda (world step)
+                                            (twin-post-box twin world (+ start (* step (/ 1.0 60))) 0.5 4.5
+                                                           0.25 0.5 0.5 :vx 1.0 :owner :pusher)))))
+                              120 :twins +geometric-twins+))
+         (x (first (twin-final-position record))))
+    (check (and (> x (+ start 2.25)) (> x 5.0)) "the pushed ball ends at x = ~,3F" x)))
+;; K1N3BX-boxes-push-on-every-axis ends here
 
 ;; [[file:../physics.org::#G3NCNT][G3NCNT-oblique-blows-true]]
 (define-claim "G3NCNT" oblique-blows-true
@@ -2798,6 +3103,24 @@ use before it. #QKS4GZ"
       (check (zerop missed) "~D of ~D sleepers were not found at their own centres" missed asked))))
 ;; W4K3PH-quiet-wake-bounded ends here
 
+;; [[file:../physics.org::#W4K3PH][W4K3PH-wake-speed-is-the-edge]]
+(define-claim "W4K3PH" wake-speed-is-the-edge
+    "A ball approaching a sleeper at 0.9 of the wake speed leaves it asleep; at 1.1 of it, wakes it as it comes within reach."
+  (loop for (factor wakes) in '((0.9 nil) (1.1 t))
+        do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
+                  (sleeper (add-physics-body world 0.0 1.0 0.0))
+                  (woken-at nil))
+             (dotimes (i 40) (step-physics-world world))
+             (check (not (physics-body-awake-p world sleeper)) "the sleeper did not fall asleep")
+             (let ((mover (add-physics-body world -0.8 1.0 0.0 :vx (* factor luv-physics::*physics-wake-speed*))))
+               (dotimes (i 360)
+                 (step-physics-world world)
+                 (when (and (null woken-at) (physics-body-awake-p world sleeper))
+                   (setf woken-at (physics-body-position world mover))))
+               (check (if wakes (and woken-at (< -0.61 woken-at -0.59)) (null woken-at))
+                      "at ~,1F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
+;; W4K3PH-wake-speed-is-the-edge ends here
+
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
 (define-claim "P41RS7" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
@@ -3197,6 +3520,19 @@ use before it. #QKS4GZ"
       (check (= 16 most) "the most pairs a ball took is ~D" most))))
 ;; P41RS7-heap-charges-every-pair ends here
 
+;; [[file:../physics.org::#P41RS7][P41RS7-pairs-on-every-side]]
+(define-claim "P41RS7" pairs-on-every-side
+    "An off-centre blow along x is the same blow along z, mirrored, a chunk away and with the two balls added the other way round."
+  (let* ((record (check-twins "blow" (lambda (twin)
+                                       (twin-scene-world twin '() '((3.5 3.0 4.5 :vx 4.0 :restitution 0.5)
+                                                                    (5.0 3.1 4.7 :restitution 0.5))
+                                                         :gravity '(0 0 0)))
+                              60))
+         (struck (twin-final-position record 1)))
+    (check (and (> (first struck) 5.5) (> (second struck) 3.1) (> (third struck) 4.7))
+           "the struck ball ends at ~S" struck)))
+;; P41RS7-pairs-on-every-side ends here
+
 ;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
 (define-claim "MYWH16" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
@@ -3409,6 +3745,85 @@ use before it. #QKS4GZ"
       (check (< outgoing 2d0) "~:[edge~;corner~]: the ball leaves up to ~,2F deg off" corner outgoing))))
 ;; MYWH16-edges-bounce-true ends here
 
+;; [[file:../physics.org::#MYWH16][MYWH16-fast-landings-flat]]
+(define-claim "MYWH16" fast-landings-flat
+    "Balls landing on a slab at 30 and 45 degrees at 5 to 20 m/s, at every place across a seam, along each axis and side, sink no more than 1 mm."
+  (let ((rest (- 0.25 luv-physics::*physics-linear-slop*)))
+    (flet ((sink (normal along sign angle speed offsets)
+             ;; NORMAL, the axis the slab faces along (its face at 0, solid below); ALONG, the
+             ;; axis of the seams crossed, in the direction SIGN: the deepest the ball gets
+             (let ((worst 0.0) (a (* angle (/ pi 180))))
+               (dotimes (k offsets worst)
+                 (let ((terrain (make-voxel-terrain)))
+                   (flet ((point (n s other)
+                            (loop for axis below 3
+                                  collect (cond ((= axis normal) n) ((= axis along) s) (t other)))))
+                     (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+                     (destructuring-bind (x0 y0 z0) (point -1 -16 -16)
+                       (destructuring-bind (x1 y1 z1) (point 0 32 32)
+                         (fill-terrain terrain x0 y0 z0 x1 y1 z1 t)))
+                     (let* ((w (make-physics-world :terrain terrain :gravity '(0 0 0) :sleep nil))
+                            (centre (point 0.9 (+ 4.0 (/ k (float offsets))) 4.5))
+                            (velocity (mapcar (lambda (v) (float v 1.0))
+                                              (point (- (* speed (sin a))) (* sign speed (cos a)) 0.0)))
+                            (h (apply #'add-physics-body w (append centre '(:radius 0.25)
+                                                                   (mapcan #'list '(:vx :vy :vz) velocity)))))
+                       (dotimes (i (+ 10 (ceiling (/ 1.5 (* speed (sin a) (/ 1 60.0))))))
+                         (step-physics-world w)
+                         (setf worst (max worst (- rest (nth normal (multiple-value-list
+                                                                    (physics-body-position w h))))))))))))))
+      (loop for (normal along sign angles speeds offsets)
+              in '((1 0 1 (30 45) (5.0 10.0 15.1 20.0) 12) (1 0 -1 (45) (10.0 20.0) 8) (1 2 1 (45) (10.0 20.0) 8)
+                   (1 2 -1 (45) (10.0 20.0) 8) (0 1 1 (45) (10.0 20.0) 8) (0 1 -1 (45) (10.0 20.0) 8))
+            do (dolist (angle angles)
+                 (dolist (speed speeds)
+                   (let ((worst (sink normal along sign angle speed offsets)))
+                     (check (<= worst 0.001) "onto the face normal to ~C, along ~:[-~;+~]~C at ~A m/s and ~A deg: ~,4F m too near"
+                            (char "xyz" normal) (plusp sign) (char "xyz" along) speed angle worst))))))))
+;; MYWH16-fast-landings-flat ends here
+
+;; [[file:../physics.org::#MYWH16][MYWH16-contacts-on-every-side]]
+(define-claim "MYWH16" contacts-on-every-side
+    "A face, an edge, a corner and a ledge met along x are met the same along z, mirrored and a chunk away."
+  (flet ((final (record) (twin-final-position record))
+         (rest-y (y) (< (abs (- y (- 0.25 luv-physics::*physics-linear-slop*))) 0.002)))
+    (let ((face (check-twins "face" (lambda (twin)
+                                      (twin-scene-world twin '((6 0 3 8 2 6 t))
+                                                        '((4.5 0.245 4.5 :vx 3.0 :restitution 0.5))))
+                             120 :twins +geometric-twins+)))
+      (let ((furthest (loop for (positions) in face maximize (first (first positions)))))
+        (check (< (first (final face)) (- furthest 0.2))
+               "the ball sent into the wall got to x = ~,3F and ends at ~,3F" furthest (first (final face)))))
+    (loop for (name z) in '(("edge" 4.5) ("corner" 5.1))
+          do (let ((record (check-twins name (lambda (twin)
+                                               (twin-scene-world twin '((4 0 4 5 1 5 t))
+                                                                 `((5.1 1.6 ,z :restitution 0.3))))
+                                        120 :twins +geometric-twins+)))
+               (destructuring-bind (x y z2) (final record)
+                 (check (and (rest-y y) (> x 5.1) (>= z2 z)) "the ~A's ball ends at ~,3F ~,3F ~,3F" name x y z2))))
+    (let ((ledge (check-twins "ledge" (lambda (twin)
+                                        (twin-scene-world twin '((5 -1 -16 32 0 32 nil) (-16 -2 -16 32 -1 32 t))
+                                                          '((4.6 0.245 3.5 :vx 0.5))))
+                              120 :twins +geometric-twins+)))
+      (check (rest-y (+ 1 (second (final ledge)))) "the ledge's ball ends at y = ~,4F" (second (final ledge))))))
+;; MYWH16-contacts-on-every-side ends here
+
+;; [[file:../physics.org::#MYWH16][MYWH16-inside-leaves-along-z]]
+(define-claim "MYWH16" inside-leaves-along-z
+    "A ball buried in a cell open only on +z leaves along +z; its twins, open on -z and +x, alike."
+  (flet ((scene (twin)
+           (twin-scene-world twin '((3 3 3 8 12 12 t) (5 7 6 6 8 11 nil)) '((5.5 7.3 5.2)) :sleep nil)))
+    (multiple-value-bind (w handles) (scene nil)
+      (step-physics-world w)
+      (let ((contacts (terrain-contacts w (first handles))))
+        (check (and (= 1 (length contacts))
+                    (every #'= '(0.0 0.0 -1.0) (list (getf (first contacts) :nx) (getf (first contacts) :ny)
+                                                     (getf (first contacts) :nz))))
+               "after one step the terrain contacts are ~S" contacts)))
+    (let ((record (check-twins "inside" #'scene 120 :twins +geometric-twins+)))
+      (check (> (third (twin-final-position record)) 6.0) "the ball ends at ~S" (twin-final-position record)))))
+;; MYWH16-inside-leaves-along-z ends here
+
 ;; [[file:../physics.org::#SW33P7][SW33P7-no-tunnelling-to-100]]
 (define-claim "SW33P7" no-tunnelling-to-100
     "Balls at up to 100 m/s stop at a one-cell wall from every phase of the step."
@@ -3516,6 +3931,35 @@ use before it. #QKS4GZ"
       (let ((normals (mapcar (lambda (c) (list (getf c :nx) (getf c :ny) (getf c :nz))) (terrain-contacts w h))))
         (check (notany (lambda (n) (= 1.0 (first n))) normals) "a contact along +x: ~S" normals)))))
 ;; SW33P7-no-sweep-from-inside ends here
+
+;; [[file:../physics.org::#SW33P7][SW33P7-sweep-on-every-side]]
+(define-claim "SW33P7" sweep-on-every-side
+    "A ball thrown at 14 m/s at a wall along x does what it does along z, mirrored and a chunk away."
+  (let ((record (check-twins "sweep" (lambda (twin)
+                                       (twin-scene-world twin '((10 0 3 11 3 6 t))
+                                                         '((4.5 0.8 4.5 :vx 14.0 :vy 1.0))))
+                             60 :twins +geometric-twins+)))
+    (check (< (first (twin-final-position record)) 9.76) "the ball ends at ~S" (twin-final-position record))))
+;; SW33P7-sweep-on-every-side ends here
+
+;; [[file:../physics.org::#SW33P7][SW33P7-sweep-from-the-margin]]
+(define-claim "SW33P7" sweep-from-the-margin
+    "A ball crossing a seam finds the silent cell past it by its sweep from just over the margin a step, not under."
+  (loop for (speed expected) in '((5.8 nil) (6.2 t) (10.0 t) (14.5 t) (16.0 t))
+        do (let* ((w (make-floor-world :sleep nil))
+                  (angle (/ pi 3))
+                  (h (add-physics-body w 7.99 0.27 4.5 :vx (float (* speed (cos angle)) 1.0)
+                                                        :vy (float (- (* speed (sin angle))) 1.0))))
+             ;; the step up to the prune phase: the contacts it found
+             (let ((luv-physics:*physics-phases* (ldiff luv-physics:*physics-phases*
+                                                        (member 'luv-physics::prune-phase luv-physics:*physics-phases*))))
+               (step-physics-world w))
+             (let ((found (>= (luv-physics::contact-table-find (luv-physics::physics-world-contact-table w)
+                                                               (luv-physics::terrain-key (luv-physics::handle-index h) 8 -1 4))
+                              0)))
+               (check (eq expected found) "at ~A m/s the ball ~:[has no~;has a~] contact with the cell past the seam"
+                      speed found)))))
+;; SW33P7-sweep-from-the-margin ends here
 
 ;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
 (define-claim "B0XPH5" box-contact-geometry
@@ -4581,6 +5025,22 @@ the phases of a step before the prepare phase. #PR3PAR"
                "from ~,1F m: the hit reports ~,4F m/s, the impact was at ~,4F" h got want)))))
 ;; R3ST1T-hit-reports-impact-speed ends here
 
+;; [[file:../physics.org::#R3ST1T][R3ST1T-threshold-is-the-edge]]
+(define-claim "R3ST1T" threshold-is-the-edge
+    "A ball of restitution 0.5 at 0.9 of the threshold stays at the wall; at 1.1 of it, it leaves at half its speed."
+  (dolist (factor '(0.9 1.1))
+    (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
+      (fill-terrain terrain 6 0 -16 7 16 32 t)
+      (let* ((speed (* factor luv-physics::*physics-restitution-threshold*))
+             (ball (add-physics-body w 5.0 2.5 4.5 :radius 0.25 :vx speed :restitution 0.5 :friction 0.0)))
+        (dotimes (i 120) (step-physics-world w))
+        (let ((leaving (- (physics-body-velocity w ball))))
+          (check (if (< factor 1)
+                     (< (abs leaving) (* 0.01 speed))
+                     (< (abs (- leaving (* 0.5 speed))) (* 0.02 0.5 speed)))
+                 "at ~,2F m/s the ball leaves the wall at ~,4F m/s" speed leaving))))))
+;; R3ST1T-threshold-is-the-edge ends here
+
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
     "Resting: penetration = slop, approach ~ 0; nothing touching: zeros; landing: > slop."
@@ -4682,6 +5142,34 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (> carried 100) "only ~D prepared constraints carry a spin impulse" carried)
         (check (zerop wrong) "~D prepared constraints do not start from their contact's spin impulse" wrong)))))
 ;; ST0R3S-store-is-exact ends here
+
+;; [[file:../physics.org::#ST0R3S][ST0R3S-hits-for-either-side]]
+(define-claim "ST0R3S" hits-for-either-side
+    "A ball that asked for hits is struck: one :hit, whether it is side b or, added first, side a."
+  (let* ((record (check-twins "struck" (lambda (twin)
+                                         (twin-scene-world twin '() '((3.5 0.245 4.5 :vx 3.0)
+                                                                      (5.5 0.245 4.5 :report-hits t))))
+                              90))
+         (hits (loop for (nil nil events) in record
+                     append (remove :hit events :key #'first :test-not #'eq))))
+    (check (and (= 1 (length hits)) (equal '(0 1) (second (first hits)))
+                (> (third (first hits)) luv-physics::*physics-hit-speed*))
+           "the blow reported the hits ~S" hits)))
+;; ST0R3S-hits-for-either-side ends here
+
+;; [[file:../physics.org::#ST0R3S][ST0R3S-hit-speed-is-the-edge]]
+(define-claim "ST0R3S" hit-speed-is-the-edge
+    "A blow at 0.9 of the hit speed reports no :hit; at 1.1 of it, one."
+  (loop for (factor expected) in '((0.9 0) (1.1 1))
+        do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
+                  (speed (* factor luv-physics::*physics-hit-speed*))
+                  (hits 0))
+             (add-physics-body world 0.0 1.0 0.0 :vx speed)
+             (add-physics-body world 1.0 1.0 0.0 :report-hits t)
+             (dotimes (i 120)
+               (incf hits (count :hit (step-events world) :key #'first)))
+             (check (= expected hits) "a blow at ~,2F m/s reported ~D hits" speed hits))))
+;; ST0R3S-hit-speed-is-the-edge ends here
 
 ;; [[file:../physics.org::#F1NAL5][F1NAL5-spin-turns-by-the-half-angle]]
 (define-claim "F1NAL5" spin-turns-by-the-half-angle
@@ -6258,6 +6746,76 @@ in the order of *physics-scene-features*. #K5DF9S"
         (check (> x 5.0) "the ball only reached x = ~,3F" x))
       (check (eq t (luv-physics::validate-physics-world world))))))
 ;; H7P4CX-walker-kicks-balls ends here
+
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-on-every-axis]]
+(define-claim "H7P4CX" walker-on-every-axis
+    "The walker climbs a step, stops at a wall and rounds a pillar the same when they are met along z, -x, -z or a chunk away."
+  (flet ((walk (twin fills x z move-x move-z)
+           ;; the walker's soles' end, mapped back, and the highest its soles rose above the floor
+           (let ((terrain (apply #'twin-floor-terrain twin fills))
+                 (floor-y (nth-value 1 (twin-point twin 0d0 0d0 0d0))) (highest -1d0))
+             (multiple-value-bind (px py pz) (twin-point twin (float x 1d0) 0d0 (float z 1d0))
+               (multiple-value-bind (mx my mz) (twin-vector twin (float move-x 1d0) 0d0 (float move-z 1d0))
+                 (declare (ignore my))
+                 (let ((p (make-physics-player px py pz)))
+                   (dotimes (i 240)
+                     (step-physics-player p terrain :move-x mx :move-z mz)
+                     (setf highest (max highest (- (physics-player-y p) floor-y))))
+                   (append (multiple-value-list
+                            (twin-back-point twin (physics-player-x p) (physics-player-y p) (physics-player-z p)))
+                           (list highest))))))))
+    (let* ((walls '((4 0 0 16 1 2 t) (0 0 4 2 2 5 t)))
+           (pillar '((6 0 6 8 2 8 t)))
+           (walks `(("step" ,walls 2.5 1 1 0) ("wall" ,walls 1 2.5 0 1)))
+           (ends (loop for (nil . walk) in walks collect (apply #'walk nil walk))))
+      (destructuring-bind (step wall) ends
+        (check (and (= 1 (second step)) (> (first step) 4.5)) "the step was not climbed: ~S" step)
+        (check (and (< (abs (- (third wall) 3.7d0)) 1d-6) (= 0 (fourth wall))) "at the wall: ~S" wall))
+      (dolist (twin (cons nil +geometric-twins+))
+        (let ((round (walk twin pillar 4.5 4.3 1 1)))
+          (check (and (= 0 (fourth round)) (> (first round) 8.3)) "~A: round the pillar: ~S" twin round))
+        (when twin
+          (loop for (name . walk) in walks for want in ends
+                for got = (apply #'walk twin walk)
+                do (check (every (lambda (a b) (< (abs (- a b)) 1d-6)) want got)
+                          "~A, ~A: the walker ends at ~S, not ~S" twin name got want)))))))
+;; H7P4CX-walker-on-every-axis ends here
+
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-limits-at-their-edges]]
+(define-claim "H7P4CX" walker-limits-at-their-edges
+    "The walker gains 1/3 m/s a step up to 4.3; jumps once when it meets a step in the air; climbs under a ceiling 3 up, not 2 up."
+  (let ((terrain (make-floor-terrain)) (p (make-physics-player 8.5 0 8.5)))
+    (dotimes (i 2) (step-physics-player p terrain))
+    (check (and (physics-player-grounded p) (= 0 (physics-player-vy p))) "standing, vy ~A" (physics-player-vy p))
+    (loop for n from 1 to 13
+          do (step-physics-player p terrain :move-x 1d0)
+             (when (member n '(1 6 12 13))
+               (check (< (abs (- (physics-player-vx p) (min 4.3d0 (/ n 3d0)))) 1d-9)
+                      "after ~D steps the walker walks at ~A m/s" n (physics-player-vx p)))))
+  (let ((terrain (make-floor-terrain)) (p (make-physics-player 3.2 0 1)) (top 0d0) (met-in-air nil))
+    (fill-terrain terrain 4 0 0 16 1 2 t)
+    (dotimes (i 240)
+      (step-physics-player p terrain :move-x 1d0 :jump (= i 1))
+      (when (and (not (physics-player-grounded p)) (< (physics-player-y p) 1) (> i 2)
+                 (< (abs (- (physics-player-x p) 3.7d0)) 1d-9))
+        (setf met-in-air t))
+      (setf top (max top (physics-player-y p))))
+    (check (eq t met-in-air) "the walker did not meet the step's face in the air")
+    (check (< (abs (- top 1.274d0)) 0.02) "meeting the step in the air, the walker rose to ~,3F" top)
+    (check (= 1 (physics-player-y p)) "the walker ends at y = ~A, not on the step" (physics-player-y p)))
+  (loop for (ceiling climbs) in '((3 t) (2 nil))
+        do (let ((terrain (make-floor-terrain)) (p (make-physics-player 2.5 0 1)) (top 0d0))
+             (fill-terrain terrain 4 0 0 16 1 2 t)
+             (fill-terrain terrain 0 ceiling 0 16 (1+ ceiling) 2 t)
+             (dotimes (i 240)
+               (step-physics-player p terrain :move-x 1d0)
+               (setf top (max top (physics-player-y p))))
+             (check (if climbs
+                        (and (= 1 (physics-player-y p)) (> (physics-player-x p) 4.5))
+                        (and (= 0 top) (< (abs (- (physics-player-x p) 3.7d0)) 1d-9)))
+                    "under a ceiling ~D up the walker ends at ~,3F ~,3F, its soles as high as ~,3F"
+                    ceiling (physics-player-x p) (physics-player-y p) top))))
+;; H7P4CX-walker-limits-at-their-edges ends here
 
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-measure-basin-reports-the-world]]
 (define-claim "B3NCH5" measure-basin-reports-the-world
@@ -8046,6 +8604,44 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
         (check (and own (eq :box (physics-hit-kind own)) (eq player (physics-hit-owner own)))
                "without :exclude the eye does not start in its own box")))))
 ;; R4YC57-eye-picks-the-ball ends here
+
+;; [[file:../physics.org::#R4YC57][R4YC57-rays-on-every-axis]]
+(define-claim "R4YC57" rays-on-every-axis
+    "Rays along each axis and at a ball meet the same cells and body in every twin, mapped back."
+  (let ((rays '((4.2 1.3 4.6 1 0 0) (4.2 1.3 4.6 -1 0 0) (4.2 1.3 4.6 0 1 0) (4.2 1.3 4.6 0 -1 0)
+                (4.2 1.3 4.6 0 0 1) (4.2 1.3 4.6 0 0 -1) (4.2 0.5 5.4 1 0 0))))
+    (flet ((cast (twin)
+             ;; each ray's hit: kind, the body's place, the cell, distance and normal, mapped back
+             (multiple-value-bind (world handles)
+                 (twin-scene-world twin '((2 0 2 9 3 3 t) (2 0 8 9 3 9 t) (2 0 2 3 3 9 t) (8 0 2 9 3 9 t)
+                                          (2 2 2 9 3 9 t) (3 0 3 8 2 8 nil))
+                                   '((6.5 0.5 5.5 :radius 0.3)) :gravity '(0 0 0))
+               (loop for (x y z dx dy dz) in rays
+                     collect (let ((hit (multiple-value-call #'physics-ray-cast world (twin-point twin x y z)
+                                          (twin-vector twin dx dy dz) 20.0)))
+                               (and hit
+                                    (list (physics-hit-kind hit) (position (physics-hit-handle hit) handles)
+                                          (and (eq :cell (physics-hit-kind hit))
+                                               (multiple-value-list
+                                                (twin-back-cell twin (physics-hit-cell-x hit) (physics-hit-cell-y hit)
+                                                                (physics-hit-cell-z hit))))
+                                          (physics-hit-distance hit)
+                                          (multiple-value-list
+                                           (twin-vector twin (physics-hit-nx hit) (physics-hit-ny hit)
+                                                        (physics-hit-nz hit))))))))))
+      (let ((scene (cast nil)))
+        (check (equal '((8 1 4) (2 1 4) (4 2 4) (4 -1 4) (4 1 8) (4 1 2)) (mapcar #'third (subseq scene 0 6)))
+               "the axis rays met the cells ~S" (mapcar #'third scene))
+        (check (every (lambda (hit want) (< (abs (- (fourth hit) want)) 1e-5)) scene '(3.8 1.2 0.7 1.3 3.4 1.6))
+               "the axis rays met them at ~S" (mapcar #'fourth scene))
+        (check (equal '(:body 0) (subseq (seventh scene) 0 2)) "the ray at the ball met ~S" (seventh scene))
+        (dolist (twin +geometric-twins+)
+          (loop for want in scene for got in (cast twin) for k from 0
+                do (check (and got (equal (subseq want 0 3) (subseq got 0 3))
+                               (< (abs (- (fourth want) (fourth got))) 1e-5)
+                               (every (lambda (a b) (< (abs (- a b)) 1e-5)) (fifth want) (fifth got)))
+                          "~A: ray ~D met ~S, not ~S" twin k got want)))))))
+;; R4YC57-rays-on-every-axis ends here
 
 ;; [[file:../physics.org::#S9WEEP][S9WEEP-sphere-casts-match-reference]]
 (defun box-first-touch (o u limit lo hi r)
