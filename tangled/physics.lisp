@@ -2147,6 +2147,26 @@ dispatches on it once per call. #W0RLD7"))
 (defclass scalar-kernels (kernel-family) ()
   (:documentation "The reference family: one constraint at a time, in buffer order. #W0RLD7"))
 
+(defstruct (step-statistics (:constructor make-step-statistics ()))
+  "What a world's last step measured, each figure in a slot of its own (Box2D's b2Profile):
+the contacts it solved, the colours they took, its wall-clock seconds, and its error, the
+deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7"
+  (contacts 0 :type fixnum)
+  (colors 0 :type fixnum)
+  (real-seconds 0d0 :type double-float)
+  (max-penetration 0d0 :type double-float)
+  (max-approach 0d0 :type double-float))
+
+(defun copy-step-statistics-into (from to)
+  "Copy every figure of the step-statistics FROM into TO, consing nothing, and return TO. #W0RLD7"
+  (declare (type step-statistics from to))
+  (setf (step-statistics-contacts to) (step-statistics-contacts from)
+        (step-statistics-colors to) (step-statistics-colors from)
+        (step-statistics-real-seconds to) (step-statistics-real-seconds from)
+        (step-statistics-max-penetration to) (step-statistics-max-penetration from)
+        (step-statistics-max-approach to) (step-statistics-max-approach from))
+  to)
+
 (defclass physics-world ()
   ((terrain :initarg :terrain :initform nil :accessor physics-world-terrain)
    (probe :initform (make-terrain-probe) :reader physics-world-probe)
@@ -2243,8 +2263,7 @@ dispatches on it once per call. #W0RLD7"))
    (undo-woken-count :initform 0 :type fixnum :accessor physics-world-undo-woken-count)
    (undo-sorted :initform nil :accessor physics-world-undo-sorted)
    (undo-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-rows)
-   (undo-statistics :initform (make-array 8 :element-type 'double-float :initial-element 0d0)
-                    :reader physics-world-undo-statistics)
+   (undo-statistics :initform (make-step-statistics) :reader physics-world-undo-statistics)
    (sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
    ;; what the world may use ([[#FEAT5X][features]]), and the step built for it
    (features :initarg :features :initform +physics-features+ :reader world-features)
@@ -2261,8 +2280,7 @@ dispatches on it once per call. #W0RLD7"))
    (event-handler :initform nil :accessor physics-world-event-handler)
    (step-hook :initform nil :accessor physics-world-step-hook)
    (phase-clock :initform nil :accessor physics-world-phase-clock)
-   (statistics :initform (make-array 8 :element-type 'double-float :initial-element 0d0)
-               :reader physics-world-statistics))
+   (statistics :initform (make-step-statistics) :reader physics-world-statistics))
   (:documentation "A simulated world of spheres over a voxel terrain: the CLOS side of the seam,
 holding the columnar buffers, the parameters, the events and the kernel family. #W0RLD7"))
 
@@ -2279,8 +2297,8 @@ event handler, or NIL (the default: the step then calls nothing). Settable; a re
 
 (declaim (inline world-statistics))
 (defun world-statistics (world)
-  "WORLD's statistics as the double-float array it is, so the step writes them unboxed. #W0RLD7"
-  (the (simple-array double-float (8)) (physics-world-statistics world)))
+  "WORLD's step-statistics, typed as such, so the step writes its slots unboxed. #W0RLD7"
+  (the step-statistics (physics-world-statistics world)))
 ;; The world holds every buffer and its own parameters:1 ends here
 
 ;; [[file:../physics.org::#R9M4PV][Choose the phase once: kernel families:1]]
@@ -4912,7 +4930,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                         do (let ((base (constraint-base k)))
                              (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
                              (dotimes (o (floor stride 8)) (setf (aref data (+ base (* 8 o))) 0.0)))))))))))
-      (setf (aref (world-statistics world) 1) (coerce (the fixnum color-count) 'double-float))
+      (setf (step-statistics-colors (world-statistics world)) color-count)
       color-count)))
 ;; Preparing the constraints:1 ends here
 
@@ -5540,8 +5558,8 @@ so its undo log closes. #ST0R3S"
                           (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
                           (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))))))
     (let ((stats (world-statistics world)))
-      (setf (aref stats 3) (coerce max-penetration 'double-float)
-            (aref stats 4) (coerce max-approach 'double-float)))
+      (setf (step-statistics-max-penetration stats) (coerce max-penetration 'double-float)
+            (step-statistics-max-approach stats) (coerce max-approach 'double-float)))
     world))
 ;; Store impulses, events and the step's error:1 ends here
 
@@ -6039,7 +6057,7 @@ and start the contact table's walk of it. #IDVK7G"
 (defun physics-world-max-penetration (world)
   "The deepest overlap, in metres, left at the end of the last step. #IDVK7G"
   (check-world world 'physics-world-max-penetration)
-  (aref (world-statistics world) 3))
+  (step-statistics-max-penetration (world-statistics world)))
 
 (defun mark-held-rows (world)
   "When an awake row of WORLD is crowded (its overlap count has reached +overlaps-per-body+),
@@ -6151,8 +6169,8 @@ its step hook, when set, are called after the phases, while the step's boxes are
              (run-physics-phases world))
            (setf (physics-world-undo-open world) nil)
            (let ((stats (world-statistics world)))
-             (setf (aref stats 0) (coerce (contact-columns-length (physics-world-contacts world)) 'double-float)
-                   (aref stats 2) (* 1d-9 (coerce (the fixnum (- (clock-ns) started)) 'double-float))))
+             (setf (step-statistics-contacts stats) (contact-columns-length (physics-world-contacts world))
+                   (step-statistics-real-seconds stats) (* 1d-9 (coerce (the fixnum (- (clock-ns) started)) 'double-float))))
            (let ((handler (physics-world-event-handler world)))
              (when handler (map-physics-events handler world)))
            (let ((hook (physics-world-step-hook world)))
@@ -6172,7 +6190,7 @@ statistics as they are. #IDVK7G"
         (physics-world-undo-woken-count world) 0
         (physics-world-undo-sorted world) nil
         (physics-world-undo-step-count world) (physics-world-step-count world))
-  (replace (the (simple-array double-float (8)) (physics-world-undo-statistics world)) (world-statistics world))
+  (copy-step-statistics-into (world-statistics world) (physics-world-undo-statistics world))
   world)
 
 (defun unwake-last-body (world row)
@@ -6222,7 +6240,7 @@ grids are rebuilt by the next step. #IDVK7G"
           (pair-list-rows (physics-world-pair-list world)) -1
           (physics-world-awake-grid-step world) -1
           (physics-world-sleeping-grid-dirty world) t)
-    (replace (world-statistics world) (the (simple-array double-float (8)) (physics-world-undo-statistics world)))
+    (copy-step-statistics-into (physics-world-undo-statistics world) (world-statistics world))
     (event-columns-clear (physics-world-events world))
     (fill (physics-world-event-data world) nil)
     world))
@@ -6249,22 +6267,22 @@ phase's position, and the bytes it consed under that position plus the number of
 (defun physics-world-last-step-contact-count (world)
   "How many contacts the last step solved. #IDVK7G"
   (check-world world 'physics-world-last-step-contact-count)
-  (round (aref (physics-world-statistics world) 0)))
+  (step-statistics-contacts (world-statistics world)))
 
 (defun physics-world-last-step-color-count (world)
   "How many colours the last step's contacts used, overflow included. #IDVK7G"
   (check-world world 'physics-world-last-step-color-count)
-  (round (aref (physics-world-statistics world) 1)))
+  (step-statistics-colors (world-statistics world)))
 
 (defun physics-world-last-step-real-seconds (world)
   "Wall-clock seconds the last step took. #IDVK7G"
   (check-world world 'physics-world-last-step-real-seconds)
-  (aref (physics-world-statistics world) 2))
+  (step-statistics-real-seconds (world-statistics world)))
 
 (defun physics-world-max-approach-speed (world)
   "The fastest approach speed, m/s, of an overlapping contact at the end of the last step. #IDVK7G"
   (check-world world 'physics-world-max-approach-speed)
-  (aref (physics-world-statistics world) 4))
+  (step-statistics-max-approach (world-statistics world)))
 ;; The step as built:1 ends here
 
 ;; [[file:../physics.org::#FEAT5X][Features: a world pays only for what it uses:1]]

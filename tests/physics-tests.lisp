@@ -3812,7 +3812,7 @@ use before it. #QKS4GZ"
 (define-claim "MYWH16" inside-leaves-along-z
     "A ball buried in a cell open only on +z leaves along +z; its twins, open on -z and +x, alike."
   (flet ((scene (twin)
-           (twin-scene-world twin '((3 3 3 8 12 12 t) (5 7 6 6 8 11 nil)) '((5.5 7.3 5.2)) :sleep nil)))
+           (twin-scene-world twin '((3 3 3 8 12 12 t) (5 7 6 6 8 11 nil)) '((5.5 7.3 5.2 :inside-cells :push-out)) :sleep nil)))
     (multiple-value-bind (w handles) (scene nil)
       (step-physics-world w)
       (let ((contacts (terrain-contacts w (first handles))))
