@@ -300,7 +300,7 @@
   (let* ((page luv-physics::*page-pathname*)
          (copy (merge-pathnames (format nil "luv-reload-claim-~D.org" (random 1000000 (make-random-state t)))
                                 (uiop:temporary-directory)))
-         (original luv-physics:*physics-phases*)
+         (original *physics-phases*)
          (text (luv-physics::read-file-text page))
          (old "store-phase finalize-phase)")
          (new "store-phase finalize-phase reload-claim-phase)")
@@ -315,25 +315,25 @@
     (unwind-protect
          (let ((w (make-floor-world)))
            ;; at its default: the page's new default is taken, and the step runs it at once
-           (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G" :page copy))
-           (check (eq 'luv-physics::reload-claim-phase (car (last luv-physics:*physics-phases*))))
-           (check (equal luv-physics:*physics-phases* (gethash 'luv-physics:*physics-phases* luv-physics::*parameter-defaults*))
+           (with-output-to-string (*standard-output*) (reload-section "IDVK7G" :page copy))
+           (check (eq 'luv-physics::reload-claim-phase (car (last *physics-phases*))))
+           (check (equal *physics-phases* (gethash '*physics-phases* luv-physics::*parameter-defaults*))
                   "the page's new default is not the one a later reload compares with")
-           (luv-physics::step-physics-world w)
+           (step-physics-world w)
            (check (= 1 counted) "the new phase ran ~D times in one step" counted)
            ;; changed at the REPL: kept
-           (setf luv-physics:*physics-phases* (remove 'luv-physics::wake-phase original))
+           (setf *physics-phases* (remove 'luv-physics::wake-phase original))
            (let ((summary (with-output-to-string (*standard-output*)
-                            (luv-physics::reload-section "IDVK7G" :page copy))))
+                            (reload-section "IDVK7G" :page copy))))
              (check (search "kept *physics-phases*" summary) "summary: ~A" summary)
              (check (search "0 warnings" summary) "summary: ~A" summary))
-           (check (equal luv-physics:*physics-phases* (remove 'luv-physics::wake-phase original))))
+           (check (equal *physics-phases* (remove 'luv-physics::wake-phase original))))
       ;; the page's own text back in the image
-      (setf luv-physics:*physics-phases* original)
-      (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G"))
-      (setf luv-physics:*physics-phases* original)
+      (setf *physics-phases* original)
+      (with-output-to-string (*standard-output*) (reload-section "IDVK7G"))
+      (setf *physics-phases* original)
       (delete-file copy))
-    (check (equal original luv-physics:*physics-phases*))))
+    (check (equal original *physics-phases*))))
 ;; OWNJGP-reload-keeps-changed-parameters ends here
 
 ;; [[file:../physics.org::#OWNJGP][OWNJGP-reload-changed-loads-one-form]]
@@ -352,12 +352,12 @@
                     out))
     (unwind-protect
          (let ((edited (with-output-to-string (*standard-output*)
-                         (luv-physics::reload-changed :page copy :tangle nil))))
+                         (reload-changed :page copy :tangle nil))))
            (check (search "reload changed: 1 form " edited) "~A" edited)
            (check (eql 0 (search "How many bodies of WORLD are awake now."
                                  (documentation 'physics-world-awake-count 'function)))))
       (let ((back (with-output-to-string (*standard-output*)
-                    (luv-physics::reload-changed :page page :tangle nil))))
+                    (reload-changed :page page :tangle nil))))
         (check (search "reload changed: 1 form " back) "~A" back))
       (delete-file copy))
     (check (equal original (documentation 'physics-world-awake-count 'function)))))
@@ -376,7 +376,7 @@
       (write-string (concatenate 'string (subseq text 0 at) "\"The deepest overlap, in metres, at the end of the last step."
                                  (subseq text (+ at (length old))))
                     out))
-    (flet ((reload (page) (with-output-to-string (*standard-output*) (luv-physics::reload-section "IDVK7G" :page page))))
+    (flet ((reload (page) (with-output-to-string (*standard-output*) (reload-section "IDVK7G" :page page))))
       (unwind-protect
            (let ((edited (reload copy)))
              (check (and (search "users recompiled" edited) (search "4YDMX5" edited)) "~A" edited))
@@ -459,31 +459,31 @@
 (defun make-floor-terrain ()
   "A terrain whose cells [-16,32)^3 are resident air except a floor one cell thick, y in
 [-1,0). #T3STK1"
-  (let ((terrain (luv-physics::make-voxel-terrain)))
-    (luv-physics::fill-terrain terrain -16 -16 -16 32 32 32 nil)
-    (luv-physics::fill-terrain terrain -16 -1 -16 32 0 32 t)
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (fill-terrain terrain -16 -1 -16 32 0 32 t)
     terrain))
 
 (defun make-floor-world (&key (sleep t) (gravity '(0 -9.81 0)))
   "A world over a floor terrain (make-floor-terrain), so a resting ball of radius R has its centre
 at R - slop. Return the world and the terrain. #T3STK1"
   (let ((terrain (make-floor-terrain)))
-    (values (luv-physics::make-physics-world :terrain terrain :sleep sleep :gravity gravity)
+    (values (make-physics-world :terrain terrain :sleep sleep :gravity gravity)
             terrain)))
 
 (defun one-air-cell-world ()
   "A world without gravity whose terrain is solid from -8 to 16 on every axis but for the one air
 cell at 4 1 5. #T3STK1"
-  (let ((terrain (luv-physics::make-voxel-terrain)))
-    (luv-physics::fill-terrain terrain -8 -8 -8 16 16 16 t)
-    (luv-physics::fill-terrain terrain 4 1 5 5 2 6 nil)
-    (luv-physics::make-physics-world :terrain terrain :gravity '(0 0 0))))
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -8 -8 -8 16 16 16 t)
+    (fill-terrain terrain 4 1 5 5 2 6 nil)
+    (make-physics-world :terrain terrain :gravity '(0 0 0))))
 
 (defun step-events (world)
   "Step WORLD once and return its events as a list of (KIND HANDLE-A HANDLE-B SPEED DATUM). #T3STK1"
-  (luv-physics::step-physics-world world)
+  (step-physics-world world)
   (let ((events '()))
-    (luv-physics::map-physics-events
+    (map-physics-events
      (lambda (kind a b x y z speed datum)
        (declare (ignore x y z))
        (push (list kind a b speed datum) events))
@@ -493,17 +493,17 @@ cell at 4 1 5. #T3STK1"
 (defun walk-box-into (world handle &key (steps 180))
   "Walk a 0.5 x 1 x 1 box at 1 m/s along +x from x = 2 into HANDLE's ball for STEPS steps; return
 how far the ball moved and the deepest the box's leading face got past the ball's back. #T3STK1"
-  (let ((dt (/ 1.0 60)) (bx 2.0) (x0 (luv-physics::physics-body-position world handle)) (worst 0.0))
+  (let ((dt (/ 1.0 60)) (bx 2.0) (x0 (physics-body-position world handle)) (worst 0.0))
     (dotimes (i steps)
-      (luv-physics::post-physics-box world bx 0.5 3.5 0.25 0.5 0.5 :vx 1.0 :owner :pusher)
-      (luv-physics::step-physics-world world)
+      (post-physics-box world bx 0.5 3.5 0.25 0.5 0.5 :vx 1.0 :owner :pusher)
+      (step-physics-world world)
       (setf bx (+ bx dt))
-      (setf worst (max worst (- (+ bx 0.25) (- (luv-physics::physics-body-position world handle) 0.25)))))
-    (values (- (luv-physics::physics-body-position world handle) x0) worst)))
+      (setf worst (max worst (- (+ bx 0.25) (- (physics-body-position world handle) 0.25)))))
+    (values (- (physics-body-position world handle) x0) worst)))
 
 (defun body-y (world handle)
   "The height of HANDLE's centre. #T3STK1"
-  (nth-value 1 (luv-physics::physics-body-position world handle)))
+  (nth-value 1 (physics-body-position world handle)))
 
 (defun terrain-contacts (world handle)
   "HANDLE's terrain contacts, as a list of plists (:row :nx :ny :nz :touching :impulse). #T3STK1"
@@ -521,23 +521,23 @@ how far the ball moved and the deepest the box's leading face got past the ball'
 
 (defun world-fingerprint (world)
   "The awake count, the sleeping count and the state hash of WORLD, as a list. #T3STK1"
-  (list (luv-physics::physics-world-awake-count world)
-        (luv-physics::physics-world-sleeping-count world)
-        (luv-physics::physics-world-state-hash world)))
+  (list (physics-world-awake-count world)
+        (physics-world-sleeping-count world)
+        (physics-world-state-hash world)))
 
 (defun prepared-basin-world (family &key (balls 1000) (steps 60))
   "A basin of BALLS balls under FAMILY, stepped STEPS times, then run through the phases of one
 more step up to and including prepare: its constraints are ready for the substeps. #T3STK1"
   (let ((world (make-basin-world balls :kernels family)))
     (dotimes (i steps) (step-physics-world world))
-    (dolist (phase (ldiff luv-physics:*physics-phases*
-                          (rest (member 'luv-physics::prepare-phase luv-physics:*physics-phases*))))
+    (dolist (phase (ldiff *physics-phases*
+                          (rest (member 'luv-physics::prepare-phase *physics-phases*))))
       (funcall phase world))
     world))
 
 (defun phases-checked-after (phase function)
   "*physics-phases* with FUNCTION, which takes the world and returns it, run right after PHASE. #T3STK1"
-  (loop for p in luv-physics:*physics-phases* collect p when (eq p phase) collect function))
+  (loop for p in *physics-phases* collect p when (eq p phase) collect function))
 
 (defun map-prepared-constraints (function world)
   "Call FUNCTION on each row K of WORLD's constraint buffer that names a contact, with K and a
@@ -795,51 +795,51 @@ return SCENE's record (run-twin). #T3STK1"
          (nan (sb-kernel:make-single-float -4194304))
          (inf sb-ext:single-float-positive-infinity)
          (-inf sb-ext:single-float-negative-infinity)
-         (h (luv-physics::add-physics-body w 3.5 1.0 3.5)))
-    (luv-physics::add-physics-body w 5.5 0.245 3.5)
-    (dotimes (i 10) (luv-physics::step-physics-world w))
+         (h (add-physics-body w 3.5 1.0 3.5)))
+    (add-physics-body w 5.5 0.245 3.5)
+    (dotimes (i 10) (step-physics-world w))
     (let ((before (world-fingerprint w)) (wrong '()))
       (dolist (bad (list nan inf -inf))
-        (dolist (call (list (lambda () (luv-physics::add-physics-body w bad 1 1))
-                            (lambda () (luv-physics::add-physics-body w 1 bad 1))
-                            (lambda () (luv-physics::add-physics-body w 1 1 bad))
-                            (lambda () (luv-physics::add-physics-body w 1 1 1 :vx bad))
-                            (lambda () (luv-physics::add-physics-body w 1 1 1 :vy bad))
-                            (lambda () (luv-physics::add-physics-body w 1 1 1 :vz bad))
-                            (lambda () (luv-physics::add-physics-body w 1 1 1 :radius bad))
-                            (lambda () (luv-physics::add-physics-body w 1 1 1 :mass bad))
-                            (lambda () (luv-physics::set-physics-body-velocity w h bad 0 0))
-                            (lambda () (luv-physics::post-physics-box w bad 1 1 0.5 0.5 0.5))
-                            (lambda () (luv-physics::post-physics-box w 1 1 1 0.5 0.5 0.5 :vy bad))
-                            (lambda () (luv-physics::wake-physics-bodies-near w 1 bad 1 1))))
+        (dolist (call (list (lambda () (add-physics-body w bad 1 1))
+                            (lambda () (add-physics-body w 1 bad 1))
+                            (lambda () (add-physics-body w 1 1 bad))
+                            (lambda () (add-physics-body w 1 1 1 :vx bad))
+                            (lambda () (add-physics-body w 1 1 1 :vy bad))
+                            (lambda () (add-physics-body w 1 1 1 :vz bad))
+                            (lambda () (add-physics-body w 1 1 1 :radius bad))
+                            (lambda () (add-physics-body w 1 1 1 :mass bad))
+                            (lambda () (set-physics-body-velocity w h bad 0 0))
+                            (lambda () (post-physics-box w bad 1 1 0.5 0.5 0.5))
+                            (lambda () (post-physics-box w 1 1 1 0.5 0.5 0.5 :vy bad))
+                            (lambda () (wake-physics-bodies-near w 1 bad 1 1))))
           (let ((outcome (handler-case (progn (funcall call) :no-error)
                            (error (e) (type-of e)))))
-            (unless (eq outcome 'luv-physics::invalid-physics-number)
+            (unless (eq outcome 'invalid-physics-number)
               (push (list (prin1-to-string bad) outcome) wrong)))))
       (check (null wrong) "~D of 36 bad calls did not signal invalid-physics-number; they gave ~S"
              (length wrong) (remove-duplicates wrong :test #'equal))
       (check (equal before (world-fingerprint w)) "the world changed: ~S -> ~S" before (world-fingerprint w))
       (check (= 0 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))) "a box was posted")
-      (check (eq t (luv-physics::validate-physics-world w))))))
+      (check (eq t (validate-physics-world w))))))
 ;; C0ND1T-non-finite-numbers ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-bad-radius-and-mass]]
 (define-claim "C0ND1T" bad-radius-and-mass
     "Radius <= 0 or over the limit -> invalid-physics-radius; mass <= 0 -> invalid-physics-parameter."
   (let ((w (make-floor-world)))
-    (luv-physics::add-physics-body w 3.5 1.0 3.5)
-    (luv-physics::step-physics-world w)
+    (add-physics-body w 3.5 1.0 3.5)
+    (step-physics-world w)
     (let ((before (world-fingerprint w)))
       (flet ((outcome (&rest args)
-               (handler-case (progn (apply #'luv-physics::add-physics-body w 8.5 1 8.5 args) :no-error)
+               (handler-case (progn (apply #'add-physics-body w 8.5 1 8.5 args) :no-error)
                  (error (e) (type-of e)))))
         (check (< (abs (- (luv-physics::max-radius-for w) 0.88)) 1e-6))
         (dolist (r '(0 0.0 -0.1 0.881 1.0 100))
-          (check (eq 'luv-physics::invalid-physics-radius (outcome :radius r)) "radius ~S gave ~S" r (outcome :radius r)))
+          (check (eq 'invalid-physics-radius (outcome :radius r)) "radius ~S gave ~S" r (outcome :radius r)))
         (dolist (m '(0 0.0 -1))
-          (check (eq 'luv-physics::invalid-physics-parameter (outcome :mass m)) "mass ~S gave ~S" m (outcome :mass m)))
+          (check (eq 'invalid-physics-parameter (outcome :mass m)) "mass ~S gave ~S" m (outcome :mass m)))
         (check (equal before (world-fingerprint w)))
-        (check (eq t (luv-physics::validate-physics-world w)))
+        (check (eq t (validate-physics-world w)))
         (check (eq :no-error (outcome :radius (luv-physics::max-radius-for w))) "the limit radius itself is refused")))))
 ;; C0ND1T-bad-radius-and-mass ends here
 
@@ -847,14 +847,14 @@ return SCENE's record (run-twin). #T3STK1"
 (define-claim "C0ND1T" bad-pair-skin
     "A pair skin outside 0..0.5 m, or not finite, is refused by name; 0 and 0.05 work."
   (dolist (skin (list (sb-kernel:make-single-float -4194304) -0.01 2))
-    (let ((name (handler-case (let ((luv-physics:*physics-pair-skin* skin)) (make-floor-world) :accepted)
-                  (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
-                  (luv-physics::invalid-physics-number (e) (luv-physics::invalid-physics-number-name e)))))
+    (let ((name (handler-case (let ((*physics-pair-skin* skin)) (make-floor-world) :accepted)
+                  (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+                  (invalid-physics-number (e) (luv-physics::invalid-physics-number-name e)))))
       (check (eq name :pair-skin) "a skin of ~S gave ~S" skin name)))
   (dolist (skin '(0 0.05))
-    (let* ((w (let ((luv-physics:*physics-pair-skin* skin)) (make-floor-world :sleep nil)))
-           (h (luv-physics::add-physics-body w 2.5 1.0 2.5)))
-      (dotimes (i 120) (luv-physics::step-physics-world w))
+    (let* ((w (let ((*physics-pair-skin* skin)) (make-floor-world :sleep nil)))
+           (h (add-physics-body w 2.5 1.0 2.5)))
+      (dotimes (i 120) (step-physics-world w))
       (check (< (abs (- (body-y w h) 0.245)) 0.002) "with a skin of ~S the ball ends at ~S" skin (body-y w h)))))
 ;; C0ND1T-bad-pair-skin ends here
 
@@ -863,36 +863,36 @@ return SCENE's record (run-twin). #T3STK1"
     "Removed, foreign and malformed handles signal stale-physics-handle with :removed, :foreign, :malformed."
   (let* ((w (make-floor-world))
          (other (make-floor-world))
-         (foreign (luv-physics::add-physics-body other 3.5 1 3.5))
-         (removed (luv-physics::add-physics-body w 2.5 1 2.5)))
-    (luv-physics::add-physics-body w 3.5 1 3.5)
-    (luv-physics::remove-physics-body w removed)
-    (luv-physics::step-physics-world w)
+         (foreign (add-physics-body other 3.5 1 3.5))
+         (removed (add-physics-body w 2.5 1 2.5)))
+    (add-physics-body w 3.5 1 3.5)
+    (remove-physics-body w removed)
+    (step-physics-world w)
     (let ((before (world-fingerprint w)))
       (loop for (handle reason) in (list (list removed :removed) (list foreign :foreign)
                                          (list -5 :malformed) (list :foo :malformed))
-            do (dolist (call (list (lambda () (luv-physics::physics-body-position w handle))
-                                   (lambda () (luv-physics::physics-body-velocity w handle))
-                                   (lambda () (luv-physics::remove-physics-body w handle))
-                                   (lambda () (luv-physics::set-physics-body-velocity w handle 1 0 0))
-                                   (lambda () (luv-physics::physics-body w handle))))
+            do (dolist (call (list (lambda () (physics-body-position w handle))
+                                   (lambda () (physics-body-velocity w handle))
+                                   (lambda () (remove-physics-body w handle))
+                                   (lambda () (set-physics-body-velocity w handle 1 0 0))
+                                   (lambda () (physics-body w handle))))
                  (let ((got (handler-case (progn (funcall call) :no-error)
-                              (luv-physics::stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e))
+                              (stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e))
                               (error (e) (type-of e)))))
                    (check (eq reason got) "handle ~S: expected ~S, got ~S" handle reason got))))
-      (check (not (luv-physics::physics-body-alive-p w foreign)))
+      (check (not (physics-body-alive-p w foreign)))
       (check (equal before (world-fingerprint w)))
-      (check (eq t (luv-physics::validate-physics-world w))))))
+      (check (eq t (validate-physics-world w))))))
 ;; C0ND1T-stale-handles ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-handle-of-no-world]]
 (define-claim "C0ND1T" handle-of-no-world
     "12345 and a handle with an unissued tag signal stale-physics-handle :unissued, reported as of no world."
   (let ((w (make-floor-world)))
-    (luv-physics::add-physics-body w 3.5 1 3.5)
+    (add-physics-body w 3.5 1 3.5)
     (dolist (handle (list 12345 (luv-physics::make-handle (1+ luv-physics::*world-tag-counter*) 0 0)))
       (let ((got (handler-case (progn (physics-body-position w handle) :no-error)
-                   (luv-physics::stale-physics-handle (e)
+                   (stale-physics-handle (e)
                      (list (luv-physics::stale-physics-handle-reason e) (princ-to-string e))))))
         (check (eq :unissued (first got)) "handle ~D gave ~S" handle got)
         (check (and (consp got) (search "no world" (second got))) "handle ~D gave ~S" handle got)))))
@@ -902,101 +902,101 @@ return SCENE's record (run-twin). #T3STK1"
 (define-claim "C0ND1T" busy-during-step
     "Steps and edits from the event handler signal physics-world-busy and change nothing."
   (let* ((w (make-floor-world))
-         (h (luv-physics::add-physics-body w 3.5 0.24 3.5)) ; touches the floor: a :begin event
+         (h (add-physics-body w 3.5 0.24 3.5)) ; touches the floor: a :begin event
          (outcomes '()) (ran nil))
-    (setf (luv-physics::physics-world-event-handler w)
+    (setf (physics-world-event-handler w)
           (lambda (&rest event)
             (declare (ignore event))
             (unless ran
               (setf ran t)
-              (dolist (call (list (lambda () (luv-physics::step-physics-world w))
-                                  (lambda () (luv-physics::add-physics-body w 1 1 1))
-                                  (lambda () (luv-physics::remove-physics-body w h))
-                                  (lambda () (luv-physics::set-physics-body-velocity w h 1 0 0))
-                                  (lambda () (luv-physics::post-physics-box w 1 1 1 0.5 0.5 0.5))
-                                  (lambda () (luv-physics::wake-physics-bodies-near w 1 1 1 1))
-                                  (lambda () (luv-physics::set-physics-body-material w h :friction 0.1))
-                                  (lambda () (luv-physics::trim-physics-world w))))
+              (dolist (call (list (lambda () (step-physics-world w))
+                                  (lambda () (add-physics-body w 1 1 1))
+                                  (lambda () (remove-physics-body w h))
+                                  (lambda () (set-physics-body-velocity w h 1 0 0))
+                                  (lambda () (post-physics-box w 1 1 1 0.5 0.5 0.5))
+                                  (lambda () (wake-physics-bodies-near w 1 1 1 1))
+                                  (lambda () (set-physics-body-material w h :friction 0.1))
+                                  (lambda () (trim-physics-world w))))
                 (push (handler-case (progn (funcall call) :no-error) (error (e) (type-of e))) outcomes)))))
-    (let ((steps (luv-physics::physics-world-step-count w)))
-      (luv-physics::step-physics-world w)
+    (let ((steps (physics-world-step-count w)))
+      (step-physics-world w)
       (check (eq t ran) "the handler never ran")
-      (check (equal outcomes (make-list 8 :initial-element 'luv-physics::physics-world-busy))
+      (check (equal outcomes (make-list 8 :initial-element 'physics-world-busy))
              "outcomes ~S" (reverse outcomes))
-      (check (= (1+ steps) (luv-physics::physics-world-step-count w)))
-      (check (= 1 (luv-physics::physics-world-awake-count w)))
-      (check (luv-physics::physics-body-alive-p w h))
+      (check (= (1+ steps) (physics-world-step-count w)))
+      (check (= 1 (physics-world-awake-count w)))
+      (check (physics-body-alive-p w h))
       (check (= 0 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
       (check (not (luv-physics::physics-world-stepping w)))
-      (check (eq t (luv-physics::validate-physics-world w))))))
+      (check (eq t (validate-physics-world w))))))
 ;; C0ND1T-busy-during-step ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-atomic-add]]
 (define-claim "C0ND1T" atomic-add
     "Out-of-range radius, mass, friction, and a body past the budget, are refused before any row exists."
   (let ((w (make-floor-world)))
-    (luv-physics::add-physics-body w 3.5 1.0 3.5)
-    (luv-physics::step-physics-world w)
+    (add-physics-body w 3.5 1.0 3.5)
+    (step-physics-world w)
     (let ((before (world-fingerprint w)) (wrong '()))
       (loop for (name value) in '((:radius 1e-30) (:radius 1e-20) (:radius 0.001) (:mass 1e-40) (:mass 1e-6)
                                   (:mass 1e7) (:mass 3e38) (:friction 1e30) (:rolling-resistance 1e30))
-            for outcome = (handler-case (progn (luv-physics::add-physics-body w 5.5 1 5.5 name value) :accepted)
-                            (luv-physics:physics-error (e) (princ-to-string e))
+            for outcome = (handler-case (progn (add-physics-body w 5.5 1 5.5 name value) :accepted)
+                            (physics-error (e) (princ-to-string e))
                             (error (e) (type-of e)))
             unless (and (stringp outcome) (search (string-downcase (symbol-name name)) (string-downcase outcome))
-                        (equal before (world-fingerprint w)) (handler-case (luv-physics::validate-physics-world w) (error () nil)))
+                        (equal before (world-fingerprint w)) (handler-case (validate-physics-world w) (error () nil)))
               do (push (list name value outcome) wrong))
       (check (null wrong) "refused wrongly, or the world changed: ~S" wrong)
       ;; a budget of one body, which the world holds
       (let ((outcome nil) (after nil))
         (setf (luv-physics::physics-world-body-budget w) 1)
-        (setf outcome (handler-case (progn (luv-physics::add-physics-body w 5.5 1 5.5) :accepted)
+        (setf outcome (handler-case (progn (add-physics-body w 5.5 1 5.5) :accepted)
                         (error (e) (list (type-of e) (princ-to-string e))))
               after (world-fingerprint w))
-        (check (and (consp outcome) (eq (first outcome) 'luv-physics::physics-budget-exceeded)
+        (check (and (consp outcome) (eq (first outcome) 'physics-budget-exceeded)
                     (search "the budget of 1" (second outcome)))
                "at the body budget: ~S" outcome)
         (check (equal after before) "the world changed at the body budget: ~S -> ~S" before after)
-        (check (eq t (luv-physics::validate-physics-world w)))))))
+        (check (eq t (validate-physics-world w)))))))
 ;; C0ND1T-atomic-add ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-huge-numbers-refused]]
 (define-claim "C0ND1T" huge-numbers-refused
     "Finite but huge velocities, gravity, boxes, wake radii and steps are refused; the bounds themselves step."
   (let* ((w (make-floor-world))
-         (h (luv-physics::add-physics-body w 3.5 1.0 3.5)))
-    (luv-physics::step-physics-world w)
+         (h (add-physics-body w 3.5 1.0 3.5)))
+    (step-physics-world w)
     (let ((before (world-fingerprint w)) (wrong '()))
-      (loop for (label call) in (list (list :set-velocity (lambda () (luv-physics::set-physics-body-velocity w h 1e20 0 0)))
-                                      (list :add-vz (lambda () (luv-physics::add-physics-body w 5.5 1 5.5 :vz 1e20)))
+      (loop for (label call) in (list (list :set-velocity (lambda () (set-physics-body-velocity w h 1e20 0 0)))
+                                      (list :add-vz (lambda () (add-physics-body w 5.5 1 5.5 :vz 1e20)))
                                       (list :gravity (lambda () (make-floor-world :gravity '(0 -1e20 0))))
-                                      (list :box-place (lambda () (luv-physics::post-physics-box w 3e38 1 1 0.5 0.5 0.5)))
-                                      (list :box-speed (lambda () (luv-physics::post-physics-box w 1 1 1 0.5 0.5 0.5 :vx 1e20)))
-                                      (list :wake-radius (lambda () (luv-physics::wake-physics-bodies-near w 1 1 1 3e38)))
-                                      (list :step (lambda () (luv-physics::step-physics-world w 1e-38))))
+                                      (list :box-place (lambda () (post-physics-box w 3e38 1 1 0.5 0.5 0.5)))
+                                      (list :box-speed (lambda () (post-physics-box w 1 1 1 0.5 0.5 0.5 :vx 1e20)))
+                                      (list :wake-radius (lambda () (wake-physics-bodies-near w 1 1 1 3e38)))
+                                      (list :step (lambda () (step-physics-world w 1e-38))))
             for outcome = (handler-case (progn (funcall call) :accepted)
-                            (luv-physics:physics-error () :refused)
+                            (physics-error () :refused)
                             (error (e) (type-of e)))
             unless (and (eq outcome :refused) (equal before (world-fingerprint w))
                         (= 0 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
               do (push (list label outcome) wrong))
       (check (null wrong) "not refused cleanly: ~S" wrong)
-      (let ((refusal (handler-case (progn (luv-physics::set-physics-body-velocity w h 1e20 2 3) :accepted)
-                       (luv-physics::invalid-physics-parameter (e)
+      (let ((refusal (handler-case (progn (set-physics-body-velocity w h 1e20 2 3) :accepted)
+                       (invalid-physics-parameter (e)
                          (list (luv-physics::invalid-physics-parameter-name e)
                                (luv-physics::invalid-physics-parameter-value e))))))
         (check (equal refusal '(:velocity (1e20 2.0 3.0))) "a set velocity of (1e20 2 3) gave ~S" refusal)))
-    (let* ((top luv-physics:*physics-max-speed*)
-           (g (make-floor-world :gravity (list 0 (- luv-physics::+physics-max-gravity+) 0)))
-           (fast (luv-physics::add-physics-body g 3.5 1.0 3.5 :vx top)))
-      (luv-physics::set-physics-body-velocity w h 0 0 (- top))
-      (luv-physics::post-physics-box w (- luv-physics:+physics-coordinate-limit+ 1) 1 1 0.5 0.5 0.5 :vy top)
-      (let ((outcome (handler-case (progn (dotimes (i 10) (luv-physics::step-physics-world w) (luv-physics::step-physics-world g))
+    (let* ((top *physics-max-speed*)
+           (g (make-floor-world :gravity (list 0 (- +physics-max-gravity+) 0)))
+           (fast (add-physics-body g 3.5 1.0 3.5 :vx top)))
+      (set-physics-body-velocity w h 0 0 (- top))
+      (post-physics-box w (- +physics-coordinate-limit+ 1) 1 1 0.5 0.5 0.5 :vy top)
+      (let ((outcome (handler-case (progn (dotimes (i 10) (step-physics-world w) (step-physics-world g))
                                           :stepped)
                        (error (e) (princ-to-string e)))))
         (check (eq outcome :stepped) "stepping at the bounds failed: ~A" outcome))
       (check (and (luv-physics::world-finite-p w) (luv-physics::world-finite-p g)) "a number is not finite")
-      (check (luv-physics::physics-body-alive-p g fast)))))
+      (check (physics-body-alive-p g fast)))))
 ;; C0ND1T-huge-numbers-refused ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-failed-step-atomic]]
@@ -1004,37 +1004,37 @@ return SCENE's record (run-twin). #T3STK1"
     "A step that signals from inside its phases is rolled back: hash, counts, step count, handles."
   (dolist (after '(luv-physics::grid-phase luv-physics::substep-phase))
     (let* ((w (make-floor-world))
-           (sleepers (list (luv-physics::add-physics-body w 6.5 0.245 6.5) (luv-physics::add-physics-body w 7.5 0.245 6.5))))
-      (dotimes (i 60) (luv-physics::step-physics-world w))
+           (sleepers (list (add-physics-body w 6.5 0.245 6.5) (add-physics-body w 7.5 0.245 6.5))))
+      (dotimes (i 60) (step-physics-world w))
       (let* ((next (luv-physics::fixed-sequence 5))
              (balls (loop for i below 30
-                          collect (luv-physics::add-physics-body w (+ 1 (* 4 (funcall next))) (+ 1 (* 3 (funcall next)))
+                          collect (add-physics-body w (+ 1 (* 4 (funcall next))) (+ 1 (* 3 (funcall next)))
                                                                  (+ 1 (* 4 (funcall next))) :radius 0.2))))
-        (let* ((fast (luv-physics::add-physics-body w 5.9 0.245 6.5 :vx 5.0))
+        (let* ((fast (add-physics-body w 5.9 0.245 6.5 :vx 5.0))
                (before (world-fingerprint w))
-               (steps (luv-physics::physics-world-step-count w))
-               (where (mapcar (lambda (h) (multiple-value-list (luv-physics::physics-body-position w h)))
+               (steps (physics-world-step-count w))
+               (where (mapcar (lambda (h) (multiple-value-list (physics-body-position w h)))
                               (append sleepers balls)))
                (reached nil)
-               (outcome (let ((luv-physics:*physics-phases*
+               (outcome (let ((*physics-phases*
                                 (phases-checked-after after (lambda (world)
-                                                              (setf reached (list (luv-physics::physics-world-awake-count world)
-                                                                                  (luv-physics::physics-world-state-hash world)))
+                                                              (setf reached (list (physics-world-awake-count world)
+                                                                                  (physics-world-state-hash world)))
                                                               (error "a phase failed")))))
-                          (handler-case (progn (luv-physics::step-physics-world w) :stepped)
+                          (handler-case (progn (step-physics-world w) :stepped)
                             (error () :failed)))))
           (check (eq outcome :failed))
           (check (and reached (/= (second reached) (third before))) "after ~A the step had changed nothing to undo" after)
           (check (equal before (world-fingerprint w)) "after a failure past ~A: ~S -> ~S" after before (world-fingerprint w))
-          (check (= steps (luv-physics::physics-world-step-count w)))
-          (check (equal where (mapcar (lambda (h) (multiple-value-list (luv-physics::physics-body-position w h)))
+          (check (= steps (physics-world-step-count w)))
+          (check (equal where (mapcar (lambda (h) (multiple-value-list (physics-body-position w h)))
                                       (append sleepers balls)))
                  "a handle names another body")
-          (check (eq t (luv-physics::validate-physics-world w)))
+          (check (eq t (validate-physics-world w)))
           ;; a body removed after the failure leaves no contact behind
-          (luv-physics::remove-physics-body w fast)
-          (luv-physics::step-physics-world w)
-          (check (eq t (luv-physics::validate-physics-world w)))
+          (remove-physics-body w fast)
+          (step-physics-world w)
+          (check (eq t (validate-physics-world w)))
           (let ((c (luv-physics::physics-world-contacts w)) (gone fast))
             (check (loop for row below (luv-physics::contact-columns-length c)
                          never (or (= gone (aref (luv-physics::contact-columns-handle-a c) row))
@@ -1047,27 +1047,27 @@ return SCENE's record (run-twin). #T3STK1"
     "A sleeper that a failed step woke and gave back is still woken and pushed by a ball rolled into it."
   (dolist (fail '(nil t))
     (let* ((w (make-floor-world))
-           (sleeper (luv-physics::add-physics-body w 6.5 0.245 6.5)))
-      (dotimes (i 60) (luv-physics::step-physics-world w))
-      (check (not (luv-physics::physics-body-awake-p w sleeper)) "the ball did not fall asleep")
-      (let ((fast (luv-physics::add-physics-body w 5.9 0.245 6.5 :vx 5.0)))
+           (sleeper (add-physics-body w 6.5 0.245 6.5)))
+      (dotimes (i 60) (step-physics-world w))
+      (check (not (physics-body-awake-p w sleeper)) "the ball did not fall asleep")
+      (let ((fast (add-physics-body w 5.9 0.245 6.5 :vx 5.0)))
         (when fail
-          (let ((luv-physics:*physics-phases*
+          (let ((*physics-phases*
                   (phases-checked-after 'luv-physics::grid-phase
                                         (lambda (world)
-                                          (check (luv-physics::physics-body-awake-p world sleeper) "the failing step did not wake the sleeper")
+                                          (check (physics-body-awake-p world sleeper) "the failing step did not wake the sleeper")
                                           (error "a phase failed")))))
-            (check (eq :failed (handler-case (progn (luv-physics::step-physics-world w) :stepped) (error () :failed))))))
-        (luv-physics::remove-physics-body w fast)
-        (luv-physics::step-physics-world w)
-        (let ((ball (luv-physics::add-physics-body w 4.5 0.245 6.5 :vx 5.0)))
-          (dotimes (i 60) (luv-physics::step-physics-world w))
-          (let ((x (luv-physics::physics-body-position w sleeper)))
+            (check (eq :failed (handler-case (progn (step-physics-world w) :stepped) (error () :failed))))))
+        (remove-physics-body w fast)
+        (step-physics-world w)
+        (let ((ball (add-physics-body w 4.5 0.245 6.5 :vx 5.0)))
+          (dotimes (i 60) (step-physics-world w))
+          (let ((x (physics-body-position w sleeper)))
             (check (> x 6.8) "~:[~;after a failed step, ~]the sleeper stayed at x = ~,3F" fail x)
-            (check (< (luv-physics::physics-body-position w ball) x)
+            (check (< (physics-body-position w ball) x)
                    "~:[~;after a failed step, ~]the rolled ball at ~,3F passed the sleeper at ~,3F"
-                   fail (luv-physics::physics-body-position w ball) x)))
-        (check (eq t (luv-physics::validate-physics-world w)))))))
+                   fail (physics-body-position w ball) x)))
+        (check (eq t (validate-physics-world w)))))))
 ;; C0ND1T-failed-step-keeps-sleepers-found ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-parameters-checked]]
@@ -1077,8 +1077,8 @@ return SCENE's record (run-twin). #T3STK1"
     (flet ((refusal (symbol value)
              (progv (list symbol) (list value)
                (handler-case (progn (make-floor-world) :accepted)
-                 (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
-                 (luv-physics::invalid-physics-number (e) (luv-physics::invalid-physics-number-name e))
+                 (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+                 (invalid-physics-number (e) (luv-physics::invalid-physics-number-name e))
                  (error (e) (type-of e))))))
       (loop for (name symbol) in luv-physics::+physics-parameters+
             do (dolist (bad (list "x" nan))
@@ -1087,21 +1087,21 @@ return SCENE's record (run-twin). #T3STK1"
       (check (>= (length luv-physics::+physics-parameters+) 17) "only ~D parameters are checked"
              (length luv-physics::+physics-parameters+))
       (check (null wrong) "~D bad values were not refused by name: ~S" (length wrong) wrong)
-      (check (eq :speculative-margin (refusal 'luv-physics:*physics-speculative-margin* -0.1)))
-      (check (eq :reach-limit (refusal 'luv-physics:*physics-reach-limit* 0.1)))
+      (check (eq :speculative-margin (refusal '*physics-speculative-margin* -0.1)))
+      (check (eq :reach-limit (refusal '*physics-reach-limit* 0.1)))
       ;; the bound itself: room for the smallest radius under the margin, and not a float less
-      (let ((least (+ (float luv-physics:*physics-speculative-margin* 1.0) luv-physics:+physics-min-radius+)))
-        (check (eq :accepted (refusal 'luv-physics:*physics-reach-limit* least))
+      (let ((least (+ (float *physics-speculative-margin* 1.0) +physics-min-radius+)))
+        (check (eq :accepted (refusal '*physics-reach-limit* least))
                "a reach limit of the margin and the smallest radius, ~A, is refused" least)
-        (check (eq :reach-limit (refusal 'luv-physics:*physics-reach-limit*
+        (check (eq :reach-limit (refusal '*physics-reach-limit*
                                          (sb-kernel:make-single-float (1- (sb-kernel:single-float-bits least)))))
                "a reach limit a float under the margin and the smallest radius is not refused by name")))
     (let* ((w (make-floor-world))
-           (h (luv-physics::add-physics-body w 3.5 1.0 3.5))
+           (h (add-physics-body w 3.5 1.0 3.5))
            (outcome (progv (mapcar #'second luv-physics::+physics-parameters+)
                         (mapcar (constantly "x") luv-physics::+physics-parameters+)
-                      (handler-case (progn (dotimes (i 60) (luv-physics::step-physics-world w))
-                                           (luv-physics::add-physics-body w 5.5 1.0 5.5)
+                      (handler-case (progn (dotimes (i 60) (step-physics-world w))
+                                           (add-physics-body w 5.5 1.0 5.5)
                                            :stepped)
                         (error (e) (princ-to-string e))))))
       (check (eq outcome :stepped) "with the parameters rebound: ~A" outcome)
@@ -1115,10 +1115,10 @@ return SCENE's record (run-twin). #T3STK1"
     (loop for (name symbol low high kind) in luv-physics::+physics-parameters+
           for step = (if (eq kind 'integer) 1 (* 0.001 (- high low)))
           do (flet ((outcome (value)
-                      (progv (if (eq name :reach-limit) (list symbol 'luv-physics::*physics-speculative-margin*) (list symbol))
+                      (progv (if (eq name :reach-limit) (list symbol '*physics-speculative-margin*) (list symbol))
                           (list value 0.001)
-                        (handler-case (progn (luv-physics::make-physics-world) :accepted)
-                          (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))))
+                        (handler-case (progn (make-physics-world) :accepted)
+                          (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))))
                (loop for value in (list low high) for past in (list (- low step) (+ high step))
                      unless (and (eq :accepted (outcome value)) (eq name (outcome past)))
                        do (push (list name value (outcome value) past (outcome past)) wrong))))
@@ -1130,61 +1130,61 @@ return SCENE's record (run-twin). #T3STK1"
     "Setting the event handler to something that cannot be called is refused by name."
   (let* ((w (make-floor-world))
          (mine (lambda (&rest event) (declare (ignore event)))))
-    (setf (luv-physics::physics-world-event-handler w) mine)
+    (setf (physics-world-event-handler w) mine)
     (dolist (bad (list 42 "handler" (gensym "NO-FUNCTION")))
-      (let ((got (handler-case (progn (setf (luv-physics::physics-world-event-handler w) bad) :accepted)
-                   (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+      (let ((got (handler-case (progn (setf (physics-world-event-handler w) bad) :accepted)
+                   (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
                    (error (e) (type-of e)))))
         (check (eq got :event-handler) "~S gave ~S" bad got)
-        (check (eq mine (luv-physics::physics-world-event-handler w)))))
+        (check (eq mine (physics-world-event-handler w)))))
     (dolist (good (list nil #'list 'list))
-      (setf (luv-physics::physics-world-event-handler w) good)
-      (check (eq good (luv-physics::physics-world-event-handler w))))))
+      (setf (physics-world-event-handler w) good)
+      (check (eq good (physics-world-event-handler w))))))
 ;; C0ND1T-event-handler-checked ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-coordinate-limit-every-step]]
 (define-claim "C0ND1T" coordinate-limit-every-step
     "Bodies crossing the coordinate limit are removed with :escaped, on the same step in every family."
   (flet ((run (family)
-           (let* ((w (luv-physics::make-physics-world :kernels family))
-                  (limit luv-physics:+physics-coordinate-limit+)
-                  (down (luv-physics::add-physics-body w 0.5 (- 6 limit) 0.5 :vy (- luv-physics:*physics-max-speed*)))
-                  (side (luv-physics::add-physics-body w (- limit 0.1) 0.5 0.5 :vx 10))
-                  (stay (luv-physics::add-physics-body w 0.5 0.5 0.5))
+           (let* ((w (make-physics-world :kernels family))
+                  (limit +physics-coordinate-limit+)
+                  (down (add-physics-body w 0.5 (- 6 limit) 0.5 :vy (- *physics-max-speed*)))
+                  (side (add-physics-body w (- limit 0.1) 0.5 0.5 :vx 10))
+                  (stay (add-physics-body w 0.5 0.5 0.5))
                   (log '()))
              (dotimes (i 3)
                (loop for (kind a) in (step-events w)
                      when (eq kind :escaped) do (push (list i (cond ((= a down) :down) ((= a side) :side) (t a))) log)))
              (list (reverse log)
-                   (list (luv-physics::physics-body-alive-p w down) (luv-physics::physics-body-alive-p w side)
-                         (luv-physics::physics-body-alive-p w stay))
-                   (luv-physics::validate-physics-world w)
-                   (luv-physics::physics-world-state-hash w)))))
+                   (list (physics-body-alive-p w down) (physics-body-alive-p w side)
+                         (physics-body-alive-p w stay))
+                   (validate-physics-world w)
+                   (physics-world-state-hash w)))))
     (let ((scalar (run :scalar)))
       (check (equal (first scalar) '((0 :side) (0 :down))) "escapes ~S" (first scalar))
       (check (equal (second scalar) '(nil nil t)))
       (check (eq t (third scalar)))
-      (dolist (family (rest (luv-physics:available-kernel-families)))
+      (dolist (family (rest (available-kernel-families)))
         (check (equal scalar (run family)) "~S differs from :scalar" family)))))
 ;; C0ND1T-coordinate-limit-every-step ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-budgets]]
 (define-claim "C0ND1T" budgets
     "A terrain fill or a body count beyond its budget signals before allocating."
-  (let* ((terrain (luv-physics::make-voxel-terrain))
-         (got (handler-case (progn (luv-physics::fill-terrain terrain 0 0 0 1024 1024 1024 nil) :filled)
+  (let* ((terrain (make-voxel-terrain))
+         (got (handler-case (progn (fill-terrain terrain 0 0 0 1024 1024 1024 nil) :filled)
                 (error (e) (type-of e)))))
-    (check (eq got 'luv-physics::physics-budget-exceeded) "a 2^30-cell fill gave ~S" got)
+    (check (eq got 'physics-budget-exceeded) "a 2^30-cell fill gave ~S" got)
     (check (= 0 (hash-table-count (luv-physics::voxel-terrain-chunks terrain))) "chunks were made"))
-  (let ((w (let ((luv-physics::*physics-body-budget* 5)) (make-floor-world))))
-    (dotimes (i 5) (luv-physics::add-physics-body w (+ 1.5 i) 1 1.5))
+  (let ((w (let ((*physics-body-budget* 5)) (make-floor-world))))
+    (dotimes (i 5) (add-physics-body w (+ 1.5 i) 1 1.5))
     (let* ((before (world-fingerprint w))
-           (got (handler-case (progn (luv-physics::add-physics-body w 8.5 1 8.5) :added)
-                  (luv-physics::physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-resource e))
+           (got (handler-case (progn (add-physics-body w 8.5 1 8.5) :added)
+                  (physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-resource e))
                   (error (e) (type-of e)))))
       (check (eq got :bodies) "the sixth body gave ~S" got)
       (check (equal before (world-fingerprint w)))
-      (check (eq t (luv-physics::validate-physics-world w))))))
+      (check (eq t (validate-physics-world w))))))
 ;; C0ND1T-budgets ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-registry-and-entry-points]]
@@ -1192,30 +1192,30 @@ return SCENE's record (run-twin). #T3STK1"
     "register-kernel-family refuses a non-class; the solver's entry points refuse wrong arguments."
   (let ((saved luv-physics::*kernel-families*))
     (unwind-protect
-         (let ((got (handler-case (progn (luv-physics:register-kernel-family :avx2 "not a class" :avx2) :registered)
-                      (luv-physics:physics-error () :refused)
+         (let ((got (handler-case (progn (register-kernel-family :avx2 "not a class" :avx2) :registered)
+                      (physics-error () :refused)
                       (error (e) (type-of e)))))
            (check (eq got :refused) "registering a string gave ~S" got)
            (check (equal saved luv-physics::*kernel-families*) "the registry changed")
            (check (typep (luv-physics::physics-world-kernels (make-floor-world :gravity '(0 -9.81 0)))
-                         'luv-physics:kernel-family)))
+                         'kernel-family)))
       (setf luv-physics::*kernel-families* saved)))
   (let* ((w (make-floor-world))
          (k (luv-physics::physics-world-kernels w))
          (wrong '()))
-    (luv-physics::add-physics-body w 3.5 1.0 3.5)
-    (luv-physics::step-physics-world w)
-    (loop for (label call) in (list (list :family (lambda () (luv-physics:physics-warm-start :scalar w)))
-                                    (list :world (lambda () (luv-physics:physics-warm-start k :not-a-world)))
-                                    (list :h (lambda () (luv-physics:physics-integrate-velocities k w "x")))
-                                    (list :h-huge (lambda () (luv-physics:physics-integrate-positions k w 1e30)))
-                                    (list :inv-h (lambda () (luv-physics:physics-solve-contacts k w 2 t 0.0))))
+    (add-physics-body w 3.5 1.0 3.5)
+    (step-physics-world w)
+    (loop for (label call) in (list (list :family (lambda () (physics-warm-start :scalar w)))
+                                    (list :world (lambda () (physics-warm-start k :not-a-world)))
+                                    (list :h (lambda () (physics-integrate-velocities k w "x")))
+                                    (list :h-huge (lambda () (physics-integrate-positions k w 1e30)))
+                                    (list :inv-h (lambda () (physics-solve-contacts k w 2 t 0.0))))
           for got = (handler-case (progn (funcall call) :ran)
-                      (luv-physics:physics-error () :refused)
+                      (physics-error () :refused)
                       (error (e) (type-of e)))
           unless (eq got :refused) do (push (list label got) wrong))
     (check (null wrong) "entry points ran on wrong arguments: ~S" wrong)
-    (check (eq t (luv-physics::validate-physics-world w)))))
+    (check (eq t (validate-physics-world w)))))
 ;; C0ND1T-registry-and-entry-points ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-every-argument-guarded]]
@@ -1370,18 +1370,18 @@ return SCENE's record (run-twin). #T3STK1"
 (define-claim "B5N8JT" handle-generations
     "A reused slot gets a new generation: the old handle is stale, the new one works."
   (let* ((w (make-floor-world))
-         (keep (luv-physics::add-physics-body w 1.5 0.245 1.5))
-         (old (luv-physics::add-physics-body w 2.5 0.245 2.5)))
-    (luv-physics::remove-physics-body w old)
-    (let ((new (luv-physics::add-physics-body w 4.5 1.25 4.5)))
+         (keep (add-physics-body w 1.5 0.245 1.5))
+         (old (add-physics-body w 2.5 0.245 2.5)))
+    (remove-physics-body w old)
+    (let ((new (add-physics-body w 4.5 1.25 4.5)))
       (check (= (luv-physics::handle-index old) (luv-physics::handle-index new)) "the slot was not reused")
       (check (> (luv-physics::handle-generation new) (luv-physics::handle-generation old)))
-      (check (not (luv-physics::physics-body-alive-p w old)))
-      (check (eq :removed (handler-case (progn (luv-physics::physics-body-position w old) :no-error)
-                            (luv-physics::stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e)))))
-      (check (equal '(4.5 1.25 4.5) (multiple-value-list (luv-physics::physics-body-position w new))))
-      (check (equal '(1.5 0.245 1.5) (multiple-value-list (luv-physics::physics-body-position w keep))))
-      (check (eq t (luv-physics::validate-physics-world w))))))
+      (check (not (physics-body-alive-p w old)))
+      (check (eq :removed (handler-case (progn (physics-body-position w old) :no-error)
+                            (stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e)))))
+      (check (equal '(4.5 1.25 4.5) (multiple-value-list (physics-body-position w new))))
+      (check (equal '(1.5 0.245 1.5) (multiple-value-list (physics-body-position w keep))))
+      (check (eq t (validate-physics-world w))))))
 ;; B5N8JT-handle-generations ends here
 
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-tags-wrap-within-their-bits]]
@@ -1423,8 +1423,8 @@ return SCENE's record (run-twin). #T3STK1"
 (define-claim "B5N8JT" describe-live-row
     "describe shows the body's current y, before and after a step."
   (let* ((w (make-floor-world))
-         (h (luv-physics::add-physics-body w 3.5 2.0 3.5))
-         (body (luv-physics::physics-body w h)))
+         (h (add-physics-body w 3.5 2.0 3.5))
+         (body (physics-body w h)))
     (flet ((y-line-shows-y ()
              (let ((text (with-output-to-string (s) (describe body s)))
                    (y (body-y w h)))
@@ -1435,7 +1435,7 @@ return SCENE's record (run-twin). #T3STK1"
                                       (string= "y" (string-trim " " (first parts)))
                                       (string= (prin1-to-string y) (string-trim " " (second parts))))))))))
       (check (y-line-shows-y) "before the step: ~A" (with-output-to-string (s) (describe body s)))
-      (luv-physics::step-physics-world w)
+      (step-physics-world w)
       (check (/= 2.0 (body-y w h)))
       (check (y-line-shows-y) "after the step: ~A" (with-output-to-string (s) (describe body s))))))
 ;; B5N8JT-describe-live-row ends here
@@ -1443,35 +1443,35 @@ return SCENE's record (run-twin). #T3STK1"
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-non-resident-is-wall]]
 (define-claim "H2W9DJ" non-resident-is-wall
     "Non-resident chunks read solid and a ball dropped onto one rests on it."
-  (let ((terrain (luv-physics::make-voxel-terrain)))
-    (luv-physics::fill-terrain terrain 0 0 0 16 16 16 nil)
-    (check (not (luv-physics::terrain-resident-p terrain 8 -1 8)))
-    (check (luv-physics::terrain-solid-p terrain 8 -1 8))
-    (check (luv-physics::terrain-solid-p terrain 1000 -1000 1000))
-    (check (not (luv-physics::terrain-solid-p terrain 8 0 8)))
-    (let* ((w (luv-physics::make-physics-world :terrain terrain))
-           (h (luv-physics::add-physics-body w 8.5 3.0 8.5)))
-      (dotimes (i 180) (luv-physics::step-physics-world w))
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain 0 0 0 16 16 16 nil)
+    (check (not (terrain-resident-p terrain 8 -1 8)))
+    (check (terrain-solid-p terrain 8 -1 8))
+    (check (terrain-solid-p terrain 1000 -1000 1000))
+    (check (not (terrain-solid-p terrain 8 0 8)))
+    (let* ((w (make-physics-world :terrain terrain))
+           (h (add-physics-body w 8.5 3.0 8.5)))
+      (dotimes (i 180) (step-physics-world w))
       (check (< (abs (- (body-y w h) 0.245)) 0.002) "the ball is at y = ~,5F" (body-y w h))
-      (check (not (luv-physics::terrain-resident-p terrain 8 -1 8)) "the step made the wall resident"))))
+      (check (not (terrain-resident-p terrain 8 -1 8)) "the step made the wall resident"))))
 ;; H2W9DJ-non-resident-is-wall ends here
 
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-cell-coordinates-bounded]]
 (define-claim "H2W9DJ" cell-coordinates-bounded
     "Cells at ±(2^22 - 1) are read and written; at ±2^22 each coordinate is refused by its name."
-  (let ((terrain (luv-physics::make-voxel-terrain)) (wrong '()))
+  (let ((terrain (make-voxel-terrain)) (wrong '()))
     (flet ((outcome (f)
              (handler-case (progn (funcall f) :accepted)
-               (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+               (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
       (loop for axis below 3
             for name in '(luv-physics::x luv-physics::y luv-physics::z)
             do (dolist (v (list (1- luv-physics::+cell-limit+) (- 1 luv-physics::+cell-limit+)
                                 luv-physics::+cell-limit+ (- luv-physics::+cell-limit+)))
                  (let ((cell (list 0 0 0)) (want (if (< (abs v) luv-physics::+cell-limit+) :accepted name)))
                    (setf (nth axis cell) v)
-                   (loop for (what f) in (list (list :solid (lambda () (apply #'luv-physics::terrain-solid-p terrain cell)))
-                                               (list :resident (lambda () (apply #'luv-physics::terrain-resident-p terrain cell)))
-                                               (list :set (lambda () (setf (apply #'luv-physics::terrain-solid-p terrain cell) nil))))
+                   (loop for (what f) in (list (list :solid (lambda () (apply #'terrain-solid-p terrain cell)))
+                                               (list :resident (lambda () (apply #'terrain-resident-p terrain cell)))
+                                               (list :set (lambda () (setf (apply #'terrain-solid-p terrain cell) nil))))
                          for got = (outcome f)
                          unless (eq got want) do (push (list what cell got) wrong))))))
     (check (null wrong) "answered wrongly: ~S" (reverse wrong))))
@@ -1480,33 +1480,33 @@ return SCENE's record (run-twin). #T3STK1"
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-cells-are-their-own]]
 (define-claim "H2W9DJ" cells-are-their-own
     "Setting one cell of a chunk changes that cell alone, and no cell of the next chunk; the chunk budget is checked at its ends."
-  (let ((terrain (luv-physics::make-voxel-terrain)) (wrong '()))
-    (luv-physics::fill-terrain terrain -16 -16 -16 32 32 32 nil)
+  (let ((terrain (make-voxel-terrain)) (wrong '()))
+    (fill-terrain terrain -16 -16 -16 32 32 32 nil)
     (flet ((solid-cells ()
              (loop for x below 16 nconc (loop for y below 16 nconc (loop for z below 16
-                                                                         when (luv-physics::terrain-solid-p terrain x y z)
+                                                                         when (terrain-solid-p terrain x y z)
                                                                            collect (list x y z))))))
       (dolist (cell '((0 0 0) (15 0 0) (0 15 0) (0 0 15) (15 15 0) (15 0 15) (0 15 15) (15 15 15) (3 7 11) (11 3 7) (7 11 3)))
-        (setf (apply #'luv-physics::terrain-solid-p terrain cell) t)
+        (setf (apply #'terrain-solid-p terrain cell) t)
         (let ((got (solid-cells))) (unless (equal got (list cell)) (push (list cell got) wrong)))
-        (setf (apply #'luv-physics::terrain-solid-p terrain cell) nil)
+        (setf (apply #'terrain-solid-p terrain cell) nil)
         (let ((got (solid-cells))) (when got (push (list :cleared cell got) wrong))))
       (dolist (cell '((-1 5 5) (16 5 5) (5 -1 5) (5 16 5) (5 5 -1) (5 5 16)))
-        (setf (apply #'luv-physics::terrain-solid-p terrain cell) t)
+        (setf (apply #'terrain-solid-p terrain cell) t)
         (let ((got (solid-cells))) (when got (push (list :beside cell got) wrong)))
-        (check (apply #'luv-physics::terrain-solid-p terrain cell))))
+        (check (apply #'terrain-solid-p terrain cell))))
     (check (null wrong) "cells share storage: ~S" (reverse wrong)))
   (flet ((budget (value)
-           (handler-case (let ((luv-physics:*physics-terrain-chunk-budget* value)) (luv-physics::make-voxel-terrain) :made)
-             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+           (handler-case (let ((*physics-terrain-chunk-budget* value)) (make-voxel-terrain) :made)
+             (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
     (check (equal (mapcar #'budget (list 1 (ash 1 24) 0 (1+ (ash 1 24)) "x"))
                   '(:made :made :terrain-chunk-budget :terrain-chunk-budget :terrain-chunk-budget))))
-  (let ((terrain (let ((luv-physics:*physics-terrain-chunk-budget* 2)) (luv-physics::make-voxel-terrain))))
-    (luv-physics::fill-terrain terrain 0 0 0 1 1 1 nil)
+  (let ((terrain (let ((*physics-terrain-chunk-budget* 2)) (make-voxel-terrain))))
+    (fill-terrain terrain 0 0 0 1 1 1 nil)
     (flet ((set-cell (x)
-             (handler-case (progn (setf (luv-physics::terrain-solid-p terrain x 0 0) t) :set)
-               (luv-physics::physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-operation e)))))
-      (check (equal (list (set-cell 20) (set-cell 40)) '(:set (setf luv-physics::terrain-solid-p)))
+             (handler-case (progn (setf (terrain-solid-p terrain x 0 0) t) :set)
+               (physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-operation e)))))
+      (check (equal (list (set-cell 20) (set-cell 40)) '(:set (setf terrain-solid-p)))
              "a budget of two chunks: ~S" (list (set-cell 20) (set-cell 40)))
       (check (= 2 (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))))))
 ;; H2W9DJ-cells-are-their-own ends here
@@ -1516,20 +1516,20 @@ return SCENE's record (run-twin). #T3STK1"
     "A terrain edit from the event handler is applied when the step ends, not during it."
   (multiple-value-bind (w terrain) (make-floor-world)
     (let ((inside :not-run))
-      (luv-physics::add-physics-body w 3.5 0.24 3.5)   ; touches the floor: a :begin event
-      (setf (luv-physics::physics-world-event-handler w)
+      (add-physics-body w 3.5 0.24 3.5)   ; touches the floor: a :begin event
+      (setf (physics-world-event-handler w)
             (lambda (&rest event)
               (declare (ignore event))
               (when (eq inside :not-run)
-                (setf (luv-physics::terrain-solid-p terrain 10 5 10) t)
-                (luv-physics::fill-terrain terrain 11 5 10 13 6 11 t)
-                (setf inside (list (luv-physics::terrain-solid-p terrain 10 5 10)
-                                   (luv-physics::terrain-solid-p terrain 12 5 10))))))
-      (check (not (luv-physics::terrain-solid-p terrain 10 5 10)))
-      (luv-physics::step-physics-world w)
+                (setf (terrain-solid-p terrain 10 5 10) t)
+                (fill-terrain terrain 11 5 10 13 6 11 t)
+                (setf inside (list (terrain-solid-p terrain 10 5 10)
+                                   (terrain-solid-p terrain 12 5 10))))))
+      (check (not (terrain-solid-p terrain 10 5 10)))
+      (step-physics-world w)
       (check (equal inside '(nil nil)) "inside the handler the cells read ~S" inside)
-      (check (luv-physics::terrain-solid-p terrain 10 5 10) "the edit was lost")
-      (check (luv-physics::terrain-solid-p terrain 12 5 10) "the fill was lost"))))
+      (check (terrain-solid-p terrain 10 5 10) "the edit was lost")
+      (check (terrain-solid-p terrain 12 5 10) "the fill was lost"))))
 ;; H2W9DJ-edit-during-step-deferred ends here
 
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-fill-during-step-one-edit]]
@@ -1537,61 +1537,61 @@ return SCENE's record (run-twin). #T3STK1"
     "A fill from the event handler is queued as one edit and applied when the step ends."
   (multiple-value-bind (w terrain) (make-floor-world)
     (let ((consed nil))
-      (luv-physics::add-physics-body w 3.5 0.24 3.5)   ; touches the floor: a :begin event
-      (setf (luv-physics::physics-world-event-handler w)
+      (add-physics-body w 3.5 0.24 3.5)   ; touches the floor: a :begin event
+      (setf (physics-world-event-handler w)
             (lambda (&rest event)
               (declare (ignore event))
               (unless consed
                 (let ((before (sb-ext:get-bytes-consed)))
-                  (dotimes (i 32) (luv-physics::fill-terrain terrain -32 2 -32 32 66 32 t))
+                  (dotimes (i 32) (fill-terrain terrain -32 2 -32 32 66 32 t))
                   (setf consed (- (sb-ext:get-bytes-consed) before))))))
-      (luv-physics::step-physics-world w)
+      (step-physics-world w)
       (check (and consed (< (/ consed 32) 4096)) "32 queued fills consed ~S bytes" consed)
-      (check (and (luv-physics::terrain-solid-p terrain -32 2 -32) (luv-physics::terrain-solid-p terrain 31 65 31)
-                  (luv-physics::terrain-solid-p terrain 0 30 0))
+      (check (and (terrain-solid-p terrain -32 2 -32) (terrain-solid-p terrain 31 65 31)
+                  (terrain-solid-p terrain 0 30 0))
              "the fill was not applied"))))
 ;; H2W9DJ-fill-during-step-one-edit ends here
 
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-queued-edits-share-the-budget]]
 (define-claim "H2W9DJ" queued-edits-share-the-budget
     "Two queued fills that fit the chunk budget alone but not together: the second is refused when made."
-  (let* ((terrain (let ((luv-physics:*physics-terrain-chunk-budget* 4)) (luv-physics::make-voxel-terrain)))
-         (w (progn (luv-physics::fill-terrain terrain 0 0 0 16 16 16 nil)
-                   (luv-physics::fill-terrain terrain 0 0 0 16 1 16 t)
+  (let* ((terrain (let ((*physics-terrain-chunk-budget* 4)) (make-voxel-terrain)))
+         (w (progn (fill-terrain terrain 0 0 0 16 16 16 nil)
+                   (fill-terrain terrain 0 0 0 16 1 16 t)
                    (make-physics-world :terrain terrain)))
          (outcomes '()))
-    (luv-physics::add-physics-body w 8 1.24 8 :radius 0.25)   ; touches the floor: a :begin event
-    (setf (luv-physics::physics-world-event-handler w)
+    (add-physics-body w 8 1.24 8 :radius 0.25)   ; touches the floor: a :begin event
+    (setf (physics-world-event-handler w)
           (lambda (&rest event)
             (declare (ignore event))
             (unless outcomes
               (dolist (x0 '(16 48))
-                (push (handler-case (progn (luv-physics::fill-terrain terrain x0 0 0 (+ x0 32) 16 16 nil) :queued)
-                        (luv-physics::physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-operation e)))
+                (push (handler-case (progn (fill-terrain terrain x0 0 0 (+ x0 32) 16 16 nil) :queued)
+                        (physics-budget-exceeded (e) (luv-physics::physics-budget-exceeded-operation e)))
                       outcomes)))))
     (let ((stepped (handler-case (progn (step-physics-world w) t)
                      (error (e) (format nil "~A" e)))))
       (check (eq stepped t) "the step signalled: ~A" stepped))
-    (check (equal (reverse outcomes) '(:queued luv-physics::fill-terrain)) "the fills gave ~S" (reverse outcomes))
+    (check (equal (reverse outcomes) '(:queued fill-terrain)) "the fills gave ~S" (reverse outcomes))
     (check (= 3 (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
            "the terrain holds ~D chunks" (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
-    (check (not (luv-physics::terrain-solid-p terrain 20 5 5)) "the first fill was not applied")))
+    (check (not (terrain-solid-p terrain 20 5 5)) "the first fill was not applied")))
 ;; H2W9DJ-queued-edits-share-the-budget ends here
 
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-edit-in-a-resident-chunk]]
 (define-claim "H2W9DJ" edit-in-a-resident-chunk
     "At a budget of one chunk, a second cell of the resident chunk is set and a cell of another chunk refused."
-  (let ((terrain (let ((luv-physics:*physics-terrain-chunk-budget* 1)) (luv-physics::make-voxel-terrain))))
-    (setf (luv-physics::terrain-solid-p terrain 20 3 5) t)
-    (let ((beside (handler-case (progn (setf (luv-physics::terrain-solid-p terrain 21 3 5) t) :set)
-                    (luv-physics::physics-budget-exceeded () :refused)))
-          (other (handler-case (progn (setf (luv-physics::terrain-solid-p terrain 3 20 5) t) :set)
-                   (luv-physics::physics-budget-exceeded () :refused))))
+  (let ((terrain (let ((*physics-terrain-chunk-budget* 1)) (make-voxel-terrain))))
+    (setf (terrain-solid-p terrain 20 3 5) t)
+    (let ((beside (handler-case (progn (setf (terrain-solid-p terrain 21 3 5) t) :set)
+                    (physics-budget-exceeded () :refused)))
+          (other (handler-case (progn (setf (terrain-solid-p terrain 3 20 5) t) :set)
+                   (physics-budget-exceeded () :refused))))
       (check (equal (list beside other) '(:set :refused)) "the cell beside ~S, the cell of another chunk ~S"
              beside other))
     (check (= 1 (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
            "the terrain holds ~D chunks" (hash-table-count (luv-physics::voxel-terrain-chunks terrain)))
-    (let ((cells (loop for x from 20 to 22 collect (luv-physics::terrain-solid-p terrain x 3 5))))
+    (let ((cells (loop for x from 20 to 22 collect (terrain-solid-p terrain x 3 5))))
       (check (equal cells '(t t nil)) "the cells at x = 20, 21 and 22 read ~S" cells))))
 ;; H2W9DJ-edit-in-a-resident-chunk ends here
 
@@ -1599,7 +1599,7 @@ return SCENE's record (run-twin). #T3STK1"
 (define-claim "Y5H8KC" resting-contact-persists
     "A resting ball keeps one terrain contact row whose normal impulse is m*g*h within 5%."
   (let* ((w (make-floor-world :sleep nil))
-         (h (luv-physics::add-physics-body w 3.5 0.3 3.5 :mass 1.0))
+         (h (add-physics-body w 3.5 0.3 3.5 :mass 1.0))
          (key (luv-physics::terrain-key (luv-physics::handle-index h) 3 -1 3))
          (table (luv-physics::physics-world-contact-table w))
          (expected (* 1.0 9.81 (/ 1.0 60 4)))
@@ -1627,14 +1627,14 @@ return SCENE's record (run-twin). #T3STK1"
 (define-claim "Y5H8KC" stale-contacts-pruned
     "Contacts of a removed body and of a body that left the floor are pruned; the table stays consistent."
   (let* ((w (make-floor-world :sleep nil))
-         (hs (loop for i below 5 collect (luv-physics::add-physics-body w (+ 1.5 i) 0.245 3.5)))
+         (hs (loop for i below 5 collect (add-physics-body w (+ 1.5 i) 0.245 3.5)))
          (c (luv-physics::physics-world-contacts w))
          (table (luv-physics::physics-world-contact-table w))
          (ended 0))
-    (dotimes (i 30) (luv-physics::step-physics-world w))
+    (dotimes (i 30) (step-physics-world w))
     (check (= 5 (luv-physics::contact-columns-length c)))
-    (luv-physics::remove-physics-body w (second hs))
-    (luv-physics::set-physics-body-velocity w (fourth hs) 0 4 0)
+    (remove-physics-body w (second hs))
+    (set-physics-body-velocity w (fourth hs) 0 4 0)
     (dotimes (i 10)
       (loop for (kind) in (step-events w) when (eq kind :end) do (incf ended)))
     (check (= 3 (luv-physics::contact-columns-length c)) "~D contacts remain" (luv-physics::contact-columns-length c))
@@ -1646,7 +1646,7 @@ return SCENE's record (run-twin). #T3STK1"
                   (sort (list (first hs) (third hs) (fifth hs)) #'<)))
     (check (loop for row below (luv-physics::contact-columns-length c)
                  always (= row (luv-physics::contact-table-find table (aref (luv-physics::contact-columns-key c) row)))))
-    (check (eq t (luv-physics::validate-physics-world w)))))
+    (check (eq t (validate-physics-world w)))))
 ;; Y5H8KC-stale-contacts-pruned ends here
 
 ;; [[file:../physics.org::#Y5H8KC][Y5H8KC-keys-name-one-contact]]
@@ -1730,7 +1730,7 @@ return SCENE's record (run-twin). #T3STK1"
     "Generated pair contacts = brute-force pairs with gap < 0.02 m in a 300-ball cloud, dense or hashed; none beyond the margin."
   (dolist (cells '(64 0))
   (let* ((luv-physics::*physics-dense-grid-cells* cells)
-         (w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
+         (w (make-physics-world :gravity '(0 0 0) :sleep nil))
          (next (luv-physics::fixed-sequence 7))
          (balls '()))                   ; (handle x y z r), in doubles
     (flet ((gap (p q)
@@ -1759,13 +1759,13 @@ return SCENE's record (run-twin). #T3STK1"
                    (push candidate balls))))
       ;; add them and re-read the stored single-float centres
       (setf balls (mapcar (lambda (b)
-                            (let ((h (luv-physics::add-physics-body w (second b) (third b) (fourth b)
+                            (let ((h (add-physics-body w (second b) (third b) (fourth b)
                                                                     :radius (fifth b))))
-                              (multiple-value-bind (x y z) (luv-physics::physics-body-position w h)
+                              (multiple-value-bind (x y z) (physics-body-position w h)
                                 (list h (float x 1d0) (float y 1d0) (float z 1d0)
-                                      (float (luv-physics::physics-body-radius w h) 1d0)))))
+                                      (float (physics-body-radius w h) 1d0)))))
                           balls))
-      (luv-physics::step-physics-world w)
+      (step-physics-world w)
       (check (eq (plusp cells) (luv-physics::hash-grid-dense (luv-physics::physics-world-awake-grid w)))
              "with ~D cells per item the grid is ~:[hashed~;dense~]" cells
              (luv-physics::hash-grid-dense (luv-physics::physics-world-awake-grid w)))
@@ -1865,16 +1865,16 @@ return SCENE's record (run-twin). #T3STK1"
   (let ((before (copy-tree luv-physics::*kernel-families*))
         (class (second (first luv-physics::*kernel-families*))))
     (loop for (name set expected) in `(("avx2" nil :name) (:auto nil :name) (:wide ,"sse" :instruction-set))
-          do (check (eq expected (handler-case (progn (luv-physics::register-kernel-family name class set) :registered)
-                                   (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+          do (check (eq expected (handler-case (progn (register-kernel-family name class set) :registered)
+                                   (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
                     "~S ~S was not refused naming ~S" name set expected))
     (check (equal before luv-physics::*kernel-families*) "the registry changed")
     (unwind-protect
          (progn
-           (check (eq :probe (luv-physics::register-kernel-family :probe class)))
+           (check (eq :probe (register-kernel-family :probe class)))
            (check (equal (append before (list (list :probe class))) luv-physics::*kernel-families*)
                   "after :probe the registry is ~S" luv-physics::*kernel-families*)
-           (check (eq :probe (luv-physics::register-kernel-family :probe class :x86-64)))
+           (check (eq :probe (register-kernel-family :probe class :x86-64)))
            (check (equal (append before (list (list :probe class :x86-64))) luv-physics::*kernel-families*)
                   "after :probe again the registry is ~S" luv-physics::*kernel-families*))
       (setf luv-physics::*kernel-families* before))))
@@ -1902,14 +1902,14 @@ return SCENE's record (run-twin). #T3STK1"
                                (equal (fourth got) cell) (eq (and (fifth got) t) resident))
                           "a centre at ~S gave ~S" (list x y z) got)
                    (check (equal before (world-fingerprint w)) "a refused body changed the world")
-                   (check (luv-physics::validate-physics-world w)))))
+                   (check (validate-physics-world w)))))
       (check (eq :inside-cells (handler-case (progn (add-physics-body w 2.5 0.5 2.5 :inside-cells :yes) nil)
-                                 (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+                                 (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
              "an :inside-cells of :yes was not refused by its name")
       (check (equal before (world-fingerprint w)) "a refused :inside-cells changed the world"))
     (let ((h (add-physics-body w 3.5 -0.3 3.5 :inside-cells :push-out)))
       (dotimes (i 120) (step-physics-world w))
-      (check (< (abs (- (body-y w h) (- 0.25 luv-physics::*physics-linear-slop*))) 0.002)
+      (check (< (abs (- (body-y w h) (- 0.25 *physics-linear-slop*))) 0.002)
              "the ball pushed out of the floor rests at y = ~,5F" (body-y w h)))
     (check (add-physics-body w 2.5 0.5 2.5) "a centre in the air was refused")
     (check (add-physics-body (make-physics-world) 40.0 -3.0 3.0) "a world without terrain refused a body")))
@@ -1925,10 +1925,10 @@ return SCENE's record (run-twin). #T3STK1"
           (let* ((required (loop for p in lambda-list until (member p lambda-list-keywords) collect p))
                  (at (position "WORLD" required :key #'string :test #'string=)))
             (when at
-             (dolist (bad (list nil (luv-physics:make-voxel-terrain) 42))
+             (dolist (bad (list nil (make-voxel-terrain) 42))
               (let* ((arguments (loop for p in required for i from 0 collect (if (= i at) bad 0)))
                      (got (handler-case (progn (apply s arguments) :no-error)
-                            (luv-physics::not-a-physics-world (e)
+                            (not-a-physics-world (e)
                               (list (luv-physics::not-a-physics-world-operation e)
                                     (luv-physics::invalid-physics-parameter-name e)))
                             (error (e) (type-of e)))))
@@ -1939,7 +1939,7 @@ return SCENE's record (run-twin). #T3STK1"
     (dolist (call (list (lambda () (physics-world-step-count nil))
                         (lambda () (setf (physics-world-event-handler 42) nil))))
       (let ((got (handler-case (progn (funcall call) :no-error)
-                   (luv-physics::not-a-physics-world (e) (luv-physics::invalid-physics-parameter-name e))
+                   (not-a-physics-world (e) (luv-physics::invalid-physics-parameter-name e))
                    (error (e) (type-of e)))))
         (incf checked)
         (unless (eq got 'luv-physics::world) (push (list call got) wrong))))
@@ -1952,8 +1952,8 @@ return SCENE's record (run-twin). #T3STK1"
     "Arguments are accepted at their limits and refused just past them; a new row holds exactly what it was given."
   (flet ((outcome (thunk)
            (handler-case (progn (funcall thunk) :accepted)
-             (luv-physics::invalid-physics-radius () :radius)
-             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+             (invalid-physics-radius () :radius)
+             (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
              (error (e) (type-of e)))))
     (let ((wrong '()))
       (flet ((world-with (want &rest arguments)
@@ -1966,7 +1966,7 @@ return SCENE's record (run-twin). #T3STK1"
         (world-with :accepted :gravity '(1000 -1000 1000)) (world-with :gravity :gravity '(0 -1000.1 0))
         (world-with :gravity :gravity '(0 -9.81))
         (world-with :kernels :kernels :no-such-family)
-        (let ((got (outcome (lambda () (luv-physics:register-kernel-family :claim-family 'luv-physics::scalar-kernels "sse")))))
+        (let ((got (outcome (lambda () (register-kernel-family :claim-family 'scalar-kernels "sse")))))
           (unless (eq got :instruction-set) (push (list :register got) wrong)))
         (check (not (assoc :claim-family luv-physics::*kernel-families*)))
         (loop for (want dt) in '((:accepted 0.0001) (:dt 0.000099) (:accepted 0.9999) (:dt 1.0))
@@ -1980,25 +1980,25 @@ return SCENE's record (run-twin). #T3STK1"
                "the world keeps ~S" (luv-physics::physics-world-step-seconds w)))
       (let* ((w (make-floor-world)) (limit (luv-physics::max-radius-for w))
              (speed (luv-physics::physics-world-max-speed w)) (diagonal (* speed (/ (sqrt 3.0)) 0.99999))
-             (far (* luv-physics::+physics-coordinate-limit+ 0.99999)))
+             (far (* +physics-coordinate-limit+ 0.99999)))
         (dotimes (i 3) (add-physics-body w (+ 1.5 i) 1.0 1.5))
         (let ((before (world-fingerprint w)))
           (loop for (want . arguments)
-                  in `((:accepted :radius ,luv-physics::+physics-min-radius+)
-                       (:radius :radius ,(* 0.999 luv-physics::+physics-min-radius+))
+                  in `((:accepted :radius ,+physics-min-radius+)
+                       (:radius :radius ,(* 0.999 +physics-min-radius+))
                        (:accepted :radius ,limit) (:radius :radius ,(* 1.001 limit))
-                       (:accepted :mass ,luv-physics::+physics-min-mass+)
-                       (:mass :mass ,(* 0.999 luv-physics::+physics-min-mass+))
-                       (:accepted :mass ,luv-physics::+physics-max-mass+)
-                       (:mass :mass ,(* 1.001 luv-physics::+physics-max-mass+))
+                       (:accepted :mass ,+physics-min-mass+)
+                       (:mass :mass ,(* 0.999 +physics-min-mass+))
+                       (:accepted :mass ,+physics-max-mass+)
+                       (:mass :mass ,(* 1.001 +physics-max-mass+))
                        (:accepted :restitution 0.0) (:accepted :restitution 1.0)
                        (:restitution :restitution -0.001) (:restitution :restitution 1.001)
-                       (:accepted :friction 0.0) (:accepted :friction ,luv-physics::+physics-max-friction+)
-                       (:friction :friction -0.001) (:friction :friction ,(* 1.001 luv-physics::+physics-max-friction+))
+                       (:accepted :friction 0.0) (:accepted :friction ,+physics-max-friction+)
+                       (:friction :friction -0.001) (:friction :friction ,(* 1.001 +physics-max-friction+))
                        (:accepted :rolling-resistance 0.0)
-                       (:accepted :rolling-resistance ,luv-physics::+physics-max-friction+)
+                       (:accepted :rolling-resistance ,+physics-max-friction+)
                        (:rolling-resistance :rolling-resistance -0.001)
-                       (:rolling-resistance :rolling-resistance ,(* 1.001 luv-physics::+physics-max-friction+))
+                       (:rolling-resistance :rolling-resistance ,(* 1.001 +physics-max-friction+))
                        (:accepted :vx ,speed) (:accepted :vy ,(- speed)) (:accepted :vz ,speed)
                        (:velocity :vx ,(* 1.001 speed)) (:velocity :vy ,(* -1.001 speed))
                        (:velocity :vz ,(* 1.001 speed))
@@ -2016,7 +2016,7 @@ return SCENE's record (run-twin). #T3STK1"
               (flet ((at (v) (outcome (lambda () (apply #'add-physics-body (make-physics-world)
                                                         (mapcar (lambda (a) (if (eq a axis) v 0.0)) '(:x :y :z)))))))
                 (unless (eq :accepted (at (* sign far))) (push (list axis (* sign far) (at (* sign far))) wrong))
-                (let ((v (* sign luv-physics::+physics-coordinate-limit+)))
+                (let ((v (* sign +physics-coordinate-limit+)))
                   (unless (eq axis (at v)) (push (list axis v (at v)) wrong))))))
           (check (equal before (world-fingerprint w)) "a refusal changed the world"))
         (check (null wrong) "~D arguments answered wrongly: ~S" (length wrong) (reverse wrong))
@@ -2050,7 +2050,7 @@ return SCENE's record (run-twin). #T3STK1"
   (let ((w (make-physics-world)))
     (dolist (life (list 0 0.0 -0.0))
       (check (eq :life (handler-case (progn (add-physics-body w 1.0 1.0 1.0 :life life) :accepted)
-                         (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+                         (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
              "a life of ~S was not refused" life))
     (check (= 0 (physics-world-awake-count w)))
     (add-physics-body w 1.0 1.0 1.0)
@@ -2061,7 +2061,7 @@ return SCENE's record (run-twin). #T3STK1"
 (define-claim "E7V3NT" mortal-body-events
     "A 1 s mortal ball: :begin, then :end, then :expired on step 60; afterwards its handle is stale."
   (let* ((w (make-floor-world))
-         (h (luv-physics::add-physics-body w 3.5 0.75 3.5 :life 1.0))
+         (h (add-physics-body w 3.5 0.75 3.5 :life 1.0))
          (begin nil) (end nil) (expired nil))
     (loop for step from 1 to 61
           do (loop for (kind a b) in (step-events w)
@@ -2073,11 +2073,11 @@ return SCENE's record (run-twin). #T3STK1"
     (check (and begin end (< begin end)) ":begin at step ~S, :end at step ~S" begin end)
     (check (eql expired 60) ":expired at step ~S, not 60" expired)
     (check (and end (<= end expired)))
-    (check (not (luv-physics::physics-body-alive-p w h)))
-    (check (= 0 (+ (luv-physics::physics-world-awake-count w) (luv-physics::physics-world-sleeping-count w))))
-    (check (eq :removed (handler-case (progn (luv-physics::physics-body-position w h) :no-error)
-                          (luv-physics::stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e)))))
-    (check (eq t (luv-physics::validate-physics-world w)))))
+    (check (not (physics-body-alive-p w h)))
+    (check (= 0 (+ (physics-world-awake-count w) (physics-world-sleeping-count w))))
+    (check (eq :removed (handler-case (progn (physics-body-position w h) :no-error)
+                          (stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e)))))
+    (check (eq t (validate-physics-world w)))))
 ;; E7V3NT-mortal-body-events ends here
 
 ;; [[file:../physics.org::#E7V3NT][E7V3NT-event-data-grow-once]]
@@ -2091,14 +2091,14 @@ return SCENE's record (run-twin). #T3STK1"
              (luv-physics::push-event w luv-physics::+event-hit+ 40 -1 1.0 2.0 3.0 4.0)))
       (push-forty)
       (check (<= 41 (length (luv-physics::physics-world-event-data w))))
-      (luv-physics::step-physics-world w)
+      (step-physics-world w)
       (check (zerop (luv-physics::event-columns-length (luv-physics::physics-world-events w))))
       (let ((before (sb-ext:get-bytes-consed)))
         (push-forty)
         (check (= before (sb-ext:get-bytes-consed)) "forty events with data consed ~D bytes"
                (- (sb-ext:get-bytes-consed) before)))
       (let ((read '()))
-        (luv-physics::map-physics-events (lambda (kind a b x y z speed datum)
+        (map-physics-events (lambda (kind a b x y z speed datum)
                                            (declare (ignore kind b x y z speed))
                                            (push (cons a datum) read))
                                          w)
@@ -2108,7 +2108,7 @@ return SCENE's record (run-twin). #T3STK1"
                      always (and (= a k) (eq datum (nth k data))))
                "the data read back are not those pushed"))))
   ;; a world that records hits and nothing else keeps a :hit and drops a :begin
-  (let ((w (luv-physics::make-physics-world :features '(:terrain :hit-events))))
+  (let ((w (make-physics-world :features '(:terrain :hit-events))))
     (check (null (luv-physics::push-event w luv-physics::+event-begin+ 1 -1 1.0 2.0 3.0 4.0)))
     (check (eql 0 (luv-physics::push-event w luv-physics::+event-hit+ 1 -1 1.0 2.0 3.0 4.0)))
     (check (= 1 (luv-physics::event-columns-length (luv-physics::physics-world-events w))))))
@@ -2122,7 +2122,7 @@ return SCENE's record (run-twin). #T3STK1"
       (luv-physics::push-event w luv-physics::+event-hit+ k -1 1.0 2.0 3.0 4.0))
     (check (< (length (luv-physics::physics-world-event-data w)) 20)
            "the data vector has room for ~D" (length (luv-physics::physics-world-event-data w)))
-    (luv-physics:map-physics-events (lambda (kind a b x y z speed datum)
+    (map-physics-events (lambda (kind a b x y z speed datum)
                                       (declare (ignore kind b x y z speed))
                                       (push (cons a datum) seen))
                                     w)
@@ -2143,7 +2143,7 @@ use before it. #QKS4GZ"
   (let* ((before (sb-kernel:dynamic-usage))
          (w (luv-physics::sleepers-beside-basin 20000 :kernels :scalar)))
     (step-physics-world w)
-    (luv-physics:trim-physics-world w)
+    (trim-physics-world w)
     (values w before)))
 
 (define-claim "QKS4GZ" trim-gives-room-back
@@ -2152,19 +2152,19 @@ use before it. #QKS4GZ"
     (sb-ext:gc :full t)
     (let ((per (round (- (sb-kernel:dynamic-usage) before) 20000)))
       (check (<= per 500) "after trimming the heap holds ~D bytes a sleeper" per))
-    (check (eq t (luv-physics::validate-physics-world w)))
+    (check (eq t (validate-physics-world w)))
     (let ((ball (add-physics-body w 4.0 1.0 4.0)))
       (dotimes (i 120) (step-physics-world w))
-      (check (not (luv-physics::physics-body-awake-p w ball)) "the ball dropped after trimming is awake after 2 s")
-      (check (eq t (luv-physics::validate-physics-world w))))))
+      (check (not (physics-body-awake-p w ball)) "the ball dropped after trimming is awake after 2 s")
+      (check (eq t (validate-physics-world w))))))
 ;; QKS4GZ-trim-gives-room-back ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trimming-lasts]]
 (define-claim "QKS4GZ" trimming-lasts
     "20000 trimmed sleepers take at most 350 bytes each by the world's count, through 60 steps that cons nothing after the first."
   (multiple-value-bind (w before) (trimmed-sleepers-beside-basin)
-    (check (<= (luv-physics:physics-world-bytes w) (* 350 20000))
-           "trimmed, the world counts ~D bytes a sleeper" (round (luv-physics:physics-world-bytes w) 20000))
+    (check (<= (physics-world-bytes w) (* 350 20000))
+           "trimmed, the world counts ~D bytes a sleeper" (round (physics-world-bytes w) 20000))
     (let ((first (sb-ext:get-bytes-consed)))
       (step-physics-world w)
       (let ((rest (sb-ext:get-bytes-consed)))
@@ -2174,11 +2174,11 @@ use before it. #QKS4GZ"
                (- (sb-ext:get-bytes-consed) rest))))
     (check (<= (luv-physics::body-columns-capacity (luv-physics::physics-world-awake w)) 16)
            "the awake buffer has room for ~D rows" (luv-physics::body-columns-capacity (luv-physics::physics-world-awake w)))
-    (check (<= (luv-physics:physics-world-bytes w) (* 350 20000))
-           "after 60 steps the world counts ~D bytes a sleeper" (round (luv-physics:physics-world-bytes w) 20000))
+    (check (<= (physics-world-bytes w) (* 350 20000))
+           "after 60 steps the world counts ~D bytes a sleeper" (round (physics-world-bytes w) 20000))
     (sb-ext:gc :full t)
-    (check (<= (luv-physics:physics-world-bytes w) (- (sb-kernel:dynamic-usage) before))
-           "the world counts ~D bytes, the heap grew by ~D" (luv-physics:physics-world-bytes w)
+    (check (<= (physics-world-bytes w) (- (sb-kernel:dynamic-usage) before))
+           "the world counts ~D bytes, the heap grew by ~D" (physics-world-bytes w)
            (- (sb-kernel:dynamic-usage) before))))
 ;; QKS4GZ-trimming-lasts ends here
 
@@ -2189,8 +2189,8 @@ use before it. #QKS4GZ"
            (let ((w (make-scene-world :pile :count 200 :kernels :scalar)))
              (dotimes (i 300)
                (step-physics-world w)
-               (when (and trim (= 14 (mod i 15))) (luv-physics:trim-physics-world w)))
-             (values (luv-physics:physics-world-state-hash w) (luv-physics::physics-world-sleeping-count w)))))
+               (when (and trim (= 14 (mod i 15))) (trim-physics-world w)))
+             (values (physics-world-state-hash w) (physics-world-sleeping-count w)))))
     (multiple-value-bind (trimmed sleepers) (run t)
       (check (plusp sleepers) "no ball of the trimmed pile sleeps")
       (check (= trimmed (run nil)) "trimming changed the hash"))))
@@ -2206,9 +2206,9 @@ use before it. #QKS4GZ"
       (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h))))
     (setf (luv-physics::physics-world-added-count w) 0)
     (loop for k below 20 do (add-physics-body w (+ 1.0 k) 2.0 2.49 :radius 0.25))
-    (luv-physics:trim-physics-world w)
+    (trim-physics-world w)
     (luv-physics::wake-phase w)
-    (let ((asleep (count-if-not (lambda (h) (luv-physics::physics-body-awake-p w h)) sleepers)))
+    (let ((asleep (count-if-not (lambda (h) (physics-body-awake-p w h)) sleepers)))
       (check (zerop asleep) "~D of the 20 sleepers an added ball overlaps sleep on" asleep))))
 ;; QKS4GZ-trim-keeps-the-added ends here
 
@@ -2222,13 +2222,13 @@ use before it. #QKS4GZ"
         (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h)))))
     (check (= 1024 (length (luv-physics::physics-world-newest-handles w)))
            "the newest sleepers' list holds ~D entries" (length (luv-physics::physics-world-newest-handles w)))
-    (luv-physics:trim-physics-world w)
+    (trim-physics-world w)
     (check (= 1000 (luv-physics::physics-world-settled-count w)))
     (check (= 64 (length (luv-physics::physics-world-newest-handles w)) (length (luv-physics::physics-world-fresh-handles w)))
            "trimmed, the lists hold ~D and ~D entries" (length (luv-physics::physics-world-newest-handles w))
            (length (luv-physics::physics-world-fresh-handles w)))
     (check (= 0 (length (luv-physics::physics-world-fresh-x w))))
-    (check (eq t (luv-physics::validate-physics-world w)))))
+    (check (eq t (validate-physics-world w)))))
 ;; QKS4GZ-trim-gives-lists-back ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-trimmed-scratch-regrows]]
@@ -2237,17 +2237,17 @@ use before it. #QKS4GZ"
   (let ((w (make-floor-world)))
     (add-physics-body w 3.5 0.245 3.5)
     (dotimes (i 200) (step-physics-world w))
-    (check (= 1 (luv-physics::physics-world-sleeping-count w)) "the ball does not sleep")
-    (luv-physics:trim-physics-world w)
+    (check (= 1 (physics-world-sleeping-count w)) "the ball does not sleep")
+    (trim-physics-world w)
     (dotimes (i 3) (step-physics-world w))
-    (let ((n (luv-physics::physics-world-awake-count w)))
+    (let ((n (physics-world-awake-count w)))
       (check (zerop n) "~D bodies awake" n)
       (check (>= (length (luv-physics::physics-world-velocities w)) (luv-physics::solver-row (1+ n))))
       (check (>= (length (luv-physics::physics-world-deltas w)) (luv-physics::delta-row (1+ n))))
       (dolist (column (list (luv-physics::physics-world-color-masks w) (luv-physics::physics-world-braced w)
                             (luv-physics::physics-world-held w)))
         (check (>= (length column) (1+ n)) "a column of marks holds ~D entries" (length column))))
-    (check (eq t (luv-physics::validate-physics-world w)))))
+    (check (eq t (validate-physics-world w)))))
 ;; QKS4GZ-trimmed-scratch-regrows ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-woken-sleeps-again-sooner]]
@@ -2255,8 +2255,8 @@ use before it. #QKS4GZ"
     "A sleeper woken by a passing ball, and not moved, sleeps again within 0.3 s."
   (let* ((w (make-floor-world))
          (h (add-physics-body w 3.5 0.245 3.5 :radius 0.25)))
-    (loop repeat 120 while (luv-physics::physics-body-awake-p w h) do (step-physics-world w))
-    (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+    (loop repeat 120 while (physics-body-awake-p w h) do (step-physics-world w))
+    (check (not (physics-body-awake-p w h)) "the ball did not fall asleep")
     (let ((before (multiple-value-list (physics-body-position w h)))
           (woke nil) (slept nil))
       (add-physics-body w 1.5 0.245 4.05 :radius 0.25 :vx 2.0)
@@ -2280,14 +2280,14 @@ use before it. #QKS4GZ"
            (let* ((w (make-floor-world))
                   (row (when beside
                          (loop for k below 10 collect (add-physics-body w (+ 0.5 (* 0.5 k)) 0.245 3.0 :radius 0.25)))))
-             (loop repeat 120 until (= (length row) (luv-physics::physics-world-sleeping-count w))
+             (loop repeat 120 until (= (length row) (physics-world-sleeping-count w))
                    do (step-physics-world w))
-             (check (= (length row) (luv-physics::physics-world-sleeping-count w)) "the row did not fall asleep")
+             (check (= (length row) (physics-world-sleeping-count w)) "the row did not fall asleep")
              (let ((ball (add-physics-body w 0.5 0.245 3.505 :radius 0.25 :vx 0.1)) (asleep-at nil))
                (loop for i below 120 until asleep-at
                      do (step-physics-world w)
-                        (unless (luv-physics::physics-body-awake-p w ball) (setf asleep-at (/ (1+ i) 60.0))))
-               (values asleep-at (luv-physics::physics-world-sleeping-count w))))))
+                        (unless (physics-body-awake-p w ball) (setf asleep-at (/ (1+ i) 60.0))))
+               (values asleep-at (physics-world-sleeping-count w))))))
     (multiple-value-bind (asleep-at sleepers) (rolled t)
       (check (<= (or asleep-at 2.0) 0.6) "beside the sleepers the ball was ~:[still awake after 2 s~;~:*asleep only at ~,2F s~]" asleep-at)
       (check (= sleepers 11) "~D sleepers, not the row and the ball" sleepers))
@@ -2301,71 +2301,71 @@ use before it. #QKS4GZ"
          (y0 0.245)
          (pile (append
                 (loop for (dx dz) in '((0 0) (0.5 0) (0 0.5) (0.5 0.5))
-                      collect (luv-physics::add-physics-body w (+ 3.25 dx) y0 (+ 3.25 dz)
+                      collect (add-physics-body w (+ 3.25 dx) y0 (+ 3.25 dz)
                                                              :rolling-resistance 0.05))
-                (list (luv-physics::add-physics-body w 3.5 (+ y0 (* 0.5 (sqrt 2))) 3.5
+                (list (add-physics-body w 3.5 (+ y0 (* 0.5 (sqrt 2))) 3.5
                                                      :rolling-resistance 0.05)
-                      (luv-physics::add-physics-body w 4.25 y0 3.25 :rolling-resistance 0.05))))
+                      (add-physics-body w 4.25 y0 3.25 :rolling-resistance 0.05))))
          (asleep-at nil))
-    (flet ((all-asleep () (notany (lambda (h) (luv-physics::physics-body-awake-p w h)) pile)))
+    (flet ((all-asleep () (notany (lambda (h) (physics-body-awake-p w h)) pile)))
       (dotimes (i 120)
-        (luv-physics::step-physics-world w)
+        (step-physics-world w)
         (when (and (not asleep-at) (all-asleep)) (setf asleep-at i)))
       (check (not (null asleep-at)) "the pile is not asleep after 2 s")
-      (check (= 6 (luv-physics::physics-world-sleeping-count w)))
+      (check (= 6 (physics-world-sleeping-count w)))
       ;; the thrown ball rolls along z = 3.25 into the first ball of the square
-      (let ((thrown (luv-physics::add-physics-body w 1.5 y0 3.25 :vx 4.0 :rolling-resistance 0.05))
+      (let ((thrown (add-physics-body w 1.5 y0 3.25 :vx 4.0 :rolling-resistance 0.05))
             (woken '()) (first-wake nil) (again nil))
         (dotimes (i 420)
           (loop for (kind a) in (step-events w)
                 when (eq kind :woke) do (pushnew a woken) (unless first-wake (setf first-wake i)))
           (when (and first-wake (not again) (all-asleep)) (setf again i)))
         (check (member (first pile) woken) "the hit ball never woke (woken: ~S)" woken)
-        (check (eq t (luv-physics::validate-physics-world w)))
+        (check (eq t (validate-physics-world w)))
         (check (and again (<= (- again first-wake) 300))
                "the pile was not asleep again within 5 s of the first wake (again at ~S, woke at ~S)"
                again first-wake)
-        (check (luv-physics::physics-body-alive-p w thrown))))))
+        (check (physics-body-alive-p w thrown))))))
 ;; QKS4GZ-pile-sleeps-wakes-sleeps ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-edit-needs-wake]]
 (define-claim "QKS4GZ" edit-needs-wake
     "Removing the cell under a sleeper needs wake-physics-bodies-near; once woken the ball falls through."
   (multiple-value-bind (w terrain) (make-floor-world)
-    (let ((h (luv-physics::add-physics-body w 3.5 0.5 3.5))
-          (other (luv-physics::add-physics-body w 6.5 0.5 3.5)))
-      (dotimes (i 120) (luv-physics::step-physics-world w))
-      (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
-      (setf (luv-physics::terrain-solid-p terrain 3 -1 3) nil)
-      (dotimes (i 10) (luv-physics::step-physics-world w))
-      (check (not (luv-physics::physics-body-awake-p w h)) "the sleeper woke by itself")
+    (let ((h (add-physics-body w 3.5 0.5 3.5))
+          (other (add-physics-body w 6.5 0.5 3.5)))
+      (dotimes (i 120) (step-physics-world w))
+      (check (not (physics-body-awake-p w h)) "the ball did not fall asleep")
+      (setf (terrain-solid-p terrain 3 -1 3) nil)
+      (dotimes (i 10) (step-physics-world w))
+      (check (not (physics-body-awake-p w h)) "the sleeper woke by itself")
       (check (< (abs (- (body-y w h) 0.245)) 0.002) "the sleeper moved to ~,4F" (body-y w h))
-      (check (= 1 (luv-physics::wake-physics-bodies-near w 3.5 -0.5 3.5 0.5)))
-      (check (luv-physics::physics-body-awake-p w h))
-      (check (not (luv-physics::physics-body-awake-p w other)) "the far ball woke too")
-      (dotimes (i 30) (luv-physics::step-physics-world w))
+      (check (= 1 (wake-physics-bodies-near w 3.5 -0.5 3.5 0.5)))
+      (check (physics-body-awake-p w h))
+      (check (not (physics-body-awake-p w other)) "the far ball woke too")
+      (dotimes (i 30) (step-physics-world w))
       (check (< (body-y w h) -0.5) "the woken ball is at y = ~,4F, not through the hole" (body-y w h))
-      (check (eq t (luv-physics::validate-physics-world w))))))
+      (check (eq t (validate-physics-world w))))))
 ;; QKS4GZ-edit-needs-wake ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-wake-near-measures-to-the-surface]]
 (define-claim "QKS4GZ" wake-near-measures-to-the-surface
     "WAKE-PHYSICS-BODIES-NEAR wakes a sleeper whose surface is within RADIUS of the point, not beyond."
   (let* ((w (make-floor-world))
-         (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
-    (loop repeat 300 while (luv-physics::physics-body-awake-p w h) do (luv-physics::step-physics-world w))
-    (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+         (h (add-physics-body w 3.5 0.245 3.5)))
+    (loop repeat 300 while (physics-body-awake-p w h) do (step-physics-world w))
+    (check (not (physics-body-awake-p w h)) "the ball did not fall asleep")
     (let ((y (+ (body-y w h) 0.755)))
-      (check (= 0 (luv-physics::wake-physics-bodies-near w 3.5 y 3.5 0.49)))
-      (check (not (luv-physics::physics-body-awake-p w h)) "woken from 0.505 m by a radius of 0.49 m")
-      (check (= 1 (luv-physics::wake-physics-bodies-near w 3.5 y 3.5 0.52)))
-      (check (luv-physics::physics-body-awake-p w h) "not woken from 0.505 m by a radius of 0.52 m"))
-    (loop repeat 300 while (luv-physics::physics-body-awake-p w h) do (luv-physics::step-physics-world w))
-    (multiple-value-bind (sx sy sz) (luv-physics::physics-body-position w h)
+      (check (= 0 (wake-physics-bodies-near w 3.5 y 3.5 0.49)))
+      (check (not (physics-body-awake-p w h)) "woken from 0.505 m by a radius of 0.49 m")
+      (check (= 1 (wake-physics-bodies-near w 3.5 y 3.5 0.52)))
+      (check (physics-body-awake-p w h) "not woken from 0.505 m by a radius of 0.52 m"))
+    (loop repeat 300 while (physics-body-awake-p w h) do (step-physics-world w))
+    (multiple-value-bind (sx sy sz) (physics-body-position w h)
       ;; D is the single-float distance the engine computes; D - r + r is D again
       (let* ((y (+ sy 1.0)) (d (- y sy)) (radius (- d 0.25)))
         (check (= d (+ radius 0.25)))
-        (check (= 1 (luv-physics::wake-physics-bodies-near w sx y sz radius))
+        (check (= 1 (wake-physics-bodies-near w sx y sz radius))
                "a radius of exactly the distance to the surface did not wake the ball")))))
 ;; QKS4GZ-wake-near-measures-to-the-surface ends here
 
@@ -2383,30 +2383,30 @@ use before it. #QKS4GZ"
               (let ((before (unless (member op '(0 5))
                               (mapcar (lambda (h)
                                         (cons h (multiple-value-list
-                                                 (luv-physics::physics-body-position w h))))
+                                                 (physics-body-position w h))))
                                       live))))
                 (case op
-                  (0 (push (luv-physics::add-physics-body
+                  (0 (push (add-physics-body
                             w (+ 1 (* 8 (funcall next))) (+ 0.3 (* 2 (funcall next))) (+ 1 (* 8 (funcall next)))
                             :radius (+ 0.1 (* 0.3 (funcall next))))
                            live))
                   (1 (let ((h (pick)))
-                       (luv-physics::remove-physics-body w h)
+                       (remove-physics-body w h)
                        (setf live (remove h live))))
                   (2 (multiple-value-bind (set row) (luv-physics::resolve-handle w (pick))
                        (when (= set luv-physics::+set-awake+)
                          (luv-physics::sleep-physics-body w row))))
                   (3 (luv-physics::wake-handle w (pick)))
-                  (4 (luv-physics::set-physics-body-velocity w (pick) (- (funcall next) 0.5) 1.0 0.0))
-                  (5 (dotimes (k 3) (luv-physics::step-physics-world w))))
-                (luv-physics::validate-physics-world w)
-                (setf live (remove-if-not (lambda (h) (luv-physics::physics-body-alive-p w h)) live))
+                  (4 (set-physics-body-velocity w (pick) (- (funcall next) 0.5) 1.0 0.0))
+                  (5 (dotimes (k 3) (step-physics-world w))))
+                (validate-physics-world w)
+                (setf live (remove-if-not (lambda (h) (physics-body-alive-p w h)) live))
                 (loop for (h . position) in before
-                      when (and (luv-physics::physics-body-alive-p w h)
+                      when (and (physics-body-alive-p w h)
                                 (not (equal position (multiple-value-list
-                                                      (luv-physics::physics-body-position w h)))))
+                                                      (physics-body-position w h)))))
                         do (error "handle ~D reads ~S, not ~S" h
-                                  (multiple-value-list (luv-physics::physics-body-position w h))
+                                  (multiple-value-list (physics-body-position w h))
                                   position)))
             (error (e)
               (incf failures)
@@ -2415,9 +2415,9 @@ use before it. #QKS4GZ"
     (check (and (= (hash-table-count ops) 6) (loop for n being the hash-values of ops always (> n 40)))
            "operations ran ~S times (add remove sleep wake velocity step)"
            (loop for op below 6 collect (gethash op ops 0)))
-    (check (> (luv-physics::physics-world-step-count w) 150) "only ~D steps" (luv-physics::physics-world-step-count w))
-    (check (= (length live) (+ (luv-physics::physics-world-awake-count w)
-                               (luv-physics::physics-world-sleeping-count w))))))
+    (check (> (physics-world-step-count w) 150) "only ~D steps" (physics-world-step-count w))
+    (check (= (length live) (+ (physics-world-awake-count w)
+                               (physics-world-sleeping-count w))))))
 ;; QKS4GZ-relocation-stress ends here
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-sleep-speed-is-the-edge]]
@@ -2425,7 +2425,7 @@ use before it. #QKS4GZ"
     "A ball drifting at 0.9 of the sleep speed sleeps after the time to sleep; at 1.1 of it, never."
   (loop for (factor sleeps) in '((0.9 t) (1.1 nil))
         do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
-                  (speed (* factor luv-physics::*physics-sleep-speed*))
+                  (speed (* factor *physics-sleep-speed*))
                   (ball (add-physics-body world 0.0 1.0 0.0 :vx speed))
                   (slept nil))
              (dotimes (i 120)
@@ -2439,8 +2439,8 @@ use before it. #QKS4GZ"
 (define-claim "K1N3BX" box-pushes-awake-ball
     "A box walking at 1 m/s pushes an awake ball ahead, overlapping it by at most slop + 0.001 m."
   (let* ((w (make-floor-world :sleep nil))
-         (h (luv-physics::add-physics-body w 3.0 0.245 3.5)))
-    (dotimes (i 30) (luv-physics::step-physics-world w))
+         (h (add-physics-body w 3.0 0.245 3.5)))
+    (dotimes (i 30) (step-physics-world w))
     (multiple-value-bind (moved worst) (walk-box-into w h)
       (check (> moved 2.0) "the ball moved only ~,3F m" moved)
       (check (<= worst (+ (luv-physics::physics-world-slop w) 0.001))
@@ -2451,9 +2451,9 @@ use before it. #QKS4GZ"
 (define-claim "K1N3BX" box-pushes-sleeping-ball
     "A box walking at 1 m/s into a sleeping ball wakes it before overlapping it by more than slop + 0.001 m."
   (let* ((w (make-floor-world))
-         (h (luv-physics::add-physics-body w 3.0 0.245 3.5)))
-    (dotimes (i 90) (luv-physics::step-physics-world w))
-    (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+         (h (add-physics-body w 3.0 0.245 3.5)))
+    (dotimes (i 90) (step-physics-world w))
+    (check (not (physics-body-awake-p w h)) "the ball did not fall asleep")
     (multiple-value-bind (moved worst) (walk-box-into w h)
       (check (> moved 2.0) "the ball moved only ~,3F m" moved)
       (check (<= worst (+ (luv-physics::physics-world-slop w) 0.001))
@@ -2465,15 +2465,15 @@ use before it. #QKS4GZ"
     "A hard arrival at a box gives :hit (and :begin) events carrying the box's owner."
   (let* ((w (make-floor-world))
          (owner (list :wall 7))
-         (other (luv-physics::add-physics-body w 2.5 0.245 6.5 :vx 6.0))
-         (h (luv-physics::add-physics-body w 2.5 0.245 3.5 :vx 6.0))
+         (other (add-physics-body w 2.5 0.245 6.5 :vx 6.0))
+         (h (add-physics-body w 2.5 0.245 3.5 :vx 6.0))
          (hits '()) (begins '()) (other-hits '()))
     (check (= 1 (luv-physics::handle-index h)))
     (dotimes (i 30)
       (dotimes (k 19)
-        (luv-physics::post-physics-box w -10.0 0.5 (- (* 0.6 k) 12.0) 0.25 0.25 0.25 :owner (list :other k)))
-      (luv-physics::post-physics-box w 4.0 0.5 3.5 0.25 0.5 0.5 :owner owner)
-      (luv-physics::post-physics-box w 4.0 0.5 6.5 0.25 0.5 0.5)
+        (post-physics-box w -10.0 0.5 (- (* 0.6 k) 12.0) 0.25 0.25 0.25 :owner (list :other k)))
+      (post-physics-box w 4.0 0.5 3.5 0.25 0.5 0.5 :owner owner)
+      (post-physics-box w 4.0 0.5 6.5 0.25 0.5 0.5)
       (loop for (kind a b speed datum) in (step-events w)
             when (and (= a other) (eq kind :hit))
               do (push datum other-hits)
@@ -2494,18 +2494,18 @@ use before it. #QKS4GZ"
     (dolist (axis '(:hx :hy :hz))
       (dolist (bad '(0 1024))
         (let ((extents (mapcar (lambda (a) (if (eq a axis) bad 0.5)) '(:hx :hy :hz))))
-          (check (eq axis (handler-case (progn (apply #'luv-physics::post-physics-box w 3.5 3.0 3.5 extents) nil)
-                            (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+          (check (eq axis (handler-case (progn (apply #'post-physics-box w 3.5 3.0 3.5 extents) nil)
+                            (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
                  "~A = ~A was not refused by its name" axis bad))))
     (check (equal '(1.0 2.0 9999.0)
-                  (handler-case (progn (luv-physics::post-physics-box w 3.5 3.0 3.5 0.5 0.5 0.5 :vx 1 :vy 2 :vz 9999) nil)
-                    (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-value e))))
+                  (handler-case (progn (post-physics-box w 3.5 3.0 3.5 0.5 0.5 0.5 :vx 1 :vy 2 :vz 9999) nil)
+                    (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-value e))))
            "a box too fast is not refused with its velocity in order")
     (check (zerop (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))) "a refused box was posted")
-    (luv-physics::post-physics-box w 3.5 3.0 3.5 0.001 1023 0.5)
+    (post-physics-box w 3.5 3.0 3.5 0.001 1023 0.5)
     (check (= 1 (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
     (let ((owners (loop for k below 40 collect (list :box k))))
-      (dolist (o owners) (luv-physics::post-physics-box w (+ 1.5 (* 0.1 (second o))) 3.0 3.5 0.05 0.05 0.05 :owner o))
+      (dolist (o owners) (post-physics-box w (+ 1.5 (* 0.1 (second o))) 3.0 3.5 0.05 0.05 0.05 :owner o))
       (check (loop for o in owners for row from 1 always (eq o (svref (luv-physics::physics-world-box-owners w) row)))
              "forty boxes posted in one step do not each keep their owner"))))
 ;; K1N3BX-box-extents-checked ends here
@@ -2663,12 +2663,12 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sorted-rows-keep-handles]]
 (define-claim "G4R1D5" sorted-rows-keep-handles
     "After the grid phase sorts scrambled rows, each handle still names its own body."
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
+  (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
          (next (luv-physics::fixed-sequence 11))
          (bodies (loop for i below 300
                        collect (let ((x (* 4 (funcall next))) (y (* 4 (funcall next))) (z (* 4 (funcall next)))
                                      (r (+ 0.1 (* 0.15 (funcall next)))))
-                                 (list (luv-physics::add-physics-body w x y z :radius r) x y z r))))
+                                 (list (add-physics-body w x y z :radius r) x y z r))))
          (awake (luv-physics::physics-world-awake w))
          (grid (luv-physics::physics-world-awake-grid w)))
     (luv-physics::reset-phase w)
@@ -2678,14 +2678,14 @@ use before it. #QKS4GZ"
     (check (loop for e below 300 always (= e (aref (luv-physics::hash-grid-items grid) e)))
            "the rows are not in the grid's order")
     (check (loop for (h x y z r) in bodies
-                 always (and (equal (multiple-value-list (luv-physics::physics-body-position w h))
+                 always (and (equal (multiple-value-list (physics-body-position w h))
                                     (list (float x 1.0) (float y 1.0) (float z 1.0)))
-                             (= (float r 1.0) (luv-physics::physics-body-radius w h))))
+                             (= (float r 1.0) (physics-body-radius w h))))
            "a handle reads another body")
     (check (not (loop for row below 300
                       always (= (aref (luv-physics::body-columns-handle awake) row) (first (nth row bodies)))))
            "no row moved")
-    (check (eq t (luv-physics::validate-physics-world w)))))
+    (check (eq t (validate-physics-world w)))))
 ;; G4R1D5-sorted-rows-keep-handles ends here
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-sort-past-one-in-sixteen]]
@@ -2693,9 +2693,9 @@ use before it. #QKS4GZ"
     "240 rows with 15 breaks of the grid's order stay as added; with 16 they are sorted."
   (flet ((sorted-after-grid-phase (runs)
            (let* ((n 240)
-                  (w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
+                  (w (make-physics-world :gravity '(0 0 0) :sleep nil))
                   ;; the cell of a world of such balls: the grid's cell grows with the widest ball
-                  (cell (let ((one (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil)))
+                  (cell (let ((one (make-physics-world :gravity '(0 0 0) :sleep nil)))
                           (add-physics-body one 0.0 1.0 1.0 :radius 0.1)
                           (luv-physics::grid-cell-size one)))
                   ;; the rows of run c are those from (floor (* c n) runs); the runs lie along x last first
@@ -2760,8 +2760,8 @@ use before it. #QKS4GZ"
     (step-physics-world w)
     (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid holds ~D" (luv-physics::hash-grid-count settled))
     (let ((ball (add-physics-body w 4.0 0.5 4.0 :radius 0.25)))
-      (loop repeat 240 while (luv-physics::physics-body-awake-p w ball) do (step-physics-world w))
-      (check (not (luv-physics::physics-body-awake-p w ball)) "the ball did not fall asleep")
+      (loop repeat 240 while (physics-body-awake-p w ball) do (step-physics-world w))
+      (check (not (physics-body-awake-p w ball)) "the ball did not fall asleep")
       (step-physics-world w)
       (check (= 2000 (luv-physics::hash-grid-count settled)) "the settled grid was built again: ~D entries"
              (luv-physics::hash-grid-count settled))
@@ -2769,7 +2769,7 @@ use before it. #QKS4GZ"
       (check (= 0 (luv-physics::hash-grid-count fresh)) "the fresh grid holds ~D" (luv-physics::hash-grid-count fresh)))
     (let ((s (luv-physics::physics-world-sleeping w)))
       (dolist (h (loop for i below 1000 collect (aref (luv-physics::body-columns-handle s) i)))
-        (luv-physics::remove-physics-body w h))
+        (remove-physics-body w h))
       (step-physics-world w)
       (check (= 1001 (luv-physics::hash-grid-count settled)) "after the removals the settled grid holds ~D"
              (luv-physics::hash-grid-count settled))
@@ -2784,7 +2784,7 @@ use before it. #QKS4GZ"
                               (when (= e h) (incf seen)))
                             (= seen 1)))
              "a sleeper is met other than once around itself")
-      (check (eq t (luv-physics::validate-physics-world w))))))
+      (check (eq t (validate-physics-world w))))))
 ;; G4R1D5-sleeping-grids-stay-lean ends here
 
 ;; [[file:../physics.org::#G4R1D5][G4R1D5-dead-entries-counted-once]]
@@ -2794,10 +2794,10 @@ use before it. #QKS4GZ"
          (balls (loop for x in '(2.5 5.5 8.5 11.5) collect (add-physics-body w x 0.245 3.5)))
          (settled (luv-physics::physics-world-sleeping-grid w)))
     (flet ((settle ()
-             (loop repeat 400 while (some (lambda (h) (luv-physics::physics-body-awake-p w h)) balls)
+             (loop repeat 400 while (some (lambda (h) (physics-body-awake-p w h)) balls)
                    do (step-physics-world w))
              (step-physics-world w)
-             (check (notany (lambda (h) (luv-physics::physics-body-awake-p w h)) balls) "a ball stayed awake"))
+             (check (notany (lambda (h) (physics-body-awake-p w h)) balls) "a ball stayed awake"))
            (stale () (luv-physics::physics-world-settled-stale w)))
       (settle)
       (add-physics-body w 20.5 0.3 3.5 :radius 0.3)
@@ -2958,8 +2958,8 @@ use before it. #QKS4GZ"
                   (b (loop for (kind h) in (step-events spread)
                            when (eq kind :woke) collect (luv-physics::handle-index h))))
               (incf woken (length a))
-              (unless (or parted (and (equal a b) (= (luv-physics::physics-world-state-hash settled)
-                                                     (luv-physics::physics-world-state-hash spread))))
+              (unless (or parted (and (equal a b) (= (physics-world-state-hash settled)
+                                                     (physics-world-state-hash spread))))
                 (setf parted (list i a b)))))
           (check (>= woken 40) "the thrown ball woke only ~D sleepers" woken)
           (check (null parted) "on step ~D the settled pile woke ~S, the spread one ~S, or their hashes differ"
@@ -2980,33 +2980,33 @@ use before it. #QKS4GZ"
     "A box moving along one axis wakes a sleeper within margin + v dt, not beyond; a still box none."
   (flet ((woken-p (velocity gap-past-reach)
            (let* ((w (make-floor-world))
-                  (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
-             (loop repeat 300 while (luv-physics::physics-body-awake-p w h)
-                   do (luv-physics::step-physics-world w))
-             (check (not (luv-physics::physics-body-awake-p w h)) "the ball did not fall asleep")
+                  (h (add-physics-body w 3.5 0.245 3.5)))
+             (loop repeat 300 while (physics-body-awake-p w h)
+                   do (step-physics-world w))
+             (check (not (physics-body-awake-p w h)) "the ball did not fall asleep")
              (let* ((reach (+ (luv-physics::physics-world-margin w)
                               (* (/ 1.0 60) (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) velocity))))))
                     (gap (+ reach gap-past-reach)))
                (destructuring-bind (vx vy vz) velocity
-                 (luv-physics::post-physics-box w (+ 3.5 0.25 0.25 gap) 0.245 3.5 0.25 0.25 0.25
+                 (post-physics-box w (+ 3.5 0.25 0.25 gap) 0.245 3.5 0.25 0.25 0.25
                                                 :vx vx :vy vy :vz vz))
-               (luv-physics::step-physics-world w)
-               (luv-physics::physics-body-awake-p w h)))))
+               (step-physics-world w)
+               (physics-body-awake-p w h)))))
     (dolist (velocity '((1.0 0.0 0.0) (0.0 1.0 0.0) (0.0 0.0 1.0)))
       (check (woken-p velocity -0.01) "a box moving at ~S did not wake the ball within reach" velocity)
       (check (not (woken-p velocity 0.01)) "a box moving at ~S woke the ball beyond reach" velocity))
     (check (not (woken-p '(0.0 0.0 0.0) -0.04)) "a still box woke the ball"))
   (flet ((woken-by-ball-p (velocity gap-past-reach)
            (let* ((w (make-floor-world))
-                  (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
-             (loop repeat 300 while (luv-physics::physics-body-awake-p w h)
-                   do (luv-physics::step-physics-world w))
+                  (h (add-physics-body w 3.5 0.245 3.5)))
+             (loop repeat 300 while (physics-body-awake-p w h)
+                   do (step-physics-world w))
              (let* ((reach (+ 0.25 0.25 (luv-physics::physics-world-margin w)
                               (* (/ 1.0 60) (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) velocity)))))))
                (destructuring-bind (vx vy vz) velocity
-                 (luv-physics::add-physics-body w (- 3.5 reach gap-past-reach) 0.245 3.5 :vx vx :vy vy :vz vz))
-               (luv-physics::step-physics-world w)
-               (luv-physics::physics-body-awake-p w h)))))
+                 (add-physics-body w (- 3.5 reach gap-past-reach) 0.245 3.5 :vx vx :vy vy :vz vz))
+               (step-physics-world w)
+               (physics-body-awake-p w h)))))
     (dolist (velocity '((3.0 0.0 0.0) (0.0 0.0 3.0)))
       (check (woken-by-ball-p velocity -0.01) "a ball moving at ~S did not wake the ball within reach" velocity)
       (check (not (woken-by-ball-p velocity 0.01)) "a ball moving at ~S woke the ball beyond reach" velocity))))
@@ -3018,7 +3018,7 @@ use before it. #QKS4GZ"
   ;; binary fractions throughout, so that the distances equal the reaches exactly: a step of
   ;; 1/64 s, a margin of 1/8 m, radii of 1/4 m, speeds of 8 m/s
   (flet ((world-with-sleeper (x)
-           (let* ((w (let ((luv-physics::*physics-speculative-margin* 0.125))
+           (let* ((w (let ((*physics-speculative-margin* 0.125))
                        (make-physics-world :gravity '(0 0 0) :step-seconds 1/64)))
                   (h (add-physics-body w x 2.0 2.0 :radius 0.25)))
              ;; the step of 1/64 s, as step-physics-world sets it before its phases
@@ -3031,9 +3031,9 @@ use before it. #QKS4GZ"
       (multiple-value-bind (w h) (world-with-sleeper (+ 4.5 past))
         (post-physics-box w 3.75 2.0 2.0 0.25 0.25 0.25 :vx 8.0)
         (luv-physics::wake-phase w)
-        (check (eq (zerop past) (luv-physics::physics-body-awake-p w h))
+        (check (eq (zerop past) (physics-body-awake-p w h))
                "a sleeper ~F m past a moving box's reach is ~:[asleep~;awake~]" past
-               (luv-physics::physics-body-awake-p w h))))
+               (physics-body-awake-p w h))))
     ;; a ball at 8 m/s reaches its radius, the margin and a step's travel, and the sleeper's
     ;; radius: 3/4 m between centres is not within reach, a 128th of a metre less is
     (dolist (short '(0.0 0.0078125))
@@ -3041,18 +3041,18 @@ use before it. #QKS4GZ"
         (add-physics-body w (+ 3.25 short) 2.0 2.0 :radius 0.25 :vx 8.0)
         (setf (luv-physics::physics-world-added-count w) 0)
         (luv-physics::wake-phase w)
-        (check (eq (plusp short) (luv-physics::physics-body-awake-p w h))
+        (check (eq (plusp short) (physics-body-awake-p w h))
                "a sleeper ~F m within a fast ball's reach is ~:[asleep~;awake~]" short
-               (luv-physics::physics-body-awake-p w h))))
+               (physics-body-awake-p w h))))
     ;; a ball added at rest wakes a sleeper it overlaps by more than the slop, not by less
-    (let ((slop luv-physics::*physics-linear-slop*))
+    (let ((slop *physics-linear-slop*))
       (dolist (overlap (list (- slop 0.001) (+ slop 0.001)))
         (multiple-value-bind (w h) (world-with-sleeper 4.0)
           (add-physics-body w (- 4.0 (- 0.5 overlap)) 2.0 2.0 :radius 0.25)
           (luv-physics::wake-phase w)
-          (check (eq (> overlap slop) (luv-physics::physics-body-awake-p w h))
+          (check (eq (> overlap slop) (physics-body-awake-p w h))
                  "an added ball overlapping a sleeper by ~,4F m leaves it ~:[asleep~;awake~]" overlap
-                 (luv-physics::physics-body-awake-p w h)))))))
+                 (physics-body-awake-p w h)))))))
 ;; W4K3PH-wake-reach-at-the-limit ends here
 
 ;; [[file:../physics.org::#W4K3PH][W4K3PH-long-box-wakes-at-its-ends]]
@@ -3067,7 +3067,7 @@ use before it. #QKS4GZ"
         (destructuring-bind (hx hy hz) (loop for k below 3 collect (if (= k axis) 2.0 0.25))
           (post-physics-box w x y z hx hy hz :vx 0.0 :vy 0.0 :vz -1.0)))
       (check (= 1 (luv-physics::wake-phase w)) "along ~C the box woke ~D" (char "xyz" axis) 0)
-      (check (luv-physics::physics-body-awake-p w h) "along ~C the sleeper by the box's end slept on" (char "xyz" axis)))))
+      (check (physics-body-awake-p w h) "along ~C the sleeper by the box's end slept on" (char "xyz" axis)))))
 ;; W4K3PH-long-box-wakes-at-its-ends ends here
 
 ;; [[file:../physics.org::#W4K3PH][W4K3PH-quiet-wake-bounded]]
@@ -3112,7 +3112,7 @@ use before it. #QKS4GZ"
                   (woken-at nil))
              (dotimes (i 40) (step-physics-world world))
              (check (not (physics-body-awake-p world sleeper)) "the sleeper did not fall asleep")
-             (let ((mover (add-physics-body world -0.8 1.0 0.0 :vx (* factor luv-physics::*physics-wake-speed*))))
+             (let ((mover (add-physics-body world -0.8 1.0 0.0 :vx (* factor *physics-wake-speed*))))
                (dotimes (i 360)
                  (step-physics-world world)
                  (when (and (null woken-at) (physics-body-awake-p world sleeper))
@@ -3124,7 +3124,7 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
 (define-claim "P41RS7" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
-  (let* ((w (luv-physics::make-basin-world 300))
+  (let* ((w (make-basin-world 300))
          (table (luv-physics::physics-world-contact-table w))
          (plist (luv-physics::physics-world-pair-list w))
          (builds-at-start 0) (builds 0) (grids-kept 0) (checked 0) (missing 0) (stale 0) (struck 0) (step 0))
@@ -3182,7 +3182,7 @@ use before it. #QKS4GZ"
                                     (cond ((and (< sep (- spec 1d-4)) (not found)) (incf missing))
                                           ((and (> sep (+ spec 1d-4)) found) (incf stale)))))))))))
              world))
-      (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::pair-phase #'check-pairs)))
+      (let ((*physics-phases* (phases-checked-after 'luv-physics::pair-phase #'check-pairs)))
         (dotimes (i 360)
           (setf step i)
           (when (= i 0) (setf builds-at-start (luv-physics::pair-list-builds plist)))
@@ -3190,10 +3190,10 @@ use before it. #QKS4GZ"
           (when (and (> i 240) (zerop (mod i 5)))
             ;; churn: one ball out, a new one in
             (let ((a (luv-physics::physics-world-awake w)))
-              (luv-physics::remove-physics-body
+              (remove-physics-body
                w (aref (luv-physics::body-columns-handle a) (mod (* i 37) (luv-physics::body-columns-length a))))
-              (luv-physics::add-physics-body w (+ 2.0 (* 0.01 (mod i 400))) 4.0 4.0 :radius 0.25)))
-          (luv-physics::step-physics-world w)
+              (add-physics-body w (+ 2.0 (* 0.01 (mod i 400))) 4.0 4.0 :radius 0.25)))
+          (step-physics-world w)
           (when (and (< i 240) (/= (luv-physics::physics-world-awake-grid-step w)
                                    (luv-physics::contact-table-step table)))
             (incf grids-kept)))))
@@ -3210,7 +3210,7 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#P41RS7][P41RS7-grid-between-builds-is-not-kept]]
 (define-claim "P41RS7" grid-between-builds-is-not-kept
     "After a grid built between list builds, a loose ball still meets a ball that came back to its anchor."
-  (let* ((w (make-physics-world :terrain (luv-physics::make-basin-terrain)))
+  (let* ((w (make-physics-world :terrain (make-basin-terrain)))
          (balls (loop for k below 12 collect (add-physics-body w 1.0 0.25 (+ 0.5 (* 0.6 k)) :radius 0.25)))
          (j (first balls))
          (plist (luv-physics::physics-world-pair-list w))
@@ -3262,7 +3262,7 @@ use before it. #QKS4GZ"
           (check (> len 0.45) "the centres are only ~,3F m apart" len)
           (check (> (/ (reduce #'+ (mapcar #'* d dir)) len) 0.999)
                  "they separated along ~S, not their pair's direction ~S" d dir))))
-    (check (<= fastest (+ luv-physics::*physics-contact-push-max* 0.01))
+    (check (<= fastest (+ *physics-contact-push-max* 0.01))
            "they parted at ~,3F m/s" fastest)))
 ;; P41RS7-coincident-pair-separates ends here
 
@@ -3270,7 +3270,7 @@ use before it. #QKS4GZ"
 (define-claim "P41RS7" crowded-walk-is-bounded
     "The pair list's build in a heap of 3000 at one point lists at most 100 candidates a body."
   (let* ((n 3000)
-         (world (make-physics-world :terrain (luv-physics::make-basin-terrain) :gravity '(0 0 0)))
+         (world (make-physics-world :terrain (make-basin-terrain) :gravity '(0 0 0)))
          (plist (luv-physics::physics-world-pair-list world)))
     (dotimes (i n) (add-physics-body world 4.0 2.0 4.0 :radius 0.25))
     (step-physics-world world)
@@ -3392,7 +3392,7 @@ use before it. #QKS4GZ"
                    (setf normal (list (luv-physics::contact@ g row nx) (luv-physics::contact@ g row ny)
                                       (luv-physics::contact@ g row nz))))))
              world))
-      (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::pair-phase #'read-normal)))
+      (let ((*physics-phases* (phases-checked-after 'luv-physics::pair-phase #'read-normal)))
         (step-physics-world w)))
     ;; |(2r + gap - speed t, speed t)| = 2r at the smaller root, in double precision
     (let* ((d0 (+ r r gap)) (reach (* 2d0 r)) (s (coerce speed 'double-float))
@@ -3441,7 +3441,7 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#P41RS7][P41RS7-overlaps-charged-to-the-smaller]]
 (define-claim "P41RS7" overlaps-charged-to-the-smaller
     "After each of two steps, a row's overlap count is the overlapping pairs in which it is the smaller ball."
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0) :sleep nil))
+  (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
          (balls (append '((2.0 2.0 2.0 0.5))
                         (loop for (dx dy dz) in '((0.7 0 0) (-0.7 0 0) (0 0.7 0) (0 -0.7 0) (0 0 0.7) (0 0 -0.7))
                               collect (list (+ 2.0 dx) (+ 2.0 dy) (+ 2.0 dz) 0.25))
@@ -3536,13 +3536,13 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
 (define-claim "MYWH16" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
-  (let* ((w (luv-physics::make-basin-world 300))
+  (let* ((w (make-basin-world 300))
          (terrain (luv-physics::physics-world-terrain w))
          (plist (luv-physics::physics-world-pair-list w))
          (table (luv-physics::physics-world-contact-table w))
          (margin (luv-physics::physics-world-margin w))
          (wrong 0) (skipped 0) (rows 0) (checked-steps 0))
-    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (dotimes (i 60) (step-physics-world w))
     (flet ((check-clear (world)
              (when (and (= (luv-physics::pair-list-step plist) (luv-physics::contact-table-step table))
                         (/= (luv-physics::pair-list-built-step plist) (luv-physics::contact-table-step table)))
@@ -3559,11 +3559,11 @@ use before it. #QKS4GZ"
                        (loop for ix from (floor (- cx reach)) to (floor (+ cx reach))
                              do (loop for iy from (floor (- cy reach)) to (floor (+ cy reach))
                                       do (loop for iz from (floor (- cz reach)) to (floor (+ cz reach))
-                                               when (luv-physics::terrain-solid-p terrain ix iy iz)
+                                               when (terrain-solid-p terrain ix iy iz)
                                                  do (incf wrong)))))))))
              world))
-      (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::pair-phase #'check-clear)))
-        (dotimes (i 60) (luv-physics::step-physics-world w))))
+      (let ((*physics-phases* (phases-checked-after 'luv-physics::pair-phase #'check-clear)))
+        (dotimes (i 60) (step-physics-world w))))
     (check (> checked-steps 30) "only ~D steps reused the list" checked-steps)
     (check (zerop wrong) "~D solid cells lay in reach of skipped rows" wrong)
     (check (> skipped (* 0.2 rows)) "only ~D of ~D rows were skipped" skipped rows)
@@ -3579,8 +3579,8 @@ use before it. #QKS4GZ"
            (cy (floor (- (aref (luv-physics::body-columns-y a) i) 0.2)))
            (cz (floor (aref (luv-physics::body-columns-z a) i)))
            (key (luv-physics::terrain-key (luv-physics::handle-index h) cx cy cz)))
-      (setf (luv-physics::terrain-solid-p terrain cx cy cz) t)
-      (luv-physics::step-physics-world w)
+      (setf (terrain-solid-p terrain cx cy cz) t)
+      (step-physics-world w)
       (check (>= (luv-physics::contact-table-find table key) 0)
              "the ball over the new cell ~D ~D ~D has no contact with it" cx cy cz))))
 ;; MYWH16-clear-rows-skip-safely ends here
@@ -3600,7 +3600,7 @@ use before it. #QKS4GZ"
                            collect (cons (aref (luv-physics::body-columns-handle a) i)
                                          (aref (luv-physics::pair-list-clear plist) i)))))
              world))
-      (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::terrain-phase #'note-clear)))
+      (let ((*physics-phases* (phases-checked-after 'luv-physics::terrain-phase #'note-clear)))
         (step-physics-world w)))
     (check (eql 1 (cdr (assoc high noted))) "the ball 2 m up is not noted clear: ~S" noted)
     (check (eql 0 (cdr (assoc low noted))) "the ball a skin's width from reach of the floor is noted clear: ~S" noted)))
@@ -3611,19 +3611,19 @@ use before it. #QKS4GZ"
     "A ball rolling at 3 m/s over six seams stays within 0.005 m of rest height and keeps 99% of its speed."
   (let* ((w (make-floor-world :sleep nil))
          (r 0.25) (vx 3.0)
-         (h (luv-physics::add-physics-body w 0.5 (- r 0.005) 0.5 :radius r :vx vx :rolling-resistance 0.0))
+         (h (add-physics-body w 0.5 (- r 0.005) 0.5 :radius r :vx vx :rolling-resistance 0.0))
          (rest (- r (luv-physics::physics-world-slop w)))
          (highest 0.0))
     (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
       (declare (ignore set))
       (setf (aref (luv-physics::body-columns-wz (luv-physics::physics-world-awake w)) row) (/ (- vx) r)))
     (dotimes (i 120)
-      (luv-physics::step-physics-world w)
+      (step-physics-world w)
       (setf highest (max highest (- (body-y w h) rest))))
-    (multiple-value-bind (x) (luv-physics::physics-body-position w h)
+    (multiple-value-bind (x) (physics-body-position w h)
       (check (> x 6.0) "the ball crossed only ~D seams (x = ~,3F)" (- (floor x) 0) x))
     (check (<= highest 0.005) "the ball rose ~,5F m above rest" highest)
-    (multiple-value-bind (ux uy uz) (luv-physics::physics-body-velocity w h)
+    (multiple-value-bind (ux uy uz) (physics-body-velocity w h)
       (declare (ignore uy))
       (check (>= (sqrt (+ (* ux ux) (* uz uz))) (* 0.99 vx)) "speed after the seams ~,4F m/s" (sqrt (+ (* ux ux) (* uz uz)))))))
 ;; MYWH16-seams-are-flat ends here
@@ -3633,11 +3633,11 @@ use before it. #QKS4GZ"
     "Contacts on a flat floor: 1 mid-cell, 1 just past a seam, 2 on a seam, 4 on a corner; all vertical."
   (loop for (x z expected) in '((3.5 3.5 1) (3.1 3.5 1) (3.5 2.9 1) (3.0 3.5 2) (3.5 3.0 2) (3.0 3.0 4))
         do (let* ((w (make-floor-world :sleep nil))
-                  (h (luv-physics::add-physics-body w x 0.3 z)))
-             (dotimes (i 60) (luv-physics::step-physics-world w))
+                  (h (add-physics-body w x 0.3 z)))
+             (dotimes (i 60) (step-physics-world w))
              (let ((contacts (terrain-contacts w h)))
                (check (= expected (length contacts)) "at (~A, ~A): ~D contacts, expected ~D" x z (length contacts) expected)
-               (check (= expected (luv-physics::physics-world-last-step-contact-count w)))
+               (check (= expected (physics-world-last-step-contact-count w)))
                (check (every (lambda (c) (and (< (abs (getf c :nx)) 1e-6) (< (abs (getf c :nz)) 1e-6) (< (abs (+ 1 (getf c :ny))) 1e-6))) contacts)
                       "at (~A, ~A) a normal is not vertical: ~S" x z contacts)
                (check (< (abs (- (body-y w h) 0.245)) 0.002) "at (~A, ~A) the ball rests at ~,5F" x z (body-y w h))))))
@@ -3681,26 +3681,26 @@ use before it. #QKS4GZ"
     "Rolling off a one-cell ledge, the edge contact tilts diagonal while pushing; the ball lands below."
   (multiple-value-bind (w terrain) (make-floor-world :sleep nil)
     ;; the floor top is at y = 0 for x < 5 and at y = -1 for x >= 5
-    (luv-physics::fill-terrain terrain 5 -1 -16 32 0 32 nil)
-    (luv-physics::fill-terrain terrain -16 -2 -16 32 -1 32 t)
+    (fill-terrain terrain 5 -1 -16 32 0 32 nil)
+    (fill-terrain terrain -16 -2 -16 32 -1 32 t)
     (let* ((v 0.5) (r 0.25)
-           (h (luv-physics::add-physics-body w 4.6 0.245 3.5 :radius r :vx v))
+           (h (add-physics-body w 4.6 0.245 3.5 :radius r :vx v))
            (key (luv-physics::terrain-key (luv-physics::handle-index h) 4 -1 3))
            (diagonal nil))
       (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
         (declare (ignore set))
         (setf (aref (luv-physics::body-columns-wz (luv-physics::physics-world-awake w)) row) (/ (- v) r)))
       (dotimes (i 180)
-        (luv-physics::step-physics-world w)
+        (step-physics-world w)
         (let ((row (luv-physics::contact-table-find (luv-physics::physics-world-contact-table w) key))
               (c (luv-physics::physics-world-contacts w)))
-          (when (and (> (luv-physics::physics-body-position w h) 5.05) (>= row 0)
+          (when (and (> (physics-body-position w h) 5.05) (>= row 0)
                      (= 1 (aref (luv-physics::contact-columns-touching c) row))
                      (> (abs (luv-physics::contact@ (luv-physics::contact-columns-geometry c) row nx)) 0.3)
                      (> (abs (luv-physics::contact@ (luv-physics::contact-columns-geometry c) row ny)) 0.3))
             (setf diagonal t))))
       (check (eq t diagonal) "no pushing diagonal edge contact once past the edge")
-      (check (> (luv-physics::physics-body-position w h) 5.25))
+      (check (> (physics-body-position w h) 5.25))
       (check (< (abs (- (body-y w h) -0.755)) 0.002) "the ball ends at y = ~,5F" (body-y w h)))))
 ;; MYWH16-rolls-over-ledge ends here
 
@@ -3713,15 +3713,15 @@ use before it. #QKS4GZ"
                 (every #'= '(0.0 -1.0 0.0) (list (getf (first contacts) :nx) (getf (first contacts) :ny)
                                                  (getf (first contacts) :nz))))
            "the floor contacts are ~S" contacts))
-  (dotimes (i steps) (luv-physics::step-physics-world w))
-  (check (< (abs (- (body-y w h) (- 0.25 luv-physics::*physics-linear-slop*))) 0.002)
+  (dotimes (i steps) (step-physics-world w))
+  (check (< (abs (- (body-y w h) (- 0.25 *physics-linear-slop*))) 0.002)
          "the ball rests at y = ~,5F" (body-y w h)))
 
 (define-claim "MYWH16" centre-on-the-face-is-inside
     "A ball centred exactly on the floor's top face is pushed up and comes to rest at r - slop."
   (let* ((w (make-floor-world :sleep nil))
-         (h (luv-physics::add-physics-body w 3.5 0.0 3.5)))
-    (luv-physics::step-physics-world w)
+         (h (add-physics-body w 3.5 0.0 3.5)))
+    (step-physics-world w)
     (check (> (body-y w h) 0.0) "after one step the centre is at y = ~,5F" (body-y w h))
     (check-pushed-up-to-rest w h 59)))
 ;; MYWH16-centre-on-the-face-is-inside ends here
@@ -3730,9 +3730,9 @@ use before it. #QKS4GZ"
 (define-claim "MYWH16" inside-leaves-through-open-face
     "A ball centred in a floor cell, nearest a face into floor, leaves through the air above, a block beside that air."
   (multiple-value-bind (w terrain) (make-floor-world :sleep nil)
-    (setf (luv-physics::terrain-solid-p terrain 6 0 5) t (luv-physics::terrain-solid-p terrain 5 0 6) t)
-    (let ((h (luv-physics::add-physics-body w 5.1 -0.4 5.5 :radius 0.25 :inside-cells :push-out)))
-      (luv-physics::step-physics-world w)
+    (setf (terrain-solid-p terrain 6 0 5) t (terrain-solid-p terrain 5 0 6) t)
+    (let ((h (add-physics-body w 5.1 -0.4 5.5 :radius 0.25 :inside-cells :push-out)))
+      (step-physics-world w)
       (check-pushed-up-to-rest w h 60))))
 ;; MYWH16-inside-leaves-through-open-face ends here
 
@@ -3748,7 +3748,7 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#MYWH16][MYWH16-fast-landings-flat]]
 (define-claim "MYWH16" fast-landings-flat
     "Balls landing on a slab at 30 and 45 degrees at 5 to 20 m/s, at every place across a seam, along each axis and side, sink no more than 1 mm."
-  (let ((rest (- 0.25 luv-physics::*physics-linear-slop*)))
+  (let ((rest (- 0.25 *physics-linear-slop*)))
     (flet ((sink (normal along sign angle speed offsets)
              ;; NORMAL, the axis the slab faces along (its face at 0, solid below); ALONG, the
              ;; axis of the seams crossed, in the direction SIGN: the deepest the ball gets
@@ -3786,7 +3786,7 @@ use before it. #QKS4GZ"
 (define-claim "MYWH16" contacts-on-every-side
     "A face, an edge, a corner and a ledge met along x are met the same along z, mirrored and a chunk away."
   (flet ((final (record) (twin-final-position record))
-         (rest-y (y) (< (abs (- y (- 0.25 luv-physics::*physics-linear-slop*))) 0.002)))
+         (rest-y (y) (< (abs (- y (- 0.25 *physics-linear-slop*))) 0.002)))
     (let ((face (check-twins "face" (lambda (twin)
                                       (twin-scene-world twin '((6 0 3 8 2 6 t))
                                                         '((4.5 0.245 4.5 :vx 3.0 :restitution 0.5))))
@@ -3951,8 +3951,8 @@ use before it. #QKS4GZ"
                   (h (add-physics-body w 7.99 0.27 4.5 :vx (float (* speed (cos angle)) 1.0)
                                                         :vy (float (- (* speed (sin angle))) 1.0))))
              ;; the step up to the prune phase: the contacts it found
-             (let ((luv-physics:*physics-phases* (ldiff luv-physics:*physics-phases*
-                                                        (member 'luv-physics::prune-phase luv-physics:*physics-phases*))))
+             (let ((*physics-phases* (ldiff *physics-phases*
+                                                        (member 'luv-physics::prune-phase *physics-phases*))))
                (step-physics-world w))
              (let ((found (>= (luv-physics::contact-table-find (luv-physics::physics-world-contact-table w)
                                                                (luv-physics::terrain-key (luv-physics::handle-index h) 8 -1 4))
@@ -3966,12 +3966,12 @@ use before it. #QKS4GZ"
     "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
   (flet ((box-contact (centre half shift)
            (let* ((w (make-floor-world :gravity '(0 0 0)))
-                  (h (luv-physics::add-physics-body w (+ 3.5 shift) (+ 3.0 shift) (+ 3.5 shift)))
+                  (h (add-physics-body w (+ 3.5 shift) (+ 3.0 shift) (+ 3.5 shift)))
                   (c (luv-physics::physics-world-contacts w)))
              (destructuring-bind (x y z) centre
                (destructuring-bind (hx hy hz) half
-                 (luv-physics::post-physics-box w (+ x shift) (+ y shift) (+ z shift) hx hy hz :owner :probe)))
-             (luv-physics::step-physics-world w)
+                 (post-physics-box w (+ x shift) (+ y shift) (+ z shift) hx hy hz :owner :probe)))
+             (step-physics-world w)
              (loop for row below (luv-physics::contact-columns-length c)
                    when (and (= (aref (luv-physics::contact-columns-handle-a c) row) h)
                              (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-box+))
@@ -4030,7 +4030,7 @@ use before it. #QKS4GZ"
                    thereis (and (= (aref (luv-physics::contact-columns-handle-a (luv-physics::physics-world-contacts w)) row) h)
                                 (= (aref (luv-physics::contact-columns-kind (luv-physics::physics-world-contacts w)) row)
                                    luv-physics::+contact-box+))))))
-    (let ((margin luv-physics::*physics-speculative-margin*) (limit luv-physics::*physics-reach-limit*))
+    (let ((margin *physics-speculative-margin*) (limit *physics-reach-limit*))
       ;; at rest: the margin
       (check (box-contact-p (- margin 0.01) '(0 0 0) '(0 0 0)) "a ball 1 cm inside the margin has no box contact")
       (check (not (box-contact-p (+ margin 0.01) '(0 0 0) '(0 0 0))) "a ball 1 cm past the margin has a box contact")
@@ -4091,10 +4091,10 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#PRUN3D][PRUN3D-reorder-keeps-contacts]]
 (define-claim "PRUN3D" reorder-keeps-contacts
     "A reordering prune keeps every contact found, unchanged, in found order, and the table consistent."
-  (let* ((w (luv-physics::make-basin-world 200))
+  (let* ((w (make-basin-world 200))
          (c (luv-physics::physics-world-contacts w))
          (table (luv-physics::physics-world-contact-table w)))
-    (dotimes (i 90) (luv-physics::step-physics-world w))
+    (dotimes (i 90) (step-physics-world w))
     (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
                      luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase))
       (funcall phase w))
@@ -4107,7 +4107,7 @@ use before it. #QKS4GZ"
                    (loop for k below (length luv-physics::+contact-fields+)
                          collect (aref (luv-physics::contact-columns-geometry c)
                                        (+ (luv-physics::geometry-start row) k))))))
-      (let* ((step (luv-physics::physics-world-step-count w))
+      (let* ((step (physics-world-step-count w))
              (before (loop for row below (luv-physics::contact-columns-length c)
                            when (= (aref (luv-physics::contact-columns-seen c) row) step)
                              collect (list (aref (luv-physics::contact-columns-order c) row)
@@ -4124,13 +4124,13 @@ use before it. #QKS4GZ"
                                  (= place (luv-physics::contact-table-find table key))
                                  (equal contents (row-contents place))))
                "a contact moved elsewhere than the place it was found at, or changed")
-        (check (eq t (luv-physics::validate-physics-world w)))))))
+        (check (eq t (validate-physics-world w)))))))
 ;; PRUN3D-reorder-keeps-contacts ends here
 
 ;; [[file:../physics.org::#PRUN3D][PRUN3D-scratch-keeps-up]]
 (define-claim "PRUN3D" scratch-keeps-up
     "After each step of a landing pile the reordering's scratch has the contact buffer's room; a later reordering conses nothing."
-  (let* ((w (luv-physics::make-basin-world 200)) (grew 0) (last 0)
+  (let* ((w (make-basin-world 200)) (grew 0) (last 0)
          (table (luv-physics::physics-world-contact-table w)))
     (flet ((rooms () (values (luv-physics::contact-columns-capacity (luv-physics::physics-world-contacts w))
                              (luv-physics::contact-columns-capacity (luv-physics::physics-world-contact-scratch w)))))
@@ -4183,7 +4183,7 @@ use before it. #QKS4GZ"
     (dotimes (i 2) (add-physics-body w (+ 1.5 (* 2.0 i)) 0.245 3.5 :collide-with-bodies nil))
     (dotimes (i 5) (step-physics-world w))
     (check (= 2 (luv-physics::contact-columns-length c)))
-    (luv-physics::remove-physics-body w (aref (luv-physics::contact-columns-handle-a c) 1))
+    (remove-physics-body w (aref (luv-physics::contact-columns-handle-a c) 1))
     (step-physics-world w)
     (check (= 1 (luv-physics::contact-columns-length c) (luv-physics::contact-table-count table))
            "~D rows and ~D keys" (luv-physics::contact-columns-length c) (luv-physics::contact-table-count table))
@@ -4193,11 +4193,11 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
 (define-claim "SSMPYW" colours-disjoint
     "In a 300-ball pile no colour below 24 holds two constraints on the same awake body."
-  (let ((w (luv-physics::make-basin-world 300)))
-    (dotimes (i 60) (luv-physics::step-physics-world w))
+  (let ((w (make-basin-world 300)))
+    (dotimes (i 60) (step-physics-world w))
     (let* ((cbuf (luv-physics::physics-world-constraints w))
            (starts (luv-physics::physics-world-color-starts w))
-           (dummy (luv-physics::physics-world-awake-count w))
+           (dummy (physics-world-awake-count w))
            (clashes 0) (two-sided-high 0))
       (check (> (luv-physics::constraint-columns-length cbuf) 300))
       (dotimes (c luv-physics::+physics-max-colors+)
@@ -4242,11 +4242,11 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-one-sided-late-among-used]]
 (define-claim "SSMPYW" one-sided-late-among-used
     "A body's one-sided colours are the highest used colours it leaves free, then those above."
-  (let ((w (luv-physics::make-basin-world 300)))
-    (dotimes (i 60) (luv-physics::step-physics-world w))
+  (let ((w (make-basin-world 300)))
+    (dotimes (i 60) (step-physics-world w))
     (let* ((cbuf (luv-physics::physics-world-constraints w))
            (starts (luv-physics::physics-world-color-starts w))
-           (dummy (luv-physics::physics-world-awake-count w))
+           (dummy (physics-world-awake-count w))
            (one-sided (make-hash-table)) (two-body (make-hash-table))
            (top -1) (bad '()) (bodies 0))
       (dotimes (c luv-physics::+physics-max-colors+)
@@ -4276,32 +4276,32 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-big-pile-colours]]
 (define-claim "SSMPYW" big-pile-colours
     "3000 awake balls after 200 steps: <= 12 colours, nothing in overflow."
-  (let ((w (luv-physics::make-basin-world 3000 :sleep nil))
+  (let ((w (make-basin-world 3000 :sleep nil))
         (most-colours 0) (most-overflow 0))
     (dotimes (i 200)
-      (luv-physics::step-physics-world w)
+      (step-physics-world w)
       (when (>= i 100)
-        (setf most-colours (max most-colours (luv-physics::physics-world-last-step-color-count w))
-              most-overflow (max most-overflow (luv-physics::physics-world-overflow-count w)))))
-    (check (= 3000 (luv-physics::physics-world-awake-count w)))
-    (check (<= (luv-physics::physics-world-last-step-color-count w) 12)
+        (setf most-colours (max most-colours (physics-world-last-step-color-count w))
+              most-overflow (max most-overflow (physics-world-overflow-count w)))))
+    (check (= 3000 (physics-world-awake-count w)))
+    (check (<= (physics-world-last-step-color-count w) 12)
            "step 200 used ~D colours (most over steps 100-200: ~D)"
-           (luv-physics::physics-world-last-step-color-count w) most-colours)
-    (check (= 0 (luv-physics::physics-world-overflow-count w))
+           (physics-world-last-step-color-count w) most-colours)
+    (check (= 0 (physics-world-overflow-count w))
            "~D constraints overflowed at step 200 (most over steps 100-200: ~D)"
-           (luv-physics::physics-world-overflow-count w) most-overflow)))
+           (physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
 
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-side-zero-where-unread]]
 (define-claim "SSMPYW" side-zero-where-unread
     "Spin columns are zero where rb is not, armed speeds where restitution is zero: after every prepare and substep phase."
   (dolist (family (available-kernel-families))
-    (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels family))
+    (let ((w (make-physics-world :terrain (make-basin-terrain) :kernels family))
           (next (luv-physics::fixed-sequence 4242))
           (checked 0) (wrong 0) (limits 0) (impulses 0) (still 0))
       (dotimes (i 300)
         (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
-          (luv-physics::add-physics-body w x y z :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (funcall next))
+          (add-physics-body w x y z :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (funcall next))
                                                  :friction (+ 0.3 (* 0.6 (funcall next)))
                                                  :restitution (if (evenp i) 0.0 (* 0.5 (funcall next)))
                                                  :rolling-resistance (* 0.05 (funcall next)))))
@@ -4320,9 +4320,9 @@ use before it. #QKS4GZ"
                     (unless (= (funcall column 'armed-speed) 0.0) (incf wrong))))
                 world)
                world))
-        (let ((luv-physics::*physics-phases*
+        (let ((*physics-phases*
                 (phases-checked-after 'luv-physics::substep-phase #'side-check)))
-          (let ((luv-physics::*physics-phases* (phases-checked-after 'luv-physics::prepare-phase #'side-check)))
+          (let ((*physics-phases* (phases-checked-after 'luv-physics::prepare-phase #'side-check)))
             (dotimes (i 150) (step-physics-world w)))))
       (check (> checked 20000) "~A: only ~D rows checked" family checked)
       (check (> limits 1000) "~A: only ~D rows with a spin limit" family limits)
@@ -4340,7 +4340,7 @@ use before it. #QKS4GZ"
     (add-physics-body w 2.5 0.245 2.5 :radius 0.25)
     (add-physics-body w 2.99 0.245 2.5 :radius 0.25)
     (step-physics-world w)
-    (let ((dummy (luv-physics::physics-world-awake-count w)) (seen '()))
+    (let ((dummy (physics-world-awake-count w)) (seen '()))
       (dotimes (c (1+ luv-physics::+physics-max-colors+))
         (loop for k from (aref starts c) below (aref starts (1+ c))
               when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
@@ -4411,10 +4411,10 @@ use before it. #QKS4GZ"
       (step-physics-world world)
       (check (braced-p) "with its floor contact unloaded the still light ball was unbraced")
       (loop for (vx vy vz) in '((0.1 0.0 0.0) (0.0 0.1 0.0) (0.0 0.0 0.1))
-            do (luv-physics::set-physics-body-velocity world light vx vy vz)
+            do (set-physics-body-velocity world light vx vy vz)
                (step-physics-world world)
                (check (not (braced-p)) "the light ball moving at ~S m/s stayed braced" (list vx vy vz))
-               (luv-physics::set-physics-body-velocity world light 0.0 0.0 0.0)
+               (set-physics-body-velocity world light 0.0 0.0 0.0)
                (dotimes (i 30) (step-physics-world world))
                (check (braced-p) "stopped after moving at ~S m/s, the light ball is not braced" (list vx vy vz))))))
 ;; PR3PAR-bracing-holds-while-still ends here
@@ -4442,7 +4442,7 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-only-columns-link]]
 (define-claim "PR3PAR" only-columns-link
     "A ball straight on one braced ball is a link; one on two balls is none."
-  (let* ((world (make-physics-world :terrain (luv-physics::make-basin-terrain) :sleep nil))
+  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil))
          (lower (add-physics-body world 1.5 0.25 1.5 :radius 0.25 :mass 1.0))
          (upper (add-physics-body world 1.5 0.75 1.5 :radius 0.25 :mass 1.0))
          (left (add-physics-body world 4.75 0.25 4.0 :radius 0.25 :mass 1.0))
@@ -4462,10 +4462,10 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-unloaded-contact-no-support]]
 (define-claim "PR3PAR" unloaded-contact-no-support
     "A column of two balls a centimetre from a wall: the wall's contact pushes nothing, and the upper ball is a link."
-  (let ((terrain (luv-physics::make-voxel-terrain)))
-    (luv-physics::fill-terrain terrain -16 -1 -16 16 32 16 nil)
-    (luv-physics::fill-terrain terrain -16 -1 -16 16 0 16 t)
-    (luv-physics::fill-terrain terrain -1 0 -4 0 3 4 t)
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 -1 -16 16 32 16 nil)
+    (fill-terrain terrain -16 -1 -16 16 0 16 t)
+    (fill-terrain terrain -1 0 -4 0 3 4 t)
     (let* ((world (make-physics-world :terrain terrain :sleep nil))
            (lower (add-physics-body world 0.26 0.25 0.5 :radius 0.25 :mass 1.0))
            (upper (add-physics-body world 0.26 0.75 0.5 :radius 0.25 :mass 1.0)))
@@ -4494,11 +4494,11 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-leaning-pair-makes-no-link]]
 (define-claim "PR3PAR" leaning-pair-makes-no-link
     "Two balls leaning on each other, each straight on a floor ball, are no links."
-  (let ((terrain (luv-physics::make-voxel-terrain)) (r 0.24))
-    (luv-physics::fill-terrain terrain -16 -1 -16 16 32 16 nil)
-    (luv-physics::fill-terrain terrain -16 -1 -16 16 0 16 t)
-    (luv-physics::fill-terrain terrain -1 0 -4 0 3 4 t)
-    (luv-physics::fill-terrain terrain 1 0 -4 2 3 4 t)
+  (let ((terrain (make-voxel-terrain)) (r 0.24))
+    (fill-terrain terrain -16 -1 -16 16 32 16 nil)
+    (fill-terrain terrain -16 -1 -16 16 0 16 t)
+    (fill-terrain terrain -1 0 -4 0 3 4 t)
+    (fill-terrain terrain 1 0 -4 2 3 4 t)
     (let* ((world (make-physics-world :terrain terrain :sleep nil))
            ;; each top ball 2 cm nearer the trench's middle than the floor ball under it
            (h (+ r (sqrt (- (expt (* 2 r) 2) (expt 0.02 2)))))
@@ -4524,7 +4524,7 @@ use before it. #QKS4GZ"
          (light (add-physics-body world 0.5 0.45 0.5 :radius 0.45 :mass 1.0))
          (heavy (add-physics-body world 0.5 1.36 0.5 :radius 0.45 :mass 1000.0)))
     (dotimes (i 120) (step-physics-world world))
-    (luv-physics::set-physics-body-velocity world light 0.02 0.0 0.0)
+    (set-physics-body-velocity world light 0.02 0.0 0.0)
     (flet ((at (h) (multiple-value-list (physics-body-position world h))))
       (let ((light-0 (at light)) (heavy-0 (at heavy)))
         (dotimes (i 60) (step-physics-world world))
@@ -4536,8 +4536,8 @@ use before it. #QKS4GZ"
 ;; [[file:../physics.org::#PR3PAR][PR3PAR-spin-friction-rate]]
 (define-claim "PR3PAR" spin-friction-rate
     "A ball spinning about the vertical on a floor slows at the patch's torque over its inertia."
-  (let* ((world (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain) :sleep nil))
-         (r 0.25) (mu 0.6) (slop luv-physics::*physics-linear-slop*)
+  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil))
+         (r 0.25) (mu 0.6) (slop *physics-linear-slop*)
          (ball (add-physics-body world 4.0 (- r slop) 4.0 :radius r :mass 1.0 :friction mu))
          (g (abs (luv-physics::physics-world-gravity-y world)))
          (alpha (/ (* 2/3 mu (sqrt (* 2 r slop)) g) (* 0.4 r r))))
@@ -4557,15 +4557,15 @@ use before it. #QKS4GZ"
   "A world of 300 balls of mixed radius (0.2 to 0.3 m), mass (0.5 to 1.5 kg), friction,
 restitution and rolling resistance dropped into the basin, stepped 60 times and then through
 the phases of a step before the prepare phase. #PR3PAR"
-  (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain)))
+  (let ((w (make-physics-world :terrain (make-basin-terrain)))
         (next (luv-physics::fixed-sequence 12345)))
     (dotimes (i 300)
       (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
-        (luv-physics::add-physics-body w x y z :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (funcall next))
+        (add-physics-body w x y z :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (funcall next))
                                                :friction (+ 0.3 (* 0.6 (funcall next)))
                                                :restitution (* 0.5 (funcall next))
                                                :rolling-resistance (* 0.05 (funcall next)))))
-    (dotimes (i 60) (luv-physics::step-physics-world w))
+    (dotimes (i 60) (step-physics-world w))
     (dolist (phase '(luv-physics::reset-phase luv-physics::wake-phase luv-physics::grid-phase
                      luv-physics::pair-phase luv-physics::terrain-phase luv-physics::box-phase
                      luv-physics::prune-phase)
@@ -4586,7 +4586,7 @@ the phases of a step before the prepare phase. #PR3PAR"
                      (map 'list #'sb-kernel:single-float-bits (luv-physics::constraint-columns-side cbuf))))))
       (let* ((general (filled nil)) (short (filled t))
              (cbuf (luv-physics::physics-world-constraints w))
-             (dummy (luv-physics::physics-world-awake-count w))
+             (dummy (physics-world-awake-count w))
              (two-awake (loop for k below (fourth short)
                               count (and (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
                                          (/= (aref (luv-physics::constraint-columns-body-a cbuf) k) dummy)
@@ -4652,12 +4652,12 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "K3RNLS" gravity-in-every-column
     "One step under gravity (1 -2 3) gives a free ball the velocity g/60 in x, y and z."
   (let* ((w (make-floor-world :gravity '(1 -2 3)))
-         (h (luv-physics::add-physics-body w 3.5 8.0 3.5)))
-    (luv-physics::step-physics-world w)
-    (loop for got in (multiple-value-list (luv-physics::physics-body-velocity w h))
+         (h (add-physics-body w 3.5 8.0 3.5)))
+    (step-physics-world w)
+    (loop for got in (multiple-value-list (physics-body-velocity w h))
           for g in '(1 -2 3) for name in '(x y z)
           do (check (< (abs (- got (/ g 60d0))) 1d-6) "v~(~A~) is ~,7F, not ~,7F" name got (/ g 60d0)))
-    (check (equal '(0.0 0.0 0.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h))))))
+    (check (equal '(0.0 0.0 0.0) (multiple-value-list (physics-body-angular-velocity w h))))))
 ;; K3RNLS-gravity-in-every-column ends here
 
 ;; [[file:../physics.org::#K3RNLS][K3RNLS-speed-clamp-closed-form]]
@@ -4689,28 +4689,28 @@ the phases of a step before the prepare phase. #PR3PAR"
   (let* ((w (make-floor-world))
          (k (luv-physics::physics-world-kernels w))
          (below-one (- 1.0 (scale-float 1.0 -24))))
-    (luv-physics::add-physics-body w 3.5 1.0 3.5)
-    (luv-physics::step-physics-world w)
+    (add-physics-body w 3.5 1.0 3.5)
+    (step-physics-world w)
     (flet ((answer (call)
              (handler-case (progn (funcall call) :ran)
                (invalid-physics-parameter (e) (list :refused (luv-physics::invalid-physics-parameter-name e)))
                (error (e) (type-of e)))))
       (loop for (label want call)
-              in (list (list "velocities h -1e7" :ran (lambda () (luv-physics:physics-integrate-velocities k w -1e7)))
-                       (list "velocities h 1e7" :ran (lambda () (luv-physics:physics-integrate-velocities k w 1e7)))
-                       (list "velocities h -10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-velocities k w -10000001.0)))
-                       (list "velocities h 10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-velocities k w 10000001.0)))
-                       (list "positions h -1e7" :ran (lambda () (luv-physics:physics-integrate-positions k w -1e7)))
-                       (list "positions h 1e7" :ran (lambda () (luv-physics:physics-integrate-positions k w 1e7)))
-                       (list "positions h -10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-positions k w -10000001.0)))
-                       (list "positions h 10000001" '(:refused :h) (lambda () (luv-physics:physics-integrate-positions k w 10000001.0)))
-                       (list "solve inv-h 1" :ran (lambda () (luv-physics:physics-solve-contacts k w 1.0 t 0.0)))
-                       (list "solve inv-h 1e7" :ran (lambda () (luv-physics:physics-solve-contacts k w 1e7 nil 0.0)))
-                       (list "solve inv-h below 1" '(:refused :inv-h) (lambda () (luv-physics:physics-solve-contacts k w below-one t 0.0)))
-                       (list "solve inv-h 10000001" '(:refused :inv-h) (lambda () (luv-physics:physics-solve-contacts k w 10000001.0 t 0.0)))
-                       (list "solve elapsed 1e7" :ran (lambda () (luv-physics:physics-solve-contacts k w 60.0 t 1e7)))
-                       (list "solve elapsed below 0" '(:refused :elapsed) (lambda () (luv-physics:physics-solve-contacts k w 60.0 t (- least-positive-normalized-single-float))))
-                       (list "solve elapsed 10000001" '(:refused :elapsed) (lambda () (luv-physics:physics-solve-contacts k w 60.0 t 10000001.0))))
+              in (list (list "velocities h -1e7" :ran (lambda () (physics-integrate-velocities k w -1e7)))
+                       (list "velocities h 1e7" :ran (lambda () (physics-integrate-velocities k w 1e7)))
+                       (list "velocities h -10000001" '(:refused :h) (lambda () (physics-integrate-velocities k w -10000001.0)))
+                       (list "velocities h 10000001" '(:refused :h) (lambda () (physics-integrate-velocities k w 10000001.0)))
+                       (list "positions h -1e7" :ran (lambda () (physics-integrate-positions k w -1e7)))
+                       (list "positions h 1e7" :ran (lambda () (physics-integrate-positions k w 1e7)))
+                       (list "positions h -10000001" '(:refused :h) (lambda () (physics-integrate-positions k w -10000001.0)))
+                       (list "positions h 10000001" '(:refused :h) (lambda () (physics-integrate-positions k w 10000001.0)))
+                       (list "solve inv-h 1" :ran (lambda () (physics-solve-contacts k w 1.0 t 0.0)))
+                       (list "solve inv-h 1e7" :ran (lambda () (physics-solve-contacts k w 1e7 nil 0.0)))
+                       (list "solve inv-h below 1" '(:refused :inv-h) (lambda () (physics-solve-contacts k w below-one t 0.0)))
+                       (list "solve inv-h 10000001" '(:refused :inv-h) (lambda () (physics-solve-contacts k w 10000001.0 t 0.0)))
+                       (list "solve elapsed 1e7" :ran (lambda () (physics-solve-contacts k w 60.0 t 1e7)))
+                       (list "solve elapsed below 0" '(:refused :elapsed) (lambda () (physics-solve-contacts k w 60.0 t (- least-positive-normalized-single-float))))
+                       (list "solve elapsed 10000001" '(:refused :elapsed) (lambda () (physics-solve-contacts k w 60.0 t 10000001.0))))
             do (let ((got (answer call)))
                  (check (equal want got) "~A: ~S, not ~S" label got want))))))
 ;; K3RNLS-entry-ranges-exact ends here
@@ -4724,9 +4724,9 @@ the phases of a step before the prepare phase. #PR3PAR"
              (let ((text (with-output-to-string (s) (disassemble kernel :stream s))))
                (loop for at = (search "GENERIC-" text) then (search "GENERIC-" text :start2 (1+ at))
                      while at collect (subseq text at (position #\Newline text :start at))))))
-      (dolist (family (luv-physics::available-kernel-families))
+      (dolist (family (available-kernel-families))
         (dolist (features (cons luv-physics::+physics-features+ luv-physics::+standard-feature-sets+))
-          (let* ((world (luv-physics:make-physics-world :kernels family :features features))
+          (let* ((world (make-physics-world :kernels family :features features))
                  (kernels (luv-physics::physics-world-kernels world))
                  (variant (luv-physics::world-kernel-variant world kernels)))
             (dolist (kernel (list* (luv-physics::kernel-variant-warm-start variant)
@@ -4844,11 +4844,11 @@ the phases of a step before the prepare phase. #PR3PAR"
           (check-gaps 0.0)
           (dotimes (i (luv-physics::physics-world-substeps world))
             (let ((elapsed (* h (float i 1.0))))
-              (luv-physics::physics-integrate-velocities kernels world h)
-              (luv-physics::physics-warm-start kernels world)
-              (luv-physics::physics-solve-contacts kernels world (/ 1.0 h) t elapsed)
-              (luv-physics::physics-integrate-positions kernels world h)
-              (luv-physics::physics-solve-contacts kernels world (/ 1.0 h) nil (+ elapsed h))
+              (physics-integrate-velocities kernels world h)
+              (physics-warm-start kernels world)
+              (physics-solve-contacts kernels world (/ 1.0 h) t elapsed)
+              (physics-integrate-positions kernels world h)
+              (physics-solve-contacts kernels world (/ 1.0 h) nil (+ elapsed h))
               (check-gaps (+ elapsed h))))))
       (check (> checked 10000) "~A: only ~D gaps checked" family checked)
       (check (zerop wrong) "~A: ~D of ~D kept gaps differ from the current gap" family wrong checked))))
@@ -4915,10 +4915,10 @@ the phases of a step before the prepare phase. #PR3PAR"
     "A pile without friction ends in one state in every family, and no ball turns."
   (let ((hashes '()))
     (dolist (family (available-kernel-families))
-      (let* ((world (luv-physics::make-scene-world :awake-basin :count 200 :kernels family
+      (let* ((world (make-scene-world :awake-basin :count 200 :kernels family
                                                    :features '(:terrain :body-contacts)
                                                    :body-arguments '(:friction 0.0)))
-             (balls (luv-physics::physics-world-handles world)))
+             (balls (physics-world-handles world)))
         (dotimes (i 150) (step-physics-world world))
         (check (> (luv-physics::contact-columns-length (luv-physics::physics-world-contacts world)) 200)
                "~(~A~): the pile has only ~D contacts" family
@@ -4927,7 +4927,7 @@ the phases of a step before the prepare phase. #PR3PAR"
                                    (notevery #'zerop (multiple-value-list (physics-body-angular-velocity world b))))
                                  balls)))
           (check (zerop turning) "~(~A~): ~D balls turn without friction" family turning))
-        (push (cons family (luv-physics::physics-world-state-hash world)) hashes)))
+        (push (cons family (physics-world-state-hash world)) hashes)))
     (check (= 1 (length (remove-duplicates hashes :key #'cdr)))
            "the families end in different states: ~{~(~A~) ~A~^, ~}"
            (loop for (f . h) in (reverse hashes) collect f collect h))))
@@ -4951,7 +4951,7 @@ the phases of a step before the prepare phase. #PR3PAR"
     (dolist (family (available-kernel-families))
       (multiple-value-bind (share others kept wall world) (luv-physics::struck-row (list :kernels family))
         (declare (ignore wall))
-        (push (luv-physics::physics-world-state-hash world) hashes)
+        (push (physics-world-state-hash world) hashes)
         (check (>= share 0.9d0) "~A cradle: the last ball has ~,3F of the momentum" family share)
         (check (<= others 0.05d0) "~A cradle: another ball leaves at ~,3F of the first's speed" family others)
         (check (>= kept 0.9d0) "~A cradle: ~,3F of the energy kept" family kept)))
@@ -4992,11 +4992,11 @@ the phases of a step before the prepare phase. #PR3PAR"
     "A stack of balls of restitution 1 comes to rest and stays there."
   (let* ((world (luv-physics::make-shaft-world :sleep nil))
          (r 0.45)
-         (balls (loop for i below 4 collect (luv-physics::add-physics-body world 0.5 (+ r (* i 2.02 r)) 0.5
+         (balls (loop for i below 4 collect (add-physics-body world 0.5 (+ r (* i 2.02 r)) 0.5
                                                                          :radius r :restitution 1.0)))
          (fastest 0d0))
     (dotimes (i 180)
-      (luv-physics::step-physics-world world)
+      (step-physics-world world)
       (when (>= i 120)
         (dolist (b balls) (setf fastest (max fastest (luv-physics::speed-of world b))))))
     (check (< fastest 0.05d0) "a ball of the stack moves at ~,4F m/s in its third second" fastest)))
@@ -5007,14 +5007,14 @@ the phases of a step before the prepare phase. #PR3PAR"
     "A bounce's :hit event carries the approach speed at impact."
   (dolist (h '(0.3d0 1d0 2.5d0))
     (let* ((world (luv-physics::open-air-world :floor t))
-           (r 0.25d0) (slop (float luv-physics::*physics-linear-slop* 1d0))
-           (ball (luv-physics::add-physics-body world 0.0 (+ r h) 0.0 :radius r :restitution 0.5
+           (r 0.25d0) (slop (float *physics-linear-slop* 1d0))
+           (ball (add-physics-body world 0.0 (+ r h) 0.0 :radius r :restitution 0.5
                                                              :report-hits t))
            (want (sqrt (* 2 9.81d0 (+ h slop))))
            (got nil))
       (loop repeat 120 until got do
-        (luv-physics::step-physics-world world)
-        (luv-physics::map-physics-events
+        (step-physics-world world)
+        (map-physics-events
          (lambda (kind a b x y z speed datum)
            (declare (ignore b x y z datum))
            (when (and (eq kind :hit) (= a ball) (null got)) (setf got speed)))
@@ -5031,7 +5031,7 @@ the phases of a step before the prepare phase. #PR3PAR"
   (dolist (factor '(0.9 1.1))
     (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
       (fill-terrain terrain 6 0 -16 7 16 32 t)
-      (let* ((speed (* factor luv-physics::*physics-restitution-threshold*))
+      (let* ((speed (* factor *physics-restitution-threshold*))
              (ball (add-physics-body w 5.0 2.5 4.5 :radius 0.25 :vx speed :restitution 0.5 :friction 0.0)))
         (dotimes (i 120) (step-physics-world w))
         (let ((leaving (- (physics-body-velocity w ball))))
@@ -5055,8 +5055,8 @@ the phases of a step before the prepare phase. #PR3PAR"
     (dotimes (i 180)
       (step-physics-world world)
       (when (< i 60) (setf deepest (max deepest (physics-world-max-penetration world)))))
-    (check (> deepest luv-physics::*physics-linear-slop*) "landing reached only ~,5F m" deepest)
-    (check (< (abs (- (physics-world-max-penetration world) luv-physics::*physics-linear-slop*)) 0.001)
+    (check (> deepest *physics-linear-slop*) "landing reached only ~,5F m" deepest)
+    (check (< (abs (- (physics-world-max-penetration world) *physics-linear-slop*)) 0.001)
            "at rest the penetration reads ~,5F m" (physics-world-max-penetration world))
     (check (< (physics-world-max-approach-speed world) 0.01)
            "at rest the approach speed reads ~,5F m/s" (physics-world-max-approach-speed world))))
@@ -5067,8 +5067,8 @@ the phases of a step before the prepare phase. #PR3PAR"
     "A landing ball's :begin event reports its arrival speed, positive."
   (dolist (e '(0.5 0.0))
     (let* ((world (luv-physics::open-air-world :floor t))
-           (r 0.25d0) (slop (float luv-physics::*physics-linear-slop* 1d0))
-           (ball (luv-physics::add-physics-body world 0.0 (+ r 1d0) 0.0 :radius r :restitution e))
+           (r 0.25d0) (slop (float *physics-linear-slop* 1d0))
+           (ball (add-physics-body world 0.0 (+ r 1d0) 0.0 :radius r :restitution e))
            (want (sqrt (* 2 9.81d0 (+ 1d0 slop))))
            (got nil))
       (loop repeat 120 until got do
@@ -5084,7 +5084,7 @@ the phases of a step before the prepare phase. #PR3PAR"
     "store-phase copies each constraint's impulses to its contact and reads the figures as their formulas, to the bit."
   (let ((world (make-basin-world 300)))
     (dotimes (i 60) (step-physics-world world))
-    (dolist (phase (ldiff luv-physics:*physics-phases* (member 'luv-physics::store-phase luv-physics:*physics-phases*)))
+    (dolist (phase (ldiff *physics-phases* (member 'luv-physics::store-phase *physics-phases*)))
       (funcall phase world))
     (let* ((cbuf (luv-physics::physics-world-constraints world))
            (v (luv-physics::physics-world-velocities world))
@@ -5124,9 +5124,9 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (> (count-if-not #'zerop impulses :key #'fifth) 100)
                "only ~D constraints end the step with a spin impulse" (count-if-not #'zerop impulses :key #'fifth)))
       ;; the next step, up to and through its prepare phase
-      (dolist (phase (append (member 'luv-physics::finalize-phase luv-physics:*physics-phases*)
-                             (ldiff luv-physics:*physics-phases*
-                                    (cdr (member 'luv-physics::prepare-phase luv-physics:*physics-phases*)))))
+      (dolist (phase (append (member 'luv-physics::finalize-phase *physics-phases*)
+                             (ldiff *physics-phases*
+                                    (cdr (member 'luv-physics::prepare-phase *physics-phases*)))))
         (funcall phase world))
       (let ((geometry (luv-physics::contact-columns-geometry (luv-physics::physics-world-contacts world)))
             (carried 0) (wrong 0))
@@ -5153,7 +5153,7 @@ the phases of a step before the prepare phase. #PR3PAR"
          (hits (loop for (nil nil events) in record
                      append (remove :hit events :key #'first :test-not #'eq))))
     (check (and (= 1 (length hits)) (equal '(0 1) (second (first hits)))
-                (> (third (first hits)) luv-physics::*physics-hit-speed*))
+                (> (third (first hits)) *physics-hit-speed*))
            "the blow reported the hits ~S" hits)))
 ;; ST0R3S-hits-for-either-side ends here
 
@@ -5162,7 +5162,7 @@ the phases of a step before the prepare phase. #PR3PAR"
     "A blow at 0.9 of the hit speed reports no :hit; at 1.1 of it, one."
   (loop for (factor expected) in '((0.9 0) (1.1 1))
         do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
-                  (speed (* factor luv-physics::*physics-hit-speed*))
+                  (speed (* factor *physics-hit-speed*))
                   (hits 0))
              (add-physics-body world 0.0 1.0 0.0 :vx speed)
              (add-physics-body world 1.0 1.0 0.0 :report-hits t)
@@ -5175,17 +5175,17 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "F1NAL5" spin-turns-by-the-half-angle
     "Free spin at omega for n steps gives q = (cos n*alpha, sin n*alpha * u), alpha = atan(|omega| dt/2)."
   (let* ((w (make-floor-world :gravity '(0 0 0)))
-         (h (luv-physics::add-physics-body w 3.5 8.0 3.5))
+         (h (add-physics-body w 3.5 8.0 3.5))
          (omega '(1d0 2d0 2d0)) (n 60) (dt (/ 1d0 60))
          (alpha (atan (* 3d0 dt 0.5d0))))
     (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
       (declare (ignore set))
       (luv-physics::with-body-columns (wx wy wz) (luv-physics::physics-world-awake w)
         (setf (aref wx row) 1.0 (aref wy row) 2.0 (aref wz row) 2.0)))
-    (dotimes (i n) (luv-physics::step-physics-world w))
+    (dotimes (i n) (step-physics-world w))
     (let ((want (cons (cos (* n alpha)) (mapcar (lambda (c) (* (sin (* n alpha)) (/ c 3d0))) omega)))
-          (got (multiple-value-list (luv-physics::physics-body-orientation w h))))
-      (check (equal '(1.0 2.0 2.0) (multiple-value-list (luv-physics::physics-body-angular-velocity w h)))
+          (got (multiple-value-list (physics-body-orientation w h))))
+      (check (equal '(1.0 2.0 2.0) (multiple-value-list (physics-body-angular-velocity w h)))
              "the spin changed in free flight")
       (loop for g in got for e in want for name in '(w x y z)
             do (check (< (abs (- g e)) 1d-5) "q~(~A~) is ~,6F, not ~,6F" name g e)))))
@@ -5195,11 +5195,11 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "F1NAL5" sleeps-after-its-time
     "A still ball sleeps once it has been still for the world's time to sleep, not before."
   (flet ((awake-at (steps time-to-sleep)
-           (let* ((luv-physics::*physics-time-to-sleep* time-to-sleep)
+           (let* ((*physics-time-to-sleep* time-to-sleep)
                   (w (make-floor-world))
-                  (h (luv-physics::add-physics-body w 3.5 (- 0.25 luv-physics::*physics-linear-slop*) 3.5)))
-             (dotimes (i steps) (luv-physics::step-physics-world w))
-             (luv-physics::physics-body-awake-p w h))))
+                  (h (add-physics-body w 3.5 (- 0.25 *physics-linear-slop*) 3.5)))
+             (dotimes (i steps) (step-physics-world w))
+             (physics-body-awake-p w h))))
     (check (awake-at 27 0.5) "the still ball slept before 0.45 s")
     (check (not (awake-at 33 0.5)) "the still ball was still awake at 0.55 s")
     (check (awake-at 57 1.0) "with a time to sleep of 1 s the ball slept before 0.95 s")))
@@ -5208,26 +5208,26 @@ the phases of a step before the prepare phase. #PR3PAR"
 ;; [[file:../physics.org::#F1NAL5][F1NAL5-limit-reached-is-crossed]]
 (define-claim "F1NAL5" limit-reached-is-crossed
     "A centre landing exactly on the coordinate limit, on any axis and side, escapes in that step."
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
-         (inside (- luv-physics:+physics-coordinate-limit+ 0.5))
-         (balls (list (luv-physics::add-physics-body w inside 0.5 0.5 :vx 30)
-                      (luv-physics::add-physics-body w 0.5 (- inside) 0.5 :vy -30)
-                      (luv-physics::add-physics-body w 0.5 0.5 inside :vz 30)))
-         (short (luv-physics::add-physics-body w (- inside 0.25) 8.5 0.5 :vx 30))
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (inside (- +physics-coordinate-limit+ 0.5))
+         (balls (list (add-physics-body w inside 0.5 0.5 :vx 30)
+                      (add-physics-body w 0.5 (- inside) 0.5 :vy -30)
+                      (add-physics-body w 0.5 0.5 inside :vz 30)))
+         (short (add-physics-body w (- inside 0.25) 8.5 0.5 :vx 30))
          (escaped (loop for (kind a) in (step-events w) when (eq kind :escaped) collect a)))
     (check (null (set-exclusive-or escaped balls)) "escaped ~S, not ~S" escaped balls)
-    (check (luv-physics::physics-body-alive-p w short) "the ball left short of the limit was removed")
-    (check (= (- luv-physics:+physics-coordinate-limit+ 0.25) (luv-physics::physics-body-position w short))
-           "the ball left short is at ~F" (luv-physics::physics-body-position w short))))
+    (check (physics-body-alive-p w short) "the ball left short of the limit was removed")
+    (check (= (- +physics-coordinate-limit+ 0.25) (physics-body-position w short))
+           "the ball left short is at ~F" (physics-body-position w short))))
 ;; F1NAL5-limit-reached-is-crossed ends here
 
 ;; [[file:../physics.org::#F1NAL5][F1NAL5-life-reached-is-over]]
 (define-claim "F1NAL5" life-reached-is-over
     "With steps of 1/64 s, balls of life 1 s, moving or asleep, expire on step 64, one of life 1 + 1/128 s on step 65; at 1/60 s, one of life 600 s on step 36000."
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0) :step-seconds 1/64))
-         (still (luv-physics::add-physics-body w 0.5 0.5 0.5 :life 1.0))
-         (moving (luv-physics::add-physics-body w 3.5 0.5 0.5 :life 1.0 :vx 1.0))
-         (more (luv-physics::add-physics-body w 6.5 0.5 0.5 :life (+ 1.0 1/128) :vx 1.0))
+  (let* ((w (make-physics-world :gravity '(0 0 0) :step-seconds 1/64))
+         (still (add-physics-body w 0.5 0.5 0.5 :life 1.0))
+         (moving (add-physics-body w 3.5 0.5 0.5 :life 1.0 :vx 1.0))
+         (more (add-physics-body w 6.5 0.5 0.5 :life (+ 1.0 1/128) :vx 1.0))
          (expired '()) (slept nil))
     (loop for step from 1 to 66
           do (loop for (kind a) in (step-events w)
@@ -5239,30 +5239,30 @@ the phases of a step before the prepare phase. #PR3PAR"
                                         (list more 65 "the ball of life 1 + 1/128 s"))
           do (check (eql want (cdr (assoc ball expired))) "~A expired on step ~S, not ~D"
                     what (cdr (assoc ball expired)) want)))
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
-         (ball (luv-physics::add-physics-body w 0.5 0.5 0.5 :life 600.0 :vx 1.0))
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (ball (add-physics-body w 0.5 0.5 0.5 :life 600.0 :vx 1.0))
          (step (loop for step from 1 to 36010
                      do (step-physics-world w)
-                     unless (luv-physics::physics-body-alive-p w ball) return step)))
+                     unless (physics-body-alive-p w ball) return step)))
     (check (eql step 36000) "the ball of life 600 s expired on step ~S, not 36000" step)))
 ;; F1NAL5-life-reached-is-over ends here
 
 ;; [[file:../physics.org::#SQU33Z][SQU33Z-squeezed-balls-stay-out]]
 (defun lone-walker-path (scene)
   "The walker's final x and y after the 240 steps of SCENE's walk with no ball in the world. #SQU33Z"
-  (let ((terrain (luv-physics::make-voxel-terrain))
-        (player (luv-physics::make-physics-player 0d0 0d0 0d0)))
-    (luv-physics::fill-terrain terrain -16 0 -16 16 12 16 nil)
-    (luv-physics::fill-terrain terrain -16 -16 -16 16 0 16 t)
-    (luv-physics::fill-terrain terrain (if (eq scene :far-step) 8 6) 0 -4 16 (if (eq scene :wall) 3 1) 4 t)
-    (dotimes (frame 240) (luv-physics::advance-physics-player player terrain (/ 1d0 60) :move-x 1d0))
-    (values (luv-physics::physics-player-x player) (luv-physics::physics-player-y player))))
+  (let ((terrain (make-voxel-terrain))
+        (player (make-physics-player 0d0 0d0 0d0)))
+    (fill-terrain terrain -16 0 -16 16 12 16 nil)
+    (fill-terrain terrain -16 -16 -16 16 0 16 t)
+    (fill-terrain terrain (if (eq scene :far-step) 8 6) 0 -4 16 (if (eq scene :wall) 3 1) 4 t)
+    (dotimes (frame 240) (advance-physics-player player terrain (/ 1d0 60) :move-x 1d0))
+    (values (physics-player-x player) (physics-player-y player))))
 
 (define-claim "SQU33Z" squeezed-balls-stay-out
     "Balls a walker or a box presses against cells stay in air cells of the resident world, in every family."
   (dolist (scene '(:step :marbles :far-step :wall :press))
     (let ((hashes '()))
-      (dolist (family (luv-physics:available-kernel-families))
+      (dolist (family (available-kernel-families))
         (multiple-value-bind (outside lowest px py hash fastest) (luv-physics::squeeze-scene family scene)
           (push hash hashes)
           (check (zerop outside) "~A, ~A: ~D ball positions outside the air of the resident world (lowest y ~,3F)"
@@ -5279,13 +5279,13 @@ the phases of a step before the prepare phase. #PR3PAR"
 ;; [[file:../physics.org::#SQU33Z][SQU33Z-box-rows-capped]]
 (define-claim "SQU33Z" box-rows-capped
     "After the substeps every box row's normal impulse is within its cap, and the caps follow the rule."
-  (let ((terrain (luv-physics::make-voxel-terrain)) (over 0) (met 0) (wrong 0) (rows 0))
-    (luv-physics::fill-terrain terrain -16 0 -16 16 12 16 nil)
-    (luv-physics::fill-terrain terrain -16 -16 -16 16 0 16 t)
-    (luv-physics::fill-terrain terrain 6 0 -4 16 1 4 t)
-    (let* ((world (luv-physics::make-physics-world :terrain terrain))
-           (player (luv-physics::make-physics-player 0d0 0d0 0d0))
-           (luv-physics:*physics-phases*
+  (let ((terrain (make-voxel-terrain)) (over 0) (met 0) (wrong 0) (rows 0))
+    (fill-terrain terrain -16 0 -16 16 12 16 nil)
+    (fill-terrain terrain -16 -16 -16 16 0 16 t)
+    (fill-terrain terrain 6 0 -4 16 1 4 t)
+    (let* ((world (make-physics-world :terrain terrain))
+           (player (make-physics-player 0d0 0d0 0d0))
+           (*physics-phases*
              (phases-checked-after
               'luv-physics::substep-phase
               (lambda (w)
@@ -5304,18 +5304,18 @@ the phases of a step before the prepare phase. #PR3PAR"
                                                    (* (aref (luv-physics::body-columns-vz awake) a) (funcall ref 'luv-physics::nz)))
                                                 (funcall ref 'luv-physics::kvn))))
                            (want (* (funcall ref 'luv-physics::normal-mass)
-                                    (+ closing luv-physics::*physics-contact-push-max* (* 9.81 h))))
+                                    (+ closing *physics-contact-push-max* (* 9.81 h))))
                            (l (funcall ref 'luv-physics::normal-impulse)))
                       (incf rows)
                       (when (> (abs (- cap want)) (* 1e-4 (max 1.0 want))) (incf wrong))
                       (when (> l (* cap (+ 1 1e-6))) (incf over))
                       (when (>= l (* cap (- 1 1e-6))) (incf met)))))
                 w))))
-      (dotimes (i 10) (luv-physics::add-physics-body-of-kind world :ball (+ 1.0 (* 0.5 i)) 0.3 0.0))
+      (dotimes (i 10) (add-physics-body-of-kind world :ball (+ 1.0 (* 0.5 i)) 0.3 0.0))
       (dotimes (frame 240)
-        (luv-physics::advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
-        (luv-physics::post-physics-player world player)
-        (luv-physics::step-physics-world world)))
+        (advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
+        (post-physics-player world player)
+        (step-physics-world world)))
     (check (> rows 100) "only ~D box rows were noted" rows)
     (check (zerop wrong) "~D of ~D caps differ from the rule" wrong rows)
     (check (zerop over) "~D box rows ended a step above their cap" over)
@@ -5329,10 +5329,10 @@ the phases of a step before the prepare phase. #PR3PAR"
            ;; one step of a ball at X Y Z whose delta after the substeps is forced to DX DY DZ
            ;; and its velocity to VX VY 0
            (multiple-value-bind (w terrain) (make-floor-world :sleep nil :gravity '(0 0 0))
-             (when wall (luv-physics::fill-terrain terrain 4 0 0 5 4 8 t))
-             (let* ((h (luv-physics::add-physics-body w x y z :radius 0.25))
+             (when wall (fill-terrain terrain 4 0 0 5 4 8 t))
+             (let* ((h (add-physics-body w x y z :radius 0.25))
                     (events '())
-                    (luv-physics:*physics-phases*
+                    (*physics-phases*
                       (phases-checked-after
                        'luv-physics::substep-phase
                        (lambda (w)
@@ -5341,15 +5341,15 @@ the phases of a step before the prepare phase. #PR3PAR"
                            (setf (aref d p) dx (aref d (+ p 1)) dy (aref d (+ p 2)) dz
                                  (aref v o) vx (aref v (+ o 1)) vy (aref v (+ o 2)) 0.0))
                          w))))
-               (luv-physics::step-physics-world w)
-               (luv-physics::map-physics-events
+               (step-physics-world w)
+               (map-physics-events
                 (lambda (kind a b ex ey ez speed datum)
                   (declare (ignore b ex ey ez datum))
                   (push (list kind a speed) events))
                 w)
-               (multiple-value-bind (px py pz) (luv-physics::physics-body-position w h)
-                 (multiple-value-bind (wx wy) (luv-physics::physics-body-velocity w h)
-                   (list px py pz wx wy (luv-physics::physics-world-last-step-held-out-count w)
+               (multiple-value-bind (px py pz) (physics-body-position w h)
+                 (multiple-value-bind (wx wy) (physics-body-velocity w h)
+                   (list px py pz wx wy (physics-world-last-step-held-out-count w)
                          (remove :held-out events :key #'first :test-not #'eq) h)))))))
     (destructuring-bind (px py pz wx wy count held h) (forced 2.5 0.55 2.5 0.0 -0.6 0.0 1.0 -5.0)
       (check (< (abs (- py 0.25)) 1e-5) "the ball forced into the floor ends at y = ~,6F" py)
@@ -5392,10 +5392,10 @@ the phases of a step before the prepare phase. #PR3PAR"
                                              (rest (butlast (uiop:split-string line :separator "|"))))))))
     (check (and at (< at 150)) "the stage table starts at line ~S, not within the first 150" at)
     (check (equal (mapcar (lambda (row) (string-trim "=" (first row))) rows)
-                  (mapcar #'string-downcase luv-physics:*physics-phases*))
+                  (mapcar #'string-downcase *physics-phases*))
            "the table's phases ~S are not *physics-phases*" (mapcar #'first rows))
     (loop for row in rows
-          for phase in luv-physics:*physics-phases*
+          for phase in *physics-phases*
           for place from 0
           do (let* ((doc (documentation phase 'function))
                     (anchor (subseq doc (1+ (position #\# doc :from-end t))))
@@ -5408,14 +5408,14 @@ the phases of a step before the prepare phase. #PR3PAR"
                      ((string= features "")
                       (dolist (f luv-physics::+physics-features+)
                         (check (nth place (luv-physics::feature-phases (remove f luv-physics::+physics-features+)
-                                                                       luv-physics:*physics-phases*))
+                                                                       *physics-phases*))
                                "~(~A~) is left out without ~S" phase f)))
                      (t
                       (let ((named (mapcar (lambda (w) (intern (string-upcase (string-left-trim ":" w)) :keyword))
                                            (remove "or" (uiop:split-string features :separator " ") :test #'string=))))
                         (check (null (nth place (luv-physics::feature-phases
                                                  (set-difference luv-physics::+physics-features+ named)
-                                                 luv-physics:*physics-phases*)))
+                                                 *physics-phases*)))
                                "~(~A~) is run without ~S" phase named))))))))
 ;; IDVK7G-stage-table-is-the-step ends here
 
@@ -5423,7 +5423,7 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "IDVK7G" ball-rests-and-sleeps
     "A dropped ball rests at floor + r - slop (±0.002 m) and sleeps, with a :slept event, within 3 s."
   (let* ((w (make-floor-world))
-         (h (luv-physics::add-physics-body w 3.5 1.0 3.5 :radius 0.25))
+         (h (add-physics-body w 3.5 1.0 3.5 :radius 0.25))
          (rest (- 0.25 (luv-physics::physics-world-slop w)))
          (slept-at nil))
     (dotimes (i 180)
@@ -5432,8 +5432,8 @@ the phases of a step before the prepare phase. #PR3PAR"
     (check (< (abs (- (body-y w h) rest)) 0.002)
            "rest height ~,5F, expected ~,5F ± 0.002" (body-y w h) rest)
     (check (not (null slept-at)) "no :slept event for the ball within 180 steps")
-    (check (not (luv-physics::physics-body-awake-p w h)) "the ball is still in the awake set")
-    (check (= 1 (luv-physics::physics-world-sleeping-count w)))))
+    (check (not (physics-body-awake-p w h)) "the ball is still in the awake set")
+    (check (= 1 (physics-world-sleeping-count w)))))
 ;; IDVK7G-ball-rests-and-sleeps ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-bounce-and-no-bounce]]
@@ -5441,7 +5441,7 @@ the phases of a step before the prepare phase. #PR3PAR"
     "Restitution 0.8 from 2 m rebounds over 0.5 m; restitution 0 stays within 0.01 m of rest after contact."
   (flet ((peak-after-contact (e)
            (let* ((w (make-floor-world :sleep nil))
-                  (h (luv-physics::add-physics-body w 3.5 2.0 3.5 :radius 0.25 :restitution e))
+                  (h (add-physics-body w 3.5 2.0 3.5 :radius 0.25 :restitution e))
                   (begun nil) (peak most-negative-single-float))
              (dotimes (i 240)
                (let ((events (step-events w)))
@@ -5461,11 +5461,11 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "IDVK7G" basin-reproducible
     "Two 200-ball basin runs hash equal after 120 steps; the hash after 119 steps differs."
   (flet ((run ()
-           (let ((w (luv-physics::make-basin-world 200)) (h119 nil))
+           (let ((w (make-basin-world 200)) (h119 nil))
              (dotimes (i 120)
-               (luv-physics::step-physics-world w)
-               (when (= i 118) (setf h119 (luv-physics::physics-world-state-hash w))))
-             (values (luv-physics::physics-world-state-hash w) h119))))
+               (step-physics-world w)
+               (when (= i 118) (setf h119 (physics-world-state-hash w))))
+             (values (physics-world-state-hash w) h119))))
     (multiple-value-bind (a a119) (run)
       (multiple-value-bind (b b119) (run)
         (check (= a b) "run 1 hashes ~D, run 2 hashes ~D" a b)
@@ -5478,9 +5478,9 @@ the phases of a step before the prepare phase. #PR3PAR"
     "One step calls each phase of *physics-phases* once, in list order, then the event handler."
   (let* ((w (make-floor-world))
          (log '())
-         (phases luv-physics::*physics-phases*))
-    (luv-physics::add-physics-body w 3.5 0.24 3.5)
-    (setf (luv-physics::physics-world-event-handler w)
+         (phases *physics-phases*))
+    (add-physics-body w 3.5 0.24 3.5)
+    (setf (physics-world-event-handler w)
           (lambda (&rest args) (declare (ignore args)) (push :handler log)))
     (unwind-protect
          (progn
@@ -5488,7 +5488,7 @@ the phases of a step before the prepare phase. #PR3PAR"
              (let ((p p))
                (sb-int:encapsulate p 'claim-phase-order
                                    (lambda (f &rest args) (push p log) (apply f args)))))
-           (luv-physics::step-physics-world w))
+           (step-physics-world w))
       (dolist (p phases) (sb-int:unencapsulate p 'claim-phase-order)))
     (let ((calls (reverse log)))
       (check (equal (remove :handler calls) phases) "phases ran as ~S" (remove :handler calls))
@@ -5503,9 +5503,9 @@ the phases of a step before the prepare phase. #PR3PAR"
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-crowd-held-closed-form]]
 (define-claim "IDVK7G" crowd-held-closed-form
     "hold-crowded-speeds scales a crowded row faster than half the push-out speed onto it, and nothing else."
-  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))))
-    (dotimes (i 4) (luv-physics::add-physics-body w (+ 1.5 (* 2 i)) 1.0 1.5))
-    (luv-physics::step-physics-world w)
+  (let ((w (make-physics-world :gravity '(0 0 0))))
+    (dotimes (i 4) (add-physics-body w (+ 1.5 (* 2 i)) 1.0 1.5))
+    (step-physics-world w)
     (let* ((v (luv-physics::physics-world-velocities w))
            (overlaps (luv-physics::pair-list-overlaps (luv-physics::physics-world-pair-list w)))
            (cap luv-physics::+overlaps-per-body+)
@@ -5528,7 +5528,7 @@ the phases of a step before the prepare phase. #PR3PAR"
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-crowd-marks-both-sides]]
 (define-claim "IDVK7G" crowd-marks-both-sides
     "mark-held-rows: nothing without a crowded row; with one, both balls of the deep pair raised to the cap, a shallow pair not."
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
          (a (add-physics-body w 1.0 1.0 1.0 :radius 0.25))
          (b (add-physics-body w 1.4 1.0 1.0 :radius 0.25))
          (c (add-physics-body w 5.0 1.0 1.0 :radius 0.25))
@@ -5552,20 +5552,20 @@ the phases of a step before the prepare phase. #PR3PAR"
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-step-statistics]]
 (define-claim "IDVK7G" step-statistics
     "Last-step contact count, colour count and real seconds are consistent with the step's buffers."
-  (let ((w (luv-physics::make-basin-world 200))
-        (clock (make-array (* 2 (length luv-physics::*physics-phases*)) :element-type 'fixnum :initial-element 0)))
+  (let ((w (make-basin-world 200))
+        (clock (make-array (* 2 (length *physics-phases*)) :element-type 'fixnum :initial-element 0)))
     (dotimes (i 120)
       (when (= i 0) (setf (luv-physics::physics-world-phase-clock w) clock))
-      (luv-physics::step-physics-world w))
+      (step-physics-world w))
     (setf (luv-physics::physics-world-phase-clock w) nil)
-    (check (every #'plusp (subseq clock 0 (length luv-physics::*physics-phases*)))
+    (check (every #'plusp (subseq clock 0 (length *physics-phases*)))
            "the phase clock counted ~S" clock)
-    (check (and (every (lambda (b) (>= b 0)) (subseq clock (length luv-physics::*physics-phases*)))
-                (some #'plusp (subseq clock (length luv-physics::*physics-phases*))))
-           "the phase clock counted bytes ~S" (subseq clock (length luv-physics::*physics-phases*)))
-    (let ((contacts (luv-physics::physics-world-last-step-contact-count w))
-          (colours (luv-physics::physics-world-last-step-color-count w))
-          (seconds (luv-physics::physics-world-last-step-real-seconds w))
+    (check (and (every (lambda (b) (>= b 0)) (subseq clock (length *physics-phases*)))
+                (some #'plusp (subseq clock (length *physics-phases*))))
+           "the phase clock counted bytes ~S" (subseq clock (length *physics-phases*)))
+    (let ((contacts (physics-world-last-step-contact-count w))
+          (colours (physics-world-last-step-color-count w))
+          (seconds (physics-world-last-step-real-seconds w))
           (starts (luv-physics::physics-world-color-starts w)))
       (check (= contacts (let ((cbuf (luv-physics::physics-world-constraints w)))
                            (count-if-not #'minusp (luv-physics::constraint-columns-contact cbuf)
@@ -5594,10 +5594,10 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (= 3 (length before)) "~D sleepers" (length before))
         (multiple-value-bind (x y z) (physics-body-position w target)
           (add-physics-body w (- x 0.6) y z :vx 5.0))
-        (let ((luv-physics:*physics-phases*
+        (let ((*physics-phases*
                 (phases-checked-after 'luv-physics::grid-phase
                                       (lambda (world)
-                                        (setf woke (and (luv-physics::physics-body-awake-p world target)
+                                        (setf woke (and (physics-body-awake-p world target)
                                                         (= 2 (physics-world-sleeping-count world))))
                                         (error "a phase failed")))))
           (check (eq :failed (handler-case (progn (step-physics-world w) :stepped) (error () :failed)))))
@@ -5611,7 +5611,7 @@ the phases of a step before the prepare phase. #PR3PAR"
     "Default, inferred and expanded feature sets; the fountain's step lacks phases and code, and conses nothing."
   (let ((all luv-physics::+physics-features+))
     (check (equal all (physics-world-features (make-physics-world))))
-    (check (eq luv-physics::*physics-phases* (luv-physics::world-phases (make-physics-world))))
+    (check (eq *physics-phases* (luv-physics::world-phases (make-physics-world))))
     (let ((features (physics-world-features (make-physics-world :sleep nil))))
       (check (equal features (remove :sleep (remove :sleep-events all))) "with :sleep nil: ~S" features))
     (check (equal '(:terrain :hit-events :contact-events :expiry-events :sleep-events)
@@ -5634,7 +5634,7 @@ the phases of a step before the prepare phase. #PR3PAR"
              "a variant asked for twice was compiled twice")))
   (flet ((code-bytes (f) (sb-kernel:%code-code-size (sb-kernel:fun-code-header (coerce f 'function)))))
     (dolist (family (available-kernel-families))
-      (let* ((world (make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels family
+      (let* ((world (make-physics-world :terrain (make-basin-terrain) :kernels family
                                         :features '(:terrain :friction :sleep :mortal)))
              (kernels (luv-physics::physics-world-kernels world))
              (variant (luv-physics::world-kernel-variant world kernels))
@@ -5643,15 +5643,15 @@ the phases of a step before the prepare phase. #PR3PAR"
         (dolist (absent '(luv-physics::grid-phase luv-physics::pair-phase luv-physics::box-phase))
           (check (not (member absent phases)) "~A runs ~A" family absent))
         (check (equal '(luv-physics::prepare-phase luv-physics::store-phase luv-physics::finalize-phase)
-                      (loop for name in luv-physics::*physics-phases*
+                      (loop for name in *physics-phases*
                             for phase in (luv-physics::world-phases world)
                             when (functionp phase) collect name))
                "the fountain's own phases are not its prepare, store and finalize phases")
         (check (eq 'luv-physics::quiet-wake-phase
-                   (nth (position 'luv-physics::wake-phase luv-physics::*physics-phases*) (luv-physics::world-phases world)))
+                   (nth (position 'luv-physics::wake-phase *physics-phases*) (luv-physics::world-phases world)))
                "~A: the fountain runs ~A as its wake phase" family
-               (nth (position 'luv-physics::wake-phase luv-physics::*physics-phases*) (luv-physics::world-phases world)))
-        (loop for name in luv-physics::*physics-phases*
+               (nth (position 'luv-physics::wake-phase *physics-phases*) (luv-physics::world-phases world)))
+        (loop for name in *physics-phases*
               for phase in (luv-physics::world-phases world)
               when (functionp phase)
                 do (check (< (code-bytes phase) (code-bytes name)) "the fountain's ~A has ~D bytes of code, the general ~D"
@@ -5729,14 +5729,14 @@ the phases of a step before the prepare phase. #PR3PAR"
                              (lambda () (setf (physics-world-event-handler world) (lambda (&rest r) r)))))
             do (let ((e (handler-case (progn (funcall thunk) nil) (error (e) e))))
                  (check (typep e 'physics-feature-omitted) "~A without ~S: ~A" operation feature e)
-                 (check (typep e 'luv-physics::physics-error))
+                 (check (typep e 'physics-error))
                  (when (typep e 'physics-feature-omitted)
                    (check (eq feature (luv-physics::physics-feature-omitted-feature e)))
                    (check (eq operation (luv-physics::physics-feature-omitted-operation e))))
                  (check (eq t (validate-physics-world world)))
                  (check (= hash (physics-world-state-hash world)) "refusing ~S changed the hash" feature)
-                 (check (= 1 (+ (luv-physics::physics-world-awake-count world)
-                                (luv-physics::physics-world-sleeping-count world)))))))
+                 (check (= 1 (+ (physics-world-awake-count world)
+                                (physics-world-sleeping-count world)))))))
     (multiple-value-bind (set row) (luv-physics::resolve-handle world ball)
       (let ((buffer (luv-physics::set-buffer world set)))
         (check (= 0.6 (aref (luv-physics::body-columns-friction buffer) row))
@@ -5745,7 +5745,7 @@ the phases of a step before the prepare phase. #PR3PAR"
   (let ((world (make-physics-world :features '(:body-contacts))))
     (check (typep (handler-case (add-physics-body world 0 0 0) (error (e) e)) 'physics-feature-omitted)
            "a body with friction joined a world without it")
-    (check (= 0 (luv-physics::physics-world-awake-count world))))
+    (check (= 0 (physics-world-awake-count world))))
   (let ((e (handler-case (make-physics-world :terrain (make-floor-terrain) :features '(:friction))
              (error (e) e))))
     (check (and (typep e 'physics-feature-omitted) (eq :terrain (luv-physics::physics-feature-omitted-feature e))))))
@@ -5772,13 +5772,13 @@ the phases of a step before the prepare phase. #PR3PAR"
       (check (typep (handler-case (set-physics-body-material world ball :friction 0.1 :rolling-resistance
                                                              (sb-kernel:make-single-float -4194304))
                       (error (e) e))
-                    'luv-physics::invalid-physics-number))
+                    'invalid-physics-number))
       (check (equal '(0.8 0.3 0.0) (material)) "a refused material changed it to ~S" (material))
       (check (eq t (validate-physics-world world))))
     (let ((gone (add-physics-body world 5.5 1.0 5.5)))
-      (luv-physics::remove-physics-body world gone)
+      (remove-physics-body world gone)
       (check (typep (handler-case (set-physics-body-material world gone :restitution 1.5) (error (e) e))
-                    'luv-physics::stale-physics-handle)
+                    'stale-physics-handle)
              "a removed body's handle with a restitution out of range is not refused as stale")))
   (flet ((rebound (e)
            (let* ((world (make-floor-world :sleep nil))
@@ -5791,7 +5791,7 @@ the phases of a step before the prepare phase. #PR3PAR"
                  (when (< y 0.26) (setf touched t))
                  (when touched (setf high (max high y)))))
              ;; above where it rests, one slop deep
-             (- high (- 0.25 luv-physics::*physics-linear-slop*)))))
+             (- high (- 0.25 *physics-linear-slop*)))))
     (let ((bounced (rebound 0.8)) (dead (rebound nil)))
       (check (> bounced 0.5) "with restitution 0.8 set after adding, the ball rose ~,4F m" bounced)
       (check (< dead 0.01) "the dead ball rose ~,4F m" dead))))
@@ -5801,19 +5801,19 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "S6T2MV" one-ulp-changes-hash
     "One ulp of a position or velocity, awake or asleep, changes physics-world-state-hash."
   (let ((w (make-floor-world)))
-    (luv-physics::add-physics-body w 3.5 0.245 3.5)
-    (dotimes (i 120) (luv-physics::step-physics-world w))
-    (luv-physics::add-physics-body w 5.5 1.0 3.5 :vx 0.5)
-    (luv-physics::step-physics-world w)
-    (check (= 1 (luv-physics::physics-world-sleeping-count w)))
-    (check (= 1 (luv-physics::physics-world-awake-count w)))
-    (let ((h0 (luv-physics::physics-world-state-hash w)) (hashes '()))
+    (add-physics-body w 3.5 0.245 3.5)
+    (dotimes (i 120) (step-physics-world w))
+    (add-physics-body w 5.5 1.0 3.5 :vx 0.5)
+    (step-physics-world w)
+    (check (= 1 (physics-world-sleeping-count w)))
+    (check (= 1 (physics-world-awake-count w)))
+    (let ((h0 (physics-world-state-hash w)) (hashes '()))
       (flet ((flip (column row bit)
                (let* ((old (aref column row))
                       (bits (logxor (ldb (byte 32 0) (sb-kernel:single-float-bits old)) (ash 1 bit))))
                  (setf (aref column row)
                        (sb-kernel:make-single-float (if (logbitp 31 bits) (- bits (ash 1 32)) bits)))
-                 (prog1 (luv-physics::physics-world-state-hash w)
+                 (prog1 (physics-world-state-hash w)
                    (setf (aref column row) old)))))
         (dolist (set (list (luv-physics::physics-world-awake w) (luv-physics::physics-world-sleeping w)))
           (loop for reader in '(luv-physics::body-columns-x luv-physics::body-columns-y luv-physics::body-columns-z
@@ -5823,7 +5823,7 @@ the phases of a step before the prepare phase. #PR3PAR"
                      (check (/= h0 (car (push (flip (funcall reader set) 0 bit) hashes)))
                             "bit ~D of ~(~A~) of the ~:[sleeping~;awake~] ball is not hashed" bit reader
                             (eq set (luv-physics::physics-world-awake w))))))
-        (check (= h0 (luv-physics::physics-world-state-hash w)) "restoring the bits")
+        (check (= h0 (physics-world-state-hash w)) "restoring the bits")
         (check (some (lambda (h) (logbitp 61 h)) (cons h0 hashes)) "no hash of ~S uses bit 61" (cons h0 hashes))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
 
@@ -5889,14 +5889,14 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "B0DY0B" body-prints-where-it-is
     "print-object shows slot, awake or asleep, and (x y z); describe shows set, row and every column."
   (let* ((w (make-floor-world :gravity '(0 0 0)))
-         (first (luv-physics::add-physics-body w 1.5 2.0 3.25))
-         (h (luv-physics::add-physics-body w 4.5 6.0 7.125 :vx 0.5))
-         (body (luv-physics::physics-body w h)))
-    (luv-physics::remove-physics-body w first)
+         (first (add-physics-body w 1.5 2.0 3.25))
+         (h (add-physics-body w 4.5 6.0 7.125 :vx 0.5))
+         (body (physics-body w h)))
+    (remove-physics-body w first)
     (check (string= (format nil "#<PHYSICS-BODY ~D awake at (4.500 6.000 7.125)>" (luv-physics::handle-index h))
                     (prin1-to-string body))
            "prints as ~A" (prin1-to-string body))
-    (let ((gone (make-instance 'luv-physics::physics-body :world w :handle first)))
+    (let ((gone (make-instance 'physics-body :world w :handle first)))
       (check (string= (format nil "#<PHYSICS-BODY ~D removed>" (luv-physics::handle-index first))
                       (prin1-to-string gone)))
       (check (string= (format nil "#<PHYSICS-BODY ~D removed>~%  handle ~D (slot ~D, generation ~D) of ~A~%"
@@ -5904,8 +5904,8 @@ the phases of a step before the prepare phase. #PR3PAR"
                               (luv-physics::handle-generation first) w)
                       (with-output-to-string (s) (describe gone s)))
              "a removed body describes as ~S" (with-output-to-string (s) (describe gone s))))
-    (check (typep (handler-case (luv-physics::physics-body w first) (error (e) e))
-                  'luv-physics::stale-physics-handle)
+    (check (typep (handler-case (physics-body w first) (error (e) e))
+                  'stale-physics-handle)
            "an object is made for a removed body")
     (let ((text (with-output-to-string (s) (describe body s))))
       (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
@@ -5922,10 +5922,10 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "4YDMX5" world-and-body-summaries
     "A world prints its counts, step and family; describe leads with that; the inspector shows a body's row."
   (let* ((w (make-floor-world))
-         (h (luv-physics::add-physics-body w 3.5 0.245 3.5)))
-    (luv-physics::add-physics-body w 5.5 1.0 5.5)
-    (luv-physics::add-physics-body w 1.5 0.245 1.5 :restitution 0.5)
-    (dotimes (i 60) (luv-physics::step-physics-world w))
+         (h (add-physics-body w 3.5 0.245 3.5)))
+    (add-physics-body w 5.5 1.0 5.5)
+    (add-physics-body w 1.5 0.245 1.5 :restitution 0.5)
+    (dotimes (i 60) (step-physics-world w))
     (let* ((awake (physics-world-awake-count w))
            (printed (prin1-to-string w))
            (described (with-output-to-string (s) (describe w s)))
@@ -5946,9 +5946,9 @@ the phases of a step before the prepare phase. #PR3PAR"
 ;; [[file:../physics.org::#4YDMX5][4YDMX5-swank-inspection-only-with-swank]]
 (define-claim "4YDMX5" swank-inspection-only-with-swank
     "No SWANK: install-swank-inspection is false; a stand-in SWANK gets both methods."
-  (let* ((w (make-floor-world)) (h (luv-physics::add-physics-body w 1.5 0.245 1.5)))
+  (let* ((w (make-floor-world)) (h (add-physics-body w 1.5 0.245 1.5)))
     (flet ((installed-p (inspect)
-             (and (eq t (luv-physics::install-swank-inspection))
+             (and (eq t (install-swank-inspection))
                   (equal (funcall inspect w) (luv-physics::inspection-parts w))
                   (equal (funcall inspect (physics-body w h)) (luv-physics::inspection-parts (physics-body w h))))))
       (if (find-package "SWANK")
@@ -5956,12 +5956,12 @@ the phases of a step before the prepare phase. #PR3PAR"
           (let ((swank (make-package "SWANK" :use '())))
             (unwind-protect
                  (progn
-                   (check (null (luv-physics::install-swank-inspection)) "without EMACS-INSPECT it installed")
+                   (check (null (install-swank-inspection)) "without EMACS-INSPECT it installed")
                    (let ((inspect (intern "EMACS-INSPECT" swank)))
                      (eval `(defgeneric ,inspect (object)))
                      (check (installed-p inspect) "the stand-in's methods give other parts")))
               (delete-package swank))
-            (check (null (luv-physics::install-swank-inspection)) "without SWANK it installed"))))))
+            (check (null (install-swank-inspection)) "without SWANK it installed"))))))
 ;; 4YDMX5-swank-inspection-only-with-swank ends here
 
 ;; [[file:../physics.org::#M9W5P7][M9W5P7-handler-refusals-counted]]
@@ -5970,7 +5970,7 @@ the phases of a step before the prepare phase. #PR3PAR"
   (multiple-value-bind (at problem state)
       (luv-physics::run-fuzz-operations '((:add 5.5 0.3 5.5 :radius 0.25) (:handler :add) (:step 0.05) (:step 0.05)))
     (check (null at) "the sequence broke a promise at operation ~S: ~A" at problem)
-    (let ((busy (gethash 'luv-physics::physics-world-busy (luv-physics::fuzz-state-conditions state))))
+    (let ((busy (gethash 'physics-world-busy (luv-physics::fuzz-state-conditions state))))
       (check (eql 1 busy) "the refusals counted as physics-world-busy: ~S, not 1" busy))
     (check (zerop (luv-physics::fuzz-state-handler-edits state)) "~D edits of the handler went through"
            (luv-physics::fuzz-state-handler-edits state))))
@@ -5980,14 +5980,14 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "M9W5P7" random-sequences-keep-promises
     "A hundred seeded sequences of 100 operations break no promise after any operation."
   (let* ((out (make-string-output-stream))
-         (figures (luv-physics::run-fuzz-campaign :seed 1 :sequences 100 :length 100 :stream out)))
+         (figures (run-fuzz-campaign :seed 1 :sequences 100 :length 100 :stream out)))
     (check (zerop (getf figures :failures)) "~D sequences failed:~%~A" (getf figures :failures)
            (get-output-stream-string out))
     (check (= 10000 (getf figures :operations)))
     (check (= (length (remove-duplicates luv-physics::+fuzz-operation-kinds+)) (length (getf figures :kinds)))
            "only ~S ran" (getf figures :kinds))
     (check (>= (length (getf figures :conditions)) 5) "refusals ~S" (getf figures :conditions))
-    (check (assoc 'luv-physics:physics-world-busy (getf figures :conditions)) "no edit was tried from a handler")))
+    (check (assoc 'physics-world-busy (getf figures :conditions)) "no edit was tried from a handler")))
 ;; M9W5P7-random-sequences-keep-promises ends here
 
 ;; [[file:../physics.org::#M9W5P7][M9W5P7-failures-shrink]]
@@ -5996,7 +5996,7 @@ the phases of a step before the prepare phase. #PR3PAR"
   (let* ((extra (lambda (state)
                   (when (> (hash-table-count (luv-physics::fuzz-state-live state)) 3) "more than three bodies")))
          (out (make-string-output-stream))
-         (figures (luv-physics::run-fuzz-campaign :seed 7 :sequences 3 :length 100 :extra-check extra :stream out))
+         (figures (run-fuzz-campaign :seed 7 :sequences 3 :length 100 :extra-check extra :stream out))
          (text (get-output-stream-string out)))
     (check (= 3 (getf figures :failures)) "~D of 3 sequences failed" (getf figures :failures))
     (check (search "seed 7000023 (" text) "the seed is not printed: ~A" text)
@@ -6029,7 +6029,7 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "M9W5P7" soak-prints-its-table
     "A 0.1 s soak: header, rule, 11 rows from step 0, rising steps, and the growth from row 2 to row 11."
   (let* ((growth nil)
-         (text (with-output-to-string (s) (setf growth (luv-physics::run-physics-soak :minutes 1/600 :stream s))))
+         (text (with-output-to-string (s) (setf growth (run-physics-soak :minutes 1/600 :stream s))))
          (lines (uiop:split-string (string-right-trim '(#\Newline) text) :separator '(#\Newline)))
          (rows (mapcar (lambda (line)
                          (let ((*read-default-float-format* 'double-float))
@@ -6060,14 +6060,14 @@ the phases of a step before the prepare phase. #PR3PAR"
           do (loop for y from -20 below 36
                    do (loop for z from -20 below 36
                             do (let ((want (or (not (and (<= -16 x 31) (<= -16 y 31) (<= -16 z 31))) (= y -1))))
-                                 (unless (eq want (luv-physics::terrain-solid-p terrain x y z))
+                                 (unless (eq want (terrain-solid-p terrain x y z))
                                    (push (list x y z) wrong))))))
     (check (null wrong) "~D cells differ, such as ~S" (length wrong) (first wrong))
     (let ((spring (luv-physics::fuzz-state-spring state)) (player (luv-physics::fuzz-state-player state))
           (world (luv-physics::fuzz-state-world state)))
       (check (equal (list (luv-physics::physics-spring-x spring) (luv-physics::physics-spring-y spring)
                           (luv-physics::physics-spring-z spring)
-                          (first (nth (1- (luv-physics::physics-spring-number spring)) luv-physics::*physics-body-kinds*))
+                          (first (nth (1- (luv-physics::physics-spring-number spring)) *physics-body-kinds*))
                           (luv-physics::physics-spring-per-step spring) (luv-physics::physics-spring-every spring))
                     '(8 -1 8 :water-drop 2 1))
              "the spring is ~S" spring)
@@ -6114,7 +6114,7 @@ the phases of a step before the prepare phase. #PR3PAR"
   (loop for x from -16 below 32
         sum (loop for y from -16 below 32
                   sum (loop for z from -16 below 32
-                            count (luv-physics::terrain-solid-p terrain x y z)))))
+                            count (terrain-solid-p terrain x y z)))))
 
 (defun bodies-of-kind (world handles)
   "The HANDLES of WORLD whose bodies have a kind. #K5DF9S"
@@ -6167,7 +6167,7 @@ the phases of a step before the prepare phase. #PR3PAR"
   "BALLS balls of the basin lattice, jittered by the fixed sequence of SEED when given, or without
 MASSES, with the mass (MASSES u) for u from that sequence, with the add-physics-body ARGUMENTS,
 in a world made by hand. #K5DF9S"
-  (let ((world (luv-physics::make-physics-world :terrain (make-basin-terrain) :sleep sleep :kernels kernels))
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :sleep sleep :kernels kernels))
         (next (and seed (luv-physics::fixed-sequence seed))))
     (dotimes (i balls world)
       (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
@@ -6208,10 +6208,10 @@ balls of the basin lattice, in a world made by hand. #K5DF9S"
          (side (ceiling (* 0.6 per-row))))
     (fill-terrain terrain 16 0 0 (+ 17 side) 4 (1+ side) nil)
     (fill-terrain terrain 16 -1 0 (+ 17 side) 0 (1+ side) t)
-    (let ((world (luv-physics::make-physics-world :terrain terrain :sleep t :kernels :scalar)))
+    (let ((world (make-physics-world :terrain terrain :sleep t :kernels :scalar)))
       (dotimes (k sleepers)
         (multiple-value-bind (i j) (floor k per-row)
-          (add-physics-body world (+ 16.3 (* 0.6 i)) (- 0.25 luv-physics::*physics-linear-slop*)
+          (add-physics-body world (+ 16.3 (* 0.6 i)) (- 0.25 *physics-linear-slop*)
                             (+ 0.3 (* 0.6 j)) :radius 0.25 :mass 1.0 :friction 0.6)))
       (when asleep
         (loop for row from (1- (physics-world-awake-count world)) downto 0
@@ -6226,17 +6226,17 @@ balls of the basin lattice, in a world made by hand. #K5DF9S"
 (defun hand-built-walker (&key (walk t))
   "The fountain in the basin, and a walker (when WALK) at 3 0 3 posted before each step, made by
 hand: the world and the function to call before each step. #K5DF9S"
-  (let ((world (luv-physics::make-physics-world :terrain (make-basin-terrain) :kernels :scalar))
+  (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels :scalar))
         (springs (list (luv-physics::make-basin-fountain)))
-        (player (luv-physics::make-physics-player 3d0 0d0 3d0)))
+        (player (make-physics-player 3d0 0d0 3d0)))
     (values world
             (lambda (step)
-              (luv-physics::run-physics-springs world springs)
+              (run-physics-springs world springs)
               (when walk
                 (multiple-value-bind (move-x move-z) (luv-physics::player-scene-input step)
-                  (luv-physics::advance-physics-player player (luv-physics::physics-world-terrain world) (/ 1d0 60)
+                  (advance-physics-player player (luv-physics::physics-world-terrain world) (/ 1d0 60)
                                                        :move-x move-x :move-z move-z))
-                (luv-physics::post-physics-player world player))))))
+                (post-physics-player world player))))))
 
 (define-claim "K5DF9S" builders-keep-their-bits
     "The dead pile, mixed-mass pile, sleepers and walker among drops equal their hand-built worlds."
@@ -6294,28 +6294,28 @@ hand: the world and the function to call before each step. #K5DF9S"
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-scene-text-drops-its-anchor]]
 (define-claim "K5DF9S" scene-text-drops-its-anchor
     "Each scene's text is its documentation less ' #ANCHOR'."
-  (dolist (scene luv-physics::*physics-scenes*)
+  (dolist (scene *physics-scenes*)
     (let ((doc (luv-physics::physics-scene-documentation scene))
-          (text (luv-physics:physics-scene-text scene)))
+          (text (physics-scene-text scene)))
       (check (and (string= text (subseq doc 0 (- (length doc) 8))) (not (find #\# text))
                   (string= " #" (subseq doc (- (length doc) 8) (- (length doc) 6))))
-             "~S: text ~S of ~S" (luv-physics::physics-scene-name scene) text doc))))
+             "~S: text ~S of ~S" (physics-scene-name scene) text doc))))
 ;; K5DF9S-scene-text-drops-its-anchor ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-run-reports-its-seconds]]
 (define-claim "K5DF9S" run-reports-its-seconds
     "run-physics-scene's lines give each second's counts of the world and its final state hash."
   (let* ((text (make-string-output-stream))
-         (world (luv-physics::run-physics-scene :awake-basin :count 20 :seconds 2 :stream text))
+         (world (run-physics-scene :awake-basin :count 20 :seconds 2 :stream text))
          (lines (remove "" (uiop:split-string (get-output-stream-string text) :separator (string #\Newline))
                         :test #'string=))
-         (want (multiple-value-bind (w script) (luv-physics::make-scene-world :awake-basin :count 20)
+         (want (multiple-value-bind (w script) (make-scene-world :awake-basin :count 20)
                  (loop for second from 1 to 2
                        do (dotimes (i 60) (funcall script (+ i (* 60 (1- second)))) (step-physics-world w))
                        collect (format nil "~D ~D ~D ~D ~D" second (physics-world-awake-count w)
                                        (physics-world-sleeping-count w)
-                                       (luv-physics::physics-world-last-step-contact-count w)
-                                       (luv-physics::physics-world-last-step-color-count w))))))
+                                       (physics-world-last-step-contact-count w)
+                                       (physics-world-last-step-color-count w))))))
     (check (= 5 (length lines)) "the report is ~S" lines)
     (when (= 5 (length lines))
       (check (search "awake-basin: 20 balls" (first lines)) "~S" (first lines))
@@ -6414,7 +6414,7 @@ in the order of *physics-scene-features*. #K5DF9S"
 (define-claim "B4S1NS" basin-as-described
     "The basin's cells, chunks and spawn lattice are those the text gives."
   (dolist (height '(6 30))
-    (let ((terrain (luv-physics::make-basin-terrain :wall-height height)) (wrong '()))
+    (let ((terrain (make-basin-terrain :wall-height height)) (wrong '()))
       (loop for x from -32 below 32
             do (loop for y from -16 below 64
                      do (loop for z from -32 below 32
@@ -6423,8 +6423,8 @@ in the order of *physics-scene-features*. #K5DF9S"
                                         (want (or (not resident)
                                                   (and (= y -1) (<= -8 x 15) (<= -8 z 15))
                                                   (and ring (<= 0 y (1- height))))))
-                                   (unless (and (eq resident (luv-physics::terrain-resident-p terrain x y z))
-                                                (eq want (luv-physics::terrain-solid-p terrain x y z)))
+                                   (unless (and (eq resident (terrain-resident-p terrain x y z))
+                                                (eq want (terrain-solid-p terrain x y z)))
                                      (push (list x y z) wrong))))))
       (check (null wrong) "walls ~D high: ~D cells differ, such as ~S" height (length wrong) (first wrong))))
   (let ((spread (list (list 1.0 -1.0) (list 1.0 -1.0) (list 1.0 -1.0))) (far 0.0) (alike 0))
@@ -6445,43 +6445,43 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (<= far 0.0251) "a ball is ~,4F m off its lattice point" far)
     (check (<= alike 8) "~D balls have two axes jittered alike" alike)
     (check (every (lambda (s) (> (- (second s) (first s)) 0.04)) spread) "the jitter spans only ~S" spread))
-  (let ((w (luv-physics::make-basin-world 3)))
-    (check (= 3 (luv-physics::physics-world-awake-count w)))
-    (check (= 0.25 (luv-physics:physics-body-radius w (aref (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 2))))))
+  (let ((w (make-basin-world 3)))
+    (check (= 3 (physics-world-awake-count w)))
+    (check (= 0.25 (physics-body-radius w (aref (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 2))))))
 ;; B4S1NS-basin-as-described ends here
 
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
 (define-claim "JAU0EF" kinds-make-their-bodies
     "Each kind gives its radius and name; a gobbet expires at 4 s; an unknown kind is refused."
   (let ((w (make-floor-world)))
-    (loop for (kind . args) in luv-physics::*physics-body-kinds* for i from 0
-          do (let ((h (luv-physics::add-physics-body-of-kind w kind (+ 1.5 (* 2 i)) 3.0 1.25 :vx 0.5 :vy 0.25 :vz -0.75)))
-               (check (= (luv-physics::physics-body-radius w h) (float (getf args :radius) 1.0))
-                      "~S has radius ~A" kind (luv-physics::physics-body-radius w h))
-               (check (equal (list (multiple-value-list (luv-physics::physics-body-position w h))
-                                   (multiple-value-list (luv-physics::physics-body-velocity w h)))
+    (loop for (kind . args) in *physics-body-kinds* for i from 0
+          do (let ((h (add-physics-body-of-kind w kind (+ 1.5 (* 2 i)) 3.0 1.25 :vx 0.5 :vy 0.25 :vz -0.75)))
+               (check (= (physics-body-radius w h) (float (getf args :radius) 1.0))
+                      "~S has radius ~A" kind (physics-body-radius w h))
+               (check (equal (list (multiple-value-list (physics-body-position w h))
+                                   (multiple-value-list (physics-body-velocity w h)))
                              (list (list (float (+ 1.5 (* 2 i)) 1.0) 3.0 1.25) (list 0.5 0.25 -0.75)))
-                      "~S starts at ~S moving at ~S" kind (multiple-value-list (luv-physics::physics-body-position w h))
-                      (multiple-value-list (luv-physics::physics-body-velocity w h)))
-               (check (eq kind (luv-physics::physics-body-kind-name w h)))))
-    (check (null (luv-physics::physics-body-kind-name w (luv-physics::add-physics-body w 9.5 3.0 1.5))))
-    (let ((gobbet (luv-physics::add-physics-body-of-kind w :lava-gobbet 11.5 3.0 1.5))
+                      "~S starts at ~S moving at ~S" kind (multiple-value-list (physics-body-position w h))
+                      (multiple-value-list (physics-body-velocity w h)))
+               (check (eq kind (physics-body-kind-name w h)))))
+    (check (null (physics-body-kind-name w (add-physics-body w 9.5 3.0 1.5))))
+    (let ((gobbet (add-physics-body-of-kind w :lava-gobbet 11.5 3.0 1.5))
           (expired-at nil))
       (dotimes (i 300)
-        (luv-physics::step-physics-world w)
-        (luv-physics::map-physics-events
+        (step-physics-world w)
+        (map-physics-events
          (lambda (kind a b x y z speed datum)
            (declare (ignore b x y z speed datum))
            (when (and (eq kind :expired) (= a gobbet)) (setf expired-at (1+ i))))
          w))
       (check (and expired-at (<= 239 expired-at 241)) "the gobbet expired at step ~A" expired-at)
-      (check (not (luv-physics::physics-body-alive-p w gobbet))))
-    (let ((before (luv-physics::physics-world-state-hash w))
-          (e (handler-case (luv-physics::add-physics-body-of-kind w :anvil 1.5 3.0 1.5) (error (e) e))))
-      (check (typep e 'luv-physics:invalid-physics-parameter))
+      (check (not (physics-body-alive-p w gobbet))))
+    (let ((before (physics-world-state-hash w))
+          (e (handler-case (add-physics-body-of-kind w :anvil 1.5 3.0 1.5) (error (e) e))))
+      (check (typep e 'invalid-physics-parameter))
       (check (eq :anvil (luv-physics::invalid-physics-parameter-value e)))
-      (check (= before (luv-physics::physics-world-state-hash w)))
-      (check (eq t (luv-physics::validate-physics-world w))))))
+      (check (= before (physics-world-state-hash w)))
+      (check (eq t (validate-physics-world w))))))
 ;; JAU0EF-kinds-make-their-bodies ends here
 
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-throws-unpatterned]]
@@ -6506,44 +6506,44 @@ in the order of *physics-scene-features*. #K5DF9S"
     "Fountain: 2 drops a step in the cone, drops never meet; lava: 1 in 4 steps; same hash twice."
   (flet ((run ()
            (let* ((w (make-floor-world))
-                  (springs (list (luv-physics::make-fountain 4 -1 4) (luv-physics::make-lava-spring 8 -1 8)))
+                  (springs (list (make-fountain 4 -1 4) (make-lava-spring 8 -1 8)))
                   (drops 0) (gobbets 0) (pairs 0) (floor-contacts 0) (outside 0) (misplaced 0)
                   (slowest 10.0) (fastest 0.0) (widest 0.0) (quadrants '()) (returned '()))
              (dotimes (i 120)
                (push
-                (luv-physics::run-physics-springs
+                (run-physics-springs
                 w springs
                 (lambda (h)
-                  (multiple-value-bind (vx vy vz) (luv-physics::physics-body-velocity w h)
+                  (multiple-value-bind (vx vy vz) (physics-body-velocity w h)
                     (let ((speed (sqrt (+ (* vx vx) (* vy vy) (* vz vz)))))
                       (setf slowest (min slowest speed) fastest (max fastest speed)
                             widest (max widest (acos (min 1.0 (/ vy speed)))))
                       (pushnew (list (plusp vx) (plusp vz)) quadrants :test #'equal)
                       (unless (and (<= 3.999 speed 6.001) (>= (/ vy speed) (- (cos (/ pi 9)) 1e-5)))
                         (incf outside))))
-                  (let ((spring (if (eq :water-drop (luv-physics::physics-body-kind-name w h)) (first springs) (second springs)))
-                        (r (luv-physics::physics-body-radius w h)))
+                  (let ((spring (if (eq :water-drop (physics-body-kind-name w h)) (first springs) (second springs)))
+                        (r (physics-body-radius w h)))
                     (unless (every (lambda (got want) (< (abs (- got want)) 1e-6))
-                                   (multiple-value-list (luv-physics::physics-body-position w h))
+                                   (multiple-value-list (physics-body-position w h))
                                    (list (+ (luv-physics::physics-spring-x spring) 0.5)
                                          (+ (luv-physics::physics-spring-y spring) 1.0 r 0.01)
                                          (+ (luv-physics::physics-spring-z spring) 0.5)))
                       (incf misplaced)))
-                  (ecase (luv-physics::physics-body-kind-name w h)
+                  (ecase (physics-body-kind-name w h)
                     (:water-drop (incf drops)) (:lava-gobbet (incf gobbets)))))
                 returned)
-               (luv-physics::step-physics-world w)
+               (step-physics-world w)
                (let ((contacts (luv-physics::physics-world-contacts w)))
                  (dotimes (c (luv-physics::contact-columns-length contacts))
                    (let ((kind (aref (luv-physics::contact-columns-kind contacts) c))
                          (a (aref (luv-physics::contact-columns-handle-a contacts) c))
                          (b (aref (luv-physics::contact-columns-handle-b contacts) c)))
                      (cond ((and (= kind luv-physics::+contact-pair+)
-                                 (eq :water-drop (luv-physics::physics-body-kind-name w a))
-                                 (eq :water-drop (luv-physics::physics-body-kind-name w b)))
+                                 (eq :water-drop (physics-body-kind-name w a))
+                                 (eq :water-drop (physics-body-kind-name w b)))
                             (incf pairs))
                            ((and (= kind luv-physics::+contact-terrain+)
-                                 (eq :water-drop (luv-physics::physics-body-kind-name w a)))
+                                 (eq :water-drop (physics-body-kind-name w a)))
                             (incf floor-contacts)))))))
              (check (= drops 240) "~D drops in 120 steps" drops)
              (check (= gobbets 30) "~D gobbets in 120 steps" gobbets)
@@ -6562,12 +6562,12 @@ in the order of *physics-scene-features*. #K5DF9S"
              (check (= 4 (length quadrants)) "bearings in only ~D quadrants" (length quadrants))
              (check (zerop pairs) "~D contacts joined two drops" pairs)
              (check (plusp floor-contacts) "no drop reached the floor")
-             (check (eq t (luv-physics::validate-physics-world w)))
-             (luv-physics::physics-world-state-hash w))))
+             (check (eq t (validate-physics-world w)))
+             (physics-world-state-hash w))))
     (check (= (run) (run)) "two runs of the same springs differ"))
   (flet ((refusal (&rest arguments)
-           (handler-case (progn (apply #'luv-physics::make-physics-spring :lava-gobbet 1 1 1 arguments) :made)
-             (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+           (handler-case (progn (apply #'make-physics-spring :lava-gobbet 1 1 1 arguments) :made)
+             (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
     (check (equal (list (refusal :per-step 64) (refusal :per-step 65) (refusal :every 3600) (refusal :every 3601))
                   '(:made :per-step :made :every)))))
 ;; JAU0EF-springs-emit-by-rule ends here
@@ -6577,81 +6577,81 @@ in the order of *physics-scene-features*. #K5DF9S"
     "Walks at 4.3 m/s on the floor, jumps 1.27 cells once per press, climbs one block, not two."
   (let ((terrain (make-floor-terrain)))
     (flet ((walk (p steps &rest input)
-             (dotimes (i steps) (apply #'luv-physics::step-physics-player p terrain input))
+             (dotimes (i steps) (apply #'step-physics-player p terrain input))
              p))
-    (let ((p (luv-physics::make-physics-player 0.5 0 0.5)) (top 0d0) (landings 0) (was-grounded nil))
+    (let ((p (make-physics-player 0.5 0 0.5)) (top 0d0) (landings 0) (was-grounded nil))
       ;; walking
       (walk p 120 :move-x 1)
-      (check (< (abs (- (luv-physics::physics-player-vx p) 4.3d0)) 1d-9) "speed ~A" (luv-physics::physics-player-vx p))
-      (check (and (luv-physics::physics-player-grounded p) (= 0 (luv-physics::physics-player-y p)))
-             "soles at ~A" (luv-physics::physics-player-y p))
+      (check (< (abs (- (physics-player-vx p) 4.3d0)) 1d-9) "speed ~A" (physics-player-vx p))
+      (check (and (physics-player-grounded p) (= 0 (physics-player-y p)))
+             "soles at ~A" (physics-player-y p))
       ;; a held jump key: one jump, then the walker stays down
       (dotimes (i 360)
-        (luv-physics::step-physics-player p terrain :jump t)
-        (setf top (max top (luv-physics::physics-player-y p)))
-        (when (and (luv-physics::physics-player-grounded p) (not was-grounded)) (incf landings))
-        (setf was-grounded (luv-physics::physics-player-grounded p)))
+        (step-physics-player p terrain :jump t)
+        (setf top (max top (physics-player-y p)))
+        (when (and (physics-player-grounded p) (not was-grounded)) (incf landings))
+        (setf was-grounded (physics-player-grounded p)))
       (check (< (abs (- top 1.274d0)) 0.02) "the jump rose ~,3F cells" top)
       (check (= 1 landings) "~D landings with the key held" landings)
       (walk p 1)
       (walk p 1 :jump t)
-      (check (plusp (luv-physics::physics-player-vy p)) "a new press did not jump"))
+      (check (plusp (physics-player-vy p)) "a new press did not jump"))
     ;; a step one block high from x = 4, a wall two blocks high at z = 4
-    (luv-physics::fill-terrain terrain 4 0 0 16 1 2 t)
-    (luv-physics::fill-terrain terrain 0 0 4 2 2 5 t)
-    (let ((p (walk (luv-physics::make-physics-player 2.5 0 1) 240 :move-x 1)))
-      (check (and (= 1 (luv-physics::physics-player-y p)) (> (luv-physics::physics-player-x p) 4.5))
-             "the step was not climbed: x ~,3F, y ~,3F" (luv-physics::physics-player-x p) (luv-physics::physics-player-y p)))
-    (let ((p (luv-physics::make-physics-player 1 0 2.5)) (highest 0d0))
+    (fill-terrain terrain 4 0 0 16 1 2 t)
+    (fill-terrain terrain 0 0 4 2 2 5 t)
+    (let ((p (walk (make-physics-player 2.5 0 1) 240 :move-x 1)))
+      (check (and (= 1 (physics-player-y p)) (> (physics-player-x p) 4.5))
+             "the step was not climbed: x ~,3F, y ~,3F" (physics-player-x p) (physics-player-y p)))
+    (let ((p (make-physics-player 1 0 2.5)) (highest 0d0))
       (dotimes (i 240)
-        (luv-physics::step-physics-player p terrain :move-z 1)
-        (setf highest (max highest (luv-physics::physics-player-y p))))
-      (check (and (< (abs (- (luv-physics::physics-player-z p) 3.7d0)) 1d-6) (= 0 highest))
-             "at the wall: z ~,3F, highest y ~,3F" (luv-physics::physics-player-z p) highest))
-    (let ((low (make-floor-terrain)) (p (luv-physics::make-physics-player 10.5 0 10.5)) (top 0d0))
-      (luv-physics::fill-terrain low 8 3 8 13 4 13 t)
+        (step-physics-player p terrain :move-z 1)
+        (setf highest (max highest (physics-player-y p))))
+      (check (and (< (abs (- (physics-player-z p) 3.7d0)) 1d-6) (= 0 highest))
+             "at the wall: z ~,3F, highest y ~,3F" (physics-player-z p) highest))
+    (let ((low (make-floor-terrain)) (p (make-physics-player 10.5 0 10.5)) (top 0d0))
+      (fill-terrain low 8 3 8 13 4 13 t)
       (dotimes (i 120)
-        (luv-physics::step-physics-player p low :jump (<= 10 i 14))
-        (setf top (max top (luv-physics::physics-player-y p))))
+        (step-physics-player p low :jump (<= 10 i 14))
+        (setf top (max top (physics-player-y p))))
       (check (< (abs (- top (- 3 (luv-physics::physics-player-height p)))) 1d-6)
              "under the ceiling the soles rose to ~,4F" top))
     ;; the floor world is resident up to x = 32; beyond is a wall
-    (let ((p (walk (luv-physics::make-physics-player 30 0 10.5) 240 :move-x 1)))
-      (check (< (abs (- (luv-physics::physics-player-x p) 31.7d0)) 1d-6)
-             "the walker left the resident world: x ~,3F" (luv-physics::physics-player-x p))))))
+    (let ((p (walk (make-physics-player 30 0 10.5) 240 :move-x 1)))
+      (check (< (abs (- (physics-player-x p) 31.7d0)) 1d-6)
+             "the walker left the resident world: x ~,3F" (physics-player-x p))))))
 ;; H7P4CX-walker-follows-the-rule ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-meets-only-its-path]]
 (define-claim "H7P4CX" walker-meets-only-its-path
     "Walls stop the walker on all four sides; a pit one cell wide takes it in; slabs beside its column do not cut its jump short."
   (flet ((jump-top (terrain)
-           (let ((p (luv-physics::make-physics-player 10.5 0 10.5)) (top 0d0))
+           (let ((p (make-physics-player 10.5 0 10.5)) (top 0d0))
              (dotimes (i 120)
-               (luv-physics::step-physics-player p terrain :jump (<= 10 i 14))
-               (setf top (max top (luv-physics::physics-player-y p))))
+               (step-physics-player p terrain :jump (<= 10 i 14))
+               (setf top (max top (physics-player-y p))))
              top)))
     (let ((pen (make-floor-terrain)))
-      (luv-physics::fill-terrain pen 7 0 7 14 2 8 t)
-      (luv-physics::fill-terrain pen 7 0 13 14 2 14 t)
-      (luv-physics::fill-terrain pen 7 0 7 8 2 14 t)
-      (luv-physics::fill-terrain pen 13 0 7 14 2 14 t)
-      (loop for (move-x move-z reader want) in '((1 0 luv-physics::physics-player-x 12.7d0)
-                                                 (-1 0 luv-physics::physics-player-x 8.3d0)
-                                                 (0 1 luv-physics::physics-player-z 12.7d0)
-                                                 (0 -1 luv-physics::physics-player-z 8.3d0))
-            do (let ((p (luv-physics::make-physics-player 10.5 0 10.5)))
-                 (dotimes (i 240) (luv-physics::step-physics-player p pen :move-x move-x :move-z move-z))
+      (fill-terrain pen 7 0 7 14 2 8 t)
+      (fill-terrain pen 7 0 13 14 2 14 t)
+      (fill-terrain pen 7 0 7 8 2 14 t)
+      (fill-terrain pen 13 0 7 14 2 14 t)
+      (loop for (move-x move-z reader want) in '((1 0 physics-player-x 12.7d0)
+                                                 (-1 0 physics-player-x 8.3d0)
+                                                 (0 1 physics-player-z 12.7d0)
+                                                 (0 -1 physics-player-z 8.3d0))
+            do (let ((p (make-physics-player 10.5 0 10.5)))
+                 (dotimes (i 240) (step-physics-player p pen :move-x move-x :move-z move-z))
                  (check (< (abs (- (funcall reader p) want)) 1d-6) "walking (~D, ~D) it stopped at ~,6F, not ~,1F"
                         move-x move-z (funcall reader p) want))))
-    (let ((pit (make-floor-terrain)) (p (luv-physics::make-physics-player 10.5 0 10.5)))
-      (luv-physics::fill-terrain pit 10 -1 10 11 0 11 nil)
-      (luv-physics::fill-terrain pit 10 -2 10 11 -1 11 t)
-      (dotimes (i 120) (luv-physics::step-physics-player p pit))
-      (check (and (= -1 (luv-physics::physics-player-y p)) (luv-physics::physics-player-grounded p))
-             "over the pit the soles stand at ~,4F" (luv-physics::physics-player-y p)))
+    (let ((pit (make-floor-terrain)) (p (make-physics-player 10.5 0 10.5)))
+      (fill-terrain pit 10 -1 10 11 0 11 nil)
+      (fill-terrain pit 10 -2 10 11 -1 11 t)
+      (dotimes (i 120) (step-physics-player p pit))
+      (check (and (= -1 (physics-player-y p)) (physics-player-grounded p))
+             "over the pit the soles stand at ~,4F" (physics-player-y p)))
     (let ((open (jump-top (make-floor-terrain))) (beside (make-floor-terrain)))
-      (luv-physics::fill-terrain beside 3 3 10 6 4 11 t)
-      (luv-physics::fill-terrain beside 10 3 3 11 4 6 t)
+      (fill-terrain beside 3 3 10 6 4 11 t)
+      (fill-terrain beside 10 3 3 11 4 6 t)
       (check (< (abs (- open 1.274d0)) 0.02) "on open ground the jump rose ~,3F cells" open)
       (let ((top (jump-top beside)))
         (check (= open top) "beside the slabs the jump rose ~,4F cells, on open ground ~,4F" top open)))))
@@ -6661,9 +6661,9 @@ in the order of *physics-scene-features*. #K5DF9S"
 (define-claim "H7P4CX" frame-rounding-allowance
     "A frame 0.7e-12 s short of a step runs it; 1.3e-12 s short, it does not."
   (let* ((terrain (make-floor-terrain))
-         (dt (luv-physics::physics-player-step-seconds (luv-physics::make-physics-player 1.5 0 1.5))))
+         (dt (luv-physics::physics-player-step-seconds (make-physics-player 1.5 0 1.5))))
     (flet ((steps (short)
-             (luv-physics::advance-physics-player (luv-physics::make-physics-player 1.5 0 1.5) terrain (- dt short))))
+             (advance-physics-player (make-physics-player 1.5 0 1.5) terrain (- dt short))))
       (check (= 1 (steps 0.7d-12)) "0.7e-12 s short: ~D steps" (steps 0.7d-12))
       (check (= 0 (steps 1.3d-12)) "1.3e-12 s short: ~D steps" (steps 1.3d-12)))))
 ;; H7P4CX-frame-rounding-allowance ends here
@@ -6675,76 +6675,76 @@ in the order of *physics-scene-features*. #K5DF9S"
     (loop for (mx mz wx wz) in (list (list 1d0 1d0 (/ 4.3d0 (sqrt 2d0)) (/ 4.3d0 (sqrt 2d0)))
                                      (list 1.5d0 0d0 4.3d0 0d0)
                                      (list 0.3d0 -0.4d0 1.29d0 -1.72d0))
-          do (let ((p (luv-physics::make-physics-player 8.5 0 8.5)))
-               (dotimes (i 120) (luv-physics::step-physics-player p terrain :move-x mx :move-z mz))
-               (check (and (< (abs (- (luv-physics::physics-player-vx p) wx)) 1d-9)
-                           (< (abs (- (luv-physics::physics-player-vz p) wz)) 1d-9))
+          do (let ((p (make-physics-player 8.5 0 8.5)))
+               (dotimes (i 120) (step-physics-player p terrain :move-x mx :move-z mz))
+               (check (and (< (abs (- (physics-player-vx p) wx)) 1d-9)
+                           (< (abs (- (physics-player-vz p) wz)) 1d-9))
                       "input (~A, ~A): velocity (~A, ~A)" mx mz
-                      (luv-physics::physics-player-vx p) (luv-physics::physics-player-vz p))))))
+                      (physics-player-vx p) (physics-player-vz p))))))
 ;; H7P4CX-input-length-capped ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-refuses-bad-input]]
 (define-claim "H7P4CX" walker-refuses-bad-input
     "NaN, infinite and out-of-range walker input signals a condition and changes nothing."
   (let ((terrain (make-floor-terrain)))
-    (let* ((p (luv-physics::make-physics-player 1.5 0 1.5))
+    (let* ((p (make-physics-player 1.5 0 1.5))
            (nan (sb-kernel:make-double-float -524288 0))
            (before (copy-structure p)))
       (flet ((refused (type thunk)
                (check (typep (handler-case (progn (funcall thunk) nil) (error (e) e)) type)
                       "not a ~S" type)
                (check (equalp p before) "the walker changed")))
-        (refused 'luv-physics:invalid-physics-number
-                 (lambda () (luv-physics::step-physics-player p terrain :move-x nan)))
-        (refused 'luv-physics:invalid-physics-number
-                 (lambda () (luv-physics::step-physics-player p terrain :move-z sb-ext:single-float-negative-infinity)))
-        (refused 'luv-physics:invalid-physics-number
-                 (lambda () (luv-physics::advance-physics-player p terrain sb-ext:double-float-positive-infinity)))
-        (refused 'luv-physics:invalid-physics-parameter
-                 (lambda () (luv-physics::advance-physics-player p terrain -1/60)))
-        (refused 'luv-physics:invalid-physics-parameter (lambda () (luv-physics::make-physics-player 1e6 0 0)))
-        (refused 'luv-physics:invalid-physics-number (lambda () (luv-physics::make-physics-player 0 :up 0)))))))
+        (refused 'invalid-physics-number
+                 (lambda () (step-physics-player p terrain :move-x nan)))
+        (refused 'invalid-physics-number
+                 (lambda () (step-physics-player p terrain :move-z sb-ext:single-float-negative-infinity)))
+        (refused 'invalid-physics-number
+                 (lambda () (advance-physics-player p terrain sb-ext:double-float-positive-infinity)))
+        (refused 'invalid-physics-parameter
+                 (lambda () (advance-physics-player p terrain -1/60)))
+        (refused 'invalid-physics-parameter (lambda () (make-physics-player 1e6 0 0)))
+        (refused 'invalid-physics-number (lambda () (make-physics-player 0 :up 0)))))))
 ;; H7P4CX-walker-refuses-bad-input ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-conses-nothing]]
 (define-claim "H7P4CX" walker-conses-nothing
     "Steps and frames of the walker, given double-floats, cons 0 bytes."
   (let ((terrain (make-floor-terrain)))
-    (luv-physics::fill-terrain terrain 4 0 0 16 1 2 t)
-    (let ((p (luv-physics::make-physics-player 0.5 0 1)))
+    (fill-terrain terrain 4 0 0 16 1 2 t)
+    (let ((p (make-physics-player 0.5 0 1)))
       (flet ((walk (n)
                (dotimes (i n)
-                 (luv-physics::step-physics-player
-                  p terrain :move-x (if (< (luv-physics::physics-player-x p) 12) 1d0 -1d0) :move-z 0.3d0
+                 (step-physics-player
+                  p terrain :move-x (if (< (physics-player-x p) 12) 1d0 -1d0) :move-z 0.3d0
                   :jump (evenp (floor i 30))))))
         (walk 100)
         (sb-ext:gc)
         (let ((before (sb-ext:get-bytes-consed)))
           (walk 100000)
-          (dotimes (i 100000) (luv-physics::advance-physics-player p terrain (/ 1d0 60) :move-x 1d0))
+          (dotimes (i 100000) (advance-physics-player p terrain (/ 1d0 60) :move-x 1d0))
           (check (= before (sb-ext:get-bytes-consed)) "the walker consed ~D bytes"
                  (- (sb-ext:get-bytes-consed) before)))
-        (check (> (luv-physics::physics-player-x p) 4) "the walker did not get onto the step")))))
+        (check (> (physics-player-x p) 4) "the walker did not get onto the step")))))
 ;; H7P4CX-walker-conses-nothing ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-kicks-balls]]
 (define-claim "H7P4CX" walker-kicks-balls
     "Frames run at most 8 steps; the posted walker pushes a ball it walks into."
   (multiple-value-bind (world terrain) (make-floor-world)
-    (let ((p (luv-physics::make-physics-player 1.5 0 5.5))
-          (ball (luv-physics::add-physics-body world 4.5 0.25 5.5 :radius 0.25)))
-      (check (= 2 (luv-physics::advance-physics-player p terrain 1/60)))
-      (check (= 8 (luv-physics::advance-physics-player p terrain 1.0)))
-      (check (= 0 (luv-physics::advance-physics-player p terrain 0.001)))
+    (let ((p (make-physics-player 1.5 0 5.5))
+          (ball (add-physics-body world 4.5 0.25 5.5 :radius 0.25)))
+      (check (= 2 (advance-physics-player p terrain 1/60)))
+      (check (= 8 (advance-physics-player p terrain 1.0)))
+      (check (= 0 (advance-physics-player p terrain 0.001)))
       (dotimes (i 90)
-        (luv-physics::advance-physics-player p terrain 1/60 :move-x 1)
-        (luv-physics::post-physics-player world p)
-        (luv-physics::step-physics-world world))
-      (let ((x (luv-physics::physics-body-position world ball)))
-        (check (> x (+ (luv-physics::physics-player-x p) 0.3)) "the ball at ~,3F is not ahead of the walker at ~,3F"
-               x (luv-physics::physics-player-x p))
+        (advance-physics-player p terrain 1/60 :move-x 1)
+        (post-physics-player world p)
+        (step-physics-world world))
+      (let ((x (physics-body-position world ball)))
+        (check (> x (+ (physics-player-x p) 0.3)) "the ball at ~,3F is not ahead of the walker at ~,3F"
+               x (physics-player-x p))
         (check (> x 5.0) "the ball only reached x = ~,3F" x))
-      (check (eq t (luv-physics::validate-physics-world world))))))
+      (check (eq t (validate-physics-world world))))))
 ;; H7P4CX-walker-kicks-balls ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-on-every-axis]]
@@ -6821,19 +6821,19 @@ in the order of *physics-scene-features*. #K5DF9S"
 (define-claim "B3NCH5" measure-basin-reports-the-world
     "measure-basin over steps 20..24 of 20 balls: the world's own contacts, colours, overflow and deepest; phases in order."
   (let ((m (luv-physics::measure-basin 20 :from 20 :to 24))
-        (w (luv-physics::make-basin-world 20)) (deepest 0.0))
+        (w (make-basin-world 20)) (deepest 0.0))
     (dotimes (i 24)
       (step-physics-world w)
-      (setf deepest (max deepest (luv-physics::physics-world-max-penetration w))))
-    (check (equal (list 20 :scalar (luv-physics::physics-world-last-step-contact-count w)
-                        (luv-physics::physics-world-last-step-color-count w)
-                        (luv-physics::physics-world-overflow-count w) deepest)
+      (setf deepest (max deepest (physics-world-max-penetration w))))
+    (check (equal (list 20 :scalar (physics-world-last-step-contact-count w)
+                        (physics-world-last-step-color-count w)
+                        (physics-world-overflow-count w) deepest)
                   (list (getf m :balls) (getf m :kernels) (getf m :contacts) (getf m :colours)
                         (getf m :overflow) (getf m :deepest)))
            "measured ~S" m)
     (check (plusp (getf m :contacts)))
-    (check (equal luv-physics:*physics-phases* (mapcar #'car (getf m :phases))))
-    (check (equal luv-physics:*physics-phases* (mapcar #'car (getf m :phase-bytes))))
+    (check (equal *physics-phases* (mapcar #'car (getf m :phases))))
+    (check (equal *physics-phases* (mapcar #'car (getf m :phase-bytes))))
     (check (every (lambda (p) (>= (cdr p) 0)) (getf m :phases)))
     (check (<= (reduce #'+ (getf m :phases) :key #'cdr) (getf m :mean)) "phases ~S over a mean step of ~A ms"
            (getf m :phases) (getf m :mean))
@@ -6843,7 +6843,7 @@ in the order of *physics-scene-features*. #K5DF9S"
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-benchmark-tables-line-up]]
 (define-claim "B3NCH5" benchmark-tables-line-up
     "The basin benchmark over 20 balls: a row per family, and every table's lines with their bars under the header's."
-  (let* ((text (with-output-to-string (s) (luv-physics::run-basin-benchmark :counts '(20) :stream s)))
+  (let* ((text (with-output-to-string (s) (run-basin-benchmark :counts '(20) :stream s)))
          (lines (uiop:split-string text :separator (string #\Newline)))
          (tables '()) (current nil)
          (families (available-kernel-families)))
@@ -6890,14 +6890,14 @@ in the order of *physics-scene-features*. #K5DF9S"
 (define-claim "B3NCH5" against-measures-this-tree
     "A bench-against process on this tree reports this image's state hash; the summary takes medians and ranges per family and tree, and the table divides by the oldest."
   (let ((lines (luv-physics::against-sample (asdf:system-source-directory "luv-physics") '(:scalar) 200 5 20))
-        (w (luv-physics::make-basin-world 200 :kernels :scalar)))
-    (dotimes (i 20) (luv-physics::step-physics-world w))
+        (w (make-basin-world 200 :kernels :scalar)))
+    (dotimes (i 20) (step-physics-world w))
     (check (= 1 (length lines)) "~D lines: ~S" (length lines) lines)
     (destructuring-bind (family ms hash) (first lines)
       (check (eq family :scalar))
       (check (< 0 ms 1000) "~,4F ms a step" ms)
-      (check (= hash (luv-physics::physics-world-state-hash w)) "the process's hash ~D, this image's ~D"
-             hash (luv-physics::physics-world-state-hash w))))
+      (check (= hash (physics-world-state-hash w)) "the process's hash ~D, this image's ~D"
+             hash (physics-world-state-hash w))))
   (let ((summary (luv-physics::against-summary
                   '(("old" :scalar 4.0d0 7) ("new" :scalar 5.0d0 9) ("old" :avx2 1.0d0 7) ("new" :avx2 1.5d0 9)
                     ("new" :scalar 4.0d0 9) ("old" :scalar 6.0d0 7) ("old" :avx2 3.0d0 7) ("new" :avx2 1.0d0 9)
@@ -6934,28 +6934,28 @@ in the order of *physics-scene-features*. #K5DF9S"
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-steps-cons-nothing]]
 (define-claim "B3NCH5" steps-cons-nothing
     "Thousands of steps of an awake pile, and of the fountain with drops added, cons 0 bytes."
-  (let ((world (luv-physics::make-basin-world 200)))
-    (dotimes (i 1700) (luv-physics::step-physics-world world))
+  (let ((world (make-basin-world 200)))
+    (dotimes (i 1700) (step-physics-world world))
     ;; a collection first closes the allocation region, so bytes consed before are counted
     ;; before; the steps after it leave time for the collector's own after-work
     (sb-ext:gc)
-    (dotimes (i 100) (luv-physics::step-physics-world world))
+    (dotimes (i 100) (step-physics-world world))
     (let ((before (sb-ext:get-bytes-consed)))
-      (dotimes (i 3000) (luv-physics::step-physics-world world))
+      (dotimes (i 3000) (step-physics-world world))
       (check (= before (sb-ext:get-bytes-consed)) "the pile consed ~D bytes in 3000 steps"
              (- (sb-ext:get-bytes-consed) before))))
-  (multiple-value-bind (world script) (luv-physics::make-scene-world :fountain :kernels :scalar)
+  (multiple-value-bind (world script) (make-scene-world :fountain :kernels :scalar)
     (dotimes (i 600)
       (funcall script i)
-      (luv-physics::step-physics-world world))
+      (step-physics-world world))
     (sb-ext:gc)
     (loop for i from 600 below 700
           do (funcall script i)
-             (luv-physics::step-physics-world world))
+             (step-physics-world world))
     (let ((before (sb-ext:get-bytes-consed)))
       (loop for i from 700 below 3700
             do (funcall script i)
-               (luv-physics::step-physics-world world))
+               (step-physics-world world))
       (check (= before (sb-ext:get-bytes-consed)) "the fountain consed ~D bytes in 3000 steps"
              (- (sb-ext:get-bytes-consed) before)))))
 ;; B3NCH5-steps-cons-nothing ends here
@@ -6964,9 +6964,9 @@ in the order of *physics-scene-features*. #K5DF9S"
 (define-claim "B3NCH5" measure-steps-counts-consing
     "A script consing 100000 bytes a step reads as 100000 to 150000 bytes a step; no script, under 1000."
   (flet ((world ()
-           (let ((w (luv-physics::make-physics-world :terrain (luv-physics::make-basin-terrain))))
+           (let ((w (make-physics-world :terrain (make-basin-terrain))))
              (dotimes (i 10) (add-physics-body w (+ 1.0 (* 0.6 i)) 0.5 4.0 :radius 0.25))
-             (dotimes (i 60) (luv-physics::step-physics-world w))
+             (dotimes (i 60) (step-physics-world w))
              w)))
     (let* ((kept nil)
            (bytes (nth-value 1 (luv-physics::measure-steps
@@ -6991,7 +6991,7 @@ in the order of *physics-scene-features*. #K5DF9S"
     (flet ((hash-after-30 (features)
              (multiple-value-bind (world before) (luv-physics::feature-scene :fountain :features features)
                (dotimes (i 30) (when before (funcall before i)) (step-physics-world world))
-               (luv-physics::physics-world-state-hash world))))
+               (physics-world-state-hash world))))
       (let ((special (hash-after-30 (third (assoc :fountain luv-physics::+feature-scenes+))))
             (general (hash-after-30 luv-physics::+physics-features+)))
         (check (equal (subseq words 0 3) '("feature" "fountain" "specialised")) "printed ~S" text)
@@ -7089,8 +7089,8 @@ in the order of *physics-scene-features*. #K5DF9S"
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-piles-come-to-rest]]
 (define-claim "X7R3M5" piles-come-to-rest
     "Floor balls of a dead pile stop spinning, and a pile hit by a thrown ball sleeps again, in every order."
-  (let* ((world (luv-physics::make-basin-world 300 :kernels :auto))
-         (balls (luv-physics::physics-world-handles world))
+  (let* ((world (make-basin-world 300 :kernels :auto))
+         (balls (physics-world-handles world))
          (spin 0.0))
     (dotimes (i 480) (step-physics-world world))
     (dolist (b balls)
@@ -7118,13 +7118,13 @@ in the order of *physics-scene-features*. #K5DF9S"
     "A ball spawned pinched between two sleepers is pushed out gently."
   (multiple-value-bind (load speed) (luv-physics::pinch-between-sleepers :seconds 1)
     (check (< load 50.0) "a contact carried ~,1F times the ball's weight over a substep" load)
-    (check (<= speed (+ luv-physics::*physics-contact-push-max* 0.01)) "the ball moved at ~,3F m/s" speed)))
+    (check (<= speed (+ *physics-contact-push-max* 0.01)) "the ball moved at ~,3F m/s" speed)))
 ;; X7R3M5-pinch-holds ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-pinch-as-described]]
 (define-claim "X7R3M5" pinch-as-described
     "The pinch's two figures over half a second equal those of the scene built from the text."
-  (let* ((world (make-physics-world :terrain (luv-physics::make-basin-terrain) :sleep t))
+  (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep t))
          (h (/ (luv-physics::physics-world-step-seconds world) (luv-physics::physics-world-substeps world)))
          (largest 0.0) (fastest 0.0))
     (add-physics-body world 3.6 0.25 4.0 :radius 0.25)
@@ -7153,7 +7153,7 @@ in the order of *physics-scene-features*. #K5DF9S"
              (check (and asleep (< (abs err) 0.002)) "~A: height error ~,5F m, ~:[awake~;asleep~]"
                     label err asleep))))
     (holds "radius 0.01" :radius 0.01)
-    (holds "largest radius" :radius (- luv-physics::*physics-reach-limit* luv-physics::*physics-speculative-margin*))
+    (holds "largest radius" :radius (- *physics-reach-limit* *physics-speculative-margin*))
     (holds "step 1/10" :step-seconds 1/10)
     (holds "step 1/2000" :step-seconds 1/2000 :seconds 3)
     (holds "x = 10 km" :x 1e4))
@@ -7199,11 +7199,11 @@ in the order of *physics-scene-features*. #K5DF9S"
     (multiple-value-bind (deepest fastest drop overlap)
         (luv-physics::stack-in-shaft '(1.0 1000.0) :seconds 5 :sleep sleep)
       (declare (ignore fastest))
-      (check (< deepest (* 2 luv-physics::*physics-linear-slop*))
+      (check (< deepest (* 2 *physics-linear-slop*))
              "sleeping ~:[off~;on~]: the heavy ball sank ~,4F m into the light one" sleep deepest)
-      (check (< (abs (- overlap luv-physics::*physics-linear-slop*)) 0.001)
+      (check (< (abs (- overlap *physics-linear-slop*)) 0.001)
              "sleeping ~:[off~;on~]: an overlap of ~,4F m is left" sleep overlap)
-      (check (< (abs (- drop (* 2 luv-physics::*physics-linear-slop*))) 0.002)
+      (check (< (abs (- drop (* 2 *physics-linear-slop*))) 0.002)
              "sleeping ~:[off~;on~]: the top ball rests ~,4F m below the top of two touching balls"
              sleep drop)))
   (let* ((world (make-floor-world :sleep nil))
@@ -7214,7 +7214,7 @@ in the order of *physics-scene-features*. #K5DF9S"
       (step-physics-world world)
       (setf deepest (max deepest (physics-world-max-penetration world))))
     (check (< deepest 0.01) "the heavy ball sank ~,4F m into the layer" deepest)
-    (check (< (abs (- (nth-value 1 (physics-body-position world heavy)) (- 0.95 (* 2 luv-physics::*physics-linear-slop*))))
+    (check (< (abs (- (nth-value 1 (physics-body-position world heavy)) (- 0.95 (* 2 *physics-linear-slop*))))
               0.002)
            "the heavy ball rests at ~,4F m" (nth-value 1 (physics-body-position world heavy))))
   (let* ((world (make-floor-world :sleep nil))
@@ -7237,7 +7237,7 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (< 0.0 fastest 10.0) "the fastest ball of the crowd moved at ~,3F m/s" fastest)
     (check (< deepest 0.01) "the crowd still overlaps by ~,4F m" deepest)
     (check (not (null ok)) "a number went non-finite or the world is invalid"))
-  (let ((push-max luv-physics::*physics-contact-push-max*) (weightless 0.0))
+  (let ((push-max *physics-contact-push-max*) (weightless 0.0))
     (dolist (gravity '((0 -9.81 0) (0 0 0)))
       (multiple-value-bind (fastest median worst deepest) (luv-physics::heaps-at-one-point :gravity gravity)
         (declare (ignore worst))
@@ -7246,7 +7246,7 @@ in the order of *physics-scene-features*. #K5DF9S"
         (check (< fastest 10.0) "a ball of a heap reached ~,3F m/s" fastest)
         (check (< deepest 0.01) "a heap still overlaps by ~,4F m" deepest)
         (setf weightless median)))
-    (let ((without (let ((luv-physics:*physics-crowded-depth* 1e9))
+    (let ((without (let ((*physics-crowded-depth* 1e9))
                      (nth-value 1 (luv-physics::heaps-at-one-point :gravity '(0 0 0))))))
       (check (> without weightless)
              "without the depth test the weightless heaps' median parting is ~,3F m/s, not above ~,3F m/s"
@@ -7260,7 +7260,7 @@ in the order of *physics-scene-features*. #K5DF9S"
     (multiple-value-bind (bytes fastest parting) (luv-physics::heap-footprint 2000 :every 5)
       (check (<= bytes (* 1.5 small)) "2000 balls hold ~D bytes a body, 100 balls ~D" bytes small)
       (check (< fastest 10.0) "a ball of the heap reached ~,3F m/s" fastest)
-      (check (<= parting luv-physics::*physics-contact-push-max*)
+      (check (<= parting *physics-contact-push-max*)
              "a pair overlapping by more than the slop parted at ~,3F m/s" parting))))
 ;; X7R3M5-heap-at-one-point-bounded ends here
 
@@ -7269,7 +7269,7 @@ in the order of *physics-scene-features*. #K5DF9S"
     "A ball spawned inside the floor leaves at the push-out speed and rests on top."
   (dolist (depth '(0.2 0.5))
     (multiple-value-bind (speed y rest) (luv-physics::buried-ball depth)
-      (check (<= speed (+ luv-physics::*physics-contact-push-max* 0.01))
+      (check (<= speed (+ *physics-contact-push-max* 0.01))
              "from ~,1F m down it moved at ~,3F m/s" depth speed)
       (check (< (abs (- y rest)) 0.002) "from ~,1F m down it ended at ~,4F m, not ~,4F m" depth y rest))))
 ;; X7R3M5-buried-ball-climbs-out ends here
@@ -7431,31 +7431,31 @@ in the order of *physics-scene-features*. #K5DF9S"
     "A recorded run has the unrecorded run's hash; frames hold the bodies; off, a step conses 0 B."
   (let ((plain (make-basin-world 300 :sleep t))
         (recorded (make-basin-world 300 :sleep t)))
-    (dotimes (i 120) (luv-physics::step-physics-world plain))
-    (let ((recording (luv-physics::start-physics-recording recorded)))
-      (dotimes (i 120) (luv-physics::step-physics-world recorded))
-      (luv-physics::stop-physics-recording recorded)
-      (check (= (luv-physics::physics-world-state-hash plain) (luv-physics::physics-world-state-hash recorded))
-             "recorded ~D, unrecorded ~D" (luv-physics::physics-world-state-hash recorded)
-             (luv-physics::physics-world-state-hash plain))
-      (check (= 121 (luv-physics::physics-recording-frame-count recording)))
+    (dotimes (i 120) (step-physics-world plain))
+    (let ((recording (start-physics-recording recorded)))
+      (dotimes (i 120) (step-physics-world recorded))
+      (stop-physics-recording recorded)
+      (check (= (physics-world-state-hash plain) (physics-world-state-hash recorded))
+             "recorded ~D, unrecorded ~D" (physics-world-state-hash recorded)
+             (physics-world-state-hash plain))
+      (check (= 121 (physics-recording-frame-count recording)))
       (let* ((frames (luv-physics::physics-recording-frames recording))
              (last (aref frames 120))
              (xyz (luv-physics::physics-recording-xyz recording))
              (awake (luv-physics::physics-world-awake recorded)))
         (check (every (lambda (f) (= 300 (aref f 1))) frames))
-        (check (= (aref last 2) (luv-physics::physics-world-awake-count recorded)))
+        (check (= (aref last 2) (physics-world-awake-count recorded)))
         (check (loop for row below (luv-physics::body-columns-length awake)
                      for k = (* 3 (+ (aref last 0) row))
                      always (and (= (aref xyz k) (aref (luv-physics::body-columns-x awake) row))
                                  (= (aref xyz (+ k 2)) (aref (luv-physics::body-columns-z awake) row))))
                "the last frame's awake centres are not the world's"))
-      (check (null (luv-physics::physics-world-step-hook recorded)))
-      (luv-physics::step-physics-world recorded)
+      (check (null (physics-world-step-hook recorded)))
+      (step-physics-world recorded)
       (let ((run 0) (longest 0))
         (dotimes (i 120)
           (let ((before (sb-ext:get-bytes-consed)))
-            (luv-physics::step-physics-world recorded)
+            (step-physics-world recorded)
             (setf run (if (zerop (- (sb-ext:get-bytes-consed) before)) (1+ run) 0)
                   longest (max longest run))))
         (check (>= longest 10) "after the recording stopped, at most ~D steps in a row consed nothing"
@@ -7467,21 +7467,21 @@ in the order of *physics-scene-features*. #K5DF9S"
   "A sleeping basin of BALLS recorded every EVERY steps for STEPS steps: the recording, stopped,
 and the world. #G4WXCJ"
   (let* ((world (make-basin-world balls :sleep t))
-         (recording (luv-physics::start-physics-recording world :every every)))
-    (dotimes (i steps) (luv-physics::step-physics-world world))
-    (luv-physics::stop-physics-recording world)
+         (recording (start-physics-recording world :every every)))
+    (dotimes (i steps) (step-physics-world world))
+    (stop-physics-recording world)
     (values recording world)))
 
 (define-claim "G4WXCJ" recording-keeps-its-pace
     "Recorded every fourth step for 120 steps, a basin of 30 holds 31 frames, the last its final state."
   (multiple-value-bind (recording world) (recorded-basin 30 120 4)
-    (check (= 31 (luv-physics::physics-recording-frame-count recording))
-           "~D frames" (luv-physics::physics-recording-frame-count recording))
+    (check (= 31 (physics-recording-frame-count recording))
+           "~D frames" (physics-recording-frame-count recording))
     (let* ((frames (luv-physics::physics-recording-frames recording))
            (last (aref frames (1- (fill-pointer frames))))
            (xyz (luv-physics::physics-recording-xyz recording))
            (awake (luv-physics::physics-world-awake world)))
-      (check (= (aref last 2) (luv-physics::physics-world-awake-count world)))
+      (check (= (aref last 2) (physics-world-awake-count world)))
       (check (loop for row below (luv-physics::body-columns-length awake)
                    for k = (* 3 (+ (aref last 0) row))
                    always (and (= (aref xyz k) (aref (luv-physics::body-columns-x awake) row))
@@ -7495,12 +7495,12 @@ and the world. #G4WXCJ"
     "A recording may take every step up to every 3600th; 0 and 3601 are refused, naming :every."
   (let ((outcomes (loop for every in '(0 1 3600 3601)
                         collect (let ((w (make-floor-world)))
-                                  (handler-case (progn (luv-physics::start-physics-recording w :every every)
-                                                       (luv-physics::stop-physics-recording w)
+                                  (handler-case (progn (start-physics-recording w :every every)
+                                                       (stop-physics-recording w)
                                                        :recorded)
-                                    (luv-physics::invalid-physics-parameter (e)
+                                    (invalid-physics-parameter (e)
                                       (if (eq :every (luv-physics::invalid-physics-parameter-name e))
-                                          (and (null (luv-physics::physics-world-step-hook w)) :refused)
+                                          (and (null (physics-world-step-hook w)) :refused)
                                           (princ-to-string e))))))))
     (check (equal outcomes '(:refused :recorded :recorded :refused)) "every 0, 1, 3600 and 3601: ~S" outcomes)))
 ;; G4WXCJ-recording-pace-bounded ends here
@@ -7509,16 +7509,16 @@ and the world. #G4WXCJ"
 (define-claim "G4WXCJ" recording-sees-boxes
     "Each recorded step holds the posted player box at the player's middle."
   (multiple-value-bind (world terrain) (make-floor-world)
-    (let ((player (luv-physics::make-physics-player 2.5d0 0d0 2.5d0))
-          (recording (luv-physics::start-physics-recording world))
+    (let ((player (make-physics-player 2.5d0 0d0 2.5d0))
+          (recording (start-physics-recording world))
           (middles '()))
       (dotimes (i 30)
-        (luv-physics::advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
-        (luv-physics::post-physics-player world player)
-        (push (list (luv-physics::physics-player-x player) (+ 0.9d0 (luv-physics::physics-player-y player)))
+        (advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
+        (post-physics-player world player)
+        (push (list (physics-player-x player) (+ 0.9d0 (physics-player-y player)))
               middles)
-        (luv-physics::step-physics-world world))
-      (luv-physics::stop-physics-recording world)
+        (step-physics-world world))
+      (stop-physics-recording world)
       (let ((boxes (reverse (luv-physics::physics-recording-boxes recording))))
         (check (equal (loop for f from 1 to 30 collect f) (mapcar #'first boxes)))
         (check (every (lambda (box middle)
@@ -7537,9 +7537,9 @@ and the world. #G4WXCJ"
          (hs (loop for (kind r x) in '((-5 0.1 2.5) (7 0.2 4.5) (300 0.3 6.5))
                    collect (add-physics-body w x (- r 0.005) 3.5 :radius r :kind kind))))
     (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w (third hs))))
-    (let ((recording (luv-physics::start-physics-recording w)))
+    (let ((recording (start-physics-recording w)))
       (dotimes (i 3) (step-physics-world w))
-      (luv-physics::stop-physics-recording w)
+      (stop-physics-recording w)
       (let* ((frames (luv-physics::physics-recording-frames recording))
              (xyz (luv-physics::physics-recording-xyz recording))
              (radius (luv-physics::physics-recording-radius recording))
@@ -7550,8 +7550,8 @@ and the world. #G4WXCJ"
         (check (every (lambda (f) (= 3 (aref f 1))) frames))
         (check (equal (loop for f across frames collect (aref f 0)) '(0 3 6 9)))
         (check (equalp last (vector 9 3 (physics-world-awake-count w) (physics-world-sleeping-count w)
-                                    (luv-physics::physics-world-last-step-contact-count w)
-                                    (* 1000 (luv-physics::physics-world-last-step-real-seconds w))
+                                    (physics-world-last-step-contact-count w)
+                                    (* 1000 (physics-world-last-step-real-seconds w))
                                     (* 3 (luv-physics::physics-world-step-seconds w))))
                "the last frame's figures: ~S" last)
         (let ((k 9))
@@ -7574,21 +7574,21 @@ and the world. #G4WXCJ"
     "A second recording, EVERY 0, an unknown scene, a missing three.js: each refused by name."
   (flet ((refusal (thunk)
            (handler-case (progn (funcall thunk) nil)
-             (luv-physics:invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+             (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
     (let* ((world (make-basin-world 50 :sleep t))
-           (recording (luv-physics::start-physics-recording world))
-           (hook (luv-physics::physics-world-step-hook world))
-           (before (luv-physics::physics-world-state-hash world)))
-      (check (eq :step-hook (refusal (lambda () (luv-physics::start-physics-recording world)))))
-      (check (eq hook (luv-physics::physics-world-step-hook world)))
-      (check (= before (luv-physics::physics-world-state-hash world)))
-      (luv-physics::stop-physics-recording world)
-      (check (eq :every (refusal (lambda () (luv-physics::start-physics-recording world :every 0)))))
-      (check (null (luv-physics::physics-world-step-hook world)))
-      (check (eq :scene (refusal (lambda () (luv-physics::run-physics-scene :volcano)))))
+           (recording (start-physics-recording world))
+           (hook (physics-world-step-hook world))
+           (before (physics-world-state-hash world)))
+      (check (eq :step-hook (refusal (lambda () (start-physics-recording world)))))
+      (check (eq hook (physics-world-step-hook world)))
+      (check (= before (physics-world-state-hash world)))
+      (stop-physics-recording world)
+      (check (eq :every (refusal (lambda () (start-physics-recording world :every 0)))))
+      (check (null (physics-world-step-hook world)))
+      (check (eq :scene (refusal (lambda () (run-physics-scene :volcano)))))
       (let ((path (repository-file "report/refused-viewer.html")))
         (when (probe-file path) (delete-file path))
-        (check (eq :three (refusal (lambda () (luv-physics::write-physics-viewer
+        (check (eq :three (refusal (lambda () (write-physics-viewer
                                                recording path :three "/nonexistent/three/")))))
         (check (not (probe-file path)))))))
 ;; G4WXCJ-refusals-name-the-argument ends here
@@ -7596,21 +7596,21 @@ and the world. #G4WXCJ"
 ;; [[file:../physics.org::#3X6XN8][3X6XN8-scenes-do-what-they-say]]
 (define-claim "3X6XN8" scenes-do-what-they-say
     "Basin 1001 bodies mostly asleep; pile all asleep; drops in the air; 60 gobbets; the walker moves balls."
-  (flet ((bodies (w) (+ (luv-physics::physics-world-awake-count w) (luv-physics::physics-world-sleeping-count w))))
-    (let ((w (luv-physics::run-physics-scene :basin)))
+  (flet ((bodies (w) (+ (physics-world-awake-count w) (physics-world-sleeping-count w))))
+    (let ((w (run-physics-scene :basin)))
       (check (= 1001 (bodies w)))
-      (check (> (luv-physics::physics-world-sleeping-count w) 800) "~D asleep"
-             (luv-physics::physics-world-sleeping-count w))
-      (check (eq t (luv-physics::validate-physics-world w))))
-    (let ((w (luv-physics::run-physics-scene :pile)))
-      (check (and (= 1000 (bodies w)) (zerop (luv-physics::physics-world-awake-count w)))
-             "~D awake at the end" (luv-physics::physics-world-awake-count w)))
-    (let ((w (luv-physics::run-physics-scene :fountain :seconds 2)))
-      (check (> (luv-physics::physics-world-awake-count w) 100) "~D drops awake"
-             (luv-physics::physics-world-awake-count w)))
-    (let ((w (luv-physics::run-physics-scene :lava)))
+      (check (> (physics-world-sleeping-count w) 800) "~D asleep"
+             (physics-world-sleeping-count w))
+      (check (eq t (validate-physics-world w))))
+    (let ((w (run-physics-scene :pile)))
+      (check (and (= 1000 (bodies w)) (zerop (physics-world-awake-count w)))
+             "~D awake at the end" (physics-world-awake-count w)))
+    (let ((w (run-physics-scene :fountain :seconds 2)))
+      (check (> (physics-world-awake-count w) 100) "~D drops awake"
+             (physics-world-awake-count w)))
+    (let ((w (run-physics-scene :lava)))
       (check (<= 59 (bodies w) 61) "~D gobbets alive" (bodies w)))
-    (multiple-value-bind (w recording) (luv-physics::run-physics-scene :player :record t :every 60)
+    (multiple-value-bind (w recording) (run-physics-scene :player :record t :every 60)
       (let* ((xyz (luv-physics::physics-recording-xyz recording))
              (frames (luv-physics::physics-recording-frames recording))
              (first-second (aref frames 1)) (end (aref frames (1- (length frames))))
@@ -7624,7 +7624,7 @@ and the world. #G4WXCJ"
                                               (expt (- (aref xyz (+ k 2)) (aref xyz (+ m 2))) 2))))))
             (setf farthest (max farthest (sqrt nearest)))))
         (check (> farthest 0.45) "no landed ball's place is empty at the end (~,3F m)" farthest)
-        (check (eq t (luv-physics::validate-physics-world w)))))))
+        (check (eq t (validate-physics-world w)))))))
 ;; 3X6XN8-scenes-do-what-they-say ends here
 
 ;; [[file:../physics.org::#3X6XN8][3X6XN8-scenes-are-their-entries]]
@@ -7638,25 +7638,25 @@ and the world. #G4WXCJ"
                                  (aref (luv-physics::body-columns-friction a) row)
                                  (aref (luv-physics::body-columns-restitution a) row)
                                  (aref (luv-physics::body-columns-rolling-resistance a) row)))))
-         (scene (name) (luv-physics::find-physics-scene name)))
+         (scene (name) (find-physics-scene name)))
     (dolist (name '(:basin :pile :fountain :lava :player))
-      (let ((w (luv-physics::make-scene-world name)))
+      (let ((w (make-scene-world name)))
         (check (= (float 1/60 1.0) (luv-physics::physics-world-step-seconds w)) "~A steps ~S s" name
                (luv-physics::physics-world-step-seconds w))
         (check (luv-physics::physics-world-sleep-enabled w) "~A sleeps not" name)
         (check (eq (class-of (luv-physics::physics-world-kernels w))
                    (class-of (luv-physics::make-kernel-family (car (last (available-kernel-families))))))
                "~A solves with ~A" name (class-of (luv-physics::physics-world-kernels w)))))
-    (let ((basin (rows (luv-physics::make-scene-world :basin))))
+    (let ((basin (rows (make-scene-world :basin))))
       (check (= 1000 (length basin)))
       (check (every (lambda (r) (equal r '(0.25 1.0 0.6 0.0 0.0))) basin) "a basin ball reads ~S"
              (find '(0.25 1.0 0.6 0.0 0.0) basin :test-not #'equal)))
-    (let ((pile (rows (luv-physics::make-scene-world :pile))))
+    (let ((pile (rows (make-scene-world :pile))))
       (check (= 1000 (length pile)))
       (check (every (lambda (r) (equal r '(0.25 1.0 0.6 0.0 0.05))) pile) "a pile ball reads ~S"
              (find '(0.25 1.0 0.6 0.0 0.05) pile :test-not #'equal)))
-    (check (= 392 (length (rows (luv-physics::make-scene-world :player)))))
-    (let* ((w (luv-physics::make-scene-world :basin :seed 5))
+    (check (= 392 (length (rows (make-scene-world :player)))))
+    (let* ((w (make-scene-world :basin :seed 5))
            (a (luv-physics::physics-world-awake w)) (next (luv-physics::fixed-sequence 5)) (worst 0.0))
       (dotimes (i 1000)
         (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
@@ -7669,7 +7669,7 @@ and the world. #G4WXCJ"
     (let ((actions (luv-physics::physics-scene-actions (scene :basin)))
           (w (make-physics-world)))
       (check (= 1 (length actions)))
-      (check (= 4 (luv-physics::scene-action-seconds (first actions)) (/ (luv-physics::physics-scene-seconds (scene :basin)) 2)))
+      (check (= 4 (luv-physics::scene-action-seconds (first actions)) (/ (physics-scene-seconds (scene :basin)) 2)))
       (funcall (luv-physics::scene-action-function (first actions)) w 0.0)
       (let ((h (aref (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 0)))
         (check (= 1 (physics-world-awake-count w)))
@@ -7678,14 +7678,14 @@ and the world. #G4WXCJ"
         (check (equal (multiple-value-list (physics-body-velocity w h)) '(4.0 -6.0 0.0))
                "the throw leaves at ~S" (multiple-value-list (physics-body-velocity w h)))
         (check (= 0.25 (physics-body-radius w h)))))
-    (check (equal (mapcar (lambda (n) (luv-physics::physics-scene-seconds (scene n))) '(:basin :pile :fountain :lava :player))
+    (check (equal (mapcar (lambda (n) (physics-scene-seconds (scene n))) '(:basin :pile :fountain :lava :player))
                   '(8 12 6 8 8)))
     (flet ((spring (name)
              (let ((springs (funcall (luv-physics::physics-scene-springs (scene name)))))
                (check (= 1 (length springs)))
                (let ((s (first springs)))
                  (list (luv-physics::physics-spring-x s) (luv-physics::physics-spring-y s) (luv-physics::physics-spring-z s)
-                       (first (nth (1- (luv-physics::physics-spring-number s)) luv-physics::*physics-body-kinds*))
+                       (first (nth (1- (luv-physics::physics-spring-number s)) *physics-body-kinds*))
                        (luv-physics::physics-spring-per-step s) (luv-physics::physics-spring-every s))))))
       (check (equal (spring :fountain) '(4 -1 4 :water-drop 2 1)) "the fountain is ~S" (spring :fountain))
       (check (equal (spring :lava) '(4 -1 4 :lava-gobbet 1 4)) "the lava spring is ~S" (spring :lava)))
@@ -7707,7 +7707,7 @@ and the world. #G4WXCJ"
                (times (and at (let ((text (substitute #\Space #\, (subseq line (+ at 4) (search " s" line :start2 (+ at 4))))))
                                 (mapcar #'read-from-string
                                         (remove "and" (uiop:split-string text :separator " ") :test (lambda (a b) (or (string= a b) (string= b ""))))))))
-               (moments (luv-physics::physics-scene-moments (scene name))))
+               (moments (physics-scene-moments (scene name))))
           (check (and times (= (length times) (length moments)) (every #'= times moments))
                  "the ~(~A~) picture's caption says ~S, the scene draws ~S" name times moments))))))
 ;; 3X6XN8-scenes-are-their-entries ends here
@@ -7793,7 +7793,7 @@ counted. #RH7T05"
   (flet ((b64 (text) (with-output-to-string (s)
                        (luv-physics::write-base64 (map '(vector (unsigned-byte 8)) #'char-code text) s))))
     (check (equal '("TWFu" "TWE=" "TQ==" "") (mapcar #'b64 '("Man" "Ma" "M" "")))))
-  (multiple-value-bind (w recording) (luv-physics::run-physics-scene :basin :record t :every 30 :seconds 3)
+  (multiple-value-bind (w recording) (run-physics-scene :basin :record t :every 30 :seconds 3)
     (declare (ignore w))
     (multiple-value-bind (lo hi) (luv-physics::recording-bounds recording)
       (let ((octets (luv-physics::recording-quanta recording lo hi))
@@ -7816,8 +7816,8 @@ counted. #RH7T05"
 (define-claim "RH7T05" recording-cells-touch-air
     "Around one air cell in solid ground, the recording's cells are its six neighbours."
   (let* ((w (one-air-cell-world)))
-    (luv-physics::add-physics-body w 4.5 1.5 5.5 :radius 0.25)
-    (let* ((recording (prog1 (luv-physics::start-physics-recording w) (luv-physics::stop-physics-recording w)))
+    (add-physics-body w 4.5 1.5 5.5 :radius 0.25)
+    (let* ((recording (prog1 (start-physics-recording w) (stop-physics-recording w)))
            (cells (loop for (x y z) on (luv-physics::recording-cells recording) by #'cdddr collect (list x y z))))
       (check (equal (sort (copy-list cells) #'< :key (lambda (c) (+ (* 100 (first c)) (* 10 (second c)) (third c))))
                     '((3 1 5) (4 0 5) (4 1 4) (4 1 6) (4 2 5) (5 1 5)))
@@ -7827,8 +7827,8 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#RH7T05][RH7T05-recording-bounds-hold-every-centre]]
 (define-claim "RH7T05" recording-bounds-hold-every-centre
     "Bounds: every centre's box grown by the pad; the unit box for an empty recording."
-  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))))
-    (flet ((bounds () (let ((r (prog1 (luv-physics::start-physics-recording w) (luv-physics::stop-physics-recording w))))
+  (let ((w (make-physics-world :gravity '(0 0 0))))
+    (flet ((bounds () (let ((r (prog1 (start-physics-recording w) (stop-physics-recording w))))
                         (multiple-value-list (luv-physics::recording-bounds r)))))
       (check (equal '((0.0 0.0 0.0) (1.0 1.0 1.0)) (bounds)) "empty: ~S" (bounds))
       (add-physics-body w 4.5 1.5 5.5 :radius 0.25)
@@ -7843,14 +7843,14 @@ counted. #RH7T05"
     (if (null chromium)
         (progn (format t "~&RH7T05: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
                (check (null chromium)))
-        (multiple-value-bind (w recording) (luv-physics::run-physics-scene :basin :record t :every 6 :seconds 2)
+        (multiple-value-bind (w recording) (run-physics-scene :basin :record t :every 6 :seconds 2)
           (declare (ignore w))
           (let* ((page (repository-file "report/viewer-check.html"))
-                 (last (1- (luv-physics::physics-recording-frame-count recording)))
+                 (last (1- (physics-recording-frame-count recording)))
                  (first-shot (repository-file "report/viewer-first.png"))
                  (last-shot (repository-file "report/viewer-last.png")))
             (ensure-directories-exist page)
-            (luv-physics::write-physics-viewer recording page :title "basin, 2 s")
+            (write-physics-viewer recording page :title "basin, 2 s")
             (browser-screenshot-pair chromium "viewer-check.html#frame=0"
                                      (format nil "viewer-check.html#frame=~D" last) first-shot last-shot)
             (let ((all (* 960 640)))
@@ -7873,14 +7873,14 @@ counted. #RH7T05"
   (multiple-value-bind (recording world) (recorded-basin 300 60 10)
     (let ((path (repository-file "report/picture-check.svg")))
       (ensure-directories-exist path)
-      (luv-physics::write-scene-picture recording path '(0 1) :title "check ")
+      (write-scene-picture recording path '(0 1) :title "check ")
       (let ((text (luv-physics::read-file-text path)))
         (flet ((count-of (needle) (loop for at = (search needle text) then (search needle text :start2 (1+ at))
                                         while at count t)))
           (check (= 600 (count-of "<circle")) "~D discs" (count-of "<circle"))
           (check (> (count-of "<polygon") 100) "~D faces" (count-of "<polygon"))
           (check (search "check 0.0 s: 300 awake, 0 asleep" text))
-          (check (search (format nil "1.0 s: ~D awake" (luv-physics::physics-world-awake-count world)) text)))))
+          (check (search (format nil "1.0 s: ~D awake" (physics-world-awake-count world)) text)))))
     (let ((frames (mapcar (lambda (s) (luv-physics::frame-at recording s)) '(0 0.2 0.45 0.9 1))))
       (check (equal frames '(0 1 3 5 6)) "the moments 0, 0.2, 0.45, 0.9 and 1 s take frames ~S" frames))))
 ;; UFK5EA-picture-draws-the-bodies ends here
@@ -7889,10 +7889,10 @@ counted. #RH7T05"
 (define-claim "UFK5EA" picture-of-one-cell
     "One air cell in solid ground: a disc and three faces, exactly placed, deepest first; the drawing fills the panel's width."
   (let* ((w (one-air-cell-world)))
-    (luv-physics::add-physics-body w 4.5 1.5 5.5 :radius 0.25)
-    (luv-physics::add-physics-body w 4.25 1.75 5.2 :radius 0.1)
-    (let ((recording (luv-physics::start-physics-recording w)))
-      (luv-physics::stop-physics-recording w)
+    (add-physics-body w 4.5 1.5 5.5 :radius 0.25)
+    (add-physics-body w 4.25 1.75 5.2 :radius 0.1)
+    (let ((recording (start-physics-recording w)))
+      (stop-physics-recording w)
       (multiple-value-bind (across up toward) (luv-physics::view-basis 35 40)
         (labels ((dot (u p) (+ (* (first u) (first p)) (* (second u) (second p)) (* (third u) (third p))))
                  (project (p) (list (dot across p) (- (dot up p))))
@@ -7929,11 +7929,11 @@ counted. #RH7T05"
                      "no item is the face ~S" f))
             (check (equal (mapcar #'first items) (sort (mapcar #'first items) #'<)) "the items are not deepest first"))
           ;; a posted box shows the three faces that look towards the viewer
-          (let* ((bw (luv-physics::make-physics-world :gravity '(0 0 0)))
-                 (recording (luv-physics::start-physics-recording bw)))
-            (luv-physics::post-physics-box bw 1.0 2.0 3.0 0.25 0.5 0.125)
+          (let* ((bw (make-physics-world :gravity '(0 0 0)))
+                 (recording (start-physics-recording bw)))
+            (post-physics-box bw 1.0 2.0 3.0 0.25 0.5 0.125)
             (step-physics-world bw)
-            (luv-physics::stop-physics-recording bw)
+            (stop-physics-recording bw)
             (let ((faces (luv-physics::scene-picture-items recording 1 '() across up toward))
                   (size '(0.5 1.0 0.25)))
               (check (= 3 (length faces)) "~D box faces" (length faces))
@@ -7949,8 +7949,8 @@ counted. #RH7T05"
                            "no face of the box looks along +~D" axis)))))))))
     (let ((path (repository-file "report/picture-cell-check.svg")) (xs '()))
       (ensure-directories-exist path)
-      (luv-physics::write-scene-picture (luv-physics::start-physics-recording w) path '(0) :width 300 :height 1000)
-      (luv-physics::stop-physics-recording w)
+      (write-scene-picture (start-physics-recording w) path '(0) :width 300 :height 1000)
+      (stop-physics-recording w)
       (let ((text (luv-physics::read-file-text path)) (*read-default-float-format* 'double-float))
         (flet ((attribute (name at) (let* ((s (+ (search (format nil "~A=\"" name) text :start2 at) (length name) 2)))
                                       (values (subseq text s (position #\" text :start s)) s))))
@@ -7989,14 +7989,14 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#UFK5EA][UFK5EA-disc-edges-bound-the-drawing]]
 (define-claim "UFK5EA" disc-edges-bound-the-drawing
     "A lone ball's disc, away from the origin, touches the left margin and the top, at the scale its extent gives."
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
-         (recording (progn (luv-physics::add-physics-body w 3.0 2.0 1.0 :radius 0.5)
-                           (luv-physics::start-physics-recording w)))
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (recording (progn (add-physics-body w 3.0 2.0 1.0 :radius 0.5)
+                           (start-physics-recording w)))
          (path (repository-file "report/picture-disc-check.svg")))
     (step-physics-world w)
-    (luv-physics::stop-physics-recording w)
+    (stop-physics-recording w)
     (ensure-directories-exist path)
-    (luv-physics::write-scene-picture recording path '(0) :width 300 :height 1000)
+    (write-scene-picture recording path '(0) :width 300 :height 1000)
     (let* ((text (luv-physics::read-file-text path)) (*read-default-float-format* 'double-float)
            (at (search "<circle" text)))
       (check (and at (not (search "<circle" text :start2 (1+ at)))) "not one disc")
@@ -8015,16 +8015,16 @@ counted. #RH7T05"
     "The deeper of two discs away from the origin is drawn at 0.55 of its colour, the nearer at full colour."
   (multiple-value-bind (across up toward) (luv-physics::view-basis 35 40)
     (declare (ignore across up))
-    (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
-           (recording (progn (luv-physics::add-physics-body w 4.0 1.0 2.0 :radius 0.25)
-                             (apply #'luv-physics::add-physics-body w (append (mapcar (lambda (c o) (float (+ c o) 1.0)) toward '(4 1 2))
+    (let* ((w (make-physics-world :gravity '(0 0 0)))
+           (recording (progn (add-physics-body w 4.0 1.0 2.0 :radius 0.25)
+                             (apply #'add-physics-body w (append (mapcar (lambda (c o) (float (+ c o) 1.0)) toward '(4 1 2))
                                                                               (list :radius 0.25)))
-                             (luv-physics::start-physics-recording w)))
+                             (start-physics-recording w)))
            (path (repository-file "report/picture-light-check.svg")))
       (step-physics-world w)
-      (luv-physics::stop-physics-recording w)
+      (stop-physics-recording w)
       (ensure-directories-exist path)
-      (luv-physics::write-scene-picture recording path '(0))
+      (write-scene-picture recording path '(0))
       (let* ((text (luv-physics::read-file-text path))
              (colour (third (find :disc (luv-physics::scene-picture-items recording 0 '() '(1 0 0) '(0 1 0) toward)
                                   :key #'second)))
@@ -8038,7 +8038,7 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-uses-world-grids]]
 (define-claim "Q5V1EW" view-grids-awake-rows-of-now
     "The view's awake grid holds every awake row once, with its centre, radius and handle of now; none after the pile sleeps; a dirty sleeping grid still finds every sleeper once."
-  (let ((w (luv-physics::make-basin-world 300)))
+  (let ((w (make-basin-world 300)))
     (dotimes (i 200) (step-physics-world w))
     (flet ((wrong-entries ()
              ;; the rows the view's awake grid misses or holds twice, and the entries unlike their row
@@ -8080,7 +8080,7 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-after-every-step]]
 (define-claim "Q5V1EW" view-after-every-step
     "A falling ball is found about its centre after each of 60 steps; a settled grid is walked with no stray."
-  (let ((w (luv-physics::make-physics-world)) (wrong '()))
+  (let ((w (make-physics-world)) (wrong '()))
     (let ((h (add-physics-body w 0.5 50.0 0.5 :radius 0.25)))
       (dotimes (i 60)
         (step-physics-world w)
@@ -8089,12 +8089,12 @@ counted. #RH7T05"
             (let ((n (map-physics-bodies-in-sphere (lambda (g) (declare (ignore g))) w x y z 0.01)))
               (unless (= n 1) (push (list i k n) wrong)))))
         (unless (= (luv-physics::query-view-steps (luv-physics::physics-world-query-view w))
-                   (luv-physics::physics-world-step-count w))
+                   (physics-world-step-count w))
           (push (list i :steps) wrong))))
     (check (null wrong) "steps where the ball was missed: ~S" (reverse wrong)))
-  (let ((w (luv-physics::make-basin-world 300 :sleep t)))
+  (let ((w (make-basin-world 300 :sleep t)))
     (loop for row from (1- (physics-world-awake-count w)) downto 0 do (luv-physics::sleep-physics-body w row))
-    (luv-physics::trim-physics-world w)
+    (trim-physics-world w)
     (let ((view (luv-physics::world-query-view w)))
       (check (luv-physics::physics-world-sleeping-grid-dirty w) "the trimmed grid is not marked for a check")
       (check (eq (luv-physics::query-view-sleeping-grid view) (luv-physics::physics-world-sleeping-grid w))
@@ -8107,7 +8107,7 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-after-an-edit]]
 (define-claim "Q5V1EW" view-after-an-edit
     "After a removal and an add that keep the counts and the step, a sphere finds the new ball and not the removed one."
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
          (a (add-physics-body w 1.0 1.0 1.0 :radius 0.25)))
     (add-physics-body w 3.0 1.0 1.0 :radius 0.25)
     (add-physics-body w 5.0 1.0 1.0 :radius 0.25)
@@ -8126,7 +8126,7 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-after-a-relocation]]
 (define-claim "Q5V1EW" view-after-a-relocation
     "After a wake and a sleep, then a wake, a sleep, an add and a removal, counts and step unchanged, each ball is found once at its place."
-  (let* ((w (luv-physics::make-physics-world :gravity '(0 0 0)))
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
          (balls (loop for x in '(1.0 3.0 5.0 7.0 9.0) collect (add-physics-body w x 1.0 1.0 :radius 0.25))))
     (step-physics-world w)
     (flet ((found (xs)
@@ -8139,7 +8139,7 @@ counted. #RH7T05"
                (assert (= set luv-physics::+set-awake+))
                (luv-physics::sleep-physics-body w row)))
            (counts () (list (physics-world-awake-count w) (physics-world-sleeping-count w)
-                            (luv-physics::physics-world-step-count w))))
+                            (physics-world-step-count w))))
       (sleep-ball (fifth balls)) (sleep-ball (fourth balls))
       (let ((xs '(1.0 3.0 5.0 7.0 9.0)))
         (check (equal (found xs) (mapcar #'list balls)) "with two asleep the spheres find ~S" (found xs))
@@ -8238,31 +8238,31 @@ counted. #RH7T05"
     (let ((before (world-fingerprint w)) (wrong '()))
       (flet ((expect (type name thunk)
                (let ((got (handler-case (progn (funcall thunk) :no-error)
-                            (luv-physics::invalid-physics-number (e)
-                              (list 'luv-physics::invalid-physics-number (luv-physics::invalid-physics-number-name e)))
-                            (luv-physics::invalid-physics-parameter (e)
-                              (list 'luv-physics::invalid-physics-parameter (luv-physics::invalid-physics-parameter-name e)))
+                            (invalid-physics-number (e)
+                              (list 'invalid-physics-number (luv-physics::invalid-physics-number-name e)))
+                            (invalid-physics-parameter (e)
+                              (list 'invalid-physics-parameter (luv-physics::invalid-physics-parameter-name e)))
                             (error (e) (type-of e)))))
                  (unless (equal got (list type name)) (push (list name got) wrong)))))
         (dolist (bad (list nan inf))
-          (expect 'luv-physics::invalid-physics-number :x (lambda () (physics-ray-cast w bad 1 1 1 0 0 5)))
-          (expect 'luv-physics::invalid-physics-number :dy (lambda () (physics-ray-cast w 1 1 1 1 bad 0 5)))
-          (expect 'luv-physics::invalid-physics-number :max-distance (lambda () (physics-ray-cast w 1 1 1 1 0 0 bad)))
-          (expect 'luv-physics::invalid-physics-number :radius (lambda () (physics-sphere-cast w 1 1 1 bad 1 0 0 5)))
-          (expect 'luv-physics::invalid-physics-number :radius
+          (expect 'invalid-physics-number :x (lambda () (physics-ray-cast w bad 1 1 1 0 0 5)))
+          (expect 'invalid-physics-number :dy (lambda () (physics-ray-cast w 1 1 1 1 bad 0 5)))
+          (expect 'invalid-physics-number :max-distance (lambda () (physics-ray-cast w 1 1 1 1 0 0 bad)))
+          (expect 'invalid-physics-number :radius (lambda () (physics-sphere-cast w 1 1 1 bad 1 0 0 5)))
+          (expect 'invalid-physics-number :radius
                   (lambda () (map-physics-bodies-in-sphere #'identity w 1 1 1 bad)))
-          (expect 'luv-physics::invalid-physics-number :hz
+          (expect 'invalid-physics-number :hz
                   (lambda () (map-physics-cells-in-box #'list w 1 1 1 1 1 bad))))
-        (expect 'luv-physics::invalid-physics-parameter :direction (lambda () (physics-ray-cast w 1 1 1 0 0 0 5)))
-        (expect 'luv-physics::invalid-physics-parameter :direction (lambda () (physics-sphere-cast w 1 1 1 0.2 0 0.0 0 5)))
-        (expect 'luv-physics::invalid-physics-parameter :max-distance (lambda () (physics-ray-cast w 1 1 1 1 0 0 -1)))
-        (expect 'luv-physics::invalid-physics-parameter :filter
+        (expect 'invalid-physics-parameter :direction (lambda () (physics-ray-cast w 1 1 1 0 0 0 5)))
+        (expect 'invalid-physics-parameter :direction (lambda () (physics-sphere-cast w 1 1 1 0.2 0 0.0 0 5)))
+        (expect 'invalid-physics-parameter :max-distance (lambda () (physics-ray-cast w 1 1 1 1 0 0 -1)))
+        (expect 'invalid-physics-parameter :filter
                 (lambda () (physics-ray-cast w 1 1 1 1 0 0 5 :filter :bodies)))
-        (expect 'luv-physics::invalid-physics-parameter :hit (lambda () (physics-ray-cast w 1 1 1 1 0 0 5 :hit 7)))
-        (expect 'luv-physics::invalid-physics-parameter :radius (lambda () (physics-sphere-cast w 1 1 1 0 1 0 0 5)))
-        (expect 'luv-physics::invalid-physics-parameter :radius
+        (expect 'invalid-physics-parameter :hit (lambda () (physics-ray-cast w 1 1 1 1 0 0 5 :hit 7)))
+        (expect 'invalid-physics-parameter :radius (lambda () (physics-sphere-cast w 1 1 1 0 1 0 0 5)))
+        (expect 'invalid-physics-parameter :radius
                 (lambda () (map-physics-bodies-in-sphere #'identity w 1 1 1 -0.5)))
-        (expect 'luv-physics::invalid-physics-parameter :function
+        (expect 'invalid-physics-parameter :function
                 (lambda () (map-physics-bodies-in-box 'not-a-function w 1 1 1 1 1 1))))
       (check (null wrong) "wrong outcomes: ~S" wrong)
       (check (equal before (world-fingerprint w)) "the world changed")
@@ -8273,7 +8273,7 @@ counted. #RH7T05"
                           :filter (lambda (kind what)
                                     (declare (ignore kind what))
                                     (handler-case (remove-physics-body w h)
-                                      (luv-physics::physics-world-busy () (setf refused t)))
+                                      (physics-world-busy () (setf refused t)))
                                     t))
         (check (eq t refused) "the filter's edit was not refused")
         (check (physics-body-alive-p w h))
@@ -8299,13 +8299,13 @@ counted. #RH7T05"
 (defun query-test-scene ()
   "The carved basin of the query claims: 400 balls that sleep, stepped 300 times, 20 more asleep
 outside the walls, 40 woken and thrown, 5 steps, and two boxes posted. Return the world. #R4YC57"
-  (let* ((terrain (luv-physics::make-basin-terrain))
+  (let* ((terrain (make-basin-terrain))
          (w (make-physics-world :terrain terrain))
          (next (luv-physics::fixed-sequence 2217)))
-    (luv-physics::fill-terrain terrain 2 0 2 3 3 3 t)
-    (luv-physics::fill-terrain terrain 5 0 5 6 2 7 t)
-    (luv-physics::fill-terrain terrain 3 -3 5 5 0 7 nil)
-    (luv-physics::fill-terrain terrain 8 0 3 9 2 4 nil)
+    (fill-terrain terrain 2 0 2 3 3 3 t)
+    (fill-terrain terrain 5 0 5 6 2 7 t)
+    (fill-terrain terrain 3 -3 5 5 0 7 nil)
+    (fill-terrain terrain 8 0 3 9 2 4 nil)
     (dotimes (i 400)
       (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
         ;; the pillars stand where some spawn points are: those balls start pushed out
@@ -8381,7 +8381,7 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
           (loop for i from (floor (min ox (first end))) to (floor (max ox (first end))) do
             (loop for j from (floor (min oy (second end))) to (floor (max oy (second end))) do
               (loop for k from (floor (min oz (third end))) to (floor (max oz (third end))) do
-                (when (luv-physics::terrain-solid-p terrain i j k)
+                (when (terrain-solid-p terrain i j k)
                   (if (and (= i (floor ox)) (= j (floor oy)) (= k (floor oz)))
                       (consider :cell (list i j k) 0d0 (mapcar #'- u))
                       (let ((e (slabs (list i j k) (list (1+ i) (1+ j) (1+ k)))))
@@ -8482,7 +8482,7 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
              (hit (apply #'physics-ray-cast w (append o d (list 10.0 :bodies nil :boxes nil))))
              (sampled (loop for k from 0 to 5000
                             for tt = (* k 0.002d0)
-                            when (apply #'luv-physics::terrain-solid-p terrain
+                            when (apply #'terrain-solid-p terrain
                                         (mapcar (lambda (ov uv) (floor (+ ov (* tt uv)))) o u))
                               return tt)))
         (when hit (incf hits))
@@ -8491,7 +8491,7 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
         (when hit
           (let ((p (mapcar (lambda (ov uv) (+ ov (* (+ (physics-hit-distance hit) 1d-4) uv))) o u))
                 (c (list (physics-hit-cell-x hit) (physics-hit-cell-y hit) (physics-hit-cell-z hit))))
-            (unless (and (apply #'luv-physics::terrain-solid-p terrain c)
+            (unless (and (apply #'terrain-solid-p terrain c)
                          (every (lambda (pv cv) (<= (- cv 1d-6) pv (+ cv 1 1d-6))) p c))
               (incf misplaced))))))
     (check (> hits 500) "only ~D rays met a cell" hits)
@@ -8503,9 +8503,9 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
 (define-claim "R4YC57" edges-corners-and-starts
     "Axis rays, grazing rays, edge and corner crossings and rays starting inside answer as documented."
   (flet ((world-with (&rest cells)
-           (let ((terrain (luv-physics::make-voxel-terrain)))
-             (luv-physics::fill-terrain terrain -8 -8 -8 8 8 8 nil)
-             (dolist (c cells) (setf (apply #'luv-physics::terrain-solid-p terrain c) t))
+           (let ((terrain (make-voxel-terrain)))
+             (fill-terrain terrain -8 -8 -8 8 8 8 nil)
+             (dolist (c cells) (setf (apply #'terrain-solid-p terrain c) t))
              (make-physics-world :terrain terrain)))
          (answer (hit)
            (and hit (list (hit-what hit) (physics-hit-distance hit)
@@ -8538,8 +8538,8 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
 ;; [[file:../physics.org::#R4YC57][R4YC57-every-edge-and-corner-cell]]
 (define-claim "R4YC57" every-edge-and-corner-cell
     "Along the 8 diagonals and 12 plane diagonals, each cell at the corner or edge is met alone, and together they are met fewest steps first, x before y before z."
-  (let* ((terrain (luv-physics::make-voxel-terrain))
-         (w (progn (luv-physics::fill-terrain terrain -4 -4 -4 4 4 4 nil) (make-physics-world :terrain terrain)))
+  (let* ((terrain (make-voxel-terrain))
+         (w (progn (fill-terrain terrain -4 -4 -4 4 4 4 nil) (make-physics-world :terrain terrain)))
          (wrong '()) (casts 0))
     (flet ((ordered-offsets (direction)
              ;; the cells meeting the corner or edge, fewest steps first, x before y before z
@@ -8568,16 +8568,16 @@ list (kind what distance nx ny nz), or NIL. #R4YC57"
                                    (loop for a below 3 collect (if (= a axis) (float (- (nth a d)) 1.0) 0.0)))))))
               ;; each cell alone
               (dolist (c cells)
-                (setf (apply #'luv-physics::terrain-solid-p terrain c) t)
+                (setf (apply #'terrain-solid-p terrain c) t)
                 (let ((hit (cast d)))
                   (unless (answer-ok hit c) (push (list :alone d c (and hit (hit-what hit))) wrong)))
-                (setf (apply #'luv-physics::terrain-solid-p terrain c) nil))
+                (setf (apply #'terrain-solid-p terrain c) nil))
               ;; all of them, made air one by one as they are met
-              (dolist (c cells) (setf (apply #'luv-physics::terrain-solid-p terrain c) t))
+              (dolist (c cells) (setf (apply #'terrain-solid-p terrain c) t))
               (dolist (c cells)
                 (let ((hit (cast d)))
                   (unless (answer-ok hit c) (push (list :in-order d c (and hit (hit-what hit))) wrong)))
-                (setf (apply #'luv-physics::terrain-solid-p terrain c) nil))
+                (setf (apply #'terrain-solid-p terrain c) nil))
               (when (cast d) (push (list :empty d) wrong)))))
         (check (= casts (+ 20 (* 2 (+ (* 8 7) (* 12 3))))) "~D casts" casts)
         (check (null wrong) "~D casts met the wrong cell: ~S" (length wrong) (reverse wrong))))))
@@ -8703,7 +8703,7 @@ within reach of something. #S9WEEP"
         (loop for i from (floor (- (min (first o) (first end)) r)) to (floor (+ (max (first o) (first end)) r)) do
           (loop for j from (floor (- (min (second o) (second end)) r)) to (floor (+ (max (second o) (second end)) r)) do
             (loop for k from (floor (- (min (third o) (third end)) r)) to (floor (+ (max (third o) (third end)) r)) do
-              (when (luv-physics::terrain-solid-p terrain i j k)
+              (when (terrain-solid-p terrain i j k)
                 (consider :cell (list i j k)
                           (box-first-touch o u bt (list i j k) (list (1+ i) (1+ j) (1+ k)) r)))))))
       best)))
@@ -8769,7 +8769,7 @@ within reach of something. #S9WEEP"
                 (miss (sqrt (reduce #'+ (mapcar (lambda (a b) (expt (- a b) 2)) predicted landed)))))
             (check (<= miss (* speed dt)) "landed ~,4F m from the prediction (one step's travel ~,4F m)"
                    miss (* speed dt))))))
-    (setf (luv-physics::terrain-solid-p terrain 8 0 6) t)
+    (setf (terrain-solid-p terrain 8 0 6) t)
     (let ((hit (physics-sphere-cast w 5.0 0.245 6.5 0.25 1 0 0 10 :bodies nil)))
       (check (and hit (eq :cell (physics-hit-kind hit)) (equal (hit-what hit) '(8 0 6))
                   (< (abs (- (physics-hit-distance hit) 2.75)) 1e-5) (= -1.0 (physics-hit-nx hit)))
@@ -8779,9 +8779,9 @@ within reach of something. #S9WEEP"
 ;; [[file:../physics.org::#S9WEEP][S9WEEP-slides-along-every-face]]
 (define-claim "S9WEEP" slides-along-every-face
     "A sphere touching the floor, the roof or a wall of thick terrain, swept along it either way, meets no seam."
-  (let* ((terrain (luv-physics::make-voxel-terrain))
-         (w (progn (luv-physics::fill-terrain terrain -3 -3 -3 19 7 19 t)
-                   (luv-physics::fill-terrain terrain 0 0 0 16 4 16 nil)
+  (let* ((terrain (make-voxel-terrain))
+         (w (progn (fill-terrain terrain -3 -3 -3 19 7 19 t)
+                   (fill-terrain terrain 0 0 0 16 4 16 nil)
                    (make-physics-world :terrain terrain)))
          (r 0.25) (d 0.245) (met '()) (casts 0))
     ;; each face: the axis across it, the coordinate of the centre, and the middle of the face
@@ -8838,7 +8838,7 @@ within reach of something. #S9WEEP"
          (balls (loop for x in '(2.0 3.0 4.0) collect (add-physics-body w x 4.0 4.0 :radius 0.25))))
     (flet ((cast (&rest options)
              (let ((hit (apply #'physics-sphere-cast w 0.5 4.0 4.0 0.1 1.0 0.0 0.0 10.0 options)))
-               (and hit (list (position (luv-physics::physics-hit-handle hit) balls)
+               (and hit (list (position (physics-hit-handle hit) balls)
                               (physics-hit-distance hit)))))
            (refuse (ball) (lambda (kind what) (not (and (eq kind :body) (eql what (nth ball balls)))))))
       (loop for (options ball distance) in (list (list '() 0 1.15)
@@ -8911,7 +8911,7 @@ within reach of something. #S9WEEP"
                        (loop for i from (floor (- (first cs) 3)) to (floor (+ (first cs) 3)) do
                          (loop for j from (floor (- (second cs) 3)) to (floor (+ (second cs) 3)) do
                            (loop for k from (floor (- (third cs) 3)) to (floor (+ (third cs) 3)) do
-                             (when (luv-physics::terrain-solid-p terrain i j k)
+                             (when (terrain-solid-p terrain i j k)
                                (let ((lo (list i j k)))
                                  (when (<= (reduce #'+ (mapcar (lambda (cv l) (expt (- cv (max l (min (1+ l) cv))) 2)) cs lo))
                                            (* rd rd))
@@ -8938,7 +8938,7 @@ within reach of something. #S9WEEP"
                                      (aref (luv-physics::body-columns-handle s) (floor (* (funcall next) (luv-physics::body-columns-length s))))))
           (add-physics-body w (+ 1 (* 6 (funcall next))) (+ 3 (* 2 (funcall next))) (+ 1 (* 6 (funcall next))) :radius 0.2)))
       (moment :churned)
-      (luv-physics::fill-terrain terrain 0 -1 0 8 0 2 nil)
+      (fill-terrain terrain 0 -1 0 8 0 2 nil)
       (wake-physics-bodies-near w 4.0 0.0 1.0 4.0)
       (moment :edited)
       (dotimes (i 2) (step-physics-world w))
@@ -8951,7 +8951,7 @@ within reach of something. #S9WEEP"
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-no-terrain-no-cells]]
 (define-claim "OV3RLP" no-terrain-no-cells
     "Without terrain the cell queries find nothing; the body queries still find the ball."
-  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))) (calls 0))
+  (let ((w (make-physics-world :gravity '(0 0 0))) (calls 0))
     (add-physics-body w 0.5 0.5 0.5 :radius 0.25)
     (flet ((counted (&rest cell) (declare (ignore cell)) (incf calls)))
       (check (= 0 (map-physics-cells-in-sphere #'counted w 0.0 0.0 0.0 2.0)))
@@ -8969,12 +8969,12 @@ within reach of something. #S9WEEP"
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-region-sizes-at-their-limits]]
 (define-claim "OV3RLP" region-sizes-at-their-limits
     "Sizes of 0 and 1024 m are taken, -1.4e-45 and 1024.0001 refused by name, by all four region queries."
-  (let ((w (luv-physics::make-physics-world :gravity '(0 0 0))) (wrong '())
+  (let ((w (make-physics-world :gravity '(0 0 0))) (wrong '())
         (above (float 1024.0001 1.0)) (below (- least-positive-single-float)))
     (add-physics-body w 0.5 0.5 0.5 :radius 0.25)
     (flet ((outcome (thunk)
              (handler-case (funcall thunk)
-               (luv-physics::invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+               (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
                (error (e) (type-of e))))
            (none (&rest args) (declare (ignore args))))
       (check (< 1024 above 1024.001))
@@ -9000,7 +9000,7 @@ within reach of something. #S9WEEP"
 ;; [[file:../physics.org::#QB3NCH][QB3NCH-queries-cons-nothing]]
 (define-claim "QB3NCH" queries-cons-nothing
     "Rays, sphere casts and region queries between steps cons 0 bytes once warm."
-  (let* ((w (luv-physics::make-basin-world 300))
+  (let* ((w (make-basin-world 300))
          (inputs (luv-physics::query-benchmark-inputs 100 7))
          (hit (make-physics-hit)) (n 0)
          (count (lambda (h) (declare (ignore h)) (incf n)))
@@ -9029,7 +9029,7 @@ within reach of something. #S9WEEP"
 ;; [[file:../physics.org::#QB3NCH][QB3NCH-benchmark-times-the-named-queries]]
 (define-claim "QB3NCH" benchmark-times-the-named-queries
     "The benchmark's ray, cast and overlap give the API's answers for the query spelled out; time-queries visits every query."
-  (let* ((w (luv-physics::make-basin-world 300))
+  (let* ((w (make-basin-world 300))
          (q (luv-physics::query-benchmark-inputs 100 7))
          (hit (make-physics-hit)) (found '()) (wrong 0) (hits 0)
          (counter (lambda (h) (push h found))))
@@ -9076,12 +9076,12 @@ within reach of something. #S9WEEP"
 (define-claim "QB3NCH" benchmark-worlds-awake-and-asleep
     "settled-basin-world: 20 balls after 300 steps, all awake, or all asleep where they lay; 3000 all put to sleep."
   (let ((awake (luv-physics::settled-basin-world 20 nil)))
-    (check (equal (list 300 20 0) (list (luv-physics::physics-world-step-count awake) (physics-world-awake-count awake)
+    (check (equal (list 300 20 0) (list (physics-world-step-count awake) (physics-world-awake-count awake)
                                         (physics-world-sleeping-count awake)))))
-  (let* ((w (luv-physics::make-basin-world 20 :kernels :auto :sleep t))
+  (let* ((w (make-basin-world 20 :kernels :auto :sleep t))
          (asleep (luv-physics::settled-basin-world 20 t)))
     (dotimes (i 300) (step-physics-world w))
-    (check (equal (list 300 0 20) (list (luv-physics::physics-world-step-count asleep) (physics-world-awake-count asleep)
+    (check (equal (list 300 0 20) (list (physics-world-step-count asleep) (physics-world-awake-count asleep)
                                         (physics-world-sleeping-count asleep))))
     (flet ((places (world)
              (sort (loop for buf in (list (luv-physics::physics-world-awake world) (luv-physics::physics-world-sleeping world))
@@ -9141,7 +9141,7 @@ within reach of something. #S9WEEP"
 (define-claim "7PAQ3M" mixed-materials-agree
     "Families agree bit for bit on a pile of mixed radii, masses and materials."
   (flet ((hash-after (kernels)
-           (let ((world (make-physics-world :terrain (luv-physics::make-basin-terrain) :kernels kernels
+           (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels
                                             :sleep nil))
                  (next (luv-physics::fixed-sequence 2026)))
              (dotimes (i 600)
@@ -9303,7 +9303,7 @@ within reach of something. #S9WEEP"
           (check (member (getf entry :anchor) anchors :test #'equal) "~S: index anchor ~S" symbol (getf entry :anchor))
           (check (and (getf entry :kinds) (plusp (length (getf entry :summary))))))))
     (let* ((path (repository-file "report/api-index-check.org"))
-           (rows (progn (ensure-directories-exist path) (luv-physics::write-api-index path)))
+           (rows (progn (ensure-directories-exist path) (write-api-index path)))
            (lines (with-open-file (in path) (loop for l = (read-line in nil) while l collect l))))
       (check (= rows (length exports)))
       (check (= rows (count-if (lambda (l) (search "| [[#" l)) lines)))

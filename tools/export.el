@@ -23,6 +23,8 @@
       org-export-use-babel nil
       org-html-htmlize-output-type 'css
       org-html-validation-link nil
+      ;; the mutant records' drawers are for the tools, not the reader
+      org-export-with-drawers nil
       org-html-head-include-default-style t
       make-backup-files nil
       coding-system-for-write 'utf-8-unix)

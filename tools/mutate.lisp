@@ -912,7 +912,9 @@ that is not equivalent survives."
           while at
           do (let* ((key-start (+ at (length prefix)))
                     (key-end (search "~:" text :start2 key-start))
-                    (end (or (search (format nil "~%~%") text :start2 key-start) (length text))))
+                    ;; a record ends at a blank line, or where its drawer closes
+                    (end (min (or (search (format nil "~%~%") text :start2 key-start) (length text))
+                              (or (search (format nil "~%:END:") text :start2 key-start) (length text)))))
                (when (and key-end (< key-end end))
                  (push (cons (subseq text key-start key-end)
                              (one-line (string-trim " " (subseq text (+ key-end 2) end)) 400))
