@@ -5390,7 +5390,25 @@ the phases of a step before the prepare phase. #PR3PAR"
                              while (luv-physics::starts-with "|" line)
                              collect (mapcar (lambda (cell) (string-trim " " cell))
                                              (rest (butlast (uiop:split-string line :separator "|"))))))))
-    (check (and at (< at 150)) "the stage table starts at line ~S, not within the first 150" at)
+    (check (and at (< at 160)) "the stage table starts at line ~S, not within the first 160" at)
+    ;; the door's own line: the phases in order, each linked to its section, counted in words
+    (let* ((door (loop for i below 40 thereis (and (search "A step of the engine runs" (aref page i)) i)))
+           (text (and door (apply #'concatenate 'string
+                                  (loop for i from door below (length page)
+                                        for line = (aref page i)
+                                        until (string= line "") collect line collect " "))))
+           (links (and text (loop for start = 0 then (1+ at)
+                                  for at = (search "[[#" text :start2 start)
+                                  while at collect (subseq text (+ at 3) (+ at 9))))))
+      (check (numberp door) "no line of the page's first 40 says what a step runs")
+      (when door
+        (check (search (format nil "runs ~R phases" (length luv-physics:*physics-phases*)) text)
+               "the door does not count ~R phases: ~A" (length luv-physics:*physics-phases*) text)
+        (check (equal (butlast links)
+                      (loop for phase in luv-physics:*physics-phases*
+                            collect (let ((doc (documentation phase 'function)))
+                                      (subseq doc (1+ (position #\# doc :from-end t))))))
+               "the door links ~S" links)))
     (check (equal (mapcar (lambda (row) (string-trim "=" (first row))) rows)
                   (mapcar #'string-downcase *physics-phases*))
            "the table's phases ~S are not *physics-phases*" (mapcar #'first rows))
@@ -9372,6 +9390,52 @@ within reach of something. #S9WEEP"
                                    "the address ends with ~S" hash)))))
                  (when (probe-file copy) (delete-file copy)))))))))
 ;; LW3YHU-page-works-in-a-browser ends here
+
+;; [[file:../physics.org::#LW3YHU][LW3YHU-phases-from-the-first-screen]]
+(define-claim "LW3YHU" phases-from-the-first-screen
+    "In physics.html, a link to each phase's section lies within the first screen, and each section exists."
+  (let ((chromium (chromium-program)) (page (repository-file "physics.html"))
+        (anchors (loop for phase in *physics-phases*
+                       collect (let ((doc (documentation phase 'function)))
+                                 (subseq doc (1+ (position #\# doc :from-end t)))))))
+    (cond ((null chromium)
+           (format t "~&LW3YHU: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
+           (check (null chromium)))
+          (t
+           (check (probe-file page) "~A is missing: make html writes it" page)
+           (when (probe-file page)
+             (let* ((copy (repository-file "physics-door-check.html"))
+                    (text (luv-physics::read-file-text page))
+                    (end (search "</body>" text :from-end t))
+                    (script (format nil "<script>window.addEventListener('load', function () {
+  var anchors = [~{'~A'~^, ~}], seen = [];
+  anchors.forEach(function (a) {
+    var onScreen = Array.from(document.querySelectorAll('a[href=\"#' + a + '\"]')).some(function (l) {
+      var r = l.getBoundingClientRect(); return r.top >= 0 && r.bottom <= window.innerHeight && r.width > 0; });
+    seen.push(a + (onScreen ? ':1' : ':0') + (document.getElementById(a) ? ':1' : ':0'));
+  });
+  var note = document.createElement('pre'); note.id = 'door-check';
+  note.textContent = 'door-check ' + seen.join(' ') + ' end';
+  document.body.appendChild(note);
+});</script>" anchors)))
+               (unwind-protect
+                    (progn
+                      (with-open-file (out copy :direction :output :if-exists :supersede :external-format :utf-8)
+                        (write-string text out :end end) (write-string script out) (write-string text out :start end))
+                      (let* ((dom (browser-run chromium (list "--window-size=1200,900" "--dump-dom"
+                                                              (format nil "file://~A" (namestring copy)))))
+                             (mark "door-check ")
+                             (at (search (format nil "id=\"door-check\">~A" mark) dom))
+                             (words (and at (uiop:split-string
+                                             (subseq dom (+ at (length "id=\"door-check\">") (length mark))
+                                                     (search " end" dom :start2 at))))))
+                        (check (= (length words) (length anchors)) "the page noted ~S" words)
+                        (loop for a in anchors
+                              for w in words
+                              do (check (string= w (format nil "~A:1:1" a))
+                                        "~A: ~A (link on the first screen, section in the page)" a w))))
+                 (when (probe-file copy) (delete-file copy)))))))))
+;; LW3YHU-phases-from-the-first-screen ends here
 
 ;; [[file:../physics.org::#O07FDP][O07FDP-both-files-registered]]
 (define-claim "O07FDP" both-files-registered
