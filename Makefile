@@ -186,6 +186,6 @@ soak: setup tangle
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f
 	find report -type f ! -name 'wp-*.svg' ! -name 'scene-*.svg' ! -name 'screenshot-*.png' -delete 2>/dev/null || true
-	rm -f physics.html physics-link-check.html physics-door-check.html
+	rm -f physics.html physics-script-check.html
 	@$(LISP) --eval '(require :asdf)' \
 	  --eval '(let ((cache (asdf:apply-output-translations (truename "./")))) (format t "rm -rf ~A~%" cache) (uiop:delete-directory-tree cache :validate t :if-does-not-exist :ignore))'

@@ -535,6 +535,11 @@ more step up to and including prepare: its constraints are ready for the substep
       (funcall phase world))
     world))
 
+(defun phase-anchor (phase)
+  "The anchor PHASE's docstring ends with: the section that defines it. #T3STK1"
+  (let ((doc (documentation phase 'function)))
+    (subseq doc (1+ (position #\# doc :from-end t)))))
+
 (defun phases-checked-after (phase function)
   "*physics-phases* with FUNCTION, which takes the world and returns it, run right after PHASE. #T3STK1"
   (loop for p in *physics-phases* collect p when (eq p phase) collect function))
@@ -5404,10 +5409,7 @@ the phases of a step before the prepare phase. #PR3PAR"
       (when door
         (check (search (format nil "runs ~R phases" (length luv-physics:*physics-phases*)) text)
                "the door does not count ~R phases: ~A" (length luv-physics:*physics-phases*) text)
-        (check (equal (butlast links)
-                      (loop for phase in luv-physics:*physics-phases*
-                            collect (let ((doc (documentation phase 'function)))
-                                      (subseq doc (1+ (position #\# doc :from-end t))))))
+        (check (equal (butlast links) (mapcar #'phase-anchor luv-physics:*physics-phases*))
                "the door links ~S" links)))
     (check (equal (mapcar (lambda (row) (string-trim "=" (first row))) rows)
                   (mapcar #'string-downcase *physics-phases*))
@@ -5415,9 +5417,8 @@ the phases of a step before the prepare phase. #PR3PAR"
     (loop for row in rows
           for phase in *physics-phases*
           for place from 0
-          do (let* ((doc (documentation phase 'function))
-                    (anchor (subseq doc (1+ (position #\# doc :from-end t))))
-                    (features (fourth (rest row))))
+          do (let ((anchor (phase-anchor phase))
+                   (features (fourth (rest row))))
                (check (search (format nil "[[#~A]" anchor) (second row))
                       "~(~A~) links ~A, not its section ~A" phase (second row) anchor)
                (cond ((string= features "compiled per set")
@@ -9329,6 +9330,21 @@ within reach of something. #S9WEEP"
 ;; LW3YHU-every-export-is-indexed ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-page-works-in-a-browser]]
+(defun page-dom-with-script (chromium script &rest arguments)
+  "The document physics.html ends as in headless CHROMIUM, at 1200 x 900, once SCRIPT (a <script>
+element) has run at its end: a copy of the page with SCRIPT before </body> is loaded with
+--dump-dom and ARGUMENTS, then deleted. #LW3YHU"
+  (let* ((copy (repository-file "physics-script-check.html"))
+         (text (luv-physics::read-file-text (repository-file "physics.html")))
+         (end (search "</body>" text :from-end t)))
+    (unwind-protect
+         (progn
+           (with-open-file (out copy :direction :output :if-exists :supersede :external-format :utf-8)
+             (write-string text out :end end) (write-string script out) (write-string text out :start end))
+           (browser-run chromium (append (list "--window-size=1200,900" "--dump-dom") arguments
+                                         (list (format nil "file://~A" (namestring copy))))))
+      (when (probe-file copy) (delete-file copy)))))
+
 (define-claim "LW3YHU" page-works-in-a-browser
     "physics.html: pictures load, code coloured, none cut off; a link scrolls its section to the top."
   (let ((chromium (chromium-program)) (page (repository-file "physics.html")))
@@ -9338,10 +9354,7 @@ within reach of something. #S9WEEP"
           (t
            (check (probe-file page) "~A is missing: make html writes it" page)
            (when (probe-file page)
-             (let* ((copy (repository-file "physics-link-check.html"))
-                    (text (luv-physics::read-file-text page))
-                    (end (search "</body>" text :from-end t))
-                    (script "<script>window.addEventListener('load', function () {
+             (let* ((script "<script>window.addEventListener('load', function () {
   var images = Array.from(document.images), blocks = Array.from(document.querySelectorAll('pre'));
   var shown = images.filter(function (i) { return i.complete && i.naturalWidth > 0; }).length;
   var cut = blocks.filter(function (b) {
@@ -9361,53 +9374,42 @@ within reach of something. #S9WEEP"
     var y = window.scrollY; window.scrollTo(0, 0);
     document.body.style.transform = 'translateY(-' + y + 'px)';
   }, 300);
-});</script>"))
-               (unwind-protect
-                    (progn
-                      (with-open-file (out copy :direction :output :if-exists :supersede :external-format :utf-8)
-                        (write-string text out :end end) (write-string script out) (write-string text out :start end))
-                      ;; one run writes both the document it ends with and its screenshot
-                      (let* ((dom (browser-run chromium (list "--window-size=1200,900" "--dump-dom"
-                                                              (format nil "--screenshot=~A"
-                                                                      (namestring (repository-file "report/page-at-anchor.png")))
-                                                              (format nil "file://~A" (namestring copy)))))
-                             (mark "id=\"link-check\">link-check ")
-                             (at (search mark dom))
-                             (note (and at (with-input-from-string (s dom :start (+ at (length mark)))
-                                             (list (read s) (read s) (read s) (read s) (read s) (read s)
-                                                   (read s) (read-line s))))))
-                        (check (not (null note)) "the page did not note what it shows")
-                        (when note
-                          (destructuring-bind (images shown keywords cut before after top hash) note
-                            (check (and (integerp images) (>= images 13) (eql shown images))
-                                   "~A of ~A pictures loaded" shown images)
-                            (check (and (integerp keywords) (> keywords 1000)) "~A coloured keywords" keywords)
-                            (check (eql cut 0) "~A code blocks are cut off" cut)
-                            (check (and (numberp before) (numberp after) (> (- after before) 2000))
-                                   "the page went from ~A to ~A" before after)
-                            (check (and (numberp top) (<= (abs top) 2)) "the heading is at ~A px" top)
-                            (check (equal (string-trim " <" (subseq hash 0 (position #\< hash))) "#3X6XN8")
-                                   "the address ends with ~S" hash)))))
-                 (when (probe-file copy) (delete-file copy)))))))))
+});</script>")
+                    ;; one run writes both the document it ends with and its screenshot
+                    (dom (page-dom-with-script chromium script
+                                               (format nil "--screenshot=~A"
+                                                       (namestring (repository-file "report/page-at-anchor.png")))))
+                    (mark "id=\"link-check\">link-check ")
+                    (at (search mark dom))
+                    (note (and at (with-input-from-string (s dom :start (+ at (length mark)))
+                                    (list (read s) (read s) (read s) (read s) (read s) (read s)
+                                          (read s) (read-line s))))))
+               (check (not (null note)) "the page did not note what it shows")
+               (when note
+                 (destructuring-bind (images shown keywords cut before after top hash) note
+                   (check (and (integerp images) (>= images 13) (eql shown images))
+                          "~A of ~A pictures loaded" shown images)
+                   (check (and (integerp keywords) (> keywords 1000)) "~A coloured keywords" keywords)
+                   (check (eql cut 0) "~A code blocks are cut off" cut)
+                   (check (and (numberp before) (numberp after) (> (- after before) 2000))
+                          "the page went from ~A to ~A" before after)
+                   (check (and (numberp top) (<= (abs top) 2)) "the heading is at ~A px" top)
+                   (check (equal (string-trim " <" (subseq hash 0 (position #\< hash))) "#3X6XN8")
+                          "the address ends with ~S" hash)))))))))
 ;; LW3YHU-page-works-in-a-browser ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-phases-from-the-first-screen]]
 (define-claim "LW3YHU" phases-from-the-first-screen
     "In physics.html, a link to each phase's section lies within the first screen, and each section exists."
   (let ((chromium (chromium-program)) (page (repository-file "physics.html"))
-        (anchors (loop for phase in *physics-phases*
-                       collect (let ((doc (documentation phase 'function)))
-                                 (subseq doc (1+ (position #\# doc :from-end t)))))))
+        (anchors (mapcar #'phase-anchor *physics-phases*)))
     (cond ((null chromium)
            (format t "~&LW3YHU: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
            (check (null chromium)))
           (t
            (check (probe-file page) "~A is missing: make html writes it" page)
            (when (probe-file page)
-             (let* ((copy (repository-file "physics-door-check.html"))
-                    (text (luv-physics::read-file-text page))
-                    (end (search "</body>" text :from-end t))
-                    (script (format nil "<script>window.addEventListener('load', function () {
+             (let* ((script (format nil "<script>window.addEventListener('load', function () {
   var anchors = [~{'~A'~^, ~}], seen = [];
   anchors.forEach(function (a) {
     var onScreen = Array.from(document.querySelectorAll('a[href=\"#' + a + '\"]')).some(function (l) {
@@ -9417,24 +9419,16 @@ within reach of something. #S9WEEP"
   var note = document.createElement('pre'); note.id = 'door-check';
   note.textContent = 'door-check ' + seen.join(' ') + ' end';
   document.body.appendChild(note);
-});</script>" anchors)))
-               (unwind-protect
-                    (progn
-                      (with-open-file (out copy :direction :output :if-exists :supersede :external-format :utf-8)
-                        (write-string text out :end end) (write-string script out) (write-string text out :start end))
-                      (let* ((dom (browser-run chromium (list "--window-size=1200,900" "--dump-dom"
-                                                              (format nil "file://~A" (namestring copy)))))
-                             (mark "door-check ")
-                             (at (search (format nil "id=\"door-check\">~A" mark) dom))
-                             (words (and at (uiop:split-string
-                                             (subseq dom (+ at (length "id=\"door-check\">") (length mark))
-                                                     (search " end" dom :start2 at))))))
-                        (check (= (length words) (length anchors)) "the page noted ~S" words)
-                        (loop for a in anchors
-                              for w in words
-                              do (check (string= w (format nil "~A:1:1" a))
-                                        "~A: ~A (link on the first screen, section in the page)" a w))))
-                 (when (probe-file copy) (delete-file copy)))))))))
+});</script>" anchors))
+                    (dom (page-dom-with-script chromium script))
+                    (mark "id=\"door-check\">door-check ")
+                    (at (search mark dom))
+                    (words (and at (uiop:split-string (subseq dom (+ at (length mark)) (search " end" dom :start2 at))))))
+               (check (= (length words) (length anchors)) "the page noted ~S" words)
+               (loop for a in anchors
+                     for w in words
+                     do (check (string= w (format nil "~A:1:1" a))
+                               "~A: ~A (link on the first screen, section in the page)" a w))))))))
 ;; LW3YHU-phases-from-the-first-screen ends here
 
 ;; [[file:../physics.org::#O07FDP][O07FDP-both-files-registered]]
