@@ -199,8 +199,87 @@ the forms before the last of the others.")
 
 (defvar *sites*)
 
+(defvar *unit-symbols* (make-hash-table :test #'eq)
+  "The symbols the toplevel form being walked mentions: a wrong variable is one of them.")
+
+(defvar *layouts* '()
+  "Each columnar layout's name with its columns, (COLUMN TYPE [WIDTH]) in declaration order, as
+the page's define-physics-layout forms declare them.")
+
 (defun site (operator from to rebuild)
   (push (list operator from to rebuild) *sites*))
+
+(defun starts-with-name-p (prefix symbol)
+  (and (symbolp symbol) (physics::starts-with prefix (symbol-name symbol))))
+
+(defparameter *token-families* '("XYZ" "AB" "IJK" "123")
+  "Letters or digits that name one of a family: an axis, a side of a pair, an index, a tangent.")
+
+(defun token-siblings (token)
+  "The tokens that differ from TOKEN in its last character within one family: x for y, vz for vx,
+ima for imb, t1x for t1y, l2 for l1.  Only short tokens (four characters at most), which are
+names of that kind rather than words that happen to end in such a letter."
+  (let ((n (length token)))
+    (when (<= 1 n 4)
+      (let* ((last (char token (1- n)))
+             (family (find-if (lambda (f) (find last f)) *token-families*)))
+        (when family
+          (loop for c across family
+                unless (char= c last)
+                  collect (concatenate 'string (subseq token 0 (1- n)) (string c))))))))
+
+(defun variable-siblings (symbol)
+  "The variables of the form being walked whose names differ from SYMBOL's in one token of a
+family: the same kind of value read from the wrong axis, side or index."
+  (let* ((tokens (uiop:split-string (symbol-name symbol) :separator "-"))
+         (siblings '()))
+    (loop for i from 0 below (length tokens)
+          do (dolist (new (token-siblings (nth i tokens)))
+               (let ((s (find-symbol (format nil "~{~A~^-~}" (replace-nth tokens i new))
+                                     (symbol-package symbol))))
+                 (when (and s (not (eq s symbol)) (variable-symbol-p s) (gethash s *unit-symbols*))
+                   (pushnew s siblings)))))
+    (nreverse siblings)))
+
+(defun neighbour-columns (column columns)
+  "The columns declared just before and just after COLUMN among COLUMNS, ((NAME TYPE ...) ...),
+that have its type and width: a wrong column of the same layout."
+  (let* ((spec (find (symbol-name column) columns :key (lambda (c) (symbol-name (first c))) :test #'string=))
+         (same (and spec (remove-if-not (lambda (c) (equal (rest c) (rest spec))) columns)))
+         (at (and spec (position spec same))))
+    (when at
+      (remove nil (list (and (> at 0) (first (nth (1- at) same)))
+                        (and (< (1+ at) (length same)) (first (nth (1+ at) same))))))))
+
+(defun layout-of-macro (operator)
+  "The layout whose WITH- macro OPERATOR is, if it is one."
+  (and (starts-with-name-p "WITH-" operator)
+       (find (subseq (symbol-name operator) 5) *layouts* :key (lambda (l) (symbol-name (car l))) :test #'string=)))
+
+(defun layout-accessor (operator)
+  "If OPERATOR reads a column of a layout, (LAYOUT . COLUMN)."
+  (and (symbolp operator)
+       (loop for (layout . columns) in *layouts*
+             for prefix = (concatenate 'string (symbol-name layout) "-")
+             for column = (and (physics::starts-with prefix (symbol-name operator))
+                               (find (subseq (symbol-name operator) (length prefix)) columns
+                                     :key (lambda (c) (symbol-name (first c))) :test #'string=))
+             when column return (cons layout (first column)))))
+
+(defun constraint-columns ()
+  "The constraint block's columns, main then side, each (NAME FLOAT) with the block it lies in."
+  (append (mapcar (lambda (c) (list c 'main)) physics::+constraint-columns+)
+          (mapcar (lambda (c) (list c 'side)) physics::+constraint-side-columns+)))
+
+(defun check-form-p (form)
+  "True if FORM checks an argument or a state: a call of the page's CHECK-... or REQUIRE-...
+functions, an ERROR, SIGNAL, ASSERT or CHECK-TYPE, or a WHEN or UNLESS whose body is such."
+  (and (consp form) (symbolp (car form))
+       (or (member (car form) '(error cerror signal assert check-type))
+           (starts-with-name-p "CHECK-" (car form))
+           (starts-with-name-p "REQUIRE-" (car form))
+           (and (member (car form) '(when unless)) (proper-list-p form)
+                (some #'check-form-p (cddr form))))))
 
 (defun variable-symbol-p (x)
   (and (symbolp x) x (not (eq x t)) (not (keywordp x)) (not (constantp x))))
@@ -228,6 +307,18 @@ PARENT, if given, is the list holding X at INDEX; a literal's site shows it."
     (cond ((comma-p x)
            (walk (sb-impl::comma-expr x)
                  (lambda (new) (funcall rebuild (sb-impl::unquote new (sb-impl::comma-kind x))))))
+          ((variable-symbol-p x)
+           ;; shown in its call, with the arguments before and after it elided, so that two
+           ;; mutants of one call are told apart
+           (dolist (other (variable-siblings x))
+             (let ((other other))
+               (flet ((text (v)
+                        (if (and parent (symbolp (car parent)))
+                            (let ((*print-case* :downcase))
+                              (format nil "(~S ~:[~;... ~]~S~:[~; ...~])" (car parent) (> index 1) v
+                                      (< (1+ index) (length parent))))
+                            (string-downcase (symbol-name v)))))
+                 (site "wrong variable" (text x) (text other) (lambda () (funcall rebuild other)))))))
           ((typep x 'integer)
            (literal "off-by-one" (1+ x))
            (literal "off-by-one" (1- x)))
@@ -255,7 +346,7 @@ but the last.  Declarations and docstrings stay."
     (loop for i from start below (if every n (1- n))
           for form = (nth i x)
           unless (or (stringp form) (and (consp form) (eq (car form) 'declare)) (atom form))
-            do (site "dropped form" form :dropped
+            do (site (if (check-form-p form) "dropped check" "dropped form") form :dropped
                      (let ((i i)) (lambda () (funcall rebuild (remove-nth x i))))))))
 
 (defun walk-bindings (x index rebuild)
@@ -289,6 +380,38 @@ but the last.  Declarations and docstrings stay."
         ;; a type, or a prototype that only names a type, is not mutated
         ((member op '(the coerce typep float)) (walk-elements x rebuild (if (eq op 'the) 2 1) (if (eq op 'the) 3 2)))
         ((eq op 'sb-int:quasiquote) (walk-elements x rebuild 1))
+        ((eq op 'loop)
+         ;; a variable a clause binds, and a type, are not read: what follows FOR, AS, WITH,
+         ;; INTO, NAMED and OF-TYPE is left alone
+         (loop for i from 1 below n
+               unless (member (nth (1- i) x) '(for as with into named of-type)
+                              :test (lambda (a b) (and (symbolp a) (string= (symbol-name a) (symbol-name b)))))
+                 do (let ((i i)) (walk (nth i x) (lambda (new) (funcall rebuild (replace-nth x i new))) x i))))
+        ((and (symbolp op) (member (symbol-name op) (quote ("@" "@W")) :test (function string=)) (= n 2) (symbolp (second x)))
+         ;; (@ COLUMN) reads a constraint column: a wrong column is its neighbour in the block
+         (dolist (other (neighbour-columns (second x) (constraint-columns)))
+           (let ((new (list op (intern (symbol-name other) *package*))))
+             (site "wrong column" x new (lambda () (funcall rebuild new))))))
+        ((and (layout-of-macro op) (>= n 3) (proper-list-p (second x)))
+         ;; (WITH-LAYOUT (SPEC...) BUFFER . BODY): a spec, NAME or (VARIABLE COLUMN), may bind the
+         ;; neighbouring column of the layout instead
+         (let ((columns (cdr (layout-of-macro op))) (specs (second x)))
+           (loop for j from 0 below (length specs)
+                 for spec = (nth j specs)
+                 for variable = (if (consp spec) (first spec) spec)
+                 for column = (if (consp spec) (second spec) spec)
+                 when (and (symbolp variable) (symbolp column))
+                   do (dolist (other (neighbour-columns column columns))
+                        (let* ((other (intern (symbol-name other) *package*))
+                               (new (replace-nth x 1 (replace-nth specs j (list variable other)))))
+                          (site "wrong column" spec (list variable other)
+                                (lambda () (funcall rebuild new)))))))
+         (walk-elements x rebuild 2))
+        ((and (eq op 'if) (= n 4) (or (check-form-p (third x)) (check-form-p (fourth x))))
+         ;; a test whose branch signals is a check: dropping it keeps the other branch
+         (let ((kept (if (check-form-p (third x)) (fourth x) (third x))))
+           (site "dropped check" x kept (lambda () (funcall rebuild kept))))
+         (walk-elements x rebuild 1))
         ((member op '(defun defmacro)) (body 3))
         ((eq op 'defmethod)
          (let ((args (position-if #'listp x :start 2))) (when args (body (1+ args)))))
@@ -325,8 +448,20 @@ but the last.  Declarations and docstrings stay."
                for clause = (nth j x)
                when (and (consp clause) (proper-list-p clause))
                  do (let ((j j) (clause clause))
+                      (when (and (rest clause) (some #'check-form-p (rest clause)))
+                        (let ((new (remove-nth x j)))
+                          (site "dropped check" clause :dropped (lambda () (funcall rebuild new)))))
                       (walk-elements clause (lambda (new) (funcall rebuild (replace-nth x j new))) 0))))
         (t
+         (when (and (starts-with-name-p "RANGED-F32" op) (string= (symbol-name op) "RANGED-F32") (>= n 5))
+           ;; a value checked against a range is checked only for being a finite number
+           (let ((new (list* (intern "FINITE-F32" (symbol-package op)) (second x) (third x) (nthcdr 5 x))))
+             (site "dropped check" x new (lambda () (funcall rebuild new)))))
+         (let ((column (layout-accessor op)))
+           (when (and column (= n 2))
+             (dolist (other (neighbour-columns (cdr column) (cdr (assoc (car column) *layouts*))))
+               (let ((new (list (intern (format nil "~A-~A" (car column) other) (symbol-package op)) (second x))))
+                 (site "wrong column" x new (lambda () (funcall rebuild new)))))))
          (let ((flip (cdr (assoc op *comparison-flips*))))
            (when flip (site "comparison flip" x (cons flip (cdr x)) (lambda () (funcall rebuild (cons flip (cdr x)))))))
          (case op
@@ -355,7 +490,7 @@ but the last.  Declarations and docstrings stay."
 
 (defun unit-sites (unit)
   "Every site of UNIT's form, each (OPERATOR FROM TO REBUILD), in a fixed order."
-  (let ((*sites* '()) (*package* (unit-package unit)))
+  (let ((*sites* '()) (*package* (unit-package unit)) (*unit-symbols* (unit-symbols unit)))
     (walk (unit-form unit) (lambda (new) new))
     (nreverse *sites*)))
 
@@ -364,7 +499,9 @@ but the last.  Declarations and docstrings stay."
 
 (defparameter *named-parts*
   '(("P5SOLV" . "solver") ("P4CONT" . "contact phases") ("QKS4GZ" . "sleep")
-    ("D9W4CH" . "hash") ("Y5H8KC" . "hash"))
+    ("D9W4CH" . "hash") ("Y5H8KC" . "hash")
+    ("MYWH16" . "terrain contacts") ("SW33P7" . "terrain contacts")
+    ("E7V3NT" . "events") ("H7P4CX" . "walker"))
   "Anchors whose sections, or whose part's sections, form a part named here; any other section
 belongs to the part of its level-1 heading.")
 
@@ -668,6 +805,15 @@ writing each step to STATUS-PATH.  Never returns."
           do (rotatef (aref v i) (aref v (random (1+ i) state))))
     (coerce v 'list)))
 
+(defun operators-in-turn (mutants state)
+  "MUTANTS, already in a seeded order, taken one operator at a time: the operators in a seeded
+order, each giving the next of its own mutants in turn, so that a section's first mutants are of
+different operators however many sites each operator has there."
+  (let ((groups (shuffle (remove-duplicates (mapcar #'mutant-operator mutants) :test #'string=) state)))
+    (let ((queues (mapcar (lambda (op) (remove op mutants :key #'mutant-operator :test-not #'string=)) groups)))
+      (loop while (some #'identity queues)
+            append (loop for q on queues when (car q) collect (pop (car q)))))))
+
 (defun section-sites (units anchor-filter &optional match)
   "An alist from anchor to the list of its mutants (not yet run), in file order."
   (let ((table '()))
@@ -938,16 +1084,22 @@ ending in ': *', which stands for every mutant of that definition."
                             collect (list (gethash (unit-anchor (mutant-unit m)) parts "?")
                                           (unit-anchor (mutant-unit m))
                                           (and (page-reason (mutant-key m) reasons) t)
+                                          (mutant-operator m)
                                           (killed-p m)))
                       stream)))
 
 (defun write-score-rows (scored stream)
   "SCORED holds one list per mutant: its part, its anchor, whether the page explains it as
-equivalent, and last whether it was killed.  The score of the rest leaves out the survivors
-the page explains as equivalent."
+equivalent, its operator, and last whether it was killed.  The score of the rest leaves out the
+survivors the page explains as equivalent.  A table by part, then the same mutants by operator."
+  (write-score-rows-by #'first "part" scored stream)
+  (terpri stream)
+  (write-score-rows-by #'fourth "operator" scored stream))
+
+(defun write-score-rows-by (key heading scored stream)
   (let ((rows '()))
     (dolist (x scored)
-      (let* ((part (first x)) (killed (car (last x))) (equivalent (and (not killed) (third x)))
+      (let* ((part (funcall key x)) (killed (car (last x))) (equivalent (and (not killed) (third x)))
              (row (or (assoc part rows :test #'string=) (car (push (list part 0 0 '() 0) rows)))))
         (incf (second row))
         (when killed (incf (third row)))
@@ -957,7 +1109,7 @@ the page explains as equivalent."
     (flet ((line (name sections n k e)
              (format stream "| ~A | ~D | ~D | ~D | ~D | ~D | ~,1F % | ~,1F % |~%" name sections n k (- n k e) e
                      (* 100 (/ k (max 1 n))) (* 100 (/ k (max 1 (- n e)))))))
-      (format stream "| part | sections | mutants | killed | survived | equivalent | score | score without equivalents |~%|-~%")
+      (format stream "| ~A | sections | mutants | killed | survived | equivalent | score | score without equivalents |~%|-~%" heading)
       (dolist (r rows)
         (line (first r) (length (fourth r)) (second r) (third r) (fifth r)))
       (format stream "|-~%")
@@ -995,7 +1147,8 @@ as they are now."
 ;;; Tables from a log: the lines a run printed, for a run stopped before its end
 
 (defparameter *operators* '("comparison flip" "sign flip" "constant scaling" "off-by-one"
-                            "dropped form" "swapped arguments"))
+                            "dropped form" "swapped arguments" "wrong variable" "wrong column"
+                            "dropped check"))
 
 (defun tables-from-log (log parts)
   "Read the mutant lines of the run logged in LOG and write the score table and the survivors
@@ -1035,6 +1188,7 @@ as a finished run does.  Return the number of mutants read."
         (format out "~A~%~A~%~%" (or first-line "") (or summary (format nil "~D mutants read from ~A, a run stopped before its end" (length rows) log)))
         (write-score-rows (mapcar (lambda (r) (list (gethash (first r) parts "?") (first r)
                                                     (and (page-reason (fourth r) reasons) t)
+                                                    (second r)
                                                     (fifth r)))
                                   rows)
                           out)))
@@ -1059,7 +1213,11 @@ as a finished run does.  Return the number of mutants read."
          (slow (setf *slow* (let ((v (sb-ext:posix-getenv "SLOW")))
                               (if (and v (plusp (length v))) (float (read-from-string v) 1d0) *slow*))))
          (state (sb-ext:seed-random-state seed))
-         (sections (mapcar (lambda (s) (cons (car s) (shuffle (cdr s) state)))
+         (layouts (setf *layouts* (loop for u in units
+                                        when (and (consp (unit-form u))
+                                                  (starts-with-name-p "DEFINE-PHYSICS-LAYOUT" (car (unit-form u))))
+                                          collect (cons (second (unit-form u)) (nthcdr 3 (unit-form u))))))
+         (sections (mapcar (lambda (s) (cons (car s) (operators-in-turn (shuffle (cdr s) state) state)))
                            (remove-if-not #'cdr (section-sites units anchor (let ((m (sb-ext:posix-getenv "MATCH"))) (and (plusp (length m)) m))))))
          (sections (shuffle sections state))
          (only-parts (let ((p (sb-ext:posix-getenv "PART")))
@@ -1104,7 +1262,7 @@ as a finished run does.  Return the number of mutants read."
              (saved (progn (ensure-directories-exist "report/") (write-record)))
              (wall (- (now) start))
              (reasons (page-reasons "physics.org")))
-        (declare (ignore dummy inline saved))
+        (declare (ignore dummy inline saved layouts))
         (ignore-errors (sb-ext:delete-directory directory :recursive t))
         (let ((n (length mutants)) (k (count-if #'killed-p mutants)))
           (format t "~&~%mutate: ~D of ~D mutants killed (~,1F %), ~D survived; ~,1F s in all, ~,1F s a mutant on average in its child; load ~A~%~%"
