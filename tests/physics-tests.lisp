@@ -3153,7 +3153,7 @@ use before it. #QKS4GZ"
                (check (if wakes
                           (and woken-at (< (- -0.6 1e-5) woken-at (+ -0.6 travel 1e-5)))
                           (null woken-at))
-                      "at ~,1F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
+                      "at ~,2F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
 ;; W4K3PH-wake-speed-is-the-edge ends here
 
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
