@@ -2432,8 +2432,8 @@ use before it. #QKS4GZ"
 
 ;; [[file:../physics.org::#QKS4GZ][QKS4GZ-sleep-speed-is-the-edge]]
 (define-claim "QKS4GZ" sleep-speed-is-the-edge
-    "A ball drifting at 0.9 of the sleep speed sleeps after the time to sleep; at 1.1 of it, never."
-  (loop for (factor sleeps) in '((0.9 t) (1.1 nil))
+    "A ball drifting under the sleep speed sleeps after the time to sleep; at 1.01 of it or more, never."
+  (loop for (factor sleeps) in '((0.5 t) (0.9 t) (0.99 t) (1.01 nil) (1.1 nil))
         do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
                   (speed (* factor *physics-sleep-speed*))
                   (ball (add-physics-body world 0.0 1.0 0.0 :vx speed))
@@ -2536,6 +2536,27 @@ use before it. #QKS4GZ"
          (x (first (twin-final-position record))))
     (check (and (> x (+ start 2.25)) (> x 5.0)) "the pushed ball ends at x = ~,3F" x)))
 ;; K1N3BX-boxes-push-on-every-axis ends here
+
+;; [[file:../physics.org::#G3NCNT][G3NCNT-speculative-distance-bands]]
+(define-claim "G3NCNT" speculative-distance-bands
+    "A ball's floor contact is made 0.2 mm inside the speculative distance and not 0.2 mm outside it, at rest, falling and at the margin."
+  (let ((dt (/ 1.0 60)) (slop *physics-linear-slop*) (margin *physics-speculative-margin*))
+    (loop for (speed gravity) in '((0.0 nil) (0.0 t) (3.0 nil) (3.0 t) (4.5 nil) (5.9 nil))
+          for edge = (min margin (+ (* 4 slop) (* dt (+ speed (if gravity (* 9.81 dt) 0.0)))))
+          do (loop for (offset expected) in '((-0.0002 t) (0.0002 nil))
+                   do (let* ((w (make-floor-world :sleep nil :gravity (if gravity '(0 -9.81 0) '(0 0 0))))
+                             (h (add-physics-body w 3.5 (+ 0.25 edge offset) 3.5 :vy (- speed))))
+                        ;; the step up to the prune phase: the contacts it found
+                        (let ((*physics-phases* (ldiff *physics-phases* (member 'luv-physics::prune-phase *physics-phases*))))
+                          (step-physics-world w))
+                        (let ((found (>= (luv-physics::contact-table-find
+                                          (luv-physics::physics-world-contact-table w)
+                                          (luv-physics::terrain-key (luv-physics::handle-index h) 3 -1 3))
+                                         0)))
+                          (check (eq expected found)
+                                 "falling at ~A m/s~:[~; under gravity~], ~,4F m over the floor (the edge ~,5F m): ~:[no~;a~] contact"
+                                 speed gravity (+ edge offset) edge found)))))))
+;; G3NCNT-speculative-distance-bands ends here
 
 ;; [[file:../physics.org::#G3NCNT][G3NCNT-oblique-blows-true]]
 (define-claim "G3NCNT" oblique-blows-true
@@ -3115,20 +3136,24 @@ use before it. #QKS4GZ"
 
 ;; [[file:../physics.org::#W4K3PH][W4K3PH-wake-speed-is-the-edge]]
 (define-claim "W4K3PH" wake-speed-is-the-edge
-    "A ball approaching a sleeper at 0.9 of the wake speed leaves it asleep; at 1.1 of it, wakes it as it comes within reach."
-  (loop for (factor wakes) in '((0.9 nil) (1.1 t))
+    "A ball approaching a sleeper under the wake speed leaves it asleep; over it, wakes it in the step it comes within reach."
+  (loop for (factor wakes) in '((0.5 nil) (0.9 nil) (0.99 nil) (1.01 t) (1.1 t) (2.0 t))
         do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
                   (sleeper (add-physics-body world 0.0 1.0 0.0))
                   (woken-at nil))
              (dotimes (i 40) (step-physics-world world))
              (check (not (physics-body-awake-p world sleeper)) "the sleeper did not fall asleep")
-             (let ((mover (add-physics-body world -0.8 1.0 0.0 :vx (* factor *physics-wake-speed*))))
+             (let* ((speed (* factor *physics-wake-speed*))
+                    (travel (/ speed 60))
+                    (mover (add-physics-body world -0.8 1.0 0.0 :vx speed)))
                (dotimes (i 360)
                  (step-physics-world world)
                  (when (and (null woken-at) (physics-body-awake-p world sleeper))
                    (setf woken-at (physics-body-position world mover))))
-               (check (if wakes (and woken-at (< -0.61 woken-at -0.59)) (null woken-at))
-                      "at ~,1F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
+               (check (if wakes
+                          (and woken-at (< (- -0.6 1e-5) woken-at (+ -0.6 travel 1e-5)))
+                          (null woken-at))
+                      "at ~,2F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
 ;; W4K3PH-wake-speed-is-the-edge ends here
 
 ;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
@@ -5037,8 +5062,8 @@ the phases of a step before the prepare phase. #PR3PAR"
 
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-threshold-is-the-edge]]
 (define-claim "R3ST1T" threshold-is-the-edge
-    "A ball of restitution 0.5 at 0.9 of the threshold stays at the wall; at 1.1 of it, it leaves at half its speed."
-  (dolist (factor '(0.9 1.1))
+    "A ball of restitution 0.5 under the threshold stays at the wall; over it, from 1.01 to 4 times it, it leaves at half its speed."
+  (dolist (factor '(0.5 0.9 0.99 1.01 1.1 2.0 4.0))
     (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
       (fill-terrain terrain 6 0 -16 7 16 32 t)
       (let* ((speed (* factor *physics-restitution-threshold*))
@@ -5046,8 +5071,8 @@ the phases of a step before the prepare phase. #PR3PAR"
         (dotimes (i 120) (step-physics-world w))
         (let ((leaving (- (physics-body-velocity w ball))))
           (check (if (< factor 1)
-                     (< (abs leaving) (* 0.01 speed))
-                     (< (abs (- leaving (* 0.5 speed))) (* 0.02 0.5 speed)))
+                     (< (abs leaving) (* 1e-4 speed))
+                     (< (abs (- leaving (* 0.5 speed))) (* 1e-4 0.5 speed)))
                  "at ~,2F m/s the ball leaves the wall at ~,4F m/s" speed leaving))))))
 ;; R3ST1T-threshold-is-the-edge ends here
 
@@ -5169,16 +5194,18 @@ the phases of a step before the prepare phase. #PR3PAR"
 
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-hit-speed-is-the-edge]]
 (define-claim "ST0R3S" hit-speed-is-the-edge
-    "A blow at 0.9 of the hit speed reports no :hit; at 1.1 of it, one."
-  (loop for (factor expected) in '((0.9 0) (1.1 1))
+    "A blow under the hit speed reports no :hit; over it, from 1.01 to 4 times it, one at the speed of approach."
+  (loop for (factor expected) in '((0.5 0) (0.9 0) (0.99 0) (1.01 1) (1.1 1) (4.0 1))
         do (let* ((world (luv-physics::open-air-world :gravity '(0 0 0)))
                   (speed (* factor *physics-hit-speed*))
-                  (hits 0))
+                  (hits '()))
              (add-physics-body world 0.0 1.0 0.0 :vx speed)
              (add-physics-body world 1.0 1.0 0.0 :report-hits t)
              (dotimes (i 120)
-               (incf hits (count :hit (step-events world) :key #'first)))
-             (check (= expected hits) "a blow at ~,2F m/s reported ~D hits" speed hits))))
+               (setf hits (append hits (remove :hit (step-events world) :key #'first :test-not #'eq))))
+             (check (and (= expected (length hits))
+                         (every (lambda (hit) (< (abs (- (fourth hit) speed)) (* 1e-5 speed))) hits))
+                    "a blow at ~,2F m/s reported the hits ~S" speed hits))))
 ;; ST0R3S-hit-speed-is-the-edge ends here
 
 ;; [[file:../physics.org::#F1NAL5][F1NAL5-spin-turns-by-the-half-angle]]
@@ -5214,6 +5241,21 @@ the phases of a step before the prepare phase. #PR3PAR"
     (check (not (awake-at 33 0.5)) "the still ball was still awake at 0.55 s")
     (check (awake-at 57 1.0) "with a time to sleep of 1 s the ball slept before 0.95 s")))
 ;; F1NAL5-sleeps-after-its-time ends here
+
+;; [[file:../physics.org::#F1NAL5][F1NAL5-sleep-time-is-the-edge]]
+(define-claim "F1NAL5" sleep-time-is-the-edge
+    "A drifting ball is awake after the whole steps within its time to sleep and asleep after one step more."
+  (dolist (steps '(10 20 45))
+    (let* ((*physics-time-to-sleep* (/ (+ steps 0.5) 60))
+           (world (luv-physics::open-air-world :gravity '(0 0 0)))
+           (ball (add-physics-body world 0.0 1.0 0.0 :vx (* 0.2 *physics-sleep-speed*))))
+      (dotimes (i steps) (step-physics-world world))
+      (check (physics-body-awake-p world ball) "asleep after ~D steps, with ~,4F s to sleep"
+             steps *physics-time-to-sleep*)
+      (step-physics-world world)
+      (check (not (physics-body-awake-p world ball)) "awake after ~D steps, with ~,4F s to sleep"
+             (1+ steps) *physics-time-to-sleep*))))
+;; F1NAL5-sleep-time-is-the-edge ends here
 
 ;; [[file:../physics.org::#F1NAL5][F1NAL5-limit-reached-is-crossed]]
 (define-claim "F1NAL5" limit-reached-is-crossed
