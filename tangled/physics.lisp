@@ -1478,15 +1478,22 @@ its budget, counting the chunks its queued edits will make resident. #H2W9DJ"
                                       :expected (format nil "an integer of magnitude under ~D" +cell-limit+)))
   v)
 
+(declaim (inline check-terrain))
+(defun check-terrain (terrain)
+  "TERRAIN, a voxel-terrain, or an invalid-physics-parameter error naming :terrain. #H2W9DJ"
+  (unless (voxel-terrain-p terrain)
+    (error 'invalid-physics-parameter :name :terrain :value terrain :expected "a voxel-terrain"))
+  terrain)
+
 (defun terrain-solid-p (terrain x y z)
   "True when cell X Y Z of TERRAIN is solid; a cell of a non-resident chunk is solid. #H2W9DJ"
-  (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
+  (check-terrain terrain) (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
   (let ((chunk (gethash (chunk-key x y z) (voxel-terrain-chunks terrain))))
     (if chunk (plusp (aref (the chunk-storage chunk) (cell-offset x y z))) t)))
 
 (defun terrain-resident-p (terrain x y z)
   "True when the chunk holding cell X Y Z of TERRAIN is resident. #H2W9DJ"
-  (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
+  (check-terrain terrain) (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
   (nth-value 1 (gethash (chunk-key x y z) (voxel-terrain-chunks terrain))))
 
 (defun %resident-chunk (terrain x y z)
@@ -1506,7 +1513,7 @@ has room. #H2W9DJ"
 
 (defun (setf terrain-solid-p) (solid-p terrain x y z)
   "Make cell X Y Z of TERRAIN solid or air. During a step the edit waits for the step's end. #H2W9DJ"
-  (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
+  (check-terrain terrain) (check-cell 'x x) (check-cell 'y y) (check-cell 'z z)
   (let ((key (chunk-key x y z)))
     (unless (or (nth-value 1 (gethash key (voxel-terrain-chunks terrain)))
                 (nth-value 1 (gethash key (voxel-terrain-pending-chunks terrain))))
@@ -1520,6 +1527,7 @@ has room. #H2W9DJ"
 (defun fill-terrain (terrain x0 y0 z0 x1 y1 z1 solid-p)
   "Set every cell of the half-open box [X0,X1)x[Y0,Y1)x[Z0,Z1) of TERRAIN to SOLID-P, making
 the chunks it touches resident. Return TERRAIN. #H2W9DJ"
+  (check-terrain terrain)
   (loop for (n v) on (list 'x0 x0 'y0 y0 'z0 z0 'x1 x1 'y1 y1 'z1 z1) by #'cddr do (check-cell n v))
   (when (and (< x0 x1) (< y0 y1) (< z0 z1))
     ;; count the chunks the box would make resident before making any
@@ -2362,6 +2370,13 @@ first, so :auto takes the last one the CPU runs. #R9M4PV"
                                       :expected (format nil "an integer from 1 to ~D" high)))
   value)
 
+(defun check-function (world name function)
+  "FUNCTION, a function or the name of one, or an invalid-physics-parameter error naming NAME. #M4K3WD"
+  (unless (or (functionp function) (and (symbolp function) function (fboundp function)))
+    (error 'invalid-physics-parameter :world world :name name :value function
+                                      :expected "a function, or the name of a function"))
+  function)
+
 (defun make-physics-world (&key terrain (step-seconds 1/60) (substeps 4) (gravity '(0 -9.81 0))
                                 (kernels :scalar) (sleep t) (features +physics-features+))
   "A new empty world over TERRAIN (a voxel-terrain or NIL), stepping STEP-SECONDS in SUBSTEPS
@@ -2653,6 +2668,7 @@ that kind ([[#FEAT5X][its features]]). #E7V3NT"
 :woke :expired :escaped :held-out), the two handles (the second -1 when none), the point X Y Z, the approach
 speed, and the datum (a box's owner, or NIL). #E7V3NT"
   (check-world world 'map-physics-events)
+  (check-function world :function function)
   (let ((events (physics-world-events world)) (data (physics-world-event-data world)))
     (with-event-columns (kind handle-a handle-b x y z speed) events
       (dotimes (i (event-columns-length events))
@@ -7483,6 +7499,10 @@ COUNT-th body of the spring at cell X Y Z: a fixed hash of the four integers. #J
   "Let each of SPRINGS emit into WORLD what is due this call, calling FUNCTION, when given, on
 the handle of each body emitted; return how many were emitted. Conses nothing. #JAU0EF"
   (check-world world 'run-physics-springs)
+  (unless (and (listp springs) (every #'physics-spring-p springs))
+    (error 'invalid-physics-parameter :world world :name :springs :value springs
+                                      :expected "a list of physics-springs (from make-physics-spring)"))
+  (when function (check-function world :function function))
   (let ((emitted 0))
     (declare (type fixnum emitted))
     (dolist (spring springs emitted)
@@ -7544,6 +7564,14 @@ checked in place and returned as it is, so the walker conses nothing for one. #H
            (< (abs value) (float most-positive-single-float 1d0)))
       value
       (progn (finite-f32 name value) (coerce value 'double-float))))
+
+(declaim (inline check-player))
+(defun check-player (player)
+  "PLAYER, a physics-player, or an invalid-physics-parameter error naming :player. #H7P4CX"
+  (unless (physics-player-p player)
+    (error 'invalid-physics-parameter :name :player :value player
+                                      :expected "a physics-player (from make-physics-player)"))
+  player)
 
 (defun make-physics-player (x y z)
   "A walker standing with the middle of its soles at X Y Z. #H7P4CX"
@@ -7621,7 +7649,7 @@ its path; return true when a cell stopped it. #H7P4CX"
   "One 1/120 s step of PLAYER in TERRAIN with the input direction MOVE-X MOVE-Z (its length is
 capped at 1) and the jump key down when JUMP. Return PLAYER. Conses nothing when the inputs are
 double-floats. #H7P4CX"
-  (declare (type physics-player player))
+  (check-player player) (check-terrain terrain)
   (let* ((dt (physics-player-step-seconds player))
          (move-x (player-input :move-x move-x)) (move-z (player-input :move-z move-z)))
     (declare (type double-float dt move-x move-z))
@@ -7671,9 +7699,11 @@ double-floats. #H7P4CX"
   "Run PLAYER for a frame of SECONDS at 120 Hz, carrying the remainder to the next frame and
 running at most eight steps, each with the input MOVE-X MOVE-Z JUMP of step-physics-player.
 Return the steps run. #H7P4CX"
+  (check-player player) (check-terrain terrain)
   (let ((dt (physics-player-step-seconds player)) (steps 0)
-        (seconds (player-input :seconds seconds)))
-    (declare (type double-float dt seconds) (type fixnum steps))
+        (seconds (player-input :seconds seconds))
+        (move-x (player-input :move-x move-x)) (move-z (player-input :move-z move-z)))
+    (declare (type double-float dt seconds move-x move-z) (type fixnum steps))
     (when (minusp seconds)
       (error 'invalid-physics-parameter :world nil :name :seconds :value seconds :expected "not negative"))
     (setf (physics-player-pending player)
@@ -7693,6 +7723,7 @@ Return the steps run. #H7P4CX"
 (defun post-physics-player (world player)
   "Post PLAYER into WORLD's next step as a kinematic box moving at its velocity. #H7P4CX"
   (check-world world 'post-physics-player)
+  (check-player player)
   (let ((w (physics-player-half-width player)) (h (* 0.5d0 (physics-player-height player))))
     ;; each double-float goes to post-physics-box as the single-float it would become there,
     ;; which is passed unboxed: passed as a double-float, each would be consed. The walker's

@@ -1224,84 +1224,165 @@ return SCENE's record (run-twin). #T3STK1"
 ;; C0ND1T-registry-and-entry-points ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-every-argument-guarded]]
+(defun guard-bad-values (kind removed)
+  "The bad values a guard of KIND must refuse, each as (VALUE SUBTYPE NAME), NAME NIL for the
+argument's own: for every number a NaN, both infinities and a string; past the range, 10³⁰ for
+a :ranged number and a :radius (invalid-physics-radius), a component of 10³⁰ m/s for a :velocity
+(named :velocity), -1 for a :positive number; a NaN, a fraction, a string and a bignum for an
+:integer; a malformed, the REMOVED and an unissued handle for a :handle; a keyword and a number
+for a :choice. #C0ND1T"
+  (let ((number (loop for v in (list (sb-kernel:make-single-float -4194304)
+                                     sb-ext:single-float-positive-infinity
+                                     sb-ext:single-float-negative-infinity "1")
+                      collect (list v 'invalid-physics-number nil))))
+    (ecase kind
+      (:finite number)
+      (:ranged (append number (list (list 1e30 'invalid-physics-parameter nil))))
+      (:radius (append number (list (list 1e30 'invalid-physics-radius nil))))
+      (:velocity (append number (list (list 1e30 'invalid-physics-parameter :velocity))))
+      (:positive (append number (list (list -1 'invalid-physics-parameter nil))))
+      (:integer (loop for v in (list (sb-kernel:make-single-float -4194304) 1.5 "1" (expt 2 62))
+                      collect (list v 'invalid-physics-parameter nil)))
+      (:handle (loop for v in (list -5 removed 12345) collect (list v 'stale-physics-handle nil)))
+      (:choice (loop for v in (list :bogus 42) collect (list v 'invalid-physics-parameter nil))))))
+
+(defun guarded-calls (world handle doomed terrain player spring)
+  "The table of guards: for each exported operation, a good call of it on WORLD, its live bodies
+HANDLE and DOOMED (the one a good remove takes), TERRAIN (the world's), PLAYER and SPRING, and
+each place of that call where a bad value can go, as (WHERE NAME KIND . PAST): WHERE the index of
+the argument (of the value after a keyword), or two indices for an element of a list argument;
+NAME the name its refusal gives; KIND as for guard-bad-values; PAST more values out of its range,
+refused as KIND's values past the range are. #C0ND1T"
+  (let ((f (lambda (&rest arguments) arguments))
+        (xyz '((1 :x :ranged 1e20) (2 :y :ranged 1e20) (3 :z :ranged 1e20))))
+    (flet ((reader (name) (list name (list world handle) '(1 :handle :handle))))
+      (append
+       (list
+        (list 'make-physics-world (list :step-seconds 1/60 :substeps 4 :gravity (list 0 -9.81 0) :terrain nil
+                                        :kernels :scalar :features '(:terrain))
+              '(1 :step-seconds :ranged 0 1) '(3 :substeps :integer 0 65) '(5 :gravity :choice)
+              '((5 0) :gravity :ranged 1001) '((5 1) :gravity :ranged -1001) '((5 2) :gravity :ranged 1001)
+              '(7 :terrain :choice) '(9 :kernels :choice) '(11 :features :choice))
+        (list* 'add-physics-body (list world 1.5 2.0 1.5 :radius 0.25 :mass 1 :restitution 0.2 :friction 0.5
+                                       :rolling-resistance 0.1 :vx 0 :vy 0 :vz 0 :life 5 :kind 0
+                                       :inside-cells :refuse)
+               '(5 :radius :radius 0 5.0) '(7 :mass :ranged -1 0) '(9 :restitution :ranged -0.1 1.5)
+               '(11 :friction :ranged -1) '(13 :rolling-resistance :ranged -1)
+               '(15 :vx :velocity) '(17 :vy :velocity) '(19 :vz :velocity)
+               '(21 :life :positive 0) '(23 :kind :integer :foo) '(25 :inside-cells :choice)
+               xyz)
+        (list 'add-physics-body-of-kind (list world :water-drop 2.5 2.0 2.5 :vx 0 :vy 0 :vz 0 :inside-cells :refuse)
+              '(1 :kind :choice) '(2 :x :ranged) '(3 :y :ranged) '(4 :z :ranged)
+              '(6 :vx :velocity) '(8 :vy :velocity) '(10 :vz :velocity) '(12 :inside-cells :choice))
+        (list 'set-physics-body-velocity (list world handle 0.5 0 0.5)
+              '(1 :handle :handle) '(2 :vx :velocity) '(3 :vy :velocity) '(4 :vz :velocity))
+        (list 'set-physics-body-material (list world handle :restitution 0.1 :friction 0.5 :rolling-resistance 0.01)
+              '(1 :handle :handle) '(3 :restitution :ranged -0.1 1.5) '(5 :friction :ranged -1)
+              '(7 :rolling-resistance :ranged -1))
+        (list* 'wake-physics-bodies-near (list world 3.5 0.5 3.5 1) '(4 :radius :ranged -1) xyz)
+        (list* 'post-physics-box (list world 8.5 0.5 8.5 0.5 0.5 0.5 :vx 0 :vy 0 :vz 0)
+               '(4 :hx :ranged 0 2000) '(5 :hy :ranged 0 2000) '(6 :hz :ranged 0 2000)
+               '(8 :vx :velocity) '(10 :vy :velocity) '(12 :vz :velocity) xyz)
+        (list 'step-physics-world (list world 1/60) '(1 :dt :ranged 0 1))
+        (list* 'physics-ray-cast (list world 1.5 2.0 1.5 1 -1 0.5 10 :filter nil :hit nil)
+               '(4 :dx :finite) '(5 :dy :finite) '(6 :dz :finite) '(7 :max-distance :ranged -1)
+               '(9 :filter :choice) '(11 :hit :choice) xyz)
+        (list* 'physics-sphere-cast (list world 1.5 2.0 1.5 0.3 1 -1 0.5 10 :filter nil :hit nil)
+               '(4 :radius :ranged 0 9) '(5 :dx :finite) '(6 :dy :finite) '(7 :dz :finite)
+               '(8 :max-distance :ranged -1) '(10 :filter :choice) '(12 :hit :choice) xyz)
+        (list 'map-physics-bodies-in-sphere (list f world 3.5 0.5 3.5 1)
+              '(0 :function :choice) '(2 :x :ranged) '(3 :y :ranged) '(4 :z :ranged) '(5 :radius :ranged -1))
+        (list 'map-physics-cells-in-sphere (list f world 3.5 0.5 3.5 1)
+              '(0 :function :choice) '(2 :x :ranged) '(3 :y :ranged) '(4 :z :ranged) '(5 :radius :ranged -1))
+        (list 'map-physics-bodies-in-box (list f world 3.5 0.5 3.5 1 1 1)
+              '(0 :function :choice) '(2 :x :ranged) '(3 :y :ranged) '(4 :z :ranged)
+              '(5 :hx :ranged -1) '(6 :hy :ranged -1) '(7 :hz :ranged -1))
+        (list 'map-physics-cells-in-box (list f world 3.5 0.5 3.5 1 1 1)
+              '(0 :function :choice) '(2 :x :ranged) '(3 :y :ranged) '(4 :z :ranged)
+              '(5 :hx :ranged -1) '(6 :hy :ranged -1) '(7 :hz :ranged -1))
+        (list 'map-physics-events (list f world) '(0 :function :choice))
+        (list 'fill-terrain (list terrain 12 0 12 14 2 14 t)
+              '(0 :terrain :choice) '(1 x0 :integer) '(2 y0 :integer) '(3 z0 :integer)
+              '(4 x1 :integer) '(5 y1 :integer) '(6 z1 :integer))
+        (list 'terrain-solid-p (list terrain 1 1 1)
+              '(0 :terrain :choice) '(1 x :integer) '(2 y :integer) '(3 z :integer))
+        (list 'terrain-resident-p (list terrain 1 1 1)
+              '(0 :terrain :choice) '(1 x :integer) '(2 y :integer) '(3 z :integer))
+        (list '(setf terrain-solid-p) (list t terrain 12 2 12)
+              '(1 :terrain :choice) '(2 x :integer) '(3 y :integer) '(4 z :integer))
+        (list 'make-physics-spring (list :water-drop 2 3 2 :per-step 1 :every 1)
+              '(0 :kind :choice) '(1 :x :integer) '(2 :y :integer) '(3 :z :integer)
+              '(5 :per-step :integer 0 65) '(7 :every :integer 0 3601))
+        (list 'run-physics-springs (list world (list spring) f) '(1 :springs :choice) '(2 :function :choice))
+        (list 'make-physics-player (list 0.5 0 0.5) '(0 :x :ranged) '(1 :y :ranged) '(2 :z :ranged))
+        (list 'step-physics-player (list player terrain :move-x 1 :move-z 0)
+              '(0 :player :choice) '(1 :terrain :choice) '(3 :move-x :finite) '(5 :move-z :finite))
+        (list 'advance-physics-player (list player terrain 0 :move-x 1 :move-z 0)
+              '(0 :player :choice) '(1 :terrain :choice) '(2 :seconds :positive)
+              '(4 :move-x :finite) '(6 :move-z :finite))
+        (list 'post-physics-player (list world player) '(1 :player :choice)))
+       (mapcar #'reader '(physics-body-position physics-body-velocity physics-body-angular-velocity
+                          physics-body-orientation physics-body-radius physics-body-awake-p physics-body-kind
+                          physics-body-kind-name physics-body))
+       (list (list 'remove-physics-body (list world doomed) '(1 :handle :handle)))))))
+
+(defun guard-refusal-wrong (condition subtype name value)
+  "NIL when CONDITION is of exactly SUBTYPE, names NAME (by its name, or by its handle VALUE for a
+stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
+  (let ((report (string-downcase (princ-to-string condition))))
+    (cond ((not (eq (type-of condition) subtype)) (list (type-of condition) :not subtype report))
+          ((not (search (string-downcase (string name)) report)) (list :report report :without name))
+          ((not (typecase condition
+                  (stale-physics-handle (eql value (luv-physics::stale-physics-handle-handle condition)))
+                  (invalid-physics-radius t)
+                  (invalid-physics-number (string= name (luv-physics::invalid-physics-number-name condition)))
+                  (invalid-physics-parameter (string= name (luv-physics::invalid-physics-parameter-name condition)))))
+           (list :report report :names-not name)))))
+
 (define-claim "C0ND1T" every-argument-guarded
-    "Each numeric argument of each exported call, made NaN or out of range alone, is refused naming it; the world is untouched."
-  (let* ((nan (sb-kernel:make-single-float -4194304))
-         (world (make-floor-world))
-         (ball (add-physics-body world 3.5 0.5 3.5))
-         (terrain (luv-physics::physics-world-terrain world))
-         (player (make-physics-player 5.5 0 5.5))
-         ;; each call: a function of its argument list, the good arguments, and per argument
-         ;; (a place in the list or a keyword) the name a NaN there is refused with (NIL: no NaN is
-         ;; tried, the kind is no number) and a value out of range, with the name its refusal gives
-         (calls
-           `((add-physics-body ,(lambda (args) (apply #'add-physics-body world args))
-              (1.5 2.0 1.5 :radius 0.25 :mass 1.0 :restitution 0.2 :friction 0.5 :rolling-resistance 0.1
-               :vx 0.0 :vy 0.0 :vz 0.0 :life 5.0 :kind 0)
-              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (:vx :vx 1e20 :velocity) (:vy :vy 1e20 :velocity)
-               (:vz :vz 1e20 :velocity) (:radius :radius 5.0 :radius) (:mass :mass -1.0 :mass)
-               (:restitution :restitution 1.5 :restitution) (:friction :friction -1.0 :friction)
-               (:rolling-resistance :rolling-resistance -1.0 :rolling-resistance) (:life :life -1.0 :life)
-               (:kind nil :foo :kind)))
-             (set-physics-body-velocity ,(lambda (args) (apply #'set-physics-body-velocity world ball args))
-              (0.5 0.0 0.5)
-              ((0 :vx 1e20 :velocity) (1 :vy 1e20 :velocity) (2 :vz 1e20 :velocity)))
-             (post-physics-box ,(lambda (args) (apply #'post-physics-box world args))
-              (8.5 0.5 8.5 0.5 0.5 0.5 :vx 0.0 :vy 0.0 :vz 0.0)
-              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :hx 0.0 :hx) (3 :hx 2000.0 :hx) (4 :hy 0.0 :hy)
-               (4 :hy 2000.0 :hy) (5 :hz 0.0 :hz) (5 :hz 2000.0 :hz) (:vx :vx 1e20 :velocity)
-               (:vy :vy 1e20 :velocity) (:vz :vz 1e20 :velocity)))
-             (wake-physics-bodies-near ,(lambda (args) (apply #'wake-physics-bodies-near world args))
-              (3.5 0.5 3.5 1.0)
-              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :radius -1.0 :radius)))
-             (physics-ray-cast ,(lambda (args) (apply #'physics-ray-cast world args))
-              (1.5 2.0 1.5 1.0 -1.0 0.5 10.0)
-              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :dx nil nil) (4 :dy nil nil) (5 :dz nil nil)
-               (6 :max-distance -1.0 :max-distance)))
-             (physics-sphere-cast ,(lambda (args) (apply #'physics-sphere-cast world args))
-              (1.5 2.0 1.5 0.3 1.0 -1.0 0.5 10.0)
-              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z) (3 :radius 9.0 :radius) (4 :dx nil nil)
-               (5 :dy nil nil) (6 :dz nil nil) (7 :max-distance -1.0 :max-distance)))
-             (make-physics-player ,(lambda (args) (apply #'make-physics-player args))
-              (5.5 0 5.5)
-              ((0 :x 1e20 :x) (1 :y 1e20 :y) (2 :z 1e20 :z)))
-             (step-physics-player ,(lambda (args) (apply #'step-physics-player player terrain args))
-              (:move-x 1.0 :move-z 0.0)
-              ((:move-x :move-x nil nil) (:move-z :move-z nil nil))))))
-    (labels ((with-argument (args place value)
-               (let ((args (copy-list args)))
-                 ;; a keyword's value follows the keyword, after the positional arguments
-                 (setf (nth (if (integerp place) place (1+ (position place args))) args) value)
-                 args))
-             (refusal (call args)
-               (handler-case (progn (funcall call args) nil) (physics-error (e) e)))
-             (named-p (e type name)
-               (and (typep e type)
-                    (or (null name)
-                        (eq name (if (typep e 'invalid-physics-number)
-                                     (luv-physics::invalid-physics-number-name e)
-                                     (luv-physics::invalid-physics-parameter-name e)))))))
-      (loop for (operation call good cases) in calls
-            do (let ((before (world-fingerprint world))
-                     (boxes (luv-physics::box-columns-length (luv-physics::physics-world-boxes world)))
-                     (player-before (copy-structure player)))
-                 (loop for (place nan-name bad bad-name) in cases
-                       do (when nan-name
-                            (let ((e (refusal call (with-argument good place nan))))
-                              (check (named-p e 'invalid-physics-number nan-name)
-                                     "~A: a NaN as ~S was answered ~S" operation place e)))
-                          (when bad
-                            (let ((e (refusal call (with-argument good place bad))))
-                              (check (if (eq bad-name :radius)
-                                         (or (named-p e 'invalid-physics-parameter :radius)
-                                             (typep e 'invalid-physics-radius))
-                                         (named-p e 'invalid-physics-parameter bad-name))
-                                     "~A: ~S as ~S was answered ~S" operation bad place e)))
-                          (check (equal before (world-fingerprint world)) "~A: a refusal changed the world" operation)
-                          (check (= boxes (luv-physics::box-columns-length (luv-physics::physics-world-boxes world))))
-                          (check (equalp player player-before) "~A: a refusal changed the walker" operation))
-                 (check (null (refusal call good)) "~A: the good call was refused" operation)))
-      (check (eq t (validate-physics-world world))))))
+    "Each number, handle and choice of each exported call, bad alone, is refused naming it; nothing changes."
+  (let* ((w (make-floor-world))
+         (h (add-physics-body w 3.5 0.5 3.5))
+         (doomed (add-physics-body w 6.5 0.5 3.5))
+         (removed (add-physics-body w 6.5 0.5 6.5))
+         (terrain (luv-physics::physics-world-terrain w))
+         (player (make-physics-player 8.5 0 5.5))
+         (spring (make-physics-spring :water-drop 2 3 2))
+         (calls 0) (wrong '()))
+    (remove-physics-body w removed)
+    (dotimes (i 5) (step-physics-world w))
+    (flet ((state ()
+             (list (world-fingerprint w) (physics-world-step-count w)
+                   (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))
+                   (luv-physics::voxel-terrain-edits terrain)
+                   (hash-table-count (luv-physics::voxel-terrain-chunks terrain))
+                   (copy-structure player) (copy-structure spring)))
+           (mutant (arguments where bad)
+             (let ((copy (copy-tree arguments)))
+               (if (consp where)
+                   (setf (nth (second where) (nth (first where) copy)) bad)
+                   (setf (nth where copy) bad))
+               copy)))
+      (loop for (operation arguments . places) in (guarded-calls w h doomed terrain player spring)
+            for function = (fdefinition operation)
+            do (loop for (where name kind . past) in places
+                     for past-subtype = (if (eq kind :radius) 'invalid-physics-radius 'invalid-physics-parameter)
+                     do (loop for (bad subtype named) in (append (guard-bad-values kind removed)
+                                                                 (loop for v in past collect (list v past-subtype nil)))
+                              for before = (state)
+                              for outcome = (handler-case (progn (apply function (mutant arguments where bad)) :accepted)
+                                              (physics-error (e) (guard-refusal-wrong e subtype (or named name) bad))
+                                              (error (e) (list (type-of e) :not-a-physics-error (princ-to-string e))))
+                              do (incf calls)
+                                 (unless (and (null outcome) (equalp before (state))
+                                              (eq t (handler-case (validate-physics-world w) (error () nil))))
+                                   (push (list operation name bad outcome) wrong))))
+               (let ((good (handler-case (progn (apply function arguments) nil) (error (e) (princ-to-string e)))))
+                 (when good (push (list operation :good-call good) wrong)))))
+    (check (< 600 calls) "only ~D bad calls were made" calls)
+    (check (eq t (validate-physics-world w)))
+    (check (null wrong) "~D of ~D calls were not refused by name, or changed something:~%~{  ~S~%~}"
+           (length wrong) calls (reverse wrong))))
 ;; C0ND1T-every-argument-guarded ends here
 
 ;; [[file:../physics.org::#L4Y0UT][L4Y0UT-swap-remove-and-growth]]
