@@ -45,7 +45,8 @@ help:
 	@echo "make mutate-splice  the last full run's tables into $(ORG), with the page's reasons for survivors"
 	@echo "make prose-count    the page's prose words by kind, its sections, blocks and longest definitions;"
 	@echo "                    into $(ORG)"
-	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface"
+	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface,"
+	@echo "                    and report/notebook.html, the history of the measurements"
 	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player, ...) and write"
 	@echo "                    report/view-SCENE.html, a 3D viewer of the run for any browser"
 	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
@@ -163,10 +164,11 @@ prose-count:
 # after editing the page, make tangle first.
 html: physics.html
 
-physics.html: $(ORG) $(OUT) luv-physics.asd tools/export.el tools/api-index.lisp | setup
+physics.html: $(ORG) $(OUT) luv-physics.asd tools/export.el tools/api-index.lisp report/notebook.org | setup
 	@mkdir -p report
 	@$(LISP) --load tools/api-index.lisp
 	@$(EMACS) -Q --batch -l tools/export.el $(ORG) physics.html
+	@$(EMACS) -Q --batch -l tools/export.el report/notebook.org $(CURDIR)/report/notebook.html
 
 SCENE ?= basin
 EVERY ?= 2
@@ -194,7 +196,7 @@ soak: setup tangle
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f
-	find report -type f ! -name 'wp-*.svg' ! -name 'scene-*.svg' ! -name 'screenshot-*.png' -delete 2>/dev/null || true
+	find report -type f ! -name 'wp-*.svg' ! -name 'scene-*.svg' ! -name 'screenshot-*.png' ! -name 'notebook.org' -delete 2>/dev/null || true
 	rm -f physics.html physics-script-check.html
 	@$(LISP) --eval '(require :asdf)' \
 	  --eval '(let ((cache (asdf:apply-output-translations (truename "./")))) (format t "rm -rf ~A~%" cache) (uiop:delete-directory-tree cache :validate t :if-does-not-exist :ignore))'
