@@ -15,7 +15,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers bench-against count-against count-features report heaps mutate mutate-splice html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers bench-against count-against count-features report heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -43,7 +43,10 @@ help:
 	@echo "                    for one section, PART='solver|hash' for the drawn mutants of some parts,"
 	@echo "                    LIST=1 to print the draw); the score table and the survivors into $(ORG)"
 	@echo "make mutate-splice  the last full run's tables into $(ORG), with the page's reasons for survivors"
-	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface"
+	@echo "make prose-count    the page's prose words by kind, its sections, blocks and longest definitions;"
+	@echo "                    into $(ORG)"
+	@echo "make html           write physics.html: the page, its code coloured, with an index of the interface,"
+	@echo "                    and report/notebook.html, the history of the measurements"
 	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player, ...) and write"
 	@echo "                    report/view-SCENE.html, a 3D viewer of the run for any browser"
 	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
@@ -148,16 +151,24 @@ mutate-splice:
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp mutate-score report/mutate-score.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp mutate-survivors report/mutate-survivors.org
 
+# The page's prose by kind (explanation, claims, measurements, mutant records), its sections,
+# engine blocks and longest definitions; the rule is in tools/prose-count.lisp and on the page (#LW3YHU).
+prose-count:
+	@mkdir -p report
+	@$(SBCL) --script tools/prose-count.lisp | tee report/prose-count.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp prose-count report/prose-count.org
+
 # The page as HTML: the index of the exported symbols comes from the loaded image
 # (report/api-index.org), then Org's export in batch Emacs writes physics.html, again only when
 # the page, the tangled files or these tools changed.  It uses the tangled files as they are:
 # after editing the page, make tangle first.
 html: physics.html
 
-physics.html: $(ORG) $(OUT) luv-physics.asd tools/export.el tools/api-index.lisp | setup
+physics.html: $(ORG) $(OUT) luv-physics.asd tools/export.el tools/api-index.lisp report/notebook.org | setup
 	@mkdir -p report
 	@$(LISP) --load tools/api-index.lisp
 	@$(EMACS) -Q --batch -l tools/export.el $(ORG) physics.html
+	@$(EMACS) -Q --batch -l tools/export.el report/notebook.org $(CURDIR)/report/notebook.html
 
 SCENE ?= basin
 EVERY ?= 2
@@ -185,7 +196,7 @@ soak: setup tangle
 
 clean:
 	find . -name .git -prune -o \( -name '*~' -o -name '#*#' -o -name '.#*' -o -name '*.fasl' \) -print0 | xargs -0 rm -f
-	find report -type f ! -name 'wp-*.svg' ! -name 'scene-*.svg' ! -name 'screenshot-*.png' -delete 2>/dev/null || true
+	find report -type f ! -name 'wp-*.svg' ! -name 'scene-*.svg' ! -name 'screenshot-*.png' ! -name 'notebook.org' -delete 2>/dev/null || true
 	rm -f physics.html physics-script-check.html
 	@$(LISP) --eval '(require :asdf)' \
 	  --eval '(let ((cache (asdf:apply-output-translations (truename "./")))) (format t "rm -rf ~A~%" cache) (uiop:delete-directory-tree cache :validate t :if-does-not-exist :ignore))'
