@@ -7030,6 +7030,22 @@ in the order of *physics-scene-features*. #K5DF9S"
             (check (= (length families) (length (cddr table))) "~D phase rows" (length (cddr table)))))))))
 ;; B3NCH5-benchmark-tables-line-up ends here
 
+;; [[file:../physics.org::#B3NCH5][B3NCH5-targets-met-at-their-edges]]
+(define-claim "B3NCH5" targets-met-at-their-edges
+    "print-basin-targets says yes at a limit and at a 3.00x speed-up, no a hundredth past either."
+  (flet ((verdicts (scalar-median speed-up)
+           (let* ((rows (list (list :balls 3000 :kernels :scalar :median scalar-median :probe 1.0
+                                    :phases (list (cons 'luv-physics::substep-phase (* 1.0d0 speed-up))))
+                              (list :balls 3000 :kernels :avx2 :median 1.0 :probe 1.0
+                                    :phases (list (cons 'luv-physics::substep-phase 1.0d0)))))
+                  (text (with-output-to-string (s) (luv-physics::print-basin-targets rows :avx2 s))))
+             (loop for line in (uiop:split-string text :separator (string #\Newline))
+                   when (and (search "balls" line) (> (length line) 6))
+                     collect (string-trim " |" (subseq line (position #\| line :from-end t :end (1- (length line)))))))))
+    (check (equal (verdicts 4.0 3.0) '("yes" "yes" "yes")) "at the edges: ~S" (verdicts 4.0 3.0))
+    (check (equal (verdicts 4.01 2.99) '("no" "yes" "no")) "past the edges: ~S" (verdicts 4.01 2.99))))
+;; B3NCH5-targets-met-at-their-edges ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-probe-reaches-the-shared-cache]]
 (define-claim "B3NCH5" probe-reaches-the-shared-cache
     "A chained read over 8 MB takes more than twice as long as over 32 KB."
