@@ -1014,7 +1014,7 @@ return SCENE's record (run-twin). #T3STK1"
       (let* ((next (luv-physics::fixed-sequence 5))
              (balls (loop for i below 30
                           collect (add-physics-body w (+ 1 (* 4 (funcall next))) (+ 1 (* 3 (funcall next)))
-                                                                 (+ 1 (* 4 (funcall next))) :radius 0.2))))
+                                                                 (+ 1 (* 4 (funcall next))) :radius 0.15))))
         (let* ((fast (add-physics-body w 5.9 0.245 6.5 :vx 5.0))
                (before (world-fingerprint w))
                (steps (physics-world-step-count w))
@@ -1451,6 +1451,15 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
          (list luv-physics::+body-columns-row-bytes+ luv-physics::+contact-columns-row-bytes+
                luv-physics::+event-columns-row-bytes+ luv-physics::+box-columns-row-bytes+)))
 ;; L4Y0UT-row-bytes-count-every-column ends here
+
+;; [[file:../physics.org::#L4Y0UT][L4Y0UT-swap-remove-of-last-row]]
+(define-claim "L4Y0UT" swap-remove-of-last-row
+    "Swap-removing the last row returns -1; an earlier row returns the old last index."
+  (let ((b (luv-physics::make-event-columns :capacity 4)))
+    (dotimes (i 3) (luv-physics::event-columns-append b))
+    (check (= 2 (luv-physics::event-columns-swap-remove b 0)))
+    (check (= -1 (luv-physics::event-columns-swap-remove b 1)))))
+;; L4Y0UT-swap-remove-of-last-row ends here
 
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-handle-generations]]
 (define-claim "B5N8JT" handle-generations
@@ -1944,6 +1953,25 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
               (check (zerop off-c) "~D constraint columns start off a 32-byte boundary" off-c)
               (check (zerop off-s) "~D side columns start off a 32-byte boundary" off-s))))))))
 ;; W0RLD7-solver-rows-aligned ends here
+
+;; [[file:../physics.org::#W0RLD7][W0RLD7-statistics-copy-carries-every-slot]]
+(define-claim "W0RLD7" statistics-copy-carries-every-slot
+    "copy-step-statistics-into carries contacts, colors, seconds, penetration and approach."
+  (let ((from (luv-physics::make-step-statistics))
+        (to (luv-physics::make-step-statistics)))
+    (setf (luv-physics::step-statistics-contacts from) 7
+          (luv-physics::step-statistics-colors from) 3
+          (luv-physics::step-statistics-real-seconds from) 0.5d0
+          (luv-physics::step-statistics-max-penetration from) 0.25d0
+          (luv-physics::step-statistics-max-approach from) 0.125d0)
+    (luv-physics::copy-step-statistics-into from to)
+    (check (equal '(7 3 0.5d0 0.25d0 0.125d0)
+               (list (luv-physics::step-statistics-contacts to)
+                     (luv-physics::step-statistics-colors to)
+                     (luv-physics::step-statistics-real-seconds to)
+                     (luv-physics::step-statistics-max-penetration to)
+                     (luv-physics::step-statistics-max-approach to))))))
+;; W0RLD7-statistics-copy-carries-every-slot ends here
 
 ;; [[file:../physics.org::#R9M4PV][R9M4PV-registry-refuses-bad-names]]
 (define-claim "R9M4PV" registry-refuses-bad-names
@@ -2525,6 +2553,19 @@ use before it. #QKS4GZ"
              (check (if sleeps (and slept (<= 30 slept 31)) (null slept))
                     "drifting at ~,3F m/s the ball slept at step ~S" speed slept))))
 ;; QKS4GZ-sleep-speed-is-the-edge ends here
+
+;; [[file:../physics.org::#QKS4GZ][QKS4GZ-wake-near-measures-along-z]]
+(define-claim "QKS4GZ" wake-near-measures-along-z
+    "WAKE-PHYSICS-BODIES-NEAR measures an offset along z as it does one along y."
+  (let* ((w (make-floor-world))
+         (h (add-physics-body w 3.5 0.245 3.5)))
+    (loop repeat 300 while (physics-body-awake-p w h) do (step-physics-world w))
+    (check (not (physics-body-awake-p w h)))
+    (multiple-value-bind (sx sy sz) (physics-body-position w h)
+      (check (= 0 (wake-physics-bodies-near w sx sy (+ sz 0.755) 0.49)))
+      (check (not (physics-body-awake-p w h)))
+      (check (= 1 (wake-physics-bodies-near w sx sy (+ sz 0.755) 0.52))))))
+;; QKS4GZ-wake-near-measures-along-z ends here
 
 ;; [[file:../physics.org::#K1N3BX][K1N3BX-box-pushes-awake-ball]]
 (define-claim "K1N3BX" box-pushes-awake-ball
@@ -4305,6 +4346,21 @@ use before it. #QKS4GZ"
            "~D rows and ~D keys" (luv-physics::contact-columns-length c) (luv-physics::contact-table-count table))
     (check (= 0 (luv-physics::contact-table-find table (aref (luv-physics::contact-columns-key c) 0))))))
 ;; PRUN3D-last-row-pruned-clean ends here
+
+;; [[file:../physics.org::#SSMPYW][SSMPYW-overflow-counted-unpadded]]
+(define-claim "SSMPYW" overflow-counted-unpadded
+    "Thirty contacts on one ball leave ten in the overflow colour, counted as ten."
+  (let ((w (make-floor-world :gravity '(0 0 0))))
+    (add-physics-body w 3.5 3.0 3.5 :radius 0.85)
+    (dotimes (i 30)
+      (let* ((y (- 1 (/ (+ i 0.5) 15)))
+             (r (sqrt (- 1 (* y y))))
+             (a (* i 2.39996)))
+        (add-physics-body w (+ 3.5 (* 0.99 r (cos a))) (+ 3.0 (* 0.99 y)) (+ 3.5 (* 0.99 r (sin a)))
+                          :radius 0.15)))
+    (step-physics-world w)
+    (check (= 10 (physics-world-overflow-count w)))))
+;; SSMPYW-overflow-counted-unpadded ends here
 
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-colours-disjoint]]
 (define-claim "SSMPYW" colours-disjoint
@@ -9105,7 +9161,7 @@ within reach of something. #S9WEEP"
           (remove-physics-body w (if (evenp i)
                                      (aref (luv-physics::body-columns-handle a) (floor (* (funcall next) (luv-physics::body-columns-length a))))
                                      (aref (luv-physics::body-columns-handle s) (floor (* (funcall next) (luv-physics::body-columns-length s))))))
-          (add-physics-body w (+ 1 (* 6 (funcall next))) (+ 3 (* 2 (funcall next))) (+ 1 (* 6 (funcall next))) :radius 0.2)))
+          (add-physics-body w (+ 1 (* 6 (funcall next))) (+ 3 (* 2 (funcall next))) (+ 1 (* 6 (funcall next))) :radius 0.15)))
       (moment :churned)
       (fill-terrain terrain 0 -1 0 8 0 2 nil)
       (wake-physics-bodies-near w 4.0 0.0 1.0 4.0)
