@@ -8050,7 +8050,7 @@ in the wave, and the bytes per sleeper, untrimmed and trimmed. #B3NCH5"
         (finish-output stream)))))
 ;; What a step costs:2 ends here
 
-;; [[file:../physics.org::#B3NCH5][What a step costs:6]]
+;; [[file:../physics.org::#B3NCH5][What a step costs:7]]
 (defun against-tree (rev directory)
   "The commit REV of this repository unpacked into DIRECTORY/REV/ (once, with git archive), as
 a directory pathname. #B3NCH5"
@@ -8148,9 +8148,9 @@ state hashes after STEPS steps. #B3NCH5"
                      (loop for (nil median) in (rest rows) collect (format nil "~,3F" (/ median base)))))
     (format stream "~&state hash after ~D steps:~{ ~A ~D~^,~}~%" steps
             (loop for (tree nil nil nil hash) in (rest (first summary)) append (list tree hash)))))
-;; What a step costs:6 ends here
+;; What a step costs:7 ends here
 
-;; [[file:../physics.org::#B3NCH5][What a step costs:8]]
+;; [[file:../physics.org::#B3NCH5][What a step costs:9]]
 (defun cachegrind-instructions (text)
   "The instructions a program ran, read from TEXT, what valgrind's cachegrind wrote to its
 standard error: the number after 'I refs:', its commas dropped; NIL when TEXT has no such line.
@@ -8225,7 +8225,7 @@ less one's stepping FROM times (count-per-step); with each engine's state hash. 
                       (cachegrind: a process of ~D steps less one of ~D); ~A; load ~A before, ~A after~%"
               balls from to to from (cpu-model-name) before (load-average))
       (print-against-table summary to stream :ranges nil))))
-;; What a step costs:8 ends here
+;; What a step costs:9 ends here
 
 ;; [[file:../physics.org::#FBNCH9][What leaving features out saves:1]]
 (defparameter +feature-scenes+
