@@ -249,6 +249,39 @@
       (check (equal definitions luv-physics::*definitions*) "a missing file changed the records"))))
 ;; BSOZ3U-registering-again-replaces ends here
 
+;; [[file:../physics.org::#BSOZ3U][BSOZ3U-out-of-order-definitions-placed]]
+(define-claim "BSOZ3U" out-of-order-definitions-placed
+    "REGISTER-TANGLED-FILE places a definition that comes earlier on the page than the one before it."
+  (let* ((page (asdf:system-relative-pathname "luv-physics" "physics.org"))
+         (lines (luv-physics::split-lines (luv-physics::read-file-text page)))
+         (file (merge-pathnames (format nil "luv-registry-claim-~D.lisp" (random 1000000 (make-random-state t)))
+                                (uiop:temporary-directory)))
+         (definitions (copy-list luv-physics::*definitions*))
+         (files (copy-list luv-physics::*registered-files*))
+         (page-pathname luv-physics::*page-pathname*)
+         (loaded-forms luv-physics::*loaded-forms*))
+    (with-open-file (out file :direction :output :external-format :utf-8)
+      (format out ";; [[file:~A::#BSOZ3U][Register a file and answer by anchor or by name:1]]~%~
+                   (defun definition-anchor (name &optional kind)~%  \"A copy. #BSOZ3U\"~%  nil)~%~%~
+                   (defun anchor-definitions (anchor)~%  \"A copy. #BSOZ3U\"~%  nil)~%~
+                   ;; Register a file and answer by anchor or by name:1 ends here~%"
+              (namestring page)))
+    (unwind-protect
+         (let* ((n (handler-case (luv-physics::register-tangled-file file) (error (e) (princ-to-string e))))
+                (records (remove-if-not (lambda (r) (search "luv-registry-claim-" (getf r :file)))
+                                        luv-physics::*definitions*)))
+           (check (eql 2 n) "registering gave ~S" n)
+           (check (equal (list (1+ (position "(defun definition-anchor (name &optional kind)" lines :test #'string=))
+                               (1+ (position "(defun anchor-definitions (anchor)" lines :test #'string=)))
+                         (mapcar (lambda (r) (getf r :org-line)) records))
+                  "placed at ~S" (mapcar (lambda (r) (getf r :org-line)) records)))
+      (setf luv-physics::*definitions* definitions luv-physics::*registered-files* files
+            luv-physics::*page-pathname* page-pathname luv-physics::*loaded-forms* loaded-forms)
+      (remhash (enough-namestring file (make-pathname :name nil :type nil :version nil :defaults page))
+               luv-physics::*loaded-file-texts*)
+      (delete-file file))))
+;; BSOZ3U-out-of-order-definitions-placed ends here
+
 ;; [[file:../physics.org::#0QBGZO][0QBGZO-page-forms-match-registry]]
 (define-claim "0QBGZO" page-forms-match-registry
     "Definitions read from the page's blocks equal the registry's, with the same page lines."
@@ -362,6 +395,21 @@
       (delete-file copy))
     (check (equal original (documentation 'physics-world-awake-count 'function)))))
 ;; OWNJGP-reload-changed-loads-one-form ends here
+
+;; [[file:../physics.org::#OWNJGP][OWNJGP-reload-reports-its-seconds]]
+(define-claim "OWNJGP" reload-reports-its-seconds
+    "RELOAD-FORMS reports the seconds since STARTED, between one and one plus the call's own time."
+  (let* ((before (get-internal-real-time))
+         (summary (with-output-to-string (*standard-output*)
+                    (luv-physics::reload-forms '() '() (vector) luv-physics::*page-pathname* "idle"
+                                               (- before internal-time-units-per-second))))
+         (wall (/ (- (get-internal-real-time) before) internal-time-units-per-second 1.0))
+         (end (search " s" summary :from-end t))
+         (seconds (let ((*read-default-float-format* 'single-float))
+                    (read-from-string summary t nil :start (1+ (position #\Space summary :end end :from-end t))))))
+    (check (and (realp seconds) (<= 0.99 seconds (+ 1.01 wall)))
+           "reported ~S s for a start 1 s before a call of ~,3F s: ~A" seconds wall summary)))
+;; OWNJGP-reload-reports-its-seconds ends here
 
 ;; [[file:../physics.org::#OWNJGP][OWNJGP-changed-inline-recompiles-users]]
 (define-claim "OWNJGP" changed-inline-recompiles-users
@@ -1129,6 +1177,18 @@ return SCENE's record (run-twin). #T3STK1"
                        do (push (list name value (outcome value) past (outcome past)) wrong))))
     (check (null wrong) "not closed at its ends: ~S" wrong)))
 ;; C0ND1T-parameter-ranges-closed ends here
+
+;; [[file:../physics.org::#C0ND1T][C0ND1T-count-range-in-order]]
+(define-claim "C0ND1T" count-range-in-order
+    "An integer parameter past its range is refused naming the range from its low end to its high end."
+  (loop for (name symbol low high kind) in luv-physics::+physics-parameters+
+        when (eq kind 'integer)
+          do (let ((expected (progv (list symbol) (list (1+ high))
+                               (handler-case (progn (make-physics-world) nil)
+                                 (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-expected e))))))
+               (check (equal (format nil "an integer from ~D to ~D" low high) expected)
+                      "~A: ~S" name expected))))
+;; C0ND1T-count-range-in-order ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-event-handler-checked]]
 (define-claim "C0ND1T" event-handler-checked
@@ -5575,6 +5635,21 @@ the phases of a step before the prepare phase. #PR3PAR"
            (getf figures :worst))))
 ;; SQU33Z-random-squeezes-hold ends here
 
+;; [[file:../physics.org::#SQU33Z][SQU33Z-blocks-up-to-three-high]]
+(define-claim "SQU33Z" blocks-up-to-three-high
+    "SQUEEZE-SCENE-WORLD builds blocks up to three cells high and no higher."
+  (let ((heights (loop for seed from 1 to 4
+                       collect (let ((terrain (nth-value 1 (luv-physics::squeeze-scene-world
+                                                            (luv-physics::fixed-sequence seed)
+                                                            (first (available-kernel-families))))))
+                                 (loop for y from 3 downto 0
+                                       when (loop for x from -4 below 7 thereis
+                                              (loop for z from -4 below 7 thereis (terrain-solid-p terrain x y z)))
+                                         return (1+ y)
+                                       finally (return 0))))))
+    (check (= 3 (reduce #'max heights)) "the highest blocks of the scenes: ~S" heights)))
+;; SQU33Z-blocks-up-to-three-high ends here
+
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-stage-table-is-the-step]]
 (define-claim "IDVK7G" stage-table-is-the-step
     "The stage table lists *physics-phases* in order, links each to its section, and names the features that leave it out."
@@ -6567,6 +6642,17 @@ hand: the world and the function to call before each step. #K5DF9S"
                     (eq :scene (luv-physics::invalid-physics-parameter-name e)))
                "~A: ~A" operation e)))))
 ;; K5DF9S-refusals-name-the-clause ends here
+
+;; [[file:../physics.org::#K5DF9S][K5DF9S-bad-count-refused]]
+(define-claim "K5DF9S" bad-count-refused
+    "MAKE-SCENE-WORLD refuses a count that is not an integer of 0 or more, naming :count."
+  (dolist (count '(-1 2.5 :many))
+    (let ((e (handler-case (progn (make-scene-world :pile :count count) nil) (error (e) e))))
+      (check (and (typep e 'invalid-physics-parameter)
+                  (eq :count (luv-physics::invalid-physics-parameter-name e))
+                  (eql count (luv-physics::invalid-physics-parameter-value e)))
+             "count ~S: ~S" count e))))
+;; K5DF9S-bad-count-refused ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-script-conses-nothing]]
 (define-claim "K5DF9S" script-conses-nothing
