@@ -251,6 +251,13 @@ that have its type and width: a wrong column of the same layout."
       (remove nil (list (and (> at 0) (first (nth (1- at) same)))
                         (and (< (1+ at) (length same)) (first (nth (1+ at) same))))))))
 
+(defun unit-layouts (units)
+  "Each layout the define-physics-layout forms of UNITS declare, as (NAME COLUMN...)."
+  (loop for u in units
+        for form = (unit-form u)
+        when (and (consp form) (starts-with-name-p "DEFINE-PHYSICS-LAYOUT" (car form)))
+          collect (cons (second form) (nthcdr 3 form))))
+
 (defun layout-of-macro (operator)
   "The layout whose WITH- macro OPERATOR is, if it is one."
   (and (starts-with-name-p "WITH-" operator)
@@ -453,7 +460,7 @@ but the last.  Declarations and docstrings stay."
                           (site "dropped check" clause :dropped (lambda () (funcall rebuild new)))))
                       (walk-elements clause (lambda (new) (funcall rebuild (replace-nth x j new))) 0))))
         (t
-         (when (and (starts-with-name-p "RANGED-F32" op) (string= (symbol-name op) "RANGED-F32") (>= n 5))
+         (when (and (string= (symbol-name op) "RANGED-F32") (>= n 5))
            ;; a value checked against a range is checked only for being a finite number
            (let ((new (list* (intern "FINITE-F32" (symbol-package op)) (second x) (third x) (nthcdr 5 x))))
              (site "dropped check" x new (lambda () (funcall rebuild new)))))
@@ -1213,10 +1220,7 @@ as a finished run does.  Return the number of mutants read."
          (slow (setf *slow* (let ((v (sb-ext:posix-getenv "SLOW")))
                               (if (and v (plusp (length v))) (float (read-from-string v) 1d0) *slow*))))
          (state (sb-ext:seed-random-state seed))
-         (layouts (setf *layouts* (loop for u in units
-                                        when (and (consp (unit-form u))
-                                                  (starts-with-name-p "DEFINE-PHYSICS-LAYOUT" (car (unit-form u))))
-                                          collect (cons (second (unit-form u)) (nthcdr 3 (unit-form u))))))
+         (layouts (setf *layouts* (unit-layouts units)))
          (sections (mapcar (lambda (s) (cons (car s) (operators-in-turn (shuffle (cdr s) state) state)))
                            (remove-if-not #'cdr (section-sites units anchor (let ((m (sb-ext:posix-getenv "MATCH"))) (and (plusp (length m)) m))))))
          (sections (shuffle sections state))
