@@ -5637,17 +5637,21 @@ the phases of a step before the prepare phase. #PR3PAR"
 
 ;; [[file:../physics.org::#SQU33Z][SQU33Z-blocks-up-to-three-high]]
 (define-claim "SQU33Z" blocks-up-to-three-high
-    "SQUEEZE-SCENE-WORLD builds blocks up to three cells high and no higher."
-  (let ((heights (loop for seed from 1 to 4
-                       collect (let ((terrain (nth-value 1 (luv-physics::squeeze-scene-world
-                                                            (luv-physics::fixed-sequence seed)
-                                                            (first (available-kernel-families))))))
-                                 (loop for y from 3 downto 0
-                                       when (loop for x from -4 below 7 thereis
-                                              (loop for z from -4 below 7 thereis (terrain-solid-p terrain x y z)))
-                                         return (1+ y)
-                                       finally (return 0))))))
-    (check (= 3 (reduce #'max heights)) "the highest blocks of the scenes: ~S" heights)))
+    "SQUEEZE-SCENE-WORLD builds blocks one to three cells high, each where it says."
+  (let ((heights '()) (misplaced 0))
+    (loop for seed from 1 to 4
+          do (multiple-value-bind (world terrain bodies e blocks)
+                 (luv-physics::squeeze-scene-world (luv-physics::fixed-sequence seed)
+                                                   (first (available-kernel-families)))
+               (declare (ignore world bodies e))
+               (loop for (x0 z0 x1 top z1) in blocks
+                     do (push top heights)
+                        (loop for x from x0 below x1 do
+                          (loop for z from z0 below z1 do
+                            (loop for y from 0 below top
+                                  unless (terrain-solid-p terrain x y z) do (incf misplaced)))))))
+    (check (equal '(1 2 3) (sort (remove-duplicates heights) #'<)) "the blocks' heights: ~S" heights)
+    (check (zerop misplaced) "~D cells of the reported blocks are not solid" misplaced)))
 ;; SQU33Z-blocks-up-to-three-high ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-stage-table-is-the-step]]
@@ -7135,6 +7139,21 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (< 0 (getf m :median)))))
 ;; B3NCH5-measure-basin-reports-the-world ends here
 
+;; [[file:../physics.org::#B3NCH5][B3NCH5-churn-drops-from-above]]
+(define-claim "B3NCH5" churn-drops-from-above
+    "measure-churn over steps 2..6 of 40 balls removes the four oldest and drops four over their spawn points."
+  (let* ((m (luv-physics::measure-churn :balls 40 :from 2 :to 6))
+         (world (getf m :world)) (handles (getf m :handles)))
+    (check (= 40 (length (physics-world-handles world))))
+    (check (notany (lambda (h) (physics-body-alive-p world h)) (coerce (subseq handles 0 4) 'list)))
+    (loop for i from 2 below 6
+          for h = (aref handles (+ 40 (- i 2)))
+          do (multiple-value-bind (sx sy sz) (luv-physics::basin-spawn-point i)
+               (multiple-value-bind (x y z) (physics-body-position world h)
+                 (check (and (< (abs (- x sx)) 0.001) (< (abs (- z sz)) 0.001) (< 0 (- (+ sy 6.0) y) 0.05))
+                        "ball of step ~D at ~,3F ~,3F ~,3F, its spawn point ~,3F ~,3F ~,3F" i x y z sx sy sz))))))
+;; B3NCH5-churn-drops-from-above ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-benchmark-tables-line-up]]
 (define-claim "B3NCH5" benchmark-tables-line-up
     "The basin benchmark over 20 balls: a row per family, and every table's lines with their bars under the header's."
@@ -7311,6 +7330,34 @@ in the order of *physics-scene-features*. #K5DF9S"
                "the process's hash ~A, this image's ~D (general ~D)" (fourth words) special general)))))
 ;; FBNCH9-feature-process-runs-its-scene ends here
 
+;; [[file:../physics.org::#FBNCH9][FBNCH9-count-table-as-counted]]
+(define-claim "FBNCH9" count-table-as-counted
+    "run-count-features prints its header, rule and one row per feature scene of what it counted."
+  (let* ((text (with-output-to-string (s)
+                 (luv-physics::run-count-features
+                  :stream s
+                  :counter (lambda (script from to arguments)
+                             (declare (ignore script to))
+                             (destructuring-bind (root name kind steps) (funcall arguments from)
+                               (declare (ignore root steps))
+                               (let ((special (string= kind "specialised")))
+                                 (values (if special 3d0 4d0)
+                                         (if (and special (string= name "fountain")) 1 0))))))))
+         (lines (with-input-from-string (in text)
+                  (loop for line = (read-line in nil) while line
+                        when (and (plusp (length line)) (char= #\| (char line 0))) collect line)))
+         (scenes luv-physics::+feature-scenes+))
+    (check (search "| scene | general | specialised | ratio | same state |" (first lines)) "~S" lines)
+    (check (string= "|-" (second lines) :end2 2) "no rule under the header: ~S" lines)
+    (check (= (length scenes) (length (cddr lines))) "~D rows for ~D scenes" (length (cddr lines)) (length scenes))
+    (loop for scene in scenes
+          for row in (cddr lines)
+          do (check (equal (format nil "| ~A | 4.000 | 3.000 | 0.750 | ~:[yes~;no~] |"
+                                   (second scene) (eq (first scene) :fountain))
+                           row)
+                    "row ~S for scene ~S" row (first scene)))))
+;; FBNCH9-count-table-as-counted ends here
+
 ;; [[file:../physics.org::#FBNCH9][FBNCH9-same-answers]]
 (define-claim "FBNCH9" same-answers
     "Four scenes, every family: the specialised step's state hash equals the general step's."
@@ -7396,6 +7443,20 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (every (lambda (n) (>= (parse-integer n) 0)) (remove "" (uiop:split-string (sixth cells) :separator ", ") :test #'string=))
              "bytes consed ~A" (sixth cells)))))
 ;; FBNCH9-benchmark-row-as-described ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-small-rows-hold]]
+(define-claim "X7R3M5" small-rows-hold
+    "RUN-STABILITY-TABLE without its large scenes prints 25 rows, and every row held."
+  (let* ((text (with-output-to-string (s) (luv-physics::run-stability-table :stream s :full nil)))
+         (rows (with-input-from-string (in text)
+                 (loop for line = (read-line in nil) while line
+                       when (and (> (length line) 2) (string= "| " line :end2 2)
+                                 (not (search "| case |" line)))
+                         collect line))))
+    (check (= 25 (length rows)) "~D rows: ~{~%~A~}" (length rows) rows)
+    (dolist (row rows)
+      (check (search "| yes |" row :from-end t) "not held: ~A" row))))
+;; X7R3M5-small-rows-hold ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-piles-come-to-rest]]
 (define-claim "X7R3M5" piles-come-to-rest
@@ -7574,6 +7635,14 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (<= parting *physics-contact-push-max*)
              "a pair overlapping by more than the slop parted at ~,3F m/s" parting))))
 ;; X7R3M5-heap-at-one-point-bounded ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-heap-table-plan-as-captioned]]
+(define-claim "X7R3M5" heap-table-plan-as-captioned
+    "HEAP-TABLE-PLAN gives 120/10 below 20000 balls, 60/20 at 20000 and 5/never above."
+  (loop for (count steps every) in '((1000 120 10) (19999 120 10) (20000 60 20) (20001 5 nil) (262144 5 nil))
+        do (multiple-value-bind (s e) (luv-physics::heap-table-plan count)
+             (check (and (eql s steps) (eql e every)) "~D balls: ~D steps, sampled every ~A" count s e))))
+;; X7R3M5-heap-table-plan-as-captioned ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-buried-ball-climbs-out]]
 (define-claim "X7R3M5" buried-ball-climbs-out
