@@ -5953,7 +5953,7 @@ toward the air by that cell's contact. #SQU33Z"
   (physics-world-buried-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:1 ends here
 
-;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:5]]
+;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:6]]
 (defun squeeze-scene-world (next kernels)
   "A random scene for the squeeze campaign, drawn from the generator NEXT: a world solved by
 KERNELS over a floor three cells deep (top at y = 0) with blocks and pits in [-4, 4), and its
@@ -6056,7 +6056,7 @@ table. #SQU33Z"
   (format stream "~&| scenes | box-steps | body-steps | outside the air | over the bound | fastest / bound | fastest, m/s | held at a face | seconds |~%|-~%| ~D | ~D | ~D | ~D | ~D | ~,3F | ~,2F | ~D | ~,1F |~%"
           (getf figures :scenes) (getf figures :box-steps) (getf figures :body-steps) (getf figures :inside)
           (getf figures :over) (getf figures :worst) (getf figures :fastest) (getf figures :held) seconds))
-;; Squeezed between a box and the cells: the box yields, the cells hold:5 ends here
+;; Squeezed between a box and the cells: the box yields, the cells hold:6 ends here
 
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
 (defun reset-phase (world)
@@ -6666,9 +6666,10 @@ material, awake, kind. #B0DY0B"
   (etypecase object
     (physics-world
      (append (list (prin1-to-string object) '(:newline))
-             (loop for (label text) in (world-summary object)
-                   append (list (format nil "~10A " label) text '(:newline)))
-             (list "kernels    " (list :value (physics-world-kernels object)) '(:newline))))
+             (loop for (label . value) in (world-inspected-parts object)
+                   append (list (format nil "~10A " label)
+                                (if (stringp value) value (list :value value))
+                                '(:newline)))))
     (physics-body
      (let ((world (physics-body-world object)))
        (append (list (prin1-to-string object) '(:newline) "world      " (list :value world) '(:newline))
@@ -6684,6 +6685,78 @@ material, awake, kind. #B0DY0B"
 
 (install-swank-inspection)
 ;; A world as an object, and both in the inspector:1 ends here
+
+;; [[file:../physics.org::#H4NDL3][A handle explained, and a world opened part by part:1]]
+(defun world-contacts-list (world)
+  "WORLD's contact rows as property lists: :kind (:pair, :cell or :box), :a and :b (handles; :b
+is nil but for a pair), :normal, :separation, :point, :normal-impulse and :touching. Made for
+a person; the step never calls it. #H4NDL3"
+  (let ((c (physics-world-contacts world)))
+    (loop with geometry = (contact-columns-geometry c)
+          for row below (contact-columns-length c)
+          for b = (aref (contact-columns-handle-b c) row)
+          collect (list :kind (svref #(:pair :cell :box) (aref (contact-columns-kind c) row))
+                        :a (aref (contact-columns-handle-a c) row)
+                        :b (if (= b +no-body+) nil b)
+                        :normal (list (contact@ geometry row nx) (contact@ geometry row ny)
+                                      (contact@ geometry row nz))
+                        :separation (contact@ geometry row separation)
+                        :point (list (contact@ geometry row px) (contact@ geometry row py)
+                                     (contact@ geometry row pz))
+                        :normal-impulse (contact@ geometry row normal-impulse)
+                        :touching (/= 0 (aref (contact-columns-touching c) row))))))
+
+(defun world-parameters-list (world)
+  "WORLD's step and contact parameters as a property list keyed as make-physics-world's
+arguments are. #H4NDL3"
+  (list :step-seconds (physics-world-step-seconds world) :substeps (physics-world-substeps world)
+        :gravity (list (physics-world-gravity-x world) (physics-world-gravity-y world)
+                       (physics-world-gravity-z world))
+        :sleep (physics-world-sleep-enabled world)
+        :contact-hertz (physics-world-contact-hertz world)
+        :damping-ratio (physics-world-damping-ratio world)
+        :push-max (physics-world-push-max world) :slop (physics-world-slop world)
+        :margin (physics-world-margin world) :pair-skin (physics-world-pair-skin world)
+        :restitution-threshold (physics-world-restitution-threshold world)
+        :hit-speed (physics-world-hit-speed world) :sleep-speed (physics-world-sleep-speed world)
+        :time-to-sleep (physics-world-time-to-sleep world) :wake-speed (physics-world-wake-speed world)
+        :features (physics-world-features world)))
+
+(defun world-inspected-parts (world)
+  "WORLD's parts for a person, as (LABEL . VALUE): the summary's lines as text, then its bodies
+as physics-body objects, its contacts (world-contacts-list), its parameters, its terrain and its
+kernel family. #H4NDL3"
+  (append (loop for (label text) in (world-summary world) collect (cons label text))
+          (list (cons "bodies" (loop for h in (physics-world-handles world)
+                                     collect (physics-body world h)))
+                (cons "contact rows" (world-contacts-list world))
+                (cons "parameters" (world-parameters-list world))
+                (cons "terrain" (physics-world-terrain world))
+                (cons "kernels" (physics-world-kernels world)))))
+
+(defmethod print-object ((terrain voxel-terrain) stream)
+  (print-unreadable-object (terrain stream :type t)
+    (format stream "~D chunk~:P resident, ~D edit~:P"
+            (hash-table-count (voxel-terrain-chunks terrain)) (voxel-terrain-edits terrain))))
+
+(defmethod sb-impl::inspected-parts ((world physics-world))
+  (values (format nil "~S~%" world) t (world-inspected-parts world)))
+
+(defmethod sb-impl::inspected-parts ((body physics-body))
+  (values (format nil "~S~%" body) t
+          (cons (cons "world" (physics-body-world body))
+                (loop for (label nil value) in (and (physics-body-alive-p (physics-body-world body)
+                                                                          (physics-body-handle body))
+                                                    (body-summary body))
+                      collect (cons label value)))))
+
+(defmethod sb-impl::inspected-parts ((terrain voxel-terrain))
+  (values (format nil "~S~%" terrain) t
+          (list (cons "chunks resident" (hash-table-count (voxel-terrain-chunks terrain)))
+                (cons "chunk budget" (voxel-terrain-budget terrain))
+                (cons "edits" (voxel-terrain-edits terrain))
+                (cons "chunks" (voxel-terrain-chunks terrain)))))
+;; A handle explained, and a world opened part by part:1 ends here
 
 ;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:1]]
 (defparameter +fuzz-bad-values+
@@ -7740,6 +7813,21 @@ Return the steps run. #H7P4CX"
                       :vz (f32 (physics-player-vz player)) :owner player)))
 ;; The player: a box that walks:1 ends here
 
+;; [[file:../physics.org::#H7P4CX][The player: a box that walks:11]]
+(defmethod print-object ((player physics-player) stream)
+  (print-unreadable-object (player stream :type t)
+    (format stream "at (~,3F ~,3F ~,3F) moving (~,3F ~,3F ~,3F) ~:[in the air~;standing~]"
+            (physics-player-x player) (physics-player-y player) (physics-player-z player)
+            (physics-player-vx player) (physics-player-vy player) (physics-player-vz player)
+            (physics-player-grounded player))))
+
+(defmethod sb-impl::inspected-parts ((player physics-player))
+  (values (format nil "~S~%" player) t
+          (loop for slot in '(x y z vx vy vz grounded jump-held half-width height eye-height
+                              jump-speed walk-speed step-ahead)
+                collect (cons (string-downcase slot) (slot-value player slot)))))
+;; The player: a box that walks:11 ends here
+
 ;; [[file:../physics.org::#B3NCH5][What a step costs:1]]
 (defun cpu-model-name ()
   "The CPU's model name from /proc/cpuinfo, or \"unknown CPU\". #B3NCH5"
@@ -7921,6 +8009,14 @@ bytes consed per step over FROM..TO, the world and every handle it was given. #B
                                                  handles)))))
       (list :mean mean :consed consed :world world :handles handles))))
 
+(defun make-spread-basin-world (balls kernels)
+  "The awake basin pile of BALLS solved by KERNELS with four more balls resting on the floor
+outside its walls, one at each far corner; return the world and the four balls' handles. #B3NCH5"
+  (let ((world (make-basin-world balls :kernels kernels)))
+    (values world
+            (loop for (x z) in '((-7.5 -7.5) (15.5 -7.5) (-7.5 15.5) (15.5 15.5))
+                  collect (add-physics-body world x 0.25 z :radius 0.25 :mass 1.0 :friction 0.6)))))
+
 (defun measure-spread-basin (&key (balls 3000) (kernels :scalar) (from 120) (to 300)
                                   (cells *physics-dense-grid-cells*))
   "The awake basin pile of BALLS with four more balls resting on the floor outside the walls, one
@@ -7928,9 +8024,7 @@ at each far corner, with *physics-dense-grid-cells* bound to CELLS throughout: m
 consed per step over FROM..TO, whether the awake grid was dense at the end, and its box's cells
 per ball. #B3NCH5"
   (let* ((*physics-dense-grid-cells* cells)
-         (world (make-basin-world balls :kernels kernels)))
-    (dolist (corner '((-7.5 -7.5) (15.5 -7.5) (-7.5 15.5) (15.5 15.5)))
-      (add-physics-body world (first corner) 0.25 (second corner) :radius 0.25 :mass 1.0 :friction 0.6))
+         (world (make-spread-basin-world balls kernels)))
     (multiple-value-bind (mean consed) (measure-steps world from to)
       (let ((grid (physics-world-awake-grid world)))
         (list :mean mean :consed consed
@@ -7978,7 +8072,7 @@ kernel family this CPU runs, and the spread pile under two dense-grid bounds for
         (finish-output stream))))))
 ;; What a step costs:1 ends here
 
-;; [[file:../physics.org::#B3NCH5][What a step costs:2]]
+;; [[file:../physics.org::#B3NCH5][What a step costs:3]]
 (define-physics-scene :sleepers
     "balls of radius 0.25 m asleep, one per 0.6 m square, on a floor beside the basin's east wall,
 each resting a slop deep and alone #B3NCH5"
@@ -8054,9 +8148,9 @@ in the wave, and the bytes per sleeper, untrimmed and trimmed. #B3NCH5"
                 (getf m :bytes-per-sleeper) (getf m :trimmed-per-sleeper) (getf m :counted-per-sleeper)
                 (getf m :awake))
         (finish-output stream)))))
-;; What a step costs:2 ends here
+;; What a step costs:3 ends here
 
-;; [[file:../physics.org::#B3NCH5][What a step costs:8]]
+;; [[file:../physics.org::#B3NCH5][What a step costs:9]]
 (defun against-tree (rev directory)
   "The commit REV of this repository unpacked into DIRECTORY/REV/ (once, with git archive), as
 a directory pathname. #B3NCH5"
@@ -8154,9 +8248,9 @@ state hashes after STEPS steps. #B3NCH5"
                      (loop for (nil median) in (rest rows) collect (format nil "~,3F" (/ median base)))))
     (format stream "~&state hash after ~D steps:~{ ~A ~D~^,~}~%" steps
             (loop for (tree nil nil nil hash) in (rest (first summary)) append (list tree hash)))))
-;; What a step costs:8 ends here
+;; What a step costs:9 ends here
 
-;; [[file:../physics.org::#B3NCH5][What a step costs:10]]
+;; [[file:../physics.org::#B3NCH5][What a step costs:12]]
 (defun cachegrind-instructions (text)
   "The instructions a program ran, read from TEXT, what valgrind's cachegrind wrote to its
 standard error: the number after 'I refs:', its commas dropped; NIL when TEXT has no such line.
@@ -8231,7 +8325,7 @@ less one's stepping FROM times (count-per-step); with each engine's state hash. 
                       (cachegrind: a process of ~D steps less one of ~D); ~A; load ~A before, ~A after~%"
               balls from to to from (cpu-model-name) before (load-average))
       (print-against-table summary to stream :ranges nil))))
-;; What a step costs:10 ends here
+;; What a step costs:12 ends here
 
 ;; [[file:../physics.org::#FBNCH9][What leaving features out saves:1]]
 (defparameter +feature-scenes+
@@ -9278,7 +9372,7 @@ family of FAMILIES; return one plist per point, families innermost (see run-accu
                                             collect (run-accuracy-point scene hz n family))))))
 ;; Error against run time:6 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:7]]
+;; [[file:../physics.org::#W9PREC][Error against run time:8]]
 (defun point-label (p)
   "A setting as it is named in the tables: family, rate and substeps. #W9PREC"
   (format nil "~(~A~) ~D Hz x ~D" (getf p :family) (getf p :hz) (getf p :substeps)))
@@ -9301,9 +9395,9 @@ either way a point of the Pareto front. #W9PREC"
                                       (and (= (getf a :error) (getf b :error)) (<= (getf a :ms) (getf b :ms))))
                                   a b))
                 points))))
-;; Error against run time:7 ends here
+;; Error against run time:8 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:8]]
+;; [[file:../physics.org::#W9PREC][Error against run time:9]]
 (defun print-sweep-table (points stream)
   "Print POINTS as an Org table: a row per scene and setting, the error, the note, the run time
 of each family, and whether every family reached the same state hash and error, twice. #W9PREC"
@@ -9331,9 +9425,9 @@ its Pareto front. #W9PREC"
                                ~%  Pareto front:~{ ~A~^,~}.~%"
                        scene measure (<= (getf best :error) tolerance) tolerance (point-label best)
                        (getf best :error) (getf best :ms) (mapcar #'point-label (pareto-front mine))))))
-;; Error against run time:8 ends here
+;; Error against run time:9 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:9]]
+;; [[file:../physics.org::#W9PREC][Error against run time:10]]
 (defparameter +substep-colours+ '((1 . "#c0392b") (2 . "#d68910") (4 . "#1e8449") (8 . "#2471a3"))
   "The colour of each substep count's curves in the diagrams. #W9PREC")
 
@@ -9383,9 +9477,9 @@ through its step rates. Errors below 1e-9 are drawn at 1e-9. #W9PREC"
         (format out "<text x=\"~D\" y=\"~D\" font-size=\"10\" fill=\"#555\">points: 30, 60, 120, 240 Hz</text>~%" (+ x1 14) (- y1 4))
         (format out "</svg>~%")))
     path))
-;; Error against run time:9 ends here
+;; Error against run time:10 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:10]]
+;; [[file:../physics.org::#W9PREC][Error against run time:11]]
 (defun run-accuracy-report (&key (directory "report/") (stream *standard-output*))
   "The sweep, written as report/work-precision.org (the table), report/work-precision-best.org
 (the Pareto-best setting per scene) and one SVG diagram per scene, report/wp-SCENE.svg. Print
@@ -9403,7 +9497,7 @@ the table to STREAM as well. #W9PREC"
                                 (format nil "~(~A~): error against run time" (first entry)) (third entry)
                                 (remove (first entry) points :key (lambda (p) (getf p :scene)) :test-not #'eq)))
     points))
-;; Error against run time:10 ends here
+;; Error against run time:11 ends here
 
 ;; [[file:../physics.org::#G4WXCJ][Watching a run: the recorder:1]]
 (defstruct (physics-recording (:constructor %make-physics-recording (terrain every)))

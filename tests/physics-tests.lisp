@@ -5496,6 +5496,24 @@ the phases of a step before the prepare phase. #PR3PAR"
     (check (eql step 36000) "the ball of life 600 s expired on step ~S, not 36000" step)))
 ;; F1NAL5-life-reached-is-over ends here
 
+;; [[file:../physics.org::#SQU33Z][SQU33Z-squeezes-on-every-axis]]
+(define-claim "SQU33Z" squeezes-on-every-axis
+    "A box squeezing a ball into a wall along +x keeps it alike along +z, -x and -z, at the wall, on the floor."
+  (let* ((start 3.013)
+         (record (check-twins "squeezed"
+                              (lambda (twin)
+                                (multiple-value-bind (world handles)
+                                    (twin-scene-world twin '((5 0 3 7 2 6 t)) '((4.5 0.245 4.5)))
+                                  (values world handles
+                                          (lambda (world step)
+                                            (twin-post-box twin world (+ start (* step (/ 1.0 60))) 0.5 4.5
+                                                           0.25 0.5 0.5 :vx 1.0 :owner :pusher)))))
+                              100 :twins '(:swap-xz :mirror-x :mirror-z))))
+    (destructuring-bind (x y z) (twin-final-position record)
+      (check (and (< (abs (- x 4.75)) 0.01) (< (abs (- y 0.245)) 0.01) (< (abs (- z 4.5)) 1e-3))
+             "the squeezed ball ends at ~,4F ~,4F ~,4F" x y z))))
+;; SQU33Z-squeezes-on-every-axis ends here
+
 ;; [[file:../physics.org::#SQU33Z][SQU33Z-squeezed-balls-stay-out]]
 (defun lone-walker-path (scene)
   "The walker's final x and y after the 240 steps of SCENE's walk with no ball in the world. #SQU33Z"
@@ -6237,7 +6255,9 @@ the phases of a step before the prepare phase. #PR3PAR"
   (let* ((w (make-floor-world)) (h (add-physics-body w 1.5 0.245 1.5)))
     (flet ((installed-p (inspect)
              (and (eq t (install-swank-inspection))
-                  (equal (funcall inspect w) (luv-physics::inspection-parts w))
+                  ;; the world's parts hold body objects made afresh, so compared as printed
+                  (string= (prin1-to-string (funcall inspect w))
+                           (prin1-to-string (luv-physics::inspection-parts w)))
                   (equal (funcall inspect (physics-body w h)) (luv-physics::inspection-parts (physics-body w h))))))
       (if (find-package "SWANK")
           (check (installed-p (find-symbol "EMACS-INSPECT" "SWANK")))
@@ -6251,6 +6271,65 @@ the phases of a step before the prepare phase. #PR3PAR"
               (delete-package swank))
             (check (null (install-swank-inspection)) "without SWANK it installed"))))))
 ;; 4YDMX5-swank-inspection-only-with-swank ends here
+
+;; [[file:../physics.org::#H4NDL3][H4NDL3-world-opens-into-its-bodies]]
+(define-claim "H4NDL3" world-opens-into-its-bodies
+    "world-inspected-parts holds a body object per handle and a plist per contact; inspect is short."
+  (let ((w (make-floor-world)))
+    (add-physics-body w 3.5 1.0 3.5)
+    (add-physics-body w 3.5 1.6 3.5)
+    (add-physics-body w 1.5 0.5 1.5 :restitution 0.5)
+    (dotimes (i 60) (step-physics-world w))
+    (let* ((parts (luv-physics::world-inspected-parts w))
+           (bodies (cdr (assoc "bodies" parts :test #'string=)))
+           (contacts (cdr (assoc "contact rows" parts :test #'string=)))
+           (c (luv-physics::physics-world-contacts w)))
+      (check (equal (physics-world-handles w) (mapcar #'physics-body-handle bodies))
+             "bodies ~S" bodies)
+      (check (every (lambda (b) (eq w (physics-body-world b))) bodies))
+      (check (= (luv-physics::contact-columns-length c) (length contacts) ) "~D contacts" (length contacts))
+      (check (plusp (length contacts)))
+      (loop for contact in contacts for row from 0
+            do (check (= (getf contact :a) (aref (luv-physics::contact-columns-handle-a c) row)))
+               (check (eq (getf contact :kind)
+                          (if (getf contact :b) :pair :cell))
+                      "row ~D is ~S" row contact))
+      (check (= (float 1/60 1f0) (getf (cdr (assoc "parameters" parts :test #'string=)) :step-seconds))
+             "parameters ~S" (cdr (assoc "parameters" parts :test #'string=)))
+      (let* ((text (with-output-to-string (*standard-output*)
+                     (let ((*standard-input* (make-string-input-stream (format nil "q~%"))))
+                       (inspect w))))
+             (lines (remove "" (uiop:split-string text :separator '(#\Newline)) :test #'string=)))
+        (check (string= (prin1-to-string w) (first lines)) "inspect begins ~S" (first lines))
+        (check (<= (length lines) 30) "inspect prints ~D lines" (length lines))
+        (dolist (label '("bodies" "contact rows" "parameters" "terrain"))
+          (check (find-if (lambda (l) (search (format nil ". ~A: " label) l)) lines)
+                 "inspect shows no ~A in ~S" label lines)))
+      (let ((values (loop for part in (luv-physics::inspection-parts w)
+                          when (and (consp part) (eq :value (first part))) collect (second part))))
+        (check (find-if (lambda (v) (and (consp v) (equal (mapcar #'physics-body-handle v)
+                                                          (physics-world-handles w))))
+                        values)
+               "the SLIME parts hold no list of the bodies: ~S" values)))))
+;; H4NDL3-world-opens-into-its-bodies ends here
+
+;; [[file:../physics.org::#H4NDL3][H4NDL3-terrain-and-body-inspect-as-summaries]]
+(define-claim "H4NDL3" terrain-and-body-inspect-as-summaries
+    "A terrain prints its chunk and edit counts; inspect on a body shows its world and position."
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain 0 0 0 16 16 16 nil)
+    (fill-terrain terrain 16 0 0 32 16 16 nil)
+    (let ((before (luv-physics::voxel-terrain-edits terrain)))
+      (check (string= (format nil "#<VOXEL-TERRAIN 2 chunks resident, ~D edit~:P>" before before)
+                      (prin1-to-string terrain))
+             "prints ~A" (prin1-to-string terrain))))
+  (let* ((w (make-floor-world)) (h (add-physics-body w 1.5 2.0 1.5))
+         (text (with-output-to-string (*standard-output*)
+                 (let ((*standard-input* (make-string-input-stream (format nil "q~%"))))
+                   (inspect (physics-body w h))))))
+    (check (search "0. world: #<PHYSICS-WORLD" text) "inspect shows ~A" text)
+    (check (search "1. position: (1.5 2.0 1.5)" text) "inspect shows ~A" text)))
+;; H4NDL3-terrain-and-body-inspect-as-summaries ends here
 
 ;; [[file:../physics.org::#M9W5P7][M9W5P7-handler-refusals-counted]]
 (define-claim "M9W5P7" handler-refusals-counted
@@ -7116,6 +7195,44 @@ in the order of *physics-scene-features*. #K5DF9S"
                     ceiling (physics-player-x p) (physics-player-y p) top))))
 ;; H7P4CX-walker-limits-at-their-edges ends here
 
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-prints-where-it-stands]]
+(define-claim "H7P4CX" walker-prints-where-it-stands
+    "A walker prints its place, velocity and footing; inspect lists its slots by name."
+  (let ((terrain (make-floor-terrain)) (player (make-physics-player 2.5 0 3.5)))
+    (check (string= "#<PHYSICS-PLAYER at (2.500 0.000 3.500) moving (0.000 0.000 0.000) in the air>"
+                    (prin1-to-string player))
+           "prints ~A" (prin1-to-string player))
+    (dotimes (i 4) (step-physics-player player terrain))
+    (check (physics-player-grounded player))
+    (check (string= "#<PHYSICS-PLAYER at (2.500 0.000 3.500) moving (0.000 0.000 0.000) standing>"
+                    (prin1-to-string player))
+           "prints ~A" (prin1-to-string player))
+    (let ((text (with-output-to-string (*standard-output*)
+                  (let ((*standard-input* (make-string-input-stream (format nil "q~%"))))
+                    (inspect player)))))
+      (check (search "0. x: 2.5" text) "inspect shows ~A" text))))
+;; H7P4CX-walker-prints-where-it-stands ends here
+
+;; [[file:../physics.org::#B3NCH5][B3NCH5-far-balls-outside-the-walls]]
+(define-claim "B3NCH5" far-balls-outside-the-walls
+    "The spread basin's four far balls are the pile's kind, beyond the walls, one per quadrant, resting."
+  (multiple-value-bind (world far) (luv-physics::make-spread-basin-world 20 :scalar)
+    (step-physics-world world)
+    (let ((quadrants '())
+          (pile (luv-physics::body-summary (physics-body world (first (physics-world-handles world))))))
+      (dolist (h far)
+        (multiple-value-bind (x y z) (physics-body-position world h)
+          (check (and (or (< x -2) (> x 10)) (or (< z -2) (> z 10))) "a far ball at ~,2F ~,2F" x z)
+          (check (<= 0.244 y 0.2505) "a far ball's centre at y = ~,4F after a step" y)
+          (pushnew (list (> x 4) (> z 4)) quadrants :test #'equal))
+        (let ((own (luv-physics::body-summary (physics-body world h))))
+          (dolist (label '("radius" "mass" "material"))
+            (check (equal (third (assoc label pile :test #'string=)) (third (assoc label own :test #'string=)))
+                   "a far ball's ~A is ~S, the pile's ~S" label
+                   (third (assoc label own :test #'string=)) (third (assoc label pile :test #'string=))))))
+      (check (= 4 (length quadrants)) "the far balls lie in ~D quadrants" (length quadrants)))))
+;; B3NCH5-far-balls-outside-the-walls ends here
+
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-measure-basin-reports-the-world]]
 (define-claim "B3NCH5" measure-basin-reports-the-world
     "measure-basin over steps 20..24 of 20 balls: the world's own contacts, colours, overflow and deepest; phases in order."
@@ -7215,6 +7332,23 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (> near 0))
     (check (> far (* 2 near)) "8 MB: ~,2F ns a read, 32 KB: ~,2F ns" far near)))
 ;; B3NCH5-probe-reaches-the-shared-cache ends here
+
+;; [[file:../physics.org::#B3NCH5][B3NCH5-against-tree-takes-only-a-name]]
+(define-claim "B3NCH5" against-tree-takes-only-a-name
+    "A rev with a space, ;, a quote or $ is refused naming :rev, and nothing is unpacked."
+  (let ((directory (uiop:ensure-directory-pathname
+                    (format nil "/tmp/luv-against-tree-~D/" (random 1000000 (make-random-state t))))))
+    (dolist (rev '("HEAD main" "HEAD;true" "HEAD'" "$(true)"))
+      (let ((refused (handler-case (progn (luv-physics::against-tree rev directory) nil)
+                       (invalid-physics-parameter (e) e)
+                       (error (e) (list :other e)))))
+        (check (typep refused 'invalid-physics-parameter) "~S gave ~S" rev refused)
+        (when (typep refused 'invalid-physics-parameter)
+          (check (eq :rev (luv-physics::invalid-physics-parameter-name refused)) "~S was refused naming ~S"
+                 rev (luv-physics::invalid-physics-parameter-name refused)))))
+    (check (null (probe-file directory)) "~A was made" directory)
+    (uiop:delete-directory-tree directory :validate t :if-does-not-exist :ignore)))
+;; B3NCH5-against-tree-takes-only-a-name ends here
 
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-against-measures-this-tree]]
 (define-claim "B3NCH5" against-measures-this-tree
@@ -7443,6 +7577,22 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (every (lambda (n) (>= (parse-integer n) 0)) (remove "" (uiop:split-string (sixth cells) :separator ", ") :test #'string=))
              "bytes consed ~A" (sixth cells)))))
 ;; FBNCH9-benchmark-row-as-described ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-kinetic-energy-counts-spin]]
+(define-claim "X7R3M5" kinetic-energy-counts-spin
+    "Two balls, one moving and turning about x, one turning about y and z: 1 + 1.6 + 0.3125 J."
+  (let* ((w (make-floor-world :gravity '(0 0 0)))
+         (a (add-physics-body w 2.5 3.5 2.5 :radius 0.5 :mass 2.0 :vx 0.6 :vz 0.8))
+         (b (add-physics-body w 6.5 3.5 6.5 :radius 0.25 :mass 1.0)))
+    (loop for (h spin) in (list (list a '(4.0 0.0 0.0)) (list b '(0.0 3.0 4.0)))
+          do (multiple-value-bind (set row) (luv-physics::resolve-handle w h)
+               (let ((buffer (luv-physics::set-buffer w set)))
+                 (setf (aref (luv-physics::body-columns-wx buffer) row) (first spin)
+                       (aref (luv-physics::body-columns-wy buffer) row) (second spin)
+                       (aref (luv-physics::body-columns-wz buffer) row) (third spin)))))
+    (let ((energy (luv-physics::pile-kinetic-energy w (list a b))))
+      (check (< (abs (- energy 2.9125d0)) 1d-6) "the two balls carry ~,7F J" energy))))
+;; X7R3M5-kinetic-energy-counts-spin ends here
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-small-rows-hold]]
 (define-claim "X7R3M5" small-rows-hold
@@ -7682,6 +7832,34 @@ in the order of *physics-scene-features*. #K5DF9S"
                             (finite-with (luv-physics::body-columns-y awake) (sb-kernel:make-single-float #x7FC00000)))))
           (check (null nan-finite) "a NaN is finite"))))))
 ;; X7R3M5-finite-means-finite ends here
+
+;; [[file:../physics.org::#W9PREC][W9PREC-point-repeats-only-when-both-agree]]
+(define-claim "W9PREC" point-repeats-only-when-both-agree
+    "Repeated needs the same error and hash in both runs; :ms is the faster run's; :error the first's."
+  (flet ((point (runs)
+           (let* ((k 0)
+                  (luv-physics::*accuracy-scenes*
+                    (list (list :stand-in
+                                (lambda (arguments)
+                                  (declare (ignore arguments))
+                                  (destructuring-bind (err wall body) (nth k runs)
+                                    (incf k)
+                                    (let ((w (make-floor-world)))
+                                      (when body (add-physics-body w 1.5 2.0 1.5))
+                                      (incf luv-physics::*driven-seconds* 1d0)
+                                      (values err wall w "stand-in"))))
+                                "error" 1.0))))
+             (luv-physics::run-accuracy-point :stand-in 60 4 :scalar))))
+    (let ((p (point '((0.5d0 0.1d0 nil) (0.5d0 0.2d0 nil)))))
+      (check (eq t (getf p :repeated)) "~S" p)
+      (check (< (abs (- (getf p :ms) 100d0)) 1d-9) "~S" p))
+    (let ((p (point '((0.5d0 0.2d0 nil) (0.25d0 0.1d0 nil)))))
+      (check (null (getf p :repeated)) "~S" p)
+      (check (< (abs (- (getf p :ms) 100d0)) 1d-9) "~S" p)
+      (check (= 0.5d0 (getf p :error)) "~S" p))
+    (let ((p (point '((0.5d0 0.1d0 nil) (0.5d0 0.1d0 t)))))
+      (check (null (getf p :repeated)) "~S" p))))
+;; W9PREC-point-repeats-only-when-both-agree ends here
 
 ;; [[file:../physics.org::#W9PREC][W9PREC-free-fall-is-first-order]]
 (define-claim "W9PREC" free-fall-is-first-order
@@ -8414,6 +8592,26 @@ counted. #RH7T05"
         (check (equal fills (list (luv-physics::shade colour 0.55) (luv-physics::shade colour 1.0)))
                "the discs are filled ~S, the colour is ~6,'0X" fills colour)))))
 ;; UFK5EA-discs-lit-by-depth ends here
+
+;; [[file:../physics.org::#Q5V1EW][Q5V1EW-far-out-on-the-finest-grid]]
+(define-claim "Q5V1EW" far-out-on-the-finest-grid
+    "Bodies of 5 mm 50 km out, on a 1 cm grid: a sphere and a box find the six they meet."
+  (let* ((*physics-speculative-margin* 0) (*physics-pair-skin* 0)
+         (terrain (make-voxel-terrain)))
+    (fill-terrain terrain 49984 0 0 50016 16 16 nil)
+    (let* ((w (make-physics-world :terrain terrain :gravity '(0 0 0)))
+           (row (loop for i below 10 collect (add-physics-body w (+ 50000.25 (* i 0.1)) 0.5 0.5 :radius 0.005)))
+           (found '()))
+      (step-physics-world w)
+      (check (= 100.0 (luv-physics::hash-grid-inv-cell (luv-physics::physics-world-awake-grid w))))
+      (map-physics-bodies-in-sphere (lambda (h) (push h found)) w 50000.6 0.5 0.5 0.3)
+      (check (equal (subseq row 1 7) (sort found #'< :key (lambda (h) (position h row))))
+             "the sphere met ~D of the row: ~S" (length found) (mapcar (lambda (h) (position h row)) found))
+      (setf found '())
+      (map-physics-bodies-in-box (lambda (h) (push h found)) w 50000.6 0.5 0.5 0.3 0.1 0.1)
+      (check (equal (subseq row 1 7) (sort found #'< :key (lambda (h) (position h row))))
+             "the box met ~D of the row: ~S" (length found) (mapcar (lambda (h) (position h row)) found)))))
+;; Q5V1EW-far-out-on-the-finest-grid ends here
 
 ;; [[file:../physics.org::#Q5V1EW][Q5V1EW-view-uses-world-grids]]
 (define-claim "Q5V1EW" view-grids-awake-rows-of-now
@@ -9549,6 +9747,24 @@ within reach of something. #S9WEEP"
                (class-name (class-of (luv-physics::physics-world-kernels
                                       (make-physics-world :kernels :auto))))))))
 ;; 7PAQ3M-choosing-a-family ends here
+
+;; [[file:../physics.org::#W1D3KF][W1D3KF-kernels-say-their-width]]
+(define-claim "W1D3KF" kernels-say-their-width
+    "Each wide kernel's docstring gives its lanes, and the impact copy names its own family's pass."
+  (loop for (width pass kernels)
+          in '((4 luv-physics::solve-blocks/sse
+                (luv-physics::warm-start-blocks/sse luv-physics::solve-blocks/sse
+                 luv-physics::solve-impact-blocks/sse luv-physics::prepare-frames-blocks/sse))
+               (8 luv-physics::solve-blocks/avx2
+                (luv-physics::warm-start-blocks/avx2 luv-physics::solve-blocks/avx2
+                 luv-physics::solve-impact-blocks/avx2 luv-physics::prepare-frames-blocks/avx2)))
+        do (dolist (kernel kernels)
+             (let ((text (documentation kernel 'function)))
+               (check (and text (search (format nil ", ~D lanes at a time" width) text))
+                      "~A says ~S" kernel text)))
+           (let ((text (documentation (third kernels) 'function)))
+             (check (search (format nil "the pass ~(~A~) or" pass) text) "~S" text))))
+;; W1D3KF-kernels-say-their-width ends here
 
 ;; [[file:../physics.org::#W1D3KF][W1D3KF-lanes-are-scalar-rows]]
 (define-claim "W1D3KF" lanes-are-scalar-rows
