@@ -15,14 +15,16 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test editor-test demo bench bench-peers bench-against count-against count-features report heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo bench bench-peers bench-against count-against count-features report heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
 	@echo "make demo           install what is missing (as root), tangle, run the default scene;"
 	@echo "                    SCENE=name runs another scene of the page (basin, pile, fountain, lava,"
 	@echo "                    player, awake-basin)"
-	@echo "make test           check tangling and anchors, then run every claim"
+	@echo "make test           check tangling and anchors, then run every claim: a line per part of the"
+	@echo "                    page, the ten slowest claims; report/compile.log and report/claims.log"
+	@echo "                    hold what the compiler and the claims printed"
 	@echo "make test ANCHOR=ID run only the claims of section ID (without the editor checks)"
 	@echo "make editor-test    Emacs with SLIME against a live image: jumps, edit buffers, reload"
 	@echo "make setup          install what the page needs if missing (apt-get, as root): sbcl, emacs-nox,"
@@ -67,8 +69,13 @@ check-tangle:
 check-anchors:
 	@$(LISP) --load tools/check-anchors.lisp
 
-test: setup check-tangle check-anchors physics.html
+# what the compiler prints goes to report/compile.log (tools/boot.lisp), what the claims print to
+# report/claims.log (tests/run.lisp); a run of make test starts the compile log afresh
+test: setup fresh-compile-log check-tangle check-anchors physics.html
 	@ANCHOR="$(ANCHOR)" LUV_HEAP="$(HEAP)" tools/run-tests "$(SBCL)" "$(EMACS)"
+
+fresh-compile-log:
+	@mkdir -p report && rm -f report/compile.log
 
 editor-test: setup
 	@LUV_HEAP="$(HEAP)" tools/editor-test "$(SBCL)" "$(EMACS)"

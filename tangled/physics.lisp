@@ -601,13 +601,29 @@ so on, in the order of FORMS. #OWNJGP"
   "The character position, counted from 1 as Emacs counts, where LINE of LINES starts. #OWNJGP"
   (1+ (loop for i from 0 below (1- line) sum (1+ (length (aref lines i))))))
 
+(defun compiler-error-message (diagnostics)
+  "The first message the compiler printed after \"caught ERROR\" in DIAGNOSTICS, its output, on
+one line; NIL if it caught none. #OWNJGP"
+  (let ((at (search "caught ERROR" diagnostics)))
+    (when at
+      (let* ((start (or (position #\Newline diagnostics :start at) (length diagnostics)))
+             (end (or (search (format nil "~%; ~%") diagnostics :start2 start)
+                      (search (format nil "~%~%") diagnostics :start2 start)
+                      (length diagnostics))))
+        (format nil "~{~A~^ ~}"
+                (loop for line across (split-lines (subseq diagnostics start end))
+                      for text = (string-trim " ;" line)
+                      unless (string= text "") collect text))))))
+
 (defun load-page-text (text page position)
   "Compile TEXT, the page PAGE's text from character POSITION, in the engine's package with the
-page as its source, and load it; return the warnings, which are not printed. #OWNJGP"
+page as its source, and load it; return the warnings, which are not printed. Signal an error,
+without loading, when the compiler caught an error in TEXT. #OWNJGP"
   (let* ((name (namestring page))
          (source (merge-pathnames (format nil "luv-physics-reload-~36R.lisp" (random (expt 36 8) (make-random-state t)))
                                   (or (sb-ext:posix-getenv "TMPDIR") "/tmp/")))
          (fasl (compile-file-pathname source))
+         (diagnostics (make-string-output-stream))
          (warnings '()))
     (unwind-protect
          (progn
@@ -619,66 +635,101 @@ page as its source, and load it; return the warnings, which are not printed. #OW
                           (warning (lambda (w) (push w warnings) (muffle-warning w))))
              (let ((*package* (find-package '#:luv-physics)) (*read-eval* t)
                    (*compile-verbose* nil) (*compile-print* nil) (*load-verbose* nil)
-                   (*error-output* (make-broadcast-stream)))
+                   (*error-output* diagnostics))
                (with-compilation-unit (:source-plist (list :emacs-buffer name :emacs-filename name
                                                            :emacs-package "LUV-PHYSICS"
                                                            :emacs-position position :emacs-string text)
                                        :source-namestring name :allow-other-keys t)
-                 (load (compile-file source :output-file fasl :external-format :utf-8))))))
+                 (let* ((output (compile-file source :output-file fasl :external-format :utf-8))
+                        (caught (compiler-error-message (get-output-stream-string diagnostics))))
+                   (cond ((null output) (error "the text did not compile~@[: ~A~]" caught))
+                         ;; a form compiled with errors would load as a form that signals them
+                         (caught (error "compile error: ~A" caught))
+                         (t (load output))))))))
       (when (probe-file source) (delete-file source))
       (when (probe-file fasl) (delete-file fasl)))
     (nreverse warnings)))
 
+(defvar *stale-forms* (make-hash-table :test 'equal)
+  "The keys of the forms a failed reload had to load and did not: the form that failed and the
+users after it, which still hold what they copied before. The next reload loads them. #OWNJGP")
+
 (defun reload-forms (selected forms lines page label &optional (started (get-internal-real-time)))
   "Load SELECTED, forms of the page PAGE (whose LINES and FORMS are given), with every user they
-need recompiled, keeping the parameters the user changed; return and print one line of summary
-starting with LABEL and ending with the seconds since STARTED. #OWNJGP"
+need recompiled and every form a failed reload left stale, keeping the parameters the user
+changed; return and print one line of summary starting with LABEL and ending with the seconds
+since STARTED. When a form fails, the summary names its page line, and the forms not loaded are
+left stale for the next reload. #OWNJGP"
   (let* ((selected (remove-if (lambda (form)
                                 (let ((read (getf form :form)))
                                   (and (consp read) (eq 'register-tangled-file (car read)))))
                               selected))
+         (key-of (let ((table (make-hash-table :test 'eq)))
+                   (loop for form in forms for key in (form-keys forms) do (setf (gethash form table) key))
+                   table))
          ;; only a form whose text changed can change what its users copy
          (changed (let ((table (loaded-forms)))
-                    (loop for form in forms for key in (form-keys forms)
-                          when (and (member form selected) (not (equal (getf form :text) (gethash key table))))
-                            collect form)))
-         (chosen (reload-closure selected forms changed))
+                    (remove-if (lambda (form) (equal (getf form :text) (gethash (gethash form key-of) table)))
+                               selected)))
+         (stale (remove-if-not (lambda (form) (gethash (gethash form key-of) *stale-forms*)) forms))
+         (chosen (let ((closure (reload-closure selected forms changed)))
+                   (remove-if-not (lambda (form) (or (member form closure :test #'eq) (member form stale :test #'eq)))
+                                  forms)))
          (users (set-difference chosen selected))
-         (kept '()) (warnings '()) (failure nil))
-    (handler-case
-        (loop while chosen
-              do (let ((run (list (pop chosen))))
-                   ;; a run: forms next to each other in one block
-                   (loop while (and chosen
-                                    (eql (getf (first chosen) :block) (getf (first run) :block))
-                                    (eq (first chosen) (second (member (first run) forms))))
-                         do (push (pop chosen) run))
-                   (setf run (nreverse run))
-                   (let* ((parameters (loop for form in run
-                                            append (loop for (name kind) in (form-definitions (getf form :form))
-                                                         when (and (eq kind :defparameter) (boundp name))
-                                                           collect name)))
-                          (tuned (remove-if (lambda (name)
-                                              (multiple-value-bind (default known) (gethash name *parameter-defaults*)
-                                                (or (not known) (equal default (symbol-value name)))))
-                                            parameters))
-                          (saved (mapcar #'symbol-value tuned))
-                          (first (getf (first run) :line)))
-                     (setf warnings (append warnings
-                                            (load-page-text (format nil "~{~A~^~%~}" (mapcar (lambda (f) (getf f :text)) run))
-                                                            page (line-position lines first))))
-                     (dolist (name parameters)
-                       (setf (gethash name *parameter-defaults*) (symbol-value name)))
-                     (loop for name in tuned for value in saved
-                           do (setf (symbol-value name) value) (push name kept))
-                     (let ((table (loaded-forms)))
-                       (loop for form in forms for key in (form-keys forms)
-                             when (member form run) do (setf (gethash key table) (getf form :text)))))))
-      (error (e) (setf failure e)))
+         (kept '()) (warnings '()) (failure nil) (failed nil) (left 0))
+    (flet ((load-run (run)
+             ;; load RUN, forms next to each other in one block; on an error the tuned
+             ;; parameters still get their values back
+             (let* ((parameters (loop for form in run
+                                      append (loop for (name kind) in (form-definitions (getf form :form))
+                                                   when (and (eq kind :defparameter) (boundp name))
+                                                     collect name)))
+                    (tuned (remove-if (lambda (name)
+                                        (multiple-value-bind (default known) (gethash name *parameter-defaults*)
+                                          (or (not known) (equal default (symbol-value name)))))
+                                      parameters))
+                    (saved (mapcar #'symbol-value tuned))
+                    (first (getf (first run) :line)))
+               (unwind-protect
+                    (progn
+                      (setf warnings (append warnings
+                                             (load-page-text (format nil "~{~A~^~%~}" (mapcar (lambda (f) (getf f :text)) run))
+                                                             page (line-position lines first))))
+                      (dolist (name parameters)
+                        (setf (gethash name *parameter-defaults*) (symbol-value name))))
+                 (loop for name in tuned for value in saved
+                       do (setf (symbol-value name) value) (pushnew name kept)))
+               (let ((table (loaded-forms)))
+                 (dolist (form run)
+                   (setf (gethash (gethash form key-of) table) (getf form :text))
+                   (remhash (gethash form key-of) *stale-forms*))))))
+      (loop while chosen
+            do (let ((run (list (pop chosen))))
+                 (loop while (and chosen
+                                  (eql (getf (first chosen) :block) (getf (first run) :block))
+                                  (eq (first chosen) (second (member (first run) forms))))
+                       do (push (pop chosen) run))
+                 (setf run (nreverse run))
+                 (handler-case (load-run run)
+                   (error (e)
+                     ;; which form failed: the run's forms one at a time, up to the one that fails
+                     (setf failure e failed (first run))
+                     (when (rest run)
+                       (dolist (form run)
+                         (handler-case (load-run (list form))
+                           (error (again) (setf failure again failed form) (return)))))
+                     ;; what is not loaded stays stale until a reload loads it
+                     (let ((unloaded (append (member failed run) chosen)))
+                       (dolist (form unloaded)
+                         (setf (gethash (gethash form key-of) *stale-forms*) t))
+                       (setf left (length unloaded) chosen '()
+                             users (remove-if (lambda (form) (member form unloaded :test #'eq)) users))))))))
     (refresh-page-lines forms)
     (let ((summary
             (format nil "~A: ~D form~:P~@[ (~A)~]~:[~*~;, ~:*~D user~:P recompiled (~{~A~^ ~})~]~
-                         ~@[, kept ~{~(~A~)~^ ~}~], ~D warning~:P~@[ (first: ~A)~], ~,2F s~@[; FAILED: ~A~]"
+                         ~@[, ~D stale from a failed reload~]~
+                         ~@[, kept ~{~(~A~)~^ ~}~], ~D warning~:P~@[ (first: ~A)~], ~,2F s~
+                         ~@[; FAILED at ~A~]~@[: ~A~]~@[; ~D form~:P left stale, which the next reload loads~]"
                     label (length selected)
                     (when selected
                       (format nil "~A:~D-~D" (file-namestring page)
@@ -686,11 +737,17 @@ starting with LABEL and ending with the seconds since STARTED. #OWNJGP"
                               (reduce #'max selected :key (lambda (f) (getf f :end)))))
                     (and users (length users))
                     (remove-duplicates (mapcar (lambda (f) (getf f :anchor)) users) :test #'equal :from-end t)
+                    (and stale (length stale))
                     (reverse kept)
                     (length warnings)
                     (when warnings (substitute #\Space #\Newline (princ-to-string (first warnings))))
                     (/ (- (get-internal-real-time) started) internal-time-units-per-second 1.0)
-                    (when failure (substitute #\Space #\Newline (princ-to-string failure))))))
+                    (when failed
+                      (let ((*package* (find-package '#:luv-physics)) (*print-case* :downcase))
+                        (format nil "~A:~D (~{~S~^ ~})" (file-namestring page) (getf failed :line)
+                                (mapcar #'first (form-definitions (getf failed :form))))))
+                    (when failure (substitute #\Space #\Newline (princ-to-string failure)))
+                    (and (plusp left) left))))
       (format t "~&~A~%" summary)
       summary)))
 

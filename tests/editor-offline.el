@@ -36,7 +36,38 @@
           (check "without SLIME, reloading says what it needs"
                  (string-match-p "needs SLIME"
                                  (condition-case e (progn (luv-physics-reload-section nil) "")
-                                   (user-error (error-message-string e))))))
+                                   (user-error (error-message-string e)))))
+          ;; C-c ' and C-c ' again, with no edit, then C-x C-s: the file is byte for byte the same
+          (let ((file (getenv "LUV_COPY"))
+                (bytes (lambda (file) (with-temp-buffer
+                                        (set-buffer-multibyte nil)
+                                        (insert-file-contents-literally file)
+                                        (buffer-string)))))
+            (let ((before (funcall bytes file))
+                  (blocks '()))
+              (dolist (at '("^(defun substep-phase (world)" "^(define-claim \"OWNJGP\" reload-keeps-changed-parameters"))
+                (goto-char (point-min))
+                (re-search-forward at)
+                (forward-line 2)
+                (org-edit-special)
+                (push (buffer-name) blocks)
+                (org-edit-src-exit)
+                (set-buffer-modified-p t)
+                (let ((inhibit-message t)) (save-buffer)))
+              (check "C-c ' then C-c ' with no edit leaves an engine block and a claim block byte for byte"
+                     (and (= 2 (length blocks)) (string= before (funcall bytes file)))
+                     blocks org-src-preserve-indentation org-edit-src-content-indentation))
+            ;; every block: what C-c ' shows, written back as C-c ' writes it, is the block's text
+            (let ((changed '()) (count 0))
+              (org-babel-map-src-blocks nil
+                ;; the page holds the escaped text, the edit buffer shows it unescaped
+                (let ((stored (buffer-substring-no-properties beg-body end-body)))
+                  (setq count (1+ count))
+                  (unless (string= (org-escape-code-in-string (org-unescape-code-in-string stored)) stored)
+                    (push (line-number-at-pos beg-block) changed))))
+              (check (format "all %d blocks come back from an edit buffer as they are" count)
+                     (and (> count 400) (null changed))
+                     (reverse changed)))))
       (error (check "the checks without SLIME ran to the end" nil (error-message-string err)))))
   (message "editor-test: without SLIME %d passed, %d failed" passed failed)
   (kill-emacs (if (and (zerop failed) (> passed 0)) 0 1)))

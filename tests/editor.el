@@ -84,6 +84,16 @@
                          (with-current-buffer "*luv-physics section*"
                            (and (string-match-p "definition-anchor-finds-its-section" (buffer-string))
                                 (string-match-p "register-tangled-file" (buffer-string)))))
+      ;; its message says "Type q": the q must reach the section's window, not the page
+      (let ((page-tick (buffer-chars-modified-tick (find-buffer-visiting copy)))
+            (selected (buffer-name (window-buffer (selected-window)))))
+        (execute-kbd-macro (kbd "q"))
+        (editor-test-check "C-c M-s selects its window, and q closes it without touching the page"
+                           (and (equal selected "*luv-physics section*")
+                                (null (get-buffer-window "*luv-physics section*"))
+                                (= page-tick (buffer-chars-modified-tick (find-buffer-visiting copy)))
+                                (eq (window-buffer (selected-window)) (find-buffer-visiting copy)))
+                           selected (buffer-name (window-buffer (selected-window)))))
 
       ;; Symbol -> page, from a Lisp buffer in CL-USER.
       (switch-to-buffer (get-buffer-create "*editor-test lisp*"))
@@ -181,6 +191,32 @@
                            (and (stringp summary) (not (string-match-p "\n" summary))
                                 (string-match-p " 0 warnings" summary))
                            summary))
+
+      ;; C-c M-u tangles the page anew: a buffer visiting a tangled file takes the new text
+      ;; without asking whether to edit a file changed on disk.  (Last: the image then reads
+      ;; the copy's tangled files.)
+      (let* ((tangled (find-file-noselect (expand-file-name "tangled/physics.lisp" (file-name-directory copy))))
+             (old "How many bodies of WORLD are awake.")
+             (new "How many bodies of WORLD are awake now."))
+        (switch-to-buffer (find-buffer-visiting copy))
+        (goto-char (point-min))
+        (search-forward old)
+        (replace-match new t t)
+        (let* ((started (float-time))
+               (summary (luv-physics-reload-changed))
+               (seconds (- (float-time) started)))
+          (message "editor-test: C-c M-u tangled and reloaded in %.2f s: %s" seconds summary)
+          (editor-test-check "C-c M-u reloads the edited form"
+                             (and (string-match-p "reload changed: 1 form " summary)
+                                  (string-prefix-p "How many bodies of WORLD are awake now."
+                                                   (editor-test-lisp "(documentation 'physics:physics-world-awake-count 'function)")))
+                             summary))
+        (with-current-buffer tangled
+          (editor-test-check "after C-c M-u a buffer on the tangled file holds the new text, unmodified, with no question"
+                             (and (verify-visited-file-modtime tangled)
+                                  (not (buffer-modified-p))
+                                  (save-excursion (goto-char (point-min)) (search-forward new nil t)))
+                             (verify-visited-file-modtime tangled) (buffer-modified-p))))
       (editor-test-finish))
   (error (editor-test-check "the editor checks ran to the end" nil (error-message-string err))
          (editor-test-finish)))

@@ -435,6 +435,63 @@
         (check (not (search "users recompiled" again)) "~A" again)))))
 ;; OWNJGP-changed-inline-recompiles-users ends here
 
+;; [[file:../physics.org::#OWNJGP][OWNJGP-failed-reload-leaves-users-stale]]
+(define-claim "OWNJGP" failed-reload-leaves-users-stale
+    "A failing user is named by its page line; it and the users after it are loaded by the next reload."
+  (let* ((page luv-physics::*page-pathname*)
+         (text (luv-physics::read-file-text page))
+         (stamp (random 1000000 (make-random-state t)))
+         (broken-copy (merge-pathnames (format nil "luv-stale-claim-~D-a.org" stamp) (uiop:temporary-directory)))
+         (mended-copy (merge-pathnames (format nil "luv-stale-claim-~D-b.org" stamp) (uiop:temporary-directory)))
+         ;; the words are split so that this claim's own text does not match them
+         (inline-at (search (concatenate 'string "(defun " "physics-world-max-penetration (world)") text))
+         (old-body (concatenate 'string "(step-statistics-max-penetration " "(world-statistics world)))"))
+         (body-at (search old-body text :start2 inline-at))
+         (user-head (concatenate 'string "(defun " "world-summary (world)"))
+         (user-at (search user-head text))
+         (line (nth-value 1 (definition-anchor 'luv-physics::world-summary)))
+         (world (make-floor-world)))
+    (flet ((edit (edits)
+             ;; EDITS: (POSITION OLD NEW), in the order of the text
+             (with-output-to-string (out)
+               (let ((from 0))
+                 (loop for (at old new) in edits
+                       do (write-string text out :start from :end at)
+                          (write-string new out)
+                          (setf from (+ at (length old))))
+                 (write-string text out :start from))))
+           (reload (page) (with-output-to-string (*standard-output*) (reload-section "IDVK7G" :page page)))
+           (left () (second (assoc "left" (luv-physics::world-summary world) :test #'equal))))
+      (check (and inline-at body-at user-at line (< inline-at body-at user-at)))
+      (let ((new-body (concatenate 'string "(+ 1000 " old-body ")")))
+        (with-open-file (out broken-copy :direction :output :external-format :utf-8)
+          (write-string (edit (list (list body-at old-body new-body)
+                                    (list user-at user-head (concatenate 'string user-head " (let ((broken 1 2)) broken)"))))
+                        out))
+        (with-open-file (out mended-copy :direction :output :external-format :utf-8)
+          (write-string (edit (list (list body-at old-body new-body))) out)))
+      (unwind-protect
+           (let ((broken (reload broken-copy)))
+             (check (search (format nil ":~D (world-summary)" line) broken) "~A" broken)
+             (check (search "left stale" broken) "~A" broken)
+             (check (gethash (list "tangled/physics.lisp" "4YDMX5" '((luv-physics::world-summary :defun)) 0)
+                             luv-physics::*stale-forms*))
+             (check (search "deepest overlap 0.0000 m" (left)) "the stale user: ~A" (left))
+             (let ((mended (reload mended-copy)))
+               (check (and (search "stale from a failed reload" mended) (search "4YDMX5" mended)
+                           (not (search "FAILED" mended)))
+                      "~A" mended)
+               (check (zerop (hash-table-count luv-physics::*stale-forms*)))
+               (check (search "deepest overlap 1000.0000 m" (left)) "the reloaded user: ~A" (left)))
+             (let ((again (reload mended-copy)))
+               (check (not (search "users recompiled" again)) "~A" again)))
+        (reload page)
+        (delete-file broken-copy)
+        (delete-file mended-copy))
+      (check (zerop (hash-table-count luv-physics::*stale-forms*)))
+      (check (search "deepest overlap 0.0000 m" (left)) "after the page's text: ~A" (left)))))
+;; OWNJGP-failed-reload-leaves-users-stale ends here
+
 ;; [[file:../physics.org::#OWNJGP][OWNJGP-users-of-copied-definitions]]
 (define-claim "OWNJGP" users-of-copied-definitions
     "The closure of W0RLD7 holds K3RNLS and S0LV3R; of W1D3KF holds F4M1LY; of BSOZ3U nothing more."

@@ -13,11 +13,15 @@
 ;;             at point), with completion; visits the chosen one's line on the page,
 ;;             with C-u in the tangled file
 ;;   C-c M-g   the page line where the symbol at point is defined
-;;   C-c M-s   what the image knows of the section at point: definitions, claims
+;;   C-c M-s   what the image knows of the section at point: definitions, claims, in a
+;;             selected window that q closes
 ;;   C-c M-r   reload the section at point into the image (C-u: the block at point)
 ;;   C-c C-c   on a Lisp block of the engine: reload that block
-;;   C-c M-u   tangle the page and reload every form whose text changed
-;;   C-c '     edit a block: the edit buffer is in the engine's package
+;;   C-c M-u   tangle the page and reload every form whose text changed; buffers visiting
+;;             the tangled files are reverted without a question
+;;   C-c '     edit a block: the edit buffer is in the engine's package, and the block's
+;;             indentation is kept (org-src-preserve-indentation), so an unedited block
+;;             goes back byte for byte
 ;; In Lisp buffers with SLIME and in the REPL:
 ;;   C-c M-g   the page line where the symbol at point is defined
 
@@ -26,6 +30,7 @@
 (require 'org)
 (require 'org-element)
 (require 'subr-x)
+(require 'cl-lib)
 
 (defvar slime-buffer-package)
 (declare-function slime-connected-p "slime")
@@ -58,8 +63,15 @@
   :lighter " Luv"
   :keymap luv-physics-mode-map
   (if luv-physics-mode
-      (add-hook 'org-ctrl-c-ctrl-c-hook #'luv-physics-ctrl-c-ctrl-c nil t)
-    (remove-hook 'org-ctrl-c-ctrl-c-hook #'luv-physics-ctrl-c-ctrl-c t)))
+      (progn
+        (add-hook 'org-ctrl-c-ctrl-c-hook #'luv-physics-ctrl-c-ctrl-c nil t)
+        ;; a block's text is the tangled text (tools/tangle.el tangles so): C-c ' and back
+        ;; must give the block back byte for byte, not indented by Org's two spaces
+        (setq-local org-src-preserve-indentation t)
+        (setq-local org-edit-src-content-indentation 0))
+    (remove-hook 'org-ctrl-c-ctrl-c-hook #'luv-physics-ctrl-c-ctrl-c t)
+    (kill-local-variable 'org-src-preserve-indentation)
+    (kill-local-variable 'org-edit-src-content-indentation)))
 
 (defun luv-physics-page-p ()
   "True in a buffer visiting the page: physics.org beside luv-physics.asd."
@@ -227,7 +239,9 @@ the page; with a prefix argument TANGLED, in the tangled file."
   "Show what the image knows of the section at point: definitions with lines, claims."
   (interactive)
   (luv-physics-require-image)
-  (let ((text (luv-physics-eval "editor-section" (luv-physics-anchor-at-point) (luv-physics-page-file))))
+  (let ((text (luv-physics-eval "editor-section" (luv-physics-anchor-at-point) (luv-physics-page-file)))
+        ;; selected, the window takes the q its message asks for, which would otherwise land in the page
+        (help-window-select t))
     (with-help-window "*luv-physics section*" (princ text))))
 
 (defun luv-physics-save-page ()
@@ -261,12 +275,44 @@ BLOCK-ONLY, only the block at point.  Show the image's one-line summary and retu
       (luv-physics-reload-section t)
       t)))
 
+(defun luv-physics-tangled-files (page)
+  "The files PAGE, a file name, tangles into: the targets of its :tangle header arguments."
+  (let ((directory (file-name-directory page)) (files '()))
+    (with-current-buffer (find-file-noselect page)
+      (save-excursion
+        (save-restriction
+          (widen)
+          (goto-char (point-min))
+          (while (re-search-forward "^[ \t]*\\(?:#\\+begin_src\\|#\\+property:\\|:header-args\\)[^\n]*:tangle[ \t]+\\([^ \t\n]+\\)" nil t)
+            (let ((target (match-string-no-properties 1)))
+              (unless (member target '("no" "yes"))
+                (cl-pushnew (expand-file-name target directory) files :test #'string=)))))))
+    (nreverse files)))
+
+(defun luv-physics-revert-tangled (page)
+  "Revert, without asking, each unmodified buffer visiting a file PAGE tangles into that changed
+on disk; return those buffers."
+  (let ((files (luv-physics-tangled-files page)) (reverted '()))
+    (dolist (buffer (buffer-list))
+      (let ((file (buffer-file-name buffer)))
+        (when (and file (member (expand-file-name file) files)
+                   (file-exists-p file)
+                   (not (buffer-modified-p buffer))
+                   (not (verify-visited-file-modtime buffer)))
+          (with-current-buffer buffer
+            (let ((inhibit-message t)) (revert-buffer t t t)))
+          (push buffer reverted))))
+    reverted))
+
 (defun luv-physics-reload-changed ()
-  "Save the page, tangle it in the image's process and reload every form whose text changed."
+  "Save the page, tangle it in the image's process and reload every form whose text changed; the
+buffers visiting the tangled files are reverted, without a question, to the new text."
   (interactive)
   (luv-physics-require-image)
   (luv-physics-save-page)
-  (let ((summary (luv-physics-eval "reload-changed" :page (luv-physics-page-file))))
+  (let* ((page (luv-physics-page-file))
+         (summary (luv-physics-eval "reload-changed" :page page)))
+    (luv-physics-revert-tangled page)
     (message "%s" summary)
     summary))
 
