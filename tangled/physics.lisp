@@ -34,6 +34,9 @@
    ;; Events, sleep, boxes (#E7V3NT, #QKS4GZ, #K1N3BX)
    #:map-physics-events #:remove-physics-body #:set-physics-body-velocity
    #:wake-physics-bodies-near #:post-physics-box
+   ;; Categories and masks, sensors (#F1LT3R, #S3NS0R)
+   #:set-physics-body-filter #:physics-body-filter
+   #:add-physics-sensor #:remove-physics-sensor #:physics-sensor-bodies
    ;; The solver's entry points (#K3RNLS)
    #:physics-integrate-velocities #:physics-warm-start #:physics-solve-contacts
    #:physics-integrate-positions
@@ -1358,6 +1361,13 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
 
 (defconstant +flag-braced+ 4 "Body flag: braced at the last step that ran the bracing pass. #B5N8JT")
 
+(defconstant +flag-filter-shift+ 16
+  "Body flags: the place of the filter word ([[#F1LT3R]]), category from bit 16, mask from bit 32. #B5N8JT")
+
+(defconstant +default-category+ 1 "The category of a body or box given none ([[#F1LT3R]]): the lowest bit alone. #B5N8JT")
+
+(defconstant +all-categories+ #xFFFF "The mask of a body or box given none ([[#F1LT3R]]): all sixteen classes. #B5N8JT")
+
 (defconstant +flag-column-steps+ (ash 63 3)
   "Body flags: the steps, up to 63, that it rested still on one support straight under it. #B5N8JT")
 
@@ -2250,6 +2260,11 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (boxes :initform (make-box-columns) :reader physics-world-boxes)
    (box-owners :initform (make-array 16 :initial-element nil) :accessor physics-world-box-owners)
    (box-ids :initform (make-hash-table :test 'eq) :reader physics-world-box-ids)
+   ;; whether any body or box has a category or mask of its own ([[#F1LT3R]]), and the lasting
+   ;; sensor boxes ([[#S3NS0R]])
+   (filtering :initform nil :accessor physics-world-filtering)
+   (sensors :initform nil :accessor physics-world-sensors)
+   (sensor-counter :initform 0 :type fixnum :accessor physics-world-sensor-counter)
    (velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
    (deltas :initform (make-array 0 :element-type 'single-float) :accessor physics-world-deltas)
    (color-starts :initform (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
@@ -2620,11 +2635,13 @@ invalid-physics-parameter when INSIDE-CELLS is neither that nor :refuse. #M4K3WD
 (defun add-physics-body (world x y z &key (radius 0.25) (mass 1.0) (restitution 0.0) (friction 0.6)
                                        (rolling-resistance 0.0) (vx 0.0) (vy 0.0) (vz 0.0)
                                        life (collide-with-bodies t) report-hits (kind 0)
-                                       (inside-cells :refuse))
+                                       (inside-cells :refuse) (category +default-category+)
+                                       (mask +all-categories+))
   "Add an awake sphere centred at X Y Z to WORLD and return its handle. LIFE, when given, is the
 number of seconds after which it expires. A centre in a solid or non-resident cell is refused
 with physics-body-in-solid-cell, unless INSIDE-CELLS is :push-out: then the body is added and its
-cell's contact pushes it out through the shallowest face whose neighbour is air ([[#MYWH16]]). #M4K3WD"
+cell's contact pushes it out through the shallowest face whose neighbour is air ([[#MYWH16]]).
+CATEGORY and MASK, sets of sixteen bits, choose the bodies and boxes it meets ([[#F1LT3R]]). #M4K3WD"
   (check-idle world 'add-physics-body)
   (let* ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
          (r (finite-f32 :radius radius world)) (m (finite-f32 :mass mass world))
@@ -2643,6 +2660,7 @@ cell's contact pushes it out through the shallowest face whose neighbour is air 
     (when (and mortal (<= life 0))
       (error 'invalid-physics-parameter :world world :name :life :value life :expected "> 0 seconds, or NIL"))
     (unless (typep kind 'fixnum) (error 'invalid-physics-parameter :world world :name :kind :value kind :expected "a fixnum"))
+    (let ((filter (checked-filter world category mask)))
     ;; a body that needs a feature the world left out is refused, not quietly given less
     (multiple-value-bind (e mu rho)
         (checked-material world 'add-physics-body (finite-f32 :restitution restitution world)
@@ -2670,11 +2688,13 @@ cell's contact pushes it out through the shallowest face whose neighbour is air 
               (aref restitution-c row) e (aref friction-c row) mu (aref rolling-resistance-c row) rho
               (aref life-c row) life
               (aref flags row) (logior (if report-hits +flag-report-hits+ 0)
-                                       (if collide-with-bodies 0 +flag-terrain-only+))
+                                       (if collide-with-bodies 0 +flag-terrain-only+)
+                                       (ash filter +flag-filter-shift+))
               (aref handle-c row) handle (aref kind-c row) kind))
       (setf (physics-world-max-radius world) (max (physics-world-max-radius world) r))
+      (note-filter world filter)
       (note-added-body world handle)
-      handle))))
+      handle)))))
 ;; Making a world and adding bodies:1 ends here
 
 ;; [[file:../physics.org::#E7V3NT][Events are rows too:1]]
@@ -2717,12 +2737,13 @@ that kind ([[#FEAT5X][its features]]). #E7V3NT"
 
 (defconstant +event-held-out+ 7 "Event code of :held-out. #E7V3NT")
 
-(defparameter +event-kinds+ #(:begin :end :hit :slept :woke :expired :escaped :held-out)
+(defparameter +event-kinds+ #(:begin :end :hit :slept :woke :expired :escaped :held-out
+                               :sensor-enter :sensor-leave)
   "Event kind keywords by code. #E7V3NT")
 
 (defun map-physics-events (function world)
   "Call FUNCTION on each event of WORLD's last step with the kind (:begin :end :hit :slept
-:woke :expired :escaped :held-out), the two handles (the second -1 when none), the point X Y Z, the approach
+:woke :expired :escaped :held-out :sensor-enter :sensor-leave), the two handles (the second -1 when none), the point X Y Z, the approach
 speed, and the datum (a box's owner, or NIL). #E7V3NT"
   (check-world world 'map-physics-events)
   (check-function world :function function)
@@ -2916,15 +2937,17 @@ how many woke. Call it after editing terrain near bodies. #QKS4GZ"
   "Kinematic boxes posted by the client for the next step. #K1N3BX"
   (min-x single-float) (min-y single-float) (min-z single-float)
   (max-x single-float) (max-y single-float) (max-z single-float)
-  (vx single-float) (vy single-float) (vz single-float) (id fixnum))
+  (vx single-float) (vy single-float) (vz single-float) (id fixnum) (filter fixnum))
 
-(defun post-physics-box (world x y z hx hy hz &key (vx 0) (vy 0) (vz 0) owner)
+(defun post-physics-box (world x y z hx hy hz &key (vx 0) (vy 0) (vz 0) owner
+                                                (category +default-category+) (mask +all-categories+))
   "Post a kinematic box centred at X Y Z with half-extents HX HY HZ, moving at VX VY VZ, for the
 next step only. OWNER, any object, keeps the box's contacts persistent across steps and comes
-back with its hit events. #K1N3BX"
+back with its hit events. CATEGORY and MASK filter the bodies it touches ([[#F1LT3R]]). #K1N3BX"
   (check-idle world 'post-physics-box)
   (require-physics-feature world :boxes 'post-physics-box)
-  (let ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
+  (let ((filter (checked-filter world category mask))
+        (x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
         (hx (finite-f32 :hx hx world)) (hy (finite-f32 :hy hy world)) (hz (finite-f32 :hz hz world))
         (vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world)))
     (flet ((half-extent (name v)
@@ -2939,10 +2962,14 @@ back with its hit events. #K1N3BX"
            (id (if owner
                    (or (gethash owner ids) (setf (gethash owner ids) (1+ (hash-table-count ids))))
                    (logior (ash 1 33) row))))
-      (with-box-columns (min-x min-y min-z max-x max-y max-z (bvx vx) (bvy vy) (bvz vz) (bid id)) boxes
+      (with-box-columns (min-x min-y min-z max-x max-y max-z (bvx vx) (bvy vy) (bvz vz) (bid id)
+                         (bfilter filter))
+          boxes
         (setf (aref min-x row) (- x hx) (aref min-y row) (- y hy) (aref min-z row) (- z hz)
               (aref max-x row) (+ x hx) (aref max-y row) (+ y hy) (aref max-z row) (+ z hz)
-              (aref bvx row) vx (aref bvy row) vy (aref bvz row) vz (aref bid row) id))
+              (aref bvx row) vx (aref bvy row) vy (aref bvz row) vz (aref bid row) id
+              (aref bfilter row) filter))
+      (note-filter world filter)
       (let ((owners (physics-world-box-owners world)))
         (when (>= row (length owners))
           (setf owners (replace (make-array (* 2 (1+ row)) :initial-element nil) owners)
@@ -2957,6 +2984,194 @@ back with its hit events. #K1N3BX"
       (when (= (aref (box-columns-id boxes) b) id)
         (return (svref (physics-world-box-owners world) b))))))
 ;; Kinematic boxes are posted for one step:1 ends here
+
+;; [[file:../physics.org::#F1LT3R][Categories and masks choose who meets whom:1]]
+(declaim (inline filter-word filters-meet-p rows-meet-p))
+(defun filter-word (category mask)
+  "CATEGORY and MASK as one word, each exclusive-ored with its default so that the default filter
+is 0: the category in bits 0 to 15, the mask in bits 16 to 31. #F1LT3R"
+  (declare (type (unsigned-byte 16) category mask))
+  (logior (logxor category +default-category+) (ash (logxor mask +all-categories+) 16)))
+
+(defun filters-meet-p (a b)
+  "True when the bodies or boxes of filter words A and B meet: each belongs to a class the
+other's mask holds. #F1LT3R"
+  (declare (type (unsigned-byte 32) a b) #.+kernel-policy+)
+  (let ((ca (logxor (ldb (byte 16 0) a) +default-category+)) (ma (logxor (ldb (byte 16 16) a) +all-categories+))
+        (cb (logxor (ldb (byte 16 0) b) +default-category+)) (mb (logxor (ldb (byte 16 16) b) +all-categories+)))
+    (and (logtest ca mb) (logtest cb ma))))
+
+(defun rows-meet-p (filtering flags-a flags-b)
+  "True when two rows of body flags FLAGS-A and FLAGS-B meet, or when FILTERING, the world's
+note that some filter is in use, is false. #F1LT3R"
+  (declare (type fixnum flags-a flags-b) #.+kernel-policy+)
+  (or (not filtering)
+      (filters-meet-p (ldb (byte 32 +flag-filter-shift+) flags-a) (ldb (byte 32 +flag-filter-shift+) flags-b))))
+
+(defun checked-filter (world category mask)
+  "The filter word of CATEGORY and MASK, each an integer from 0 to 65535, or an
+invalid-physics-parameter error naming :category or :mask. #F1LT3R"
+  (flet ((one (name value)
+           (unless (typep value '(integer 0 #xFFFF))
+             (error 'invalid-physics-parameter :world world :name name :value value
+                                               :expected "an integer from 0 to 65535 (sixteen class bits)"))))
+    (one :category category)
+    (one :mask mask)
+    (filter-word category mask)))
+
+(defun note-filter (world word)
+  "Turn on WORLD's filtering once a body or box has the filter WORD of its own. #F1LT3R"
+  (unless (zerop word) (setf (physics-world-filtering world) t))
+  word)
+
+(defun physics-body-filter (world handle)
+  "The category and the mask of HANDLE's body, as two values. #F1LT3R"
+  (check-world world 'physics-body-filter)
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (let ((word (ldb (byte 32 +flag-filter-shift+) (aref (body-columns-flags (set-buffer world set)) row))))
+      (values (logxor (ldb (byte 16 0) word) +default-category+)
+              (logxor (ldb (byte 16 16) word) +all-categories+)))))
+
+(defun set-physics-body-filter (world handle &key category mask)
+  "Give HANDLE's body the CATEGORY and MASK given (each kept when not), both checked before
+either is written; wake it and the sleepers within its reach, and have the next step build its
+pair list again, so that pairs that no longer meet lose their contacts there. #F1LT3R"
+  (check-idle world 'set-physics-body-filter)
+  (multiple-value-bind (old-category old-mask) (physics-body-filter world handle)
+    (let* ((word (checked-filter world (or category old-category) (or mask old-mask)))
+           (row (wake-handle world handle))
+           (awake (physics-world-awake world))
+           (sleeping (physics-world-sleeping world)))
+      (setf (ldb (byte 32 +flag-filter-shift+) (aref (body-columns-flags awake) row)) word)
+      (note-filter world word)
+      ;; the pair list's structure is defined with the pair phase, later on the page
+      (locally (declare (notinline (setf pair-list-rows)))
+        (setf (pair-list-rows (physics-world-pair-list world)) -1))
+      ;; the sleepers it touches: woken last row first, so no row moved is visited again
+      (let ((x (aref (body-columns-x awake) row)) (y (aref (body-columns-y awake) row))
+            (z (aref (body-columns-z awake) row))
+            (reach (+ (aref (body-columns-radius awake) row) (f32 (physics-world-margin world)))))
+        (loop for s from (1- (body-columns-length sleeping)) downto 0
+              do (let ((dx (- (aref (body-columns-x sleeping) s) x)) (dy (- (aref (body-columns-y sleeping) s) y))
+                       (dz (- (aref (body-columns-z sleeping) s) z))
+                       (r (+ reach (aref (body-columns-radius sleeping) s))))
+                   (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* r r))
+                     (wake-physics-body world s)))))
+      handle)))
+;; Categories and masks choose who meets whom:1 ends here
+
+;; [[file:../physics.org::#S3NS0R][Sensors report who enters and who leaves:1]]
+(defstruct (physics-sensor (:constructor make-physics-sensor
+                               (id min-x min-y min-z max-x max-y max-z filter owner)))
+  "A lasting sensor box: its id, bounds and filter word, its owner, and the bodies inside it
+(INSIDE, each handle to the step it was last seen inside). #S3NS0R"
+  (id 0 :type fixnum)
+  (min-x 0.0 :type single-float) (min-y 0.0 :type single-float) (min-z 0.0 :type single-float)
+  (max-x 0.0 :type single-float) (max-y 0.0 :type single-float) (max-z 0.0 :type single-float)
+  (filter 0 :type fixnum)
+  (owner nil)
+  (inside (make-hash-table) :type hash-table))
+
+(defconstant +event-sensor-enter+ 8 "Event code of :sensor-enter. #S3NS0R")
+
+(defconstant +event-sensor-leave+ 9 "Event code of :sensor-leave. #S3NS0R")
+
+(defun add-physics-sensor (world x y z hx hy hz &key (category +default-category+)
+                                                  (mask +all-categories+) owner)
+  "Add a lasting sensor box centred at X Y Z with half-extents HX HY HZ, meeting the bodies that
+CATEGORY and MASK meet, and return its id. Its :sensor-enter and :sensor-leave events carry
+OWNER as their datum. #S3NS0R"
+  (check-idle world 'add-physics-sensor)
+  (let ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
+        (hx (finite-f32 :hx hx world)) (hy (finite-f32 :hy hy world)) (hz (finite-f32 :hz hz world)))
+    (flet ((half-extent (name v)
+             (unless (< 0 v 1024)
+               (error 'invalid-physics-parameter :world world :name name :value v :expected "in (0, 1024) m"))))
+      (half-extent :hx hx) (half-extent :hy hy) (half-extent :hz hz))
+    (check-coordinate :x x world) (check-coordinate :y y world) (check-coordinate :z z world)
+    (let* ((filter (checked-filter world category mask))
+           (id (incf (physics-world-sensor-counter world)))
+           (sensor (make-physics-sensor id (- x hx) (- y hy) (- z hz) (+ x hx) (+ y hy) (+ z hz) filter owner)))
+      (note-filter world filter)
+      (setf (slot-value world 'event-mask)
+            (logior (world-event-mask world) (ash 1 +event-sensor-enter+) (ash 1 +event-sensor-leave+))
+            (physics-world-sensors world) (append (physics-world-sensors world) (list sensor)))
+      id)))
+
+(defun find-sensor (world id operation)
+  "The sensor of WORLD whose id is ID, or an invalid-physics-parameter error naming :sensor. #S3NS0R"
+  (or (find id (physics-world-sensors world) :key #'physics-sensor-id)
+      (error 'invalid-physics-parameter :world world :name :sensor :value id
+                                        :expected (format nil "the id of a sensor of this world (~(~A~))" operation))))
+
+(defun remove-physics-sensor (world id)
+  "Remove WORLD's sensor ID, reporting nothing for the bodies inside it. #S3NS0R"
+  (check-idle world 'remove-physics-sensor)
+  (let ((sensor (find-sensor world id 'remove-physics-sensor)))
+    (setf (physics-world-sensors world) (remove sensor (physics-world-sensors world)))
+    id))
+
+(defun physics-sensor-bodies (world id)
+  "The handles of the bodies inside WORLD's sensor ID after the last step, in ascending order. #S3NS0R"
+  (check-world world 'physics-sensor-bodies)
+  (let ((handles '()))
+    (maphash (lambda (h mark) (declare (ignore mark)) (push h handles))
+             (physics-sensor-inside (find-sensor world id 'physics-sensor-bodies)))
+    (sort handles #'<)))
+
+(defun sense-set (world sensor buffer mark filtering)
+  "Mark in SENSOR's set, as seen at step MARK, each body of BUFFER inside it, with a
+:sensor-enter event for each that was not inside before. #S3NS0R"
+  (declare (type physics-sensor sensor) (type body-columns buffer) (type fixnum mark) #.+kernel-policy+)
+  (let ((x0 (physics-sensor-min-x sensor)) (y0 (physics-sensor-min-y sensor)) (z0 (physics-sensor-min-z sensor))
+        (x1 (physics-sensor-max-x sensor)) (y1 (physics-sensor-max-y sensor)) (z1 (physics-sensor-max-z sensor))
+        (word (ash (physics-sensor-filter sensor) +flag-filter-shift+))
+        (inside (physics-sensor-inside sensor)) (id (physics-sensor-id sensor)))
+    (declare (type single-float x0 y0 z0 x1 y1 z1) (type fixnum word id))
+    (with-body-columns (x y z vx vy vz radius flags handle) buffer
+      (dotimes (i (body-columns-length buffer))
+        (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+               (dx (max (- x0 cx) (- cx x1) 0.0)) (dy (max (- y0 cy) (- cy y1) 0.0))
+               (dz (max (- z0 cz) (- cz z1) 0.0)))
+          (declare (type single-float cx cy cz r dx dy dz))
+          (when (and (< (+ (* dx dx) (* dy dy) (* dz dz)) (* r r))
+                     (rows-meet-p filtering (aref flags i) word))
+            (let ((h (aref handle i)))
+              (unless (gethash h inside)
+                (push-event world +event-sensor-enter+ h id cx cy cz
+                            (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                      (* (aref vz i) (aref vz i))))
+                            (physics-sensor-owner sensor)))
+              (setf (gethash h inside) mark))))))))
+
+(defun sense-phase (world)
+  "After a step's phases: each sensor of WORLD, in the order they were added, marks the bodies
+inside it (the awake set, then the sleeping one), reporting those that entered, then reports
+and forgets those no longer inside. #S3NS0R"
+  (let ((mark (physics-world-step-count world)) (filtering (physics-world-filtering world))
+        (ids (physics-world-ids world)))
+    (dolist (sensor (physics-world-sensors world))
+      (let ((inside (physics-sensor-inside sensor)))
+        (sense-set world sensor (physics-world-awake world) mark filtering)
+        (sense-set world sensor (physics-world-sleeping world) mark filtering)
+        (with-hash-table-iterator (next inside)
+          (loop (multiple-value-bind (more h seen) (next)
+                  (unless more (return))
+                  (unless (= seen mark)
+                    (remhash h inside)
+                    (if (handle-status ids h)
+                        (push-event world +event-sensor-leave+ h (physics-sensor-id sensor)
+                                    (* 0.5 (+ (physics-sensor-min-x sensor) (physics-sensor-max-x sensor)))
+                                    (* 0.5 (+ (physics-sensor-min-y sensor) (physics-sensor-max-y sensor)))
+                                    (* 0.5 (+ (physics-sensor-min-z sensor) (physics-sensor-max-z sensor)))
+                                    0.0 (physics-sensor-owner sensor))
+                        (multiple-value-bind (x y z) (physics-body-position world h)
+                          (multiple-value-bind (vx vy vz) (physics-body-velocity world h)
+                            (push-event world +event-sensor-leave+ h (physics-sensor-id sensor) x y z
+                                        (sqrt (+ (* vx vx) (* vy vy) (* vz vz)))
+                                        (physics-sensor-owner sensor)))))))))))
+    world))
+;; Sensors report who enters and who leaves:1 ends here
 
 ;; [[file:../physics.org::#G3NCNT][Contacts are made speculatively:1]]
 (declaim (inline touch-contact))
@@ -3724,7 +3939,9 @@ gap is under the speculative distance. #P41RS7"
          (strays (pair-list-loose-count plist))
          ;; true once a row has taken +overlaps-per-body+ overlapping pairs this step: until
          ;; then overlap-room is true of every pair and is not asked
-         (crowded nil))
+         (crowded nil)
+         ;; true once a body or box has a category or mask of its own ([[#F1LT3R]])
+         (filtering (physics-world-filtering world)))
     (declare (type single-float margin skin cell slop dt gstep rmax threshold) (type index n) (type fixnum strays)
              (type body-columns awake sleeping) (type pair-list plist)
              (type contact-columns contacts) (type contact-table table)
@@ -3780,7 +3997,8 @@ gap is under the speculative distance. #P41RS7"
                       (block walk
                         (do-grid-neighbours (j grid (aref x i) (aref y i) (aref z i))
                           (when (and (zerop (aref loose j))
-                                     (zerop (logand (aref flags j) +flag-terrain-only+)))
+                                     (zerop (logand (aref flags j) +flag-terrain-only+))
+                                     (rows-meet-p filtering (aref flags i) (aref flags j)))
                             (rows i j (when (>= (incf refused) +overlaps-per-body+) (return-from walk)))))))))
                 (when (> strays 1)
                   (let ((lgrid (pair-list-loose-grid plist)) (lx (pair-list-loose-x plist))
@@ -3797,7 +4015,8 @@ gap is under the speculative distance. #P41RS7"
                         (when (zerop (logand (aref flags i) +flag-terrain-only+))
                           (block walk
                             (do-grid-neighbours (j lgrid (aref x i) (aref y i) (aref z i))
-                              (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+)))
+                              (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+))
+                                         (rows-meet-p filtering (aref flags i) (aref flags j)))
                                 (rows i j (when (>= (incf refused) +overlaps-per-body+)
                                             (return-from walk))))))))))))
               ;; build the list again: the half neighbourhood of each body's cell, in the
@@ -3827,7 +4046,8 @@ gap is under the speculative distance. #P41RS7"
                                    (incf (pair-list-examined plist) found)
                                    (dotimes (q found)
                                      (let ((j (aref items (aref near q))))
-                                       (when (zerop (logand (aref flags j) +flag-terrain-only+))
+                                       (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
+                                                  (rows-meet-p filtering (aref flags i) (aref flags j)))
                                          (if (or (not crowded) (overlap-room (pair-list-overlaps plist) i j radius))
                                              (progn (pair-list-push plist i j)
                                                     (pair-of-rows i j))
@@ -3865,6 +4085,7 @@ gap is under the speculative distance. #P41RS7"
                            (= (aref (handle-table-generation ids) slot) (handle-generation h))
                            (let ((row (aref (handle-table-local ids) slot)))
                              (and (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
+                                  (rows-meet-p filtering (aref flags i) (aref (body-columns-flags sleeping) row))
                                   ;; pair-contact's own first test: a pair farther apart than
                                   ;; this touches no contact
                                   (let ((dx (- (aref (body-columns-x sleeping) row) xi))
@@ -4245,11 +4466,13 @@ with the face the ray enters it through. #SW33P7"
          (threshold (f32 (physics-world-restitution-threshold world)))
          (contacts (physics-world-contacts world))
          (table (physics-world-contact-table world))
-         (touched nil))
+         (touched nil)
+         ;; true once a body or box has a category or mask of its own ([[#F1LT3R]])
+         (filtering (physics-world-filtering world)))
     (declare (type single-float margin limit dt gstep threshold))
     (when (plusp (box-columns-length boxes))
-      (with-body-columns (x y z (bvx vx) (bvy vy) (bvz vz) radius handle) awake
-        (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz id) boxes
+      (with-body-columns (x y z (bvx vx) (bvy vy) (bvz vz) radius handle flags) awake
+        (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz id filter) boxes
           (dotimes (b (box-columns-length boxes))
             (let* ((bx0 (aref min-x b)) (by0 (aref min-y b)) (bz0 (aref min-z b))
                    (bx1 (aref max-x b)) (by1 (aref max-y b)) (bz1 (aref max-z b))
@@ -4257,6 +4480,7 @@ with the face the ray enters it through. #SW33P7"
                    (half (max (- bx1 ccx) (- by1 ccy) (- bz1 ccz)))
                    (span (1+ (ceiling (* half (hash-grid-inv-cell grid))))))
               (do-grid-neighbours (i grid ccx ccy ccz :span span)
+               (when (rows-meet-p filtering (aref flags i) (ash (aref filter b) +flag-filter-shift+))
                 (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                        ;; the body's velocity relative to the box, and how far it can travel
                        ;; towards it this step: as against cells ([[#MYWH16]]), a body faster
@@ -4281,7 +4505,7 @@ with the face the ray enters it through. #SW33P7"
                         (inside-face nil cx cy cz r bx0 by0 bz0 bx1 by1 bz1 0 0 0)
                       (setf touched t)
                       (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
-                                     nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b)))))))))))
+                                     nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))))))))))
         ;; the step's squeeze rules look for box rows only when some body touched a box ([[#SQU33Z]])
     (when touched (setf (physics-world-box-touch-step world) (physics-world-step-count world)))
     world))
@@ -6248,6 +6472,9 @@ its step hook, when set, are called after the phases, while the step's boxes are
            (sb-int:with-float-traps-masked (:inexact :underflow)
              (run-physics-phases world))
            (setf (physics-world-undo-open world) nil)
+           ;; the lasting sensors look at the bodies where the step left them ([[#S3NS0R]])
+           (when (physics-world-sensors world)
+             (sb-int:with-float-traps-masked (:inexact :underflow) (sense-phase world)))
            (let ((stats (world-statistics world)))
              (setf (step-statistics-contacts stats) (contact-columns-length (physics-world-contacts world))
                    (step-statistics-real-seconds stats) (* 1d-9 (coerce (the fixnum (- (clock-ns) started)) 'double-float))))

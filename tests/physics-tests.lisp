@@ -1560,8 +1560,8 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
 
 ;; [[file:../physics.org::#L4Y0UT][L4Y0UT-row-bytes-count-every-column]]
 (define-claim "L4Y0UT" row-bytes-count-every-column
-    "Row bytes: body 116, contact 124, event 40, box 44."
-  (check (equal '(116 124 40 44)
+    "Row bytes: body 116, contact 124, event 40, box 52."
+  (check (equal '(116 124 40 52)
                 (list luv-physics::+body-columns-row-bytes+ luv-physics::+contact-columns-row-bytes+
                       luv-physics::+event-columns-row-bytes+ luv-physics::+box-columns-row-bytes+))
          "row bytes ~S"
@@ -2775,6 +2775,231 @@ use before it. #QKS4GZ"
          (x (first (twin-final-position record))))
     (check (and (> x (+ start 2.25)) (> x 5.0)) "the pushed ball ends at x = ~,3F" x)))
 ;; K1N3BX-boxes-push-on-every-axis ends here
+
+;; [[file:../physics.org::#F1LT3R][F1LT3R-filtered-pair-never-touches]]
+(define-claim "F1LT3R" filtered-pair-never-touches
+    "Balls of classes that do not meet pass through each other, bit for bit as when apart, in every family."
+  (flet ((run (family falling resting-x)
+           ;; the falling ball (FALLING its keywords) and the resting one at RESTING-X: each step's
+           ;; state hash and the two balls' bits, the resting one's x less its offset; with the
+           ;; closest the two came and the events between them
+           (let* ((w (make-physics-world :terrain (make-floor-terrain) :kernels family))
+                  (a (apply #'add-physics-body w 3.5 1.5 3.5 falling))
+                  (b (add-physics-body w resting-x 0.25 3.5))
+                  (closest 10.0) (between 0))
+             (flet ((bits (h dx)
+                      (multiple-value-bind (x y z) (physics-body-position w h)
+                        (append (list (- x dx) y z) (multiple-value-list (physics-body-velocity w h))
+                                (multiple-value-list (physics-body-angular-velocity w h))))))
+               (values (loop repeat 300
+                             collect (progn
+                                       (dolist (e (step-events w))
+                                         (when (or (and (= (second e) a) (= (third e) b))
+                                                   (and (= (second e) b) (= (third e) a)))
+                                           (incf between)))
+                                       (setf closest (min closest (abs (- (body-y w a) (body-y w b)))))
+                                       (list (physics-world-state-hash w) (bits a 0.0) (bits b (- resting-x 3.5)))))
+                       closest between (physics-world-sleeping-count w))))))
+    (let ((families (luv-physics::available-kernel-families))
+          (filter (list :category 2 :mask (logandc2 #xFFFF 1))))
+      (check (member :scalar families))
+      (dolist (family families)
+        (multiple-value-bind (through closest between sleeping) (run family filter 3.5)
+          (let ((apart (run family filter 5.5)) (shorthand (run family '(:collide-with-bodies nil) 3.5)))
+            (check (< closest 0.01) "~S: the balls came no closer than ~,4F m" family closest)
+            (check (zerop between) "~S: ~D events between the two" family between)
+            (check (= 2 sleeping) "~S: ~D balls asleep at the end" family sleeping)
+            (check (every (lambda (b a) (equal (rest b) (rest a))) through apart)
+                   "~S: the balls do not move as they do apart" family)
+            (check (every (lambda (b s) (= (first b) (first s))) through shorthand)
+                   "~S: the hashes differ from those of :collide-with-bodies nil" family)))))))
+;; F1LT3R-filtered-pair-never-touches ends here
+
+;; [[file:../physics.org::#F1LT3R][F1LT3R-box-passes-through-a-class]]
+(define-claim "F1LT3R" box-passes-through-a-class
+    "A box whose mask leaves out category 2 walks through a ball of category 2 and pushes a ball of category 1."
+  (let* ((w (make-floor-world :sleep nil))
+         (pushed (add-physics-body w 3.0 0.245 3.0))
+         (ghost (add-physics-body w 3.0 0.245 4.0 :category 2))
+         (box-events 0))
+    (dotimes (i 30) (step-physics-world w))
+    (let ((x-pushed (physics-body-position w pushed)) (x-ghost (physics-body-position w ghost)) (bx 2.0))
+      (dotimes (i 180)
+        (post-physics-box w bx 0.5 3.5 0.25 0.5 1.5 :vx 1.0 :owner :wall :mask (logandc2 #xFFFF 2))
+        (dolist (e (step-events w))
+          (when (and (= (second e) ghost) (eq (fifth e) :wall)) (incf box-events)))
+        (incf bx (/ 1.0 60)))
+      (check (> (- (physics-body-position w pushed) x-pushed) 2.0) "the default ball moved only ~,3F m"
+             (- (physics-body-position w pushed) x-pushed))
+      (check (< (abs (- (physics-body-position w ghost) x-ghost)) 1e-4) "the ball of category 2 moved ~,6F m"
+             (- (physics-body-position w ghost) x-ghost))
+      (check (zerop box-events) "~D events between the box and the ball of category 2" box-events))))
+;; F1LT3R-box-passes-through-a-class ends here
+
+;; [[file:../physics.org::#F1LT3R][F1LT3R-filter-arguments-checked]]
+(define-claim "F1LT3R" filter-arguments-checked
+    "Categories and masks outside 0..65535 are refused by name, leaving the world as it was."
+  (let* ((w (make-floor-world))
+         (h (add-physics-body w 3.5 0.245 3.5))
+         (gone (add-physics-body w 5.5 0.245 3.5)))
+    (remove-physics-body w gone)
+    (step-physics-world w)
+    (let ((before (world-fingerprint w)))
+      (dolist (name '(:category :mask))
+        (dolist (bad (list -1 65536 1.5 :all))
+          (dolist (call (list (lambda () (add-physics-body w 1.5 1.0 1.5 name bad))
+                              (lambda () (post-physics-box w 1.5 1.0 1.5 0.5 0.5 0.5 name bad))
+                              (lambda () (set-physics-body-filter w h name bad))))
+            (check (eq name (handler-case (progn (funcall call) :accepted)
+                              (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+                   "~S ~S was not refused by its name" name bad)
+            (check (equal before (world-fingerprint w)) "a refused ~S changed the world" name)
+            (check (zerop (luv-physics::box-columns-length (luv-physics::physics-world-boxes w))))
+            (check (equal '(1 #xFFFF) (multiple-value-list (physics-body-filter w h))))
+            (check (not (luv-physics::physics-world-filtering w)))
+            (check (validate-physics-world w)))))
+      (check (eq :removed (handler-case (progn (set-physics-body-filter w gone :category 2) :accepted)
+                            (stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e))))))
+    (dolist (good '(0 #xFFFF))
+      (check (add-physics-body w 1.5 1.0 1.5 :category good :mask good))
+      (check (post-physics-box w 1.5 1.0 1.5 0.5 0.5 0.5 :category good :mask good))
+      (check (set-physics-body-filter w h :category good :mask good))
+      (check (equal (list good good) (multiple-value-list (physics-body-filter w h)))))))
+;; F1LT3R-filter-arguments-checked ends here
+
+;; [[file:../physics.org::#F1LT3R][F1LT3R-filtering-off-until-used]]
+(define-claim "F1LT3R" filtering-off-until-used
+    "A world's filtering stays off for default filters and turns on with the first filter of its own."
+  (flet ((world (&rest keys)
+           (let ((w (make-floor-world)))
+             (dotimes (k 4) (apply #'add-physics-body w (+ 2.5 (* 0.3 k)) (+ 0.5 (* 0.6 k)) 3.5 keys))
+             (apply #'post-physics-box w 2.5 0.25 3.5 0.25 0.25 0.25 keys)
+             (dotimes (i 60) (step-physics-world w))
+             w)))
+    (let ((plain (world)) (spelled (world :category 1 :mask #xFFFF)))
+      (check (not (luv-physics::physics-world-filtering (make-physics-world))))
+      (dolist (w (list plain spelled))
+        (check (not (luv-physics::physics-world-filtering w)))
+        (let ((flags (luv-physics::body-columns-flags (luv-physics::physics-world-awake w))))
+          (check (every (lambda (i) (zerop (ldb (byte 32 luv-physics::+flag-filter-shift+) (aref flags i))))
+                        (loop for i below (physics-world-awake-count w) collect i)))))
+      (check (= (physics-world-state-hash plain) (physics-world-state-hash spelled)))
+      (let ((w (make-floor-world)))
+        (add-physics-body w 2.5 0.5 2.5 :category 2)
+        (check (luv-physics::physics-world-filtering w)))
+      (let ((w (make-floor-world)))
+        (post-physics-box w 2.5 0.5 2.5 0.5 0.5 0.5 :mask 6)
+        (check (luv-physics::physics-world-filtering w))))))
+;; F1LT3R-filtering-off-until-used ends here
+
+;; [[file:../physics.org::#F1LT3R][F1LT3R-new-filter-drops-contacts]]
+(define-claim "F1LT3R" new-filter-drops-contacts
+    "A filter set on a stack ends the pair's contact (or wakes the sleeping stack) and lets the upper ball fall through."
+  (dolist (sleep '(nil t))
+    (let* ((w (make-floor-world :sleep sleep))
+           (lower (add-physics-body w 3.5 0.245 3.5))
+           (upper (add-physics-body w 3.5 0.8 3.5))
+           (events '()))
+      (dotimes (i 240) (step-physics-world w))
+      (check (< (abs (- (body-y w upper) 0.735)) 0.01) "the upper ball rests at y = ~,4F" (body-y w upper))
+      (check (eq sleep (not (or (physics-body-awake-p w lower) (physics-body-awake-p w upper))))
+             "sleep ~S: the stack is awake ~S" sleep (physics-body-awake-p w upper))
+      (set-physics-body-filter w lower :mask (logandc2 #xFFFF 1))
+      (check (equal (list 1 (logandc2 #xFFFF 1)) (multiple-value-list (physics-body-filter w lower))))
+      (check (and (physics-body-awake-p w lower) (physics-body-awake-p w upper)) "the stack was not woken")
+      (dotimes (i 120)
+        (loop for (kind a b) in (step-events w)
+              when (and (= (min a b) (min lower upper)) (= (max a b) (max lower upper)))
+                do (push (list i kind) events)))
+      (check (equal events (if sleep '() '((0 :end)))) "sleep ~S: the pair's events ~S" sleep (reverse events))
+      (check (< (abs (- (body-y w upper) (body-y w lower))) 0.002)
+             "the upper ball is ~,4F m above the lower" (- (body-y w upper) (body-y w lower))))))
+;; F1LT3R-new-filter-drops-contacts ends here
+
+;; [[file:../physics.org::#S3NS0R][S3NS0R-rolling-ball-crosses-once]]
+(define-claim "S3NS0R" rolling-ball-crosses-once
+    "A ball rolling at 10/7 m/s across a sensor enters at step 71 and leaves at step 111, once each."
+  (let* ((w (make-floor-world :sleep nil))
+         (h (add-physics-body w 1.5 0.245 3.5 :vx 2.0))
+         (v (/ 10.0 7)) (dt (/ 1.0 60)) (r 0.25) (events '()))
+    (dotimes (i 40) (step-physics-world w))
+    (let* ((x40 (physics-body-position w h))
+           (speed (physics-body-velocity w h))
+           (near (+ x40 r (* v 30.5 dt)))
+           (far (- (+ x40 (* v 70.5 dt)) r))
+           (sensor (add-physics-sensor w (* 0.5 (+ near far)) 0.5 3.5 (* 0.5 (- far near)) 0.5 1.0 :owner :plate)))
+      (check (< (abs (- speed v)) (* 0.005 v)) "the ball rolls at ~,4F m/s, not 10/7" speed)
+      (loop for step from 41 to 200
+            do (loop for (kind a b nil datum) in (step-events w)
+                     when (member kind '(:sensor-enter :sensor-leave))
+                       do (push (list step kind a b datum) events)))
+      (check (equal (reverse events) (list (list 71 :sensor-enter h sensor :plate) (list 111 :sensor-leave h sensor :plate)))
+             "the sensor's events ~S" (reverse events))
+      (check (< (abs (- (physics-body-velocity w h) speed)) 1e-3) "the ball left at ~,4F m/s, entered at ~,4F"
+             (physics-body-velocity w h) speed))))
+;; S3NS0R-rolling-ball-crosses-once ends here
+
+;; [[file:../physics.org::#S3NS0R][S3NS0R-resting-body-enters-once]]
+(define-claim "S3NS0R" resting-body-enters-once
+    "A ball resting on a plate sensor, through sleep, gives one :sensor-enter; masked-out balls give none."
+  (let* ((w (make-floor-world))
+         (h (add-physics-body w 3.5 1.0 3.5))
+         (ghost (add-physics-body w 6.5 1.0 3.5 :category 2))
+         (plate (add-physics-sensor w 3.5 0.1 3.5 0.5 0.1 0.5))
+         (closed (add-physics-sensor w 6.5 0.1 3.5 0.5 0.1 0.5 :mask (logandc2 #xFFFF 2)))
+         (events '()))
+    (loop for step from 1 to 600
+          do (loop for (kind a b) in (step-events w)
+                   when (member kind '(:sensor-enter :sensor-leave))
+                     do (push (list kind a b) events)))
+    (check (equal events (list (list :sensor-enter h plate))) "the sensors' events ~S" (reverse events))
+    (check (not (physics-body-awake-p w h)) "the ball did not fall asleep")
+    (check (< (abs (- (body-y w h) (- 0.25 (luv-physics::physics-world-slop w)))) 5e-4) "the ball rests at y = ~,5F" (body-y w h))
+    (check (equal (list h) (physics-sensor-bodies w plate)))
+    (check (null (physics-sensor-bodies w closed)))
+    (check (< (body-y w ghost) 0.3))
+    (let ((before (sb-ext:get-bytes-consed)))
+      (dotimes (i 60) (step-physics-world w))
+      (check (= before (sb-ext:get-bytes-consed)) "60 steps with the sensors consed ~D bytes"
+             (- (sb-ext:get-bytes-consed) before)))
+    (check (equal (list h) (physics-sensor-bodies w plate)))
+    (remove-physics-body w h)
+    (let ((leaves (loop for (kind a b) in (step-events w)
+                        when (eq kind :sensor-leave) collect (list a b))))
+      (check (equal leaves (list (list h plate))) "leaves ~S" leaves))
+    (check (null (physics-sensor-bodies w plate)))
+    (remove-physics-sensor w plate)
+    (check (eq :sensor (handler-case (progn (physics-sensor-bodies w plate) :known)
+                         (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))))
+;; S3NS0R-resting-body-enters-once ends here
+
+;; [[file:../physics.org::#S3NS0R][S3NS0R-sensor-arguments-checked]]
+(define-claim "S3NS0R" sensor-arguments-checked
+    "Bad half-extents, centres, categories, masks and sensor ids are refused by name, leaving the world as it was."
+  (let* ((w (make-floor-world))
+         (mask (luv-physics::world-event-mask w)))
+    (add-physics-body w 3.5 0.245 3.5)
+    (step-physics-world w)
+    (check (not (logtest mask (ash 3 luv-physics::+event-sensor-enter+))) "a new world records sensor events")
+    (let ((before (world-fingerprint w)))
+      (loop for (name . arguments)
+              in `((:hx 3.5 1.0 3.5 0 0.5 0.5) (:hy 3.5 1.0 3.5 0.5 1024 0.5) (:hz 3.5 1.0 3.5 0.5 0.5 0)
+                   (:x ,+physics-coordinate-limit+ 1.0 3.5 0.5 0.5 0.5)
+                   (:category 3.5 1.0 3.5 0.5 0.5 0.5 :category -1) (:mask 3.5 1.0 3.5 0.5 0.5 0.5 :mask 65536))
+            do (check (eq name (handler-case (progn (apply #'add-physics-sensor w arguments) :accepted)
+                                 (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))
+                      "~S was not refused by its name" arguments)
+               (check (equal before (world-fingerprint w)))
+               (check (null (luv-physics::physics-world-sensors w)))
+               (check (= mask (luv-physics::world-event-mask w)))
+               (check (not (luv-physics::physics-world-filtering w))))
+      (check (eq :sensor (handler-case (progn (remove-physics-sensor w 1) :accepted)
+                           (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+      (check (equal before (world-fingerprint w))))
+    (add-physics-sensor w 3.5 1.0 3.5 0.5 0.5 0.5)
+    (check (logbitp luv-physics::+event-sensor-enter+ (luv-physics::world-event-mask w)))
+    (check (logbitp luv-physics::+event-sensor-leave+ (luv-physics::world-event-mask w)))))
+;; S3NS0R-sensor-arguments-checked ends here
 
 ;; [[file:../physics.org::#G3NCNT][G3NCNT-speculative-distance-bands]]
 (define-claim "G3NCNT" speculative-distance-bands
