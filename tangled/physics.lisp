@@ -6163,6 +6163,8 @@ count of ball positions outside air cells of the resident world or below the flo
 the lowest centre, the walker's final x and y (NIL for :press), the state hash, the fastest
 speed of any ball after any step, the deepest any ball's surface reached into a solid cell and
 into the box (its radius, when the centre lies inside), and whether a centre lay inside the box. #SQU33Z"
+  ;; the walker's structure is defined with the walker, later on the page
+  (declare (notinline physics-player-x physics-player-y))
   (let ((terrain (make-voxel-terrain)))
     (fill-terrain terrain -16 0 -16 16 12 16 nil)
     (fill-terrain terrain -16 -16 -16 16 0 16 t)

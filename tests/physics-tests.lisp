@@ -6602,7 +6602,7 @@ the phases of a step before the prepare phase. #PR3PAR"
     (fill-terrain terrain 0 0 0 16 16 16 nil)
     (fill-terrain terrain 16 0 0 32 16 16 nil)
     (let ((before (luv-physics::voxel-terrain-edits terrain)))
-      (check (string= (format nil "#<VOXEL-TERRAIN 2 chunks resident, ~D edit~:P>" before before)
+      (check (string= (format nil "#<VOXEL-TERRAIN 2 chunks resident, ~D edit~:P>" before)
                       (prin1-to-string terrain))
              "prints ~A" (prin1-to-string terrain))))
   (let* ((w (make-floor-world)) (h (add-physics-body w 1.5 2.0 1.5))
