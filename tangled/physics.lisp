@@ -6862,6 +6862,23 @@ physics-world-invalid naming the first broken invariant. #V4L1D8"
              (mortal (count-if #'plusp (body-columns-life sleeping) :end (body-columns-length sleeping))))
         (unless (= mortal (physics-world-mortal-sleepers world))
           (fail "~D mortal sleepers counted as ~D" mortal (physics-world-mortal-sleepers world))))
+      ;; the forces and gravity scales ([[#F0RC3S]]) cover every slot, a free slot holds neither,
+      ;; no force waits unless one was applied, and the scales other than 1 are counted
+      (let ((pushes (physics-world-pushes world)) (scaled 0))
+        (when pushes
+          (unless (>= (length pushes) (* 4 (handle-table-count ids)))
+            (fail "the pushes cover ~D of ~D handle slots" (floor (length pushes) 4) (handle-table-count ids)))
+          (dotimes (slot (floor (length pushes) 4))
+            (let* ((p (* 4 slot))
+                   (forced (notevery #'zerop (subseq pushes p (+ p 3)))))
+              (when (/= 1.0 (aref pushes (+ p 3))) (incf scaled))
+              (when (and (or (>= slot (handle-table-count ids)) (= (aref sets slot) +set-free+))
+                         (or forced (/= 1.0 (aref pushes (+ p 3)))))
+                (fail "free handle slot ~D holds a force or a gravity scale" slot))
+              (when (and forced (not (physics-world-pushed world)))
+                (fail "handle slot ~D holds a force no call applied" slot)))))
+        (unless (= scaled (physics-world-scaled-count world))
+          (fail "~D gravity scales other than 1 counted as ~D" scaled (physics-world-scaled-count world))))
       t)))
 ;; The validation walker:1 ends here
 
