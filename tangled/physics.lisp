@@ -2932,23 +2932,25 @@ INSIDE-CELLS is :push-out); a refused move changes nothing. #T3LPRT"
 smallest radius. #1MPULS"
   (/ (* 2.0 (f32 (physics-world-max-speed world))) +physics-min-radius+))
 
-(defun check-vector-bound (world name value ax ay az limit expected)
-  "Signal invalid-physics-parameter naming NAME and VALUE, EXPECTED saying what was wanted, unless
-the single-floats AX AY AZ make a vector no longer than LIMIT; each component is bounded first, so
-no square overflows. #1MPULS"
-  (declare (type single-float ax ay az limit))
-  (unless (and (<= (abs ax) limit) (<= (abs ay) limit) (<= (abs az) limit)
-               (<= (+ (* ax ax) (* ay ay) (* az az)) (* limit limit)))
-    (error 'invalid-physics-parameter :world world :name name :value value :expected expected))
-  (values))
+(defmacro check-vector-bound (world name value ax ay az limit expected)
+  "Signal invalid-physics-parameter naming NAME unless the single-floats AX AY AZ make a vector no
+longer than LIMIT; the forms VALUE and EXPECTED, the value refused and what was wanted, are
+evaluated only then, so a call that passes conses nothing. Each component is bounded first, so no
+square overflows. #1MPULS"
+  (let ((x (gensym "X")) (y (gensym "Y")) (z (gensym "Z")) (l (gensym "LIMIT")))
+    `(let ((,x ,ax) (,y ,ay) (,z ,az) (,l ,limit))
+       (declare (type single-float ,x ,y ,z ,l))
+       (unless (and (<= (abs ,x) ,l) (<= (abs ,y) ,l) (<= (abs ,z) ,l)
+                    (<= (+ (* ,x ,x) (* ,y ,y) (* ,z ,z)) (* ,l ,l)))
+         (error 'invalid-physics-parameter :world ,world :name ,name :value ,value :expected ,expected)))))
 
-(defun checked-impulse (world handle jx jy jz &optional point)
+(defun checked-impulse (world handle jx jy jz &optional px py pz)
   "The velocity and angular velocity HANDLE's body would have after the impulse JX JY JZ at its
-centre or at POINT (a list X Y Z), as six single-floats, once every number and both results are
-checked; else the error. #1MPULS"
+centre or, when PX is given, at the point PX PY PZ, as six single-floats, once every number and
+both results are checked; else the error. #1MPULS"
   (let ((jx (finite-f32 :jx jx world)) (jy (finite-f32 :jy jy world)) (jz (finite-f32 :jz jz world))
-        (point (and point (list (finite-f32 :px (first point) world) (finite-f32 :py (second point) world)
-                                (finite-f32 :pz (third point) world)))))
+        (px (and px (finite-f32 :px px world))) (py (and px (finite-f32 :py py world)))
+        (pz (and px (finite-f32 :pz pz world))))
     (multiple-value-bind (set row) (resolve-handle world handle)
       (let* ((b (set-buffer world set))
              (im (aref (body-columns-inverse-mass b) row))
@@ -2963,22 +2965,21 @@ checked; else the error. #1MPULS"
               (wz (aref (body-columns-wz b) row)))
           (check-vector-bound world :impulse (list jx jy jz) vx vy vz top
                               (format nil "an impulse that leaves a speed of at most ~A m/s" top))
-          (when point
-            (destructuring-bind (px py pz) point
-              (check-coordinate :px px world) (check-coordinate :py py world) (check-coordinate :pz pz world)
-              (let* ((rx (- px (aref (body-columns-x b) row))) (ry (- py (aref (body-columns-y b) row)))
-                     (rz (- pz (aref (body-columns-z b) row)))
-                     (reach (+ (aref (body-columns-radius b) row) (f32 (physics-world-slop world))))
-                     (ii (aref (body-columns-inverse-inertia b) row)))
-                (unless (<= (+ (* rx rx) (* ry ry) (* rz rz)) (* reach reach))
-                  (error 'invalid-physics-parameter :world world :name :point :value point
-                                                    :expected (format nil "a point of the body, within ~,4F m of its centre" reach)))
-                (setf wx (+ wx (* ii (- (* ry jz) (* rz jy))))
-                      wy (+ wy (* ii (- (* rz jx) (* rx jz))))
-                      wz (+ wz (* ii (- (* rx jy) (* ry jx)))))
-                (let ((spin (max-spin-for world)))
-                  (check-vector-bound world :angular-velocity (list wx wy wz) wx wy wz spin
-                                      (format nil "an impulse that leaves a spin of at most ~,1F rad/s" spin))))))
+          (when px
+            (check-coordinate :px px world) (check-coordinate :py py world) (check-coordinate :pz pz world)
+            (let* ((rx (- px (aref (body-columns-x b) row))) (ry (- py (aref (body-columns-y b) row)))
+                   (rz (- pz (aref (body-columns-z b) row)))
+                   (reach (+ (aref (body-columns-radius b) row) (f32 (physics-world-slop world))))
+                   (ii (aref (body-columns-inverse-inertia b) row)))
+              (unless (<= (+ (* rx rx) (* ry ry) (* rz rz)) (* reach reach))
+                (error 'invalid-physics-parameter :world world :name :point :value (list px py pz)
+                                                  :expected (format nil "a point of the body, within ~,4F m of its centre" reach)))
+              (setf wx (+ wx (* ii (- (* ry jz) (* rz jy))))
+                    wy (+ wy (* ii (- (* rz jx) (* rx jz))))
+                    wz (+ wz (* ii (- (* rx jy) (* ry jx)))))
+              (let ((spin (max-spin-for world)))
+                (check-vector-bound world :angular-velocity (list wx wy wz) wx wy wz spin
+                                    (format nil "an impulse that leaves a spin of at most ~,1F rad/s" spin)))))
           (values vx vy vz wx wy wz))))))
 
 (defun write-body-motion (world handle vx vy vz wx wy wz)
@@ -3006,7 +3007,7 @@ the body. A point farther from the centre than the radius and the slop is refuse
 a spin left beyond the limit naming :angular-velocity, and nothing changes. #1MPULS"
   (check-idle world 'apply-physics-impulse-at)
   (multiple-value-call #'write-body-motion world handle
-    (checked-impulse world handle jx jy jz (list px py pz))))
+    (checked-impulse world handle jx jy jz px py pz)))
 
 (defun set-physics-body-angular-velocity (world handle wx wy wz)
   "Set the angular velocity of HANDLE's body, rad/s about the world's axes, waking it; a spin over
@@ -3656,13 +3657,16 @@ Return 0. #W4K3PH"
   0)
 
 (defun note-added-body (world handle)
-  "Remember that HANDLE's body was added since the last step, for the wake phase. #W4K3PH"
-  (let ((added (physics-world-added world)) (count (physics-world-added-count world)))
-    (declare (type fixnum-column added) (type fixnum count))
-    (setf added (fixnum-room added (1+ count) :least 16) (physics-world-added world) added)
-    (setf (aref added count) handle
-          (physics-world-added-count world) (1+ count))
-    handle))
+  "Remember that HANDLE's body was added (or moved, [[#T3LPRT]]) since the last step, for the wake
+phase. A world that never sleeps has no wake phase to read and empty the list, and notes
+nothing. #W4K3PH"
+  (when (physics-world-sleep-enabled world)
+    (let ((added (physics-world-added world)) (count (physics-world-added-count world)))
+      (declare (type fixnum-column added) (type fixnum count))
+      (setf added (fixnum-room added (1+ count) :least 16) (physics-world-added world) added)
+      (setf (aref added count) handle
+            (physics-world-added-count world) (1+ count))))
+  handle)
 ;; Fast bodies and moving boxes wake what they reach:1 ends here
 
 ;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:1]]

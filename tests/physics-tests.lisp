@@ -3076,6 +3076,30 @@ use before it. #QKS4GZ"
           (check (= (first got) (first scalar)) "~(~A~) ends with hash ~D, scalar ~D" family (first got) (first scalar)))))))
 ;; F0RC3S-families-agree-on-pushes ends here
 
+;; [[file:../physics.org::#F0RC3S][F0RC3S-acting-conses-nothing]]
+(define-claim "F0RC3S" acting-conses-nothing
+    "Forces, impulses, spins, scales and teleports of 100 balls, and the steps after them, cons nothing."
+  (dolist (sleep '(nil t))
+    (let* ((w (make-physics-world :gravity '(0 -9.81 0) :sleep sleep))
+           (balls (loop for i below 100 collect (add-physics-body w (* 1.0 i) 50.0 0.0 :gravity-scale 0.5))))
+      (flet ((round-of-calls ()
+               (dolist (h balls)
+                 (multiple-value-bind (x y z) (physics-body-position w h)
+                   (apply-physics-force w h 1.0 0.0 0.0)
+                   (apply-physics-impulse w h 0.0 0.01 0.0)
+                   (apply-physics-impulse-at w h 0.0 0.0 0.01 (+ x 0.2) y z)
+                   (set-physics-body-angular-velocity w h 0.0 1.0 0.0)
+                   (set-physics-body-gravity-scale w h 0.5)
+                   (set-physics-body-position w h x (+ y 0.001) z)))
+               (step-physics-world w)))
+        (dotimes (i 5) (round-of-calls))
+        (let ((bytes (sb-ext:get-bytes-consed)))
+          (dotimes (i 20) (round-of-calls))
+          (check (= bytes (sb-ext:get-bytes-consed)) "with sleep ~S, 20 rounds of calls and steps consed ~D bytes"
+                 sleep (- (sb-ext:get-bytes-consed) bytes))))
+      (check (eq t (validate-physics-world w))))))
+;; F0RC3S-acting-conses-nothing ends here
+
 ;; [[file:../physics.org::#F0RC3S][F0RC3S-walker-checks-pushes]]
 (define-claim "F0RC3S" walker-checks-pushes
     "validate-physics-world signals on a miscounted scale, a free slot's push, a spent force left, short pushes."
