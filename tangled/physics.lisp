@@ -86,7 +86,12 @@
    #:physics-scene-seconds #:physics-scene-moments #:physics-scene-text #:find-physics-scene
    #:make-scene-world #:physics-world-handles #:unknown-physics-scene #:invalid-physics-scene-clause
    ;; Features: a world pays only for what it uses (#FEAT5X)
-   #:physics-world-features #:physics-feature-omitted #:set-physics-body-material))
+   #:physics-world-features #:physics-feature-omitted #:set-physics-body-material
+   ;; Acting on bodies: a new place, impulses and spin, forces and gravity scales (#T3LPRT, #1MPULS, #F0RC3S)
+   #:set-physics-body-position #:apply-physics-impulse #:apply-physics-impulse-at
+   #:set-physics-body-angular-velocity #:apply-physics-force #:physics-body-force
+   #:set-physics-body-gravity-scale #:physics-body-gravity-scale
+   #:+physics-max-acceleration+ #:+physics-max-gravity-scale+))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -2189,7 +2194,7 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +physics-features+
     '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :mortal
-      :hit-events :contact-events :expiry-events :sleep-events)
+      :hit-events :contact-events :expiry-events :sleep-events :forces)
     "Every feature a world may use ([[#FEAT5X]]), in the order physics-world-features lists them. #W0RLD7"))
 
 (defconstant +solver-stride+ 8
@@ -2310,6 +2315,10 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (mortal-sleepers :initform 0 :type fixnum :accessor physics-world-mortal-sleepers)
    (added :initform (make-array 16 :element-type 'fixnum :initial-element 0) :accessor physics-world-added)
    (added-count :initform 0 :type fixnum :accessor physics-world-added-count)
+   ;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
+   (pushes :initform nil :type (or null f32-column) :accessor physics-world-pushes)
+   (pushed :initform nil :accessor physics-world-pushed)
+   (scaled-count :initform 0 :type fixnum :accessor physics-world-scaled-count)
    (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
    (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
    (substeps :initarg :substeps :type fixnum :accessor physics-world-substeps)
@@ -2636,12 +2645,13 @@ invalid-physics-parameter when INSIDE-CELLS is neither that nor :refuse. #M4K3WD
                                        (rolling-resistance 0.0) (vx 0.0) (vy 0.0) (vz 0.0)
                                        life (collide-with-bodies t) report-hits (kind 0)
                                        (inside-cells :refuse) (category +default-category+)
-                                       (mask +all-categories+))
+                                       (mask +all-categories+) (gravity-scale 1.0))
   "Add an awake sphere centred at X Y Z to WORLD and return its handle. LIFE, when given, is the
 number of seconds after which it expires. A centre in a solid or non-resident cell is refused
 with physics-body-in-solid-cell, unless INSIDE-CELLS is :push-out: then the body is added and its
 cell's contact pushes it out through the shallowest face whose neighbour is air ([[#MYWH16]]).
-CATEGORY and MASK, sets of sixteen bits, choose the bodies and boxes it meets ([[#F1LT3R]]). #M4K3WD"
+CATEGORY and MASK, sets of sixteen bits, choose the bodies and boxes it meets ([[#F1LT3R]]).
+GRAVITY-SCALE multiplies the world's gravity for this body alone ([[#F0RC3S]]). #M4K3WD"
   (check-idle world 'add-physics-body)
   (let* ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world))
          (r (finite-f32 :radius radius world)) (m (finite-f32 :mass mass world))
@@ -2660,6 +2670,7 @@ CATEGORY and MASK, sets of sixteen bits, choose the bodies and boxes it meets ([
     (when (and mortal (<= life 0))
       (error 'invalid-physics-parameter :world world :name :life :value life :expected "> 0 seconds, or NIL"))
     (unless (typep kind 'fixnum) (error 'invalid-physics-parameter :world world :name :kind :value kind :expected "a fixnum"))
+    (setf gravity-scale (checked-gravity-scale world 'add-physics-body gravity-scale))
     (let ((filter (checked-filter world category mask)))
     ;; a body that needs a feature the world left out is refused, not quietly given less
     (multiple-value-bind (e mu rho)
@@ -2693,6 +2704,7 @@ CATEGORY and MASK, sets of sixteen bits, choose the bodies and boxes it meets ([
               (aref handle-c row) handle (aref kind-c row) kind))
       (setf (physics-world-max-radius world) (max (physics-world-max-radius world) r))
       (note-filter world filter)
+      (note-gravity-scale world handle gravity-scale)
       (note-added-body world handle)
       handle)))))
 ;; Making a world and adding bodies:1 ends here
@@ -2828,6 +2840,7 @@ undo log too (roll-back-step). #QKS4GZ"
     (incf (physics-world-rows-version world))
     (when (>= moved 0)
       (setf (aref (handle-table-local ids) (handle-index (aref (body-columns-handle buffer) row))) row))
+    (when (physics-world-pushes world) (forget-pushes world handle))
     (handle-table-release ids handle)
     handle))
 
@@ -2915,11 +2928,15 @@ and kernel family not. As a second value, each slot's share, largest first, as a
   "Wake every sleeping body of WORLD whose surface lies within RADIUS of point X Y Z; return
 how many woke. Call it after editing terrain near bodies. #QKS4GZ"
   (check-idle world 'wake-physics-bodies-near)
-  (let ((x (check-coordinate :x (finite-f32 :x x world) world))
-        (y (check-coordinate :y (finite-f32 :y y world) world))
-        (z (check-coordinate :z (finite-f32 :z z world) world))
-        (radius (ranged-f32 :radius radius 0 (* 2 +physics-coordinate-limit+) world))
-        (s (physics-world-sleeping world)) (count 0))
+  (wake-sleepers-near world (check-coordinate :x (finite-f32 :x x world) world)
+                      (check-coordinate :y (finite-f32 :y y world) world)
+                      (check-coordinate :z (finite-f32 :z z world) world)
+                      (ranged-f32 :radius radius 0 (* 2 +physics-coordinate-limit+) world)))
+
+(defun wake-sleepers-near (world x y z radius)
+  "Wake every sleeping body of WORLD whose surface lies within RADIUS of the point X Y Z, numbers
+already checked; return how many woke. #QKS4GZ"
+  (let ((s (physics-world-sleeping world)) (count 0))
     (loop with row = (1- (body-columns-length s))
           while (>= row 0)
           do (with-body-columns ((sx x) (sy y) (sz z) (r radius)) s
@@ -2931,6 +2948,296 @@ how many woke. Call it after editing terrain near bodies. #QKS4GZ"
              (decf row))
     count))
 ;; Sleep is relocation; boxes, throws and edits wake:1 ends here
+
+;; [[file:../physics.org::#T3LPRT][A body moved by hand: teleporting:1]]
+(defun drop-body-contacts (world handle)
+  "Drop every contact of HANDLE's body from WORLD, a touching one with the :end event pruning gives
+it, and wake the sleeping body on the other side of each contact between two bodies; return how
+many contacts were dropped. #T3LPRT"
+  (let ((contacts (physics-world-contacts world))
+        (table (physics-world-contact-table world))
+        (ids (physics-world-ids world))
+        (dropped 0))
+    (declare (type fixnum dropped))
+    (loop for row of-type fixnum from (1- (contact-columns-length contacts)) downto 0
+          do (with-contact-columns (key kind handle-a handle-b touching geometry) contacts
+               (let* ((a (aref handle-a row)) (b (aref handle-b row))
+                      (pair (= (aref kind row) +contact-pair+)))
+                 (when (or (= a handle) (and pair (= b handle)))
+                   (let ((other (if (= a handle) b a)))
+                     (when (and pair (null (handle-status ids other))
+                                (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))
+                       (wake-handle world other)))
+                   (when (= (aref touching row) 1)
+                     (push-event world +event-end+ a b (contact@ geometry row px) (contact@ geometry row py)
+                                 (contact@ geometry row pz) 0.0))
+                   (contact-table-delete table (aref key row))
+                   (let ((moved (contact-columns-swap-remove contacts row)))
+                     (when (>= moved 0) (contact-table-put table (aref key row) row)))
+                   (incf dropped)))))
+    dropped))
+
+(defun set-physics-body-position (world handle x y z &key (inside-cells :refuse))
+  "Move the centre of HANDLE's body to X Y Z, keeping its velocity and spin, and wake it; the
+sleepers within its reach where it was wake too, and its contacts are dropped. A centre in a solid
+or non-resident cell is refused as add-physics-body refuses one (physics-body-in-solid-cell, unless
+INSIDE-CELLS is :push-out); a refused move changes nothing. #T3LPRT"
+  (check-idle world 'set-physics-body-position)
+  (let ((x (finite-f32 :x x world)) (y (finite-f32 :y y world)) (z (finite-f32 :z z world)))
+    (multiple-value-bind (set row) (resolve-handle world handle)
+      (check-coordinate :x x world) (check-coordinate :y y world) (check-coordinate :z z world)
+      (check-centre-in-air world 'set-physics-body-position x y z inside-cells)
+      (let* ((buffer (set-buffer world set))
+             (ox (aref (body-columns-x buffer) row)) (oy (aref (body-columns-y buffer) row))
+             (oz (aref (body-columns-z buffer) row))
+             (reach (+ (aref (body-columns-radius buffer) row) (f32 (physics-world-margin world)))))
+        (wake-handle world handle)
+        (wake-sleepers-near world ox oy oz reach)
+        (drop-body-contacts world handle)
+        ;; waking others appends rows: the body's row is read again
+        (let ((row (nth-value 1 (resolve-handle world handle))))
+          (with-body-columns ((bx x) (by y) (bz z) sleep-time flags) (physics-world-awake world)
+            (setf (aref bx row) x (aref by row) y (aref bz row) z (aref sleep-time row) 0.0
+                  (aref flags row) (logandc2 (aref flags row) (logior +flag-braced+ +flag-column-steps+)))))
+        (incf (physics-world-rows-version world))
+        (note-added-body world handle)
+        (values)))))
+;; A body moved by hand: teleporting:1 ends here
+
+;; [[file:../physics.org::#1MPULS][Impulses and spin given by hand:1]]
+(defun max-spin-for (world)
+  "The largest angular speed, rad/s, a body of WORLD may be given: twice its top speed over the
+smallest radius. #1MPULS"
+  (/ (* 2.0 (f32 (physics-world-max-speed world))) +physics-min-radius+))
+
+(defmacro check-vector-bound (world name value ax ay az limit expected)
+  "Signal invalid-physics-parameter naming NAME unless the single-floats AX AY AZ make a vector no
+longer than LIMIT; the forms VALUE and EXPECTED, the value refused and what was wanted, are
+evaluated only then, so a call that passes conses nothing. Each component is bounded first, so no
+square overflows. #1MPULS"
+  (let ((x (gensym "X")) (y (gensym "Y")) (z (gensym "Z")) (l (gensym "LIMIT")))
+    `(let ((,x ,ax) (,y ,ay) (,z ,az) (,l ,limit))
+       (declare (type single-float ,x ,y ,z ,l))
+       (unless (and (<= (abs ,x) ,l) (<= (abs ,y) ,l) (<= (abs ,z) ,l)
+                    (<= (+ (* ,x ,x) (* ,y ,y) (* ,z ,z)) (* ,l ,l)))
+         (error 'invalid-physics-parameter :world ,world :name ,name :value ,value :expected ,expected)))))
+
+(defun checked-impulse (world handle jx jy jz &optional px py pz)
+  "The velocity and angular velocity HANDLE's body would have after the impulse JX JY JZ at its
+centre or, when PX is given, at the point PX PY PZ, as six single-floats, once every number and
+both results are checked; else the error. #1MPULS"
+  (let ((jx (finite-f32 :jx jx world)) (jy (finite-f32 :jy jy world)) (jz (finite-f32 :jz jz world))
+        (px (and px (finite-f32 :px px world))) (py (and px (finite-f32 :py py world)))
+        (pz (and px (finite-f32 :pz pz world))))
+    (multiple-value-bind (set row) (resolve-handle world handle)
+      (let* ((b (set-buffer world set))
+             (im (aref (body-columns-inverse-mass b) row))
+             (top (f32 (physics-world-max-speed world)))
+             (jmax (/ (* 2.0 top) im)))
+        (check-vector-bound world :impulse (list jx jy jz) jx jy jz jmax
+                            (format nil "at most ~,1F N s: twice the top speed times the mass" jmax))
+        (let ((vx (+ (aref (body-columns-vx b) row) (* jx im)))
+              (vy (+ (aref (body-columns-vy b) row) (* jy im)))
+              (vz (+ (aref (body-columns-vz b) row) (* jz im)))
+              (wx (aref (body-columns-wx b) row)) (wy (aref (body-columns-wy b) row))
+              (wz (aref (body-columns-wz b) row)))
+          (check-vector-bound world :impulse (list jx jy jz) vx vy vz top
+                              (format nil "an impulse that leaves a speed of at most ~A m/s" top))
+          (when px
+            (check-coordinate :px px world) (check-coordinate :py py world) (check-coordinate :pz pz world)
+            (let* ((rx (- px (aref (body-columns-x b) row))) (ry (- py (aref (body-columns-y b) row)))
+                   (rz (- pz (aref (body-columns-z b) row)))
+                   (reach (+ (aref (body-columns-radius b) row) (f32 (physics-world-slop world))))
+                   (ii (aref (body-columns-inverse-inertia b) row)))
+              (unless (<= (+ (* rx rx) (* ry ry) (* rz rz)) (* reach reach))
+                (error 'invalid-physics-parameter :world world :name :point :value (list px py pz)
+                                                  :expected (format nil "a point of the body, within ~,4F m of its centre" reach)))
+              (setf wx (+ wx (* ii (- (* ry jz) (* rz jy))))
+                    wy (+ wy (* ii (- (* rz jx) (* rx jz))))
+                    wz (+ wz (* ii (- (* rx jy) (* ry jx)))))
+              (let ((spin (max-spin-for world)))
+                (check-vector-bound world :angular-velocity (list wx wy wz) wx wy wz spin
+                                    (format nil "an impulse that leaves a spin of at most ~,1F rad/s" spin)))))
+          (values vx vy vz wx wy wz))))))
+
+(defun write-body-motion (world handle vx vy vz wx wy wz)
+  "Wake HANDLE's body and give it the velocity VX VY VZ and the angular velocity WX WY WZ, with none
+of its time to sleep counted. #1MPULS"
+  (let ((row (wake-handle world handle)))
+    (with-body-columns ((bvx vx) (bvy vy) (bvz vz) (bwx wx) (bwy wy) (bwz wz) sleep-time)
+        (physics-world-awake world)
+      (setf (aref bvx row) vx (aref bvy row) vy (aref bvz row) vz
+            (aref bwx row) wx (aref bwy row) wy (aref bwz row) wz (aref sleep-time row) 0.0)))
+  (values))
+
+(defun apply-physics-impulse (world handle jx jy jz)
+  "Give HANDLE's body the impulse JX JY JZ, N s, at its centre: its velocity gains J/m. Wake the
+body. A component beyond twice the top speed times the mass, or a velocity left beyond the top
+speed, is refused naming :impulse, and nothing changes. #1MPULS"
+  (check-idle world 'apply-physics-impulse)
+  (multiple-value-call #'write-body-motion world handle
+    (checked-impulse world handle jx jy jz)))
+
+(defun apply-physics-impulse-at (world handle jx jy jz px py pz)
+  "Give HANDLE's body the impulse JX JY JZ, N s, at the point PX PY PZ of the body: its velocity
+gains J/m and its angular velocity I^-1 (r x J), r the point less the centre, I = 2/5 m r^2. Wake
+the body. A point farther from the centre than the radius and the slop is refused naming :point,
+a spin left beyond the limit naming :angular-velocity, and nothing changes. #1MPULS"
+  (check-idle world 'apply-physics-impulse-at)
+  (multiple-value-call #'write-body-motion world handle
+    (checked-impulse world handle jx jy jz px py pz)))
+
+(defun set-physics-body-angular-velocity (world handle wx wy wz)
+  "Set the angular velocity of HANDLE's body, rad/s about the world's axes, waking it; a spin over
+twice the top speed over the smallest radius is refused naming :angular-velocity. #1MPULS"
+  (check-idle world 'set-physics-body-angular-velocity)
+  (let ((wx (finite-f32 :wx wx world)) (wy (finite-f32 :wy wy world)) (wz (finite-f32 :wz wz world)))
+    (resolve-handle world handle)
+    (let ((spin (max-spin-for world)))
+      (check-vector-bound world :angular-velocity (list wx wy wz) wx wy wz spin
+                          (format nil "a spin of at most ~,1F rad/s" spin)))
+    (multiple-value-bind (vx vy vz) (physics-body-velocity world handle)
+      (write-body-motion world handle vx vy vz wx wy wz))))
+;; Impulses and spin given by hand:1 ends here
+
+;; [[file:../physics.org::#F0RC3S][Forces for the next step, and gravity by the body:1]]
+(defconstant +physics-max-acceleration+ 1000000.0
+  "Largest acceleration, m/s², along each axis and in length, that the forces applied to a body
+for one step may give it. #F0RC3S")
+
+(defconstant +physics-max-gravity-scale+ 100.0
+  "Largest magnitude of a body's gravity scale. #F0RC3S")
+
+(defun ensure-pushes (world)
+  "WORLD's pushes, made or grown to cover every slot of its handle table: four floats a slot, the
+force's x y z and the gravity scale, 0 0 0 1 for a slot none has set. #F0RC3S"
+  (let ((need (* 4 (length (handle-table-set (physics-world-ids world)))))
+        (old (physics-world-pushes world)))
+    (if (and old (>= (length old) need))
+        old
+        (let ((new (make-array need :element-type 'single-float :initial-element 0.0)))
+          (loop for p from 3 below need by 4 do (setf (aref new p) 1.0))
+          (when old (replace new old))
+          (setf (physics-world-pushes world) new)))))
+
+(defun checked-pushes (world)
+  "WORLD's pushes, once they are seen to cover every slot its handle table has opened, which the
+pushed integration reads without checks; else physics-world-invalid. #F0RC3S"
+  (let ((pushes (physics-world-pushes world)))
+    (unless (and pushes (>= (length pushes) (* 4 (handle-table-count (physics-world-ids world)))))
+      (error 'physics-world-invalid :world world :invariant "the pushes cover every handle slot"))
+    pushes))
+
+(declaim (inline pushes-live-p))
+(defun pushes-live-p (world)
+  "True when WORLD's next substeps have a force to apply or a gravity scale other than 1. #F0RC3S"
+  (and (physics-world-pushes world)
+       (or (physics-world-pushed world) (plusp (physics-world-scaled-count world)))))
+
+(defun checked-gravity-scale (world operation scale)
+  "SCALE as a single-float of magnitude at most +physics-max-gravity-scale+, given to OPERATION,
+once WORLD is seen to have :forces when it is not 1; else the error. #F0RC3S"
+  (let ((s (ranged-f32 :gravity-scale scale (- +physics-max-gravity-scale+) +physics-max-gravity-scale+ world)))
+    (unless (= s 1.0) (require-physics-feature world :forces operation))
+    s))
+
+(defun note-gravity-scale (world handle scale)
+  "Give HANDLE's slot the gravity SCALE, counting the scales that are not 1; a world that has no
+pushes and is given 1 is left without. #F0RC3S"
+  (when (or (physics-world-pushes world) (/= scale 1.0))
+    (let* ((pushes (ensure-pushes world))
+           (p (+ 3 (* 4 (handle-index handle))))
+           (old (aref pushes p)))
+      (incf (physics-world-scaled-count world) (- (if (= scale 1.0) 0 1) (if (= old 1.0) 0 1)))
+      (setf (aref pushes p) scale)))
+  (values))
+
+(defun forget-pushes (world handle)
+  "Set HANDLE's slot back to no force and a gravity scale of 1, as its body goes. #F0RC3S"
+  (note-gravity-scale world handle 1.0)
+  (let ((pushes (physics-world-pushes world)) (p (* 4 (handle-index handle))))
+    (setf (aref pushes p) 0.0 (aref pushes (+ p 1)) 0.0 (aref pushes (+ p 2)) 0.0))
+  (values))
+
+(defun clear-physics-forces (world)
+  "Spend the forces WORLD's last step applied: every slot's force back to zero. #F0RC3S"
+  (let ((pushes (physics-world-pushes world)))
+    (declare (type f32-column pushes))
+    (loop for p of-type index from 0 below (length pushes) by 4
+          do (setf (aref pushes p) 0.0 (aref pushes (+ p 1)) 0.0 (aref pushes (+ p 2)) 0.0))
+    (setf (physics-world-pushed world) nil)))
+
+(defun integrate-pushed-velocities-range (v pushes handles inverse-mass start end h gx gy gz max-speed)
+  "Add to velocity rows START..END of V, over H, gravity times each body's gravity scale and its
+force times its inverse mass, read from PUSHES at the slot of its handle in HANDLES, and clamp their
+speed to MAX-SPEED. #F0RC3S"
+  (declare (type f32-column v pushes inverse-mass) (type fixnum-column handles) (type index start end)
+           (type single-float h gx gy gz max-speed) #.+kernel-policy+)
+  (let ((max2 (* max-speed max-speed)))
+    (loop for i of-type index from start below end
+          for o of-type index = (solver-row i)
+          for p of-type index = (* 4 (handle-index (aref handles i)))
+          do (let* ((s (aref pushes (+ p 3))) (im (aref inverse-mass i))
+                    (x (+ (aref v o) (* h (+ (* s gx) (* im (aref pushes p))))))
+                    (y (+ (aref v (+ o 1)) (* h (+ (* s gy) (* im (aref pushes (+ p 1)))))))
+                    (z (+ (aref v (+ o 2)) (* h (+ (* s gz) (* im (aref pushes (+ p 2)))))))
+                    (s2 (+ (* x x) (* y y) (* z z))))
+               (when (> s2 max2)
+                 (let ((k (/ max-speed (fsqrt s2))))
+                   (setf x (* x k) y (* y k) z (* z k))))
+               (setf (aref v o) x (aref v (+ o 1)) y (aref v (+ o 2)) z)))))
+
+(defun apply-physics-force (world handle fx fy fz)
+  "Add the force FX FY FZ, N, to what HANDLE's body is given for the next step, and wake it; the
+step applies the sum in every substep, as it applies gravity, and then spends it. A sum beyond
++physics-max-acceleration+ times the mass is refused naming :force, and nothing changes. #F0RC3S"
+  (check-idle world 'apply-physics-force)
+  (let ((fx (finite-f32 :fx fx world)) (fy (finite-f32 :fy fy world)) (fz (finite-f32 :fz fz world)))
+    (multiple-value-bind (set row) (resolve-handle world handle)
+      (require-physics-feature world :forces 'apply-physics-force)
+      (let* ((limit (/ +physics-max-acceleration+ (aref (body-columns-inverse-mass (set-buffer world set)) row)))
+             (old (physics-world-pushes world))
+             (p (* 4 (handle-index handle)))
+             ;; a finite component refused below is under 3.4e38, and what it is added to under 1e11
+             (sx (if old (+ fx (aref old p)) fx))
+             (sy (if old (+ fy (aref old (+ p 1))) fy))
+             (sz (if old (+ fz (aref old (+ p 2))) fz)))
+        (check-vector-bound world :force (list fx fy fz) sx sy sz limit
+                            (format nil "a force that, with those given since the last step, is at most ~,1F N" limit))
+        (let ((pushes (ensure-pushes world)))
+          (setf (aref pushes p) sx (aref pushes (+ p 1)) sy (aref pushes (+ p 2)) sz
+                (physics-world-pushed world) t))
+        (wake-handle world handle)
+        (values)))))
+
+(defun physics-body-force (world handle)
+  "The force, N, HANDLE's body has been given for the next step, as three values. #F0RC3S"
+  (check-world world 'physics-body-force)
+  (resolve-handle world handle)
+  (let ((pushes (physics-world-pushes world)) (p (* 4 (handle-index handle))))
+    (if pushes
+        (values (aref pushes p) (aref pushes (+ p 1)) (aref pushes (+ p 2)))
+        (values 0.0 0.0 0.0))))
+
+(defun set-physics-body-gravity-scale (world handle scale)
+  "Make HANDLE's body feel SCALE times the world's gravity from the next step on, and wake it. A
+scale beyond +physics-max-gravity-scale+ in magnitude is refused naming :gravity-scale, and one
+other than 1 in a world without :forces with physics-feature-omitted. #F0RC3S"
+  (check-idle world 'set-physics-body-gravity-scale)
+  (resolve-handle world handle)
+  (let ((s (checked-gravity-scale world 'set-physics-body-gravity-scale scale)))
+    (note-gravity-scale world handle s)
+    (let ((row (wake-handle world handle)))
+      (setf (aref (body-columns-sleep-time (physics-world-awake world)) row) 0.0))
+    (values)))
+
+(defun physics-body-gravity-scale (world handle)
+  "The gravity scale of HANDLE's body: 1 unless it was given another. #F0RC3S"
+  (check-world world 'physics-body-gravity-scale)
+  (resolve-handle world handle)
+  (let ((pushes (physics-world-pushes world)))
+    (if pushes (aref pushes (+ 3 (* 4 (handle-index handle)))) 1.0)))
+;; Forces for the next step, and gravity by the body:1 ends here
 
 ;; [[file:../physics.org::#K1N3BX][Kinematic boxes are posted for one step:1]]
 (define-physics-layout box-columns
@@ -3622,13 +3929,16 @@ Return 0. #W4K3PH"
   0)
 
 (defun note-added-body (world handle)
-  "Remember that HANDLE's body was added since the last step, for the wake phase. #W4K3PH"
-  (let ((added (physics-world-added world)) (count (physics-world-added-count world)))
-    (declare (type fixnum-column added) (type fixnum count))
-    (setf added (fixnum-room added (1+ count) :least 16) (physics-world-added world) added)
-    (setf (aref added count) handle
-          (physics-world-added-count world) (1+ count))
-    handle))
+  "Remember that HANDLE's body was added (or moved, [[#T3LPRT]]) since the last step, for the wake
+phase. A world that never sleeps has no wake phase to read and empty the list, and notes
+nothing. #W4K3PH"
+  (when (physics-world-sleep-enabled world)
+    (let ((added (physics-world-added world)) (count (physics-world-added-count world)))
+      (declare (type fixnum-column added) (type fixnum count))
+      (setf added (fixnum-room added (1+ count) :least 16) (physics-world-added world) added)
+      (setf (aref added count) handle
+            (physics-world-added-count world) (1+ count))))
+  handle)
 ;; Fast bodies and moving boxes wake what they reach:1 ends here
 
 ;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:1]]
@@ -5740,10 +6050,17 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 
 ;; [[file:../physics.org::#SC4L4R][The scalar family:1]]
 (defmethod physics-integrate-velocities ((kernels scalar-kernels) world h)
-  (integrate-velocities-range (physics-world-velocities world) 0
-                              (body-columns-length (physics-world-awake world)) h
-                              (physics-world-gravity-x world) (physics-world-gravity-y world)
-                              (physics-world-gravity-z world) (f32 (physics-world-max-speed world))))
+  (let ((awake (physics-world-awake world)))
+    (if (pushes-live-p world)
+        ;; forces or gravity scales are in use ([[#F0RC3S]])
+        (integrate-pushed-velocities-range (physics-world-velocities world) (checked-pushes world)
+                                           (body-columns-handle awake) (body-columns-inverse-mass awake)
+                                           0 (body-columns-length awake) h
+                                           (physics-world-gravity-x world) (physics-world-gravity-y world)
+                                           (physics-world-gravity-z world) (f32 (physics-world-max-speed world)))
+        (integrate-velocities-range (physics-world-velocities world) 0 (body-columns-length awake) h
+                                    (physics-world-gravity-x world) (physics-world-gravity-y world)
+                                    (physics-world-gravity-z world) (f32 (physics-world-max-speed world))))))
 
 (defmethod physics-warm-start ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
@@ -6477,6 +6794,8 @@ its step hook, when set, are called after the phases, while the step's boxes are
            ;; the lasting sensors look at the bodies where the step left them ([[#S3NS0R]])
            (when (physics-world-sensors world)
              (sb-int:with-float-traps-masked (:inexact :underflow) (sense-phase world)))
+           ;; the forces applied for this step are spent ([[#F0RC3S]])
+           (when (physics-world-pushed world) (clear-physics-forces world))
            (let ((stats (world-statistics world)))
              (setf (step-statistics-contacts stats) (contact-columns-length (physics-world-contacts world))
                    (step-statistics-real-seconds stats) (* 1d-9 (coerce (the fixnum (- (clock-ns) started)) 'double-float))))
@@ -6833,6 +7152,23 @@ physics-world-invalid naming the first broken invariant. #V4L1D8"
              (mortal (count-if #'plusp (body-columns-life sleeping) :end (body-columns-length sleeping))))
         (unless (= mortal (physics-world-mortal-sleepers world))
           (fail "~D mortal sleepers counted as ~D" mortal (physics-world-mortal-sleepers world))))
+      ;; the forces and gravity scales ([[#F0RC3S]]) cover every slot, a free slot holds neither,
+      ;; no force waits unless one was applied, and the scales other than 1 are counted
+      (let ((pushes (physics-world-pushes world)) (scaled 0))
+        (when pushes
+          (unless (>= (length pushes) (* 4 (handle-table-count ids)))
+            (fail "the pushes cover ~D of ~D handle slots" (floor (length pushes) 4) (handle-table-count ids)))
+          (dotimes (slot (floor (length pushes) 4))
+            (let* ((p (* 4 slot))
+                   (forced (notevery #'zerop (subseq pushes p (+ p 3)))))
+              (when (/= 1.0 (aref pushes (+ p 3))) (incf scaled))
+              (when (and (or (>= slot (handle-table-count ids)) (= (aref sets slot) +set-free+))
+                         (or forced (/= 1.0 (aref pushes (+ p 3)))))
+                (fail "free handle slot ~D holds a force or a gravity scale" slot))
+              (when (and forced (not (physics-world-pushed world)))
+                (fail "handle slot ~D holds a force no call applied" slot)))))
+        (unless (= scaled (physics-world-scaled-count world))
+          (fail "~D gravity scales other than 1 counted as ~D" scaled (physics-world-scaled-count world))))
       t)))
 ;; The validation walker:1 ends here
 
@@ -7302,7 +7638,7 @@ and :conditions (refusals by condition type). #M9W5P7"
           (mapcar (lambda (c) (list (car c) (cdr c))) (getf figures :kinds))))
 ;; Random operation sequences find what a hostile caller would:1 ends here
 
-;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:6]]
+;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:7]]
 (defun run-physics-soak (&key (minutes 5) (seed 1) (stream *standard-output*))
   "Churn a fuzz world for MINUTES of wall-clock time: each step adds a ball, removes one of the
 oldest when more than 300 live, throws one, posts a walking box, edits a cell under the pile and
@@ -7343,7 +7679,7 @@ bytes from the second row (the first after the churn began) to the last. #M9W5P7
       (run-physics-springs world (list (fuzz-state-spring state)))
       (step-physics-world world)
       (incf steps))))
-;; Random operation sequences find what a hostile caller would:6 ends here
+;; Random operation sequences find what a hostile caller would:7 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:1]]
 (define-condition unknown-physics-scene (invalid-physics-parameter)
@@ -9344,7 +9680,7 @@ returns the error, the wall seconds its steps took, the world and a short note. 
             began)))
 ;; Error against run time:2 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:3]]
+;; [[file:../physics.org::#W9PREC][Error against run time:4]]
 (define-accuracy-scene seams ("largest height error, m" 0.001)
   "A ball rolls across the floor's cell seams from 3 m/s for 3 s: the largest distance of its
 centre from its resting height after the first 0.5 s, and its speed lost from 1 s to 3 s. #W9PREC"
@@ -9370,9 +9706,9 @@ slop it should rest at. #W9PREC"
                                     (setf worst (max worst (abs (- (- r (nth-value 1 (physics-body-position world ball)))
                                                                    *physics-linear-slop*)))))))))
     (values worst wall world (format nil "~:[awake~;asleep~] at 3 s" (not (physics-body-awake-p world ball))))))
-;; Error against run time:3 ends here
+;; Error against run time:4 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:4]]
+;; [[file:../physics.org::#W9PREC][Error against run time:5]]
 (define-accuracy-scene head-on ("largest velocity error / approach speed" 0.01)
   "Balls of 1 kg and 2 kg meet head-on at 3 m/s each, restitution 0.5, without gravity: their
 velocities after 1 s against momentum conservation and the restitution law (-3 and 0 m/s). #W9PREC"
@@ -9426,9 +9762,9 @@ radius. #W9PREC"
         (values (max energy-error (/ deepest 0.25d0)) wall world
                 (format nil "deepest ~,4F m; energy ~,1F J against ~,1F J (~,2,,,,,'eE)"
                         deepest energy reference energy-error))))))
-;; Error against run time:4 ends here
+;; Error against run time:5 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:5]]
+;; [[file:../physics.org::#W9PREC][Error against run time:6]]
 (defun rebound-heights (world-args restitution drop &key (rounds 4) (radius 0.25))
   "Drop a ball of RESTITUTION with its centre DROP metres above the contact level onto the
 floor: its flights' apex heights above that level, the drop first, up to ROUNDS rebounds. Each
@@ -9621,9 +9957,9 @@ largest angle of its impulse from the geometric normal at impact. #W9PREC"
 largest angle of its impulse from the geometric normal at impact. #W9PREC"
   (multiple-value-bind (impulse outgoing wall world) (block-drops world-args t)
     (values impulse wall world (format nil "outgoing off by up to ~,2F deg" outgoing))))
-;; Error against run time:5 ends here
+;; Error against run time:6 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:6]]
+;; [[file:../physics.org::#W9PREC][Error against run time:7]]
 (defparameter +sweep-rates+ '(30 60 120 240)
   "Step rates of the sweep, Hz. #W9PREC")
 
@@ -9656,9 +9992,9 @@ family of FAMILIES; return one plist per point, families innermost (see run-accu
                     nconc (loop for n in substeps
                                 nconc (loop for family in families
                                             collect (run-accuracy-point scene hz n family))))))
-;; Error against run time:6 ends here
+;; Error against run time:7 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:8]]
+;; [[file:../physics.org::#W9PREC][Error against run time:9]]
 (defun point-label (p)
   "A setting as it is named in the tables: family, rate and substeps. #W9PREC"
   (format nil "~(~A~) ~D Hz x ~D" (getf p :family) (getf p :hz) (getf p :substeps)))
@@ -9681,9 +10017,9 @@ either way a point of the Pareto front. #W9PREC"
                                       (and (= (getf a :error) (getf b :error)) (<= (getf a :ms) (getf b :ms))))
                                   a b))
                 points))))
-;; Error against run time:8 ends here
+;; Error against run time:9 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:9]]
+;; [[file:../physics.org::#W9PREC][Error against run time:10]]
 (defun print-sweep-table (points stream)
   "Print POINTS as an Org table: a row per scene and setting, the error, the note, the run time
 of each family, and whether every family reached the same state hash and error, twice. #W9PREC"
@@ -9711,9 +10047,9 @@ its Pareto front. #W9PREC"
                                ~%  Pareto front:~{ ~A~^,~}.~%"
                        scene measure (<= (getf best :error) tolerance) tolerance (point-label best)
                        (getf best :error) (getf best :ms) (mapcar #'point-label (pareto-front mine))))))
-;; Error against run time:9 ends here
+;; Error against run time:10 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:10]]
+;; [[file:../physics.org::#W9PREC][Error against run time:11]]
 (defparameter +substep-colours+ '((1 . "#c0392b") (2 . "#d68910") (4 . "#1e8449") (8 . "#2471a3"))
   "The colour of each substep count's curves in the diagrams. #W9PREC")
 
@@ -9763,9 +10099,9 @@ through its step rates. Errors below 1e-9 are drawn at 1e-9. #W9PREC"
         (format out "<text x=\"~D\" y=\"~D\" font-size=\"10\" fill=\"#555\">points: 30, 60, 120, 240 Hz</text>~%" (+ x1 14) (- y1 4))
         (format out "</svg>~%")))
     path))
-;; Error against run time:10 ends here
+;; Error against run time:11 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:11]]
+;; [[file:../physics.org::#W9PREC][Error against run time:12]]
 (defun run-accuracy-report (&key (directory "report/") (stream *standard-output*))
   "The sweep, written as report/work-precision.org (the table), report/work-precision-best.org
 (the Pareto-best setting per scene) and one SVG diagram per scene, report/wp-SCENE.svg. Print
@@ -9783,7 +10119,7 @@ the table to STREAM as well. #W9PREC"
                                 (format nil "~(~A~): error against run time" (first entry)) (third entry)
                                 (remove (first entry) points :key (lambda (p) (getf p :scene)) :test-not #'eq)))
     points))
-;; Error against run time:11 ends here
+;; Error against run time:12 ends here
 
 ;; [[file:../physics.org::#G4WXCJ][Watching a run: the recorder:1]]
 (defstruct (physics-recording (:constructor %make-physics-recording (terrain every)))
