@@ -51,6 +51,8 @@ help:
 	@echo "                    and report/notebook.html, the history of the measurements"
 	@echo "make view SCENE=basin  record a scene (basin, pile, fountain, lava, player, ...) and write"
 	@echo "                    report/view-SCENE.html, a 3D viewer of the run for any browser"
+	@echo "make view FILE=f.lisp  record the world f.lisp's last form returns (STEPS=240 EVERY=2,"
+	@echo "                    BOUNDS='x0 y0 z0 x1 y1 z1' the terrain drawn) into report/view-f.html"
 	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
 	@echo "make fuzz           random operation sequences (SEED=1 COUNT=1200 LENGTH=150), then random squeezes"
 	@echo "                    (SCENES=40 STEPS=300); figures into $(ORG)"
@@ -180,7 +182,7 @@ physics.html: $(ORG) $(OUT) luv-physics.asd tools/export.el tools/api-index.lisp
 SCENE ?= basin
 EVERY ?= 2
 view: setup
-	@SCENE="$(SCENE)" EVERY="$(EVERY)" $(LISP) --load tools/view.lisp
+	@SCENE="$(SCENE)" EVERY="$(EVERY)" FILE="$(FILE)" STEPS="$(STEPS)" BOUNDS="$(BOUNDS)" $(LISP) --load tools/view.lisp
 
 # The pictures report/scene-*.svg are kept in git: the page shows them.
 pictures: setup

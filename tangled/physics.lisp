@@ -62,7 +62,7 @@
    ;; #G4WXCJ, #3X6XN8, #RH7T05, #UFK5EA), the index of the interface (#LW3YHU)
    #:physics-world-step-hook #:physics-recording #:start-physics-recording #:stop-physics-recording
    #:physics-recording-frame-count #:*physics-scenes* #:run-physics-scene
-   #:write-physics-viewer #:write-scene-picture #:write-api-index
+   #:write-physics-viewer #:write-world-viewer #:write-scene-picture #:write-api-index
    ;; Asking the world (#C4STRY, #R4YC57, #S9WEEP, #OV3RLP, #QB3NCH)
    #:physics-hit #:make-physics-hit #:physics-hit-kind #:physics-hit-handle #:physics-hit-owner
    #:physics-hit-cell-x #:physics-hit-cell-y #:physics-hit-cell-z #:physics-hit-x #:physics-hit-y
@@ -10122,25 +10122,37 @@ the table to STREAM as well. #W9PREC"
 ;; Error against run time:12 ends here
 
 ;; [[file:../physics.org::#G4WXCJ][Watching a run: the recorder:1]]
-(defstruct (physics-recording (:constructor %make-physics-recording (terrain every)))
+(defconstant +recorded-contacts+ 64
+  "The most touching contacts a recorded frame keeps, the first in the world's rows. #G4WXCJ")
+
+(defstruct (physics-recording (:constructor %make-physics-recording (terrain every &optional bounds)))
   "A run as it was stepped, one frame every EVERY steps: each body's centre (XYZ, three floats),
-RADIUS and STYLE (its kind's number times two, plus one for a sleeper); each frame's first body,
-body count and figures (FRAMES); the boxes posted for each recorded step (BOXES, a list of frame
-and centre and half extents); and the world's TERRAIN, to draw its cells. #G4WXCJ"
+RADIUS, STYLE (its kind's number times two, plus one for a sleeper), HANDLE and VELOCITY (three
+floats); each frame's first body, body count and figures (FRAMES); each frame's first contact in
+CONTACTS (CONTACT-STARTS), six floats a contact, point and normal; the boxes posted for each
+recorded step (BOXES, a list of frame and centre and half extents); the world's TERRAIN, to draw
+its cells; and BOUNDS, NIL or the corners (x0 y0 z0 x1 y1 z1) of the terrain to draw. #G4WXCJ"
   (terrain nil)
+  (bounds nil)
   (every 1 :type (integer 1 3600))
   (steps 0 :type fixnum)
   (xyz (make-array 4096 :element-type 'single-float :adjustable t :fill-pointer 0))
   (radius (make-array 1024 :element-type 'single-float :adjustable t :fill-pointer 0))
   (style (make-array 1024 :element-type '(unsigned-byte 8) :adjustable t :fill-pointer 0))
+  (handle (make-array 1024 :element-type 'fixnum :adjustable t :fill-pointer 0))
+  (velocity (make-array 4096 :element-type 'single-float :adjustable t :fill-pointer 0))
+  (contacts (make-array 1024 :element-type 'single-float :adjustable t :fill-pointer 0))
+  (contact-starts (make-array 64 :element-type 'fixnum :adjustable t :fill-pointer 0))
   (frames (make-array 64 :adjustable t :fill-pointer 0))
   (boxes '()))
 
 (defun record-physics-frame (recording world)
   "Append WORLD's present state to RECORDING as one frame: every body, awake ones first, the boxes
-posted for the step, and the frame's figures, a vector of the first body, the body count, the
-awake and sleeping counts, the contacts, the step's milliseconds and the simulated seconds. #G4WXCJ"
+posted for the step, the first +recorded-contacts+ touching contacts, and the frame's figures, a
+vector of the first body, the body count, the awake and sleeping counts, the contacts, the step's
+milliseconds and the simulated seconds. #G4WXCJ"
   (let* ((xyz (physics-recording-xyz recording))
+         (velocity (physics-recording-velocity recording))
          (first (floor (fill-pointer xyz) 3))
          (frame (fill-pointer (physics-recording-frames recording))))
     (flet ((take (buffer asleep)
@@ -10148,12 +10160,28 @@ awake and sleeping counts, the contacts, the step's milliseconds and the simulat
                (vector-push-extend (aref (body-columns-x buffer) row) xyz)
                (vector-push-extend (aref (body-columns-y buffer) row) xyz)
                (vector-push-extend (aref (body-columns-z buffer) row) xyz)
+               (vector-push-extend (aref (body-columns-vx buffer) row) velocity)
+               (vector-push-extend (aref (body-columns-vy buffer) row) velocity)
+               (vector-push-extend (aref (body-columns-vz buffer) row) velocity)
+               (vector-push-extend (aref (body-columns-handle buffer) row) (physics-recording-handle recording))
                (vector-push-extend (aref (body-columns-radius buffer) row) (physics-recording-radius recording))
                (vector-push-extend (+ (* 2 (min 127 (max 0 (aref (body-columns-kind buffer) row))))
                                       (if asleep 1 0))
                                    (physics-recording-style recording)))))
       (take (physics-world-awake world) nil)
       (take (physics-world-sleeping world) t))
+    (let* ((out (physics-recording-contacts recording))
+           (c (physics-world-contacts world))
+           (geometry (contact-columns-geometry c)))
+      (vector-push-extend (floor (fill-pointer out) 6) (physics-recording-contact-starts recording))
+      (loop with kept = 0
+            for row below (contact-columns-length c)
+            while (< kept +recorded-contacts+)
+            when (= 1 (aref (contact-columns-touching c) row))
+              do (incf kept)
+                 (dolist (v (list (contact@ geometry row px) (contact@ geometry row py) (contact@ geometry row pz)
+                                  (contact@ geometry row nx) (contact@ geometry row ny) (contact@ geometry row nz)))
+                   (vector-push-extend v out))))
     (let ((boxes (physics-world-boxes world)))
       (dotimes (row (box-columns-length boxes))
         (flet ((middle (lo hi) (* 0.5 (+ (aref lo row) (aref hi row))))
@@ -10177,16 +10205,29 @@ awake and sleeping counts, the contacts, the step's milliseconds and the simulat
      (physics-recording-frames recording))
     recording))
 
-(defun start-physics-recording (world &key (every 1))
+(defun check-recording-bounds (bounds)
+  "BOUNDS when it is NIL or six reals X0 Y0 Z0 X1 Y1 Z1 with each low corner below its high one,
+as single-floats; else an invalid-physics-parameter error naming :bounds. #G4WXCJ"
+  (cond ((null bounds) nil)
+        ((and (listp bounds) (= 6 (length bounds)) (every #'realp bounds)
+              (< (first bounds) (fourth bounds)) (< (second bounds) (fifth bounds))
+              (< (third bounds) (sixth bounds)))
+         (mapcar (lambda (v) (float v 1.0)) bounds))
+        (t (error 'invalid-physics-parameter :name :bounds :value bounds
+                                             :expected "NIL or a list (x0 y0 z0 x1 y1 z1) with x0 < x1, y0 < y1, z0 < z1"))))
+
+(defun start-physics-recording (world &key (every 1) bounds)
   "Record WORLD from now on: a frame of its present state, then a frame after every EVERY-th
-step, through its step hook (which must be free). Return the recording. #G4WXCJ"
+step, through its step hook (which must be free). BOUNDS, when given, is the box (x0 y0 z0 x1 y1
+z1) whose terrain the viewer draws. Return the recording. #G4WXCJ"
   (check-world world 'start-physics-recording)
   (check-count :every every 3600)
+  (setf bounds (check-recording-bounds bounds))
   (when (physics-world-step-hook world)
     (error 'invalid-physics-parameter :world world :name :step-hook
                                       :value (physics-world-step-hook world)
                                       :expected "NIL: a world is recorded by one recording at a time"))
-  (let ((recording (%make-physics-recording (physics-world-terrain world) every)))
+  (let ((recording (%make-physics-recording (physics-world-terrain world) every bounds)))
     (record-physics-frame recording world)
     (setf (physics-world-step-hook world)
           (lambda (world)
@@ -10280,12 +10321,21 @@ single-floats, LO and HI. #RH7T05"
         (values (list 0.0 0.0 0.0) (list 1.0 1.0 1.0))
         (values (mapcar (lambda (v) (- v pad)) lo) (mapcar (lambda (v) (+ v pad)) hi)))))
 
-(defun recording-cells (recording)
-  "The resident solid cells of RECORDING's terrain with an air neighbour, inside the box of its
-centres grown by a cell on every side: a list of X Y Z, flat. #RH7T05"
+(defun recording-cell-box (recording &optional (bounds (physics-recording-bounds recording)))
+  "The box whose terrain the viewer draws for RECORDING, as two lists of three single-floats LO
+and HI: BOUNDS (x0 y0 z0 x1 y1 z1) when given, else the box of its centres grown by a cell on
+every side. #RH7T05"
+  (if bounds
+      (values (subseq bounds 0 3) (subseq bounds 3 6))
+      (recording-bounds recording :pad 1.0)))
+
+(defun recording-cells (recording &optional (bounds (physics-recording-bounds recording)))
+  "The resident solid cells of RECORDING's terrain with an air neighbour, inside BOUNDS (x0 y0 z0
+x1 y1 z1) when given, else the box of its centres grown by a cell on every side: a list of X Y Z,
+flat. #RH7T05"
   (let ((terrain (physics-recording-terrain recording)) (cells '()))
-    (when (and terrain (plusp (fill-pointer (physics-recording-xyz recording))))
-      (multiple-value-bind (lo hi) (recording-bounds recording :pad 1.0)
+    (when (and terrain (or bounds (plusp (fill-pointer (physics-recording-xyz recording)))))
+      (multiple-value-bind (lo hi) (recording-cell-box recording bounds)
         (flet ((air-p (x y z) (and (terrain-resident-p terrain x y z) (not (terrain-solid-p terrain x y z)))))
           (loop for x from (floor (first lo)) below (ceiling (first hi))
                 do (loop for y from (floor (second lo)) below (ceiling (second hi))
@@ -10326,8 +10376,31 @@ coordinate spread over LO..HI, computed in double-floats. #RH7T05"
         (setf (aref octets (* 2 i)) (ldb (byte 8 0) q)
               (aref octets (1+ (* 2 i))) (ldb (byte 8 8) q))))))
 
-(defun write-recording-json (recording title stream)
-  "Write RECORDING to STREAM as the JavaScript object the viewer reads, titled TITLE. #RH7T05"
+(defun recording-handle-octets (recording)
+  "RECORDING's handles as octets, their low 48 bits in six little-endian bytes a body, and the
+bits above, which the handles of one world share (its tag's high bits). #RH7T05"
+  (let* ((handles (physics-recording-handle recording))
+         (octets (make-array (* 6 (fill-pointer handles)) :element-type '(unsigned-byte 8))))
+    (dotimes (i (fill-pointer handles) octets)
+      (dotimes (b 6)
+        (setf (aref octets (+ (* 6 i) b)) (ldb (byte 8 (* 8 b)) (aref handles i)))))
+    (values octets (if (plusp (length handles)) (ash (aref handles 0) -48) 0))))
+
+(defun recording-velocity-octets (recording)
+  "RECORDING's velocities as octets, three little-endian signed 16-bit numbers a body over the
+fastest component's range, and that range, m/s. #RH7T05"
+  (let* ((v (physics-recording-velocity recording))
+         (top (max 1e-3 (reduce #'max v :key #'abs :initial-value 0.0)))
+         (octets (make-array (* 2 (fill-pointer v)) :element-type '(unsigned-byte 8))))
+    (dotimes (i (fill-pointer v))
+      (let ((q (ldb (byte 16 0) (max -32767 (min 32767 (round (* 32767 (/ (float (aref v i) 1d0) top))))))))
+        (setf (aref octets (* 2 i)) (ldb (byte 8 0) q)
+              (aref octets (1+ (* 2 i))) (ldb (byte 8 8) q))))
+    (values octets top)))
+
+(defun write-recording-json (recording title stream &optional (bounds (physics-recording-bounds recording)))
+  "Write RECORDING to STREAM as the JavaScript object the viewer reads, titled TITLE, its terrain
+drawn within BOUNDS (recording-cells). #RH7T05"
   (multiple-value-bind (lo hi) (recording-bounds recording)
     (multiple-value-bind (palette indices) (recording-palette recording)
       (let ((frames (physics-recording-frames recording)))
@@ -10343,19 +10416,32 @@ coordinate spread over LO..HI, computed in double-floats. #RH7T05"
         (format stream "\"frames\": [~%~{[~{~D, ~D, ~D, ~D, ~D, ~,4F, ~,4F~}]~^,~%~}],~%"
                 (map 'list (lambda (f) (coerce f 'list)) frames))
         (format stream "\"boxes\": [~{[~{~D~@{, ~,4F~}~}]~^, ~}],~%" (reverse (physics-recording-boxes recording)))
-        (format stream "\"cells\": [~{~D~^,~}],~%" (recording-cells recording))
+        (format stream "\"cells\": [~{~D~^,~}],~%" (recording-cells recording bounds))
+        (multiple-value-bind (cell-lo cell-hi) (recording-cell-box recording bounds)
+          (format stream "\"cellLo\": [~{~,4F~^, ~}], \"cellHi\": [~{~,4F~^, ~}],~%" cell-lo cell-hi))
+        (format stream "\"contactStarts\": [~{~D~^,~}],~%" (coerce (physics-recording-contact-starts recording) 'list))
+        (format stream "\"contacts\": [~{~,3F~^,~}],~%" (coerce (physics-recording-contacts recording) 'list))
         (format stream "\"positions\": \"")
         (write-base64 (recording-quanta recording lo hi) stream)
         (format stream "\",~%\"styles\": \"")
         (write-base64 indices stream)
+        (multiple-value-bind (octets high) (recording-handle-octets recording)
+          (format stream "\",~%\"handleHigh\": ~D,~%\"handles\": \"" high)
+          (write-base64 octets stream))
+        (multiple-value-bind (octets top) (recording-velocity-octets recording)
+          (format stream "\",~%\"speedRange\": ~,6F,~%\"velocities\": \"" top)
+          (write-base64 octets stream))
         (format stream "\"}~%")))))
 
 (defun write-physics-viewer (recording pathname &key (title "a recorded run")
+                                                  (bounds (physics-recording-bounds recording))
                                                   (template (asdf:system-relative-pathname "luv-physics" "tools/viewer.html"))
                                                   (three "/usr/share/javascript/three/"))
   "Write RECORDING to PATHNAME as one HTML file that plays it back in 3D: TEMPLATE with its marker
 lines replaced by three.js and its orbit controls from the directory THREE (Debian's libjs-three)
-and by the recording, titled TITLE. Return PATHNAME. #RH7T05"
+and by the recording, titled TITLE, its terrain drawn within BOUNDS (x0 y0 z0 x1 y1 z1; by
+default the recording's, else near the bodies). Return PATHNAME. #RH7T05"
+  (setf bounds (check-recording-bounds bounds))
   (let ((library (merge-pathnames "three.min.js" three))
         (orbit (merge-pathnames "examples/js/controls/OrbitControls.js" three)))
     (unless (and (probe-file library) (probe-file orbit))
@@ -10367,9 +10453,22 @@ and by the recording, titled TITLE. Return PATHNAME. #RH7T05"
               do (let ((marker (string-trim " " line)))
                    (cond ((string= marker "//@include three") (write-string (read-file-text library) out))
                          ((string= marker "//@include orbit") (write-string (read-file-text orbit) out))
-                         ((string= marker "//@include data") (write-recording-json recording title out))
+                         ((string= marker "//@include data") (write-recording-json recording title out bounds))
                          (t (write-line line out)))))))
     pathname))
+
+(defun write-world-viewer (world pathname &key (steps 240) (every 2) bounds (title "a world"))
+  "Record WORLD for STEPS steps, a frame every EVERY, and write the recording's viewer to
+PATHNAME, its terrain drawn within BOUNDS (x0 y0 z0 x1 y1 z1) or near the bodies. The world is
+left stepped and no longer recorded. Return PATHNAME and the recording. #RH7T05"
+  (check-world world 'write-world-viewer)
+  (unless (and (integerp steps) (<= 0 steps 1000000))
+    (error 'invalid-physics-parameter :world world :name :steps :value steps
+                                      :expected "an integer from 0 to 1000000"))
+  (let ((recording (start-physics-recording world :every every :bounds bounds)))
+    (unwind-protect (dotimes (i steps) (step-physics-world world))
+      (stop-physics-recording world))
+    (values (write-physics-viewer recording pathname :title title) recording)))
 ;; A viewer for the browser:1 ends here
 
 ;; [[file:../physics.org::#UFK5EA][Pictures of the scenes:1]]

@@ -8970,6 +8970,42 @@ and the world. #G4WXCJ"
         (check (equal (sort (coerce (subseq style 9 12) 'list) #'<) '(0 14 255)))))))
 ;; G4WXCJ-frames-hold-every-column ends here
 
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-frames-hold-handles-and-contacts]]
+(define-claim "G4WXCJ" frames-hold-handles-and-contacts
+    "Frames hold each body's handle and velocity, and at most +recorded-contacts+ touching contacts, normals unit."
+  (multiple-value-bind (recording world) (recorded-basin 300 90 1)
+    (let* ((frames (luv-physics::physics-recording-frames recording))
+           (last (aref frames 90))
+           (handles (luv-physics::physics-recording-handle recording))
+           (velocity (luv-physics::physics-recording-velocity recording))
+           (starts (luv-physics::physics-recording-contact-starts recording))
+           (contacts (luv-physics::physics-recording-contacts recording))
+           (awake (luv-physics::physics-world-awake world)))
+      (check (= (length handles) (length (luv-physics::physics-recording-radius recording))))
+      (check (= (length velocity) (length (luv-physics::physics-recording-xyz recording))))
+      (check (loop for row below (luv-physics::body-columns-length awake)
+                   for k = (+ (aref last 0) row)
+                   always (and (= (aref handles k) (aref (luv-physics::body-columns-handle awake) row))
+                               (= (aref velocity (* 3 k)) (aref (luv-physics::body-columns-vx awake) row))
+                               (= (aref velocity (+ 1 (* 3 k))) (aref (luv-physics::body-columns-vy awake) row))
+                               (= (aref velocity (+ 2 (* 3 k))) (aref (luv-physics::body-columns-vz awake) row))))
+             "the last frame's handles or velocities are not the world's")
+      (check (= (length starts) (length frames)))
+      (let ((counts (loop for f below (length frames)
+                          collect (- (if (< (1+ f) (length frames)) (aref starts (1+ f)) (floor (length contacts) 6))
+                                     (aref starts f)))))
+        (check (zerop (first counts)) "the first frame keeps ~D contacts" (first counts))
+        (check (every (lambda (n) (<= 0 n luv-physics::+recorded-contacts+)) counts) "contacts a frame: ~S" counts)
+        (check (= luv-physics::+recorded-contacts+ (car (last counts))) "the last frame keeps ~D" (car (last counts))))
+      (check (> (physics-world-last-step-contact-count world) 300) "the world counts ~D contacts"
+             (physics-world-last-step-contact-count world))
+      (check (loop for i from 0 below (length contacts) by 6
+                   always (< (abs (- 1 (sqrt (+ (expt (aref contacts (+ i 3)) 2) (expt (aref contacts (+ i 4)) 2)
+                                                (expt (aref contacts (+ i 5)) 2)))))
+                             1e-3))
+             "a recorded normal is not of unit length"))))
+;; G4WXCJ-frames-hold-handles-and-contacts ends here
+
 ;; [[file:../physics.org::#G4WXCJ][G4WXCJ-refusals-name-the-argument]]
 (define-claim "G4WXCJ" refusals-name-the-argument
     "A second recording, EVERY 0, an unknown scene, a missing three.js: each refused by name."
@@ -9267,6 +9303,106 @@ counted. #RH7T05"
                 (check (and moved (> moved (* 0.01 all))) "the first and last frames differ in ~A pixels"
                        moved))))))))
 ;; RH7T05-viewer-draws-the-scene ends here
+
+;; [[file:../physics.org::#RH7T05][RH7T05-viewer-picks-a-body]]
+(defun browser-document (chromium url &key (size "960,640"))
+  "The document CHROMIUM ends with after loading URL at SIZE, as a string. #RH7T05"
+  (browser-run chromium (list (format nil "--window-size=~A" size) "--dump-dom" url)))
+
+(defun colour-middle (picture colour &key (crop '(560 380 200 120)) (fuzz 20))
+  "The middle, as two pixel coordinates X Y of the PNG file PICTURE, of the box of the pixels
+within FUZZ percent of COLOUR inside CROP (width height left top); NIL when there are none. #RH7T05"
+  (destructuring-bind (w h x y) crop
+    (let* ((text (program-output "convert" (list (namestring picture) "-crop" (format nil "~Dx~D+~D+~D" w h x y)
+                                                 "+repage" "-fuzz" (format nil "~D%" fuzz) "-fill" "white"
+                                                 "-opaque" colour "-fill" "black" "+opaque" "white"
+                                                 "-format" "%@" "info:")))
+           (numbers (mapcar #'parse-integer (uiop:split-string (substitute #\Space #\x (substitute #\Space #\+ text))
+                                                               :separator " "))))
+      (destructuring-bind (bw bh bx by) numbers
+        (and (< 0 bw w) (< 0 bh h) (list (+ x bx (floor bw 2)) (+ y by (floor bh 2))))))))
+
+(define-claim "RH7T05" viewer-picks-a-body
+    "In headless Chromium a pick on a ball's pixels shows its handle, kind, velocity and sleep."
+  (let ((chromium (chromium-program)))
+    (if (null chromium)
+        (progn (format t "~&RH7T05: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
+               (check (null chromium)))
+        (let* ((w (make-physics-world :gravity '(0 0 0)))
+               (gobbet (add-physics-body w 0 0 0 :radius 0.6 :kind 4 :vx 1.5))
+               (marble (add-physics-body w 2.5 0 0 :radius 0.6 :kind 2))
+               (page (repository-file "report/viewer-pick.html"))
+               (shot (repository-file "report/viewer-pick.png")))
+          (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w marble)))
+          (ensure-directories-exist page)
+          (write-world-viewer w page :steps 0 :title "two balls")
+          (browser-screenshot chromium (format nil "file://~A#canvas=960x592" (namestring page)) shot)
+          (flet ((pick (at)
+                   (let* ((dom (browser-document chromium (format nil "file://~A#canvas=960x592&pick=~D,~D" (namestring page)
+                                                                  (first at) (second at))))
+                          (mark (search "data-picked=\"" dom))
+                          (panel (search "<div id=\"picked\">" dom)))
+                     (list (and mark (parse-integer dom :start (+ mark 13) :junk-allowed t))
+                           (and panel (subseq dom (+ panel 17) (search "</div>" dom :start2 panel)))))))
+            (let ((red (colour-middle shot "#e8401c"))
+                  (grey (colour-middle shot "#7081a2")))
+              (check (and red grey) "the balls' pixels: red ~S, grey ~S" red grey)
+              (when (and red grey)
+                (destructuring-bind (handle text) (pick red)
+                  (check (eql handle gobbet) "the gobbet's pixel ~S picks ~S (~S)" red handle text)
+                  (check (and text (search (format nil "handle ~D" gobbet) text) (search "lava-gobbet" text)
+                              (search "velocity 1.500 0.000 0.000" text) (search "awake" text))
+                         "the gobbet's panel reads ~S" text))
+                (destructuring-bind (handle text) (pick grey)
+                  (check (eql handle marble) "the marble's pixel ~S picks ~S (~S)" grey handle text)
+                  (check (and text (search (format nil "handle ~D" marble) text) (search "marble" text)
+                              (search "asleep" text))
+                         "the marble's panel reads ~S" text))
+                (destructuring-bind (handle text) (pick '(205 125))
+                  (check (and (null handle) (equal text "")) "an empty pixel picks ~S (~S)" handle text)))))))))
+;; RH7T05-viewer-picks-a-body ends here
+
+;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-the-given-box]]
+(defun far-wall-world ()
+  "A floor 40 m long on x and 8 m on z, its top at y = 0, a wall 3 m high at x = 36, and a ball
+at rest near the start. #RH7T05"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain 0 0 0 40 6 8 nil)
+    (fill-terrain terrain 0 -1 0 40 0 8 t)
+    (fill-terrain terrain 36 0 0 37 3 8 t)
+    (let ((w (make-physics-world :terrain terrain)))
+      (add-physics-body w 2 0.3 3 :radius 0.25)
+      w)))
+
+(define-claim "RH7T05" viewer-draws-the-given-box
+    "Given bounds, the recording's cells hold a wall 34 m from the ball; without, none past x = 5."
+  (let* ((w (far-wall-world))
+         (near (prog1 (start-physics-recording w) (stop-physics-recording w)))
+         (wide (prog1 (start-physics-recording w :bounds '(0 -1 0 40 4 8)) (stop-physics-recording w))))
+    (flet ((cells (recording)
+             (loop for (x y z) on (luv-physics::recording-cells recording) by #'cdddr collect (list x y z))))
+      (check (every (lambda (c) (<= (first c) 5)) (cells near)) "without bounds, a cell at ~S"
+             (find-if (lambda (c) (> (first c) 5)) (cells near)))
+      (let ((wall (remove-if-not (lambda (c) (and (= 36 (first c)) (>= (second c) 0))) (cells wide))))
+        (check (find '(36 2 4) wall :test #'equal) "the wall's top is not drawn")
+        (check (find '(36 0 4) wall :test #'equal) "the wall's foot is not drawn")
+        (check (every (lambda (c) (<= 0 (second c) 2)) wall) "a wall cell at ~S"
+               (find-if-not (lambda (c) (<= 0 (second c) 2)) wall)))
+      (check (find '(20 -1 4) (cells wide) :test #'equal) "the floor's top is not drawn"))
+    (let ((page (repository-file "report/viewer-box.html")))
+      (ensure-directories-exist page)
+      (write-world-viewer (far-wall-world) page :steps 10 :bounds '(0 -1 0 40 4 8))
+      (let* ((text (luv-physics::read-file-text page))
+             (start (+ (search "\"cells\": [" text) 10))
+             (numbers (mapcar #'parse-integer (uiop:split-string (subseq text start (position #\] text :start start))
+                                                                 :separator ","))))
+        (check (loop for (x y z) on numbers by #'cdddr thereis (and (= x 36) (= y 2)))
+               "the written file's cells hold no wall top")))
+    (flet ((refusal (bounds)
+             (handler-case (progn (start-physics-recording (far-wall-world) :bounds bounds) nil)
+               (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+      (check (equal '(:bounds :bounds :bounds) (mapcar #'refusal '((1 2 3) (0 0 0 1 1 0) (0 0 0 1 1 x))))))))
+;; RH7T05-viewer-draws-the-given-box ends here
 
 ;; [[file:../physics.org::#UFK5EA][UFK5EA-picture-draws-the-bodies]]
 (define-claim "UFK5EA" picture-draws-the-bodies
