@@ -7639,16 +7639,18 @@ and :conditions (refusals by condition type). #M9W5P7"
 ;; Random operation sequences find what a hostile caller would:1 ends here
 
 ;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:7]]
-(defun run-physics-soak (&key (minutes 5) (seed 1) (stream *standard-output*))
+(defun run-physics-soak (&key (minutes 5) (seed 1) (stream *standard-output*) step-hook)
   "Churn a fuzz world for MINUTES of wall-clock time: each step adds a ball, removes one of the
 oldest when more than 300 live, throws one, posts a walking box, edits a cell under the pile and
 lets the spring run. Print to STREAM, at every tenth of the run, the seconds, the steps, the
 bodies and the heap in MB after a full collection, as an Org table. Return the heap's growth in
-bytes from the second row (the first after the churn began) to the last. #M9W5P7"
+bytes from the second row (the first after the churn began) to the last. STEP-HOOK, when given,
+is the world's step hook (physics-world-step-hook) throughout. #M9W5P7"
   (let* ((state (make-fuzz-state)) (world (fuzz-state-world state)) (terrain (fuzz-state-terrain state))
          (next (fixed-sequence seed)) (handles (make-array 0 :adjustable t :fill-pointer 0))
          (start (get-internal-real-time)) (span (* minutes 60 internal-time-units-per-second))
          (steps 0) (row 0) (first-heap nil) (last-heap 0))
+    (setf (physics-world-step-hook world) step-hook)
     (format stream "~&| seconds | steps | bodies | heap MB |~%|-~%")
     (loop
       (let ((elapsed (- (get-internal-real-time) start)))
@@ -8197,16 +8199,21 @@ COUNT-th body of the spring at cell X Y Z: a fixed hash of the four integers. #J
 
 (defun run-physics-springs (world springs &optional function)
   "Let each of SPRINGS emit into WORLD what is due this call, calling FUNCTION, when given, on
-the handle of each body emitted; return how many were emitted. Conses nothing. #JAU0EF"
+the handle of each body emitted; return how many were emitted. A spring whose mouth, the cell
+above its block, is solid emits nothing. Conses nothing. #JAU0EF"
   (check-world world 'run-physics-springs)
   (unless (and (listp springs) (every #'physics-spring-p springs))
     (error 'invalid-physics-parameter :world world :name :springs :value springs
                                       :expected "a list of physics-springs (from make-physics-spring)"))
   (when function (check-function world :function function))
-  (let ((emitted 0))
+  (let ((emitted 0) (terrain (physics-world-terrain world)))
     (declare (type fixnum emitted))
     (dolist (spring springs emitted)
-      (when (zerop (mod (physics-spring-calls spring) (physics-spring-every spring)))
+      (when (and (zerop (mod (physics-spring-calls spring) (physics-spring-every spring)))
+                 ;; a spring whose mouth, the cell above its block, is solid or not resident is
+                 ;; covered, and waits
+                 (not (and terrain (terrain-solid-p terrain (physics-spring-x spring)
+                                                    (1+ (physics-spring-y spring)) (physics-spring-z spring)))))
         (let* ((number (physics-spring-number spring))
                (radius (f32 (getf (rest (physics-kind-entry number)) :radius)))
                (x (physics-spring-x spring)) (y (physics-spring-y spring)) (z (physics-spring-z spring)))
@@ -9438,10 +9445,11 @@ its final height less its ideal resting height (radius less a slop), and whether
       (values (- (nth-value 1 (physics-body-position world ball)) (- radius *physics-linear-slop*))
               (not (physics-body-awake-p world ball))))))
 
-(defun run-stability-table (&key (stream *standard-output*) (full t))
+(defun run-stability-table (&key (stream *standard-output*) (full t) (crowd (and full 10000)))
   "Print, as an Org table, what each stiff or extreme scene measured and whether it held; with
-FULL false, only the rows whose scenes hold a few balls (not the piles, heaps, crowd and the
-fountain's ten minutes). #X7R3M5"
+FULL false, only the rows whose scenes hold a few balls (not the piles, heaps and the fountain's
+ten minutes). CROWD, when not NIL, is how many balls the crowd in one cell holds (10000 in the
+full table, none in the short one). #X7R3M5"
   (format stream "~&#+caption: stiff and extreme cases; ~A; load ~A~%" (cpu-model-name) (load-average))
   (format stream "~&| case | measured | held |~%|------+----------+------|~%")
   (flet ((row (case held fmt &rest args)
@@ -9546,9 +9554,9 @@ fountain's ten minutes). #X7R3M5"
         (row (format nil "ball spawned ~,1F m deep in the floor" depth)
              (and (<= speed (+ *physics-contact-push-max* 0.01)) (< (abs (- y rest)) 0.002))
              "left at ~,3F m/s at most; ends ~,4F m from its resting height" speed (- y rest))))
-    (when full
-      (multiple-value-bind (overflow cleared speed pen ok) (crowd-in-one-cell 10000)
-        (row "10000 balls of 0.05 m in one 1 m cell" (and ok cleared (< pen 0.02))
+    (when crowd
+      (multiple-value-bind (overflow cleared speed pen ok) (crowd-in-one-cell crowd)
+        (row (format nil "~D balls of 0.05 m in one 1 m cell" crowd) (and ok cleared (< pen 0.02))
              "~D contacts in the overflow colour at first, none from ~:[never~;~:*~,2F s~]; fastest ~,3F m/s; ~
               deepest left ~,4F m; ~:[not finite or invalid~;finite and valid~]" overflow cleared speed pen ok)))
     (dolist (v '(20 50 100 200))

@@ -7246,6 +7246,32 @@ the phases of a step before the prepare phase. #PR3PAR"
              "returned ~A for ~S" growth (mapcar #'fourth rows)))))
 ;; M9W5P7-soak-prints-its-table ends here
 
+;; [[file:../physics.org::#M9W5P7][M9W5P7-soak-box-walks-the-floor]]
+(define-claim "M9W5P7" soak-box-walks-the-floor
+    "The soak's box is a 1 m cube on the floor at z 5..6, at 3 m/s along x, 0.05 m further each step, and it meets bodies."
+  (let ((boxes '()) (touched 0))
+    (run-physics-soak :minutes 1/60 :stream (make-broadcast-stream)
+                      :step-hook (lambda (world)
+                                   (let ((b (luv-physics::physics-world-boxes world))
+                                         (c (luv-physics::physics-world-contacts world)))
+                                     (push (loop for column in '(luv-physics::min-x luv-physics::min-y luv-physics::min-z
+                                                                 luv-physics::max-x luv-physics::max-y luv-physics::max-z
+                                                                 luv-physics::vx)
+                                                 collect (aref (slot-value b column) 0))
+                                           boxes)
+                                     (dotimes (row (luv-physics::contact-columns-length c))
+                                       (when (= (aref (luv-physics::contact-columns-kind c) row) luv-physics::+contact-box+)
+                                         (incf touched))))))
+    (setf boxes (nreverse boxes))
+    (check (>= (length boxes) 20) "~D steps" (length boxes))
+    (loop for (x0 y0 z0 x1 y1 z1 vx) in boxes for n from 0
+          for centre = (+ 1 (mod (* 0.05 n) 10))
+          do (check (and (< (abs (- (* 0.5 (+ x0 x1)) centre)) 1e-4) (< (abs (- (- x1 x0) 1.0)) 1e-4)
+                         (= 0.0 y0) (= 1.0 y1) (= 5.0 z0) (= 6.0 z1) (= 3.0 vx))
+                    "before step ~D the box is ~S, not centred at x = ~,3F" n (list x0 y0 z0 x1 y1 z1 vx) centre))
+    (check (plusp touched) "the box touched no body")))
+;; M9W5P7-soak-box-walks-the-floor ends here
+
 ;; [[file:../physics.org::#M9W5P7][M9W5P7-fuzz-state-as-described]]
 (define-claim "M9W5P7" fuzz-state-as-described
     "make-fuzz-state: resident air [-16,32)^3 with a floor at y = -1, a fountain at 8 -1 8, the player at 2 0 9."
@@ -7655,6 +7681,24 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (= 3 (physics-world-awake-count w)))
     (check (= 0.25 (physics-body-radius w (aref (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 2))))))
 ;; B4S1NS-basin-as-described ends here
+
+;; [[file:../physics.org::#JAU0EF][JAU0EF-covered-spring-stays-quiet]]
+(define-claim "JAU0EF" covered-spring-stays-quiet
+    "A fountain under a solid cell emits nothing and signals nothing; uncovered it emits two a call again."
+  (multiple-value-bind (w terrain) (make-floor-world)
+    (let ((spring (make-fountain 4 -1 4)))
+      (check (= 2 (run-physics-springs w (list spring))))
+      (setf (terrain-solid-p terrain 4 0 4) t)
+      (let ((quiet (loop repeat 5 collect (handler-case (run-physics-springs w (list spring))
+                                             (error (e) (type-of e))))))
+        (check (equal '(0 0 0 0 0) quiet) "covered, the fountain gave ~S" quiet))
+      (check (= 2 (physics-world-awake-count w)) "~D bodies" (physics-world-awake-count w))
+      (check (= 6 (luv-physics::physics-spring-calls spring)))
+      (check (= 2 (luv-physics::physics-spring-emitted spring)))
+      (setf (terrain-solid-p terrain 4 0 4) nil)
+      (check (= 2 (run-physics-springs w (list spring))))
+      (check (validate-physics-world w)))))
+;; JAU0EF-covered-spring-stays-quiet ends here
 
 ;; [[file:../physics.org::#JAU0EF][JAU0EF-kinds-make-their-bodies]]
 (define-claim "JAU0EF" kinds-make-their-bodies
@@ -8424,14 +8468,15 @@ in the order of *physics-scene-features*. #K5DF9S"
 
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-small-rows-hold]]
 (define-claim "X7R3M5" small-rows-hold
-    "RUN-STABILITY-TABLE without its large scenes prints 25 rows, and every row held."
-  (let* ((text (with-output-to-string (s) (luv-physics::run-stability-table :stream s :full nil)))
+    "RUN-STABILITY-TABLE without its large scenes and with a crowd of 1000 prints 26 rows, every one held."
+  (let* ((text (with-output-to-string (s) (luv-physics::run-stability-table :stream s :full nil :crowd 1000)))
          (rows (with-input-from-string (in text)
                  (loop for line = (read-line in nil) while line
                        when (and (> (length line) 2) (string= "| " line :end2 2)
                                  (not (search "| case |" line)))
                          collect line))))
-    (check (= 25 (length rows)) "~D rows: ~{~%~A~}" (length rows) rows)
+    (check (= 26 (length rows)) "~D rows: ~{~%~A~}" (length rows) rows)
+    (check (find-if (lambda (row) (search "| 1000 balls of 0.05 m in one 1 m cell |" row)) rows) "no crowd row")
     (dolist (row rows)
       (check (search "| yes |" row :from-end t) "not held: ~A" row))))
 ;; X7R3M5-small-rows-hold ends here
