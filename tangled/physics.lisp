@@ -981,6 +981,18 @@ single-float goes through double precision; both round correctly, so they agree)
   (declare (type single-float x))
   (sb-simd-sse::f32-sqrt x))
 
+(declaim (inline store-clamped-velocity))
+(defun store-clamped-velocity (v o x y z max-speed max2)
+  "Store the velocity X Y Z in rows O..O+2 of V, scaled down to the speed MAX-SPEED when it is
+faster (MAX2 is its square, computed once by the caller): the clamp every integration of
+velocities ends with. #V0CAB5"
+  (declare (type f32-column v) (type index o) (type single-float x y z max-speed max2))
+  (let ((s2 (+ (* x x) (* y y) (* z z))))
+    (when (> s2 max2)
+      (let ((k (/ max-speed (fsqrt s2))))
+        (setf x (* x k) y (* y k) z (* z k))))
+    (setf (aref v o) x (aref v (+ o 1)) y (aref v (+ o 2)) z)))
+
 (declaim (inline clock-ns))
 (defun clock-ns ()
   "Nanoseconds on the monotonic clock (CLOCK_MONOTONIC, id 1 on Linux), as a fixnum. #V0CAB5"
@@ -3173,19 +3185,16 @@ force times its inverse mass, read from PUSHES at the slot of its handle in HAND
 speed to MAX-SPEED. #F0RC3S"
   (declare (type f32-column v pushes inverse-mass) (type fixnum-column handles) (type index start end)
            (type single-float h gx gy gz max-speed) #.+kernel-policy+)
-  (let ((max2 (* max-speed max-speed)))
-    (loop for i of-type index from start below end
-          for o of-type index = (solver-row i)
-          for p of-type index = (* 4 (handle-index (aref handles i)))
-          do (let* ((s (aref pushes (+ p 3))) (im (aref inverse-mass i))
-                    (x (+ (aref v o) (* h (+ (* s gx) (* im (aref pushes p))))))
-                    (y (+ (aref v (+ o 1)) (* h (+ (* s gy) (* im (aref pushes (+ p 1)))))))
-                    (z (+ (aref v (+ o 2)) (* h (+ (* s gz) (* im (aref pushes (+ p 2)))))))
-                    (s2 (+ (* x x) (* y y) (* z z))))
-               (when (> s2 max2)
-                 (let ((k (/ max-speed (fsqrt s2))))
-                   (setf x (* x k) y (* y k) z (* z k))))
-               (setf (aref v o) x (aref v (+ o 1)) y (aref v (+ o 2)) z)))))
+  (loop with max2 of-type single-float = (* max-speed max-speed)
+        for i of-type index from start below end
+        for o of-type index = (solver-row i)
+        for p of-type index = (* 4 (handle-index (aref handles i)))
+        do (let ((s (aref pushes (+ p 3))) (im (aref inverse-mass i)))
+             (store-clamped-velocity v o
+                                     (+ (aref v o) (* h (+ (* s gx) (* im (aref pushes p)))))
+                                     (+ (aref v (+ o 1)) (* h (+ (* s gy) (* im (aref pushes (+ p 1))))))
+                                     (+ (aref v (+ o 2)) (* h (+ (* s gz) (* im (aref pushes (+ p 2))))))
+                                     max-speed max2))))
 
 (defun apply-physics-force (world handle fx fy fz)
   "Add the force FX FY FZ, N, to what HANDLE's body is given for the next step, and wake it; the
@@ -5702,12 +5711,8 @@ single-float from LOW to 1e7. #K3RNLS"
   (let ((dvx (* h gx)) (dvy (* h gy)) (dvz (* h gz)) (max2 (* max-speed max-speed)))
     (loop for i of-type index from start below end
           for o of-type index = (solver-row i)
-          do (let* ((x (+ (aref v o) dvx)) (y (+ (aref v (+ o 1)) dvy)) (z (+ (aref v (+ o 2)) dvz))
-                    (s2 (+ (* x x) (* y y) (* z z))))
-               (when (> s2 max2)
-                 (let ((s (/ max-speed (fsqrt s2))))
-                   (setf x (* x s) y (* y s) z (* z s))))
-               (setf (aref v o) x (aref v (+ o 1)) y (aref v (+ o 2)) z)))))
+          do (store-clamped-velocity v o (+ (aref v o) dvx) (+ (aref v (+ o 1)) dvy) (+ (aref v (+ o 2)) dvz)
+                                     max-speed max2))))
 
 (defun integrate-positions-range (v d start end h)
   "Add H times velocity to delta rows START..END of D. #K3RNLS"

@@ -815,6 +815,17 @@ and 0.1 %, or, in a geometric twin, a contact event's point further than +twin-t
 step. #T3STK1"
   (nth body (first (first (last record)))))
 
+(defun pushed-ball-scene (fills start)
+  "A scene for check-twins: over the floor with FILLS, a ball resting at 4.5 0.245 4.5 and a box
+0.5 x 1 x 1 m posted before each step at 1 m/s along +x, its centre at x = START at the first
+step. #T3STK1"
+  (lambda (twin)
+    (multiple-value-bind (world handles) (twin-scene-world twin fills '((4.5 0.245 4.5)))
+      (values world handles
+              (lambda (world step)
+                (twin-post-box twin world (+ start (* step (/ 1.0 60))) 0.5 4.5 0.25 0.5 0.5
+                               :vx 1.0 :owner :pusher))))))
+
 (defun check-twins (name scene steps &key (twins +twins+))
   "Check that each of TWINS of SCENE, named NAME, run for STEPS steps, does what SCENE does;
 return SCENE's record (run-twin). #T3STK1"
@@ -3267,15 +3278,7 @@ use before it. #QKS4GZ"
 (define-claim "K1N3BX" boxes-push-on-every-axis
     "A box pushing a ball along +x pushes its twins' balls alike along +z, -x and -z."
   (let* ((start 3.013)
-         (record (check-twins "pushed"
-                              (lambda (twin)
-                                (multiple-value-bind (world handles)
-                                    (twin-scene-world twin '() '((4.5 0.245 4.5)))
-                                  (values world handles
-                                          (lambda (world step)
-                                            (twin-post-box twin world (+ start (* step (/ 1.0 60))) 0.5 4.5
-                                                           0.25 0.5 0.5 :vx 1.0 :owner :pusher)))))
-                              120 :twins +geometric-twins+))
+         (record (check-twins "pushed" (pushed-ball-scene '() start) 120 :twins +geometric-twins+))
          (x (first (twin-final-position record))))
     (check (and (> x (+ start 2.25)) (> x 5.0)) "the pushed ball ends at x = ~,3F" x)))
 ;; K1N3BX-boxes-push-on-every-axis ends here
@@ -6286,15 +6289,8 @@ the phases of a step before the prepare phase. #PR3PAR"
 (define-claim "SQU33Z" squeezes-on-every-axis
     "A box squeezing a ball into a wall along +x keeps it alike along +z, -x and -z, at the wall, on the floor."
   (let* ((start 3.013)
-         (record (check-twins "squeezed"
-                              (lambda (twin)
-                                (multiple-value-bind (world handles)
-                                    (twin-scene-world twin '((5 0 3 7 2 6 t)) '((4.5 0.245 4.5)))
-                                  (values world handles
-                                          (lambda (world step)
-                                            (twin-post-box twin world (+ start (* step (/ 1.0 60))) 0.5 4.5
-                                                           0.25 0.5 0.5 :vx 1.0 :owner :pusher)))))
-                              100 :twins '(:swap-xz :mirror-x :mirror-z))))
+         (record (check-twins "squeezed" (pushed-ball-scene '((5 0 3 7 2 6 t)) start) 100
+                              :twins '(:swap-xz :mirror-x :mirror-z))))
     (destructuring-bind (x y z) (twin-final-position record)
       (check (and (< (abs (- x 4.75)) 0.01) (< (abs (- y 0.245)) 0.01) (< (abs (- z 4.5)) 1e-3))
              "the squeezed ball ends at ~,4F ~,4F ~,4F" x y z))))
