@@ -82,6 +82,60 @@
                 (macroexpand-1 '(check (= 1 1) "why ~A" 2)))))
 ;; BJSCR8-check-is-the-framework-assertion ends here
 
+;; [[file:../physics.org::#W0RKSH][W0RKSH-engine-loads-alone]]
+(define-claim "W0RKSH" engine-loads-alone
+    "An SBCL that loads only luv-physics steps a ball as this image does and defines nothing of the workshop."
+  (let* ((names (remove-duplicates
+                 (loop for record in luv-physics::*definitions*
+                       for name = (getf record :name)
+                       when (and (equal (getf record :file) "tangled/workshop.lisp")
+                                 (symbolp name)
+                                 (eq (symbol-package name) (find-package '#:luv-physics))
+                                 (not (eq (getf record :kind) :defmethod)))
+                         collect (symbol-name name))
+                 :test #'string=))
+         (program (format nil "(progn
+  (load \"tools/boot.lisp\")
+  (let ((*standard-output* (make-broadcast-stream)) (*error-output* (make-broadcast-stream)))
+    (asdf:load-system \"luv-physics\"))
+  (let* ((package (find-package \"LUV-PHYSICS\"))
+         (world (funcall (find-symbol \"MAKE-PHYSICS-WORLD\" package)))
+         (ball (funcall (find-symbol \"ADD-PHYSICS-BODY\" package) world 0 10 0))
+         (defined (loop for name in '~S
+                        for (symbol status) = (multiple-value-list (find-symbol name package))
+                        when (and symbol (or (fboundp symbol) (boundp symbol) (find-class symbol nil)
+                                             (eq status :external)))
+                          collect name)))
+    (funcall (find-symbol \"STEP-PHYSICS-WORLD\" package) world)
+    (format t \"~~&engine-alone ~~S~~%\"
+            (list defined
+                  (multiple-value-list (funcall (find-symbol \"PHYSICS-BODY-VELOCITY\" package) world ball))
+                  (remove-if-not (lambda (s) (search \"luv-physics\" s)) (asdf:already-loaded-systems))))))"
+                          names))
+         (output (with-output-to-string (errors)
+                   (write-string (uiop:run-program (list "sbcl" "--dynamic-space-size" "4Gb" "--noinform"
+                                                         "--non-interactive" "--no-sysinit" "--no-userinit"
+                                                         "--eval" "(require :asdf)" "--eval" program)
+                                                   :directory (asdf:system-source-directory "luv-physics")
+                                                   :output :string :error-output errors :ignore-error-status t)
+                                 errors)))
+         (at (search "engine-alone " output))
+         (answer (and at (let ((*read-eval* nil)) (read-from-string output t nil :start (+ at 13)))))
+         (world (make-physics-world))
+         (ball (add-physics-body world 0 10 0)))
+    (step-physics-world world)
+    (check (> (length names) 100) "only ~D workshop names" (length names))
+    (check (not (null answer)) "the child printed no answer: ~A" output)
+    (when answer
+      (destructuring-bind (defined velocity systems) answer
+        (check (null defined) "the engine alone defines ~S" defined)
+        (check (equal systems '("luv-physics")) "the child loaded ~S" systems)
+        (check (equal velocity (multiple-value-list (physics-body-velocity world ball)))
+               "the child's ball moves at ~S, this image's at ~S"
+               velocity (multiple-value-list (physics-body-velocity world ball)))
+        (check (< (abs (- (second velocity) (/ -9.81 60))) 1e-5) "vy ~S" (second velocity))))))
+;; W0RKSH-engine-loads-alone ends here
+
 ;; [[file:../physics.org::#HAPODD][HAPODD-records-have-the-documented-keys]]
 (define-claim "HAPODD" records-have-the-documented-keys
     "A record is a plist of :name :kind :anchor :file :line :org-line :docstring."
@@ -224,11 +278,11 @@
          (files (copy-list luv-physics::*registered-files*))
          (last-file (car (last files)))
          (n (luv-physics::register-tangled-file last-file)))
-    (check (= n (count "tangled/physics-simd.lisp" definitions
+    (check (= n (count "tangled/workshop.lisp" definitions
                        :key (lambda (r) (getf r :file)) :test #'equal)))
     (check (equal definitions luv-physics::*definitions*) "the records changed")
     (check (equal files luv-physics::*registered-files*) "the files changed")
-    (let* ((file "tangled/physics-simd.lisp")
+    (let* ((file "tangled/workshop.lisp")
            (text (gethash file luv-physics::*loaded-file-texts*)))
       (check (stringp text) "no text kept for ~A" file)
       (unwind-protect
@@ -11027,12 +11081,72 @@ element) has run at its end: a copy of the page with SCRIPT before </body> is lo
                                "~A: ~A (link on the first screen, section in the page)" a w))))))))
 ;; LW3YHU-phases-from-the-first-screen ends here
 
+;; [[file:../physics.org::#LW3YHU][LW3YHU-map-leads-to-every-phase]]
+(define-claim "LW3YHU" map-leads-to-every-phase
+    "In physics.html the first screen links the map, whose stage table links each phase's section; each click lands there."
+  (let ((chromium (chromium-program)) (page (repository-file "physics.html"))
+        (phases (mapcar (lambda (phase) (string-downcase (symbol-name phase))) *physics-phases*))
+        (anchors (mapcar #'phase-anchor *physics-phases*)))
+    (cond ((null chromium)
+           (format t "~&LW3YHU: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
+           (check (null chromium)))
+          (t
+           (check (probe-file page) "~A is missing: make html writes it" page)
+           (when (probe-file page)
+             (let* ((script (format nil "<script>window.addEventListener('load', function () {
+  var phases = [~{'~A'~^, ~}], anchors = [~{'~A'~^, ~}], landed = [];
+  var door = Array.from(document.querySelectorAll('a[href=\"#M4PD00\"]')).some(function (l) {
+    var r = l.getBoundingClientRect(); return r.top >= 0 && r.bottom <= window.innerHeight && r.width > 0; });
+  var map = document.getElementById('outline-container-M4PD00');
+  var rows = Array.from(map ? map.querySelectorAll('tr') : []).filter(function (r) {
+    return r.cells[0] && r.cells[0].tagName == 'TD' && phases.indexOf(r.cells[0].textContent.trim()) >= 0; });
+  var names = rows.map(function (r) { return r.cells[0].textContent.trim(); });
+  var i = 0;
+  function note () {
+    var pre = document.createElement('pre'); pre.id = 'map-check';
+    pre.textContent = 'map-check ' + (door ? 1 : 0) + ' ' + (names.join(',') || '-') + ' ' + landed.join(' ') + ' end';
+    document.body.appendChild(pre);
+  }
+  function next () {
+    if (i == phases.length) { note(); return; }
+    var a = anchors[i], row = rows[i];
+    var link = row && row.cells[1] && row.cells[1].querySelector('a[href=\"#' + a + '\"]');
+    if (!link) { landed.push('none'); i++; next(); return; }
+    link.click();
+    setTimeout(function () {
+      var heading = document.getElementById(a);
+      landed.push((heading ? Math.round(heading.getBoundingClientRect().top) : 'gone') + ':' + location.hash.slice(1));
+      i++; next();
+    }, 100);
+  }
+  next();
+});</script>" phases anchors))
+                    (dom (page-dom-with-script chromium script))
+                    (mark "id=\"map-check\">map-check ")
+                    (at (search mark dom))
+                    (words (and at (uiop:split-string (subseq dom (+ at (length mark)) (search " end" dom :start2 at))))))
+               (check (not (null words)) "the page noted nothing")
+               (when words
+                 (check (equal (first words) "1") "no link to the map on the first screen")
+                 (check (equal (second words) (format nil "~{~A~^,~}" phases))
+                        "the map's stage table names ~A, not the phases in run order" (second words))
+                 (check (= (length (cddr words)) (length anchors)) "the page noted ~S" words)
+                 (loop for phase in phases
+                       for a in anchors
+                       for w in (cddr words)
+                       do (let* ((colon (position #\: w))
+                                 (top (and colon (parse-integer w :end colon :junk-allowed t))))
+                            (check (and top (<= (abs top) 2) (string= (subseq w (1+ colon)) a))
+                                   "~A: its link in the map landed at ~A (top px:address), not at #~A"
+                                   phase w a))))))))))
+;; LW3YHU-map-leads-to-every-phase ends here
+
 ;; [[file:../physics.org::#O07FDP][O07FDP-both-files-registered]]
 (define-claim "O07FDP" both-files-registered
-    "The registry holds tangled/physics.lisp and tangled/physics-simd.lisp, in load order."
-  (check (equal '("physics.lisp" "physics-simd.lisp")
+    "The registry holds tangled/physics.lisp, tangled/physics-simd.lisp and tangled/workshop.lisp, in load order."
+  (check (equal '("physics.lisp" "physics-simd.lisp" "workshop.lisp")
                 (mapcar #'file-namestring luv-physics::*registered-files*)))
-  (check (equal '("tangled/physics.lisp" "tangled/physics-simd.lisp")
+  (check (equal '("tangled/physics.lisp" "tangled/physics-simd.lisp" "tangled/workshop.lisp")
                 (remove-duplicates (mapcar (lambda (r) (getf r :file)) luv-physics::*definitions*)
                                    :test #'equal :from-end t))))
 ;; O07FDP-both-files-registered ends here

@@ -105,7 +105,7 @@
   "Signal a user error unless an image with luv-physics is connected."
   (unless (luv-physics-image-ready-p)
     (user-error "luv-physics: this needs SLIME connected to an image that loaded luv-physics \
-\(M-x slime, then (load \"tools/boot.lisp\") (asdf:load-system \"luv-physics\"))")))
+\(M-x slime, then (load \"tools/boot.lisp\") (asdf:load-system \"luv-physics/workshop\"))")))
 
 (defun luv-physics-page-buffer ()
   "The buffer of the page: this one, or the one an edit buffer came from."

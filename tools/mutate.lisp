@@ -28,7 +28,7 @@
   "The tangled files whose definitions are mutated.")
 
 (defparameter *dependent-files* '("tangled/physics.lisp" "tangled/physics-simd.lisp"
-                                  "tests/physics-tests.lisp")
+                                  "tangled/workshop.lisp" "tests/physics-tests.lisp")
   "The files whose forms may inline, or be generated from, a mutated definition.")
 
 (defparameter *mutable-kinds* '(defun defmacro defmethod defparameter)
