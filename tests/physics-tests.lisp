@@ -494,7 +494,7 @@
 
 ;; [[file:../physics.org::#OWNJGP][OWNJGP-users-of-copied-definitions]]
 (define-claim "OWNJGP" users-of-copied-definitions
-    "The closure of W0RLD7 holds K3RNLS and S0LV3R; of W1D3KF holds F4M1LY; of BSOZ3U nothing more."
+    "The closure of W0RLD7 holds K3RNLS and S0LSTG; of W1D3KF holds F4M1LY; of BSOZ3U nothing more."
   (let* ((lines (luv-physics::page-lines-of nil))
          (forms (luv-physics::page-forms lines (luv-physics::engine-files))))
     (flet ((anchors-of (anchor)
@@ -504,7 +504,7 @@
                        (remove anchor forms :key (lambda (f) (getf f :anchor)) :test-not #'equal) forms))
               :test #'equal)))
       (check (member 'luv-physics::solver-row (loop for f in forms append (luv-physics::form-expanders (getf f :form)))))
-      (check (subsetp '("W0RLD7" "K3RNLS" "S0LV3R") (anchors-of "W0RLD7") :test #'equal) "~S" (anchors-of "W0RLD7"))
+      (check (subsetp '("W0RLD7" "K3RNLS" "S0LSTG") (anchors-of "W0RLD7") :test #'equal) "~S" (anchors-of "W0RLD7"))
       (check (subsetp '("W1D3KF" "F4M1LY") (anchors-of "W1D3KF") :test #'equal) "~S" (anchors-of "W1D3KF"))
       (check (equal '("BSOZ3U") (anchors-of "BSOZ3U")) "~S" (anchors-of "BSOZ3U")))))
 ;; OWNJGP-users-of-copied-definitions ends here
@@ -5378,10 +5378,10 @@ use before it. #QKS4GZ"
     "Featured kernels keep their docstrings and texts; the text compiled for every feature is the kernel."
   (loop for (name anchor features)
           in '((luv-physics::warm-start-range "#W4RMST" (:body-contacts :friction :rolling-resistance))
-               (luv-physics::solve-range "#S0LV3R" (:body-contacts :boxes :friction :rolling-resistance :restitution
+               (luv-physics::solve-range "#S0LSTG" (:body-contacts :boxes :friction :rolling-resistance :restitution
                                                     :hit-events :contact-events))
-               (luv-physics::prepare-frames-range "#PR3PAR" (:boxes))
-               (luv-physics::prepare-phase "#PR3PAR" (:body-contacts :boxes :friction :restitution :rolling-resistance :contact-events :hit-events))
+               (luv-physics::prepare-frames-range "#PRFRM2" (:boxes))
+               (luv-physics::prepare-phase "#PRSTG6" (:body-contacts :boxes :friction :restitution :rolling-resistance :contact-events :hit-events))
                (luv-physics::store-phase "#ST0R3S" (:body-contacts :boxes :friction :contact-events :hit-events :rolling-resistance))
                (luv-physics::finalize-phase "#F1NAL5" (:body-contacts :boxes :sleep :mortal))
                (luv-physics::warm-start-blocks/sse "#W1D3KF" (:body-contacts :friction :rolling-resistance))
@@ -5397,8 +5397,8 @@ use before it. #QKS4GZ"
              (check (and (= 5 (length text)) (equal features (fifth text))) "~(~A~) keeps ~S" name text))))
 ;; KTXT7V-kernel-is-its-text ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-held-mass-is-the-awake-mass]]
-(define-claim "PR3PAR" held-mass-is-the-awake-mass
+;; [[file:../physics.org::#PRSTG6][PRSTG6-held-mass-is-the-awake-mass]]
+(define-claim "PRSTG6" held-mass-is-the-awake-mass
     "held-mass-bound: the awake bodies' mass, sleepers left out, no bound while a box is posted."
   (let* ((world (make-physics-world :terrain (make-floor-terrain) :sleep t))
          (balls (loop for mass in '(1.0 2.0 4.0) for x from 1.0
@@ -5408,10 +5408,10 @@ use before it. #QKS4GZ"
     (check (= 3.0 (luv-physics::held-mass-bound world)) "the 4 kg ball asleep: ~A kg" (luv-physics::held-mass-bound world))
     (post-physics-box world 5.0 2.0 5.0 0.25 0.25 0.25)
     (check (= 1e30 (luv-physics::held-mass-bound world)) "a box posted: ~A kg" (luv-physics::held-mass-bound world))))
-;; PR3PAR-held-mass-is-the-awake-mass ends here
+;; PRSTG6-held-mass-is-the-awake-mass ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-bracing-holds-while-still]]
-(define-claim "PR3PAR" bracing-holds-while-still
+;; [[file:../physics.org::#PRSTG6][PRSTG6-bracing-holds-while-still]]
+(define-claim "PRSTG6" bracing-holds-while-still
     "A braced body stays braced while still, whatever its load; moving, it is unbraced."
   (let* ((world (luv-physics::make-shaft-world :sleep nil))
          (light (add-physics-body world 0.5 0.45 0.5 :radius 0.45 :mass 1.0)))
@@ -5438,10 +5438,10 @@ use before it. #QKS4GZ"
                (set-physics-body-velocity world light 0.0 0.0 0.0)
                (dotimes (i 30) (step-physics-world world))
                (check (braced-p) "stopped after moving at ~S m/s, the light ball is not braced" (list vx vy vz))))))
-;; PR3PAR-bracing-holds-while-still ends here
+;; PRSTG6-bracing-holds-while-still ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-brace-side-at-its-limits]]
-(define-claim "PR3PAR" brace-side-at-its-limits
+;; [[file:../physics.org::#PRSTG6][PRSTG6-brace-side-at-its-limits]]
+(define-claim "PRSTG6" brace-side-at-its-limits
     "brace-side: a braced row is static past 4x and 0.9, or to a link at least as heavy past 0.99."
   (flet ((side (braced-a braced-b inverse-a inverse-b rise)
            (luv-physics::brace-side
@@ -5458,10 +5458,10 @@ use before it. #QKS4GZ"
                                ((1 1 1.0 1.0 -0.995) nil) ((3 1 1.1 1.0 -1.0) nil) ((3 0 1.0 1.0 -0.995) nil))
           do (check (eq want (apply #'side case)) "braced, inverse masses and rise ~S: ~S, not ~S"
                     case (apply #'side case) want))))
-;; PR3PAR-brace-side-at-its-limits ends here
+;; PRSTG6-brace-side-at-its-limits ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-only-columns-link]]
-(define-claim "PR3PAR" only-columns-link
+;; [[file:../physics.org::#PRSTG6][PRSTG6-only-columns-link]]
+(define-claim "PRSTG6" only-columns-link
     "A ball straight on one braced ball is a link; one on two balls is none."
   (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil))
          (lower (add-physics-body world 1.5 0.25 1.5 :radius 0.25 :mass 1.0))
@@ -5478,10 +5478,10 @@ use before it. #QKS4GZ"
       (check (= (mark upper) 3) "the ball straight on another has the mark ~D, not 3" (mark upper))
       (check (= (mark lower) 1) "the column's lower ball has the mark ~D, not 1" (mark lower))
       (check (not (logtest (mark top) 2)) "the ball on two balls is a link (mark ~D)" (mark top)))))
-;; PR3PAR-only-columns-link ends here
+;; PRSTG6-only-columns-link ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-unloaded-contact-no-support]]
-(define-claim "PR3PAR" unloaded-contact-no-support
+;; [[file:../physics.org::#PRSTG6][PRSTG6-unloaded-contact-no-support]]
+(define-claim "PRSTG6" unloaded-contact-no-support
     "A column of two balls a centimetre from a wall: the wall's contact pushes nothing, and the upper ball is a link."
   (let ((terrain (make-voxel-terrain)))
     (fill-terrain terrain -16 -1 -16 16 32 16 nil)
@@ -5510,10 +5510,10 @@ use before it. #QKS4GZ"
           (check (zerop pushed) "the wall pushed with ~F N s" pushed))
         (check (= (mark upper) 3) "the upper ball has the mark ~D, not 3" (mark upper))
         (check (= (mark lower) 1) "the lower ball has the mark ~D, not 1" (mark lower))))))
-;; PR3PAR-unloaded-contact-no-support ends here
+;; PRSTG6-unloaded-contact-no-support ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-leaning-pair-makes-no-link]]
-(define-claim "PR3PAR" leaning-pair-makes-no-link
+;; [[file:../physics.org::#PRSTG6][PRSTG6-leaning-pair-makes-no-link]]
+(define-claim "PRSTG6" leaning-pair-makes-no-link
     "Two balls leaning on each other, each straight on a floor ball, are no links."
   (let ((terrain (make-voxel-terrain)) (r 0.24))
     (fill-terrain terrain -16 -1 -16 16 32 16 nil)
@@ -5536,10 +5536,10 @@ use before it. #QKS4GZ"
           (check (< (abs (- y h)) 0.03) "the arch fell: the left ball's centre is at ~,4F m, not near ~,4F" y h))
         (dolist (ball (list left right))
           (check (not (logtest (mark ball) 2)) "a leaning ball is a link (mark ~D)" (mark ball)))))))
-;; PR3PAR-leaning-pair-makes-no-link ends here
+;; PRSTG6-leaning-pair-makes-no-link ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-braced-body-stays-put]]
-(define-claim "PR3PAR" braced-body-stays-put
+;; [[file:../physics.org::#PRSTG6][PRSTG6-braced-body-stays-put]]
+(define-claim "PRSTG6" braced-body-stays-put
     "A braced body set rolling below the sleep speed stays under the heavy body that rests on it."
   (let* ((world (luv-physics::make-shaft-world :sleep nil))
          (light (add-physics-body world 0.5 0.45 0.5 :radius 0.45 :mass 1.0))
@@ -5552,10 +5552,10 @@ use before it. #QKS4GZ"
         (flet ((moved (h from) (sqrt (reduce #'+ (mapcar (lambda (a b) (expt (- a b) 2)) (at h) from)))))
           (check (< (moved light light-0) 0.0005) "the light ball moved ~,5F m" (moved light light-0))
           (check (< (moved heavy heavy-0) 0.001) "the heavy ball moved ~,5F m" (moved heavy heavy-0)))))))
-;; PR3PAR-braced-body-stays-put ends here
+;; PRSTG6-braced-body-stays-put ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-spin-friction-rate]]
-(define-claim "PR3PAR" spin-friction-rate
+;; [[file:../physics.org::#PRSTG6][PRSTG6-spin-friction-rate]]
+(define-claim "PRSTG6" spin-friction-rate
     "A ball spinning about the vertical on a floor slows at the patch's torque over its inertia."
   (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil))
          (r 0.25) (mu 0.6) (slop *physics-linear-slop*)
@@ -5571,9 +5571,9 @@ use before it. #QKS4GZ"
       (let ((expected (- 10.0 (* alpha 0.5))))
         (check (< (abs (- (spin) expected)) (* 0.01 expected))
                "after 0.5 s the ball spins at ~,4F rad/s, not ~,4F" (spin) expected)))))
-;; PR3PAR-spin-friction-rate ends here
+;; PRSTG6-spin-friction-rate ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-short-path-same-bits]]
+;; [[file:../physics.org::#PRSTG6][PRSTG6-short-path-same-bits]]
 (defun mixed-pile-before-prepare ()
   "A world of 300 balls of mixed radius (0.2 to 0.3 m), mass (0.5 to 1.5 kg), friction,
 restitution and rolling resistance dropped into the basin, stepped 60 times and then through
@@ -5593,7 +5593,7 @@ the phases of a step before the prepare phase. #PR3PAR"
                    w)
       (funcall phase w))))
 
-(define-claim "PR3PAR" short-path-same-bits
+(define-claim "PRSTG6" short-path-same-bits
     "The fill's short path for two awake bodies writes the rows the general path writes, to the bit."
   (let ((w (mixed-pile-before-prepare)))
     (flet ((filled (short)
@@ -5620,10 +5620,10 @@ the phases of a step before the prepare phase. #PR3PAR"
                (count nil (mapcar #'= (first general) (first short))))
         (check (equal (fifth general) (fifth short)) "~D side floats differ"
                (count nil (mapcar #'= (fifth general) (fifth short))))))))
-;; PR3PAR-short-path-same-bits ends here
+;; PRSTG6-short-path-same-bits ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-side-blocks-start-as-zeros]]
-(define-claim "PR3PAR" side-blocks-start-as-zeros
+;; [[file:../physics.org::#PRSTG6][PRSTG6-side-blocks-start-as-zeros]]
+(define-claim "PRSTG6" side-blocks-start-as-zeros
     "Rows with a radius on side b, and padding rows, keep zero side columns whatever the buffer held."
   (let ((w (mixed-pile-before-prepare)))
     (let ((cbuf (luv-physics::physics-world-constraints w)))
@@ -5650,7 +5650,7 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (> paired 300) "~D rows with a radius on side b" paired)
         (check (plusp padding) "no padding row")
         (check (plusp one-sided) "no row with nothing on side b")))))
-;; PR3PAR-side-blocks-start-as-zeros ends here
+;; PRSTG6-side-blocks-start-as-zeros ends here
 
 ;; [[file:../physics.org::#G7Q3XR][G7Q3XR-softness-is-the-closed-form]]
 (define-claim "G7Q3XR" softness-is-the-closed-form
@@ -5821,8 +5821,8 @@ the phases of a step before the prepare phase. #PR3PAR"
                    "~S, rb ~A: the velocities changed by ~S, not ~S" features rb got want))))))))
 ;; W4RMST-warm-start-formula ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
-(define-claim "S0LV3R" frames-are-perpendicular
+;; [[file:../physics.org::#S0LSTG][S0LSTG-frames-are-perpendicular]]
+(define-claim "S0LSTG" frames-are-perpendicular
     "Prepared tangent frames are orthonormal with their normals, in every family."
   (dolist (family (available-kernel-families))
     (let ((world (prepared-basin-world family)) (worst 0.0) (rows 0))
@@ -5838,10 +5838,10 @@ the phases of a step before the prepare phase. #PR3PAR"
        world)
       (check (> rows 2000) "~A: only ~D constraints prepared" family rows)
       (check (< worst 1e-6) "~A: a frame is off by ~,3E" family worst))))
-;; S0LV3R-frames-are-perpendicular ends here
+;; S0LSTG-frames-are-perpendicular ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-kept-gap-is-current]]
-(define-claim "S0LV3R" kept-gap-is-current
+;; [[file:../physics.org::#S0LSTG][S0LSTG-kept-gap-is-current]]
+(define-claim "S0LSTG" kept-gap-is-current
     "The kept gap equals the gap recomputed from the current deltas, before and after each substep."
   (dolist (family (available-kernel-families))
     (let ((world (prepared-basin-world family)) (checked 0) (wrong 0))
@@ -5873,10 +5873,10 @@ the phases of a step before the prepare phase. #PR3PAR"
               (check-gaps (+ elapsed h))))))
       (check (> checked 10000) "~A: only ~D gaps checked" family checked)
       (check (zerop wrong) "~A: ~D of ~D kept gaps differ from the current gap" family wrong checked))))
-;; S0LV3R-kept-gap-is-current ends here
+;; S0LSTG-kept-gap-is-current ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-one-row-closed-form]]
-(define-claim "S0LV3R" one-row-closed-form
+;; [[file:../physics.org::#S0LSTG][S0LSTG-one-row-closed-form]]
+(define-claim "S0LSTG" one-row-closed-form
     "One relax row: normal impulse 1.5 and velocities exactly; spin friction clamped to +-0.75 or kept inside."
   (loop for (spin want) in '((1.0 -0.75) (-1.0 0.75) (0.5 -0.5))
         do (let ((cbuf (luv-physics::make-constraint-columns))
@@ -5903,10 +5903,10 @@ the phases of a step before the prepare phase. #PR3PAR"
                       spin (column 'spin-impulse) want)
                (check (equal (row 0) (list 0.0 -0.5 0.0 0.0 (* -0.5 want) 0.0)) "spinning at ~A body a is ~S" spin (row 0))
                (check (equal (row 1) (list 0.0 -1.5 0.0 0.0 (+ spin (* 0.5 want)) 0.0)) "spinning at ~A body b is ~S" spin (row 1))))))
-;; S0LV3R-one-row-closed-form ends here
+;; S0LSTG-one-row-closed-form ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-frictionless-pair-shares]]
-(define-claim "S0LV3R" frictionless-pair-shares
+;; [[file:../physics.org::#S0LSTG][S0LSTG-frictionless-pair-shares]]
+(define-claim "S0LSTG" frictionless-pair-shares
     "Without friction two equal balls meeting head-on without bounce leave together at half the speed."
   (dolist (family (available-kernel-families))
     (let* ((world (make-physics-world :terrain (make-floor-terrain) :features '(:terrain :body-contacts)
@@ -5929,10 +5929,10 @@ the phases of a step before the prepare phase. #PR3PAR"
           (check (every (lambda (u) (< (abs u) 1e-5)) (list ax ay bx by))
                  "~(~A~): across z the balls move at ~{~,6F~^ ~}" family (list ax ay bx by))
           (check (< (abs (- (+ az bz) 2.0)) 1e-5) "~(~A~): the momentum along z is ~,6F" family (+ az bz)))))))
-;; S0LV3R-frictionless-pair-shares ends here
+;; S0LSTG-frictionless-pair-shares ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-frictionless-pile-alike]]
-(define-claim "S0LV3R" frictionless-pile-alike
+;; [[file:../physics.org::#S0LSTG][S0LSTG-frictionless-pile-alike]]
+(define-claim "S0LSTG" frictionless-pile-alike
     "A pile without friction ends in one state in every family, and no ball turns."
   (let ((hashes '()))
     (dolist (family (available-kernel-families))
@@ -5952,7 +5952,7 @@ the phases of a step before the prepare phase. #PR3PAR"
     (check (= 1 (length (remove-duplicates hashes :key #'cdr)))
            "the families end in different states: ~{~(~A~) ~A~^, ~}"
            (loop for (f . h) in (reverse hashes) collect f collect h))))
-;; S0LV3R-frictionless-pile-alike ends here
+;; S0LSTG-frictionless-pile-alike ends here
 
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-rebound-ratios]]
 (define-claim "R3ST1T" rebound-ratios
