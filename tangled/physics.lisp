@@ -4229,14 +4229,164 @@ walk keeps its values in registers. #P41RS7"
               (when full (setf crowded t))
               (when strikes (return-from scan-listed-pairs (values p crowded)))))))
       (values count crowded))))
+;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
+;; [[file:../physics.org::#P41HLD][The pairs of a list that holds:1]]
+(defmacro pair-listed-pairs ()
+  "The listed pairs whose rows both stayed (scan-listed-pairs), each pair that strikes taken
+again whole, its overlap already counted: expanded in the pair phase while its list holds. #P41HLD"
+  `(let ((p 0))
+     (declare (type index p))
+     (loop (multiple-value-setq (p crowded) (scan-listed-pairs world p crowded))
+           (when (>= p (pair-list-count plist)) (return))
+           (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
+             (declare (type index i j))
+             (pair (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
+                   (aref vx i) (aref vy i) (aref vz i)
+                   (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
+                   (aref vx j) (aref vy j) (aref vz j) -1 -1))
+           (incf p))))
+
+(defmacro pair-loose-rows ()
+  "Each loose row against the rows of its 27 cells that are not loose, in the awake grid:
+expanded in the pair phase while its list holds. #P41HLD"
+  `(dotimes (q strays)
+     (let ((i (aref loose-rows q)) (refused 0))
+       (declare (type index refused))
+       (when (zerop (logand (aref flags i) +flag-terrain-only+))
+         (block walk
+           (do-grid-neighbours (j grid (aref x i) (aref y i) (aref z i))
+             (when (and (zerop (aref loose j))
+                        (zerop (logand (aref flags j) +flag-terrain-only+))
+                        (rows-meet-p filtering (aref flags i) (aref flags j)))
+               (rows i j (when (>= (incf refused) +overlaps-per-body+) (return-from walk))))))))))
+
+(defmacro pair-loose-among-loose ()
+  "Each pair of loose rows, from the lower row, in a grid of the loose rows alone: expanded in
+the pair phase while its list holds. #P41HLD"
+  `(when (> strays 1)
+     (let ((lgrid (pair-list-loose-grid plist)) (lx (pair-list-loose-x plist))
+           (ly (pair-list-loose-y plist)) (lz (pair-list-loose-z plist)))
+       (declare (type f32-column lx ly lz))
+       (dotimes (q strays)
+         (let ((i (aref loose-rows q)))
+           (setf (aref lx q) (aref x i) (aref ly q) (aref y i) (aref lz q) (aref z i))))
+       ;; hashed: a dense box sized by the loose rows' spread could outgrow its room
+       (build-hash-grid lgrid cell strays lx ly lz loose-rows :dense-allowed nil)
+       (dotimes (q strays)
+         (let ((i (aref loose-rows q)) (refused 0))
+           (declare (type index refused))
+           (when (zerop (logand (aref flags i) +flag-terrain-only+))
+             (block walk
+               (do-grid-neighbours (j lgrid (aref x i) (aref y i) (aref z i))
+                 (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+))
+                            (rows-meet-p filtering (aref flags i) (aref flags j)))
+                   (rows i j (when (>= (incf refused) +overlaps-per-body+)
+                               (return-from walk))))))))))))
+;; The pairs of a list that holds:1 ends here
+
+;; [[file:../physics.org::#P41BLD][Building the list again:1]]
+(defmacro pair-list-walk ()
+  "The walk of row I (at place E of the grid's order, its cell's half runs in RUNS) in the
+build: take each row within the widest reach plus the skin, in order, and stop at the
++overlaps-per-body+th refusal. Expanded in pair-list-build. #P41BLD"
+  `(let* ((widest (+ (aref radius i) rmax margin skin)) (reach2 (* widest widest))
+          (refused 0))
+     (declare (type single-float widest reach2) (type index refused))
+     (block walk
+       (flet ((take (found)
+                ;; the FOUND places listed in NEAR, in order; the walk stops
+                ;; at its +overlaps-per-body+th refusal
+                (declare (type index found))
+                (incf (pair-list-examined plist) found)
+                (dotimes (q found)
+                  (let ((j (aref items (aref near q))))
+                    (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
+                               (rows-meet-p filtering (aref flags i) (aref flags j)))
+                      (if (or (not crowded) (overlap-room (pair-list-overlaps plist) i j radius))
+                          (progn (pair-list-push plist i j)
+                                 (pair-of-rows i j))
+                          (progn (setf crowd t)
+                                 (when (>= (incf refused) +overlaps-per-body+)
+                                   (return-from walk)))))))))
+         (if (not crowd)
+             (take (grid-list-near grid e runs run-count reach2))
+             ;; once a walk of this build was refused, each run is listed a
+             ;; chunk at a time, so a walk that stops lists little beyond it
+             (dotimes (q run-count)
+               (let ((end (aref runs (+ (* 3 q) 1))))
+                 (loop for start of-type fixnum from (if (= q 0) (1+ e) (aref runs (* 3 q)))
+                         below end by +crowded-walk-chunk+
+                       do (setf (aref chunk 1) (1+ e) (aref chunk 2) -1
+                                (aref chunk 3) start (aref chunk 4) (min end (+ start +crowded-walk-chunk+))
+                                (aref chunk 5) (aref runs (+ (* 3 q) 2)))
+                          (take (grid-list-near grid e chunk 2 reach2))))))))))
+
+(defmacro pair-list-build ()
+  "Build the pair list again, taking each pair as it is found: the half neighbourhood of each
+body's cell, in the grid's order, within the widest reach plus the skin; after a refused walk,
+each run a chunk at a time. Expanded in the pair phase. #P41BLD"
+  `(let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+         (runs (make-array 42 :element-type 'fixnum))
+         ;; a crowded walk's chunk: an empty first run, then a piece of one run
+         (chunk (make-array 6 :element-type 'fixnum :initial-element 0))
+         (cell-key -1) (run-count 0) (crowd nil))
+     (declare (type fixnum-column items keys near runs chunk)
+              (dynamic-extent runs chunk) (type fixnum cell-key) (type (integer 0 14) run-count))
+     (setf (pair-list-count plist) 0 (pair-list-examined plist) 0)
+     (dotimes (e (hash-grid-count grid))
+       (let ((i (aref items e)))
+         (when (zerop (logand (aref flags i) +flag-terrain-only+))
+           ;; the items of one cell are consecutive in the grid's order and share its runs
+           (unless (= (aref keys e) cell-key)
+             (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
+           (pair-list-walk))))
+     (pair-list-anchor plist awake n cell)
+     (setf (pair-list-built-step plist) (contact-table-step table)
+           (pair-list-loose-count plist) 0)))
+;; Building the list again:1 ends here
+
+;; [[file:../physics.org::#P41LEN][Leaning on sleepers:1]]
+(defmacro pair-leans-on-sleepers ()
+  "Lean contacts: each awake body that meets bodies onto the sleepers within its reach, in the
+order of their rows. Expanded in the pair phase. #P41LEN"
+  `(when any-sleeping
+     (dotimes (i n)
+       (when (zerop (logand (aref flags i) +flag-terrain-only+))
+         (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i)) (hi (aref handle i))
+               (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
+           ;; the sleepers within reach, in the order of their rows: the lean contacts
+           ;; are touched, and so ordered, as they would be from any grids
+           (do-sleepers-in-row-order
+               (h world xi yi zi)
+               (let ((slot (handle-index h)))
+                 (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+                      (= (aref (handle-table-generation ids) slot) (handle-generation h))
+                      (let ((row (aref (handle-table-local ids) slot)))
+                        (and (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
+                             (rows-meet-p filtering (aref flags i) (aref (body-columns-flags sleeping) row))
+                             ;; pair-contact's own first test: a pair farther apart than
+                             ;; this touches no contact
+                             (let ((dx (- (aref (body-columns-x sleeping) row) xi))
+                                   (dy (- (aref (body-columns-y sleeping) row) yi))
+                                   (dz (- (aref (body-columns-z sleeping) row) zi))
+                                   (reach (+ ri (aref (body-columns-radius sleeping) row) margin)))
+                               (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
+             (let ((row (aref (handle-table-local ids) (handle-index h))))
+               (pair xi yi zi ri hi vxi vyi vzi
+                     (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
+                     (aref (body-columns-z sleeping) row)
+                     (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0 -1 -1))))))))
+;; Leaning on sleepers:1 ends here
+
+;; [[file:../physics.org::#P41STG][The pair phase, stage by stage:1]]
 (defun pair-phase (world)
   "The pair phase: contacts between awake bodies (each pair once) and lean contacts from awake bodies
 onto the sleepers they reach. The pairs come from the pair list while it still holds: the
 listed pairs whose rows both stayed near their anchors, and for each loose row the awake
 bodies of its 27 cells. Otherwise the list is built again, walking the half neighbourhood of
 each body's cell in the grid's order. A candidate within reach becomes a contact only when its
-gap is under the speculative distance. #P41RS7"
+gap is under the speculative distance. #P41STG"
   (let* ((awake (physics-world-awake world))
          (sleeping (physics-world-sleeping world))
          (ids (physics-world-ids world))
@@ -4298,127 +4448,17 @@ gap is under the speculative distance. #P41RS7"
                 (declare (type fixnum-column pairs loose loose-rows))
                 ;; the walk stops at a pair that strikes, which is taken here again whole,
                 ;; its overlap already counted
-                (let ((p 0))
-                  (declare (type index p))
-                  (loop (multiple-value-setq (p crowded) (scan-listed-pairs world p crowded))
-                        (when (>= p (pair-list-count plist)) (return))
-                        (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
-                          (declare (type index i j))
-                          (pair (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
-                                (aref vx i) (aref vy i) (aref vz i)
-                                (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
-                                (aref vx j) (aref vy j) (aref vz j) -1 -1))
-                        (incf p)))
-                (dotimes (q strays)
-                  (let ((i (aref loose-rows q)) (refused 0))
-                    (declare (type index refused))
-                    (when (zerop (logand (aref flags i) +flag-terrain-only+))
-                      (block walk
-                        (do-grid-neighbours (j grid (aref x i) (aref y i) (aref z i))
-                          (when (and (zerop (aref loose j))
-                                     (zerop (logand (aref flags j) +flag-terrain-only+))
-                                     (rows-meet-p filtering (aref flags i) (aref flags j)))
-                            (rows i j (when (>= (incf refused) +overlaps-per-body+) (return-from walk)))))))))
-                (when (> strays 1)
-                  (let ((lgrid (pair-list-loose-grid plist)) (lx (pair-list-loose-x plist))
-                        (ly (pair-list-loose-y plist)) (lz (pair-list-loose-z plist)))
-                    (declare (type f32-column lx ly lz))
-                    (dotimes (q strays)
-                      (let ((i (aref loose-rows q)))
-                        (setf (aref lx q) (aref x i) (aref ly q) (aref y i) (aref lz q) (aref z i))))
-                    ;; hashed: a dense box sized by the loose rows' spread could outgrow its room
-                    (build-hash-grid lgrid cell strays lx ly lz loose-rows :dense-allowed nil)
-                    (dotimes (q strays)
-                      (let ((i (aref loose-rows q)) (refused 0))
-                        (declare (type index refused))
-                        (when (zerop (logand (aref flags i) +flag-terrain-only+))
-                          (block walk
-                            (do-grid-neighbours (j lgrid (aref x i) (aref y i) (aref z i))
-                              (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+))
-                                         (rows-meet-p filtering (aref flags i) (aref flags j)))
-                                (rows i j (when (>= (incf refused) +overlaps-per-body+)
-                                            (return-from walk))))))))))))
+                (pair-listed-pairs)
+                (pair-loose-rows)
+                (pair-loose-among-loose))
               ;; build the list again: the half neighbourhood of each body's cell, in the
               ;; grid's order, within the widest reach plus the skin
-              (let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
-                    (runs (make-array 42 :element-type 'fixnum))
-                    ;; a crowded walk's chunk: an empty first run, then a piece of one run
-                    (chunk (make-array 6 :element-type 'fixnum :initial-element 0))
-                    (cell-key -1) (run-count 0) (crowd nil))
-                (declare (type fixnum-column items keys near runs chunk)
-                         (dynamic-extent runs chunk) (type fixnum cell-key) (type (integer 0 14) run-count))
-                (setf (pair-list-count plist) 0 (pair-list-examined plist) 0)
-                (dotimes (e (hash-grid-count grid))
-                  (let ((i (aref items e)))
-                    (when (zerop (logand (aref flags i) +flag-terrain-only+))
-                      ;; the items of one cell are consecutive in the grid's order and share its runs
-                      (unless (= (aref keys e) cell-key)
-                        (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
-                      (let* ((widest (+ (aref radius i) rmax margin skin)) (reach2 (* widest widest))
-                             (refused 0))
-                        (declare (type single-float widest reach2) (type index refused))
-                        (block walk
-                          (flet ((take (found)
-                                   ;; the FOUND places listed in NEAR, in order; the walk stops
-                                   ;; at its +overlaps-per-body+th refusal
-                                   (declare (type index found))
-                                   (incf (pair-list-examined plist) found)
-                                   (dotimes (q found)
-                                     (let ((j (aref items (aref near q))))
-                                       (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
-                                                  (rows-meet-p filtering (aref flags i) (aref flags j)))
-                                         (if (or (not crowded) (overlap-room (pair-list-overlaps plist) i j radius))
-                                             (progn (pair-list-push plist i j)
-                                                    (pair-of-rows i j))
-                                             (progn (setf crowd t)
-                                                    (when (>= (incf refused) +overlaps-per-body+)
-                                                      (return-from walk)))))))))
-                            (if (not crowd)
-                                (take (grid-list-near grid e runs run-count reach2))
-                                ;; once a walk of this build was refused, each run is listed a
-                                ;; chunk at a time, so a walk that stops lists little beyond it
-                                (dotimes (q run-count)
-                                  (let ((end (aref runs (+ (* 3 q) 1))))
-                                    (loop for start of-type fixnum from (if (= q 0) (1+ e) (aref runs (* 3 q)))
-                                            below end by +crowded-walk-chunk+
-                                          do (setf (aref chunk 1) (1+ e) (aref chunk 2) -1
-                                                   (aref chunk 3) start (aref chunk 4) (min end (+ start +crowded-walk-chunk+))
-                                                   (aref chunk 5) (aref runs (+ (* 3 q) 2)))
-                                             (take (grid-list-near grid e chunk 2 reach2))))))))))))
-                (pair-list-anchor plist awake n cell)
-                (setf (pair-list-built-step plist) (contact-table-step table)
-                      (pair-list-loose-count plist) 0))))
+              (pair-list-build)))
         (setf (pair-list-step plist) (contact-table-step table))
         ;; slow or fast, an awake body reaching a sleeper leans on it
-        (when any-sleeping
-          (dotimes (i n)
-            (when (zerop (logand (aref flags i) +flag-terrain-only+))
-              (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i)) (hi (aref handle i))
-                    (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
-                ;; the sleepers within reach, in the order of their rows: the lean contacts
-                ;; are touched, and so ordered, as they would be from any grids
-                (do-sleepers-in-row-order
-                    (h world xi yi zi)
-                    (let ((slot (handle-index h)))
-                      (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                           (= (aref (handle-table-generation ids) slot) (handle-generation h))
-                           (let ((row (aref (handle-table-local ids) slot)))
-                             (and (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
-                                  (rows-meet-p filtering (aref flags i) (aref (body-columns-flags sleeping) row))
-                                  ;; pair-contact's own first test: a pair farther apart than
-                                  ;; this touches no contact
-                                  (let ((dx (- (aref (body-columns-x sleeping) row) xi))
-                                        (dy (- (aref (body-columns-y sleeping) row) yi))
-                                        (dz (- (aref (body-columns-z sleeping) row) zi))
-                                        (reach (+ ri (aref (body-columns-radius sleeping) row) margin)))
-                                    (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
-                  (let ((row (aref (handle-table-local ids) (handle-index h))))
-                    (pair xi yi zi ri hi vxi vyi vzi
-                          (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
-                          (aref (body-columns-z sleeping) row)
-                          (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0 -1 -1)))))))))
+        (pair-leans-on-sleepers)))
     world))
-;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
+;; The pair phase, stage by stage:1 ends here
 
 ;; [[file:../physics.org::#MYWH16][Sphere against cells: the overshoot rule keeps seams smooth:1]]
 (defmacro with-cell-closest-point ((nx ny nz px py pz separation d2 ox oy oz)
@@ -4531,11 +4571,141 @@ open. #MYWH16"
               (setf (ldb (byte 1 (+ dx (* 3 dy) (* 9 dz))) (aref masks span)) 1)))))))
   "For a span of one or two cells along x, y and z (bits 0, 1 and 2 of the index set for two),
 the bits of the 27-bit neighbourhood mask that lie inside it. #MYWH16")
+;; Sphere against cells: the overshoot rule keeps seams smooth:1 ends here
 
+;; [[file:../physics.org::#MYWGTH][Gathering the cells:1]]
+(defmacro terrain-block-mask ()
+  "The solid cells of row I's span X0..X1, Y0..Y1, Z0..Z1 (at most two cells a side, a 2x2x2
+block in one chunk) as the bits of its 27-bit mask: eight reads at fixed offsets, no loop, then
+only the cells in the span kept. Expanded in terrain-gather-mask. #MYWGTH"
+  `(let ((chunk (chunk-at (chunk-key x0 y0 z0)))
+         (o (cell-offset x0 y0 z0)))
+     (declare (type chunk-storage chunk) (type (integer 0 4095) o))
+     (flet ((solid-bit (offset bit)
+              (declare (type (integer 0 4095) offset) (type (integer 0 13) bit))
+              ;; a cell's byte plus 255, shifted right eight places: 1 when solid
+              (ash (ash (+ (aref chunk offset) 255) -8) bit)))
+       (declare (inline solid-bit))
+       (let ((sx 1) (sz (ash 1 +chunk-bits+)) (sy (ash 1 (* 2 +chunk-bits+))))
+         (setf mask (logand (aref +span-masks+ (+ (- x1 x0) (* 2 (- y1 y0)) (* 4 (- z1 z0))))
+                            (logior (solid-bit o 0) (solid-bit (+ o sx) 1)
+                                    (solid-bit (+ o sy) 3) (solid-bit (+ o sx sy) 4)
+                                    (solid-bit (+ o sz) 9) (solid-bit (+ o sx sz) 10)
+                                    (solid-bit (+ o sy sz) 12) (solid-bit (+ o sx sy sz) 13))))))))
+
+(defmacro terrain-gather-mask ()
+  "Set MASK to the solid cells of the (at most) 3x3x3 neighbourhood X0..X1, Y0..Y1, Z0..Z1 of
+row I, unless the row stayed near its anchor and the anchor had no solid cell near it: expanded
+in the terrain phase. #MYWGTH"
+  `(unless (and use-clear (zerop (aref loose i)) (= (aref clear i) 1))
+   (cond
+     ;; the common case, at most two cells a side and a 2x2x2 block in one chunk:
+     ;; eight reads at fixed offsets, no loop, then only the cells in the span kept
+     ((and (<= (- x1 x0) 1) (<= (- y1 y0) 1) (<= (- z1 z0) 1)
+           (= (ash x0 (- +chunk-bits+)) (ash (1+ x0) (- +chunk-bits+)))
+           (= (ash y0 (- +chunk-bits+)) (ash (1+ y0) (- +chunk-bits+)))
+           (= (ash z0 (- +chunk-bits+)) (ash (1+ z0) (- +chunk-bits+))))
+      (terrain-block-mask))
+     ;; otherwise cell by cell, each through the chunk it lies in
+     (t
+       (loop for iz of-type fixnum from z0 to z1 do
+         (loop for iy of-type fixnum from y0 to y1 do
+           (loop for ix of-type fixnum from x0 to x1 do
+             (when (cell-solid-p ix iy iz)
+               (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))))))
+
+(defmacro terrain-note-clear ()
+  "In the step that built the pair list, note in CLEAR whether every cell within row I's reach
+plus 0.45 skins is air: expanded in the terrain phase. #MYWGTH"
+  `(when fresh
+     (setf (aref clear i)
+           (if (and (zerop mask)
+                    (let ((wide (+ reach widen)))
+                      (loop for iz of-type fixnum from (cell-floor (- cz wide)) to (cell-floor (+ cz wide))
+                            always (loop for iy of-type fixnum from (cell-floor (- cy wide)) to (cell-floor (+ cy wide))
+                                         always (loop for ix of-type fixnum from (cell-floor (- cx wide))
+                                                        to (cell-floor (+ cx wide))
+                                                      never (cell-solid-p ix iy iz))))))
+               1 0))))
+;; Gathering the cells:1 ends here
+
+;; [[file:../physics.org::#MYWCNT][A contact per cell:1]]
+(defmacro terrain-outside-contact ()
+  "Row I's contact with the solid cell IX IY IZ whose closest point lies outside the body: the
+overshoot rule, the nearest solid cell so far, a fast approach's impact normal, then the contact
+when its gap is under the speculative distance. Expanded in terrain-cell-contacts. #MYWCNT"
+  `(when (and (<= d2 (* reach reach))
+              (not (or (and (/= ox 0) (solid (+ ix ox) iy iz))
+                       (and (/= oy 0) (solid ix (+ iy oy) iz))
+                       (and (/= oz 0) (solid ix iy (+ iz oz)))
+                       (and (/= ox 0) (/= oy 0) (solid (+ ix ox) (+ iy oy) iz))
+                       (and (/= ox 0) (/= oz 0) (solid (+ ix ox) iy (+ iz oz)))
+                       (and (/= oy 0) (/= oz 0) (solid ix (+ iy oy) (+ iz oz)))
+                       (and (/= ox 0) (/= oy 0) (/= oz 0)
+                            (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
+     (when (< d2 (aref near i)) (setf (aref near i) d2))
+     (multiple-value-bind (nx ny nz sep)
+         (multiple-value-bind (nx ny nz sep) (finish)
+           ;; a fast approach strikes the cell joined with its solid face
+           ;; neighbours, which read through the chunk: they may lie
+           ;; outside the gathered span
+           (if (and (> (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz)) threshold)
+                    (> sep 0.0))
+               (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
+                              threshold
+                              (if (cell-solid-p (- ix 1) iy iz) (- fx 1.0) fx)
+                              (if (cell-solid-p ix (- iy 1) iz) (- fy 1.0) fy)
+                              (if (cell-solid-p ix iy (- iz 1)) (- fz 1.0) fz)
+                              (if (cell-solid-p (+ ix 1) iy iz) (+ fx 2.0) (+ fx 1.0))
+                              (if (cell-solid-p ix (+ iy 1) iz) (+ fy 2.0) (+ fy 1.0))
+                              (if (cell-solid-p ix iy (+ iz 1)) (+ fz 2.0) (+ fz 1.0)))
+               (values nx ny nz sep)))
+       (when (< sep (speculative-distance
+                     (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
+                     dt slop ahead gstep))
+         (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
+                        nx ny nz sep px py pz 0.0 0.0 0.0)))))
+
+(defmacro terrain-inside-contact ()
+  "Row I's contact with the solid cell IX IY IZ that holds its centre: pushed out through a
+face (inside-face), and the body counted buried. Expanded in terrain-cell-contacts. #MYWCNT"
+  `(progn
+     (setf (aref near i) 0.0)
+     (incf buried)
+     (multiple-value-bind (nx ny nz px py pz sep)
+         (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
+                      ix iy iz)
+       (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
+                      nx ny nz sep px py pz 0.0 0.0 0.0))))
+
+(defmacro terrain-cell-contacts ()
+  "Offer a contact for each solid cell of row I's MASK: expanded in the terrain phase. #MYWCNT"
+  `(unless (zerop mask)
+     (flet ((solid (ix iy iz)
+              (declare (type fixnum ix iy iz))
+              (logbitp (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))) mask)))
+       (declare (inline solid))
+       (loop for iz of-type fixnum from z0 to z1 do
+         (loop for iy of-type fixnum from y0 to y1 do
+           (loop for ix of-type fixnum from x0 to x1 do
+             (when (solid ix iy iz)
+               (let ((fx (float ix 1.0)) (fy (float iy 1.0)) (fz (float iz 1.0))
+                     (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
+                 (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
+                     (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
+                   ;; outside: the overshoot rule, the nearest solid cell so far, then
+                   ;; the contact. A cell the rule silences has a solid cell nearer
+                   ;; the centre, so the nearest is among those it keeps
+                   (terrain-outside-contact)
+                   ;; inside: push out through a face, and count the body buried
+                   (terrain-inside-contact))))))))))
+;; A contact per cell:1 ends here
+
+;; [[file:../physics.org::#MYWSTG][The terrain phase, stage by stage:1]]
 (defun terrain-phase (world)
   "The terrain phase: each awake body gathers the solid cells within its reach into a 27-bit mask and
 offers one contact per cell whose face, edge or corner passes the overshoot rule and whose gap
-is under the speculative distance. #MYWH16"
+is under the speculative distance. #MYWSTG"
   (declare #.+kernel-policy+)
   (let ((terrain (physics-world-terrain world)))
     (when terrain
@@ -4600,112 +4770,20 @@ is under the speculative distance. #MYWH16"
               (declare (type fixnum x0 x1 y0 y1 z0 z1) (type (unsigned-byte 27) mask))
               ;; gather the solid cells of the (at most) 3x3x3 neighbourhood, unless the row
               ;; stayed near its anchor and the anchor had no solid cell near it
-              (unless (and use-clear (zerop (aref loose i)) (= (aref clear i) 1))
-              (cond
-                ;; the common case, at most two cells a side and a 2x2x2 block in one chunk:
-                ;; eight reads at fixed offsets, no loop, then only the cells in the span kept
-                ((and (<= (- x1 x0) 1) (<= (- y1 y0) 1) (<= (- z1 z0) 1)
-                      (= (ash x0 (- +chunk-bits+)) (ash (1+ x0) (- +chunk-bits+)))
-                      (= (ash y0 (- +chunk-bits+)) (ash (1+ y0) (- +chunk-bits+)))
-                      (= (ash z0 (- +chunk-bits+)) (ash (1+ z0) (- +chunk-bits+))))
-                 (let ((chunk (chunk-at (chunk-key x0 y0 z0)))
-                       (o (cell-offset x0 y0 z0)))
-                   (declare (type chunk-storage chunk) (type (integer 0 4095) o))
-                   (flet ((solid-bit (offset bit)
-                            (declare (type (integer 0 4095) offset) (type (integer 0 13) bit))
-                            ;; a cell's byte plus 255, shifted right eight places: 1 when solid
-                            (ash (ash (+ (aref chunk offset) 255) -8) bit)))
-                     (declare (inline solid-bit))
-                     (let ((sx 1) (sz (ash 1 +chunk-bits+)) (sy (ash 1 (* 2 +chunk-bits+))))
-                       (setf mask (logand (aref +span-masks+ (+ (- x1 x0) (* 2 (- y1 y0)) (* 4 (- z1 z0))))
-                                          (logior (solid-bit o 0) (solid-bit (+ o sx) 1)
-                                                  (solid-bit (+ o sy) 3) (solid-bit (+ o sx sy) 4)
-                                                  (solid-bit (+ o sz) 9) (solid-bit (+ o sx sz) 10)
-                                                  (solid-bit (+ o sy sz) 12) (solid-bit (+ o sx sy sz) 13))))))))
-                ;; otherwise cell by cell, each through the chunk it lies in
-                (t
-                  (loop for iz of-type fixnum from z0 to z1 do
-                    (loop for iy of-type fixnum from y0 to y1 do
-                      (loop for ix of-type fixnum from x0 to x1 do
-                        (when (cell-solid-p ix iy iz)
-                          (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))))))))))))))
+              (terrain-gather-mask)
               ;; in the step that built the pair list, each row's anchor is its centre: note
               ;; whether every cell within its reach plus 0.45 skins is air
-              (when fresh
-                (setf (aref clear i)
-                      (if (and (zerop mask)
-                               (let ((wide (+ reach widen)))
-                                 (loop for iz of-type fixnum from (cell-floor (- cz wide)) to (cell-floor (+ cz wide))
-                                       always (loop for iy of-type fixnum from (cell-floor (- cy wide)) to (cell-floor (+ cy wide))
-                                                    always (loop for ix of-type fixnum from (cell-floor (- cx wide))
-                                                                   to (cell-floor (+ cx wide))
-                                                                 never (cell-solid-p ix iy iz))))))
-                          1 0)))
+              (terrain-note-clear)
               ;; as far as the cells gathered reach, until a solid one nearer is met below
               (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
               ;; a body that can travel past its margin this step also sweeps its path
               (when (> travel margin)
                 (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
                                        (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
-              (unless (zerop mask)
-                (flet ((solid (ix iy iz)
-                         (declare (type fixnum ix iy iz))
-                         (logbitp (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))) mask)))
-                  (declare (inline solid))
-                  (loop for iz of-type fixnum from z0 to z1 do
-                    (loop for iy of-type fixnum from y0 to y1 do
-                      (loop for ix of-type fixnum from x0 to x1 do
-                        (when (solid ix iy iz)
-                          (let ((fx (float ix 1.0)) (fy (float iy 1.0)) (fz (float iz 1.0))
-                                (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
-                            (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
-                                (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
-                              ;; outside: the overshoot rule, the nearest solid cell so far, then
-                              ;; the contact. A cell the rule silences has a solid cell nearer
-                              ;; the centre, so the nearest is among those it keeps
-                              (when (and (<= d2 (* reach reach))
-                                         (not (or (and (/= ox 0) (solid (+ ix ox) iy iz))
-                                                  (and (/= oy 0) (solid ix (+ iy oy) iz))
-                                                  (and (/= oz 0) (solid ix iy (+ iz oz)))
-                                                  (and (/= ox 0) (/= oy 0) (solid (+ ix ox) (+ iy oy) iz))
-                                                  (and (/= ox 0) (/= oz 0) (solid (+ ix ox) iy (+ iz oz)))
-                                                  (and (/= oy 0) (/= oz 0) (solid ix (+ iy oy) (+ iz oz)))
-                                                  (and (/= ox 0) (/= oy 0) (/= oz 0)
-                                                       (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
-                                (when (< d2 (aref near i)) (setf (aref near i) d2))
-                                (multiple-value-bind (nx ny nz sep)
-                                    (multiple-value-bind (nx ny nz sep) (finish)
-                                      ;; a fast approach strikes the cell joined with its solid face
-                                      ;; neighbours, which read through the chunk: they may lie
-                                      ;; outside the gathered span
-                                      (if (and (> (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz)) threshold)
-                                               (> sep 0.0))
-                                          (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
-                                                         threshold
-                                                         (if (cell-solid-p (- ix 1) iy iz) (- fx 1.0) fx)
-                                                         (if (cell-solid-p ix (- iy 1) iz) (- fy 1.0) fy)
-                                                         (if (cell-solid-p ix iy (- iz 1)) (- fz 1.0) fz)
-                                                         (if (cell-solid-p (+ ix 1) iy iz) (+ fx 2.0) (+ fx 1.0))
-                                                         (if (cell-solid-p ix (+ iy 1) iz) (+ fy 2.0) (+ fy 1.0))
-                                                         (if (cell-solid-p ix iy (+ iz 1)) (+ fz 2.0) (+ fz 1.0)))
-                                          (values nx ny nz sep)))
-                                  (when (< sep (speculative-distance
-                                                (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
-                                                dt slop ahead gstep))
-                                    (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
-                                                   nx ny nz sep px py pz 0.0 0.0 0.0))))
-                              ;; inside: push out through a face, and count the body buried
-                              (progn
-                                (setf (aref near i) 0.0)
-                                (incf buried)
-                                (multiple-value-bind (nx ny nz px py pz sep)
-                                    (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
-                                                 ix iy iz)
-                                  (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
-                                                 nx ny nz sep px py pz 0.0 0.0 0.0))))))))))))))
+              (terrain-cell-contacts))))
         (setf (physics-world-buried-count world) buried))))
     world))
-;; Sphere against cells: the overshoot rule keeps seams smooth:1 ends here
+;; The terrain phase, stage by stage:1 ends here
 
 ;; [[file:../physics.org::#SW33P7][Fast bodies sweep their path through the cells:1]]
 (declaim (inline first-solid-on-ray))
@@ -5469,7 +5547,7 @@ box velocity KX KY KZ, approach along the normal X Y Z. #PRF1LL"
 (defmacro fill-short-row ()
   "Fill row K of the constraint buffer for its contact between two awake bodies, neither static
 to the other: expanded in the prepare phase's fill. #PRF1LL"
-  '(let* ((c (aref contact k))
+  `(let* ((c (aref contact k))
           (g (geometry-start c)) (base (constraint-base k))
           (la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c))))
           (x (contact-at geometry g nx)) (y (contact-at geometry g ny))
@@ -5509,7 +5587,7 @@ to the other: expanded in the prepare phase's fill. #PRF1LL"
 (defmacro fill-row-material ()
   "Write the friction, restitution, rolling limit and spin limit of the general path's row:
 expanded in fill-row-sides. #PRF1LL"
-  '(if (>= b 0)
+  `(if (>= b 0)
        (progn
          (setf (@ friction) (fsqrt (* (aref (body-columns-friction buf-a) la)
                                       (aref (body-columns-friction buf-b) lb))))
@@ -5533,7 +5611,7 @@ expanded in fill-row-sides. #PRF1LL"
 (defmacro fill-row-softness ()
   "Write the soft coefficients of the general path's row: two-body, or static and stiffened by
 its carried load over its effective mass. Expanded in fill-row-sides. #PRF1LL"
-  '(let ((load (if two-sided
+  `(let ((load (if two-sided
                    0.0
                    (min load-limit (* (contact-at geometry g normal-impulse) mass-sum load-scale)
                         (* held-mass mass-sum)))))
@@ -5551,7 +5629,7 @@ its carried load over its effective mass. Expanded in fill-row-sides. #PRF1LL"
 (defmacro fill-row-sides ()
   "Write the general path's radii, inverse masses and inertias, gap, box velocity, material,
 spin impulse, approach speed and soft coefficients: expanded in fill-general-row. #PRF1LL"
-  '(let* ((r-a (aref (body-columns-radius buf-a) la))
+  `(let* ((r-a (aref (body-columns-radius buf-a) la))
           (r-b (if (>= b 0) (aref (body-columns-radius buf-b) lb) 0.0))
           (im-a (if dyn-a (aref (body-columns-inverse-mass awake) la) 0.0))
           (im-b (if dyn-b (aref (body-columns-inverse-mass awake) lb) 0.0))
@@ -5578,7 +5656,7 @@ spin impulse, approach speed and soft coefficients: expanded in fill-general-row
 (defmacro fill-general-row ()
   "Fill row K of the constraint buffer for its contact by the general path: each side's set and
 row from the handle table, a braced side static: expanded in the prepare phase's fill. #PRF1LL"
-  '(let* ((c (aref contact k))
+  `(let* ((c (aref contact k))
           (g (geometry-start c))
           (base (constraint-base k))
           (a (aref ha c)) (b (aref hb c))
@@ -5617,7 +5695,7 @@ row from the handle table, a braced side static: expanded in the prepare phase's
   "The fill: order the rows by colour, zero the side blocks, fill each colour's rows by the
 short or the general path, complete them in the frame pass, and pad each colour. Expanded in
 the prepare phase, whose variables it reads. #PRF1LL"
-  '(with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
+  `(with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
      (with-constraint-block (contact body-a body-b) cbuf
        (order-rows-by-colour colors contact cursor m)
        ;; the side blocks start as zeros, padding rows' included: a row writes only the side
@@ -5979,7 +6057,7 @@ per constraint. #S0LV3R"
   "The current gap of row K: in the solve pass the gap the relax pass kept, in the relax pass
 the prepared gap moved by both bodies' deltas and the box's travel, kept in the row for the next
 solve. Expanded in solve-range and its copies. #S0LGAP"
-  '(if biased
+  `(if biased
        (@ gap)
        ;; a row's place in the delta array is its place in the velocity
        ;; array ([[#W0RLD7]]), found above
@@ -5998,7 +6076,7 @@ solve. Expanded in solve-range and its copies. #S0LGAP"
   "The bias of row K's normal impulse: a speculative gap S is closed over the substep; in the
 solve pass, an overlap is pushed out at the soft bias rate, capped at PUSH-MAX; in the relax
 pass, nothing. #S0LNRM"
-  '(cond (positive (* s inv-h))
+  `(cond (positive (* s inv-h))
          (biased (let ((soft (* (@ bias-rate) s)) (cap (- push-max)))
                    (if (> soft cap) soft cap)))
          (t 0.0)))
@@ -6007,7 +6085,7 @@ pass, nothing. #S0LNRM"
   "The bounce of row K, a push of its own that makes the pair leave at the speed restitution
 gives: in the impact copy, computed for an impact or an armed row; in solve-range, zero, or the
 end of the pass at a row that may strike or is armed. Expanded in solve-range and its copies. #S0LNRM"
-  '(if-feature :restitution
+  `(if-feature :restitution
     (if-feature :impact-part
     (let* ((e (@ restitution))
            (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold)))))
@@ -6055,7 +6133,7 @@ end of the pass at a row that may strike or is armed. Expanded in solve-range an
   "Rolling resistance on row K: the rolling impulse inside |R| <= rolling limit times the
 normal impulse, applied to the angular velocities WAX..WBZ of the place it is expanded in, one
 of the two that solve-friction and solve-frictionless make. #S0LFRC"
-  '(let ((rl (@ rolling-limit)))
+  `(let ((rl (@ rolling-limit)))
     (when (> rl 0.0)
       (let* ((rlimit (* rl new)) (rm (@ rolling-mass))
              (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z))
@@ -6072,7 +6150,7 @@ of the two that solve-friction and solve-frictionless make. #S0LFRC"
 (defmacro solve-spin-friction ()
   "Spin friction on row K: an angular impulse about the normal inside |S| <= spin limit times
 the normal impulse, on the angular velocities WAX..WBZ; expanded in solve-friction. #S0LFRC"
-  '(let ((sl (if (= br 0.0) (@ spin-limit) 0.0)))
+  `(let ((sl (if (= br 0.0) (@ spin-limit) 0.0)))
      (when (> sl 0.0)
        (let* ((slimit (* sl new)) (sp (@ spin-impulse))
               (raw (- sp (* (@ rolling-mass)
@@ -6087,7 +6165,7 @@ the normal impulse, on the angular velocities WAX..WBZ; expanded in solve-fricti
   "Friction on row K inside the cone |l1,l2| <= friction times the normal impulse, from the
 relative velocity before the normal impulse; then rolling resistance and spin friction; write
 both bodies' velocities. Expanded in solve-range when the world has friction. #S0LFRC"
-  '(let* (
+  `(let* (
           (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
           (wbx (if-feature :body-contacts (block-ref v b 3) 0.0))
           (wby (if-feature :body-contacts (block-ref v b 4) 0.0))
@@ -6130,7 +6208,7 @@ both bodies' velocities. Expanded in solve-range when the world has friction. #S
 (defmacro solve-frictionless ()
   "Write row K's bodies' velocities after the normal impulse, with rolling resistance alone on
 the angular ones when the world has it: solve-range without friction. #S0LFRC"
-  '(progn
+  `(progn
      (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz)
      (if-feature :body-contacts
        (setf (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz))
