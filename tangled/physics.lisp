@@ -6398,6 +6398,34 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
                              (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
              (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
 
+(defmacro store-touch-event ()
+  "A :begin or :end event for row K's contact C when whether it pushed this step (PUSHED) differs
+from whether it touched: expanded in the store phase, with its variables. #ST0R3S"
+  `(if-feature :contact-events
+   (unless (eq pushed (= (aref touching c) 1))
+     (setf (aref touching c) (if pushed 1 0))
+     (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
+                 (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
+                 (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))
+
+(defmacro store-hit-event ()
+  "A :hit event for row K's contact C when it pushed and arrived faster than the hit speed, for
+a box's contact or a body that reports hits: expanded in the store phase, with its variables. #ST0R3S"
+  `(if-feature :hit-events
+   (when (and pushed (> (- (@ relative-velocity)) hit-speed)
+              (or (= (aref kind c) +contact-box+)
+                  (flet ((reports (h)
+                           (and (>= h 0)
+                                (let ((set (aref (handle-table-set ids) (handle-index h)))
+                                      (row (aref (handle-table-local ids) (handle-index h))))
+                                  (logtest +flag-report-hits+
+                                           (aref (body-columns-flags (if (= set +set-awake+) awake sleeping))
+                                                 row))))))
+                    (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
+     (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
+                 (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
+                 (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))
+
 (define-featured-kernel (store-phase :features (:body-contacts :boxes :friction :contact-events :hit-events :rolling-resistance)) (world)
   "The store phase: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
@@ -6458,26 +6486,8 @@ so its undo log closes. #ST0R3S"
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))
                     max-approach (max max-approach (- vn))))
-            (if-feature :contact-events
-            (unless (eq pushed (= (aref touching c) 1))
-              (setf (aref touching c) (if pushed 1 0))
-              (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
-                          (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
-                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))
-            (if-feature :hit-events
-            (when (and pushed (> (- (@ relative-velocity)) hit-speed)
-                       (or (= (aref kind c) +contact-box+)
-                           (flet ((reports (h)
-                                    (and (>= h 0)
-                                         (let ((set (aref (handle-table-set ids) (handle-index h)))
-                                               (row (aref (handle-table-local ids) (handle-index h))))
-                                           (logtest +flag-report-hits+
-                                                    (aref (body-columns-flags (if (= set +set-awake+) awake sleeping))
-                                                          row))))))
-                             (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
-              (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
-                          (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
-                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))))))
+            (store-touch-event)
+            (store-hit-event)))))
     (let ((stats (world-statistics world)))
       (setf (step-statistics-max-penetration stats) (coerce max-penetration 'double-float)
             (step-statistics-max-approach stats) (coerce max-approach 'double-float)))
@@ -11259,6 +11269,89 @@ cast that starts overlapping the sphere meets it at 0 when it heads deeper, else
 
 (declaim (inline sweep-rounded-box))
 
+(defmacro push-out-face (bit d fx fy fz)
+  "Take the exposed face BIT at depth D, outward normal FX FY FZ, as the nearest so far (DEPTH,
+NX NY NZ). #C4STRY"
+  `(when (and (logbitp ,bit exposed) (< ,d depth))
+     (setf depth ,d nx ,fx ny ,fy nz ,fz)))
+
+(defmacro rounded-face-hit (bit o u plane sign (o1 u1 lo1 hi1) (o2 u2 lo2 hi2) nx ny nz)
+  "The hit of the search with the face BIT of the box (O the cast's origin and U its direction
+along the face's axis, PLANE the face moved out by its radius, SIGN its side), approached from
+outside and met within the face's span along its two other axes; noted in BT, BNX BNY BNZ and
+FOUND. #C4STRY"
+  ;; the plane of the face moved out by r, approached from outside
+  `(when (and (logbitp ,bit exposed) (,(if (minusp sign) '> '<) ,u 0d0)
+              (,(if (minusp sign) '<= '>=) ,o ,plane))
+     (let ((tt (/ (- ,plane ,o) ,u)))
+       (when (< tt bt)
+         (let ((a (+ ,o1 (* tt ,u1))) (b (+ ,o2 (* tt ,u2))))
+           (when (and (<= ,lo1 a ,hi1) (<= ,lo2 b ,hi2))
+             (setf bt tt bnx ,nx bny ,ny bnz ,nz found t)))))))
+
+(defmacro rounded-edge-hit (bit1 bit2 (oa ua ea sa) (ob ub eb sb) (oc uc lo hi) nxf nyf nzf)
+  "The hit of the search with the quarter cylinder of radius R about the edge between the exposed
+faces BIT1 and BIT2, entered from outside; noted in BT, BNX BNY BNZ and FOUND. #C4STRY"
+  ;; the quarter cylinder of radius r about an edge, entered from outside
+  `(when (and (logbitp ,bit1 exposed) (logbitp ,bit2 exposed))
+     (let* ((pa (- ,oa ,ea)) (pb (- ,ob ,eb))
+            (aa (+ (* ,ua ,ua) (* ,ub ,ub)))
+            (bb (+ (* pa ,ua) (* pb ,ub)))
+            (cc (- (+ (* pa pa) (* pb pb)) (* r r))))
+       (when (and (> aa 0d0) (< bb 0d0) (>= cc 0d0))
+         (let ((disc (- (* bb bb) (* aa cc))))
+           (when (>= disc 0d0)
+             (let ((tt (/ (- (- bb) (dsqrt disc)) aa)))
+               (when (< tt bt)
+                 (let ((qa (+ pa (* tt ,ua))) (qb (+ pb (* tt ,ub)))
+                       (c (+ ,oc (* tt ,uc))))
+                   (when (and (>= (* qa ,sa) 0d0) (>= (* qb ,sb) 0d0) (<= ,lo c ,hi))
+                     (let ((inv (/ 1d0 r)))
+                       (setf bt tt bnx ,nxf bny ,nyf bnz ,nzf found t))))))))))))
+
+(defmacro rounded-corner-hit (bx by bz cx cy cz sx sy sz)
+  "The hit of the search with the eighth of a sphere of radius R about the corner of the exposed
+faces BX, BY and BZ, entered from outside; noted in BT, BNX BNY BNZ and FOUND. #C4STRY"
+  ;; the eighth of a sphere of radius r about a corner, entered from outside
+  `(when (and (logbitp ,bx exposed) (logbitp ,by exposed) (logbitp ,bz exposed))
+     (let* ((mx (- ox ,cx)) (my (- oy ,cy)) (mz (- oz ,cz))
+            (b (+ (* mx ux) (* my uy) (* mz uz))))
+       (when (< b 0d0)
+         (let* ((qx (- mx (* b ux))) (qy (- my (* b uy))) (qz (- mz (* b uz)))
+                (h2 (- (* r r) (+ (* qx qx) (* qy qy) (* qz qz)))))
+           (when (>= h2 0d0)
+             (let ((tt (- (- b) (dsqrt h2))))
+               (when (< tt bt)
+                 (let ((hx (+ mx (* tt ux))) (hy (+ my (* tt uy))) (hz (+ mz (* tt uz))))
+                   (when (and (>= (* hx ,sx) 0d0) (>= (* hy ,sy) 0d0) (>= (* hz ,sz) 0d0))
+                     (let ((inv (/ 1d0 r)))
+                       (setf bt tt bnx (* hx inv) bny (* hy inv) bnz (* hz inv)
+                             found t))))))))))))
+
+(defmacro rounded-edge-hits ()
+  "The twelve edges of the box, each a rounded-edge-hit. #C4STRY"
+  `(progn
+     ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
+             append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
+                          collect `(rounded-edge-hit ,bx ,by (ox ux ,ex ,sx) (oy uy ,ey ,sy) (oz uz z0 z1)
+                                         (* qa inv) (* qb inv) 0d0)))
+     ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
+             append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
+                          collect `(rounded-edge-hit ,bx ,bz (ox ux ,ex ,sx) (oz uz ,ez ,sz) (oy uy y0 y1)
+                                         (* qa inv) 0d0 (* qb inv))))
+     ,@(loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
+             append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
+                          collect `(rounded-edge-hit ,by ,bz (oy uy ,ey ,sy) (oz uz ,ez ,sz) (ox ux x0 x1)
+                                         0d0 (* qa inv) (* qb inv))))))
+
+(defmacro rounded-corner-hits ()
+  "The eight corners of the box, each a rounded-corner-hit. #C4STRY"
+  `(progn
+     ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
+             append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
+                          append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
+                                       collect `(rounded-corner-hit ,bx ,by ,bz ,ex ,ey ,ez ,sx ,sy ,sz))))))
+
 (defun sweep-rounded-box (s x0 y0 z0 x1 y1 z1 exposed)
   "True when cast S meets the box X0..X1 Y0..Y1 Z0..Z1 grown by its radius nearer than its nearest
 hit so far, through a face whose bit is set in EXPOSED (bits 0-5: -x +x -y +y -z +z), an edge both
@@ -11279,12 +11372,9 @@ cast. #C4STRY"
          ;; in the closed box: pushed out through the nearest exposed face
          (let ((depth most-positive-double-float) (nx 0d0) (ny 0d0) (nz 0d0))
            (declare (type double-float depth nx ny nz))
-           (macrolet ((face (bit d fx fy fz)
-                        `(when (and (logbitp ,bit exposed) (< ,d depth))
-                           (setf depth ,d nx ,fx ny ,fy nz ,fz))))
-             (face 0 (- ox x0) -1d0 0d0 0d0) (face 1 (- x1 ox) 1d0 0d0 0d0)
-             (face 2 (- oy y0) 0d0 -1d0 0d0) (face 3 (- y1 oy) 0d0 1d0 0d0)
-             (face 4 (- oz z0) 0d0 0d0 -1d0) (face 5 (- z1 oz) 0d0 0d0 1d0))
+           (push-out-face 0 (- ox x0) -1d0 0d0 0d0) (push-out-face 1 (- x1 ox) 1d0 0d0 0d0)
+           (push-out-face 2 (- oy y0) 0d0 -1d0 0d0) (push-out-face 3 (- y1 oy) 0d0 1d0 0d0)
+           (push-out-face 4 (- oz z0) 0d0 0d0 -1d0) (push-out-face 5 (- z1 oz) 0d0 0d0 1d0)
            (cond ((= depth most-positive-double-float) (candidate s 0d0 (- ux) (- uy) (- uz)))
                  ((< (+ (* ux nx) (* uy ny) (* uz nz)) 0d0) (candidate s 0d0 nx ny nz))
                  (t nil))))
@@ -11299,77 +11389,15 @@ cast. #C4STRY"
         (t
          (let ((bt best) (bnx 0d0) (bny 0d0) (bnz 0d0) (found nil))
            (declare (type double-float bt bnx bny bnz))
-           (macrolet ((face (bit o u plane sign (o1 u1 lo1 hi1) (o2 u2 lo2 hi2) nx ny nz)
-                        ;; the plane of the face moved out by r, approached from outside
-                        `(when (and (logbitp ,bit exposed) (,(if (minusp sign) '> '<) ,u 0d0)
-                                    (,(if (minusp sign) '<= '>=) ,o ,plane))
-                           (let ((tt (/ (- ,plane ,o) ,u)))
-                             (when (< tt bt)
-                               (let ((a (+ ,o1 (* tt ,u1))) (b (+ ,o2 (* tt ,u2))))
-                                 (when (and (<= ,lo1 a ,hi1) (<= ,lo2 b ,hi2))
-                                   (setf bt tt bnx ,nx bny ,ny bnz ,nz found t)))))))
-                      (edge (bit1 bit2 (oa ua ea sa) (ob ub eb sb) (oc uc lo hi) nxf nyf nzf)
-                        ;; the quarter cylinder of radius r about an edge, entered from outside
-                        `(when (and (logbitp ,bit1 exposed) (logbitp ,bit2 exposed))
-                           (let* ((pa (- ,oa ,ea)) (pb (- ,ob ,eb))
-                                  (aa (+ (* ,ua ,ua) (* ,ub ,ub)))
-                                  (bb (+ (* pa ,ua) (* pb ,ub)))
-                                  (cc (- (+ (* pa pa) (* pb pb)) (* r r))))
-                             (when (and (> aa 0d0) (< bb 0d0) (>= cc 0d0))
-                               (let ((disc (- (* bb bb) (* aa cc))))
-                                 (when (>= disc 0d0)
-                                   (let ((tt (/ (- (- bb) (dsqrt disc)) aa)))
-                                     (when (< tt bt)
-                                       (let ((qa (+ pa (* tt ,ua))) (qb (+ pb (* tt ,ub)))
-                                             (c (+ ,oc (* tt ,uc))))
-                                         (when (and (>= (* qa ,sa) 0d0) (>= (* qb ,sb) 0d0) (<= ,lo c ,hi))
-                                           (let ((inv (/ 1d0 r)))
-                                             (setf bt tt bnx ,nxf bny ,nyf bnz ,nzf found t))))))))))))
-                      (corner (bx by bz cx cy cz sx sy sz)
-                        ;; the eighth of a sphere of radius r about a corner, entered from outside
-                        `(when (and (logbitp ,bx exposed) (logbitp ,by exposed) (logbitp ,bz exposed))
-                           (let* ((mx (- ox ,cx)) (my (- oy ,cy)) (mz (- oz ,cz))
-                                  (b (+ (* mx ux) (* my uy) (* mz uz))))
-                             (when (< b 0d0)
-                               (let* ((qx (- mx (* b ux))) (qy (- my (* b uy))) (qz (- mz (* b uz)))
-                                      (h2 (- (* r r) (+ (* qx qx) (* qy qy) (* qz qz)))))
-                                 (when (>= h2 0d0)
-                                   (let ((tt (- (- b) (dsqrt h2))))
-                                     (when (< tt bt)
-                                       (let ((hx (+ mx (* tt ux))) (hy (+ my (* tt uy))) (hz (+ mz (* tt uz))))
-                                         (when (and (>= (* hx ,sx) 0d0) (>= (* hy ,sy) 0d0) (>= (* hz ,sz) 0d0))
-                                           (let ((inv (/ 1d0 r)))
-                                             (setf bt tt bnx (* hx inv) bny (* hy inv) bnz (* hz inv)
-                                                   found t))))))))))))
-                      (edges ()
-                        `(progn
-                           ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
-                                   append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
-                                                collect `(edge ,bx ,by (ox ux ,ex ,sx) (oy uy ,ey ,sy) (oz uz z0 z1)
-                                                               (* qa inv) (* qb inv) 0d0)))
-                           ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
-                                   append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
-                                                collect `(edge ,bx ,bz (ox ux ,ex ,sx) (oz uz ,ez ,sz) (oy uy y0 y1)
-                                                               (* qa inv) 0d0 (* qb inv))))
-                           ,@(loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
-                                   append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
-                                                collect `(edge ,by ,bz (oy uy ,ey ,sy) (oz uz ,ez ,sz) (ox ux x0 x1)
-                                                               0d0 (* qa inv) (* qb inv))))))
-                      (corners ()
-                        `(progn
-                           ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
-                                   append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
-                                                append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
-                                                             collect `(corner ,bx ,by ,bz ,ex ,ey ,ez ,sx ,sy ,sz)))))))
-             (face 0 ox ux (- x0 r) -1 (oy uy y0 y1) (oz uz z0 z1) -1d0 0d0 0d0)
-             (face 1 ox ux (+ x1 r) 1 (oy uy y0 y1) (oz uz z0 z1) 1d0 0d0 0d0)
-             (face 2 oy uy (- y0 r) -1 (ox ux x0 x1) (oz uz z0 z1) 0d0 -1d0 0d0)
-             (face 3 oy uy (+ y1 r) 1 (ox ux x0 x1) (oz uz z0 z1) 0d0 1d0 0d0)
-             (face 4 oz uz (- z0 r) -1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 -1d0)
-             (face 5 oz uz (+ z1 r) 1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 1d0)
-             (when (> r 0d0)
-               (edges)
-               (corners)))
+           (rounded-face-hit 0 ox ux (- x0 r) -1 (oy uy y0 y1) (oz uz z0 z1) -1d0 0d0 0d0)
+           (rounded-face-hit 1 ox ux (+ x1 r) 1 (oy uy y0 y1) (oz uz z0 z1) 1d0 0d0 0d0)
+           (rounded-face-hit 2 oy uy (- y0 r) -1 (ox ux x0 x1) (oz uz z0 z1) 0d0 -1d0 0d0)
+           (rounded-face-hit 3 oy uy (+ y1 r) 1 (ox ux x0 x1) (oz uz z0 z1) 0d0 1d0 0d0)
+           (rounded-face-hit 4 oz uz (- z0 r) -1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 -1d0)
+           (rounded-face-hit 5 oz uz (+ z1 r) 1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 1d0)
+           (when (> r 0d0)
+             (rounded-edge-hits)
+             (rounded-corner-hits))
            (when found (candidate s bt bnx bny bnz))))))))
 
 (defun sweep-boxes (s world)
