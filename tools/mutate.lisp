@@ -510,7 +510,8 @@ but the last.  Declarations and docstrings stay."
 (defparameter *named-parts*
   '(("P5SOLV" . "solver") ("P4CONT" . "contact phases") ("QKS4GZ" . "sleep")
     ("D9W4CH" . "hash") ("Y5H8KC" . "hash")
-    ("MYWH16" . "terrain contacts") ("SW33P7" . "terrain contacts")
+    ("MYWH16" . "terrain contacts") ("MYWGTH" . "terrain contacts") ("MYWCNT" . "terrain contacts")
+    ("MYWSTG" . "terrain contacts") ("SW33P7" . "terrain contacts")
     ("E7V3NT" . "events") ("H7P4CX" . "walker"))
   "Anchors whose sections, or whose part's sections, form a part named here; any other section
 belongs to the part of its level-1 heading.")
