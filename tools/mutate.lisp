@@ -1143,7 +1143,7 @@ survivors the page explains as equivalent.  A table by part, then the same mutan
                        (or (page-reason key reasons)
                            (let ((why (page-reason key (page-reasons *mutant-records* "Surviving mutant ~"))))
                              (and why (format nil "not equivalent: ~A" why)))
-                           "(no reason given on the page)")))))
+                           "(no reason given in the records)")))))
 
 (defun annotate-survivors ()
   "Write report/mutate-survivors.org from report/mutate-survivors.tsv and the page's reasons,
