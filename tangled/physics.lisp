@@ -3457,14 +3457,164 @@ walk keeps its values in registers. #P41RS7"
               (when full (setf crowded t))
               (when strikes (return-from scan-listed-pairs (values p crowded)))))))
       (values count crowded))))
+;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
+;; [[file:../physics.org::#P41HLD][The pairs of a list that holds:1]]
+(defmacro pair-listed-pairs ()
+  "The listed pairs whose rows both stayed (scan-listed-pairs), each pair that strikes taken
+again whole, its overlap already counted: expanded in the pair phase while its list holds. #P41HLD"
+  `(let ((p 0))
+     (declare (type index p))
+     (loop (multiple-value-setq (p crowded) (scan-listed-pairs world p crowded))
+           (when (>= p (pair-list-count plist)) (return))
+           (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
+             (declare (type index i j))
+             (pair (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
+                   (aref vx i) (aref vy i) (aref vz i)
+                   (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
+                   (aref vx j) (aref vy j) (aref vz j) -1 -1))
+           (incf p))))
+
+(defmacro pair-loose-rows ()
+  "Each loose row against the rows of its 27 cells that are not loose, in the awake grid:
+expanded in the pair phase while its list holds. #P41HLD"
+  `(dotimes (q strays)
+     (let ((i (aref loose-rows q)) (refused 0))
+       (declare (type index refused))
+       (when (zerop (logand (aref flags i) +flag-terrain-only+))
+         (block walk
+           (do-grid-neighbours (j grid (aref x i) (aref y i) (aref z i))
+             (when (and (zerop (aref loose j))
+                        (zerop (logand (aref flags j) +flag-terrain-only+))
+                        (rows-meet-p filtering (aref flags i) (aref flags j)))
+               (rows i j (when (>= (incf refused) +overlaps-per-body+) (return-from walk))))))))))
+
+(defmacro pair-loose-among-loose ()
+  "Each pair of loose rows, from the lower row, in a grid of the loose rows alone: expanded in
+the pair phase while its list holds. #P41HLD"
+  `(when (> strays 1)
+     (let ((lgrid (pair-list-loose-grid plist)) (lx (pair-list-loose-x plist))
+           (ly (pair-list-loose-y plist)) (lz (pair-list-loose-z plist)))
+       (declare (type f32-column lx ly lz))
+       (dotimes (q strays)
+         (let ((i (aref loose-rows q)))
+           (setf (aref lx q) (aref x i) (aref ly q) (aref y i) (aref lz q) (aref z i))))
+       ;; hashed: a dense box sized by the loose rows' spread could outgrow its room
+       (build-hash-grid lgrid cell strays lx ly lz loose-rows :dense-allowed nil)
+       (dotimes (q strays)
+         (let ((i (aref loose-rows q)) (refused 0))
+           (declare (type index refused))
+           (when (zerop (logand (aref flags i) +flag-terrain-only+))
+             (block walk
+               (do-grid-neighbours (j lgrid (aref x i) (aref y i) (aref z i))
+                 (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+))
+                            (rows-meet-p filtering (aref flags i) (aref flags j)))
+                   (rows i j (when (>= (incf refused) +overlaps-per-body+)
+                               (return-from walk))))))))))))
+;; The pairs of a list that holds:1 ends here
+
+;; [[file:../physics.org::#P41BLD][Building the list again:1]]
+(defmacro pair-list-walk ()
+  "The walk of row I (at place E of the grid's order, its cell's half runs in RUNS) in the
+build: take each row within the widest reach plus the skin, in order, and stop at the
++overlaps-per-body+th refusal. Expanded in pair-list-build. #P41BLD"
+  `(let* ((widest (+ (aref radius i) rmax margin skin)) (reach2 (* widest widest))
+          (refused 0))
+     (declare (type single-float widest reach2) (type index refused))
+     (block walk
+       (flet ((take (found)
+                ;; the FOUND places listed in NEAR, in order; the walk stops
+                ;; at its +overlaps-per-body+th refusal
+                (declare (type index found))
+                (incf (pair-list-examined plist) found)
+                (dotimes (q found)
+                  (let ((j (aref items (aref near q))))
+                    (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
+                               (rows-meet-p filtering (aref flags i) (aref flags j)))
+                      (if (or (not crowded) (overlap-room (pair-list-overlaps plist) i j radius))
+                          (progn (pair-list-push plist i j)
+                                 (pair-of-rows i j))
+                          (progn (setf crowd t)
+                                 (when (>= (incf refused) +overlaps-per-body+)
+                                   (return-from walk)))))))))
+         (if (not crowd)
+             (take (grid-list-near grid e runs run-count reach2))
+             ;; once a walk of this build was refused, each run is listed a
+             ;; chunk at a time, so a walk that stops lists little beyond it
+             (dotimes (q run-count)
+               (let ((end (aref runs (+ (* 3 q) 1))))
+                 (loop for start of-type fixnum from (if (= q 0) (1+ e) (aref runs (* 3 q)))
+                         below end by +crowded-walk-chunk+
+                       do (setf (aref chunk 1) (1+ e) (aref chunk 2) -1
+                                (aref chunk 3) start (aref chunk 4) (min end (+ start +crowded-walk-chunk+))
+                                (aref chunk 5) (aref runs (+ (* 3 q) 2)))
+                          (take (grid-list-near grid e chunk 2 reach2))))))))))
+
+(defmacro pair-list-build ()
+  "Build the pair list again, taking each pair as it is found: the half neighbourhood of each
+body's cell, in the grid's order, within the widest reach plus the skin; after a refused walk,
+each run a chunk at a time. Expanded in the pair phase. #P41BLD"
+  `(let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+         (runs (make-array 42 :element-type 'fixnum))
+         ;; a crowded walk's chunk: an empty first run, then a piece of one run
+         (chunk (make-array 6 :element-type 'fixnum :initial-element 0))
+         (cell-key -1) (run-count 0) (crowd nil))
+     (declare (type fixnum-column items keys near runs chunk)
+              (dynamic-extent runs chunk) (type fixnum cell-key) (type (integer 0 14) run-count))
+     (setf (pair-list-count plist) 0 (pair-list-examined plist) 0)
+     (dotimes (e (hash-grid-count grid))
+       (let ((i (aref items e)))
+         (when (zerop (logand (aref flags i) +flag-terrain-only+))
+           ;; the items of one cell are consecutive in the grid's order and share its runs
+           (unless (= (aref keys e) cell-key)
+             (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
+           (pair-list-walk))))
+     (pair-list-anchor plist awake n cell)
+     (setf (pair-list-built-step plist) (contact-table-step table)
+           (pair-list-loose-count plist) 0)))
+;; Building the list again:1 ends here
+
+;; [[file:../physics.org::#P41LEN][Leaning on sleepers:1]]
+(defmacro pair-leans-on-sleepers ()
+  "Lean contacts: each awake body that meets bodies onto the sleepers within its reach, in the
+order of their rows. Expanded in the pair phase. #P41LEN"
+  `(when any-sleeping
+     (dotimes (i n)
+       (when (zerop (logand (aref flags i) +flag-terrain-only+))
+         (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i)) (hi (aref handle i))
+               (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
+           ;; the sleepers within reach, in the order of their rows: the lean contacts
+           ;; are touched, and so ordered, as they would be from any grids
+           (do-sleepers-in-row-order
+               (h world xi yi zi)
+               (let ((slot (handle-index h)))
+                 (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+                      (= (aref (handle-table-generation ids) slot) (handle-generation h))
+                      (let ((row (aref (handle-table-local ids) slot)))
+                        (and (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
+                             (rows-meet-p filtering (aref flags i) (aref (body-columns-flags sleeping) row))
+                             ;; pair-contact's own first test: a pair farther apart than
+                             ;; this touches no contact
+                             (let ((dx (- (aref (body-columns-x sleeping) row) xi))
+                                   (dy (- (aref (body-columns-y sleeping) row) yi))
+                                   (dz (- (aref (body-columns-z sleeping) row) zi))
+                                   (reach (+ ri (aref (body-columns-radius sleeping) row) margin)))
+                               (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
+             (let ((row (aref (handle-table-local ids) (handle-index h))))
+               (pair xi yi zi ri hi vxi vyi vzi
+                     (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
+                     (aref (body-columns-z sleeping) row)
+                     (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0 -1 -1))))))))
+;; Leaning on sleepers:1 ends here
+
+;; [[file:../physics.org::#P41STG][The pair phase, stage by stage:1]]
 (defun pair-phase (world)
   "The pair phase: contacts between awake bodies (each pair once) and lean contacts from awake bodies
 onto the sleepers they reach. The pairs come from the pair list while it still holds: the
 listed pairs whose rows both stayed near their anchors, and for each loose row the awake
 bodies of its 27 cells. Otherwise the list is built again, walking the half neighbourhood of
 each body's cell in the grid's order. A candidate within reach becomes a contact only when its
-gap is under the speculative distance. #P41RS7"
+gap is under the speculative distance. #P41STG"
   (let* ((awake (physics-world-awake world))
          (sleeping (physics-world-sleeping world))
          (ids (physics-world-ids world))
@@ -3526,127 +3676,17 @@ gap is under the speculative distance. #P41RS7"
                 (declare (type fixnum-column pairs loose loose-rows))
                 ;; the walk stops at a pair that strikes, which is taken here again whole,
                 ;; its overlap already counted
-                (let ((p 0))
-                  (declare (type index p))
-                  (loop (multiple-value-setq (p crowded) (scan-listed-pairs world p crowded))
-                        (when (>= p (pair-list-count plist)) (return))
-                        (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
-                          (declare (type index i j))
-                          (pair (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
-                                (aref vx i) (aref vy i) (aref vz i)
-                                (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
-                                (aref vx j) (aref vy j) (aref vz j) -1 -1))
-                        (incf p)))
-                (dotimes (q strays)
-                  (let ((i (aref loose-rows q)) (refused 0))
-                    (declare (type index refused))
-                    (when (zerop (logand (aref flags i) +flag-terrain-only+))
-                      (block walk
-                        (do-grid-neighbours (j grid (aref x i) (aref y i) (aref z i))
-                          (when (and (zerop (aref loose j))
-                                     (zerop (logand (aref flags j) +flag-terrain-only+))
-                                     (rows-meet-p filtering (aref flags i) (aref flags j)))
-                            (rows i j (when (>= (incf refused) +overlaps-per-body+) (return-from walk)))))))))
-                (when (> strays 1)
-                  (let ((lgrid (pair-list-loose-grid plist)) (lx (pair-list-loose-x plist))
-                        (ly (pair-list-loose-y plist)) (lz (pair-list-loose-z plist)))
-                    (declare (type f32-column lx ly lz))
-                    (dotimes (q strays)
-                      (let ((i (aref loose-rows q)))
-                        (setf (aref lx q) (aref x i) (aref ly q) (aref y i) (aref lz q) (aref z i))))
-                    ;; hashed: a dense box sized by the loose rows' spread could outgrow its room
-                    (build-hash-grid lgrid cell strays lx ly lz loose-rows :dense-allowed nil)
-                    (dotimes (q strays)
-                      (let ((i (aref loose-rows q)) (refused 0))
-                        (declare (type index refused))
-                        (when (zerop (logand (aref flags i) +flag-terrain-only+))
-                          (block walk
-                            (do-grid-neighbours (j lgrid (aref x i) (aref y i) (aref z i))
-                              (when (and (> j i) (zerop (logand (aref flags j) +flag-terrain-only+))
-                                         (rows-meet-p filtering (aref flags i) (aref flags j)))
-                                (rows i j (when (>= (incf refused) +overlaps-per-body+)
-                                            (return-from walk))))))))))))
+                (pair-listed-pairs)
+                (pair-loose-rows)
+                (pair-loose-among-loose))
               ;; build the list again: the half neighbourhood of each body's cell, in the
               ;; grid's order, within the widest reach plus the skin
-              (let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
-                    (runs (make-array 42 :element-type 'fixnum))
-                    ;; a crowded walk's chunk: an empty first run, then a piece of one run
-                    (chunk (make-array 6 :element-type 'fixnum :initial-element 0))
-                    (cell-key -1) (run-count 0) (crowd nil))
-                (declare (type fixnum-column items keys near runs chunk)
-                         (dynamic-extent runs chunk) (type fixnum cell-key) (type (integer 0 14) run-count))
-                (setf (pair-list-count plist) 0 (pair-list-examined plist) 0)
-                (dotimes (e (hash-grid-count grid))
-                  (let ((i (aref items e)))
-                    (when (zerop (logand (aref flags i) +flag-terrain-only+))
-                      ;; the items of one cell are consecutive in the grid's order and share its runs
-                      (unless (= (aref keys e) cell-key)
-                        (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
-                      (let* ((widest (+ (aref radius i) rmax margin skin)) (reach2 (* widest widest))
-                             (refused 0))
-                        (declare (type single-float widest reach2) (type index refused))
-                        (block walk
-                          (flet ((take (found)
-                                   ;; the FOUND places listed in NEAR, in order; the walk stops
-                                   ;; at its +overlaps-per-body+th refusal
-                                   (declare (type index found))
-                                   (incf (pair-list-examined plist) found)
-                                   (dotimes (q found)
-                                     (let ((j (aref items (aref near q))))
-                                       (when (and (zerop (logand (aref flags j) +flag-terrain-only+))
-                                                  (rows-meet-p filtering (aref flags i) (aref flags j)))
-                                         (if (or (not crowded) (overlap-room (pair-list-overlaps plist) i j radius))
-                                             (progn (pair-list-push plist i j)
-                                                    (pair-of-rows i j))
-                                             (progn (setf crowd t)
-                                                    (when (>= (incf refused) +overlaps-per-body+)
-                                                      (return-from walk)))))))))
-                            (if (not crowd)
-                                (take (grid-list-near grid e runs run-count reach2))
-                                ;; once a walk of this build was refused, each run is listed a
-                                ;; chunk at a time, so a walk that stops lists little beyond it
-                                (dotimes (q run-count)
-                                  (let ((end (aref runs (+ (* 3 q) 1))))
-                                    (loop for start of-type fixnum from (if (= q 0) (1+ e) (aref runs (* 3 q)))
-                                            below end by +crowded-walk-chunk+
-                                          do (setf (aref chunk 1) (1+ e) (aref chunk 2) -1
-                                                   (aref chunk 3) start (aref chunk 4) (min end (+ start +crowded-walk-chunk+))
-                                                   (aref chunk 5) (aref runs (+ (* 3 q) 2)))
-                                             (take (grid-list-near grid e chunk 2 reach2))))))))))))
-                (pair-list-anchor plist awake n cell)
-                (setf (pair-list-built-step plist) (contact-table-step table)
-                      (pair-list-loose-count plist) 0))))
+              (pair-list-build)))
         (setf (pair-list-step plist) (contact-table-step table))
         ;; slow or fast, an awake body reaching a sleeper leans on it
-        (when any-sleeping
-          (dotimes (i n)
-            (when (zerop (logand (aref flags i) +flag-terrain-only+))
-              (let ((xi (aref x i)) (yi (aref y i)) (zi (aref z i)) (ri (aref radius i)) (hi (aref handle i))
-                    (vxi (aref vx i)) (vyi (aref vy i)) (vzi (aref vz i)))
-                ;; the sleepers within reach, in the order of their rows: the lean contacts
-                ;; are touched, and so ordered, as they would be from any grids
-                (do-sleepers-in-row-order
-                    (h world xi yi zi)
-                    (let ((slot (handle-index h)))
-                      (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                           (= (aref (handle-table-generation ids) slot) (handle-generation h))
-                           (let ((row (aref (handle-table-local ids) slot)))
-                             (and (zerop (logand (aref (body-columns-flags sleeping) row) +flag-terrain-only+))
-                                  (rows-meet-p filtering (aref flags i) (aref (body-columns-flags sleeping) row))
-                                  ;; pair-contact's own first test: a pair farther apart than
-                                  ;; this touches no contact
-                                  (let ((dx (- (aref (body-columns-x sleeping) row) xi))
-                                        (dy (- (aref (body-columns-y sleeping) row) yi))
-                                        (dz (- (aref (body-columns-z sleeping) row) zi))
-                                        (reach (+ ri (aref (body-columns-radius sleeping) row) margin)))
-                                    (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
-                  (let ((row (aref (handle-table-local ids) (handle-index h))))
-                    (pair xi yi zi ri hi vxi vyi vzi
-                          (aref (body-columns-x sleeping) row) (aref (body-columns-y sleeping) row)
-                          (aref (body-columns-z sleeping) row)
-                          (aref (body-columns-radius sleeping) row) h 0.0 0.0 0.0 -1 -1)))))))))
+        (pair-leans-on-sleepers)))
     world))
-;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
+;; The pair phase, stage by stage:1 ends here
 
 ;; [[file:../physics.org::#MYWH16][Sphere against cells: the overshoot rule keeps seams smooth:1]]
 (defmacro with-cell-closest-point ((nx ny nz px py pz separation d2 ox oy oz)
@@ -3759,11 +3799,141 @@ open. #MYWH16"
               (setf (ldb (byte 1 (+ dx (* 3 dy) (* 9 dz))) (aref masks span)) 1)))))))
   "For a span of one or two cells along x, y and z (bits 0, 1 and 2 of the index set for two),
 the bits of the 27-bit neighbourhood mask that lie inside it. #MYWH16")
+;; Sphere against cells: the overshoot rule keeps seams smooth:1 ends here
 
+;; [[file:../physics.org::#MYWGTH][Gathering the cells:1]]
+(defmacro terrain-block-mask ()
+  "The solid cells of row I's span X0..X1, Y0..Y1, Z0..Z1 (at most two cells a side, a 2x2x2
+block in one chunk) as the bits of its 27-bit mask: eight reads at fixed offsets, no loop, then
+only the cells in the span kept. Expanded in terrain-gather-mask. #MYWGTH"
+  `(let ((chunk (chunk-at (chunk-key x0 y0 z0)))
+         (o (cell-offset x0 y0 z0)))
+     (declare (type chunk-storage chunk) (type (integer 0 4095) o))
+     (flet ((solid-bit (offset bit)
+              (declare (type (integer 0 4095) offset) (type (integer 0 13) bit))
+              ;; a cell's byte plus 255, shifted right eight places: 1 when solid
+              (ash (ash (+ (aref chunk offset) 255) -8) bit)))
+       (declare (inline solid-bit))
+       (let ((sx 1) (sz (ash 1 +chunk-bits+)) (sy (ash 1 (* 2 +chunk-bits+))))
+         (setf mask (logand (aref +span-masks+ (+ (- x1 x0) (* 2 (- y1 y0)) (* 4 (- z1 z0))))
+                            (logior (solid-bit o 0) (solid-bit (+ o sx) 1)
+                                    (solid-bit (+ o sy) 3) (solid-bit (+ o sx sy) 4)
+                                    (solid-bit (+ o sz) 9) (solid-bit (+ o sx sz) 10)
+                                    (solid-bit (+ o sy sz) 12) (solid-bit (+ o sx sy sz) 13))))))))
+
+(defmacro terrain-gather-mask ()
+  "Set MASK to the solid cells of the (at most) 3x3x3 neighbourhood X0..X1, Y0..Y1, Z0..Z1 of
+row I, unless the row stayed near its anchor and the anchor had no solid cell near it: expanded
+in the terrain phase. #MYWGTH"
+  `(unless (and use-clear (zerop (aref loose i)) (= (aref clear i) 1))
+   (cond
+     ;; the common case, at most two cells a side and a 2x2x2 block in one chunk:
+     ;; eight reads at fixed offsets, no loop, then only the cells in the span kept
+     ((and (<= (- x1 x0) 1) (<= (- y1 y0) 1) (<= (- z1 z0) 1)
+           (= (ash x0 (- +chunk-bits+)) (ash (1+ x0) (- +chunk-bits+)))
+           (= (ash y0 (- +chunk-bits+)) (ash (1+ y0) (- +chunk-bits+)))
+           (= (ash z0 (- +chunk-bits+)) (ash (1+ z0) (- +chunk-bits+))))
+      (terrain-block-mask))
+     ;; otherwise cell by cell, each through the chunk it lies in
+     (t
+       (loop for iz of-type fixnum from z0 to z1 do
+         (loop for iy of-type fixnum from y0 to y1 do
+           (loop for ix of-type fixnum from x0 to x1 do
+             (when (cell-solid-p ix iy iz)
+               (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0)))))))))))))))
+
+(defmacro terrain-note-clear ()
+  "In the step that built the pair list, note in CLEAR whether every cell within row I's reach
+plus 0.45 skins is air: expanded in the terrain phase. #MYWGTH"
+  `(when fresh
+     (setf (aref clear i)
+           (if (and (zerop mask)
+                    (let ((wide (+ reach widen)))
+                      (loop for iz of-type fixnum from (cell-floor (- cz wide)) to (cell-floor (+ cz wide))
+                            always (loop for iy of-type fixnum from (cell-floor (- cy wide)) to (cell-floor (+ cy wide))
+                                         always (loop for ix of-type fixnum from (cell-floor (- cx wide))
+                                                        to (cell-floor (+ cx wide))
+                                                      never (cell-solid-p ix iy iz))))))
+               1 0))))
+;; Gathering the cells:1 ends here
+
+;; [[file:../physics.org::#MYWCNT][A contact per cell:1]]
+(defmacro terrain-outside-contact ()
+  "Row I's contact with the solid cell IX IY IZ whose closest point lies outside the body: the
+overshoot rule, the nearest solid cell so far, a fast approach's impact normal, then the contact
+when its gap is under the speculative distance. Expanded in terrain-cell-contacts. #MYWCNT"
+  `(when (and (<= d2 (* reach reach))
+              (not (or (and (/= ox 0) (solid (+ ix ox) iy iz))
+                       (and (/= oy 0) (solid ix (+ iy oy) iz))
+                       (and (/= oz 0) (solid ix iy (+ iz oz)))
+                       (and (/= ox 0) (/= oy 0) (solid (+ ix ox) (+ iy oy) iz))
+                       (and (/= ox 0) (/= oz 0) (solid (+ ix ox) iy (+ iz oz)))
+                       (and (/= oy 0) (/= oz 0) (solid ix (+ iy oy) (+ iz oz)))
+                       (and (/= ox 0) (/= oy 0) (/= oz 0)
+                            (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
+     (when (< d2 (aref near i)) (setf (aref near i) d2))
+     (multiple-value-bind (nx ny nz sep)
+         (multiple-value-bind (nx ny nz sep) (finish)
+           ;; a fast approach strikes the cell joined with its solid face
+           ;; neighbours, which read through the chunk: they may lie
+           ;; outside the gathered span
+           (if (and (> (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz)) threshold)
+                    (> sep 0.0))
+               (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
+                              threshold
+                              (if (cell-solid-p (- ix 1) iy iz) (- fx 1.0) fx)
+                              (if (cell-solid-p ix (- iy 1) iz) (- fy 1.0) fy)
+                              (if (cell-solid-p ix iy (- iz 1)) (- fz 1.0) fz)
+                              (if (cell-solid-p (+ ix 1) iy iz) (+ fx 2.0) (+ fx 1.0))
+                              (if (cell-solid-p ix (+ iy 1) iz) (+ fy 2.0) (+ fy 1.0))
+                              (if (cell-solid-p ix iy (+ iz 1)) (+ fz 2.0) (+ fz 1.0)))
+               (values nx ny nz sep)))
+       (when (< sep (speculative-distance
+                     (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
+                     dt slop ahead gstep))
+         (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
+                        nx ny nz sep px py pz 0.0 0.0 0.0)))))
+
+(defmacro terrain-inside-contact ()
+  "Row I's contact with the solid cell IX IY IZ that holds its centre: pushed out through a
+face (inside-face), and the body counted buried. Expanded in terrain-cell-contacts. #MYWCNT"
+  `(progn
+     (setf (aref near i) 0.0)
+     (incf buried)
+     (multiple-value-bind (nx ny nz px py pz sep)
+         (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
+                      ix iy iz)
+       (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
+                      nx ny nz sep px py pz 0.0 0.0 0.0))))
+
+(defmacro terrain-cell-contacts ()
+  "Offer a contact for each solid cell of row I's MASK: expanded in the terrain phase. #MYWCNT"
+  `(unless (zerop mask)
+     (flet ((solid (ix iy iz)
+              (declare (type fixnum ix iy iz))
+              (logbitp (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))) mask)))
+       (declare (inline solid))
+       (loop for iz of-type fixnum from z0 to z1 do
+         (loop for iy of-type fixnum from y0 to y1 do
+           (loop for ix of-type fixnum from x0 to x1 do
+             (when (solid ix iy iz)
+               (let ((fx (float ix 1.0)) (fy (float iy 1.0)) (fz (float iz 1.0))
+                     (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
+                 (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
+                     (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
+                   ;; outside: the overshoot rule, the nearest solid cell so far, then
+                   ;; the contact. A cell the rule silences has a solid cell nearer
+                   ;; the centre, so the nearest is among those it keeps
+                   (terrain-outside-contact)
+                   ;; inside: push out through a face, and count the body buried
+                   (terrain-inside-contact))))))))))
+;; A contact per cell:1 ends here
+
+;; [[file:../physics.org::#MYWSTG][The terrain phase, stage by stage:1]]
 (defun terrain-phase (world)
   "The terrain phase: each awake body gathers the solid cells within its reach into a 27-bit mask and
 offers one contact per cell whose face, edge or corner passes the overshoot rule and whose gap
-is under the speculative distance. #MYWH16"
+is under the speculative distance. #MYWSTG"
   (declare #.+kernel-policy+)
   (let ((terrain (physics-world-terrain world)))
     (when terrain
@@ -3828,112 +3998,20 @@ is under the speculative distance. #MYWH16"
               (declare (type fixnum x0 x1 y0 y1 z0 z1) (type (unsigned-byte 27) mask))
               ;; gather the solid cells of the (at most) 3x3x3 neighbourhood, unless the row
               ;; stayed near its anchor and the anchor had no solid cell near it
-              (unless (and use-clear (zerop (aref loose i)) (= (aref clear i) 1))
-              (cond
-                ;; the common case, at most two cells a side and a 2x2x2 block in one chunk:
-                ;; eight reads at fixed offsets, no loop, then only the cells in the span kept
-                ((and (<= (- x1 x0) 1) (<= (- y1 y0) 1) (<= (- z1 z0) 1)
-                      (= (ash x0 (- +chunk-bits+)) (ash (1+ x0) (- +chunk-bits+)))
-                      (= (ash y0 (- +chunk-bits+)) (ash (1+ y0) (- +chunk-bits+)))
-                      (= (ash z0 (- +chunk-bits+)) (ash (1+ z0) (- +chunk-bits+))))
-                 (let ((chunk (chunk-at (chunk-key x0 y0 z0)))
-                       (o (cell-offset x0 y0 z0)))
-                   (declare (type chunk-storage chunk) (type (integer 0 4095) o))
-                   (flet ((solid-bit (offset bit)
-                            (declare (type (integer 0 4095) offset) (type (integer 0 13) bit))
-                            ;; a cell's byte plus 255, shifted right eight places: 1 when solid
-                            (ash (ash (+ (aref chunk offset) 255) -8) bit)))
-                     (declare (inline solid-bit))
-                     (let ((sx 1) (sz (ash 1 +chunk-bits+)) (sy (ash 1 (* 2 +chunk-bits+))))
-                       (setf mask (logand (aref +span-masks+ (+ (- x1 x0) (* 2 (- y1 y0)) (* 4 (- z1 z0))))
-                                          (logior (solid-bit o 0) (solid-bit (+ o sx) 1)
-                                                  (solid-bit (+ o sy) 3) (solid-bit (+ o sx sy) 4)
-                                                  (solid-bit (+ o sz) 9) (solid-bit (+ o sx sz) 10)
-                                                  (solid-bit (+ o sy sz) 12) (solid-bit (+ o sx sy sz) 13))))))))
-                ;; otherwise cell by cell, each through the chunk it lies in
-                (t
-                  (loop for iz of-type fixnum from z0 to z1 do
-                    (loop for iy of-type fixnum from y0 to y1 do
-                      (loop for ix of-type fixnum from x0 to x1 do
-                        (when (cell-solid-p ix iy iz)
-                          (setf mask (logior mask (ash 1 (the (integer 0 26) (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))))))))))))))
+              (terrain-gather-mask)
               ;; in the step that built the pair list, each row's anchor is its centre: note
               ;; whether every cell within its reach plus 0.45 skins is air
-              (when fresh
-                (setf (aref clear i)
-                      (if (and (zerop mask)
-                               (let ((wide (+ reach widen)))
-                                 (loop for iz of-type fixnum from (cell-floor (- cz wide)) to (cell-floor (+ cz wide))
-                                       always (loop for iy of-type fixnum from (cell-floor (- cy wide)) to (cell-floor (+ cy wide))
-                                                    always (loop for ix of-type fixnum from (cell-floor (- cx wide))
-                                                                   to (cell-floor (+ cx wide))
-                                                                 never (cell-solid-p ix iy iz))))))
-                          1 0)))
+              (terrain-note-clear)
               ;; as far as the cells gathered reach, until a solid one nearer is met below
               (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
               ;; a body that can travel past its margin this step also sweeps its path
               (when (> travel margin)
                 (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
                                        (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
-              (unless (zerop mask)
-                (flet ((solid (ix iy iz)
-                         (declare (type fixnum ix iy iz))
-                         (logbitp (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))) mask)))
-                  (declare (inline solid))
-                  (loop for iz of-type fixnum from z0 to z1 do
-                    (loop for iy of-type fixnum from y0 to y1 do
-                      (loop for ix of-type fixnum from x0 to x1 do
-                        (when (solid ix iy iz)
-                          (let ((fx (float ix 1.0)) (fy (float iy 1.0)) (fz (float iz 1.0))
-                                (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
-                            (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
-                                (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
-                              ;; outside: the overshoot rule, the nearest solid cell so far, then
-                              ;; the contact. A cell the rule silences has a solid cell nearer
-                              ;; the centre, so the nearest is among those it keeps
-                              (when (and (<= d2 (* reach reach))
-                                         (not (or (and (/= ox 0) (solid (+ ix ox) iy iz))
-                                                  (and (/= oy 0) (solid ix (+ iy oy) iz))
-                                                  (and (/= oz 0) (solid ix iy (+ iz oz)))
-                                                  (and (/= ox 0) (/= oy 0) (solid (+ ix ox) (+ iy oy) iz))
-                                                  (and (/= ox 0) (/= oz 0) (solid (+ ix ox) iy (+ iz oz)))
-                                                  (and (/= oy 0) (/= oz 0) (solid ix (+ iy oy) (+ iz oz)))
-                                                  (and (/= ox 0) (/= oy 0) (/= oz 0)
-                                                       (solid (+ ix ox) (+ iy oy) (+ iz oz))))))
-                                (when (< d2 (aref near i)) (setf (aref near i) d2))
-                                (multiple-value-bind (nx ny nz sep)
-                                    (multiple-value-bind (nx ny nz sep) (finish)
-                                      ;; a fast approach strikes the cell joined with its solid face
-                                      ;; neighbours, which read through the chunk: they may lie
-                                      ;; outside the gathered span
-                                      (if (and (> (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz)) threshold)
-                                               (> sep 0.0))
-                                          (impact-normal nx ny nz sep cx cy cz r (aref vx i) (aref vy i) (aref vz i) dt
-                                                         threshold
-                                                         (if (cell-solid-p (- ix 1) iy iz) (- fx 1.0) fx)
-                                                         (if (cell-solid-p ix (- iy 1) iz) (- fy 1.0) fy)
-                                                         (if (cell-solid-p ix iy (- iz 1)) (- fz 1.0) fz)
-                                                         (if (cell-solid-p (+ ix 1) iy iz) (+ fx 2.0) (+ fx 1.0))
-                                                         (if (cell-solid-p ix (+ iy 1) iz) (+ fy 2.0) (+ fy 1.0))
-                                                         (if (cell-solid-p ix iy (+ iz 1)) (+ fz 2.0) (+ fz 1.0)))
-                                          (values nx ny nz sep)))
-                                  (when (< sep (speculative-distance
-                                                (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
-                                                dt slop ahead gstep))
-                                    (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
-                                                   nx ny nz sep px py pz 0.0 0.0 0.0))))
-                              ;; inside: push out through a face, and count the body buried
-                              (progn
-                                (setf (aref near i) 0.0)
-                                (incf buried)
-                                (multiple-value-bind (nx ny nz px py pz sep)
-                                    (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
-                                                 ix iy iz)
-                                  (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
-                                                 nx ny nz sep px py pz 0.0 0.0 0.0))))))))))))))
+              (terrain-cell-contacts))))
         (setf (physics-world-buried-count world) buried))))
     world))
-;; Sphere against cells: the overshoot rule keeps seams smooth:1 ends here
+;; The terrain phase, stage by stage:1 ends here
 
 ;; [[file:../physics.org::#SW33P7][Fast bodies sweep their path through the cells:1]]
 (declaim (inline first-solid-on-ray))
@@ -4400,6 +4478,24 @@ fewer; OPERATORS, macrolet definitions, wrap the text wherever it is compiled. #
 ;; One kernel text for every feature set:1 ends here
 
 ;; [[file:../physics.org::#PR3PAR][Preparing the constraints:1]]
+(defconstant +brace-braced+ 1
+  "Bracing mark: the body is braced, static to a much heavier body resting on it. #PR3PAR")
+
+(defconstant +brace-link+ 2
+  "Bracing mark: in the contacts' pass, the body under this one was braced at the step before;
+once settled, this body is a link of a column (always with +brace-braced+). #PR3PAR")
+
+(defconstant +brace-unsettled+ 4
+  "Bracing mark: the body's contact with the body straight under it is deeper than 1.05 slops,
+so it does not count as still for sleep. #PR3PAR")
+
+(defconstant +brace-on-column+ 8
+  "Bracing mark: the body rests within 8 degrees of the vertical on a body at least as light. #PR3PAR")
+
+(defconstant +brace-support+ 16
+  "Bracing mark: one support; a body's mark counts its supports in these units, above the four
+flags. #PR3PAR")
+
 (declaim (inline spin-arm))
 (defun spin-arm (radius slop)
   "The lever of spin friction for a ball of RADIUS resting SLOP deep on something flat: two
@@ -4411,13 +4507,13 @@ thirds of the radius of its contact patch, sqrt(2 RADIUS SLOP). #PR3PAR"
 (defun rests-static-p (braced inverse-mass brace-ratio lower upper rise)
   "Whether the awake row UPPER rests on the BRACED row LOWER as on something static: more than
 BRACE-RATIO times heavier and RISE (the upward part of the normal from LOWER to UPPER) above 0.9,
-or a link of a column (UPPER's mark in BRACED has the bit 2), at least as heavy and RISE above
+or a link of a column (UPPER's mark in BRACED holds +brace-link+), at least as heavy and RISE above
 0.99. #PR3PAR"
   (declare (type fixnum-column braced) (type f32-column inverse-mass) (type index lower upper)
            (type single-float brace-ratio rise))
-  (and (logtest (aref braced lower) 1)
+  (and (logtest (aref braced lower) +brace-braced+)
        (or (and (> rise 0.9) (> (aref inverse-mass lower) (* brace-ratio (aref inverse-mass upper))))
-           (and (> rise 0.99) (logtest (aref braced upper) 2)
+           (and (> rise 0.99) (logtest (aref braced upper) +brace-link+)
                 (>= (aref inverse-mass lower) (aref inverse-mass upper))))))
 
 (declaim (inline brace-side))
@@ -4445,13 +4541,422 @@ with no mass of their own, 1e30 kg, beyond any world's. #PR3PAR"
 (defvar *prepare-short-path* t
   "When false, the prepare fill sends every row through its general path; the claim that the
 short path changes no bit compares the two. #PR3PAR")
+;; Preparing the constraints:1 ends here
 
+;; [[file:../physics.org::#PRLD5V][Loading the solver's bodies:1]]
+(declaim (inline size-constraint-buffer))
+(defun size-constraint-buffer (world cbuf)
+  "Give CBUF, WORLD's constraint buffer, room and length for the rows of every colour, padding
+included, as the colouring laid them out. #PRLD5V"
+  (declare (type constraint-columns cbuf))
+  (let ((rows (aref (physics-world-color-starts world) (1+ +physics-max-colors+))))
+    (constraint-columns-ensure-capacity cbuf rows)
+    (setf (constraint-columns-length cbuf) rows)))
+
+(declaim (inline load-solver-bodies))
+(defun load-solver-bodies (awake v d n)
+  "Load the solver's body state: the velocities of AWAKE's N rows into their solver rows of V,
+zero velocities in the dummy row N, and zero deltas in D for every row and the dummy. #PRLD5V"
+  (declare (type body-columns awake) (type f32-column v d) (type index n))
+  (with-body-columns (vx vy vz wx wy wz) awake
+    (dotimes (i n)
+      (let ((o (solver-row i)))
+        (setf (aref v o) (aref vx i) (aref v (+ o 1)) (aref vy i) (aref v (+ o 2)) (aref vz i)
+              (aref v (+ o 3)) (aref wx i) (aref v (+ o 4)) (aref wy i) (aref v (+ o 5)) (aref wz i)))))
+  (fill v 0.0 :start (solver-row n) :end (solver-row (1+ n)))
+  (fill d 0.0 :end (delta-row (1+ n))))
+;; Loading the solver's bodies:1 ends here
+
+;; [[file:../physics.org::#PRBR4C][Marking the braced bodies:1]]
+(declaim (inline masses-span-brace-ratio-p))
+(defun masses-span-brace-ratio-p (inverse-mass n brace-ratio)
+  "Whether one of the N awake rows (N above zero) of INVERSE-MASS is more than BRACE-RATIO times
+heavier than another: without that, or a column's link, no body is static to another. #PRBR4C"
+  (declare (type f32-column inverse-mass) (type index n) (type single-float brace-ratio))
+  (let ((lo (aref inverse-mass 0)) (hi (aref inverse-mass 0)))
+    (declare (type single-float lo hi))
+    (dotimes (i n) (setf lo (min lo (aref inverse-mass i)) hi (max hi (aref inverse-mass i))))
+    (> hi (* brace-ratio lo))))
+
+(declaim (inline upward-part))
+(defun upward-part (x y z up-x up-y up-z)
+  "The upward part of the normal X Y Z, UP-X UP-Y UP-Z pointing against gravity. #PRBR4C"
+  (declare (type single-float x y z up-x up-y up-z))
+  (+ (* x up-x) (* y up-y) (* z up-z)))
+
+(declaim (inline still-row-p))
+(defun still-row-p (v o still2)
+  "Whether the solver row at O of V moves slower than the sleep speed, STILL2 its square. #PRBR4C"
+  (declare (type f32-column v) (type index o) (type single-float still2))
+  (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
+        (* (aref v (+ o 2)) (aref v (+ o 2))))
+     still2))
+
+(declaim (inline column-steps with-column-steps))
+(defun column-steps (flags)
+  "The steps a body has rested on one support straight under it, from its FLAGS word
+(+flag-column-steps+). #PRBR4C"
+  (declare (type fixnum flags))
+  (ldb (byte 6 3) flags))
+
+(defun with-column-steps (count flags)
+  "The FLAGS word with its column steps (+flag-column-steps+) set to COUNT. #PRBR4C"
+  (declare (type fixnum flags) (type (integer 0 63) count))
+  (dpb count (byte 6 3) flags))
+;; Marking the braced bodies:1 ends here
+
+;; [[file:../physics.org::#PRBR4C][Marking the braced bodies:2]]
+(declaim (inline note-one-sided-support))
+(defun note-one-sided-support (braced v row still2)
+  "Count a support of the awake ROW held up by something static, and mark it braced when its
+solver velocity in V is still (STILL2, the sleep speed squared). #PRBR4C"
+  (declare (type fixnum-column braced) (type f32-column v) (type index row) (type single-float still2))
+  (let ((o (solver-row row)))
+    (declare (type index o))
+    (incf (aref braced row) +brace-support+)
+    (when (still-row-p v o still2)
+      (setf (aref braced row) (logior (aref braced row) +brace-braced+)))))
+
+(declaim (inline note-support))
+(defun note-support (braced inverse-mass flags geometry c lower upper rise slop kept)
+  "Count a support of the awake row UPPER resting on LOWER through contact C of GEOMETRY, RISE
+the upward part of their normal; within 8 degrees of the vertical on a body at least as light,
+mark it +brace-on-column+, with +brace-unsettled+ when the contact is deeper than 1.05 SLOPs and
++brace-link+ when LOWER was braced at the step before (KEPT, the pass ran then). #PRBR4C"
+  (declare (type fixnum-column braced flags) (type f32-column inverse-mass geometry)
+           (type index c lower upper) (type single-float rise slop))
+  (incf (aref braced upper) +brace-support+)
+  (when (and (> rise 0.99) (>= (aref inverse-mass lower) (aref inverse-mass upper)))
+    (setf (aref braced upper)
+          (logior (aref braced upper) +brace-on-column+
+                  (if (< (contact@ geometry c separation) (* -1.05 slop)) +brace-unsettled+ 0)
+                  (if (and kept (logtest (aref flags lower) +flag-braced+)) +brace-link+ 0)))))
+
+(declaim (inline note-pair-supports))
+(defun note-pair-supports (braced inverse-mass flags geometry c la lb rise slop kept)
+  "Count the supports contact C gives its two awake rows LA and LB, RISE the upward part of the
+normal from LA to LB: the upper gains one when the pair stands within 25 degrees of the
+vertical (note-support), the lower none; sideways, both. #PRBR4C"
+  (declare (type fixnum-column braced flags) (type f32-column inverse-mass geometry)
+           (type index c la lb) (type single-float rise slop))
+  (cond ((> rise 0.9) (note-support braced inverse-mass flags geometry c la lb rise slop kept))
+        ((< rise -0.9) (note-support braced inverse-mass flags geometry c lb la (- rise) slop kept))
+        (t (incf (aref braced la) +brace-support+) (incf (aref braced lb) +brace-support+))))
+
+(declaim (inline mark-supports))
+(defun mark-supports (contacts m rows braced v inverse-mass flags still2 slop kept up-x up-y up-z)
+  "The contacts' pass: for each of the M contacts that carried load, its awake rows in ROWS (as
+the colouring found them, -1 for a side that is not an awake body), count the supports and set
+the marks of its bodies in BRACED. #PRBR4C"
+  (declare (type contact-columns contacts) (type index m) (type fixnum-column rows braced flags)
+           (type f32-column v inverse-mass) (type single-float still2 slop up-x up-y up-z))
+  (with-contact-columns (geometry) contacts
+    (dotimes (c m)
+      (when (> (contact@ geometry c normal-impulse) 0.0)
+        (let* ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c))))
+               (dyn-a (>= la 0)) (dyn-b (>= lb 0)))
+          (declare (type fixnum la lb))
+          (cond ((not (eq dyn-a dyn-b)) (note-one-sided-support braced v (if dyn-a la lb) still2))
+                (dyn-a (note-pair-supports braced inverse-mass flags geometry c la lb
+                                           (upward-part (contact@ geometry c nx) (contact@ geometry c ny)
+                                                        (contact@ geometry c nz) up-x up-y up-z)
+                                           slop kept))))))))
+;; Marking the braced bodies:2 ends here
+
+;; [[file:../physics.org::#PRBR4C][Marking the braced bodies:3]]
+(declaim (inline settle-brace-mark))
+(defun settle-brace-mark (braced flags v i still2 kept)
+  "Settle the mark of awake row I in BRACED: braced, a link of a column, or neither, with
++brace-unsettled+ kept while it counts column steps; write its braced flag and column steps into
+FLAGS (counted on from the step before when KEPT). Return whether it counts column steps and
+whether it is a link. #PRBR4C"
+  (declare (type fixnum-column braced flags) (type f32-column v) (type index i) (type single-float still2))
+  (let* ((o (solver-row i))
+         (mark (aref braced i))
+         (still (still-row-p v o still2))
+         (column (and still (logtest mark +brace-on-column+) (= (ash mark -4) 1)))
+         (count (if column (min 63 (1+ (if kept (column-steps (aref flags i)) 0))) 0))
+         (link (and column (logtest mark +brace-link+) (>= count +column-wait+))))
+    (setf (aref braced i)
+          (logior (cond (link (logior +brace-braced+ +brace-link+))
+                        ((or (logtest mark +brace-braced+)
+                             (and kept still (logtest (aref flags i) +flag-braced+)))
+                         +brace-braced+)
+                        (t 0))
+                  (if column (logand mark +brace-unsettled+) 0)))
+    (setf (aref flags i) (with-column-steps count (if (logtest (aref braced i) +brace-braced+)
+                                                      (logior (aref flags i) +flag-braced+)
+                                                      (logandc2 (aref flags i) +flag-braced+))))
+    (values column link)))
+
+(declaim (inline settle-brace-marks))
+(defun settle-brace-marks (braced flags v n still2 kept)
+  "The bodies' pass: settle the mark of each of the N awake rows (settle-brace-mark). Return
+whether some body counts column steps (the world's column watch) and whether some body is a
+link. #PRBR4C"
+  (declare (type fixnum-column braced flags) (type f32-column v) (type index n) (type single-float still2))
+  (let ((watch nil) (linked nil))
+    (dotimes (i n)
+      (multiple-value-bind (column link) (settle-brace-mark braced flags v i still2 kept)
+        (when column (setf watch t))
+        (when link (setf linked t))))
+    (values watch linked)))
+
+(declaim (inline still-braced-sides))
+(defun still-braced-sides (contacts m rows braced inverse-mass brace-ratio v up-x up-y up-z)
+  "The stilling pass: zero in V the solver velocity of each awake body that one of the M
+contacts finds static to a heavier one above it (brace-side), as the one-sided contact takes
+it to be: nothing else would stop it rolling out. #PRBR4C"
+  (declare (type contact-columns contacts) (type index m) (type fixnum-column rows braced)
+           (type f32-column inverse-mass v) (type single-float brace-ratio up-x up-y up-z))
+  (with-contact-columns (geometry) contacts
+    (dotimes (c m)
+      (let ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c)))))
+        (declare (type fixnum la lb))
+        (when (and (>= la 0) (>= lb 0))
+          (let* ((la la) (lb lb)
+                 (side (brace-side braced inverse-mass brace-ratio la lb
+                                   (upward-part (contact@ geometry c nx) (contact@ geometry c ny)
+                                                (contact@ geometry c nz) up-x up-y up-z))))
+            (declare (type index la lb))
+            (when side
+              (let ((o (solver-row (if (eq side :a) la lb))))
+                (fill v 0.0 :start o :end (+ o 6))))))))))
+
+(declaim (inline brace-bodies))
+(defun brace-bodies (world contacts m rows braced v inverse-mass flags n still2 slop kept up-x up-y up-z)
+  "The bracing pass's first two stages: clear the marks, mark the supports (mark-supports),
+settle the marks (settle-brace-marks), and note in WORLD the step of this pass and whether a
+column is forming. Return whether some body is a link. #PRBR4C"
+  (declare (type fixnum-column braced) (type index n))
+  (fill braced 0 :end (1+ n))
+  (mark-supports contacts m rows braced v inverse-mass flags still2 slop kept up-x up-y up-z)
+  (multiple-value-bind (watch linked) (settle-brace-marks braced flags v n still2 kept)
+    (setf (physics-world-braced-step world) (physics-world-step-count world)
+          (physics-world-column-watch world) watch)
+    linked))
+;; Marking the braced bodies:3 ends here
+
+;; [[file:../physics.org::#PRCL0R][Ordering the rows by colour:1]]
+(declaim (inline order-rows-by-colour))
+(defun order-rows-by-colour (colors contact cursor m)
+  "Write into CONTACT, at each colour's CURSOR (which it advances), the M contacts of each colour
+of COLORS, in contact order. #PRCL0R"
+  (declare (type fixnum-column colors contact cursor) (type index m))
+  (dotimes (c m)
+    (let ((color (aref colors c)))
+      (setf (aref contact (aref cursor color)) c)
+      (incf (aref cursor color)))))
+
+(declaim (inline pad-colour-rows))
+(defun pad-colour-rows (cursor color-starts contact body-a body-b data stride n)
+  "Make every row from each colour's CURSOR to the next colour's start (COLOR-STARTS) a padding
+row: contact -1, the dummy N on both sides, every float of DATA's main blocks (of STRIDE floats)
+zero. #PRCL0R"
+  (declare (type fixnum-column cursor color-starts contact body-a body-b) (type f32-column data)
+           (type constraint-block-size stride) (type index n))
+  (dotimes (color +physics-max-colors+)
+    (loop for k of-type index from (aref cursor color) below (aref color-starts (1+ color))
+          do (let ((base (+ +constraint-origin+ (* (ash k -3) stride) (logand k 7))))
+               (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
+               (dotimes (o (floor stride 8)) (setf (aref data (+ base (* 8 o))) 0.0))))))
+;; Ordering the rows by colour:1 ends here
+
+;; [[file:../physics.org::#PRF1LL][Filling a row:1]]
+(declaim (inline normal-approach))
+(defun normal-approach (v va vb kx ky kz x y z)
+  "The speed at which the bodies of the solver rows VA and VB of V, side b moved besides by the
+box velocity KX KY KZ, approach along the normal X Y Z. #PRF1LL"
+  (declare (type f32-column v) (type index va vb) (type single-float kx ky kz x y z))
+  (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
+     (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
+     (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z)))
+
+(defmacro fill-short-row ()
+  "Fill row K of the constraint buffer for its contact between two awake bodies, neither static
+to the other: expanded in the prepare phase's fill. #PRF1LL"
+  `(let* ((c (aref contact k))
+          (g (geometry-start c)) (base (constraint-base k))
+          (la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c))))
+          (x (contact-at geometry g nx)) (y (contact-at geometry g ny))
+          (z (contact-at geometry g nz))
+          (kx (contact-at geometry g kvx)) (ky (contact-at geometry g kvy))
+          (kz (contact-at geometry g kvz))
+          (r-a (aref radius-c la)) (r-b (aref radius-c lb))
+          (va (solver-row la)) (vb (solver-row lb)))
+     (declare (type index c g base la lb va vb) (type single-float x y z kx ky kz r-a r-b)
+              (ignorable va vb kx ky kz))
+     (setf (aref body-a k) la (aref body-b k) lb
+           (@ nx) x (@ ny) y (@ nz) z (@ ra) r-a (@ rb) r-b
+           (@ ima) (aref im-c la) (@ imb) (aref im-c lb)
+           (@ iia) (aref ii-c la) (@ iib) (aref ii-c lb)
+           (@ separation) (+ (contact-at geometry g separation) slop)
+           (@ friction) (fsqrt (* (aref fr-c la) (aref fr-c lb)))
+           (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass (@ impulse-scale) dyn-impulse
+           (@ normal-impulse) (contact-at geometry g normal-impulse)
+           (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1)
+           (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
+     ;; the columns of boxes, restitution, rolling resistance and the events, when the world
+     ;; has them (spin friction's and the armed speed are zeros here, as the side block starts)
+     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
+     (if-feature :restitution
+       (setf (@ restitution) (max (aref re-c la) (aref re-c lb))))
+     (if-feature :rolling-resistance
+       (setf (@ rolling-limit) (* (max (aref ro-c la) (aref ro-c lb)) (max r-a r-b))
+             (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x)
+             (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
+             (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z)))
+     (if-feature (:or :contact-events :hit-events)
+       (setf (@ relative-velocity) (normal-approach v va vb kx ky kz x y z)))))
+;; Filling a row:1 ends here
+
+;; [[file:../physics.org::#PRF1LL][Filling a row:2]]
+(defmacro fill-row-material ()
+  "Write the friction, restitution, rolling limit and spin limit of the general path's row:
+expanded in fill-row-sides. #PRF1LL"
+  `(if (>= b 0)
+       (progn
+         (setf (@ friction) (fsqrt (* (aref (body-columns-friction buf-a) la)
+                                      (aref (body-columns-friction buf-b) lb))))
+         (if-feature :restitution
+           (setf (@ restitution) (max (aref (body-columns-restitution buf-a) la)
+                                      (aref (body-columns-restitution buf-b) lb))))
+         (if-feature :rolling-resistance
+           (setf (@ rolling-limit) (* (max (aref (body-columns-rolling-resistance buf-a) la)
+                                           (aref (body-columns-rolling-resistance buf-b) lb))
+                                      (max r-a r-b)))))
+       (progn
+         (setf (@ friction) (aref (body-columns-friction buf-a) la))
+         ;; a spin limit only here, where side b has no radius: the kernels read the spin
+         ;; columns only where rb is zero ([[#SSMPYW]])
+         (if-feature :friction (setf (@ spin-limit) (* (@ friction) (spin-arm r-a slop))))
+         (if-feature :restitution
+           (setf (@ restitution) (aref (body-columns-restitution buf-a) la)))
+         (if-feature :rolling-resistance
+           (setf (@ rolling-limit) (* (aref (body-columns-rolling-resistance buf-a) la) r-a))))))
+
+(defmacro fill-row-softness ()
+  "Write the soft coefficients of the general path's row: two-body, or static and stiffened by
+its carried load over its effective mass. Expanded in fill-row-sides. #PRF1LL"
+  `(let ((load (if two-sided
+                   0.0
+                   (min load-limit (* (contact-at geometry g normal-impulse) mass-sum load-scale)
+                        (* held-mass mass-sum)))))
+     (declare (type single-float load))
+     (cond ((> load 1.0)
+            (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
+                  (@ impulse-scale) (/ st-impulse load)))
+           (two-sided
+            (setf (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass
+                  (@ impulse-scale) dyn-impulse))
+           (t
+            (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
+                  (@ impulse-scale) st-impulse)))))
+
+(defmacro fill-row-sides ()
+  "Write the general path's radii, inverse masses and inertias, gap, box velocity, material,
+spin impulse, approach speed and soft coefficients: expanded in fill-general-row. #PRF1LL"
+  `(let* ((r-a (aref (body-columns-radius buf-a) la))
+          (r-b (if (>= b 0) (aref (body-columns-radius buf-b) lb) 0.0))
+          (im-a (if dyn-a (aref (body-columns-inverse-mass awake) la) 0.0))
+          (im-b (if dyn-b (aref (body-columns-inverse-mass awake) lb) 0.0))
+          (ii-a (if dyn-a (aref (body-columns-inverse-inertia awake) la) 0.0))
+          (ii-b (if dyn-b (aref (body-columns-inverse-inertia awake) lb) 0.0))
+          (kx (contact-at geometry g kvx)) (ky (contact-at geometry g kvy)) (kz (contact-at geometry g kvz))
+          (mass-sum (+ im-a im-b))
+          (va (solver-row (if dyn-a la n)))
+          (vb (solver-row (if dyn-b lb n))))
+     (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz) (ignorable va vb kx ky kz))
+     (setf (@ ra) r-a (@ rb) r-b
+           (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
+           (@ separation) (+ (contact-at geometry g separation) slop))
+     ;; the box's velocity, until the frame pass resolves it
+     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (fill-row-material)
+     ;; the spin impulse the contact carried out of the last step: zero on every row with a
+     ;; radius on side b, whose spin is never solved
+     (if-feature :friction (setf (@ spin-impulse) (contact-at geometry g spin-impulse)))
+     (if-feature (:or :contact-events :hit-events)
+       (setf (@ relative-velocity) (normal-approach v va vb kx ky kz x y z)))
+     (fill-row-softness)))
+
+(defmacro fill-general-row ()
+  "Fill row K of the constraint buffer for its contact by the general path: each side's set and
+row from the handle table, a braced side static: expanded in the prepare phase's fill. #PRF1LL"
+  `(let* ((c (aref contact k))
+          (g (geometry-start c))
+          (base (constraint-base k))
+          (a (aref ha c)) (b (aref hb c))
+          (set-a (aref sets (handle-index a)))
+          (set-b (if (>= b 0) (aref sets (handle-index b)) +set-free+))
+          (la (aref locals (handle-index a)))
+          (lb (if (>= b 0) (aref locals (handle-index b)) 0))
+          (buf-a (if (= set-a +set-awake+) awake sleeping))
+          (buf-b (if (= set-b +set-awake+) awake sleeping))
+          (sets sets) (locals locals)
+          (dyn-a (= set-a +set-awake+)) (dyn-b (= set-b +set-awake+))
+          (x (contact-at geometry g nx)) (y (contact-at geometry g ny)) (z (contact-at geometry g nz))
+          ;; a braced body is static to a much heavier one above it, as a sleeper is to the
+          ;; bodies that lean on it
+          (brace (and static dyn-a dyn-b
+                      (brace-side braced inverse-mass brace-ratio la lb (upward-part x y z up-x up-y up-z))))
+          (dyn-a (and dyn-a (not (eq brace :a))))
+          (dyn-b (and dyn-b (not (eq brace :b))))
+          (two-sided (and dyn-a dyn-b)))
+     (declare (type fixnum a b set-a set-b) (type index c la lb base) (type single-float x y z)
+              (type body-columns buf-a buf-b) (type fixnum-column sets locals) (ignorable sets locals))
+     (setf (aref body-a k) (if dyn-a la n)
+           (aref body-b k) (if dyn-b lb n)
+           (@ nx) x (@ ny) y (@ nz) z)
+     (fill-row-sides)
+     (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
+     (setf (@ normal-impulse) (contact-at geometry g normal-impulse)
+           (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1)
+           (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
+     (if-feature :rolling-resistance
+       (setf (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x)
+             (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
+             (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z)))))
+
+(defmacro fill-constraint-rows ()
+  "The fill: order the rows by colour, zero the side blocks, fill each colour's rows by the
+short or the general path, complete them in the frame pass, and pad each colour. Expanded in
+the prepare phase, whose variables it reads. #PRF1LL"
+  `(with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
+     (with-constraint-block (contact body-a body-b) cbuf
+       (order-rows-by-colour colors contact cursor m)
+       ;; the side blocks start as zeros, padding rows' included: a row writes only the side
+       ;; columns that may be other than zero, the spin limit and impulse of a row with no
+       ;; radius on side b ([[#SSMPYW]])
+       (when (plusp (constraint-columns-length cbuf))
+         (fill (side-floats) 0.0 :end (+ +constraint-origin+
+                                         (* (ceiling (constraint-columns-length cbuf) 8)
+                                            (constraint-columns-side-block cbuf)))))
+       (with-body-columns ((radius-c radius) (im-c inverse-mass) (ii-c inverse-inertia)
+                           (fr-c friction) (re-c restitution) (ro-c rolling-resistance))
+           awake
+         (declare (ignorable re-c ro-c))
+         (dotimes (color (1+ +physics-max-colors+))
+           (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
+             (if (let ((c (aref contact k)))
+                   (and short-path (not static)
+                        (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
+                 (fill-short-row)
+                 (fill-general-row)))))
+       ;; the frames, the box velocities along them and the effective masses, in lanes where
+       ;; the family has them
+       (physics-prepare-frames (physics-world-kernels world) world)
+       (pad-colour-rows cursor color-starts contact body-a body-b data stride n))))
+;; Filling a row:2 ends here
+
+;; [[file:../physics.org::#PRSTG6][The prepare phase, stage by stage:1]]
 (define-featured-kernel (prepare-phase :features (:body-contacts :boxes :friction :restitution :rolling-resistance :contact-events :hit-events))
     (world)
   "The prepare phase: colour the contacts, then write the constraint buffer in colour order, and load the
 awake bodies' velocities into the solver; note the number of colours used in the step's
 statistics, and return it. Compiled for fewer features, it writes no column the world's kernels
-do not read: restitution's, rolling resistance's, and the approach speed only events read. #PR3PAR"
+do not read: restitution's, rolling resistance's, and the approach speed only events read. #PRSTG6"
   (declare #.+kernel-policy+)
   (let* ((h (physics-world-current-h world))
          (contacts (physics-world-contacts world))
@@ -4483,18 +4988,8 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
         (declare (type single-float dyn-bias dyn-mass dyn-impulse))
         (multiple-value-bind (st-bias st-mass st-impulse) (physics-softness (* 2.0 hertz) zeta h)
           (declare (type single-float st-bias st-mass st-impulse))
-          ;; the buffer's rows: every colour's, padding included
-          (let ((rows (aref (physics-world-color-starts world) (1+ +physics-max-colors+))))
-            (constraint-columns-ensure-capacity cbuf rows)
-            (setf (constraint-columns-length cbuf) rows))
-          ;; the solver's body state: velocities of awake rows, zero deltas, a zero dummy row
-          (with-body-columns (vx vy vz wx wy wz) awake
-            (dotimes (i n)
-              (let ((o (solver-row i)))
-                (setf (aref v o) (aref vx i) (aref v (+ o 1)) (aref vy i) (aref v (+ o 2)) (aref vz i)
-                      (aref v (+ o 3)) (aref wx i) (aref v (+ o 4)) (aref wy i) (aref v (+ o 5)) (aref wz i)))))
-          (fill v 0.0 :start (solver-row n) :end (solver-row (1+ n)))
-          (fill d 0.0 :end (delta-row (1+ n)))
+          (size-constraint-buffer world cbuf)
+          (load-solver-bodies awake v d n)
           (let ((cursor (make-array (+ +physics-max-colors+ 1) :element-type 'fixnum))
                 (color-starts (physics-world-color-starts world))
                 (sets (handle-table-set ids)) (locals (handle-table-local ids))
@@ -4519,11 +5014,7 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
             ;; of it below. No body is static to another unless one awake body is that many times
             ;; heavier than another, or a column has a link: else the scene skips the tests of
             ;; brace-side below
-            (let* ((static (and (> g 1e-3) (plusp n)
-                                (let ((lo (aref inverse-mass 0)) (hi (aref inverse-mass 0)))
-                                  (declare (type single-float lo hi))
-                                  (dotimes (i n) (setf lo (min lo (aref inverse-mass i)) hi (max hi (aref inverse-mass i))))
-                                  (> hi (* brace-ratio lo)))))
+            (let* ((static (and (> g 1e-3) (plusp n) (masses-span-brace-ratio-p inverse-mass n brace-ratio)))
                    ;; the pass runs at every step where a body may be static to another or a
                    ;; column is forming (a body counting its steps on one support, or a link),
                    ;; and else at every +column-look+th step, which finds a column starting
@@ -4533,274 +5024,28 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
                    ;; whether the pass ran at the step before, and the awake bodies' flags
                    (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world))))
                    (flags (body-columns-flags awake)))
-            (declare (type fixnum-column flags))
-            (when bracing
-            (fill braced 0 :end (1+ n))
-            ;; the contacts' pass marks, in BRACED: 1 braced by a one-sided contact; 8 resting
-            ;; within 8 degrees of the vertical on a body at least as light, 2 besides when that
-            ;; body was braced at the step before, 4 when that contact is deeper than 1.05 slops;
-            ;; and counts in 16s the body's supports, the contacts that carried load on it other
-            ;; than those of bodies resting on it from above
-            (with-contact-columns (geometry) contacts
-              (dotimes (c m)
-                ;; a contact that carried no load counts for nothing: its bodies are not
-                ;; looked up
-                (when (> (contact@ geometry c normal-impulse) 0.0)
-                  (let* ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c))))
-                         (dyn-a (>= la 0)) (dyn-b (>= lb 0)))
-                    (declare (type fixnum la lb))
-                    (if (not (eq dyn-a dyn-b))
-                        (let* ((row (if dyn-a la lb)) (o (solver-row row)))
-                          (declare (type index row o))
-                          (incf (aref braced row) 16)
-                          (when (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
-                                      (* (aref v (+ o 2)) (aref v (+ o 2))))
-                                   still2)
-                            (setf (aref braced row) (logior (aref braced row) 1))))
-                        (when dyn-a
-                          (let* ((la la) (lb lb)
-                                 (rise (+ (* (contact@ geometry c nx) up-x) (* (contact@ geometry c ny) up-y)
-                                          (* (contact@ geometry c nz) up-z))))
-                            (declare (type index la lb) (type single-float rise))
-                            ;; the upper side gains a support, the lower none; sideways, both
-                            (flet ((support (lower upper rise)
-                                     (declare (type index lower upper) (type single-float rise))
-                                     (incf (aref braced upper) 16)
-                                     (when (and (> rise 0.99) (>= (aref inverse-mass lower) (aref inverse-mass upper)))
-                                       (setf (aref braced upper)
-                                             (logior (aref braced upper) 8
-                                                     (if (< (contact@ geometry c separation) (* -1.05 slop)) 4 0)
-                                                     (if (and kept (logtest (aref flags lower) +flag-braced+)) 2 0))))))
-                              (cond ((> rise 0.9) (support la lb rise))
-                                    ((< rise -0.9) (support lb la (- rise)))
-                                    (t (incf (aref braced la) 16) (incf (aref braced lb) 16)))))))))))
-              ;; a body braced at the step before stays braced while it is still, whatever its
-              ;; load: its load moves to the bodies below once it is braced (hysteresis). A
-              ;; still body whose one support is a body under it counts its steps so in its
-              ;; flags; from the column wait on, that body braced, it is a link of a column:
-              ;; braced (1) and a link (2). Counting, it is not settled (4) while deeper than
-              ;; 1.05 slops
-              (let ((watch nil))
-                (dotimes (i n)
-                  (let* ((o (solver-row i))
-                         (mark (aref braced i))
-                         (still (< (+ (* (aref v o) (aref v o)) (* (aref v (+ o 1)) (aref v (+ o 1)))
-                                      (* (aref v (+ o 2)) (aref v (+ o 2))))
-                                   still2))
-                         (column (and still (logtest mark 8) (= (ash mark -4) 1)))
-                         (count (if column (min 63 (1+ (if kept (ldb (byte 6 3) (aref flags i)) 0))) 0))
-                         (link (and column (logtest mark 2) (>= count +column-wait+))))
-                    (when column (setf watch t))
-                    (when link (setf static t))
-                    (setf (aref braced i)
-                          (logior (cond (link 3)
-                                        ((or (logtest mark 1) (and kept still (logtest (aref flags i) +flag-braced+))) 1)
-                                        (t 0))
-                                  (if column (logand mark 4) 0)))
-                    (setf (aref flags i) (dpb count (byte 6 3)
-                                              (if (logtest (aref braced i) 1)
-                                                  (logior (aref flags i) +flag-braced+)
-                                                  (logandc2 (aref flags i) +flag-braced+))))))
-                (setf (physics-world-braced-step world) (physics-world-step-count world)
-                      (physics-world-column-watch world) watch))
-              ;; a body that is static to a heavier one above it starts the step still, as the
-              ;; one-sided contact takes it to be: nothing else would stop it rolling out
-              (when static
-              (with-contact-columns (geometry) contacts
-                (dotimes (c m)
-                  (let ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c)))))
-                    (declare (type fixnum la lb))
-                    (when (and (>= la 0) (>= lb 0))
-                      (let* ((la la) (lb lb)
-                             (side (brace-side braced inverse-mass brace-ratio la lb
-                                               (+ (* (contact@ geometry c nx) up-x) (* (contact@ geometry c ny) up-y)
-                                                  (* (contact@ geometry c nz) up-z)))))
-                        (declare (type index la lb))
-                        (when side
-                          (let ((o (solver-row (if (eq side :a) la lb))))
-                            (fill v 0.0 :start o :end (+ o 6)))))))))))
-            (with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
-              (with-constraint-block (contact body-a body-b) cbuf
-                ;; each contact's place in its colour first; then the rows are filled in
-                ;; the buffer's order, so that a block of eight is written whole while its
-                ;; lines are in cache, not one row at a time among the other colours' blocks
-                (dotimes (c m)
-                  (let ((color (aref colors c)))
-                    (setf (aref contact (aref cursor color)) c)
-                    (incf (aref cursor color))))
-                ;; the side blocks start as zeros, padding rows' included: a row writes only
-                ;; the side columns that may be other than zero, the spin limit and impulse of
-                ;; a row with no radius on side b ([[#SSMPYW]])
-                (when (plusp (constraint-columns-length cbuf))
-                  (fill (side-floats) 0.0 :end (+ +constraint-origin+
-                                                  (* (ceiling (constraint-columns-length cbuf) 8)
-                                                     (constraint-columns-side-block cbuf)))))
-                (with-body-columns ((radius-c radius) (im-c inverse-mass) (ii-c inverse-inertia)
-                                    (fr-c friction) (re-c restitution) (ro-c rolling-resistance))
-                    awake
-                (declare (ignorable re-c ro-c))
-                (dotimes (color (1+ +physics-max-colors+))
-                 (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
-                  (if (let ((c (aref contact k)))
-                        (and short-path (not static)
-                             (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
-                   ;; the common case, two awake bodies and no bracing, on its own short path:
-                   ;; the same values by the same operations as the general path below
-                   (let* ((c (aref contact k))
-                          (g (geometry-start c)) (base (constraint-base k))
-                          (la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c))))
-                          (x (contact-at geometry g nx)) (y (contact-at geometry g ny))
-                          (z (contact-at geometry g nz))
-                          (kx (contact-at geometry g kvx)) (ky (contact-at geometry g kvy))
-                          (kz (contact-at geometry g kvz))
-                          (r-a (aref radius-c la)) (r-b (aref radius-c lb))
-                          (va (solver-row la)) (vb (solver-row lb)))
-                     (declare (type index c g base la lb va vb) (type single-float x y z kx ky kz r-a r-b)
-                              (ignorable va vb kx ky kz))
-                     (setf (aref body-a k) la (aref body-b k) lb
-                           (@ nx) x (@ ny) y (@ nz) z (@ ra) r-a (@ rb) r-b
-                           (@ ima) (aref im-c la) (@ imb) (aref im-c lb)
-                           (@ iia) (aref ii-c la) (@ iib) (aref ii-c lb)
-                           (@ separation) (+ (contact-at geometry g separation) slop)
-                           (@ friction) (fsqrt (* (aref fr-c la) (aref fr-c lb)))
-                           (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass (@ impulse-scale) dyn-impulse
-                           (@ normal-impulse) (contact-at geometry g normal-impulse)
-                           (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1)
-                           (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
-                     ;; the columns of boxes, restitution, rolling resistance and the events,
-                     ;; when the world has them (spin friction's and the armed speed are zeros
-                     ;; here, as the side block starts)
-                     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
-                     (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
-                     (if-feature :restitution
-                       (setf (@ restitution) (max (aref re-c la) (aref re-c lb))))
-                     (if-feature :rolling-resistance
-                       (setf (@ rolling-limit) (* (max (aref ro-c la) (aref ro-c lb)) (max r-a r-b))
-                             (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x)
-                             (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
-                             (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z)))
-                     (if-feature (:or :contact-events :hit-events)
-                       (setf (@ relative-velocity)
-                             (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
-                                (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
-                                (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z)))))
-                  (let* ((c (aref contact k))
-                         (g (geometry-start c))
-                         (base (constraint-base k))
-                         (a (aref ha c)) (b (aref hb c))
-                         (set-a (aref sets (handle-index a)))
-                         (set-b (if (>= b 0) (aref sets (handle-index b)) +set-free+))
-                         (la (aref locals (handle-index a)))
-                         (lb (if (>= b 0) (aref locals (handle-index b)) 0))
-                         (buf-a (if (= set-a +set-awake+) awake sleeping))
-                         (buf-b (if (= set-b +set-awake+) awake sleeping))
-                         (sets sets) (locals locals)
-                         (dyn-a (= set-a +set-awake+)) (dyn-b (= set-b +set-awake+))
-                         (x (contact-at geometry g nx)) (y (contact-at geometry g ny)) (z (contact-at geometry g nz))
-                         ;; a braced body is static to a much heavier one above it, as a sleeper
-                         ;; is to the bodies that lean on it
-                         (brace (and static dyn-a dyn-b
-                                     (brace-side braced inverse-mass brace-ratio la lb
-                                                 (+ (* x up-x) (* y up-y) (* z up-z)))))
-                         (dyn-a (and dyn-a (not (eq brace :a))))
-                         (dyn-b (and dyn-b (not (eq brace :b))))
-                         (two-sided (and dyn-a dyn-b)))
-                    (declare (type fixnum a b set-a set-b) (type index c la lb base) (type single-float x y z)
-                             (type body-columns buf-a buf-b) (type fixnum-column sets locals) (ignorable sets locals))
-                    (setf (aref body-a k) (if dyn-a la n)
-                          (aref body-b k) (if dyn-b lb n)
-                          (@ nx) x (@ ny) y (@ nz) z)
-                    (let* ((r-a (aref (body-columns-radius buf-a) la))
-                           (r-b (if (>= b 0) (aref (body-columns-radius buf-b) lb) 0.0))
-                           (im-a (if dyn-a (aref (body-columns-inverse-mass awake) la) 0.0))
-                           (im-b (if dyn-b (aref (body-columns-inverse-mass awake) lb) 0.0))
-                           (ii-a (if dyn-a (aref (body-columns-inverse-inertia awake) la) 0.0))
-                           (ii-b (if dyn-b (aref (body-columns-inverse-inertia awake) lb) 0.0))
-                           (kx (contact-at geometry g kvx)) (ky (contact-at geometry g kvy)) (kz (contact-at geometry g kvz))
-                           (mass-sum (+ im-a im-b))
-                           (va (solver-row (if dyn-a la n)))
-                           (vb (solver-row (if dyn-b lb n))))
-                      (declare (type single-float r-a r-b im-a im-b ii-a ii-b kx ky kz) (ignorable va vb kx ky kz))
-                      (setf (@ ra) r-a (@ rb) r-b
-                            (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
-                            (@ separation) (+ (contact-at geometry g separation) slop))
-                      ;; the box's velocity, until the frame pass resolves it
-                      (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
-                      (if (>= b 0)
-                          (progn
-                            (setf (@ friction) (fsqrt (* (aref (body-columns-friction buf-a) la)
-                                                         (aref (body-columns-friction buf-b) lb))))
-                            (if-feature :restitution
-                              (setf (@ restitution) (max (aref (body-columns-restitution buf-a) la)
-                                                         (aref (body-columns-restitution buf-b) lb))))
-                            (if-feature :rolling-resistance
-                              (setf (@ rolling-limit) (* (max (aref (body-columns-rolling-resistance buf-a) la)
-                                                              (aref (body-columns-rolling-resistance buf-b) lb))
-                                                         (max r-a r-b)))))
-                          (progn
-                            (setf (@ friction) (aref (body-columns-friction buf-a) la))
-                            ;; a spin limit only here, where side b has no radius: the kernels
-                            ;; read the spin columns only where rb is zero ([[#SSMPYW]])
-                            (if-feature :friction (setf (@ spin-limit) (* (@ friction) (spin-arm r-a slop))))
-                            (if-feature :restitution
-                              (setf (@ restitution) (aref (body-columns-restitution buf-a) la)))
-                            (if-feature :rolling-resistance
-                              (setf (@ rolling-limit) (* (aref (body-columns-rolling-resistance buf-a) la) r-a)))))
-                      ;; the spin impulse the contact carried out of the last step: zero on
-                      ;; every row with a radius on side b, whose spin is never solved
-                      (if-feature :friction (setf (@ spin-impulse) (contact-at geometry g spin-impulse)))
-                      (if-feature (:or :contact-events :hit-events)
-                        (setf (@ relative-velocity)
-                              (+ (* (- (+ (aref v vb) kx) (aref v va)) x)
-                                 (* (- (+ (aref v (+ vb 1)) ky) (aref v (+ va 1))) y)
-                                 (* (- (+ (aref v (+ vb 2)) kz) (aref v (+ va 2))) z))))
-                      ;; a one-sided contact's carried load, as the mass it holds up, over its
-                      ;; own effective mass: above 1 it divides the spring's give. It holds up
-                      ;; no more than every awake body's mass
-                      (let ((load (if two-sided
-                                      0.0
-                                      (min load-limit (* (contact-at geometry g normal-impulse) mass-sum load-scale)
-                                           (* held-mass mass-sum)))))
-                        (declare (type single-float load))
-                        (cond ((> load 1.0)
-                               (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
-                                     (@ impulse-scale) (/ st-impulse load)))
-                              (two-sided
-                               (setf (@ bias-rate) dyn-bias (@ mass-scale) dyn-mass
-                                     (@ impulse-scale) dyn-impulse))
-                              (t
-                               (setf (@ bias-rate) st-bias (@ mass-scale) st-mass
-                                     (@ impulse-scale) st-impulse)))))
-                    (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
-                    (setf (@ normal-impulse) (contact-at geometry g normal-impulse)
-                          (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
-                    (if-feature :rolling-resistance
-                      (setf (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
-                            (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z))))))))
-                ;; the frames, the box velocities along them and the effective masses,
-                ;; in lanes where the family has them
-                (physics-prepare-frames (physics-world-kernels world) world)
-                ;; padding rows: no contact, the dummy on both sides, every float zero (their
-                ;; side columns are zeros from the start)
-                (dotimes (color +physics-max-colors+)
-                  (loop for k of-type index from (aref cursor color) below (aref color-starts (1+ color))
-                        do (let ((base (constraint-base k)))
-                             (setf (aref contact k) -1 (aref body-a k) n (aref body-b k) n)
-                             (dotimes (o (floor stride 8)) (setf (aref data (+ base (* 8 o))) 0.0)))))))))))
+              (declare (type fixnum-column flags))
+              (when bracing
+                (when (brace-bodies world contacts m rows braced v inverse-mass flags n still2 slop kept
+                                    up-x up-y up-z)
+                  (setf static t))
+                (when static
+                  (still-braced-sides contacts m rows braced inverse-mass brace-ratio v up-x up-y up-z)))
+              (fill-constraint-rows)))))
       (setf (step-statistics-colors (world-statistics world)) color-count)
       color-count)))
-;; Preparing the constraints:1 ends here
+;; The prepare phase, stage by stage:1 ends here
 
-;; [[file:../physics.org::#PR3PAR][Preparing the constraints:12]]
+;; [[file:../physics.org::#PRFRM2][The frame pass:1]]
 (defgeneric physics-prepare-frames (kernels world)
   (:documentation "Complete every constraint row the fill wrote: the tangent frame, the box
-velocity along the normal and the frame, the effective masses and the first substep's gap. #PR3PAR"))
+velocity along the normal and the frame, the effective masses and the first substep's gap. #PRFRM2"))
 
 (declaim (inline moved-gap))
 (defun moved-gap (separation nx ny nz ddx ddy ddz kvn elapsed)
   "The gap of a constraint whose prepared gap is SEPARATION along the normal NX NY NZ, after its
 bodies' deltas have drawn apart by DDX DDY DDZ and its box has moved at KVN for ELAPSED seconds:
-the one formula the relax pass ([[#S0LV3R]]) and the frame pass compute it by. #PR3PAR"
+the one formula the relax pass ([[#S0LV3R]]) and the frame pass compute it by. #PRFRM2"
   (declare (type single-float separation nx ny nz ddx ddy ddz kvn elapsed))
   (+ separation (+ (* ddx nx) (* ddy ny) (* ddz nz)) (* kvn elapsed)))
 
@@ -4809,7 +5054,7 @@ the one formula the relax pass ([[#S0LV3R]]) and the frame pass compute it by. #
 and the box velocity held in the KVN, KVT1 and KVT2 columns: the tangent frame t1, t2 (t1 from
 the axis least aligned with the normal), the box velocity resolved onto n, t1 and t2, the
 normal, tangent and rolling masses (zero where nothing can move), and the gap the first
-substep's solve reads. Compiled without boxes, it has no box velocity to resolve. #PR3PAR"
+substep's solve reads. Compiled without boxes, it has no box velocity to resolve. #PRFRM2"
   (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
   (flet ((inverse (v)
            ;; 1/v where v > 0, else 0: zero where nothing can move
@@ -4850,7 +5095,7 @@ substep's solve reads. Compiled without boxes, it has no box velocity to resolve
   (let ((cbuf (physics-world-constraints world)))
     (funcall (kernel-variant-prepare-frames (world-kernel-variant world kernels))
              cbuf 0 (constraint-columns-length cbuf))))
-;; Preparing the constraints:12 ends here
+;; The frame pass:1 ends here
 
 ;; [[file:../physics.org::#G7Q3XR][Soft contacts:1]]
 (defun physics-softness (hertz zeta h)
@@ -5033,7 +5278,180 @@ per constraint. #S0LV3R"
   `(if ,flag
        (symbol-macrolet ((biased t)) ,@body)
        (symbol-macrolet ((biased nil)) ,@body)))
+;; Solve and relax:1 ends here
 
+;; [[file:../physics.org::#S0LGAP][The gap:1]]
+(defmacro solve-row-gap ()
+  "The current gap of row K: in the solve pass the gap the relax pass kept, in the relax pass
+the prepared gap moved by both bodies' deltas and the box's travel, kept in the row for the next
+solve. Expanded in solve-range and its copies. #S0LGAP"
+  `(if biased
+       (@ gap)
+       ;; a row's place in the delta array is its place in the velocity
+       ;; array ([[#W0RLD7]]), found above
+       (let ((da a) (db b))
+         (declare (ignorable db))
+         (setf (@ gap)
+               (moved-gap (@ separation) x y z
+                          (- (if-feature :body-contacts (aref d db) 0.0) (aref d da))
+                          (- (if-feature :body-contacts (block-ref d db 1) 0.0) (block-ref d da 1))
+                          (- (if-feature :body-contacts (block-ref d db 2) 0.0) (block-ref d da 2))
+                          (if-feature :boxes (@ kvn) 0.0) elapsed)))))
+;; The gap:1 ends here
+
+;; [[file:../physics.org::#S0LNRM][The normal impulse and the bounce:1]]
+(defmacro solve-soft-bias ()
+  "The bias of row K's normal impulse: a speculative gap S is closed over the substep; in the
+solve pass, an overlap is pushed out at the soft bias rate, capped at PUSH-MAX; in the relax
+pass, nothing. #S0LNRM"
+  `(cond (positive (* s inv-h))
+         (biased (let ((soft (* (@ bias-rate) s)) (cap (- push-max)))
+                   (if (> soft cap) soft cap)))
+         (t 0.0)))
+
+(defmacro solve-impact-bump ()
+  "The bounce of row K, a push of its own that makes the pair leave at the speed restitution
+gives: in the impact copy, computed for an impact or an armed row; in solve-range, zero, or the
+end of the pass at a row that may strike or is armed. Expanded in solve-range and its copies. #S0LNRM"
+  `(if-feature :restitution
+    (if-feature :impact-part
+    (let* ((e (@ restitution))
+           (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold)))))
+    (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
+      (let* ((sp (if positive s 0.0))
+             ;; the change of vn over a substep under gravity
+             (dv (* (- (if (> mb 0.0) 1.0 0.0) (if (> ma 0.0) 1.0 0.0))
+                    (+ (* hgx x) (* hgy y) (* hgz z))))
+             (half (* 0.5 dv))
+             ;; vn now, and the speed of the impact when the gap closes
+             (c (if biased (- vn half) (+ vn half)))
+             (fall (* (* (* 2.0 dv) sp) inv-h))
+             (uc (if impact
+                     (let ((u2 (- (* c c) fall))) (fsqrt (if (> u2 0.0) u2 0.0)))
+                     (@ armed-speed)))
+             ;; the leaving speed squared, from here
+             (wc2 (+ (* (* e e) (* uc uc)) fall)))
+        ;; the events report the approach at impact
+        (when impact (setf (@ relative-velocity) (- uc)))
+        (if (> 0.0 wc2)
+            ;; the rebound would not climb this gap: close it, bounce later
+            (progn (setf (@ armed-speed) uc) 0.0)
+            (let* ((root (fsqrt (if (> wc2 0.0) wc2 0.0)))
+                   (w (if biased (+ root half) (- root half)))
+                   (kick (* (@ normal-mass) (- w vn))))
+              (when (> kick 0.0) (setf (@ armed-speed) 0.0))
+              (if (> kick 0.0) kick 0.0))))
+      0.0))
+    ;; a row that may strike (it has not pushed yet, approaches faster than
+    ;; the threshold and has restitution) or is armed ends the pass here, for
+    ;; solve-handing to run the pass with the impact part on it, as it is:
+    ;; nothing of it has been written but the kept gap, which that pass
+    ;; writes again with the same bits. Only a row with restitution is ever
+    ;; armed, so its armed speed is read only then ([[#SSMPYW]])
+    (if (and (> (@ restitution) 0.0)
+             (or (> (@ armed-speed) 0.0)
+                 (and (< vn (- threshold)) (= mni 0.0))))
+        (return-from solve-pass k)
+        0.0))
+    0.0))
+;; The normal impulse and the bounce:1 ends here
+
+;; [[file:../physics.org::#S0LFRC][Friction, rolling resistance and spin:1]]
+(defmacro solve-rolling-resistance ()
+  "Rolling resistance on row K: the rolling impulse inside |R| <= rolling limit times the
+normal impulse, applied to the angular velocities WAX..WBZ of the place it is expanded in, one
+of the two that solve-friction and solve-frictionless make. #S0LFRC"
+  `(let ((rl (@ rolling-limit)))
+    (when (> rl 0.0)
+      (let* ((rlimit (* rl new)) (rm (@ rolling-mass))
+             (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z))
+             (nrx (- rx (* rm (- wbx wax)))) (nry (- ry (* rm (- wby way)))) (nrz (- rz (* rm (- wbz waz))))
+             (len2 (+ (* nrx nrx) (* nry nry) (* nrz nrz))))
+        (when (> len2 (* rlimit rlimit))
+          (let ((scale (/ rlimit (fsqrt len2))))
+            (setf nrx (* nrx scale) nry (* nry scale) nrz (* nrz scale))))
+        (let ((dx (- nrx rx)) (dy (- nry ry)) (dz (- nrz rz)))
+          (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry (@ rolling-impulse-z) nrz)
+          (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
+                wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz))))))))
+
+(defmacro solve-spin-friction ()
+  "Spin friction on row K: an angular impulse about the normal inside |S| <= spin limit times
+the normal impulse, on the angular velocities WAX..WBZ; expanded in solve-friction. #S0LFRC"
+  `(let ((sl (if (= br 0.0) (@ spin-limit) 0.0)))
+     (when (> sl 0.0)
+       (let* ((slimit (* sl new)) (sp (@ spin-impulse))
+              (raw (- sp (* (@ rolling-mass)
+                            (+ (+ (* (- wbx wax) x) (* (- wby way) y)) (* (- wbz waz) z)))))
+              (nsp (if (> raw slimit) slimit (if (> (* slimit -1.0) raw) (* slimit -1.0) raw)))
+              (ds (- nsp sp)))
+         (setf (@ spin-impulse) nsp
+               wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
+               wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z))))))))
+
+(defmacro solve-friction ()
+  "Friction on row K inside the cone |l1,l2| <= friction times the normal impulse, from the
+relative velocity before the normal impulse; then rolling resistance and spin friction; write
+both bodies' velocities. Expanded in solve-range when the world has friction. #S0LFRC"
+  `(let* (
+          (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
+          (wbx (if-feature :body-contacts (block-ref v b 3) 0.0))
+          (wby (if-feature :body-contacts (block-ref v b 4) 0.0))
+          (wbz (if-feature :body-contacts (block-ref v b 5) 0.0))
+          (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
+          (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (if-feature :boxes (@ kvt1) 0.0))
+                  (+ (* wx qx) (* wy qy) (* wz qz))))
+          (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (if-feature :boxes (@ kvt2) 0.0)
+                  (+ (* wx ux) (* wy uy) (* wz uz))))
+          (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
+          (tm (@ tangent-mass))
+          (n1 (- l1 (* tm vt1))) (n2 (- l2 (* tm vt2)))
+          (limit (* (@ friction) new))
+          (len2 (+ (* n1 n1) (* n2 n2)))
+          (over (> len2 (* limit limit)))
+          ;; inside the cone the scale is 1, and multiplying by 1 changes no bit
+          (scale (if over (/ limit (fsqrt len2)) 1.0))
+          (n1 (* n1 scale)) (n2 (* n2 scale))
+          (d1 (- n1 l1)) (d2 (- n2 l2))
+          (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
+          (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
+          (iar (* iam ar)) (ibr (* ibm br)))
+     (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
+     (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz)))
+     (if-feature :body-contacts
+       (setf (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz))))
+     (let ((wax (- wax (* iar cx))) (way (- way (* iar cy))) (waz (- waz (* iar cz)))
+           (wbx (- wbx (* ibr cx))) (wby (- wby (* ibr cy))) (wbz (- wbz (* ibr cz))))
+       (if-feature :rolling-resistance (solve-rolling-resistance))
+       ;; spin friction: an angular impulse about the normal inside |S| <= spin-limit *
+       ;; normal impulse; the rolling mass is the spin's too, for a ball's inertia is
+       ;; the same about every axis
+       ;; only a row with no radius on side b has a spin limit ([[#SSMPYW]]); any
+       ;; other's is zero, and is not read
+       (solve-spin-friction)
+       (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz)
+       (if-feature :body-contacts
+         (setf (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz)))))
+
+(defmacro solve-frictionless ()
+  "Write row K's bodies' velocities after the normal impulse, with rolling resistance alone on
+the angular ones when the world has it: solve-range without friction. #S0LFRC"
+  `(progn
+     (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz)
+     (if-feature :body-contacts
+       (setf (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz))
+     (if-feature :rolling-resistance
+       (let ((wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
+             (wbx (if-feature :body-contacts (block-ref v b 3) 0.0))
+             (wby (if-feature :body-contacts (block-ref v b 4) 0.0))
+             (wbz (if-feature :body-contacts (block-ref v b 5) 0.0)))
+         (solve-rolling-resistance)
+         (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz)
+         (if-feature :body-contacts
+           (setf (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))
+;; Friction, rolling resistance and spin:1 ends here
+
+;; [[file:../physics.org::#S0LSTG][The pass, stage by stage:1]]
 (define-featured-kernel (solve-range :features (:body-contacts :boxes :friction :rolling-resistance :restitution
                                                  :hit-events :contact-events))
     (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
@@ -5041,7 +5459,7 @@ per constraint. #S0LV3R"
 when USE-BIAS), or an impact's bounce (an approach faster than THRESHOLD, under gravity HGX HGY
 HGZ times the substep), then Coulomb friction, then rolling resistance. Return END, or the
 first row that may strike or is armed, left unsolved for solve-handing. Compiled without body
-contacts, it reads and writes body a alone: body b is then the dummy row, all zeros. #S0LV3R"
+contacts, it reads and writes body a alone: body b is then the dummy row, all zeros. #S0LSTG"
   (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
            (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+
            (ignorable threshold hgx hgy hgz))
@@ -5050,7 +5468,6 @@ contacts, it reads and writes body a alone: body b is then the dummy row, all ze
   (with-solver-columns cbuf
     (loop for k of-type index from start below end do
       ;; one straight chain of bindings, a name bound again where its value changes
-      (progn
       (let ((base (constraint-base k)))
        ;; the constraint's own columns are read from the block where they are used
        ;; without body contacts body b is the dummy row of every constraint: its velocities,
@@ -5065,28 +5482,14 @@ contacts, it reads and writes body a alone: body b is then the dummy row, all ze
              ;; current separation: the prepared gap moved by both deltas and the box's
              ;; travel. The relax pass computes it and keeps it; the next solve, which sees
              ;; the same deltas and the same time, reads it back
-             (s (if biased
-                    (@ gap)
-                    ;; a row's place in the delta array is its place in the velocity
-                    ;; array ([[#W0RLD7]]), found above
-                    (let ((da a) (db b))
-                      (declare (ignorable db))
-                      (setf (@ gap)
-                            (moved-gap (@ separation) x y z
-                                       (- (if-feature :body-contacts (aref d db) 0.0) (aref d da))
-                                       (- (if-feature :body-contacts (block-ref d db 1) 0.0) (block-ref d da 1))
-                                       (- (if-feature :body-contacts (block-ref d db 2) 0.0) (block-ref d da 2))
-                                       (if-feature :boxes (@ kvn) 0.0) elapsed)))))
+             (s (solve-row-gap))
              (vax (aref v a)) (vay (block-ref v a 1)) (vaz (block-ref v a 2))
              (vbx (if-feature :body-contacts (aref v b) 0.0))
              (vby (if-feature :body-contacts (block-ref v b 1) 0.0))
              (vbz (if-feature :body-contacts (block-ref v b 2) 0.0))
              ;; normal: only the linear velocities take part
              (positive (> s 0.0))
-             (bias (cond (positive (* s inv-h))
-                         (biased (let ((soft (* (@ bias-rate) s)) (cap (- push-max)))
-                                   (if (> soft cap) soft cap)))
-                         (t 0.0)))
+             (bias (solve-soft-bias))
              ;; the relative velocity before this constraint's impulses: the normal part
              ;; and, below, friction both read it
              (dvx (- vbx vax)) (dvy (- vby vay)) (dvz (- vbz vaz))
@@ -5105,47 +5508,7 @@ contacts, it reads and writes body a alone: body b is then the dummy row, all ze
              ;; the threshold; or an armed contact whose gap has closed. Its bounce, the
              ;; impulse that makes the pair leave at the speed restitution gives, is a push
              ;; of its own, not kept in the contact's impulse
-             (bump (if-feature :restitution
-                    (if-feature :impact-part
-                    (let* ((e (@ restitution))
-                           (impact (and (> e 0.0) (= mni 0.0) (> new 0.0) (< vn (- threshold)))))
-                    (if (or impact (and (> (@ armed-speed) 0.0) (not positive)))
-                      (let* ((sp (if positive s 0.0))
-                             ;; the change of vn over a substep under gravity
-                             (dv (* (- (if (> mb 0.0) 1.0 0.0) (if (> ma 0.0) 1.0 0.0))
-                                    (+ (* hgx x) (* hgy y) (* hgz z))))
-                             (half (* 0.5 dv))
-                             ;; vn now, and the speed of the impact when the gap closes
-                             (c (if biased (- vn half) (+ vn half)))
-                             (fall (* (* (* 2.0 dv) sp) inv-h))
-                             (uc (if impact
-                                     (let ((u2 (- (* c c) fall))) (fsqrt (if (> u2 0.0) u2 0.0)))
-                                     (@ armed-speed)))
-                             ;; the leaving speed squared, from here
-                             (wc2 (+ (* (* e e) (* uc uc)) fall)))
-                        ;; the events report the approach at impact
-                        (when impact (setf (@ relative-velocity) (- uc)))
-                        (if (> 0.0 wc2)
-                            ;; the rebound would not climb this gap: close it, bounce later
-                            (progn (setf (@ armed-speed) uc) 0.0)
-                            (let* ((root (fsqrt (if (> wc2 0.0) wc2 0.0)))
-                                   (w (if biased (+ root half) (- root half)))
-                                   (kick (* (@ normal-mass) (- w vn))))
-                              (when (> kick 0.0) (setf (@ armed-speed) 0.0))
-                              (if (> kick 0.0) kick 0.0))))
-                      0.0))
-                    ;; a row that may strike (it has not pushed yet, approaches faster than
-                    ;; the threshold and has restitution) or is armed ends the pass here, for
-                    ;; solve-handing to run the pass with the impact part on it, as it is:
-                    ;; nothing of it has been written but the kept gap, which that pass
-                    ;; writes again with the same bits. Only a row with restitution is ever
-                    ;; armed, so its armed speed is read only then ([[#SSMPYW]])
-                    (if (and (> (@ restitution) 0.0)
-                             (or (> (@ armed-speed) 0.0)
-                                 (and (< vn (- threshold)) (= mni 0.0))))
-                        (return-from solve-pass k)
-                        0.0))
-                    0.0))
+             (bump (solve-impact-bump))
              (bounced (> bump 0.0))
              (new (if bounced l new))
              (dl (if bounced bump (- new l)))
@@ -5159,93 +5522,19 @@ contacts, it reads and writes body a alone: body b is then the dummy row, all ze
           (setf (@ normal-impulse) new)
           (if-feature (:or :restitution :contact-events :hit-events)
             (setf (@ max-normal-impulse) (if (> mni pushed) mni pushed))))
-        ;; rolling resistance, written once for the two places it is compiled into
-        (macrolet ((rolling-resistance ()
-                     '(let ((rl (@ rolling-limit)))
-                       (when (> rl 0.0)
-                         (let* ((rlimit (* rl new)) (rm (@ rolling-mass))
-                                (rx (@ rolling-impulse-x)) (ry (@ rolling-impulse-y)) (rz (@ rolling-impulse-z))
-                                (nrx (- rx (* rm (- wbx wax)))) (nry (- ry (* rm (- wby way)))) (nrz (- rz (* rm (- wbz waz))))
-                                (len2 (+ (* nrx nrx) (* nry nry) (* nrz nrz))))
-                           (when (> len2 (* rlimit rlimit))
-                             (let ((scale (/ rlimit (fsqrt len2))))
-                               (setf nrx (* nrx scale) nry (* nry scale) nrz (* nrz scale))))
-                           (let ((dx (- nrx rx)) (dy (- nry ry)) (dz (- nrz rz)))
-                             (setf (@ rolling-impulse-x) nrx (@ rolling-impulse-y) nry (@ rolling-impulse-z) nrz)
-                             (setf wax (- wax (* iam dx)) way (- way (* iam dy)) waz (- waz (* iam dz))
-                                   wbx (+ wbx (* ibm dx)) wby (+ wby (* ibm dy)) wbz (+ wbz (* ibm dz)))))))))
         (if-feature :friction
           ;; friction, inside the cone |l1,l2| <= friction * normal impulse; the angular
           ;; velocities are read only now
-          (let* (
-                 (wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
-                 (wbx (if-feature :body-contacts (block-ref v b 3) 0.0))
-                 (wby (if-feature :body-contacts (block-ref v b 4) 0.0))
-                 (wbz (if-feature :body-contacts (block-ref v b 5) 0.0))
-                 (wx (+ (* ar wax) (* br wbx))) (wy (+ (* ar way) (* br wby))) (wz (+ (* ar waz) (* br wbz)))
-                 (vt1 (- (+ (* dvx ux) (* dvy uy) (* dvz uz) (if-feature :boxes (@ kvt1) 0.0))
-                         (+ (* wx qx) (* wy qy) (* wz qz))))
-                 (vt2 (+ (* dvx qx) (* dvy qy) (* dvz qz) (if-feature :boxes (@ kvt2) 0.0)
-                         (+ (* wx ux) (* wy uy) (* wz uz))))
-                 (l1 (@ tangent-impulse-1)) (l2 (@ tangent-impulse-2))
-                 (tm (@ tangent-mass))
-                 (n1 (- l1 (* tm vt1))) (n2 (- l2 (* tm vt2)))
-                 (limit (* (@ friction) new))
-                 (len2 (+ (* n1 n1) (* n2 n2)))
-                 (over (> len2 (* limit limit)))
-                 ;; inside the cone the scale is 1, and multiplying by 1 changes no bit
-                 (scale (if over (/ limit (fsqrt len2)) 1.0))
-                 (n1 (* n1 scale)) (n2 (* n2 scale))
-                 (d1 (- n1 l1)) (d2 (- n2 l2))
-                 (px (+ (* d1 ux) (* d2 qx))) (py (+ (* d1 uy) (* d2 qy))) (pz (+ (* d1 uz) (* d2 qz)))
-                 (cx (- (* d1 qx) (* d2 ux))) (cy (- (* d1 qy) (* d2 uy))) (cz (- (* d1 qz) (* d2 uz)))
-                 (iar (* iam ar)) (ibr (* ibm br)))
-            (setf (@ tangent-impulse-1) n1 (@ tangent-impulse-2) n2)
-            (setf (aref v a) (- vax (* ma px)) (block-ref v a 1) (- vay (* ma py)) (block-ref v a 2) (- vaz (* ma pz)))
-            (if-feature :body-contacts
-              (setf (aref v b) (+ vbx (* mb px)) (block-ref v b 1) (+ vby (* mb py)) (block-ref v b 2) (+ vbz (* mb pz))))
-            (let ((wax (- wax (* iar cx))) (way (- way (* iar cy))) (waz (- waz (* iar cz)))
-                  (wbx (- wbx (* ibr cx))) (wby (- wby (* ibr cy))) (wbz (- wbz (* ibr cz))))
-              (if-feature :rolling-resistance (rolling-resistance))
-              ;; spin friction: an angular impulse about the normal inside |S| <= spin-limit *
-              ;; normal impulse; the rolling mass is the spin's too, for a ball's inertia is
-              ;; the same about every axis
-              ;; only a row with no radius on side b has a spin limit ([[#SSMPYW]]); any
-              ;; other's is zero, and is not read
-              (let ((sl (if (= br 0.0) (@ spin-limit) 0.0)))
-                (when (> sl 0.0)
-                  (let* ((slimit (* sl new)) (sp (@ spin-impulse))
-                         (raw (- sp (* (@ rolling-mass)
-                                       (+ (+ (* (- wbx wax) x) (* (- wby way) y)) (* (- wbz waz) z)))))
-                         (nsp (if (> raw slimit) slimit (if (> (* slimit -1.0) raw) (* slimit -1.0) raw)))
-                         (ds (- nsp sp)))
-                    (setf (@ spin-impulse) nsp
-                          wax (- wax (* iam (* ds x))) way (- way (* iam (* ds y))) waz (- waz (* iam (* ds z)))
-                          wbx (+ wbx (* ibm (* ds x))) wby (+ wby (* ibm (* ds y))) wbz (+ wbz (* ibm (* ds z)))))))
-              (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz)
-              (if-feature :body-contacts
-                (setf (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))
+          (solve-friction)
           ;; without friction the tangent speeds are never read, and the angular velocities
           ;; change only under rolling resistance
-          (progn
-            (setf (aref v a) vax (block-ref v a 1) vay (block-ref v a 2) vaz)
-            (if-feature :body-contacts
-              (setf (aref v b) vbx (block-ref v b 1) vby (block-ref v b 2) vbz))
-            (if-feature :rolling-resistance
-              (let ((wax (block-ref v a 3)) (way (block-ref v a 4)) (waz (block-ref v a 5))
-                    (wbx (if-feature :body-contacts (block-ref v b 3) 0.0))
-                    (wby (if-feature :body-contacts (block-ref v b 4) 0.0))
-                    (wbz (if-feature :body-contacts (block-ref v b 5) 0.0)))
-                (rolling-resistance)
-                (setf (block-ref v a 3) wax (block-ref v a 4) way (block-ref v a 5) waz)
-                (if-feature :body-contacts
-                  (setf (block-ref v b 3) wbx (block-ref v b 4) wby (block-ref v b 5) wbz))))))))))))))
+          (solve-frictionless))))))))
   end))
 
 (defmacro define-impact-copy (name kernel documentation)
   "Define NAME, described by DOCUMENTATION, as the featured kernel KERNEL compiled with every
 feature and with its impact part (the pseudo-feature :impact-part), which KERNEL itself leaves
-out: it stops at each row that may strike, for solve-handing to run NAME on it. #S0LV3R"
+out: it stops at each row that may strike, for solve-handing to run NAME on it. #S0LSTG"
   (destructuring-bind (operators lambda-list declarations forms tested) (get kernel 'featured-kernel)
     (declare (ignore tested))
     (let ((function `(defun ,name ,lambda-list ,documentation ,@declarations
@@ -5254,21 +5543,21 @@ out: it stops at each row that may strike, for solve-handing to run NAME on it. 
 
 (define-impact-copy solve-impact-range solve-range
   "One Gauss-Seidel pass over constraints START..END, bouncing impacts ([[#R3ST1T]]): solve-handing
-runs it on each row at which solve-range or a variant of it stops. #S0LV3R")
+runs it on each row at which solve-range or a variant of it stops. #S0LSTG")
 
 (declaim (inline solve-handing))
 (defun solve-handing (solve impact width cbuf v d start end inv-h use-bias elapsed push-max
                       threshold hgx hgy hgz)
   "Run the solve kernel SOLVE over constraints START..END; each time it stops at a row (a block
 of WIDTH rows) that may strike, run IMPACT, its copy with the impact part, on that row or block,
-and go on with SOLVE after it. #S0LV3R"
+and go on with SOLVE after it. #S0LSTG"
   (declare (type index start end width))
   (loop for k of-type index = (funcall solve cbuf v d start end inv-h use-bias elapsed push-max
                                        threshold hgx hgy hgz)
         while (< k end)
         do (funcall impact cbuf v d k (+ k width) inv-h use-bias elapsed push-max threshold hgx hgy hgz)
            (setf start (+ k width))))
-;; Solve and relax:1 ends here
+;; The pass, stage by stage:1 ends here
 
 ;; [[file:../physics.org::#R3ST1T][Restitution at impact:1]]
 (defun impact-parameters (world)
@@ -5337,6 +5626,34 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
                              (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
              (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
 
+(defmacro store-touch-event ()
+  "A :begin or :end event for row K's contact C when whether it pushed this step (PUSHED) differs
+from whether it touched: expanded in the store phase, with its variables. #ST0R3S"
+  `(if-feature :contact-events
+   (unless (eq pushed (= (aref touching c) 1))
+     (setf (aref touching c) (if pushed 1 0))
+     (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
+                 (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
+                 (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))
+
+(defmacro store-hit-event ()
+  "A :hit event for row K's contact C when it pushed and arrived faster than the hit speed, for
+a box's contact or a body that reports hits: expanded in the store phase, with its variables. #ST0R3S"
+  `(if-feature :hit-events
+   (when (and pushed (> (- (@ relative-velocity)) hit-speed)
+              (or (= (aref kind c) +contact-box+)
+                  (flet ((reports (h)
+                           (and (>= h 0)
+                                (let ((set (aref (handle-table-set ids) (handle-index h)))
+                                      (row (aref (handle-table-local ids) (handle-index h))))
+                                  (logtest +flag-report-hits+
+                                           (aref (body-columns-flags (if (= set +set-awake+) awake sleeping))
+                                                 row))))))
+                    (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
+     (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
+                 (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
+                 (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))
+
 (define-featured-kernel (store-phase :features (:body-contacts :boxes :friction :contact-events :hit-events :rolling-resistance)) (world)
   "The store phase: copy each constraint's impulses back to its contact, note touching flips as :begin
 and :end, hard arrivals as :hit, and measure the step's largest penetration and approach
@@ -5397,26 +5714,8 @@ so its undo log closes. #ST0R3S"
             (when (< gap 0.0)
               (setf max-penetration (max max-penetration (- gap))
                     max-approach (max max-approach (- vn))))
-            (if-feature :contact-events
-            (unless (eq pushed (= (aref touching c) 1))
-              (setf (aref touching c) (if pushed 1 0))
-              (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
-                          (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
-                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))
-            (if-feature :hit-events
-            (when (and pushed (> (- (@ relative-velocity)) hit-speed)
-                       (or (= (aref kind c) +contact-box+)
-                           (flet ((reports (h)
-                                    (and (>= h 0)
-                                         (let ((set (aref (handle-table-set ids) (handle-index h)))
-                                               (row (aref (handle-table-local ids) (handle-index h))))
-                                           (logtest +flag-report-hits+
-                                                    (aref (body-columns-flags (if (= set +set-awake+) awake sleeping))
-                                                          row))))))
-                             (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
-              (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
-                          (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
-                          (and (= (aref kind c) +contact-box+) (box-owner world (aref key c))))))))))
+            (store-touch-event)
+            (store-hit-event)))))
     (let ((stats (world-statistics world)))
       (setf (step-statistics-max-penetration stats) (coerce max-penetration 'double-float)
             (step-statistics-max-approach stats) (coerce max-approach 'double-float)))
@@ -7221,6 +7520,89 @@ cast that starts overlapping the sphere meets it at 0 when it heads deeper, else
 
 (declaim (inline sweep-rounded-box))
 
+(defmacro push-out-face (bit d fx fy fz)
+  "Take the exposed face BIT at depth D, outward normal FX FY FZ, as the nearest so far (DEPTH,
+NX NY NZ). #C4STRY"
+  `(when (and (logbitp ,bit exposed) (< ,d depth))
+     (setf depth ,d nx ,fx ny ,fy nz ,fz)))
+
+(defmacro rounded-face-hit (bit o u plane sign (o1 u1 lo1 hi1) (o2 u2 lo2 hi2) nx ny nz)
+  "The hit of the search with the face BIT of the box (O the cast's origin and U its direction
+along the face's axis, PLANE the face moved out by its radius, SIGN its side), approached from
+outside and met within the face's span along its two other axes; noted in BT, BNX BNY BNZ and
+FOUND. #C4STRY"
+  ;; the plane of the face moved out by r, approached from outside
+  `(when (and (logbitp ,bit exposed) (,(if (minusp sign) '> '<) ,u 0d0)
+              (,(if (minusp sign) '<= '>=) ,o ,plane))
+     (let ((tt (/ (- ,plane ,o) ,u)))
+       (when (< tt bt)
+         (let ((a (+ ,o1 (* tt ,u1))) (b (+ ,o2 (* tt ,u2))))
+           (when (and (<= ,lo1 a ,hi1) (<= ,lo2 b ,hi2))
+             (setf bt tt bnx ,nx bny ,ny bnz ,nz found t)))))))
+
+(defmacro rounded-edge-hit (bit1 bit2 (oa ua ea sa) (ob ub eb sb) (oc uc lo hi) nxf nyf nzf)
+  "The hit of the search with the quarter cylinder of radius R about the edge between the exposed
+faces BIT1 and BIT2, entered from outside; noted in BT, BNX BNY BNZ and FOUND. #C4STRY"
+  ;; the quarter cylinder of radius r about an edge, entered from outside
+  `(when (and (logbitp ,bit1 exposed) (logbitp ,bit2 exposed))
+     (let* ((pa (- ,oa ,ea)) (pb (- ,ob ,eb))
+            (aa (+ (* ,ua ,ua) (* ,ub ,ub)))
+            (bb (+ (* pa ,ua) (* pb ,ub)))
+            (cc (- (+ (* pa pa) (* pb pb)) (* r r))))
+       (when (and (> aa 0d0) (< bb 0d0) (>= cc 0d0))
+         (let ((disc (- (* bb bb) (* aa cc))))
+           (when (>= disc 0d0)
+             (let ((tt (/ (- (- bb) (dsqrt disc)) aa)))
+               (when (< tt bt)
+                 (let ((qa (+ pa (* tt ,ua))) (qb (+ pb (* tt ,ub)))
+                       (c (+ ,oc (* tt ,uc))))
+                   (when (and (>= (* qa ,sa) 0d0) (>= (* qb ,sb) 0d0) (<= ,lo c ,hi))
+                     (let ((inv (/ 1d0 r)))
+                       (setf bt tt bnx ,nxf bny ,nyf bnz ,nzf found t))))))))))))
+
+(defmacro rounded-corner-hit (bx by bz cx cy cz sx sy sz)
+  "The hit of the search with the eighth of a sphere of radius R about the corner of the exposed
+faces BX, BY and BZ, entered from outside; noted in BT, BNX BNY BNZ and FOUND. #C4STRY"
+  ;; the eighth of a sphere of radius r about a corner, entered from outside
+  `(when (and (logbitp ,bx exposed) (logbitp ,by exposed) (logbitp ,bz exposed))
+     (let* ((mx (- ox ,cx)) (my (- oy ,cy)) (mz (- oz ,cz))
+            (b (+ (* mx ux) (* my uy) (* mz uz))))
+       (when (< b 0d0)
+         (let* ((qx (- mx (* b ux))) (qy (- my (* b uy))) (qz (- mz (* b uz)))
+                (h2 (- (* r r) (+ (* qx qx) (* qy qy) (* qz qz)))))
+           (when (>= h2 0d0)
+             (let ((tt (- (- b) (dsqrt h2))))
+               (when (< tt bt)
+                 (let ((hx (+ mx (* tt ux))) (hy (+ my (* tt uy))) (hz (+ mz (* tt uz))))
+                   (when (and (>= (* hx ,sx) 0d0) (>= (* hy ,sy) 0d0) (>= (* hz ,sz) 0d0))
+                     (let ((inv (/ 1d0 r)))
+                       (setf bt tt bnx (* hx inv) bny (* hy inv) bnz (* hz inv)
+                             found t))))))))))))
+
+(defmacro rounded-edge-hits ()
+  "The twelve edges of the box, each a rounded-edge-hit. #C4STRY"
+  `(progn
+     ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
+             append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
+                          collect `(rounded-edge-hit ,bx ,by (ox ux ,ex ,sx) (oy uy ,ey ,sy) (oz uz z0 z1)
+                                         (* qa inv) (* qb inv) 0d0)))
+     ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
+             append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
+                          collect `(rounded-edge-hit ,bx ,bz (ox ux ,ex ,sx) (oz uz ,ez ,sz) (oy uy y0 y1)
+                                         (* qa inv) 0d0 (* qb inv))))
+     ,@(loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
+             append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
+                          collect `(rounded-edge-hit ,by ,bz (oy uy ,ey ,sy) (oz uz ,ez ,sz) (ox ux x0 x1)
+                                         0d0 (* qa inv) (* qb inv))))))
+
+(defmacro rounded-corner-hits ()
+  "The eight corners of the box, each a rounded-corner-hit. #C4STRY"
+  `(progn
+     ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
+             append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
+                          append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
+                                       collect `(rounded-corner-hit ,bx ,by ,bz ,ex ,ey ,ez ,sx ,sy ,sz))))))
+
 (defun sweep-rounded-box (s x0 y0 z0 x1 y1 z1 exposed)
   "True when cast S meets the box X0..X1 Y0..Y1 Z0..Z1 grown by its radius nearer than its nearest
 hit so far, through a face whose bit is set in EXPOSED (bits 0-5: -x +x -y +y -z +z), an edge both
@@ -7241,12 +7623,9 @@ cast. #C4STRY"
          ;; in the closed box: pushed out through the nearest exposed face
          (let ((depth most-positive-double-float) (nx 0d0) (ny 0d0) (nz 0d0))
            (declare (type double-float depth nx ny nz))
-           (macrolet ((face (bit d fx fy fz)
-                        `(when (and (logbitp ,bit exposed) (< ,d depth))
-                           (setf depth ,d nx ,fx ny ,fy nz ,fz))))
-             (face 0 (- ox x0) -1d0 0d0 0d0) (face 1 (- x1 ox) 1d0 0d0 0d0)
-             (face 2 (- oy y0) 0d0 -1d0 0d0) (face 3 (- y1 oy) 0d0 1d0 0d0)
-             (face 4 (- oz z0) 0d0 0d0 -1d0) (face 5 (- z1 oz) 0d0 0d0 1d0))
+           (push-out-face 0 (- ox x0) -1d0 0d0 0d0) (push-out-face 1 (- x1 ox) 1d0 0d0 0d0)
+           (push-out-face 2 (- oy y0) 0d0 -1d0 0d0) (push-out-face 3 (- y1 oy) 0d0 1d0 0d0)
+           (push-out-face 4 (- oz z0) 0d0 0d0 -1d0) (push-out-face 5 (- z1 oz) 0d0 0d0 1d0)
            (cond ((= depth most-positive-double-float) (candidate s 0d0 (- ux) (- uy) (- uz)))
                  ((< (+ (* ux nx) (* uy ny) (* uz nz)) 0d0) (candidate s 0d0 nx ny nz))
                  (t nil))))
@@ -7261,77 +7640,15 @@ cast. #C4STRY"
         (t
          (let ((bt best) (bnx 0d0) (bny 0d0) (bnz 0d0) (found nil))
            (declare (type double-float bt bnx bny bnz))
-           (macrolet ((face (bit o u plane sign (o1 u1 lo1 hi1) (o2 u2 lo2 hi2) nx ny nz)
-                        ;; the plane of the face moved out by r, approached from outside
-                        `(when (and (logbitp ,bit exposed) (,(if (minusp sign) '> '<) ,u 0d0)
-                                    (,(if (minusp sign) '<= '>=) ,o ,plane))
-                           (let ((tt (/ (- ,plane ,o) ,u)))
-                             (when (< tt bt)
-                               (let ((a (+ ,o1 (* tt ,u1))) (b (+ ,o2 (* tt ,u2))))
-                                 (when (and (<= ,lo1 a ,hi1) (<= ,lo2 b ,hi2))
-                                   (setf bt tt bnx ,nx bny ,ny bnz ,nz found t)))))))
-                      (edge (bit1 bit2 (oa ua ea sa) (ob ub eb sb) (oc uc lo hi) nxf nyf nzf)
-                        ;; the quarter cylinder of radius r about an edge, entered from outside
-                        `(when (and (logbitp ,bit1 exposed) (logbitp ,bit2 exposed))
-                           (let* ((pa (- ,oa ,ea)) (pb (- ,ob ,eb))
-                                  (aa (+ (* ,ua ,ua) (* ,ub ,ub)))
-                                  (bb (+ (* pa ,ua) (* pb ,ub)))
-                                  (cc (- (+ (* pa pa) (* pb pb)) (* r r))))
-                             (when (and (> aa 0d0) (< bb 0d0) (>= cc 0d0))
-                               (let ((disc (- (* bb bb) (* aa cc))))
-                                 (when (>= disc 0d0)
-                                   (let ((tt (/ (- (- bb) (dsqrt disc)) aa)))
-                                     (when (< tt bt)
-                                       (let ((qa (+ pa (* tt ,ua))) (qb (+ pb (* tt ,ub)))
-                                             (c (+ ,oc (* tt ,uc))))
-                                         (when (and (>= (* qa ,sa) 0d0) (>= (* qb ,sb) 0d0) (<= ,lo c ,hi))
-                                           (let ((inv (/ 1d0 r)))
-                                             (setf bt tt bnx ,nxf bny ,nyf bnz ,nzf found t))))))))))))
-                      (corner (bx by bz cx cy cz sx sy sz)
-                        ;; the eighth of a sphere of radius r about a corner, entered from outside
-                        `(when (and (logbitp ,bx exposed) (logbitp ,by exposed) (logbitp ,bz exposed))
-                           (let* ((mx (- ox ,cx)) (my (- oy ,cy)) (mz (- oz ,cz))
-                                  (b (+ (* mx ux) (* my uy) (* mz uz))))
-                             (when (< b 0d0)
-                               (let* ((qx (- mx (* b ux))) (qy (- my (* b uy))) (qz (- mz (* b uz)))
-                                      (h2 (- (* r r) (+ (* qx qx) (* qy qy) (* qz qz)))))
-                                 (when (>= h2 0d0)
-                                   (let ((tt (- (- b) (dsqrt h2))))
-                                     (when (< tt bt)
-                                       (let ((hx (+ mx (* tt ux))) (hy (+ my (* tt uy))) (hz (+ mz (* tt uz))))
-                                         (when (and (>= (* hx ,sx) 0d0) (>= (* hy ,sy) 0d0) (>= (* hz ,sz) 0d0))
-                                           (let ((inv (/ 1d0 r)))
-                                             (setf bt tt bnx (* hx inv) bny (* hy inv) bnz (* hz inv)
-                                                   found t))))))))))))
-                      (edges ()
-                        `(progn
-                           ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
-                                   append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
-                                                collect `(edge ,bx ,by (ox ux ,ex ,sx) (oy uy ,ey ,sy) (oz uz z0 z1)
-                                                               (* qa inv) (* qb inv) 0d0)))
-                           ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
-                                   append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
-                                                collect `(edge ,bx ,bz (ox ux ,ex ,sx) (oz uz ,ez ,sz) (oy uy y0 y1)
-                                                               (* qa inv) 0d0 (* qb inv))))
-                           ,@(loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
-                                   append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
-                                                collect `(edge ,by ,bz (oy uy ,ey ,sy) (oz uz ,ez ,sz) (ox ux x0 x1)
-                                                               0d0 (* qa inv) (* qb inv))))))
-                      (corners ()
-                        `(progn
-                           ,@(loop for (sx bx ex) in '((-1d0 0 x0) (1d0 1 x1))
-                                   append (loop for (sy by ey) in '((-1d0 2 y0) (1d0 3 y1))
-                                                append (loop for (sz bz ez) in '((-1d0 4 z0) (1d0 5 z1))
-                                                             collect `(corner ,bx ,by ,bz ,ex ,ey ,ez ,sx ,sy ,sz)))))))
-             (face 0 ox ux (- x0 r) -1 (oy uy y0 y1) (oz uz z0 z1) -1d0 0d0 0d0)
-             (face 1 ox ux (+ x1 r) 1 (oy uy y0 y1) (oz uz z0 z1) 1d0 0d0 0d0)
-             (face 2 oy uy (- y0 r) -1 (ox ux x0 x1) (oz uz z0 z1) 0d0 -1d0 0d0)
-             (face 3 oy uy (+ y1 r) 1 (ox ux x0 x1) (oz uz z0 z1) 0d0 1d0 0d0)
-             (face 4 oz uz (- z0 r) -1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 -1d0)
-             (face 5 oz uz (+ z1 r) 1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 1d0)
-             (when (> r 0d0)
-               (edges)
-               (corners)))
+           (rounded-face-hit 0 ox ux (- x0 r) -1 (oy uy y0 y1) (oz uz z0 z1) -1d0 0d0 0d0)
+           (rounded-face-hit 1 ox ux (+ x1 r) 1 (oy uy y0 y1) (oz uz z0 z1) 1d0 0d0 0d0)
+           (rounded-face-hit 2 oy uy (- y0 r) -1 (ox ux x0 x1) (oz uz z0 z1) 0d0 -1d0 0d0)
+           (rounded-face-hit 3 oy uy (+ y1 r) 1 (ox ux x0 x1) (oz uz z0 z1) 0d0 1d0 0d0)
+           (rounded-face-hit 4 oz uz (- z0 r) -1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 -1d0)
+           (rounded-face-hit 5 oz uz (+ z1 r) 1 (ox ux x0 x1) (oy uy y0 y1) 0d0 0d0 1d0)
+           (when (> r 0d0)
+             (rounded-edge-hits)
+             (rounded-corner-hits))
            (when found (candidate s bt bnx bny bnz))))))))
 
 (defun sweep-boxes (s world)

@@ -31,6 +31,9 @@
                                   "tangled/workshop.lisp" "tests/physics-tests.lisp")
   "The files whose forms may inline, or be generated from, a mutated definition.")
 
+(defparameter *mutant-records* "tests/mutant-records.org"
+  "The file of the mutant records: why a mutant that survives is equivalent, or survives.")
+
 (defparameter *mutable-kinds* '(defun defmacro defmethod defparameter)
   "Standard defining operators whose forms are mutated; any operator of the page's own
 whose name starts with DEF (a macro of the engine's package) is mutated too.")
@@ -507,7 +510,8 @@ but the last.  Declarations and docstrings stay."
 (defparameter *named-parts*
   '(("P5SOLV" . "solver") ("P4CONT" . "contact phases") ("QKS4GZ" . "sleep")
     ("D9W4CH" . "hash") ("Y5H8KC" . "hash")
-    ("MYWH16" . "terrain contacts") ("SW33P7" . "terrain contacts")
+    ("MYWH16" . "terrain contacts") ("MYWGTH" . "terrain contacts") ("MYWCNT" . "terrain contacts")
+    ("MYWSTG" . "terrain contacts") ("SW33P7" . "terrain contacts")
     ("E7V3NT" . "events") ("H7P4CX" . "walker"))
   "Anchors whose sections, or whose part's sections, form a part named here; any other section
 belongs to the part of its level-1 heading.")
@@ -1057,9 +1061,9 @@ the COUNT round robin ones."
     (finish-output)))
 
 (defun page-reasons (page &optional (prefix "Equivalent mutant ~"))
-  "Alist from mutant key to the sentence the page gives for it: paragraphs starting
-'Equivalent mutant ~KEY~:', or with PREFIX 'Surviving mutant ~' those that say why a mutant
-that is not equivalent survives."
+  "Alist from mutant key to the sentence the records file PAGE (*mutant-records*) gives for it:
+paragraphs starting 'Equivalent mutant ~KEY~:', or with PREFIX 'Surviving mutant ~' those that
+say why a mutant that is not equivalent survives."
   (let ((text (physics::read-file-text page)) (reasons '()) (start 0))
     (loop for at = (search prefix text :start2 start)
           while at
@@ -1070,7 +1074,7 @@ that is not equivalent survives."
                               (or (search (format nil "~%:END:") text :start2 key-start) (length text)))))
                (when (and key-end (< key-end end))
                  (push (cons (subseq text key-start key-end)
-                             (one-line (string-trim " " (subseq text (+ key-end 2) end)) 400))
+                             (one-line (string-trim '(#\Space #\Newline) (subseq text (+ key-end 2) end)) 400))
                        reasons))
                (setf start (1+ at))))
     reasons))
@@ -1086,7 +1090,7 @@ ending in ': *', which stands for every mutant of that definition."
                     reasons))))
 
 (defun score-table (mutants parts stream)
-  (let ((reasons (page-reasons "physics.org")))
+  (let ((reasons (page-reasons *mutant-records*)))
     (write-score-rows (loop for m in mutants
                             collect (list (gethash (unit-anchor (mutant-unit m)) parts "?")
                                           (unit-anchor (mutant-unit m))
@@ -1137,9 +1141,9 @@ survivors the page explains as equivalent.  A table by part, then the same mutan
       (loop for (anchor operator file key) in rows
             do (format stream "- ~A ~A, ~A: ~A~%    ~A~%" anchor operator file key
                        (or (page-reason key reasons)
-                           (let ((why (page-reason key (page-reasons "physics.org" "Surviving mutant ~"))))
+                           (let ((why (page-reason key (page-reasons *mutant-records* "Surviving mutant ~"))))
                              (and why (format nil "not equivalent: ~A" why)))
-                           "(no reason given on the page)")))))
+                           "(no reason given in the records)")))))
 
 (defun annotate-survivors ()
   "Write report/mutate-survivors.org from report/mutate-survivors.tsv and the page's reasons,
@@ -1148,7 +1152,7 @@ as they are now."
                 (loop for line = (read-line in nil) while line
                       collect (uiop:split-string line :separator '(#\Tab))))))
     (with-open-file (out "report/mutate-survivors.org" :direction :output :if-exists :supersede)
-      (survivors-list rows (page-reasons "physics.org") out))))
+      (survivors-list rows (page-reasons *mutant-records*) out))))
 
 ;;; ------------------------------------------------------------------------------------
 ;;; Tables from a log: the lines a run printed, for a run stopped before its end
@@ -1190,7 +1194,7 @@ as a finished run does.  Return the number of mutants read."
     (setf rows (nreverse rows))
     (let ((summary (find-if (lambda (l) (and (physics::starts-with "mutate: " l) (search "mutants killed" l))) lines))
           (first-line (find-if (lambda (l) (physics::starts-with "mutate: seed" l)) lines))
-          (reasons (page-reasons "physics.org")))
+          (reasons (page-reasons *mutant-records*)))
       (with-open-file (out "report/mutate-score.org" :direction :output :if-exists :supersede)
         (format out "~A~%~A~%~%" (or first-line "") (or summary (format nil "~D mutants read from ~A, a run stopped before its end" (length rows) log)))
         (write-score-rows (mapcar (lambda (r) (list (gethash (first r) parts "?") (first r)
@@ -1265,7 +1269,7 @@ as a finished run does.  Return the number of mutants read."
                                           only)))
              (saved (progn (ensure-directories-exist "report/") (write-record)))
              (wall (- (now) start))
-             (reasons (page-reasons "physics.org")))
+             (reasons (page-reasons *mutant-records*)))
         (declare (ignore dummy inline saved layouts))
         (ignore-errors (sb-ext:delete-directory directory :recursive t))
         (let ((n (length mutants)) (k (count-if #'killed-p mutants)))
