@@ -10713,7 +10713,29 @@ return its traces. #P33R5X"
                                    (princ-to-string hz) (princ-to-string substeps) (princ-to-string iterations)
                                    (format nil "~F" (peer-point-slop engine)) (namestring out) knobs))
           (unless (zerop code) (error "~(~A~) harness failed on ~(~A~): ~A" engine scene stderr)))
-        (prog1 (parse-peer-traces (read-peer-output out)) (delete-file out)))))
+        (let ((traces (prog1 (parse-peer-traces (read-peer-output out)) (delete-file out))))
+          (check-peer-traces engine scene runs traces)
+          traces))))
+
+(defun check-peer-traces (engine scene runs traces)
+  "Signal an error unless TRACES, ENGINE's record of SCENE's RUNS, has a trace per run with the
+run's balls and watched balls, each watched ball starting where the run puts it (lifted by the
+engine's slop) within 10^-5 m: the harness read the scene file and wrote its record as the page
+reads them. #P33R5X"
+  (unless (= (length traces) (length runs))
+    (error "~(~A~) recorded ~D runs of ~(~A~), not ~D" engine (length traces) scene (length runs)))
+  (loop for run in runs for trace in traces
+        for balls = (getf run :balls)
+        for watched = (remove-if-not (lambda (b) (getf b :watch)) balls)
+        do (unless (and (= (peer-trace-balls trace) (length balls)) (= (peer-trace-watched trace) (length watched)))
+             (error "~(~A~) recorded ~D balls, ~D watched, of a run of ~(~A~) with ~D, ~D watched"
+                    engine (peer-trace-balls trace) (peer-trace-watched trace) scene (length balls) (length watched)))
+           (loop for b in watched for j from 0
+                 for at = (list (getf b :x) (if (getf b :lift) (- (getf b :y) (peer-point-slop engine)) (getf b :y)) (getf b :z))
+                 do (loop for c below 3 for want in at
+                          unless (< (abs (- (trace-watch trace 0 j c) want)) 1d-5)
+                            do (error "~(~A~) starts a ball of ~(~A~) at ~,6F on axis ~D, not ~,6F"
+                                      engine scene (trace-watch trace 0 j c) c want)))))
 
 (defun peer-point-slop (engine)
   "The resting overlap ENGINE's contacts are meant to keep: this engine's linear slop, Box3D's
