@@ -15,7 +15,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tangled/workshop.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-peers bench-against count-against count-features report heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-peers bench-against count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -42,6 +42,9 @@ help:
 	@echo "make count-features the feature table's scenes as instructions a step, by valgrind; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
+	@echo "make report-peers   every scene of the error-against-run-time sweep here, in Debian's Bullet and"
+	@echo "                    in ODE (and Box3D with BOX3D_SRC=dir, a checkout of its source), one run;"
+	@echo "                    diagrams into report/wp-peers-*.svg, the table into $(ORG)"
 	@echo "make heaps          heaps of 1000 balls to the body budget spawned at one point; table into $(ORG)"
 	@echo "make mutate         run the claims against COUNT=150 mutants of the engine (SEED=1, ANCHOR=ID"
 	@echo "                    for one section, PART='solver|hash' for the drawn mutants of some parts,"
@@ -145,6 +148,28 @@ report: setup tangle
 	@REPORT=accuracy $(LISP) --load tools/report.lisp
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp work-precision-best report/work-precision-best.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp work-precision-table report/work-precision.org
+
+# The sweep's scenes in this engine, Bullet and ODE (#P33R5X): the page writes the scenes as data
+# into report/peers/scenes.txt, tools/peers/bullet-scenes.cpp and ode-scenes.cpp run them.
+# BOX3D_SRC=dir, a checkout of github.com/erincatto/box3d, adds Box3D, built here from it.
+BOX3D_SRC ?=
+report-peers: setup tangle
+	@tools/peers/setup libbullet-dev libode-dev g++ pkg-config
+	@mkdir -p report/peers
+	@rm -f report/peers/box3d-scenes
+	@if [ -n "$(BOX3D_SRC)" ]; then \
+	  mkdir -p report/peers/box3d-obj && \
+	  for f in $(BOX3D_SRC)/src/*.c; do \
+	    $(CC) -O2 -DNDEBUG -std=gnu17 -I$(BOX3D_SRC)/include -I$(BOX3D_SRC)/src -c $$f -o report/peers/box3d-obj/$$(basename $$f .c).o || exit 1; \
+	  done && \
+	  $(CXX) -O2 -I$(BOX3D_SRC)/include -o report/peers/box3d-scenes tools/peers/box3d-scenes.cpp report/peers/box3d-obj/*.o -lpthread -lm; \
+	fi
+	@$(CXX) -O2 -o report/peers/bullet-scenes tools/peers/bullet-scenes.cpp $$(pkg-config --cflags --libs bullet)
+	@$(CXX) -O2 -o report/peers/ode-scenes tools/peers/ode-scenes.cpp $$(pkg-config --cflags --libs ode)
+	@rm -f report/peers/failed
+	@{ REPORT=peers $(LISP) --load tools/report.lisp || touch report/peers/failed; } | tee report/peers.log
+	@test ! -e report/peers/failed
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp peer-table report/peers-table.org
 
 # Heaps spawned at one point, 1000 balls to the body budget: memory per body and speeds (#X7R3M5).
 heaps: setup tangle

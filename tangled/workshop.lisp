@@ -3125,6 +3125,22 @@ largest angle of its impulse from the geometric normal at impact. #W9PREC"
 ;; Error against run time:6 ends here
 
 ;; [[file:../physics.org::#W9PREC][Error against run time:7]]
+(define-accuracy-scene rolling-resistance ("largest speed error / v0" 0.01)
+  "A ball of radius 0.25 m rolling without sliding at 2 m/s along the floor, rolling resistance
+0.05: its speed against v0 - 5/7 rho g t over 2 s. #W9PREC"
+  (let* ((world (apply #'open-air-world :floor t world-args))
+         (r 0.25) (v0 2d0) (rho 0.05d0) (g 9.81d0)
+         (ball (add-physics-body world 0.5 (- r *physics-linear-slop*) 0.5 :radius r :rolling-resistance rho :vx v0))
+         (worst 0d0))
+    (set-physics-body-angular-velocity world ball 0 0 (/ (- v0) r))
+    (let ((wall (drive world 2.0 (lambda (time)
+                                   (let ((vx (physics-body-velocity world ball)))
+                                     (setf worst (max worst (/ (abs (- vx (max 0d0 (- v0 (* 5/7 rho g time))))) v0))))))))
+      (values worst wall world
+              (format nil "speed at the end ~,3F m/s (ideal ~,3F)" (physics-body-velocity world ball) (- v0 (* 5/7 rho g 2)))))))
+;; Error against run time:7 ends here
+
+;; [[file:../physics.org::#W9PREC][Error against run time:9]]
 (defparameter +sweep-rates+ '(30 60 120 240)
   "Step rates of the sweep, Hz. #W9PREC")
 
@@ -3157,9 +3173,9 @@ family of FAMILIES; return one plist per point, families innermost (see run-accu
                     nconc (loop for n in substeps
                                 nconc (loop for family in families
                                             collect (run-accuracy-point scene hz n family))))))
-;; Error against run time:7 ends here
+;; Error against run time:9 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:9]]
+;; [[file:../physics.org::#W9PREC][Error against run time:11]]
 (defun point-label (p)
   "A setting as it is named in the tables: family, rate and substeps. #W9PREC"
   (format nil "~(~A~) ~D Hz x ~D" (getf p :family) (getf p :hz) (getf p :substeps)))
@@ -3182,9 +3198,9 @@ either way a point of the Pareto front. #W9PREC"
                                       (and (= (getf a :error) (getf b :error)) (<= (getf a :ms) (getf b :ms))))
                                   a b))
                 points))))
-;; Error against run time:9 ends here
+;; Error against run time:11 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:10]]
+;; [[file:../physics.org::#W9PREC][Error against run time:12]]
 (defun print-sweep-table (points stream)
   "Print POINTS as an Org table: a row per scene and setting, the error, the note, the run time
 of each family, and whether every family reached the same state hash and error, twice. #W9PREC"
@@ -3212,9 +3228,9 @@ its Pareto front. #W9PREC"
                                ~%  Pareto front:~{ ~A~^,~}.~%"
                        scene measure (<= (getf best :error) tolerance) tolerance (point-label best)
                        (getf best :error) (getf best :ms) (mapcar #'point-label (pareto-front mine))))))
-;; Error against run time:10 ends here
+;; Error against run time:12 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:11]]
+;; [[file:../physics.org::#W9PREC][Error against run time:13]]
 (defparameter +substep-colours+ '((1 . "#c0392b") (2 . "#d68910") (4 . "#1e8449") (8 . "#2471a3"))
   "The colour of each substep count's curves in the diagrams. #W9PREC")
 
@@ -3264,9 +3280,9 @@ through its step rates. Errors below 1e-9 are drawn at 1e-9. #W9PREC"
         (format out "<text x=\"~D\" y=\"~D\" font-size=\"10\" fill=\"#555\">points: 30, 60, 120, 240 Hz</text>~%" (+ x1 14) (- y1 4))
         (format out "</svg>~%")))
     path))
-;; Error against run time:11 ends here
+;; Error against run time:13 ends here
 
-;; [[file:../physics.org::#W9PREC][Error against run time:12]]
+;; [[file:../physics.org::#W9PREC][Error against run time:14]]
 (defun run-accuracy-report (&key (directory "report/") (stream *standard-output*))
   "The sweep, written as report/work-precision.org (the table), report/work-precision-best.org
 (the Pareto-best setting per scene) and one SVG diagram per scene, report/wp-SCENE.svg. Print
@@ -3284,7 +3300,814 @@ the table to STREAM as well. #W9PREC"
                                 (format nil "~(~A~): error against run time" (first entry)) (third entry)
                                 (remove (first entry) points :key (lambda (p) (getf p :scene)) :test-not #'eq)))
     points))
-;; Error against run time:12 ends here
+;; Error against run time:14 ends here
+
+;; [[file:../physics.org::#P33R5X][Error against run time, engine beside engine:1]]
+(defun peer-run (&key (gravity '(0 -9.81 0)) (seconds 1) sleep record-all boxes balls params)
+  "One run of a peer scene as a plist: GRAVITY, SECONDS, SLEEP, RECORD-ALL, BOXES (each a list
+x0 y0 z0 x1 y1 z1), BALLS (each a plist of peer-ball) and PARAMS, a plist the measurement
+reads. #P33R5X"
+  (list :gravity gravity :seconds seconds :sleep sleep :record-all record-all
+        :boxes boxes :balls balls :params params))
+
+(defun peer-ball (x y z &key (radius 0.25) (mass 1.0) (restitution 0.0) (friction 0.6) (rolling 0.0)
+                          (vx 0.0) (vy 0.0) (vz 0.0) (wx 0.0) (wy 0.0) (wz 0.0) lift watch)
+  "A ball of a peer run: its centre, material, velocity and spin; LIFT, its centre lies the
+engine's resting overlap lower; WATCH, it is recorded every step. #P33R5X"
+  (list :x x :y y :z z :radius radius :mass mass :restitution restitution :friction friction
+        :rolling rolling :vx vx :vy vy :vz vz :wx wx :wy wy :wz wz :lift lift :watch watch))
+
+(defparameter +open-floor+ '(-16 -1 -16 32 0 32)
+  "The floor of open-air-world as a box. #P33R5X")
+
+(defparameter +lone-cell+ '(0 0 0 1 1 1)
+  "The lone cell of drop-onto-block as a box. #P33R5X")
+
+(defparameter +shaft-boxes+ '((-1 -1 -1 2 0 2) (-1 0 -1 0 12 2) (1 0 -1 2 12 2) (0 0 -1 1 12 0) (0 0 1 1 12 2))
+  "The cells around make-shaft-world's shaft, as its floor and four walls 12 high. #P33R5X")
+
+(defparameter +basin-boxes+ '((-8 -1 -8 16 0 16) (-1 0 -1 9 6 0) (-1 0 8 9 6 9) (-1 0 0 0 6 8) (8 0 0 9 6 8))
+  "The floor and walls of the basin (make-basin-terrain) as boxes. #P33R5X")
+
+(defun bounce-series-seconds (restitution drop)
+  "How long a ball of RESTITUTION dropped DROP metres flies, in ideal bounces, to its fifth apex,
+and a fifth of a second more; at most 12 s. #P33R5X"
+  (let ((t0 (sqrt (/ (* 2 drop) 9.81d0))))
+    (min 12d0 (+ 0.2d0 (* t0 (+ 1 (* 2 (loop for k from 1 to 4 sum (expt restitution k)))))))))
+
+(defun peer-scene-runs (scene)
+  "The runs of the accuracy scene SCENE, as data: the same balls, boxes and durations as the
+scene's function, in the order it adds them. #P33R5X"
+  (let ((r 0.25))
+    (ecase scene
+      (free-fall (list (peer-run :balls (list (peer-ball 0.5 0.0 0.5 :watch t)))))
+      (bounce (list (peer-run :seconds 4 :boxes (list +open-floor+)
+                              :balls (list (peer-ball 0.5 (+ 2.0 r) 0.5 :restitution 0.8 :watch t)))))
+      (slide-to-roll (list (peer-run :boxes (list +open-floor+)
+                                     :balls (list (peer-ball 0.5 r 0.5 :friction 0.4 :vx 4.0 :lift t :watch t))
+                                     :params '(:v0 4d0 :mu 0.4d0))))
+      (rolling-resistance (list (peer-run :seconds 2 :boxes (list +open-floor+)
+                                          :balls (list (peer-ball 0.5 r 0.5 :rolling 0.05 :vx 2.0 :wz (/ -2.0 r) :lift t :watch t))
+                                          :params '(:v0 2d0 :rho 0.05d0))))
+      (seams (list (peer-run :seconds 3 :boxes (list +open-floor+)
+                             :balls (list (peer-ball 0.5 r 0.5 :vx 3.0 :lift t :watch t)))))
+      (resting (list (peer-run :seconds 3 :sleep t :boxes (list +open-floor+)
+                               :balls (list (peer-ball 0.5 (+ r 0.2) 0.5 :watch t)))))
+      (head-on (list (peer-run :gravity '(0 0 0)
+                               :balls (list (peer-ball -1.0 0.5 0.5 :mass 1.0 :restitution 0.5 :vx 3.0)
+                                            (peer-ball 1.0 0.5 0.5 :mass 2.0 :restitution 0.5 :vx -3.0)))))
+      (shaft-stack (list (peer-run :seconds 10 :sleep t :boxes +shaft-boxes+
+                                   :balls (loop for i below 6 collect (peer-ball 0.5 (+ 0.45 (* i 2.02 0.45)) 0.5 :radius 0.45)))))
+      (pile (let ((world (make-basin-world 1000 :sleep t)))
+              (list (peer-run :seconds 4 :sleep t :record-all t :boxes +basin-boxes+
+                              :balls (loop for h in (physics-world-handles world)
+                                           collect (multiple-value-bind (x y z) (physics-body-position world h)
+                                                     (peer-ball x y z)))))))
+      (bounce-series (loop for e in +bounce-restitutions+
+                           nconc (loop for drop in +bounce-drops+
+                                       collect (peer-run :seconds (bounce-series-seconds e drop) :boxes (list +open-floor+)
+                                                         :balls (list (peer-ball 0.5 (+ r drop) 0.5 :restitution e :lift t :watch t))
+                                                         :params (list :restitution e :drop drop)))))
+      (cradle (list (peer-run :gravity '(0 0 0)
+                              :balls (append (loop for i from 1 below 5
+                                                   collect (peer-ball (+ 2.0 (* i 2 r)) 0.5 0.5 :restitution 1.0 :friction 0.0 :watch t))
+                                             (list (peer-ball 2.0 0.5 0.5 :restitution 1.0 :friction 0.0 :vx 2.0 :watch t)))
+                              :params '(:speed 2d0))))
+      (struck-row (list (peer-run :boxes (list +open-floor+)
+                                  :balls (append (loop for i from 1 below 4
+                                                       collect (peer-ball (+ 2.0 (* i 2 r)) r 0.5 :restitution 1.0 :lift t :watch t))
+                                                 (list (peer-ball 0.5 r 0.5 :restitution 1.0 :vx (* 7/5 3.0) :lift t :watch t)))
+                                  :params '(:speed 3d0))))
+      ((edge-drop corner-drop)
+       (loop for speed in '(2d0 5d0 10d0)
+             nconc (loop for offset in '(0.05d0 0.1d0 0.15d0 0.2d0)
+                         collect (let* ((dx (if (eq scene 'corner-drop) (* 0.7d0 offset) offset))
+                                        (dz (if (eq scene 'corner-drop) dx 0d0))
+                                        (y-impact (+ 1d0 (sqrt (- (* r r) (* dx dx) (* dz dz))))))
+                                   (peer-run :seconds 0.5 :boxes (list +lone-cell+)
+                                             :balls (list (peer-ball (+ 1d0 dx) (+ y-impact 0.3d0) (if (eq scene 'corner-drop) (+ 1d0 dz) 0.5d0)
+                                                                     :friction 0.0 :restitution 0.5 :vy (- speed) :watch t))
+                                             :params (list :speed speed :dx dx :dz dz))))))
+      (oblique-pair
+       (loop for speed in '(2d0 5d0 10d0)
+             nconc (loop for offset in '(0.1d0 0.2d0 0.3d0 0.4d0)
+                         collect (peer-run :seconds 0.5 :sleep t :gravity '(0 0 0)
+                                           :balls (list (peer-ball 0.0d0 (+ 0.5d0 offset) 0.5d0 :friction 0.0 :restitution 0.5 :vx speed)
+                                                        (peer-ball 1.0d0 0.5d0 0.5d0 :friction 0.0 :restitution 0.5))
+                                           :params (list :speed speed :offset offset))))))))
+
+(defun write-peer-scenes (path &optional (scenes (mapcar #'first *accuracy-scenes*)))
+  "Write the runs of SCENES to PATH in the scene file's format (tools/peers/scenes.h). #P33R5X"
+  (with-open-file (out path :direction :output :if-exists :supersede)
+    (let ((*read-default-float-format* 'double-float))
+      (flet ((num (x) (format nil "~F" (float x 1d0))))
+        (dolist (scene scenes)
+          (format out "scene ~(~A~)~%" scene)
+          (dolist (run (peer-scene-runs scene))
+            (format out "run~%gravity ~{~A~^ ~}~%seconds ~A~%sleep ~D~%record-all ~D~%"
+                    (mapcar #'num (getf run :gravity)) (num (getf run :seconds))
+                    (if (getf run :sleep) 1 0) (if (getf run :record-all) 1 0))
+            (dolist (b (getf run :boxes)) (format out "box ~{~A~^ ~}~%" (mapcar #'num b)))
+            (dolist (b (getf run :balls))
+              (format out "ball ~{~A~^ ~} ~D ~D~%"
+                      (mapcar (lambda (k) (num (getf b k))) '(:x :y :z :radius :mass :restitution :friction :rolling :vx :vy :vz :wx :wy :wz))
+                      (if (getf b :lift) 1 0) (if (getf b :watch) 1 0)))
+            (loop for (k v) on (getf run :params) by #'cddr do (format out "param ~(~A~) ~A~%" k (num v)))
+            (format out "end~%"))))))
+  path)
+
+(defun read-peer-scenes (path)
+  "The scene file at PATH as an alist of scene names (symbols of this package) to their runs,
+the plists peer-scene-runs makes, its numbers double-floats. #P33R5X"
+  (let ((scenes '()) (runs nil) (run nil) (name nil))
+    (flet ((numbers (words) (let ((*read-default-float-format* 'double-float) (*read-eval* nil))
+                              (mapcar (lambda (w) (float (read-from-string w) 1d0)) words)))
+           (close-scene () (when name (push (cons name (nreverse runs)) scenes))))
+      (with-open-file (in path)
+        (loop for line = (read-line in nil) while line
+              for words = (uiop:split-string (string-trim " " line) :separator " ")
+              for head = (first words)
+              do (cond ((string= head "scene") (close-scene) (setf name (intern (string-upcase (second words)) '#:luv-physics) runs '()))
+                       ((string= head "run") (setf run (peer-run)))
+                       ((string= head "gravity") (setf (getf run :gravity) (numbers (rest words))))
+                       ((string= head "seconds") (setf (getf run :seconds) (first (numbers (rest words)))))
+                       ((string= head "sleep") (setf (getf run :sleep) (string= (second words) "1")))
+                       ((string= head "record-all") (setf (getf run :record-all) (string= (second words) "1")))
+                       ((string= head "box") (setf (getf run :boxes) (append (getf run :boxes) (list (numbers (rest words))))))
+                       ((string= head "ball")
+                        (destructuring-bind (x y z radius mass e mu rho vx vy vz wx wy wz lift watch) (numbers (rest words))
+                          (setf (getf run :balls)
+                                (append (getf run :balls)
+                                        (list (peer-ball x y z :radius radius :mass mass :restitution e :friction mu :rolling rho
+                                                               :vx vx :vy vy :vz vz :wx wx :wy wy :wz wz
+                                                               :lift (= lift 1) :watch (= watch 1)))))))
+                       ((string= head "param")
+                        (setf (getf run :params) (append (getf run :params)
+                                                         (list (intern (string-upcase (second words)) :keyword)
+                                                               (first (numbers (cddr words)))))))
+                       ((string= head "end") (push run runs))
+                       ((string= head ""))
+                       (t (error "read-peer-scenes: unknown directive ~S in ~A" head path)))))
+      (close-scene))
+    (nreverse scenes)))
+;; Error against run time, engine beside engine:1 ends here
+
+;; [[file:../physics.org::#P33R5X][Error against run time, engine beside engine:2]]
+(defstruct (peer-trace (:constructor make-peer-trace (frames watched balls wall record-all times watch all final)))
+  "One run's record: FRAMES frames (the first before any step) of TIMES, the WATCH columns of the
+WATCHED balls (x y z vx vy vz wx wy wz each), ALL balls' centres when RECORD-ALL, the FINAL
+positions and velocities of the BALLS, and the WALL seconds of the steps. #P33R5X"
+  (frames 0 :type fixnum) (watched 0 :type fixnum) (balls 0 :type fixnum) (wall 0d0 :type double-float)
+  (record-all nil) (times nil) (watch nil) (all nil) (final nil))
+
+(defun parse-peer-traces (data)
+  "The traces in DATA, a vector of double-floats laid out as tools/peers/scenes.h writes them. #P33R5X"
+  (let ((at 0) (traces '()))
+    (flet ((take (n) (prog1 (subseq data at (+ at n)) (incf at n))))
+      (loop while (< at (length data))
+            do (destructuring-bind (frames watched balls wall record-all) (coerce (take 5) 'list)
+                 (let* ((frames (round frames)) (watched (round watched)) (balls (round balls))
+                        (record-all (= record-all 1d0))
+                        (per (+ 1 (* 9 watched) (if record-all (* 3 balls) 0)))
+                        (times (make-array frames :element-type 'double-float))
+                        (watch (make-array (* frames watched 9) :element-type 'double-float))
+                        (all (and record-all (make-array (* frames balls 3) :element-type 'double-float))))
+                   (dotimes (f frames)
+                     (let ((base (+ at (* f per))))
+                       (setf (aref times f) (aref data base))
+                       (replace watch data :start1 (* f watched 9) :start2 (1+ base) :end2 (+ 1 base (* 9 watched)))
+                       (when all (replace all data :start1 (* f balls 3) :start2 (+ 1 base (* 9 watched)) :end2 (+ base per)))))
+                   (incf at (* frames per))
+                   (push (make-peer-trace frames watched balls wall record-all times watch all
+                                          (coerce (take (* 6 balls)) '(simple-array double-float (*))))
+                         traces)))))
+    (nreverse traces)))
+
+(defun read-peer-output (path)
+  "The little-endian doubles of the file at PATH, as a vector of double-floats. #P33R5X"
+  (with-open-file (in path :element-type '(unsigned-byte 64))
+    (let* ((words (make-array (file-length in) :element-type '(unsigned-byte 64)))
+           (data (make-array (length words) :element-type 'double-float)))
+      (read-sequence words in)
+      (dotimes (i (length words) data)
+        (let ((w (aref words i)))
+          (setf (aref data i) (sb-kernel:make-double-float (let ((hi (ldb (byte 32 32) w))) (if (>= hi #x80000000) (- hi #x100000000) hi))
+                                                           (ldb (byte 32 0) w))))))))
+
+(defun trace-watch (trace frame ball column)
+  "Column COLUMN (0 to 8: x y z vx vy vz wx wy wz) of watched ball BALL at FRAME of TRACE. #P33R5X"
+  (aref (peer-trace-watch trace) (+ column (* 9 (+ ball (* frame (peer-trace-watched trace)))))))
+
+(defun trace-final (trace ball column)
+  "Column COLUMN (0 to 5: x y z vx vy vz) of ball BALL after TRACE's last step. #P33R5X"
+  (aref (peer-trace-final trace) (+ column (* 6 ball))))
+;; Error against run time, engine beside engine:2 ends here
+
+;; [[file:../physics.org::#P33R5X][Error against run time, engine beside engine:3]]
+(defun run-peer-scene-here (runs hz substeps &key (kernels :scalar))
+  "Run the RUNS of a peer scene in this engine at HZ and SUBSTEPS with KERNELS, recording what
+the harnesses record; return the traces, as parse-peer-traces reads them. #P33R5X"
+  (let ((data (make-array 1024 :element-type 'double-float :adjustable t :fill-pointer 0)))
+    (flet ((put (x) (vector-push-extend (float x 1d0) data)))
+      (dolist (run runs)
+        (let* ((terrain (make-voxel-terrain))
+               (world (progn (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+                             (dolist (b (getf run :boxes)) (apply #'fill-terrain terrain (append (mapcar #'round b) '(t))))
+                             (make-physics-world :terrain terrain :gravity (getf run :gravity) :step-seconds (/ 1 hz)
+                                                 :substeps substeps :kernels kernels :sleep (getf run :sleep))))
+               (balls (loop for b in (getf run :balls)
+                            collect (add-physics-body world (getf b :x) (if (getf b :lift) (- (getf b :y) *physics-linear-slop*) (getf b :y)) (getf b :z)
+                                                      :radius (getf b :radius) :mass (getf b :mass) :restitution (getf b :restitution)
+                                                      :friction (getf b :friction) :rolling-resistance (getf b :rolling)
+                                                      :vx (getf b :vx) :vy (getf b :vy) :vz (getf b :vz))
+                            into handles
+                            do (unless (every #'zerop (list (getf b :wx) (getf b :wy) (getf b :wz)))
+                                 (set-physics-body-angular-velocity world (car (last handles)) (getf b :wx) (getf b :wy) (getf b :wz)))
+                            finally (return handles)))
+               (watched (loop for b in (getf run :balls) for h in balls when (getf b :watch) collect h))
+               (dt (float (physics-world-step-seconds world) 1d0))
+               (steps (round (getf run :seconds) dt))
+               (frames (make-array 1024 :element-type 'double-float :adjustable t :fill-pointer 0))
+               (wall 0d0))
+          (flet ((frame (time)
+                   (vector-push-extend time frames)
+                   (dolist (h watched)
+                     (multiple-value-bind (x y z) (physics-body-position world h)
+                       (multiple-value-bind (vx vy vz) (physics-body-velocity world h)
+                         (multiple-value-bind (wx wy wz) (physics-body-angular-velocity world h)
+                           (dolist (v (list x y z vx vy vz wx wy wz)) (vector-push-extend (float v 1d0) frames))))))
+                   (when (getf run :record-all)
+                     (dolist (h balls)
+                       (multiple-value-bind (x y z) (physics-body-position world h)
+                         (vector-push-extend (float x 1d0) frames) (vector-push-extend (float y 1d0) frames)
+                         (vector-push-extend (float z 1d0) frames))))))
+            (frame 0d0)
+            (dotimes (i steps)
+              (step-physics-world world)
+              (incf wall (physics-world-last-step-real-seconds world))
+              (frame (* (1+ i) dt)))
+            (dolist (x (list (1+ steps) (length watched) (length balls) wall (if (getf run :record-all) 1 0))) (put x))
+            (loop for x across frames do (vector-push-extend x data))
+            (dolist (h balls)
+              (multiple-value-bind (x y z) (physics-body-position world h)
+                (multiple-value-bind (vx vy vz) (physics-body-velocity world h)
+                  (dolist (v (list x y z vx vy vz)) (put v)))))))))
+    (parse-peer-traces (coerce data '(simple-array double-float (*))))))
+;; Error against run time, engine beside engine:3 ends here
+
+;; [[file:../physics.org::#P33R5X][Error against run time, engine beside engine:4]]
+(defvar *peer-measures* '()
+  "Each scene's measurement: (SCENE . FUNCTION), FUNCTION of the runs, their traces and the
+engine's resting overlap SLOP, returning the error and a note. #P33R5X")
+
+(defmacro define-peer-measure (scene (runs traces slop) doc &body body)
+  "Define how SCENE's error is measured, as the function PEER-MEASURE-SCENE of its RUNS, their
+TRACES and the resting overlap SLOP of the engine that ran them; DOC is its docstring. #P33R5X"
+  (let ((function (intern (format nil "PEER-MEASURE-~A" scene))))
+    `(progn
+       (defun ,function (,runs ,traces ,slop)
+         ,doc
+         (declare (ignorable ,runs ,traces ,slop))
+         ,@body)
+       (setf *peer-measures* (append (remove ',scene *peer-measures* :key #'first) (list (cons ',scene ',function))))
+       ',scene)))
+
+(defun trace-step (trace)
+  "The step of TRACE, s: the time of its second frame. #P33R5X"
+  (aref (peer-trace-times trace) 1))
+
+(define-peer-measure free-fall (runs traces slop)
+  "The largest distance of the ball from y = -g t^2/2 (accuracy-scene-free-fall). #P33R5X"
+  (let ((tr (first traces)))
+    (values (loop for f from 1 below (peer-trace-frames tr)
+                  for time = (aref (peer-trace-times tr) f)
+                  maximize (abs (+ (trace-watch tr f 0 1) (* 0.5d0 9.81d0 time time))))
+            "")))
+
+(define-peer-measure bounce (runs traces slop)
+  "The worst relative error of the first three apexes against 0.8^(2n) times 2 m (accuracy-scene-bounce). #P33R5X"
+  (let ((tr (first traces)) (r 0.25d0) (apexes '()) (rising nil))
+    (loop for f from 1 below (peer-trace-frames tr)
+          for vy = (trace-watch tr f 0 4)
+          do (when (and rising (<= vy 0)) (push (- (trace-watch tr f 0 1) r) apexes))
+             (setf rising (> vy 0)))
+    (setf apexes (reverse apexes))
+    (values (if (< (length apexes) 3)
+                1d0
+                (loop for n from 1 to 3 for h in apexes
+                      maximize (let ((ideal (* 2d0 (expt 0.8d0 (* 2 n))))) (/ (abs (- h ideal)) ideal))))
+            (format nil "apexes ~{~,3F~^ ~} m" (subseq apexes 0 (min 3 (length apexes)))))))
+
+(define-peer-measure slide-to-roll (runs traces slop)
+  "The largest speed error over v0 against sliding, then rolling at 5/7 v0 (accuracy-scene-slide-to-roll). #P33R5X"
+  (let* ((tr (first traces)) (params (getf (first runs) :params))
+         (r 0.25d0) (v0 (getf params :v0)) (mu (getf params :mu)) (g 9.81d0)
+         (t-roll (/ (* 2 v0) (* 7 mu g))) (began nil) (worst 0d0))
+    (loop for f from 1 below (peer-trace-frames tr)
+          for time = (aref (peer-trace-times tr) f)
+          for vx = (trace-watch tr f 0 3)
+          do (let ((ideal (if (< time t-roll) (- v0 (* mu g time)) (* 5/7 v0))))
+               (setf worst (max worst (/ (abs (- vx ideal)) v0)))
+               (when (and (not began) (< (abs (+ vx (* (trace-watch tr f 0 8) r))) 0.01))
+                 (setf began time))))
+    (values worst (format nil "rolling from ~:[never~;~:*~,3F s~] (ideal ~,3F s)" began t-roll))))
+
+(define-peer-measure rolling-resistance (runs traces slop)
+  "The largest speed error over v0 against v0 - 5/7 rho g t (accuracy-scene-rolling-resistance). #P33R5X"
+  (let* ((tr (first traces)) (params (getf (first runs) :params))
+         (v0 (getf params :v0)) (rho (getf params :rho)))
+    (values (loop for f from 1 below (peer-trace-frames tr)
+                  for time = (aref (peer-trace-times tr) f)
+                  maximize (/ (abs (- (trace-watch tr f 0 3) (max 0d0 (- v0 (* 5/7 rho 9.81d0 time))))) v0))
+            (format nil "speed at the end ~,3F m/s (ideal ~,3F)" (trace-watch tr (1- (peer-trace-frames tr)) 0 3)
+                    (max 0d0 (- v0 (* 5/7 rho 9.81d0 (aref (peer-trace-times tr) (1- (peer-trace-frames tr))))))))))
+
+(defun trace-speed (trace frame ball)
+  "The speed of watched ball BALL at FRAME of TRACE. #P33R5X"
+  (sqrt (+ (expt (trace-watch trace frame ball 3) 2) (expt (trace-watch trace frame ball 4) 2) (expt (trace-watch trace frame ball 5) 2))))
+
+(define-peer-measure seams (runs traces slop)
+  "The largest distance of the centre from its resting height after 0.5 s (accuracy-scene-seams). #P33R5X"
+  (let* ((tr (first traces)) (rest (- 0.25d0 slop)) (worst 0d0) (v1 nil) (v3 0d0))
+    (loop for f from 1 below (peer-trace-frames tr)
+          for time = (aref (peer-trace-times tr) f)
+          do (when (>= time 0.5) (setf worst (max worst (abs (- (trace-watch tr f 0 1) rest)))))
+             (when (and (null v1) (>= time 1.0)) (setf v1 (trace-speed tr f 0)))
+             (setf v3 (trace-speed tr f 0)))
+    (values worst (format nil "speed lost 1-3 s: ~,3F %" (if (plusp v1) (* 100 (/ (- v1 v3) v1)) 0)))))
+
+(define-peer-measure resting (runs traces slop)
+  "The largest distance of the depth from SLOP over the third second (accuracy-scene-resting). #P33R5X"
+  (let ((tr (first traces)) (r 0.25d0))
+    (values (loop for f from 1 below (peer-trace-frames tr)
+                  when (>= (aref (peer-trace-times tr) f) 2.0)
+                    maximize (abs (- (- r (trace-watch tr f 0 1)) slop)))
+            "")))
+
+(define-peer-measure head-on (runs traces slop)
+  "The final velocities against -3 and 0 m/s, over the approach speed (accuracy-scene-head-on). #P33R5X"
+  (let* ((tr (first traces)) (va (trace-final tr 0 3)) (vb (trace-final tr 1 3)))
+    (values (/ (max (abs (- va -3d0)) (abs vb)) 6d0)
+            (format nil "momentum ~,4F (ideal -3) kg m/s" (+ va (* 2 vb))))))
+
+(define-peer-measure shaft-stack (runs traces slop)
+  "The top ball's distance from its ideal height plus its drift (accuracy-scene-shaft-stack). #P33R5X"
+  (let* ((tr (first traces)) (r 0.45d0) (top 5)
+         (drop (- (+ (- r slop) (* 5 (- (* 2 r) slop))) (trace-final tr top 1)))
+         (drift (sqrt (+ (expt (- (trace-final tr top 0) 0.5) 2) (expt (- (trace-final tr top 2) 0.5) 2)))))
+    (values (+ (abs drop) drift) (format nil "top ~,4F m low, ~,4F m aside" drop drift))))
+
+(defun deepest-overlap (centres radii boxes order)
+  "The deepest overlap, m, of balls at CENTRES (x y z of each) with RADII between two of them or
+with one of BOXES (x0 y0 z0 x1 y1 z1 each); 0 when none overlaps. Pairs are swept in order of
+x, ORDER a scratch vector of the balls' indices. #P33R5X"
+  (declare (type (simple-array double-float (*)) centres radii) (type (simple-array fixnum (*)) order)
+           (optimize speed))
+  (let* ((n (length radii)) (reach (* 2 (reduce #'max radii))) (deepest 0d0))
+    (declare (type double-float deepest reach) (type fixnum n))
+    (dotimes (i n) (setf (aref order i) i))
+    (sort order #'< :key (lambda (i) (aref centres (* 3 i))))
+    (dotimes (k n)
+      (let* ((i (aref order k)) (x (aref centres (* 3 i))) (y (aref centres (+ 1 (* 3 i))))
+             (z (aref centres (+ 2 (* 3 i)))) (r (aref radii i)))
+        (loop for m of-type fixnum from (1+ k) below n
+              for j = (aref order m)
+              while (< (- (aref centres (* 3 j)) x) reach)
+              do (let ((d (sqrt (+ (expt (- x (aref centres (* 3 j))) 2) (expt (- y (aref centres (+ 1 (* 3 j)))) 2)
+                                   (expt (- z (aref centres (+ 2 (* 3 j)))) 2)))))
+                   (setf deepest (max deepest (- (+ r (aref radii j)) d)))))
+        (dolist (b boxes)
+          (destructuring-bind (x0 y0 z0 x1 y1 z1) b
+            (declare (type double-float x0 y0 z0 x1 y1 z1))
+            (let ((dx (max (- x0 x) 0d0 (- x x1))) (dy (max (- y0 y) 0d0 (- y y1))) (dz (max (- z0 z) 0d0 (- z z1))))
+              (setf deepest (max deepest (if (and (zerop dx) (zerop dy) (zerop dz))
+                                             (+ r (min (- x x0) (- x1 x) (- y y0) (- y1 y) (- z z0) (- z1 z)))
+                                             (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz))))))))))))
+    deepest))
+
+(defvar *peer-pile-reference* nil
+  "The pile's energy as this engine's converged run (240 Hz, 16 substeps) of the peer scene
+ends it, once computed. #P33R5X")
+
+(defun trace-pile-energy (trace)
+  "The potential (above y = 0) and kinetic energy of TRACE's 1 kg balls at its end, J. #P33R5X"
+  (loop for i below (peer-trace-balls trace)
+        sum (+ (* 9.81d0 (trace-final trace i 1))
+               (* 0.5d0 (+ (expt (trace-final trace i 3) 2) (expt (trace-final trace i 4) 2) (expt (trace-final trace i 5) 2))))))
+
+(defun peer-pile-reference (runs)
+  "*peer-pile-reference*, computed from RUNS when not yet known. #P33R5X"
+  (or *peer-pile-reference*
+      (setf *peer-pile-reference* (trace-pile-energy (first (run-peer-scene-here runs 240 16))))))
+
+(define-peer-measure pile (runs traces slop)
+  "The worse of the energy's error against this engine's converged run and the deepest overlap over the radius (accuracy-scene-pile). #P33R5X"
+  (let* ((tr (first traces)) (run (first runs)) (n (peer-trace-balls tr))
+         (radii (map '(simple-array double-float (*)) (lambda (b) (float (getf b :radius) 1d0)) (getf run :balls)))
+         (boxes (mapcar (lambda (b) (mapcar (lambda (x) (float x 1d0)) b)) (getf run :boxes)))
+         (centres (make-array (* 3 n) :element-type 'double-float))
+         (order (make-array n :element-type 'fixnum))
+         (deepest (loop for f from 1 below (peer-trace-frames tr)
+                        do (replace centres (peer-trace-all tr) :start2 (* f n 3))
+                        maximize (deepest-overlap centres radii boxes order)))
+         (reference (peer-pile-reference runs))
+         (energy (trace-pile-energy tr))
+         (energy-error (/ (abs (- energy reference)) reference)))
+    (values (max energy-error (/ deepest 0.25d0))
+            (format nil "deepest ~,4F m; energy ~,1F J against ~,1F J (~,2,,,,,'eE)" deepest energy reference energy-error))))
+
+(define-peer-measure bounce-series (runs traces slop)
+  "The worst relative error of a rebound ratio against e^2 (accuracy-scene-bounce-series, rebound-heights). #P33R5X"
+  (let ((worst 0d0) (count 0) (g 9.81d0) (limit (* 1.1d0 *physics-restitution-threshold*)))
+    (loop for run in runs for tr in traces
+          do (let* ((params (getf run :params)) (e (getf params :restitution))
+                    (level (- 0.25d0 slop)) (dt (trace-step tr)) (apexes '()) (flying nil))
+               (loop for f from 2 below (peer-trace-frames tr)
+                     while (<= (length apexes) 4)
+                     do (let ((y0 (trace-watch tr (- f 2) 0 1)) (y1 (trace-watch tr (- f 1) 0 1)) (y2 (trace-watch tr f 0 1)))
+                          (let ((free (< (abs (+ (- y0 (* 2 y1)) y2 (* g dt dt))) 1d-5)))
+                            (when (and free (not flying))
+                              (let ((b (+ (/ (- y1 y0) dt) (* 0.5d0 g dt))))
+                                (push (- (+ y0 (/ (* b (abs b)) (* 2 g))) level) apexes)))
+                            (setf flying free))))
+               (let* ((heights (reverse apexes)) (e2 (* e e))
+                      (errors (loop for (before after) on heights while after
+                                    while (> (sqrt (* 2 g (max 0d0 before))) limit)
+                                    collect (/ (abs (- (/ after before) e2)) e2))))
+                 (incf count (length errors))
+                 (setf worst (reduce #'max errors :initial-value (if errors worst 1d0))))))
+    (values worst (format nil "~D rebounds" count))))
+
+(defun struck-row-measure (runs traces)
+  "The worse of the momentum share and the energy the last ball of a struck row does not carry,
+at the frame it is fastest; the watched balls are the row, then the striker. #P33R5X"
+  (let* ((tr (first traces)) (speed (getf (getf (first runs) :params) :speed))
+         (k (peer-trace-watched tr)) (best nil))
+    (loop for f from 1 below (peer-trace-frames tr)
+          for vs = (cons (trace-watch tr f (1- k) 3) (loop for j below (1- k) collect (trace-watch tr f j 3)))
+          do (when (or (null best) (> (car (last vs)) (car (last best)))) (setf best vs)))
+    (let ((share (if (plusp (reduce #'+ best)) (/ (car (last best)) (reduce #'+ best)) 0d0))
+          (kept (/ (reduce #'+ (mapcar (lambda (v) (* v v)) best)) (* speed speed)))
+          (others (/ (reduce #'max (mapcar #'abs (butlast best))) speed)))
+      (values (max (- 1 share) (- 1 kept)) (format nil "others ~,3F v0, energy ~,3F" others kept)))))
+
+(define-peer-measure cradle (runs traces slop)
+  "The momentum and energy the last ball does not carry (accuracy-scene-cradle). #P33R5X"
+  (struck-row-measure runs traces))
+
+(define-peer-measure struck-row (runs traces slop)
+  "The momentum and energy the last ball does not carry (accuracy-scene-struck-row). #P33R5X"
+  (struck-row-measure runs traces))
+
+(defun angle-between (a b)
+  "The angle, degrees, between the vectors A and B (lists of three); 180 when either is zero, as
+when a striker passes through the ball it should strike. #P33R5X"
+  (if (or (every #'zerop a) (every #'zerop b))
+      180d0
+      (let ((c (/ (reduce #'+ (mapcar #'* a b)) (sqrt (* (reduce #'+ (mapcar #'* a a)) (reduce #'+ (mapcar #'* b b)))))))
+        (* (/ 180 pi) (acos (max -1d0 (min 1d0 c)))))))
+
+(defun block-drop-measure (runs traces)
+  "The largest angle of a block drop's impulse from the geometric normal at impact, and of its
+outgoing velocity from the reflection law's (drop-onto-block), over RUNS. #P33R5X"
+  (let ((impulse 0d0) (outgoing 0d0) (g 9.81d0) (r 0.25d0) (e 0.5d0))
+    (loop for run in runs for tr in traces
+          do (destructuring-bind (&key speed dx dz) (getf run :params)
+               (let* ((y-impact (+ 1d0 (sqrt (- (* r r) (* dx dx) (* dz dz)))))
+                      (y0 (+ y-impact 0.3d0))
+                      (u (sqrt (+ (* speed speed) (* 2 g (- y0 y-impact)))))
+                      (t-impact (/ (- u speed) g))
+                      (n (list (/ dx r) (/ (- y-impact 1d0) r) (/ dz r)))
+                      (v-in (list 0d0 (- u) 0d0))
+                      (vn (reduce #'+ (mapcar #'* v-in n)))
+                      (ideal (mapcar (lambda (v k) (- v (* (+ 1 e) vn k))) v-in n))
+                      (hit nil) (out nil))
+                 (loop for f from 1 below (peer-trace-frames tr) until out
+                       for time = (aref (peer-trace-times tr) f)
+                       do (let ((vx (trace-watch tr f 0 3)) (vy (trace-watch tr f 0 4)) (vz (trace-watch tr f 0 5)))
+                            (cond ((and (not hit) (> (abs (- vy (- (- speed) (* g time)))) 1d-3)) (setf hit f))
+                                  ((and hit (> f (1+ hit))) (setf out (list vx (+ vy (* g (- time t-impact))) vz))))))
+                 (setf impulse (max impulse (if out (angle-between (mapcar #'- out v-in) n) 180d0))
+                       outgoing (max outgoing (if out (angle-between out ideal) 180d0))))))
+    (values impulse (format nil "outgoing off by up to ~,2F deg" outgoing))))
+
+(define-peer-measure edge-drop (runs traces slop)
+  "The largest angle of the impulse from the edge's geometric normal (accuracy-scene-edge-drop). #P33R5X"
+  (block-drop-measure runs traces))
+
+(define-peer-measure corner-drop (runs traces slop)
+  "The largest angle of the impulse from the corner's geometric normal (accuracy-scene-corner-drop). #P33R5X"
+  (block-drop-measure runs traces))
+
+(define-peer-measure oblique-pair (runs traces slop)
+  "The largest angle of the struck ball's velocity from the line of centres (accuracy-scene-oblique-pair). #P33R5X"
+  (let ((impulse 0d0) (outgoing 0d0) (reach 0.5d0) (e 0.5d0))
+    (loop for run in runs for tr in traces
+          do (destructuring-bind (&key speed offset) (getf run :params)
+               (let* ((n (list (/ (sqrt (- (* reach reach) (* offset offset))) reach) (/ (- offset) reach) 0d0))
+                      (vn (* speed (first n)))
+                      (ideal (list (- speed (* 0.5d0 (+ 1 e) vn (first n))) (- (* 0.5d0 (+ 1 e) vn (second n))) 0d0)))
+                 (setf impulse (max impulse (angle-between (loop for c from 3 to 5 collect (trace-final tr 1 c)) n))
+                       outgoing (max outgoing (angle-between (loop for c from 3 to 5 collect (trace-final tr 0 c)) ideal))))))
+    (values impulse (format nil "striker off by up to ~,2F deg" outgoing))))
+
+(defun measure-peer-scene (scene runs traces slop)
+  "SCENE's error and note from the TRACES of its RUNS, run by an engine of resting overlap SLOP;
+an error of 10^9 when the traces hold numbers the measurement cannot take (a peer's balls gone to
+infinity, say), with the note saying so. #P33R5X"
+  (handler-case (funcall (cdr (or (assoc scene *peer-measures*) (error "no measurement for ~S" scene))) runs traces slop)
+    (arithmetic-error (e) (values 1d9 (format nil "not measurable: ~A" e)))))
+;; Error against run time, engine beside engine:4 ends here
+
+;; [[file:../physics.org::#P33R5X][Error against run time, engine beside engine:7]]
+(defun peer-file (name)
+  "The pathname of the file NAME of the repository. #P33R5X"
+  (asdf:system-relative-pathname "luv-physics" name))
+
+(defun run-peer-harness (program arguments)
+  "Run PROGRAM with ARGUMENTS; return its error output and exit code. #P33R5X"
+  (let* ((err (make-string-output-stream))
+         (process (sb-ext:run-program program arguments :output nil :error err :input nil)))
+    (values (get-output-stream-string err) (sb-ext:process-exit-code process))))
+
+(defparameter +peer-rates+ '(30 60 120 240)
+  "Step rates of every engine's curves, Hz. #P33R5X")
+
+(defun peer-curves ()
+  "The curves of the comparison, each (ENGINE LABEL SUBSTEPS ITERATIONS KNOBS): this engine at
+1, 2, 4 and 8 substeps; Bullet at 4, 10 and 30 iterations with margin 0, at its defaults
+(margin 0.04) and without split impulse; ODE's quick step at 5, 20 and 80 iterations and its
+big-matrix dWorldStep; Box3D, when its harness was built, at 1, 4 (its default) and 8 substeps.
+Each runs at every rate of +peer-rates+. #P33R5X"
+  (append (loop for n in '(1 2 4 8) collect (list :luv (format nil "this engine, ~D substeps" n) n 1 '()))
+          (loop for i in '(4 10 30) collect (list :bullet (format nil "Bullet, ~D iterations" i) 1 i '("margin=0")))
+          (list (list :bullet "Bullet defaults (margin 0.04)" 1 10 '("margin=0.04"))
+                (list :bullet "Bullet, no split impulse" 1 10 '("margin=0" "split=0")))
+          (loop for i in '(5 20 80) collect (list :ode (format nil "ODE quick step, ~D iterations" i) 1 i '()))
+          (list (list :ode "ODE dWorldStep" 1 1 '("solver=step")))
+          (when (peer-binary :box3d)
+            (loop for n in '(1 4 8) collect (list :box3d (format nil "Box3D, ~D substeps" n) n 1 '())))))
+
+(defun peer-binary (engine)
+  "The harness of ENGINE (:bullet, :ode or :box3d): report/peers/ENGINE-scenes when it exists. #P33R5X"
+  (let ((path (peer-file (format nil "report/peers/~(~A~)-scenes" engine))))
+    (and (probe-file path) path)))
+
+(defun run-peer-point (engine scene runs scenes-file hz substeps iterations knobs)
+  "Run SCENE's RUNS (read from SCENES-FILE) in ENGINE at HZ, SUBSTEPS, ITERATIONS and KNOBS;
+return its traces. #P33R5X"
+  (if (eq engine :luv)
+      (run-peer-scene-here runs hz substeps :kernels (car (last (available-kernel-families))))
+      (let ((out (peer-file (format nil "report/peers/~(~A~)-~D.bin" engine (sb-unix:unix-getpid)))))
+        (multiple-value-bind (stderr code)
+            (run-peer-harness (namestring (peer-binary engine))
+                            (list* (namestring scenes-file) (string-downcase (symbol-name scene))
+                                   (princ-to-string hz) (princ-to-string substeps) (princ-to-string iterations)
+                                   (format nil "~F" (peer-point-slop engine)) (namestring out) knobs))
+          (unless (zerop code) (error "~(~A~) harness failed on ~(~A~): ~A" engine scene stderr)))
+        (let ((traces (prog1 (parse-peer-traces (read-peer-output out)) (delete-file out))))
+          (check-peer-traces engine scene runs traces)
+          traces))))
+
+(defun check-peer-traces (engine scene runs traces)
+  "Signal an error unless TRACES, ENGINE's record of SCENE's RUNS, has a trace per run with the
+run's balls and watched balls, each watched ball starting where the run puts it (lifted by the
+engine's slop) within 10^-5 m: the harness read the scene file and wrote its record as the page
+reads them. #P33R5X"
+  (unless (= (length traces) (length runs))
+    (error "~(~A~) recorded ~D runs of ~(~A~), not ~D" engine (length traces) scene (length runs)))
+  (loop for run in runs for trace in traces
+        for balls = (getf run :balls)
+        for watched = (remove-if-not (lambda (b) (getf b :watch)) balls)
+        do (unless (and (= (peer-trace-balls trace) (length balls)) (= (peer-trace-watched trace) (length watched)))
+             (error "~(~A~) recorded ~D balls, ~D watched, of a run of ~(~A~) with ~D, ~D watched"
+                    engine (peer-trace-balls trace) (peer-trace-watched trace) scene (length balls) (length watched)))
+           (loop for b in watched for j from 0
+                 for at = (list (getf b :x) (if (getf b :lift) (- (getf b :y) (peer-point-slop engine)) (getf b :y)) (getf b :z))
+                 do (loop for c below 3 for want in at
+                          unless (< (abs (- (trace-watch trace 0 j c) want)) 1d-5)
+                            do (error "~(~A~) starts a ball of ~(~A~) at ~,6F on axis ~D, not ~,6F"
+                                      engine scene (trace-watch trace 0 j c) c want)))))
+
+(defun peer-point-slop (engine)
+  "The resting overlap ENGINE's contacts are meant to keep: this engine's linear slop, Box3D's
+(B3_LINEAR_SLOP, 0.005 m), 0 for Bullet and ODE. #P33R5X"
+  (case engine
+    (:luv (float *physics-linear-slop* 1d0))
+    (:box3d 0.005d0)
+    (t 0d0)))
+
+(defparameter +pile-skipped+
+  '("Bullet, 30 iterations" "Bullet, no split impulse" "ODE quick step, 80 iterations" "ODE dWorldStep")
+  "The curves the pile leaves out, to keep make report-peers within its minutes. #P33R5X")
+
+(defun run-peer-sweep (&key (scenes (mapcar #'first *accuracy-scenes*)) (scenes-file (peer-file "report/peers/scenes.txt"))
+                            (rates +peer-rates+) (curves (peer-curves)) (stream *standard-output*))
+  "Every curve of CURVES at every rate of RATES on every scene of SCENES, read from SCENES-FILE;
+return a plist per point (:scene :engine :curve :hz :error :ms :note :repeated). Each scene's
+points run twice (the pile's, which take seconds each, once), the engines interleaved, and a
+point keeps its faster run's time; :repeated says whether the runs ended every ball in the same
+place. #P33R5X"
+  (let ((file (read-peer-scenes scenes-file)) (points '()))
+    (dolist (scene scenes (nreverse points))
+      (let* ((runs (cdr (assoc scene file)))
+             (seconds (reduce #'+ runs :key (lambda (r) (getf r :seconds))))
+             (plan (loop for hz in rates
+                         nconc (loop for (engine label substeps iterations knobs) in curves
+                                     unless (and (eq scene 'pile) (member label +pile-skipped+ :test #'string=))
+                                       collect (list engine label hz substeps iterations knobs))))
+             (by-engine (loop for e in '(:luv :bullet :ode :box3d)
+                              collect (remove e plan :key #'first :test-not #'eq)))
+             (order (loop for k from 0 below (reduce #'max by-engine :key #'length)
+                          nconc (loop for l in by-engine when (nth k l) collect (nth k l))))
+             (results (make-hash-table :test #'equal)))
+        (when (eq scene 'pile) (peer-pile-reference runs))
+        (dotimes (pass (if (eq scene 'pile) 1 2))
+          (dolist (p order)
+            (destructuring-bind (engine label hz substeps iterations knobs) p
+              (declare (ignore label))
+              (push (run-peer-point engine scene runs scenes-file hz substeps iterations knobs) (gethash p results)))))
+        (dolist (p order)
+          (destructuring-bind (engine label hz substeps iterations knobs) p
+            (declare (ignore substeps iterations knobs))
+            (let* ((all (reverse (gethash p results))) (first (first all)))
+              (multiple-value-bind (err note) (measure-peer-scene scene runs first (peer-point-slop engine))
+                (let ((ms (/ (* 1000 (reduce #'min all :key (lambda (traces) (reduce #'+ traces :key #'peer-trace-wall)))) seconds)))
+                  (push (list :scene scene :engine engine :curve label :hz hz :error (float err 1d0) :ms ms :note note
+                              :repeated (every (lambda (other) (every (lambda (a b) (equalp (peer-trace-final a) (peer-trace-final b))) first other))
+                                               (rest all)))
+                        points)
+                  (format stream "~&~(~A~) ~A ~D Hz: error ~,3,,,,,'eE, ~,3F ms/s~%" scene label hz err ms))))))))))
+;; Error against run time, engine beside engine:7 ends here
+
+;; [[file:../physics.org::#P33R5X][Error against run time, engine beside engine:8]]
+(defparameter +engine-styles+ '((:luv "#1e8449" :circle) (:bullet "#c0392b" :square) (:ode "#2471a3" :triangle) (:box3d "#8e44ad" :diamond))
+  "Each engine's colour and marker in the diagrams. #P33R5X")
+
+(defparameter +curve-dashes+ '("" "7 3" "2 2" "9 3 2 3" "4 4")
+  "The dash patterns of an engine's curves, in the order of its curves. #P33R5X")
+
+(defun svg-marker (out shape x y colour)
+  "Write to OUT the marker SHAPE (:circle :square :triangle :diamond) at X Y in COLOUR. #P33R5X"
+  (ecase shape
+    (:circle (format out "<circle cx=\"~,1F\" cy=\"~,1F\" r=\"3\" fill=\"~A\"/>~%" x y colour))
+    (:square (format out "<rect x=\"~,1F\" y=\"~,1F\" width=\"6\" height=\"6\" fill=\"~A\"/>~%" (- x 3) (- y 3) colour))
+    (:triangle (format out "<polygon points=\"~,1F,~,1F ~,1F,~,1F ~,1F,~,1F\" fill=\"~A\"/>~%" x (- y 4) (- x 3.5) (+ y 3) (+ x 3.5) (+ y 3) colour))
+    (:diamond (format out "<polygon points=\"~,1F,~,1F ~,1F,~,1F ~,1F,~,1F ~,1F,~,1F\" fill=\"~A\"/>~%" x (- y 4) (+ x 4) y x (+ y 4) (- x 4) y colour))))
+
+(defun write-peer-diagram (path title measure points)
+  "Write to PATH an SVG diagram of POINTS (one scene, every engine): log10 of the error against
+log10 of the wall milliseconds per simulated second, a curve per engine setting through its
+step rates, each engine a colour and a marker, and a legend. Errors below 1e-9 are drawn at
+1e-9. #P33R5X"
+  (let* ((x0 72) (x1 470) (y0 34) (y1 384) (width 760) (height 440)
+         (lx (lambda (p) (log (max 1d-3 (getf p :ms)) 10d0)))
+         (ly (lambda (p) (log (max 1d-9 (getf p :error)) 10d0)))
+         (xmin (floor (reduce #'min points :key lx))) (xmax (max (1+ xmin) (ceiling (reduce #'max points :key lx))))
+         (ymin (floor (reduce #'min points :key ly))) (ymax (max (1+ ymin) (ceiling (reduce #'max points :key ly))))
+         (curves (remove-duplicates (mapcar (lambda (p) (list (getf p :engine) (getf p :curve))) points) :test #'equal :from-end t)))
+    (flet ((sx (v) (+ x0 (* (- x1 x0) (/ (- v xmin) (- xmax xmin)))))
+           (sy (v) (- y1 (* (- y1 y0) (/ (- v ymin) (- ymax ymin))))))
+      (with-open-file (out path :direction :output :if-exists :supersede)
+        (format out "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"~D\" height=\"~D\" viewBox=\"0 0 ~D ~D\" font-family=\"sans-serif\" font-size=\"11\">~%" width height width height)
+        (format out "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>~%<text x=\"~D\" y=\"18\" font-size=\"13\">~A</text>~%" x0 title)
+        (loop for k from xmin to xmax
+              do (format out "<line x1=\"~,1F\" y1=\"~D\" x2=\"~,1F\" y2=\"~D\" stroke=\"#ddd\"/><text x=\"~,1F\" y=\"~D\" text-anchor=\"middle\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
+                         (sx k) y0 (sx k) y1 (sx k) (+ y1 16) k))
+        (loop for k from ymin to ymax
+              do (format out "<line x1=\"~D\" y1=\"~,1F\" x2=\"~D\" y2=\"~,1F\" stroke=\"#ddd\"/><text x=\"~D\" y=\"~,1F\" text-anchor=\"end\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
+                         x0 (sy k) x1 (sy k) (- x0 6) (+ (sy k) 4) k))
+        (format out "<rect x=\"~D\" y=\"~D\" width=\"~D\" height=\"~D\" fill=\"none\" stroke=\"#444\"/>~%" x0 y0 (- x1 x0) (- y1 y0))
+        (format out "<text x=\"~D\" y=\"~D\" text-anchor=\"middle\">wall ms per simulated second</text>~%" (round (+ x0 x1) 2) (+ y1 34))
+        (format out "<text transform=\"translate(18 ~D) rotate(-90)\" text-anchor=\"middle\">~A</text>~%" (round (+ y0 y1) 2) measure)
+        (loop for (engine label) in curves
+              for row from 0
+              for style = (cdr (assoc engine +engine-styles+))
+              for index = (position label (remove engine curves :key #'first :test-not #'eq) :key #'second :test #'string=)
+              for dash = (nth (mod index (length +curve-dashes+)) +curve-dashes+)
+              for curve = (sort (remove-if-not (lambda (p) (and (eq (getf p :engine) engine) (string= (getf p :curve) label))) points)
+                                #'< :key (lambda (p) (getf p :hz)))
+              do (format out "<polyline fill=\"none\" stroke=\"~A\" stroke-width=\"1.5\" stroke-dasharray=\"~A\" points=\"~{~,1F,~,1F~^ ~}\"/>~%"
+                         (first style) dash (loop for p in curve collect (sx (funcall lx p)) collect (sy (funcall ly p))))
+                 (dolist (p curve) (svg-marker out (second style) (sx (funcall lx p)) (sy (funcall ly p)) (first style)))
+                 (let ((y (+ y0 8 (* 15 row))))
+                   (format out "<line x1=\"~D\" y1=\"~D\" x2=\"~D\" y2=\"~D\" stroke=\"~A\" stroke-width=\"1.5\" stroke-dasharray=\"~A\"/>~%"
+                           (+ x1 14) y (+ x1 44) y (first style) dash)
+                   (svg-marker out (second style) (+ x1 29) y (first style))
+                   (format out "<text x=\"~D\" y=\"~D\">~A</text>~%" (+ x1 50) (+ y 4) label)))
+        (format out "<text x=\"~D\" y=\"~D\" font-size=\"10\" fill=\"#555\">points: 30, 60, 120, 240 Hz</text>~%" (+ x1 14) (- y1 4))
+        (format out "</svg>~%")))
+    path))
+
+(defparameter +engine-names+ '((:luv . "this engine") (:bullet . "Bullet") (:ode . "ODE") (:box3d . "Box3D"))
+  "How the tables name each engine. #P33R5X")
+
+(defun peer-point-label (p)
+  "A point as the tables name it: its curve and rate. #P33R5X"
+  (format nil "~A at ~D Hz" (getf p :curve) (getf p :hz)))
+
+(defparameter +accuracy-levels+ '(10 1 1/10 1/100)
+  "The accuracy levels of the table, as multiples of a scene's tolerance. #P33R5X")
+
+(defun cheapest-within (points level)
+  "The cheapest of POINTS whose error is within LEVEL, or NIL. #P33R5X"
+  (let ((within (remove-if-not (lambda (p) (<= (getf p :error) level)) points)))
+    (and within (reduce (lambda (a b) (if (<= (getf a :ms) (getf b :ms)) a b)) within))))
+
+(defparameter +peer-why+
+  '((free-fall . "Free fall's error is the substep's alone, g t h/2 in every engine, so the cheapest step wins, and this engine's fixed cost a step and a substep, for one ball, is several times a peer's.")
+    (bounce . "One ball on a floor: the peers reach the same apexes within the tolerance, and their step for one ball costs less than this engine's.")
+    (slide-to-roll . "ODE's contact solve follows the friction law as closely as this engine's, for less a step with one ball.")
+    (seams . "Bullet and ODE meet the floor as one flat box, with no seams to cross, and their step for one ball costs less; this engine's error stays far inside the tolerance.")
+    (resting . "Every engine rests the ball well within the tolerance, so the cheapest step wins.")
+    (head-on . "Every engine keeps momentum and the restitution law here, so the cheapest step wins.")
+    (shaft-stack . "ODE's solve and Box3D's soft step hold the stack too, each for less a step than this engine's.")
+    (pile . "Where a peer's pile settles closer to the reference, it pays several times this engine's time for it.")
+    (bounce-series . "A peer's rebound ratios off e^2 at low restitution or height count only within ten times the tolerance.")
+    (cradle . "Within ten times the tolerance a row that passes only part of its momentum counts, and a peer's cheaper step wins; within the tolerance only this engine passes it on.")
+    (struck-row . "Within ten times the tolerance a row that passes only part of its momentum counts, and a peer's cheaper step wins; within the tolerance only this engine passes it on.")
+    (oblique-pair . "Within ten degrees a peer's impulse counts, from a contact found a step late and a little deep; within the tolerance only this engine's speculative contact, which takes the normal at the touch.")
+    (edge-drop . "Within ten degrees a peer's impulse counts, from a contact found a step late and deep in the cell; within the tolerance only this engine, whose speculative contact takes the normal at the touch.")
+    (corner-drop . "Within ten degrees a peer's impulse counts, from a contact found a step late and deep in the cell; within the tolerance only this engine, whose speculative contact takes the normal at the touch.")
+    (rolling-resistance . "ODE's solve meets the rolling limit exactly for less a step; this engine's soft contact lets the speed stray a little more, still far within the tolerance."))
+  "Why this engine is not the cheapest at a level where another engine is: one sentence per scene,
+printed only when it applies. #P33R5X")
+
+(defun print-peer-table (points stream)
+  "Print, per scene, the engine with the cheapest point within each accuracy level of
++accuracy-levels+ times the scene's tolerance (that point is on the scene's joint Pareto front),
+each engine's error at its defaults, and the engines with a point on the joint front. #P33R5X"
+  (format stream "~&| scene | tolerance |~{ within ~A x |~} defaults: this / Bullet / ODE / Box3D | on the front |~%" +accuracy-levels+)
+  (format stream "~&|-------+-----------+~{~*-----+~}------+------|~%" +accuracy-levels+)
+  (loop for (scene nil nil tolerance) in *accuracy-scenes*
+        for mine = (remove scene points :key (lambda (p) (getf p :scene)) :test-not #'eq)
+        when mine
+          do (flet ((default (engine curve hz)
+                      (let ((p (find-if (lambda (p) (and (eq (getf p :engine) engine) (string= (getf p :curve) curve) (= (getf p :hz) hz))) mine)))
+                        (if p (format nil "~,1,,,,,'eE" (getf p :error)) "-"))))
+               (format stream "~&| ~(~A~) | ~A |~{ ~A |~} ~A / ~A / ~A / ~A | ~{~A~^, ~} |~%"
+                       scene tolerance
+                       (loop for level in +accuracy-levels+
+                             collect (let ((p (cheapest-within mine (* level tolerance))))
+                                       (if p (format nil "~A (~,2F ms/s)" (cdr (assoc (getf p :engine) +engine-names+)) (getf p :ms)) "none")))
+                       (default :luv "this engine, 4 substeps" 60) (default :bullet "Bullet defaults (margin 0.04)" 60)
+                       (default :ode "ODE quick step, 20 iterations" 60) (default :box3d "Box3D, 4 substeps" 60)
+                       (mapcar (lambda (e) (cdr (assoc e +engine-names+)))
+                               (remove-duplicates (mapcar (lambda (p) (getf p :engine)) (pareto-front mine)) :from-end t))))))
+
+(defun print-peer-notes (points stream)
+  "Print, per scene, each engine's best (the cheapest within the tolerance, else the most
+accurate, with its setting) and, where this engine is not the cheapest at a level another
+engine reaches, the sentence of +peer-why+. #P33R5X"
+  (loop for (scene nil measure tolerance) in *accuracy-scenes*
+        for mine = (remove scene points :key (lambda (p) (getf p :scene)) :test-not #'eq)
+        when mine
+          do (format stream "~&- ~(~A~) (~A), each engine's best:" scene measure)
+             (loop for (engine) in +engine-names+
+                   for own = (remove engine mine :key (lambda (p) (getf p :engine)) :test-not #'eq)
+                   when own
+                     do (let ((best (good-enough own tolerance)))
+                          (format stream " ~A, ~,2,,,,,'eE at ~,2F ms/s~:[ (none within the tolerance)~;~];" (peer-point-label best)
+                                  (getf best :error) (getf best :ms) (<= (getf best :error) tolerance))))
+             (let ((behind (loop for level in +accuracy-levels+
+                                 for p = (cheapest-within mine (* level tolerance))
+                                 thereis (and p (not (eq (getf p :engine) :luv))))))
+               (when (and behind (plusp (length (or (cdr (assoc scene +peer-why+)) ""))))
+                 (format stream "~%  ~A" (cdr (assoc scene +peer-why+)))))
+             (unless (every (lambda (p) (getf p :repeated)) mine)
+               (format stream "~%  (some point ended differently in its two runs)"))
+             (terpri stream)))
+
+(defun run-peer-report (&key (directory (peer-file "report/")) (stream *standard-output*))
+  "Write the scene file report/peers/scenes.txt, run the sweep of every engine on it, and write
+report/peers-table.org (the table and the notes) and a diagram per scene,
+report/wp-peers-SCENE.svg. #P33R5X"
+  (let* ((scenes-file (merge-pathnames "peers/scenes.txt" directory)))
+    (ensure-directories-exist scenes-file)
+    (write-peer-scenes scenes-file)
+    (let ((points (run-peer-sweep :scenes-file scenes-file :stream stream)))
+      (with-open-file (out (merge-pathnames "peers/points.sexp" directory) :direction :output :if-exists :supersede)
+        (with-standard-io-syntax (let ((*package* (find-package '#:luv-physics))) (prin1 points out))))
+      (write-peer-figures points directory))))
+
+(defun write-peer-figures (points directory)
+  "Write the table and notes of POINTS to DIRECTORY's peers-table.org and a diagram per scene,
+wp-peers-SCENE.svg. #P33R5X"
+  (progn
+      (with-open-file (out (merge-pathnames "peers-table.org" directory) :direction :output :if-exists :supersede)
+        (format out "#+caption: the cheapest engine within each multiple of the tolerance, ms per simulated second; ~A; load ~A~%"
+                (cpu-model-name) (load-average))
+        (print-peer-table points out)
+        (terpri out)
+        (print-peer-notes points out))
+      (dolist (entry *accuracy-scenes*)
+        (let ((mine (remove (first entry) points :key (lambda (p) (getf p :scene)) :test-not #'eq)))
+          (when mine
+            (write-peer-diagram (merge-pathnames (format nil "wp-peers-~(~A~).svg" (first entry)) directory)
+                                (format nil "~(~A~): error against run time, engine beside engine" (first entry)) (third entry)
+                                mine))))
+      points))
+;; Error against run time, engine beside engine:8 ends here
 
 ;; [[file:../physics.org::#G4WXCJ][Watching a run: the recorder:1]]
 (defconstant +recorded-contacts+ 64

@@ -8770,6 +8770,15 @@ in the order of *physics-scene-features*. #K5DF9S"
       (check (< (abs (- err worst)) 0.002) "the scene reports ~,4F, its apexes ~A give ~,4F" err note worst))))
 ;; W9PREC-bounce-apexes-follow-e-squared ends here
 
+;; [[file:../physics.org::#W9PREC][W9PREC-rolling-slows-at-five-sevenths]]
+(define-claim "W9PREC" rolling-slows-at-five-sevenths
+    "A rolling ball with rolling resistance slows at 5/7 rho g."
+  (multiple-value-bind (err wall world note)
+      (luv-physics::accuracy-scene-rolling-resistance (list :step-seconds 1/60 :substeps 4))
+    (declare (ignore wall world))
+    (check (< err 1d-4) "the speed strayed by ~,3E of v0 (~A)" err note)))
+;; W9PREC-rolling-slows-at-five-sevenths ends here
+
 ;; [[file:../physics.org::#W9PREC][W9PREC-point-repeats-only-when-both-agree]]
 (define-claim "W9PREC" point-repeats-only-when-both-agree
     "Repeated needs the same error and hash in both runs; :ms is the faster run's; :error the first's."
@@ -8920,6 +8929,67 @@ in the order of *physics-scene-features*. #K5DF9S"
                  (check (= 1 (found "text" "x" 550 "y" (+ y 4))) "no legend text at y ~D" y))
         (check (= 1 (found "text" "x" 514 "y" 380)) "no note of the rates")))))
 ;; W9PREC-diagram-geometry ends here
+
+;; [[file:../physics.org::#P33R5X][P33R5X-data-scenes-are-the-scenes]]
+(define-claim "P33R5X" data-scenes-are-the-scenes
+    "Every scene, written as data, read back and run here, measures as the scene's own function does."
+  (let ((path (repository-file "report/peers/claim-scenes.txt")))
+    (ensure-directories-exist path)
+    (luv-physics::write-peer-scenes path)
+    (let ((file (luv-physics::read-peer-scenes path)))
+      (dolist (entry luv-physics::*accuracy-scenes*)
+        (let* ((scene (first entry))
+               (setting (if (eq scene 'luv-physics::pile) '(30 1) '(60 4)))
+               (own (let ((luv-physics::*driven-seconds* 0d0))
+                      (funcall (second entry) (list :step-seconds (/ 1 (first setting)) :substeps (second setting) :kernels :scalar))))
+               (runs (cdr (assoc scene file)))
+               (luv-physics::*peer-pile-reference* luv-physics::*converged-pile-energy*)
+               (data (luv-physics::measure-peer-scene scene runs (luv-physics::run-peer-scene-here runs (first setting) (second setting))
+                                                      (float *physics-linear-slop* 1d0))))
+          (check (consp runs) "~(~A~) is not in the file" scene)
+          (check (<= (abs (- own data)) (+ 1d-6 (* 5d-4 (abs own))
+                                           (if (member scene '(luv-physics::oblique-pair luv-physics::edge-drop luv-physics::corner-drop))
+                                               0.05d0 0d0)))
+                 "~(~A~): its function measures ~,6E, its data ~,6E" scene own data))))))
+;; P33R5X-data-scenes-are-the-scenes ends here
+
+;; [[file:../physics.org::#P33R5X][P33R5X-traces-read-as-written]]
+(define-claim "P33R5X" traces-read-as-written
+    "read-peer-output reads little-endian doubles; parse-peer-traces finds each field where scenes.h writes it."
+  (let ((path (repository-file "report/peers/claim-doubles.bin")))
+    (ensure-directories-exist path)
+    (with-open-file (out path :direction :output :element-type '(unsigned-byte 8) :if-exists :supersede)
+      (dolist (x '(1.5d0 -2.25d0 1d-300))
+        (let ((bits (logior (ash (ldb (byte 32 0) (sb-kernel:double-float-high-bits x)) 32) (sb-kernel:double-float-low-bits x))))
+          (dotimes (i 8) (write-byte (ldb (byte 8 (* 8 i)) bits) out)))))
+    (check (equalp (coerce (luv-physics::read-peer-output path) 'list) '(1.5d0 -2.25d0 1d-300))))
+  (let* ((frame (lambda (time base) (append (list time) (loop for c below 9 collect (+ base c)) (loop for c below 6 collect (- base c)))))
+         (data (coerce (append '(2d0 1d0 2d0 0.125d0 1d0)
+                               (funcall frame 0d0 100d0) (funcall frame 0.5d0 200d0)
+                               (loop for c below 12 collect (+ 300d0 c)))
+                       '(simple-array double-float (*))))
+         (trace (first (luv-physics::parse-peer-traces data))))
+    (check (= 1 (length (luv-physics::parse-peer-traces data))))
+    (check (and (= 2 (luv-physics::peer-trace-frames trace)) (= 0.125d0 (luv-physics::peer-trace-wall trace))
+                (equalp (luv-physics::peer-trace-times trace) #(0d0 0.5d0))))
+    (check (= 208d0 (luv-physics::trace-watch trace 1 0 8)) "watched ~S" (luv-physics::peer-trace-watch trace))
+    (check (equalp (luv-physics::peer-trace-all trace) (coerce '(100d0 99d0 98d0 97d0 96d0 95d0 200d0 199d0 198d0 197d0 196d0 195d0) 'vector)))
+    (check (= 311d0 (luv-physics::trace-final trace 1 5)))))
+;; P33R5X-traces-read-as-written ends here
+
+;; [[file:../physics.org::#P33R5X][P33R5X-table-names-the-cheapest]]
+(define-claim "P33R5X" table-names-the-cheapest
+    "The peer table's row names the cheapest engine at each level, the defaults' errors and the front."
+  (let* ((points (list (list :scene 'luv-physics::free-fall :engine :luv :curve "this engine, 4 substeps" :hz 60 :ms 2d0 :error 0.005d0)
+                       (list :scene 'luv-physics::free-fall :engine :bullet :curve "Bullet defaults (margin 0.04)" :hz 60 :ms 1d0 :error 0.05d0)
+                       (list :scene 'luv-physics::free-fall :engine :ode :curve "ODE quick step, 20 iterations" :hz 60 :ms 3d0 :error 1d-5)))
+         (lines (uiop:split-string (string-right-trim '(#\Newline) (with-output-to-string (s) (luv-physics::print-peer-table points s)))
+                                   :separator '(#\Newline))))
+    (check (= 3 (length lines)) "~S" lines)
+    (check (equal (third lines)
+                  "| free-fall | 0.01 | Bullet (1.00 ms/s) | this engine (2.00 ms/s) | ODE (3.00 ms/s) | ODE (3.00 ms/s) | 5.0e-3 / 5.0e-2 / 1.0e-5 / - | Bullet, this engine, ODE |")
+           "the row is ~S" (third lines))))
+;; P33R5X-table-names-the-cheapest ends here
 
 ;; [[file:../physics.org::#G4WXCJ][G4WXCJ-recording-changes-nothing]]
 (define-claim "G4WXCJ" recording-changes-nothing

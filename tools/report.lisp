@@ -1,6 +1,6 @@
 ;;;; tools/report.lisp -- make report: the stiff and extreme cases (REPORT=stability) or the
 ;;;; error-against-run-time sweep (REPORT=accuracy), which writes its tables and SVG diagrams
-;;;; under report/.
+;;;; under report/, or the same sweep's scenes in this engine, Bullet and ODE (REPORT=peers).
 
 (load (merge-pathnames "boot.lisp" *load-truename*))
 
@@ -12,9 +12,11 @@
 (let ((part (uiop:getenv "REPORT")))
   (cond ((equal part "stability")
          (funcall (find-symbol "RUN-STABILITY-TABLE" '#:luv-physics)))
+        ((equal part "peers")
+         (funcall (find-symbol "RUN-PEER-REPORT" '#:luv-physics)))
         ((equal part "heaps")
          (funcall (find-symbol "RUN-HEAP-TABLE" '#:luv-physics)))
         ((equal part "accuracy")
          (funcall (find-symbol "RUN-ACCURACY-REPORT" '#:luv-physics) :directory "report/"))
-        (t (format *error-output* "report: set REPORT to stability, heaps or accuracy~%")
+        (t (format *error-output* "report: set REPORT to stability, heaps, accuracy or peers~%")
            (sb-ext:exit :code 2))))
