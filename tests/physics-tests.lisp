@@ -6156,6 +6156,34 @@ the phases of a step before the prepare phase. #PR3PAR"
                            (aref (luv-physics::body-columns-flags (luv-physics::set-buffer w set)) row)))))))
 ;; J0STOR-body-removal-removes-joints ends here
 
+;; [[file:../physics.org::#J0STOR][J0STOR-recorded-joints]]
+(define-claim "J0STOR" recorded-joints
+    "A recorded pendulum keeps one joint a frame, fixed point to ball centre; the viewer's file holds them."
+  (let* ((w (make-physics-world :sleep nil))
+         (ball (add-physics-body w 0.6 9.2 0 :radius 0.1))
+         (joint (add-physics-joint w :distance ball nil :anchor-b '(0 10 0)))
+         (recording (luv-physics::start-physics-recording w))
+         (centres (list (multiple-value-list (physics-body-position w ball)))))
+    (declare (ignore joint))
+    (dotimes (i 10)
+      (step-physics-world w)
+      (push (multiple-value-list (physics-body-position w ball)) centres))
+    (setf centres (nreverse centres))
+    (let ((joints (luv-physics::physics-recording-joints recording))
+          (starts (luv-physics::physics-recording-joint-starts recording)))
+      (check (equal (loop for i to 10 collect i) (coerce starts 'list)) "joint starts ~S" starts)
+      (loop for k to 10 for centre in centres
+            do (check (every (lambda (want got) (< (abs (- want got)) 1e-3))
+                             (append centre '(0 10 0)) (coerce (subseq joints (* 6 k) (* 6 (1+ k))) 'list))
+                      "frame ~D holds ~S" k (subseq joints (* 6 k) (* 6 (1+ k))))))
+    (let ((path (merge-pathnames "report/joints-viewer-claim.html" (asdf:system-source-directory "luv-physics"))))
+      (luv-physics::write-physics-viewer recording path)
+      (let ((text (uiop:read-file-string path)))
+        (check (search "\"joints\": [" text))
+        (check (search (format nil "~,3F" (first (first centres))) text)))
+      (delete-file path))))
+;; J0STOR-recorded-joints ends here
+
 ;; [[file:../physics.org::#J0S0LV][J0S0LV-families-agree-with-joints]]
 (defun swinging-chain-world (kernels &key (links 8) (sleep t))
   "A floor world of family KERNELS with a chain of LINKS balls of radius 0.2 joined at their
