@@ -12,10 +12,10 @@ COUNT  ?= 150
 FUZZ_COUNT := $(if $(filter command line environment,$(origin COUNT)),$(COUNT),1200)
 
 ORG    := physics.org
-OUT    := tangled/physics.lisp tangled/physics-simd.lisp tests/physics-tests.lisp
+OUT    := tangled/physics.lisp tangled/physics-simd.lisp tangled/workshop.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo bench bench-peers bench-against count-against count-features report heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-peers bench-against count-against count-features report heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -32,6 +32,8 @@ help:
 	@echo "make tangle         write $(OUT) from $(ORG), each only if its text changed"
 	@echo "make check-tangle   do the generated files equal what $(ORG) tangles to?"
 	@echo "make check-anchors  links, anchors, claim blocks and docstrings of $(ORG)"
+	@echo "make load-time      the engine's load: compiled from an empty cache, then loaded compiled,"
+	@echo "                    in fresh SBCLs, with the workshop's compile beside it; table into $(ORG)"
 	@echo "make bench          measure the basin per kernel family and the queries; write the tables into $(ORG)"
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make bench-against  this engine against the commits REVS='ce415a5 d9c8f94' in ROUNDS=5 rounds of"
@@ -84,6 +86,12 @@ editor-test: setup
 
 demo: setup tangle
 	@SCENE="$(SCENE)" $(LISP) --load tools/demo.lisp
+
+# The engine system's load (#W0RKSH): fresh SBCLs, an empty ASDF cache for the compile.
+load-time: setup tangle
+	@mkdir -p report
+	@$(LISP) --load tools/load-time.lisp | tee report/load-time.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp engine-load-time report/load-time.org
 
 bench: setup tangle
 	@mkdir -p report

@@ -600,7 +600,3 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
 (precompile-featured-kernels (warm-start-blocks/sse solve-blocks/sse prepare-frames-blocks/sse
                               warm-start-blocks/avx2 solve-blocks/avx2 prepare-frames-blocks/avx2))
 ;; The SSE and AVX2 families:1 ends here
-
-;; [[file:../physics.org::#O07FDP][Closing the files:2]]
-(register-tangled-file #.(or *compile-file-truename* *load-truename*))
-;; Closing the files:2 ends here

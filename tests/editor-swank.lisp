@@ -8,7 +8,7 @@
 
 (in-package #:cl-user)
 
-(when (luv-load-systems "luv-physics")
+(when (luv-load-systems "luv-physics/workshop")
   (sb-ext:exit :code 2))
 
 (load (sb-ext:posix-getenv "SWANK_LOADER"))

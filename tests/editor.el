@@ -71,7 +71,7 @@
         (let ((current-prefix-arg '(4)))
           (call-interactively #'luv-physics-definitions)))
       (editor-test-check "link -> definition, C-u: the definition's line in the tangled file"
-                         (and (string-suffix-p "tangled/physics.lisp" buffer-file-name)
+                         (and (string-suffix-p "tangled/workshop.lisp" buffer-file-name)
                               (string-prefix-p "(defun definition-anchor (name" (editor-test-line)))
                          buffer-file-name (editor-test-line))
 

@@ -82,6 +82,60 @@
                 (macroexpand-1 '(check (= 1 1) "why ~A" 2)))))
 ;; BJSCR8-check-is-the-framework-assertion ends here
 
+;; [[file:../physics.org::#W0RKSH][W0RKSH-engine-loads-alone]]
+(define-claim "W0RKSH" engine-loads-alone
+    "An SBCL that loads only luv-physics steps a ball as this image does and defines nothing of the workshop."
+  (let* ((names (remove-duplicates
+                 (loop for record in luv-physics::*definitions*
+                       for name = (getf record :name)
+                       when (and (equal (getf record :file) "tangled/workshop.lisp")
+                                 (symbolp name)
+                                 (eq (symbol-package name) (find-package '#:luv-physics))
+                                 (not (eq (getf record :kind) :defmethod)))
+                         collect (symbol-name name))
+                 :test #'string=))
+         (program (format nil "(progn
+  (load \"tools/boot.lisp\")
+  (let ((*standard-output* (make-broadcast-stream)) (*error-output* (make-broadcast-stream)))
+    (asdf:load-system \"luv-physics\"))
+  (let* ((package (find-package \"LUV-PHYSICS\"))
+         (world (funcall (find-symbol \"MAKE-PHYSICS-WORLD\" package)))
+         (ball (funcall (find-symbol \"ADD-PHYSICS-BODY\" package) world 0 10 0))
+         (defined (loop for name in '~S
+                        for (symbol status) = (multiple-value-list (find-symbol name package))
+                        when (and symbol (or (fboundp symbol) (boundp symbol) (find-class symbol nil)
+                                             (eq status :external)))
+                          collect name)))
+    (funcall (find-symbol \"STEP-PHYSICS-WORLD\" package) world)
+    (format t \"~~&engine-alone ~~S~~%\"
+            (list defined
+                  (multiple-value-list (funcall (find-symbol \"PHYSICS-BODY-VELOCITY\" package) world ball))
+                  (remove-if-not (lambda (s) (search \"luv-physics\" s)) (asdf:already-loaded-systems))))))"
+                          names))
+         (output (with-output-to-string (errors)
+                   (write-string (uiop:run-program (list "sbcl" "--dynamic-space-size" "4Gb" "--noinform"
+                                                         "--non-interactive" "--no-sysinit" "--no-userinit"
+                                                         "--eval" "(require :asdf)" "--eval" program)
+                                                   :directory (asdf:system-source-directory "luv-physics")
+                                                   :output :string :error-output errors :ignore-error-status t)
+                                 errors)))
+         (at (search "engine-alone " output))
+         (answer (and at (let ((*read-eval* nil)) (read-from-string output t nil :start (+ at 13)))))
+         (world (make-physics-world))
+         (ball (add-physics-body world 0 10 0)))
+    (step-physics-world world)
+    (check (> (length names) 100) "only ~D workshop names" (length names))
+    (check (not (null answer)) "the child printed no answer: ~A" output)
+    (when answer
+      (destructuring-bind (defined velocity systems) answer
+        (check (null defined) "the engine alone defines ~S" defined)
+        (check (equal systems '("luv-physics")) "the child loaded ~S" systems)
+        (check (equal velocity (multiple-value-list (physics-body-velocity world ball)))
+               "the child's ball moves at ~S, this image's at ~S"
+               velocity (multiple-value-list (physics-body-velocity world ball)))
+        (check (< (abs (- (second velocity) (/ -9.81 60))) 1e-5) "vy ~S" (second velocity))))))
+;; W0RKSH-engine-loads-alone ends here
+
 ;; [[file:../physics.org::#HAPODD][HAPODD-records-have-the-documented-keys]]
 (define-claim "HAPODD" records-have-the-documented-keys
     "A record is a plist of :name :kind :anchor :file :line :org-line :docstring."
@@ -224,11 +278,11 @@
          (files (copy-list luv-physics::*registered-files*))
          (last-file (car (last files)))
          (n (luv-physics::register-tangled-file last-file)))
-    (check (= n (count "tangled/physics-simd.lisp" definitions
+    (check (= n (count "tangled/workshop.lisp" definitions
                        :key (lambda (r) (getf r :file)) :test #'equal)))
     (check (equal definitions luv-physics::*definitions*) "the records changed")
     (check (equal files luv-physics::*registered-files*) "the files changed")
-    (let* ((file "tangled/physics-simd.lisp")
+    (let* ((file "tangled/workshop.lisp")
            (text (gethash file luv-physics::*loaded-file-texts*)))
       (check (stringp text) "no text kept for ~A" file)
       (unwind-protect
@@ -494,7 +548,7 @@
 
 ;; [[file:../physics.org::#OWNJGP][OWNJGP-users-of-copied-definitions]]
 (define-claim "OWNJGP" users-of-copied-definitions
-    "The closure of W0RLD7 holds K3RNLS and S0LV3R; of W1D3KF holds F4M1LY; of BSOZ3U nothing more."
+    "The closure of W0RLD7 holds K3RNLS and S0LSTG; of W1D3KF holds F4M1LY; of BSOZ3U nothing more."
   (let* ((lines (luv-physics::page-lines-of nil))
          (forms (luv-physics::page-forms lines (luv-physics::engine-files))))
     (flet ((anchors-of (anchor)
@@ -504,7 +558,7 @@
                        (remove anchor forms :key (lambda (f) (getf f :anchor)) :test-not #'equal) forms))
               :test #'equal)))
       (check (member 'luv-physics::solver-row (loop for f in forms append (luv-physics::form-expanders (getf f :form)))))
-      (check (subsetp '("W0RLD7" "K3RNLS" "S0LV3R") (anchors-of "W0RLD7") :test #'equal) "~S" (anchors-of "W0RLD7"))
+      (check (subsetp '("W0RLD7" "K3RNLS" "S0LSTG") (anchors-of "W0RLD7") :test #'equal) "~S" (anchors-of "W0RLD7"))
       (check (subsetp '("W1D3KF" "F4M1LY") (anchors-of "W1D3KF") :test #'equal) "~S" (anchors-of "W1D3KF"))
       (check (equal '("BSOZ3U") (anchors-of "BSOZ3U")) "~S" (anchors-of "BSOZ3U")))))
 ;; OWNJGP-users-of-copied-definitions ends here
@@ -4127,8 +4181,8 @@ use before it. #QKS4GZ"
                       "at ~,2F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
 ;; W4K3PH-wake-speed-is-the-edge ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-pair-list-finds-every-pair]]
-(define-claim "P41RS7" pair-list-finds-every-pair
+;; [[file:../physics.org::#P41STG][P41STG-pair-list-finds-every-pair]]
+(define-claim "P41STG" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
   (let* ((w (make-basin-world 300))
          (table (luv-physics::physics-world-contact-table w))
@@ -4211,10 +4265,10 @@ use before it. #QKS4GZ"
       (check (< builds 120) "the list was built on ~D of 240 steps" builds)
       (check (> grids-kept 120) "the awake grid was kept on only ~D of 240 steps" grids-kept)
       (check (> builds 1) "the list was never rebuilt: the test saw no loose rows"))))
-;; P41RS7-pair-list-finds-every-pair ends here
+;; P41STG-pair-list-finds-every-pair ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-grid-between-builds-is-not-kept]]
-(define-claim "P41RS7" grid-between-builds-is-not-kept
+;; [[file:../physics.org::#P41STG][P41STG-grid-between-builds-is-not-kept]]
+(define-claim "P41STG" grid-between-builds-is-not-kept
     "After a grid built between list builds, a loose ball still meets a ball that came back to its anchor."
   (let* ((w (make-physics-world :terrain (make-basin-terrain)))
          (balls (loop for k below 12 collect (add-physics-body w 1.0 0.25 (+ 0.5 (* 0.6 k)) :radius 0.25)))
@@ -4244,10 +4298,10 @@ use before it. #QKS4GZ"
                                         (= (aref (luv-physics::contact-columns-seen c) row)
                                            (luv-physics::contact-table-step table))))
                      "K found no contact with J"))))))))
-;; P41RS7-grid-between-builds-is-not-kept ends here
+;; P41STG-grid-between-builds-is-not-kept ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-coincident-pair-separates]]
-(define-claim "P41RS7" coincident-pair-separates
+;; [[file:../physics.org::#P41STG][P41STG-coincident-pair-separates]]
+(define-claim "P41STG" coincident-pair-separates
     "Coincident balls separate along their pair's direction at <= the push-out speed."
   (let* ((world (make-physics-world :gravity '(0 0 0)))
          (a (add-physics-body world 0 0 0 :radius 0.25))
@@ -4270,10 +4324,10 @@ use before it. #QKS4GZ"
                  "they separated along ~S, not their pair's direction ~S" d dir))))
     (check (<= fastest (+ *physics-contact-push-max* 0.01))
            "they parted at ~,3F m/s" fastest)))
-;; P41RS7-coincident-pair-separates ends here
+;; P41STG-coincident-pair-separates ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-crowded-walk-is-bounded]]
-(define-claim "P41RS7" crowded-walk-is-bounded
+;; [[file:../physics.org::#P41STG][P41STG-crowded-walk-is-bounded]]
+(define-claim "P41STG" crowded-walk-is-bounded
     "The pair list's build in a heap of 3000 at one point lists at most 100 candidates a body."
   (let* ((n 3000)
          (world (make-physics-world :terrain (make-basin-terrain) :gravity '(0 0 0)))
@@ -4282,10 +4336,10 @@ use before it. #QKS4GZ"
     (step-physics-world world)
     (check (<= (luv-physics::pair-list-examined plist) (* 100 n))
            "the build listed ~D candidates for ~D balls" (luv-physics::pair-list-examined plist) n)))
-;; P41RS7-crowded-walk-is-bounded ends here
+;; P41STG-crowded-walk-is-bounded ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-build-counts-its-candidates]]
-(define-claim "P41RS7" build-counts-its-candidates
+;; [[file:../physics.org::#P41STG][P41STG-build-counts-its-candidates]]
+(define-claim "P41STG" build-counts-its-candidates
     "Two balls in reach and one far: a build lists one candidate and one pair, build after build."
   (let* ((world (make-physics-world :gravity '(0 0 0)))
          (plist (luv-physics::physics-world-pair-list world)))
@@ -4303,10 +4357,10 @@ use before it. #QKS4GZ"
         (step-physics-world world)
         (check (= (1+ builds) (luv-physics::pair-list-builds plist)) "the wider cells did not build the list again")
         (counted "after the cells widened")))))
-;; P41RS7-build-counts-its-candidates ends here
+;; P41STG-build-counts-its-candidates ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-two-loose-rows-meet]]
-(define-claim "P41RS7" two-loose-rows-meet
+;; [[file:../physics.org::#P41STG][P41STG-two-loose-rows-meet]]
+(define-claim "P41STG" two-loose-rows-meet
     "Two balls added together, the step's only loose rows, take their pair contact in that step."
   (let* ((world (make-physics-world :gravity '(0 0 0)))
          (plist (luv-physics::physics-world-pair-list world))
@@ -4327,10 +4381,10 @@ use before it. #QKS4GZ"
                                                   (aref (luv-physics::contact-columns-handle-b c) row))
                                             (list a b)))))
              "the two added balls have no pair contact"))))
-;; P41RS7-two-loose-rows-meet ends here
+;; P41STG-two-loose-rows-meet ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-holds-at-its-limits]]
-(define-claim "P41RS7" holds-at-its-limits
+;; [[file:../physics.org::#P41STG][P41STG-holds-at-its-limits]]
+(define-claim "P41STG" holds-at-its-limits
     "The pair list holds with up to max(16, n/32) loose rows, and never with a negative count."
   (flet ((holds (loose n) (funcall 'luv-physics::pair-list-holds-p loose n)))
     (check (holds 16 100) "16 loose of 100 rows do not hold")
@@ -4339,10 +4393,10 @@ use before it. #QKS4GZ"
     (check (not (holds 33 1024)) "33 loose of 1024 rows hold")
     (check (holds 0 0) "an empty list does not hold")
     (check (not (holds -1 100)) "a list built for another edge holds")))
-;; P41RS7-holds-at-its-limits ends here
+;; P41STG-holds-at-its-limits ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-pair-contact-geometry]]
-(define-claim "P41RS7" pair-contact-geometry
+;; [[file:../physics.org::#P41STG][P41STG-pair-contact-geometry]]
+(define-claim "P41STG" pair-contact-geometry
     "A pair contact's normal, separation and point are the spheres', whichever ball has the lower slot."
   (let* ((u '(2/7 3/7 6/7)) (gap 0.01) (ra 0.25) (rb 0.2)
          (a '(3.0 3.0 3.0)) (b (mapcar (lambda (p n) (+ p (* n (+ ra rb gap)))) a u)))
@@ -4376,10 +4430,10 @@ use before it. #QKS4GZ"
                      "~:[b~;a~] first: the contact is not from the lower slot" a-first)
               (check (every (lambda (x e) (< (abs (- x e)) 1e-5)) got want)
                      "~:[b~;a~] first: (nx ny nz separation px py pz) is ~S, not ~S" a-first got want))))))))
-;; P41RS7-pair-contact-geometry ends here
+;; P41STG-pair-contact-geometry ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-listed-pair-strikes]]
-(define-claim "P41RS7" listed-pair-strikes
+;; [[file:../physics.org::#P41STG][P41STG-listed-pair-strikes]]
+(define-claim "P41STG" listed-pair-strikes
     "A listed pair that strikes takes the line of centres at its touch, as the build takes it."
   (let* ((w (make-physics-world :gravity '(0 0 0)))
          (r 0.25) (gap 0.02) (speed 1.5)
@@ -4413,10 +4467,10 @@ use before it. #QKS4GZ"
         (check (every (lambda (x e) (< (abs (- (* sign x) e)) 1d-5)) normal want)
                "the normal is ~S, not the line of centres at the touch ~S" normal want)
         (check (> (abs (second normal)) 0.02) "the normal ~S is the line of centres now" normal)))))
-;; P41RS7-listed-pair-strikes ends here
+;; P41STG-listed-pair-strikes ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-gone-rows-loose]]
-(define-claim "P41RS7" gone-rows-loose
+;; [[file:../physics.org::#P41STG][P41STG-gone-rows-loose]]
+(define-claim "P41STG" gone-rows-loose
     "pair-list-strays over fewer rows than the list knew marks the rows gone loose."
   (let* ((w (make-floor-world)))
     (dotimes (i 5) (add-physics-body w (+ 1.5 (* 1.0 i)) 0.5 3.5))
@@ -4428,10 +4482,10 @@ use before it. #QKS4GZ"
       (check (= 0 count) "~D of the three rows left are loose" count)
       (check (equal '(0 0 0 1 1) (coerce (subseq (luv-physics::pair-list-loose plist) 0 5) 'list))
              "loose flags ~S" (subseq (luv-physics::pair-list-loose plist) 0 5)))))
-;; P41RS7-gone-rows-loose ends here
+;; P41STG-gone-rows-loose ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-overlap-room-charges-the-smaller]]
-(define-claim "P41RS7" overlap-room-charges-the-smaller
+;; [[file:../physics.org::#P41STG][P41STG-overlap-room-charges-the-smaller]]
+(define-claim "P41STG" overlap-room-charges-the-smaller
     "overlap-room: a pair is refused only when its smaller body (either, for equal radii) has 16 overlaps."
   (locally (declare (notinline luv-physics::overlap-room))
   (let ((radius (make-array 4 :element-type 'single-float :initial-contents '(0.5 0.25 0.25 0.5))))
@@ -4442,10 +4496,10 @@ use before it. #QKS4GZ"
           do (let ((overlaps (make-array 4 :element-type 'fixnum :initial-contents counts)))
                (check (eq want (luv-physics::overlap-room overlaps i j radius))
                       "rows ~D and ~D of radii ~S with overlaps ~S: room ~S" i j radius counts (not want)))))))
-;; P41RS7-overlap-room-charges-the-smaller ends here
+;; P41STG-overlap-room-charges-the-smaller ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-overlaps-charged-to-the-smaller]]
-(define-claim "P41RS7" overlaps-charged-to-the-smaller
+;; [[file:../physics.org::#P41STG][P41STG-overlaps-charged-to-the-smaller]]
+(define-claim "P41STG" overlaps-charged-to-the-smaller
     "After each of two steps, a row's overlap count is the overlapping pairs in which it is the smaller ball."
   (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
          (balls (append '((2.0 2.0 2.0 0.5))
@@ -4472,10 +4526,10 @@ use before it. #QKS4GZ"
           (check (zerop close) "step ~D: ~D pairs within 1e-4 m of touching" s close)
           (check (plusp (reduce #'+ want)) "step ~D: no pair overlaps" s)
           (check (equal want got) "step ~D: overlap counts ~S, by the centres ~S" s got want))))))
-;; P41RS7-overlaps-charged-to-the-smaller ends here
+;; P41STG-overlaps-charged-to-the-smaller ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-terrain-only-bodies-take-no-pairs]]
-(define-claim "P41RS7" terrain-only-bodies-take-no-pairs
+;; [[file:../physics.org::#P41STG][P41STG-terrain-only-bodies-take-no-pairs]]
+(define-claim "P41STG" terrain-only-bodies-take-no-pairs
     "Drops that meet only terrain take no pair contact, whether found by the list's build, a loose row or two loose rows."
   (let* ((w (make-floor-world :sleep nil))
          (c (luv-physics::physics-world-contacts w))
@@ -4509,10 +4563,10 @@ use before it. #QKS4GZ"
       (step-physics-world w) (count-pairs)
       (check (plusp pairs) "no pair contact at all")
       (check (zerop pairs-with-drops) "~D pair contacts with a drop" pairs-with-drops))))
-;; P41RS7-terrain-only-bodies-take-no-pairs ends here
+;; P41STG-terrain-only-bodies-take-no-pairs ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-heap-charges-every-pair]]
-(define-claim "P41RS7" heap-charges-every-pair
+;; [[file:../physics.org::#P41STG][P41STG-heap-charges-every-pair]]
+(define-claim "P41STG" heap-charges-every-pair
     "In a heap of 40 equal balls at one point, no ball takes more than 16 pairs in a step."
   (let* ((w (make-physics-world :gravity '(0 0 0)))
          (c (luv-physics::physics-world-contacts w))
@@ -4524,10 +4578,10 @@ use before it. #QKS4GZ"
                                                 (or (= h (aref (luv-physics::contact-columns-handle-a c) row))
                                                     (= h (aref (luv-physics::contact-columns-handle-b c) row))))))))
       (check (= 16 most) "the most pairs a ball took is ~D" most))))
-;; P41RS7-heap-charges-every-pair ends here
+;; P41STG-heap-charges-every-pair ends here
 
-;; [[file:../physics.org::#P41RS7][P41RS7-pairs-on-every-side]]
-(define-claim "P41RS7" pairs-on-every-side
+;; [[file:../physics.org::#P41STG][P41STG-pairs-on-every-side]]
+(define-claim "P41STG" pairs-on-every-side
     "An off-centre blow along x is the same blow along z, mirrored, a chunk away and with the two balls added the other way round."
   (let* ((record (check-twins "blow" (lambda (twin)
                                        (twin-scene-world twin '() '((3.5 3.0 4.5 :vx 4.0 :restitution 0.5)
@@ -4537,10 +4591,10 @@ use before it. #QKS4GZ"
          (struck (twin-final-position record 1)))
     (check (and (> (first struck) 5.5) (> (second struck) 3.1) (> (third struck) 4.7))
            "the struck ball ends at ~S" struck)))
-;; P41RS7-pairs-on-every-side ends here
+;; P41STG-pairs-on-every-side ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-clear-rows-skip-safely]]
-(define-claim "MYWH16" clear-rows-skip-safely
+;; [[file:../physics.org::#MYWSTG][MYWSTG-clear-rows-skip-safely]]
+(define-claim "MYWSTG" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
   (let* ((w (make-basin-world 300))
          (terrain (luv-physics::physics-world-terrain w))
@@ -4589,10 +4643,10 @@ use before it. #QKS4GZ"
       (step-physics-world w)
       (check (>= (luv-physics::contact-table-find table key) 0)
              "the ball over the new cell ~D ~D ~D has no contact with it" cx cy cz))))
-;; MYWH16-clear-rows-skip-safely ends here
+;; MYWSTG-clear-rows-skip-safely ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-clear-means-clear-and-a-skin]]
-(define-claim "MYWH16" clear-means-clear-and-a-skin
+;; [[file:../physics.org::#MYWSTG][MYWSTG-clear-means-clear-and-a-skin]]
+(define-claim "MYWSTG" clear-means-clear-and-a-skin
     "A row is noted clear only when its reach and 0.45 skins hold no solid cell."
   (let* ((w (make-floor-world :sleep nil))
          (plist (luv-physics::physics-world-pair-list w))
@@ -4610,10 +4664,10 @@ use before it. #QKS4GZ"
         (step-physics-world w)))
     (check (eql 1 (cdr (assoc high noted))) "the ball 2 m up is not noted clear: ~S" noted)
     (check (eql 0 (cdr (assoc low noted))) "the ball a skin's width from reach of the floor is noted clear: ~S" noted)))
-;; MYWH16-clear-means-clear-and-a-skin ends here
+;; MYWSTG-clear-means-clear-and-a-skin ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-seams-are-flat]]
-(define-claim "MYWH16" seams-are-flat
+;; [[file:../physics.org::#MYWSTG][MYWSTG-seams-are-flat]]
+(define-claim "MYWSTG" seams-are-flat
     "A ball rolling at 3 m/s over six seams stays within 0.005 m of rest height and keeps 99% of its speed."
   (let* ((w (make-floor-world :sleep nil))
          (r 0.25) (vx 3.0)
@@ -4632,10 +4686,10 @@ use before it. #QKS4GZ"
     (multiple-value-bind (ux uy uz) (physics-body-velocity w h)
       (declare (ignore uy))
       (check (>= (sqrt (+ (* ux ux) (* uz uz))) (* 0.99 vx)) "speed after the seams ~,4F m/s" (sqrt (+ (* ux ux) (* uz uz)))))))
-;; MYWH16-seams-are-flat ends here
+;; MYWSTG-seams-are-flat ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-one-contact-per-support]]
-(define-claim "MYWH16" one-contact-per-support
+;; [[file:../physics.org::#MYWSTG][MYWSTG-one-contact-per-support]]
+(define-claim "MYWSTG" one-contact-per-support
     "Contacts on a flat floor: 1 mid-cell, 1 just past a seam, 2 on a seam, 4 on a corner; all vertical."
   (loop for (x z expected) in '((3.5 3.5 1) (3.1 3.5 1) (3.5 2.9 1) (3.0 3.5 2) (3.5 3.0 2) (3.0 3.0 4))
         do (let* ((w (make-floor-world :sleep nil))
@@ -4647,10 +4701,10 @@ use before it. #QKS4GZ"
                (check (every (lambda (c) (and (< (abs (getf c :nx)) 1e-6) (< (abs (getf c :nz)) 1e-6) (< (abs (+ 1 (getf c :ny))) 1e-6))) contacts)
                       "at (~A, ~A) a normal is not vertical: ~S" x z contacts)
                (check (< (abs (- (body-y w h) 0.245)) 0.002) "at (~A, ~A) the ball rests at ~,5F" x z (body-y w h))))))
-;; MYWH16-one-contact-per-support ends here
+;; MYWSTG-one-contact-per-support ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-overshoot-every-side]]
-(define-claim "MYWH16" overshoot-every-side
+;; [[file:../physics.org::#MYWSTG][MYWSTG-overshoot-every-side]]
+(define-claim "MYWSTG" overshoot-every-side
     "A cell touching the centre's solid cell only at an edge or corner is silent, on every side of every axis."
   (loop for ox from -1 to 1
         do (loop for oy from -1 to 1
@@ -4666,10 +4720,10 @@ use before it. #QKS4GZ"
                                      (check (= 1 (length (terrain-contacts w h)))
                                             "overshoot (~D ~D ~D): ~D terrain contacts" ox oy oz
                                             (length (terrain-contacts w h))))))))))
-;; MYWH16-overshoot-every-side ends here
+;; MYWSTG-overshoot-every-side ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-three-layers-gathered]]
-(define-claim "MYWH16" three-layers-gathered
+;; [[file:../physics.org::#MYWSTG][MYWSTG-three-layers-gathered]]
+(define-claim "MYWSTG" three-layers-gathered
     "A ball whose neighbourhood is three cells deep along x, y or z meets the one solid cell of the far layer."
   (dotimes (axis 3)
     (multiple-value-bind (w terrain) (make-floor-world :gravity '(0 0 0) :sleep nil)
@@ -4680,10 +4734,10 @@ use before it. #QKS4GZ"
           (step-physics-world w)
           (check (= 1 (length (terrain-contacts w h)))
                  "three cells deep along ~C: ~D terrain contacts" (char "xyz" axis) (length (terrain-contacts w h))))))))
-;; MYWH16-three-layers-gathered ends here
+;; MYWSTG-three-layers-gathered ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-rolls-over-ledge]]
-(define-claim "MYWH16" rolls-over-ledge
+;; [[file:../physics.org::#MYWSTG][MYWSTG-rolls-over-ledge]]
+(define-claim "MYWSTG" rolls-over-ledge
     "Rolling off a one-cell ledge, the edge contact tilts diagonal while pushing; the ball lands below."
   (multiple-value-bind (w terrain) (make-floor-world :sleep nil)
     ;; the floor top is at y = 0 for x < 5 and at y = -1 for x >= 5
@@ -4708,12 +4762,12 @@ use before it. #QKS4GZ"
       (check (eq t diagonal) "no pushing diagonal edge contact once past the edge")
       (check (> (physics-body-position w h) 5.25))
       (check (< (abs (- (body-y w h) -0.755)) 0.002) "the ball ends at y = ~,5F" (body-y w h)))))
-;; MYWH16-rolls-over-ledge ends here
+;; MYWSTG-rolls-over-ledge ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-centre-on-the-face-is-inside]]
+;; [[file:../physics.org::#MYWSTG][MYWSTG-centre-on-the-face-is-inside]]
 (defun check-pushed-up-to-rest (w h steps)
   "Check that the ball H of radius 0.25 m in W, stepped once, has one floor contact along
-(0, -1, 0), and after STEPS more steps rests on the floor at r less a slop. #MYWH16"
+(0, -1, 0), and after STEPS more steps rests on the floor at r less a slop. #MYWSTG"
   (let ((contacts (terrain-contacts w h)))
     (check (and (= 1 (length contacts))
                 (every #'= '(0.0 -1.0 0.0) (list (getf (first contacts) :nx) (getf (first contacts) :ny)
@@ -4723,36 +4777,36 @@ use before it. #QKS4GZ"
   (check (< (abs (- (body-y w h) (- 0.25 *physics-linear-slop*))) 0.002)
          "the ball rests at y = ~,5F" (body-y w h)))
 
-(define-claim "MYWH16" centre-on-the-face-is-inside
+(define-claim "MYWSTG" centre-on-the-face-is-inside
     "A ball centred exactly on the floor's top face is pushed up and comes to rest at r - slop."
   (let* ((w (make-floor-world :sleep nil))
          (h (add-physics-body w 3.5 0.0 3.5)))
     (step-physics-world w)
     (check (> (body-y w h) 0.0) "after one step the centre is at y = ~,5F" (body-y w h))
     (check-pushed-up-to-rest w h 59)))
-;; MYWH16-centre-on-the-face-is-inside ends here
+;; MYWSTG-centre-on-the-face-is-inside ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-inside-leaves-through-open-face]]
-(define-claim "MYWH16" inside-leaves-through-open-face
+;; [[file:../physics.org::#MYWSTG][MYWSTG-inside-leaves-through-open-face]]
+(define-claim "MYWSTG" inside-leaves-through-open-face
     "A ball centred in a floor cell, nearest a face into floor, leaves through the air above, a block beside that air."
   (multiple-value-bind (w terrain) (make-floor-world :sleep nil)
     (setf (terrain-solid-p terrain 6 0 5) t (terrain-solid-p terrain 5 0 6) t)
     (let ((h (add-physics-body w 5.1 -0.4 5.5 :radius 0.25 :inside-cells :push-out)))
       (step-physics-world w)
       (check-pushed-up-to-rest w h 60))))
-;; MYWH16-inside-leaves-through-open-face ends here
+;; MYWSTG-inside-leaves-through-open-face ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-edges-bounce-true]]
-(define-claim "MYWH16" edges-bounce-true
+;; [[file:../physics.org::#MYWSTG][MYWSTG-edges-bounce-true]]
+(define-claim "MYWSTG" edges-bounce-true
     "Drops onto a block's edge and corner take their impulse along the normal at impact."
   (dolist (corner '(nil t))
     (multiple-value-bind (impulse outgoing) (luv-physics::block-drops '() corner)
       (check (< impulse 1d0) "~:[edge~;corner~]: the impulse is up to ~,2F deg off the normal" corner impulse)
       (check (< outgoing 2d0) "~:[edge~;corner~]: the ball leaves up to ~,2F deg off" corner outgoing))))
-;; MYWH16-edges-bounce-true ends here
+;; MYWSTG-edges-bounce-true ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-fast-landings-flat]]
-(define-claim "MYWH16" fast-landings-flat
+;; [[file:../physics.org::#MYWSTG][MYWSTG-fast-landings-flat]]
+(define-claim "MYWSTG" fast-landings-flat
     "Balls landing on a slab at 30 and 45 degrees at 5 to 20 m/s, at every place across a seam, along each axis and side, sink no more than 1 mm."
   (let ((rest (- 0.25 *physics-linear-slop*)))
     (flet ((sink (normal along sign angle speed offsets)
@@ -4786,10 +4840,10 @@ use before it. #QKS4GZ"
                    (let ((worst (sink normal along sign angle speed offsets)))
                      (check (<= worst 0.001) "onto the face normal to ~C, along ~:[-~;+~]~C at ~A m/s and ~A deg: ~,4F m too near"
                             (char "xyz" normal) (plusp sign) (char "xyz" along) speed angle worst))))))))
-;; MYWH16-fast-landings-flat ends here
+;; MYWSTG-fast-landings-flat ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-contacts-on-every-side]]
-(define-claim "MYWH16" contacts-on-every-side
+;; [[file:../physics.org::#MYWSTG][MYWSTG-contacts-on-every-side]]
+(define-claim "MYWSTG" contacts-on-every-side
     "A face, an edge, a corner and a ledge met along x are met the same along z, mirrored and a chunk away."
   (flet ((final (record) (twin-final-position record))
          (rest-y (y) (< (abs (- y (- 0.25 *physics-linear-slop*))) 0.002)))
@@ -4812,10 +4866,10 @@ use before it. #QKS4GZ"
                                                           '((4.6 0.245 3.5 :vx 0.5))))
                               120 :twins +geometric-twins+)))
       (check (rest-y (+ 1 (second (final ledge)))) "the ledge's ball ends at y = ~,4F" (second (final ledge))))))
-;; MYWH16-contacts-on-every-side ends here
+;; MYWSTG-contacts-on-every-side ends here
 
-;; [[file:../physics.org::#MYWH16][MYWH16-inside-leaves-along-z]]
-(define-claim "MYWH16" inside-leaves-along-z
+;; [[file:../physics.org::#MYWSTG][MYWSTG-inside-leaves-along-z]]
+(define-claim "MYWSTG" inside-leaves-along-z
     "A ball buried in a cell open only on +z leaves along +z; its twins, open on -z and +x, alike."
   (flet ((scene (twin)
            (twin-scene-world twin '((3 3 3 8 12 12 t) (5 7 6 6 8 11 nil)) '((5.5 7.3 5.2 :inside-cells :push-out)) :sleep nil)))
@@ -4828,7 +4882,7 @@ use before it. #QKS4GZ"
                "after one step the terrain contacts are ~S" contacts)))
     (let ((record (check-twins "inside" #'scene 120 :twins +geometric-twins+)))
       (check (> (third (twin-final-position record)) 6.0) "the ball ends at ~S" (twin-final-position record)))))
-;; MYWH16-inside-leaves-along-z ends here
+;; MYWSTG-inside-leaves-along-z ends here
 
 ;; [[file:../physics.org::#SW33P7][SW33P7-no-tunnelling-to-100]]
 (define-claim "SW33P7" no-tunnelling-to-100
@@ -5378,10 +5432,10 @@ use before it. #QKS4GZ"
     "Featured kernels keep their docstrings and texts; the text compiled for every feature is the kernel."
   (loop for (name anchor features)
           in '((luv-physics::warm-start-range "#W4RMST" (:body-contacts :friction :rolling-resistance))
-               (luv-physics::solve-range "#S0LV3R" (:body-contacts :boxes :friction :rolling-resistance :restitution
+               (luv-physics::solve-range "#S0LSTG" (:body-contacts :boxes :friction :rolling-resistance :restitution
                                                     :hit-events :contact-events))
-               (luv-physics::prepare-frames-range "#PR3PAR" (:boxes))
-               (luv-physics::prepare-phase "#PR3PAR" (:body-contacts :boxes :friction :restitution :rolling-resistance :contact-events :hit-events))
+               (luv-physics::prepare-frames-range "#PRFRM2" (:boxes))
+               (luv-physics::prepare-phase "#PRSTG6" (:body-contacts :boxes :friction :restitution :rolling-resistance :contact-events :hit-events))
                (luv-physics::store-phase "#ST0R3S" (:body-contacts :boxes :friction :contact-events :hit-events :rolling-resistance))
                (luv-physics::finalize-phase "#F1NAL5" (:body-contacts :boxes :sleep :mortal))
                (luv-physics::warm-start-blocks/sse "#W1D3KF" (:body-contacts :friction :rolling-resistance))
@@ -5397,8 +5451,8 @@ use before it. #QKS4GZ"
              (check (and (= 5 (length text)) (equal features (fifth text))) "~(~A~) keeps ~S" name text))))
 ;; KTXT7V-kernel-is-its-text ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-held-mass-is-the-awake-mass]]
-(define-claim "PR3PAR" held-mass-is-the-awake-mass
+;; [[file:../physics.org::#PRSTG6][PRSTG6-held-mass-is-the-awake-mass]]
+(define-claim "PRSTG6" held-mass-is-the-awake-mass
     "held-mass-bound: the awake bodies' mass, sleepers left out, no bound while a box is posted."
   (let* ((world (make-physics-world :terrain (make-floor-terrain) :sleep t))
          (balls (loop for mass in '(1.0 2.0 4.0) for x from 1.0
@@ -5408,10 +5462,10 @@ use before it. #QKS4GZ"
     (check (= 3.0 (luv-physics::held-mass-bound world)) "the 4 kg ball asleep: ~A kg" (luv-physics::held-mass-bound world))
     (post-physics-box world 5.0 2.0 5.0 0.25 0.25 0.25)
     (check (= 1e30 (luv-physics::held-mass-bound world)) "a box posted: ~A kg" (luv-physics::held-mass-bound world))))
-;; PR3PAR-held-mass-is-the-awake-mass ends here
+;; PRSTG6-held-mass-is-the-awake-mass ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-bracing-holds-while-still]]
-(define-claim "PR3PAR" bracing-holds-while-still
+;; [[file:../physics.org::#PRSTG6][PRSTG6-bracing-holds-while-still]]
+(define-claim "PRSTG6" bracing-holds-while-still
     "A braced body stays braced while still, whatever its load; moving, it is unbraced."
   (let* ((world (luv-physics::make-shaft-world :sleep nil))
          (light (add-physics-body world 0.5 0.45 0.5 :radius 0.45 :mass 1.0)))
@@ -5438,10 +5492,10 @@ use before it. #QKS4GZ"
                (set-physics-body-velocity world light 0.0 0.0 0.0)
                (dotimes (i 30) (step-physics-world world))
                (check (braced-p) "stopped after moving at ~S m/s, the light ball is not braced" (list vx vy vz))))))
-;; PR3PAR-bracing-holds-while-still ends here
+;; PRSTG6-bracing-holds-while-still ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-brace-side-at-its-limits]]
-(define-claim "PR3PAR" brace-side-at-its-limits
+;; [[file:../physics.org::#PRSTG6][PRSTG6-brace-side-at-its-limits]]
+(define-claim "PRSTG6" brace-side-at-its-limits
     "brace-side: a braced row is static past 4x and 0.9, or to a link at least as heavy past 0.99."
   (flet ((side (braced-a braced-b inverse-a inverse-b rise)
            (luv-physics::brace-side
@@ -5458,10 +5512,10 @@ use before it. #QKS4GZ"
                                ((1 1 1.0 1.0 -0.995) nil) ((3 1 1.1 1.0 -1.0) nil) ((3 0 1.0 1.0 -0.995) nil))
           do (check (eq want (apply #'side case)) "braced, inverse masses and rise ~S: ~S, not ~S"
                     case (apply #'side case) want))))
-;; PR3PAR-brace-side-at-its-limits ends here
+;; PRSTG6-brace-side-at-its-limits ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-only-columns-link]]
-(define-claim "PR3PAR" only-columns-link
+;; [[file:../physics.org::#PRSTG6][PRSTG6-only-columns-link]]
+(define-claim "PRSTG6" only-columns-link
     "A ball straight on one braced ball is a link; one on two balls is none."
   (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil))
          (lower (add-physics-body world 1.5 0.25 1.5 :radius 0.25 :mass 1.0))
@@ -5478,10 +5532,10 @@ use before it. #QKS4GZ"
       (check (= (mark upper) 3) "the ball straight on another has the mark ~D, not 3" (mark upper))
       (check (= (mark lower) 1) "the column's lower ball has the mark ~D, not 1" (mark lower))
       (check (not (logtest (mark top) 2)) "the ball on two balls is a link (mark ~D)" (mark top)))))
-;; PR3PAR-only-columns-link ends here
+;; PRSTG6-only-columns-link ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-unloaded-contact-no-support]]
-(define-claim "PR3PAR" unloaded-contact-no-support
+;; [[file:../physics.org::#PRSTG6][PRSTG6-unloaded-contact-no-support]]
+(define-claim "PRSTG6" unloaded-contact-no-support
     "A column of two balls a centimetre from a wall: the wall's contact pushes nothing, and the upper ball is a link."
   (let ((terrain (make-voxel-terrain)))
     (fill-terrain terrain -16 -1 -16 16 32 16 nil)
@@ -5510,10 +5564,10 @@ use before it. #QKS4GZ"
           (check (zerop pushed) "the wall pushed with ~F N s" pushed))
         (check (= (mark upper) 3) "the upper ball has the mark ~D, not 3" (mark upper))
         (check (= (mark lower) 1) "the lower ball has the mark ~D, not 1" (mark lower))))))
-;; PR3PAR-unloaded-contact-no-support ends here
+;; PRSTG6-unloaded-contact-no-support ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-leaning-pair-makes-no-link]]
-(define-claim "PR3PAR" leaning-pair-makes-no-link
+;; [[file:../physics.org::#PRSTG6][PRSTG6-leaning-pair-makes-no-link]]
+(define-claim "PRSTG6" leaning-pair-makes-no-link
     "Two balls leaning on each other, each straight on a floor ball, are no links."
   (let ((terrain (make-voxel-terrain)) (r 0.24))
     (fill-terrain terrain -16 -1 -16 16 32 16 nil)
@@ -5536,10 +5590,10 @@ use before it. #QKS4GZ"
           (check (< (abs (- y h)) 0.03) "the arch fell: the left ball's centre is at ~,4F m, not near ~,4F" y h))
         (dolist (ball (list left right))
           (check (not (logtest (mark ball) 2)) "a leaning ball is a link (mark ~D)" (mark ball)))))))
-;; PR3PAR-leaning-pair-makes-no-link ends here
+;; PRSTG6-leaning-pair-makes-no-link ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-braced-body-stays-put]]
-(define-claim "PR3PAR" braced-body-stays-put
+;; [[file:../physics.org::#PRSTG6][PRSTG6-braced-body-stays-put]]
+(define-claim "PRSTG6" braced-body-stays-put
     "A braced body set rolling below the sleep speed stays under the heavy body that rests on it."
   (let* ((world (luv-physics::make-shaft-world :sleep nil))
          (light (add-physics-body world 0.5 0.45 0.5 :radius 0.45 :mass 1.0))
@@ -5552,10 +5606,10 @@ use before it. #QKS4GZ"
         (flet ((moved (h from) (sqrt (reduce #'+ (mapcar (lambda (a b) (expt (- a b) 2)) (at h) from)))))
           (check (< (moved light light-0) 0.0005) "the light ball moved ~,5F m" (moved light light-0))
           (check (< (moved heavy heavy-0) 0.001) "the heavy ball moved ~,5F m" (moved heavy heavy-0)))))))
-;; PR3PAR-braced-body-stays-put ends here
+;; PRSTG6-braced-body-stays-put ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-spin-friction-rate]]
-(define-claim "PR3PAR" spin-friction-rate
+;; [[file:../physics.org::#PRSTG6][PRSTG6-spin-friction-rate]]
+(define-claim "PRSTG6" spin-friction-rate
     "A ball spinning about the vertical on a floor slows at the patch's torque over its inertia."
   (let* ((world (make-physics-world :terrain (make-basin-terrain) :sleep nil))
          (r 0.25) (mu 0.6) (slop *physics-linear-slop*)
@@ -5571,9 +5625,9 @@ use before it. #QKS4GZ"
       (let ((expected (- 10.0 (* alpha 0.5))))
         (check (< (abs (- (spin) expected)) (* 0.01 expected))
                "after 0.5 s the ball spins at ~,4F rad/s, not ~,4F" (spin) expected)))))
-;; PR3PAR-spin-friction-rate ends here
+;; PRSTG6-spin-friction-rate ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-short-path-same-bits]]
+;; [[file:../physics.org::#PRSTG6][PRSTG6-short-path-same-bits]]
 (defun mixed-pile-before-prepare ()
   "A world of 300 balls of mixed radius (0.2 to 0.3 m), mass (0.5 to 1.5 kg), friction,
 restitution and rolling resistance dropped into the basin, stepped 60 times and then through
@@ -5593,7 +5647,7 @@ the phases of a step before the prepare phase. #PR3PAR"
                    w)
       (funcall phase w))))
 
-(define-claim "PR3PAR" short-path-same-bits
+(define-claim "PRSTG6" short-path-same-bits
     "The fill's short path for two awake bodies writes the rows the general path writes, to the bit."
   (let ((w (mixed-pile-before-prepare)))
     (flet ((filled (short)
@@ -5620,10 +5674,10 @@ the phases of a step before the prepare phase. #PR3PAR"
                (count nil (mapcar #'= (first general) (first short))))
         (check (equal (fifth general) (fifth short)) "~D side floats differ"
                (count nil (mapcar #'= (fifth general) (fifth short))))))))
-;; PR3PAR-short-path-same-bits ends here
+;; PRSTG6-short-path-same-bits ends here
 
-;; [[file:../physics.org::#PR3PAR][PR3PAR-side-blocks-start-as-zeros]]
-(define-claim "PR3PAR" side-blocks-start-as-zeros
+;; [[file:../physics.org::#PRSTG6][PRSTG6-side-blocks-start-as-zeros]]
+(define-claim "PRSTG6" side-blocks-start-as-zeros
     "Rows with a radius on side b, and padding rows, keep zero side columns whatever the buffer held."
   (let ((w (mixed-pile-before-prepare)))
     (let ((cbuf (luv-physics::physics-world-constraints w)))
@@ -5650,7 +5704,7 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (> paired 300) "~D rows with a radius on side b" paired)
         (check (plusp padding) "no padding row")
         (check (plusp one-sided) "no row with nothing on side b")))))
-;; PR3PAR-side-blocks-start-as-zeros ends here
+;; PRSTG6-side-blocks-start-as-zeros ends here
 
 ;; [[file:../physics.org::#G7Q3XR][G7Q3XR-softness-is-the-closed-form]]
 (define-claim "G7Q3XR" softness-is-the-closed-form
@@ -5821,8 +5875,8 @@ the phases of a step before the prepare phase. #PR3PAR"
                    "~S, rb ~A: the velocities changed by ~S, not ~S" features rb got want))))))))
 ;; W4RMST-warm-start-formula ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-frames-are-perpendicular]]
-(define-claim "S0LV3R" frames-are-perpendicular
+;; [[file:../physics.org::#S0LSTG][S0LSTG-frames-are-perpendicular]]
+(define-claim "S0LSTG" frames-are-perpendicular
     "Prepared tangent frames are orthonormal with their normals, in every family."
   (dolist (family (available-kernel-families))
     (let ((world (prepared-basin-world family)) (worst 0.0) (rows 0))
@@ -5838,10 +5892,10 @@ the phases of a step before the prepare phase. #PR3PAR"
        world)
       (check (> rows 2000) "~A: only ~D constraints prepared" family rows)
       (check (< worst 1e-6) "~A: a frame is off by ~,3E" family worst))))
-;; S0LV3R-frames-are-perpendicular ends here
+;; S0LSTG-frames-are-perpendicular ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-kept-gap-is-current]]
-(define-claim "S0LV3R" kept-gap-is-current
+;; [[file:../physics.org::#S0LSTG][S0LSTG-kept-gap-is-current]]
+(define-claim "S0LSTG" kept-gap-is-current
     "The kept gap equals the gap recomputed from the current deltas, before and after each substep."
   (dolist (family (available-kernel-families))
     (let ((world (prepared-basin-world family)) (checked 0) (wrong 0))
@@ -5873,10 +5927,10 @@ the phases of a step before the prepare phase. #PR3PAR"
               (check-gaps (+ elapsed h))))))
       (check (> checked 10000) "~A: only ~D gaps checked" family checked)
       (check (zerop wrong) "~A: ~D of ~D kept gaps differ from the current gap" family wrong checked))))
-;; S0LV3R-kept-gap-is-current ends here
+;; S0LSTG-kept-gap-is-current ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-one-row-closed-form]]
-(define-claim "S0LV3R" one-row-closed-form
+;; [[file:../physics.org::#S0LSTG][S0LSTG-one-row-closed-form]]
+(define-claim "S0LSTG" one-row-closed-form
     "One relax row: normal impulse 1.5 and velocities exactly; spin friction clamped to +-0.75 or kept inside."
   (loop for (spin want) in '((1.0 -0.75) (-1.0 0.75) (0.5 -0.5))
         do (let ((cbuf (luv-physics::make-constraint-columns))
@@ -5903,10 +5957,10 @@ the phases of a step before the prepare phase. #PR3PAR"
                       spin (column 'spin-impulse) want)
                (check (equal (row 0) (list 0.0 -0.5 0.0 0.0 (* -0.5 want) 0.0)) "spinning at ~A body a is ~S" spin (row 0))
                (check (equal (row 1) (list 0.0 -1.5 0.0 0.0 (+ spin (* 0.5 want)) 0.0)) "spinning at ~A body b is ~S" spin (row 1))))))
-;; S0LV3R-one-row-closed-form ends here
+;; S0LSTG-one-row-closed-form ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-frictionless-pair-shares]]
-(define-claim "S0LV3R" frictionless-pair-shares
+;; [[file:../physics.org::#S0LSTG][S0LSTG-frictionless-pair-shares]]
+(define-claim "S0LSTG" frictionless-pair-shares
     "Without friction two equal balls meeting head-on without bounce leave together at half the speed."
   (dolist (family (available-kernel-families))
     (let* ((world (make-physics-world :terrain (make-floor-terrain) :features '(:terrain :body-contacts)
@@ -5929,10 +5983,10 @@ the phases of a step before the prepare phase. #PR3PAR"
           (check (every (lambda (u) (< (abs u) 1e-5)) (list ax ay bx by))
                  "~(~A~): across z the balls move at ~{~,6F~^ ~}" family (list ax ay bx by))
           (check (< (abs (- (+ az bz) 2.0)) 1e-5) "~(~A~): the momentum along z is ~,6F" family (+ az bz)))))))
-;; S0LV3R-frictionless-pair-shares ends here
+;; S0LSTG-frictionless-pair-shares ends here
 
-;; [[file:../physics.org::#S0LV3R][S0LV3R-frictionless-pile-alike]]
-(define-claim "S0LV3R" frictionless-pile-alike
+;; [[file:../physics.org::#S0LSTG][S0LSTG-frictionless-pile-alike]]
+(define-claim "S0LSTG" frictionless-pile-alike
     "A pile without friction ends in one state in every family, and no ball turns."
   (let ((hashes '()))
     (dolist (family (available-kernel-families))
@@ -5952,7 +6006,7 @@ the phases of a step before the prepare phase. #PR3PAR"
     (check (= 1 (length (remove-duplicates hashes :key #'cdr)))
            "the families end in different states: ~{~(~A~) ~A~^, ~}"
            (loop for (f . h) in (reverse hashes) collect f collect h))))
-;; S0LV3R-frictionless-pile-alike ends here
+;; S0LSTG-frictionless-pile-alike ends here
 
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-rebound-ratios]]
 (define-claim "R3ST1T" rebound-ratios
@@ -11387,12 +11441,72 @@ element) has run at its end: a copy of the page with SCRIPT before </body> is lo
                                "~A: ~A (link on the first screen, section in the page)" a w))))))))
 ;; LW3YHU-phases-from-the-first-screen ends here
 
+;; [[file:../physics.org::#LW3YHU][LW3YHU-map-leads-to-every-phase]]
+(define-claim "LW3YHU" map-leads-to-every-phase
+    "In physics.html the first screen links the map, whose stage table links each phase's section; each click lands there."
+  (let ((chromium (chromium-program)) (page (repository-file "physics.html"))
+        (phases (mapcar (lambda (phase) (string-downcase (symbol-name phase))) *physics-phases*))
+        (anchors (mapcar #'phase-anchor *physics-phases*)))
+    (cond ((null chromium)
+           (format t "~&LW3YHU: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
+           (check (null chromium)))
+          (t
+           (check (probe-file page) "~A is missing: make html writes it" page)
+           (when (probe-file page)
+             (let* ((script (format nil "<script>window.addEventListener('load', function () {
+  var phases = [~{'~A'~^, ~}], anchors = [~{'~A'~^, ~}], landed = [];
+  var door = Array.from(document.querySelectorAll('a[href=\"#M4PD00\"]')).some(function (l) {
+    var r = l.getBoundingClientRect(); return r.top >= 0 && r.bottom <= window.innerHeight && r.width > 0; });
+  var map = document.getElementById('outline-container-M4PD00');
+  var rows = Array.from(map ? map.querySelectorAll('tr') : []).filter(function (r) {
+    return r.cells[0] && r.cells[0].tagName == 'TD' && phases.indexOf(r.cells[0].textContent.trim()) >= 0; });
+  var names = rows.map(function (r) { return r.cells[0].textContent.trim(); });
+  var i = 0;
+  function note () {
+    var pre = document.createElement('pre'); pre.id = 'map-check';
+    pre.textContent = 'map-check ' + (door ? 1 : 0) + ' ' + (names.join(',') || '-') + ' ' + landed.join(' ') + ' end';
+    document.body.appendChild(pre);
+  }
+  function next () {
+    if (i == phases.length) { note(); return; }
+    var a = anchors[i], row = rows[i];
+    var link = row && row.cells[1] && row.cells[1].querySelector('a[href=\"#' + a + '\"]');
+    if (!link) { landed.push('none'); i++; next(); return; }
+    link.click();
+    setTimeout(function () {
+      var heading = document.getElementById(a);
+      landed.push((heading ? Math.round(heading.getBoundingClientRect().top) : 'gone') + ':' + location.hash.slice(1));
+      i++; next();
+    }, 100);
+  }
+  next();
+});</script>" phases anchors))
+                    (dom (page-dom-with-script chromium script))
+                    (mark "id=\"map-check\">map-check ")
+                    (at (search mark dom))
+                    (words (and at (uiop:split-string (subseq dom (+ at (length mark)) (search " end" dom :start2 at))))))
+               (check (not (null words)) "the page noted nothing")
+               (when words
+                 (check (equal (first words) "1") "no link to the map on the first screen")
+                 (check (equal (second words) (format nil "~{~A~^,~}" phases))
+                        "the map's stage table names ~A, not the phases in run order" (second words))
+                 (check (= (length (cddr words)) (length anchors)) "the page noted ~S" words)
+                 (loop for phase in phases
+                       for a in anchors
+                       for w in (cddr words)
+                       do (let* ((colon (position #\: w))
+                                 (top (and colon (parse-integer w :end colon :junk-allowed t))))
+                            (check (and top (<= (abs top) 2) (string= (subseq w (1+ colon)) a))
+                                   "~A: its link in the map landed at ~A (top px:address), not at #~A"
+                                   phase w a))))))))))
+;; LW3YHU-map-leads-to-every-phase ends here
+
 ;; [[file:../physics.org::#O07FDP][O07FDP-both-files-registered]]
 (define-claim "O07FDP" both-files-registered
-    "The registry holds tangled/physics.lisp and tangled/physics-simd.lisp, in load order."
-  (check (equal '("physics.lisp" "physics-simd.lisp")
+    "The registry holds tangled/physics.lisp, tangled/physics-simd.lisp and tangled/workshop.lisp, in load order."
+  (check (equal '("physics.lisp" "physics-simd.lisp" "workshop.lisp")
                 (mapcar #'file-namestring luv-physics::*registered-files*)))
-  (check (equal '("tangled/physics.lisp" "tangled/physics-simd.lisp")
+  (check (equal '("tangled/physics.lisp" "tangled/physics-simd.lisp" "tangled/workshop.lisp")
                 (remove-duplicates (mapcar (lambda (r) (getf r :file)) luv-physics::*definitions*)
                                    :test #'equal :from-end t))))
 ;; O07FDP-both-files-registered ends here

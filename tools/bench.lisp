@@ -10,7 +10,7 @@
 
 (in-package #:cl-user)
 
-(when (luv-load-systems "luv-physics")
+(when (luv-load-systems "luv-physics/workshop")
   (sb-ext:exit :code 2))
 
 (let* ((name (string-upcase (or (sb-ext:posix-getenv "BENCH") "run-basin-benchmark")))

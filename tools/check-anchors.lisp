@@ -17,7 +17,8 @@
 ;;;;  5. every definition the loaded system registered (see section BSOZ3U of the page)
 ;;;;     ends its docstring with #ANCHOR of its section; a defmethod or a
 ;;;;     define-symbol-macro may have no docstring, anything else must have one;
-;;;;  6. the block that registers a tangled file is that file's last chunk;
+;;;;  6. the block that registers the tangled files is the last chunk of the workshop's file,
+;;;;     the last one loaded, and registers each of them;
 ;;;;  7. the mutant records (tests/mutant-records.org, which tools/mutate.lisp reads) sit
 ;;;;     under headings that start with an anchor of the page, each paragraph is one record
 ;;;;     ("Equivalent mutant ~KEY~: ..." or "Surviving mutant ~KEY~: ..."), and the page
@@ -258,19 +259,24 @@
                    (report "docstring does not end with ~A" ending)))))))))
 
 (defun check-registration-last ()
-  "Check 6."
-  (dolist (source (symbol-value (find-symbol "*REGISTERED-FILES*" '#:luv-physics)))
-    (let* ((lines (read-lines source))
-           (register (position-if (lambda (text) (starts-with "(register-tangled-file " text))
-                                  lines :from-end t)))
-      (if (null register)
-          (problem "~A: does not register its definitions" (relative source))
-          (loop for i from (1+ register) below (length lines)
-                for anchor = (funcall (find-symbol "LINK-COMMENT-ANCHOR" '#:luv-physics) (aref lines i))
-                when anchor
-                  do (problem "~A:~D: the chunk from #~A comes after the registration block; ~
-                               insert sections before the closing section"
-                              (relative source) (1+ i) anchor))))))
+  "Check 6: the workshop's file, loaded last, registers every tangled file in its last chunk."
+  (let* ((files (symbol-value (find-symbol "*REGISTERED-FILES*" '#:luv-physics)))
+         (source (car (last files)))
+         (lines (and source (read-lines source)))
+         (registers (and lines (count-if (lambda (text) (starts-with "(register-tangled-file " text)) lines)))
+         (register (and lines (position-if (lambda (text) (starts-with "(register-tangled-file " text))
+                                           lines :from-end t))))
+    (cond ((null register)
+           (problem "~A: does not register the definitions of the tangled files" (if source (relative source) "no file")))
+          (t
+           (unless (= registers (length files))
+             (problem "~A: ~D registration forms for ~D registered files" (relative source) registers (length files)))
+           (loop for i from (1+ register) below (length lines)
+                 for anchor = (funcall (find-symbol "LINK-COMMENT-ANCHOR" '#:luv-physics) (aref lines i))
+                 when anchor
+                   do (problem "~A:~D: the chunk from #~A comes after the registration block; ~
+                                insert sections before the closing section"
+                               (relative source) (1+ i) anchor))))))
 
 ;;; The mutant records
 
@@ -316,8 +322,8 @@
     (collect-blocks-and-links)
     (check-claims)
     (setf records (check-mutant-records))
-    (if (cl-user::luv-load-systems "luv-physics")
-        (problem "luv-physics did not load, so its definitions were not checked")
+    (if (cl-user::luv-load-systems "luv-physics/workshop")
+        (problem "luv-physics/workshop did not load, so the definitions were not checked")
         (progn (setf definitions (check-definitions))
                (check-registration-last)))
     (cond (*problems*

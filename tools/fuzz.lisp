@@ -9,7 +9,7 @@
 
 (in-package #:cl-user)
 
-(when (luv-load-systems "luv-physics")
+(when (luv-load-systems "luv-physics/workshop")
   (sb-ext:exit :code 2))
 
 (flet ((setting (name default)

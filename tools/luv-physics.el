@@ -4,7 +4,7 @@
 ;;   (load "/path/to/luv-physics/tools/luv-physics.el")
 ;; Every physics.org that sits beside a luv-physics.asd then opens in
 ;; `luv-physics-mode'.  With SLIME connected to an image that has loaded the
-;; system, the keys below ask that image; without SLIME (or without a
+;; system luv-physics/workshop (the engine and the page's tools), the keys below ask that image; without SLIME (or without a
 ;; connection) the jumps read the page's text instead, and reloading says what
 ;; it needs.
 ;;
@@ -97,15 +97,19 @@
               "COMMON-LISP-USER"))
 
 (defun luv-physics-image-ready-p ()
-  "True when SLIME is connected to an image that has loaded luv-physics."
+  "True when SLIME is connected to an image that has loaded luv-physics/workshop: the engine
+alone has no answers for the editor."
   (and (luv-physics-connected-p)
-       (slime-eval '(cl:and (cl:find-package "LUV-PHYSICS") cl:t) "COMMON-LISP-USER")))
+       (slime-eval '(cl:and (cl:find-package "LUV-PHYSICS")
+                            (cl:fboundp (cl:find-symbol "EDITOR-SECTION" "LUV-PHYSICS"))
+                            cl:t)
+                   "COMMON-LISP-USER")))
 
 (defun luv-physics-require-image ()
-  "Signal a user error unless an image with luv-physics is connected."
+  "Signal a user error unless an image with luv-physics/workshop is connected."
   (unless (luv-physics-image-ready-p)
-    (user-error "luv-physics: this needs SLIME connected to an image that loaded luv-physics \
-\(M-x slime, then (load \"tools/boot.lisp\") (asdf:load-system \"luv-physics\"))")))
+    (user-error "luv-physics: this needs SLIME connected to an image that loaded luv-physics/workshop \
+\(M-x slime, then (load \"tools/boot.lisp\") (asdf:load-system \"luv-physics/workshop\"))")))
 
 (defun luv-physics-page-buffer ()
   "The buffer of the page: this one, or the one an edit buffer came from."

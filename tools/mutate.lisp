@@ -28,7 +28,7 @@
   "The tangled files whose definitions are mutated.")
 
 (defparameter *dependent-files* '("tangled/physics.lisp" "tangled/physics-simd.lisp"
-                                  "tests/physics-tests.lisp")
+                                  "tangled/workshop.lisp" "tests/physics-tests.lisp")
   "The files whose forms may inline, or be generated from, a mutated definition.")
 
 (defparameter *mutant-records* "tests/mutant-records.org"
@@ -510,7 +510,8 @@ but the last.  Declarations and docstrings stay."
 (defparameter *named-parts*
   '(("P5SOLV" . "solver") ("P4CONT" . "contact phases") ("QKS4GZ" . "sleep")
     ("D9W4CH" . "hash") ("Y5H8KC" . "hash")
-    ("MYWH16" . "terrain contacts") ("SW33P7" . "terrain contacts")
+    ("MYWH16" . "terrain contacts") ("MYWGTH" . "terrain contacts") ("MYWCNT" . "terrain contacts")
+    ("MYWSTG" . "terrain contacts") ("SW33P7" . "terrain contacts")
     ("E7V3NT" . "events") ("H7P4CX" . "walker"))
   "Anchors whose sections, or whose part's sections, form a part named here; any other section
 belongs to the part of its level-1 heading.")
@@ -1142,7 +1143,7 @@ survivors the page explains as equivalent.  A table by part, then the same mutan
                        (or (page-reason key reasons)
                            (let ((why (page-reason key (page-reasons *mutant-records* "Surviving mutant ~"))))
                              (and why (format nil "not equivalent: ~A" why)))
-                           "(no reason given on the page)")))))
+                           "(no reason given in the records)")))))
 
 (defun annotate-survivors ()
   "Write report/mutate-survivors.org from report/mutate-survivors.tsv and the page's reasons,

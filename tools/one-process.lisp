@@ -16,6 +16,10 @@ many bytes are consed."
       (format *error-output* "~A: usage: ~A.lisp ~A~%" tool tool usage)
       (sb-ext:exit :code 2))
     (load (concatenate 'string (first arguments) "tools/boot.lisp"))
-    (when (funcall 'luv-load-systems "luv-physics")
+    ;; the tree's workshop, where the benchmarks live; a tree from before the workshop was a
+    ;; system of its own has them in luv-physics
+    (when (funcall 'luv-load-systems (if (funcall (find-symbol "FIND-SYSTEM" "ASDF") "luv-physics/workshop" nil)
+                                         "luv-physics/workshop"
+                                         "luv-physics"))
       (sb-ext:exit :code 2))
     arguments))

@@ -11,7 +11,7 @@
 
 (in-package #:cl-user)
 
-(when (luv-load-systems "luv-physics")
+(when (luv-load-systems "luv-physics/workshop")
   (sb-ext:exit :code 2))
 
 (defun physics (name) (find-symbol name '#:luv-physics))

@@ -12,7 +12,7 @@
 
 (in-package #:cl-user)
 
-(when (luv-load-systems "luv-physics")
+(when (luv-load-systems "luv-physics/workshop")
   (sb-ext:exit :code 2))
 
 (defparameter *peer-counts*
