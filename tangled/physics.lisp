@@ -77,7 +77,10 @@
    #:set-physics-body-position #:apply-physics-impulse #:apply-physics-impulse-at
    #:set-physics-body-angular-velocity #:apply-physics-force #:physics-body-force
    #:set-physics-body-gravity-scale #:physics-body-gravity-scale
-   #:+physics-max-acceleration+ #:+physics-max-gravity-scale+))
+   #:+physics-max-acceleration+ #:+physics-max-gravity-scale+
+   ;; Joints (#J0STOR)
+   #:add-physics-joint #:remove-physics-joint #:physics-joint-alive-p #:physics-world-joint-count
+   #:physics-joint-bodies #:physics-joint-length #:physics-joint-impulse))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -637,6 +640,9 @@ column is forming: a pass at every such step finds a column that starts to form.
 
 (defconstant +handle-tag-bits+ 16 "Bits of a handle that name its world. #B5N8JT")
 
+(defconstant +handle-joint-bit+ 60
+  "The bit, above the tag, set in a joint's handle and in no body's ([[#J0STOR]]). #B5N8JT")
+
 (declaim (inline handle-index handle-generation handle-tag make-handle))
 (defun handle-index (handle)
   "The handle-table slot HANDLE names. #B5N8JT"
@@ -710,6 +716,7 @@ column is forming: a pass at every such step finds a column that starts to form.
 (defun handle-status (table handle)
   "NIL when HANDLE names a live body of TABLE, else why not (:malformed :unissued :foreign :removed). #B5N8JT"
   (cond ((not (and (typep handle 'fixnum) (>= handle 0))) :malformed)
+        ((logbitp +handle-joint-bit+ handle) :malformed)
         ((/= (handle-tag handle) (handle-table-tag table))
          (if (tag-issued-p (handle-tag handle)) :foreign :unissued))
         ((or (>= (handle-index handle) (handle-table-count table))
@@ -1434,7 +1441,7 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +physics-features+
     '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :mortal
-      :hit-events :contact-events :expiry-events :sleep-events :forces)
+      :hit-events :contact-events :expiry-events :sleep-events :forces :joints)
     "Every feature a world may use ([[#FEAT5X]]), in the order physics-world-features lists them. #W0RLD7"))
 
 (defconstant +solver-stride+ 8
@@ -1558,6 +1565,8 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    ;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
    (pushes :initform nil :type (or null f32-column) :accessor physics-world-pushes)
    (pushed :initform nil :accessor physics-world-pushed)
+   ;; the joints, made with the first ([[#J0STOR]])
+   (joints :initform nil :accessor physics-world-joints)
    (scaled-count :initform 0 :type fixnum :accessor physics-world-scaled-count)
    (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
    (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
@@ -1990,7 +1999,7 @@ that kind ([[#FEAT5X][its features]]). #E7V3NT"
 (defconstant +event-held-out+ 7 "Event code of :held-out. #E7V3NT")
 
 (defparameter +event-kinds+ #(:begin :end :hit :slept :woke :expired :escaped :held-out
-                               :sensor-enter :sensor-leave)
+                               :sensor-enter :sensor-leave :joint-break :joint-removed)
   "Event kind keywords by code. #E7V3NT")
 
 (defun map-physics-events (function world)
@@ -2073,7 +2082,9 @@ undo log too (roll-back-step). #QKS4GZ"
   (let* ((ids (physics-world-ids world))
          (buffer (set-buffer world set))
          (handle (aref (body-columns-handle buffer) row))
-         (moved (progn (when (and (= set +set-sleeping+) (> (aref (body-columns-life buffer) row) 0.0))
+         (moved (progn ;; its joints go first, while its row is its own ([[#J0STOR]])
+                       (when (physics-world-joints world) (remove-body-joints world handle))
+                       (when (and (= set +set-sleeping+) (> (aref (body-columns-life buffer) row) 0.0))
                          (decf (physics-world-mortal-sleepers world)))
                        (when (= set +set-sleeping+) (leave-sleeping-grids world handle))
                        (body-columns-swap-remove buffer row))))
@@ -3153,6 +3164,8 @@ the last step wake the sleepers they overlap deeper than the slop. Return how ma
                          (span (1+ (ceiling (* half inv)))))
                     (wake-near cx cy cz travel span t (aref min-x b) (aref min-y b) (aref min-z b)
                                (aref max-x b) (aref max-y b) (aref max-z b))))))))))
+    ;; a joint group wakes with any of its bodies ([[#J0SL3P]])
+    (when (physics-world-joints world) (incf woken (wake-joint-groups world)))
     (setf (physics-world-added-count world) 0)
     woken))
 
@@ -3163,6 +3176,8 @@ when they are spent (sleeping-grids-spent-p), so that the fresh sleepers' list s
 Return 0. #W4K3PH"
   (when (sleeping-grids-spent-p world) (ensure-sleeping-grid world))
   (setf (physics-world-added-count world) 0)
+  ;; but a body a caller woke wakes its joint group ([[#J0SL3P]])
+  (when (physics-world-joints world) (wake-joint-groups world))
   0)
 
 (defun note-added-body (world handle)
@@ -5602,6 +5617,711 @@ what a solve pass needs to bounce an impact. #R3ST1T"
                              (body-columns-length (physics-world-awake world)) h))
 ;; The scalar family:1 ends here
 
+;; [[file:../physics.org::#J0STOR][Joints are rows, named by handles:1]]
+(defconstant +joint-point+ 0 "Joint kind: a point joint, its two anchors held together. #J0STOR")
+
+(defconstant +joint-distance+ 1 "Joint kind: a distance joint, its two anchors held at a length. #J0STOR")
+
+(defconstant +joint-spring+ 1 "Joint flag: its length is a spring of its hertz and damping ratio. #J0STOR")
+
+(defconstant +joint-slack+ 2 "Joint flag: no length of its own (a rope): only its limits hold. #J0STOR")
+
+(defconstant +joint-lower+ 4 "Joint flag: its minimum length holds. #J0STOR")
+
+(defconstant +joint-upper+ 8 "Joint flag: its maximum length holds. #J0STOR")
+
+(defconstant +flag-jointed+ 512
+  "Body flag: the body has a joint, so it sleeps only with its joint group ([[#J0SL3P]]). #J0STOR")
+
+(defconstant +joint-anchor-reach+ 2.0
+  "How many of its body's radii an anchor may lie from the body's centre. #J0STOR")
+
+(defconstant +physics-min-joint-length+ 0.005 "The shortest length, m, a distance joint may be given. #J0STOR")
+
+(defconstant +physics-max-joint-length+ 1000.0 "The longest length, m, a distance joint may be given. #J0STOR")
+
+(defconstant +physics-max-break-force+ 1e12 "The largest break force, N, a joint may be given. #J0STOR")
+
+(defconstant +event-joint-break+ 10 "Event code of :joint-break. #J0STOR")
+
+(defconstant +event-joint-removed+ 11 "Event code of :joint-removed. #J0STOR")
+
+(define-physics-layout joint-columns
+  "The joints of a world, a row each: what the caller gave, the impulses carried between substeps
+and steps, and what the step's prepare writes for the substeps. #J0STOR"
+  (kind fixnum) (flags fixnum) (handle fixnum) (body-a fixnum) (body-b fixnum)
+  (ax single-float) (ay single-float) (az single-float)
+  (bx single-float) (by single-float) (bz single-float)
+  (rest-length single-float) (min-length single-float) (max-length single-float)
+  (hertz single-float) (damping-ratio single-float) (break-force single-float)
+  ;; carried: a point joint's impulse; a distance joint's length, lower and upper impulses
+  (impulse-x single-float) (impulse-y single-float) (impulse-z single-float)
+  ;; written by the prepare, read by the substeps
+  (row-a fixnum) (row-b fixnum)
+  (rax single-float) (ray single-float) (raz single-float)
+  (rbx single-float) (rby single-float) (rbz single-float)
+  (sx single-float) (sy single-float) (sz single-float)
+  (ima single-float) (imb single-float) (iia single-float) (iib single-float)
+  (k11 single-float) (k12 single-float) (k13 single-float)
+  (k22 single-float) (k23 single-float) (k33 single-float)
+  (bias-rate single-float) (mass-scale single-float) (impulse-scale single-float)
+  (limit-scale single-float))
+
+(defstruct (joint-set (:constructor %make-joint-set (ids)) (:copier nil))
+  "Everything a world keeps for its joints: the rows, their handle table, and by body slot the
+joint groups' parents, each body's count of joints and the passes' marks; the stiff softness
+of this step's limits. #J0STOR"
+  (rows (make-joint-columns) :type joint-columns)
+  (ids nil :type handle-table)
+  (parent (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (counts (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (marks (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (groups-stale nil)
+  (limit-bias 0.0 :type single-float)
+  (limit-mass 1.0 :type single-float))
+
+(declaim (inline group-root))
+(defun group-root (parent slot)
+  "The root of SLOT's joint group in PARENT, halving the path to it on the way: the groups of [[#J0SL3P]]. #J0STOR"
+  (declare (type fixnum-column parent) (type index slot))
+  (loop until (= (aref parent slot) slot)
+        do (setf (aref parent slot) (aref parent (aref parent slot))
+                 slot (aref parent slot)))
+  slot)
+
+(defun ensure-joint-set (world)
+  "WORLD's joint set, made with its first joint: its handles carry the world's tag, and the world
+records joint events from then on. #J0STOR"
+  (or (physics-world-joints world)
+      (progn
+        (setf (slot-value world 'event-mask)
+              (logior (world-event-mask world) (ash 1 +event-joint-break+) (ash 1 +event-joint-removed+)))
+        (setf (physics-world-joints world)
+              (%make-joint-set (%make-handle-table :tag (handle-table-tag (physics-world-ids world))))))))
+
+(defun ensure-joint-slots (world set)
+  "Grow SET's columns by body slot to cover every slot of WORLD's handle table; a new slot is a
+group of its own. #J0STOR"
+  (let ((need (length (handle-table-set (physics-world-ids world))))
+        (old (length (joint-set-parent set))))
+    (when (< old need)
+      (let ((parent (make-array need :element-type 'fixnum)))
+        (dotimes (i need) (setf (aref parent i) i))
+        (replace parent (joint-set-parent set))
+        (setf (joint-set-parent set) parent
+              (joint-set-counts set) (fixnum-column-copy (joint-set-counts set) need old)
+              (joint-set-marks set) (make-array need :element-type 'fixnum :initial-element 0))
+        (fill (joint-set-counts set) 0 :start old)))
+    set))
+
+(defun joint-handle-status (world joint)
+  "NIL when JOINT names a live joint of WORLD, else why not (:malformed :unissued :foreign
+:removed), as handle-status answers for bodies. #J0STOR"
+  (if (not (and (typep joint 'fixnum) (>= joint 0) (logbitp +handle-joint-bit+ joint)))
+      :malformed
+      (let ((h (ldb (byte +handle-joint-bit+ 0) joint))
+            (set (physics-world-joints world)))
+        (cond (set (handle-status (joint-set-ids set) h))
+              ((/= (handle-tag h) (handle-table-tag (physics-world-ids world)))
+               (if (tag-issued-p (handle-tag h)) :foreign :unissued))
+              (t :removed)))))
+
+(defun resolve-joint (world joint)
+  "The row of JOINT in WORLD's joints, or a stale-physics-handle error. #J0STOR"
+  (let ((status (joint-handle-status world joint)))
+    (when status (error 'stale-physics-handle :world world :handle joint :reason status))
+    (aref (handle-table-local (joint-set-ids (physics-world-joints world)))
+          (handle-index (ldb (byte +handle-joint-bit+ 0) joint)))))
+
+(declaim (inline rotate-by))
+(defun rotate-by (qw qx qy qz x y z)
+  "X Y Z turned by the unit quaternion QW QX QY QZ, as three values: with t = 2 u x v for u the
+quaternion's vector part, v + w t + u x t. #J0STOR"
+  (declare (type single-float qw qx qy qz x y z))
+  (let ((tx (* 2.0 (- (* qy z) (* qz y))))
+        (ty (* 2.0 (- (* qz x) (* qx z))))
+        (tz (* 2.0 (- (* qx y) (* qy x)))))
+    (values (+ x (* qw tx) (- (* qy tz) (* qz ty)))
+            (+ y (* qw ty) (- (* qz tx) (* qx tz)))
+            (+ z (* qw tz) (- (* qx ty) (* qy tx))))))
+
+(defun body-anchor (world handle lx ly lz)
+  "The world point of the anchor LX LY LZ, in the frame of HANDLE's live body, as three values. #J0STOR"
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (with-body-columns (x y z qw qx qy qz) (set-buffer world set)
+      (multiple-value-bind (rx ry rz) (rotate-by (aref qw row) (aref qx row) (aref qy row) (aref qz row)
+                                                 (f32 lx) (f32 ly) (f32 lz))
+        (values (+ (aref x row) rx) (+ (aref y row) ry) (+ (aref z row) rz))))))
+
+(defun checked-anchor (world name anchor)
+  "ANCHOR, a list of three finite numbers, as three single-floats; else the error naming NAME. #J0STOR"
+  (unless (and (listp anchor) (eql 3 (ignore-errors (list-length anchor))))
+    (error 'invalid-physics-parameter :world world :name name :value anchor :expected "a list of three numbers"))
+  (values (finite-f32 name (first anchor) world) (finite-f32 name (second anchor) world)
+          (finite-f32 name (third anchor) world)))
+
+(defun check-anchor-reach (world name x y z radius)
+  "Signal invalid-physics-parameter naming NAME unless the local anchor X Y Z lies within
++joint-anchor-reach+ radii, RADIUS each, of its body's centre. #J0STOR"
+  (let ((reach (* +joint-anchor-reach+ radius)))
+    (unless (and (<= (abs x) reach) (<= (abs y) reach) (<= (abs z) reach)
+                 (<= (+ (* x x) (* y y) (* z z)) (* reach reach)))
+      (error 'invalid-physics-parameter :world world :name name :value (list x y z)
+                                        :expected (format nil "within ~A radii (~,3F m) of its body's centre"
+                                                          +joint-anchor-reach+ reach)))))
+
+(defun set-body-flag (world handle flag on)
+  "Set FLAG in the flags of HANDLE's live body when ON, else clear it. #J0STOR"
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (let ((flags (body-columns-flags (set-buffer world set))))
+      (setf (aref flags row) (if on (logior (aref flags row) flag) (logandc2 (aref flags row) flag))))))
+
+(defun add-physics-joint (world kind body-a body-b &key (anchor-a '(0 0 0)) anchor-b length min-length
+                                                       max-length rope (hertz 0) (damping-ratio 0) break-force)
+  "Join BODY-A to BODY-B (a handle, or NIL for a fixed point of the world) by a joint of KIND,
+:point or :distance, and return its handle. ANCHOR-A is a point in BODY-A's frame; ANCHOR-B one
+in BODY-B's frame or, without BODY-B, a point of the world (by default where ANCHOR-A is now). A
+distance joint holds LENGTH (by default the anchors' distance now): stiffly, or as a spring of
+HERTZ and DAMPING-RATIO when HERTZ is above 0, or, with ROPE, only as a maximum; MIN-LENGTH and
+MAX-LENGTH bound it. A joint whose substep impulse exceeds BREAK-FORCE times the substep breaks.
+Everything is checked first: a mistake signals a physics-error naming its argument and changes
+nothing. #J0STOR"
+  (check-idle world 'add-physics-joint)
+  (require-physics-feature world :joints 'add-physics-joint)
+  (unless (member kind '(:point :distance))
+    (error 'invalid-physics-parameter :world world :name :kind :value kind :expected ":point or :distance"))
+  (resolve-handle world body-a)
+  (when body-b
+    (resolve-handle world body-b)
+    (when (= body-a body-b)
+      (error 'invalid-physics-parameter :world world :name :body-b :value body-b
+                                        :expected "a body other than BODY-A, or NIL for a fixed point")))
+  (multiple-value-bind (ax ay az) (checked-anchor world :anchor-a anchor-a)
+    (check-anchor-reach world :anchor-a ax ay az (physics-body-radius world body-a))
+    (multiple-value-bind (pax pay paz) (body-anchor world body-a ax ay az)
+      (multiple-value-bind (bx by bz)
+          (if (or body-b anchor-b) (checked-anchor world :anchor-b (or anchor-b '(0 0 0))) (values pax pay paz))
+        (if body-b
+            (check-anchor-reach world :anchor-b bx by bz (physics-body-radius world body-b))
+            (progn (check-coordinate :anchor-b bx world) (check-coordinate :anchor-b by world)
+                   (check-coordinate :anchor-b bz world)))
+        (multiple-value-bind (pbx pby pbz) (if body-b (body-anchor world body-b bx by bz) (values bx by bz))
+          (let* ((distance (f32 (sqrt (+ (expt (- pbx pax) 2) (expt (- pby pay) 2) (expt (- pbz paz) 2)))))
+                 (point (eq kind :point))
+                 (hz (ranged-f32 :hertz hertz 0 1000 world))
+                 (zeta (ranged-f32 :damping-ratio damping-ratio 0 1000 world))
+                 (low +physics-min-joint-length+) (high +physics-max-joint-length+)
+                 (rest (cond (point 0.0)
+                             (length (ranged-f32 :length length low high world))
+                             (t (ranged-f32 :length distance low high world))))
+                 (least (and min-length (ranged-f32 :min-length min-length low high world)))
+                 (most (cond (max-length (ranged-f32 :max-length max-length (or least low) high world))
+                             (rope (max rest (or least 0.0)))))
+                 (force (and break-force (ranged-f32 :break-force break-force 0 +physics-max-break-force+ world))))
+            (when (and point (or length min-length max-length rope))
+              (error 'invalid-physics-parameter :world world :name (cond (length :length) (min-length :min-length)
+                                                                         (max-length :max-length) (t :rope))
+                                                :value (or length min-length max-length rope)
+                                                :expected "NIL: a point joint has no length"))
+            (when (and force (not (plusp force)))
+              (error 'invalid-physics-parameter :world world :name :break-force :value break-force
+                                                :expected "a positive force, or NIL for none"))
+            (let ((count (if (physics-world-joints world)
+                             (joint-columns-length (joint-set-rows (physics-world-joints world)))
+                             0)))
+              (when (>= count (1- (ash 1 +handle-index-bits+)))
+                (error 'physics-budget-exceeded :world world :operation 'add-physics-joint :resource :joints
+                                                :requested (1+ count) :budget (1- (ash 1 +handle-index-bits+)))))
+            ;; everything is checked: from here on the world changes
+            (let* ((set (ensure-joint-slots world (ensure-joint-set world)))
+                   (rows (joint-set-rows set))
+                   (row (joint-columns-append rows))
+                   (handle (logior (ash 1 +handle-joint-bit+)
+                                   (handle-table-allocate (joint-set-ids set) +set-awake+ row))))
+              (with-joint-columns ((k kind) (f flags) (h handle) (a body-a) (b body-b) (jax ax) (jay ay) (jaz az)
+                                   (jbx bx) (jby by) (jbz bz) rest-length min-length max-length (jh hertz)
+                                   (jz damping-ratio) (jf break-force) row-a)
+                  rows
+                (setf (aref k row) (if point +joint-point+ +joint-distance+)
+                      (aref f row) (logior (if (and (not point) (> hz 0.0) (not rope)) +joint-spring+ 0)
+                                           (if rope +joint-slack+ 0)
+                                           (if least +joint-lower+ 0)
+                                           (if most +joint-upper+ 0))
+                      (aref h row) handle (aref a row) body-a (aref b row) (or body-b +no-body+)
+                      (aref jax row) ax (aref jay row) ay (aref jaz row) az
+                      (aref jbx row) bx (aref jby row) by (aref jbz row) bz
+                      (aref rest-length row) rest (aref min-length row) (or least 0.0)
+                      (aref max-length row) (or most 0.0) (aref jh row) hz (aref jz row) zeta
+                      (aref jf row) (or force 0.0) (aref row-a row) -1))
+              (note-joint-bodies world set body-a body-b 1)
+              (wake-handle world body-a)
+              (when body-b (wake-handle world body-b))
+              handle)))))))
+
+(defun note-joint-bodies (world set body-a body-b change)
+  "Count a joint more (CHANGE 1) or less (-1) at BODY-A and at BODY-B (a handle or NIL), flag a
+body +flag-jointed+ while its count is above zero, and join their groups when a joint is added
+(a removal marks the groups stale, to be found again from the joints left). #J0STOR"
+  (ensure-joint-slots world set)
+  (let ((counts (joint-set-counts set)))
+    (dolist (h (if body-b (list body-a body-b) (list body-a)))
+      (when (null (handle-status (physics-world-ids world) h))
+        (let ((slot (handle-index h)))
+          (incf (aref counts slot) change)
+          (set-body-flag world h +flag-jointed+ (plusp (aref counts slot))))))
+    (if (and (plusp change) body-b (not (joint-set-groups-stale set)))
+        (let ((parent (joint-set-parent set)))
+          (setf (aref parent (group-root parent (handle-index body-a))) (group-root parent (handle-index body-b))))
+        (when (minusp change) (setf (joint-set-groups-stale set) t)))))
+
+(defun remove-joint-row (world set row)
+  "Remove the joint at ROW of SET: its bodies count it no more, its handle goes stale, and the
+last row fills its place. #J0STOR"
+  (let* ((rows (joint-set-rows set)) (ids (joint-set-ids set))
+         (handle (aref (joint-columns-handle rows) row))
+         (b (aref (joint-columns-body-b rows) row)))
+    (note-joint-bodies world set (aref (joint-columns-body-a rows) row) (if (= b +no-body+) nil b) -1)
+    (let ((moved (joint-columns-swap-remove rows row)))
+      (when (>= moved 0)
+        (setf (aref (handle-table-local ids) (handle-index (aref (joint-columns-handle rows) row))) row)))
+    (handle-table-release ids (ldb (byte +handle-joint-bit+ 0) handle))
+    handle))
+
+(defun remove-physics-joint (world joint)
+  "Remove JOINT from WORLD and wake its bodies; JOINT goes stale. #J0STOR"
+  (check-idle world 'remove-physics-joint)
+  (let* ((row (resolve-joint world joint))
+         (set (physics-world-joints world))
+         (a (aref (joint-columns-body-a (joint-set-rows set)) row))
+         (b (aref (joint-columns-body-b (joint-set-rows set)) row)))
+    (remove-joint-row world set row)
+    (wake-handle world a)
+    (unless (= b +no-body+) (wake-handle world b))
+    (values)))
+
+(defun remove-body-joints (world handle)
+  "Remove every joint of HANDLE's body, each with a :joint-removed event naming both bodies and
+carrying the joint's handle. #J0STOR"
+  (let* ((set (physics-world-joints world)) (rows (joint-set-rows set)))
+    (when (plusp (aref (joint-set-counts (ensure-joint-slots world set)) (handle-index handle)))
+      (loop for row from (1- (joint-columns-length rows)) downto 0
+            do (let ((a (aref (joint-columns-body-a rows) row)) (b (aref (joint-columns-body-b rows) row)))
+                 (when (or (= a handle) (= b handle))
+                   (push-event world +event-joint-removed+ a b 0.0 0.0 0.0 0.0
+                               (aref (joint-columns-handle rows) row))
+                   (remove-joint-row world set row)))))))
+
+(defun physics-joint-alive-p (world joint)
+  "True when JOINT names a joint of WORLD that has not been removed or broken. #J0STOR"
+  (check-world world 'physics-joint-alive-p)
+  (null (joint-handle-status world joint)))
+
+(defun physics-world-joint-count (world)
+  "How many joints WORLD holds. #J0STOR"
+  (check-world world 'physics-world-joint-count)
+  (let ((set (physics-world-joints world)))
+    (if set (joint-columns-length (joint-set-rows set)) 0)))
+
+(defun physics-joint-bodies (world joint)
+  "The two bodies JOINT joins, as two values: handles, the second NIL for a fixed point. #J0STOR"
+  (check-world world 'physics-joint-bodies)
+  (let* ((row (resolve-joint world joint)) (rows (joint-set-rows (physics-world-joints world)))
+         (b (aref (joint-columns-body-b rows) row)))
+    (values (aref (joint-columns-body-a rows) row) (if (= b +no-body+) nil b))))
+
+(defun joint-anchor-points (world row)
+  "The world points of the two anchors of the joint at ROW, as six values. #J0STOR"
+  (with-joint-columns (body-a body-b ax ay az bx by bz) (joint-set-rows (physics-world-joints world))
+    (multiple-value-bind (pax pay paz) (body-anchor world (aref body-a row) (aref ax row) (aref ay row) (aref az row))
+      (multiple-value-bind (pbx pby pbz)
+          (if (= (aref body-b row) +no-body+)
+              (values (aref bx row) (aref by row) (aref bz row))
+              (body-anchor world (aref body-b row) (aref bx row) (aref by row) (aref bz row)))
+        (values pax pay paz pbx pby pbz)))))
+
+(defun physics-joint-length (world joint)
+  "The distance, m, between JOINT's two anchors where its bodies are now. #J0STOR"
+  (check-world world 'physics-joint-length)
+  (multiple-value-bind (ax ay az bx by bz) (joint-anchor-points world (resolve-joint world joint))
+    (sqrt (+ (expt (- bx ax) 2) (expt (- by ay) 2) (expt (- bz az) 2)))))
+
+(defun joint-row-impulse (rows row)
+  "The size of the impulse, N s, the joint at ROW of ROWS applied in its last substep: a point
+joint's vector, a distance joint's along its axis. #J0STOR"
+  (with-joint-columns (kind impulse-x impulse-y impulse-z) rows
+    (let ((x (aref impulse-x row)) (y (aref impulse-y row)) (z (aref impulse-z row)))
+      (if (= (aref kind row) +joint-point+)
+          (sqrt (+ (* x x) (* y y) (* z z)))
+          (abs (- (+ x y) z))))))
+
+(defun physics-joint-impulse (world joint)
+  "The size of the impulse, N s, JOINT applied in its last substep (its force times the substep). #J0STOR"
+  (check-world world 'physics-joint-impulse)
+  (joint-row-impulse (joint-set-rows (physics-world-joints world)) (resolve-joint world joint)))
+
+(defun validate-joints (world fail)
+  "Walk WORLD's joints, calling FAIL with a message for the first broken invariant: each row's
+handle is live and forwards to it, live slots and rows agree, each joint's bodies are live and
+two, and each body's count of joints and its jointed flag are right. #J0STOR"
+  (let ((set (physics-world-joints world)))
+    (when set
+      (let* ((rows (joint-set-rows set)) (ids (joint-set-ids set)) (bodies (physics-world-ids world))
+             (counts (make-hash-table)) (live 0))
+        (dotimes (row (joint-columns-length rows))
+          (let* ((h (aref (joint-columns-handle rows) row)) (status (joint-handle-status world h))
+                 (a (aref (joint-columns-body-a rows) row)) (b (aref (joint-columns-body-b rows) row)))
+            (when status (funcall fail "joint row ~D holds handle ~D, which is ~(~A~)" row h status))
+            (unless (= row (aref (handle-table-local ids) (handle-index (ldb (byte +handle-joint-bit+ 0) h))))
+              (funcall fail "joint ~D forwards to another row than ~D" h row))
+            (when (handle-status bodies a) (funcall fail "joint ~D names body ~D, which is ~(~A~)" h a (handle-status bodies a)))
+            (unless (or (= b +no-body+) (null (handle-status bodies b)))
+              (funcall fail "joint ~D names body ~D, which is ~(~A~)" h b (handle-status bodies b)))
+            (when (= a b) (funcall fail "joint ~D joins body ~D to itself" h a))
+            (incf (gethash a counts 0))
+            (unless (= b +no-body+) (incf (gethash b counts 0)))))
+        (dotimes (slot (handle-table-count ids))
+          (unless (= (aref (handle-table-set ids) slot) +set-free+) (incf live)))
+        (unless (= live (joint-columns-length rows))
+          (funcall fail "~D live joint slots but ~D joint rows" live (joint-columns-length rows)))
+        (loop for (set-code buffer) in (list (list +set-awake+ (physics-world-awake world))
+                                             (list +set-sleeping+ (physics-world-sleeping world)))
+              do (dotimes (row (body-columns-length buffer))
+                   (let* ((h (aref (body-columns-handle buffer) row))
+                          (n (gethash h counts 0))
+                          (counted (if (< (handle-index h) (length (joint-set-counts set)))
+                                       (aref (joint-set-counts set) (handle-index h)) 0)))
+                     (unless (= n counted)
+                       (funcall fail "body ~D has ~D joints, counted as ~D" h n counted))
+                     (unless (eq (plusp n) (logtest +flag-jointed+ (aref (body-columns-flags buffer) row)))
+                       (funcall fail "body ~D in set ~D has ~D joints and its jointed flag ~:[clear~;set~]"
+                                h set-code n (logtest +flag-jointed+ (aref (body-columns-flags buffer) row)))))))))))
+;; Joints are rows, named by handles:1 ends here
+
+;; [[file:../physics.org::#J0S0LV][Joints in the substeps:1]]
+(defconstant +joint-damping-ratio+ 2.0
+  "The damping ratio of a stiff joint: Box2D v3's. #J0S0LV")
+
+(defun joint-stiffness (world h)
+  "The frequency and damping ratio of a stiff joint of WORLD over substep H, as two values:
+twice the contact hertz capped at a quarter of the substep rate, and +joint-damping-ratio+. #J0S0LV"
+  (values (* 2.0 (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h))) +joint-damping-ratio+))
+
+(defun spring-softness (hertz zeta h)
+  "The soft coefficients of a spring joint of HERTZ and damping ratio ZETA over substep H: those of
+physics-softness for the damping ratio less the h omega / 2 that solving the spring implicitly
+adds, and no less than zero. #J0S0LV"
+  (declare (type single-float hertz zeta h))
+  (physics-softness hertz (max 0.0 (- zeta (* 0.5 h 2.0 (f32 pi) hertz))) h))
+
+(defun prepare-joints (world h)
+  "Write, for every joint of WORLD whose first body is awake, what the substeps of H read: the
+solver rows, the turned levers, the separation, the masses, the effective mass (a point joint's
+inverted matrix, a distance joint's axial mass) and the soft coefficients. Return the joint set
+when some joint is to be solved, else NIL. #J0S0LV"
+  (let ((set (physics-world-joints world)))
+    (when (and set (plusp (joint-columns-length (joint-set-rows set))))
+      (let* ((rows (joint-set-rows set))
+             (ids (physics-world-ids world)) (sets (handle-table-set ids)) (locals (handle-table-local ids))
+             (awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+             (dummy (body-columns-length awake))
+             (active 0))
+        (declare (type fixnum-column sets locals) (type fixnum dummy active))
+        (multiple-value-bind (stiff-hertz stiff-zeta) (joint-stiffness world h)
+          (multiple-value-bind (stiff-bias stiff-mass stiff-impulse) (physics-softness stiff-hertz stiff-zeta h)
+            (declare (type single-float stiff-bias stiff-mass stiff-impulse))
+            (setf (joint-set-limit-bias set) stiff-bias (joint-set-limit-mass set) stiff-mass)
+            (with-joint-columns (kind flags body-a body-b ax ay az bx by bz hertz damping-ratio
+                                 row-a row-b rax ray raz rbx rby rbz sx sy sz
+                                 ima imb iia iib k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale
+                                 limit-scale)
+                rows
+              (flet ((place (h)
+                       ;; the set and row of a live body, or 0 and -1 for none
+                       (declare (type fixnum h))
+                       (if (= h +no-body+) (values 0 -1)
+                           (values (aref sets (handle-index h)) (aref locals (handle-index h))))))
+                (dotimes (j (joint-columns-length rows))
+                  (multiple-value-bind (set-a la) (place (aref body-a j))
+                    (if (/= set-a +set-awake+)
+                        (setf (aref row-a j) -1)
+                        (multiple-value-bind (set-b lb) (place (aref body-b j))
+                          (incf active)
+                          (let* ((b-buffer (if (= set-b +set-awake+) awake sleeping))
+                                 (b-moves (= set-b +set-awake+)))
+                            (setf (aref row-a j) la (aref row-b j) (if b-moves lb dummy))
+                            (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) awake
+                              (multiple-value-bind (rx ry rz)
+                                  (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
+                                (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz
+                                      (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la)
+                                      (aref sx j) (- (+ (aref x la) rx)) (aref sy j) (- (+ (aref y la) ry))
+                                      (aref sz j) (- (+ (aref z la) rz)))))
+                            (if (< lb 0)
+                                (setf (aref rbx j) 0.0 (aref rby j) 0.0 (aref rbz j) 0.0 (aref imb j) 0.0 (aref iib j) 0.0
+                                      (aref sx j) (+ (aref sx j) (aref bx j)) (aref sy j) (+ (aref sy j) (aref by j))
+                                      (aref sz j) (+ (aref sz j) (aref bz j)))
+                                (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) b-buffer
+                                  (multiple-value-bind (rx ry rz)
+                                      (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
+                                    (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz
+                                          (aref imb j) (if b-moves (aref inverse-mass lb) 0.0)
+                                          (aref iib j) (if b-moves (aref inverse-inertia lb) 0.0)
+                                          (aref sx j) (+ (aref sx j) (aref x lb) rx) (aref sy j) (+ (aref sy j) (aref y lb) ry)
+                                          (aref sz j) (+ (aref sz j) (aref z lb) rz))))))
+                          ;; the effective mass: a point joint's matrix inverted, a distance joint's axial mass
+                          (let* ((m (+ (aref ima j) (aref imb j))) (ia (aref iia j)) (ib (aref iib j))
+                                 (ax (aref rax j)) (ay (aref ray j)) (az (aref raz j))
+                                 (bx (aref rbx j)) (by (aref rby j)) (bz (aref rbz j)))
+                            (declare (type single-float m ia ib ax ay az bx by bz))
+                            (if (= (aref kind j) +joint-point+)
+                                (let* ((a11 (+ m (* ia (+ (* ay ay) (* az az))) (* ib (+ (* by by) (* bz bz)))))
+                                       (a22 (+ m (* ia (+ (* ax ax) (* az az))) (* ib (+ (* bx bx) (* bz bz)))))
+                                       (a33 (+ m (* ia (+ (* ax ax) (* ay ay))) (* ib (+ (* bx bx) (* by by)))))
+                                       (a12 (- (+ (* ia ax ay) (* ib bx by))))
+                                       (a13 (- (+ (* ia ax az) (* ib bx bz))))
+                                       (a23 (- (+ (* ia ay az) (* ib by bz))))
+                                       (c11 (- (* a22 a33) (* a23 a23))) (c12 (- (* a13 a23) (* a12 a33)))
+                                       (c13 (- (* a12 a23) (* a13 a22))) (c22 (- (* a11 a33) (* a13 a13)))
+                                       (c23 (- (* a12 a13) (* a11 a23))) (c33 (- (* a11 a22) (* a12 a12)))
+                                       (det (+ (* a11 c11) (* a12 c12) (* a13 c13)))
+                                       (inv (if (> det 0.0) (/ 1.0 det) 0.0)))
+                                  (setf (aref k11 j) (* c11 inv) (aref k12 j) (* c12 inv) (aref k13 j) (* c13 inv)
+                                        (aref k22 j) (* c22 inv) (aref k23 j) (* c23 inv) (aref k33 j) (* c33 inv)))
+                                (let* ((cx (aref sx j)) (cy (aref sy j)) (cz (aref sz j))
+                                       (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+                                       (s (if (> len 1e-9) (/ 1.0 len) 0.0))
+                                       (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
+                                       (ax1 (- (* ay nz) (* az ny))) (ay1 (- (* az nx) (* ax nz))) (az1 (- (* ax ny) (* ay nx)))
+                                       (bx1 (- (* by nz) (* bz ny))) (by1 (- (* bz nx) (* bx nz))) (bz1 (- (* bx ny) (* by nx)))
+                                       (k (+ m (* ia (+ (* ax1 ax1) (* ay1 ay1) (* az1 az1)))
+                                             (* ib (+ (* bx1 bx1) (* by1 by1) (* bz1 bz1))))))
+                                  (setf (aref k11 j) (if (> k 0.0) (/ 1.0 k) 0.0))))
+                            ;; the soft coefficients: the joint's own hertz, or stiff
+                            (setf (aref limit-scale j) stiff-impulse)
+                            (if (> (aref hertz j) 0.0)
+                                (multiple-value-bind (br ms is)
+                                    (if (logtest (aref flags j) +joint-spring+)
+                                        (spring-softness (aref hertz j) (aref damping-ratio j) h)
+                                        (physics-softness (aref hertz j) (aref damping-ratio j) h))
+                                  (setf (aref bias-rate j) br (aref mass-scale j) ms (aref impulse-scale j) is))
+                                (setf (aref bias-rate j) stiff-bias (aref mass-scale j) stiff-mass
+                                      (aref impulse-scale j) stiff-impulse)))))))))))
+        (and (plusp active) set)))))
+
+(defmacro with-joint-row ((v d j) &body body)
+  "Run BODY for the prepared joint J, its columns bound by with-joint-columns, over the solver's velocities V and deltas D, with:
+OA OB the two solver rows, MA MB IA IB the masses, AX .. BZ the levers, CX CY CZ the separation
+now, (relative-velocity) the anchors' relative velocity as three values and (push! PX PY PZ) the
+impulse P applied to the second body and -P to the first. #J0S0LV"
+  `(let* ((la (aref row-a ,j)) (lb (aref row-b ,j))
+          (oa (solver-row la)) (ob (solver-row lb)) (da (delta-row la)) (db (delta-row lb))
+          (ma (aref ima ,j)) (mb (aref imb ,j)) (ia (aref iia ,j)) (ib (aref iib ,j))
+          (ax (aref rax ,j)) (ay (aref ray ,j)) (az (aref raz ,j))
+          (bx (aref rbx ,j)) (by (aref rby ,j)) (bz (aref rbz ,j))
+          (cx (+ (aref sx ,j) (- (aref ,d db) (aref ,d da))))
+          (cy (+ (aref sy ,j) (- (aref ,d (+ db 1)) (aref ,d (+ da 1)))))
+          (cz (+ (aref sz ,j) (- (aref ,d (+ db 2)) (aref ,d (+ da 2))))))
+     (declare (type index la lb oa ob da db) (type single-float ma mb ia ib ax ay az bx by bz cx cy cz)
+              (ignorable cx cy cz))
+     (flet ((relative-velocity ()
+              (let ((wax (aref ,v (+ oa 3))) (way (aref ,v (+ oa 4))) (waz (aref ,v (+ oa 5)))
+                    (wbx (aref ,v (+ ob 3))) (wby (aref ,v (+ ob 4))) (wbz (aref ,v (+ ob 5))))
+                (values (- (+ (aref ,v ob) (- (* wby bz) (* wbz by))) (+ (aref ,v oa) (- (* way az) (* waz ay))))
+                        (- (+ (aref ,v (+ ob 1)) (- (* wbz bx) (* wbx bz))) (+ (aref ,v (+ oa 1)) (- (* waz ax) (* wax az))))
+                        (- (+ (aref ,v (+ ob 2)) (- (* wbx by) (* wby bx))) (+ (aref ,v (+ oa 2)) (- (* wax ay) (* way ax)))))))
+            (push! (px py pz)
+              (declare (type single-float px py pz))
+              (setf (aref ,v oa) (- (aref ,v oa) (* ma px))
+                    (aref ,v (+ oa 1)) (- (aref ,v (+ oa 1)) (* ma py))
+                    (aref ,v (+ oa 2)) (- (aref ,v (+ oa 2)) (* ma pz))
+                    (aref ,v (+ oa 3)) (- (aref ,v (+ oa 3)) (* ia (- (* ay pz) (* az py))))
+                    (aref ,v (+ oa 4)) (- (aref ,v (+ oa 4)) (* ia (- (* az px) (* ax pz))))
+                    (aref ,v (+ oa 5)) (- (aref ,v (+ oa 5)) (* ia (- (* ax py) (* ay px)))))
+              ;; the dummy row, a fixed point's or a sleeper's, stays zero
+              (when (> mb 0.0)
+                (setf (aref ,v ob) (+ (aref ,v ob) (* mb px))
+                      (aref ,v (+ ob 1)) (+ (aref ,v (+ ob 1)) (* mb py))
+                      (aref ,v (+ ob 2)) (+ (aref ,v (+ ob 2)) (* mb pz))
+                      (aref ,v (+ ob 3)) (+ (aref ,v (+ ob 3)) (* ib (- (* by pz) (* bz py))))
+                      (aref ,v (+ ob 4)) (+ (aref ,v (+ ob 4)) (* ib (- (* bz px) (* bx pz))))
+                      (aref ,v (+ ob 5)) (+ (aref ,v (+ ob 5)) (* ib (- (* bx py) (* by px))))))))
+       (declare (inline relative-velocity push!) (ignorable #'relative-velocity))
+       ,@body)))
+
+(defun warm-start-joints (set v d)
+  "Apply every prepared joint's carried impulse again, at the start of a substep. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) #.+kernel-policy+)
+  (let ((rows (joint-set-rows set)))
+    (with-joint-columns (kind row-a row-b rax ray raz rbx rby rbz sx sy sz ima imb iia iib
+                         impulse-x impulse-y impulse-z)
+        rows
+      (dotimes (j (joint-columns-length rows))
+        (when (>= (aref row-a j) 0)
+          (with-joint-row (v d j)
+            (if (= (aref kind j) +joint-point+)
+                (push! (aref impulse-x j) (aref impulse-y j) (aref impulse-z j))
+                (let* ((len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+                       (s (if (> len 1e-9) (/ (- (+ (aref impulse-x j) (aref impulse-y j)) (aref impulse-z j)) len) 0.0)))
+                  (push! (* s cx) (* s cy) (* s cz)))))))))
+  nil)
+
+(defun solve-joints (set v d inv-h use-bias)
+  "One pass over the prepared joints in row order: with the soft bias when USE-BIAS (the solve),
+without it (the relax), but for a spring's length, which keeps its own coefficients. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
+  (let ((rows (joint-set-rows set))
+        (limit-bias (joint-set-limit-bias set)) (limit-mass (joint-set-limit-mass set)))
+    (declare (type single-float limit-bias limit-mass))
+    (with-joint-columns (kind flags row-a row-b rax ray raz rbx rby rbz sx sy sz ima imb iia iib
+                         k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale limit-scale
+                         rest-length min-length max-length impulse-x impulse-y impulse-z)
+        rows
+      (dotimes (j (joint-columns-length rows))
+        (when (>= (aref row-a j) 0)
+          (with-joint-row (v d j)
+            (if (= (aref kind j) +joint-point+)
+                (multiple-value-bind (vx vy vz) (relative-velocity)
+                  (let* ((br (if use-bias (aref bias-rate j) 0.0))
+                         (ms (if use-bias (aref mass-scale j) 1.0))
+                         (is (if use-bias (aref impulse-scale j) 0.0))
+                         (rx (+ vx (* br cx))) (ry (+ vy (* br cy))) (rz (+ vz (* br cz)))
+                         (px (- (- (* ms (+ (* (aref k11 j) rx) (* (aref k12 j) ry) (* (aref k13 j) rz))))
+                                (* is (aref impulse-x j))))
+                         (py (- (- (* ms (+ (* (aref k12 j) rx) (* (aref k22 j) ry) (* (aref k23 j) rz))))
+                                (* is (aref impulse-y j))))
+                         (pz (- (- (* ms (+ (* (aref k13 j) rx) (* (aref k23 j) ry) (* (aref k33 j) rz))))
+                                (* is (aref impulse-z j)))))
+                    (setf (aref impulse-x j) (+ (aref impulse-x j) px)
+                          (aref impulse-y j) (+ (aref impulse-y j) py)
+                          (aref impulse-z j) (+ (aref impulse-z j) pz))
+                    (push! px py pz)))
+                (let* ((len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+                       (s (if (> len 1e-9) (/ 1.0 len) 0.0))
+                       (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
+                       (k (aref k11 j)) (f (aref flags j)))
+                  (declare (type single-float len s nx ny nz k) (type fixnum f))
+                  (flet ((speed-along ()
+                           (multiple-value-bind (vx vy vz) (relative-velocity)
+                             (+ (* vx nx) (* vy ny) (* vz nz)))))
+                    (declare (inline speed-along))
+                    ;; the length: a spring in the solve alone, a stiff length with the bias in the
+                    ;; solve and without it in the relax
+                    (unless (or (logtest f +joint-slack+) (and (not use-bias) (logtest f +joint-spring+)))
+                      (let* ((soft use-bias)
+                             (bias (if soft (* (aref bias-rate j) (- len (aref rest-length j))) 0.0))
+                             (ms (if soft (aref mass-scale j) 1.0))
+                             (is (if soft (aref impulse-scale j) 0.0))
+                             (p (- (- (* ms k (+ (speed-along) bias))) (* is (aref impulse-x j)))))
+                        (setf (aref impulse-x j) (+ (aref impulse-x j) p))
+                        (push! (* p nx) (* p ny) (* p nz))))
+                    ;; the bounds: impulses that only push, speculative while the bound is not reached
+                    (when (logtest f +joint-lower+)
+                      (let* ((c (- len (aref min-length j)))
+                             (bias (cond ((> c 0.0) (* c inv-h)) (use-bias (* limit-bias c)) (t 0.0)))
+                             (ms (if (and (<= c 0.0) use-bias) limit-mass 1.0))
+                             (is (if (and (<= c 0.0) use-bias) (aref limit-scale j) 0.0))
+                             (p (- (- (* ms k (+ (speed-along) bias))) (* is (aref impulse-y j))))
+                             (new (max 0.0 (+ (aref impulse-y j) p)))
+                             (q (- new (aref impulse-y j))))
+                        (setf (aref impulse-y j) new)
+                        (push! (* q nx) (* q ny) (* q nz))))
+                    (when (logtest f +joint-upper+)
+                      (let* ((c (- (aref max-length j) len))
+                             (bias (cond ((> c 0.0) (* c inv-h)) (use-bias (* limit-bias c)) (t 0.0)))
+                             (ms (if (and (<= c 0.0) use-bias) limit-mass 1.0))
+                             (is (if (and (<= c 0.0) use-bias) (aref limit-scale j) 0.0))
+                             (p (- (- (* ms k (+ (- (speed-along)) bias))) (* is (aref impulse-z j))))
+                             (new (max 0.0 (+ (aref impulse-z j) p)))
+                             (q (- new (aref impulse-z j))))
+                        (setf (aref impulse-z j) new)
+                        (push! (- (* q nx)) (- (* q ny)) (- (* q nz)))))))))))))
+  nil)
+
+(defun break-joints (world set)
+  "Remove every solved joint of SET whose last substep impulse over the substep exceeds its break
+force, each with a :joint-break event: both bodies, its first anchor's point, the force. #J0S0LV"
+  (let* ((rows (joint-set-rows set))
+         (inv-h (/ 1.0 (physics-world-current-h world))))
+    (loop for j from (1- (joint-columns-length rows)) downto 0
+          do (let ((limit (aref (joint-columns-break-force rows) j)))
+               (when (and (> limit 0.0) (>= (aref (joint-columns-row-a rows) j) 0))
+                 (let ((force (* inv-h (joint-row-impulse rows j))))
+                   (when (> force limit)
+                     (multiple-value-bind (x y z) (joint-anchor-points world j)
+                       (push-event world +event-joint-break+ (aref (joint-columns-body-a rows) j)
+                                   (aref (joint-columns-body-b rows) j) x y z force
+                                   (aref (joint-columns-handle rows) j)))
+                     (remove-joint-row world set j))))))))
+;; Joints in the substeps:1 ends here
+
+;; [[file:../physics.org::#J0SL3P][Joint groups sleep and wake together:1]]
+(defun refresh-joint-groups (world set)
+  "Make SET's groups current: when stale, every body slot its own group again, then one union for
+each joint of two bodies. #J0SL3P"
+  (ensure-joint-slots world set)
+  (when (joint-set-groups-stale set)
+    (let ((parent (joint-set-parent set)) (rows (joint-set-rows set)))
+      (dotimes (i (length parent)) (setf (aref parent i) i))
+      (dotimes (j (joint-columns-length rows))
+        (let ((b (aref (joint-columns-body-b rows) j)))
+          (unless (= b +no-body+)
+            (setf (aref parent (group-root parent (handle-index (aref (joint-columns-body-a rows) j))))
+                  (group-root parent (handle-index b))))))
+      (setf (joint-set-groups-stale set) nil)))
+  set)
+
+(defmacro do-joint-bodies ((slot set) &body body)
+  "Run BODY with SLOT bound to the body slot of each side of each joint of SET that is a body. #J0SL3P"
+  (let ((rows (gensym "ROWS")) (j (gensym "J")) (b (gensym "B")))
+    `(let ((,rows (joint-set-rows ,set)))
+       (dotimes (,j (joint-columns-length ,rows))
+         (let ((,slot (handle-index (aref (joint-columns-body-a ,rows) ,j)))) ,@body)
+         (let ((,b (aref (joint-columns-body-b ,rows) ,j)))
+           (unless (= ,b +no-body+) (let ((,slot (handle-index ,b))) ,@body)))))))
+
+(defun wake-joint-groups (world)
+  "Wake every sleeper of a joint group that has an awake body; return how many woke. Run at the
+end of the wake phase. #J0SL3P"
+  (let ((set (physics-world-joints world)) (woken 0))
+    (when (and set (plusp (joint-columns-length (joint-set-rows set)))
+               (plusp (body-columns-length (physics-world-sleeping world))))
+      (refresh-joint-groups world set)
+      (let* ((parent (joint-set-parent set)) (marks (joint-set-marks set))
+             (ids (physics-world-ids world)) (sets (handle-table-set ids)) (locals (handle-table-local ids)))
+        (do-joint-bodies (slot set) (setf (aref marks (group-root parent slot)) 0))
+        (do-joint-bodies (slot set)
+          (when (= (aref sets slot) +set-awake+) (setf (aref marks (group-root parent slot)) 1)))
+        (do-joint-bodies (slot set)
+          (when (and (= (aref sets slot) +set-sleeping+) (= 1 (aref marks (group-root parent slot))))
+            (wake-physics-body world (aref locals slot))
+            (incf woken)))))
+    woken))
+
+(defun sleep-joint-groups (world set)
+  "Put to sleep every awake body of each joint group of SET whose awake bodies have all been
+still for WORLD's time to sleep. #J0SL3P"
+  (refresh-joint-groups world set)
+  (let* ((parent (joint-set-parent set)) (marks (joint-set-marks set))
+         (ids (physics-world-ids world)) (sets (handle-table-set ids)) (locals (handle-table-local ids))
+         (stillness (body-columns-sleep-time (physics-world-awake world)))
+         (time-to-sleep (f32 (physics-world-time-to-sleep world))))
+    (do-joint-bodies (slot set) (setf (aref marks (group-root parent slot)) 1))
+    (do-joint-bodies (slot set)
+      (when (and (= (aref sets slot) +set-awake+) (< (aref stillness (aref locals slot)) time-to-sleep))
+        (setf (aref marks (group-root parent slot)) 0)))
+    (do-joint-bodies (slot set)
+      (when (and (= (aref sets slot) +set-awake+) (= 1 (aref marks (group-root parent slot))))
+        (sleep-physics-body world (aref locals slot))))))
+
+(defun finish-joints (world)
+  "The end of a step with joints, in the finalize phase: break the joints over their force, then
+put to sleep the groups still for long enough, when WORLD sleeps. #J0SL3P"
+  (let ((set (physics-world-joints world)))
+    (when (and set (plusp (joint-columns-length (joint-set-rows set))))
+      (break-joints world set)
+      (when (physics-world-sleep-enabled world) (sleep-joint-groups world set)))))
+;; Joint groups sleep and wake together:1 ends here
+
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (declaim (inline held-marking-p mark-held))
 (defun held-marking-p (world)
@@ -5797,8 +6517,8 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
     (fold-solver-state awake v dt)
     ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
     ;; moved, so the solver's rows still match it
-    (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle) awake
-      (declare (ignorable vx vy vz wx wy wz radius sleep-time age life))
+    (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle flags) awake
+      (declare (ignorable vx vy vz wx wy wz radius sleep-time age life flags))
       (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
         (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
                (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
@@ -5817,7 +6537,9 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
                  ;; a body only sleepers and terrain touch is judged by its displacement alone
                  (if (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
                           (not (and settle-p (logtest (aref settling i) 4))))
-                     (when (>= (incf (aref sleep-time i) dt) time-to-sleep)
+                     ;; a jointed body sleeps with its group ([[#J0SL3P]])
+                     (when (and (>= (incf (aref sleep-time i) dt) time-to-sleep)
+                                (not (logtest (aref flags i) +flag-jointed+)))
                        (sleep-physics-body world i))
                      (setf (aref sleep-time i) 0.0)))))))
     ;; only a world with a mortal sleeper walks the sleeping buffer, and only its rows that
@@ -5829,6 +6551,8 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
         (when (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i)))
           (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
           (%remove-body world +set-sleeping+ i)))))
+    ;; joints over their force break, and still joint groups sleep ([[#J0SL3P]])
+    (when (physics-world-joints world) (finish-joints world))
     world))
 ;; Finalize: positions, orientation, age and sleep:1 ends here
 
@@ -6170,13 +6894,18 @@ bodies to half the push-out speed. #IDVK7G"
          ;; the box rows and their caps ([[#SQU33Z]]): none in a step where no body touched a box
          (boxed (if (= (physics-world-box-touch-step world) (physics-world-step-count world))
                     (note-box-rows world)
-                    0)))
+                    0))
+         ;; the joints to solve, prepared, or NIL ([[#J0S0LV]])
+         (joints (and (physics-world-joints world) (prepare-joints world h)))
+         (v (physics-world-velocities world)) (d (physics-world-deltas world)))
     (declare (type single-float h inv-h) (type fixnum relaxes boxed))
     (let ((squeezed nil))
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
+        (when joints (warm-start-joints joints v d))
         (physics-warm-start kernels world)
+        (when joints (solve-joints joints v d inv-h t))
         (physics-solve-contacts kernels world inv-h t elapsed)
         (flet ((yield-boxes ()
                  ;; a box that yields squeezes what it presses: from then on the step holds it
@@ -6186,6 +6915,7 @@ bodies to half the push-out speed. #IDVK7G"
           (when (plusp boxed) (yield-boxes))
           (physics-integrate-positions kernels world h)
           (dotimes (k relaxes)
+            (when joints (solve-joints joints v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
@@ -6596,6 +7326,8 @@ physics-world-invalid naming the first broken invariant. #V4L1D8"
                 (fail "handle slot ~D holds a force no call applied" slot)))))
         (unless (= scaled (physics-world-scaled-count world))
           (fail "~D gravity scales other than 1 counted as ~D" scaled (physics-world-scaled-count world))))
+      ;; the joints ([[#J0STOR]])
+      (validate-joints world #'fail)
       t)))
 ;; The validation walker:1 ends here
 

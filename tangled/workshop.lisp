@@ -4117,7 +4117,8 @@ wp-peers-SCENE.svg. #P33R5X"
   "A run as it was stepped, one frame every EVERY steps: each body's centre (XYZ, three floats),
 RADIUS, STYLE (its kind's number times two, plus one for a sleeper), HANDLE and VELOCITY (three
 floats); each frame's first body, body count and figures (FRAMES); each frame's first contact in
-CONTACTS (CONTACT-STARTS), six floats a contact, point and normal; the boxes posted for each
+CONTACTS (CONTACT-STARTS), six floats a contact, point and normal; each frame's first joint in
+JOINTS (JOINT-STARTS), six floats a joint, its two anchors' points; the boxes posted for each
 recorded step (BOXES, a list of frame and centre and half extents); the world's TERRAIN, to draw
 its cells; and BOUNDS, NIL or the corners (x0 y0 z0 x1 y1 z1) of the terrain to draw. #G4WXCJ"
   (terrain nil)
@@ -4131,12 +4132,15 @@ its cells; and BOUNDS, NIL or the corners (x0 y0 z0 x1 y1 z1) of the terrain to 
   (velocity (make-array 4096 :element-type 'single-float :adjustable t :fill-pointer 0))
   (contacts (make-array 1024 :element-type 'single-float :adjustable t :fill-pointer 0))
   (contact-starts (make-array 64 :element-type 'fixnum :adjustable t :fill-pointer 0))
+  (joints (make-array 0 :element-type 'single-float :adjustable t :fill-pointer 0))
+  (joint-starts (make-array 64 :element-type 'fixnum :adjustable t :fill-pointer 0))
   (frames (make-array 64 :adjustable t :fill-pointer 0))
   (boxes '()))
 
 (defun record-physics-frame (recording world)
   "Append WORLD's present state to RECORDING as one frame: every body, awake ones first, the boxes
-posted for the step, the first +recorded-contacts+ touching contacts, and the frame's figures, a
+posted for the step, the first +recorded-contacts+ touching contacts, every joint's two anchor
+points ([[#J0STOR]]), and the frame's figures, a
 vector of the first body, the body count, the awake and sleeping counts, the contacts, the step's
 milliseconds and the simulated seconds. #G4WXCJ"
   (let* ((xyz (physics-recording-xyz recording))
@@ -4170,6 +4174,11 @@ milliseconds and the simulated seconds. #G4WXCJ"
                  (dolist (v (list (contact@ geometry row px) (contact@ geometry row py) (contact@ geometry row pz)
                                   (contact@ geometry row nx) (contact@ geometry row ny) (contact@ geometry row nz)))
                    (vector-push-extend v out))))
+    (let ((out (physics-recording-joints recording)))
+      (vector-push-extend (floor (fill-pointer out) 6) (physics-recording-joint-starts recording))
+      (dotimes (row (physics-world-joint-count world))
+        (dolist (v (multiple-value-list (joint-anchor-points world row)))
+          (vector-push-extend v out))))
     (let ((boxes (physics-world-boxes world)))
       (dotimes (row (box-columns-length boxes))
         (flet ((middle (lo hi) (* 0.5 (+ (aref lo row) (aref hi row))))
@@ -4409,6 +4418,8 @@ drawn within BOUNDS (recording-cells). #RH7T05"
           (format stream "\"cellLo\": [~{~,4F~^, ~}], \"cellHi\": [~{~,4F~^, ~}],~%" cell-lo cell-hi))
         (format stream "\"contactStarts\": [~{~D~^,~}],~%" (coerce (physics-recording-contact-starts recording) 'list))
         (format stream "\"contacts\": [~{~,3F~^,~}],~%" (coerce (physics-recording-contacts recording) 'list))
+        (format stream "\"jointStarts\": [~{~D~^,~}],~%" (coerce (physics-recording-joint-starts recording) 'list))
+        (format stream "\"joints\": [~{~,3F~^,~}],~%" (coerce (physics-recording-joints recording) 'list))
         (format stream "\"positions\": \"")
         (write-base64 (recording-quanta recording lo hi) stream)
         (format stream "\",~%\"styles\": \"")

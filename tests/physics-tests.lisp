@@ -6116,6 +6116,366 @@ the phases of a step before the prepare phase. #PR3PAR"
                  "at ~,2F m/s the ball leaves the wall at ~,4F m/s" speed leaving))))))
 ;; R3ST1T-threshold-is-the-edge ends here
 
+;; [[file:../physics.org::#J0STOR][J0STOR-bad-input-refused]]
+(define-claim "J0STOR" bad-input-refused
+    "Each bad add-physics-joint signals its named physics-error; the world keeps no joint, validates and hashes the same."
+  (let* ((w (make-floor-world))
+         (a (add-physics-body w 2.5 2.0 2.5 :radius 0.25))
+         (b (add-physics-body w 3.5 2.0 2.5 :radius 0.25))
+         (gone (add-physics-body w 5.5 2.0 2.5))
+         (plain (make-physics-world :features '(:terrain :body-contacts :friction)))
+         (p (add-physics-body plain 0 0 0))
+         (nan (sb-kernel:make-single-float -4194304)))
+    (remove-physics-body w gone)
+    (let ((hash (physics-world-state-hash w)))
+      (loop for (want name call)
+              in (list (list 'physics-feature-omitted :joints (lambda () (add-physics-joint plain :point p nil)))
+                       (list 'invalid-physics-parameter :kind (lambda () (add-physics-joint w :hinge a b)))
+                       (list 'stale-physics-handle :removed (lambda () (add-physics-joint w :point a gone)))
+                       (list 'invalid-physics-parameter :body-b (lambda () (add-physics-joint w :point a a)))
+                       (list 'invalid-physics-parameter :anchor-a (lambda () (add-physics-joint w :point a b :anchor-a '(0 1))))
+                       (list 'invalid-physics-number :anchor-a (lambda () (add-physics-joint w :point a b :anchor-a (list 0 nan 0))))
+                       (list 'invalid-physics-parameter :anchor-a (lambda () (add-physics-joint w :point a b :anchor-a '(0.6 0 0))))
+                       (list 'invalid-physics-parameter :anchor-b (lambda () (add-physics-joint w :distance a nil :anchor-b '(0 1e9 0))))
+                       (list 'invalid-physics-parameter :length (lambda () (add-physics-joint w :distance a b :length -1)))
+                       (list 'invalid-physics-number :length (lambda () (add-physics-joint w :distance a b :length nan)))
+                       (list 'invalid-physics-parameter :length (lambda () (add-physics-joint w :distance a b :length 0.001)))
+                       (list 'invalid-physics-parameter :max-length
+                             (lambda () (add-physics-joint w :distance a b :rope t :min-length 0.8 :max-length 0.5)))
+                       (list 'invalid-physics-parameter :length (lambda () (add-physics-joint w :point a b :length 1)))
+                       (list 'invalid-physics-parameter :hertz (lambda () (add-physics-joint w :distance a b :hertz -2)))
+                       (list 'invalid-physics-number :damping-ratio (lambda () (add-physics-joint w :distance a b :hertz 2 :damping-ratio nan)))
+                       (list 'invalid-physics-parameter :break-force (lambda () (add-physics-joint w :point a b :break-force 0))))
+            do (let ((e (handler-case (progn (funcall call) :no-error) (error (e) e))))
+                 (check (typep e want) "~S gave ~A, not ~(~A~)" name e want)
+                 (when (typep e 'physics-error)
+                   (check (eq name (typecase e
+                                     (physics-feature-omitted (luv-physics::physics-feature-omitted-feature e))
+                                     (stale-physics-handle (luv-physics::stale-physics-handle-reason e))
+                                     (invalid-physics-number (luv-physics::invalid-physics-number-name e))
+                                     (invalid-physics-parameter (luv-physics::invalid-physics-parameter-name e))))
+                          "~A names another argument than ~S" e name))
+                 (check (= 0 (physics-world-joint-count w)) "a refused ~S left a joint" name)
+                 (check (= hash (physics-world-state-hash w)) "a refused ~S changed the hash" name)
+                 (check (eq t (validate-physics-world w))))))))
+;; J0STOR-bad-input-refused ends here
+
+;; [[file:../physics.org::#J0STOR][J0STOR-joint-handles]]
+(define-claim "J0STOR" joint-handles
+    "Stale, foreign and crossed joint and body handles are refused by reason; a live joint's readers answer."
+  (let* ((w (make-floor-world)) (other (make-floor-world))
+         (a (add-physics-body w 2.5 2.0 2.5)) (b (add-physics-body w 3.5 2.0 2.5))
+         (c (add-physics-body other 2.5 2.0 2.5))
+         (j (add-physics-joint w :distance a b))
+         (foreign (add-physics-joint other :distance c nil :anchor-b '(2.5 3.0 2.5))))
+    (flet ((reason (call) (handler-case (progn (funcall call) :no-error)
+                            (stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e)))))
+      (check (equal (list a b) (multiple-value-list (physics-joint-bodies w j))))
+      (check (< (abs (- 1.0 (physics-joint-length w j))) 1e-6) "length ~A" (physics-joint-length w j))
+      (check (eq :foreign (reason (lambda () (physics-joint-length w foreign)))))
+      (check (eq :malformed (reason (lambda () (physics-joint-length w a)))))
+      (check (eq :malformed (reason (lambda () (physics-body-position w j)))))
+      (remove-physics-joint w j)
+      (check (eq :removed (reason (lambda () (remove-physics-joint w j)))))
+      (check (not (physics-joint-alive-p w j)))
+      (let ((again (add-physics-joint w :point a b :anchor-a '(0.5 0 0) :anchor-b '(-0.5 0 0))))
+        (check (= (luv-physics::handle-index again) (luv-physics::handle-index j)) "the slot was not reused")
+        (check (> (luv-physics::handle-generation again) (luv-physics::handle-generation j)))
+        (check (physics-joint-alive-p w again))
+        (check (eq t (validate-physics-world w)))))))
+;; J0STOR-joint-handles ends here
+
+;; [[file:../physics.org::#J0STOR][J0STOR-body-removal-removes-joints]]
+(define-claim "J0STOR" body-removal-removes-joints
+    "Removing a body removes its joints, each with a :joint-removed event; the others stay; the world validates."
+  (let* ((w (make-floor-world))
+         (balls (loop for i from 1 to 3 collect (add-physics-body w 3.5 (- 10 i) 3.5)))
+         (top (add-physics-joint w :distance (first balls) nil :anchor-b '(3.5 10 3.5)))
+         (upper (add-physics-joint w :distance (first balls) (second balls)))
+         (lower (add-physics-joint w :distance (second balls) (third balls)))
+         (seen '()))
+    (step-physics-world w)
+    (remove-physics-body w (second balls))
+    (map-physics-events (lambda (kind a b x y z speed datum) (declare (ignore x y z speed))
+                          (when (eq kind :joint-removed) (push (list a b datum) seen)))
+                        w)
+    (check (= 1 (physics-world-joint-count w)) "~D joints left" (physics-world-joint-count w))
+    (check (physics-joint-alive-p w top))
+    (check (not (or (physics-joint-alive-p w upper) (physics-joint-alive-p w lower))))
+    (check (equal (sort (mapcar #'third seen) #'<) (sort (list upper lower) #'<)) "events ~S" seen)
+    (check (every (lambda (e) (member (second balls) (subseq e 0 2))) seen))
+    (check (eq t (validate-physics-world w)))
+    (multiple-value-bind (set row) (luv-physics::resolve-handle w (third balls))
+      (check (not (logtest luv-physics::+flag-jointed+
+                           (aref (luv-physics::body-columns-flags (luv-physics::set-buffer w set)) row)))))))
+;; J0STOR-body-removal-removes-joints ends here
+
+;; [[file:../physics.org::#J0STOR][J0STOR-recorded-joints]]
+(define-claim "J0STOR" recorded-joints
+    "A recorded pendulum keeps one joint a frame, fixed point to ball centre; the viewer's file holds them."
+  (let* ((w (make-physics-world :sleep nil))
+         (ball (add-physics-body w 0.6 9.2 0 :radius 0.1))
+         (joint (add-physics-joint w :distance ball nil :anchor-b '(0 10 0)))
+         (recording (luv-physics::start-physics-recording w))
+         (centres (list (multiple-value-list (physics-body-position w ball)))))
+    (declare (ignore joint))
+    (dotimes (i 10)
+      (step-physics-world w)
+      (push (multiple-value-list (physics-body-position w ball)) centres))
+    (setf centres (nreverse centres))
+    (let ((joints (luv-physics::physics-recording-joints recording))
+          (starts (luv-physics::physics-recording-joint-starts recording)))
+      (check (equal (loop for i to 10 collect i) (coerce starts 'list)) "joint starts ~S" starts)
+      (loop for k to 10 for centre in centres
+            do (check (every (lambda (want got) (< (abs (- want got)) 1e-3))
+                             (append centre '(0 10 0)) (coerce (subseq joints (* 6 k) (* 6 (1+ k))) 'list))
+                      "frame ~D holds ~S" k (subseq joints (* 6 k) (* 6 (1+ k))))))
+    (let ((path (merge-pathnames "report/joints-viewer-claim.html" (asdf:system-source-directory "luv-physics"))))
+      (luv-physics::write-physics-viewer recording path)
+      (let ((text (uiop:read-file-string path)))
+        (check (search "\"joints\": [" text))
+        (check (search (format nil "~,3F" (first (first centres))) text)))
+      (delete-file path))))
+;; J0STOR-recorded-joints ends here
+
+;; [[file:../physics.org::#J0S0LV][J0S0LV-families-agree-with-joints]]
+(defun swinging-chain-world (kernels &key (links 8) (sleep t))
+  "A floor world of family KERNELS with a chain of LINKS balls of radius 0.2 joined at their
+surfaces by point joints, hung by a rope from the point 3.5 6 3.5, its balls laid out sideways so
+that it swings, and a loose ball on the floor under it. Return the world and the balls. #J0S0LV"
+  (let* ((w (make-physics-world :terrain (make-floor-terrain) :kernels kernels :sleep sleep))
+         (balls (loop for i from 1 to links
+                      collect (add-physics-body w (+ 3.5 (* 0.4 i)) 5.5 3.5 :radius 0.2 :friction 0.3))))
+    (add-physics-body w 4.5 0.2 3.5 :radius 0.3)
+    (add-physics-joint w :distance (first balls) nil :anchor-a '(-0.2 0 0) :anchor-b '(3.5 5.5 3.5) :rope t)
+    (loop for (p q) on balls while q
+          do (add-physics-joint w :point p q :anchor-a '(0.2 0 0) :anchor-b '(-0.2 0 0)))
+    (values w balls)))
+
+(define-claim "J0S0LV" families-agree-with-joints
+    "A swinging jointed chain over a ball on the floor ends with one state hash in every kernel family."
+  (let ((hashes (loop for family in (available-kernel-families)
+                      collect (multiple-value-bind (w balls) (swinging-chain-world family)
+                                (dotimes (i 150) (step-physics-world w))
+                                (check (> (abs (- 4.3 (physics-body-position w (first balls)))) 0.1) "the chain did not swing")
+                                (check (eq t (validate-physics-world w)))
+                                (physics-world-state-hash w)))))
+    (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes)))
+;; J0S0LV-families-agree-with-joints ends here
+
+;; [[file:../physics.org::#J0S0LV][J0S0LV-joint-steps-cons-nothing]]
+(define-claim "J0S0LV" joint-steps-cons-nothing
+    "60 steps of a jointed chain, after 60 to grow, cons 0 bytes."
+  (let ((w (swinging-chain-world :scalar :sleep nil)))
+    (dotimes (i 60) (step-physics-world w))
+    (let ((before (sb-ext:get-bytes-consed)))
+      (dotimes (i 60) (step-physics-world w))
+      (check (= 0 (- (sb-ext:get-bytes-consed) before)) "60 steps consed ~D bytes"
+             (- (sb-ext:get-bytes-consed) before)))))
+;; J0S0LV-joint-steps-cons-nothing ends here
+
+;; [[file:../physics.org::#J0S0LV][J0S0LV-breaks-above-its-force]]
+(define-claim "J0S0LV" breaks-above-its-force
+    "A 10 kg ball breaks a 50 N joint in its first step (event, force ~ 98.1 N) and not a 150 N one."
+  (flet ((hang (force)
+           (let* ((w (make-physics-world :sleep nil))
+                  (ball (add-physics-body w 0 9 0 :mass 10))
+                  (joint (add-physics-joint w :distance ball nil :anchor-b '(0 10 0) :break-force force)))
+             (values w ball joint))))
+    (multiple-value-bind (w ball joint) (hang 50)
+      (let ((events (step-events w)))
+        (let ((e (find :joint-break events :key #'first)))
+          (check (not (null e)) "no :joint-break in ~S" events)
+          (when e
+            (check (equal (list ball -1) (subseq e 1 3)) "the event names ~S" (subseq e 1 3))
+            (check (< (abs (- (fourth e) 98.1)) (* 0.05 98.1)) "the force is ~A" (fourth e))
+            (check (= joint (fifth e)) "the datum is ~S" (fifth e)))))
+      (check (not (physics-joint-alive-p w joint)))
+      (dotimes (i 30) (step-physics-world w))
+      (check (< (nth-value 1 (physics-body-position w ball)) 8) "the ball did not fall")
+      (check (eq t (validate-physics-world w))))
+    (multiple-value-bind (w ball joint) (hang 150)
+      (dotimes (i 60) (step-physics-world w))
+      (check (physics-joint-alive-p w joint))
+      (check (< (abs (- 9 (nth-value 1 (physics-body-position w ball)))) 0.01)))))
+;; J0S0LV-breaks-above-its-force ends here
+
+;; [[file:../physics.org::#J0SL3P][J0SL3P-groups-sleep-and-wake-together]]
+(define-claim "J0SL3P" groups-sleep-and-wake-together
+    "Five jointed balls sleep on one step; an impulse on the lowest wakes all five by the next step."
+  (let* ((w (make-floor-world))
+         (balls (loop for i from 1 to 5 collect (add-physics-body w 3.5 (- 10 (* 0.5 i)) 3.5 :radius 0.1)))
+         (slept '()))
+    (add-physics-joint w :distance (first balls) nil :anchor-b '(3.5 10 3.5))
+    (loop for (p q) on balls while q do (add-physics-joint w :distance p q))
+    (loop for step from 1 to 120
+          do (loop for (kind a) in (step-events w)
+                   when (eq kind :slept) do (push (list step a) slept)))
+    (check (= 5 (length slept)) "slept: ~S" slept)
+    (check (= 1 (length (remove-duplicates (mapcar #'first slept)))) "they slept on steps ~S" (mapcar #'first slept))
+    (check (= 5 (physics-world-sleeping-count w)))
+    (apply-physics-impulse w (fifth balls) 0.5 0 0)
+    (check (physics-body-awake-p w (fifth balls)))
+    (step-physics-world w)
+    (check (every (lambda (b) (physics-body-awake-p w b)) balls) "awake: ~S"
+           (mapcar (lambda (b) (physics-body-awake-p w b)) balls))
+    (check (eq t (validate-physics-world w)))))
+;; J0SL3P-groups-sleep-and-wake-together ends here
+
+;; [[file:../physics.org::#J0PHYS][Joints against physics:1]]
+(defun pendulum-run (degrees seconds &key (length 1.0))
+  "A ball of radius 0.1 on a stiff distance joint of LENGTH to a fixed point, released at rest
+DEGREES from the vertical and run SECONDS in open space; return its period, measured between the
+first and last upward crossings of the vertical, and its energy at the end over its energy at
+the start. #J0PHYS"
+  (let* ((w (make-physics-world :sleep nil))
+         (theta (* degrees (/ pi 180)))
+         (ball (add-physics-body w (* length (sin theta)) (- 10 (* length (cos theta))) 0 :radius 0.1 :friction 0))
+         (crossings '()) (previous nil))
+    (add-physics-joint w :distance ball nil :anchor-b '(0 10 0))
+    (flet ((energy ()
+             (multiple-value-bind (vx vy vz) (physics-body-velocity w ball)
+               (+ (* 0.5d0 (+ (* vx vx) (* vy vy) (* vz vz)))
+                  (* 9.81d0 (- (nth-value 1 (physics-body-position w ball)) (- 10 length)))))))
+      (let ((start (energy)))
+        (dotimes (i (round (* 60 seconds)))
+          (step-physics-world w)
+          (let ((x (physics-body-position w ball)))
+            (when (and previous (< previous 0) (>= x 0))
+              (push (+ i (/ (- previous) (- x previous))) crossings))
+            (setf previous x)))
+        (values (/ (- (first crossings) (car (last crossings))) (1- (length crossings)) 60d0)
+                (/ (energy) start))))))
+
+(defun elliptic-period (degrees length)
+  "The exact period of a simple pendulum of LENGTH released at DEGREES, under g = 9.81. #J0PHYS"
+  (let ((k (sin (* degrees (/ pi 360)))) (a 1d0) (b 0d0))
+    (setf b (sqrt (- 1 (* k k))))
+    (loop repeat 40 do (psetf a (/ (+ a b) 2) b (sqrt (* a b))))
+    (* 4 (sqrt (/ length 9.81d0)) (/ pi (* 2 a)))))
+
+(defun hanging-chain-stretch (links &key (heavy 1.0) rope (link 0.5) (seconds 5))
+  "The stretch, over its length, of a chain of LINKS balls of 1 kg (the last one HEAVY kg) joined
+centre to centre by distance joints of LINK m (ropes when ROPE), hung from a fixed point and run
+SECONDS at rest. #J0PHYS"
+  (let* ((w (make-physics-world :sleep nil))
+         (balls (loop for i from 1 to links
+                      collect (add-physics-body w 0 (- 20 (* i link)) 0 :radius 0.1 :friction 0
+                                                                  :mass (if (= i links) heavy 1.0)))))
+    (add-physics-joint w :distance (first balls) nil :anchor-b '(0 20 0) :rope rope)
+    (loop for (p q) on balls while q do (add-physics-joint w :distance p q :rope rope))
+    (dotimes (i (* 60 seconds)) (step-physics-world w))
+    (/ (- (- 20 (nth-value 1 (physics-body-position w (car (last balls))))) (* links link)) (* links link))))
+;; Joints against physics:1 ends here
+
+;; [[file:../physics.org::#J0PHYS][J0PHYS-pendulum-period-and-energy]]
+(define-claim "J0PHYS" pendulum-period-and-energy
+    "A 1 m pendulum: period within 0.5 % of 2 pi sqrt(L/g) at 5 degrees; at 90, within 1 % of the elliptic period, energy within 2 % after 60 s."
+  (let ((small (* 2 pi (sqrt (/ 1 9.81d0)))))
+    (let ((period (pendulum-run 5 20)))
+      (check (< (abs (- period small)) (* 0.005 small)) "at 5 degrees the period is ~,5F s, not ~,5F" period small)))
+  (multiple-value-bind (period energy) (pendulum-run 90 60)
+    (let ((exact (elliptic-period 90 1)))
+      (check (< (abs (- period exact)) (* 0.01 exact)) "at 90 degrees the period is ~,5F s, not ~,5F" period exact)
+      (check (< (abs (- energy 1)) 0.02) "after 60 s the energy is ~,4F of the start" energy))))
+;; J0PHYS-pendulum-period-and-energy ends here
+
+;; [[file:../physics.org::#J0PHYS][J0PHYS-spring-is-the-damped-oscillator]]
+(define-claim "J0PHYS" spring-is-the-damped-oscillator
+    "Spring joints of (1 Hz, 0.1), (2 Hz, 0.05), (0.5 Hz, 0.2): period and peak ratios within 1 % of the damped oscillator's."
+  (loop for (hertz zeta seconds) in '((1.0 0.1 10) (2.0 0.05 10) (0.5 0.2 20))
+        do (let* ((w (make-physics-world :sleep nil :gravity '(0 0 0)))
+                  (ball (add-physics-body w 1.2 0 0 :radius 0.1 :friction 0))
+                  (xs (make-array (* 60 seconds))) (ups '()) (peaks '()))
+             (add-physics-joint w :distance ball nil :anchor-b '(0 0 0) :length 1.0 :hertz hertz :damping-ratio zeta)
+             (dotimes (i (length xs))
+               (step-physics-world w)
+               (setf (aref xs i) (- (physics-body-position w ball) 1d0)))
+             (loop for i from 1 below (1- (length xs))
+                   for a = (aref xs (1- i)) for x = (aref xs i)
+                   do (when (and (< a 0) (>= x 0)) (push (+ i (/ (- a) (- x a))) ups))
+                      (when (and (> x 0) (> x a) (>= x (aref xs (1+ i)))) (push x peaks)))
+             (let* ((ups (reverse ups)) (peaks (reverse peaks))
+                    (omega (* 2 pi hertz))
+                    (want (/ (* 2 pi) (* omega (sqrt (- 1 (* zeta zeta))))))
+                    (period (/ (- (car (last ups)) (first ups)) (1- (length ups)) 60))
+                    (decay (exp (- (* zeta omega want)))))
+               (check (< (abs (- period want)) (* 0.01 want)) "~A Hz: period ~,5F s, not ~,5F" hertz period want)
+               (check (>= (length peaks) 5) "~A Hz: only ~D peaks" hertz (length peaks))
+               (loop for (p q) on peaks for k below 4
+                     do (check (< (abs (- (/ q p) decay)) (* 0.01 decay))
+                               "~A Hz: peak ratio ~,4F, not ~,4F" hertz (/ q p) decay))))))
+;; J0PHYS-spring-is-the-damped-oscillator ends here
+
+;; [[file:../physics.org::#J0PHYS][J0PHYS-hanging-chain-stretch]]
+(define-claim "J0PHYS" hanging-chain-stretch
+    "A chain of 20 stretches < 0.5 %, < 3.5 % under a 100 kg ball; a rope of 20 likewise, and taut."
+  (loop for (rope heavy bound) in '((nil 1.0 0.005) (nil 100.0 0.035) (t 1.0 0.005) (t 100.0 0.035))
+        do (let ((stretch (hanging-chain-stretch 20 :heavy heavy :rope rope)))
+             (check (< 0 stretch bound) "~:[chain~;rope~] of 20, last ball ~A kg: stretch ~,3F %, bound ~,1F %"
+                    rope heavy (* 100 stretch) (* 100 bound)))))
+;; J0PHYS-hanging-chain-stretch ends here
+
+;; [[file:../physics.org::#J0PHYS][J0PHYS-cradle-on-strings]]
+(defun cradle-world (kernels)
+  "Newton's cradle on strings in open space, solved by KERNELS: five touching balls of radius 0.25
+and restitution 1, each on two distance joints of 1 m to the points 0.5 m either side of it at
+height 10, the first drawn back 30 degrees. Return the world, the balls and their rest height. #J0PHYS"
+  (let* ((w (make-physics-world :kernels kernels :sleep nil))
+         (drop (sqrt 0.75)) (rest (- 10 drop)) (theta (/ pi 6))
+         (balls (loop for i below 5 collect (add-physics-body w (* i 0.5) rest 0 :radius 0.25 :friction 0
+                                                                                :restitution 1.0))))
+    (set-physics-body-position w (first balls) (- (* drop (sin theta))) (- 10 (* drop (cos theta))) 0)
+    (loop for ball in balls for i from 0
+          do (dolist (z '(0.5 -0.5))
+               (add-physics-joint w :distance ball nil :anchor-b (list (* i 0.5) 10 z) :length 1.0)))
+    (values w balls rest)))
+
+(define-claim "J0PHYS" cradle-on-strings
+    "Newton's cradle on strings: the last ball rises >= 90 % of the release height, the middle three < 5 %, families equal."
+  (let ((hashes '()))
+    (dolist (family (available-kernel-families))
+      (multiple-value-bind (w balls rest) (cradle-world family)
+        (let ((release (- (nth-value 1 (physics-body-position w (first balls))) rest))
+              (highest (make-list 5 :initial-element 0d0)))
+          (dotimes (step 90)
+            (step-physics-world w)
+            (loop for ball in balls for k from 0
+                  do (setf (nth k highest) (max (nth k highest) (- (nth-value 1 (physics-body-position w ball)) rest)))))
+          (check (>= (fifth highest) (* 0.9 release)) "~A: the last ball rose ~,4F m of ~,4F" family (fifth highest) release)
+          (loop for k from 1 to 3
+                do (check (< (nth k highest) (* 0.05 release)) "~A: ball ~D rose ~,4F m of ~,4F" family k (nth k highest) release))
+          (push (physics-world-state-hash w) hashes))))
+    (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes)))
+;; J0PHYS-cradle-on-strings ends here
+
+;; [[file:../physics.org::#J0PHYS][J0PHYS-rope-bridge-is-a-catenary]]
+(define-claim "J0PHYS" rope-bridge-is-a-catenary
+    "Thirty balls on 31 ropes of 12/31 m between points 10 m apart hang within 3 % of the catenary's depth."
+  (let* ((w (make-physics-world :sleep nil))
+         (a 5d0) (s 12d0) (links 31) (ds (/ s links)) (top 20d0)
+         ;; c with s = 2 c sinh(a/c), by bisection: the left side falls as c grows
+         (c (let ((lo 1d-2) (hi 1d4))
+              (loop repeat 200 do (let ((mid (sqrt (* lo hi))))
+                                    (if (> (* 2 mid (sinh (/ a mid))) s) (setf lo mid) (setf hi mid))))
+              lo))
+         (depth (lambda (sigma) (let ((x (* c (asinh (/ sigma c))))) (values (- (* c (cosh (/ a c))) (* c (cosh (/ x c)))) x))))
+         (balls (loop for i from 1 below links
+                      collect (multiple-value-bind (d x) (funcall depth (- (* i ds) (/ s 2)))
+                                (add-physics-body w (+ x a) (- top d) 0 :radius 0.1 :friction 0))))
+         (middle (nth 15 balls)) (sum 0d0) (count 0))
+    (add-physics-joint w :distance (first balls) nil :anchor-b (list 0 top 0) :rope t :length ds)
+    (loop for (p q) on balls while q do (add-physics-joint w :distance p q :rope t :length ds))
+    (add-physics-joint w :distance (car (last balls)) nil :anchor-b (list (* 2 a) top 0) :rope t :length ds)
+    (dotimes (i 300)
+      (step-physics-world w)
+      (when (>= i 180)
+        (incf sum (- top (nth-value 1 (physics-body-position w middle))))
+        (incf count)))
+    (let ((want (funcall depth (- (* 16 ds) (/ s 2)))) (mean (/ sum count)))
+      (check (< (abs (- mean want)) (* 0.03 want)) "the sixteenth ball hangs ~,4F m deep, the catenary ~,4F" mean want))))
+;; J0PHYS-rope-bridge-is-a-catenary ends here
+
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
     "Resting: penetration = slop, approach ~ 0; nothing touching: zeros; landing: > slop."
