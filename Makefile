@@ -55,7 +55,7 @@ help:
 	@echo "                    BOUNDS='x0 y0 z0 x1 y1 z1' the terrain drawn) into report/view-f.html"
 	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
 	@echo "make fuzz           random operation sequences (SEED=1 COUNT=1200 LENGTH=150), then random squeezes"
-	@echo "                    (SCENES=40 STEPS=300); figures into $(ORG)"
+	@echo "                    (SCENES=40 STEPS=300), then damaged snapshots of the scenes; figures into $(ORG)"
 	@echo "make soak           a churning world for MINUTES=5 minutes; its heap curve into $(ORG)"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
@@ -97,6 +97,8 @@ bench: setup tangle
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-queries report/bench-queries.org
 	@BENCH=run-feature-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-features.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-features report/bench-features.org
+	@BENCH=run-snapshot-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-snapshots.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-snapshots report/bench-snapshots.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
 # without -march=native like Debian's Bullet and ODE.
@@ -196,6 +198,8 @@ fuzz: setup tangle
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp fuzz-campaign report/fuzz.org
 	@{ FUZZ=squeeze SEED="$(SEED)" SCENES="$(SCENES)" STEPS="$(STEPS)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/squeeze.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp squeeze-campaign report/squeeze.org
+	@{ FUZZ=snapshot SEED="$(SEED)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/snapshot-fuzz.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp snapshot-fuzz report/snapshot-fuzz.org
 	@test ! -e report/fuzz-failed
 
 soak: setup tangle
