@@ -7649,27 +7649,28 @@ and :conditions (refusals by condition type). #M9W5P7"
 ;; Random operation sequences find what a hostile caller would:1 ends here
 
 ;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:7]]
-(defun run-physics-soak (&key (minutes 5) (seed 1) (stream *standard-output*) step-hook)
-  "Churn a fuzz world for MINUTES of wall-clock time: each step adds a ball, removes one of the
-oldest when more than 300 live, throws one, posts a walking box, edits a cell under the pile and
-lets the spring run. Print to STREAM, at every tenth of the run, the seconds, the steps, the
-bodies and the heap in MB after a full collection, as an Org table. Return the heap's growth in
+(defun run-physics-soak (&key (minutes 5) steps (seed 1) (stream *standard-output*) step-hook)
+  "Churn a fuzz world for MINUTES of wall-clock time, or for STEPS steps when STEPS is given: each
+step adds a ball, removes one of the oldest when more than 300 live, throws one, posts a walking
+box, edits a cell under the pile and lets the spring run. Print to STREAM, at every tenth of the
+run (of its time, or of its steps), the seconds, the steps, the bodies and the heap in MB after a
+full collection, as an Org table. Return the heap's growth in
 bytes from the second row (the first after the churn began) to the last. STEP-HOOK, when given,
 is the world's step hook (physics-world-step-hook) throughout. #M9W5P7"
   (let* ((state (make-fuzz-state)) (world (fuzz-state-world state)) (terrain (fuzz-state-terrain state))
          (next (fixed-sequence seed)) (handles (make-array 0 :adjustable t :fill-pointer 0))
          (start (get-internal-real-time)) (span (* minutes 60 internal-time-units-per-second))
-         (steps 0) (row 0) (first-heap nil) (last-heap 0))
+         (steps-taken 0) (row 0) (first-heap nil) (last-heap 0))
     (setf (physics-world-step-hook world) step-hook)
     (format stream "~&| seconds | steps | bodies | heap MB |~%|-~%")
     (loop
       (let ((elapsed (- (get-internal-real-time) start)))
-        (when (>= elapsed (* row (/ span 10)))
+        (when (if steps (>= (* 10 steps-taken) (* row steps)) (>= elapsed (* row (/ span 10))))
           (sb-ext:gc :full t)
           (setf last-heap (sb-kernel:dynamic-usage))
           ;; growth is counted from the second row, once the buffers have grown to the churn
           (when (= row 1) (setf first-heap last-heap))
-          (format stream "| ~D | ~D | ~D | ~,2F |~%" (round elapsed internal-time-units-per-second) steps
+          (format stream "| ~D | ~D | ~D | ~,2F |~%" (round elapsed internal-time-units-per-second) steps-taken
                   (+ (physics-world-awake-count world) (physics-world-sleeping-count world))
                   (/ last-heap 1048576.0))
           (finish-output stream)
@@ -7684,13 +7685,13 @@ is the world's step hook (physics-world-step-hook) throughout. #M9W5P7"
         (setf handles (delete (aref handles 0) handles)))
       (let ((h (aref handles (floor (* (funcall next) (length handles))))))
         (set-physics-body-velocity world h (- (* 10 (funcall next)) 5) (* 5 (funcall next)) (- (* 10 (funcall next)) 5)))
-      (post-physics-box world (+ 1 (mod (* 0.05 steps) 10)) 0.5 5.5 0.5 0.5 0.5 :vx 3.0 :owner :walker)
+      (post-physics-box world (+ 1 (mod (* 0.05 steps-taken) 10)) 0.5 5.5 0.5 0.5 0.5 :vx 3.0 :owner :walker)
       (let ((x (floor (* 11 (funcall next)))) (z (floor (* 11 (funcall next)))))
         (setf (terrain-solid-p terrain x 0 z) (< (funcall next) 0.5))
         (wake-physics-bodies-near world (+ x 0.5) 0.5 (+ z 0.5) 1.0))
       (run-physics-springs world (list (fuzz-state-spring state)))
       (step-physics-world world)
-      (incf steps))))
+      (incf steps-taken))))
 ;; Random operation sequences find what a hostile caller would:7 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]

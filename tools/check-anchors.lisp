@@ -17,7 +17,11 @@
 ;;;;  5. every definition the loaded system registered (see section BSOZ3U of the page)
 ;;;;     ends its docstring with #ANCHOR of its section; a defmethod or a
 ;;;;     define-symbol-macro may have no docstring, anything else must have one;
-;;;;  6. the block that registers a tangled file is that file's last chunk.
+;;;;  6. the block that registers a tangled file is that file's last chunk;
+;;;;  7. the mutant records (tests/mutant-records.org, which tools/mutate.lisp reads) sit
+;;;;     under headings that start with an anchor of the page, each paragraph is one record
+;;;;     ("Equivalent mutant ~KEY~: ..." or "Surviving mutant ~KEY~: ..."), and the page
+;;;;     keeps no :MUTANTS: drawer of its own.
 
 (load (merge-pathnames "boot.lisp" *load-truename*))
 
@@ -28,6 +32,7 @@
 
 (defparameter *page-name* "physics.org")
 (defparameter *test-file* "tests/physics-tests.lisp")
+(defparameter *records-name* "tests/mutant-records.org")
 (defparameter *optional-docstring-kinds* '(:defmethod :define-symbol-macro))
 
 (defvar *problems* '())
@@ -267,11 +272,41 @@
                                insert sections before the closing section"
                               (relative source) (1+ i) anchor))))))
 
+;;; The mutant records
+
+(defun check-mutant-records ()
+  "Check 7; return the number of records."
+  (loop for i from 1 to (line-count)
+        when (string-equal ":MUTANTS:" (trim (line i)))
+          do (page-problem i "a :MUTANTS: drawer: the records belong in ~A" *records-name*))
+  (let ((path (merge-pathnames *records-name* cl-user::*luv-root*)) (records 0) (start t))
+    (if (not (probe-file path))
+        (problem "~A: no such file" *records-name*)
+        (loop with lines = (read-lines path)
+              for text across lines
+              for n from 1
+              do (cond ((blank-p text) (setf start t))
+                       ((starts-with "#" text))
+                       ((heading-p text)
+                        (let* ((words (trim (string-left-trim "*" text)))
+                               (anchor (subseq words 0 (or (position #\Space words) (length words)))))
+                          (unless (gethash anchor *anchors*)
+                            (problem "~A:~D: ~S is not an anchor of the page" *records-name* n anchor)))
+                        (setf start t))
+                       (start
+                        (if (and (or (starts-with "Equivalent mutant ~" text)
+                                     (starts-with "Surviving mutant ~" text))
+                                 (search "~:" text))
+                            (incf records)
+                            (problem "~A:~D: a paragraph that is not a mutant record" *records-name* n))
+                        (setf start nil)))))
+    records))
+
 ;;; Run
 
 (defun main ()
   (let ((page (merge-pathnames *page-name* cl-user::*luv-root*))
-        (definitions 0))
+        (definitions 0) (records 0))
     (unless (probe-file page)
       (format t "~&check-anchors: ~A: no such file~%" *page-name*)
       (sb-ext:exit :code 1))
@@ -280,6 +315,7 @@
     (check-headings)
     (collect-blocks-and-links)
     (check-claims)
+    (setf records (check-mutant-records))
     (if (cl-user::luv-load-systems "luv-physics")
         (problem "luv-physics did not load, so its definitions were not checked")
         (progn (setf definitions (check-definitions))
@@ -289,8 +325,8 @@
            (finish-output)
            (sb-ext:exit :code 1))
           (t
-           (format t "~&check-anchors: ~A is consistent: ~D anchors, ~D links, ~D claims, ~D definitions~%"
-                   *page-name* (hash-table-count *anchors*) *link-count* *claim-count* definitions)
+           (format t "~&check-anchors: ~A is consistent: ~D anchors, ~D links, ~D claims, ~D definitions, ~D mutant records~%"
+                   *page-name* (hash-table-count *anchors*) *link-count* *claim-count* definitions records)
            (finish-output)))))
 
 (main)

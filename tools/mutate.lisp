@@ -31,6 +31,9 @@
                                   "tests/physics-tests.lisp")
   "The files whose forms may inline, or be generated from, a mutated definition.")
 
+(defparameter *mutant-records* "tests/mutant-records.org"
+  "The file of the mutant records: why a mutant that survives is equivalent, or survives.")
+
 (defparameter *mutable-kinds* '(defun defmacro defmethod defparameter)
   "Standard defining operators whose forms are mutated; any operator of the page's own
 whose name starts with DEF (a macro of the engine's package) is mutated too.")
@@ -1057,9 +1060,9 @@ the COUNT round robin ones."
     (finish-output)))
 
 (defun page-reasons (page &optional (prefix "Equivalent mutant ~"))
-  "Alist from mutant key to the sentence the page gives for it: paragraphs starting
-'Equivalent mutant ~KEY~:', or with PREFIX 'Surviving mutant ~' those that say why a mutant
-that is not equivalent survives."
+  "Alist from mutant key to the sentence the records file PAGE (*mutant-records*) gives for it:
+paragraphs starting 'Equivalent mutant ~KEY~:', or with PREFIX 'Surviving mutant ~' those that
+say why a mutant that is not equivalent survives."
   (let ((text (physics::read-file-text page)) (reasons '()) (start 0))
     (loop for at = (search prefix text :start2 start)
           while at
@@ -1070,7 +1073,7 @@ that is not equivalent survives."
                               (or (search (format nil "~%:END:") text :start2 key-start) (length text)))))
                (when (and key-end (< key-end end))
                  (push (cons (subseq text key-start key-end)
-                             (one-line (string-trim " " (subseq text (+ key-end 2) end)) 400))
+                             (one-line (string-trim '(#\Space #\Newline) (subseq text (+ key-end 2) end)) 400))
                        reasons))
                (setf start (1+ at))))
     reasons))
@@ -1086,7 +1089,7 @@ ending in ': *', which stands for every mutant of that definition."
                     reasons))))
 
 (defun score-table (mutants parts stream)
-  (let ((reasons (page-reasons "physics.org")))
+  (let ((reasons (page-reasons *mutant-records*)))
     (write-score-rows (loop for m in mutants
                             collect (list (gethash (unit-anchor (mutant-unit m)) parts "?")
                                           (unit-anchor (mutant-unit m))
@@ -1137,7 +1140,7 @@ survivors the page explains as equivalent.  A table by part, then the same mutan
       (loop for (anchor operator file key) in rows
             do (format stream "- ~A ~A, ~A: ~A~%    ~A~%" anchor operator file key
                        (or (page-reason key reasons)
-                           (let ((why (page-reason key (page-reasons "physics.org" "Surviving mutant ~"))))
+                           (let ((why (page-reason key (page-reasons *mutant-records* "Surviving mutant ~"))))
                              (and why (format nil "not equivalent: ~A" why)))
                            "(no reason given on the page)")))))
 
@@ -1148,7 +1151,7 @@ as they are now."
                 (loop for line = (read-line in nil) while line
                       collect (uiop:split-string line :separator '(#\Tab))))))
     (with-open-file (out "report/mutate-survivors.org" :direction :output :if-exists :supersede)
-      (survivors-list rows (page-reasons "physics.org") out))))
+      (survivors-list rows (page-reasons *mutant-records*) out))))
 
 ;;; ------------------------------------------------------------------------------------
 ;;; Tables from a log: the lines a run printed, for a run stopped before its end
@@ -1190,7 +1193,7 @@ as a finished run does.  Return the number of mutants read."
     (setf rows (nreverse rows))
     (let ((summary (find-if (lambda (l) (and (physics::starts-with "mutate: " l) (search "mutants killed" l))) lines))
           (first-line (find-if (lambda (l) (physics::starts-with "mutate: seed" l)) lines))
-          (reasons (page-reasons "physics.org")))
+          (reasons (page-reasons *mutant-records*)))
       (with-open-file (out "report/mutate-score.org" :direction :output :if-exists :supersede)
         (format out "~A~%~A~%~%" (or first-line "") (or summary (format nil "~D mutants read from ~A, a run stopped before its end" (length rows) log)))
         (write-score-rows (mapcar (lambda (r) (list (gethash (first r) parts "?") (first r)
@@ -1265,7 +1268,7 @@ as a finished run does.  Return the number of mutants read."
                                           only)))
              (saved (progn (ensure-directories-exist "report/") (write-record)))
              (wall (- (now) start))
-             (reasons (page-reasons "physics.org")))
+             (reasons (page-reasons *mutant-records*)))
         (declare (ignore dummy inline saved layouts))
         (ignore-errors (sb-ext:delete-directory directory :recursive t))
         (let ((n (length mutants)) (k (count-if #'killed-p mutants)))
