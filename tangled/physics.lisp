@@ -7777,27 +7777,33 @@ range, a body in a solid cell. #SN4P0T"))
   "Signal the physics-snapshot-invalid subtype TYPE. #SN4P0T"
   (error type :operation operation :offset offset :expected expected :found found))
 
+(declaim (inline snapshot-checksum))
 (defun snapshot-checksum (buffer start end)
-  "The 62-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4), read as
-32-bit words and folded as the state hash folds its words. #SN4P0T"
+  "The 64-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4): FNV-1a's
+step, exclusive or then multiply by its prime modulo 2^64, over 64-bit words and a last 32-bit
+one. Each step is a bijection of the hash for a given word, and of the word for a given hash, so
+a change within any one word always changes the sum. #SN4P0T"
   (declare (type octets buffer) (type index start end) #.+kernel-policy+)
-  (let ((hash 0))
-    (declare (type (unsigned-byte 62) hash))
+  (let ((hash 14695981039346656037) (i start))
+    (declare (type (unsigned-byte 64) hash) (type index i))
     (sb-sys:with-pinned-objects (buffer)
       (let ((sap (sb-sys:vector-sap buffer)))
-        (loop for i of-type index from start below end by 4
-              do (setf hash (ldb (byte 62 0) (+ (* hash 1099511628211) (sb-sys:sap-ref-32 sap i)))))))
+        (loop while (<= (+ i 8) end)
+              do (setf hash (logand (* (logxor hash (sb-sys:sap-ref-64 sap i)) 1099511628211)
+                                    #xFFFFFFFFFFFFFFFF))
+                 (incf i 8))
+        (when (< i end)
+          (setf hash (logand (* (logxor hash (sb-sys:sap-ref-32 sap i)) 1099511628211) #xFFFFFFFFFFFFFFFF)))))
     hash))
-;; A snapshot holds what decides the next step, part by part:1 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:2]]
 ;;; the scratch a snapshot and a restore reuse: one set per image, grown by doubling
 
 (defstruct (snapshot-scratch (:constructor make-snapshot-scratch ()))
   "What taking and restoring snapshots reuse: the palette index of each body (MATERIALS), the
 palette's words (PALETTE, nine a material) and its open-addressing table (TABLE), marks by handle
 slot (MARKS, stamped with STAMP), and a contact table filled while a snapshot is checked and
-traded for the world's when it is restored (CONTACTS). #SN4P0T"
+traded for the world's when it is restored (CONTACTS), the flags of each contact's record
+between sizing and writing a snapshot (CONTACT-FLAGS), and each part's size and offset. #SN4P0T"
   (materials (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (palette (make-array 576 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
@@ -7805,6 +7811,7 @@ traded for the world's when it is restored (CONTACTS). #SN4P0T"
   (marks (make-array 64 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (stamp 0 :type fixnum)
   (contacts (make-contact-table) :type contact-table)
+  (contact-flags (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (sizes (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (offsets (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
 
@@ -7822,9 +7829,9 @@ any mark below S is no mark. #SN4P0T"
                                                                                  :initial-element 0)))
   (incf (snapshot-scratch-stamp scratch) 2)
   (values (snapshot-scratch-marks scratch) (1- (snapshot-scratch-stamp scratch))))
-;; A snapshot holds what decides the next step, part by part:2 ends here
+;; A snapshot holds what decides the next step, part by part:1 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:3]]
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:2]]
 ;;; the palette of materials: what a body was given when it was added, shared by many bodies
 
 (defun material-words (bodies row words at)
@@ -7874,9 +7881,9 @@ an earlier entry with the same words, found through the table, or K itself, then
           do (cond ((= e -1) (setf (aref table i) k) (return k))
                    ((loop for j below 9 always (= (aref words (+ (* 9 e) j)) (aref words (+ at j))))
                     (return e))))))
-;; A snapshot holds what decides the next step, part by part:3 ends here
+;; A snapshot holds what decides the next step, part by part:2 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:4]]
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:3]]
 ;;; the parts of a snapshot, in order: each part's id, its name and the bytes of its payload
 
 (defparameter +snapshot-parts+
@@ -7911,7 +7918,7 @@ palette of MATERIALS entries, and return their sum with the parts' own headers. 
           (aref sizes 3) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-awake world)))))
           (aref sizes 4) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-sleeping world)))))
           (aref sizes 5) (+ 4 (* +snapshot-material-bytes+ materials))
-          (aref sizes 6) (padded (+ 4 (contact-records-bytes (physics-world-contacts world))))
+          (aref sizes 6) (padded (+ 4 (contact-records-bytes (physics-world-contacts world) *snapshot-scratch*)))
           (aref sizes 7) (padded (+ 36 (* +snapshot-pair-row-bytes+ rows) (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0))))
           (aref sizes 8) (+ 4 (* +snapshot-box-bytes+ (box-columns-length (physics-world-boxes world))))
           (aref sizes 9) (+ 4 (if (physics-world-pushes world) (* 16 (handle-table-count ids)) 0)))
@@ -8020,14 +8027,21 @@ vectors +x -x +y -y +z -z, exactly) and a bit for each impulse group with a bit 
   (+ +snapshot-contact-bytes+ (if (zerop (ldb (byte 3 2) flags)) 12 0)
      (if (logbitp 5 flags) 4 0) (if (logbitp 6 flags) 8 0) (if (logbitp 7 flags) 12 0) (if (logbitp 8 flags) 4 0)))
 
-(defun contact-records-bytes (contacts)
-  "The bytes of the snapshot records of every contact of CONTACTS. #SN4P0T"
-  (declare (type contact-columns contacts) #.+kernel-policy+)
-  (let ((geometry (contact-columns-geometry contacts)) (bytes 0))
-    (declare (type index bytes))
-    (dotimes (row (contact-columns-length contacts) bytes)
-      (let ((flags (contact-record-flags geometry (geometry-start row))))
-        (incf bytes (contact-record-bytes flags))))))
+(defun contact-records-bytes (contacts scratch)
+  "The bytes of the snapshot records of every contact of CONTACTS; each record's flags are kept
+in SCRATCH's contact flags for the writer. #SN4P0T"
+  (declare (type contact-columns contacts) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let ((geometry (contact-columns-geometry contacts)) (bytes 0) (n (contact-columns-length contacts)))
+    (declare (type index bytes n))
+    (when (< (length (snapshot-scratch-contact-flags scratch)) n)
+      (setf (snapshot-scratch-contact-flags scratch)
+            (make-array (max n (* 2 (length (snapshot-scratch-contact-flags scratch)))) :element-type 'fixnum)))
+    (let ((kept (snapshot-scratch-contact-flags scratch)))
+      (declare (type fixnum-column kept))
+      (dotimes (row n bytes)
+        (let ((flags (contact-record-flags geometry (geometry-start row))))
+          (setf (aref kept row) flags)
+          (incf bytes (contact-record-bytes flags)))))))
 
 (defun write-snapshot-bodies (bodies buffer at materials first)
   "Write the rows of BODIES into BUFFER from AT: their count, then a record a row, the row's
@@ -8123,7 +8137,7 @@ material being entry FIRST + row of MATERIALS. #SN4P0T"
          (with-contact-columns (key seen touching geometry) contacts
            (dotimes (row n)
              (let* ((g (geometry-start row))
-                    (flags (logior (contact-record-flags geometry g)
+                    (flags (logior (aref (snapshot-scratch-contact-flags scratch) row)
                                    (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2))))
                (setf (snap-i64 buffer o) (aref key row) (snap-u16 buffer (+ o 8)) flags)
                (incf o 10)
@@ -8206,9 +8220,9 @@ material being entry FIRST + row of MATERIALS. #SN4P0T"
     (:reach-limit (setf (physics-world-reach-limit world) value))
     (:max-speed (setf (physics-world-max-speed world) value))
     (:body-budget (setf (physics-world-body-budget world) value))))
-;; A snapshot holds what decides the next step, part by part:4 ends here
+;; A snapshot holds what decides the next step, part by part:3 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:5]]
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:4]]
 ;;; reading a snapshot back: every byte is checked before the world is touched
 
 (defmacro snapshot-check (test type offset expected found)
@@ -8552,9 +8566,9 @@ what the restore reuses. #SN4P0T"
   (check-snapshot-contacts buffer scratch)
   (check-snapshot-rest buffer scratch)
   buffer)
-;; A snapshot holds what decides the next step, part by part:5 ends here
+;; A snapshot holds what decides the next step, part by part:4 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:6]]
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:5]]
 ;;; applying a checked snapshot: nothing here can fail
 
 (defun apply-snapshot-bodies (world bodies set buffer at mat)
@@ -8790,9 +8804,9 @@ WORLD is left as it was. #SN4P0T"
     (check-snapshot world buffer scratch)
     (sb-int:with-float-traps-masked (:inexact :underflow) (apply-snapshot world buffer scratch))
     world))
-;; A snapshot holds what decides the next step, part by part:6 ends here
+;; A snapshot holds what decides the next step, part by part:5 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:7]]
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:6]]
 ;;; on disk: the same bytes, to a stream or a file
 
 (defun write-physics-world (world destination)
@@ -8852,9 +8866,9 @@ this machine runs it. Bad bytes signal as restore-physics-world does. #SN4P0T"
                          :kernels (or kernels
                                       (if (and family (assoc family (runnable-kernel-families))) family :scalar)))))
             (restore-physics-world world buffer))))))
-;; A snapshot holds what decides the next step, part by part:7 ends here
+;; A snapshot holds what decides the next step, part by part:6 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:8]]
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:7]]
 ;;; damaged snapshots, at random: make fuzz and a short run in the claims
 
 (defun reseal-snapshot (buffer)
@@ -8916,9 +8930,9 @@ damaged copies each, from SEED; return a list of (SCENE BYTES . FIGURES). #SN4P0
       (format stream "| ~(~A~) | ~D | ~D | ~D | ~D | ~D | ~D |~%" scene size (+ restored refused crashes)
               restored refused invalid crashes)))
   (format stream "~%~,1F s~%" seconds))
-;; A snapshot holds what decides the next step, part by part:8 ends here
+;; A snapshot holds what decides the next step, part by part:7 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:9]]
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:8]]
 ;;; what a snapshot costs: make bench
 
 (defun snapshot-part-bytes (buffer id)
@@ -8983,7 +8997,7 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
           (push (ms (lambda () (restore-physics-world world buffer) (dotimes (j 8) (step-physics-world world)))) times)))
       (format stream "| rollback at 1000 balls (2 s) | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~,0F % |~%"
               (median times) (/ (median times) (/ 1000 60.0) 0.01)))))
-;; A snapshot holds what decides the next step, part by part:9 ends here
+;; A snapshot holds what decides the next step, part by part:8 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:1]]
 (define-condition unknown-physics-scene (invalid-physics-parameter)
