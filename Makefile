@@ -22,6 +22,7 @@ help:
 	@echo "make demo           install what is missing (as root), tangle, run the default scene;"
 	@echo "                    SCENE=name runs another scene of the page (basin, pile, fountain, lava,"
 	@echo "                    player, awake-basin)"
+	@echo "                    SAVE=file also writes the world the scene ends with (write-physics-world)"
 	@echo "make test           check tangling and anchors, then run every claim: a line per part of the"
 	@echo "                    page, the ten slowest claims; report/compile.log and report/claims.log"
 	@echo "                    hold what the compiler and the claims printed"
@@ -83,7 +84,7 @@ editor-test: setup
 	@LUV_HEAP="$(HEAP)" tools/editor-test "$(SBCL)" "$(EMACS)"
 
 demo: setup tangle
-	@SCENE="$(SCENE)" $(LISP) --load tools/demo.lisp
+	@SCENE="$(SCENE)" SAVE="$(SAVE)" $(LISP) --load tools/demo.lisp
 
 bench: setup tangle
 	@mkdir -p report

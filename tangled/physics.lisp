@@ -8439,7 +8439,7 @@ a solid cell of WORLD's terrain. #SN4P0T"
 
 (defun check-snapshot-contacts (buffer scratch)
   "Check the contact part of the snapshot in BUFFER: its size, each key's kind and slots (the
-slots of live bodies, A below B for a pair), each key once, and finite impulses; the keys go into
+slots of the table, live or freed in the last step, A below B for a pair), each key once, and finite impulses; the keys go into
 SCRATCH's contact table, mapped to their rows. Run after check-snapshot-slots, whose marks it
 reads. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
@@ -8458,12 +8458,14 @@ reads. #SN4P0T"
                           (format nil "the record of contact ~D within the part" row) end)
           (let* ((key (snap-i64 buffer o)) (flags (snap-u16 buffer (+ o 8)))
                  (kind (ldb (byte 4 58) key)) (a (ldb (byte 24 34) key)))
-            (snapshot-check (and (>= key 0) (< key (ash 1 60)) (<= kind 2) (< a count) (= (aref marks a) stamp))
-                            physics-snapshot-other-layout o "a contact key of a live body" key)
+            ;; a body that expired in the last step has a free slot, and its contacts wait for
+            ;; the next step's prune: a key may name a free slot of the table
+            (snapshot-check (and (>= key 0) (< key (ash 1 60)) (<= kind 2) (< a count) (>= (aref marks a) (1- stamp)))
+                            physics-snapshot-other-layout o "a contact key of a slot of the table" key)
             (when (= kind +contact-pair+)
               (let ((b (ldb (byte 34 0) key)))
-                (snapshot-check (and (< a b count) (= (aref marks b) stamp)) physics-snapshot-other-layout o
-                                "a pair key of two live bodies, the lower slot first" key)))
+                (snapshot-check (and (< a b count) (>= (aref marks b) (1- stamp))) physics-snapshot-other-layout o
+                                "a pair key of two slots of the table, the lower first" key)))
 
             (snapshot-check (and (< flags 512) (/= 7 (ldb (byte 3 2) flags))) physics-snapshot-other-layout (+ o 8)
                             "contact flags of 9 bits, a normal code from 0 to 6" flags)
@@ -8689,6 +8691,14 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
       (contact-columns-ensure-capacity (physics-world-contact-scratch world) (contact-columns-capacity contacts))
       (setf (contact-columns-length contacts) n)
       (with-contact-columns (handle-a handle-b kind key seen order touching geometry) contacts
+       (flet ((slot-handle (slot)
+                ;; the handle of SLOT's body; of a free slot, the handle its body had before it
+                ;; expired, one generation back
+                (let ((g (aref generations slot)))
+                  (make-handle tag (if (= (aref (handle-table-set ids) slot) +set-free+)
+                                       (ldb (byte +handle-generation-bits+ 0) (1- g))
+                                       g)
+                               slot))))
         (let ((o (+ at 4)))
          (declare (type index o))
          (dotimes (row n)
@@ -8696,10 +8706,8 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
                  (a (ldb (byte 24 34) k)) (kk (ldb (byte 4 58) k)) (g (geometry-start row))
                  (code (ldb (byte 3 2) bits)))
             (setf (aref key row) k (aref kind row) kk
-                  (aref handle-a row) (make-handle tag (aref generations a) a)
-                  (aref handle-b row) (if (= kk +contact-pair+)
-                                          (let ((b (ldb (byte 24 0) k))) (make-handle tag (aref generations b) b))
-                                          +no-body+)
+                  (aref handle-a row) (slot-handle a)
+                  (aref handle-b row) (if (= kk +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
                   (aref seen row) (if (logbitp 1 bits) (1- step) step)
                   (aref order row) row
                   (aref touching row) (if (logbitp 0 bits) 1 0))
@@ -8711,7 +8719,7 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
               (when (logbitp bit bits)
                 (dotimes (f width)
                   (setf (aref geometry (+ g first f)) (snap-f32 buffer o))
-                  (incf o 4))))))))
+                  (incf o 4)))))))))
       ;; the table the check filled becomes the world's, and the world's the scratch's
       (rotatef (contact-table-slots table) (contact-table-slots full))
       (rotatef (contact-table-mask table) (contact-table-mask full))

@@ -7485,6 +7485,29 @@ asleep, all touching. #SN4P0T"
       (when (probe-file file) (delete-file file)))))
 ;; SN4P0T-file-from-another-image-resumes ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-expired-bodies-contacts-restore]]
+(define-claim "SN4P0T" expired-bodies-contacts-restore
+    "Snapshots of the lava scene, with contacts of bodies that expired in the last step, restore."
+  (multiple-value-bind (world script) (make-scene-world :lava)
+    (let ((other (make-scene-world :lava)) (refused 0) (parted 0) (freed 0))
+      (dotimes (i 480)
+        (funcall script i) (step-physics-world world)
+        (when (>= i 420)
+          (let ((ids (luv-physics::physics-world-ids world)) (contacts (luv-physics::physics-world-contacts world)))
+            (when (loop for row below (luv-physics::contact-columns-length contacts)
+                        thereis (= luv-physics::+set-free+
+                                   (aref (luv-physics::handle-table-set ids)
+                                         (luv-physics::handle-index (aref (luv-physics::contact-columns-handle-a contacts) row)))))
+              (incf freed)))
+          (handler-case (progn (restore-physics-world other (snapshot-physics-world world))
+                               (validate-physics-world other)
+                               (unless (= (physics-world-state-hash world) (physics-world-state-hash other)) (incf parted)))
+            (physics-error () (incf refused)))))
+      (check (zerop refused) "~D of 60 snapshots refused" refused)
+      (check (zerop parted) "~D of 60 restores parted" parted)
+      (check (plusp freed) "no snapshot held a contact of a free slot"))))
+;; SN4P0T-expired-bodies-contacts-restore ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-sleepers-cost-what-the-awake-cost]]
 (define-claim "SN4P0T" sleepers-cost-what-the-awake-cost
     "Bodies take 74 bytes each, awake or asleep; one material, one palette entry of 36 bytes."
