@@ -22,6 +22,7 @@ help:
 	@echo "make demo           install what is missing (as root), tangle, run the default scene;"
 	@echo "                    SCENE=name runs another scene of the page (basin, pile, fountain, lava,"
 	@echo "                    player, awake-basin)"
+	@echo "                    SAVE=file also writes the world the scene ends with (write-physics-world)"
 	@echo "make test           check tangling and anchors, then run every claim: a line per part of the"
 	@echo "                    page, the ten slowest claims; report/compile.log and report/claims.log"
 	@echo "                    hold what the compiler and the claims printed"
@@ -60,7 +61,7 @@ help:
 	@echo "                    BOUNDS='x0 y0 z0 x1 y1 z1' the terrain drawn) into report/view-f.html"
 	@echo "make pictures       draw each scene at a few moments: report/scene-*.svg, shown by the page"
 	@echo "make fuzz           random operation sequences (SEED=1 COUNT=1200 LENGTH=150), then random squeezes"
-	@echo "                    (SCENES=40 STEPS=300); figures into $(ORG)"
+	@echo "                    (SCENES=40 STEPS=300), then damaged snapshots of the scenes; figures into $(ORG)"
 	@echo "make soak           a churning world for MINUTES=5 minutes; its heap curve into $(ORG)"
 	@echo "make clean          remove editor backups and this repository's compiled files"
 
@@ -88,7 +89,7 @@ editor-test: setup
 	@LUV_HEAP="$(HEAP)" tools/editor-test "$(SBCL)" "$(EMACS)"
 
 demo: setup tangle
-	@SCENE="$(SCENE)" $(LISP) --load tools/demo.lisp
+	@SCENE="$(SCENE)" SAVE="$(SAVE)" $(LISP) --load tools/demo.lisp
 
 # The engine system's load (#W0RKSH): fresh SBCLs, an empty ASDF cache for the compile.
 load-time: setup tangle
@@ -108,6 +109,8 @@ bench: setup tangle
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-queries report/bench-queries.org
 	@BENCH=run-feature-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-features.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-features report/bench-features.org
+	@BENCH=run-snapshot-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-snapshots.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-snapshots report/bench-snapshots.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
 # without -march=native like Debian's Bullet and ODE.
@@ -229,6 +232,8 @@ fuzz: setup tangle
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp fuzz-campaign report/fuzz.org
 	@{ FUZZ=squeeze SEED="$(SEED)" SCENES="$(SCENES)" STEPS="$(STEPS)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/squeeze.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp squeeze-campaign report/squeeze.org
+	@{ FUZZ=snapshot SEED="$(SEED)" nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/snapshot-fuzz.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp snapshot-fuzz report/snapshot-fuzz.org
 	@test ! -e report/fuzz-failed
 
 soak: setup tangle

@@ -80,7 +80,12 @@
    #:+physics-max-acceleration+ #:+physics-max-gravity-scale+
    ;; Joints (#J0STOR)
    #:add-physics-joint #:remove-physics-joint #:physics-joint-alive-p #:physics-world-joint-count
-   #:physics-joint-bodies #:physics-joint-length #:physics-joint-impulse))
+   #:physics-joint-bodies #:physics-joint-length #:physics-joint-impulse
+   ;; A snapshot holds what decides the next step (#SN4P0T)
+   #:snapshot-physics-world #:restore-physics-world #:write-physics-world #:read-physics-world
+   #:physics-snapshot-invalid #:physics-snapshot-truncated
+   #:physics-snapshot-wrong-magic #:physics-snapshot-wrong-version #:physics-snapshot-checksum-mismatch
+   #:physics-snapshot-other-layout #:physics-snapshot-missing-features))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -7538,6 +7543,1323 @@ kernel family. #H4NDL3"
                 (cons "edits" (voxel-terrain-edits terrain))
                 (cons "chunks" (voxel-terrain-chunks terrain)))))
 ;; A handle explained, and a world opened part by part:1 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
+(deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))
+
+(defconstant +snapshot-version+ 1 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
+
+(defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SN4P0T")
+
+(defconstant +snapshot-body-bytes+ 74 "Bytes of one body's record in a snapshot. #SN4P0T")
+
+(defconstant +snapshot-material-bytes+ 36 "Bytes of one entry of a snapshot's palette of materials. #SN4P0T")
+
+(defconstant +snapshot-contact-bytes+ 10
+  "Bytes every contact's record in a snapshot has: its key and its flags; the normal and the
+groups of carried impulses follow when the flags say so. #SN4P0T")
+
+(defconstant +snapshot-pair-row-bytes+ 21 "Bytes of one row of the pair list in a snapshot: anchor, handle, clear. #SN4P0T")
+
+(defconstant +snapshot-box-bytes+ 52 "Bytes of one posted box in a snapshot. #SN4P0T")
+
+(defparameter +snapshot-magic+ (map 'octets #'char-code "LUVWORLD")
+  "The eight bytes a snapshot starts with. #SN4P0T")
+
+(declaim (inline snap-u8 snap-u16 snap-u32 snap-i32 snap-u64 snap-i64 snap-f32 snap-f64
+                 (setf snap-u8) (setf snap-u16) (setf snap-u32) (setf snap-i32) (setf snap-u64)
+                 (setf snap-i64) (setf snap-f32) (setf snap-f64)))
+(macrolet ((def (name ref type)
+             `(progn
+                (defun ,name (buffer offset)
+                  ,(format nil "The ~(~A~) at byte OFFSET of BUFFER, little-endian. #SN4P0T" type)
+                  (declare (type octets buffer) (type index offset) #.+kernel-policy+)
+                  (sb-sys:with-pinned-objects (buffer) (,ref (sb-sys:vector-sap buffer) offset)))
+                (defun (setf ,name) (value buffer offset)
+                  ,(format nil "Write the ~(~A~) VALUE at byte OFFSET of BUFFER, little-endian. #SN4P0T" type)
+                  (declare (type octets buffer) (type index offset) (type ,type value) #.+kernel-policy+)
+                  (sb-sys:with-pinned-objects (buffer) (setf (,ref (sb-sys:vector-sap buffer) offset) value))))))
+  (def snap-u8 sb-sys:sap-ref-8 (unsigned-byte 8))
+  (def snap-u16 sb-sys:sap-ref-16 (unsigned-byte 16))
+  (def snap-u32 sb-sys:sap-ref-32 (unsigned-byte 32))
+  (def snap-i32 sb-sys:signed-sap-ref-32 (signed-byte 32))
+  (def snap-u64 sb-sys:sap-ref-64 (unsigned-byte 64))
+  (def snap-i64 sb-sys:signed-sap-ref-64 (signed-byte 64))
+  (def snap-f32 sb-sys:sap-ref-single single-float)
+  (def snap-f64 sb-sys:sap-ref-double double-float))
+
+#-little-endian
+(error "The snapshot's accessors read and write the machine's own byte order, which must be little-endian. #SN4P0T")
+
+(define-condition physics-snapshot-invalid (physics-error)
+  ((operation :initarg :operation :reader physics-snapshot-invalid-operation)
+   (offset :initarg :offset :reader physics-snapshot-invalid-offset)
+   (expected :initarg :expected :reader physics-snapshot-invalid-expected)
+   (found :initarg :found :reader physics-snapshot-invalid-found))
+  (:report (lambda (c s)
+             (format s "~(~A~): the snapshot is refused at byte ~D: expected ~A, found ~S; the world is unchanged"
+                     (physics-snapshot-invalid-operation c) (physics-snapshot-invalid-offset c)
+                     (physics-snapshot-invalid-expected c) (physics-snapshot-invalid-found c))))
+  (:documentation "A snapshot that cannot be restored, naming the operation, the byte offset, what
+was expected there and what was found; the world restored into is left as it was. #SN4P0T"))
+
+(define-condition physics-snapshot-truncated (physics-snapshot-invalid) ()
+  (:documentation "A snapshot shorter than its header or its recorded size. #SN4P0T"))
+
+(define-condition physics-snapshot-wrong-magic (physics-snapshot-invalid) ()
+  (:documentation "Bytes that do not start with the snapshot magic LUVWORLD. #SN4P0T"))
+
+(define-condition physics-snapshot-wrong-version (physics-snapshot-invalid) ()
+  (:documentation "A snapshot of a layout version this engine does not read. #SN4P0T"))
+
+(define-condition physics-snapshot-checksum-mismatch (physics-snapshot-invalid) ()
+  (:documentation "A snapshot whose bytes do not hash to its recorded checksum. #SN4P0T"))
+
+(define-condition physics-snapshot-other-layout (physics-snapshot-invalid) ()
+  (:documentation "A snapshot whose parts, counts or values do not describe a world this engine
+can hold: parts out of order or of the wrong size, a slot out of range, a number out of its
+range, a body in a solid cell. #SN4P0T"))
+
+(define-condition physics-snapshot-missing-features (physics-snapshot-invalid) ()
+  (:documentation "A snapshot of a world that used a feature the target world was made without. #SN4P0T"))
+
+(defun snapshot-refuse (type operation offset expected found)
+  "Signal the physics-snapshot-invalid subtype TYPE. #SN4P0T"
+  (error type :operation operation :offset offset :expected expected :found found))
+
+(declaim (inline snapshot-checksum))
+(defun snapshot-checksum (buffer start end)
+  "The 64-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4): FNV-1a's
+step, exclusive or then multiply by its prime modulo 2^64, over 64-bit words and a last 32-bit
+one. Each step is a bijection of the hash for a given word, and of the word for a given hash, so
+a change within any one word always changes the sum. #SN4P0T"
+  (declare (type octets buffer) (type index start end) #.+kernel-policy+)
+  (let ((hash 14695981039346656037) (i start))
+    (declare (type (unsigned-byte 64) hash) (type index i))
+    (sb-sys:with-pinned-objects (buffer)
+      (let ((sap (sb-sys:vector-sap buffer)))
+        (loop while (<= (+ i 8) end)
+              do (setf hash (logand (* (logxor hash (sb-sys:sap-ref-64 sap i)) 1099511628211)
+                                    #xFFFFFFFFFFFFFFFF))
+                 (incf i 8))
+        (when (< i end)
+          (setf hash (logand (* (logxor hash (sb-sys:sap-ref-32 sap i)) 1099511628211) #xFFFFFFFFFFFFFFFF)))))
+    hash))
+
+;;; the scratch a snapshot and a restore reuse: one set per image, grown by doubling
+
+(defstruct (snapshot-scratch (:constructor make-snapshot-scratch ()))
+  "What taking and restoring snapshots reuse: the palette index of each body (MATERIALS), the
+palette's words (PALETTE, nine a material) and its open-addressing table (TABLE), marks by handle
+slot (MARKS, stamped with STAMP), and a contact table filled while a snapshot is checked and
+traded for the world's when it is restored (CONTACTS), the flags of each contact's record
+between sizing and writing a snapshot (CONTACT-FLAGS), and each part's size and offset. #SN4P0T"
+  (materials (make-array 64 :element-type 'fixnum) :type fixnum-column)
+  (palette (make-array 576 :element-type 'fixnum) :type fixnum-column)
+  (count 0 :type index)
+  (table (make-array 128 :element-type 'fixnum :initial-element -1) :type fixnum-column)
+  (marks (make-array 64 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (stamp 0 :type fixnum)
+  (contacts (make-contact-table) :type contact-table)
+  (contact-flags (make-array 64 :element-type 'fixnum) :type fixnum-column)
+  (sizes (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (offsets (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
+
+(defvar *snapshot-scratch* (make-snapshot-scratch)
+  "The image's snapshot scratch: snapshots and restores run one at a time, as steps do. #SN4P0T")
+
+(defun snapshot-marks (scratch slots)
+  "SCRATCH's marks, with room for SLOTS slots, under two fresh stamps: return the marks and the
+first, S, which marks free slots, while S + 1 marks live ones and is SCRATCH's stamp from now on;
+any mark below S is no mark. #SN4P0T"
+  (declare (type snapshot-scratch scratch) (type index slots))
+  (when (< (length (snapshot-scratch-marks scratch)) slots)
+    (setf (snapshot-scratch-marks scratch)
+          (make-array (max slots (* 2 (length (snapshot-scratch-marks scratch)))) :element-type 'fixnum
+                                                                                 :initial-element 0)))
+  (incf (snapshot-scratch-stamp scratch) 2)
+  (values (snapshot-scratch-marks scratch) (1- (snapshot-scratch-stamp scratch))))
+;; A snapshot holds what decides the next step, part by part:1 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:2]]
+;;; the palette of materials: what a body was given when it was added, shared by many bodies
+
+(defun material-words (bodies row words at)
+  "Write into WORDS from AT the nine words of the material of ROW of BODIES: the bits of its
+radius, inverse mass, inverse inertia, restitution, friction, rolling resistance and life, its
+kind, and its filter (the flags from bit 16). #SN4P0T"
+  (declare (type body-columns bodies) (type index row at) (type fixnum-column words) #.+kernel-policy+)
+  (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind flags)
+      bodies
+    (macrolet ((bits (column) `(ldb (byte 32 0) (sb-kernel:single-float-bits (aref ,column row)))))
+      (setf (aref words at) (bits radius) (aref words (+ at 1)) (bits inverse-mass)
+            (aref words (+ at 2)) (bits inverse-inertia) (aref words (+ at 3)) (bits restitution)
+            (aref words (+ at 4)) (bits friction) (aref words (+ at 5)) (bits rolling-resistance)
+            (aref words (+ at 6)) (bits life) (aref words (+ at 7)) (ldb (byte 32 0) (aref kind row))
+            (aref words (+ at 8)) (ldb (byte 32 0) (ash (aref flags row) -16))))))
+
+(defun palette-index (scratch bodies row)
+  "The index in SCRATCH's palette of the material of ROW of BODIES, added when new. #SN4P0T"
+  (declare (type snapshot-scratch scratch) (type body-columns bodies) (type index row) #.+kernel-policy+)
+  (let ((count (snapshot-scratch-count scratch)))
+    (when (> (* 9 (1+ count)) (length (snapshot-scratch-palette scratch)))
+      (setf (snapshot-scratch-palette scratch)
+            (replace (make-array (* 18 (1+ count)) :element-type 'fixnum) (snapshot-scratch-palette scratch))))
+    ;; when the table is half full it doubles, and every entry is put in again
+    (when (> (* 2 (1+ count)) (length (snapshot-scratch-table scratch)))
+      (let ((table (make-array (* 2 (length (snapshot-scratch-table scratch))) :element-type 'fixnum
+                                                                              :initial-element -1)))
+        (setf (snapshot-scratch-table scratch) table)
+        (dotimes (k count) (palette-place scratch k))))
+    (let ((words (snapshot-scratch-palette scratch)) (at (* 9 count)))
+      (material-words bodies row words at)
+      (let ((place (palette-place scratch count)))
+        (declare (type fixnum place))
+        (when (= place count) (incf (snapshot-scratch-count scratch)))
+        place))))
+
+(defun palette-place (scratch k)
+  "The palette index of the material whose nine words stand at entry K of SCRATCH's palette:
+an earlier entry with the same words, found through the table, or K itself, then entered. #SN4P0T"
+  (declare (type snapshot-scratch scratch) (type index k) #.+kernel-policy+)
+  (let* ((words (snapshot-scratch-palette scratch)) (table (snapshot-scratch-table scratch))
+         (mask (1- (length table))) (at (* 9 k)) (h 0))
+    (declare (type fixnum-column words table) (type fixnum mask) (type (unsigned-byte 62) h))
+    (dotimes (i 9) (setf h (ldb (byte 62 0) (+ (* h 1099511628211) (aref words (+ at i))))))
+    (loop for i of-type fixnum = (logand (ash h -7) mask) then (logand (1+ i) mask)
+          for e of-type fixnum = (aref table i)
+          do (cond ((= e -1) (setf (aref table i) k) (return k))
+                   ((loop for j below 9 always (= (aref words (+ (* 9 e) j)) (aref words (+ at j))))
+                    (return e))))))
+;; A snapshot holds what decides the next step, part by part:2 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:3]]
+;;; the parts of a snapshot, in order: each part's id, its name and the bytes of its payload
+
+(defparameter +snapshot-parts+
+  '((1 :world) (2 :handles) (3 :awake-bodies) (4 :sleeping-bodies) (5 :materials) (6 :contacts)
+    (7 :pair-list) (8 :boxes) (9 :pushes))
+  "The parts of a snapshot, in the order they are written, each its id and its name: each part
+of the world's state is one entry, and a new kind of state (joints) is one more. #SN4P0T")
+
+(defconstant +snapshot-world-bytes+ 204 "Bytes of the world part's payload. #SN4P0T")
+
+(declaim (inline padded))
+(defun padded (bytes)
+  "BYTES rounded up to a multiple of 4. #SN4P0T"
+  (declare (type index bytes))
+  (logandc2 (+ bytes 3) 3))
+
+(defun features-mask (features)
+  "The bit mask of FEATURES, bit K for the K-th feature of +physics-features+. #SN4P0T"
+  (loop for f in features sum (ash 1 (position f +physics-features+))))
+
+(defun snapshot-part-sizes (world materials sizes)
+  "Write into SIZES, by part id, the payload bytes of each part of WORLD's snapshot, given its
+palette of MATERIALS entries, and return their sum with the parts' own headers. #SN4P0T"
+  (declare (type fixnum-column sizes) (type index materials) #.+kernel-policy+)
+  (let* ((ids (physics-world-ids world))
+         (free (loop with slot = (handle-table-free ids) while (>= slot 0)
+                     count t do (setf slot (aref (handle-table-local ids) slot))))
+         (plist (physics-world-pair-list world))
+         (rows (max 0 (pair-list-rows plist))))
+    (setf (aref sizes 1) +snapshot-world-bytes+
+          (aref sizes 2) (+ 12 (* 4 (handle-table-count ids)) (* 4 free) (* 8 (physics-world-added-count world)))
+          (aref sizes 3) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-awake world)))))
+          (aref sizes 4) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-sleeping world)))))
+          (aref sizes 5) (+ 4 (* +snapshot-material-bytes+ materials))
+          (aref sizes 6) (padded (+ 4 (contact-records-bytes (physics-world-contacts world) *snapshot-scratch*)))
+          (aref sizes 7) (padded (+ 36 (* +snapshot-pair-row-bytes+ rows) (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0))))
+          (aref sizes 8) (+ 4 (* +snapshot-box-bytes+ (box-columns-length (physics-world-boxes world))))
+          (aref sizes 9) (+ 4 (if (physics-world-pushes world) (* 16 (handle-table-count ids)) 0)))
+    (loop for (id) in +snapshot-parts+ sum (+ 8 (aref sizes id)))))
+
+(defun snapshot-materials (world scratch)
+  "Fill SCRATCH's palette with the materials of WORLD's bodies, awake rows then sleeping, and
+its materials column with each body's entry; return the palette's size. #SN4P0T"
+  (declare (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (+ (body-columns-length awake) (body-columns-length sleeping))))
+    (when (< (length (snapshot-scratch-materials scratch)) n)
+      (setf (snapshot-scratch-materials scratch)
+            (make-array (max n (* 2 (length (snapshot-scratch-materials scratch)))) :element-type 'fixnum)))
+    (fill (snapshot-scratch-table scratch) -1)
+    (setf (snapshot-scratch-count scratch) 0)
+    (let ((materials (snapshot-scratch-materials scratch)) (k 0) (last -1))
+      (declare (type fixnum-column materials) (type index k) (type fixnum last))
+      (flet ((walk (bodies)
+               (declare (type body-columns bodies))
+               (dotimes (row (body-columns-length bodies))
+                 ;; most bodies share the material of the body before them: compared first, not hashed
+                 (let* ((words (snapshot-scratch-palette scratch))
+                        (at (* 9 (snapshot-scratch-count scratch))))
+                   (declare (type fixnum-column words) (type index at))
+                   (setf last
+                         (if (and (>= last 0) (<= (+ at 9) (length words))
+                                  (progn (material-words bodies row words at)
+                                         (loop for j below 9
+                                               always (= (aref words (+ (* 9 last) j)) (aref words (+ at j))))))
+                             last
+                             (palette-index scratch bodies row))))
+                 (setf (aref materials k) last)
+                 (incf k))))
+        (walk awake)
+        (walk sleeping)))
+    (snapshot-scratch-count scratch)))
+
+(defun snapshot-physics-world (world &optional buffer)
+  "Write WORLD's whole simulation state into BUFFER, an octet vector, when it is large enough,
+else into a new one; return the buffer and the snapshot's size in bytes. Into a buffer large
+enough it conses nothing. #SN4P0T"
+  (check-idle world 'snapshot-physics-world)
+  (unless (or (null buffer) (typep buffer 'octets))
+    (error 'invalid-physics-parameter :world world :name :buffer :value buffer
+                                      :expected "NIL or an octet vector, (simple-array (unsigned-byte 8) (*))"))
+  (let* ((scratch *snapshot-scratch*)
+         (materials (snapshot-materials world scratch))
+         (sizes (snapshot-scratch-sizes scratch))
+         (total (+ +snapshot-header-bytes+ (snapshot-part-sizes world materials sizes))))
+    (declare (type index total))
+    (let ((buffer (if (and buffer (>= (length buffer) total)) buffer (make-array total :element-type '(unsigned-byte 8)))))
+      (replace buffer +snapshot-magic+)
+      (setf (snap-u32 buffer 8) +snapshot-version+
+            (snap-u32 buffer 12) (length +snapshot-parts+)
+            (snap-u64 buffer 16) total)
+      (let ((at +snapshot-header-bytes+))
+        (declare (type index at))
+        (loop for (id) in +snapshot-parts+
+              for size of-type index = (aref sizes id)
+              do (setf (snap-u32 buffer at) id (snap-u32 buffer (+ at 4)) size)
+                 ;; the padding reads as zeros
+                 (fill buffer 0 :start (+ at 8) :end (+ at 8 size))
+                 (write-snapshot-part id world buffer (+ at 8) scratch)
+                 (incf at (+ 8 size))))
+      (setf (snap-u64 buffer 24) (snapshot-checksum buffer +snapshot-header-bytes+ total))
+      (values buffer total))))
+
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +contact-impulse-groups+
+    `((5 ,(position 'normal-impulse +contact-fields+) 1)
+      (6 ,(position 'tangent-impulse-1 +contact-fields+) 2)
+      (7 ,(position 'rolling-impulse-x +contact-fields+) 3)
+      (8 ,(position 'spin-impulse +contact-fields+) 1))
+    "The groups of a contact's carried impulses a snapshot writes only when one of their bits is
+set: each the flag bit that says so, its first field's place in the geometry row and its width. #SN4P0T"))
+
+(defmacro do-impulse-groups ((bit first width) &body body)
+  "Run BODY once for each group of +contact-impulse-groups+, with BIT, FIRST and WIDTH bound to
+its constants, written out, not looped over. #SN4P0T"
+  `(progn ,@(loop for (b f w) in +contact-impulse-groups+
+                  collect `(symbol-macrolet ((,bit ,b) (,first ,f) (,width ,w)) ,@body))))
+
+(declaim (inline contact-record-flags))
+(defun contact-record-flags (geometry g)
+  "The flags of the snapshot record of the contact whose floats begin at G of GEOMETRY, less its
+touching and seen bits: the code of its normal in bits 2-4 (0 written out; 1 to 6 the unit
+vectors +x -x +y -y +z -z, exactly) and a bit for each impulse group with a bit set. #SN4P0T"
+  (declare (type f32-column geometry) (type index g) #.+kernel-policy+)
+  (let ((nx (aref geometry g)) (ny (aref geometry (+ g 1))) (nz (aref geometry (+ g 2))) (flags 0))
+    (declare (type fixnum flags))
+    (flet ((zero (v) (declare (type single-float v)) (zerop (sb-kernel:single-float-bits v))))
+      (setf flags (ash (cond ((and (zero ny) (zero nz)) (cond ((= nx 1.0) 1) ((= nx -1.0) 2) (t 0)))
+                             ((and (zero nx) (zero nz)) (cond ((= ny 1.0) 3) ((= ny -1.0) 4) (t 0)))
+                             ((and (zero nx) (zero ny)) (cond ((= nz 1.0) 5) ((= nz -1.0) 6) (t 0)))
+                             (t 0))
+                       2))
+      (do-impulse-groups (bit first width)
+        (unless (loop for k of-type index below width always (zero (aref geometry (+ g first k))))
+          (setf flags (logior flags (ash 1 bit)))))
+      flags)))
+
+(declaim (inline contact-record-bytes))
+(defun contact-record-bytes (flags)
+  "The bytes of a contact's snapshot record whose flags are FLAGS. #SN4P0T"
+  (declare (type fixnum flags))
+  (+ +snapshot-contact-bytes+ (if (zerop (ldb (byte 3 2) flags)) 12 0)
+     (if (logbitp 5 flags) 4 0) (if (logbitp 6 flags) 8 0) (if (logbitp 7 flags) 12 0) (if (logbitp 8 flags) 4 0)))
+
+(defun contact-records-bytes (contacts scratch)
+  "The bytes of the snapshot records of every contact of CONTACTS; each record's flags are kept
+in SCRATCH's contact flags for the writer. #SN4P0T"
+  (declare (type contact-columns contacts) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let ((geometry (contact-columns-geometry contacts)) (bytes 0) (n (contact-columns-length contacts)))
+    (declare (type index bytes n))
+    (when (< (length (snapshot-scratch-contact-flags scratch)) n)
+      (setf (snapshot-scratch-contact-flags scratch)
+            (make-array (max n (* 2 (length (snapshot-scratch-contact-flags scratch)))) :element-type 'fixnum)))
+    (let ((kept (snapshot-scratch-contact-flags scratch)))
+      (declare (type fixnum-column kept))
+      (dotimes (row n bytes)
+        (let ((flags (contact-record-flags geometry (geometry-start row))))
+          (setf (aref kept row) flags)
+          (incf bytes (contact-record-bytes flags)))))))
+
+(defun write-snapshot-bodies (bodies buffer at materials first)
+  "Write the rows of BODIES into BUFFER from AT: their count, then a record a row, the row's
+material being entry FIRST + row of MATERIALS. #SN4P0T"
+  (declare (type body-columns bodies) (type octets buffer) (type index at first)
+           (type fixnum-column materials) #.+kernel-policy+)
+  (let ((n (body-columns-length bodies)))
+    (setf (snap-u32 buffer at) n)
+    (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz sleep-time age flags handle) bodies
+      (dotimes (row n)
+        (let ((o (+ at 4 (* row +snapshot-body-bytes+))))
+          (declare (type index o))
+          (setf (snap-f32 buffer o) (aref x row) (snap-f32 buffer (+ o 4)) (aref y row)
+                (snap-f32 buffer (+ o 8)) (aref z row) (snap-f32 buffer (+ o 12)) (aref vx row)
+                (snap-f32 buffer (+ o 16)) (aref vy row) (snap-f32 buffer (+ o 20)) (aref vz row)
+                (snap-f32 buffer (+ o 24)) (aref wx row) (snap-f32 buffer (+ o 28)) (aref wy row)
+                (snap-f32 buffer (+ o 32)) (aref wz row) (snap-f32 buffer (+ o 36)) (aref qw row)
+                (snap-f32 buffer (+ o 40)) (aref qx row) (snap-f32 buffer (+ o 44)) (aref qy row)
+                (snap-f32 buffer (+ o 48)) (aref qz row) (snap-f32 buffer (+ o 52)) (aref sleep-time row)
+                (snap-f64 buffer (+ o 56)) (aref age row)
+                (snap-u32 buffer (+ o 64)) (handle-index (aref handle row))
+                (snap-u32 buffer (+ o 68)) (aref materials (+ first row))
+                (snap-u16 buffer (+ o 72)) (ldb (byte 16 0) (aref flags row))))))))
+
+(defun write-snapshot-part (id world buffer at scratch)
+  "Write the payload of part ID of WORLD's snapshot into BUFFER from AT. #SN4P0T"
+  (declare (type octets buffer) (type index at) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (ecase id
+    (1 (let ((stats (world-statistics world)) (terrain (physics-world-terrain world))
+             (name (symbol-name (kernel-family-name (physics-world-kernels world)))))
+         (setf (snap-u32 buffer at) (handle-table-tag (physics-world-ids world))
+               (snap-u32 buffer (+ at 4)) (features-mask (world-features world))
+               (snap-u32 buffer (+ at 8)) (logior (if (physics-world-sleep-enabled world) 1 0)
+                                                  (if (physics-world-filtering world) 2 0)
+                                                  (if (physics-world-column-watch world) 4 0)
+                                                  (if (physics-world-pushed world) 8 0))
+               (snap-u32 buffer (+ at 12)) (physics-world-substeps world)
+               (snap-u64 buffer (+ at 16)) (physics-world-step-count world)
+               (snap-f32 buffer (+ at 24)) (physics-world-step-seconds world)
+               (snap-f32 buffer (+ at 28)) (physics-world-gravity-x world)
+               (snap-f32 buffer (+ at 32)) (physics-world-gravity-y world)
+               (snap-f32 buffer (+ at 36)) (physics-world-gravity-z world)
+               (snap-f32 buffer (+ at 40)) (physics-world-current-dt world)
+               (snap-f32 buffer (+ at 44)) (physics-world-current-h world)
+               (snap-f32 buffer (+ at 48)) (physics-world-max-radius world))
+         (loop for (name nil nil nil kind) in +physics-parameters+
+               for o of-type index from (+ at 52) by 4
+               for value = (world-parameter world name)
+               do (if (eq kind 'integer)
+                      (setf (snap-u32 buffer o) value)
+                      (setf (snap-f32 buffer o) value)))
+         (setf (snap-i64 buffer (+ at 124)) (physics-world-braced-step world)
+               (snap-i64 buffer (+ at 132)) (physics-world-awake-grid-step world)
+               (snap-u64 buffer (+ at 140)) (contact-table-misses (physics-world-contact-table world))
+               (snap-u32 buffer (+ at 148)) (step-statistics-contacts stats)
+               (snap-u32 buffer (+ at 152)) (step-statistics-colors stats)
+               (snap-f64 buffer (+ at 156)) (step-statistics-real-seconds stats)
+               (snap-f64 buffer (+ at 164)) (step-statistics-max-penetration stats)
+               (snap-f64 buffer (+ at 172)) (step-statistics-max-approach stats)
+               (snap-u64 buffer (+ at 180)) (if terrain (voxel-terrain-edits terrain) 0))
+         (dotimes (i (min 16 (length name)))
+           (setf (snap-u8 buffer (+ at 188 i)) (logand 127 (char-code (char name i)))))))
+    (2 (let* ((ids (physics-world-ids world)) (count (handle-table-count ids))
+              (generations (handle-table-generation ids)) (locals (handle-table-local ids))
+              (free-at (+ at 8 (* 4 count))) (nfree 0))
+         (declare (type index count nfree))
+         (setf (snap-u32 buffer at) count)
+         (dotimes (slot count) (setf (snap-u32 buffer (+ at 8 (* 4 slot))) (aref generations slot)))
+         (loop with slot of-type fixnum = (handle-table-free ids) while (>= slot 0)
+               do (setf (snap-u32 buffer (+ free-at (* 4 nfree))) slot)
+                  (incf nfree)
+                  (setf slot (aref locals slot)))
+         (setf (snap-u32 buffer (+ at 4)) nfree)
+         ;; the bodies added since the last step, each as its slot and generation
+         (let ((added (physics-world-added world)) (n (physics-world-added-count world))
+               (o (+ free-at (* 4 nfree))))
+           (setf (snap-u32 buffer o) n)
+           (dotimes (k n)
+             (setf (snap-u32 buffer (+ o 4 (* 8 k))) (handle-index (aref added k))
+                   (snap-u32 buffer (+ o 8 (* 8 k))) (handle-generation (aref added k)))))))
+    (3 (write-snapshot-bodies (physics-world-awake world) buffer at (snapshot-scratch-materials scratch) 0))
+    (4 (write-snapshot-bodies (physics-world-sleeping world) buffer at (snapshot-scratch-materials scratch)
+                              (body-columns-length (physics-world-awake world))))
+    (5 (let ((count (snapshot-scratch-count scratch)) (words (snapshot-scratch-palette scratch)))
+         (setf (snap-u32 buffer at) count)
+         (dotimes (k count)
+           (dotimes (j 9)
+             (setf (snap-u32 buffer (+ at 4 (* k +snapshot-material-bytes+) (* 4 j))) (aref words (+ (* 9 k) j)))))))
+    (6 (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts))
+              (step (physics-world-step-count world)) (o (+ at 4)))
+         (declare (type index o))
+         (setf (snap-u32 buffer at) n)
+         (with-contact-columns (key seen touching geometry) contacts
+           (dotimes (row n)
+             (let* ((g (geometry-start row))
+                    (flags (logior (aref (snapshot-scratch-contact-flags scratch) row)
+                                   (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2))))
+               (setf (snap-i64 buffer o) (aref key row) (snap-u16 buffer (+ o 8)) flags)
+               (incf o 10)
+               (when (zerop (ldb (byte 3 2) flags))
+                 (dotimes (k 3) (setf (snap-f32 buffer o) (aref geometry (+ g k))) (incf o 4)))
+               (do-impulse-groups (bit first width)
+                 (when (logbitp bit flags)
+                   (dotimes (k width)
+                     (setf (snap-f32 buffer o) (aref geometry (+ g first k)))
+                     (incf o 4)))))))))
+    (7 (let* ((plist (physics-world-pair-list world)) (rows (pair-list-rows plist))
+              (pairs (if (>= rows 0) (pair-list-count plist) 0)))
+         (setf (snap-i32 buffer at) rows (snap-f32 buffer (+ at 4)) (pair-list-cell plist)
+               (snap-u32 buffer (+ at 8)) (pair-list-builds plist) (snap-i32 buffer (+ at 12)) (pair-list-loose-count plist)
+               (snap-i64 buffer (+ at 16)) (pair-list-step plist) (snap-i64 buffer (+ at 24)) (pair-list-built-step plist)
+               (snap-u32 buffer (+ at 32)) pairs)
+         (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)) (clear (pair-list-clear plist)))
+           (dotimes (i (max rows 0))
+             (let ((o (+ at 36 (* i +snapshot-pair-row-bytes+))))
+               (setf (snap-f32 buffer o) (aref anchors (* 3 i)) (snap-f32 buffer (+ o 4)) (aref anchors (+ 1 (* 3 i)))
+                     (snap-f32 buffer (+ o 8)) (aref anchors (+ 2 (* 3 i))) (snap-i64 buffer (+ o 12)) (aref handles i)
+                     (snap-u8 buffer (+ o 20)) (if (= 1 (aref clear i)) 1 0)))))
+         (let ((o (+ at 36 (* (max rows 0) +snapshot-pair-row-bytes+))) (list (pair-list-pairs plist)))
+           (dotimes (k pairs) (setf (snap-i64 buffer (+ o (* 8 k))) (aref list k))))))
+    (8 (let* ((boxes (physics-world-boxes world)) (n (box-columns-length boxes)))
+         (setf (snap-u32 buffer at) n)
+         (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz (bid id) filter) boxes
+           (dotimes (row n)
+             (let ((o (+ at 4 (* row +snapshot-box-bytes+))))
+               (loop for column in (list min-x min-y min-z max-x max-y max-z vx vy vz) for k from 0
+                     do (setf (snap-f32 buffer (+ o (* 4 k))) (aref (the f32-column column) row)))
+               (setf (snap-i64 buffer (+ o 36)) (aref bid row) (snap-i64 buffer (+ o 44)) (aref filter row)))))))
+    (9 (let ((pushes (physics-world-pushes world)))
+         (if pushes
+             (let ((slots (handle-table-count (physics-world-ids world))))
+               (setf (snap-u32 buffer at) slots)
+               (dotimes (k (* 4 slots)) (setf (snap-f32 buffer (+ at 4 (* 4 k))) (aref pushes k))))
+             (setf (snap-u32 buffer at) 0))))))
+
+(defun world-parameter (world name)
+  "The value of WORLD's parameter NAME, a keyword of +physics-parameters+. #SN4P0T"
+  (ecase name
+    (:contact-hertz (physics-world-contact-hertz world))
+    (:contact-damping-ratio (physics-world-damping-ratio world))
+    (:contact-push-max (physics-world-push-max world))
+    (:load-stiffening (physics-world-load-stiffening world))
+    (:crowded-relax-passes (physics-world-crowded-relax-passes world))
+    (:crowded-depth (physics-world-crowded-depth world))
+    (:linear-slop (physics-world-slop world))
+    (:speculative-margin (physics-world-margin world))
+    (:pair-skin (physics-world-pair-skin world))
+    (:restitution-threshold (physics-world-restitution-threshold world))
+    (:hit-speed (physics-world-hit-speed world))
+    (:sleep-speed (physics-world-sleep-speed world))
+    (:time-to-sleep (physics-world-time-to-sleep world))
+    (:wake-speed (physics-world-wake-speed world))
+    (:brace-mass-ratio (physics-world-brace-mass-ratio world))
+    (:reach-limit (physics-world-reach-limit world))
+    (:max-speed (physics-world-max-speed world))
+    (:body-budget (physics-world-body-budget world))))
+
+(defun (setf world-parameter) (value world name)
+  "Set WORLD's parameter NAME, a keyword of +physics-parameters+, to VALUE. #SN4P0T"
+  (ecase name
+    (:contact-hertz (setf (physics-world-contact-hertz world) value))
+    (:contact-damping-ratio (setf (physics-world-damping-ratio world) value))
+    (:contact-push-max (setf (physics-world-push-max world) value))
+    (:load-stiffening (setf (physics-world-load-stiffening world) value))
+    (:crowded-relax-passes (setf (physics-world-crowded-relax-passes world) value))
+    (:crowded-depth (setf (physics-world-crowded-depth world) value))
+    (:linear-slop (setf (physics-world-slop world) value))
+    (:speculative-margin (setf (physics-world-margin world) value))
+    (:pair-skin (setf (physics-world-pair-skin world) value))
+    (:restitution-threshold (setf (physics-world-restitution-threshold world) value))
+    (:hit-speed (setf (physics-world-hit-speed world) value))
+    (:sleep-speed (setf (physics-world-sleep-speed world) value))
+    (:time-to-sleep (setf (physics-world-time-to-sleep world) value))
+    (:wake-speed (setf (physics-world-wake-speed world) value))
+    (:brace-mass-ratio (setf (physics-world-brace-mass-ratio world) value))
+    (:reach-limit (setf (physics-world-reach-limit world) value))
+    (:max-speed (setf (physics-world-max-speed world) value))
+    (:body-budget (setf (physics-world-body-budget world) value))))
+;; A snapshot holds what decides the next step, part by part:3 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:4]]
+;;; reading a snapshot back: every byte is checked before the world is touched
+
+(defmacro snapshot-check (test type offset expected found)
+  "Unless TEST, refuse the snapshot (a restore's) with the physics-snapshot-invalid subtype TYPE at
+OFFSET. #SN4P0T"
+  `(unless ,test (snapshot-refuse ',type 'restore-physics-world ,offset ,expected ,found)))
+
+(declaim (inline snap-finite-f32 snap-finite-f64))
+(defun snap-finite-f32 (buffer offset)
+  "The single-float at OFFSET of BUFFER, or the snapshot refused there when it is not finite. #SN4P0T"
+  (declare (type octets buffer) (type index offset))
+  (let ((bits (snap-u32 buffer offset)))
+    (snapshot-check (/= (ldb (byte 8 23) bits) 255) physics-snapshot-other-layout offset
+                    "a finite single-float" bits)
+    (snap-f32 buffer offset)))
+
+(defun snap-finite-f64 (buffer offset)
+  "The double-float at OFFSET of BUFFER, or the snapshot refused there when it is not finite. #SN4P0T"
+  (declare (type octets buffer) (type index offset))
+  (let ((bits (snap-u64 buffer offset)))
+    (snapshot-check (/= (ldb (byte 11 52) bits) 2047) physics-snapshot-other-layout offset
+                    "a finite double-float" bits)
+    (snap-f64 buffer offset)))
+
+(defun check-snapshot-frame (buffer scratch)
+  "Check BUFFER's header, checksum and part frames; note each part's payload offset and size in
+SCRATCH by part id; return the snapshot's size. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let ((length (length buffer)))
+    (snapshot-check (>= length +snapshot-header-bytes+) physics-snapshot-truncated length
+                    (format nil "a header of ~D bytes" +snapshot-header-bytes+) length)
+    (let ((wrong (mismatch buffer +snapshot-magic+ :end1 8)))
+      (snapshot-check (null wrong) physics-snapshot-wrong-magic wrong "the magic LUVWORLD" (subseq buffer 0 8)))
+    (snapshot-check (= (snap-u32 buffer 8) +snapshot-version+) physics-snapshot-wrong-version 8
+                    (format nil "version ~D" +snapshot-version+) (snap-u32 buffer 8))
+    (let ((total (snap-u64 buffer 16)))
+      (snapshot-check (<= total length) physics-snapshot-truncated length
+                      (format nil "the ~D bytes the header records" total) length)
+      (snapshot-check (and (>= total +snapshot-header-bytes+) (zerop (mod (- total +snapshot-header-bytes+) 4)))
+                      physics-snapshot-other-layout 16 "a size past the header, by whole words" total)
+      (let ((sum (snapshot-checksum buffer +snapshot-header-bytes+ total)))
+        (snapshot-check (= sum (snap-u64 buffer 24)) physics-snapshot-checksum-mismatch 24
+                        (format nil "the checksum of the bytes, ~D" sum) (snap-u64 buffer 24)))
+      (snapshot-check (= (snap-u32 buffer 12) (length +snapshot-parts+)) physics-snapshot-other-layout 12
+                      (format nil "~D parts" (length +snapshot-parts+)) (snap-u32 buffer 12))
+      (let ((at +snapshot-header-bytes+))
+        (loop for (id name) in +snapshot-parts+
+              do (snapshot-check (<= (+ at 8) total) physics-snapshot-other-layout at
+                                 (format nil "the ~(~A~) part" name) :end)
+                 (snapshot-check (= (snap-u32 buffer at) id) physics-snapshot-other-layout at
+                                 (format nil "the ~(~A~) part, id ~D" name id) (snap-u32 buffer at))
+                 (let ((size (snap-u32 buffer (+ at 4))))
+                   (snapshot-check (and (<= (+ at 8 size) total) (zerop (mod size 4)) (>= size 4))
+                                   physics-snapshot-other-layout (+ at 4)
+                                   (format nil "a size in words within the snapshot for the ~(~A~) part" name) size)
+                   (setf (aref (snapshot-scratch-offsets scratch) id) (+ at 8)
+                         (aref (snapshot-scratch-sizes scratch) id) size)
+                   (incf at (+ 8 size))))
+        (snapshot-check (= at total) physics-snapshot-other-layout at "the end of the snapshot" at))
+      total)))
+
+(defun check-part-size (scratch id expected)
+  "Refuse the snapshot unless part ID's payload, as SCRATCH noted it, is EXPECTED bytes. #SN4P0T"
+  (declare (type snapshot-scratch scratch))
+  (let ((size (aref (snapshot-scratch-sizes scratch) id)))
+    (snapshot-check (= size expected) physics-snapshot-other-layout (- (aref (snapshot-scratch-offsets scratch) id) 4)
+                    (format nil "~D bytes for part ~D as its counts give" expected id) size)))
+
+(defun check-snapshot-world (world buffer scratch)
+  "Check the world part of the snapshot in BUFFER against WORLD: its features within WORLD's, its
+sleep, and every number within its range. #SN4P0T"
+  (declare (type octets buffer))
+  (check-part-size scratch 1 +snapshot-world-bytes+)
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 1))
+         (mask (snap-u32 buffer (+ at 4)))
+         (own (features-mask (world-features world))))
+    (snapshot-check (zerop (logandc2 mask own)) physics-snapshot-missing-features (+ at 4)
+                    (format nil "only features of the target world, ~{~S~^ ~}" (world-features world))
+                    (loop for f in +physics-features+ for k from 0 when (logbitp k mask) collect f))
+    (snapshot-check (eq (logbitp 0 (snap-u32 buffer (+ at 8))) (and (physics-world-sleep-enabled world) t))
+                    physics-snapshot-other-layout (+ at 8)
+                    (format nil "a world ~:[without~;with~] sleep, as the target is" (physics-world-sleep-enabled world))
+                    (snap-u32 buffer (+ at 8)))
+    (snapshot-check (<= 1 (snap-u32 buffer (+ at 12)) 64) physics-snapshot-other-layout (+ at 12)
+                    "1 to 64 substeps" (snap-u32 buffer (+ at 12)))
+    (snapshot-check (<= (snap-u64 buffer (+ at 16)) most-positive-fixnum) physics-snapshot-other-layout (+ at 16)
+                    "a step count" (snap-u64 buffer (+ at 16)))
+    (snapshot-check (< 0 (snap-u32 buffer at) (ash 1 +handle-tag-bits+)) physics-snapshot-other-layout at
+                    "a world tag from 1 to 2^16 - 1" (snap-u32 buffer at))
+    (flet ((ranged (offset low high what &optional name)
+             (let ((v (snap-finite-f32 buffer offset)))
+               (snapshot-check (<= low v high) physics-snapshot-other-layout offset
+                               (if name (format nil "~(~A~) from ~A to ~A" name low high) what) v))))
+      (ranged (+ at 24) +physics-min-step-seconds+ 0.99999994 "a step of under 1 second")
+      (dotimes (k 3) (ranged (+ at 28 (* 4 k)) (- +physics-max-gravity+) +physics-max-gravity+ "a gravity in range"))
+      (ranged (+ at 40) 1e-9 1.0 "the last step's length")
+      (ranged (+ at 44) 1e-9 1.0 "the last substep's length")
+      (ranged (+ at 48) 0.0 0.5 "the largest radius the world has had")
+      (loop for (name nil low high kind) in +physics-parameters+
+            for o from (+ at 52) by 4
+            do (if (eq kind 'integer)
+                   (snapshot-check (<= low (snap-u32 buffer o) high) physics-snapshot-other-layout o
+                                   (format nil "~(~A~) from ~D to ~D" name low high) (snap-u32 buffer o))
+                   (ranged o low high nil name)))
+      (let ((margin (snap-f32 buffer (+ at 52 (* 4 (position :speculative-margin +physics-parameters+ :key #'first)))))
+            (limit (snap-f32 buffer (+ at 52 (* 4 (position :reach-limit +physics-parameters+ :key #'first))))))
+        (snapshot-check (>= limit (+ margin +physics-min-radius+)) physics-snapshot-other-layout (+ at 52)
+                        "a reach limit of at least the margin and the smallest radius" limit)))
+    (dolist (o '(124 132))
+      (snapshot-check (typep (snap-i64 buffer (+ at o)) 'fixnum) physics-snapshot-other-layout (+ at o)
+                      "a step number" (snap-i64 buffer (+ at o))))
+    (snapshot-check (typep (snap-u64 buffer (+ at 140)) 'index) physics-snapshot-other-layout (+ at 140)
+                    "a count of misses" (snap-u64 buffer (+ at 140)))
+    (dolist (o '(156 164 172)) (snap-finite-f64 buffer (+ at o)))))
+
+(defun check-snapshot-slots (world buffer scratch)
+  "Check the handle, material and body parts of the snapshot in BUFFER: the sizes their counts
+give, every generation, every free slot and every body's slot distinct and within the table, the
+slots all accounted for, each material and each body's numbers in range, and no body's centre in
+a solid cell of WORLD's terrain. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((offsets (snapshot-scratch-offsets scratch))
+         (hat (aref offsets 2)) (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4)))
+         (wat (aref offsets 1))
+         (max-speed (snap-f32 buffer (+ wat 52 (* 4 (position :max-speed +physics-parameters+ :key #'first)))))
+         (max-radius (snap-f32 buffer (+ wat 48)))
+         (terrain (physics-world-terrain world))
+         (mat (aref offsets 5)) (materials (snap-u32 buffer mat)))
+    (declare (type index hat wat mat) (type (unsigned-byte 32) count nfree materials)
+             (type single-float max-speed max-radius))
+    (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout hat
+                    "a handle table of under 2^24 slots" count)
+    (snapshot-check (<= nfree count) physics-snapshot-other-layout (+ hat 4) "no more free slots than slots" nfree)
+    (let* ((o (+ hat 8 (* 4 count) (* 4 nfree))) (added (if (< (+ o 4) (length buffer)) (snap-u32 buffer o) 0)))
+      (check-part-size scratch 2 (+ 12 (* 4 count) (* 4 nfree) (* 8 added)))
+      (dotimes (k added)
+        (snapshot-check (and (< (snap-u32 buffer (+ o 4 (* 8 k))) count)
+                             (< (snap-u32 buffer (+ o 8 (* 8 k))) (ash 1 +handle-generation-bits+)))
+                        physics-snapshot-other-layout (+ o 4 (* 8 k)) "an added body's slot and generation"
+                        (snap-u32 buffer (+ o 4 (* 8 k))))))
+    (dotimes (slot count)
+      (snapshot-check (< (snap-u32 buffer (+ hat 8 (* 4 slot))) (ash 1 +handle-generation-bits+))
+                      physics-snapshot-other-layout (+ hat 8 (* 4 slot)) "a generation under 2^20"
+                      (snap-u32 buffer (+ hat 8 (* 4 slot)))))
+    (multiple-value-bind (marks stamp) (snapshot-marks scratch count)
+      (declare (type fixnum-column marks) (type fixnum stamp))
+      (dotimes (k nfree)
+        (let* ((o (+ hat 8 (* 4 count) (* 4 k))) (slot (snap-u32 buffer o)))
+          (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
+                          "a free slot of the table, listed once" slot)
+          (setf (aref marks slot) stamp)))
+      (check-part-size scratch 5 (+ 4 (* +snapshot-material-bytes+ materials)))
+      (dotimes (k materials)
+        (let ((o (+ mat 4 (* k +snapshot-material-bytes+))))
+          (flet ((ranged (field low high what)
+                   (let ((v (snap-finite-f32 buffer (+ o (* 4 field)))))
+                     (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o (* 4 field)) what v))))
+            (ranged 0 +physics-min-radius+ max-radius "a radius from the smallest to the world's largest")
+            (ranged 1 (/ 0.999 +physics-max-mass+) (/ 1.001 +physics-min-mass+) "the inverse of a mass in range")
+            (ranged 2 0.0 (/ 2.6 (* +physics-min-mass+ +physics-min-radius+ +physics-min-radius+))
+                    "the inverse of an inertia in range")
+            (ranged 3 0.0 1.0 "a restitution in [0, 1]")
+            (ranged 4 0.0 +physics-max-friction+ "a friction in range")
+            (ranged 5 0.0 +physics-max-friction+ "a rolling resistance in range")
+            (ranged 6 0.0 1e30 "a life of 0 or more"))
+          (snapshot-check (<= 0 (snap-i32 buffer (+ o 28)) 1000) physics-snapshot-other-layout (+ o 28)
+                          "a kind from 0 to 1000" (snap-i32 buffer (+ o 28)))))
+      (let ((live nfree))
+        (declare (type index live))
+        (dolist (id '(3 4))
+          (let* ((at (aref offsets id)) (n (snap-u32 buffer at)))
+            (declare (type index at n))
+            (check-part-size scratch id (padded (+ 4 (* +snapshot-body-bytes+ n))))
+            (dotimes (row n)
+              (let ((o (+ at 4 (* row +snapshot-body-bytes+))))
+                (declare (type index o))
+                (dotimes (k 14) (snap-finite-f32 buffer (+ o (* 4 k))))
+                (snap-finite-f64 buffer (+ o 56))
+                (dotimes (k 3)
+                  (let ((c (snap-f32 buffer (+ o (* 4 k)))))
+                    (snapshot-check (< (abs c) +physics-coordinate-limit+) physics-snapshot-other-layout (+ o (* 4 k))
+                                    "a coordinate within the limit" c)))
+                (let ((vx (snap-f32 buffer (+ o 12))) (vy (snap-f32 buffer (+ o 16))) (vz (snap-f32 buffer (+ o 20)))
+                      (qw (snap-f32 buffer (+ o 36))) (qx (snap-f32 buffer (+ o 40))) (qy (snap-f32 buffer (+ o 44)))
+                      (qz (snap-f32 buffer (+ o 48))))
+                  (snapshot-check (and (<= (abs vx) max-speed) (<= (abs vy) max-speed) (<= (abs vz) max-speed)
+                                       (<= (+ (* vx vx) (* vy vy) (* vz vz)) (* 1.001 max-speed max-speed)))
+                                  physics-snapshot-other-layout (+ o 12) "a speed within the world's top speed" vx)
+                  (dotimes (k 3)
+                    (snapshot-check (<= (abs (snap-f32 buffer (+ o 24 (* 4 k)))) 1e6) physics-snapshot-other-layout
+                                    (+ o 24 (* 4 k)) "a spin under 10^6 rad/s" (snap-f32 buffer (+ o 24 (* 4 k)))))
+                  (snapshot-check (and (<= (abs qw) 1.1) (<= (abs qx) 1.1) (<= (abs qy) 1.1) (<= (abs qz) 1.1)
+                                       (<= 0.9 (+ (* qw qw) (* qx qx) (* qy qy) (* qz qz)) 1.1))
+                                  physics-snapshot-other-layout (+ o 36) "a unit quaternion" qw))
+                (snapshot-check (<= 0.0 (snap-f32 buffer (+ o 52)) 1e30) physics-snapshot-other-layout (+ o 52)
+                                "a time still of 0 or more" (snap-f32 buffer (+ o 52)))
+                (snapshot-check (<= 0d0 (snap-f64 buffer (+ o 56)) 1d30) physics-snapshot-other-layout (+ o 56)
+                                "an age of 0 or more" (snap-f64 buffer (+ o 56)))
+                (let ((slot (snap-u32 buffer (+ o 64))) (material (snap-u32 buffer (+ o 68))))
+                  (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout (+ o 64)
+                                  "a slot of the table neither free nor another body's" slot)
+                  (setf (aref marks slot) (1+ stamp))
+                  (incf live)
+                  (snapshot-check (< material materials) physics-snapshot-other-layout (+ o 68)
+                                  "a material of the palette" material))
+                (when terrain
+                  (let ((x (floor (snap-f32 buffer o))) (y (floor (snap-f32 buffer (+ o 4))))
+                        (z (floor (snap-f32 buffer (+ o 8)))))
+                    (snapshot-check (not (terrain-solid-p terrain x y z)) physics-snapshot-other-layout o
+                                    "a centre in an air cell of the world's terrain" (list x y z))))))))
+        (snapshot-check (= live count) physics-snapshot-other-layout hat
+                        "as many slots as free slots and bodies" count)))))
+
+(defun check-snapshot-contacts (buffer scratch)
+  "Check the contact part of the snapshot in BUFFER: its size, each key's kind and slots (the
+slots of the table, live or freed in the last step, A below B for a pair), each key once, and finite impulses; the keys go into
+SCRATCH's contact table, mapped to their rows. Run after check-snapshot-slots, whose marks it
+reads. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 6)) (n (snap-u32 buffer at))
+         (hat (aref (snapshot-scratch-offsets scratch) 2)) (count (snap-u32 buffer hat))
+         (marks (snapshot-scratch-marks scratch)) (stamp (snapshot-scratch-stamp scratch))
+         (table (snapshot-scratch-contacts scratch)))
+    (declare (type index at n hat count) (type fixnum-column marks) (type fixnum stamp))
+    (progn
+      (fill (contact-table-slots table) -1)
+      (setf (contact-table-count table) 0)
+      (let ((o (+ at 4)) (end (+ at (aref (snapshot-scratch-sizes scratch) 6))))
+        (declare (type index o end))
+        (dotimes (row n)
+          (snapshot-check (<= (+ o +snapshot-contact-bytes+) end) physics-snapshot-other-layout o
+                          (format nil "the record of contact ~D within the part" row) end)
+          (let* ((key (snap-i64 buffer o)) (flags (snap-u16 buffer (+ o 8)))
+                 (kind (ldb (byte 4 58) key)) (a (ldb (byte 24 34) key)))
+            ;; a body that expired in the last step has a free slot, and its contacts wait for
+            ;; the next step's prune: a key may name a free slot of the table
+            (snapshot-check (and (>= key 0) (< key (ash 1 60)) (<= kind 2) (< a count) (>= (aref marks a) (1- stamp)))
+                            physics-snapshot-other-layout o "a contact key of a slot of the table" key)
+            (when (= kind +contact-pair+)
+              (let ((b (ldb (byte 34 0) key)))
+                (snapshot-check (and (< a b count) (>= (aref marks b) (1- stamp))) physics-snapshot-other-layout o
+                                "a pair key of two slots of the table, the lower first" key)))
+
+            (snapshot-check (and (< flags 512) (/= 7 (ldb (byte 3 2) flags))) physics-snapshot-other-layout (+ o 8)
+                            "contact flags of 9 bits, a normal code from 0 to 6" flags)
+            (snapshot-check (<= (+ o (contact-record-bytes flags)) end) physics-snapshot-other-layout o
+                            (format nil "the record of contact ~D within the part" row) end)
+            ;; a key already in the table is replaced, not counted again: a duplicate
+            (let ((before (contact-table-count table)))
+              (contact-table-put table key row)
+              (snapshot-check (/= before (contact-table-count table)) physics-snapshot-other-layout o
+                              "a key no other contact has" key))
+            ;; a carried impulse is at most the momentum of the heaviest body at the top speed
+            (loop for p of-type index from (+ o 10 (if (zerop (ldb (byte 3 2) flags)) 12 0))
+                    below (+ o (contact-record-bytes flags)) by 4
+                  do (snapshot-check (<= (abs (snap-finite-f32 buffer p)) 1e9) physics-snapshot-other-layout p
+                                     "a carried impulse of at most 10^9 N s" (snap-f32 buffer p)))
+            (when (zerop (ldb (byte 3 2) flags))
+              (dotimes (k 3)
+                (snapshot-check (<= (abs (snap-finite-f32 buffer (+ o 10 (* 4 k)))) 1.001)
+                                physics-snapshot-other-layout (+ o 10 (* 4 k)) "a normal of unit length"
+                                (snap-f32 buffer (+ o 10 (* 4 k))))))
+            (incf o (contact-record-bytes flags))))
+        (check-part-size scratch 6 (padded (- o at))))
+      table)))
+
+(defun check-snapshot-rest (buffer scratch)
+  "Check the pair list, box and push parts of the snapshot in BUFFER: sizes, rows, pairs of
+listed rows, finite numbers, and pushes that cover the table with nothing on a free slot. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((offsets (snapshot-scratch-offsets scratch))
+         (at (aref offsets 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32))))
+    (declare (type index at))
+    (snapshot-check (< -2 rows (ash 1 24)) physics-snapshot-other-layout at "a count of listed rows" rows)
+    (snapshot-check (or (>= rows 0) (zerop pairs)) physics-snapshot-other-layout (+ at 32) "no pairs in no list" pairs)
+    (check-part-size scratch 7 (padded (+ 36 (* +snapshot-pair-row-bytes+ (max rows 0)) (* 8 pairs))))
+    (when (>= rows 0)
+      (let ((cell (snap-finite-f32 buffer (+ at 4))))
+        (snapshot-check (< 0.0 cell 1e6) physics-snapshot-other-layout (+ at 4) "a cell edge above 0" cell))
+      (snapshot-check (<= -1 (snap-i32 buffer (+ at 12)) rows) physics-snapshot-other-layout (+ at 12)
+                      "a count of loose rows" (snap-i32 buffer (+ at 12)))
+      (dolist (o '(16 24))
+        (snapshot-check (typep (snap-i64 buffer (+ at o)) 'fixnum) physics-snapshot-other-layout (+ at o)
+                        "a step number" (snap-i64 buffer (+ at o))))
+      (dotimes (i rows)
+        (let ((o (+ at 36 (* i +snapshot-pair-row-bytes+))))
+          (dotimes (k 3)
+            (let ((c (snap-finite-f32 buffer (+ o (* 4 k)))))
+              (snapshot-check (< (abs c) +physics-coordinate-limit+) physics-snapshot-other-layout (+ o (* 4 k))
+                              "an anchor within the coordinate limit" c)))
+          (snapshot-check (typep (snap-i64 buffer (+ o 12)) 'fixnum) physics-snapshot-other-layout (+ o 12)
+                          "a handle" (snap-i64 buffer (+ o 12)))
+          (snapshot-check (<= (snap-u8 buffer (+ o 20)) 1) physics-snapshot-other-layout (+ o 20)
+                          "a clear mark, 0 or 1" (snap-u8 buffer (+ o 20)))))
+      (let ((base (+ at 36 (* rows +snapshot-pair-row-bytes+))))
+        (dotimes (k pairs)
+          (let ((p (snap-i64 buffer (+ base (* 8 k)))))
+            (snapshot-check (and (>= p 0) (< (ash p -24) rows) (< (ldb (byte 24 0) p) rows))
+                            physics-snapshot-other-layout (+ base (* 8 k)) "a pair of listed rows" p))))))
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 8)) (n (snap-u32 buffer at)))
+    (declare (type index at))
+    (check-part-size scratch 8 (+ 4 (* +snapshot-box-bytes+ n)))
+    (dotimes (row n)
+      (let ((o (+ at 4 (* row +snapshot-box-bytes+))))
+        (dotimes (k 9)
+          (let ((c (snap-finite-f32 buffer (+ o (* 4 k)))))
+            (snapshot-check (< (abs c) +physics-coordinate-limit+) physics-snapshot-other-layout (+ o (* 4 k))
+                            "a box's number within the coordinate limit" c)))
+        (dotimes (k 3)
+          (snapshot-check (<= (snap-f32 buffer (+ o (* 4 k))) (snap-f32 buffer (+ o 12 (* 4 k))))
+                          physics-snapshot-other-layout (+ o (* 4 k)) "a box's low corner below its high" k))
+        (snapshot-check (<= 0 (snap-i64 buffer (+ o 36)) (ash 1 34)) physics-snapshot-other-layout (+ o 36)
+                        "a box id" (snap-i64 buffer (+ o 36)))
+        (snapshot-check (<= 0 (snap-i64 buffer (+ o 44)) #xFFFFFFFF) physics-snapshot-other-layout (+ o 44)
+                        "a box filter of 32 bits" (snap-i64 buffer (+ o 44))))))
+  (let* ((offsets (snapshot-scratch-offsets scratch))
+         (at (aref offsets 9)) (slots (snap-u32 buffer at))
+         (hat (aref offsets 2)) (count (snap-u32 buffer hat))
+         (pushed (logbitp 3 (snap-u32 buffer (+ (aref offsets 1) 8))))
+         (marks (snapshot-scratch-marks scratch)) (live (snapshot-scratch-stamp scratch)))
+    (declare (type index at hat) (type fixnum-column marks))
+    (snapshot-check (or (zerop slots) (= slots count)) physics-snapshot-other-layout at
+                    "pushes for no slot or for every slot of the table" slots)
+    (check-part-size scratch 9 (+ 4 (* 16 slots)))
+    (dotimes (slot slots)
+      (let ((o (+ at 4 (* 16 slot))))
+        (dotimes (k 3)
+          (snapshot-check (<= (abs (snap-finite-f32 buffer (+ o (* 4 k)))) (* +physics-max-acceleration+ +physics-max-mass+))
+                          physics-snapshot-other-layout (+ o (* 4 k)) "a force in range" (snap-f32 buffer (+ o (* 4 k)))))
+        (snap-finite-f32 buffer (+ o 12))
+        (snapshot-check (<= (abs (snap-f32 buffer (+ o 12))) +physics-max-gravity-scale+)
+                        physics-snapshot-other-layout (+ o 12) "a gravity scale in range" (snap-f32 buffer (+ o 12)))
+        (let ((forced (or (/= 0.0 (snap-f32 buffer o)) (/= 0.0 (snap-f32 buffer (+ o 4))) (/= 0.0 (snap-f32 buffer (+ o 8))))))
+          (snapshot-check (or (= (aref marks slot) live) (and (not forced) (= 1.0 (snap-f32 buffer (+ o 12)))))
+                          physics-snapshot-other-layout o "no force and a gravity scale of 1 on a free slot" slot)
+          (snapshot-check (or pushed (not forced)) physics-snapshot-other-layout o
+                          "no force unless one was applied" slot))))))
+
+(defun check-snapshot (world buffer scratch)
+  "Check every byte of the snapshot BUFFER for restoring into WORLD, signalling the
+physics-snapshot-invalid subtype that names the first fault and its byte offset; leave in SCRATCH
+what the restore reuses. #SN4P0T"
+  (check-snapshot-frame buffer scratch)
+  (check-snapshot-world world buffer scratch)
+  (check-snapshot-slots world buffer scratch)
+  (check-snapshot-contacts buffer scratch)
+  (check-snapshot-rest buffer scratch)
+  buffer)
+;; A snapshot holds what decides the next step, part by part:4 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:5]]
+;;; applying a checked snapshot: nothing here can fail
+
+(defun apply-snapshot-bodies (world bodies set buffer at mat)
+  "Fill BODIES, WORLD's set SET, from the checked body part at AT of BUFFER, its materials from
+the palette at MAT, and point each body's handle slot at its row. #SN4P0T"
+  (declare (type body-columns bodies) (type octets buffer) (type index at mat) (type fixnum set)
+           #.+kernel-policy+)
+  (let* ((n (snap-u32 buffer at)) (ids (physics-world-ids world)) (tag (handle-table-tag ids))
+         (sets (handle-table-set ids)) (locals (handle-table-local ids)) (generations (handle-table-generation ids)))
+    (declare (type index n) (type fixnum-column sets locals generations))
+    (body-columns-clear bodies)
+    (body-columns-ensure-capacity bodies n)
+    (setf (body-columns-length bodies) n)
+    (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz sleep-time age flags handle
+                        radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind)
+        bodies
+      (dotimes (row n)
+        (let* ((o (+ at 4 (* row +snapshot-body-bytes+)))
+               (slot (snap-u32 buffer (+ o 64)))
+               (m (+ mat 4 (* (snap-u32 buffer (+ o 68)) +snapshot-material-bytes+))))
+          (declare (type index o m) (type (unsigned-byte 24) slot))
+          (setf (aref x row) (snap-f32 buffer o) (aref y row) (snap-f32 buffer (+ o 4))
+                (aref z row) (snap-f32 buffer (+ o 8)) (aref vx row) (snap-f32 buffer (+ o 12))
+                (aref vy row) (snap-f32 buffer (+ o 16)) (aref vz row) (snap-f32 buffer (+ o 20))
+                (aref wx row) (snap-f32 buffer (+ o 24)) (aref wy row) (snap-f32 buffer (+ o 28))
+                (aref wz row) (snap-f32 buffer (+ o 32)) (aref qw row) (snap-f32 buffer (+ o 36))
+                (aref qx row) (snap-f32 buffer (+ o 40)) (aref qy row) (snap-f32 buffer (+ o 44))
+                (aref qz row) (snap-f32 buffer (+ o 48)) (aref sleep-time row) (snap-f32 buffer (+ o 52))
+                (aref age row) (snap-f64 buffer (+ o 56))
+                (aref radius row) (snap-f32 buffer m) (aref inverse-mass row) (snap-f32 buffer (+ m 4))
+                (aref inverse-inertia row) (snap-f32 buffer (+ m 8)) (aref restitution row) (snap-f32 buffer (+ m 12))
+                (aref friction row) (snap-f32 buffer (+ m 16)) (aref rolling-resistance row) (snap-f32 buffer (+ m 20))
+                (aref life row) (snap-f32 buffer (+ m 24)) (aref kind row) (snap-i32 buffer (+ m 28))
+                (aref flags row) (logior (snap-u16 buffer (+ o 72)) (ash (snap-u32 buffer (+ m 32)) 16))
+                (aref handle row) (make-handle tag (aref generations slot) slot)
+                (aref sets slot) set (aref locals slot) row))))))
+
+(defun apply-snapshot (world buffer scratch)
+  "Put WORLD into the state of the checked snapshot BUFFER, whose parts SCRATCH located and whose
+contact keys SCRATCH's contact table holds. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((offsets (snapshot-scratch-offsets scratch))
+         (wat (aref offsets 1)) (hat (aref offsets 2))
+         (ids (physics-world-ids world))
+         (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4)))
+         (step (snap-u64 buffer (+ wat 16)))
+         (flags (snap-u32 buffer (+ wat 8))))
+    (declare (type index wat hat count nfree step))
+    ;; the world part: its numbers, parameters and the last step's statistics
+    (setf (handle-table-tag ids) (snap-u32 buffer wat)
+          (physics-world-filtering world) (logbitp 1 flags)
+          (physics-world-column-watch world) (logbitp 2 flags)
+          (physics-world-substeps world) (snap-u32 buffer (+ wat 12))
+          (physics-world-step-count world) step
+          (physics-world-step-seconds world) (snap-f32 buffer (+ wat 24))
+          (physics-world-gravity-x world) (snap-f32 buffer (+ wat 28))
+          (physics-world-gravity-y world) (snap-f32 buffer (+ wat 32))
+          (physics-world-gravity-z world) (snap-f32 buffer (+ wat 36))
+          (physics-world-current-dt world) (snap-f32 buffer (+ wat 40))
+          (physics-world-current-h world) (snap-f32 buffer (+ wat 44))
+          (physics-world-max-radius world) (snap-f32 buffer (+ wat 48)))
+    (loop for (name nil nil nil kind) in +physics-parameters+
+          for o of-type index from (+ wat 52) by 4
+          do (setf (world-parameter world name) (if (eq kind 'integer) (snap-u32 buffer o) (snap-f32 buffer o))))
+    (let ((stats (world-statistics world)))
+      (setf (physics-world-braced-step world) (snap-i64 buffer (+ wat 124))
+            (physics-world-awake-grid-step world) (snap-i64 buffer (+ wat 132))
+            (step-statistics-contacts stats) (snap-u32 buffer (+ wat 148))
+            (step-statistics-colors stats) (snap-u32 buffer (+ wat 152))
+            (step-statistics-real-seconds stats) (snap-f64 buffer (+ wat 156))
+            (step-statistics-max-penetration stats) (snap-f64 buffer (+ wat 164))
+            (step-statistics-max-approach stats) (snap-f64 buffer (+ wat 172))))
+    ;; the handle table: its generations, every slot free, then the free list chained
+    (loop while (> count (length (handle-table-set ids)))
+          do (let ((n (* 2 (length (handle-table-set ids)))))
+               (flet ((grow (a init) (replace (make-array n :element-type 'fixnum :initial-element init) a)))
+                 (setf (handle-table-set ids) (grow (handle-table-set ids) +set-free+)
+                       (handle-table-local ids) (grow (handle-table-local ids) -1)
+                       (handle-table-generation ids) (grow (handle-table-generation ids) 0)))))
+    (let ((sets (handle-table-set ids)) (locals (handle-table-local ids)) (generations (handle-table-generation ids)))
+      (declare (type fixnum-column sets locals generations))
+      (fill sets +set-free+) (fill locals -1)
+      (fill generations 0 :start count)
+      (dotimes (slot count) (setf (aref generations slot) (snap-u32 buffer (+ hat 8 (* 4 slot)))))
+      (setf (handle-table-count ids) count
+            (handle-table-free ids) (if (plusp nfree) (snap-u32 buffer (+ hat 8 (* 4 count))) -1))
+      (dotimes (k nfree)
+        (setf (aref locals (snap-u32 buffer (+ hat 8 (* 4 count) (* 4 k))))
+              (if (< (1+ k) nfree) (snap-u32 buffer (+ hat 8 (* 4 count) (* 4 (1+ k)))) -1))))
+    ;; the bodies added since the last step
+    (let* ((o (+ hat 8 (* 4 count) (* 4 nfree))) (n (snap-u32 buffer o)) (tag (handle-table-tag ids)))
+      (declare (type index o n))
+      (when (< (length (physics-world-added world)) n)
+        (setf (physics-world-added world) (fixnum-room (physics-world-added world) n :least 16)))
+      (let ((added (physics-world-added world)))
+        (declare (type fixnum-column added))
+        (dotimes (k n)
+          (setf (aref added k) (make-handle tag (snap-u32 buffer (+ o 8 (* 8 k))) (snap-u32 buffer (+ o 4 (* 8 k)))))))
+      (setf (physics-world-added-count world) n))
+    ;; the bodies, awake and sleeping, in their rows
+    (apply-snapshot-bodies world (physics-world-awake world) +set-awake+ buffer (aref offsets 3) (aref offsets 5))
+    (apply-snapshot-bodies world (physics-world-sleeping world) +set-sleeping+ buffer (aref offsets 4) (aref offsets 5))
+    (let ((sleeping (physics-world-sleeping world)))
+      (setf (physics-world-mortal-sleepers world)
+            (count-if #'plusp (body-columns-life sleeping) :end (body-columns-length sleeping))))
+    ;; the contacts in their rows, their keys in the table the check filled
+    (let* ((at (aref offsets 6)) (n (snap-u32 buffer at))
+           (contacts (physics-world-contacts world)) (table (physics-world-contact-table world))
+           (full (snapshot-scratch-contacts scratch))
+           (tag (handle-table-tag ids)) (generations (handle-table-generation ids)))
+      (declare (type index at n) (type fixnum-column generations))
+      (contact-columns-clear contacts)
+      (contact-columns-ensure-capacity contacts n)
+      (contact-columns-ensure-capacity (physics-world-contact-scratch world) (contact-columns-capacity contacts))
+      (setf (contact-columns-length contacts) n)
+      (with-contact-columns (handle-a handle-b kind key seen order touching geometry) contacts
+       (flet ((slot-handle (slot)
+                ;; the handle of SLOT's body; of a free slot, the handle its body had before it
+                ;; expired, one generation back
+                (let ((g (aref generations slot)))
+                  (make-handle tag (if (= (aref (handle-table-set ids) slot) +set-free+)
+                                       (ldb (byte +handle-generation-bits+ 0) (1- g))
+                                       g)
+                               slot))))
+        (let ((o (+ at 4)))
+         (declare (type index o))
+         (dotimes (row n)
+          (let* ((k (snap-i64 buffer o)) (bits (snap-u16 buffer (+ o 8)))
+                 (a (ldb (byte 24 34) k)) (kk (ldb (byte 4 58) k)) (g (geometry-start row))
+                 (code (ldb (byte 3 2) bits)))
+            (setf (aref key row) k (aref kind row) kk
+                  (aref handle-a row) (slot-handle a)
+                  (aref handle-b row) (if (= kk +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
+                  (aref seen row) (if (logbitp 1 bits) (1- step) step)
+                  (aref order row) row
+                  (aref touching row) (if (logbitp 0 bits) 1 0))
+            (incf o 10)
+            (if (zerop code)
+                (dotimes (f 3) (setf (aref geometry (+ g f)) (snap-f32 buffer o)) (incf o 4))
+                (setf (aref geometry (+ g (ash (1- code) -1))) (if (oddp code) 1.0 -1.0)))
+            (do-impulse-groups (bit first width)
+              (when (logbitp bit bits)
+                (dotimes (f width)
+                  (setf (aref geometry (+ g first f)) (snap-f32 buffer o))
+                  (incf o 4)))))))))
+      ;; the table the check filled becomes the world's, and the world's the scratch's
+      (rotatef (contact-table-slots table) (contact-table-slots full))
+      (rotatef (contact-table-mask table) (contact-table-mask full))
+      (rotatef (contact-table-count table) (contact-table-count full))
+      (setf (contact-table-step table) step (contact-table-cursor table) 0 (contact-table-touched table) 0
+            (contact-table-misses table) (snap-u64 buffer (+ wat 140))))
+    ;; the pair list, and the awake grid of its build when the grid still is that
+    (let* ((at (aref offsets 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
+           (plist (physics-world-pair-list world)))
+      (declare (type index at pairs))
+      (setf (pair-list-rows plist) rows (pair-list-terrain plist) nil (pair-list-terrain-edits plist) -1
+            (pair-list-count plist) 0)
+      (when (>= rows 0)
+        (pair-list-room plist rows)
+        (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)) (clear (pair-list-clear plist)))
+          (fill (pair-list-loose plist) 0)
+          (dotimes (i rows)
+            (let ((o (+ at 36 (* i +snapshot-pair-row-bytes+))))
+              (setf (aref anchors (* 3 i)) (snap-f32 buffer o) (aref anchors (+ 1 (* 3 i))) (snap-f32 buffer (+ o 4))
+                    (aref anchors (+ 2 (* 3 i))) (snap-f32 buffer (+ o 8)) (aref handles i) (snap-i64 buffer (+ o 12))
+                    (aref clear i) (snap-u8 buffer (+ o 20))))))
+        (when (< (length (pair-list-pairs plist)) pairs)
+          (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) pairs :least 1024)))
+        (let ((list (pair-list-pairs plist)) (base (+ at 36 (* rows +snapshot-pair-row-bytes+))))
+          (dotimes (k pairs) (setf (aref list k) (snap-i64 buffer (+ base (* 8 k))))))
+        (setf (pair-list-count plist) pairs (pair-list-cell plist) (snap-f32 buffer (+ at 4))
+              (pair-list-builds plist) (snap-u32 buffer (+ at 8)) (pair-list-loose-count plist) (snap-i32 buffer (+ at 12))
+              (pair-list-step plist) (snap-i64 buffer (+ at 16)) (pair-list-built-step plist) (snap-i64 buffer (+ at 24)))
+        (when (= (physics-world-awake-grid-step world) (pair-list-built-step plist))
+          ;; the grid of the list's build, bucketed again from the anchors it was built from
+          (let ((xs (pair-list-loose-x plist)) (ys (pair-list-loose-y plist)) (zs (pair-list-loose-z plist))
+                (anchors (pair-list-anchors plist)))
+            (dotimes (i rows)
+              (setf (aref xs i) (aref anchors (* 3 i)) (aref ys i) (aref anchors (+ 1 (* 3 i)))
+                    (aref zs i) (aref anchors (+ 2 (* 3 i)))))
+            (build-hash-grid (physics-world-awake-grid world) (pair-list-cell plist) rows xs ys zs
+                             (awake-row-identities world rows))))))
+    ;; the sleeping grids are built again from every sleeper at the next step
+    (let ((of (sleeping-grid-of world)))
+      (fill of 0)
+      (setf (hash-grid-inv-cell (physics-world-sleeping-grid world)) 0.0
+            (physics-world-fresh-count world) 0 (physics-world-newest-count world) 0
+            (physics-world-settled-count world) 0 (physics-world-settled-stale world) 0
+            (physics-world-sleeping-grid-dirty world) t))
+    ;; the posted boxes, without their owners
+    (let* ((at (aref offsets 8)) (n (snap-u32 buffer at)) (boxes (physics-world-boxes world)))
+      (declare (type index at n))
+      (box-columns-clear boxes)
+      (fill (physics-world-box-owners world) nil)
+      (dotimes (k n)
+        (let ((row (box-columns-append boxes)) (o (+ at 4 (* k +snapshot-box-bytes+))))
+          (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz (bid id) filter) boxes
+            (setf (aref min-x row) (snap-f32 buffer o) (aref min-y row) (snap-f32 buffer (+ o 4))
+                  (aref min-z row) (snap-f32 buffer (+ o 8)) (aref max-x row) (snap-f32 buffer (+ o 12))
+                  (aref max-y row) (snap-f32 buffer (+ o 16)) (aref max-z row) (snap-f32 buffer (+ o 20))
+                  (aref vx row) (snap-f32 buffer (+ o 24)) (aref vy row) (snap-f32 buffer (+ o 28))
+                  (aref vz row) (snap-f32 buffer (+ o 32)) (aref bid row) (snap-i64 buffer (+ o 36))
+                  (aref filter row) (snap-i64 buffer (+ o 44)))))))
+    (when (> (box-columns-length (physics-world-boxes world)) (length (physics-world-box-owners world)))
+      (setf (physics-world-box-owners world)
+            (make-array (* 2 (box-columns-length (physics-world-boxes world))) :initial-element nil)))
+    ;; the forces and gravity scales by slot
+    (let* ((at (aref offsets 9)) (slots (snap-u32 buffer at)))
+      (declare (type index at slots))
+      (if (zerop slots)
+          (setf (physics-world-pushes world) nil (physics-world-scaled-count world) 0
+                (physics-world-pushed world) nil)
+          (let ((pushes (ensure-pushes world)) (scaled 0))
+            (declare (type f32-column pushes) (type index scaled))
+            (loop for p from 0 below (length pushes) by 4
+                  do (setf (aref pushes p) 0.0 (aref pushes (+ p 1)) 0.0 (aref pushes (+ p 2)) 0.0 (aref pushes (+ p 3)) 1.0))
+            (dotimes (k (* 4 slots)) (setf (aref pushes k) (snap-f32 buffer (+ at 4 (* 4 k)))))
+            (dotimes (slot slots) (when (/= 1.0 (aref pushes (+ 3 (* 4 slot)))) (incf scaled)))
+            (setf (physics-world-scaled-count world) scaled (physics-world-pushed world) (logbitp 3 flags)))))
+    ;; what a step leaves for the caller to read goes; caches keyed by the step are stale
+    (event-columns-clear (physics-world-events world))
+    (fill (physics-world-event-data world) nil)
+    (setf (physics-world-near-cells-step world) -1 (physics-world-box-touch-step world) -1
+          (physics-world-undo-open world) nil)
+    (incf (physics-world-rows-version world))
+    world))
+
+(defun restore-physics-world (world buffer)
+  "Put WORLD back into the state the snapshot BUFFER (from snapshot-physics-world) holds, and
+return WORLD; into a world whose buffers are large enough it conses nothing. A snapshot that is
+truncated, of another magic, version or layout, whose checksum fails, or of a world with
+features WORLD lacks, signals the physics-snapshot-invalid subtype naming the byte offset, and
+WORLD is left as it was. #SN4P0T"
+  (check-idle world 'restore-physics-world)
+  (unless (typep buffer 'octets)
+    (error 'invalid-physics-parameter :world world :name :buffer :value buffer
+                                      :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))
+  (let ((scratch *snapshot-scratch*))
+    (check-snapshot world buffer scratch)
+    (sb-int:with-float-traps-masked (:inexact :underflow) (apply-snapshot world buffer scratch))
+    world))
+;; A snapshot holds what decides the next step, part by part:5 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:6]]
+;;; on disk: the same bytes, to a stream or a file
+
+(defun write-physics-world (world destination)
+  "Write WORLD's snapshot to DESTINATION, a binary output stream of octets or a pathname (a file
+made or replaced), and return the bytes written. #SN4P0T"
+  (check-idle world 'write-physics-world)
+  (multiple-value-bind (buffer size) (snapshot-physics-world world)
+    (flet ((out (stream) (write-sequence buffer stream :end size)))
+      (if (streamp destination)
+          (out destination)
+          (with-open-file (stream destination :direction :output :element-type '(unsigned-byte 8)
+                                              :if-exists :supersede :if-does-not-exist :create)
+            (out stream))))
+    size))
+
+(defun read-snapshot-octets (source)
+  "The octets of the snapshot SOURCE holds, a binary input stream of octets or a pathname: the
+header, then as many bytes as it records, or as many as there are. #SN4P0T"
+  (flet ((in (stream)
+           (let* ((header (make-array +snapshot-header-bytes+ :element-type '(unsigned-byte 8)))
+                  (got (read-sequence header stream)))
+             (if (or (< got +snapshot-header-bytes+) (mismatch header +snapshot-magic+ :end1 8))
+                 (subseq header 0 got)
+                 (let* ((total (min (snap-u64 header 16) (ash 1 34)))
+                        (buffer (make-array (max total +snapshot-header-bytes+) :element-type '(unsigned-byte 8))))
+                   (replace buffer header)
+                   (let ((end (read-sequence buffer stream :start +snapshot-header-bytes+)))
+                     (if (< end (length buffer)) (subseq buffer 0 end) buffer)))))))
+    (if (streamp source)
+        (in source)
+        (with-open-file (stream source :element-type '(unsigned-byte 8)) (in stream)))))
+
+(defun read-physics-world (source &key terrain into (kernels nil))
+  "Read the snapshot SOURCE holds (a binary input stream or a pathname, as write-physics-world
+wrote it) and return the world it describes: restored INTO that world when given, else into a
+new world over TERRAIN (the caller's, as the snapshot holds no cells) made with the snapshot's
+step, substeps, gravity, sleep and features, and KERNELS, or the family the snapshot names when
+this machine runs it. Bad bytes signal as restore-physics-world does. #SN4P0T"
+  (let* ((buffer (coerce (read-snapshot-octets source) 'octets))
+         (scratch *snapshot-scratch*))
+    (if into
+        (restore-physics-world into buffer)
+        (progn
+          (check-snapshot-frame buffer scratch)
+          (check-part-size scratch 1 +snapshot-world-bytes+)
+          (let* ((at (aref (snapshot-scratch-offsets scratch) 1))
+                 (mask (snap-u32 buffer (+ at 4)))
+                 (name (map 'string #'code-char (remove 0 (subseq buffer (+ at 188) (+ at 204)))))
+                 (family (find-symbol name :keyword))
+                 (world (make-physics-world
+                         :terrain terrain
+                         :step-seconds (snap-finite-f32 buffer (+ at 24))
+                         :substeps (snap-u32 buffer (+ at 12))
+                         :gravity (loop for k below 3 collect (snap-finite-f32 buffer (+ at 28 (* 4 k))))
+                         :sleep (logbitp 0 (snap-u32 buffer (+ at 8)))
+                         :features (loop for f in +physics-features+ for k from 0 when (logbitp k mask) collect f)
+                         :kernels (or kernels
+                                      (if (and family (assoc family (runnable-kernel-families))) family :scalar)))))
+            (restore-physics-world world buffer))))))
+;; A snapshot holds what decides the next step, part by part:6 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:7]]
+;;; damaged snapshots, at random: make fuzz and a short run in the claims
+
+(defun reseal-snapshot (buffer)
+  "Write into BUFFER, a snapshot, the checksum of its bytes as they are now, so that a damage
+made to them meets the checks past the checksum; return BUFFER. #SN4P0T"
+  (declare (type octets buffer))
+  (setf (snap-u64 buffer 24) (snapshot-checksum buffer +snapshot-header-bytes+ (snap-u64 buffer 16)))
+  buffer)
+
+(defun fuzz-snapshot (world snapshot count random)
+  "Restore into WORLD COUNT damaged copies of SNAPSHOT, drawn from the random state RANDOM: a
+bit flipped anywhere; a bit flipped past the header and the copy resealed; or the copy cut
+short. After each, WORLD goes back to SNAPSHOT. Return the restores, the refusals, the invalid
+worlds (a restore that passed whose world fails validation or then signals in a step, or a
+refusal that changed the world) and the crashes (any error that is no physics-error), as a
+plist. #SN4P0T"
+  (let ((restored 0) (refused 0) (invalid 0) (crashes 0) (n (length snapshot)))
+    (dotimes (k count)
+      (let ((b (copy-seq snapshot)) (before (physics-world-state-hash world))
+            (awake (physics-world-awake-count world)))
+        (ecase (random 3 random)
+          (0 (let ((i (random n random))) (setf (aref b i) (logxor (aref b i) (ash 1 (random 8 random))))))
+          (1 (let ((i (+ +snapshot-header-bytes+ (random (- n +snapshot-header-bytes+) random))))
+               (setf (aref b i) (logxor (aref b i) (ash 1 (random 8 random))))
+               (reseal-snapshot b)))
+          (2 (setf b (subseq b 0 (random n random)))))
+        (handler-case
+            (progn (restore-physics-world world b)
+                   (incf restored)
+                   (handler-case (progn (validate-physics-world world) (step-physics-world world)
+                                        (validate-physics-world world))
+                     (physics-error () (incf invalid))))
+          (physics-snapshot-invalid ()
+            (incf refused)
+            (unless (and (= before (physics-world-state-hash world)) (= awake (physics-world-awake-count world))
+                         (handler-case (validate-physics-world world) (physics-error () nil)))
+              (incf invalid)))
+          (error () (incf crashes)))
+        (restore-physics-world world snapshot)))
+    (list :restored restored :refused refused :invalid invalid :crashes crashes)))
+
+(defun run-snapshot-fuzz-campaign (&key (seed 1) (count 2000))
+  "Fuzz the snapshots of the five standard scenes at 300 balls, each taken after 2 s, COUNT
+damaged copies each, from SEED; return a list of (SCENE BYTES . FIGURES). #SN4P0T"
+  (let ((random (sb-ext:seed-random-state seed)))
+    (loop for scene in '(:basin :pile :fountain :lava :player)
+          collect (multiple-value-bind (world script) (make-scene-world scene :count 300)
+                    (dotimes (i 120) (funcall script i) (step-physics-world world))
+                    (multiple-value-bind (buffer size) (snapshot-physics-world world)
+                      (let ((snapshot (subseq buffer 0 size)))
+                        (list* scene size (fuzz-snapshot world snapshot count random))))))))
+
+(defun print-snapshot-fuzz-figures (rows seconds stream)
+  "Print the snapshot fuzz campaign's ROWS as an Org table to STREAM. #SN4P0T"
+  (format stream "| scene | snapshot bytes | damaged copies | restored | refused | invalid worlds | crashes |~%")
+  (format stream "|-------+----------------+----------------+----------+---------+----------------+---------|~%")
+  (dolist (row rows)
+    (destructuring-bind (scene size &key restored refused invalid crashes) row
+      (format stream "| ~(~A~) | ~D | ~D | ~D | ~D | ~D | ~D |~%" scene size (+ restored refused crashes)
+              restored refused invalid crashes)))
+  (format stream "~%~,1F s~%" seconds))
+;; A snapshot holds what decides the next step, part by part:7 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:8]]
+;;; what a snapshot costs: make bench
+
+(defun snapshot-part-bytes (buffer id)
+  "The bytes part ID of the snapshot BUFFER takes, its own header of 8 included. #SN4P0T"
+  (loop with at = +snapshot-header-bytes+
+        for (part) in +snapshot-parts+
+        for size = (snap-u32 buffer (+ at 4))
+        when (= part id) return (+ 8 size)
+        do (incf at (+ 8 size))))
+
+(defun run-snapshot-benchmark (&key (stream *standard-output*) (balls 3000) (rounds 30))
+  "Measure snapshots: their size in the BALLS-ball basin and in the settled pile, snapshot plus
+restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8-step rollback at
+1000 balls, and the bytes consed; print Org tables to STREAM. #SN4P0T"
+  (flet ((median (list) (let ((v (sort (coerce list 'vector) #'<))) (aref v (floor (length v) 2))))
+         (ms (f) (let ((t0 (clock-ns))) (funcall f) (* 1d-6 (- (clock-ns) t0)))))
+    (let* ((world (make-basin-world balls :kernels :auto))
+           (other (make-basin-world balls :kernels :auto))
+           (buffer nil) (steps '()) (saves '()))
+      (dotimes (i 240) (step-physics-world world))
+      (setf buffer (snapshot-physics-world world))
+      (restore-physics-world other buffer)
+      (sb-ext:gc :full t)
+      (dotimes (k rounds)
+        (push (ms (lambda () (step-physics-world world))) steps)
+        (push (ms (lambda () (setf buffer (snapshot-physics-world world buffer)) (restore-physics-world other buffer))) saves))
+      (let* ((size (nth-value 1 (snapshot-physics-world world buffer)))
+             (awake (physics-world-awake-count world)) (asleep (physics-world-sleeping-count world))
+             (contacts (contact-columns-length (physics-world-contacts world)))
+             (consed (let ((b (sb-ext:get-bytes-consed)))
+                       (dotimes (i 10) (snapshot-physics-world world buffer) (restore-physics-world other buffer))
+                       (- (sb-ext:get-bytes-consed) b))))
+        (format stream "| basin of ~D at 4 s | bytes | per awake body | per contact |~%" balls)
+        (format stream "|----------------------+-------+----------------+-------------|~%")
+        (format stream "| whole snapshot (~D awake, ~D asleep, ~D contacts) | ~D | ~,1F | |~%"
+                awake asleep contacts size (/ size (max 1 (+ awake asleep))))
+        (format stream "| bodies and materials | ~D | ~,1F | |~%"
+                (+ (snapshot-part-bytes buffer 3) (snapshot-part-bytes buffer 4) (snapshot-part-bytes buffer 5))
+                (/ (+ (snapshot-part-bytes buffer 3) (snapshot-part-bytes buffer 4) (snapshot-part-bytes buffer 5))
+                   (max 1 (+ awake asleep))))
+        (format stream "| contacts | ~D | | ~,1F |~%" (snapshot-part-bytes buffer 6)
+                (/ (snapshot-part-bytes buffer 6) (max 1 contacts)))
+        (format stream "| pair list (~D listed pairs) | ~D | ~,1F | |~%"
+                (pair-list-count (physics-world-pair-list world)) (snapshot-part-bytes buffer 7)
+                (/ (snapshot-part-bytes buffer 7) (max 1 awake)))
+        (format stream "| target: 80 a body and 40 a contact | ~D | 80 | 40 |~%~%" (+ (* 80 (+ awake asleep)) (* 40 contacts)))
+        (format stream "| basin of ~D at 4 s, ~D rounds | median ms |~%|---+---|~%" balls rounds)
+        (format stream "| a step | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%~%"
+                (median steps) (median saves) (* 100 (/ (median saves) (median steps))) consed)))
+    (multiple-value-bind (pile script) (make-scene-world :pile)
+      (dotimes (i (* 60 12)) (funcall script i) (step-physics-world pile))
+      (multiple-value-bind (buffer size) (snapshot-physics-world pile)
+        (declare (ignore buffer))
+        (format stream "| settled pile | bodies | asleep | bytes | per body |~%|---+---+---+---+---|~%| 12 s | ~D | ~D | ~D | ~,1F |~%~%"
+                (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile))
+                (physics-world-sleeping-count pile) size
+                (/ size (max 1 (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile)))))))
+    (let* ((world (make-basin-world 1000 :kernels :auto)) (times '()))
+      (dotimes (i 120) (step-physics-world world))
+      (let ((buffer (snapshot-physics-world world)))
+        (dotimes (k 10)
+          (push (ms (lambda () (restore-physics-world world buffer) (dotimes (j 8) (step-physics-world world)))) times)))
+      (format stream "| rollback at 1000 balls (2 s) | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~D % |~%"
+              (median times) (round (/ (median times) (/ 1000 60.0) 0.01))))))
+;; A snapshot holds what decides the next step, part by part:8 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:2]]
 (defun physics-world-handles (world)

@@ -7739,6 +7739,207 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (check (equal '(:velocity nil nil nil nil) (drawn :velocity 0.9d0)) "with draws of 0.9, ~S" (drawn :velocity 0.9d0))))
 ;; M9W5P7-operations-span-their-ranges ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-every-scene-resumes-to-the-bit]]
+(defun resumed-scene-hashes (name family steps more &key (count 300))
+  "Run scene NAME under FAMILY for STEPS steps, snapshot it, run MORE; then restore the snapshot
+into a second world of the scene stepped half as often, run MORE there. Return both hashes. #SN4P0T"
+  (multiple-value-bind (world script) (make-scene-world name :kernels family :count count)
+    (dotimes (i steps) (funcall script i) (step-physics-world world))
+    (let ((snapshot (snapshot-physics-world world)))
+      (dotimes (i more) (funcall script (+ steps i)) (step-physics-world world))
+      (multiple-value-bind (other other-script) (make-scene-world name :kernels family :count count)
+        ;; the other world's script has reached step STEPS, its world a different state
+        (dotimes (i steps) (funcall other-script i) (when (evenp i) (step-physics-world other)))
+        (restore-physics-world other snapshot)
+        (validate-physics-world other)
+        (dotimes (i more) (funcall other-script (+ steps i)) (step-physics-world other))
+        (values (physics-world-state-hash world) (physics-world-state-hash other))))))
+
+(define-claim "SN4P0T" every-scene-resumes-to-the-bit
+    "Each standard scene under each family resumes from a snapshot, in a world stepped otherwise, to the same hash."
+  (dolist (family (luv-physics::available-kernel-families))
+    (dolist (scene '(:basin :pile :fountain :lava :player))
+      (multiple-value-bind (straight restored) (resumed-scene-hashes scene family 120 60)
+        (check (= straight restored) "~(~A~) under ~(~A~): ~D straight, ~D restored" scene family straight restored)))))
+;; SN4P0T-every-scene-resumes-to-the-bit ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-rollback-loop-ends-at-the-straight-hash]]
+(define-claim "SN4P0T" rollback-loop-ends-at-the-straight-hash
+    "Restoring 8 steps back and simulating them again, every step for 600 steps, ends at the straight run's hash."
+  (flet ((run (rollback)
+           (multiple-value-bind (world script) (make-scene-world :pile :count 200)
+             (declare (ignore script))
+             (let* ((handles (coerce (subseq (luv-physics::body-columns-handle (luv-physics::physics-world-awake world)) 0 200) (quote list)))
+                    (ring (make-array 9 :initial-element nil)))
+               (flet ((step-with-input (k)
+                        ;; the input of step K: a kick to one ball every 37 steps
+                        (when (zerop (mod k 37))
+                          (let ((h (nth (mod k 200) handles)))
+                            (when (physics-body-alive-p world h) (apply-physics-impulse world h 0.0 3.0 0.5))))
+                        (step-physics-world world)))
+                 (dotimes (k 600)
+                   (setf (aref ring (mod k 9)) (snapshot-physics-world world (aref ring (mod k 9))))
+                   (when (and rollback (>= k 8))
+                     ;; the late input arrives: back to step k - 8 and through the 8 steps again
+                     (restore-physics-world world (aref ring (mod (- k 8) 9)))
+                     (loop for j from (- k 8) below k do (step-with-input j)))
+                   (step-with-input k)))
+               (physics-world-state-hash world)))))
+    (let ((straight (run nil)) (rolled (run t)))
+      (check (= straight rolled) "straight ~D, rolled back ~D" straight rolled))))
+;; SN4P0T-rollback-loop-ends-at-the-straight-hash ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-bad-snapshots-are-named-where-they-fail]]
+(defun snapshot-part-at (buffer id)
+  "Where the payload of part ID of the snapshot BUFFER begins. #SN4P0T"
+  (loop with at = 32
+        for (part) in luv-physics::+snapshot-parts+
+        when (= part id) return (+ at 8)
+        do (incf at (+ 8 (luv-physics::snap-u32 buffer (+ at 4))))))
+
+(defun refusal (world buffer)
+  "Restore BUFFER into WORLD; return the type and byte offset of the refusal, or :restored. #SN4P0T"
+  (handler-case (progn (restore-physics-world world buffer) :restored)
+    (physics-snapshot-invalid (e) (list (type-of e) (luv-physics::physics-snapshot-invalid-offset e)))))
+
+(defun settled-floor-world (&rest features)
+  "A floor world of twelve balls, with FEATURES when given, stepped 40 times: some awake, some
+asleep, all touching. #SN4P0T"
+  (let* ((terrain (make-floor-terrain))
+         (world (apply #'make-physics-world :terrain terrain (and features (list :features features)))))
+    (dotimes (i 12) (add-physics-body world (+ 2.0 (* 0.6 (mod i 4))) (+ 0.5 (* 0.6 (floor i 4))) 3.5
+                                      :restitution (if (member :restitution (luv-physics::world-features world)) 0.3 0.0)))
+    (dotimes (i 40) (step-physics-world world))
+    world))
+
+(define-claim "SN4P0T" bad-snapshots-are-named-where-they-fail
+    "Truncated, wrong magic or version, a bad checksum, another layout and missing features each signal their condition at their byte, the world unchanged."
+  (let* ((source (settled-floor-world))
+         (good (subseq (snapshot-physics-world source) 0))
+         (target (settled-floor-world))
+         (lean (settled-floor-world :terrain :body-contacts :friction :sleep)))
+    (dotimes (i 30) (step-physics-world target))
+    (let ((before (world-fingerprint target)))
+      (flet ((bad (expected buffer &optional (world target))
+               (let ((got (refusal world buffer)))
+                 (check (equal expected got) "expected ~S, got ~S" expected got)
+                 (check (equal before (world-fingerprint target)) "the refused restore changed the world")
+                 (check (eq t (validate-physics-world target))))))
+        (bad (list 'physics-snapshot-truncated 20) (subseq good 0 20))
+        (bad (list 'physics-snapshot-truncated 1000) (subseq good 0 1000))
+        (bad (list 'physics-snapshot-wrong-magic 3) (let ((b (copy-seq good))) (setf (aref b 3) 0) b))
+        (bad (list 'physics-snapshot-wrong-version 8) (let ((b (copy-seq good))) (setf (aref b 8) 2) b))
+        (bad (list 'physics-snapshot-checksum-mismatch 24) (let ((b (copy-seq good))) (incf (aref b 500)) b))
+        ;; the part after the world part named as another: resealed, so only the layout is wrong
+        (bad (list 'physics-snapshot-other-layout (+ 32 8 204))
+             (let ((b (copy-seq good))) (setf (aref b (+ 32 8 204)) 7) (luv-physics::reseal-snapshot b)))
+        ;; the first awake body given a slot the table has not got
+        (let* ((b (copy-seq good))
+               (at (+ (snapshot-part-at b 3) 4 64)))
+          (setf (luv-physics::snap-u32 b at) 99999)
+          (bad (list 'physics-snapshot-other-layout at) (luv-physics::reseal-snapshot b)))
+        ;; a snapshot of a world with every feature into one without restitution
+        (let ((lean-before (world-fingerprint lean)))
+          (check (eq 'physics-snapshot-missing-features (first (refusal lean good))))
+          (check (equal lean-before (world-fingerprint lean))))
+        (check (eq :restored (refusal target good)))
+        (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
+;; SN4P0T-bad-snapshots-are-named-where-they-fail ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-snapshots-leave-valid-worlds]]
+(define-claim "SN4P0T" damaged-snapshots-leave-valid-worlds
+    "300 damaged snapshots of a settled floor world leave no invalid world and crash nothing."
+  (let* ((world (settled-floor-world))
+         (snapshot (subseq (snapshot-physics-world world) 0))
+         (result (luv-physics::fuzz-snapshot world snapshot 300 (sb-ext:seed-random-state 7))))
+    (check (zerop (getf result :invalid)) "~S" result)
+    (check (zerop (getf result :crashes)) "~S" result)
+    (check (plusp (getf result :refused)) "~S" result)))
+;; SN4P0T-damaged-snapshots-leave-valid-worlds ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-snapshots-into-room-cons-nothing]]
+(define-claim "SN4P0T" snapshots-into-room-cons-nothing
+    "Snapshot and restore of a 300-ball basin into a buffer already large enough cons no byte."
+  (multiple-value-bind (world script) (make-scene-world :basin :count 300)
+    (dotimes (i 150) (funcall script i) (step-physics-world world))
+    (let* ((buffer (snapshot-physics-world world)) (other (make-scene-world :basin :count 300)))
+      (restore-physics-world other buffer)
+      (step-physics-world other)
+      (restore-physics-world other buffer)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (dotimes (i 10)
+          (snapshot-physics-world world buffer)
+          (restore-physics-world other buffer))
+        (let ((consed (- (sb-ext:get-bytes-consed) before)))
+          (check (zerop consed) "~D bytes consed" consed))))))
+;; SN4P0T-snapshots-into-room-cons-nothing ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-file-from-another-image-resumes]]
+(define-claim "SN4P0T" file-from-another-image-resumes
+    "A basin written to a file by a child SBCL, read here, reaches the straight run's hash after 60 more steps."
+  (let ((file (uiop:tmpize-pathname (merge-pathnames "snapshot-child.luv" (uiop:temporary-directory))))
+        (root (asdf:system-source-directory "luv-physics")))
+    (unwind-protect
+         (progn
+           (uiop:run-program
+            (list "sbcl" "--dynamic-space-size" "2Gb" "--noinform" "--non-interactive" "--no-sysinit" "--no-userinit"
+                  "--load" (namestring (merge-pathnames "tools/boot.lisp" root))
+                  "--eval" "(asdf:load-system \"luv-physics\")"
+                  "--eval" (format nil "(multiple-value-bind (w s) (physics:make-scene-world :basin :count 300 :kernels :scalar)
+                                          (dotimes (i 120) (funcall s i) (physics:step-physics-world w))
+                                          (physics:write-physics-world w ~S))" (namestring file)))
+            :output nil :error-output nil)
+           (multiple-value-bind (world script) (make-scene-world :basin :count 300 :kernels :scalar)
+             (dotimes (i 180) (funcall script i) (step-physics-world world))
+             (let ((read (read-physics-world file :terrain (make-basin-terrain))))
+               (check (eq t (validate-physics-world read)))
+               (dotimes (i 60) (step-physics-world read))
+               (check (= (physics-world-state-hash world) (physics-world-state-hash read))
+                      "straight ~D, read ~D" (physics-world-state-hash world) (physics-world-state-hash read)))))
+      (when (probe-file file) (delete-file file)))))
+;; SN4P0T-file-from-another-image-resumes ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-expired-bodies-contacts-restore]]
+(define-claim "SN4P0T" expired-bodies-contacts-restore
+    "Snapshots of the lava scene, with contacts of bodies that expired in the last step, restore."
+  (multiple-value-bind (world script) (make-scene-world :lava)
+    (let ((other (make-scene-world :lava)) (refused 0) (parted 0) (freed 0))
+      (dotimes (i 480)
+        (funcall script i) (step-physics-world world)
+        (when (>= i 420)
+          (let ((ids (luv-physics::physics-world-ids world)) (contacts (luv-physics::physics-world-contacts world)))
+            (when (loop for row below (luv-physics::contact-columns-length contacts)
+                        thereis (= luv-physics::+set-free+
+                                   (aref (luv-physics::handle-table-set ids)
+                                         (luv-physics::handle-index (aref (luv-physics::contact-columns-handle-a contacts) row)))))
+              (incf freed)))
+          (handler-case (progn (restore-physics-world other (snapshot-physics-world world))
+                               (validate-physics-world other)
+                               (unless (= (physics-world-state-hash world) (physics-world-state-hash other)) (incf parted)))
+            (physics-error () (incf refused)))))
+      (check (zerop refused) "~D of 60 snapshots refused" refused)
+      (check (zerop parted) "~D of 60 restores parted" parted)
+      (check (plusp freed) "no snapshot held a contact of a free slot"))))
+;; SN4P0T-expired-bodies-contacts-restore ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-sleepers-cost-what-the-awake-cost]]
+(define-claim "SN4P0T" sleepers-cost-what-the-awake-cost
+    "Bodies take 74 bytes each, awake or asleep; one material, one palette entry of 36 bytes."
+  (let ((world (settled-floor-world)))
+    (flet ((bodies (buffer id)
+             (let ((n (luv-physics::snap-u32 buffer (snapshot-part-at buffer id))))
+               (values (luv-physics::snapshot-part-bytes buffer id) (+ 8 (* 4 (ceiling (+ 4 (* 74 n)) 4))) n))))
+      (dolist (steps '(0 360))
+        (dotimes (i steps) (step-physics-world world))
+        (let ((buffer (snapshot-physics-world world)))
+          (dolist (id '(3 4))
+            (multiple-value-bind (bytes expected n) (bodies buffer id)
+              (check (= bytes expected) "part ~D: ~D bytes for ~D bodies" id bytes n)))
+          (check (= 48 (luv-physics::snapshot-part-bytes buffer 5)) "the palette takes ~D bytes"
+                 (luv-physics::snapshot-part-bytes buffer 5))))
+      (check (= 12 (physics-world-sleeping-count world)) "~D of 12 asleep" (physics-world-sleeping-count world)))))
+;; SN4P0T-sleepers-cost-what-the-awake-cost ends here
+
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
   "The solid cells of TERRAIN in [-16,32)^3. #K5DF9S"

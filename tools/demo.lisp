@@ -10,7 +10,13 @@
 
 (let ((run (find-symbol "RUN-DEFAULT-SCENE" '#:luv-physics))
       (scene (intern (string-upcase (or (sb-ext:posix-getenv "SCENE") "basin")) :keyword)))
-  (handler-case (funcall run :scene scene)
+  (handler-case
+      (let ((world (funcall run :scene scene))
+            (save (sb-ext:posix-getenv "SAVE")))
+        ;; SAVE=file writes the world as the scene left it (#SN4P0T); make view FILE= can show it
+        (when (and save (string/= save ""))
+          (format t "~&demo: wrote ~D bytes to ~A~%"
+                  (funcall (find-symbol "WRITE-PHYSICS-WORLD" '#:luv-physics) world save) save)))
     (error (e)
       (format *error-output* "demo: ~A~%" e)
       (sb-ext:exit :code 1))))
