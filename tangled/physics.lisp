@@ -85,7 +85,7 @@
    #:snapshot-physics-world #:restore-physics-world #:write-physics-world #:read-physics-world
    #:physics-snapshot-invalid #:physics-snapshot-truncated
    #:physics-snapshot-wrong-magic #:physics-snapshot-wrong-version #:physics-snapshot-checksum-mismatch
-   #:physics-snapshot-other-layout #:physics-snapshot-missing-features))
+   #:physics-snapshot-other-layout #:physics-snapshot-missing-features #:physics-snapshot-of-joints))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -7623,6 +7623,20 @@ range, a body in a solid cell. #SN4P0T"))
 (define-condition physics-snapshot-missing-features (physics-snapshot-invalid) ()
   (:documentation "A snapshot of a world that used a feature the target world was made without. #SN4P0T"))
 
+(define-condition physics-snapshot-of-joints (physics-error)
+  ((operation :initarg :operation :reader physics-snapshot-of-joints-operation))
+  (:report (lambda (c s)
+             (format s "~(~A~): its world has had a joint, and a snapshot holds no joint: ~
+                        expected a world that never had one; the world is unchanged"
+                     (physics-snapshot-of-joints-operation c))))
+  (:documentation "A snapshot asked of a world that has had a joint, or a restore into one: the
+parts of a snapshot do not hold the joint set yet. #SN4P0T"))
+
+(defun check-jointless (world operation)
+  "Signal physics-snapshot-of-joints unless WORLD has never had a joint. #SN4P0T"
+  (when (physics-world-joints world)
+    (error 'physics-snapshot-of-joints :world world :operation operation)))
+
 (defun snapshot-refuse (type operation offset expected found)
   "Signal the physics-snapshot-invalid subtype TYPE. #SN4P0T"
   (error type :operation operation :offset offset :expected expected :found found))
@@ -7810,8 +7824,9 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
 (defun snapshot-physics-world (world &optional buffer)
   "Write WORLD's whole simulation state into BUFFER, an octet vector, when it is large enough,
 else into a new one; return the buffer and the snapshot's size in bytes. Into a buffer large
-enough it conses nothing. #SN4P0T"
+enough it conses nothing. A world that has had a joint signals physics-snapshot-of-joints. #SN4P0T"
   (check-idle world 'snapshot-physics-world)
+  (check-jointless world 'snapshot-physics-world)
   (unless (or (null buffer) (typep buffer 'octets))
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "NIL or an octet vector, (simple-array (unsigned-byte 8) (*))"))
@@ -8657,8 +8672,9 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
 return WORLD; into a world whose buffers are large enough it conses nothing. A snapshot that is
 truncated, of another magic, version or layout, whose checksum fails, or of a world with
 features WORLD lacks, signals the physics-snapshot-invalid subtype naming the byte offset, and
-WORLD is left as it was. #SN4P0T"
+WORLD is left as it was; so is a WORLD that has had a joint, with physics-snapshot-of-joints. #SN4P0T"
   (check-idle world 'restore-physics-world)
+  (check-jointless world 'restore-physics-world)
   (unless (typep buffer 'octets)
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))

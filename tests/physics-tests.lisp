@@ -7846,6 +7846,24 @@ asleep, all touching. #SN4P0T"
         (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
 ;; SN4P0T-bad-snapshots-are-named-where-they-fail ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-joints-are-refused-whole]]
+(define-claim "SN4P0T" joints-are-refused-whole
+    "A world that has had a joint: snapshot and restore refused with physics-snapshot-of-joints, the world unchanged."
+  (let* ((world (make-physics-world))
+         (ball (add-physics-body world 1.0 9.0 0.0 :radius 0.25))
+         (good (subseq (snapshot-physics-world (settled-floor-world)) 0)))
+    (add-physics-joint world :distance ball nil :anchor-b '(0.0 9.0 0.0))
+    (dotimes (i 30) (step-physics-world world))
+    (let ((before (world-fingerprint world)))
+      (dolist (call (list (lambda () (snapshot-physics-world world))
+                          (lambda () (restore-physics-world world good))))
+        (let ((got (handler-case (progn (funcall call) :done)
+                     (physics-snapshot-of-joints (e) (luv-physics::physics-snapshot-of-joints-operation e)))))
+          (check (member got '(snapshot-physics-world restore-physics-world)) "the call gave ~S" got)))
+      (check (equal before (world-fingerprint world)) "a refused call changed the world")
+      (check (eq t (validate-physics-world world))))))
+;; SN4P0T-joints-are-refused-whole ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-snapshots-leave-valid-worlds]]
 (define-claim "SN4P0T" damaged-snapshots-leave-valid-worlds
     "300 damaged snapshots of a settled floor world leave no invalid world and crash nothing."
@@ -7884,7 +7902,7 @@ asleep, all touching. #SN4P0T"
            (uiop:run-program
             (list "sbcl" "--dynamic-space-size" "2Gb" "--noinform" "--non-interactive" "--no-sysinit" "--no-userinit"
                   "--load" (namestring (merge-pathnames "tools/boot.lisp" root))
-                  "--eval" "(asdf:load-system \"luv-physics\")"
+                  "--eval" "(asdf:load-system \"luv-physics/workshop\")"
                   "--eval" (format nil "(multiple-value-bind (w s) (physics:make-scene-world :basin :count 300 :kernels :scalar)
                                           (dotimes (i 120) (funcall s i) (physics:step-physics-world w))
                                           (physics:write-physics-world w ~S))" (namestring file)))
