@@ -1642,6 +1642,19 @@ event handler, or NIL (the default: the step then calls nothing). Settable; a re
 (defun world-statistics (world)
   "WORLD's step-statistics, typed as such, so the step writes its slots unboxed. #W0RLD7"
   (the step-statistics (physics-world-statistics world)))
+
+(defmacro with-world-parameters ((&rest specs) world &body body)
+  "Run BODY with each of SPECS bound to a parameter of WORLD as a single-float, read once before
+BODY: a spec NAME binds NAME to (physics-world-NAME WORLD), a spec (VARIABLE NAME) binds VARIABLE
+to it, in the shape of with-body-columns. A featured kernel's variant may leave one unread, so
+each is ignorable. #W0RLD7"
+  (let ((w (gensym "WORLD"))
+        (pairs (mapcar (lambda (spec) (if (consp spec) spec (list spec spec))) specs)))
+    `(let* ((,w ,world)
+            ,@(loop for (variable name) in pairs
+                    collect `(,variable (f32 (,(intern (format nil "PHYSICS-WORLD-~A" name)) ,w)))))
+       (declare (type single-float ,@(mapcar #'first pairs)) (ignorable ,w ,@(mapcar #'first pairs)))
+       ,@body)))
 ;; The world holds every buffer and its own parameters:1 ends here
 
 ;; [[file:../physics.org::#R9M4PV][Choose the phase once: kernel families:1]]
@@ -3447,36 +3460,34 @@ phase takes them, CROWDED telling whether some row is crowded, but stop at a pai
 whether some row is crowded now. A function of its own, without the impact part, so that the
 walk keeps its values in registers. #P41RS7"
   (declare (type index start) #.+kernel-policy+)
-  (let* ((awake (physics-world-awake world))
-         (plist (physics-world-pair-list world))
-         (margin (f32 (physics-world-margin world)))
-         (slop (f32 (physics-world-slop world)))
-         (dt (physics-world-current-dt world))
-         (gstep (gravity-step world dt))
-         (threshold (f32 (physics-world-restitution-threshold world)))
-         (contacts (physics-world-contacts world))
-         (table (physics-world-contact-table world))
-         (overlaps (pair-list-overlaps plist))
-         (pairs (pair-list-pairs plist)) (loose (pair-list-loose plist))
-         (count (pair-list-count plist)))
-    (declare (type single-float margin slop dt gstep threshold) (type body-columns awake)
-             (type pair-list plist) (type contact-columns contacts) (type contact-table table)
-             (type fixnum-column overlaps pairs loose) (type index count))
-    (with-body-columns (x y z vx vy vz radius handle) awake
-      (loop for p of-type index from start below count do
-        (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
-          (declare (type index i j))
-          (when (and (zerop (logior (aref loose i) (aref loose j)))
-                     (or (not crowded) (overlap-room overlaps i j radius)))
-            (multiple-value-bind (full strikes)
-                (pair-contact contacts table overlaps margin slop dt gstep threshold nil
-                              (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
-                              (aref vx i) (aref vy i) (aref vz i)
-                              (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
-                              (aref vx j) (aref vy j) (aref vz j) i j)
-              (when full (setf crowded t))
-              (when strikes (return-from scan-listed-pairs (values p crowded)))))))
-      (values count crowded))))
+  (with-world-parameters (margin slop (threshold restitution-threshold)) world
+    (let* ((awake (physics-world-awake world))
+           (plist (physics-world-pair-list world))
+           (dt (physics-world-current-dt world))
+           (gstep (gravity-step world dt))
+           (contacts (physics-world-contacts world))
+           (table (physics-world-contact-table world))
+           (overlaps (pair-list-overlaps plist))
+           (pairs (pair-list-pairs plist)) (loose (pair-list-loose plist))
+           (count (pair-list-count plist)))
+      (declare (type single-float margin slop dt gstep threshold) (type body-columns awake)
+               (type pair-list plist) (type contact-columns contacts) (type contact-table table)
+               (type fixnum-column overlaps pairs loose) (type index count))
+      (with-body-columns (x y z vx vy vz radius handle) awake
+        (loop for p of-type index from start below count do
+          (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
+            (declare (type index i j))
+            (when (and (zerop (logior (aref loose i) (aref loose j)))
+                       (or (not crowded) (overlap-room overlaps i j radius)))
+              (multiple-value-bind (full strikes)
+                  (pair-contact contacts table overlaps margin slop dt gstep threshold nil
+                                (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
+                                (aref vx i) (aref vy i) (aref vz i)
+                                (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
+                                (aref vx j) (aref vy j) (aref vz j) i j)
+                (when full (setf crowded t))
+                (when strikes (return-from scan-listed-pairs (values p crowded)))))))
+        (values count crowded)))))
 ;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
 ;; [[file:../physics.org::#P41HLD][The pairs of a list that holds:1]]
@@ -3635,77 +3646,73 @@ listed pairs whose rows both stayed near their anchors, and for each loose row t
 bodies of its 27 cells. Otherwise the list is built again, walking the half neighbourhood of
 each body's cell in the grid's order. A candidate within reach becomes a contact only when its
 gap is under the speculative distance. #P41STG"
-  (let* ((awake (physics-world-awake world))
-         (sleeping (physics-world-sleeping world))
-         (ids (physics-world-ids world))
-         (grid (physics-world-awake-grid world))
-         (plist (physics-world-pair-list world))
-         (n (body-columns-length awake))
-         (any-sleeping (plusp (body-columns-length sleeping)))
-         (margin (f32 (physics-world-margin world)))
-         (skin (f32 (physics-world-pair-skin world)))
-         (cell (f32 (grid-cell-size world)))
-         (slop (f32 (physics-world-slop world)))
-         (dt (physics-world-current-dt world))
-         (gstep (gravity-step world dt))
-         (rmax (f32 (physics-world-max-radius world)))
-         (threshold (f32 (physics-world-restitution-threshold world)))
-         (contacts (physics-world-contacts world))
-         (table (physics-world-contact-table world))
-         ;; the grid phase counted the loose rows
-         (strays (pair-list-loose-count plist))
-         ;; true once a row has taken +overlaps-per-body+ overlapping pairs this step: until
-         ;; then overlap-room is true of every pair and is not asked
-         (crowded nil)
-         ;; true once a body or box has a category or mask of its own ([[#F1LT3R]])
-         (filtering (physics-world-filtering world)))
-    (declare (type single-float margin skin cell slop dt gstep rmax threshold) (type index n) (type fixnum strays)
-             (type body-columns awake sleeping) (type pair-list plist)
-             (type contact-columns contacts) (type contact-table table)
-             (type handle-table ids) (type hash-grid grid) #.+kernel-policy+
-             (inline touch-contact))
-    (with-body-columns (x y z vx vy vz radius flags handle) awake
-      (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
-               (declare (type single-float xi yi zi ri xj yj zj rj vxi vyi vzi vxj vyj vzj)
-                        (type fixnum hi hj ci cj))
-               (when (pair-contact contacts table (pair-list-overlaps plist) margin slop dt gstep threshold t
-                                   xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
-                 (setf crowded t))))
-        (declare (inline pair))
-        (pair-list-room plist n)
-        (fill (pair-list-overlaps plist) 0 :end n)
-        (macrolet ((pair-of-rows (i j)
-                     ;; the pair of awake rows I and J
-                     `(pair (aref x ,i) (aref y ,i) (aref z ,i) (aref radius ,i) (aref handle ,i)
-                            (aref vx ,i) (aref vy ,i) (aref vz ,i)
-                            (aref x ,j) (aref y ,j) (aref z ,j) (aref radius ,j) (aref handle ,j)
-                            (aref vx ,j) (aref vy ,j) (aref vz ,j) ,i ,j))
-                   (rows (i j &optional refused)
-                     ;; the same, unless they overlap and the smaller has its share of
-                     ;; overlaps: then REFUSED
-                     `(if (or (not crowded) (overlap-room (pair-list-overlaps plist) ,i ,j radius))
-                          (pair-of-rows ,i ,j)
-                          ,refused)))
-          (if (pair-list-holds-p strays n)
-              ;; the list holds: its pairs whose rows both stayed; then each loose row against
-              ;; the rows of its 27 cells that are not loose, in the awake grid, whose cells
-              ;; may be the build's; then each pair of loose rows, from the lower row, in a
-              ;; grid of the loose rows alone
-              (let ((pairs (pair-list-pairs plist)) (loose (pair-list-loose plist))
-                    (loose-rows (pair-list-loose-rows plist)))
-                (declare (type fixnum-column pairs loose loose-rows))
-                ;; the walk stops at a pair that strikes, which is taken here again whole,
-                ;; its overlap already counted
-                (pair-listed-pairs)
-                (pair-loose-rows)
-                (pair-loose-among-loose))
-              ;; build the list again: the half neighbourhood of each body's cell, in the
-              ;; grid's order, within the widest reach plus the skin
-              (pair-list-build)))
-        (setf (pair-list-step plist) (contact-table-step table))
-        ;; slow or fast, an awake body reaching a sleeper leans on it
-        (pair-leans-on-sleepers)))
-    world))
+  (with-world-parameters (margin (skin pair-skin) slop (rmax max-radius) (threshold restitution-threshold)) world
+    (let* ((awake (physics-world-awake world))
+           (sleeping (physics-world-sleeping world))
+           (ids (physics-world-ids world))
+           (grid (physics-world-awake-grid world))
+           (plist (physics-world-pair-list world))
+           (n (body-columns-length awake))
+           (any-sleeping (plusp (body-columns-length sleeping)))
+           (cell (f32 (grid-cell-size world)))
+           (dt (physics-world-current-dt world))
+           (gstep (gravity-step world dt))
+           (contacts (physics-world-contacts world))
+           (table (physics-world-contact-table world))
+           ;; the grid phase counted the loose rows
+           (strays (pair-list-loose-count plist))
+           ;; true once a row has taken +overlaps-per-body+ overlapping pairs this step: until
+           ;; then overlap-room is true of every pair and is not asked
+           (crowded nil)
+           ;; true once a body or box has a category or mask of its own ([[#F1LT3R]])
+           (filtering (physics-world-filtering world)))
+      (declare (type single-float margin skin cell slop dt gstep rmax threshold) (type index n) (type fixnum strays)
+               (type body-columns awake sleeping) (type pair-list plist)
+               (type contact-columns contacts) (type contact-table table)
+               (type handle-table ids) (type hash-grid grid) #.+kernel-policy+
+               (inline touch-contact))
+      (with-body-columns (x y z vx vy vz radius flags handle) awake
+        (flet ((pair (xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
+                 (declare (type single-float xi yi zi ri xj yj zj rj vxi vyi vzi vxj vyj vzj)
+                          (type fixnum hi hj ci cj))
+                 (when (pair-contact contacts table (pair-list-overlaps plist) margin slop dt gstep threshold t
+                                     xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
+                   (setf crowded t))))
+          (declare (inline pair))
+          (pair-list-room plist n)
+          (fill (pair-list-overlaps plist) 0 :end n)
+          (macrolet ((pair-of-rows (i j)
+                       ;; the pair of awake rows I and J
+                       `(pair (aref x ,i) (aref y ,i) (aref z ,i) (aref radius ,i) (aref handle ,i)
+                              (aref vx ,i) (aref vy ,i) (aref vz ,i)
+                              (aref x ,j) (aref y ,j) (aref z ,j) (aref radius ,j) (aref handle ,j)
+                              (aref vx ,j) (aref vy ,j) (aref vz ,j) ,i ,j))
+                     (rows (i j &optional refused)
+                       ;; the same, unless they overlap and the smaller has its share of
+                       ;; overlaps: then REFUSED
+                       `(if (or (not crowded) (overlap-room (pair-list-overlaps plist) ,i ,j radius))
+                            (pair-of-rows ,i ,j)
+                            ,refused)))
+            (if (pair-list-holds-p strays n)
+                ;; the list holds: its pairs whose rows both stayed; then each loose row against
+                ;; the rows of its 27 cells that are not loose, in the awake grid, whose cells
+                ;; may be the build's; then each pair of loose rows, from the lower row, in a
+                ;; grid of the loose rows alone
+                (let ((pairs (pair-list-pairs plist)) (loose (pair-list-loose plist))
+                      (loose-rows (pair-list-loose-rows plist)))
+                  (declare (type fixnum-column pairs loose loose-rows))
+                  ;; the walk stops at a pair that strikes, which is taken here again whole,
+                  ;; its overlap already counted
+                  (pair-listed-pairs)
+                  (pair-loose-rows)
+                  (pair-loose-among-loose))
+                ;; build the list again: the half neighbourhood of each body's cell, in the
+                ;; grid's order, within the widest reach plus the skin
+                (pair-list-build)))
+          (setf (pair-list-step plist) (contact-table-step table))
+          ;; slow or fast, an awake body reaching a sleeper leans on it
+          (pair-leans-on-sleepers)))
+      world)))
 ;; The pair phase, stage by stage:1 ends here
 
 ;; [[file:../physics.org::#MYWH16][Sphere against cells: the overshoot rule keeps seams smooth:1]]
@@ -3957,79 +3964,76 @@ is under the speculative distance. #MYWSTG"
   (declare #.+kernel-policy+)
   (let ((terrain (physics-world-terrain world)))
     (when terrain
-      (let* ((awake (physics-world-awake world))
-             (probe (physics-world-probe world))
-             (n (body-columns-length awake))
-             (margin (f32 (physics-world-margin world)))
-             (slop (f32 (physics-world-slop world)))
-             (dt (physics-world-current-dt world))
-             (gstep (gravity-step world dt))
-             (limit (f32 (physics-world-reach-limit world)))
-             (threshold (f32 (physics-world-restitution-threshold world)))
-             (contacts (physics-world-contacts world))
-             (table (physics-world-contact-table world))
-             ;; the bodies come in the grid's order, so most share the chunk of the one before
-             (last-key -1) (last-chunk nil)
-             ;; the pair list's rows this step: which are loose, and which were clear of
-             ;; solid cells around their anchors when it was built
-             (plist (physics-world-pair-list world))
-             (current (= (pair-list-step plist) (contact-table-step table)))
-             (fresh (and current (= (pair-list-built-step plist) (contact-table-step table))))
-             (use-clear (and current (not fresh) (eq (pair-list-terrain plist) terrain)
-                             (= (pair-list-terrain-edits plist) (voxel-terrain-edits terrain))))
-             (loose (pair-list-loose plist)) (clear (pair-list-clear plist))
-             (widen (* 0.45 (f32 (physics-world-pair-skin world))))
-             ;; for each row, the square of the longest path the finalize phase may leave
-             ;; unchecked ([[#SQU33Z]]): as far as its reach, and short of the nearest solid cell
-             (near (let ((a (physics-world-near-cells world)))
-                     (if (> (length a) n)
-                         a
-                         (setf (physics-world-near-cells world) (make-array (* 2 (1+ n)) :element-type 'single-float)))))
-             ;; the bodies whose centre lies in a solid cell
-             (buried 0))
-        (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key buried)
-                 (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear) (type f32-column near)
-                 (type contact-columns contacts) (type contact-table table) (inline touch-contact))
-        (when fresh
-          (setf (pair-list-terrain plist) terrain (pair-list-terrain-edits plist) (voxel-terrain-edits terrain)))
-        (setf (physics-world-near-cells-step world) (contact-table-step table))
-        (labels ((chunk-at (key)
-                   (declare (type fixnum key))
-                   (if (= key last-key)
-                       (the chunk-storage last-chunk)
-                       (setf last-key key last-chunk (probe-chunk probe key))))
-                 (cell-solid-p (ix iy iz)
-                   ;; one cell, through the chunk it lies in
-                   (declare (type fixnum ix iy iz))
-                   (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))))
-          (declare (inline chunk-at cell-solid-p))
-        (with-body-columns (x y z vx vy vz radius handle) awake
-          (dotimes (i n)
-            (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                   ;; how far the body can travel this step; a body faster than its margin a
-                   ;; step reaches that far, so that it meets an edge or a corner before it strikes
-                   (travel (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))
-                   (ahead (max margin travel))
-                   (reach (step-reach r travel margin limit))
-                   (x0 (cell-floor (- cx reach))) (x1 (cell-floor (+ cx reach)))
-                   (y0 (cell-floor (- cy reach))) (y1 (cell-floor (+ cy reach)))
-                   (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach)))
-                   (mask 0))
-              (declare (type fixnum x0 x1 y0 y1 z0 z1) (type (unsigned-byte 27) mask))
-              ;; gather the solid cells of the (at most) 3x3x3 neighbourhood, unless the row
-              ;; stayed near its anchor and the anchor had no solid cell near it
-              (terrain-gather-mask)
-              ;; in the step that built the pair list, each row's anchor is its centre: note
-              ;; whether every cell within its reach plus 0.45 skins is air
-              (terrain-note-clear)
-              ;; as far as the cells gathered reach, until a solid one nearer is met below
-              (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
-              ;; a body that can travel past its margin this step also sweeps its path
-              (when (> travel margin)
-                (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
-                                       (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
-              (terrain-cell-contacts))))
-        (setf (physics-world-buried-count world) buried))))
+      (with-world-parameters (margin slop (limit reach-limit) (threshold restitution-threshold)) world
+        (let* ((awake (physics-world-awake world))
+               (probe (physics-world-probe world))
+               (n (body-columns-length awake))
+               (dt (physics-world-current-dt world))
+               (gstep (gravity-step world dt))
+               (contacts (physics-world-contacts world))
+               (table (physics-world-contact-table world))
+               ;; the bodies come in the grid's order, so most share the chunk of the one before
+               (last-key -1) (last-chunk nil)
+               ;; the pair list's rows this step: which are loose, and which were clear of
+               ;; solid cells around their anchors when it was built
+               (plist (physics-world-pair-list world))
+               (current (= (pair-list-step plist) (contact-table-step table)))
+               (fresh (and current (= (pair-list-built-step plist) (contact-table-step table))))
+               (use-clear (and current (not fresh) (eq (pair-list-terrain plist) terrain)
+                               (= (pair-list-terrain-edits plist) (voxel-terrain-edits terrain))))
+               (loose (pair-list-loose plist)) (clear (pair-list-clear plist))
+               (widen (* 0.45 (f32 (physics-world-pair-skin world))))
+               ;; for each row, the square of the longest path the finalize phase may leave
+               ;; unchecked ([[#SQU33Z]]): as far as its reach, and short of the nearest solid cell
+               (near (let ((a (physics-world-near-cells world)))
+                       (if (> (length a) n)
+                           a
+                           (setf (physics-world-near-cells world) (make-array (* 2 (1+ n)) :element-type 'single-float)))))
+               ;; the bodies whose centre lies in a solid cell
+               (buried 0))
+          (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key buried)
+                   (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear) (type f32-column near)
+                   (type contact-columns contacts) (type contact-table table) (inline touch-contact))
+          (when fresh
+            (setf (pair-list-terrain plist) terrain (pair-list-terrain-edits plist) (voxel-terrain-edits terrain)))
+          (setf (physics-world-near-cells-step world) (contact-table-step table))
+          (labels ((chunk-at (key)
+                     (declare (type fixnum key))
+                     (if (= key last-key)
+                         (the chunk-storage last-chunk)
+                         (setf last-key key last-chunk (probe-chunk probe key))))
+                   (cell-solid-p (ix iy iz)
+                     ;; one cell, through the chunk it lies in
+                     (declare (type fixnum ix iy iz))
+                     (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))))
+            (declare (inline chunk-at cell-solid-p))
+          (with-body-columns (x y z vx vy vz radius handle) awake
+            (dotimes (i n)
+              (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+                     ;; how far the body can travel this step; a body faster than its margin a
+                     ;; step reaches that far, so that it meets an edge or a corner before it strikes
+                     (travel (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))
+                     (ahead (max margin travel))
+                     (reach (step-reach r travel margin limit))
+                     (x0 (cell-floor (- cx reach))) (x1 (cell-floor (+ cx reach)))
+                     (y0 (cell-floor (- cy reach))) (y1 (cell-floor (+ cy reach)))
+                     (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach)))
+                     (mask 0))
+                (declare (type fixnum x0 x1 y0 y1 z0 z1) (type (unsigned-byte 27) mask))
+                ;; gather the solid cells of the (at most) 3x3x3 neighbourhood, unless the row
+                ;; stayed near its anchor and the anchor had no solid cell near it
+                (terrain-gather-mask)
+                ;; in the step that built the pair list, each row's anchor is its centre: note
+                ;; whether every cell within its reach plus 0.45 skins is air
+                (terrain-note-clear)
+                ;; as far as the cells gathered reach, until a solid one nearer is met below
+                (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
+                ;; a body that can travel past its margin this step also sweeps its path
+                (when (> travel margin)
+                  (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
+                                         (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
+                (terrain-cell-contacts))))
+          (setf (physics-world-buried-count world) buried)))))
     world))
 ;; The terrain phase, stage by stage:1 ends here
 
@@ -4101,59 +4105,57 @@ with the face the ray enters it through. #SW33P7"
 ;; [[file:../physics.org::#B0XPH5][Boxes touch as moving terrain:1]]
 (defun box-phase (world)
   "The box phase: posted kinematic boxes touch the awake bodies near them as moving terrain. #B0XPH5"
-  (let* ((boxes (physics-world-boxes world))
-         (awake (physics-world-awake world))
-         (grid (physics-world-awake-grid world))
-         (margin (f32 (physics-world-margin world)))
-         (limit (f32 (physics-world-reach-limit world)))
-         (dt (physics-world-current-dt world))
-         (gstep (gravity-step world dt))
-         (threshold (f32 (physics-world-restitution-threshold world)))
-         (contacts (physics-world-contacts world))
-         (table (physics-world-contact-table world))
-         (touched nil)
-         ;; true once a body or box has a category or mask of its own ([[#F1LT3R]])
-         (filtering (physics-world-filtering world)))
-    (declare (type single-float margin limit dt gstep threshold))
-    (when (plusp (box-columns-length boxes))
-      (with-body-columns (x y z (bvx vx) (bvy vy) (bvz vz) radius handle flags) awake
-        (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz id filter) boxes
-          (dotimes (b (box-columns-length boxes))
-            (let* ((bx0 (aref min-x b)) (by0 (aref min-y b)) (bz0 (aref min-z b))
-                   (bx1 (aref max-x b)) (by1 (aref max-y b)) (bz1 (aref max-z b))
-                   (ccx (* 0.5 (+ bx0 bx1))) (ccy (* 0.5 (+ by0 by1))) (ccz (* 0.5 (+ bz0 bz1)))
-                   (half (max (- bx1 ccx) (- by1 ccy) (- bz1 ccz)))
-                   (span (1+ (ceiling (* half (hash-grid-inv-cell grid))))))
-              (do-grid-neighbours (i grid ccx ccy ccz :span span)
-               (when (rows-meet-p filtering (aref flags i) (ash (aref filter b) +flag-filter-shift+))
-                (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                       ;; the body's velocity relative to the box, and how far it can travel
-                       ;; towards it this step: as against cells ([[#MYWH16]]), a body faster
-                       ;; than its margin a step reaches that far, to meet an edge or a corner
-                       ;; before it strikes
-                       (wx (- (aref bvx i) (aref vx b))) (wy (- (aref bvy i) (aref vy b)))
-                       (wz (- (aref bvz i) (aref vz b)))
-                       (travel (step-travel wx wy wz dt gstep))
-                       (reach (step-reach r travel margin limit))
-                       (key (box-key (handle-index (aref handle i)) (aref id b))))
-                  (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
-                      (cx cy cz r bx0 by0 bz0 bx1 by1 bz1)
-                    (when (<= d2 (* reach reach))
-                      ;; the normal at the point it will strike, as a cell's
-                      (multiple-value-bind (nx ny nz sep)
-                          (multiple-value-bind (nx ny nz sep) (finish)
-                            (impact-normal nx ny nz sep cx cy cz r wx wy wz dt threshold bx0 by0 bz0 bx1 by1 bz1))
+  (with-world-parameters (margin (limit reach-limit) (threshold restitution-threshold)) world
+    (let* ((boxes (physics-world-boxes world))
+           (awake (physics-world-awake world))
+           (grid (physics-world-awake-grid world))
+           (dt (physics-world-current-dt world))
+           (gstep (gravity-step world dt))
+           (contacts (physics-world-contacts world))
+           (table (physics-world-contact-table world))
+           (touched nil)
+           ;; true once a body or box has a category or mask of its own ([[#F1LT3R]])
+           (filtering (physics-world-filtering world)))
+      (declare (type single-float margin limit dt gstep threshold))
+      (when (plusp (box-columns-length boxes))
+        (with-body-columns (x y z (bvx vx) (bvy vy) (bvz vz) radius handle flags) awake
+          (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz id filter) boxes
+            (dotimes (b (box-columns-length boxes))
+              (let* ((bx0 (aref min-x b)) (by0 (aref min-y b)) (bz0 (aref min-z b))
+                     (bx1 (aref max-x b)) (by1 (aref max-y b)) (bz1 (aref max-z b))
+                     (ccx (* 0.5 (+ bx0 bx1))) (ccy (* 0.5 (+ by0 by1))) (ccz (* 0.5 (+ bz0 bz1)))
+                     (half (max (- bx1 ccx) (- by1 ccy) (- bz1 ccz)))
+                     (span (1+ (ceiling (* half (hash-grid-inv-cell grid))))))
+                (do-grid-neighbours (i grid ccx ccy ccz :span span)
+                 (when (rows-meet-p filtering (aref flags i) (ash (aref filter b) +flag-filter-shift+))
+                  (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+                         ;; the body's velocity relative to the box, and how far it can travel
+                         ;; towards it this step: as against cells ([[#MYWH16]]), a body faster
+                         ;; than its margin a step reaches that far, to meet an edge or a corner
+                         ;; before it strikes
+                         (wx (- (aref bvx i) (aref vx b))) (wy (- (aref bvy i) (aref vy b)))
+                         (wz (- (aref bvz i) (aref vz b)))
+                         (travel (step-travel wx wy wz dt gstep))
+                         (reach (step-reach r travel margin limit))
+                         (key (box-key (handle-index (aref handle i)) (aref id b))))
+                    (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
+                        (cx cy cz r bx0 by0 bz0 bx1 by1 bz1)
+                      (when (<= d2 (* reach reach))
+                        ;; the normal at the point it will strike, as a cell's
+                        (multiple-value-bind (nx ny nz sep)
+                            (multiple-value-bind (nx ny nz sep) (finish)
+                              (impact-normal nx ny nz sep cx cy cz r wx wy wz dt threshold bx0 by0 bz0 bx1 by1 bz1))
+                          (setf touched t)
+                          (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
+                                         nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))
+                      (multiple-value-bind (nx ny nz px py pz sep)
+                          (inside-face nil cx cy cz r bx0 by0 bz0 bx1 by1 bz1 0 0 0)
                         (setf touched t)
                         (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
-                                       nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))
-                    (multiple-value-bind (nx ny nz px py pz sep)
-                        (inside-face nil cx cy cz r bx0 by0 bz0 bx1 by1 bz1 0 0 0)
-                      (setf touched t)
-                      (touch-contact contacts table key +contact-box+ (aref handle i) +no-body+
-                                     nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))))))))))
-        ;; the step's squeeze rules look for box rows only when some body touched a box ([[#SQU33Z]])
-    (when touched (setf (physics-world-box-touch-step world) (physics-world-step-count world)))
-    world))
+                                       nx ny nz sep px py pz (aref vx b) (aref vy b) (aref vz b))))))))))))
+          ;; the step's squeeze rules look for box rows only when some body touched a box ([[#SQU33Z]])
+      (when touched (setf (physics-world-box-touch-step world) (physics-world-step-count world)))
+      world)))
 ;; Boxes touch as moving terrain:1 ends here
 
 ;; [[file:../physics.org::#PRUN3D][Contacts not found this step are pruned:1]]
@@ -4987,73 +4989,70 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
     (declare (type body-columns awake sleeping) (type contact-columns contacts) (type single-float h)
              (type index m n))
     (ensure-solver-scratch world n m)
-    (let ((short-path *prepare-short-path*)
-          (color-count (color-contacts world (if-feature :body-contacts t nil)))
-          (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 (the single-float h))))
-          (zeta (f32 (physics-world-damping-ratio world)))
-          (ids (physics-world-ids world))
-          (cbuf (physics-world-constraints world))
-          (colors (physics-world-contact-colors world))
-          (v (physics-world-velocities world))
-          (d (physics-world-deltas world))
-          (slop (f32 (physics-world-slop world)))
-          (g (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
-                       (expt (physics-world-gravity-z world) 2))))
-          (load-limit (f32 (physics-world-load-stiffening world)))
-          (held-mass (held-mass-bound world)))
-      (declare (type f32-column v d) (type fixnum-column colors)
-               (type single-float slop hertz zeta g load-limit held-mass)
-               (type handle-table ids) (type constraint-columns cbuf))
-      (multiple-value-bind (dyn-bias dyn-mass dyn-impulse) (physics-softness hertz zeta h)
-        (declare (type single-float dyn-bias dyn-mass dyn-impulse))
-        (multiple-value-bind (st-bias st-mass st-impulse) (physics-softness (* 2.0 hertz) zeta h)
-          (declare (type single-float st-bias st-mass st-impulse))
-          (size-constraint-buffer world cbuf)
-          (load-solver-bodies awake v d n)
-          (let ((cursor (make-array (+ +physics-max-colors+ 1) :element-type 'fixnum))
-                (color-starts (physics-world-color-starts world))
-                (sets (handle-table-set ids)) (locals (handle-table-local ids))
-                (braced (physics-world-braced world))
-                ;; each contact's awake rows, as the colouring found them
-                (rows (physics-world-contact-rows world))
-                (brace-ratio (f32 (physics-world-brace-mass-ratio world)))
-                (still2 (f32 (expt (physics-world-sleep-speed world) 2)))
-                (inverse-mass (body-columns-inverse-mass awake))
-                ;; 1/(|g| h) turns a substep's normal impulse into the mass it holds up
-                (load-scale (if (> g 1e-3) (/ 1.0 (* g h)) 0.0))
-                ;; up, against gravity (zero without gravity)
-                (up-x (if (> g 1e-3) (/ (- (physics-world-gravity-x world)) g) 0.0))
-                (up-y (if (> g 1e-3) (/ (- (physics-world-gravity-y world)) g) 0.0))
-                (up-z (if (> g 1e-3) (/ (- (physics-world-gravity-z world)) g) 0.0)))
-            (declare (dynamic-extent cursor) (type fixnum-column sets locals braced rows color-starts)
-                     (type single-float brace-ratio still2 load-scale up-x up-y up-z)
-                     (type f32-column inverse-mass))
-            (replace cursor color-starts)
-            ;; a body is braced when it is still and a one-sided contact carried load last step.
-            ;; Nothing is braced without gravity: then the scene skips this pass and every test
-            ;; of it below. No body is static to another unless one awake body is that many times
-            ;; heavier than another, or a column has a link: else the scene skips the tests of
-            ;; brace-side below
-            (let* ((static (and (> g 1e-3) (plusp n) (masses-span-brace-ratio-p inverse-mass n brace-ratio)))
-                   ;; the pass runs at every step where a body may be static to another or a
-                   ;; column is forming (a body counting its steps on one support, or a link),
-                   ;; and else at every +column-look+th step, which finds a column starting
-                   (bracing (and (> g 1e-3) (plusp n)
-                                 (or static (physics-world-column-watch world)
-                                     (zerop (mod (physics-world-step-count world) +column-look+)))))
-                   ;; whether the pass ran at the step before, and the awake bodies' flags
-                   (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world))))
-                   (flags (body-columns-flags awake)))
-              (declare (type fixnum-column flags))
-              (when bracing
-                (when (brace-bodies world contacts m rows braced v inverse-mass flags n still2 slop kept
-                                    up-x up-y up-z)
-                  (setf static t))
-                (when static
-                  (still-braced-sides contacts m rows braced inverse-mass brace-ratio v up-x up-y up-z)))
-              (fill-constraint-rows)))))
-      (setf (step-statistics-colors (world-statistics world)) color-count)
-      color-count)))
+    (with-world-parameters ((zeta damping-ratio) slop (load-limit load-stiffening) (brace-ratio brace-mass-ratio)) world
+      (let ((short-path *prepare-short-path*)
+            (color-count (color-contacts world (if-feature :body-contacts t nil)))
+            (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 (the single-float h))))
+            (ids (physics-world-ids world))
+            (cbuf (physics-world-constraints world))
+            (colors (physics-world-contact-colors world))
+            (v (physics-world-velocities world))
+            (d (physics-world-deltas world))
+            (g (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
+                         (expt (physics-world-gravity-z world) 2))))
+            (held-mass (held-mass-bound world)))
+        (declare (type f32-column v d) (type fixnum-column colors)
+                 (type single-float slop hertz zeta g load-limit held-mass)
+                 (type handle-table ids) (type constraint-columns cbuf))
+        (multiple-value-bind (dyn-bias dyn-mass dyn-impulse) (physics-softness hertz zeta h)
+          (declare (type single-float dyn-bias dyn-mass dyn-impulse))
+          (multiple-value-bind (st-bias st-mass st-impulse) (physics-softness (* 2.0 hertz) zeta h)
+            (declare (type single-float st-bias st-mass st-impulse))
+            (size-constraint-buffer world cbuf)
+            (load-solver-bodies awake v d n)
+            (let ((cursor (make-array (+ +physics-max-colors+ 1) :element-type 'fixnum))
+                  (color-starts (physics-world-color-starts world))
+                  (sets (handle-table-set ids)) (locals (handle-table-local ids))
+                  (braced (physics-world-braced world))
+                  ;; each contact's awake rows, as the colouring found them
+                  (rows (physics-world-contact-rows world))
+                  (still2 (f32 (expt (physics-world-sleep-speed world) 2)))
+                  (inverse-mass (body-columns-inverse-mass awake))
+                  ;; 1/(|g| h) turns a substep's normal impulse into the mass it holds up
+                  (load-scale (if (> g 1e-3) (/ 1.0 (* g h)) 0.0))
+                  ;; up, against gravity (zero without gravity)
+                  (up-x (if (> g 1e-3) (/ (- (physics-world-gravity-x world)) g) 0.0))
+                  (up-y (if (> g 1e-3) (/ (- (physics-world-gravity-y world)) g) 0.0))
+                  (up-z (if (> g 1e-3) (/ (- (physics-world-gravity-z world)) g) 0.0)))
+              (declare (dynamic-extent cursor) (type fixnum-column sets locals braced rows color-starts)
+                       (type single-float brace-ratio still2 load-scale up-x up-y up-z)
+                       (type f32-column inverse-mass))
+              (replace cursor color-starts)
+              ;; a body is braced when it is still and a one-sided contact carried load last step.
+              ;; Nothing is braced without gravity: then the scene skips this pass and every test
+              ;; of it below. No body is static to another unless one awake body is that many times
+              ;; heavier than another, or a column has a link: else the scene skips the tests of
+              ;; brace-side below
+              (let* ((static (and (> g 1e-3) (plusp n) (masses-span-brace-ratio-p inverse-mass n brace-ratio)))
+                     ;; the pass runs at every step where a body may be static to another or a
+                     ;; column is forming (a body counting its steps on one support, or a link),
+                     ;; and else at every +column-look+th step, which finds a column starting
+                     (bracing (and (> g 1e-3) (plusp n)
+                                   (or static (physics-world-column-watch world)
+                                       (zerop (mod (physics-world-step-count world) +column-look+)))))
+                     ;; whether the pass ran at the step before, and the awake bodies' flags
+                     (kept (= (physics-world-braced-step world) (1- (physics-world-step-count world))))
+                     (flags (body-columns-flags awake)))
+                (declare (type fixnum-column flags))
+                (when bracing
+                  (when (brace-bodies world contacts m rows braced v inverse-mass flags n still2 slop kept
+                                      up-x up-y up-z)
+                    (setf static t))
+                  (when static
+                    (still-braced-sides contacts m rows braced inverse-mass brace-ratio v up-x up-y up-z)))
+                (fill-constraint-rows)))))
+        (setf (step-statistics-colors (world-statistics world)) color-count)
+        color-count))))
 ;; The prepare phase, stage by stage:1 ends here
 
 ;; [[file:../physics.org::#PRFRM2][The frame pass:1]]
@@ -5089,21 +5088,21 @@ substep's solve reads. Compiled without boxes, it has no box velocity to resolve
              (q (if big (+ (* z z) (* y y)) (+ (* z z) (* x x))))
              ;; a padding row's zero normal: length one, so nothing divides by zero
              (s (/ 1.0 (fsqrt (if (> q 0.0) q 1.0))))
-             (tx (if big 0.0 (- (* z s))))
-             (ty (if big (* z s) 0.0))
-             (tz (if big (- (* y s)) (* x s)))
-             (ux (- (* y tz) (* z ty))) (uy (- (* z tx) (* x tz))) (uz (- (* x ty) (* y tx)))
+             (ux (if big 0.0 (- (* z s))))
+             (uy (if big (* z s) 0.0))
+             (uz (if big (- (* y s)) (* x s)))
+             (qx (- (* y uz) (* z uy))) (qy (- (* z ux) (* x uz))) (qz (- (* x uy) (* y ux)))
              (ima (@ ima)) (imb (@ imb)) (iia (@ iia)) (iib (@ iib)) (ra (@ ra)) (rb (@ rb))
              (mass-sum (+ ima imb))
              (tangent-sum (+ mass-sum (* iia ra ra) (* iib rb rb)))
              (rolling-sum (+ iia iib)))
         (declare (type index base))
-        (setf (@ t1x) tx (@ t1y) ty (@ t1z) tz (@ t2x) ux (@ t2y) uy (@ t2z) uz)
+        (setf (@ t1x) ux (@ t1y) uy (@ t1z) uz (@ t2x) qx (@ t2y) qy (@ t2z) qz)
         (if-feature :boxes
           (let ((kx (@ kvn)) (ky (@ kvt1)) (kz (@ kvt2)))
             (setf (@ kvn) (+ (* kx x) (* ky y) (* kz z))
-                  (@ kvt1) (+ (* kx tx) (* ky ty) (* kz tz))
-                  (@ kvt2) (+ (* kx ux) (* ky uy) (* kz uz)))))
+                  (@ kvt1) (+ (* kx ux) (* ky uy) (* kz uz))
+                  (@ kvt2) (+ (* kx qx) (* ky qy) (* kz qz)))))
         (setf ;; the gap the first substep's solve starts from: what the relax pass
               ;; computes ([[#S0LV3R]]), with both deltas and the time elapsed zero
               (@ gap) (moved-gap (@ separation) x y z 0.0 0.0 0.0 (if-feature :boxes (@ kvn) 0.0) 0.0)
@@ -6386,65 +6385,64 @@ speed; in a world with sleepers, mark the awake rows that only sleepers and terr
 (mark-held), for the finalize phase's sleep. From here on the step changes what it cannot undo,
 so its undo log closes. #ST0R3S"
   (setf (physics-world-undo-open world) nil)
-  (let* ((cbuf (physics-world-constraints world))
-         (contacts (physics-world-contacts world))
-         (v (physics-world-velocities world))
-         (ids (physics-world-ids world))
-         (awake (physics-world-awake world))
-         (sleeping (physics-world-sleeping world))
-         (hit-speed (f32 (physics-world-hit-speed world)))
-         (slop (f32 (physics-world-slop world)))
-         (max-penetration 0.0) (max-approach 0.0)
-         (n (body-columns-length awake))
-         (held (physics-world-held world))
-         ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts;
-         ;; without body contacts and boxes every contact is terrain's, which marks nothing
-         (marking (if-feature (:or :body-contacts :boxes) (held-marking-p world) nil)))
-    (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
-             (type index n) (type fixnum-column held)
-             (ignorable ids awake sleeping hit-speed) #.+kernel-policy+)
-    (when marking (fill held 0 :end (1+ n)))
-    (with-constraint-block (contact body-a body-b) cbuf
-      (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
-        (declare (ignorable touching kind handle-a handle-b key))
-        (loop for k of-type index below (constraint-columns-length cbuf)
-              unless (< (aref contact k) 0) do
-          (let* ((base (constraint-base k))
-                 (c (aref contact k))
-                 (g (geometry-start c))
-                 (pushed (if-feature (:or :contact-events :hit-events) (> (@ max-normal-impulse) 0.0) nil))
-                 (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
-                 (x (@ nx)) (y (@ ny)) (z (@ nz))
-                 ;; the gap the last relax pass kept, less the slop the prepared gap carries
-                 (gap (- (@ gap) slop))
-                 ;; without body contacts the other side is the dummy row, whose velocity is
-                 ;; the zero the prepare phase wrote, which no one-sided kernel changes
-                 (vn (+ (* (- (if-feature :body-contacts (aref v b) 0.0) (aref v a)) x)
-                        (* (- (if-feature :body-contacts (aref v (+ b 1)) 0.0) (aref v (+ a 1))) y)
-                        (* (- (if-feature :body-contacts (aref v (+ b 2)) 0.0) (aref v (+ a 2))) z)
-                        (if-feature :boxes (@ kvn) 0.0))))
-            (declare (type fixnum c) (type index base g) (ignorable pushed b))
-            (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
-                  (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2))
-            ;; without rolling resistance the contact's rolling impulses stay the zeros it was
-            ;; made with
-            (if-feature :rolling-resistance
-              (setf (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
-                    (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z)))
-            ;; and the spin impulse, for the next step's first substep to start from it: only
-            ;; a row with no radius on side b has one, and no other row's side block is read
-            (if-feature :friction
-              (when (= (@ rb) 0.0) (setf (contact-at geometry g spin-impulse) (@ spin-impulse))))
-            (when marking (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
-            (when (< gap 0.0)
-              (setf max-penetration (max max-penetration (- gap))
-                    max-approach (max max-approach (- vn))))
-            (store-touch-event)
-            (store-hit-event)))))
-    (let ((stats (world-statistics world)))
-      (setf (step-statistics-max-penetration stats) (coerce max-penetration 'double-float)
-            (step-statistics-max-approach stats) (coerce max-approach 'double-float)))
-    world))
+  (with-world-parameters (hit-speed slop) world
+    (let* ((cbuf (physics-world-constraints world))
+           (contacts (physics-world-contacts world))
+           (v (physics-world-velocities world))
+           (ids (physics-world-ids world))
+           (awake (physics-world-awake world))
+           (sleeping (physics-world-sleeping world))
+           (max-penetration 0.0) (max-approach 0.0)
+           (n (body-columns-length awake))
+           (held (physics-world-held world))
+           ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts;
+           ;; without body contacts and boxes every contact is terrain's, which marks nothing
+           (marking (if-feature (:or :body-contacts :boxes) (held-marking-p world) nil)))
+      (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
+               (type index n) (type fixnum-column held)
+               (ignorable ids awake sleeping) #.+kernel-policy+)
+      (when marking (fill held 0 :end (1+ n)))
+      (with-constraint-block (contact body-a body-b) cbuf
+        (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
+          (declare (ignorable touching kind handle-a handle-b key))
+          (loop for k of-type index below (constraint-columns-length cbuf)
+                unless (< (aref contact k) 0) do
+            (let* ((base (constraint-base k))
+                   (c (aref contact k))
+                   (g (geometry-start c))
+                   (pushed (if-feature (:or :contact-events :hit-events) (> (@ max-normal-impulse) 0.0) nil))
+                   (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
+                   (x (@ nx)) (y (@ ny)) (z (@ nz))
+                   ;; the gap the last relax pass kept, less the slop the prepared gap carries
+                   (gap (- (@ gap) slop))
+                   ;; without body contacts the other side is the dummy row, whose velocity is
+                   ;; the zero the prepare phase wrote, which no one-sided kernel changes
+                   (vn (+ (* (- (if-feature :body-contacts (aref v b) 0.0) (aref v a)) x)
+                          (* (- (if-feature :body-contacts (aref v (+ b 1)) 0.0) (aref v (+ a 1))) y)
+                          (* (- (if-feature :body-contacts (aref v (+ b 2)) 0.0) (aref v (+ a 2))) z)
+                          (if-feature :boxes (@ kvn) 0.0))))
+              (declare (type fixnum c) (type index base g) (ignorable pushed b))
+              (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
+                    (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2))
+              ;; without rolling resistance the contact's rolling impulses stay the zeros it was
+              ;; made with
+              (if-feature :rolling-resistance
+                (setf (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
+                      (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z)))
+              ;; and the spin impulse, for the next step's first substep to start from it: only
+              ;; a row with no radius on side b has one, and no other row's side block is read
+              (if-feature :friction
+                (when (= (@ rb) 0.0) (setf (contact-at geometry g spin-impulse) (@ spin-impulse))))
+              (when marking (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
+              (when (< gap 0.0)
+                (setf max-penetration (max max-penetration (- gap))
+                      max-approach (max max-approach (- vn))))
+              (store-touch-event)
+              (store-hit-event)))))
+      (let ((stats (world-statistics world)))
+        (setf (step-statistics-max-penetration stats) (coerce max-penetration 'double-float)
+              (step-statistics-max-approach stats) (coerce max-approach 'double-float)))
+      world)))
 ;; Store impulses, events and the step's error:1 ends here
 
 ;; [[file:../physics.org::#F1NAL5][Finalize: positions, orientation, age and sleep:1]]
