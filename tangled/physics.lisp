@@ -85,7 +85,7 @@
    #:snapshot-physics-world #:restore-physics-world #:write-physics-world #:read-physics-world
    #:physics-snapshot-invalid #:physics-snapshot-truncated
    #:physics-snapshot-wrong-magic #:physics-snapshot-wrong-version #:physics-snapshot-checksum-mismatch
-   #:physics-snapshot-other-layout #:physics-snapshot-missing-features #:physics-snapshot-of-joints))
+   #:physics-snapshot-other-layout #:physics-snapshot-missing-features))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -7545,7 +7545,7 @@ kernel family. #H4NDL3"
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
 (deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))
 
-(defconstant +snapshot-version+ 1 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
+(defconstant +snapshot-version+ 2 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
 
 (defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SN4P0T")
 
@@ -7620,20 +7620,6 @@ range, a body in a solid cell. #SN4P0T"))
 
 (define-condition physics-snapshot-missing-features (physics-snapshot-invalid) ()
   (:documentation "A snapshot of a world that used a feature the target world was made without. #SN4P0T"))
-
-(define-condition physics-snapshot-of-joints (physics-error)
-  ((operation :initarg :operation :reader physics-snapshot-of-joints-operation))
-  (:report (lambda (c s)
-             (format s "~(~A~): its world has had a joint, and a snapshot holds no joint: ~
-                        expected a world that never had one; the world is unchanged"
-                     (physics-snapshot-of-joints-operation c))))
-  (:documentation "A snapshot asked of a world that has had a joint, or a restore into one: the
-parts of a snapshot do not hold the joint set yet. #SN4P0T"))
-
-(defun check-jointless (world operation)
-  "Signal physics-snapshot-of-joints unless WORLD has never had a joint. #SN4P0T"
-  (when (physics-world-joints world)
-    (error 'physics-snapshot-of-joints :world world :operation operation)))
 
 (defun snapshot-refuse (type operation offset expected found)
   "Signal the physics-snapshot-invalid subtype TYPE. #SN4P0T"
@@ -7750,9 +7736,12 @@ an earlier entry with the same words, found through the table, or K itself, then
 
 (defparameter +snapshot-parts+
   '((1 :world) (2 :handles) (3 :awake-bodies) (4 :sleeping-bodies) (5 :materials) (6 :contacts)
-    (7 :pair-list) (8 :boxes) (9 :pushes))
-  "The parts of a snapshot, in the order they are written, each its id and its name: each part
-of the world's state is one entry, and a new kind of state (joints) is one more. #SN4P0T")
+    (7 :pair-list) (8 :boxes) (9 :pushes) (10 :joints :optional))
+  "The parts of a snapshot, in the order they are written, each its id and its name, and
+:optional for a part a world may not have (then it is not written and its size is -1): each part
+of the world's state is one entry. #SN4P0T")
+
+(defconstant +snapshot-joint-bytes+ 88 "Bytes of one joint's record in a snapshot. #SN4P0T")
 
 (defconstant +snapshot-world-bytes+ 204 "Bytes of the world part's payload. #SN4P0T")
 
@@ -7783,8 +7772,16 @@ palette of MATERIALS entries, and return their sum with the parts' own headers. 
           (aref sizes 6) (padded (+ 4 (contact-records-bytes (physics-world-contacts world) *snapshot-scratch*)))
           (aref sizes 7) (padded (+ 36 (* +snapshot-pair-row-bytes+ rows) (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0))))
           (aref sizes 8) (+ 4 (* +snapshot-box-bytes+ (box-columns-length (physics-world-boxes world))))
-          (aref sizes 9) (+ 4 (if (physics-world-pushes world) (* 16 (handle-table-count ids)) 0)))
-    (loop for (id) in +snapshot-parts+ sum (+ 8 (aref sizes id)))))
+          (aref sizes 9) (+ 4 (if (physics-world-pushes world) (* 16 (handle-table-count ids)) 0))
+          (aref sizes 10) (let ((set (physics-world-joints world)))
+                            (if set
+                                (let ((jids (joint-set-ids set)))
+                                  (+ 20 (* 4 (handle-table-count jids))
+                                     (* 4 (loop with slot = (handle-table-free jids) while (>= slot 0)
+                                                count t do (setf slot (aref (handle-table-local jids) slot))))
+                                     (* +snapshot-joint-bytes+ (joint-columns-length (joint-set-rows set)))))
+                                -1)))
+    (loop for (id) in +snapshot-parts+ unless (minusp (aref sizes id)) sum (+ 8 (aref sizes id)))))
 
 (defun snapshot-materials (world scratch)
   "Fill SCRATCH's palette with the materials of WORLD's bodies, awake rows then sleeping, and
@@ -7822,9 +7819,8 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
 (defun snapshot-physics-world (world &optional buffer)
   "Write WORLD's whole simulation state into BUFFER, an octet vector, when it is large enough,
 else into a new one; return the buffer and the snapshot's size in bytes. Into a buffer large
-enough it conses nothing. A world that has had a joint signals physics-snapshot-of-joints. #SN4P0T"
+enough it conses nothing. #SN4P0T"
   (check-idle world 'snapshot-physics-world)
-  (check-jointless world 'snapshot-physics-world)
   (unless (or (null buffer) (typep buffer 'octets))
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "NIL or an octet vector, (simple-array (unsigned-byte 8) (*))"))
@@ -7836,12 +7832,13 @@ enough it conses nothing. A world that has had a joint signals physics-snapshot-
     (let ((buffer (if (and buffer (>= (length buffer) total)) buffer (make-array total :element-type '(unsigned-byte 8)))))
       (replace buffer +snapshot-magic+)
       (setf (snap-u32 buffer 8) +snapshot-version+
-            (snap-u32 buffer 12) (length +snapshot-parts+)
+            (snap-u32 buffer 12) (loop for (id) in +snapshot-parts+ count (>= (aref sizes id) 0))
             (snap-u64 buffer 16) total)
       (let ((at +snapshot-header-bytes+))
         (declare (type index at))
         (loop for (id) in +snapshot-parts+
-              for size of-type index = (aref sizes id)
+              for size of-type fixnum = (aref sizes id)
+              unless (minusp size)
               do (setf (snap-u32 buffer at) id (snap-u32 buffer (+ at 4)) size)
                  ;; the padding reads as zeros
                  (fill buffer 0 :start (+ at 8) :end (+ at 8 size))
@@ -8039,7 +8036,36 @@ material being entry FIRST + row of MATERIALS. #SN4P0T"
              (let ((slots (handle-table-count (physics-world-ids world))))
                (setf (snap-u32 buffer at) slots)
                (dotimes (k (* 4 slots)) (setf (snap-f32 buffer (+ at 4 (* 4 k))) (aref pushes k))))
-             (setf (snap-u32 buffer at) 0))))))
+             (setf (snap-u32 buffer at) 0))))
+    (10 (let* ((set (physics-world-joints world)) (jids (joint-set-ids set)) (count (handle-table-count jids))
+               (rows (joint-set-rows set)) (n (joint-columns-length rows))
+               (generations (handle-table-generation jids)) (nfree 0))
+          (declare (type index count n nfree))
+          (setf (snap-u32 buffer at) n (snap-u32 buffer (+ at 4)) count
+                (snap-f32 buffer (+ at 12)) (joint-set-limit-bias set) (snap-f32 buffer (+ at 16)) (joint-set-limit-mass set))
+          (dotimes (slot count) (setf (snap-u32 buffer (+ at 20 (* 4 slot))) (aref generations slot)))
+          (loop with slot of-type fixnum = (handle-table-free jids) while (>= slot 0)
+                do (setf (snap-u32 buffer (+ at 20 (* 4 count) (* 4 nfree))) slot)
+                   (incf nfree)
+                   (setf slot (aref (handle-table-local jids) slot)))
+          (setf (snap-u32 buffer (+ at 8)) nfree)
+          (with-joint-columns (kind flags handle body-a body-b ax ay az bx by bz rest-length min-length max-length
+                               hertz damping-ratio break-force impulse-x impulse-y impulse-z)
+              rows
+            (dotimes (row n)
+              (let ((o (+ at 20 (* 4 count) (* 4 nfree) (* row +snapshot-joint-bytes+)))
+                    (a (aref body-a row)) (b (aref body-b row)))
+                (declare (type index o))
+                (setf (snap-u32 buffer o) (aref kind row) (snap-u32 buffer (+ o 4)) (aref flags row)
+                      (snap-u32 buffer (+ o 8)) (handle-index (ldb (byte +handle-joint-bit+ 0) (aref handle row)))
+                      (snap-u32 buffer (+ o 12)) (handle-index a) (snap-u32 buffer (+ o 16)) (handle-generation a)
+                      (snap-u32 buffer (+ o 20)) (if (= b +no-body+) #xFFFFFFFF (handle-index b))
+                      (snap-u32 buffer (+ o 24)) (if (= b +no-body+) 0 (handle-generation b)))
+                (macrolet ((floats (&rest columns)
+                             `(setf ,@(loop for c in columns for k from 28 by 4
+                                            append `((snap-f32 buffer (+ o ,k)) (aref ,c row))))))
+                  (floats ax ay az bx by bz rest-length min-length max-length hertz damping-ratio
+                          break-force impulse-x impulse-y impulse-z)))))))))
 
 (defun world-parameter (world name)
   "The value of WORLD's parameter NAME, a keyword of +physics-parameters+. #SN4P0T"
@@ -8130,11 +8156,15 @@ SCRATCH by part id; return the snapshot's size. #SN4P0T"
       (let ((sum (snapshot-checksum buffer +snapshot-header-bytes+ total)))
         (snapshot-check (= sum (snap-u64 buffer 24)) physics-snapshot-checksum-mismatch 24
                         (format nil "the checksum of the bytes, ~D" sum) (snap-u64 buffer 24)))
-      (snapshot-check (= (snap-u32 buffer 12) (length +snapshot-parts+)) physics-snapshot-other-layout 12
-                      (format nil "~D parts" (length +snapshot-parts+)) (snap-u32 buffer 12))
-      (let ((at +snapshot-header-bytes+))
-        (loop for (id name) in +snapshot-parts+
-              do (snapshot-check (<= (+ at 8) total) physics-snapshot-other-layout at
+      (let ((at +snapshot-header-bytes+) (present 0))
+        (declare (type index at present))
+        (loop for (id name optional) in +snapshot-parts+
+              ;; an optional part the world did not have is not there: its size is -1
+              if (and optional (or (> (+ at 8) total) (/= (snap-u32 buffer at) id)))
+                do (setf (aref (snapshot-scratch-offsets scratch) id) 0 (aref (snapshot-scratch-sizes scratch) id) -1)
+              else
+              do (incf present)
+                 (snapshot-check (<= (+ at 8) total) physics-snapshot-other-layout at
                                  (format nil "the ~(~A~) part" name) :end)
                  (snapshot-check (= (snap-u32 buffer at) id) physics-snapshot-other-layout at
                                  (format nil "the ~(~A~) part, id ~D" name id) (snap-u32 buffer at))
@@ -8145,7 +8175,9 @@ SCRATCH by part id; return the snapshot's size. #SN4P0T"
                    (setf (aref (snapshot-scratch-offsets scratch) id) (+ at 8)
                          (aref (snapshot-scratch-sizes scratch) id) size)
                    (incf at (+ 8 size))))
-        (snapshot-check (= at total) physics-snapshot-other-layout at "the end of the snapshot" at))
+        (snapshot-check (= at total) physics-snapshot-other-layout at "the end of the snapshot" at)
+        (snapshot-check (= (snap-u32 buffer 12) present) physics-snapshot-other-layout 12
+                        (format nil "~D parts" present) (snap-u32 buffer 12)))
       total)))
 
 (defun check-part-size (scratch id expected)
@@ -8200,7 +8232,10 @@ sleep, and every number within its range. #SN4P0T"
                       "a step number" (snap-i64 buffer (+ at o))))
     (snapshot-check (typep (snap-u64 buffer (+ at 140)) 'index) physics-snapshot-other-layout (+ at 140)
                     "a count of misses" (snap-u64 buffer (+ at 140)))
-    (dolist (o '(156 164 172)) (snap-finite-f64 buffer (+ at o)))))
+    ;; the statistics are read as single-floats too: a finite double beyond one's range is refused
+    (dolist (o '(156 164 172))
+      (snapshot-check (<= (abs (snap-finite-f64 buffer (+ at o))) 1d30) physics-snapshot-other-layout (+ at o)
+                      "a statistic of magnitude up to 1e30" (snap-f64 buffer (+ at o))))))
 
 (defun check-snapshot-slots (world buffer scratch)
   "Check the handle, material and body parts of the snapshot in BUFFER: the sizes their counts
@@ -8434,7 +8469,119 @@ what the restore reuses. #SN4P0T"
   (check-snapshot-slots world buffer scratch)
   (check-snapshot-contacts buffer scratch)
   (check-snapshot-rest buffer scratch)
+  (check-snapshot-joints buffer scratch)
   buffer)
+
+(defun check-snapshot-jointed-flags (buffer scratch named mark)
+  "Refuse the snapshot in BUFFER unless each body's jointed flag is set exactly when its slot is
+marked MARK in NAMED, the slots some joint names. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column named) (type fixnum mark))
+  (dolist (id '(3 4))
+    (let ((bat (aref (snapshot-scratch-offsets scratch) id)))
+      (dotimes (row (snap-u32 buffer bat))
+        (let ((o (+ bat 4 (* row +snapshot-body-bytes+))))
+          (snapshot-check (eq (logtest +flag-jointed+ (snap-u16 buffer (+ o 72)))
+                              (= (aref named (snap-u32 buffer (+ o 64))) mark))
+                          physics-snapshot-other-layout (+ o 72)
+                          "the jointed flag set exactly on a body some joint names" (snap-u16 buffer (+ o 72))))))))
+
+(defun check-snapshot-joints (buffer scratch)
+  "Check the joint part of the snapshot in BUFFER, when it has one: the size its counts give, its
+handle table as the bodies' is checked, each joint's kind and flags, its slot a live one of that
+table and no other joint's, its bodies live bodies of the snapshot of the generations its table
+gives, and every number finite and in its range. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)))
+    (declare (type index at))
+    (if (minusp (aref (snapshot-scratch-sizes scratch) 10))
+      (check-snapshot-jointed-flags buffer scratch (snapshot-scratch-marks scratch) -1)
+      (let* ((hat (aref offsets 2)) (bodies (snap-u32 buffer hat))
+             (n (snap-u32 buffer at)) (count (snap-u32 buffer (+ at 4))) (nfree (snap-u32 buffer (+ at 8)))
+             (wat (aref offsets 1)))
+        (declare (type index hat bodies wat))
+        (snapshot-check (logbitp (position :joints +physics-features+) (snap-u32 buffer (+ wat 4)))
+                        physics-snapshot-other-layout (+ wat 4) "the feature :joints of a world with joints"
+                        (snap-u32 buffer (+ wat 4)))
+        (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout (+ at 4)
+                        "a joint table of under 2^24 slots" count)
+        (snapshot-check (= (+ n nfree) count) physics-snapshot-other-layout (+ at 8)
+                        "a joint for each slot that is not free" nfree)
+        (check-part-size scratch 10 (+ 20 (* 4 count) (* 4 nfree) (* +snapshot-joint-bytes+ n)))
+        (snap-finite-f32 buffer (+ at 12))
+        (snap-finite-f32 buffer (+ at 16))
+        (dotimes (slot count)
+          (snapshot-check (< (snap-u32 buffer (+ at 20 (* 4 slot))) (ash 1 +handle-generation-bits+))
+                          physics-snapshot-other-layout (+ at 20 (* 4 slot)) "a generation under 2^20"
+                          (snap-u32 buffer (+ at 20 (* 4 slot)))))
+        ;; the live bodies' slots, from the body parts
+        (multiple-value-bind (marks stamp) (snapshot-marks scratch (max bodies count))
+          (declare (type fixnum-column marks) (type fixnum stamp))
+          (dolist (id '(3 4))
+            (let ((bat (aref offsets id)))
+              (dotimes (row (snap-u32 buffer bat))
+                (setf (aref marks (snap-u32 buffer (+ bat 4 64 (* row +snapshot-body-bytes+)))) (1+ stamp)))))
+          (let ((first (+ at 20 (* 4 count) (* 4 nfree))))
+            (dotimes (row n)
+              (let ((o (+ first (* row +snapshot-joint-bytes+))))
+                (snapshot-check (<= (snap-u32 buffer o) +joint-distance+) physics-snapshot-other-layout o
+                                "a joint kind, 0 or 1" (snap-u32 buffer o))
+                (snapshot-check (< (snap-u32 buffer (+ o 4)) 16) physics-snapshot-other-layout (+ o 4)
+                                "joint flags under 16" (snap-u32 buffer (+ o 4)))
+                (loop for side in '(12 20)
+                      for slot = (snap-u32 buffer (+ o side))
+                      for generation = (snap-u32 buffer (+ o side 4))
+                      unless (and (= side 20) (= slot #xFFFFFFFF) (zerop generation))
+                        do (snapshot-check (and (< slot bodies) (= (aref marks slot) (1+ stamp))
+                                                (= generation (snap-u32 buffer (+ hat 8 (* 4 slot))))
+                                                (or (= side 12) (/= slot (snap-u32 buffer (+ o 12)))))
+                                           physics-snapshot-other-layout (+ o side)
+                                           "the slot of a live body of the snapshot, of its generation, not the joint's other body"
+                                           slot))
+                (let ((reach (* +joint-anchor-reach+ (snap-f32 buffer (+ wat 48))))
+                      (fixed (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)))
+                  (flet ((ranged (k low high what)
+                           (let ((v (snap-finite-f32 buffer (+ o k))))
+                             (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o k) what v)
+                             v)))
+                    (loop for k from 28 below 40 by 4
+                          do (ranged k (- reach) reach "an anchor within the reach of the world's largest radius"))
+                    (loop for k from 40 below 52 by 4
+                          do (if fixed
+                                 (ranged k (- +physics-coordinate-limit+) +physics-coordinate-limit+
+                                         "a fixed point within the coordinate limit")
+                                 (ranged k (- reach) reach "an anchor within the reach of the world's largest radius")))
+                    (loop for k from 52 below 64 by 4
+                          do (ranged k 0.0 +physics-max-joint-length+ "a length from 0 to the longest a joint may have"))
+                    ;; a hertz of a few denormals would make the softness divide by zero
+                    (let ((hertz (ranged 64 0.0 1000.0 "a hertz from 0 to 1000")))
+                      (snapshot-check (or (= hertz 0.0) (>= hertz 1e-30)) physics-snapshot-other-layout (+ o 64)
+                                      "a hertz of 0, or of 1e-30 or more" hertz))
+                    (ranged 68 0.0 1000.0 "a damping ratio from 0 to 1000")
+                    (ranged 72 0.0 +physics-max-break-force+ "a break force from 0 to the largest")
+                    (loop for k from 76 below 88 by 4
+                          do (ranged k -1e9 1e9 "a carried impulse up to 1e9 N s"))))))
+            ;; a body's jointed flag is set exactly when a joint names it
+            (multiple-value-bind (named stamp) (snapshot-marks scratch bodies)
+              (declare (type fixnum-column named) (type fixnum stamp))
+              (dotimes (row n)
+                (let ((o (+ first (* row +snapshot-joint-bytes+))))
+                  (setf (aref named (snap-u32 buffer (+ o 12))) (1+ stamp))
+                  (unless (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)
+                    (setf (aref named (snap-u32 buffer (+ o 20))) (1+ stamp)))))
+              (check-snapshot-jointed-flags buffer scratch named (1+ stamp)))
+            ;; the joint slots: each free one listed once, each live one held by one joint
+            (multiple-value-bind (marks stamp) (snapshot-marks scratch count)
+              (declare (type fixnum-column marks) (type fixnum stamp))
+              (dotimes (k nfree)
+                (let* ((o (+ at 20 (* 4 count) (* 4 k))) (slot (snap-u32 buffer o)))
+                  (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
+                                  "a free joint slot of the table, listed once" slot)
+                  (setf (aref marks slot) stamp)))
+              (dotimes (row n)
+                (let* ((o (+ first (* row +snapshot-joint-bytes+) 8)) (slot (snap-u32 buffer o)))
+                  (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
+                                  "a joint slot of the table, neither free nor another joint's" slot)
+                  (setf (aref marks slot) stamp))))))))))
 ;; A snapshot holds what decides the next step, part by part:4 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:5]]
@@ -8663,16 +8810,83 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
     (setf (physics-world-near-cells-step world) -1 (physics-world-box-touch-step world) -1
           (physics-world-undo-open world) nil)
     (incf (physics-world-rows-version world))
+    (apply-snapshot-joints world buffer scratch)
     world))
+
+(defun apply-snapshot-joints (world buffer scratch)
+  "Make WORLD's joint set the checked snapshot BUFFER's: none when it has no joint part (the joint
+events out of the event mask again unless its features record them), else the rows, their
+handle table, each body's count of joints, and the groups, stale, to be found again. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let ((at (aref (snapshot-scratch-offsets scratch) 10))
+        (bits (logior (ash 1 +event-joint-break+) (ash 1 +event-joint-removed+))))
+    (declare (type index at) (type fixnum bits))
+    (if (minusp (aref (snapshot-scratch-sizes scratch) 10))
+        (when (physics-world-joints world)
+          (setf (physics-world-joints world) nil
+                (slot-value world 'event-mask)
+                (logior (logandc2 (world-event-mask world) bits)
+                        (logand bits (the fixnum (feature-event-mask (world-features world)))))))
+        (let* ((set (ensure-joint-set world)) (jids (joint-set-ids set)) (rows (joint-set-rows set))
+               (n (snap-u32 buffer at)) (count (snap-u32 buffer (+ at 4))) (nfree (snap-u32 buffer (+ at 8)))
+               (tag (handle-table-tag (physics-world-ids world)))
+               (bodies (handle-table-generation (physics-world-ids world))))
+          (declare (type index n count nfree) (type fixnum-column bodies))
+          (when (< (length (handle-table-set jids)) count)
+            (let ((size (max 16 (* 2 count))))
+              (setf (handle-table-set jids) (make-array size :element-type 'fixnum :initial-element +set-free+)
+                    (handle-table-local jids) (make-array size :element-type 'fixnum :initial-element -1)
+                    (handle-table-generation jids) (make-array size :element-type 'fixnum :initial-element 0))))
+          (let ((sets (handle-table-set jids)) (locals (handle-table-local jids)) (generations (handle-table-generation jids)))
+            (declare (type fixnum-column sets locals generations))
+            (fill sets +set-free+) (fill locals -1) (fill generations 0)
+            (dotimes (slot count) (setf (aref generations slot) (snap-u32 buffer (+ at 20 (* 4 slot)))))
+            (setf (handle-table-count jids) count (handle-table-tag jids) tag
+                  (handle-table-free jids) (if (plusp nfree) (snap-u32 buffer (+ at 20 (* 4 count))) -1))
+            (dotimes (k nfree)
+              (setf (aref locals (snap-u32 buffer (+ at 20 (* 4 count) (* 4 k))))
+                    (if (< (1+ k) nfree) (snap-u32 buffer (+ at 24 (* 4 count) (* 4 k))) -1)))
+            (joint-columns-clear rows)
+            (joint-columns-ensure-capacity rows n)
+            (setf (joint-columns-length rows) n)
+            (with-joint-columns (kind flags handle body-a body-b ax ay az bx by bz rest-length min-length max-length
+                                 hertz damping-ratio break-force impulse-x impulse-y impulse-z row-a)
+                rows
+              (dotimes (row n)
+                (let* ((o (+ at 20 (* 4 count) (* 4 nfree) (* row +snapshot-joint-bytes+)))
+                       (slot (snap-u32 buffer (+ o 8))) (a (snap-u32 buffer (+ o 12))) (b (snap-u32 buffer (+ o 20))))
+                  (declare (type index o slot a b))
+                  (setf (aref kind row) (snap-u32 buffer o) (aref flags row) (snap-u32 buffer (+ o 4))
+                        (aref handle row) (logior (ash 1 +handle-joint-bit+) (make-handle tag (aref generations slot) slot))
+                        (aref body-a row) (make-handle tag (aref bodies a) a)
+                        (aref body-b row) (if (= b #xFFFFFFFF) +no-body+ (make-handle tag (aref bodies b) b))
+                        (aref row-a row) -1
+                        (aref sets slot) +set-awake+ (aref locals slot) row)
+                  (macrolet ((floats (&rest columns)
+                               `(setf ,@(loop for c in columns for k from 28 by 4
+                                              append `((aref ,c row) (snap-f32 buffer (+ o ,k)))))))
+                    (floats ax ay az bx by bz rest-length min-length max-length hertz damping-ratio
+                            break-force impulse-x impulse-y impulse-z))))))
+          (setf (joint-set-limit-bias set) (snap-f32 buffer (+ at 12)) (joint-set-limit-mass set) (snap-f32 buffer (+ at 16)))
+          ;; each body's count of joints, and the groups found again from the joints at the next need
+          (ensure-joint-slots world set)
+          (let ((counts (joint-set-counts set)) (parent (joint-set-parent set)))
+            (declare (type fixnum-column counts parent))
+            (fill counts 0)
+            (dotimes (i (length parent)) (setf (aref parent i) i))
+            (dotimes (row n)
+              (incf (aref counts (handle-index (aref (joint-columns-body-a rows) row))))
+              (let ((b (aref (joint-columns-body-b rows) row)))
+                (unless (= b +no-body+) (incf (aref counts (handle-index b)))))))
+          (setf (joint-set-groups-stale set) t)))))
 
 (defun restore-physics-world (world buffer)
   "Put WORLD back into the state the snapshot BUFFER (from snapshot-physics-world) holds, and
 return WORLD; into a world whose buffers are large enough it conses nothing. A snapshot that is
 truncated, of another magic, version or layout, whose checksum fails, or of a world with
 features WORLD lacks, signals the physics-snapshot-invalid subtype naming the byte offset, and
-WORLD is left as it was; so is a WORLD that has had a joint, with physics-snapshot-of-joints. #SN4P0T"
+WORLD is left as it was. #SN4P0T"
   (check-idle world 'restore-physics-world)
-  (check-jointless world 'restore-physics-world)
   (unless (typep buffer 'octets)
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))
