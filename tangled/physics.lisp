@@ -5643,6 +5643,7 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 (defconstant +physics-min-joint-length+ 0.005 "The shortest length, m, a distance joint may be given. #J0STOR")
 
 (defconstant +physics-max-joint-length+ 1000.0 "The longest length, m, a distance joint may be given. #J0STOR")
+(defconstant +physics-min-joint-hertz+ 0.001 "The lowest hertz above 0 a joint's spring may be given. #J0STOR")
 
 (defconstant +physics-max-break-force+ 1e12 "The largest break force, N, a joint may be given. #J0STOR")
 
@@ -5812,7 +5813,11 @@ nothing. #J0STOR"
         (multiple-value-bind (pbx pby pbz) (if body-b (body-anchor world body-b bx by bz) (values bx by bz))
           (let* ((distance (f32 (sqrt (+ (expt (- pbx pax) 2) (expt (- pby pay) 2) (expt (- pbz paz) 2)))))
                  (point (eq kind :point))
-                 (hz (ranged-f32 :hertz hertz 0 1000 world))
+                 (hz (let ((hz (ranged-f32 :hertz hertz 0 1000 world)))
+                       (when (< 0.0 hz +physics-min-joint-hertz+)
+                         (error 'invalid-physics-parameter :world world :name :hertz :value hertz
+                                                           :expected (format nil "0, or from ~A to 1000" +physics-min-joint-hertz+)))
+                       hz))
                  (zeta (ranged-f32 :damping-ratio damping-ratio 0 1000 world))
                  (low +physics-min-joint-length+) (high +physics-max-joint-length+)
                  (rest (cond (point 0.0)
@@ -8554,8 +8559,8 @@ gives, and every number finite and in its range. #SN4P0T"
                           do (ranged k 0.0 +physics-max-joint-length+ "a length from 0 to the longest a joint may have"))
                     ;; a hertz of a few denormals would make the softness divide by zero
                     (let ((hertz (ranged 64 0.0 1000.0 "a hertz from 0 to 1000")))
-                      (snapshot-check (or (= hertz 0.0) (>= hertz 1e-30)) physics-snapshot-other-layout (+ o 64)
-                                      "a hertz of 0, or of 1e-30 or more" hertz))
+                      (snapshot-check (or (= hertz 0.0) (>= hertz +physics-min-joint-hertz+)) physics-snapshot-other-layout (+ o 64)
+                                      "a hertz of 0, or of 0.001 (+physics-min-joint-hertz+) or more" hertz))
                     (ranged 68 0.0 1000.0 "a damping ratio from 0 to 1000")
                     (ranged 72 0.0 +physics-max-break-force+ "a break force from 0 to the largest")
                     (loop for k from 76 below 88 by 4

@@ -6144,6 +6144,7 @@ the phases of a step before the prepare phase. #PR3PAR"
                              (lambda () (add-physics-joint w :distance a b :rope t :min-length 0.8 :max-length 0.5)))
                        (list 'invalid-physics-parameter :length (lambda () (add-physics-joint w :point a b :length 1)))
                        (list 'invalid-physics-parameter :hertz (lambda () (add-physics-joint w :distance a b :hertz -2)))
+                       (list 'invalid-physics-parameter :hertz (lambda () (add-physics-joint w :distance a b :hertz 1e-44)))
                        (list 'invalid-physics-number :damping-ratio (lambda () (add-physics-joint w :distance a b :hertz 2 :damping-ratio nan)))
                        (list 'invalid-physics-parameter :break-force (lambda () (add-physics-joint w :point a b :break-force 0))))
             do (let ((e (handler-case (progn (funcall call) :no-error) (error (e) e))))
