@@ -101,425 +101,509 @@ in any register. #R0WS8T"
 ;; Gathering rows into lanes:1 ends here
 
 ;; [[file:../physics.org::#W1D3KF][One kernel text, two widths:1]]
-(defmacro define-wide-kernels (family width documentation
+(defmacro define-wide-kernels (family width documentation &rest operators
                                &key load store broadcast add sub mul div sqrt gt eq if* or* transpose
                                  max andc1 mask)
-  "Define the solver kernels of FAMILY for lanes of WIDTH, described by DOCUMENTATION: the
-operator keywords name the sb-simd functions the width-neutral operators stand for (MASK, the
-one that reads a comparison's lanes as floats, bit for bit). #W1D3KF"
-  (declare (ignore documentation))
+  "Define the solver kernels of FAMILY for lanes of WIDTH, described by DOCUMENTATION, which each
+kernel's docstring quotes: the operator keywords name the sb-simd functions the width-neutral
+operators stand for (MASK, the one that reads a comparison's lanes as floats, bit for bit). #W1D3KF"
+  (declare (ignore load store broadcast add sub mul div sqrt gt eq if* or* transpose max andc1 mask))
   ;; the names go where FAMILY was read, whatever package is current when the form is expanded:
   ;; define-impact-copy finds its kernel's text under the kernel's name
   (let* ((home (symbol-package family))
-         (scatter (intern (format nil "SCATTER-ROWS-~D" width) home))
-         (movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask))
-         (ws (intern (format nil "WARM-START-BLOCKS/~A" family) home))
-         (so (intern (format nil "SOLVE-BLOCKS/~A" family) home))
-         (soi (intern (format nil "SOLVE-IMPACT-BLOCKS/~A" family) home))
-         (pf (intern (format nil "PREPARE-FRAMES-BLOCKS/~A" family) home)))
-    (let ((operators
-            `((w+ (a b) `(,',add ,a ,b)) (w- (a b) `(,',sub ,a ,b)) (w* (a b) `(,',mul ,a ,b))
-                (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
-                (w= (a b) `(,',eq ,a ,b)) (wif (m a b) `(,',if* ,m ,a ,b)) (wor (a b) `(,',or* ,a ,b))
-                (wc (x) `(,',broadcast ,x))
-                ;; three selections in one instruction each, to the bit: (wmax a b) is
-                ;; (wif (w> a b) a b), b where the two are equal or either is not a number;
-                ;; (wzero-where m b) is (wif m (wc 0.0) b); (wany m), whether some lane of
-                ;; the mask M is set, the sign bits of (wif m (wc -1.0) (wc 0.0)) read at once
-                (wmax (a b) `(,',max ,a ,b))
-                (wzero-where (m b) `(,',andc1 (,',mask ,m) ,b))
-                (wany (m) `(not (zerop (,',movemask (,',mask ,m)))))
-                ;; a side column ([[#SSMPYW]]) is read from the side block of the block at K
-                (@w (column) (if (constraint-side-column-p column)
-                                 `(,',load (side-floats) (side-base k) ,(constraint-offset column))
-                                 `(,',load data base ,(constraint-offset column))))
-                (@w! (column value) (if (constraint-side-column-p column)
-                                        `(,',store ,value (side-floats) (side-base k) ,(constraint-offset column))
-                                        `(,',store ,value data base ,(constraint-offset column))))
-                ;; true when some lane of the block has no radius on side b, the only lanes
-                ;; whose spin columns may be other than zero ([[#SSMPYW]])
-                (some-one-sided () `(if-feature :body-contacts
-                                      (wany (w= (@w rb) (wc 0.0)))
-                                      t))
-                (st@ (i) `(,',load st 0 ,(* ,width i)))
-                ;; moved-gap ([[#PR3PAR]]) in lanes, for the relax pass and the frame pass
-                (wgap (ddx ddy ddz elapsed)
-                  `(w+ (w+ (@w separation) (w+ (w+ (w* ,ddx (@w nx)) (w* ,ddy (@w ny))) (w* ,ddz (@w nz))))
-                       (w* (if-feature :boxes (@w kvn) (wc 0.0)) ,elapsed)))
-                (st! (i value) `(,',store ,value st 0 ,(* ,width i))))))
+         (name (lambda (stem) (intern (format nil "~A/~A" stem family) home)))
+         (ws (funcall name "WARM-START-BLOCKS")) (so (funcall name "SOLVE-BLOCKS"))
+         (soi (funcall name "SOLVE-IMPACT-BLOCKS")) (pf (funcall name "PREPARE-FRAMES-BLOCKS"))
+         ;; the family's own description, its anchor left to the kernel's
+         (says (format nil "~D lanes at a time (~A)" width
+                       (string-right-trim " " (subseq documentation 0 (search "#" documentation :from-end t)))))
+         (operators (apply #'wide-operators width
+                           :scatter (intern (format nil "SCATTER-ROWS-~D" width) home)
+                           :movemask (if (= width 8) 'sb-simd-avx:f32.8-movemask 'sb-simd-sse:f32.4-movemask)
+                           operators)))
     `(progn
        (define-featured-kernel (,ws :features (:body-contacts :friction :rolling-resistance) :operators ,operators)
            (cbuf v start end)
-         ,(format nil "Warm start constraints START..END, a whole number of blocks, ~D lanes at a time. #W1D3KF" width)
+         ,(format nil "Warm start constraints START..END, a whole number of blocks, ~A. #W1D3KF" says)
          (declare (type constraint-columns cbuf) (type f32-column v) (type index start end) #.+kernel-policy+)
-         (with-solver-columns cbuf
-           (loop for k of-type index from start below end by ,width do
-             (let ((base (constraint-base k)))
-               (declare (type index base))
-               ;; the impulses first; then body a's rows, then body b's, each gathered,
-               ;; pushed and scattered alone: a colour never names a body twice, so the order
-               ;; changes no bit, and only six velocities are alive at a time
-               (if-feature :friction
-                 (let* ((l (@w normal-impulse)) (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2))
-                        (px (w+ (w+ (w* l (@w nx)) (w* l1 (@w t1x))) (w* l2 (@w t2x))))
-                        (py (w+ (w+ (w* l (@w ny)) (w* l1 (@w t1y))) (w* l2 (@w t2y))))
-                        (pz (w+ (w+ (w* l (@w nz)) (w* l1 (@w t1z))) (w* l2 (@w t2z))))
-                        (cx (w- (w* l1 (@w t2x)) (w* l2 (@w t1x))))
-                        (cy (w- (w* l1 (@w t2y)) (w* l2 (@w t1y))))
-                        (cz (w- (w* l1 (@w t2z)) (w* l2 (@w t1z)))))
-                   ;; the spin impulse, read only for a block with a lane that may have one
-                   ;; ([[#SSMPYW]]): every other lane's is zero, as is every lane's of the
-                   ;; blocks that do not read it
-                   (let ((sp (if (some-one-sided) (@w spin-impulse) (wc 0.0))))
-                   (symbol-macrolet ((ma (@w ima)) (mb (@w imb)) (ia (@w iia)) (ib (@w iib))
-                                     (ar (@w ra)) (br (@w rb))
-                                     (rx (if-feature :rolling-resistance
-                                           (w+ (@w rolling-impulse-x) (w* sp (@w nx)))
-                                           (w* sp (@w nx))))
-                                     (ry (if-feature :rolling-resistance
-                                           (w+ (@w rolling-impulse-y) (w* sp (@w ny)))
-                                           (w* sp (@w ny))))
-                                     (rz (if-feature :rolling-resistance
-                                           (w+ (@w rolling-impulse-z) (w* sp (@w nz)))
-                                           (w* sp (@w nz)))))
-                     ;; each body's three masses are read once, into registers
-                     (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
-                       (let ((ma ma) (ia ia) (ar ar))
-                         (setf vax (w- vax (w* ma px)) vay (w- vay (w* ma py)) vaz (w- vaz (w* ma pz))
-                               wax (w- wax (w* ia (w+ (w* ar cx) rx)))
-                               way (w- way (w* ia (w+ (w* ar cy) ry)))
-                               waz (w- waz (w* ia (w+ (w* ar cz) rz)))))
-                       (,scatter v body-a k vax vay vaz wax way waz (wc 0.0) (wc 0.0)))
-                     ;; without body contacts body b is the dummy row, which its zero
-                     ;; masses leave as it is: it is neither gathered nor scattered
-                     (if-feature :body-contacts
-                     (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
-                       (let ((mb mb) (ib ib) (br br))
-                         (setf vbx (w+ vbx (w* mb px)) vby (w+ vby (w* mb py)) vbz (w+ vbz (w* mb pz))
-                               wbx (w+ wbx (w* ib (w- rx (w* br cx))))
-                               wby (w+ wby (w* ib (w- ry (w* br cy))))
-                               wbz (w+ wbz (w* ib (w- rz (w* br cz))))))
-                       (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0)))))))
-               ;; without friction the impulse is along the normal and turns nothing; only
-               ;; rolling resistance, when the world has it, turns the bodies
-               (let* ((l (@w normal-impulse))
-                      (px (w* l (@w nx))) (py (w* l (@w ny))) (pz (w* l (@w nz))))
-                 (,transpose (v body-a k vax vay vaz wax way waz a6 a7)
-                   (let ((ma (@w ima)))
-                     (setf vax (w- vax (w* ma px)) vay (w- vay (w* ma py)) vaz (w- vaz (w* ma pz))))
-                   (if-feature :rolling-resistance
-                     (let ((ia (@w iia)))
-                       (setf wax (w- wax (w* ia (@w rolling-impulse-x)))
-                             way (w- way (w* ia (@w rolling-impulse-y)))
-                             waz (w- waz (w* ia (@w rolling-impulse-z))))))
-                   (,scatter v body-a k vax vay vaz wax way waz (wc 0.0) (wc 0.0)))
-                 (if-feature :body-contacts
-                 (,transpose (v body-b k vbx vby vbz wbx wby wbz b6 b7)
-                   (let ((mb (@w imb)))
-                     (setf vbx (w+ vbx (w* mb px)) vby (w+ vby (w* mb py)) vbz (w+ vbz (w* mb pz))))
-                   (if-feature :rolling-resistance
-                     (let ((ib (@w iib)))
-                       (setf wbx (w+ wbx (w* ib (@w rolling-impulse-x)))
-                             wby (w+ wby (w* ib (@w rolling-impulse-y)))
-                             wbz (w+ wbz (w* ib (@w rolling-impulse-z))))))
-                   (,scatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0))))))))))
+         (wide-warm-start ,width))
        (define-featured-kernel (,so :features (:body-contacts :boxes :friction :rolling-resistance :restitution
                                                :hit-events :contact-events)
                                     :operators ,operators)
            (cbuf v d start end inv-h use-bias elapsed push-max threshold hgx hgy hgz)
-         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time. Return END, or the first block that may strike or is armed, left unsolved for solve-handing. #W1D3KF" width)
+         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~A. Return END, or the first block that may strike or is armed, left unsolved for solve-handing. #W1D3KF" says)
          (declare (type constraint-columns cbuf) (type f32-column v d) (type index start end)
                   (type single-float inv-h elapsed push-max threshold hgx hgy hgz) #.+kernel-policy+)
-         ;; the block's twelve velocity columns live here, on the stack, between the gather
-         ;; and the scatter, and after them friction's four values before the cone
-         (block solve-pass
-         (let ((st (make-array ,(* 16 width) :element-type 'single-float))
-               ;; the scalars, broadcast once: a scalar read back inside the loop would be a
-               ;; legacy SSE instruction among the 256-bit ones ([[#F4M1LY]])
-               (lower (wc (- threshold))) (ghx (wc hgx)) (ghy (wc hgy)) (ghz (wc hgz)) (ih (wc inv-h))
-               (el (wc elapsed)) (cap (wc (- push-max))))
-           (declare (dynamic-extent st) (type (simple-array single-float (,(* 16 width))) st)
-                    (ignorable lower ghx ghy ghz))
-         (unswitch-bias (use-bias)
+         (wide-solve ,width))
+       (define-impact-copy ,soi ,so
+         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~A, bouncing impacts ([[#R3ST1T]]): solve-handing runs it on each block at which the pass ~(~A~) or a variant of it stops. #W1D3KF" says so))
+       (define-featured-kernel (,pf :features (:boxes) :operators ,operators) (cbuf start end)
+         ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~A; compiled without boxes, it has no box velocity to resolve. #W1D3KF" says)
+         (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
+         (wide-prepare-frames ,width)))))
+;; One kernel text, two widths:1 ends here
+
+;; [[file:../physics.org::#W1DOPS][The lanes' vocabulary:1]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun wide-operators (width &key load store broadcast add sub mul div sqrt gt eq if* or* transpose
+                                 max andc1 mask scatter movemask)
+    "The macrolet definitions of the width-neutral operators for lanes of WIDTH, each standing for
+the sb-simd function (or row macro) its keyword names. #W1DOPS"
+    `((w+ (a b) `(,',add ,a ,b)) (w- (a b) `(,',sub ,a ,b)) (w* (a b) `(,',mul ,a ,b))
+      (w/ (a b) `(,',div ,a ,b)) (wsqrt (a) `(,',sqrt ,a)) (w> (a b) `(,',gt ,a ,b))
+      (w= (a b) `(,',eq ,a ,b)) (wif (m a b) `(,',if* ,m ,a ,b)) (wor (a b) `(,',or* ,a ,b))
+      (wc (x) `(,',broadcast ,x))
+      ;; three selections in one instruction each, to the bit: (wmax a b) is
+      ;; (wif (w> a b) a b), b where the two are equal or either is not a number;
+      ;; (wzero-where m b) is (wif m (wc 0.0) b); (wany m), whether some lane of
+      ;; the mask M is set, the sign bits of (wif m (wc -1.0) (wc 0.0)) read at once
+      (wmax (a b) `(,',max ,a ,b))
+      (wzero-where (m b) `(,',andc1 (,',mask ,m) ,b))
+      (wany (m) `(not (zerop (,',movemask (,',mask ,m)))))
+      ;; a side column ([[#SSMPYW]]) is read from the side block of the block at K
+      (@w (column) (if (constraint-side-column-p column)
+                       `(,',load (side-floats) (side-base k) ,(constraint-offset column))
+                       `(,',load data base ,(constraint-offset column))))
+      (@w! (column value) (if (constraint-side-column-p column)
+                              `(,',store ,value (side-floats) (side-base k) ,(constraint-offset column))
+                              `(,',store ,value data base ,(constraint-offset column))))
+      ;; true when some lane of the block has no radius on side b, the only lanes
+      ;; whose spin columns may be other than zero ([[#SSMPYW]])
+      (some-one-sided () `(if-feature :body-contacts
+                            (wany (w= (@w rb) (wc 0.0)))
+                            t))
+      (st@ (i) `(,',load st 0 ,(* ,width i)))
+      ;; moved-gap ([[#PR3PAR]]) in lanes, for the relax pass and the frame pass
+      (wgap (ddx ddy ddz elapsed)
+        `(w+ (w+ (@w separation) (wdot (,ddx ,ddy ,ddz) ((@w nx) (@w ny) (@w nz))))
+             (w* (if-feature :boxes (@w kvn) (wc 0.0)) ,elapsed)))
+      (st! (i value) `(,',store ,value st 0 ,(* ,width i)))
+      ;; the lane groups: the rows of a block's bodies gathered into lanes, and scattered back
+      ;; from them ([[#R0WS8T]])
+      (wgather (rows &body body) `(,',transpose ,rows ,@body))
+      (wscatter (&rest rows) `(,',scatter ,@rows))
+      ;; the three-lane helper: a dot product summed left to right, as the scalar kernels sum it
+      (wdot ((a b c) (x y z)) `(w+ (w+ (w* ,a ,x) (w* ,b ,y)) (w* ,c ,z))))))
+;; The lanes' vocabulary:1 ends here
+
+;; [[file:../physics.org::#W1DWRM][The warm start in lanes:1]]
+(defmacro wide-warm-start (width)
+  "The body of the warm start of a wide family whose blocks are WIDTH lanes: its impulses, then
+body a's rows, then body b's. Expanded in the template's warm start. #W1DWRM"
+  `(with-solver-columns cbuf
+     (loop for k of-type index from start below end by ,width do
+       (let ((base (constraint-base k)))
+         (declare (type index base))
+         ;; the impulses first; then body a's rows, then body b's, each gathered,
+         ;; pushed and scattered alone: a colour never names a body twice, so the order
+         ;; changes no bit, and only six velocities are alive at a time
+         (if-feature :friction
+           (let* ((l (@w normal-impulse)) (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2))
+                  (px (wdot (l l1 l2) ((@w nx) (@w t1x) (@w t2x))))
+                  (py (wdot (l l1 l2) ((@w ny) (@w t1y) (@w t2y))))
+                  (pz (wdot (l l1 l2) ((@w nz) (@w t1z) (@w t2z))))
+                  (cx (w- (w* l1 (@w t2x)) (w* l2 (@w t1x))))
+                  (cy (w- (w* l1 (@w t2y)) (w* l2 (@w t1y))))
+                  (cz (w- (w* l1 (@w t2z)) (w* l2 (@w t1z)))))
+             ;; the spin impulse, read only for a block with a lane that may have one
+             ;; ([[#SSMPYW]]): every other lane's is zero, as is every lane's of the
+             ;; blocks that do not read it
+             (let ((sp (if (some-one-sided) (@w spin-impulse) (wc 0.0))))
+             (symbol-macrolet ((ma (@w ima)) (mb (@w imb)) (ia (@w iia)) (ib (@w iib))
+                               (ar (@w ra)) (br (@w rb))
+                               (rx (if-feature :rolling-resistance
+                                     (w+ (@w rolling-impulse-x) (w* sp (@w nx)))
+                                     (w* sp (@w nx))))
+                               (ry (if-feature :rolling-resistance
+                                     (w+ (@w rolling-impulse-y) (w* sp (@w ny)))
+                                     (w* sp (@w ny))))
+                               (rz (if-feature :rolling-resistance
+                                     (w+ (@w rolling-impulse-z) (w* sp (@w nz)))
+                                     (w* sp (@w nz)))))
+               ;; each body's three masses are read once, into registers
+               (wgather (v body-a k vax vay vaz wax way waz a6 a7)
+                 (let ((ma ma) (ia ia) (ar ar))
+                   (setf vax (w- vax (w* ma px)) vay (w- vay (w* ma py)) vaz (w- vaz (w* ma pz))
+                         wax (w- wax (w* ia (w+ (w* ar cx) rx)))
+                         way (w- way (w* ia (w+ (w* ar cy) ry)))
+                         waz (w- waz (w* ia (w+ (w* ar cz) rz)))))
+                 (wscatter v body-a k vax vay vaz wax way waz (wc 0.0) (wc 0.0)))
+               ;; without body contacts body b is the dummy row, which its zero
+               ;; masses leave as it is: it is neither gathered nor scattered
+               (if-feature :body-contacts
+               (wgather (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+                 (let ((mb mb) (ib ib) (br br))
+                   (setf vbx (w+ vbx (w* mb px)) vby (w+ vby (w* mb py)) vbz (w+ vbz (w* mb pz))
+                         wbx (w+ wbx (w* ib (w- rx (w* br cx))))
+                         wby (w+ wby (w* ib (w- ry (w* br cy))))
+                         wbz (w+ wbz (w* ib (w- rz (w* br cz))))))
+                 (wscatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0)))))))
+         ;; without friction the impulse is along the normal and turns nothing; only
+         ;; rolling resistance, when the world has it, turns the bodies
+         (let* ((l (@w normal-impulse))
+                (px (w* l (@w nx))) (py (w* l (@w ny))) (pz (w* l (@w nz))))
+           (wgather (v body-a k vax vay vaz wax way waz a6 a7)
+             (let ((ma (@w ima)))
+               (setf vax (w- vax (w* ma px)) vay (w- vay (w* ma py)) vaz (w- vaz (w* ma pz))))
+             (if-feature :rolling-resistance
+               (let ((ia (@w iia)))
+                 (setf wax (w- wax (w* ia (@w rolling-impulse-x)))
+                       way (w- way (w* ia (@w rolling-impulse-y)))
+                       waz (w- waz (w* ia (@w rolling-impulse-z))))))
+             (wscatter v body-a k vax vay vaz wax way waz (wc 0.0) (wc 0.0)))
+           (if-feature :body-contacts
+           (wgather (v body-b k vbx vby vbz wbx wby wbz b6 b7)
+             (let ((mb (@w imb)))
+               (setf vbx (w+ vbx (w* mb px)) vby (w+ vby (w* mb py)) vbz (w+ vbz (w* mb pz))))
+             (if-feature :rolling-resistance
+               (let ((ib (@w iib)))
+                 (setf wbx (w+ wbx (w* ib (@w rolling-impulse-x)))
+                       wby (w+ wby (w* ib (@w rolling-impulse-y)))
+                       wbz (w+ wbz (w* ib (@w rolling-impulse-z))))))
+             (wscatter v body-b k vbx vby vbz wbx wby wbz (wc 0.0) (wc 0.0))))))))))
+;; The warm start in lanes:1 ends here
+
+;; [[file:../physics.org::#W1DGAP][The gap and the rows in lanes:1]]
+(defmacro wide-solve-gap ()
+  "The gap of each lane of the block at K: in the solve the one its relax pass or the frame pass
+kept, in the relax pass the prepared gap moved by the deltas and kept. #W1DGAP"
+  `(if biased
+       (@w gap)
+       (let ((s (wgather (d body-a k dax day daz da3 da4 da5 da6 da7)
+                  ;; without body contacts body b is the dummy, whose
+                  ;; deltas are zeros
+                  (if-feature :body-contacts
+                    (wgather (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
+                      (wgap (w- dbx dax) (w- dby day) (w- dbz daz) el))
+                    (wgap (w- (wc 0.0) dax) (w- (wc 0.0) day) (w- (wc 0.0) daz) el)))))
+         (@w! gap s)
+         s)))
+
+(defmacro wide-solve-gather ()
+  "Gather the velocity rows of both bodies of the block at K into the stage ST: six slots each,
+body b's only with body contacts. #W1DGAP"
+  `(progn
+     (wgather (v body-a k gax gay gaz gwx gwy gwz a6 a7)
+       (st! 0 gax) (st! 1 gay) (st! 2 gaz) (st! 3 gwx) (st! 4 gwy) (st! 5 gwz))
+     ;; without body contacts body b is the dummy row of every constraint: its
+     ;; velocities, mass, inertia and radius are zeros, named here as such, and it is
+     ;; neither gathered nor scattered
+     (if-feature :body-contacts
+     (wgather (v body-b k gbx gby gbz hwx hwy hwz b6 b7)
+       (st! 6 gbx) (st! 7 gby) (st! 8 gbz) (st! 9 hwx) (st! 10 hwy) (st! 11 hwz)))))
+
+(defmacro wide-solve-scatter ()
+  "Scatter the stage ST back as the velocity rows of the block at K: body b's only with body
+contacts. #W1DGAP"
+  `(progn
+     (wscatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
+     (if-feature :body-contacts
+       (wscatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0)))))
+
+(defmacro with-solve-lanes (&body body)
+  "Run BODY with the names of the solve: the block's frame columns, masses and arms read from
+the block, and the twelve velocities read from the stage; without body contacts body b's are the
+dummy's zeros. #W1DGAP"
+  `(symbol-macrolet ((x (@w nx)) (y (@w ny)) (z (@w nz))
+                     (ma (@w ima)) (mb (if-feature :body-contacts (@w imb) (wc 0.0))) (iam (@w iia))
+                     (ibm (if-feature :body-contacts (@w iib) (wc 0.0)))
+                     (ar (@w ra)) (br (if-feature :body-contacts (@w rb) (wc 0.0)))
+                     (ux (@w t1x)) (uy (@w t1y)) (uz (@w t1z))
+                     (qx (@w t2x)) (qy (@w t2y)) (qz (@w t2z))
+                     (vax (st@ 0)) (vay (st@ 1)) (vaz (st@ 2)) (wax (st@ 3)) (way (st@ 4)) (waz (st@ 5))
+                     (vbx (if-feature :body-contacts (st@ 6) (wc 0.0)))
+                     (vby (if-feature :body-contacts (st@ 7) (wc 0.0)))
+                     (vbz (if-feature :body-contacts (st@ 8) (wc 0.0)))
+                     (wbx (if-feature :body-contacts (st@ 9) (wc 0.0)))
+                     (wby (if-feature :body-contacts (st@ 10) (wc 0.0)))
+                     (wbz (if-feature :body-contacts (st@ 11) (wc 0.0))))
+     ,@body))
+;; The gap and the rows in lanes:1 ends here
+
+;; [[file:../physics.org::#W1DNRM][The normal impulse and the bounce in lanes:1]]
+(defmacro with-wide-normal-impulse (&body body)
+  "Run BODY with the bias, the relative velocity, friction's speeds and the new normal impulse
+NEW and its change DL of each lane of the block at K; friction's impulse before the cone waits
+in the stage. #W1DNRM"
+  `(let* ((positive (w> s (wc 0.0)))
+          (bias (if biased
+                    (let ((soft (w* (@w bias-rate) s)))
+                      (wif positive (w* s ih) (wmax soft cap)))
+                    (wmax (w* s ih) (wc 0.0))))
+          ;; the relative velocity before the impulses, for the normal part
+          ;; and for friction, whose two speeds are found here, before the
+          ;; normal impulse, which does not change them
+          (dvx (w- vbx vax)) (dvy (w- vby vay)) (dvz (w- vbz vaz))
+          (vn (w+ (wdot (dvx dvy dvz) (x y z)) (if-feature :boxes (@w kvn) (wc 0.0))))
+          ;; (without friction these are constants nothing reads, and vanish)
+          (wx (if-feature :friction (w+ (w* ar wax) (w* br wbx)) (wc 0.0)))
+          (wy (if-feature :friction (w+ (w* ar way) (w* br wby)) (wc 0.0)))
+          (wz (if-feature :friction (w+ (w* ar waz) (w* br wbz)) (wc 0.0)))
+          (vt1 (if-feature :friction
+                 (w- (w+ (wdot (dvx dvy dvz) (ux uy uz)) (if-feature :boxes (@w kvt1) (wc 0.0)))
+                     (wdot (wx wy wz) (qx qy qz)))
+                 (wc 0.0)))
+          (vt2 (if-feature :friction
+                 (w+ (w+ (wdot (dvx dvy dvz) (qx qy qz)) (if-feature :boxes (@w kvt2) (wc 0.0)))
+                     (wdot (wx wy wz) (ux uy uz)))
+                 (wc 0.0)))
+          ;; the friction impulse before the cone, and its length, need no
+          ;; normal impulse either; they wait in the stage, so that no register
+          ;; holds them across the impact part
+          (staged (if-feature :friction
+                    (let* ((n1 (w- (@w tangent-impulse-1) (w* (@w tangent-mass) vt1)))
+                           (n2 (w- (@w tangent-impulse-2) (w* (@w tangent-mass) vt2)))
+                           (len2 (w+ (w* n1 n1) (w* n2 n2))))
+                      (st! 12 n1) (st! 13 n2) (st! 14 len2) (st! 15 (wsqrt len2))
+                      t)
+                    nil))
+          (l (@w normal-impulse))
+          (raw (if biased
+                   (w- (w- l (w* (w* (@w normal-mass) (wif positive (wc 1.0) (@w mass-scale)))
+                                 (w+ vn bias)))
+                       (w* (wzero-where positive (@w impulse-scale)) l))
+                   (w- l (w* (@w normal-mass) (w+ vn bias)))))
+          (new (wmax raw (wc 0.0)))
+          (mni (if-feature (:or :restitution :contact-events :hit-events)
+                           (@w max-normal-impulse) (wc 0.0)))
+          ;; impacts and armed contacts ([[#R3ST1T]]): a block with no lane that
+          ;; has not pushed yet and approaches faster than the threshold, and
+          ;; none armed, skips them
+          (dl (w- new l)))
+     (declare (ignorable wx wy wz vt1 vt2 staged mni))
+     ,@body))
+
+(defmacro wide-solve-bounce ()
+  "The normal impulse to keep, its change and what the contact pushed, as three values: NEW, DL
+and NEW where no lane may bounce; the impact part where the pseudo-feature :impact-part is
+compiled in; else the end of the pass at this block. #W1DNRM"
+  `(if-feature :restitution
+     ;; only a lane with restitution is ever armed: a block with none reads
+     ;; no armed speed ([[#SSMPYW]]), and no lane of it may strike
+     (if (not (wany (w> (@w restitution) (wc 0.0))))
+       (values new dl new)
+     (let ((armed (@w armed-speed)))
+             (if (not (wany
+                              ;; lanes that have not pushed: vn, or 0 without
+                              ;; restitution; the others: an armed lane's speed
+                              ;; times -1e30, below any threshold
+                              (w> lower (wif (w= mni (wc 0.0))
+                                             (wif (w> (@w restitution) (wc 0.0)) vn (wc 0.0))
+                                             (w* armed (wc -1e30))))))
+                 (values new dl new)
+                 (if-feature :impact-part
+                 (let* ((e (@w restitution))
+                        (impact-f (wif (w= mni (wc 0.0))
+                                       (wif (w> new (wc 0.0))
+                                            (wif (w> lower vn)
+                                                 (wif (w> e (wc 0.0)) (wc 1.0) (wc 0.0))
+                                                 (wc 0.0))
+                                            (wc 0.0))
+                                       (wc 0.0)))
+                        (armed-f (wif positive (wc 0.0) (wif (w> armed (wc 0.0)) (wc 1.0) (wc 0.0))))
+                        (impact (w> impact-f (wc 0.0)))
+                        (sp (wif positive s (wc 0.0)))
+                        (dv (w* (w- (wif (w> mb (wc 0.0)) (wc 1.0) (wc 0.0))
+                                    (wif (w> ma (wc 0.0)) (wc 1.0) (wc 0.0)))
+                                (wdot (ghx ghy ghz) (x y z))))
+                        (half (w* (wc 0.5) dv))
+                        (c (if biased (w- vn half) (w+ vn half)))
+                        (fall (w* (w* (w* (wc 2.0) dv) sp) ih))
+                        (u2 (w- (w* c c) fall))
+                        (uc (wif impact (wsqrt (wif (w> u2 (wc 0.0)) u2 (wc 0.0))) armed))
+                        (wc2 (w+ (w* (w* e e) (w* uc uc)) fall))
+                        (short (w> (wc 0.0) wc2))
+                        (root (wsqrt (wif (w> wc2 (wc 0.0)) wc2 (wc 0.0))))
+                        (w (if biased (w+ root half) (w- root half)))
+                        (kick (w* (@w normal-mass) (w- w vn)))
+                        (bounce (w> (wif short (wc 0.0) (wif (w> kick (wc 0.0)) (w+ impact-f armed-f) (wc 0.0)))
+                                    (wc 0.0)))
+                        (arm (w> (wif short impact-f (wc 0.0)) (wc 0.0))))
+                   ;; the events report the approach at impact: times -1 is
+                   ;; the exact negation
+                   (@w! relative-velocity (wif impact (w* uc (wc -1.0)) (@w relative-velocity)))
+                   (@w! armed-speed (wif bounce (wc 0.0) (wif arm uc armed)))
+                   (let* ((bump (wif bounce kick (wc 0.0))) (bounced (w> bump (wc 0.0))))
+                     (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))
+                 ;; a block that may strike or is armed ends the pass
+                 ;; here, for solve-handing to run the copy with the
+                 ;; impact part on it, as it is: nothing of it has been
+                 ;; written but the kept gap, which the copy writes again
+                 ;; with the same bits
+                 (return-from solve-pass k)))))
+     (values new dl new)))
+;; The normal impulse and the bounce in lanes:1 ends here
+
+;; [[file:../physics.org::#W1DFRC][Friction, rolling resistance and spin in lanes:1]]
+(defmacro wide-solve-friction ()
+  "Friction in each lane of the block at K, inside the cone, and the normal and friction
+impulses applied to the staged velocities; without friction the normal impulse alone. #W1DFRC"
+  `(if-feature :friction
+     (symbol-macrolet ((n1 (st@ 12)) (n2 (st@ 13)) (len2 (st@ 14)) (root (st@ 15))
+                       (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2)))
+     (let* ((limit (w* (@w friction) new))
+            (over (w> len2 (w* limit limit)))
+            ;; outside the cone len2 > 0, so no lane divides by zero
+            ;; 1 inside the cone, where multiplying by it changes no bit
+            (scale (wif over (w/ limit (wif over root (wc 1.0))) (wc 1.0)))
+            (n1 (w* n1 scale)) (n2 (w* n2 scale))
+            (d1 (w- n1 l1)) (d2 (w- n2 l2)))
+       (@w! normal-impulse new)
+       (if-feature (:or :restitution :contact-events :hit-events)
+         (@w! max-normal-impulse (wmax mni pushed)))
+       (@w! tangent-impulse-1 n1) (@w! tangent-impulse-2 n2)
+       ;; each velocity takes the normal impulse, then friction's, in one
+       ;; expression: the same two roundings as two steps, one store; a
+       ;; component at a time, so each frame column is read once
+       (let ((madl (w* ma dl)) (mbdl (w* mb dl)) (iar (w* iam ar)) (ibr (w* ibm br))
+             (ma ma) (mb mb))
+         (declare (ignorable mbdl ibr mb))
+         (macrolet ((component (i j k l n u q)
+                      `(let* ((u ,u) (q ,q)
+                              (p (w+ (w* d1 u) (w* d2 q)))
+                              (c (w- (w* d1 q) (w* d2 u))))
+                         (st! ,i (w- (w- (st@ ,i) (w* madl ,n)) (w* ma p)))
+                         (st! ,k (w- (st@ ,k) (w* iar c)))
+                         (if-feature :body-contacts
+                           (progn (st! ,j (w+ (w+ (st@ ,j) (w* mbdl ,n)) (w* mb p)))
+                                  (st! ,l (w- (st@ ,l) (w* ibr c))))))))
+           (component 0 6 3 9 x ux qx) (component 1 7 4 10 y uy qy)
+           (component 2 8 5 11 z uz qz)))))
+     ;; without friction only the normal impulse moves the bodies
+     (progn
+       (@w! normal-impulse new)
+       (if-feature (:or :restitution :contact-events :hit-events)
+         (@w! max-normal-impulse (wmax mni pushed)))
+       (let ((madl (w* ma dl)) (mbdl (w* mb dl)))
+         (declare (ignorable mbdl))
+         (st! 0 (w- (st@ 0) (w* madl x))) (st! 1 (w- (st@ 1) (w* madl y)))
+         (st! 2 (w- (st@ 2) (w* madl z)))
+         (if-feature :body-contacts
+           (progn (st! 6 (w+ (st@ 6) (w* mbdl x))) (st! 7 (w+ (st@ 7) (w* mbdl y)))
+                  (st! 8 (w+ (st@ 8) (w* mbdl z)))))))))
+
+(defmacro wide-solve-rolling-resistance ()
+  "Rolling resistance in each lane of the block at K, on the staged angular velocities; skipped
+by a block none of whose lanes has a rolling limit. #W1DFRC"
+  `(if-feature :rolling-resistance
+     (let* ((rl (@w rolling-limit))
+            (rolling (w> rl (wc 0.0))))
+       (when (wany rolling)
+         (let* ((rlimit (w* rl new))
+                (rm (@w rolling-mass))
+                (rx (@w rolling-impulse-x)) (ry (@w rolling-impulse-y)) (rz (@w rolling-impulse-z))
+                (nrx (w- rx (w* rm (w- wbx wax)))) (nry (w- ry (w* rm (w- wby way))))
+                (nrz (w- rz (w* rm (w- wbz waz))))
+                (len2 (wdot (nrx nry nrz) (nrx nry nrz)))
+                (over (w> len2 (w* rlimit rlimit)))
+                (scale (wif over (w/ rlimit (wsqrt (wif over len2 (wc 1.0)))) (wc 1.0)))
+                (nrx (w* nrx scale)) (nry (w* nry scale)) (nrz (w* nrz scale))
+                (dx (w- nrx rx)) (dy (w- nry ry)) (dz (w- nrz rz)))
+           (@w! rolling-impulse-x (wif rolling nrx rx))
+           (@w! rolling-impulse-y (wif rolling nry ry))
+           (@w! rolling-impulse-z (wif rolling nrz rz))
+           (st! 3 (wif rolling (w- wax (w* iam dx)) wax)) (st! 4 (wif rolling (w- way (w* iam dy)) way))
+           (st! 5 (wif rolling (w- waz (w* iam dz)) waz))
+           (if-feature :body-contacts
+             (progn (st! 9 (wif rolling (w+ wbx (w* ibm dx)) wbx))
+                    (st! 10 (wif rolling (w+ wby (w* ibm dy)) wby))
+                    (st! 11 (wif rolling (w+ wbz (w* ibm dz)) wbz)))))))))
+
+(defmacro wide-solve-spin-friction ()
+  "Spin friction in each lane of the block at K, on the staged angular velocities; skipped by a
+block none of whose lanes may have a spin limit. #W1DFRC"
+  `(if-feature :friction
+     (when (some-one-sided)
+     (let* ((sl (@w spin-limit))
+            (spinning (w> sl (wc 0.0))))
+       (when (wany spinning)
+         (let* ((slimit (w* sl new)) (sp (@w spin-impulse))
+                (raw (w- sp (w* (@w rolling-mass)
+                                (wdot ((w- wbx wax) (w- wby way) (w- wbz waz)) (x y z)))))
+                (low (w* slimit (wc -1.0)))
+                (nsp (wif (w> raw slimit) slimit (wif (w> low raw) low raw)))
+                (ds (w- nsp sp)))
+           (@w! spin-impulse (wif spinning nsp sp))
+           (st! 3 (wif spinning (w- wax (w* iam (w* ds x))) wax))
+           (st! 4 (wif spinning (w- way (w* iam (w* ds y))) way))
+           (st! 5 (wif spinning (w- waz (w* iam (w* ds z))) waz))
+           (if-feature :body-contacts
+             (progn (st! 9 (wif spinning (w+ wbx (w* ibm (w* ds x))) wbx))
+                    (st! 10 (wif spinning (w+ wby (w* ibm (w* ds y))) wby))
+                    (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz))))))))))
+;; Friction, rolling resistance and spin in lanes:1 ends here
+
+;; [[file:../physics.org::#W1DPAS][The solve pass in lanes:1]]
+(defmacro wide-solve (width)
+  "The body of the solve of a wide family whose blocks are WIDTH lanes: for each block its gap,
+its rows gathered, the normal impulse, the bounce, friction, rolling resistance and spin, and its
+rows scattered; the value is END, or the block the pass stopped at. #W1DPAS"
+  `(block solve-pass
+     (let ((st (make-array ,(* 16 width) :element-type 'single-float))
+           ;; the scalars, broadcast once: a scalar read back inside the loop would be a
+           ;; legacy SSE instruction among the 256-bit ones ([[#F4M1LY]])
+           (lower (wc (- threshold))) (ghx (wc hgx)) (ghy (wc hgy)) (ghz (wc hgz)) (ih (wc inv-h))
+           (el (wc elapsed)) (cap (wc (- push-max))))
+       (declare (dynamic-extent st) (type (simple-array single-float (,(* 16 width))) st)
+                (ignorable lower ghx ghy ghz))
+       (unswitch-bias (use-bias)
          (with-solver-columns cbuf
            (loop for k of-type index from start below end by ,width do
              (progn
-             (let ((base (constraint-base k)))
-               (declare (type index base))
-               ;; the gap first: a relax pass computes it from the deltas alone, so that
-               ;; they are dead before the velocity rows are gathered, and keeps it; a solve
-               ;; reads the one its relax pass or the frame pass left
-               (let ((s (if biased
-                            (@w gap)
-                            (let ((s (,transpose (d body-a k dax day daz da3 da4 da5 da6 da7)
-                                       ;; without body contacts body b is the dummy, whose
-                                       ;; deltas are zeros
-                                       (if-feature :body-contacts
-                                         (,transpose (d body-b k dbx dby dbz db3 db4 db5 db6 db7)
-                                           (wgap (w- dbx dax) (w- dby day) (w- dbz daz) el))
-                                         (wgap (w- (wc 0.0) dax) (w- (wc 0.0) day) (w- (wc 0.0) daz) el)))))
-                              (@w! gap s)
-                              s))))
-               ;; the rows gathered into the stage; each read of a velocity below is a load
-               ;; from it and each new value a store, so no velocity holds a register
-               (,transpose (v body-a k gax gay gaz gwx gwy gwz a6 a7)
-                 (st! 0 gax) (st! 1 gay) (st! 2 gaz) (st! 3 gwx) (st! 4 gwy) (st! 5 gwz))
-               ;; without body contacts body b is the dummy row of every constraint: its
-               ;; velocities, mass, inertia and radius are zeros, named here as such, and it is
-               ;; neither gathered nor scattered
-               (if-feature :body-contacts
-               (,transpose (v body-b k gbx gby gbz hwx hwy hwz b6 b7)
-                 (st! 6 gbx) (st! 7 gby) (st! 8 gbz) (st! 9 hwx) (st! 10 hwy) (st! 11 hwz)))
-               (symbol-macrolet ((x (@w nx)) (y (@w ny)) (z (@w nz))
-                                 (ma (@w ima)) (mb (if-feature :body-contacts (@w imb) (wc 0.0))) (iam (@w iia))
-                                 (ibm (if-feature :body-contacts (@w iib) (wc 0.0)))
-                                 (ar (@w ra)) (br (if-feature :body-contacts (@w rb) (wc 0.0)))
-                                 (ux (@w t1x)) (uy (@w t1y)) (uz (@w t1z))
-                                 (qx (@w t2x)) (qy (@w t2y)) (qz (@w t2z))
-                                 (vax (st@ 0)) (vay (st@ 1)) (vaz (st@ 2)) (wax (st@ 3)) (way (st@ 4)) (waz (st@ 5))
-                                 (vbx (if-feature :body-contacts (st@ 6) (wc 0.0)))
-                                 (vby (if-feature :body-contacts (st@ 7) (wc 0.0)))
-                                 (vbz (if-feature :body-contacts (st@ 8) (wc 0.0)))
-                                 (wbx (if-feature :body-contacts (st@ 9) (wc 0.0)))
-                                 (wby (if-feature :body-contacts (st@ 10) (wc 0.0)))
-                                 (wbz (if-feature :body-contacts (st@ 11) (wc 0.0))))
-                 (let* ((positive (w> s (wc 0.0)))
-                        (bias (if biased
-                                  (let ((soft (w* (@w bias-rate) s)))
-                                    (wif positive (w* s ih) (wmax soft cap)))
-                                  (wmax (w* s ih) (wc 0.0))))
-                        ;; the relative velocity before the impulses, for the normal part
-                        ;; and for friction, whose two speeds are found here, before the
-                        ;; normal impulse, which does not change them
-                        (dvx (w- vbx vax)) (dvy (w- vby vay)) (dvz (w- vbz vaz))
-                        (vn (w+ (w+ (w+ (w* dvx x) (w* dvy y)) (w* dvz z)) (if-feature :boxes (@w kvn) (wc 0.0))))
-                        ;; (without friction these are constants nothing reads, and vanish)
-                        (wx (if-feature :friction (w+ (w* ar wax) (w* br wbx)) (wc 0.0)))
-                        (wy (if-feature :friction (w+ (w* ar way) (w* br wby)) (wc 0.0)))
-                        (wz (if-feature :friction (w+ (w* ar waz) (w* br wbz)) (wc 0.0)))
-                        (vt1 (if-feature :friction
-                               (w- (w+ (w+ (w+ (w* dvx ux) (w* dvy uy)) (w* dvz uz)) (if-feature :boxes (@w kvt1) (wc 0.0)))
-                                   (w+ (w+ (w* wx qx) (w* wy qy)) (w* wz qz)))
-                               (wc 0.0)))
-                        (vt2 (if-feature :friction
-                               (w+ (w+ (w+ (w+ (w* dvx qx) (w* dvy qy)) (w* dvz qz)) (if-feature :boxes (@w kvt2) (wc 0.0)))
-                                   (w+ (w+ (w* wx ux) (w* wy uy)) (w* wz uz)))
-                               (wc 0.0)))
-                        ;; the friction impulse before the cone, and its length, need no
-                        ;; normal impulse either; they wait in the stage, so that no register
-                        ;; holds them across the impact part
-                        (staged (if-feature :friction
-                                  (let* ((n1 (w- (@w tangent-impulse-1) (w* (@w tangent-mass) vt1)))
-                                         (n2 (w- (@w tangent-impulse-2) (w* (@w tangent-mass) vt2)))
-                                         (len2 (w+ (w* n1 n1) (w* n2 n2))))
-                                    (st! 12 n1) (st! 13 n2) (st! 14 len2) (st! 15 (wsqrt len2))
-                                    t)
-                                  nil))
-                        (l (@w normal-impulse))
-                        (raw (if biased
-                                 (w- (w- l (w* (w* (@w normal-mass) (wif positive (wc 1.0) (@w mass-scale)))
-                                               (w+ vn bias)))
-                                     (w* (wzero-where positive (@w impulse-scale)) l))
-                                 (w- l (w* (@w normal-mass) (w+ vn bias)))))
-                        (new (wmax raw (wc 0.0)))
-                        (mni (if-feature (:or :restitution :contact-events :hit-events)
-                                         (@w max-normal-impulse) (wc 0.0)))
-                        ;; impacts and armed contacts ([[#R3ST1T]]): a block with no lane that
-                        ;; has not pushed yet and approaches faster than the threshold, and
-                        ;; none armed, skips them
-                        (dl (w- new l)))
-                   (declare (ignorable wx wy wz vt1 vt2 staged mni))
-                   ;; the normal impulse to keep, the velocity change and what the contact pushed
-                   (multiple-value-bind (new dl pushed)
-                       (if-feature :restitution
-                         ;; only a lane with restitution is ever armed: a block with none reads
-                         ;; no armed speed ([[#SSMPYW]]), and no lane of it may strike
-                         (if (not (wany (w> (@w restitution) (wc 0.0))))
-                           (values new dl new)
-                         (let ((armed (@w armed-speed)))
-                                 (if (not (wany
-                                                  ;; lanes that have not pushed: vn, or 0 without
-                                                  ;; restitution; the others: an armed lane's speed
-                                                  ;; times -1e30, below any threshold
-                                                  (w> lower (wif (w= mni (wc 0.0))
-                                                                 (wif (w> (@w restitution) (wc 0.0)) vn (wc 0.0))
-                                                                 (w* armed (wc -1e30))))))
-                                     (values new dl new)
-                                     (if-feature :impact-part
-                                     (let* ((e (@w restitution))
-                                            (impact-f (wif (w= mni (wc 0.0))
-                                                           (wif (w> new (wc 0.0))
-                                                                (wif (w> lower vn)
-                                                                     (wif (w> e (wc 0.0)) (wc 1.0) (wc 0.0))
-                                                                     (wc 0.0))
-                                                                (wc 0.0))
-                                                           (wc 0.0)))
-                                            (armed-f (wif positive (wc 0.0) (wif (w> armed (wc 0.0)) (wc 1.0) (wc 0.0))))
-                                            (impact (w> impact-f (wc 0.0)))
-                                            (sp (wif positive s (wc 0.0)))
-                                            (dv (w* (w- (wif (w> mb (wc 0.0)) (wc 1.0) (wc 0.0))
-                                                        (wif (w> ma (wc 0.0)) (wc 1.0) (wc 0.0)))
-                                                    (w+ (w+ (w* ghx x) (w* ghy y)) (w* ghz z))))
-                                            (half (w* (wc 0.5) dv))
-                                            (c (if biased (w- vn half) (w+ vn half)))
-                                            (fall (w* (w* (w* (wc 2.0) dv) sp) ih))
-                                            (u2 (w- (w* c c) fall))
-                                            (uc (wif impact (wsqrt (wif (w> u2 (wc 0.0)) u2 (wc 0.0))) armed))
-                                            (wc2 (w+ (w* (w* e e) (w* uc uc)) fall))
-                                            (short (w> (wc 0.0) wc2))
-                                            (root (wsqrt (wif (w> wc2 (wc 0.0)) wc2 (wc 0.0))))
-                                            (w (if biased (w+ root half) (w- root half)))
-                                            (kick (w* (@w normal-mass) (w- w vn)))
-                                            (bounce (w> (wif short (wc 0.0) (wif (w> kick (wc 0.0)) (w+ impact-f armed-f) (wc 0.0)))
-                                                        (wc 0.0)))
-                                            (arm (w> (wif short impact-f (wc 0.0)) (wc 0.0))))
-                                       ;; the events report the approach at impact: times -1 is
-                                       ;; the exact negation
-                                       (@w! relative-velocity (wif impact (w* uc (wc -1.0)) (@w relative-velocity)))
-                                       (@w! armed-speed (wif bounce (wc 0.0) (wif arm uc armed)))
-                                       (let* ((bump (wif bounce kick (wc 0.0))) (bounced (w> bump (wc 0.0))))
-                                         (values (wif bounced l new) (wif bounced bump dl) (wif bounced bump new))))
-                                     ;; a block that may strike or is armed ends the pass
-                                     ;; here, for solve-handing to run the copy with the
-                                     ;; impact part on it, as it is: nothing of it has been
-                                     ;; written but the kept gap, which the copy writes again
-                                     ;; with the same bits
-                                     (return-from solve-pass k)))))
-                         (values new dl new))
-                   (declare (ignorable pushed))
-                   (if-feature :friction
-                     (symbol-macrolet ((n1 (st@ 12)) (n2 (st@ 13)) (len2 (st@ 14)) (root (st@ 15))
-                                       (l1 (@w tangent-impulse-1)) (l2 (@w tangent-impulse-2)))
-                     (let* ((limit (w* (@w friction) new))
-                            (over (w> len2 (w* limit limit)))
-                            ;; outside the cone len2 > 0, so no lane divides by zero
-                            ;; 1 inside the cone, where multiplying by it changes no bit
-                            (scale (wif over (w/ limit (wif over root (wc 1.0))) (wc 1.0)))
-                            (n1 (w* n1 scale)) (n2 (w* n2 scale))
-                            (d1 (w- n1 l1)) (d2 (w- n2 l2)))
-                       (@w! normal-impulse new)
-                       (if-feature (:or :restitution :contact-events :hit-events)
-                         (@w! max-normal-impulse (wmax mni pushed)))
-                       (@w! tangent-impulse-1 n1) (@w! tangent-impulse-2 n2)
-                       ;; each velocity takes the normal impulse, then friction's, in one
-                       ;; expression: the same two roundings as two steps, one store; a
-                       ;; component at a time, so each frame column is read once
-                       (let ((madl (w* ma dl)) (mbdl (w* mb dl)) (iar (w* iam ar)) (ibr (w* ibm br))
-                             (ma ma) (mb mb))
-                         (declare (ignorable mbdl ibr mb))
-                         (macrolet ((component (i j k l n u q)
-                                      `(let* ((u ,u) (q ,q)
-                                              (p (w+ (w* d1 u) (w* d2 q)))
-                                              (c (w- (w* d1 q) (w* d2 u))))
-                                         (st! ,i (w- (w- (st@ ,i) (w* madl ,n)) (w* ma p)))
-                                         (st! ,k (w- (st@ ,k) (w* iar c)))
-                                         (if-feature :body-contacts
-                                           (progn (st! ,j (w+ (w+ (st@ ,j) (w* mbdl ,n)) (w* mb p)))
-                                                  (st! ,l (w- (st@ ,l) (w* ibr c))))))))
-                           (component 0 6 3 9 x ux qx) (component 1 7 4 10 y uy qy)
-                           (component 2 8 5 11 z uz qz)))))
-                     ;; without friction only the normal impulse moves the bodies
-                     (progn
-                       (@w! normal-impulse new)
-                       (if-feature (:or :restitution :contact-events :hit-events)
-                         (@w! max-normal-impulse (wmax mni pushed)))
-                       (let ((madl (w* ma dl)) (mbdl (w* mb dl)))
-                         (declare (ignorable mbdl))
-                         (st! 0 (w- (st@ 0) (w* madl x))) (st! 1 (w- (st@ 1) (w* madl y)))
-                         (st! 2 (w- (st@ 2) (w* madl z)))
-                         (if-feature :body-contacts
-                           (progn (st! 6 (w+ (st@ 6) (w* mbdl x))) (st! 7 (w+ (st@ 7) (w* mbdl y)))
-                                  (st! 8 (w+ (st@ 8) (w* mbdl z))))))))
-                   ;; a block none of whose lanes rolls against resistance skips the rolling
-                   ;; part: every lane would keep its old values anyway
-                   (if-feature :rolling-resistance
-                     (let* ((rl (@w rolling-limit))
-                            (rolling (w> rl (wc 0.0))))
-                       (when (wany rolling)
-                         (let* ((rlimit (w* rl new))
-                                (rm (@w rolling-mass))
-                                (rx (@w rolling-impulse-x)) (ry (@w rolling-impulse-y)) (rz (@w rolling-impulse-z))
-                                (nrx (w- rx (w* rm (w- wbx wax)))) (nry (w- ry (w* rm (w- wby way))))
-                                (nrz (w- rz (w* rm (w- wbz waz))))
-                                (len2 (w+ (w+ (w* nrx nrx) (w* nry nry)) (w* nrz nrz)))
-                                (over (w> len2 (w* rlimit rlimit)))
-                                (scale (wif over (w/ rlimit (wsqrt (wif over len2 (wc 1.0)))) (wc 1.0)))
-                                (nrx (w* nrx scale)) (nry (w* nry scale)) (nrz (w* nrz scale))
-                                (dx (w- nrx rx)) (dy (w- nry ry)) (dz (w- nrz rz)))
-                           (@w! rolling-impulse-x (wif rolling nrx rx))
-                           (@w! rolling-impulse-y (wif rolling nry ry))
-                           (@w! rolling-impulse-z (wif rolling nrz rz))
-                           (st! 3 (wif rolling (w- wax (w* iam dx)) wax)) (st! 4 (wif rolling (w- way (w* iam dy)) way))
-                           (st! 5 (wif rolling (w- waz (w* iam dz)) waz))
-                           (if-feature :body-contacts
-                             (progn (st! 9 (wif rolling (w+ wbx (w* ibm dx)) wbx))
-                                    (st! 10 (wif rolling (w+ wby (w* ibm dy)) wby))
-                                    (st! 11 (wif rolling (w+ wbz (w* ibm dz)) wbz))))))))
-                   ;; spin friction, skipped as the rolling part is by a block none of whose
-                   ;; lanes has a spin limit
-                   (if-feature :friction
-                     (when (some-one-sided)
-                     (let* ((sl (@w spin-limit))
-                            (spinning (w> sl (wc 0.0))))
-                       (when (wany spinning)
-                         (let* ((slimit (w* sl new)) (sp (@w spin-impulse))
-                                (raw (w- sp (w* (@w rolling-mass)
-                                                (w+ (w+ (w* (w- wbx wax) x) (w* (w- wby way) y)) (w* (w- wbz waz) z)))))
-                                (low (w* slimit (wc -1.0)))
-                                (nsp (wif (w> raw slimit) slimit (wif (w> low raw) low raw)))
-                                (ds (w- nsp sp)))
-                           (@w! spin-impulse (wif spinning nsp sp))
-                           (st! 3 (wif spinning (w- wax (w* iam (w* ds x))) wax))
-                           (st! 4 (wif spinning (w- way (w* iam (w* ds y))) way))
-                           (st! 5 (wif spinning (w- waz (w* iam (w* ds z))) waz))
-                           (if-feature :body-contacts
-                             (progn (st! 9 (wif spinning (w+ wbx (w* ibm (w* ds x))) wbx))
-                                    (st! 10 (wif spinning (w+ wby (w* ibm (w* ds y))) wby))
-                                    (st! 11 (wif spinning (w+ wbz (w* ibm (w* ds z))) wbz))))))))))))
-               (,scatter v body-a k (st@ 0) (st@ 1) (st@ 2) (st@ 3) (st@ 4) (st@ 5) (wc 0.0) (wc 0.0))
-               (if-feature :body-contacts
-                 (,scatter v body-b k (st@ 6) (st@ 7) (st@ 8) (st@ 9) (st@ 10) (st@ 11) (wc 0.0) (wc 0.0))))))))))
-         end))
-       (define-impact-copy ,soi ,so
-         ,(format nil "Solve or relax constraints START..END, a whole number of blocks, ~D lanes at a time, bouncing impacts ([[#R3ST1T]]): solve-handing runs it on each block at which the pass ~(~A~) or a variant of it stops. #W1D3KF" width so))
-       (define-featured-kernel (,pf :features (:boxes) :operators ,operators) (cbuf start end)
-         ,(format nil "Complete the frames and masses of constraints START..END, a whole number of blocks, ~D lanes at a time; compiled without boxes, it has no box velocity to resolve. #W1D3KF" width)
-         (declare (type constraint-columns cbuf) (type index start end) #.+kernel-policy+)
-         (with-constraint-block () cbuf
-           (loop for k of-type index from start below end by ,width do
-             (let ((base (constraint-base k)))
-               (declare (type index base))
-               (macrolet ((inverse (v)
-                            ;; 1/v where v > 0, else 0; the divisor is 1 where v is not, so
-                            ;; no lane divides by zero
-                            `(let ((pos (w> ,v (wc 0.0))))
-                               (wif pos (w/ (wc 1.0) (wif pos ,v (wc 1.0))) (wc 0.0)))))
-                 (let* ((x (@w nx)) (y (@w ny)) (z (@w nz))
-                        ;; |y| > 0.9, as two comparisons
-                        (big (wor (w> y (wc 0.9)) (w> (wc -0.9) y)))
-                        (zz (w* z z))
-                        (q (wif big (w+ zz (w* y y)) (w+ zz (w* x x))))
-                        (s (w/ (wc 1.0) (wsqrt (wif (w> q (wc 0.0)) q (wc 1.0)))))
-                        (zs (w* z s))
-                        ;; times -1: the exact negation, the zero's sign included
-                        (ux (wif big (wc 0.0) (w* zs (wc -1.0))))
-                        (uy (wif big zs (wc 0.0)))
-                        (uz (wif big (w* (w* y s) (wc -1.0)) (w* x s)))
-                        (qx (w- (w* y uz) (w* z uy))) (qy (w- (w* z ux) (w* x uz))) (qz (w- (w* x uy) (w* y ux))))
-                   (@w! t1x ux) (@w! t1y uy) (@w! t1z uz) (@w! t2x qx) (@w! t2y qy) (@w! t2z qz)
-                   ;; without boxes there is no box velocity to resolve
-                   (if-feature :boxes
-                     (let ((kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
-                       (@w! kvn (w+ (w+ (w* kx x) (w* ky y)) (w* kz z)))
-                       (@w! kvt1 (w+ (w+ (w* kx ux) (w* ky uy)) (w* kz uz)))
-                       (@w! kvt2 (w+ (w+ (w* kx qx) (w* ky qy)) (w* kz qz)))))
-                   (@w! gap (wgap (wc 0.0) (wc 0.0) (wc 0.0) (wc 0.0))))
-                 (let* ((ra (@w ra)) (rb (@w rb)) (iia (@w iia)) (iib (@w iib))
-                        (mass-sum (w+ (@w ima) (@w imb))))
-                   (@w! normal-mass (inverse mass-sum))
-                   (@w! tangent-mass (inverse (w+ (w+ mass-sum (w* (w* iia ra) ra)) (w* (w* iib rb) rb))))
-                   (@w! rolling-mass (inverse (w+ iia iib)))))))))))))
-;; One kernel text, two widths:1 ends here
+               (let ((base (constraint-base k)))
+                 (declare (type index base))
+                 (let ((s (wide-solve-gap)))
+                   (wide-solve-gather)
+                   (with-solve-lanes
+                     (with-wide-normal-impulse
+                       (multiple-value-bind (new dl pushed) (wide-solve-bounce)
+                         (declare (ignorable pushed))
+                         (wide-solve-friction)
+                         (wide-solve-rolling-resistance)
+                         (wide-solve-spin-friction))))
+                   (wide-solve-scatter))))))))
+     end))
+;; The solve pass in lanes:1 ends here
+
+;; [[file:../physics.org::#W1DFRM][The frames in lanes:1]]
+(defmacro wide-prepare-frames (width)
+  "The body of the frame pass of a wide family whose blocks are WIDTH lanes: tangents, the box
+velocity in the frame, the gap and the masses of each lane. #W1DFRM"
+  `(with-constraint-block () cbuf
+     (loop for k of-type index from start below end by ,width do
+       (let ((base (constraint-base k)))
+         (declare (type index base))
+         (macrolet ((inverse (v)
+                      ;; 1/v where v > 0, else 0; the divisor is 1 where v is not, so
+                      ;; no lane divides by zero
+                      `(let ((pos (w> ,v (wc 0.0))))
+                         (wif pos (w/ (wc 1.0) (wif pos ,v (wc 1.0))) (wc 0.0)))))
+           (let* ((x (@w nx)) (y (@w ny)) (z (@w nz))
+                  ;; |y| > 0.9, as two comparisons
+                  (big (wor (w> y (wc 0.9)) (w> (wc -0.9) y)))
+                  (zz (w* z z))
+                  (q (wif big (w+ zz (w* y y)) (w+ zz (w* x x))))
+                  (s (w/ (wc 1.0) (wsqrt (wif (w> q (wc 0.0)) q (wc 1.0)))))
+                  (zs (w* z s))
+                  ;; times -1: the exact negation, the zero's sign included
+                  (ux (wif big (wc 0.0) (w* zs (wc -1.0))))
+                  (uy (wif big zs (wc 0.0)))
+                  (uz (wif big (w* (w* y s) (wc -1.0)) (w* x s)))
+                  (qx (w- (w* y uz) (w* z uy))) (qy (w- (w* z ux) (w* x uz))) (qz (w- (w* x uy) (w* y ux))))
+             (@w! t1x ux) (@w! t1y uy) (@w! t1z uz) (@w! t2x qx) (@w! t2y qy) (@w! t2z qz)
+             ;; without boxes there is no box velocity to resolve
+             (if-feature :boxes
+               (let ((kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
+                 (@w! kvn (wdot (kx ky kz) (x y z)))
+                 (@w! kvt1 (wdot (kx ky kz) (ux uy uz)))
+                 (@w! kvt2 (wdot (kx ky kz) (qx qy qz)))))
+             (@w! gap (wgap (wc 0.0) (wc 0.0) (wc 0.0) (wc 0.0))))
+           (let* ((ra (@w ra)) (rb (@w rb)) (iia (@w iia)) (iib (@w iib))
+                  (mass-sum (w+ (@w ima) (@w imb))))
+             (@w! normal-mass (inverse mass-sum))
+             (@w! tangent-mass (inverse (w+ (w+ mass-sum (w* (w* iia ra) ra)) (w* (w* iib rb) rb))))
+             (@w! rolling-mass (inverse (w+ iia iib)))))))))
+;; The frames in lanes:1 ends here
 
 ;; [[file:../physics.org::#F4M1LY][The SSE and AVX2 families:1]]
 (define-wide-kernels avx2 8
