@@ -6477,6 +6477,28 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (< (abs (- mean want)) (* 0.03 want)) "the sixteenth ball hangs ~,4F m deep, the catenary ~,4F" mean want))))
 ;; J0PHYS-rope-bridge-is-a-catenary ends here
 
+;; [[file:../physics.org::#J0PHYS][J0PHYS-surface-pivot-is-a-compound-pendulum]]
+(define-claim "J0PHYS" surface-pivot-is-a-compound-pendulum
+    "A ball hung by its surface point swings with the compound pendulum's period 2 pi sqrt(7r/5g), within 0.5 %."
+  (let* ((w (make-physics-world)) (r 0.25) (dt (/ 1d0 60))
+         (ball (add-physics-body w 0.0 0.0 0.0 :radius r))
+         (crossings '()) (prev nil))
+    (add-physics-joint w :point ball nil :anchor-a (list 0 r 0) :anchor-b (list 0 r 0))
+    (set-physics-body-angular-velocity w ball 0 0 0.3)
+    (set-physics-body-velocity w ball (* 0.3 r) 0 0)
+    (dotimes (i 600)
+      (step-physics-world w)
+      (let ((x (physics-body-position w ball)))
+        (when (and prev (< prev 0) (>= x 0))
+          (push (* dt (+ i (/ (- prev) (- x prev)))) crossings))
+        (setf prev x)))
+    (let* ((c (reverse crossings))
+           (period (/ (- (car (last c)) (first c)) (max 1 (1- (length c)))))
+           (want (* 2 pi (sqrt (/ (* 7 r) (* 5 9.81d0))))))
+      (check (>= (length c) 8) "~D crossings" (length c))
+      (check (< (abs (- period want)) (* 0.005 want)) "period ~,5F s, the compound pendulum's ~,5F s" period want))))
+;; J0PHYS-surface-pivot-is-a-compound-pendulum ends here
+
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
     "Resting: penetration = slop, approach ~ 0; nothing touching: zeros; landing: > slop."
