@@ -3237,6 +3237,25 @@ its Pareto front. #W9PREC"
 (defparameter +family-dashes+ '((:scalar . "") (:sse . "7 3") (:avx2 . "2 2"))
   "The dash pattern of each kernel family's curves in the diagrams. #W9PREC")
 
+(defun write-log-axes (out width height x0 y0 x1 y1 xmin xmax ymin ymax title measure)
+  "Write to OUT the head of a WIDTH by HEIGHT SVG diagram and its axes: the plot's frame from X0 Y0
+to X1 Y1, a grid line at each power of ten from XMIN to XMAX and YMIN to YMAX, the TITLE, the wall
+time along x and MEASURE along y. The work-precision diagrams and the peers' share it. #W9PREC"
+  (flet ((sx (v) (+ x0 (* (- x1 x0) (/ (- v xmin) (- xmax xmin)))))
+         (sy (v) (- y1 (* (- y1 y0) (/ (- v ymin) (- ymax ymin))))))
+    (format out "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"~D\" height=\"~D\" viewBox=\"0 0 ~D ~D\" font-family=\"sans-serif\" font-size=\"11\">~%" width height width height)
+    (format out "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>~%")
+    (format out "<text x=\"~D\" y=\"18\" font-size=\"13\">~A</text>~%" x0 title)
+    (loop for k from xmin to xmax
+          do (format out "<line x1=\"~,1F\" y1=\"~D\" x2=\"~,1F\" y2=\"~D\" stroke=\"#ddd\"/><text x=\"~,1F\" y=\"~D\" text-anchor=\"middle\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
+                     (sx k) y0 (sx k) y1 (sx k) (+ y1 16) k))
+    (loop for k from ymin to ymax
+          do (format out "<line x1=\"~D\" y1=\"~,1F\" x2=\"~D\" y2=\"~,1F\" stroke=\"#ddd\"/><text x=\"~D\" y=\"~,1F\" text-anchor=\"end\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
+                     x0 (sy k) x1 (sy k) (- x0 6) (+ (sy k) 4) k))
+    (format out "<rect x=\"~D\" y=\"~D\" width=\"~D\" height=\"~D\" fill=\"none\" stroke=\"#444\"/>~%" x0 y0 (- x1 x0) (- y1 y0))
+    (format out "<text x=\"~D\" y=\"~D\" text-anchor=\"middle\">wall ms per simulated second</text>~%" (round (+ x0 x1) 2) (+ y1 34))
+    (format out "<text transform=\"translate(18 ~D) rotate(-90)\" text-anchor=\"middle\">~A</text>~%" (round (+ y0 y1) 2) measure)))
+
 (defun write-work-precision-svg (path title measure points)
   "Write to PATH an SVG work-precision diagram of POINTS (one scene): log10 of the error against
 log10 of the wall milliseconds per simulated second, one curve per family and substep count
@@ -3249,18 +3268,7 @@ through its step rates. Errors below 1e-9 are drawn at 1e-9. #W9PREC"
     (flet ((sx (v) (+ x0 (* (- x1 x0) (/ (- v xmin) (- xmax xmin)))))
            (sy (v) (- y1 (* (- y1 y0) (/ (- v ymin) (- ymax ymin))))))
       (with-open-file (out path :direction :output :if-exists :supersede)
-        (format out "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"~D\" height=\"~D\" viewBox=\"0 0 ~D ~D\" font-family=\"sans-serif\" font-size=\"11\">~%" width height width height)
-        (format out "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>~%")
-        (format out "<text x=\"~D\" y=\"18\" font-size=\"13\">~A</text>~%" x0 title)
-        (loop for k from xmin to xmax
-              do (format out "<line x1=\"~,1F\" y1=\"~D\" x2=\"~,1F\" y2=\"~D\" stroke=\"#ddd\"/><text x=\"~,1F\" y=\"~D\" text-anchor=\"middle\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
-                         (sx k) y0 (sx k) y1 (sx k) (+ y1 16) k))
-        (loop for k from ymin to ymax
-              do (format out "<line x1=\"~D\" y1=\"~,1F\" x2=\"~D\" y2=\"~,1F\" stroke=\"#ddd\"/><text x=\"~D\" y=\"~,1F\" text-anchor=\"end\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
-                         x0 (sy k) x1 (sy k) (- x0 6) (+ (sy k) 4) k))
-        (format out "<rect x=\"~D\" y=\"~D\" width=\"~D\" height=\"~D\" fill=\"none\" stroke=\"#444\"/>~%" x0 y0 (- x1 x0) (- y1 y0))
-        (format out "<text x=\"~D\" y=\"~D\" text-anchor=\"middle\">wall ms per simulated second</text>~%" (round (+ x0 x1) 2) (+ y1 34))
-        (format out "<text transform=\"translate(18 ~D) rotate(-90)\" text-anchor=\"middle\">~A</text>~%" (round (+ y0 y1) 2) measure)
+        (write-log-axes out width height x0 y0 x1 y1 xmin xmax ymin ymax title measure)
         (let ((row 0))
           (dolist (family (remove-duplicates (mapcar (lambda (p) (getf p :family)) points) :from-end t))
             (dolist (n (remove-duplicates (mapcar (lambda (p) (getf p :substeps)) points) :from-end t))
@@ -3969,17 +3977,7 @@ step rates, each engine a colour and a marker, and a legend. Errors below 1e-9 a
     (flet ((sx (v) (+ x0 (* (- x1 x0) (/ (- v xmin) (- xmax xmin)))))
            (sy (v) (- y1 (* (- y1 y0) (/ (- v ymin) (- ymax ymin))))))
       (with-open-file (out path :direction :output :if-exists :supersede)
-        (format out "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"~D\" height=\"~D\" viewBox=\"0 0 ~D ~D\" font-family=\"sans-serif\" font-size=\"11\">~%" width height width height)
-        (format out "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>~%<text x=\"~D\" y=\"18\" font-size=\"13\">~A</text>~%" x0 title)
-        (loop for k from xmin to xmax
-              do (format out "<line x1=\"~,1F\" y1=\"~D\" x2=\"~,1F\" y2=\"~D\" stroke=\"#ddd\"/><text x=\"~,1F\" y=\"~D\" text-anchor=\"middle\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
-                         (sx k) y0 (sx k) y1 (sx k) (+ y1 16) k))
-        (loop for k from ymin to ymax
-              do (format out "<line x1=\"~D\" y1=\"~,1F\" x2=\"~D\" y2=\"~,1F\" stroke=\"#ddd\"/><text x=\"~D\" y=\"~,1F\" text-anchor=\"end\">10<tspan dy=\"-5\" font-size=\"8\">~D</tspan></text>~%"
-                         x0 (sy k) x1 (sy k) (- x0 6) (+ (sy k) 4) k))
-        (format out "<rect x=\"~D\" y=\"~D\" width=\"~D\" height=\"~D\" fill=\"none\" stroke=\"#444\"/>~%" x0 y0 (- x1 x0) (- y1 y0))
-        (format out "<text x=\"~D\" y=\"~D\" text-anchor=\"middle\">wall ms per simulated second</text>~%" (round (+ x0 x1) 2) (+ y1 34))
-        (format out "<text transform=\"translate(18 ~D) rotate(-90)\" text-anchor=\"middle\">~A</text>~%" (round (+ y0 y1) 2) measure)
+        (write-log-axes out width height x0 y0 x1 y1 xmin xmax ymin ymax title measure)
         (loop for (engine label) in curves
               for row from 0
               for style = (cdr (assoc engine +engine-styles+))
