@@ -7556,7 +7556,20 @@ kernel family. #H4NDL3"
 
 (defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SN4P0T")
 
-(defconstant +snapshot-body-bytes+ 74 "Bytes of one body's record in a snapshot. #SN4P0T")
+(defconstant +snapshot-body-bytes+ 70
+  "Bytes of one body's record in a snapshot but its material's index, which takes 1, 2 or 4 bytes
+as the palette has up to 256, up to 65536 or more entries (material-index-bytes). #SN4P0T")
+
+(declaim (inline material-index-bytes body-record-bytes))
+(defun material-index-bytes (materials)
+  "The bytes a body's index into a palette of MATERIALS entries takes in a snapshot. #SN4P0T"
+  (declare (type index materials))
+  (cond ((<= materials 256) 1) ((<= materials 65536) 2) (t 4)))
+
+(defun body-record-bytes (materials)
+  "The bytes one body takes in a snapshot whose palette has MATERIALS entries. #SN4P0T"
+  (declare (type index materials))
+  (+ +snapshot-body-bytes+ (material-index-bytes materials)))
 
 (defconstant +snapshot-material-bytes+ 36 "Bytes of one entry of a snapshot's palette of materials. #SN4P0T")
 
@@ -7792,12 +7805,12 @@ and its pairs written out whole. #SN4P0T"
          (rows (max 0 (pair-list-rows plist))))
     (setf (aref sizes 1) +snapshot-world-bytes+
           (aref sizes 2) (+ 12 (* 4 (handle-table-count ids)) (* 4 free) (* 8 (physics-world-added-count world)))
-          (aref sizes 3) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-awake world)))))
-          (aref sizes 4) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-sleeping world)))))
+          (aref sizes 3) (padded (+ 4 (* (body-record-bytes materials) (body-columns-length (physics-world-awake world)))))
+          (aref sizes 4) (padded (+ 4 (* (body-record-bytes materials) (body-columns-length (physics-world-sleeping world)))))
           (aref sizes 5) (+ 4 (* +snapshot-material-bytes+ materials))
           (aref sizes 6) (padded (+ 4 (* +snapshot-contact-most-bytes+ (contact-columns-length (physics-world-contacts world)))))
           (aref sizes 7) (+ +snapshot-pair-head-bytes+ (* (+ +snapshot-pair-row-bytes+ 8) rows) (* 4 (ceiling rows 32))
-                            (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0)))
+                            (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0)) 8)
           (aref sizes 8) (+ 4 (* +snapshot-box-bytes+ (box-columns-length (physics-world-boxes world))))
           (aref sizes 9) (+ 4 (if (physics-world-pushes world) (* 16 (handle-table-count ids)) 0))
           (aref sizes 10) (let ((set (physics-world-joints world)))
@@ -7942,35 +7955,51 @@ and K to its place in the list, written out, not looped over. #SN4P0T"
                           (symbol-macrolet ((,k ,i)) ,@body))))))
 
 (declaim (inline body-part-column))
-(defun body-part-column (n k)
+(defun body-part-column (n k &optional (width 4))
   "Where, from the count that starts a body part of N bodies, the block of its K-th column begins:
-the float columns of +snapshot-body-floats+ from 0, then age (14), slot (16), material (17) and
-flags (18), as 4-byte units. #SN4P0T"
-  (declare (type index n) (type (integer 0 18) k))
-  (the index (+ 4 (* 4 k n))))
+the float columns of +snapshot-body-floats+ from 0, then age (14, two units), slot (16) and
+material (17), in 4-byte units, and the flags (18) after the materials' indices of WIDTH bytes
+each. #SN4P0T"
+  (declare (type index n) (type (integer 0 18) k) (type (member 1 2 4) width))
+  (the index (if (= k 18) (+ 4 (* (+ 68 width) n)) (+ 4 (* 4 k n)))))
 
-(defun write-snapshot-bodies (bodies buffer at materials first)
+(declaim (inline snap-material-index (setf snap-material-index)))
+(defun snap-material-index (buffer offset width)
+  "The material index of WIDTH bytes at OFFSET of BUFFER. #SN4P0T"
+  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width))
+  (case width (1 (snap-u8 buffer offset)) (2 (snap-u16 buffer offset)) (t (snap-u32 buffer offset))))
+
+(defun (setf snap-material-index) (value buffer offset width)
+  "Write the material index VALUE in WIDTH bytes at OFFSET of BUFFER. #SN4P0T"
+  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width) (type (unsigned-byte 32) value))
+  (case width
+    (1 (setf (snap-u8 buffer offset) value))
+    (2 (setf (snap-u16 buffer offset) value))
+    (t (setf (snap-u32 buffer offset) value))))
+
+(defun write-snapshot-bodies (bodies buffer at materials first palette)
   "Write the rows of BODIES into BUFFER from AT: their count, then each column as one block of
 every row's value, the float columns and the ages copied whole, the row's material being entry
-FIRST + row of MATERIALS; return the padded bytes written. #SN4P0T"
-  (declare (type body-columns bodies) (type octets buffer) (type index at first)
+FIRST + row of MATERIALS, an index into a PALETTE of that many entries; return the padded bytes
+written. #SN4P0T"
+  (declare (type body-columns bodies) (type octets buffer) (type index at first palette)
            (type fixnum-column materials) #.+kernel-policy+)
-  (let ((n (body-columns-length bodies)))
+  (let ((n (body-columns-length bodies)) (w (material-index-bytes palette)))
     (setf (snap-u32 buffer at) n)
     (do-snapshot-body-floats (column k) bodies
       (sb-kernel:%byte-blt column 0 buffer (+ at (body-part-column n k)) (+ at (body-part-column n (1+ k)))))
     (sb-kernel:%byte-blt (body-columns-age bodies) 0 buffer (+ at (body-part-column n 14)) (+ at (body-part-column n 16)))
     (let ((handle (body-columns-handle bodies)) (flags (body-columns-flags bodies))
-          (s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18))))
+          (s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18 w))))
       (declare (type fixnum-column handle flags) (type index s m f))
       (dotimes (row n)
         (setf (snap-u32 buffer (+ s (* 4 row))) (ldb (byte +handle-index-bits+ 0) (aref handle row))
-              (snap-u32 buffer (+ m (* 4 row))) (aref materials (+ first row))
+              (snap-material-index buffer (+ m (* w row)) w) (aref materials (+ first row))
               (snap-u16 buffer (+ f (* 2 row))) (ldb (byte 16 0) (aref flags row))))
       ;; the padding reads as zeros
-      (loop for p of-type index from (+ f (* 2 n)) below (+ at (padded (+ 4 (* +snapshot-body-bytes+ n))))
+      (loop for p of-type index from (+ f (* 2 n)) below (+ at (padded (+ 4 (* (body-record-bytes palette) n))))
             do (setf (aref buffer p) 0)))
-    (padded (+ 4 (* +snapshot-body-bytes+ n)))))
+    (padded (+ 4 (* (body-record-bytes palette) n)))))
 
 (defun write-snapshot-contacts (world buffer at)
   "Write the contacts of WORLD into BUFFER from AT, in their row order, each record as long as its
@@ -8003,9 +8032,9 @@ flags make it, in one pass; return the padded bytes written. #SN4P0T"
 
 (defun write-snapshot-pair-list (world buffer at)
   "Write the pair list of WORLD into BUFFER from AT: its numbers, each row's anchor, the rows'
-clear marks as bits, the rows' handles unless they are the awake rows' own, and the pairs,
-grouped by their first row when the list allows, else whole; return the padded bytes
-written. #SN4P0T"
+clear marks as bits, the rows' handles unless they are the awake rows' own, and the pairs as
+differences of rows when they fit in a byte and a 16-bit word, else whole; return the padded
+bytes written. #SN4P0T"
   (declare (type octets buffer) (type index at) #.+kernel-policy+)
   (let* ((plist (physics-world-pair-list world)) (rows (pair-list-rows plist))
          (n (max rows 0)) (pairs (if (>= rows 0) (pair-list-count plist) 0))
@@ -8033,27 +8062,29 @@ written. #SN4P0T"
           (incf o 4))))
     (unless own
       (dotimes (i n) (setf (snap-i64 buffer o) (aref handles i)) (incf o 8)))
-    (let ((list (pair-list-pairs plist)) (start o) (grouped t))
-      (declare (type fixnum-column list) (type index start))
-      ;; grouped: a count of pairs a row, then each pair's B - A, while A never falls and B - A fits
-      ;; in 16 bits; the counts are zeroed first and counted up as the pairs go by
-      (loop for p of-type index from o below (+ o (* 2 n)) do (setf (aref buffer p) 0))
-      (let ((d (+ o (* 2 n))))
-        (declare (type index d))
+    (let ((list (pair-list-pairs plist)) (deltas t))
+      (declare (type fixnum-column list))
+      ;; as deltas: a byte a pair, its row A less the pair before's, signed, or -128 when that does
+      ;; not fit and A is the next of the rows listed whole after; then a 16-bit word a pair, its row
+      ;; B less its row A, signed; whole pairs when some B - A does not fit
+      (let ((whole (padded (+ o (* 3 pairs)))) (wholes 0))
+        (declare (type index whole wholes))
         (loop with last of-type fixnum = 0
               for k of-type index below pairs
               for a of-type fixnum = (ash (aref list k) -24)
               for b of-type fixnum = (ldb (byte 24 0) (aref list k))
-              do (if (and (<= last a) (< a b) (< (- b a) 65536) (< a n) (< (snap-u16 buffer (+ o (* 2 a))) 65535))
-                     (progn (setf (snap-u16 buffer d) (- b a) last a)
-                            (incf (snap-u16 buffer (+ o (* 2 a))))
-                            (incf d 2))
-                     (return (setf grouped nil))))
-        (if grouped
-            (setf o d)
-            (progn (setf o start)
-                   (dotimes (k pairs) (setf (snap-i64 buffer o) (aref list k)) (incf o 8)))))
-      (setf (snap-u32 buffer (+ at 36)) (logior (if own 0 1) (if grouped 2 0))))
+              do (unless (<= -32768 (- b a) 32767) (return (setf deltas nil)))
+                 (if (< -128 (- a last) 128)
+                     (setf (snap-u8 buffer (+ o k)) (ldb (byte 8 0) (- a last)))
+                     (setf (snap-u8 buffer (+ o k)) 128
+                           (snap-u32 buffer (+ whole 4 (* 4 wholes))) a
+                           wholes (1+ wholes)))
+                 (setf (snap-u16 buffer (+ o pairs (* 2 k))) (ldb (byte 16 0) (- b a)) last a))
+        (if deltas
+            (progn (loop for q of-type index from (+ o (* 3 pairs)) below whole do (setf (aref buffer q) 0))
+                   (setf (snap-u32 buffer whole) wholes o (+ whole 4 (* 4 wholes))))
+            (dotimes (k pairs) (setf (snap-i64 buffer o) (aref list k)) (incf o 8))))
+      (setf (snap-u32 buffer (+ at 36)) (logior (if own 0 1) (if deltas 2 0))))
     (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
     (- o at)))
 
@@ -8157,9 +8188,10 @@ return its bytes. #SN4P0T"
              (setf (snap-u32 buffer (+ o 4 (* 8 k))) (handle-index (aref added k))
                    (snap-u32 buffer (+ o 8 (* 8 k))) (handle-generation (aref added k))))
            (- (+ o 4 (* 8 n)) at))))
-    (3 (write-snapshot-bodies (physics-world-awake world) buffer at (snapshot-scratch-materials scratch) 0))
+    (3 (write-snapshot-bodies (physics-world-awake world) buffer at (snapshot-scratch-materials scratch) 0
+                              (snapshot-scratch-count scratch)))
     (4 (write-snapshot-bodies (physics-world-sleeping world) buffer at (snapshot-scratch-materials scratch)
-                              (body-columns-length (physics-world-awake world))))
+                              (body-columns-length (physics-world-awake world)) (snapshot-scratch-count scratch)))
     (5 (let ((count (snapshot-scratch-count scratch)) (words (snapshot-scratch-palette scratch)))
          (setf (snap-u32 buffer at) count)
          (dotimes (k count)
@@ -8451,6 +8483,7 @@ one of the palette, and its centre in no solid cell of WORLD's terrain; return i
            #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets id)) (n (snap-u32 buffer at))
          (count (snap-u32 buffer (aref offsets 2))) (materials (snap-u32 buffer (aref offsets 5)))
+         (w (material-index-bytes materials))
          (max-speed (snap-f32 buffer (+ (aref offsets 1) 52 (* 4 (position :max-speed +physics-parameters+ :key #'first)))))
          (terrain (physics-world-terrain world))
          (chunks (and terrain (voxel-terrain-chunks terrain))) (last-key -1) (chunk nil)
@@ -8462,7 +8495,7 @@ one of the palette, and its centre in no solid cell of WORLD's terrain; return i
          (top (* 1.001 max-speed max-speed)))
     (declare (type index at n count materials) (type single-float max-speed top) (type fixnum last-key)
              (type (signed-byte 32) coordinate speed spin unit still))
-    (check-part-size scratch id (padded (+ 4 (* +snapshot-body-bytes+ n))))
+    (check-part-size scratch id (padded (+ 4 (* (body-record-bytes materials) n))))
     (dotimes (row n n)
       (macrolet ((bits (k) `(snap-u32 buffer (+ at (body-part-column n ,k) (* 4 row))))
                  (within (k limit) `(<= (logand (bits ,k) #x7FFFFFFF) ,limit))
@@ -8481,12 +8514,12 @@ one of the palette, and its centre in no solid cell of WORLD's terrain; return i
           (refuse-snapshot-body buffer at n row max-speed)
           (snapshot-check nil physics-snapshot-other-layout (+ at 4 (* 4 row)) "a body within its ranges" row))
         (let ((slot (snap-u32 buffer (+ at (body-part-column n 16) (* 4 row))))
-              (material (snap-u32 buffer (+ at (body-part-column n 17) (* 4 row)))))
+              (material (snap-material-index buffer (+ at (body-part-column n 17) (* w row)) w)))
           (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout
                           (+ at (body-part-column n 16) (* 4 row))
                           "a slot of the table neither free nor another body's" slot)
           (setf (aref marks slot) (1+ stamp))
-          (snapshot-check (< material materials) physics-snapshot-other-layout (+ at (body-part-column n 17) (* 4 row))
+          (snapshot-check (< material materials) physics-snapshot-other-layout (+ at (body-part-column n 17) (* w row))
                           "a material of the palette" material))
         (when chunks
           ;; the chunk of the row before is most often this row's too: looked up only when not
@@ -8590,7 +8623,7 @@ reads. #SN4P0T"
 (defun check-snapshot-pair-list (buffer scratch)
   "Check the pair list part of the snapshot in BUFFER: its form and the size its counts give,
 its numbers, finite anchors within the coordinate limit, no more rows than awake bodies when
-their handles are not written, and pairs of listed rows. #SN4P0T"
+their handles are not written, and pairs of listed rows, written whole or as differences. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch))
          (at (aref offsets 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
@@ -8605,7 +8638,9 @@ their handles are not written, and pairs of listed rows. #SN4P0T"
            (handles (+ clear (* 4 (ceiling n 32))))
            (list (+ handles (if (logbitp 0 form) (* 8 n) 0))))
       (declare (type index clear handles list))
-      (check-part-size scratch 7 (padded (- (+ list (if (logbitp 1 form) (+ (* 2 n) (* 2 pairs)) (* 8 pairs))) at)))
+      (let* ((whole (padded (+ list (* 3 pairs))))
+             (wholes (if (and (logbitp 1 form) (<= (+ whole 4) (length buffer))) (snap-u32 buffer whole) 0)))
+        (check-part-size scratch 7 (- (if (logbitp 1 form) (+ whole 4 (* 4 wholes)) (+ list (* 8 pairs))) at)))
       (when (>= rows 0)
         (let ((cell (snap-finite-f32 buffer (+ at 4))))
           (snapshot-check (< 0.0 cell 1e6) physics-snapshot-other-layout (+ at 4) "a cell edge above 0" cell))
@@ -8625,20 +8660,24 @@ their handles are not written, and pairs of listed rows. #SN4P0T"
             (snapshot-check (<= n (snap-u32 buffer (aref offsets 3))) physics-snapshot-other-layout at
                             "no more listed rows than awake bodies, whose handles the rows had" rows))
         (if (logbitp 1 form)
-            ;; each row's count, then each pair's B - A: a pair of listed rows, A below B
-            (let ((d (+ list (* 2 n))) (total 0))
-              (declare (type index d total))
-              (dotimes (a n)
-                (let ((c (snap-u16 buffer (+ list (* 2 a)))))
-                  (snapshot-check (<= (+ total c) pairs) physics-snapshot-other-layout (+ list (* 2 a))
-                                  "counts of pairs that sum to the pair count" c)
-                  (dotimes (j c)
-                    (let ((delta (snap-u16 buffer (+ d (* 2 (+ total j))))))
-                      (snapshot-check (and (> delta 0) (< (+ a delta) n)) physics-snapshot-other-layout
-                                      (+ d (* 2 (+ total j))) "a pair of listed rows" delta)))
-                  (incf total c)))
-              (snapshot-check (= total pairs) physics-snapshot-other-layout (+ at 32)
-                              "a pair count that the rows' counts sum to" pairs))
+            ;; the rows the differences give, each a listed row
+            (let* ((a 0) (whole (padded (+ list (* 3 pairs)))) (wholes (snap-u32 buffer whole)) (taken 0))
+              (declare (type fixnum a) (type index whole wholes taken))
+              (dotimes (k pairs)
+                (let* ((da (snap-u8 buffer (+ list k))) (db (snap-u16 buffer (+ list pairs (* 2 k))))
+                       (b 0))
+                  (declare (type fixnum b))
+                  (if (= da 128)
+                      (progn (snapshot-check (< taken wholes) physics-snapshot-other-layout (+ list k)
+                                             "a row listed whole for each pair that needs one" taken)
+                             (setf a (snap-u32 buffer (+ whole 4 (* 4 taken))))
+                             (incf taken))
+                      (incf a (if (> da 128) (- da 256) da)))
+                  (setf b (+ a (if (>= db 32768) (- db 65536) db)))
+                  (snapshot-check (and (<= 0 a) (< a n) (<= 0 b) (< b n)) physics-snapshot-other-layout (+ list k)
+                                  "a pair of listed rows" (list a b))))
+              (snapshot-check (= taken wholes) physics-snapshot-other-layout whole
+                              "as many rows listed whole as pairs that need one" wholes))
             (dotimes (k pairs)
               (let ((p (snap-i64 buffer (+ list (* 8 k)))))
                 (snapshot-check (and (>= p 0) (< (ash p -24) n) (< (ldb (byte 24 0) p) n))
@@ -8705,9 +8744,10 @@ what the restore reuses. #SN4P0T"
 marked MARK in NAMED, the slots some joint names. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column named) (type fixnum mark))
   (dolist (id '(3 4))
-    (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat)))
+    (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat))
+           (w (material-index-bytes (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 5)))))
       (dotimes (row n)
-        (let ((o (+ bat (body-part-column n 18) (* 2 row)))
+        (let ((o (+ bat (body-part-column n 18 w) (* 2 row)))
               (slot (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))))
           (snapshot-check (eq (logtest +flag-jointed+ (snap-u16 buffer o)) (= (aref named slot) mark))
                           physics-snapshot-other-layout o
@@ -8872,6 +8912,7 @@ at its row; rows it held past the new count read as zeros again. #SN4P0T"
   (declare (type body-columns bodies) (type octets buffer) (type index at mat) (type fixnum set)
            #.+kernel-policy+)
   (let* ((n (snap-u32 buffer at)) (old (body-columns-length bodies)) (ids (physics-world-ids world))
+         (w (material-index-bytes (snap-u32 buffer mat)))
          (tag (handle-table-tag ids))
          (sets (handle-table-set ids)) (locals (handle-table-local ids)) (generations (handle-table-generation ids)))
     (declare (type index n old) (type (unsigned-byte 16) tag) (type fixnum-column sets locals generations))
@@ -8885,11 +8926,11 @@ at its row; rows it held past the new count read as zeros again. #SN4P0T"
     (sb-kernel:%byte-blt buffer (+ at (body-part-column n 14)) (body-columns-age bodies) 0 (* 8 n))
     (with-body-columns (flags handle radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind)
         bodies
-      (let ((s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18))))
+      (let ((s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18 w))))
         (declare (type index s m f))
         (dotimes (row n)
           (let* ((slot (snap-u32 buffer (+ s (* 4 row))))
-                 (p (+ mat 4 (* (snap-u32 buffer (+ m (* 4 row))) +snapshot-material-bytes+)))
+                 (p (+ mat 4 (* (snap-material-index buffer (+ m (* w row)) w) +snapshot-material-bytes+)))
                  (generation (aref generations slot)))
             (declare (type index p) (type (unsigned-byte 24) slot) (type (unsigned-byte 20) generation))
             (setf (aref radius row) (snap-f32 buffer p) (aref inverse-mass row) (snap-f32 buffer (+ p 4))
@@ -8990,12 +9031,14 @@ its build when the world's grid still is that build's. #SN4P0T"
         (let ((list (pair-list-pairs plist)))
           (declare (type fixnum-column list))
           (if (logbitp 1 form)
-              (let ((d (+ o (* 2 rows))) (k 0))
-                (declare (type index d k))
-                (dotimes (a rows)
-                  (dotimes (j (snap-u16 buffer (+ o (* 2 a))))
-                    (setf (aref list k) (logior (ash a 24) (+ a (snap-u16 buffer d))))
-                    (incf k) (incf d 2))))
+              (let ((a 0) (whole (+ (padded (+ o (* 3 pairs))) 4)))
+                (declare (type (unsigned-byte 24) a) (type index whole))
+                (dotimes (k pairs)
+                  (let ((da (snap-u8 buffer (+ o k))) (db (snap-u16 buffer (+ o pairs (* 2 k)))))
+                    (if (= da 128)
+                        (setf a (snap-u32 buffer whole) whole (+ whole 4))
+                        (setf a (+ a (if (> da 128) (- da 256) da))))
+                    (setf (aref list k) (logior (ash a 24) (+ a (if (>= db 32768) (- db 65536) db)))))))
               (dotimes (k pairs) (setf (aref list k) (snap-i64 buffer (+ o (* 8 k))))))))
       (setf (pair-list-count plist) pairs (pair-list-cell plist) (snap-f32 buffer (+ at 4))
             (pair-list-builds plist) (snap-u32 buffer (+ at 8)) (pair-list-loose-count plist) (snap-i32 buffer (+ at 12))
@@ -9353,18 +9396,21 @@ damaged copies each, from SEED; return a list of (SCENE BYTES . FIGURES). #SN4P0
   "Measure snapshots: their size in the BALLS-ball basin and in the settled pile, snapshot plus
 restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8-step rollback at
 1000 balls, and the bytes consed; print Org tables to STREAM. #SN4P0T"
+  (format stream "load average ~A at the start~%~%" (load-average))
   (flet ((median (list) (let ((v (sort (coerce list 'vector) #'<))) (aref v (floor (length v) 2))))
          (ms (f) (let ((t0 (clock-ns))) (funcall f) (* 1d-6 (- (clock-ns) t0)))))
     (let* ((world (make-basin-world balls :kernels :auto))
            (other (make-basin-world balls :kernels :auto))
-           (buffer nil) (steps '()) (saves '()))
+           (buffer nil) (steps '()) (saves '()) (snaps '()) (restores '()))
       (dotimes (i 240) (step-physics-world world))
       (setf buffer (snapshot-physics-world world))
       (restore-physics-world other buffer)
       (sb-ext:gc :full t)
       (dotimes (k rounds)
         (push (ms (lambda () (step-physics-world world))) steps)
-        (push (ms (lambda () (setf buffer (snapshot-physics-world world buffer)) (restore-physics-world other buffer))) saves))
+        (push (ms (lambda () (setf buffer (snapshot-physics-world world buffer)) (restore-physics-world other buffer))) saves)
+        (push (ms (lambda () (snapshot-physics-world world buffer))) snaps)
+        (push (ms (lambda () (restore-physics-world other buffer))) restores))
       (let* ((size (nth-value 1 (snapshot-physics-world world buffer)))
              (awake (physics-world-awake-count world)) (asleep (physics-world-sleeping-count world))
              (contacts (contact-columns-length (physics-world-contacts world)))
@@ -9386,8 +9432,9 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
                 (/ (snapshot-part-bytes buffer 7) (max 1 awake)))
         (format stream "| target: 80 a body and 40 a contact | ~D | 80 | 40 |~%~%" (+ (* 80 (+ awake asleep)) (* 40 contacts)))
         (format stream "| basin of ~D at 4 s, ~D rounds | median ms |~%|---+---|~%" balls rounds)
-        (format stream "| a step | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%~%"
-                (median steps) (median saves) (* 100 (/ (median saves) (median steps))) consed)))
+        (format stream "| a step | ~,3F |~%| snapshot | ~,3F |~%| restore | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%~%"
+                (median steps) (median snaps) (median restores) (median saves)
+                (* 100 (/ (median saves) (median steps))) consed)))
     (multiple-value-bind (pile script) (make-scene-world :pile)
       (dotimes (i (* 60 12)) (funcall script i) (step-physics-world pile))
       (multiple-value-bind (buffer size) (snapshot-physics-world pile)
@@ -9402,7 +9449,8 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
         (dotimes (k 10)
           (push (ms (lambda () (restore-physics-world world buffer) (dotimes (j 8) (step-physics-world world)))) times)))
       (format stream "| rollback at 1000 balls (2 s) | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~D % |~%"
-              (median times) (round (/ (median times) (/ 1000 60.0) 0.01))))))
+              (median times) (round (/ (median times) (/ 1000 60.0) 0.01)))))
+  (format stream "~%load average ~A at the end~%" (load-average)))
 ;; A snapshot holds what decides the next step, part by part:8 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:2]]
