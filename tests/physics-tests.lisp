@@ -684,6 +684,16 @@ how far the ball moved and the deepest the box's leading face got past the ball'
         (physics-world-sleeping-count world)
         (physics-world-state-hash world)))
 
+(defun refusal-of (thunk)
+  "Call THUNK and answer :accepted if it returns, else what the physics-error it signals names:
+the number's or the parameter's name, the stale handle's reason, or, for the other refusals,
+the condition's type. #T3STK1"
+  (handler-case (progn (funcall thunk) :accepted)
+    (invalid-physics-number (e) (luv-physics::invalid-physics-number-name e))
+    (stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e))
+    (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))
+    (physics-error (e) (type-of e))))
+
 (defun prepared-basin-world (family &key (balls 1000) (steps 60))
   "A basin of BALLS balls under FAMILY, stepped STEPS times, then run through the phases of one
 more step up to and including prepare: its constraints are ready for the substeps. #T3STK1"
@@ -2976,10 +2986,7 @@ use before it. #QKS4GZ"
     (progn
       (let ((before (world-fingerprint w)) (wrong '()))
         (flet ((expect (want call)
-                 (let ((got (handler-case (progn (funcall call) :accepted)
-                              (invalid-physics-number (e) (luv-physics::invalid-physics-number-name e))
-                              (stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e))
-                              (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+                 (let ((got (refusal-of call)))
                    (unless (eq want got) (push (list want got) wrong))
                    (unless (equal before (world-fingerprint w)) (push (list want :changed-the-world) wrong))
                    (when (some (lambda (h) (physics-body-awake-p w h)) balls) (push (list want :woke) wrong)))))
@@ -3091,10 +3098,7 @@ use before it. #QKS4GZ"
     (check (notany (lambda (h) (physics-body-awake-p w h)) balls) "the two balls do not sleep")
     (let ((before (world-fingerprint w)) (wrong '()))
       (flet ((expect (want call)
-               (let ((got (handler-case (progn (funcall call) :accepted)
-                            (invalid-physics-number (e) (luv-physics::invalid-physics-number-name e))
-                            (stale-physics-handle (e) (luv-physics::stale-physics-handle-reason e))
-                            (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+               (let ((got (refusal-of call)))
                  (unless (eq want got) (push (list want got) wrong))
                  (unless (equal before (world-fingerprint w)) (push (list want :changed-the-world) wrong))
                  (when (some (lambda (h) (physics-body-awake-p w h)) balls) (push (list want :woke) wrong))
