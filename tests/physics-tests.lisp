@@ -7860,7 +7860,8 @@ asleep, all touching. #SN4P0T"
         (bad (list 'physics-snapshot-truncated 20) (subseq good 0 20))
         (bad (list 'physics-snapshot-truncated 1000) (subseq good 0 1000))
         (bad (list 'physics-snapshot-wrong-magic 3) (let ((b (copy-seq good))) (setf (aref b 3) 0) b))
-        (bad (list 'physics-snapshot-wrong-version 8) (let ((b (copy-seq good))) (setf (aref b 8) 3) b))
+        (bad (list 'physics-snapshot-wrong-version 8)
+             (let ((b (copy-seq good))) (setf (aref b 8) (1+ luv-physics::+snapshot-version+)) b))
         (bad (list 'physics-snapshot-checksum-mismatch 24) (let ((b (copy-seq good))) (incf (aref b 500)) b))
         ;; the part after the world part named as another: resealed, so only the layout is wrong
         (bad (list 'physics-snapshot-other-layout (+ 32 8 204))
@@ -7871,7 +7872,8 @@ asleep, all touching. #SN4P0T"
           (bad (list 'physics-snapshot-other-layout (+ 32 8 164)) (luv-physics::reseal-snapshot b)))
         ;; the first awake body given a slot the table has not got
         (let* ((b (copy-seq good))
-               (at (+ (snapshot-part-at b 3) 4 64)))
+               (part (snapshot-part-at b 3))
+               (at (+ part 4 (* 64 (luv-physics::snap-u32 b part)))))
           (setf (luv-physics::snap-u32 b at) 99999)
           (bad (list 'physics-snapshot-other-layout at) (luv-physics::reseal-snapshot b)))
         ;; a snapshot of a world with every feature into one without restitution
@@ -7972,7 +7974,7 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
         (bad (+ first 88 8) (lambda (b) (setf (luv-physics::snap-u32 b (+ first 88 8)) (luv-physics::snap-u32 b (+ first 8)))))
         (bad (+ first 64) (lambda (b) (setf (luv-physics::snap-u32 b (+ first 64)) 13)))
         (bad (+ at 8) (lambda (b) (incf (luv-physics::snap-u32 b (+ at 4)))))
-        (let ((flags (+ (snapshot-part-at good 3) 4 72)))
+        (let ((flags (let ((part (snapshot-part-at good 3))) (+ part 4 (* 72 (luv-physics::snap-u32 good part))))))
           (bad flags (lambda (b) (setf (luv-physics::snap-u16 b flags)
                                        (logxor (luv-physics::snap-u16 b flags) luv-physics::+flag-jointed+)))))
         (check (eq :restored (refusal target good)))
