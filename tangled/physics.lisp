@@ -81,6 +81,8 @@
    ;; Joints (#J0STOR)
    #:add-physics-joint #:remove-physics-joint #:physics-joint-alive-p #:physics-world-joint-count
    #:physics-joint-bodies #:physics-joint-length #:physics-joint-impulse
+   ;; Boxes (#BXR0WS)
+   #:add-physics-box #:physics-body-box-p #:physics-box-half-extents
    ;; A snapshot holds what decides the next step (#SN4P0T)
    #:snapshot-physics-world #:restore-physics-world #:write-physics-world #:read-physics-world
    #:physics-snapshot-invalid #:physics-snapshot-truncated
@@ -613,6 +615,8 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
 (defconstant +flag-terrain-only+ 2 "Body flag: meets terrain and boxes but no other body. #B5N8JT")
 
 (defconstant +flag-braced+ 4 "Body flag: braced at the last step that ran the bracing pass. #B5N8JT")
+
+(defconstant +flag-box-shape+ 1024 "Body flag: the body is a box ([[#BXR0WS]]), not a sphere. #B5N8JT")
 
 (defconstant +flag-filter-shift+ 16
   "Body flags: the place of the filter word ([[#F1LT3R]]), category from bit 16, mask from bit 32. #B5N8JT")
@@ -1446,7 +1450,7 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +physics-features+
     '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :mortal
-      :hit-events :contact-events :expiry-events :sleep-events :forces :joints)
+      :hit-events :contact-events :expiry-events :sleep-events :forces :joints :box-bodies)
     "Every feature a world may use ([[#FEAT5X]]), in the order physics-world-features lists them. #W0RLD7"))
 
 (defconstant +solver-stride+ 8
@@ -1574,6 +1578,8 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (pushed :initform nil :accessor physics-world-pushed)
    ;; the joints, made with the first ([[#J0STOR]])
    (joints :initform nil :accessor physics-world-joints)
+   ;; the box bodies' extents and points ([[#BXR0WS]]), or NIL until the first box
+   (box-bodies :initform nil :accessor physics-world-box-bodies)
    (scaled-count :initform 0 :type fixnum :accessor physics-world-scaled-count)
    (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
    (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
@@ -2104,6 +2110,7 @@ undo log too (roll-back-step). #QKS4GZ"
          (handle (aref (body-columns-handle buffer) row))
          (moved (progn ;; its joints go first, while its row is its own ([[#J0STOR]])
                        (when (physics-world-joints world) (remove-body-joints world handle))
+                       (when (physics-world-box-bodies world) (forget-box world handle))
                        (when (and (= set +set-sleeping+) (> (aref (body-columns-life buffer) row) 0.0))
                          (decf (physics-world-mortal-sleepers world)))
                        (when (= set +set-sleeping+) (leave-sleeping-grids world handle))
@@ -3992,7 +3999,8 @@ is under the speculative distance. #MYWSTG"
                            a
                            (setf (physics-world-near-cells world) (make-array (* 2 (1+ n)) :element-type 'single-float)))))
                ;; the bodies whose centre lies in a solid cell
-               (buried 0))
+               (buried 0)
+               (boxes (physics-world-box-bodies world)))
           (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key buried)
                    (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear) (type f32-column near)
                    (type contact-columns contacts) (type contact-table table) (inline touch-contact))
@@ -4009,7 +4017,7 @@ is under the speculative distance. #MYWSTG"
                      (declare (type fixnum ix iy iz))
                      (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))))
             (declare (inline chunk-at cell-solid-p))
-          (with-body-columns (x y z vx vy vz radius handle) awake
+          (with-body-columns (x y z vx vy vz radius handle flags) awake
             (dotimes (i n)
               (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                      ;; how far the body can travel this step; a body faster than its margin a
@@ -4030,11 +4038,13 @@ is under the speculative distance. #MYWSTG"
                 (terrain-note-clear)
                 ;; as far as the cells gathered reach, until a solid one nearer is met below
                 (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
+                ;; a box's points are its own ([[#BXCELL]]), found when the world has boxes
+                (unless (and boxes (logtest (aref flags i) +flag-box-shape+))
                 ;; a body that can travel past its margin this step also sweeps its path
                 (when (> travel margin)
                   (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
                                          (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
-                (terrain-cell-contacts))))
+                (terrain-cell-contacts)))))
           (setf (physics-world-buried-count world) buried)))))
     world))
 ;; The terrain phase, stage by stage:1 ends here
@@ -4129,7 +4139,9 @@ with the face the ray enters it through. #SW33P7"
                      (half (max (- bx1 ccx) (- by1 ccy) (- bz1 ccz)))
                      (span (1+ (ceiling (* half (hash-grid-inv-cell grid))))))
                 (do-grid-neighbours (i grid ccx ccy ccz :span span)
-                 (when (rows-meet-p filtering (aref flags i) (ash (aref filter b) +flag-filter-shift+))
+                 (when (and (rows-meet-p filtering (aref flags i) (ash (aref filter b) +flag-filter-shift+))
+                            ;; a box body meets no posted box yet ([[#BXR0WS]])
+                            (not (logtest (aref flags i) +flag-box-shape+)))
                   (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                          ;; the body's velocity relative to the box, and how far it can travel
                          ;; towards it this step: as against cells ([[#MYWH16]]), a body faster
@@ -6333,6 +6345,575 @@ put to sleep the groups still for long enough, when WORLD sleeps. #J0SL3P"
       (when (physics-world-sleep-enabled world) (sleep-joint-groups world set)))))
 ;; Joint groups sleep and wake together:1 ends here
 
+;; [[file:../physics.org::#BXR0WS][A box is a row and a set of extents by slot:1]]
+(defconstant +box-min-half-extent+ 0.05
+  "The smallest half-extent of a box body, in metres. #BXR0WS")
+
+(define-physics-layout box-point-columns
+  "The contact points of box bodies against the cells, one row a point: the box's solver row, the
+point's key (its feature), the normal (pushing the box), the lever from the box's centre, the
+two tangents, the gap at the step's start, the effective masses, the friction, the three
+carried impulses, the box's inverse mass and its world inverse inertia's six entries. #BXR0WS"
+  (row fixnum) (key fixnum) (handle fixnum)
+  (nx single-float) (ny single-float) (nz single-float)
+  (rx single-float) (ry single-float) (rz single-float)
+  (t1x single-float) (t1y single-float) (t1z single-float)
+  (t2x single-float) (t2y single-float) (t2z single-float)
+  (separation single-float) (normal-mass single-float) (tangent-mass-1 single-float)
+  (tangent-mass-2 single-float) (friction single-float)
+  (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
+  (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
+  (i22 single-float) (i23 single-float) (i33 single-float))
+
+(defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
+  "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
+many boxes live, the contact points of this step and of the last one, each with the first row
+and the count of every slot's points, the awake box rows of this step, their turns (three floats
+a row) and the soft coefficients of the step. #BXR0WS"
+  (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (live 0 :type index)
+  (points (make-box-point-columns) :type box-point-columns)
+  (previous (make-box-point-columns) :type box-point-columns)
+  (first (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (count (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (previous-first (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (previous-count (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (row-count 0 :type index)
+  (turns (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (bias-rate 0.0 :type single-float)
+  (mass-scale 1.0 :type single-float)
+  (impulse-scale 0.0 :type single-float)
+  (push-max 0.0 :type single-float))
+
+(defun box-set-room (set slots)
+  "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
+  (when (> slots (length (box-set-hx set)))
+    (let ((n (max slots (* 2 (length (box-set-hx set))))))
+      (flet ((grow-f (a) (let ((b (make-array n :element-type 'single-float :initial-element 0.0))) (replace b a) b))
+             (grow-i (a) (let ((b (make-array n :element-type 'fixnum :initial-element 0))) (replace b a) b)))
+        (setf (box-set-hx set) (grow-f (box-set-hx set)) (box-set-hy set) (grow-f (box-set-hy set))
+              (box-set-hz set) (grow-f (box-set-hz set))
+              (box-set-first set) (grow-i (box-set-first set)) (box-set-count set) (grow-i (box-set-count set))
+              (box-set-previous-first set) (grow-i (box-set-previous-first set))
+              (box-set-previous-count set) (grow-i (box-set-previous-count set))))))
+  set)
+
+(defun box-half-diagonal (hx hy hz)
+  "The radius of the sphere that holds a box of half-extents HX HY HZ. #BXR0WS"
+  (fsqrt (+ (* hx hx) (* hy hy) (* hz hz))))
+
+(defun checked-box-extents (world hx hy hz)
+  "HX HY HZ as three single-floats, once each is finite and at least +box-min-half-extent+ and
+the half diagonal is at most the largest radius of WORLD; else invalid-physics-parameter naming
+:half-extents. #BXR0WS"
+  (let* ((limit (max-radius-for world))
+         (fx (finite-f32 :hx hx world)) (fy (finite-f32 :hy hy world)) (fz (finite-f32 :hz hz world)))
+    (unless (and (<= +box-min-half-extent+ (min fx fy fz))
+                 (<= (box-half-diagonal fx fy fz) limit))
+      (error 'invalid-physics-parameter :world world :name :half-extents :value (list hx hy hz)
+                                        :expected (format nil "each at least ~A m, the half diagonal at most ~,3F m"
+                                                          +box-min-half-extent+ limit)))
+    (values fx fy fz)))
+
+(defun checked-orientation (world orientation)
+  "ORIENTATION, a list of four finite reals W X Y Z not all near zero, as a unit quaternion of
+four single-floats; else invalid-physics-parameter naming :orientation. #BXR0WS"
+  (flet ((refuse () (error 'invalid-physics-parameter :world world :name :orientation :value orientation
+                                                      :expected "a list of four finite reals W X Y Z, not all zero")))
+    (unless (and (listp orientation) (= 4 (length orientation)) (every #'realp orientation)) (refuse))
+    (let* ((q (mapcar (lambda (v) (finite-f32 :orientation v world)) orientation))
+           (norm (fsqrt (reduce #'+ (mapcar (lambda (v) (* v v)) q)))))
+      (unless (> norm 1e-3) (refuse))
+      (values-list (mapcar (lambda (v) (/ v norm)) q)))))
+
+(defun box-axes (qw qx qy qz)
+  "The rotation matrix of the unit quaternion QW QX QY QZ, row by row, as nine values: its
+columns are the box's axes in the world. #BXR0WS"
+  (declare (type single-float qw qx qy qz))
+  (let ((xx (* qx qx)) (yy (* qy qy)) (zz (* qz qz)) (xy (* qx qy)) (xz (* qx qz)) (yz (* qy qz))
+        (wx (* qw qx)) (wy (* qw qy)) (wz (* qw qz)))
+    (values (- 1.0 (* 2.0 (+ yy zz))) (* 2.0 (- xy wz)) (* 2.0 (+ xz wy))
+            (* 2.0 (+ xy wz)) (- 1.0 (* 2.0 (+ xx zz))) (* 2.0 (- yz wx))
+            (* 2.0 (- xz wy)) (* 2.0 (+ yz wx)) (- 1.0 (* 2.0 (+ xx yy))))))
+
+(defun box-in-cells-p (world x y z hx hy hz qw qx qy qz)
+  "True when the centre X Y Z or a corner of the box of half-extents HX HY HZ turned by QW QX QY
+QZ, each pulled 0.02 m towards the centre, lies in a solid or non-resident cell of WORLD's
+terrain. #BXR0WS"
+  (let ((terrain (physics-world-terrain world)))
+    (and terrain
+         (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33) (box-axes qw qx qy qz)
+           (flet ((solid (px py pz)
+                    (let ((ix (cell-floor px)) (iy (cell-floor py)) (iz (cell-floor pz)))
+                      (let ((chunk (gethash (chunk-key ix iy iz) (voxel-terrain-chunks terrain))))
+                        (or (null chunk) (plusp (aref (the chunk-storage chunk) (cell-offset ix iy iz))))))))
+             (or (solid x y z)
+                 (loop for corner below 8
+                       for a = (if (logbitp 0 corner) (- hx 0.02) (- 0.02 hx))
+                       for b = (if (logbitp 1 corner) (- hy 0.02) (- 0.02 hy))
+                       for c = (if (logbitp 2 corner) (- hz 0.02) (- 0.02 hz))
+                       thereis (solid (+ x (* r11 a) (* r12 b) (* r13 c))
+                                      (+ y (* r21 a) (* r22 b) (* r23 c))
+                                      (+ z (* r31 a) (* r32 b) (* r33 c))))))))))
+
+(defun add-physics-box (world x y z hx hy hz &key mass density (orientation '(1 0 0 0)) (friction 0.6)
+                                               (restitution 0.0) (vx 0.0) (vy 0.0) (vz 0.0) life
+                                               (kind 0) (inside-cells :refuse) (category +default-category+)
+                                               (mask +all-categories+) (gravity-scale 1.0))
+  "Add an awake box centred at X Y Z with half-extents HX HY HZ, turned by ORIENTATION (a
+quaternion W X Y Z, normalised), to WORLD, and return its body handle. Its mass is MASS, or
+DENSITY times its volume, or 1 kg; the other keys are add-physics-body's. A box that overlaps
+solid cells is refused with physics-body-in-solid-cell unless INSIDE-CELLS is :push-out; a world
+made without :box-bodies refuses it with physics-feature-omitted. #BXR0WS"
+  (check-idle world 'add-physics-box)
+  (require-physics-feature world :box-bodies 'add-physics-box)
+  (multiple-value-bind (hx hy hz) (checked-box-extents world hx hy hz)
+    (multiple-value-bind (qw qx qy qz) (checked-orientation world orientation)
+      (let* ((volume (* 8.0 hx hy hz))
+             (m (cond ((and mass density)
+                       (error 'invalid-physics-parameter :world world :name :density :value density
+                                                         :expected "NIL when a mass is given"))
+                      (mass mass)
+                      (density (* volume (finite-f32 :density density world)))
+                      (t 1.0)))
+             (fx (finite-f32 :x x world)) (fy (finite-f32 :y y world)) (fz (finite-f32 :z z world)))
+        (unless (and (realp restitution) (zerop restitution))
+          (error 'invalid-physics-parameter :world world :name :restitution :value restitution
+                                            :expected "0 for a box, which does not bounce"))
+        (check-coordinate :x fx world) (check-coordinate :y fy world) (check-coordinate :z fz world)
+        (unless (member inside-cells '(:refuse :push-out))
+          (error 'invalid-physics-parameter :world world :name :inside-cells :value inside-cells
+                                            :expected ":refuse or :push-out"))
+        (when (and (eq inside-cells :refuse) (box-in-cells-p world fx fy fz hx hy hz qw qx qy qz))
+          (error 'physics-body-in-solid-cell :world world :operation 'add-physics-box :name :position
+                                             :value (list x y z) :cell (list (cell-floor fx) (cell-floor fy) (cell-floor fz))
+                                             :resident (and (physics-world-terrain world)
+                                                            (terrain-resident-p (physics-world-terrain world)
+                                                                                (cell-floor fx) (cell-floor fy) (cell-floor fz)))
+                                             :expected "a box clear of solid and non-resident cells"))
+        (check-body-room world 'add-physics-box)
+        ;; add-physics-body checks the rest before it touches the world
+        (let* ((handle (add-physics-body world fx fy fz :radius (box-half-diagonal hx hy hz) :mass m
+                                         :friction friction :vx vx :vy vy :vz vz :life life
+                                         :collide-with-bodies nil :kind kind :inside-cells :push-out
+                                         :category category :mask mask :gravity-scale gravity-scale))
+               (set (or (physics-world-box-bodies world)
+                        (setf (physics-world-box-bodies world) (%make-box-set))))
+               (slot (handle-index handle))
+               (row (nth-value 1 (resolve-handle world handle)))
+               (m (f32 m)))
+          (box-set-room set (handle-table-count (physics-world-ids world)))
+          (setf (aref (box-set-hx set) slot) hx (aref (box-set-hy set) slot) hy (aref (box-set-hz set) slot) hz)
+          (incf (box-set-live set))
+          (with-body-columns ((bqw qw) (bqx qx) (bqy qy) (bqz qz) inverse-inertia flags) (physics-world-awake world)
+            (setf (aref bqw row) qw (aref bqx row) qx (aref bqy row) qy (aref bqz row) qz
+                  (aref inverse-inertia row) (/ 9.0 (* 2.0 m (+ (* hx hx) (* hy hy) (* hz hz))))
+                  (aref flags row) (logior (aref flags row) +flag-box-shape+)))
+          handle)))))
+
+(defun physics-body-box-p (world handle)
+  "True when HANDLE's live body is a box. #BXR0WS"
+  (check-world world 'physics-body-box-p)
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (logtest (aref (body-columns-flags (set-buffer world set)) row) +flag-box-shape+)))
+
+(defun physics-box-half-extents (world handle)
+  "The half-extents of HANDLE's box body as three values; zeros for a sphere. #BXR0WS"
+  (check-world world 'physics-box-half-extents)
+  (resolve-handle world handle)
+  (let ((set (physics-world-box-bodies world)) (slot (handle-index handle)))
+    (if (and set (physics-body-box-p world handle))
+        (values (aref (box-set-hx set) slot) (aref (box-set-hy set) slot) (aref (box-set-hz set) slot))
+        (values 0.0 0.0 0.0))))
+
+(defun forget-box (world handle)
+  "Zero the extents of HANDLE's slot in WORLD's box set, its body about to be removed, when that
+body is a box. #BXR0WS"
+  (let ((set (physics-world-box-bodies world)) (slot (handle-index handle)))
+    (when (and set (< slot (length (box-set-hx set))) (plusp (aref (box-set-hx set) slot)))
+      (setf (aref (box-set-hx set) slot) 0.0 (aref (box-set-hy set) slot) 0.0 (aref (box-set-hz set) slot) 0.0
+            (aref (box-set-count set) slot) 0 (aref (box-set-previous-count set) slot) 0)
+      (decf (box-set-live set)))))
+
+(defun validate-box-set (world fail)
+  "Check WORLD's box set against its rows, calling FAIL with a format control and arguments at the
+first break: a slot holds extents exactly when its body has the box flag, every extent within its
+bounds, and the count of live boxes is theirs. #BXR0WS"
+  (let ((set (physics-world-box-bodies world)) (boxes 0))
+    (when set
+      (dolist (buffer (list (physics-world-awake world) (physics-world-sleeping world)))
+        (dotimes (row (body-columns-length buffer))
+          (let* ((h (aref (body-columns-handle buffer) row)) (slot (handle-index h))
+                 (box (logtest (aref (body-columns-flags buffer) row) +flag-box-shape+))
+                 (hx (if (< slot (length (box-set-hx set))) (aref (box-set-hx set) slot) 0.0)))
+            (when box (incf boxes))
+            (unless (eq box (plusp hx))
+              (funcall fail "handle ~D: box flag ~A but extent ~A" h box hx))
+            (when (and box (< (aref (box-set-hx set) slot) +box-min-half-extent+))
+              (funcall fail "handle ~D: extent below ~A" h +box-min-half-extent+)))))
+      (unless (= boxes (box-set-live set))
+        (funcall fail "~D box rows but the box set counts ~D" boxes (box-set-live set))))))
+;; A box is a row and a set of extents by slot:1 ends here
+
+;; [[file:../physics.org::#BXCELL][A box against the cells:1]]
+(defconstant +box-point-lattice-bit+ 33
+  "The bit of a box point's key that marks a lattice point of the cells, not a corner of the box. #BXCELL")
+
+(declaim (inline box-corner-key box-lattice-key))
+(defun box-corner-key (slot corner face)
+  "The key of corner CORNER (0-7) of the box in handle slot SLOT against a cell face of direction
+FACE (0-5: -x +x -y +y -z +z). #BXCELL"
+  (declare (type (unsigned-byte 24) slot) (type (integer 0 7) corner) (type (integer 0 5) face))
+  (logior (ash slot 34) (+ (* corner 6) face)))
+
+(defun box-lattice-key (slot x y z face)
+  "The key of the lattice point X Y Z against face FACE (0-5) of the box in handle slot SLOT. #BXCELL"
+  (declare (type (unsigned-byte 24) slot) (type fixnum x y z) (type (integer 0 5) face))
+  (logior (ash slot 34) (ash 1 +box-point-lattice-bit+)
+          (ash (ldb (byte 10 0) x) 23) (ash (ldb (byte 10 0) y) 13) (ash (ldb (byte 10 0) z) 3) face))
+
+(defun add-box-point (set row handle key nx ny nz rx ry rz gap)
+  "Append to SET's points the point KEY of the box at solver ROW (handle HANDLE): normal NX NY NZ,
+lever RX RY RZ, gap GAP; its impulses are those its key had last step, or zeros. #BXCELL"
+  (declare (type box-set set) (type index row) (type fixnum handle key)
+           (type single-float nx ny nz rx ry rz gap) #.+kernel-policy+)
+  (let* ((points (box-set-points set))
+         (k (box-point-columns-append points))
+         (old (box-set-previous set))
+         (slot (handle-index handle))
+         (from (aref (box-set-previous-first set) slot))
+         (to (min (box-point-columns-length old) (+ from (aref (box-set-previous-count set) slot)))))
+    (declare (type index k from) (type fixnum to))
+    (with-box-point-columns ((r row) (kc key) (hc handle) (cnx nx) (cny ny) (cnz nz) (crx rx) (cry ry) (crz rz)
+                             separation normal-impulse tangent-impulse-1 tangent-impulse-2)
+        points
+      (setf (aref r k) row (aref kc k) key (aref hc k) handle
+            (aref cnx k) nx (aref cny k) ny (aref cnz k) nz (aref crx k) rx (aref cry k) ry (aref crz k) rz
+            (aref separation k) gap)
+      (with-box-point-columns ((okey key) (on normal-impulse) (o1 tangent-impulse-1) (o2 tangent-impulse-2)) old
+        (loop for j of-type fixnum from from below to
+              when (= (aref okey j) key)
+                do (setf (aref normal-impulse k) (aref on j) (aref tangent-impulse-1 k) (aref o1 j)
+                         (aref tangent-impulse-2 k) (aref o2 j))
+                   (return))))
+    k))
+
+(defun find-box-points (world set row reach)
+  "Append to SET's points every point of the box at awake ROW of WORLD against the cells within
+REACH of its surface: its corners against cell faces, the convex lattice points of the cells
+against its faces. #BXCELL"
+  (declare (type box-set set) (type index row) (type single-float reach) #.+kernel-policy+)
+  (let ((terrain (physics-world-terrain world))
+        (probe (physics-world-probe world)))
+    (when terrain
+      (with-body-columns (x y z qw qx qy qz handle) (physics-world-awake world)
+        (let* ((h (aref handle row)) (slot (handle-index h))
+               (cx (aref x row)) (cy (aref y row)) (cz (aref z row))
+               (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot)))
+          (declare (type single-float cx cy cz hx hy hz))
+          (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+              (box-axes (aref qw row) (aref qx row) (aref qy row) (aref qz row))
+            (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+            (flet ((solid (ix iy iz)
+                     (declare (type fixnum ix iy iz))
+                     (probe-solid-p probe ix iy iz)))
+              (declare (inline solid))
+              ;; the corners against the faces of the cells
+              (dotimes (corner 8)
+                (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
+                       (c (if (logbitp 2 corner) hz (- hz)))
+                       (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
+                       (rz (+ (* r31 a) (* r32 b) (* r33 c)))
+                       (px (+ cx rx)) (py (+ cy ry)) (pz (+ cz rz))
+                       (ix (cell-floor px)) (iy (cell-floor py)) (iz (cell-floor pz))
+                       ;; the distances to the cell's six faces: -x +x -y +y -z +z
+                       (d0 (- px (float ix 1.0))) (d1 (- (float (1+ ix) 1.0) px))
+                       (d2 (- py (float iy 1.0))) (d3 (- (float (1+ iy) 1.0) py))
+                       (d4 (- pz (float iz 1.0))) (d5 (- (float (1+ iz) 1.0) pz)))
+                  (declare (type single-float a b c rx ry rz px py pz d0 d1 d2 d3 d4 d5) (type fixnum ix iy iz))
+                  (macrolet ((each-face (form)
+                               ;; FORM once per face, with FACE, the distance D, the neighbour's cell
+                               ;; offset (OX OY OZ) and the normal out of the neighbour (NX NY NZ)
+                               `(progn
+                                  ,@(loop for (face dist ox oy oz nx ny nz)
+                                            in '((0 d0 -1 0 0 1.0 0.0 0.0) (1 d1 1 0 0 -1.0 0.0 0.0)
+                                                 (2 d2 0 -1 0 0.0 1.0 0.0) (3 d3 0 1 0 0.0 -1.0 0.0)
+                                                 (4 d4 0 0 -1 0.0 0.0 1.0) (5 d5 0 0 1 0.0 0.0 -1.0))
+                                          collect `(symbol-macrolet ((face ,face) (d ,dist) (ox ,ox) (oy ,oy) (oz ,oz)
+                                                                     (nx ,nx) (ny ,ny) (nz ,nz))
+                                                     ,form)))))
+                    (if (solid ix iy iz)
+                        ;; inside a solid cell: the nearest face whose neighbour is air, out of it
+                        (let ((best -1) (depth most-positive-single-float) (bnx 0.0) (bny 0.0) (bnz 0.0))
+                          (declare (type fixnum best) (type single-float depth bnx bny bnz))
+                          (each-face (when (and (< d depth) (not (solid (- ix ox) (- iy oy) (- iz oz))))
+                                       (setf best face depth d bnx (- nx) bny (- ny) bnz (- nz))))
+                          (when (>= best 0)
+                            (add-box-point set row h (box-corner-key slot corner best) bnx bny bnz rx ry rz (- depth))))
+                        ;; in air: each solid neighbour across a face nearer than the reach
+                        (each-face (when (and (< d reach) (solid (+ ix ox) (+ iy oy) (+ iz oz)))
+                                     (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz d)))))))
+              ;; the convex lattice points of the cells against the faces of the box
+              (let* ((ex (+ (* (abs r11) hx) (* (abs r12) hy) (* (abs r13) hz) reach))
+                     (ey (+ (* (abs r21) hx) (* (abs r22) hy) (* (abs r23) hz) reach))
+                     (ez (+ (* (abs r31) hx) (* (abs r32) hy) (* (abs r33) hz) reach)))
+                (declare (type single-float ex ey ez))
+                (loop for lx of-type fixnum from (- (cell-floor (- cx ex)) -1) to (cell-floor (+ cx ex)) do
+                  (loop for ly of-type fixnum from (- (cell-floor (- cy ey)) -1) to (cell-floor (+ cy ey)) do
+                    (loop for lz of-type fixnum from (- (cell-floor (- cz ez)) -1) to (cell-floor (+ cz ez)) do
+                      (let ((solids 0))
+                        (declare (type fixnum solids))
+                        (dotimes (k 8)
+                          (when (solid (- lx (if (logbitp 0 k) 0 1)) (- ly (if (logbitp 1 k) 0 1))
+                                       (- lz (if (logbitp 2 k) 0 1)))
+                            (incf solids)))
+                        (when (<= 1 solids 3)
+                          (let* ((rx (- (float lx 1.0) cx)) (ry (- (float ly 1.0) cy)) (rz (- (float lz 1.0) cz))
+                                 ;; the point in the box's frame, and how far out of each face pair
+                                 (u (+ (* r11 rx) (* r21 ry) (* r31 rz)))
+                                 (v (+ (* r12 rx) (* r22 ry) (* r32 rz)))
+                                 (w (+ (* r13 rx) (* r23 ry) (* r33 rz)))
+                                 (ou (- (abs u) hx)) (ov (- (abs v) hy)) (ow (- (abs w) hz)))
+                            (declare (type single-float rx ry rz u v w ou ov ow))
+                            (when (and (< ou reach) (< ov reach) (< ow reach))
+                              ;; the face it is least inside of, or farthest out of
+                              (multiple-value-bind (gap face nx ny nz)
+                                  (cond ((and (>= ou ov) (>= ou ow))
+                                         (if (> u 0.0) (values ou 1 (- r11) (- r21) (- r31)) (values ou 0 r11 r21 r31)))
+                                        ((>= ov ow)
+                                         (if (> v 0.0) (values ov 3 (- r12) (- r22) (- r32)) (values ov 2 r12 r22 r32)))
+                                        (t
+                                         (if (> w 0.0) (values ow 5 (- r13) (- r23) (- r33)) (values ow 4 r13 r23 r33))))
+                                (declare (type single-float gap nx ny nz) (type (integer 0 5) face))
+                                (add-box-point set row h (box-lattice-key slot lx ly lz face)
+                                               nx ny nz rx ry rz gap))))))))))))))))
+  set)
+;; A box against the cells:1 ends here
+
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:1]]
+(defun box-tangents (nx ny nz)
+  "Two unit tangents of the unit normal NX NY NZ, perpendicular to it and to each other, as six
+values: the first the normal crossed with the world axis it is least along. #BXSOLV"
+  (declare (type single-float nx ny nz))
+  (multiple-value-bind (ax ay az)
+      (cond ((and (<= (abs nx) (abs ny)) (<= (abs nx) (abs nz))) (values 0.0 (- nz) ny))
+            ((<= (abs ny) (abs nz)) (values nz 0.0 (- nx)))
+            (t (values (- ny) nx 0.0)))
+    (declare (type single-float ax ay az))
+    (let ((s (/ 1.0 (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
+      (let ((t1x (* ax s)) (t1y (* ay s)) (t1z (* az s)))
+        (values t1x t1y t1z
+                (- (* ny t1z) (* nz t1y)) (- (* nz t1x) (* nx t1z)) (- (* nx t1y) (* ny t1x)))))))
+
+(defun prepare-box-points (world h)
+  "Find and prepare the points of every awake box of WORLD for the substeps of H: the last step's
+points become the old ones, each awake box's are found anew from where it is ([[#BXCELL]]), and
+each gets its effective masses, tangents, friction and the box's world inverse inertia; the
+boxes' turns are zeroed and their rows excused from the finalize phase's path check. Return the
+box set when some point is to be solved, else NIL. #BXSOLV"
+  (declare (type single-float h))
+  (let* ((set (physics-world-box-bodies world))
+         (awake (physics-world-awake world))
+         (n (body-columns-length awake)))
+    (declare (type box-set set) (type index n))
+    ;; this step's points become the old ones
+    (rotatef (box-set-points set) (box-set-previous set))
+    (rotatef (box-set-first set) (box-set-previous-first set))
+    (rotatef (box-set-count set) (box-set-previous-count set))
+    (box-point-columns-clear (box-set-points set))
+    (setf (box-set-row-count set) 0)
+    (when (plusp (box-set-live set))
+      (when (< (length (box-set-rows set)) (* 3 n))
+        (setf (box-set-rows set) (make-array (* 6 n) :element-type 'fixnum :initial-element 0)
+              (box-set-turns set) (make-array (* 6 n) :element-type 'single-float :initial-element 0.0)))
+      (fill (box-set-turns set) 0.0 :end (* 3 n))
+      (with-world-parameters (margin (zeta damping-ratio) push-max) world
+        (let* ((dt (physics-world-current-dt world))
+               (gstep (gravity-step world dt))
+               (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h)))
+               (near (and (= (physics-world-near-cells-step world) (physics-world-step-count world))
+                          (physics-world-near-cells world)))
+               (rows (box-set-rows set)))
+          (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
+            (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
+                  (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
+          (with-body-columns (vx vy vz flags handle) awake
+            (dotimes (i n)
+              (when (logtest (aref flags i) +flag-box-shape+)
+                (let ((slot (handle-index (aref handle i)))
+                      (start (box-point-columns-length (box-set-points set))))
+                  (setf (aref rows (box-set-row-count set)) i)
+                  (incf (box-set-row-count set))
+                  ;; the finalize phase does not hold a box's path as a sphere's ([[#SQU33Z]])
+                  (when near (setf (aref near i) most-positive-single-float))
+                  (find-box-points world set i (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep)))
+                  (setf (aref (box-set-first set) slot) start
+                        (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))))
+        (prepare-box-point-masses world set)))
+    (and (plusp (box-point-columns-length (box-set-points set))) set)))
+
+(defun prepare-box-point-masses (world set)
+  "Write each of SET's points' box inverse mass and world inverse inertia, tangents, effective
+masses and friction; each gap gains the slop, so a box rests a slop deep as a sphere does. #BXSOLV"
+  (declare (type box-set set) #.+kernel-policy+)
+  (let ((awake (physics-world-awake world)) (points (box-set-points set))
+        (slop (f32 (physics-world-slop world))))
+    (declare (type single-float slop))
+    (with-body-columns (qw qx qy qz inverse-mass (fr friction) handle) awake
+      (with-box-point-columns (row nx ny nz rx ry rz t1x t1y t1z t2x t2y t2z normal-mass tangent-mass-1
+                               tangent-mass-2 friction im i11 i12 i13 i22 i23 i33 separation)
+          points
+        (dotimes (k (box-point-columns-length points))
+          (setf (aref separation k) (+ (aref separation k) slop))
+          (let* ((i (aref row k)) (slot (handle-index (aref handle i)))
+                 (m (aref inverse-mass i))
+                 (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot))
+                 ;; the inverse inertia in the box's frame: 3 / (m (b^2 + c^2)) and its like
+                 (dx (/ (* 3.0 m) (+ (* hy hy) (* hz hz))))
+                 (dy (/ (* 3.0 m) (+ (* hx hx) (* hz hz))))
+                 (dz (/ (* 3.0 m) (+ (* hx hx) (* hy hy)))))
+            (declare (type index i) (type single-float m hx hy hz dx dy dz))
+            (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+                (box-axes (aref qw i) (aref qx i) (aref qy i) (aref qz i))
+              (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+              ;; R D R^T
+              (setf (aref im k) m
+                    (aref i11 k) (+ (* r11 r11 dx) (* r12 r12 dy) (* r13 r13 dz))
+                    (aref i12 k) (+ (* r11 r21 dx) (* r12 r22 dy) (* r13 r23 dz))
+                    (aref i13 k) (+ (* r11 r31 dx) (* r12 r32 dy) (* r13 r33 dz))
+                    (aref i22 k) (+ (* r21 r21 dx) (* r22 r22 dy) (* r23 r23 dz))
+                    (aref i23 k) (+ (* r21 r31 dx) (* r22 r32 dy) (* r23 r33 dz))
+                    (aref i33 k) (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz))
+                    (aref friction k) (aref fr i)))
+            (multiple-value-bind (ax ay az bx by bz) (box-tangents (aref nx k) (aref ny k) (aref nz k))
+              (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
+            (flet ((mass-along (ux uy uz)
+                     (declare (type single-float ux uy uz))
+                     ;; 1 / (1/m + (r x u) . I^-1 (r x u))
+                     (let* ((px (- (* (aref ry k) uz) (* (aref rz k) uy)))
+                            (py (- (* (aref rz k) ux) (* (aref rx k) uz)))
+                            (pz (- (* (aref rx k) uy) (* (aref ry k) ux)))
+                            (kk (+ m (* px (+ (* (aref i11 k) px) (* (aref i12 k) py) (* (aref i13 k) pz)))
+                                   (* py (+ (* (aref i12 k) px) (* (aref i22 k) py) (* (aref i23 k) pz)))
+                                   (* pz (+ (* (aref i13 k) px) (* (aref i23 k) py) (* (aref i33 k) pz))))))
+                       (if (> kk 0.0) (/ 1.0 kk) 0.0))))
+              (setf (aref normal-mass k) (mass-along (aref nx k) (aref ny k) (aref nz k))
+                    (aref tangent-mass-1 k) (mass-along (aref t1x k) (aref t1y k) (aref t1z k))
+                    (aref tangent-mass-2 k) (mass-along (aref t2x k) (aref t2y k) (aref t2z k)))))))))
+  set)
+
+(defmacro with-box-point ((v k) &body body)
+  "Run BODY for box point K, its columns bound by with-box-point-columns, over the solver's
+velocities V, with O the box's solver row and (push! PX PY PZ) the impulse P applied at the
+point: P/m to the velocity, I^-1 (r x P) to the spin. #BXSOLV"
+  `(let ((o (solver-row (aref row ,k))))
+     (declare (type index o))
+     (flet ((push! (px py pz)
+              (declare (type single-float px py pz))
+              (let* ((m (aref im ,k))
+                     (tx (- (* (aref ry ,k) pz) (* (aref rz ,k) py)))
+                     (ty (- (* (aref rz ,k) px) (* (aref rx ,k) pz)))
+                     (tz (- (* (aref rx ,k) py) (* (aref ry ,k) px))))
+                (setf (aref ,v o) (+ (aref ,v o) (* m px))
+                      (aref ,v (+ o 1)) (+ (aref ,v (+ o 1)) (* m py))
+                      (aref ,v (+ o 2)) (+ (aref ,v (+ o 2)) (* m pz))
+                      (aref ,v (+ o 3)) (+ (aref ,v (+ o 3)) (+ (* (aref i11 ,k) tx) (* (aref i12 ,k) ty) (* (aref i13 ,k) tz)))
+                      (aref ,v (+ o 4)) (+ (aref ,v (+ o 4)) (+ (* (aref i12 ,k) tx) (* (aref i22 ,k) ty) (* (aref i23 ,k) tz)))
+                      (aref ,v (+ o 5)) (+ (aref ,v (+ o 5)) (+ (* (aref i13 ,k) tx) (* (aref i23 ,k) ty) (* (aref i33 ,k) tz))))))
+            (point-velocity ()
+              ;; v + w x r
+              (values (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
+                      (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
+                      (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k)))))))
+       (declare (inline push! point-velocity) (ignorable #'point-velocity))
+       ,@body)))
+
+(defun warm-start-box-points (set v)
+  "Apply every box point's carried impulses again, at the start of a substep. #BXSOLV"
+  (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
+  (let ((points (box-set-points set)))
+    (with-box-point-columns (row nx ny nz rx ry rz t1x t1y t1z t2x t2y t2z normal-impulse tangent-impulse-1
+                             tangent-impulse-2 im i11 i12 i13 i22 i23 i33)
+        points
+      (dotimes (k (box-point-columns-length points))
+        (with-box-point (v k)
+          (let ((pn (aref normal-impulse k)) (p1 (aref tangent-impulse-1 k)) (p2 (aref tangent-impulse-2 k)))
+            (push! (+ (* pn (aref nx k)) (* p1 (aref t1x k)) (* p2 (aref t2x k)))
+                   (+ (* pn (aref ny k)) (* p1 (aref t1y k)) (* p2 (aref t2y k)))
+                   (+ (* pn (aref nz k)) (* p1 (aref t1z k)) (* p2 (aref t2z k)))))))))
+  nil)
+
+(defun solve-box-points (set v d inv-h use-bias)
+  "One pass over the box points: each normal impulse, with the soft bias when USE-BIAS (the
+solve) and without it (the relax), clamped to push only; then its friction, held in the cone. #BXSOLV"
+  (declare (type box-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
+  (let ((points (box-set-points set)) (turns (box-set-turns set))
+        (bias-rate (box-set-bias-rate set)) (mass-scale (box-set-mass-scale set))
+        (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set)))
+    (declare (type f32-column turns) (type single-float bias-rate mass-scale impulse-scale push-max))
+    (with-box-point-columns (row nx ny nz rx ry rz t1x t1y t1z t2x t2y t2z separation normal-mass
+                             tangent-mass-1 tangent-mass-2 friction normal-impulse tangent-impulse-1
+                             tangent-impulse-2 im i11 i12 i13 i22 i23 i33)
+        points
+      (dotimes (k (box-point-columns-length points))
+        (with-box-point (v k)
+          (let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
+                 (ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
+                 (lx (aref rx k)) (ly (aref ry k)) (lz (aref rz k))
+                 (qx (aref turns tr)) (qy (aref turns (+ tr 1))) (qz (aref turns (+ tr 2)))
+                 ;; the gap now: moved by the box's delta and its turn
+                 (s (+ (aref separation k)
+                       (* ax (+ (aref d p) (- (* qy lz) (* qz ly))))
+                       (* ay (+ (aref d (+ p 1)) (- (* qz lx) (* qx lz))))
+                       (* az (+ (aref d (+ p 2)) (- (* qx ly) (* qy lx))))))
+                 (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
+                 (positive (> s 0.0))
+                 (bias (cond (positive (* s inv-h))
+                             (use-bias (max (* bias-rate s) (- push-max)))
+                             (t 0.0)))
+                 (ms (if (and use-bias (not positive)) mass-scale 1.0))
+                 (is (if (and use-bias (not positive)) impulse-scale 0.0))
+                 (old (aref normal-impulse k))
+                 (new (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old))))
+                 (pn (- new old)))
+            (declare (type index i p tr) (type single-float s vn bias ms is old new pn))
+            (setf (aref normal-impulse k) new)
+            (push! (* pn ax) (* pn ay) (* pn az))
+            ;; friction in the cone of mu times the normal impulse
+            (multiple-value-bind (ux uy uz) (point-velocity)
+              (let* ((o1 (aref tangent-impulse-1 k)) (o2 (aref tangent-impulse-2 k))
+                     (n1 (- o1 (* (aref tangent-mass-1 k) (+ (* ux (aref t1x k)) (* uy (aref t1y k)) (* uz (aref t1z k))))))
+                     (n2 (- o2 (* (aref tangent-mass-2 k) (+ (* ux (aref t2x k)) (* uy (aref t2y k)) (* uz (aref t2z k))))))
+                     (limit (* (aref friction k) new))
+                     (len2 (+ (* n1 n1) (* n2 n2))))
+                (declare (type single-float o1 o2 n1 n2 limit len2))
+                (when (> len2 (* limit limit))
+                  (let ((scale (if (> len2 0.0) (/ limit (fsqrt len2)) 0.0)))
+                    (setf n1 (* n1 scale) n2 (* n2 scale))))
+                (setf (aref tangent-impulse-1 k) n1 (aref tangent-impulse-2 k) n2)
+                (let ((d1 (- n1 o1)) (d2 (- n2 o2)))
+                  (push! (+ (* d1 (aref t1x k)) (* d2 (aref t2x k)))
+                         (+ (* d1 (aref t1y k)) (* d2 (aref t2y k)))
+                         (+ (* d1 (aref t1z k)) (* d2 (aref t2z k))))))))))))
+  nil)
+
+(defun turn-box-rows (set v h)
+  "Add to each awake box's turn its spin over the substep H, after the positions integrate. #BXSOLV"
+  (declare (type box-set set) (type f32-column v) (type single-float h) #.+kernel-policy+)
+  (let ((rows (box-set-rows set)) (turns (box-set-turns set)))
+    (declare (type fixnum-column rows) (type f32-column turns))
+    (dotimes (j (box-set-row-count set))
+      (let* ((i (aref rows j)) (o (solver-row i)) (tr (* 3 i)))
+        (declare (type index i o tr))
+        (setf (aref turns tr) (+ (aref turns tr) (* h (aref v (+ o 3))))
+              (aref turns (+ tr 1)) (+ (aref turns (+ tr 1)) (* h (aref v (+ o 4))))
+              (aref turns (+ tr 2)) (+ (aref turns (+ tr 2)) (* h (aref v (+ o 5))))))))
+  nil)
+;; Box points in the substeps:1 ends here
+
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (declaim (inline held-marking-p mark-held))
 (defun held-marking-p (world)
@@ -6907,6 +7488,8 @@ bodies to half the push-out speed. #IDVK7G"
                     0))
          ;; the joints to solve, prepared, or NIL ([[#J0S0LV]])
          (joints (and (physics-world-joints world) (prepare-joints world h)))
+         ;; the boxes' points, found and prepared, or NIL ([[#BXSOLV]])
+         (boxes (and (physics-world-box-bodies world) (prepare-box-points world h)))
          (v (physics-world-velocities world)) (d (physics-world-deltas world)))
     (declare (type single-float h inv-h) (type fixnum relaxes boxed))
     (let ((squeezed nil))
@@ -6914,8 +7497,10 @@ bodies to half the push-out speed. #IDVK7G"
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
         (when joints (warm-start-joints joints v d))
+        (when boxes (warm-start-box-points boxes v))
         (physics-warm-start kernels world)
         (when joints (solve-joints joints v d inv-h t))
+        (when boxes (solve-box-points boxes v d inv-h t))
         (physics-solve-contacts kernels world inv-h t elapsed)
         (flet ((yield-boxes ()
                  ;; a box that yields squeezes what it presses: from then on the step holds it
@@ -6924,8 +7509,10 @@ bodies to half the push-out speed. #IDVK7G"
                    (setf squeezed (squeeze-speed-limit world)))))
           (when (plusp boxed) (yield-boxes))
           (physics-integrate-positions kernels world h)
+          (when boxes (turn-box-rows boxes v h))
           (dotimes (k relaxes)
             (when joints (solve-joints joints v d inv-h nil))
+            (when boxes (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
@@ -7260,6 +7847,21 @@ velocity, awake set first, each set in row order. Equal hashes mean bit-equal st
             (setf hash (ldb (byte 62 0)
                             (+ (* hash 1099511628211)
                                (ldb (byte 32 0) (sb-kernel:single-float-bits (aref column i))))))))))
+    ;; a world of boxes hashes orientations and extents too ([[#BXR0WS]])
+    (let ((boxes (physics-world-box-bodies world)))
+      (when boxes
+        (dolist (buffer (list (physics-world-awake world) (physics-world-sleeping world)))
+          (with-body-columns (qw qx qy qz handle) buffer
+            (dotimes (i (body-columns-length buffer))
+              (let ((slot (handle-index (aref handle i))))
+                (dolist (value (list* (aref qw i) (aref qx i) (aref qy i) (aref qz i)
+                                      (if (< slot (length (box-set-hx boxes)))
+                                          (list (aref (box-set-hx boxes) slot) (aref (box-set-hy boxes) slot)
+                                                (aref (box-set-hz boxes) slot))
+                                          (list 0.0 0.0 0.0))))
+                  (setf hash (ldb (byte 62 0)
+                                  (+ (* hash 1099511628211)
+                                     (ldb (byte 32 0) (sb-kernel:single-float-bits value))))))))))))
     hash))
 ;; Determinism is chosen: same code, same start, same hash:1 ends here
 
@@ -7319,6 +7921,8 @@ physics-world-invalid naming the first broken invariant. #V4L1D8"
              (mortal (count-if #'plusp (body-columns-life sleeping) :end (body-columns-length sleeping))))
         (unless (= mortal (physics-world-mortal-sleepers world))
           (fail "~D mortal sleepers counted as ~D" mortal (physics-world-mortal-sleepers world))))
+      ;; the box set agrees with the box rows ([[#BXR0WS]])
+      (validate-box-set world #'fail)
       ;; the forces and gravity scales ([[#F0RC3S]]) cover every slot, a free slot holds neither,
       ;; no force waits unless one was applied, and the scales other than 1 are counted
       (let ((pushes (physics-world-pushes world)) (scaled 0))
