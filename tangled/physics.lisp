@@ -5605,16 +5605,21 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 
 (defmethod physics-warm-start ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
-    (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
-             cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf))))
+    (if (solving-joints world)
+        ;; joints are solved colour by colour with the contacts ([[#J0S0LV]])
+        (warm-start-with-joints kernels world)
+        (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
+                 cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf)))))
 
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
-    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-      (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
-                     cbuf (physics-world-velocities world) (physics-world-deltas world)
-                     0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-                     (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
+    (if (solving-joints world)
+        (solve-with-joints kernels world inv-h use-bias elapsed)
+        (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+          (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
+                         cbuf (physics-world-velocities world) (physics-world-deltas world)
+                         0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+                         (f32 (physics-world-push-max world)) threshold hgx hgy hgz)))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
@@ -5675,7 +5680,7 @@ and steps, and what the step's prepare writes for the substeps. #J0STOR"
 (defstruct (joint-set (:constructor %make-joint-set (ids)) (:copier nil))
   "Everything a world keeps for its joints: the rows, their handle table, and by body slot the
 joint groups' parents, each body's count of joints and the passes' marks; the stiff softness
-of this step's limits. #J0STOR"
+of this step's limits, and the step's colouring of its joints. #J0STOR"
   (rows (make-joint-columns) :type joint-columns)
   (ids nil :type handle-table)
   (parent (make-array 0 :element-type 'fixnum) :type fixnum-column)
@@ -5683,7 +5688,14 @@ of this step's limits. #J0STOR"
   (marks (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (groups-stale nil)
   (limit-bias 0.0 :type single-float)
-  (limit-mass 1.0 :type single-float))
+  (limit-mass 1.0 :type single-float)
+  ;; the step's colouring of the joints to solve ([[#J0S0LV]]): each joint's colour by row, the
+  ;; rows in colour order, each colour's run of them, and whether the substeps are solving them
+  (colors (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (order (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (color-starts (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
+   :type fixnum-column)
+  (solving nil))
 
 (declaim (inline group-root))
 (defun group-root (parent slot)
@@ -6028,6 +6040,7 @@ solver rows, the turned levers, the separation, the masses, the effective mass (
 inverted matrix, a distance joint's axial mass) and the soft coefficients. Return the joint set
 when some joint is to be solved, else NIL. #J0S0LV"
   (let ((set (physics-world-joints world)))
+    (when set (setf (joint-set-solving set) nil))
     (when (and set (plusp (joint-columns-length (joint-set-rows set))))
       (let* ((rows (joint-set-rows set))
              (ids (physics-world-ids world)) (sets (handle-table-set ids)) (locals (handle-table-local ids))
@@ -6115,7 +6128,131 @@ when some joint is to be solved, else NIL. #J0S0LV"
                                   (setf (aref bias-rate j) br (aref mass-scale j) ms (aref impulse-scale j) is))
                                 (setf (aref bias-rate j) stiff-bias (aref mass-scale j) stiff-mass
                                       (aref impulse-scale j) stiff-impulse)))))))))))
+        (when (plusp active) (color-joints world set))
+        (setf (joint-set-solving set) (plusp active))
         (and (plusp active) set)))))
+
+(defun color-joints (world set)
+  "Colour the joints of SET prepared for this step on the colour masks the contacts' colouring
+left ([[#SSMPYW]]): first each joint of two awake bodies takes the lowest of colours 0-19 free at
+both, then each joint of one awake body takes, at it, the highest free colour among those in use,
+or failing that the lowest free colour; a joint that fits nowhere goes to the overflow colour 24.
+Then write SET's order, its prepared rows colour by colour and in row order within a colour, and
+its colour starts. #J0S0LV"
+  (declare #.+kernel-policy+)
+  (let* ((rows (joint-set-rows set)) (n (joint-columns-length rows))
+         (masks (physics-world-color-masks world))
+         (contact-starts (physics-world-color-starts world))
+         (dummy (body-columns-length (physics-world-awake world)))
+         (used 0))
+    (declare (type fixnum-column masks contact-starts) (type index n dummy) (type (unsigned-byte 32) used))
+    (when (< (length (joint-set-colors set)) n)
+      (setf (joint-set-colors set) (make-array (max 16 (* 2 n)) :element-type 'fixnum :initial-element 0)
+            (joint-set-order set) (make-array (max 16 (* 2 n)) :element-type 'fixnum :initial-element 0)))
+    (let ((colors (joint-set-colors set)) (order (joint-set-order set)) (starts (joint-set-color-starts set))
+          (row-a (joint-columns-row-a rows)) (row-b (joint-columns-row-b rows)))
+      (declare (type fixnum-column colors order starts row-a row-b))
+      ;; the colours the contacts use
+      (dotimes (c +physics-max-colors+)
+        (when (< (aref contact-starts c) (aref contact-starts (1+ c)))
+          (setf used (logior used (ash 1 c)))))
+      (flet ((take (j color la lb)
+               ;; joint J takes COLOR, marked at the rows LA and LB (-1 for none)
+               (declare (type index j) (type fixnum color la lb))
+               (setf (aref colors j) color)
+               (when (< color +physics-max-colors+)
+                 (setf used (logior used (ash 1 color))
+                       (aref masks la) (logior (aref masks la) (ash 1 color)))
+                 (when (>= lb 0) (setf (aref masks lb) (logior (aref masks lb) (ash 1 color)))))))
+        (declare (inline take))
+        ;; pass one: joints of two awake bodies, the lowest colour free at both
+        (dotimes (j n)
+          (let ((la (aref row-a j)) (lb (aref row-b j)))
+            (declare (type fixnum la lb))
+            (cond ((< la 0) (setf (aref colors j) -2))
+                  ((= lb dummy) (setf (aref colors j) -1))
+                  (t (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
+                                         (1- (ash 1 +physics-dynamic-colors+)))))
+                       (take j (if (zerop free) +physics-max-colors+ (lowest-bit free)) la lb))))))
+        ;; pass two: joints of one awake body, as late among the used colours as it allows
+        (dotimes (j n)
+          (when (= (aref colors j) -1)
+            (let* ((la (aref row-a j))
+                   (free (logand (lognot (aref masks la)) (1- (ash 1 +physics-max-colors+)))))
+              (declare (type index la) (type (unsigned-byte 32) free))
+              (take j (cond ((plusp (logand free used)) (highest-bit (logand free used)))
+                            ((plusp free) (lowest-bit free))
+                            (t +physics-max-colors+))
+                    la -1)))))
+      ;; each colour's count, its end by the running sum, and its rows placed from the end back
+      (fill starts 0)
+      (dotimes (j n) (when (>= (aref colors j) 0) (incf (aref starts (aref colors j)))))
+      (loop with at of-type index = 0
+            for c from 0 to +physics-max-colors+
+            do (incf at (aref starts c)) (setf (aref starts c) at)
+            finally (setf (aref starts (1+ +physics-max-colors+)) at))
+      (loop for j of-type fixnum from (1- n) downto 0
+            for c of-type fixnum = (aref colors j)
+            when (>= c 0)
+              do (setf (aref order (decf (aref starts c))) j))
+      set)))
+
+(defun solving-joints (world)
+  "The joint set whose joints WORLD's substeps are solving, or NIL: what the kernel families'
+constraint passes test once a call. #J0S0LV"
+  (let ((set (physics-world-joints world)))
+    (and set (joint-set-solving set) set)))
+
+(defmacro do-constraint-colours ((start end world &key settle joints) colour-form overflow-form)
+  "Run, for each colour of WORLD's constraints in turn, the form of JOINTS, (SET FORM), with SET
+bound to the joint set and START END to the colour's run of its order, when the substeps solve
+joints and the colour has some (SETTLE first), then COLOUR-FORM with START END bound to the
+colour's run of the constraint buffer, when it has one; then SETTLE, then the overflow colour's
+joints and OVERFLOW-FORM. #J0S0LV"
+  (let ((starts (gensym "STARTS")) (c (gensym "C")) (set (or (first joints) (gensym "SET"))))
+    `(let ((,starts (physics-world-color-starts ,world))
+           (,set (solving-joints ,world)))
+       (declare (type fixnum-column ,starts))
+       (flet ((joint-run (,c)
+                (declare (type fixnum ,c))
+                (let* ((js (joint-set-color-starts ,set))
+                       (,start (aref js ,c)) (,end (aref js (1+ ,c))))
+                  (declare (type fixnum-column js) (type index ,start ,end))
+                  (when (< ,start ,end) ,@(when settle (list settle)) ,(second joints)))))
+         (declare (inline joint-run))
+         (dotimes (,c +physics-max-colors+)
+           (when ,set (joint-run ,c))
+           (let ((,start (aref ,starts ,c)) (,end (aref ,starts (1+ ,c))))
+             (when (< ,start ,end) ,colour-form)))
+         ,@(when settle (list settle))
+         (when ,set (joint-run +physics-max-colors+))
+         (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
+           (when (< ,start ,end) ,overflow-form))))))
+
+(defun warm-start-with-joints (kernels world)
+  "The scalar family's warm start in a step that solves joints: colour by colour, the colour's
+joints, then its contacts, as the wide families run them. #J0S0LV"
+  (let ((cbuf (physics-world-constraints world))
+        (v (physics-world-velocities world)) (d (physics-world-deltas world))
+        (warm (kernel-variant-warm-start (world-kernel-variant world kernels))))
+    (do-constraint-colours (s e world :joints (set (warm-start-joints set v d s e)))
+      (funcall warm cbuf v s e)
+      (funcall warm cbuf v s e))))
+
+(defun solve-with-joints (kernels world inv-h use-bias elapsed)
+  "The scalar family's solve or relax pass in a step that solves joints: colour by colour, the
+colour's joints, then its contacts, as the wide families run them. #J0S0LV"
+  (let ((cbuf (physics-world-constraints world))
+        (v (physics-world-velocities world)) (d (physics-world-deltas world))
+        (push-max (f32 (physics-world-push-max world)))
+        (solve (kernel-variant-solve (world-kernel-variant world kernels))))
+    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+      (flet ((contacts (s e)
+               (solve-handing solve 'solve-impact-range 1 cbuf v d s e inv-h use-bias elapsed push-max
+                              threshold hgx hgy hgz)))
+        (do-constraint-colours (s e world :joints (set (solve-joints set v d inv-h use-bias s e)))
+          (contacts s e)
+          (contacts s e))))))
 
 (defmacro with-joint-row ((v d j) &body body)
   "Run BODY for the prepared joint J, its columns bound by with-joint-columns, over the solver's velocities V and deltas D, with:
@@ -6157,15 +6294,18 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
        (declare (inline relative-velocity push!) (ignorable #'relative-velocity))
        ,@body)))
 
-(defun warm-start-joints (set v d)
-  "Apply every prepared joint's carried impulse again, at the start of a substep. #J0S0LV"
-  (declare (type joint-set set) (type f32-column v d) #.+kernel-policy+)
-  (let ((rows (joint-set-rows set)))
+(defun warm-start-joints (set v d start end)
+  "Apply again the carried impulse of each prepared joint of SET at START..END of its colour order,
+at the start of a substep. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type index start end) #.+kernel-policy+)
+  (let ((rows (joint-set-rows set)) (order (joint-set-order set)))
+    (declare (type fixnum-column order))
     (with-joint-columns (kind row-a row-b rax ray raz rbx rby rbz sx sy sz ima imb iia iib
                          impulse-x impulse-y impulse-z)
         rows
-      (dotimes (j (joint-columns-length rows))
-        (when (>= (aref row-a j) 0)
+      (loop for i of-type index from start below end
+            for j of-type index = (aref order i) do
+        (progn
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
                 (push! (aref impulse-x j) (aref impulse-y j) (aref impulse-z j))
@@ -6174,19 +6314,22 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
                   (push! (* s cx) (* s cy) (* s cz)))))))))
   nil)
 
-(defun solve-joints (set v d inv-h use-bias)
-  "One pass over the prepared joints in row order: with the soft bias when USE-BIAS (the solve),
-without it (the relax), but for a spring's length, which keeps its own coefficients. #J0S0LV"
-  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
-  (let ((rows (joint-set-rows set))
+(defun solve-joints (set v d inv-h use-bias start end)
+  "One pass over the prepared joints of SET at START..END of its colour order: with the soft bias
+when USE-BIAS (the solve), without it (the relax), but for a spring's length, which keeps its
+own coefficients. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) (type index start end)
+           #.+kernel-policy+)
+  (let ((rows (joint-set-rows set)) (order (joint-set-order set))
         (limit-bias (joint-set-limit-bias set)) (limit-mass (joint-set-limit-mass set)))
-    (declare (type single-float limit-bias limit-mass))
+    (declare (type single-float limit-bias limit-mass) (type fixnum-column order))
     (with-joint-columns (kind flags row-a row-b rax ray raz rbx rby rbz sx sy sz ima imb iia iib
                          k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale limit-scale
                          rest-length min-length max-length impulse-x impulse-y impulse-z)
         rows
-      (dotimes (j (joint-columns-length rows))
-        (when (>= (aref row-a j) 0)
+      (loop for i of-type index from start below end
+            for j of-type index = (aref order i) do
+        (progn
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
                 (multiple-value-bind (vx vy vz) (relative-velocity)
@@ -6904,16 +7047,15 @@ bodies to half the push-out speed. #IDVK7G"
                     (note-box-rows world)
                     0))
          ;; the joints to solve, prepared, or NIL ([[#J0S0LV]])
-         (joints (and (physics-world-joints world) (prepare-joints world h)))
-         (v (physics-world-velocities world)) (d (physics-world-deltas world)))
+         (joints (and (physics-world-joints world) (prepare-joints world h))))
     (declare (type single-float h inv-h) (type fixnum relaxes boxed))
     (let ((squeezed nil))
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
-        (when joints (warm-start-joints joints v d))
+        ;; the joints, when some are prepared, are solved inside these passes, colour by
+        ;; colour with the contacts ([[#J0S0LV]])
         (physics-warm-start kernels world)
-        (when joints (solve-joints joints v d inv-h t))
         (physics-solve-contacts kernels world inv-h t elapsed)
         (flet ((yield-boxes ()
                  ;; a box that yields squeezes what it presses: from then on the step holds it
@@ -6923,11 +7065,12 @@ bodies to half the push-out speed. #IDVK7G"
           (when (plusp boxed) (yield-boxes))
           (physics-integrate-positions kernels world h)
           (dotimes (k relaxes)
-            (when joints (solve-joints joints v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
         (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed)))))
+    ;; the joints' colouring serves these substeps only: a pass run by hand solves contacts alone
+    (when joints (setf (joint-set-solving joints) nil))
     world))
 
 (defparameter *physics-phases*

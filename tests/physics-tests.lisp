@@ -6264,6 +6264,46 @@ that it swings, and a loose ball on the floor under it. Return the world and the
     (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes)))
 ;; J0S0LV-families-agree-with-joints ends here
 
+;; [[file:../physics.org::#J0S0LV][J0S0LV-joints-share-the-colours]]
+(define-claim "J0S0LV" joints-share-the-colours
+    "In a swinging chain of touching balls no colour holds a body twice among its contacts and joints."
+  (let ((w (swinging-chain-world :scalar :sleep nil)) (shared 0))
+    (dotimes (step 40)
+      (step-physics-world w)
+      (let* ((set (luv-physics::physics-world-joints w))
+             (rows (luv-physics::joint-set-rows set))
+             (order (luv-physics::joint-set-order set)) (js (luv-physics::joint-set-color-starts set))
+             (cbuf (luv-physics::physics-world-constraints w)) (cs (luv-physics::physics-world-color-starts w))
+             (dummy (physics-world-awake-count w)) (clashes 0) (kinds (make-hash-table)))
+        (check (= (luv-physics::joint-columns-length rows) (aref js (1+ luv-physics::+physics-max-colors+)))
+               "step ~D: ~D joints in the order of ~D" step (aref js (1+ luv-physics::+physics-max-colors+))
+               (luv-physics::joint-columns-length rows))
+        (check (equal (loop for j below (luv-physics::joint-columns-length rows) collect j)
+                      (sort (coerce (subseq order 0 (aref js (1+ luv-physics::+physics-max-colors+))) 'list) #'<))
+               "step ~D: the order is no permutation of the joints" step)
+        (check (= (aref js luv-physics::+physics-max-colors+) (aref js (1+ luv-physics::+physics-max-colors+)))
+               "step ~D: joints in the overflow colour" step)
+        (dotimes (c luv-physics::+physics-max-colors+)
+          (let ((seen (make-hash-table)))
+            (flet ((meet (body kind)
+                     (unless (= body dummy)
+                       (when (gethash body seen) (incf clashes))
+                       (setf (gethash body seen) t)
+                       (pushnew kind (gethash body kinds))
+                       (when (= 2 (length (gethash body kinds))) (incf shared)))))
+              (loop for k from (aref cs c) below (aref cs (1+ c))
+                    when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
+                      do (meet (aref (luv-physics::constraint-columns-body-a cbuf) k) :contact)
+                         (meet (aref (luv-physics::constraint-columns-body-b cbuf) k) :contact))
+              (loop for i from (aref js c) below (aref js (1+ c))
+                    for j = (aref order i)
+                    do (check (= c (aref (luv-physics::joint-set-colors set) j)) "joint row ~D out of its colour" j)
+                       (meet (aref (luv-physics::joint-columns-row-a rows) j) :joint)
+                       (meet (aref (luv-physics::joint-columns-row-b rows) j) :joint)))))
+        (check (= 0 clashes) "step ~D: ~D bodies met twice in a colour" step clashes)))
+    (check (plusp shared) "no body was met by both a joint and a contact")))
+;; J0S0LV-joints-share-the-colours ends here
+
 ;; [[file:../physics.org::#J0S0LV][J0S0LV-joint-steps-cons-nothing]]
 (define-claim "J0S0LV" joint-steps-cons-nothing
     "60 steps of a jointed chain, after 60 to grow, cons 0 bytes."
