@@ -5619,16 +5619,21 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 
 (defmethod physics-warm-start ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
-    (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
-             cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf))))
+    (if (solving-joints world)
+        ;; joints are solved colour by colour with the contacts ([[#J0S0LV]])
+        (warm-start-with-joints kernels world)
+        (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
+                 cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf)))))
 
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
-    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-      (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
-                     cbuf (physics-world-velocities world) (physics-world-deltas world)
-                     0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-                     (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
+    (if (solving-joints world)
+        (solve-with-joints kernels world inv-h use-bias elapsed)
+        (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+          (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
+                         cbuf (physics-world-velocities world) (physics-world-deltas world)
+                         0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+                         (f32 (physics-world-push-max world)) threshold hgx hgy hgz)))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
@@ -5689,7 +5694,7 @@ and steps, and what the step's prepare writes for the substeps. #J0STOR"
 (defstruct (joint-set (:constructor %make-joint-set (ids)) (:copier nil))
   "Everything a world keeps for its joints: the rows, their handle table, and by body slot the
 joint groups' parents, each body's count of joints and the passes' marks; the stiff softness
-of this step's limits. #J0STOR"
+of this step's limits, and the step's colouring of its joints. #J0STOR"
   (rows (make-joint-columns) :type joint-columns)
   (ids nil :type handle-table)
   (parent (make-array 0 :element-type 'fixnum) :type fixnum-column)
@@ -5697,7 +5702,16 @@ of this step's limits. #J0STOR"
   (marks (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (groups-stale nil)
   (limit-bias 0.0 :type single-float)
-  (limit-mass 1.0 :type single-float))
+  (limit-mass 1.0 :type single-float)
+  ;; the step's colouring of the joints to solve ([[#J0S0LV]]): each joint's colour by row, the
+  ;; rows in colour order, each colour's run of them, the rows the sort into that order writes,
+  ;; and whether the substeps are solving them
+  (colors (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (order (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (scratch nil)
+  (color-starts (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
+   :type fixnum-column)
+  (solving nil))
 
 (declaim (inline group-root))
 (defun group-root (parent slot)
@@ -6036,100 +6050,277 @@ adds, and no less than zero. #J0S0LV"
   (declare (type single-float hertz zeta h))
   (physics-softness hertz (max 0.0 (- zeta (* 0.5 h 2.0 (f32 pi) hertz))) h))
 
+(defun place-joint (rows j dummy sets locals awake sleeping)
+  "Note, for joint J of ROWS, the two solver rows (DUMMY for a fixed point or a sleeping second
+body), the levers, its anchors turned by its bodies' orientations, the bodies' masses and the
+anchors' separation at the step's start; or -1 as its first row when its first body is not
+awake. SETS and LOCALS are the body handle table's, AWAKE and SLEEPING the body buffers. Return
+true when the joint is to be solved. #J0S0LV"
+  (declare (type joint-columns rows) (type index j dummy) (type fixnum-column sets locals)
+           (type body-columns awake sleeping) #.+kernel-policy+)
+  (progn
+    (with-joint-columns (body-a body-b ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz sx sy sz
+                         ima imb iia iib)
+        rows
+      (flet ((place (h)
+               ;; the set and row of a live body, or 0 and -1 for none
+               (declare (type fixnum h))
+               (if (= h +no-body+) (values 0 -1) (values (aref sets (handle-index h)) (aref locals (handle-index h))))))
+        (multiple-value-bind (set-a la) (place (aref body-a j))
+          (when (/= set-a +set-awake+)
+            (setf (aref row-a j) -1)
+            (return-from place-joint nil))
+          (multiple-value-bind (set-b lb) (place (aref body-b j))
+            (let ((b-moves (= set-b +set-awake+)))
+              (setf (aref row-a j) la (aref row-b j) (if b-moves lb dummy))
+              (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) awake
+                (multiple-value-bind (rx ry rz)
+                    (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
+                  (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz
+                        (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la)
+                        (aref sx j) (- (+ (aref x la) rx)) (aref sy j) (- (+ (aref y la) ry))
+                        (aref sz j) (- (+ (aref z la) rz)))))
+              (if (< lb 0)
+                  ;; a fixed point: no lever, no mass, the point itself
+                  (setf (aref rbx j) 0.0 (aref rby j) 0.0 (aref rbz j) 0.0 (aref imb j) 0.0 (aref iib j) 0.0
+                        (aref sx j) (+ (aref sx j) (aref bx j)) (aref sy j) (+ (aref sy j) (aref by j))
+                        (aref sz j) (+ (aref sz j) (aref bz j)))
+                  (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) (if b-moves awake sleeping)
+                    (multiple-value-bind (rx ry rz)
+                        (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
+                      (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz
+                            (aref imb j) (if b-moves (aref inverse-mass lb) 0.0)
+                            (aref iib j) (if b-moves (aref inverse-inertia lb) 0.0)
+                            (aref sx j) (+ (aref sx j) (aref x lb) rx) (aref sy j) (+ (aref sy j) (aref y lb) ry)
+                            (aref sz j) (+ (aref sz j) (aref z lb) rz)))))
+              t)))))))
+
+(defun joint-effective-mass (rows j)
+  "Write the effective mass of the placed joint J of ROWS: a point joint's matrix K of the
+anchors, inverted (its six entries), or a distance joint's axial mass along its separation. #J0S0LV"
+  (declare (type joint-columns rows) (type index j) #.+kernel-policy+)
+  (with-joint-columns (kind rax ray raz rbx rby rbz sx sy sz ima imb iia iib k11 k12 k13 k22 k23 k33) rows
+    (let* ((m (+ (aref ima j) (aref imb j))) (ia (aref iia j)) (ib (aref iib j))
+           (ax (aref rax j)) (ay (aref ray j)) (az (aref raz j))
+           (bx (aref rbx j)) (by (aref rby j)) (bz (aref rbz j)))
+      (declare (type single-float m ia ib ax ay az bx by bz))
+      (if (= (aref kind j) +joint-point+)
+          (let* ((a11 (+ m (* ia (+ (* ay ay) (* az az))) (* ib (+ (* by by) (* bz bz)))))
+                 (a22 (+ m (* ia (+ (* ax ax) (* az az))) (* ib (+ (* bx bx) (* bz bz)))))
+                 (a33 (+ m (* ia (+ (* ax ax) (* ay ay))) (* ib (+ (* bx bx) (* by by)))))
+                 (a12 (- (+ (* ia ax ay) (* ib bx by))))
+                 (a13 (- (+ (* ia ax az) (* ib bx bz))))
+                 (a23 (- (+ (* ia ay az) (* ib by bz))))
+                 (c11 (- (* a22 a33) (* a23 a23))) (c12 (- (* a13 a23) (* a12 a33)))
+                 (c13 (- (* a12 a23) (* a13 a22))) (c22 (- (* a11 a33) (* a13 a13)))
+                 (c23 (- (* a12 a13) (* a11 a23))) (c33 (- (* a11 a22) (* a12 a12)))
+                 (det (+ (* a11 c11) (* a12 c12) (* a13 c13)))
+                 (inv (if (> det 0.0) (/ 1.0 det) 0.0)))
+            (setf (aref k11 j) (* c11 inv) (aref k12 j) (* c12 inv) (aref k13 j) (* c13 inv)
+                  (aref k22 j) (* c22 inv) (aref k23 j) (* c23 inv) (aref k33 j) (* c33 inv)))
+          (let* ((cx (aref sx j)) (cy (aref sy j)) (cz (aref sz j))
+                 (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+                 (s (if (> len 1e-9) (/ 1.0 len) 0.0))
+                 (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
+                 (ax1 (- (* ay nz) (* az ny))) (ay1 (- (* az nx) (* ax nz))) (az1 (- (* ax ny) (* ay nx)))
+                 (bx1 (- (* by nz) (* bz ny))) (by1 (- (* bz nx) (* bx nz))) (bz1 (- (* bx ny) (* by nx)))
+                 (k (+ m (* ia (+ (* ax1 ax1) (* ay1 ay1) (* az1 az1)))
+                       (* ib (+ (* bx1 bx1) (* by1 by1) (* bz1 bz1))))))
+            (setf (aref k11 j) (if (> k 0.0) (/ 1.0 k) 0.0)))))))
+
+(defun joint-soft-coefficients (rows j h stiff-bias stiff-mass stiff-impulse)
+  "Write the soft coefficients of the placed joint J of ROWS over substep H: its own hertz's (a
+spring's by spring-softness), or the stiff ones, STIFF-BIAS STIFF-MASS STIFF-IMPULSE; and the
+stiff impulse scale of its limits. #J0S0LV"
+  (declare (type joint-columns rows) (type index j) (type single-float h stiff-bias stiff-mass stiff-impulse)
+           #.+kernel-policy+)
+  (with-joint-columns (flags hertz damping-ratio bias-rate mass-scale impulse-scale limit-scale) rows
+    (setf (aref limit-scale j) stiff-impulse)
+    (if (> (aref hertz j) 0.0)
+        (multiple-value-bind (br ms is)
+            (if (logtest (aref flags j) +joint-spring+)
+                (spring-softness (aref hertz j) (aref damping-ratio j) h)
+                (physics-softness (aref hertz j) (aref damping-ratio j) h))
+          (setf (aref bias-rate j) br (aref mass-scale j) ms (aref impulse-scale j) is))
+        (setf (aref bias-rate j) stiff-bias (aref mass-scale j) stiff-mass (aref impulse-scale j) stiff-impulse))))
+
 (defun prepare-joints (world h)
-  "Write, for every joint of WORLD whose first body is awake, what the substeps of H read: the
-solver rows, the turned levers, the separation, the masses, the effective mass (a point joint's
-inverted matrix, a distance joint's axial mass) and the soft coefficients. Return the joint set
-when some joint is to be solved, else NIL. #J0S0LV"
+  "Write, for every joint of WORLD whose first body is awake, what the substeps of H read, stage
+by stage: the solver rows, the turned levers, the masses and the separation (place-joint), the
+effective mass (joint-effective-mass), the soft coefficients (joint-soft-coefficients); then
+colour the joints (color-joints). Return the joint set when some joint is to be solved, else
+NIL. #J0S0LV"
+  (let* ((set (physics-world-joints world))
+         (rows (and set (joint-set-rows set)))
+         (ids (physics-world-ids world))
+         (awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (dummy (body-columns-length awake))
+         (active 0))
+    (declare (type fixnum active))
+    (when set (setf (joint-set-solving set) nil))
+    (when (and set (plusp (joint-columns-length rows)))
+      (multiple-value-bind (stiff-hertz stiff-zeta) (joint-stiffness world h)
+        (multiple-value-bind (stiff-bias stiff-mass stiff-impulse) (physics-softness stiff-hertz stiff-zeta h)
+          (setf (joint-set-limit-bias set) stiff-bias (joint-set-limit-mass set) stiff-mass)
+          (dotimes (j (joint-columns-length rows))
+            (when (place-joint rows j dummy (handle-table-set ids) (handle-table-local ids) awake sleeping)
+              (incf active)
+              (joint-effective-mass rows j)
+              (joint-soft-coefficients rows j h stiff-bias stiff-mass stiff-impulse)))))
+      (when (plusp active) (color-joints world set))
+      (setf (joint-set-solving set) (plusp active)))
+    (and (plusp active) set)))
+
+(defun color-joints (world set)
+  "Colour the joints of SET prepared for this step on the colour masks the contacts' colouring
+left ([[#SSMPYW]]): first each joint of two awake bodies takes the lowest of colours 0-19 free at
+both, then each joint of one awake body takes, at it, the highest free colour among those in use,
+or failing that the lowest free colour; a joint that fits nowhere goes to the overflow colour 24.
+Then write SET's order, its prepared rows colour by colour and in row order within a colour,
+the others after them, and its colour starts, and sort its rows into that order. #J0S0LV"
+  (declare #.+kernel-policy+)
+  (let* ((rows (joint-set-rows set)) (n (joint-columns-length rows))
+         (masks (physics-world-color-masks world))
+         (contact-starts (physics-world-color-starts world))
+         (dummy (body-columns-length (physics-world-awake world)))
+         (used 0))
+    (declare (type fixnum-column masks contact-starts) (type index n dummy) (type (unsigned-byte 32) used))
+    (when (< (length (joint-set-colors set)) n)
+      (setf (joint-set-colors set) (make-array (max 16 (* 2 n)) :element-type 'fixnum :initial-element 0)
+            (joint-set-order set) (make-array (max 16 (* 2 n)) :element-type 'fixnum :initial-element 0)))
+    (let ((colors (joint-set-colors set)) (order (joint-set-order set)) (starts (joint-set-color-starts set))
+          (row-a (joint-columns-row-a rows)) (row-b (joint-columns-row-b rows)))
+      (declare (type fixnum-column colors order starts row-a row-b))
+      ;; the colours the contacts use
+      (dotimes (c +physics-max-colors+)
+        (when (< (aref contact-starts c) (aref contact-starts (1+ c)))
+          (setf used (logior used (ash 1 c)))))
+      (flet ((take (j color la lb)
+               ;; joint J takes COLOR, marked at the rows LA and LB (-1 for none)
+               (declare (type index j) (type fixnum color la lb))
+               (setf (aref colors j) color)
+               (when (< color +physics-max-colors+)
+                 (setf used (logior used (ash 1 color))
+                       (aref masks la) (logior (aref masks la) (ash 1 color)))
+                 (when (>= lb 0) (setf (aref masks lb) (logior (aref masks lb) (ash 1 color)))))))
+        (declare (inline take))
+        ;; pass one: joints of two awake bodies, the lowest colour free at both
+        (dotimes (j n)
+          (let ((la (aref row-a j)) (lb (aref row-b j)))
+            (declare (type fixnum la lb))
+            (cond ((< la 0) (setf (aref colors j) -2))
+                  ((= lb dummy) (setf (aref colors j) -1))
+                  (t (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
+                                         (1- (ash 1 +physics-dynamic-colors+)))))
+                       (take j (if (zerop free) +physics-max-colors+ (lowest-bit free)) la lb))))))
+        ;; pass two: joints of one awake body, as late among the used colours as it allows
+        (dotimes (j n)
+          (when (= (aref colors j) -1)
+            (let* ((la (aref row-a j))
+                   (free (logand (lognot (aref masks la)) (1- (ash 1 +physics-max-colors+)))))
+              (declare (type index la) (type (unsigned-byte 32) free))
+              (take j (cond ((plusp (logand free used)) (highest-bit (logand free used)))
+                            ((plusp free) (lowest-bit free))
+                            (t +physics-max-colors+))
+                    la -1)))))
+      ;; each colour's count, its end by the running sum, and its rows placed from the end back
+      (fill starts 0)
+      (dotimes (j n) (when (>= (aref colors j) 0) (incf (aref starts (aref colors j)))))
+      (loop with at of-type index = 0
+            for c from 0 to +physics-max-colors+
+            do (incf at (aref starts c)) (setf (aref starts c) at)
+            finally (setf (aref starts (1+ +physics-max-colors+)) at))
+      (loop for j of-type fixnum from (1- n) downto 0
+            for c of-type fixnum = (aref colors j)
+            when (>= c 0)
+              do (setf (aref order (decf (aref starts c))) j))
+      ;; the joints not solved this step after them, in row order
+      (loop with at of-type index = (aref starts (1+ +physics-max-colors+))
+            for j of-type index below n
+            when (< (aref colors j) 0)
+              do (setf (aref order at) j) (incf at))
+      (sort-joint-rows set))))
+
+(defun sort-joint-rows (set)
+  "Put the rows of SET in its colour order, when they are not yet, so that each colour's joints
+are consecutive rows: each joint's handle forwarded to its new row, its colour noted by row, and
+the order the rows' own again. #J0S0LV"
+  (declare #.+kernel-policy+)
+  (let* ((rows (joint-set-rows set)) (n (joint-columns-length rows))
+         (order (joint-set-order set)) (colors (joint-set-colors set)) (starts (joint-set-color-starts set)))
+    (declare (type fixnum-column order colors starts) (type index n))
+    (unless (loop for i of-type index below n always (= (aref order i) i))
+      ;; the colours by row are the places' scratch: each row's place in the order
+      (dotimes (i n) (setf (aref colors (aref order i)) i))
+      (joint-columns-permute rows (or (joint-set-scratch set) (setf (joint-set-scratch set) (make-joint-columns)))
+                             colors n)
+      (let ((local (handle-table-local (joint-set-ids set))) (handle (joint-columns-handle rows)))
+        (declare (type fixnum-column local handle))
+        (dotimes (r n)
+          (setf (aref local (handle-index (ldb (byte +handle-joint-bit+ 0) (aref handle r)))) r
+                (aref order r) r)))
+      (fill colors -2 :end n)
+      (dotimes (c (1+ +physics-max-colors+))
+        (loop for r of-type index from (aref starts c) below (aref starts (1+ c))
+              do (setf (aref colors r) c))))
+    set))
+
+(defun solving-joints (world)
+  "The joint set whose joints WORLD's substeps are solving, or NIL: what the kernel families'
+constraint passes test once a call. #J0S0LV"
   (let ((set (physics-world-joints world)))
-    (when (and set (plusp (joint-columns-length (joint-set-rows set))))
-      (let* ((rows (joint-set-rows set))
-             (ids (physics-world-ids world)) (sets (handle-table-set ids)) (locals (handle-table-local ids))
-             (awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-             (dummy (body-columns-length awake))
-             (active 0))
-        (declare (type fixnum-column sets locals) (type fixnum dummy active))
-        (multiple-value-bind (stiff-hertz stiff-zeta) (joint-stiffness world h)
-          (multiple-value-bind (stiff-bias stiff-mass stiff-impulse) (physics-softness stiff-hertz stiff-zeta h)
-            (declare (type single-float stiff-bias stiff-mass stiff-impulse))
-            (setf (joint-set-limit-bias set) stiff-bias (joint-set-limit-mass set) stiff-mass)
-            (with-joint-columns (kind flags body-a body-b ax ay az bx by bz hertz damping-ratio
-                                 row-a row-b rax ray raz rbx rby rbz sx sy sz
-                                 ima imb iia iib k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale
-                                 limit-scale)
-                rows
-              (flet ((place (h)
-                       ;; the set and row of a live body, or 0 and -1 for none
-                       (declare (type fixnum h))
-                       (if (= h +no-body+) (values 0 -1)
-                           (values (aref sets (handle-index h)) (aref locals (handle-index h))))))
-                (dotimes (j (joint-columns-length rows))
-                  (multiple-value-bind (set-a la) (place (aref body-a j))
-                    (if (/= set-a +set-awake+)
-                        (setf (aref row-a j) -1)
-                        (multiple-value-bind (set-b lb) (place (aref body-b j))
-                          (incf active)
-                          (let* ((b-buffer (if (= set-b +set-awake+) awake sleeping))
-                                 (b-moves (= set-b +set-awake+)))
-                            (setf (aref row-a j) la (aref row-b j) (if b-moves lb dummy))
-                            (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) awake
-                              (multiple-value-bind (rx ry rz)
-                                  (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
-                                (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz
-                                      (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la)
-                                      (aref sx j) (- (+ (aref x la) rx)) (aref sy j) (- (+ (aref y la) ry))
-                                      (aref sz j) (- (+ (aref z la) rz)))))
-                            (if (< lb 0)
-                                (setf (aref rbx j) 0.0 (aref rby j) 0.0 (aref rbz j) 0.0 (aref imb j) 0.0 (aref iib j) 0.0
-                                      (aref sx j) (+ (aref sx j) (aref bx j)) (aref sy j) (+ (aref sy j) (aref by j))
-                                      (aref sz j) (+ (aref sz j) (aref bz j)))
-                                (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) b-buffer
-                                  (multiple-value-bind (rx ry rz)
-                                      (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
-                                    (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz
-                                          (aref imb j) (if b-moves (aref inverse-mass lb) 0.0)
-                                          (aref iib j) (if b-moves (aref inverse-inertia lb) 0.0)
-                                          (aref sx j) (+ (aref sx j) (aref x lb) rx) (aref sy j) (+ (aref sy j) (aref y lb) ry)
-                                          (aref sz j) (+ (aref sz j) (aref z lb) rz))))))
-                          ;; the effective mass: a point joint's matrix inverted, a distance joint's axial mass
-                          (let* ((m (+ (aref ima j) (aref imb j))) (ia (aref iia j)) (ib (aref iib j))
-                                 (ax (aref rax j)) (ay (aref ray j)) (az (aref raz j))
-                                 (bx (aref rbx j)) (by (aref rby j)) (bz (aref rbz j)))
-                            (declare (type single-float m ia ib ax ay az bx by bz))
-                            (if (= (aref kind j) +joint-point+)
-                                (let* ((a11 (+ m (* ia (+ (* ay ay) (* az az))) (* ib (+ (* by by) (* bz bz)))))
-                                       (a22 (+ m (* ia (+ (* ax ax) (* az az))) (* ib (+ (* bx bx) (* bz bz)))))
-                                       (a33 (+ m (* ia (+ (* ax ax) (* ay ay))) (* ib (+ (* bx bx) (* by by)))))
-                                       (a12 (- (+ (* ia ax ay) (* ib bx by))))
-                                       (a13 (- (+ (* ia ax az) (* ib bx bz))))
-                                       (a23 (- (+ (* ia ay az) (* ib by bz))))
-                                       (c11 (- (* a22 a33) (* a23 a23))) (c12 (- (* a13 a23) (* a12 a33)))
-                                       (c13 (- (* a12 a23) (* a13 a22))) (c22 (- (* a11 a33) (* a13 a13)))
-                                       (c23 (- (* a12 a13) (* a11 a23))) (c33 (- (* a11 a22) (* a12 a12)))
-                                       (det (+ (* a11 c11) (* a12 c12) (* a13 c13)))
-                                       (inv (if (> det 0.0) (/ 1.0 det) 0.0)))
-                                  (setf (aref k11 j) (* c11 inv) (aref k12 j) (* c12 inv) (aref k13 j) (* c13 inv)
-                                        (aref k22 j) (* c22 inv) (aref k23 j) (* c23 inv) (aref k33 j) (* c33 inv)))
-                                (let* ((cx (aref sx j)) (cy (aref sy j)) (cz (aref sz j))
-                                       (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
-                                       (s (if (> len 1e-9) (/ 1.0 len) 0.0))
-                                       (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
-                                       (ax1 (- (* ay nz) (* az ny))) (ay1 (- (* az nx) (* ax nz))) (az1 (- (* ax ny) (* ay nx)))
-                                       (bx1 (- (* by nz) (* bz ny))) (by1 (- (* bz nx) (* bx nz))) (bz1 (- (* bx ny) (* by nx)))
-                                       (k (+ m (* ia (+ (* ax1 ax1) (* ay1 ay1) (* az1 az1)))
-                                             (* ib (+ (* bx1 bx1) (* by1 by1) (* bz1 bz1))))))
-                                  (setf (aref k11 j) (if (> k 0.0) (/ 1.0 k) 0.0))))
-                            ;; the soft coefficients: the joint's own hertz, or stiff
-                            (setf (aref limit-scale j) stiff-impulse)
-                            (if (> (aref hertz j) 0.0)
-                                (multiple-value-bind (br ms is)
-                                    (if (logtest (aref flags j) +joint-spring+)
-                                        (spring-softness (aref hertz j) (aref damping-ratio j) h)
-                                        (physics-softness (aref hertz j) (aref damping-ratio j) h))
-                                  (setf (aref bias-rate j) br (aref mass-scale j) ms (aref impulse-scale j) is))
-                                (setf (aref bias-rate j) stiff-bias (aref mass-scale j) stiff-mass
-                                      (aref impulse-scale j) stiff-impulse)))))))))))
-        (and (plusp active) set)))))
+    (and set (joint-set-solving set) set)))
+
+(defmacro do-constraint-colours ((start end world &key settle joints) colour-form overflow-form)
+  "Run, for each colour of WORLD's constraints in turn, the form of JOINTS, (SET FORM), with SET
+bound to the joint set and START END to the colour's run of its rows, when the substeps solve
+joints and the colour has some (SETTLE first), then COLOUR-FORM with START END bound to the
+colour's run of the constraint buffer, when it has one; then SETTLE, then the overflow colour's
+joints and OVERFLOW-FORM. #J0S0LV"
+  (let ((starts (gensym "STARTS")) (c (gensym "C")) (set (or (first joints) (gensym "SET"))))
+    `(let ((,starts (physics-world-color-starts ,world))
+           (,set (solving-joints ,world)))
+       (declare (type fixnum-column ,starts))
+       (flet ((joint-run (,c)
+                (declare (type fixnum ,c))
+                (let* ((js (joint-set-color-starts ,set))
+                       (,start (aref js ,c)) (,end (aref js (1+ ,c))))
+                  (declare (type fixnum-column js) (type index ,start ,end))
+                  (when (< ,start ,end) ,@(when settle (list settle)) ,(second joints)))))
+         (declare (inline joint-run))
+         (dotimes (,c +physics-max-colors+)
+           (when ,set (joint-run ,c))
+           (let ((,start (aref ,starts ,c)) (,end (aref ,starts (1+ ,c))))
+             (when (< ,start ,end) ,colour-form)))
+         ,@(when settle (list settle))
+         (when ,set (joint-run +physics-max-colors+))
+         (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
+           (when (< ,start ,end) ,overflow-form))))))
+
+(defun warm-start-with-joints (kernels world)
+  "The scalar family's warm start in a step that solves joints: colour by colour, the colour's
+joints, then its contacts, as the wide families run them. #J0S0LV"
+  (let ((cbuf (physics-world-constraints world))
+        (v (physics-world-velocities world)) (d (physics-world-deltas world))
+        (warm (kernel-variant-warm-start (world-kernel-variant world kernels))))
+    (do-constraint-colours (s e world :joints (set (warm-start-joints set v d s e)))
+      (funcall warm cbuf v s e)
+      (funcall warm cbuf v s e))))
+
+(defun solve-with-joints (kernels world inv-h use-bias elapsed)
+  "The scalar family's solve or relax pass in a step that solves joints: colour by colour, the
+colour's joints, then its contacts, as the wide families run them. #J0S0LV"
+  (let ((cbuf (physics-world-constraints world))
+        (v (physics-world-velocities world)) (d (physics-world-deltas world))
+        (push-max (f32 (physics-world-push-max world)))
+        (solve (kernel-variant-solve (world-kernel-variant world kernels))))
+    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+      (flet ((contacts (s e)
+               (solve-handing solve 'solve-impact-range 1 cbuf v d s e inv-h use-bias elapsed push-max
+                              threshold hgx hgy hgz)))
+        (do-constraint-colours (s e world :joints (set (solve-joints set v d inv-h use-bias s e)))
+          (contacts s e)
+          (contacts s e))))))
 
 (defmacro with-joint-row ((v d j) &body body)
   "Run BODY for the prepared joint J, its columns bound by with-joint-columns, over the solver's velocities V and deltas D, with:
@@ -6171,15 +6362,16 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
        (declare (inline relative-velocity push!) (ignorable #'relative-velocity))
        ,@body)))
 
-(defun warm-start-joints (set v d)
-  "Apply every prepared joint's carried impulse again, at the start of a substep. #J0S0LV"
-  (declare (type joint-set set) (type f32-column v d) #.+kernel-policy+)
+(defun warm-start-joints (set v d start end)
+  "Apply again the carried impulse of each prepared joint of SET at rows START..END, at the start
+of a substep. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type index start end) #.+kernel-policy+)
   (let ((rows (joint-set-rows set)))
     (with-joint-columns (kind row-a row-b rax ray raz rbx rby rbz sx sy sz ima imb iia iib
                          impulse-x impulse-y impulse-z)
         rows
-      (dotimes (j (joint-columns-length rows))
-        (when (>= (aref row-a j) 0)
+      (loop for j of-type index from start below end do
+        (progn
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
                 (push! (aref impulse-x j) (aref impulse-y j) (aref impulse-z j))
@@ -6188,10 +6380,12 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
                   (push! (* s cx) (* s cy) (* s cz)))))))))
   nil)
 
-(defun solve-joints (set v d inv-h use-bias)
-  "One pass over the prepared joints in row order: with the soft bias when USE-BIAS (the solve),
-without it (the relax), but for a spring's length, which keeps its own coefficients. #J0S0LV"
-  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
+(defun solve-joints (set v d inv-h use-bias start end)
+  "One pass over the prepared joints of SET at rows START..END: with the soft bias when USE-BIAS
+(the solve), without it (the relax), but for a spring's length, which keeps its own
+coefficients. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) (type index start end)
+           #.+kernel-policy+)
   (let ((rows (joint-set-rows set))
         (limit-bias (joint-set-limit-bias set)) (limit-mass (joint-set-limit-mass set)))
     (declare (type single-float limit-bias limit-mass))
@@ -6199,8 +6393,8 @@ without it (the relax), but for a spring's length, which keeps its own coefficie
                          k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale limit-scale
                          rest-length min-length max-length impulse-x impulse-y impulse-z)
         rows
-      (dotimes (j (joint-columns-length rows))
-        (when (>= (aref row-a j) 0)
+      (loop for j of-type index from start below end do
+        (progn
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
                 (multiple-value-bind (vx vy vz) (relative-velocity)
@@ -7496,10 +7690,10 @@ bodies to half the push-out speed. #IDVK7G"
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
-        (when joints (warm-start-joints joints v d))
+        ;; the joints, when some are prepared, are solved inside these passes, colour by
+        ;; colour with the contacts ([[#J0S0LV]])
         (when boxes (warm-start-box-points boxes v))
         (physics-warm-start kernels world)
-        (when joints (solve-joints joints v d inv-h t))
         (when boxes (solve-box-points boxes v d inv-h t))
         (physics-solve-contacts kernels world inv-h t elapsed)
         (flet ((yield-boxes ()
@@ -7511,12 +7705,13 @@ bodies to half the push-out speed. #IDVK7G"
           (physics-integrate-positions kernels world h)
           (when boxes (turn-box-rows boxes v h))
           (dotimes (k relaxes)
-            (when joints (solve-joints joints v d inv-h nil))
             (when boxes (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
         (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed)))))
+    ;; the joints' colouring serves these substeps only: a pass run by hand solves contacts alone
+    (when joints (setf (joint-set-solving joints) nil))
     world))
 
 (defparameter *physics-phases*

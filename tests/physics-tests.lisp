@@ -6273,6 +6273,45 @@ that it swings, and a loose ball on the floor under it. Return the world and the
     (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes)))
 ;; J0S0LV-families-agree-with-joints ends here
 
+;; [[file:../physics.org::#J0S0LV][J0S0LV-joints-share-the-colours]]
+(define-claim "J0S0LV" joints-share-the-colours
+    "In a swinging chain of touching balls no colour holds a body twice among its contacts and joints."
+  (let ((w (swinging-chain-world :scalar :sleep nil)) (shared 0))
+    (dotimes (step 40)
+      (step-physics-world w)
+      (let* ((set (luv-physics::physics-world-joints w))
+             (rows (luv-physics::joint-set-rows set))
+             (order (luv-physics::joint-set-order set)) (js (luv-physics::joint-set-color-starts set))
+             (cbuf (luv-physics::physics-world-constraints w)) (cs (luv-physics::physics-world-color-starts w))
+             (dummy (physics-world-awake-count w)) (clashes 0) (kinds (make-hash-table)))
+        (check (= (luv-physics::joint-columns-length rows) (aref js (1+ luv-physics::+physics-max-colors+)))
+               "step ~D: ~D joints in the order of ~D" step (aref js (1+ luv-physics::+physics-max-colors+))
+               (luv-physics::joint-columns-length rows))
+        (check (equal (loop for j below (luv-physics::joint-columns-length rows) collect j)
+                      (coerce (subseq order 0 (aref js (1+ luv-physics::+physics-max-colors+))) 'list))
+               "step ~D: the rows are not in colour order" step)
+        (check (= (aref js luv-physics::+physics-max-colors+) (aref js (1+ luv-physics::+physics-max-colors+)))
+               "step ~D: joints in the overflow colour" step)
+        (dotimes (c luv-physics::+physics-max-colors+)
+          (let ((seen (make-hash-table)))
+            (flet ((meet (body kind)
+                     (unless (= body dummy)
+                       (when (gethash body seen) (incf clashes))
+                       (setf (gethash body seen) t)
+                       (pushnew kind (gethash body kinds))
+                       (when (= 2 (length (gethash body kinds))) (incf shared)))))
+              (loop for k from (aref cs c) below (aref cs (1+ c))
+                    when (>= (aref (luv-physics::constraint-columns-contact cbuf) k) 0)
+                      do (meet (aref (luv-physics::constraint-columns-body-a cbuf) k) :contact)
+                         (meet (aref (luv-physics::constraint-columns-body-b cbuf) k) :contact))
+              (loop for j from (aref js c) below (aref js (1+ c))
+                    do (check (= c (aref (luv-physics::joint-set-colors set) j)) "joint row ~D out of its colour" j)
+                       (meet (aref (luv-physics::joint-columns-row-a rows) j) :joint)
+                       (meet (aref (luv-physics::joint-columns-row-b rows) j) :joint)))))
+        (check (= 0 clashes) "step ~D: ~D bodies met twice in a colour" step clashes)))
+    (check (plusp shared) "no body was met by both a joint and a contact")))
+;; J0S0LV-joints-share-the-colours ends here
+
 ;; [[file:../physics.org::#J0S0LV][J0S0LV-joint-steps-cons-nothing]]
 (define-claim "J0S0LV" joint-steps-cons-nothing
     "60 steps of a jointed chain, after 60 to grow, cons 0 bytes."
@@ -6507,6 +6546,25 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (>= (length c) 8) "~D crossings" (length c))
       (check (< (abs (- period want)) (* 0.005 want)) "period ~,5F s, the compound pendulum's ~,5F s" period want))))
 ;; J0PHYS-surface-pivot-is-a-compound-pendulum ends here
+
+;; [[file:../physics.org::#J0GR1D][J0GR1D-the-grid-is-box3ds]]
+(define-claim "J0GR1D" the-grid-is-box3ds
+    "A 10 x 10 joint grid: 90 spheres, 171 joints meeting at the start, no contacts, and it hangs."
+  (multiple-value-bind (w corner) (luv-physics::joint-grid-world 10 :kernels :scalar)
+    (check (= 90 (physics-world-awake-count w)))
+    (check (= 171 (physics-world-joint-count w)) "~D joints" (physics-world-joint-count w))
+    (let* ((rows (luv-physics::joint-set-rows (luv-physics::physics-world-joints w)))
+           (handles (loop for j below (luv-physics::joint-columns-length rows)
+                          collect (aref (luv-physics::joint-columns-handle rows) j))))
+      (check (= 10 (count -1 (loop for j below (luv-physics::joint-columns-length rows)
+                                   collect (aref (luv-physics::joint-columns-body-b rows) j)))))
+      (check (every (lambda (j) (< (physics-joint-length w j) 1e-5)) handles) "a joint's anchors do not meet")
+      (let ((start (nth-value 1 (physics-body-position w corner))))
+        (dotimes (i 30) (step-physics-world w))
+        (check (= 0 (physics-world-last-step-contact-count w)) "~D contacts" (physics-world-last-step-contact-count w))
+        (let ((drop (- start (nth-value 1 (physics-body-position w corner)))))
+          (check (< 0 drop 0.9) "the corner fell ~,4F m" drop))))))
+;; J0GR1D-the-grid-is-box3ds ends here
 
 ;; [[file:../physics.org::#BXR0WS][BXR0WS-bad-boxes-refused]]
 (define-claim "BXR0WS" bad-boxes-refused
