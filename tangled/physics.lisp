@@ -441,104 +441,131 @@ room under the reach limit for the smallest radius. #C0ND1T"
          (declare (ignorable ,b))
          ,@body))))
 
-(defmacro define-physics-layout (name docstring &rest columns)
-  "Define the columnar layout NAME: a buffer struct of one specialised array per column of
-COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
-NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
-or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
-  (let* ((make (layout-symbol "%MAKE-" name))
-         (ctor (layout-symbol "MAKE-" name))
-         (len (layout-symbol name "-LENGTH"))
-         (cap (layout-symbol name "-CAPACITY"))
-         (spare (layout-symbol name "-SPARE"))
-         (ensure (layout-symbol name "-ENSURE-CAPACITY"))
-         (trim (layout-symbol name "-TRIM"))
-         (append (layout-symbol name "-APPEND"))
-         (remove (layout-symbol name "-SWAP-REMOVE"))
-         (copy (layout-symbol name "-COPY-ROW"))
-         (permute (layout-symbol name "-PERMUTE"))
-         (zero (layout-symbol name "-ZERO-ROW"))
-         (clear (layout-symbol name "-CLEAR"))
-         (with (layout-symbol "WITH-" name))
-         (names (layout-symbol "+" name "-COLUMN-NAMES+"))
-         (bytes (layout-symbol "+" name "-ROW-BYTES+"))
-         (accessors (loop for (c) in columns collect (layout-symbol name "-" c))))
-    `(progn
-       (defstruct (,name (:constructor ,make) (:copier nil) (:predicate nil))
-         ,docstring
-         (length 0 :type index)
-         (capacity 0 :type index)
-         (spare 0 :type index)
-         ,@(loop for (c type) in columns
-                 collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
-       (defparameter ,names ',(mapcar #'first columns)
-         ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
-       (defparameter ,bytes ,(loop for (nil type width) in columns
-                                   sum (* (or width 1) (ecase type (single-float 4) (double-float 8) (fixnum 8))))
-         ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name))
-       (defun ,ctor (&key (capacity 16) (spare 0))
-         ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
-         (let ((size (+ capacity spare)))
-           (,make :capacity capacity :spare spare
-                  ,@(loop for (c type width) in columns
-                          append `(,(intern (symbol-name c) :keyword)
-                                   (make-array (* size ,(or width 1)) :element-type ',type
-                                                                      :initial-element ,(column-zero type)))))))
-       (defun ,ensure (buffer rows)
-         ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index rows))
-         (when (> rows (,cap buffer))
-           (let* ((new (max rows (* 2 (,cap buffer)) 16))
-                  (size (+ new (,spare buffer))))
-             ,@(loop for (c type width) in columns for acc in accessors
-                     collect `(let ((fresh (make-array (* size ,(or width 1)) :element-type ',type
-                                                                              :initial-element ,(column-zero type))))
-                                (replace fresh (,acc buffer))
-                                (setf (,acc buffer) fresh)))
-             (setf (,cap buffer) new)))
-         buffer)
-       (defun ,trim (buffer rows)
-         ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-names (name)
+    "The symbols the layout NAME defines, as a plist keyed by what each names. #L4Y0UT"
+    (list :make (layout-symbol "%MAKE-" name)
+          :ctor (layout-symbol "MAKE-" name)
+          :len (layout-symbol name "-LENGTH")
+          :cap (layout-symbol name "-CAPACITY")
+          :spare (layout-symbol name "-SPARE")
+          :ensure (layout-symbol name "-ENSURE-CAPACITY")
+          :trim (layout-symbol name "-TRIM")
+          :append (layout-symbol name "-APPEND")
+          :remove (layout-symbol name "-SWAP-REMOVE")
+          :copy (layout-symbol name "-COPY-ROW")
+          :permute (layout-symbol name "-PERMUTE")
+          :zero (layout-symbol name "-ZERO-ROW")
+          :clear (layout-symbol name "-CLEAR")
+          :with (layout-symbol "WITH-" name)
+          :names (layout-symbol "+" name "-COLUMN-NAMES+")
+          :bytes (layout-symbol "+" name "-ROW-BYTES+")))
+
+  (defun layout-accessors (name columns)
+    "The reader of each of COLUMNS in the layout NAME's struct, in their order. #L4Y0UT"
+    (loop for (c) in columns collect (layout-symbol name "-" c))))
+;; One macro generates every columnar layout:1 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:2]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-struct-forms (name docstring columns)
+    "The struct of the layout NAME, one array slot per column of COLUMNS, and the constants that
+name its columns and count a row's bytes. #L4Y0UT"
+    (destructuring-bind (&key make names bytes &allow-other-keys) (layout-names name)
+      `((defstruct (,name (:constructor ,make) (:copier nil) (:predicate nil))
+          ,docstring
+          (length 0 :type index)
+          (capacity 0 :type index)
+          (spare 0 :type index)
+          ,@(loop for (c type) in columns
+                  collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
+        (defparameter ,names ',(mapcar #'first columns)
+          ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
+        (defparameter ,bytes ,(loop for (nil type width) in columns
+                                    sum (* (or width 1) (ecase type (single-float 4) (double-float 8) (fixnum 8))))
+          ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name)))))
+
+  (defun layout-sizing-forms (name columns)
+    "The layout NAME's constructor, and its operations that grow and shrink a buffer's arrays. #L4Y0UT"
+    (destructuring-bind (&key make ctor len cap spare ensure trim &allow-other-keys) (layout-names name)
+      (let ((accessors (layout-accessors name columns)))
+        `((defun ,ctor (&key (capacity 16) (spare 0))
+            ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
+            (let ((size (+ capacity spare)))
+              (,make :capacity capacity :spare spare
+                     ,@(loop for (c type width) in columns
+                             append `(,(intern (symbol-name c) :keyword)
+                                      (make-array (* size ,(or width 1)) :element-type ',type
+                                                                         :initial-element ,(column-zero type)))))))
+          (defun ,ensure (buffer rows)
+            ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
+            (declare (type ,name buffer) (type index rows))
+            (when (> rows (,cap buffer))
+              (let* ((new (max rows (* 2 (,cap buffer)) 16))
+                     (size (+ new (,spare buffer))))
+                ,@(loop for (c type width) in columns for acc in accessors
+                        collect `(let ((fresh (make-array (* size ,(or width 1)) :element-type ',type
+                                                                                 :initial-element ,(column-zero type))))
+                                   (replace fresh (,acc buffer))
+                                   (setf (,acc buffer) fresh)))
+                (setf (,cap buffer) new)))
+            buffer)
+          (defun ,trim (buffer rows)
+            ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
 least 16), keeping every row; return BUFFER. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index rows))
-         (let ((new (max rows (,len buffer) 16)))
-           (when (< new (,cap buffer))
-             (let ((size (+ new (,spare buffer))))
-               ,@(loop for (c type width) in columns for acc in accessors
-                       collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
-                                                                               :initial-element ,(column-zero type))))
-                                  (replace kept (,acc buffer))
-                                  (setf (,acc buffer) kept)))
-               (setf (,cap buffer) new))))
-         buffer)
-       (declaim (inline ,append))
-       (defun ,append (buffer)
-         ,(format nil "Add a row to BUFFER, a ~A, and return its index; the row reads as zeros. #L4Y0UT" name)
-         (declare (type ,name buffer))
-         (let ((row (,len buffer)))
-           (when (>= row (,cap buffer)) (,ensure buffer (1+ row)))
-           (setf (,len buffer) (1+ row))
-           row))
-       (defun ,zero (buffer row)
-         ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index row) #.+kernel-policy+)
-         ,@(loop for (nil type width) in columns for acc in accessors
-                 collect (if width
-                             `(fill (,acc buffer) ,(column-zero type)
-                                    :start (* row ,width) :end (* (1+ row) ,width))
-                             `(setf (aref (,acc buffer) row) ,(column-zero type))))
-         buffer)
-       (defun ,copy (from from-row to to-row)
-         ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
-         (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
-         ,@(loop for (nil nil width) in columns for acc in accessors
-                 collect (if width
-                             `(replace (,acc to) (,acc from) :start1 (* to-row ,width)
-                                                              :start2 (* from-row ,width)
-                                                              :end2 (* (1+ from-row) ,width))
-                             `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
-         to)
-       (defun ,permute (buffer scratch destinations count)
+            (declare (type ,name buffer) (type index rows))
+            (let ((new (max rows (,len buffer) 16)))
+              (when (< new (,cap buffer))
+                (let ((size (+ new (,spare buffer))))
+                  ,@(loop for (c type width) in columns for acc in accessors
+                          collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
+                                                                                  :initial-element ,(column-zero type))))
+                                     (replace kept (,acc buffer))
+                                     (setf (,acc buffer) kept)))
+                  (setf (,cap buffer) new))))
+            buffer))))))
+;; One macro generates every columnar layout:2 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:3]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-row-forms (name columns)
+    "The layout NAME's operations on one row: append one that reads as zeros, zero one, copy one
+between buffers. #L4Y0UT"
+    (destructuring-bind (&key len cap ensure append zero copy &allow-other-keys) (layout-names name)
+      (let ((accessors (layout-accessors name columns)))
+        `((declaim (inline ,append))
+          (defun ,append (buffer)
+            ,(format nil "Add a row to BUFFER, a ~A, and return its index; the row reads as zeros. #L4Y0UT" name)
+            (declare (type ,name buffer))
+            (let ((row (,len buffer)))
+              (when (>= row (,cap buffer)) (,ensure buffer (1+ row)))
+              (setf (,len buffer) (1+ row))
+              row))
+          (defun ,zero (buffer row)
+            ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
+            (declare (type ,name buffer) (type index row) #.+kernel-policy+)
+            ,@(loop for (nil type width) in columns for acc in accessors
+                    collect (if width
+                                `(fill (,acc buffer) ,(column-zero type)
+                                       :start (* row ,width) :end (* (1+ row) ,width))
+                                `(setf (aref (,acc buffer) row) ,(column-zero type))))
+            buffer)
+          (defun ,copy (from from-row to to-row)
+            ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
+            (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
+            ,@(loop for (nil nil width) in columns for acc in accessors
+                    collect (if width
+                                `(replace (,acc to) (,acc from) :start1 (* to-row ,width)
+                                                                 :start2 (* from-row ,width)
+                                                                 :end2 (* (1+ from-row) ,width))
+                                `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
+            to)))))
+
+  (defun layout-permute-form (name columns)
+    "The layout NAME's permute: every row to its new place, column by column through a scratch
+buffer whose arrays it then takes. #L4Y0UT"
+    (destructuring-bind (&key len cap ensure permute &allow-other-keys) (layout-names name)
+      `(defun ,permute (buffer scratch destinations count)
          ,(format nil "Move each row R of BUFFER, a ~A, to row (aref DESTINATIONS R), or drop it where
 that is negative; the places taken must be exactly 0 .. COUNT-1. The rows are written into
 SCRATCH, a buffer of the same layout and spare, whose arrays BUFFER then takes in exchange
@@ -548,53 +575,81 @@ for its own; rows past COUNT read as zeros. Return BUFFER. #L4Y0UT" name)
          (,ensure scratch (max count (,cap buffer)))
          (let ((n (,len buffer)) (stale (,len scratch)))
            (declare (type index n stale))
-           ,@(loop for (nil type width) in columns for acc in accessors
-                   collect `(let ((from (,acc buffer)) (to (,acc scratch)))
-                              (declare (type ,(column-array-type type) from to))
-                              ;; rows the scratch held from its last use, past COUNT, become zeros
-                              (when (> stale count)
-                                (fill to ,(column-zero type) :start (* count ,(or width 1))
-                                                             :end (* stale ,(or width 1))))
-                              (dotimes (r n)
-                                (let ((d (aref destinations r)))
-                                  (declare (type fixnum d))
-                                  (when (>= d 0)
-                                    ,(if width
-                                         `(loop for k of-type fixnum from 0 below ,width
-                                                do (setf (aref to (+ (* d ,width) k))
-                                                         (aref from (+ (* r ,width) k))))
-                                         `(setf (aref to d) (aref from r))))))
-                              (setf (,acc scratch) from (,acc buffer) to)))
+           ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
+                   collect (layout-permute-column type width acc))
            (rotatef (,cap buffer) (,cap scratch))
            (setf (,len buffer) count (,len scratch) n))
-         buffer)
-       (defun ,remove (buffer row)
-         ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
+         buffer)))
+
+  (defun layout-permute-column (type width acc)
+    "Permute's pass over one column, read by ACC, of TYPE and WIDTH values a row. #L4Y0UT"
+    `(let ((from (,acc buffer)) (to (,acc scratch)))
+       (declare (type ,(column-array-type type) from to))
+       ;; rows the scratch held from its last use, past COUNT, become zeros
+       (when (> stale count)
+         (fill to ,(column-zero type) :start (* count ,(or width 1))
+                                      :end (* stale ,(or width 1))))
+       (dotimes (r n)
+         (let ((d (aref destinations r)))
+           (declare (type fixnum d))
+           (when (>= d 0)
+             ,(if width
+                  `(loop for k of-type fixnum from 0 below ,width
+                         do (setf (aref to (+ (* d ,width) k))
+                                  (aref from (+ (* r ,width) k))))
+                  `(setf (aref to d) (aref from r))))))
+       (setf (,acc scratch) from (,acc buffer) to))))
+;; One macro generates every columnar layout:3 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:4]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-removal-forms (name columns)
+    "The layout NAME's swap-remove, which fills a hole with the last row, and clear. #L4Y0UT"
+    (destructuring-bind (&key len spare remove copy zero clear &allow-other-keys) (layout-names name)
+      `((defun ,remove (buffer row)
+          ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
 row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index row))
-         (let ((last (1- (,len buffer))))
-           (declare (type fixnum last))
-           (assert (<= 0 row last) () "row ~D is outside ~A of length ~D" row ',name (1+ last))
-           (unless (= row last) (,copy buffer last buffer row))
-           (,zero buffer last)
-           (setf (,len buffer) last)
-           (if (= row last) -1 last)))
-       (defun ,clear (buffer)
-         ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
-         (declare (type ,name buffer))
-         (let ((n (+ (,len buffer) (,spare buffer))))
-           ,@(loop for (nil type width) in columns for acc in accessors
-                   collect `(fill (,acc buffer) ,(column-zero type)
-                                  :end (min (* n ,(or width 1)) (length (,acc buffer))))))
-         (setf (,len buffer) 0)
-         buffer)
-       (defmacro ,with ((&rest cols) buffer &body body)
+          (declare (type ,name buffer) (type index row))
+          (let ((last (1- (,len buffer))))
+            (declare (type fixnum last))
+            (assert (<= 0 row last) () "row ~D is outside ~A of length ~D" row ',name (1+ last))
+            (unless (= row last) (,copy buffer last buffer row))
+            (,zero buffer last)
+            (setf (,len buffer) last)
+            (if (= row last) -1 last)))
+        (defun ,clear (buffer)
+          ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
+          (declare (type ,name buffer))
+          (let ((n (+ (,len buffer) (,spare buffer))))
+            ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
+                    collect `(fill (,acc buffer) ,(column-zero type)
+                                   :end (min (* n ,(or width 1)) (length (,acc buffer))))))
+          (setf (,len buffer) 0)
+          buffer))))
+
+  (defun layout-with-form (name columns)
+    "The layout NAME's WITH- macro, binding columns by name as declared arrays. #L4Y0UT"
+    (destructuring-bind (&key with &allow-other-keys) (layout-names name)
+      `(defmacro ,with ((&rest cols) buffer &body body)
          ,(format nil "Run BODY with each of COLS bound to that column of the ~A BUFFER. #L4Y0UT" name)
-         (expand-layout-bindings ',name ',(loop for (c type) in columns for acc in accessors
+         (expand-layout-bindings ',name ',(loop for (c type) in columns for acc in (layout-accessors name columns)
                                                 collect (list c type acc))
-                                 cols buffer body))
-       ',name)))
-;; One macro generates every columnar layout:1 ends here
+                                 cols buffer body)))))
+
+(defmacro define-physics-layout (name docstring &rest columns)
+  "Define the columnar layout NAME: a buffer struct of one specialised array per column of
+COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
+NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
+or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
+  `(progn
+     ,@(layout-struct-forms name docstring columns)
+     ,@(layout-sizing-forms name columns)
+     ,@(layout-row-forms name columns)
+     ,(layout-permute-form name columns)
+     ,@(layout-removal-forms name columns)
+     ,(layout-with-form name columns)
+     ',name))
+;; One macro generates every columnar layout:4 ends here
 
 ;; [[file:../physics.org::#B5N8JT][Bodies are rows; a handle is a forwarding address:1]]
 (define-physics-layout body-columns
@@ -1498,21 +1553,35 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
         (step-statistics-max-penetration to) (step-statistics-max-penetration from)
         (step-statistics-max-approach to) (step-statistics-max-approach from))
   to)
+;; The world holds every buffer and its own parameters:1 ends here
 
-(defclass physics-world ()
+;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:2]]
+(defclass world-stores ()
   ((terrain :initarg :terrain :initform nil :accessor physics-world-terrain)
    (probe :initform (make-terrain-probe) :reader physics-world-probe)
-   (kernels :initarg :kernels :accessor physics-world-kernels)
-   (awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
+   (kernels :initarg :kernels :accessor physics-world-kernels))
+  (:documentation "What the world is made of: the terrain its bodies meet, the probe that reads
+its cells, and the kernel family that runs its solver phases. #W0RLD7"))
+
+(defclass world-bodies ()
+  ((awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
    (awake-scratch :initform (make-body-columns :spare 1) :reader physics-world-awake-scratch)
    (row-places :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-row-places)
    (sleeping :initform (make-body-columns) :reader physics-world-sleeping)
-   (ids :initform (make-handle-table) :reader physics-world-ids)
-   (contacts :initform (make-contact-columns) :reader physics-world-contacts)
+   (ids :initform (make-handle-table) :reader physics-world-ids))
+  (:documentation "The bodies: the awake and the sleeping buffers, the awake buffer's scratch
+twin and the table from handles to rows. #W0RLD7"))
+
+(defclass world-contacts ()
+  ((contacts :initform (make-contact-columns) :reader physics-world-contacts)
    (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
    (contact-scratch :initform (make-contact-columns) :reader physics-world-contact-scratch)
-   (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints)
-   (events :initform (make-event-columns) :reader physics-world-events)
+   (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints))
+  (:documentation "The persistent contacts, their table by pair and their scratch twin, and the
+constraints a step builds from them. #W0RLD7"))
+
+(defclass world-events-and-boxes ()
+  ((events :initform (make-event-columns) :reader physics-world-events)
    (event-data :initform (make-array 16 :initial-element nil) :accessor physics-world-event-data)
    (boxes :initform (make-box-columns) :reader physics-world-boxes)
    (box-owners :initform (make-array 16 :initial-element nil) :accessor physics-world-box-owners)
@@ -1521,8 +1590,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    ;; sensor boxes ([[#S3NS0R]])
    (filtering :initform nil :accessor physics-world-filtering)
    (sensors :initform nil :accessor physics-world-sensors)
-   (sensor-counter :initform 0 :type fixnum :accessor physics-world-sensor-counter)
-   (velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
+   (sensor-counter :initform 0 :type fixnum :accessor physics-world-sensor-counter))
+  (:documentation "The step's events and the boxes posted into it, with their owners and
+handles, and the filters and lasting sensors. #W0RLD7"))
+
+(defclass world-solver-scratch ()
+  ((velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
    (deltas :initform (make-array 0 :element-type 'single-float) :accessor physics-world-deltas)
    (color-starts :initform (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
                  :reader physics-world-color-starts)
@@ -1542,8 +1615,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
-   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows)
-   (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
+   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows))
+  (:documentation "The arrays each step reuses to solve: the solver's rows of motion, the
+colours, and what the boxes and the cells brace, hold and squeeze. #W0RLD7"))
+
+(defclass world-grids ()
+  ((awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
@@ -1566,15 +1643,23 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (grid-of :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-grid-of)
    (mortal-sleepers :initform 0 :type fixnum :accessor physics-world-mortal-sleepers)
    (added :initform (make-array 16 :element-type 'fixnum :initial-element 0) :accessor physics-world-added)
-   (added-count :initform 0 :type fixnum :accessor physics-world-added-count)
-   ;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
+   (added-count :initform 0 :type fixnum :accessor physics-world-added-count))
+  (:documentation "The hash grids of the awake, the sleeping, the freshly added and the newest
+bodies, and the counts that decide when each is rebuilt. #W0RLD7"))
+
+(defclass world-forces-and-joints ()
+  (;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
    (pushes :initform nil :type (or null f32-column) :accessor physics-world-pushes)
    (pushed :initform nil :accessor physics-world-pushed)
    ;; the joints, made with the first ([[#J0STOR]])
    (joints :initform nil :accessor physics-world-joints)
    (scaled-count :initform 0 :type fixnum :accessor physics-world-scaled-count)
-   (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
-   (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
+   (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius))
+  (:documentation "The forces and gravity scales by handle slot, the joints, and the largest
+radius. #W0RLD7"))
+
+(defclass world-parameters ()
+  ((step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
    (substeps :initarg :substeps :type fixnum :accessor physics-world-substeps)
    (gravity-x :initarg :gravity-x :type single-float :accessor physics-world-gravity-x)
    (gravity-y :initarg :gravity-y :type single-float :accessor physics-world-gravity-y)
@@ -1598,16 +1683,23 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (brace-mass-ratio :initarg :brace-mass-ratio :accessor physics-world-brace-mass-ratio)
    (reach-limit :initarg :reach-limit :accessor physics-world-reach-limit)
    (max-speed :initarg :max-speed :accessor physics-world-max-speed)
-   (body-budget :initarg :body-budget :accessor physics-world-body-budget)
-   ;; what a step that fails before storing its impulses undoes (roll-back-step)
-   (undo-open :initform nil :accessor physics-world-undo-open)
+   (body-budget :initarg :body-budget :accessor physics-world-body-budget))
+  (:documentation "The step's time, its gravity and the parameters of contacts, sleep and
+limits, copied and checked when the world is made (checked-physics-parameters). #W0RLD7"))
+
+(defclass world-undo ()
+  ((undo-open :initform nil :accessor physics-world-undo-open)
    (undo-step-count :initform 0 :type fixnum :accessor physics-world-undo-step-count)
    (undo-woken :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-woken)
    (undo-woken-count :initform 0 :type fixnum :accessor physics-world-undo-woken-count)
    (undo-sorted :initform nil :accessor physics-world-undo-sorted)
    (undo-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-rows)
-   (undo-statistics :initform (make-step-statistics) :reader physics-world-undo-statistics)
-   (sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
+   (undo-statistics :initform (make-step-statistics) :reader physics-world-undo-statistics))
+  (:documentation "What a step that fails before storing its impulses undoes (roll-back-step).
+#W0RLD7"))
+
+(defclass world-step-state ()
+  ((sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
    ;; what the world may use ([[#FEAT5X][features]]), and the step built for it
    (features :initarg :features :initform +physics-features+ :reader world-features)
    (event-mask :initarg :event-mask :initform -1 :type fixnum :reader world-event-mask)
@@ -1624,6 +1716,15 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (step-hook :initform nil :accessor physics-world-step-hook)
    (phase-clock :initform nil :accessor physics-world-phase-clock)
    (statistics :initform (make-step-statistics) :reader physics-world-statistics))
+  (:documentation "What the world may use and the step built for it, the step's clock and count,
+the callbacks and what the last step measured. #W0RLD7"))
+
+ ;; CLOS lays out the slots of the last superclass first: the groups are named last to first, so a
+ ;; world keeps its slots in the order they are written above.
+(defclass physics-world (world-step-state world-undo world-parameters world-forces-and-joints world-grids
+                         world-solver-scratch world-events-and-boxes world-contacts world-bodies
+                         world-stores)
+  ()
   (:documentation "A simulated world of spheres over a voxel terrain: the CLOS side of the seam,
 holding the columnar buffers, the parameters, the events and the kernel family. #W0RLD7"))
 
@@ -1655,7 +1756,7 @@ each is ignorable. #W0RLD7"
                     collect `(,variable (f32 (,(intern (format nil "PHYSICS-WORLD-~A" name)) ,w)))))
        (declare (type single-float ,@(mapcar #'first pairs)) (ignorable ,w ,@(mapcar #'first pairs)))
        ,@body)))
-;; The world holds every buffer and its own parameters:1 ends here
+;; The world holds every buffer and its own parameters:2 ends here
 
 ;; [[file:../physics.org::#R9M4PV][Choose the phase once: kernel families:1]]
 (defvar *kernel-families* '((:scalar scalar-kernels))
