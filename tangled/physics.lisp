@@ -4305,8 +4305,9 @@ the hole. #PRUN3D"
       normal-mass tangent-mass rolling-mass friction bias-rate mass-scale
       impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2 gap
       ;; the columns only some worlds have ([[#FEAT5X]]): the box's velocity along the normal
-      ;; and the frame, the largest push the events and restitution read, the approach speed
-      ;; the events report, rolling resistance's, and restitution's
+      ;; and the frame (written as its x, y, z until the frame pass: +constraint-column-aliases+),
+      ;; the largest push the events and restitution read, the approach speed the events
+      ;; report, rolling resistance's, and restitution's
       kvn kvt1 kvt2 max-normal-impulse
       relative-velocity rolling-limit rolling-impulse-x rolling-impulse-y rolling-impulse-z
       restitution)
@@ -4316,12 +4317,21 @@ world needs, then those a world's features may leave out, last. #SSMPYW")
     '(spin-limit spin-impulse armed-speed)
     "The float columns of a constraint's side block, read only by the rows that need them:
 friction's two, then restitution's. #SSMPYW")
+  (defparameter +constraint-column-aliases+
+    '((kvx . kvn) (kvy . kvt1) (kvz . kvt2))
+    "Each name of a column that holds one thing before the frame pass and another after it, with
+the column's own name: the fill writes the box's velocity along the world's axes as kvx, kvy and
+kvz, and the frame pass turns it, in the same three columns, into its parts along the normal and
+the two tangents, kvn, kvt1 and kvt2. #SSMPYW")
   (defun constraint-side-column-p (column)
     "True when COLUMN sits in the side block. #SSMPYW"
     (member column +constraint-side-columns+ :test #'string= :key #'symbol-name))
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints, the main block's or, for a
-column of +constraint-side-columns+, the side block's. #SSMPYW"
+column of +constraint-side-columns+, the side block's; a name of +constraint-column-aliases+ is
+its column's. #SSMPYW"
+    (setf column (or (cdr (assoc column +constraint-column-aliases+ :test #'string= :key #'symbol-name))
+                     column))
     (* 8 (or (position column +constraint-columns+ :test #'string= :key #'symbol-name)
              (position column +constraint-side-columns+ :test #'string= :key #'symbol-name)
              (error "no constraint column ~A" column)))))
@@ -4921,7 +4931,7 @@ to the other: expanded in the prepare phase's fill. #PRF1LL"
            (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
      ;; the columns of boxes, restitution, rolling resistance and the events, when the world
      ;; has them (spin friction's and the armed speed are zeros here, as the side block starts)
-     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (if-feature :boxes (setf (@ kvx) kx (@ kvy) ky (@ kvz) kz))
      (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
      (if-feature :restitution
        (setf (@ restitution) (max (aref re-c la) (aref re-c lb))))
@@ -4995,7 +5005,7 @@ spin impulse, approach speed and soft coefficients: expanded in fill-general-row
            (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
            (@ separation) (+ (contact-at geometry g separation) slop))
      ;; the box's velocity, until the frame pass resolves it
-     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (if-feature :boxes (setf (@ kvx) kx (@ kvy) ky (@ kvz) kz))
      (fill-row-material)
      ;; the spin impulse the contact carried out of the last step: zero on every row with a
      ;; radius on side b, whose spin is never solved
@@ -5171,7 +5181,7 @@ the one formula the relax pass ([[#S0LV3R]]) and the frame pass compute it by. #
 
 (define-featured-kernel (prepare-frames-range :features (:boxes)) (cbuf start end)
   "Complete constraints START..END of CBUF from their normal, radii, inverse masses and inertias,
-and the box velocity held in the KVN, KVT1 and KVT2 columns: the tangent frame t1, t2 (t1 from
+and the box velocity held in the KVX, KVY and KVZ columns: the tangent frame t1, t2 (t1 from
 the axis least aligned with the normal), the box velocity resolved onto n, t1 and t2, the
 normal, tangent and rolling masses (zero where nothing can move), and the gap the first
 substep's solve reads. Compiled without boxes, it has no box velocity to resolve. #PRFRM2"
@@ -5200,7 +5210,7 @@ substep's solve reads. Compiled without boxes, it has no box velocity to resolve
         (declare (type index base))
         (setf (@ t1x) ux (@ t1y) uy (@ t1z) uz (@ t2x) qx (@ t2y) qy (@ t2z) qz)
         (if-feature :boxes
-          (let ((kx (@ kvn)) (ky (@ kvt1)) (kz (@ kvt2)))
+          (let ((kx (@ kvx)) (ky (@ kvy)) (kz (@ kvz)))
             (setf (@ kvn) (+ (* kx x) (* ky y) (* kz z))
                   (@ kvt1) (+ (* kx ux) (* ky uy) (* kz uz))
                   (@ kvt2) (+ (* kx qx) (* ky qy) (* kz qz)))))

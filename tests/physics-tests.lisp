@@ -5706,6 +5706,29 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (plusp one-sided) "no row with nothing on side b")))))
 ;; PRSTG6-side-blocks-start-as-zeros ends here
 
+;; [[file:../physics.org::#PRFRM2][PRFRM2-box-velocity-onto-the-frame]]
+(define-claim "PRFRM2" box-velocity-onto-the-frame
+    "prepare-frames-range turns kvx kvy kvz (1 2 3) into kvn kvt1 kvt2 along n (0.6 0.8 0) and the tangents."
+  (let ((cbuf (luv-physics::make-constraint-columns)))
+    (luv-physics::constraint-columns-ensure-capacity cbuf 8)
+    (setf (luv-physics::constraint-columns-length cbuf) 8)
+    (flet ((put (column value) (setf (luv-physics::constraint-ref cbuf 0 column) value))
+           (column-value (column) (luv-physics::constraint-ref cbuf 0 column)))
+      (loop for (column value) in '((nx 0.6) (ny 0.8) (nz 0.0) (ra 0.25) (rb 0.25) (ima 1.0) (imb 1.0)
+                                    (iia 10.0) (iib 10.0) (kvx 1.0) (kvy 2.0) (kvz 3.0))
+            do (put (intern (symbol-name column) :luv-physics) value))
+      (luv-physics::prepare-frames-range cbuf 0 1)
+      (let* ((c (lambda (name) (column-value (intern name :luv-physics))))
+             (kvn (funcall c "KVN")) (kvt1 (funcall c "KVT1")) (kvt2 (funcall c "KVT2"))
+             (along (lambda (x y z) (+ (* 1.0 (funcall c x)) (* 2.0 (funcall c y)) (* 3.0 (funcall c z))))))
+        (check (< (abs (- kvn 2.2)) 1e-6) "kvn ~S" kvn)
+        (check (< (abs (- kvt1 (funcall along "T1X" "T1Y" "T1Z"))) 1e-6) "kvt1 ~S" kvt1)
+        (check (< (abs (- kvt2 (funcall along "T2X" "T2Y" "T2Z"))) 1e-6) "kvt2 ~S" kvt2)
+        (check (< (abs (- (+ (* kvn kvn) (* kvt1 kvt1) (* kvt2 kvt2)) 14.0)) 1e-5)
+               "the parts' squared length ~S" (+ (* kvn kvn) (* kvt1 kvt1) (* kvt2 kvt2)))
+        (check (= (luv-physics::constraint-offset 'luv-physics::kvx) (luv-physics::constraint-offset 'luv-physics::kvn)))))))
+;; PRFRM2-box-velocity-onto-the-frame ends here
+
 ;; [[file:../physics.org::#G7Q3XR][G7Q3XR-softness-is-the-closed-form]]
 (define-claim "G7Q3XR" softness-is-the-closed-form
     "PHYSICS-SOFTNESS gives omega/a1, a2/(1+a2) and 1/(1+a2); 0 Hz gives 0, 1, 0 exactly."
