@@ -624,16 +624,21 @@ functions of the page, not macros, not the standard's own."
 
 (defun claims-reach (order names)
   "For each claim of ORDER, (NAME . SECONDS), the list of NAMES its run calls, found by
-running it once more with every one of NAMES wrapped in a probe."
+running it once more with every one of NAMES wrapped in a probe.  A featured kernel a world
+runs as a variant compiled for its features is called through the variant, not its name: the
+claim reaches the kernel when it asks featured-kernel for one."
   (dolist (n names)
     (let ((n n))
       (sb-int:encapsulate n 'mutate-reach
                           (lambda (f &rest args) (setf (gethash n *reached*) t) (apply f args)))))
+  (sb-int:encapsulate 'physics::featured-kernel 'mutate-reach-variant
+                      (lambda (f name &rest args) (setf (gethash name *reached*) t) (apply f name args)))
   (unwind-protect
        (loop for (claim) in order
              collect (progn (clrhash *reached*)
                             (run-claim claim)
                             (cons claim (loop for n being the hash-keys of *reached* collect n))))
+    (sb-int:unencapsulate 'physics::featured-kernel 'mutate-reach-variant)
     (dolist (n names) (sb-int:unencapsulate n 'mutate-reach))))
 
 (defun claims-reach-in-child (claims names path)
