@@ -1612,6 +1612,8 @@ handles, and the filters and lasting sensors. #W0RLD7"))
    (buried-count :initform 0 :type fixnum :accessor physics-world-buried-count)
    (box-touch-step :initform -1 :type fixnum :accessor physics-world-box-touch-step)
    (held-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-held-rows)
+   ;; the finalize phase's list of the rows that leave the awake set, each row and its fate
+   (departures :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-departures)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
@@ -2237,7 +2239,8 @@ fallen asleep or been removed. Return WORLD. #QKS4GZ"
           (physics-world-deltas world) (make-array 0 :element-type 'single-float)
           (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
           (physics-world-braced world) (make-array 0 :element-type 'fixnum)
-          (physics-world-held world) (make-array 0 :element-type 'fixnum))
+          (physics-world-held world) (make-array 0 :element-type 'fixnum)
+          (physics-world-departures world) (make-array 0 :element-type 'fixnum))
     (flet ((list-room (handles count) (fixnum-column-copy handles (max 64 count) count)))
       (setf (physics-world-fresh-handles world)
             (list-room (physics-world-fresh-handles world) (physics-world-fresh-count world))
@@ -3196,93 +3199,131 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
 ;; The grids of the awake and of the sleeping:1 ends here
 
 ;; [[file:../physics.org::#W4K3PH][Fast bodies and moving boxes wake what they reach:1]]
+(declaim (inline sleeper-in-reach-p))
+(defun sleeper-in-reach-p (world h x y z reach-extra box-p min-x min-y min-z max-x max-y max-z)
+  "True when H still names a sleeper of WORLD whose surface lies within REACH-EXTRA of the point X
+Y Z, or with BOX-P of the box MIN-X .. MAX-Z. #W4K3PH"
+  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
+  (let ((ids (physics-world-ids world))
+        (sleeping (physics-world-sleeping world))
+        (slot (handle-index h)))
+    (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+         (= (aref (handle-table-generation ids) slot) (handle-generation h))
+         (let* ((row (aref (handle-table-local ids) slot))
+                (sx (aref (body-columns-x sleeping) row))
+                (sy (aref (body-columns-y sleeping) row))
+                (sz (aref (body-columns-z sleeping) row))
+                (sr (aref (body-columns-radius sleeping) row)))
+           (if box-p
+               (let ((dx (- sx (max min-x (min max-x sx))))
+                     (dy (- sy (max min-y (min max-y sy))))
+                     (dz (- sz (max min-z (min max-z sz)))))
+                 (<= (+ (* dx dx) (* dy dy) (* dz dz))
+                     (* (+ sr reach-extra) (+ sr reach-extra))))
+               (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
+                     (reach (+ sr reach-extra)))
+                 (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))))))))
+
+(defun wake-within-reach (world x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
+  "Wake every sleeper of WORLD in reach of the point X Y Z or, with BOX-P, of the box MIN-X ..
+MAX-Z (sleeper-in-reach-p), looking SPAN cells of the sleeping grid around the point; return how
+many woke. #W4K3PH"
+  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
+  (let ((ids (physics-world-ids world))
+        (woken 0))
+    (declare (type fixnum woken))
+    ;; the sleepers within reach are woken in the order of their sleeping rows,
+    ;; which is the order they join the awake rows in: it does not hang on the grids
+    (do-sleepers-in-row-order
+        (h world x y z :span span)
+        (sleeper-in-reach-p world h x y z reach-extra box-p min-x min-y min-z max-x max-y max-z)
+      ;; each still sleeps: waking one moves no other out of the sleeping set
+      (wake-physics-body world (aref (handle-table-local ids) (handle-index h)))
+      (incf woken))
+    woken))
+
+(defun wake-near-added (world)
+  "Wake the sleepers each body added to WORLD since the last step overlaps deeper than the slop,
+so that it meets them as awake bodies from its first substep; return how many woke. #W4K3PH"
+  (let ((ids (physics-world-ids world))
+        (added (physics-world-added world))
+        (slop (f32 (physics-world-slop world)))
+        (woken 0))
+    (declare (type fixnum-column added) (type single-float slop) (type fixnum woken))
+    (dotimes (k (physics-world-added-count world) woken)
+      (let* ((h (aref added k)) (slot (handle-index h)))
+        (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
+                   (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+          (let ((row (aref (handle-table-local ids) slot)))
+            (with-body-columns (x y z radius flags) (physics-world-awake world)
+              (when (zerop (logand (aref flags row) +flag-terrain-only+))
+                (incf woken (wake-within-reach world (aref x row) (aref y row) (aref z row)
+                                               (- (aref radius row) slop)
+                                               1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))))
+
+(defun wake-near-fast-bodies (world n)
+  "Wake the sleepers within the margin plus one step's travel of each of the first N awake bodies
+of WORLD faster than the wake speed; return how many woke. #W4K3PH"
+  (let ((margin (f32 (physics-world-margin world)))
+        (dt (physics-world-current-dt world))
+        (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
+        (rmax (f32 (physics-world-max-radius world)))
+        (inv (hash-grid-inv-cell (physics-world-sleeping-grid world)))
+        (woken 0))
+    (declare (type single-float margin wake2 dt rmax) (type fixnum woken))
+    ;; a body woken is appended to the awake buffer, which grows then: its columns are
+    ;; read again for each row
+    (dotimes (i n woken)
+      (with-body-columns (x y z vx vy vz radius flags) (physics-world-awake world)
+        (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                         (* (aref vz i) (aref vz i)))
+                      wake2)
+                   (zerop (logand (aref flags i) +flag-terrain-only+)))
+          (let ((extra (+ (aref radius i) margin
+                          (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                          (* (aref vz i) (aref vz i))))))))
+            ;; a sleeper within reach is at most EXTRA plus the largest radius away, so
+            ;; its cell is at most that many cell edges from the body's, rounded up: one
+            ;; cell unless the body travels more than the skin in a step
+            (incf woken (wake-within-reach world (aref x i) (aref y i) (aref z i) extra
+                                           (ceiling (* (+ extra rmax) inv))
+                                           nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
+
+(defun wake-near-moving-boxes (world)
+  "Wake the sleepers within the margin plus one step's travel of each moving box of WORLD; return
+how many woke. #W4K3PH"
+  (let ((margin (f32 (physics-world-margin world)))
+        (dt (physics-world-current-dt world))
+        (boxes (physics-world-boxes world))
+        (inv (hash-grid-inv-cell (physics-world-sleeping-grid world)))
+        (woken 0))
+    (declare (type single-float margin dt) (type fixnum woken))
+    (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
+      (dotimes (b (box-columns-length boxes) woken)
+        (when (or (/= 0 (aref vx b)) (/= 0 (aref vy b)) (/= 0 (aref vz b)))
+          (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
+                 (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
+                 (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
+                 (travel (+ margin (* dt (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
+                                                   (* (aref vz b) (aref vz b)))))))
+                 (half (+ travel (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz))))
+                 (span (1+ (ceiling (* half inv)))))
+            (incf woken (wake-within-reach world cx cy cz travel span t (aref min-x b) (aref min-y b)
+                                           (aref min-z b) (aref max-x b) (aref max-y b) (aref max-z b)))))))))
+
 (defun wake-phase (world)
   "The wake phase: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
 sleepers they can reach this step: within the margin plus one step's travel; bodies added since
 the last step wake the sleepers they overlap deeper than the slop. Return how many woke. #W4K3PH"
-  (let ((sleeping (physics-world-sleeping world))
-        (woken 0))
+  (let ((woken 0))
     (declare (type fixnum woken))
-    (when (plusp (body-columns-length sleeping))
-      (let* ((grid (ensure-sleeping-grid world))
-             (ids (physics-world-ids world))
-             (n (body-columns-length (physics-world-awake world)))
-             (margin (f32 (physics-world-margin world)))
-             (dt (physics-world-current-dt world))
-             (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
-             (rmax (f32 (physics-world-max-radius world))))
-        (declare (type single-float margin wake2 dt rmax))
-        (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
-                 (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
-                 ;; the sleepers within reach are woken in the order of their sleeping rows,
-                 ;; which is the order they join the awake rows in: it does not hang on the grids
-                 (do-sleepers-in-row-order
-                     (h world x y z :span span)
-                     (let ((slot (handle-index h)))
-                       (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                            (= (aref (handle-table-generation ids) slot) (handle-generation h))
-                            (let* ((row (aref (handle-table-local ids) slot))
-                                   (sx (aref (body-columns-x sleeping) row))
-                                   (sy (aref (body-columns-y sleeping) row))
-                                   (sz (aref (body-columns-z sleeping) row))
-                                   (sr (aref (body-columns-radius sleeping) row)))
-                              (if box-p
-                                  (let ((dx (- sx (max min-x (min max-x sx))))
-                                        (dy (- sy (max min-y (min max-y sy))))
-                                        (dz (- sz (max min-z (min max-z sz)))))
-                                    (<= (+ (* dx dx) (* dy dy) (* dz dz))
-                                        (* (+ sr reach-extra) (+ sr reach-extra))))
-                                  (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
-                                        (reach (+ sr reach-extra)))
-                                    (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
-                   ;; each still sleeps: waking one moves no other out of the sleeping set
-                   (wake-physics-body world (aref (handle-table-local ids) (handle-index h)))
-                   (incf woken))))
-          ;; a body added since the last step wakes the sleepers it overlaps deeper than the
-          ;; slop, so that it meets them as awake bodies from its first substep
-          (let ((added (physics-world-added world))
-                (slop (f32 (physics-world-slop world))))
-            (declare (type fixnum-column added) (type single-float slop))
-            (dotimes (k (physics-world-added-count world))
-              (let* ((h (aref added k)) (slot (handle-index h)))
-                (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
-                           (= (aref (handle-table-generation ids) slot) (handle-generation h)))
-                  (let ((row (aref (handle-table-local ids) slot)))
-                    (with-body-columns (x y z radius flags) (physics-world-awake world)
-                      (when (zerop (logand (aref flags row) +flag-terrain-only+))
-                        (wake-near (aref x row) (aref y row) (aref z row) (- (aref radius row) slop)
-                                   1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
-          ;; a body woken is appended to the awake buffer, which grows then: its columns are
-          ;; read again for each row
-          (dotimes (i n)
-            (with-body-columns (x y z vx vy vz radius flags) (physics-world-awake world)
-              (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                               (* (aref vz i) (aref vz i)))
-                            wake2)
-                         (zerop (logand (aref flags i) +flag-terrain-only+)))
-                (let ((extra (+ (aref radius i) margin
-                                (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                                (* (aref vz i) (aref vz i))))))))
-                  ;; a sleeper within reach is at most EXTRA plus the largest radius away, so
-                  ;; its cell is at most that many cell edges from the body's, rounded up: one
-                  ;; cell unless the body travels more than the skin in a step
-                  (wake-near (aref x i) (aref y i) (aref z i) extra
-                             (ceiling (* (+ extra rmax) (hash-grid-inv-cell grid)))
-                             nil 0.0 0.0 0.0 0.0 0.0 0.0)))))
-          (let ((boxes (physics-world-boxes world))
-                (inv (hash-grid-inv-cell grid)))
-            (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
-              (dotimes (b (box-columns-length boxes))
-                (when (or (/= 0 (aref vx b)) (/= 0 (aref vy b)) (/= 0 (aref vz b)))
-                  (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
-                         (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
-                         (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
-                         (travel (+ margin (* dt (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
-                                                           (* (aref vz b) (aref vz b)))))))
-                         (half (+ travel (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz))))
-                         (span (1+ (ceiling (* half inv)))))
-                    (wake-near cx cy cz travel span t (aref min-x b) (aref min-y b) (aref min-z b)
-                               (aref max-x b) (aref max-y b) (aref max-z b))))))))))
+    (when (plusp (body-columns-length (physics-world-sleeping world)))
+      (ensure-sleeping-grid world)
+      ;; the awake bodies before any wakes: a body woken here is not asked to wake others
+      (let ((n (body-columns-length (physics-world-awake world))))
+        (incf woken (wake-near-added world))
+        (incf woken (wake-near-fast-bodies world n))
+        (incf woken (wake-near-moving-boxes world))))
     ;; a joint group wakes with any of its bodies ([[#J0SL3P]])
     (when (physics-world-joints world) (incf woken (wake-joint-groups world)))
     (setf (physics-world-added-count world) 0)
@@ -6601,10 +6642,47 @@ with fold-positions, three. #F1NAL5"
                (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
           (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
 
+(defconstant +departure-none+ 0
+  "A row's fate in the finalize phase's first pass: it stays awake. #F1NAL5")
+
+(defconstant +departure-escaped+ 1
+  "A row's fate in the finalize phase's first pass: its centre crossed the coordinate limit, and
+it is removed with an :escaped event. #F1NAL5")
+
+(defconstant +departure-expired+ 2
+  "A row's fate in the finalize phase's first pass: a mortal body reached its life, and it is
+removed with an :expired event. #F1NAL5")
+
+(defconstant +departure-asleep+ 3
+  "A row's fate in the finalize phase's first pass: still for long enough, it goes to sleep. #F1NAL5")
+
+(defmacro stillness-fate ()
+  "The fate of awake row I, neither escaped nor expired, in a world that sleeps: +departure-asleep+
+once it has been still for the time to sleep, else +departure-none+, counting its still time or
+setting it back to zero. Expanded in finalize-phase's first pass, whose names it reads. #F1NAL5"
+  `(let* ((p (delta-row i))
+          (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
+          (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
+          (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                             (* (aref vz i) (aref vz i))))
+                    (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
+          (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
+     ;; a body only sleepers and terrain touch is judged by its displacement alone
+     (cond ((not (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
+                      (not (and settle-p (logtest (aref settling i) +brace-unsettled+)))))
+            (setf (aref sleep-time i) 0.0)
+            +departure-none+)
+           ;; a jointed body sleeps with its group ([[#J0SL3P]])
+           ((and (>= (incf (aref sleep-time i) dt) time-to-sleep)
+                 (not (logtest (aref flags i) +flag-jointed+)))
+            +departure-asleep+)
+           (t +departure-none+))))
+
 (define-featured-kernel (finalize-phase :features (:body-contacts :boxes :sleep :mortal)) (world)
   "The finalize phase, last of the step: fold deltas into positions and solver velocities into the rows, turn orientations,
 age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
-sleep. Rows are visited from the last down, so relocation never skips one. Compiled for fewer
+sleep: one pass decides which rows leave the awake set, the next moves them, both from the last
+row down, so relocation never skips one. Compiled for fewer
 features it holds no ageing without :mortal, no sleep without :sleep, and no reading of the
 store phase's marks without body contacts and boxes, which alone make them. #F1NAL5"
   (let* ((awake (physics-world-awake world))
@@ -6634,33 +6712,39 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
     (multiple-value-bind (check near held) (path-check-notes world)
       (hold-out-of-cells world held (fold-positions awake d check near held)))
     (fold-solver-state awake v dt)
-    ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
-    ;; moved, so the solver's rows still match it
-    (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle flags) awake
-      (declare (ignorable vx vy vz wx wy wz radius sleep-time age life flags))
-      (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
-        (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
-               (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-               (%remove-body world +set-awake+ i))
-              ((if-feature :mortal (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i))) nil)
-               (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-               (%remove-body world +set-awake+ i))
-              (sleep-p
-               (let* ((p (delta-row i))
-                      (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
-                      (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
-                      (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                         (* (aref vz i) (aref vz i))))
-                                (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
-                      (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
-                 ;; a body only sleepers and terrain touch is judged by its displacement alone
-                 (if (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
-                          (not (and settle-p (logtest (aref settling i) 4))))
-                     ;; a jointed body sleeps with its group ([[#J0SL3P]])
-                     (when (and (>= (incf (aref sleep-time i) dt) time-to-sleep)
-                                (not (logtest (aref flags i) +flag-jointed+)))
-                       (sleep-physics-body world i))
-                     (setf (aref sleep-time i) 0.0)))))))
+    ;; then ageing and sleep, in two passes: the first decides, in a loop that calls nothing,
+    ;; which rows leave the awake set and why, and lists them from the last down; the second
+    ;; moves them in that order, so a relocation only ever moves a row already dealt with
+    (let ((leaving (fixnum-room (physics-world-departures world) (* 2 (body-columns-length awake))))
+          (departures 0))
+      (declare (type fixnum-column leaving) (type index departures))
+      (setf (physics-world-departures world) leaving)
+      (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life flags) awake
+        (declare (ignorable vx vy vz wx wy wz radius sleep-time age life flags))
+        (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
+          (let ((fate
+                  (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
+                         +departure-escaped+)
+                        ((if-feature :mortal (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i))) nil)
+                         +departure-expired+)
+                        (sleep-p (stillness-fate))
+                        (t +departure-none+))))
+            (declare (type fixnum fate))
+            (unless (= fate +departure-none+)
+              (setf (aref leaving departures) i (aref leaving (1+ departures)) fate)
+              (incf departures 2)))))
+      (with-body-columns (x y z handle) awake
+        (loop for j of-type index from 0 below departures by 2 do
+          (let ((i (aref leaving j)))
+            (declare (type index i))
+            (let ((fate (aref leaving (1+ j))))
+              (cond ((= fate +departure-escaped+)
+                     (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+                     (%remove-body world +set-awake+ i))
+                    ((= fate +departure-expired+)
+                     (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+                     (%remove-body world +set-awake+ i))
+                    (t (sleep-physics-body world i))))))))
     ;; only a world with a mortal sleeper walks the sleeping buffer, and only its rows that
     ;; slept before this step: a removal below moves the last row, one of them or one just
     ;; asleep, into a place already walked
