@@ -3361,7 +3361,7 @@ use before it. #QKS4GZ"
                                        (setf closest (min closest (abs (- (body-y w a) (body-y w b)))))
                                        (list (physics-world-state-hash w) (bits a 0.0) (bits b (- resting-x 3.5)))))
                        closest between (physics-world-sleeping-count w))))))
-    (let ((families (luv-physics::available-kernel-families))
+    (let ((families (available-kernel-families))
           (filter (list :category 2 :mask (logandc2 #xFFFF 1))))
       (check (member :scalar families))
       (dolist (family families)
@@ -6240,7 +6240,7 @@ the phases of a step before the prepare phase. #PR3PAR"
   (let* ((w (make-physics-world :sleep nil))
          (ball (add-physics-body w 0.6 9.2 0 :radius 0.1))
          (joint (add-physics-joint w :distance ball nil :anchor-b '(0 10 0)))
-         (recording (luv-physics::start-physics-recording w))
+         (recording (start-physics-recording w))
          (centres (list (multiple-value-list (physics-body-position w ball)))))
     (declare (ignore joint))
     (dotimes (i 10)
@@ -6255,7 +6255,7 @@ the phases of a step before the prepare phase. #PR3PAR"
                              (append centre '(0 10 0)) (coerce (subseq joints (* 6 k) (* 6 (1+ k))) 'list))
                       "frame ~D holds ~S" k (subseq joints (* 6 k) (* 6 (1+ k))))))
     (let ((path (merge-pathnames "report/joints-viewer-claim.html" (asdf:system-source-directory "luv-physics"))))
-      (luv-physics::write-physics-viewer recording path)
+      (write-physics-viewer recording path)
       (let ((text (uiop:read-file-string path)))
         (check (search "\"joints\": [" text))
         (check (search (format nil "~,3F" (first (first centres))) text)))
@@ -7803,7 +7803,7 @@ into a second world of the scene stepped half as often, run MORE there. Return b
 
 (define-claim "SN4P0T" every-scene-resumes-to-the-bit
     "Each standard scene under each family resumes from a snapshot, in a world stepped otherwise, to the same hash."
-  (dolist (family (luv-physics::available-kernel-families))
+  (dolist (family (available-kernel-families))
     (dolist (scene '(:basin :pile :fountain :lava :player))
       (multiple-value-bind (straight restored) (resumed-scene-hashes scene family 120 60)
         (check (= straight restored) "~(~A~) under ~(~A~): ~D straight, ~D restored" scene family straight restored)))))
@@ -7908,7 +7908,7 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
 
 (define-claim "SN4P0T" jointed-worlds-resume-to-the-bit
     "A jointed chain and pendulum resumes from its snapshot to the straight hash, in every family, into worlds of other joints, none, or fresh."
-  (dolist (family (luv-physics::available-kernel-families))
+  (dolist (family (available-kernel-families))
     (let* ((world (jointed-snapshot-world family)) (snapshot nil))
       (dotimes (i 90) (step-physics-world world))
       (setf snapshot (subseq (snapshot-physics-world world) 0))
