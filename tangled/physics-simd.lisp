@@ -593,7 +593,7 @@ velocity in the frame, the gap and the masses of each lane. #W1DFRM"
              (@w! t1x ux) (@w! t1y uy) (@w! t1z uz) (@w! t2x qx) (@w! t2y qy) (@w! t2z qz)
              ;; without boxes there is no box velocity to resolve
              (if-feature :boxes
-               (let ((kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
+               (let ((kx (@w kvx)) (ky (@w kvy)) (kz (@w kvz)))
                  (@w! kvn (wdot (kx ky kz) (x y z)))
                  (@w! kvt1 (wdot (kx ky kz) (ux uy uz)))
                  (@w! kvt2 (wdot (kx ky kz) (qx qy qz)))))

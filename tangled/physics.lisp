@@ -443,104 +443,131 @@ room under the reach limit for the smallest radius. #C0ND1T"
          (declare (ignorable ,b))
          ,@body))))
 
-(defmacro define-physics-layout (name docstring &rest columns)
-  "Define the columnar layout NAME: a buffer struct of one specialised array per column of
-COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
-NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
-or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
-  (let* ((make (layout-symbol "%MAKE-" name))
-         (ctor (layout-symbol "MAKE-" name))
-         (len (layout-symbol name "-LENGTH"))
-         (cap (layout-symbol name "-CAPACITY"))
-         (spare (layout-symbol name "-SPARE"))
-         (ensure (layout-symbol name "-ENSURE-CAPACITY"))
-         (trim (layout-symbol name "-TRIM"))
-         (append (layout-symbol name "-APPEND"))
-         (remove (layout-symbol name "-SWAP-REMOVE"))
-         (copy (layout-symbol name "-COPY-ROW"))
-         (permute (layout-symbol name "-PERMUTE"))
-         (zero (layout-symbol name "-ZERO-ROW"))
-         (clear (layout-symbol name "-CLEAR"))
-         (with (layout-symbol "WITH-" name))
-         (names (layout-symbol "+" name "-COLUMN-NAMES+"))
-         (bytes (layout-symbol "+" name "-ROW-BYTES+"))
-         (accessors (loop for (c) in columns collect (layout-symbol name "-" c))))
-    `(progn
-       (defstruct (,name (:constructor ,make) (:copier nil) (:predicate nil))
-         ,docstring
-         (length 0 :type index)
-         (capacity 0 :type index)
-         (spare 0 :type index)
-         ,@(loop for (c type) in columns
-                 collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
-       (defparameter ,names ',(mapcar #'first columns)
-         ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
-       (defparameter ,bytes ,(loop for (nil type width) in columns
-                                   sum (* (or width 1) (ecase type (single-float 4) (double-float 8) (fixnum 8))))
-         ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name))
-       (defun ,ctor (&key (capacity 16) (spare 0))
-         ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
-         (let ((size (+ capacity spare)))
-           (,make :capacity capacity :spare spare
-                  ,@(loop for (c type width) in columns
-                          append `(,(intern (symbol-name c) :keyword)
-                                   (make-array (* size ,(or width 1)) :element-type ',type
-                                                                      :initial-element ,(column-zero type)))))))
-       (defun ,ensure (buffer rows)
-         ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index rows))
-         (when (> rows (,cap buffer))
-           (let* ((new (max rows (* 2 (,cap buffer)) 16))
-                  (size (+ new (,spare buffer))))
-             ,@(loop for (c type width) in columns for acc in accessors
-                     collect `(let ((fresh (make-array (* size ,(or width 1)) :element-type ',type
-                                                                              :initial-element ,(column-zero type))))
-                                (replace fresh (,acc buffer))
-                                (setf (,acc buffer) fresh)))
-             (setf (,cap buffer) new)))
-         buffer)
-       (defun ,trim (buffer rows)
-         ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-names (name)
+    "The symbols the layout NAME defines, as a plist keyed by what each names. #L4Y0UT"
+    (list :make (layout-symbol "%MAKE-" name)
+          :ctor (layout-symbol "MAKE-" name)
+          :len (layout-symbol name "-LENGTH")
+          :cap (layout-symbol name "-CAPACITY")
+          :spare (layout-symbol name "-SPARE")
+          :ensure (layout-symbol name "-ENSURE-CAPACITY")
+          :trim (layout-symbol name "-TRIM")
+          :append (layout-symbol name "-APPEND")
+          :remove (layout-symbol name "-SWAP-REMOVE")
+          :copy (layout-symbol name "-COPY-ROW")
+          :permute (layout-symbol name "-PERMUTE")
+          :zero (layout-symbol name "-ZERO-ROW")
+          :clear (layout-symbol name "-CLEAR")
+          :with (layout-symbol "WITH-" name)
+          :names (layout-symbol "+" name "-COLUMN-NAMES+")
+          :bytes (layout-symbol "+" name "-ROW-BYTES+")))
+
+  (defun layout-accessors (name columns)
+    "The reader of each of COLUMNS in the layout NAME's struct, in their order. #L4Y0UT"
+    (loop for (c) in columns collect (layout-symbol name "-" c))))
+;; One macro generates every columnar layout:1 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:2]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-struct-forms (name docstring columns)
+    "The struct of the layout NAME, one array slot per column of COLUMNS, and the constants that
+name its columns and count a row's bytes. #L4Y0UT"
+    (destructuring-bind (&key make names bytes &allow-other-keys) (layout-names name)
+      `((defstruct (,name (:constructor ,make) (:copier nil) (:predicate nil))
+          ,docstring
+          (length 0 :type index)
+          (capacity 0 :type index)
+          (spare 0 :type index)
+          ,@(loop for (c type) in columns
+                  collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
+        (defparameter ,names ',(mapcar #'first columns)
+          ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
+        (defparameter ,bytes ,(loop for (nil type width) in columns
+                                    sum (* (or width 1) (ecase type (single-float 4) (double-float 8) (fixnum 8))))
+          ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name)))))
+
+  (defun layout-sizing-forms (name columns)
+    "The layout NAME's constructor, and its operations that grow and shrink a buffer's arrays. #L4Y0UT"
+    (destructuring-bind (&key make ctor len cap spare ensure trim &allow-other-keys) (layout-names name)
+      (let ((accessors (layout-accessors name columns)))
+        `((defun ,ctor (&key (capacity 16) (spare 0))
+            ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
+            (let ((size (+ capacity spare)))
+              (,make :capacity capacity :spare spare
+                     ,@(loop for (c type width) in columns
+                             append `(,(intern (symbol-name c) :keyword)
+                                      (make-array (* size ,(or width 1)) :element-type ',type
+                                                                         :initial-element ,(column-zero type)))))))
+          (defun ,ensure (buffer rows)
+            ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
+            (declare (type ,name buffer) (type index rows))
+            (when (> rows (,cap buffer))
+              (let* ((new (max rows (* 2 (,cap buffer)) 16))
+                     (size (+ new (,spare buffer))))
+                ,@(loop for (c type width) in columns for acc in accessors
+                        collect `(let ((fresh (make-array (* size ,(or width 1)) :element-type ',type
+                                                                                 :initial-element ,(column-zero type))))
+                                   (replace fresh (,acc buffer))
+                                   (setf (,acc buffer) fresh)))
+                (setf (,cap buffer) new)))
+            buffer)
+          (defun ,trim (buffer rows)
+            ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
 least 16), keeping every row; return BUFFER. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index rows))
-         (let ((new (max rows (,len buffer) 16)))
-           (when (< new (,cap buffer))
-             (let ((size (+ new (,spare buffer))))
-               ,@(loop for (c type width) in columns for acc in accessors
-                       collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
-                                                                               :initial-element ,(column-zero type))))
-                                  (replace kept (,acc buffer))
-                                  (setf (,acc buffer) kept)))
-               (setf (,cap buffer) new))))
-         buffer)
-       (declaim (inline ,append))
-       (defun ,append (buffer)
-         ,(format nil "Add a row to BUFFER, a ~A, and return its index; the row reads as zeros. #L4Y0UT" name)
-         (declare (type ,name buffer))
-         (let ((row (,len buffer)))
-           (when (>= row (,cap buffer)) (,ensure buffer (1+ row)))
-           (setf (,len buffer) (1+ row))
-           row))
-       (defun ,zero (buffer row)
-         ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index row) #.+kernel-policy+)
-         ,@(loop for (nil type width) in columns for acc in accessors
-                 collect (if width
-                             `(fill (,acc buffer) ,(column-zero type)
-                                    :start (* row ,width) :end (* (1+ row) ,width))
-                             `(setf (aref (,acc buffer) row) ,(column-zero type))))
-         buffer)
-       (defun ,copy (from from-row to to-row)
-         ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
-         (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
-         ,@(loop for (nil nil width) in columns for acc in accessors
-                 collect (if width
-                             `(replace (,acc to) (,acc from) :start1 (* to-row ,width)
-                                                              :start2 (* from-row ,width)
-                                                              :end2 (* (1+ from-row) ,width))
-                             `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
-         to)
-       (defun ,permute (buffer scratch destinations count)
+            (declare (type ,name buffer) (type index rows))
+            (let ((new (max rows (,len buffer) 16)))
+              (when (< new (,cap buffer))
+                (let ((size (+ new (,spare buffer))))
+                  ,@(loop for (c type width) in columns for acc in accessors
+                          collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
+                                                                                  :initial-element ,(column-zero type))))
+                                     (replace kept (,acc buffer))
+                                     (setf (,acc buffer) kept)))
+                  (setf (,cap buffer) new))))
+            buffer))))))
+;; One macro generates every columnar layout:2 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:3]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-row-forms (name columns)
+    "The layout NAME's operations on one row: append one that reads as zeros, zero one, copy one
+between buffers. #L4Y0UT"
+    (destructuring-bind (&key len cap ensure append zero copy &allow-other-keys) (layout-names name)
+      (let ((accessors (layout-accessors name columns)))
+        `((declaim (inline ,append))
+          (defun ,append (buffer)
+            ,(format nil "Add a row to BUFFER, a ~A, and return its index; the row reads as zeros. #L4Y0UT" name)
+            (declare (type ,name buffer))
+            (let ((row (,len buffer)))
+              (when (>= row (,cap buffer)) (,ensure buffer (1+ row)))
+              (setf (,len buffer) (1+ row))
+              row))
+          (defun ,zero (buffer row)
+            ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
+            (declare (type ,name buffer) (type index row) #.+kernel-policy+)
+            ,@(loop for (nil type width) in columns for acc in accessors
+                    collect (if width
+                                `(fill (,acc buffer) ,(column-zero type)
+                                       :start (* row ,width) :end (* (1+ row) ,width))
+                                `(setf (aref (,acc buffer) row) ,(column-zero type))))
+            buffer)
+          (defun ,copy (from from-row to to-row)
+            ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
+            (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
+            ,@(loop for (nil nil width) in columns for acc in accessors
+                    collect (if width
+                                `(replace (,acc to) (,acc from) :start1 (* to-row ,width)
+                                                                 :start2 (* from-row ,width)
+                                                                 :end2 (* (1+ from-row) ,width))
+                                `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
+            to)))))
+
+  (defun layout-permute-form (name columns)
+    "The layout NAME's permute: every row to its new place, column by column through a scratch
+buffer whose arrays it then takes. #L4Y0UT"
+    (destructuring-bind (&key len cap ensure permute &allow-other-keys) (layout-names name)
+      `(defun ,permute (buffer scratch destinations count)
          ,(format nil "Move each row R of BUFFER, a ~A, to row (aref DESTINATIONS R), or drop it where
 that is negative; the places taken must be exactly 0 .. COUNT-1. The rows are written into
 SCRATCH, a buffer of the same layout and spare, whose arrays BUFFER then takes in exchange
@@ -550,53 +577,81 @@ for its own; rows past COUNT read as zeros. Return BUFFER. #L4Y0UT" name)
          (,ensure scratch (max count (,cap buffer)))
          (let ((n (,len buffer)) (stale (,len scratch)))
            (declare (type index n stale))
-           ,@(loop for (nil type width) in columns for acc in accessors
-                   collect `(let ((from (,acc buffer)) (to (,acc scratch)))
-                              (declare (type ,(column-array-type type) from to))
-                              ;; rows the scratch held from its last use, past COUNT, become zeros
-                              (when (> stale count)
-                                (fill to ,(column-zero type) :start (* count ,(or width 1))
-                                                             :end (* stale ,(or width 1))))
-                              (dotimes (r n)
-                                (let ((d (aref destinations r)))
-                                  (declare (type fixnum d))
-                                  (when (>= d 0)
-                                    ,(if width
-                                         `(loop for k of-type fixnum from 0 below ,width
-                                                do (setf (aref to (+ (* d ,width) k))
-                                                         (aref from (+ (* r ,width) k))))
-                                         `(setf (aref to d) (aref from r))))))
-                              (setf (,acc scratch) from (,acc buffer) to)))
+           ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
+                   collect (layout-permute-column type width acc))
            (rotatef (,cap buffer) (,cap scratch))
            (setf (,len buffer) count (,len scratch) n))
-         buffer)
-       (defun ,remove (buffer row)
-         ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
+         buffer)))
+
+  (defun layout-permute-column (type width acc)
+    "Permute's pass over one column, read by ACC, of TYPE and WIDTH values a row. #L4Y0UT"
+    `(let ((from (,acc buffer)) (to (,acc scratch)))
+       (declare (type ,(column-array-type type) from to))
+       ;; rows the scratch held from its last use, past COUNT, become zeros
+       (when (> stale count)
+         (fill to ,(column-zero type) :start (* count ,(or width 1))
+                                      :end (* stale ,(or width 1))))
+       (dotimes (r n)
+         (let ((d (aref destinations r)))
+           (declare (type fixnum d))
+           (when (>= d 0)
+             ,(if width
+                  `(loop for k of-type fixnum from 0 below ,width
+                         do (setf (aref to (+ (* d ,width) k))
+                                  (aref from (+ (* r ,width) k))))
+                  `(setf (aref to d) (aref from r))))))
+       (setf (,acc scratch) from (,acc buffer) to))))
+;; One macro generates every columnar layout:3 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:4]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-removal-forms (name columns)
+    "The layout NAME's swap-remove, which fills a hole with the last row, and clear. #L4Y0UT"
+    (destructuring-bind (&key len spare remove copy zero clear &allow-other-keys) (layout-names name)
+      `((defun ,remove (buffer row)
+          ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
 row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index row))
-         (let ((last (1- (,len buffer))))
-           (declare (type fixnum last))
-           (assert (<= 0 row last) () "row ~D is outside ~A of length ~D" row ',name (1+ last))
-           (unless (= row last) (,copy buffer last buffer row))
-           (,zero buffer last)
-           (setf (,len buffer) last)
-           (if (= row last) -1 last)))
-       (defun ,clear (buffer)
-         ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
-         (declare (type ,name buffer))
-         (let ((n (+ (,len buffer) (,spare buffer))))
-           ,@(loop for (nil type width) in columns for acc in accessors
-                   collect `(fill (,acc buffer) ,(column-zero type)
-                                  :end (min (* n ,(or width 1)) (length (,acc buffer))))))
-         (setf (,len buffer) 0)
-         buffer)
-       (defmacro ,with ((&rest cols) buffer &body body)
+          (declare (type ,name buffer) (type index row))
+          (let ((last (1- (,len buffer))))
+            (declare (type fixnum last))
+            (assert (<= 0 row last) () "row ~D is outside ~A of length ~D" row ',name (1+ last))
+            (unless (= row last) (,copy buffer last buffer row))
+            (,zero buffer last)
+            (setf (,len buffer) last)
+            (if (= row last) -1 last)))
+        (defun ,clear (buffer)
+          ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
+          (declare (type ,name buffer))
+          (let ((n (+ (,len buffer) (,spare buffer))))
+            ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
+                    collect `(fill (,acc buffer) ,(column-zero type)
+                                   :end (min (* n ,(or width 1)) (length (,acc buffer))))))
+          (setf (,len buffer) 0)
+          buffer))))
+
+  (defun layout-with-form (name columns)
+    "The layout NAME's WITH- macro, binding columns by name as declared arrays. #L4Y0UT"
+    (destructuring-bind (&key with &allow-other-keys) (layout-names name)
+      `(defmacro ,with ((&rest cols) buffer &body body)
          ,(format nil "Run BODY with each of COLS bound to that column of the ~A BUFFER. #L4Y0UT" name)
-         (expand-layout-bindings ',name ',(loop for (c type) in columns for acc in accessors
+         (expand-layout-bindings ',name ',(loop for (c type) in columns for acc in (layout-accessors name columns)
                                                 collect (list c type acc))
-                                 cols buffer body))
-       ',name)))
-;; One macro generates every columnar layout:1 ends here
+                                 cols buffer body)))))
+
+(defmacro define-physics-layout (name docstring &rest columns)
+  "Define the columnar layout NAME: a buffer struct of one specialised array per column of
+COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
+NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
+or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
+  `(progn
+     ,@(layout-struct-forms name docstring columns)
+     ,@(layout-sizing-forms name columns)
+     ,@(layout-row-forms name columns)
+     ,(layout-permute-form name columns)
+     ,@(layout-removal-forms name columns)
+     ,(layout-with-form name columns)
+     ',name))
+;; One macro generates every columnar layout:4 ends here
 
 ;; [[file:../physics.org::#B5N8JT][Bodies are rows; a handle is a forwarding address:1]]
 (define-physics-layout body-columns
@@ -1502,23 +1557,37 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
         (step-statistics-max-penetration to) (step-statistics-max-penetration from)
         (step-statistics-max-approach to) (step-statistics-max-approach from))
   to)
+;; The world holds every buffer and its own parameters:1 ends here
 
-(defclass physics-world ()
+;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:2]]
+(defclass world-stores ()
   ((terrain :initarg :terrain :initform nil :accessor physics-world-terrain)
    (probe :initform (make-terrain-probe) :reader physics-world-probe)
-   (kernels :initarg :kernels :accessor physics-world-kernels)
-   (awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
+   (kernels :initarg :kernels :accessor physics-world-kernels))
+  (:documentation "What the world is made of: the terrain its bodies meet, the probe that reads
+its cells, and the kernel family that runs its solver phases. #W0RLD7"))
+
+(defclass world-bodies ()
+  ((awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
    (awake-scratch :initform (make-body-columns :spare 1) :reader physics-world-awake-scratch)
    (row-places :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-row-places)
    (sleeping :initform (make-body-columns) :reader physics-world-sleeping)
-   (ids :initform (make-handle-table) :reader physics-world-ids)
-   (contacts :initform (make-contact-columns) :reader physics-world-contacts)
+   (ids :initform (make-handle-table) :reader physics-world-ids))
+  (:documentation "The bodies: the awake and the sleeping buffers, the awake buffer's scratch
+twin and the table from handles to rows. #W0RLD7"))
+
+(defclass world-contacts ()
+  ((contacts :initform (make-contact-columns) :reader physics-world-contacts)
    (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
    (contact-scratch :initform (make-contact-columns) :reader physics-world-contact-scratch)
    ;; what its snapshots and restores reuse, made at the first ([[#SN4P0T]])
    (snapshot-scratch :initform nil :accessor physics-world-snapshot-scratch)
-   (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints)
-   (events :initform (make-event-columns) :reader physics-world-events)
+   (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints))
+  (:documentation "The persistent contacts, their table by pair and their scratch twin, the
+snapshots' scratch, and the constraints a step builds from them. #W0RLD7"))
+
+(defclass world-events-and-boxes ()
+  ((events :initform (make-event-columns) :reader physics-world-events)
    (event-data :initform (make-array 16 :initial-element nil) :accessor physics-world-event-data)
    (boxes :initform (make-box-columns) :reader physics-world-boxes)
    (box-owners :initform (make-array 16 :initial-element nil) :accessor physics-world-box-owners)
@@ -1527,8 +1596,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    ;; sensor boxes ([[#S3NS0R]])
    (filtering :initform nil :accessor physics-world-filtering)
    (sensors :initform nil :accessor physics-world-sensors)
-   (sensor-counter :initform 0 :type fixnum :accessor physics-world-sensor-counter)
-   (velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
+   (sensor-counter :initform 0 :type fixnum :accessor physics-world-sensor-counter))
+  (:documentation "The step's events and the boxes posted into it, with their owners and
+handles, and the filters and lasting sensors. #W0RLD7"))
+
+(defclass world-solver-scratch ()
+  ((velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
    (deltas :initform (make-array 0 :element-type 'single-float) :accessor physics-world-deltas)
    (color-starts :initform (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
                  :reader physics-world-color-starts)
@@ -1545,11 +1618,17 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (buried-count :initform 0 :type fixnum :accessor physics-world-buried-count)
    (box-touch-step :initform -1 :type fixnum :accessor physics-world-box-touch-step)
    (held-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-held-rows)
+   ;; the finalize phase's list of the rows that leave the awake set, each row and its fate
+   (departures :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-departures)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
-   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows)
-   (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
+   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows))
+  (:documentation "The arrays each step reuses to solve: the solver's rows of motion, the
+colours, and what the boxes and the cells brace, hold and squeeze. #W0RLD7"))
+
+(defclass world-grids ()
+  ((awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
@@ -1572,8 +1651,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (grid-of :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-grid-of)
    (mortal-sleepers :initform 0 :type fixnum :accessor physics-world-mortal-sleepers)
    (added :initform (make-array 16 :element-type 'fixnum :initial-element 0) :accessor physics-world-added)
-   (added-count :initform 0 :type fixnum :accessor physics-world-added-count)
-   ;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
+   (added-count :initform 0 :type fixnum :accessor physics-world-added-count))
+  (:documentation "The hash grids of the awake, the sleeping, the freshly added and the newest
+bodies, and the counts that decide when each is rebuilt. #W0RLD7"))
+
+(defclass world-forces-and-joints ()
+  (;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
    (pushes :initform nil :type (or null f32-column) :accessor physics-world-pushes)
    (pushed :initform nil :accessor physics-world-pushed)
    ;; the joints, made with the first ([[#J0STOR]])
@@ -1581,8 +1664,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    ;; the box bodies' extents and points ([[#BXR0WS]]), or NIL until the first box
    (box-bodies :initform nil :accessor physics-world-box-bodies)
    (scaled-count :initform 0 :type fixnum :accessor physics-world-scaled-count)
-   (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
-   (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
+   (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius))
+  (:documentation "The forces and gravity scales by handle slot, the joints, the box bodies'
+extents and points, and the largest radius. #W0RLD7"))
+
+(defclass world-parameters ()
+  ((step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
    (substeps :initarg :substeps :type fixnum :accessor physics-world-substeps)
    (gravity-x :initarg :gravity-x :type single-float :accessor physics-world-gravity-x)
    (gravity-y :initarg :gravity-y :type single-float :accessor physics-world-gravity-y)
@@ -1606,16 +1693,23 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (brace-mass-ratio :initarg :brace-mass-ratio :accessor physics-world-brace-mass-ratio)
    (reach-limit :initarg :reach-limit :accessor physics-world-reach-limit)
    (max-speed :initarg :max-speed :accessor physics-world-max-speed)
-   (body-budget :initarg :body-budget :accessor physics-world-body-budget)
-   ;; what a step that fails before storing its impulses undoes (roll-back-step)
-   (undo-open :initform nil :accessor physics-world-undo-open)
+   (body-budget :initarg :body-budget :accessor physics-world-body-budget))
+  (:documentation "The step's time, its gravity and the parameters of contacts, sleep and
+limits, copied and checked when the world is made (checked-physics-parameters). #W0RLD7"))
+
+(defclass world-undo ()
+  ((undo-open :initform nil :accessor physics-world-undo-open)
    (undo-step-count :initform 0 :type fixnum :accessor physics-world-undo-step-count)
    (undo-woken :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-woken)
    (undo-woken-count :initform 0 :type fixnum :accessor physics-world-undo-woken-count)
    (undo-sorted :initform nil :accessor physics-world-undo-sorted)
    (undo-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-rows)
-   (undo-statistics :initform (make-step-statistics) :reader physics-world-undo-statistics)
-   (sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
+   (undo-statistics :initform (make-step-statistics) :reader physics-world-undo-statistics))
+  (:documentation "What a step that fails before storing its impulses undoes (roll-back-step).
+#W0RLD7"))
+
+(defclass world-step-state ()
+  ((sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
    ;; what the world may use ([[#FEAT5X][features]]), and the step built for it
    (features :initarg :features :initform +physics-features+ :reader world-features)
    (event-mask :initarg :event-mask :initform -1 :type fixnum :reader world-event-mask)
@@ -1632,6 +1726,15 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (step-hook :initform nil :accessor physics-world-step-hook)
    (phase-clock :initform nil :accessor physics-world-phase-clock)
    (statistics :initform (make-step-statistics) :reader physics-world-statistics))
+  (:documentation "What the world may use and the step built for it, the step's clock and count,
+the callbacks and what the last step measured. #W0RLD7"))
+
+ ;; CLOS lays out the slots of the last superclass first: the groups are named last to first, so a
+ ;; world keeps its slots in the order they are written above.
+(defclass physics-world (world-step-state world-undo world-parameters world-forces-and-joints world-grids
+                         world-solver-scratch world-events-and-boxes world-contacts world-bodies
+                         world-stores)
+  ()
   (:documentation "A simulated world of spheres over a voxel terrain: the CLOS side of the seam,
 holding the columnar buffers, the parameters, the events and the kernel family. #W0RLD7"))
 
@@ -1663,7 +1766,7 @@ each is ignorable. #W0RLD7"
                     collect `(,variable (f32 (,(intern (format nil "PHYSICS-WORLD-~A" name)) ,w)))))
        (declare (type single-float ,@(mapcar #'first pairs)) (ignorable ,w ,@(mapcar #'first pairs)))
        ,@body)))
-;; The world holds every buffer and its own parameters:1 ends here
+;; The world holds every buffer and its own parameters:2 ends here
 
 ;; [[file:../physics.org::#R9M4PV][Choose the phase once: kernel families:1]]
 (defvar *kernel-families* '((:scalar scalar-kernels))
@@ -2145,7 +2248,8 @@ fallen asleep or been removed. Return WORLD. #QKS4GZ"
           (physics-world-deltas world) (make-array 0 :element-type 'single-float)
           (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
           (physics-world-braced world) (make-array 0 :element-type 'fixnum)
-          (physics-world-held world) (make-array 0 :element-type 'fixnum))
+          (physics-world-held world) (make-array 0 :element-type 'fixnum)
+          (physics-world-departures world) (make-array 0 :element-type 'fixnum))
     (flet ((list-room (handles count) (fixnum-column-copy handles (max 64 count) count)))
       (setf (physics-world-fresh-handles world)
             (list-room (physics-world-fresh-handles world) (physics-world-fresh-count world))
@@ -3104,93 +3208,131 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
 ;; The grids of the awake and of the sleeping:1 ends here
 
 ;; [[file:../physics.org::#W4K3PH][Fast bodies and moving boxes wake what they reach:1]]
+(declaim (inline sleeper-in-reach-p))
+(defun sleeper-in-reach-p (world h x y z reach-extra box-p min-x min-y min-z max-x max-y max-z)
+  "True when H still names a sleeper of WORLD whose surface lies within REACH-EXTRA of the point X
+Y Z, or with BOX-P of the box MIN-X .. MAX-Z. #W4K3PH"
+  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
+  (let ((ids (physics-world-ids world))
+        (sleeping (physics-world-sleeping world))
+        (slot (handle-index h)))
+    (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+         (= (aref (handle-table-generation ids) slot) (handle-generation h))
+         (let* ((row (aref (handle-table-local ids) slot))
+                (sx (aref (body-columns-x sleeping) row))
+                (sy (aref (body-columns-y sleeping) row))
+                (sz (aref (body-columns-z sleeping) row))
+                (sr (aref (body-columns-radius sleeping) row)))
+           (if box-p
+               (let ((dx (- sx (max min-x (min max-x sx))))
+                     (dy (- sy (max min-y (min max-y sy))))
+                     (dz (- sz (max min-z (min max-z sz)))))
+                 (<= (+ (* dx dx) (* dy dy) (* dz dz))
+                     (* (+ sr reach-extra) (+ sr reach-extra))))
+               (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
+                     (reach (+ sr reach-extra)))
+                 (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))))))))
+
+(defun wake-within-reach (world x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
+  "Wake every sleeper of WORLD in reach of the point X Y Z or, with BOX-P, of the box MIN-X ..
+MAX-Z (sleeper-in-reach-p), looking SPAN cells of the sleeping grid around the point; return how
+many woke. #W4K3PH"
+  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
+  (let ((ids (physics-world-ids world))
+        (woken 0))
+    (declare (type fixnum woken))
+    ;; the sleepers within reach are woken in the order of their sleeping rows,
+    ;; which is the order they join the awake rows in: it does not hang on the grids
+    (do-sleepers-in-row-order
+        (h world x y z :span span)
+        (sleeper-in-reach-p world h x y z reach-extra box-p min-x min-y min-z max-x max-y max-z)
+      ;; each still sleeps: waking one moves no other out of the sleeping set
+      (wake-physics-body world (aref (handle-table-local ids) (handle-index h)))
+      (incf woken))
+    woken))
+
+(defun wake-near-added (world)
+  "Wake the sleepers each body added to WORLD since the last step overlaps deeper than the slop,
+so that it meets them as awake bodies from its first substep; return how many woke. #W4K3PH"
+  (let ((ids (physics-world-ids world))
+        (added (physics-world-added world))
+        (slop (f32 (physics-world-slop world)))
+        (woken 0))
+    (declare (type fixnum-column added) (type single-float slop) (type fixnum woken))
+    (dotimes (k (physics-world-added-count world) woken)
+      (let* ((h (aref added k)) (slot (handle-index h)))
+        (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
+                   (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+          (let ((row (aref (handle-table-local ids) slot)))
+            (with-body-columns (x y z radius flags) (physics-world-awake world)
+              (when (zerop (logand (aref flags row) +flag-terrain-only+))
+                (incf woken (wake-within-reach world (aref x row) (aref y row) (aref z row)
+                                               (- (aref radius row) slop)
+                                               1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))))
+
+(defun wake-near-fast-bodies (world n)
+  "Wake the sleepers within the margin plus one step's travel of each of the first N awake bodies
+of WORLD faster than the wake speed; return how many woke. #W4K3PH"
+  (let ((margin (f32 (physics-world-margin world)))
+        (dt (physics-world-current-dt world))
+        (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
+        (rmax (f32 (physics-world-max-radius world)))
+        (inv (hash-grid-inv-cell (physics-world-sleeping-grid world)))
+        (woken 0))
+    (declare (type single-float margin wake2 dt rmax) (type fixnum woken))
+    ;; a body woken is appended to the awake buffer, which grows then: its columns are
+    ;; read again for each row
+    (dotimes (i n woken)
+      (with-body-columns (x y z vx vy vz radius flags) (physics-world-awake world)
+        (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                         (* (aref vz i) (aref vz i)))
+                      wake2)
+                   (zerop (logand (aref flags i) +flag-terrain-only+)))
+          (let ((extra (+ (aref radius i) margin
+                          (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                          (* (aref vz i) (aref vz i))))))))
+            ;; a sleeper within reach is at most EXTRA plus the largest radius away, so
+            ;; its cell is at most that many cell edges from the body's, rounded up: one
+            ;; cell unless the body travels more than the skin in a step
+            (incf woken (wake-within-reach world (aref x i) (aref y i) (aref z i) extra
+                                           (ceiling (* (+ extra rmax) inv))
+                                           nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
+
+(defun wake-near-moving-boxes (world)
+  "Wake the sleepers within the margin plus one step's travel of each moving box of WORLD; return
+how many woke. #W4K3PH"
+  (let ((margin (f32 (physics-world-margin world)))
+        (dt (physics-world-current-dt world))
+        (boxes (physics-world-boxes world))
+        (inv (hash-grid-inv-cell (physics-world-sleeping-grid world)))
+        (woken 0))
+    (declare (type single-float margin dt) (type fixnum woken))
+    (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
+      (dotimes (b (box-columns-length boxes) woken)
+        (when (or (/= 0 (aref vx b)) (/= 0 (aref vy b)) (/= 0 (aref vz b)))
+          (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
+                 (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
+                 (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
+                 (travel (+ margin (* dt (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
+                                                   (* (aref vz b) (aref vz b)))))))
+                 (half (+ travel (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz))))
+                 (span (1+ (ceiling (* half inv)))))
+            (incf woken (wake-within-reach world cx cy cz travel span t (aref min-x b) (aref min-y b)
+                                           (aref min-z b) (aref max-x b) (aref max-y b) (aref max-z b)))))))))
+
 (defun wake-phase (world)
   "The wake phase: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
 sleepers they can reach this step: within the margin plus one step's travel; bodies added since
 the last step wake the sleepers they overlap deeper than the slop. Return how many woke. #W4K3PH"
-  (let ((sleeping (physics-world-sleeping world))
-        (woken 0))
+  (let ((woken 0))
     (declare (type fixnum woken))
-    (when (plusp (body-columns-length sleeping))
-      (let* ((grid (ensure-sleeping-grid world))
-             (ids (physics-world-ids world))
-             (n (body-columns-length (physics-world-awake world)))
-             (margin (f32 (physics-world-margin world)))
-             (dt (physics-world-current-dt world))
-             (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
-             (rmax (f32 (physics-world-max-radius world))))
-        (declare (type single-float margin wake2 dt rmax))
-        (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
-                 (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
-                 ;; the sleepers within reach are woken in the order of their sleeping rows,
-                 ;; which is the order they join the awake rows in: it does not hang on the grids
-                 (do-sleepers-in-row-order
-                     (h world x y z :span span)
-                     (let ((slot (handle-index h)))
-                       (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                            (= (aref (handle-table-generation ids) slot) (handle-generation h))
-                            (let* ((row (aref (handle-table-local ids) slot))
-                                   (sx (aref (body-columns-x sleeping) row))
-                                   (sy (aref (body-columns-y sleeping) row))
-                                   (sz (aref (body-columns-z sleeping) row))
-                                   (sr (aref (body-columns-radius sleeping) row)))
-                              (if box-p
-                                  (let ((dx (- sx (max min-x (min max-x sx))))
-                                        (dy (- sy (max min-y (min max-y sy))))
-                                        (dz (- sz (max min-z (min max-z sz)))))
-                                    (<= (+ (* dx dx) (* dy dy) (* dz dz))
-                                        (* (+ sr reach-extra) (+ sr reach-extra))))
-                                  (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
-                                        (reach (+ sr reach-extra)))
-                                    (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
-                   ;; each still sleeps: waking one moves no other out of the sleeping set
-                   (wake-physics-body world (aref (handle-table-local ids) (handle-index h)))
-                   (incf woken))))
-          ;; a body added since the last step wakes the sleepers it overlaps deeper than the
-          ;; slop, so that it meets them as awake bodies from its first substep
-          (let ((added (physics-world-added world))
-                (slop (f32 (physics-world-slop world))))
-            (declare (type fixnum-column added) (type single-float slop))
-            (dotimes (k (physics-world-added-count world))
-              (let* ((h (aref added k)) (slot (handle-index h)))
-                (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
-                           (= (aref (handle-table-generation ids) slot) (handle-generation h)))
-                  (let ((row (aref (handle-table-local ids) slot)))
-                    (with-body-columns (x y z radius flags) (physics-world-awake world)
-                      (when (zerop (logand (aref flags row) +flag-terrain-only+))
-                        (wake-near (aref x row) (aref y row) (aref z row) (- (aref radius row) slop)
-                                   1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
-          ;; a body woken is appended to the awake buffer, which grows then: its columns are
-          ;; read again for each row
-          (dotimes (i n)
-            (with-body-columns (x y z vx vy vz radius flags) (physics-world-awake world)
-              (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                               (* (aref vz i) (aref vz i)))
-                            wake2)
-                         (zerop (logand (aref flags i) +flag-terrain-only+)))
-                (let ((extra (+ (aref radius i) margin
-                                (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                                (* (aref vz i) (aref vz i))))))))
-                  ;; a sleeper within reach is at most EXTRA plus the largest radius away, so
-                  ;; its cell is at most that many cell edges from the body's, rounded up: one
-                  ;; cell unless the body travels more than the skin in a step
-                  (wake-near (aref x i) (aref y i) (aref z i) extra
-                             (ceiling (* (+ extra rmax) (hash-grid-inv-cell grid)))
-                             nil 0.0 0.0 0.0 0.0 0.0 0.0)))))
-          (let ((boxes (physics-world-boxes world))
-                (inv (hash-grid-inv-cell grid)))
-            (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
-              (dotimes (b (box-columns-length boxes))
-                (when (or (/= 0 (aref vx b)) (/= 0 (aref vy b)) (/= 0 (aref vz b)))
-                  (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
-                         (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
-                         (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
-                         (travel (+ margin (* dt (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
-                                                           (* (aref vz b) (aref vz b)))))))
-                         (half (+ travel (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz))))
-                         (span (1+ (ceiling (* half inv)))))
-                    (wake-near cx cy cz travel span t (aref min-x b) (aref min-y b) (aref min-z b)
-                               (aref max-x b) (aref max-y b) (aref max-z b))))))))))
+    (when (plusp (body-columns-length (physics-world-sleeping world)))
+      (ensure-sleeping-grid world)
+      ;; the awake bodies before any wakes: a body woken here is not asked to wake others
+      (let ((n (body-columns-length (physics-world-awake world))))
+        (incf woken (wake-near-added world))
+        (incf woken (wake-near-fast-bodies world n))
+        (incf woken (wake-near-moving-boxes world))))
     ;; a joint group wakes with any of its bodies ([[#J0SL3P]])
     (when (physics-world-joints world) (incf woken (wake-joint-groups world)))
     (setf (physics-world-added-count world) 0)
@@ -4218,8 +4360,9 @@ the hole. #PRUN3D"
       normal-mass tangent-mass rolling-mass friction bias-rate mass-scale
       impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2 gap
       ;; the columns only some worlds have ([[#FEAT5X]]): the box's velocity along the normal
-      ;; and the frame, the largest push the events and restitution read, the approach speed
-      ;; the events report, rolling resistance's, and restitution's
+      ;; and the frame (written as its x, y, z until the frame pass: +constraint-column-aliases+),
+      ;; the largest push the events and restitution read, the approach speed the events
+      ;; report, rolling resistance's, and restitution's
       kvn kvt1 kvt2 max-normal-impulse
       relative-velocity rolling-limit rolling-impulse-x rolling-impulse-y rolling-impulse-z
       restitution)
@@ -4229,12 +4372,21 @@ world needs, then those a world's features may leave out, last. #SSMPYW")
     '(spin-limit spin-impulse armed-speed)
     "The float columns of a constraint's side block, read only by the rows that need them:
 friction's two, then restitution's. #SSMPYW")
+  (defparameter +constraint-column-aliases+
+    '((kvx . kvn) (kvy . kvt1) (kvz . kvt2))
+    "Each name of a column that holds one thing before the frame pass and another after it, with
+the column's own name: the fill writes the box's velocity along the world's axes as kvx, kvy and
+kvz, and the frame pass turns it, in the same three columns, into its parts along the normal and
+the two tangents, kvn, kvt1 and kvt2. #SSMPYW")
   (defun constraint-side-column-p (column)
     "True when COLUMN sits in the side block. #SSMPYW"
     (member column +constraint-side-columns+ :test #'string= :key #'symbol-name))
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints, the main block's or, for a
-column of +constraint-side-columns+, the side block's. #SSMPYW"
+column of +constraint-side-columns+, the side block's; a name of +constraint-column-aliases+ is
+its column's. #SSMPYW"
+    (setf column (or (cdr (assoc column +constraint-column-aliases+ :test #'string= :key #'symbol-name))
+                     column))
     (* 8 (or (position column +constraint-columns+ :test #'string= :key #'symbol-name)
              (position column +constraint-side-columns+ :test #'string= :key #'symbol-name)
              (error "no constraint column ~A" column)))))
@@ -4834,7 +4986,7 @@ to the other: expanded in the prepare phase's fill. #PRF1LL"
            (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
      ;; the columns of boxes, restitution, rolling resistance and the events, when the world
      ;; has them (spin friction's and the armed speed are zeros here, as the side block starts)
-     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (if-feature :boxes (setf (@ kvx) kx (@ kvy) ky (@ kvz) kz))
      (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
      (if-feature :restitution
        (setf (@ restitution) (max (aref re-c la) (aref re-c lb))))
@@ -4908,7 +5060,7 @@ spin impulse, approach speed and soft coefficients: expanded in fill-general-row
            (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
            (@ separation) (+ (contact-at geometry g separation) slop))
      ;; the box's velocity, until the frame pass resolves it
-     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (if-feature :boxes (setf (@ kvx) kx (@ kvy) ky (@ kvz) kz))
      (fill-row-material)
      ;; the spin impulse the contact carried out of the last step: zero on every row with a
      ;; radius on side b, whose spin is never solved
@@ -5084,7 +5236,7 @@ the one formula the relax pass ([[#S0LV3R]]) and the frame pass compute it by. #
 
 (define-featured-kernel (prepare-frames-range :features (:boxes)) (cbuf start end)
   "Complete constraints START..END of CBUF from their normal, radii, inverse masses and inertias,
-and the box velocity held in the KVN, KVT1 and KVT2 columns: the tangent frame t1, t2 (t1 from
+and the box velocity held in the KVX, KVY and KVZ columns: the tangent frame t1, t2 (t1 from
 the axis least aligned with the normal), the box velocity resolved onto n, t1 and t2, the
 normal, tangent and rolling masses (zero where nothing can move), and the gap the first
 substep's solve reads. Compiled without boxes, it has no box velocity to resolve. #PRFRM2"
@@ -5113,7 +5265,7 @@ substep's solve reads. Compiled without boxes, it has no box velocity to resolve
         (declare (type index base))
         (setf (@ t1x) ux (@ t1y) uy (@ t1z) uz (@ t2x) qx (@ t2y) qy (@ t2z) qz)
         (if-feature :boxes
-          (let ((kx (@ kvn)) (ky (@ kvt1)) (kz (@ kvt2)))
+          (let ((kx (@ kvx)) (ky (@ kvy)) (kz (@ kvz)))
             (setf (@ kvn) (+ (* kx x) (* ky y) (* kz z))
                   (@ kvt1) (+ (* kx ux) (* ky uy) (* kz uz))
                   (@ kvt2) (+ (* kx qx) (* ky qy) (* kz qz)))))
@@ -7267,10 +7419,47 @@ with fold-positions, three. #F1NAL5"
                (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
           (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
 
+(defconstant +departure-none+ 0
+  "A row's fate in the finalize phase's first pass: it stays awake. #F1NAL5")
+
+(defconstant +departure-escaped+ 1
+  "A row's fate in the finalize phase's first pass: its centre crossed the coordinate limit, and
+it is removed with an :escaped event. #F1NAL5")
+
+(defconstant +departure-expired+ 2
+  "A row's fate in the finalize phase's first pass: a mortal body reached its life, and it is
+removed with an :expired event. #F1NAL5")
+
+(defconstant +departure-asleep+ 3
+  "A row's fate in the finalize phase's first pass: still for long enough, it goes to sleep. #F1NAL5")
+
+(defmacro stillness-fate ()
+  "The fate of awake row I, neither escaped nor expired, in a world that sleeps: +departure-asleep+
+once it has been still for the time to sleep, else +departure-none+, counting its still time or
+setting it back to zero. Expanded in finalize-phase's first pass, whose names it reads. #F1NAL5"
+  `(let* ((p (delta-row i))
+          (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
+          (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
+          (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                             (* (aref vz i) (aref vz i))))
+                    (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
+          (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
+     ;; a body only sleepers and terrain touch is judged by its displacement alone
+     (cond ((not (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
+                      (not (and settle-p (logtest (aref settling i) +brace-unsettled+)))))
+            (setf (aref sleep-time i) 0.0)
+            +departure-none+)
+           ;; a jointed body sleeps with its group ([[#J0SL3P]])
+           ((and (>= (incf (aref sleep-time i) dt) time-to-sleep)
+                 (not (logtest (aref flags i) +flag-jointed+)))
+            +departure-asleep+)
+           (t +departure-none+))))
+
 (define-featured-kernel (finalize-phase :features (:body-contacts :boxes :sleep :mortal)) (world)
   "The finalize phase, last of the step: fold deltas into positions and solver velocities into the rows, turn orientations,
 age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
-sleep. Rows are visited from the last down, so relocation never skips one. Compiled for fewer
+sleep: one pass decides which rows leave the awake set, the next moves them, both from the last
+row down, so relocation never skips one. Compiled for fewer
 features it holds no ageing without :mortal, no sleep without :sleep, and no reading of the
 store phase's marks without body contacts and boxes, which alone make them. #F1NAL5"
   (let* ((awake (physics-world-awake world))
@@ -7300,33 +7489,39 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
     (multiple-value-bind (check near held) (path-check-notes world)
       (hold-out-of-cells world held (fold-positions awake d check near held)))
     (fold-solver-state awake v dt)
-    ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
-    ;; moved, so the solver's rows still match it
-    (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle flags) awake
-      (declare (ignorable vx vy vz wx wy wz radius sleep-time age life flags))
-      (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
-        (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
-               (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-               (%remove-body world +set-awake+ i))
-              ((if-feature :mortal (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i))) nil)
-               (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-               (%remove-body world +set-awake+ i))
-              (sleep-p
-               (let* ((p (delta-row i))
-                      (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
-                      (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
-                      (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                         (* (aref vz i) (aref vz i))))
-                                (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
-                      (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
-                 ;; a body only sleepers and terrain touch is judged by its displacement alone
-                 (if (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
-                          (not (and settle-p (logtest (aref settling i) 4))))
-                     ;; a jointed body sleeps with its group ([[#J0SL3P]])
-                     (when (and (>= (incf (aref sleep-time i) dt) time-to-sleep)
-                                (not (logtest (aref flags i) +flag-jointed+)))
-                       (sleep-physics-body world i))
-                     (setf (aref sleep-time i) 0.0)))))))
+    ;; then ageing and sleep, in two passes: the first decides, in a loop that calls nothing,
+    ;; which rows leave the awake set and why, and lists them from the last down; the second
+    ;; moves them in that order, so a relocation only ever moves a row already dealt with
+    (let ((leaving (fixnum-room (physics-world-departures world) (* 2 (body-columns-length awake))))
+          (departures 0))
+      (declare (type fixnum-column leaving) (type index departures))
+      (setf (physics-world-departures world) leaving)
+      (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life flags) awake
+        (declare (ignorable vx vy vz wx wy wz radius sleep-time age life flags))
+        (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
+          (let ((fate
+                  (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
+                         +departure-escaped+)
+                        ((if-feature :mortal (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i))) nil)
+                         +departure-expired+)
+                        (sleep-p (stillness-fate))
+                        (t +departure-none+))))
+            (declare (type fixnum fate))
+            (unless (= fate +departure-none+)
+              (setf (aref leaving departures) i (aref leaving (1+ departures)) fate)
+              (incf departures 2)))))
+      (with-body-columns (x y z handle) awake
+        (loop for j of-type index from 0 below departures by 2 do
+          (let ((i (aref leaving j)))
+            (declare (type index i))
+            (let ((fate (aref leaving (1+ j))))
+              (cond ((= fate +departure-escaped+)
+                     (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+                     (%remove-body world +set-awake+ i))
+                    ((= fate +departure-expired+)
+                     (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+                     (%remove-body world +set-awake+ i))
+                    (t (sleep-physics-body world i))))))))
     ;; only a world with a mortal sleeper walks the sleeping buffer, and only its rows that
     ;; slept before this step: a removal below moves the last row, one of them or one just
     ;; asleep, into a place already walked

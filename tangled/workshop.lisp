@@ -237,18 +237,23 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
                                                               :defaults page))
                      (file-namestring source)))
            (cursors (make-hash-table :test 'equal))
+           ;; the tangled and page lines of the last record: the definitions of one form share them
+           (previous nil)
            (records
              (loop for scanned in (scan-tangled-text text)
                    collect (destructuring-bind (&key name kind anchor line source-line docstring)
                                scanned
                              (let* ((section (and anchor (gethash anchor sections)))
                                     (org-line
-                                      (and section
-                                           (or (page-line page-lines section source-line
-                                                          (gethash anchor cursors (car section)))
-                                               (page-line page-lines section source-line)))))
+                                      (if (eql line (car previous))
+                                          (cdr previous)
+                                          (and section
+                                               (or (page-line page-lines section source-line
+                                                              (gethash anchor cursors (car section)))
+                                                   (page-line page-lines section source-line))))))
                                (when org-line
                                  (setf (gethash anchor cursors) (1+ org-line)))
+                               (setf previous (cons line org-line))
                                (list :name name :kind kind :anchor anchor :file file
                                      :line line :org-line org-line :docstring docstring))))))
       (setf *definitions* (append (remove file *definitions*

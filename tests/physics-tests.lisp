@@ -3370,7 +3370,7 @@ use before it. #QKS4GZ"
                                        (setf closest (min closest (abs (- (body-y w a) (body-y w b)))))
                                        (list (physics-world-state-hash w) (bits a 0.0) (bits b (- resting-x 3.5)))))
                        closest between (physics-world-sleeping-count w))))))
-    (let ((families (luv-physics::available-kernel-families))
+    (let ((families (available-kernel-families))
           (filter (list :category 2 :mask (logandc2 #xFFFF 1))))
       (check (member :scalar families))
       (dolist (family families)
@@ -5715,6 +5715,29 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (plusp one-sided) "no row with nothing on side b")))))
 ;; PRSTG6-side-blocks-start-as-zeros ends here
 
+;; [[file:../physics.org::#PRFRM2][PRFRM2-box-velocity-onto-the-frame]]
+(define-claim "PRFRM2" box-velocity-onto-the-frame
+    "prepare-frames-range turns kvx kvy kvz (1 2 3) into kvn kvt1 kvt2 along n (0.6 0.8 0) and the tangents."
+  (let ((cbuf (luv-physics::make-constraint-columns)))
+    (luv-physics::constraint-columns-ensure-capacity cbuf 8)
+    (setf (luv-physics::constraint-columns-length cbuf) 8)
+    (flet ((put (column value) (setf (luv-physics::constraint-ref cbuf 0 column) value))
+           (column-value (column) (luv-physics::constraint-ref cbuf 0 column)))
+      (loop for (column value) in '((nx 0.6) (ny 0.8) (nz 0.0) (ra 0.25) (rb 0.25) (ima 1.0) (imb 1.0)
+                                    (iia 10.0) (iib 10.0) (kvx 1.0) (kvy 2.0) (kvz 3.0))
+            do (put (intern (symbol-name column) :luv-physics) value))
+      (luv-physics::prepare-frames-range cbuf 0 1)
+      (let* ((c (lambda (name) (column-value (intern name :luv-physics))))
+             (kvn (funcall c "KVN")) (kvt1 (funcall c "KVT1")) (kvt2 (funcall c "KVT2"))
+             (along (lambda (x y z) (+ (* 1.0 (funcall c x)) (* 2.0 (funcall c y)) (* 3.0 (funcall c z))))))
+        (check (< (abs (- kvn 2.2)) 1e-6) "kvn ~S" kvn)
+        (check (< (abs (- kvt1 (funcall along "T1X" "T1Y" "T1Z"))) 1e-6) "kvt1 ~S" kvt1)
+        (check (< (abs (- kvt2 (funcall along "T2X" "T2Y" "T2Z"))) 1e-6) "kvt2 ~S" kvt2)
+        (check (< (abs (- (+ (* kvn kvn) (* kvt1 kvt1) (* kvt2 kvt2)) 14.0)) 1e-5)
+               "the parts' squared length ~S" (+ (* kvn kvn) (* kvt1 kvt1) (* kvt2 kvt2)))
+        (check (= (luv-physics::constraint-offset 'luv-physics::kvx) (luv-physics::constraint-offset 'luv-physics::kvn)))))))
+;; PRFRM2-box-velocity-onto-the-frame ends here
+
 ;; [[file:../physics.org::#G7Q3XR][G7Q3XR-softness-is-the-closed-form]]
 (define-claim "G7Q3XR" softness-is-the-closed-form
     "PHYSICS-SOFTNESS gives omega/a1, a2/(1+a2) and 1/(1+a2); 0 Hz gives 0, 1, 0 exactly."
@@ -6226,7 +6249,7 @@ the phases of a step before the prepare phase. #PR3PAR"
   (let* ((w (make-physics-world :sleep nil))
          (ball (add-physics-body w 0.6 9.2 0 :radius 0.1))
          (joint (add-physics-joint w :distance ball nil :anchor-b '(0 10 0)))
-         (recording (luv-physics::start-physics-recording w))
+         (recording (start-physics-recording w))
          (centres (list (multiple-value-list (physics-body-position w ball)))))
     (declare (ignore joint))
     (dotimes (i 10)
@@ -6241,7 +6264,7 @@ the phases of a step before the prepare phase. #PR3PAR"
                              (append centre '(0 10 0)) (coerce (subseq joints (* 6 k) (* 6 (1+ k))) 'list))
                       "frame ~D holds ~S" k (subseq joints (* 6 k) (* 6 (1+ k))))))
     (let ((path (merge-pathnames "report/joints-viewer-claim.html" (asdf:system-source-directory "luv-physics"))))
-      (luv-physics::write-physics-viewer recording path)
+      (write-physics-viewer recording path)
       (let ((text (uiop:read-file-string path)))
         (check (search "\"joints\": [" text))
         (check (search (format nil "~,3F" (first (first centres))) text)))
@@ -8031,7 +8054,7 @@ into a second world of the scene stepped half as often, run MORE there. Return b
 
 (define-claim "SN4P0T" every-scene-resumes-to-the-bit
     "Each standard scene under each family resumes from a snapshot, in a world stepped otherwise, to the same hash."
-  (dolist (family (luv-physics::available-kernel-families))
+  (dolist (family (available-kernel-families))
     (dolist (scene '(:basin :pile :fountain :lava :player))
       (multiple-value-bind (straight restored) (resumed-scene-hashes scene family 120 60)
         (check (= straight restored) "~(~A~) under ~(~A~): ~D straight, ~D restored" scene family straight restored)))))
@@ -8138,7 +8161,7 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
 
 (define-claim "SN4P0T" jointed-worlds-resume-to-the-bit
     "A jointed chain and pendulum resumes from its snapshot to the straight hash, in every family, into worlds of other joints, none, or fresh."
-  (dolist (family (luv-physics::available-kernel-families))
+  (dolist (family (available-kernel-families))
     (let* ((world (jointed-snapshot-world family)) (snapshot nil))
       (dotimes (i 90) (step-physics-world world))
       (setf snapshot (subseq (snapshot-physics-world world) 0))
