@@ -8817,6 +8817,21 @@ and its pairs written out whole. #SN4P0T"
                                 -1)))
     (loop for (id) in +snapshot-parts+ unless (minusp (aref sizes id)) sum (+ 8 (aref sizes id)))))
 
+(declaim (inline same-material-p))
+(defun same-material-p (bodies row other)
+  "True when rows ROW and OTHER of BODIES have the same material, bit for bit: the nine words
+material-words writes. #SN4P0T"
+  (declare (type body-columns bodies) (type index row other) #.+kernel-policy+)
+  (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind flags)
+      bodies
+    (macrolet ((same (&rest columns)
+                 `(and ,@(loop for c in columns
+                               collect `(= (sb-kernel:single-float-bits (aref ,c row))
+                                           (sb-kernel:single-float-bits (aref ,c other)))))))
+      (and (same radius inverse-mass inverse-inertia restitution friction rolling-resistance life)
+           (= (aref kind row) (aref kind other))
+           (= (ldb (byte 32 16) (aref flags row)) (ldb (byte 32 16) (aref flags other)))))))
+
 (defun snapshot-materials (world scratch)
   "Fill SCRATCH's palette with the materials of WORLD's bodies, awake rows then sleeping, and
 its materials column with each body's entry; return the palette's size. #SN4P0T"
@@ -8832,27 +8847,15 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
       (declare (type fixnum-column materials) (type index k))
       (flet ((walk (bodies)
                (declare (type body-columns bodies))
-               (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance
-                                   life kind flags)
-                   bodies
-                 (let ((last -1))
-                   (declare (type fixnum last))
-                   (dotimes (row (body-columns-length bodies))
-                     ;; most bodies share the material of the row before them: compared, not hashed
-                     (setf last
-                           (if (and (> row 0)
-                                    (macrolet ((same (&rest columns)
-                                                 `(and ,@(loop for c in columns
-                                                               collect `(= (sb-kernel:single-float-bits (aref ,c row))
-                                                                           (sb-kernel:single-float-bits (aref ,c (1- row))))))))
-                                      (same radius inverse-mass inverse-inertia restitution friction
-                                            rolling-resistance life))
-                                    (= (aref kind row) (aref kind (1- row)))
-                                    (= (ldb (byte 32 16) (aref flags row)) (ldb (byte 32 16) (aref flags (1- row)))))
-                               last
-                               (palette-index scratch bodies row)))
-                     (setf (aref materials k) last)
-                     (incf k))))))
+               (let ((last -1))
+                 (declare (type fixnum last))
+                 (dotimes (row (body-columns-length bodies))
+                   ;; most bodies share the material of the row before them: compared, not hashed
+                   (setf last (if (and (> row 0) (same-material-p bodies row (1- row)))
+                                  last
+                                  (palette-index scratch bodies row))
+                         (aref materials k) last)
+                   (incf k)))))
         (walk awake)
         (walk sleeping)))
     (snapshot-scratch-count scratch)))
