@@ -1187,6 +1187,51 @@ is the world's step hook (physics-world-step-hook) throughout. #M9W5P7"
       (incf steps-taken))))
 ;; Random operation sequences find what a hostile caller would:7 ends here
 
+;; [[file:../physics.org::#B3NCHW][What the workers gain:1]]
+(defun measure-workers (count family counts &key (from 60) (to 150))
+  "Step basins of COUNT balls in FAMILY, one per worker count of COUNTS, in turn for TO steps;
+return the median ms per step over steps FROM..TO of each, the one-worker world's serial share
+and whether all reached one state hash. #B3NCHW"
+  (let* ((worlds (mapcar (lambda (n) (open-world-workers (make-basin-world count :kernels family) n)) counts))
+         (times (mapcar (lambda (w) (declare (ignore w)) (list nil)) worlds))
+         (clock (make-array (* 2 (length *physics-phases*)) :element-type 'fixnum :initial-element 0)))
+    (dotimes (i to)
+      (when (= i from) (setf (physics-world-phase-clock (first worlds)) clock))
+      (loop for w in worlds for cell in times
+            do (step-physics-world w)
+               (when (>= i from) (push (* 1000 (physics-world-last-step-real-seconds w)) (car cell)))))
+    (let* ((phases (subseq clock 0 (length *physics-phases*)))
+           (total (reduce #'+ phases))
+           (split (aref phases (position 'substep-phase *physics-phases*)))
+           (hashes (mapcar #'physics-world-state-hash worlds)))
+      (mapc #'close-physics-world worlds)
+      (values (mapcar (lambda (cell) (median (car cell))) times)
+              (if (plusp total) (/ (- total split) (float total 1d0)) 0d0)
+              (= 1 (length (remove-duplicates hashes)))))))
+
+(defun run-worker-benchmark (&key (sizes '(1000 3000 10000 30000)) (stream *standard-output*))
+  "Print, as an Org table, the basin at each of SIZES in every kernel family with one worker,
+two, and the machine's cores when more: median ms, speed-up over one worker, the serial share
+and Amdahl's bound for two, and whether the hashes agree; with the machine and its load. #B3NCHW"
+  (let* ((cores (machine-cores))
+         (counts (remove-duplicates (list 1 2 (max 2 cores)))))
+    (format stream "~&#+caption: the basin, all awake, 60 Hz, 4 substeps; median of steps 60-150, the worlds stepped in turn; ~A, ~D cores; load ~A at the start~%"
+            (cpu-model-name) cores (load-average))
+    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash |~%"
+            counts (rest counts))
+    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------|~%"
+            counts (rest counts))
+    (dolist (size sizes)
+      (dolist (family (available-kernel-families))
+        (multiple-value-bind (ms serial same) (measure-workers size family counts)
+          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A |~%"
+                  size (string-downcase family) ms
+                  (mapcar (lambda (m) (/ (first ms) m)) (rest ms))
+                  (* 100 serial) (/ 1 (+ serial (/ (- 1 serial) 2))) (if same "yes" "NO"))
+          (finish-output stream))))
+    (format stream "~&load ~A at the end~%" (load-average))))
+;; What the workers gain:1 ends here
+
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:1]]
 (define-condition unknown-physics-scene (invalid-physics-parameter)
   ((operation :initarg :operation :reader unknown-physics-scene-operation))
