@@ -8196,6 +8196,10 @@ typed slots so that publishing a job conses nothing. #W0RKP1"
   (split-rows 4096 :type index)
   ;; a colour splits only when it has at least this many rows per worker ([[#SPL1T5]])
   (share-rows 64 :type index)
+  ;; per job: its calls, and the nanoseconds per 1024 rows it took split and whole ([[#SPL1T5]])
+  (calls (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (split-ns (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (whole-ns (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
   ;; the parameters of the job, written by the caller before it publishes
   (wide nil) (narrow nil) (impact nil) (settle nil)
   (lanes 1 :type (integer 1 64))
@@ -8453,6 +8457,42 @@ pool has one, else with the scalar kernel. #SPL1T5"
                    (t (multiple-value-bind (s e) (share-bounds start end worker count)
                         (when (< s e) (run-colour-piece pool s e t))))))))))
 
+(defconstant +split-probe+ 64
+  "Every so many calls of a pass, a tuned pool runs it the way it does not prefer. #SPL1T5")
+
+(defun prefer-split-p (pool job)
+  "Whether POOL runs this call of JOB split: when splitting has been the faster per row, but every
++split-probe+th call the other way, so both figures stay current. #SPL1T5"
+  (declare (type worker-pool pool) (type fixnum job))
+  (let* ((calls (incf (aref (worker-pool-calls pool) job)))
+         (prefer (<= (aref (worker-pool-split-ns pool) job) (aref (worker-pool-whole-ns pool) job))))
+    (declare (type fixnum calls))
+    (if (zerop (mod calls +split-probe+)) (not prefer) prefer)))
+
+(defun note-split-time (pool job split ns rows)
+  "Fold NS, the nanoseconds a call of JOB over ROWS rows took, SPLIT or whole, into POOL's running
+figure for that way: nanoseconds per 1024 rows, each call an eighth of it. #SPL1T5"
+  (declare (type worker-pool pool) (type fixnum job ns) (type index rows))
+  (let ((figures (if split (worker-pool-split-ns pool) (worker-pool-whole-ns pool)))
+        (x (floor (* (max ns 0) 1024) (max rows 1))))
+    (declare (type fixnum x))
+    (setf (aref figures job)
+          (if (zerop (aref figures job)) x (+ (aref figures job) (floor (- x (aref figures job)) 8))))))
+
+(defmacro tuned-split ((pool world rows job) split-form whole-form)
+  "Run SPLIT-FORM with POOL bound to WORLD's pool when the pass of JOB over ROWS rows splits, else
+WHOLE-FORM: a pool with split-rows 0 always splits; one above it splits as prefer-split-p says,
+timing each call for note-split-time. #SPL1T5"
+  (let ((tuning (gensym "TUNING")) (split (gensym "SPLIT")) (start (gensym "START")) (n (gensym "ROWS")))
+    `(let* ((,n ,rows) (,pool (splitting-pool ,world ,n)))
+       (if (null ,pool)
+           ,whole-form
+           (let* ((,tuning (plusp (worker-pool-split-rows ,pool)))
+                  (,split (or (not ,tuning) (prefer-split-p ,pool ,job)))
+                  (,start (if ,tuning (clock-ns) 0)))
+             (multiple-value-prog1 (if ,split ,split-form ,whole-form)
+               (when ,tuning (note-split-time ,pool ,job ,split (- (clock-ns) ,start) ,n))))))))
+
 (defun splitting-pool (world rows)
   "WORLD's pool when it has one and ROWS reach its split-rows, else NIL. #SPL1T5"
   (let ((pool (and (typep world 'physics-world) (physics-world-pool world))))
@@ -8512,43 +8552,44 @@ the integration JOB on the workers. #SPL1T5"
     (run-on-workers pool job 1)))
 
 (defmethod physics-integrate-velocities :around ((kernels scalar-kernels) world h)
-  (let ((pool (splitting-pool world (awake-rows world))))
-    (cond ((null pool) (call-next-method))
-          (t (check-solver-world 'physics-integrate-velocities world)
-             (check-solver-number 'physics-integrate-velocities :h h -1e7)
-             (run-rows-pass pool world (if (pushes-live-p world) +job-pushed-velocities+ +job-velocities+) h)))))
+  (tuned-split (pool world (awake-rows world) +job-velocities+)
+    (progn (check-solver-world 'physics-integrate-velocities world)
+           (check-solver-number 'physics-integrate-velocities :h h -1e7)
+           (run-rows-pass pool world (if (pushes-live-p world) +job-pushed-velocities+ +job-velocities+) h))
+    (call-next-method)))
 
 (defmethod physics-integrate-positions :around ((kernels scalar-kernels) world h)
-  (let ((pool (splitting-pool world (awake-rows world))))
-    (cond ((null pool) (call-next-method))
-          (t (check-solver-world 'physics-integrate-positions world)
-             (check-solver-number 'physics-integrate-positions :h h -1e7)
-             (run-rows-pass pool world +job-positions+ h)))))
+  (tuned-split (pool world (awake-rows world) +job-positions+)
+    (progn (check-solver-world 'physics-integrate-positions world)
+           (check-solver-number 'physics-integrate-positions :h h -1e7)
+           (run-rows-pass pool world +job-positions+ h))
+    (call-next-method)))
 
 (defmethod physics-warm-start :around ((kernels scalar-kernels) world)
-  (let ((pool (splitting-pool world (constraint-rows world))))
-    (cond ((null pool) (call-next-method))
-          (t (check-solver-world 'physics-warm-start world)
-             (run-colour-pass pool kernels world +job-warm-start+)))))
+  (tuned-split (pool world (constraint-rows world) +job-warm-start+)
+    (progn (check-solver-world 'physics-warm-start world)
+           (run-colour-pass pool kernels world +job-warm-start+))
+    (call-next-method)))
 
 (defmethod physics-solve-contacts :around ((kernels scalar-kernels) world inv-h use-bias elapsed)
-  (let ((pool (splitting-pool world (constraint-rows world))))
-    (cond ((null pool) (call-next-method))
-          (t (check-solver-world 'physics-solve-contacts world)
-             (check-solver-number 'physics-solve-contacts :inv-h inv-h 1.0)
-             (check-solver-number 'physics-solve-contacts :elapsed elapsed 0.0)
-             (unless (typep use-bias 'boolean)
-               (error 'invalid-physics-parameter :world world :name :use-bias :value use-bias :expected "T or NIL"))
-             (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-               (setf (worker-pool-inv-h pool) inv-h (worker-pool-use-bias pool) use-bias
-                     (worker-pool-elapsed pool) elapsed (worker-pool-push-max pool) (f32 (physics-world-push-max world))
-                     (worker-pool-threshold pool) threshold
-                     (worker-pool-hgx pool) hgx (worker-pool-hgy pool) hgy (worker-pool-hgz pool) hgz))
-             (run-colour-pass pool kernels world +job-solve+)))))
+  (tuned-split (pool world (constraint-rows world) +job-solve+)
+    (progn (check-solver-world 'physics-solve-contacts world)
+           (check-solver-number 'physics-solve-contacts :inv-h inv-h 1.0)
+           (check-solver-number 'physics-solve-contacts :elapsed elapsed 0.0)
+           (unless (typep use-bias 'boolean)
+             (error 'invalid-physics-parameter :world world :name :use-bias :value use-bias :expected "T or NIL"))
+           (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+             (setf (worker-pool-inv-h pool) inv-h (worker-pool-use-bias pool) use-bias
+                   (worker-pool-elapsed pool) elapsed (worker-pool-push-max pool) (f32 (physics-world-push-max world))
+                   (worker-pool-threshold pool) threshold
+                   (worker-pool-hgx pool) hgx (worker-pool-hgy pool) hgy (worker-pool-hgz pool) hgz))
+           (run-colour-pass pool kernels world +job-solve+))
+    (call-next-method)))
 
 (defmethod physics-prepare-frames :around ((kernels scalar-kernels) world)
-  (let ((pool (splitting-pool world (constraint-rows world))))
-    (if pool (run-colour-pass pool kernels world +job-frames+) (call-next-method))))
+  (tuned-split (pool world (constraint-rows world) +job-frames+)
+    (run-colour-pass pool kernels world +job-frames+)
+    (call-next-method)))
 ;; The step's loops cut into fixed pieces:1 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]

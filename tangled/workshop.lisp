@@ -1188,11 +1188,38 @@ is the world's step hook (physics-world-step-hook) throughout. #M9W5P7"
 ;; Random operation sequences find what a hostile caller would:7 ends here
 
 ;; [[file:../physics.org::#B3NCHW][What the workers gain:1]]
+(defun make-wide-basin-world (count &key (kernels :scalar))
+  "A world of COUNT awake balls of the basin's kind on a square floor walled two cells high, wide
+enough for eight layers of them at the basin's spacing: the basin's pile, too many to stand in
+the basin. #B3NCHW"
+  (let* ((across (max 4 (ceiling (sqrt (/ count 8.0)))))
+         (side (ceiling (+ 0.6 (* 0.55 across))))
+         (terrain (make-voxel-terrain))
+         (world (progn (fill-terrain terrain -1 -1 -1 (+ side 1) 16 (+ side 1) nil)
+                       (fill-terrain terrain -1 -1 -1 (+ side 1) 0 (+ side 1) t)
+                       (fill-terrain terrain -1 0 -1 (+ side 1) 2 0 t)
+                       (fill-terrain terrain -1 0 side (+ side 1) 2 (+ side 1) t)
+                       (fill-terrain terrain -1 0 0 0 2 side t)
+                       (fill-terrain terrain side 0 0 (+ side 1) 2 side t)
+                       (make-physics-world :terrain terrain :kernels kernels :sleep nil
+                                           :features '(:terrain :body-contacts :friction)))))
+    (dotimes (i count world)
+      (multiple-value-bind (layer k) (floor i (* across across))
+        (multiple-value-bind (row col) (floor k across)
+          (add-physics-body world (+ 0.3 (* col 0.55) (* 0.01 (mod i 3))) (+ 0.5 (* layer 0.55))
+                            (+ 0.3 (* row 0.55) (* 0.01 (mod i 5)))
+                            :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0))))))
+
 (defun measure-workers (count family counts &key (from 60) (to 150))
   "Step basins of COUNT balls in FAMILY, one per worker count of COUNTS, in turn for TO steps;
 return the median ms per step over steps FROM..TO of each, the one-worker world's serial share
 and whether all reached one state hash. #B3NCHW"
-  (let* ((worlds (mapcar (lambda (n) (open-world-workers (make-basin-world count :kernels family) n)) counts))
+  (let* ((worlds (mapcar (lambda (n)
+                           (open-world-workers (if (> count 10000)
+                                                   (make-wide-basin-world count :kernels family)
+                                                   (make-basin-world count :kernels family))
+                                               n))
+                         counts))
          (times (mapcar (lambda (w) (declare (ignore w)) (list nil)) worlds))
          (clock (make-array (* 2 (length *physics-phases*)) :element-type 'fixnum :initial-element 0)))
     (dotimes (i to)

@@ -8135,6 +8135,22 @@ solved by FAMILY. #SPL1T5"
     (mapc #'close-physics-world worlds)))
 ;; SPL1T5-worker-fault-as-one-worker ends here
 
+;; [[file:../physics.org::#SPL1T5][SPL1T5-tuned-pool-keeps-the-bits]]
+(define-claim "SPL1T5" tuned-pool-keeps-the-bits
+    "A self-tuning pool of two workers reaches one worker's hash after 140 steps, having run the solve both ways."
+  (let ((one (make-basin-world 300)) (two (make-basin-world 300)))
+    (luv-physics::open-world-workers two 2)
+    (let ((pool (luv-physics::physics-world-pool two)))
+      (setf (luv-physics::worker-pool-split-rows pool) 1)
+      (dotimes (i 140) (step-physics-world one) (step-physics-world two))
+      (check (= (physics-world-state-hash one) (physics-world-state-hash two))
+             "one worker ~D, two tuned ~D" (physics-world-state-hash one) (physics-world-state-hash two))
+      (let ((job luv-physics::+job-solve+))
+        (check (plusp (aref (luv-physics::worker-pool-split-ns pool) job)) "the solve never ran split")
+        (check (plusp (aref (luv-physics::worker-pool-whole-ns pool) job)) "the solve never ran whole")))
+    (close-physics-world two)))
+;; SPL1T5-tuned-pool-keeps-the-bits ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-every-scene-resumes-to-the-bit]]
 (defun resumed-scene-hashes (name family steps more &key (count 300))
   "Run scene NAME under FAMILY for STEPS steps, snapshot it, run MORE; then restore the snapshot
