@@ -15,7 +15,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tangled/workshop.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-peers bench-against bench-joint-grid count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-workers bench-peers bench-against bench-joint-grid count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -36,6 +36,7 @@ help:
 	@echo "make load-time      the engine's load: compiled from an empty cache, then loaded compiled,"
 	@echo "                    in fresh SBCLs, with the workshop's compile beside it; table into $(ORG)"
 	@echo "make bench          measure the basin per kernel family and the queries; write the tables into $(ORG)"
+	@echo "make bench-workers  the basin with one worker and with two, stepped in turn; table into $(ORG)"
 	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
 	@echo "make bench-against  this engine against the commits REVS='ce415a5 d9c8f94' in ROUNDS=5 rounds of"
 	@echo "                    alternating processes; table into $(ORG)"
@@ -113,6 +114,13 @@ bench: setup tangle
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-features report/bench-features.org
 	@BENCH=run-snapshot-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-snapshots.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-snapshots report/bench-snapshots.org
+	@$(MAKE) --no-print-directory bench-workers
+
+# the basin with one worker and with two, interleaved (#B3NCHW): cheap to run again alone
+bench-workers: setup tangle
+	@mkdir -p report
+	@BENCH=run-worker-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-workers.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-workers report/bench-workers.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
 # without -march=native like Debian's Bullet and ODE.

@@ -688,3 +688,13 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
 (precompile-featured-kernels (warm-start-blocks/sse solve-blocks/sse prepare-frames-blocks/sse
                               warm-start-blocks/avx2 solve-blocks/avx2 prepare-frames-blocks/avx2))
 ;; The SSE and AVX2 families:1 ends here
+
+;; [[file:../physics.org::#L4NESW][Every core in lanes:1]]
+(defun settle-ymm ()
+  "Clear the upper halves of the ymm registers, after a worker's piece of AVX2 code. #L4NESW"
+  (sb-simd-avx:vzeroupper))
+
+(defmethod kernel-lanes ((kernels sse-kernels)) (values 4 nil))
+
+(defmethod kernel-lanes ((kernels avx2-kernels)) (values 8 #'settle-ymm))
+;; Every core in lanes:1 ends here

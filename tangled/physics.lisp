@@ -87,7 +87,9 @@
    #:snapshot-physics-world #:restore-physics-world #:write-physics-world #:read-physics-world
    #:physics-snapshot-invalid #:physics-snapshot-truncated
    #:physics-snapshot-wrong-magic #:physics-snapshot-wrong-version #:physics-snapshot-checksum-mismatch
-   #:physics-snapshot-other-layout #:physics-snapshot-missing-features))
+   #:physics-snapshot-other-layout #:physics-snapshot-missing-features
+   ;; Every core (#W0RKP1)
+   #:close-physics-world #:physics-world-workers #:+physics-max-workers+))
 
 (in-package #:luv-physics)
 ;; The package:1 ends here
@@ -1725,6 +1727,8 @@ limits, copied and checked when the world is made (checked-physics-parameters). 
    (event-handler :initform nil :accessor physics-world-event-handler)
    (step-hook :initform nil :accessor physics-world-step-hook)
    (phase-clock :initform nil :accessor physics-world-phase-clock)
+   ;; the world's workers ([[#W0RKP1]]), or NIL for one
+   (pool :initform nil :accessor physics-world-pool)
    (statistics :initform (make-step-statistics) :reader physics-world-statistics))
   (:documentation "What the world may use and the step built for it, the step's clock and count,
 the callbacks and what the last step measured. #W0RLD7"))
@@ -1837,11 +1841,12 @@ first, so :auto takes the last one the CPU runs. #R9M4PV"
   function)
 
 (defun make-physics-world (&key terrain (step-seconds 1/60) (substeps 4) (gravity '(0 -9.81 0))
-                                (kernels :scalar) (sleep t) (features +physics-features+))
+                                (kernels :scalar) (sleep t) (features +physics-features+) (workers 1))
   "A new empty world over TERRAIN (a voxel-terrain or NIL), stepping STEP-SECONDS in SUBSTEPS
 substeps under GRAVITY (a list of three numbers), solving with the kernel family KERNELS, using
 only FEATURES (a list of keywords of +physics-features+, or :events for every kind of event;
-every feature by default). #M4K3WD"
+every feature by default), its step shared by WORKERS threads (a count, or :auto for the
+machine's cores: [[#W0RKP1]]). #M4K3WD"
   (unless (or (null terrain) (typep terrain 'voxel-terrain))
     (error 'invalid-physics-parameter :name :terrain :value terrain :expected "a voxel-terrain or NIL"))
   (let ((dt (finite-f32 :step-seconds step-seconds)))
@@ -1854,10 +1859,12 @@ every feature by default). #M4K3WD"
     (let ((g (mapcar (lambda (v) (ranged-f32 :gravity v (- +physics-max-gravity+) +physics-max-gravity+))
                      gravity))
           (parameters (checked-physics-parameters)))
-      (let ((features (checked-physics-features features sleep)))
+      (let ((features (checked-physics-features features sleep))
+            (workers (checked-worker-count workers)))
         (when (and terrain (not (member :terrain features)))
           (error 'physics-feature-omitted :feature :terrain :operation 'make-physics-world))
-        (apply #'make-instance 'physics-world
+        (open-world-workers
+         (apply #'make-instance 'physics-world
                :terrain terrain :step-seconds dt :substeps substeps
                :gravity-x (first g) :gravity-y (second g) :gravity-z (third g)
                :kernels (make-kernel-family kernels)
@@ -1865,7 +1872,8 @@ every feature by default). #M4K3WD"
                :features features :event-mask (feature-event-mask features)
                :constraints (make-constraint-columns (constraint-block-floats features)
                                                      (constraint-side-floats features))
-               parameters)))))
+               parameters)
+         workers)))))
 
 (defmethod (setf physics-world-event-handler) :before (handler (world physics-world))
   (unless (or (null handler) (functionp handler) (and (symbolp handler) (fboundp handler)))
@@ -8542,6 +8550,437 @@ kernel family. #H4NDL3"
                 (cons "edits" (voxel-terrain-edits terrain))
                 (cons "chunks" (voxel-terrain-chunks terrain)))))
 ;; A handle explained, and a world opened part by part:1 ends here
+
+;; [[file:../physics.org::#W0RKP1][Workers are threads made once, parked between steps:1]]
+(defconstant +physics-max-workers+ 64
+  "The most workers a world may have. #W0RKP1")
+
+(defconstant +worker-spins+ 500
+  "How many turns of the pause instruction a waiting worker or caller spins before it yields its
+core. #W0RKP1")
+
+(defconstant +worker-park-spins+ 20000
+  "How many times a worker waiting for a job spins or yields before it parks. #W0RKP1")
+
+(defstruct (worker-pool (:constructor %make-worker-pool (count)) (:copier nil))
+  "The threads of a world with workers, and the job they share: its stages and parameters, in
+typed slots so that publishing a job conses nothing. #W0RKP1"
+  (count 1 :type (integer 1 64) :read-only t)
+  (threads '() :type list)
+  (generation 0 :type sb-ext:word)
+  (parked 0 :type sb-ext:word)
+  (finished 0 :type sb-ext:word)
+  (arrived 0 :type sb-ext:word)
+  (sense 0 :type sb-ext:word)
+  (mutex (sb-thread:make-mutex :name "luv-physics workers") :read-only t)
+  (wakeup (sb-thread:make-waitqueue :name "luv-physics workers") :read-only t)
+  (closing nil)
+  (modes 0 :type (unsigned-byte 32))
+  (failure nil)
+  (failure-stage most-positive-fixnum :type fixnum)
+  (failure-worker 0 :type fixnum)
+  ;; the job: which one, and how many stages
+  (job 0 :type fixnum)
+  (stages 0 :type fixnum)
+  ;; a pass splits only over at least this many rows; below it worker 0 runs it all
+  (split-rows 4096 :type index)
+  ;; a colour splits only when it has at least this many rows per worker ([[#SPL1T5]])
+  (share-rows 64 :type index)
+  ;; per job: its calls, and the nanoseconds per 1024 rows it took split and whole ([[#SPL1T5]])
+  (calls (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (split-ns (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (whole-ns (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  ;; the parameters of the job, written by the caller before it publishes
+  (wide nil) (narrow nil) (impact nil) (settle nil)
+  (lanes 1 :type (integer 1 64))
+  (cbuf nil)
+  (v (make-array 0 :element-type 'single-float) :type f32-column)
+  (d (make-array 0 :element-type 'single-float) :type f32-column)
+  (pushes (make-array 0 :element-type 'single-float) :type f32-column)
+  (handles (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (masses (make-array 0 :element-type 'single-float) :type f32-column)
+  (starts (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (stage-colours (make-array (+ +physics-max-colors+ 1) :element-type 'fixnum :initial-element 0)
+   :type fixnum-column :read-only t)
+  (rows 0 :type index)
+  (h 0.0 :type single-float) (inv-h 0.0 :type single-float) (use-bias nil)
+  (elapsed 0.0 :type single-float) (push-max 0.0 :type single-float)
+  (threshold 0.0 :type single-float)
+  (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float)
+  (gx 0.0 :type single-float) (gy 0.0 :type single-float) (gz 0.0 :type single-float)
+  (max-speed 0.0 :type single-float))
+
+(defun machine-cores ()
+  "The number of cores this machine has online (sysconf), at least 1. #W0RKP1"
+  (max 1 (sb-alien:alien-funcall
+          (sb-alien:extern-alien "sysconf" (function sb-alien:long sb-alien:int))
+          84)))                           ; _SC_NPROCESSORS_ONLN
+
+(defun checked-worker-count (workers)
+  "The worker count WORKERS names: itself, from 1 to +physics-max-workers+, or for :auto the
+machine's cores; else invalid-physics-parameter naming :workers. #W0RKP1"
+  (cond ((eq workers :auto) (min +physics-max-workers+ (machine-cores)))
+        ((and (integerp workers) (<= 1 workers +physics-max-workers+)) workers)
+        (t (error 'invalid-physics-parameter
+                  :name :workers :value workers
+                  :expected (format nil "an integer from 1 to ~D, or :auto, in make-physics-world"
+                                    +physics-max-workers+)))))
+
+(defun spin-or-yield (spins)
+  "Wait a moment, the SPINSth time a loop has waited: a pause while SPINS is below
++worker-spins+, else give up the core. Return SPINS plus one. #W0RKP1"
+  (declare (type fixnum spins))
+  (if (< spins +worker-spins+) (sb-ext:spin-loop-hint) (sb-thread:thread-yield))
+  (1+ spins))
+
+(defun await-generation (pool seen)
+  "Wait until POOL's generation differs from SEEN, spinning, then parked on its wait queue;
+return the new generation. #W0RKP1"
+  (declare (type worker-pool pool) (type sb-ext:word seen))
+  (let ((spins 0))
+    (declare (type fixnum spins))
+    (loop while (< spins +worker-park-spins+)
+          do (unless (= (worker-pool-generation pool) seen)
+               (return-from await-generation (worker-pool-generation pool)))
+             (setf spins (spin-or-yield spins))))
+  (sb-thread:with-mutex ((worker-pool-mutex pool))
+    (sb-ext:atomic-incf (worker-pool-parked pool))
+    (loop while (= (worker-pool-generation pool) seen)
+          do (sb-thread:condition-wait (worker-pool-wakeup pool) (worker-pool-mutex pool)))
+    (sb-ext:atomic-decf (worker-pool-parked pool))
+    (worker-pool-generation pool)))
+
+(defun await-workers (pool)
+  "The barrier between two stages of POOL's job: return once every worker has arrived. #W0RKP1"
+  (declare (type worker-pool pool))
+  (let ((sense (worker-pool-sense pool)))
+    (if (= (sb-ext:atomic-incf (worker-pool-arrived pool)) (1- (worker-pool-count pool)))
+        (progn (setf (worker-pool-arrived pool) 0)
+               (sb-ext:atomic-incf (worker-pool-sense pool)))
+        (let ((spins 0))
+          (declare (type fixnum spins))
+          (loop while (= (worker-pool-sense pool) sense)
+                do (setf spins (spin-or-yield spins))))))
+  pool)
+
+(defun note-worker-failure (pool worker stage condition)
+  "Keep CONDITION, signalled in WORKER's piece of STAGE, when no earlier stage or lower worker of
+it has failed. #W0RKP1"
+  (sb-thread:with-mutex ((worker-pool-mutex pool))
+    (when (or (< stage (worker-pool-failure-stage pool))
+              (and (= stage (worker-pool-failure-stage pool)) (< worker (worker-pool-failure-worker pool))))
+      (setf (worker-pool-failure pool) condition
+            (worker-pool-failure-stage pool) stage
+            (worker-pool-failure-worker pool) worker))))
+
+(defun run-worker-stages (pool worker)
+  "Run WORKER's piece of every stage of POOL's job, with the barrier between stages; a piece
+that signals is kept (note-worker-failure) and the stages after it are skipped. #W0RKP1"
+  (declare (type worker-pool pool) (type fixnum worker))
+  (let ((stages (worker-pool-stages pool)))
+    (dotimes (stage stages)
+      (when (> (worker-pool-failure-stage pool) (1- stage))
+        (handler-case (run-worker-stage pool worker stage)
+          (serious-condition (c) (note-worker-failure pool worker stage c))))
+      (when (< (1+ stage) stages) (await-workers pool)))))
+
+(defun worker-loop (pool worker)
+  "The life of WORKER, a thread of POOL: wait for a job, run its pieces, count itself
+finished; until the pool closes. #W0RKP1"
+  (declare (type worker-pool pool) (type fixnum worker))
+  ;; a new pool's generation is 0: a thread that starts late still sees the first job
+  (let ((seen 0))
+    (declare (type sb-ext:word seen))
+    (loop
+      (setf seen (await-generation pool seen))
+      (when (worker-pool-closing pool) (return))
+      (setf (sb-vm:floating-point-modes) (worker-pool-modes pool))
+      (run-worker-stages pool worker)
+      (sb-ext:atomic-incf (worker-pool-finished pool)))))
+
+(defun run-on-workers (pool job stages)
+  "Run JOB, of STAGES stages, on every worker of POOL, the calling thread as worker 0, whose
+parameters the caller has written into POOL; return once all have finished, or signal the
+condition of the earliest piece that signalled. #W0RKP1"
+  (declare (type worker-pool pool) (type fixnum job stages))
+  (setf (worker-pool-job pool) job
+        (worker-pool-stages pool) stages
+        (worker-pool-finished pool) 0
+        (worker-pool-failure pool) nil
+        (worker-pool-failure-stage pool) most-positive-fixnum
+        (worker-pool-modes pool) (sb-vm:floating-point-modes))
+  (sb-ext:atomic-incf (worker-pool-generation pool))
+  (when (plusp (worker-pool-parked pool))
+    (sb-thread:with-mutex ((worker-pool-mutex pool))
+      (sb-thread:condition-broadcast (worker-pool-wakeup pool))))
+  (run-worker-stages pool 0)
+  (let ((others (1- (worker-pool-count pool))) (spins 0))
+    (declare (type fixnum spins))
+    (loop until (= (worker-pool-finished pool) others)
+          do (setf spins (spin-or-yield spins))))
+  (let ((failure (worker-pool-failure pool)))
+    (when failure
+      (setf (worker-pool-failure pool) nil)
+      (error failure)))
+  pool)
+
+(defun make-worker-pool (count)
+  "A pool of COUNT workers: COUNT - 1 threads, parked, and the caller. #W0RKP1"
+  (let ((pool (%make-worker-pool count)))
+    (handler-bind ((serious-condition (lambda (c) (declare (ignore c)) (close-worker-pool pool))))
+      (loop for worker from 1 below count
+            do (push (sb-thread:make-thread #'worker-loop :name "luv-physics worker"
+                                                          :arguments (list pool worker))
+                     (worker-pool-threads pool))))
+    pool))
+
+(defun close-worker-pool (pool)
+  "Let POOL's threads go: wake them to find it closing, and wait for each to end. #W0RKP1"
+  (unless (worker-pool-closing pool)
+    (setf (worker-pool-closing pool) t)
+    (sb-ext:atomic-incf (worker-pool-generation pool))
+    (sb-thread:with-mutex ((worker-pool-mutex pool))
+      (sb-thread:condition-broadcast (worker-pool-wakeup pool)))
+    (mapc #'sb-thread:join-thread (worker-pool-threads pool))
+    (setf (worker-pool-threads pool) '()))
+  pool)
+
+(defun open-world-workers (world count)
+  "Give WORLD a pool of COUNT workers (none for one), closed by a finalizer when WORLD is
+dropped; return WORLD. #W0RKP1"
+  (when (> count 1)
+    (let ((pool (make-worker-pool count)))
+      (setf (physics-world-pool world) pool)
+      (sb-ext:finalize world (lambda () (close-worker-pool pool)) :dont-save t)))
+  world)
+
+(defun close-physics-world (world)
+  "Let WORLD's worker threads go; WORLD steps on the calling thread alone from then on. Return
+WORLD. #W0RKP1"
+  (check-idle world 'close-physics-world)
+  (let ((pool (physics-world-pool world)))
+    (when pool
+      (setf (physics-world-pool world) nil)
+      (sb-ext:cancel-finalization world)
+      (close-worker-pool pool)))
+  world)
+
+(defun physics-world-workers (world)
+  "How many workers step WORLD: its pool's count, or 1. #W0RKP1"
+  (check-world world 'physics-world-workers)
+  (let ((pool (physics-world-pool world)))
+    (if pool (worker-pool-count pool) 1)))
+;; Workers are threads made once, parked between steps:1 ends here
+
+;; [[file:../physics.org::#SPL1T5][The step's loops cut into fixed pieces:1]]
+(defconstant +share-grain+ 8
+  "A worker's share of a run of rows starts and ends on a multiple of this many rows. #SPL1T5")
+
+(defconstant +job-velocities+ 0 "The job: integrate velocities by shares of the awake rows. #SPL1T5")
+(defconstant +job-pushed-velocities+ 1 "The job: the same, with forces and gravity scales. #SPL1T5")
+(defconstant +job-positions+ 2 "The job: integrate positions by shares of the awake rows. #SPL1T5")
+(defconstant +job-warm-start+ 3 "The job: the warm start, colour by colour. #SPL1T5")
+(defconstant +job-solve+ 4 "The job: a solve or relax pass, colour by colour. #SPL1T5")
+(defconstant +job-frames+ 5 "The job: the frame pass, every colour's run shared. #SPL1T5")
+
+(defgeneric kernel-lanes (kernels)
+  (:documentation "The lanes of KERNELS' wide kernels (1 for none), and a function to call after
+a wide piece, or NIL. #SPL1T5"))
+
+(defmethod kernel-lanes ((kernels scalar-kernels)) (values 1 nil))
+
+(declaim (inline share-bounds))
+(defun share-bounds (start end worker count)
+  "The rows of WORKER's share, of COUNT, of the run START..END: two values. #SPL1T5"
+  (declare (type index start end) (type fixnum worker count))
+  (let* ((blocks (ceiling (- end start) +share-grain+))
+         (from (floor (* blocks worker) count))
+         (to (floor (* blocks (1+ worker)) count)))
+    (values (min end (+ start (* from +share-grain+))) (min end (+ start (* to +share-grain+))))))
+
+(defun run-colour-piece (pool s e wide)
+  "Run POOL's colour pass on the rows S..E of one colour: with the wide kernel when WIDE, and the
+pool has one, else with the scalar kernel. #SPL1T5"
+  (declare (type worker-pool pool) (type index s e))
+  (let* ((job (worker-pool-job pool))
+         (lanes (if (and wide (worker-pool-wide pool)) (worker-pool-lanes pool) 1))
+         (kernel (if (= lanes 1) (worker-pool-narrow pool) (worker-pool-wide pool)))
+         (cbuf (worker-pool-cbuf pool)) (v (worker-pool-v pool)))
+    (cond ((= job +job-warm-start+) (funcall kernel cbuf v s e))
+          ((= job +job-frames+) (funcall kernel cbuf s e))
+          (t (solve-handing kernel (if (= lanes 1) 'solve-impact-range (worker-pool-impact pool)) lanes
+                            cbuf v (worker-pool-d pool) s e (worker-pool-inv-h pool) (worker-pool-use-bias pool)
+                            (worker-pool-elapsed pool) (worker-pool-push-max pool) (worker-pool-threshold pool)
+                            (worker-pool-hgx pool) (worker-pool-hgy pool) (worker-pool-hgz pool))))
+    (when (and (> lanes 1) (worker-pool-settle pool)) (funcall (worker-pool-settle pool)))))
+
+(defun run-worker-stage (pool worker stage)
+  "Run WORKER's piece of stage STAGE of POOL's job. #SPL1T5"
+  (declare (type worker-pool pool) (type fixnum worker stage))
+  (let ((job (worker-pool-job pool)) (count (worker-pool-count pool)))
+    (cond ((<= job +job-positions+)
+           (multiple-value-bind (s e) (share-bounds 0 (worker-pool-rows pool) worker count)
+             (cond ((= job +job-velocities+)
+                    (integrate-velocities-range (worker-pool-v pool) s e (worker-pool-h pool)
+                                                (worker-pool-gx pool) (worker-pool-gy pool) (worker-pool-gz pool)
+                                                (worker-pool-max-speed pool)))
+                   ((= job +job-pushed-velocities+)
+                    (integrate-pushed-velocities-range (worker-pool-v pool) (worker-pool-pushes pool)
+                                                       (worker-pool-handles pool) (worker-pool-masses pool)
+                                                       s e (worker-pool-h pool)
+                                                       (worker-pool-gx pool) (worker-pool-gy pool) (worker-pool-gz pool)
+                                                       (worker-pool-max-speed pool)))
+                   (t (integrate-positions-range (worker-pool-v pool) (worker-pool-d pool) s e
+                                                 (worker-pool-h pool))))))
+          ((= job +job-frames+)
+           ;; one stage: a share of every colour's run, the overflow colour's too
+           (let ((starts (worker-pool-starts pool)))
+             (dotimes (c (1+ +physics-max-colors+))
+               (multiple-value-bind (s e) (share-bounds (aref starts c) (aref starts (1+ c)) worker count)
+                 (when (< s e) (run-colour-piece pool s e (< c +physics-max-colors+)))))))
+          (t
+           (let* ((starts (worker-pool-starts pool))
+                  (c (aref (worker-pool-stage-colours pool) stage))
+                  (start (aref starts c)) (end (aref starts (1+ c))))
+             (cond ((or (= c +physics-max-colors+) (< (- end start) (* count (worker-pool-share-rows pool))))
+                    (when (= worker 0) (run-colour-piece pool start end (< c +physics-max-colors+))))
+                   (t (multiple-value-bind (s e) (share-bounds start end worker count)
+                        (when (< s e) (run-colour-piece pool s e t))))))))))
+
+(defconstant +split-probe+ 64
+  "Every so many calls of a pass, a tuned pool runs it the way it does not prefer. #SPL1T5")
+
+(defun prefer-split-p (pool job)
+  "Whether POOL runs this call of JOB split: when splitting has been the faster per row, but every
++split-probe+th call the other way, so both figures stay current. #SPL1T5"
+  (declare (type worker-pool pool) (type fixnum job))
+  (let* ((calls (incf (aref (worker-pool-calls pool) job)))
+         (prefer (<= (aref (worker-pool-split-ns pool) job) (aref (worker-pool-whole-ns pool) job))))
+    (declare (type fixnum calls))
+    (if (zerop (mod calls +split-probe+)) (not prefer) prefer)))
+
+(defun note-split-time (pool job split ns rows)
+  "Fold NS, the nanoseconds a call of JOB over ROWS rows took, SPLIT or whole, into POOL's running
+figure for that way: nanoseconds per 1024 rows, each call an eighth of it. #SPL1T5"
+  (declare (type worker-pool pool) (type fixnum job ns) (type index rows))
+  (let ((figures (if split (worker-pool-split-ns pool) (worker-pool-whole-ns pool)))
+        (x (floor (* (max ns 0) 1024) (max rows 1))))
+    (declare (type fixnum x))
+    (setf (aref figures job)
+          (if (zerop (aref figures job)) x (+ (aref figures job) (floor (- x (aref figures job)) 8))))))
+
+(defmacro tuned-split ((pool world rows job) split-form whole-form)
+  "Run SPLIT-FORM with POOL bound to WORLD's pool when the pass of JOB over ROWS rows splits, else
+WHOLE-FORM: a pool with split-rows 0 always splits; one above it splits as prefer-split-p says,
+timing each call for note-split-time. #SPL1T5"
+  (let ((tuning (gensym "TUNING")) (split (gensym "SPLIT")) (start (gensym "START")) (n (gensym "ROWS")))
+    `(let* ((,n ,rows) (,pool (splitting-pool ,world ,n)))
+       (if (null ,pool)
+           ,whole-form
+           (let* ((,tuning (plusp (worker-pool-split-rows ,pool)))
+                  (,split (or (not ,tuning) (prefer-split-p ,pool ,job)))
+                  (,start (if ,tuning (clock-ns) 0)))
+             (multiple-value-prog1 (if ,split ,split-form ,whole-form)
+               (when ,tuning (note-split-time ,pool ,job ,split (- (clock-ns) ,start) ,n))))))))
+
+(defun splitting-pool (world rows)
+  "WORLD's pool when it has one and ROWS reach its split-rows, else NIL. #SPL1T5"
+  (let ((pool (and (typep world 'physics-world) (physics-world-pool world))))
+    (and pool (>= rows (worker-pool-split-rows pool)) pool)))
+
+(defun awake-rows (world)
+  "The awake rows of WORLD, or 0 for something else. #SPL1T5"
+  (if (typep world 'physics-world) (body-columns-length (physics-world-awake world)) 0))
+
+(defun constraint-rows (world)
+  "The constraint rows of WORLD, or 0 for something else. #SPL1T5"
+  (if (typep world 'physics-world) (constraint-columns-length (physics-world-constraints world)) 0))
+
+(defun run-colour-pass (pool kernels world job)
+  "Write into POOL the kernels of JOB in the family KERNELS for WORLD's features, its buffers and
+the stages (the colours with rows, then the overflow colour), and run it on the workers. #SPL1T5"
+  (let* ((variant (world-kernel-variant world kernels))
+         (starts (physics-world-color-starts world))
+         (stage-colours (worker-pool-stage-colours pool))
+         (stages 0))
+    (declare (type fixnum stages) (type fixnum-column starts))
+    (multiple-value-bind (lanes settle) (kernel-lanes kernels)
+      (setf (worker-pool-lanes pool) lanes (worker-pool-settle pool) settle))
+    (multiple-value-bind (wide narrow)
+        (cond ((= job +job-warm-start+)
+               (values (kernel-variant-wide-warm-start variant) (kernel-variant-warm-start variant)))
+              ((= job +job-solve+) (values (kernel-variant-wide-solve variant) (kernel-variant-solve variant)))
+              (t (values (kernel-variant-wide-prepare-frames variant) (kernel-variant-prepare-frames variant))))
+      (setf (worker-pool-wide pool) wide (worker-pool-narrow pool) narrow
+            (worker-pool-impact pool) (nth-value 3 (wide-kernel-names kernels))))
+    (dotimes (c (1+ +physics-max-colors+))
+      (when (< (aref starts c) (aref starts (1+ c)))
+        (setf (aref stage-colours stages) c)
+        (incf stages)))
+    (setf (worker-pool-cbuf pool) (physics-world-constraints world)
+          (worker-pool-v pool) (physics-world-velocities world)
+          (worker-pool-d pool) (physics-world-deltas world)
+          (worker-pool-starts pool) starts)
+    (run-on-workers pool job (if (= job +job-frames+) 1 stages))))
+
+(defun run-rows-pass (pool world job h)
+  "Write into POOL WORLD's awake rows, solver arrays and parameters and the substep H, and run
+the integration JOB on the workers. #SPL1T5"
+  (let ((awake (physics-world-awake world)))
+    (setf (worker-pool-v pool) (physics-world-velocities world)
+          (worker-pool-d pool) (physics-world-deltas world)
+          (worker-pool-rows pool) (body-columns-length awake)
+          (worker-pool-h pool) h
+          (worker-pool-gx pool) (physics-world-gravity-x world)
+          (worker-pool-gy pool) (physics-world-gravity-y world)
+          (worker-pool-gz pool) (physics-world-gravity-z world)
+          (worker-pool-max-speed pool) (f32 (physics-world-max-speed world)))
+    (when (= job +job-pushed-velocities+)
+      (setf (worker-pool-pushes pool) (checked-pushes world)
+            (worker-pool-handles pool) (body-columns-handle awake)
+            (worker-pool-masses pool) (body-columns-inverse-mass awake)))
+    (run-on-workers pool job 1)))
+
+(defmethod physics-integrate-velocities :around ((kernels scalar-kernels) world h)
+  (tuned-split (pool world (awake-rows world) +job-velocities+)
+    (progn (check-solver-world 'physics-integrate-velocities world)
+           (check-solver-number 'physics-integrate-velocities :h h -1e7)
+           (run-rows-pass pool world (if (pushes-live-p world) +job-pushed-velocities+ +job-velocities+) h))
+    (call-next-method)))
+
+(defmethod physics-integrate-positions :around ((kernels scalar-kernels) world h)
+  (tuned-split (pool world (awake-rows world) +job-positions+)
+    (progn (check-solver-world 'physics-integrate-positions world)
+           (check-solver-number 'physics-integrate-positions :h h -1e7)
+           (run-rows-pass pool world +job-positions+ h))
+    (call-next-method)))
+
+(defmethod physics-warm-start :around ((kernels scalar-kernels) world)
+  (tuned-split (pool world (constraint-rows world) +job-warm-start+)
+    (progn (check-solver-world 'physics-warm-start world)
+           (run-colour-pass pool kernels world +job-warm-start+))
+    (call-next-method)))
+
+(defmethod physics-solve-contacts :around ((kernels scalar-kernels) world inv-h use-bias elapsed)
+  (tuned-split (pool world (constraint-rows world) +job-solve+)
+    (progn (check-solver-world 'physics-solve-contacts world)
+           (check-solver-number 'physics-solve-contacts :inv-h inv-h 1.0)
+           (check-solver-number 'physics-solve-contacts :elapsed elapsed 0.0)
+           (unless (typep use-bias 'boolean)
+             (error 'invalid-physics-parameter :world world :name :use-bias :value use-bias :expected "T or NIL"))
+           (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+             (setf (worker-pool-inv-h pool) inv-h (worker-pool-use-bias pool) use-bias
+                   (worker-pool-elapsed pool) elapsed (worker-pool-push-max pool) (f32 (physics-world-push-max world))
+                   (worker-pool-threshold pool) threshold
+                   (worker-pool-hgx pool) hgx (worker-pool-hgy pool) hgy (worker-pool-hgz pool) hgz))
+           (run-colour-pass pool kernels world +job-solve+))
+    (call-next-method)))
+
+(defmethod physics-prepare-frames :around ((kernels scalar-kernels) world)
+  (tuned-split (pool world (constraint-rows world) +job-frames+)
+    (run-colour-pass pool kernels world +job-frames+)
+    (call-next-method)))
+;; The step's loops cut into fixed pieces:1 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
 (deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))

@@ -1264,6 +1264,78 @@ is the world's step hook (physics-world-step-hook) throughout. #M9W5P7"
       (incf steps-taken))))
 ;; Random operation sequences find what a hostile caller would:7 ends here
 
+;; [[file:../physics.org::#B3NCHW][What the workers gain:1]]
+(defun make-wide-basin-world (count &key (kernels :scalar))
+  "A world of COUNT awake balls of the basin's kind on a square floor walled two cells high, wide
+enough for eight layers of them at the basin's spacing: the basin's pile, too many to stand in
+the basin. #B3NCHW"
+  (let* ((across (max 4 (ceiling (sqrt (/ count 8.0)))))
+         (side (ceiling (+ 0.6 (* 0.55 across))))
+         (terrain (make-voxel-terrain))
+         (world (progn (fill-terrain terrain -1 -1 -1 (+ side 1) 16 (+ side 1) nil)
+                       (fill-terrain terrain -1 -1 -1 (+ side 1) 0 (+ side 1) t)
+                       (fill-terrain terrain -1 0 -1 (+ side 1) 2 0 t)
+                       (fill-terrain terrain -1 0 side (+ side 1) 2 (+ side 1) t)
+                       (fill-terrain terrain -1 0 0 0 2 side t)
+                       (fill-terrain terrain side 0 0 (+ side 1) 2 side t)
+                       (make-physics-world :terrain terrain :kernels kernels :sleep nil
+                                           :features '(:terrain :body-contacts :friction)))))
+    (dotimes (i count world)
+      (multiple-value-bind (layer k) (floor i (* across across))
+        (multiple-value-bind (row col) (floor k across)
+          (add-physics-body world (+ 0.3 (* col 0.55) (* 0.01 (mod i 3))) (+ 0.5 (* layer 0.55))
+                            (+ 0.3 (* row 0.55) (* 0.01 (mod i 5)))
+                            :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0))))))
+
+(defun measure-workers (count family counts &key (from 60) (to 150))
+  "Step basins of COUNT balls in FAMILY, one per worker count of COUNTS, in turn for TO steps;
+return the median ms per step over steps FROM..TO of each, the one-worker world's serial share
+and whether all reached one state hash. #B3NCHW"
+  (let* ((worlds (mapcar (lambda (n)
+                           (open-world-workers (if (> count 10000)
+                                                   (make-wide-basin-world count :kernels family)
+                                                   (make-basin-world count :kernels family))
+                                               n))
+                         counts))
+         (times (mapcar (lambda (w) (declare (ignore w)) (list nil)) worlds))
+         (clock (make-array (* 2 (length *physics-phases*)) :element-type 'fixnum :initial-element 0)))
+    (dotimes (i to)
+      (when (= i from) (setf (physics-world-phase-clock (first worlds)) clock))
+      (loop for w in worlds for cell in times
+            do (step-physics-world w)
+               (when (>= i from) (push (* 1000 (physics-world-last-step-real-seconds w)) (car cell)))))
+    (let* ((phases (subseq clock 0 (length *physics-phases*)))
+           (total (reduce #'+ phases))
+           (split (aref phases (position 'substep-phase *physics-phases*)))
+           (hashes (mapcar #'physics-world-state-hash worlds)))
+      (mapc #'close-physics-world worlds)
+      (values (mapcar (lambda (cell) (median (car cell))) times)
+              (if (plusp total) (/ (- total split) (float total 1d0)) 0d0)
+              (= 1 (length (remove-duplicates hashes)))))))
+
+(defun run-worker-benchmark (&key (sizes '(1000 3000 10000 30000)) (stream *standard-output*))
+  "Print, as an Org table, the basin at each of SIZES in every kernel family with one worker,
+two, and the machine's cores when more: median ms, speed-up over one worker, the serial share
+and Amdahl's bound for two, and whether the hashes agree; with the machine and its load. #B3NCHW"
+  (let* ((cores (machine-cores))
+         (counts (remove-duplicates (list 1 2 (max 2 cores)))))
+    (format stream "~&#+caption: the basin, all awake, 60 Hz, 4 substeps; median of steps 60-150, the worlds stepped in turn; ~A, ~D cores; load ~A at the start~%"
+            (cpu-model-name) cores (load-average))
+    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash |~%"
+            counts (rest counts))
+    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------|~%"
+            counts (rest counts))
+    (dolist (size sizes)
+      (dolist (family (available-kernel-families))
+        (multiple-value-bind (ms serial same) (measure-workers size family counts)
+          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A |~%"
+                  size (string-downcase family) ms
+                  (mapcar (lambda (m) (/ (first ms) m)) (rest ms))
+                  (* 100 serial) (/ 1 (+ serial (/ (- 1 serial) 2))) (if same "yes" "NO"))
+          (finish-output stream))))
+    (format stream "~&load ~A at the end~%" (load-average))))
+;; What the workers gain:1 ends here
+
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:1]]
 (define-condition unknown-physics-scene (invalid-physics-parameter)
   ((operation :initarg :operation :reader unknown-physics-scene-operation))
