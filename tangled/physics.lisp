@@ -8896,6 +8896,12 @@ timing each call for note-split-time. #SPL1T5"
   "The constraint rows of WORLD, or 0 for something else. #SPL1T5"
   (if (typep world 'physics-world) (constraint-columns-length (physics-world-constraints world)) 0))
 
+(defun colour-pass-rows (world)
+  "The rows a colour pass of WORLD splits by: its constraint rows, or -1, which no pool splits,
+when its substeps solve joints: the pieces of a split pass hold contacts only, so such a pass
+runs whole, on the calling thread. #SPL1T5"
+  (if (and (typep world 'physics-world) (solving-joints world)) -1 (constraint-rows world)))
+
 (defun run-colour-pass (pool kernels world job)
   "Write into POOL the kernels of JOB in the family KERNELS for WORLD's features, its buffers and
 the stages (the colours with rows, then the overflow colour), and run it on the workers. #SPL1T5"
@@ -8956,13 +8962,13 @@ the integration JOB on the workers. #SPL1T5"
     (call-next-method)))
 
 (defmethod physics-warm-start :around ((kernels scalar-kernels) world)
-  (tuned-split (pool world (constraint-rows world) +job-warm-start+)
+  (tuned-split (pool world (colour-pass-rows world) +job-warm-start+)
     (progn (check-solver-world 'physics-warm-start world)
            (run-colour-pass pool kernels world +job-warm-start+))
     (call-next-method)))
 
 (defmethod physics-solve-contacts :around ((kernels scalar-kernels) world inv-h use-bias elapsed)
-  (tuned-split (pool world (constraint-rows world) +job-solve+)
+  (tuned-split (pool world (colour-pass-rows world) +job-solve+)
     (progn (check-solver-world 'physics-solve-contacts world)
            (check-solver-number 'physics-solve-contacts :inv-h inv-h 1.0)
            (check-solver-number 'physics-solve-contacts :elapsed elapsed 0.0)
