@@ -81,6 +81,8 @@
    ;; Joints (#J0STOR)
    #:add-physics-joint #:remove-physics-joint #:physics-joint-alive-p #:physics-world-joint-count
    #:physics-joint-bodies #:physics-joint-length #:physics-joint-impulse
+   ;; Boxes (#BXR0WS)
+   #:add-physics-box #:physics-body-box-p #:physics-box-half-extents
    ;; A snapshot holds what decides the next step (#SN4P0T)
    #:snapshot-physics-world #:restore-physics-world #:write-physics-world #:read-physics-world
    #:physics-snapshot-invalid #:physics-snapshot-truncated
@@ -613,6 +615,8 @@ row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #
 (defconstant +flag-terrain-only+ 2 "Body flag: meets terrain and boxes but no other body. #B5N8JT")
 
 (defconstant +flag-braced+ 4 "Body flag: braced at the last step that ran the bracing pass. #B5N8JT")
+
+(defconstant +flag-box-shape+ 1024 "Body flag: the body is a box ([[#BXR0WS]]), not a sphere. #B5N8JT")
 
 (defconstant +flag-filter-shift+ 16
   "Body flags: the place of the filter word ([[#F1LT3R]]), category from bit 16, mask from bit 32. #B5N8JT")
@@ -1446,7 +1450,7 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +physics-features+
     '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :mortal
-      :hit-events :contact-events :expiry-events :sleep-events :forces :joints)
+      :hit-events :contact-events :expiry-events :sleep-events :forces :joints :box-bodies)
     "Every feature a world may use ([[#FEAT5X]]), in the order physics-world-features lists them. #W0RLD7"))
 
 (defconstant +solver-stride+ 8
@@ -1511,6 +1515,8 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (contacts :initform (make-contact-columns) :reader physics-world-contacts)
    (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
    (contact-scratch :initform (make-contact-columns) :reader physics-world-contact-scratch)
+   ;; what its snapshots and restores reuse, made at the first ([[#SN4P0T]])
+   (snapshot-scratch :initform nil :accessor physics-world-snapshot-scratch)
    (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints)
    (events :initform (make-event-columns) :reader physics-world-events)
    (event-data :initform (make-array 16 :initial-element nil) :accessor physics-world-event-data)
@@ -1572,6 +1578,8 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (pushed :initform nil :accessor physics-world-pushed)
    ;; the joints, made with the first ([[#J0STOR]])
    (joints :initform nil :accessor physics-world-joints)
+   ;; the box bodies' extents and points ([[#BXR0WS]]), or NIL until the first box
+   (box-bodies :initform nil :accessor physics-world-box-bodies)
    (scaled-count :initform 0 :type fixnum :accessor physics-world-scaled-count)
    (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
    (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
@@ -2102,6 +2110,7 @@ undo log too (roll-back-step). #QKS4GZ"
          (handle (aref (body-columns-handle buffer) row))
          (moved (progn ;; its joints go first, while its row is its own ([[#J0STOR]])
                        (when (physics-world-joints world) (remove-body-joints world handle))
+                       (when (physics-world-box-bodies world) (forget-box world handle))
                        (when (and (= set +set-sleeping+) (> (aref (body-columns-life buffer) row) 0.0))
                          (decf (physics-world-mortal-sleepers world)))
                        (when (= set +set-sleeping+) (leave-sleeping-grids world handle))
@@ -3990,7 +3999,8 @@ is under the speculative distance. #MYWSTG"
                            a
                            (setf (physics-world-near-cells world) (make-array (* 2 (1+ n)) :element-type 'single-float)))))
                ;; the bodies whose centre lies in a solid cell
-               (buried 0))
+               (buried 0)
+               (boxes (physics-world-box-bodies world)))
           (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key buried)
                    (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear) (type f32-column near)
                    (type contact-columns contacts) (type contact-table table) (inline touch-contact))
@@ -4007,7 +4017,7 @@ is under the speculative distance. #MYWSTG"
                      (declare (type fixnum ix iy iz))
                      (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))))
             (declare (inline chunk-at cell-solid-p))
-          (with-body-columns (x y z vx vy vz radius handle) awake
+          (with-body-columns (x y z vx vy vz radius handle flags) awake
             (dotimes (i n)
               (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                      ;; how far the body can travel this step; a body faster than its margin a
@@ -4028,11 +4038,13 @@ is under the speculative distance. #MYWSTG"
                 (terrain-note-clear)
                 ;; as far as the cells gathered reach, until a solid one nearer is met below
                 (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
+                ;; a box's points are its own ([[#BXCELL]]), found when the world has boxes
+                (unless (and boxes (logtest (aref flags i) +flag-box-shape+))
                 ;; a body that can travel past its margin this step also sweeps its path
                 (when (> travel margin)
                   (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
                                          (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
-                (terrain-cell-contacts))))
+                (terrain-cell-contacts)))))
           (setf (physics-world-buried-count world) buried)))))
     world))
 ;; The terrain phase, stage by stage:1 ends here
@@ -4127,7 +4139,9 @@ with the face the ray enters it through. #SW33P7"
                      (half (max (- bx1 ccx) (- by1 ccy) (- bz1 ccz)))
                      (span (1+ (ceiling (* half (hash-grid-inv-cell grid))))))
                 (do-grid-neighbours (i grid ccx ccy ccz :span span)
-                 (when (rows-meet-p filtering (aref flags i) (ash (aref filter b) +flag-filter-shift+))
+                 (when (and (rows-meet-p filtering (aref flags i) (ash (aref filter b) +flag-filter-shift+))
+                            ;; a box body meets no posted box yet ([[#BXR0WS]])
+                            (not (logtest (aref flags i) +flag-box-shape+)))
                   (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                          ;; the body's velocity relative to the box, and how far it can travel
                          ;; towards it this step: as against cells ([[#MYWH16]]), a body faster
@@ -6525,6 +6539,575 @@ put to sleep the groups still for long enough, when WORLD sleeps. #J0SL3P"
       (when (physics-world-sleep-enabled world) (sleep-joint-groups world set)))))
 ;; Joint groups sleep and wake together:1 ends here
 
+;; [[file:../physics.org::#BXR0WS][A box is a row and a set of extents by slot:1]]
+(defconstant +box-min-half-extent+ 0.05
+  "The smallest half-extent of a box body, in metres. #BXR0WS")
+
+(define-physics-layout box-point-columns
+  "The contact points of box bodies against the cells, one row a point: the box's solver row, the
+point's key (its feature), the normal (pushing the box), the lever from the box's centre, the
+two tangents, the gap at the step's start, the effective masses, the friction, the three
+carried impulses, the box's inverse mass and its world inverse inertia's six entries. #BXR0WS"
+  (row fixnum) (key fixnum) (handle fixnum)
+  (nx single-float) (ny single-float) (nz single-float)
+  (rx single-float) (ry single-float) (rz single-float)
+  (t1x single-float) (t1y single-float) (t1z single-float)
+  (t2x single-float) (t2y single-float) (t2z single-float)
+  (separation single-float) (normal-mass single-float) (tangent-mass-1 single-float)
+  (tangent-mass-2 single-float) (friction single-float)
+  (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
+  (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
+  (i22 single-float) (i23 single-float) (i33 single-float))
+
+(defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
+  "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
+many boxes live, the contact points of this step and of the last one, each with the first row
+and the count of every slot's points, the awake box rows of this step, their turns (three floats
+a row) and the soft coefficients of the step. #BXR0WS"
+  (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (live 0 :type index)
+  (points (make-box-point-columns) :type box-point-columns)
+  (previous (make-box-point-columns) :type box-point-columns)
+  (first (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (count (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (previous-first (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (previous-count (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (row-count 0 :type index)
+  (turns (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (bias-rate 0.0 :type single-float)
+  (mass-scale 1.0 :type single-float)
+  (impulse-scale 0.0 :type single-float)
+  (push-max 0.0 :type single-float))
+
+(defun box-set-room (set slots)
+  "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
+  (when (> slots (length (box-set-hx set)))
+    (let ((n (max slots (* 2 (length (box-set-hx set))))))
+      (flet ((grow-f (a) (let ((b (make-array n :element-type 'single-float :initial-element 0.0))) (replace b a) b))
+             (grow-i (a) (let ((b (make-array n :element-type 'fixnum :initial-element 0))) (replace b a) b)))
+        (setf (box-set-hx set) (grow-f (box-set-hx set)) (box-set-hy set) (grow-f (box-set-hy set))
+              (box-set-hz set) (grow-f (box-set-hz set))
+              (box-set-first set) (grow-i (box-set-first set)) (box-set-count set) (grow-i (box-set-count set))
+              (box-set-previous-first set) (grow-i (box-set-previous-first set))
+              (box-set-previous-count set) (grow-i (box-set-previous-count set))))))
+  set)
+
+(defun box-half-diagonal (hx hy hz)
+  "The radius of the sphere that holds a box of half-extents HX HY HZ. #BXR0WS"
+  (fsqrt (+ (* hx hx) (* hy hy) (* hz hz))))
+
+(defun checked-box-extents (world hx hy hz)
+  "HX HY HZ as three single-floats, once each is finite and at least +box-min-half-extent+ and
+the half diagonal is at most the largest radius of WORLD; else invalid-physics-parameter naming
+:half-extents. #BXR0WS"
+  (let* ((limit (max-radius-for world))
+         (fx (finite-f32 :hx hx world)) (fy (finite-f32 :hy hy world)) (fz (finite-f32 :hz hz world)))
+    (unless (and (<= +box-min-half-extent+ (min fx fy fz))
+                 (<= (box-half-diagonal fx fy fz) limit))
+      (error 'invalid-physics-parameter :world world :name :half-extents :value (list hx hy hz)
+                                        :expected (format nil "each at least ~A m, the half diagonal at most ~,3F m"
+                                                          +box-min-half-extent+ limit)))
+    (values fx fy fz)))
+
+(defun checked-orientation (world orientation)
+  "ORIENTATION, a list of four finite reals W X Y Z not all near zero, as a unit quaternion of
+four single-floats; else invalid-physics-parameter naming :orientation. #BXR0WS"
+  (flet ((refuse () (error 'invalid-physics-parameter :world world :name :orientation :value orientation
+                                                      :expected "a list of four finite reals W X Y Z, not all zero")))
+    (unless (and (listp orientation) (= 4 (length orientation)) (every #'realp orientation)) (refuse))
+    (let* ((q (mapcar (lambda (v) (finite-f32 :orientation v world)) orientation))
+           (norm (fsqrt (reduce #'+ (mapcar (lambda (v) (* v v)) q)))))
+      (unless (> norm 1e-3) (refuse))
+      (values-list (mapcar (lambda (v) (/ v norm)) q)))))
+
+(defun box-axes (qw qx qy qz)
+  "The rotation matrix of the unit quaternion QW QX QY QZ, row by row, as nine values: its
+columns are the box's axes in the world. #BXR0WS"
+  (declare (type single-float qw qx qy qz))
+  (let ((xx (* qx qx)) (yy (* qy qy)) (zz (* qz qz)) (xy (* qx qy)) (xz (* qx qz)) (yz (* qy qz))
+        (wx (* qw qx)) (wy (* qw qy)) (wz (* qw qz)))
+    (values (- 1.0 (* 2.0 (+ yy zz))) (* 2.0 (- xy wz)) (* 2.0 (+ xz wy))
+            (* 2.0 (+ xy wz)) (- 1.0 (* 2.0 (+ xx zz))) (* 2.0 (- yz wx))
+            (* 2.0 (- xz wy)) (* 2.0 (+ yz wx)) (- 1.0 (* 2.0 (+ xx yy))))))
+
+(defun box-in-cells-p (world x y z hx hy hz qw qx qy qz)
+  "True when the centre X Y Z or a corner of the box of half-extents HX HY HZ turned by QW QX QY
+QZ, each pulled 0.02 m towards the centre, lies in a solid or non-resident cell of WORLD's
+terrain. #BXR0WS"
+  (let ((terrain (physics-world-terrain world)))
+    (and terrain
+         (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33) (box-axes qw qx qy qz)
+           (flet ((solid (px py pz)
+                    (let ((ix (cell-floor px)) (iy (cell-floor py)) (iz (cell-floor pz)))
+                      (let ((chunk (gethash (chunk-key ix iy iz) (voxel-terrain-chunks terrain))))
+                        (or (null chunk) (plusp (aref (the chunk-storage chunk) (cell-offset ix iy iz))))))))
+             (or (solid x y z)
+                 (loop for corner below 8
+                       for a = (if (logbitp 0 corner) (- hx 0.02) (- 0.02 hx))
+                       for b = (if (logbitp 1 corner) (- hy 0.02) (- 0.02 hy))
+                       for c = (if (logbitp 2 corner) (- hz 0.02) (- 0.02 hz))
+                       thereis (solid (+ x (* r11 a) (* r12 b) (* r13 c))
+                                      (+ y (* r21 a) (* r22 b) (* r23 c))
+                                      (+ z (* r31 a) (* r32 b) (* r33 c))))))))))
+
+(defun add-physics-box (world x y z hx hy hz &key mass density (orientation '(1 0 0 0)) (friction 0.6)
+                                               (restitution 0.0) (vx 0.0) (vy 0.0) (vz 0.0) life
+                                               (kind 0) (inside-cells :refuse) (category +default-category+)
+                                               (mask +all-categories+) (gravity-scale 1.0))
+  "Add an awake box centred at X Y Z with half-extents HX HY HZ, turned by ORIENTATION (a
+quaternion W X Y Z, normalised), to WORLD, and return its body handle. Its mass is MASS, or
+DENSITY times its volume, or 1 kg; the other keys are add-physics-body's. A box that overlaps
+solid cells is refused with physics-body-in-solid-cell unless INSIDE-CELLS is :push-out; a world
+made without :box-bodies refuses it with physics-feature-omitted. #BXR0WS"
+  (check-idle world 'add-physics-box)
+  (require-physics-feature world :box-bodies 'add-physics-box)
+  (multiple-value-bind (hx hy hz) (checked-box-extents world hx hy hz)
+    (multiple-value-bind (qw qx qy qz) (checked-orientation world orientation)
+      (let* ((volume (* 8.0 hx hy hz))
+             (m (cond ((and mass density)
+                       (error 'invalid-physics-parameter :world world :name :density :value density
+                                                         :expected "NIL when a mass is given"))
+                      (mass mass)
+                      (density (* volume (finite-f32 :density density world)))
+                      (t 1.0)))
+             (fx (finite-f32 :x x world)) (fy (finite-f32 :y y world)) (fz (finite-f32 :z z world)))
+        (unless (and (realp restitution) (zerop restitution))
+          (error 'invalid-physics-parameter :world world :name :restitution :value restitution
+                                            :expected "0 for a box, which does not bounce"))
+        (check-coordinate :x fx world) (check-coordinate :y fy world) (check-coordinate :z fz world)
+        (unless (member inside-cells '(:refuse :push-out))
+          (error 'invalid-physics-parameter :world world :name :inside-cells :value inside-cells
+                                            :expected ":refuse or :push-out"))
+        (when (and (eq inside-cells :refuse) (box-in-cells-p world fx fy fz hx hy hz qw qx qy qz))
+          (error 'physics-body-in-solid-cell :world world :operation 'add-physics-box :name :position
+                                             :value (list x y z) :cell (list (cell-floor fx) (cell-floor fy) (cell-floor fz))
+                                             :resident (and (physics-world-terrain world)
+                                                            (terrain-resident-p (physics-world-terrain world)
+                                                                                (cell-floor fx) (cell-floor fy) (cell-floor fz)))
+                                             :expected "a box clear of solid and non-resident cells"))
+        (check-body-room world 'add-physics-box)
+        ;; add-physics-body checks the rest before it touches the world
+        (let* ((handle (add-physics-body world fx fy fz :radius (box-half-diagonal hx hy hz) :mass m
+                                         :friction friction :vx vx :vy vy :vz vz :life life
+                                         :collide-with-bodies nil :kind kind :inside-cells :push-out
+                                         :category category :mask mask :gravity-scale gravity-scale))
+               (set (or (physics-world-box-bodies world)
+                        (setf (physics-world-box-bodies world) (%make-box-set))))
+               (slot (handle-index handle))
+               (row (nth-value 1 (resolve-handle world handle)))
+               (m (f32 m)))
+          (box-set-room set (handle-table-count (physics-world-ids world)))
+          (setf (aref (box-set-hx set) slot) hx (aref (box-set-hy set) slot) hy (aref (box-set-hz set) slot) hz)
+          (incf (box-set-live set))
+          (with-body-columns ((bqw qw) (bqx qx) (bqy qy) (bqz qz) inverse-inertia flags) (physics-world-awake world)
+            (setf (aref bqw row) qw (aref bqx row) qx (aref bqy row) qy (aref bqz row) qz
+                  (aref inverse-inertia row) (/ 9.0 (* 2.0 m (+ (* hx hx) (* hy hy) (* hz hz))))
+                  (aref flags row) (logior (aref flags row) +flag-box-shape+)))
+          handle)))))
+
+(defun physics-body-box-p (world handle)
+  "True when HANDLE's live body is a box. #BXR0WS"
+  (check-world world 'physics-body-box-p)
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (logtest (aref (body-columns-flags (set-buffer world set)) row) +flag-box-shape+)))
+
+(defun physics-box-half-extents (world handle)
+  "The half-extents of HANDLE's box body as three values; zeros for a sphere. #BXR0WS"
+  (check-world world 'physics-box-half-extents)
+  (resolve-handle world handle)
+  (let ((set (physics-world-box-bodies world)) (slot (handle-index handle)))
+    (if (and set (physics-body-box-p world handle))
+        (values (aref (box-set-hx set) slot) (aref (box-set-hy set) slot) (aref (box-set-hz set) slot))
+        (values 0.0 0.0 0.0))))
+
+(defun forget-box (world handle)
+  "Zero the extents of HANDLE's slot in WORLD's box set, its body about to be removed, when that
+body is a box. #BXR0WS"
+  (let ((set (physics-world-box-bodies world)) (slot (handle-index handle)))
+    (when (and set (< slot (length (box-set-hx set))) (plusp (aref (box-set-hx set) slot)))
+      (setf (aref (box-set-hx set) slot) 0.0 (aref (box-set-hy set) slot) 0.0 (aref (box-set-hz set) slot) 0.0
+            (aref (box-set-count set) slot) 0 (aref (box-set-previous-count set) slot) 0)
+      (decf (box-set-live set)))))
+
+(defun validate-box-set (world fail)
+  "Check WORLD's box set against its rows, calling FAIL with a format control and arguments at the
+first break: a slot holds extents exactly when its body has the box flag, every extent within its
+bounds, and the count of live boxes is theirs. #BXR0WS"
+  (let ((set (physics-world-box-bodies world)) (boxes 0))
+    (when set
+      (dolist (buffer (list (physics-world-awake world) (physics-world-sleeping world)))
+        (dotimes (row (body-columns-length buffer))
+          (let* ((h (aref (body-columns-handle buffer) row)) (slot (handle-index h))
+                 (box (logtest (aref (body-columns-flags buffer) row) +flag-box-shape+))
+                 (hx (if (< slot (length (box-set-hx set))) (aref (box-set-hx set) slot) 0.0)))
+            (when box (incf boxes))
+            (unless (eq box (plusp hx))
+              (funcall fail "handle ~D: box flag ~A but extent ~A" h box hx))
+            (when (and box (< (aref (box-set-hx set) slot) +box-min-half-extent+))
+              (funcall fail "handle ~D: extent below ~A" h +box-min-half-extent+)))))
+      (unless (= boxes (box-set-live set))
+        (funcall fail "~D box rows but the box set counts ~D" boxes (box-set-live set))))))
+;; A box is a row and a set of extents by slot:1 ends here
+
+;; [[file:../physics.org::#BXCELL][A box against the cells:1]]
+(defconstant +box-point-lattice-bit+ 33
+  "The bit of a box point's key that marks a lattice point of the cells, not a corner of the box. #BXCELL")
+
+(declaim (inline box-corner-key box-lattice-key))
+(defun box-corner-key (slot corner face)
+  "The key of corner CORNER (0-7) of the box in handle slot SLOT against a cell face of direction
+FACE (0-5: -x +x -y +y -z +z). #BXCELL"
+  (declare (type (unsigned-byte 24) slot) (type (integer 0 7) corner) (type (integer 0 5) face))
+  (logior (ash slot 34) (+ (* corner 6) face)))
+
+(defun box-lattice-key (slot x y z face)
+  "The key of the lattice point X Y Z against face FACE (0-5) of the box in handle slot SLOT. #BXCELL"
+  (declare (type (unsigned-byte 24) slot) (type fixnum x y z) (type (integer 0 5) face))
+  (logior (ash slot 34) (ash 1 +box-point-lattice-bit+)
+          (ash (ldb (byte 10 0) x) 23) (ash (ldb (byte 10 0) y) 13) (ash (ldb (byte 10 0) z) 3) face))
+
+(defun add-box-point (set row handle key nx ny nz rx ry rz gap)
+  "Append to SET's points the point KEY of the box at solver ROW (handle HANDLE): normal NX NY NZ,
+lever RX RY RZ, gap GAP; its impulses are those its key had last step, or zeros. #BXCELL"
+  (declare (type box-set set) (type index row) (type fixnum handle key)
+           (type single-float nx ny nz rx ry rz gap) #.+kernel-policy+)
+  (let* ((points (box-set-points set))
+         (k (box-point-columns-append points))
+         (old (box-set-previous set))
+         (slot (handle-index handle))
+         (from (aref (box-set-previous-first set) slot))
+         (to (min (box-point-columns-length old) (+ from (aref (box-set-previous-count set) slot)))))
+    (declare (type index k from) (type fixnum to))
+    (with-box-point-columns ((r row) (kc key) (hc handle) (cnx nx) (cny ny) (cnz nz) (crx rx) (cry ry) (crz rz)
+                             separation normal-impulse tangent-impulse-1 tangent-impulse-2)
+        points
+      (setf (aref r k) row (aref kc k) key (aref hc k) handle
+            (aref cnx k) nx (aref cny k) ny (aref cnz k) nz (aref crx k) rx (aref cry k) ry (aref crz k) rz
+            (aref separation k) gap)
+      (with-box-point-columns ((okey key) (on normal-impulse) (o1 tangent-impulse-1) (o2 tangent-impulse-2)) old
+        (loop for j of-type fixnum from from below to
+              when (= (aref okey j) key)
+                do (setf (aref normal-impulse k) (aref on j) (aref tangent-impulse-1 k) (aref o1 j)
+                         (aref tangent-impulse-2 k) (aref o2 j))
+                   (return))))
+    k))
+
+(defun find-box-points (world set row reach)
+  "Append to SET's points every point of the box at awake ROW of WORLD against the cells within
+REACH of its surface: its corners against cell faces, the convex lattice points of the cells
+against its faces. #BXCELL"
+  (declare (type box-set set) (type index row) (type single-float reach) #.+kernel-policy+)
+  (let ((terrain (physics-world-terrain world))
+        (probe (physics-world-probe world)))
+    (when terrain
+      (with-body-columns (x y z qw qx qy qz handle) (physics-world-awake world)
+        (let* ((h (aref handle row)) (slot (handle-index h))
+               (cx (aref x row)) (cy (aref y row)) (cz (aref z row))
+               (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot)))
+          (declare (type single-float cx cy cz hx hy hz))
+          (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+              (box-axes (aref qw row) (aref qx row) (aref qy row) (aref qz row))
+            (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+            (flet ((solid (ix iy iz)
+                     (declare (type fixnum ix iy iz))
+                     (probe-solid-p probe ix iy iz)))
+              (declare (inline solid))
+              ;; the corners against the faces of the cells
+              (dotimes (corner 8)
+                (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
+                       (c (if (logbitp 2 corner) hz (- hz)))
+                       (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
+                       (rz (+ (* r31 a) (* r32 b) (* r33 c)))
+                       (px (+ cx rx)) (py (+ cy ry)) (pz (+ cz rz))
+                       (ix (cell-floor px)) (iy (cell-floor py)) (iz (cell-floor pz))
+                       ;; the distances to the cell's six faces: -x +x -y +y -z +z
+                       (d0 (- px (float ix 1.0))) (d1 (- (float (1+ ix) 1.0) px))
+                       (d2 (- py (float iy 1.0))) (d3 (- (float (1+ iy) 1.0) py))
+                       (d4 (- pz (float iz 1.0))) (d5 (- (float (1+ iz) 1.0) pz)))
+                  (declare (type single-float a b c rx ry rz px py pz d0 d1 d2 d3 d4 d5) (type fixnum ix iy iz))
+                  (macrolet ((each-face (form)
+                               ;; FORM once per face, with FACE, the distance D, the neighbour's cell
+                               ;; offset (OX OY OZ) and the normal out of the neighbour (NX NY NZ)
+                               `(progn
+                                  ,@(loop for (face dist ox oy oz nx ny nz)
+                                            in '((0 d0 -1 0 0 1.0 0.0 0.0) (1 d1 1 0 0 -1.0 0.0 0.0)
+                                                 (2 d2 0 -1 0 0.0 1.0 0.0) (3 d3 0 1 0 0.0 -1.0 0.0)
+                                                 (4 d4 0 0 -1 0.0 0.0 1.0) (5 d5 0 0 1 0.0 0.0 -1.0))
+                                          collect `(symbol-macrolet ((face ,face) (d ,dist) (ox ,ox) (oy ,oy) (oz ,oz)
+                                                                     (nx ,nx) (ny ,ny) (nz ,nz))
+                                                     ,form)))))
+                    (if (solid ix iy iz)
+                        ;; inside a solid cell: the nearest face whose neighbour is air, out of it
+                        (let ((best -1) (depth most-positive-single-float) (bnx 0.0) (bny 0.0) (bnz 0.0))
+                          (declare (type fixnum best) (type single-float depth bnx bny bnz))
+                          (each-face (when (and (< d depth) (not (solid (- ix ox) (- iy oy) (- iz oz))))
+                                       (setf best face depth d bnx (- nx) bny (- ny) bnz (- nz))))
+                          (when (>= best 0)
+                            (add-box-point set row h (box-corner-key slot corner best) bnx bny bnz rx ry rz (- depth))))
+                        ;; in air: each solid neighbour across a face nearer than the reach
+                        (each-face (when (and (< d reach) (solid (+ ix ox) (+ iy oy) (+ iz oz)))
+                                     (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz d)))))))
+              ;; the convex lattice points of the cells against the faces of the box
+              (let* ((ex (+ (* (abs r11) hx) (* (abs r12) hy) (* (abs r13) hz) reach))
+                     (ey (+ (* (abs r21) hx) (* (abs r22) hy) (* (abs r23) hz) reach))
+                     (ez (+ (* (abs r31) hx) (* (abs r32) hy) (* (abs r33) hz) reach)))
+                (declare (type single-float ex ey ez))
+                (loop for lx of-type fixnum from (- (cell-floor (- cx ex)) -1) to (cell-floor (+ cx ex)) do
+                  (loop for ly of-type fixnum from (- (cell-floor (- cy ey)) -1) to (cell-floor (+ cy ey)) do
+                    (loop for lz of-type fixnum from (- (cell-floor (- cz ez)) -1) to (cell-floor (+ cz ez)) do
+                      (let ((solids 0))
+                        (declare (type fixnum solids))
+                        (dotimes (k 8)
+                          (when (solid (- lx (if (logbitp 0 k) 0 1)) (- ly (if (logbitp 1 k) 0 1))
+                                       (- lz (if (logbitp 2 k) 0 1)))
+                            (incf solids)))
+                        (when (<= 1 solids 3)
+                          (let* ((rx (- (float lx 1.0) cx)) (ry (- (float ly 1.0) cy)) (rz (- (float lz 1.0) cz))
+                                 ;; the point in the box's frame, and how far out of each face pair
+                                 (u (+ (* r11 rx) (* r21 ry) (* r31 rz)))
+                                 (v (+ (* r12 rx) (* r22 ry) (* r32 rz)))
+                                 (w (+ (* r13 rx) (* r23 ry) (* r33 rz)))
+                                 (ou (- (abs u) hx)) (ov (- (abs v) hy)) (ow (- (abs w) hz)))
+                            (declare (type single-float rx ry rz u v w ou ov ow))
+                            (when (and (< ou reach) (< ov reach) (< ow reach))
+                              ;; the face it is least inside of, or farthest out of
+                              (multiple-value-bind (gap face nx ny nz)
+                                  (cond ((and (>= ou ov) (>= ou ow))
+                                         (if (> u 0.0) (values ou 1 (- r11) (- r21) (- r31)) (values ou 0 r11 r21 r31)))
+                                        ((>= ov ow)
+                                         (if (> v 0.0) (values ov 3 (- r12) (- r22) (- r32)) (values ov 2 r12 r22 r32)))
+                                        (t
+                                         (if (> w 0.0) (values ow 5 (- r13) (- r23) (- r33)) (values ow 4 r13 r23 r33))))
+                                (declare (type single-float gap nx ny nz) (type (integer 0 5) face))
+                                (add-box-point set row h (box-lattice-key slot lx ly lz face)
+                                               nx ny nz rx ry rz gap))))))))))))))))
+  set)
+;; A box against the cells:1 ends here
+
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:1]]
+(defun box-tangents (nx ny nz)
+  "Two unit tangents of the unit normal NX NY NZ, perpendicular to it and to each other, as six
+values: the first the normal crossed with the world axis it is least along. #BXSOLV"
+  (declare (type single-float nx ny nz))
+  (multiple-value-bind (ax ay az)
+      (cond ((and (<= (abs nx) (abs ny)) (<= (abs nx) (abs nz))) (values 0.0 (- nz) ny))
+            ((<= (abs ny) (abs nz)) (values nz 0.0 (- nx)))
+            (t (values (- ny) nx 0.0)))
+    (declare (type single-float ax ay az))
+    (let ((s (/ 1.0 (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
+      (let ((t1x (* ax s)) (t1y (* ay s)) (t1z (* az s)))
+        (values t1x t1y t1z
+                (- (* ny t1z) (* nz t1y)) (- (* nz t1x) (* nx t1z)) (- (* nx t1y) (* ny t1x)))))))
+
+(defun prepare-box-points (world h)
+  "Find and prepare the points of every awake box of WORLD for the substeps of H: the last step's
+points become the old ones, each awake box's are found anew from where it is ([[#BXCELL]]), and
+each gets its effective masses, tangents, friction and the box's world inverse inertia; the
+boxes' turns are zeroed and their rows excused from the finalize phase's path check. Return the
+box set when some point is to be solved, else NIL. #BXSOLV"
+  (declare (type single-float h))
+  (let* ((set (physics-world-box-bodies world))
+         (awake (physics-world-awake world))
+         (n (body-columns-length awake)))
+    (declare (type box-set set) (type index n))
+    ;; this step's points become the old ones
+    (rotatef (box-set-points set) (box-set-previous set))
+    (rotatef (box-set-first set) (box-set-previous-first set))
+    (rotatef (box-set-count set) (box-set-previous-count set))
+    (box-point-columns-clear (box-set-points set))
+    (setf (box-set-row-count set) 0)
+    (when (plusp (box-set-live set))
+      (when (< (length (box-set-rows set)) (* 3 n))
+        (setf (box-set-rows set) (make-array (* 6 n) :element-type 'fixnum :initial-element 0)
+              (box-set-turns set) (make-array (* 6 n) :element-type 'single-float :initial-element 0.0)))
+      (fill (box-set-turns set) 0.0 :end (* 3 n))
+      (with-world-parameters (margin (zeta damping-ratio) push-max) world
+        (let* ((dt (physics-world-current-dt world))
+               (gstep (gravity-step world dt))
+               (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h)))
+               (near (and (= (physics-world-near-cells-step world) (physics-world-step-count world))
+                          (physics-world-near-cells world)))
+               (rows (box-set-rows set)))
+          (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
+            (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
+                  (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
+          (with-body-columns (vx vy vz flags handle) awake
+            (dotimes (i n)
+              (when (logtest (aref flags i) +flag-box-shape+)
+                (let ((slot (handle-index (aref handle i)))
+                      (start (box-point-columns-length (box-set-points set))))
+                  (setf (aref rows (box-set-row-count set)) i)
+                  (incf (box-set-row-count set))
+                  ;; the finalize phase does not hold a box's path as a sphere's ([[#SQU33Z]])
+                  (when near (setf (aref near i) most-positive-single-float))
+                  (find-box-points world set i (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep)))
+                  (setf (aref (box-set-first set) slot) start
+                        (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))))
+        (prepare-box-point-masses world set)))
+    (and (plusp (box-point-columns-length (box-set-points set))) set)))
+
+(defun prepare-box-point-masses (world set)
+  "Write each of SET's points' box inverse mass and world inverse inertia, tangents, effective
+masses and friction; each gap gains the slop, so a box rests a slop deep as a sphere does. #BXSOLV"
+  (declare (type box-set set) #.+kernel-policy+)
+  (let ((awake (physics-world-awake world)) (points (box-set-points set))
+        (slop (f32 (physics-world-slop world))))
+    (declare (type single-float slop))
+    (with-body-columns (qw qx qy qz inverse-mass (fr friction) handle) awake
+      (with-box-point-columns (row nx ny nz rx ry rz t1x t1y t1z t2x t2y t2z normal-mass tangent-mass-1
+                               tangent-mass-2 friction im i11 i12 i13 i22 i23 i33 separation)
+          points
+        (dotimes (k (box-point-columns-length points))
+          (setf (aref separation k) (+ (aref separation k) slop))
+          (let* ((i (aref row k)) (slot (handle-index (aref handle i)))
+                 (m (aref inverse-mass i))
+                 (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot))
+                 ;; the inverse inertia in the box's frame: 3 / (m (b^2 + c^2)) and its like
+                 (dx (/ (* 3.0 m) (+ (* hy hy) (* hz hz))))
+                 (dy (/ (* 3.0 m) (+ (* hx hx) (* hz hz))))
+                 (dz (/ (* 3.0 m) (+ (* hx hx) (* hy hy)))))
+            (declare (type index i) (type single-float m hx hy hz dx dy dz))
+            (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+                (box-axes (aref qw i) (aref qx i) (aref qy i) (aref qz i))
+              (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+              ;; R D R^T
+              (setf (aref im k) m
+                    (aref i11 k) (+ (* r11 r11 dx) (* r12 r12 dy) (* r13 r13 dz))
+                    (aref i12 k) (+ (* r11 r21 dx) (* r12 r22 dy) (* r13 r23 dz))
+                    (aref i13 k) (+ (* r11 r31 dx) (* r12 r32 dy) (* r13 r33 dz))
+                    (aref i22 k) (+ (* r21 r21 dx) (* r22 r22 dy) (* r23 r23 dz))
+                    (aref i23 k) (+ (* r21 r31 dx) (* r22 r32 dy) (* r23 r33 dz))
+                    (aref i33 k) (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz))
+                    (aref friction k) (aref fr i)))
+            (multiple-value-bind (ax ay az bx by bz) (box-tangents (aref nx k) (aref ny k) (aref nz k))
+              (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
+            (flet ((mass-along (ux uy uz)
+                     (declare (type single-float ux uy uz))
+                     ;; 1 / (1/m + (r x u) . I^-1 (r x u))
+                     (let* ((px (- (* (aref ry k) uz) (* (aref rz k) uy)))
+                            (py (- (* (aref rz k) ux) (* (aref rx k) uz)))
+                            (pz (- (* (aref rx k) uy) (* (aref ry k) ux)))
+                            (kk (+ m (* px (+ (* (aref i11 k) px) (* (aref i12 k) py) (* (aref i13 k) pz)))
+                                   (* py (+ (* (aref i12 k) px) (* (aref i22 k) py) (* (aref i23 k) pz)))
+                                   (* pz (+ (* (aref i13 k) px) (* (aref i23 k) py) (* (aref i33 k) pz))))))
+                       (if (> kk 0.0) (/ 1.0 kk) 0.0))))
+              (setf (aref normal-mass k) (mass-along (aref nx k) (aref ny k) (aref nz k))
+                    (aref tangent-mass-1 k) (mass-along (aref t1x k) (aref t1y k) (aref t1z k))
+                    (aref tangent-mass-2 k) (mass-along (aref t2x k) (aref t2y k) (aref t2z k)))))))))
+  set)
+
+(defmacro with-box-point ((v k) &body body)
+  "Run BODY for box point K, its columns bound by with-box-point-columns, over the solver's
+velocities V, with O the box's solver row and (push! PX PY PZ) the impulse P applied at the
+point: P/m to the velocity, I^-1 (r x P) to the spin. #BXSOLV"
+  `(let ((o (solver-row (aref row ,k))))
+     (declare (type index o))
+     (flet ((push! (px py pz)
+              (declare (type single-float px py pz))
+              (let* ((m (aref im ,k))
+                     (tx (- (* (aref ry ,k) pz) (* (aref rz ,k) py)))
+                     (ty (- (* (aref rz ,k) px) (* (aref rx ,k) pz)))
+                     (tz (- (* (aref rx ,k) py) (* (aref ry ,k) px))))
+                (setf (aref ,v o) (+ (aref ,v o) (* m px))
+                      (aref ,v (+ o 1)) (+ (aref ,v (+ o 1)) (* m py))
+                      (aref ,v (+ o 2)) (+ (aref ,v (+ o 2)) (* m pz))
+                      (aref ,v (+ o 3)) (+ (aref ,v (+ o 3)) (+ (* (aref i11 ,k) tx) (* (aref i12 ,k) ty) (* (aref i13 ,k) tz)))
+                      (aref ,v (+ o 4)) (+ (aref ,v (+ o 4)) (+ (* (aref i12 ,k) tx) (* (aref i22 ,k) ty) (* (aref i23 ,k) tz)))
+                      (aref ,v (+ o 5)) (+ (aref ,v (+ o 5)) (+ (* (aref i13 ,k) tx) (* (aref i23 ,k) ty) (* (aref i33 ,k) tz))))))
+            (point-velocity ()
+              ;; v + w x r
+              (values (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
+                      (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
+                      (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k)))))))
+       (declare (inline push! point-velocity) (ignorable #'point-velocity))
+       ,@body)))
+
+(defun warm-start-box-points (set v)
+  "Apply every box point's carried impulses again, at the start of a substep. #BXSOLV"
+  (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
+  (let ((points (box-set-points set)))
+    (with-box-point-columns (row nx ny nz rx ry rz t1x t1y t1z t2x t2y t2z normal-impulse tangent-impulse-1
+                             tangent-impulse-2 im i11 i12 i13 i22 i23 i33)
+        points
+      (dotimes (k (box-point-columns-length points))
+        (with-box-point (v k)
+          (let ((pn (aref normal-impulse k)) (p1 (aref tangent-impulse-1 k)) (p2 (aref tangent-impulse-2 k)))
+            (push! (+ (* pn (aref nx k)) (* p1 (aref t1x k)) (* p2 (aref t2x k)))
+                   (+ (* pn (aref ny k)) (* p1 (aref t1y k)) (* p2 (aref t2y k)))
+                   (+ (* pn (aref nz k)) (* p1 (aref t1z k)) (* p2 (aref t2z k)))))))))
+  nil)
+
+(defun solve-box-points (set v d inv-h use-bias)
+  "One pass over the box points: each normal impulse, with the soft bias when USE-BIAS (the
+solve) and without it (the relax), clamped to push only; then its friction, held in the cone. #BXSOLV"
+  (declare (type box-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
+  (let ((points (box-set-points set)) (turns (box-set-turns set))
+        (bias-rate (box-set-bias-rate set)) (mass-scale (box-set-mass-scale set))
+        (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set)))
+    (declare (type f32-column turns) (type single-float bias-rate mass-scale impulse-scale push-max))
+    (with-box-point-columns (row nx ny nz rx ry rz t1x t1y t1z t2x t2y t2z separation normal-mass
+                             tangent-mass-1 tangent-mass-2 friction normal-impulse tangent-impulse-1
+                             tangent-impulse-2 im i11 i12 i13 i22 i23 i33)
+        points
+      (dotimes (k (box-point-columns-length points))
+        (with-box-point (v k)
+          (let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
+                 (ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
+                 (lx (aref rx k)) (ly (aref ry k)) (lz (aref rz k))
+                 (qx (aref turns tr)) (qy (aref turns (+ tr 1))) (qz (aref turns (+ tr 2)))
+                 ;; the gap now: moved by the box's delta and its turn
+                 (s (+ (aref separation k)
+                       (* ax (+ (aref d p) (- (* qy lz) (* qz ly))))
+                       (* ay (+ (aref d (+ p 1)) (- (* qz lx) (* qx lz))))
+                       (* az (+ (aref d (+ p 2)) (- (* qx ly) (* qy lx))))))
+                 (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
+                 (positive (> s 0.0))
+                 (bias (cond (positive (* s inv-h))
+                             (use-bias (max (* bias-rate s) (- push-max)))
+                             (t 0.0)))
+                 (ms (if (and use-bias (not positive)) mass-scale 1.0))
+                 (is (if (and use-bias (not positive)) impulse-scale 0.0))
+                 (old (aref normal-impulse k))
+                 (new (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old))))
+                 (pn (- new old)))
+            (declare (type index i p tr) (type single-float s vn bias ms is old new pn))
+            (setf (aref normal-impulse k) new)
+            (push! (* pn ax) (* pn ay) (* pn az))
+            ;; friction in the cone of mu times the normal impulse
+            (multiple-value-bind (ux uy uz) (point-velocity)
+              (let* ((o1 (aref tangent-impulse-1 k)) (o2 (aref tangent-impulse-2 k))
+                     (n1 (- o1 (* (aref tangent-mass-1 k) (+ (* ux (aref t1x k)) (* uy (aref t1y k)) (* uz (aref t1z k))))))
+                     (n2 (- o2 (* (aref tangent-mass-2 k) (+ (* ux (aref t2x k)) (* uy (aref t2y k)) (* uz (aref t2z k))))))
+                     (limit (* (aref friction k) new))
+                     (len2 (+ (* n1 n1) (* n2 n2))))
+                (declare (type single-float o1 o2 n1 n2 limit len2))
+                (when (> len2 (* limit limit))
+                  (let ((scale (if (> len2 0.0) (/ limit (fsqrt len2)) 0.0)))
+                    (setf n1 (* n1 scale) n2 (* n2 scale))))
+                (setf (aref tangent-impulse-1 k) n1 (aref tangent-impulse-2 k) n2)
+                (let ((d1 (- n1 o1)) (d2 (- n2 o2)))
+                  (push! (+ (* d1 (aref t1x k)) (* d2 (aref t2x k)))
+                         (+ (* d1 (aref t1y k)) (* d2 (aref t2y k)))
+                         (+ (* d1 (aref t1z k)) (* d2 (aref t2z k))))))))))))
+  nil)
+
+(defun turn-box-rows (set v h)
+  "Add to each awake box's turn its spin over the substep H, after the positions integrate. #BXSOLV"
+  (declare (type box-set set) (type f32-column v) (type single-float h) #.+kernel-policy+)
+  (let ((rows (box-set-rows set)) (turns (box-set-turns set)))
+    (declare (type fixnum-column rows) (type f32-column turns))
+    (dotimes (j (box-set-row-count set))
+      (let* ((i (aref rows j)) (o (solver-row i)) (tr (* 3 i)))
+        (declare (type index i o tr))
+        (setf (aref turns tr) (+ (aref turns tr) (* h (aref v (+ o 3))))
+              (aref turns (+ tr 1)) (+ (aref turns (+ tr 1)) (* h (aref v (+ o 4))))
+              (aref turns (+ tr 2)) (+ (aref turns (+ tr 2)) (* h (aref v (+ o 5))))))))
+  nil)
+;; Box points in the substeps:1 ends here
+
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (declaim (inline held-marking-p mark-held))
 (defun held-marking-p (world)
@@ -7098,15 +7681,20 @@ bodies to half the push-out speed. #IDVK7G"
                     (note-box-rows world)
                     0))
          ;; the joints to solve, prepared, or NIL ([[#J0S0LV]])
-         (joints (and (physics-world-joints world) (prepare-joints world h))))
+         (joints (and (physics-world-joints world) (prepare-joints world h)))
+         ;; the boxes' points, found and prepared, or NIL ([[#BXSOLV]])
+         (boxes (and (physics-world-box-bodies world) (prepare-box-points world h)))
+         (v (physics-world-velocities world)) (d (physics-world-deltas world)))
     (declare (type single-float h inv-h) (type fixnum relaxes boxed))
     (let ((squeezed nil))
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
-        ;; the joints, when some are prepared, are solved inside these passes, colour by
-        ;; colour with the contacts ([[#J0S0LV]])
+        ;; the joints, when some are prepared, are solved inside the contacts' passes, colour
+        ;; by colour with the contacts ([[#J0S0LV]])
+        (when boxes (warm-start-box-points boxes v))
         (physics-warm-start kernels world)
+        (when boxes (solve-box-points boxes v d inv-h t))
         (physics-solve-contacts kernels world inv-h t elapsed)
         (flet ((yield-boxes ()
                  ;; a box that yields squeezes what it presses: from then on the step holds it
@@ -7115,7 +7703,9 @@ bodies to half the push-out speed. #IDVK7G"
                    (setf squeezed (squeeze-speed-limit world)))))
           (when (plusp boxed) (yield-boxes))
           (physics-integrate-positions kernels world h)
+          (when boxes (turn-box-rows boxes v h))
           (dotimes (k relaxes)
+            (when boxes (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
@@ -7452,6 +8042,21 @@ velocity, awake set first, each set in row order. Equal hashes mean bit-equal st
             (setf hash (ldb (byte 62 0)
                             (+ (* hash 1099511628211)
                                (ldb (byte 32 0) (sb-kernel:single-float-bits (aref column i))))))))))
+    ;; a world of boxes hashes orientations and extents too ([[#BXR0WS]])
+    (let ((boxes (physics-world-box-bodies world)))
+      (when boxes
+        (dolist (buffer (list (physics-world-awake world) (physics-world-sleeping world)))
+          (with-body-columns (qw qx qy qz handle) buffer
+            (dotimes (i (body-columns-length buffer))
+              (let ((slot (handle-index (aref handle i))))
+                (dolist (value (list* (aref qw i) (aref qx i) (aref qy i) (aref qz i)
+                                      (if (< slot (length (box-set-hx boxes)))
+                                          (list (aref (box-set-hx boxes) slot) (aref (box-set-hy boxes) slot)
+                                                (aref (box-set-hz boxes) slot))
+                                          (list 0.0 0.0 0.0))))
+                  (setf hash (ldb (byte 62 0)
+                                  (+ (* hash 1099511628211)
+                                     (ldb (byte 32 0) (sb-kernel:single-float-bits value))))))))))))
     hash))
 ;; Determinism is chosen: same code, same start, same hash:1 ends here
 
@@ -7511,6 +8116,8 @@ physics-world-invalid naming the first broken invariant. #V4L1D8"
              (mortal (count-if #'plusp (body-columns-life sleeping) :end (body-columns-length sleeping))))
         (unless (= mortal (physics-world-mortal-sleepers world))
           (fail "~D mortal sleepers counted as ~D" mortal (physics-world-mortal-sleepers world))))
+      ;; the box set agrees with the box rows ([[#BXR0WS]])
+      (validate-box-set world #'fail)
       ;; the forces and gravity scales ([[#F0RC3S]]) cover every slot, a free slot holds neither,
       ;; no force waits unless one was applied, and the scales other than 1 are counted
       (let ((pushes (physics-world-pushes world)) (scaled 0))
@@ -7744,11 +8351,24 @@ kernel family. #H4NDL3"
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
 (deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))
 
-(defconstant +snapshot-version+ 2 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
+(defconstant +snapshot-version+ 3 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
 
 (defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SN4P0T")
 
-(defconstant +snapshot-body-bytes+ 74 "Bytes of one body's record in a snapshot. #SN4P0T")
+(defconstant +snapshot-body-bytes+ 70
+  "Bytes of one body's record in a snapshot but its material's index, which takes 1, 2 or 4 bytes
+as the palette has up to 256, up to 65536 or more entries (material-index-bytes). #SN4P0T")
+
+(declaim (inline material-index-bytes body-record-bytes))
+(defun material-index-bytes (materials)
+  "The bytes a body's index into a palette of MATERIALS entries takes in a snapshot. #SN4P0T"
+  (declare (type index materials))
+  (cond ((<= materials 256) 1) ((<= materials 65536) 2) (t 4)))
+
+(defun body-record-bytes (materials)
+  "The bytes one body takes in a snapshot whose palette has MATERIALS entries. #SN4P0T"
+  (declare (type index materials))
+  (+ +snapshot-body-bytes+ (material-index-bytes materials)))
 
 (defconstant +snapshot-material-bytes+ 36 "Bytes of one entry of a snapshot's palette of materials. #SN4P0T")
 
@@ -7756,7 +8376,13 @@ kernel family. #H4NDL3"
   "Bytes every contact's record in a snapshot has: its key and its flags; the normal and the
 groups of carried impulses follow when the flags say so. #SN4P0T")
 
-(defconstant +snapshot-pair-row-bytes+ 21 "Bytes of one row of the pair list in a snapshot: anchor, handle, clear. #SN4P0T")
+(defconstant +snapshot-contact-most-bytes+ 50
+  "The most bytes a contact's record in a snapshot takes: its key, its flags, its normal and every
+group of carried impulses. #SN4P0T")
+
+(defconstant +snapshot-pair-row-bytes+ 12 "Bytes of one row's anchor in the pair list of a snapshot. #SN4P0T")
+
+(defconstant +snapshot-pair-head-bytes+ 40 "Bytes of the pair list part's payload before its rows. #SN4P0T")
 
 (defconstant +snapshot-box-bytes+ 52 "Bytes of one posted box in a snapshot. #SN4P0T")
 
@@ -7826,31 +8452,39 @@ range, a body in a solid cell. #SN4P0T"))
 
 (declaim (inline snapshot-checksum))
 (defun snapshot-checksum (buffer start end)
-  "The 64-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4): FNV-1a's
-step, exclusive or then multiply by its prime modulo 2^64, over 64-bit words and a last 32-bit
-one. Each step is a bijection of the hash for a given word, and of the word for a given hash, so
-a change within any one word always changes the sum. #SN4P0T"
+  "The 64-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4): four lanes
+of FNV-1a's step, exclusive or then multiply by its prime modulo 2^64, lane K taking the 64-bit
+words K, K + 4, K + 8 ... and lane 0 the last whole words; then the four lanes' sums and a last
+32-bit word folded by the same step in that order. Each step is a bijection of the hash for a
+given word, and of the word for a given hash, so a change within any one word always changes the
+sum. #SN4P0T"
   (declare (type octets buffer) (type index start end) #.+kernel-policy+)
-  (let ((hash 14695981039346656037) (i start))
-    (declare (type (unsigned-byte 64) hash) (type index i))
-    (sb-sys:with-pinned-objects (buffer)
-      (let ((sap (sb-sys:vector-sap buffer)))
-        (loop while (<= (+ i 8) end)
-              do (setf hash (logand (* (logxor hash (sb-sys:sap-ref-64 sap i)) 1099511628211)
-                                    #xFFFFFFFFFFFFFFFF))
-                 (incf i 8))
-        (when (< i end)
-          (setf hash (logand (* (logxor hash (sb-sys:sap-ref-32 sap i)) 1099511628211) #xFFFFFFFFFFFFFFFF)))))
-    hash))
+  (let ((h0 14695981039346656037) (h1 14695981039346656037) (h2 14695981039346656037)
+        (h3 14695981039346656037) (i start))
+    (declare (type (unsigned-byte 64) h0 h1 h2 h3) (type index i))
+    (macrolet ((fnv (hash word) `(setf ,hash (logand (* (logxor ,hash ,word) 1099511628211) #xFFFFFFFFFFFFFFFF))))
+      (sb-sys:with-pinned-objects (buffer)
+        (let ((sap (sb-sys:vector-sap buffer)))
+          ;; four chains of multiplies in flight at once, not one
+          (loop while (<= (+ i 32) end)
+                do (fnv h0 (sb-sys:sap-ref-64 sap i)) (fnv h1 (sb-sys:sap-ref-64 sap (+ i 8)))
+                   (fnv h2 (sb-sys:sap-ref-64 sap (+ i 16))) (fnv h3 (sb-sys:sap-ref-64 sap (+ i 24)))
+                   (incf i 32))
+          (loop while (<= (+ i 8) end) do (fnv h0 (sb-sys:sap-ref-64 sap i)) (incf i 8))
+          (let ((hash 14695981039346656037))
+            (declare (type (unsigned-byte 64) hash))
+            (fnv hash h0) (fnv hash h1) (fnv hash h2) (fnv hash h3)
+            (when (< i end) (fnv hash (sb-sys:sap-ref-32 sap i)))
+            hash))))))
 
 ;;; the scratch a snapshot and a restore reuse: one set per image, grown by doubling
 
 (defstruct (snapshot-scratch (:constructor make-snapshot-scratch ()))
-  "What taking and restoring snapshots reuse: the palette index of each body (MATERIALS), the
-palette's words (PALETTE, nine a material) and its open-addressing table (TABLE), marks by handle
-slot (MARKS, stamped with STAMP), and a contact table filled while a snapshot is checked and
-traded for the world's when it is restored (CONTACTS), the flags of each contact's record
-between sizing and writing a snapshot (CONTACT-FLAGS), and each part's size and offset. #SN4P0T"
+  "What taking and restoring a world's snapshots reuse: the palette index of each body
+(MATERIALS), the palette's words (PALETTE, nine a material) and its open-addressing table
+(TABLE), marks by handle slot (MARKS, stamped with STAMP), a contact table filled while a
+snapshot is checked and traded for the world's when it is restored (CONTACTS), and each part's
+size and offset. #SN4P0T"
   (materials (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (palette (make-array 576 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
@@ -7858,12 +8492,14 @@ between sizing and writing a snapshot (CONTACT-FLAGS), and each part's size and 
   (marks (make-array 64 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (stamp 0 :type fixnum)
   (contacts (make-contact-table) :type contact-table)
-  (contact-flags (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (sizes (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (offsets (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
 
-(defvar *snapshot-scratch* (make-snapshot-scratch)
-  "The image's snapshot scratch: snapshots and restores run one at a time, as steps do. #SN4P0T")
+(defun world-snapshot-scratch (world)
+  "WORLD's snapshot scratch, made at its first snapshot or restore: each world has its own, so
+worlds stepped on different threads take and restore snapshots at the same time. #SN4P0T"
+  (or (physics-world-snapshot-scratch world)
+      (setf (physics-world-snapshot-scratch world) (make-snapshot-scratch))))
 
 (defun snapshot-marks (scratch slots)
   "SCRATCH's marks, with room for SLOTS slots, under two fresh stamps: return the marks and the
@@ -7954,9 +8590,12 @@ of the world's state is one entry. #SN4P0T")
   "The bit mask of FEATURES, bit K for the K-th feature of +physics-features+. #SN4P0T"
   (loop for f in features sum (ash 1 (position f +physics-features+))))
 
-(defun snapshot-part-sizes (world materials sizes)
-  "Write into SIZES, by part id, the payload bytes of each part of WORLD's snapshot, given its
-palette of MATERIALS entries, and return their sum with the parts' own headers. #SN4P0T"
+(defun snapshot-part-bounds (world materials sizes)
+  "Write into SIZES, by part id, the most payload bytes each part of WORLD's snapshot may take,
+given its palette of MATERIALS entries (-1 for a part the world has not got), and return their
+sum with the parts' own headers: the exact size of every part but the contacts, whose records
+are bounded by +snapshot-contact-most-bytes+, and the pair list, bounded by its rows' handles
+and its pairs written out whole. #SN4P0T"
   (declare (type fixnum-column sizes) (type index materials) #.+kernel-policy+)
   (let* ((ids (physics-world-ids world))
          (free (loop with slot = (handle-table-free ids) while (>= slot 0)
@@ -7965,11 +8604,12 @@ palette of MATERIALS entries, and return their sum with the parts' own headers. 
          (rows (max 0 (pair-list-rows plist))))
     (setf (aref sizes 1) +snapshot-world-bytes+
           (aref sizes 2) (+ 12 (* 4 (handle-table-count ids)) (* 4 free) (* 8 (physics-world-added-count world)))
-          (aref sizes 3) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-awake world)))))
-          (aref sizes 4) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-sleeping world)))))
+          (aref sizes 3) (padded (+ 4 (* (body-record-bytes materials) (body-columns-length (physics-world-awake world)))))
+          (aref sizes 4) (padded (+ 4 (* (body-record-bytes materials) (body-columns-length (physics-world-sleeping world)))))
           (aref sizes 5) (+ 4 (* +snapshot-material-bytes+ materials))
-          (aref sizes 6) (padded (+ 4 (contact-records-bytes (physics-world-contacts world) *snapshot-scratch*)))
-          (aref sizes 7) (padded (+ 36 (* +snapshot-pair-row-bytes+ rows) (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0))))
+          (aref sizes 6) (padded (+ 4 (* +snapshot-contact-most-bytes+ (contact-columns-length (physics-world-contacts world)))))
+          (aref sizes 7) (+ +snapshot-pair-head-bytes+ (* (+ +snapshot-pair-row-bytes+ 8) rows) (* 4 (ceiling rows 32))
+                            (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0)) 8)
           (aref sizes 8) (+ 4 (* +snapshot-box-bytes+ (box-columns-length (physics-world-boxes world))))
           (aref sizes 9) (+ 4 (if (physics-world-pushes world) (* 16 (handle-table-count ids)) 0))
           (aref sizes 10) (let ((set (physics-world-joints world)))
@@ -7993,58 +8633,64 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
             (make-array (max n (* 2 (length (snapshot-scratch-materials scratch)))) :element-type 'fixnum)))
     (fill (snapshot-scratch-table scratch) -1)
     (setf (snapshot-scratch-count scratch) 0)
-    (let ((materials (snapshot-scratch-materials scratch)) (k 0) (last -1))
-      (declare (type fixnum-column materials) (type index k) (type fixnum last))
+    (let ((materials (snapshot-scratch-materials scratch)) (k 0))
+      (declare (type fixnum-column materials) (type index k))
       (flet ((walk (bodies)
                (declare (type body-columns bodies))
-               (dotimes (row (body-columns-length bodies))
-                 ;; most bodies share the material of the body before them: compared first, not hashed
-                 (let* ((words (snapshot-scratch-palette scratch))
-                        (at (* 9 (snapshot-scratch-count scratch))))
-                   (declare (type fixnum-column words) (type index at))
-                   (setf last
-                         (if (and (>= last 0) (<= (+ at 9) (length words))
-                                  (progn (material-words bodies row words at)
-                                         (loop for j below 9
-                                               always (= (aref words (+ (* 9 last) j)) (aref words (+ at j))))))
-                             last
-                             (palette-index scratch bodies row))))
-                 (setf (aref materials k) last)
-                 (incf k))))
+               (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance
+                                   life kind flags)
+                   bodies
+                 (let ((last -1))
+                   (declare (type fixnum last))
+                   (dotimes (row (body-columns-length bodies))
+                     ;; most bodies share the material of the row before them: compared, not hashed
+                     (setf last
+                           (if (and (> row 0)
+                                    (macrolet ((same (&rest columns)
+                                                 `(and ,@(loop for c in columns
+                                                               collect `(= (sb-kernel:single-float-bits (aref ,c row))
+                                                                           (sb-kernel:single-float-bits (aref ,c (1- row))))))))
+                                      (same radius inverse-mass inverse-inertia restitution friction
+                                            rolling-resistance life))
+                                    (= (aref kind row) (aref kind (1- row)))
+                                    (= (ldb (byte 32 16) (aref flags row)) (ldb (byte 32 16) (aref flags (1- row)))))
+                               last
+                               (palette-index scratch bodies row)))
+                     (setf (aref materials k) last)
+                     (incf k))))))
         (walk awake)
         (walk sleeping)))
     (snapshot-scratch-count scratch)))
 
 (defun snapshot-physics-world (world &optional buffer)
-  "Write WORLD's whole simulation state into BUFFER, an octet vector, when it is large enough,
-else into a new one; return the buffer and the snapshot's size in bytes. Into a buffer large
-enough it conses nothing. #SN4P0T"
+  "Write WORLD's whole simulation state into BUFFER, an octet vector, when it has room for the
+snapshot's bound (snapshot-part-bounds), else into a new one of that bound; return the buffer
+and the snapshot's size in bytes. Into a buffer large enough it conses nothing. #SN4P0T"
   (check-idle world 'snapshot-physics-world)
   (unless (or (null buffer) (typep buffer 'octets))
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "NIL or an octet vector, (simple-array (unsigned-byte 8) (*))"))
-  (let* ((scratch *snapshot-scratch*)
+  (let* ((scratch (world-snapshot-scratch world))
          (materials (snapshot-materials world scratch))
          (sizes (snapshot-scratch-sizes scratch))
-         (total (+ +snapshot-header-bytes+ (snapshot-part-sizes world materials sizes))))
-    (declare (type index total))
-    (let ((buffer (if (and buffer (>= (length buffer) total)) buffer (make-array total :element-type '(unsigned-byte 8)))))
+         (bound (+ +snapshot-header-bytes+ (snapshot-part-bounds world materials sizes))))
+    (declare (type index bound))
+    (let ((buffer (if (and buffer (>= (length buffer) bound)) buffer (make-array bound :element-type '(unsigned-byte 8))))
+          (at +snapshot-header-bytes+))
+      (declare (type octets buffer) (type index at))
       (replace buffer +snapshot-magic+)
       (setf (snap-u32 buffer 8) +snapshot-version+
-            (snap-u32 buffer 12) (loop for (id) in +snapshot-parts+ count (>= (aref sizes id) 0))
-            (snap-u64 buffer 16) total)
-      (let ((at +snapshot-header-bytes+))
-        (declare (type index at))
-        (loop for (id) in +snapshot-parts+
-              for size of-type fixnum = (aref sizes id)
-              unless (minusp size)
-              do (setf (snap-u32 buffer at) id (snap-u32 buffer (+ at 4)) size)
-                 ;; the padding reads as zeros
-                 (fill buffer 0 :start (+ at 8) :end (+ at 8 size))
-                 (write-snapshot-part id world buffer (+ at 8) scratch)
-                 (incf at (+ 8 size))))
-      (setf (snap-u64 buffer 24) (snapshot-checksum buffer +snapshot-header-bytes+ total))
-      (values buffer total))))
+            (snap-u32 buffer 12) (loop for (id) in +snapshot-parts+ count (>= (aref sizes id) 0)))
+      ;; each part writes its payload, padding zeroed, and says how long it came out
+      (loop for (id) in +snapshot-parts+
+            unless (minusp (aref sizes id))
+              do (let ((size (write-snapshot-part id world buffer (+ at 8) scratch)))
+                   (declare (type index size))
+                   (setf (snap-u32 buffer at) id (snap-u32 buffer (+ at 4)) size)
+                   (incf at (+ 8 size))))
+      (setf (snap-u64 buffer 16) at
+            (snap-u64 buffer 24) (snapshot-checksum buffer +snapshot-header-bytes+ at))
+      (values buffer at))))
 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +contact-impulse-groups+
@@ -8067,16 +8713,21 @@ its constants, written out, not looped over. #SN4P0T"
 touching and seen bits: the code of its normal in bits 2-4 (0 written out; 1 to 6 the unit
 vectors +x -x +y -y +z -z, exactly) and a bit for each impulse group with a bit set. #SN4P0T"
   (declare (type f32-column geometry) (type index g) #.+kernel-policy+)
-  (let ((nx (aref geometry g)) (ny (aref geometry (+ g 1))) (nz (aref geometry (+ g 2))) (flags 0))
-    (declare (type fixnum flags))
-    (flet ((zero (v) (declare (type single-float v)) (zerop (sb-kernel:single-float-bits v))))
-      (setf flags (ash (cond ((and (zero ny) (zero nz)) (cond ((= nx 1.0) 1) ((= nx -1.0) 2) (t 0)))
-                             ((and (zero nx) (zero nz)) (cond ((= ny 1.0) 3) ((= ny -1.0) 4) (t 0)))
-                             ((and (zero nx) (zero ny)) (cond ((= nz 1.0) 5) ((= nz -1.0) 6) (t 0)))
-                             (t 0))
-                       2))
+  (macrolet ((bits (k) `(sb-kernel:single-float-bits (aref geometry (+ g ,k)))))
+    (let ((x (bits 0)) (y (bits 1)) (z (bits 2)) (flags 0))
+      (declare (type (signed-byte 32) x y z) (type fixnum flags))
+      ;; the bits of 1.0 and of -1.0
+      (flet ((code (v plus minus)
+               (declare (type (signed-byte 32) v) (type fixnum plus minus))
+               (cond ((= v #x3F800000) plus) ((= v (- #x40800000)) minus) (t 0))))
+        (declare (inline code))
+        (setf flags (ash (cond ((zerop (logior y z)) (code x 1 2))
+                               ((zerop (logior x z)) (code y 3 4))
+                               ((zerop (logior x y)) (code z 5 6))
+                               (t 0))
+                         2)))
       (do-impulse-groups (bit first width)
-        (unless (loop for k of-type index below width always (zero (aref geometry (+ g first k))))
+        (unless (loop for k of-type index below width always (zerop (bits (+ first k))))
           (setf flags (logior flags (ash 1 bit)))))
       flags)))
 
@@ -8087,44 +8738,154 @@ vectors +x -x +y -y +z -z, exactly) and a bit for each impulse group with a bit 
   (+ +snapshot-contact-bytes+ (if (zerop (ldb (byte 3 2) flags)) 12 0)
      (if (logbitp 5 flags) 4 0) (if (logbitp 6 flags) 8 0) (if (logbitp 7 flags) 12 0) (if (logbitp 8 flags) 4 0)))
 
-(defun contact-records-bytes (contacts scratch)
-  "The bytes of the snapshot records of every contact of CONTACTS; each record's flags are kept
-in SCRATCH's contact flags for the writer. #SN4P0T"
-  (declare (type contact-columns contacts) (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let ((geometry (contact-columns-geometry contacts)) (bytes 0) (n (contact-columns-length contacts)))
-    (declare (type index bytes n))
-    (when (< (length (snapshot-scratch-contact-flags scratch)) n)
-      (setf (snapshot-scratch-contact-flags scratch)
-            (make-array (max n (* 2 (length (snapshot-scratch-contact-flags scratch)))) :element-type 'fixnum)))
-    (let ((kept (snapshot-scratch-contact-flags scratch)))
-      (declare (type fixnum-column kept))
-      (dotimes (row n bytes)
-        (let ((flags (contact-record-flags geometry (geometry-start row))))
-          (setf (aref kept row) flags)
-          (incf bytes (contact-record-bytes flags)))))))
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +snapshot-body-floats+ '(x y z vx vy vz wx wy wz qw qx qy qz sleep-time)
+    "The single-float columns of a body that a body part of a snapshot holds, each as one block of
+its rows, in this order. #SN4P0T"))
 
-(defun write-snapshot-bodies (bodies buffer at materials first)
-  "Write the rows of BODIES into BUFFER from AT: their count, then a record a row, the row's
-material being entry FIRST + row of MATERIALS. #SN4P0T"
-  (declare (type body-columns bodies) (type octets buffer) (type index at first)
+(defmacro do-snapshot-body-floats ((column k) bodies &body body)
+  "Run BODY once for each column of +snapshot-body-floats+, COLUMN bound to that column of BODIES
+and K to its place in the list, written out, not looped over. #SN4P0T"
+  (let ((b (gensym "BODIES")))
+    `(let ((,b ,bodies))
+       ,@(loop for c in +snapshot-body-floats+ for i from 0
+               collect `(let ((,column (,(intern (format nil "BODY-COLUMNS-~A" c) (symbol-package 'body-columns-x)) ,b)))
+                          (declare (type f32-column ,column) (ignorable ,column))
+                          (symbol-macrolet ((,k ,i)) ,@body))))))
+
+(declaim (inline body-part-column))
+(defun body-part-column (n k &optional (width 4))
+  "Where, from the count that starts a body part of N bodies, the block of its K-th column begins:
+the float columns of +snapshot-body-floats+ from 0, then age (14, two units), slot (16) and
+material (17), in 4-byte units, and the flags (18) after the materials' indices of WIDTH bytes
+each. #SN4P0T"
+  (declare (type index n) (type (integer 0 18) k) (type (member 1 2 4) width))
+  (the index (if (= k 18) (+ 4 (* (+ 68 width) n)) (+ 4 (* 4 k n)))))
+
+(declaim (inline snap-material-index (setf snap-material-index)))
+(defun snap-material-index (buffer offset width)
+  "The material index of WIDTH bytes at OFFSET of BUFFER. #SN4P0T"
+  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width))
+  (case width (1 (snap-u8 buffer offset)) (2 (snap-u16 buffer offset)) (t (snap-u32 buffer offset))))
+
+(defun (setf snap-material-index) (value buffer offset width)
+  "Write the material index VALUE in WIDTH bytes at OFFSET of BUFFER. #SN4P0T"
+  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width) (type (unsigned-byte 32) value))
+  (case width
+    (1 (setf (snap-u8 buffer offset) value))
+    (2 (setf (snap-u16 buffer offset) value))
+    (t (setf (snap-u32 buffer offset) value))))
+
+(defun write-snapshot-bodies (bodies buffer at materials first palette)
+  "Write the rows of BODIES into BUFFER from AT: their count, then each column as one block of
+every row's value, the float columns and the ages copied whole, the row's material being entry
+FIRST + row of MATERIALS, an index into a PALETTE of that many entries; return the padded bytes
+written. #SN4P0T"
+  (declare (type body-columns bodies) (type octets buffer) (type index at first palette)
            (type fixnum-column materials) #.+kernel-policy+)
-  (let ((n (body-columns-length bodies)))
+  (let ((n (body-columns-length bodies)) (w (material-index-bytes palette)))
     (setf (snap-u32 buffer at) n)
-    (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz sleep-time age flags handle) bodies
+    (do-snapshot-body-floats (column k) bodies
+      (sb-kernel:%byte-blt column 0 buffer (+ at (body-part-column n k)) (+ at (body-part-column n (1+ k)))))
+    (sb-kernel:%byte-blt (body-columns-age bodies) 0 buffer (+ at (body-part-column n 14)) (+ at (body-part-column n 16)))
+    (let ((handle (body-columns-handle bodies)) (flags (body-columns-flags bodies))
+          (s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18 w))))
+      (declare (type fixnum-column handle flags) (type index s m f))
       (dotimes (row n)
-        (let ((o (+ at 4 (* row +snapshot-body-bytes+))))
-          (declare (type index o))
-          (setf (snap-f32 buffer o) (aref x row) (snap-f32 buffer (+ o 4)) (aref y row)
-                (snap-f32 buffer (+ o 8)) (aref z row) (snap-f32 buffer (+ o 12)) (aref vx row)
-                (snap-f32 buffer (+ o 16)) (aref vy row) (snap-f32 buffer (+ o 20)) (aref vz row)
-                (snap-f32 buffer (+ o 24)) (aref wx row) (snap-f32 buffer (+ o 28)) (aref wy row)
-                (snap-f32 buffer (+ o 32)) (aref wz row) (snap-f32 buffer (+ o 36)) (aref qw row)
-                (snap-f32 buffer (+ o 40)) (aref qx row) (snap-f32 buffer (+ o 44)) (aref qy row)
-                (snap-f32 buffer (+ o 48)) (aref qz row) (snap-f32 buffer (+ o 52)) (aref sleep-time row)
-                (snap-f64 buffer (+ o 56)) (aref age row)
-                (snap-u32 buffer (+ o 64)) (handle-index (aref handle row))
-                (snap-u32 buffer (+ o 68)) (aref materials (+ first row))
-                (snap-u16 buffer (+ o 72)) (ldb (byte 16 0) (aref flags row))))))))
+        (setf (snap-u32 buffer (+ s (* 4 row))) (ldb (byte +handle-index-bits+ 0) (aref handle row))
+              (snap-material-index buffer (+ m (* w row)) w) (aref materials (+ first row))
+              (snap-u16 buffer (+ f (* 2 row))) (ldb (byte 16 0) (aref flags row))))
+      ;; the padding reads as zeros
+      (loop for p of-type index from (+ f (* 2 n)) below (+ at (padded (+ 4 (* (body-record-bytes palette) n))))
+            do (setf (aref buffer p) 0)))
+    (padded (+ 4 (* (body-record-bytes palette) n)))))
+
+(defun write-snapshot-contacts (world buffer at)
+  "Write the contacts of WORLD into BUFFER from AT, in their row order, each record as long as its
+flags make it, in one pass; return the padded bytes written. #SN4P0T"
+  (declare (type octets buffer) (type index at) #.+kernel-policy+)
+  (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts))
+         (step (physics-world-step-count world)) (o (+ at 4)))
+    (declare (type index n o) (type fixnum step))
+    (setf (snap-u32 buffer at) n)
+    (with-contact-columns (key seen touching geometry) contacts
+      (dotimes (row n)
+        (let* ((g (geometry-start row))
+               (flags (logior (contact-record-flags geometry g)
+                              (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2))))
+          (declare (type index g) (type fixnum flags))
+          (setf (snap-i64 buffer o) (aref key row) (snap-u16 buffer (+ o 8)) flags)
+          (incf o 10)
+          (when (zerop (ldb (byte 3 2) flags))
+            (setf (snap-f32 buffer o) (aref geometry g) (snap-f32 buffer (+ o 4)) (aref geometry (+ g 1))
+                  (snap-f32 buffer (+ o 8)) (aref geometry (+ g 2)))
+            (incf o 12))
+          (do-impulse-groups (bit first width)
+            (when (logbitp bit flags)
+              (dotimes (k width)
+                (setf (snap-f32 buffer o) (aref geometry (+ g first k)))
+                (incf o 4)))))))
+    ;; the padding reads as zeros
+    (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
+    (- o at)))
+
+(defun write-snapshot-pair-list (world buffer at)
+  "Write the pair list of WORLD into BUFFER from AT: its numbers, each row's anchor, the rows'
+clear marks as bits, the rows' handles unless they are the awake rows' own, and the pairs as
+differences of rows when they fit in a byte and a 16-bit word, else whole; return the padded
+bytes written. #SN4P0T"
+  (declare (type octets buffer) (type index at) #.+kernel-policy+)
+  (let* ((plist (physics-world-pair-list world)) (rows (pair-list-rows plist))
+         (n (max rows 0)) (pairs (if (>= rows 0) (pair-list-count plist) 0))
+         (awake (physics-world-awake world)) (handles (pair-list-handles plist))
+         (own (and (<= n (body-columns-length awake))
+                   (let ((now (body-columns-handle awake)))
+                     (declare (type fixnum-column now))
+                     (loop for i of-type index below n always (= (aref handles i) (aref now i))))))
+         (o (+ at +snapshot-pair-head-bytes+ (* +snapshot-pair-row-bytes+ n))))
+    (declare (type fixnum rows) (type index n pairs o))
+    (setf (snap-i32 buffer at) rows (snap-f32 buffer (+ at 4)) (pair-list-cell plist)
+          (snap-u32 buffer (+ at 8)) (pair-list-builds plist) (snap-i32 buffer (+ at 12)) (pair-list-loose-count plist)
+          (snap-i64 buffer (+ at 16)) (pair-list-step plist) (snap-i64 buffer (+ at 24)) (pair-list-built-step plist)
+          (snap-u32 buffer (+ at 32)) pairs)
+    (sb-kernel:%byte-blt (pair-list-anchors plist) 0 buffer (+ at +snapshot-pair-head-bytes+) o)
+    ;; the clear marks, a bit a row in 32-bit words
+    (let ((clear (pair-list-clear plist)))
+      (declare (type fixnum-column clear))
+      (dotimes (w (ceiling n 32))
+        (let ((word 0))
+          (declare (type (unsigned-byte 32) word))
+          (loop for i of-type index from (* 32 w) below (min n (* 32 (1+ w)))
+                do (when (= 1 (aref clear i)) (setf word (logior word (ash 1 (- i (* 32 w)))))))
+          (setf (snap-u32 buffer o) word)
+          (incf o 4))))
+    (unless own
+      (dotimes (i n) (setf (snap-i64 buffer o) (aref handles i)) (incf o 8)))
+    (let ((list (pair-list-pairs plist)) (deltas t))
+      (declare (type fixnum-column list))
+      ;; as deltas: a byte a pair, its row A less the pair before's, signed, or -128 when that does
+      ;; not fit and A is the next of the rows listed whole after; then a 16-bit word a pair, its row
+      ;; B less its row A, signed; whole pairs when some B - A does not fit
+      (let ((whole (padded (+ o (* 3 pairs)))) (wholes 0))
+        (declare (type index whole wholes))
+        (loop with last of-type fixnum = 0
+              for k of-type index below pairs
+              for a of-type fixnum = (ash (aref list k) -24)
+              for b of-type fixnum = (ldb (byte 24 0) (aref list k))
+              do (unless (<= -32768 (- b a) 32767) (return (setf deltas nil)))
+                 (if (< -128 (- a last) 128)
+                     (setf (snap-u8 buffer (+ o k)) (ldb (byte 8 0) (- a last)))
+                     (setf (snap-u8 buffer (+ o k)) 128
+                           (snap-u32 buffer (+ whole 4 (* 4 wholes))) a
+                           wholes (1+ wholes)))
+                 (setf (snap-u16 buffer (+ o pairs (* 2 k))) (ldb (byte 16 0) (- b a)) last a))
+        (if deltas
+            (progn (loop for q of-type index from (+ o (* 3 pairs)) below whole do (setf (aref buffer q) 0))
+                   (setf (snap-u32 buffer whole) wholes o (+ whole 4 (* 4 wholes))))
+            (dotimes (k pairs) (setf (snap-i64 buffer o) (aref list k)) (incf o 8))))
+      (setf (snap-u32 buffer (+ at 36)) (logior (if own 0 1) (if deltas 2 0))))
+    (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
+    (- o at)))
 
 (defun write-snapshot-world (world buffer at)
   "Write the world part of WORLD's snapshot into BUFFER from AT: its numbers, its parameters and
@@ -8200,10 +8961,13 @@ limits' softness and a record per joint. #SN4P0T"
                     break-force impulse-x impulse-y impulse-z)))))))
 
 (defun write-snapshot-part (id world buffer at scratch)
-  "Write the payload of part ID of WORLD's snapshot into BUFFER from AT. #SN4P0T"
+  "Write the payload of part ID of WORLD's snapshot into BUFFER from AT, its padding zeroed, and
+return its bytes. #SN4P0T"
   (declare (type octets buffer) (type index at) (type snapshot-scratch scratch) #.+kernel-policy+)
   (ecase id
-    (1 (write-snapshot-world world buffer at))
+    (1 (fill buffer 0 :start at :end (+ at +snapshot-world-bytes+))
+       (write-snapshot-world world buffer at)
+       +snapshot-world-bytes+)
     (2 (let* ((ids (physics-world-ids world)) (count (handle-table-count ids))
               (generations (handle-table-generation ids)) (locals (handle-table-local ids))
               (free-at (+ at 8 (* 4 count))) (nfree 0))
@@ -8221,62 +8985,40 @@ limits' softness and a record per joint. #SN4P0T"
            (setf (snap-u32 buffer o) n)
            (dotimes (k n)
              (setf (snap-u32 buffer (+ o 4 (* 8 k))) (handle-index (aref added k))
-                   (snap-u32 buffer (+ o 8 (* 8 k))) (handle-generation (aref added k)))))))
-    (3 (write-snapshot-bodies (physics-world-awake world) buffer at (snapshot-scratch-materials scratch) 0))
+                   (snap-u32 buffer (+ o 8 (* 8 k))) (handle-generation (aref added k))))
+           (- (+ o 4 (* 8 n)) at))))
+    (3 (write-snapshot-bodies (physics-world-awake world) buffer at (snapshot-scratch-materials scratch) 0
+                              (snapshot-scratch-count scratch)))
     (4 (write-snapshot-bodies (physics-world-sleeping world) buffer at (snapshot-scratch-materials scratch)
-                              (body-columns-length (physics-world-awake world))))
+                              (body-columns-length (physics-world-awake world)) (snapshot-scratch-count scratch)))
     (5 (let ((count (snapshot-scratch-count scratch)) (words (snapshot-scratch-palette scratch)))
          (setf (snap-u32 buffer at) count)
          (dotimes (k count)
            (dotimes (j 9)
-             (setf (snap-u32 buffer (+ at 4 (* k +snapshot-material-bytes+) (* 4 j))) (aref words (+ (* 9 k) j)))))))
-    (6 (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts))
-              (step (physics-world-step-count world)) (o (+ at 4)))
-         (declare (type index o))
-         (setf (snap-u32 buffer at) n)
-         (with-contact-columns (key seen touching geometry) contacts
-           (dotimes (row n)
-             (let* ((g (geometry-start row))
-                    (flags (logior (aref (snapshot-scratch-contact-flags scratch) row)
-                                   (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2))))
-               (setf (snap-i64 buffer o) (aref key row) (snap-u16 buffer (+ o 8)) flags)
-               (incf o 10)
-               (when (zerop (ldb (byte 3 2) flags))
-                 (dotimes (k 3) (setf (snap-f32 buffer o) (aref geometry (+ g k))) (incf o 4)))
-               (do-impulse-groups (bit first width)
-                 (when (logbitp bit flags)
-                   (dotimes (k width)
-                     (setf (snap-f32 buffer o) (aref geometry (+ g first k)))
-                     (incf o 4)))))))))
-    (7 (let* ((plist (physics-world-pair-list world)) (rows (pair-list-rows plist))
-              (pairs (if (>= rows 0) (pair-list-count plist) 0)))
-         (setf (snap-i32 buffer at) rows (snap-f32 buffer (+ at 4)) (pair-list-cell plist)
-               (snap-u32 buffer (+ at 8)) (pair-list-builds plist) (snap-i32 buffer (+ at 12)) (pair-list-loose-count plist)
-               (snap-i64 buffer (+ at 16)) (pair-list-step plist) (snap-i64 buffer (+ at 24)) (pair-list-built-step plist)
-               (snap-u32 buffer (+ at 32)) pairs)
-         (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)) (clear (pair-list-clear plist)))
-           (dotimes (i (max rows 0))
-             (let ((o (+ at 36 (* i +snapshot-pair-row-bytes+))))
-               (setf (snap-f32 buffer o) (aref anchors (* 3 i)) (snap-f32 buffer (+ o 4)) (aref anchors (+ 1 (* 3 i)))
-                     (snap-f32 buffer (+ o 8)) (aref anchors (+ 2 (* 3 i))) (snap-i64 buffer (+ o 12)) (aref handles i)
-                     (snap-u8 buffer (+ o 20)) (if (= 1 (aref clear i)) 1 0)))))
-         (let ((o (+ at 36 (* (max rows 0) +snapshot-pair-row-bytes+))) (list (pair-list-pairs plist)))
-           (dotimes (k pairs) (setf (snap-i64 buffer (+ o (* 8 k))) (aref list k))))))
+             (setf (snap-u32 buffer (+ at 4 (* k +snapshot-material-bytes+) (* 4 j))) (aref words (+ (* 9 k) j)))))
+         (+ 4 (* count +snapshot-material-bytes+))))
+    (6 (write-snapshot-contacts world buffer at))
+    (7 (write-snapshot-pair-list world buffer at))
     (8 (let* ((boxes (physics-world-boxes world)) (n (box-columns-length boxes)))
          (setf (snap-u32 buffer at) n)
          (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz (bid id) filter) boxes
            (dotimes (row n)
              (let ((o (+ at 4 (* row +snapshot-box-bytes+))))
-               (loop for column in (list min-x min-y min-z max-x max-y max-z vx vy vz) for k from 0
-                     do (setf (snap-f32 buffer (+ o (* 4 k))) (aref (the f32-column column) row)))
-               (setf (snap-i64 buffer (+ o 36)) (aref bid row) (snap-i64 buffer (+ o 44)) (aref filter row)))))))
+               (macrolet ((floats (&rest columns)
+                            `(setf ,@(loop for c in columns for k from 0
+                                           append `((snap-f32 buffer (+ o ,(* 4 k))) (aref ,c row))))))
+                 (floats min-x min-y min-z max-x max-y max-z vx vy vz))
+               (setf (snap-i64 buffer (+ o 36)) (aref bid row) (snap-i64 buffer (+ o 44)) (aref filter row)))))
+         (+ 4 (* n +snapshot-box-bytes+))))
     (9 (let ((pushes (physics-world-pushes world)))
          (if pushes
              (let ((slots (handle-table-count (physics-world-ids world))))
                (setf (snap-u32 buffer at) slots)
-               (dotimes (k (* 4 slots)) (setf (snap-f32 buffer (+ at 4 (* 4 k))) (aref pushes k))))
-             (setf (snap-u32 buffer at) 0))))
-    (10 (write-snapshot-joints world buffer at))))
+               (sb-kernel:%byte-blt pushes 0 buffer (+ at 4) (+ at 4 (* 16 slots)))
+               (+ 4 (* 16 slots)))
+             (progn (setf (snap-u32 buffer at) 0) 4))))
+    (10 (write-snapshot-joints world buffer at)
+        (aref (snapshot-scratch-sizes scratch) 10))))
 
 (defun world-parameter (world name)
   "The value of WORLD's parameter NAME, a keyword of +physics-parameters+. #SN4P0T"
@@ -8448,21 +9190,13 @@ sleep, and every number within its range. #SN4P0T"
       (snapshot-check (<= (abs (snap-finite-f64 buffer (+ at o))) 1d30) physics-snapshot-other-layout (+ at o)
                       "a statistic of magnitude up to 1e30" (snap-f64 buffer (+ at o))))))
 
-(defun check-snapshot-slots (world buffer scratch)
-  "Check the handle, material and body parts of the snapshot in BUFFER: the sizes their counts
-give, every generation, every free slot and every body's slot distinct and within the table, the
-slots all accounted for, each material and each body's numbers in range, and no body's centre in
-a solid cell of WORLD's terrain. #SN4P0T"
+(defun check-snapshot-handles (buffer scratch)
+  "Check the handle part of the snapshot in BUFFER: its size as its counts give it, every
+generation, every added body and every free slot within the table, each free slot listed once;
+return SCRATCH's marks with the free slots marked, and the stamp that marks them. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let* ((offsets (snapshot-scratch-offsets scratch))
-         (hat (aref offsets 2)) (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4)))
-         (wat (aref offsets 1))
-         (max-speed (snap-f32 buffer (+ wat 52 (* 4 (position :max-speed +physics-parameters+ :key #'first)))))
-         (max-radius (snap-f32 buffer (+ wat 48)))
-         (terrain (physics-world-terrain world))
-         (mat (aref offsets 5)) (materials (snap-u32 buffer mat)))
-    (declare (type index hat wat mat) (type (unsigned-byte 32) count nfree materials)
-             (type single-float max-speed max-radius))
+  (let* ((hat (aref (snapshot-scratch-offsets scratch) 2)) (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4))))
+    (declare (type index hat) (type (unsigned-byte 32) count nfree))
     (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout hat
                     "a handle table of under 2^24 slots" count)
     (snapshot-check (<= nfree count) physics-snapshot-other-layout (+ hat 4) "no more free slots than slots" nfree)
@@ -8484,67 +9218,146 @@ a solid cell of WORLD's terrain. #SN4P0T"
           (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
                           "a free slot of the table, listed once" slot)
           (setf (aref marks slot) stamp)))
-      (check-part-size scratch 5 (+ 4 (* +snapshot-material-bytes+ materials)))
-      (dotimes (k materials)
-        (let ((o (+ mat 4 (* k +snapshot-material-bytes+))))
-          (flet ((ranged (field low high what)
-                   (let ((v (snap-finite-f32 buffer (+ o (* 4 field)))))
-                     (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o (* 4 field)) what v))))
-            (ranged 0 +physics-min-radius+ max-radius "a radius from the smallest to the world's largest")
-            (ranged 1 (/ 0.999 +physics-max-mass+) (/ 1.001 +physics-min-mass+) "the inverse of a mass in range")
-            (ranged 2 0.0 (/ 2.6 (* +physics-min-mass+ +physics-min-radius+ +physics-min-radius+))
-                    "the inverse of an inertia in range")
-            (ranged 3 0.0 1.0 "a restitution in [0, 1]")
-            (ranged 4 0.0 +physics-max-friction+ "a friction in range")
-            (ranged 5 0.0 +physics-max-friction+ "a rolling resistance in range")
-            (ranged 6 0.0 1e30 "a life of 0 or more"))
-          (snapshot-check (<= 0 (snap-i32 buffer (+ o 28)) 1000) physics-snapshot-other-layout (+ o 28)
-                          "a kind from 0 to 1000" (snap-i32 buffer (+ o 28)))))
-      (let ((live nfree))
-        (declare (type index live))
-        (dolist (id '(3 4))
-          (let* ((at (aref offsets id)) (n (snap-u32 buffer at)))
-            (declare (type index at n))
-            (check-part-size scratch id (padded (+ 4 (* +snapshot-body-bytes+ n))))
-            (dotimes (row n)
-              (let ((o (+ at 4 (* row +snapshot-body-bytes+))))
-                (declare (type index o))
-                (dotimes (k 14) (snap-finite-f32 buffer (+ o (* 4 k))))
-                (snap-finite-f64 buffer (+ o 56))
-                (dotimes (k 3)
-                  (let ((c (snap-f32 buffer (+ o (* 4 k)))))
-                    (snapshot-check (< (abs c) +physics-coordinate-limit+) physics-snapshot-other-layout (+ o (* 4 k))
-                                    "a coordinate within the limit" c)))
-                (let ((vx (snap-f32 buffer (+ o 12))) (vy (snap-f32 buffer (+ o 16))) (vz (snap-f32 buffer (+ o 20)))
-                      (qw (snap-f32 buffer (+ o 36))) (qx (snap-f32 buffer (+ o 40))) (qy (snap-f32 buffer (+ o 44)))
-                      (qz (snap-f32 buffer (+ o 48))))
-                  (snapshot-check (and (<= (abs vx) max-speed) (<= (abs vy) max-speed) (<= (abs vz) max-speed)
-                                       (<= (+ (* vx vx) (* vy vy) (* vz vz)) (* 1.001 max-speed max-speed)))
-                                  physics-snapshot-other-layout (+ o 12) "a speed within the world's top speed" vx)
-                  (dotimes (k 3)
-                    (snapshot-check (<= (abs (snap-f32 buffer (+ o 24 (* 4 k)))) 1e6) physics-snapshot-other-layout
-                                    (+ o 24 (* 4 k)) "a spin under 10^6 rad/s" (snap-f32 buffer (+ o 24 (* 4 k)))))
-                  (snapshot-check (and (<= (abs qw) 1.1) (<= (abs qx) 1.1) (<= (abs qy) 1.1) (<= (abs qz) 1.1)
-                                       (<= 0.9 (+ (* qw qw) (* qx qx) (* qy qy) (* qz qz)) 1.1))
-                                  physics-snapshot-other-layout (+ o 36) "a unit quaternion" qw))
-                (snapshot-check (<= 0.0 (snap-f32 buffer (+ o 52)) 1e30) physics-snapshot-other-layout (+ o 52)
-                                "a time still of 0 or more" (snap-f32 buffer (+ o 52)))
-                (snapshot-check (<= 0d0 (snap-f64 buffer (+ o 56)) 1d30) physics-snapshot-other-layout (+ o 56)
-                                "an age of 0 or more" (snap-f64 buffer (+ o 56)))
-                (let ((slot (snap-u32 buffer (+ o 64))) (material (snap-u32 buffer (+ o 68))))
-                  (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout (+ o 64)
-                                  "a slot of the table neither free nor another body's" slot)
-                  (setf (aref marks slot) (1+ stamp))
-                  (incf live)
-                  (snapshot-check (< material materials) physics-snapshot-other-layout (+ o 68)
-                                  "a material of the palette" material))
-                (when terrain
-                  (let ((x (floor (snap-f32 buffer o))) (y (floor (snap-f32 buffer (+ o 4))))
-                        (z (floor (snap-f32 buffer (+ o 8)))))
-                    (snapshot-check (not (terrain-solid-p terrain x y z)) physics-snapshot-other-layout o
-                                    "a centre in an air cell of the world's terrain" (list x y z))))))))
-        (snapshot-check (= live count) physics-snapshot-other-layout hat
-                        "as many slots as free slots and bodies" count)))))
+      (values marks stamp))))
+
+(defun check-snapshot-materials (buffer scratch)
+  "Check the material part of the snapshot in BUFFER: its size, and each material's numbers
+within their ranges, its radius up to the world's largest. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((mat (aref (snapshot-scratch-offsets scratch) 5)) (materials (snap-u32 buffer mat))
+         (max-radius (snap-f32 buffer (+ (aref (snapshot-scratch-offsets scratch) 1) 48))))
+    (declare (type index mat) (type (unsigned-byte 32) materials) (type single-float max-radius))
+    (check-part-size scratch 5 (+ 4 (* +snapshot-material-bytes+ materials)))
+    (dotimes (k materials)
+      (let ((o (+ mat 4 (* k +snapshot-material-bytes+))))
+        (flet ((ranged (field low high what)
+                 (let ((v (snap-finite-f32 buffer (+ o (* 4 field)))))
+                   (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o (* 4 field)) what v))))
+          (ranged 0 +physics-min-radius+ max-radius "a radius from the smallest to the world's largest")
+          (ranged 1 (/ 0.999 +physics-max-mass+) (/ 1.001 +physics-min-mass+) "the inverse of a mass in range")
+          (ranged 2 0.0 (/ 2.6 (* +physics-min-mass+ +physics-min-radius+ +physics-min-radius+))
+                  "the inverse of an inertia in range")
+          (ranged 3 0.0 1.0 "a restitution in [0, 1]")
+          (ranged 4 0.0 +physics-max-friction+ "a friction in range")
+          (ranged 5 0.0 +physics-max-friction+ "a rolling resistance in range")
+          (ranged 6 0.0 1e30 "a life of 0 or more"))
+        (snapshot-check (<= 0 (snap-i32 buffer (+ o 28)) 1000) physics-snapshot-other-layout (+ o 28)
+                        "a kind from 0 to 1000" (snap-i32 buffer (+ o 28)))))))
+
+(defun refuse-snapshot-body (buffer at n row max-speed)
+  "Refuse the snapshot in BUFFER at the first number of body ROW, of the N of the body part at AT,
+that is not finite or not in its range, naming what was expected. #SN4P0T"
+  (declare (type octets buffer) (type index at n row) (type single-float max-speed))
+  (flet ((float-at (k) (+ at (body-part-column n k) (* 4 row))))
+    (dotimes (k 14) (snap-finite-f32 buffer (float-at k)))
+    (snap-finite-f64 buffer (+ at (body-part-column n 14) (* 8 row)))
+    (dotimes (k 3)
+      (let ((c (snap-f32 buffer (float-at k))))
+        (snapshot-check (< (abs c) +physics-coordinate-limit+) physics-snapshot-other-layout (float-at k)
+                        "a coordinate within the limit" c)))
+    (let ((vx (snap-f32 buffer (float-at 3))) (vy (snap-f32 buffer (float-at 4))) (vz (snap-f32 buffer (float-at 5)))
+          (qw (snap-f32 buffer (float-at 9))) (qx (snap-f32 buffer (float-at 10))) (qy (snap-f32 buffer (float-at 11)))
+          (qz (snap-f32 buffer (float-at 12))))
+      (snapshot-check (and (<= (abs vx) max-speed) (<= (abs vy) max-speed) (<= (abs vz) max-speed)
+                           (<= (+ (* vx vx) (* vy vy) (* vz vz)) (* 1.001 max-speed max-speed)))
+                      physics-snapshot-other-layout (float-at 3) "a speed within the world's top speed" vx)
+      (loop for k from 6 below 9
+            do (snapshot-check (<= (abs (snap-f32 buffer (float-at k))) 1e6) physics-snapshot-other-layout
+                               (float-at k) "a spin under 10^6 rad/s" (snap-f32 buffer (float-at k))))
+      (snapshot-check (and (<= (abs qw) 1.1) (<= (abs qx) 1.1) (<= (abs qy) 1.1) (<= (abs qz) 1.1)
+                           (<= 0.9 (+ (* qw qw) (* qx qx) (* qy qy) (* qz qz)) 1.1))
+                      physics-snapshot-other-layout (float-at 9) "a unit quaternion" qw))
+    (snapshot-check (<= 0.0 (snap-f32 buffer (float-at 13)) 1e30) physics-snapshot-other-layout (float-at 13)
+                    "a time still of 0 or more" (snap-f32 buffer (float-at 13)))
+    (let ((age (+ at (body-part-column n 14) (* 8 row))))
+      (snapshot-check (<= 0d0 (snap-f64 buffer age) 1d30) physics-snapshot-other-layout age
+                      "an age of 0 or more" (snap-f64 buffer age)))))
+
+(defun check-snapshot-bodies (world buffer scratch id marks stamp)
+  "Check body part ID of the snapshot in BUFFER: its size, each body's numbers in range (a fast
+test of every row, and refuse-snapshot-body naming the fault of a row that fails it), its slot a
+slot of the table neither free nor another body's, marked in MARKS with STAMP + 1, its material
+one of the palette, and its centre in no solid cell of WORLD's terrain; return its count. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column marks) (type fixnum stamp)
+           #.+kernel-policy+)
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets id)) (n (snap-u32 buffer at))
+         (count (snap-u32 buffer (aref offsets 2))) (materials (snap-u32 buffer (aref offsets 5)))
+         (w (material-index-bytes materials))
+         (max-speed (snap-f32 buffer (+ (aref offsets 1) 52 (* 4 (position :max-speed +physics-parameters+ :key #'first)))))
+         (terrain (physics-world-terrain world))
+         (chunks (and terrain (voxel-terrain-chunks terrain))) (last-key -1) (chunk nil)
+         ;; the bits of the bounds: a finite single-float's magnitude orders as its bits do, and a
+         ;; NaN's or an infinity's bits lie above every finite one's
+         (coordinate (sb-kernel:single-float-bits (float +physics-coordinate-limit+ 1.0)))
+         (speed (sb-kernel:single-float-bits max-speed)) (spin (sb-kernel:single-float-bits 1e6))
+         (unit (sb-kernel:single-float-bits 1.1)) (still (sb-kernel:single-float-bits 1e30))
+         (top (* 1.001 max-speed max-speed)))
+    (declare (type index at n count materials) (type single-float max-speed top) (type fixnum last-key)
+             (type (signed-byte 32) coordinate speed spin unit still))
+    (check-part-size scratch id (padded (+ 4 (* (body-record-bytes materials) n))))
+    (dotimes (row n n)
+      (macrolet ((bits (k) `(snap-u32 buffer (+ at (body-part-column n ,k) (* 4 row))))
+                 (within (k limit) `(<= (logand (bits ,k) #x7FFFFFFF) ,limit))
+                 (value (k) `(snap-f32 buffer (+ at (body-part-column n ,k) (* 4 row)))))
+        (unless (and (within 0 (1- coordinate)) (within 1 (1- coordinate)) (within 2 (1- coordinate))
+                     (within 3 speed) (within 4 speed) (within 5 speed)
+                     (<= (+ (* (value 3) (value 3)) (* (value 4) (value 4)) (* (value 5) (value 5))) top)
+                     (within 6 spin) (within 7 spin) (within 8 spin)
+                     (within 9 unit) (within 10 unit) (within 11 unit) (within 12 unit)
+                     (<= 0.9 (+ (* (value 9) (value 9)) (* (value 10) (value 10)) (* (value 11) (value 11))
+                                (* (value 12) (value 12)))
+                         1.1)
+                     (let ((b (bits 13))) (or (<= b still) (= b #x80000000)))
+                     (let ((age (snap-u64 buffer (+ at (body-part-column n 14) (* 8 row)))))
+                       (or (<= age #.(sb-kernel:double-float-bits 1d30)) (= age (ash 1 63)))))
+          (refuse-snapshot-body buffer at n row max-speed)
+          (snapshot-check nil physics-snapshot-other-layout (+ at 4 (* 4 row)) "a body within its ranges" row))
+        (let ((slot (snap-u32 buffer (+ at (body-part-column n 16) (* 4 row))))
+              (material (snap-material-index buffer (+ at (body-part-column n 17) (* w row)) w)))
+          (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout
+                          (+ at (body-part-column n 16) (* 4 row))
+                          "a slot of the table neither free nor another body's" slot)
+          (setf (aref marks slot) (1+ stamp))
+          (snapshot-check (< material materials) physics-snapshot-other-layout (+ at (body-part-column n 17) (* w row))
+                          "a material of the palette" material))
+        (when chunks
+          ;; the chunk of the row before is most often this row's too: looked up only when not
+          (let* ((x (floor (the (single-float -65536.0 65536.0) (value 0))))
+                 (y (floor (the (single-float -65536.0 65536.0) (value 1))))
+                 (z (floor (the (single-float -65536.0 65536.0) (value 2))))
+                 (key (chunk-key x y z)))
+            (declare (type cell x y z) (type fixnum key))
+            (unless (= key last-key)
+              (setf chunk (gethash key chunks) last-key key))
+            (snapshot-check (and chunk (zerop (aref (the chunk-storage chunk) (cell-offset x y z))))
+                            physics-snapshot-other-layout (+ at 4 (* 4 row))
+                            "a centre in an air cell of the world's terrain" (list x y z))))))))
+
+(defun check-snapshot-slots (world buffer scratch)
+  "Check the handle, material and body parts of the snapshot in BUFFER (check-snapshot-handles,
+check-snapshot-materials, check-snapshot-bodies), and that the free slots and the bodies'
+slots are every slot of the table. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (multiple-value-bind (marks stamp) (check-snapshot-handles buffer scratch)
+    (check-snapshot-materials buffer scratch)
+    (let* ((hat (aref (snapshot-scratch-offsets scratch) 2)) (count (snap-u32 buffer hat))
+           (live (+ (snap-u32 buffer (+ hat 4))
+                    (check-snapshot-bodies world buffer scratch 3 marks stamp)
+                    (check-snapshot-bodies world buffer scratch 4 marks stamp))))
+      (snapshot-check (= live count) physics-snapshot-other-layout hat
+                      "as many slots as free slots and bodies" count))))
+
+(defun snapshot-table-room (table n)
+  "Give the contact table TABLE room for N keys under contact-table-put's load, emptied, and
+return its slots. #SN4P0T"
+  (declare (type contact-table table) (type index n))
+  (loop while (>= (* 4 (1+ n)) (length (contact-table-slots table)))
+        do (let ((size (* 2 (length (contact-table-slots table)))))
+             (setf (contact-table-slots table) (make-array size :element-type 'fixnum :initial-element -1)
+                   (contact-table-mask table) (1- (ash size -1)))))
+  (fill (contact-table-slots table) -1)
+  (setf (contact-table-count table) 0)
+  (contact-table-slots table))
 
 (defun check-snapshot-contacts (buffer scratch)
   "Check the contact part of the snapshot in BUFFER: its size, each key's kind and slots (the
@@ -8555,83 +9368,124 @@ reads. #SN4P0T"
   (let* ((at (aref (snapshot-scratch-offsets scratch) 6)) (n (snap-u32 buffer at))
          (hat (aref (snapshot-scratch-offsets scratch) 2)) (count (snap-u32 buffer hat))
          (marks (snapshot-scratch-marks scratch)) (stamp (snapshot-scratch-stamp scratch))
-         (table (snapshot-scratch-contacts scratch)))
-    (declare (type index at n hat count) (type fixnum-column marks) (type fixnum stamp))
-    (progn
-      (fill (contact-table-slots table) -1)
-      (setf (contact-table-count table) 0)
-      (let ((o (+ at 4)) (end (+ at (aref (snapshot-scratch-sizes scratch) 6))))
-        (declare (type index o end))
-        (dotimes (row n)
-          (snapshot-check (<= (+ o +snapshot-contact-bytes+) end) physics-snapshot-other-layout o
-                          (format nil "the record of contact ~D within the part" row) end)
-          (let* ((key (snap-i64 buffer o)) (flags (snap-u16 buffer (+ o 8)))
-                 (kind (ldb (byte 4 58) key)) (a (ldb (byte 24 34) key)))
-            ;; a body that expired in the last step has a free slot, and its contacts wait for
-            ;; the next step's prune: a key may name a free slot of the table
-            (snapshot-check (and (>= key 0) (< key (ash 1 60)) (<= kind 2) (< a count) (>= (aref marks a) (1- stamp)))
-                            physics-snapshot-other-layout o "a contact key of a slot of the table" key)
-            (when (= kind +contact-pair+)
-              (let ((b (ldb (byte 34 0) key)))
-                (snapshot-check (and (< a b count) (>= (aref marks b) (1- stamp))) physics-snapshot-other-layout o
-                                "a pair key of two slots of the table, the lower first" key)))
+         (table (snapshot-scratch-contacts scratch))
+         (end (+ at (aref (snapshot-scratch-sizes scratch) 6)))
+         ;; a part of N records has at least 10 bytes a record
+         (slots (snapshot-table-room table (min n (floor (- end at) +snapshot-contact-bytes+))))
+         (mask (contact-table-mask table))
+         (impulse (sb-kernel:single-float-bits 1e9)) (unit (sb-kernel:single-float-bits 1.001))
+         (o (+ at 4)))
+    (declare (type index at n hat count end o) (type fixnum-column marks slots) (type fixnum stamp mask)
+             (type (signed-byte 32) impulse unit))
+    (dotimes (row n)
+      (snapshot-check (<= (+ o +snapshot-contact-bytes+) end) physics-snapshot-other-layout o
+                      (format nil "the record of contact ~D within the part" row) end)
+      (let* ((key (snap-i64 buffer o)) (flags (snap-u16 buffer (+ o 8)))
+             (kind (ldb (byte 4 58) key)) (a (ldb (byte 24 34) key)) (code (ldb (byte 3 2) flags))
+             (bytes (contact-record-bytes flags)))
+        (declare (type fixnum key flags bytes))
+        ;; a body that expired in the last step has a free slot, and its contacts wait for
+        ;; the next step's prune: a key may name a free slot of the table
+        (snapshot-check (and (>= key 0) (< key (ash 1 60)) (<= kind 2) (< a count) (>= (aref marks a) (1- stamp)))
+                        physics-snapshot-other-layout o "a contact key of a slot of the table" key)
+        (when (= kind +contact-pair+)
+          (let ((b (ldb (byte 34 0) key)))
+            (snapshot-check (and (< a b count) (>= (aref marks b) (1- stamp))) physics-snapshot-other-layout o
+                            "a pair key of two slots of the table, the lower first" key)))
+        (snapshot-check (and (< flags 512) (/= 7 code)) physics-snapshot-other-layout (+ o 8)
+                        "contact flags of 9 bits, a normal code from 0 to 6" flags)
+        (snapshot-check (<= (+ o bytes) end) physics-snapshot-other-layout o
+                        (format nil "the record of contact ~D within the part" row) end)
+        ;; a key already in the table is a duplicate
+        (snapshot-check (loop for i of-type fixnum = (contact-slot-hash key mask) then (logand (1+ i) mask)
+                              for k of-type fixnum = (aref slots (* 2 i))
+                              do (cond ((= k key) (return nil))
+                                       ((= k -1) (setf (aref slots (* 2 i)) key (aref slots (1+ (* 2 i))) row)
+                                        (return t))))
+                        physics-snapshot-other-layout o "a key no other contact has" key)
+        ;; a carried impulse is at most the momentum of the heaviest body at the top speed
+        (loop for p of-type index from (+ o 10 (if (zerop code) 12 0)) below (+ o bytes) by 4
+              do (unless (<= (logand (snap-u32 buffer p) #x7FFFFFFF) impulse)
+                   (snapshot-check (<= (abs (snap-finite-f32 buffer p)) 1e9) physics-snapshot-other-layout p
+                                   "a carried impulse of at most 10^9 N s" (snap-f32 buffer p))))
+        (when (zerop code)
+          (dotimes (k 3)
+            (unless (<= (logand (snap-u32 buffer (+ o 10 (* 4 k))) #x7FFFFFFF) unit)
+              (snapshot-check (<= (abs (snap-finite-f32 buffer (+ o 10 (* 4 k)))) 1.001)
+                              physics-snapshot-other-layout (+ o 10 (* 4 k)) "a normal of unit length"
+                              (snap-f32 buffer (+ o 10 (* 4 k)))))))
+        (incf o bytes)))
+    (setf (contact-table-count table) n)
+    (check-part-size scratch 6 (padded (- o at)))
+    table))
 
-            (snapshot-check (and (< flags 512) (/= 7 (ldb (byte 3 2) flags))) physics-snapshot-other-layout (+ o 8)
-                            "contact flags of 9 bits, a normal code from 0 to 6" flags)
-            (snapshot-check (<= (+ o (contact-record-bytes flags)) end) physics-snapshot-other-layout o
-                            (format nil "the record of contact ~D within the part" row) end)
-            ;; a key already in the table is replaced, not counted again: a duplicate
-            (let ((before (contact-table-count table)))
-              (contact-table-put table key row)
-              (snapshot-check (/= before (contact-table-count table)) physics-snapshot-other-layout o
-                              "a key no other contact has" key))
-            ;; a carried impulse is at most the momentum of the heaviest body at the top speed
-            (loop for p of-type index from (+ o 10 (if (zerop (ldb (byte 3 2) flags)) 12 0))
-                    below (+ o (contact-record-bytes flags)) by 4
-                  do (snapshot-check (<= (abs (snap-finite-f32 buffer p)) 1e9) physics-snapshot-other-layout p
-                                     "a carried impulse of at most 10^9 N s" (snap-f32 buffer p)))
-            (when (zerop (ldb (byte 3 2) flags))
-              (dotimes (k 3)
-                (snapshot-check (<= (abs (snap-finite-f32 buffer (+ o 10 (* 4 k)))) 1.001)
-                                physics-snapshot-other-layout (+ o 10 (* 4 k)) "a normal of unit length"
-                                (snap-f32 buffer (+ o 10 (* 4 k))))))
-            (incf o (contact-record-bytes flags))))
-        (check-part-size scratch 6 (padded (- o at))))
-      table)))
-
-(defun check-snapshot-rest (buffer scratch)
-  "Check the pair list, box and push parts of the snapshot in BUFFER: sizes, rows, pairs of
-listed rows, finite numbers, and pushes that cover the table with nothing on a free slot. #SN4P0T"
+(defun check-snapshot-pair-list (buffer scratch)
+  "Check the pair list part of the snapshot in BUFFER: its form and the size its counts give,
+its numbers, finite anchors within the coordinate limit, no more rows than awake bodies when
+their handles are not written, and pairs of listed rows, written whole or as differences. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch))
-         (at (aref offsets 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32))))
-    (declare (type index at))
+         (at (aref offsets 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
+         (form (snap-u32 buffer (+ at 36))) (n (max rows 0))
+         (coordinate (sb-kernel:single-float-bits (float +physics-coordinate-limit+ 1.0))))
+    (declare (type index at) (type fixnum rows n) (type (unsigned-byte 32) pairs form)
+             (type (signed-byte 32) coordinate))
     (snapshot-check (< -2 rows (ash 1 24)) physics-snapshot-other-layout at "a count of listed rows" rows)
     (snapshot-check (or (>= rows 0) (zerop pairs)) physics-snapshot-other-layout (+ at 32) "no pairs in no list" pairs)
-    (check-part-size scratch 7 (padded (+ 36 (* +snapshot-pair-row-bytes+ (max rows 0)) (* 8 pairs))))
-    (when (>= rows 0)
-      (let ((cell (snap-finite-f32 buffer (+ at 4))))
-        (snapshot-check (< 0.0 cell 1e6) physics-snapshot-other-layout (+ at 4) "a cell edge above 0" cell))
-      (snapshot-check (<= -1 (snap-i32 buffer (+ at 12)) rows) physics-snapshot-other-layout (+ at 12)
-                      "a count of loose rows" (snap-i32 buffer (+ at 12)))
-      (dolist (o '(16 24))
-        (snapshot-check (typep (snap-i64 buffer (+ at o)) 'fixnum) physics-snapshot-other-layout (+ at o)
-                        "a step number" (snap-i64 buffer (+ at o))))
-      (dotimes (i rows)
-        (let ((o (+ at 36 (* i +snapshot-pair-row-bytes+))))
-          (dotimes (k 3)
-            (let ((c (snap-finite-f32 buffer (+ o (* 4 k)))))
-              (snapshot-check (< (abs c) +physics-coordinate-limit+) physics-snapshot-other-layout (+ o (* 4 k))
-                              "an anchor within the coordinate limit" c)))
-          (snapshot-check (typep (snap-i64 buffer (+ o 12)) 'fixnum) physics-snapshot-other-layout (+ o 12)
-                          "a handle" (snap-i64 buffer (+ o 12)))
-          (snapshot-check (<= (snap-u8 buffer (+ o 20)) 1) physics-snapshot-other-layout (+ o 20)
-                          "a clear mark, 0 or 1" (snap-u8 buffer (+ o 20)))))
-      (let ((base (+ at 36 (* rows +snapshot-pair-row-bytes+))))
-        (dotimes (k pairs)
-          (let ((p (snap-i64 buffer (+ base (* 8 k)))))
-            (snapshot-check (and (>= p 0) (< (ash p -24) rows) (< (ldb (byte 24 0) p) rows))
-                            physics-snapshot-other-layout (+ base (* 8 k)) "a pair of listed rows" p))))))
+    (snapshot-check (< form 4) physics-snapshot-other-layout (+ at 36) "a form of 2 bits" form)
+    (let* ((clear (+ at +snapshot-pair-head-bytes+ (* +snapshot-pair-row-bytes+ n)))
+           (handles (+ clear (* 4 (ceiling n 32))))
+           (list (+ handles (if (logbitp 0 form) (* 8 n) 0))))
+      (declare (type index clear handles list))
+      (let* ((whole (padded (+ list (* 3 pairs))))
+             (wholes (if (and (logbitp 1 form) (<= (+ whole 4) (length buffer))) (snap-u32 buffer whole) 0)))
+        (check-part-size scratch 7 (- (if (logbitp 1 form) (+ whole 4 (* 4 wholes)) (+ list (* 8 pairs))) at)))
+      (when (>= rows 0)
+        (let ((cell (snap-finite-f32 buffer (+ at 4))))
+          (snapshot-check (< 0.0 cell 1e6) physics-snapshot-other-layout (+ at 4) "a cell edge above 0" cell))
+        (snapshot-check (<= -1 (snap-i32 buffer (+ at 12)) rows) physics-snapshot-other-layout (+ at 12)
+                        "a count of loose rows" (snap-i32 buffer (+ at 12)))
+        (dolist (o '(16 24))
+          (snapshot-check (typep (snap-i64 buffer (+ at o)) 'fixnum) physics-snapshot-other-layout (+ at o)
+                          "a step number" (snap-i64 buffer (+ at o))))
+        (loop for o of-type index from (+ at +snapshot-pair-head-bytes+) below clear by 4
+              do (unless (< (logand (snap-u32 buffer o) #x7FFFFFFF) coordinate)
+                   (snapshot-check nil physics-snapshot-other-layout o "a finite anchor within the coordinate limit"
+                                   (snap-u32 buffer o))))
+        (if (logbitp 0 form)
+            (dotimes (i n)
+              (snapshot-check (typep (snap-i64 buffer (+ handles (* 8 i))) 'fixnum) physics-snapshot-other-layout
+                              (+ handles (* 8 i)) "a handle" (snap-i64 buffer (+ handles (* 8 i)))))
+            (snapshot-check (<= n (snap-u32 buffer (aref offsets 3))) physics-snapshot-other-layout at
+                            "no more listed rows than awake bodies, whose handles the rows had" rows))
+        (if (logbitp 1 form)
+            ;; the rows the differences give, each a listed row
+            (let* ((a 0) (whole (padded (+ list (* 3 pairs)))) (wholes (snap-u32 buffer whole)) (taken 0))
+              (declare (type fixnum a) (type index whole wholes taken))
+              (dotimes (k pairs)
+                (let* ((da (snap-u8 buffer (+ list k))) (db (snap-u16 buffer (+ list pairs (* 2 k))))
+                       (b 0))
+                  (declare (type fixnum b))
+                  (if (= da 128)
+                      (progn (snapshot-check (< taken wholes) physics-snapshot-other-layout (+ list k)
+                                             "a row listed whole for each pair that needs one" taken)
+                             (setf a (snap-u32 buffer (+ whole 4 (* 4 taken))))
+                             (incf taken))
+                      (incf a (if (> da 128) (- da 256) da)))
+                  (setf b (+ a (if (>= db 32768) (- db 65536) db)))
+                  (snapshot-check (and (<= 0 a) (< a n) (<= 0 b) (< b n)) physics-snapshot-other-layout (+ list k)
+                                  "a pair of listed rows" (list a b))))
+              (snapshot-check (= taken wholes) physics-snapshot-other-layout whole
+                              "as many rows listed whole as pairs that need one" wholes))
+            (dotimes (k pairs)
+              (let ((p (snap-i64 buffer (+ list (* 8 k)))))
+                (snapshot-check (and (>= p 0) (< (ash p -24) n) (< (ldb (byte 24 0) p) n))
+                                physics-snapshot-other-layout (+ list (* 8 k)) "a pair of listed rows" p))))))))
+
+(defun check-snapshot-rest (buffer scratch)
+  "Check the box and push parts of the snapshot in BUFFER: sizes, finite numbers, and pushes that
+cover the table with nothing on a free slot. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 8)) (n (snap-u32 buffer at)))
     (declare (type index at))
     (check-part-size scratch 8 (+ 4 (* +snapshot-box-bytes+ n)))
@@ -8679,6 +9533,7 @@ what the restore reuses. #SN4P0T"
   (check-snapshot-world world buffer scratch)
   (check-snapshot-slots world buffer scratch)
   (check-snapshot-contacts buffer scratch)
+  (check-snapshot-pair-list buffer scratch)
   (check-snapshot-rest buffer scratch)
   (check-snapshot-joints buffer scratch)
   buffer)
@@ -8688,195 +9543,258 @@ what the restore reuses. #SN4P0T"
 marked MARK in NAMED, the slots some joint names. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column named) (type fixnum mark))
   (dolist (id '(3 4))
-    (let ((bat (aref (snapshot-scratch-offsets scratch) id)))
-      (dotimes (row (snap-u32 buffer bat))
-        (let ((o (+ bat 4 (* row +snapshot-body-bytes+))))
-          (snapshot-check (eq (logtest +flag-jointed+ (snap-u16 buffer (+ o 72)))
-                              (= (aref named (snap-u32 buffer (+ o 64))) mark))
-                          physics-snapshot-other-layout (+ o 72)
-                          "the jointed flag set exactly on a body some joint names" (snap-u16 buffer (+ o 72))))))))
+    (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat))
+           (w (material-index-bytes (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 5)))))
+      (dotimes (row n)
+        (let ((o (+ bat (body-part-column n 18 w) (* 2 row)))
+              (slot (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))))
+          (snapshot-check (eq (logtest +flag-jointed+ (snap-u16 buffer o)) (= (aref named slot) mark))
+                          physics-snapshot-other-layout o
+                          "the jointed flag set exactly on a body some joint names" (snap-u16 buffer o)))))))
+
+(defun snapshot-joint-first (buffer at)
+  "Where the first joint's record begins in the joints part at AT of BUFFER. #SN4P0T"
+  (declare (type octets buffer) (type index at))
+  (+ at 20 (* 4 (snap-u32 buffer (+ at 4))) (* 4 (snap-u32 buffer (+ at 8)))))
+
+(defun check-snapshot-joint-table (buffer scratch)
+  "Check the head of the joints part of the snapshot in BUFFER: the feature :joints, a joint table
+of under 2^24 slots each free or held by a joint, the size its counts give, finite softness of
+the limits, and every generation under 2^20. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)) (wat (aref offsets 1))
+         (n (snap-u32 buffer at)) (count (snap-u32 buffer (+ at 4))) (nfree (snap-u32 buffer (+ at 8))))
+    (declare (type index at wat))
+    (snapshot-check (logbitp (position :joints +physics-features+) (snap-u32 buffer (+ wat 4)))
+                    physics-snapshot-other-layout (+ wat 4) "the feature :joints of a world with joints"
+                    (snap-u32 buffer (+ wat 4)))
+    (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout (+ at 4)
+                    "a joint table of under 2^24 slots" count)
+    (snapshot-check (= (+ n nfree) count) physics-snapshot-other-layout (+ at 8)
+                    "a joint for each slot that is not free" nfree)
+    (check-part-size scratch 10 (+ 20 (* 4 count) (* 4 nfree) (* +snapshot-joint-bytes+ n)))
+    (snap-finite-f32 buffer (+ at 12))
+    (snap-finite-f32 buffer (+ at 16))
+    (dotimes (slot count)
+      (snapshot-check (< (snap-u32 buffer (+ at 20 (* 4 slot))) (ash 1 +handle-generation-bits+))
+                      physics-snapshot-other-layout (+ at 20 (* 4 slot)) "a generation under 2^20"
+                      (snap-u32 buffer (+ at 20 (* 4 slot)))))))
+
+(defun mark-snapshot-bodies (buffer scratch slots)
+  "Mark in SCRATCH's marks, room made for SLOTS, the slot of every body of the snapshot in
+BUFFER; return the marks and the mark. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type index slots))
+  (multiple-value-bind (marks stamp) (snapshot-marks scratch slots)
+    (declare (type fixnum-column marks) (type fixnum stamp))
+    (dolist (id '(3 4))
+      (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat)))
+        (dotimes (row n)
+          (setf (aref marks (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))) (1+ stamp)))))
+    (values marks (1+ stamp))))
+
+(defun check-snapshot-joint-bodies (buffer o hat bodies marks live)
+  "Refuse the joint record at O of BUFFER unless both its bodies are live bodies of the snapshot
+(marked LIVE in MARKS, within the BODIES slots of the handle part at HAT) of the generation that
+part gives, two bodies, not one; the second may be none, a fixed point. #SN4P0T"
+  (declare (type octets buffer) (type index o hat bodies) (type fixnum-column marks) (type fixnum live))
+  (loop for side in '(12 20)
+        for slot = (snap-u32 buffer (+ o side))
+        for generation = (snap-u32 buffer (+ o side 4))
+        unless (and (= side 20) (= slot #xFFFFFFFF) (zerop generation))
+          do (snapshot-check (and (< slot bodies) (= (aref marks slot) live)
+                                  (= generation (snap-u32 buffer (+ hat 8 (* 4 slot))))
+                                  (or (= side 12) (/= slot (snap-u32 buffer (+ o 12)))))
+                             physics-snapshot-other-layout (+ o side)
+                             "the slot of a live body of the snapshot, of its generation, not the joint's other body"
+                             slot)))
+
+(defun check-snapshot-joint-numbers (buffer o reach)
+  "Refuse the joint record at O of BUFFER unless its kind and flags are a joint's and each number
+is finite and in its range: anchors within REACH (a fixed point within the coordinate limit),
+lengths, softness and break force of 0 or more up to their largest, carried impulses up to
+10^9 N s. #SN4P0T"
+  (declare (type octets buffer) (type index o) (type single-float reach))
+  (snapshot-check (<= (snap-u32 buffer o) +joint-distance+) physics-snapshot-other-layout o
+                  "a joint kind, 0 or 1" (snap-u32 buffer o))
+  (snapshot-check (< (snap-u32 buffer (+ o 4)) 16) physics-snapshot-other-layout (+ o 4)
+                  "joint flags under 16" (snap-u32 buffer (+ o 4)))
+  (let ((fixed (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)))
+    (flet ((ranged (k low high what)
+             (let ((v (snap-finite-f32 buffer (+ o k))))
+               (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o k) what v)
+               v)))
+      (loop for k from 28 below 40 by 4
+            do (ranged k (- reach) reach "an anchor within the reach of the world's largest radius"))
+      (loop for k from 40 below 52 by 4
+            do (if fixed
+                   (ranged k (- +physics-coordinate-limit+) +physics-coordinate-limit+
+                           "a fixed point within the coordinate limit")
+                   (ranged k (- reach) reach "an anchor within the reach of the world's largest radius")))
+      (loop for k from 52 below 64 by 4
+            do (ranged k 0.0 +physics-max-joint-length+ "a length from 0 to the longest a joint may have"))
+      ;; a hertz of a few denormals would make the softness divide by zero
+      (let ((hertz (ranged 64 0.0 1000.0 "a hertz from 0 to 1000")))
+        (snapshot-check (or (= hertz 0.0) (>= hertz +physics-min-joint-hertz+)) physics-snapshot-other-layout (+ o 64)
+                        "a hertz of 0, or of 0.001 (+physics-min-joint-hertz+) or more" hertz))
+      (ranged 68 0.0 1000.0 "a damping ratio from 0 to 1000")
+      (ranged 72 0.0 +physics-max-break-force+ "a break force from 0 to the largest")
+      (loop for k from 76 below 88 by 4
+            do (ranged k -1e9 1e9 "a carried impulse up to 1e9 N s")))))
+
+(defun check-snapshot-joint-rows (buffer scratch)
+  "Check each joint record of the snapshot in BUFFER: its bodies (check-snapshot-joint-bodies)
+and its numbers (check-snapshot-joint-numbers). #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)) (hat (aref offsets 2))
+         (bodies (snap-u32 buffer hat)) (first (snapshot-joint-first buffer at))
+         (reach (* +joint-anchor-reach+ (snap-f32 buffer (+ (aref offsets 1) 48)))))
+    (declare (type index at hat bodies first))
+    (multiple-value-bind (marks live) (mark-snapshot-bodies buffer scratch (max bodies (snap-u32 buffer (+ at 4))))
+      (dotimes (row (snap-u32 buffer at))
+        (let ((o (+ first (* row +snapshot-joint-bytes+))))
+          (check-snapshot-joint-numbers buffer o reach)
+          (check-snapshot-joint-bodies buffer o hat bodies marks live))))))
+
+(defun check-snapshot-joint-names (buffer scratch)
+  "Refuse the snapshot in BUFFER unless a body's jointed flag is set exactly when some joint of
+its joints part names it. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 10)) (first (snapshot-joint-first buffer at)))
+    (multiple-value-bind (named stamp) (snapshot-marks scratch (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 2)))
+      (declare (type fixnum-column named) (type fixnum stamp))
+      (dotimes (row (snap-u32 buffer at))
+        (let ((o (+ first (* row +snapshot-joint-bytes+))))
+          (setf (aref named (snap-u32 buffer (+ o 12))) (1+ stamp))
+          (unless (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)
+            (setf (aref named (snap-u32 buffer (+ o 20))) (1+ stamp)))))
+      (check-snapshot-jointed-flags buffer scratch named (1+ stamp)))))
+
+(defun check-snapshot-joint-slots (buffer scratch)
+  "Refuse the snapshot in BUFFER unless each free joint slot is listed once and each live one is
+held by one joint. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 10)) (count (snap-u32 buffer (+ at 4)))
+         (first (snapshot-joint-first buffer at)))
+    (multiple-value-bind (marks stamp) (snapshot-marks scratch count)
+      (declare (type fixnum-column marks) (type fixnum stamp))
+      (flet ((take (o what)
+               (let ((slot (snap-u32 buffer o)))
+                 (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
+                                 what slot)
+                 (setf (aref marks slot) stamp))))
+        (dotimes (k (snap-u32 buffer (+ at 8)))
+          (take (+ at 20 (* 4 count) (* 4 k)) "a free joint slot of the table, listed once"))
+        (dotimes (row (snap-u32 buffer at))
+          (take (+ first (* row +snapshot-joint-bytes+) 8) "a joint slot of the table, neither free nor another joint's"))))))
 
 (defun check-snapshot-joints (buffer scratch)
-  "Check the joint part of the snapshot in BUFFER, when it has one: the size its counts give, its
-handle table as the bodies' is checked, each joint's kind and flags, its slot a live one of that
-table and no other joint's, its bodies live bodies of the snapshot of the generations its table
-gives, and every number finite and in its range. #SN4P0T"
+  "Check the joint part of the snapshot in BUFFER, when it has one, stage by stage: its table, each
+joint's record, the bodies' jointed flags and the joint slots; without one, that no body is
+flagged jointed. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch))
-  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)))
-    (declare (type index at))
-    (if (minusp (aref (snapshot-scratch-sizes scratch) 10))
+  (if (minusp (aref (snapshot-scratch-sizes scratch) 10))
       (check-snapshot-jointed-flags buffer scratch (snapshot-scratch-marks scratch) -1)
-      (let* ((hat (aref offsets 2)) (bodies (snap-u32 buffer hat))
-             (n (snap-u32 buffer at)) (count (snap-u32 buffer (+ at 4))) (nfree (snap-u32 buffer (+ at 8)))
-             (wat (aref offsets 1)))
-        (declare (type index hat bodies wat))
-        (snapshot-check (logbitp (position :joints +physics-features+) (snap-u32 buffer (+ wat 4)))
-                        physics-snapshot-other-layout (+ wat 4) "the feature :joints of a world with joints"
-                        (snap-u32 buffer (+ wat 4)))
-        (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout (+ at 4)
-                        "a joint table of under 2^24 slots" count)
-        (snapshot-check (= (+ n nfree) count) physics-snapshot-other-layout (+ at 8)
-                        "a joint for each slot that is not free" nfree)
-        (check-part-size scratch 10 (+ 20 (* 4 count) (* 4 nfree) (* +snapshot-joint-bytes+ n)))
-        (snap-finite-f32 buffer (+ at 12))
-        (snap-finite-f32 buffer (+ at 16))
-        (dotimes (slot count)
-          (snapshot-check (< (snap-u32 buffer (+ at 20 (* 4 slot))) (ash 1 +handle-generation-bits+))
-                          physics-snapshot-other-layout (+ at 20 (* 4 slot)) "a generation under 2^20"
-                          (snap-u32 buffer (+ at 20 (* 4 slot)))))
-        ;; the live bodies' slots, from the body parts
-        (multiple-value-bind (marks stamp) (snapshot-marks scratch (max bodies count))
-          (declare (type fixnum-column marks) (type fixnum stamp))
-          (dolist (id '(3 4))
-            (let ((bat (aref offsets id)))
-              (dotimes (row (snap-u32 buffer bat))
-                (setf (aref marks (snap-u32 buffer (+ bat 4 64 (* row +snapshot-body-bytes+)))) (1+ stamp)))))
-          (let ((first (+ at 20 (* 4 count) (* 4 nfree))))
-            (dotimes (row n)
-              (let ((o (+ first (* row +snapshot-joint-bytes+))))
-                (snapshot-check (<= (snap-u32 buffer o) +joint-distance+) physics-snapshot-other-layout o
-                                "a joint kind, 0 or 1" (snap-u32 buffer o))
-                (snapshot-check (< (snap-u32 buffer (+ o 4)) 16) physics-snapshot-other-layout (+ o 4)
-                                "joint flags under 16" (snap-u32 buffer (+ o 4)))
-                (loop for side in '(12 20)
-                      for slot = (snap-u32 buffer (+ o side))
-                      for generation = (snap-u32 buffer (+ o side 4))
-                      unless (and (= side 20) (= slot #xFFFFFFFF) (zerop generation))
-                        do (snapshot-check (and (< slot bodies) (= (aref marks slot) (1+ stamp))
-                                                (= generation (snap-u32 buffer (+ hat 8 (* 4 slot))))
-                                                (or (= side 12) (/= slot (snap-u32 buffer (+ o 12)))))
-                                           physics-snapshot-other-layout (+ o side)
-                                           "the slot of a live body of the snapshot, of its generation, not the joint's other body"
-                                           slot))
-                (let ((reach (* +joint-anchor-reach+ (snap-f32 buffer (+ wat 48))))
-                      (fixed (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)))
-                  (flet ((ranged (k low high what)
-                           (let ((v (snap-finite-f32 buffer (+ o k))))
-                             (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o k) what v)
-                             v)))
-                    (loop for k from 28 below 40 by 4
-                          do (ranged k (- reach) reach "an anchor within the reach of the world's largest radius"))
-                    (loop for k from 40 below 52 by 4
-                          do (if fixed
-                                 (ranged k (- +physics-coordinate-limit+) +physics-coordinate-limit+
-                                         "a fixed point within the coordinate limit")
-                                 (ranged k (- reach) reach "an anchor within the reach of the world's largest radius")))
-                    (loop for k from 52 below 64 by 4
-                          do (ranged k 0.0 +physics-max-joint-length+ "a length from 0 to the longest a joint may have"))
-                    ;; a hertz of a few denormals would make the softness divide by zero
-                    (let ((hertz (ranged 64 0.0 1000.0 "a hertz from 0 to 1000")))
-                      (snapshot-check (or (= hertz 0.0) (>= hertz +physics-min-joint-hertz+)) physics-snapshot-other-layout (+ o 64)
-                                      "a hertz of 0, or of 0.001 (+physics-min-joint-hertz+) or more" hertz))
-                    (ranged 68 0.0 1000.0 "a damping ratio from 0 to 1000")
-                    (ranged 72 0.0 +physics-max-break-force+ "a break force from 0 to the largest")
-                    (loop for k from 76 below 88 by 4
-                          do (ranged k -1e9 1e9 "a carried impulse up to 1e9 N s"))))))
-            ;; a body's jointed flag is set exactly when a joint names it
-            (multiple-value-bind (named stamp) (snapshot-marks scratch bodies)
-              (declare (type fixnum-column named) (type fixnum stamp))
-              (dotimes (row n)
-                (let ((o (+ first (* row +snapshot-joint-bytes+))))
-                  (setf (aref named (snap-u32 buffer (+ o 12))) (1+ stamp))
-                  (unless (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)
-                    (setf (aref named (snap-u32 buffer (+ o 20))) (1+ stamp)))))
-              (check-snapshot-jointed-flags buffer scratch named (1+ stamp)))
-            ;; the joint slots: each free one listed once, each live one held by one joint
-            (multiple-value-bind (marks stamp) (snapshot-marks scratch count)
-              (declare (type fixnum-column marks) (type fixnum stamp))
-              (dotimes (k nfree)
-                (let* ((o (+ at 20 (* 4 count) (* 4 k))) (slot (snap-u32 buffer o)))
-                  (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
-                                  "a free joint slot of the table, listed once" slot)
-                  (setf (aref marks slot) stamp)))
-              (dotimes (row n)
-                (let* ((o (+ first (* row +snapshot-joint-bytes+) 8)) (slot (snap-u32 buffer o)))
-                  (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
-                                  "a joint slot of the table, neither free nor another joint's" slot)
-                  (setf (aref marks slot) stamp))))))))))
+      (progn
+        (check-snapshot-joint-table buffer scratch)
+        (check-snapshot-joint-rows buffer scratch)
+        (check-snapshot-joint-names buffer scratch)
+        (check-snapshot-joint-slots buffer scratch))))
 ;; A snapshot holds what decides the next step, part by part:4 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:5]]
 ;;; applying a checked snapshot: nothing here can fail
 
 (defun apply-snapshot-bodies (world bodies set buffer at mat)
-  "Fill BODIES, WORLD's set SET, from the checked body part at AT of BUFFER, its materials from
-the palette at MAT, and point each body's handle slot at its row. #SN4P0T"
+  "Fill BODIES, WORLD's set SET, from the checked body part at AT of BUFFER, the float columns and
+the ages copied whole, its materials from the palette at MAT, and point each body's handle slot
+at its row; rows it held past the new count read as zeros again. #SN4P0T"
   (declare (type body-columns bodies) (type octets buffer) (type index at mat) (type fixnum set)
            #.+kernel-policy+)
-  (let* ((n (snap-u32 buffer at)) (ids (physics-world-ids world)) (tag (handle-table-tag ids))
+  (let* ((n (snap-u32 buffer at)) (old (body-columns-length bodies)) (ids (physics-world-ids world))
+         (w (material-index-bytes (snap-u32 buffer mat)))
+         (tag (handle-table-tag ids))
          (sets (handle-table-set ids)) (locals (handle-table-local ids)) (generations (handle-table-generation ids)))
-    (declare (type index n) (type fixnum-column sets locals generations))
-    (body-columns-clear bodies)
+    (declare (type index n old) (type (unsigned-byte 16) tag) (type fixnum-column sets locals generations))
     (body-columns-ensure-capacity bodies n)
     (setf (body-columns-length bodies) n)
-    (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz sleep-time age flags handle
-                        radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind)
+    ;; the rows past N that held bodies, and the spare rows, read as zeros
+    (loop for row of-type index from n below (min (+ (max old n) (body-columns-spare bodies)) (length (body-columns-x bodies)))
+          do (body-columns-zero-row bodies row))
+    (do-snapshot-body-floats (column k) bodies
+      (sb-kernel:%byte-blt buffer (+ at (body-part-column n k)) column 0 (* 4 n)))
+    (sb-kernel:%byte-blt buffer (+ at (body-part-column n 14)) (body-columns-age bodies) 0 (* 8 n))
+    (with-body-columns (flags handle radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind)
         bodies
-      (dotimes (row n)
-        (let* ((o (+ at 4 (* row +snapshot-body-bytes+)))
-               (slot (snap-u32 buffer (+ o 64)))
-               (m (+ mat 4 (* (snap-u32 buffer (+ o 68)) +snapshot-material-bytes+))))
-          (declare (type index o m) (type (unsigned-byte 24) slot))
-          (setf (aref x row) (snap-f32 buffer o) (aref y row) (snap-f32 buffer (+ o 4))
-                (aref z row) (snap-f32 buffer (+ o 8)) (aref vx row) (snap-f32 buffer (+ o 12))
-                (aref vy row) (snap-f32 buffer (+ o 16)) (aref vz row) (snap-f32 buffer (+ o 20))
-                (aref wx row) (snap-f32 buffer (+ o 24)) (aref wy row) (snap-f32 buffer (+ o 28))
-                (aref wz row) (snap-f32 buffer (+ o 32)) (aref qw row) (snap-f32 buffer (+ o 36))
-                (aref qx row) (snap-f32 buffer (+ o 40)) (aref qy row) (snap-f32 buffer (+ o 44))
-                (aref qz row) (snap-f32 buffer (+ o 48)) (aref sleep-time row) (snap-f32 buffer (+ o 52))
-                (aref age row) (snap-f64 buffer (+ o 56))
-                (aref radius row) (snap-f32 buffer m) (aref inverse-mass row) (snap-f32 buffer (+ m 4))
-                (aref inverse-inertia row) (snap-f32 buffer (+ m 8)) (aref restitution row) (snap-f32 buffer (+ m 12))
-                (aref friction row) (snap-f32 buffer (+ m 16)) (aref rolling-resistance row) (snap-f32 buffer (+ m 20))
-                (aref life row) (snap-f32 buffer (+ m 24)) (aref kind row) (snap-i32 buffer (+ m 28))
-                (aref flags row) (logior (snap-u16 buffer (+ o 72)) (ash (snap-u32 buffer (+ m 32)) 16))
-                (aref handle row) (make-handle tag (aref generations slot) slot)
-                (aref sets slot) set (aref locals slot) row))))))
+      (let ((s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18 w))))
+        (declare (type index s m f))
+        (dotimes (row n)
+          (let* ((slot (snap-u32 buffer (+ s (* 4 row))))
+                 (p (+ mat 4 (* (snap-material-index buffer (+ m (* w row)) w) +snapshot-material-bytes+)))
+                 (generation (aref generations slot)))
+            (declare (type index p) (type (unsigned-byte 24) slot) (type (unsigned-byte 20) generation))
+            (setf (aref radius row) (snap-f32 buffer p) (aref inverse-mass row) (snap-f32 buffer (+ p 4))
+                  (aref inverse-inertia row) (snap-f32 buffer (+ p 8)) (aref restitution row) (snap-f32 buffer (+ p 12))
+                  (aref friction row) (snap-f32 buffer (+ p 16)) (aref rolling-resistance row) (snap-f32 buffer (+ p 20))
+                  (aref life row) (snap-f32 buffer (+ p 24)) (aref kind row) (snap-i32 buffer (+ p 28))
+                  (aref flags row) (logior (snap-u16 buffer (+ f (* 2 row))) (ash (snap-u32 buffer (+ p 32)) 16))
+                  (aref handle row) (logior (ash tag (+ +handle-index-bits+ +handle-generation-bits+))
+                                            (ash generation +handle-index-bits+) slot)
+                  (aref sets slot) set (aref locals slot) row)))))))
 
 (defun apply-snapshot-contacts (world buffer scratch)
-  "Put the contacts of the checked snapshot BUFFER into WORLD in their rows, with their keys in
-the table the check filled in SCRATCH, which becomes the world's. #SN4P0T"
+  "Put the contacts of the checked snapshot BUFFER into WORLD in their rows, every float of each
+row written (what the record leaves out as zero), with their keys in the table the check filled
+in SCRATCH, which becomes the world's. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 6)) (n (snap-u32 buffer at))
          (wat (aref offsets 1)) (step (snap-u64 buffer (+ wat 16))) (ids (physics-world-ids world))
          (contacts (physics-world-contacts world)) (table (physics-world-contact-table world))
-         (full (snapshot-scratch-contacts scratch))
-         (tag (handle-table-tag ids)) (generations (handle-table-generation ids)))
-    (declare (type index at n wat step) (type fixnum-column generations))
-    (contact-columns-clear contacts)
+         (full (snapshot-scratch-contacts scratch)) (old (contact-columns-length contacts))
+         (tag (handle-table-tag ids)) (generations (handle-table-generation ids)) (sets (handle-table-set ids)))
+    (declare (type index at n wat step old) (type (unsigned-byte 16) tag) (type fixnum-column generations sets))
     (contact-columns-ensure-capacity contacts n)
     (contact-columns-ensure-capacity (physics-world-contact-scratch world) (contact-columns-capacity contacts))
     (setf (contact-columns-length contacts) n)
+    (loop for row of-type index from n below (min (+ (max old n) (contact-columns-spare contacts))
+                                                 (length (contact-columns-key contacts)))
+          do (contact-columns-zero-row contacts row))
     (with-contact-columns (handle-a handle-b kind key seen order touching geometry) contacts
-     (flet ((slot-handle (slot)
-              ;; the handle of SLOT's body; of a free slot, the handle its body had before it
-              ;; expired, one generation back
-              (let ((g (aref generations slot)))
-                (make-handle tag (if (= (aref (handle-table-set ids) slot) +set-free+)
-                                     (ldb (byte +handle-generation-bits+ 0) (1- g))
-                                     g)
-                             slot))))
-      (let ((o (+ at 4)))
-       (declare (type index o))
-       (dotimes (row n)
-        (let* ((k (snap-i64 buffer o)) (bits (snap-u16 buffer (+ o 8)))
-               (a (ldb (byte 24 34) k)) (kk (ldb (byte 4 58) k)) (g (geometry-start row))
-               (code (ldb (byte 3 2) bits)))
-          (setf (aref key row) k (aref kind row) kk
-                (aref handle-a row) (slot-handle a)
-                (aref handle-b row) (if (= kk +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
-                (aref seen row) (if (logbitp 1 bits) (1- step) step)
-                (aref order row) row
-                (aref touching row) (if (logbitp 0 bits) 1 0))
-          (incf o 10)
-          (if (zerop code)
-              (dotimes (f 3) (setf (aref geometry (+ g f)) (snap-f32 buffer o)) (incf o 4))
-              (setf (aref geometry (+ g (ash (1- code) -1))) (if (oddp code) 1.0 -1.0)))
-          (do-impulse-groups (bit first width)
-            (when (logbitp bit bits)
-              (dotimes (f width)
-                (setf (aref geometry (+ g first f)) (snap-f32 buffer o))
-                (incf o 4)))))))))
+      (flet ((slot-handle (slot)
+               ;; the handle of SLOT's body; of a free slot, the handle its body had before it
+               ;; expired, one generation back
+               (declare (type (unsigned-byte 24) slot))
+               (let ((g (aref generations slot)))
+                 (declare (type (unsigned-byte 20) g))
+                 (logior (ash tag (+ +handle-index-bits+ +handle-generation-bits+))
+                         (ash (if (= (aref sets slot) +set-free+) (ldb (byte +handle-generation-bits+ 0) (1- g)) g)
+                              +handle-index-bits+)
+                         slot))))
+        (declare (inline slot-handle))
+        (let ((o (+ at 4)))
+          (declare (type index o))
+          (dotimes (row n)
+            (let* ((k (snap-i64 buffer o)) (bits (snap-u16 buffer (+ o 8)))
+                   (a (ldb (byte 24 34) k)) (kk (ldb (byte 4 58) k)) (g (geometry-start row))
+                   (code (ldb (byte 3 2) bits)))
+              (declare (type fixnum k bits) (type index g))
+              (setf (aref key row) k (aref kind row) kk
+                    (aref handle-a row) (slot-handle a)
+                    (aref handle-b row) (if (= kk +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
+                    (aref seen row) (if (logbitp 1 bits) (1- step) step)
+                    (aref order row) row
+                    (aref touching row) (if (logbitp 0 bits) 1 0))
+              (incf o 10)
+              (dotimes (f #.(length +contact-fields+)) (setf (aref geometry (+ g f)) 0.0))
+              (if (zerop code)
+                  (progn (setf (aref geometry g) (snap-f32 buffer o) (aref geometry (+ g 1)) (snap-f32 buffer (+ o 4))
+                               (aref geometry (+ g 2)) (snap-f32 buffer (+ o 8)))
+                         (incf o 12))
+                  (setf (aref geometry (+ g (ash (1- code) -1))) (if (oddp code) 1.0 -1.0)))
+              (do-impulse-groups (bit first width)
+                (when (logbitp bit bits)
+                  (dotimes (f width)
+                    (setf (aref geometry (+ g first f)) (snap-f32 buffer o))
+                    (incf o 4)))))))))
     ;; the table the check filled becomes the world's, and the world's the scratch's
     (rotatef (contact-table-slots table) (contact-table-slots full))
     (rotatef (contact-table-mask table) (contact-table-mask full))
@@ -8885,27 +9803,42 @@ the table the check filled in SCRATCH, which becomes the world's. #SN4P0T"
           (contact-table-misses table) (snap-u64 buffer (+ wat 140)))))
 
 (defun apply-snapshot-pair-list (world buffer scratch)
-  "Put the pair list of the checked snapshot BUFFER into WORLD, and the awake grid of its build
-when the world's grid still is that build's. #SN4P0T"
+  "Put the pair list of the checked snapshot BUFFER into WORLD, the rows' handles the awake rows'
+own when the snapshot does not write them (the bodies are restored first), and the awake grid of
+its build when the world's grid still is that build's. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
-         (plist (physics-world-pair-list world)))
-    (declare (type index at pairs))
+         (form (snap-u32 buffer (+ at 36))) (plist (physics-world-pair-list world)))
+    (declare (type index at pairs) (type fixnum rows))
     (setf (pair-list-rows plist) rows (pair-list-terrain plist) nil (pair-list-terrain-edits plist) -1
           (pair-list-count plist) 0)
     (when (>= rows 0)
       (pair-list-room plist rows)
-      (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)) (clear (pair-list-clear plist)))
+      (let* ((handles (pair-list-handles plist)) (clear (pair-list-clear plist))
+             (bits (+ at +snapshot-pair-head-bytes+ (* +snapshot-pair-row-bytes+ rows)))
+             (o (+ bits (* 4 (ceiling rows 32)))))
+        (declare (type fixnum-column handles clear) (type index bits o))
         (fill (pair-list-loose plist) 0)
+        (sb-kernel:%byte-blt buffer (+ at +snapshot-pair-head-bytes+) (pair-list-anchors plist) 0 (* 12 rows))
         (dotimes (i rows)
-          (let ((o (+ at 36 (* i +snapshot-pair-row-bytes+))))
-            (setf (aref anchors (* 3 i)) (snap-f32 buffer o) (aref anchors (+ 1 (* 3 i))) (snap-f32 buffer (+ o 4))
-                  (aref anchors (+ 2 (* 3 i))) (snap-f32 buffer (+ o 8)) (aref handles i) (snap-i64 buffer (+ o 12))
-                  (aref clear i) (snap-u8 buffer (+ o 20))))))
-      (when (< (length (pair-list-pairs plist)) pairs)
-        (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) pairs :least 1024)))
-      (let ((list (pair-list-pairs plist)) (base (+ at 36 (* rows +snapshot-pair-row-bytes+))))
-        (dotimes (k pairs) (setf (aref list k) (snap-i64 buffer (+ base (* 8 k))))))
+          (setf (aref clear i) (ldb (byte 1 (logand i 31)) (snap-u32 buffer (+ bits (* 4 (ash i -5)))))))
+        (if (logbitp 0 form)
+            (dotimes (i rows) (setf (aref handles i) (snap-i64 buffer o)) (incf o 8))
+            (replace handles (body-columns-handle (physics-world-awake world)) :end1 rows))
+        (when (< (length (pair-list-pairs plist)) pairs)
+          (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) pairs :least 1024)))
+        (let ((list (pair-list-pairs plist)))
+          (declare (type fixnum-column list))
+          (if (logbitp 1 form)
+              (let ((a 0) (whole (+ (padded (+ o (* 3 pairs))) 4)))
+                (declare (type (unsigned-byte 24) a) (type index whole))
+                (dotimes (k pairs)
+                  (let ((da (snap-u8 buffer (+ o k))) (db (snap-u16 buffer (+ o pairs (* 2 k)))))
+                    (if (= da 128)
+                        (setf a (snap-u32 buffer whole) whole (+ whole 4))
+                        (setf a (+ a (if (> da 128) (- da 256) da))))
+                    (setf (aref list k) (logior (ash a 24) (+ a (if (>= db 32768) (- db 65536) db)))))))
+              (dotimes (k pairs) (setf (aref list k) (snap-i64 buffer (+ o (* 8 k))))))))
       (setf (pair-list-count plist) pairs (pair-list-cell plist) (snap-f32 buffer (+ at 4))
             (pair-list-builds plist) (snap-u32 buffer (+ at 8)) (pair-list-loose-count plist) (snap-i32 buffer (+ at 12))
             (pair-list-step plist) (snap-i64 buffer (+ at 16)) (pair-list-built-step plist) (snap-i64 buffer (+ at 24)))
@@ -8986,7 +9919,9 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
     (apply-snapshot-bodies world (physics-world-sleeping world) +set-sleeping+ buffer (aref offsets 4) (aref offsets 5))
     (let ((sleeping (physics-world-sleeping world)))
       (setf (physics-world-mortal-sleepers world)
-            (count-if #'plusp (body-columns-life sleeping) :end (body-columns-length sleeping))))
+            (let ((life (body-columns-life sleeping)))
+              (declare (type f32-column life))
+              (loop for row of-type index below (body-columns-length sleeping) count (plusp (aref life row))))))
     ;; the contacts in their rows, then the pair list and its grid
     (apply-snapshot-contacts world buffer scratch)
     (apply-snapshot-pair-list world buffer scratch)
@@ -9113,7 +10048,7 @@ WORLD is left as it was. #SN4P0T"
   (unless (typep buffer 'octets)
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))
-  (let ((scratch *snapshot-scratch*))
+  (let ((scratch (world-snapshot-scratch world)))
     (check-snapshot world buffer scratch)
     (sb-int:with-float-traps-masked (:inexact :underflow) (apply-snapshot world buffer scratch))
     world))
@@ -9159,7 +10094,7 @@ new world over TERRAIN (the caller's, as the snapshot holds no cells) made with 
 step, substeps, gravity, sleep and features, and KERNELS, or the family the snapshot names when
 this machine runs it. Bad bytes signal as restore-physics-world does. #SN4P0T"
   (let* ((buffer (coerce (read-snapshot-octets source) 'octets))
-         (scratch *snapshot-scratch*))
+         (scratch (make-snapshot-scratch)))
     (if into
         (restore-physics-world into buffer)
         (progn
@@ -9260,18 +10195,21 @@ damaged copies each, from SEED; return a list of (SCENE BYTES . FIGURES). #SN4P0
   "Measure snapshots: their size in the BALLS-ball basin and in the settled pile, snapshot plus
 restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8-step rollback at
 1000 balls, and the bytes consed; print Org tables to STREAM. #SN4P0T"
+  (format stream "load average ~A at the start~%~%" (load-average))
   (flet ((median (list) (let ((v (sort (coerce list 'vector) #'<))) (aref v (floor (length v) 2))))
          (ms (f) (let ((t0 (clock-ns))) (funcall f) (* 1d-6 (- (clock-ns) t0)))))
     (let* ((world (make-basin-world balls :kernels :auto))
            (other (make-basin-world balls :kernels :auto))
-           (buffer nil) (steps '()) (saves '()))
+           (buffer nil) (steps '()) (saves '()) (snaps '()) (restores '()))
       (dotimes (i 240) (step-physics-world world))
       (setf buffer (snapshot-physics-world world))
       (restore-physics-world other buffer)
       (sb-ext:gc :full t)
       (dotimes (k rounds)
         (push (ms (lambda () (step-physics-world world))) steps)
-        (push (ms (lambda () (setf buffer (snapshot-physics-world world buffer)) (restore-physics-world other buffer))) saves))
+        (push (ms (lambda () (setf buffer (snapshot-physics-world world buffer)) (restore-physics-world other buffer))) saves)
+        (push (ms (lambda () (snapshot-physics-world world buffer))) snaps)
+        (push (ms (lambda () (restore-physics-world other buffer))) restores))
       (let* ((size (nth-value 1 (snapshot-physics-world world buffer)))
              (awake (physics-world-awake-count world)) (asleep (physics-world-sleeping-count world))
              (contacts (contact-columns-length (physics-world-contacts world)))
@@ -9293,8 +10231,9 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
                 (/ (snapshot-part-bytes buffer 7) (max 1 awake)))
         (format stream "| target: 80 a body and 40 a contact | ~D | 80 | 40 |~%~%" (+ (* 80 (+ awake asleep)) (* 40 contacts)))
         (format stream "| basin of ~D at 4 s, ~D rounds | median ms |~%|---+---|~%" balls rounds)
-        (format stream "| a step | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%~%"
-                (median steps) (median saves) (* 100 (/ (median saves) (median steps))) consed)))
+        (format stream "| a step | ~,3F |~%| snapshot | ~,3F |~%| restore | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%~%"
+                (median steps) (median snaps) (median restores) (median saves)
+                (* 100 (/ (median saves) (median steps))) consed)))
     (multiple-value-bind (pile script) (make-scene-world :pile)
       (dotimes (i (* 60 12)) (funcall script i) (step-physics-world pile))
       (multiple-value-bind (buffer size) (snapshot-physics-world pile)
@@ -9309,7 +10248,8 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
         (dotimes (k 10)
           (push (ms (lambda () (restore-physics-world world buffer) (dotimes (j 8) (step-physics-world world)))) times)))
       (format stream "| rollback at 1000 balls (2 s) | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~D % |~%"
-              (median times) (round (/ (median times) (/ 1000 60.0) 0.01))))))
+              (median times) (round (/ (median times) (/ 1000 60.0) 0.01)))))
+  (format stream "~%load average ~A at the end~%" (load-average)))
 ;; A snapshot holds what decides the next step, part by part:8 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:2]]
