@@ -7893,8 +7893,8 @@ bodies to half the push-out speed. #IDVK7G"
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
-        ;; the joints, when some are prepared, are solved inside these passes, colour by
-        ;; colour with the contacts ([[#J0S0LV]])
+        ;; the joints, when some are prepared, are solved inside the contacts' passes, colour
+        ;; by colour with the contacts ([[#J0S0LV]])
         (when boxes (warm-start-box-points boxes v))
         (physics-warm-start kernels world)
         (when boxes (solve-box-points boxes v d inv-h t))

@@ -6218,6 +6218,36 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (eq t (validate-physics-world w)))))))
 ;; J0STOR-joint-handles ends here
 
+;; [[file:../physics.org::#J0STOR][J0STOR-anchors-turn-with-their-body]]
+(define-claim "J0STOR" anchors-turn-with-their-body
+    "A joint's length follows its body's orientation about x, y, z and a general axis, as the rotation matrix turns the anchor."
+  (let* ((w (make-physics-world :sleep nil))
+         (ball (add-physics-body w 0 0 0 :radius 0.25))
+         (joint (add-physics-joint w :distance ball nil :anchor-a '(0.1 0.2 0.3) :anchor-b '(0 0 1) :length 1)))
+    (loop for (angle ax ay az) in '((0.7 1 0 0) (0.9 0 1 0) (1.3 0 0 1) (2.1 1 2 3))
+          do (let* ((n (sqrt (+ (* ax ax) (* ay ay) (* az az))))
+                    (s (/ (sin (/ angle 2d0)) n))
+                    (q (mapcar (lambda (v) (float v 1.0)) (list (cos (/ angle 2d0)) (* s ax) (* s ay) (* s az)))))
+               (multiple-value-bind (set row) (luv-physics::resolve-handle w ball)
+                 (let ((b (luv-physics::set-buffer w set)))
+                   (setf (aref (luv-physics::body-columns-qw b) row) (first q)
+                         (aref (luv-physics::body-columns-qx b) row) (second q)
+                         (aref (luv-physics::body-columns-qy b) row) (third q)
+                         (aref (luv-physics::body-columns-qz b) row) (fourth q))))
+               (destructuring-bind (qw qx qy qz) (mapcar (lambda (v) (float v 1d0)) q)
+                 (let* ((x 0.1d0) (y 0.2d0) (z 0.3d0)
+                        (rx (+ (* (- 1 (* 2 (+ (* qy qy) (* qz qz)))) x) (* 2 (- (* qx qy) (* qw qz)) y)
+                               (* 2 (+ (* qx qz) (* qw qy)) z)))
+                        (ry (+ (* 2 (+ (* qx qy) (* qw qz)) x) (* (- 1 (* 2 (+ (* qx qx) (* qz qz)))) y)
+                               (* 2 (- (* qy qz) (* qw qx)) z)))
+                        (rz (+ (* 2 (- (* qx qz) (* qw qy)) x) (* 2 (+ (* qy qz) (* qw qx)) y)
+                               (* (- 1 (* 2 (+ (* qx qx) (* qy qy)))) z)))
+                        (want (sqrt (+ (* rx rx) (* ry ry) (expt (- rz 1) 2))))
+                        (got (physics-joint-length w joint)))
+                   (check (< (abs (- want got)) 1d-5) "turned ~A rad about (~A ~A ~A): length ~,6F, not ~,6F"
+                          angle ax ay az got want)))))))
+;; J0STOR-anchors-turn-with-their-body ends here
+
 ;; [[file:../physics.org::#J0STOR][J0STOR-body-removal-removes-joints]]
 (define-claim "J0STOR" body-removal-removes-joints
     "Removing a body removes its joints, each with a :joint-removed event; the others stay; the world validates."
