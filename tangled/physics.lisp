@@ -445,104 +445,131 @@ room under the reach limit for the smallest radius. #C0ND1T"
          (declare (ignorable ,b))
          ,@body))))
 
-(defmacro define-physics-layout (name docstring &rest columns)
-  "Define the columnar layout NAME: a buffer struct of one specialised array per column of
-COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
-NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
-or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
-  (let* ((make (layout-symbol "%MAKE-" name))
-         (ctor (layout-symbol "MAKE-" name))
-         (len (layout-symbol name "-LENGTH"))
-         (cap (layout-symbol name "-CAPACITY"))
-         (spare (layout-symbol name "-SPARE"))
-         (ensure (layout-symbol name "-ENSURE-CAPACITY"))
-         (trim (layout-symbol name "-TRIM"))
-         (append (layout-symbol name "-APPEND"))
-         (remove (layout-symbol name "-SWAP-REMOVE"))
-         (copy (layout-symbol name "-COPY-ROW"))
-         (permute (layout-symbol name "-PERMUTE"))
-         (zero (layout-symbol name "-ZERO-ROW"))
-         (clear (layout-symbol name "-CLEAR"))
-         (with (layout-symbol "WITH-" name))
-         (names (layout-symbol "+" name "-COLUMN-NAMES+"))
-         (bytes (layout-symbol "+" name "-ROW-BYTES+"))
-         (accessors (loop for (c) in columns collect (layout-symbol name "-" c))))
-    `(progn
-       (defstruct (,name (:constructor ,make) (:copier nil) (:predicate nil))
-         ,docstring
-         (length 0 :type index)
-         (capacity 0 :type index)
-         (spare 0 :type index)
-         ,@(loop for (c type) in columns
-                 collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
-       (defparameter ,names ',(mapcar #'first columns)
-         ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
-       (defparameter ,bytes ,(loop for (nil type width) in columns
-                                   sum (* (or width 1) (ecase type (single-float 4) (double-float 8) (fixnum 8))))
-         ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name))
-       (defun ,ctor (&key (capacity 16) (spare 0))
-         ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
-         (let ((size (+ capacity spare)))
-           (,make :capacity capacity :spare spare
-                  ,@(loop for (c type width) in columns
-                          append `(,(intern (symbol-name c) :keyword)
-                                   (make-array (* size ,(or width 1)) :element-type ',type
-                                                                      :initial-element ,(column-zero type)))))))
-       (defun ,ensure (buffer rows)
-         ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index rows))
-         (when (> rows (,cap buffer))
-           (let* ((new (max rows (* 2 (,cap buffer)) 16))
-                  (size (+ new (,spare buffer))))
-             ,@(loop for (c type width) in columns for acc in accessors
-                     collect `(let ((fresh (make-array (* size ,(or width 1)) :element-type ',type
-                                                                              :initial-element ,(column-zero type))))
-                                (replace fresh (,acc buffer))
-                                (setf (,acc buffer) fresh)))
-             (setf (,cap buffer) new)))
-         buffer)
-       (defun ,trim (buffer rows)
-         ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-names (name)
+    "The symbols the layout NAME defines, as a plist keyed by what each names. #L4Y0UT"
+    (list :make (layout-symbol "%MAKE-" name)
+          :ctor (layout-symbol "MAKE-" name)
+          :len (layout-symbol name "-LENGTH")
+          :cap (layout-symbol name "-CAPACITY")
+          :spare (layout-symbol name "-SPARE")
+          :ensure (layout-symbol name "-ENSURE-CAPACITY")
+          :trim (layout-symbol name "-TRIM")
+          :append (layout-symbol name "-APPEND")
+          :remove (layout-symbol name "-SWAP-REMOVE")
+          :copy (layout-symbol name "-COPY-ROW")
+          :permute (layout-symbol name "-PERMUTE")
+          :zero (layout-symbol name "-ZERO-ROW")
+          :clear (layout-symbol name "-CLEAR")
+          :with (layout-symbol "WITH-" name)
+          :names (layout-symbol "+" name "-COLUMN-NAMES+")
+          :bytes (layout-symbol "+" name "-ROW-BYTES+")))
+
+  (defun layout-accessors (name columns)
+    "The reader of each of COLUMNS in the layout NAME's struct, in their order. #L4Y0UT"
+    (loop for (c) in columns collect (layout-symbol name "-" c))))
+;; One macro generates every columnar layout:1 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:2]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-struct-forms (name docstring columns)
+    "The struct of the layout NAME, one array slot per column of COLUMNS, and the constants that
+name its columns and count a row's bytes. #L4Y0UT"
+    (destructuring-bind (&key make names bytes &allow-other-keys) (layout-names name)
+      `((defstruct (,name (:constructor ,make) (:copier nil) (:predicate nil))
+          ,docstring
+          (length 0 :type index)
+          (capacity 0 :type index)
+          (spare 0 :type index)
+          ,@(loop for (c type) in columns
+                  collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
+        (defparameter ,names ',(mapcar #'first columns)
+          ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
+        (defparameter ,bytes ,(loop for (nil type width) in columns
+                                    sum (* (or width 1) (ecase type (single-float 4) (double-float 8) (fixnum 8))))
+          ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name)))))
+
+  (defun layout-sizing-forms (name columns)
+    "The layout NAME's constructor, and its operations that grow and shrink a buffer's arrays. #L4Y0UT"
+    (destructuring-bind (&key make ctor len cap spare ensure trim &allow-other-keys) (layout-names name)
+      (let ((accessors (layout-accessors name columns)))
+        `((defun ,ctor (&key (capacity 16) (spare 0))
+            ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
+            (let ((size (+ capacity spare)))
+              (,make :capacity capacity :spare spare
+                     ,@(loop for (c type width) in columns
+                             append `(,(intern (symbol-name c) :keyword)
+                                      (make-array (* size ,(or width 1)) :element-type ',type
+                                                                         :initial-element ,(column-zero type)))))))
+          (defun ,ensure (buffer rows)
+            ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
+            (declare (type ,name buffer) (type index rows))
+            (when (> rows (,cap buffer))
+              (let* ((new (max rows (* 2 (,cap buffer)) 16))
+                     (size (+ new (,spare buffer))))
+                ,@(loop for (c type width) in columns for acc in accessors
+                        collect `(let ((fresh (make-array (* size ,(or width 1)) :element-type ',type
+                                                                                 :initial-element ,(column-zero type))))
+                                   (replace fresh (,acc buffer))
+                                   (setf (,acc buffer) fresh)))
+                (setf (,cap buffer) new)))
+            buffer)
+          (defun ,trim (buffer rows)
+            ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
 least 16), keeping every row; return BUFFER. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index rows))
-         (let ((new (max rows (,len buffer) 16)))
-           (when (< new (,cap buffer))
-             (let ((size (+ new (,spare buffer))))
-               ,@(loop for (c type width) in columns for acc in accessors
-                       collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
-                                                                               :initial-element ,(column-zero type))))
-                                  (replace kept (,acc buffer))
-                                  (setf (,acc buffer) kept)))
-               (setf (,cap buffer) new))))
-         buffer)
-       (declaim (inline ,append))
-       (defun ,append (buffer)
-         ,(format nil "Add a row to BUFFER, a ~A, and return its index; the row reads as zeros. #L4Y0UT" name)
-         (declare (type ,name buffer))
-         (let ((row (,len buffer)))
-           (when (>= row (,cap buffer)) (,ensure buffer (1+ row)))
-           (setf (,len buffer) (1+ row))
-           row))
-       (defun ,zero (buffer row)
-         ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index row) #.+kernel-policy+)
-         ,@(loop for (nil type width) in columns for acc in accessors
-                 collect (if width
-                             `(fill (,acc buffer) ,(column-zero type)
-                                    :start (* row ,width) :end (* (1+ row) ,width))
-                             `(setf (aref (,acc buffer) row) ,(column-zero type))))
-         buffer)
-       (defun ,copy (from from-row to to-row)
-         ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
-         (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
-         ,@(loop for (nil nil width) in columns for acc in accessors
-                 collect (if width
-                             `(replace (,acc to) (,acc from) :start1 (* to-row ,width)
-                                                              :start2 (* from-row ,width)
-                                                              :end2 (* (1+ from-row) ,width))
-                             `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
-         to)
-       (defun ,permute (buffer scratch destinations count)
+            (declare (type ,name buffer) (type index rows))
+            (let ((new (max rows (,len buffer) 16)))
+              (when (< new (,cap buffer))
+                (let ((size (+ new (,spare buffer))))
+                  ,@(loop for (c type width) in columns for acc in accessors
+                          collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
+                                                                                  :initial-element ,(column-zero type))))
+                                     (replace kept (,acc buffer))
+                                     (setf (,acc buffer) kept)))
+                  (setf (,cap buffer) new))))
+            buffer))))))
+;; One macro generates every columnar layout:2 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:3]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-row-forms (name columns)
+    "The layout NAME's operations on one row: append one that reads as zeros, zero one, copy one
+between buffers. #L4Y0UT"
+    (destructuring-bind (&key len cap ensure append zero copy &allow-other-keys) (layout-names name)
+      (let ((accessors (layout-accessors name columns)))
+        `((declaim (inline ,append))
+          (defun ,append (buffer)
+            ,(format nil "Add a row to BUFFER, a ~A, and return its index; the row reads as zeros. #L4Y0UT" name)
+            (declare (type ,name buffer))
+            (let ((row (,len buffer)))
+              (when (>= row (,cap buffer)) (,ensure buffer (1+ row)))
+              (setf (,len buffer) (1+ row))
+              row))
+          (defun ,zero (buffer row)
+            ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
+            (declare (type ,name buffer) (type index row) #.+kernel-policy+)
+            ,@(loop for (nil type width) in columns for acc in accessors
+                    collect (if width
+                                `(fill (,acc buffer) ,(column-zero type)
+                                       :start (* row ,width) :end (* (1+ row) ,width))
+                                `(setf (aref (,acc buffer) row) ,(column-zero type))))
+            buffer)
+          (defun ,copy (from from-row to to-row)
+            ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
+            (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
+            ,@(loop for (nil nil width) in columns for acc in accessors
+                    collect (if width
+                                `(replace (,acc to) (,acc from) :start1 (* to-row ,width)
+                                                                 :start2 (* from-row ,width)
+                                                                 :end2 (* (1+ from-row) ,width))
+                                `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
+            to)))))
+
+  (defun layout-permute-form (name columns)
+    "The layout NAME's permute: every row to its new place, column by column through a scratch
+buffer whose arrays it then takes. #L4Y0UT"
+    (destructuring-bind (&key len cap ensure permute &allow-other-keys) (layout-names name)
+      `(defun ,permute (buffer scratch destinations count)
          ,(format nil "Move each row R of BUFFER, a ~A, to row (aref DESTINATIONS R), or drop it where
 that is negative; the places taken must be exactly 0 .. COUNT-1. The rows are written into
 SCRATCH, a buffer of the same layout and spare, whose arrays BUFFER then takes in exchange
@@ -552,53 +579,81 @@ for its own; rows past COUNT read as zeros. Return BUFFER. #L4Y0UT" name)
          (,ensure scratch (max count (,cap buffer)))
          (let ((n (,len buffer)) (stale (,len scratch)))
            (declare (type index n stale))
-           ,@(loop for (nil type width) in columns for acc in accessors
-                   collect `(let ((from (,acc buffer)) (to (,acc scratch)))
-                              (declare (type ,(column-array-type type) from to))
-                              ;; rows the scratch held from its last use, past COUNT, become zeros
-                              (when (> stale count)
-                                (fill to ,(column-zero type) :start (* count ,(or width 1))
-                                                             :end (* stale ,(or width 1))))
-                              (dotimes (r n)
-                                (let ((d (aref destinations r)))
-                                  (declare (type fixnum d))
-                                  (when (>= d 0)
-                                    ,(if width
-                                         `(loop for k of-type fixnum from 0 below ,width
-                                                do (setf (aref to (+ (* d ,width) k))
-                                                         (aref from (+ (* r ,width) k))))
-                                         `(setf (aref to d) (aref from r))))))
-                              (setf (,acc scratch) from (,acc buffer) to)))
+           ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
+                   collect (layout-permute-column type width acc))
            (rotatef (,cap buffer) (,cap scratch))
            (setf (,len buffer) count (,len scratch) n))
-         buffer)
-       (defun ,remove (buffer row)
-         ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
+         buffer)))
+
+  (defun layout-permute-column (type width acc)
+    "Permute's pass over one column, read by ACC, of TYPE and WIDTH values a row. #L4Y0UT"
+    `(let ((from (,acc buffer)) (to (,acc scratch)))
+       (declare (type ,(column-array-type type) from to))
+       ;; rows the scratch held from its last use, past COUNT, become zeros
+       (when (> stale count)
+         (fill to ,(column-zero type) :start (* count ,(or width 1))
+                                      :end (* stale ,(or width 1))))
+       (dotimes (r n)
+         (let ((d (aref destinations r)))
+           (declare (type fixnum d))
+           (when (>= d 0)
+             ,(if width
+                  `(loop for k of-type fixnum from 0 below ,width
+                         do (setf (aref to (+ (* d ,width) k))
+                                  (aref from (+ (* r ,width) k))))
+                  `(setf (aref to d) (aref from r))))))
+       (setf (,acc scratch) from (,acc buffer) to))))
+;; One macro generates every columnar layout:3 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:4]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-removal-forms (name columns)
+    "The layout NAME's swap-remove, which fills a hole with the last row, and clear. #L4Y0UT"
+    (destructuring-bind (&key len spare remove copy zero clear &allow-other-keys) (layout-names name)
+      `((defun ,remove (buffer row)
+          ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
 row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index row))
-         (let ((last (1- (,len buffer))))
-           (declare (type fixnum last))
-           (assert (<= 0 row last) () "row ~D is outside ~A of length ~D" row ',name (1+ last))
-           (unless (= row last) (,copy buffer last buffer row))
-           (,zero buffer last)
-           (setf (,len buffer) last)
-           (if (= row last) -1 last)))
-       (defun ,clear (buffer)
-         ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
-         (declare (type ,name buffer))
-         (let ((n (+ (,len buffer) (,spare buffer))))
-           ,@(loop for (nil type width) in columns for acc in accessors
-                   collect `(fill (,acc buffer) ,(column-zero type)
-                                  :end (min (* n ,(or width 1)) (length (,acc buffer))))))
-         (setf (,len buffer) 0)
-         buffer)
-       (defmacro ,with ((&rest cols) buffer &body body)
+          (declare (type ,name buffer) (type index row))
+          (let ((last (1- (,len buffer))))
+            (declare (type fixnum last))
+            (assert (<= 0 row last) () "row ~D is outside ~A of length ~D" row ',name (1+ last))
+            (unless (= row last) (,copy buffer last buffer row))
+            (,zero buffer last)
+            (setf (,len buffer) last)
+            (if (= row last) -1 last)))
+        (defun ,clear (buffer)
+          ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
+          (declare (type ,name buffer))
+          (let ((n (+ (,len buffer) (,spare buffer))))
+            ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
+                    collect `(fill (,acc buffer) ,(column-zero type)
+                                   :end (min (* n ,(or width 1)) (length (,acc buffer))))))
+          (setf (,len buffer) 0)
+          buffer))))
+
+  (defun layout-with-form (name columns)
+    "The layout NAME's WITH- macro, binding columns by name as declared arrays. #L4Y0UT"
+    (destructuring-bind (&key with &allow-other-keys) (layout-names name)
+      `(defmacro ,with ((&rest cols) buffer &body body)
          ,(format nil "Run BODY with each of COLS bound to that column of the ~A BUFFER. #L4Y0UT" name)
-         (expand-layout-bindings ',name ',(loop for (c type) in columns for acc in accessors
+         (expand-layout-bindings ',name ',(loop for (c type) in columns for acc in (layout-accessors name columns)
                                                 collect (list c type acc))
-                                 cols buffer body))
-       ',name)))
-;; One macro generates every columnar layout:1 ends here
+                                 cols buffer body)))))
+
+(defmacro define-physics-layout (name docstring &rest columns)
+  "Define the columnar layout NAME: a buffer struct of one specialised array per column of
+COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
+NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
+or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
+  `(progn
+     ,@(layout-struct-forms name docstring columns)
+     ,@(layout-sizing-forms name columns)
+     ,@(layout-row-forms name columns)
+     ,(layout-permute-form name columns)
+     ,@(layout-removal-forms name columns)
+     ,(layout-with-form name columns)
+     ',name))
+;; One macro generates every columnar layout:4 ends here
 
 ;; [[file:../physics.org::#B5N8JT][Bodies are rows; a handle is a forwarding address:1]]
 (define-physics-layout body-columns
@@ -1504,23 +1559,37 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
         (step-statistics-max-penetration to) (step-statistics-max-penetration from)
         (step-statistics-max-approach to) (step-statistics-max-approach from))
   to)
+;; The world holds every buffer and its own parameters:1 ends here
 
-(defclass physics-world ()
+;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:2]]
+(defclass world-stores ()
   ((terrain :initarg :terrain :initform nil :accessor physics-world-terrain)
    (probe :initform (make-terrain-probe) :reader physics-world-probe)
-   (kernels :initarg :kernels :accessor physics-world-kernels)
-   (awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
+   (kernels :initarg :kernels :accessor physics-world-kernels))
+  (:documentation "What the world is made of: the terrain its bodies meet, the probe that reads
+its cells, and the kernel family that runs its solver phases. #W0RLD7"))
+
+(defclass world-bodies ()
+  ((awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
    (awake-scratch :initform (make-body-columns :spare 1) :reader physics-world-awake-scratch)
    (row-places :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-row-places)
    (sleeping :initform (make-body-columns) :reader physics-world-sleeping)
-   (ids :initform (make-handle-table) :reader physics-world-ids)
-   (contacts :initform (make-contact-columns) :reader physics-world-contacts)
+   (ids :initform (make-handle-table) :reader physics-world-ids))
+  (:documentation "The bodies: the awake and the sleeping buffers, the awake buffer's scratch
+twin and the table from handles to rows. #W0RLD7"))
+
+(defclass world-contacts ()
+  ((contacts :initform (make-contact-columns) :reader physics-world-contacts)
    (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
    (contact-scratch :initform (make-contact-columns) :reader physics-world-contact-scratch)
    ;; what its snapshots and restores reuse, made at the first ([[#SN4P0T]])
    (snapshot-scratch :initform nil :accessor physics-world-snapshot-scratch)
-   (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints)
-   (events :initform (make-event-columns) :reader physics-world-events)
+   (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints))
+  (:documentation "The persistent contacts, their table by pair and their scratch twin, the
+snapshots' scratch, and the constraints a step builds from them. #W0RLD7"))
+
+(defclass world-events-and-boxes ()
+  ((events :initform (make-event-columns) :reader physics-world-events)
    (event-data :initform (make-array 16 :initial-element nil) :accessor physics-world-event-data)
    (boxes :initform (make-box-columns) :reader physics-world-boxes)
    (box-owners :initform (make-array 16 :initial-element nil) :accessor physics-world-box-owners)
@@ -1529,8 +1598,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    ;; sensor boxes ([[#S3NS0R]])
    (filtering :initform nil :accessor physics-world-filtering)
    (sensors :initform nil :accessor physics-world-sensors)
-   (sensor-counter :initform 0 :type fixnum :accessor physics-world-sensor-counter)
-   (velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
+   (sensor-counter :initform 0 :type fixnum :accessor physics-world-sensor-counter))
+  (:documentation "The step's events and the boxes posted into it, with their owners and
+handles, and the filters and lasting sensors. #W0RLD7"))
+
+(defclass world-solver-scratch ()
+  ((velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
    (deltas :initform (make-array 0 :element-type 'single-float) :accessor physics-world-deltas)
    (color-starts :initform (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
                  :reader physics-world-color-starts)
@@ -1547,11 +1620,17 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (buried-count :initform 0 :type fixnum :accessor physics-world-buried-count)
    (box-touch-step :initform -1 :type fixnum :accessor physics-world-box-touch-step)
    (held-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-held-rows)
+   ;; the finalize phase's list of the rows that leave the awake set, each row and its fate
+   (departures :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-departures)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
-   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows)
-   (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
+   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows))
+  (:documentation "The arrays each step reuses to solve: the solver's rows of motion, the
+colours, and what the boxes and the cells brace, hold and squeeze. #W0RLD7"))
+
+(defclass world-grids ()
+  ((awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
@@ -1574,8 +1653,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (grid-of :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-grid-of)
    (mortal-sleepers :initform 0 :type fixnum :accessor physics-world-mortal-sleepers)
    (added :initform (make-array 16 :element-type 'fixnum :initial-element 0) :accessor physics-world-added)
-   (added-count :initform 0 :type fixnum :accessor physics-world-added-count)
-   ;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
+   (added-count :initform 0 :type fixnum :accessor physics-world-added-count))
+  (:documentation "The hash grids of the awake, the sleeping, the freshly added and the newest
+bodies, and the counts that decide when each is rebuilt. #W0RLD7"))
+
+(defclass world-forces-and-joints ()
+  (;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
    (pushes :initform nil :type (or null f32-column) :accessor physics-world-pushes)
    (pushed :initform nil :accessor physics-world-pushed)
    ;; the joints, made with the first ([[#J0STOR]])
@@ -1583,8 +1666,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    ;; the box bodies' extents and points ([[#BXR0WS]]), or NIL until the first box
    (box-bodies :initform nil :accessor physics-world-box-bodies)
    (scaled-count :initform 0 :type fixnum :accessor physics-world-scaled-count)
-   (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
-   (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
+   (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius))
+  (:documentation "The forces and gravity scales by handle slot, the joints, the box bodies'
+extents and points, and the largest radius. #W0RLD7"))
+
+(defclass world-parameters ()
+  ((step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
    (substeps :initarg :substeps :type fixnum :accessor physics-world-substeps)
    (gravity-x :initarg :gravity-x :type single-float :accessor physics-world-gravity-x)
    (gravity-y :initarg :gravity-y :type single-float :accessor physics-world-gravity-y)
@@ -1608,16 +1695,23 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (brace-mass-ratio :initarg :brace-mass-ratio :accessor physics-world-brace-mass-ratio)
    (reach-limit :initarg :reach-limit :accessor physics-world-reach-limit)
    (max-speed :initarg :max-speed :accessor physics-world-max-speed)
-   (body-budget :initarg :body-budget :accessor physics-world-body-budget)
-   ;; what a step that fails before storing its impulses undoes (roll-back-step)
-   (undo-open :initform nil :accessor physics-world-undo-open)
+   (body-budget :initarg :body-budget :accessor physics-world-body-budget))
+  (:documentation "The step's time, its gravity and the parameters of contacts, sleep and
+limits, copied and checked when the world is made (checked-physics-parameters). #W0RLD7"))
+
+(defclass world-undo ()
+  ((undo-open :initform nil :accessor physics-world-undo-open)
    (undo-step-count :initform 0 :type fixnum :accessor physics-world-undo-step-count)
    (undo-woken :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-woken)
    (undo-woken-count :initform 0 :type fixnum :accessor physics-world-undo-woken-count)
    (undo-sorted :initform nil :accessor physics-world-undo-sorted)
    (undo-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-rows)
-   (undo-statistics :initform (make-step-statistics) :reader physics-world-undo-statistics)
-   (sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
+   (undo-statistics :initform (make-step-statistics) :reader physics-world-undo-statistics))
+  (:documentation "What a step that fails before storing its impulses undoes (roll-back-step).
+#W0RLD7"))
+
+(defclass world-step-state ()
+  ((sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
    ;; what the world may use ([[#FEAT5X][features]]), and the step built for it
    (features :initarg :features :initform +physics-features+ :reader world-features)
    (event-mask :initarg :event-mask :initform -1 :type fixnum :reader world-event-mask)
@@ -1636,6 +1730,15 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    ;; the world's workers ([[#W0RKP1]]), or NIL for one
    (pool :initform nil :accessor physics-world-pool)
    (statistics :initform (make-step-statistics) :reader physics-world-statistics))
+  (:documentation "What the world may use and the step built for it, the step's clock and count,
+the callbacks and what the last step measured. #W0RLD7"))
+
+ ;; CLOS lays out the slots of the last superclass first: the groups are named last to first, so a
+ ;; world keeps its slots in the order they are written above.
+(defclass physics-world (world-step-state world-undo world-parameters world-forces-and-joints world-grids
+                         world-solver-scratch world-events-and-boxes world-contacts world-bodies
+                         world-stores)
+  ()
   (:documentation "A simulated world of spheres over a voxel terrain: the CLOS side of the seam,
 holding the columnar buffers, the parameters, the events and the kernel family. #W0RLD7"))
 
@@ -1667,7 +1770,7 @@ each is ignorable. #W0RLD7"
                     collect `(,variable (f32 (,(intern (format nil "PHYSICS-WORLD-~A" name)) ,w)))))
        (declare (type single-float ,@(mapcar #'first pairs)) (ignorable ,w ,@(mapcar #'first pairs)))
        ,@body)))
-;; The world holds every buffer and its own parameters:1 ends here
+;; The world holds every buffer and its own parameters:2 ends here
 
 ;; [[file:../physics.org::#R9M4PV][Choose the phase once: kernel families:1]]
 (defvar *kernel-families* '((:scalar scalar-kernels))
@@ -2153,7 +2256,8 @@ fallen asleep or been removed. Return WORLD. #QKS4GZ"
           (physics-world-deltas world) (make-array 0 :element-type 'single-float)
           (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
           (physics-world-braced world) (make-array 0 :element-type 'fixnum)
-          (physics-world-held world) (make-array 0 :element-type 'fixnum))
+          (physics-world-held world) (make-array 0 :element-type 'fixnum)
+          (physics-world-departures world) (make-array 0 :element-type 'fixnum))
     (flet ((list-room (handles count) (fixnum-column-copy handles (max 64 count) count)))
       (setf (physics-world-fresh-handles world)
             (list-room (physics-world-fresh-handles world) (physics-world-fresh-count world))
@@ -3112,93 +3216,131 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
 ;; The grids of the awake and of the sleeping:1 ends here
 
 ;; [[file:../physics.org::#W4K3PH][Fast bodies and moving boxes wake what they reach:1]]
+(declaim (inline sleeper-in-reach-p))
+(defun sleeper-in-reach-p (world h x y z reach-extra box-p min-x min-y min-z max-x max-y max-z)
+  "True when H still names a sleeper of WORLD whose surface lies within REACH-EXTRA of the point X
+Y Z, or with BOX-P of the box MIN-X .. MAX-Z. #W4K3PH"
+  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
+  (let ((ids (physics-world-ids world))
+        (sleeping (physics-world-sleeping world))
+        (slot (handle-index h)))
+    (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+         (= (aref (handle-table-generation ids) slot) (handle-generation h))
+         (let* ((row (aref (handle-table-local ids) slot))
+                (sx (aref (body-columns-x sleeping) row))
+                (sy (aref (body-columns-y sleeping) row))
+                (sz (aref (body-columns-z sleeping) row))
+                (sr (aref (body-columns-radius sleeping) row)))
+           (if box-p
+               (let ((dx (- sx (max min-x (min max-x sx))))
+                     (dy (- sy (max min-y (min max-y sy))))
+                     (dz (- sz (max min-z (min max-z sz)))))
+                 (<= (+ (* dx dx) (* dy dy) (* dz dz))
+                     (* (+ sr reach-extra) (+ sr reach-extra))))
+               (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
+                     (reach (+ sr reach-extra)))
+                 (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))))))))
+
+(defun wake-within-reach (world x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
+  "Wake every sleeper of WORLD in reach of the point X Y Z or, with BOX-P, of the box MIN-X ..
+MAX-Z (sleeper-in-reach-p), looking SPAN cells of the sleeping grid around the point; return how
+many woke. #W4K3PH"
+  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
+  (let ((ids (physics-world-ids world))
+        (woken 0))
+    (declare (type fixnum woken))
+    ;; the sleepers within reach are woken in the order of their sleeping rows,
+    ;; which is the order they join the awake rows in: it does not hang on the grids
+    (do-sleepers-in-row-order
+        (h world x y z :span span)
+        (sleeper-in-reach-p world h x y z reach-extra box-p min-x min-y min-z max-x max-y max-z)
+      ;; each still sleeps: waking one moves no other out of the sleeping set
+      (wake-physics-body world (aref (handle-table-local ids) (handle-index h)))
+      (incf woken))
+    woken))
+
+(defun wake-near-added (world)
+  "Wake the sleepers each body added to WORLD since the last step overlaps deeper than the slop,
+so that it meets them as awake bodies from its first substep; return how many woke. #W4K3PH"
+  (let ((ids (physics-world-ids world))
+        (added (physics-world-added world))
+        (slop (f32 (physics-world-slop world)))
+        (woken 0))
+    (declare (type fixnum-column added) (type single-float slop) (type fixnum woken))
+    (dotimes (k (physics-world-added-count world) woken)
+      (let* ((h (aref added k)) (slot (handle-index h)))
+        (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
+                   (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+          (let ((row (aref (handle-table-local ids) slot)))
+            (with-body-columns (x y z radius flags) (physics-world-awake world)
+              (when (zerop (logand (aref flags row) +flag-terrain-only+))
+                (incf woken (wake-within-reach world (aref x row) (aref y row) (aref z row)
+                                               (- (aref radius row) slop)
+                                               1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))))
+
+(defun wake-near-fast-bodies (world n)
+  "Wake the sleepers within the margin plus one step's travel of each of the first N awake bodies
+of WORLD faster than the wake speed; return how many woke. #W4K3PH"
+  (let ((margin (f32 (physics-world-margin world)))
+        (dt (physics-world-current-dt world))
+        (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
+        (rmax (f32 (physics-world-max-radius world)))
+        (inv (hash-grid-inv-cell (physics-world-sleeping-grid world)))
+        (woken 0))
+    (declare (type single-float margin wake2 dt rmax) (type fixnum woken))
+    ;; a body woken is appended to the awake buffer, which grows then: its columns are
+    ;; read again for each row
+    (dotimes (i n woken)
+      (with-body-columns (x y z vx vy vz radius flags) (physics-world-awake world)
+        (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                         (* (aref vz i) (aref vz i)))
+                      wake2)
+                   (zerop (logand (aref flags i) +flag-terrain-only+)))
+          (let ((extra (+ (aref radius i) margin
+                          (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                          (* (aref vz i) (aref vz i))))))))
+            ;; a sleeper within reach is at most EXTRA plus the largest radius away, so
+            ;; its cell is at most that many cell edges from the body's, rounded up: one
+            ;; cell unless the body travels more than the skin in a step
+            (incf woken (wake-within-reach world (aref x i) (aref y i) (aref z i) extra
+                                           (ceiling (* (+ extra rmax) inv))
+                                           nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
+
+(defun wake-near-moving-boxes (world)
+  "Wake the sleepers within the margin plus one step's travel of each moving box of WORLD; return
+how many woke. #W4K3PH"
+  (let ((margin (f32 (physics-world-margin world)))
+        (dt (physics-world-current-dt world))
+        (boxes (physics-world-boxes world))
+        (inv (hash-grid-inv-cell (physics-world-sleeping-grid world)))
+        (woken 0))
+    (declare (type single-float margin dt) (type fixnum woken))
+    (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
+      (dotimes (b (box-columns-length boxes) woken)
+        (when (or (/= 0 (aref vx b)) (/= 0 (aref vy b)) (/= 0 (aref vz b)))
+          (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
+                 (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
+                 (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
+                 (travel (+ margin (* dt (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
+                                                   (* (aref vz b) (aref vz b)))))))
+                 (half (+ travel (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz))))
+                 (span (1+ (ceiling (* half inv)))))
+            (incf woken (wake-within-reach world cx cy cz travel span t (aref min-x b) (aref min-y b)
+                                           (aref min-z b) (aref max-x b) (aref max-y b) (aref max-z b)))))))))
+
 (defun wake-phase (world)
   "The wake phase: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
 sleepers they can reach this step: within the margin plus one step's travel; bodies added since
 the last step wake the sleepers they overlap deeper than the slop. Return how many woke. #W4K3PH"
-  (let ((sleeping (physics-world-sleeping world))
-        (woken 0))
+  (let ((woken 0))
     (declare (type fixnum woken))
-    (when (plusp (body-columns-length sleeping))
-      (let* ((grid (ensure-sleeping-grid world))
-             (ids (physics-world-ids world))
-             (n (body-columns-length (physics-world-awake world)))
-             (margin (f32 (physics-world-margin world)))
-             (dt (physics-world-current-dt world))
-             (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
-             (rmax (f32 (physics-world-max-radius world))))
-        (declare (type single-float margin wake2 dt rmax))
-        (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
-                 (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
-                 ;; the sleepers within reach are woken in the order of their sleeping rows,
-                 ;; which is the order they join the awake rows in: it does not hang on the grids
-                 (do-sleepers-in-row-order
-                     (h world x y z :span span)
-                     (let ((slot (handle-index h)))
-                       (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                            (= (aref (handle-table-generation ids) slot) (handle-generation h))
-                            (let* ((row (aref (handle-table-local ids) slot))
-                                   (sx (aref (body-columns-x sleeping) row))
-                                   (sy (aref (body-columns-y sleeping) row))
-                                   (sz (aref (body-columns-z sleeping) row))
-                                   (sr (aref (body-columns-radius sleeping) row)))
-                              (if box-p
-                                  (let ((dx (- sx (max min-x (min max-x sx))))
-                                        (dy (- sy (max min-y (min max-y sy))))
-                                        (dz (- sz (max min-z (min max-z sz)))))
-                                    (<= (+ (* dx dx) (* dy dy) (* dz dz))
-                                        (* (+ sr reach-extra) (+ sr reach-extra))))
-                                  (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
-                                        (reach (+ sr reach-extra)))
-                                    (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
-                   ;; each still sleeps: waking one moves no other out of the sleeping set
-                   (wake-physics-body world (aref (handle-table-local ids) (handle-index h)))
-                   (incf woken))))
-          ;; a body added since the last step wakes the sleepers it overlaps deeper than the
-          ;; slop, so that it meets them as awake bodies from its first substep
-          (let ((added (physics-world-added world))
-                (slop (f32 (physics-world-slop world))))
-            (declare (type fixnum-column added) (type single-float slop))
-            (dotimes (k (physics-world-added-count world))
-              (let* ((h (aref added k)) (slot (handle-index h)))
-                (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
-                           (= (aref (handle-table-generation ids) slot) (handle-generation h)))
-                  (let ((row (aref (handle-table-local ids) slot)))
-                    (with-body-columns (x y z radius flags) (physics-world-awake world)
-                      (when (zerop (logand (aref flags row) +flag-terrain-only+))
-                        (wake-near (aref x row) (aref y row) (aref z row) (- (aref radius row) slop)
-                                   1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
-          ;; a body woken is appended to the awake buffer, which grows then: its columns are
-          ;; read again for each row
-          (dotimes (i n)
-            (with-body-columns (x y z vx vy vz radius flags) (physics-world-awake world)
-              (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                               (* (aref vz i) (aref vz i)))
-                            wake2)
-                         (zerop (logand (aref flags i) +flag-terrain-only+)))
-                (let ((extra (+ (aref radius i) margin
-                                (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                                (* (aref vz i) (aref vz i))))))))
-                  ;; a sleeper within reach is at most EXTRA plus the largest radius away, so
-                  ;; its cell is at most that many cell edges from the body's, rounded up: one
-                  ;; cell unless the body travels more than the skin in a step
-                  (wake-near (aref x i) (aref y i) (aref z i) extra
-                             (ceiling (* (+ extra rmax) (hash-grid-inv-cell grid)))
-                             nil 0.0 0.0 0.0 0.0 0.0 0.0)))))
-          (let ((boxes (physics-world-boxes world))
-                (inv (hash-grid-inv-cell grid)))
-            (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
-              (dotimes (b (box-columns-length boxes))
-                (when (or (/= 0 (aref vx b)) (/= 0 (aref vy b)) (/= 0 (aref vz b)))
-                  (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
-                         (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
-                         (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
-                         (travel (+ margin (* dt (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
-                                                           (* (aref vz b) (aref vz b)))))))
-                         (half (+ travel (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz))))
-                         (span (1+ (ceiling (* half inv)))))
-                    (wake-near cx cy cz travel span t (aref min-x b) (aref min-y b) (aref min-z b)
-                               (aref max-x b) (aref max-y b) (aref max-z b))))))))))
+    (when (plusp (body-columns-length (physics-world-sleeping world)))
+      (ensure-sleeping-grid world)
+      ;; the awake bodies before any wakes: a body woken here is not asked to wake others
+      (let ((n (body-columns-length (physics-world-awake world))))
+        (incf woken (wake-near-added world))
+        (incf woken (wake-near-fast-bodies world n))
+        (incf woken (wake-near-moving-boxes world))))
     ;; a joint group wakes with any of its bodies ([[#J0SL3P]])
     (when (physics-world-joints world) (incf woken (wake-joint-groups world)))
     (setf (physics-world-added-count world) 0)
@@ -4226,8 +4368,9 @@ the hole. #PRUN3D"
       normal-mass tangent-mass rolling-mass friction bias-rate mass-scale
       impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2 gap
       ;; the columns only some worlds have ([[#FEAT5X]]): the box's velocity along the normal
-      ;; and the frame, the largest push the events and restitution read, the approach speed
-      ;; the events report, rolling resistance's, and restitution's
+      ;; and the frame (written as its x, y, z until the frame pass: +constraint-column-aliases+),
+      ;; the largest push the events and restitution read, the approach speed the events
+      ;; report, rolling resistance's, and restitution's
       kvn kvt1 kvt2 max-normal-impulse
       relative-velocity rolling-limit rolling-impulse-x rolling-impulse-y rolling-impulse-z
       restitution)
@@ -4237,12 +4380,21 @@ world needs, then those a world's features may leave out, last. #SSMPYW")
     '(spin-limit spin-impulse armed-speed)
     "The float columns of a constraint's side block, read only by the rows that need them:
 friction's two, then restitution's. #SSMPYW")
+  (defparameter +constraint-column-aliases+
+    '((kvx . kvn) (kvy . kvt1) (kvz . kvt2))
+    "Each name of a column that holds one thing before the frame pass and another after it, with
+the column's own name: the fill writes the box's velocity along the world's axes as kvx, kvy and
+kvz, and the frame pass turns it, in the same three columns, into its parts along the normal and
+the two tangents, kvn, kvt1 and kvt2. #SSMPYW")
   (defun constraint-side-column-p (column)
     "True when COLUMN sits in the side block. #SSMPYW"
     (member column +constraint-side-columns+ :test #'string= :key #'symbol-name))
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints, the main block's or, for a
-column of +constraint-side-columns+, the side block's. #SSMPYW"
+column of +constraint-side-columns+, the side block's; a name of +constraint-column-aliases+ is
+its column's. #SSMPYW"
+    (setf column (or (cdr (assoc column +constraint-column-aliases+ :test #'string= :key #'symbol-name))
+                     column))
     (* 8 (or (position column +constraint-columns+ :test #'string= :key #'symbol-name)
              (position column +constraint-side-columns+ :test #'string= :key #'symbol-name)
              (error "no constraint column ~A" column)))))
@@ -4842,7 +4994,7 @@ to the other: expanded in the prepare phase's fill. #PRF1LL"
            (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
      ;; the columns of boxes, restitution, rolling resistance and the events, when the world
      ;; has them (spin friction's and the armed speed are zeros here, as the side block starts)
-     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (if-feature :boxes (setf (@ kvx) kx (@ kvy) ky (@ kvz) kz))
      (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
      (if-feature :restitution
        (setf (@ restitution) (max (aref re-c la) (aref re-c lb))))
@@ -4916,7 +5068,7 @@ spin impulse, approach speed and soft coefficients: expanded in fill-general-row
            (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
            (@ separation) (+ (contact-at geometry g separation) slop))
      ;; the box's velocity, until the frame pass resolves it
-     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (if-feature :boxes (setf (@ kvx) kx (@ kvy) ky (@ kvz) kz))
      (fill-row-material)
      ;; the spin impulse the contact carried out of the last step: zero on every row with a
      ;; radius on side b, whose spin is never solved
@@ -5092,7 +5244,7 @@ the one formula the relax pass ([[#S0LV3R]]) and the frame pass compute it by. #
 
 (define-featured-kernel (prepare-frames-range :features (:boxes)) (cbuf start end)
   "Complete constraints START..END of CBUF from their normal, radii, inverse masses and inertias,
-and the box velocity held in the KVN, KVT1 and KVT2 columns: the tangent frame t1, t2 (t1 from
+and the box velocity held in the KVX, KVY and KVZ columns: the tangent frame t1, t2 (t1 from
 the axis least aligned with the normal), the box velocity resolved onto n, t1 and t2, the
 normal, tangent and rolling masses (zero where nothing can move), and the gap the first
 substep's solve reads. Compiled without boxes, it has no box velocity to resolve. #PRFRM2"
@@ -5121,7 +5273,7 @@ substep's solve reads. Compiled without boxes, it has no box velocity to resolve
         (declare (type index base))
         (setf (@ t1x) ux (@ t1y) uy (@ t1z) uz (@ t2x) qx (@ t2y) qy (@ t2z) qz)
         (if-feature :boxes
-          (let ((kx (@ kvn)) (ky (@ kvt1)) (kz (@ kvt2)))
+          (let ((kx (@ kvx)) (ky (@ kvy)) (kz (@ kvz)))
             (setf (@ kvn) (+ (* kx x) (* ky y) (* kz z))
                   (@ kvt1) (+ (* kx ux) (* ky uy) (* kz uz))
                   (@ kvt2) (+ (* kx qx) (* ky qy) (* kz qz)))))
@@ -5627,16 +5779,21 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 
 (defmethod physics-warm-start ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
-    (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
-             cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf))))
+    (if (solving-joints world)
+        ;; joints are solved colour by colour with the contacts ([[#J0S0LV]])
+        (warm-start-with-joints kernels world)
+        (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
+                 cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf)))))
 
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
-    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-      (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
-                     cbuf (physics-world-velocities world) (physics-world-deltas world)
-                     0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-                     (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
+    (if (solving-joints world)
+        (solve-with-joints kernels world inv-h use-bias elapsed)
+        (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+          (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
+                         cbuf (physics-world-velocities world) (physics-world-deltas world)
+                         0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+                         (f32 (physics-world-push-max world)) threshold hgx hgy hgz)))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
@@ -5697,7 +5854,7 @@ and steps, and what the step's prepare writes for the substeps. #J0STOR"
 (defstruct (joint-set (:constructor %make-joint-set (ids)) (:copier nil))
   "Everything a world keeps for its joints: the rows, their handle table, and by body slot the
 joint groups' parents, each body's count of joints and the passes' marks; the stiff softness
-of this step's limits. #J0STOR"
+of this step's limits, and the step's colouring of its joints. #J0STOR"
   (rows (make-joint-columns) :type joint-columns)
   (ids nil :type handle-table)
   (parent (make-array 0 :element-type 'fixnum) :type fixnum-column)
@@ -5705,7 +5862,16 @@ of this step's limits. #J0STOR"
   (marks (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (groups-stale nil)
   (limit-bias 0.0 :type single-float)
-  (limit-mass 1.0 :type single-float))
+  (limit-mass 1.0 :type single-float)
+  ;; the step's colouring of the joints to solve ([[#J0S0LV]]): each joint's colour by row, the
+  ;; rows in colour order, each colour's run of them, the rows the sort into that order writes,
+  ;; and whether the substeps are solving them
+  (colors (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (order (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (scratch nil)
+  (color-starts (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
+   :type fixnum-column)
+  (solving nil))
 
 (declaim (inline group-root))
 (defun group-root (parent slot)
@@ -6044,100 +6210,277 @@ adds, and no less than zero. #J0S0LV"
   (declare (type single-float hertz zeta h))
   (physics-softness hertz (max 0.0 (- zeta (* 0.5 h 2.0 (f32 pi) hertz))) h))
 
+(defun place-joint (rows j dummy sets locals awake sleeping)
+  "Note, for joint J of ROWS, the two solver rows (DUMMY for a fixed point or a sleeping second
+body), the levers, its anchors turned by its bodies' orientations, the bodies' masses and the
+anchors' separation at the step's start; or -1 as its first row when its first body is not
+awake. SETS and LOCALS are the body handle table's, AWAKE and SLEEPING the body buffers. Return
+true when the joint is to be solved. #J0S0LV"
+  (declare (type joint-columns rows) (type index j dummy) (type fixnum-column sets locals)
+           (type body-columns awake sleeping) #.+kernel-policy+)
+  (progn
+    (with-joint-columns (body-a body-b ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz sx sy sz
+                         ima imb iia iib)
+        rows
+      (flet ((place (h)
+               ;; the set and row of a live body, or 0 and -1 for none
+               (declare (type fixnum h))
+               (if (= h +no-body+) (values 0 -1) (values (aref sets (handle-index h)) (aref locals (handle-index h))))))
+        (multiple-value-bind (set-a la) (place (aref body-a j))
+          (when (/= set-a +set-awake+)
+            (setf (aref row-a j) -1)
+            (return-from place-joint nil))
+          (multiple-value-bind (set-b lb) (place (aref body-b j))
+            (let ((b-moves (= set-b +set-awake+)))
+              (setf (aref row-a j) la (aref row-b j) (if b-moves lb dummy))
+              (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) awake
+                (multiple-value-bind (rx ry rz)
+                    (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
+                  (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz
+                        (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la)
+                        (aref sx j) (- (+ (aref x la) rx)) (aref sy j) (- (+ (aref y la) ry))
+                        (aref sz j) (- (+ (aref z la) rz)))))
+              (if (< lb 0)
+                  ;; a fixed point: no lever, no mass, the point itself
+                  (setf (aref rbx j) 0.0 (aref rby j) 0.0 (aref rbz j) 0.0 (aref imb j) 0.0 (aref iib j) 0.0
+                        (aref sx j) (+ (aref sx j) (aref bx j)) (aref sy j) (+ (aref sy j) (aref by j))
+                        (aref sz j) (+ (aref sz j) (aref bz j)))
+                  (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) (if b-moves awake sleeping)
+                    (multiple-value-bind (rx ry rz)
+                        (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
+                      (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz
+                            (aref imb j) (if b-moves (aref inverse-mass lb) 0.0)
+                            (aref iib j) (if b-moves (aref inverse-inertia lb) 0.0)
+                            (aref sx j) (+ (aref sx j) (aref x lb) rx) (aref sy j) (+ (aref sy j) (aref y lb) ry)
+                            (aref sz j) (+ (aref sz j) (aref z lb) rz)))))
+              t)))))))
+
+(defun joint-effective-mass (rows j)
+  "Write the effective mass of the placed joint J of ROWS: a point joint's matrix K of the
+anchors, inverted (its six entries), or a distance joint's axial mass along its separation. #J0S0LV"
+  (declare (type joint-columns rows) (type index j) #.+kernel-policy+)
+  (with-joint-columns (kind rax ray raz rbx rby rbz sx sy sz ima imb iia iib k11 k12 k13 k22 k23 k33) rows
+    (let* ((m (+ (aref ima j) (aref imb j))) (ia (aref iia j)) (ib (aref iib j))
+           (ax (aref rax j)) (ay (aref ray j)) (az (aref raz j))
+           (bx (aref rbx j)) (by (aref rby j)) (bz (aref rbz j)))
+      (declare (type single-float m ia ib ax ay az bx by bz))
+      (if (= (aref kind j) +joint-point+)
+          (let* ((a11 (+ m (* ia (+ (* ay ay) (* az az))) (* ib (+ (* by by) (* bz bz)))))
+                 (a22 (+ m (* ia (+ (* ax ax) (* az az))) (* ib (+ (* bx bx) (* bz bz)))))
+                 (a33 (+ m (* ia (+ (* ax ax) (* ay ay))) (* ib (+ (* bx bx) (* by by)))))
+                 (a12 (- (+ (* ia ax ay) (* ib bx by))))
+                 (a13 (- (+ (* ia ax az) (* ib bx bz))))
+                 (a23 (- (+ (* ia ay az) (* ib by bz))))
+                 (c11 (- (* a22 a33) (* a23 a23))) (c12 (- (* a13 a23) (* a12 a33)))
+                 (c13 (- (* a12 a23) (* a13 a22))) (c22 (- (* a11 a33) (* a13 a13)))
+                 (c23 (- (* a12 a13) (* a11 a23))) (c33 (- (* a11 a22) (* a12 a12)))
+                 (det (+ (* a11 c11) (* a12 c12) (* a13 c13)))
+                 (inv (if (> det 0.0) (/ 1.0 det) 0.0)))
+            (setf (aref k11 j) (* c11 inv) (aref k12 j) (* c12 inv) (aref k13 j) (* c13 inv)
+                  (aref k22 j) (* c22 inv) (aref k23 j) (* c23 inv) (aref k33 j) (* c33 inv)))
+          (let* ((cx (aref sx j)) (cy (aref sy j)) (cz (aref sz j))
+                 (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+                 (s (if (> len 1e-9) (/ 1.0 len) 0.0))
+                 (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
+                 (ax1 (- (* ay nz) (* az ny))) (ay1 (- (* az nx) (* ax nz))) (az1 (- (* ax ny) (* ay nx)))
+                 (bx1 (- (* by nz) (* bz ny))) (by1 (- (* bz nx) (* bx nz))) (bz1 (- (* bx ny) (* by nx)))
+                 (k (+ m (* ia (+ (* ax1 ax1) (* ay1 ay1) (* az1 az1)))
+                       (* ib (+ (* bx1 bx1) (* by1 by1) (* bz1 bz1))))))
+            (setf (aref k11 j) (if (> k 0.0) (/ 1.0 k) 0.0)))))))
+
+(defun joint-soft-coefficients (rows j h stiff-bias stiff-mass stiff-impulse)
+  "Write the soft coefficients of the placed joint J of ROWS over substep H: its own hertz's (a
+spring's by spring-softness), or the stiff ones, STIFF-BIAS STIFF-MASS STIFF-IMPULSE; and the
+stiff impulse scale of its limits. #J0S0LV"
+  (declare (type joint-columns rows) (type index j) (type single-float h stiff-bias stiff-mass stiff-impulse)
+           #.+kernel-policy+)
+  (with-joint-columns (flags hertz damping-ratio bias-rate mass-scale impulse-scale limit-scale) rows
+    (setf (aref limit-scale j) stiff-impulse)
+    (if (> (aref hertz j) 0.0)
+        (multiple-value-bind (br ms is)
+            (if (logtest (aref flags j) +joint-spring+)
+                (spring-softness (aref hertz j) (aref damping-ratio j) h)
+                (physics-softness (aref hertz j) (aref damping-ratio j) h))
+          (setf (aref bias-rate j) br (aref mass-scale j) ms (aref impulse-scale j) is))
+        (setf (aref bias-rate j) stiff-bias (aref mass-scale j) stiff-mass (aref impulse-scale j) stiff-impulse))))
+
 (defun prepare-joints (world h)
-  "Write, for every joint of WORLD whose first body is awake, what the substeps of H read: the
-solver rows, the turned levers, the separation, the masses, the effective mass (a point joint's
-inverted matrix, a distance joint's axial mass) and the soft coefficients. Return the joint set
-when some joint is to be solved, else NIL. #J0S0LV"
+  "Write, for every joint of WORLD whose first body is awake, what the substeps of H read, stage
+by stage: the solver rows, the turned levers, the masses and the separation (place-joint), the
+effective mass (joint-effective-mass), the soft coefficients (joint-soft-coefficients); then
+colour the joints (color-joints). Return the joint set when some joint is to be solved, else
+NIL. #J0S0LV"
+  (let* ((set (physics-world-joints world))
+         (rows (and set (joint-set-rows set)))
+         (ids (physics-world-ids world))
+         (awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (dummy (body-columns-length awake))
+         (active 0))
+    (declare (type fixnum active))
+    (when set (setf (joint-set-solving set) nil))
+    (when (and set (plusp (joint-columns-length rows)))
+      (multiple-value-bind (stiff-hertz stiff-zeta) (joint-stiffness world h)
+        (multiple-value-bind (stiff-bias stiff-mass stiff-impulse) (physics-softness stiff-hertz stiff-zeta h)
+          (setf (joint-set-limit-bias set) stiff-bias (joint-set-limit-mass set) stiff-mass)
+          (dotimes (j (joint-columns-length rows))
+            (when (place-joint rows j dummy (handle-table-set ids) (handle-table-local ids) awake sleeping)
+              (incf active)
+              (joint-effective-mass rows j)
+              (joint-soft-coefficients rows j h stiff-bias stiff-mass stiff-impulse)))))
+      (when (plusp active) (color-joints world set))
+      (setf (joint-set-solving set) (plusp active)))
+    (and (plusp active) set)))
+
+(defun color-joints (world set)
+  "Colour the joints of SET prepared for this step on the colour masks the contacts' colouring
+left ([[#SSMPYW]]): first each joint of two awake bodies takes the lowest of colours 0-19 free at
+both, then each joint of one awake body takes, at it, the highest free colour among those in use,
+or failing that the lowest free colour; a joint that fits nowhere goes to the overflow colour 24.
+Then write SET's order, its prepared rows colour by colour and in row order within a colour,
+the others after them, and its colour starts, and sort its rows into that order. #J0S0LV"
+  (declare #.+kernel-policy+)
+  (let* ((rows (joint-set-rows set)) (n (joint-columns-length rows))
+         (masks (physics-world-color-masks world))
+         (contact-starts (physics-world-color-starts world))
+         (dummy (body-columns-length (physics-world-awake world)))
+         (used 0))
+    (declare (type fixnum-column masks contact-starts) (type index n dummy) (type (unsigned-byte 32) used))
+    (when (< (length (joint-set-colors set)) n)
+      (setf (joint-set-colors set) (make-array (max 16 (* 2 n)) :element-type 'fixnum :initial-element 0)
+            (joint-set-order set) (make-array (max 16 (* 2 n)) :element-type 'fixnum :initial-element 0)))
+    (let ((colors (joint-set-colors set)) (order (joint-set-order set)) (starts (joint-set-color-starts set))
+          (row-a (joint-columns-row-a rows)) (row-b (joint-columns-row-b rows)))
+      (declare (type fixnum-column colors order starts row-a row-b))
+      ;; the colours the contacts use
+      (dotimes (c +physics-max-colors+)
+        (when (< (aref contact-starts c) (aref contact-starts (1+ c)))
+          (setf used (logior used (ash 1 c)))))
+      (flet ((take (j color la lb)
+               ;; joint J takes COLOR, marked at the rows LA and LB (-1 for none)
+               (declare (type index j) (type fixnum color la lb))
+               (setf (aref colors j) color)
+               (when (< color +physics-max-colors+)
+                 (setf used (logior used (ash 1 color))
+                       (aref masks la) (logior (aref masks la) (ash 1 color)))
+                 (when (>= lb 0) (setf (aref masks lb) (logior (aref masks lb) (ash 1 color)))))))
+        (declare (inline take))
+        ;; pass one: joints of two awake bodies, the lowest colour free at both
+        (dotimes (j n)
+          (let ((la (aref row-a j)) (lb (aref row-b j)))
+            (declare (type fixnum la lb))
+            (cond ((< la 0) (setf (aref colors j) -2))
+                  ((= lb dummy) (setf (aref colors j) -1))
+                  (t (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
+                                         (1- (ash 1 +physics-dynamic-colors+)))))
+                       (take j (if (zerop free) +physics-max-colors+ (lowest-bit free)) la lb))))))
+        ;; pass two: joints of one awake body, as late among the used colours as it allows
+        (dotimes (j n)
+          (when (= (aref colors j) -1)
+            (let* ((la (aref row-a j))
+                   (free (logand (lognot (aref masks la)) (1- (ash 1 +physics-max-colors+)))))
+              (declare (type index la) (type (unsigned-byte 32) free))
+              (take j (cond ((plusp (logand free used)) (highest-bit (logand free used)))
+                            ((plusp free) (lowest-bit free))
+                            (t +physics-max-colors+))
+                    la -1)))))
+      ;; each colour's count, its end by the running sum, and its rows placed from the end back
+      (fill starts 0)
+      (dotimes (j n) (when (>= (aref colors j) 0) (incf (aref starts (aref colors j)))))
+      (loop with at of-type index = 0
+            for c from 0 to +physics-max-colors+
+            do (incf at (aref starts c)) (setf (aref starts c) at)
+            finally (setf (aref starts (1+ +physics-max-colors+)) at))
+      (loop for j of-type fixnum from (1- n) downto 0
+            for c of-type fixnum = (aref colors j)
+            when (>= c 0)
+              do (setf (aref order (decf (aref starts c))) j))
+      ;; the joints not solved this step after them, in row order
+      (loop with at of-type index = (aref starts (1+ +physics-max-colors+))
+            for j of-type index below n
+            when (< (aref colors j) 0)
+              do (setf (aref order at) j) (incf at))
+      (sort-joint-rows set))))
+
+(defun sort-joint-rows (set)
+  "Put the rows of SET in its colour order, when they are not yet, so that each colour's joints
+are consecutive rows: each joint's handle forwarded to its new row, its colour noted by row, and
+the order the rows' own again. #J0S0LV"
+  (declare #.+kernel-policy+)
+  (let* ((rows (joint-set-rows set)) (n (joint-columns-length rows))
+         (order (joint-set-order set)) (colors (joint-set-colors set)) (starts (joint-set-color-starts set)))
+    (declare (type fixnum-column order colors starts) (type index n))
+    (unless (loop for i of-type index below n always (= (aref order i) i))
+      ;; the colours by row are the places' scratch: each row's place in the order
+      (dotimes (i n) (setf (aref colors (aref order i)) i))
+      (joint-columns-permute rows (or (joint-set-scratch set) (setf (joint-set-scratch set) (make-joint-columns)))
+                             colors n)
+      (let ((local (handle-table-local (joint-set-ids set))) (handle (joint-columns-handle rows)))
+        (declare (type fixnum-column local handle))
+        (dotimes (r n)
+          (setf (aref local (handle-index (ldb (byte +handle-joint-bit+ 0) (aref handle r)))) r
+                (aref order r) r)))
+      (fill colors -2 :end n)
+      (dotimes (c (1+ +physics-max-colors+))
+        (loop for r of-type index from (aref starts c) below (aref starts (1+ c))
+              do (setf (aref colors r) c))))
+    set))
+
+(defun solving-joints (world)
+  "The joint set whose joints WORLD's substeps are solving, or NIL: what the kernel families'
+constraint passes test once a call. #J0S0LV"
   (let ((set (physics-world-joints world)))
-    (when (and set (plusp (joint-columns-length (joint-set-rows set))))
-      (let* ((rows (joint-set-rows set))
-             (ids (physics-world-ids world)) (sets (handle-table-set ids)) (locals (handle-table-local ids))
-             (awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-             (dummy (body-columns-length awake))
-             (active 0))
-        (declare (type fixnum-column sets locals) (type fixnum dummy active))
-        (multiple-value-bind (stiff-hertz stiff-zeta) (joint-stiffness world h)
-          (multiple-value-bind (stiff-bias stiff-mass stiff-impulse) (physics-softness stiff-hertz stiff-zeta h)
-            (declare (type single-float stiff-bias stiff-mass stiff-impulse))
-            (setf (joint-set-limit-bias set) stiff-bias (joint-set-limit-mass set) stiff-mass)
-            (with-joint-columns (kind flags body-a body-b ax ay az bx by bz hertz damping-ratio
-                                 row-a row-b rax ray raz rbx rby rbz sx sy sz
-                                 ima imb iia iib k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale
-                                 limit-scale)
-                rows
-              (flet ((place (h)
-                       ;; the set and row of a live body, or 0 and -1 for none
-                       (declare (type fixnum h))
-                       (if (= h +no-body+) (values 0 -1)
-                           (values (aref sets (handle-index h)) (aref locals (handle-index h))))))
-                (dotimes (j (joint-columns-length rows))
-                  (multiple-value-bind (set-a la) (place (aref body-a j))
-                    (if (/= set-a +set-awake+)
-                        (setf (aref row-a j) -1)
-                        (multiple-value-bind (set-b lb) (place (aref body-b j))
-                          (incf active)
-                          (let* ((b-buffer (if (= set-b +set-awake+) awake sleeping))
-                                 (b-moves (= set-b +set-awake+)))
-                            (setf (aref row-a j) la (aref row-b j) (if b-moves lb dummy))
-                            (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) awake
-                              (multiple-value-bind (rx ry rz)
-                                  (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
-                                (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz
-                                      (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la)
-                                      (aref sx j) (- (+ (aref x la) rx)) (aref sy j) (- (+ (aref y la) ry))
-                                      (aref sz j) (- (+ (aref z la) rz)))))
-                            (if (< lb 0)
-                                (setf (aref rbx j) 0.0 (aref rby j) 0.0 (aref rbz j) 0.0 (aref imb j) 0.0 (aref iib j) 0.0
-                                      (aref sx j) (+ (aref sx j) (aref bx j)) (aref sy j) (+ (aref sy j) (aref by j))
-                                      (aref sz j) (+ (aref sz j) (aref bz j)))
-                                (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) b-buffer
-                                  (multiple-value-bind (rx ry rz)
-                                      (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
-                                    (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz
-                                          (aref imb j) (if b-moves (aref inverse-mass lb) 0.0)
-                                          (aref iib j) (if b-moves (aref inverse-inertia lb) 0.0)
-                                          (aref sx j) (+ (aref sx j) (aref x lb) rx) (aref sy j) (+ (aref sy j) (aref y lb) ry)
-                                          (aref sz j) (+ (aref sz j) (aref z lb) rz))))))
-                          ;; the effective mass: a point joint's matrix inverted, a distance joint's axial mass
-                          (let* ((m (+ (aref ima j) (aref imb j))) (ia (aref iia j)) (ib (aref iib j))
-                                 (ax (aref rax j)) (ay (aref ray j)) (az (aref raz j))
-                                 (bx (aref rbx j)) (by (aref rby j)) (bz (aref rbz j)))
-                            (declare (type single-float m ia ib ax ay az bx by bz))
-                            (if (= (aref kind j) +joint-point+)
-                                (let* ((a11 (+ m (* ia (+ (* ay ay) (* az az))) (* ib (+ (* by by) (* bz bz)))))
-                                       (a22 (+ m (* ia (+ (* ax ax) (* az az))) (* ib (+ (* bx bx) (* bz bz)))))
-                                       (a33 (+ m (* ia (+ (* ax ax) (* ay ay))) (* ib (+ (* bx bx) (* by by)))))
-                                       (a12 (- (+ (* ia ax ay) (* ib bx by))))
-                                       (a13 (- (+ (* ia ax az) (* ib bx bz))))
-                                       (a23 (- (+ (* ia ay az) (* ib by bz))))
-                                       (c11 (- (* a22 a33) (* a23 a23))) (c12 (- (* a13 a23) (* a12 a33)))
-                                       (c13 (- (* a12 a23) (* a13 a22))) (c22 (- (* a11 a33) (* a13 a13)))
-                                       (c23 (- (* a12 a13) (* a11 a23))) (c33 (- (* a11 a22) (* a12 a12)))
-                                       (det (+ (* a11 c11) (* a12 c12) (* a13 c13)))
-                                       (inv (if (> det 0.0) (/ 1.0 det) 0.0)))
-                                  (setf (aref k11 j) (* c11 inv) (aref k12 j) (* c12 inv) (aref k13 j) (* c13 inv)
-                                        (aref k22 j) (* c22 inv) (aref k23 j) (* c23 inv) (aref k33 j) (* c33 inv)))
-                                (let* ((cx (aref sx j)) (cy (aref sy j)) (cz (aref sz j))
-                                       (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
-                                       (s (if (> len 1e-9) (/ 1.0 len) 0.0))
-                                       (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
-                                       (ax1 (- (* ay nz) (* az ny))) (ay1 (- (* az nx) (* ax nz))) (az1 (- (* ax ny) (* ay nx)))
-                                       (bx1 (- (* by nz) (* bz ny))) (by1 (- (* bz nx) (* bx nz))) (bz1 (- (* bx ny) (* by nx)))
-                                       (k (+ m (* ia (+ (* ax1 ax1) (* ay1 ay1) (* az1 az1)))
-                                             (* ib (+ (* bx1 bx1) (* by1 by1) (* bz1 bz1))))))
-                                  (setf (aref k11 j) (if (> k 0.0) (/ 1.0 k) 0.0))))
-                            ;; the soft coefficients: the joint's own hertz, or stiff
-                            (setf (aref limit-scale j) stiff-impulse)
-                            (if (> (aref hertz j) 0.0)
-                                (multiple-value-bind (br ms is)
-                                    (if (logtest (aref flags j) +joint-spring+)
-                                        (spring-softness (aref hertz j) (aref damping-ratio j) h)
-                                        (physics-softness (aref hertz j) (aref damping-ratio j) h))
-                                  (setf (aref bias-rate j) br (aref mass-scale j) ms (aref impulse-scale j) is))
-                                (setf (aref bias-rate j) stiff-bias (aref mass-scale j) stiff-mass
-                                      (aref impulse-scale j) stiff-impulse)))))))))))
-        (and (plusp active) set)))))
+    (and set (joint-set-solving set) set)))
+
+(defmacro do-constraint-colours ((start end world &key settle joints) colour-form overflow-form)
+  "Run, for each colour of WORLD's constraints in turn, the form of JOINTS, (SET FORM), with SET
+bound to the joint set and START END to the colour's run of its rows, when the substeps solve
+joints and the colour has some (SETTLE first), then COLOUR-FORM with START END bound to the
+colour's run of the constraint buffer, when it has one; then SETTLE, then the overflow colour's
+joints and OVERFLOW-FORM. #J0S0LV"
+  (let ((starts (gensym "STARTS")) (c (gensym "C")) (set (or (first joints) (gensym "SET"))))
+    `(let ((,starts (physics-world-color-starts ,world))
+           (,set (solving-joints ,world)))
+       (declare (type fixnum-column ,starts))
+       (flet ((joint-run (,c)
+                (declare (type fixnum ,c))
+                (let* ((js (joint-set-color-starts ,set))
+                       (,start (aref js ,c)) (,end (aref js (1+ ,c))))
+                  (declare (type fixnum-column js) (type index ,start ,end))
+                  (when (< ,start ,end) ,@(when settle (list settle)) ,(second joints)))))
+         (declare (inline joint-run))
+         (dotimes (,c +physics-max-colors+)
+           (when ,set (joint-run ,c))
+           (let ((,start (aref ,starts ,c)) (,end (aref ,starts (1+ ,c))))
+             (when (< ,start ,end) ,colour-form)))
+         ,@(when settle (list settle))
+         (when ,set (joint-run +physics-max-colors+))
+         (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
+           (when (< ,start ,end) ,overflow-form))))))
+
+(defun warm-start-with-joints (kernels world)
+  "The scalar family's warm start in a step that solves joints: colour by colour, the colour's
+joints, then its contacts, as the wide families run them. #J0S0LV"
+  (let ((cbuf (physics-world-constraints world))
+        (v (physics-world-velocities world)) (d (physics-world-deltas world))
+        (warm (kernel-variant-warm-start (world-kernel-variant world kernels))))
+    (do-constraint-colours (s e world :joints (set (warm-start-joints set v d s e)))
+      (funcall warm cbuf v s e)
+      (funcall warm cbuf v s e))))
+
+(defun solve-with-joints (kernels world inv-h use-bias elapsed)
+  "The scalar family's solve or relax pass in a step that solves joints: colour by colour, the
+colour's joints, then its contacts, as the wide families run them. #J0S0LV"
+  (let ((cbuf (physics-world-constraints world))
+        (v (physics-world-velocities world)) (d (physics-world-deltas world))
+        (push-max (f32 (physics-world-push-max world)))
+        (solve (kernel-variant-solve (world-kernel-variant world kernels))))
+    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+      (flet ((contacts (s e)
+               (solve-handing solve 'solve-impact-range 1 cbuf v d s e inv-h use-bias elapsed push-max
+                              threshold hgx hgy hgz)))
+        (do-constraint-colours (s e world :joints (set (solve-joints set v d inv-h use-bias s e)))
+          (contacts s e)
+          (contacts s e))))))
 
 (defmacro with-joint-row ((v d j) &body body)
   "Run BODY for the prepared joint J, its columns bound by with-joint-columns, over the solver's velocities V and deltas D, with:
@@ -6179,15 +6522,16 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
        (declare (inline relative-velocity push!) (ignorable #'relative-velocity))
        ,@body)))
 
-(defun warm-start-joints (set v d)
-  "Apply every prepared joint's carried impulse again, at the start of a substep. #J0S0LV"
-  (declare (type joint-set set) (type f32-column v d) #.+kernel-policy+)
+(defun warm-start-joints (set v d start end)
+  "Apply again the carried impulse of each prepared joint of SET at rows START..END, at the start
+of a substep. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type index start end) #.+kernel-policy+)
   (let ((rows (joint-set-rows set)))
     (with-joint-columns (kind row-a row-b rax ray raz rbx rby rbz sx sy sz ima imb iia iib
                          impulse-x impulse-y impulse-z)
         rows
-      (dotimes (j (joint-columns-length rows))
-        (when (>= (aref row-a j) 0)
+      (loop for j of-type index from start below end do
+        (progn
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
                 (push! (aref impulse-x j) (aref impulse-y j) (aref impulse-z j))
@@ -6196,10 +6540,12 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
                   (push! (* s cx) (* s cy) (* s cz)))))))))
   nil)
 
-(defun solve-joints (set v d inv-h use-bias)
-  "One pass over the prepared joints in row order: with the soft bias when USE-BIAS (the solve),
-without it (the relax), but for a spring's length, which keeps its own coefficients. #J0S0LV"
-  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
+(defun solve-joints (set v d inv-h use-bias start end)
+  "One pass over the prepared joints of SET at rows START..END: with the soft bias when USE-BIAS
+(the solve), without it (the relax), but for a spring's length, which keeps its own
+coefficients. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) (type index start end)
+           #.+kernel-policy+)
   (let ((rows (joint-set-rows set))
         (limit-bias (joint-set-limit-bias set)) (limit-mass (joint-set-limit-mass set)))
     (declare (type single-float limit-bias limit-mass))
@@ -6207,8 +6553,8 @@ without it (the relax), but for a spring's length, which keeps its own coefficie
                          k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale limit-scale
                          rest-length min-length max-length impulse-x impulse-y impulse-z)
         rows
-      (dotimes (j (joint-columns-length rows))
-        (when (>= (aref row-a j) 0)
+      (loop for j of-type index from start below end do
+        (progn
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
                 (multiple-value-bind (vx vy vz) (relative-velocity)
@@ -7081,10 +7427,47 @@ with fold-positions, three. #F1NAL5"
                (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
           (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
 
+(defconstant +departure-none+ 0
+  "A row's fate in the finalize phase's first pass: it stays awake. #F1NAL5")
+
+(defconstant +departure-escaped+ 1
+  "A row's fate in the finalize phase's first pass: its centre crossed the coordinate limit, and
+it is removed with an :escaped event. #F1NAL5")
+
+(defconstant +departure-expired+ 2
+  "A row's fate in the finalize phase's first pass: a mortal body reached its life, and it is
+removed with an :expired event. #F1NAL5")
+
+(defconstant +departure-asleep+ 3
+  "A row's fate in the finalize phase's first pass: still for long enough, it goes to sleep. #F1NAL5")
+
+(defmacro stillness-fate ()
+  "The fate of awake row I, neither escaped nor expired, in a world that sleeps: +departure-asleep+
+once it has been still for the time to sleep, else +departure-none+, counting its still time or
+setting it back to zero. Expanded in finalize-phase's first pass, whose names it reads. #F1NAL5"
+  `(let* ((p (delta-row i))
+          (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
+          (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
+          (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                             (* (aref vz i) (aref vz i))))
+                    (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
+          (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
+     ;; a body only sleepers and terrain touch is judged by its displacement alone
+     (cond ((not (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
+                      (not (and settle-p (logtest (aref settling i) +brace-unsettled+)))))
+            (setf (aref sleep-time i) 0.0)
+            +departure-none+)
+           ;; a jointed body sleeps with its group ([[#J0SL3P]])
+           ((and (>= (incf (aref sleep-time i) dt) time-to-sleep)
+                 (not (logtest (aref flags i) +flag-jointed+)))
+            +departure-asleep+)
+           (t +departure-none+))))
+
 (define-featured-kernel (finalize-phase :features (:body-contacts :boxes :sleep :mortal)) (world)
   "The finalize phase, last of the step: fold deltas into positions and solver velocities into the rows, turn orientations,
 age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
-sleep. Rows are visited from the last down, so relocation never skips one. Compiled for fewer
+sleep: one pass decides which rows leave the awake set, the next moves them, both from the last
+row down, so relocation never skips one. Compiled for fewer
 features it holds no ageing without :mortal, no sleep without :sleep, and no reading of the
 store phase's marks without body contacts and boxes, which alone make them. #F1NAL5"
   (let* ((awake (physics-world-awake world))
@@ -7114,33 +7497,39 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
     (multiple-value-bind (check near held) (path-check-notes world)
       (hold-out-of-cells world held (fold-positions awake d check near held)))
     (fold-solver-state awake v dt)
-    ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
-    ;; moved, so the solver's rows still match it
-    (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle flags) awake
-      (declare (ignorable vx vy vz wx wy wz radius sleep-time age life flags))
-      (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
-        (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
-               (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-               (%remove-body world +set-awake+ i))
-              ((if-feature :mortal (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i))) nil)
-               (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-               (%remove-body world +set-awake+ i))
-              (sleep-p
-               (let* ((p (delta-row i))
-                      (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
-                      (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
-                      (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                         (* (aref vz i) (aref vz i))))
-                                (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
-                      (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
-                 ;; a body only sleepers and terrain touch is judged by its displacement alone
-                 (if (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
-                          (not (and settle-p (logtest (aref settling i) 4))))
-                     ;; a jointed body sleeps with its group ([[#J0SL3P]])
-                     (when (and (>= (incf (aref sleep-time i) dt) time-to-sleep)
-                                (not (logtest (aref flags i) +flag-jointed+)))
-                       (sleep-physics-body world i))
-                     (setf (aref sleep-time i) 0.0)))))))
+    ;; then ageing and sleep, in two passes: the first decides, in a loop that calls nothing,
+    ;; which rows leave the awake set and why, and lists them from the last down; the second
+    ;; moves them in that order, so a relocation only ever moves a row already dealt with
+    (let ((leaving (fixnum-room (physics-world-departures world) (* 2 (body-columns-length awake))))
+          (departures 0))
+      (declare (type fixnum-column leaving) (type index departures))
+      (setf (physics-world-departures world) leaving)
+      (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life flags) awake
+        (declare (ignorable vx vy vz wx wy wz radius sleep-time age life flags))
+        (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
+          (let ((fate
+                  (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
+                         +departure-escaped+)
+                        ((if-feature :mortal (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i))) nil)
+                         +departure-expired+)
+                        (sleep-p (stillness-fate))
+                        (t +departure-none+))))
+            (declare (type fixnum fate))
+            (unless (= fate +departure-none+)
+              (setf (aref leaving departures) i (aref leaving (1+ departures)) fate)
+              (incf departures 2)))))
+      (with-body-columns (x y z handle) awake
+        (loop for j of-type index from 0 below departures by 2 do
+          (let ((i (aref leaving j)))
+            (declare (type index i))
+            (let ((fate (aref leaving (1+ j))))
+              (cond ((= fate +departure-escaped+)
+                     (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+                     (%remove-body world +set-awake+ i))
+                    ((= fate +departure-expired+)
+                     (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+                     (%remove-body world +set-awake+ i))
+                    (t (sleep-physics-body world i))))))))
     ;; only a world with a mortal sleeper walks the sleeping buffer, and only its rows that
     ;; slept before this step: a removal below moves the last row, one of them or one just
     ;; asleep, into a place already walked
@@ -7504,10 +7893,10 @@ bodies to half the push-out speed. #IDVK7G"
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
-        (when joints (warm-start-joints joints v d))
+        ;; the joints, when some are prepared, are solved inside these passes, colour by
+        ;; colour with the contacts ([[#J0S0LV]])
         (when boxes (warm-start-box-points boxes v))
         (physics-warm-start kernels world)
-        (when joints (solve-joints joints v d inv-h t))
         (when boxes (solve-box-points boxes v d inv-h t))
         (physics-solve-contacts kernels world inv-h t elapsed)
         (flet ((yield-boxes ()
@@ -7519,12 +7908,13 @@ bodies to half the push-out speed. #IDVK7G"
           (physics-integrate-positions kernels world h)
           (when boxes (turn-box-rows boxes v h))
           (dotimes (k relaxes)
-            (when joints (solve-joints joints v d inv-h nil))
             (when boxes (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
         (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed)))))
+    ;; the joints' colouring serves these substeps only: a pass run by hand solves contacts alone
+    (when joints (setf (joint-set-solving joints) nil))
     world))
 
 (defparameter *physics-phases*
@@ -8494,9 +8884,9 @@ timing each call for note-split-time. #SPL1T5"
                (when ,tuning (note-split-time ,pool ,job ,split (- (clock-ns) ,start) ,n))))))))
 
 (defun splitting-pool (world rows)
-  "WORLD's pool when it has one and ROWS reach its split-rows, else NIL. #SPL1T5"
+  "WORLD's pool when it has one and ROWS, more than none, reach its split-rows, else NIL. #SPL1T5"
   (let ((pool (and (typep world 'physics-world) (physics-world-pool world))))
-    (and pool (>= rows (worker-pool-split-rows pool)) pool)))
+    (and pool (plusp rows) (>= rows (worker-pool-split-rows pool)) pool)))
 
 (defun awake-rows (world)
   "The awake rows of WORLD, or 0 for something else. #SPL1T5"
@@ -8505,6 +8895,11 @@ timing each call for note-split-time. #SPL1T5"
 (defun constraint-rows (world)
   "The constraint rows of WORLD, or 0 for something else. #SPL1T5"
   (if (typep world 'physics-world) (constraint-columns-length (physics-world-constraints world)) 0))
+
+(defun colour-pass-rows (world)
+  "The constraint rows of WORLD a warm start or solve pass would split, or 0 when its substeps
+solve joints, whose passes run whole. #SPL1T5"
+  (if (and (typep world 'physics-world) (solving-joints world)) 0 (constraint-rows world)))
 
 (defun run-colour-pass (pool kernels world job)
   "Write into POOL the kernels of JOB in the family KERNELS for WORLD's features, its buffers and
@@ -8566,13 +8961,13 @@ the integration JOB on the workers. #SPL1T5"
     (call-next-method)))
 
 (defmethod physics-warm-start :around ((kernels scalar-kernels) world)
-  (tuned-split (pool world (constraint-rows world) +job-warm-start+)
+  (tuned-split (pool world (colour-pass-rows world) +job-warm-start+)
     (progn (check-solver-world 'physics-warm-start world)
            (run-colour-pass pool kernels world +job-warm-start+))
     (call-next-method)))
 
 (defmethod physics-solve-contacts :around ((kernels scalar-kernels) world inv-h use-bias elapsed)
-  (tuned-split (pool world (constraint-rows world) +job-solve+)
+  (tuned-split (pool world (colour-pass-rows world) +job-solve+)
     (progn (check-solver-world 'physics-solve-contacts world)
            (check-solver-number 'physics-solve-contacts :inv-h inv-h 1.0)
            (check-solver-number 'physics-solve-contacts :elapsed elapsed 0.0)
@@ -8866,6 +9261,21 @@ and its pairs written out whole. #SN4P0T"
                                 -1)))
     (loop for (id) in +snapshot-parts+ unless (minusp (aref sizes id)) sum (+ 8 (aref sizes id)))))
 
+(declaim (inline same-material-p))
+(defun same-material-p (bodies row other)
+  "True when rows ROW and OTHER of BODIES have the same material, bit for bit: the nine words
+material-words writes. #SN4P0T"
+  (declare (type body-columns bodies) (type index row other) #.+kernel-policy+)
+  (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind flags)
+      bodies
+    (macrolet ((same (&rest columns)
+                 `(and ,@(loop for c in columns
+                               collect `(= (sb-kernel:single-float-bits (aref ,c row))
+                                           (sb-kernel:single-float-bits (aref ,c other)))))))
+      (and (same radius inverse-mass inverse-inertia restitution friction rolling-resistance life)
+           (= (aref kind row) (aref kind other))
+           (= (ldb (byte 32 16) (aref flags row)) (ldb (byte 32 16) (aref flags other)))))))
+
 (defun snapshot-materials (world scratch)
   "Fill SCRATCH's palette with the materials of WORLD's bodies, awake rows then sleeping, and
 its materials column with each body's entry; return the palette's size. #SN4P0T"
@@ -8881,27 +9291,15 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
       (declare (type fixnum-column materials) (type index k))
       (flet ((walk (bodies)
                (declare (type body-columns bodies))
-               (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance
-                                   life kind flags)
-                   bodies
-                 (let ((last -1))
-                   (declare (type fixnum last))
-                   (dotimes (row (body-columns-length bodies))
-                     ;; most bodies share the material of the row before them: compared, not hashed
-                     (setf last
-                           (if (and (> row 0)
-                                    (macrolet ((same (&rest columns)
-                                                 `(and ,@(loop for c in columns
-                                                               collect `(= (sb-kernel:single-float-bits (aref ,c row))
-                                                                           (sb-kernel:single-float-bits (aref ,c (1- row))))))))
-                                      (same radius inverse-mass inverse-inertia restitution friction
-                                            rolling-resistance life))
-                                    (= (aref kind row) (aref kind (1- row)))
-                                    (= (ldb (byte 32 16) (aref flags row)) (ldb (byte 32 16) (aref flags (1- row)))))
-                               last
-                               (palette-index scratch bodies row)))
-                     (setf (aref materials k) last)
-                     (incf k))))))
+               (let ((last -1))
+                 (declare (type fixnum last))
+                 (dotimes (row (body-columns-length bodies))
+                   ;; most bodies share the material of the row before them: compared, not hashed
+                   (setf last (if (and (> row 0) (same-material-p bodies row (1- row)))
+                                  last
+                                  (palette-index scratch bodies row))
+                         (aref materials k) last)
+                   (incf k)))))
         (walk awake)
         (walk sleeping)))
     (snapshot-scratch-count scratch)))
