@@ -8884,9 +8884,9 @@ timing each call for note-split-time. #SPL1T5"
                (when ,tuning (note-split-time ,pool ,job ,split (- (clock-ns) ,start) ,n))))))))
 
 (defun splitting-pool (world rows)
-  "WORLD's pool when it has one and ROWS reach its split-rows, else NIL. #SPL1T5"
+  "WORLD's pool when it has one and ROWS, more than none, reach its split-rows, else NIL. #SPL1T5"
   (let ((pool (and (typep world 'physics-world) (physics-world-pool world))))
-    (and pool (>= rows (worker-pool-split-rows pool)) pool)))
+    (and pool (plusp rows) (>= rows (worker-pool-split-rows pool)) pool)))
 
 (defun awake-rows (world)
   "The awake rows of WORLD, or 0 for something else. #SPL1T5"
@@ -8897,10 +8897,9 @@ timing each call for note-split-time. #SPL1T5"
   (if (typep world 'physics-world) (constraint-columns-length (physics-world-constraints world)) 0))
 
 (defun colour-pass-rows (world)
-  "The rows a colour pass of WORLD splits by: its constraint rows, or -1, which no pool splits,
-when its substeps solve joints: the pieces of a split pass hold contacts only, so such a pass
-runs whole, on the calling thread. #SPL1T5"
-  (if (and (typep world 'physics-world) (solving-joints world)) -1 (constraint-rows world)))
+  "The constraint rows of WORLD a warm start or solve pass would split, or 0 when its substeps
+solve joints, whose passes run whole. #SPL1T5"
+  (if (and (typep world 'physics-world) (solving-joints world)) 0 (constraint-rows world)))
 
 (defun run-colour-pass (pool kernels world job)
   "Write into POOL the kernels of JOB in the family KERNELS for WORLD's features, its buffers and
