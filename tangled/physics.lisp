@@ -6727,9 +6727,10 @@ against its faces. #BXCELL"
   "Append to SET, as points found by the box OWNER, the points between box A (centre ACX ACY ACZ,
 orientation AQW .. AQZ, half-extents AHX AHY AHZ, solver row ROW-A) and box B (the same, B...),
 when they are nearer than REACH along every face axis: the face axis of either box along which
-they overlap least (or are farthest apart) gives the normal and the reference face; the corners of
-the other box over that face and the corners of that face over the other box's facing face are
-the points. KEY-BASE with the family, the axis and the corner is a point's key. #BXCELL"
+they overlap least (or lie farthest apart) gives the normal and the reference face; the other
+box's face most against it, clipped to the reference face's sides, gives the points, each with
+its height over the reference face as its gap. KEY-BASE with the reference axis and the clipped
+vertex's feature is a point's key. #BXCELL"
   (declare (type box-set set) (type fixnum owner key-base) (type index row-a row-b)
            (type single-float reach acx acy acz aqw aqx aqy aqz ahx ahy ahz
                  bcx bcy bcz bqw bqx bqy bqz bhx bhy bhz)
@@ -6758,7 +6759,12 @@ the points. KEY-BASE with the family, the axis and the corner is a point's key. 
             (try 3 b11 b21 b31) (try 4 b12 b22 b32) (try 5 b13 b23 b33)))
         (when (< best-sep reach)
           ;; the reference box R owns the face; the incident box I is pushed off it along N
-          (let ((on-b (>= best 3)))
+          (let ((on-b (>= best 3))
+                (poly (make-array 24 :element-type 'single-float))
+                (next (make-array 24 :element-type 'single-float))
+                (ids (make-array 8 :element-type 'fixnum))
+                (next-ids (make-array 8 :element-type 'fixnum)))
+            (declare (dynamic-extent poly next ids next-ids))
             (macrolet ((with-roles (&body body)
                          ;; bind the reference box's numbers as R..., the incident's as I...
                          `(if on-b
@@ -6775,75 +6781,87 @@ the points. KEY-BASE with the family, the axis and the corner is a point's key. 
                                     (axis best))
                                 ,@body))))
               (with-roles
-                (let* ((ex (- icx rcx)) (ey (- icy rcy)) (ez (- icz rcz))
-                       ;; the reference axis, turned towards the incident box, and its half-extent
-                       (lx (case axis (0 r11) (1 r12) (t r13)))
-                       (ly (case axis (0 r21) (1 r22) (t r23)))
-                       (lz (case axis (0 r31) (1 r32) (t r33)))
-                       (sign (if (>= (+ (* ex lx) (* ey ly) (* ez lz)) 0.0) 1.0 -1.0))
-                       (nx (* sign lx)) (ny (* sign ly)) (nz (* sign lz))
-                       (rh (case axis (0 rhx) (1 rhy) (t rhz)))
-                       (tol 1e-3))
-                  (declare (type single-float ex ey ez lx ly lz sign nx ny nz rh tol) (type (integer 0 2) axis))
-                  ;; family 0: the incident box's corners over the reference face
-                  (dotimes (corner 8)
-                    (let* ((a (if (logbitp 0 corner) ihx (- ihx))) (b (if (logbitp 1 corner) ihy (- ihy)))
-                           (c (if (logbitp 2 corner) ihz (- ihz)))
-                           (px (+ (* i11 a) (* i12 b) (* i13 c))) (py (+ (* i21 a) (* i22 b) (* i23 c)))
-                           (pz (+ (* i31 a) (* i32 b) (* i33 c)))
-                           ;; the corner from the reference centre, in the reference frame
-                           (qx (+ ex px)) (qy (+ ey py)) (qz (+ ez pz))
-                           (u (+ (* r11 qx) (* r21 qy) (* r31 qz)))
-                           (v (+ (* r12 qx) (* r22 qy) (* r32 qz)))
-                           (w (+ (* r13 qx) (* r23 qy) (* r33 qz)))
-                           (gap (- (+ (* nx qx) (* ny qy) (* nz qz)) rh)))
-                      (declare (type single-float a b c px py pz qx qy qz u v w gap))
-                      (when (and (< gap reach)
-                                 (case axis
-                                   (0 (and (<= (abs v) (+ rhy tol)) (<= (abs w) (+ rhz tol))))
-                                   (1 (and (<= (abs u) (+ rhx tol)) (<= (abs w) (+ rhz tol))))
-                                   (t (and (<= (abs u) (+ rhx tol)) (<= (abs v) (+ rhy tol))))))
-                        (add-box-point set irow owner (logior key-base (ash (+ (if on-b 3 0) axis) 3) corner)
-                                       nx ny nz px py pz gap rrow qx qy qz))))
-                  ;; family 1: the reference face's corners over the incident box's facing face,
-                  ;; strictly inside it (a corner on its rim is one of family 0's)
-                  (let* ((c1 (- (+ (* i11 nx) (* i21 ny) (* i31 nz))))
-                         (c2 (- (+ (* i12 nx) (* i22 ny) (* i32 nz))))
-                         (c3 (- (+ (* i13 nx) (* i23 ny) (* i33 nz))))
-                         ;; the incident axis most against N, and the face's outward normal O
+                (macrolet ((column (m c1 c2 c3) `(case ,m (0 ,c1) (1 ,c2) (t ,c3))))
+                  (let* ((ex (- icx rcx)) (ey (- icy rcy)) (ez (- icz rcz))
+                         ;; the reference axis, turned towards the incident box, its half-extent,
+                         ;; and the face's two side axes K1 K2 with theirs
+                         (lx (column axis r11 r12 r13)) (ly (column axis r21 r22 r23)) (lz (column axis r31 r32 r33))
+                         (sign (if (>= (+ (* ex lx) (* ey ly) (* ez lz)) 0.0) 1.0 -1.0))
+                         (nx (* sign lx)) (ny (* sign ly)) (nz (* sign lz))
+                         (rh (column axis rhx rhy rhz))
+                         (k1 (if (= axis 0) 1 0)) (k2 (if (= axis 2) 1 2))
+                         (e1 (column k1 rhx rhy rhz)) (e2 (column k2 rhx rhy rhz))
+                         (ux (column k1 r11 r12 r13)) (uy (column k1 r21 r22 r23)) (uz (column k1 r31 r32 r33))
+                         (vx (column k2 r11 r12 r13)) (vy (column k2 r21 r22 r23)) (vz (column k2 r31 r32 r33))
+                         ;; the incident axis most against N, the face's outward normal and centre
+                         (c1 (+ (* i11 nx) (* i21 ny) (* i31 nz)))
+                         (c2 (+ (* i12 nx) (* i22 ny) (* i32 nz)))
+                         (c3 (+ (* i13 nx) (* i23 ny) (* i33 nz)))
                          (m (cond ((and (>= (abs c1) (abs c2)) (>= (abs c1) (abs c3))) 0) ((>= (abs c2) (abs c3)) 1) (t 2)))
-                         (ms (if (>= (case m (0 c1) (1 c2) (t c3)) 0.0) 1.0 -1.0))
-                         (ox (* ms (case m (0 i11) (1 i12) (t i13))))
-                         (oy (* ms (case m (0 i21) (1 i22) (t i23))))
-                         (oz (* ms (case m (0 i31) (1 i32) (t i33))))
-                         (mh (case m (0 ihx) (1 ihy) (t ihz))))
-                    (declare (type single-float c1 c2 c3 ms ox oy oz mh) (type (integer 0 2) m))
+                         (ms (if (> (column m c1 c2 c3) 0.0) -1.0 1.0))
+                         (mh (column m ihx ihy ihz))
+                         (gx (+ ex (* ms mh (column m i11 i12 i13))))
+                         (gy (+ ey (* ms mh (column m i21 i22 i23))))
+                         (gz (+ ez (* ms mh (column m i31 i32 i33))))
+                         (j1 (if (= m 0) 1 0)) (j2 (if (= m 2) 1 2))
+                         (f1 (column j1 ihx ihy ihz)) (f2 (column j2 ihx ihy ihz))
+                         (px (* f1 (column j1 i11 i12 i13))) (py (* f1 (column j1 i21 i22 i23))) (pz (* f1 (column j1 i31 i32 i33)))
+                         (qx (* f2 (column j2 i11 i12 i13))) (qy (* f2 (column j2 i21 i22 i23))) (qz (* f2 (column j2 i31 i32 i33)))
+                         (count 4))
+                    (declare (type single-float ex ey ez lx ly lz sign nx ny nz rh e1 e2 ux uy uz vx vy vz
+                                                c1 c2 c3 ms mh gx gy gz f1 f2 px py pz qx qy qz)
+                             (type (integer 0 2) axis k1 k2 m j1 j2) (type fixnum count))
+                    ;; the incident face's corners, in order around it, in the reference face's frame:
+                    ;; along K1, along K2, and the height over the face
                     (dotimes (corner 4)
-                      (let* ((s1 (if (logbitp 0 corner) 1.0 -1.0)) (s2 (if (logbitp 1 corner) 1.0 -1.0))
-                             ;; the face corner from the reference centre
-                             (fx (* sign rh lx)) (fy (* sign rh ly)) (fz (* sign rh lz)))
-                        (declare (type single-float s1 s2 fx fy fz))
-                        (case axis
-                          (0 (setf fx (+ fx (* s1 rhy r12) (* s2 rhz r13)) fy (+ fy (* s1 rhy r22) (* s2 rhz r23))
-                                   fz (+ fz (* s1 rhy r32) (* s2 rhz r33))))
-                          (1 (setf fx (+ fx (* s1 rhx r11) (* s2 rhz r13)) fy (+ fy (* s1 rhx r21) (* s2 rhz r23))
-                                   fz (+ fz (* s1 rhx r31) (* s2 rhz r33))))
-                          (t (setf fx (+ fx (* s1 rhx r11) (* s2 rhy r12)) fy (+ fy (* s1 rhx r21) (* s2 rhy r22))
-                                   fz (+ fz (* s1 rhx r31) (* s2 rhy r32)))))
-                        (let* ((qx (- fx ex)) (qy (- fy ey)) (qz (- fz ez))
-                               (u (+ (* i11 qx) (* i21 qy) (* i31 qz)))
-                               (v (+ (* i12 qx) (* i22 qy) (* i32 qz)))
-                               (w (+ (* i13 qx) (* i23 qy) (* i33 qz)))
-                               (gap (- (+ (* ox qx) (* oy qy) (* oz qz)) mh)))
-                          (declare (type single-float qx qy qz u v w gap))
-                          (when (and (< gap reach)
-                                     (case m
-                                       (0 (and (< (abs v) (- ihy tol)) (< (abs w) (- ihz tol))))
-                                       (1 (and (< (abs u) (- ihx tol)) (< (abs w) (- ihz tol))))
-                                       (t (and (< (abs u) (- ihx tol)) (< (abs v) (- ihy tol))))))
-                            (add-box-point set irow owner
-                                           (logior key-base (ash 1 7) (ash (+ (if on-b 3 0) axis) 3) corner)
-                                           nx ny nz qx qy qz gap rrow fx fy fz))))))))))))))
+                      (let* ((s1 (if (< 0 corner 3) -1.0 1.0)) (s2 (if (< corner 2) 1.0 -1.0))
+                             (wx (+ gx (* s1 px) (* s2 qx))) (wy (+ gy (* s1 py) (* s2 qy))) (wz (+ gz (* s1 pz) (* s2 qz)))
+                             (o (* 3 corner)))
+                        (declare (type single-float s1 s2 wx wy wz) (type fixnum o))
+                        (setf (aref poly o) (+ (* wx ux) (* wy uy) (* wz uz))
+                              (aref poly (+ o 1)) (+ (* wx vx) (* wy vy) (* wz vz))
+                              (aref poly (+ o 2)) (- (+ (* wx nx) (* wy ny) (* wz nz)) rh)
+                              (aref ids corner) corner)))
+                    ;; clip against the four sides: a <= e1, -a <= e1, b <= e2, -b <= e2
+                    (dotimes (plane 4)
+                      (let ((kept 0) (coordinate (if (< plane 2) 0 1))
+                            (side (if (evenp plane) 1.0 -1.0)) (limit (if (< plane 2) e1 e2)))
+                        (declare (type fixnum kept coordinate) (type single-float side limit))
+                        (dotimes (i count)
+                          (let* ((j (if (= (1+ i) count) 0 (1+ i)))
+                                 (oi (* 3 i)) (oj (* 3 j))
+                                 (di (- (* side (aref poly (+ oi coordinate))) limit))
+                                 (dj (- (* side (aref poly (+ oj coordinate))) limit)))
+                            (declare (type fixnum j oi oj) (type single-float di dj))
+                            (when (<= di 0.0)
+                              (let ((o (* 3 kept)))
+                                (setf (aref next o) (aref poly oi) (aref next (+ o 1)) (aref poly (+ oi 1))
+                                      (aref next (+ o 2)) (aref poly (+ oi 2)) (aref next-ids kept) (aref ids i))
+                                (incf kept)))
+                            (when (or (and (<= di 0.0) (> dj 0.0)) (and (> di 0.0) (<= dj 0.0)))
+                              ;; the edge crosses the side: the crossing, named by the side and the
+                              ;; corner the edge starts from
+                              (let ((f (/ di (- di dj))) (o (* 3 kept)))
+                                (declare (type single-float f))
+                                (dotimes (c 3)
+                                  (setf (aref next (+ o c))
+                                        (+ (aref poly (+ oi c)) (* f (- (aref poly (+ oj c)) (aref poly (+ oi c)))))))
+                                (setf (aref next-ids kept) (logand 31 (+ 4 (* 4 plane) (logand 3 (aref ids i)))))
+                                (incf kept)))))
+                        (setf count kept)
+                        (rotatef poly next) (rotatef ids next-ids)))
+                    ;; each vertex left nearer than the reach is a point on the incident face
+                    (dotimes (i count)
+                      (let* ((o (* 3 i)) (a (aref poly o)) (b (aref poly (+ o 1))) (gap (aref poly (+ o 2)))
+                             ;; from the reference centre, and from the incident one
+                             (fx (+ (* a ux) (* b vx) (* (+ rh gap) nx)))
+                             (fy (+ (* a uy) (* b vy) (* (+ rh gap) ny)))
+                             (fz (+ (* a uz) (* b vz) (* (+ rh gap) nz))))
+                        (declare (type fixnum o) (type single-float a b gap fx fy fz))
+                        (when (< gap reach)
+                          (add-box-point set irow owner
+                                         (logior key-base (ash (+ (if on-b 3 0) axis) 5) (aref ids i))
+                                         nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz)))))))))))))
   set)
 
 (defun find-box-box-points (world set row reach)
