@@ -6559,6 +6559,14 @@ bounds, and the count of live boxes is theirs. #BXR0WS"
               (funcall fail "handle ~D: extent below ~A" h +box-min-half-extent+)))))
       (unless (= boxes (box-set-live set))
         (funcall fail "~D box rows but the box set counts ~D" boxes (box-set-live set))))))
+
+(defun refuse-box-snapshot (world)
+  "Signal invalid-physics-parameter naming :world when WORLD has had a box: a snapshot
+([[#SN4P0T]]) does not hold the box set yet, and a world restored without it would turn its boxes
+into spheres. #BXR0WS"
+  (when (physics-world-box-bodies world)
+    (error 'invalid-physics-parameter :world world :name :world :value world
+                                      :expected "a world that has had no box: a snapshot does not hold box bodies yet")))
 ;; A box is a row and a set of extents by slot:1 ends here
 
 ;; [[file:../physics.org::#BXCELL][A box against the cells:1]]
@@ -8690,6 +8698,7 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
 else into a new one; return the buffer and the snapshot's size in bytes. Into a buffer large
 enough it conses nothing. #SN4P0T"
   (check-idle world 'snapshot-physics-world)
+  (refuse-box-snapshot world)
   (unless (or (null buffer) (typep buffer 'octets))
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "NIL or an octet vector, (simple-array (unsigned-byte 8) (*))"))
@@ -9780,6 +9789,7 @@ truncated, of another magic, version or layout, whose checksum fails, or of a wo
 features WORLD lacks, signals the physics-snapshot-invalid subtype naming the byte offset, and
 WORLD is left as it was. #SN4P0T"
   (check-idle world 'restore-physics-world)
+  (refuse-box-snapshot world)
   (unless (typep buffer 'octets)
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))

@@ -6508,6 +6508,22 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (< (abs (- period want)) (* 0.005 want)) "period ~,5F s, the compound pendulum's ~,5F s" period want))))
 ;; J0PHYS-surface-pivot-is-a-compound-pendulum ends here
 
+;; [[file:../physics.org::#BXR0WS][BXR0WS-snapshots-refuse-boxes]]
+(define-claim "BXR0WS" snapshots-refuse-boxes
+    "A world with a box is refused by snapshot and restore, unchanged."
+  (let* ((w (make-floor-world))
+         (plain (make-floor-world))
+         (bytes (progn (add-physics-body plain 2.5 1 2.5) (snapshot-physics-world plain))))
+    (add-physics-box w 2.5 1 2.5 0.5 0.5 0.5)
+    (step-physics-world w)
+    (let ((hash (physics-world-state-hash w)))
+      (dolist (call (list (lambda () (snapshot-physics-world w)) (lambda () (restore-physics-world w bytes))))
+        (check (eq :world (handler-case (progn (funcall call) :done)
+                            (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))))
+      (check (= hash (physics-world-state-hash w)))
+      (check (eq t (validate-physics-world w))))))
+;; BXR0WS-snapshots-refuse-boxes ends here
+
 ;; [[file:../physics.org::#BXR0WS][BXR0WS-bad-boxes-refused]]
 (define-claim "BXR0WS" bad-boxes-refused
     "Bad boxes are refused by name and leave the world unchanged."
