@@ -593,7 +593,7 @@ velocity in the frame, the gap and the masses of each lane. #W1DFRM"
              (@w! t1x ux) (@w! t1y uy) (@w! t1z uz) (@w! t2x qx) (@w! t2y qy) (@w! t2z qz)
              ;; without boxes there is no box velocity to resolve
              (if-feature :boxes
-               (let ((kx (@w kvn)) (ky (@w kvt1)) (kz (@w kvt2)))
+               (let ((kx (@w kvx)) (ky (@w kvy)) (kz (@w kvz)))
                  (@w! kvn (wdot (kx ky kz) (x y z)))
                  (@w! kvt1 (wdot (kx ky kz) (ux uy uz)))
                  (@w! kvt2 (wdot (kx ky kz) (qx qy qz)))))
@@ -656,7 +656,10 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
                          (variant (world-kernel-variant world kernels))
                          (wide (kernel-variant-wide-warm-start variant))
                          (narrow (kernel-variant-warm-start variant)))
-                    (do-colour-runs (s e world ,settle) (funcall wide cbuf v s e) (funcall narrow cbuf v s e))))
+                    ;; each colour's joints before its contacts, in scalar code ([[#J0S0LV]])
+                    (do-constraint-colours (s e world :settle ,settle
+                                                      :joints (set (warm-start-joints set v (physics-world-deltas world) s e)))
+                      (funcall wide cbuf v s e) (funcall narrow cbuf v s e))))
                 (defmethod physics-solve-contacts ((kernels ,class) world inv-h use-bias elapsed)
                   (let* ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world))
                          (d (physics-world-deltas world)) (push-max (f32 (physics-world-push-max world)))
@@ -664,7 +667,8 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
                          (wide (kernel-variant-wide-solve variant))
                          (narrow (kernel-variant-solve variant)))
                     (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-                      (do-colour-runs (s e world ,settle)
+                      (do-constraint-colours (s e world :settle ,settle
+                                                        :joints (set (solve-joints set v d inv-h use-bias s e)))
                         (solve-handing wide ',si ,width cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz)
                         (solve-handing narrow 'solve-impact-range 1
                                        cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz))))))))

@@ -443,104 +443,131 @@ room under the reach limit for the smallest radius. #C0ND1T"
          (declare (ignorable ,b))
          ,@body))))
 
-(defmacro define-physics-layout (name docstring &rest columns)
-  "Define the columnar layout NAME: a buffer struct of one specialised array per column of
-COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
-NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
-or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
-  (let* ((make (layout-symbol "%MAKE-" name))
-         (ctor (layout-symbol "MAKE-" name))
-         (len (layout-symbol name "-LENGTH"))
-         (cap (layout-symbol name "-CAPACITY"))
-         (spare (layout-symbol name "-SPARE"))
-         (ensure (layout-symbol name "-ENSURE-CAPACITY"))
-         (trim (layout-symbol name "-TRIM"))
-         (append (layout-symbol name "-APPEND"))
-         (remove (layout-symbol name "-SWAP-REMOVE"))
-         (copy (layout-symbol name "-COPY-ROW"))
-         (permute (layout-symbol name "-PERMUTE"))
-         (zero (layout-symbol name "-ZERO-ROW"))
-         (clear (layout-symbol name "-CLEAR"))
-         (with (layout-symbol "WITH-" name))
-         (names (layout-symbol "+" name "-COLUMN-NAMES+"))
-         (bytes (layout-symbol "+" name "-ROW-BYTES+"))
-         (accessors (loop for (c) in columns collect (layout-symbol name "-" c))))
-    `(progn
-       (defstruct (,name (:constructor ,make) (:copier nil) (:predicate nil))
-         ,docstring
-         (length 0 :type index)
-         (capacity 0 :type index)
-         (spare 0 :type index)
-         ,@(loop for (c type) in columns
-                 collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
-       (defparameter ,names ',(mapcar #'first columns)
-         ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
-       (defparameter ,bytes ,(loop for (nil type width) in columns
-                                   sum (* (or width 1) (ecase type (single-float 4) (double-float 8) (fixnum 8))))
-         ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name))
-       (defun ,ctor (&key (capacity 16) (spare 0))
-         ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
-         (let ((size (+ capacity spare)))
-           (,make :capacity capacity :spare spare
-                  ,@(loop for (c type width) in columns
-                          append `(,(intern (symbol-name c) :keyword)
-                                   (make-array (* size ,(or width 1)) :element-type ',type
-                                                                      :initial-element ,(column-zero type)))))))
-       (defun ,ensure (buffer rows)
-         ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index rows))
-         (when (> rows (,cap buffer))
-           (let* ((new (max rows (* 2 (,cap buffer)) 16))
-                  (size (+ new (,spare buffer))))
-             ,@(loop for (c type width) in columns for acc in accessors
-                     collect `(let ((fresh (make-array (* size ,(or width 1)) :element-type ',type
-                                                                              :initial-element ,(column-zero type))))
-                                (replace fresh (,acc buffer))
-                                (setf (,acc buffer) fresh)))
-             (setf (,cap buffer) new)))
-         buffer)
-       (defun ,trim (buffer rows)
-         ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-names (name)
+    "The symbols the layout NAME defines, as a plist keyed by what each names. #L4Y0UT"
+    (list :make (layout-symbol "%MAKE-" name)
+          :ctor (layout-symbol "MAKE-" name)
+          :len (layout-symbol name "-LENGTH")
+          :cap (layout-symbol name "-CAPACITY")
+          :spare (layout-symbol name "-SPARE")
+          :ensure (layout-symbol name "-ENSURE-CAPACITY")
+          :trim (layout-symbol name "-TRIM")
+          :append (layout-symbol name "-APPEND")
+          :remove (layout-symbol name "-SWAP-REMOVE")
+          :copy (layout-symbol name "-COPY-ROW")
+          :permute (layout-symbol name "-PERMUTE")
+          :zero (layout-symbol name "-ZERO-ROW")
+          :clear (layout-symbol name "-CLEAR")
+          :with (layout-symbol "WITH-" name)
+          :names (layout-symbol "+" name "-COLUMN-NAMES+")
+          :bytes (layout-symbol "+" name "-ROW-BYTES+")))
+
+  (defun layout-accessors (name columns)
+    "The reader of each of COLUMNS in the layout NAME's struct, in their order. #L4Y0UT"
+    (loop for (c) in columns collect (layout-symbol name "-" c))))
+;; One macro generates every columnar layout:1 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:2]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-struct-forms (name docstring columns)
+    "The struct of the layout NAME, one array slot per column of COLUMNS, and the constants that
+name its columns and count a row's bytes. #L4Y0UT"
+    (destructuring-bind (&key make names bytes &allow-other-keys) (layout-names name)
+      `((defstruct (,name (:constructor ,make) (:copier nil) (:predicate nil))
+          ,docstring
+          (length 0 :type index)
+          (capacity 0 :type index)
+          (spare 0 :type index)
+          ,@(loop for (c type) in columns
+                  collect `(,c (make-array 0 :element-type ',type) :type ,(column-array-type type))))
+        (defparameter ,names ',(mapcar #'first columns)
+          ,(format nil "The columns of ~A, in declaration order. #L4Y0UT" name))
+        (defparameter ,bytes ,(loop for (nil type width) in columns
+                                    sum (* (or width 1) (ecase type (single-float 4) (double-float 8) (fixnum 8))))
+          ,(format nil "Bytes one row of ~A occupies across its columns. #L4Y0UT" name)))))
+
+  (defun layout-sizing-forms (name columns)
+    "The layout NAME's constructor, and its operations that grow and shrink a buffer's arrays. #L4Y0UT"
+    (destructuring-bind (&key make ctor len cap spare ensure trim &allow-other-keys) (layout-names name)
+      (let ((accessors (layout-accessors name columns)))
+        `((defun ,ctor (&key (capacity 16) (spare 0))
+            ,(format nil "A new empty ~A buffer with room for CAPACITY rows plus SPARE zero rows. #L4Y0UT" name)
+            (let ((size (+ capacity spare)))
+              (,make :capacity capacity :spare spare
+                     ,@(loop for (c type width) in columns
+                             append `(,(intern (symbol-name c) :keyword)
+                                      (make-array (* size ,(or width 1)) :element-type ',type
+                                                                         :initial-element ,(column-zero type)))))))
+          (defun ,ensure (buffer rows)
+            ,(format nil "Grow BUFFER, a ~A, by doubling until it holds ROWS rows; return BUFFER. #L4Y0UT" name)
+            (declare (type ,name buffer) (type index rows))
+            (when (> rows (,cap buffer))
+              (let* ((new (max rows (* 2 (,cap buffer)) 16))
+                     (size (+ new (,spare buffer))))
+                ,@(loop for (c type width) in columns for acc in accessors
+                        collect `(let ((fresh (make-array (* size ,(or width 1)) :element-type ',type
+                                                                                 :initial-element ,(column-zero type))))
+                                   (replace fresh (,acc buffer))
+                                   (setf (,acc buffer) fresh)))
+                (setf (,cap buffer) new)))
+            buffer)
+          (defun ,trim (buffer rows)
+            ,(format nil "Shrink BUFFER, a ~A, to room for ROWS rows, or for its length if that is more (and at
 least 16), keeping every row; return BUFFER. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index rows))
-         (let ((new (max rows (,len buffer) 16)))
-           (when (< new (,cap buffer))
-             (let ((size (+ new (,spare buffer))))
-               ,@(loop for (c type width) in columns for acc in accessors
-                       collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
-                                                                               :initial-element ,(column-zero type))))
-                                  (replace kept (,acc buffer))
-                                  (setf (,acc buffer) kept)))
-               (setf (,cap buffer) new))))
-         buffer)
-       (declaim (inline ,append))
-       (defun ,append (buffer)
-         ,(format nil "Add a row to BUFFER, a ~A, and return its index; the row reads as zeros. #L4Y0UT" name)
-         (declare (type ,name buffer))
-         (let ((row (,len buffer)))
-           (when (>= row (,cap buffer)) (,ensure buffer (1+ row)))
-           (setf (,len buffer) (1+ row))
-           row))
-       (defun ,zero (buffer row)
-         ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index row) #.+kernel-policy+)
-         ,@(loop for (nil type width) in columns for acc in accessors
-                 collect (if width
-                             `(fill (,acc buffer) ,(column-zero type)
-                                    :start (* row ,width) :end (* (1+ row) ,width))
-                             `(setf (aref (,acc buffer) row) ,(column-zero type))))
-         buffer)
-       (defun ,copy (from from-row to to-row)
-         ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
-         (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
-         ,@(loop for (nil nil width) in columns for acc in accessors
-                 collect (if width
-                             `(replace (,acc to) (,acc from) :start1 (* to-row ,width)
-                                                              :start2 (* from-row ,width)
-                                                              :end2 (* (1+ from-row) ,width))
-                             `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
-         to)
-       (defun ,permute (buffer scratch destinations count)
+            (declare (type ,name buffer) (type index rows))
+            (let ((new (max rows (,len buffer) 16)))
+              (when (< new (,cap buffer))
+                (let ((size (+ new (,spare buffer))))
+                  ,@(loop for (c type width) in columns for acc in accessors
+                          collect `(let ((kept (make-array (* size ,(or width 1)) :element-type ',type
+                                                                                  :initial-element ,(column-zero type))))
+                                     (replace kept (,acc buffer))
+                                     (setf (,acc buffer) kept)))
+                  (setf (,cap buffer) new))))
+            buffer))))))
+;; One macro generates every columnar layout:2 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:3]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-row-forms (name columns)
+    "The layout NAME's operations on one row: append one that reads as zeros, zero one, copy one
+between buffers. #L4Y0UT"
+    (destructuring-bind (&key len cap ensure append zero copy &allow-other-keys) (layout-names name)
+      (let ((accessors (layout-accessors name columns)))
+        `((declaim (inline ,append))
+          (defun ,append (buffer)
+            ,(format nil "Add a row to BUFFER, a ~A, and return its index; the row reads as zeros. #L4Y0UT" name)
+            (declare (type ,name buffer))
+            (let ((row (,len buffer)))
+              (when (>= row (,cap buffer)) (,ensure buffer (1+ row)))
+              (setf (,len buffer) (1+ row))
+              row))
+          (defun ,zero (buffer row)
+            ,(format nil "Set every column of ROW of BUFFER, a ~A, to zero. #L4Y0UT" name)
+            (declare (type ,name buffer) (type index row) #.+kernel-policy+)
+            ,@(loop for (nil type width) in columns for acc in accessors
+                    collect (if width
+                                `(fill (,acc buffer) ,(column-zero type)
+                                       :start (* row ,width) :end (* (1+ row) ,width))
+                                `(setf (aref (,acc buffer) row) ,(column-zero type))))
+            buffer)
+          (defun ,copy (from from-row to to-row)
+            ,(format nil "Copy row FROM-ROW of the ~A FROM into row TO-ROW of TO. #L4Y0UT" name)
+            (declare (type ,name from to) (type index from-row to-row) #.+kernel-policy+)
+            ,@(loop for (nil nil width) in columns for acc in accessors
+                    collect (if width
+                                `(replace (,acc to) (,acc from) :start1 (* to-row ,width)
+                                                                 :start2 (* from-row ,width)
+                                                                 :end2 (* (1+ from-row) ,width))
+                                `(setf (aref (,acc to) to-row) (aref (,acc from) from-row))))
+            to)))))
+
+  (defun layout-permute-form (name columns)
+    "The layout NAME's permute: every row to its new place, column by column through a scratch
+buffer whose arrays it then takes. #L4Y0UT"
+    (destructuring-bind (&key len cap ensure permute &allow-other-keys) (layout-names name)
+      `(defun ,permute (buffer scratch destinations count)
          ,(format nil "Move each row R of BUFFER, a ~A, to row (aref DESTINATIONS R), or drop it where
 that is negative; the places taken must be exactly 0 .. COUNT-1. The rows are written into
 SCRATCH, a buffer of the same layout and spare, whose arrays BUFFER then takes in exchange
@@ -550,53 +577,81 @@ for its own; rows past COUNT read as zeros. Return BUFFER. #L4Y0UT" name)
          (,ensure scratch (max count (,cap buffer)))
          (let ((n (,len buffer)) (stale (,len scratch)))
            (declare (type index n stale))
-           ,@(loop for (nil type width) in columns for acc in accessors
-                   collect `(let ((from (,acc buffer)) (to (,acc scratch)))
-                              (declare (type ,(column-array-type type) from to))
-                              ;; rows the scratch held from its last use, past COUNT, become zeros
-                              (when (> stale count)
-                                (fill to ,(column-zero type) :start (* count ,(or width 1))
-                                                             :end (* stale ,(or width 1))))
-                              (dotimes (r n)
-                                (let ((d (aref destinations r)))
-                                  (declare (type fixnum d))
-                                  (when (>= d 0)
-                                    ,(if width
-                                         `(loop for k of-type fixnum from 0 below ,width
-                                                do (setf (aref to (+ (* d ,width) k))
-                                                         (aref from (+ (* r ,width) k))))
-                                         `(setf (aref to d) (aref from r))))))
-                              (setf (,acc scratch) from (,acc buffer) to)))
+           ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
+                   collect (layout-permute-column type width acc))
            (rotatef (,cap buffer) (,cap scratch))
            (setf (,len buffer) count (,len scratch) n))
-         buffer)
-       (defun ,remove (buffer row)
-         ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
+         buffer)))
+
+  (defun layout-permute-column (type width acc)
+    "Permute's pass over one column, read by ACC, of TYPE and WIDTH values a row. #L4Y0UT"
+    `(let ((from (,acc buffer)) (to (,acc scratch)))
+       (declare (type ,(column-array-type type) from to))
+       ;; rows the scratch held from its last use, past COUNT, become zeros
+       (when (> stale count)
+         (fill to ,(column-zero type) :start (* count ,(or width 1))
+                                      :end (* stale ,(or width 1))))
+       (dotimes (r n)
+         (let ((d (aref destinations r)))
+           (declare (type fixnum d))
+           (when (>= d 0)
+             ,(if width
+                  `(loop for k of-type fixnum from 0 below ,width
+                         do (setf (aref to (+ (* d ,width) k))
+                                  (aref from (+ (* r ,width) k))))
+                  `(setf (aref to d) (aref from r))))))
+       (setf (,acc scratch) from (,acc buffer) to))))
+;; One macro generates every columnar layout:3 ends here
+
+;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:4]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun layout-removal-forms (name columns)
+    "The layout NAME's swap-remove, which fills a hole with the last row, and clear. #L4Y0UT"
+    (destructuring-bind (&key len spare remove copy zero clear &allow-other-keys) (layout-names name)
+      `((defun ,remove (buffer row)
+          ,(format nil "Remove ROW of BUFFER, a ~A, by moving the last row into it; the vacated
 row is zeroed. Return the old index of the moved row, or -1 when ROW was last. #L4Y0UT" name)
-         (declare (type ,name buffer) (type index row))
-         (let ((last (1- (,len buffer))))
-           (declare (type fixnum last))
-           (assert (<= 0 row last) () "row ~D is outside ~A of length ~D" row ',name (1+ last))
-           (unless (= row last) (,copy buffer last buffer row))
-           (,zero buffer last)
-           (setf (,len buffer) last)
-           (if (= row last) -1 last)))
-       (defun ,clear (buffer)
-         ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
-         (declare (type ,name buffer))
-         (let ((n (+ (,len buffer) (,spare buffer))))
-           ,@(loop for (nil type width) in columns for acc in accessors
-                   collect `(fill (,acc buffer) ,(column-zero type)
-                                  :end (min (* n ,(or width 1)) (length (,acc buffer))))))
-         (setf (,len buffer) 0)
-         buffer)
-       (defmacro ,with ((&rest cols) buffer &body body)
+          (declare (type ,name buffer) (type index row))
+          (let ((last (1- (,len buffer))))
+            (declare (type fixnum last))
+            (assert (<= 0 row last) () "row ~D is outside ~A of length ~D" row ',name (1+ last))
+            (unless (= row last) (,copy buffer last buffer row))
+            (,zero buffer last)
+            (setf (,len buffer) last)
+            (if (= row last) -1 last)))
+        (defun ,clear (buffer)
+          ,(format nil "Empty BUFFER, a ~A, zeroing the rows it held. #L4Y0UT" name)
+          (declare (type ,name buffer))
+          (let ((n (+ (,len buffer) (,spare buffer))))
+            ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
+                    collect `(fill (,acc buffer) ,(column-zero type)
+                                   :end (min (* n ,(or width 1)) (length (,acc buffer))))))
+          (setf (,len buffer) 0)
+          buffer))))
+
+  (defun layout-with-form (name columns)
+    "The layout NAME's WITH- macro, binding columns by name as declared arrays. #L4Y0UT"
+    (destructuring-bind (&key with &allow-other-keys) (layout-names name)
+      `(defmacro ,with ((&rest cols) buffer &body body)
          ,(format nil "Run BODY with each of COLS bound to that column of the ~A BUFFER. #L4Y0UT" name)
-         (expand-layout-bindings ',name ',(loop for (c type) in columns for acc in accessors
+         (expand-layout-bindings ',name ',(loop for (c type) in columns for acc in (layout-accessors name columns)
                                                 collect (list c type acc))
-                                 cols buffer body))
-       ',name)))
-;; One macro generates every columnar layout:1 ends here
+                                 cols buffer body)))))
+
+(defmacro define-physics-layout (name docstring &rest columns)
+  "Define the columnar layout NAME: a buffer struct of one specialised array per column of
+COLUMNS, each (COLUMN-NAME ELEMENT-TYPE), with NAME-append, NAME-swap-remove,
+NAME-copy-row, NAME-permute, NAME-ensure-capacity, NAME-trim, NAME-clear and WITH-NAME, which binds columns by name
+or as (VARIABLE COLUMN). A column (NAME TYPE WIDTH) holds WIDTH values a row, side by side. #L4Y0UT"
+  `(progn
+     ,@(layout-struct-forms name docstring columns)
+     ,@(layout-sizing-forms name columns)
+     ,@(layout-row-forms name columns)
+     ,(layout-permute-form name columns)
+     ,@(layout-removal-forms name columns)
+     ,(layout-with-form name columns)
+     ',name))
+;; One macro generates every columnar layout:4 ends here
 
 ;; [[file:../physics.org::#B5N8JT][Bodies are rows; a handle is a forwarding address:1]]
 (define-physics-layout body-columns
@@ -1502,21 +1557,37 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
         (step-statistics-max-penetration to) (step-statistics-max-penetration from)
         (step-statistics-max-approach to) (step-statistics-max-approach from))
   to)
+;; The world holds every buffer and its own parameters:1 ends here
 
-(defclass physics-world ()
+;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:2]]
+(defclass world-stores ()
   ((terrain :initarg :terrain :initform nil :accessor physics-world-terrain)
    (probe :initform (make-terrain-probe) :reader physics-world-probe)
-   (kernels :initarg :kernels :accessor physics-world-kernels)
-   (awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
+   (kernels :initarg :kernels :accessor physics-world-kernels))
+  (:documentation "What the world is made of: the terrain its bodies meet, the probe that reads
+its cells, and the kernel family that runs its solver phases. #W0RLD7"))
+
+(defclass world-bodies ()
+  ((awake :initform (make-body-columns :spare 1) :reader physics-world-awake)
    (awake-scratch :initform (make-body-columns :spare 1) :reader physics-world-awake-scratch)
    (row-places :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-row-places)
    (sleeping :initform (make-body-columns) :reader physics-world-sleeping)
-   (ids :initform (make-handle-table) :reader physics-world-ids)
-   (contacts :initform (make-contact-columns) :reader physics-world-contacts)
+   (ids :initform (make-handle-table) :reader physics-world-ids))
+  (:documentation "The bodies: the awake and the sleeping buffers, the awake buffer's scratch
+twin and the table from handles to rows. #W0RLD7"))
+
+(defclass world-contacts ()
+  ((contacts :initform (make-contact-columns) :reader physics-world-contacts)
    (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
    (contact-scratch :initform (make-contact-columns) :reader physics-world-contact-scratch)
-   (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints)
-   (events :initform (make-event-columns) :reader physics-world-events)
+   ;; what its snapshots and restores reuse, made at the first ([[#SN4P0T]])
+   (snapshot-scratch :initform nil :accessor physics-world-snapshot-scratch)
+   (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints))
+  (:documentation "The persistent contacts, their table by pair and their scratch twin, the
+snapshots' scratch, and the constraints a step builds from them. #W0RLD7"))
+
+(defclass world-events-and-boxes ()
+  ((events :initform (make-event-columns) :reader physics-world-events)
    (event-data :initform (make-array 16 :initial-element nil) :accessor physics-world-event-data)
    (boxes :initform (make-box-columns) :reader physics-world-boxes)
    (box-owners :initform (make-array 16 :initial-element nil) :accessor physics-world-box-owners)
@@ -1525,8 +1596,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    ;; sensor boxes ([[#S3NS0R]])
    (filtering :initform nil :accessor physics-world-filtering)
    (sensors :initform nil :accessor physics-world-sensors)
-   (sensor-counter :initform 0 :type fixnum :accessor physics-world-sensor-counter)
-   (velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
+   (sensor-counter :initform 0 :type fixnum :accessor physics-world-sensor-counter))
+  (:documentation "The step's events and the boxes posted into it, with their owners and
+handles, and the filters and lasting sensors. #W0RLD7"))
+
+(defclass world-solver-scratch ()
+  ((velocities :initform (make-array 0 :element-type 'single-float) :accessor physics-world-velocities)
    (deltas :initform (make-array 0 :element-type 'single-float) :accessor physics-world-deltas)
    (color-starts :initform (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
                  :reader physics-world-color-starts)
@@ -1543,11 +1618,17 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (buried-count :initform 0 :type fixnum :accessor physics-world-buried-count)
    (box-touch-step :initform -1 :type fixnum :accessor physics-world-box-touch-step)
    (held-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-held-rows)
+   ;; the finalize phase's list of the rows that leave the awake set, each row and its fate
+   (departures :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-departures)
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
-   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows)
-   (awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
+   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows))
+  (:documentation "The arrays each step reuses to solve: the solver's rows of motion, the
+colours, and what the boxes and the cells brace, hold and squeeze. #W0RLD7"))
+
+(defclass world-grids ()
+  ((awake-grid :initform (make-hash-grid) :reader physics-world-awake-grid)
    (awake-grid-step :initform -1 :type fixnum :accessor physics-world-awake-grid-step)
    (sleeping-grid :initform (make-hash-grid) :reader physics-world-sleeping-grid)
    (sleeping-grid-dirty :initform t :accessor physics-world-sleeping-grid-dirty)
@@ -1570,8 +1651,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (grid-of :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-grid-of)
    (mortal-sleepers :initform 0 :type fixnum :accessor physics-world-mortal-sleepers)
    (added :initform (make-array 16 :element-type 'fixnum :initial-element 0) :accessor physics-world-added)
-   (added-count :initform 0 :type fixnum :accessor physics-world-added-count)
-   ;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
+   (added-count :initform 0 :type fixnum :accessor physics-world-added-count))
+  (:documentation "The hash grids of the awake, the sleeping, the freshly added and the newest
+bodies, and the counts that decide when each is rebuilt. #W0RLD7"))
+
+(defclass world-forces-and-joints ()
+  (;; forces and gravity scales by handle slot, made at their first use ([[#F0RC3S]])
    (pushes :initform nil :type (or null f32-column) :accessor physics-world-pushes)
    (pushed :initform nil :accessor physics-world-pushed)
    ;; the joints, made with the first ([[#J0STOR]])
@@ -1579,8 +1664,12 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    ;; the box bodies' extents and points ([[#BXR0WS]]), or NIL until the first box
    (box-bodies :initform nil :accessor physics-world-box-bodies)
    (scaled-count :initform 0 :type fixnum :accessor physics-world-scaled-count)
-   (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius)
-   (step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
+   (max-radius :initform 0.0 :type single-float :accessor physics-world-max-radius))
+  (:documentation "The forces and gravity scales by handle slot, the joints, the box bodies'
+extents and points, and the largest radius. #W0RLD7"))
+
+(defclass world-parameters ()
+  ((step-seconds :initarg :step-seconds :type single-float :accessor physics-world-step-seconds)
    (substeps :initarg :substeps :type fixnum :accessor physics-world-substeps)
    (gravity-x :initarg :gravity-x :type single-float :accessor physics-world-gravity-x)
    (gravity-y :initarg :gravity-y :type single-float :accessor physics-world-gravity-y)
@@ -1604,16 +1693,23 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (brace-mass-ratio :initarg :brace-mass-ratio :accessor physics-world-brace-mass-ratio)
    (reach-limit :initarg :reach-limit :accessor physics-world-reach-limit)
    (max-speed :initarg :max-speed :accessor physics-world-max-speed)
-   (body-budget :initarg :body-budget :accessor physics-world-body-budget)
-   ;; what a step that fails before storing its impulses undoes (roll-back-step)
-   (undo-open :initform nil :accessor physics-world-undo-open)
+   (body-budget :initarg :body-budget :accessor physics-world-body-budget))
+  (:documentation "The step's time, its gravity and the parameters of contacts, sleep and
+limits, copied and checked when the world is made (checked-physics-parameters). #W0RLD7"))
+
+(defclass world-undo ()
+  ((undo-open :initform nil :accessor physics-world-undo-open)
    (undo-step-count :initform 0 :type fixnum :accessor physics-world-undo-step-count)
    (undo-woken :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-woken)
    (undo-woken-count :initform 0 :type fixnum :accessor physics-world-undo-woken-count)
    (undo-sorted :initform nil :accessor physics-world-undo-sorted)
    (undo-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-undo-rows)
-   (undo-statistics :initform (make-step-statistics) :reader physics-world-undo-statistics)
-   (sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
+   (undo-statistics :initform (make-step-statistics) :reader physics-world-undo-statistics))
+  (:documentation "What a step that fails before storing its impulses undoes (roll-back-step).
+#W0RLD7"))
+
+(defclass world-step-state ()
+  ((sleep-enabled :initarg :sleep-enabled :initform t :reader physics-world-sleep-enabled)
    ;; what the world may use ([[#FEAT5X][features]]), and the step built for it
    (features :initarg :features :initform +physics-features+ :reader world-features)
    (event-mask :initarg :event-mask :initform -1 :type fixnum :reader world-event-mask)
@@ -1630,6 +1726,15 @@ deepest overlap left and the fastest approach of an overlapping contact. #W0RLD7
    (step-hook :initform nil :accessor physics-world-step-hook)
    (phase-clock :initform nil :accessor physics-world-phase-clock)
    (statistics :initform (make-step-statistics) :reader physics-world-statistics))
+  (:documentation "What the world may use and the step built for it, the step's clock and count,
+the callbacks and what the last step measured. #W0RLD7"))
+
+ ;; CLOS lays out the slots of the last superclass first: the groups are named last to first, so a
+ ;; world keeps its slots in the order they are written above.
+(defclass physics-world (world-step-state world-undo world-parameters world-forces-and-joints world-grids
+                         world-solver-scratch world-events-and-boxes world-contacts world-bodies
+                         world-stores)
+  ()
   (:documentation "A simulated world of spheres over a voxel terrain: the CLOS side of the seam,
 holding the columnar buffers, the parameters, the events and the kernel family. #W0RLD7"))
 
@@ -1661,7 +1766,7 @@ each is ignorable. #W0RLD7"
                     collect `(,variable (f32 (,(intern (format nil "PHYSICS-WORLD-~A" name)) ,w)))))
        (declare (type single-float ,@(mapcar #'first pairs)) (ignorable ,w ,@(mapcar #'first pairs)))
        ,@body)))
-;; The world holds every buffer and its own parameters:1 ends here
+;; The world holds every buffer and its own parameters:2 ends here
 
 ;; [[file:../physics.org::#R9M4PV][Choose the phase once: kernel families:1]]
 (defvar *kernel-families* '((:scalar scalar-kernels))
@@ -2143,7 +2248,8 @@ fallen asleep or been removed. Return WORLD. #QKS4GZ"
           (physics-world-deltas world) (make-array 0 :element-type 'single-float)
           (physics-world-color-masks world) (make-array 0 :element-type 'fixnum)
           (physics-world-braced world) (make-array 0 :element-type 'fixnum)
-          (physics-world-held world) (make-array 0 :element-type 'fixnum))
+          (physics-world-held world) (make-array 0 :element-type 'fixnum)
+          (physics-world-departures world) (make-array 0 :element-type 'fixnum))
     (flet ((list-room (handles count) (fixnum-column-copy handles (max 64 count) count)))
       (setf (physics-world-fresh-handles world)
             (list-room (physics-world-fresh-handles world) (physics-world-fresh-count world))
@@ -3102,93 +3208,131 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
 ;; The grids of the awake and of the sleeping:1 ends here
 
 ;; [[file:../physics.org::#W4K3PH][Fast bodies and moving boxes wake what they reach:1]]
+(declaim (inline sleeper-in-reach-p))
+(defun sleeper-in-reach-p (world h x y z reach-extra box-p min-x min-y min-z max-x max-y max-z)
+  "True when H still names a sleeper of WORLD whose surface lies within REACH-EXTRA of the point X
+Y Z, or with BOX-P of the box MIN-X .. MAX-Z. #W4K3PH"
+  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
+  (let ((ids (physics-world-ids world))
+        (sleeping (physics-world-sleeping world))
+        (slot (handle-index h)))
+    (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
+         (= (aref (handle-table-generation ids) slot) (handle-generation h))
+         (let* ((row (aref (handle-table-local ids) slot))
+                (sx (aref (body-columns-x sleeping) row))
+                (sy (aref (body-columns-y sleeping) row))
+                (sz (aref (body-columns-z sleeping) row))
+                (sr (aref (body-columns-radius sleeping) row)))
+           (if box-p
+               (let ((dx (- sx (max min-x (min max-x sx))))
+                     (dy (- sy (max min-y (min max-y sy))))
+                     (dz (- sz (max min-z (min max-z sz)))))
+                 (<= (+ (* dx dx) (* dy dy) (* dz dz))
+                     (* (+ sr reach-extra) (+ sr reach-extra))))
+               (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
+                     (reach (+ sr reach-extra)))
+                 (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach))))))))
+
+(defun wake-within-reach (world x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
+  "Wake every sleeper of WORLD in reach of the point X Y Z or, with BOX-P, of the box MIN-X ..
+MAX-Z (sleeper-in-reach-p), looking SPAN cells of the sleeping grid around the point; return how
+many woke. #W4K3PH"
+  (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
+  (let ((ids (physics-world-ids world))
+        (woken 0))
+    (declare (type fixnum woken))
+    ;; the sleepers within reach are woken in the order of their sleeping rows,
+    ;; which is the order they join the awake rows in: it does not hang on the grids
+    (do-sleepers-in-row-order
+        (h world x y z :span span)
+        (sleeper-in-reach-p world h x y z reach-extra box-p min-x min-y min-z max-x max-y max-z)
+      ;; each still sleeps: waking one moves no other out of the sleeping set
+      (wake-physics-body world (aref (handle-table-local ids) (handle-index h)))
+      (incf woken))
+    woken))
+
+(defun wake-near-added (world)
+  "Wake the sleepers each body added to WORLD since the last step overlaps deeper than the slop,
+so that it meets them as awake bodies from its first substep; return how many woke. #W4K3PH"
+  (let ((ids (physics-world-ids world))
+        (added (physics-world-added world))
+        (slop (f32 (physics-world-slop world)))
+        (woken 0))
+    (declare (type fixnum-column added) (type single-float slop) (type fixnum woken))
+    (dotimes (k (physics-world-added-count world) woken)
+      (let* ((h (aref added k)) (slot (handle-index h)))
+        (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
+                   (= (aref (handle-table-generation ids) slot) (handle-generation h)))
+          (let ((row (aref (handle-table-local ids) slot)))
+            (with-body-columns (x y z radius flags) (physics-world-awake world)
+              (when (zerop (logand (aref flags row) +flag-terrain-only+))
+                (incf woken (wake-within-reach world (aref x row) (aref y row) (aref z row)
+                                               (- (aref radius row) slop)
+                                               1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))))
+
+(defun wake-near-fast-bodies (world n)
+  "Wake the sleepers within the margin plus one step's travel of each of the first N awake bodies
+of WORLD faster than the wake speed; return how many woke. #W4K3PH"
+  (let ((margin (f32 (physics-world-margin world)))
+        (dt (physics-world-current-dt world))
+        (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
+        (rmax (f32 (physics-world-max-radius world)))
+        (inv (hash-grid-inv-cell (physics-world-sleeping-grid world)))
+        (woken 0))
+    (declare (type single-float margin wake2 dt rmax) (type fixnum woken))
+    ;; a body woken is appended to the awake buffer, which grows then: its columns are
+    ;; read again for each row
+    (dotimes (i n woken)
+      (with-body-columns (x y z vx vy vz radius flags) (physics-world-awake world)
+        (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                         (* (aref vz i) (aref vz i)))
+                      wake2)
+                   (zerop (logand (aref flags i) +flag-terrain-only+)))
+          (let ((extra (+ (aref radius i) margin
+                          (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                                          (* (aref vz i) (aref vz i))))))))
+            ;; a sleeper within reach is at most EXTRA plus the largest radius away, so
+            ;; its cell is at most that many cell edges from the body's, rounded up: one
+            ;; cell unless the body travels more than the skin in a step
+            (incf woken (wake-within-reach world (aref x i) (aref y i) (aref z i) extra
+                                           (ceiling (* (+ extra rmax) inv))
+                                           nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
+
+(defun wake-near-moving-boxes (world)
+  "Wake the sleepers within the margin plus one step's travel of each moving box of WORLD; return
+how many woke. #W4K3PH"
+  (let ((margin (f32 (physics-world-margin world)))
+        (dt (physics-world-current-dt world))
+        (boxes (physics-world-boxes world))
+        (inv (hash-grid-inv-cell (physics-world-sleeping-grid world)))
+        (woken 0))
+    (declare (type single-float margin dt) (type fixnum woken))
+    (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
+      (dotimes (b (box-columns-length boxes) woken)
+        (when (or (/= 0 (aref vx b)) (/= 0 (aref vy b)) (/= 0 (aref vz b)))
+          (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
+                 (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
+                 (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
+                 (travel (+ margin (* dt (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
+                                                   (* (aref vz b) (aref vz b)))))))
+                 (half (+ travel (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz))))
+                 (span (1+ (ceiling (* half inv)))))
+            (incf woken (wake-within-reach world cx cy cz travel span t (aref min-x b) (aref min-y b)
+                                           (aref min-z b) (aref max-x b) (aref max-y b) (aref max-z b)))))))))
+
 (defun wake-phase (world)
   "The wake phase: awake bodies faster than the wake speed, and moving kinematic boxes, wake the
 sleepers they can reach this step: within the margin plus one step's travel; bodies added since
 the last step wake the sleepers they overlap deeper than the slop. Return how many woke. #W4K3PH"
-  (let ((sleeping (physics-world-sleeping world))
-        (woken 0))
+  (let ((woken 0))
     (declare (type fixnum woken))
-    (when (plusp (body-columns-length sleeping))
-      (let* ((grid (ensure-sleeping-grid world))
-             (ids (physics-world-ids world))
-             (n (body-columns-length (physics-world-awake world)))
-             (margin (f32 (physics-world-margin world)))
-             (dt (physics-world-current-dt world))
-             (wake2 (f32 (expt (physics-world-wake-speed world) 2)))
-             (rmax (f32 (physics-world-max-radius world))))
-        (declare (type single-float margin wake2 dt rmax))
-        (flet ((wake-near (x y z reach-extra span box-p min-x min-y min-z max-x max-y max-z)
-                 (declare (type single-float x y z reach-extra min-x min-y min-z max-x max-y max-z))
-                 ;; the sleepers within reach are woken in the order of their sleeping rows,
-                 ;; which is the order they join the awake rows in: it does not hang on the grids
-                 (do-sleepers-in-row-order
-                     (h world x y z :span span)
-                     (let ((slot (handle-index h)))
-                       (and (= (aref (handle-table-set ids) slot) +set-sleeping+)
-                            (= (aref (handle-table-generation ids) slot) (handle-generation h))
-                            (let* ((row (aref (handle-table-local ids) slot))
-                                   (sx (aref (body-columns-x sleeping) row))
-                                   (sy (aref (body-columns-y sleeping) row))
-                                   (sz (aref (body-columns-z sleeping) row))
-                                   (sr (aref (body-columns-radius sleeping) row)))
-                              (if box-p
-                                  (let ((dx (- sx (max min-x (min max-x sx))))
-                                        (dy (- sy (max min-y (min max-y sy))))
-                                        (dz (- sz (max min-z (min max-z sz)))))
-                                    (<= (+ (* dx dx) (* dy dy) (* dz dz))
-                                        (* (+ sr reach-extra) (+ sr reach-extra))))
-                                  (let ((dx (- sx x)) (dy (- sy y)) (dz (- sz z))
-                                        (reach (+ sr reach-extra)))
-                                    (< (+ (* dx dx) (* dy dy) (* dz dz)) (* reach reach)))))))
-                   ;; each still sleeps: waking one moves no other out of the sleeping set
-                   (wake-physics-body world (aref (handle-table-local ids) (handle-index h)))
-                   (incf woken))))
-          ;; a body added since the last step wakes the sleepers it overlaps deeper than the
-          ;; slop, so that it meets them as awake bodies from its first substep
-          (let ((added (physics-world-added world))
-                (slop (f32 (physics-world-slop world))))
-            (declare (type fixnum-column added) (type single-float slop))
-            (dotimes (k (physics-world-added-count world))
-              (let* ((h (aref added k)) (slot (handle-index h)))
-                (when (and (= (aref (handle-table-set ids) slot) +set-awake+)
-                           (= (aref (handle-table-generation ids) slot) (handle-generation h)))
-                  (let ((row (aref (handle-table-local ids) slot)))
-                    (with-body-columns (x y z radius flags) (physics-world-awake world)
-                      (when (zerop (logand (aref flags row) +flag-terrain-only+))
-                        (wake-near (aref x row) (aref y row) (aref z row) (- (aref radius row) slop)
-                                   1 nil 0.0 0.0 0.0 0.0 0.0 0.0))))))))
-          ;; a body woken is appended to the awake buffer, which grows then: its columns are
-          ;; read again for each row
-          (dotimes (i n)
-            (with-body-columns (x y z vx vy vz radius flags) (physics-world-awake world)
-              (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                               (* (aref vz i) (aref vz i)))
-                            wake2)
-                         (zerop (logand (aref flags i) +flag-terrain-only+)))
-                (let ((extra (+ (aref radius i) margin
-                                (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                                (* (aref vz i) (aref vz i))))))))
-                  ;; a sleeper within reach is at most EXTRA plus the largest radius away, so
-                  ;; its cell is at most that many cell edges from the body's, rounded up: one
-                  ;; cell unless the body travels more than the skin in a step
-                  (wake-near (aref x i) (aref y i) (aref z i) extra
-                             (ceiling (* (+ extra rmax) (hash-grid-inv-cell grid)))
-                             nil 0.0 0.0 0.0 0.0 0.0 0.0)))))
-          (let ((boxes (physics-world-boxes world))
-                (inv (hash-grid-inv-cell grid)))
-            (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) boxes
-              (dotimes (b (box-columns-length boxes))
-                (when (or (/= 0 (aref vx b)) (/= 0 (aref vy b)) (/= 0 (aref vz b)))
-                  (let* ((cx (* 0.5 (+ (aref min-x b) (aref max-x b))))
-                         (cy (* 0.5 (+ (aref min-y b) (aref max-y b))))
-                         (cz (* 0.5 (+ (aref min-z b) (aref max-z b))))
-                         (travel (+ margin (* dt (fsqrt (+ (* (aref vx b) (aref vx b)) (* (aref vy b) (aref vy b))
-                                                           (* (aref vz b) (aref vz b)))))))
-                         (half (+ travel (max (- (aref max-x b) cx) (- (aref max-y b) cy) (- (aref max-z b) cz))))
-                         (span (1+ (ceiling (* half inv)))))
-                    (wake-near cx cy cz travel span t (aref min-x b) (aref min-y b) (aref min-z b)
-                               (aref max-x b) (aref max-y b) (aref max-z b))))))))))
+    (when (plusp (body-columns-length (physics-world-sleeping world)))
+      (ensure-sleeping-grid world)
+      ;; the awake bodies before any wakes: a body woken here is not asked to wake others
+      (let ((n (body-columns-length (physics-world-awake world))))
+        (incf woken (wake-near-added world))
+        (incf woken (wake-near-fast-bodies world n))
+        (incf woken (wake-near-moving-boxes world))))
     ;; a joint group wakes with any of its bodies ([[#J0SL3P]])
     (when (physics-world-joints world) (incf woken (wake-joint-groups world)))
     (setf (physics-world-added-count world) 0)
@@ -4216,8 +4360,9 @@ the hole. #PRUN3D"
       normal-mass tangent-mass rolling-mass friction bias-rate mass-scale
       impulse-scale normal-impulse tangent-impulse-1 tangent-impulse-2 gap
       ;; the columns only some worlds have ([[#FEAT5X]]): the box's velocity along the normal
-      ;; and the frame, the largest push the events and restitution read, the approach speed
-      ;; the events report, rolling resistance's, and restitution's
+      ;; and the frame (written as its x, y, z until the frame pass: +constraint-column-aliases+),
+      ;; the largest push the events and restitution read, the approach speed the events
+      ;; report, rolling resistance's, and restitution's
       kvn kvt1 kvt2 max-normal-impulse
       relative-velocity rolling-limit rolling-impulse-x rolling-impulse-y rolling-impulse-z
       restitution)
@@ -4227,12 +4372,21 @@ world needs, then those a world's features may leave out, last. #SSMPYW")
     '(spin-limit spin-impulse armed-speed)
     "The float columns of a constraint's side block, read only by the rows that need them:
 friction's two, then restitution's. #SSMPYW")
+  (defparameter +constraint-column-aliases+
+    '((kvx . kvn) (kvy . kvt1) (kvz . kvt2))
+    "Each name of a column that holds one thing before the frame pass and another after it, with
+the column's own name: the fill writes the box's velocity along the world's axes as kvx, kvy and
+kvz, and the frame pass turns it, in the same three columns, into its parts along the normal and
+the two tangents, kvn, kvt1 and kvt2. #SSMPYW")
   (defun constraint-side-column-p (column)
     "True when COLUMN sits in the side block. #SSMPYW"
     (member column +constraint-side-columns+ :test #'string= :key #'symbol-name))
   (defun constraint-offset (column)
     "Where COLUMN's eight lanes begin inside a block of constraints, the main block's or, for a
-column of +constraint-side-columns+, the side block's. #SSMPYW"
+column of +constraint-side-columns+, the side block's; a name of +constraint-column-aliases+ is
+its column's. #SSMPYW"
+    (setf column (or (cdr (assoc column +constraint-column-aliases+ :test #'string= :key #'symbol-name))
+                     column))
     (* 8 (or (position column +constraint-columns+ :test #'string= :key #'symbol-name)
              (position column +constraint-side-columns+ :test #'string= :key #'symbol-name)
              (error "no constraint column ~A" column)))))
@@ -4832,7 +4986,7 @@ to the other: expanded in the prepare phase's fill. #PRF1LL"
            (@ tangent-impulse-2) (contact-at geometry g tangent-impulse-2))
      ;; the columns of boxes, restitution, rolling resistance and the events, when the world
      ;; has them (spin friction's and the armed speed are zeros here, as the side block starts)
-     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (if-feature :boxes (setf (@ kvx) kx (@ kvy) ky (@ kvz) kz))
      (if-feature (:or :restitution :contact-events :hit-events) (setf (@ max-normal-impulse) 0.0))
      (if-feature :restitution
        (setf (@ restitution) (max (aref re-c la) (aref re-c lb))))
@@ -4906,7 +5060,7 @@ spin impulse, approach speed and soft coefficients: expanded in fill-general-row
            (@ ima) im-a (@ imb) im-b (@ iia) ii-a (@ iib) ii-b
            (@ separation) (+ (contact-at geometry g separation) slop))
      ;; the box's velocity, until the frame pass resolves it
-     (if-feature :boxes (setf (@ kvn) kx (@ kvt1) ky (@ kvt2) kz))
+     (if-feature :boxes (setf (@ kvx) kx (@ kvy) ky (@ kvz) kz))
      (fill-row-material)
      ;; the spin impulse the contact carried out of the last step: zero on every row with a
      ;; radius on side b, whose spin is never solved
@@ -5082,7 +5236,7 @@ the one formula the relax pass ([[#S0LV3R]]) and the frame pass compute it by. #
 
 (define-featured-kernel (prepare-frames-range :features (:boxes)) (cbuf start end)
   "Complete constraints START..END of CBUF from their normal, radii, inverse masses and inertias,
-and the box velocity held in the KVN, KVT1 and KVT2 columns: the tangent frame t1, t2 (t1 from
+and the box velocity held in the KVX, KVY and KVZ columns: the tangent frame t1, t2 (t1 from
 the axis least aligned with the normal), the box velocity resolved onto n, t1 and t2, the
 normal, tangent and rolling masses (zero where nothing can move), and the gap the first
 substep's solve reads. Compiled without boxes, it has no box velocity to resolve. #PRFRM2"
@@ -5111,7 +5265,7 @@ substep's solve reads. Compiled without boxes, it has no box velocity to resolve
         (declare (type index base))
         (setf (@ t1x) ux (@ t1y) uy (@ t1z) uz (@ t2x) qx (@ t2y) qy (@ t2z) qz)
         (if-feature :boxes
-          (let ((kx (@ kvn)) (ky (@ kvt1)) (kz (@ kvt2)))
+          (let ((kx (@ kvx)) (ky (@ kvy)) (kz (@ kvz)))
             (setf (@ kvn) (+ (* kx x) (* ky y) (* kz z))
                   (@ kvt1) (+ (* kx ux) (* ky uy) (* kz uz))
                   (@ kvt2) (+ (* kx qx) (* ky qy) (* kz qz)))))
@@ -5617,16 +5771,21 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 
 (defmethod physics-warm-start ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
-    (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
-             cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf))))
+    (if (solving-joints world)
+        ;; joints are solved colour by colour with the contacts ([[#J0S0LV]])
+        (warm-start-with-joints kernels world)
+        (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
+                 cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf)))))
 
 (defmethod physics-solve-contacts ((kernels scalar-kernels) world inv-h use-bias elapsed)
   (let ((cbuf (physics-world-constraints world)))
-    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
-      (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
-                     cbuf (physics-world-velocities world) (physics-world-deltas world)
-                     0 (constraint-columns-length cbuf) inv-h use-bias elapsed
-                     (f32 (physics-world-push-max world)) threshold hgx hgy hgz))))
+    (if (solving-joints world)
+        (solve-with-joints kernels world inv-h use-bias elapsed)
+        (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+          (solve-handing (kernel-variant-solve (world-kernel-variant world kernels)) 'solve-impact-range 1
+                         cbuf (physics-world-velocities world) (physics-world-deltas world)
+                         0 (constraint-columns-length cbuf) inv-h use-bias elapsed
+                         (f32 (physics-world-push-max world)) threshold hgx hgy hgz)))))
 
 (defmethod physics-integrate-positions ((kernels scalar-kernels) world h)
   (integrate-positions-range (physics-world-velocities world) (physics-world-deltas world) 0
@@ -5687,7 +5846,7 @@ and steps, and what the step's prepare writes for the substeps. #J0STOR"
 (defstruct (joint-set (:constructor %make-joint-set (ids)) (:copier nil))
   "Everything a world keeps for its joints: the rows, their handle table, and by body slot the
 joint groups' parents, each body's count of joints and the passes' marks; the stiff softness
-of this step's limits. #J0STOR"
+of this step's limits, and the step's colouring of its joints. #J0STOR"
   (rows (make-joint-columns) :type joint-columns)
   (ids nil :type handle-table)
   (parent (make-array 0 :element-type 'fixnum) :type fixnum-column)
@@ -5695,7 +5854,16 @@ of this step's limits. #J0STOR"
   (marks (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (groups-stale nil)
   (limit-bias 0.0 :type single-float)
-  (limit-mass 1.0 :type single-float))
+  (limit-mass 1.0 :type single-float)
+  ;; the step's colouring of the joints to solve ([[#J0S0LV]]): each joint's colour by row, the
+  ;; rows in colour order, each colour's run of them, the rows the sort into that order writes,
+  ;; and whether the substeps are solving them
+  (colors (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (order (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (scratch nil)
+  (color-starts (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
+   :type fixnum-column)
+  (solving nil))
 
 (declaim (inline group-root))
 (defun group-root (parent slot)
@@ -6034,100 +6202,277 @@ adds, and no less than zero. #J0S0LV"
   (declare (type single-float hertz zeta h))
   (physics-softness hertz (max 0.0 (- zeta (* 0.5 h 2.0 (f32 pi) hertz))) h))
 
+(defun place-joint (rows j dummy sets locals awake sleeping)
+  "Note, for joint J of ROWS, the two solver rows (DUMMY for a fixed point or a sleeping second
+body), the levers, its anchors turned by its bodies' orientations, the bodies' masses and the
+anchors' separation at the step's start; or -1 as its first row when its first body is not
+awake. SETS and LOCALS are the body handle table's, AWAKE and SLEEPING the body buffers. Return
+true when the joint is to be solved. #J0S0LV"
+  (declare (type joint-columns rows) (type index j dummy) (type fixnum-column sets locals)
+           (type body-columns awake sleeping) #.+kernel-policy+)
+  (progn
+    (with-joint-columns (body-a body-b ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz sx sy sz
+                         ima imb iia iib)
+        rows
+      (flet ((place (h)
+               ;; the set and row of a live body, or 0 and -1 for none
+               (declare (type fixnum h))
+               (if (= h +no-body+) (values 0 -1) (values (aref sets (handle-index h)) (aref locals (handle-index h))))))
+        (multiple-value-bind (set-a la) (place (aref body-a j))
+          (when (/= set-a +set-awake+)
+            (setf (aref row-a j) -1)
+            (return-from place-joint nil))
+          (multiple-value-bind (set-b lb) (place (aref body-b j))
+            (let ((b-moves (= set-b +set-awake+)))
+              (setf (aref row-a j) la (aref row-b j) (if b-moves lb dummy))
+              (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) awake
+                (multiple-value-bind (rx ry rz)
+                    (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
+                  (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz
+                        (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la)
+                        (aref sx j) (- (+ (aref x la) rx)) (aref sy j) (- (+ (aref y la) ry))
+                        (aref sz j) (- (+ (aref z la) rz)))))
+              (if (< lb 0)
+                  ;; a fixed point: no lever, no mass, the point itself
+                  (setf (aref rbx j) 0.0 (aref rby j) 0.0 (aref rbz j) 0.0 (aref imb j) 0.0 (aref iib j) 0.0
+                        (aref sx j) (+ (aref sx j) (aref bx j)) (aref sy j) (+ (aref sy j) (aref by j))
+                        (aref sz j) (+ (aref sz j) (aref bz j)))
+                  (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) (if b-moves awake sleeping)
+                    (multiple-value-bind (rx ry rz)
+                        (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
+                      (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz
+                            (aref imb j) (if b-moves (aref inverse-mass lb) 0.0)
+                            (aref iib j) (if b-moves (aref inverse-inertia lb) 0.0)
+                            (aref sx j) (+ (aref sx j) (aref x lb) rx) (aref sy j) (+ (aref sy j) (aref y lb) ry)
+                            (aref sz j) (+ (aref sz j) (aref z lb) rz)))))
+              t)))))))
+
+(defun joint-effective-mass (rows j)
+  "Write the effective mass of the placed joint J of ROWS: a point joint's matrix K of the
+anchors, inverted (its six entries), or a distance joint's axial mass along its separation. #J0S0LV"
+  (declare (type joint-columns rows) (type index j) #.+kernel-policy+)
+  (with-joint-columns (kind rax ray raz rbx rby rbz sx sy sz ima imb iia iib k11 k12 k13 k22 k23 k33) rows
+    (let* ((m (+ (aref ima j) (aref imb j))) (ia (aref iia j)) (ib (aref iib j))
+           (ax (aref rax j)) (ay (aref ray j)) (az (aref raz j))
+           (bx (aref rbx j)) (by (aref rby j)) (bz (aref rbz j)))
+      (declare (type single-float m ia ib ax ay az bx by bz))
+      (if (= (aref kind j) +joint-point+)
+          (let* ((a11 (+ m (* ia (+ (* ay ay) (* az az))) (* ib (+ (* by by) (* bz bz)))))
+                 (a22 (+ m (* ia (+ (* ax ax) (* az az))) (* ib (+ (* bx bx) (* bz bz)))))
+                 (a33 (+ m (* ia (+ (* ax ax) (* ay ay))) (* ib (+ (* bx bx) (* by by)))))
+                 (a12 (- (+ (* ia ax ay) (* ib bx by))))
+                 (a13 (- (+ (* ia ax az) (* ib bx bz))))
+                 (a23 (- (+ (* ia ay az) (* ib by bz))))
+                 (c11 (- (* a22 a33) (* a23 a23))) (c12 (- (* a13 a23) (* a12 a33)))
+                 (c13 (- (* a12 a23) (* a13 a22))) (c22 (- (* a11 a33) (* a13 a13)))
+                 (c23 (- (* a12 a13) (* a11 a23))) (c33 (- (* a11 a22) (* a12 a12)))
+                 (det (+ (* a11 c11) (* a12 c12) (* a13 c13)))
+                 (inv (if (> det 0.0) (/ 1.0 det) 0.0)))
+            (setf (aref k11 j) (* c11 inv) (aref k12 j) (* c12 inv) (aref k13 j) (* c13 inv)
+                  (aref k22 j) (* c22 inv) (aref k23 j) (* c23 inv) (aref k33 j) (* c33 inv)))
+          (let* ((cx (aref sx j)) (cy (aref sy j)) (cz (aref sz j))
+                 (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+                 (s (if (> len 1e-9) (/ 1.0 len) 0.0))
+                 (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
+                 (ax1 (- (* ay nz) (* az ny))) (ay1 (- (* az nx) (* ax nz))) (az1 (- (* ax ny) (* ay nx)))
+                 (bx1 (- (* by nz) (* bz ny))) (by1 (- (* bz nx) (* bx nz))) (bz1 (- (* bx ny) (* by nx)))
+                 (k (+ m (* ia (+ (* ax1 ax1) (* ay1 ay1) (* az1 az1)))
+                       (* ib (+ (* bx1 bx1) (* by1 by1) (* bz1 bz1))))))
+            (setf (aref k11 j) (if (> k 0.0) (/ 1.0 k) 0.0)))))))
+
+(defun joint-soft-coefficients (rows j h stiff-bias stiff-mass stiff-impulse)
+  "Write the soft coefficients of the placed joint J of ROWS over substep H: its own hertz's (a
+spring's by spring-softness), or the stiff ones, STIFF-BIAS STIFF-MASS STIFF-IMPULSE; and the
+stiff impulse scale of its limits. #J0S0LV"
+  (declare (type joint-columns rows) (type index j) (type single-float h stiff-bias stiff-mass stiff-impulse)
+           #.+kernel-policy+)
+  (with-joint-columns (flags hertz damping-ratio bias-rate mass-scale impulse-scale limit-scale) rows
+    (setf (aref limit-scale j) stiff-impulse)
+    (if (> (aref hertz j) 0.0)
+        (multiple-value-bind (br ms is)
+            (if (logtest (aref flags j) +joint-spring+)
+                (spring-softness (aref hertz j) (aref damping-ratio j) h)
+                (physics-softness (aref hertz j) (aref damping-ratio j) h))
+          (setf (aref bias-rate j) br (aref mass-scale j) ms (aref impulse-scale j) is))
+        (setf (aref bias-rate j) stiff-bias (aref mass-scale j) stiff-mass (aref impulse-scale j) stiff-impulse))))
+
 (defun prepare-joints (world h)
-  "Write, for every joint of WORLD whose first body is awake, what the substeps of H read: the
-solver rows, the turned levers, the separation, the masses, the effective mass (a point joint's
-inverted matrix, a distance joint's axial mass) and the soft coefficients. Return the joint set
-when some joint is to be solved, else NIL. #J0S0LV"
+  "Write, for every joint of WORLD whose first body is awake, what the substeps of H read, stage
+by stage: the solver rows, the turned levers, the masses and the separation (place-joint), the
+effective mass (joint-effective-mass), the soft coefficients (joint-soft-coefficients); then
+colour the joints (color-joints). Return the joint set when some joint is to be solved, else
+NIL. #J0S0LV"
+  (let* ((set (physics-world-joints world))
+         (rows (and set (joint-set-rows set)))
+         (ids (physics-world-ids world))
+         (awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (dummy (body-columns-length awake))
+         (active 0))
+    (declare (type fixnum active))
+    (when set (setf (joint-set-solving set) nil))
+    (when (and set (plusp (joint-columns-length rows)))
+      (multiple-value-bind (stiff-hertz stiff-zeta) (joint-stiffness world h)
+        (multiple-value-bind (stiff-bias stiff-mass stiff-impulse) (physics-softness stiff-hertz stiff-zeta h)
+          (setf (joint-set-limit-bias set) stiff-bias (joint-set-limit-mass set) stiff-mass)
+          (dotimes (j (joint-columns-length rows))
+            (when (place-joint rows j dummy (handle-table-set ids) (handle-table-local ids) awake sleeping)
+              (incf active)
+              (joint-effective-mass rows j)
+              (joint-soft-coefficients rows j h stiff-bias stiff-mass stiff-impulse)))))
+      (when (plusp active) (color-joints world set))
+      (setf (joint-set-solving set) (plusp active)))
+    (and (plusp active) set)))
+
+(defun color-joints (world set)
+  "Colour the joints of SET prepared for this step on the colour masks the contacts' colouring
+left ([[#SSMPYW]]): first each joint of two awake bodies takes the lowest of colours 0-19 free at
+both, then each joint of one awake body takes, at it, the highest free colour among those in use,
+or failing that the lowest free colour; a joint that fits nowhere goes to the overflow colour 24.
+Then write SET's order, its prepared rows colour by colour and in row order within a colour,
+the others after them, and its colour starts, and sort its rows into that order. #J0S0LV"
+  (declare #.+kernel-policy+)
+  (let* ((rows (joint-set-rows set)) (n (joint-columns-length rows))
+         (masks (physics-world-color-masks world))
+         (contact-starts (physics-world-color-starts world))
+         (dummy (body-columns-length (physics-world-awake world)))
+         (used 0))
+    (declare (type fixnum-column masks contact-starts) (type index n dummy) (type (unsigned-byte 32) used))
+    (when (< (length (joint-set-colors set)) n)
+      (setf (joint-set-colors set) (make-array (max 16 (* 2 n)) :element-type 'fixnum :initial-element 0)
+            (joint-set-order set) (make-array (max 16 (* 2 n)) :element-type 'fixnum :initial-element 0)))
+    (let ((colors (joint-set-colors set)) (order (joint-set-order set)) (starts (joint-set-color-starts set))
+          (row-a (joint-columns-row-a rows)) (row-b (joint-columns-row-b rows)))
+      (declare (type fixnum-column colors order starts row-a row-b))
+      ;; the colours the contacts use
+      (dotimes (c +physics-max-colors+)
+        (when (< (aref contact-starts c) (aref contact-starts (1+ c)))
+          (setf used (logior used (ash 1 c)))))
+      (flet ((take (j color la lb)
+               ;; joint J takes COLOR, marked at the rows LA and LB (-1 for none)
+               (declare (type index j) (type fixnum color la lb))
+               (setf (aref colors j) color)
+               (when (< color +physics-max-colors+)
+                 (setf used (logior used (ash 1 color))
+                       (aref masks la) (logior (aref masks la) (ash 1 color)))
+                 (when (>= lb 0) (setf (aref masks lb) (logior (aref masks lb) (ash 1 color)))))))
+        (declare (inline take))
+        ;; pass one: joints of two awake bodies, the lowest colour free at both
+        (dotimes (j n)
+          (let ((la (aref row-a j)) (lb (aref row-b j)))
+            (declare (type fixnum la lb))
+            (cond ((< la 0) (setf (aref colors j) -2))
+                  ((= lb dummy) (setf (aref colors j) -1))
+                  (t (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
+                                         (1- (ash 1 +physics-dynamic-colors+)))))
+                       (take j (if (zerop free) +physics-max-colors+ (lowest-bit free)) la lb))))))
+        ;; pass two: joints of one awake body, as late among the used colours as it allows
+        (dotimes (j n)
+          (when (= (aref colors j) -1)
+            (let* ((la (aref row-a j))
+                   (free (logand (lognot (aref masks la)) (1- (ash 1 +physics-max-colors+)))))
+              (declare (type index la) (type (unsigned-byte 32) free))
+              (take j (cond ((plusp (logand free used)) (highest-bit (logand free used)))
+                            ((plusp free) (lowest-bit free))
+                            (t +physics-max-colors+))
+                    la -1)))))
+      ;; each colour's count, its end by the running sum, and its rows placed from the end back
+      (fill starts 0)
+      (dotimes (j n) (when (>= (aref colors j) 0) (incf (aref starts (aref colors j)))))
+      (loop with at of-type index = 0
+            for c from 0 to +physics-max-colors+
+            do (incf at (aref starts c)) (setf (aref starts c) at)
+            finally (setf (aref starts (1+ +physics-max-colors+)) at))
+      (loop for j of-type fixnum from (1- n) downto 0
+            for c of-type fixnum = (aref colors j)
+            when (>= c 0)
+              do (setf (aref order (decf (aref starts c))) j))
+      ;; the joints not solved this step after them, in row order
+      (loop with at of-type index = (aref starts (1+ +physics-max-colors+))
+            for j of-type index below n
+            when (< (aref colors j) 0)
+              do (setf (aref order at) j) (incf at))
+      (sort-joint-rows set))))
+
+(defun sort-joint-rows (set)
+  "Put the rows of SET in its colour order, when they are not yet, so that each colour's joints
+are consecutive rows: each joint's handle forwarded to its new row, its colour noted by row, and
+the order the rows' own again. #J0S0LV"
+  (declare #.+kernel-policy+)
+  (let* ((rows (joint-set-rows set)) (n (joint-columns-length rows))
+         (order (joint-set-order set)) (colors (joint-set-colors set)) (starts (joint-set-color-starts set)))
+    (declare (type fixnum-column order colors starts) (type index n))
+    (unless (loop for i of-type index below n always (= (aref order i) i))
+      ;; the colours by row are the places' scratch: each row's place in the order
+      (dotimes (i n) (setf (aref colors (aref order i)) i))
+      (joint-columns-permute rows (or (joint-set-scratch set) (setf (joint-set-scratch set) (make-joint-columns)))
+                             colors n)
+      (let ((local (handle-table-local (joint-set-ids set))) (handle (joint-columns-handle rows)))
+        (declare (type fixnum-column local handle))
+        (dotimes (r n)
+          (setf (aref local (handle-index (ldb (byte +handle-joint-bit+ 0) (aref handle r)))) r
+                (aref order r) r)))
+      (fill colors -2 :end n)
+      (dotimes (c (1+ +physics-max-colors+))
+        (loop for r of-type index from (aref starts c) below (aref starts (1+ c))
+              do (setf (aref colors r) c))))
+    set))
+
+(defun solving-joints (world)
+  "The joint set whose joints WORLD's substeps are solving, or NIL: what the kernel families'
+constraint passes test once a call. #J0S0LV"
   (let ((set (physics-world-joints world)))
-    (when (and set (plusp (joint-columns-length (joint-set-rows set))))
-      (let* ((rows (joint-set-rows set))
-             (ids (physics-world-ids world)) (sets (handle-table-set ids)) (locals (handle-table-local ids))
-             (awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-             (dummy (body-columns-length awake))
-             (active 0))
-        (declare (type fixnum-column sets locals) (type fixnum dummy active))
-        (multiple-value-bind (stiff-hertz stiff-zeta) (joint-stiffness world h)
-          (multiple-value-bind (stiff-bias stiff-mass stiff-impulse) (physics-softness stiff-hertz stiff-zeta h)
-            (declare (type single-float stiff-bias stiff-mass stiff-impulse))
-            (setf (joint-set-limit-bias set) stiff-bias (joint-set-limit-mass set) stiff-mass)
-            (with-joint-columns (kind flags body-a body-b ax ay az bx by bz hertz damping-ratio
-                                 row-a row-b rax ray raz rbx rby rbz sx sy sz
-                                 ima imb iia iib k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale
-                                 limit-scale)
-                rows
-              (flet ((place (h)
-                       ;; the set and row of a live body, or 0 and -1 for none
-                       (declare (type fixnum h))
-                       (if (= h +no-body+) (values 0 -1)
-                           (values (aref sets (handle-index h)) (aref locals (handle-index h))))))
-                (dotimes (j (joint-columns-length rows))
-                  (multiple-value-bind (set-a la) (place (aref body-a j))
-                    (if (/= set-a +set-awake+)
-                        (setf (aref row-a j) -1)
-                        (multiple-value-bind (set-b lb) (place (aref body-b j))
-                          (incf active)
-                          (let* ((b-buffer (if (= set-b +set-awake+) awake sleeping))
-                                 (b-moves (= set-b +set-awake+)))
-                            (setf (aref row-a j) la (aref row-b j) (if b-moves lb dummy))
-                            (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) awake
-                              (multiple-value-bind (rx ry rz)
-                                  (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
-                                (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz
-                                      (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la)
-                                      (aref sx j) (- (+ (aref x la) rx)) (aref sy j) (- (+ (aref y la) ry))
-                                      (aref sz j) (- (+ (aref z la) rz)))))
-                            (if (< lb 0)
-                                (setf (aref rbx j) 0.0 (aref rby j) 0.0 (aref rbz j) 0.0 (aref imb j) 0.0 (aref iib j) 0.0
-                                      (aref sx j) (+ (aref sx j) (aref bx j)) (aref sy j) (+ (aref sy j) (aref by j))
-                                      (aref sz j) (+ (aref sz j) (aref bz j)))
-                                (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) b-buffer
-                                  (multiple-value-bind (rx ry rz)
-                                      (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
-                                    (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz
-                                          (aref imb j) (if b-moves (aref inverse-mass lb) 0.0)
-                                          (aref iib j) (if b-moves (aref inverse-inertia lb) 0.0)
-                                          (aref sx j) (+ (aref sx j) (aref x lb) rx) (aref sy j) (+ (aref sy j) (aref y lb) ry)
-                                          (aref sz j) (+ (aref sz j) (aref z lb) rz))))))
-                          ;; the effective mass: a point joint's matrix inverted, a distance joint's axial mass
-                          (let* ((m (+ (aref ima j) (aref imb j))) (ia (aref iia j)) (ib (aref iib j))
-                                 (ax (aref rax j)) (ay (aref ray j)) (az (aref raz j))
-                                 (bx (aref rbx j)) (by (aref rby j)) (bz (aref rbz j)))
-                            (declare (type single-float m ia ib ax ay az bx by bz))
-                            (if (= (aref kind j) +joint-point+)
-                                (let* ((a11 (+ m (* ia (+ (* ay ay) (* az az))) (* ib (+ (* by by) (* bz bz)))))
-                                       (a22 (+ m (* ia (+ (* ax ax) (* az az))) (* ib (+ (* bx bx) (* bz bz)))))
-                                       (a33 (+ m (* ia (+ (* ax ax) (* ay ay))) (* ib (+ (* bx bx) (* by by)))))
-                                       (a12 (- (+ (* ia ax ay) (* ib bx by))))
-                                       (a13 (- (+ (* ia ax az) (* ib bx bz))))
-                                       (a23 (- (+ (* ia ay az) (* ib by bz))))
-                                       (c11 (- (* a22 a33) (* a23 a23))) (c12 (- (* a13 a23) (* a12 a33)))
-                                       (c13 (- (* a12 a23) (* a13 a22))) (c22 (- (* a11 a33) (* a13 a13)))
-                                       (c23 (- (* a12 a13) (* a11 a23))) (c33 (- (* a11 a22) (* a12 a12)))
-                                       (det (+ (* a11 c11) (* a12 c12) (* a13 c13)))
-                                       (inv (if (> det 0.0) (/ 1.0 det) 0.0)))
-                                  (setf (aref k11 j) (* c11 inv) (aref k12 j) (* c12 inv) (aref k13 j) (* c13 inv)
-                                        (aref k22 j) (* c22 inv) (aref k23 j) (* c23 inv) (aref k33 j) (* c33 inv)))
-                                (let* ((cx (aref sx j)) (cy (aref sy j)) (cz (aref sz j))
-                                       (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
-                                       (s (if (> len 1e-9) (/ 1.0 len) 0.0))
-                                       (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
-                                       (ax1 (- (* ay nz) (* az ny))) (ay1 (- (* az nx) (* ax nz))) (az1 (- (* ax ny) (* ay nx)))
-                                       (bx1 (- (* by nz) (* bz ny))) (by1 (- (* bz nx) (* bx nz))) (bz1 (- (* bx ny) (* by nx)))
-                                       (k (+ m (* ia (+ (* ax1 ax1) (* ay1 ay1) (* az1 az1)))
-                                             (* ib (+ (* bx1 bx1) (* by1 by1) (* bz1 bz1))))))
-                                  (setf (aref k11 j) (if (> k 0.0) (/ 1.0 k) 0.0))))
-                            ;; the soft coefficients: the joint's own hertz, or stiff
-                            (setf (aref limit-scale j) stiff-impulse)
-                            (if (> (aref hertz j) 0.0)
-                                (multiple-value-bind (br ms is)
-                                    (if (logtest (aref flags j) +joint-spring+)
-                                        (spring-softness (aref hertz j) (aref damping-ratio j) h)
-                                        (physics-softness (aref hertz j) (aref damping-ratio j) h))
-                                  (setf (aref bias-rate j) br (aref mass-scale j) ms (aref impulse-scale j) is))
-                                (setf (aref bias-rate j) stiff-bias (aref mass-scale j) stiff-mass
-                                      (aref impulse-scale j) stiff-impulse)))))))))))
-        (and (plusp active) set)))))
+    (and set (joint-set-solving set) set)))
+
+(defmacro do-constraint-colours ((start end world &key settle joints) colour-form overflow-form)
+  "Run, for each colour of WORLD's constraints in turn, the form of JOINTS, (SET FORM), with SET
+bound to the joint set and START END to the colour's run of its rows, when the substeps solve
+joints and the colour has some (SETTLE first), then COLOUR-FORM with START END bound to the
+colour's run of the constraint buffer, when it has one; then SETTLE, then the overflow colour's
+joints and OVERFLOW-FORM. #J0S0LV"
+  (let ((starts (gensym "STARTS")) (c (gensym "C")) (set (or (first joints) (gensym "SET"))))
+    `(let ((,starts (physics-world-color-starts ,world))
+           (,set (solving-joints ,world)))
+       (declare (type fixnum-column ,starts))
+       (flet ((joint-run (,c)
+                (declare (type fixnum ,c))
+                (let* ((js (joint-set-color-starts ,set))
+                       (,start (aref js ,c)) (,end (aref js (1+ ,c))))
+                  (declare (type fixnum-column js) (type index ,start ,end))
+                  (when (< ,start ,end) ,@(when settle (list settle)) ,(second joints)))))
+         (declare (inline joint-run))
+         (dotimes (,c +physics-max-colors+)
+           (when ,set (joint-run ,c))
+           (let ((,start (aref ,starts ,c)) (,end (aref ,starts (1+ ,c))))
+             (when (< ,start ,end) ,colour-form)))
+         ,@(when settle (list settle))
+         (when ,set (joint-run +physics-max-colors+))
+         (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
+           (when (< ,start ,end) ,overflow-form))))))
+
+(defun warm-start-with-joints (kernels world)
+  "The scalar family's warm start in a step that solves joints: colour by colour, the colour's
+joints, then its contacts, as the wide families run them. #J0S0LV"
+  (let ((cbuf (physics-world-constraints world))
+        (v (physics-world-velocities world)) (d (physics-world-deltas world))
+        (warm (kernel-variant-warm-start (world-kernel-variant world kernels))))
+    (do-constraint-colours (s e world :joints (set (warm-start-joints set v d s e)))
+      (funcall warm cbuf v s e)
+      (funcall warm cbuf v s e))))
+
+(defun solve-with-joints (kernels world inv-h use-bias elapsed)
+  "The scalar family's solve or relax pass in a step that solves joints: colour by colour, the
+colour's joints, then its contacts, as the wide families run them. #J0S0LV"
+  (let ((cbuf (physics-world-constraints world))
+        (v (physics-world-velocities world)) (d (physics-world-deltas world))
+        (push-max (f32 (physics-world-push-max world)))
+        (solve (kernel-variant-solve (world-kernel-variant world kernels))))
+    (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+      (flet ((contacts (s e)
+               (solve-handing solve 'solve-impact-range 1 cbuf v d s e inv-h use-bias elapsed push-max
+                              threshold hgx hgy hgz)))
+        (do-constraint-colours (s e world :joints (set (solve-joints set v d inv-h use-bias s e)))
+          (contacts s e)
+          (contacts s e))))))
 
 (defmacro with-joint-row ((v d j) &body body)
   "Run BODY for the prepared joint J, its columns bound by with-joint-columns, over the solver's velocities V and deltas D, with:
@@ -6169,15 +6514,16 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
        (declare (inline relative-velocity push!) (ignorable #'relative-velocity))
        ,@body)))
 
-(defun warm-start-joints (set v d)
-  "Apply every prepared joint's carried impulse again, at the start of a substep. #J0S0LV"
-  (declare (type joint-set set) (type f32-column v d) #.+kernel-policy+)
+(defun warm-start-joints (set v d start end)
+  "Apply again the carried impulse of each prepared joint of SET at rows START..END, at the start
+of a substep. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type index start end) #.+kernel-policy+)
   (let ((rows (joint-set-rows set)))
     (with-joint-columns (kind row-a row-b rax ray raz rbx rby rbz sx sy sz ima imb iia iib
                          impulse-x impulse-y impulse-z)
         rows
-      (dotimes (j (joint-columns-length rows))
-        (when (>= (aref row-a j) 0)
+      (loop for j of-type index from start below end do
+        (progn
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
                 (push! (aref impulse-x j) (aref impulse-y j) (aref impulse-z j))
@@ -6186,10 +6532,12 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
                   (push! (* s cx) (* s cy) (* s cz)))))))))
   nil)
 
-(defun solve-joints (set v d inv-h use-bias)
-  "One pass over the prepared joints in row order: with the soft bias when USE-BIAS (the solve),
-without it (the relax), but for a spring's length, which keeps its own coefficients. #J0S0LV"
-  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
+(defun solve-joints (set v d inv-h use-bias start end)
+  "One pass over the prepared joints of SET at rows START..END: with the soft bias when USE-BIAS
+(the solve), without it (the relax), but for a spring's length, which keeps its own
+coefficients. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) (type index start end)
+           #.+kernel-policy+)
   (let ((rows (joint-set-rows set))
         (limit-bias (joint-set-limit-bias set)) (limit-mass (joint-set-limit-mass set)))
     (declare (type single-float limit-bias limit-mass))
@@ -6197,8 +6545,8 @@ without it (the relax), but for a spring's length, which keeps its own coefficie
                          k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale limit-scale
                          rest-length min-length max-length impulse-x impulse-y impulse-z)
         rows
-      (dotimes (j (joint-columns-length rows))
-        (when (>= (aref row-a j) 0)
+      (loop for j of-type index from start below end do
+        (progn
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
                 (multiple-value-bind (vx vy vz) (relative-velocity)
@@ -7339,10 +7687,47 @@ with fold-positions, three. #F1NAL5"
                (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
           (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
 
+(defconstant +departure-none+ 0
+  "A row's fate in the finalize phase's first pass: it stays awake. #F1NAL5")
+
+(defconstant +departure-escaped+ 1
+  "A row's fate in the finalize phase's first pass: its centre crossed the coordinate limit, and
+it is removed with an :escaped event. #F1NAL5")
+
+(defconstant +departure-expired+ 2
+  "A row's fate in the finalize phase's first pass: a mortal body reached its life, and it is
+removed with an :expired event. #F1NAL5")
+
+(defconstant +departure-asleep+ 3
+  "A row's fate in the finalize phase's first pass: still for long enough, it goes to sleep. #F1NAL5")
+
+(defmacro stillness-fate ()
+  "The fate of awake row I, neither escaped nor expired, in a world that sleeps: +departure-asleep+
+once it has been still for the time to sleep, else +departure-none+, counting its still time or
+setting it back to zero. Expanded in finalize-phase's first pass, whose names it reads. #F1NAL5"
+  `(let* ((p (delta-row i))
+          (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
+          (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
+          (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
+                             (* (aref vz i) (aref vz i))))
+                    (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
+          (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
+     ;; a body only sleepers and terrain touch is judged by its displacement alone
+     (cond ((not (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
+                      (not (and settle-p (logtest (aref settling i) +brace-unsettled+)))))
+            (setf (aref sleep-time i) 0.0)
+            +departure-none+)
+           ;; a jointed body sleeps with its group ([[#J0SL3P]])
+           ((and (>= (incf (aref sleep-time i) dt) time-to-sleep)
+                 (not (logtest (aref flags i) +flag-jointed+)))
+            +departure-asleep+)
+           (t +departure-none+))))
+
 (define-featured-kernel (finalize-phase :features (:body-contacts :boxes :sleep :mortal)) (world)
   "The finalize phase, last of the step: fold deltas into positions and solver velocities into the rows, turn orientations,
 age mortal bodies (sleepers too) and expire them, and put bodies still for long enough to
-sleep. Rows are visited from the last down, so relocation never skips one. Compiled for fewer
+sleep: one pass decides which rows leave the awake set, the next moves them, both from the last
+row down, so relocation never skips one. Compiled for fewer
 features it holds no ageing without :mortal, no sleep without :sleep, and no reading of the
 store phase's marks without body contacts and boxes, which alone make them. #F1NAL5"
   (let* ((awake (physics-world-awake world))
@@ -7372,33 +7757,39 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
     (multiple-value-bind (check near held) (path-check-notes world)
       (hold-out-of-cells world held (fold-positions awake d check near held)))
     (fold-solver-state awake v dt)
-    ;; then ageing and sleep, which may relocate rows; a row below the one visited is never
-    ;; moved, so the solver's rows still match it
-    (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life handle flags) awake
-      (declare (ignorable vx vy vz wx wy wz radius sleep-time age life flags))
-      (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
-        (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
-               (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-               (%remove-body world +set-awake+ i))
-              ((if-feature :mortal (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i))) nil)
-               (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
-               (%remove-body world +set-awake+ i))
-              (sleep-p
-               (let* ((p (delta-row i))
-                      (ddx (aref d p)) (ddy (aref d (+ p 1))) (ddz (aref d (+ p 2)))
-                      (ax (aref wx i)) (ay (aref wy i)) (az (aref wz i))
-                      (speed (+ (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
-                                         (* (aref vz i) (aref vz i))))
-                                (* (aref radius i) (fsqrt (+ (* ax ax) (* ay ay) (* az az))))))
-                      (drift (* 0.5 inv-dt (fsqrt (+ (* ddx ddx) (* ddy ddy) (* ddz ddz))))))
-                 ;; a body only sleepers and terrain touch is judged by its displacement alone
-                 (if (and (< (if (and marked (= (aref held i) 1)) drift (max speed drift)) sleep-speed)
-                          (not (and settle-p (logtest (aref settling i) 4))))
-                     ;; a jointed body sleeps with its group ([[#J0SL3P]])
-                     (when (and (>= (incf (aref sleep-time i) dt) time-to-sleep)
-                                (not (logtest (aref flags i) +flag-jointed+)))
-                       (sleep-physics-body world i))
-                     (setf (aref sleep-time i) 0.0)))))))
+    ;; then ageing and sleep, in two passes: the first decides, in a loop that calls nothing,
+    ;; which rows leave the awake set and why, and lists them from the last down; the second
+    ;; moves them in that order, so a relocation only ever moves a row already dealt with
+    (let ((leaving (fixnum-room (physics-world-departures world) (* 2 (body-columns-length awake))))
+          (departures 0))
+      (declare (type fixnum-column leaving) (type index departures))
+      (setf (physics-world-departures world) leaving)
+      (with-body-columns (x y z vx vy vz wx wy wz radius sleep-time age life flags) awake
+        (declare (ignorable vx vy vz wx wy wz radius sleep-time age life flags))
+        (loop for i of-type fixnum from (1- (body-columns-length awake)) downto 0 do
+          (let ((fate
+                  (cond ((or (>= (abs (aref x i)) limit) (>= (abs (aref y i)) limit) (>= (abs (aref z i)) limit))
+                         +departure-escaped+)
+                        ((if-feature :mortal (and (> (aref life i) 0.0) (>= (incf (aref age i) dt) (aref life i))) nil)
+                         +departure-expired+)
+                        (sleep-p (stillness-fate))
+                        (t +departure-none+))))
+            (declare (type fixnum fate))
+            (unless (= fate +departure-none+)
+              (setf (aref leaving departures) i (aref leaving (1+ departures)) fate)
+              (incf departures 2)))))
+      (with-body-columns (x y z handle) awake
+        (loop for j of-type index from 0 below departures by 2 do
+          (let ((i (aref leaving j)))
+            (declare (type index i))
+            (let ((fate (aref leaving (1+ j))))
+              (cond ((= fate +departure-escaped+)
+                     (push-event world +event-escaped+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+                     (%remove-body world +set-awake+ i))
+                    ((= fate +departure-expired+)
+                     (push-event world +event-expired+ (aref handle i) +no-body+ (aref x i) (aref y i) (aref z i) 0.0)
+                     (%remove-body world +set-awake+ i))
+                    (t (sleep-physics-body world i))))))))
     ;; only a world with a mortal sleeper walks the sleeping buffer, and only its rows that
     ;; slept before this step: a removal below moves the last row, one of them or one just
     ;; asleep, into a place already walked
@@ -7762,10 +8153,10 @@ bodies to half the push-out speed. #IDVK7G"
     (dotimes (i (physics-world-substeps world))
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
-        (when joints (warm-start-joints joints v d))
+        ;; the joints, when some are prepared, are solved inside these passes, colour by
+        ;; colour with the contacts ([[#J0S0LV]])
         (when boxes (warm-start-box-points boxes v))
         (physics-warm-start kernels world)
-        (when joints (solve-joints joints v d inv-h t))
         (when boxes (solve-box-points boxes v d inv-h t))
         (physics-solve-contacts kernels world inv-h t elapsed)
         (flet ((yield-boxes ()
@@ -7777,12 +8168,13 @@ bodies to half the push-out speed. #IDVK7G"
           (physics-integrate-positions kernels world h)
           (when boxes (turn-box-rows boxes v h))
           (dotimes (k relaxes)
-            (when joints (solve-joints joints v d inv-h nil))
             (when boxes (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
         (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed)))))
+    ;; the joints' colouring serves these substeps only: a pass run by hand solves contacts alone
+    (when joints (setf (joint-set-solving joints) nil))
     world))
 
 (defparameter *physics-phases*
@@ -8422,11 +8814,24 @@ kernel family. #H4NDL3"
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
 (deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))
 
-(defconstant +snapshot-version+ 2 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
+(defconstant +snapshot-version+ 3 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
 
 (defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SN4P0T")
 
-(defconstant +snapshot-body-bytes+ 74 "Bytes of one body's record in a snapshot. #SN4P0T")
+(defconstant +snapshot-body-bytes+ 70
+  "Bytes of one body's record in a snapshot but its material's index, which takes 1, 2 or 4 bytes
+as the palette has up to 256, up to 65536 or more entries (material-index-bytes). #SN4P0T")
+
+(declaim (inline material-index-bytes body-record-bytes))
+(defun material-index-bytes (materials)
+  "The bytes a body's index into a palette of MATERIALS entries takes in a snapshot. #SN4P0T"
+  (declare (type index materials))
+  (cond ((<= materials 256) 1) ((<= materials 65536) 2) (t 4)))
+
+(defun body-record-bytes (materials)
+  "The bytes one body takes in a snapshot whose palette has MATERIALS entries. #SN4P0T"
+  (declare (type index materials))
+  (+ +snapshot-body-bytes+ (material-index-bytes materials)))
 
 (defconstant +snapshot-material-bytes+ 36 "Bytes of one entry of a snapshot's palette of materials. #SN4P0T")
 
@@ -8434,7 +8839,13 @@ kernel family. #H4NDL3"
   "Bytes every contact's record in a snapshot has: its key and its flags; the normal and the
 groups of carried impulses follow when the flags say so. #SN4P0T")
 
-(defconstant +snapshot-pair-row-bytes+ 21 "Bytes of one row of the pair list in a snapshot: anchor, handle, clear. #SN4P0T")
+(defconstant +snapshot-contact-most-bytes+ 50
+  "The most bytes a contact's record in a snapshot takes: its key, its flags, its normal and every
+group of carried impulses. #SN4P0T")
+
+(defconstant +snapshot-pair-row-bytes+ 12 "Bytes of one row's anchor in the pair list of a snapshot. #SN4P0T")
+
+(defconstant +snapshot-pair-head-bytes+ 40 "Bytes of the pair list part's payload before its rows. #SN4P0T")
 
 (defconstant +snapshot-box-bytes+ 52 "Bytes of one posted box in a snapshot. #SN4P0T")
 
@@ -8504,31 +8915,39 @@ range, a body in a solid cell. #SN4P0T"))
 
 (declaim (inline snapshot-checksum))
 (defun snapshot-checksum (buffer start end)
-  "The 64-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4): FNV-1a's
-step, exclusive or then multiply by its prime modulo 2^64, over 64-bit words and a last 32-bit
-one. Each step is a bijection of the hash for a given word, and of the word for a given hash, so
-a change within any one word always changes the sum. #SN4P0T"
+  "The 64-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4): four lanes
+of FNV-1a's step, exclusive or then multiply by its prime modulo 2^64, lane K taking the 64-bit
+words K, K + 4, K + 8 ... and lane 0 the last whole words; then the four lanes' sums and a last
+32-bit word folded by the same step in that order. Each step is a bijection of the hash for a
+given word, and of the word for a given hash, so a change within any one word always changes the
+sum. #SN4P0T"
   (declare (type octets buffer) (type index start end) #.+kernel-policy+)
-  (let ((hash 14695981039346656037) (i start))
-    (declare (type (unsigned-byte 64) hash) (type index i))
-    (sb-sys:with-pinned-objects (buffer)
-      (let ((sap (sb-sys:vector-sap buffer)))
-        (loop while (<= (+ i 8) end)
-              do (setf hash (logand (* (logxor hash (sb-sys:sap-ref-64 sap i)) 1099511628211)
-                                    #xFFFFFFFFFFFFFFFF))
-                 (incf i 8))
-        (when (< i end)
-          (setf hash (logand (* (logxor hash (sb-sys:sap-ref-32 sap i)) 1099511628211) #xFFFFFFFFFFFFFFFF)))))
-    hash))
+  (let ((h0 14695981039346656037) (h1 14695981039346656037) (h2 14695981039346656037)
+        (h3 14695981039346656037) (i start))
+    (declare (type (unsigned-byte 64) h0 h1 h2 h3) (type index i))
+    (macrolet ((fnv (hash word) `(setf ,hash (logand (* (logxor ,hash ,word) 1099511628211) #xFFFFFFFFFFFFFFFF))))
+      (sb-sys:with-pinned-objects (buffer)
+        (let ((sap (sb-sys:vector-sap buffer)))
+          ;; four chains of multiplies in flight at once, not one
+          (loop while (<= (+ i 32) end)
+                do (fnv h0 (sb-sys:sap-ref-64 sap i)) (fnv h1 (sb-sys:sap-ref-64 sap (+ i 8)))
+                   (fnv h2 (sb-sys:sap-ref-64 sap (+ i 16))) (fnv h3 (sb-sys:sap-ref-64 sap (+ i 24)))
+                   (incf i 32))
+          (loop while (<= (+ i 8) end) do (fnv h0 (sb-sys:sap-ref-64 sap i)) (incf i 8))
+          (let ((hash 14695981039346656037))
+            (declare (type (unsigned-byte 64) hash))
+            (fnv hash h0) (fnv hash h1) (fnv hash h2) (fnv hash h3)
+            (when (< i end) (fnv hash (sb-sys:sap-ref-32 sap i)))
+            hash))))))
 
 ;;; the scratch a snapshot and a restore reuse: one set per image, grown by doubling
 
 (defstruct (snapshot-scratch (:constructor make-snapshot-scratch ()))
-  "What taking and restoring snapshots reuse: the palette index of each body (MATERIALS), the
-palette's words (PALETTE, nine a material) and its open-addressing table (TABLE), marks by handle
-slot (MARKS, stamped with STAMP), and a contact table filled while a snapshot is checked and
-traded for the world's when it is restored (CONTACTS), the flags of each contact's record
-between sizing and writing a snapshot (CONTACT-FLAGS), and each part's size and offset. #SN4P0T"
+  "What taking and restoring a world's snapshots reuse: the palette index of each body
+(MATERIALS), the palette's words (PALETTE, nine a material) and its open-addressing table
+(TABLE), marks by handle slot (MARKS, stamped with STAMP), a contact table filled while a
+snapshot is checked and traded for the world's when it is restored (CONTACTS), and each part's
+size and offset. #SN4P0T"
   (materials (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (palette (make-array 576 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
@@ -8536,12 +8955,14 @@ between sizing and writing a snapshot (CONTACT-FLAGS), and each part's size and 
   (marks (make-array 64 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (stamp 0 :type fixnum)
   (contacts (make-contact-table) :type contact-table)
-  (contact-flags (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (sizes (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (offsets (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
 
-(defvar *snapshot-scratch* (make-snapshot-scratch)
-  "The image's snapshot scratch: snapshots and restores run one at a time, as steps do. #SN4P0T")
+(defun world-snapshot-scratch (world)
+  "WORLD's snapshot scratch, made at its first snapshot or restore: each world has its own, so
+worlds stepped on different threads take and restore snapshots at the same time. #SN4P0T"
+  (or (physics-world-snapshot-scratch world)
+      (setf (physics-world-snapshot-scratch world) (make-snapshot-scratch))))
 
 (defun snapshot-marks (scratch slots)
   "SCRATCH's marks, with room for SLOTS slots, under two fresh stamps: return the marks and the
@@ -8632,9 +9053,12 @@ of the world's state is one entry. #SN4P0T")
   "The bit mask of FEATURES, bit K for the K-th feature of +physics-features+. #SN4P0T"
   (loop for f in features sum (ash 1 (position f +physics-features+))))
 
-(defun snapshot-part-sizes (world materials sizes)
-  "Write into SIZES, by part id, the payload bytes of each part of WORLD's snapshot, given its
-palette of MATERIALS entries, and return their sum with the parts' own headers. #SN4P0T"
+(defun snapshot-part-bounds (world materials sizes)
+  "Write into SIZES, by part id, the most payload bytes each part of WORLD's snapshot may take,
+given its palette of MATERIALS entries (-1 for a part the world has not got), and return their
+sum with the parts' own headers: the exact size of every part but the contacts, whose records
+are bounded by +snapshot-contact-most-bytes+, and the pair list, bounded by its rows' handles
+and its pairs written out whole. #SN4P0T"
   (declare (type fixnum-column sizes) (type index materials) #.+kernel-policy+)
   (let* ((ids (physics-world-ids world))
          (free (loop with slot = (handle-table-free ids) while (>= slot 0)
@@ -8643,11 +9067,12 @@ palette of MATERIALS entries, and return their sum with the parts' own headers. 
          (rows (max 0 (pair-list-rows plist))))
     (setf (aref sizes 1) +snapshot-world-bytes+
           (aref sizes 2) (+ 12 (* 4 (handle-table-count ids)) (* 4 free) (* 8 (physics-world-added-count world)))
-          (aref sizes 3) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-awake world)))))
-          (aref sizes 4) (padded (+ 4 (* +snapshot-body-bytes+ (body-columns-length (physics-world-sleeping world)))))
+          (aref sizes 3) (padded (+ 4 (* (body-record-bytes materials) (body-columns-length (physics-world-awake world)))))
+          (aref sizes 4) (padded (+ 4 (* (body-record-bytes materials) (body-columns-length (physics-world-sleeping world)))))
           (aref sizes 5) (+ 4 (* +snapshot-material-bytes+ materials))
-          (aref sizes 6) (padded (+ 4 (contact-records-bytes (physics-world-contacts world) *snapshot-scratch*)))
-          (aref sizes 7) (padded (+ 36 (* +snapshot-pair-row-bytes+ rows) (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0))))
+          (aref sizes 6) (padded (+ 4 (* +snapshot-contact-most-bytes+ (contact-columns-length (physics-world-contacts world)))))
+          (aref sizes 7) (+ +snapshot-pair-head-bytes+ (* (+ +snapshot-pair-row-bytes+ 8) rows) (* 4 (ceiling rows 32))
+                            (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0)) 8)
           (aref sizes 8) (+ 4 (* +snapshot-box-bytes+ (box-columns-length (physics-world-boxes world))))
           (aref sizes 9) (+ 4 (if (physics-world-pushes world) (* 16 (handle-table-count ids)) 0))
           (aref sizes 10) (let ((set (physics-world-joints world)))
@@ -8660,6 +9085,21 @@ palette of MATERIALS entries, and return their sum with the parts' own headers. 
                                 -1)))
     (loop for (id) in +snapshot-parts+ unless (minusp (aref sizes id)) sum (+ 8 (aref sizes id)))))
 
+(declaim (inline same-material-p))
+(defun same-material-p (bodies row other)
+  "True when rows ROW and OTHER of BODIES have the same material, bit for bit: the nine words
+material-words writes. #SN4P0T"
+  (declare (type body-columns bodies) (type index row other) #.+kernel-policy+)
+  (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind flags)
+      bodies
+    (macrolet ((same (&rest columns)
+                 `(and ,@(loop for c in columns
+                               collect `(= (sb-kernel:single-float-bits (aref ,c row))
+                                           (sb-kernel:single-float-bits (aref ,c other)))))))
+      (and (same radius inverse-mass inverse-inertia restitution friction rolling-resistance life)
+           (= (aref kind row) (aref kind other))
+           (= (ldb (byte 32 16) (aref flags row)) (ldb (byte 32 16) (aref flags other)))))))
+
 (defun snapshot-materials (world scratch)
   "Fill SCRATCH's palette with the materials of WORLD's bodies, awake rows then sleeping, and
 its materials column with each body's entry; return the palette's size. #SN4P0T"
@@ -8671,59 +9111,53 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
             (make-array (max n (* 2 (length (snapshot-scratch-materials scratch)))) :element-type 'fixnum)))
     (fill (snapshot-scratch-table scratch) -1)
     (setf (snapshot-scratch-count scratch) 0)
-    (let ((materials (snapshot-scratch-materials scratch)) (k 0) (last -1))
-      (declare (type fixnum-column materials) (type index k) (type fixnum last))
+    (let ((materials (snapshot-scratch-materials scratch)) (k 0))
+      (declare (type fixnum-column materials) (type index k))
       (flet ((walk (bodies)
                (declare (type body-columns bodies))
-               (dotimes (row (body-columns-length bodies))
-                 ;; most bodies share the material of the body before them: compared first, not hashed
-                 (let* ((words (snapshot-scratch-palette scratch))
-                        (at (* 9 (snapshot-scratch-count scratch))))
-                   (declare (type fixnum-column words) (type index at))
-                   (setf last
-                         (if (and (>= last 0) (<= (+ at 9) (length words))
-                                  (progn (material-words bodies row words at)
-                                         (loop for j below 9
-                                               always (= (aref words (+ (* 9 last) j)) (aref words (+ at j))))))
-                             last
-                             (palette-index scratch bodies row))))
-                 (setf (aref materials k) last)
-                 (incf k))))
+               (let ((last -1))
+                 (declare (type fixnum last))
+                 (dotimes (row (body-columns-length bodies))
+                   ;; most bodies share the material of the row before them: compared, not hashed
+                   (setf last (if (and (> row 0) (same-material-p bodies row (1- row)))
+                                  last
+                                  (palette-index scratch bodies row))
+                         (aref materials k) last)
+                   (incf k)))))
         (walk awake)
         (walk sleeping)))
     (snapshot-scratch-count scratch)))
 
 (defun snapshot-physics-world (world &optional buffer)
-  "Write WORLD's whole simulation state into BUFFER, an octet vector, when it is large enough,
-else into a new one; return the buffer and the snapshot's size in bytes. Into a buffer large
-enough it conses nothing. #SN4P0T"
+  "Write WORLD's whole simulation state into BUFFER, an octet vector, when it has room for the
+snapshot's bound (snapshot-part-bounds), else into a new one of that bound; return the buffer
+and the snapshot's size in bytes. Into a buffer large enough it conses nothing. #SN4P0T"
   (check-idle world 'snapshot-physics-world)
   (refuse-box-snapshot world)
   (unless (or (null buffer) (typep buffer 'octets))
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "NIL or an octet vector, (simple-array (unsigned-byte 8) (*))"))
-  (let* ((scratch *snapshot-scratch*)
+  (let* ((scratch (world-snapshot-scratch world))
          (materials (snapshot-materials world scratch))
          (sizes (snapshot-scratch-sizes scratch))
-         (total (+ +snapshot-header-bytes+ (snapshot-part-sizes world materials sizes))))
-    (declare (type index total))
-    (let ((buffer (if (and buffer (>= (length buffer) total)) buffer (make-array total :element-type '(unsigned-byte 8)))))
+         (bound (+ +snapshot-header-bytes+ (snapshot-part-bounds world materials sizes))))
+    (declare (type index bound))
+    (let ((buffer (if (and buffer (>= (length buffer) bound)) buffer (make-array bound :element-type '(unsigned-byte 8))))
+          (at +snapshot-header-bytes+))
+      (declare (type octets buffer) (type index at))
       (replace buffer +snapshot-magic+)
       (setf (snap-u32 buffer 8) +snapshot-version+
-            (snap-u32 buffer 12) (loop for (id) in +snapshot-parts+ count (>= (aref sizes id) 0))
-            (snap-u64 buffer 16) total)
-      (let ((at +snapshot-header-bytes+))
-        (declare (type index at))
-        (loop for (id) in +snapshot-parts+
-              for size of-type fixnum = (aref sizes id)
-              unless (minusp size)
-              do (setf (snap-u32 buffer at) id (snap-u32 buffer (+ at 4)) size)
-                 ;; the padding reads as zeros
-                 (fill buffer 0 :start (+ at 8) :end (+ at 8 size))
-                 (write-snapshot-part id world buffer (+ at 8) scratch)
-                 (incf at (+ 8 size))))
-      (setf (snap-u64 buffer 24) (snapshot-checksum buffer +snapshot-header-bytes+ total))
-      (values buffer total))))
+            (snap-u32 buffer 12) (loop for (id) in +snapshot-parts+ count (>= (aref sizes id) 0)))
+      ;; each part writes its payload, padding zeroed, and says how long it came out
+      (loop for (id) in +snapshot-parts+
+            unless (minusp (aref sizes id))
+              do (let ((size (write-snapshot-part id world buffer (+ at 8) scratch)))
+                   (declare (type index size))
+                   (setf (snap-u32 buffer at) id (snap-u32 buffer (+ at 4)) size)
+                   (incf at (+ 8 size))))
+      (setf (snap-u64 buffer 16) at
+            (snap-u64 buffer 24) (snapshot-checksum buffer +snapshot-header-bytes+ at))
+      (values buffer at))))
 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +contact-impulse-groups+
@@ -8746,16 +9180,21 @@ its constants, written out, not looped over. #SN4P0T"
 touching and seen bits: the code of its normal in bits 2-4 (0 written out; 1 to 6 the unit
 vectors +x -x +y -y +z -z, exactly) and a bit for each impulse group with a bit set. #SN4P0T"
   (declare (type f32-column geometry) (type index g) #.+kernel-policy+)
-  (let ((nx (aref geometry g)) (ny (aref geometry (+ g 1))) (nz (aref geometry (+ g 2))) (flags 0))
-    (declare (type fixnum flags))
-    (flet ((zero (v) (declare (type single-float v)) (zerop (sb-kernel:single-float-bits v))))
-      (setf flags (ash (cond ((and (zero ny) (zero nz)) (cond ((= nx 1.0) 1) ((= nx -1.0) 2) (t 0)))
-                             ((and (zero nx) (zero nz)) (cond ((= ny 1.0) 3) ((= ny -1.0) 4) (t 0)))
-                             ((and (zero nx) (zero ny)) (cond ((= nz 1.0) 5) ((= nz -1.0) 6) (t 0)))
-                             (t 0))
-                       2))
+  (macrolet ((bits (k) `(sb-kernel:single-float-bits (aref geometry (+ g ,k)))))
+    (let ((x (bits 0)) (y (bits 1)) (z (bits 2)) (flags 0))
+      (declare (type (signed-byte 32) x y z) (type fixnum flags))
+      ;; the bits of 1.0 and of -1.0
+      (flet ((code (v plus minus)
+               (declare (type (signed-byte 32) v) (type fixnum plus minus))
+               (cond ((= v #x3F800000) plus) ((= v (- #x40800000)) minus) (t 0))))
+        (declare (inline code))
+        (setf flags (ash (cond ((zerop (logior y z)) (code x 1 2))
+                               ((zerop (logior x z)) (code y 3 4))
+                               ((zerop (logior x y)) (code z 5 6))
+                               (t 0))
+                         2)))
       (do-impulse-groups (bit first width)
-        (unless (loop for k of-type index below width always (zero (aref geometry (+ g first k))))
+        (unless (loop for k of-type index below width always (zerop (bits (+ first k))))
           (setf flags (logior flags (ash 1 bit)))))
       flags)))
 
@@ -8766,44 +9205,154 @@ vectors +x -x +y -y +z -z, exactly) and a bit for each impulse group with a bit 
   (+ +snapshot-contact-bytes+ (if (zerop (ldb (byte 3 2) flags)) 12 0)
      (if (logbitp 5 flags) 4 0) (if (logbitp 6 flags) 8 0) (if (logbitp 7 flags) 12 0) (if (logbitp 8 flags) 4 0)))
 
-(defun contact-records-bytes (contacts scratch)
-  "The bytes of the snapshot records of every contact of CONTACTS; each record's flags are kept
-in SCRATCH's contact flags for the writer. #SN4P0T"
-  (declare (type contact-columns contacts) (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let ((geometry (contact-columns-geometry contacts)) (bytes 0) (n (contact-columns-length contacts)))
-    (declare (type index bytes n))
-    (when (< (length (snapshot-scratch-contact-flags scratch)) n)
-      (setf (snapshot-scratch-contact-flags scratch)
-            (make-array (max n (* 2 (length (snapshot-scratch-contact-flags scratch)))) :element-type 'fixnum)))
-    (let ((kept (snapshot-scratch-contact-flags scratch)))
-      (declare (type fixnum-column kept))
-      (dotimes (row n bytes)
-        (let ((flags (contact-record-flags geometry (geometry-start row))))
-          (setf (aref kept row) flags)
-          (incf bytes (contact-record-bytes flags)))))))
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +snapshot-body-floats+ '(x y z vx vy vz wx wy wz qw qx qy qz sleep-time)
+    "The single-float columns of a body that a body part of a snapshot holds, each as one block of
+its rows, in this order. #SN4P0T"))
 
-(defun write-snapshot-bodies (bodies buffer at materials first)
-  "Write the rows of BODIES into BUFFER from AT: their count, then a record a row, the row's
-material being entry FIRST + row of MATERIALS. #SN4P0T"
-  (declare (type body-columns bodies) (type octets buffer) (type index at first)
+(defmacro do-snapshot-body-floats ((column k) bodies &body body)
+  "Run BODY once for each column of +snapshot-body-floats+, COLUMN bound to that column of BODIES
+and K to its place in the list, written out, not looped over. #SN4P0T"
+  (let ((b (gensym "BODIES")))
+    `(let ((,b ,bodies))
+       ,@(loop for c in +snapshot-body-floats+ for i from 0
+               collect `(let ((,column (,(intern (format nil "BODY-COLUMNS-~A" c) (symbol-package 'body-columns-x)) ,b)))
+                          (declare (type f32-column ,column) (ignorable ,column))
+                          (symbol-macrolet ((,k ,i)) ,@body))))))
+
+(declaim (inline body-part-column))
+(defun body-part-column (n k &optional (width 4))
+  "Where, from the count that starts a body part of N bodies, the block of its K-th column begins:
+the float columns of +snapshot-body-floats+ from 0, then age (14, two units), slot (16) and
+material (17), in 4-byte units, and the flags (18) after the materials' indices of WIDTH bytes
+each. #SN4P0T"
+  (declare (type index n) (type (integer 0 18) k) (type (member 1 2 4) width))
+  (the index (if (= k 18) (+ 4 (* (+ 68 width) n)) (+ 4 (* 4 k n)))))
+
+(declaim (inline snap-material-index (setf snap-material-index)))
+(defun snap-material-index (buffer offset width)
+  "The material index of WIDTH bytes at OFFSET of BUFFER. #SN4P0T"
+  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width))
+  (case width (1 (snap-u8 buffer offset)) (2 (snap-u16 buffer offset)) (t (snap-u32 buffer offset))))
+
+(defun (setf snap-material-index) (value buffer offset width)
+  "Write the material index VALUE in WIDTH bytes at OFFSET of BUFFER. #SN4P0T"
+  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width) (type (unsigned-byte 32) value))
+  (case width
+    (1 (setf (snap-u8 buffer offset) value))
+    (2 (setf (snap-u16 buffer offset) value))
+    (t (setf (snap-u32 buffer offset) value))))
+
+(defun write-snapshot-bodies (bodies buffer at materials first palette)
+  "Write the rows of BODIES into BUFFER from AT: their count, then each column as one block of
+every row's value, the float columns and the ages copied whole, the row's material being entry
+FIRST + row of MATERIALS, an index into a PALETTE of that many entries; return the padded bytes
+written. #SN4P0T"
+  (declare (type body-columns bodies) (type octets buffer) (type index at first palette)
            (type fixnum-column materials) #.+kernel-policy+)
-  (let ((n (body-columns-length bodies)))
+  (let ((n (body-columns-length bodies)) (w (material-index-bytes palette)))
     (setf (snap-u32 buffer at) n)
-    (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz sleep-time age flags handle) bodies
+    (do-snapshot-body-floats (column k) bodies
+      (sb-kernel:%byte-blt column 0 buffer (+ at (body-part-column n k)) (+ at (body-part-column n (1+ k)))))
+    (sb-kernel:%byte-blt (body-columns-age bodies) 0 buffer (+ at (body-part-column n 14)) (+ at (body-part-column n 16)))
+    (let ((handle (body-columns-handle bodies)) (flags (body-columns-flags bodies))
+          (s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18 w))))
+      (declare (type fixnum-column handle flags) (type index s m f))
       (dotimes (row n)
-        (let ((o (+ at 4 (* row +snapshot-body-bytes+))))
-          (declare (type index o))
-          (setf (snap-f32 buffer o) (aref x row) (snap-f32 buffer (+ o 4)) (aref y row)
-                (snap-f32 buffer (+ o 8)) (aref z row) (snap-f32 buffer (+ o 12)) (aref vx row)
-                (snap-f32 buffer (+ o 16)) (aref vy row) (snap-f32 buffer (+ o 20)) (aref vz row)
-                (snap-f32 buffer (+ o 24)) (aref wx row) (snap-f32 buffer (+ o 28)) (aref wy row)
-                (snap-f32 buffer (+ o 32)) (aref wz row) (snap-f32 buffer (+ o 36)) (aref qw row)
-                (snap-f32 buffer (+ o 40)) (aref qx row) (snap-f32 buffer (+ o 44)) (aref qy row)
-                (snap-f32 buffer (+ o 48)) (aref qz row) (snap-f32 buffer (+ o 52)) (aref sleep-time row)
-                (snap-f64 buffer (+ o 56)) (aref age row)
-                (snap-u32 buffer (+ o 64)) (handle-index (aref handle row))
-                (snap-u32 buffer (+ o 68)) (aref materials (+ first row))
-                (snap-u16 buffer (+ o 72)) (ldb (byte 16 0) (aref flags row))))))))
+        (setf (snap-u32 buffer (+ s (* 4 row))) (ldb (byte +handle-index-bits+ 0) (aref handle row))
+              (snap-material-index buffer (+ m (* w row)) w) (aref materials (+ first row))
+              (snap-u16 buffer (+ f (* 2 row))) (ldb (byte 16 0) (aref flags row))))
+      ;; the padding reads as zeros
+      (loop for p of-type index from (+ f (* 2 n)) below (+ at (padded (+ 4 (* (body-record-bytes palette) n))))
+            do (setf (aref buffer p) 0)))
+    (padded (+ 4 (* (body-record-bytes palette) n)))))
+
+(defun write-snapshot-contacts (world buffer at)
+  "Write the contacts of WORLD into BUFFER from AT, in their row order, each record as long as its
+flags make it, in one pass; return the padded bytes written. #SN4P0T"
+  (declare (type octets buffer) (type index at) #.+kernel-policy+)
+  (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts))
+         (step (physics-world-step-count world)) (o (+ at 4)))
+    (declare (type index n o) (type fixnum step))
+    (setf (snap-u32 buffer at) n)
+    (with-contact-columns (key seen touching geometry) contacts
+      (dotimes (row n)
+        (let* ((g (geometry-start row))
+               (flags (logior (contact-record-flags geometry g)
+                              (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2))))
+          (declare (type index g) (type fixnum flags))
+          (setf (snap-i64 buffer o) (aref key row) (snap-u16 buffer (+ o 8)) flags)
+          (incf o 10)
+          (when (zerop (ldb (byte 3 2) flags))
+            (setf (snap-f32 buffer o) (aref geometry g) (snap-f32 buffer (+ o 4)) (aref geometry (+ g 1))
+                  (snap-f32 buffer (+ o 8)) (aref geometry (+ g 2)))
+            (incf o 12))
+          (do-impulse-groups (bit first width)
+            (when (logbitp bit flags)
+              (dotimes (k width)
+                (setf (snap-f32 buffer o) (aref geometry (+ g first k)))
+                (incf o 4)))))))
+    ;; the padding reads as zeros
+    (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
+    (- o at)))
+
+(defun write-snapshot-pair-list (world buffer at)
+  "Write the pair list of WORLD into BUFFER from AT: its numbers, each row's anchor, the rows'
+clear marks as bits, the rows' handles unless they are the awake rows' own, and the pairs as
+differences of rows when they fit in a byte and a 16-bit word, else whole; return the padded
+bytes written. #SN4P0T"
+  (declare (type octets buffer) (type index at) #.+kernel-policy+)
+  (let* ((plist (physics-world-pair-list world)) (rows (pair-list-rows plist))
+         (n (max rows 0)) (pairs (if (>= rows 0) (pair-list-count plist) 0))
+         (awake (physics-world-awake world)) (handles (pair-list-handles plist))
+         (own (and (<= n (body-columns-length awake))
+                   (let ((now (body-columns-handle awake)))
+                     (declare (type fixnum-column now))
+                     (loop for i of-type index below n always (= (aref handles i) (aref now i))))))
+         (o (+ at +snapshot-pair-head-bytes+ (* +snapshot-pair-row-bytes+ n))))
+    (declare (type fixnum rows) (type index n pairs o))
+    (setf (snap-i32 buffer at) rows (snap-f32 buffer (+ at 4)) (pair-list-cell plist)
+          (snap-u32 buffer (+ at 8)) (pair-list-builds plist) (snap-i32 buffer (+ at 12)) (pair-list-loose-count plist)
+          (snap-i64 buffer (+ at 16)) (pair-list-step plist) (snap-i64 buffer (+ at 24)) (pair-list-built-step plist)
+          (snap-u32 buffer (+ at 32)) pairs)
+    (sb-kernel:%byte-blt (pair-list-anchors plist) 0 buffer (+ at +snapshot-pair-head-bytes+) o)
+    ;; the clear marks, a bit a row in 32-bit words
+    (let ((clear (pair-list-clear plist)))
+      (declare (type fixnum-column clear))
+      (dotimes (w (ceiling n 32))
+        (let ((word 0))
+          (declare (type (unsigned-byte 32) word))
+          (loop for i of-type index from (* 32 w) below (min n (* 32 (1+ w)))
+                do (when (= 1 (aref clear i)) (setf word (logior word (ash 1 (- i (* 32 w)))))))
+          (setf (snap-u32 buffer o) word)
+          (incf o 4))))
+    (unless own
+      (dotimes (i n) (setf (snap-i64 buffer o) (aref handles i)) (incf o 8)))
+    (let ((list (pair-list-pairs plist)) (deltas t))
+      (declare (type fixnum-column list))
+      ;; as deltas: a byte a pair, its row A less the pair before's, signed, or -128 when that does
+      ;; not fit and A is the next of the rows listed whole after; then a 16-bit word a pair, its row
+      ;; B less its row A, signed; whole pairs when some B - A does not fit
+      (let ((whole (padded (+ o (* 3 pairs)))) (wholes 0))
+        (declare (type index whole wholes))
+        (loop with last of-type fixnum = 0
+              for k of-type index below pairs
+              for a of-type fixnum = (ash (aref list k) -24)
+              for b of-type fixnum = (ldb (byte 24 0) (aref list k))
+              do (unless (<= -32768 (- b a) 32767) (return (setf deltas nil)))
+                 (if (< -128 (- a last) 128)
+                     (setf (snap-u8 buffer (+ o k)) (ldb (byte 8 0) (- a last)))
+                     (setf (snap-u8 buffer (+ o k)) 128
+                           (snap-u32 buffer (+ whole 4 (* 4 wholes))) a
+                           wholes (1+ wholes)))
+                 (setf (snap-u16 buffer (+ o pairs (* 2 k))) (ldb (byte 16 0) (- b a)) last a))
+        (if deltas
+            (progn (loop for q of-type index from (+ o (* 3 pairs)) below whole do (setf (aref buffer q) 0))
+                   (setf (snap-u32 buffer whole) wholes o (+ whole 4 (* 4 wholes))))
+            (dotimes (k pairs) (setf (snap-i64 buffer o) (aref list k)) (incf o 8))))
+      (setf (snap-u32 buffer (+ at 36)) (logior (if own 0 1) (if deltas 2 0))))
+    (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
+    (- o at)))
 
 (defun write-snapshot-world (world buffer at)
   "Write the world part of WORLD's snapshot into BUFFER from AT: its numbers, its parameters and
@@ -8879,10 +9428,13 @@ limits' softness and a record per joint. #SN4P0T"
                     break-force impulse-x impulse-y impulse-z)))))))
 
 (defun write-snapshot-part (id world buffer at scratch)
-  "Write the payload of part ID of WORLD's snapshot into BUFFER from AT. #SN4P0T"
+  "Write the payload of part ID of WORLD's snapshot into BUFFER from AT, its padding zeroed, and
+return its bytes. #SN4P0T"
   (declare (type octets buffer) (type index at) (type snapshot-scratch scratch) #.+kernel-policy+)
   (ecase id
-    (1 (write-snapshot-world world buffer at))
+    (1 (fill buffer 0 :start at :end (+ at +snapshot-world-bytes+))
+       (write-snapshot-world world buffer at)
+       +snapshot-world-bytes+)
     (2 (let* ((ids (physics-world-ids world)) (count (handle-table-count ids))
               (generations (handle-table-generation ids)) (locals (handle-table-local ids))
               (free-at (+ at 8 (* 4 count))) (nfree 0))
@@ -8900,62 +9452,40 @@ limits' softness and a record per joint. #SN4P0T"
            (setf (snap-u32 buffer o) n)
            (dotimes (k n)
              (setf (snap-u32 buffer (+ o 4 (* 8 k))) (handle-index (aref added k))
-                   (snap-u32 buffer (+ o 8 (* 8 k))) (handle-generation (aref added k)))))))
-    (3 (write-snapshot-bodies (physics-world-awake world) buffer at (snapshot-scratch-materials scratch) 0))
+                   (snap-u32 buffer (+ o 8 (* 8 k))) (handle-generation (aref added k))))
+           (- (+ o 4 (* 8 n)) at))))
+    (3 (write-snapshot-bodies (physics-world-awake world) buffer at (snapshot-scratch-materials scratch) 0
+                              (snapshot-scratch-count scratch)))
     (4 (write-snapshot-bodies (physics-world-sleeping world) buffer at (snapshot-scratch-materials scratch)
-                              (body-columns-length (physics-world-awake world))))
+                              (body-columns-length (physics-world-awake world)) (snapshot-scratch-count scratch)))
     (5 (let ((count (snapshot-scratch-count scratch)) (words (snapshot-scratch-palette scratch)))
          (setf (snap-u32 buffer at) count)
          (dotimes (k count)
            (dotimes (j 9)
-             (setf (snap-u32 buffer (+ at 4 (* k +snapshot-material-bytes+) (* 4 j))) (aref words (+ (* 9 k) j)))))))
-    (6 (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts))
-              (step (physics-world-step-count world)) (o (+ at 4)))
-         (declare (type index o))
-         (setf (snap-u32 buffer at) n)
-         (with-contact-columns (key seen touching geometry) contacts
-           (dotimes (row n)
-             (let* ((g (geometry-start row))
-                    (flags (logior (aref (snapshot-scratch-contact-flags scratch) row)
-                                   (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2))))
-               (setf (snap-i64 buffer o) (aref key row) (snap-u16 buffer (+ o 8)) flags)
-               (incf o 10)
-               (when (zerop (ldb (byte 3 2) flags))
-                 (dotimes (k 3) (setf (snap-f32 buffer o) (aref geometry (+ g k))) (incf o 4)))
-               (do-impulse-groups (bit first width)
-                 (when (logbitp bit flags)
-                   (dotimes (k width)
-                     (setf (snap-f32 buffer o) (aref geometry (+ g first k)))
-                     (incf o 4)))))))))
-    (7 (let* ((plist (physics-world-pair-list world)) (rows (pair-list-rows plist))
-              (pairs (if (>= rows 0) (pair-list-count plist) 0)))
-         (setf (snap-i32 buffer at) rows (snap-f32 buffer (+ at 4)) (pair-list-cell plist)
-               (snap-u32 buffer (+ at 8)) (pair-list-builds plist) (snap-i32 buffer (+ at 12)) (pair-list-loose-count plist)
-               (snap-i64 buffer (+ at 16)) (pair-list-step plist) (snap-i64 buffer (+ at 24)) (pair-list-built-step plist)
-               (snap-u32 buffer (+ at 32)) pairs)
-         (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)) (clear (pair-list-clear plist)))
-           (dotimes (i (max rows 0))
-             (let ((o (+ at 36 (* i +snapshot-pair-row-bytes+))))
-               (setf (snap-f32 buffer o) (aref anchors (* 3 i)) (snap-f32 buffer (+ o 4)) (aref anchors (+ 1 (* 3 i)))
-                     (snap-f32 buffer (+ o 8)) (aref anchors (+ 2 (* 3 i))) (snap-i64 buffer (+ o 12)) (aref handles i)
-                     (snap-u8 buffer (+ o 20)) (if (= 1 (aref clear i)) 1 0)))))
-         (let ((o (+ at 36 (* (max rows 0) +snapshot-pair-row-bytes+))) (list (pair-list-pairs plist)))
-           (dotimes (k pairs) (setf (snap-i64 buffer (+ o (* 8 k))) (aref list k))))))
+             (setf (snap-u32 buffer (+ at 4 (* k +snapshot-material-bytes+) (* 4 j))) (aref words (+ (* 9 k) j)))))
+         (+ 4 (* count +snapshot-material-bytes+))))
+    (6 (write-snapshot-contacts world buffer at))
+    (7 (write-snapshot-pair-list world buffer at))
     (8 (let* ((boxes (physics-world-boxes world)) (n (box-columns-length boxes)))
          (setf (snap-u32 buffer at) n)
          (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz (bid id) filter) boxes
            (dotimes (row n)
              (let ((o (+ at 4 (* row +snapshot-box-bytes+))))
-               (loop for column in (list min-x min-y min-z max-x max-y max-z vx vy vz) for k from 0
-                     do (setf (snap-f32 buffer (+ o (* 4 k))) (aref (the f32-column column) row)))
-               (setf (snap-i64 buffer (+ o 36)) (aref bid row) (snap-i64 buffer (+ o 44)) (aref filter row)))))))
+               (macrolet ((floats (&rest columns)
+                            `(setf ,@(loop for c in columns for k from 0
+                                           append `((snap-f32 buffer (+ o ,(* 4 k))) (aref ,c row))))))
+                 (floats min-x min-y min-z max-x max-y max-z vx vy vz))
+               (setf (snap-i64 buffer (+ o 36)) (aref bid row) (snap-i64 buffer (+ o 44)) (aref filter row)))))
+         (+ 4 (* n +snapshot-box-bytes+))))
     (9 (let ((pushes (physics-world-pushes world)))
          (if pushes
              (let ((slots (handle-table-count (physics-world-ids world))))
                (setf (snap-u32 buffer at) slots)
-               (dotimes (k (* 4 slots)) (setf (snap-f32 buffer (+ at 4 (* 4 k))) (aref pushes k))))
-             (setf (snap-u32 buffer at) 0))))
-    (10 (write-snapshot-joints world buffer at))))
+               (sb-kernel:%byte-blt pushes 0 buffer (+ at 4) (+ at 4 (* 16 slots)))
+               (+ 4 (* 16 slots)))
+             (progn (setf (snap-u32 buffer at) 0) 4))))
+    (10 (write-snapshot-joints world buffer at)
+        (aref (snapshot-scratch-sizes scratch) 10))))
 
 (defun world-parameter (world name)
   "The value of WORLD's parameter NAME, a keyword of +physics-parameters+. #SN4P0T"
@@ -9127,21 +9657,13 @@ sleep, and every number within its range. #SN4P0T"
       (snapshot-check (<= (abs (snap-finite-f64 buffer (+ at o))) 1d30) physics-snapshot-other-layout (+ at o)
                       "a statistic of magnitude up to 1e30" (snap-f64 buffer (+ at o))))))
 
-(defun check-snapshot-slots (world buffer scratch)
-  "Check the handle, material and body parts of the snapshot in BUFFER: the sizes their counts
-give, every generation, every free slot and every body's slot distinct and within the table, the
-slots all accounted for, each material and each body's numbers in range, and no body's centre in
-a solid cell of WORLD's terrain. #SN4P0T"
+(defun check-snapshot-handles (buffer scratch)
+  "Check the handle part of the snapshot in BUFFER: its size as its counts give it, every
+generation, every added body and every free slot within the table, each free slot listed once;
+return SCRATCH's marks with the free slots marked, and the stamp that marks them. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let* ((offsets (snapshot-scratch-offsets scratch))
-         (hat (aref offsets 2)) (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4)))
-         (wat (aref offsets 1))
-         (max-speed (snap-f32 buffer (+ wat 52 (* 4 (position :max-speed +physics-parameters+ :key #'first)))))
-         (max-radius (snap-f32 buffer (+ wat 48)))
-         (terrain (physics-world-terrain world))
-         (mat (aref offsets 5)) (materials (snap-u32 buffer mat)))
-    (declare (type index hat wat mat) (type (unsigned-byte 32) count nfree materials)
-             (type single-float max-speed max-radius))
+  (let* ((hat (aref (snapshot-scratch-offsets scratch) 2)) (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4))))
+    (declare (type index hat) (type (unsigned-byte 32) count nfree))
     (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout hat
                     "a handle table of under 2^24 slots" count)
     (snapshot-check (<= nfree count) physics-snapshot-other-layout (+ hat 4) "no more free slots than slots" nfree)
@@ -9163,67 +9685,146 @@ a solid cell of WORLD's terrain. #SN4P0T"
           (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
                           "a free slot of the table, listed once" slot)
           (setf (aref marks slot) stamp)))
-      (check-part-size scratch 5 (+ 4 (* +snapshot-material-bytes+ materials)))
-      (dotimes (k materials)
-        (let ((o (+ mat 4 (* k +snapshot-material-bytes+))))
-          (flet ((ranged (field low high what)
-                   (let ((v (snap-finite-f32 buffer (+ o (* 4 field)))))
-                     (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o (* 4 field)) what v))))
-            (ranged 0 +physics-min-radius+ max-radius "a radius from the smallest to the world's largest")
-            (ranged 1 (/ 0.999 +physics-max-mass+) (/ 1.001 +physics-min-mass+) "the inverse of a mass in range")
-            (ranged 2 0.0 (/ 2.6 (* +physics-min-mass+ +physics-min-radius+ +physics-min-radius+))
-                    "the inverse of an inertia in range")
-            (ranged 3 0.0 1.0 "a restitution in [0, 1]")
-            (ranged 4 0.0 +physics-max-friction+ "a friction in range")
-            (ranged 5 0.0 +physics-max-friction+ "a rolling resistance in range")
-            (ranged 6 0.0 1e30 "a life of 0 or more"))
-          (snapshot-check (<= 0 (snap-i32 buffer (+ o 28)) 1000) physics-snapshot-other-layout (+ o 28)
-                          "a kind from 0 to 1000" (snap-i32 buffer (+ o 28)))))
-      (let ((live nfree))
-        (declare (type index live))
-        (dolist (id '(3 4))
-          (let* ((at (aref offsets id)) (n (snap-u32 buffer at)))
-            (declare (type index at n))
-            (check-part-size scratch id (padded (+ 4 (* +snapshot-body-bytes+ n))))
-            (dotimes (row n)
-              (let ((o (+ at 4 (* row +snapshot-body-bytes+))))
-                (declare (type index o))
-                (dotimes (k 14) (snap-finite-f32 buffer (+ o (* 4 k))))
-                (snap-finite-f64 buffer (+ o 56))
-                (dotimes (k 3)
-                  (let ((c (snap-f32 buffer (+ o (* 4 k)))))
-                    (snapshot-check (< (abs c) +physics-coordinate-limit+) physics-snapshot-other-layout (+ o (* 4 k))
-                                    "a coordinate within the limit" c)))
-                (let ((vx (snap-f32 buffer (+ o 12))) (vy (snap-f32 buffer (+ o 16))) (vz (snap-f32 buffer (+ o 20)))
-                      (qw (snap-f32 buffer (+ o 36))) (qx (snap-f32 buffer (+ o 40))) (qy (snap-f32 buffer (+ o 44)))
-                      (qz (snap-f32 buffer (+ o 48))))
-                  (snapshot-check (and (<= (abs vx) max-speed) (<= (abs vy) max-speed) (<= (abs vz) max-speed)
-                                       (<= (+ (* vx vx) (* vy vy) (* vz vz)) (* 1.001 max-speed max-speed)))
-                                  physics-snapshot-other-layout (+ o 12) "a speed within the world's top speed" vx)
-                  (dotimes (k 3)
-                    (snapshot-check (<= (abs (snap-f32 buffer (+ o 24 (* 4 k)))) 1e6) physics-snapshot-other-layout
-                                    (+ o 24 (* 4 k)) "a spin under 10^6 rad/s" (snap-f32 buffer (+ o 24 (* 4 k)))))
-                  (snapshot-check (and (<= (abs qw) 1.1) (<= (abs qx) 1.1) (<= (abs qy) 1.1) (<= (abs qz) 1.1)
-                                       (<= 0.9 (+ (* qw qw) (* qx qx) (* qy qy) (* qz qz)) 1.1))
-                                  physics-snapshot-other-layout (+ o 36) "a unit quaternion" qw))
-                (snapshot-check (<= 0.0 (snap-f32 buffer (+ o 52)) 1e30) physics-snapshot-other-layout (+ o 52)
-                                "a time still of 0 or more" (snap-f32 buffer (+ o 52)))
-                (snapshot-check (<= 0d0 (snap-f64 buffer (+ o 56)) 1d30) physics-snapshot-other-layout (+ o 56)
-                                "an age of 0 or more" (snap-f64 buffer (+ o 56)))
-                (let ((slot (snap-u32 buffer (+ o 64))) (material (snap-u32 buffer (+ o 68))))
-                  (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout (+ o 64)
-                                  "a slot of the table neither free nor another body's" slot)
-                  (setf (aref marks slot) (1+ stamp))
-                  (incf live)
-                  (snapshot-check (< material materials) physics-snapshot-other-layout (+ o 68)
-                                  "a material of the palette" material))
-                (when terrain
-                  (let ((x (floor (snap-f32 buffer o))) (y (floor (snap-f32 buffer (+ o 4))))
-                        (z (floor (snap-f32 buffer (+ o 8)))))
-                    (snapshot-check (not (terrain-solid-p terrain x y z)) physics-snapshot-other-layout o
-                                    "a centre in an air cell of the world's terrain" (list x y z))))))))
-        (snapshot-check (= live count) physics-snapshot-other-layout hat
-                        "as many slots as free slots and bodies" count)))))
+      (values marks stamp))))
+
+(defun check-snapshot-materials (buffer scratch)
+  "Check the material part of the snapshot in BUFFER: its size, and each material's numbers
+within their ranges, its radius up to the world's largest. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((mat (aref (snapshot-scratch-offsets scratch) 5)) (materials (snap-u32 buffer mat))
+         (max-radius (snap-f32 buffer (+ (aref (snapshot-scratch-offsets scratch) 1) 48))))
+    (declare (type index mat) (type (unsigned-byte 32) materials) (type single-float max-radius))
+    (check-part-size scratch 5 (+ 4 (* +snapshot-material-bytes+ materials)))
+    (dotimes (k materials)
+      (let ((o (+ mat 4 (* k +snapshot-material-bytes+))))
+        (flet ((ranged (field low high what)
+                 (let ((v (snap-finite-f32 buffer (+ o (* 4 field)))))
+                   (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o (* 4 field)) what v))))
+          (ranged 0 +physics-min-radius+ max-radius "a radius from the smallest to the world's largest")
+          (ranged 1 (/ 0.999 +physics-max-mass+) (/ 1.001 +physics-min-mass+) "the inverse of a mass in range")
+          (ranged 2 0.0 (/ 2.6 (* +physics-min-mass+ +physics-min-radius+ +physics-min-radius+))
+                  "the inverse of an inertia in range")
+          (ranged 3 0.0 1.0 "a restitution in [0, 1]")
+          (ranged 4 0.0 +physics-max-friction+ "a friction in range")
+          (ranged 5 0.0 +physics-max-friction+ "a rolling resistance in range")
+          (ranged 6 0.0 1e30 "a life of 0 or more"))
+        (snapshot-check (<= 0 (snap-i32 buffer (+ o 28)) 1000) physics-snapshot-other-layout (+ o 28)
+                        "a kind from 0 to 1000" (snap-i32 buffer (+ o 28)))))))
+
+(defun refuse-snapshot-body (buffer at n row max-speed)
+  "Refuse the snapshot in BUFFER at the first number of body ROW, of the N of the body part at AT,
+that is not finite or not in its range, naming what was expected. #SN4P0T"
+  (declare (type octets buffer) (type index at n row) (type single-float max-speed))
+  (flet ((float-at (k) (+ at (body-part-column n k) (* 4 row))))
+    (dotimes (k 14) (snap-finite-f32 buffer (float-at k)))
+    (snap-finite-f64 buffer (+ at (body-part-column n 14) (* 8 row)))
+    (dotimes (k 3)
+      (let ((c (snap-f32 buffer (float-at k))))
+        (snapshot-check (< (abs c) +physics-coordinate-limit+) physics-snapshot-other-layout (float-at k)
+                        "a coordinate within the limit" c)))
+    (let ((vx (snap-f32 buffer (float-at 3))) (vy (snap-f32 buffer (float-at 4))) (vz (snap-f32 buffer (float-at 5)))
+          (qw (snap-f32 buffer (float-at 9))) (qx (snap-f32 buffer (float-at 10))) (qy (snap-f32 buffer (float-at 11)))
+          (qz (snap-f32 buffer (float-at 12))))
+      (snapshot-check (and (<= (abs vx) max-speed) (<= (abs vy) max-speed) (<= (abs vz) max-speed)
+                           (<= (+ (* vx vx) (* vy vy) (* vz vz)) (* 1.001 max-speed max-speed)))
+                      physics-snapshot-other-layout (float-at 3) "a speed within the world's top speed" vx)
+      (loop for k from 6 below 9
+            do (snapshot-check (<= (abs (snap-f32 buffer (float-at k))) 1e6) physics-snapshot-other-layout
+                               (float-at k) "a spin under 10^6 rad/s" (snap-f32 buffer (float-at k))))
+      (snapshot-check (and (<= (abs qw) 1.1) (<= (abs qx) 1.1) (<= (abs qy) 1.1) (<= (abs qz) 1.1)
+                           (<= 0.9 (+ (* qw qw) (* qx qx) (* qy qy) (* qz qz)) 1.1))
+                      physics-snapshot-other-layout (float-at 9) "a unit quaternion" qw))
+    (snapshot-check (<= 0.0 (snap-f32 buffer (float-at 13)) 1e30) physics-snapshot-other-layout (float-at 13)
+                    "a time still of 0 or more" (snap-f32 buffer (float-at 13)))
+    (let ((age (+ at (body-part-column n 14) (* 8 row))))
+      (snapshot-check (<= 0d0 (snap-f64 buffer age) 1d30) physics-snapshot-other-layout age
+                      "an age of 0 or more" (snap-f64 buffer age)))))
+
+(defun check-snapshot-bodies (world buffer scratch id marks stamp)
+  "Check body part ID of the snapshot in BUFFER: its size, each body's numbers in range (a fast
+test of every row, and refuse-snapshot-body naming the fault of a row that fails it), its slot a
+slot of the table neither free nor another body's, marked in MARKS with STAMP + 1, its material
+one of the palette, and its centre in no solid cell of WORLD's terrain; return its count. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column marks) (type fixnum stamp)
+           #.+kernel-policy+)
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets id)) (n (snap-u32 buffer at))
+         (count (snap-u32 buffer (aref offsets 2))) (materials (snap-u32 buffer (aref offsets 5)))
+         (w (material-index-bytes materials))
+         (max-speed (snap-f32 buffer (+ (aref offsets 1) 52 (* 4 (position :max-speed +physics-parameters+ :key #'first)))))
+         (terrain (physics-world-terrain world))
+         (chunks (and terrain (voxel-terrain-chunks terrain))) (last-key -1) (chunk nil)
+         ;; the bits of the bounds: a finite single-float's magnitude orders as its bits do, and a
+         ;; NaN's or an infinity's bits lie above every finite one's
+         (coordinate (sb-kernel:single-float-bits (float +physics-coordinate-limit+ 1.0)))
+         (speed (sb-kernel:single-float-bits max-speed)) (spin (sb-kernel:single-float-bits 1e6))
+         (unit (sb-kernel:single-float-bits 1.1)) (still (sb-kernel:single-float-bits 1e30))
+         (top (* 1.001 max-speed max-speed)))
+    (declare (type index at n count materials) (type single-float max-speed top) (type fixnum last-key)
+             (type (signed-byte 32) coordinate speed spin unit still))
+    (check-part-size scratch id (padded (+ 4 (* (body-record-bytes materials) n))))
+    (dotimes (row n n)
+      (macrolet ((bits (k) `(snap-u32 buffer (+ at (body-part-column n ,k) (* 4 row))))
+                 (within (k limit) `(<= (logand (bits ,k) #x7FFFFFFF) ,limit))
+                 (value (k) `(snap-f32 buffer (+ at (body-part-column n ,k) (* 4 row)))))
+        (unless (and (within 0 (1- coordinate)) (within 1 (1- coordinate)) (within 2 (1- coordinate))
+                     (within 3 speed) (within 4 speed) (within 5 speed)
+                     (<= (+ (* (value 3) (value 3)) (* (value 4) (value 4)) (* (value 5) (value 5))) top)
+                     (within 6 spin) (within 7 spin) (within 8 spin)
+                     (within 9 unit) (within 10 unit) (within 11 unit) (within 12 unit)
+                     (<= 0.9 (+ (* (value 9) (value 9)) (* (value 10) (value 10)) (* (value 11) (value 11))
+                                (* (value 12) (value 12)))
+                         1.1)
+                     (let ((b (bits 13))) (or (<= b still) (= b #x80000000)))
+                     (let ((age (snap-u64 buffer (+ at (body-part-column n 14) (* 8 row)))))
+                       (or (<= age #.(sb-kernel:double-float-bits 1d30)) (= age (ash 1 63)))))
+          (refuse-snapshot-body buffer at n row max-speed)
+          (snapshot-check nil physics-snapshot-other-layout (+ at 4 (* 4 row)) "a body within its ranges" row))
+        (let ((slot (snap-u32 buffer (+ at (body-part-column n 16) (* 4 row))))
+              (material (snap-material-index buffer (+ at (body-part-column n 17) (* w row)) w)))
+          (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout
+                          (+ at (body-part-column n 16) (* 4 row))
+                          "a slot of the table neither free nor another body's" slot)
+          (setf (aref marks slot) (1+ stamp))
+          (snapshot-check (< material materials) physics-snapshot-other-layout (+ at (body-part-column n 17) (* w row))
+                          "a material of the palette" material))
+        (when chunks
+          ;; the chunk of the row before is most often this row's too: looked up only when not
+          (let* ((x (floor (the (single-float -65536.0 65536.0) (value 0))))
+                 (y (floor (the (single-float -65536.0 65536.0) (value 1))))
+                 (z (floor (the (single-float -65536.0 65536.0) (value 2))))
+                 (key (chunk-key x y z)))
+            (declare (type cell x y z) (type fixnum key))
+            (unless (= key last-key)
+              (setf chunk (gethash key chunks) last-key key))
+            (snapshot-check (and chunk (zerop (aref (the chunk-storage chunk) (cell-offset x y z))))
+                            physics-snapshot-other-layout (+ at 4 (* 4 row))
+                            "a centre in an air cell of the world's terrain" (list x y z))))))))
+
+(defun check-snapshot-slots (world buffer scratch)
+  "Check the handle, material and body parts of the snapshot in BUFFER (check-snapshot-handles,
+check-snapshot-materials, check-snapshot-bodies), and that the free slots and the bodies'
+slots are every slot of the table. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (multiple-value-bind (marks stamp) (check-snapshot-handles buffer scratch)
+    (check-snapshot-materials buffer scratch)
+    (let* ((hat (aref (snapshot-scratch-offsets scratch) 2)) (count (snap-u32 buffer hat))
+           (live (+ (snap-u32 buffer (+ hat 4))
+                    (check-snapshot-bodies world buffer scratch 3 marks stamp)
+                    (check-snapshot-bodies world buffer scratch 4 marks stamp))))
+      (snapshot-check (= live count) physics-snapshot-other-layout hat
+                      "as many slots as free slots and bodies" count))))
+
+(defun snapshot-table-room (table n)
+  "Give the contact table TABLE room for N keys under contact-table-put's load, emptied, and
+return its slots. #SN4P0T"
+  (declare (type contact-table table) (type index n))
+  (loop while (>= (* 4 (1+ n)) (length (contact-table-slots table)))
+        do (let ((size (* 2 (length (contact-table-slots table)))))
+             (setf (contact-table-slots table) (make-array size :element-type 'fixnum :initial-element -1)
+                   (contact-table-mask table) (1- (ash size -1)))))
+  (fill (contact-table-slots table) -1)
+  (setf (contact-table-count table) 0)
+  (contact-table-slots table))
 
 (defun check-snapshot-contacts (buffer scratch)
   "Check the contact part of the snapshot in BUFFER: its size, each key's kind and slots (the
@@ -9234,83 +9835,124 @@ reads. #SN4P0T"
   (let* ((at (aref (snapshot-scratch-offsets scratch) 6)) (n (snap-u32 buffer at))
          (hat (aref (snapshot-scratch-offsets scratch) 2)) (count (snap-u32 buffer hat))
          (marks (snapshot-scratch-marks scratch)) (stamp (snapshot-scratch-stamp scratch))
-         (table (snapshot-scratch-contacts scratch)))
-    (declare (type index at n hat count) (type fixnum-column marks) (type fixnum stamp))
-    (progn
-      (fill (contact-table-slots table) -1)
-      (setf (contact-table-count table) 0)
-      (let ((o (+ at 4)) (end (+ at (aref (snapshot-scratch-sizes scratch) 6))))
-        (declare (type index o end))
-        (dotimes (row n)
-          (snapshot-check (<= (+ o +snapshot-contact-bytes+) end) physics-snapshot-other-layout o
-                          (format nil "the record of contact ~D within the part" row) end)
-          (let* ((key (snap-i64 buffer o)) (flags (snap-u16 buffer (+ o 8)))
-                 (kind (ldb (byte 4 58) key)) (a (ldb (byte 24 34) key)))
-            ;; a body that expired in the last step has a free slot, and its contacts wait for
-            ;; the next step's prune: a key may name a free slot of the table
-            (snapshot-check (and (>= key 0) (< key (ash 1 60)) (<= kind 2) (< a count) (>= (aref marks a) (1- stamp)))
-                            physics-snapshot-other-layout o "a contact key of a slot of the table" key)
-            (when (= kind +contact-pair+)
-              (let ((b (ldb (byte 34 0) key)))
-                (snapshot-check (and (< a b count) (>= (aref marks b) (1- stamp))) physics-snapshot-other-layout o
-                                "a pair key of two slots of the table, the lower first" key)))
+         (table (snapshot-scratch-contacts scratch))
+         (end (+ at (aref (snapshot-scratch-sizes scratch) 6)))
+         ;; a part of N records has at least 10 bytes a record
+         (slots (snapshot-table-room table (min n (floor (- end at) +snapshot-contact-bytes+))))
+         (mask (contact-table-mask table))
+         (impulse (sb-kernel:single-float-bits 1e9)) (unit (sb-kernel:single-float-bits 1.001))
+         (o (+ at 4)))
+    (declare (type index at n hat count end o) (type fixnum-column marks slots) (type fixnum stamp mask)
+             (type (signed-byte 32) impulse unit))
+    (dotimes (row n)
+      (snapshot-check (<= (+ o +snapshot-contact-bytes+) end) physics-snapshot-other-layout o
+                      (format nil "the record of contact ~D within the part" row) end)
+      (let* ((key (snap-i64 buffer o)) (flags (snap-u16 buffer (+ o 8)))
+             (kind (ldb (byte 4 58) key)) (a (ldb (byte 24 34) key)) (code (ldb (byte 3 2) flags))
+             (bytes (contact-record-bytes flags)))
+        (declare (type fixnum key flags bytes))
+        ;; a body that expired in the last step has a free slot, and its contacts wait for
+        ;; the next step's prune: a key may name a free slot of the table
+        (snapshot-check (and (>= key 0) (< key (ash 1 60)) (<= kind 2) (< a count) (>= (aref marks a) (1- stamp)))
+                        physics-snapshot-other-layout o "a contact key of a slot of the table" key)
+        (when (= kind +contact-pair+)
+          (let ((b (ldb (byte 34 0) key)))
+            (snapshot-check (and (< a b count) (>= (aref marks b) (1- stamp))) physics-snapshot-other-layout o
+                            "a pair key of two slots of the table, the lower first" key)))
+        (snapshot-check (and (< flags 512) (/= 7 code)) physics-snapshot-other-layout (+ o 8)
+                        "contact flags of 9 bits, a normal code from 0 to 6" flags)
+        (snapshot-check (<= (+ o bytes) end) physics-snapshot-other-layout o
+                        (format nil "the record of contact ~D within the part" row) end)
+        ;; a key already in the table is a duplicate
+        (snapshot-check (loop for i of-type fixnum = (contact-slot-hash key mask) then (logand (1+ i) mask)
+                              for k of-type fixnum = (aref slots (* 2 i))
+                              do (cond ((= k key) (return nil))
+                                       ((= k -1) (setf (aref slots (* 2 i)) key (aref slots (1+ (* 2 i))) row)
+                                        (return t))))
+                        physics-snapshot-other-layout o "a key no other contact has" key)
+        ;; a carried impulse is at most the momentum of the heaviest body at the top speed
+        (loop for p of-type index from (+ o 10 (if (zerop code) 12 0)) below (+ o bytes) by 4
+              do (unless (<= (logand (snap-u32 buffer p) #x7FFFFFFF) impulse)
+                   (snapshot-check (<= (abs (snap-finite-f32 buffer p)) 1e9) physics-snapshot-other-layout p
+                                   "a carried impulse of at most 10^9 N s" (snap-f32 buffer p))))
+        (when (zerop code)
+          (dotimes (k 3)
+            (unless (<= (logand (snap-u32 buffer (+ o 10 (* 4 k))) #x7FFFFFFF) unit)
+              (snapshot-check (<= (abs (snap-finite-f32 buffer (+ o 10 (* 4 k)))) 1.001)
+                              physics-snapshot-other-layout (+ o 10 (* 4 k)) "a normal of unit length"
+                              (snap-f32 buffer (+ o 10 (* 4 k)))))))
+        (incf o bytes)))
+    (setf (contact-table-count table) n)
+    (check-part-size scratch 6 (padded (- o at)))
+    table))
 
-            (snapshot-check (and (< flags 512) (/= 7 (ldb (byte 3 2) flags))) physics-snapshot-other-layout (+ o 8)
-                            "contact flags of 9 bits, a normal code from 0 to 6" flags)
-            (snapshot-check (<= (+ o (contact-record-bytes flags)) end) physics-snapshot-other-layout o
-                            (format nil "the record of contact ~D within the part" row) end)
-            ;; a key already in the table is replaced, not counted again: a duplicate
-            (let ((before (contact-table-count table)))
-              (contact-table-put table key row)
-              (snapshot-check (/= before (contact-table-count table)) physics-snapshot-other-layout o
-                              "a key no other contact has" key))
-            ;; a carried impulse is at most the momentum of the heaviest body at the top speed
-            (loop for p of-type index from (+ o 10 (if (zerop (ldb (byte 3 2) flags)) 12 0))
-                    below (+ o (contact-record-bytes flags)) by 4
-                  do (snapshot-check (<= (abs (snap-finite-f32 buffer p)) 1e9) physics-snapshot-other-layout p
-                                     "a carried impulse of at most 10^9 N s" (snap-f32 buffer p)))
-            (when (zerop (ldb (byte 3 2) flags))
-              (dotimes (k 3)
-                (snapshot-check (<= (abs (snap-finite-f32 buffer (+ o 10 (* 4 k)))) 1.001)
-                                physics-snapshot-other-layout (+ o 10 (* 4 k)) "a normal of unit length"
-                                (snap-f32 buffer (+ o 10 (* 4 k))))))
-            (incf o (contact-record-bytes flags))))
-        (check-part-size scratch 6 (padded (- o at))))
-      table)))
-
-(defun check-snapshot-rest (buffer scratch)
-  "Check the pair list, box and push parts of the snapshot in BUFFER: sizes, rows, pairs of
-listed rows, finite numbers, and pushes that cover the table with nothing on a free slot. #SN4P0T"
+(defun check-snapshot-pair-list (buffer scratch)
+  "Check the pair list part of the snapshot in BUFFER: its form and the size its counts give,
+its numbers, finite anchors within the coordinate limit, no more rows than awake bodies when
+their handles are not written, and pairs of listed rows, written whole or as differences. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch))
-         (at (aref offsets 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32))))
-    (declare (type index at))
+         (at (aref offsets 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
+         (form (snap-u32 buffer (+ at 36))) (n (max rows 0))
+         (coordinate (sb-kernel:single-float-bits (float +physics-coordinate-limit+ 1.0))))
+    (declare (type index at) (type fixnum rows n) (type (unsigned-byte 32) pairs form)
+             (type (signed-byte 32) coordinate))
     (snapshot-check (< -2 rows (ash 1 24)) physics-snapshot-other-layout at "a count of listed rows" rows)
     (snapshot-check (or (>= rows 0) (zerop pairs)) physics-snapshot-other-layout (+ at 32) "no pairs in no list" pairs)
-    (check-part-size scratch 7 (padded (+ 36 (* +snapshot-pair-row-bytes+ (max rows 0)) (* 8 pairs))))
-    (when (>= rows 0)
-      (let ((cell (snap-finite-f32 buffer (+ at 4))))
-        (snapshot-check (< 0.0 cell 1e6) physics-snapshot-other-layout (+ at 4) "a cell edge above 0" cell))
-      (snapshot-check (<= -1 (snap-i32 buffer (+ at 12)) rows) physics-snapshot-other-layout (+ at 12)
-                      "a count of loose rows" (snap-i32 buffer (+ at 12)))
-      (dolist (o '(16 24))
-        (snapshot-check (typep (snap-i64 buffer (+ at o)) 'fixnum) physics-snapshot-other-layout (+ at o)
-                        "a step number" (snap-i64 buffer (+ at o))))
-      (dotimes (i rows)
-        (let ((o (+ at 36 (* i +snapshot-pair-row-bytes+))))
-          (dotimes (k 3)
-            (let ((c (snap-finite-f32 buffer (+ o (* 4 k)))))
-              (snapshot-check (< (abs c) +physics-coordinate-limit+) physics-snapshot-other-layout (+ o (* 4 k))
-                              "an anchor within the coordinate limit" c)))
-          (snapshot-check (typep (snap-i64 buffer (+ o 12)) 'fixnum) physics-snapshot-other-layout (+ o 12)
-                          "a handle" (snap-i64 buffer (+ o 12)))
-          (snapshot-check (<= (snap-u8 buffer (+ o 20)) 1) physics-snapshot-other-layout (+ o 20)
-                          "a clear mark, 0 or 1" (snap-u8 buffer (+ o 20)))))
-      (let ((base (+ at 36 (* rows +snapshot-pair-row-bytes+))))
-        (dotimes (k pairs)
-          (let ((p (snap-i64 buffer (+ base (* 8 k)))))
-            (snapshot-check (and (>= p 0) (< (ash p -24) rows) (< (ldb (byte 24 0) p) rows))
-                            physics-snapshot-other-layout (+ base (* 8 k)) "a pair of listed rows" p))))))
+    (snapshot-check (< form 4) physics-snapshot-other-layout (+ at 36) "a form of 2 bits" form)
+    (let* ((clear (+ at +snapshot-pair-head-bytes+ (* +snapshot-pair-row-bytes+ n)))
+           (handles (+ clear (* 4 (ceiling n 32))))
+           (list (+ handles (if (logbitp 0 form) (* 8 n) 0))))
+      (declare (type index clear handles list))
+      (let* ((whole (padded (+ list (* 3 pairs))))
+             (wholes (if (and (logbitp 1 form) (<= (+ whole 4) (length buffer))) (snap-u32 buffer whole) 0)))
+        (check-part-size scratch 7 (- (if (logbitp 1 form) (+ whole 4 (* 4 wholes)) (+ list (* 8 pairs))) at)))
+      (when (>= rows 0)
+        (let ((cell (snap-finite-f32 buffer (+ at 4))))
+          (snapshot-check (< 0.0 cell 1e6) physics-snapshot-other-layout (+ at 4) "a cell edge above 0" cell))
+        (snapshot-check (<= -1 (snap-i32 buffer (+ at 12)) rows) physics-snapshot-other-layout (+ at 12)
+                        "a count of loose rows" (snap-i32 buffer (+ at 12)))
+        (dolist (o '(16 24))
+          (snapshot-check (typep (snap-i64 buffer (+ at o)) 'fixnum) physics-snapshot-other-layout (+ at o)
+                          "a step number" (snap-i64 buffer (+ at o))))
+        (loop for o of-type index from (+ at +snapshot-pair-head-bytes+) below clear by 4
+              do (unless (< (logand (snap-u32 buffer o) #x7FFFFFFF) coordinate)
+                   (snapshot-check nil physics-snapshot-other-layout o "a finite anchor within the coordinate limit"
+                                   (snap-u32 buffer o))))
+        (if (logbitp 0 form)
+            (dotimes (i n)
+              (snapshot-check (typep (snap-i64 buffer (+ handles (* 8 i))) 'fixnum) physics-snapshot-other-layout
+                              (+ handles (* 8 i)) "a handle" (snap-i64 buffer (+ handles (* 8 i)))))
+            (snapshot-check (<= n (snap-u32 buffer (aref offsets 3))) physics-snapshot-other-layout at
+                            "no more listed rows than awake bodies, whose handles the rows had" rows))
+        (if (logbitp 1 form)
+            ;; the rows the differences give, each a listed row
+            (let* ((a 0) (whole (padded (+ list (* 3 pairs)))) (wholes (snap-u32 buffer whole)) (taken 0))
+              (declare (type fixnum a) (type index whole wholes taken))
+              (dotimes (k pairs)
+                (let* ((da (snap-u8 buffer (+ list k))) (db (snap-u16 buffer (+ list pairs (* 2 k))))
+                       (b 0))
+                  (declare (type fixnum b))
+                  (if (= da 128)
+                      (progn (snapshot-check (< taken wholes) physics-snapshot-other-layout (+ list k)
+                                             "a row listed whole for each pair that needs one" taken)
+                             (setf a (snap-u32 buffer (+ whole 4 (* 4 taken))))
+                             (incf taken))
+                      (incf a (if (> da 128) (- da 256) da)))
+                  (setf b (+ a (if (>= db 32768) (- db 65536) db)))
+                  (snapshot-check (and (<= 0 a) (< a n) (<= 0 b) (< b n)) physics-snapshot-other-layout (+ list k)
+                                  "a pair of listed rows" (list a b))))
+              (snapshot-check (= taken wholes) physics-snapshot-other-layout whole
+                              "as many rows listed whole as pairs that need one" wholes))
+            (dotimes (k pairs)
+              (let ((p (snap-i64 buffer (+ list (* 8 k)))))
+                (snapshot-check (and (>= p 0) (< (ash p -24) n) (< (ldb (byte 24 0) p) n))
+                                physics-snapshot-other-layout (+ list (* 8 k)) "a pair of listed rows" p))))))))
+
+(defun check-snapshot-rest (buffer scratch)
+  "Check the box and push parts of the snapshot in BUFFER: sizes, finite numbers, and pushes that
+cover the table with nothing on a free slot. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 8)) (n (snap-u32 buffer at)))
     (declare (type index at))
     (check-part-size scratch 8 (+ 4 (* +snapshot-box-bytes+ n)))
@@ -9358,6 +10000,7 @@ what the restore reuses. #SN4P0T"
   (check-snapshot-world world buffer scratch)
   (check-snapshot-slots world buffer scratch)
   (check-snapshot-contacts buffer scratch)
+  (check-snapshot-pair-list buffer scratch)
   (check-snapshot-rest buffer scratch)
   (check-snapshot-joints buffer scratch)
   buffer)
@@ -9367,195 +10010,258 @@ what the restore reuses. #SN4P0T"
 marked MARK in NAMED, the slots some joint names. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column named) (type fixnum mark))
   (dolist (id '(3 4))
-    (let ((bat (aref (snapshot-scratch-offsets scratch) id)))
-      (dotimes (row (snap-u32 buffer bat))
-        (let ((o (+ bat 4 (* row +snapshot-body-bytes+))))
-          (snapshot-check (eq (logtest +flag-jointed+ (snap-u16 buffer (+ o 72)))
-                              (= (aref named (snap-u32 buffer (+ o 64))) mark))
-                          physics-snapshot-other-layout (+ o 72)
-                          "the jointed flag set exactly on a body some joint names" (snap-u16 buffer (+ o 72))))))))
+    (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat))
+           (w (material-index-bytes (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 5)))))
+      (dotimes (row n)
+        (let ((o (+ bat (body-part-column n 18 w) (* 2 row)))
+              (slot (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))))
+          (snapshot-check (eq (logtest +flag-jointed+ (snap-u16 buffer o)) (= (aref named slot) mark))
+                          physics-snapshot-other-layout o
+                          "the jointed flag set exactly on a body some joint names" (snap-u16 buffer o)))))))
+
+(defun snapshot-joint-first (buffer at)
+  "Where the first joint's record begins in the joints part at AT of BUFFER. #SN4P0T"
+  (declare (type octets buffer) (type index at))
+  (+ at 20 (* 4 (snap-u32 buffer (+ at 4))) (* 4 (snap-u32 buffer (+ at 8)))))
+
+(defun check-snapshot-joint-table (buffer scratch)
+  "Check the head of the joints part of the snapshot in BUFFER: the feature :joints, a joint table
+of under 2^24 slots each free or held by a joint, the size its counts give, finite softness of
+the limits, and every generation under 2^20. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)) (wat (aref offsets 1))
+         (n (snap-u32 buffer at)) (count (snap-u32 buffer (+ at 4))) (nfree (snap-u32 buffer (+ at 8))))
+    (declare (type index at wat))
+    (snapshot-check (logbitp (position :joints +physics-features+) (snap-u32 buffer (+ wat 4)))
+                    physics-snapshot-other-layout (+ wat 4) "the feature :joints of a world with joints"
+                    (snap-u32 buffer (+ wat 4)))
+    (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout (+ at 4)
+                    "a joint table of under 2^24 slots" count)
+    (snapshot-check (= (+ n nfree) count) physics-snapshot-other-layout (+ at 8)
+                    "a joint for each slot that is not free" nfree)
+    (check-part-size scratch 10 (+ 20 (* 4 count) (* 4 nfree) (* +snapshot-joint-bytes+ n)))
+    (snap-finite-f32 buffer (+ at 12))
+    (snap-finite-f32 buffer (+ at 16))
+    (dotimes (slot count)
+      (snapshot-check (< (snap-u32 buffer (+ at 20 (* 4 slot))) (ash 1 +handle-generation-bits+))
+                      physics-snapshot-other-layout (+ at 20 (* 4 slot)) "a generation under 2^20"
+                      (snap-u32 buffer (+ at 20 (* 4 slot)))))))
+
+(defun mark-snapshot-bodies (buffer scratch slots)
+  "Mark in SCRATCH's marks, room made for SLOTS, the slot of every body of the snapshot in
+BUFFER; return the marks and the mark. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type index slots))
+  (multiple-value-bind (marks stamp) (snapshot-marks scratch slots)
+    (declare (type fixnum-column marks) (type fixnum stamp))
+    (dolist (id '(3 4))
+      (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat)))
+        (dotimes (row n)
+          (setf (aref marks (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))) (1+ stamp)))))
+    (values marks (1+ stamp))))
+
+(defun check-snapshot-joint-bodies (buffer o hat bodies marks live)
+  "Refuse the joint record at O of BUFFER unless both its bodies are live bodies of the snapshot
+(marked LIVE in MARKS, within the BODIES slots of the handle part at HAT) of the generation that
+part gives, two bodies, not one; the second may be none, a fixed point. #SN4P0T"
+  (declare (type octets buffer) (type index o hat bodies) (type fixnum-column marks) (type fixnum live))
+  (loop for side in '(12 20)
+        for slot = (snap-u32 buffer (+ o side))
+        for generation = (snap-u32 buffer (+ o side 4))
+        unless (and (= side 20) (= slot #xFFFFFFFF) (zerop generation))
+          do (snapshot-check (and (< slot bodies) (= (aref marks slot) live)
+                                  (= generation (snap-u32 buffer (+ hat 8 (* 4 slot))))
+                                  (or (= side 12) (/= slot (snap-u32 buffer (+ o 12)))))
+                             physics-snapshot-other-layout (+ o side)
+                             "the slot of a live body of the snapshot, of its generation, not the joint's other body"
+                             slot)))
+
+(defun check-snapshot-joint-numbers (buffer o reach)
+  "Refuse the joint record at O of BUFFER unless its kind and flags are a joint's and each number
+is finite and in its range: anchors within REACH (a fixed point within the coordinate limit),
+lengths, softness and break force of 0 or more up to their largest, carried impulses up to
+10^9 N s. #SN4P0T"
+  (declare (type octets buffer) (type index o) (type single-float reach))
+  (snapshot-check (<= (snap-u32 buffer o) +joint-distance+) physics-snapshot-other-layout o
+                  "a joint kind, 0 or 1" (snap-u32 buffer o))
+  (snapshot-check (< (snap-u32 buffer (+ o 4)) 16) physics-snapshot-other-layout (+ o 4)
+                  "joint flags under 16" (snap-u32 buffer (+ o 4)))
+  (let ((fixed (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)))
+    (flet ((ranged (k low high what)
+             (let ((v (snap-finite-f32 buffer (+ o k))))
+               (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o k) what v)
+               v)))
+      (loop for k from 28 below 40 by 4
+            do (ranged k (- reach) reach "an anchor within the reach of the world's largest radius"))
+      (loop for k from 40 below 52 by 4
+            do (if fixed
+                   (ranged k (- +physics-coordinate-limit+) +physics-coordinate-limit+
+                           "a fixed point within the coordinate limit")
+                   (ranged k (- reach) reach "an anchor within the reach of the world's largest radius")))
+      (loop for k from 52 below 64 by 4
+            do (ranged k 0.0 +physics-max-joint-length+ "a length from 0 to the longest a joint may have"))
+      ;; a hertz of a few denormals would make the softness divide by zero
+      (let ((hertz (ranged 64 0.0 1000.0 "a hertz from 0 to 1000")))
+        (snapshot-check (or (= hertz 0.0) (>= hertz +physics-min-joint-hertz+)) physics-snapshot-other-layout (+ o 64)
+                        "a hertz of 0, or of 0.001 (+physics-min-joint-hertz+) or more" hertz))
+      (ranged 68 0.0 1000.0 "a damping ratio from 0 to 1000")
+      (ranged 72 0.0 +physics-max-break-force+ "a break force from 0 to the largest")
+      (loop for k from 76 below 88 by 4
+            do (ranged k -1e9 1e9 "a carried impulse up to 1e9 N s")))))
+
+(defun check-snapshot-joint-rows (buffer scratch)
+  "Check each joint record of the snapshot in BUFFER: its bodies (check-snapshot-joint-bodies)
+and its numbers (check-snapshot-joint-numbers). #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)) (hat (aref offsets 2))
+         (bodies (snap-u32 buffer hat)) (first (snapshot-joint-first buffer at))
+         (reach (* +joint-anchor-reach+ (snap-f32 buffer (+ (aref offsets 1) 48)))))
+    (declare (type index at hat bodies first))
+    (multiple-value-bind (marks live) (mark-snapshot-bodies buffer scratch (max bodies (snap-u32 buffer (+ at 4))))
+      (dotimes (row (snap-u32 buffer at))
+        (let ((o (+ first (* row +snapshot-joint-bytes+))))
+          (check-snapshot-joint-numbers buffer o reach)
+          (check-snapshot-joint-bodies buffer o hat bodies marks live))))))
+
+(defun check-snapshot-joint-names (buffer scratch)
+  "Refuse the snapshot in BUFFER unless a body's jointed flag is set exactly when some joint of
+its joints part names it. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 10)) (first (snapshot-joint-first buffer at)))
+    (multiple-value-bind (named stamp) (snapshot-marks scratch (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 2)))
+      (declare (type fixnum-column named) (type fixnum stamp))
+      (dotimes (row (snap-u32 buffer at))
+        (let ((o (+ first (* row +snapshot-joint-bytes+))))
+          (setf (aref named (snap-u32 buffer (+ o 12))) (1+ stamp))
+          (unless (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)
+            (setf (aref named (snap-u32 buffer (+ o 20))) (1+ stamp)))))
+      (check-snapshot-jointed-flags buffer scratch named (1+ stamp)))))
+
+(defun check-snapshot-joint-slots (buffer scratch)
+  "Refuse the snapshot in BUFFER unless each free joint slot is listed once and each live one is
+held by one joint. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 10)) (count (snap-u32 buffer (+ at 4)))
+         (first (snapshot-joint-first buffer at)))
+    (multiple-value-bind (marks stamp) (snapshot-marks scratch count)
+      (declare (type fixnum-column marks) (type fixnum stamp))
+      (flet ((take (o what)
+               (let ((slot (snap-u32 buffer o)))
+                 (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
+                                 what slot)
+                 (setf (aref marks slot) stamp))))
+        (dotimes (k (snap-u32 buffer (+ at 8)))
+          (take (+ at 20 (* 4 count) (* 4 k)) "a free joint slot of the table, listed once"))
+        (dotimes (row (snap-u32 buffer at))
+          (take (+ first (* row +snapshot-joint-bytes+) 8) "a joint slot of the table, neither free nor another joint's"))))))
 
 (defun check-snapshot-joints (buffer scratch)
-  "Check the joint part of the snapshot in BUFFER, when it has one: the size its counts give, its
-handle table as the bodies' is checked, each joint's kind and flags, its slot a live one of that
-table and no other joint's, its bodies live bodies of the snapshot of the generations its table
-gives, and every number finite and in its range. #SN4P0T"
+  "Check the joint part of the snapshot in BUFFER, when it has one, stage by stage: its table, each
+joint's record, the bodies' jointed flags and the joint slots; without one, that no body is
+flagged jointed. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch))
-  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)))
-    (declare (type index at))
-    (if (minusp (aref (snapshot-scratch-sizes scratch) 10))
+  (if (minusp (aref (snapshot-scratch-sizes scratch) 10))
       (check-snapshot-jointed-flags buffer scratch (snapshot-scratch-marks scratch) -1)
-      (let* ((hat (aref offsets 2)) (bodies (snap-u32 buffer hat))
-             (n (snap-u32 buffer at)) (count (snap-u32 buffer (+ at 4))) (nfree (snap-u32 buffer (+ at 8)))
-             (wat (aref offsets 1)))
-        (declare (type index hat bodies wat))
-        (snapshot-check (logbitp (position :joints +physics-features+) (snap-u32 buffer (+ wat 4)))
-                        physics-snapshot-other-layout (+ wat 4) "the feature :joints of a world with joints"
-                        (snap-u32 buffer (+ wat 4)))
-        (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout (+ at 4)
-                        "a joint table of under 2^24 slots" count)
-        (snapshot-check (= (+ n nfree) count) physics-snapshot-other-layout (+ at 8)
-                        "a joint for each slot that is not free" nfree)
-        (check-part-size scratch 10 (+ 20 (* 4 count) (* 4 nfree) (* +snapshot-joint-bytes+ n)))
-        (snap-finite-f32 buffer (+ at 12))
-        (snap-finite-f32 buffer (+ at 16))
-        (dotimes (slot count)
-          (snapshot-check (< (snap-u32 buffer (+ at 20 (* 4 slot))) (ash 1 +handle-generation-bits+))
-                          physics-snapshot-other-layout (+ at 20 (* 4 slot)) "a generation under 2^20"
-                          (snap-u32 buffer (+ at 20 (* 4 slot)))))
-        ;; the live bodies' slots, from the body parts
-        (multiple-value-bind (marks stamp) (snapshot-marks scratch (max bodies count))
-          (declare (type fixnum-column marks) (type fixnum stamp))
-          (dolist (id '(3 4))
-            (let ((bat (aref offsets id)))
-              (dotimes (row (snap-u32 buffer bat))
-                (setf (aref marks (snap-u32 buffer (+ bat 4 64 (* row +snapshot-body-bytes+)))) (1+ stamp)))))
-          (let ((first (+ at 20 (* 4 count) (* 4 nfree))))
-            (dotimes (row n)
-              (let ((o (+ first (* row +snapshot-joint-bytes+))))
-                (snapshot-check (<= (snap-u32 buffer o) +joint-distance+) physics-snapshot-other-layout o
-                                "a joint kind, 0 or 1" (snap-u32 buffer o))
-                (snapshot-check (< (snap-u32 buffer (+ o 4)) 16) physics-snapshot-other-layout (+ o 4)
-                                "joint flags under 16" (snap-u32 buffer (+ o 4)))
-                (loop for side in '(12 20)
-                      for slot = (snap-u32 buffer (+ o side))
-                      for generation = (snap-u32 buffer (+ o side 4))
-                      unless (and (= side 20) (= slot #xFFFFFFFF) (zerop generation))
-                        do (snapshot-check (and (< slot bodies) (= (aref marks slot) (1+ stamp))
-                                                (= generation (snap-u32 buffer (+ hat 8 (* 4 slot))))
-                                                (or (= side 12) (/= slot (snap-u32 buffer (+ o 12)))))
-                                           physics-snapshot-other-layout (+ o side)
-                                           "the slot of a live body of the snapshot, of its generation, not the joint's other body"
-                                           slot))
-                (let ((reach (* +joint-anchor-reach+ (snap-f32 buffer (+ wat 48))))
-                      (fixed (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)))
-                  (flet ((ranged (k low high what)
-                           (let ((v (snap-finite-f32 buffer (+ o k))))
-                             (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o k) what v)
-                             v)))
-                    (loop for k from 28 below 40 by 4
-                          do (ranged k (- reach) reach "an anchor within the reach of the world's largest radius"))
-                    (loop for k from 40 below 52 by 4
-                          do (if fixed
-                                 (ranged k (- +physics-coordinate-limit+) +physics-coordinate-limit+
-                                         "a fixed point within the coordinate limit")
-                                 (ranged k (- reach) reach "an anchor within the reach of the world's largest radius")))
-                    (loop for k from 52 below 64 by 4
-                          do (ranged k 0.0 +physics-max-joint-length+ "a length from 0 to the longest a joint may have"))
-                    ;; a hertz of a few denormals would make the softness divide by zero
-                    (let ((hertz (ranged 64 0.0 1000.0 "a hertz from 0 to 1000")))
-                      (snapshot-check (or (= hertz 0.0) (>= hertz +physics-min-joint-hertz+)) physics-snapshot-other-layout (+ o 64)
-                                      "a hertz of 0, or of 0.001 (+physics-min-joint-hertz+) or more" hertz))
-                    (ranged 68 0.0 1000.0 "a damping ratio from 0 to 1000")
-                    (ranged 72 0.0 +physics-max-break-force+ "a break force from 0 to the largest")
-                    (loop for k from 76 below 88 by 4
-                          do (ranged k -1e9 1e9 "a carried impulse up to 1e9 N s"))))))
-            ;; a body's jointed flag is set exactly when a joint names it
-            (multiple-value-bind (named stamp) (snapshot-marks scratch bodies)
-              (declare (type fixnum-column named) (type fixnum stamp))
-              (dotimes (row n)
-                (let ((o (+ first (* row +snapshot-joint-bytes+))))
-                  (setf (aref named (snap-u32 buffer (+ o 12))) (1+ stamp))
-                  (unless (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)
-                    (setf (aref named (snap-u32 buffer (+ o 20))) (1+ stamp)))))
-              (check-snapshot-jointed-flags buffer scratch named (1+ stamp)))
-            ;; the joint slots: each free one listed once, each live one held by one joint
-            (multiple-value-bind (marks stamp) (snapshot-marks scratch count)
-              (declare (type fixnum-column marks) (type fixnum stamp))
-              (dotimes (k nfree)
-                (let* ((o (+ at 20 (* 4 count) (* 4 k))) (slot (snap-u32 buffer o)))
-                  (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
-                                  "a free joint slot of the table, listed once" slot)
-                  (setf (aref marks slot) stamp)))
-              (dotimes (row n)
-                (let* ((o (+ first (* row +snapshot-joint-bytes+) 8)) (slot (snap-u32 buffer o)))
-                  (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
-                                  "a joint slot of the table, neither free nor another joint's" slot)
-                  (setf (aref marks slot) stamp))))))))))
+      (progn
+        (check-snapshot-joint-table buffer scratch)
+        (check-snapshot-joint-rows buffer scratch)
+        (check-snapshot-joint-names buffer scratch)
+        (check-snapshot-joint-slots buffer scratch))))
 ;; A snapshot holds what decides the next step, part by part:4 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:5]]
 ;;; applying a checked snapshot: nothing here can fail
 
 (defun apply-snapshot-bodies (world bodies set buffer at mat)
-  "Fill BODIES, WORLD's set SET, from the checked body part at AT of BUFFER, its materials from
-the palette at MAT, and point each body's handle slot at its row. #SN4P0T"
+  "Fill BODIES, WORLD's set SET, from the checked body part at AT of BUFFER, the float columns and
+the ages copied whole, its materials from the palette at MAT, and point each body's handle slot
+at its row; rows it held past the new count read as zeros again. #SN4P0T"
   (declare (type body-columns bodies) (type octets buffer) (type index at mat) (type fixnum set)
            #.+kernel-policy+)
-  (let* ((n (snap-u32 buffer at)) (ids (physics-world-ids world)) (tag (handle-table-tag ids))
+  (let* ((n (snap-u32 buffer at)) (old (body-columns-length bodies)) (ids (physics-world-ids world))
+         (w (material-index-bytes (snap-u32 buffer mat)))
+         (tag (handle-table-tag ids))
          (sets (handle-table-set ids)) (locals (handle-table-local ids)) (generations (handle-table-generation ids)))
-    (declare (type index n) (type fixnum-column sets locals generations))
-    (body-columns-clear bodies)
+    (declare (type index n old) (type (unsigned-byte 16) tag) (type fixnum-column sets locals generations))
     (body-columns-ensure-capacity bodies n)
     (setf (body-columns-length bodies) n)
-    (with-body-columns (x y z vx vy vz wx wy wz qw qx qy qz sleep-time age flags handle
-                        radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind)
+    ;; the rows past N that held bodies, and the spare rows, read as zeros
+    (loop for row of-type index from n below (min (+ (max old n) (body-columns-spare bodies)) (length (body-columns-x bodies)))
+          do (body-columns-zero-row bodies row))
+    (do-snapshot-body-floats (column k) bodies
+      (sb-kernel:%byte-blt buffer (+ at (body-part-column n k)) column 0 (* 4 n)))
+    (sb-kernel:%byte-blt buffer (+ at (body-part-column n 14)) (body-columns-age bodies) 0 (* 8 n))
+    (with-body-columns (flags handle radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind)
         bodies
-      (dotimes (row n)
-        (let* ((o (+ at 4 (* row +snapshot-body-bytes+)))
-               (slot (snap-u32 buffer (+ o 64)))
-               (m (+ mat 4 (* (snap-u32 buffer (+ o 68)) +snapshot-material-bytes+))))
-          (declare (type index o m) (type (unsigned-byte 24) slot))
-          (setf (aref x row) (snap-f32 buffer o) (aref y row) (snap-f32 buffer (+ o 4))
-                (aref z row) (snap-f32 buffer (+ o 8)) (aref vx row) (snap-f32 buffer (+ o 12))
-                (aref vy row) (snap-f32 buffer (+ o 16)) (aref vz row) (snap-f32 buffer (+ o 20))
-                (aref wx row) (snap-f32 buffer (+ o 24)) (aref wy row) (snap-f32 buffer (+ o 28))
-                (aref wz row) (snap-f32 buffer (+ o 32)) (aref qw row) (snap-f32 buffer (+ o 36))
-                (aref qx row) (snap-f32 buffer (+ o 40)) (aref qy row) (snap-f32 buffer (+ o 44))
-                (aref qz row) (snap-f32 buffer (+ o 48)) (aref sleep-time row) (snap-f32 buffer (+ o 52))
-                (aref age row) (snap-f64 buffer (+ o 56))
-                (aref radius row) (snap-f32 buffer m) (aref inverse-mass row) (snap-f32 buffer (+ m 4))
-                (aref inverse-inertia row) (snap-f32 buffer (+ m 8)) (aref restitution row) (snap-f32 buffer (+ m 12))
-                (aref friction row) (snap-f32 buffer (+ m 16)) (aref rolling-resistance row) (snap-f32 buffer (+ m 20))
-                (aref life row) (snap-f32 buffer (+ m 24)) (aref kind row) (snap-i32 buffer (+ m 28))
-                (aref flags row) (logior (snap-u16 buffer (+ o 72)) (ash (snap-u32 buffer (+ m 32)) 16))
-                (aref handle row) (make-handle tag (aref generations slot) slot)
-                (aref sets slot) set (aref locals slot) row))))))
+      (let ((s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18 w))))
+        (declare (type index s m f))
+        (dotimes (row n)
+          (let* ((slot (snap-u32 buffer (+ s (* 4 row))))
+                 (p (+ mat 4 (* (snap-material-index buffer (+ m (* w row)) w) +snapshot-material-bytes+)))
+                 (generation (aref generations slot)))
+            (declare (type index p) (type (unsigned-byte 24) slot) (type (unsigned-byte 20) generation))
+            (setf (aref radius row) (snap-f32 buffer p) (aref inverse-mass row) (snap-f32 buffer (+ p 4))
+                  (aref inverse-inertia row) (snap-f32 buffer (+ p 8)) (aref restitution row) (snap-f32 buffer (+ p 12))
+                  (aref friction row) (snap-f32 buffer (+ p 16)) (aref rolling-resistance row) (snap-f32 buffer (+ p 20))
+                  (aref life row) (snap-f32 buffer (+ p 24)) (aref kind row) (snap-i32 buffer (+ p 28))
+                  (aref flags row) (logior (snap-u16 buffer (+ f (* 2 row))) (ash (snap-u32 buffer (+ p 32)) 16))
+                  (aref handle row) (logior (ash tag (+ +handle-index-bits+ +handle-generation-bits+))
+                                            (ash generation +handle-index-bits+) slot)
+                  (aref sets slot) set (aref locals slot) row)))))))
 
 (defun apply-snapshot-contacts (world buffer scratch)
-  "Put the contacts of the checked snapshot BUFFER into WORLD in their rows, with their keys in
-the table the check filled in SCRATCH, which becomes the world's. #SN4P0T"
+  "Put the contacts of the checked snapshot BUFFER into WORLD in their rows, every float of each
+row written (what the record leaves out as zero), with their keys in the table the check filled
+in SCRATCH, which becomes the world's. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 6)) (n (snap-u32 buffer at))
          (wat (aref offsets 1)) (step (snap-u64 buffer (+ wat 16))) (ids (physics-world-ids world))
          (contacts (physics-world-contacts world)) (table (physics-world-contact-table world))
-         (full (snapshot-scratch-contacts scratch))
-         (tag (handle-table-tag ids)) (generations (handle-table-generation ids)))
-    (declare (type index at n wat step) (type fixnum-column generations))
-    (contact-columns-clear contacts)
+         (full (snapshot-scratch-contacts scratch)) (old (contact-columns-length contacts))
+         (tag (handle-table-tag ids)) (generations (handle-table-generation ids)) (sets (handle-table-set ids)))
+    (declare (type index at n wat step old) (type (unsigned-byte 16) tag) (type fixnum-column generations sets))
     (contact-columns-ensure-capacity contacts n)
     (contact-columns-ensure-capacity (physics-world-contact-scratch world) (contact-columns-capacity contacts))
     (setf (contact-columns-length contacts) n)
+    (loop for row of-type index from n below (min (+ (max old n) (contact-columns-spare contacts))
+                                                 (length (contact-columns-key contacts)))
+          do (contact-columns-zero-row contacts row))
     (with-contact-columns (handle-a handle-b kind key seen order touching geometry) contacts
-     (flet ((slot-handle (slot)
-              ;; the handle of SLOT's body; of a free slot, the handle its body had before it
-              ;; expired, one generation back
-              (let ((g (aref generations slot)))
-                (make-handle tag (if (= (aref (handle-table-set ids) slot) +set-free+)
-                                     (ldb (byte +handle-generation-bits+ 0) (1- g))
-                                     g)
-                             slot))))
-      (let ((o (+ at 4)))
-       (declare (type index o))
-       (dotimes (row n)
-        (let* ((k (snap-i64 buffer o)) (bits (snap-u16 buffer (+ o 8)))
-               (a (ldb (byte 24 34) k)) (kk (ldb (byte 4 58) k)) (g (geometry-start row))
-               (code (ldb (byte 3 2) bits)))
-          (setf (aref key row) k (aref kind row) kk
-                (aref handle-a row) (slot-handle a)
-                (aref handle-b row) (if (= kk +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
-                (aref seen row) (if (logbitp 1 bits) (1- step) step)
-                (aref order row) row
-                (aref touching row) (if (logbitp 0 bits) 1 0))
-          (incf o 10)
-          (if (zerop code)
-              (dotimes (f 3) (setf (aref geometry (+ g f)) (snap-f32 buffer o)) (incf o 4))
-              (setf (aref geometry (+ g (ash (1- code) -1))) (if (oddp code) 1.0 -1.0)))
-          (do-impulse-groups (bit first width)
-            (when (logbitp bit bits)
-              (dotimes (f width)
-                (setf (aref geometry (+ g first f)) (snap-f32 buffer o))
-                (incf o 4)))))))))
+      (flet ((slot-handle (slot)
+               ;; the handle of SLOT's body; of a free slot, the handle its body had before it
+               ;; expired, one generation back
+               (declare (type (unsigned-byte 24) slot))
+               (let ((g (aref generations slot)))
+                 (declare (type (unsigned-byte 20) g))
+                 (logior (ash tag (+ +handle-index-bits+ +handle-generation-bits+))
+                         (ash (if (= (aref sets slot) +set-free+) (ldb (byte +handle-generation-bits+ 0) (1- g)) g)
+                              +handle-index-bits+)
+                         slot))))
+        (declare (inline slot-handle))
+        (let ((o (+ at 4)))
+          (declare (type index o))
+          (dotimes (row n)
+            (let* ((k (snap-i64 buffer o)) (bits (snap-u16 buffer (+ o 8)))
+                   (a (ldb (byte 24 34) k)) (kk (ldb (byte 4 58) k)) (g (geometry-start row))
+                   (code (ldb (byte 3 2) bits)))
+              (declare (type fixnum k bits) (type index g))
+              (setf (aref key row) k (aref kind row) kk
+                    (aref handle-a row) (slot-handle a)
+                    (aref handle-b row) (if (= kk +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
+                    (aref seen row) (if (logbitp 1 bits) (1- step) step)
+                    (aref order row) row
+                    (aref touching row) (if (logbitp 0 bits) 1 0))
+              (incf o 10)
+              (dotimes (f #.(length +contact-fields+)) (setf (aref geometry (+ g f)) 0.0))
+              (if (zerop code)
+                  (progn (setf (aref geometry g) (snap-f32 buffer o) (aref geometry (+ g 1)) (snap-f32 buffer (+ o 4))
+                               (aref geometry (+ g 2)) (snap-f32 buffer (+ o 8)))
+                         (incf o 12))
+                  (setf (aref geometry (+ g (ash (1- code) -1))) (if (oddp code) 1.0 -1.0)))
+              (do-impulse-groups (bit first width)
+                (when (logbitp bit bits)
+                  (dotimes (f width)
+                    (setf (aref geometry (+ g first f)) (snap-f32 buffer o))
+                    (incf o 4)))))))))
     ;; the table the check filled becomes the world's, and the world's the scratch's
     (rotatef (contact-table-slots table) (contact-table-slots full))
     (rotatef (contact-table-mask table) (contact-table-mask full))
@@ -9564,27 +10270,42 @@ the table the check filled in SCRATCH, which becomes the world's. #SN4P0T"
           (contact-table-misses table) (snap-u64 buffer (+ wat 140)))))
 
 (defun apply-snapshot-pair-list (world buffer scratch)
-  "Put the pair list of the checked snapshot BUFFER into WORLD, and the awake grid of its build
-when the world's grid still is that build's. #SN4P0T"
+  "Put the pair list of the checked snapshot BUFFER into WORLD, the rows' handles the awake rows'
+own when the snapshot does not write them (the bodies are restored first), and the awake grid of
+its build when the world's grid still is that build's. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
-         (plist (physics-world-pair-list world)))
-    (declare (type index at pairs))
+         (form (snap-u32 buffer (+ at 36))) (plist (physics-world-pair-list world)))
+    (declare (type index at pairs) (type fixnum rows))
     (setf (pair-list-rows plist) rows (pair-list-terrain plist) nil (pair-list-terrain-edits plist) -1
           (pair-list-count plist) 0)
     (when (>= rows 0)
       (pair-list-room plist rows)
-      (let ((anchors (pair-list-anchors plist)) (handles (pair-list-handles plist)) (clear (pair-list-clear plist)))
+      (let* ((handles (pair-list-handles plist)) (clear (pair-list-clear plist))
+             (bits (+ at +snapshot-pair-head-bytes+ (* +snapshot-pair-row-bytes+ rows)))
+             (o (+ bits (* 4 (ceiling rows 32)))))
+        (declare (type fixnum-column handles clear) (type index bits o))
         (fill (pair-list-loose plist) 0)
+        (sb-kernel:%byte-blt buffer (+ at +snapshot-pair-head-bytes+) (pair-list-anchors plist) 0 (* 12 rows))
         (dotimes (i rows)
-          (let ((o (+ at 36 (* i +snapshot-pair-row-bytes+))))
-            (setf (aref anchors (* 3 i)) (snap-f32 buffer o) (aref anchors (+ 1 (* 3 i))) (snap-f32 buffer (+ o 4))
-                  (aref anchors (+ 2 (* 3 i))) (snap-f32 buffer (+ o 8)) (aref handles i) (snap-i64 buffer (+ o 12))
-                  (aref clear i) (snap-u8 buffer (+ o 20))))))
-      (when (< (length (pair-list-pairs plist)) pairs)
-        (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) pairs :least 1024)))
-      (let ((list (pair-list-pairs plist)) (base (+ at 36 (* rows +snapshot-pair-row-bytes+))))
-        (dotimes (k pairs) (setf (aref list k) (snap-i64 buffer (+ base (* 8 k))))))
+          (setf (aref clear i) (ldb (byte 1 (logand i 31)) (snap-u32 buffer (+ bits (* 4 (ash i -5)))))))
+        (if (logbitp 0 form)
+            (dotimes (i rows) (setf (aref handles i) (snap-i64 buffer o)) (incf o 8))
+            (replace handles (body-columns-handle (physics-world-awake world)) :end1 rows))
+        (when (< (length (pair-list-pairs plist)) pairs)
+          (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) pairs :least 1024)))
+        (let ((list (pair-list-pairs plist)))
+          (declare (type fixnum-column list))
+          (if (logbitp 1 form)
+              (let ((a 0) (whole (+ (padded (+ o (* 3 pairs))) 4)))
+                (declare (type (unsigned-byte 24) a) (type index whole))
+                (dotimes (k pairs)
+                  (let ((da (snap-u8 buffer (+ o k))) (db (snap-u16 buffer (+ o pairs (* 2 k)))))
+                    (if (= da 128)
+                        (setf a (snap-u32 buffer whole) whole (+ whole 4))
+                        (setf a (+ a (if (> da 128) (- da 256) da))))
+                    (setf (aref list k) (logior (ash a 24) (+ a (if (>= db 32768) (- db 65536) db)))))))
+              (dotimes (k pairs) (setf (aref list k) (snap-i64 buffer (+ o (* 8 k))))))))
       (setf (pair-list-count plist) pairs (pair-list-cell plist) (snap-f32 buffer (+ at 4))
             (pair-list-builds plist) (snap-u32 buffer (+ at 8)) (pair-list-loose-count plist) (snap-i32 buffer (+ at 12))
             (pair-list-step plist) (snap-i64 buffer (+ at 16)) (pair-list-built-step plist) (snap-i64 buffer (+ at 24)))
@@ -9665,7 +10386,9 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
     (apply-snapshot-bodies world (physics-world-sleeping world) +set-sleeping+ buffer (aref offsets 4) (aref offsets 5))
     (let ((sleeping (physics-world-sleeping world)))
       (setf (physics-world-mortal-sleepers world)
-            (count-if #'plusp (body-columns-life sleeping) :end (body-columns-length sleeping))))
+            (let ((life (body-columns-life sleeping)))
+              (declare (type f32-column life))
+              (loop for row of-type index below (body-columns-length sleeping) count (plusp (aref life row))))))
     ;; the contacts in their rows, then the pair list and its grid
     (apply-snapshot-contacts world buffer scratch)
     (apply-snapshot-pair-list world buffer scratch)
@@ -9793,7 +10516,7 @@ WORLD is left as it was. #SN4P0T"
   (unless (typep buffer 'octets)
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))
-  (let ((scratch *snapshot-scratch*))
+  (let ((scratch (world-snapshot-scratch world)))
     (check-snapshot world buffer scratch)
     (sb-int:with-float-traps-masked (:inexact :underflow) (apply-snapshot world buffer scratch))
     world))
@@ -9839,7 +10562,7 @@ new world over TERRAIN (the caller's, as the snapshot holds no cells) made with 
 step, substeps, gravity, sleep and features, and KERNELS, or the family the snapshot names when
 this machine runs it. Bad bytes signal as restore-physics-world does. #SN4P0T"
   (let* ((buffer (coerce (read-snapshot-octets source) 'octets))
-         (scratch *snapshot-scratch*))
+         (scratch (make-snapshot-scratch)))
     (if into
         (restore-physics-world into buffer)
         (progn
@@ -9940,18 +10663,21 @@ damaged copies each, from SEED; return a list of (SCENE BYTES . FIGURES). #SN4P0
   "Measure snapshots: their size in the BALLS-ball basin and in the settled pile, snapshot plus
 restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8-step rollback at
 1000 balls, and the bytes consed; print Org tables to STREAM. #SN4P0T"
+  (format stream "load average ~A at the start~%~%" (load-average))
   (flet ((median (list) (let ((v (sort (coerce list 'vector) #'<))) (aref v (floor (length v) 2))))
          (ms (f) (let ((t0 (clock-ns))) (funcall f) (* 1d-6 (- (clock-ns) t0)))))
     (let* ((world (make-basin-world balls :kernels :auto))
            (other (make-basin-world balls :kernels :auto))
-           (buffer nil) (steps '()) (saves '()))
+           (buffer nil) (steps '()) (saves '()) (snaps '()) (restores '()))
       (dotimes (i 240) (step-physics-world world))
       (setf buffer (snapshot-physics-world world))
       (restore-physics-world other buffer)
       (sb-ext:gc :full t)
       (dotimes (k rounds)
         (push (ms (lambda () (step-physics-world world))) steps)
-        (push (ms (lambda () (setf buffer (snapshot-physics-world world buffer)) (restore-physics-world other buffer))) saves))
+        (push (ms (lambda () (setf buffer (snapshot-physics-world world buffer)) (restore-physics-world other buffer))) saves)
+        (push (ms (lambda () (snapshot-physics-world world buffer))) snaps)
+        (push (ms (lambda () (restore-physics-world other buffer))) restores))
       (let* ((size (nth-value 1 (snapshot-physics-world world buffer)))
              (awake (physics-world-awake-count world)) (asleep (physics-world-sleeping-count world))
              (contacts (contact-columns-length (physics-world-contacts world)))
@@ -9973,8 +10699,9 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
                 (/ (snapshot-part-bytes buffer 7) (max 1 awake)))
         (format stream "| target: 80 a body and 40 a contact | ~D | 80 | 40 |~%~%" (+ (* 80 (+ awake asleep)) (* 40 contacts)))
         (format stream "| basin of ~D at 4 s, ~D rounds | median ms |~%|---+---|~%" balls rounds)
-        (format stream "| a step | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%~%"
-                (median steps) (median saves) (* 100 (/ (median saves) (median steps))) consed)))
+        (format stream "| a step | ~,3F |~%| snapshot | ~,3F |~%| restore | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%~%"
+                (median steps) (median snaps) (median restores) (median saves)
+                (* 100 (/ (median saves) (median steps))) consed)))
     (multiple-value-bind (pile script) (make-scene-world :pile)
       (dotimes (i (* 60 12)) (funcall script i) (step-physics-world pile))
       (multiple-value-bind (buffer size) (snapshot-physics-world pile)
@@ -9989,7 +10716,8 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
         (dotimes (k 10)
           (push (ms (lambda () (restore-physics-world world buffer) (dotimes (j 8) (step-physics-world world)))) times)))
       (format stream "| rollback at 1000 balls (2 s) | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~D % |~%"
-              (median times) (round (/ (median times) (/ 1000 60.0) 0.01))))))
+              (median times) (round (/ (median times) (/ 1000 60.0) 0.01)))))
+  (format stream "~%load average ~A at the end~%" (load-average)))
 ;; A snapshot holds what decides the next step, part by part:8 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:2]]

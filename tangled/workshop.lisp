@@ -237,18 +237,23 @@ a tangled file's contents, in order.  :SOURCE-LINE is the text of the form's fir
                                                               :defaults page))
                      (file-namestring source)))
            (cursors (make-hash-table :test 'equal))
+           ;; the tangled and page lines of the last record: the definitions of one form share them
+           (previous nil)
            (records
              (loop for scanned in (scan-tangled-text text)
                    collect (destructuring-bind (&key name kind anchor line source-line docstring)
                                scanned
                              (let* ((section (and anchor (gethash anchor sections)))
                                     (org-line
-                                      (and section
-                                           (or (page-line page-lines section source-line
-                                                          (gethash anchor cursors (car section)))
-                                               (page-line page-lines section source-line)))))
+                                      (if (eql line (car previous))
+                                          (cdr previous)
+                                          (and section
+                                               (or (page-line page-lines section source-line
+                                                              (gethash anchor cursors (car section)))
+                                                   (page-line page-lines section source-line))))))
                                (when org-line
                                  (setf (gethash anchor cursors) (1+ org-line)))
+                               (setf previous (cons line org-line))
                                (list :name name :kind kind :anchor anchor :file file
                                      :line line :org-line org-line :docstring docstring))))))
       (setf *definitions* (append (remove file *definitions*
@@ -777,6 +782,78 @@ buffer whose package is named PACKAGE, or NIL when the page defines no such name
   "For the editor: what section prints for ANCHOR of PAGE, as a string. #PYXPDY"
   (with-output-to-string (s) (section anchor :page page :stream s)))
 ;; Answers for the editor:1 ends here
+
+;; [[file:../physics.org::#J0GR1D][The joint grid, beside Box3D:1]]
+(defun joint-grid-world (n &key (kernels :auto))
+  "Box3D's joint grid of N x N spheres of radius 0.4 in the plane z = 0, solved by KERNELS: the
+sphere of column k and row i at (k, -i, 0) for rows 1 to N-1, each joined by a point joint to the
+one above (the fixed point (k, -0.5, 0) for row 1) at anchors (0, 0.5, 0) and (0, -0.5, 0), and to
+the one to its left at anchors (-0.5, 0, 0) and (0.5, 0, 0); category 2, a mask without it, and
+no sleep. Return the world and the handle of the lowest right-hand sphere. #J0GR1D"
+  (let ((w (make-physics-world :sleep nil :kernels kernels))
+        (grid (make-array (list n n) :initial-element nil)))
+    (dotimes (k n)
+      (loop for i from 1 below n
+            do (let ((ball (add-physics-body w (float k 1.0) (float (- i) 1.0) 0.0 :radius 0.4
+                                               :category 2 :mask #xFFFD)))
+                 (setf (aref grid k i) ball)
+                 (if (= i 1)
+                     (add-physics-joint w :point ball nil :anchor-a '(0 0.5 0) :anchor-b (list (float k 1.0) -0.5 0.0))
+                     (add-physics-joint w :point (aref grid k (1- i)) ball :anchor-a '(0 -0.5 0) :anchor-b '(0 0.5 0)))
+                 (when (plusp k)
+                   (add-physics-joint w :point (aref grid (1- k) i) ball :anchor-a '(0.5 0 0) :anchor-b '(-0.5 0 0))))))
+    (values w (aref grid (1- n) (1- n)))))
+
+(defun joint-grid-lines (command prefix)
+  "Run COMMAND, a list of strings, and return its output's lines that begin with PREFIX, as
+lists of their words after it. #J0GR1D"
+  (loop for line in (uiop:split-string (uiop:run-program command :output :string :error-output *error-output*)
+                                       :separator '(#\Newline))
+        for words = (remove "" (uiop:split-string line) :test #'string=)
+        when (and words (string= (first words) prefix)) collect (rest words)))
+
+(defun run-joint-grid-benchmark (&key (stream *standard-output*) (n 100) (steps 100)
+                                      (rounds (let ((r (sb-ext:posix-getenv "ROUNDS")))
+                                                (if (and r (plusp (length r))) (parse-integer r) 5))))
+  "Print, as an Org table, the CPU time per step of Box3D's joint grid of N x N spheres over STEPS
+steps in this engine's kernel families and in Box3D (report/peers/box3d-joint-grid), ROUNDS
+rounds of alternating processes, the median of the rounds and each one's ratio to Box3D's, with
+the height of the lowest corner at the end. #J0GR1D"
+  (let* ((root (namestring (asdf:system-source-directory "luv-physics")))
+         (box3d (namestring (merge-pathnames "report/peers/box3d-joint-grid" root)))
+         (script (namestring (merge-pathnames "tools/joint-grid-one.lisp" root)))
+         (families (available-kernel-families))
+         (before (load-average))
+         (samples '()))
+    (flet ((number (word) (let ((*read-default-float-format* 'double-float) (*read-eval* nil))
+                            (coerce (read-from-string word) 'double-float))))
+      (dotimes (round rounds)
+        (dolist (words (joint-grid-lines (list "sbcl" "--dynamic-space-size" "4Gb" "--script" script root
+                                               (format nil "~{~(~A~)~^,~}" families) (princ-to-string n)
+                                               (princ-to-string steps))
+                                         "joint-grid"))
+          (push (list (format nil "luv-physics ~A" (first words)) (number (second words)) (number (third words))) samples))
+        (dolist (words (joint-grid-lines (list box3d (princ-to-string n) (princ-to-string steps)) "box3d-joint-grid:"))
+          ;; n N steps STEPS ms-per-step MS corner-y Y
+          (push (list "Box3D, one worker" (number (sixth words)) (number (eighth words))) samples))))
+    (setf samples (reverse samples))
+    (let* ((engines (remove-duplicates (mapcar #'first samples) :test #'string= :from-end t))
+           (medians (mapcar (lambda (e) (median (mapcar #'second (remove e samples :key #'first :test-not #'string=))))
+                            engines))
+           (reference (nth (position "Box3D, one worker" engines :test #'string=) medians)))
+      (format stream "~&#+caption: Box3D's joint grid, ~D x ~D spheres (~D moving, ~D joints), ~D steps of 1/60 s in 4 ~
+                      substeps, no sleep; CPU ms per step, median of ~D rounds of alternating processes; ~
+                      Box3D built from its source with -O2 -DNDEBUG, one worker; ~A; load ~A~%"
+              n n (* n (1- n)) (+ (* n (1- n)) (* (1- n) (1- n))) steps rounds (cpu-model-name) before)
+      (format stream "~&| engine | median ms | lowest | highest | / Box3D | corner y m |~%")
+      (format stream "~&|--------+-----------+--------+---------+---------+------------|~%")
+      (loop for engine in engines for m in medians
+            for rows = (remove engine samples :key #'first :test-not #'string=)
+            do (format stream "~&| ~A | ~,2F | ~,2F | ~,2F | ~,2F | ~,3F |~%" engine m
+                       (reduce #'min (mapcar #'second rows)) (reduce #'max (mapcar #'second rows))
+                       (/ m reference) (third (first rows))))
+      (format stream "~&(after the run: load ~A)~%" (load-average)))))
+;; The joint grid, beside Box3D:1 ends here
 
 ;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:6]]
 (defun squeeze-scene-world (next kernels)

@@ -96,8 +96,43 @@ the page's own defining macros, and the names it declaims inline."
       (walk form 0))
     names))
 
+(defvar *expansion-names* (make-hash-table :test #'equal)
+  "Every name a form inside an EVAL-WHEN of the files defines: a function or a parameter the
+compiler may call or read while it expands a macro, so that a change to it reaches the code the
+macro wrote.")
+
+(defun compile-time-forms (form text start)
+  "When FORM, read from TEXT at START, is an EVAL-WHEN, each form inside it as (FORM . START),
+its position in TEXT; else NIL."
+  (when (and (consp form) (eq (car form) 'eval-when))
+    (let ((position (nth-value 1 (read-from-string text t nil :start (1+ start))))) ; the operator
+      (setf position (nth-value 1 (read-from-string text t nil :start position)))   ; its situations
+      (loop for at = (physics::skip-blanks-and-comments text position)
+            until (char= (char text at) #\))
+            collect (multiple-value-bind (inner end) (read-from-string text t nil :start at)
+                      (setf position end)
+                      (cons inner at))))))
+
+(defun make-form-unit (form file line anchors)
+  "The UNIT of FORM, a toplevel form of FILE (or one inside a toplevel EVAL-WHEN) at LINE."
+  (let* ((definition (first (physics::toplevel-definitions form)))
+         (symbols (make-hash-table :test #'eq)))
+    (map-tree-symbols (lambda (s) (setf (gethash s symbols) t)) form)
+    (make-unit :form form :file file :line line :anchor (aref anchors (1- line))
+               :package *package*
+               :name (and definition (physics::definition-name
+                                      (intern (symbol-name (car definition)) :keyword)
+                                      definition))
+               :kind (and definition (car definition))
+               :symbols symbols
+               :defines (defined-names form)
+               :mutable (and definition (eq definition form)
+                             (member file *engine-files* :test #'string=)
+                             (engine-defining-operator-p (car form))))))
+
 (defun read-units (file)
-  "The toplevel forms of FILE, each a UNIT, in order."
+  "The toplevel forms of FILE, each a UNIT, in order; a toplevel EVAL-WHEN gives a unit for each
+form inside it, whose names go into *EXPANSION-NAMES*."
   (let* ((text (physics::read-file-text file))
          (lines (physics::split-lines text))
          (anchors (physics::line-anchors lines))
@@ -111,21 +146,14 @@ the page's own defining macros, and the names it declaims inline."
         (multiple-value-bind (form end) (read-from-string text t nil :start start)
           (when (and (consp form) (eq (car form) 'in-package))
             (setf *package* (find-package (second form))))
-          (let* ((definition (first (physics::toplevel-definitions form)))
-                 (symbols (make-hash-table :test #'eq)))
-            (map-tree-symbols (lambda (s) (setf (gethash s symbols) t)) form)
-            (push (make-unit :form form :file file :line line :anchor (aref anchors (1- line))
-                             :package *package*
-                             :name (and definition (physics::definition-name
-                                                    (intern (symbol-name (car definition)) :keyword)
-                                                    definition))
-                             :kind (and definition (car definition))
-                             :symbols symbols
-                             :defines (defined-names form)
-                             :mutable (and definition (eq definition form)
-                                           (member file *engine-files* :test #'string=)
-                                           (engine-defining-operator-p (car form))))
-                  units))
+          (let ((inner (compile-time-forms form text start)))
+            (if inner
+                (loop for (f . at) in inner
+                      for unit = (make-form-unit f file (+ line (count #\Newline text :start start :end at))
+                                                 anchors)
+                      do (dolist (n (unit-defines unit)) (setf (gethash n *expansion-names*) t))
+                         (push unit units))
+                (push (make-form-unit form file line anchors) units)))
           (incf line (count #\Newline text :start start :end end))
           (setf position end))))))
 
@@ -148,10 +176,12 @@ declamation makes it not inline by default: callers may still ask for it.")
 
 (defun inlined-name-p (name)
   "True if a change to NAME's definition reaches the code of its callers: a macro, a
-compiler macro, a symbol macro, a function declared inline, or a featured kernel, whose text
-define-impact-copy compiles again under another name."
+compiler macro, a symbol macro, a function declared inline, a definition of an EVAL-WHEN that
+a macro may call while it expands, or a featured kernel, whose text define-impact-copy
+compiles again under another name."
   (and (symbolp name)
        (or (gethash name *inline-names*)
+           (gethash name *expansion-names*)
            (get name 'physics::featured-kernel)
            (and (fboundp name) (macro-function name))
            (compiler-macro-function name)
@@ -594,16 +624,21 @@ functions of the page, not macros, not the standard's own."
 
 (defun claims-reach (order names)
   "For each claim of ORDER, (NAME . SECONDS), the list of NAMES its run calls, found by
-running it once more with every one of NAMES wrapped in a probe."
+running it once more with every one of NAMES wrapped in a probe.  A featured kernel a world
+runs as a variant compiled for its features is called through the variant, not its name: the
+claim reaches the kernel when it asks featured-kernel for one."
   (dolist (n names)
     (let ((n n))
       (sb-int:encapsulate n 'mutate-reach
                           (lambda (f &rest args) (setf (gethash n *reached*) t) (apply f args)))))
+  (sb-int:encapsulate 'physics::featured-kernel 'mutate-reach-variant
+                      (lambda (f name &rest args) (setf (gethash name *reached*) t) (apply f name args)))
   (unwind-protect
        (loop for (claim) in order
              collect (progn (clrhash *reached*)
                             (run-claim claim)
                             (cons claim (loop for n being the hash-keys of *reached* collect n))))
+    (sb-int:unencapsulate 'physics::featured-kernel 'mutate-reach-variant)
     (dolist (n names) (sb-int:unencapsulate n 'mutate-reach))))
 
 (defun claims-reach-in-child (claims names path)
@@ -715,6 +750,13 @@ NIL if all compiled without a warning; else a line saying what went wrong."
          (forms (cons (cons unit (funcall (mutant-rebuild mutant)))
                       (mapcar (lambda (u) (cons u (unit-form u))) (dependents unit units))))
          (texts (featured-texts)))
+    ;; a definition the mutant drops is gone, as from an image that loaded the mutated page,
+    ;; and not left as the unchanged engine defined it
+    (dolist (name (set-difference (unit-defines unit) (defined-names (cdr (first forms))) :test #'equal))
+      (when (and (or (symbolp name) (and (consp name) (eq (car name) 'setf)))
+                 (fboundp name) (not (typep (fdefinition name) 'generic-function))
+                 (not (and (symbolp name) (special-operator-p name))))
+        (fmakunbound name)))
     ;; a kernel whose defining form is evaluated again keeps the text that form keeps, or none
     (loop for (name) in texts
           when (some (lambda (f) (member name (unit-defines (car f)))) forms)
