@@ -6704,11 +6704,15 @@ put to sleep the groups still for long enough, when WORLD sleeps. #J0SL3P"
   "The smallest half-extent of a box body, in metres. #BXR0WS")
 
 (define-physics-layout box-point-columns
-  "The contact points of box bodies against the cells, one row a point: the box's solver row, the
-point's key (its feature), the normal (pushing the box), the lever from the box's centre, the
-two tangents, the gap at the step's start, the effective masses, the friction, the three
-carried impulses, the box's inverse mass and its world inverse inertia's six entries. #BXR0WS"
-  (row fixnum) (key fixnum) (handle fixnum)
+  "The contact points of box bodies, one row a point: the solver rows of its two sides (the second
+the dummy for a cell, the first the dummy for a sleeping box's corner), the point's key (its
+feature), the handle of the box that found it, the normal (pushing the first side off the
+second), the levers from both centres, the two tangents, the gap at the step's start, the
+effective masses, the friction, the three carried impulses, and each side's inverse mass and world
+inverse inertia's six entries. #BXR0WS"
+  (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
+  (sx single-float) (sy single-float) (sz single-float) (imb single-float)
+  (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
   (nx single-float) (ny single-float) (nz single-float)
   (rx single-float) (ry single-float) (rz single-float)
   (t1x single-float) (t1y single-float) (t1z single-float)
@@ -6737,6 +6741,7 @@ a row) and the soft coefficients of the step. #BXR0WS"
   (rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (row-count 0 :type index)
   (turns (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (dummy 0 :type index)
   (bias-rate 0.0 :type single-float)
   (mass-scale 1.0 :type single-float)
   (impulse-scale 0.0 :type single-float)
@@ -6910,6 +6915,14 @@ bounds, and the count of live boxes is theirs. #BXR0WS"
               (funcall fail "handle ~D: extent below ~A" h +box-min-half-extent+)))))
       (unless (= boxes (box-set-live set))
         (funcall fail "~D box rows but the box set counts ~D" boxes (box-set-live set))))))
+
+(defun refuse-box-snapshot (world)
+  "Signal invalid-physics-parameter naming :world when WORLD has had a box: a snapshot
+([[#SN4P0T]]) does not hold the box set yet, and a world restored without it would turn its boxes
+into spheres. #BXR0WS"
+  (when (physics-world-box-bodies world)
+    (error 'invalid-physics-parameter :world world :name :world :value world
+                                      :expected "a world that has had no box: a snapshot does not hold box bodies yet")))
 ;; A box is a row and a set of extents by slot:1 ends here
 
 ;; [[file:../physics.org::#BXCELL][A box against the cells:1]]
@@ -6929,11 +6942,14 @@ FACE (0-5: -x +x -y +y -z +z). #BXCELL"
   (logior (ash slot 34) (ash 1 +box-point-lattice-bit+)
           (ash (ldb (byte 10 0) x) 23) (ash (ldb (byte 10 0) y) 13) (ash (ldb (byte 10 0) z) 3) face))
 
-(defun add-box-point (set row handle key nx ny nz rx ry rz gap)
-  "Append to SET's points the point KEY of the box at solver ROW (handle HANDLE): normal NX NY NZ,
-lever RX RY RZ, gap GAP; its impulses are those its key had last step, or zeros. #BXCELL"
-  (declare (type box-set set) (type index row) (type fixnum handle key)
-           (type single-float nx ny nz rx ry rz gap) #.+kernel-policy+)
+(defun add-box-point (set row handle key nx ny nz rx ry rz gap &optional (row-b (box-set-dummy set))
+                                                                          (sx 0.0) (sy 0.0) (sz 0.0))
+  "Append to SET's points the point KEY found by the box HANDLE, between the sides at solver rows
+ROW and ROW-B (the dummy by default: a cell): normal NX NY NZ pushing the first side, levers RX RY
+RZ and SX SY SZ from the two centres, gap GAP; its impulses are those its key had last step, or
+zeros. #BXCELL"
+  (declare (type box-set set) (type index row row-b) (type fixnum handle key)
+           (type single-float nx ny nz rx ry rz gap sx sy sz) #.+kernel-policy+)
   (let* ((points (box-set-points set))
          (k (box-point-columns-append points))
          (old (box-set-previous set))
@@ -6941,11 +6957,13 @@ lever RX RY RZ, gap GAP; its impulses are those its key had last step, or zeros.
          (from (aref (box-set-previous-first set) slot))
          (to (min (box-point-columns-length old) (+ from (aref (box-set-previous-count set) slot)))))
     (declare (type index k from) (type fixnum to))
-    (with-box-point-columns ((r row) (kc key) (hc handle) (cnx nx) (cny ny) (cnz nz) (crx rx) (cry ry) (crz rz)
+    (with-box-point-columns ((r row) (rb row-b) (kc key) (hc handle) (cnx nx) (cny ny) (cnz nz)
+                             (crx rx) (cry ry) (crz rz) (csx sx) (csy sy) (csz sz)
                              separation normal-impulse tangent-impulse-1 tangent-impulse-2)
         points
-      (setf (aref r k) row (aref kc k) key (aref hc k) handle
+      (setf (aref r k) row (aref rb k) row-b (aref kc k) key (aref hc k) handle
             (aref cnx k) nx (aref cny k) ny (aref cnz k) nz (aref crx k) rx (aref cry k) ry (aref crz k) rz
+            (aref csx k) sx (aref csy k) sy (aref csz k) sz
             (aref separation k) gap)
       (with-box-point-columns ((okey key) (on normal-impulse) (o1 tangent-impulse-1) (o2 tangent-impulse-2)) old
         (loop for j of-type fixnum from from below to
@@ -7003,12 +7021,14 @@ against its faces. #BXCELL"
                         ;; inside a solid cell: the nearest face whose neighbour is air, out of it
                         (let ((best -1) (depth most-positive-single-float) (bnx 0.0) (bny 0.0) (bnz 0.0))
                           (declare (type fixnum best) (type single-float depth bnx bny bnz))
-                          (each-face (when (and (< d depth) (not (solid (- ix ox) (- iy oy) (- iz oz))))
+                          (each-face (when (and (< d depth) (not (solid (+ ix ox) (+ iy oy) (+ iz oz)))
+                                                (> (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
                                        (setf best face depth d bnx (- nx) bny (- ny) bnz (- nz))))
                           (when (>= best 0)
                             (add-box-point set row h (box-corner-key slot corner best) bnx bny bnz rx ry rz (- depth))))
                         ;; in air: each solid neighbour across a face nearer than the reach
-                        (each-face (when (and (< d reach) (solid (+ ix ox) (+ iy oy) (+ iz oz)))
+                        (each-face (when (and (< d reach) (solid (+ ix ox) (+ iy oy) (+ iz oz))
+                                              (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
                                      (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz d)))))))
               ;; the convex lattice points of the cells against the faces of the box
               (let* ((ex (+ (* (abs r11) hx) (* (abs r12) hy) (* (abs r13) hz) reach))
@@ -7018,12 +7038,15 @@ against its faces. #BXCELL"
                 (loop for lx of-type fixnum from (- (cell-floor (- cx ex)) -1) to (cell-floor (+ cx ex)) do
                   (loop for ly of-type fixnum from (- (cell-floor (- cy ey)) -1) to (cell-floor (+ cy ey)) do
                     (loop for lz of-type fixnum from (- (cell-floor (- cz ez)) -1) to (cell-floor (+ cz ez)) do
-                      (let ((solids 0))
-                        (declare (type fixnum solids))
+                      (let ((solids 0) (gx 0.0) (gy 0.0) (gz 0.0))
+                        (declare (type fixnum solids) (type single-float gx gy gz))
+                        ;; how many of the eight cells are solid, and where they lie from the point
                         (dotimes (k 8)
                           (when (solid (- lx (if (logbitp 0 k) 0 1)) (- ly (if (logbitp 1 k) 0 1))
                                        (- lz (if (logbitp 2 k) 0 1)))
-                            (incf solids)))
+                            (incf solids)
+                            (setf gx (+ gx (if (logbitp 0 k) 0.5 -0.5)) gy (+ gy (if (logbitp 1 k) 0.5 -0.5))
+                                  gz (+ gz (if (logbitp 2 k) 0.5 -0.5)))))
                         (when (<= 1 solids 3)
                           (let* ((rx (- (float lx 1.0) cx)) (ry (- (float ly 1.0) cy)) (rz (- (float lz 1.0) cz))
                                  ;; the point in the box's frame, and how far out of each face pair
@@ -7033,17 +7056,212 @@ against its faces. #BXCELL"
                                  (ou (- (abs u) hx)) (ov (- (abs v) hy)) (ow (- (abs w) hz)))
                             (declare (type single-float rx ry rz u v w ou ov ow))
                             (when (and (< ou reach) (< ov reach) (< ow reach))
-                              ;; the face it is least inside of, or farthest out of
-                              (multiple-value-bind (gap face nx ny nz)
-                                  (cond ((and (>= ou ov) (>= ou ow))
-                                         (if (> u 0.0) (values ou 1 (- r11) (- r21) (- r31)) (values ou 0 r11 r21 r31)))
-                                        ((>= ov ow)
-                                         (if (> v 0.0) (values ov 3 (- r12) (- r22) (- r32)) (values ov 2 r12 r22 r32)))
-                                        (t
-                                         (if (> w 0.0) (values ow 5 (- r13) (- r23) (- r33)) (values ow 4 r13 r23 r33))))
-                                (declare (type single-float gap nx ny nz) (type (integer 0 5) face))
-                                (add-box-point set row h (box-lattice-key slot lx ly lz face)
-                                               nx ny nz rx ry rz gap))))))))))))))))
+                              ;; the face it is least inside of, or farthest out of, among those
+                              ;; whose push takes the box away from the solid cells: a face whose
+                              ;; outward normal points into them, as G does (the solid cells'
+                              ;; centres less the point)
+                              (let ((best -1) (gap most-negative-single-float)
+                                    (ga (+ (* r11 gx) (* r21 gy) (* r31 gz)))
+                                    (gb (+ (* r12 gx) (* r22 gy) (* r32 gz)))
+                                    (gc (+ (* r13 gx) (* r23 gy) (* r33 gz)))
+                                    (glimit (* 0.25 (fsqrt (+ (* gx gx) (* gy gy) (* gz gz))))))
+                                (declare (type fixnum best) (type single-float gap ga gb gc glimit))
+                                (macrolet ((face (index out along sign)
+                                             ;; within 75 degrees of the way to the solid cells
+                                             `(when (and (> (* ,sign ,along) glimit) (> ,out gap))
+                                                (setf best ,index gap ,out))))
+                                  (face 0 (- (- u) hx) ga -1.0) (face 1 (- u hx) ga 1.0)
+                                  (face 2 (- (- v) hy) gb -1.0) (face 3 (- v hy) gb 1.0)
+                                  (face 4 (- (- w) hz) gc -1.0) (face 5 (- w hz) gc 1.0))
+                                (when (>= best 0)
+                                  ;; the push is the face's inward normal
+                                  (multiple-value-bind (nx ny nz)
+                                      (case best
+                                        (0 (values r11 r21 r31)) (1 (values (- r11) (- r21) (- r31)))
+                                        (2 (values r12 r22 r32)) (3 (values (- r12) (- r22) (- r32)))
+                                        (4 (values r13 r23 r33)) (t (values (- r13) (- r23) (- r33))))
+                                    (declare (type single-float nx ny nz))
+                                    (add-box-point set row h (box-lattice-key slot lx ly lz best)
+                                                   nx ny nz rx ry rz gap))))))))))))))))))
+  set)
+
+(defun box-pair-points (set owner key-base row-a row-b reach
+                        acx acy acz aqw aqx aqy aqz ahx ahy ahz
+                        bcx bcy bcz bqw bqx bqy bqz bhx bhy bhz)
+  "Append to SET, as points found by the box OWNER, the points between box A (centre ACX ACY ACZ,
+orientation AQW .. AQZ, half-extents AHX AHY AHZ, solver row ROW-A) and box B (the same, B...),
+when they are nearer than REACH along every face axis: the face axis of either box along which
+they overlap least (or lie farthest apart) gives the normal and the reference face; the other
+box's face most against it, clipped to the reference face's sides, gives the points, each with
+its height over the reference face as its gap. KEY-BASE with the reference axis and the clipped
+vertex's feature is a point's key. #BXCELL"
+  (declare (type box-set set) (type fixnum owner key-base) (type index row-a row-b)
+           (type single-float reach acx acy acz aqw aqx aqy aqz ahx ahy ahz
+                 bcx bcy bcz bqw bqx bqy bqz bhx bhy bhz)
+           #.+kernel-policy+)
+  (multiple-value-bind (a11 a12 a13 a21 a22 a23 a31 a32 a33) (box-axes aqw aqx aqy aqz)
+    (multiple-value-bind (b11 b12 b13 b21 b22 b23 b31 b32 b33) (box-axes bqw bqx bqy bqz)
+      (declare (type single-float a11 a12 a13 a21 a22 a23 a31 a32 a33 b11 b12 b13 b21 b22 b23 b31 b32 b33))
+      (let ((dx (- acx bcx)) (dy (- acy bcy)) (dz (- acz bcz))
+            (best -1) (best-sep most-negative-single-float))
+        (declare (type single-float dx dy dz best-sep) (type fixnum best))
+        ;; the six face axes: how far apart the boxes are along each
+        (flet ((apart (lx ly lz)
+                 (declare (type single-float lx ly lz))
+                 (- (abs (+ (* dx lx) (* dy ly) (* dz lz)))
+                    (+ (* ahx (abs (+ (* a11 lx) (* a21 ly) (* a31 lz))))
+                       (* ahy (abs (+ (* a12 lx) (* a22 ly) (* a32 lz))))
+                       (* ahz (abs (+ (* a13 lx) (* a23 ly) (* a33 lz)))))
+                    (+ (* bhx (abs (+ (* b11 lx) (* b21 ly) (* b31 lz))))
+                       (* bhy (abs (+ (* b12 lx) (* b22 ly) (* b32 lz))))
+                       (* bhz (abs (+ (* b13 lx) (* b23 ly) (* b33 lz))))))))
+          (declare (inline apart))
+          (macrolet ((try (index lx ly lz)
+                       `(let ((sep (apart ,lx ,ly ,lz)))
+                          (when (> sep best-sep) (setf best ,index best-sep sep)))))
+            (try 0 a11 a21 a31) (try 1 a12 a22 a32) (try 2 a13 a23 a33)
+            (try 3 b11 b21 b31) (try 4 b12 b22 b32) (try 5 b13 b23 b33)))
+        (when (< best-sep reach)
+          ;; the reference box R owns the face; the incident box I is pushed off it along N
+          (let ((on-b (>= best 3))
+                (poly (make-array 24 :element-type 'single-float))
+                (next (make-array 24 :element-type 'single-float))
+                (ids (make-array 8 :element-type 'fixnum))
+                (next-ids (make-array 8 :element-type 'fixnum)))
+            (declare (dynamic-extent poly next ids next-ids))
+            (macrolet ((with-roles (&body body)
+                         ;; bind the reference box's numbers as R..., the incident's as I...
+                         `(if on-b
+                              (let ((rcx bcx) (rcy bcy) (rcz bcz) (r11 b11) (r12 b12) (r13 b13) (r21 b21) (r22 b22)
+                                    (r23 b23) (r31 b31) (r32 b32) (r33 b33) (rhx bhx) (rhy bhy) (rhz bhz) (rrow row-b)
+                                    (icx acx) (icy acy) (icz acz) (i11 a11) (i12 a12) (i13 a13) (i21 a21) (i22 a22)
+                                    (i23 a23) (i31 a31) (i32 a32) (i33 a33) (ihx ahx) (ihy ahy) (ihz ahz) (irow row-a)
+                                    (axis (- best 3)))
+                                ,@body)
+                              (let ((rcx acx) (rcy acy) (rcz acz) (r11 a11) (r12 a12) (r13 a13) (r21 a21) (r22 a22)
+                                    (r23 a23) (r31 a31) (r32 a32) (r33 a33) (rhx ahx) (rhy ahy) (rhz ahz) (rrow row-a)
+                                    (icx bcx) (icy bcy) (icz bcz) (i11 b11) (i12 b12) (i13 b13) (i21 b21) (i22 b22)
+                                    (i23 b23) (i31 b31) (i32 b32) (i33 b33) (ihx bhx) (ihy bhy) (ihz bhz) (irow row-b)
+                                    (axis best))
+                                ,@body))))
+              (with-roles
+                (macrolet ((column (m c1 c2 c3) `(case ,m (0 ,c1) (1 ,c2) (t ,c3))))
+                  (let* ((ex (- icx rcx)) (ey (- icy rcy)) (ez (- icz rcz))
+                         ;; the reference axis, turned towards the incident box, its half-extent,
+                         ;; and the face's two side axes K1 K2 with theirs
+                         (lx (column axis r11 r12 r13)) (ly (column axis r21 r22 r23)) (lz (column axis r31 r32 r33))
+                         (sign (if (>= (+ (* ex lx) (* ey ly) (* ez lz)) 0.0) 1.0 -1.0))
+                         (nx (* sign lx)) (ny (* sign ly)) (nz (* sign lz))
+                         (rh (column axis rhx rhy rhz))
+                         (k1 (if (= axis 0) 1 0)) (k2 (if (= axis 2) 1 2))
+                         (e1 (column k1 rhx rhy rhz)) (e2 (column k2 rhx rhy rhz))
+                         (ux (column k1 r11 r12 r13)) (uy (column k1 r21 r22 r23)) (uz (column k1 r31 r32 r33))
+                         (vx (column k2 r11 r12 r13)) (vy (column k2 r21 r22 r23)) (vz (column k2 r31 r32 r33))
+                         ;; the incident axis most against N, the face's outward normal and centre
+                         (c1 (+ (* i11 nx) (* i21 ny) (* i31 nz)))
+                         (c2 (+ (* i12 nx) (* i22 ny) (* i32 nz)))
+                         (c3 (+ (* i13 nx) (* i23 ny) (* i33 nz)))
+                         (m (cond ((and (>= (abs c1) (abs c2)) (>= (abs c1) (abs c3))) 0) ((>= (abs c2) (abs c3)) 1) (t 2)))
+                         (ms (if (> (column m c1 c2 c3) 0.0) -1.0 1.0))
+                         (mh (column m ihx ihy ihz))
+                         (gx (+ ex (* ms mh (column m i11 i12 i13))))
+                         (gy (+ ey (* ms mh (column m i21 i22 i23))))
+                         (gz (+ ez (* ms mh (column m i31 i32 i33))))
+                         (j1 (if (= m 0) 1 0)) (j2 (if (= m 2) 1 2))
+                         (f1 (column j1 ihx ihy ihz)) (f2 (column j2 ihx ihy ihz))
+                         (px (* f1 (column j1 i11 i12 i13))) (py (* f1 (column j1 i21 i22 i23))) (pz (* f1 (column j1 i31 i32 i33)))
+                         (qx (* f2 (column j2 i11 i12 i13))) (qy (* f2 (column j2 i21 i22 i23))) (qz (* f2 (column j2 i31 i32 i33)))
+                         (count 4))
+                    (declare (type single-float ex ey ez lx ly lz sign nx ny nz rh e1 e2 ux uy uz vx vy vz
+                                                c1 c2 c3 ms mh gx gy gz f1 f2 px py pz qx qy qz)
+                             (type (integer 0 2) axis k1 k2 m j1 j2) (type fixnum count))
+                    ;; the incident face's corners, in order around it, in the reference face's frame:
+                    ;; along K1, along K2, and the height over the face
+                    (dotimes (corner 4)
+                      (let* ((s1 (if (< 0 corner 3) -1.0 1.0)) (s2 (if (< corner 2) 1.0 -1.0))
+                             (wx (+ gx (* s1 px) (* s2 qx))) (wy (+ gy (* s1 py) (* s2 qy))) (wz (+ gz (* s1 pz) (* s2 qz)))
+                             (o (* 3 corner)))
+                        (declare (type single-float s1 s2 wx wy wz) (type fixnum o))
+                        (setf (aref poly o) (+ (* wx ux) (* wy uy) (* wz uz))
+                              (aref poly (+ o 1)) (+ (* wx vx) (* wy vy) (* wz vz))
+                              (aref poly (+ o 2)) (- (+ (* wx nx) (* wy ny) (* wz nz)) rh)
+                              (aref ids corner) corner)))
+                    ;; clip against the four sides: a <= e1, -a <= e1, b <= e2, -b <= e2
+                    (dotimes (plane 4)
+                      (let ((kept 0) (coordinate (if (< plane 2) 0 1))
+                            (side (if (evenp plane) 1.0 -1.0)) (limit (if (< plane 2) e1 e2)))
+                        (declare (type fixnum kept coordinate) (type single-float side limit))
+                        (dotimes (i count)
+                          (let* ((j (if (= (1+ i) count) 0 (1+ i)))
+                                 (oi (* 3 i)) (oj (* 3 j))
+                                 (di (- (* side (aref poly (+ oi coordinate))) limit))
+                                 (dj (- (* side (aref poly (+ oj coordinate))) limit)))
+                            (declare (type fixnum j oi oj) (type single-float di dj))
+                            (when (<= di 0.0)
+                              (let ((o (* 3 kept)))
+                                (setf (aref next o) (aref poly oi) (aref next (+ o 1)) (aref poly (+ oi 1))
+                                      (aref next (+ o 2)) (aref poly (+ oi 2)) (aref next-ids kept) (aref ids i))
+                                (incf kept)))
+                            (when (or (and (<= di 0.0) (> dj 0.0)) (and (> di 0.0) (<= dj 0.0)))
+                              ;; the edge crosses the side: the crossing, named by the side and the
+                              ;; corner the edge starts from
+                              (let ((f (/ di (- di dj))) (o (* 3 kept)))
+                                (declare (type single-float f))
+                                (dotimes (c 3)
+                                  (setf (aref next (+ o c))
+                                        (+ (aref poly (+ oi c)) (* f (- (aref poly (+ oj c)) (aref poly (+ oi c)))))))
+                                (setf (aref next-ids kept) (logand 31 (+ 4 (* 4 plane) (logand 3 (aref ids i)))))
+                                (incf kept)))))
+                        (setf count kept)
+                        (rotatef poly next) (rotatef ids next-ids)))
+                    ;; each vertex left nearer than the reach is a point on the incident face
+                    (dotimes (i count)
+                      (let* ((o (* 3 i)) (a (aref poly o)) (b (aref poly (+ o 1))) (gap (aref poly (+ o 2)))
+                             ;; from the reference centre, and from the incident one
+                             (fx (+ (* a ux) (* b vx) (* (+ rh gap) nx)))
+                             (fy (+ (* a uy) (* b vy) (* (+ rh gap) ny)))
+                             (fz (+ (* a uz) (* b vz) (* (+ rh gap) nz))))
+                        (declare (type fixnum o) (type single-float a b gap fx fy fz))
+                        (when (< gap reach)
+                          (add-box-point set irow owner
+                                         (logior key-base (ash (+ (if on-b 3 0) axis) 5) (aref ids i))
+                                         nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz)))))))))))))
+  set)
+
+(defun find-box-box-points (world set row reach)
+  "Append to SET's points those between the box at awake ROW of WORLD and every other box near
+it: each awake box after it in the rows, once a pair, and each sleeping box, which holds still as
+a cell does (box-pair-points). #BXCELL"
+  (declare (type box-set set) (type index row) (type single-float reach) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (body-columns-length awake))
+         (hxs (box-set-hx set)) (hys (box-set-hy set)) (hzs (box-set-hz set)))
+    (declare (type index n) (type f32-column hxs hys hzs))
+    (with-body-columns (x y z qw qx qy qz radius handle) awake
+      (let* ((owner (aref handle row)) (slot (handle-index owner))
+             (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
+             (aw (aref qw row)) (ax (aref qx row)) (ay (aref qy row)) (az (aref qz row))
+             (hx (aref hxs slot)) (hy (aref hys slot)) (hz (aref hzs slot)))
+        (declare (type fixnum owner) (type single-float cx cy cz r aw ax ay az hx hy hz))
+        (flet ((meet (buffer j row-j)
+                 ;; the box at row J of BUFFER, at solver row ROW-J
+                 (declare (type body-columns buffer) (type index j row-j))
+                 (with-body-columns ((ox x) (oy y) (oz z) (ow qw) (oqx qx) (oqy qy) (oqz qz) (orad radius)
+                                     (ohandle handle) (oflags flags))
+                     buffer
+                   (when (logtest (aref oflags j) +flag-box-shape+)
+                     (let* ((dx (- (aref ox j) cx)) (dy (- (aref oy j) cy)) (dz (- (aref oz j) cz))
+                            (near (+ r (aref orad j) reach)))
+                       (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
+                         (let* ((other (aref ohandle j)) (oslot (handle-index other))
+                                (base (logior (ash slot 34) (ash 1 32) (ash oslot 8))))
+                           (box-pair-points set owner base row row-j reach
+                                            cx cy cz aw ax ay az hx hy hz
+                                            (aref ox j) (aref oy j) (aref oz j) (aref ow j) (aref oqx j)
+                                            (aref oqy j) (aref oqz j)
+                                            (aref hxs oslot) (aref hys oslot) (aref hzs oslot)))))))))
+          (loop for j of-type index from (1+ row) below n do (meet awake j j))
+          (dotimes (j (body-columns-length sleeping)) (meet sleeping j n))))))
   set)
 ;; A box against the cells:1 ends here
 
@@ -7078,12 +7296,13 @@ box set when some point is to be solved, else NIL. #BXSOLV"
     (rotatef (box-set-first set) (box-set-previous-first set))
     (rotatef (box-set-count set) (box-set-previous-count set))
     (box-point-columns-clear (box-set-points set))
-    (setf (box-set-row-count set) 0)
+    (setf (box-set-row-count set) 0 (box-set-dummy set) n)
     (when (plusp (box-set-live set))
       (when (< (length (box-set-rows set)) (* 3 n))
-        (setf (box-set-rows set) (make-array (* 6 n) :element-type 'fixnum :initial-element 0)
-              (box-set-turns set) (make-array (* 6 n) :element-type 'single-float :initial-element 0.0)))
-      (fill (box-set-turns set) 0.0 :end (* 3 n))
+        (setf (box-set-rows set) (make-array (* 6 (1+ n)) :element-type 'fixnum :initial-element 0)
+              (box-set-turns set) (make-array (* 6 (1+ n)) :element-type 'single-float :initial-element 0.0)))
+      ;; the turns of the awake rows and of the dummy after them
+      (fill (box-set-turns set) 0.0 :end (* 3 (1+ n)))
       (with-world-parameters (margin (zeta damping-ratio) push-max) world
         (let* ((dt (physics-world-current-dt world))
                (gstep (gravity-step world dt))
@@ -7103,85 +7322,129 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                   (incf (box-set-row-count set))
                   ;; the finalize phase does not hold a box's path as a sphere's ([[#SQU33Z]])
                   (when near (setf (aref near i) most-positive-single-float))
-                  (find-box-points world set i (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep)))
+                  (let ((reach (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))))
+                    (find-box-points world set i reach)
+                    (find-box-box-points world set i reach))
                   (setf (aref (box-set-first set) slot) start
                         (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))))
         (prepare-box-point-masses world set)))
     (and (plusp (box-point-columns-length (box-set-points set))) set)))
 
+(defun box-row-inertia (awake set i)
+  "The inverse mass of the box at awake row I of AWAKE, a buffer of SET's world, and its world
+inverse inertia R D^-1 R^T as six entries 11 12 13 22 23 33: seven values, zeros for the dummy row
+past the awake ones. #BXSOLV"
+  (declare (type body-columns awake) (type box-set set) (type index i) #.+kernel-policy+)
+  (if (>= i (body-columns-length awake))
+      (values 0.0 0.0 0.0 0.0 0.0 0.0 0.0)
+      (with-body-columns (qw qx qy qz inverse-mass handle) awake
+        (let* ((slot (handle-index (aref handle i)))
+               (m (aref inverse-mass i))
+               (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot))
+               ;; the inverse inertia in the box's frame: 3 / (m (b^2 + c^2)) and its like
+               (dx (/ (* 3.0 m) (+ (* hy hy) (* hz hz))))
+               (dy (/ (* 3.0 m) (+ (* hx hx) (* hz hz))))
+               (dz (/ (* 3.0 m) (+ (* hx hx) (* hy hy)))))
+          (declare (type single-float m hx hy hz dx dy dz))
+          (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+              (box-axes (aref qw i) (aref qx i) (aref qy i) (aref qz i))
+            (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+            (values m
+                    (+ (* r11 r11 dx) (* r12 r12 dy) (* r13 r13 dz))
+                    (+ (* r11 r21 dx) (* r12 r22 dy) (* r13 r23 dz))
+                    (+ (* r11 r31 dx) (* r12 r32 dy) (* r13 r33 dz))
+                    (+ (* r21 r21 dx) (* r22 r22 dy) (* r23 r23 dz))
+                    (+ (* r21 r31 dx) (* r22 r32 dy) (* r23 r33 dz))
+                    (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz))))))))
+
 (defun prepare-box-point-masses (world set)
-  "Write each of SET's points' box inverse mass and world inverse inertia, tangents, effective
-masses and friction; each gap gains the slop, so a box rests a slop deep as a sphere does. #BXSOLV"
+  "Write each of SET's points' sides' inverse masses and world inverse inertias, its tangents,
+effective masses and friction (the larger side's, the mean of two boxes'); each gap gains the
+slop, so a box rests a slop deep as a sphere does. #BXSOLV"
   (declare (type box-set set) #.+kernel-policy+)
   (let ((awake (physics-world-awake world)) (points (box-set-points set))
         (slop (f32 (physics-world-slop world))))
     (declare (type single-float slop))
-    (with-body-columns (qw qx qy qz inverse-mass (fr friction) handle) awake
-      (with-box-point-columns (row nx ny nz rx ry rz t1x t1y t1z t2x t2y t2z normal-mass tangent-mass-1
-                               tangent-mass-2 friction im i11 i12 i13 i22 i23 i33 separation)
+    (with-body-columns ((fr friction)) awake
+      (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
+                               tangent-mass-1 tangent-mass-2 friction im i11 i12 i13 i22 i23 i33
+                               imb j11 j12 j13 j22 j23 j33 separation)
           points
         (dotimes (k (box-point-columns-length points))
           (setf (aref separation k) (+ (aref separation k) slop))
-          (let* ((i (aref row k)) (slot (handle-index (aref handle i)))
-                 (m (aref inverse-mass i))
-                 (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot))
-                 ;; the inverse inertia in the box's frame: 3 / (m (b^2 + c^2)) and its like
-                 (dx (/ (* 3.0 m) (+ (* hy hy) (* hz hz))))
-                 (dy (/ (* 3.0 m) (+ (* hx hx) (* hz hz))))
-                 (dz (/ (* 3.0 m) (+ (* hx hx) (* hy hy)))))
-            (declare (type index i) (type single-float m hx hy hz dx dy dz))
-            (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
-                (box-axes (aref qw i) (aref qx i) (aref qy i) (aref qz i))
-              (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
-              ;; R D R^T
-              (setf (aref im k) m
-                    (aref i11 k) (+ (* r11 r11 dx) (* r12 r12 dy) (* r13 r13 dz))
-                    (aref i12 k) (+ (* r11 r21 dx) (* r12 r22 dy) (* r13 r23 dz))
-                    (aref i13 k) (+ (* r11 r31 dx) (* r12 r32 dy) (* r13 r33 dz))
-                    (aref i22 k) (+ (* r21 r21 dx) (* r22 r22 dy) (* r23 r23 dz))
-                    (aref i23 k) (+ (* r21 r31 dx) (* r22 r32 dy) (* r23 r33 dz))
-                    (aref i33 k) (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz))
-                    (aref friction k) (aref fr i)))
-            (multiple-value-bind (ax ay az bx by bz) (box-tangents (aref nx k) (aref ny k) (aref nz k))
-              (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
-            (flet ((mass-along (ux uy uz)
-                     (declare (type single-float ux uy uz))
-                     ;; 1 / (1/m + (r x u) . I^-1 (r x u))
-                     (let* ((px (- (* (aref ry k) uz) (* (aref rz k) uy)))
-                            (py (- (* (aref rz k) ux) (* (aref rx k) uz)))
-                            (pz (- (* (aref rx k) uy) (* (aref ry k) ux)))
-                            (kk (+ m (* px (+ (* (aref i11 k) px) (* (aref i12 k) py) (* (aref i13 k) pz)))
-                                   (* py (+ (* (aref i12 k) px) (* (aref i22 k) py) (* (aref i23 k) pz)))
-                                   (* pz (+ (* (aref i13 k) px) (* (aref i23 k) py) (* (aref i33 k) pz))))))
-                       (if (> kk 0.0) (/ 1.0 kk) 0.0))))
-              (setf (aref normal-mass k) (mass-along (aref nx k) (aref ny k) (aref nz k))
-                    (aref tangent-mass-1 k) (mass-along (aref t1x k) (aref t1y k) (aref t1z k))
-                    (aref tangent-mass-2 k) (mass-along (aref t2x k) (aref t2y k) (aref t2z k)))))))))
+          (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
+            (declare (type index a b n))
+            (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set a)
+              (setf (aref im k) m (aref i11 k) e11 (aref i12 k) e12 (aref i13 k) e13
+                    (aref i22 k) e22 (aref i23 k) e23 (aref i33 k) e33))
+            (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set b)
+              (setf (aref imb k) m (aref j11 k) e11 (aref j12 k) e12 (aref j13 k) e13
+                    (aref j22 k) e22 (aref j23 k) e23 (aref j33 k) e33))
+            (setf (aref friction k) (cond ((>= b n) (aref fr a))
+                                          ((>= a n) (aref fr b))
+                                          (t (fsqrt (* (aref fr a) (aref fr b)))))))
+          (multiple-value-bind (ax ay az bx by bz) (box-tangents (aref nx k) (aref ny k) (aref nz k))
+            (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
+          (flet ((mass-along (ux uy uz)
+                   (declare (type single-float ux uy uz))
+                   ;; 1 / (1/m_a + 1/m_b + (r_a x u) . Ia^-1 (r_a x u) + (r_b x u) . Ib^-1 (r_b x u))
+                   (let* ((px (- (* (aref ry k) uz) (* (aref rz k) uy)))
+                          (py (- (* (aref rz k) ux) (* (aref rx k) uz)))
+                          (pz (- (* (aref rx k) uy) (* (aref ry k) ux)))
+                          (qx (- (* (aref sy k) uz) (* (aref sz k) uy)))
+                          (qy (- (* (aref sz k) ux) (* (aref sx k) uz)))
+                          (qz (- (* (aref sx k) uy) (* (aref sy k) ux)))
+                          (kk (+ (aref im k) (aref imb k)
+                                 (* px (+ (* (aref i11 k) px) (* (aref i12 k) py) (* (aref i13 k) pz)))
+                                 (* py (+ (* (aref i12 k) px) (* (aref i22 k) py) (* (aref i23 k) pz)))
+                                 (* pz (+ (* (aref i13 k) px) (* (aref i23 k) py) (* (aref i33 k) pz)))
+                                 (* qx (+ (* (aref j11 k) qx) (* (aref j12 k) qy) (* (aref j13 k) qz)))
+                                 (* qy (+ (* (aref j12 k) qx) (* (aref j22 k) qy) (* (aref j23 k) qz)))
+                                 (* qz (+ (* (aref j13 k) qx) (* (aref j23 k) qy) (* (aref j33 k) qz))))))
+                     (if (> kk 0.0) (/ 1.0 kk) 0.0))))
+            (setf (aref normal-mass k) (mass-along (aref nx k) (aref ny k) (aref nz k))
+                  (aref tangent-mass-1 k) (mass-along (aref t1x k) (aref t1y k) (aref t1z k))
+                  (aref tangent-mass-2 k) (mass-along (aref t2x k) (aref t2y k) (aref t2z k))))))))
   set)
 
 (defmacro with-box-point ((v k) &body body)
   "Run BODY for box point K, its columns bound by with-box-point-columns, over the solver's
-velocities V, with O the box's solver row and (push! PX PY PZ) the impulse P applied at the
-point: P/m to the velocity, I^-1 (r x P) to the spin. #BXSOLV"
-  `(let ((o (solver-row (aref row ,k))))
-     (declare (type index o))
+velocities V, with O and OB the two sides' solver rows, (push! PX PY PZ) the impulse P applied at
+the point, P/m and I^-1 (r x P) to the first side and their opposites to the second, and
+(point-velocity) the first side's point velocity less the second's, v + w x r, as three values. #BXSOLV"
+  `(let ((o (solver-row (aref row ,k))) (ob (solver-row (aref row-b ,k))))
+     (declare (type index o ob))
      (flet ((push! (px py pz)
               (declare (type single-float px py pz))
-              (let* ((m (aref im ,k))
+              (let* ((m (aref im ,k)) (mb (aref imb ,k))
                      (tx (- (* (aref ry ,k) pz) (* (aref rz ,k) py)))
                      (ty (- (* (aref rz ,k) px) (* (aref rx ,k) pz)))
-                     (tz (- (* (aref rx ,k) py) (* (aref ry ,k) px))))
+                     (tz (- (* (aref rx ,k) py) (* (aref ry ,k) px)))
+                     (ux (- (* (aref sy ,k) pz) (* (aref sz ,k) py)))
+                     (uy (- (* (aref sz ,k) px) (* (aref sx ,k) pz)))
+                     (uz (- (* (aref sx ,k) py) (* (aref sy ,k) px))))
                 (setf (aref ,v o) (+ (aref ,v o) (* m px))
                       (aref ,v (+ o 1)) (+ (aref ,v (+ o 1)) (* m py))
                       (aref ,v (+ o 2)) (+ (aref ,v (+ o 2)) (* m pz))
                       (aref ,v (+ o 3)) (+ (aref ,v (+ o 3)) (+ (* (aref i11 ,k) tx) (* (aref i12 ,k) ty) (* (aref i13 ,k) tz)))
                       (aref ,v (+ o 4)) (+ (aref ,v (+ o 4)) (+ (* (aref i12 ,k) tx) (* (aref i22 ,k) ty) (* (aref i23 ,k) tz)))
-                      (aref ,v (+ o 5)) (+ (aref ,v (+ o 5)) (+ (* (aref i13 ,k) tx) (* (aref i23 ,k) ty) (* (aref i33 ,k) tz))))))
+                      (aref ,v (+ o 5)) (+ (aref ,v (+ o 5)) (+ (* (aref i13 ,k) tx) (* (aref i23 ,k) ty) (* (aref i33 ,k) tz))))
+                ;; the dummy row, a cell's or a sleeper's, stays zero
+                (when (> mb 0.0)
+                  (setf (aref ,v ob) (- (aref ,v ob) (* mb px))
+                        (aref ,v (+ ob 1)) (- (aref ,v (+ ob 1)) (* mb py))
+                        (aref ,v (+ ob 2)) (- (aref ,v (+ ob 2)) (* mb pz))
+                        (aref ,v (+ ob 3)) (- (aref ,v (+ ob 3)) (+ (* (aref j11 ,k) ux) (* (aref j12 ,k) uy) (* (aref j13 ,k) uz)))
+                        (aref ,v (+ ob 4)) (- (aref ,v (+ ob 4)) (+ (* (aref j12 ,k) ux) (* (aref j22 ,k) uy) (* (aref j23 ,k) uz)))
+                        (aref ,v (+ ob 5)) (- (aref ,v (+ ob 5)) (+ (* (aref j13 ,k) ux) (* (aref j23 ,k) uy) (* (aref j33 ,k) uz)))))))
             (point-velocity ()
-              ;; v + w x r
-              (values (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
-                      (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
-                      (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k)))))))
+              ;; (v + w x r) of the first side less that of the second
+              (values (- (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
+                         (+ (aref ,v ob) (- (* (aref ,v (+ ob 4)) (aref sz ,k)) (* (aref ,v (+ ob 5)) (aref sy ,k)))))
+                      (- (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
+                         (+ (aref ,v (+ ob 1)) (- (* (aref ,v (+ ob 5)) (aref sx ,k)) (* (aref ,v (+ ob 3)) (aref sz ,k)))))
+                      (- (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k))))
+                         (+ (aref ,v (+ ob 2)) (- (* (aref ,v (+ ob 3)) (aref sy ,k)) (* (aref ,v (+ ob 4)) (aref sx ,k))))))))
        (declare (inline push! point-velocity) (ignorable #'point-velocity))
        ,@body)))
 
@@ -7189,8 +7452,9 @@ point: P/m to the velocity, I^-1 (r x P) to the spin. #BXSOLV"
   "Apply every box point's carried impulses again, at the start of a substep. #BXSOLV"
   (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
   (let ((points (box-set-points set)))
-    (with-box-point-columns (row nx ny nz rx ry rz t1x t1y t1z t2x t2y t2z normal-impulse tangent-impulse-1
-                             tangent-impulse-2 im i11 i12 i13 i22 i23 i33)
+    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-impulse
+                             tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
+                             imb j11 j12 j13 j22 j23 j33)
         points
       (dotimes (k (box-point-columns-length points))
         (with-box-point (v k)
@@ -7208,21 +7472,25 @@ solve) and without it (the relax), clamped to push only; then its friction, held
         (bias-rate (box-set-bias-rate set)) (mass-scale (box-set-mass-scale set))
         (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set)))
     (declare (type f32-column turns) (type single-float bias-rate mass-scale impulse-scale push-max))
-    (with-box-point-columns (row nx ny nz rx ry rz t1x t1y t1z t2x t2y t2z separation normal-mass
-                             tangent-mass-1 tangent-mass-2 friction normal-impulse tangent-impulse-1
-                             tangent-impulse-2 im i11 i12 i13 i22 i23 i33)
+    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
+                             normal-mass tangent-mass-1 tangent-mass-2 friction normal-impulse
+                             tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
+                             imb j11 j12 j13 j22 j23 j33)
         points
       (dotimes (k (box-point-columns-length points))
         (with-box-point (v k)
           (let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
+                 (j (aref row-b k)) (pb (delta-row j)) (tb (* 3 j))
                  (ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
                  (lx (aref rx k)) (ly (aref ry k)) (lz (aref rz k))
+                 (mx (aref sx k)) (my (aref sy k)) (mz (aref sz k))
                  (qx (aref turns tr)) (qy (aref turns (+ tr 1))) (qz (aref turns (+ tr 2)))
-                 ;; the gap now: moved by the box's delta and its turn
+                 (ux (aref turns tb)) (uy (aref turns (+ tb 1))) (uz (aref turns (+ tb 2)))
+                 ;; the gap now: moved by each side's delta and turn (the dummy's are zero)
                  (s (+ (aref separation k)
-                       (* ax (+ (aref d p) (- (* qy lz) (* qz ly))))
-                       (* ay (+ (aref d (+ p 1)) (- (* qz lx) (* qx lz))))
-                       (* az (+ (aref d (+ p 2)) (- (* qx ly) (* qy lx))))))
+                       (* ax (- (+ (aref d p) (- (* qy lz) (* qz ly))) (+ (aref d pb) (- (* uy mz) (* uz my)))))
+                       (* ay (- (+ (aref d (+ p 1)) (- (* qz lx) (* qx lz))) (+ (aref d (+ pb 1)) (- (* uz mx) (* ux mz)))))
+                       (* az (- (+ (aref d (+ p 2)) (- (* qx ly) (* qy lx))) (+ (aref d (+ pb 2)) (- (* ux my) (* uy mx)))))))
                  (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
                  (positive (> s 0.0))
                  (bias (cond (positive (* s inv-h))
@@ -7233,7 +7501,7 @@ solve) and without it (the relax), clamped to push only; then its friction, held
                  (old (aref normal-impulse k))
                  (new (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old))))
                  (pn (- new old)))
-            (declare (type index i p tr) (type single-float s vn bias ms is old new pn))
+            (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
             (setf (aref normal-impulse k) new)
             (push! (* pn ax) (* pn ay) (* pn az))
             ;; friction in the cone of mu times the normal impulse
@@ -9309,6 +9577,7 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
 snapshot's bound (snapshot-part-bounds), else into a new one of that bound; return the buffer
 and the snapshot's size in bytes. Into a buffer large enough it conses nothing. #SN4P0T"
   (check-idle world 'snapshot-physics-world)
+  (refuse-box-snapshot world)
   (unless (or (null buffer) (typep buffer 'octets))
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "NIL or an octet vector, (simple-array (unsigned-byte 8) (*))"))
@@ -10687,6 +10956,7 @@ truncated, of another magic, version or layout, whose checksum fails, or of a wo
 features WORLD lacks, signals the physics-snapshot-invalid subtype naming the byte offset, and
 WORLD is left as it was. #SN4P0T"
   (check-idle world 'restore-physics-world)
+  (refuse-box-snapshot world)
   (unless (typep buffer 'octets)
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))

@@ -6619,6 +6619,22 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
           (check (< 0 drop 0.9) "the corner fell ~,4F m" drop))))))
 ;; J0GR1D-the-grid-is-box3ds ends here
 
+;; [[file:../physics.org::#BXR0WS][BXR0WS-snapshots-refuse-boxes]]
+(define-claim "BXR0WS" snapshots-refuse-boxes
+    "A world with a box is refused by snapshot and restore, unchanged."
+  (let* ((w (make-floor-world))
+         (plain (make-floor-world))
+         (bytes (progn (add-physics-body plain 2.5 1 2.5) (snapshot-physics-world plain))))
+    (add-physics-box w 2.5 1 2.5 0.5 0.5 0.5)
+    (step-physics-world w)
+    (let ((hash (physics-world-state-hash w)))
+      (dolist (call (list (lambda () (snapshot-physics-world w)) (lambda () (restore-physics-world w bytes))))
+        (check (eq :world (handler-case (progn (funcall call) :done)
+                            (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))))
+      (check (= hash (physics-world-state-hash w)))
+      (check (eq t (validate-physics-world w))))))
+;; BXR0WS-snapshots-refuse-boxes ends here
+
 ;; [[file:../physics.org::#BXR0WS][BXR0WS-bad-boxes-refused]]
 (define-claim "BXR0WS" bad-boxes-refused
     "Bad boxes are refused by name and leave the world unchanged."
@@ -6772,6 +6788,67 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (< (abs (- a want)) (* 0.01 want)) "acceleration ~,4F, g(sin - mu cos) ~,4F" a want))))
 ;; BXCELL-incline-holds-or-slides ends here
 
+;; [[file:../physics.org::#BXCELL][BXCELL-tips-at-45-degrees]]
+(define-claim "BXCELL" tips-at-45-degrees
+    "A cube tipped over a cell edge rocks back at 44.5 degrees and falls at 45.5."
+  (flet ((tip (degrees)
+           (let* ((phi (* degrees (/ pi 180)))
+                  (terrain (make-voxel-terrain)))
+             (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+             (fill-terrain terrain -16 -5 -16 0 0 32 t)
+             (let* ((w (make-physics-world :terrain terrain :sleep nil))
+                    (box (add-physics-box w (+ (* -0.5 (cos phi)) (* 0.5 (sin phi)))
+                                          (+ (* 0.5 (cos phi)) (* 0.5 (sin phi))) 2.5 0.5 0.5 0.5
+                                          :friction 1.5 :orientation (list (cos (/ phi 2)) 0 0 (- (sin (/ phi 2)))))))
+               (dotimes (i 180) (step-physics-world w))
+               (check (eq t (validate-physics-world w)))
+               (multiple-value-bind (x y) (physics-body-position w box)
+                 (values x y (* 2 (acos (min 1.0 (abs (physics-body-orientation w box)))) (/ 180 pi))))))))
+    (multiple-value-bind (x y turn) (tip 44.5)
+      (check (< x 0.0) "at 44.5 degrees the centre ended at x = ~,4F" x)
+      (check (< (abs (- y (- 0.5 *physics-linear-slop*))) 1e-3) "at 44.5 degrees the centre ended at y = ~,4F, turned ~,2F degrees" y turn))
+    (let ((y (nth-value 1 (tip 45.5))))
+      (check (< y 0.0) "at 45.5 degrees the centre ended at y = ~,4F, on the ledge" y))))
+;; BXCELL-tips-at-45-degrees ends here
+
+;; [[file:../physics.org::#BXCELL][BXCELL-cube-rests-on-cube]]
+(define-claim "BXCELL" cube-rests-on-cube
+    "A cube on a cube on the floor rests two slops down, and a cube dropped on a sleeper rests on it."
+  (let* ((w (make-floor-world))
+         (low (add-physics-box w 2.5 0.495 2.5 0.5 0.5 0.5))
+         (high (add-physics-box w 2.5 1.495 2.5 0.5 0.5 0.5)))
+    (dotimes (i 120) (step-physics-world w))
+    (multiple-value-bind (x y z) (physics-body-position w high)
+      (check (< (abs (- y (- 1.5 (* 2 *physics-linear-slop*)))) 1e-3) "the upper cube rests at y = ~,5F" y)
+      (check (< (max (abs (- x 2.5)) (abs (- z 2.5))) 1e-3) "the upper cube slid to ~,4F ~,4F" x z))
+    (check (not (or (physics-body-awake-p w low) (physics-body-awake-p w high))) "awake at 2 s")
+    (check (eq t (validate-physics-world w))))
+  (let* ((w (make-floor-world))
+         (low (add-physics-box w 2.5 0.495 2.5 0.5 0.5 0.5)))
+    (dotimes (i 60) (step-physics-world w))
+    (check (not (physics-body-awake-p w low)) "the lower cube is awake at 1 s")
+    (let ((high (add-physics-box w 2.5 2.0 2.5 0.5 0.5 0.5)))
+      (dotimes (i 120) (step-physics-world w))
+      (let ((y (nth-value 1 (physics-body-position w high))))
+        (check (< (abs (- y (- 1.5 (* 2 *physics-linear-slop*)))) 1e-3) "the dropped cube rests at y = ~,5F" y)))))
+;; BXCELL-cube-rests-on-cube ends here
+
+;; [[file:../physics.org::#BXCELL][BXCELL-ten-cubes-stand]]
+(define-claim "BXCELL" ten-cubes-stand
+    "A stack of ten unit cubes stands for 60 s and sleeps."
+  (let* ((w (make-floor-world))
+         (cubes (loop for k below 10 collect (add-physics-box w 2.5 (+ 0.5 k) 2.5 0.5 0.5 0.5)))
+         (top (car (last cubes))))
+    (dotimes (i 300) (step-physics-world w))
+    (check (zerop (physics-world-awake-count w)) "~D cubes awake at 5 s" (physics-world-awake-count w))
+    (dotimes (i 3300) (step-physics-world w))
+    (multiple-value-bind (x y z) (physics-body-position w top)
+      (check (< (abs (- y (- 9.5 (* 10 *physics-linear-slop*)))) 0.01) "the top cube is at y = ~,4F" y)
+      (check (< (sqrt (+ (expt (- x 2.5) 2) (expt (- z 2.5) 2))) 0.05) "the top cube is off the axis at ~,4F ~,4F" x z))
+    (check (zerop (physics-world-awake-count w)))
+    (check (eq t (validate-physics-world w)))))
+;; BXCELL-ten-cubes-stand ends here
+
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-families-agree-on-boxes]]
 (define-claim "BXSOLV" families-agree-on-boxes
     "A tumbling box and a sliding box end in the same state hash in every kernel family."
@@ -6780,6 +6857,8 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
              (add-physics-box w -2.5 (- 0.5 *physics-linear-slop*) 2.5 0.5 0.5 0.5 :friction 0.5 :vx 4)
              (let ((b (add-physics-box w 4.5 2.0 4.5 0.4 0.3 0.5 :orientation '(0.9 0.3 0.2 0.1) :vz -1)))
                (set-physics-body-angular-velocity w b 1 2 3))
+             (add-physics-box w 8.5 0.495 2.5 0.5 0.5 0.5)
+             (add-physics-box w 8.7 1.8 2.4 0.5 0.4 0.3 :orientation '(0.95 0.1 0.2 0.2))
              (dotimes (i 180) (step-physics-world w))
              (check (eq t (validate-physics-world w)))
              (physics-world-state-hash w))))
