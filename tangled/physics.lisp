@@ -12347,6 +12347,19 @@ hit when it returns true. #R4YC57"
 ;; Rays walk the cells in order:1 ends here
 
 ;; [[file:../physics.org::#S9WEEP][Spheres swept along a path:1]]
+(defmacro sweep-cell-if-solid (i j k)
+  "When cell I J K is solid, sweep the cast's sphere against it (sweep-rounded-box), its faces
+shared with air exposed, and take a nearer hit as the cast's. Expanded in sweep-cells, inside its
+chunk reader (solid-p) and its search's names (s, cx, cy, cz). #S9WEEP"
+  `(when (solid-p ,i ,j ,k)
+     (let ((exposed (logior (if (solid-p (1- ,i) ,j ,k) 0 1) (if (solid-p (1+ ,i) ,j ,k) 0 2)
+                            (if (solid-p ,i (1- ,j) ,k) 0 4) (if (solid-p ,i (1+ ,j) ,k) 0 8)
+                            (if (solid-p ,i ,j (1- ,k)) 0 16) (if (solid-p ,i ,j (1+ ,k)) 0 32)))
+           (x0 (float ,i 1d0)) (y0 (float ,j 1d0)) (z0 (float ,k 1d0)))
+       (when (and (sweep-rounded-box s x0 y0 z0 (+ x0 1d0) (+ y0 1d0) (+ z0 1d0) exposed)
+                  (offer s +hit-cell+ 0))
+         (setf cx ,i cy ,j cz ,k)))))
+
 (defun sweep-cells (s probe)
   "Find the first solid cell the sphere of cast S meets along its path, up to its nearest hit so
 far: walking the path a metre at a time, every solid cell within the radius of that metre is
@@ -12369,14 +12382,7 @@ centre starts in a solid cell meets it at 0 with the normal against the cast. #S
                        (loop for k of-type fixnum from (dcell (- (min az bz) r)) to (dcell (+ (max az bz) r)) do
                          (loop for j of-type fixnum from (dcell (- (min ay by) r)) to (dcell (+ (max ay by) r)) do
                            (loop for i of-type fixnum from (dcell (- (min ax bx) r)) to (dcell (+ (max ax bx) r)) do
-                             (when (solid-p i j k)
-                               (let ((exposed (logior (if (solid-p (1- i) j k) 0 1) (if (solid-p (1+ i) j k) 0 2)
-                                                      (if (solid-p i (1- j) k) 0 4) (if (solid-p i (1+ j) k) 0 8)
-                                                      (if (solid-p i j (1- k)) 0 16) (if (solid-p i j (1+ k)) 0 32)))
-                                     (x0 (float i 1d0)) (y0 (float j 1d0)) (z0 (float k 1d0)))
-                                 (when (and (sweep-rounded-box s x0 y0 z0 (+ x0 1d0) (+ y0 1d0) (+ z0 1d0) exposed)
-                                            (offer s +hit-cell+ 0))
-                                   (setf cx i cy j cz k)))))))
+                             (sweep-cell-if-solid i j k))))
                        (when (<= best t1) (return))
                        (setf t0 t1)))))))
   s)

@@ -1680,6 +1680,25 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
     (check (= -1 (luv-physics::event-columns-swap-remove b 1)))))
 ;; L4Y0UT-swap-remove-of-last-row ends here
 
+;; [[file:../physics.org::#L4Y0UT][L4Y0UT-permute-grows-its-scratch]]
+(define-claim "L4Y0UT" permute-grows-its-scratch
+    "Permuting 40 rows through a 16-row scratch keeps all 40, reversed, with room for 40."
+  (let ((b (luv-physics::make-event-columns :capacity 40))
+        (scratch (luv-physics::make-event-columns :capacity 16))
+        (destinations (make-array 40 :element-type 'fixnum)))
+    (dotimes (i 40)
+      (setf (aref (luv-physics::event-columns-kind b) (luv-physics::event-columns-append b)) i
+            (aref destinations i) (- 39 i)))
+    (luv-physics::event-columns-permute b scratch destinations 40)
+    (check (= 40 (luv-physics::event-columns-length b)))
+    (check (>= (luv-physics::event-columns-capacity b) 40) "room for ~D rows"
+           (luv-physics::event-columns-capacity b))
+    (check (>= (length (luv-physics::event-columns-kind b)) 40))
+    (when (>= (length (luv-physics::event-columns-kind b)) 40)
+      (check (every (lambda (r) (= r (aref (luv-physics::event-columns-kind b) (- 39 r)))) (loop for r below 40 collect r))
+             "the kinds read ~S" (subseq (luv-physics::event-columns-kind b) 0 40)))))
+;; L4Y0UT-permute-grows-its-scratch ends here
+
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-handle-generations]]
 (define-claim "B5N8JT" handle-generations
     "A reused slot gets a new generation: the old handle is stale, the new one works."

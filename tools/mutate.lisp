@@ -307,9 +307,11 @@ that have its type and width: a wrong column of the same layout."
              when column return (cons layout (first column)))))
 
 (defun constraint-columns ()
-  "The constraint block's columns, main then side, each (NAME FLOAT) with the block it lies in."
+  "The constraint block's columns, main then side, each (NAME FLOAT) with the block it lies in,
+and the second names of +constraint-column-aliases+, neighbours among themselves."
   (append (mapcar (lambda (c) (list c 'main)) physics::+constraint-columns+)
-          (mapcar (lambda (c) (list c 'side)) physics::+constraint-side-columns+)))
+          (mapcar (lambda (c) (list c 'side)) physics::+constraint-side-columns+)
+          (mapcar (lambda (a) (list (car a) 'alias)) physics::+constraint-column-aliases+)))
 
 (defun check-form-p (form)
   "True if FORM checks an argument or a state: a call of the page's CHECK-... or REQUIRE-...
