@@ -2203,9 +2203,9 @@ valgrind). Return the instructions the whole process ran and the state hash endi
 line it printed that begins with SCRIPT (against, feature). #B3NCH5"
   (let ((path (merge-pathnames (format nil "tools/~A-one.lisp" script) (asdf:system-source-directory "luv-physics"))))
     (multiple-value-bind (out err code)
-        (uiop:run-program (list* "env" (format nil "AGAINST_NURSERY_BYTES=~D" (* 3 1024 1024 1024))
+        (uiop:run-program (list* "env" (format nil "AGAINST_NURSERY_BYTES=~D" (* 12 1024 1024 1024))
                                  "valgrind" "--tool=cachegrind" "--cache-sim=no" "--cachegrind-out-file=/dev/null"
-                                 "sbcl" "--dynamic-space-size" "8Gb" "--script" (namestring path) arguments)
+                                 "sbcl" "--dynamic-space-size" "16Gb" "--script" (namestring path) arguments)
                           :output :string :error-output :string :ignore-error-status t)
       (let ((count (cachegrind-instructions err))
             (words (loop for line in (uiop:split-string out :separator '(#\Newline))
