@@ -3172,25 +3172,36 @@ of the momentum share and the kinetic energy the last ball does not carry. #W9PR
     (values (max (- 1 share) (- 1 kept)) wall world
             (format nil "others ~,3F v0, energy ~,3F" others kept))))
 
+(defun block-drop-ideal (speed dx dz radius restitution)
+  "The analytic answer of a ball of RADIUS and RESTITUTION dropped at SPEED from 0.3 m above its
+impact with the top edge (DZ 0) or the corner (DZ > 0) of the cell [0,1)^3, at the offsets DX, DZ
+outside it: its centre's height at impact and at the start, the instant of impact, the
+geometric normal there, the velocity coming in and the reflection law's velocity going out (the
+last three as lists x y z). #W9PREC"
+  (let* ((g 9.81d0) (r radius)
+         (y-impact (+ 1d0 (sqrt (- (* r r) (* dx dx) (* dz dz)))))
+         (y0 (+ y-impact 0.3d0))
+         (u (sqrt (+ (* speed speed) (* 2 g (- y0 y-impact)))))
+         (n (list (/ dx r) (/ (- y-impact 1d0) r) (/ dz r)))
+         (v-in (list 0d0 (- u) 0d0))
+         (vn (reduce #'+ (mapcar #'* v-in n))))
+    (values y-impact y0 (/ (- u speed) g) n v-in
+            (mapcar (lambda (v k) (- v (* (+ 1 restitution) vn k))) v-in n))))
+
 (defun drop-onto-block (world-args &key (speed 5d0) (dx 0.1d0) dz (restitution 0.5d0) (radius 0.25d0) box)
   "Drop a frictionless ball of RESTITUTION straight down at SPEED onto the lone cell [0,1)^3 (with
 BOX, a kinematic box at rest posted there every step instead): onto its top edge x = 1, y = 1 at
 the offset DX outside it, or with DZ onto its corner x = z = 1.
 Return the angles, degrees, of the impulse it took from the geometric normal at impact and of
 its outgoing velocity from the reflection law's, then the wall seconds and the world. #W9PREC"
+  (multiple-value-bind (y-impact y0 t-impact n v-in ideal)
+      (block-drop-ideal speed dx (or dz 0d0) radius restitution)
+    (declare (ignore y-impact))
   (let* ((world (apply #'open-air-world world-args))
-         (g 9.81d0) (r radius) (oz (or dz 0d0))
-         (y-impact (+ 1d0 (sqrt (- (* r r) (* dx dx) (* oz oz)))))
-         (y0 (+ y-impact 0.3d0))
+         (g 9.81d0)
          (ball (progn (unless box (fill-terrain (physics-world-terrain world) 0 0 0 1 1 1 t))
-                      (add-physics-body world (+ 1d0 dx) y0 (if dz (+ 1d0 dz) 0.5d0) :radius r :friction 0.0
+                      (add-physics-body world (+ 1d0 dx) y0 (if dz (+ 1d0 dz) 0.5d0) :radius radius :friction 0.0
                                         :restitution restitution :vy (- speed))))
-         (u (sqrt (+ (* speed speed) (* 2 g (- y0 y-impact)))))
-         (t-impact (/ (- u speed) g))
-         (n (list (/ dx r) (/ (- y-impact 1d0) r) (/ oz r)))
-         (v-in (list 0d0 (- u) 0d0))
-         (vn (reduce #'+ (mapcar #'* v-in n)))
-         (ideal (mapcar (lambda (v k) (- v (* (+ 1 restitution) vn k))) v-in n))
          (dt (float (physics-world-step-seconds world) 1d0))
          (time 0d0) (hit nil) (out nil) (wall 0d0))
     (loop repeat 120 until out do
@@ -3204,13 +3215,9 @@ its outgoing velocity from the reflection law's, then the wall seconds and the w
               ;; a step after the impact, its velocity taken back to the instant of impact
               ((and hit (> time (+ hit dt)))
                (setf out (list vx (+ vy (* g (- time t-impact))) vz))))))
-    (flet ((angle (a b)
-             (let ((c (/ (reduce #'+ (mapcar #'* a b))
-                         (sqrt (* (reduce #'+ (mapcar #'* a a)) (reduce #'+ (mapcar #'* b b)))))))
-               (* (/ 180 pi) (acos (max -1d0 (min 1d0 c)))))))
-      (if out
-          (values (angle (mapcar #'- out v-in) n) (angle out ideal) wall world)
-          (values 180d0 180d0 wall world)))))
+    (if out
+        (values (angle-between (mapcar #'- out v-in) n) (angle-between out ideal) wall world)
+        (values 180d0 180d0 wall world)))))
 
 (defun block-drops (world-args corner &optional box)
   "drop-onto-block at 2, 5 and 10 m/s and offsets 0.05 to 0.2 m (0.7 of that on each axis at a
@@ -3540,9 +3547,9 @@ scene's function, in the order it adds them. #P33R5X"
              nconc (loop for offset in '(0.05d0 0.1d0 0.15d0 0.2d0)
                          collect (let* ((dx (if (eq scene 'corner-drop) (* 0.7d0 offset) offset))
                                         (dz (if (eq scene 'corner-drop) dx 0d0))
-                                        (y-impact (+ 1d0 (sqrt (- (* r r) (* dx dx) (* dz dz))))))
+                                        (y0 (nth-value 1 (block-drop-ideal speed dx dz r 0.5d0))))
                                    (peer-run :seconds 0.5 :boxes (list +lone-cell+)
-                                             :balls (list (peer-ball (+ 1d0 dx) (+ y-impact 0.3d0) (if (eq scene 'corner-drop) (+ 1d0 dz) 0.5d0)
+                                             :balls (list (peer-ball (+ 1d0 dx) y0 (if (eq scene 'corner-drop) (+ 1d0 dz) 0.5d0)
                                                                      :friction 0.0 :restitution 0.5 :vy (- speed) :watch t))
                                              :params (list :speed speed :dx dx :dz dz))))))
       (oblique-pair
@@ -3927,25 +3934,19 @@ when a striker passes through the ball it should strike. #P33R5X"
 (defun block-drop-measure (runs traces)
   "The largest angle of a block drop's impulse from the geometric normal at impact, and of its
 outgoing velocity from the reflection law's (drop-onto-block), over RUNS. #P33R5X"
-  (let ((impulse 0d0) (outgoing 0d0) (g 9.81d0) (r 0.25d0) (e 0.5d0))
+  (let ((impulse 0d0) (outgoing 0d0) (g 9.81d0))
     (loop for run in runs for tr in traces
           do (destructuring-bind (&key speed dx dz) (getf run :params)
-               (let* ((y-impact (+ 1d0 (sqrt (- (* r r) (* dx dx) (* dz dz)))))
-                      (y0 (+ y-impact 0.3d0))
-                      (u (sqrt (+ (* speed speed) (* 2 g (- y0 y-impact)))))
-                      (t-impact (/ (- u speed) g))
-                      (n (list (/ dx r) (/ (- y-impact 1d0) r) (/ dz r)))
-                      (v-in (list 0d0 (- u) 0d0))
-                      (vn (reduce #'+ (mapcar #'* v-in n)))
-                      (ideal (mapcar (lambda (v k) (- v (* (+ 1 e) vn k))) v-in n))
-                      (hit nil) (out nil))
+               (multiple-value-bind (y-impact y0 t-impact n v-in ideal) (block-drop-ideal speed dx dz 0.25d0 0.5d0)
+                 (declare (ignore y-impact y0))
+               (let ((hit nil) (out nil))
                  (loop for f from 1 below (peer-trace-frames tr) until out
                        for time = (aref (peer-trace-times tr) f)
                        do (let ((vx (trace-watch tr f 0 3)) (vy (trace-watch tr f 0 4)) (vz (trace-watch tr f 0 5)))
                             (cond ((and (not hit) (> (abs (- vy (- (- speed) (* g time)))) 1d-3)) (setf hit f))
                                   ((and hit (> f (1+ hit))) (setf out (list vx (+ vy (* g (- time t-impact))) vz))))))
                  (setf impulse (max impulse (if out (angle-between (mapcar #'- out v-in) n) 180d0))
-                       outgoing (max outgoing (if out (angle-between out ideal) 180d0))))))
+                       outgoing (max outgoing (if out (angle-between out ideal) 180d0)))))))
     (values impulse (format nil "outgoing off by up to ~,2F deg" outgoing))))
 
 (define-peer-measure edge-drop (runs traces slop)
