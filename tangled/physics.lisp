@@ -1334,55 +1334,72 @@ so a walk over neighbouring cells reads positions from one run of memory. #D9W4C
           (setf (aref starts buckets) n)))))
     grid))
 
+(defmacro do-dense-grid-runs ((entry grid) (i0 j0 k0 i1 j1 k1) &body body)
+  "Run BODY with ENTRY bound to each place of the dense GRID's order whose cell lies from I0 J0 K0
+to I1 J1 K1 (fixnums), cut to the grid's own box: layer by layer along z, row by row along y,
+each row of cells along x one run of places. #D9W4CH"
+  (let ((g (gensym "GRID")) (starts (gensym "STARTS")) (ox (gensym "OX")) (oy (gensym "OY"))
+        (oz (gensym "OZ")) (nx (gensym "NX")) (ny (gensym "NY")) (nz (gensym "NZ"))
+        (lo (gensym "LO")) (hi (gensym "HI")) (j (gensym "J")) (k (gensym "K")) (row (gensym "ROW")))
+    `(let* ((,g ,grid) (,starts (hash-grid-starts ,g))
+            (,ox (hash-grid-ox ,g)) (,oy (hash-grid-oy ,g)) (,oz (hash-grid-oz ,g))
+            (,nx (hash-grid-nx ,g)) (,ny (hash-grid-ny ,g)) (,nz (hash-grid-nz ,g))
+            (,lo (max ,ox ,i0)) (,hi (min (+ ,ox ,nx -1) ,i1)))
+       ;; a dense grid's box is under 4096 cells a side
+       (declare (type fixnum-column ,starts) (type cell ,ox ,oy ,oz)
+                (type (integer 1 4096) ,nx ,ny ,nz) (type fixnum ,lo ,hi))
+       (when (<= ,lo ,hi)
+         (loop for ,k of-type fixnum from (max ,oz ,k0) to (min (+ ,oz ,nz -1) ,k1) do
+           (loop for ,j of-type fixnum from (max ,oy ,j0) to (min (+ ,oy ,ny -1) ,j1)
+                 for ,row of-type fixnum = (* ,nx (+ (- ,j ,oy) (* ,ny (- ,k ,oz))))
+                 do (loop for ,entry of-type fixnum from (aref ,starts (+ ,row (- ,lo ,ox)))
+                            below (aref ,starts (+ ,row (- ,hi ,ox) 1))
+                          do (progn ,@body))))))))
+
+(defmacro do-hashed-grid-cells ((entry grid) (i0 j0 k0 i1 j1 k1) &body body)
+  "Run BODY with ENTRY bound to each place of the hashed GRID's order whose cell lies from I0 J0
+K0 to I1 J1 K1 (fixnums), cell by cell in the order z, y, x: each cell's key names a bucket,
+and of the bucket's places those of that key belong. #D9W4CH"
+  (let ((g (gensym "GRID")) (starts (gensym "STARTS")) (keys (gensym "KEYS")) (mask (gensym "MASK"))
+        (i (gensym "I")) (j (gensym "J")) (k (gensym "K")) (key (gensym "KEY")) (b (gensym "B")))
+    `(let* ((,g ,grid) (,starts (hash-grid-starts ,g)) (,keys (hash-grid-keys ,g))
+            (,mask (hash-grid-mask ,g)))
+       (declare (type fixnum-column ,starts ,keys) (type fixnum ,mask))
+       (loop for ,k of-type fixnum from ,k0 to ,k1 do
+         (loop for ,j of-type fixnum from ,j0 to ,j1 do
+           (loop for ,i of-type fixnum from ,i0 to ,i1
+                 for ,key of-type fixnum = (grid-cell-key ,i ,j ,k)
+                 for ,b of-type fixnum = (grid-bucket ,key ,mask)
+                 do (loop for ,entry of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
+                          when (= (aref ,keys ,entry) ,key)
+                            do (progn ,@body))))))))
+
+(defmacro do-grid-entries ((entry grid) (i0 j0 k0 i1 j1 k1) &body body)
+  "Run BODY with ENTRY bound to the place, in GRID's order, of each item bucketed in a cell from
+I0 J0 K0 to I1 J1 K1 (cell coordinates, fixnums), cell by cell in the order z, y, x, the dense
+grid's way or the hashed grid's. The bounds are read once, before any cell. #D9W4CH"
+  (let ((g (gensym "GRID")) (visit (gensym "VISIT")) (e (gensym "E"))
+        (box (loop for name in '("I0" "J0" "K0" "I1" "J1" "K1") collect (gensym name))))
+    `(let ((,g ,grid) ,@(mapcar #'list box (list i0 j0 k0 i1 j1 k1)))
+       (declare (type fixnum ,@box))
+       (flet ((,visit (,entry) (declare (type index ,entry) (ignorable ,entry)) ,@body))
+         (declare (inline ,visit))
+         (cond ((zerop (hash-grid-count ,g)))
+               ((hash-grid-dense ,g) (do-dense-grid-runs (,e ,g) ,box (,visit ,e)))
+               (t (do-hashed-grid-cells (,e ,g) ,box (,visit ,e))))))))
+
 (defmacro do-grid-cells (((item &optional entry) grid) (i0 j0 k0 i1 j1 k1) &body body)
   "Run BODY with ITEM bound to each item of GRID bucketed in a cell from I0 J0 K0 to I1 J1 K1 (cell
-coordinates, fixnums), cell by cell in the order z, y, x; ENTRY, when given, is bound to the
-item's place in the grid's order, where the grid keeps its copy of the item's centre. A dense
-grid visits only the cells inside its own box, each row of cells along x as one run of its
-items. #D9W4CH"
-  (let ((g (gensym "GRID")) (i (gensym)) (j (gensym)) (k (gensym)) (e (gensym)) (key (gensym)) (b (gensym))
-        (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW")) (visit (gensym "VISIT"))
-        (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS"))
-        (ci0 (gensym)) (cj0 (gensym)) (ck0 (gensym)) (ci1 (gensym)) (cj1 (gensym)) (ck1 (gensym))
-        (entry (or entry (gensym "ENTRY"))))
-    `(let ((,g ,grid) (,ci0 ,i0) (,cj0 ,j0) (,ck0 ,k0) (,ci1 ,i1) (,cj1 ,j1) (,ck1 ,k1))
-       (declare (type fixnum ,ci0 ,cj0 ,ck0 ,ci1 ,cj1 ,ck1))
-       (let ((,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g)))
-         (declare (type fixnum-column ,starts ,items ,keys))
-         (flet ((,visit (,entry)
-                  (declare (type index ,entry) (ignorable ,entry))
-                  (let ((,item (aref ,items ,entry)))
-                    (declare (type fixnum ,item) (ignorable ,item))
-                    ,@body)))
-           (declare (inline ,visit))
-           (cond
-             ((zerop (hash-grid-count ,g)))
-             ((hash-grid-dense ,g)
-              ;; rows of cells along x are contiguous runs of items; a dense grid's box is under
-              ;; 4096 cells a side
-              (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
-                     (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g))
-                     (,lo (max ox ,ci0)) (,hi (min (+ ox nx -1) ,ci1)))
-                (declare (type cell ox oy oz) (type (integer 1 4096) nx ny nz) (type fixnum ,lo ,hi))
-                (when (<= ,lo ,hi)
-                  (loop for ,k of-type fixnum from (max oz ,ck0) to (min (+ oz nz -1) ,ck1) do
-                    (loop for ,j of-type fixnum from (max oy ,cj0) to (min (+ oy ny -1) ,cj1) do
-                      (let ((,row (* nx (+ (- ,j oy) (* ny (- ,k oz))))))
-                        (declare (type fixnum ,row))
-                        (loop for ,e of-type fixnum from (aref ,starts (+ ,row (- ,lo ox)))
-                                below (aref ,starts (+ ,row (- ,hi ox) 1))
-                              do (,visit ,e))))))))
-             (t
-              (let ((mask (hash-grid-mask ,g)))
-                (declare (type fixnum mask))
-                (loop for ,k of-type fixnum from ,ck0 to ,ck1 do
-                  (loop for ,j of-type fixnum from ,cj0 to ,cj1 do
-                    (loop for ,i of-type fixnum from ,ci0 to ,ci1 do
-                      (let* ((,key (grid-cell-key ,i ,j ,k))
-                             (,b (grid-bucket ,key mask)))
-                        (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
-                              when (= (aref ,keys ,e) ,key)
-                                do (,visit ,e))))))))))))))
+coordinates, fixnums), cell by cell in the order z, y, x (do-grid-entries); ENTRY, when given,
+is bound to the item's place in the grid's order, where the grid keeps its copy of the item's
+centre. #D9W4CH"
+  (let ((g (gensym "GRID")) (items (gensym "ITEMS")) (entry (or entry (gensym "ENTRY"))))
+    `(let* ((,g ,grid) (,items (hash-grid-items ,g)))
+       (declare (type fixnum-column ,items))
+       (do-grid-entries (,entry ,g) (,i0 ,j0 ,k0 ,i1 ,j1 ,k1)
+         (let ((,item (aref ,items ,entry)))
+           (declare (type fixnum ,item) (ignorable ,item))
+           ,@body)))))
 
 (defmacro do-grid-neighbours ((item grid x y z &key (span 1)) &body body)
   "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
@@ -12244,77 +12261,86 @@ values; T-IN > T-OUT when it misses. #C4STRY"
 (defconstant +path-part-cells+ 1.5d0
   "How many cells' length of path a walk of the bodies takes at a time. #C4STRY")
 
+(declaim (inline path-walk-range path-part-layers path-layer-piece path-piece-cells))
+
+(defun path-walk-range (s grid rho)
+  "The part [LO, HI] of cast S's path, up to its nearest hit so far, that a walk of GRID's
+cells within RHO (a double) of the path must cover, as two values: a dense grid cuts the path
+to its own box grown by RHO; a hashed grid has no box, and the whole path is walked. #C4STRY"
+  (declare (type query-search s) (type hash-grid grid) (type double-float rho))
+  (if (hash-grid-dense grid)
+      (let ((c (/ 1d0 (float (hash-grid-inv-cell grid) 1d0)))
+            (ox (hash-grid-ox grid)) (oy (hash-grid-oy grid)) (oz (hash-grid-oz grid)))
+        (segment-box-range s (- (* c ox) rho) (- (* c oy) rho) (- (* c oz) rho)
+                           (+ (* c (+ ox (hash-grid-nx grid))) rho) (+ (* c (+ oy (hash-grid-ny grid))) rho)
+                           (+ (* c (+ oz (hash-grid-nz grid))) rho)
+                           (query-search-best s)))
+      (values 0d0 (query-search-best s))))
+
+(defun path-part-layers (s grid t0 t1 rho inv)
+  "The layers of cells along z, K0 to K1 as two values, within RHO of the part [T0, T1] of cast
+S's path, for cells INV to the metre; a dense grid's layers are cut to its box. #C4STRY"
+  (declare (type query-search s) (type hash-grid grid) (type double-float t0 t1 rho inv))
+  (let* ((oz (query-search-oz s)) (uz (query-search-uz s))
+         (az (+ oz (* t0 uz))) (bz (+ oz (* t1 uz)))
+         (k0 (dcell (* (- (min az bz) rho) inv))) (k1 (dcell (* (+ (max az bz) rho) inv))))
+    (declare (type fixnum k0 k1))
+    (if (hash-grid-dense grid)
+        (values (max k0 (hash-grid-oz grid)) (min k1 (+ (hash-grid-oz grid) (hash-grid-nz grid) -1)))
+        (values k0 k1))))
+
+(defun path-layer-piece (s k c rho ta tb)
+  "The piece of the part [TA, TB] of cast S's path within RHO of layer K of cells C metres high,
+as two values; the first exceeds the second when there is none. #C4STRY"
+  (declare (type query-search s) (type fixnum k) (type double-float c rho ta tb))
+  (let ((oz (query-search-oz s)) (uz (query-search-uz s)))
+    (if (= uz 0d0)
+        (values ta tb)
+        (let* ((iuz (/ 1d0 uz))
+               (za (* (- (- (* c k) rho) oz) iuz)) (zb (* (- (+ (* c (1+ k)) rho) oz) iuz)))
+          (values (max ta (min za zb)) (min tb (max za zb)))))))
+
+(defun path-piece-cells (s ta tb rho inv)
+  "The cells along x, I0 to I1, and along y, J0 to J1, within RHO of the piece [TA, TB] of cast
+S's path, for cells INV to the metre, as four values. #C4STRY"
+  (declare (type query-search s) (type double-float ta tb rho inv))
+  (let ((ya (+ (query-search-oy s) (* ta (query-search-uy s)))) (yb (+ (query-search-oy s) (* tb (query-search-uy s))))
+        (xa (+ (query-search-ox s) (* ta (query-search-ux s)))) (xb (+ (query-search-ox s) (* tb (query-search-ux s)))))
+    (values (dcell (* (- (min xa xb) rho) inv)) (dcell (* (+ (max xa xb) rho) inv))
+            (dcell (* (- (min ya yb) rho) inv)) (dcell (* (+ (max ya yb) rho) inv)))))
+
 (defmacro do-path-entries ((entry) (s grid rho) &body body)
   "For cast S, run BODY with ENTRY bound to the place, in GRID's order, of each item of GRID whose
 cell lies within RHO (a double: the farthest a centre can be from the path and still be met, per
 axis) of the path from 0 to the nearest hit so far, +path-part-cells+ cells' length of path at a
 time, until the nearest hit is no farther than the part walked. For each layer of cells along z,
-the part is cut to the piece within RHO of the layer, and the rows along y and the cells along x
-visited are those within RHO of that piece. #C4STRY"
-  (let ((g (gensym "G")) (inv (gensym "INV")) (c (gensym "C")) (t0 (gensym "T0")) (t1 (gensym "T1"))
-        (lo (gensym "LO")) (hi (gensym "HI")) (r (gensym "RHO")) (ox (gensym)) (oy (gensym)) (oz (gensym))
-        (ux (gensym)) (uy (gensym)) (uz (gensym)) (iuz (gensym)) (starts (gensym "STARTS"))
-        (keys (gensym "KEYS")) (visit (gensym "VISIT")))
-    `(let ((,g ,grid) (,r ,rho))
-       (declare (type hash-grid ,g) (type double-float ,r))
-       (unless (zerop (hash-grid-count ,g))
-         (let* ((,inv (float (hash-grid-inv-cell ,g) 1d0)) (,c (/ 1d0 ,inv))
-                (,ox (query-search-ox ,s)) (,oy (query-search-oy ,s)) (,oz (query-search-oz ,s))
-                (,ux (query-search-ux ,s)) (,uy (query-search-uy ,s)) (,uz (query-search-uz ,s))
-                (,iuz (if (= ,uz 0d0) 0d0 (/ 1d0 ,uz)))
-                (,starts (hash-grid-starts ,g)) (,keys (hash-grid-keys ,g))
-                (dense (hash-grid-dense ,g))
-                (gox (hash-grid-ox ,g)) (goy (hash-grid-oy ,g)) (goz (hash-grid-oz ,g))
-                (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g)) (mask (hash-grid-mask ,g)))
-           (declare (type double-float ,inv ,c ,ox ,oy ,oz ,ux ,uy ,uz ,iuz)
-                    (type fixnum-column ,starts ,keys) (type cell gox goy goz) (type (integer 1 4096) nx ny nz)
-                    (type fixnum mask))
-           (flet ((,visit (,entry) (declare (type index ,entry)) ,@body))
-             (declare (inline ,visit))
-             ;; a dense grid first cuts the path to its own box, grown by RHO
-             (multiple-value-bind (,lo ,hi)
-                 (if dense
-                     (segment-box-range ,s (- (* ,c gox) ,r) (- (* ,c goy) ,r) (- (* ,c goz) ,r)
-                                        (+ (* ,c (+ gox nx)) ,r) (+ (* ,c (+ goy ny)) ,r) (+ (* ,c (+ goz nz)) ,r)
-                                        (query-search-best ,s))
-                     (values 0d0 (query-search-best ,s)))
+the part is cut to the piece within RHO of the layer (path-layer-piece), and the cells visited
+are those within RHO of that piece (path-piece-cells), in do-grid-entries' order. #C4STRY"
+  (let ((q (gensym "S")) (g (gensym "G")) (r (gensym "RHO")) (inv (gensym "INV")) (c (gensym "C"))
+        (visit (gensym "VISIT")) (lo (gensym "LO")) (hi (gensym "HI")) (t0 (gensym "T0")) (t1 (gensym "T1"))
+        (k (gensym "K")) (k0 (gensym "K0")) (k1 (gensym "K1")) (ta (gensym "TA")) (tb (gensym "TB"))
+        (i0 (gensym "I0")) (i1 (gensym "I1")) (j0 (gensym "J0")) (j1 (gensym "J1")) (e (gensym "E")))
+    `(let ((,q ,s) (,g ,grid) (,r ,rho))
+       (declare (type query-search ,q) (type hash-grid ,g) (type double-float ,r))
+       (flet ((,visit (,entry) (declare (type index ,entry)) ,@body))
+         (declare (inline ,visit))
+         (unless (zerop (hash-grid-count ,g))
+           (let* ((,inv (float (hash-grid-inv-cell ,g) 1d0)) (,c (/ 1d0 ,inv)))
+             (declare (type double-float ,inv ,c))
+             (multiple-value-bind (,lo ,hi) (path-walk-range ,q ,g ,r)
                (declare (type double-float ,lo ,hi))
                (loop with ,t0 of-type double-float = ,lo
-                     while (and (<= ,t0 ,hi) (< ,t0 (query-search-best ,s)))
-                     do (let* ((,t1 (min (query-search-best ,s) ,hi (+ ,t0 (* +path-part-cells+ ,c))))
-                               (az (+ ,oz (* ,t0 ,uz))) (bz (+ ,oz (* ,t1 ,uz)))
-                               (k0 (dcell (* (- (min az bz) ,r) ,inv))) (k1 (dcell (* (+ (max az bz) ,r) ,inv))))
-                          (declare (type double-float ,t1 az bz) (type fixnum k0 k1))
-                          (when dense (setf k0 (max k0 goz) k1 (min k1 (+ goz nz -1))))
-                          (loop for k of-type fixnum from k0 to k1 do
-                            ;; the piece of the part within RHO of layer K, up to the nearest hit
-                            (let ((ta ,t0) (tb (min ,t1 (query-search-best ,s))))
-                              (declare (type double-float ta tb))
-                              (unless (= ,uz 0d0)
-                                (let ((za (* (- (- (* ,c k) ,r) ,oz) ,iuz)) (zb (* (- (+ (* ,c (1+ k)) ,r) ,oz) ,iuz)))
-                                  (setf ta (max ta (min za zb)) tb (min tb (max za zb)))))
-                              (when (<= ta tb)
-                                (let* ((ya (+ ,oy (* ta ,uy))) (yb (+ ,oy (* tb ,uy)))
-                                       (xa (+ ,ox (* ta ,ux))) (xb (+ ,ox (* tb ,ux)))
-                                       (j0 (dcell (* (- (min ya yb) ,r) ,inv))) (j1 (dcell (* (+ (max ya yb) ,r) ,inv)))
-                                       (i0 (dcell (* (- (min xa xb) ,r) ,inv))) (i1 (dcell (* (+ (max xa xb) ,r) ,inv))))
-                                  (declare (type fixnum j0 j1 i0 i1))
-                                  (if dense
-                                      ;; each row of cells along x is one run of entries
-                                      (let ((i0 (max i0 gox)) (i1 (min i1 (+ gox nx -1))))
-                                        (when (<= i0 i1)
-                                          (loop for j of-type fixnum from (max j0 goy) to (min j1 (+ goy ny -1)) do
-                                            (let ((row (* nx (+ (- j goy) (* ny (- k goz))))))
-                                              (declare (type fixnum row))
-                                              (loop for e of-type fixnum from (aref ,starts (+ row (- i0 gox)))
-                                                      below (aref ,starts (+ row (- i1 gox) 1))
-                                                    do (,visit e))))))
-                                      (loop for j of-type fixnum from j0 to j1 do
-                                        (loop for i of-type fixnum from i0 to i1 do
-                                          (let* ((key (grid-cell-key i j k)) (b (grid-bucket key mask)))
-                                            (loop for e of-type fixnum from (aref ,starts b) below (aref ,starts (1+ b))
-                                                  when (= (aref ,keys e) key) do (,visit e))))))))))
-                          (when (or (<= (query-search-best ,s) ,t1) (>= ,t1 ,hi)) (return))
+                     while (and (<= ,t0 ,hi) (< ,t0 (query-search-best ,q)))
+                     do (let ((,t1 (min (query-search-best ,q) ,hi (+ ,t0 (* +path-part-cells+ ,c)))))
+                          (declare (type double-float ,t1))
+                          (multiple-value-bind (,k0 ,k1) (path-part-layers ,q ,g ,t0 ,t1 ,r ,inv)
+                            (loop for ,k of-type fixnum from ,k0 to ,k1 do
+                              (multiple-value-bind (,ta ,tb)
+                                  (path-layer-piece ,q ,k ,c ,r ,t0 (min ,t1 (query-search-best ,q)))
+                                (when (<= ,ta ,tb)
+                                  (multiple-value-bind (,i0 ,i1 ,j0 ,j1) (path-piece-cells ,q ,ta ,tb ,r ,inv)
+                                    (do-grid-entries (,e ,g) (,i0 ,j0 ,k ,i1 ,j1 ,k) (,visit ,e)))))))
+                          (when (or (<= (query-search-best ,q) ,t1) (>= ,t1 ,hi)) (return))
                           (setf ,t0 ,t1))))))))))
 
 (defun sweep-awake (s view world)
@@ -12332,6 +12358,17 @@ grid's columns of centre, radius and handle; the excluded body is passed over. #
         (let ((h (aref handles e)))
           (unless (eql h exclude) (offer s +hit-body+ h))))))
   s)
+
+(declaim (inline centre-near-path-p))
+
+(defun centre-near-path-p (s x y z rho)
+  "Whether a centre at X Y Z (doubles) may be met by cast S: it is not farther than RHO from the
+path's line, nor wholly behind the cast, nor wholly beyond its nearest hit so far. #C4STRY"
+  (declare (type query-search s) (type double-float x y z rho))
+  (let* ((mx (- x (query-search-ox s))) (my (- y (query-search-oy s))) (mz (- z (query-search-oz s)))
+         (along (+ (* mx (query-search-ux s)) (* my (query-search-uy s)) (* mz (query-search-uz s)))))
+    (and (> along (- rho)) (< (- along rho) (query-search-best s))
+         (<= (- (+ (* mx mx) (* my my) (* mz mz)) (* along along)) (* rho rho)))))
 
 (defun sweep-sleepers (s view world)
   "Sweep cast S against the sleepers of VIEW: through its sleeping grid, each entry first judged by
@@ -12354,20 +12391,14 @@ one by one or through their grid. The excluded body is passed over. #C4STRY"
                      ;; memory with its neighbours': passed over when farther from the path's line
                      ;; than RHO, or wholly behind the cast or beyond its nearest hit
                      `(let* ((g ,grid) (gx (hash-grid-xs g)) (gy (hash-grid-ys g)) (gz (hash-grid-zs g))
-                             (items (hash-grid-items g)) (rho2 (* rho rho))
-                             (ox (query-search-ox s)) (oy (query-search-oy s)) (oz (query-search-oz s))
-                             (ux (query-search-ux s)) (uy (query-search-uy s)) (uz (query-search-uz s)))
-                        (declare (type f32-column gx gy gz) (type fixnum-column items)
-                                 (type double-float rho2 ox oy oz ux uy uz))
+                             (items (hash-grid-items g)))
+                        (declare (type f32-column gx gy gz) (type fixnum-column items))
                         (do-path-entries (e) (s g rho)
-                          (let* ((mx (- (float (aref gx e) 1d0) ox)) (my (- (float (aref gy e) 1d0) oy))
-                                 (mz (- (float (aref gz e) 1d0) oz))
-                                 (along (+ (* mx ux) (* my uy) (* mz uz))))
-                            (when (and (> along (- rho)) (< (- along rho) (query-search-best s))
-                                       (<= (- (+ (* mx mx) (* my my) (* mz mz)) (* along along)) rho2))
-                              (let ((row ,(if direct `(aref items e) `(view-row view world t (aref items e)))))
-                                (declare (type fixnum row))
-                                (when (>= row 0) (try row)))))))))
+                          (when (centre-near-path-p s (float (aref gx e) 1d0) (float (aref gy e) 1d0)
+                                                    (float (aref gz e) 1d0) rho)
+                            (let ((row ,(if direct `(aref items e) `(view-row view world t (aref items e)))))
+                              (declare (type fixnum row))
+                              (when (>= row 0) (try row))))))))
           (walk (query-view-sleeping-grid view) nil)
           (if (plusp (hash-grid-count (query-view-sleeping-stray-grid view)))
               (walk (query-view-sleeping-stray-grid view) t)
@@ -12484,56 +12515,58 @@ corner, every cell that meets that edge or corner is tried, fewest steps first. 
   (declare (type query-search s) (type terrain-probe probe) #.+kernel-policy+)
   (with-search (ox oy oz ux uy uz best cx cy cz) s
     (with-chunk-reader (solid-p probe)
-      (let ((ix (dcell ox)) (iy (dcell oy)) (iz (dcell oz)))
-        (declare (type cell ix iy iz))
-        (flet ((try (x y z tt axis)
-                 (declare (type cell x y z) (type double-float tt) (type (integer 0 3) axis))
-                 ;; axis 3: the cell the ray starts in
-                 (when (and (solid-p x y z)
-                            (case axis
-                              (0 (candidate s tt (if (> ux 0d0) -1d0 1d0) 0d0 0d0))
-                              (1 (candidate s tt 0d0 (if (> uy 0d0) -1d0 1d0) 0d0))
-                              (2 (candidate s tt 0d0 0d0 (if (> uz 0d0) -1d0 1d0)))
-                              (t (candidate s tt (- ux) (- uy) (- uz))))
-                            (offer s +hit-cell+ 0))
-                   (setf cx x cy y cz z)
-                   t)))
-          (declare (inline try))
+      ;; the cell the ray is in, its step along each axis, the distance to the next face
+      ;; crossed along each axis, and the distance between faces along each
+      (let* ((ix (dcell ox)) (iy (dcell oy)) (iz (dcell oz))
+             (sx (cond ((> ux 0d0) 1) ((< ux 0d0) -1) (t 0)))
+             (sy (cond ((> uy 0d0) 1) ((< uy 0d0) -1) (t 0)))
+             (sz (cond ((> uz 0d0) 1) ((< uz 0d0) -1) (t 0)))
+             (huge 1d300)
+             (tx (if (= sx 0) huge (/ (- (float (if (> sx 0) (1+ ix) ix) 1d0) ox) ux)))
+             (ty (if (= sy 0) huge (/ (- (float (if (> sy 0) (1+ iy) iy) 1d0) oy) uy)))
+             (tz (if (= sz 0) huge (/ (- (float (if (> sz 0) (1+ iz) iz) 1d0) oz) uz)))
+             (ddx (if (= sx 0) 0d0 (/ 1d0 (abs ux))))
+             (ddy (if (= sy 0) 0d0 (/ 1d0 (abs uy))))
+             (ddz (if (= sz 0) 0d0 (/ 1d0 (abs uz)))))
+        (declare (type cell ix iy iz) (type fixnum sx sy sz) (type double-float tx ty tz ddx ddy ddz))
+        (labels ((try (x y z tt axis)
+                   (declare (type cell x y z) (type double-float tt) (type (integer 0 3) axis))
+                   ;; axis 3: the cell the ray starts in
+                   (when (and (solid-p x y z)
+                              (case axis
+                                (0 (candidate s tt (if (> ux 0d0) -1d0 1d0) 0d0 0d0))
+                                (1 (candidate s tt 0d0 (if (> uy 0d0) -1d0 1d0) 0d0))
+                                (2 (candidate s tt 0d0 0d0 (if (> uz 0d0) -1d0 1d0)))
+                                (t (candidate s tt (- ux) (- uy) (- uz))))
+                              (offer s +hit-cell+ 0))
+                     (setf cx x cy y cz z)
+                     t))
+                 (cross (tn mx my mz)
+                   ;; the cells entered at TN: through one face, or every cell meeting the
+                   ;; edge or corner crossed, fewest steps first
+                   (if (and (not (and mx my)) (not (and mx mz)) (not (and my mz)))
+                       (cond (mx (try (+ ix sx) iy iz tn 0))
+                             (my (try ix (+ iy sy) iz tn 1))
+                             (t (try ix iy (+ iz sz) tn 2)))
+                       (let ((ax (if mx sx 0)) (ay (if my sy 0)) (az (if mz sz 0)))
+                         (or (and mx (try (+ ix ax) iy iz tn 0))
+                             (and my (try ix (+ iy ay) iz tn 1))
+                             (and mz (try ix iy (+ iz az) tn 2))
+                             (and mx my (try (+ ix ax) (+ iy ay) iz tn 0))
+                             (and mx mz (try (+ ix ax) iy (+ iz az) tn 0))
+                             (and my mz (try ix (+ iy ay) (+ iz az) tn 1))
+                             (and mx my mz (try (+ ix ax) (+ iy ay) (+ iz az) tn 0)))))))
+          (declare (inline try cross))
           (unless (try ix iy iz 0d0 3)
-            (let* ((sx (cond ((> ux 0d0) 1) ((< ux 0d0) -1) (t 0)))
-                   (sy (cond ((> uy 0d0) 1) ((< uy 0d0) -1) (t 0)))
-                   (sz (cond ((> uz 0d0) 1) ((< uz 0d0) -1) (t 0)))
-                   (huge 1d300)
-                   (tx (if (= sx 0) huge (/ (- (float (if (> sx 0) (1+ ix) ix) 1d0) ox) ux)))
-                   (ty (if (= sy 0) huge (/ (- (float (if (> sy 0) (1+ iy) iy) 1d0) oy) uy)))
-                   (tz (if (= sz 0) huge (/ (- (float (if (> sz 0) (1+ iz) iz) 1d0) oz) uz)))
-                   (ddx (if (= sx 0) 0d0 (/ 1d0 (abs ux))))
-                   (ddy (if (= sy 0) 0d0 (/ 1d0 (abs uy))))
-                   (ddz (if (= sz 0) 0d0 (/ 1d0 (abs uz)))))
-              (declare (type fixnum sx sy sz) (type double-float tx ty tz ddx ddy ddz))
-              (loop
-                (let ((tn (min tx ty tz)))
-                  (when (>= tn best) (return))
-                  (let ((mx (= tx tn)) (my (= ty tn)) (mz (= tz tn)))
-                    (when (if (and (not (and mx my)) (not (and mx mz)) (not (and my mz)))
-                              ;; one face crossed
-                              (cond (mx (try (+ ix sx) iy iz tn 0))
-                                    (my (try ix (+ iy sy) iz tn 1))
-                                    (t (try ix iy (+ iz sz) tn 2)))
-                              ;; an edge or a corner: every cell meeting it, fewest steps first
-                              (let ((ax (if mx sx 0)) (ay (if my sy 0)) (az (if mz sz 0)))
-                                (or (and mx (try (+ ix ax) iy iz tn 0))
-                                    (and my (try ix (+ iy ay) iz tn 1))
-                                    (and mz (try ix iy (+ iz az) tn 2))
-                                    (and mx my (try (+ ix ax) (+ iy ay) iz tn 0))
-                                    (and mx mz (try (+ ix ax) iy (+ iz az) tn 0))
-                                    (and my mz (try ix (+ iy ay) (+ iz az) tn 1))
-                                    (and mx my mz (try (+ ix ax) (+ iy ay) (+ iz az) tn 0)))))
-                      (return))
-                    (when mx (setf ix (+ ix sx) tx (+ tx ddx)))
-                    (when my (setf iy (+ iy sy) ty (+ ty ddy)))
-                    (when mz (setf iz (+ iz sz) tz (+ tz ddz))))))))))))
-    s)
+            (loop
+              (let ((tn (min tx ty tz)))
+                (when (>= tn best) (return))
+                (let ((mx (= tx tn)) (my (= ty tn)) (mz (= tz tn)))
+                  (when (cross tn mx my mz) (return))
+                  (when mx (setf ix (+ ix sx) tx (+ tx ddx)))
+                  (when my (setf iy (+ iy sy) ty (+ ty ddy)))
+                  (when mz (setf iz (+ iz sz) tz (+ tz ddz)))))))))))
+  s)
 
 (defun physics-ray-cast (world x y z dx dy dz max-distance &key (bodies t) (cells t) (boxes t) exclude filter hit)
   "The first thing the ray from X Y Z along DX DY DZ meets closer than MAX-DISTANCE: a body (awake

@@ -1657,7 +1657,10 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
       (check (= 16 (luv-physics::event-columns-capacity e)) "capacity ~D" (luv-physics::event-columns-capacity e))
       (check (equal '(10 11 12) (loop for r below 3 collect (aref (luv-physics::event-columns-kind e) r))))
       (check (equal '(0.5 1.5 2.5) (loop for r below 3 collect (aref (luv-physics::event-columns-speed e) r))))
-      (check (= 17 (length (luv-physics::event-columns-kind e)))))))
+      (check (= 17 (length (luv-physics::event-columns-kind e))))
+      (let ((kinds (luv-physics::event-columns-kind e)))
+        (luv-physics::event-columns-trim e 1)
+        (check (eq kinds (luv-physics::event-columns-kind e)) "a trim with nothing to give back made new columns")))))
 ;; L4Y0UT-clear-and-trim ends here
 
 ;; [[file:../physics.org::#L4Y0UT][L4Y0UT-row-bytes-count-every-column]]
@@ -2239,7 +2242,7 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
     (add-physics-body w 5.5 0.3 5.5)
     (step-physics-world w)
     (let ((before (world-fingerprint w)))
-      (loop for (x y z cell resident) in '((3.5 -0.3 3.5 (3 -1 3) t) (40.0 3.0 3.0 (40 3 3) nil))
+      (loop for (x y z cell resident) in '((3.5 -0.3 3.5 (3 -1 3) t) (40.0 3.0 3.0 (40 3 3) nil) (3.0 40.0 3.0 (3 40 3) nil))
             do (dolist (add (list (lambda () (add-physics-body w x y z))
                                   (lambda () (add-physics-body-of-kind w :ball x y z))))
                  (let ((got (handler-case (progn (funcall add) :added)
@@ -9204,8 +9207,8 @@ in the order of *physics-scene-features*. #K5DF9S"
     "Fountain: 2 drops a step in the cone, drops never meet; lava: 1 in 4 steps; same hash twice."
   (flet ((run ()
            (let* ((w (make-floor-world))
-                  (springs (list (make-fountain 4 -1 4) (make-lava-spring 8 -1 8)))
-                  (drops 0) (gobbets 0) (pairs 0) (floor-contacts 0) (outside 0) (misplaced 0)
+                  (springs (list (make-fountain 4 -1 4) (make-lava-spring 8 -1 12)))
+                  (drops 0) (gobbets 0) (pairs 0) (floor-contacts 0) (outside 0) (misplaced 0) (misthrown 0)
                   (slowest 10.0) (fastest 0.0) (widest 0.0) (quadrants '()) (returned '()))
              (dotimes (i 120)
                (push
@@ -9226,7 +9229,17 @@ in the order of *physics-scene-features*. #K5DF9S"
                                    (list (+ (luv-physics::physics-spring-x spring) 0.5)
                                          (+ (luv-physics::physics-spring-y spring) 1.0 r 0.01)
                                          (+ (luv-physics::physics-spring-z spring) 0.5)))
-                      (incf misplaced)))
+                      (incf misplaced))
+                    ;; the throw is the one of this spring's cell, numbered by what it emitted
+                    (multiple-value-bind (dx dy dz speed)
+                        (luv-physics::spring-throw (luv-physics::physics-spring-x spring)
+                                                   (luv-physics::physics-spring-y spring)
+                                                   (luv-physics::physics-spring-z spring)
+                                                   (1- (luv-physics::physics-spring-emitted spring)))
+                      (unless (every (lambda (got want) (< (abs (- got want)) 1e-6))
+                                     (multiple-value-list (physics-body-velocity w h))
+                                     (list (* speed dx) (* speed dy) (* speed dz)))
+                        (incf misthrown))))
                   (ecase (physics-body-kind-name w h)
                     (:water-drop (incf drops)) (:lava-gobbet (incf gobbets)))))
                 returned)
@@ -9255,6 +9268,7 @@ in the order of *physics-scene-features*. #K5DF9S"
                     "calls and emitted ~S" springs)
              (check (zerop outside) "~D bodies left outside the cone or the speed range" outside)
              (check (zerop misplaced) "~D bodies did not start just above their block's top face" misplaced)
+             (check (zerop misthrown) "~D bodies left with another throw than their spring's own" misthrown)
              (check (and (< slowest 4.2) (> fastest 5.8)) "speeds only from ~,3F to ~,3F m/s" slowest fastest)
              (check (> widest (* 18 (/ pi 180))) "tilts only up to ~,2F rad" widest)
              (check (= 4 (length quadrants)) "bearings in only ~D quadrants" (length quadrants))
@@ -12259,23 +12273,28 @@ within reach of something. #S9WEEP"
 ;; [[file:../physics.org::#7PAQ3M][7PAQ3M-mixed-materials-agree]]
 (define-claim "7PAQ3M" mixed-materials-agree
     "Families agree bit for bit on a pile of mixed radii, masses and materials."
-  (flet ((hash-after (kernels)
-           (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels
-                                            :sleep nil))
+  (flet ((hash-after (kernels &optional (friction t))
+           (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep nil
+                                            :features (if friction
+                                                          luv-physics::+physics-features+
+                                                          (remove :friction luv-physics::+physics-features+))))
                  (next (luv-physics::fixed-sequence 2026)))
              (dotimes (i 600)
                (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
                  (add-physics-body world x y z
                                    :radius (+ 0.2 (* 0.1 (funcall next))) :mass (+ 0.5 (* 2.5 (funcall next)))
-                                   :restitution (* 0.6 (funcall next)) :friction (+ 0.2 (* 0.6 (funcall next)))
+                                   :restitution (* 0.6 (funcall next))
+                                   :friction (* (if friction 1 0) (+ 0.2 (* 0.6 (funcall next))))
                                    :rolling-resistance (if (zerop (mod i 3)) (* 0.1 (funcall next)) 0.0)
                                    :vx (* 3 (- (funcall next) 0.5)) :vy (* 3 (- (funcall next) 0.5))
                                    :vz (* 3 (- (funcall next) 0.5)))))
              (dotimes (i 240) (step-physics-world world))
              (physics-world-state-hash world))))
-    (let ((reference (hash-after :scalar)))
-      (dolist (family (remove :scalar (available-kernel-families)))
-        (check (= reference (hash-after family)) "~A differs from scalar on the mixed pile" family)))))
+    (dolist (friction '(t nil))
+      (let ((reference (hash-after :scalar friction)))
+        (dolist (family (remove :scalar (available-kernel-families)))
+          (check (= reference (hash-after family friction)) "~A differs from scalar on the mixed pile~:[ without friction~;~]"
+                 family friction))))))
 ;; 7PAQ3M-mixed-materials-agree ends here
 
 ;; [[file:../physics.org::#7PAQ3M][7PAQ3M-choosing-a-family]]
