@@ -7346,6 +7346,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                   (when near (setf (aref near i) most-positive-single-float))
                   (let ((reach (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))))
                     (find-box-points world set i reach)
+                    ;; a box faster than its margin sweeps its corners ([[#BXSWEP]])
+                    (when (> reach margin) (sweep-box-corners world set i reach))
                     (find-box-box-points world set i reach)
                     ;; the spheres near it ([[#BXSPHR]])
                     (find-box-sphere-points world set i reach dt gstep))
@@ -7588,9 +7590,12 @@ friction, held in the cone. #BXSOLV"
 (defun bounce-box-points (set v)
   "After the substeps, give each box point that struck this step the push that makes it leave
 at its restitution times the speed it struck at, in +box-bounce-passes+ Gauss-Seidel passes, each
-point's bounce a push of its own, never a pull. #BXSOLV"
+point's bounce a push of its own, never a pull. The speed is the instant's at the step's end,
+which the velocity of the substep to come reaches less half that substep's gravity. #BXSOLV"
   (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
-  (let ((points (box-set-points set)))
+  (let ((points (box-set-points set))
+        (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
+    (declare (type single-float hgx hgy hgz))
     (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
                              imb j11 j12 j13 j22 j23 j33 restitution impact-speed bounce)
         points
@@ -7600,11 +7605,15 @@ point's bounce a push of its own, never a pull. #BXSOLV"
             (with-box-point (v k)
               (let* ((ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
                      (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
+                     ;; the change of vn over a substep under gravity
+                     (dv (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
+                            (+ (* hgx ax) (* hgy ay) (* hgz az))))
                      (old (aref bounce k))
                      (new (max 0.0 (+ old (* (aref normal-mass k)
-                                             (- (* (aref restitution k) (aref impact-speed k)) vn)))))
+                                             (- (- (* (aref restitution k) (aref impact-speed k)) (* 0.5 dv))
+                                                vn)))))
                      (push (- new old)))
-                (declare (type single-float ax ay az vn old new push))
+                (declare (type single-float ax ay az vn dv old new push))
                 (setf (aref bounce k) new)
                 (push! (* push ax) (* push ay) (* push az)))))))))
   nil)
@@ -7749,6 +7758,87 @@ adds GSTEP; each such box's slot gets the first and the count of its points. #BX
                     (aref (box-set-count set) slot) (- (box-point-columns-length points) start))))))))
   set)
 ;; A box against a sphere:1 ends here
+
+;; [[file:../physics.org::#BXSWEP][Fast boxes sweep their corners through the cells:1]]
+(defun sweep-box-corners (world set row reach)
+  "Append to SET's points, for the awake box at ROW of WORLD, each corner's first cell face
+along the box's travel this step within REACH that lies beyond the faces of the corner's own
+cell's neighbours ([[#BXCELL]]): the corner walks the cells it crosses, and the face it enters
+a solid cell through, with the box's centre on its air side, is its point. #BXSWEP"
+  (declare (type box-set set) (type index row) (type single-float reach) #.+kernel-policy+)
+  (let ((terrain (physics-world-terrain world)) (probe (physics-world-probe world))
+        (dt (physics-world-current-dt world)))
+    (declare (type single-float dt))
+    (when terrain
+      (with-body-columns (x y z vx vy vz qw qx qy qz handle) (physics-world-awake world)
+        (let* ((h (aref handle row)) (slot (handle-index h))
+               (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot))
+               ;; the way the box travels this step: its velocity with the step's gravity added
+               (dx (+ (aref vx row) (* dt (f32 (physics-world-gravity-x world)))))
+               (dy (+ (aref vy row) (* dt (f32 (physics-world-gravity-y world)))))
+               (dz (+ (aref vz row) (* dt (f32 (physics-world-gravity-z world)))))
+               (len (fsqrt (+ (* dx dx) (* dy dy) (* dz dz)))))
+          (declare (type single-float hx hy hz dx dy dz len))
+          (when (> len 0.0)
+            (let ((ux (/ dx len)) (uy (/ dy len)) (uz (/ dz len)))
+              (declare (type single-float ux uy uz))
+              (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+                  (box-axes (aref qw row) (aref qx row) (aref qy row) (aref qz row))
+                (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+                (flet ((solid (ix iy iz) (declare (type fixnum ix iy iz)) (probe-solid-p probe ix iy iz))
+                       (first-crossing (p i u)
+                         ;; the distance along the way to the first face across axis coordinate P
+                         ;; from cell I, moving at U along that axis
+                         (declare (type single-float p u) (type fixnum i))
+                         (cond ((> u 0.0) (/ (- (float (1+ i) 1.0) p) u))
+                               ((< u 0.0) (/ (- (float i 1.0) p) u))
+                               (t most-positive-single-float))))
+                  (declare (inline solid first-crossing))
+                  (dotimes (corner 8)
+                    (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
+                           (c (if (logbitp 2 corner) hz (- hz)))
+                           (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
+                           (rz (+ (* r31 a) (* r32 b) (* r33 c)))
+                           (px (+ (aref x row) rx)) (py (+ (aref y row) ry)) (pz (+ (aref z row) rz))
+                           (cx (cell-floor px)) (cy (cell-floor py)) (cz (cell-floor pz))
+                           (ix cx) (iy cy) (iz cz)
+                           (sx (if (> ux 0.0) 1 -1)) (sy (if (> uy 0.0) 1 -1)) (sz (if (> uz 0.0) 1 -1))
+                           (tx (first-crossing px ix ux)) (ty (first-crossing py iy uy)) (tz (first-crossing pz iz uz))
+                           (ex (if (= ux 0.0) most-positive-single-float (/ 1.0 (abs ux))))
+                           (ey (if (= uy 0.0) most-positive-single-float (/ 1.0 (abs uy))))
+                           (ez (if (= uz 0.0) most-positive-single-float (/ 1.0 (abs uz)))))
+                      (declare (type single-float a b c rx ry rz px py pz tx ty tz ex ey ez)
+                               (type fixnum cx cy cz ix iy iz sx sy sz))
+                      (unless (solid ix iy iz)
+                        (loop for steps of-type fixnum from 1 to 64 do
+                          (let ((axis (cond ((and (<= tx ty) (<= tx tz)) 0) ((<= ty tz) 1) (t 2))))
+                            (declare (type (integer 0 2) axis))
+                            (when (> (case axis (0 tx) (1 ty) (t tz)) reach) (return))
+                            (case axis
+                              (0 (incf ix sx) (setf tx (+ tx ex)))
+                              (1 (incf iy sy) (setf ty (+ ty ey)))
+                              (t (incf iz sz) (setf tz (+ tz ez))))
+                            (when (solid ix iy iz)
+                              (let* ((step (case axis (0 sx) (1 sy) (t sz)))
+                                     (face (+ (* 2 axis) (if (> step 0) 1 0)))
+                                     ;; the normal out of the entered cell, back along the axis
+                                     (nx (if (= axis 0) (float (- step) 1.0) 0.0))
+                                     (ny (if (= axis 1) (float (- step) 1.0) 0.0))
+                                     (nz (if (= axis 2) (float (- step) 1.0) 0.0))
+                                     ;; the face's plane, and the corner's distance to it
+                                     (gap (case axis
+                                            (0 (if (> step 0) (- (float ix 1.0) px) (- px (float (1+ ix) 1.0))))
+                                            (1 (if (> step 0) (- (float iy 1.0) py) (- py (float (1+ iy) 1.0))))
+                                            (t (if (> step 0) (- (float iz 1.0) pz) (- pz (float (1+ iz) 1.0)))))))
+                                (declare (type fixnum step face) (type single-float nx ny nz gap))
+                                ;; beyond the neighbours' faces, with the centre on the face's air side
+                                (when (and (not (solid (+ cx (if (= axis 0) step 0)) (+ cy (if (= axis 1) step 0))
+                                                       (+ cz (if (= axis 2) step 0))))
+                                           (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
+                                  (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz gap)))
+                              (return)))))))))))))))
+  set)
+;; Fast boxes sweep their corners through the cells:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (declaim (inline held-marking-p mark-held))
@@ -12350,11 +12440,15 @@ grid's columns of centre, radius and handle; the excluded body is passed over. #
   (let* ((exclude (query-search-exclude s)) (radius (query-search-radius s))
          (rho (+ (float (the single-float (physics-world-max-radius world)) 1d0) radius 1d-4))
          (g (query-view-awake-grid view)) (gx (hash-grid-xs g)) (gy (hash-grid-ys g)) (gz (hash-grid-zs g))
-         (radii (query-view-awake-radii view)) (handles (query-view-awake-handles view)))
+         (radii (query-view-awake-radii view)) (handles (query-view-awake-handles view))
+         (boxes (physics-world-box-bodies world)))
     (declare (type double-float radius rho) (type f32-column gx gy gz radii) (type fixnum-column handles))
     (do-path-entries (e) (s g rho)
-      (when (sweep-sphere s (float (aref gx e) 1d0) (float (aref gy e) 1d0) (float (aref gz e) 1d0)
-                          (+ (float (aref radii e) 1d0) radius))
+      (when (if (and boxes (box-entry-p boxes (aref handles e)))
+                ;; a box is met on its faces ([[#C4STBX]])
+                (sweep-body-box s world (aref handles e))
+                (sweep-sphere s (float (aref gx e) 1d0) (float (aref gy e) 1d0) (float (aref gz e) 1d0)
+                              (+ (float (aref radii e) 1d0) radius)))
         (let ((h (aref handles e)))
           (unless (eql h exclude) (offer s +hit-body+ h))))))
   s)
@@ -12376,13 +12470,17 @@ the grid's copy of its centre and then found through the handle table; then the 
 one by one or through their grid. The excluded body is passed over. #C4STRY"
   (declare (type query-search s) (type query-view view) #.+kernel-policy+)
   (let* ((exclude (query-search-exclude s)) (radius (query-search-radius s))
-         (rho (+ (float (the single-float (physics-world-max-radius world)) 1d0) radius 1d-4)))
+         (rho (+ (float (the single-float (physics-world-max-radius world)) 1d0) radius 1d-4))
+         (boxes (physics-world-box-bodies world)))
     (declare (type double-float radius rho))
     (with-body-columns ((cx x) (cy y) (cz z) (cr radius) (ch handle)) (physics-world-sleeping world)
       (flet ((try (row)
                (declare (type index row))
-               (when (sweep-sphere s (float (aref cx row) 1d0) (float (aref cy row) 1d0) (float (aref cz row) 1d0)
-                                   (+ (float (aref cr row) 1d0) radius))
+               (when (if (and boxes (box-entry-p boxes (aref ch row)))
+                         ;; a box is met on its faces ([[#C4STBX]])
+                         (sweep-body-box s world (aref ch row))
+                         (sweep-sphere s (float (aref cx row) 1d0) (float (aref cy row) 1d0) (float (aref cz row) 1d0)
+                                       (+ (float (aref cr row) 1d0) radius)))
                  (let ((h (aref ch row)))
                    (unless (eql h exclude) (offer s +hit-body+ h))))))
         (declare (inline try))
@@ -12504,6 +12602,54 @@ return NIL. #C4STRY"
                   (physics-hit-nz hit) (coerce nz 'single-float) (physics-hit-distance hit) (coerce tt 'single-float))
             hit))))))
 ;; Casts: a search, its hits and the shapes it meets:1 ends here
+
+;; [[file:../physics.org::#C4STBX][A cast meets a box body on its faces:1]]
+(defun box-entry-p (boxes handle)
+  "True when BOXES, a world's box set or NIL, holds extents for the slot of HANDLE: the body is a
+box. #C4STBX"
+  (declare (type fixnum handle))
+  (and boxes
+       (let ((slot (handle-index handle)) (hx (box-set-hx boxes)))
+         (and (< slot (length hx)) (> (aref hx slot) 0.0)))))
+
+(defun sweep-body-box (s world handle)
+  "True when cast S meets the box body HANDLE of WORLD nearer than its nearest hit so far: the box
+of its half-extents about its centre, turned by its orientation, grown by the cast's radius; the
+distance and the outward normal are then S's candidate. #C4STBX"
+  (declare (type query-search s) (type fixnum handle))
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (let* ((buffer (set-buffer world set)) (boxes (physics-world-box-bodies world))
+           (slot (handle-index handle))
+           (hx (float (aref (box-set-hx boxes) slot) 1d0)) (hy (float (aref (box-set-hy boxes) slot) 1d0))
+           (hz (float (aref (box-set-hz boxes) slot) 1d0)))
+      (declare (type double-float hx hy hz))
+      (with-body-columns (x y z qw qx qy qz) buffer
+        (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+            (box-axes (aref qw row) (aref qx row) (aref qy row) (aref qz row))
+          (let ((r11 (float r11 1d0)) (r12 (float r12 1d0)) (r13 (float r13 1d0))
+                (r21 (float r21 1d0)) (r22 (float r22 1d0)) (r23 (float r23 1d0))
+                (r31 (float r31 1d0)) (r32 (float r32 1d0)) (r33 (float r33 1d0)))
+            (declare (type double-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+            (with-search (ox oy oz ux uy uz cnx cny cnz) s
+              (let ((wox ox) (woy oy) (woz oz) (wux ux) (wuy uy) (wuz uz)
+                    (mx (- ox (float (aref x row) 1d0))) (my (- oy (float (aref y row) 1d0)))
+                    (mz (- oz (float (aref z row) 1d0))))
+                (declare (type double-float wox woy woz wux wuy wuz mx my mz))
+                ;; the cast in the box's frame: R^T (o - c) and R^T u
+                (setf ox (+ (* r11 mx) (* r21 my) (* r31 mz)) oy (+ (* r12 mx) (* r22 my) (* r32 mz))
+                      oz (+ (* r13 mx) (* r23 my) (* r33 mz))
+                      ux (+ (* r11 wux) (* r21 wuy) (* r31 wuz)) uy (+ (* r12 wux) (* r22 wuy) (* r32 wuz))
+                      uz (+ (* r13 wux) (* r23 wuy) (* r33 wuz)))
+                (let ((met (sweep-rounded-box s (- hx) (- hy) (- hz) hx hy hz 63)))
+                  (setf ox wox oy woy oz woz ux wux uy wuy uz wuz)
+                  (when met
+                    ;; the normal back in the world: R n
+                    (let ((nx cnx) (ny cny) (nz cnz))
+                      (declare (type double-float nx ny nz))
+                      (setf cnx (+ (* r11 nx) (* r12 ny) (* r13 nz)) cny (+ (* r21 nx) (* r22 ny) (* r23 nz))
+                            cnz (+ (* r31 nx) (* r32 ny) (* r33 nz)))))
+                  met)))))))))
+;; A cast meets a box body on its faces:1 ends here
 
 ;; [[file:../physics.org::#R4YC57][Rays walk the cells in order:1]]
 (defun ray-cells (s probe)
