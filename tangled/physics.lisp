@@ -6727,7 +6727,7 @@ feature), the handle of the box that found it, the normal (pushing the first sid
 second), the levers from both centres, the two tangents, the gap at the step's start, the
 effective masses, the friction, the three carried impulses, and each side's inverse mass and world
 inverse inertia's six entries, then the point's restitution, its largest push this step, the
-speed it struck at this step and its bounce ([[#BXSOLV]]). #BXR0WS"
+speed it struck at this step, its bounce and its normal velocity before the pass ([[#BXSOLV]]). #BXR0WS"
   (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
   (sx single-float) (sy single-float) (sz single-float) (imb single-float)
   (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
@@ -6740,14 +6740,15 @@ speed it struck at this step and its bounce ([[#BXSOLV]]). #BXR0WS"
   (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
   (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
   (i22 single-float) (i23 single-float) (i33 single-float)
-  (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float))
+  (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float)
+  (approach single-float))
 
 (defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
   "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
 many boxes live, the contact points of this step and of the last one, each with the first row
 and the count of every slot's points, the awake box rows of this step, their turns (three floats
 a row), the soft coefficients of the step, and its restitution threshold and gravity times the
-substep. #BXR0WS"
+substep, and whether some point of the step has restitution. #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -6767,6 +6768,7 @@ substep. #BXR0WS"
   (impulse-scale 0.0 :type single-float)
   (push-max 0.0 :type single-float)
   (threshold 0.0 :type single-float)
+  (bouncy nil :type boolean)
   (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float))
 
 (defun box-set-room (set slots)
@@ -7399,6 +7401,7 @@ slop, so a box rests a slop deep as a sphere does. #BXSOLV"
   (let ((awake (physics-world-awake world)) (points (box-set-points set))
         (slop (f32 (physics-world-slop world))))
     (declare (type single-float slop))
+    (setf (box-set-bouncy set) nil)
     (with-body-columns ((fr friction) (re restitution)) awake
       (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
                                tangent-mass-1 tangent-mass-2 friction im i11 i12 i13 i22 i23 i33
@@ -7410,7 +7413,8 @@ slop, so a box rests a slop deep as a sphere does. #BXSOLV"
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
             (setf (aref restitution k) (max (if (< a n) (aref re a) 0.0) (if (< b n) (aref re b) 0.0))
-                  (aref pushed k) 0.0 (aref impact-speed k) 0.0 (aref bounce k) 0.0))
+                  (aref pushed k) 0.0 (aref impact-speed k) 0.0 (aref bounce k) 0.0)
+            (when (> (aref restitution k) 0.0) (setf (box-set-bouncy set) t)))
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
             (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set a)
@@ -7529,8 +7533,17 @@ friction, held in the cone. #BXSOLV"
     (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
                              normal-mass tangent-mass-1 tangent-mass-2 friction normal-impulse
                              tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed)
+                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed approach)
         points
+      ;; the normal velocity of each point that may strike, before this pass pushes any point:
+      ;; the corners of a box landing flat all strike at the speed the first one does
+      (when (box-set-bouncy set)
+        (dotimes (k (box-point-columns-length points))
+          (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0))
+            (with-box-point (v k)
+              (setf (aref approach k)
+                    (multiple-value-bind (ux uy uz) (point-velocity)
+                      (+ (* ux (aref nx k)) (* uy (aref ny k)) (* uz (aref nz k)))))))))
       (dotimes (k (box-point-columns-length points))
         (with-box-point (v k)
           (let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
@@ -7556,11 +7569,12 @@ friction, held in the cone. #BXSOLV"
                  (new (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old))))
                  (pn (- new old)))
             (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
-            ;; an impact: the first push this step of a point with restitution approaching faster
-            ;; than the threshold; its speed is kept for the bounce after the substeps
-            (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0) (> new 0.0) (< vn (- threshold)))
+            ;; an impact: the first push this step of a point with restitution that approached,
+            ;; before the pass, faster than the threshold; its speed is kept for the bounce
+            (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0) (> new 0.0)
+                       (< (aref approach k) (- threshold)))
               (setf (aref impact-speed k)
-                    (box-point-impact-speed vn s positive use-bias inv-h
+                    (box-point-impact-speed (aref approach k) s positive use-bias inv-h
                                             (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
                                                (+ (* hgx ax) (* hgy ay) (* hgz az))))))
             (setf (aref normal-impulse k) new

@@ -6904,6 +6904,26 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (= before (sb-ext:get-bytes-consed)) "60 steps consed ~D bytes" (- (sb-ext:get-bytes-consed) before)))))
 ;; BXSOLV-box-steps-cons-nothing ends here
 
+;; [[file:../physics.org::#BXSOLV][BXSOLV-boxes-rebound-to-e-squared]]
+(define-claim "BXSOLV" boxes-rebound-to-e-squared
+    "A cube dropped flat with restitution e first rebounds to e^2 of its drop within 2 %."
+  (dolist (e '(0.2 0.5 0.9))
+    (dolist (drop '(0.25 1.0))
+      (let* ((w (make-floor-world :sleep nil))
+             (rest (- 0.5 *physics-linear-slop*))
+             (box (add-physics-box w 2.5 (+ rest drop) 2.5 0.5 0.5 0.5 :restitution e))
+             (peak nil) (rising nil))
+        (dotimes (i 180)
+          (step-physics-world w)
+          (let ((y (nth-value 1 (physics-body-position w box))) (vy (nth-value 1 (physics-body-velocity w box))))
+            (cond ((and (null peak) (> vy 0)) (setf rising t peak (- y rest)))
+                  ((and rising (> vy 0)) (setf peak (max peak (- y rest))))
+                  (rising (setf peak (max peak (- y rest)) rising nil)))))
+        (let ((want (* e e drop)))
+          (check (and peak (< (abs (- peak want)) (* 0.02 want)))
+                 "e ~,1F from ~,2F m: rebound ~A m, e^2 h ~,5F" e drop peak want))))))
+;; BXSOLV-boxes-rebound-to-e-squared ends here
+
 ;; [[file:../physics.org::#BXSPHR][BXSPHR-ball-strikes-box]]
 (define-claim "BXSPHR" ball-strikes-box
     "A ball sliding head on into a resting cube of its mass hands over its momentum as e says."
