@@ -7942,6 +7942,24 @@ phase's notes, and the array for the rows held back, at least as long as the awa
             (physics-world-near-cells world)
             (physics-world-held-rows world))))
 
+(declaim (inline path-outruns-look-p surface-stop))
+
+(defun path-outruns-look-p (moved2 r vx vy vz margin limit dt gstep)
+  "Whether a body of radius R, moving at VX VY VZ at the start of a step of DT seconds (gravity
+adding GSTEP), moved the square root of MOVED2: farther than the terrain phase looked, past its
+MARGIN and past the travel that velocity promised (step-reach, at most LIMIT). #SQU33Z"
+  (declare (type single-float moved2 r vx vy vz margin limit dt gstep))
+  (and (> moved2 (* margin margin))
+       (let ((looked (- (step-reach r (step-travel vx vy vz dt gstep) margin limit) r)))
+         (> moved2 (* looked looked)))))
+
+(defun surface-stop (at r along)
+  "How far along its path a sphere of radius R goes before its surface reaches a face's plane,
+which its centre reaches at AT, its path's unit direction having the component ALONG across the
+face; 0 when the surface is past the plane already. #SQU33Z"
+  (declare (type single-float at r along))
+  (max 0.0 (- at (/ r (max (abs along) 1e-6)))))
+
 (defun hold-out-of-cells (world rows count)
   "Check the path of each of WORLD's awake rows listed in the first COUNT entries of ROWS, then fold
 its delta into its position: a path that carries the centre into a solid cell, or, longer than
@@ -7949,137 +7967,52 @@ the terrain phase looked along, the surface through the face of one, is cut wher
 reaches that face (at the start, if it is already past it), the velocity into the face removed
 and a :held-out event reported. Return how many bodies were held. #SQU33Z"
   (declare (type fixnum-column rows) (type index count) #.+kernel-policy+)
-  (let ((held 0))
-    (declare (type fixnum held))
-    (let* ((awake (physics-world-awake world))
-           (probe (physics-world-probe world))
-           (v (physics-world-velocities world))
-           (d (physics-world-deltas world))
-           (margin (f32 (physics-world-margin world)))
-           (limit (f32 (physics-world-reach-limit world)))
-           (dt (physics-world-current-dt world))
-           (gstep (gravity-step world dt)))
-      (declare (type f32-column v d) (type single-float margin limit dt gstep))
-      (with-body-columns (x y z vx vy vz radius handle) awake
-        (dotimes (j count)
-          (let* ((i (aref rows j))
-                 (p (delta-row i))
-                 (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
-                 (moved2 (+ (* dx dx) (* dy dy) (* dz dz)))
-                 (cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                 ;; longer than the terrain phase looked: past its margin and past the travel
-                 ;; the body's velocity at the start of the step promised
-                 (long (and (> moved2 (* margin margin))
-                            (let ((looked (- (step-reach r (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep)
-                                                         margin limit)
-                                             r)))
-                              (> moved2 (* looked looked))))))
-            (declare (type index i p) (type single-float dx dy dz moved2 cx cy cz r))
-            ;; within the look-ahead, a path that stays in the centre's cell stays in the air
-            (when (or long
-                      (/= (cell-floor cx) (cell-floor (+ cx dx)))
-                      (/= (cell-floor cy) (cell-floor (+ cy dy)))
-                      (/= (cell-floor cz) (cell-floor (+ cz dz))))
-              (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
-                     (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
-                (declare (type single-float len inv ux uy uz))
-                (multiple-value-bind (axis at) (first-solid-on-ray probe cx cy cz ux uy uz (if long (+ len r) len))
-                  (declare (type (integer -1 2) axis) (type single-float at))
-                  (unless (< axis 0)
-                    (let* ((along (case axis (0 ux) (1 uy) (t uz)))
-                           ;; where the surface reaches the face's plane, along the path
-                           (stop (max 0.0 (- at (/ r (max (abs along) 1e-6)))))
-                           (o (+ (solver-row i) axis))
-                           (into (if (> along 0.0) (max 0.0 (aref v o)) (min 0.0 (aref v o)))))
-                      (declare (type single-float along stop into) (type index o))
-                      (when (< stop len)
-                        (setf (aref d p) (* ux stop) (aref d (+ p 1)) (* uy stop) (aref d (+ p 2)) (* uz stop)
-                              (aref v o) (- (aref v o) into))
-                        (incf held)
-                        (push-event world +event-held-out+ (aref handle i) +no-body+
-                                    (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into))))))))
-            ;; then the fold, as for every other row
-            (setf (aref x i) (+ cx (aref d p)) (aref y i) (+ cy (aref d (+ p 1))) (aref z i) (+ cz (aref d (+ p 2))))))))
+  (let* ((held 0)
+         (awake (physics-world-awake world))
+         (probe (physics-world-probe world))
+         (v (physics-world-velocities world))
+         (d (physics-world-deltas world))
+         (margin (f32 (physics-world-margin world)))
+         (limit (f32 (physics-world-reach-limit world)))
+         (dt (physics-world-current-dt world))
+         (gstep (gravity-step world dt)))
+    (declare (type fixnum held) (type f32-column v d) (type single-float margin limit dt gstep))
+    (with-body-columns (x y z vx vy vz radius handle) awake
+      (dotimes (j count)
+        (let* ((i (aref rows j))
+               (p (delta-row i))
+               (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
+               (moved2 (+ (* dx dx) (* dy dy) (* dz dz)))
+               (cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+               (long (path-outruns-look-p moved2 r (aref vx i) (aref vy i) (aref vz i) margin limit dt gstep)))
+          (declare (type index i p) (type single-float dx dy dz moved2 cx cy cz r))
+          ;; within the look-ahead, a path that stays in the centre's cell stays in the air
+          (when (or long
+                    (/= (cell-floor cx) (cell-floor (+ cx dx)))
+                    (/= (cell-floor cy) (cell-floor (+ cy dy)))
+                    (/= (cell-floor cz) (cell-floor (+ cz dz))))
+            (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
+                   (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
+              (declare (type single-float len inv ux uy uz))
+              (multiple-value-bind (axis at) (first-solid-on-ray probe cx cy cz ux uy uz (if long (+ len r) len))
+                (declare (type (integer -1 2) axis) (type single-float at))
+                (unless (< axis 0)
+                  (let* ((along (case axis (0 ux) (1 uy) (t uz)))
+                         ;; where the surface reaches the face's plane, along the path
+                         (stop (surface-stop at r along))
+                         (o (+ (solver-row i) axis))
+                         (into (if (> along 0.0) (max 0.0 (aref v o)) (min 0.0 (aref v o)))))
+                    (declare (type single-float along stop into) (type index o))
+                    (when (< stop len)
+                      (setf (aref d p) (* ux stop) (aref d (+ p 1)) (* uy stop) (aref d (+ p 2)) (* uz stop)
+                            (aref v o) (- (aref v o) into))
+                      (incf held)
+                      (push-event world +event-held-out+ (aref handle i) +no-body+
+                                  (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into))))))))
+          ;; then the fold, as for every other row
+          (setf (aref x i) (+ cx (aref d p)) (aref y i) (+ cy (aref d (+ p 1))) (aref z i) (+ cz (aref d (+ p 2)))))))
     (setf (physics-world-held-out-count world) held)
     held))
-
-(defun squeeze-scene (family scene)
-  "Run SCENE (:step, :marbles, :far-step, :wall or :press) under FAMILY for 240 steps of 1/60 s; return the
-count of ball positions outside air cells of the resident world or below the floor less a slop,
-the lowest centre, the walker's final x and y (NIL for :press), the state hash, the fastest
-speed of any ball after any step, the deepest any ball's surface reached into a solid cell and
-into the box (its radius, when the centre lies inside), and whether a centre lay inside the box. #SQU33Z"
-  ;; the walker's structure is defined with the walker, later on the page
-  (declare (notinline physics-player-x physics-player-y))
-  (let ((terrain (make-voxel-terrain)))
-    (fill-terrain terrain -16 0 -16 16 12 16 nil)
-    (fill-terrain terrain -16 -16 -16 16 0 16 t)
-    (case scene
-      (:step (fill-terrain terrain 6 0 -4 16 1 4 t))
-      (:marbles (fill-terrain terrain 6 0 -4 16 1 4 t))
-      (:far-step (fill-terrain terrain 8 0 -4 16 1 4 t))
-      (:wall (fill-terrain terrain 6 0 -4 16 3 4 t)))
-    (let* ((world (make-physics-world :terrain terrain :kernels family))
-           (player (make-physics-player 0d0 0d0 0d0))
-           (slop *physics-linear-slop*)
-           (balls (loop for x from 1.0 to 5.5 by 0.5
-                        collect (add-physics-body-of-kind world (if (eq scene :marbles) :marble :ball) x 0.3 0.0)))
-           (outside 0) (lowest 100.0) (fastest 0.0) (cells 0.0) (box 0.0) (inside-box nil))
-      (let ((bounds (make-list 6)))
-      (flet ((note-box ()
-               ;; the box posted for the next step, where it will be at the step's end
-               (let ((b (physics-world-boxes world)) (dt (/ 1.0 60)))
-                 (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) b
-                   (setf bounds (list (+ (aref min-x 0) (* dt (aref vx 0))) (+ (aref min-y 0) (* dt (aref vy 0)))
-                                      (+ (aref min-z 0) (* dt (aref vz 0))) (+ (aref max-x 0) (* dt (aref vx 0)))
-                                      (+ (aref max-y 0) (* dt (aref vy 0))) (+ (aref max-z 0) (* dt (aref vz 0))))))))
-               (box-bounds () (values-list bounds)))
-      (dotimes (frame 240)
-        (if (eq scene :press)
-            (post-physics-box world 3.25 (max 0.7 (- 1.5 (* frame (/ 1.0 60)))) 0.0 2.0 0.5 1.0
-                              :vy (if (> (- 1.5 (* frame (/ 1.0 60))) 0.7) -1.0 0.0) :owner :press)
-            (progn (advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
-                   (post-physics-player world player)))
-        (note-box)
-        (step-physics-world world)
-        (dolist (h balls)
-          (multiple-value-bind (vx vy vz) (physics-body-velocity world h)
-            (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))
-          (multiple-value-bind (x y z) (physics-body-position world h)
-            (let ((r (physics-body-radius world h)))
-              ;; the deepest a ball's surface reaches into the solid cells around its centre
-              (loop for i from (1- (floor x)) to (1+ (floor x)) do
-                (loop for j from (1- (floor y)) to (1+ (floor y)) do
-                  (loop for k from (1- (floor z)) to (1+ (floor z)) do
-                    (when (terrain-solid-p terrain i j k)
-                      (let ((dx (- (max i (min (1+ i) x)) x)) (dy (- (max j (min (1+ j) y)) y))
-                            (dz (- (max k (min (1+ k) z)) z)))
-                        (setf cells (max cells (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))))
-              ;; and into the box that presses it
-              (multiple-value-bind (bx0 by0 bz0 bx1 by1 bz1) (box-bounds)
-                (let ((dx (- (max bx0 (min bx1 x)) x)) (dy (- (max by0 (min by1 y)) y)) (dz (- (max bz0 (min bz1 z)) z)))
-                  (when (= 0 dx dy dz) (setf inside-box t))
-                  (setf box (max box (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))
-            (setf lowest (min lowest y))
-            ;; a cell of a chunk that is not resident counts as solid
-            (when (or (< y (- slop)) (terrain-solid-p terrain (floor x) (floor y) (floor z)))
-              (incf outside)))))
-      (values outside lowest
-              (and (not (eq scene :press)) (physics-player-x player))
-              (and (not (eq scene :press)) (physics-player-y player))
-              (physics-world-state-hash world)
-              fastest cells box inside-box))))))
-
-(defun physics-world-last-step-held-out-count (world)
-  "How many bodies the last step stopped at the face of a solid cell. #SQU33Z"
-  (check-world world 'physics-world-last-step-held-out-count)
-  (physics-world-held-out-count world))
-
-(defun physics-world-last-step-buried-count (world)
-  "How many awake bodies began the last step with their centre in a solid cell, and were pushed
-toward the air by that cell's contact. #SQU33Z"
-  (check-world world 'physics-world-last-step-buried-count)
-  (physics-world-buried-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:1 ends here
 
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
