@@ -6726,7 +6726,8 @@ the dummy for a cell, the first the dummy for a sleeping box's corner), the poin
 feature), the handle of the box that found it, the normal (pushing the first side off the
 second), the levers from both centres, the two tangents, the gap at the step's start, the
 effective masses, the friction, the three carried impulses, and each side's inverse mass and world
-inverse inertia's six entries. #BXR0WS"
+inverse inertia's six entries, then the point's restitution, its largest push this step, the
+speed it struck at this step and its bounce ([[#BXSOLV]]). #BXR0WS"
   (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
   (sx single-float) (sy single-float) (sz single-float) (imb single-float)
   (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
@@ -6738,13 +6739,15 @@ inverse inertia's six entries. #BXR0WS"
   (tangent-mass-2 single-float) (friction single-float)
   (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
   (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
-  (i22 single-float) (i23 single-float) (i33 single-float))
+  (i22 single-float) (i23 single-float) (i33 single-float)
+  (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float))
 
 (defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
   "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
 many boxes live, the contact points of this step and of the last one, each with the first row
 and the count of every slot's points, the awake box rows of this step, their turns (three floats
-a row) and the soft coefficients of the step. #BXR0WS"
+a row), the soft coefficients of the step, and its restitution threshold and gravity times the
+substep. #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -6762,7 +6765,9 @@ a row) and the soft coefficients of the step. #BXR0WS"
   (bias-rate 0.0 :type single-float)
   (mass-scale 1.0 :type single-float)
   (impulse-scale 0.0 :type single-float)
-  (push-max 0.0 :type single-float))
+  (push-max 0.0 :type single-float)
+  (threshold 0.0 :type single-float)
+  (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float))
 
 (defun box-set-room (set slots)
   "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
@@ -6856,9 +6861,6 @@ made without :box-bodies refuses it with physics-feature-omitted. #BXR0WS"
                       (density (* volume (finite-f32 :density density world)))
                       (t 1.0)))
              (fx (finite-f32 :x x world)) (fy (finite-f32 :y y world)) (fz (finite-f32 :z z world)))
-        (unless (and (realp restitution) (zerop restitution))
-          (error 'invalid-physics-parameter :world world :name :restitution :value restitution
-                                            :expected "0 for a box, which does not bounce"))
         (check-coordinate :x fx world) (check-coordinate :y fy world) (check-coordinate :z fz world)
         (unless (member inside-cells '(:refuse :push-out))
           (error 'invalid-physics-parameter :world world :name :inside-cells :value inside-cells
@@ -6873,7 +6875,7 @@ made without :box-bodies refuses it with physics-feature-omitted. #BXR0WS"
         (check-body-room world 'add-physics-box)
         ;; add-physics-body checks the rest before it touches the world
         (let* ((handle (add-physics-body world fx fy fz :radius (box-half-diagonal hx hy hz) :mass m
-                                         :friction friction :vx vx :vy vy :vz vz :life life
+                                         :friction friction :restitution restitution :vx vx :vy vy :vz vz :life life
                                          :collide-with-bodies nil :kind kind :inside-cells :push-out
                                          :category category :mask mask :gravity-scale gravity-scale))
                (set (or (physics-world-box-bodies world)
@@ -7330,6 +7332,9 @@ box set when some point is to be solved, else NIL. #BXSOLV"
           (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
             (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
                   (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
+          (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+            (setf (box-set-threshold set) threshold (box-set-hgx set) hgx (box-set-hgy set) hgy
+                  (box-set-hgz set) hgz))
           (with-body-columns (vx vy vz flags handle) awake
             (dotimes (i n)
               (when (logtest (aref flags i) +flag-box-shape+)
@@ -7341,19 +7346,29 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                   (when near (setf (aref near i) most-positive-single-float))
                   (let ((reach (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))))
                     (find-box-points world set i reach)
-                    (find-box-box-points world set i reach))
+                    (find-box-box-points world set i reach)
+                    ;; the spheres near it ([[#BXSPHR]])
+                    (find-box-sphere-points world set i reach dt gstep))
                   (setf (aref (box-set-first set) slot) start
-                        (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))))
+                        (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))
+            ;; the sleeping boxes, held still, against the awake spheres ([[#BXSPHR]])
+            (find-sleeping-box-sphere-points world set margin dt gstep)))
         (prepare-box-point-masses world set)))
     (and (plusp (box-point-columns-length (box-set-points set))) set)))
 
 (defun box-row-inertia (awake set i)
   "The inverse mass of the box at awake row I of AWAKE, a buffer of SET's world, and its world
 inverse inertia R D^-1 R^T as six entries 11 12 13 22 23 33: seven values, zeros for the dummy row
-past the awake ones. #BXSOLV"
+past the awake ones, and for a sphere its scalar inverse inertia on the diagonal. #BXSOLV"
   (declare (type body-columns awake) (type box-set set) (type index i) #.+kernel-policy+)
-  (if (>= i (body-columns-length awake))
-      (values 0.0 0.0 0.0 0.0 0.0 0.0 0.0)
+  (cond
+    ((>= i (body-columns-length awake))
+      (values 0.0 0.0 0.0 0.0 0.0 0.0 0.0))
+    ;; a sphere met by a box ([[#BXSPHR]]): its scalar inverse inertia on the diagonal
+    ((not (logtest (aref (body-columns-flags awake) i) +flag-box-shape+))
+     (let ((ii (aref (body-columns-inverse-inertia awake) i)))
+       (values (aref (body-columns-inverse-mass awake) i) ii 0.0 0.0 ii 0.0 ii)))
+    (t
       (with-body-columns (qw qx qy qz inverse-mass handle) awake
         (let* ((slot (handle-index (aref handle i)))
                (m (aref inverse-mass i))
@@ -7372,7 +7387,7 @@ past the awake ones. #BXSOLV"
                     (+ (* r11 r31 dx) (* r12 r32 dy) (* r13 r33 dz))
                     (+ (* r21 r21 dx) (* r22 r22 dy) (* r23 r23 dz))
                     (+ (* r21 r31 dx) (* r22 r32 dy) (* r23 r33 dz))
-                    (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz))))))))
+                    (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz)))))))))
 
 (defun prepare-box-point-masses (world set)
   "Write each of SET's points' sides' inverse masses and world inverse inertias, its tangents,
@@ -7382,13 +7397,18 @@ slop, so a box rests a slop deep as a sphere does. #BXSOLV"
   (let ((awake (physics-world-awake world)) (points (box-set-points set))
         (slop (f32 (physics-world-slop world))))
     (declare (type single-float slop))
-    (with-body-columns ((fr friction)) awake
+    (with-body-columns ((fr friction) (re restitution)) awake
       (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
                                tangent-mass-1 tangent-mass-2 friction im i11 i12 i13 i22 i23 i33
-                               imb j11 j12 j13 j22 j23 j33 separation)
+                               imb j11 j12 j13 j22 j23 j33 separation restitution pushed impact-speed bounce)
           points
         (dotimes (k (box-point-columns-length points))
           (setf (aref separation k) (+ (aref separation k) slop))
+          ;; the larger restitution of the sides that move, as a sphere contact's ([[#PR3PAR]])
+          (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
+            (declare (type index a b n))
+            (setf (aref restitution k) (max (if (< a n) (aref re a) 0.0) (if (< b n) (aref re b) 0.0))
+                  (aref pushed k) 0.0 (aref impact-speed k) 0.0 (aref bounce k) 0.0))
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
             (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set a)
@@ -7481,18 +7501,33 @@ the point, P/m and I^-1 (r x P) to the first side and their opposites to the sec
                    (+ (* pn (aref nz k)) (* p1 (aref t1z k)) (* p2 (aref t2z k)))))))))
   nil)
 
+(defmacro box-point-impact-speed (vn s positive biased inv-h dv)
+  "The speed at which a box point whose normal velocity is VN and whose gap is S strikes, as a
+sphere row's ([[#R3ST1T]]): VN taken at this instant of the substep (the solve pass, BIASED, runs
+before its positions move, the relax pass after), and grown by the fall through the gap still
+open, DV the change of VN over a substep under gravity. #BXSOLV"
+  `(let* ((half (* 0.5 ,dv))
+          (c (if ,biased (- ,vn half) (+ ,vn half)))
+          (u2 (- (* c c) (* (* (* 2.0 ,dv) (if ,positive ,s 0.0)) ,inv-h))))
+     (declare (type single-float half c u2))
+     (fsqrt (if (> u2 0.0) u2 0.0))))
+
 (defun solve-box-points (set v d inv-h use-bias)
   "One pass over the box points: each normal impulse, with the soft bias when USE-BIAS (the
-solve) and without it (the relax), clamped to push only; then its friction, held in the cone. #BXSOLV"
+solve) and without it (the relax), clamped to push only, keeping the speed of an impact; then its
+friction, held in the cone. #BXSOLV"
   (declare (type box-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
   (let ((points (box-set-points set)) (turns (box-set-turns set))
         (bias-rate (box-set-bias-rate set)) (mass-scale (box-set-mass-scale set))
-        (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set)))
-    (declare (type f32-column turns) (type single-float bias-rate mass-scale impulse-scale push-max))
+        (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set))
+        (threshold (box-set-threshold set))
+        (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
+    (declare (type f32-column turns)
+             (type single-float bias-rate mass-scale impulse-scale push-max threshold hgx hgy hgz))
     (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
                              normal-mass tangent-mass-1 tangent-mass-2 friction normal-impulse
                              tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33)
+                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed)
         points
       (dotimes (k (box-point-columns-length points))
         (with-box-point (v k)
@@ -7519,7 +7554,15 @@ solve) and without it (the relax), clamped to push only; then its friction, held
                  (new (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old))))
                  (pn (- new old)))
             (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
-            (setf (aref normal-impulse k) new)
+            ;; an impact: the first push this step of a point with restitution approaching faster
+            ;; than the threshold; its speed is kept for the bounce after the substeps
+            (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0) (> new 0.0) (< vn (- threshold)))
+              (setf (aref impact-speed k)
+                    (box-point-impact-speed vn s positive use-bias inv-h
+                                            (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
+                                               (+ (* hgx ax) (* hgy ay) (* hgz az))))))
+            (setf (aref normal-impulse k) new
+                  (aref pushed k) (max (aref pushed k) new))
             (push! (* pn ax) (* pn ay) (* pn az))
             ;; friction in the cone of mu times the normal impulse
             (multiple-value-bind (ux uy uz) (point-velocity)
@@ -7539,6 +7582,33 @@ solve) and without it (the relax), clamped to push only; then its friction, held
                          (+ (* d1 (aref t1z k)) (* d2 (aref t2z k))))))))))))
   nil)
 
+(defconstant +box-bounce-passes+ 4
+  "The passes of the bounce over the box points that struck in a step. #BXSOLV")
+
+(defun bounce-box-points (set v)
+  "After the substeps, give each box point that struck this step the push that makes it leave
+at its restitution times the speed it struck at, in +box-bounce-passes+ Gauss-Seidel passes, each
+point's bounce a push of its own, never a pull. #BXSOLV"
+  (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
+  (let ((points (box-set-points set)))
+    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
+                             imb j11 j12 j13 j22 j23 j33 restitution impact-speed bounce)
+        points
+      (dotimes (pass +box-bounce-passes+)
+        (dotimes (k (box-point-columns-length points))
+          (when (> (aref impact-speed k) 0.0)
+            (with-box-point (v k)
+              (let* ((ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
+                     (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
+                     (old (aref bounce k))
+                     (new (max 0.0 (+ old (* (aref normal-mass k)
+                                             (- (* (aref restitution k) (aref impact-speed k)) vn)))))
+                     (push (- new old)))
+                (declare (type single-float ax ay az vn old new push))
+                (setf (aref bounce k) new)
+                (push! (* push ax) (* push ay) (* push az)))))))))
+  nil)
+
 (defun turn-box-rows (set v h)
   "Add to each awake box's turn its spin over the substep H, after the positions integrate. #BXSOLV"
   (declare (type box-set set) (type f32-column v) (type single-float h) #.+kernel-policy+)
@@ -7552,6 +7622,133 @@ solve) and without it (the relax), clamped to push only; then its friction, held
               (aref turns (+ tr 2)) (+ (aref turns (+ tr 2)) (* h (aref v (+ o 5))))))))
   nil)
 ;; Box points in the substeps:1 ends here
+
+;; [[file:../physics.org::#BXSPHR][A box against a sphere:1]]
+(declaim (inline box-sphere-key))
+(defun box-sphere-key (slot sphere-slot)
+  "The key of the point between the box in handle slot SLOT and the sphere in handle slot
+SPHERE-SLOT: a box-box key's bit with the low byte all ones, which no box-box key has. #BXSPHR"
+  (declare (type (unsigned-byte 24) slot sphere-slot))
+  (logior (ash slot 34) (ash 1 32) (ash sphere-slot 8) 255))
+
+(defun box-sphere-point (set owner key row-a row-b reach ax ay az radius
+                         bcx bcy bcz qw qx qy qz hx hy hz)
+  "Append to SET, as a point found by the box OWNER under KEY, the point between the sphere of
+centre AX AY AZ and RADIUS at solver row ROW-A and the box of centre BCX BCY BCZ, orientation QW ..
+QZ and half-extents HX HY HZ at solver row ROW-B, when its gap is under REACH: the box's point
+nearest the centre, the normal from the box to the sphere. #BXSPHR"
+  (declare (type box-set set) (type fixnum owner key) (type index row-a row-b)
+           (type single-float reach ax ay az radius bcx bcy bcz qw qx qy qz hx hy hz) #.+kernel-policy+)
+  (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33) (box-axes qw qx qy qz)
+    (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+    (let* ((dx (- ax bcx)) (dy (- ay bcy)) (dz (- az bcz))
+           ;; the centre in the box's frame, and its nearest point of the box
+           (u (+ (* r11 dx) (* r21 dy) (* r31 dz)))
+           (v (+ (* r12 dx) (* r22 dy) (* r32 dz)))
+           (w (+ (* r13 dx) (* r23 dy) (* r33 dz)))
+           (cu (max (- hx) (min hx u))) (cv (max (- hy) (min hy v))) (cw (max (- hz) (min hz w)))
+           (lu (- u cu)) (lv (- v cv)) (lw (- w cw))
+           (d2 (+ (* lu lu) (* lv lv) (* lw lw))))
+      (declare (type single-float dx dy dz u v w cu cv cw lu lv lw d2))
+      (multiple-value-bind (nu nv nw gap)
+          (if (> d2 0.0)
+              ;; outside: along the way from the nearest point to the centre
+              (let* ((dist (fsqrt d2)) (inv (/ 1.0 dist)))
+                (values (* lu inv) (* lv inv) (* lw inv) (- dist radius)))
+              ;; inside: out of the face it is least deep behind, onto which the point moves
+              (let ((du (- hx (abs u))) (dv (- hy (abs v))) (dw (- hz (abs w))))
+                (cond ((and (<= du dv) (<= du dw))
+                       (setf cu (if (>= u 0.0) hx (- hx)))
+                       (values (if (>= u 0.0) 1.0 -1.0) 0.0 0.0 (- (- du) radius)))
+                      ((<= dv dw)
+                       (setf cv (if (>= v 0.0) hy (- hy)))
+                       (values 0.0 (if (>= v 0.0) 1.0 -1.0) 0.0 (- (- dv) radius)))
+                      (t
+                       (setf cw (if (>= w 0.0) hz (- hz)))
+                       (values 0.0 0.0 (if (>= w 0.0) 1.0 -1.0) (- (- dw) radius))))))
+        (declare (type single-float nu nv nw gap))
+        (when (< gap reach)
+          (let ((nx (+ (* r11 nu) (* r12 nv) (* r13 nw)))
+                (ny (+ (* r21 nu) (* r22 nv) (* r23 nw)))
+                (nz (+ (* r31 nu) (* r32 nv) (* r33 nw))))
+            (declare (type single-float nx ny nz))
+            (add-box-point set row-a owner key nx ny nz (* (- radius) nx) (* (- radius) ny) (* (- radius) nz) gap
+                           row-b
+                           (+ (* r11 cu) (* r12 cv) (* r13 cw))
+                           (+ (* r21 cu) (* r22 cv) (* r23 cw))
+                           (+ (* r31 cu) (* r32 cv) (* r33 cw))))))))
+  set)
+
+(declaim (inline sphere-meets-box-p))
+(defun sphere-meets-box-p (filtering sphere-flags box-flags)
+  "True when a row of SPHERE-FLAGS is a sphere that meets bodies and meets, by the filters when
+FILTERING, a box of BOX-FLAGS. #BXSPHR"
+  (declare (type fixnum sphere-flags box-flags))
+  (and (not (logtest sphere-flags (logior +flag-box-shape+ +flag-terrain-only+)))
+       (rows-meet-p filtering sphere-flags box-flags)))
+
+(defun find-box-sphere-points (world set row reach dt gstep)
+  "Append to SET's points those between the awake box at ROW of WORLD and every sphere near it,
+awake or, held still, sleeping; REACH is the box's, grown to the travel of an awake sphere
+relative to it in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
+  (declare (type box-set set) (type index row) (type single-float reach dt gstep) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world)))
+    (declare (type index n))
+    (with-body-columns (x y z vx vy vz qw qx qy qz radius handle flags) awake
+      (let* ((owner (aref handle row)) (slot (handle-index owner)) (box-flags (aref flags row))
+             (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
+             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot)))
+        (declare (type fixnum owner box-flags) (type single-float cx cy cz r hx hy hz))
+        (flet ((meet (buffer j row-j reach)
+                 ;; the sphere at row J of BUFFER, at solver row ROW-J
+                 (declare (type body-columns buffer) (type index j row-j) (type single-float reach))
+                 (with-body-columns ((sx x) (sy y) (sz z) (sr radius) (sh handle) (sf flags)) buffer
+                   (when (sphere-meets-box-p filtering (aref sf j) box-flags)
+                     (let* ((dx (- (aref sx j) cx)) (dy (- (aref sy j) cy)) (dz (- (aref sz j) cz))
+                            (near (+ r (aref sr j) reach)))
+                       (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
+                         (box-sphere-point set owner (box-sphere-key slot (handle-index (aref sh j))) row-j row reach
+                                           (aref sx j) (aref sy j) (aref sz j) (aref sr j)
+                                           cx cy cz (aref qw row) (aref qx row) (aref qy row) (aref qz row)
+                                           hx hy hz)))))))
+          (dotimes (j n)
+            (meet awake j j (max reach (step-travel (- (aref vx j) (aref vx row)) (- (aref vy j) (aref vy row))
+                                                    (- (aref vz j) (aref vz row)) dt gstep))))
+          (dotimes (j (body-columns-length sleeping)) (meet sleeping j n reach))))))
+  set)
+
+(defun find-sleeping-box-sphere-points (world set margin dt gstep)
+  "Append to SET's points those between each sleeping box of WORLD, held still, and every awake
+sphere near it, within MARGIN or the sphere's travel in a step of DT seconds in which gravity
+adds GSTEP; each such box's slot gets the first and the count of its points. #BXSPHR"
+  (declare (type box-set set) (type single-float margin dt gstep) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
+         (points (box-set-points set)))
+    (declare (type index n))
+    (with-body-columns ((bx x) (by y) (bz z) (bqw qw) (bqx qx) (bqy qy) (bqz qz) (br radius) (bh handle) (bf flags))
+        sleeping
+      (with-body-columns (x y z vx vy vz radius handle flags) awake
+        (dotimes (b (body-columns-length sleeping))
+          (when (logtest (aref bf b) +flag-box-shape+)
+            (let* ((owner (aref bh b)) (slot (handle-index owner))
+                   (start (box-point-columns-length points)))
+              (dotimes (j n)
+                (when (sphere-meets-box-p filtering (aref flags j) (aref bf b))
+                  (let* ((reach (max margin (step-travel (aref vx j) (aref vy j) (aref vz j) dt gstep)))
+                         (dx (- (aref x j) (aref bx b))) (dy (- (aref y j) (aref by b))) (dz (- (aref z j) (aref bz b)))
+                         (near (+ (aref br b) (aref radius j) reach)))
+                    (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
+                      (box-sphere-point set owner (box-sphere-key slot (handle-index (aref handle j))) j n reach
+                                        (aref x j) (aref y j) (aref z j) (aref radius j)
+                                        (aref bx b) (aref by b) (aref bz b) (aref bqw b) (aref bqx b) (aref bqy b)
+                                        (aref bqz b) (aref (box-set-hx set) slot) (aref (box-set-hy set) slot)
+                                        (aref (box-set-hz set) slot))))))
+              (setf (aref (box-set-first set) slot) start
+                    (aref (box-set-count set) slot) (- (box-point-columns-length points) start))))))))
+  set)
+;; A box against a sphere:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (declaim (inline held-marking-p mark-held))
@@ -8130,7 +8327,9 @@ bodies to half the push-out speed. #IDVK7G"
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
-        (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed)))))
+        (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed))))
+    ;; the box points that struck bounce once, after the substeps ([[#BXSOLV]])
+    (when boxes (bounce-box-points boxes v)))
     ;; the joints' colouring serves these substeps only: a pass run by hand solves contacts alone
     (when joints (setf (joint-set-solving joints) nil))
     world))

@@ -6681,7 +6681,7 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
                                                           :orientation (list 1 (sb-kernel:make-single-float -4194304) 0 0))))
         (refused :orientation (lambda () (add-physics-box w 5.5 2 5.5 0.2 0.2 0.2 :orientation '(0 0 0 0))))
         (refused 'add-physics-box (lambda () (add-physics-box w 5.5 0.4 5.5 0.5 0.5 0.5)))
-        (refused :restitution (lambda () (add-physics-box w 5.5 2 5.5 0.2 0.2 0.2 :restitution 0.5)))
+        (refused :restitution (lambda () (add-physics-box w 5.5 2 5.5 0.2 0.2 0.2 :restitution 1.5)))
         (refused :density (lambda () (add-physics-box w 5.5 2 5.5 0.2 0.2 0.2 :mass 2 :density 100))))
       (check (= count (physics-world-awake-count w)))
       (check (= hash (physics-world-state-hash w)) "the state hash changed")
@@ -6903,6 +6903,70 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (dotimes (i 60) (step-physics-world w))
       (check (= before (sb-ext:get-bytes-consed)) "60 steps consed ~D bytes" (- (sb-ext:get-bytes-consed) before)))))
 ;; BXSOLV-box-steps-cons-nothing ends here
+
+;; [[file:../physics.org::#BXSPHR][BXSPHR-ball-strikes-box]]
+(define-claim "BXSPHR" ball-strikes-box
+    "A ball sliding head on into a resting cube of its mass hands over its momentum as e says."
+  (dolist (e '(1.0 0.5))
+    (let* ((w (make-floor-world :sleep nil))
+           (y (- 0.25 *physics-linear-slop*))
+           (ball (add-physics-body w 1.0 y 2.5 :radius 0.25 :mass 1 :friction 0 :restitution e :vx 3))
+           (cube (add-physics-box w 3.0 y 2.5 0.25 0.25 0.25 :mass 1 :friction 0)))
+      (dotimes (i 60) (step-physics-world w))
+      (let ((vb (physics-body-velocity w ball)) (vc (physics-body-velocity w cube))
+            (want-b (* 3 (/ (- 1 e) 2))) (want-c (* 3 (/ (+ 1 e) 2))))
+        (check (< (abs (- vb want-b)) (* 0.02 3)) "e ~,1F: the ball moves at ~,4F m/s, not ~,4F" e vb want-b)
+        (check (< (abs (- vc want-c)) (* 0.02 3)) "e ~,1F: the cube moves at ~,4F m/s, not ~,4F" e vc want-c)
+        (check (> (abs (physics-body-orientation w cube)) 0.9999) "e ~,1F: the cube turned" e))
+      (check (eq t (validate-physics-world w))))))
+;; BXSPHR-ball-strikes-box ends here
+
+;; [[file:../physics.org::#BXSPHR][BXSPHR-ball-rests-on-box]]
+(define-claim "BXSPHR" ball-rests-on-box
+    "A ball on a resting cube rests on it and sleeps; without sleep it creeps under 1 cm in 60 s."
+  (dolist (sleep '(t nil))
+    (let* ((w (make-floor-world :sleep sleep))
+           (rest (- 1.25 (* 2 *physics-linear-slop*)))
+           (cube (add-physics-box w 2.5 (- 0.5 *physics-linear-slop*) 2.5 0.5 0.5 0.5))
+           (ball (add-physics-body w 2.5 (if sleep 1.45 rest) 2.5 :radius 0.25)))
+      (flet ((off (limit when)
+               (destructuring-bind (x y z) (multiple-value-list (physics-body-position w ball))
+                 (check (< (abs (- y rest)) 1e-3) "sleep ~A, ~A: the ball rests at y = ~,5F" sleep when y)
+                 (check (< (max (abs (- x 2.5)) (abs (- z 2.5))) limit) "sleep ~A, ~A: the ball is at ~,4F ~,4F"
+                        sleep when x z)
+                 (list x y z))))
+        (dotimes (i (if sleep 180 120)) (step-physics-world w))
+        (let ((at (off (if sleep 0.01 1e-3) "at first")))
+          (when sleep
+            (check (not (or (physics-body-awake-p w ball) (physics-body-awake-p w cube))) "awake at 3 s"))
+          (dotimes (i 3600) (step-physics-world w))
+          (if sleep
+              (check (equal at (multiple-value-list (physics-body-position w ball))) "a sleeper moved")
+              (off 0.01 "60 s later"))))
+      (check (eq t (validate-physics-world w))))))
+;; BXSPHR-ball-rests-on-box ends here
+
+;; [[file:../physics.org::#BXSPHR][BXSPHR-families-agree-on-balls-and-boxes]]
+(define-claim "BXSPHR" families-agree-on-balls-and-boxes
+    "Balls and boxes meeting end in the same state hash in every kernel family."
+  (flet ((run (family)
+           (let ((w (make-physics-world :terrain (make-floor-terrain) :kernels family)))
+             (add-physics-box w 2.5 0.8 2.5 0.5 0.3 0.4 :orientation '(0.9 0.2 0.1 0.3))
+             (add-physics-body w 2.6 2.5 2.4 :radius 0.3 :restitution 0.4)
+             (add-physics-box w 6.5 0.495 2.5 0.5 0.5 0.5)
+             (add-physics-body w 6.9 2.0 2.9 :radius 0.2 :friction 0.8)
+             (add-physics-box w -2.5 0.495 6.5 0.5 0.5 0.5 :vx 2 :friction 0.3)
+             (add-physics-body w 1.5 0.5 6.6 :radius 0.25 :vx -4 :vy 1 :restitution 0.7)
+             (add-physics-body w 6.5 0.245 6.5 :radius 0.25)
+             (add-physics-box w 6.6 1.5 6.4 0.4 0.4 0.4 :orientation '(0.95 0.1 0.2 0.2))
+             (dotimes (i 180) (step-physics-world w))
+             (check (eq t (validate-physics-world w)))
+             (physics-world-state-hash w))))
+    (let ((scalar (run :scalar)))
+      (dolist (family (rest (available-kernel-families)))
+        (let ((got (run family)))
+          (check (= got scalar) "~(~A~) ends with hash ~D, scalar ~D" family got scalar))))))
+;; BXSPHR-families-agree-on-balls-and-boxes ends here
 
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
