@@ -5150,13 +5150,22 @@ the prepare phase, whose variables it reads. #PRF1LL"
                            (fr-c friction) (re-c restitution) (ro-c rolling-resistance))
            awake
          (declare (ignorable re-c ro-c))
-         (dotimes (color (1+ +physics-max-colors+))
-           (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
-             (if (let ((c (aref contact k)))
-                   (and short-path (not static)
-                        (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
-                 (fill-short-row)
-                 (fill-general-row)))))
+         ;; each row is written from its contact alone, so the rows may be cut into pieces
+         ;; of whole blocks, one a worker ([[#SPL1T5]])
+         (flet ((fill-piece (worker count)
+                  (declare (type fixnum worker count))
+                  (dotimes (color (1+ +physics-max-colors+))
+                    (multiple-value-bind (from to)
+                        (piece-bounds (aref color-starts color) (aref cursor color) worker count)
+                      (declare (type index from to))
+                      (loop for k of-type index from from below to do
+                        (if (let ((c (aref contact k)))
+                              (and short-path (not static)
+                                   (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
+                            (fill-short-row)
+                            (fill-general-row)))))))
+           (declare (dynamic-extent #'fill-piece))
+           (run-pieces world (constraint-columns-length cbuf) :fill #'fill-piece)))
        ;; the frames, the box velocities along them and the effective masses, in lanes where
        ;; the family has them
        (physics-prepare-frames (physics-world-kernels world) world)
@@ -7880,17 +7889,18 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
 
 (defmacro store-touch-event ()
   "A :begin or :end event for row K's contact C when whether it pushed this step (PUSHED) differs
-from whether it touched: expanded in the store phase, with its variables. #ST0R3S"
+from whether it touched: expanded in the store phase's piece of WORKER, with its variables. #ST0R3S"
   `(if-feature :contact-events
    (unless (eq pushed (= (aref touching c) 1))
      (setf (aref touching c) (if pushed 1 0))
-     (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
+     (push-piece-event world worker (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
                  (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
                  (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))
 
 (defmacro store-hit-event ()
   "A :hit event for row K's contact C when it pushed and arrived faster than the hit speed, for
-a box's contact or a body that reports hits: expanded in the store phase, with its variables. #ST0R3S"
+a box's contact or a body that reports hits: expanded in the store phase's piece of WORKER, with
+its variables. #ST0R3S"
   `(if-feature :hit-events
    (when (and pushed (> (- (@ relative-velocity)) hit-speed)
               (or (= (aref kind c) +contact-box+)
@@ -7902,7 +7912,7 @@ a box's contact or a body that reports hits: expanded in the store phase, with i
                                            (aref (body-columns-flags (if (= set +set-awake+) awake sleeping))
                                                  row))))))
                     (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
-     (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
+     (push-piece-event world worker +event-hit+ (aref handle-a c) (aref handle-b c)
                  (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
                  (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))
 
@@ -7921,19 +7931,31 @@ so its undo log closes. #ST0R3S"
            (awake (physics-world-awake world))
            (sleeping (physics-world-sleeping world))
            (max-penetration 0.0) (max-approach 0.0)
+           ;; each piece's two figures ([[#SPL1T5]])
+           ;; two for each of the most workers a world may have, +physics-max-workers+
+           (maxima (make-array 128 :element-type 'single-float :initial-element 0.0))
            (n (body-columns-length awake))
            (held (physics-world-held world))
            ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts;
            ;; without body contacts and boxes every contact is terrain's, which marks nothing
            (marking (if-feature (:or :body-contacts :boxes) (held-marking-p world) nil)))
       (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
-               (type index n) (type fixnum-column held)
+               (type index n) (type fixnum-column held) (type f32-column maxima) (dynamic-extent maxima)
                (ignorable ids awake sleeping) #.+kernel-policy+)
       (when marking (fill held 0 :end (1+ n)))
       (with-constraint-block (contact body-a body-b) cbuf
         (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
           (declare (ignorable touching kind handle-a handle-b key))
-          (loop for k of-type index below (constraint-columns-length cbuf)
+          ;; each row writes its own contact, so the rows may be cut into pieces, one a worker,
+          ;; each with its own figures and events, merged in the pieces' order ([[#SPL1T5]]);
+          ;; the marks, which rows share, are set by one worker
+          (flet ((store-piece (worker count)
+                   (declare (type fixnum worker count))
+                   (let ((max-penetration 0.0) (max-approach 0.0) (mark (and marking (= count 1))))
+                     (declare (type single-float max-penetration max-approach))
+                   (multiple-value-bind (from to) (piece-bounds 0 (constraint-columns-length cbuf) worker count)
+                     (declare (type index from to))
+          (loop for k of-type index from from below to
                 unless (< (aref contact k) 0) do
             (let* ((base (constraint-base k))
                    (c (aref contact k))
@@ -7961,12 +7983,25 @@ so its undo log closes. #ST0R3S"
               ;; a row with no radius on side b has one, and no other row's side block is read
               (if-feature :friction
                 (when (= (@ rb) 0.0) (setf (contact-at geometry g spin-impulse) (@ spin-impulse))))
-              (when marking (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
+              (when mark (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
               (when (< gap 0.0)
                 (setf max-penetration (max max-penetration (- gap))
                       max-approach (max max-approach (- vn))))
               (store-touch-event)
-              (store-hit-event)))))
+              (store-hit-event))))
+                     (setf (aref maxima (* 2 worker)) max-penetration
+                           (aref maxima (1+ (* 2 worker))) max-approach))))
+            (declare (dynamic-extent #'store-piece))
+            (let ((pieces (run-pieces world (constraint-columns-length cbuf) :store #'store-piece)))
+              (declare (type fixnum pieces))
+              (dotimes (w pieces)
+                (setf max-penetration (max max-penetration (aref maxima (* 2 w)))
+                      max-approach (max max-approach (aref maxima (1+ (* 2 w))))))
+              (when (and marking (> pieces 1))
+                (dotimes (k (constraint-columns-length cbuf))
+                  (let ((c (aref contact k)))
+                    (unless (< c 0)
+                      (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n)))))))))
       (let ((stats (world-statistics world)))
         (setf (step-statistics-max-penetration stats) (coerce max-penetration 'double-float)
               (step-statistics-max-approach stats) (coerce max-approach 'double-float)))
@@ -8243,6 +8278,24 @@ phase's notes, and the array for the rows held back, at least as long as the awa
             (physics-world-near-cells world)
             (physics-world-held-rows world))))
 
+(declaim (inline path-outruns-look-p surface-stop))
+
+(defun path-outruns-look-p (moved2 r vx vy vz margin limit dt gstep)
+  "Whether a body of radius R, moving at VX VY VZ at the start of a step of DT seconds (gravity
+adding GSTEP), moved the square root of MOVED2: farther than the terrain phase looked, past its
+MARGIN and past the travel that velocity promised (step-reach, at most LIMIT). #SQU33Z"
+  (declare (type single-float moved2 r vx vy vz margin limit dt gstep))
+  (and (> moved2 (* margin margin))
+       (let ((looked (- (step-reach r (step-travel vx vy vz dt gstep) margin limit) r)))
+         (> moved2 (* looked looked)))))
+
+(defun surface-stop (at r along)
+  "How far along its path a sphere of radius R goes before its surface reaches a face's plane,
+which its centre reaches at AT, its path's unit direction having the component ALONG across the
+face; 0 when the surface is past the plane already. #SQU33Z"
+  (declare (type single-float at r along))
+  (max 0.0 (- at (/ r (max (abs along) 1e-6)))))
+
 (defun hold-out-of-cells (world rows count)
   "Check the path of each of WORLD's awake rows listed in the first COUNT entries of ROWS, then fold
 its delta into its position: a path that carries the centre into a solid cell, or, longer than
@@ -8250,137 +8303,52 @@ the terrain phase looked along, the surface through the face of one, is cut wher
 reaches that face (at the start, if it is already past it), the velocity into the face removed
 and a :held-out event reported. Return how many bodies were held. #SQU33Z"
   (declare (type fixnum-column rows) (type index count) #.+kernel-policy+)
-  (let ((held 0))
-    (declare (type fixnum held))
-    (let* ((awake (physics-world-awake world))
-           (probe (physics-world-probe world))
-           (v (physics-world-velocities world))
-           (d (physics-world-deltas world))
-           (margin (f32 (physics-world-margin world)))
-           (limit (f32 (physics-world-reach-limit world)))
-           (dt (physics-world-current-dt world))
-           (gstep (gravity-step world dt)))
-      (declare (type f32-column v d) (type single-float margin limit dt gstep))
-      (with-body-columns (x y z vx vy vz radius handle) awake
-        (dotimes (j count)
-          (let* ((i (aref rows j))
-                 (p (delta-row i))
-                 (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
-                 (moved2 (+ (* dx dx) (* dy dy) (* dz dz)))
-                 (cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                 ;; longer than the terrain phase looked: past its margin and past the travel
-                 ;; the body's velocity at the start of the step promised
-                 (long (and (> moved2 (* margin margin))
-                            (let ((looked (- (step-reach r (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep)
-                                                         margin limit)
-                                             r)))
-                              (> moved2 (* looked looked))))))
-            (declare (type index i p) (type single-float dx dy dz moved2 cx cy cz r))
-            ;; within the look-ahead, a path that stays in the centre's cell stays in the air
-            (when (or long
-                      (/= (cell-floor cx) (cell-floor (+ cx dx)))
-                      (/= (cell-floor cy) (cell-floor (+ cy dy)))
-                      (/= (cell-floor cz) (cell-floor (+ cz dz))))
-              (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
-                     (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
-                (declare (type single-float len inv ux uy uz))
-                (multiple-value-bind (axis at) (first-solid-on-ray probe cx cy cz ux uy uz (if long (+ len r) len))
-                  (declare (type (integer -1 2) axis) (type single-float at))
-                  (unless (< axis 0)
-                    (let* ((along (case axis (0 ux) (1 uy) (t uz)))
-                           ;; where the surface reaches the face's plane, along the path
-                           (stop (max 0.0 (- at (/ r (max (abs along) 1e-6)))))
-                           (o (+ (solver-row i) axis))
-                           (into (if (> along 0.0) (max 0.0 (aref v o)) (min 0.0 (aref v o)))))
-                      (declare (type single-float along stop into) (type index o))
-                      (when (< stop len)
-                        (setf (aref d p) (* ux stop) (aref d (+ p 1)) (* uy stop) (aref d (+ p 2)) (* uz stop)
-                              (aref v o) (- (aref v o) into))
-                        (incf held)
-                        (push-event world +event-held-out+ (aref handle i) +no-body+
-                                    (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into))))))))
-            ;; then the fold, as for every other row
-            (setf (aref x i) (+ cx (aref d p)) (aref y i) (+ cy (aref d (+ p 1))) (aref z i) (+ cz (aref d (+ p 2))))))))
+  (let* ((held 0)
+         (awake (physics-world-awake world))
+         (probe (physics-world-probe world))
+         (v (physics-world-velocities world))
+         (d (physics-world-deltas world))
+         (margin (f32 (physics-world-margin world)))
+         (limit (f32 (physics-world-reach-limit world)))
+         (dt (physics-world-current-dt world))
+         (gstep (gravity-step world dt)))
+    (declare (type fixnum held) (type f32-column v d) (type single-float margin limit dt gstep))
+    (with-body-columns (x y z vx vy vz radius handle) awake
+      (dotimes (j count)
+        (let* ((i (aref rows j))
+               (p (delta-row i))
+               (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
+               (moved2 (+ (* dx dx) (* dy dy) (* dz dz)))
+               (cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+               (long (path-outruns-look-p moved2 r (aref vx i) (aref vy i) (aref vz i) margin limit dt gstep)))
+          (declare (type index i p) (type single-float dx dy dz moved2 cx cy cz r))
+          ;; within the look-ahead, a path that stays in the centre's cell stays in the air
+          (when (or long
+                    (/= (cell-floor cx) (cell-floor (+ cx dx)))
+                    (/= (cell-floor cy) (cell-floor (+ cy dy)))
+                    (/= (cell-floor cz) (cell-floor (+ cz dz))))
+            (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
+                   (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
+              (declare (type single-float len inv ux uy uz))
+              (multiple-value-bind (axis at) (first-solid-on-ray probe cx cy cz ux uy uz (if long (+ len r) len))
+                (declare (type (integer -1 2) axis) (type single-float at))
+                (unless (< axis 0)
+                  (let* ((along (case axis (0 ux) (1 uy) (t uz)))
+                         ;; where the surface reaches the face's plane, along the path
+                         (stop (surface-stop at r along))
+                         (o (+ (solver-row i) axis))
+                         (into (if (> along 0.0) (max 0.0 (aref v o)) (min 0.0 (aref v o)))))
+                    (declare (type single-float along stop into) (type index o))
+                    (when (< stop len)
+                      (setf (aref d p) (* ux stop) (aref d (+ p 1)) (* uy stop) (aref d (+ p 2)) (* uz stop)
+                            (aref v o) (- (aref v o) into))
+                      (incf held)
+                      (push-event world +event-held-out+ (aref handle i) +no-body+
+                                  (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into))))))))
+          ;; then the fold, as for every other row
+          (setf (aref x i) (+ cx (aref d p)) (aref y i) (+ cy (aref d (+ p 1))) (aref z i) (+ cz (aref d (+ p 2)))))))
     (setf (physics-world-held-out-count world) held)
     held))
-
-(defun squeeze-scene (family scene)
-  "Run SCENE (:step, :marbles, :far-step, :wall or :press) under FAMILY for 240 steps of 1/60 s; return the
-count of ball positions outside air cells of the resident world or below the floor less a slop,
-the lowest centre, the walker's final x and y (NIL for :press), the state hash, the fastest
-speed of any ball after any step, the deepest any ball's surface reached into a solid cell and
-into the box (its radius, when the centre lies inside), and whether a centre lay inside the box. #SQU33Z"
-  ;; the walker's structure is defined with the walker, later on the page
-  (declare (notinline physics-player-x physics-player-y))
-  (let ((terrain (make-voxel-terrain)))
-    (fill-terrain terrain -16 0 -16 16 12 16 nil)
-    (fill-terrain terrain -16 -16 -16 16 0 16 t)
-    (case scene
-      (:step (fill-terrain terrain 6 0 -4 16 1 4 t))
-      (:marbles (fill-terrain terrain 6 0 -4 16 1 4 t))
-      (:far-step (fill-terrain terrain 8 0 -4 16 1 4 t))
-      (:wall (fill-terrain terrain 6 0 -4 16 3 4 t)))
-    (let* ((world (make-physics-world :terrain terrain :kernels family))
-           (player (make-physics-player 0d0 0d0 0d0))
-           (slop *physics-linear-slop*)
-           (balls (loop for x from 1.0 to 5.5 by 0.5
-                        collect (add-physics-body-of-kind world (if (eq scene :marbles) :marble :ball) x 0.3 0.0)))
-           (outside 0) (lowest 100.0) (fastest 0.0) (cells 0.0) (box 0.0) (inside-box nil))
-      (let ((bounds (make-list 6)))
-      (flet ((note-box ()
-               ;; the box posted for the next step, where it will be at the step's end
-               (let ((b (physics-world-boxes world)) (dt (/ 1.0 60)))
-                 (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) b
-                   (setf bounds (list (+ (aref min-x 0) (* dt (aref vx 0))) (+ (aref min-y 0) (* dt (aref vy 0)))
-                                      (+ (aref min-z 0) (* dt (aref vz 0))) (+ (aref max-x 0) (* dt (aref vx 0)))
-                                      (+ (aref max-y 0) (* dt (aref vy 0))) (+ (aref max-z 0) (* dt (aref vz 0))))))))
-               (box-bounds () (values-list bounds)))
-      (dotimes (frame 240)
-        (if (eq scene :press)
-            (post-physics-box world 3.25 (max 0.7 (- 1.5 (* frame (/ 1.0 60)))) 0.0 2.0 0.5 1.0
-                              :vy (if (> (- 1.5 (* frame (/ 1.0 60))) 0.7) -1.0 0.0) :owner :press)
-            (progn (advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
-                   (post-physics-player world player)))
-        (note-box)
-        (step-physics-world world)
-        (dolist (h balls)
-          (multiple-value-bind (vx vy vz) (physics-body-velocity world h)
-            (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))
-          (multiple-value-bind (x y z) (physics-body-position world h)
-            (let ((r (physics-body-radius world h)))
-              ;; the deepest a ball's surface reaches into the solid cells around its centre
-              (loop for i from (1- (floor x)) to (1+ (floor x)) do
-                (loop for j from (1- (floor y)) to (1+ (floor y)) do
-                  (loop for k from (1- (floor z)) to (1+ (floor z)) do
-                    (when (terrain-solid-p terrain i j k)
-                      (let ((dx (- (max i (min (1+ i) x)) x)) (dy (- (max j (min (1+ j) y)) y))
-                            (dz (- (max k (min (1+ k) z)) z)))
-                        (setf cells (max cells (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))))
-              ;; and into the box that presses it
-              (multiple-value-bind (bx0 by0 bz0 bx1 by1 bz1) (box-bounds)
-                (let ((dx (- (max bx0 (min bx1 x)) x)) (dy (- (max by0 (min by1 y)) y)) (dz (- (max bz0 (min bz1 z)) z)))
-                  (when (= 0 dx dy dz) (setf inside-box t))
-                  (setf box (max box (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))
-            (setf lowest (min lowest y))
-            ;; a cell of a chunk that is not resident counts as solid
-            (when (or (< y (- slop)) (terrain-solid-p terrain (floor x) (floor y) (floor z)))
-              (incf outside)))))
-      (values outside lowest
-              (and (not (eq scene :press)) (physics-player-x player))
-              (and (not (eq scene :press)) (physics-player-y player))
-              (physics-world-state-hash world)
-              fastest cells box inside-box))))))
-
-(defun physics-world-last-step-held-out-count (world)
-  "How many bodies the last step stopped at the face of a solid cell. #SQU33Z"
-  (check-world world 'physics-world-last-step-held-out-count)
-  (physics-world-held-out-count world))
-
-(defun physics-world-last-step-buried-count (world)
-  "How many awake bodies began the last step with their centre in a solid cell, and were pushed
-toward the air by that cell's contact. #SQU33Z"
-  (check-world world 'physics-world-last-step-buried-count)
-  (physics-world-buried-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:1 ends here
 
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
@@ -9150,6 +9118,9 @@ core. #W0RKP1")
 (defconstant +worker-park-spins+ 20000
   "How many times a worker waiting for a job spins or yields before it parks. #W0RKP1")
 
+(defconstant +pool-jobs+ 10
+  "How many kinds of job a pool keeps its calls and timings for ([[#SPL1T5]]). #W0RKP1")
+
 (defstruct (worker-pool (:constructor %make-worker-pool (count)) (:copier nil))
   "The threads of a world with workers, and the job they share: its stages and parameters, in
 typed slots so that publishing a job conses nothing. #W0RKP1"
@@ -9172,16 +9143,28 @@ typed slots so that publishing a job conses nothing. #W0RKP1"
   (stages 0 :type fixnum)
   ;; a pass splits only over at least this many rows; below it worker 0 runs it all
   (split-rows 4096 :type index)
+  ;; how many times a worker waiting for a job spins or yields before it parks
+  (park-spins +worker-park-spins+ :type fixnum)
   ;; a colour splits only when it has at least this many rows per worker ([[#SPL1T5]])
   (share-rows 64 :type index)
   ;; per job: its calls, and the nanoseconds per 1024 rows it took split and whole ([[#SPL1T5]])
-  (calls (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
-  (split-ns (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
-  (whole-ns (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (calls (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (split-ns (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (whole-ns (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  ;; per job: the nanoseconds all its calls took, either way ([[#B3NCHW]] reads them)
+  (spent (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  ;; a phase's own piece, a function of the worker and the count, while its job runs
+  (piece nil :type (or null function))
+  ;; the events of a phase's pieces, a buffer and its data for each worker but worker 0,
+  ;; merged in worker order ([[#SPL1T5]])
+  (events #() :type simple-vector)
+  (event-data #() :type simple-vector)
   ;; the parameters of the job, written by the caller before it publishes
   (wide nil) (narrow nil) (impact nil) (settle nil)
   (lanes 1 :type (integer 1 64))
   (cbuf nil)
+  ;; the joint set whose joints a colour pass solves with its contacts, or NIL ([[#J0S0LV]])
+  (joints nil)
   (v (make-array 0 :element-type 'single-float) :type f32-column)
   (d (make-array 0 :element-type 'single-float) :type f32-column)
   (pushes (make-array 0 :element-type 'single-float) :type f32-column)
@@ -9227,7 +9210,7 @@ return the new generation. #W0RKP1"
   (declare (type worker-pool pool) (type sb-ext:word seen))
   (let ((spins 0))
     (declare (type fixnum spins))
-    (loop while (< spins +worker-park-spins+)
+    (loop while (< spins (worker-pool-park-spins pool))
           do (unless (= (worker-pool-generation pool) seen)
                (return-from await-generation (worker-pool-generation pool)))
              (setf spins (spin-or-yield spins))))
@@ -9315,6 +9298,8 @@ condition of the earliest piece that signalled. #W0RKP1"
 (defun make-worker-pool (count)
   "A pool of COUNT workers: COUNT - 1 threads, parked, and the caller. #W0RKP1"
   (let ((pool (%make-worker-pool count)))
+    (setf (worker-pool-events pool) (map-into (make-array count) #'make-event-columns)
+          (worker-pool-event-data pool) (map-into (make-array count) (lambda () (make-array 8 :initial-element nil))))
     (handler-bind ((serious-condition (lambda (c) (declare (ignore c)) (close-worker-pool pool))))
       (loop for worker from 1 below count
             do (push (sb-thread:make-thread #'worker-loop :name "luv-physics worker"
@@ -9370,6 +9355,8 @@ WORLD. #W0RKP1"
 (defconstant +job-warm-start+ 3 "The job: the warm start, colour by colour. #SPL1T5")
 (defconstant +job-solve+ 4 "The job: a solve or relax pass, colour by colour. #SPL1T5")
 (defconstant +job-frames+ 5 "The job: the frame pass, every colour's run shared. #SPL1T5")
+(defconstant +job-fill+ 6 "The job: the prepare phase's fill, a piece of every colour's rows each. #SPL1T5")
+(defconstant +job-store+ 7 "The job: the store phase, a piece of the rows each. #SPL1T5")
 
 (defgeneric kernel-lanes (kernels)
   (:documentation "The lanes of KERNELS' wide kernels (1 for none), and a function to call after
@@ -9406,7 +9393,10 @@ pool has one, else with the scalar kernel. #SPL1T5"
   "Run WORKER's piece of stage STAGE of POOL's job. #SPL1T5"
   (declare (type worker-pool pool) (type fixnum worker stage))
   (let ((job (worker-pool-job pool)) (count (worker-pool-count pool)))
-    (cond ((<= job +job-positions+)
+    (cond ((>= job +job-fill+)
+           ;; a phase's own piece, which cuts its share with share-bounds
+           (funcall (the function (worker-pool-piece pool)) worker count))
+          ((<= job +job-positions+)
            (multiple-value-bind (s e) (share-bounds 0 (worker-pool-rows pool) worker count)
              (cond ((= job +job-velocities+)
                     (integrate-velocities-range (worker-pool-v pool) s e (worker-pool-h pool)
@@ -9430,10 +9420,27 @@ pool has one, else with the scalar kernel. #SPL1T5"
            (let* ((starts (worker-pool-starts pool))
                   (c (aref (worker-pool-stage-colours pool) stage))
                   (start (aref starts c)) (end (aref starts (1+ c))))
-             (cond ((or (= c +physics-max-colors+) (< (- end start) (* count (worker-pool-share-rows pool))))
+             ;; the colour's joints, on worker 0, beside the others' shares of its contacts
+             (when (and (= worker 0) (worker-pool-joints pool)) (run-colour-joints pool c))
+             (cond ((>= start end))
+                   ((or (= c +physics-max-colors+) (< (- end start) (* count (worker-pool-share-rows pool))))
                     (when (= worker 0) (run-colour-piece pool start end (< c +physics-max-colors+))))
                    (t (multiple-value-bind (s e) (share-bounds start end worker count)
                         (when (< s e) (run-colour-piece pool s e t))))))))))
+
+(defun run-colour-joints (pool c)
+  "Run POOL's colour pass over the joints of colour C of its joint set: warm start them, or solve
+or relax them. #SPL1T5"
+  (declare (type worker-pool pool) (type fixnum c))
+  (let* ((set (worker-pool-joints pool))
+         (js (joint-set-color-starts set))
+         (start (aref js c)) (end (aref js (1+ c))))
+    (declare (type fixnum-column js) (type index start end))
+    (when (< start end)
+      (if (= (worker-pool-job pool) +job-warm-start+)
+          (warm-start-joints set (worker-pool-v pool) (worker-pool-d pool) start end)
+          (solve-joints set (worker-pool-v pool) (worker-pool-d pool) (worker-pool-inv-h pool)
+                        (worker-pool-use-bias pool) start end)))))
 
 (defconstant +split-probe+ 64
   "Every so many calls of a pass, a tuned pool runs it the way it does not prefer. #SPL1T5")
@@ -9460,16 +9467,81 @@ figure for that way: nanoseconds per 1024 rows, each call an eighth of it. #SPL1
 (defmacro tuned-split ((pool world rows job) split-form whole-form)
   "Run SPLIT-FORM with POOL bound to WORLD's pool when the pass of JOB over ROWS rows splits, else
 WHOLE-FORM: a pool with split-rows 0 always splits; one above it splits as prefer-split-p says,
-timing each call for note-split-time. #SPL1T5"
-  (let ((tuning (gensym "TUNING")) (split (gensym "SPLIT")) (start (gensym "START")) (n (gensym "ROWS")))
+timing each call for note-split-time. A pool adds each call's nanoseconds to its job's spent
+figure. #SPL1T5"
+  (let ((tuning (gensym "TUNING")) (split (gensym "SPLIT")) (start (gensym "START")) (n (gensym "ROWS"))
+        (ns (gensym "NS")))
     `(let* ((,n ,rows) (,pool (splitting-pool ,world ,n)))
        (if (null ,pool)
            ,whole-form
            (let* ((,tuning (plusp (worker-pool-split-rows ,pool)))
                   (,split (or (not ,tuning) (prefer-split-p ,pool ,job)))
-                  (,start (if ,tuning (clock-ns) 0)))
+                  (,start (clock-ns)))
              (multiple-value-prog1 (if ,split ,split-form ,whole-form)
-               (when ,tuning (note-split-time ,pool ,job ,split (- (clock-ns) ,start) ,n))))))))
+               (let ((,ns (- (clock-ns) ,start)))
+                 (incf (aref (worker-pool-spent ,pool) ,job) ,ns)
+                 (when ,tuning (note-split-time ,pool ,job ,split ,ns ,n)))))))))
+
+(defun piece-bounds (start end worker count)
+  "share-bounds for the phases the page defines before it: the rows of WORKER's share, of COUNT,
+of the run START..END. #SPL1T5"
+  (declare (type index start end) (type fixnum worker count))
+  (share-bounds start end worker count))
+
+(defun piece-job (kind)
+  "The job number of the phase piece KIND names: :fill or :store. #SPL1T5"
+  (ecase kind (:fill +job-fill+) (:store +job-store+)))
+
+(defun push-piece-event (world worker kind handle-a handle-b x y z speed &optional datum)
+  "Record an event found by WORKER's piece of a phase: worker 0's in WORLD's event buffer
+(push-event), another worker's, when WORLD records its kind, in that worker's buffer of WORLD's
+pool, which run-pieces appends after the pieces before it. #SPL1T5"
+  (declare (type fixnum worker kind handle-a handle-b) (type single-float x y z speed))
+  (if (zerop worker)
+      (push-event world kind handle-a handle-b x y z speed datum)
+      (when (logbitp kind (the fixnum (world-event-mask world)))
+        (let* ((pool (physics-world-pool world))
+               (events (svref (worker-pool-events pool) worker))
+               (row (event-columns-append events)))
+          (with-event-columns ((k kind) (a handle-a) (b handle-b) (ex x) (ey y) (ez z) (s speed)) events
+            (setf (aref k row) kind (aref a row) handle-a (aref b row) handle-b
+                  (aref ex row) x (aref ey row) y (aref ez row) z (aref s row) speed))
+          (let ((data (svref (worker-pool-event-data pool) worker)))
+            (when (>= row (length data))
+              (setf data (replace (make-array (* 2 (1+ row)) :initial-element nil) data)
+                    (svref (worker-pool-event-data pool) worker) data))
+            (setf (svref data row) datum))))))
+
+(defun merge-piece-events (pool world)
+  "Append the events the pieces of POOL's workers 1, 2, ... found to WORLD's buffer, in worker
+order, after worker 0's, and empty their buffers. #SPL1T5"
+  (loop for w from 1 below (worker-pool-count pool)
+        do (let ((events (svref (worker-pool-events pool) w))
+                 (data (svref (worker-pool-event-data pool) w)))
+             (with-event-columns (kind handle-a handle-b x y z speed) events
+               (dotimes (row (event-columns-length events))
+                 (push-event world (aref kind row) (aref handle-a row) (aref handle-b row)
+                             (aref x row) (aref y row) (aref z row) (aref speed row) (svref data row))))
+             (fill data nil :end (min (length data) (event-columns-length events)))
+             (event-columns-clear events))))
+
+(defun run-pieces (world rows kind piece)
+  "Run PIECE, a phase's function of a worker and the count of workers, over ROWS rows: on every
+worker of WORLD's pool, each with its number, when the pass of KIND splits (tuned-split), else
+once as the one worker of one; then append the pieces' events in worker order. Return how many
+pieces ran. The piece, often made on the caller's stack, is the pool's only while its job
+runs. #SPL1T5"
+  (declare (type function piece))
+  (let ((job (piece-job kind)))
+    (tuned-split (pool world rows job)
+      (progn (dotimes (w (worker-pool-count pool))
+               (event-columns-clear (svref (worker-pool-events pool) w)))
+             (setf (worker-pool-piece pool) piece)
+             (unwind-protect (run-on-workers pool job 1)
+               (setf (worker-pool-piece pool) nil))
+             (merge-piece-events pool world)
+             (worker-pool-count pool))
+      (progn (funcall piece 0 1) 1))))
 
 (defun splitting-pool (world rows)
   "WORLD's pool when it has one and ROWS, more than none, reach its split-rows, else NIL. #SPL1T5"
@@ -9485,9 +9557,11 @@ timing each call for note-split-time. #SPL1T5"
   (if (typep world 'physics-world) (constraint-columns-length (physics-world-constraints world)) 0))
 
 (defun colour-pass-rows (world)
-  "The constraint rows of WORLD a warm start or solve pass would split, or 0 when its substeps
-solve joints, whose passes run whole. #SPL1T5"
-  (if (and (typep world 'physics-world) (solving-joints world)) 0 (constraint-rows world)))
+  "The rows of WORLD a warm start or solve pass splits: its constraint rows, and when its
+substeps solve joints, its prepared joints too. #SPL1T5"
+  (let ((set (and (typep world 'physics-world) (solving-joints world))))
+    (+ (constraint-rows world)
+       (if set (aref (joint-set-color-starts set) (1+ +physics-max-colors+)) 0))))
 
 (defun run-colour-pass (pool kernels world job)
   "Write into POOL the kernels of JOB in the family KERNELS for WORLD's features, its buffers and
@@ -9506,10 +9580,16 @@ the stages (the colours with rows, then the overflow colour), and run it on the 
               (t (values (kernel-variant-wide-prepare-frames variant) (kernel-variant-prepare-frames variant))))
       (setf (worker-pool-wide pool) wide (worker-pool-narrow pool) narrow
             (worker-pool-impact pool) (nth-value 3 (wide-kernel-names kernels))))
-    (dotimes (c (1+ +physics-max-colors+))
-      (when (< (aref starts c) (aref starts (1+ c)))
-        (setf (aref stage-colours stages) c)
-        (incf stages)))
+    (let* ((set (and (/= job +job-frames+) (solving-joints world)))
+           (js (and set (joint-set-color-starts set))))
+      (declare (type (or null fixnum-column) js))
+      (setf (worker-pool-joints pool) set)
+      ;; a stage for each colour with contacts or joints, in order, the overflow colour last
+      (dotimes (c (1+ +physics-max-colors+))
+        (when (or (< (aref starts c) (aref starts (1+ c)))
+                  (and js (< (aref js c) (aref js (1+ c)))))
+          (setf (aref stage-colours stages) c)
+          (incf stages))))
     (setf (worker-pool-cbuf pool) (physics-world-constraints world)
           (worker-pool-v pool) (physics-world-velocities world)
           (worker-pool-d pool) (physics-world-deltas world)
