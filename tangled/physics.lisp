@@ -8349,6 +8349,17 @@ and a :held-out event reported. Return how many bodies were held. #SQU33Z"
           (setf (aref x i) (+ cx (aref d p)) (aref y i) (+ cy (aref d (+ p 1))) (aref z i) (+ cz (aref d (+ p 2)))))))
     (setf (physics-world-held-out-count world) held)
     held))
+
+(defun physics-world-last-step-held-out-count (world)
+  "How many bodies the last step stopped at the face of a solid cell. #SQU33Z"
+  (check-world world 'physics-world-last-step-held-out-count)
+  (physics-world-held-out-count world))
+
+(defun physics-world-last-step-buried-count (world)
+  "How many awake bodies began the last step with their centre in a solid cell, and were pushed
+toward the air by that cell's contact. #SQU33Z"
+  (check-world world 'physics-world-last-step-buried-count)
+  (physics-world-buried-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:1 ends here
 
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
