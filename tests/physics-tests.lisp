@@ -10817,6 +10817,15 @@ NIL, and the browser claims are skipped. #RH7T05"
     (and (found-p "compare")
          (find-if #'found-p '("chromium" "chromium-browser" "google-chrome")))))
 
+(defmacro with-chromium ((chromium anchor) &body body)
+  "Run BODY with CHROMIUM bound to the Chromium program (chromium-program); without Chromium or
+ImageMagick, say that the browser claim of section ANCHOR is skipped, and run nothing. #RH7T05"
+  `(let ((,chromium (chromium-program)))
+     (if (null ,chromium)
+         (progn (format t "~&~A: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%" ,anchor)
+                (check (null ,chromium)))
+         (progn ,@body))))
+
 (defun browser-run (chromium arguments)
   "Run CHROMIUM headless with ARGUMENTS, a profile in a fresh temporary directory and a virtual
 time budget of 4 s; return its standard output. #RH7T05"
@@ -10924,32 +10933,29 @@ counted. #RH7T05"
 ;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-the-scene]]
 (define-claim "RH7T05" viewer-draws-the-scene
     "In headless Chromium the viewer's screenshots are not blank, and moving the slider changes them."
-  (let ((chromium (chromium-program)))
-    (if (null chromium)
-        (progn (format t "~&RH7T05: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
-               (check (null chromium)))
-        (multiple-value-bind (w recording) (run-physics-scene :basin :record t :every 6 :seconds 2)
-          (declare (ignore w))
-          (let* ((page (repository-file "report/viewer-check.html"))
-                 (last (1- (physics-recording-frame-count recording)))
-                 (first-shot (repository-file "report/viewer-first.png"))
-                 (last-shot (repository-file "report/viewer-last.png")))
-            (ensure-directories-exist page)
-            (write-physics-viewer recording page :title "basin, 2 s")
-            (browser-screenshot-pair chromium "viewer-check.html#frame=0"
-                                     (format nil "viewer-check.html#frame=~D" last) first-shot last-shot)
-            (let ((all (* 960 640)))
-              (dolist (shot (list first-shot last-shot))
-                (let ((drawn (pixels-differing shot "#20242b"))
-                      (other-than-balls (pixels-differing shot "#d9822b" :fuzz 20)))
-                  (check (and drawn (> drawn (* 0.05 all))) "~A: ~A pixels differ from the background"
-                         (file-namestring shot) drawn)
-                  (check (and other-than-balls (> (- all other-than-balls) (* 0.05 all)))
-                         "~A: ~A pixels are near the awake balls' colour" (file-namestring shot)
-                         (and other-than-balls (- all other-than-balls)))))
-              (let ((moved (pixels-differing first-shot last-shot)))
-                (check (and moved (> moved (* 0.01 all))) "the first and last frames differ in ~A pixels"
-                       moved))))))))
+  (with-chromium (chromium "RH7T05")
+    (multiple-value-bind (w recording) (run-physics-scene :basin :record t :every 6 :seconds 2)
+      (declare (ignore w))
+      (let* ((page (repository-file "report/viewer-check.html"))
+             (last (1- (physics-recording-frame-count recording)))
+             (first-shot (repository-file "report/viewer-first.png"))
+             (last-shot (repository-file "report/viewer-last.png")))
+        (ensure-directories-exist page)
+        (write-physics-viewer recording page :title "basin, 2 s")
+        (browser-screenshot-pair chromium "viewer-check.html#frame=0"
+                                 (format nil "viewer-check.html#frame=~D" last) first-shot last-shot)
+        (let ((all (* 960 640)))
+          (dolist (shot (list first-shot last-shot))
+            (let ((drawn (pixels-differing shot "#20242b"))
+                  (other-than-balls (pixels-differing shot "#d9822b" :fuzz 20)))
+              (check (and drawn (> drawn (* 0.05 all))) "~A: ~A pixels differ from the background"
+                     (file-namestring shot) drawn)
+              (check (and other-than-balls (> (- all other-than-balls) (* 0.05 all)))
+                     "~A: ~A pixels are near the awake balls' colour" (file-namestring shot)
+                     (and other-than-balls (- all other-than-balls)))))
+          (let ((moved (pixels-differing first-shot last-shot)))
+            (check (and moved (> moved (* 0.01 all))) "the first and last frames differ in ~A pixels"
+                   moved)))))))
 ;; RH7T05-viewer-draws-the-scene ends here
 
 ;; [[file:../physics.org::#RH7T05][RH7T05-viewer-picks-a-body]]
@@ -10972,42 +10978,39 @@ within FUZZ percent of COLOUR inside CROP (width height left top); NIL when ther
 
 (define-claim "RH7T05" viewer-picks-a-body
     "In headless Chromium a pick on a ball's pixels shows its handle, kind, velocity and sleep."
-  (let ((chromium (chromium-program)))
-    (if (null chromium)
-        (progn (format t "~&RH7T05: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
-               (check (null chromium)))
-        (let* ((w (make-physics-world :gravity '(0 0 0)))
-               (gobbet (add-physics-body w 0 0 0 :radius 0.6 :kind 4 :vx 1.5))
-               (marble (add-physics-body w 2.5 0 0 :radius 0.6 :kind 2))
-               (page (repository-file "report/viewer-pick.html"))
-               (shot (repository-file "report/viewer-pick.png")))
-          (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w marble)))
-          (ensure-directories-exist page)
-          (write-world-viewer w page :steps 0 :title "two balls")
-          (browser-screenshot chromium (format nil "file://~A#canvas=960x592" (namestring page)) shot)
-          (flet ((pick (at)
-                   (let* ((dom (browser-document chromium (format nil "file://~A#canvas=960x592&pick=~D,~D" (namestring page)
-                                                                  (first at) (second at))))
-                          (mark (search "data-picked=\"" dom))
-                          (panel (search "<div id=\"picked\">" dom)))
-                     (list (and mark (parse-integer dom :start (+ mark 13) :junk-allowed t))
-                           (and panel (subseq dom (+ panel 17) (search "</div>" dom :start2 panel)))))))
-            (let ((red (colour-middle shot "#e8401c"))
-                  (grey (colour-middle shot "#7081a2")))
-              (check (and red grey) "the balls' pixels: red ~S, grey ~S" red grey)
-              (when (and red grey)
-                (destructuring-bind (handle text) (pick red)
-                  (check (eql handle gobbet) "the gobbet's pixel ~S picks ~S (~S)" red handle text)
-                  (check (and text (search (format nil "handle ~D" gobbet) text) (search "lava-gobbet" text)
-                              (search "velocity 1.500 0.000 0.000" text) (search "awake" text))
-                         "the gobbet's panel reads ~S" text))
-                (destructuring-bind (handle text) (pick grey)
-                  (check (eql handle marble) "the marble's pixel ~S picks ~S (~S)" grey handle text)
-                  (check (and text (search (format nil "handle ~D" marble) text) (search "marble" text)
-                              (search "asleep" text))
-                         "the marble's panel reads ~S" text))
-                (destructuring-bind (handle text) (pick '(205 125))
-                  (check (and (null handle) (equal text "")) "an empty pixel picks ~S (~S)" handle text)))))))))
+  (with-chromium (chromium "RH7T05")
+    (let* ((w (make-physics-world :gravity '(0 0 0)))
+           (gobbet (add-physics-body w 0 0 0 :radius 0.6 :kind 4 :vx 1.5))
+           (marble (add-physics-body w 2.5 0 0 :radius 0.6 :kind 2))
+           (page (repository-file "report/viewer-pick.html"))
+           (shot (repository-file "report/viewer-pick.png")))
+      (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w marble)))
+      (ensure-directories-exist page)
+      (write-world-viewer w page :steps 0 :title "two balls")
+      (browser-screenshot chromium (format nil "file://~A#canvas=960x592" (namestring page)) shot)
+      (flet ((pick (at)
+               (let* ((dom (browser-document chromium (format nil "file://~A#canvas=960x592&pick=~D,~D" (namestring page)
+                                                              (first at) (second at))))
+                      (mark (search "data-picked=\"" dom))
+                      (panel (search "<div id=\"picked\">" dom)))
+                 (list (and mark (parse-integer dom :start (+ mark 13) :junk-allowed t))
+                       (and panel (subseq dom (+ panel 17) (search "</div>" dom :start2 panel)))))))
+        (let ((red (colour-middle shot "#e8401c"))
+              (grey (colour-middle shot "#7081a2")))
+          (check (and red grey) "the balls' pixels: red ~S, grey ~S" red grey)
+          (when (and red grey)
+            (destructuring-bind (handle text) (pick red)
+              (check (eql handle gobbet) "the gobbet's pixel ~S picks ~S (~S)" red handle text)
+              (check (and text (search (format nil "handle ~D" gobbet) text) (search "lava-gobbet" text)
+                          (search "velocity 1.500 0.000 0.000" text) (search "awake" text))
+                     "the gobbet's panel reads ~S" text))
+            (destructuring-bind (handle text) (pick grey)
+              (check (eql handle marble) "the marble's pixel ~S picks ~S (~S)" grey handle text)
+              (check (and text (search (format nil "handle ~D" marble) text) (search "marble" text)
+                          (search "asleep" text))
+                     "the marble's panel reads ~S" text))
+            (destructuring-bind (handle text) (pick '(205 125))
+              (check (and (null handle) (equal text "")) "an empty pixel picks ~S (~S)" handle text))))))))
 ;; RH7T05-viewer-picks-a-body ends here
 
 ;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-the-given-box]]
@@ -12582,14 +12585,11 @@ element) has run at its end: a copy of the page with SCRIPT before </body> is lo
 
 (define-claim "LW3YHU" page-works-in-a-browser
     "physics.html: pictures load, code coloured, none cut off; a link scrolls its section to the top."
-  (let ((chromium (chromium-program)) (page (repository-file "physics.html")))
-    (cond ((null chromium)
-           (format t "~&LW3YHU: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
-           (check (null chromium)))
-          (t
-           (check (probe-file page) "~A is missing: make html writes it" page)
-           (when (probe-file page)
-             (let* ((script "<script>window.addEventListener('load', function () {
+  (with-chromium (chromium "LW3YHU")
+    (let ((page (repository-file "physics.html")))
+      (check (probe-file page) "~A is missing: make html writes it" page)
+      (when (probe-file page)
+        (let* ((script "<script>window.addEventListener('load', function () {
   var images = Array.from(document.images), blocks = Array.from(document.querySelectorAll('pre'));
   var shown = images.filter(function (i) { return i.complete && i.naturalWidth > 0; }).length;
   var cut = blocks.filter(function (b) {
@@ -12610,41 +12610,38 @@ element) has run at its end: a copy of the page with SCRIPT before </body> is lo
     document.body.style.transform = 'translateY(-' + y + 'px)';
   }, 300);
 });</script>")
-                    ;; one run writes both the document it ends with and its screenshot
-                    (dom (page-dom-with-script chromium script
-                                               (format nil "--screenshot=~A"
-                                                       (namestring (repository-file "report/page-at-anchor.png")))))
-                    (mark "id=\"link-check\">link-check ")
-                    (at (search mark dom))
-                    (note (and at (with-input-from-string (s dom :start (+ at (length mark)))
-                                    (list (read s) (read s) (read s) (read s) (read s) (read s)
-                                          (read s) (read-line s))))))
-               (check (not (null note)) "the page did not note what it shows")
-               (when note
-                 (destructuring-bind (images shown keywords cut before after top hash) note
-                   (check (and (integerp images) (>= images 13) (eql shown images))
-                          "~A of ~A pictures loaded" shown images)
-                   (check (and (integerp keywords) (> keywords 1000)) "~A coloured keywords" keywords)
-                   (check (eql cut 0) "~A code blocks are cut off" cut)
-                   (check (and (numberp before) (numberp after) (> (- after before) 2000))
-                          "the page went from ~A to ~A" before after)
-                   (check (and (numberp top) (<= (abs top) 2)) "the heading is at ~A px" top)
-                   (check (equal (string-trim " <" (subseq hash 0 (position #\< hash))) "#3X6XN8")
-                          "the address ends with ~S" hash)))))))))
+               ;; one run writes both the document it ends with and its screenshot
+               (dom (page-dom-with-script chromium script
+                                          (format nil "--screenshot=~A"
+                                                  (namestring (repository-file "report/page-at-anchor.png")))))
+               (mark "id=\"link-check\">link-check ")
+               (at (search mark dom))
+               (note (and at (with-input-from-string (s dom :start (+ at (length mark)))
+                               (list (read s) (read s) (read s) (read s) (read s) (read s)
+                                     (read s) (read-line s))))))
+          (check (not (null note)) "the page did not note what it shows")
+          (when note
+            (destructuring-bind (images shown keywords cut before after top hash) note
+              (check (and (integerp images) (>= images 13) (eql shown images))
+                     "~A of ~A pictures loaded" shown images)
+              (check (and (integerp keywords) (> keywords 1000)) "~A coloured keywords" keywords)
+              (check (eql cut 0) "~A code blocks are cut off" cut)
+              (check (and (numberp before) (numberp after) (> (- after before) 2000))
+                     "the page went from ~A to ~A" before after)
+              (check (and (numberp top) (<= (abs top) 2)) "the heading is at ~A px" top)
+              (check (equal (string-trim " <" (subseq hash 0 (position #\< hash))) "#3X6XN8")
+                     "the address ends with ~S" hash))))))))
 ;; LW3YHU-page-works-in-a-browser ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-phases-from-the-first-screen]]
 (define-claim "LW3YHU" phases-from-the-first-screen
     "In physics.html, a link to each phase's section lies within the first screen, and each section exists."
-  (let ((chromium (chromium-program)) (page (repository-file "physics.html"))
-        (anchors (mapcar #'phase-anchor *physics-phases*)))
-    (cond ((null chromium)
-           (format t "~&LW3YHU: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
-           (check (null chromium)))
-          (t
-           (check (probe-file page) "~A is missing: make html writes it" page)
-           (when (probe-file page)
-             (let* ((script (format nil "<script>window.addEventListener('load', function () {
+  (with-chromium (chromium "LW3YHU")
+    (let ((page (repository-file "physics.html"))
+          (anchors (mapcar #'phase-anchor *physics-phases*)))
+      (check (probe-file page) "~A is missing: make html writes it" page)
+      (when (probe-file page)
+        (let* ((script (format nil "<script>window.addEventListener('load', function () {
   var anchors = [~{'~A'~^, ~}], seen = [];
   anchors.forEach(function (a) {
     var onScreen = Array.from(document.querySelectorAll('a[href=\"#' + a + '\"]')).some(function (l) {
@@ -12655,30 +12652,27 @@ element) has run at its end: a copy of the page with SCRIPT before </body> is lo
   note.textContent = 'door-check ' + seen.join(' ') + ' end';
   document.body.appendChild(note);
 });</script>" anchors))
-                    (dom (page-dom-with-script chromium script))
-                    (mark "id=\"door-check\">door-check ")
-                    (at (search mark dom))
-                    (words (and at (uiop:split-string (subseq dom (+ at (length mark)) (search " end" dom :start2 at))))))
-               (check (= (length words) (length anchors)) "the page noted ~S" words)
-               (loop for a in anchors
-                     for w in words
-                     do (check (string= w (format nil "~A:1:1" a))
-                               "~A: ~A (link on the first screen, section in the page)" a w))))))))
+               (dom (page-dom-with-script chromium script))
+               (mark "id=\"door-check\">door-check ")
+               (at (search mark dom))
+               (words (and at (uiop:split-string (subseq dom (+ at (length mark)) (search " end" dom :start2 at))))))
+          (check (= (length words) (length anchors)) "the page noted ~S" words)
+          (loop for a in anchors
+                for w in words
+                do (check (string= w (format nil "~A:1:1" a))
+                          "~A: ~A (link on the first screen, section in the page)" a w)))))))
 ;; LW3YHU-phases-from-the-first-screen ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-map-leads-to-every-phase]]
 (define-claim "LW3YHU" map-leads-to-every-phase
     "In physics.html the first screen links the map, whose stage table links each phase's section; each click lands there."
-  (let ((chromium (chromium-program)) (page (repository-file "physics.html"))
-        (phases (mapcar (lambda (phase) (string-downcase (symbol-name phase))) *physics-phases*))
-        (anchors (mapcar #'phase-anchor *physics-phases*)))
-    (cond ((null chromium)
-           (format t "~&LW3YHU: skipped, Chromium or ImageMagick is not installed (tools/setup installs them)~%")
-           (check (null chromium)))
-          (t
-           (check (probe-file page) "~A is missing: make html writes it" page)
-           (when (probe-file page)
-             (let* ((script (format nil "<script>window.addEventListener('load', function () {
+  (with-chromium (chromium "LW3YHU")
+    (let ((page (repository-file "physics.html"))
+          (phases (mapcar (lambda (phase) (string-downcase (symbol-name phase))) *physics-phases*))
+          (anchors (mapcar #'phase-anchor *physics-phases*)))
+      (check (probe-file page) "~A is missing: make html writes it" page)
+      (when (probe-file page)
+        (let* ((script (format nil "<script>window.addEventListener('load', function () {
   var phases = [~{'~A'~^, ~}], anchors = [~{'~A'~^, ~}], landed = [];
   var door = Array.from(document.querySelectorAll('a[href=\"#M4PD00\"]')).some(function (l) {
     var r = l.getBoundingClientRect(); return r.top >= 0 && r.bottom <= window.innerHeight && r.width > 0; });
@@ -12706,24 +12700,24 @@ element) has run at its end: a copy of the page with SCRIPT before </body> is lo
   }
   next();
 });</script>" phases anchors))
-                    (dom (page-dom-with-script chromium script))
-                    (mark "id=\"map-check\">map-check ")
-                    (at (search mark dom))
-                    (words (and at (uiop:split-string (subseq dom (+ at (length mark)) (search " end" dom :start2 at))))))
-               (check (not (null words)) "the page noted nothing")
-               (when words
-                 (check (equal (first words) "1") "no link to the map on the first screen")
-                 (check (equal (second words) (format nil "~{~A~^,~}" phases))
-                        "the map's stage table names ~A, not the phases in run order" (second words))
-                 (check (= (length (cddr words)) (length anchors)) "the page noted ~S" words)
-                 (loop for phase in phases
-                       for a in anchors
-                       for w in (cddr words)
-                       do (let* ((colon (position #\: w))
-                                 (top (and colon (parse-integer w :end colon :junk-allowed t))))
-                            (check (and top (<= (abs top) 2) (string= (subseq w (1+ colon)) a))
-                                   "~A: its link in the map landed at ~A (top px:address), not at #~A"
-                                   phase w a))))))))))
+               (dom (page-dom-with-script chromium script))
+               (mark "id=\"map-check\">map-check ")
+               (at (search mark dom))
+               (words (and at (uiop:split-string (subseq dom (+ at (length mark)) (search " end" dom :start2 at))))))
+          (check (not (null words)) "the page noted nothing")
+          (when words
+            (check (equal (first words) "1") "no link to the map on the first screen")
+            (check (equal (second words) (format nil "~{~A~^,~}" phases))
+                   "the map's stage table names ~A, not the phases in run order" (second words))
+            (check (= (length (cddr words)) (length anchors)) "the page noted ~S" words)
+            (loop for phase in phases
+                  for a in anchors
+                  for w in (cddr words)
+                  do (let* ((colon (position #\: w))
+                            (top (and colon (parse-integer w :end colon :junk-allowed t))))
+                       (check (and top (<= (abs top) 2) (string= (subseq w (1+ colon)) a))
+                              "~A: its link in the map landed at ~A (top px:address), not at #~A"
+                              phase w a)))))))))
 ;; LW3YHU-map-leads-to-every-phase ends here
 
 ;; [[file:../physics.org::#O07FDP][O07FDP-both-files-registered]]
