@@ -1574,31 +1574,52 @@ the basin. #B3NCHW"
                             (+ 0.3 (* row 0.55) (* 0.01 (mod i 5)))
                             :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0))))))
 
+(defparameter *job-phases*
+  '((substep-phase 0 1 2 3 4) (prepare-phase 5 6) (store-phase 7))
+  "Each phase whose loops split, with the jobs ([[#SPL1T5]]) that run inside it. #B3NCHW")
+
+(defun make-bench-basin (count family)
+  "The benchmark's basin of COUNT awake balls in FAMILY: the basin, or above 10000 balls the wide
+basin. #B3NCHW"
+  (if (> count 10000)
+      (make-wide-basin-world count :kernels family)
+      (make-basin-world count :kernels family)))
+
 (defun measure-workers (count family counts &key (from 60) (to 150))
   "Step basins of COUNT balls in FAMILY, one per worker count of COUNTS, in turn for TO steps;
-return the median ms per step over steps FROM..TO of each, the one-worker world's serial share
-and whether all reached one state hash. #B3NCHW"
-  (let* ((worlds (mapcar (lambda (n)
-                           (open-world-workers (if (> count 10000)
-                                                   (make-wide-basin-world count :kernels family)
-                                                   (make-basin-world count :kernels family))
-                                               n))
-                         counts))
+return the median ms per step over steps FROM..TO of each, the serial share of a one-worker step,
+whether all reached one state hash, and each phase's serial part of the step, as a list of
+(phase share). The serial share is measured on one more basin, stepped in turn with the others,
+whose pool of one worker (no thread) runs every pass that splits and times it. #B3NCHW"
+  (let* ((worlds (mapcar (lambda (n) (open-world-workers (make-bench-basin count family) n)) counts))
+         (probe (make-bench-basin count family))
+         (pool (make-worker-pool 1))
          (times (mapcar (lambda (w) (declare (ignore w)) (list nil)) worlds))
-         (clock (make-array (* 2 (length *physics-phases*)) :element-type 'fixnum :initial-element 0)))
+         (n (length *physics-phases*))
+         (clock (make-array (* 2 n) :element-type 'fixnum :initial-element 0)))
+    (setf (physics-world-pool probe) pool (worker-pool-split-rows pool) 0)
     (dotimes (i to)
-      (when (= i from) (setf (physics-world-phase-clock (first worlds)) clock))
+      (when (= i from)
+        (setf (physics-world-phase-clock probe) clock)
+        (fill (worker-pool-spent pool) 0))
+      (step-physics-world probe)
       (loop for w in worlds for cell in times
             do (step-physics-world w)
                (when (>= i from) (push (* 1000 (physics-world-last-step-real-seconds w)) (car cell)))))
-    (let* ((phases (subseq clock 0 (length *physics-phases*)))
-           (total (reduce #'+ phases))
-           (split (aref phases (position 'substep-phase *physics-phases*)))
-           (hashes (mapcar #'physics-world-state-hash worlds)))
+    (let* ((total (max 1 (reduce #'+ clock :end n)))
+           (parts (loop for phase in *physics-phases* for k from 0
+                        collect (list phase
+                                      (/ (- (aref clock k)
+                                            (loop for j in (rest (assoc phase *job-phases*))
+                                                  sum (aref (worker-pool-spent pool) j)))
+                                         (float total 1d0)))))
+           (hashes (mapcar #'physics-world-state-hash (cons probe worlds))))
       (mapc #'close-physics-world worlds)
+      (setf (physics-world-pool probe) nil)
       (values (mapcar (lambda (cell) (median (car cell))) times)
-              (if (plusp total) (/ (- total split) (float total 1d0)) 0d0)
-              (= 1 (length (remove-duplicates hashes)))))))
+              (max 0d0 (reduce #'+ parts :key #'second))
+              (= 1 (length (remove-duplicates hashes)))
+              parts))))
 
 (defun run-worker-benchmark (&key (sizes '(1000 3000 10000 30000)) (stream *standard-output*))
   "Print, as an Org table, the basin at each of SIZES in every kernel family with one worker,
@@ -1608,17 +1629,21 @@ and Amdahl's bound for two, and whether the hashes agree; with the machine and i
          (counts (remove-duplicates (list 1 2 (max 2 cores)))))
     (format stream "~&#+caption: the basin, all awake, 60 Hz, 4 substeps; median of steps 60-150, the worlds stepped in turn; ~A, ~D cores; load ~A at the start~%"
             (cpu-model-name) cores (load-average))
-    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash |~%"
+    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash | serial, % by phase |~%"
             counts (rest counts))
-    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------|~%"
+    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------+--------------------|~%"
             counts (rest counts))
     (dolist (size sizes)
       (dolist (family (available-kernel-families))
-        (multiple-value-bind (ms serial same) (measure-workers size family counts)
-          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A |~%"
+        (multiple-value-bind (ms serial same parts) (measure-workers size family counts)
+          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A | ~{~A~^ ~} |~%"
                   size (string-downcase family) ms
                   (mapcar (lambda (m) (/ (first ms) m)) (rest ms))
-                  (* 100 serial) (/ 1 (+ serial (/ (- 1 serial) 2))) (if same "yes" "NO"))
+                  (* 100 serial) (/ 1 (+ serial (/ (- 1 serial) 2))) (if same "yes" "NO")
+                  (loop for (phase share) in (sort (copy-list parts) #'> :key #'second)
+                        when (>= share 0.01)
+                          collect (format nil "~(~A~) ~D" (subseq (string phase) 0 (search "-PHASE" (string phase)))
+                                          (round (* 100 share)))))
           (finish-output stream))))
     (format stream "~&load ~A at the end~%" (load-average))))
 ;; What the workers gain:1 ends here
