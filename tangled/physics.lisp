@@ -81,6 +81,7 @@
    ;; Joints (#J0STOR)
    #:add-physics-joint #:remove-physics-joint #:physics-joint-alive-p #:physics-world-joint-count
    #:physics-joint-bodies #:physics-joint-length #:physics-joint-impulse
+   #:physics-joint #:physics-joint-world #:physics-joint-handle #:physics-world-joint-objects
    ;; Boxes (#BXR0WS)
    #:add-physics-box #:physics-body-box-p #:physics-box-half-extents
    ;; A snapshot holds what decides the next step (#SN4P0T)
@@ -6725,6 +6726,104 @@ put to sleep the groups still for long enough, when WORLD sleeps. #J0SL3P"
       (when (physics-world-sleep-enabled world) (sleep-joint-groups world set)))))
 ;; Joint groups sleep and wake together:1 ends here
 
+;; [[file:../physics.org::#J0OBJT][A joint as an object:1]]
+(defclass physics-joint ()
+  ((world :initarg :world :reader physics-joint-world)
+   (handle :initarg :handle :reader physics-joint-handle))
+  (:documentation "A joint as an object: a world and a joint's handle. Its numbers live in the
+world's joint rows; describe shows that row as if it were slots. #J0OBJT"))
+
+(setf (documentation 'physics-joint-world 'function) "The world of the physics-joint JOINT. #J0OBJT"
+      (documentation 'physics-joint-handle 'function) "The handle of the physics-joint JOINT. #J0OBJT")
+
+(defun physics-joint (world joint)
+  "The physics-joint object for the live joint JOINT of WORLD. #J0OBJT"
+  (check-world world 'physics-joint)
+  (resolve-joint world joint)
+  (make-instance 'physics-joint :world world :handle joint))
+
+(defun joint-flavour (rows row)
+  "What the joint at ROW of ROWS is, in words: point, or a distance joint stiff, a spring or a rope. #J0OBJT"
+  (let ((flags (aref (joint-columns-flags rows) row)))
+    (cond ((= (aref (joint-columns-kind rows) row) +joint-point+) "point")
+          ((logtest flags +joint-slack+) "distance, a rope")
+          ((logtest flags +joint-spring+) "distance, a spring")
+          (t "distance, stiff"))))
+
+(defmethod print-object ((joint physics-joint) stream)
+  (print-unreadable-object (joint stream :type t)
+    (let ((w (physics-joint-world joint)) (j (physics-joint-handle joint)))
+      (if (physics-joint-alive-p w j)
+          (let ((rows (joint-set-rows (physics-world-joints w))) (row (resolve-joint w j)))
+            (multiple-value-bind (a b) (physics-joint-bodies w j)
+              (format stream "~D ~A of ~D and ~:[a fixed point~;~:*~D~], ~,3F m"
+                      (handle-index j) (joint-flavour rows row) (handle-index a) (and b (handle-index b))
+                      (physics-joint-length w j))))
+          (format stream "~D removed" (handle-index j))))))
+
+(defun joint-summary (joint)
+  "JOINT's row as (LABEL TEXT VALUE) lines: kind, bodies, anchors, length, lengths held, softness,
+break force, last impulse. #J0OBJT"
+  (let* ((w (physics-joint-world joint)) (j (physics-joint-handle joint))
+         (rows (joint-set-rows (physics-world-joints w))) (row (resolve-joint w j)))
+    (with-joint-columns (kind flags ax ay az bx by bz rest-length min-length max-length hertz damping-ratio
+                         break-force)
+        rows
+      (multiple-value-bind (a b) (physics-joint-bodies w j)
+        (let ((f (aref flags row)) (point (= (aref kind row) +joint-point+))
+              (anchor-a (list (aref ax row) (aref ay row) (aref az row)))
+              (anchor-b (list (aref bx row) (aref by row) (aref bz row)))
+              (length (physics-joint-length w j)) (impulse (physics-joint-impulse w j)))
+          (list (list "kind" (joint-flavour rows row) (if point :point :distance))
+                (list "bodies" (format nil "~D and ~:[none: a fixed point~;~:*~D~]" a b) (list a b))
+                (list "anchors" (format nil "~{~,4F~^ ~} in ~D's frame, ~{~,4F~^ ~} ~:[of the world~;in ~:*~D's frame~]"
+                                        anchor-a a anchor-b b)
+                      (list anchor-a anchor-b))
+                (list "length" (format nil "~,4F m now" length) length)
+                (list "holds" (if point
+                                  "its anchors together"
+                                  (format nil "~:[~,4F m~;~*no length of its own~]~:[~*~;, at least ~,4F m~]~:[~*~;, at most ~,4F m~]"
+                                          (logtest f +joint-slack+) (aref rest-length row)
+                                          (logtest f +joint-lower+) (aref min-length row)
+                                          (logtest f +joint-upper+) (aref max-length row)))
+                      (list (aref rest-length row) (aref min-length row) (aref max-length row)))
+                (list "softness" (if (> (aref hertz row) 0.0)
+                                     (format nil "~A Hz, damping ratio ~A" (aref hertz row) (aref damping-ratio row))
+                                     "stiff")
+                      (list (aref hertz row) (aref damping-ratio row)))
+                (list "break force" (if (> (aref break-force row) 0.0) (format nil "~A N" (aref break-force row)) "none")
+                      (aref break-force row))
+                (list "last impulse" (format nil "~,6F N s in its last substep" impulse) impulse)))))))
+
+(defmethod describe-object ((joint physics-joint) stream)
+  (let ((w (physics-joint-world joint)) (j (physics-joint-handle joint)))
+    (format stream "~&~S~%  joint handle ~D (slot ~D, generation ~D) of ~S~%" joint j (handle-index j)
+            (handle-generation j) w)
+    (when (physics-joint-alive-p w j)
+      (loop for (label text) in (joint-summary joint)
+            do (format stream "  ~18A ~A~%" label text))
+      (let ((rows (joint-set-rows (physics-world-joints w))) (row (resolve-joint w j)))
+        (format stream "  Its row, joint row ~D:~%" row)
+        (dolist (column +joint-columns-column-names+)
+          (format stream "  ~(~22A~) = ~S~%" column (aref (slot-value rows column) row)))))))
+
+(defmethod sb-impl::inspected-parts ((joint physics-joint))
+  (values (format nil "~S~%" joint) t
+          (cons (cons "world" (physics-joint-world joint))
+                (loop for (label nil value) in (and (physics-joint-alive-p (physics-joint-world joint)
+                                                                           (physics-joint-handle joint))
+                                                    (joint-summary joint))
+                      collect (cons label value)))))
+
+(defun physics-world-joint-objects (world)
+  "The joints of WORLD as physics-joint objects, in the order of their rows. #J0OBJT"
+  (check-world world 'physics-world-joint-objects)
+  (let ((set (physics-world-joints world)))
+    (and set (loop with rows = (joint-set-rows set)
+                   for row below (joint-columns-length rows)
+                   collect (physics-joint world (aref (joint-columns-handle rows) row))))))
+;; A joint as an object:1 ends here
+
 ;; [[file:../physics.org::#BXR0WS][A box is a row and a set of extents by slot:1]]
 (defconstant +box-min-half-extent+ 0.05
   "The smallest half-extent of a box body, in metres. #BXR0WS")
@@ -9014,7 +9113,12 @@ material, awake, kind. #B0DY0B"
                 (physics-world-restitution-threshold world) (physics-world-hit-speed world)
                 (physics-world-sleep-speed world) (physics-world-time-to-sleep world)
                 (physics-world-wake-speed world))
-          (line "events" "~:[no handler~;handler ~:*~S~]" (physics-world-event-handler world)))))
+          (line "events" "~:[no handler~;handler ~:*~S~]" (physics-world-event-handler world))
+          (line "joints" "~D joint~:P, ~D solved in the last step" (physics-world-joint-count world)
+                (let ((set (physics-world-joints world)))
+                  (if set (count-if-not #'minusp (joint-columns-row-a (joint-set-rows set))
+                                        :end (joint-columns-length (joint-set-rows set)))
+                      0))))))
 
 (defmethod describe-object ((world physics-world) stream)
   (format stream "~&~S~%" world)
@@ -9090,6 +9194,7 @@ kernel family. #H4NDL3"
           (list (cons "bodies" (loop for h in (physics-world-handles world)
                                      collect (physics-body world h)))
                 (cons "contact rows" (world-contacts-list world))
+                (cons "joint rows" (physics-world-joint-objects world))
                 (cons "parameters" (world-parameters-list world))
                 (cons "terrain" (physics-world-terrain world))
                 (cons "kernels" (physics-world-kernels world)))))
