@@ -931,17 +931,6 @@ into the box (its radius, when the centre lies inside), and whether a centre lay
               (and (not (eq scene :press)) (physics-player-y player))
               (physics-world-state-hash world)
               fastest cells box inside-box))))
-
-(defun physics-world-last-step-held-out-count (world)
-  "How many bodies the last step stopped at the face of a solid cell. #SQU33Z"
-  (check-world world 'physics-world-last-step-held-out-count)
-  (physics-world-held-out-count world))
-
-(defun physics-world-last-step-buried-count (world)
-  "How many awake bodies began the last step with their centre in a solid cell, and were pushed
-toward the air by that cell's contact. #SQU33Z"
-  (check-world world 'physics-world-last-step-buried-count)
-  (physics-world-buried-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:2 ends here
 
 ;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:7]]

@@ -6904,6 +6904,26 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (= before (sb-ext:get-bytes-consed)) "60 steps consed ~D bytes" (- (sb-ext:get-bytes-consed) before)))))
 ;; BXSOLV-box-steps-cons-nothing ends here
 
+;; [[file:../physics.org::#BXSOLV][BXSOLV-boxes-rebound-to-e-squared]]
+(define-claim "BXSOLV" boxes-rebound-to-e-squared
+    "A cube dropped flat with restitution e first rebounds to e^2 of its drop within 2 %."
+  (dolist (e '(0.2 0.5 0.9))
+    (dolist (drop '(0.25 1.0))
+      (let* ((w (make-floor-world :sleep nil))
+             (rest (- 0.5 *physics-linear-slop*))
+             (box (add-physics-box w 2.5 (+ rest drop) 2.5 0.5 0.5 0.5 :restitution e))
+             (peak nil) (rising nil))
+        (dotimes (i 180)
+          (step-physics-world w)
+          (let ((y (nth-value 1 (physics-body-position w box))) (vy (nth-value 1 (physics-body-velocity w box))))
+            (cond ((and (null peak) (> vy 0)) (setf rising t peak (- y rest)))
+                  ((and rising (> vy 0)) (setf peak (max peak (- y rest))))
+                  (rising (setf peak (max peak (- y rest)) rising nil)))))
+        (let ((want (* e e drop)))
+          (check (and peak (< (abs (- peak want)) (* 0.02 want)))
+                 "e ~,1F from ~,2F m: rebound ~A m, e^2 h ~,5F" e drop peak want))))))
+;; BXSOLV-boxes-rebound-to-e-squared ends here
+
 ;; [[file:../physics.org::#BXSPHR][BXSPHR-ball-strikes-box]]
 (define-claim "BXSPHR" ball-strikes-box
     "A ball sliding head on into a resting cube of its mass hands over its momentum as e says."
@@ -6967,6 +6987,37 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
         (let ((got (run family)))
           (check (= got scalar) "~(~A~) ends with hash ~D, scalar ~D" family got scalar))))))
 ;; BXSPHR-families-agree-on-balls-and-boxes ends here
+
+;; [[file:../physics.org::#BXSWEP][BXSWEP-fast-boxes-stay-out-of-cells]]
+(define-claim "BXSWEP" fast-boxes-stay-out-of-cells
+    "A unit cube dropped at 50 m/s onto a floor, thick or one cell thick, stays above it."
+  (dolist (dt (list (/ 1.0 60) (/ 1.0 20)))
+    (dolist (thick '(t nil))
+      (dolist (start '(6.3 6.8 7.3 7.8 8.3))
+        (dolist (orientation '((1 0 0 0) (0.9 0.3 0.2 0.1)))
+          (let ((hashes '()))
+            (dolist (family (available-kernel-families))
+              (let ((terrain (make-voxel-terrain)))
+                (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+                (fill-terrain terrain -16 (if thick -5 0) -16 32 1 32 t)
+                (let* ((w (make-physics-world :terrain terrain :kernels family))
+                       (box (add-physics-box w 2.5 start 2.5 0.5 0.5 0.5 :vy -50 :orientation orientation))
+                       (lowest 100.0))
+                  (dotimes (i (round 5 dt))
+                    (step-physics-world w dt)
+                    (setf lowest (min lowest (nth-value 1 (physics-body-position w box)))))
+                  (when (eq family :scalar)
+                    (let ((y (nth-value 1 (physics-body-position w box))))
+                      (check (> lowest 1.25) "dt ~,3F thick ~A from ~A turned ~A: the centre went down to ~,4F"
+                             dt thick start (second orientation) lowest)
+                      (check (< (abs (- y (- 1.5 *physics-linear-slop*))) 0.01)
+                             "dt ~,3F thick ~A from ~A turned ~A: it ended at y = ~,4F" dt thick start (second orientation) y)
+                      (check (not (physics-body-awake-p w box)) "dt ~,3F thick ~A from ~A: awake at 5 s" dt thick start)
+                      (check (eq t (validate-physics-world w)))))
+                  (push (physics-world-state-hash w) hashes))))
+            (check (every (lambda (h) (= h (first hashes))) hashes)
+                   "dt ~,3F thick ~A from ~A: the families end apart" dt thick start)))))))
+;; BXSWEP-fast-boxes-stay-out-of-cells ends here
 
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
@@ -11458,6 +11509,31 @@ at rest near the start. #RH7T05"
                  "inside the handler ~S, after the step ~S" inside
                  (list (physics-hit-kind hit) (physics-hit-distance hit))))))))
 ;; C4STRY-queries-check-and-change-nothing ends here
+
+;; [[file:../physics.org::#C4STBX][C4STBX-casts-meet-box-bodies]]
+(define-claim "C4STBX" casts-meet-box-bodies
+    "Rays and sphere casts meet a turned box body on its faces, at the analytic distance."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (phi (/ pi 6))
+         (box (add-physics-box w 0 0 0 0.5 0.3 0.4 :orientation (list (cos (/ phi 2)) 0 (sin (/ phi 2)) 0))))
+    (dolist (state '(:awake :asleep))
+      ;; still in open space without gravity, it sleeps
+      (when (eq state :asleep) (dotimes (i 180) (step-physics-world w)))
+      (check (eq (eq state :awake) (physics-body-awake-p w box)))
+      (let ((ray (physics-ray-cast w -5 0 0 1 0 0 20))
+            (cast (physics-sphere-cast w -5 0 0 0.1 1 0 0 20)))
+        (check (and ray (eq :body (physics-hit-kind ray)) (= box (physics-hit-handle ray))) "~A: the ray missed" state)
+        (check (< (abs (- (physics-hit-distance ray) (- 5 (/ 0.5 (cos phi))))) 1e-5)
+               "~A: the ray met it at ~,6F" state (physics-hit-distance ray))
+        (check (< (max (abs (- (physics-hit-nx ray) (- (cos phi)))) (abs (physics-hit-ny ray))
+                       (abs (- (physics-hit-nz ray) (sin phi))))
+                  1e-5)
+               "~A: the ray's normal ~,5F ~,5F ~,5F" state (physics-hit-nx ray) (physics-hit-ny ray) (physics-hit-nz ray))
+        (check (and cast (< (abs (- (physics-hit-distance cast) (- 5 (/ 0.6 (cos phi))))) 1e-5))
+               "~A: the sphere cast met it at ~A" state (and cast (physics-hit-distance cast)))
+        (check (null (physics-ray-cast w -5 0.35 0 1 0 0 20)) "~A: the ray over the top met it" state)))
+    (check (eq t (validate-physics-world w)))))
+;; C4STBX-casts-meet-box-bodies ends here
 
 ;; [[file:../physics.org::#R4YC57][R4YC57-rays-match-brute-force]]
 (defun query-test-scene ()
