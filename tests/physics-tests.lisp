@@ -8451,7 +8451,9 @@ solved by FAMILY. #SPL1T5"
                         collect (let ((w (make-basin-world 300)))
                                   (luv-physics::open-world-workers w workers)
                                   (let ((pool (luv-physics::physics-world-pool w)))
-                                    (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                                    ;; every pass split; a worker parks after its spins, not its yields
+                                    (when pool (setf (luv-physics::worker-pool-split-rows pool) 0
+                                                     (luv-physics::worker-pool-park-spins pool) luv-physics::+worker-spins+)))
                                   (dotimes (i 40) (step-physics-world w))
                                   w)))
           (current nil)
