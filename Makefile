@@ -37,7 +37,8 @@ help:
 	@echo "                    in fresh SBCLs, with the workshop's compile beside it; table into $(ORG)"
 	@echo "make bench          measure the basin per kernel family and the queries; write the tables into $(ORG)"
 	@echo "make bench-workers  the basin with one worker and with two, stepped in turn; table into $(ORG)"
-	@echo "make bench-peers    the basin here, in Debian's Bullet and in ODE, one run; table into $(ORG)"
+	@echo "make bench-peers    the basin here (1 and 2 workers), in Debian's Bullet and in ODE, one run; with"
+	@echo "                    BOX3D_SRC=dir (a checkout of erincatto/box3d) in Box3D too, 1 and 2 workers"
 	@echo "make bench-against  this engine against the commits REVS='ce415a5 d9c8f94' in ROUNDS=5 rounds of"
 	@echo "                    alternating processes; table into $(ORG)"
 	@echo "make count-against  the same engines' instructions a step, counted by valgrind; table into $(ORG)"
@@ -123,14 +124,24 @@ bench-workers: setup tangle
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-workers report/bench-workers.org
 
 # Bullet's side is tools/peers/bullet-basin.cpp, ODE's tools/peers/ode-basin.cpp, both built
-# without -march=native like Debian's Bullet and ODE.
+# without -march=native like Debian's Bullet and ODE; with BOX3D_SRC=dir (a checkout of
+# erincatto/box3d), Box3D's is tools/peers/box3d-basin.cpp, built here from it (#B3NCHW).
 bench-peers: setup tangle
 	@tools/peers/setup libbullet-dev libode-dev g++ pkg-config
 	@mkdir -p report/peers
 	@$(CXX) -O2 -o report/peers/bullet-basin tools/peers/bullet-basin.cpp $$(pkg-config --cflags --libs bullet)
 	@$(CXX) -O2 -o report/peers/ode-basin tools/peers/ode-basin.cpp $$(pkg-config --cflags --libs ode)
+	@rm -f report/peers/box3d-basin
+	@if [ -n "$(BOX3D_SRC)" ]; then \
+	  mkdir -p report/peers/box3d-obj && \
+	  for f in $(BOX3D_SRC)/src/*.c; do \
+	    o=report/peers/box3d-obj/$$(basename $$f .c).o; \
+	    [ -e $$o -a $$o -nt $$f ] || $(CC) -O2 -DNDEBUG -std=gnu17 -I$(BOX3D_SRC)/include -I$(BOX3D_SRC)/src -c $$f -o $$o || exit 1; \
+	  done && \
+	  $(CXX) -O2 -I$(BOX3D_SRC)/include -o report/peers/box3d-basin tools/peers/box3d-basin.cpp report/peers/box3d-obj/*.o -lpthread -lm; \
+	fi
 	@rm -f report/peers/failed
-	@{ BULLET_BASIN=report/peers/bullet-basin ODE_BASIN=report/peers/ode-basin $(LISP) --load tools/peers/bench-peers.lisp || touch report/peers/failed; } | tee report/peers.org
+	@{ BULLET_BASIN=report/peers/bullet-basin ODE_BASIN=report/peers/ode-basin BOX3D_BASIN=$(if $(BOX3D_SRC),report/peers/box3d-basin,) $(LISP) --load tools/peers/bench-peers.lisp || touch report/peers/failed; } | tee report/peers.org
 	@test ! -e report/peers/failed
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-peers report/peers.org
 

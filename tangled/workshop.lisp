@@ -1618,21 +1618,22 @@ and Amdahl's bound for two, and whether the hashes agree; with the machine and i
          (counts (remove-duplicates (list 1 2 (max 2 cores)))))
     (format stream "~&#+caption: the basin, all awake, 60 Hz, 4 substeps; median of steps 60-150, the worlds stepped in turn; ~A, ~D cores; load ~A at the start~%"
             (cpu-model-name) cores (load-average))
-    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash | serial, % by phase |~%"
+    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash | serial, % of the step by phase           |~%"
             counts (rest counts))
-    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------+--------------------|~%"
+    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------+----------------------------------------------|~%"
             counts (rest counts))
     (dolist (size sizes)
       (dolist (family (available-kernel-families))
         (multiple-value-bind (ms serial same parts) (measure-workers size family counts)
-          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A | ~{~A~^ ~} |~%"
+          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A | ~44A |~%"
                   size (string-downcase family) ms
                   (mapcar (lambda (m) (/ (first ms) m)) (rest ms))
                   (* 100 serial) (/ 1 (+ serial (/ (- 1 serial) 2))) (if same "yes" "NO")
-                  (loop for (phase share) in (sort (copy-list parts) #'> :key #'second)
-                        when (>= share 0.01)
-                          collect (format nil "~(~A~) ~D" (subseq (string phase) 0 (search "-PHASE" (string phase)))
-                                          (round (* 100 share)))))
+                  (format nil "~{~A~^ ~}"
+                          (loop for (phase share) in (sort (copy-list parts) #'> :key #'second)
+                                when (>= share 0.01)
+                                  collect (format nil "~(~A~) ~D" (subseq (string phase) 0 (search "-PHASE" (string phase)))
+                                                  (round (* 100 share))))))
           (finish-output stream))))
     (format stream "~&load ~A at the end~%" (load-average))))
 ;; What the workers gain:1 ends here

@@ -8487,42 +8487,54 @@ solved by FAMILY. #SPL1T5"
 
 ;; [[file:../physics.org::#SPL1T5][SPL1T5-worker-fault-as-one-worker]]
 (define-claim "SPL1T5" worker-fault-as-one-worker
-    "A fault in a worker's piece reaches the caller as with one worker; the world as before, the workers parked, stepping again alike."
-  (let ((worlds (loop for workers from 1 to 3
-                      collect (let ((w (make-basin-world 300)))
-                                (luv-physics::open-world-workers w workers)
-                                (let ((pool (luv-physics::physics-world-pool w)))
-                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
-                                (dotimes (i 10) (step-physics-world w))
-                                w)))
-        (faults '()))
-    (unwind-protect
-         (progn
-           (sb-int:encapsulate 'luv-physics::integrate-positions-range 'claim-worker-fault
-                               (lambda (f v d start end h)
-                                 (when (and (<= start 150) (< 150 end))
-                                   (error 'physics-world-invalid :world nil :invariant "row 150 is faulty"))
-                                 (funcall f v d start end h)))
-           (dolist (w worlds)
-             (let ((hash (physics-world-state-hash w)))
-               (push (handler-case (progn (step-physics-world w) (list :stepped))
-                       (error (e) (list (type-of e) (princ-to-string e))))
-                     faults)
-               (check (eq t (validate-physics-world w)))
-               (check (= hash (physics-world-state-hash w)) "~D workers: the failed step changed the hash"
-                      (physics-world-workers w)))))
-      (sb-int:unencapsulate 'luv-physics::integrate-positions-range 'claim-worker-fault))
-    (setf faults (reverse faults))
-    (check (eq 'physics-world-invalid (first (first faults))) "one worker: ~S" (first faults))
-    (check (= 1 (length (remove-duplicates faults :test #'equal))) "the faults differ: ~S" faults)
-    (dolist (w (rest worlds))
-      (let ((pool (luv-physics::physics-world-pool w)))
-        (check (loop repeat 500 thereis (= (luv-physics::worker-pool-parked pool) (1- (luv-physics::worker-pool-count pool)))
-                     do (sleep 0.01))
-               "~D workers: ~D parked" (luv-physics::worker-pool-count pool) (luv-physics::worker-pool-parked pool))))
-    (let ((hashes (mapcar (lambda (w) (dotimes (i 10) (step-physics-world w)) (physics-world-state-hash w)) worlds)))
-      (check (= 1 (length (remove-duplicates hashes))) "after the fault: hashes ~S" hashes))
-    (mapc #'close-physics-world worlds)))
+    "A fault in a worker's piece, of the integration or of the fill, reaches the caller as with one worker; the world as before, the workers parked, stepping again alike."
+  (dolist (site '(luv-physics::integrate-positions-range luv-physics::piece-bounds))
+    (let ((worlds (loop for workers from 1 to 3
+                        collect (let ((w (make-basin-world 300)))
+                                  (luv-physics::open-world-workers w workers)
+                                  (let ((pool (luv-physics::physics-world-pool w)))
+                                    ;; every pass split; a worker parks after its spins, not its yields
+                                    (when pool (setf (luv-physics::worker-pool-split-rows pool) 0
+                                                     (luv-physics::worker-pool-park-spins pool) luv-physics::+worker-spins+)))
+                                  (dotimes (i 40) (step-physics-world w))
+                                  w)))
+          (current nil)
+          (faults '()))
+      (flet ((fault () (error 'physics-world-invalid :world nil :invariant "row 150 is faulty")))
+        (unwind-protect
+             (progn
+               (if (eq site 'luv-physics::piece-bounds)
+                   (sb-int:encapsulate site 'claim-worker-fault
+                                       (lambda (f start end worker count)
+                                         (multiple-value-bind (s e) (funcall f start end worker count)
+                                           (when (and (luv-physics::physics-world-undo-open current) (<= s 150) (< 150 e))
+                                             (fault))
+                                           (values s e))))
+                   (sb-int:encapsulate site 'claim-worker-fault
+                                       (lambda (f v d start end h)
+                                         (when (and (<= start 150) (< 150 end)) (fault))
+                                         (funcall f v d start end h))))
+               (dolist (w worlds)
+                 (let ((hash (physics-world-state-hash w)))
+                   (setf current w)
+                   (push (handler-case (progn (step-physics-world w) (list :stepped))
+                           (error (e) (list (type-of e) (princ-to-string e))))
+                         faults)
+                   (check (eq t (validate-physics-world w)))
+                   (check (= hash (physics-world-state-hash w)) "~(~A~), ~D workers: the failed step changed the hash"
+                          site (physics-world-workers w)))))
+          (sb-int:unencapsulate site 'claim-worker-fault)))
+      (setf faults (reverse faults))
+      (check (eq 'physics-world-invalid (first (first faults))) "~(~A~), one worker: ~S" site (first faults))
+      (check (= 1 (length (remove-duplicates faults :test #'equal))) "~(~A~): the faults differ: ~S" site faults)
+      (dolist (w (rest worlds))
+        (let ((pool (luv-physics::physics-world-pool w)))
+          (check (loop repeat 500 thereis (= (luv-physics::worker-pool-parked pool) (1- (luv-physics::worker-pool-count pool)))
+                       do (sleep 0.01))
+                 "~(~A~), ~D workers: ~D parked" site (luv-physics::worker-pool-count pool) (luv-physics::worker-pool-parked pool))))
+      (let ((hashes (mapcar (lambda (w) (dotimes (i 10) (step-physics-world w)) (physics-world-state-hash w)) worlds)))
+        (check (= 1 (length (remove-duplicates hashes))) "~(~A~), after the fault: hashes ~S" site hashes))
+      (mapc #'close-physics-world worlds))))
 ;; SPL1T5-worker-fault-as-one-worker ends here
 
 ;; [[file:../physics.org::#SPL1T5][SPL1T5-tuned-pool-keeps-the-bits]]
