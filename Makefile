@@ -15,7 +15,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tangled/workshop.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-workers bench-peers bench-against bench-joint-grid count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-workers bench-rollback bench-peers bench-against bench-joint-grid count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -37,6 +37,7 @@ help:
 	@echo "                    in fresh SBCLs, with the workshop's compile beside it; table into $(ORG)"
 	@echo "make bench          measure the basin per kernel family and the queries; write the tables into $(ORG)"
 	@echo "make bench-workers  the basin with one worker and with two, stepped in turn; table into $(ORG)"
+	@echo "make bench-rollback an 8-step rollback at 1000 balls (restore and 8 steps) against a 60 Hz frame"
 	@echo "make bench-peers    the basin here (1 and 2 workers), in Debian's Bullet and in ODE, one run; with"
 	@echo "                    BOX3D_SRC=dir (a checkout of erincatto/box3d) in Box3D too, 1 and 2 workers"
 	@echo "make bench-against  this engine against the commits REVS='ce415a5 d9c8f94' in ROUNDS=5 rounds of"
@@ -116,6 +117,12 @@ bench: setup tangle
 	@BENCH=run-snapshot-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-snapshots.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-snapshots report/bench-snapshots.org
 	@$(MAKE) --no-print-directory bench-workers
+
+# an 8-step rollback at 1000 balls (#SN4P0T): cheap to run again alone, at a quiet moment
+bench-rollback: setup tangle
+	@mkdir -p report
+	@BENCH=run-rollback-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-rollback.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-rollback report/bench-rollback.org
 
 # the basin with one worker and with two, interleaved (#B3NCHW): cheap to run again alone
 bench-workers: setup tangle

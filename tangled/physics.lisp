@@ -9774,7 +9774,7 @@ the integration JOB on the workers. #SPL1T5"
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
 (deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))
 
-(defconstant +snapshot-version+ 3 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
+(defconstant +snapshot-version+ 4 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
 
 (defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SN4P0T")
 
@@ -9796,12 +9796,16 @@ as the palette has up to 256, up to 65536 or more entries (material-index-bytes)
 (defconstant +snapshot-material-bytes+ 36 "Bytes of one entry of a snapshot's palette of materials. #SN4P0T")
 
 (defconstant +snapshot-contact-bytes+ 10
-  "Bytes every contact's record in a snapshot has: its key and its flags; the normal and the
-groups of carried impulses follow when the flags say so. #SN4P0T")
+  "Bytes every contact has in a snapshot: its key and its flags; its normal and its groups of
+carried impulses go into the part's streams when the flags say so. #SN4P0T")
+
+(defconstant +snapshot-contact-head-bytes+ 24
+  "Bytes of the contact part's payload before its keys: the count of contacts and the counts of
+its five streams. #SN4P0T")
 
 (defconstant +snapshot-contact-most-bytes+ 50
-  "The most bytes a contact's record in a snapshot takes: its key, its flags, its normal and every
-group of carried impulses. #SN4P0T")
+  "The most bytes a contact takes in a snapshot: its key, its flags, its normal and every group of
+carried impulses. #SN4P0T")
 
 (defconstant +snapshot-pair-row-bytes+ 12 "Bytes of one row's anchor in the pair list of a snapshot. #SN4P0T")
 
@@ -9876,28 +9880,31 @@ range, a body in a solid cell. #SN4P0T"))
 (declaim (inline snapshot-checksum))
 (defun snapshot-checksum (buffer start end)
   "The 64-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4): four lanes
-of FNV-1a's step, exclusive or then multiply by its prime modulo 2^64, lane K taking the 64-bit
-words K, K + 4, K + 8 ... and lane 0 the last whole words; then the four lanes' sums and a last
-32-bit word folded by the same step in that order. Each step is a bijection of the hash for a
-given word, and of the word for a given hash, so a change within any one word always changes the
-sum. #SN4P0T"
+of Fletcher's two sums over 64-bit words, lane K taking the words K, K + 4, K + 8 ... (A, the sum
+of its words, and B, the sum of its A's, both modulo 2^64) and lane 0 the last whole words; then
+the eight sums and a last 32-bit word folded by FNV-1a's step, in that order. A change within
+one word always changes its lane's A. #SN4P0T"
   (declare (type octets buffer) (type index start end) #.+kernel-policy+)
-  (let ((h0 14695981039346656037) (h1 14695981039346656037) (h2 14695981039346656037)
-        (h3 14695981039346656037) (i start))
-    (declare (type (unsigned-byte 64) h0 h1 h2 h3) (type index i))
-    (macrolet ((fnv (hash word) `(setf ,hash (logand (* (logxor ,hash ,word) 1099511628211) #xFFFFFFFFFFFFFFFF))))
+  (let ((a0 0) (a1 0) (a2 0) (a3 0) (b0 0) (b1 0) (b2 0) (b3 0) (i start))
+    (declare (type (unsigned-byte 64) a0 a1 a2 a3 b0 b1 b2 b3) (type index i))
+    (macrolet ((sum (a b word) `(setf ,a (logand (+ ,a ,word) #xFFFFFFFFFFFFFFFF)
+                                      ,b (logand (+ ,b ,a) #xFFFFFFFFFFFFFFFF)))
+               (fnv (hash word) `(setf ,hash (logand (* (logxor ,hash ,word) 1099511628211) #xFFFFFFFFFFFFFFFF))))
       (sb-sys:with-pinned-objects (buffer)
-        (let ((sap (sb-sys:vector-sap buffer)))
-          ;; four chains of multiplies in flight at once, not one
+        (let ((sap (sb-sys:sap+ (sb-sys:vector-sap buffer) start)))
+          ;; four chains of adds in flight at once, the pointer moved, not an index scaled
           (loop while (<= (+ i 32) end)
-                do (fnv h0 (sb-sys:sap-ref-64 sap i)) (fnv h1 (sb-sys:sap-ref-64 sap (+ i 8)))
-                   (fnv h2 (sb-sys:sap-ref-64 sap (+ i 16))) (fnv h3 (sb-sys:sap-ref-64 sap (+ i 24)))
+                do (sum a0 b0 (sb-sys:sap-ref-64 sap 0)) (sum a1 b1 (sb-sys:sap-ref-64 sap 8))
+                   (sum a2 b2 (sb-sys:sap-ref-64 sap 16)) (sum a3 b3 (sb-sys:sap-ref-64 sap 24))
+                   (setf sap (sb-sys:sap+ sap 32))
                    (incf i 32))
-          (loop while (<= (+ i 8) end) do (fnv h0 (sb-sys:sap-ref-64 sap i)) (incf i 8))
+          (loop while (<= (+ i 8) end)
+                do (sum a0 b0 (sb-sys:sap-ref-64 sap 0)) (setf sap (sb-sys:sap+ sap 8)) (incf i 8))
           (let ((hash 14695981039346656037))
             (declare (type (unsigned-byte 64) hash))
-            (fnv hash h0) (fnv hash h1) (fnv hash h2) (fnv hash h3)
-            (when (< i end) (fnv hash (sb-sys:sap-ref-32 sap i)))
+            (fnv hash a0) (fnv hash a1) (fnv hash a2) (fnv hash a3)
+            (fnv hash b0) (fnv hash b1) (fnv hash b2) (fnv hash b3)
+            (when (< i end) (fnv hash (sb-sys:sap-ref-32 sap 0)))
             hash))))))
 
 ;;; the scratch a snapshot and a restore reuse: one set per image, grown by doubling
@@ -9905,9 +9912,10 @@ sum. #SN4P0T"
 (defstruct (snapshot-scratch (:constructor make-snapshot-scratch ()))
   "What taking and restoring a world's snapshots reuse: the palette index of each body
 (MATERIALS), the palette's words (PALETTE, nine a material) and its open-addressing table
-(TABLE), marks by handle slot (MARKS, stamped with STAMP), a contact table filled while a
-snapshot is checked and traded for the world's when it is restored (CONTACTS), and each part's
-size and offset. #SN4P0T"
+(TABLE), marks by handle slot (MARKS, stamped with STAMP), a contact table and contact rows
+filled while a snapshot is checked and traded for the world's when it is restored (CONTACTS,
+CONTACT-ROWS), the chunks found last (CHUNK-KEYS, CHUNKS), the contact streams' words
+(STREAMS), and each part's size and offset. #SN4P0T"
   (materials (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (palette (make-array 576 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
@@ -9915,6 +9923,10 @@ size and offset. #SN4P0T"
   (marks (make-array 64 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (stamp 0 :type fixnum)
   (contacts (make-contact-table) :type contact-table)
+  (contact-rows nil :type (or null contact-columns))
+  (chunk-keys (make-array 16 :element-type 'fixnum :initial-element -1) :type fixnum-column)
+  (chunks (make-array 16 :initial-element nil) :type simple-vector)
+  (streams (make-array 0 :element-type '(unsigned-byte 32)) :type (simple-array (unsigned-byte 32) (*)))
   (sizes (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (offsets (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
 
@@ -10030,7 +10042,7 @@ and its pairs written out whole. #SN4P0T"
           (aref sizes 3) (padded (+ 4 (* (body-record-bytes materials) (body-columns-length (physics-world-awake world)))))
           (aref sizes 4) (padded (+ 4 (* (body-record-bytes materials) (body-columns-length (physics-world-sleeping world)))))
           (aref sizes 5) (+ 4 (* +snapshot-material-bytes+ materials))
-          (aref sizes 6) (padded (+ 4 (* +snapshot-contact-most-bytes+ (contact-columns-length (physics-world-contacts world)))))
+          (aref sizes 6) (padded (+ +snapshot-contact-head-bytes+ 40 (* +snapshot-contact-most-bytes+ (contact-columns-length (physics-world-contacts world)))))
           (aref sizes 7) (+ +snapshot-pair-head-bytes+ (* (+ +snapshot-pair-row-bytes+ 8) rows) (* 4 (ceiling rows 32))
                             (* 8 (if (>= (pair-list-rows plist) 0) (pair-list-count plist) 0)) 8)
           (aref sizes 8) (+ 4 (* +snapshot-box-bytes+ (box-columns-length (physics-world-boxes world))))
@@ -10120,52 +10132,6 @@ and the snapshot's size in bytes. Into a buffer large enough it conses nothing. 
       (values buffer at))))
 
 (eval-when (:compile-toplevel :load-toplevel :execute)
-  (defparameter +contact-impulse-groups+
-    `((5 ,(position 'normal-impulse +contact-fields+) 1)
-      (6 ,(position 'tangent-impulse-1 +contact-fields+) 2)
-      (7 ,(position 'rolling-impulse-x +contact-fields+) 3)
-      (8 ,(position 'spin-impulse +contact-fields+) 1))
-    "The groups of a contact's carried impulses a snapshot writes only when one of their bits is
-set: each the flag bit that says so, its first field's place in the geometry row and its width. #SN4P0T"))
-
-(defmacro do-impulse-groups ((bit first width) &body body)
-  "Run BODY once for each group of +contact-impulse-groups+, with BIT, FIRST and WIDTH bound to
-its constants, written out, not looped over. #SN4P0T"
-  `(progn ,@(loop for (b f w) in +contact-impulse-groups+
-                  collect `(symbol-macrolet ((,bit ,b) (,first ,f) (,width ,w)) ,@body))))
-
-(declaim (inline contact-record-flags))
-(defun contact-record-flags (geometry g)
-  "The flags of the snapshot record of the contact whose floats begin at G of GEOMETRY, less its
-touching and seen bits: the code of its normal in bits 2-4 (0 written out; 1 to 6 the unit
-vectors +x -x +y -y +z -z, exactly) and a bit for each impulse group with a bit set. #SN4P0T"
-  (declare (type f32-column geometry) (type index g) #.+kernel-policy+)
-  (macrolet ((bits (k) `(sb-kernel:single-float-bits (aref geometry (+ g ,k)))))
-    (let ((x (bits 0)) (y (bits 1)) (z (bits 2)) (flags 0))
-      (declare (type (signed-byte 32) x y z) (type fixnum flags))
-      ;; the bits of 1.0 and of -1.0
-      (flet ((code (v plus minus)
-               (declare (type (signed-byte 32) v) (type fixnum plus minus))
-               (cond ((= v #x3F800000) plus) ((= v (- #x40800000)) minus) (t 0))))
-        (declare (inline code))
-        (setf flags (ash (cond ((zerop (logior y z)) (code x 1 2))
-                               ((zerop (logior x z)) (code y 3 4))
-                               ((zerop (logior x y)) (code z 5 6))
-                               (t 0))
-                         2)))
-      (do-impulse-groups (bit first width)
-        (unless (loop for k of-type index below width always (zerop (bits (+ first k))))
-          (setf flags (logior flags (ash 1 bit)))))
-      flags)))
-
-(declaim (inline contact-record-bytes))
-(defun contact-record-bytes (flags)
-  "The bytes of a contact's snapshot record whose flags are FLAGS. #SN4P0T"
-  (declare (type fixnum flags))
-  (+ +snapshot-contact-bytes+ (if (zerop (ldb (byte 3 2) flags)) 12 0)
-     (if (logbitp 5 flags) 4 0) (if (logbitp 6 flags) 8 0) (if (logbitp 7 flags) 12 0) (if (logbitp 8 flags) 4 0)))
-
-(eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +snapshot-body-floats+ '(x y z vx vy vz wx wy wz qw qx qy qz sleep-time)
     "The single-float columns of a body that a body part of a snapshot holds, each as one block of
 its rows, in this order. #SN4P0T"))
@@ -10227,32 +10193,104 @@ written. #SN4P0T"
             do (setf (aref buffer p) 0)))
     (padded (+ 4 (* (body-record-bytes palette) n)))))
 
-(defun write-snapshot-contacts (world buffer at)
-  "Write the contacts of WORLD into BUFFER from AT, in their row order, each record as long as its
-flags make it, in one pass; return the padded bytes written. #SN4P0T"
-  (declare (type octets buffer) (type index at) #.+kernel-policy+)
-  (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts))
-         (step (physics-world-step-count world)) (o (+ at 4)))
-    (declare (type index n o) (type fixnum step))
+(declaim (inline normal-code))
+(defun normal-code (x y z)
+  "The code of the normal whose components have the bits X Y Z: 1 to 6 for the unit vectors +x
+-x +y -y +z -z, exactly, and 0 for any other. #SN4P0T"
+  (declare (type (unsigned-byte 32) x y z))
+  ;; the bits of 1.0 and of -1.0
+  (flet ((code (v plus minus)
+           (declare (type (unsigned-byte 32) v) (type fixnum plus minus))
+           (cond ((= v #x3F800000) plus) ((= v #xBF800000) minus) (t 0))))
+    (declare (inline code))
+    (cond ((zerop (logior y z)) (code x 1 2))
+          ((zerop (logior x z)) (code y 3 4))
+          ((zerop (logior x y)) (code z 5 6))
+          (t 0))))
+
+(defun snapshot-stream-room (scratch n)
+  "SCRATCH's stream words, with room for N + 1 entries of each stream (ten words a contact). #SN4P0T"
+  (declare (type snapshot-scratch scratch) (type index n))
+  (let ((words (* 10 (1+ n))))
+    (when (< (length (snapshot-scratch-streams scratch)) words)
+      (setf (snapshot-scratch-streams scratch)
+            (make-array (max words (* 2 (length (snapshot-scratch-streams scratch)))) :element-type '(unsigned-byte 32))))
+    (snapshot-scratch-streams scratch)))
+
+(defun write-snapshot-contact-flags (world buffer at streams)
+  "One pass over WORLD's contacts in their row order: each one's flags into the contact part at AT
+of BUFFER, and its words into each stream it belongs to, stream K's entries from word (N + 1)
+times the widths before K of STREAMS, its entry past the last zero; each stream's count into the
+part's head. #SN4P0T"
+  (declare (type octets buffer) (type index at) (type (simple-array (unsigned-byte 32) (*)) streams)
+           #.+kernel-policy+)
+  (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts)) (m (1+ n))
+         (step (physics-world-step-count world)))
+    (declare (type index n m) (type fixnum step))
+    (with-contact-columns (seen touching geometry) contacts
+      (sb-sys:with-pinned-objects (geometry streams buffer)
+        ;; pointers that move on: a field is then one load at a fixed displacement
+        (let ((g (sb-sys:vector-sap geometry))
+              (f (sb-sys:sap+ (sb-sys:vector-sap buffer) (+ at +snapshot-contact-head-bytes+ (* 8 n))))
+              (s0 (sb-sys:vector-sap streams)) (s1 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 12 m)))
+              (s2 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 16 m))) (s3 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 24 m)))
+              (s4 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 36 m))))
+          (macrolet ((word (k) `(sb-sys:sap-ref-32 g ,(* 4 k)))
+                     (put (s width first present)
+                       ;; the words go in at the stream's end, which moves on only when present
+                       `(progn ,@(loop for k below width collect `(setf (sb-sys:sap-ref-32 ,s ,(* 4 k)) (word ,(+ first k))))
+                               (setf ,s (sb-sys:sap+ ,s (* ,(* 4 width) ,present))))))
+            (dotimes (row n)
+              (let* ((code (normal-code (word 0) (word 1) (word 2)))
+                     (p0 (if (zerop code) 1 0))
+                     (p1 (if (zerop (word #.(position 'normal-impulse +contact-fields+))) 0 1))
+                     (p2 (if (zerop (logior (word #.(position 'tangent-impulse-1 +contact-fields+))
+                                            (word #.(1+ (position 'tangent-impulse-1 +contact-fields+)))))
+                             0 1))
+                     (p3 (if (zerop (logior (word #.(position 'rolling-impulse-x +contact-fields+))
+                                            (word #.(+ 1 (position 'rolling-impulse-x +contact-fields+)))
+                                            (word #.(+ 2 (position 'rolling-impulse-x +contact-fields+)))))
+                             0 1))
+                     (p4 (if (zerop (word #.(position 'spin-impulse +contact-fields+))) 0 1)))
+                (declare (type (integer 0 6) code) (type bit p0 p1 p2 p3 p4))
+                (setf (sb-sys:sap-ref-16 f 0)
+                      (logior (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2) (ash code 2)
+                              (ash p1 5) (ash p2 6) (ash p3 7) (ash p4 8)))
+                (put s0 3 0 p0)
+                (put s1 1 #.(position 'normal-impulse +contact-fields+) p1)
+                (put s2 2 #.(position 'tangent-impulse-1 +contact-fields+) p2)
+                (put s3 3 #.(position 'rolling-impulse-x +contact-fields+) p3)
+                (put s4 1 #.(position 'spin-impulse +contact-fields+) p4)
+                (setf g (sb-sys:sap+ g #.(* 4 (length +contact-fields+))) f (sb-sys:sap+ f 2)))))
+          ;; each stream's count, and its entry past the last, zeros
+          (let ((base (sb-sys:vector-sap streams)))
+            (macrolet ((close-stream (s k start width)
+                         `(let ((count (floor (- (sb-sys:sap-int ,s) (sb-sys:sap-int base) ,(* 4 start) (* ,(* 4 start) n))
+                                              ,(* 4 width))))
+                            (dotimes (j ,width) (setf (sb-sys:sap-ref-32 ,s (* 4 j)) 0))
+                            (setf (snap-u32 buffer (+ at ,(+ 4 (* 4 k)))) count))))
+              (close-stream s0 0 0 3) (close-stream s1 1 3 1) (close-stream s2 2 4 2)
+              (close-stream s3 3 6 3) (close-stream s4 4 9 1))))))))
+
+(defun write-snapshot-contacts (world buffer at scratch)
+  "Write the contacts of WORLD into BUFFER from AT as columns: their count and the counts of the
+five streams, the keys (the key column's words, copied whole), each contact's flags, then the
+streams, each closed by an entry of zeros; return the padded bytes written. #SN4P0T"
+  (declare (type octets buffer) (type index at) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts)) (m (1+ n))
+         (streams (snapshot-stream-room scratch n))
+         (keys (+ at +snapshot-contact-head-bytes+)) (o (+ keys (* 10 n))))
+    (declare (type index n m keys o) (type (simple-array (unsigned-byte 32) (*)) streams))
     (setf (snap-u32 buffer at) n)
-    (with-contact-columns (key seen touching geometry) contacts
-      (dotimes (row n)
-        (let* ((g (geometry-start row))
-               (flags (logior (contact-record-flags geometry g)
-                              (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2))))
-          (declare (type index g) (type fixnum flags))
-          (setf (snap-i64 buffer o) (aref key row) (snap-u16 buffer (+ o 8)) flags)
-          (incf o 10)
-          (when (zerop (ldb (byte 3 2) flags))
-            (setf (snap-f32 buffer o) (aref geometry g) (snap-f32 buffer (+ o 4)) (aref geometry (+ g 1))
-                  (snap-f32 buffer (+ o 8)) (aref geometry (+ g 2)))
-            (incf o 12))
-          (do-impulse-groups (bit first width)
-            (when (logbitp bit flags)
-              (dotimes (k width)
-                (setf (snap-f32 buffer o) (aref geometry (+ g first k)))
-                (incf o 4)))))))
-    ;; the padding reads as zeros
+    (sb-kernel:%byte-blt (contact-columns-key contacts) 0 buffer keys (+ keys (* 8 n)))
+    (write-snapshot-contact-flags world buffer at streams)
+    ;; each stream's entries and its closing zeros, copied whole
+    (loop for (start width) in '((0 3) (3 1) (4 2) (6 3) (9 1))
+          for k from 0
+          do (let ((bytes (* 4 width (1+ (snap-u32 buffer (+ at 4 (* 4 k)))))))
+               (declare (type index bytes))
+               (sb-kernel:%byte-blt streams (* 4 start m) buffer o (+ o bytes))
+               (incf o bytes)))
     (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
     (- o at)))
 
@@ -10424,7 +10462,7 @@ return its bytes. #SN4P0T"
            (dotimes (j 9)
              (setf (snap-u32 buffer (+ at 4 (* k +snapshot-material-bytes+) (* 4 j))) (aref words (+ (* 9 k) j)))))
          (+ 4 (* count +snapshot-material-bytes+))))
-    (6 (write-snapshot-contacts world buffer at))
+    (6 (write-snapshot-contacts world buffer at scratch))
     (7 (write-snapshot-pair-list world buffer at))
     (8 (let* ((boxes (physics-world-boxes world)) (n (box-columns-length boxes)))
          (setf (snap-u32 buffer at) n)
@@ -10700,11 +10738,68 @@ that is not finite or not in its range, naming what was expected. #SN4P0T"
       (snapshot-check (<= 0d0 (snap-f64 buffer age) 1d30) physics-snapshot-other-layout age
                       "an age of 0 or more" (snap-f64 buffer age)))))
 
+(defun check-snapshot-body-columns (buffer at n max-speed)
+  "Refuse the body part of N bodies at AT of BUFFER unless every position, velocity, spin and
+orientation number is finite and within its bound (a coordinate below the limit, a speed
+component up to MAX-SPEED, a spin below 10^6 rad/s, a quaternion component up to 1.1), each
+column tested whole, its words two at a time (snapshot-words-within); a column that fails has
+the row it fails at named by refuse-snapshot-body. #SN4P0T"
+  (declare (type octets buffer) (type index at n) (type single-float max-speed))
+  (let ((coordinate (1- (sb-kernel:single-float-bits (float +physics-coordinate-limit+ 1.0))))
+        (speed (sb-kernel:single-float-bits max-speed)) (spin (sb-kernel:single-float-bits 1e6))
+        (unit (sb-kernel:single-float-bits 1.1)))
+    (dotimes (k 13)
+      (let* ((start (+ at (body-part-column n k)))
+             (wrong (snapshot-words-within buffer start (+ start (* 4 n))
+                                           (cond ((< k 3) coordinate) ((< k 6) speed) ((< k 9) spin) (t unit)))))
+        (when wrong
+          (refuse-snapshot-body buffer at n (floor (- wrong start) 4) max-speed)
+          (snapshot-check nil physics-snapshot-other-layout wrong "a body within its ranges" k))))))
+
+(defun check-snapshot-body-norms (buffer at n max-speed)
+  "Refuse the body part of N bodies at AT of BUFFER unless every body's speed is within
+MAX-SPEED, its orientation of unit length within a tenth, its time still and its age of 0 or
+more and finite, a row at a time, the fault named by refuse-snapshot-body. #SN4P0T"
+  (declare (type octets buffer) (type index at n) (type single-float max-speed) #.+kernel-policy+)
+  (let ((top (* 1.001 max-speed max-speed)) (still (sb-kernel:single-float-bits 1e30))
+        (c3 (+ at (body-part-column n 3))) (c9 (+ at (body-part-column n 9))) (c13 (+ at (body-part-column n 13)))
+        (ages (+ at (body-part-column n 14))) (n4 (* 4 n)))
+    (declare (type single-float top) (type index c3 c9 c13 ages n4) (type (signed-byte 32) still))
+    (sb-sys:with-pinned-objects (buffer)
+      (let ((sap (sb-sys:vector-sap buffer)))
+        (dotimes (row n)
+          (let ((v (sb-sys:sap+ sap (+ c3 (* 4 row)))) (q (sb-sys:sap+ sap (+ c9 (* 4 row)))))
+            (macrolet ((at-column (p k) `(sb-sys:sap-ref-single ,p (* ,k n4))))
+              (unless (and (<= (+ (* (at-column v 0) (at-column v 0)) (* (at-column v 1) (at-column v 1))
+                                  (* (at-column v 2) (at-column v 2)))
+                               top)
+                           (<= 0.9 (+ (* (at-column q 0) (at-column q 0)) (* (at-column q 1) (at-column q 1))
+                                      (* (at-column q 2) (at-column q 2)) (* (at-column q 3) (at-column q 3)))
+                               1.1)
+                           (let ((b (sb-sys:sap-ref-32 sap (+ c13 (* 4 row))))) (or (<= b still) (= b #x80000000)))
+                           (let ((age (sb-sys:sap-ref-64 sap (+ ages (* 8 row)))))
+                             (or (<= age #.(sb-kernel:double-float-bits 1d30)) (= age (ash 1 63)))))
+                (refuse-snapshot-body buffer at n row max-speed)
+                (snapshot-check nil physics-snapshot-other-layout (+ at 4 (* 4 row)) "a body within its ranges" row)))))))))
+
+(defun snapshot-chunk (scratch chunks key)
+  "The chunk of the terrain's table CHUNKS under KEY, or NIL, through SCRATCH's cache of the
+chunks looked up last, one entry for each of sixteen places of the key's hash. #SN4P0T"
+  (declare (type snapshot-scratch scratch) (type hash-table chunks) (type fixnum key) #.+kernel-policy+)
+  (let ((keys (snapshot-scratch-chunk-keys scratch)) (place (logand (logxor key (ash key -19) (ash key -38)) 15)))
+    (declare (type fixnum-column keys) (type (integer 0 15) place))
+    (if (= key (aref keys place))
+        (svref (snapshot-scratch-chunks scratch) place)
+        (let ((chunk (gethash key chunks)))
+          (when chunk
+            (setf (aref keys place) key (svref (snapshot-scratch-chunks scratch) place) chunk))
+          chunk))))
+
 (defun check-snapshot-bodies (world buffer scratch id marks stamp)
-  "Check body part ID of the snapshot in BUFFER: its size, each body's numbers in range (a fast
-test of every row, and refuse-snapshot-body naming the fault of a row that fails it), its slot a
-slot of the table neither free nor another body's, marked in MARKS with STAMP + 1, its material
-one of the palette, and its centre in no solid cell of WORLD's terrain; return its count. #SN4P0T"
+  "Check body part ID of the snapshot in BUFFER: its size, each body's numbers in range
+(check-snapshot-body-columns, check-snapshot-body-norms), its slot a slot of the table neither
+free nor another body's, marked in MARKS with STAMP + 1, its material one of the palette, and its
+centre in no solid cell of WORLD's terrain; return its count. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column marks) (type fixnum stamp)
            #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets id)) (n (snap-u32 buffer at))
@@ -10712,53 +10807,31 @@ one of the palette, and its centre in no solid cell of WORLD's terrain; return i
          (w (material-index-bytes materials))
          (max-speed (snap-f32 buffer (+ (aref offsets 1) 52 (* 4 (position :max-speed +physics-parameters+ :key #'first)))))
          (terrain (physics-world-terrain world))
-         (chunks (and terrain (voxel-terrain-chunks terrain))) (last-key -1) (chunk nil)
-         ;; the bits of the bounds: a finite single-float's magnitude orders as its bits do, and a
-         ;; NaN's or an infinity's bits lie above every finite one's
-         (coordinate (sb-kernel:single-float-bits (float +physics-coordinate-limit+ 1.0)))
-         (speed (sb-kernel:single-float-bits max-speed)) (spin (sb-kernel:single-float-bits 1e6))
-         (unit (sb-kernel:single-float-bits 1.1)) (still (sb-kernel:single-float-bits 1e30))
-         (top (* 1.001 max-speed max-speed)))
-    (declare (type index at n count materials) (type single-float max-speed top) (type fixnum last-key)
-             (type (signed-byte 32) coordinate speed spin unit still))
+         (chunks (and terrain (voxel-terrain-chunks terrain))))
+    (declare (type index at n count materials) (type single-float max-speed))
     (check-part-size scratch id (padded (+ 4 (* (body-record-bytes materials) n))))
+    (check-snapshot-body-columns buffer at n max-speed)
+    (check-snapshot-body-norms buffer at n max-speed)
+    ;; the chunks of a terrain that changed since the last restore are looked up again
+    (fill (snapshot-scratch-chunk-keys scratch) -1)
     (dotimes (row n n)
-      (macrolet ((bits (k) `(snap-u32 buffer (+ at (body-part-column n ,k) (* 4 row))))
-                 (within (k limit) `(<= (logand (bits ,k) #x7FFFFFFF) ,limit))
-                 (value (k) `(snap-f32 buffer (+ at (body-part-column n ,k) (* 4 row)))))
-        (unless (and (within 0 (1- coordinate)) (within 1 (1- coordinate)) (within 2 (1- coordinate))
-                     (within 3 speed) (within 4 speed) (within 5 speed)
-                     (<= (+ (* (value 3) (value 3)) (* (value 4) (value 4)) (* (value 5) (value 5))) top)
-                     (within 6 spin) (within 7 spin) (within 8 spin)
-                     (within 9 unit) (within 10 unit) (within 11 unit) (within 12 unit)
-                     (<= 0.9 (+ (* (value 9) (value 9)) (* (value 10) (value 10)) (* (value 11) (value 11))
-                                (* (value 12) (value 12)))
-                         1.1)
-                     (let ((b (bits 13))) (or (<= b still) (= b #x80000000)))
-                     (let ((age (snap-u64 buffer (+ at (body-part-column n 14) (* 8 row)))))
-                       (or (<= age #.(sb-kernel:double-float-bits 1d30)) (= age (ash 1 63)))))
-          (refuse-snapshot-body buffer at n row max-speed)
-          (snapshot-check nil physics-snapshot-other-layout (+ at 4 (* 4 row)) "a body within its ranges" row))
-        (let ((slot (snap-u32 buffer (+ at (body-part-column n 16) (* 4 row))))
-              (material (snap-material-index buffer (+ at (body-part-column n 17) (* w row)) w)))
-          (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout
-                          (+ at (body-part-column n 16) (* 4 row))
-                          "a slot of the table neither free nor another body's" slot)
-          (setf (aref marks slot) (1+ stamp))
-          (snapshot-check (< material materials) physics-snapshot-other-layout (+ at (body-part-column n 17) (* w row))
-                          "a material of the palette" material))
-        (when chunks
-          ;; the chunk of the row before is most often this row's too: looked up only when not
-          (let* ((x (floor (the (single-float -65536.0 65536.0) (value 0))))
-                 (y (floor (the (single-float -65536.0 65536.0) (value 1))))
-                 (z (floor (the (single-float -65536.0 65536.0) (value 2))))
-                 (key (chunk-key x y z)))
-            (declare (type cell x y z) (type fixnum key))
-            (unless (= key last-key)
-              (setf chunk (gethash key chunks) last-key key))
-            (snapshot-check (and chunk (zerop (aref (the chunk-storage chunk) (cell-offset x y z))))
-                            physics-snapshot-other-layout (+ at 4 (* 4 row))
-                            "a centre in an air cell of the world's terrain" (list x y z))))))))
+      (let ((slot (snap-u32 buffer (+ at (body-part-column n 16) (* 4 row))))
+            (material (snap-material-index buffer (+ at (body-part-column n 17) (* w row)) w)))
+        (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout
+                        (+ at (body-part-column n 16) (* 4 row))
+                        "a slot of the table neither free nor another body's" slot)
+        (setf (aref marks slot) (1+ stamp))
+        (snapshot-check (< material materials) physics-snapshot-other-layout (+ at (body-part-column n 17) (* w row))
+                        "a material of the palette" material))
+      (when chunks
+        (let* ((x (floor (the (single-float -65536.0 65536.0) (snap-f32 buffer (+ at (body-part-column n 0) (* 4 row))))))
+               (y (floor (the (single-float -65536.0 65536.0) (snap-f32 buffer (+ at (body-part-column n 1) (* 4 row))))))
+               (z (floor (the (single-float -65536.0 65536.0) (snap-f32 buffer (+ at (body-part-column n 2) (* 4 row))))))
+               (chunk (snapshot-chunk scratch chunks (chunk-key x y z))))
+          (declare (type cell x y z))
+          (snapshot-check (and chunk (zerop (aref (the chunk-storage chunk) (cell-offset x y z))))
+                          physics-snapshot-other-layout (+ at 4 (* 4 row))
+                          "a centre in an air cell of the world's terrain" (list x y z)))))))
 
 (defun check-snapshot-slots (world buffer scratch)
   "Check the handle, material and body parts of the snapshot in BUFFER (check-snapshot-handles,
@@ -10786,65 +10859,196 @@ return its slots. #SN4P0T"
   (setf (contact-table-count table) 0)
   (contact-table-slots table))
 
-(defun check-snapshot-contacts (buffer scratch)
-  "Check the contact part of the snapshot in BUFFER: its size, each key's kind and slots (the
-slots of the table, live or freed in the last step, A below B for a pair), each key once, and finite impulses; the keys go into
-SCRATCH's contact table, mapped to their rows. Run after check-snapshot-slots, whose marks it
-reads. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let* ((at (aref (snapshot-scratch-offsets scratch) 6)) (n (snap-u32 buffer at))
-         (hat (aref (snapshot-scratch-offsets scratch) 2)) (count (snap-u32 buffer hat))
+(defun snapshot-words-within (buffer start end limit)
+  "The offset of the first 32-bit word of BUFFER from START below END whose magnitude, its bits
+less the sign, exceeds LIMIT's bits, or NIL: two words at a time, each lane's bits raised by
+2^31 - 1 - LIMIT, which sets its top bit exactly when it exceeds LIMIT (a NaN's and an
+infinity's bits lie above every finite number's). #SN4P0T"
+  (declare (type octets buffer) (type index start end) (type (unsigned-byte 31) limit) #.+kernel-policy+)
+  (let ((raise (* (- #x7FFFFFFF limit) #x100000001)) (over 0) (i start))
+    (declare (type (unsigned-byte 64) raise over) (type index i))
+    (sb-sys:with-pinned-objects (buffer)
+      (let ((sap (sb-sys:vector-sap buffer)))
+        (loop while (<= (+ i 8) end)
+              do (setf over (logior over (logand (+ (logand (sb-sys:sap-ref-64 sap i) #x7FFFFFFF7FFFFFFF) raise)
+                                                 #xFFFFFFFFFFFFFFFF)))
+                 (incf i 8))
+        (when (< i end)
+          (setf over (logior over (+ (logand (sb-sys:sap-ref-32 sap i) #x7FFFFFFF) (- #x7FFFFFFF limit)))))))
+    (unless (zerop (logand over #x8000000080000000))
+      (loop for o of-type index from start below end by 4
+            unless (<= (logand (snap-u32 buffer o) #x7FFFFFFF) limit) return o))))
+
+(defun snapshot-contact-layout (buffer at)
+  "Where the parts of the contact part at AT of BUFFER begin: its keys, its flags, then each of
+its five streams, and where it ends, as six values after the keys and the flags. #SN4P0T"
+  (declare (type octets buffer) (type index at))
+  (let* ((n (snap-u32 buffer at)) (keys (+ at +snapshot-contact-head-bytes+)) (flags (+ keys (* 8 n)))
+         (s0 (+ flags (* 2 n))) (s1 (+ s0 (* 12 (1+ (snap-u32 buffer (+ at 4))))))
+         (s2 (+ s1 (* 4 (1+ (snap-u32 buffer (+ at 8)))))) (s3 (+ s2 (* 8 (1+ (snap-u32 buffer (+ at 12))))))
+         (s4 (+ s3 (* 12 (1+ (snap-u32 buffer (+ at 16)))))) (end (+ s4 (* 4 (1+ (snap-u32 buffer (+ at 20)))))))
+    (values keys flags s0 s1 s2 s3 s4 end)))
+
+(defun check-snapshot-contact-streams (buffer scratch)
+  "Check the frame and the streams of the contact part of the snapshot in BUFFER: no stream
+longer than the contacts, its size as the counts give it, every normal written out of unit
+length at most, every carried impulse finite and of at most 10^9 N s, and each stream closed by
+an entry of zeros. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 6)) (n (snap-u32 buffer at)))
+    (declare (type index at))
+    (dotimes (k 5)
+      (snapshot-check (<= (snap-u32 buffer (+ at 4 (* 4 k))) n) physics-snapshot-other-layout (+ at 4 (* 4 k))
+                      "a stream of no more entries than contacts" (snap-u32 buffer (+ at 4 (* 4 k)))))
+    (multiple-value-bind (keys flags s0 s1 s2 s3 s4 end) (snapshot-contact-layout buffer at)
+      (declare (ignore keys flags))
+      (check-part-size scratch 6 (padded (- end at)))
+      (let ((normal (snapshot-words-within buffer s0 s1 (sb-kernel:single-float-bits 1.001)))
+            (impulse (snapshot-words-within buffer s1 end (sb-kernel:single-float-bits 1e9))))
+        (snapshot-check (null normal) physics-snapshot-other-layout normal "a normal of unit length"
+                        (and normal (snap-f32 buffer normal)))
+        (snapshot-check (null impulse) physics-snapshot-other-layout impulse "a carried impulse of at most 10^9 N s"
+                        (and impulse (snap-f32 buffer impulse))))
+      ;; the closing entry of each stream, zeros
+      (flet ((closed (start width)
+               (loop for o of-type index from (- start (* 4 width)) below start by 4
+                     do (snapshot-check (zerop (snap-u32 buffer o)) physics-snapshot-other-layout o
+                                        "a stream's closing entry of zeros" (snap-u32 buffer o)))))
+        (closed s1 3) (closed s2 1) (closed s3 2) (closed s4 3) (closed end 1)))))
+
+(defun snapshot-contact-rows (world scratch n)
+  "SCRATCH's contact rows, laid out as WORLD's contacts, with room for N rows, every row past N
+zero again, and its length as many rows as may hold words. #SN4P0T"
+  (declare (type snapshot-scratch scratch) (type index n))
+  (let ((rows (or (snapshot-scratch-contact-rows scratch)
+                  (setf (snapshot-scratch-contact-rows scratch)
+                        (make-contact-columns :spare (contact-columns-spare (physics-world-contacts world)))))))
+    (contact-columns-ensure-capacity rows n)
+    (loop for row of-type index from n below (min (+ (contact-columns-length rows) (contact-columns-spare rows))
+                                                 (length (contact-columns-key rows)))
+          do (contact-columns-zero-row rows row))
+    (setf (contact-columns-length rows) (max n (contact-columns-length rows)))
+    rows))
+
+(declaim (inline check-snapshot-contact-key))
+(defun check-snapshot-contact-key (buffer o key count marks stamp)
+  "Refuse the contact key word at O of BUFFER, whose key is KEY, unless it is a fixnum's word of
+a contact kind and slots of the table (COUNT slots, marked in MARKS as free, STAMP - 1, or
+live, STAMP), live or freed in the last step, A below B for a pair. #SN4P0T"
+  (declare (type octets buffer) (type index o count) (type fixnum key stamp) (type fixnum-column marks)
+           #.+kernel-policy+)
+  (let ((kind (ldb (byte 4 58) key)) (a (ldb (byte 24 34) key)))
+    ;; a body that expired in the last step has a free slot, and its contacts wait for the next
+    ;; step's prune: a key may name a free slot of the table
+    (snapshot-check (and (not (logtest (snap-u64 buffer o) 1)) (>= key 0) (< key (ash 1 60)) (<= kind 2)
+                         (< a count) (>= (aref marks a) (1- stamp)))
+                    physics-snapshot-other-layout o "a contact key of a slot of the table, twice over" (snap-u64 buffer o))
+    (when (= kind +contact-pair+)
+      (let ((b (ldb (byte 34 0) key)))
+        (snapshot-check (and (< a b count) (>= (aref marks b) (1- stamp))) physics-snapshot-other-layout o
+                        "a pair key of two slots of the table, the lower first" key)))))
+
+(declaim (inline snapshot-key-put))
+(defun snapshot-key-put (slots mask key row)
+  "Put KEY, mapped to ROW, into the contact table's SLOTS (MASK + 1 entries) and return true,
+or return NIL when KEY is there already. #SN4P0T"
+  (declare (type fixnum-column slots) (type fixnum mask key row) #.+kernel-policy+)
+  (loop for i of-type fixnum = (contact-slot-hash key mask) then (logand (1+ i) mask)
+        for e of-type fixnum = (aref slots (* 2 i))
+        do (cond ((= e key) (return nil))
+                 ((= e -1) (setf (aref slots (* 2 i)) key (aref slots (1+ (* 2 i))) row) (return t)))))
+
+(defun decode-snapshot-contacts (buffer scratch rows)
+  "Check the keys and flags of the contact part of the snapshot in BUFFER, each key once (into
+SCRATCH's contact table, mapped to its row), and write each contact into its row of ROWS: key,
+kind, the handles of its slots, seen, order, touching, its normal (written out, or the axis
+its code names) and its carried impulses, every other float zero. Run after
+check-snapshot-contact-streams and check-snapshot-slots, whose marks it reads. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type contact-columns rows) #.+kernel-policy+)
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 6)) (n (snap-u32 buffer at))
+         (hat (aref offsets 2)) (count (snap-u32 buffer hat)) (wat (aref offsets 1))
+         (tag (snap-u32 buffer wat)) (step (snap-u64 buffer (+ wat 16)))
          (marks (snapshot-scratch-marks scratch)) (stamp (snapshot-scratch-stamp scratch))
-         (table (snapshot-scratch-contacts scratch))
-         (end (+ at (aref (snapshot-scratch-sizes scratch) 6)))
-         ;; a part of N records has at least 10 bytes a record
-         (slots (snapshot-table-room table (min n (floor (- end at) +snapshot-contact-bytes+))))
-         (mask (contact-table-mask table))
-         (impulse (sb-kernel:single-float-bits 1e9)) (unit (sb-kernel:single-float-bits 1.001))
-         (o (+ at 4)))
-    (declare (type index at n hat count end o) (type fixnum-column marks slots) (type fixnum stamp mask)
-             (type (signed-byte 32) impulse unit))
-    (dotimes (row n)
-      (snapshot-check (<= (+ o +snapshot-contact-bytes+) end) physics-snapshot-other-layout o
-                      (format nil "the record of contact ~D within the part" row) end)
-      (let* ((key (snap-i64 buffer o)) (flags (snap-u16 buffer (+ o 8)))
-             (kind (ldb (byte 4 58) key)) (a (ldb (byte 24 34) key)) (code (ldb (byte 3 2) flags))
-             (bytes (contact-record-bytes flags)))
-        (declare (type fixnum key flags bytes))
-        ;; a body that expired in the last step has a free slot, and its contacts wait for
-        ;; the next step's prune: a key may name a free slot of the table
-        (snapshot-check (and (>= key 0) (< key (ash 1 60)) (<= kind 2) (< a count) (>= (aref marks a) (1- stamp)))
-                        physics-snapshot-other-layout o "a contact key of a slot of the table" key)
-        (when (= kind +contact-pair+)
-          (let ((b (ldb (byte 34 0) key)))
-            (snapshot-check (and (< a b count) (>= (aref marks b) (1- stamp))) physics-snapshot-other-layout o
-                            "a pair key of two slots of the table, the lower first" key)))
-        (snapshot-check (and (< flags 512) (/= 7 code)) physics-snapshot-other-layout (+ o 8)
-                        "contact flags of 9 bits, a normal code from 0 to 6" flags)
-        (snapshot-check (<= (+ o bytes) end) physics-snapshot-other-layout o
-                        (format nil "the record of contact ~D within the part" row) end)
-        ;; a key already in the table is a duplicate
-        (snapshot-check (loop for i of-type fixnum = (contact-slot-hash key mask) then (logand (1+ i) mask)
-                              for k of-type fixnum = (aref slots (* 2 i))
-                              do (cond ((= k key) (return nil))
-                                       ((= k -1) (setf (aref slots (* 2 i)) key (aref slots (1+ (* 2 i))) row)
-                                        (return t))))
-                        physics-snapshot-other-layout o "a key no other contact has" key)
-        ;; a carried impulse is at most the momentum of the heaviest body at the top speed
-        (loop for p of-type index from (+ o 10 (if (zerop code) 12 0)) below (+ o bytes) by 4
-              do (unless (<= (logand (snap-u32 buffer p) #x7FFFFFFF) impulse)
-                   (snapshot-check (<= (abs (snap-finite-f32 buffer p)) 1e9) physics-snapshot-other-layout p
-                                   "a carried impulse of at most 10^9 N s" (snap-f32 buffer p))))
-        (when (zerop code)
-          (dotimes (k 3)
-            (unless (<= (logand (snap-u32 buffer (+ o 10 (* 4 k))) #x7FFFFFFF) unit)
-              (snapshot-check (<= (abs (snap-finite-f32 buffer (+ o 10 (* 4 k)))) 1.001)
-                              physics-snapshot-other-layout (+ o 10 (* 4 k)) "a normal of unit length"
-                              (snap-f32 buffer (+ o 10 (* 4 k)))))))
-        (incf o bytes)))
-    (setf (contact-table-count table) n)
-    (check-part-size scratch 6 (padded (- o at)))
+         (table (snapshot-scratch-contacts scratch)) (slots (snapshot-table-room table n))
+         (mask (contact-table-mask table)))
+    (declare (type index at n hat count wat step) (type (unsigned-byte 16) tag)
+             (type fixnum-column marks slots) (type fixnum stamp mask))
+    (multiple-value-bind (keys flags s0 s1 s2 s3 s4 end) (snapshot-contact-layout buffer at)
+      (declare (type index keys flags s0 s1 s2 s3 s4 end))
+      (with-contact-columns (handle-a handle-b kind key seen order touching geometry) rows
+        (flet ((slot-handle (slot)
+                 ;; the handle of SLOT's body; of a free slot, the handle its body had before it
+                 ;; expired, one generation back
+                 (declare (type (unsigned-byte 24) slot))
+                 (let ((g (snap-u32 buffer (+ hat 8 (* 4 slot)))))
+                   (declare (type (unsigned-byte 20) g))
+                   (logior (ash tag (+ +handle-index-bits+ +handle-generation-bits+))
+                           (ash (if (= (aref marks slot) (1- stamp)) (ldb (byte +handle-generation-bits+ 0) (1- g)) g)
+                                +handle-index-bits+)
+                           slot))))
+          (declare (inline slot-handle))
+          (sb-sys:with-pinned-objects (geometry buffer)
+            ;; pointers that move on, and each stream's last entry, its closing zeros
+            (let* ((base (sb-sys:vector-sap buffer)) (g (sb-sys:vector-sap geometry))
+                   (r0 (sb-sys:sap+ base s0)) (r1 (sb-sys:sap+ base s1)) (r2 (sb-sys:sap+ base s2))
+                   (r3 (sb-sys:sap+ base s3)) (r4 (sb-sys:sap+ base s4))
+                   (z0 (sb-sys:sap+ base (- s1 12))) (z1 (sb-sys:sap+ base (- s2 4))) (z2 (sb-sys:sap+ base (- s3 8)))
+                   (z3 (sb-sys:sap+ base (- s4 12))) (z4 (sb-sys:sap+ base (- end 4))))
+              (macrolet ((take (r z width first bit)
+                           ;; a stream's next entry when the flag BIT is set, else its closing zeros;
+                           ;; never past them
+                           `(let ((from (if (and (logbitp ,bit f) (sb-sys:sap< ,r ,z)) ,r ,z)))
+                              ,@(loop for k below width
+                                      collect `(setf (sb-sys:sap-ref-32 g ,(* 4 (+ first k))) (sb-sys:sap-ref-32 from ,(* 4 k))))
+                              (setf ,r (sb-sys:sap+ ,r (* ,(* 4 width) (ldb (byte 1 ,bit) f)))))))
+                (dotimes (row n)
+                  (let* ((o (+ keys (* 8 row))) (k (ash (sb-sys:signed-sap-ref-64 base o) -1))
+                         (f (sb-sys:sap-ref-16 base (+ flags (* 2 row)))) (code (ldb (byte 3 2) f)))
+                    (declare (type fixnum k) (type (unsigned-byte 16) f))
+                    (check-snapshot-contact-key buffer o k count marks stamp)
+                    (snapshot-check (and (< f 512) (/= 7 code)) physics-snapshot-other-layout (+ flags (* 2 row))
+                                    "contact flags of 9 bits, a normal code from 0 to 6" f)
+                    ;; a key already in the table is a duplicate
+                    (snapshot-check (snapshot-key-put slots mask k row) physics-snapshot-other-layout o
+                                    "a key no other contact has" k)
+                    (setf (aref key row) k (aref kind row) (ldb (byte 4 58) k)
+                          (aref handle-a row) (slot-handle (ldb (byte 24 34) k))
+                          (aref handle-b row) (if (= (ldb (byte 4 58) k) +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
+                          (aref seen row) (if (logbitp 1 f) (1- step) step)
+                          (aref order row) row
+                          (aref touching row) (ldb (byte 1 0) f))
+                    ;; the normal: written out, or the unit axis its code names
+                    (if (zerop code)
+                        (let ((from (if (sb-sys:sap< r0 z0) r0 z0)))
+                          (setf (sb-sys:sap-ref-32 g 0) (sb-sys:sap-ref-32 from 0) (sb-sys:sap-ref-32 g 4) (sb-sys:sap-ref-32 from 4)
+                                (sb-sys:sap-ref-32 g 8) (sb-sys:sap-ref-32 from 8)
+                                r0 (sb-sys:sap+ r0 12)))
+                        (setf (sb-sys:sap-ref-32 g 0) 0 (sb-sys:sap-ref-32 g 4) 0 (sb-sys:sap-ref-32 g 8) 0
+                              (sb-sys:sap-ref-32 g (* 4 (ash (1- code) -1))) (if (oddp code) #x3F800000 #xBF800000)))
+                    (setf (sb-sys:sap-ref-32 g 12) 0 (sb-sys:sap-ref-32 g 16) 0 (sb-sys:sap-ref-32 g 20) 0
+                          (sb-sys:sap-ref-32 g 24) 0 (sb-sys:sap-ref-32 g 28) 0 (sb-sys:sap-ref-32 g 32) 0
+                          (sb-sys:sap-ref-32 g 36) 0)
+                    (take r1 z1 1 #.(position 'normal-impulse +contact-fields+) 5)
+                    (take r2 z2 2 #.(position 'tangent-impulse-1 +contact-fields+) 6)
+                    (take r3 z3 3 #.(position 'rolling-impulse-x +contact-fields+) 7)
+                    (take r4 z4 1 #.(position 'spin-impulse +contact-fields+) 8)
+                    (setf g (sb-sys:sap+ g #.(* 4 (length +contact-fields+))))))
+                ;; every stream read to its end, no further
+                (snapshot-check (and (sb-sys:sap= r0 z0) (sb-sys:sap= r1 z1) (sb-sys:sap= r2 z2) (sb-sys:sap= r3 z3)
+                                     (sb-sys:sap= r4 z4))
+                                physics-snapshot-other-layout flags
+                                "as many contacts flagged for each stream as its count" n)))))))
+    (setf (contact-table-count table) n (contact-columns-length rows) n)
     table))
+
+(defun check-snapshot-contacts (world buffer scratch)
+  "Check the contact part of the snapshot in BUFFER, stage by stage: its frame and streams, then
+each contact's key and flags as it is decoded into SCRATCH's rows, laid out as WORLD's contacts,
+for the restore to trade for the world's. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (check-snapshot-contact-streams buffer scratch)
+  (decode-snapshot-contacts buffer scratch
+                            (snapshot-contact-rows world scratch (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 6)))))
 
 (defun check-snapshot-pair-list (buffer scratch)
   "Check the pair list part of the snapshot in BUFFER: its form and the size its counts give,
@@ -10959,7 +11163,7 @@ what the restore reuses. #SN4P0T"
   (check-snapshot-frame buffer scratch)
   (check-snapshot-world world buffer scratch)
   (check-snapshot-slots world buffer scratch)
-  (check-snapshot-contacts buffer scratch)
+  (check-snapshot-contacts world buffer scratch)
   (check-snapshot-pair-list buffer scratch)
   (check-snapshot-rest buffer scratch)
   (check-snapshot-joints buffer scratch)
@@ -11168,60 +11372,25 @@ at its row; rows it held past the new count read as zeros again. #SN4P0T"
                                             (ash generation +handle-index-bits+) slot)
                   (aref sets slot) set (aref locals slot) row)))))))
 
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +snapshot-traded-contact-columns+ '(handle-a handle-b kind key seen order touching geometry)
+    "The columns of a contact that a restore decodes and trades for the world's: every column of
+contact-columns. #SN4P0T"))
+
 (defun apply-snapshot-contacts (world buffer scratch)
-  "Put the contacts of the checked snapshot BUFFER into WORLD in their rows, every float of each
-row written (what the record leaves out as zero), with their keys in the table the check filled
-in SCRATCH, which becomes the world's. #SN4P0T"
+  "Give WORLD the contacts the check decoded into SCRATCH's rows, by trading their columns for the
+world's, and the table of their keys the check filled, traded the same way. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 6)) (n (snap-u32 buffer at))
-         (wat (aref offsets 1)) (step (snap-u64 buffer (+ wat 16))) (ids (physics-world-ids world))
-         (contacts (physics-world-contacts world)) (table (physics-world-contact-table world))
-         (full (snapshot-scratch-contacts scratch)) (old (contact-columns-length contacts))
-         (tag (handle-table-tag ids)) (generations (handle-table-generation ids)) (sets (handle-table-set ids)))
-    (declare (type index at n wat step old) (type (unsigned-byte 16) tag) (type fixnum-column generations sets))
-    (contact-columns-ensure-capacity contacts n)
+  (let* ((wat (aref (snapshot-scratch-offsets scratch) 1)) (step (snap-u64 buffer (+ wat 16)))
+         (contacts (physics-world-contacts world)) (rows (snapshot-scratch-contact-rows scratch))
+         (table (physics-world-contact-table world)) (full (snapshot-scratch-contacts scratch)))
+    (declare (type index wat step) (type contact-columns contacts rows))
+    (macrolet ((trade ()
+                 `(progn ,@(loop for c in (append +snapshot-traded-contact-columns+ '(length capacity))
+                                 for reader = (intern (format nil "CONTACT-COLUMNS-~A" c) (symbol-package 'contact-columns))
+                                 collect `(rotatef (,reader contacts) (,reader rows))))))
+      (trade))
     (contact-columns-ensure-capacity (physics-world-contact-scratch world) (contact-columns-capacity contacts))
-    (setf (contact-columns-length contacts) n)
-    (loop for row of-type index from n below (min (+ (max old n) (contact-columns-spare contacts))
-                                                 (length (contact-columns-key contacts)))
-          do (contact-columns-zero-row contacts row))
-    (with-contact-columns (handle-a handle-b kind key seen order touching geometry) contacts
-      (flet ((slot-handle (slot)
-               ;; the handle of SLOT's body; of a free slot, the handle its body had before it
-               ;; expired, one generation back
-               (declare (type (unsigned-byte 24) slot))
-               (let ((g (aref generations slot)))
-                 (declare (type (unsigned-byte 20) g))
-                 (logior (ash tag (+ +handle-index-bits+ +handle-generation-bits+))
-                         (ash (if (= (aref sets slot) +set-free+) (ldb (byte +handle-generation-bits+ 0) (1- g)) g)
-                              +handle-index-bits+)
-                         slot))))
-        (declare (inline slot-handle))
-        (let ((o (+ at 4)))
-          (declare (type index o))
-          (dotimes (row n)
-            (let* ((k (snap-i64 buffer o)) (bits (snap-u16 buffer (+ o 8)))
-                   (a (ldb (byte 24 34) k)) (kk (ldb (byte 4 58) k)) (g (geometry-start row))
-                   (code (ldb (byte 3 2) bits)))
-              (declare (type fixnum k bits) (type index g))
-              (setf (aref key row) k (aref kind row) kk
-                    (aref handle-a row) (slot-handle a)
-                    (aref handle-b row) (if (= kk +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
-                    (aref seen row) (if (logbitp 1 bits) (1- step) step)
-                    (aref order row) row
-                    (aref touching row) (if (logbitp 0 bits) 1 0))
-              (incf o 10)
-              (dotimes (f #.(length +contact-fields+)) (setf (aref geometry (+ g f)) 0.0))
-              (if (zerop code)
-                  (progn (setf (aref geometry g) (snap-f32 buffer o) (aref geometry (+ g 1)) (snap-f32 buffer (+ o 4))
-                               (aref geometry (+ g 2)) (snap-f32 buffer (+ o 8)))
-                         (incf o 12))
-                  (setf (aref geometry (+ g (ash (1- code) -1))) (if (oddp code) 1.0 -1.0)))
-              (do-impulse-groups (bit first width)
-                (when (logbitp bit bits)
-                  (dotimes (f width)
-                    (setf (aref geometry (+ g first f)) (snap-f32 buffer o))
-                    (incf o 4)))))))))
     ;; the table the check filled becomes the world's, and the world's the scratch's
     (rotatef (contact-table-slots table) (contact-table-slots full))
     (rotatef (contact-table-mask table) (contact-table-mask full))
@@ -11670,14 +11839,27 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
                 (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile))
                 (physics-world-sleeping-count pile) size
                 (/ size (max 1 (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile)))))))
-    (let* ((world (make-basin-world 1000 :kernels :auto)) (times '()))
-      (dotimes (i 120) (step-physics-world world))
-      (let ((buffer (snapshot-physics-world world)))
-        (dotimes (k 10)
-          (push (ms (lambda () (restore-physics-world world buffer) (dotimes (j 8) (step-physics-world world)))) times)))
-      (format stream "| rollback at 1000 balls (2 s) | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~D % |~%"
-              (median times) (round (/ (median times) (/ 1000 60.0) 0.01)))))
+    (run-rollback-benchmark :stream stream :load nil))
   (format stream "~%load average ~A at the end~%" (load-average)))
+
+(defun run-rollback-benchmark (&key (stream *standard-output*) (balls 1000) (rounds 20) (load t))
+  "Measure an 8-step rollback in the BALLS-ball basin at 2 s, under the widest family: a restore
+and eight steps, the median of ROUNDS, against a 60 Hz frame, as an Org table to STREAM, with
+the load average the run began and ended with when LOAD. make bench-rollback runs it alone. #SN4P0T"
+  (when load (format stream "load average ~A at the start~%~%" (load-average)))
+  (let* ((world (make-basin-world balls :kernels :auto)) (times '()))
+    (dotimes (i 120) (step-physics-world world))
+    (let ((buffer (snapshot-physics-world world)))
+      (sb-ext:gc :full t)
+      (dotimes (k rounds)
+        (let ((t0 (clock-ns)))
+          (restore-physics-world world buffer)
+          (dotimes (j 8) (step-physics-world world))
+          (push (* 1d-6 (- (clock-ns) t0)) times))))
+    (let ((median (aref (sort (coerce times 'vector) #'<) (floor (length times) 2))))
+      (format stream "| rollback at ~D balls (2 s), ~D rounds | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~D % |~%"
+              balls rounds median (round (/ median (/ 1000 60.0) 0.01)))))
+  (when load (format stream "~%load average ~A at the end~%" (load-average))))
 ;; A snapshot holds what decides the next step, part by part:8 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:2]]

@@ -8906,6 +8906,14 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
       (check (= 12 (physics-world-sleeping-count world)) "~D of 12 asleep" (physics-world-sleeping-count world)))))
 ;; SN4P0T-sleepers-cost-what-the-awake-cost ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-restore-trades-every-contact-column]]
+(define-claim "SN4P0T" restore-trades-every-contact-column
+    "The contact columns a restore decodes and trades are every column of contact-columns, in order."
+  (check (equal luv-physics::+snapshot-traded-contact-columns+ luv-physics::+contact-columns-column-names+)
+         "traded ~S, the layout's ~S" luv-physics::+snapshot-traded-contact-columns+
+         luv-physics::+contact-columns-column-names+))
+;; SN4P0T-restore-trades-every-contact-column ends here
+
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
   "The solid cells of TERRAIN in [-16,32)^3. #K5DF9S"
