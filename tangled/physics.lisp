@@ -9232,7 +9232,11 @@ kernel family. #H4NDL3"
 core. #W0RKP1")
 
 (defconstant +worker-park-spins+ 20000
-  "How many times a worker waiting for a job spins or yields before it parks. #W0RKP1")
+  "How many times, at most, a worker waiting for a job spins or yields before it parks. #W0RKP1")
+
+(defconstant +worker-park-ns+ 500000
+  "How long, in nanoseconds, a worker waiting for a job spins or yields at most before it parks:
+the jobs of a step follow each other within it, the gap between a game's frames does not. #W0RKP1")
 
 (defconstant +pool-jobs+ 10
   "How many kinds of job a pool keeps its calls and timings for ([[#SPL1T5]]). #W0RKP1")
@@ -9324,9 +9328,12 @@ machine's cores; else invalid-physics-parameter naming :workers. #W0RKP1"
   "Wait until POOL's generation differs from SEEN, spinning, then parked on its wait queue;
 return the new generation. #W0RKP1"
   (declare (type worker-pool pool) (type sb-ext:word seen))
-  (let ((spins 0))
-    (declare (type fixnum spins))
-    (loop while (< spins (worker-pool-park-spins pool))
+  (let ((spins 0) (start (clock-ns)))
+    (declare (type fixnum spins start))
+    (loop while (and (< spins (worker-pool-park-spins pool))
+                     ;; past the pauses, the clock is read every 64th turn
+                     (or (< spins +worker-spins+) (logtest spins 63)
+                         (< (- (clock-ns) start) +worker-park-ns+)))
           do (unless (= (worker-pool-generation pool) seen)
                (return-from await-generation (worker-pool-generation pool)))
              (setf spins (spin-or-yield spins))))
