@@ -5133,6 +5133,16 @@ row from the handle table, a braced side static: expanded in the prepare phase's
              (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
              (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z)))))
 
+(defmacro fill-constraint-row ()
+  "Fill row K from its contact: by the short path when the world takes it and both of the
+contact's bodies have rows, else by the general one. Expanded in the prepare phase's fill, whose
+variables it reads. #PRF1LL"
+  `(if (let ((c (aref contact k)))
+         (and short-path (not static)
+              (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
+       (fill-short-row)
+       (fill-general-row)))
+
 (defmacro fill-constraint-rows ()
   "The fill: order the rows by colour, zero the side blocks, fill each colour's rows by the
 short or the general path, complete them in the frame pass, and pad each colour. Expanded in
@@ -5159,12 +5169,7 @@ the prepare phase, whose variables it reads. #PRF1LL"
                     (multiple-value-bind (from to)
                         (piece-bounds (aref color-starts color) (aref cursor color) worker count)
                       (declare (type index from to))
-                      (loop for k of-type index from from below to do
-                        (if (let ((c (aref contact k)))
-                              (and short-path (not static)
-                                   (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
-                            (fill-short-row)
-                            (fill-general-row)))))))
+                      (loop for k of-type index from from below to do (fill-constraint-row))))))
            (declare (dynamic-extent #'fill-piece))
            (run-pieces world (constraint-columns-length cbuf) :fill #'fill-piece)))
        ;; the frames, the box velocities along them and the effective masses, in lanes where
@@ -7709,6 +7714,14 @@ friction, held in the cone. #BXSOLV"
 (defconstant +box-bounce-passes+ 4
   "The passes of the bounce over the box points that struck in a step. #BXSOLV")
 
+(declaim (inline bounce-impulse))
+(defun bounce-impulse (old normal-mass restitution impact-speed dv vn)
+  "The bounce a point that struck at IMPACT-SPEED carries after a pass, from OLD before it: what
+makes its normal velocity VN the RESTITUTION times that speed, less half the change DV gravity
+gives it over a substep, through its NORMAL-MASS; a push, never a pull. #BXSOLV"
+  (declare (type single-float old normal-mass restitution impact-speed dv vn))
+  (max 0.0 (+ old (* normal-mass (- (- (* restitution impact-speed) (* 0.5 dv)) vn)))))
+
 (defun bounce-box-points (set v)
   "After the substeps, give each box point that struck this step the push that makes it leave
 at its restitution times the speed it struck at, in +box-bounce-passes+ Gauss-Seidel passes, each
@@ -7731,9 +7744,8 @@ which the velocity of the substep to come reaches less half that substep's gravi
                      (dv (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
                             (+ (* hgx ax) (* hgy ay) (* hgz az))))
                      (old (aref bounce k))
-                     (new (max 0.0 (+ old (* (aref normal-mass k)
-                                             (- (- (* (aref restitution k) (aref impact-speed k)) (* 0.5 dv))
-                                                vn)))))
+                     (new (bounce-impulse old (aref normal-mass k) (aref restitution k) (aref impact-speed k)
+                                          dv vn))
                      (push (- new old)))
                 (declare (type single-float ax ay az vn dv old new push))
                 (setf (aref bounce k) new)
@@ -7882,11 +7894,73 @@ adds GSTEP; each such box's slot gets the first and the count of its points. #BX
 ;; A box against a sphere:1 ends here
 
 ;; [[file:../physics.org::#BXSWEP][Fast boxes sweep their corners through the cells:1]]
+(declaim (inline first-crossing))
+(defun first-crossing (p i u)
+  "The distance, along a unit direction whose component along an axis is U, to the first cell
+face across that axis from coordinate P in cell I. #BXSWEP"
+  (declare (type single-float p u) (type fixnum i))
+  (cond ((> u 0.0) (/ (- (float (1+ i) 1.0) p) u))
+        ((< u 0.0) (/ (- (float i 1.0) p) u))
+        (t most-positive-single-float)))
+
+(defun corner-first-solid (probe px py pz ux uy uz reach)
+  "Walk the cells a point at PX PY PZ crosses along the unit direction UX UY UZ, within REACH and
+at most 64 cells, and return the first solid cell it enters, the axis (0 to 2) it entered it
+across and the step (+1 or -1) along that axis, as five values; the axis is -1 when it enters
+none, or starts in one. #BXSWEP"
+  (declare (type terrain-probe probe) (type single-float px py pz ux uy uz reach) #.+kernel-policy+)
+  (let* ((ix (cell-floor px)) (iy (cell-floor py)) (iz (cell-floor pz))
+         (sx (if (> ux 0.0) 1 -1)) (sy (if (> uy 0.0) 1 -1)) (sz (if (> uz 0.0) 1 -1))
+         (tx (first-crossing px ix ux)) (ty (first-crossing py iy uy)) (tz (first-crossing pz iz uz))
+         (ex (if (= ux 0.0) most-positive-single-float (/ 1.0 (abs ux))))
+         (ey (if (= uy 0.0) most-positive-single-float (/ 1.0 (abs uy))))
+         (ez (if (= uz 0.0) most-positive-single-float (/ 1.0 (abs uz)))))
+    (declare (type fixnum ix iy iz sx sy sz) (type single-float tx ty tz ex ey ez))
+    (unless (probe-solid-p probe ix iy iz)
+      (loop repeat 64 do
+        (let ((axis (cond ((and (<= tx ty) (<= tx tz)) 0) ((<= ty tz) 1) (t 2))))
+          (declare (type (integer 0 2) axis))
+          (when (> (case axis (0 tx) (1 ty) (t tz)) reach) (return))
+          (case axis
+            (0 (incf ix sx) (setf tx (+ tx ex)))
+            (1 (incf iy sy) (setf ty (+ ty ey)))
+            (t (incf iz sz) (setf tz (+ tz ez))))
+          (when (probe-solid-p probe ix iy iz)
+            (return-from corner-first-solid (values ix iy iz axis (case axis (0 sx) (1 sy) (t sz))))))))
+    (values ix iy iz -1 0)))
+
+(defun add-corner-face-point (set probe row h slot corner px py pz rx ry rz ix iy iz axis step)
+  "Append to SET the point of the awake box at ROW (handle H, slot SLOT) whose CORNER, at PX PY PZ
+and RX RY RZ from the centre, enters the solid cell IX IY IZ across AXIS by STEP, when that face
+lies beyond the faces of the corner's own cell's neighbours and the box's centre is on its air
+side: the face's normal out of the entered cell, and the corner's gap to its plane. #BXSWEP"
+  (declare (type box-set set) (type terrain-probe probe) (type index row slot) (type fixnum h corner ix iy iz step)
+           (type (integer 0 2) axis) (type single-float px py pz rx ry rz) #.+kernel-policy+)
+  (let* ((face (+ (* 2 axis) (if (> step 0) 1 0)))
+         ;; the normal out of the entered cell, back along the axis
+         (nx (if (= axis 0) (float (- step) 1.0) 0.0))
+         (ny (if (= axis 1) (float (- step) 1.0) 0.0))
+         (nz (if (= axis 2) (float (- step) 1.0) 0.0))
+         ;; the face's plane, and the corner's distance to it
+         (gap (case axis
+                (0 (if (> step 0) (- (float ix 1.0) px) (- px (float (1+ ix) 1.0))))
+                (1 (if (> step 0) (- (float iy 1.0) py) (- py (float (1+ iy) 1.0))))
+                (t (if (> step 0) (- (float iz 1.0) pz) (- pz (float (1+ iz) 1.0))))))
+         ;; the neighbour of the corner's own cell across the same face
+         (cx (+ (cell-floor px) (if (= axis 0) step 0)))
+         (cy (+ (cell-floor py) (if (= axis 1) step 0)))
+         (cz (+ (cell-floor pz) (if (= axis 2) step 0))))
+    (declare (type fixnum face cx cy cz) (type single-float nx ny nz gap))
+    (when (and (not (probe-solid-p probe cx cy cz))
+               (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
+      (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz gap))))
+
 (defun sweep-box-corners (world set row reach)
   "Append to SET's points, for the awake box at ROW of WORLD, each corner's first cell face
 along the box's travel this step within REACH that lies beyond the faces of the corner's own
-cell's neighbours ([[#BXCELL]]): the corner walks the cells it crosses, and the face it enters
-a solid cell through, with the box's centre on its air side, is its point. #BXSWEP"
+cell's neighbours ([[#BXCELL]]): the corner walks the cells it crosses (corner-first-solid), and
+the face it enters a solid cell through, with the box's centre on its air side, is its point
+(add-corner-face-point). #BXSWEP"
   (declare (type box-set set) (type index row) (type single-float reach) #.+kernel-policy+)
   (let ((terrain (physics-world-terrain world)) (probe (physics-world-probe world))
         (dt (physics-world-current-dt world)))
@@ -7907,58 +7981,18 @@ a solid cell through, with the box's centre on its air side, is its point. #BXSW
               (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
                   (box-axes (aref qw row) (aref qx row) (aref qy row) (aref qz row))
                 (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
-                (flet ((solid (ix iy iz) (declare (type fixnum ix iy iz)) (probe-solid-p probe ix iy iz))
-                       (first-crossing (p i u)
-                         ;; the distance along the way to the first face across axis coordinate P
-                         ;; from cell I, moving at U along that axis
-                         (declare (type single-float p u) (type fixnum i))
-                         (cond ((> u 0.0) (/ (- (float (1+ i) 1.0) p) u))
-                               ((< u 0.0) (/ (- (float i 1.0) p) u))
-                               (t most-positive-single-float))))
-                  (declare (inline solid first-crossing))
-                  (dotimes (corner 8)
-                    (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
-                           (c (if (logbitp 2 corner) hz (- hz)))
-                           (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
-                           (rz (+ (* r31 a) (* r32 b) (* r33 c)))
-                           (px (+ (aref x row) rx)) (py (+ (aref y row) ry)) (pz (+ (aref z row) rz))
-                           (cx (cell-floor px)) (cy (cell-floor py)) (cz (cell-floor pz))
-                           (ix cx) (iy cy) (iz cz)
-                           (sx (if (> ux 0.0) 1 -1)) (sy (if (> uy 0.0) 1 -1)) (sz (if (> uz 0.0) 1 -1))
-                           (tx (first-crossing px ix ux)) (ty (first-crossing py iy uy)) (tz (first-crossing pz iz uz))
-                           (ex (if (= ux 0.0) most-positive-single-float (/ 1.0 (abs ux))))
-                           (ey (if (= uy 0.0) most-positive-single-float (/ 1.0 (abs uy))))
-                           (ez (if (= uz 0.0) most-positive-single-float (/ 1.0 (abs uz)))))
-                      (declare (type single-float a b c rx ry rz px py pz tx ty tz ex ey ez)
-                               (type fixnum cx cy cz ix iy iz sx sy sz))
-                      (unless (solid ix iy iz)
-                        (loop for steps of-type fixnum from 1 to 64 do
-                          (let ((axis (cond ((and (<= tx ty) (<= tx tz)) 0) ((<= ty tz) 1) (t 2))))
-                            (declare (type (integer 0 2) axis))
-                            (when (> (case axis (0 tx) (1 ty) (t tz)) reach) (return))
-                            (case axis
-                              (0 (incf ix sx) (setf tx (+ tx ex)))
-                              (1 (incf iy sy) (setf ty (+ ty ey)))
-                              (t (incf iz sz) (setf tz (+ tz ez))))
-                            (when (solid ix iy iz)
-                              (let* ((step (case axis (0 sx) (1 sy) (t sz)))
-                                     (face (+ (* 2 axis) (if (> step 0) 1 0)))
-                                     ;; the normal out of the entered cell, back along the axis
-                                     (nx (if (= axis 0) (float (- step) 1.0) 0.0))
-                                     (ny (if (= axis 1) (float (- step) 1.0) 0.0))
-                                     (nz (if (= axis 2) (float (- step) 1.0) 0.0))
-                                     ;; the face's plane, and the corner's distance to it
-                                     (gap (case axis
-                                            (0 (if (> step 0) (- (float ix 1.0) px) (- px (float (1+ ix) 1.0))))
-                                            (1 (if (> step 0) (- (float iy 1.0) py) (- py (float (1+ iy) 1.0))))
-                                            (t (if (> step 0) (- (float iz 1.0) pz) (- pz (float (1+ iz) 1.0)))))))
-                                (declare (type fixnum step face) (type single-float nx ny nz gap))
-                                ;; beyond the neighbours' faces, with the centre on the face's air side
-                                (when (and (not (solid (+ cx (if (= axis 0) step 0)) (+ cy (if (= axis 1) step 0))
-                                                       (+ cz (if (= axis 2) step 0))))
-                                           (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
-                                  (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz gap)))
-                              (return)))))))))))))))
+                (dotimes (corner 8)
+                  (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
+                         (c (if (logbitp 2 corner) hz (- hz)))
+                         (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
+                         (rz (+ (* r31 a) (* r32 b) (* r33 c)))
+                         (px (+ (aref x row) rx)) (py (+ (aref y row) ry)) (pz (+ (aref z row) rz)))
+                    (declare (type single-float a b c rx ry rz px py pz))
+                    (multiple-value-bind (ix iy iz axis step) (corner-first-solid probe px py pz ux uy uz reach)
+                      (declare (type fixnum ix iy iz axis step))
+                      (when (>= axis 0)
+                        (add-corner-face-point set probe row h slot corner px py pz rx ry rz
+                                               ix iy iz axis step))))))))))))
   set)
 ;; Fast boxes sweep their corners through the cells:1 ends here
 
@@ -7985,6 +8019,43 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
                   (lean (and (= (aref kind c) +contact-pair+)
                              (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
              (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
+
+(defmacro store-contact-row ()
+  "Store row K, of contact C: its impulses into the contact, its mark when the piece MARKs, the
+step's deepest gap and fastest approach, its touch and hit events: expanded in the store phase's
+piece, with its variables. #ST0R3S"
+  `(let* ((base (constraint-base k))
+          (c (aref contact k))
+          (g (geometry-start c))
+          (pushed (if-feature (:or :contact-events :hit-events) (> (@ max-normal-impulse) 0.0) nil))
+          (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
+          (x (@ nx)) (y (@ ny)) (z (@ nz))
+          ;; the gap the last relax pass kept, less the slop the prepared gap carries
+          (gap (- (@ gap) slop))
+          ;; without body contacts the other side is the dummy row, whose velocity is
+          ;; the zero the prepare phase wrote, which no one-sided kernel changes
+          (vn (+ (* (- (if-feature :body-contacts (aref v b) 0.0) (aref v a)) x)
+                 (* (- (if-feature :body-contacts (aref v (+ b 1)) 0.0) (aref v (+ a 1))) y)
+                 (* (- (if-feature :body-contacts (aref v (+ b 2)) 0.0) (aref v (+ a 2))) z)
+                 (if-feature :boxes (@ kvn) 0.0))))
+     (declare (type fixnum c) (type index base g) (ignorable pushed b))
+     (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
+           (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2))
+     ;; without rolling resistance the contact's rolling impulses stay the zeros it was
+     ;; made with
+     (if-feature :rolling-resistance
+       (setf (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
+             (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z)))
+     ;; and the spin impulse, for the next step's first substep to start from it: only
+     ;; a row with no radius on side b has one, and no other row's side block is read
+     (if-feature :friction
+       (when (= (@ rb) 0.0) (setf (contact-at geometry g spin-impulse) (@ spin-impulse))))
+     (when mark (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
+     (when (< gap 0.0)
+       (setf max-penetration (max max-penetration (- gap))
+             max-approach (max max-approach (- vn))))
+     (store-touch-event)
+     (store-hit-event)))
 
 (defmacro store-touch-event ()
   "A :begin or :end event for row K's contact C when whether it pushed this step (PUSHED) differs
@@ -8052,42 +8123,10 @@ so its undo log closes. #ST0R3S"
                    (declare (type fixnum worker count))
                    (let ((max-penetration 0.0) (max-approach 0.0) (mark (and marking (= count 1))))
                      (declare (type single-float max-penetration max-approach))
-                   (multiple-value-bind (from to) (piece-bounds 0 (constraint-columns-length cbuf) worker count)
-                     (declare (type index from to))
-          (loop for k of-type index from from below to
-                unless (< (aref contact k) 0) do
-            (let* ((base (constraint-base k))
-                   (c (aref contact k))
-                   (g (geometry-start c))
-                   (pushed (if-feature (:or :contact-events :hit-events) (> (@ max-normal-impulse) 0.0) nil))
-                   (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
-                   (x (@ nx)) (y (@ ny)) (z (@ nz))
-                   ;; the gap the last relax pass kept, less the slop the prepared gap carries
-                   (gap (- (@ gap) slop))
-                   ;; without body contacts the other side is the dummy row, whose velocity is
-                   ;; the zero the prepare phase wrote, which no one-sided kernel changes
-                   (vn (+ (* (- (if-feature :body-contacts (aref v b) 0.0) (aref v a)) x)
-                          (* (- (if-feature :body-contacts (aref v (+ b 1)) 0.0) (aref v (+ a 1))) y)
-                          (* (- (if-feature :body-contacts (aref v (+ b 2)) 0.0) (aref v (+ a 2))) z)
-                          (if-feature :boxes (@ kvn) 0.0))))
-              (declare (type fixnum c) (type index base g) (ignorable pushed b))
-              (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
-                    (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2))
-              ;; without rolling resistance the contact's rolling impulses stay the zeros it was
-              ;; made with
-              (if-feature :rolling-resistance
-                (setf (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
-                      (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z)))
-              ;; and the spin impulse, for the next step's first substep to start from it: only
-              ;; a row with no radius on side b has one, and no other row's side block is read
-              (if-feature :friction
-                (when (= (@ rb) 0.0) (setf (contact-at geometry g spin-impulse) (@ spin-impulse))))
-              (when mark (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
-              (when (< gap 0.0)
-                (setf max-penetration (max max-penetration (- gap))
-                      max-approach (max max-approach (- vn))))
-              (store-touch-event)
-              (store-hit-event))))
+                     (multiple-value-bind (from to) (piece-bounds 0 (constraint-columns-length cbuf) worker count)
+                       (declare (type index from to))
+                       (loop for k of-type index from from below to
+                             unless (< (aref contact k) 0) do (store-contact-row)))
                      (setf (aref maxima (* 2 worker)) max-penetration
                            (aref maxima (1+ (* 2 worker))) max-approach))))
             (declare (dynamic-extent #'store-piece))
