@@ -1334,55 +1334,72 @@ so a walk over neighbouring cells reads positions from one run of memory. #D9W4C
           (setf (aref starts buckets) n)))))
     grid))
 
+(defmacro do-dense-grid-runs ((entry grid) (i0 j0 k0 i1 j1 k1) &body body)
+  "Run BODY with ENTRY bound to each place of the dense GRID's order whose cell lies from I0 J0 K0
+to I1 J1 K1 (fixnums), cut to the grid's own box: layer by layer along z, row by row along y,
+each row of cells along x one run of places. #D9W4CH"
+  (let ((g (gensym "GRID")) (starts (gensym "STARTS")) (ox (gensym "OX")) (oy (gensym "OY"))
+        (oz (gensym "OZ")) (nx (gensym "NX")) (ny (gensym "NY")) (nz (gensym "NZ"))
+        (lo (gensym "LO")) (hi (gensym "HI")) (j (gensym "J")) (k (gensym "K")) (row (gensym "ROW")))
+    `(let* ((,g ,grid) (,starts (hash-grid-starts ,g))
+            (,ox (hash-grid-ox ,g)) (,oy (hash-grid-oy ,g)) (,oz (hash-grid-oz ,g))
+            (,nx (hash-grid-nx ,g)) (,ny (hash-grid-ny ,g)) (,nz (hash-grid-nz ,g))
+            (,lo (max ,ox ,i0)) (,hi (min (+ ,ox ,nx -1) ,i1)))
+       ;; a dense grid's box is under 4096 cells a side
+       (declare (type fixnum-column ,starts) (type cell ,ox ,oy ,oz)
+                (type (integer 1 4096) ,nx ,ny ,nz) (type fixnum ,lo ,hi))
+       (when (<= ,lo ,hi)
+         (loop for ,k of-type fixnum from (max ,oz ,k0) to (min (+ ,oz ,nz -1) ,k1) do
+           (loop for ,j of-type fixnum from (max ,oy ,j0) to (min (+ ,oy ,ny -1) ,j1)
+                 for ,row of-type fixnum = (* ,nx (+ (- ,j ,oy) (* ,ny (- ,k ,oz))))
+                 do (loop for ,entry of-type fixnum from (aref ,starts (+ ,row (- ,lo ,ox)))
+                            below (aref ,starts (+ ,row (- ,hi ,ox) 1))
+                          do (progn ,@body))))))))
+
+(defmacro do-hashed-grid-cells ((entry grid) (i0 j0 k0 i1 j1 k1) &body body)
+  "Run BODY with ENTRY bound to each place of the hashed GRID's order whose cell lies from I0 J0
+K0 to I1 J1 K1 (fixnums), cell by cell in the order z, y, x: each cell's key names a bucket,
+and of the bucket's places those of that key belong. #D9W4CH"
+  (let ((g (gensym "GRID")) (starts (gensym "STARTS")) (keys (gensym "KEYS")) (mask (gensym "MASK"))
+        (i (gensym "I")) (j (gensym "J")) (k (gensym "K")) (key (gensym "KEY")) (b (gensym "B")))
+    `(let* ((,g ,grid) (,starts (hash-grid-starts ,g)) (,keys (hash-grid-keys ,g))
+            (,mask (hash-grid-mask ,g)))
+       (declare (type fixnum-column ,starts ,keys) (type fixnum ,mask))
+       (loop for ,k of-type fixnum from ,k0 to ,k1 do
+         (loop for ,j of-type fixnum from ,j0 to ,j1 do
+           (loop for ,i of-type fixnum from ,i0 to ,i1
+                 for ,key of-type fixnum = (grid-cell-key ,i ,j ,k)
+                 for ,b of-type fixnum = (grid-bucket ,key ,mask)
+                 do (loop for ,entry of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
+                          when (= (aref ,keys ,entry) ,key)
+                            do (progn ,@body))))))))
+
+(defmacro do-grid-entries ((entry grid) (i0 j0 k0 i1 j1 k1) &body body)
+  "Run BODY with ENTRY bound to the place, in GRID's order, of each item bucketed in a cell from
+I0 J0 K0 to I1 J1 K1 (cell coordinates, fixnums), cell by cell in the order z, y, x, the dense
+grid's way or the hashed grid's. The bounds are read once, before any cell. #D9W4CH"
+  (let ((g (gensym "GRID")) (visit (gensym "VISIT")) (e (gensym "E"))
+        (box (loop for name in '("I0" "J0" "K0" "I1" "J1" "K1") collect (gensym name))))
+    `(let ((,g ,grid) ,@(mapcar #'list box (list i0 j0 k0 i1 j1 k1)))
+       (declare (type fixnum ,@box))
+       (flet ((,visit (,entry) (declare (type index ,entry) (ignorable ,entry)) ,@body))
+         (declare (inline ,visit))
+         (cond ((zerop (hash-grid-count ,g)))
+               ((hash-grid-dense ,g) (do-dense-grid-runs (,e ,g) ,box (,visit ,e)))
+               (t (do-hashed-grid-cells (,e ,g) ,box (,visit ,e))))))))
+
 (defmacro do-grid-cells (((item &optional entry) grid) (i0 j0 k0 i1 j1 k1) &body body)
   "Run BODY with ITEM bound to each item of GRID bucketed in a cell from I0 J0 K0 to I1 J1 K1 (cell
-coordinates, fixnums), cell by cell in the order z, y, x; ENTRY, when given, is bound to the
-item's place in the grid's order, where the grid keeps its copy of the item's centre. A dense
-grid visits only the cells inside its own box, each row of cells along x as one run of its
-items. #D9W4CH"
-  (let ((g (gensym "GRID")) (i (gensym)) (j (gensym)) (k (gensym)) (e (gensym)) (key (gensym)) (b (gensym))
-        (lo (gensym "LO")) (hi (gensym "HI")) (row (gensym "ROW")) (visit (gensym "VISIT"))
-        (starts (gensym "STARTS")) (items (gensym "ITEMS")) (keys (gensym "KEYS"))
-        (ci0 (gensym)) (cj0 (gensym)) (ck0 (gensym)) (ci1 (gensym)) (cj1 (gensym)) (ck1 (gensym))
-        (entry (or entry (gensym "ENTRY"))))
-    `(let ((,g ,grid) (,ci0 ,i0) (,cj0 ,j0) (,ck0 ,k0) (,ci1 ,i1) (,cj1 ,j1) (,ck1 ,k1))
-       (declare (type fixnum ,ci0 ,cj0 ,ck0 ,ci1 ,cj1 ,ck1))
-       (let ((,starts (hash-grid-starts ,g)) (,items (hash-grid-items ,g)) (,keys (hash-grid-keys ,g)))
-         (declare (type fixnum-column ,starts ,items ,keys))
-         (flet ((,visit (,entry)
-                  (declare (type index ,entry) (ignorable ,entry))
-                  (let ((,item (aref ,items ,entry)))
-                    (declare (type fixnum ,item) (ignorable ,item))
-                    ,@body)))
-           (declare (inline ,visit))
-           (cond
-             ((zerop (hash-grid-count ,g)))
-             ((hash-grid-dense ,g)
-              ;; rows of cells along x are contiguous runs of items; a dense grid's box is under
-              ;; 4096 cells a side
-              (let* ((ox (hash-grid-ox ,g)) (oy (hash-grid-oy ,g)) (oz (hash-grid-oz ,g))
-                     (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g))
-                     (,lo (max ox ,ci0)) (,hi (min (+ ox nx -1) ,ci1)))
-                (declare (type cell ox oy oz) (type (integer 1 4096) nx ny nz) (type fixnum ,lo ,hi))
-                (when (<= ,lo ,hi)
-                  (loop for ,k of-type fixnum from (max oz ,ck0) to (min (+ oz nz -1) ,ck1) do
-                    (loop for ,j of-type fixnum from (max oy ,cj0) to (min (+ oy ny -1) ,cj1) do
-                      (let ((,row (* nx (+ (- ,j oy) (* ny (- ,k oz))))))
-                        (declare (type fixnum ,row))
-                        (loop for ,e of-type fixnum from (aref ,starts (+ ,row (- ,lo ox)))
-                                below (aref ,starts (+ ,row (- ,hi ox) 1))
-                              do (,visit ,e))))))))
-             (t
-              (let ((mask (hash-grid-mask ,g)))
-                (declare (type fixnum mask))
-                (loop for ,k of-type fixnum from ,ck0 to ,ck1 do
-                  (loop for ,j of-type fixnum from ,cj0 to ,cj1 do
-                    (loop for ,i of-type fixnum from ,ci0 to ,ci1 do
-                      (let* ((,key (grid-cell-key ,i ,j ,k))
-                             (,b (grid-bucket ,key mask)))
-                        (loop for ,e of-type fixnum from (aref ,starts ,b) below (aref ,starts (1+ ,b))
-                              when (= (aref ,keys ,e) ,key)
-                                do (,visit ,e))))))))))))))
+coordinates, fixnums), cell by cell in the order z, y, x (do-grid-entries); ENTRY, when given,
+is bound to the item's place in the grid's order, where the grid keeps its copy of the item's
+centre. #D9W4CH"
+  (let ((g (gensym "GRID")) (items (gensym "ITEMS")) (entry (or entry (gensym "ENTRY"))))
+    `(let* ((,g ,grid) (,items (hash-grid-items ,g)))
+       (declare (type fixnum-column ,items))
+       (do-grid-entries (,entry ,g) (,i0 ,j0 ,k0 ,i1 ,j1 ,k1)
+         (let ((,item (aref ,items ,entry)))
+           (declare (type fixnum ,item) (ignorable ,item))
+           ,@body)))))
 
 (defmacro do-grid-neighbours ((item grid x y z &key (span 1)) &body body)
   "Run BODY with ITEM bound to each item of GRID whose cell lies within SPAN cells of the cell
@@ -5133,13 +5150,22 @@ the prepare phase, whose variables it reads. #PRF1LL"
                            (fr-c friction) (re-c restitution) (ro-c rolling-resistance))
            awake
          (declare (ignorable re-c ro-c))
-         (dotimes (color (1+ +physics-max-colors+))
-           (loop for k of-type index from (aref color-starts color) below (aref cursor color) do
-             (if (let ((c (aref contact k)))
-                   (and short-path (not static)
-                        (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
-                 (fill-short-row)
-                 (fill-general-row)))))
+         ;; each row is written from its contact alone, so the rows may be cut into pieces
+         ;; of whole blocks, one a worker ([[#SPL1T5]])
+         (flet ((fill-piece (worker count)
+                  (declare (type fixnum worker count))
+                  (dotimes (color (1+ +physics-max-colors+))
+                    (multiple-value-bind (from to)
+                        (piece-bounds (aref color-starts color) (aref cursor color) worker count)
+                      (declare (type index from to))
+                      (loop for k of-type index from from below to do
+                        (if (let ((c (aref contact k)))
+                              (and short-path (not static)
+                                   (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
+                            (fill-short-row)
+                            (fill-general-row)))))))
+           (declare (dynamic-extent #'fill-piece))
+           (run-pieces world (constraint-columns-length cbuf) :fill #'fill-piece)))
        ;; the frames, the box velocities along them and the effective masses, in lanes where
        ;; the family has them
        (physics-prepare-frames (physics-world-kernels world) world)
@@ -6709,7 +6735,8 @@ the dummy for a cell, the first the dummy for a sleeping box's corner), the poin
 feature), the handle of the box that found it, the normal (pushing the first side off the
 second), the levers from both centres, the two tangents, the gap at the step's start, the
 effective masses, the friction, the three carried impulses, and each side's inverse mass and world
-inverse inertia's six entries. #BXR0WS"
+inverse inertia's six entries, then the point's restitution, its largest push this step, the
+speed it struck at this step and its bounce ([[#BXSOLV]]). #BXR0WS"
   (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
   (sx single-float) (sy single-float) (sz single-float) (imb single-float)
   (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
@@ -6721,15 +6748,16 @@ inverse inertia's six entries. #BXR0WS"
   (tangent-mass-2 single-float) (friction single-float)
   (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
   (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
-  (i22 single-float) (i23 single-float) (i33 single-float))
+  (i22 single-float) (i23 single-float) (i33 single-float)
+  (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float))
 
 (defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
   "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
 many boxes live, the contact points of this step and of the last one, each with the first row
 and the count of every slot's points, the awake box rows of this step, their turns (three floats
 a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
-step's start (four floats a box), whether this step solves points, and the soft coefficients of
-the step. #BXR0WS"
+step's start (four floats a box), whether this step solves points, the soft coefficients of the
+step, and its restitution threshold and gravity times the substep. #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -6754,7 +6782,9 @@ the step. #BXR0WS"
   (bias-rate 0.0 :type single-float)
   (mass-scale 1.0 :type single-float)
   (impulse-scale 0.0 :type single-float)
-  (push-max 0.0 :type single-float))
+  (push-max 0.0 :type single-float)
+  (threshold 0.0 :type single-float)
+  (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float))
 
 (defun box-set-room (set slots)
   "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
@@ -6848,9 +6878,6 @@ made without :box-bodies refuses it with physics-feature-omitted. #BXR0WS"
                       (density (* volume (finite-f32 :density density world)))
                       (t 1.0)))
              (fx (finite-f32 :x x world)) (fy (finite-f32 :y y world)) (fz (finite-f32 :z z world)))
-        (unless (and (realp restitution) (zerop restitution))
-          (error 'invalid-physics-parameter :world world :name :restitution :value restitution
-                                            :expected "0 for a box, which does not bounce"))
         (check-coordinate :x fx world) (check-coordinate :y fy world) (check-coordinate :z fz world)
         (unless (member inside-cells '(:refuse :push-out))
           (error 'invalid-physics-parameter :world world :name :inside-cells :value inside-cells
@@ -6865,7 +6892,7 @@ made without :box-bodies refuses it with physics-feature-omitted. #BXR0WS"
         (check-body-room world 'add-physics-box)
         ;; add-physics-body checks the rest before it touches the world
         (let* ((handle (add-physics-body world fx fy fz :radius (box-half-diagonal hx hy hz) :mass m
-                                         :friction friction :vx vx :vy vy :vz vz :life life
+                                         :friction friction :restitution restitution :vx vx :vy vy :vz vz :life life
                                          :collide-with-bodies nil :kind kind :inside-cells :push-out
                                          :category category :mask mask :gravity-scale gravity-scale))
                (set (or (physics-world-box-bodies world)
@@ -7503,6 +7530,9 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                   (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
           ;; the awake boxes by cell, for the walk over their pairs ([[#BXCELL]])
           (grid-awake-boxes world set n)
+          (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
+            (setf (box-set-threshold set) threshold (box-set-hgx set) hgx (box-set-hgy set) hgy
+                  (box-set-hgz set) hgz))
           (with-body-columns (vx vy vz flags handle) awake
             (dotimes (i n)
               (when (logtest (aref flags i) +flag-box-shape+)
@@ -7514,9 +7544,13 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                   (when near (setf (aref near i) most-positive-single-float))
                   (let ((reach (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))))
                     (find-box-points world set i reach)
-                    (find-box-box-points world set i reach))
+                    (find-box-box-points world set i reach)
+                    ;; the spheres near it ([[#BXSPHR]])
+                    (find-box-sphere-points world set i reach dt gstep))
                   (setf (aref (box-set-first set) slot) start
-                        (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))))
+                        (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))
+            ;; the sleeping boxes, held still, against the awake spheres ([[#BXSPHR]])
+            (find-sleeping-box-sphere-points world set margin dt gstep)))
         (prepare-box-point-masses world set)))
     (setf (box-set-solving set) (plusp (box-point-columns-length (box-set-points set))))
     (and (box-set-solving set) set)))
@@ -7524,10 +7558,16 @@ box set when some point is to be solved, else NIL. #BXSOLV"
 (defun box-row-inertia (awake set i)
   "The inverse mass of the box at awake row I of AWAKE, a buffer of SET's world, and its world
 inverse inertia R D^-1 R^T as six entries 11 12 13 22 23 33: seven values, zeros for the dummy row
-past the awake ones. #BXSOLV"
+past the awake ones, and for a sphere its scalar inverse inertia on the diagonal. #BXSOLV"
   (declare (type body-columns awake) (type box-set set) (type index i) #.+kernel-policy+)
-  (if (>= i (body-columns-length awake))
-      (values 0.0 0.0 0.0 0.0 0.0 0.0 0.0)
+  (cond
+    ((>= i (body-columns-length awake))
+      (values 0.0 0.0 0.0 0.0 0.0 0.0 0.0))
+    ;; a sphere met by a box ([[#BXSPHR]]): its scalar inverse inertia on the diagonal
+    ((not (logtest (aref (body-columns-flags awake) i) +flag-box-shape+))
+     (let ((ii (aref (body-columns-inverse-inertia awake) i)))
+       (values (aref (body-columns-inverse-mass awake) i) ii 0.0 0.0 ii 0.0 ii)))
+    (t
       (with-body-columns (qw qx qy qz inverse-mass handle) awake
         (let* ((slot (handle-index (aref handle i)))
                (m (aref inverse-mass i))
@@ -7546,7 +7586,7 @@ past the awake ones. #BXSOLV"
                     (+ (* r11 r31 dx) (* r12 r32 dy) (* r13 r33 dz))
                     (+ (* r21 r21 dx) (* r22 r22 dy) (* r23 r23 dz))
                     (+ (* r21 r31 dx) (* r22 r32 dy) (* r23 r33 dz))
-                    (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz))))))))
+                    (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz)))))))))
 
 (defun prepare-box-point-masses (world set)
   "Write each of SET's points' sides' inverse masses and world inverse inertias, its tangents,
@@ -7556,13 +7596,18 @@ slop, so a box rests a slop deep as a sphere does. #BXSOLV"
   (let ((awake (physics-world-awake world)) (points (box-set-points set))
         (slop (f32 (physics-world-slop world))))
     (declare (type single-float slop))
-    (with-body-columns ((fr friction)) awake
+    (with-body-columns ((fr friction) (re restitution)) awake
       (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
                                tangent-mass-1 tangent-mass-2 friction im i11 i12 i13 i22 i23 i33
-                               imb j11 j12 j13 j22 j23 j33 separation)
+                               imb j11 j12 j13 j22 j23 j33 separation restitution pushed impact-speed bounce)
           points
         (dotimes (k (box-point-columns-length points))
           (setf (aref separation k) (+ (aref separation k) slop))
+          ;; the larger restitution of the sides that move, as a sphere contact's ([[#PR3PAR]])
+          (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
+            (declare (type index a b n))
+            (setf (aref restitution k) (max (if (< a n) (aref re a) 0.0) (if (< b n) (aref re b) 0.0))
+                  (aref pushed k) 0.0 (aref impact-speed k) 0.0 (aref bounce k) 0.0))
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
             (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set a)
@@ -7655,18 +7700,33 @@ the point, P/m and I^-1 (r x P) to the first side and their opposites to the sec
                    (+ (* pn (aref nz k)) (* p1 (aref t1z k)) (* p2 (aref t2z k)))))))))
   nil)
 
+(defmacro box-point-impact-speed (vn s positive biased inv-h dv)
+  "The speed at which a box point whose normal velocity is VN and whose gap is S strikes, as a
+sphere row's ([[#R3ST1T]]): VN taken at this instant of the substep (the solve pass, BIASED, runs
+before its positions move, the relax pass after), and grown by the fall through the gap still
+open, DV the change of VN over a substep under gravity. #BXSOLV"
+  `(let* ((half (* 0.5 ,dv))
+          (c (if ,biased (- ,vn half) (+ ,vn half)))
+          (u2 (- (* c c) (* (* (* 2.0 ,dv) (if ,positive ,s 0.0)) ,inv-h))))
+     (declare (type single-float half c u2))
+     (fsqrt (if (> u2 0.0) u2 0.0))))
+
 (defun solve-box-points (set v d inv-h use-bias)
   "One pass over the box points: each normal impulse, with the soft bias when USE-BIAS (the
-solve) and without it (the relax), clamped to push only; then its friction, held in the cone. #BXSOLV"
+solve) and without it (the relax), clamped to push only, keeping the speed of an impact; then its
+friction, held in the cone. #BXSOLV"
   (declare (type box-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
   (let ((points (box-set-points set)) (turns (box-set-turns set))
         (bias-rate (box-set-bias-rate set)) (mass-scale (box-set-mass-scale set))
-        (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set)))
-    (declare (type f32-column turns) (type single-float bias-rate mass-scale impulse-scale push-max))
+        (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set))
+        (threshold (box-set-threshold set))
+        (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
+    (declare (type f32-column turns)
+             (type single-float bias-rate mass-scale impulse-scale push-max threshold hgx hgy hgz))
     (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
                              normal-mass tangent-mass-1 tangent-mass-2 friction normal-impulse
                              tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33)
+                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed)
         points
       (dotimes (k (box-point-columns-length points))
         (with-box-point (v k)
@@ -7693,7 +7753,15 @@ solve) and without it (the relax), clamped to push only; then its friction, held
                  (new (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old))))
                  (pn (- new old)))
             (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
-            (setf (aref normal-impulse k) new)
+            ;; an impact: the first push this step of a point with restitution approaching faster
+            ;; than the threshold; its speed is kept for the bounce after the substeps
+            (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0) (> new 0.0) (< vn (- threshold)))
+              (setf (aref impact-speed k)
+                    (box-point-impact-speed vn s positive use-bias inv-h
+                                            (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
+                                               (+ (* hgx ax) (* hgy ay) (* hgz az))))))
+            (setf (aref normal-impulse k) new
+                  (aref pushed k) (max (aref pushed k) new))
             (push! (* pn ax) (* pn ay) (* pn az))
             ;; friction in the cone of mu times the normal impulse
             (multiple-value-bind (ux uy uz) (point-velocity)
@@ -7737,6 +7805,33 @@ last spin over the step. #BXSOLV"
               (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s))))))))
   nil)
 
+(defconstant +box-bounce-passes+ 4
+  "The passes of the bounce over the box points that struck in a step. #BXSOLV")
+
+(defun bounce-box-points (set v)
+  "After the substeps, give each box point that struck this step the push that makes it leave
+at its restitution times the speed it struck at, in +box-bounce-passes+ Gauss-Seidel passes, each
+point's bounce a push of its own, never a pull. #BXSOLV"
+  (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
+  (let ((points (box-set-points set)))
+    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
+                             imb j11 j12 j13 j22 j23 j33 restitution impact-speed bounce)
+        points
+      (dotimes (pass +box-bounce-passes+)
+        (dotimes (k (box-point-columns-length points))
+          (when (> (aref impact-speed k) 0.0)
+            (with-box-point (v k)
+              (let* ((ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
+                     (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
+                     (old (aref bounce k))
+                     (new (max 0.0 (+ old (* (aref normal-mass k)
+                                             (- (* (aref restitution k) (aref impact-speed k)) vn)))))
+                     (push (- new old)))
+                (declare (type single-float ax ay az vn old new push))
+                (setf (aref bounce k) new)
+                (push! (* push ax) (* push ay) (* push az)))))))))
+  nil)
+
 (defun turn-box-rows (set v h)
   "Add to each awake box's turn its spin over the substep H, after the positions integrate. #BXSOLV"
   (declare (type box-set set) (type f32-column v) (type single-float h) #.+kernel-policy+)
@@ -7750,6 +7845,133 @@ last spin over the step. #BXSOLV"
               (aref turns (+ tr 2)) (+ (aref turns (+ tr 2)) (* h (aref v (+ o 5))))))))
   nil)
 ;; Box points in the substeps:1 ends here
+
+;; [[file:../physics.org::#BXSPHR][A box against a sphere:1]]
+(declaim (inline box-sphere-key))
+(defun box-sphere-key (slot sphere-slot)
+  "The key of the point between the box in handle slot SLOT and the sphere in handle slot
+SPHERE-SLOT: a box-box key's bit with the low byte all ones, which no box-box key has. #BXSPHR"
+  (declare (type (unsigned-byte 24) slot sphere-slot))
+  (logior (ash slot 34) (ash 1 32) (ash sphere-slot 8) 255))
+
+(defun box-sphere-point (set owner key row-a row-b reach ax ay az radius
+                         bcx bcy bcz qw qx qy qz hx hy hz)
+  "Append to SET, as a point found by the box OWNER under KEY, the point between the sphere of
+centre AX AY AZ and RADIUS at solver row ROW-A and the box of centre BCX BCY BCZ, orientation QW ..
+QZ and half-extents HX HY HZ at solver row ROW-B, when its gap is under REACH: the box's point
+nearest the centre, the normal from the box to the sphere. #BXSPHR"
+  (declare (type box-set set) (type fixnum owner key) (type index row-a row-b)
+           (type single-float reach ax ay az radius bcx bcy bcz qw qx qy qz hx hy hz) #.+kernel-policy+)
+  (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33) (box-axes qw qx qy qz)
+    (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+    (let* ((dx (- ax bcx)) (dy (- ay bcy)) (dz (- az bcz))
+           ;; the centre in the box's frame, and its nearest point of the box
+           (u (+ (* r11 dx) (* r21 dy) (* r31 dz)))
+           (v (+ (* r12 dx) (* r22 dy) (* r32 dz)))
+           (w (+ (* r13 dx) (* r23 dy) (* r33 dz)))
+           (cu (max (- hx) (min hx u))) (cv (max (- hy) (min hy v))) (cw (max (- hz) (min hz w)))
+           (lu (- u cu)) (lv (- v cv)) (lw (- w cw))
+           (d2 (+ (* lu lu) (* lv lv) (* lw lw))))
+      (declare (type single-float dx dy dz u v w cu cv cw lu lv lw d2))
+      (multiple-value-bind (nu nv nw gap)
+          (if (> d2 0.0)
+              ;; outside: along the way from the nearest point to the centre
+              (let* ((dist (fsqrt d2)) (inv (/ 1.0 dist)))
+                (values (* lu inv) (* lv inv) (* lw inv) (- dist radius)))
+              ;; inside: out of the face it is least deep behind, onto which the point moves
+              (let ((du (- hx (abs u))) (dv (- hy (abs v))) (dw (- hz (abs w))))
+                (cond ((and (<= du dv) (<= du dw))
+                       (setf cu (if (>= u 0.0) hx (- hx)))
+                       (values (if (>= u 0.0) 1.0 -1.0) 0.0 0.0 (- (- du) radius)))
+                      ((<= dv dw)
+                       (setf cv (if (>= v 0.0) hy (- hy)))
+                       (values 0.0 (if (>= v 0.0) 1.0 -1.0) 0.0 (- (- dv) radius)))
+                      (t
+                       (setf cw (if (>= w 0.0) hz (- hz)))
+                       (values 0.0 0.0 (if (>= w 0.0) 1.0 -1.0) (- (- dw) radius))))))
+        (declare (type single-float nu nv nw gap))
+        (when (< gap reach)
+          (let ((nx (+ (* r11 nu) (* r12 nv) (* r13 nw)))
+                (ny (+ (* r21 nu) (* r22 nv) (* r23 nw)))
+                (nz (+ (* r31 nu) (* r32 nv) (* r33 nw))))
+            (declare (type single-float nx ny nz))
+            (add-box-point set row-a owner key nx ny nz (* (- radius) nx) (* (- radius) ny) (* (- radius) nz) gap
+                           row-b
+                           (+ (* r11 cu) (* r12 cv) (* r13 cw))
+                           (+ (* r21 cu) (* r22 cv) (* r23 cw))
+                           (+ (* r31 cu) (* r32 cv) (* r33 cw))))))))
+  set)
+
+(declaim (inline sphere-meets-box-p))
+(defun sphere-meets-box-p (filtering sphere-flags box-flags)
+  "True when a row of SPHERE-FLAGS is a sphere that meets bodies and meets, by the filters when
+FILTERING, a box of BOX-FLAGS. #BXSPHR"
+  (declare (type fixnum sphere-flags box-flags))
+  (and (not (logtest sphere-flags (logior +flag-box-shape+ +flag-terrain-only+)))
+       (rows-meet-p filtering sphere-flags box-flags)))
+
+(defun find-box-sphere-points (world set row reach dt gstep)
+  "Append to SET's points those between the awake box at ROW of WORLD and every sphere near it,
+awake or, held still, sleeping; REACH is the box's, grown to the travel of an awake sphere
+relative to it in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
+  (declare (type box-set set) (type index row) (type single-float reach dt gstep) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world)))
+    (declare (type index n))
+    (with-body-columns (x y z vx vy vz qw qx qy qz radius handle flags) awake
+      (let* ((owner (aref handle row)) (slot (handle-index owner)) (box-flags (aref flags row))
+             (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
+             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot)))
+        (declare (type fixnum owner box-flags) (type single-float cx cy cz r hx hy hz))
+        (flet ((meet (buffer j row-j reach)
+                 ;; the sphere at row J of BUFFER, at solver row ROW-J
+                 (declare (type body-columns buffer) (type index j row-j) (type single-float reach))
+                 (with-body-columns ((sx x) (sy y) (sz z) (sr radius) (sh handle) (sf flags)) buffer
+                   (when (sphere-meets-box-p filtering (aref sf j) box-flags)
+                     (let* ((dx (- (aref sx j) cx)) (dy (- (aref sy j) cy)) (dz (- (aref sz j) cz))
+                            (near (+ r (aref sr j) reach)))
+                       (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
+                         (box-sphere-point set owner (box-sphere-key slot (handle-index (aref sh j))) row-j row reach
+                                           (aref sx j) (aref sy j) (aref sz j) (aref sr j)
+                                           cx cy cz (aref qw row) (aref qx row) (aref qy row) (aref qz row)
+                                           hx hy hz)))))))
+          (dotimes (j n)
+            (meet awake j j (max reach (step-travel (- (aref vx j) (aref vx row)) (- (aref vy j) (aref vy row))
+                                                    (- (aref vz j) (aref vz row)) dt gstep))))
+          (dotimes (j (body-columns-length sleeping)) (meet sleeping j n reach))))))
+  set)
+
+(defun find-sleeping-box-sphere-points (world set margin dt gstep)
+  "Append to SET's points those between each sleeping box of WORLD, held still, and every awake
+sphere near it, within MARGIN or the sphere's travel in a step of DT seconds in which gravity
+adds GSTEP; each such box's slot gets the first and the count of its points. #BXSPHR"
+  (declare (type box-set set) (type single-float margin dt gstep) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
+         (points (box-set-points set)))
+    (declare (type index n))
+    (with-body-columns ((bx x) (by y) (bz z) (bqw qw) (bqx qx) (bqy qy) (bqz qz) (br radius) (bh handle) (bf flags))
+        sleeping
+      (with-body-columns (x y z vx vy vz radius handle flags) awake
+        (dotimes (b (body-columns-length sleeping))
+          (when (logtest (aref bf b) +flag-box-shape+)
+            (let* ((owner (aref bh b)) (slot (handle-index owner))
+                   (start (box-point-columns-length points)))
+              (dotimes (j n)
+                (when (sphere-meets-box-p filtering (aref flags j) (aref bf b))
+                  (let* ((reach (max margin (step-travel (aref vx j) (aref vy j) (aref vz j) dt gstep)))
+                         (dx (- (aref x j) (aref bx b))) (dy (- (aref y j) (aref by b))) (dz (- (aref z j) (aref bz b)))
+                         (near (+ (aref br b) (aref radius j) reach)))
+                    (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
+                      (box-sphere-point set owner (box-sphere-key slot (handle-index (aref handle j))) j n reach
+                                        (aref x j) (aref y j) (aref z j) (aref radius j)
+                                        (aref bx b) (aref by b) (aref bz b) (aref bqw b) (aref bqx b) (aref bqy b)
+                                        (aref bqz b) (aref (box-set-hx set) slot) (aref (box-set-hy set) slot)
+                                        (aref (box-set-hz set) slot))))))
+              (setf (aref (box-set-first set) slot) start
+                    (aref (box-set-count set) slot) (- (box-point-columns-length points) start))))))))
+  set)
+;; A box against a sphere:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (declaim (inline held-marking-p mark-held))
@@ -7777,17 +7999,18 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
 
 (defmacro store-touch-event ()
   "A :begin or :end event for row K's contact C when whether it pushed this step (PUSHED) differs
-from whether it touched: expanded in the store phase, with its variables. #ST0R3S"
+from whether it touched: expanded in the store phase's piece of WORKER, with its variables. #ST0R3S"
   `(if-feature :contact-events
    (unless (eq pushed (= (aref touching c) 1))
      (setf (aref touching c) (if pushed 1 0))
-     (push-event world (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
+     (push-piece-event world worker (if pushed +event-begin+ +event-end+) (aref handle-a c) (aref handle-b c)
                  (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
                  (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))
 
 (defmacro store-hit-event ()
   "A :hit event for row K's contact C when it pushed and arrived faster than the hit speed, for
-a box's contact or a body that reports hits: expanded in the store phase, with its variables. #ST0R3S"
+a box's contact or a body that reports hits: expanded in the store phase's piece of WORKER, with
+its variables. #ST0R3S"
   `(if-feature :hit-events
    (when (and pushed (> (- (@ relative-velocity)) hit-speed)
               (or (= (aref kind c) +contact-box+)
@@ -7799,7 +8022,7 @@ a box's contact or a body that reports hits: expanded in the store phase, with i
                                            (aref (body-columns-flags (if (= set +set-awake+) awake sleeping))
                                                  row))))))
                     (or (reports (aref handle-a c)) (reports (aref handle-b c))))))
-     (push-event world +event-hit+ (aref handle-a c) (aref handle-b c)
+     (push-piece-event world worker +event-hit+ (aref handle-a c) (aref handle-b c)
                  (contact-at geometry g px) (contact-at geometry g py) (contact-at geometry g pz) (- (@ relative-velocity))
                  (and (= (aref kind c) +contact-box+) (box-owner world (aref key c)))))))
 
@@ -7818,19 +8041,31 @@ so its undo log closes. #ST0R3S"
            (awake (physics-world-awake world))
            (sleeping (physics-world-sleeping world))
            (max-penetration 0.0) (max-approach 0.0)
+           ;; each piece's two figures ([[#SPL1T5]])
+           ;; two for each of the most workers a world may have, +physics-max-workers+
+           (maxima (make-array 128 :element-type 'single-float :initial-element 0.0))
            (n (body-columns-length awake))
            (held (physics-world-held world))
            ;; only sleep looks at the marks, and only a world with sleepers makes lean contacts;
            ;; without body contacts and boxes every contact is terrain's, which marks nothing
            (marking (if-feature (:or :body-contacts :boxes) (held-marking-p world) nil)))
       (declare (type f32-column v) (type single-float hit-speed slop max-penetration max-approach)
-               (type index n) (type fixnum-column held)
+               (type index n) (type fixnum-column held) (type f32-column maxima) (dynamic-extent maxima)
                (ignorable ids awake sleeping) #.+kernel-policy+)
       (when marking (fill held 0 :end (1+ n)))
       (with-constraint-block (contact body-a body-b) cbuf
         (with-contact-columns (touching kind handle-a handle-b key geometry) contacts
           (declare (ignorable touching kind handle-a handle-b key))
-          (loop for k of-type index below (constraint-columns-length cbuf)
+          ;; each row writes its own contact, so the rows may be cut into pieces, one a worker,
+          ;; each with its own figures and events, merged in the pieces' order ([[#SPL1T5]]);
+          ;; the marks, which rows share, are set by one worker
+          (flet ((store-piece (worker count)
+                   (declare (type fixnum worker count))
+                   (let ((max-penetration 0.0) (max-approach 0.0) (mark (and marking (= count 1))))
+                     (declare (type single-float max-penetration max-approach))
+                   (multiple-value-bind (from to) (piece-bounds 0 (constraint-columns-length cbuf) worker count)
+                     (declare (type index from to))
+          (loop for k of-type index from from below to
                 unless (< (aref contact k) 0) do
             (let* ((base (constraint-base k))
                    (c (aref contact k))
@@ -7858,12 +8093,25 @@ so its undo log closes. #ST0R3S"
               ;; a row with no radius on side b has one, and no other row's side block is read
               (if-feature :friction
                 (when (= (@ rb) 0.0) (setf (contact-at geometry g spin-impulse) (@ spin-impulse))))
-              (when marking (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
+              (when mark (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
               (when (< gap 0.0)
                 (setf max-penetration (max max-penetration (- gap))
                       max-approach (max max-approach (- vn))))
               (store-touch-event)
-              (store-hit-event)))))
+              (store-hit-event))))
+                     (setf (aref maxima (* 2 worker)) max-penetration
+                           (aref maxima (1+ (* 2 worker))) max-approach))))
+            (declare (dynamic-extent #'store-piece))
+            (let ((pieces (run-pieces world (constraint-columns-length cbuf) :store #'store-piece)))
+              (declare (type fixnum pieces))
+              (dotimes (w pieces)
+                (setf max-penetration (max max-penetration (aref maxima (* 2 w)))
+                      max-approach (max max-approach (aref maxima (1+ (* 2 w))))))
+              (when (and marking (> pieces 1))
+                (dotimes (k (constraint-columns-length cbuf))
+                  (let ((c (aref contact k)))
+                    (unless (< c 0)
+                      (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n)))))))))
       (let ((stats (world-statistics world)))
         (setf (step-statistics-max-penetration stats) (coerce max-penetration 'double-float)
               (step-statistics-max-approach stats) (coerce max-approach 'double-float)))
@@ -8142,6 +8390,24 @@ phase's notes, and the array for the rows held back, at least as long as the awa
             (physics-world-near-cells world)
             (physics-world-held-rows world))))
 
+(declaim (inline path-outruns-look-p surface-stop))
+
+(defun path-outruns-look-p (moved2 r vx vy vz margin limit dt gstep)
+  "Whether a body of radius R, moving at VX VY VZ at the start of a step of DT seconds (gravity
+adding GSTEP), moved the square root of MOVED2: farther than the terrain phase looked, past its
+MARGIN and past the travel that velocity promised (step-reach, at most LIMIT). #SQU33Z"
+  (declare (type single-float moved2 r vx vy vz margin limit dt gstep))
+  (and (> moved2 (* margin margin))
+       (let ((looked (- (step-reach r (step-travel vx vy vz dt gstep) margin limit) r)))
+         (> moved2 (* looked looked)))))
+
+(defun surface-stop (at r along)
+  "How far along its path a sphere of radius R goes before its surface reaches a face's plane,
+which its centre reaches at AT, its path's unit direction having the component ALONG across the
+face; 0 when the surface is past the plane already. #SQU33Z"
+  (declare (type single-float at r along))
+  (max 0.0 (- at (/ r (max (abs along) 1e-6)))))
+
 (defun hold-out-of-cells (world rows count)
   "Check the path of each of WORLD's awake rows listed in the first COUNT entries of ROWS, then fold
 its delta into its position: a path that carries the centre into a solid cell, or, longer than
@@ -8149,137 +8415,52 @@ the terrain phase looked along, the surface through the face of one, is cut wher
 reaches that face (at the start, if it is already past it), the velocity into the face removed
 and a :held-out event reported. Return how many bodies were held. #SQU33Z"
   (declare (type fixnum-column rows) (type index count) #.+kernel-policy+)
-  (let ((held 0))
-    (declare (type fixnum held))
-    (let* ((awake (physics-world-awake world))
-           (probe (physics-world-probe world))
-           (v (physics-world-velocities world))
-           (d (physics-world-deltas world))
-           (margin (f32 (physics-world-margin world)))
-           (limit (f32 (physics-world-reach-limit world)))
-           (dt (physics-world-current-dt world))
-           (gstep (gravity-step world dt)))
-      (declare (type f32-column v d) (type single-float margin limit dt gstep))
-      (with-body-columns (x y z vx vy vz radius handle) awake
-        (dotimes (j count)
-          (let* ((i (aref rows j))
-                 (p (delta-row i))
-                 (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
-                 (moved2 (+ (* dx dx) (* dy dy) (* dz dz)))
-                 (cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                 ;; longer than the terrain phase looked: past its margin and past the travel
-                 ;; the body's velocity at the start of the step promised
-                 (long (and (> moved2 (* margin margin))
-                            (let ((looked (- (step-reach r (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep)
-                                                         margin limit)
-                                             r)))
-                              (> moved2 (* looked looked))))))
-            (declare (type index i p) (type single-float dx dy dz moved2 cx cy cz r))
-            ;; within the look-ahead, a path that stays in the centre's cell stays in the air
-            (when (or long
-                      (/= (cell-floor cx) (cell-floor (+ cx dx)))
-                      (/= (cell-floor cy) (cell-floor (+ cy dy)))
-                      (/= (cell-floor cz) (cell-floor (+ cz dz))))
-              (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
-                     (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
-                (declare (type single-float len inv ux uy uz))
-                (multiple-value-bind (axis at) (first-solid-on-ray probe cx cy cz ux uy uz (if long (+ len r) len))
-                  (declare (type (integer -1 2) axis) (type single-float at))
-                  (unless (< axis 0)
-                    (let* ((along (case axis (0 ux) (1 uy) (t uz)))
-                           ;; where the surface reaches the face's plane, along the path
-                           (stop (max 0.0 (- at (/ r (max (abs along) 1e-6)))))
-                           (o (+ (solver-row i) axis))
-                           (into (if (> along 0.0) (max 0.0 (aref v o)) (min 0.0 (aref v o)))))
-                      (declare (type single-float along stop into) (type index o))
-                      (when (< stop len)
-                        (setf (aref d p) (* ux stop) (aref d (+ p 1)) (* uy stop) (aref d (+ p 2)) (* uz stop)
-                              (aref v o) (- (aref v o) into))
-                        (incf held)
-                        (push-event world +event-held-out+ (aref handle i) +no-body+
-                                    (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into))))))))
-            ;; then the fold, as for every other row
-            (setf (aref x i) (+ cx (aref d p)) (aref y i) (+ cy (aref d (+ p 1))) (aref z i) (+ cz (aref d (+ p 2))))))))
+  (let* ((held 0)
+         (awake (physics-world-awake world))
+         (probe (physics-world-probe world))
+         (v (physics-world-velocities world))
+         (d (physics-world-deltas world))
+         (margin (f32 (physics-world-margin world)))
+         (limit (f32 (physics-world-reach-limit world)))
+         (dt (physics-world-current-dt world))
+         (gstep (gravity-step world dt)))
+    (declare (type fixnum held) (type f32-column v d) (type single-float margin limit dt gstep))
+    (with-body-columns (x y z vx vy vz radius handle) awake
+      (dotimes (j count)
+        (let* ((i (aref rows j))
+               (p (delta-row i))
+               (dx (aref d p)) (dy (aref d (+ p 1))) (dz (aref d (+ p 2)))
+               (moved2 (+ (* dx dx) (* dy dy) (* dz dz)))
+               (cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+               (long (path-outruns-look-p moved2 r (aref vx i) (aref vy i) (aref vz i) margin limit dt gstep)))
+          (declare (type index i p) (type single-float dx dy dz moved2 cx cy cz r))
+          ;; within the look-ahead, a path that stays in the centre's cell stays in the air
+          (when (or long
+                    (/= (cell-floor cx) (cell-floor (+ cx dx)))
+                    (/= (cell-floor cy) (cell-floor (+ cy dy)))
+                    (/= (cell-floor cz) (cell-floor (+ cz dz))))
+            (let* ((len (fsqrt moved2)) (inv (/ 1.0 (max len 1e-12)))
+                   (ux (* dx inv)) (uy (* dy inv)) (uz (* dz inv)))
+              (declare (type single-float len inv ux uy uz))
+              (multiple-value-bind (axis at) (first-solid-on-ray probe cx cy cz ux uy uz (if long (+ len r) len))
+                (declare (type (integer -1 2) axis) (type single-float at))
+                (unless (< axis 0)
+                  (let* ((along (case axis (0 ux) (1 uy) (t uz)))
+                         ;; where the surface reaches the face's plane, along the path
+                         (stop (surface-stop at r along))
+                         (o (+ (solver-row i) axis))
+                         (into (if (> along 0.0) (max 0.0 (aref v o)) (min 0.0 (aref v o)))))
+                    (declare (type single-float along stop into) (type index o))
+                    (when (< stop len)
+                      (setf (aref d p) (* ux stop) (aref d (+ p 1)) (* uy stop) (aref d (+ p 2)) (* uz stop)
+                            (aref v o) (- (aref v o) into))
+                      (incf held)
+                      (push-event world +event-held-out+ (aref handle i) +no-body+
+                                  (+ cx (* ux at)) (+ cy (* uy at)) (+ cz (* uz at)) (abs into))))))))
+          ;; then the fold, as for every other row
+          (setf (aref x i) (+ cx (aref d p)) (aref y i) (+ cy (aref d (+ p 1))) (aref z i) (+ cz (aref d (+ p 2)))))))
     (setf (physics-world-held-out-count world) held)
     held))
-
-(defun squeeze-scene (family scene)
-  "Run SCENE (:step, :marbles, :far-step, :wall or :press) under FAMILY for 240 steps of 1/60 s; return the
-count of ball positions outside air cells of the resident world or below the floor less a slop,
-the lowest centre, the walker's final x and y (NIL for :press), the state hash, the fastest
-speed of any ball after any step, the deepest any ball's surface reached into a solid cell and
-into the box (its radius, when the centre lies inside), and whether a centre lay inside the box. #SQU33Z"
-  ;; the walker's structure is defined with the walker, later on the page
-  (declare (notinline physics-player-x physics-player-y))
-  (let ((terrain (make-voxel-terrain)))
-    (fill-terrain terrain -16 0 -16 16 12 16 nil)
-    (fill-terrain terrain -16 -16 -16 16 0 16 t)
-    (case scene
-      (:step (fill-terrain terrain 6 0 -4 16 1 4 t))
-      (:marbles (fill-terrain terrain 6 0 -4 16 1 4 t))
-      (:far-step (fill-terrain terrain 8 0 -4 16 1 4 t))
-      (:wall (fill-terrain terrain 6 0 -4 16 3 4 t)))
-    (let* ((world (make-physics-world :terrain terrain :kernels family))
-           (player (make-physics-player 0d0 0d0 0d0))
-           (slop *physics-linear-slop*)
-           (balls (loop for x from 1.0 to 5.5 by 0.5
-                        collect (add-physics-body-of-kind world (if (eq scene :marbles) :marble :ball) x 0.3 0.0)))
-           (outside 0) (lowest 100.0) (fastest 0.0) (cells 0.0) (box 0.0) (inside-box nil))
-      (let ((bounds (make-list 6)))
-      (flet ((note-box ()
-               ;; the box posted for the next step, where it will be at the step's end
-               (let ((b (physics-world-boxes world)) (dt (/ 1.0 60)))
-                 (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) b
-                   (setf bounds (list (+ (aref min-x 0) (* dt (aref vx 0))) (+ (aref min-y 0) (* dt (aref vy 0)))
-                                      (+ (aref min-z 0) (* dt (aref vz 0))) (+ (aref max-x 0) (* dt (aref vx 0)))
-                                      (+ (aref max-y 0) (* dt (aref vy 0))) (+ (aref max-z 0) (* dt (aref vz 0))))))))
-               (box-bounds () (values-list bounds)))
-      (dotimes (frame 240)
-        (if (eq scene :press)
-            (post-physics-box world 3.25 (max 0.7 (- 1.5 (* frame (/ 1.0 60)))) 0.0 2.0 0.5 1.0
-                              :vy (if (> (- 1.5 (* frame (/ 1.0 60))) 0.7) -1.0 0.0) :owner :press)
-            (progn (advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
-                   (post-physics-player world player)))
-        (note-box)
-        (step-physics-world world)
-        (dolist (h balls)
-          (multiple-value-bind (vx vy vz) (physics-body-velocity world h)
-            (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))
-          (multiple-value-bind (x y z) (physics-body-position world h)
-            (let ((r (physics-body-radius world h)))
-              ;; the deepest a ball's surface reaches into the solid cells around its centre
-              (loop for i from (1- (floor x)) to (1+ (floor x)) do
-                (loop for j from (1- (floor y)) to (1+ (floor y)) do
-                  (loop for k from (1- (floor z)) to (1+ (floor z)) do
-                    (when (terrain-solid-p terrain i j k)
-                      (let ((dx (- (max i (min (1+ i) x)) x)) (dy (- (max j (min (1+ j) y)) y))
-                            (dz (- (max k (min (1+ k) z)) z)))
-                        (setf cells (max cells (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))))
-              ;; and into the box that presses it
-              (multiple-value-bind (bx0 by0 bz0 bx1 by1 bz1) (box-bounds)
-                (let ((dx (- (max bx0 (min bx1 x)) x)) (dy (- (max by0 (min by1 y)) y)) (dz (- (max bz0 (min bz1 z)) z)))
-                  (when (= 0 dx dy dz) (setf inside-box t))
-                  (setf box (max box (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))
-            (setf lowest (min lowest y))
-            ;; a cell of a chunk that is not resident counts as solid
-            (when (or (< y (- slop)) (terrain-solid-p terrain (floor x) (floor y) (floor z)))
-              (incf outside)))))
-      (values outside lowest
-              (and (not (eq scene :press)) (physics-player-x player))
-              (and (not (eq scene :press)) (physics-player-y player))
-              (physics-world-state-hash world)
-              fastest cells box inside-box))))))
-
-(defun physics-world-last-step-held-out-count (world)
-  "How many bodies the last step stopped at the face of a solid cell. #SQU33Z"
-  (check-world world 'physics-world-last-step-held-out-count)
-  (physics-world-held-out-count world))
-
-(defun physics-world-last-step-buried-count (world)
-  "How many awake bodies began the last step with their centre in a solid cell, and were pushed
-toward the air by that cell's contact. #SQU33Z"
-  (check-world world 'physics-world-last-step-buried-count)
-  (physics-world-buried-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:1 ends here
 
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
@@ -8397,7 +8578,9 @@ bodies to half the push-out speed. #IDVK7G"
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
-        (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed)))))
+        (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed))))
+    ;; the box points that struck bounce once, after the substeps ([[#BXSOLV]])
+    (when boxes (bounce-box-points boxes v)))
     ;; the joints' colouring serves these substeps only: a pass run by hand solves contacts alone
     (when joints (setf (joint-set-solving joints) nil))
     world))
@@ -9047,6 +9230,9 @@ core. #W0RKP1")
 (defconstant +worker-park-spins+ 20000
   "How many times a worker waiting for a job spins or yields before it parks. #W0RKP1")
 
+(defconstant +pool-jobs+ 10
+  "How many kinds of job a pool keeps its calls and timings for ([[#SPL1T5]]). #W0RKP1")
+
 (defstruct (worker-pool (:constructor %make-worker-pool (count)) (:copier nil))
   "The threads of a world with workers, and the job they share: its stages and parameters, in
 typed slots so that publishing a job conses nothing. #W0RKP1"
@@ -9069,16 +9255,28 @@ typed slots so that publishing a job conses nothing. #W0RKP1"
   (stages 0 :type fixnum)
   ;; a pass splits only over at least this many rows; below it worker 0 runs it all
   (split-rows 4096 :type index)
+  ;; how many times a worker waiting for a job spins or yields before it parks
+  (park-spins +worker-park-spins+ :type fixnum)
   ;; a colour splits only when it has at least this many rows per worker ([[#SPL1T5]])
   (share-rows 64 :type index)
   ;; per job: its calls, and the nanoseconds per 1024 rows it took split and whole ([[#SPL1T5]])
-  (calls (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
-  (split-ns (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
-  (whole-ns (make-array 6 :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (calls (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (split-ns (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  (whole-ns (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  ;; per job: the nanoseconds all its calls took, either way ([[#B3NCHW]] reads them)
+  (spent (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  ;; a phase's own piece, a function of the worker and the count, while its job runs
+  (piece nil :type (or null function))
+  ;; the events of a phase's pieces, a buffer and its data for each worker but worker 0,
+  ;; merged in worker order ([[#SPL1T5]])
+  (events #() :type simple-vector)
+  (event-data #() :type simple-vector)
   ;; the parameters of the job, written by the caller before it publishes
   (wide nil) (narrow nil) (impact nil) (settle nil)
   (lanes 1 :type (integer 1 64))
   (cbuf nil)
+  ;; the joint set whose joints a colour pass solves with its contacts, or NIL ([[#J0S0LV]])
+  (joints nil)
   (v (make-array 0 :element-type 'single-float) :type f32-column)
   (d (make-array 0 :element-type 'single-float) :type f32-column)
   (pushes (make-array 0 :element-type 'single-float) :type f32-column)
@@ -9124,7 +9322,7 @@ return the new generation. #W0RKP1"
   (declare (type worker-pool pool) (type sb-ext:word seen))
   (let ((spins 0))
     (declare (type fixnum spins))
-    (loop while (< spins +worker-park-spins+)
+    (loop while (< spins (worker-pool-park-spins pool))
           do (unless (= (worker-pool-generation pool) seen)
                (return-from await-generation (worker-pool-generation pool)))
              (setf spins (spin-or-yield spins))))
@@ -9212,6 +9410,8 @@ condition of the earliest piece that signalled. #W0RKP1"
 (defun make-worker-pool (count)
   "A pool of COUNT workers: COUNT - 1 threads, parked, and the caller. #W0RKP1"
   (let ((pool (%make-worker-pool count)))
+    (setf (worker-pool-events pool) (map-into (make-array count) #'make-event-columns)
+          (worker-pool-event-data pool) (map-into (make-array count) (lambda () (make-array 8 :initial-element nil))))
     (handler-bind ((serious-condition (lambda (c) (declare (ignore c)) (close-worker-pool pool))))
       (loop for worker from 1 below count
             do (push (sb-thread:make-thread #'worker-loop :name "luv-physics worker"
@@ -9267,6 +9467,8 @@ WORLD. #W0RKP1"
 (defconstant +job-warm-start+ 3 "The job: the warm start, colour by colour. #SPL1T5")
 (defconstant +job-solve+ 4 "The job: a solve or relax pass, colour by colour. #SPL1T5")
 (defconstant +job-frames+ 5 "The job: the frame pass, every colour's run shared. #SPL1T5")
+(defconstant +job-fill+ 6 "The job: the prepare phase's fill, a piece of every colour's rows each. #SPL1T5")
+(defconstant +job-store+ 7 "The job: the store phase, a piece of the rows each. #SPL1T5")
 
 (defgeneric kernel-lanes (kernels)
   (:documentation "The lanes of KERNELS' wide kernels (1 for none), and a function to call after
@@ -9303,7 +9505,10 @@ pool has one, else with the scalar kernel. #SPL1T5"
   "Run WORKER's piece of stage STAGE of POOL's job. #SPL1T5"
   (declare (type worker-pool pool) (type fixnum worker stage))
   (let ((job (worker-pool-job pool)) (count (worker-pool-count pool)))
-    (cond ((<= job +job-positions+)
+    (cond ((>= job +job-fill+)
+           ;; a phase's own piece, which cuts its share with share-bounds
+           (funcall (the function (worker-pool-piece pool)) worker count))
+          ((<= job +job-positions+)
            (multiple-value-bind (s e) (share-bounds 0 (worker-pool-rows pool) worker count)
              (cond ((= job +job-velocities+)
                     (integrate-velocities-range (worker-pool-v pool) s e (worker-pool-h pool)
@@ -9327,10 +9532,27 @@ pool has one, else with the scalar kernel. #SPL1T5"
            (let* ((starts (worker-pool-starts pool))
                   (c (aref (worker-pool-stage-colours pool) stage))
                   (start (aref starts c)) (end (aref starts (1+ c))))
-             (cond ((or (= c +physics-max-colors+) (< (- end start) (* count (worker-pool-share-rows pool))))
+             ;; the colour's joints, on worker 0, beside the others' shares of its contacts
+             (when (and (= worker 0) (worker-pool-joints pool)) (run-colour-joints pool c))
+             (cond ((>= start end))
+                   ((or (= c +physics-max-colors+) (< (- end start) (* count (worker-pool-share-rows pool))))
                     (when (= worker 0) (run-colour-piece pool start end (< c +physics-max-colors+))))
                    (t (multiple-value-bind (s e) (share-bounds start end worker count)
                         (when (< s e) (run-colour-piece pool s e t))))))))))
+
+(defun run-colour-joints (pool c)
+  "Run POOL's colour pass over the joints of colour C of its joint set: warm start them, or solve
+or relax them. #SPL1T5"
+  (declare (type worker-pool pool) (type fixnum c))
+  (let* ((set (worker-pool-joints pool))
+         (js (joint-set-color-starts set))
+         (start (aref js c)) (end (aref js (1+ c))))
+    (declare (type fixnum-column js) (type index start end))
+    (when (< start end)
+      (if (= (worker-pool-job pool) +job-warm-start+)
+          (warm-start-joints set (worker-pool-v pool) (worker-pool-d pool) start end)
+          (solve-joints set (worker-pool-v pool) (worker-pool-d pool) (worker-pool-inv-h pool)
+                        (worker-pool-use-bias pool) start end)))))
 
 (defconstant +split-probe+ 64
   "Every so many calls of a pass, a tuned pool runs it the way it does not prefer. #SPL1T5")
@@ -9357,16 +9579,81 @@ figure for that way: nanoseconds per 1024 rows, each call an eighth of it. #SPL1
 (defmacro tuned-split ((pool world rows job) split-form whole-form)
   "Run SPLIT-FORM with POOL bound to WORLD's pool when the pass of JOB over ROWS rows splits, else
 WHOLE-FORM: a pool with split-rows 0 always splits; one above it splits as prefer-split-p says,
-timing each call for note-split-time. #SPL1T5"
-  (let ((tuning (gensym "TUNING")) (split (gensym "SPLIT")) (start (gensym "START")) (n (gensym "ROWS")))
+timing each call for note-split-time. A pool adds each call's nanoseconds to its job's spent
+figure. #SPL1T5"
+  (let ((tuning (gensym "TUNING")) (split (gensym "SPLIT")) (start (gensym "START")) (n (gensym "ROWS"))
+        (ns (gensym "NS")))
     `(let* ((,n ,rows) (,pool (splitting-pool ,world ,n)))
        (if (null ,pool)
            ,whole-form
            (let* ((,tuning (plusp (worker-pool-split-rows ,pool)))
                   (,split (or (not ,tuning) (prefer-split-p ,pool ,job)))
-                  (,start (if ,tuning (clock-ns) 0)))
+                  (,start (clock-ns)))
              (multiple-value-prog1 (if ,split ,split-form ,whole-form)
-               (when ,tuning (note-split-time ,pool ,job ,split (- (clock-ns) ,start) ,n))))))))
+               (let ((,ns (- (clock-ns) ,start)))
+                 (incf (aref (worker-pool-spent ,pool) ,job) ,ns)
+                 (when ,tuning (note-split-time ,pool ,job ,split ,ns ,n)))))))))
+
+(defun piece-bounds (start end worker count)
+  "share-bounds for the phases the page defines before it: the rows of WORKER's share, of COUNT,
+of the run START..END. #SPL1T5"
+  (declare (type index start end) (type fixnum worker count))
+  (share-bounds start end worker count))
+
+(defun piece-job (kind)
+  "The job number of the phase piece KIND names: :fill or :store. #SPL1T5"
+  (ecase kind (:fill +job-fill+) (:store +job-store+)))
+
+(defun push-piece-event (world worker kind handle-a handle-b x y z speed &optional datum)
+  "Record an event found by WORKER's piece of a phase: worker 0's in WORLD's event buffer
+(push-event), another worker's, when WORLD records its kind, in that worker's buffer of WORLD's
+pool, which run-pieces appends after the pieces before it. #SPL1T5"
+  (declare (type fixnum worker kind handle-a handle-b) (type single-float x y z speed))
+  (if (zerop worker)
+      (push-event world kind handle-a handle-b x y z speed datum)
+      (when (logbitp kind (the fixnum (world-event-mask world)))
+        (let* ((pool (physics-world-pool world))
+               (events (svref (worker-pool-events pool) worker))
+               (row (event-columns-append events)))
+          (with-event-columns ((k kind) (a handle-a) (b handle-b) (ex x) (ey y) (ez z) (s speed)) events
+            (setf (aref k row) kind (aref a row) handle-a (aref b row) handle-b
+                  (aref ex row) x (aref ey row) y (aref ez row) z (aref s row) speed))
+          (let ((data (svref (worker-pool-event-data pool) worker)))
+            (when (>= row (length data))
+              (setf data (replace (make-array (* 2 (1+ row)) :initial-element nil) data)
+                    (svref (worker-pool-event-data pool) worker) data))
+            (setf (svref data row) datum))))))
+
+(defun merge-piece-events (pool world)
+  "Append the events the pieces of POOL's workers 1, 2, ... found to WORLD's buffer, in worker
+order, after worker 0's, and empty their buffers. #SPL1T5"
+  (loop for w from 1 below (worker-pool-count pool)
+        do (let ((events (svref (worker-pool-events pool) w))
+                 (data (svref (worker-pool-event-data pool) w)))
+             (with-event-columns (kind handle-a handle-b x y z speed) events
+               (dotimes (row (event-columns-length events))
+                 (push-event world (aref kind row) (aref handle-a row) (aref handle-b row)
+                             (aref x row) (aref y row) (aref z row) (aref speed row) (svref data row))))
+             (fill data nil :end (min (length data) (event-columns-length events)))
+             (event-columns-clear events))))
+
+(defun run-pieces (world rows kind piece)
+  "Run PIECE, a phase's function of a worker and the count of workers, over ROWS rows: on every
+worker of WORLD's pool, each with its number, when the pass of KIND splits (tuned-split), else
+once as the one worker of one; then append the pieces' events in worker order. Return how many
+pieces ran. The piece, often made on the caller's stack, is the pool's only while its job
+runs. #SPL1T5"
+  (declare (type function piece))
+  (let ((job (piece-job kind)))
+    (tuned-split (pool world rows job)
+      (progn (dotimes (w (worker-pool-count pool))
+               (event-columns-clear (svref (worker-pool-events pool) w)))
+             (setf (worker-pool-piece pool) piece)
+             (unwind-protect (run-on-workers pool job 1)
+               (setf (worker-pool-piece pool) nil))
+             (merge-piece-events pool world)
+             (worker-pool-count pool))
+      (progn (funcall piece 0 1) 1))))
 
 (defun splitting-pool (world rows)
   "WORLD's pool when it has one and ROWS, more than none, reach its split-rows, else NIL. #SPL1T5"
@@ -9382,9 +9669,11 @@ timing each call for note-split-time. #SPL1T5"
   (if (typep world 'physics-world) (constraint-columns-length (physics-world-constraints world)) 0))
 
 (defun colour-pass-rows (world)
-  "The constraint rows of WORLD a warm start or solve pass would split, or 0 when its substeps
-solve joints, whose passes run whole. #SPL1T5"
-  (if (and (typep world 'physics-world) (solving-joints world)) 0 (constraint-rows world)))
+  "The rows of WORLD a warm start or solve pass splits: its constraint rows, and when its
+substeps solve joints, its prepared joints too. #SPL1T5"
+  (let ((set (and (typep world 'physics-world) (solving-joints world))))
+    (+ (constraint-rows world)
+       (if set (aref (joint-set-color-starts set) (1+ +physics-max-colors+)) 0))))
 
 (defun run-colour-pass (pool kernels world job)
   "Write into POOL the kernels of JOB in the family KERNELS for WORLD's features, its buffers and
@@ -9403,10 +9692,16 @@ the stages (the colours with rows, then the overflow colour), and run it on the 
               (t (values (kernel-variant-wide-prepare-frames variant) (kernel-variant-prepare-frames variant))))
       (setf (worker-pool-wide pool) wide (worker-pool-narrow pool) narrow
             (worker-pool-impact pool) (nth-value 3 (wide-kernel-names kernels))))
-    (dotimes (c (1+ +physics-max-colors+))
-      (when (< (aref starts c) (aref starts (1+ c)))
-        (setf (aref stage-colours stages) c)
-        (incf stages)))
+    (let* ((set (and (/= job +job-frames+) (solving-joints world)))
+           (js (and set (joint-set-color-starts set))))
+      (declare (type (or null fixnum-column) js))
+      (setf (worker-pool-joints pool) set)
+      ;; a stage for each colour with contacts or joints, in order, the overflow colour last
+      (dotimes (c (1+ +physics-max-colors+))
+        (when (or (< (aref starts c) (aref starts (1+ c)))
+                  (and js (< (aref js c) (aref js (1+ c)))))
+          (setf (aref stage-colours stages) c)
+          (incf stages))))
     (setf (worker-pool-cbuf pool) (physics-world-constraints world)
           (worker-pool-v pool) (physics-world-velocities world)
           (worker-pool-d pool) (physics-world-deltas world)
@@ -12262,77 +12557,86 @@ values; T-IN > T-OUT when it misses. #C4STRY"
 (defconstant +path-part-cells+ 1.5d0
   "How many cells' length of path a walk of the bodies takes at a time. #C4STRY")
 
+(declaim (inline path-walk-range path-part-layers path-layer-piece path-piece-cells))
+
+(defun path-walk-range (s grid rho)
+  "The part [LO, HI] of cast S's path, up to its nearest hit so far, that a walk of GRID's
+cells within RHO (a double) of the path must cover, as two values: a dense grid cuts the path
+to its own box grown by RHO; a hashed grid has no box, and the whole path is walked. #C4STRY"
+  (declare (type query-search s) (type hash-grid grid) (type double-float rho))
+  (if (hash-grid-dense grid)
+      (let ((c (/ 1d0 (float (hash-grid-inv-cell grid) 1d0)))
+            (ox (hash-grid-ox grid)) (oy (hash-grid-oy grid)) (oz (hash-grid-oz grid)))
+        (segment-box-range s (- (* c ox) rho) (- (* c oy) rho) (- (* c oz) rho)
+                           (+ (* c (+ ox (hash-grid-nx grid))) rho) (+ (* c (+ oy (hash-grid-ny grid))) rho)
+                           (+ (* c (+ oz (hash-grid-nz grid))) rho)
+                           (query-search-best s)))
+      (values 0d0 (query-search-best s))))
+
+(defun path-part-layers (s grid t0 t1 rho inv)
+  "The layers of cells along z, K0 to K1 as two values, within RHO of the part [T0, T1] of cast
+S's path, for cells INV to the metre; a dense grid's layers are cut to its box. #C4STRY"
+  (declare (type query-search s) (type hash-grid grid) (type double-float t0 t1 rho inv))
+  (let* ((oz (query-search-oz s)) (uz (query-search-uz s))
+         (az (+ oz (* t0 uz))) (bz (+ oz (* t1 uz)))
+         (k0 (dcell (* (- (min az bz) rho) inv))) (k1 (dcell (* (+ (max az bz) rho) inv))))
+    (declare (type fixnum k0 k1))
+    (if (hash-grid-dense grid)
+        (values (max k0 (hash-grid-oz grid)) (min k1 (+ (hash-grid-oz grid) (hash-grid-nz grid) -1)))
+        (values k0 k1))))
+
+(defun path-layer-piece (s k c rho ta tb)
+  "The piece of the part [TA, TB] of cast S's path within RHO of layer K of cells C metres high,
+as two values; the first exceeds the second when there is none. #C4STRY"
+  (declare (type query-search s) (type fixnum k) (type double-float c rho ta tb))
+  (let ((oz (query-search-oz s)) (uz (query-search-uz s)))
+    (if (= uz 0d0)
+        (values ta tb)
+        (let* ((iuz (/ 1d0 uz))
+               (za (* (- (- (* c k) rho) oz) iuz)) (zb (* (- (+ (* c (1+ k)) rho) oz) iuz)))
+          (values (max ta (min za zb)) (min tb (max za zb)))))))
+
+(defun path-piece-cells (s ta tb rho inv)
+  "The cells along x, I0 to I1, and along y, J0 to J1, within RHO of the piece [TA, TB] of cast
+S's path, for cells INV to the metre, as four values. #C4STRY"
+  (declare (type query-search s) (type double-float ta tb rho inv))
+  (let ((ya (+ (query-search-oy s) (* ta (query-search-uy s)))) (yb (+ (query-search-oy s) (* tb (query-search-uy s))))
+        (xa (+ (query-search-ox s) (* ta (query-search-ux s)))) (xb (+ (query-search-ox s) (* tb (query-search-ux s)))))
+    (values (dcell (* (- (min xa xb) rho) inv)) (dcell (* (+ (max xa xb) rho) inv))
+            (dcell (* (- (min ya yb) rho) inv)) (dcell (* (+ (max ya yb) rho) inv)))))
+
 (defmacro do-path-entries ((entry) (s grid rho) &body body)
   "For cast S, run BODY with ENTRY bound to the place, in GRID's order, of each item of GRID whose
 cell lies within RHO (a double: the farthest a centre can be from the path and still be met, per
 axis) of the path from 0 to the nearest hit so far, +path-part-cells+ cells' length of path at a
 time, until the nearest hit is no farther than the part walked. For each layer of cells along z,
-the part is cut to the piece within RHO of the layer, and the rows along y and the cells along x
-visited are those within RHO of that piece. #C4STRY"
-  (let ((g (gensym "G")) (inv (gensym "INV")) (c (gensym "C")) (t0 (gensym "T0")) (t1 (gensym "T1"))
-        (lo (gensym "LO")) (hi (gensym "HI")) (r (gensym "RHO")) (ox (gensym)) (oy (gensym)) (oz (gensym))
-        (ux (gensym)) (uy (gensym)) (uz (gensym)) (iuz (gensym)) (starts (gensym "STARTS"))
-        (keys (gensym "KEYS")) (visit (gensym "VISIT")))
-    `(let ((,g ,grid) (,r ,rho))
-       (declare (type hash-grid ,g) (type double-float ,r))
-       (unless (zerop (hash-grid-count ,g))
-         (let* ((,inv (float (hash-grid-inv-cell ,g) 1d0)) (,c (/ 1d0 ,inv))
-                (,ox (query-search-ox ,s)) (,oy (query-search-oy ,s)) (,oz (query-search-oz ,s))
-                (,ux (query-search-ux ,s)) (,uy (query-search-uy ,s)) (,uz (query-search-uz ,s))
-                (,iuz (if (= ,uz 0d0) 0d0 (/ 1d0 ,uz)))
-                (,starts (hash-grid-starts ,g)) (,keys (hash-grid-keys ,g))
-                (dense (hash-grid-dense ,g))
-                (gox (hash-grid-ox ,g)) (goy (hash-grid-oy ,g)) (goz (hash-grid-oz ,g))
-                (nx (hash-grid-nx ,g)) (ny (hash-grid-ny ,g)) (nz (hash-grid-nz ,g)) (mask (hash-grid-mask ,g)))
-           (declare (type double-float ,inv ,c ,ox ,oy ,oz ,ux ,uy ,uz ,iuz)
-                    (type fixnum-column ,starts ,keys) (type cell gox goy goz) (type (integer 1 4096) nx ny nz)
-                    (type fixnum mask))
-           (flet ((,visit (,entry) (declare (type index ,entry)) ,@body))
-             (declare (inline ,visit))
-             ;; a dense grid first cuts the path to its own box, grown by RHO
-             (multiple-value-bind (,lo ,hi)
-                 (if dense
-                     (segment-box-range ,s (- (* ,c gox) ,r) (- (* ,c goy) ,r) (- (* ,c goz) ,r)
-                                        (+ (* ,c (+ gox nx)) ,r) (+ (* ,c (+ goy ny)) ,r) (+ (* ,c (+ goz nz)) ,r)
-                                        (query-search-best ,s))
-                     (values 0d0 (query-search-best ,s)))
+the part is cut to the piece within RHO of the layer (path-layer-piece), and the cells visited
+are those within RHO of that piece (path-piece-cells), in do-grid-entries' order. #C4STRY"
+  (let ((q (gensym "S")) (g (gensym "G")) (r (gensym "RHO")) (inv (gensym "INV")) (c (gensym "C"))
+        (visit (gensym "VISIT")) (lo (gensym "LO")) (hi (gensym "HI")) (t0 (gensym "T0")) (t1 (gensym "T1"))
+        (k (gensym "K")) (k0 (gensym "K0")) (k1 (gensym "K1")) (ta (gensym "TA")) (tb (gensym "TB"))
+        (i0 (gensym "I0")) (i1 (gensym "I1")) (j0 (gensym "J0")) (j1 (gensym "J1")) (e (gensym "E")))
+    `(let ((,q ,s) (,g ,grid) (,r ,rho))
+       (declare (type query-search ,q) (type hash-grid ,g) (type double-float ,r))
+       (flet ((,visit (,entry) (declare (type index ,entry)) ,@body))
+         (declare (inline ,visit))
+         (unless (zerop (hash-grid-count ,g))
+           (let* ((,inv (float (hash-grid-inv-cell ,g) 1d0)) (,c (/ 1d0 ,inv)))
+             (declare (type double-float ,inv ,c))
+             (multiple-value-bind (,lo ,hi) (path-walk-range ,q ,g ,r)
                (declare (type double-float ,lo ,hi))
                (loop with ,t0 of-type double-float = ,lo
-                     while (and (<= ,t0 ,hi) (< ,t0 (query-search-best ,s)))
-                     do (let* ((,t1 (min (query-search-best ,s) ,hi (+ ,t0 (* +path-part-cells+ ,c))))
-                               (az (+ ,oz (* ,t0 ,uz))) (bz (+ ,oz (* ,t1 ,uz)))
-                               (k0 (dcell (* (- (min az bz) ,r) ,inv))) (k1 (dcell (* (+ (max az bz) ,r) ,inv))))
-                          (declare (type double-float ,t1 az bz) (type fixnum k0 k1))
-                          (when dense (setf k0 (max k0 goz) k1 (min k1 (+ goz nz -1))))
-                          (loop for k of-type fixnum from k0 to k1 do
-                            ;; the piece of the part within RHO of layer K, up to the nearest hit
-                            (let ((ta ,t0) (tb (min ,t1 (query-search-best ,s))))
-                              (declare (type double-float ta tb))
-                              (unless (= ,uz 0d0)
-                                (let ((za (* (- (- (* ,c k) ,r) ,oz) ,iuz)) (zb (* (- (+ (* ,c (1+ k)) ,r) ,oz) ,iuz)))
-                                  (setf ta (max ta (min za zb)) tb (min tb (max za zb)))))
-                              (when (<= ta tb)
-                                (let* ((ya (+ ,oy (* ta ,uy))) (yb (+ ,oy (* tb ,uy)))
-                                       (xa (+ ,ox (* ta ,ux))) (xb (+ ,ox (* tb ,ux)))
-                                       (j0 (dcell (* (- (min ya yb) ,r) ,inv))) (j1 (dcell (* (+ (max ya yb) ,r) ,inv)))
-                                       (i0 (dcell (* (- (min xa xb) ,r) ,inv))) (i1 (dcell (* (+ (max xa xb) ,r) ,inv))))
-                                  (declare (type fixnum j0 j1 i0 i1))
-                                  (if dense
-                                      ;; each row of cells along x is one run of entries
-                                      (let ((i0 (max i0 gox)) (i1 (min i1 (+ gox nx -1))))
-                                        (when (<= i0 i1)
-                                          (loop for j of-type fixnum from (max j0 goy) to (min j1 (+ goy ny -1)) do
-                                            (let ((row (* nx (+ (- j goy) (* ny (- k goz))))))
-                                              (declare (type fixnum row))
-                                              (loop for e of-type fixnum from (aref ,starts (+ row (- i0 gox)))
-                                                      below (aref ,starts (+ row (- i1 gox) 1))
-                                                    do (,visit e))))))
-                                      (loop for j of-type fixnum from j0 to j1 do
-                                        (loop for i of-type fixnum from i0 to i1 do
-                                          (let* ((key (grid-cell-key i j k)) (b (grid-bucket key mask)))
-                                            (loop for e of-type fixnum from (aref ,starts b) below (aref ,starts (1+ b))
-                                                  when (= (aref ,keys e) key) do (,visit e))))))))))
-                          (when (or (<= (query-search-best ,s) ,t1) (>= ,t1 ,hi)) (return))
+                     while (and (<= ,t0 ,hi) (< ,t0 (query-search-best ,q)))
+                     do (let ((,t1 (min (query-search-best ,q) ,hi (+ ,t0 (* +path-part-cells+ ,c)))))
+                          (declare (type double-float ,t1))
+                          (multiple-value-bind (,k0 ,k1) (path-part-layers ,q ,g ,t0 ,t1 ,r ,inv)
+                            (loop for ,k of-type fixnum from ,k0 to ,k1 do
+                              (multiple-value-bind (,ta ,tb)
+                                  (path-layer-piece ,q ,k ,c ,r ,t0 (min ,t1 (query-search-best ,q)))
+                                (when (<= ,ta ,tb)
+                                  (multiple-value-bind (,i0 ,i1 ,j0 ,j1) (path-piece-cells ,q ,ta ,tb ,r ,inv)
+                                    (do-grid-entries (,e ,g) (,i0 ,j0 ,k ,i1 ,j1 ,k) (,visit ,e)))))))
+                          (when (or (<= (query-search-best ,q) ,t1) (>= ,t1 ,hi)) (return))
                           (setf ,t0 ,t1))))))))))
 
 (defun sweep-awake (s view world)
@@ -12350,6 +12654,17 @@ grid's columns of centre, radius and handle; the excluded body is passed over. #
         (let ((h (aref handles e)))
           (unless (eql h exclude) (offer s +hit-body+ h))))))
   s)
+
+(declaim (inline centre-near-path-p))
+
+(defun centre-near-path-p (s x y z rho)
+  "Whether a centre at X Y Z (doubles) may be met by cast S: it is not farther than RHO from the
+path's line, nor wholly behind the cast, nor wholly beyond its nearest hit so far. #C4STRY"
+  (declare (type query-search s) (type double-float x y z rho))
+  (let* ((mx (- x (query-search-ox s))) (my (- y (query-search-oy s))) (mz (- z (query-search-oz s)))
+         (along (+ (* mx (query-search-ux s)) (* my (query-search-uy s)) (* mz (query-search-uz s)))))
+    (and (> along (- rho)) (< (- along rho) (query-search-best s))
+         (<= (- (+ (* mx mx) (* my my) (* mz mz)) (* along along)) (* rho rho)))))
 
 (defun sweep-sleepers (s view world)
   "Sweep cast S against the sleepers of VIEW: through its sleeping grid, each entry first judged by
@@ -12372,20 +12687,14 @@ one by one or through their grid. The excluded body is passed over. #C4STRY"
                      ;; memory with its neighbours': passed over when farther from the path's line
                      ;; than RHO, or wholly behind the cast or beyond its nearest hit
                      `(let* ((g ,grid) (gx (hash-grid-xs g)) (gy (hash-grid-ys g)) (gz (hash-grid-zs g))
-                             (items (hash-grid-items g)) (rho2 (* rho rho))
-                             (ox (query-search-ox s)) (oy (query-search-oy s)) (oz (query-search-oz s))
-                             (ux (query-search-ux s)) (uy (query-search-uy s)) (uz (query-search-uz s)))
-                        (declare (type f32-column gx gy gz) (type fixnum-column items)
-                                 (type double-float rho2 ox oy oz ux uy uz))
+                             (items (hash-grid-items g)))
+                        (declare (type f32-column gx gy gz) (type fixnum-column items))
                         (do-path-entries (e) (s g rho)
-                          (let* ((mx (- (float (aref gx e) 1d0) ox)) (my (- (float (aref gy e) 1d0) oy))
-                                 (mz (- (float (aref gz e) 1d0) oz))
-                                 (along (+ (* mx ux) (* my uy) (* mz uz))))
-                            (when (and (> along (- rho)) (< (- along rho) (query-search-best s))
-                                       (<= (- (+ (* mx mx) (* my my) (* mz mz)) (* along along)) rho2))
-                              (let ((row ,(if direct `(aref items e) `(view-row view world t (aref items e)))))
-                                (declare (type fixnum row))
-                                (when (>= row 0) (try row)))))))))
+                          (when (centre-near-path-p s (float (aref gx e) 1d0) (float (aref gy e) 1d0)
+                                                    (float (aref gz e) 1d0) rho)
+                            (let ((row ,(if direct `(aref items e) `(view-row view world t (aref items e)))))
+                              (declare (type fixnum row))
+                              (when (>= row 0) (try row))))))))
           (walk (query-view-sleeping-grid view) nil)
           (if (plusp (hash-grid-count (query-view-sleeping-stray-grid view)))
               (walk (query-view-sleeping-stray-grid view) t)
@@ -12502,56 +12811,58 @@ corner, every cell that meets that edge or corner is tried, fewest steps first. 
   (declare (type query-search s) (type terrain-probe probe) #.+kernel-policy+)
   (with-search (ox oy oz ux uy uz best cx cy cz) s
     (with-chunk-reader (solid-p probe)
-      (let ((ix (dcell ox)) (iy (dcell oy)) (iz (dcell oz)))
-        (declare (type cell ix iy iz))
-        (flet ((try (x y z tt axis)
-                 (declare (type cell x y z) (type double-float tt) (type (integer 0 3) axis))
-                 ;; axis 3: the cell the ray starts in
-                 (when (and (solid-p x y z)
-                            (case axis
-                              (0 (candidate s tt (if (> ux 0d0) -1d0 1d0) 0d0 0d0))
-                              (1 (candidate s tt 0d0 (if (> uy 0d0) -1d0 1d0) 0d0))
-                              (2 (candidate s tt 0d0 0d0 (if (> uz 0d0) -1d0 1d0)))
-                              (t (candidate s tt (- ux) (- uy) (- uz))))
-                            (offer s +hit-cell+ 0))
-                   (setf cx x cy y cz z)
-                   t)))
-          (declare (inline try))
+      ;; the cell the ray is in, its step along each axis, the distance to the next face
+      ;; crossed along each axis, and the distance between faces along each
+      (let* ((ix (dcell ox)) (iy (dcell oy)) (iz (dcell oz))
+             (sx (cond ((> ux 0d0) 1) ((< ux 0d0) -1) (t 0)))
+             (sy (cond ((> uy 0d0) 1) ((< uy 0d0) -1) (t 0)))
+             (sz (cond ((> uz 0d0) 1) ((< uz 0d0) -1) (t 0)))
+             (huge 1d300)
+             (tx (if (= sx 0) huge (/ (- (float (if (> sx 0) (1+ ix) ix) 1d0) ox) ux)))
+             (ty (if (= sy 0) huge (/ (- (float (if (> sy 0) (1+ iy) iy) 1d0) oy) uy)))
+             (tz (if (= sz 0) huge (/ (- (float (if (> sz 0) (1+ iz) iz) 1d0) oz) uz)))
+             (ddx (if (= sx 0) 0d0 (/ 1d0 (abs ux))))
+             (ddy (if (= sy 0) 0d0 (/ 1d0 (abs uy))))
+             (ddz (if (= sz 0) 0d0 (/ 1d0 (abs uz)))))
+        (declare (type cell ix iy iz) (type fixnum sx sy sz) (type double-float tx ty tz ddx ddy ddz))
+        (labels ((try (x y z tt axis)
+                   (declare (type cell x y z) (type double-float tt) (type (integer 0 3) axis))
+                   ;; axis 3: the cell the ray starts in
+                   (when (and (solid-p x y z)
+                              (case axis
+                                (0 (candidate s tt (if (> ux 0d0) -1d0 1d0) 0d0 0d0))
+                                (1 (candidate s tt 0d0 (if (> uy 0d0) -1d0 1d0) 0d0))
+                                (2 (candidate s tt 0d0 0d0 (if (> uz 0d0) -1d0 1d0)))
+                                (t (candidate s tt (- ux) (- uy) (- uz))))
+                              (offer s +hit-cell+ 0))
+                     (setf cx x cy y cz z)
+                     t))
+                 (cross (tn mx my mz)
+                   ;; the cells entered at TN: through one face, or every cell meeting the
+                   ;; edge or corner crossed, fewest steps first
+                   (if (and (not (and mx my)) (not (and mx mz)) (not (and my mz)))
+                       (cond (mx (try (+ ix sx) iy iz tn 0))
+                             (my (try ix (+ iy sy) iz tn 1))
+                             (t (try ix iy (+ iz sz) tn 2)))
+                       (let ((ax (if mx sx 0)) (ay (if my sy 0)) (az (if mz sz 0)))
+                         (or (and mx (try (+ ix ax) iy iz tn 0))
+                             (and my (try ix (+ iy ay) iz tn 1))
+                             (and mz (try ix iy (+ iz az) tn 2))
+                             (and mx my (try (+ ix ax) (+ iy ay) iz tn 0))
+                             (and mx mz (try (+ ix ax) iy (+ iz az) tn 0))
+                             (and my mz (try ix (+ iy ay) (+ iz az) tn 1))
+                             (and mx my mz (try (+ ix ax) (+ iy ay) (+ iz az) tn 0)))))))
+          (declare (inline try cross))
           (unless (try ix iy iz 0d0 3)
-            (let* ((sx (cond ((> ux 0d0) 1) ((< ux 0d0) -1) (t 0)))
-                   (sy (cond ((> uy 0d0) 1) ((< uy 0d0) -1) (t 0)))
-                   (sz (cond ((> uz 0d0) 1) ((< uz 0d0) -1) (t 0)))
-                   (huge 1d300)
-                   (tx (if (= sx 0) huge (/ (- (float (if (> sx 0) (1+ ix) ix) 1d0) ox) ux)))
-                   (ty (if (= sy 0) huge (/ (- (float (if (> sy 0) (1+ iy) iy) 1d0) oy) uy)))
-                   (tz (if (= sz 0) huge (/ (- (float (if (> sz 0) (1+ iz) iz) 1d0) oz) uz)))
-                   (ddx (if (= sx 0) 0d0 (/ 1d0 (abs ux))))
-                   (ddy (if (= sy 0) 0d0 (/ 1d0 (abs uy))))
-                   (ddz (if (= sz 0) 0d0 (/ 1d0 (abs uz)))))
-              (declare (type fixnum sx sy sz) (type double-float tx ty tz ddx ddy ddz))
-              (loop
-                (let ((tn (min tx ty tz)))
-                  (when (>= tn best) (return))
-                  (let ((mx (= tx tn)) (my (= ty tn)) (mz (= tz tn)))
-                    (when (if (and (not (and mx my)) (not (and mx mz)) (not (and my mz)))
-                              ;; one face crossed
-                              (cond (mx (try (+ ix sx) iy iz tn 0))
-                                    (my (try ix (+ iy sy) iz tn 1))
-                                    (t (try ix iy (+ iz sz) tn 2)))
-                              ;; an edge or a corner: every cell meeting it, fewest steps first
-                              (let ((ax (if mx sx 0)) (ay (if my sy 0)) (az (if mz sz 0)))
-                                (or (and mx (try (+ ix ax) iy iz tn 0))
-                                    (and my (try ix (+ iy ay) iz tn 1))
-                                    (and mz (try ix iy (+ iz az) tn 2))
-                                    (and mx my (try (+ ix ax) (+ iy ay) iz tn 0))
-                                    (and mx mz (try (+ ix ax) iy (+ iz az) tn 0))
-                                    (and my mz (try ix (+ iy ay) (+ iz az) tn 1))
-                                    (and mx my mz (try (+ ix ax) (+ iy ay) (+ iz az) tn 0)))))
-                      (return))
-                    (when mx (setf ix (+ ix sx) tx (+ tx ddx)))
-                    (when my (setf iy (+ iy sy) ty (+ ty ddy)))
-                    (when mz (setf iz (+ iz sz) tz (+ tz ddz))))))))))))
-    s)
+            (loop
+              (let ((tn (min tx ty tz)))
+                (when (>= tn best) (return))
+                (let ((mx (= tx tn)) (my (= ty tn)) (mz (= tz tn)))
+                  (when (cross tn mx my mz) (return))
+                  (when mx (setf ix (+ ix sx) tx (+ tx ddx)))
+                  (when my (setf iy (+ iy sy) ty (+ ty ddy)))
+                  (when mz (setf iz (+ iz sz) tz (+ tz ddz)))))))))))
+  s)
 
 (defun physics-ray-cast (world x y z dx dy dz max-distance &key (bodies t) (cells t) (boxes t) exclude filter hit)
   "The first thing the ray from X Y Z along DX DY DZ meets closer than MAX-DISTANCE: a body (awake

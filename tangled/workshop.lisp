@@ -918,7 +918,96 @@ with the top cube's centre at the end. #PYR4MD"
       (format stream "~&(after the run: load ~A)~%" (load-average)))))
 ;; The large pyramid, beside Box3D:1 ends here
 
-;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:6]]
+;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:2]]
+(defun deepest-into-cells (terrain x y z r)
+  "How deep the surface of a sphere of radius R centred at X Y Z reaches into the solid cells of
+TERRAIN around its centre's cell (negative when it touches none). #SQU33Z"
+  (let ((deepest -1.0))
+    (loop for i from (1- (floor x)) to (1+ (floor x)) do
+      (loop for j from (1- (floor y)) to (1+ (floor y)) do
+        (loop for k from (1- (floor z)) to (1+ (floor z))
+              when (terrain-solid-p terrain i j k)
+                do (let ((dx (- (max i (min (1+ i) x)) x)) (dy (- (max j (min (1+ j) y)) y))
+                         (dz (- (max k (min (1+ k) z)) z)))
+                     (setf deepest (max deepest (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz))))))))))
+    deepest))
+
+(defun depth-into-box (bounds x y z r)
+  "How deep the surface of a sphere of radius R centred at X Y Z reaches into the box BOUNDS (a
+list x0 y0 z0 x1 y1 z1), and, as a second value, whether the centre lies inside it. #SQU33Z"
+  (destructuring-bind (bx0 by0 bz0 bx1 by1 bz1) bounds
+    (let ((dx (- (max bx0 (min bx1 x)) x)) (dy (- (max by0 (min by1 y)) y)) (dz (- (max bz0 (min bz1 z)) z)))
+      (values (- r (sqrt (+ (* dx dx) (* dy dy) (* dz dz)))) (= 0 dx dy dz)))))
+
+(defun posted-box-bounds (world)
+  "The bounds (x0 y0 z0 x1 y1 z1) of the first box posted to WORLD for its next step, where it
+will be at that step's end. #SQU33Z"
+  (let ((b (physics-world-boxes world)) (dt (/ 1.0 60)))
+    (with-box-columns (min-x min-y min-z max-x max-y max-z vx vy vz) b
+      (list (+ (aref min-x 0) (* dt (aref vx 0))) (+ (aref min-y 0) (* dt (aref vy 0)))
+            (+ (aref min-z 0) (* dt (aref vz 0))) (+ (aref max-x 0) (* dt (aref vx 0)))
+            (+ (aref max-y 0) (* dt (aref vy 0))) (+ (aref max-z 0) (* dt (aref vz 0)))))))
+
+(defun squeeze-scene (family scene)
+  "Run SCENE (:step, :marbles, :far-step, :wall or :press) under FAMILY for 240 steps of 1/60 s; return the
+count of ball positions outside air cells of the resident world or below the floor less a slop,
+the lowest centre, the walker's final x and y (NIL for :press), the state hash, the fastest
+speed of any ball after any step, the deepest any ball's surface reached into a solid cell and
+into the box (its radius, when the centre lies inside), and whether a centre lay inside the box. #SQU33Z"
+  ;; the walker's structure is defined with the walker, later on the page
+  (declare (notinline physics-player-x physics-player-y))
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 0 -16 16 12 16 nil)
+    (fill-terrain terrain -16 -16 -16 16 0 16 t)
+    (case scene
+      ((:step :marbles) (fill-terrain terrain 6 0 -4 16 1 4 t))
+      (:far-step (fill-terrain terrain 8 0 -4 16 1 4 t))
+      (:wall (fill-terrain terrain 6 0 -4 16 3 4 t)))
+    (let* ((world (make-physics-world :terrain terrain :kernels family))
+           (player (make-physics-player 0d0 0d0 0d0))
+           (slop *physics-linear-slop*)
+           (balls (loop for x from 1.0 to 5.5 by 0.5
+                        collect (add-physics-body-of-kind world (if (eq scene :marbles) :marble :ball) x 0.3 0.0)))
+           (outside 0) (lowest 100.0) (fastest 0.0) (cells 0.0) (box 0.0) (inside-box nil))
+      (dotimes (frame 240)
+        (if (eq scene :press)
+            (post-physics-box world 3.25 (max 0.7 (- 1.5 (* frame (/ 1.0 60)))) 0.0 2.0 0.5 1.0
+                              :vy (if (> (- 1.5 (* frame (/ 1.0 60))) 0.7) -1.0 0.0) :owner :press)
+            (progn (advance-physics-player player terrain (/ 1d0 60) :move-x 1d0)
+                   (post-physics-player world player)))
+        (let ((bounds (posted-box-bounds world)))
+          (step-physics-world world)
+          (dolist (h balls)
+            (multiple-value-bind (x y z) (physics-body-position world h)
+              (let ((r (physics-body-radius world h)))
+                (multiple-value-bind (vx vy vz) (physics-body-velocity world h)
+                  (setf fastest (max fastest (sqrt (+ (* vx vx) (* vy vy) (* vz vz))))))
+                (setf cells (max cells (deepest-into-cells terrain x y z r))
+                      lowest (min lowest y))
+                (multiple-value-bind (depth inside) (depth-into-box bounds x y z r)
+                  (setf box (max box depth) inside-box (or inside-box inside)))
+                ;; a cell of a chunk that is not resident counts as solid
+                (when (or (< y (- slop)) (terrain-solid-p terrain (floor x) (floor y) (floor z)))
+                  (incf outside)))))))
+      (values outside lowest
+              (and (not (eq scene :press)) (physics-player-x player))
+              (and (not (eq scene :press)) (physics-player-y player))
+              (physics-world-state-hash world)
+              fastest cells box inside-box))))
+
+(defun physics-world-last-step-held-out-count (world)
+  "How many bodies the last step stopped at the face of a solid cell. #SQU33Z"
+  (check-world world 'physics-world-last-step-held-out-count)
+  (physics-world-held-out-count world))
+
+(defun physics-world-last-step-buried-count (world)
+  "How many awake bodies began the last step with their centre in a solid cell, and were pushed
+toward the air by that cell's contact. #SQU33Z"
+  (check-world world 'physics-world-last-step-buried-count)
+  (physics-world-buried-count world))
+;; Squeezed between a box and the cells: the box yields, the cells hold:2 ends here
+
+;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:7]]
 (defun squeeze-scene-world (next kernels)
   "A random scene for the squeeze campaign, drawn from the generator NEXT: a world solved by
 KERNELS over a floor three cells deep (top at y = 0) with blocks and pits in [-4, 4), and its
@@ -1021,7 +1110,7 @@ table. #SQU33Z"
   (format stream "~&| scenes | box-steps | body-steps | outside the air | over the bound | fastest / bound | fastest, m/s | held at a face | seconds |~%|-~%| ~D | ~D | ~D | ~D | ~D | ~,3F | ~,2F | ~D | ~,1F |~%"
           (getf figures :scenes) (getf figures :box-steps) (getf figures :body-steps) (getf figures :inside)
           (getf figures :over) (getf figures :worst) (getf figures :fastest) (getf figures :held) seconds))
-;; Squeezed between a box and the cells: the box yields, the cells hold:6 ends here
+;; Squeezed between a box and the cells: the box yields, the cells hold:7 ends here
 
 ;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:1]]
 (defparameter +fuzz-bad-values+
@@ -1350,31 +1439,52 @@ the basin. #B3NCHW"
                             (+ 0.3 (* row 0.55) (* 0.01 (mod i 5)))
                             :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0))))))
 
+(defparameter *job-phases*
+  '((substep-phase 0 1 2 3 4) (prepare-phase 5 6) (store-phase 7))
+  "Each phase whose loops split, with the jobs ([[#SPL1T5]]) that run inside it. #B3NCHW")
+
+(defun make-bench-basin (count family)
+  "The benchmark's basin of COUNT awake balls in FAMILY: the basin, or above 10000 balls the wide
+basin. #B3NCHW"
+  (if (> count 10000)
+      (make-wide-basin-world count :kernels family)
+      (make-basin-world count :kernels family)))
+
 (defun measure-workers (count family counts &key (from 60) (to 150))
   "Step basins of COUNT balls in FAMILY, one per worker count of COUNTS, in turn for TO steps;
-return the median ms per step over steps FROM..TO of each, the one-worker world's serial share
-and whether all reached one state hash. #B3NCHW"
-  (let* ((worlds (mapcar (lambda (n)
-                           (open-world-workers (if (> count 10000)
-                                                   (make-wide-basin-world count :kernels family)
-                                                   (make-basin-world count :kernels family))
-                                               n))
-                         counts))
+return the median ms per step over steps FROM..TO of each, the serial share of a one-worker step,
+whether all reached one state hash, and each phase's serial part of the step, as a list of
+(phase share). The serial share is measured on one more basin, stepped in turn with the others,
+whose pool of one worker (no thread) runs every pass that splits and times it. #B3NCHW"
+  (let* ((worlds (mapcar (lambda (n) (open-world-workers (make-bench-basin count family) n)) counts))
+         (probe (make-bench-basin count family))
+         (pool (make-worker-pool 1))
          (times (mapcar (lambda (w) (declare (ignore w)) (list nil)) worlds))
-         (clock (make-array (* 2 (length *physics-phases*)) :element-type 'fixnum :initial-element 0)))
+         (n (length *physics-phases*))
+         (clock (make-array (* 2 n) :element-type 'fixnum :initial-element 0)))
+    (setf (physics-world-pool probe) pool (worker-pool-split-rows pool) 0)
     (dotimes (i to)
-      (when (= i from) (setf (physics-world-phase-clock (first worlds)) clock))
+      (when (= i from)
+        (setf (physics-world-phase-clock probe) clock)
+        (fill (worker-pool-spent pool) 0))
+      (step-physics-world probe)
       (loop for w in worlds for cell in times
             do (step-physics-world w)
                (when (>= i from) (push (* 1000 (physics-world-last-step-real-seconds w)) (car cell)))))
-    (let* ((phases (subseq clock 0 (length *physics-phases*)))
-           (total (reduce #'+ phases))
-           (split (aref phases (position 'substep-phase *physics-phases*)))
-           (hashes (mapcar #'physics-world-state-hash worlds)))
+    (let* ((total (max 1 (reduce #'+ clock :end n)))
+           (parts (loop for phase in *physics-phases* for k from 0
+                        collect (list phase
+                                      (/ (- (aref clock k)
+                                            (loop for j in (rest (assoc phase *job-phases*))
+                                                  sum (aref (worker-pool-spent pool) j)))
+                                         (float total 1d0)))))
+           (hashes (mapcar #'physics-world-state-hash (cons probe worlds))))
       (mapc #'close-physics-world worlds)
+      (setf (physics-world-pool probe) nil)
       (values (mapcar (lambda (cell) (median (car cell))) times)
-              (if (plusp total) (/ (- total split) (float total 1d0)) 0d0)
-              (= 1 (length (remove-duplicates hashes)))))))
+              (max 0d0 (reduce #'+ parts :key #'second))
+              (= 1 (length (remove-duplicates hashes)))
+              parts))))
 
 (defun run-worker-benchmark (&key (sizes '(1000 3000 10000 30000)) (stream *standard-output*))
   "Print, as an Org table, the basin at each of SIZES in every kernel family with one worker,
@@ -1384,17 +1494,21 @@ and Amdahl's bound for two, and whether the hashes agree; with the machine and i
          (counts (remove-duplicates (list 1 2 (max 2 cores)))))
     (format stream "~&#+caption: the basin, all awake, 60 Hz, 4 substeps; median of steps 60-150, the worlds stepped in turn; ~A, ~D cores; load ~A at the start~%"
             (cpu-model-name) cores (load-average))
-    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash |~%"
+    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash | serial, % by phase |~%"
             counts (rest counts))
-    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------|~%"
+    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------+--------------------|~%"
             counts (rest counts))
     (dolist (size sizes)
       (dolist (family (available-kernel-families))
-        (multiple-value-bind (ms serial same) (measure-workers size family counts)
-          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A |~%"
+        (multiple-value-bind (ms serial same parts) (measure-workers size family counts)
+          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A | ~{~A~^ ~} |~%"
                   size (string-downcase family) ms
                   (mapcar (lambda (m) (/ (first ms) m)) (rest ms))
-                  (* 100 serial) (/ 1 (+ serial (/ (- 1 serial) 2))) (if same "yes" "NO"))
+                  (* 100 serial) (/ 1 (+ serial (/ (- 1 serial) 2))) (if same "yes" "NO")
+                  (loop for (phase share) in (sort (copy-list parts) #'> :key #'second)
+                        when (>= share 0.01)
+                          collect (format nil "~(~A~) ~D" (subseq (string phase) 0 (search "-PHASE" (string phase)))
+                                          (round (* 100 share)))))
           (finish-output stream))))
     (format stream "~&load ~A at the end~%" (load-average))))
 ;; What the workers gain:1 ends here

@@ -29,7 +29,8 @@
 ;;;; header-args:lisp+, else the page's :tangle no); their length is the lines between
 ;;;; #+begin_src and #+end_src.  The longest definitions are the top-level forms of the two
 ;;;; tangled engine files, by lines, with the deepest nesting of parentheses in them (the form's
-;;;; own parenthesis is depth 1; strings, comments and character literals are skipped).
+;;;; own parenthesis is depth 1; strings, comments and character literals are skipped), and
+;;;; then every one of them over the page's bound: 120 lines, or deeper than 16 parentheses.
 
 (defun lines-of (path)
   (with-open-file (s path :external-format :utf-8)
@@ -278,7 +279,12 @@ and the engine blocks' lengths."
                          #'> :key #'second)))
         (loop for (name n depth nil file) in forms
               repeat 10
-              do (format t "  ~4D lines  depth ~2D  ~A (~A)~%" n depth name file)))
+              do (format t "  ~4D lines  depth ~2D  ~A (~A)~%" n depth name file))
+        ;; the page's bound on an engine definition: 120 lines, 16 parentheses deep
+        (let ((over (remove-if-not (lambda (f) (or (> (second f) 120) (> (third f) 16))) forms)))
+          (format t "engine definitions over 120 lines or deeper than 16 parentheses: ~D~%" (length over))
+          (loop for (name n depth nil file) in over
+                do (format t "  ~4D lines  depth ~2D  ~A (~A)~%" n depth name file))))
       (let ((dump (sb-ext:posix-getenv "PROSE_COUNT_DUMP")))
         (when (and dump (plusp (length dump)))
           (with-open-file (out dump :direction :output :if-exists :supersede :external-format :utf-8)
