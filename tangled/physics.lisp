@@ -7136,10 +7136,11 @@ farthest from it, and the two that span the largest areas with those on either s
 through them; write their places into KEEP in increasing order and return 4. #BXCELL"
   (declare (type (simple-array single-float (24)) poly) (type (simple-array fixnum (8)) keep)
            (type (integer 5 8) kept) #.+kernel-policy+)
-  (macrolet ((a (q) `(aref poly (* 3 (aref keep ,q)))) (b (q) `(aref poly (+ 1 (* 3 (aref keep ,q)))))
-             (gap (q) `(aref poly (+ 2 (* 3 (aref keep ,q))))))
-    (let ((p1 0) (p2 -1) (p3 -1) (p4 -1))
-      (declare (type fixnum p1 p2 p3 p4))
+  (macrolet ((a (q) `(aref poly (* 3 (the (integer 0 7) (aref keep ,q)))))
+             (b (q) `(aref poly (+ 1 (* 3 (the (integer 0 7) (aref keep ,q))))))
+             (gap (q) `(aref poly (+ 2 (* 3 (the (integer 0 7) (aref keep ,q)))))))
+    (let ((p1 0) (p2 0) (p3 0) (p4 0))
+      (declare (type (integer 0 7) p1 p2 p3 p4))
       (loop for q from 1 below kept when (< (gap q) (gap p1)) do (setf p1 q))
       (let ((far -1.0))
         (declare (type single-float far))
@@ -7286,7 +7287,8 @@ give one. KEY-BASE with the axis and the vertex's or the edges' feature is a poi
                 (next (make-array 24 :element-type 'single-float))
                 (ids (make-array 8 :element-type 'fixnum))
                 (next-ids (make-array 8 :element-type 'fixnum)))
-            (declare (dynamic-extent poly next ids next-ids))
+            (declare (dynamic-extent poly next ids next-ids)
+                     (type (simple-array single-float (24)) poly next) (type (simple-array fixnum (8)) ids next-ids))
             (macrolet ((with-roles (&body body)
                          ;; bind the reference box's numbers as R..., the incident's as I...
                          `(if on-b
@@ -7446,8 +7448,8 @@ which holds still as a cell does (box-pair-points). #BXCELL"
              (hx (aref hxs slot)) (hy (aref hys slot)) (hz (aref hzs slot))
              ;; the farthest centre a box may meet this one from, against the grid's cells
              (far (+ r rmax reach))
-             (span (min 64 (ceiling (* far (hash-grid-inv-cell grid)))))
-             (sleep-span (min 64 (ceiling (/ far (grid-cell-size world))))))
+             (span (ceiling (min 64.0 (* far (hash-grid-inv-cell grid)))))
+             (sleep-span (ceiling (min 64.0 (/ far (the single-float (f32 (grid-cell-size world))))))))
         (declare (type fixnum owner) (type single-float cx cy cz r aw ax ay az hx hy hz far)
                  (type (integer 0 64) span sleep-span))
         (flet ((meet (buffer j row-j)

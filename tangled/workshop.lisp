@@ -872,13 +872,14 @@ handle. #PYR4MD"
                                             :density 100))))
       (values w top))))
 
-(defun run-pyramid-benchmark (&key (stream *standard-output*) (base 100) (steps 200)
+(defun run-pyramid-benchmark (&key (stream *standard-output*) (base 100) (steps 200) (profile-steps 50)
                                    (rounds (let ((r (sb-ext:posix-getenv "ROUNDS")))
                                              (if (and r (plusp (length r))) (parse-integer r) 5))))
   "Print, as an Org table, the CPU time per step of Box3D's large pyramid of BASE cubes at its base
 over STEPS steps in this engine's kernel families and in Box3D (report/peers/box3d-large-pyramid),
 ROUNDS rounds of alternating processes, the median of the rounds and each one's ratio to Box3D's,
-with the top cube's centre at the end. #PYR4MD"
+with the top cube's centre at the end; then the shares of the scalar family's step, by function,
+over PROFILE-STEPS steps. #PYR4MD"
   (let* ((root (namestring (asdf:system-source-directory "luv-physics")))
          (box3d (namestring (merge-pathnames "report/peers/box3d-large-pyramid" root)))
          (script (namestring (merge-pathnames "tools/pyramid-one.lisp" root)))
@@ -915,7 +916,17 @@ with the top cube's centre at the end. #PYR4MD"
             do (format stream "~&| ~A | ~,2F | ~,2F | ~,2F | ~,2F | ~,3F | ~,3F |~%" engine m
                        (reduce #'min (mapcar #'second rows)) (reduce #'max (mapcar #'second rows))
                        (/ m reference) (third (first rows)) (fourth (first rows))))
-      (format stream "~&(after the run: load ~A)~%" (load-average)))))
+      (format stream "~&(after the run: load ~A)~%" (load-average))
+      ;; where the step goes: one more process, the scalar family under the statistical profiler
+      (let ((shares (joint-grid-lines (list "sbcl" "--dynamic-space-size" "4Gb" "--script" script root "profile"
+                                            (princ-to-string base) (princ-to-string profile-steps))
+                                      "profile")))
+        (format stream "~&~%#+caption: Where the scalar family's step of that pyramid goes: each function holding at ~
+                        least 1 % of sb-sprof's samples by itself (1 ms apart) over ~D steps; load ~A~%"
+                profile-steps (load-average))
+        (format stream "~&| function | share % |~%|----------+---------|~%")
+        (dolist (words shares)
+          (format stream "~&| ~(~{~A~^ ~}~) | ~A |~%" (butlast words) (car (last words))))))))
 ;; The large pyramid, beside Box3D:1 ends here
 
 ;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:2]]
