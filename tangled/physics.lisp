@@ -81,6 +81,7 @@
    ;; Joints (#J0STOR)
    #:add-physics-joint #:remove-physics-joint #:physics-joint-alive-p #:physics-world-joint-count
    #:physics-joint-bodies #:physics-joint-length #:physics-joint-impulse
+   #:physics-joint #:physics-joint-world #:physics-joint-handle #:physics-world-joint-objects
    ;; Boxes (#BXR0WS)
    #:add-physics-box #:physics-body-box-p #:physics-box-half-extents
    ;; A snapshot holds what decides the next step (#SN4P0T)
@@ -6725,6 +6726,104 @@ put to sleep the groups still for long enough, when WORLD sleeps. #J0SL3P"
       (when (physics-world-sleep-enabled world) (sleep-joint-groups world set)))))
 ;; Joint groups sleep and wake together:1 ends here
 
+;; [[file:../physics.org::#J0OBJT][A joint as an object:1]]
+(defclass physics-joint ()
+  ((world :initarg :world :reader physics-joint-world)
+   (handle :initarg :handle :reader physics-joint-handle))
+  (:documentation "A joint as an object: a world and a joint's handle. Its numbers live in the
+world's joint rows; describe shows that row as if it were slots. #J0OBJT"))
+
+(setf (documentation 'physics-joint-world 'function) "The world of the physics-joint JOINT. #J0OBJT"
+      (documentation 'physics-joint-handle 'function) "The handle of the physics-joint JOINT. #J0OBJT")
+
+(defun physics-joint (world joint)
+  "The physics-joint object for the live joint JOINT of WORLD. #J0OBJT"
+  (check-world world 'physics-joint)
+  (resolve-joint world joint)
+  (make-instance 'physics-joint :world world :handle joint))
+
+(defun joint-flavour (rows row)
+  "What the joint at ROW of ROWS is, in words: point, or a distance joint stiff, a spring or a rope. #J0OBJT"
+  (let ((flags (aref (joint-columns-flags rows) row)))
+    (cond ((= (aref (joint-columns-kind rows) row) +joint-point+) "point")
+          ((logtest flags +joint-slack+) "distance, a rope")
+          ((logtest flags +joint-spring+) "distance, a spring")
+          (t "distance, stiff"))))
+
+(defmethod print-object ((joint physics-joint) stream)
+  (print-unreadable-object (joint stream :type t)
+    (let ((w (physics-joint-world joint)) (j (physics-joint-handle joint)))
+      (if (physics-joint-alive-p w j)
+          (let ((rows (joint-set-rows (physics-world-joints w))) (row (resolve-joint w j)))
+            (multiple-value-bind (a b) (physics-joint-bodies w j)
+              (format stream "~D ~A of ~D and ~:[a fixed point~;~:*~D~], ~,3F m"
+                      (handle-index j) (joint-flavour rows row) (handle-index a) (and b (handle-index b))
+                      (physics-joint-length w j))))
+          (format stream "~D removed" (handle-index j))))))
+
+(defun joint-summary (joint)
+  "JOINT's row as (LABEL TEXT VALUE) lines: kind, bodies, anchors, length, lengths held, softness,
+break force, last impulse. #J0OBJT"
+  (let* ((w (physics-joint-world joint)) (j (physics-joint-handle joint))
+         (rows (joint-set-rows (physics-world-joints w))) (row (resolve-joint w j)))
+    (with-joint-columns (kind flags ax ay az bx by bz rest-length min-length max-length hertz damping-ratio
+                         break-force)
+        rows
+      (multiple-value-bind (a b) (physics-joint-bodies w j)
+        (let ((f (aref flags row)) (point (= (aref kind row) +joint-point+))
+              (anchor-a (list (aref ax row) (aref ay row) (aref az row)))
+              (anchor-b (list (aref bx row) (aref by row) (aref bz row)))
+              (length (physics-joint-length w j)) (impulse (physics-joint-impulse w j)))
+          (list (list "kind" (joint-flavour rows row) (if point :point :distance))
+                (list "bodies" (format nil "~D and ~:[none: a fixed point~;~:*~D~]" a b) (list a b))
+                (list "anchors" (format nil "~{~,4F~^ ~} in ~D's frame, ~{~,4F~^ ~} ~:[of the world~;in ~:*~D's frame~]"
+                                        anchor-a a anchor-b b)
+                      (list anchor-a anchor-b))
+                (list "length" (format nil "~,4F m now" length) length)
+                (list "holds" (if point
+                                  "its anchors together"
+                                  (format nil "~:[~,4F m~;~*no length of its own~]~:[~*~;, at least ~,4F m~]~:[~*~;, at most ~,4F m~]"
+                                          (logtest f +joint-slack+) (aref rest-length row)
+                                          (logtest f +joint-lower+) (aref min-length row)
+                                          (logtest f +joint-upper+) (aref max-length row)))
+                      (list (aref rest-length row) (aref min-length row) (aref max-length row)))
+                (list "softness" (if (> (aref hertz row) 0.0)
+                                     (format nil "~A Hz, damping ratio ~A" (aref hertz row) (aref damping-ratio row))
+                                     "stiff")
+                      (list (aref hertz row) (aref damping-ratio row)))
+                (list "break force" (if (> (aref break-force row) 0.0) (format nil "~A N" (aref break-force row)) "none")
+                      (aref break-force row))
+                (list "last impulse" (format nil "~,6F N s in its last substep" impulse) impulse)))))))
+
+(defmethod describe-object ((joint physics-joint) stream)
+  (let ((w (physics-joint-world joint)) (j (physics-joint-handle joint)))
+    (format stream "~&~S~%  joint handle ~D (slot ~D, generation ~D) of ~S~%" joint j (handle-index j)
+            (handle-generation j) w)
+    (when (physics-joint-alive-p w j)
+      (loop for (label text) in (joint-summary joint)
+            do (format stream "  ~18A ~A~%" label text))
+      (let ((rows (joint-set-rows (physics-world-joints w))) (row (resolve-joint w j)))
+        (format stream "  Its row, joint row ~D:~%" row)
+        (dolist (column +joint-columns-column-names+)
+          (format stream "  ~(~22A~) = ~S~%" column (aref (slot-value rows column) row)))))))
+
+(defmethod sb-impl::inspected-parts ((joint physics-joint))
+  (values (format nil "~S~%" joint) t
+          (cons (cons "world" (physics-joint-world joint))
+                (loop for (label nil value) in (and (physics-joint-alive-p (physics-joint-world joint)
+                                                                           (physics-joint-handle joint))
+                                                    (joint-summary joint))
+                      collect (cons label value)))))
+
+(defun physics-world-joint-objects (world)
+  "The joints of WORLD as physics-joint objects, in the order of their rows. #J0OBJT"
+  (check-world world 'physics-world-joint-objects)
+  (let ((set (physics-world-joints world)))
+    (and set (loop with rows = (joint-set-rows set)
+                   for row below (joint-columns-length rows)
+                   collect (physics-joint world (aref (joint-columns-handle rows) row))))))
+;; A joint as an object:1 ends here
+
 ;; [[file:../physics.org::#BXR0WS][A box is a row and a set of extents by slot:1]]
 (defconstant +box-min-half-extent+ 0.05
   "The smallest half-extent of a box body, in metres. #BXR0WS")
@@ -6736,7 +6835,7 @@ feature), the handle of the box that found it, the normal (pushing the first sid
 second), the levers from both centres, the two tangents, the gap at the step's start, the
 effective masses, the friction, the three carried impulses, and each side's inverse mass and world
 inverse inertia's six entries, then the point's restitution, its largest push this step, the
-speed it struck at this step and its bounce ([[#BXSOLV]]). #BXR0WS"
+speed it struck at this step, its bounce and its normal velocity before the pass ([[#BXSOLV]]). #BXR0WS"
   (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
   (sx single-float) (sy single-float) (sz single-float) (imb single-float)
   (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
@@ -6749,7 +6848,8 @@ speed it struck at this step and its bounce ([[#BXSOLV]]). #BXR0WS"
   (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
   (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
   (i22 single-float) (i23 single-float) (i33 single-float)
-  (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float))
+  (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float)
+  (approach single-float))
 
 (defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
   "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
@@ -6757,7 +6857,8 @@ many boxes live, the contact points of this step and of the last one, each with 
 and the count of every slot's points, the awake box rows of this step, their turns (three floats
 a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
 step's start (four floats a box), whether this step solves points, the soft coefficients of the
-step, and its restitution threshold and gravity times the substep. #BXR0WS"
+step, its restitution threshold and gravity times the substep, and whether some point of the
+step has restitution. #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -6784,6 +6885,7 @@ step, and its restitution threshold and gravity times the substep. #BXR0WS"
   (impulse-scale 0.0 :type single-float)
   (push-max 0.0 :type single-float)
   (threshold 0.0 :type single-float)
+  (bouncy nil :type boolean)
   (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float))
 
 (defun box-set-room (set slots)
@@ -7546,6 +7648,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                   (when near (setf (aref near i) most-positive-single-float))
                   (let ((reach (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))))
                     (find-box-points world set i reach)
+                    ;; a box faster than its margin sweeps its corners ([[#BXSWEP]])
+                    (when (> reach margin) (sweep-box-corners world set i reach))
                     (find-box-box-points world set i reach)
                     ;; the spheres near it ([[#BXSPHR]])
                     (find-box-sphere-points world set i reach dt gstep))
@@ -7598,6 +7702,7 @@ slop, so a box rests a slop deep as a sphere does. #BXSOLV"
   (let ((awake (physics-world-awake world)) (points (box-set-points set))
         (slop (f32 (physics-world-slop world))))
     (declare (type single-float slop))
+    (setf (box-set-bouncy set) nil)
     (with-body-columns ((fr friction) (re restitution)) awake
       (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
                                tangent-mass-1 tangent-mass-2 friction im i11 i12 i13 i22 i23 i33
@@ -7609,7 +7714,8 @@ slop, so a box rests a slop deep as a sphere does. #BXSOLV"
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
             (setf (aref restitution k) (max (if (< a n) (aref re a) 0.0) (if (< b n) (aref re b) 0.0))
-                  (aref pushed k) 0.0 (aref impact-speed k) 0.0 (aref bounce k) 0.0))
+                  (aref pushed k) 0.0 (aref impact-speed k) 0.0 (aref bounce k) 0.0)
+            (when (> (aref restitution k) 0.0) (setf (box-set-bouncy set) t)))
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
             (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set a)
@@ -7728,8 +7834,17 @@ friction, held in the cone. #BXSOLV"
     (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
                              normal-mass tangent-mass-1 tangent-mass-2 friction normal-impulse
                              tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed)
+                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed approach)
         points
+      ;; the normal velocity of each point that may strike, before this pass pushes any point:
+      ;; the corners of a box landing flat all strike at the speed the first one does
+      (when (box-set-bouncy set)
+        (dotimes (k (box-point-columns-length points))
+          (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0))
+            (with-box-point (v k)
+              (setf (aref approach k)
+                    (multiple-value-bind (ux uy uz) (point-velocity)
+                      (+ (* ux (aref nx k)) (* uy (aref ny k)) (* uz (aref nz k)))))))))
       (dotimes (k (box-point-columns-length points))
         (with-box-point (v k)
           (let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
@@ -7755,11 +7870,12 @@ friction, held in the cone. #BXSOLV"
                  (new (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old))))
                  (pn (- new old)))
             (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
-            ;; an impact: the first push this step of a point with restitution approaching faster
-            ;; than the threshold; its speed is kept for the bounce after the substeps
-            (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0) (> new 0.0) (< vn (- threshold)))
+            ;; an impact: the first push this step of a point with restitution that approached,
+            ;; before the pass, faster than the threshold; its speed is kept for the bounce
+            (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0) (> new 0.0)
+                       (< (aref approach k) (- threshold)))
               (setf (aref impact-speed k)
-                    (box-point-impact-speed vn s positive use-bias inv-h
+                    (box-point-impact-speed (aref approach k) s positive use-bias inv-h
                                             (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
                                                (+ (* hgx ax) (* hgy ay) (* hgz az))))))
             (setf (aref normal-impulse k) new
@@ -7813,9 +7929,12 @@ last spin over the step. #BXSOLV"
 (defun bounce-box-points (set v)
   "After the substeps, give each box point that struck this step the push that makes it leave
 at its restitution times the speed it struck at, in +box-bounce-passes+ Gauss-Seidel passes, each
-point's bounce a push of its own, never a pull. #BXSOLV"
+point's bounce a push of its own, never a pull. The speed is the instant's at the step's end,
+which the velocity of the substep to come reaches less half that substep's gravity. #BXSOLV"
   (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
-  (let ((points (box-set-points set)))
+  (let ((points (box-set-points set))
+        (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
+    (declare (type single-float hgx hgy hgz))
     (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
                              imb j11 j12 j13 j22 j23 j33 restitution impact-speed bounce)
         points
@@ -7825,11 +7944,15 @@ point's bounce a push of its own, never a pull. #BXSOLV"
             (with-box-point (v k)
               (let* ((ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
                      (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
+                     ;; the change of vn over a substep under gravity
+                     (dv (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
+                            (+ (* hgx ax) (* hgy ay) (* hgz az))))
                      (old (aref bounce k))
                      (new (max 0.0 (+ old (* (aref normal-mass k)
-                                             (- (* (aref restitution k) (aref impact-speed k)) vn)))))
+                                             (- (- (* (aref restitution k) (aref impact-speed k)) (* 0.5 dv))
+                                                vn)))))
                      (push (- new old)))
-                (declare (type single-float ax ay az vn old new push))
+                (declare (type single-float ax ay az vn dv old new push))
                 (setf (aref bounce k) new)
                 (push! (* push ax) (* push ay) (* push az)))))))))
   nil)
@@ -7974,6 +8097,87 @@ adds GSTEP; each such box's slot gets the first and the count of its points. #BX
                     (aref (box-set-count set) slot) (- (box-point-columns-length points) start))))))))
   set)
 ;; A box against a sphere:1 ends here
+
+;; [[file:../physics.org::#BXSWEP][Fast boxes sweep their corners through the cells:1]]
+(defun sweep-box-corners (world set row reach)
+  "Append to SET's points, for the awake box at ROW of WORLD, each corner's first cell face
+along the box's travel this step within REACH that lies beyond the faces of the corner's own
+cell's neighbours ([[#BXCELL]]): the corner walks the cells it crosses, and the face it enters
+a solid cell through, with the box's centre on its air side, is its point. #BXSWEP"
+  (declare (type box-set set) (type index row) (type single-float reach) #.+kernel-policy+)
+  (let ((terrain (physics-world-terrain world)) (probe (physics-world-probe world))
+        (dt (physics-world-current-dt world)))
+    (declare (type single-float dt))
+    (when terrain
+      (with-body-columns (x y z vx vy vz qw qx qy qz handle) (physics-world-awake world)
+        (let* ((h (aref handle row)) (slot (handle-index h))
+               (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot))
+               ;; the way the box travels this step: its velocity with the step's gravity added
+               (dx (+ (aref vx row) (* dt (f32 (physics-world-gravity-x world)))))
+               (dy (+ (aref vy row) (* dt (f32 (physics-world-gravity-y world)))))
+               (dz (+ (aref vz row) (* dt (f32 (physics-world-gravity-z world)))))
+               (len (fsqrt (+ (* dx dx) (* dy dy) (* dz dz)))))
+          (declare (type single-float hx hy hz dx dy dz len))
+          (when (> len 0.0)
+            (let ((ux (/ dx len)) (uy (/ dy len)) (uz (/ dz len)))
+              (declare (type single-float ux uy uz))
+              (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+                  (box-axes (aref qw row) (aref qx row) (aref qy row) (aref qz row))
+                (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+                (flet ((solid (ix iy iz) (declare (type fixnum ix iy iz)) (probe-solid-p probe ix iy iz))
+                       (first-crossing (p i u)
+                         ;; the distance along the way to the first face across axis coordinate P
+                         ;; from cell I, moving at U along that axis
+                         (declare (type single-float p u) (type fixnum i))
+                         (cond ((> u 0.0) (/ (- (float (1+ i) 1.0) p) u))
+                               ((< u 0.0) (/ (- (float i 1.0) p) u))
+                               (t most-positive-single-float))))
+                  (declare (inline solid first-crossing))
+                  (dotimes (corner 8)
+                    (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
+                           (c (if (logbitp 2 corner) hz (- hz)))
+                           (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
+                           (rz (+ (* r31 a) (* r32 b) (* r33 c)))
+                           (px (+ (aref x row) rx)) (py (+ (aref y row) ry)) (pz (+ (aref z row) rz))
+                           (cx (cell-floor px)) (cy (cell-floor py)) (cz (cell-floor pz))
+                           (ix cx) (iy cy) (iz cz)
+                           (sx (if (> ux 0.0) 1 -1)) (sy (if (> uy 0.0) 1 -1)) (sz (if (> uz 0.0) 1 -1))
+                           (tx (first-crossing px ix ux)) (ty (first-crossing py iy uy)) (tz (first-crossing pz iz uz))
+                           (ex (if (= ux 0.0) most-positive-single-float (/ 1.0 (abs ux))))
+                           (ey (if (= uy 0.0) most-positive-single-float (/ 1.0 (abs uy))))
+                           (ez (if (= uz 0.0) most-positive-single-float (/ 1.0 (abs uz)))))
+                      (declare (type single-float a b c rx ry rz px py pz tx ty tz ex ey ez)
+                               (type fixnum cx cy cz ix iy iz sx sy sz))
+                      (unless (solid ix iy iz)
+                        (loop for steps of-type fixnum from 1 to 64 do
+                          (let ((axis (cond ((and (<= tx ty) (<= tx tz)) 0) ((<= ty tz) 1) (t 2))))
+                            (declare (type (integer 0 2) axis))
+                            (when (> (case axis (0 tx) (1 ty) (t tz)) reach) (return))
+                            (case axis
+                              (0 (incf ix sx) (setf tx (+ tx ex)))
+                              (1 (incf iy sy) (setf ty (+ ty ey)))
+                              (t (incf iz sz) (setf tz (+ tz ez))))
+                            (when (solid ix iy iz)
+                              (let* ((step (case axis (0 sx) (1 sy) (t sz)))
+                                     (face (+ (* 2 axis) (if (> step 0) 1 0)))
+                                     ;; the normal out of the entered cell, back along the axis
+                                     (nx (if (= axis 0) (float (- step) 1.0) 0.0))
+                                     (ny (if (= axis 1) (float (- step) 1.0) 0.0))
+                                     (nz (if (= axis 2) (float (- step) 1.0) 0.0))
+                                     ;; the face's plane, and the corner's distance to it
+                                     (gap (case axis
+                                            (0 (if (> step 0) (- (float ix 1.0) px) (- px (float (1+ ix) 1.0))))
+                                            (1 (if (> step 0) (- (float iy 1.0) py) (- py (float (1+ iy) 1.0))))
+                                            (t (if (> step 0) (- (float iz 1.0) pz) (- pz (float (1+ iz) 1.0)))))))
+                                (declare (type fixnum step face) (type single-float nx ny nz gap))
+                                ;; beyond the neighbours' faces, with the centre on the face's air side
+                                (when (and (not (solid (+ cx (if (= axis 0) step 0)) (+ cy (if (= axis 1) step 0))
+                                                       (+ cz (if (= axis 2) step 0))))
+                                           (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
+                                  (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz gap)))
+                              (return)))))))))))))))
+  set)
+;; Fast boxes sweep their corners through the cells:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (declaim (inline held-marking-p mark-held))
@@ -8463,6 +8667,17 @@ and a :held-out event reported. Return how many bodies were held. #SQU33Z"
           (setf (aref x i) (+ cx (aref d p)) (aref y i) (+ cy (aref d (+ p 1))) (aref z i) (+ cz (aref d (+ p 2)))))))
     (setf (physics-world-held-out-count world) held)
     held))
+
+(defun physics-world-last-step-held-out-count (world)
+  "How many bodies the last step stopped at the face of a solid cell. #SQU33Z"
+  (check-world world 'physics-world-last-step-held-out-count)
+  (physics-world-held-out-count world))
+
+(defun physics-world-last-step-buried-count (world)
+  "How many awake bodies began the last step with their centre in a solid cell, and were pushed
+toward the air by that cell's contact. #SQU33Z"
+  (check-world world 'physics-world-last-step-buried-count)
+  (physics-world-buried-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:1 ends here
 
 ;; [[file:../physics.org::#IDVK7G][The step as built:1]]
@@ -9117,7 +9332,12 @@ material, awake, kind. #B0DY0B"
                 (physics-world-restitution-threshold world) (physics-world-hit-speed world)
                 (physics-world-sleep-speed world) (physics-world-time-to-sleep world)
                 (physics-world-wake-speed world))
-          (line "events" "~:[no handler~;handler ~:*~S~]" (physics-world-event-handler world)))))
+          (line "events" "~:[no handler~;handler ~:*~S~]" (physics-world-event-handler world))
+          (line "joints" "~D joint~:P, ~D solved in the last step" (physics-world-joint-count world)
+                (let ((set (physics-world-joints world)))
+                  (if set (count-if-not #'minusp (joint-columns-row-a (joint-set-rows set))
+                                        :end (joint-columns-length (joint-set-rows set)))
+                      0))))))
 
 (defmethod describe-object ((world physics-world) stream)
   (format stream "~&~S~%" world)
@@ -9193,6 +9413,7 @@ kernel family. #H4NDL3"
           (list (cons "bodies" (loop for h in (physics-world-handles world)
                                      collect (physics-body world h)))
                 (cons "contact rows" (world-contacts-list world))
+                (cons "joint rows" (physics-world-joint-objects world))
                 (cons "parameters" (world-parameters-list world))
                 (cons "terrain" (physics-world-terrain world))
                 (cons "kernels" (physics-world-kernels world)))))
@@ -12648,11 +12869,15 @@ grid's columns of centre, radius and handle; the excluded body is passed over. #
   (let* ((exclude (query-search-exclude s)) (radius (query-search-radius s))
          (rho (+ (float (the single-float (physics-world-max-radius world)) 1d0) radius 1d-4))
          (g (query-view-awake-grid view)) (gx (hash-grid-xs g)) (gy (hash-grid-ys g)) (gz (hash-grid-zs g))
-         (radii (query-view-awake-radii view)) (handles (query-view-awake-handles view)))
+         (radii (query-view-awake-radii view)) (handles (query-view-awake-handles view))
+         (boxes (physics-world-box-bodies world)))
     (declare (type double-float radius rho) (type f32-column gx gy gz radii) (type fixnum-column handles))
     (do-path-entries (e) (s g rho)
-      (when (sweep-sphere s (float (aref gx e) 1d0) (float (aref gy e) 1d0) (float (aref gz e) 1d0)
-                          (+ (float (aref radii e) 1d0) radius))
+      (when (if (and boxes (box-entry-p boxes (aref handles e)))
+                ;; a box is met on its faces ([[#C4STBX]])
+                (sweep-body-box s world (aref handles e))
+                (sweep-sphere s (float (aref gx e) 1d0) (float (aref gy e) 1d0) (float (aref gz e) 1d0)
+                              (+ (float (aref radii e) 1d0) radius)))
         (let ((h (aref handles e)))
           (unless (eql h exclude) (offer s +hit-body+ h))))))
   s)
@@ -12674,13 +12899,17 @@ the grid's copy of its centre and then found through the handle table; then the 
 one by one or through their grid. The excluded body is passed over. #C4STRY"
   (declare (type query-search s) (type query-view view) #.+kernel-policy+)
   (let* ((exclude (query-search-exclude s)) (radius (query-search-radius s))
-         (rho (+ (float (the single-float (physics-world-max-radius world)) 1d0) radius 1d-4)))
+         (rho (+ (float (the single-float (physics-world-max-radius world)) 1d0) radius 1d-4))
+         (boxes (physics-world-box-bodies world)))
     (declare (type double-float radius rho))
     (with-body-columns ((cx x) (cy y) (cz z) (cr radius) (ch handle)) (physics-world-sleeping world)
       (flet ((try (row)
                (declare (type index row))
-               (when (sweep-sphere s (float (aref cx row) 1d0) (float (aref cy row) 1d0) (float (aref cz row) 1d0)
-                                   (+ (float (aref cr row) 1d0) radius))
+               (when (if (and boxes (box-entry-p boxes (aref ch row)))
+                         ;; a box is met on its faces ([[#C4STBX]])
+                         (sweep-body-box s world (aref ch row))
+                         (sweep-sphere s (float (aref cx row) 1d0) (float (aref cy row) 1d0) (float (aref cz row) 1d0)
+                                       (+ (float (aref cr row) 1d0) radius)))
                  (let ((h (aref ch row)))
                    (unless (eql h exclude) (offer s +hit-body+ h))))))
         (declare (inline try))
@@ -12802,6 +13031,54 @@ return NIL. #C4STRY"
                   (physics-hit-nz hit) (coerce nz 'single-float) (physics-hit-distance hit) (coerce tt 'single-float))
             hit))))))
 ;; Casts: a search, its hits and the shapes it meets:1 ends here
+
+;; [[file:../physics.org::#C4STBX][A cast meets a box body on its faces:1]]
+(defun box-entry-p (boxes handle)
+  "True when BOXES, a world's box set or NIL, holds extents for the slot of HANDLE: the body is a
+box. #C4STBX"
+  (declare (type fixnum handle))
+  (and boxes
+       (let ((slot (handle-index handle)) (hx (box-set-hx boxes)))
+         (and (< slot (length hx)) (> (aref hx slot) 0.0)))))
+
+(defun sweep-body-box (s world handle)
+  "True when cast S meets the box body HANDLE of WORLD nearer than its nearest hit so far: the box
+of its half-extents about its centre, turned by its orientation, grown by the cast's radius; the
+distance and the outward normal are then S's candidate. #C4STBX"
+  (declare (type query-search s) (type fixnum handle))
+  (multiple-value-bind (set row) (resolve-handle world handle)
+    (let* ((buffer (set-buffer world set)) (boxes (physics-world-box-bodies world))
+           (slot (handle-index handle))
+           (hx (float (aref (box-set-hx boxes) slot) 1d0)) (hy (float (aref (box-set-hy boxes) slot) 1d0))
+           (hz (float (aref (box-set-hz boxes) slot) 1d0)))
+      (declare (type double-float hx hy hz))
+      (with-body-columns (x y z qw qx qy qz) buffer
+        (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+            (box-axes (aref qw row) (aref qx row) (aref qy row) (aref qz row))
+          (let ((r11 (float r11 1d0)) (r12 (float r12 1d0)) (r13 (float r13 1d0))
+                (r21 (float r21 1d0)) (r22 (float r22 1d0)) (r23 (float r23 1d0))
+                (r31 (float r31 1d0)) (r32 (float r32 1d0)) (r33 (float r33 1d0)))
+            (declare (type double-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
+            (with-search (ox oy oz ux uy uz cnx cny cnz) s
+              (let ((wox ox) (woy oy) (woz oz) (wux ux) (wuy uy) (wuz uz)
+                    (mx (- ox (float (aref x row) 1d0))) (my (- oy (float (aref y row) 1d0)))
+                    (mz (- oz (float (aref z row) 1d0))))
+                (declare (type double-float wox woy woz wux wuy wuz mx my mz))
+                ;; the cast in the box's frame: R^T (o - c) and R^T u
+                (setf ox (+ (* r11 mx) (* r21 my) (* r31 mz)) oy (+ (* r12 mx) (* r22 my) (* r32 mz))
+                      oz (+ (* r13 mx) (* r23 my) (* r33 mz))
+                      ux (+ (* r11 wux) (* r21 wuy) (* r31 wuz)) uy (+ (* r12 wux) (* r22 wuy) (* r32 wuz))
+                      uz (+ (* r13 wux) (* r23 wuy) (* r33 wuz)))
+                (let ((met (sweep-rounded-box s (- hx) (- hy) (- hz) hx hy hz 63)))
+                  (setf ox wox oy woy oz woz ux wux uy wuy uz wuz)
+                  (when met
+                    ;; the normal back in the world: R n
+                    (let ((nx cnx) (ny cny) (nz cnz))
+                      (declare (type double-float nx ny nz))
+                      (setf cnx (+ (* r11 nx) (* r12 ny) (* r13 nz)) cny (+ (* r21 nx) (* r22 ny) (* r23 nz))
+                            cnz (+ (* r31 nx) (* r32 ny) (* r33 nz)))))
+                  met)))))))))
+;; A cast meets a box body on its faces:1 ends here
 
 ;; [[file:../physics.org::#R4YC57][Rays walk the cells in order:1]]
 (defun ray-cells (s probe)

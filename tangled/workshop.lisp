@@ -783,6 +783,102 @@ buffer whose package is named PACKAGE, or NIL when the page defines no such name
   (with-output-to-string (s) (section anchor :page page :stream s)))
 ;; Answers for the editor:1 ends here
 
+;; [[file:../physics.org::#J0PHYS][Joints against physics:1]]
+(defun pendulum-run (degrees seconds &key (length 1.0) world-args)
+  "A ball of radius 0.1 on a stiff distance joint of LENGTH to a fixed point, released at rest
+DEGREES from the vertical and run SECONDS in open space, in a world of WORLD-ARGS; return its
+period, measured between the first and last upward crossings of the vertical, its energy at the
+end over its energy at the start, the wall seconds of the steps and the world. #J0PHYS"
+  (let* ((w (apply #'make-physics-world :sleep nil world-args))
+         (dt (float (physics-world-step-seconds w) 1d0))
+         (theta (* degrees (/ pi 180)))
+         (ball (add-physics-body w (* length (sin theta)) (- 10 (* length (cos theta))) 0 :radius 0.1 :friction 0))
+         (crossings '()) (previous nil))
+    (add-physics-joint w :distance ball nil :anchor-b '(0 10 0))
+    (flet ((energy ()
+             (multiple-value-bind (vx vy vz) (physics-body-velocity w ball)
+               (+ (* 0.5d0 (+ (* vx vx) (* vy vy) (* vz vz)))
+                  (* 9.81d0 (- (nth-value 1 (physics-body-position w ball)) (- 10 length)))))))
+      (let* ((start (energy))
+             (wall (drive w seconds
+                          (lambda (time)
+                            (let ((x (physics-body-position w ball)))
+                              (when (and previous (< previous 0) (>= x 0))
+                                (push (- time (* dt (/ x (- x previous)))) crossings))
+                              (setf previous x))))))
+        (values (if (cdr crossings)
+                    (/ (- (first crossings) (car (last crossings))) (1- (length crossings)))
+                    0d0)
+                (/ (energy) start) wall w)))))
+
+(defun elliptic-period (degrees length)
+  "The exact period of a simple pendulum of LENGTH released at DEGREES, under g = 9.81. #J0PHYS"
+  (let ((k (sin (* degrees (/ pi 360)))) (a 1d0) (b 0d0))
+    (setf b (sqrt (- 1 (* k k))))
+    (loop repeat 40 do (psetf a (/ (+ a b) 2) b (sqrt (* a b))))
+    (* 4 (sqrt (/ length 9.81d0)) (/ pi (* 2 a)))))
+
+(defun spring-run (hertz zeta seconds &key world-args)
+  "A ball of 1 kg without gravity on a spring joint of HERTZ and damping ratio ZETA, rest length 1
+m, to a fixed point, let go at 1.2 m and run SECONDS in a world of WORLD-ARGS; return its period
+between the first and last upward crossings of the rest length, the ratios of each peak past the
+rest length to the one before, the wall seconds of the steps and the world. #J0PHYS"
+  (let* ((w (apply #'make-physics-world :sleep nil :gravity '(0 0 0) world-args))
+         (dt (float (physics-world-step-seconds w) 1d0))
+         (ball (add-physics-body w 1.2 0 0 :radius 0.1 :friction 0))
+         (xs (make-array (round seconds dt) :element-type 'double-float :initial-element 0d0))
+         (k 0) (ups '()) (peaks '()))
+    (add-physics-joint w :distance ball nil :anchor-b '(0 0 0) :length 1.0 :hertz hertz :damping-ratio zeta)
+    (let ((wall (drive w seconds (lambda (time)
+                                   (declare (ignore time))
+                                   (setf (aref xs k) (- (physics-body-position w ball) 1d0))
+                                   (incf k)))))
+      (loop for i from 1 below (1- (length xs))
+            for a = (aref xs (1- i)) for x = (aref xs i)
+            do (when (and (< a 0) (>= x 0)) (push (* dt (+ i (/ (- a) (- x a)))) ups))
+               (when (and (> x 0) (> x a) (>= x (aref xs (1+ i)))) (push x peaks)))
+      (setf ups (reverse ups) peaks (reverse peaks))
+      (values (if (cdr ups) (/ (- (car (last ups)) (first ups)) (1- (length ups))) 0d0)
+              (loop for (p q) on peaks while q collect (/ q p))
+              wall w))))
+
+(defun damped-oscillator (hertz zeta)
+  "The period of the damped oscillator of HERTZ and damping ratio ZETA and the ratio of each peak
+to the one before, as two values. #J0PHYS"
+  (let* ((omega (* 2 pi hertz))
+         (period (/ (* 2 pi) (* omega (sqrt (- 1 (* zeta zeta)))))))
+    (values period (exp (- (* zeta omega period))))))
+
+(defun hanging-chain-stretch (links &key (heavy 1.0) rope (link 0.5) (seconds 5) world-args)
+  "The stretch, over its length, of a chain of LINKS balls of 1 kg (the last one HEAVY kg) joined
+centre to centre by distance joints of LINK m (ropes when ROPE), hung from a fixed point and run
+SECONDS at rest in a world of WORLD-ARGS. #J0PHYS"
+  (let* ((w (apply #'make-physics-world :sleep nil world-args))
+         (balls (loop for i from 1 to links
+                      collect (add-physics-body w 0 (- 20 (* i link)) 0 :radius 0.1 :friction 0
+                                                                  :mass (if (= i links) heavy 1.0)))))
+    (add-physics-joint w :distance (first balls) nil :anchor-b '(0 20 0) :rope rope)
+    (loop for (p q) on balls while q do (add-physics-joint w :distance p q :rope rope))
+    (dotimes (i (round seconds (physics-world-step-seconds w))) (step-physics-world w))
+    (/ (- (- 20 (nth-value 1 (physics-body-position w (car (last balls))))) (* links link)) (* links link))))
+
+(defun cradle-point (i &optional (top 4.0))
+  "The centre of ball I of Newton's cradle on strings hung from the height TOP: the five balls of
+radius 0.25 touch along x from 0, each 1 m of string at 30 degrees below TOP, the first (I 0)
+drawn back 30 degrees in the plane of swing. #J0PHYS"
+  (let ((drop (sqrt 0.75d0)))
+    (if (= i 0)
+        (values (- (* drop (sin (/ pi 6)))) (- top (* drop (cos (/ pi 6)))) 0d0)
+        (values (* i 0.5d0) (- top drop) 0d0))))
+
+(defun hang-cradle (world balls &optional (top 4.0))
+  "Hang each of BALLS, the cradle's in order, on two stiff distance joints of 1 m from the points
+of height TOP 0.5 m either side of its plane of swing. #J0PHYS"
+  (loop for ball in balls for i from 0
+        do (dolist (z '(0.5 -0.5))
+             (add-physics-joint world :distance ball nil :anchor-b (list (* i 0.5) top z) :length 1.0))))
+;; Joints against physics:1 ends here
+
 ;; [[file:../physics.org::#J0GR1D][The joint grid, beside Box3D:1]]
 (defun joint-grid-world (n &key (kernels :auto))
   "Box3D's joint grid of N x N spheres of radius 0.4 in the plane z = 0, solved by KERNELS: the
@@ -854,6 +950,108 @@ the height of the lowest corner at the end. #J0GR1D"
                        (/ m reference) (third (first rows))))
       (format stream "~&(after the run: load ~A)~%" (load-average)))))
 ;; The joint grid, beside Box3D:1 ends here
+
+;; [[file:../physics.org::#J0XTRM][Joints at the extremes:1]]
+(defun hanging-chain-run (links &key (heavy 1.0) (seconds 20) (link 0.5))
+  "A chain of LINKS balls of 1 kg (the last HEAVY kg) joined centre to centre by stiff distance
+joints of LINK m, hung from a fixed point, let go at its length and run SECONDS: its stretch over
+its length, from the second half of the run, as the mean, the least and the most, then whether
+the world stayed finite and valid. #J0XTRM"
+  (let* ((w (make-physics-world :sleep nil))
+         (balls (loop for i from 1 to links
+                      collect (add-physics-body w 0 (- 20 (* i link)) 0 :radius 0.1 :friction 0
+                                                                  :mass (if (= i links) heavy 1.0))))
+         (last (car (last balls))) (steps (round seconds (physics-world-step-seconds w)))
+         (sum 0d0) (count 0) (least most-positive-double-float) (most 0d0))
+    (add-physics-joint w :distance (first balls) nil :anchor-b '(0 20 0))
+    (loop for (p q) on balls while q do (add-physics-joint w :distance p q))
+    (dotimes (i steps)
+      (step-physics-world w)
+      (when (>= (* 2 i) steps)
+        (let ((stretch (/ (- (- 20 (nth-value 1 (physics-body-position w last))) (* links link)) (* links link))))
+          (incf sum stretch) (incf count)
+          (setf least (min least stretch) most (max most stretch)))))
+    (values (/ sum count) least most (and (world-finite-p w) (eq t (validate-physics-world w))))))
+
+(defun soft-chain-law (links &key (heavy 1.0) (link 0.5))
+  "The stretch over its length by the soft law of a chain of LINKS balls of 1 kg (the last HEAVY
+kg) on stiff joints of LINK m hung at rest in a default world: each joint gives by its load over
+its effective mass times the stiff joint's omega squared. #J0XTRM"
+  (let* ((w (make-physics-world))
+         (omega (* 2 pi (joint-stiffness w (/ (physics-world-step-seconds w) (physics-world-substeps w))))))
+    (/ (loop for i from 1 to links
+             ;; joint i holds ball i from above: the fixed point or ball i-1, which are 1 kg
+             for below = (+ heavy (- links i))
+             for upper = (if (= i 1) nil 1d0)
+             for lower = (if (= i links) heavy 1d0)
+             for mass = (if upper (/ 1 (+ (/ 1 upper) (/ 1 lower))) lower)
+             sum (/ (* below 9.81d0) (* mass omega omega)))
+       (* links link))))
+
+(defun stretched-pair (&key (steps 10))
+  "Two balls of 1 kg 2 m apart in free space joined by a stiff distance joint of 1 m, run STEPS:
+its length after steps 1, 5 and STEPS, the fastest either ball moved at the end of a step, and how
+far their centre of mass moved. #J0XTRM"
+  (let* ((w (make-physics-world :sleep nil :gravity '(0 0 0)))
+         (a (add-physics-body w -1.0 5.0 0.0)) (b (add-physics-body w 1.0 5.0 0.0))
+         (joint (add-physics-joint w :distance a b :length 1.0))
+         (lengths '()) (fastest 0.0))
+    (dotimes (i steps)
+      (step-physics-world w)
+      (setf fastest (max fastest (speed-of w a) (speed-of w b)))
+      (when (member (1+ i) (list 1 5 steps)) (push (physics-joint-length w joint) lengths)))
+    (values (reverse lengths) fastest
+            (let ((xa (multiple-value-list (physics-body-position w a)))
+                  (xb (multiple-value-list (physics-body-position w b))))
+              (sqrt (reduce #'+ (mapcar (lambda (p q k) (expt (- (* 0.5 (+ p q)) k) 2)) xa xb '(0 5 0))))))))
+
+(defun removal-in-a-handler ()
+  "A ball of 10 kg hung by a joint of break force 50 N, stepped once with a handler that, at the
+joint's :joint-break, removes the ball and the joint, and once without: what the two removals
+signalled, the force of the break, whether the world validates, and whether the two worlds end
+with one state hash. #J0XTRM"
+  (flet ((hang ()
+           (let* ((w (make-physics-world :sleep nil))
+                  (ball (add-physics-body w 0 9 0 :mass 10)))
+             (values w ball (add-physics-joint w :distance ball nil :anchor-b '(0 10 0) :break-force 50)))))
+    (multiple-value-bind (w ball joint) (hang)
+      (let ((outcomes '()) (force nil))
+        (setf (physics-world-event-handler w)
+              (lambda (kind a b x y z speed datum)
+                (declare (ignore a b x y z datum))
+                (when (eq kind :joint-break)
+                  (setf force speed)
+                  (dolist (call (list (lambda () (remove-physics-body w ball)) (lambda () (remove-physics-joint w joint))))
+                    (push (handler-case (progn (funcall call) :done) (error (e) (type-of e))) outcomes)))))
+        (step-physics-world w)
+        (let ((plain (hang)))
+          (step-physics-world plain)
+          (values (reverse outcomes) force (eq t (validate-physics-world w))
+                  (= (physics-world-state-hash w) (physics-world-state-hash plain))
+                  (physics-body-alive-p w ball)))))))
+
+(defun joint-stability-rows (row)
+  "Write the joints' rows of the table of stiff and extreme cases by ROW, the table's function of
+a case, whether it held, and a format control and its arguments. #J0XTRM"
+  (loop for (links heavy what) in '((20 1000.0 "chain of 20 links of 0.5 m under a 1000 kg ball (1000:1), 20 s")
+                                    (200 1.0 "chain of 200 links of 0.5 m, 20 s"))
+        do (multiple-value-bind (mean least most ok) (hanging-chain-run links :heavy heavy)
+             (let ((law (soft-chain-law links :heavy heavy)))
+               (funcall row what (and ok (< (abs (- mean law)) (* 0.1 law)))
+                        "stretch over seconds 10 to 20: mean ~,2F % (the soft law ~,2F %), ~,2F to ~,2F %; ~
+                         ~:[not finite or invalid~;finite and valid~]"
+                        (* 100 mean) (* 100 law) (* 100 least) (* 100 most) ok))))
+  (multiple-value-bind (lengths fastest drift) (stretched-pair)
+    (funcall row "two balls 2 m apart joined at 1 m, no gravity" (and (< (abs (- (third lengths) 1)) 0.001) (< drift 1e-4))
+             "length after 1, 5, 10 steps ~{~,4F~^, ~} m; fastest ~,3F m/s; centre of mass moved ~,1,,,,,'eE m"
+             lengths fastest drift))
+  (multiple-value-bind (outcomes force valid same alive) (removal-in-a-handler)
+    (funcall row "joint's body removed by the :joint-break handler mid-step"
+             (and (equal outcomes '(physics-world-busy physics-world-busy)) valid same alive)
+             "break at ~,1F N; removing the ball and the joint: ~{~(~A~)~^, ~}; ~:[invalid~;valid~]; ~
+              ~:[another state~;the state of the world without the handler~]; the ball ~:[removed~;still there~]"
+             force outcomes valid same alive)))
+;; Joints at the extremes:1 ends here
 
 ;; [[file:../physics.org::#PYR4MD][The large pyramid, beside Box3D:1]]
 (defun large-pyramid-world (base &key (kernels :auto) (sleep nil))
@@ -1005,17 +1203,6 @@ into the box (its radius, when the centre lies inside), and whether a centre lay
               (and (not (eq scene :press)) (physics-player-y player))
               (physics-world-state-hash world)
               fastest cells box inside-box))))
-
-(defun physics-world-last-step-held-out-count (world)
-  "How many bodies the last step stopped at the face of a solid cell. #SQU33Z"
-  (check-world world 'physics-world-last-step-held-out-count)
-  (physics-world-held-out-count world))
-
-(defun physics-world-last-step-buried-count (world)
-  "How many awake bodies began the last step with their centre in a solid cell, and were pushed
-toward the air by that cell's contact. #SQU33Z"
-  (check-world world 'physics-world-last-step-buried-count)
-  (physics-world-buried-count world))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:2 ends here
 
 ;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:7]]
@@ -1544,7 +1731,7 @@ the clause's keyword, VALUE the clause. #K5DF9S"))
 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter *physics-scene-features*
-    '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :events :mortal)
+    '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :events :mortal :joints)
     "The features a scene may declare it uses. #K5DF9S")
 
   (defparameter *scene-body-arguments*
@@ -1613,6 +1800,11 @@ declare, as forms; or a clause error for the first clause that is not of its sha
                                                     append (list k v))))
                        bodies)))
               (:springs (once :springs `(lambda () (list ,@rest))))
+              (:joints
+               (require-shape (and rest (listp (first rest)) (= 2 (length (first rest)))
+                                   (every #'symbolp (first rest)) (rest rest))
+                              "(:joints (world bodies) form...), naming two variables")
+               (once :joints `(lambda ,(first rest) (declare (ignorable ,@(first rest))) ,@(rest rest))))
               (:player
                (require-shape (and (= 2 (length rest)) (point (first rest)) (symbolp (second rest)))
                       "(:player (x y z) input), INPUT a function's name")
@@ -1654,7 +1846,7 @@ declare, as forms; or a clause error for the first clause that is not of its sha
                (once :features `',rest))
               (t (scene-clause-error
                   scene clause
-                  "one of (:terrain ...) (:world ...) (:bodies ...) (:springs ...) (:player ...) (:throw ...) (:at ...) (:seconds ...) (:pictures ...) (:features ...)"))))))
+                  "one of (:terrain ...) (:world ...) (:bodies ...) (:joints ...) (:springs ...) (:player ...) (:throw ...) (:at ...) (:seconds ...) (:pictures ...) (:features ...)"))))))
       (dolist (needed '(:terrain :seconds :features))
         (unless (getf slots needed)
           (scene-clause-error scene needed "given: every scene declares its terrain, its seconds and its features")))
@@ -1673,15 +1865,16 @@ line to print when it happens. #K5DF9S"
   (seconds 0) (text nil) (function #'identity :type function))
 
 (defstruct (physics-scene (:constructor make-physics-scene
-                              (&key name documentation terrain world-arguments bodies springs player
+                              (&key name documentation terrain world-arguments bodies joints springs player
                                     actions seconds moments features)))
   "A scene as define-physics-scene declared it: its NAME and DOCUMENTATION; TERRAIN, a function of
 the number of bodies at the start returning the terrain; the WORLD-ARGUMENTS of make-physics-world;
-BODIES, a list of scene-bodies; SPRINGS, NIL or a function making the list of springs; PLAYER,
+BODIES, a list of scene-bodies; JOINTS, NIL or a function of the world and its bodies' handles
+that joins them; SPRINGS, NIL or a function making the list of springs; PLAYER,
 NIL or a list of a function making the walker and its input function; ACTIONS, a list of
 scene-action; the SECONDS it runs; the MOMENTS of its picture; and the FEATURES it uses. #K5DF9S"
   (name nil :type keyword) (documentation "" :type string) (terrain #'identity :type function)
-  (world-arguments '()) (bodies '()) (springs nil) (player nil) (actions '())
+  (world-arguments '()) (bodies '()) (joints nil) (springs nil) (player nil) (actions '())
   (seconds 1) (moments '()) (features '()))
 
 ;; the documentation of the scene's public readers, which defstruct cannot give
@@ -1835,6 +2028,8 @@ FEATURES (T for the features the scene declares; every feature when not given), 
          (world (apply #'make-physics-world :terrain (funcall (physics-scene-terrain scene) (reduce #'+ counts))
                        arguments)))
     (loop for group in groups for n in counts do (add-scene-bodies world group n seed body-arguments))
+    (when (physics-scene-joints scene)
+      (funcall (physics-scene-joints scene) world (physics-world-handles world)))
     (values world
             (scene-script scene world (getf arguments :step-seconds 1/60)
                           :shift shift :throw-at throw-at :stream stream)
@@ -3083,6 +3278,8 @@ full table, none in the short one). #X7R3M5"
                (row what (and (zerop outside) (<= fastest 10.0))
                     "~D of 2400 positions outside the air; fastest ~,2F m/s; deepest into the cells ~,4F m, ~
                      into the box ~,4F m~:[~; (a centre inside the box)~]" outside fastest cells box inside)))
+    ;; joints at the extremes ([[#J0XTRM]])
+    (when full (joint-stability-rows #'row))
     (when full
       (multiple-value-bind (alive finite consed growth) (fountain-long-run)
         (row "fountain, 10 simulated minutes" (and finite (zerop consed) (< growth 1000000))
@@ -3116,18 +3313,24 @@ each step; return the wall-clock seconds the steps themselves took. #W9PREC"
 (defvar *accuracy-scenes* '()
   "The reference scenes of the sweep in the order defined, each (NAME FUNCTION MEASURE TOLERANCE). #W9PREC")
 
-(defmacro define-accuracy-scene (name (measure tolerance) doc &body body)
+(defvar *own-accuracy-scenes* '()
+  "The reference scenes of the sweep that only this engine runs, not the peers of [[#P33R5X]]
+(the joints' of [[#J0PREC]]), each as an entry of *accuracy-scenes*. #W9PREC")
+
+(defmacro define-accuracy-scene (name (measure tolerance &key (peers t)) doc &body body)
   "Define the reference scene NAME, as the function ACCURACY-SCENE-NAME, whose error is the
 MEASURE (a string) and good enough under TOLERANCE: BODY runs with WORLD-ARGS bound to the setting's keywords for make-physics-world and
-returns the error, the wall seconds its steps took, the world and a short note. #W9PREC"
-  (let ((function (intern (format nil "ACCURACY-SCENE-~A" name))))
+returns the error, the wall seconds its steps took, the world and a short note. With PEERS
+false the scene goes to *own-accuracy-scenes*, which the peers do not run. #W9PREC"
+  (let ((function (intern (format nil "ACCURACY-SCENE-~A" name)))
+        (registry (if peers '*accuracy-scenes* '*own-accuracy-scenes*)))
     `(progn
        (defun ,function (world-args)
          ,doc
          (declare (ignorable world-args))
          ,@body)
-       (setf *accuracy-scenes*
-             (append (remove ',name *accuracy-scenes* :key #'first)
+       (setf ,registry
+             (append (remove ',name ,registry :key #'first)
                      (list (list ',name ',function ,measure ,tolerance))))
        ',name)))
 ;; Error against run time:1 ends here
@@ -3636,10 +3839,12 @@ through its step rates. Errors below 1e-9 are drawn at 1e-9. #W9PREC"
 
 ;; [[file:../physics.org::#W9PREC][Error against run time:14]]
 (defun run-accuracy-report (&key (directory "report/") (stream *standard-output*))
-  "The sweep, written as report/work-precision.org (the table), report/work-precision-best.org
-(the Pareto-best setting per scene) and one SVG diagram per scene, report/wp-SCENE.svg. Print
-the table to STREAM as well. #W9PREC"
-  (let ((points (run-accuracy-sweep)))
+  "The sweep of every scene, those only this engine runs after the others, written as
+report/work-precision.org (the table), report/work-precision-best.org (the Pareto-best setting
+per scene) and one SVG diagram per scene, report/wp-SCENE.svg. Print the table to STREAM as
+well. #W9PREC"
+  (let* ((*accuracy-scenes* (append *accuracy-scenes* *own-accuracy-scenes*))
+         (points (run-accuracy-sweep)))
     (with-open-file (out (merge-pathnames "work-precision.org" directory) :direction :output :if-exists :supersede)
       (format out "#+caption: error and wall ms per simulated second; ~A; load ~A~%" (cpu-model-name) (load-average))
       (print-sweep-table points out))
@@ -3653,6 +3858,31 @@ the table to STREAM as well. #W9PREC"
                                 (remove (first entry) points :key (lambda (p) (getf p :scene)) :test-not #'eq)))
     points))
 ;; Error against run time:14 ends here
+
+;; [[file:../physics.org::#J0PREC][The pendulum and the spring:1]]
+(define-accuracy-scene pendulum ("worst of period and energy a minute, relative" 0.02 :peers nil)
+  "A 1 m pendulum released at 90 degrees, a minute: the worse of its period's error against the
+elliptic period and its energy's drift over the minute, both relative. #J0PREC"
+  (multiple-value-bind (period energy wall world) (pendulum-run 90 60 :world-args world-args)
+    (let ((exact (elliptic-period 90 1)))
+      (values (max (/ (abs (- period exact)) exact) (abs (- energy 1)))
+              wall world
+              (format nil "period ~,3@F %, energy ~,3@F % a minute"
+                      (* 100 (/ (- period exact) exact)) (* 100 (- energy 1)))))))
+
+(define-accuracy-scene spring ("worst of period and peak ratio, relative" 0.01 :peers nil)
+  "A spring joint of 1 Hz and damping ratio 0.1 on a ball of 1 kg, ten seconds: the worse of its
+period's error against the damped oscillator's and its first four peak ratios' against
+exp(-zeta omega T), relative. #J0PREC"
+  (multiple-value-bind (period ratios wall world) (spring-run 1.0 0.1 10 :world-args world-args)
+    (multiple-value-bind (want decay) (damped-oscillator 1.0 0.1)
+      (let ((ratio-error (if (>= (length ratios) 4)
+                             (loop for r in ratios repeat 4 maximize (/ (abs (- r decay)) decay))
+                             1d0)))
+        (values (max (/ (abs (- period want)) want) ratio-error) wall world
+                (format nil "period ~,3@F %, peak ratios off by up to ~,3F %"
+                        (* 100 (/ (- period want) want)) (* 100 ratio-error)))))))
+;; The pendulum and the spring:1 ends here
 
 ;; [[file:../physics.org::#P33R5X][Error against run time, engine beside engine:1]]
 (defun peer-run (&key (gravity '(0 -9.81 0)) (seconds 1) sleep record-all boxes balls params)
@@ -4625,6 +4855,46 @@ square, 1.5 s a side, as two values MOVE-X MOVE-Z. #3X6XN8"
       (ecase (mod (floor (- step 60) 90) 4)
         (0 (values 1d0 0d0)) (1 (values 0d0 1d0)) (2 (values -1d0 0d0)) (3 (values 0d0 -1d0)))))
 ;; The standard scenes:1 ends here
+
+;; [[file:../physics.org::#J0SCNE][Scenes of joints:1]]
+(defun joint-scene-terrain ()
+  "The terrain of the joints' scenes: resident air in [-8,8) x [0,12) x [-8,8) over a floor one
+cell thick, y in [-1,0). #J0SCNE"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -8 0 -8 8 12 8 nil)
+    (fill-terrain terrain -8 -1 -8 8 0 8 t)
+    terrain))
+
+(defun chain-point (i)
+  "The centre of ball I of the chain scene: the twelve lie 0.5 m apart along x from the fixed
+point (0, 8, 0). #J0SCNE"
+  (values (* 0.5 (1+ i)) 8.0 0.0))
+
+(defun join-chain (world balls)
+  "Hang BALLS, the chain's in order, from the fixed point (0, 8, 0) by a rope to the first one's
+centre, and join each centre to the next by a stiff distance joint of the 0.5 m between them. #J0SCNE"
+  (add-physics-joint world :distance (first balls) nil :anchor-b '(0 8 0) :rope t)
+  (loop for (p q) on balls while q do (add-physics-joint world :distance p q)))
+
+(define-physics-scene :chain
+    "a chain of twelve balls on distance joints, hung by a rope and let go sideways, over a floor #J0SCNE"
+  (:terrain () (joint-scene-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 12 :spawn chain-point :radius 0.2 :mass 1.0 :friction 0.3)
+  (:bodies 1 :spawn (lambda (i) (declare (ignore i)) (values 2.0 0.2 0.0)) :radius 0.3 :friction 0.3)
+  (:joints (world bodies) (join-chain world (subseq bodies 0 12)))
+  (:seconds 10)
+  (:features :terrain :friction :sleep :joints))
+
+(define-physics-scene :cradle
+    "Newton's cradle on strings: five touching balls on two strings each, the first let go from 30 degrees #J0SCNE"
+  (:terrain () (joint-scene-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 5 :spawn cradle-point :radius 0.25 :mass 1.0 :friction 0.0 :restitution 1.0)
+  (:joints (world bodies) (hang-cradle world bodies))
+  (:seconds 6)
+  (:features :body-contacts :restitution :sleep :joints))
+;; Scenes of joints:1 ends here
 
 ;; [[file:../physics.org::#RH7T05][A viewer for the browser:1]]
 (defun write-base64 (octets stream)

@@ -7,11 +7,11 @@
                      (physics:fill-terrain terrain -8 -1 -8 12 0 8 t)
                      (physics:make-physics-world :terrain terrain :kernels :auto)))
        (chain (loop for i from 1 to 12
-                    collect (physics:add-physics-body world (* 0.4 i) 8 0 :radius 0.2 :friction 0.3))))
-  ;; the chain: joined surface to surface by point joints, hung by a rope from (0 8 0)
-  (physics:add-physics-joint world :distance (first chain) nil :anchor-a '(-0.2 0 0) :anchor-b '(0 8 0) :rope t)
+                    collect (physics:add-physics-body world (* 0.5 i) 8 0 :radius 0.2 :friction 0.3))))
+  ;; the chain: centre to centre by stiff distance joints of 0.5 m, hung by a rope from (0 8 0)
+  (physics:add-physics-joint world :distance (first chain) nil :anchor-b '(0 8 0) :rope t)
   (loop for (p q) on chain while q
-        do (physics:add-physics-joint world :point p q :anchor-a '(0.2 0 0) :anchor-b '(-0.2 0 0)))
+        do (physics:add-physics-joint world :distance p q))
   ;; the cradle: five touching balls of restitution 1 on two strings each, the first drawn back
   (let* ((drop (sqrt 0.75)) (x0 -5.0) (z0 3.0)
          (balls (loop for i below 5
