@@ -6860,8 +6860,10 @@ speed it struck at this step, its bounce and its normal velocity before the pass
   "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
 many boxes live, the contact points of this step and of the last one, each with the first row
 and the count of every slot's points, the awake box rows of this step, their turns (three floats
-a row), the soft coefficients of the step, and its restitution threshold and gravity times the
-substep, and whether some point of the step has restitution. #BXR0WS"
+a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
+step's start (four floats a box), whether this step solves points, the soft coefficients of the
+step, its restitution threshold and gravity times the substep, and whether some point of the
+step has restitution. #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -6875,6 +6877,13 @@ substep, and whether some point of the step has restitution. #BXR0WS"
   (rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (row-count 0 :type index)
   (turns (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (grid (make-hash-grid) :type hash-grid)
+  (grid-rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (gx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (gy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (gz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (start-q (make-array 64 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (solving nil :type boolean)
   (dummy 0 :type index)
   (bias-rate 0.0 :type single-float)
   (mass-scale 1.0 :type single-float)
@@ -7219,16 +7228,66 @@ against its faces. #BXCELL"
                                                    nx ny nz rx ry rz gap))))))))))))))))))
   set)
 
+(defconstant +box-axis-tolerance+ 5e-4
+  "How much farther apart the second box's face must hold two boxes than the first's best for
+it to be the reference, in metres: a tenth of the slop, as Box2D's polygons do. #BXCELL")
+
+(defconstant +box-clip-tolerance+ 1e-3
+  "How far past a side of the reference face an incident corner may lie and still be kept as
+it is, in metres. #BXCELL")
+
+(defun reduce-box-manifold (poly keep kept)
+  "Choose four of the KEPT vertices whose places in POLY (three floats a vertex: two coordinates
+in the reference face and the gap) the first KEPT entries of KEEP hold: the deepest, the one
+farthest from it, and the two that span the largest areas with those on either side of the line
+through them; write their places into KEEP in increasing order and return 4. #BXCELL"
+  (declare (type (simple-array single-float (24)) poly) (type (simple-array fixnum (8)) keep)
+           (type (integer 5 8) kept) #.+kernel-policy+)
+  (macrolet ((a (q) `(aref poly (* 3 (the (integer 0 7) (aref keep ,q)))))
+             (b (q) `(aref poly (+ 1 (* 3 (the (integer 0 7) (aref keep ,q))))))
+             (gap (q) `(aref poly (+ 2 (* 3 (the (integer 0 7) (aref keep ,q)))))))
+    (let ((p1 0) (p2 0) (p3 0) (p4 0))
+      (declare (type (integer 0 7) p1 p2 p3 p4))
+      (loop for q from 1 below kept when (< (gap q) (gap p1)) do (setf p1 q))
+      (let ((far -1.0))
+        (declare (type single-float far))
+        (dotimes (q kept)
+          (let ((d (+ (expt (- (a q) (a p1)) 2) (expt (- (b q) (b p1)) 2))))
+            (when (and (/= q p1) (> d far)) (setf p2 q far d)))))
+      ;; twice the signed area of the triangle P1 P2 Q, most positive and most negative
+      (let ((most most-negative-single-float) (least most-positive-single-float))
+        (declare (type single-float most least))
+        (dotimes (q kept)
+          (unless (or (= q p1) (= q p2))
+            (let ((area (- (* (- (a p2) (a p1)) (- (b q) (b p1))) (* (- (b p2) (b p1)) (- (a q) (a p1))))))
+              (when (> area most) (setf p3 q most area)))))
+        (dotimes (q kept)
+          (unless (or (= q p1) (= q p2) (= q p3))
+            (let ((area (- (* (- (a p2) (a p1)) (- (b q) (b p1))) (* (- (b p2) (b p1)) (- (a q) (a p1))))))
+              (when (< area least) (setf p4 q least area))))))
+      ;; the four places, in increasing order
+      (let ((c1 (aref keep p1)) (c2 (aref keep p2)) (c3 (aref keep p3)) (c4 (aref keep p4)))
+        (declare (type fixnum c1 c2 c3 c4))
+        (setf (aref keep 0) c1 (aref keep 1) c2 (aref keep 2) c3 (aref keep 3) c4)
+        (loop for q from 1 below 4
+              do (let ((v (aref keep q)) (r q))
+                   (declare (type fixnum v r))
+                   (loop while (and (> r 0) (> (aref keep (1- r)) v))
+                         do (setf (aref keep r) (aref keep (1- r)))
+                            (decf r))
+                   (setf (aref keep r) v))))
+      4)))
+
 (defun box-pair-points (set owner key-base row-a row-b reach
                         acx acy acz aqw aqx aqy aqz ahx ahy ahz
                         bcx bcy bcz bqw bqx bqy bqz bhx bhy bhz)
   "Append to SET, as points found by the box OWNER, the points between box A (centre ACX ACY ACZ,
 orientation AQW .. AQZ, half-extents AHX AHY AHZ, solver row ROW-A) and box B (the same, B...),
-when they are nearer than REACH along every face axis: the face axis of either box along which
-they overlap least (or lie farthest apart) gives the normal and the reference face; the other
-box's face most against it, clipped to the reference face's sides, gives the points, each with
-its height over the reference face as its gap. KEY-BASE with the reference axis and the clipped
-vertex's feature is a point's key. #BXCELL"
+when they are nearer than REACH along every axis of the separating-axis test: the axis along
+which they overlap least (or lie farthest apart) gives the normal. On a face axis the other box's
+face most against the reference face, clipped to its sides and reduced to four, gives the points,
+each with its height over the reference face as its gap; on an edge axis the edges' nearest points
+give one. KEY-BASE with the axis and the vertex's or the edges' feature is a point's key. #BXCELL"
   (declare (type box-set set) (type fixnum owner key-base) (type index row-a row-b)
            (type single-float reach acx acy acz aqw aqx aqy aqz ahx ahy ahz
                  bcx bcy bcz bqw bqx bqy bqz bhx bhy bhz)
@@ -7237,8 +7296,9 @@ vertex's feature is a point's key. #BXCELL"
     (multiple-value-bind (b11 b12 b13 b21 b22 b23 b31 b32 b33) (box-axes bqw bqx bqy bqz)
       (declare (type single-float a11 a12 a13 a21 a22 a23 a31 a32 a33 b11 b12 b13 b21 b22 b23 b31 b32 b33))
       (let ((dx (- acx bcx)) (dy (- acy bcy)) (dz (- acz bcz))
-            (best -1) (best-sep most-negative-single-float))
-        (declare (type single-float dx dy dz best-sep) (type fixnum best))
+            (best -1) (best-sep most-negative-single-float)
+            (edge -1) (edge-sep most-negative-single-float) (elx 0.0) (ely 0.0) (elz 0.0))
+        (declare (type single-float dx dy dz best-sep edge-sep elx ely elz) (type fixnum best edge))
         ;; the six face axes: how far apart the boxes are along each
         (flet ((apart (lx ly lz)
                  (declare (type single-float lx ly lz))
@@ -7250,19 +7310,92 @@ vertex's feature is a point's key. #BXCELL"
                        (* bhy (abs (+ (* b12 lx) (* b22 ly) (* b32 lz))))
                        (* bhz (abs (+ (* b13 lx) (* b23 ly) (* b33 lz))))))))
           (declare (inline apart))
-          (macrolet ((try (index lx ly lz)
-                       `(let ((sep (apart ,lx ,ly ,lz)))
-                          (when (> sep best-sep) (setf best ,index best-sep sep)))))
-            (try 0 a11 a21 a31) (try 1 a12 a22 a32) (try 2 a13 a23 a33)
-            (try 3 b11 b21 b31) (try 4 b12 b22 b32) (try 5 b13 b23 b33)))
-        (when (< best-sep reach)
+          ;; B's face is taken only when it separates the boxes more than A's best by the
+          ;; axis tolerance, so that two faces lying on each other keep one reference
+          (let ((a-best -1) (a-sep most-negative-single-float))
+            (declare (type fixnum a-best) (type single-float a-sep))
+            (macrolet ((try (index lx ly lz)
+                         `(let ((sep (apart ,lx ,ly ,lz)))
+                            (when (> sep best-sep) (setf best ,index best-sep sep)))))
+              (try 0 a11 a21 a31) (try 1 a12 a22 a32) (try 2 a13 a23 a33)
+              (setf a-best best a-sep best-sep best -1 best-sep most-negative-single-float)
+              (try 3 b11 b21 b31) (try 4 b12 b22 b32) (try 5 b13 b23 b33))
+            (unless (> best-sep (+ a-sep +box-axis-tolerance+))
+              (setf best a-best best-sep a-sep)))
+          ;; the nine edge axes, A's axis I crossed with B's axis J, but for edges near parallel
+          (macrolet ((edges ()
+                       `(progn
+                          ,@(loop for i below 3
+                                  append (loop for j below 3
+                                               collect (destructuring-bind ((ux uy uz) (vx vy vz))
+                                                           (list (nth i '((a11 a21 a31) (a12 a22 a32) (a13 a23 a33)))
+                                                                 (nth j '((b11 b21 b31) (b12 b22 b32) (b13 b23 b33))))
+                                                         `(let* ((lx (- (* ,uy ,vz) (* ,uz ,vy)))
+                                                                 (ly (- (* ,uz ,vx) (* ,ux ,vz)))
+                                                                 (lz (- (* ,ux ,vy) (* ,uy ,vx)))
+                                                                 (len2 (+ (* lx lx) (* ly ly) (* lz lz))))
+                                                            (declare (type single-float lx ly lz len2))
+                                                            (when (> len2 1e-6)
+                                                              (let* ((f (/ 1.0 (fsqrt len2)))
+                                                                     (sep (apart (* f lx) (* f ly) (* f lz))))
+                                                                (declare (type single-float f sep))
+                                                                (when (> sep edge-sep)
+                                                                  (setf edge ,(+ (* 3 i) j) edge-sep sep
+                                                                        elx (* f lx) ely (* f ly) elz (* f lz))))))))))))
+            (edges)))
+        (cond
+          ((>= (max best-sep edge-sep) reach))
+          ((> edge-sep (+ best-sep +box-axis-tolerance+))
+           ;; an edge of A against an edge of B: one point, midway between the edges' nearest
+           ;; points, the normal their common perpendicular, from A towards B, pushing B
+           (macrolet ((pick (k c1 c2 c3) `(case ,k (0 ,c1) (1 ,c2) (t ,c3))))
+             (let* ((flip (if (> (+ (* elx dx) (* ely dy) (* elz dz)) 0.0) -1.0 1.0))
+                    (nx (* flip elx)) (ny (* flip ely)) (nz (* flip elz))
+                    (ei (floor edge 3)) (ej (mod edge 3))
+                    (pax acx) (pay acy) (paz acz) (pbx bcx) (pby bcy) (pbz bcz))
+               (declare (type single-float flip nx ny nz pax pay paz pbx pby pbz) (type (integer 0 2) ei ej))
+               ;; each box's edge farthest along the normal towards the other: its centre
+               (dotimes (k 3)
+                 (unless (= k ei)
+                   (let* ((cx (pick k a11 a12 a13)) (cy (pick k a21 a22 a23)) (cz (pick k a31 a32 a33))
+                          (e (* (pick k ahx ahy ahz) (if (> (+ (* cx nx) (* cy ny) (* cz nz)) 0.0) 1.0 -1.0))))
+                     (declare (type single-float cx cy cz e))
+                     (setf pax (+ pax (* e cx)) pay (+ pay (* e cy)) paz (+ paz (* e cz)))))
+                 (unless (= k ej)
+                   (let* ((cx (pick k b11 b12 b13)) (cy (pick k b21 b22 b23)) (cz (pick k b31 b32 b33))
+                          (e (* (pick k bhx bhy bhz) (if (> (+ (* cx nx) (* cy ny) (* cz nz)) 0.0) -1.0 1.0))))
+                     (declare (type single-float cx cy cz e))
+                     (setf pbx (+ pbx (* e cx)) pby (+ pby (* e cy)) pbz (+ pbz (* e cz))))))
+               ;; the nearest points of the two edges, each held to its edge's length
+               (let* ((ux (pick ei a11 a12 a13)) (uy (pick ei a21 a22 a23)) (uz (pick ei a31 a32 a33))
+                      (vx (pick ej b11 b12 b13)) (vy (pick ej b21 b22 b23)) (vz (pick ej b31 b32 b33))
+                      (ea (pick ei ahx ahy ahz)) (eb (pick ej bhx bhy bhz))
+                      (ddx (- pbx pax)) (ddy (- pby pay)) (ddz (- pbz paz))
+                      (uv (+ (* ux vx) (* uy vy) (* uz vz)))
+                      (ud (+ (* ux ddx) (* uy ddy) (* uz ddz)))
+                      (vd (+ (* vx ddx) (* vy ddy) (* vz ddz)))
+                      (den (- 1.0 (* uv uv)))
+                      (sa (if (> den 1e-6) (max (- ea) (min ea (/ (- ud (* uv vd)) den))) 0.0))
+                      (tb (max (- eb) (min eb (- (* uv sa) vd))))
+                      (sa (max (- ea) (min ea (+ ud (* uv tb)))))
+                      (qax (+ pax (* sa ux))) (qay (+ pay (* sa uy))) (qaz (+ paz (* sa uz)))
+                      (qbx (+ pbx (* tb vx))) (qby (+ pby (* tb vy))) (qbz (+ pbz (* tb vz)))
+                      (gap (+ (* nx (- qbx qax)) (* ny (- qby qay)) (* nz (- qbz qaz))))
+                      (mx (* 0.5 (+ qax qbx))) (my (* 0.5 (+ qay qby))) (mz (* 0.5 (+ qaz qbz))))
+                 (declare (type single-float ux uy uz vx vy vz ea eb ddx ddy ddz uv ud vd den sa tb
+                                qax qay qaz qbx qby qbz gap mx my mz))
+                 (when (< gap reach)
+                   (add-box-point set row-b owner (logior key-base (ash 7 5) edge) nx ny nz
+                                  (- mx bcx) (- my bcy) (- mz bcz) gap row-a (- mx acx) (- my acy) (- mz acz)))))))
+          (t
           ;; the reference box R owns the face; the incident box I is pushed off it along N
           (let ((on-b (>= best 3))
                 (poly (make-array 24 :element-type 'single-float))
                 (next (make-array 24 :element-type 'single-float))
                 (ids (make-array 8 :element-type 'fixnum))
                 (next-ids (make-array 8 :element-type 'fixnum)))
-            (declare (dynamic-extent poly next ids next-ids))
+            (declare (dynamic-extent poly next ids next-ids)
+                     (type (simple-array single-float (24)) poly next) (type (simple-array fixnum (8)) ids next-ids))
             (macrolet ((with-roles (&body body)
                          ;; bind the reference box's numbers as R..., the incident's as I...
                          `(if on-b
@@ -7328,8 +7461,10 @@ vertex's feature is a point's key. #BXCELL"
                         (dotimes (i count)
                           (let* ((j (if (= (1+ i) count) 0 (1+ i)))
                                  (oi (* 3 i)) (oj (* 3 j))
-                                 (di (- (* side (aref poly (+ oi coordinate))) limit))
-                                 (dj (- (* side (aref poly (+ oj coordinate))) limit)))
+                                 ;; a corner within the tolerance of a side is on it, kept as
+                                 ;; it is, with its own key
+                                 (di (- (* side (aref poly (+ oi coordinate))) limit +box-clip-tolerance+))
+                                 (dj (- (* side (aref poly (+ oj coordinate))) limit +box-clip-tolerance+)))
                             (declare (type fixnum j oi oj) (type single-float di dj))
                             (when (<= di 0.0)
                               (let ((o (* 3 kept)))
@@ -7348,35 +7483,82 @@ vertex's feature is a point's key. #BXCELL"
                                 (incf kept)))))
                         (setf count kept)
                         (rotatef poly next) (rotatef ids next-ids)))
-                    ;; each vertex left nearer than the reach is a point on the incident face
-                    (dotimes (i count)
-                      (let* ((o (* 3 i)) (a (aref poly o)) (b (aref poly (+ o 1))) (gap (aref poly (+ o 2)))
-                             ;; from the reference centre, and from the incident one
-                             (fx (+ (* a ux) (* b vx) (* (+ rh gap) nx)))
-                             (fy (+ (* a uy) (* b vy) (* (+ rh gap) ny)))
-                             (fz (+ (* a uz) (* b vz) (* (+ rh gap) nz))))
-                        (declare (type fixnum o) (type single-float a b gap fx fy fz))
-                        (when (< gap reach)
+                    ;; each vertex left nearer than the reach is a point on the incident face,
+                    ;; four at most (reduce-box-manifold)
+                    (let ((keep (make-array 8 :element-type 'fixnum)) (kept 0))
+                      (declare (dynamic-extent keep) (type (integer 0 8) kept))
+                      (dotimes (i count)
+                        (when (< (aref poly (+ (* 3 i) 2)) reach)
+                          (setf (aref keep kept) i)
+                          (incf kept)))
+                      (when (> kept 4) (setf kept (reduce-box-manifold poly keep kept)))
+                      (dotimes (q kept)
+                        (let* ((i (aref keep q))
+                               (o (* 3 i)) (a (aref poly o)) (b (aref poly (+ o 1))) (gap (aref poly (+ o 2)))
+                               ;; from the reference centre, and from the incident one
+                               (fx (+ (* a ux) (* b vx) (* (+ rh gap) nx)))
+                               (fy (+ (* a uy) (* b vy) (* (+ rh gap) ny)))
+                               (fz (+ (* a uz) (* b vz) (* (+ rh gap) nz))))
+                          (declare (type fixnum i o) (type single-float a b gap fx fy fz))
                           (add-box-point set irow owner
                                          (logior key-base (ash (+ (if on-b 3 0) axis) 5) (aref ids i))
-                                         nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz)))))))))))))
+                                         nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz))))))))))))))
   set)
+
+(defun grid-awake-boxes (world set n)
+  "Bucket the centres of the awake boxes among the first N awake rows of WORLD into SET's grid,
+whose items are their rows, in cells of the largest diameter and the margin, and keep their
+orientations, in the order of the rows. #BXCELL"
+  (declare (type box-set set) (type index n) #.+kernel-policy+)
+  (let ((awake (physics-world-awake world)) (count 0))
+    (declare (type index count))
+    (when (< (length (box-set-grid-rows set)) n)
+      (let ((m (max n (* 2 (length (box-set-grid-rows set))))))
+        (setf (box-set-grid-rows set) (make-array m :element-type 'fixnum :initial-element 0)
+              (box-set-gx set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-gy set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-gz set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-start-q set) (make-array (* 4 m) :element-type 'single-float :initial-element 0.0))
+        (hash-grid-reserve (box-set-grid set) m)))
+    (let ((rows (box-set-grid-rows set)) (gx (box-set-gx set)) (gy (box-set-gy set)) (gz (box-set-gz set))
+          (start-q (box-set-start-q set)))
+      (with-body-columns (x y z qw qx qy qz flags) awake
+        (dotimes (i n)
+          (when (logtest (aref flags i) +flag-box-shape+)
+            (setf (aref rows count) i (aref gx count) (aref x i) (aref gy count) (aref y i) (aref gz count) (aref z i)
+                  ;; the orientation the turns of the substeps start from (turn-box-orientations)
+                  (aref start-q (* 4 count)) (aref qw i) (aref start-q (+ (* 4 count) 1)) (aref qx i)
+                  (aref start-q (+ (* 4 count) 2)) (aref qy i) (aref start-q (+ (* 4 count) 3)) (aref qz i))
+            (incf count))))
+      (build-hash-grid (box-set-grid set)
+                       (+ (* 2.0 (f32 (physics-world-max-radius world))) (f32 (physics-world-margin world)))
+                       count gx gy gz rows))
+    set))
 
 (defun find-box-box-points (world set row reach)
   "Append to SET's points those between the box at awake ROW of WORLD and every other box near
-it: each awake box after it in the rows, once a pair, and each sleeping box, which holds still as
-a cell does (box-pair-points). #BXCELL"
+it: each awake box after it in the rows, found in the cells of SET's grid around it, once a pair,
+and each sleeping box, found in the sleeping grids and met in the order of the sleeping rows,
+which holds still as a cell does (box-pair-points). #BXCELL"
   (declare (type box-set set) (type index row) (type single-float reach) #.+kernel-policy+)
   (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
          (n (body-columns-length awake))
-         (hxs (box-set-hx set)) (hys (box-set-hy set)) (hzs (box-set-hz set)))
-    (declare (type index n) (type f32-column hxs hys hzs))
+         (ids (physics-world-ids world))
+         (hxs (box-set-hx set)) (hys (box-set-hy set)) (hzs (box-set-hz set))
+         (grid (box-set-grid set))
+         (rmax (f32 (physics-world-max-radius world))))
+    (declare (type index n) (type f32-column hxs hys hzs) (type single-float rmax))
     (with-body-columns (x y z qw qx qy qz radius handle) awake
       (let* ((owner (aref handle row)) (slot (handle-index owner))
              (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
              (aw (aref qw row)) (ax (aref qx row)) (ay (aref qy row)) (az (aref qz row))
-             (hx (aref hxs slot)) (hy (aref hys slot)) (hz (aref hzs slot)))
-        (declare (type fixnum owner) (type single-float cx cy cz r aw ax ay az hx hy hz))
+             (hx (aref hxs slot)) (hy (aref hys slot)) (hz (aref hzs slot))
+             ;; the farthest centre a box may meet this one from, against the grid's cells
+             (far (+ r rmax reach))
+             (span (ceiling (min 64.0 (* far (hash-grid-inv-cell grid)))))
+             (sleep-span (ceiling (min 64.0 (/ far (the single-float (f32 (grid-cell-size world))))))))
+        (declare (type fixnum owner) (type single-float cx cy cz r aw ax ay az hx hy hz far)
+                 (type (integer 0 64) span sleep-span))
         (flet ((meet (buffer j row-j)
                  ;; the box at row J of BUFFER, at solver row ROW-J
                  (declare (type body-columns buffer) (type index j row-j))
@@ -7394,8 +7576,16 @@ a cell does (box-pair-points). #BXCELL"
                                             (aref ox j) (aref oy j) (aref oz j) (aref ow j) (aref oqx j)
                                             (aref oqy j) (aref oqz j)
                                             (aref hxs oslot) (aref hys oslot) (aref hzs oslot)))))))))
-          (loop for j of-type index from (1+ row) below n do (meet awake j j))
-          (dotimes (j (body-columns-length sleeping)) (meet sleeping j n))))))
+          (do-grid-neighbours (j grid cx cy cz :span span)
+            (when (> j row) (meet awake j j)))
+          (when (plusp (body-columns-length sleeping))
+            (do-sleepers-in-row-order (h world cx cy cz :span sleep-span)
+                (let ((s (handle-index h)))
+                  (and (= (aref (handle-table-set ids) s) +set-sleeping+)
+                       (= (aref (handle-table-generation ids) s) (handle-generation h))
+                       (logtest (aref (body-columns-flags sleeping) (aref (handle-table-local ids) s))
+                                +flag-box-shape+)))
+              (meet sleeping (aref (handle-table-local ids) (handle-index h)) n)))))))
   set)
 ;; A box against the cells:1 ends here
 
@@ -7447,6 +7637,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
           (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
             (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
                   (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
+          ;; the awake boxes by cell, for the walk over their pairs ([[#BXCELL]])
+          (grid-awake-boxes world set n)
           (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
             (setf (box-set-threshold set) threshold (box-set-hgx set) hgx (box-set-hgy set) hgy
                   (box-set-hgz set) hgz))
@@ -7471,7 +7663,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
             ;; the sleeping boxes, held still, against the awake spheres ([[#BXSPHR]])
             (find-sleeping-box-sphere-points world set margin dt gstep)))
         (prepare-box-point-masses world set)))
-    (and (plusp (box-point-columns-length (box-set-points set))) set)))
+    (setf (box-set-solving set) (plusp (box-point-columns-length (box-set-points set))))
+    (and (box-set-solving set) set)))
 
 (defun box-row-inertia (awake set i)
   "The inverse mass of the box at awake row I of AWAKE, a buffer of SET's world, and its world
@@ -7709,6 +7902,30 @@ friction, held in the cone. #BXSOLV"
                   (push! (+ (* d1 (aref t1x k)) (* d2 (aref t2x k)))
                          (+ (* d1 (aref t1y k)) (* d2 (aref t2y k)))
                          (+ (* d1 (aref t1z k)) (* d2 (aref t2z k))))))))))))
+  nil)
+
+(defun turn-box-orientations (world)
+  "When WORLD's box set solved points this step, set each awake box's orientation to the one it
+had at the step's start turned by the sum of its substeps' turns, in place of the turn by its
+last spin over the step. #BXSOLV"
+  (let ((set (physics-world-box-bodies world)))
+    (declare (type box-set set) #.+kernel-policy+)
+    (when (box-set-solving set)
+      (let ((start-q (box-set-start-q set)) (turns (box-set-turns set)) (rows (box-set-rows set)))
+        (declare (type f32-column start-q turns) (type fixnum-column rows))
+        (with-body-columns (qw qx qy qz) (physics-world-awake world)
+          (dotimes (j (box-set-row-count set))
+            (let* ((i (aref rows j)) (tr (* 3 i)) (o (* 4 j))
+                   ;; half the turn, and the orientation at the step's start: q + (0, t/2) q
+                   (ax (* 0.5 (aref turns tr))) (ay (* 0.5 (aref turns (+ tr 1)))) (az (* 0.5 (aref turns (+ tr 2))))
+                   (w0 (aref start-q o)) (x0 (aref start-q (+ o 1))) (y0 (aref start-q (+ o 2))) (z0 (aref start-q (+ o 3)))
+                   (nw (- w0 (+ (* ax x0) (* ay y0) (* az z0))))
+                   (nx (+ x0 (+ (* ax w0) (- (* ay z0) (* az y0)))))
+                   (ny (+ y0 (+ (* ay w0) (- (* az x0) (* ax z0)))))
+                   (nz (+ z0 (+ (* az w0) (- (* ax y0) (* ay x0)))))
+                   (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
+              (declare (type index i tr o) (type single-float ax ay az w0 x0 y0 z0 nw nx ny nz s))
+              (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s))))))))
   nil)
 
 (defconstant +box-bounce-passes+ 4
@@ -8256,6 +8473,8 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
     (multiple-value-bind (check near held) (path-check-notes world)
       (hold-out-of-cells world held (fold-positions awake d check near held)))
     (fold-solver-state awake v dt)
+    ;; a box whose points were solved turns by its substeps' turns ([[#BXSOLV]])
+    (when (physics-world-box-bodies world) (turn-box-orientations world))
     ;; then ageing and sleep, in two passes: the first decides, in a loop that calls nothing,
     ;; which rows leave the awake set and why, and lists them from the last down; the second
     ;; moves them in that order, so a relocation only ever moves a row already dealt with
