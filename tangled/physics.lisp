@@ -7278,6 +7278,245 @@ through them; write their places into KEEP in increasing order and return 4. #BX
                    (setf (aref keep r) v))))
       4)))
 
+(defmacro nth-of (k c1 c2 c3)
+  "C1, C2 or C3, as K is 0, 1 or 2. #BXCELL"
+  `(case ,k (0 ,c1) (1 ,c2) (t ,c3)))
+
+(defmacro box-pair-axes ()
+  "Find the separating axis of two boxes: the face axis along which they lie farthest apart (or
+overlap least), B's only when it beats A's by the axis tolerance, as BEST and BEST-SEP, and the
+edge axis, A's axis I crossed with B's axis J, as EDGE (3I + J), EDGE-SEP and ELX ELY ELZ.
+Expanded in box-pair-points, whose variables it reads and sets. #BXCELL"
+  `(flet ((apart (lx ly lz)
+           (declare (type single-float lx ly lz))
+           (- (abs (+ (* dx lx) (* dy ly) (* dz lz)))
+              (+ (* ahx (abs (+ (* a11 lx) (* a21 ly) (* a31 lz))))
+                 (* ahy (abs (+ (* a12 lx) (* a22 ly) (* a32 lz))))
+                 (* ahz (abs (+ (* a13 lx) (* a23 ly) (* a33 lz)))))
+              (+ (* bhx (abs (+ (* b11 lx) (* b21 ly) (* b31 lz))))
+                 (* bhy (abs (+ (* b12 lx) (* b22 ly) (* b32 lz))))
+                 (* bhz (abs (+ (* b13 lx) (* b23 ly) (* b33 lz))))))))
+    (declare (inline apart))
+    ;; B's face is taken only when it separates the boxes more than A's best by the
+    ;; axis tolerance, so that two faces lying on each other keep one reference
+    (let ((a-best -1) (a-sep most-negative-single-float))
+      (declare (type fixnum a-best) (type single-float a-sep))
+      (macrolet ((try (index lx ly lz)
+                   `(let ((sep (apart ,lx ,ly ,lz)))
+                      (when (> sep best-sep) (setf best ,index best-sep sep)))))
+        (try 0 a11 a21 a31) (try 1 a12 a22 a32) (try 2 a13 a23 a33)
+        (setf a-best best a-sep best-sep best -1 best-sep most-negative-single-float)
+        (try 3 b11 b21 b31) (try 4 b12 b22 b32) (try 5 b13 b23 b33))
+      (unless (> best-sep (+ a-sep +box-axis-tolerance+))
+        (setf best a-best best-sep a-sep)))
+    ;; the nine edge axes, A's axis I crossed with B's axis J, but for edges near parallel
+    (macrolet ((edges ()
+                 `(progn
+                    ,@(loop for i below 3
+                            append (loop for j below 3
+                                         collect (destructuring-bind ((ux uy uz) (vx vy vz))
+                                                     (list (nth i '((a11 a21 a31) (a12 a22 a32) (a13 a23 a33)))
+                                                           (nth j '((b11 b21 b31) (b12 b22 b32) (b13 b23 b33))))
+                                                   `(let* ((lx (- (* ,uy ,vz) (* ,uz ,vy)))
+                                                           (ly (- (* ,uz ,vx) (* ,ux ,vz)))
+                                                           (lz (- (* ,ux ,vy) (* ,uy ,vx)))
+                                                           (len2 (+ (* lx lx) (* ly ly) (* lz lz))))
+                                                      (declare (type single-float lx ly lz len2))
+                                                      (when (> len2 1e-6)
+                                                        (let* ((f (/ 1.0 (fsqrt len2)))
+                                                               (sep (apart (* f lx) (* f ly) (* f lz))))
+                                                          (declare (type single-float f sep))
+                                                          (when (> sep edge-sep)
+                                                            (setf edge ,(+ (* 3 i) j) edge-sep sep
+                                                                  elx (* f lx) ely (* f ly) elz (* f lz))))))))))))
+      (edges))))
+
+(defmacro box-edge-point ()
+  "Add the point of an edge of box A against an edge of box B (EDGE, along ELX ELY ELZ): midway
+between the edges' nearest points, the normal their common perpendicular, from A towards B,
+pushing B. Expanded in box-pair-points, whose variables it reads. #BXCELL"
+  `(let* ((flip (if (> (+ (* elx dx) (* ely dy) (* elz dz)) 0.0) -1.0 1.0))
+         (nx (* flip elx)) (ny (* flip ely)) (nz (* flip elz))
+         (ei (floor edge 3)) (ej (mod edge 3))
+         (pax acx) (pay acy) (paz acz) (pbx bcx) (pby bcy) (pbz bcz))
+    (declare (type single-float flip nx ny nz pax pay paz pbx pby pbz) (type (integer 0 2) ei ej))
+    ;; each box's edge farthest along the normal towards the other: its centre
+    (dotimes (k 3)
+      (unless (= k ei)
+        (let* ((cx (nth-of k a11 a12 a13)) (cy (nth-of k a21 a22 a23)) (cz (nth-of k a31 a32 a33))
+               (e (* (nth-of k ahx ahy ahz) (if (> (+ (* cx nx) (* cy ny) (* cz nz)) 0.0) 1.0 -1.0))))
+          (declare (type single-float cx cy cz e))
+          (setf pax (+ pax (* e cx)) pay (+ pay (* e cy)) paz (+ paz (* e cz)))))
+      (unless (= k ej)
+        (let* ((cx (nth-of k b11 b12 b13)) (cy (nth-of k b21 b22 b23)) (cz (nth-of k b31 b32 b33))
+               (e (* (nth-of k bhx bhy bhz) (if (> (+ (* cx nx) (* cy ny) (* cz nz)) 0.0) -1.0 1.0))))
+          (declare (type single-float cx cy cz e))
+          (setf pbx (+ pbx (* e cx)) pby (+ pby (* e cy)) pbz (+ pbz (* e cz))))))
+    ;; the nearest points of the two edges, each held to its edge's length
+    (let* ((ux (nth-of ei a11 a12 a13)) (uy (nth-of ei a21 a22 a23)) (uz (nth-of ei a31 a32 a33))
+           (vx (nth-of ej b11 b12 b13)) (vy (nth-of ej b21 b22 b23)) (vz (nth-of ej b31 b32 b33))
+           (ea (nth-of ei ahx ahy ahz)) (eb (nth-of ej bhx bhy bhz))
+           (ddx (- pbx pax)) (ddy (- pby pay)) (ddz (- pbz paz))
+           (uv (+ (* ux vx) (* uy vy) (* uz vz)))
+           (ud (+ (* ux ddx) (* uy ddy) (* uz ddz)))
+           (vd (+ (* vx ddx) (* vy ddy) (* vz ddz)))
+           (den (- 1.0 (* uv uv)))
+           (sa (if (> den 1e-6) (max (- ea) (min ea (/ (- ud (* uv vd)) den))) 0.0))
+           (tb (max (- eb) (min eb (- (* uv sa) vd))))
+           (sa (max (- ea) (min ea (+ ud (* uv tb)))))
+           (qax (+ pax (* sa ux))) (qay (+ pay (* sa uy))) (qaz (+ paz (* sa uz)))
+           (qbx (+ pbx (* tb vx))) (qby (+ pby (* tb vy))) (qbz (+ pbz (* tb vz)))
+           (gap (+ (* nx (- qbx qax)) (* ny (- qby qay)) (* nz (- qbz qaz))))
+           (mx (* 0.5 (+ qax qbx))) (my (* 0.5 (+ qay qby))) (mz (* 0.5 (+ qaz qbz))))
+      (declare (type single-float ux uy uz vx vy vz ea eb ddx ddy ddz uv ud vd den sa tb
+                     qax qay qaz qbx qby qbz gap mx my mz))
+      (when (< gap reach)
+        (add-box-point set row-b owner (logior key-base (ash 7 5) edge) nx ny nz
+                       (- mx bcx) (- my bcy) (- mz bcz) gap row-a (- mx acx) (- my acy) (- mz acz))))))
+
+(defmacro with-box-roles (&body body)
+  "Run BODY with the reference box's numbers bound as R... (centre RCX RCY RCZ, axes R11 .. R33,
+half-extents RHX RHY RHZ, row RROW), the incident box's as I..., and the reference face's AXIS:
+box B is the reference when ON-B, else box A. Expanded in box-face-points. #BXCELL"
+  `(if on-b
+       (let ((rcx bcx) (rcy bcy) (rcz bcz) (r11 b11) (r12 b12) (r13 b13) (r21 b21) (r22 b22)
+             (r23 b23) (r31 b31) (r32 b32) (r33 b33) (rhx bhx) (rhy bhy) (rhz bhz) (rrow row-b)
+             (icx acx) (icy acy) (icz acz) (i11 a11) (i12 a12) (i13 a13) (i21 a21) (i22 a22)
+             (i23 a23) (i31 a31) (i32 a32) (i33 a33) (ihx ahx) (ihy ahy) (ihz ahz) (irow row-a)
+             (axis (- best 3)))
+         ,@body)
+       (let ((rcx acx) (rcy acy) (rcz acz) (r11 a11) (r12 a12) (r13 a13) (r21 a21) (r22 a22)
+             (r23 a23) (r31 a31) (r32 a32) (r33 a33) (rhx ahx) (rhy ahy) (rhz ahz) (rrow row-a)
+             (icx bcx) (icy bcy) (icz bcz) (i11 b11) (i12 b12) (i13 b13) (i21 b21) (i22 b22)
+             (i23 b23) (i31 b31) (i32 b32) (i33 b33) (ihx bhx) (ihy bhy) (ihz bhz) (irow row-b)
+             (axis best))
+         ,@body)))
+
+(defmacro incident-face-corners ()
+  "Write into POLY the incident face's four corners, in order around it, in the reference face's
+frame (along K1, along K2, and the height over the face), and into IDS their numbers. Expanded in
+box-face-points, whose variables it reads. #BXCELL"
+  `(progn
+     ;; the incident face's corners, in order around it, in the reference face's frame:
+     ;; along K1, along K2, and the height over the face
+     (dotimes (corner 4)
+       (let* ((s1 (if (< 0 corner 3) -1.0 1.0)) (s2 (if (< corner 2) 1.0 -1.0))
+              (wx (+ gx (* s1 px) (* s2 qx))) (wy (+ gy (* s1 py) (* s2 qy))) (wz (+ gz (* s1 pz) (* s2 qz)))
+              (o (* 3 corner)))
+         (declare (type single-float s1 s2 wx wy wz) (type fixnum o))
+         (setf (aref poly o) (+ (* wx ux) (* wy uy) (* wz uz))
+               (aref poly (+ o 1)) (+ (* wx vx) (* wy vy) (* wz vz))
+               (aref poly (+ o 2)) (- (+ (* wx nx) (* wy ny) (* wz nz)) rh)
+               (aref ids corner) corner)))))
+
+(defmacro clip-incident-face ()
+  "Clip the COUNT corners of POLY (numbered in IDS) against the reference face's four sides, a <=
+E1, -a <= E1, b <= E2, -b <= E2, through NEXT and NEXT-IDS, leaving the clipped polygon in POLY
+and its COUNT. Expanded in box-face-points, whose variables it reads and sets. #BXCELL"
+  `(progn
+     ;; clip against the four sides: a <= e1, -a <= e1, b <= e2, -b <= e2
+     (dotimes (plane 4)
+       (let ((kept 0) (coordinate (if (< plane 2) 0 1))
+             (side (if (evenp plane) 1.0 -1.0)) (limit (if (< plane 2) e1 e2)))
+         (declare (type fixnum kept coordinate) (type single-float side limit))
+         (dotimes (i count)
+           (let* ((j (if (= (1+ i) count) 0 (1+ i)))
+                  (oi (* 3 i)) (oj (* 3 j))
+                  ;; a corner within the tolerance of a side is on it, kept as
+                  ;; it is, with its own key
+                  (di (- (* side (aref poly (+ oi coordinate))) limit +box-clip-tolerance+))
+                  (dj (- (* side (aref poly (+ oj coordinate))) limit +box-clip-tolerance+)))
+             (declare (type fixnum j oi oj) (type single-float di dj))
+             (when (<= di 0.0)
+               (let ((o (* 3 kept)))
+                 (setf (aref next o) (aref poly oi) (aref next (+ o 1)) (aref poly (+ oi 1))
+                       (aref next (+ o 2)) (aref poly (+ oi 2)) (aref next-ids kept) (aref ids i))
+                 (incf kept)))
+             (when (or (and (<= di 0.0) (> dj 0.0)) (and (> di 0.0) (<= dj 0.0)))
+               ;; the edge crosses the side: the crossing, named by the side and the
+               ;; corner the edge starts from
+               (let ((f (/ di (- di dj))) (o (* 3 kept)))
+                 (declare (type single-float f))
+                 (dotimes (c 3)
+                   (setf (aref next (+ o c))
+                         (+ (aref poly (+ oi c)) (* f (- (aref poly (+ oj c)) (aref poly (+ oi c)))))))
+                 (setf (aref next-ids kept) (logand 31 (+ 4 (* 4 plane) (logand 3 (aref ids i)))))
+                 (incf kept)))))
+         (setf count kept)
+         (rotatef poly next) (rotatef ids next-ids)))))
+
+(defmacro add-incident-points ()
+  "Add as points of the incident box each vertex of the clipped POLY nearer than the reach, four
+at most (reduce-box-manifold), each keyed by the reference face and its own number. Expanded in
+box-face-points, whose variables it reads. #BXCELL"
+  `(progn
+     ;; each vertex left nearer than the reach is a point on the incident face,
+     ;; four at most (reduce-box-manifold)
+     (let ((keep (make-array 8 :element-type 'fixnum)) (kept 0))
+       (declare (dynamic-extent keep) (type (integer 0 8) kept))
+       (dotimes (i count)
+         (when (< (aref poly (+ (* 3 i) 2)) reach)
+           (setf (aref keep kept) i)
+           (incf kept)))
+       (when (> kept 4) (setf kept (reduce-box-manifold poly keep kept)))
+       (dotimes (q kept)
+         (let* ((i (aref keep q))
+                (o (* 3 i)) (a (aref poly o)) (b (aref poly (+ o 1))) (gap (aref poly (+ o 2)))
+                ;; from the reference centre, and from the incident one
+                (fx (+ (* a ux) (* b vx) (* (+ rh gap) nx)))
+                (fy (+ (* a uy) (* b vy) (* (+ rh gap) ny)))
+                (fz (+ (* a uz) (* b vz) (* (+ rh gap) nz))))
+           (declare (type fixnum i o) (type single-float a b gap fx fy fz))
+           (add-box-point set irow owner
+                          (logior key-base (ash (+ (if on-b 3 0) axis) 5) (aref ids i))
+                          nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz))))))
+
+(defmacro box-face-points ()
+  "Add the points of the incident box's face most against the reference face (box B's when the
+separating axis BEST is one of B's, else A's), pushed off it along the face's normal: its corners
+clipped to the reference face's sides and reduced to four, each with its height over the face as
+its gap. Expanded in box-pair-points, whose variables it reads. #BXCELL"
+  `(let ((on-b (>= best 3))
+         (poly (make-array 24 :element-type 'single-float))
+         (next (make-array 24 :element-type 'single-float))
+         (ids (make-array 8 :element-type 'fixnum))
+         (next-ids (make-array 8 :element-type 'fixnum)))
+     (declare (dynamic-extent poly next ids next-ids)
+              (type (simple-array single-float (24)) poly next) (type (simple-array fixnum (8)) ids next-ids))
+     (with-box-roles
+       (let* ((ex (- icx rcx)) (ey (- icy rcy)) (ez (- icz rcz))
+              ;; the reference axis, turned towards the incident box, its half-extent,
+              ;; and the face's two side axes K1 K2 with theirs
+              (lx (nth-of axis r11 r12 r13)) (ly (nth-of axis r21 r22 r23)) (lz (nth-of axis r31 r32 r33))
+              (sign (if (>= (+ (* ex lx) (* ey ly) (* ez lz)) 0.0) 1.0 -1.0))
+              (nx (* sign lx)) (ny (* sign ly)) (nz (* sign lz))
+              (rh (nth-of axis rhx rhy rhz))
+              (k1 (if (= axis 0) 1 0)) (k2 (if (= axis 2) 1 2))
+              (e1 (nth-of k1 rhx rhy rhz)) (e2 (nth-of k2 rhx rhy rhz))
+              (ux (nth-of k1 r11 r12 r13)) (uy (nth-of k1 r21 r22 r23)) (uz (nth-of k1 r31 r32 r33))
+              (vx (nth-of k2 r11 r12 r13)) (vy (nth-of k2 r21 r22 r23)) (vz (nth-of k2 r31 r32 r33))
+              ;; the incident axis most against N, the face's outward normal and centre
+              (c1 (+ (* i11 nx) (* i21 ny) (* i31 nz)))
+              (c2 (+ (* i12 nx) (* i22 ny) (* i32 nz)))
+              (c3 (+ (* i13 nx) (* i23 ny) (* i33 nz)))
+              (m (cond ((and (>= (abs c1) (abs c2)) (>= (abs c1) (abs c3))) 0) ((>= (abs c2) (abs c3)) 1) (t 2)))
+              (ms (if (> (nth-of m c1 c2 c3) 0.0) -1.0 1.0))
+              (mh (nth-of m ihx ihy ihz))
+              (gx (+ ex (* ms mh (nth-of m i11 i12 i13))))
+              (gy (+ ey (* ms mh (nth-of m i21 i22 i23))))
+              (gz (+ ez (* ms mh (nth-of m i31 i32 i33))))
+              (j1 (if (= m 0) 1 0)) (j2 (if (= m 2) 1 2))
+              (f1 (nth-of j1 ihx ihy ihz)) (f2 (nth-of j2 ihx ihy ihz))
+              (px (* f1 (nth-of j1 i11 i12 i13))) (py (* f1 (nth-of j1 i21 i22 i23))) (pz (* f1 (nth-of j1 i31 i32 i33)))
+              (qx (* f2 (nth-of j2 i11 i12 i13))) (qy (* f2 (nth-of j2 i21 i22 i23))) (qz (* f2 (nth-of j2 i31 i32 i33)))
+              (count 4))
+         (declare (type single-float ex ey ez lx ly lz sign nx ny nz rh e1 e2 ux uy uz vx vy vz
+                                     c1 c2 c3 ms mh gx gy gz f1 f2 px py pz qx qy qz)
+                  (type (integer 0 2) axis k1 k2 m j1 j2) (type fixnum count))
+         (incident-face-corners)
+         (clip-incident-face)
+         (add-incident-points)))))
+
 (defun box-pair-points (set owner key-base row-a row-b reach
                         acx acy acz aqw aqx aqy aqz ahx ahy ahz
                         bcx bcy bcz bqw bqx bqy bqz bhx bhy bhz)
@@ -7299,210 +7538,17 @@ give one. KEY-BASE with the axis and the vertex's or the edges' feature is a poi
             (best -1) (best-sep most-negative-single-float)
             (edge -1) (edge-sep most-negative-single-float) (elx 0.0) (ely 0.0) (elz 0.0))
         (declare (type single-float dx dy dz best-sep edge-sep elx ely elz) (type fixnum best edge))
-        ;; the six face axes: how far apart the boxes are along each
-        (flet ((apart (lx ly lz)
-                 (declare (type single-float lx ly lz))
-                 (- (abs (+ (* dx lx) (* dy ly) (* dz lz)))
-                    (+ (* ahx (abs (+ (* a11 lx) (* a21 ly) (* a31 lz))))
-                       (* ahy (abs (+ (* a12 lx) (* a22 ly) (* a32 lz))))
-                       (* ahz (abs (+ (* a13 lx) (* a23 ly) (* a33 lz)))))
-                    (+ (* bhx (abs (+ (* b11 lx) (* b21 ly) (* b31 lz))))
-                       (* bhy (abs (+ (* b12 lx) (* b22 ly) (* b32 lz))))
-                       (* bhz (abs (+ (* b13 lx) (* b23 ly) (* b33 lz))))))))
-          (declare (inline apart))
-          ;; B's face is taken only when it separates the boxes more than A's best by the
-          ;; axis tolerance, so that two faces lying on each other keep one reference
-          (let ((a-best -1) (a-sep most-negative-single-float))
-            (declare (type fixnum a-best) (type single-float a-sep))
-            (macrolet ((try (index lx ly lz)
-                         `(let ((sep (apart ,lx ,ly ,lz)))
-                            (when (> sep best-sep) (setf best ,index best-sep sep)))))
-              (try 0 a11 a21 a31) (try 1 a12 a22 a32) (try 2 a13 a23 a33)
-              (setf a-best best a-sep best-sep best -1 best-sep most-negative-single-float)
-              (try 3 b11 b21 b31) (try 4 b12 b22 b32) (try 5 b13 b23 b33))
-            (unless (> best-sep (+ a-sep +box-axis-tolerance+))
-              (setf best a-best best-sep a-sep)))
-          ;; the nine edge axes, A's axis I crossed with B's axis J, but for edges near parallel
-          (macrolet ((edges ()
-                       `(progn
-                          ,@(loop for i below 3
-                                  append (loop for j below 3
-                                               collect (destructuring-bind ((ux uy uz) (vx vy vz))
-                                                           (list (nth i '((a11 a21 a31) (a12 a22 a32) (a13 a23 a33)))
-                                                                 (nth j '((b11 b21 b31) (b12 b22 b32) (b13 b23 b33))))
-                                                         `(let* ((lx (- (* ,uy ,vz) (* ,uz ,vy)))
-                                                                 (ly (- (* ,uz ,vx) (* ,ux ,vz)))
-                                                                 (lz (- (* ,ux ,vy) (* ,uy ,vx)))
-                                                                 (len2 (+ (* lx lx) (* ly ly) (* lz lz))))
-                                                            (declare (type single-float lx ly lz len2))
-                                                            (when (> len2 1e-6)
-                                                              (let* ((f (/ 1.0 (fsqrt len2)))
-                                                                     (sep (apart (* f lx) (* f ly) (* f lz))))
-                                                                (declare (type single-float f sep))
-                                                                (when (> sep edge-sep)
-                                                                  (setf edge ,(+ (* 3 i) j) edge-sep sep
-                                                                        elx (* f lx) ely (* f ly) elz (* f lz))))))))))))
-            (edges)))
+        ;; the six face axes and the nine edge axes: how far apart the boxes are along each
+        (box-pair-axes)
         (cond
           ((>= (max best-sep edge-sep) reach))
           ((> edge-sep (+ best-sep +box-axis-tolerance+))
            ;; an edge of A against an edge of B: one point, midway between the edges' nearest
            ;; points, the normal their common perpendicular, from A towards B, pushing B
-           (macrolet ((pick (k c1 c2 c3) `(case ,k (0 ,c1) (1 ,c2) (t ,c3))))
-             (let* ((flip (if (> (+ (* elx dx) (* ely dy) (* elz dz)) 0.0) -1.0 1.0))
-                    (nx (* flip elx)) (ny (* flip ely)) (nz (* flip elz))
-                    (ei (floor edge 3)) (ej (mod edge 3))
-                    (pax acx) (pay acy) (paz acz) (pbx bcx) (pby bcy) (pbz bcz))
-               (declare (type single-float flip nx ny nz pax pay paz pbx pby pbz) (type (integer 0 2) ei ej))
-               ;; each box's edge farthest along the normal towards the other: its centre
-               (dotimes (k 3)
-                 (unless (= k ei)
-                   (let* ((cx (pick k a11 a12 a13)) (cy (pick k a21 a22 a23)) (cz (pick k a31 a32 a33))
-                          (e (* (pick k ahx ahy ahz) (if (> (+ (* cx nx) (* cy ny) (* cz nz)) 0.0) 1.0 -1.0))))
-                     (declare (type single-float cx cy cz e))
-                     (setf pax (+ pax (* e cx)) pay (+ pay (* e cy)) paz (+ paz (* e cz)))))
-                 (unless (= k ej)
-                   (let* ((cx (pick k b11 b12 b13)) (cy (pick k b21 b22 b23)) (cz (pick k b31 b32 b33))
-                          (e (* (pick k bhx bhy bhz) (if (> (+ (* cx nx) (* cy ny) (* cz nz)) 0.0) -1.0 1.0))))
-                     (declare (type single-float cx cy cz e))
-                     (setf pbx (+ pbx (* e cx)) pby (+ pby (* e cy)) pbz (+ pbz (* e cz))))))
-               ;; the nearest points of the two edges, each held to its edge's length
-               (let* ((ux (pick ei a11 a12 a13)) (uy (pick ei a21 a22 a23)) (uz (pick ei a31 a32 a33))
-                      (vx (pick ej b11 b12 b13)) (vy (pick ej b21 b22 b23)) (vz (pick ej b31 b32 b33))
-                      (ea (pick ei ahx ahy ahz)) (eb (pick ej bhx bhy bhz))
-                      (ddx (- pbx pax)) (ddy (- pby pay)) (ddz (- pbz paz))
-                      (uv (+ (* ux vx) (* uy vy) (* uz vz)))
-                      (ud (+ (* ux ddx) (* uy ddy) (* uz ddz)))
-                      (vd (+ (* vx ddx) (* vy ddy) (* vz ddz)))
-                      (den (- 1.0 (* uv uv)))
-                      (sa (if (> den 1e-6) (max (- ea) (min ea (/ (- ud (* uv vd)) den))) 0.0))
-                      (tb (max (- eb) (min eb (- (* uv sa) vd))))
-                      (sa (max (- ea) (min ea (+ ud (* uv tb)))))
-                      (qax (+ pax (* sa ux))) (qay (+ pay (* sa uy))) (qaz (+ paz (* sa uz)))
-                      (qbx (+ pbx (* tb vx))) (qby (+ pby (* tb vy))) (qbz (+ pbz (* tb vz)))
-                      (gap (+ (* nx (- qbx qax)) (* ny (- qby qay)) (* nz (- qbz qaz))))
-                      (mx (* 0.5 (+ qax qbx))) (my (* 0.5 (+ qay qby))) (mz (* 0.5 (+ qaz qbz))))
-                 (declare (type single-float ux uy uz vx vy vz ea eb ddx ddy ddz uv ud vd den sa tb
-                                qax qay qaz qbx qby qbz gap mx my mz))
-                 (when (< gap reach)
-                   (add-box-point set row-b owner (logior key-base (ash 7 5) edge) nx ny nz
-                                  (- mx bcx) (- my bcy) (- mz bcz) gap row-a (- mx acx) (- my acy) (- mz acz)))))))
+           (box-edge-point))
           (t
-          ;; the reference box R owns the face; the incident box I is pushed off it along N
-          (let ((on-b (>= best 3))
-                (poly (make-array 24 :element-type 'single-float))
-                (next (make-array 24 :element-type 'single-float))
-                (ids (make-array 8 :element-type 'fixnum))
-                (next-ids (make-array 8 :element-type 'fixnum)))
-            (declare (dynamic-extent poly next ids next-ids)
-                     (type (simple-array single-float (24)) poly next) (type (simple-array fixnum (8)) ids next-ids))
-            (macrolet ((with-roles (&body body)
-                         ;; bind the reference box's numbers as R..., the incident's as I...
-                         `(if on-b
-                              (let ((rcx bcx) (rcy bcy) (rcz bcz) (r11 b11) (r12 b12) (r13 b13) (r21 b21) (r22 b22)
-                                    (r23 b23) (r31 b31) (r32 b32) (r33 b33) (rhx bhx) (rhy bhy) (rhz bhz) (rrow row-b)
-                                    (icx acx) (icy acy) (icz acz) (i11 a11) (i12 a12) (i13 a13) (i21 a21) (i22 a22)
-                                    (i23 a23) (i31 a31) (i32 a32) (i33 a33) (ihx ahx) (ihy ahy) (ihz ahz) (irow row-a)
-                                    (axis (- best 3)))
-                                ,@body)
-                              (let ((rcx acx) (rcy acy) (rcz acz) (r11 a11) (r12 a12) (r13 a13) (r21 a21) (r22 a22)
-                                    (r23 a23) (r31 a31) (r32 a32) (r33 a33) (rhx ahx) (rhy ahy) (rhz ahz) (rrow row-a)
-                                    (icx bcx) (icy bcy) (icz bcz) (i11 b11) (i12 b12) (i13 b13) (i21 b21) (i22 b22)
-                                    (i23 b23) (i31 b31) (i32 b32) (i33 b33) (ihx bhx) (ihy bhy) (ihz bhz) (irow row-b)
-                                    (axis best))
-                                ,@body))))
-              (with-roles
-                (macrolet ((column (m c1 c2 c3) `(case ,m (0 ,c1) (1 ,c2) (t ,c3))))
-                  (let* ((ex (- icx rcx)) (ey (- icy rcy)) (ez (- icz rcz))
-                         ;; the reference axis, turned towards the incident box, its half-extent,
-                         ;; and the face's two side axes K1 K2 with theirs
-                         (lx (column axis r11 r12 r13)) (ly (column axis r21 r22 r23)) (lz (column axis r31 r32 r33))
-                         (sign (if (>= (+ (* ex lx) (* ey ly) (* ez lz)) 0.0) 1.0 -1.0))
-                         (nx (* sign lx)) (ny (* sign ly)) (nz (* sign lz))
-                         (rh (column axis rhx rhy rhz))
-                         (k1 (if (= axis 0) 1 0)) (k2 (if (= axis 2) 1 2))
-                         (e1 (column k1 rhx rhy rhz)) (e2 (column k2 rhx rhy rhz))
-                         (ux (column k1 r11 r12 r13)) (uy (column k1 r21 r22 r23)) (uz (column k1 r31 r32 r33))
-                         (vx (column k2 r11 r12 r13)) (vy (column k2 r21 r22 r23)) (vz (column k2 r31 r32 r33))
-                         ;; the incident axis most against N, the face's outward normal and centre
-                         (c1 (+ (* i11 nx) (* i21 ny) (* i31 nz)))
-                         (c2 (+ (* i12 nx) (* i22 ny) (* i32 nz)))
-                         (c3 (+ (* i13 nx) (* i23 ny) (* i33 nz)))
-                         (m (cond ((and (>= (abs c1) (abs c2)) (>= (abs c1) (abs c3))) 0) ((>= (abs c2) (abs c3)) 1) (t 2)))
-                         (ms (if (> (column m c1 c2 c3) 0.0) -1.0 1.0))
-                         (mh (column m ihx ihy ihz))
-                         (gx (+ ex (* ms mh (column m i11 i12 i13))))
-                         (gy (+ ey (* ms mh (column m i21 i22 i23))))
-                         (gz (+ ez (* ms mh (column m i31 i32 i33))))
-                         (j1 (if (= m 0) 1 0)) (j2 (if (= m 2) 1 2))
-                         (f1 (column j1 ihx ihy ihz)) (f2 (column j2 ihx ihy ihz))
-                         (px (* f1 (column j1 i11 i12 i13))) (py (* f1 (column j1 i21 i22 i23))) (pz (* f1 (column j1 i31 i32 i33)))
-                         (qx (* f2 (column j2 i11 i12 i13))) (qy (* f2 (column j2 i21 i22 i23))) (qz (* f2 (column j2 i31 i32 i33)))
-                         (count 4))
-                    (declare (type single-float ex ey ez lx ly lz sign nx ny nz rh e1 e2 ux uy uz vx vy vz
-                                                c1 c2 c3 ms mh gx gy gz f1 f2 px py pz qx qy qz)
-                             (type (integer 0 2) axis k1 k2 m j1 j2) (type fixnum count))
-                    ;; the incident face's corners, in order around it, in the reference face's frame:
-                    ;; along K1, along K2, and the height over the face
-                    (dotimes (corner 4)
-                      (let* ((s1 (if (< 0 corner 3) -1.0 1.0)) (s2 (if (< corner 2) 1.0 -1.0))
-                             (wx (+ gx (* s1 px) (* s2 qx))) (wy (+ gy (* s1 py) (* s2 qy))) (wz (+ gz (* s1 pz) (* s2 qz)))
-                             (o (* 3 corner)))
-                        (declare (type single-float s1 s2 wx wy wz) (type fixnum o))
-                        (setf (aref poly o) (+ (* wx ux) (* wy uy) (* wz uz))
-                              (aref poly (+ o 1)) (+ (* wx vx) (* wy vy) (* wz vz))
-                              (aref poly (+ o 2)) (- (+ (* wx nx) (* wy ny) (* wz nz)) rh)
-                              (aref ids corner) corner)))
-                    ;; clip against the four sides: a <= e1, -a <= e1, b <= e2, -b <= e2
-                    (dotimes (plane 4)
-                      (let ((kept 0) (coordinate (if (< plane 2) 0 1))
-                            (side (if (evenp plane) 1.0 -1.0)) (limit (if (< plane 2) e1 e2)))
-                        (declare (type fixnum kept coordinate) (type single-float side limit))
-                        (dotimes (i count)
-                          (let* ((j (if (= (1+ i) count) 0 (1+ i)))
-                                 (oi (* 3 i)) (oj (* 3 j))
-                                 ;; a corner within the tolerance of a side is on it, kept as
-                                 ;; it is, with its own key
-                                 (di (- (* side (aref poly (+ oi coordinate))) limit +box-clip-tolerance+))
-                                 (dj (- (* side (aref poly (+ oj coordinate))) limit +box-clip-tolerance+)))
-                            (declare (type fixnum j oi oj) (type single-float di dj))
-                            (when (<= di 0.0)
-                              (let ((o (* 3 kept)))
-                                (setf (aref next o) (aref poly oi) (aref next (+ o 1)) (aref poly (+ oi 1))
-                                      (aref next (+ o 2)) (aref poly (+ oi 2)) (aref next-ids kept) (aref ids i))
-                                (incf kept)))
-                            (when (or (and (<= di 0.0) (> dj 0.0)) (and (> di 0.0) (<= dj 0.0)))
-                              ;; the edge crosses the side: the crossing, named by the side and the
-                              ;; corner the edge starts from
-                              (let ((f (/ di (- di dj))) (o (* 3 kept)))
-                                (declare (type single-float f))
-                                (dotimes (c 3)
-                                  (setf (aref next (+ o c))
-                                        (+ (aref poly (+ oi c)) (* f (- (aref poly (+ oj c)) (aref poly (+ oi c)))))))
-                                (setf (aref next-ids kept) (logand 31 (+ 4 (* 4 plane) (logand 3 (aref ids i)))))
-                                (incf kept)))))
-                        (setf count kept)
-                        (rotatef poly next) (rotatef ids next-ids)))
-                    ;; each vertex left nearer than the reach is a point on the incident face,
-                    ;; four at most (reduce-box-manifold)
-                    (let ((keep (make-array 8 :element-type 'fixnum)) (kept 0))
-                      (declare (dynamic-extent keep) (type (integer 0 8) kept))
-                      (dotimes (i count)
-                        (when (< (aref poly (+ (* 3 i) 2)) reach)
-                          (setf (aref keep kept) i)
-                          (incf kept)))
-                      (when (> kept 4) (setf kept (reduce-box-manifold poly keep kept)))
-                      (dotimes (q kept)
-                        (let* ((i (aref keep q))
-                               (o (* 3 i)) (a (aref poly o)) (b (aref poly (+ o 1))) (gap (aref poly (+ o 2)))
-                               ;; from the reference centre, and from the incident one
-                               (fx (+ (* a ux) (* b vx) (* (+ rh gap) nx)))
-                               (fy (+ (* a uy) (* b vy) (* (+ rh gap) ny)))
-                               (fz (+ (* a uz) (* b vz) (* (+ rh gap) nz))))
-                          (declare (type fixnum i o) (type single-float a b gap fx fy fz))
-                          (add-box-point set irow owner
-                                         (logior key-base (ash (+ (if on-b 3 0) axis) 5) (aref ids i))
-                                         nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz))))))))))))))
+           ;; the reference box R owns the face; the incident box I is pushed off it along N
+           (box-face-points))))))
   set)
 
 (defun grid-awake-boxes (world set n)
