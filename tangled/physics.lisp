@@ -7116,6 +7116,114 @@ zeros. #BXCELL"
                    (return))))
     k))
 
+(defmacro each-cell-face (form)
+  "FORM once for each of a cell's six faces, with FACE (0 to 5: -x +x -y +y -z +z), the distance
+D to it (the variables D0 to D5), the offset OX OY OZ of the neighbour across it and the normal NX
+NY NZ out of that neighbour bound as symbol macros. #BXCELL"
+  `(progn
+     ,@(loop for (face dist ox oy oz nx ny nz)
+               in '((0 d0 -1 0 0 1.0 0.0 0.0) (1 d1 1 0 0 -1.0 0.0 0.0)
+                    (2 d2 0 -1 0 0.0 1.0 0.0) (3 d3 0 1 0 0.0 -1.0 0.0)
+                    (4 d4 0 0 -1 0.0 0.0 1.0) (5 d5 0 0 1 0.0 0.0 -1.0))
+             collect `(symbol-macrolet ((face ,face) (d ,dist) (ox ,ox) (oy ,oy) (oz ,oz)
+                                        (nx ,nx) (ny ,ny) (nz ,nz))
+                        ,form))))
+
+(defmacro box-corner-points ()
+  "Add the points of the box's eight corners against the faces of the cells: a corner inside a
+solid cell is pushed out through its nearest face whose neighbour is air, a corner in the air
+meets each solid neighbour across a face nearer than the reach. Expanded in find-box-points,
+whose variables it reads. #BXCELL"
+  `(dotimes (corner 8)
+     (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
+            (c (if (logbitp 2 corner) hz (- hz)))
+            (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
+            (rz (+ (* r31 a) (* r32 b) (* r33 c)))
+            (px (+ cx rx)) (py (+ cy ry)) (pz (+ cz rz))
+            (ix (cell-floor px)) (iy (cell-floor py)) (iz (cell-floor pz))
+            ;; the distances to the cell's six faces: -x +x -y +y -z +z
+            (d0 (- px (float ix 1.0))) (d1 (- (float (1+ ix) 1.0) px))
+            (d2 (- py (float iy 1.0))) (d3 (- (float (1+ iy) 1.0) py))
+            (d4 (- pz (float iz 1.0))) (d5 (- (float (1+ iz) 1.0) pz)))
+       (declare (type single-float a b c rx ry rz px py pz d0 d1 d2 d3 d4 d5) (type fixnum ix iy iz))
+       (if (solid ix iy iz)
+           ;; inside a solid cell: the nearest face whose neighbour is air, out of it
+           (let ((best -1) (depth most-positive-single-float) (bnx 0.0) (bny 0.0) (bnz 0.0))
+             (declare (type fixnum best) (type single-float depth bnx bny bnz))
+             (each-cell-face (when (and (< d depth) (not (solid (+ ix ox) (+ iy oy) (+ iz oz)))
+                                   (> (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
+                          (setf best face depth d bnx (- nx) bny (- ny) bnz (- nz))))
+             (when (>= best 0)
+               (add-box-point set row h (box-corner-key slot corner best) bnx bny bnz rx ry rz (- depth))))
+           ;; in air: each solid neighbour across a face nearer than the reach
+           (each-cell-face (when (and (< d reach) (solid (+ ix ox) (+ iy oy) (+ iz oz))
+                                 (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
+                        (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz d)))))))
+
+(defmacro box-lattice-point ()
+  "Add the point of the lattice point LX LY LZ, where SOLIDS of its eight cells meet (one to
+three: a convex corner of the cells) whose centres lie, summed, GX GY GZ from it: against the
+box's face it is least inside of, or farthest out of, among those whose push takes the box away
+from the solid cells. Expanded in find-box-points, whose variables it reads. #BXCELL"
+  `(when (<= 1 solids 3)
+     (let* ((rx (- (float lx 1.0) cx)) (ry (- (float ly 1.0) cy)) (rz (- (float lz 1.0) cz))
+            ;; the point in the box's frame, and how far out of each face pair
+            (u (+ (* r11 rx) (* r21 ry) (* r31 rz)))
+            (v (+ (* r12 rx) (* r22 ry) (* r32 rz)))
+            (w (+ (* r13 rx) (* r23 ry) (* r33 rz)))
+            (ou (- (abs u) hx)) (ov (- (abs v) hy)) (ow (- (abs w) hz)))
+       (declare (type single-float rx ry rz u v w ou ov ow))
+       (when (and (< ou reach) (< ov reach) (< ow reach))
+         ;; the face it is least inside of, or farthest out of, among those
+         ;; whose push takes the box away from the solid cells: a face whose
+         ;; outward normal points into them, as G does (the solid cells'
+         ;; centres less the point)
+         (let ((best -1) (gap most-negative-single-float)
+               (ga (+ (* r11 gx) (* r21 gy) (* r31 gz)))
+               (gb (+ (* r12 gx) (* r22 gy) (* r32 gz)))
+               (gc (+ (* r13 gx) (* r23 gy) (* r33 gz)))
+               (glimit (* 0.25 (fsqrt (+ (* gx gx) (* gy gy) (* gz gz))))))
+           (declare (type fixnum best) (type single-float gap ga gb gc glimit))
+           (macrolet ((face (index out along sign)
+                        ;; within 75 degrees of the way to the solid cells
+                        `(when (and (> (* ,sign ,along) glimit) (> ,out gap))
+                           (setf best ,index gap ,out))))
+             (face 0 (- (- u) hx) ga -1.0) (face 1 (- u hx) ga 1.0)
+             (face 2 (- (- v) hy) gb -1.0) (face 3 (- v hy) gb 1.0)
+             (face 4 (- (- w) hz) gc -1.0) (face 5 (- w hz) gc 1.0))
+           (when (>= best 0)
+             ;; the push is the face's inward normal
+             (multiple-value-bind (nx ny nz)
+                 (case best
+                   (0 (values r11 r21 r31)) (1 (values (- r11) (- r21) (- r31)))
+                   (2 (values r12 r22 r32)) (3 (values (- r12) (- r22) (- r32)))
+                   (4 (values r13 r23 r33)) (t (values (- r13) (- r23) (- r33))))
+               (declare (type single-float nx ny nz))
+               (add-box-point set row h (box-lattice-key slot lx ly lz best)
+                              nx ny nz rx ry rz gap))))))))
+
+(defmacro box-lattice-points ()
+  "Add the points of the convex lattice points of the cells, within the reach of the box's
+bounding box, against the box's faces (box-lattice-point). Expanded in find-box-points, whose
+variables it reads. #BXCELL"
+  `(let* ((ex (+ (* (abs r11) hx) (* (abs r12) hy) (* (abs r13) hz) reach))
+          (ey (+ (* (abs r21) hx) (* (abs r22) hy) (* (abs r23) hz) reach))
+          (ez (+ (* (abs r31) hx) (* (abs r32) hy) (* (abs r33) hz) reach)))
+     (declare (type single-float ex ey ez))
+     (loop for lx of-type fixnum from (- (cell-floor (- cx ex)) -1) to (cell-floor (+ cx ex)) do
+       (loop for ly of-type fixnum from (- (cell-floor (- cy ey)) -1) to (cell-floor (+ cy ey)) do
+         (loop for lz of-type fixnum from (- (cell-floor (- cz ez)) -1) to (cell-floor (+ cz ez)) do
+           (let ((solids 0) (gx 0.0) (gy 0.0) (gz 0.0))
+             (declare (type fixnum solids) (type single-float gx gy gz))
+             ;; how many of the eight cells are solid, and where they lie from the point
+             (dotimes (k 8)
+               (when (solid (- lx (if (logbitp 0 k) 0 1)) (- ly (if (logbitp 1 k) 0 1))
+                            (- lz (if (logbitp 2 k) 0 1)))
+                 (incf solids)
+                 (setf gx (+ gx (if (logbitp 0 k) 0.5 -0.5)) gy (+ gy (if (logbitp 1 k) 0.5 -0.5))
+                       gz (+ gz (if (logbitp 2 k) 0.5 -0.5)))))
+             (box-lattice-point)))))))
+
 (defun find-box-points (world set row reach)
   "Append to SET's points every point of the box at awake ROW of WORLD against the cells within
 REACH of its surface: its corners against cell faces, the convex lattice points of the cells
@@ -7137,95 +7245,9 @@ against its faces. #BXCELL"
                      (probe-solid-p probe ix iy iz)))
               (declare (inline solid))
               ;; the corners against the faces of the cells
-              (dotimes (corner 8)
-                (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
-                       (c (if (logbitp 2 corner) hz (- hz)))
-                       (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
-                       (rz (+ (* r31 a) (* r32 b) (* r33 c)))
-                       (px (+ cx rx)) (py (+ cy ry)) (pz (+ cz rz))
-                       (ix (cell-floor px)) (iy (cell-floor py)) (iz (cell-floor pz))
-                       ;; the distances to the cell's six faces: -x +x -y +y -z +z
-                       (d0 (- px (float ix 1.0))) (d1 (- (float (1+ ix) 1.0) px))
-                       (d2 (- py (float iy 1.0))) (d3 (- (float (1+ iy) 1.0) py))
-                       (d4 (- pz (float iz 1.0))) (d5 (- (float (1+ iz) 1.0) pz)))
-                  (declare (type single-float a b c rx ry rz px py pz d0 d1 d2 d3 d4 d5) (type fixnum ix iy iz))
-                  (macrolet ((each-face (form)
-                               ;; FORM once per face, with FACE, the distance D, the neighbour's cell
-                               ;; offset (OX OY OZ) and the normal out of the neighbour (NX NY NZ)
-                               `(progn
-                                  ,@(loop for (face dist ox oy oz nx ny nz)
-                                            in '((0 d0 -1 0 0 1.0 0.0 0.0) (1 d1 1 0 0 -1.0 0.0 0.0)
-                                                 (2 d2 0 -1 0 0.0 1.0 0.0) (3 d3 0 1 0 0.0 -1.0 0.0)
-                                                 (4 d4 0 0 -1 0.0 0.0 1.0) (5 d5 0 0 1 0.0 0.0 -1.0))
-                                          collect `(symbol-macrolet ((face ,face) (d ,dist) (ox ,ox) (oy ,oy) (oz ,oz)
-                                                                     (nx ,nx) (ny ,ny) (nz ,nz))
-                                                     ,form)))))
-                    (if (solid ix iy iz)
-                        ;; inside a solid cell: the nearest face whose neighbour is air, out of it
-                        (let ((best -1) (depth most-positive-single-float) (bnx 0.0) (bny 0.0) (bnz 0.0))
-                          (declare (type fixnum best) (type single-float depth bnx bny bnz))
-                          (each-face (when (and (< d depth) (not (solid (+ ix ox) (+ iy oy) (+ iz oz)))
-                                                (> (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
-                                       (setf best face depth d bnx (- nx) bny (- ny) bnz (- nz))))
-                          (when (>= best 0)
-                            (add-box-point set row h (box-corner-key slot corner best) bnx bny bnz rx ry rz (- depth))))
-                        ;; in air: each solid neighbour across a face nearer than the reach
-                        (each-face (when (and (< d reach) (solid (+ ix ox) (+ iy oy) (+ iz oz))
-                                              (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
-                                     (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz d)))))))
+              (box-corner-points)
               ;; the convex lattice points of the cells against the faces of the box
-              (let* ((ex (+ (* (abs r11) hx) (* (abs r12) hy) (* (abs r13) hz) reach))
-                     (ey (+ (* (abs r21) hx) (* (abs r22) hy) (* (abs r23) hz) reach))
-                     (ez (+ (* (abs r31) hx) (* (abs r32) hy) (* (abs r33) hz) reach)))
-                (declare (type single-float ex ey ez))
-                (loop for lx of-type fixnum from (- (cell-floor (- cx ex)) -1) to (cell-floor (+ cx ex)) do
-                  (loop for ly of-type fixnum from (- (cell-floor (- cy ey)) -1) to (cell-floor (+ cy ey)) do
-                    (loop for lz of-type fixnum from (- (cell-floor (- cz ez)) -1) to (cell-floor (+ cz ez)) do
-                      (let ((solids 0) (gx 0.0) (gy 0.0) (gz 0.0))
-                        (declare (type fixnum solids) (type single-float gx gy gz))
-                        ;; how many of the eight cells are solid, and where they lie from the point
-                        (dotimes (k 8)
-                          (when (solid (- lx (if (logbitp 0 k) 0 1)) (- ly (if (logbitp 1 k) 0 1))
-                                       (- lz (if (logbitp 2 k) 0 1)))
-                            (incf solids)
-                            (setf gx (+ gx (if (logbitp 0 k) 0.5 -0.5)) gy (+ gy (if (logbitp 1 k) 0.5 -0.5))
-                                  gz (+ gz (if (logbitp 2 k) 0.5 -0.5)))))
-                        (when (<= 1 solids 3)
-                          (let* ((rx (- (float lx 1.0) cx)) (ry (- (float ly 1.0) cy)) (rz (- (float lz 1.0) cz))
-                                 ;; the point in the box's frame, and how far out of each face pair
-                                 (u (+ (* r11 rx) (* r21 ry) (* r31 rz)))
-                                 (v (+ (* r12 rx) (* r22 ry) (* r32 rz)))
-                                 (w (+ (* r13 rx) (* r23 ry) (* r33 rz)))
-                                 (ou (- (abs u) hx)) (ov (- (abs v) hy)) (ow (- (abs w) hz)))
-                            (declare (type single-float rx ry rz u v w ou ov ow))
-                            (when (and (< ou reach) (< ov reach) (< ow reach))
-                              ;; the face it is least inside of, or farthest out of, among those
-                              ;; whose push takes the box away from the solid cells: a face whose
-                              ;; outward normal points into them, as G does (the solid cells'
-                              ;; centres less the point)
-                              (let ((best -1) (gap most-negative-single-float)
-                                    (ga (+ (* r11 gx) (* r21 gy) (* r31 gz)))
-                                    (gb (+ (* r12 gx) (* r22 gy) (* r32 gz)))
-                                    (gc (+ (* r13 gx) (* r23 gy) (* r33 gz)))
-                                    (glimit (* 0.25 (fsqrt (+ (* gx gx) (* gy gy) (* gz gz))))))
-                                (declare (type fixnum best) (type single-float gap ga gb gc glimit))
-                                (macrolet ((face (index out along sign)
-                                             ;; within 75 degrees of the way to the solid cells
-                                             `(when (and (> (* ,sign ,along) glimit) (> ,out gap))
-                                                (setf best ,index gap ,out))))
-                                  (face 0 (- (- u) hx) ga -1.0) (face 1 (- u hx) ga 1.0)
-                                  (face 2 (- (- v) hy) gb -1.0) (face 3 (- v hy) gb 1.0)
-                                  (face 4 (- (- w) hz) gc -1.0) (face 5 (- w hz) gc 1.0))
-                                (when (>= best 0)
-                                  ;; the push is the face's inward normal
-                                  (multiple-value-bind (nx ny nz)
-                                      (case best
-                                        (0 (values r11 r21 r31)) (1 (values (- r11) (- r21) (- r31)))
-                                        (2 (values r12 r22 r32)) (3 (values (- r12) (- r22) (- r32)))
-                                        (4 (values r13 r23 r33)) (t (values (- r13) (- r23) (- r33))))
-                                    (declare (type single-float nx ny nz))
-                                    (add-box-point set row h (box-lattice-key slot lx ly lz best)
-                                                   nx ny nz rx ry rz gap))))))))))))))))))
+              (box-lattice-points)))))))
   set)
 
 (defconstant +box-axis-tolerance+ 5e-4
