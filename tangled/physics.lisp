@@ -6479,15 +6479,14 @@ substeps turned them, so that the finalize phase does not turn them again. #J0S0
             (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
   nil)
 
-(defun turn-joint-levers (set awake d)
+(defun turn-joint-levers (set awake)
   "Turn the levers of each joint of SET solved this step to its awake bodies' orientations in
-AWAKE as the substeps have turned them, and write the effective mass of those levers, along
-the anchors' separation with the deltas D. #J0S0LV"
-  (declare (type joint-set set) (type body-columns awake) (type f32-column d) #.+kernel-policy+)
+AWAKE as the substeps have turned them. #J0S0LV"
+  (declare (type joint-set set) (type body-columns awake) #.+kernel-policy+)
   (let ((rows (joint-set-rows set))
         (n (aref (joint-set-color-starts set) (1+ +physics-max-colors+))))
     (declare (type index n))
-    (with-joint-columns (ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz sx sy sz imb) rows
+    (with-joint-columns (ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz imb) rows
       (with-body-columns (qw qx qy qz) awake
         (dotimes (j n)
           (let ((la (aref row-a j)) (lb (aref row-b j)))
@@ -6499,12 +6498,7 @@ the anchors' separation with the deltas D. #J0S0LV"
             (when (> (aref imb j) 0.0)
               (multiple-value-bind (x y z)
                   (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
-                (setf (aref rbx j) x (aref rby j) y (aref rbz j) z)))
-            (let ((da (delta-row la)) (db (delta-row lb)))
-              (joint-effective-mass rows j
-                                    (+ (aref sx j) (- (aref d db) (aref d da)) (- (aref rbx j) (aref rax j)))
-                                    (+ (aref sy j) (- (aref d (+ db 1)) (aref d (+ da 1))) (- (aref rby j) (aref ray j)))
-                                    (+ (aref sz j) (- (aref d (+ db 2)) (aref d (+ da 2))) (- (aref rbz j) (aref raz j)))))))))
+                (setf (aref rbx j) x (aref rby j) y (aref rbz j) z)))))))
     nil))
 
 (defun joints-turned-p (world)
@@ -8641,7 +8635,7 @@ bodies to half the push-out speed. #IDVK7G"
           (when boxes (turn-box-rows boxes v h))
           (when joints
             (turn-jointed-orientations joints (physics-world-awake world) v h)
-            (turn-joint-levers joints (physics-world-awake world) d))
+            (turn-joint-levers joints (physics-world-awake world)))
           (dotimes (k relaxes)
             (when boxes (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
