@@ -15,7 +15,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tangled/workshop.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-workers bench-rollback bench-peers bench-against bench-joint-grid count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-workers bench-rollback bench-peers bench-against bench-joint-grid bench-pyramid count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -45,6 +45,8 @@ help:
 	@echo "make count-against  the same engines' instructions a step, counted by valgrind; table into $(ORG)"
 	@echo "make bench-joint-grid BOX3D_SRC=dir  Box3D's joint grid here and in Box3D built from dir, in"
 	@echo "                    ROUNDS=5 rounds of alternating processes; table into $(ORG)"
+	@echo "make bench-pyramid BOX3D_SRC=dir  Box3D's large pyramid (5050 cubes) here and in Box3D built"
+	@echo "                    from dir, ROUNDS=5 rounds of alternating processes; table into $(ORG)"
 	@echo "make count-features the feature table's scenes as instructions a step, by valgrind; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
@@ -183,6 +185,19 @@ bench-joint-grid: setup tangle
 	@$(CC) -O2 -std=gnu17 -I$(BOX3D_SRC)/include -o report/peers/box3d-joint-grid tools/peers/box3d-joint-grid.c report/peers/box3d-obj/*.o -lpthread -lm
 	@ROUNDS="$(ROUNDS)" BENCH=run-joint-grid-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-joint-grid.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-joint-grid report/bench-joint-grid.org
+
+# Box3D's large pyramid here and in Box3D (#PYR4MD), alternating processes: BOX3D_SRC=dir, a
+# checkout of github.com/erincatto/box3d, is built here for the measurement only.
+bench-pyramid: setup tangle
+	@test -n "$(BOX3D_SRC)" || { echo "bench-pyramid: BOX3D_SRC=dir, a checkout of erincatto/box3d, is needed" >&2; exit 1; }
+	@mkdir -p report/peers/box3d-obj
+	@for f in $(BOX3D_SRC)/src/*.c; do \
+	  o=report/peers/box3d-obj/$$(basename $$f .c).o; \
+	  [ -e $$o -a $$o -nt $$f ] || $(CC) -O2 -DNDEBUG -std=gnu17 -I$(BOX3D_SRC)/include -I$(BOX3D_SRC)/src -c $$f -o $$o || exit 1; \
+	done
+	@$(CC) -O2 -std=gnu17 -I$(BOX3D_SRC)/include -o report/peers/box3d-large-pyramid tools/peers/box3d-large-pyramid.c report/peers/box3d-obj/*.o -lpthread -lm
+	@ROUNDS="$(ROUNDS)" BENCH=run-pyramid-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-pyramid.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-pyramid report/bench-pyramid.org
 
 # The diagrams report/wp-*.svg are kept in git: the page links to them.
 report: setup tangle

@@ -5133,6 +5133,16 @@ row from the handle table, a braced side static: expanded in the prepare phase's
              (@ rolling-impulse-y) (contact-at geometry g rolling-impulse-y)
              (@ rolling-impulse-z) (contact-at geometry g rolling-impulse-z)))))
 
+(defmacro fill-constraint-row ()
+  "Fill row K from its contact: by the short path when the world takes it and both of the
+contact's bodies have rows, else by the general one. Expanded in the prepare phase's fill, whose
+variables it reads. #PRF1LL"
+  `(if (let ((c (aref contact k)))
+         (and short-path (not static)
+              (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
+       (fill-short-row)
+       (fill-general-row)))
+
 (defmacro fill-constraint-rows ()
   "The fill: order the rows by colour, zero the side blocks, fill each colour's rows by the
 short or the general path, complete them in the frame pass, and pad each colour. Expanded in
@@ -5159,12 +5169,7 @@ the prepare phase, whose variables it reads. #PRF1LL"
                     (multiple-value-bind (from to)
                         (piece-bounds (aref color-starts color) (aref cursor color) worker count)
                       (declare (type index from to))
-                      (loop for k of-type index from from below to do
-                        (if (let ((c (aref contact k)))
-                              (and short-path (not static)
-                                   (>= (aref rows (* 2 c)) 0) (>= (aref rows (1+ (* 2 c))) 0)))
-                            (fill-short-row)
-                            (fill-general-row)))))))
+                      (loop for k of-type index from from below to do (fill-constraint-row))))))
            (declare (dynamic-extent #'fill-piece))
            (run-pieces world (constraint-columns-length cbuf) :fill #'fill-piece)))
        ;; the frames, the box velocities along them and the effective masses, in lanes where
@@ -6910,8 +6915,10 @@ speed it struck at this step, its bounce and its normal velocity before the pass
   "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
 many boxes live, the contact points of this step and of the last one, each with the first row
 and the count of every slot's points, the awake box rows of this step, their turns (three floats
-a row), the soft coefficients of the step, and its restitution threshold and gravity times the
-substep, and whether some point of the step has restitution. #BXR0WS"
+a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
+step's start (four floats a box), whether this step solves points, the soft coefficients of the
+step, its restitution threshold and gravity times the substep, and whether some point of the
+step has restitution. #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -6925,6 +6932,13 @@ substep, and whether some point of the step has restitution. #BXR0WS"
   (rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (row-count 0 :type index)
   (turns (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (grid (make-hash-grid) :type hash-grid)
+  (grid-rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (gx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (gy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (gz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (start-q (make-array 64 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (solving nil :type boolean)
   (dummy 0 :type index)
   (bias-rate 0.0 :type single-float)
   (mass-scale 1.0 :type single-float)
@@ -7269,16 +7283,66 @@ against its faces. #BXCELL"
                                                    nx ny nz rx ry rz gap))))))))))))))))))
   set)
 
+(defconstant +box-axis-tolerance+ 5e-4
+  "How much farther apart the second box's face must hold two boxes than the first's best for
+it to be the reference, in metres: a tenth of the slop, as Box2D's polygons do. #BXCELL")
+
+(defconstant +box-clip-tolerance+ 1e-3
+  "How far past a side of the reference face an incident corner may lie and still be kept as
+it is, in metres. #BXCELL")
+
+(defun reduce-box-manifold (poly keep kept)
+  "Choose four of the KEPT vertices whose places in POLY (three floats a vertex: two coordinates
+in the reference face and the gap) the first KEPT entries of KEEP hold: the deepest, the one
+farthest from it, and the two that span the largest areas with those on either side of the line
+through them; write their places into KEEP in increasing order and return 4. #BXCELL"
+  (declare (type (simple-array single-float (24)) poly) (type (simple-array fixnum (8)) keep)
+           (type (integer 5 8) kept) #.+kernel-policy+)
+  (macrolet ((a (q) `(aref poly (* 3 (the (integer 0 7) (aref keep ,q)))))
+             (b (q) `(aref poly (+ 1 (* 3 (the (integer 0 7) (aref keep ,q))))))
+             (gap (q) `(aref poly (+ 2 (* 3 (the (integer 0 7) (aref keep ,q)))))))
+    (let ((p1 0) (p2 0) (p3 0) (p4 0))
+      (declare (type (integer 0 7) p1 p2 p3 p4))
+      (loop for q from 1 below kept when (< (gap q) (gap p1)) do (setf p1 q))
+      (let ((far -1.0))
+        (declare (type single-float far))
+        (dotimes (q kept)
+          (let ((d (+ (expt (- (a q) (a p1)) 2) (expt (- (b q) (b p1)) 2))))
+            (when (and (/= q p1) (> d far)) (setf p2 q far d)))))
+      ;; twice the signed area of the triangle P1 P2 Q, most positive and most negative
+      (let ((most most-negative-single-float) (least most-positive-single-float))
+        (declare (type single-float most least))
+        (dotimes (q kept)
+          (unless (or (= q p1) (= q p2))
+            (let ((area (- (* (- (a p2) (a p1)) (- (b q) (b p1))) (* (- (b p2) (b p1)) (- (a q) (a p1))))))
+              (when (> area most) (setf p3 q most area)))))
+        (dotimes (q kept)
+          (unless (or (= q p1) (= q p2) (= q p3))
+            (let ((area (- (* (- (a p2) (a p1)) (- (b q) (b p1))) (* (- (b p2) (b p1)) (- (a q) (a p1))))))
+              (when (< area least) (setf p4 q least area))))))
+      ;; the four places, in increasing order
+      (let ((c1 (aref keep p1)) (c2 (aref keep p2)) (c3 (aref keep p3)) (c4 (aref keep p4)))
+        (declare (type fixnum c1 c2 c3 c4))
+        (setf (aref keep 0) c1 (aref keep 1) c2 (aref keep 2) c3 (aref keep 3) c4)
+        (loop for q from 1 below 4
+              do (let ((v (aref keep q)) (r q))
+                   (declare (type fixnum v r))
+                   (loop while (and (> r 0) (> (aref keep (1- r)) v))
+                         do (setf (aref keep r) (aref keep (1- r)))
+                            (decf r))
+                   (setf (aref keep r) v))))
+      4)))
+
 (defun box-pair-points (set owner key-base row-a row-b reach
                         acx acy acz aqw aqx aqy aqz ahx ahy ahz
                         bcx bcy bcz bqw bqx bqy bqz bhx bhy bhz)
   "Append to SET, as points found by the box OWNER, the points between box A (centre ACX ACY ACZ,
 orientation AQW .. AQZ, half-extents AHX AHY AHZ, solver row ROW-A) and box B (the same, B...),
-when they are nearer than REACH along every face axis: the face axis of either box along which
-they overlap least (or lie farthest apart) gives the normal and the reference face; the other
-box's face most against it, clipped to the reference face's sides, gives the points, each with
-its height over the reference face as its gap. KEY-BASE with the reference axis and the clipped
-vertex's feature is a point's key. #BXCELL"
+when they are nearer than REACH along every axis of the separating-axis test: the axis along
+which they overlap least (or lie farthest apart) gives the normal. On a face axis the other box's
+face most against the reference face, clipped to its sides and reduced to four, gives the points,
+each with its height over the reference face as its gap; on an edge axis the edges' nearest points
+give one. KEY-BASE with the axis and the vertex's or the edges' feature is a point's key. #BXCELL"
   (declare (type box-set set) (type fixnum owner key-base) (type index row-a row-b)
            (type single-float reach acx acy acz aqw aqx aqy aqz ahx ahy ahz
                  bcx bcy bcz bqw bqx bqy bqz bhx bhy bhz)
@@ -7287,8 +7351,9 @@ vertex's feature is a point's key. #BXCELL"
     (multiple-value-bind (b11 b12 b13 b21 b22 b23 b31 b32 b33) (box-axes bqw bqx bqy bqz)
       (declare (type single-float a11 a12 a13 a21 a22 a23 a31 a32 a33 b11 b12 b13 b21 b22 b23 b31 b32 b33))
       (let ((dx (- acx bcx)) (dy (- acy bcy)) (dz (- acz bcz))
-            (best -1) (best-sep most-negative-single-float))
-        (declare (type single-float dx dy dz best-sep) (type fixnum best))
+            (best -1) (best-sep most-negative-single-float)
+            (edge -1) (edge-sep most-negative-single-float) (elx 0.0) (ely 0.0) (elz 0.0))
+        (declare (type single-float dx dy dz best-sep edge-sep elx ely elz) (type fixnum best edge))
         ;; the six face axes: how far apart the boxes are along each
         (flet ((apart (lx ly lz)
                  (declare (type single-float lx ly lz))
@@ -7300,19 +7365,92 @@ vertex's feature is a point's key. #BXCELL"
                        (* bhy (abs (+ (* b12 lx) (* b22 ly) (* b32 lz))))
                        (* bhz (abs (+ (* b13 lx) (* b23 ly) (* b33 lz))))))))
           (declare (inline apart))
-          (macrolet ((try (index lx ly lz)
-                       `(let ((sep (apart ,lx ,ly ,lz)))
-                          (when (> sep best-sep) (setf best ,index best-sep sep)))))
-            (try 0 a11 a21 a31) (try 1 a12 a22 a32) (try 2 a13 a23 a33)
-            (try 3 b11 b21 b31) (try 4 b12 b22 b32) (try 5 b13 b23 b33)))
-        (when (< best-sep reach)
+          ;; B's face is taken only when it separates the boxes more than A's best by the
+          ;; axis tolerance, so that two faces lying on each other keep one reference
+          (let ((a-best -1) (a-sep most-negative-single-float))
+            (declare (type fixnum a-best) (type single-float a-sep))
+            (macrolet ((try (index lx ly lz)
+                         `(let ((sep (apart ,lx ,ly ,lz)))
+                            (when (> sep best-sep) (setf best ,index best-sep sep)))))
+              (try 0 a11 a21 a31) (try 1 a12 a22 a32) (try 2 a13 a23 a33)
+              (setf a-best best a-sep best-sep best -1 best-sep most-negative-single-float)
+              (try 3 b11 b21 b31) (try 4 b12 b22 b32) (try 5 b13 b23 b33))
+            (unless (> best-sep (+ a-sep +box-axis-tolerance+))
+              (setf best a-best best-sep a-sep)))
+          ;; the nine edge axes, A's axis I crossed with B's axis J, but for edges near parallel
+          (macrolet ((edges ()
+                       `(progn
+                          ,@(loop for i below 3
+                                  append (loop for j below 3
+                                               collect (destructuring-bind ((ux uy uz) (vx vy vz))
+                                                           (list (nth i '((a11 a21 a31) (a12 a22 a32) (a13 a23 a33)))
+                                                                 (nth j '((b11 b21 b31) (b12 b22 b32) (b13 b23 b33))))
+                                                         `(let* ((lx (- (* ,uy ,vz) (* ,uz ,vy)))
+                                                                 (ly (- (* ,uz ,vx) (* ,ux ,vz)))
+                                                                 (lz (- (* ,ux ,vy) (* ,uy ,vx)))
+                                                                 (len2 (+ (* lx lx) (* ly ly) (* lz lz))))
+                                                            (declare (type single-float lx ly lz len2))
+                                                            (when (> len2 1e-6)
+                                                              (let* ((f (/ 1.0 (fsqrt len2)))
+                                                                     (sep (apart (* f lx) (* f ly) (* f lz))))
+                                                                (declare (type single-float f sep))
+                                                                (when (> sep edge-sep)
+                                                                  (setf edge ,(+ (* 3 i) j) edge-sep sep
+                                                                        elx (* f lx) ely (* f ly) elz (* f lz))))))))))))
+            (edges)))
+        (cond
+          ((>= (max best-sep edge-sep) reach))
+          ((> edge-sep (+ best-sep +box-axis-tolerance+))
+           ;; an edge of A against an edge of B: one point, midway between the edges' nearest
+           ;; points, the normal their common perpendicular, from A towards B, pushing B
+           (macrolet ((pick (k c1 c2 c3) `(case ,k (0 ,c1) (1 ,c2) (t ,c3))))
+             (let* ((flip (if (> (+ (* elx dx) (* ely dy) (* elz dz)) 0.0) -1.0 1.0))
+                    (nx (* flip elx)) (ny (* flip ely)) (nz (* flip elz))
+                    (ei (floor edge 3)) (ej (mod edge 3))
+                    (pax acx) (pay acy) (paz acz) (pbx bcx) (pby bcy) (pbz bcz))
+               (declare (type single-float flip nx ny nz pax pay paz pbx pby pbz) (type (integer 0 2) ei ej))
+               ;; each box's edge farthest along the normal towards the other: its centre
+               (dotimes (k 3)
+                 (unless (= k ei)
+                   (let* ((cx (pick k a11 a12 a13)) (cy (pick k a21 a22 a23)) (cz (pick k a31 a32 a33))
+                          (e (* (pick k ahx ahy ahz) (if (> (+ (* cx nx) (* cy ny) (* cz nz)) 0.0) 1.0 -1.0))))
+                     (declare (type single-float cx cy cz e))
+                     (setf pax (+ pax (* e cx)) pay (+ pay (* e cy)) paz (+ paz (* e cz)))))
+                 (unless (= k ej)
+                   (let* ((cx (pick k b11 b12 b13)) (cy (pick k b21 b22 b23)) (cz (pick k b31 b32 b33))
+                          (e (* (pick k bhx bhy bhz) (if (> (+ (* cx nx) (* cy ny) (* cz nz)) 0.0) -1.0 1.0))))
+                     (declare (type single-float cx cy cz e))
+                     (setf pbx (+ pbx (* e cx)) pby (+ pby (* e cy)) pbz (+ pbz (* e cz))))))
+               ;; the nearest points of the two edges, each held to its edge's length
+               (let* ((ux (pick ei a11 a12 a13)) (uy (pick ei a21 a22 a23)) (uz (pick ei a31 a32 a33))
+                      (vx (pick ej b11 b12 b13)) (vy (pick ej b21 b22 b23)) (vz (pick ej b31 b32 b33))
+                      (ea (pick ei ahx ahy ahz)) (eb (pick ej bhx bhy bhz))
+                      (ddx (- pbx pax)) (ddy (- pby pay)) (ddz (- pbz paz))
+                      (uv (+ (* ux vx) (* uy vy) (* uz vz)))
+                      (ud (+ (* ux ddx) (* uy ddy) (* uz ddz)))
+                      (vd (+ (* vx ddx) (* vy ddy) (* vz ddz)))
+                      (den (- 1.0 (* uv uv)))
+                      (sa (if (> den 1e-6) (max (- ea) (min ea (/ (- ud (* uv vd)) den))) 0.0))
+                      (tb (max (- eb) (min eb (- (* uv sa) vd))))
+                      (sa (max (- ea) (min ea (+ ud (* uv tb)))))
+                      (qax (+ pax (* sa ux))) (qay (+ pay (* sa uy))) (qaz (+ paz (* sa uz)))
+                      (qbx (+ pbx (* tb vx))) (qby (+ pby (* tb vy))) (qbz (+ pbz (* tb vz)))
+                      (gap (+ (* nx (- qbx qax)) (* ny (- qby qay)) (* nz (- qbz qaz))))
+                      (mx (* 0.5 (+ qax qbx))) (my (* 0.5 (+ qay qby))) (mz (* 0.5 (+ qaz qbz))))
+                 (declare (type single-float ux uy uz vx vy vz ea eb ddx ddy ddz uv ud vd den sa tb
+                                qax qay qaz qbx qby qbz gap mx my mz))
+                 (when (< gap reach)
+                   (add-box-point set row-b owner (logior key-base (ash 7 5) edge) nx ny nz
+                                  (- mx bcx) (- my bcy) (- mz bcz) gap row-a (- mx acx) (- my acy) (- mz acz)))))))
+          (t
           ;; the reference box R owns the face; the incident box I is pushed off it along N
           (let ((on-b (>= best 3))
                 (poly (make-array 24 :element-type 'single-float))
                 (next (make-array 24 :element-type 'single-float))
                 (ids (make-array 8 :element-type 'fixnum))
                 (next-ids (make-array 8 :element-type 'fixnum)))
-            (declare (dynamic-extent poly next ids next-ids))
+            (declare (dynamic-extent poly next ids next-ids)
+                     (type (simple-array single-float (24)) poly next) (type (simple-array fixnum (8)) ids next-ids))
             (macrolet ((with-roles (&body body)
                          ;; bind the reference box's numbers as R..., the incident's as I...
                          `(if on-b
@@ -7378,8 +7516,10 @@ vertex's feature is a point's key. #BXCELL"
                         (dotimes (i count)
                           (let* ((j (if (= (1+ i) count) 0 (1+ i)))
                                  (oi (* 3 i)) (oj (* 3 j))
-                                 (di (- (* side (aref poly (+ oi coordinate))) limit))
-                                 (dj (- (* side (aref poly (+ oj coordinate))) limit)))
+                                 ;; a corner within the tolerance of a side is on it, kept as
+                                 ;; it is, with its own key
+                                 (di (- (* side (aref poly (+ oi coordinate))) limit +box-clip-tolerance+))
+                                 (dj (- (* side (aref poly (+ oj coordinate))) limit +box-clip-tolerance+)))
                             (declare (type fixnum j oi oj) (type single-float di dj))
                             (when (<= di 0.0)
                               (let ((o (* 3 kept)))
@@ -7398,35 +7538,82 @@ vertex's feature is a point's key. #BXCELL"
                                 (incf kept)))))
                         (setf count kept)
                         (rotatef poly next) (rotatef ids next-ids)))
-                    ;; each vertex left nearer than the reach is a point on the incident face
-                    (dotimes (i count)
-                      (let* ((o (* 3 i)) (a (aref poly o)) (b (aref poly (+ o 1))) (gap (aref poly (+ o 2)))
-                             ;; from the reference centre, and from the incident one
-                             (fx (+ (* a ux) (* b vx) (* (+ rh gap) nx)))
-                             (fy (+ (* a uy) (* b vy) (* (+ rh gap) ny)))
-                             (fz (+ (* a uz) (* b vz) (* (+ rh gap) nz))))
-                        (declare (type fixnum o) (type single-float a b gap fx fy fz))
-                        (when (< gap reach)
+                    ;; each vertex left nearer than the reach is a point on the incident face,
+                    ;; four at most (reduce-box-manifold)
+                    (let ((keep (make-array 8 :element-type 'fixnum)) (kept 0))
+                      (declare (dynamic-extent keep) (type (integer 0 8) kept))
+                      (dotimes (i count)
+                        (when (< (aref poly (+ (* 3 i) 2)) reach)
+                          (setf (aref keep kept) i)
+                          (incf kept)))
+                      (when (> kept 4) (setf kept (reduce-box-manifold poly keep kept)))
+                      (dotimes (q kept)
+                        (let* ((i (aref keep q))
+                               (o (* 3 i)) (a (aref poly o)) (b (aref poly (+ o 1))) (gap (aref poly (+ o 2)))
+                               ;; from the reference centre, and from the incident one
+                               (fx (+ (* a ux) (* b vx) (* (+ rh gap) nx)))
+                               (fy (+ (* a uy) (* b vy) (* (+ rh gap) ny)))
+                               (fz (+ (* a uz) (* b vz) (* (+ rh gap) nz))))
+                          (declare (type fixnum i o) (type single-float a b gap fx fy fz))
                           (add-box-point set irow owner
                                          (logior key-base (ash (+ (if on-b 3 0) axis) 5) (aref ids i))
-                                         nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz)))))))))))))
+                                         nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz))))))))))))))
   set)
+
+(defun grid-awake-boxes (world set n)
+  "Bucket the centres of the awake boxes among the first N awake rows of WORLD into SET's grid,
+whose items are their rows, in cells of the largest diameter and the margin, and keep their
+orientations, in the order of the rows. #BXCELL"
+  (declare (type box-set set) (type index n) #.+kernel-policy+)
+  (let ((awake (physics-world-awake world)) (count 0))
+    (declare (type index count))
+    (when (< (length (box-set-grid-rows set)) n)
+      (let ((m (max n (* 2 (length (box-set-grid-rows set))))))
+        (setf (box-set-grid-rows set) (make-array m :element-type 'fixnum :initial-element 0)
+              (box-set-gx set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-gy set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-gz set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-start-q set) (make-array (* 4 m) :element-type 'single-float :initial-element 0.0))
+        (hash-grid-reserve (box-set-grid set) m)))
+    (let ((rows (box-set-grid-rows set)) (gx (box-set-gx set)) (gy (box-set-gy set)) (gz (box-set-gz set))
+          (start-q (box-set-start-q set)))
+      (with-body-columns (x y z qw qx qy qz flags) awake
+        (dotimes (i n)
+          (when (logtest (aref flags i) +flag-box-shape+)
+            (setf (aref rows count) i (aref gx count) (aref x i) (aref gy count) (aref y i) (aref gz count) (aref z i)
+                  ;; the orientation the turns of the substeps start from (turn-box-orientations)
+                  (aref start-q (* 4 count)) (aref qw i) (aref start-q (+ (* 4 count) 1)) (aref qx i)
+                  (aref start-q (+ (* 4 count) 2)) (aref qy i) (aref start-q (+ (* 4 count) 3)) (aref qz i))
+            (incf count))))
+      (build-hash-grid (box-set-grid set)
+                       (+ (* 2.0 (f32 (physics-world-max-radius world))) (f32 (physics-world-margin world)))
+                       count gx gy gz rows))
+    set))
 
 (defun find-box-box-points (world set row reach)
   "Append to SET's points those between the box at awake ROW of WORLD and every other box near
-it: each awake box after it in the rows, once a pair, and each sleeping box, which holds still as
-a cell does (box-pair-points). #BXCELL"
+it: each awake box after it in the rows, found in the cells of SET's grid around it, once a pair,
+and each sleeping box, found in the sleeping grids and met in the order of the sleeping rows,
+which holds still as a cell does (box-pair-points). #BXCELL"
   (declare (type box-set set) (type index row) (type single-float reach) #.+kernel-policy+)
   (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
          (n (body-columns-length awake))
-         (hxs (box-set-hx set)) (hys (box-set-hy set)) (hzs (box-set-hz set)))
-    (declare (type index n) (type f32-column hxs hys hzs))
+         (ids (physics-world-ids world))
+         (hxs (box-set-hx set)) (hys (box-set-hy set)) (hzs (box-set-hz set))
+         (grid (box-set-grid set))
+         (rmax (f32 (physics-world-max-radius world))))
+    (declare (type index n) (type f32-column hxs hys hzs) (type single-float rmax))
     (with-body-columns (x y z qw qx qy qz radius handle) awake
       (let* ((owner (aref handle row)) (slot (handle-index owner))
              (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
              (aw (aref qw row)) (ax (aref qx row)) (ay (aref qy row)) (az (aref qz row))
-             (hx (aref hxs slot)) (hy (aref hys slot)) (hz (aref hzs slot)))
-        (declare (type fixnum owner) (type single-float cx cy cz r aw ax ay az hx hy hz))
+             (hx (aref hxs slot)) (hy (aref hys slot)) (hz (aref hzs slot))
+             ;; the farthest centre a box may meet this one from, against the grid's cells
+             (far (+ r rmax reach))
+             (span (ceiling (min 64.0 (* far (hash-grid-inv-cell grid)))))
+             (sleep-span (ceiling (min 64.0 (/ far (the single-float (f32 (grid-cell-size world))))))))
+        (declare (type fixnum owner) (type single-float cx cy cz r aw ax ay az hx hy hz far)
+                 (type (integer 0 64) span sleep-span))
         (flet ((meet (buffer j row-j)
                  ;; the box at row J of BUFFER, at solver row ROW-J
                  (declare (type body-columns buffer) (type index j row-j))
@@ -7444,8 +7631,16 @@ a cell does (box-pair-points). #BXCELL"
                                             (aref ox j) (aref oy j) (aref oz j) (aref ow j) (aref oqx j)
                                             (aref oqy j) (aref oqz j)
                                             (aref hxs oslot) (aref hys oslot) (aref hzs oslot)))))))))
-          (loop for j of-type index from (1+ row) below n do (meet awake j j))
-          (dotimes (j (body-columns-length sleeping)) (meet sleeping j n))))))
+          (do-grid-neighbours (j grid cx cy cz :span span)
+            (when (> j row) (meet awake j j)))
+          (when (plusp (body-columns-length sleeping))
+            (do-sleepers-in-row-order (h world cx cy cz :span sleep-span)
+                (let ((s (handle-index h)))
+                  (and (= (aref (handle-table-set ids) s) +set-sleeping+)
+                       (= (aref (handle-table-generation ids) s) (handle-generation h))
+                       (logtest (aref (body-columns-flags sleeping) (aref (handle-table-local ids) s))
+                                +flag-box-shape+)))
+              (meet sleeping (aref (handle-table-local ids) (handle-index h)) n)))))))
   set)
 ;; A box against the cells:1 ends here
 
@@ -7497,6 +7692,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
           (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
             (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
                   (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
+          ;; the awake boxes by cell, for the walk over their pairs ([[#BXCELL]])
+          (grid-awake-boxes world set n)
           (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
             (setf (box-set-threshold set) threshold (box-set-hgx set) hgx (box-set-hgy set) hgy
                   (box-set-hgz set) hgz))
@@ -7521,7 +7718,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
             ;; the sleeping boxes, held still, against the awake spheres ([[#BXSPHR]])
             (find-sleeping-box-sphere-points world set margin dt gstep)))
         (prepare-box-point-masses world set)))
-    (and (plusp (box-point-columns-length (box-set-points set))) set)))
+    (setf (box-set-solving set) (plusp (box-point-columns-length (box-set-points set))))
+    (and (box-set-solving set) set)))
 
 (defun box-row-inertia (awake set i)
   "The inverse mass of the box at awake row I of AWAKE, a buffer of SET's world, and its world
@@ -7761,8 +7959,40 @@ friction, held in the cone. #BXSOLV"
                          (+ (* d1 (aref t1z k)) (* d2 (aref t2z k))))))))))))
   nil)
 
+(defun turn-box-orientations (world)
+  "When WORLD's box set solved points this step, set each awake box's orientation to the one it
+had at the step's start turned by the sum of its substeps' turns, in place of the turn by its
+last spin over the step. #BXSOLV"
+  (let ((set (physics-world-box-bodies world)))
+    (declare (type box-set set) #.+kernel-policy+)
+    (when (box-set-solving set)
+      (let ((start-q (box-set-start-q set)) (turns (box-set-turns set)) (rows (box-set-rows set)))
+        (declare (type f32-column start-q turns) (type fixnum-column rows))
+        (with-body-columns (qw qx qy qz) (physics-world-awake world)
+          (dotimes (j (box-set-row-count set))
+            (let* ((i (aref rows j)) (tr (* 3 i)) (o (* 4 j))
+                   ;; half the turn, and the orientation at the step's start: q + (0, t/2) q
+                   (ax (* 0.5 (aref turns tr))) (ay (* 0.5 (aref turns (+ tr 1)))) (az (* 0.5 (aref turns (+ tr 2))))
+                   (w0 (aref start-q o)) (x0 (aref start-q (+ o 1))) (y0 (aref start-q (+ o 2))) (z0 (aref start-q (+ o 3)))
+                   (nw (- w0 (+ (* ax x0) (* ay y0) (* az z0))))
+                   (nx (+ x0 (+ (* ax w0) (- (* ay z0) (* az y0)))))
+                   (ny (+ y0 (+ (* ay w0) (- (* az x0) (* ax z0)))))
+                   (nz (+ z0 (+ (* az w0) (- (* ax y0) (* ay x0)))))
+                   (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
+              (declare (type index i tr o) (type single-float ax ay az w0 x0 y0 z0 nw nx ny nz s))
+              (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s))))))))
+  nil)
+
 (defconstant +box-bounce-passes+ 4
   "The passes of the bounce over the box points that struck in a step. #BXSOLV")
+
+(declaim (inline bounce-impulse))
+(defun bounce-impulse (old normal-mass restitution impact-speed dv vn)
+  "The bounce a point that struck at IMPACT-SPEED carries after a pass, from OLD before it: what
+makes its normal velocity VN the RESTITUTION times that speed, less half the change DV gravity
+gives it over a substep, through its NORMAL-MASS; a push, never a pull. #BXSOLV"
+  (declare (type single-float old normal-mass restitution impact-speed dv vn))
+  (max 0.0 (+ old (* normal-mass (- (- (* restitution impact-speed) (* 0.5 dv)) vn)))))
 
 (defun bounce-box-points (set v)
   "After the substeps, give each box point that struck this step the push that makes it leave
@@ -7786,9 +8016,8 @@ which the velocity of the substep to come reaches less half that substep's gravi
                      (dv (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
                             (+ (* hgx ax) (* hgy ay) (* hgz az))))
                      (old (aref bounce k))
-                     (new (max 0.0 (+ old (* (aref normal-mass k)
-                                             (- (- (* (aref restitution k) (aref impact-speed k)) (* 0.5 dv))
-                                                vn)))))
+                     (new (bounce-impulse old (aref normal-mass k) (aref restitution k) (aref impact-speed k)
+                                          dv vn))
                      (push (- new old)))
                 (declare (type single-float ax ay az vn dv old new push))
                 (setf (aref bounce k) new)
@@ -7937,11 +8166,73 @@ adds GSTEP; each such box's slot gets the first and the count of its points. #BX
 ;; A box against a sphere:1 ends here
 
 ;; [[file:../physics.org::#BXSWEP][Fast boxes sweep their corners through the cells:1]]
+(declaim (inline first-crossing))
+(defun first-crossing (p i u)
+  "The distance, along a unit direction whose component along an axis is U, to the first cell
+face across that axis from coordinate P in cell I. #BXSWEP"
+  (declare (type single-float p u) (type fixnum i))
+  (cond ((> u 0.0) (/ (- (float (1+ i) 1.0) p) u))
+        ((< u 0.0) (/ (- (float i 1.0) p) u))
+        (t most-positive-single-float)))
+
+(defun corner-first-solid (probe px py pz ux uy uz reach)
+  "Walk the cells a point at PX PY PZ crosses along the unit direction UX UY UZ, within REACH and
+at most 64 cells, and return the first solid cell it enters, the axis (0 to 2) it entered it
+across and the step (+1 or -1) along that axis, as five values; the axis is -1 when it enters
+none, or starts in one. #BXSWEP"
+  (declare (type terrain-probe probe) (type single-float px py pz ux uy uz reach) #.+kernel-policy+)
+  (let* ((ix (cell-floor px)) (iy (cell-floor py)) (iz (cell-floor pz))
+         (sx (if (> ux 0.0) 1 -1)) (sy (if (> uy 0.0) 1 -1)) (sz (if (> uz 0.0) 1 -1))
+         (tx (first-crossing px ix ux)) (ty (first-crossing py iy uy)) (tz (first-crossing pz iz uz))
+         (ex (if (= ux 0.0) most-positive-single-float (/ 1.0 (abs ux))))
+         (ey (if (= uy 0.0) most-positive-single-float (/ 1.0 (abs uy))))
+         (ez (if (= uz 0.0) most-positive-single-float (/ 1.0 (abs uz)))))
+    (declare (type fixnum ix iy iz sx sy sz) (type single-float tx ty tz ex ey ez))
+    (unless (probe-solid-p probe ix iy iz)
+      (loop repeat 64 do
+        (let ((axis (cond ((and (<= tx ty) (<= tx tz)) 0) ((<= ty tz) 1) (t 2))))
+          (declare (type (integer 0 2) axis))
+          (when (> (case axis (0 tx) (1 ty) (t tz)) reach) (return))
+          (case axis
+            (0 (incf ix sx) (setf tx (+ tx ex)))
+            (1 (incf iy sy) (setf ty (+ ty ey)))
+            (t (incf iz sz) (setf tz (+ tz ez))))
+          (when (probe-solid-p probe ix iy iz)
+            (return-from corner-first-solid (values ix iy iz axis (case axis (0 sx) (1 sy) (t sz))))))))
+    (values ix iy iz -1 0)))
+
+(defun add-corner-face-point (set probe row h slot corner px py pz rx ry rz ix iy iz axis step)
+  "Append to SET the point of the awake box at ROW (handle H, slot SLOT) whose CORNER, at PX PY PZ
+and RX RY RZ from the centre, enters the solid cell IX IY IZ across AXIS by STEP, when that face
+lies beyond the faces of the corner's own cell's neighbours and the box's centre is on its air
+side: the face's normal out of the entered cell, and the corner's gap to its plane. #BXSWEP"
+  (declare (type box-set set) (type terrain-probe probe) (type index row slot) (type fixnum h corner ix iy iz step)
+           (type (integer 0 2) axis) (type single-float px py pz rx ry rz) #.+kernel-policy+)
+  (let* ((face (+ (* 2 axis) (if (> step 0) 1 0)))
+         ;; the normal out of the entered cell, back along the axis
+         (nx (if (= axis 0) (float (- step) 1.0) 0.0))
+         (ny (if (= axis 1) (float (- step) 1.0) 0.0))
+         (nz (if (= axis 2) (float (- step) 1.0) 0.0))
+         ;; the face's plane, and the corner's distance to it
+         (gap (case axis
+                (0 (if (> step 0) (- (float ix 1.0) px) (- px (float (1+ ix) 1.0))))
+                (1 (if (> step 0) (- (float iy 1.0) py) (- py (float (1+ iy) 1.0))))
+                (t (if (> step 0) (- (float iz 1.0) pz) (- pz (float (1+ iz) 1.0))))))
+         ;; the neighbour of the corner's own cell across the same face
+         (cx (+ (cell-floor px) (if (= axis 0) step 0)))
+         (cy (+ (cell-floor py) (if (= axis 1) step 0)))
+         (cz (+ (cell-floor pz) (if (= axis 2) step 0))))
+    (declare (type fixnum face cx cy cz) (type single-float nx ny nz gap))
+    (when (and (not (probe-solid-p probe cx cy cz))
+               (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
+      (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz gap))))
+
 (defun sweep-box-corners (world set row reach)
   "Append to SET's points, for the awake box at ROW of WORLD, each corner's first cell face
 along the box's travel this step within REACH that lies beyond the faces of the corner's own
-cell's neighbours ([[#BXCELL]]): the corner walks the cells it crosses, and the face it enters
-a solid cell through, with the box's centre on its air side, is its point. #BXSWEP"
+cell's neighbours ([[#BXCELL]]): the corner walks the cells it crosses (corner-first-solid), and
+the face it enters a solid cell through, with the box's centre on its air side, is its point
+(add-corner-face-point). #BXSWEP"
   (declare (type box-set set) (type index row) (type single-float reach) #.+kernel-policy+)
   (let ((terrain (physics-world-terrain world)) (probe (physics-world-probe world))
         (dt (physics-world-current-dt world)))
@@ -7962,58 +8253,18 @@ a solid cell through, with the box's centre on its air side, is its point. #BXSW
               (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
                   (box-axes (aref qw row) (aref qx row) (aref qy row) (aref qz row))
                 (declare (type single-float r11 r12 r13 r21 r22 r23 r31 r32 r33))
-                (flet ((solid (ix iy iz) (declare (type fixnum ix iy iz)) (probe-solid-p probe ix iy iz))
-                       (first-crossing (p i u)
-                         ;; the distance along the way to the first face across axis coordinate P
-                         ;; from cell I, moving at U along that axis
-                         (declare (type single-float p u) (type fixnum i))
-                         (cond ((> u 0.0) (/ (- (float (1+ i) 1.0) p) u))
-                               ((< u 0.0) (/ (- (float i 1.0) p) u))
-                               (t most-positive-single-float))))
-                  (declare (inline solid first-crossing))
-                  (dotimes (corner 8)
-                    (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
-                           (c (if (logbitp 2 corner) hz (- hz)))
-                           (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
-                           (rz (+ (* r31 a) (* r32 b) (* r33 c)))
-                           (px (+ (aref x row) rx)) (py (+ (aref y row) ry)) (pz (+ (aref z row) rz))
-                           (cx (cell-floor px)) (cy (cell-floor py)) (cz (cell-floor pz))
-                           (ix cx) (iy cy) (iz cz)
-                           (sx (if (> ux 0.0) 1 -1)) (sy (if (> uy 0.0) 1 -1)) (sz (if (> uz 0.0) 1 -1))
-                           (tx (first-crossing px ix ux)) (ty (first-crossing py iy uy)) (tz (first-crossing pz iz uz))
-                           (ex (if (= ux 0.0) most-positive-single-float (/ 1.0 (abs ux))))
-                           (ey (if (= uy 0.0) most-positive-single-float (/ 1.0 (abs uy))))
-                           (ez (if (= uz 0.0) most-positive-single-float (/ 1.0 (abs uz)))))
-                      (declare (type single-float a b c rx ry rz px py pz tx ty tz ex ey ez)
-                               (type fixnum cx cy cz ix iy iz sx sy sz))
-                      (unless (solid ix iy iz)
-                        (loop for steps of-type fixnum from 1 to 64 do
-                          (let ((axis (cond ((and (<= tx ty) (<= tx tz)) 0) ((<= ty tz) 1) (t 2))))
-                            (declare (type (integer 0 2) axis))
-                            (when (> (case axis (0 tx) (1 ty) (t tz)) reach) (return))
-                            (case axis
-                              (0 (incf ix sx) (setf tx (+ tx ex)))
-                              (1 (incf iy sy) (setf ty (+ ty ey)))
-                              (t (incf iz sz) (setf tz (+ tz ez))))
-                            (when (solid ix iy iz)
-                              (let* ((step (case axis (0 sx) (1 sy) (t sz)))
-                                     (face (+ (* 2 axis) (if (> step 0) 1 0)))
-                                     ;; the normal out of the entered cell, back along the axis
-                                     (nx (if (= axis 0) (float (- step) 1.0) 0.0))
-                                     (ny (if (= axis 1) (float (- step) 1.0) 0.0))
-                                     (nz (if (= axis 2) (float (- step) 1.0) 0.0))
-                                     ;; the face's plane, and the corner's distance to it
-                                     (gap (case axis
-                                            (0 (if (> step 0) (- (float ix 1.0) px) (- px (float (1+ ix) 1.0))))
-                                            (1 (if (> step 0) (- (float iy 1.0) py) (- py (float (1+ iy) 1.0))))
-                                            (t (if (> step 0) (- (float iz 1.0) pz) (- pz (float (1+ iz) 1.0)))))))
-                                (declare (type fixnum step face) (type single-float nx ny nz gap))
-                                ;; beyond the neighbours' faces, with the centre on the face's air side
-                                (when (and (not (solid (+ cx (if (= axis 0) step 0)) (+ cy (if (= axis 1) step 0))
-                                                       (+ cz (if (= axis 2) step 0))))
-                                           (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
-                                  (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz gap)))
-                              (return)))))))))))))))
+                (dotimes (corner 8)
+                  (let* ((a (if (logbitp 0 corner) hx (- hx))) (b (if (logbitp 1 corner) hy (- hy)))
+                         (c (if (logbitp 2 corner) hz (- hz)))
+                         (rx (+ (* r11 a) (* r12 b) (* r13 c))) (ry (+ (* r21 a) (* r22 b) (* r23 c)))
+                         (rz (+ (* r31 a) (* r32 b) (* r33 c)))
+                         (px (+ (aref x row) rx)) (py (+ (aref y row) ry)) (pz (+ (aref z row) rz)))
+                    (declare (type single-float a b c rx ry rz px py pz))
+                    (multiple-value-bind (ix iy iz axis step) (corner-first-solid probe px py pz ux uy uz reach)
+                      (declare (type fixnum ix iy iz axis step))
+                      (when (>= axis 0)
+                        (add-corner-face-point set probe row h slot corner px py pz rx ry rz
+                                               ix iy iz axis step))))))))))))
   set)
 ;; Fast boxes sweep their corners through the cells:1 ends here
 
@@ -8040,6 +8291,43 @@ body, braced or not, or a box). Terrain notes nothing. #ST0R3S"
                   (lean (and (= (aref kind c) +contact-pair+)
                              (= (aref (handle-table-set ids) (handle-index other)) +set-sleeping+))))
              (setf (aref held row) (logior (aref held row) (if lean 1 2)))))))
+
+(defmacro store-contact-row ()
+  "Store row K, of contact C: its impulses into the contact, its mark when the piece MARKs, the
+step's deepest gap and fastest approach, its touch and hit events: expanded in the store phase's
+piece, with its variables. #ST0R3S"
+  `(let* ((base (constraint-base k))
+          (c (aref contact k))
+          (g (geometry-start c))
+          (pushed (if-feature (:or :contact-events :hit-events) (> (@ max-normal-impulse) 0.0) nil))
+          (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
+          (x (@ nx)) (y (@ ny)) (z (@ nz))
+          ;; the gap the last relax pass kept, less the slop the prepared gap carries
+          (gap (- (@ gap) slop))
+          ;; without body contacts the other side is the dummy row, whose velocity is
+          ;; the zero the prepare phase wrote, which no one-sided kernel changes
+          (vn (+ (* (- (if-feature :body-contacts (aref v b) 0.0) (aref v a)) x)
+                 (* (- (if-feature :body-contacts (aref v (+ b 1)) 0.0) (aref v (+ a 1))) y)
+                 (* (- (if-feature :body-contacts (aref v (+ b 2)) 0.0) (aref v (+ a 2))) z)
+                 (if-feature :boxes (@ kvn) 0.0))))
+     (declare (type fixnum c) (type index base g) (ignorable pushed b))
+     (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
+           (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2))
+     ;; without rolling resistance the contact's rolling impulses stay the zeros it was
+     ;; made with
+     (if-feature :rolling-resistance
+       (setf (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
+             (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z)))
+     ;; and the spin impulse, for the next step's first substep to start from it: only
+     ;; a row with no radius on side b has one, and no other row's side block is read
+     (if-feature :friction
+       (when (= (@ rb) 0.0) (setf (contact-at geometry g spin-impulse) (@ spin-impulse))))
+     (when mark (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
+     (when (< gap 0.0)
+       (setf max-penetration (max max-penetration (- gap))
+             max-approach (max max-approach (- vn))))
+     (store-touch-event)
+     (store-hit-event)))
 
 (defmacro store-touch-event ()
   "A :begin or :end event for row K's contact C when whether it pushed this step (PUSHED) differs
@@ -8107,42 +8395,10 @@ so its undo log closes. #ST0R3S"
                    (declare (type fixnum worker count))
                    (let ((max-penetration 0.0) (max-approach 0.0) (mark (and marking (= count 1))))
                      (declare (type single-float max-penetration max-approach))
-                   (multiple-value-bind (from to) (piece-bounds 0 (constraint-columns-length cbuf) worker count)
-                     (declare (type index from to))
-          (loop for k of-type index from from below to
-                unless (< (aref contact k) 0) do
-            (let* ((base (constraint-base k))
-                   (c (aref contact k))
-                   (g (geometry-start c))
-                   (pushed (if-feature (:or :contact-events :hit-events) (> (@ max-normal-impulse) 0.0) nil))
-                   (a (solver-row (aref body-a k))) (b (solver-row (aref body-b k)))
-                   (x (@ nx)) (y (@ ny)) (z (@ nz))
-                   ;; the gap the last relax pass kept, less the slop the prepared gap carries
-                   (gap (- (@ gap) slop))
-                   ;; without body contacts the other side is the dummy row, whose velocity is
-                   ;; the zero the prepare phase wrote, which no one-sided kernel changes
-                   (vn (+ (* (- (if-feature :body-contacts (aref v b) 0.0) (aref v a)) x)
-                          (* (- (if-feature :body-contacts (aref v (+ b 1)) 0.0) (aref v (+ a 1))) y)
-                          (* (- (if-feature :body-contacts (aref v (+ b 2)) 0.0) (aref v (+ a 2))) z)
-                          (if-feature :boxes (@ kvn) 0.0))))
-              (declare (type fixnum c) (type index base g) (ignorable pushed b))
-              (setf (contact-at geometry g normal-impulse) (@ normal-impulse)
-                    (contact-at geometry g tangent-impulse-1) (@ tangent-impulse-1) (contact-at geometry g tangent-impulse-2) (@ tangent-impulse-2))
-              ;; without rolling resistance the contact's rolling impulses stay the zeros it was
-              ;; made with
-              (if-feature :rolling-resistance
-                (setf (contact-at geometry g rolling-impulse-x) (@ rolling-impulse-x) (contact-at geometry g rolling-impulse-y) (@ rolling-impulse-y)
-                      (contact-at geometry g rolling-impulse-z) (@ rolling-impulse-z)))
-              ;; and the spin impulse, for the next step's first substep to start from it: only
-              ;; a row with no radius on side b has one, and no other row's side block is read
-              (if-feature :friction
-                (when (= (@ rb) 0.0) (setf (contact-at geometry g spin-impulse) (@ spin-impulse))))
-              (when mark (mark-held held kind handle-a handle-b ids c (aref body-a k) (aref body-b k) n))
-              (when (< gap 0.0)
-                (setf max-penetration (max max-penetration (- gap))
-                      max-approach (max max-approach (- vn))))
-              (store-touch-event)
-              (store-hit-event))))
+                     (multiple-value-bind (from to) (piece-bounds 0 (constraint-columns-length cbuf) worker count)
+                       (declare (type index from to))
+                       (loop for k of-type index from from below to
+                             unless (< (aref contact k) 0) do (store-contact-row)))
                      (setf (aref maxima (* 2 worker)) max-penetration
                            (aref maxima (1+ (* 2 worker))) max-approach))))
             (declare (dynamic-extent #'store-piece))
@@ -8279,6 +8535,8 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
     (multiple-value-bind (check near held) (path-check-notes world)
       (hold-out-of-cells world held (fold-positions awake d check near held)))
     (fold-solver-state awake v dt (joints-turned-p world))
+    ;; a box whose points were solved turns by its substeps' turns ([[#BXSOLV]])
+    (when (physics-world-box-bodies world) (turn-box-orientations world))
     ;; then ageing and sleep, in two passes: the first decides, in a loop that calls nothing,
     ;; which rows leave the awake set and why, and lists them from the last down; the second
     ;; moves them in that order, so a relocation only ever moves a row already dealt with

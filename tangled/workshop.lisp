@@ -1053,6 +1053,80 @@ a case, whether it held, and a format control and its arguments. #J0XTRM"
              force outcomes valid same alive)))
 ;; Joints at the extremes:1 ends here
 
+;; [[file:../physics.org::#PYR4MD][The large pyramid, beside Box3D:1]]
+(defun large-pyramid-world (base &key (kernels :auto) (sleep nil))
+  "Box3D's large pyramid of BASE unit cubes at its base, solved by KERNELS: in row i from 0, the
+cubes of columns j from i to BASE-1 at ((i + 1)/2 + j - i - BASE/2, i + 1/2, 0), density 100, on a
+floor of cells whose top is y = 0, sleeping when SLEEP. Return the world and the top cube's
+handle. #PYR4MD"
+  (let* ((half (ceiling base 2))
+         (terrain (make-voxel-terrain)))
+    (fill-terrain terrain (- -4 half) -2 -4 (+ 4 half) (+ base 4) 4 nil)
+    (fill-terrain terrain (- -4 half) -2 -4 (+ 4 half) 0 4 t)
+    (let ((w (make-physics-world :terrain terrain :sleep sleep :kernels kernels)) (top nil))
+      (dotimes (i base)
+        (loop for j from i below base
+              do (setf top (add-physics-box w (+ (* 0.5 (+ i 1)) (- j i) (* -0.5 base)) (+ i 0.5) 0.0 0.5 0.5 0.5
+                                            :density 100))))
+      (values w top))))
+
+(defun run-pyramid-benchmark (&key (stream *standard-output*) (base 100) (steps 200) (profile-steps 50)
+                                   (rounds (let ((r (sb-ext:posix-getenv "ROUNDS")))
+                                             (if (and r (plusp (length r))) (parse-integer r) 5))))
+  "Print, as an Org table, the CPU time per step of Box3D's large pyramid of BASE cubes at its base
+over STEPS steps in this engine's kernel families and in Box3D (report/peers/box3d-large-pyramid),
+ROUNDS rounds of alternating processes, the median of the rounds and each one's ratio to Box3D's,
+with the top cube's centre at the end; then the shares of the scalar family's step, by function,
+over PROFILE-STEPS steps. #PYR4MD"
+  (let* ((root (namestring (asdf:system-source-directory "luv-physics")))
+         (box3d (namestring (merge-pathnames "report/peers/box3d-large-pyramid" root)))
+         (script (namestring (merge-pathnames "tools/pyramid-one.lisp" root)))
+         (families (available-kernel-families))
+         (before (load-average))
+         (samples '()))
+    (flet ((number (word) (let ((*read-default-float-format* 'double-float) (*read-eval* nil))
+                            (coerce (read-from-string word) 'double-float))))
+      (dotimes (round rounds)
+        (dolist (words (joint-grid-lines (list "sbcl" "--dynamic-space-size" "4Gb" "--script" script root
+                                               (format nil "~{~(~A~)~^,~}" families) (princ-to-string base)
+                                               (princ-to-string steps))
+                                         "pyramid"))
+          (push (list (format nil "luv-physics ~A" (first words)) (number (second words)) (number (third words))
+                      (number (fourth words)))
+                samples))
+        (dolist (words (joint-grid-lines (list box3d (princ-to-string base) (princ-to-string steps)) "box3d-large-pyramid:"))
+          ;; base B cubes C steps S ms-per-step MS top-y Y top-x X
+          (push (list "Box3D, one worker" (number (eighth words)) (number (tenth words)) (number (nth 11 words)))
+                samples))))
+    (setf samples (reverse samples))
+    (let* ((engines (remove-duplicates (mapcar #'first samples) :test #'string= :from-end t))
+           (medians (mapcar (lambda (e) (median (mapcar #'second (remove e samples :key #'first :test-not #'string=))))
+                            engines))
+           (reference (nth (position "Box3D, one worker" engines :test #'string=) medians)))
+      (format stream "~&#+caption: Box3D's large pyramid, ~D cubes at the base (~D cubes), ~D steps of 1/60 s in 4 ~
+                      substeps, no sleep; CPU ms per step, median of ~D rounds of alternating processes; ~
+                      Box3D built from its source with -O2 -DNDEBUG, one worker; ~A; load ~A~%"
+              base (/ (* base (1+ base)) 2) steps rounds (cpu-model-name) before)
+      (format stream "~&| engine | median ms | lowest | highest | / Box3D | top y m | top x m |~%")
+      (format stream "~&|--------+-----------+--------+---------+---------+---------+---------|~%")
+      (loop for engine in engines for m in medians
+            for rows = (remove engine samples :key #'first :test-not #'string=)
+            do (format stream "~&| ~A | ~,2F | ~,2F | ~,2F | ~,2F | ~,3F | ~,3F |~%" engine m
+                       (reduce #'min (mapcar #'second rows)) (reduce #'max (mapcar #'second rows))
+                       (/ m reference) (third (first rows)) (fourth (first rows))))
+      (format stream "~&(after the run: load ~A)~%" (load-average))
+      ;; where the step goes: one more process, the scalar family under the statistical profiler
+      (let ((shares (joint-grid-lines (list "sbcl" "--dynamic-space-size" "4Gb" "--script" script root "profile"
+                                            (princ-to-string base) (princ-to-string profile-steps))
+                                      "profile")))
+        (format stream "~&~%#+caption: Where the scalar family's step of that pyramid goes: each function holding at ~
+                        least 1 % of sb-sprof's samples by itself (1 ms apart) over ~D steps; load ~A~%"
+                profile-steps (load-average))
+        (format stream "~&| function | share % |~%|----------+---------|~%")
+        (dolist (words shares)
+          (format stream "~&| ~(~{~A~^ ~}~) | ~A |~%" (butlast words) (car (last words))))))))
+;; The large pyramid, beside Box3D:1 ends here
+
 ;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:2]]
 (defun deepest-into-cells (terrain x y z r)
   "How deep the surface of a sphere of radius R centred at X Y Z reaches into the solid cells of

@@ -6966,6 +6966,134 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (check (eq t (validate-physics-world w)))))
 ;; BXCELL-ten-cubes-stand ends here
 
+;; [[file:../physics.org::#BXCELL][BXCELL-ten-cubes-stand-awake]]
+(define-claim "BXCELL" ten-cubes-stand-awake
+    "A stack of ten unit cubes in a world that never sleeps stands for 60 s."
+  (let* ((w (make-floor-world :sleep nil))
+         (top (car (last (loop for k below 10 collect (add-physics-box w 2.5 (+ 0.5 k) 2.5 0.5 0.5 0.5)))))
+         (worst-y 0.0) (worst-off 0.0) (worst-turn 0.0))
+    (dotimes (second 60)
+      (dotimes (i 60) (step-physics-world w))
+      (multiple-value-bind (x y z) (physics-body-position w top)
+        (setf worst-y (max worst-y (abs (- y (- 9.5 (* 10 *physics-linear-slop*)))))
+              worst-off (max worst-off (sqrt (+ (expt (- x 2.5) 2) (expt (- z 2.5) 2))))
+              worst-turn (max worst-turn (reduce #'max (mapcar #'abs (rest (multiple-value-list (physics-body-orientation w top)))))))))
+    (check (< worst-y 0.01) "the top cube strayed ~,4F m from 9.45 m high" worst-y)
+    (check (< worst-off 0.1) "the top cube strayed ~,4F m from the axis" worst-off)
+    (check (< worst-turn 0.05) "the top cube turned to a vector component of ~,4F" worst-turn)
+    (check (eq t (validate-physics-world w)))))
+;; BXCELL-ten-cubes-stand-awake ends here
+
+;; [[file:../physics.org::#BXCELL][BXCELL-cells-find-every-pair]]
+(define-claim "BXCELL" cells-find-every-pair
+    "The box pairs found through the grid are those of a walk over every pair, asleep or awake."
+  (let* ((w (make-physics-world :terrain (make-floor-terrain) :gravity '(0 0 0)))
+         (state (sb-ext:seed-random-state 44))
+         (k 0))
+    (flet ((heap (count)
+             (loop while (plusp count)
+                   do (let ((i (mod k 6)) (j (mod (floor k 6) 6)) (l (floor k 36)))
+                        (incf k)
+                        (when (or (< count 100) (evenp (+ i j l)))
+                          (decf count)
+                          (add-physics-box w (+ 2.0 (* 0.9 i) (- (random 0.2 state) 0.1)) (+ 4.0 (* 0.9 l) (random 0.1 state))
+                                           (+ 2.0 (* 0.9 j) (- (random 0.2 state) 0.1))
+                                           (+ 0.2 (random 0.3 state)) (+ 0.2 (random 0.3 state)) (+ 0.2 (random 0.3 state))
+                                           :orientation (list 1 (random 0.2 state) (random 0.2 state) (random 0.2 state))))))))
+      (heap 60)
+      (dotimes (i 60) (step-physics-world w))
+      (heap 100)
+      (step-physics-world w))
+    (let* ((set (luv-physics::physics-world-box-bodies w))
+           (awake (luv-physics::physics-world-awake w)) (sleeping (luv-physics::physics-world-sleeping w))
+           (n (luv-physics::body-columns-length awake))
+           (mine (luv-physics::%make-box-set))
+           (margin (luv-physics::f32 (luv-physics::physics-world-margin w))))
+      (check (plusp (luv-physics::body-columns-length sleeping)) "no box sleeps")
+      (luv-physics::ensure-sleeping-grid w)
+      (luv-physics::prepare-box-points w (luv-physics::physics-world-current-h w))
+      (luv-physics::box-set-room mine (length (luv-physics::box-set-hx set)))
+      (replace (luv-physics::box-set-hx mine) (luv-physics::box-set-hx set))
+      (replace (luv-physics::box-set-hy mine) (luv-physics::box-set-hy set))
+      (replace (luv-physics::box-set-hz mine) (luv-physics::box-set-hz set))
+      (setf (luv-physics::box-set-dummy mine) n)
+      (flet ((box (buffer j)
+               (let ((slot (luv-physics::handle-index (aref (luv-physics::body-columns-handle buffer) j))))
+                 (list (aref (luv-physics::body-columns-x buffer) j) (aref (luv-physics::body-columns-y buffer) j)
+                       (aref (luv-physics::body-columns-z buffer) j) (aref (luv-physics::body-columns-qw buffer) j)
+                       (aref (luv-physics::body-columns-qx buffer) j) (aref (luv-physics::body-columns-qy buffer) j)
+                       (aref (luv-physics::body-columns-qz buffer) j) (aref (luv-physics::box-set-hx set) slot)
+                       (aref (luv-physics::box-set-hy set) slot) (aref (luv-physics::box-set-hz set) slot))))
+             (slot (buffer j) (luv-physics::handle-index (aref (luv-physics::body-columns-handle buffer) j)))
+             (box-box (points slop)
+               ;; the keys and gaps, the world's with the slop its prepare adds
+               (stable-sort (loop for p below (luv-physics::box-point-columns-length points)
+                                  for key = (aref (luv-physics::box-point-columns-key points) p)
+                                  when (logbitp 32 key)
+                                    collect (cons key (+ (aref (luv-physics::box-point-columns-separation points) p) slop)))
+                            #'< :key #'car)))
+        (dotimes (i n)
+          ;; the reach of the world's prepare: the margin, or the travel of a step without gravity
+          (let ((reach (max margin (luv-physics::step-travel (aref (luv-physics::body-columns-vx awake) i)
+                                                             (aref (luv-physics::body-columns-vy awake) i)
+                                                             (aref (luv-physics::body-columns-vz awake) i)
+                                                             (luv-physics::physics-world-current-dt w) 0.0)))
+                (owner (aref (luv-physics::body-columns-handle awake) i)))
+            (loop for (buffer from to row-of)
+                    in (list (list awake (1+ i) n #'identity) (list sleeping 0 (luv-physics::body-columns-length sleeping) (constantly n)))
+                  do (loop for j from from below to
+                           do (apply #'luv-physics::box-pair-points mine owner
+                                     (logior (ash (slot awake i) 34) (ash 1 32) (ash (slot buffer j) 8))
+                                     i (funcall row-of j) reach (append (box awake i) (box buffer j)))))))
+        (let ((cells (box-box (luv-physics::box-set-points set) 0.0))
+              (every-pair (box-box (luv-physics::box-set-points mine) (luv-physics::f32 (luv-physics::physics-world-slop w)))))
+          (check (> (length cells) 200) "only ~D points between boxes" (length cells))
+          (check (some (lambda (p) (>= (aref (luv-physics::box-point-columns-row-b (luv-physics::box-set-points set)) p) n))
+                       (loop for p below (luv-physics::box-point-columns-length (luv-physics::box-set-points set))
+                             when (logbitp 32 (aref (luv-physics::box-point-columns-key (luv-physics::box-set-points set)) p))
+                               collect p))
+                 "no point between boxes is against a sleeper")
+          (check (equal cells every-pair) "~D points through the cells, ~D over every pair"
+                 (length cells) (length every-pair)))))))
+;; BXCELL-cells-find-every-pair ends here
+
+;; [[file:../physics.org::#BXCELL][BXCELL-turned-and-crossed-cubes]]
+(define-claim "BXCELL" turned-and-crossed-cubes
+    "A cube turned 45 degrees on a cube rests on four points; crossed edges meet along their common perpendicular."
+  (let* ((w (make-floor-world :sleep nil))
+         (c (cos (/ pi 8))) (s (sin (/ pi 8)))
+         (low (add-physics-box w 2.5 0.495 2.5 0.5 0.5 0.5))
+         (high (add-physics-box w 2.5 1.495 2.5 0.5 0.5 0.5 :orientation (list c 0 s 0))))
+    (declare (ignore low))
+    (dotimes (i 119) (step-physics-world w))
+    (let ((points (luv-physics::box-set-points (luv-physics::physics-world-box-bodies w))))
+      (check (= 4 (loop for k below (luv-physics::box-point-columns-length points)
+                        count (logbitp 32 (aref (luv-physics::box-point-columns-key points) k))))
+             "the turned cube rests on ~D points" (loop for k below (luv-physics::box-point-columns-length points)
+                                                       count (logbitp 32 (aref (luv-physics::box-point-columns-key points) k)))))
+    (step-physics-world w)
+    (multiple-value-bind (x y z) (physics-body-position w high)
+      (check (< (abs (- y (- 1.5 (* 2 *physics-linear-slop*)))) 1e-3) "the turned cube rests at y = ~,5F" y)
+      (check (< (max (abs (- x 2.5)) (abs (- z 2.5))) 1e-3) "the turned cube slid to ~,4F ~,4F" x z))
+    (multiple-value-bind (qw qx qy qz) (physics-body-orientation w high)
+      (let ((turn (* 2 (atan (abs qy) (abs qw)) (/ 180 pi))))
+        (check (< (abs (- turn 45)) 0.1) "turned by ~,3F degrees" turn)
+        (check (< (max (abs qx) (abs qz)) 1e-3) "tilted: ~,5F ~,5F" qx qz)))
+    (check (eq t (validate-physics-world w))))
+  (let* ((w (make-floor-world :sleep nil :gravity '(0 0 0)))
+         (c (cos (/ pi 8))) (s (sin (/ pi 8))) (reach (* 0.5 (sqrt 2)))
+         (a (add-physics-box w 2.5 4.0 2.5 0.5 0.5 0.5 :orientation (list c 0 0 s)))
+         (b (add-physics-box w 2.5 (+ 4.0 (* 2 reach) 0.001) 2.5 0.5 0.5 0.5 :orientation (list c s 0 0) :vy -1)))
+    (dotimes (i 15) (step-physics-world w))
+    (loop for box in (list a b) for name in '("the struck cube" "the striking cube")
+          do (multiple-value-bind (vx vy vz) (physics-body-velocity w box)
+               (check (< (abs (+ vy 0.5)) 1e-3) "~A moves down at ~,5F m/s" name (- vy))
+               (check (< (max (abs vx) (abs vz)) 1e-3) "~A moves sideways at ~,5F ~,5F m/s" name vx vz))
+             (let ((spin (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) (multiple-value-list (physics-body-angular-velocity w box)))))))
+               (check (< spin 1e-3) "~A spins at ~,5F rad/s" name spin)))
+    (check (eq t (validate-physics-world w)))))
+;; BXCELL-turned-and-crossed-cubes ends here
+
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-families-agree-on-boxes]]
 (define-claim "BXSOLV" families-agree-on-boxes
     "A tumbling box and a sliding box end in the same state hash in every kernel family."
@@ -7113,6 +7241,52 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
             (check (every (lambda (h) (= h (first hashes))) hashes)
                    "dt ~,3F thick ~A from ~A: the families end apart" dt thick start)))))))
 ;; BXSWEP-fast-boxes-stay-out-of-cells ends here
+
+;; [[file:../physics.org::#PYR4MD][PYR4MD-the-pyramid-is-box3ds]]
+(define-claim "PYR4MD" the-pyramid-is-box3ds
+    "A pyramid of base 4: ten unit cubes of 100 kg in rows of 4, 3, 2, 1, touching, centred on x = 0."
+  (let* ((w (luv-physics::large-pyramid-world 4 :kernels :scalar))
+         (awake (luv-physics::physics-world-awake w))
+         (cubes (loop for i below (luv-physics::body-columns-length awake)
+                      collect (aref (luv-physics::body-columns-handle awake) i))))
+    (check (= 10 (length cubes)))
+    (dolist (c cubes)
+      (check (equal '(0.5 0.5 0.5) (multiple-value-list (physics-box-half-extents w c))))
+      (let ((inverse-mass (multiple-value-bind (set row) (luv-physics::resolve-handle w c)
+                            (aref (luv-physics::body-columns-inverse-mass (luv-physics::set-buffer w set)) row))))
+        (check (< (abs (- 0.01 inverse-mass)) 1e-9) "a cube of ~F kg" (/ inverse-mass))))
+    (loop for row from 0 for count in '(4 3 2 1)
+          for xs = (sort (loop for c in cubes
+                               when (= (nth-value 1 (physics-body-position w c)) (+ row 0.5))
+                                 collect (physics-body-position w c))
+                         #'<)
+          do (check (= count (length xs)) "row ~D holds ~D cubes" row (length xs))
+             (check (every (lambda (a b) (= 1.0 (- b a))) xs (rest xs)) "row ~D's cubes at ~S" row xs)
+             (check (= 0.0 (+ (first xs) (car (last xs)))) "row ~D not centred: ~S" row xs))
+    (check (equal '(-1.5 -0.5 0.5 1.5)
+                  (sort (loop for c in cubes when (= 0.5 (nth-value 1 (physics-body-position w c)))
+                              collect (physics-body-position w c))
+                        #'<)))))
+;; PYR4MD-the-pyramid-is-box3ds ends here
+
+;; [[file:../physics.org::#PYR4MD][PYR4MD-twenty-rows-stand]]
+(define-claim "PYR4MD" twenty-rows-stand
+    "A pyramid of 20 rows of unit cubes stands for 1000 steps without sleep."
+  (let* ((w (luv-physics::large-pyramid-world 20 :kernels :auto))
+         (awake (luv-physics::physics-world-awake w))
+         (cubes (loop for i below (luv-physics::body-columns-length awake)
+                      collect (aref (luv-physics::body-columns-handle awake) i)))
+         (starts (mapcar (lambda (c) (multiple-value-list (physics-body-position w c))) cubes))
+         (down 0.0) (across 0.0))
+    (dotimes (i 1000) (step-physics-world w))
+    (loop for c in cubes for (x0 y0 z0) in starts
+          do (multiple-value-bind (x y z) (physics-body-position w c)
+               (let ((rest-y (- y0 (* (+ (floor y0) 1) *physics-linear-slop*))))
+                 (setf down (max down (abs (- y rest-y))) across (max across (abs (- x x0)) (abs (- z z0)))))))
+    (check (< down 0.03) "a cube strayed ~,4F m from its resting height" down)
+    (check (< across 0.1) "a cube strayed ~,4F m across" across)
+    (check (eq t (validate-physics-world w)))))
+;; PYR4MD-twenty-rows-stand ends here
 
 ;; [[file:../physics.org::#ST0R3S][ST0R3S-error-figures]]
 (define-claim "ST0R3S" error-figures
