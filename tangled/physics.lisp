@@ -5903,7 +5903,9 @@ of this step's limits, and the step's colouring of its joints. #J0STOR"
   (scratch nil)
   (color-starts (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
    :type fixnum-column)
-  (solving nil))
+  (solving nil)
+  ;; whether this step's substeps turned the jointed spheres' orientations ([[#J0S0LV]])
+  (turned nil))
 
 (declaim (inline group-root))
 (defun group-root (parent slot)
@@ -6270,8 +6272,7 @@ true when the joint is to be solved. #J0S0LV"
                     (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
                   (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz
                         (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la)
-                        (aref sx j) (- (+ (aref x la) rx)) (aref sy j) (- (+ (aref y la) ry))
-                        (aref sz j) (- (+ (aref z la) rz)))))
+                        (aref sx j) (- (aref x la)) (aref sy j) (- (aref y la)) (aref sz j) (- (aref z la)))))
               (if (< lb 0)
                   ;; a fixed point: no lever, no mass, the point itself
                   (setf (aref rbx j) 0.0 (aref rby j) 0.0 (aref rbz j) 0.0 (aref imb j) 0.0 (aref iib j) 0.0
@@ -6283,15 +6284,17 @@ true when the joint is to be solved. #J0S0LV"
                       (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz
                             (aref imb j) (if b-moves (aref inverse-mass lb) 0.0)
                             (aref iib j) (if b-moves (aref inverse-inertia lb) 0.0)
-                            (aref sx j) (+ (aref sx j) (aref x lb) rx) (aref sy j) (+ (aref sy j) (aref y lb) ry)
-                            (aref sz j) (+ (aref sz j) (aref z lb) rz)))))
+                            (aref sx j) (+ (aref sx j) (aref x lb)) (aref sy j) (+ (aref sy j) (aref y lb))
+                            (aref sz j) (+ (aref sz j) (aref z lb))))))
               t)))))))
 
-(defun joint-effective-mass (rows j)
-  "Write the effective mass of the placed joint J of ROWS: a point joint's matrix K of the
-anchors, inverted (its six entries), or a distance joint's axial mass along its separation. #J0S0LV"
-  (declare (type joint-columns rows) (type index j) #.+kernel-policy+)
-  (with-joint-columns (kind rax ray raz rbx rby rbz sx sy sz ima imb iia iib k11 k12 k13 k22 k23 k33) rows
+(declaim (inline joint-effective-mass))
+(defun joint-effective-mass (rows j cx cy cz)
+  "Write the effective mass of the placed joint J of ROWS for its levers as they are: a point
+joint's matrix K of the anchors, inverted (its six entries), or a distance joint's axial mass
+along the anchors' separation CX CY CZ. #J0S0LV"
+  (declare (type joint-columns rows) (type index j) (type single-float cx cy cz) #.+kernel-policy+)
+  (with-joint-columns (kind rax ray raz rbx rby rbz ima imb iia iib k11 k12 k13 k22 k23 k33) rows
     (let* ((m (+ (aref ima j) (aref imb j))) (ia (aref iia j)) (ib (aref iib j))
            (ax (aref rax j)) (ay (aref ray j)) (az (aref raz j))
            (bx (aref rbx j)) (by (aref rby j)) (bz (aref rbz j)))
@@ -6310,8 +6313,7 @@ anchors, inverted (its six entries), or a distance joint's axial mass along its 
                  (inv (if (> det 0.0) (/ 1.0 det) 0.0)))
             (setf (aref k11 j) (* c11 inv) (aref k12 j) (* c12 inv) (aref k13 j) (* c13 inv)
                   (aref k22 j) (* c22 inv) (aref k23 j) (* c23 inv) (aref k33 j) (* c33 inv)))
-          (let* ((cx (aref sx j)) (cy (aref sy j)) (cz (aref sz j))
-                 (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+          (let* ((len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
                  (s (if (> len 1e-9) (/ 1.0 len) 0.0))
                  (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
                  (ax1 (- (* ay nz) (* az ny))) (ay1 (- (* az nx) (* ax nz))) (az1 (- (* ax ny) (* ay nx)))
@@ -6357,7 +6359,10 @@ NIL. #J0S0LV"
           (dotimes (j (joint-columns-length rows))
             (when (place-joint rows j dummy (handle-table-set ids) (handle-table-local ids) awake sleeping)
               (incf active)
-              (joint-effective-mass rows j)
+              (with-joint-columns (sx sy sz rax ray raz rbx rby rbz) rows
+                (joint-effective-mass rows j (- (+ (aref sx j) (aref rbx j)) (aref rax j))
+                                      (- (+ (aref sy j) (aref rby j)) (aref ray j))
+                                      (- (+ (aref sz j) (aref rbz j)) (aref raz j))))
               (joint-soft-coefficients rows j h stiff-bias stiff-mass stiff-impulse)))))
       (when (plusp active) (color-joints world set))
       (setf (joint-set-solving set) (plusp active)))
@@ -6457,6 +6462,56 @@ the order the rows' own again. #J0S0LV"
               do (setf (aref colors r) c))))
     set))
 
+(defun turn-jointed-orientations (set awake v h)
+  "Turn the orientation of each awake jointed sphere of AWAKE by its spin in V over the substep
+H, q + h/2 (0, w) q normalised, after the positions integrate, and note in SET that this step's
+substeps turned them, so that the finalize phase does not turn them again. #J0S0LV"
+  (declare (type joint-set set) (type body-columns awake) (type f32-column v) (type single-float h)
+           #.+kernel-policy+)
+  (setf (joint-set-turned set) t)
+  (let ((hw (* 0.5 h)))
+    (with-body-columns (qw qx qy qz flags) awake
+      (dotimes (i (body-columns-length awake))
+        (when (= (logand (aref flags i) (logior +flag-jointed+ +flag-box-shape+)) +flag-jointed+)
+          (let* ((o (solver-row i))
+                 (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5)))
+                 (w0 (aref qw i)) (x0 (aref qx i)) (y0 (aref qy i)) (z0 (aref qz i))
+                 (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
+                 (nx (+ x0 (* hw (+ (* ax w0) (- (* ay z0) (* az y0))))))
+                 (ny (+ y0 (* hw (+ (* ay w0) (- (* az x0) (* ax z0))))))
+                 (nz (+ z0 (* hw (+ (* az w0) (- (* ax y0) (* ay x0))))))
+                 (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
+            (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
+  nil)
+
+(defun turn-joint-levers (set awake)
+  "Turn the levers of each joint of SET solved this step to its awake bodies' orientations in
+AWAKE as the substeps have turned them. #J0S0LV"
+  (declare (type joint-set set) (type body-columns awake) #.+kernel-policy+)
+  (let ((rows (joint-set-rows set))
+        (n (aref (joint-set-color-starts set) (1+ +physics-max-colors+))))
+    (declare (type index n))
+    (with-joint-columns (ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz imb) rows
+      (with-body-columns (qw qx qy qz) awake
+        (dotimes (j n)
+          (let ((la (aref row-a j)) (lb (aref row-b j)))
+            (declare (type index la lb))
+            (multiple-value-bind (x y z)
+                (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
+              (setf (aref rax j) x (aref ray j) y (aref raz j) z))
+            ;; a fixed point has no lever, a sleeper keeps its own
+            (when (> (aref imb j) 0.0)
+              (multiple-value-bind (x y z)
+                  (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
+                (setf (aref rbx j) x (aref rby j) y (aref rbz j) z)))))))
+    nil))
+
+(defun joints-turned-p (world)
+  "Whether WORLD's last substeps turned its jointed spheres' orientations, which the finalize
+phase then leaves as they are; the note is taken back as it is read. #J0S0LV"
+  (let ((set (physics-world-joints world)))
+    (and set (joint-set-turned set) (progn (setf (joint-set-turned set) nil) t))))
+
 (defun solving-joints (world)
   "The joint set whose joints WORLD's substeps are solving, or NIL: what the kernel families'
 constraint passes test once a call. #J0S0LV"
@@ -6524,9 +6579,9 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
           (ma (aref ima ,j)) (mb (aref imb ,j)) (ia (aref iia ,j)) (ib (aref iib ,j))
           (ax (aref rax ,j)) (ay (aref ray ,j)) (az (aref raz ,j))
           (bx (aref rbx ,j)) (by (aref rby ,j)) (bz (aref rbz ,j))
-          (cx (+ (aref sx ,j) (- (aref ,d db) (aref ,d da))))
-          (cy (+ (aref sy ,j) (- (aref ,d (+ db 1)) (aref ,d (+ da 1)))))
-          (cz (+ (aref sz ,j) (- (aref ,d (+ db 2)) (aref ,d (+ da 2))))))
+          (cx (+ (aref sx ,j) (- (aref ,d db) (aref ,d da)) (- bx ax)))
+          (cy (+ (aref sy ,j) (- (aref ,d (+ db 1)) (aref ,d (+ da 1))) (- by ay)))
+          (cz (+ (aref sz ,j) (- (aref ,d (+ db 2)) (aref ,d (+ da 2))) (- bz az))))
      (declare (type index la lb oa ob da db) (type single-float ma mb ia ib ax ay az bx by bz cx cy cz)
               (ignorable cx cy cz))
      (flet ((relative-velocity ()
@@ -8447,10 +8502,11 @@ listed. #F1NAL5"
               (setf (aref held listed) i listed (1+ listed))
               (setf (aref x i) (+ (aref x i) dx) (aref y i) (+ (aref y i) dy) (aref z i) (+ (aref z i) dz))))))))
 
-(defun fold-solver-state (awake v dt)
+(defun fold-solver-state (awake v dt &optional turned)
   "Fold the solver's velocities V into AWAKE's rows, and turn each orientation by its angular
-velocity over DT. Two loops that call nothing, each reading and writing at most eight arrays;
-with fold-positions, three. #F1NAL5"
+velocity over DT, but, when TURNED, a jointed sphere's, which the substeps turned ([[#J0S0LV]]).
+Two loops that call nothing, each reading and writing at most eight arrays; with fold-positions,
+three. #F1NAL5"
   (declare (type body-columns awake) (type f32-column v) (type single-float dt) #.+kernel-policy+)
   (let ((n (body-columns-length awake)))
     (with-body-columns (vx vy vz wx wy wz) awake
@@ -8458,18 +8514,24 @@ with fold-positions, three. #F1NAL5"
         (let ((o (solver-row i)))
           (setf (aref vx i) (aref v o) (aref vy i) (aref v (+ o 1)) (aref vz i) (aref v (+ o 2))
                 (aref wx i) (aref v (+ o 3)) (aref wy i) (aref v (+ o 4)) (aref wz i) (aref v (+ o 5))))))
-    ;; q += dt/2 (0,w) q, then normalise
-    (with-body-columns (qw qx qy qz) awake
-      (dotimes (i n)
-        (let* ((o (solver-row i))
-               (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5)))
-               (hw (* 0.5 dt)) (w0 (aref qw i)) (x0 (aref qx i)) (y0 (aref qy i)) (z0 (aref qz i))
-               (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
-               (nx (+ x0 (* hw (+ (* ax w0) (- (* ay z0) (* az y0))))))
-               (ny (+ y0 (* hw (+ (* ay w0) (- (* az x0) (* ax z0))))))
-               (nz (+ z0 (* hw (+ (* az w0) (- (* ax y0) (* ay x0))))))
-               (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
-          (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
+    ;; q += dt/2 (0,w) q, then normalise; when TURNED, a loop of its own that leaves the jointed
+    ;; spheres out, so that a world without joints runs the loop it always ran
+    (with-body-columns (qw qx qy qz flags) awake
+      (macrolet ((turn-rows (skip)
+                   `(dotimes (i n)
+                      (unless ,skip
+                        (let* ((o (solver-row i))
+                               (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5)))
+                               (hw (* 0.5 dt)) (w0 (aref qw i)) (x0 (aref qx i)) (y0 (aref qy i)) (z0 (aref qz i))
+                               (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
+                               (nx (+ x0 (* hw (+ (* ax w0) (- (* ay z0) (* az y0))))))
+                               (ny (+ y0 (* hw (+ (* ay w0) (- (* az x0) (* ax z0))))))
+                               (nz (+ z0 (* hw (+ (* az w0) (- (* ax y0) (* ay x0))))))
+                               (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
+                          (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
+        (if turned
+            (turn-rows (= (logand (aref flags i) (logior +flag-jointed+ +flag-box-shape+)) +flag-jointed+))
+            (turn-rows nil))))))
 
 (defconstant +departure-none+ 0
   "A row's fate in the finalize phase's first pass: it stays awake. #F1NAL5")
@@ -8540,7 +8602,7 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
     ;; paths are checked first ([[#SQU33Z]])
     (multiple-value-bind (check near held) (path-check-notes world)
       (hold-out-of-cells world held (fold-positions awake d check near held)))
-    (fold-solver-state awake v dt)
+    (fold-solver-state awake v dt (joints-turned-p world))
     ;; a box whose points were solved turns by its substeps' turns ([[#BXSOLV]])
     (when (physics-world-box-bodies world) (turn-box-orientations world))
     ;; then ageing and sleep, in two passes: the first decides, in a loop that calls nothing,
@@ -8897,6 +8959,9 @@ bodies to half the push-out speed. #IDVK7G"
           (when (plusp boxed) (yield-boxes))
           (physics-integrate-positions kernels world h)
           (when boxes (turn-box-rows boxes v h))
+          (when joints
+            (turn-jointed-orientations joints (physics-world-awake world) v h)
+            (turn-joint-levers joints (physics-world-awake world)))
           (dotimes (k relaxes)
             (when boxes (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))

@@ -6348,6 +6348,59 @@ that it swings, and a loose ball on the floor under it. Return the world and the
     (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes)))
 ;; J0S0LV-families-agree-with-joints ends here
 
+;; [[file:../physics.org::#J0S0LV][J0S0LV-surface-chain-holds]]
+(defun surface-chain-world (kernels &key (links 10) (degrees 60))
+  "A world of family KERNELS without terrain or sleep with a chain of LINKS balls of 1 kg and
+radius 0.4 joined by point joints at +-0.5 m along the chain in their own frames, the first hung
+by its anchor from the point 0 10 0, laid out straight DEGREES from the vertical. Return the
+world, the balls and the joints. #J0S0LV"
+  (let* ((w (make-physics-world :kernels kernels :sleep nil))
+         (th (* degrees (/ pi 180))) (dx (* 0.5 (sin th))) (dy (* -0.5 (cos th)))
+         (balls (loop for i below links
+                      collect (add-physics-body w (* (+ 1 (* 2 i)) dx) (+ 10 (* (+ 1 (* 2 i)) dy)) 0
+                                                :radius 0.4 :mass 1)))
+         (joints (cons (add-physics-joint w :point (first balls) nil :anchor-a (list (- dx) (- dy) 0)
+                                                                     :anchor-b '(0 10 0))
+                       (loop for (p q) on balls while q
+                             collect (add-physics-joint w :point p q :anchor-a (list dx dy 0)
+                                                                     :anchor-b (list (- dx) (- dy) 0))))))
+    (values w balls joints)))
+
+(define-claim "J0S0LV" surface-chain-holds
+    "Ten balls joined at their surfaces, let go at 60 deg, keep their gaps under 13.5 mm, spins under 87.5 rad/s, energy."
+  (let* ((m 1.0) (g 9.81) (inertia (* 0.4 m 0.4 0.4)) (omega (* 2 pi 60))
+         (gap-bound (/ (* 2 10 m g (+ (/ 2 m) (/ (* 2 0.25) inertia))) (* omega omega)))
+         (budget (* m g (loop for i below 10 sum (+ i 0.5)) (- 1 (cos (/ pi 3)))))
+         (spin-bound (sqrt (/ (* 2 budget) inertia)))
+         (hashes '()))
+    (dolist (family (available-kernel-families))
+      (multiple-value-bind (w balls joints) (surface-chain-world family)
+        (flet ((energy ()
+                 (loop for b in balls
+                       sum (multiple-value-bind (vx vy vz) (physics-body-velocity w b)
+                             (multiple-value-bind (ax ay az) (physics-body-angular-velocity w b)
+                               (+ (* 0.5 m (+ (* vx vx) (* vy vy) (* vz vz)))
+                                  (* 0.5 inertia (+ (* ax ax) (* ay ay) (* az az)))
+                                  (* m g (nth-value 1 (physics-body-position w b))))))))
+               (spin (b) (multiple-value-bind (ax ay az) (physics-body-angular-velocity w b)
+                           (sqrt (+ (* ax ax) (* ay ay) (* az az))))))
+          (let ((start (energy)) (gap 0) (fastest 0) (gain -1d9) (lowest 10))
+            (dotimes (i 300)
+              (step-physics-world w)
+              (setf gap (max gap (loop for j in joints maximize (physics-joint-length w j)))
+                    fastest (max fastest (loop for b in balls maximize (spin b)))
+                    gain (max gain (- (energy) start))
+                    lowest (min lowest (nth-value 1 (physics-body-position w (car (last balls)))))))
+            (check (< gap gap-bound) "~(~A~): a joint opened by ~,4F m, over ~,4F" family gap gap-bound)
+            (check (< fastest spin-bound) "~(~A~): a ball spun at ~,1F rad/s, over ~,1F" family fastest spin-bound)
+            (check (< gain (* 0.01 budget)) "~(~A~): the energy grew by ~,2F J of ~,0F" family gain budget)
+            ;; laid out, the last ball is 4.75 m below the pivot; hanging, 9.5 m
+            (check (< lowest 3) "~(~A~): the chain did not swing down: its end no lower than ~,2F m" family lowest)
+            (check (eq t (validate-physics-world w)))
+            (push (physics-world-state-hash w) hashes)))))
+    (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes)))
+;; J0S0LV-surface-chain-holds ends here
+
 ;; [[file:../physics.org::#J0S0LV][J0S0LV-joints-share-the-colours]]
 (define-claim "J0S0LV" joints-share-the-colours
     "In a swinging chain of touching balls no colour holds a body twice among its contacts and joints."
