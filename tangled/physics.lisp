@@ -6627,6 +6627,73 @@ of a substep. #J0S0LV"
                   (push! (* s cx) (* s cy) (* s cz)))))))))
   nil)
 
+(defmacro solve-joint-bound (gap impulse along push)
+  "Push on a distance joint's bound whose GAP (the length less the lower bound, or the upper
+bound less the length) the joint closes at the speed ALONG, carrying its impulse in the column
+IMPULSE: an impulse that only pushes, speculative while the bound is not reached, soft in the
+solve once it is; then PUSH, a form that pushes the change Q. Expanded in solve-distance-joint.
+#J0S0LV"
+  `(let* ((c ,gap)
+          (bias (cond ((> c 0.0) (* c inv-h)) (use-bias (* limit-bias c)) (t 0.0)))
+          (ms (if (and (<= c 0.0) use-bias) limit-mass 1.0))
+          (is (if (and (<= c 0.0) use-bias) (aref limit-scale j) 0.0))
+          (p (- (- (* ms k (+ ,along bias))) (* is (aref ,impulse j))))
+          (new (max 0.0 (+ (aref ,impulse j) p)))
+          (q (- new (aref ,impulse j))))
+     (setf (aref ,impulse j) new)
+     ,push))
+
+(defmacro solve-point-joint ()
+  "One push of the point joint at row J: its three axes at once, through its prepared inverse
+effective mass K11 .. K33, soft with the bias in the solve, rigid without it in the relax.
+Expanded in solve-joints, within with-joint-row. #J0S0LV"
+  `(multiple-value-bind (vx vy vz) (relative-velocity)
+     (let* ((br (if use-bias (aref bias-rate j) 0.0))
+            (ms (if use-bias (aref mass-scale j) 1.0))
+            (is (if use-bias (aref impulse-scale j) 0.0))
+            (rx (+ vx (* br cx))) (ry (+ vy (* br cy))) (rz (+ vz (* br cz)))
+            (px (- (- (* ms (+ (* (aref k11 j) rx) (* (aref k12 j) ry) (* (aref k13 j) rz))))
+                   (* is (aref impulse-x j))))
+            (py (- (- (* ms (+ (* (aref k12 j) rx) (* (aref k22 j) ry) (* (aref k23 j) rz))))
+                   (* is (aref impulse-y j))))
+            (pz (- (- (* ms (+ (* (aref k13 j) rx) (* (aref k23 j) ry) (* (aref k33 j) rz))))
+                   (* is (aref impulse-z j)))))
+       (setf (aref impulse-x j) (+ (aref impulse-x j) px)
+             (aref impulse-y j) (+ (aref impulse-y j) py)
+             (aref impulse-z j) (+ (aref impulse-z j) pz))
+       (push! px py pz))))
+
+(defmacro solve-distance-joint ()
+  "One push of the distance joint at row J along its axis: its length (a spring in the solve
+alone, a stiff length with the bias in the solve and without it in the relax), then its lower and
+upper bounds (solve-joint-bound). Expanded in solve-joints, within with-joint-row. #J0S0LV"
+  `(let* ((len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+          (s (if (> len 1e-9) (/ 1.0 len) 0.0))
+          (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
+          (k (aref k11 j)) (f (aref flags j)))
+     (declare (type single-float len s nx ny nz k) (type fixnum f))
+     (flet ((speed-along ()
+              (multiple-value-bind (vx vy vz) (relative-velocity)
+                (+ (* vx nx) (* vy ny) (* vz nz)))))
+       (declare (inline speed-along))
+       ;; the length: a spring in the solve alone, a stiff length with the bias in the
+       ;; solve and without it in the relax
+       (unless (or (logtest f +joint-slack+) (and (not use-bias) (logtest f +joint-spring+)))
+         (let* ((soft use-bias)
+                (bias (if soft (* (aref bias-rate j) (- len (aref rest-length j))) 0.0))
+                (ms (if soft (aref mass-scale j) 1.0))
+                (is (if soft (aref impulse-scale j) 0.0))
+                (p (- (- (* ms k (+ (speed-along) bias))) (* is (aref impulse-x j)))))
+           (setf (aref impulse-x j) (+ (aref impulse-x j) p))
+           (push! (* p nx) (* p ny) (* p nz))))
+       ;; the bounds: impulses that only push, speculative while the bound is not reached
+       (when (logtest f +joint-lower+)
+         (solve-joint-bound (- len (aref min-length j)) impulse-y (speed-along)
+                            (push! (* q nx) (* q ny) (* q nz))))
+       (when (logtest f +joint-upper+)
+         (solve-joint-bound (- (aref max-length j) len) impulse-z (- (speed-along))
+                            (push! (- (* q nx)) (- (* q ny)) (- (* q nz))))))))
+
 (defun solve-joints (set v d inv-h use-bias start end)
   "One pass over the prepared joints of SET at rows START..END: with the soft bias when USE-BIAS
 (the solve), without it (the relax), but for a spring's length, which keeps its own
@@ -6644,61 +6711,8 @@ coefficients. #J0S0LV"
         (progn
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
-                (multiple-value-bind (vx vy vz) (relative-velocity)
-                  (let* ((br (if use-bias (aref bias-rate j) 0.0))
-                         (ms (if use-bias (aref mass-scale j) 1.0))
-                         (is (if use-bias (aref impulse-scale j) 0.0))
-                         (rx (+ vx (* br cx))) (ry (+ vy (* br cy))) (rz (+ vz (* br cz)))
-                         (px (- (- (* ms (+ (* (aref k11 j) rx) (* (aref k12 j) ry) (* (aref k13 j) rz))))
-                                (* is (aref impulse-x j))))
-                         (py (- (- (* ms (+ (* (aref k12 j) rx) (* (aref k22 j) ry) (* (aref k23 j) rz))))
-                                (* is (aref impulse-y j))))
-                         (pz (- (- (* ms (+ (* (aref k13 j) rx) (* (aref k23 j) ry) (* (aref k33 j) rz))))
-                                (* is (aref impulse-z j)))))
-                    (setf (aref impulse-x j) (+ (aref impulse-x j) px)
-                          (aref impulse-y j) (+ (aref impulse-y j) py)
-                          (aref impulse-z j) (+ (aref impulse-z j) pz))
-                    (push! px py pz)))
-                (let* ((len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
-                       (s (if (> len 1e-9) (/ 1.0 len) 0.0))
-                       (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
-                       (k (aref k11 j)) (f (aref flags j)))
-                  (declare (type single-float len s nx ny nz k) (type fixnum f))
-                  (flet ((speed-along ()
-                           (multiple-value-bind (vx vy vz) (relative-velocity)
-                             (+ (* vx nx) (* vy ny) (* vz nz)))))
-                    (declare (inline speed-along))
-                    ;; the length: a spring in the solve alone, a stiff length with the bias in the
-                    ;; solve and without it in the relax
-                    (unless (or (logtest f +joint-slack+) (and (not use-bias) (logtest f +joint-spring+)))
-                      (let* ((soft use-bias)
-                             (bias (if soft (* (aref bias-rate j) (- len (aref rest-length j))) 0.0))
-                             (ms (if soft (aref mass-scale j) 1.0))
-                             (is (if soft (aref impulse-scale j) 0.0))
-                             (p (- (- (* ms k (+ (speed-along) bias))) (* is (aref impulse-x j)))))
-                        (setf (aref impulse-x j) (+ (aref impulse-x j) p))
-                        (push! (* p nx) (* p ny) (* p nz))))
-                    ;; the bounds: impulses that only push, speculative while the bound is not reached
-                    (when (logtest f +joint-lower+)
-                      (let* ((c (- len (aref min-length j)))
-                             (bias (cond ((> c 0.0) (* c inv-h)) (use-bias (* limit-bias c)) (t 0.0)))
-                             (ms (if (and (<= c 0.0) use-bias) limit-mass 1.0))
-                             (is (if (and (<= c 0.0) use-bias) (aref limit-scale j) 0.0))
-                             (p (- (- (* ms k (+ (speed-along) bias))) (* is (aref impulse-y j))))
-                             (new (max 0.0 (+ (aref impulse-y j) p)))
-                             (q (- new (aref impulse-y j))))
-                        (setf (aref impulse-y j) new)
-                        (push! (* q nx) (* q ny) (* q nz))))
-                    (when (logtest f +joint-upper+)
-                      (let* ((c (- (aref max-length j) len))
-                             (bias (cond ((> c 0.0) (* c inv-h)) (use-bias (* limit-bias c)) (t 0.0)))
-                             (ms (if (and (<= c 0.0) use-bias) limit-mass 1.0))
-                             (is (if (and (<= c 0.0) use-bias) (aref limit-scale j) 0.0))
-                             (p (- (- (* ms k (+ (- (speed-along)) bias))) (* is (aref impulse-z j))))
-                             (new (max 0.0 (+ (aref impulse-z j) p)))
-                             (q (- new (aref impulse-z j))))
-                        (setf (aref impulse-z j) new)
-                        (push! (- (* q nx)) (- (* q ny)) (- (* q nz)))))))))))))
+                (solve-point-joint)
+                (solve-distance-joint)))))))
   nil)
 
 (defun break-joints (world set)

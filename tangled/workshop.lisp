@@ -5292,7 +5292,7 @@ to sleep where it lies. #QB3NCH"
   (format stream "~&after the run: load ~A~%" (load-average)))
 ;; What a query costs:1 ends here
 
-;; [[file:../physics.org::#LW3YHU][The page as HTML, and an index of the interface:1]]
+;; [[file:../physics.org::#LW3YHU][The page as HTML, and an index of the interface:2]]
 (defun export-kinds (symbol)
   "What SYMBOL names in the image, as a list of words: macro, generic function, function, constant,
 variable, condition, class, structure or type. #LW3YHU"
@@ -5378,7 +5378,7 @@ link to its section. Return the number of entries. #LW3YHU"
                       ""))
                 (org-table-text (or (getf entry :summary) "")))))
     (length entries)))
-;; The page as HTML, and an index of the interface:1 ends here
+;; The page as HTML, and an index of the interface:2 ends here
 
 ;; [[file:../physics.org::#O07FDP][Closing the files:1]]
 (register-tangled-file #.(let ((here (or *compile-file-truename* *load-truename*)))

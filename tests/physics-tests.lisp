@@ -12891,6 +12891,22 @@ within reach of something. #S9WEEP"
                        (same family (list features (if biased :solve :relax)) scalar wide)))))))))
 ;; W1D3KF-lanes-are-scalar-rows ends here
 
+;; [[file:../physics.org::#LW3YHU][LW3YHU-definitions-keep-the-bound]]
+(define-claim "LW3YHU" definitions-keep-the-bound
+    "No top-level form of the engine's tangled files is over 120 lines or deeper than 16 parentheses."
+  (multiple-value-bind (out err code)
+      (program-output "sh" (list "-c" (format nil "cd ~A && sbcl --script tools/prose-count.lisp"
+                                              (namestring (repository-file "")))))
+    (check (eql code 0) "make prose-count's script failed: ~A" err)
+    (let* ((mark "engine definitions over 120 lines or deeper than 16 parentheses: ")
+           (at (search mark out)))
+      (check (not (null at)) "the report names no forms past the bound")
+      (when at
+        (let ((count (parse-integer out :start (+ at (length mark)) :junk-allowed t)))
+          (check (eql count 0) "~A forms past the bound:~%~A" count
+                 (subseq out (+ at (length mark)))))))))
+;; LW3YHU-definitions-keep-the-bound ends here
+
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-summary-is-the-first-sentence]]
 (define-claim "LW3YHU" summary-is-the-first-sentence
     "docstring-summary cuts at the first sentence's point, past abbreviations, initials and numbers."
