@@ -900,6 +900,11 @@ no sleep. Return the world and the handle of the lowest right-hand sphere. #J0GR
                    (add-physics-joint w :point (aref grid (1- k) i) ball :anchor-a '(0.5 0 0) :anchor-b '(-0.5 0 0))))))
     (values w (aref grid (1- n) (1- n)))))
 
+(defun word-double (word)
+  "The number a measuring process printed as WORD, read without evaluation, as a double-float. #J0GR1D"
+  (let ((*read-default-float-format* 'double-float) (*read-eval* nil))
+    (coerce (read-from-string word) 'double-float)))
+
 (defun joint-grid-lines (command prefix)
   "Run COMMAND, a list of strings, and return its output's lines that begin with PREFIX, as
 lists of their words after it. #J0GR1D"
@@ -921,17 +926,15 @@ the height of the lowest corner at the end. #J0GR1D"
          (families (available-kernel-families))
          (before (load-average))
          (samples '()))
-    (flet ((number (word) (let ((*read-default-float-format* 'double-float) (*read-eval* nil))
-                            (coerce (read-from-string word) 'double-float))))
-      (dotimes (round rounds)
-        (dolist (words (joint-grid-lines (list "sbcl" "--dynamic-space-size" "4Gb" "--script" script root
-                                               (format nil "~{~(~A~)~^,~}" families) (princ-to-string n)
-                                               (princ-to-string steps))
-                                         "joint-grid"))
-          (push (list (format nil "luv-physics ~A" (first words)) (number (second words)) (number (third words))) samples))
-        (dolist (words (joint-grid-lines (list box3d (princ-to-string n) (princ-to-string steps)) "box3d-joint-grid:"))
-          ;; n N steps STEPS ms-per-step MS corner-y Y
-          (push (list "Box3D, one worker" (number (sixth words)) (number (eighth words))) samples))))
+    (dotimes (round rounds)
+      (dolist (words (joint-grid-lines (list "sbcl" "--dynamic-space-size" "4Gb" "--script" script root
+                                             (format nil "~{~(~A~)~^,~}" families) (princ-to-string n)
+                                             (princ-to-string steps))
+                                       "joint-grid"))
+        (push (list (format nil "luv-physics ~A" (first words)) (word-double (second words)) (word-double (third words))) samples))
+      (dolist (words (joint-grid-lines (list box3d (princ-to-string n) (princ-to-string steps)) "box3d-joint-grid:"))
+        ;; n N steps STEPS ms-per-step MS corner-y Y
+        (push (list "Box3D, one worker" (word-double (sixth words)) (word-double (eighth words))) samples)))
     (setf samples (reverse samples))
     (let* ((engines (remove-duplicates (mapcar #'first samples) :test #'string= :from-end t))
            (medians (mapcar (lambda (e) (median (mapcar #'second (remove e samples :key #'first :test-not #'string=))))
@@ -1084,20 +1087,18 @@ over PROFILE-STEPS steps. #PYR4MD"
          (families (available-kernel-families))
          (before (load-average))
          (samples '()))
-    (flet ((number (word) (let ((*read-default-float-format* 'double-float) (*read-eval* nil))
-                            (coerce (read-from-string word) 'double-float))))
-      (dotimes (round rounds)
-        (dolist (words (joint-grid-lines (list "sbcl" "--dynamic-space-size" "4Gb" "--script" script root
-                                               (format nil "~{~(~A~)~^,~}" families) (princ-to-string base)
-                                               (princ-to-string steps))
-                                         "pyramid"))
-          (push (list (format nil "luv-physics ~A" (first words)) (number (second words)) (number (third words))
-                      (number (fourth words)))
-                samples))
-        (dolist (words (joint-grid-lines (list box3d (princ-to-string base) (princ-to-string steps)) "box3d-large-pyramid:"))
-          ;; base B cubes C steps S ms-per-step MS top-y Y top-x X
-          (push (list "Box3D, one worker" (number (eighth words)) (number (tenth words)) (number (nth 11 words)))
-                samples))))
+    (dotimes (round rounds)
+      (dolist (words (joint-grid-lines (list "sbcl" "--dynamic-space-size" "4Gb" "--script" script root
+                                             (format nil "~{~(~A~)~^,~}" families) (princ-to-string base)
+                                             (princ-to-string steps))
+                                       "pyramid"))
+        (push (list (format nil "luv-physics ~A" (first words)) (word-double (second words)) (word-double (third words))
+                    (word-double (fourth words)))
+              samples))
+      (dolist (words (joint-grid-lines (list box3d (princ-to-string base) (princ-to-string steps)) "box3d-large-pyramid:"))
+        ;; base B cubes C steps S ms-per-step MS top-y Y top-x X
+        (push (list "Box3D, one worker" (word-double (eighth words)) (word-double (tenth words)) (word-double (nth 11 words)))
+              samples)))
     (setf samples (reverse samples))
     (let* ((engines (remove-duplicates (mapcar #'first samples) :test #'string= :from-end t))
            (medians (mapcar (lambda (e) (median (mapcar #'second (remove e samples :key #'first :test-not #'string=))))
@@ -2501,8 +2502,7 @@ lists (family median-ms hash); BALLS 0 only loads, and so compiles, that engine.
           for words = (remove "" (uiop:split-string line) :test #'string=)
           when (and (= 4 (length words)) (string= (first words) "against"))
             collect (list (intern (string-upcase (second words)) :keyword)
-                          (let ((*read-default-float-format* 'double-float) (*read-eval* nil))
-                            (coerce (read-from-string (third words)) 'double-float))
+                          (word-double (third words))
                           (parse-integer (fourth words))))))
 
 (defun against-summary (samples)
