@@ -8601,8 +8601,8 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
   "Make a world with MAKE (which returns it and a script, or NIL), give it a pool for each worker
 count of COUNTS (none for 1), splitting every pass, and run STEPS steps, step I taken by the
 pool of the (I mod length)th count (calling the script, and EACH with the world and the step,
-before each); return its state hash, its events in order, and whether some colour pass ran
-split. #SPL1T5"
+before each); return its state hash, its events in order, whether some colour pass ran split,
+and whether some walk of the pair phase ran in pieces. #SPL1T5"
   (multiple-value-bind (world script) (funcall make)
     (let ((pools (mapcar (lambda (n)
                            (when (> n 1)
@@ -8631,6 +8631,11 @@ split. #SPL1T5"
              (values (physics-world-state-hash world) (reverse events)
                      (some (lambda (pool)
                              (and pool (plusp (aref (luv-physics::worker-pool-spent pool) luv-physics::+job-solve+))))
+                           pools)
+                     ;; the pair phase's walks in pieces ([[#P41P1C]])
+                     (some (lambda (pool)
+                             (and pool (plusp (+ (aref (luv-physics::worker-pool-spent pool) luv-physics::+job-pairs+)
+                                                 (aref (luv-physics::worker-pool-spent pool) luv-physics::+job-pair-build+)))))
                            pools)))
         (setf (luv-physics::physics-world-pool world) nil)
         (dolist (pool pools) (when pool (luv-physics::close-worker-pool pool)))))))
@@ -8684,7 +8689,8 @@ solved by FAMILY. #SPL1T5"
                         "~(~A~), ~A: the events differ between 1 and 2-4 workers" family label)
                  (check (or (plusp (length (second (first runs)))) (string= label "joints"))
                         "~(~A~), ~A: no events to compare" family label)
-                 (check (third (second runs)) "~(~A~), ~A: no colour pass ran split" family label)))
+                 (check (third (second runs)) "~(~A~), ~A: no colour pass ran split" family label)
+                 (check (fourth (second runs)) "~(~A~), ~A: no pair walk ran in pieces" family label)))
     (dolist (scene '(:pile :fountain :lava :player))
       (let ((runs (loop for counts in '((1) (2 3 4))
                         collect (multiple-value-list
@@ -8763,6 +8769,76 @@ solved by FAMILY. #SPL1T5"
         (check (plusp (aref (luv-physics::worker-pool-whole-ns pool) job)) "the solve never ran whole")))
     (close-physics-world two)))
 ;; SPL1T5-tuned-pool-keeps-the-bits ends here
+
+;; [[file:../physics.org::#P41P1C][P41P1C-pieces-leave-the-walk]]
+(defun pair-walk-view (world)
+  "What the pair phase's walk leaves in WORLD: the pair list's pairs, examined count and
+overlaps, the contact table's cursor, misses and touched count, and the contacts' order. #P41P1C"
+  (let* ((plist (luv-physics::physics-world-pair-list world))
+         (table (luv-physics::physics-world-contact-table world))
+         (contacts (luv-physics::physics-world-contacts world))
+         (rows (luv-physics::contact-columns-length contacts)))
+    (list (subseq (luv-physics::pair-list-pairs plist) 0 (luv-physics::pair-list-count plist))
+          (luv-physics::pair-list-examined plist)
+          (subseq (luv-physics::pair-list-overlaps plist) 0 (luv-physics::awake-rows world))
+          (luv-physics::contact-table-cursor table) (luv-physics::contact-table-misses table)
+          (luv-physics::contact-table-touched table)
+          (subseq (luv-physics::contact-columns-order contacts) 0 rows))))
+
+(define-claim "P41P1C" pieces-leave-the-walk
+    "Pair pieces on 2 and 3 workers leave the pair list, overlaps and the contact table's walk as one worker, step by step."
+  (let ((worlds (loop for workers in '(1 2 3)
+                      collect (let ((w (make-basin-world 300)))
+                                (luv-physics::open-world-workers w workers)
+                                (let ((pool (luv-physics::physics-world-pool w)))
+                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                                w)))
+        (differ '()))
+    (dotimes (i 60)
+      (dolist (w worlds) (step-physics-world w))
+      (let ((views (mapcar #'pair-walk-view worlds)))
+        (unless (every (lambda (v) (equalp v (first views))) (rest views)) (push i differ))))
+    (check (null differ) "the walks differ after steps ~S" (reverse differ))
+    (dolist (w (rest worlds))
+      (let ((spent (luv-physics::worker-pool-spent (luv-physics::physics-world-pool w))))
+        (check (plusp (aref spent luv-physics::+job-pairs+)) "~D workers: the listed pairs never ran in pieces"
+               (physics-world-workers w))
+        (check (plusp (aref spent luv-physics::+job-pair-build+)) "~D workers: the build never ran in pieces"
+               (physics-world-workers w))))
+    (mapc #'close-physics-world worlds)))
+;; P41P1C-pieces-leave-the-walk ends here
+
+;; [[file:../physics.org::#P41P1C][P41P1C-crowded-walk-runs-whole]]
+(define-claim "P41P1C" crowded-walk-runs-whole
+    "A heap's crowded pieces are dropped and its walk runs whole, at one worker's hash; a basin's pieces are always merged."
+  (let ((merged '()))
+    (sb-int:encapsulate 'luv-physics::run-pair-pieces 'claim-crowded
+                        (lambda (f pool world kind) (let ((r (funcall f pool world kind))) (push r merged) r)))
+    (unwind-protect
+         (flet ((heap (workers)
+                  (let ((w (make-physics-world :gravity '(0 0 0))))
+                    (dotimes (i 40) (add-physics-body w 4.0 2.0 4.0 :radius 0.25))
+                    (luv-physics::open-world-workers w workers)
+                    (let ((pool (luv-physics::physics-world-pool w)))
+                      (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                    w)))
+           (let ((one (heap 1)) (two (heap 2)))
+             (step-physics-world one) (step-physics-world two)
+             (check (equal '(nil) merged) "the heap's first step merged its pieces: ~S" merged)
+             (check (= (physics-world-state-hash one) (physics-world-state-hash two)) "the heap's first step parts the hashes")
+             (dotimes (i 9)
+               (step-physics-world one) (step-physics-world two)
+               (check (= (physics-world-state-hash one) (physics-world-state-hash two)) "the heap's step ~D parts the hashes" (+ i 2)))
+             (close-physics-world two))
+           (let ((w (make-basin-world 300)))
+             (luv-physics::open-world-workers w 2)
+             (setf (luv-physics::worker-pool-split-rows (luv-physics::physics-world-pool w)) 0
+                   merged '())
+             (dotimes (i 30) (step-physics-world w))
+             (check (and merged (every #'identity merged)) "the basin's pieces were dropped: ~S" merged)
+             (close-physics-world w)))
+      (sb-int:unencapsulate 'luv-physics::run-pair-pieces 'claim-crowded))))
+;; P41P1C-crowded-walk-runs-whole ends here
 
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-every-scene-resumes-to-the-bit]]
 (defun resumed-scene-hashes (name family steps more &key (count 300))
