@@ -7001,8 +7001,9 @@ many boxes live, the contact points of this step and of the last one, each with 
 and the count of every slot's points, the awake box rows of this step, their turns (three floats
 a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
 step's start (four floats a box), whether this step solves points, the soft coefficients of the
-step, its restitution threshold and gravity times the substep, and whether some point of the
-step has restitution. #BXR0WS"
+step, its restitution threshold and gravity times the substep, whether some point of the step
+has restitution, and the grid of the awake spheres that may meet a box with its rows, centres and
+their largest travel this step, and room for the rows a walk of it finds ([[#BXSPHR]]). #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -7030,7 +7031,14 @@ step has restitution. #BXR0WS"
   (push-max 0.0 :type single-float)
   (threshold 0.0 :type single-float)
   (bouncy nil :type boolean)
-  (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float))
+  (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float)
+  (spheres (make-hash-grid) :type hash-grid)
+  (sphere-rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (sx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (sy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (sz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (sphere-travel 0.0 :type single-float)
+  (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
 
 (defun box-set-room (set slots)
   "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
@@ -7836,8 +7844,10 @@ box set when some point is to be solved, else NIL. #BXSOLV"
           (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
             (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
                   (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
-          ;; the awake boxes by cell, for the walk over their pairs ([[#BXCELL]])
+          ;; the awake boxes by cell, for the walk over their pairs ([[#BXCELL]]), and the
+          ;; awake spheres, for the walk of each box over the spheres near it ([[#BXSPHR]])
           (grid-awake-boxes world set n)
+          (grid-awake-spheres world set n dt gstep)
           (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
             (setf (box-set-threshold set) threshold (box-set-hgx set) hgx (box-set-hgy set) hgy
                   (box-set-hgz set) hgz))
@@ -8246,19 +8256,85 @@ FILTERING, a box of BOX-FLAGS. #BXSPHR"
   (and (not (logtest sphere-flags (logior +flag-box-shape+ +flag-terrain-only+)))
        (rows-meet-p filtering sphere-flags box-flags)))
 
+(defconstant +box-sphere-span+ 8
+  "The most cells each way a box walks in the grid of the awake spheres, or in the sleeping grids,
+to find the spheres it may meet; a reach spanning more visits every row instead. #BXSPHR")
+
+(defun grid-awake-spheres (world set n dt gstep)
+  "Bucket the awake spheres among the first N awake rows of WORLD that meet bodies into SET's grid
+of spheres, whose items are their rows, in cells of the largest diameter and the margin, and keep
+the largest travel among them in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
+  (declare (type box-set set) (type index n) (type single-float dt gstep) #.+kernel-policy+)
+  (let ((awake (physics-world-awake world)) (count 0) (travel 0.0))
+    (declare (type index count) (type single-float travel))
+    (when (< (length (box-set-sphere-rows set)) n)
+      (let ((m (max n (* 2 (length (box-set-sphere-rows set))))))
+        (setf (box-set-sphere-rows set) (make-array m :element-type 'fixnum :initial-element 0)
+              (box-set-sx set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-sy set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-sz set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-found set) (make-array m :element-type 'fixnum :initial-element 0))
+        (hash-grid-reserve (box-set-spheres set) m)))
+    (let ((rows (box-set-sphere-rows set)) (sx (box-set-sx set)) (sy (box-set-sy set)) (sz (box-set-sz set)))
+      (with-body-columns (x y z vx vy vz flags) awake
+        (dotimes (i n)
+          (unless (logtest (aref flags i) (logior +flag-box-shape+ +flag-terrain-only+))
+            (setf (aref rows count) i (aref sx count) (aref x i) (aref sy count) (aref y i) (aref sz count) (aref z i)
+                  travel (max travel (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep)))
+            (incf count))))
+      (build-hash-grid (box-set-spheres set)
+                       (+ (* 2.0 (f32 (physics-world-max-radius world))) (f32 (physics-world-margin world)))
+                       count sx sy sz rows))
+    (setf (box-set-sphere-travel set) travel)
+    set))
+
+(defun near-sphere-rows (set x y z far)
+  "Write into SET's room for found rows, in increasing order, the rows of the awake spheres in
+SET's grid of spheres whose cells lie within FAR of the point X Y Z, and return their count; or
+return -1, writing nothing, when FAR spans more than +box-sphere-span+ cells. #BXSPHR"
+  (declare (type box-set set) (type single-float x y z far) #.+kernel-policy+)
+  (let* ((grid (box-set-spheres set)) (found (box-set-found set)) (count 0)
+         (cells (* far (hash-grid-inv-cell grid))))
+    (declare (type fixnum count) (type single-float cells))
+    (cond
+      ((zerop (hash-grid-count grid)) 0)
+      ((> cells (float +box-sphere-span+ 1.0)) -1)
+      (t
+       (do-grid-neighbours (j grid x y z :span (ceiling cells))
+         (setf (aref found count) j)
+         (incf count))
+       ;; the rows in increasing order, as a walk over every row meets them
+       (loop for i of-type fixnum from 1 below count
+             do (let ((v (aref found i)) (k i))
+                  (declare (type fixnum v k))
+                  (loop while (and (> k 0) (> (aref found (1- k)) v))
+                        do (setf (aref found k) (aref found (1- k)))
+                           (decf k))
+                  (setf (aref found k) v)))
+       count))))
+
 (defun find-box-sphere-points (world set row reach dt gstep)
   "Append to SET's points those between the awake box at ROW of WORLD and every sphere near it,
-awake or, held still, sleeping; REACH is the box's, grown to the travel of an awake sphere
+awake (found in SET's grid of spheres) or, held still, sleeping (found in the sleeping grids),
+each in the order of its rows; REACH is the box's, grown to the travel of an awake sphere
 relative to it in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
   (declare (type box-set set) (type index row) (type single-float reach dt gstep) #.+kernel-policy+)
   (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-         (n (body-columns-length awake)) (filtering (physics-world-filtering world)))
-    (declare (type index n))
+         (ids (physics-world-ids world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
+         (rmax (f32 (physics-world-max-radius world))))
+    (declare (type index n) (type single-float rmax))
     (with-body-columns (x y z vx vy vz qw qx qy qz radius handle flags) awake
       (let* ((owner (aref handle row)) (slot (handle-index owner)) (box-flags (aref flags row))
              (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
-             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot)))
-        (declare (type fixnum owner box-flags) (type single-float cx cy cz r hx hy hz))
+             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot))
+             (travel (step-travel (aref vx row) (aref vy row) (aref vz row) dt 0.0))
+             ;; the farthest centre an awake sphere may meet this box from, with a millimetre
+             ;; for the rounding of the travels
+             (far (+ r rmax (max reach (+ travel (box-set-sphere-travel set))) 1e-3))
+             (sleep-far (+ r rmax reach 1e-3))
+             (sleep-cells (/ sleep-far (the single-float (f32 (grid-cell-size world))))))
+        (declare (type fixnum owner box-flags) (type single-float cx cy cz r hx hy hz travel far sleep-far sleep-cells))
         (flet ((meet (buffer j row-j reach)
                  ;; the sphere at row J of BUFFER, at solver row ROW-J
                  (declare (type body-columns buffer) (type index j row-j) (type single-float reach))
@@ -8271,41 +8347,75 @@ relative to it in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
                                            (aref sx j) (aref sy j) (aref sz j) (aref sr j)
                                            cx cy cz (aref qw row) (aref qx row) (aref qy row) (aref qz row)
                                            hx hy hz)))))))
-          (dotimes (j n)
-            (meet awake j j (max reach (step-travel (- (aref vx j) (aref vx row)) (- (aref vy j) (aref vy row))
-                                                    (- (aref vz j) (aref vz row)) dt gstep))))
-          (dotimes (j (body-columns-length sleeping)) (meet sleeping j n reach))))))
+          (flet ((meet-awake (j)
+                   (declare (type index j))
+                   (meet awake j j (max reach (step-travel (- (aref vx j) (aref vx row)) (- (aref vy j) (aref vy row))
+                                                           (- (aref vz j) (aref vz row)) dt gstep)))))
+            (let ((count (near-sphere-rows set cx cy cz far)) (found (box-set-found set)))
+              (declare (type fixnum count) (type fixnum-column found))
+              (if (minusp count)
+                  (dotimes (j n) (meet-awake j))
+                  (dotimes (k count) (meet-awake (aref found k))))))
+          (let ((m (body-columns-length sleeping)))
+            (cond ((zerop m))
+                  ((> sleep-cells (float +box-sphere-span+ 1.0))
+                   (dotimes (j m) (meet sleeping j n reach)))
+                  (t
+                   (do-sleepers-in-row-order (h world cx cy cz :span (ceiling sleep-cells))
+                       (let ((s (handle-index h)))
+                         (and (= (aref (handle-table-set ids) s) +set-sleeping+)
+                              (= (aref (handle-table-generation ids) s) (handle-generation h))
+                              (not (logtest (aref (body-columns-flags sleeping) (aref (handle-table-local ids) s))
+                                            +flag-box-shape+))))
+                     (meet sleeping (aref (handle-table-local ids) (handle-index h)) n reach)))))))))
+  set)
+
+(defun sleeping-box-sphere-points (world set b margin dt gstep)
+  "Append to SET's points those between the sleeping box at row B of WORLD's sleeping buffer, held
+still, and every awake sphere near it (found in SET's grid of spheres, in the order of its rows),
+within MARGIN or the sphere's travel in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
+  (declare (type box-set set) (type index b) (type single-float margin dt gstep) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
+         (found (box-set-found set)) (rmax (f32 (physics-world-max-radius world))))
+    (declare (type index n) (type fixnum-column found) (type single-float rmax))
+    (with-body-columns ((bx x) (by y) (bz z) (bqw qw) (bqx qx) (bqy qy) (bqz qz) (br radius) (bh handle) (bf flags))
+        sleeping
+      (with-body-columns (x y z vx vy vz radius handle flags) awake
+        (let* ((slot (handle-index (aref bh b)))
+               (count (near-sphere-rows set (aref bx b) (aref by b) (aref bz b)
+                                        (+ (aref br b) rmax (max margin (box-set-sphere-travel set)) 1e-3))))
+          (declare (type fixnum count))
+          (flet ((meet (j)
+                   (declare (type index j))
+                   (when (sphere-meets-box-p filtering (aref flags j) (aref bf b))
+                     (let* ((reach (max margin (step-travel (aref vx j) (aref vy j) (aref vz j) dt gstep)))
+                            (dx (- (aref x j) (aref bx b))) (dy (- (aref y j) (aref by b))) (dz (- (aref z j) (aref bz b)))
+                            (near (+ (aref br b) (aref radius j) reach)))
+                       (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
+                         (box-sphere-point set (aref bh b) (box-sphere-key slot (handle-index (aref handle j))) j n reach
+                                           (aref x j) (aref y j) (aref z j) (aref radius j)
+                                           (aref bx b) (aref by b) (aref bz b) (aref bqw b) (aref bqx b) (aref bqy b)
+                                           (aref bqz b) (aref (box-set-hx set) slot) (aref (box-set-hy set) slot)
+                                           (aref (box-set-hz set) slot)))))))
+            (if (minusp count)
+                (dotimes (j n) (meet j))
+                (dotimes (k count) (meet (aref found k)))))))))
   set)
 
 (defun find-sleeping-box-sphere-points (world set margin dt gstep)
   "Append to SET's points those between each sleeping box of WORLD, held still, and every awake
-sphere near it, within MARGIN or the sphere's travel in a step of DT seconds in which gravity
-adds GSTEP; each such box's slot gets the first and the count of its points. #BXSPHR"
+sphere near it (sleeping-box-sphere-points); each such box's slot gets the first and the count of
+its points. #BXSPHR"
   (declare (type box-set set) (type single-float margin dt gstep) #.+kernel-policy+)
-  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
-         (points (box-set-points set)))
-    (declare (type index n))
-    (with-body-columns ((bx x) (by y) (bz z) (bqw qw) (bqx qx) (bqy qy) (bqz qz) (br radius) (bh handle) (bf flags))
-        sleeping
-      (with-body-columns (x y z vx vy vz radius handle flags) awake
-        (dotimes (b (body-columns-length sleeping))
-          (when (logtest (aref bf b) +flag-box-shape+)
-            (let* ((owner (aref bh b)) (slot (handle-index owner))
-                   (start (box-point-columns-length points)))
-              (dotimes (j n)
-                (when (sphere-meets-box-p filtering (aref flags j) (aref bf b))
-                  (let* ((reach (max margin (step-travel (aref vx j) (aref vy j) (aref vz j) dt gstep)))
-                         (dx (- (aref x j) (aref bx b))) (dy (- (aref y j) (aref by b))) (dz (- (aref z j) (aref bz b)))
-                         (near (+ (aref br b) (aref radius j) reach)))
-                    (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
-                      (box-sphere-point set owner (box-sphere-key slot (handle-index (aref handle j))) j n reach
-                                        (aref x j) (aref y j) (aref z j) (aref radius j)
-                                        (aref bx b) (aref by b) (aref bz b) (aref bqw b) (aref bqx b) (aref bqy b)
-                                        (aref bqz b) (aref (box-set-hx set) slot) (aref (box-set-hy set) slot)
-                                        (aref (box-set-hz set) slot))))))
-              (setf (aref (box-set-first set) slot) start
-                    (aref (box-set-count set) slot) (- (box-point-columns-length points) start))))))))
+  (let ((sleeping (physics-world-sleeping world)) (points (box-set-points set)))
+    (with-body-columns ((bh handle) (bf flags)) sleeping
+      (dotimes (b (body-columns-length sleeping))
+        (when (logtest (aref bf b) +flag-box-shape+)
+          (let ((slot (handle-index (aref bh b))) (start (box-point-columns-length points)))
+            (sleeping-box-sphere-points world set b margin dt gstep)
+            (setf (aref (box-set-first set) slot) start
+                  (aref (box-set-count set) slot) (- (box-point-columns-length points) start)))))))
   set)
 ;; A box against a sphere:1 ends here
 
