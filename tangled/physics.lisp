@@ -7026,8 +7026,9 @@ many boxes live, the contact points of this step and of the last one, each with 
 and the count of every slot's points, the awake box rows of this step, their turns (three floats
 a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
 step's start (four floats a box), whether this step solves points, the soft coefficients of the
-step, its restitution threshold and gravity times the substep, and whether some point of the
-step has restitution. #BXR0WS"
+step, its restitution threshold and gravity times the substep, whether some point of the step
+has restitution, and the grid of the awake spheres that may meet a box with its rows, centres and
+their largest travel this step, and room for the rows a walk of it finds ([[#BXSPHR]]). #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -7055,7 +7056,14 @@ step has restitution. #BXR0WS"
   (push-max 0.0 :type single-float)
   (threshold 0.0 :type single-float)
   (bouncy nil :type boolean)
-  (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float))
+  (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float)
+  (spheres (make-hash-grid) :type hash-grid)
+  (sphere-rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (sx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (sy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (sz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (sphere-travel 0.0 :type single-float)
+  (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
 
 (defun box-set-room (set slots)
   "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
@@ -7222,14 +7230,6 @@ bounds, and the count of live boxes is theirs. #BXR0WS"
               (funcall fail "handle ~D: extent below ~A" h +box-min-half-extent+)))))
       (unless (= boxes (box-set-live set))
         (funcall fail "~D box rows but the box set counts ~D" boxes (box-set-live set))))))
-
-(defun refuse-box-snapshot (world)
-  "Signal invalid-physics-parameter naming :world when WORLD has had a box: a snapshot
-([[#SN4P0T]]) does not hold the box set yet, and a world restored without it would turn its boxes
-into spheres. #BXR0WS"
-  (when (physics-world-box-bodies world)
-    (error 'invalid-physics-parameter :world world :name :world :value world
-                                      :expected "a world that has had no box: a snapshot does not hold box bodies yet")))
 ;; A box is a row and a set of extents by slot:1 ends here
 
 ;; [[file:../physics.org::#BXCELL][A box against the cells:1]]
@@ -7869,8 +7869,10 @@ box set when some point is to be solved, else NIL. #BXSOLV"
           (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
             (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
                   (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
-          ;; the awake boxes by cell, for the walk over their pairs ([[#BXCELL]])
+          ;; the awake boxes by cell, for the walk over their pairs ([[#BXCELL]]), and the
+          ;; awake spheres, for the walk of each box over the spheres near it ([[#BXSPHR]])
           (grid-awake-boxes world set n)
+          (grid-awake-spheres world set n dt gstep)
           (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
             (setf (box-set-threshold set) threshold (box-set-hgx set) hgx (box-set-hgy set) hgy
                   (box-set-hgz set) hgz))
@@ -8279,19 +8281,85 @@ FILTERING, a box of BOX-FLAGS. #BXSPHR"
   (and (not (logtest sphere-flags (logior +flag-box-shape+ +flag-terrain-only+)))
        (rows-meet-p filtering sphere-flags box-flags)))
 
+(defconstant +box-sphere-span+ 8
+  "The most cells each way a box walks in the grid of the awake spheres, or in the sleeping grids,
+to find the spheres it may meet; a reach spanning more visits every row instead. #BXSPHR")
+
+(defun grid-awake-spheres (world set n dt gstep)
+  "Bucket the awake spheres among the first N awake rows of WORLD that meet bodies into SET's grid
+of spheres, whose items are their rows, in cells of the largest diameter and the margin, and keep
+the largest travel among them in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
+  (declare (type box-set set) (type index n) (type single-float dt gstep) #.+kernel-policy+)
+  (let ((awake (physics-world-awake world)) (count 0) (travel 0.0))
+    (declare (type index count) (type single-float travel))
+    (when (< (length (box-set-sphere-rows set)) n)
+      (let ((m (max n (* 2 (length (box-set-sphere-rows set))))))
+        (setf (box-set-sphere-rows set) (make-array m :element-type 'fixnum :initial-element 0)
+              (box-set-sx set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-sy set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-sz set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-found set) (make-array m :element-type 'fixnum :initial-element 0))
+        (hash-grid-reserve (box-set-spheres set) m)))
+    (let ((rows (box-set-sphere-rows set)) (sx (box-set-sx set)) (sy (box-set-sy set)) (sz (box-set-sz set)))
+      (with-body-columns (x y z vx vy vz flags) awake
+        (dotimes (i n)
+          (unless (logtest (aref flags i) (logior +flag-box-shape+ +flag-terrain-only+))
+            (setf (aref rows count) i (aref sx count) (aref x i) (aref sy count) (aref y i) (aref sz count) (aref z i)
+                  travel (max travel (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep)))
+            (incf count))))
+      (build-hash-grid (box-set-spheres set)
+                       (+ (* 2.0 (f32 (physics-world-max-radius world))) (f32 (physics-world-margin world)))
+                       count sx sy sz rows))
+    (setf (box-set-sphere-travel set) travel)
+    set))
+
+(defun near-sphere-rows (set x y z far)
+  "Write into SET's room for found rows, in increasing order, the rows of the awake spheres in
+SET's grid of spheres whose cells lie within FAR of the point X Y Z, and return their count; or
+return -1, writing nothing, when FAR spans more than +box-sphere-span+ cells. #BXSPHR"
+  (declare (type box-set set) (type single-float x y z far) #.+kernel-policy+)
+  (let* ((grid (box-set-spheres set)) (found (box-set-found set)) (count 0)
+         (cells (* far (hash-grid-inv-cell grid))))
+    (declare (type fixnum count) (type single-float cells))
+    (cond
+      ((zerop (hash-grid-count grid)) 0)
+      ((> cells (float +box-sphere-span+ 1.0)) -1)
+      (t
+       (do-grid-neighbours (j grid x y z :span (ceiling cells))
+         (setf (aref found count) j)
+         (incf count))
+       ;; the rows in increasing order, as a walk over every row meets them
+       (loop for i of-type fixnum from 1 below count
+             do (let ((v (aref found i)) (k i))
+                  (declare (type fixnum v k))
+                  (loop while (and (> k 0) (> (aref found (1- k)) v))
+                        do (setf (aref found k) (aref found (1- k)))
+                           (decf k))
+                  (setf (aref found k) v)))
+       count))))
+
 (defun find-box-sphere-points (world set row reach dt gstep)
   "Append to SET's points those between the awake box at ROW of WORLD and every sphere near it,
-awake or, held still, sleeping; REACH is the box's, grown to the travel of an awake sphere
+awake (found in SET's grid of spheres) or, held still, sleeping (found in the sleeping grids),
+each in the order of its rows; REACH is the box's, grown to the travel of an awake sphere
 relative to it in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
   (declare (type box-set set) (type index row) (type single-float reach dt gstep) #.+kernel-policy+)
   (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-         (n (body-columns-length awake)) (filtering (physics-world-filtering world)))
-    (declare (type index n))
+         (ids (physics-world-ids world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
+         (rmax (f32 (physics-world-max-radius world))))
+    (declare (type index n) (type single-float rmax))
     (with-body-columns (x y z vx vy vz qw qx qy qz radius handle flags) awake
       (let* ((owner (aref handle row)) (slot (handle-index owner)) (box-flags (aref flags row))
              (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
-             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot)))
-        (declare (type fixnum owner box-flags) (type single-float cx cy cz r hx hy hz))
+             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot))
+             (travel (step-travel (aref vx row) (aref vy row) (aref vz row) dt 0.0))
+             ;; the farthest centre an awake sphere may meet this box from, with a millimetre
+             ;; for the rounding of the travels
+             (far (+ r rmax (max reach (+ travel (box-set-sphere-travel set))) 1e-3))
+             (sleep-far (+ r rmax reach 1e-3))
+             (sleep-cells (/ sleep-far (the single-float (f32 (grid-cell-size world))))))
+        (declare (type fixnum owner box-flags) (type single-float cx cy cz r hx hy hz travel far sleep-far sleep-cells))
         (flet ((meet (buffer j row-j reach)
                  ;; the sphere at row J of BUFFER, at solver row ROW-J
                  (declare (type body-columns buffer) (type index j row-j) (type single-float reach))
@@ -8304,41 +8372,75 @@ relative to it in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
                                            (aref sx j) (aref sy j) (aref sz j) (aref sr j)
                                            cx cy cz (aref qw row) (aref qx row) (aref qy row) (aref qz row)
                                            hx hy hz)))))))
-          (dotimes (j n)
-            (meet awake j j (max reach (step-travel (- (aref vx j) (aref vx row)) (- (aref vy j) (aref vy row))
-                                                    (- (aref vz j) (aref vz row)) dt gstep))))
-          (dotimes (j (body-columns-length sleeping)) (meet sleeping j n reach))))))
+          (flet ((meet-awake (j)
+                   (declare (type index j))
+                   (meet awake j j (max reach (step-travel (- (aref vx j) (aref vx row)) (- (aref vy j) (aref vy row))
+                                                           (- (aref vz j) (aref vz row)) dt gstep)))))
+            (let ((count (near-sphere-rows set cx cy cz far)) (found (box-set-found set)))
+              (declare (type fixnum count) (type fixnum-column found))
+              (if (minusp count)
+                  (dotimes (j n) (meet-awake j))
+                  (dotimes (k count) (meet-awake (aref found k))))))
+          (let ((m (body-columns-length sleeping)))
+            (cond ((zerop m))
+                  ((> sleep-cells (float +box-sphere-span+ 1.0))
+                   (dotimes (j m) (meet sleeping j n reach)))
+                  (t
+                   (do-sleepers-in-row-order (h world cx cy cz :span (ceiling sleep-cells))
+                       (let ((s (handle-index h)))
+                         (and (= (aref (handle-table-set ids) s) +set-sleeping+)
+                              (= (aref (handle-table-generation ids) s) (handle-generation h))
+                              (not (logtest (aref (body-columns-flags sleeping) (aref (handle-table-local ids) s))
+                                            +flag-box-shape+))))
+                     (meet sleeping (aref (handle-table-local ids) (handle-index h)) n reach)))))))))
+  set)
+
+(defun sleeping-box-sphere-points (world set b margin dt gstep)
+  "Append to SET's points those between the sleeping box at row B of WORLD's sleeping buffer, held
+still, and every awake sphere near it (found in SET's grid of spheres, in the order of its rows),
+within MARGIN or the sphere's travel in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
+  (declare (type box-set set) (type index b) (type single-float margin dt gstep) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
+         (found (box-set-found set)) (rmax (f32 (physics-world-max-radius world))))
+    (declare (type index n) (type fixnum-column found) (type single-float rmax))
+    (with-body-columns ((bx x) (by y) (bz z) (bqw qw) (bqx qx) (bqy qy) (bqz qz) (br radius) (bh handle) (bf flags))
+        sleeping
+      (with-body-columns (x y z vx vy vz radius handle flags) awake
+        (let* ((slot (handle-index (aref bh b)))
+               (count (near-sphere-rows set (aref bx b) (aref by b) (aref bz b)
+                                        (+ (aref br b) rmax (max margin (box-set-sphere-travel set)) 1e-3))))
+          (declare (type fixnum count))
+          (flet ((meet (j)
+                   (declare (type index j))
+                   (when (sphere-meets-box-p filtering (aref flags j) (aref bf b))
+                     (let* ((reach (max margin (step-travel (aref vx j) (aref vy j) (aref vz j) dt gstep)))
+                            (dx (- (aref x j) (aref bx b))) (dy (- (aref y j) (aref by b))) (dz (- (aref z j) (aref bz b)))
+                            (near (+ (aref br b) (aref radius j) reach)))
+                       (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
+                         (box-sphere-point set (aref bh b) (box-sphere-key slot (handle-index (aref handle j))) j n reach
+                                           (aref x j) (aref y j) (aref z j) (aref radius j)
+                                           (aref bx b) (aref by b) (aref bz b) (aref bqw b) (aref bqx b) (aref bqy b)
+                                           (aref bqz b) (aref (box-set-hx set) slot) (aref (box-set-hy set) slot)
+                                           (aref (box-set-hz set) slot)))))))
+            (if (minusp count)
+                (dotimes (j n) (meet j))
+                (dotimes (k count) (meet (aref found k)))))))))
   set)
 
 (defun find-sleeping-box-sphere-points (world set margin dt gstep)
   "Append to SET's points those between each sleeping box of WORLD, held still, and every awake
-sphere near it, within MARGIN or the sphere's travel in a step of DT seconds in which gravity
-adds GSTEP; each such box's slot gets the first and the count of its points. #BXSPHR"
+sphere near it (sleeping-box-sphere-points); each such box's slot gets the first and the count of
+its points. #BXSPHR"
   (declare (type box-set set) (type single-float margin dt gstep) #.+kernel-policy+)
-  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
-         (points (box-set-points set)))
-    (declare (type index n))
-    (with-body-columns ((bx x) (by y) (bz z) (bqw qw) (bqx qx) (bqy qy) (bqz qz) (br radius) (bh handle) (bf flags))
-        sleeping
-      (with-body-columns (x y z vx vy vz radius handle flags) awake
-        (dotimes (b (body-columns-length sleeping))
-          (when (logtest (aref bf b) +flag-box-shape+)
-            (let* ((owner (aref bh b)) (slot (handle-index owner))
-                   (start (box-point-columns-length points)))
-              (dotimes (j n)
-                (when (sphere-meets-box-p filtering (aref flags j) (aref bf b))
-                  (let* ((reach (max margin (step-travel (aref vx j) (aref vy j) (aref vz j) dt gstep)))
-                         (dx (- (aref x j) (aref bx b))) (dy (- (aref y j) (aref by b))) (dz (- (aref z j) (aref bz b)))
-                         (near (+ (aref br b) (aref radius j) reach)))
-                    (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
-                      (box-sphere-point set owner (box-sphere-key slot (handle-index (aref handle j))) j n reach
-                                        (aref x j) (aref y j) (aref z j) (aref radius j)
-                                        (aref bx b) (aref by b) (aref bz b) (aref bqw b) (aref bqx b) (aref bqy b)
-                                        (aref bqz b) (aref (box-set-hx set) slot) (aref (box-set-hy set) slot)
-                                        (aref (box-set-hz set) slot))))))
-              (setf (aref (box-set-first set) slot) start
-                    (aref (box-set-count set) slot) (- (box-point-columns-length points) start))))))))
+  (let ((sleeping (physics-world-sleeping world)) (points (box-set-points set)))
+    (with-body-columns ((bh handle) (bf flags)) sleeping
+      (dotimes (b (body-columns-length sleeping))
+        (when (logtest (aref bf b) +flag-box-shape+)
+          (let ((slot (handle-index (aref bh b))) (start (box-point-columns-length points)))
+            (sleeping-box-sphere-points world set b margin dt gstep)
+            (setf (aref (box-set-first set) slot) start
+                  (aref (box-set-count set) slot) (- (box-point-columns-length points) start)))))))
   set)
 ;; A box against a sphere:1 ends here
 
@@ -10504,7 +10606,7 @@ else by calling WHOLE, the phase's own walk; return how many bodies lie buried. 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
 (deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))
 
-(defconstant +snapshot-version+ 4 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
+(defconstant +snapshot-version+ 5 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
 
 (defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SN4P0T")
 
@@ -10542,6 +10644,19 @@ carried impulses. #SN4P0T")
 (defconstant +snapshot-pair-head-bytes+ 40 "Bytes of the pair list part's payload before its rows. #SN4P0T")
 
 (defconstant +snapshot-box-bytes+ 52 "Bytes of one posted box in a snapshot. #SN4P0T")
+
+(defconstant +snapshot-box-body-bytes+ 24
+  "Bytes of one box body's record in the box part of a snapshot: its slot, its three half-extents,
+and the first and the count of its points. #SN4P0T")
+
+(defconstant +snapshot-box-point-bytes+ 20
+  "Bytes of one box point of the last step in a snapshot: its key and its three carried impulses. #SN4P0T")
+
+(declaim (inline box-part-bytes))
+(defun box-part-bytes (boxes points)
+  "The payload bytes of a box part of BOXES box bodies and POINTS points. #SN4P0T"
+  (declare (type index boxes points))
+  (+ 8 (* +snapshot-box-body-bytes+ boxes) (* +snapshot-box-point-bytes+ points)))
 
 (defparameter +snapshot-magic+ (map 'octets #'char-code "LUVWORLD")
   "The eight bytes a snapshot starts with. #SN4P0T")
@@ -10736,7 +10851,7 @@ an earlier entry with the same words, found through the table, or K itself, then
 
 (defparameter +snapshot-parts+
   '((1 :world) (2 :handles) (3 :awake-bodies) (4 :sleeping-bodies) (5 :materials) (6 :contacts)
-    (7 :pair-list) (8 :boxes) (9 :pushes) (10 :joints :optional))
+    (7 :pair-list) (8 :boxes) (9 :pushes) (10 :joints :optional) (11 :box-bodies :optional))
   "The parts of a snapshot, in the order they are written, each its id and its name, and
 :optional for a part a world may not have (then it is not written and its size is -1): each part
 of the world's state is one entry. #SN4P0T")
@@ -10784,7 +10899,9 @@ and its pairs written out whole. #SN4P0T"
                                      (* 4 (loop with slot = (handle-table-free jids) while (>= slot 0)
                                                 count t do (setf slot (aref (handle-table-local jids) slot))))
                                      (* +snapshot-joint-bytes+ (joint-columns-length (joint-set-rows set)))))
-                                -1)))
+                                -1))
+          (aref sizes 11) (let ((set (physics-world-box-bodies world)))
+                            (if set (box-part-bytes (box-set-live set) (box-point-columns-length (box-set-points set))) -1)))
     (loop for (id) in +snapshot-parts+ unless (minusp (aref sizes id)) sum (+ 8 (aref sizes id)))))
 
 (declaim (inline same-material-p))
@@ -10835,7 +10952,6 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
 snapshot's bound (snapshot-part-bounds), else into a new one of that bound; return the buffer
 and the snapshot's size in bytes. Into a buffer large enough it conses nothing. #SN4P0T"
   (check-idle world 'snapshot-physics-world)
-  (refuse-box-snapshot world)
   (unless (or (null buffer) (typep buffer 'octets))
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "NIL or an octet vector, (simple-array (unsigned-byte 8) (*))"))
@@ -11213,7 +11329,8 @@ return its bytes. #SN4P0T"
                (+ 4 (* 16 slots)))
              (progn (setf (snap-u32 buffer at) 0) 4))))
     (10 (write-snapshot-joints world buffer at)
-        (aref (snapshot-scratch-sizes scratch) 10))))
+        (aref (snapshot-scratch-sizes scratch) 10))
+    (11 (write-snapshot-box-bodies world buffer at))))
 
 (defun world-parameter (world name)
   "The value of WORLD's parameter NAME, a keyword of +physics-parameters+. #SN4P0T"
@@ -11364,7 +11481,6 @@ sleep, and every number within its range. #SN4P0T"
       (dotimes (k 3) (ranged (+ at 28 (* 4 k)) (- +physics-max-gravity+) +physics-max-gravity+ "a gravity in range"))
       (ranged (+ at 40) 1e-9 1.0 "the last step's length")
       (ranged (+ at 44) 1e-9 1.0 "the last substep's length")
-      (ranged (+ at 48) 0.0 0.5 "the largest radius the world has had")
       (loop for (name nil low high kind) in +physics-parameters+
             for o from (+ at 52) by 4
             do (if (eq kind 'integer)
@@ -11374,7 +11490,9 @@ sleep, and every number within its range. #SN4P0T"
       (let ((margin (snap-f32 buffer (+ at 52 (* 4 (position :speculative-margin +physics-parameters+ :key #'first)))))
             (limit (snap-f32 buffer (+ at 52 (* 4 (position :reach-limit +physics-parameters+ :key #'first))))))
         (snapshot-check (>= limit (+ margin +physics-min-radius+)) physics-snapshot-other-layout (+ at 52)
-                        "a reach limit of at least the margin and the smallest radius" limit)))
+                        "a reach limit of at least the margin and the smallest radius" limit)
+        ;; a box's half diagonal may pass half a cell: the bound is the one add-physics-box keeps
+        (ranged (+ at 48) 0.0 (- limit margin) "the largest radius the world has had, within the reach limit less the margin")))
     (dolist (o '(124 132))
       (snapshot-check (typep (snap-i64 buffer (+ at o)) 'fixnum) physics-snapshot-other-layout (+ at o)
                       "a step number" (snap-i64 buffer (+ at o))))
@@ -11897,6 +12015,7 @@ what the restore reuses. #SN4P0T"
   (check-snapshot-pair-list buffer scratch)
   (check-snapshot-rest buffer scratch)
   (check-snapshot-joints buffer scratch)
+  (check-snapshot-box-bodies buffer scratch)
   buffer)
 
 (defun check-snapshot-jointed-flags (buffer scratch named mark)
@@ -12295,6 +12414,7 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
           (physics-world-undo-open world) nil)
     (incf (physics-world-rows-version world))
     (apply-snapshot-joints world buffer scratch)
+    (apply-snapshot-box-bodies world buffer scratch)
     world))
 
 (defun apply-snapshot-joints (world buffer scratch)
@@ -12371,7 +12491,6 @@ truncated, of another magic, version or layout, whose checksum fails, or of a wo
 features WORLD lacks, signals the physics-snapshot-invalid subtype naming the byte offset, and
 WORLD is left as it was. #SN4P0T"
   (check-idle world 'restore-physics-world)
-  (refuse-box-snapshot world)
   (unless (typep buffer 'octets)
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))
@@ -12486,12 +12605,16 @@ plist. #SN4P0T"
     (list :restored restored :refused refused :invalid invalid :crashes crashes)))
 
 (defun run-snapshot-fuzz-campaign (&key (seed 1) (count 2000))
-  "Fuzz the snapshots of the five standard scenes at 300 balls, each taken after 2 s, COUNT
-damaged copies each, from SEED; return a list of (SCENE BYTES . FIGURES). #SN4P0T"
+  "Fuzz the snapshots of the five standard scenes at 300 balls, each taken after 2 s, and of the
+box tower (snapshot-box-tower) at half a second, COUNT damaged copies each, from SEED; return a
+list of (SCENE BYTES . FIGURES). #SN4P0T"
   (let ((random (sb-ext:seed-random-state seed)))
-    (loop for scene in '(:basin :pile :fountain :lava :player)
-          collect (multiple-value-bind (world script) (make-scene-world scene :count 300)
-                    (dotimes (i 120) (funcall script i) (step-physics-world world))
+    (loop for scene in '(:basin :pile :fountain :lava :player :box-tower)
+          collect (multiple-value-bind (world script)
+                      (if (eq scene :box-tower)
+                          (values (snapshot-box-tower :auto) (lambda (i) (declare (ignore i))))
+                          (make-scene-world scene :count 300))
+                    (dotimes (i (if (eq scene :box-tower) 30 120)) (funcall script i) (step-physics-world world))
                     (multiple-value-bind (buffer size) (snapshot-physics-world world)
                       (let ((snapshot (subseq buffer 0 size)))
                         (list* scene size (fuzz-snapshot world snapshot count random))))))))
@@ -12511,15 +12634,16 @@ damaged copies each, from SEED; return a list of (SCENE BYTES . FIGURES). #SN4P0
 ;;; what a snapshot costs: make bench
 
 (defun snapshot-part-bytes (buffer id)
-  "The bytes part ID of the snapshot BUFFER takes, its own header of 8 included. #SN4P0T"
+  "The bytes part ID of the snapshot BUFFER takes, its own header of 8 included, the parts walked
+by their own ids; 0 when it has no such part. #SN4P0T"
   (loop with at = +snapshot-header-bytes+
-        for (part) in +snapshot-parts+
-        for size = (snap-u32 buffer (+ at 4))
-        when (= part id) return (+ 8 size)
-        do (incf at (+ 8 size))))
+        while (< at (snap-u64 buffer 16))
+        when (= (snap-u32 buffer at) id) return (+ 8 (snap-u32 buffer (+ at 4)))
+        do (incf at (+ 8 (snap-u32 buffer (+ at 4))))
+        finally (return 0)))
 
 (defun run-snapshot-benchmark (&key (stream *standard-output*) (balls 3000) (rounds 30))
-  "Measure snapshots: their size in the BALLS-ball basin and in the settled pile, snapshot plus
+  "Measure snapshots: their size in the BALLS-ball basin, in the settled pile and in the box tower, snapshot plus
 restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8-step rollback at
 1000 balls, and the bytes consed; print Org tables to STREAM. #SN4P0T"
   (format stream "load average ~A at the start~%~%" (load-average))
@@ -12569,6 +12693,14 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
                 (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile))
                 (physics-world-sleeping-count pile) size
                 (/ size (max 1 (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile)))))))
+    (let ((tower (snapshot-box-tower :auto)))
+      (dotimes (i 30) (step-physics-world tower))
+      (multiple-value-bind (buffer size) (snapshot-physics-world tower)
+        (format stream "| box tower at 0.5 s | bodies | boxes | box points | bytes | box part |~%|---+---+---+---+---+---|~%| 5 boxes, 2 balls | ~D | ~D | ~D | ~D | ~D |~%~%"
+                (+ (physics-world-awake-count tower) (physics-world-sleeping-count tower))
+                (box-set-live (physics-world-box-bodies tower))
+                (box-point-columns-length (box-set-points (physics-world-box-bodies tower)))
+                size (snapshot-part-bytes buffer 11))))
     (run-rollback-benchmark :stream stream :load nil))
   (format stream "~%load average ~A at the end~%" (load-average)))
 
@@ -12591,6 +12723,156 @@ the load average the run began and ended with when LOAD. make bench-rollback run
               balls rounds median (round (/ median (/ 1000 60.0) 0.01)))))
   (when load (format stream "~%load average ~A at the end~%" (load-average))))
 ;; A snapshot holds what decides the next step, part by part:8 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:15]]
+(defun write-snapshot-box-bodies (world buffer at)
+  "Write the box part of WORLD's snapshot into BUFFER from AT: the counts of box bodies and of the
+last step's points, each box's slot, half-extents, first point and count, then the points' keys
+and their three carried impulses, each a column copied whole; return its bytes. #SN4P0T"
+  (declare (type octets buffer) (type index at) #.+kernel-policy+)
+  (let* ((set (physics-world-box-bodies world)) (points (box-set-points set))
+         (p (box-point-columns-length points))
+         (hx (box-set-hx set)) (hy (box-set-hy set)) (hz (box-set-hz set))
+         (first (box-set-first set)) (count (box-set-count set))
+         (slots (min (length hx) (handle-table-count (physics-world-ids world)))) (b 0))
+    (declare (type box-set set) (type index p slots b) (type f32-column hx hy hz) (type fixnum-column first count))
+    (dotimes (slot slots)
+      (when (plusp (aref hx slot))
+        (let ((o (+ at 8 (* b +snapshot-box-body-bytes+))))
+          (declare (type index o))
+          (setf (snap-u32 buffer o) slot (snap-f32 buffer (+ o 4)) (aref hx slot)
+                (snap-f32 buffer (+ o 8)) (aref hy slot) (snap-f32 buffer (+ o 12)) (aref hz slot)
+                (snap-u32 buffer (+ o 16)) (if (zerop (aref count slot)) 0 (ldb (byte 32 0) (aref first slot)))
+                (snap-u32 buffer (+ o 20)) (ldb (byte 32 0) (aref count slot)))
+          (incf b))))
+    (setf (snap-u32 buffer at) b (snap-u32 buffer (+ at 4)) p)
+    (let ((o (+ at 8 (* b +snapshot-box-body-bytes+))))
+      (declare (type index o))
+      (sb-kernel:%byte-blt (box-point-columns-key points) 0 buffer o (+ o (* 8 p)))
+      (sb-kernel:%byte-blt (box-point-columns-normal-impulse points) 0 buffer (+ o (* 8 p)) (+ o (* 12 p)))
+      (sb-kernel:%byte-blt (box-point-columns-tangent-impulse-1 points) 0 buffer (+ o (* 12 p)) (+ o (* 16 p)))
+      (sb-kernel:%byte-blt (box-point-columns-tangent-impulse-2 points) 0 buffer (+ o (* 16 p)) (+ o (* 20 p))))
+    (box-part-bytes b p)))
+
+(defun check-snapshot-box-records (buffer scratch marks mark)
+  "Check the head and the box records of the box part of the snapshot in BUFFER: the feature
+:box-bodies, the size its counts give, each box's slot within the table and listed once (marked
+MARK in MARKS), its half-extents finite, each at least +box-min-half-extent+ and the half
+diagonal within the world's largest radius, and its points within the part's. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column marks) (type fixnum mark))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 11)) (wat (aref offsets 1))
+         (b (snap-u32 buffer at)) (p (snap-u32 buffer (+ at 4))) (count (snap-u32 buffer (aref offsets 2)))
+         (max-radius (snap-f32 buffer (+ wat 48))))
+    (declare (type index at wat count) (type (unsigned-byte 32) b p))
+    (snapshot-check (logbitp (position :box-bodies +physics-features+) (snap-u32 buffer (+ wat 4)))
+                    physics-snapshot-other-layout (+ wat 4) "the feature :box-bodies of a world with boxes"
+                    (snap-u32 buffer (+ wat 4)))
+    (snapshot-check (<= b count) physics-snapshot-other-layout at "no more boxes than slots" b)
+    (snapshot-check (< p (ash 1 26)) physics-snapshot-other-layout (+ at 4) "under 2^26 points" p)
+    (check-part-size scratch 11 (box-part-bytes b p))
+    (dotimes (k b)
+      (let* ((o (+ at 8 (* k +snapshot-box-body-bytes+))) (slot (snap-u32 buffer o)))
+        (snapshot-check (and (< slot count) (/= (aref marks slot) mark)) physics-snapshot-other-layout o
+                        "a box's slot of the table, listed once" slot)
+        (setf (aref marks slot) mark)
+        (let ((hx (snap-finite-f32 buffer (+ o 4))) (hy (snap-finite-f32 buffer (+ o 8)))
+              (hz (snap-finite-f32 buffer (+ o 12))))
+          (snapshot-check (and (<= +box-min-half-extent+ (min hx hy hz)) (<= (box-half-diagonal hx hy hz) max-radius))
+                          physics-snapshot-other-layout (+ o 4)
+                          "half-extents of at least the smallest, the half diagonal within the world's largest radius"
+                          (list hx hy hz)))
+        (snapshot-check (<= (+ (snap-u32 buffer (+ o 16)) (snap-u32 buffer (+ o 20))) p)
+                        physics-snapshot-other-layout (+ o 16) "a box's points among the part's"
+                        (list (snap-u32 buffer (+ o 16)) (snap-u32 buffer (+ o 20))))))))
+
+(defun check-snapshot-box-bodies (buffer scratch)
+  "Check the box part of the snapshot in BUFFER, when it has one: its records
+(check-snapshot-box-records), every point's key a fixnum's word and every carried impulse finite
+and of at most 10^9 N s; and, with it or without it, that a body has the box flag exactly when the
+part lists its slot. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 11))
+         (present (>= (aref (snapshot-scratch-sizes scratch) 11) 0))
+         (boxes (if present (snap-u32 buffer at) 0)) (flagged 0))
+    (declare (type index at boxes flagged))
+    (multiple-value-bind (marks stamp) (snapshot-marks scratch (snap-u32 buffer (aref offsets 2)))
+      (declare (type fixnum-column marks) (type fixnum stamp))
+      (when present
+        (check-snapshot-box-records buffer scratch marks (1+ stamp))
+        (let* ((p (snap-u32 buffer (+ at 4))) (keys (+ at 8 (* boxes +snapshot-box-body-bytes+)))
+               (impulses (+ keys (* 8 p)))
+               (wrong (snapshot-words-within buffer impulses (+ impulses (* 12 p)) (sb-kernel:single-float-bits 1e9))))
+          (declare (type index p keys impulses))
+          (dotimes (k p)
+            (snapshot-check (not (logtest 1 (snap-u64 buffer (+ keys (* 8 k))))) physics-snapshot-other-layout
+                            (+ keys (* 8 k)) "a point's key, a fixnum's word" (snap-u64 buffer (+ keys (* 8 k)))))
+          (snapshot-check (null wrong) physics-snapshot-other-layout wrong "a carried impulse of at most 10^9 N s"
+                          (and wrong (snap-f32 buffer wrong)))))
+      (dolist (id '(3 4))
+        (let* ((bat (aref offsets id)) (n (snap-u32 buffer bat))
+               (w (material-index-bytes (snap-u32 buffer (aref offsets 5)))))
+          (dotimes (row n)
+            (let ((o (+ bat (body-part-column n 18 w) (* 2 row)))
+                  (slot (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))))
+              (when (logtest +flag-box-shape+ (snap-u16 buffer o)) (incf flagged))
+              (snapshot-check (eq (logtest +flag-box-shape+ (snap-u16 buffer o)) (= (aref marks slot) (1+ stamp)))
+                              physics-snapshot-other-layout o
+                              "the box flag set exactly on a body whose slot the box part lists" (snap-u16 buffer o))))))
+      (snapshot-check (= flagged boxes) physics-snapshot-other-layout at "a body for each box the part lists" boxes))))
+
+(defun apply-snapshot-box-bodies (world buffer scratch)
+  "Make WORLD's box set the checked snapshot BUFFER's: none when it has no box part; else the
+half-extents by slot, zero where a slot holds no box, each box's first point and count, and the
+last step's points, their keys and carried impulses, every other number of a point zero. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (if (minusp (aref (snapshot-scratch-sizes scratch) 11))
+      (setf (physics-world-box-bodies world) nil)
+      (let* ((at (aref (snapshot-scratch-offsets scratch) 11))
+             (b (snap-u32 buffer at)) (p (snap-u32 buffer (+ at 4)))
+             (set (or (physics-world-box-bodies world) (setf (physics-world-box-bodies world) (%make-box-set))))
+             (points (box-set-points set))
+             (o (+ at 8 (* b +snapshot-box-body-bytes+))))
+        (declare (type index at b p o) (type box-set set))
+        (box-set-room set (handle-table-count (physics-world-ids world)))
+        (fill (box-set-hx set) 0.0) (fill (box-set-hy set) 0.0) (fill (box-set-hz set) 0.0)
+        (fill (box-set-count set) 0) (fill (box-set-previous-count set) 0)
+        (box-point-columns-clear (box-set-previous set))
+        (box-point-columns-clear points)
+        (box-point-columns-ensure-capacity points p)
+        (setf (box-point-columns-length points) p)
+        (sb-kernel:%byte-blt buffer o (box-point-columns-key points) 0 (* 8 p))
+        (sb-kernel:%byte-blt buffer (+ o (* 8 p)) (box-point-columns-normal-impulse points) 0 (* 4 p))
+        (sb-kernel:%byte-blt buffer (+ o (* 12 p)) (box-point-columns-tangent-impulse-1 points) 0 (* 4 p))
+        (sb-kernel:%byte-blt buffer (+ o (* 16 p)) (box-point-columns-tangent-impulse-2 points) 0 (* 4 p))
+        (dotimes (k b)
+          (let ((r (+ at 8 (* k +snapshot-box-body-bytes+))))
+            (declare (type index r))
+            (let ((slot (snap-u32 buffer r)))
+              (setf (aref (box-set-hx set) slot) (snap-f32 buffer (+ r 4))
+                    (aref (box-set-hy set) slot) (snap-f32 buffer (+ r 8))
+                    (aref (box-set-hz set) slot) (snap-f32 buffer (+ r 12))
+                    (aref (box-set-first set) slot) (snap-u32 buffer (+ r 16))
+                    (aref (box-set-count set) slot) (snap-u32 buffer (+ r 20))))))
+        (setf (box-set-live set) b))))
+
+(defun snapshot-box-tower (kernels)
+  "A floor world under KERNELS with a tower of five boxes dropped from a little apart, the
+second turned, the fourth flat and long, and two balls falling beside and onto it: boxes meet
+the floor, each other and the balls within its first second. Return the world and the boxes'
+handles. #SN4P0T"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -8 -8 -8 16 16 16 nil)
+    (fill-terrain terrain -8 -1 -8 16 0 16 t)
+    (let ((world (make-physics-world :terrain terrain :kernels kernels)))
+      (values
+       world
+       (loop for (y hx hy hz orientation) in '((0.5 0.3 0.3 0.3 (1 0 0 0)) (1.3 0.3 0.3 0.3 (0.97 0 0.24 0))
+                                              (2.1 0.3 0.3 0.3 (1 0 0 0)) (2.8 0.5 0.15 0.3 (0.99 0.1 0 0))
+                                              (3.5 0.25 0.25 0.25 (1 0 0 0)))
+             collect (add-physics-box world 2.5 y 2.5 hx hy hz :density 500 :orientation orientation)
+             finally (add-physics-body world 2.55 4.6 2.45 :radius 0.2)
+                     (add-physics-body world 3.3 1.0 2.5 :radius 0.25 :vx -1.0))))))
+;; A snapshot holds what decides the next step, part by part:15 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:2]]
 (defun physics-world-handles (world)

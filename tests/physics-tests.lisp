@@ -6736,22 +6736,6 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (dolist (r rows) (check (second r) "not held: ~A: ~A" (first r) (third r)))))
 ;; J0XTRM-joint-rows-hold ends here
 
-;; [[file:../physics.org::#BXR0WS][BXR0WS-snapshots-refuse-boxes]]
-(define-claim "BXR0WS" snapshots-refuse-boxes
-    "A world with a box is refused by snapshot and restore, unchanged."
-  (let* ((w (make-floor-world))
-         (plain (make-floor-world))
-         (bytes (progn (add-physics-body plain 2.5 1 2.5) (snapshot-physics-world plain))))
-    (add-physics-box w 2.5 1 2.5 0.5 0.5 0.5)
-    (step-physics-world w)
-    (let ((hash (physics-world-state-hash w)))
-      (dolist (call (list (lambda () (snapshot-physics-world w)) (lambda () (restore-physics-world w bytes))))
-        (check (eq :world (handler-case (progn (funcall call) :done)
-                            (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))))
-      (check (= hash (physics-world-state-hash w)))
-      (check (eq t (validate-physics-world w))))))
-;; BXR0WS-snapshots-refuse-boxes ends here
-
 ;; [[file:../physics.org::#BXR0WS][BXR0WS-bad-boxes-refused]]
 (define-claim "BXR0WS" bad-boxes-refused
     "Bad boxes are refused by name and leave the world unchanged."
@@ -7210,6 +7194,95 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
         (let ((got (run family)))
           (check (= got scalar) "~(~A~) ends with hash ~D, scalar ~D" family got scalar))))))
 ;; BXSPHR-families-agree-on-balls-and-boxes ends here
+
+;; [[file:../physics.org::#BXSPHR][BXSPHR-grid-finds-every-sphere]]
+(define-claim "BXSPHR" grid-finds-every-sphere
+    "The box-sphere points found through the grids are those of a walk over every row, in order."
+  (let* ((w (make-physics-world :terrain (make-floor-terrain) :gravity '(0 0 0)))
+         (state (sb-ext:seed-random-state 45))
+         (k 0))
+    (flet ((heap (count fast)
+             (loop while (plusp count)
+                   do (let ((i (mod k 6)) (j (mod (floor k 6) 6)) (l (floor k 36)))
+                        (incf k) (decf count)
+                        (let ((x (+ 2.0 (* 0.9 i) (- (random 0.2 state) 0.1))) (y (+ 4.0 (* 0.9 l) (random 0.1 state)))
+                              (z (+ 2.0 (* 0.9 j) (- (random 0.2 state) 0.1)))
+                              (v (if (and fast (zerop (mod k 3))) (list (- (random 60.0 state) 30) (- (random 20.0 state) 10) 0)
+                                     (list 0 0 0))))
+                          (if (evenp (+ i j l))
+                              (add-physics-box w x y z (+ 0.2 (random 0.25 state)) (+ 0.2 (random 0.25 state))
+                                               (+ 0.2 (random 0.25 state))
+                                               :orientation (list 1 (random 0.2 state) (random 0.2 state) (random 0.2 state))
+                                               :vx (first v) :vy (second v) :vz (third v))
+                              (add-physics-body w x y z :radius (+ 0.1 (random 0.3 state)) :collide-with-bodies (/= k 70)
+                                                        :vx (first v) :vy (second v) :vz (third v))))))))
+      (heap 60 nil)
+      (dotimes (i 60) (step-physics-world w))
+      (heap 120 t)
+      (step-physics-world w))
+    (let* ((set (luv-physics::physics-world-box-bodies w))
+           (awake (luv-physics::physics-world-awake w)) (sleeping (luv-physics::physics-world-sleeping w))
+           (n (luv-physics::body-columns-length awake))
+           (mine (luv-physics::%make-box-set))
+           (dt (luv-physics::physics-world-current-dt w))
+           (gstep (luv-physics::gravity-step w dt))
+           (margin (luv-physics::f32 (luv-physics::physics-world-margin w)))
+           (filtering (luv-physics::physics-world-filtering w)))
+      (check (plusp (luv-physics::body-columns-length sleeping)) "nothing sleeps")
+      (luv-physics::ensure-sleeping-grid w)
+      (luv-physics::prepare-box-points w (luv-physics::physics-world-current-h w))
+      (luv-physics::box-set-room mine (length (luv-physics::box-set-hx set)))
+      (replace (luv-physics::box-set-hx mine) (luv-physics::box-set-hx set))
+      (replace (luv-physics::box-set-hy mine) (luv-physics::box-set-hy set))
+      (replace (luv-physics::box-set-hz mine) (luv-physics::box-set-hz set))
+      (setf (luv-physics::box-set-dummy mine) n)
+      (flet ((col (name buffer j) (aref (funcall (intern (format nil "BODY-COLUMNS-~A" name) :luv-physics) buffer) j)))
+        (flet ((box-p (buffer j) (logtest (col "FLAGS" buffer j) luv-physics::+flag-box-shape+))
+               (travel (vx vy vz) (luv-physics::step-travel vx vy vz dt gstep))
+               (meet (box-buffer b sphere-buffer j row-a row-b reach)
+                 ;; the sphere at J of SPHERE-BUFFER against the box at B of BOX-BUFFER, by hand
+                 (when (luv-physics::sphere-meets-box-p filtering (col "FLAGS" sphere-buffer j) (col "FLAGS" box-buffer b))
+                   (let ((near (+ (col "RADIUS" box-buffer b) (col "RADIUS" sphere-buffer j) reach))
+                         (d2 (loop for c in '("X" "Y" "Z") sum (expt (- (col c sphere-buffer j) (col c box-buffer b)) 2)))
+                         (slot (luv-physics::handle-index (col "HANDLE" box-buffer b))))
+                     (when (< d2 (* near near))
+                       (luv-physics::box-sphere-point
+                        mine (col "HANDLE" box-buffer b)
+                        (luv-physics::box-sphere-key slot (luv-physics::handle-index (col "HANDLE" sphere-buffer j)))
+                        row-a row-b reach (col "X" sphere-buffer j) (col "Y" sphere-buffer j) (col "Z" sphere-buffer j)
+                        (col "RADIUS" sphere-buffer j) (col "X" box-buffer b) (col "Y" box-buffer b) (col "Z" box-buffer b)
+                        (col "QW" box-buffer b) (col "QX" box-buffer b) (col "QY" box-buffer b) (col "QZ" box-buffer b)
+                        (aref (luv-physics::box-set-hx set) slot) (aref (luv-physics::box-set-hy set) slot)
+                        (aref (luv-physics::box-set-hz set) slot))))))
+               (points (set slop)
+                 (let ((p (luv-physics::box-set-points set)))
+                   (loop for q below (luv-physics::box-point-columns-length p)
+                         for key = (aref (luv-physics::box-point-columns-key p) q)
+                         when (and (logbitp 32 key) (= 255 (logand key 255)))
+                           collect (list key (+ (aref (luv-physics::box-point-columns-separation p) q) slop)
+                                         (aref (luv-physics::box-point-columns-row p) q)
+                                         (aref (luv-physics::box-point-columns-row-b p) q))))))
+          (dotimes (b n)
+            (when (box-p awake b)
+              (let ((reach (max margin (travel (col "VX" awake b) (col "VY" awake b) (col "VZ" awake b)))))
+                (dotimes (j n)
+                  (meet awake b awake j j b (max reach (travel (- (col "VX" awake j) (col "VX" awake b))
+                                                               (- (col "VY" awake j) (col "VY" awake b))
+                                                               (- (col "VZ" awake j) (col "VZ" awake b))))))
+                (dotimes (j (luv-physics::body-columns-length sleeping))
+                  (meet awake b sleeping j n b reach)))))
+          (dotimes (b (luv-physics::body-columns-length sleeping))
+            (when (box-p sleeping b)
+              (dotimes (j n)
+                (meet sleeping b awake j j n (max margin (travel (col "VX" awake j) (col "VY" awake j) (col "VZ" awake j)))))))
+          (let ((grids (points set 0.0))
+                (every-row (points mine (luv-physics::f32 (luv-physics::physics-world-slop w)))))
+            (check (> (length grids) 60) "only ~D points between boxes and spheres" (length grids))
+            (check (some (lambda (p) (or (>= (third p) n) (>= (fourth p) n))) grids) "no point against a sleeper")
+            (check (some (lambda (p) (> (second p) margin)) grids) "no point beyond the margin")
+            (check (equal grids every-row) "~D points through the grids, ~D over every row"
+                   (length grids) (length every-row))))))))
+;; BXSPHR-grid-finds-every-sphere ends here
 
 ;; [[file:../physics.org::#BXSWEP][BXSWEP-fast-boxes-stay-out-of-cells]]
 (define-claim "BXSWEP" fast-boxes-stay-out-of-cells
@@ -8936,10 +9009,11 @@ into a second world of the scene stepped half as often, run MORE there. Return b
 
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-bad-snapshots-are-named-where-they-fail]]
 (defun snapshot-part-at (buffer id)
-  "Where the payload of part ID of the snapshot BUFFER begins. #SN4P0T"
+  "Where the payload of part ID of the snapshot BUFFER begins, the parts walked by their own ids
+(an optional part the world had not is not there). #SN4P0T"
   (loop with at = 32
-        for (part) in luv-physics::+snapshot-parts+
-        when (= part id) return (+ at 8)
+        while (< at (luv-physics::snap-u64 buffer 16))
+        when (= (luv-physics::snap-u32 buffer at) id) return (+ at 8)
         do (incf at (+ 8 (luv-physics::snap-u32 buffer (+ at 4))))))
 
 (defun refusal (world buffer)
@@ -9094,14 +9168,85 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
         (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
 ;; SN4P0T-damaged-joints-are-refused-at-their-byte ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-box-tower-resumes-to-the-bit]]
+(define-claim "SN4P0T" box-tower-resumes-to-the-bit
+    "A tower of boxes restored mid-fall resumes to the straight hash in every family, into any world; a box-free snapshot drops the box set."
+  (dolist (family (available-kernel-families))
+    (multiple-value-bind (world boxes) (luv-physics::snapshot-box-tower family)
+      (dotimes (i 30) (step-physics-world world))
+      (let ((snapshot (subseq (snapshot-physics-world world) 0)))
+        (check (plusp (luv-physics::box-point-columns-length
+                       (luv-physics::box-set-points (luv-physics::physics-world-box-bodies world))))
+               "no box point to carry at the snapshot")
+        (dotimes (i 60) (step-physics-world world))
+        (let ((straight (physics-world-state-hash world)))
+          (loop for (what target) in (list (list :same world)
+                                           (list :other-tower (let ((w (luv-physics::snapshot-box-tower family)))
+                                                                (dotimes (i 10) (step-physics-world w))
+                                                                w))
+                                           (list :no-boxes (settled-floor-world))
+                                           (list :fresh (make-physics-world :terrain (make-floor-terrain) :kernels family)))
+                do (restore-physics-world target snapshot)
+                   (check (eq t (validate-physics-world target)) "~(~A~) under ~(~A~) does not validate" what family)
+                   (check (= 5 (luv-physics::box-set-live (luv-physics::physics-world-box-bodies target))) "~(~A~): boxes" what)
+                   (check (equal '(0.5 0.15 0.3) (multiple-value-list (physics-box-half-extents target (fourth boxes))))
+                          "~(~A~): the flat box's half-extents" what)
+                   (dotimes (i 60) (step-physics-world target))
+                   (check (= straight (physics-world-state-hash target)) "~(~A~) under ~(~A~): ~D straight, ~D restored"
+                          what family straight (physics-world-state-hash target)))))
+      (restore-physics-world world (snapshot-physics-world (settled-floor-world)))
+      (check (null (luv-physics::physics-world-box-bodies world)) "the box set was kept")
+      (check (eq t (validate-physics-world world))))))
+;; SN4P0T-box-tower-resumes-to-the-bit ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-boxes-are-refused-at-their-byte]]
+(define-claim "SN4P0T" damaged-boxes-are-refused-at-their-byte
+    "A box part with a bad slot, extent, point range, key or impulse, or a box flag turned over, is refused at its byte, the world unchanged."
+  (let ((source (luv-physics::snapshot-box-tower :scalar)) (target (luv-physics::snapshot-box-tower :scalar)))
+    (dotimes (i 30) (step-physics-world source))
+    (dotimes (i 12) (step-physics-world target))
+    (let* ((good (subseq (snapshot-physics-world source) 0))
+           (at (snapshot-part-at good 11))
+           (boxes (luv-physics::snap-u32 good at))
+           (keys (+ at 8 (* 24 boxes)))
+           (impulses (+ keys (* 8 (luv-physics::snap-u32 good (+ at 4)))))
+           (before (world-fingerprint target)))
+      (flet ((bad (offset change)
+               (let ((b (copy-seq good)))
+                 (funcall change b)
+                 (let ((got (refusal target (luv-physics::reseal-snapshot b))))
+                   (check (equal (list 'physics-snapshot-other-layout offset) got) "at ~D: got ~S" offset got))
+                 (check (equal before (world-fingerprint target)) "the refused restore changed the world")
+                 (check (eq t (validate-physics-world target))))))
+        (check (= 5 boxes))
+        (bad (+ at 8) (lambda (b) (setf (luv-physics::snap-u32 b (+ at 8)) 99999)))
+        (bad (+ at 32) (lambda (b) (setf (luv-physics::snap-u32 b (+ at 32)) (luv-physics::snap-u32 b (+ at 8)))))
+        (bad (+ at 12) (lambda (b) (setf (luv-physics::snap-u32 b (+ at 12)) #x7FC00000)))
+        (bad (+ at 12) (lambda (b) (setf (luv-physics::snap-f32 b (+ at 20)) 0.01)))
+        (bad (+ at 12) (lambda (b) (setf (luv-physics::snap-f32 b (+ at 16)) 0.9)))
+        (bad (+ at 24) (lambda (b) (setf (luv-physics::snap-u32 b (+ at 28)) (1+ (luv-physics::snap-u32 b (+ at 4))))))
+        (bad keys (lambda (b) (setf (luv-physics::snap-u64 b keys) (logior 1 (luv-physics::snap-u64 b keys)))))
+        (bad impulses (lambda (b) (setf (luv-physics::snap-u32 b impulses) #x7FC00000)))
+        (bad (+ impulses 4) (lambda (b) (setf (luv-physics::snap-f32 b (+ impulses 4)) 1.5e9)))
+        (let ((flags (let ((part (snapshot-part-at good 3))) (+ part 4 (* 69 (luv-physics::snap-u32 good part))))))
+          (bad flags (lambda (b) (setf (luv-physics::snap-u16 b flags)
+                                       (logxor (luv-physics::snap-u16 b flags) luv-physics::+flag-box-shape+)))))
+        (check (eq :restored (refusal target good)))
+        (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
+;; SN4P0T-damaged-boxes-are-refused-at-their-byte ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-snapshots-leave-valid-worlds]]
 (define-claim "SN4P0T" damaged-snapshots-leave-valid-worlds
-    "300 damaged snapshots of a settled floor world, and 1000 of a jointed chain, leave no invalid world and crash nothing."
+    "300 damaged snapshots of a settled floor world, 1000 of a jointed chain and 500 of a box tower leave no invalid world and crash nothing."
   (loop for (world count) in (list (list (settled-floor-world) 300)
                                    (list (let ((w (jointed-snapshot-world :scalar)))
                                            (dotimes (i 40) (step-physics-world w))
                                            w)
-                                         1000))
+                                         1000)
+                                   (list (let ((w (luv-physics::snapshot-box-tower :scalar)))
+                                           (dotimes (i 30) (step-physics-world w))
+                                           w)
+                                         500))
         do (let* ((snapshot (subseq (snapshot-physics-world world) 0))
                   (result (luv-physics::fuzz-snapshot world snapshot count (sb-ext:seed-random-state 7))))
              (check (zerop (getf result :invalid)) "~S" result)
