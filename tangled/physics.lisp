@@ -9877,6 +9877,8 @@ typed slots so that publishing a job conses nothing. #W0RKP1"
   (spent (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
   ;; per job: the part of spent its merges took on the calling thread alone ([[#P41P1C]])
   (merged (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  ;; per job: how many of its tuned calls ran split ([[#B3NCHW]])
+  (splits (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
   ;; a phase's own piece, a function of the worker and the count, while its job runs
   (piece nil :type (or null function))
   ;; the events of a phase's pieces, a buffer and its data for each worker but worker 0,
@@ -10186,19 +10188,21 @@ or relax them. #SPL1T5"
 
 (defun note-split-time (pool job split ns rows)
   "Fold NS, the nanoseconds a call of JOB over ROWS rows took, SPLIT or whole, into POOL's running
-figure for that way: nanoseconds per 1024 rows, each call an eighth of it. #SPL1T5"
+figure for that way, in nanoseconds per 1024 rows: a call faster than the figure (or the first)
+sets it, a slower one moves it an eighth of the way. #SPL1T5"
   (declare (type worker-pool pool) (type fixnum job ns) (type index rows))
   (let ((figures (if split (worker-pool-split-ns pool) (worker-pool-whole-ns pool)))
         (x (floor (* (max ns 0) 1024) (max rows 1))))
     (declare (type fixnum x))
     (setf (aref figures job)
-          (if (zerop (aref figures job)) x (+ (aref figures job) (floor (- x (aref figures job)) 8))))))
+          (let ((old (aref figures job)))
+            (if (or (zerop old) (< x old)) x (+ old (floor (- x old) 8)))))))
 
 (defmacro tuned-split ((pool world rows job) split-form whole-form)
   "Run SPLIT-FORM with POOL bound to WORLD's pool when the pass of JOB over ROWS rows splits, else
 WHOLE-FORM: a pool with split-rows 0 always splits; one above it splits as prefer-split-p says,
-timing each call for note-split-time. A pool adds each call's nanoseconds to its job's spent
-figure. #SPL1T5"
+timing each call for note-split-time and counting the calls it split. A pool adds each call's
+nanoseconds to its job's spent figure. #SPL1T5"
   (let ((tuning (gensym "TUNING")) (split (gensym "SPLIT")) (start (gensym "START")) (n (gensym "ROWS"))
         (ns (gensym "NS")))
     `(let* ((,n ,rows) (,pool (splitting-pool ,world ,n)))
@@ -10210,7 +10214,9 @@ figure. #SPL1T5"
              (multiple-value-prog1 (if ,split ,split-form ,whole-form)
                (let ((,ns (- (clock-ns) ,start)))
                  (incf (aref (worker-pool-spent ,pool) ,job) ,ns)
-                 (when ,tuning (note-split-time ,pool ,job ,split ,ns ,n)))))))))
+                 (when ,tuning
+                   (when ,split (incf (aref (worker-pool-splits ,pool) ,job)))
+                   (note-split-time ,pool ,job ,split ,ns ,n)))))))))
 
 (defun piece-bounds (start end worker count)
   "share-bounds for the phases the page defines before it: the rows of WORKER's share, of COUNT,
@@ -10387,6 +10393,10 @@ the integration JOB on the workers. #SPL1T5"
 
 ;; [[file:../physics.org::#P41P1C][The pair phase in pieces:1]]
 (defconstant +job-pairs+ 8 "The job: the pair phase's listed pairs, a share of the list each. #P41P1C")
+
+(defconstant +body-row-weight+ 8
+  "How many rows a body counts as against a pool's split-rows in the passes that take a body a
+row: the list's build and the terrain phase. #P41P1C")
 (defconstant +job-pair-build+ 9
   "The job: the pair list's build, a share of the awake grid's places each. #P41P1C")
 
@@ -10549,7 +10559,7 @@ walk. #P41P1C"
   (declare (type function whole))
   (let ((job (if (eq kind :build) +job-pair-build+ +job-pairs+))
         (places (if (eq kind :build)
-                    (hash-grid-count (physics-world-awake-grid world))
+                    (* +body-row-weight+ (hash-grid-count (physics-world-awake-grid world)))
                     (pair-list-count (physics-world-pair-list world)))))
     (tuned-split (pool world places job)
       (unless (run-pair-pieces pool world kind) (funcall whole))
@@ -10598,7 +10608,7 @@ contacts in worker order; return how many bodies lie buried. #MYWP1C"
   "Take WORLD's terrain rows in pieces on its workers when its pool splits the pass (tuned-split),
 else by calling WHOLE, the phase's own walk; return how many bodies lie buried. #MYWP1C"
   (declare (type function whole))
-  (tuned-split (pool world (awake-rows world) +job-terrain+)
+  (tuned-split (pool world (* +body-row-weight+ (awake-rows world)) +job-terrain+)
     (run-terrain-pieces pool world)
     (funcall whole)))
 ;; The terrain phase in pieces:1 ends here

@@ -1652,8 +1652,8 @@ basin. #B3NCHW"
 (defun measure-workers (count family counts &key (from 60) (to 150))
   "Step basins of COUNT balls in FAMILY, one per worker count of COUNTS, in turn for TO steps;
 return the median ms per step over steps FROM..TO of each, the serial share of a one-worker step,
-whether all reached one state hash, and each phase's serial part of the step, as a list of
-(phase share). The serial share is measured on one more basin, stepped in turn with the others,
+whether all reached one state hash, each phase's serial part of the step, as a list of
+(phase share), and the part of the two-worker pool's tuned calls that ran split (0 without one). The serial share is measured on one more basin, stepped in turn with the others,
 whose pool of one worker (no thread) runs every pass that splits and times it. #B3NCHW"
   (let* ((worlds (mapcar (lambda (n) (open-world-workers (make-bench-basin count family) n)) counts))
          (probe (make-bench-basin count family))
@@ -1679,33 +1679,40 @@ whose pool of one worker (no thread) runs every pass that splits and times it. #
                                                   sum (- (aref (worker-pool-spent pool) j)
                                                          (aref (worker-pool-merged pool) j))))
                                          (float total 1d0)))))
-           (hashes (mapcar #'physics-world-state-hash (cons probe worlds))))
+           (hashes (mapcar #'physics-world-state-hash (cons probe worlds)))
+           (two (find-if (lambda (w) (= 2 (physics-world-workers w))) worlds))
+           (split (if two
+                      (let ((p (physics-world-pool two)))
+                        (/ (reduce #'+ (worker-pool-splits p)) (float (max 1 (reduce #'+ (worker-pool-calls p))) 1d0)))
+                      0d0)))
       (mapc #'close-physics-world worlds)
       (setf (physics-world-pool probe) nil)
       (values (mapcar (lambda (cell) (median (car cell))) times)
               (max 0d0 (reduce #'+ parts :key #'second))
               (= 1 (length (remove-duplicates hashes)))
-              parts))))
+              parts
+              split))))
 
 (defun run-worker-benchmark (&key (sizes '(1000 3000 10000 30000)) (stream *standard-output*))
   "Print, as an Org table, the basin at each of SIZES in every kernel family with one worker,
 two, and the machine's cores when more: median ms, speed-up over one worker, the serial share
-and Amdahl's bound for two, and whether the hashes agree; with the machine and its load. #B3NCHW"
+and Amdahl's bound for two, whether the hashes agree, and the part of two workers' tuned calls
+that ran split; with the machine and its load. #B3NCHW"
   (let* ((cores (machine-cores))
          (counts (remove-duplicates (list 1 2 (max 2 cores)))))
     (format stream "~&#+caption: the basin, all awake, 60 Hz, 4 substeps; median of steps 60-150, the worlds stepped in turn; ~A, ~D cores; load ~A at the start~%"
             (cpu-model-name) cores (load-average))
-    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash | serial, % of the step by phase           |~%"
+    (format stream "~&| balls | family |~{ ~D w ms |~}~{ ~D w speed-up |~} serial share | bound, 2 w | same hash | split, 2 w | serial, % of the step by phase           |~%"
             counts (rest counts))
-    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------+----------------------------------------------|~%"
+    (format stream "~&|-------+--------+~{~*---------+~}~{~*---------------+~}--------------+------------+-----------+------------+----------------------------------------------|~%"
             counts (rest counts))
     (dolist (size sizes)
       (dolist (family (available-kernel-families))
-        (multiple-value-bind (ms serial same parts) (measure-workers size family counts)
-          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A | ~44A |~%"
+        (multiple-value-bind (ms serial same parts split) (measure-workers size family counts)
+          (format stream "~&| ~5D | ~6A |~{ ~8,3F |~}~{ ~13,2Fx |~} ~11,1F% | ~9,2Fx | ~9A | ~9,1F% | ~44A |~%"
                   size (string-downcase family) ms
                   (mapcar (lambda (m) (/ (first ms) m)) (rest ms))
-                  (* 100 serial) (/ 1 (+ serial (/ (- 1 serial) 2))) (if same "yes" "NO")
+                  (* 100 serial) (/ 1 (+ serial (/ (- 1 serial) 2))) (if same "yes" "NO") (* 100 split)
                   (format nil "~{~A~^ ~}"
                           (loop for (phase share) in (sort (copy-list parts) #'> :key #'second)
                                 when (>= share 0.01)

@@ -8843,6 +8843,26 @@ solved by FAMILY. #SPL1T5"
       (mapc #'close-physics-world worlds))))
 ;; SPL1T5-worker-fault-as-one-worker ends here
 
+;; [[file:../physics.org::#SPL1T5][SPL1T5-tuner-falls-at-once]]
+(define-claim "SPL1T5" tuner-falls-at-once
+    "note-split-time: a faster call sets the figure, a slower one raises it an eighth of the way; prefer-split-p follows and probes."
+  (let* ((pool (luv-physics::make-worker-pool 1))
+         (job luv-physics::+job-solve+)
+         (split (luv-physics::worker-pool-split-ns pool))
+         (whole (luv-physics::worker-pool-whole-ns pool)))
+    (luv-physics::note-split-time pool job t 1000 2048)
+    (check (= 500 (aref split job)) "first call: ~D" (aref split job))
+    (luv-physics::note-split-time pool job t 11000 2048)
+    (check (= 1125 (aref split job)) "a slow call: ~D" (aref split job))
+    (luv-physics::note-split-time pool job t 400 1024)
+    (check (= 400 (aref split job)) "a fast call: ~D" (aref split job))
+    (luv-physics::note-split-time pool job nil 640 1024)
+    (check (and (= 640 (aref whole job)) (= 400 (aref split job))) "whole ~D, split ~D" (aref whole job) (aref split job))
+    (let ((ways (loop repeat luv-physics::+split-probe+ collect (luv-physics::prefer-split-p pool job))))
+      (check (= (1- luv-physics::+split-probe+) (count t ways)) "split on ~D of ~D calls" (count t ways) (length ways))
+      (check (null (car (last ways))) "the probe is not the last of ~D calls" luv-physics::+split-probe+))))
+;; SPL1T5-tuner-falls-at-once ends here
+
 ;; [[file:../physics.org::#SPL1T5][SPL1T5-tuned-pool-keeps-the-bits]]
 (define-claim "SPL1T5" tuned-pool-keeps-the-bits
     "A self-tuning pool of two workers reaches one worker's hash after 140 steps, having run the solve both ways."
@@ -8956,6 +8976,32 @@ overlaps, the contact table's cursor, misses and touched count, and the contacts
                "~D workers: the terrain never ran in pieces" (physics-world-workers w)))
       (mapc #'close-physics-world worlds))))
 ;; MYWP1C-terrain-pieces-as-one-walk ends here
+
+;; [[file:../physics.org::#B3NCHW][B3NCHW-worker-table-reads-its-figures]]
+(define-claim "B3NCHW" worker-table-reads-its-figures
+    "run-worker-benchmark over 200 balls: a row per family, cells under the header's, one hash, shares within 0-100 %, the bound from the share."
+  (let* ((text (with-output-to-string (s) (luv-physics::run-worker-benchmark :sizes '(200) :stream s)))
+         (lines (remove-if-not (lambda (l) (and (plusp (length l)) (char= #\| (char l 0))))
+                               (uiop:split-string text :separator (string #\Newline))))
+         (families (available-kernel-families)))
+    (flet ((cells (line) (mapcar (lambda (c) (string-trim " " c)) (rest (butlast (uiop:split-string line :separator "|")))))
+           (number (cell) (let ((*read-default-float-format* 'double-float))
+                            (read-from-string (string-right-trim "%x" cell)))))
+      (check (= (+ 2 (length families)) (length lines)) "~D lines" (length lines))
+      (let* ((header (cells (first lines)))
+             (at (lambda (name) (position name header :test #'string=))))
+        (check (every (lambda (l) (= (length header) (length (cells l)))) (cddr lines)) "a row's cells are not the header's")
+        (loop for row in (cddr lines) for family in families
+              do (let ((c (cells row)))
+                   (check (equal (list "200" (string-downcase family)) (subseq c 0 2)) "row ~S" c)
+                   (check (string= "yes" (nth (funcall at "same hash") c)) "~(~A~): hashes differ" family)
+                   (let ((serial (/ (number (nth (funcall at "serial share") c)) 100))
+                         (split (number (nth (funcall at "split, 2 w") c))))
+                     (check (<= 0 serial 1) "~(~A~): serial share ~A" family serial)
+                     (check (<= 0 split 100) "~(~A~): split ~A %" family split)
+                     (check (< (abs (- (number (nth (funcall at "bound, 2 w") c)) (/ 1 (+ serial (/ (- 1 serial) 2))))) 0.01)
+                            "~(~A~): the bound ~A is not Amdahl's for ~A" family (nth (funcall at "bound, 2 w") c) serial))))))))
+;; B3NCHW-worker-table-reads-its-figures ends here
 
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-every-scene-resumes-to-the-bit]]
 (defun resumed-scene-hashes (name family steps more &key (count 300))
