@@ -8761,6 +8761,13 @@ solved by FAMILY. #SPL1T5"
     (dotimes (i 10) (add-physics-body w (+ 3.0 (* 0.25 i)) 7.0 3.5 :radius 0.12))
     w))
 
+(defun box-basin-world (family)
+  "A 120-ball basin with six box bodies dropped among the balls, solved by FAMILY. #SPL1T5"
+  (let ((w (make-basin-world 120 :kernels family)))
+    (dotimes (i 6 w)
+      (add-physics-box w (+ 1.5 (* 0.9 i)) 3.0 (+ 2.5 (* 0.3 i)) 0.3 0.3 0.3 :density 200
+                       :orientation '(0.96 0.2 0 0.2)))))
+
 (define-claim "SPL1T5" same-bits-at-any-worker-count
     "One worker, and 2, 3 and 4 taking the steps in turn, reach one state hash and one event order, in every family, over the basin, churn with boxes, sleep and wake, joints and the standard scenes."
   (dolist (family (available-kernel-families))
@@ -8769,7 +8776,8 @@ solved by FAMILY. #SPL1T5"
                      (list "churn and boxes" 30 (lambda () (make-basin-world 160 :kernels family :sleep t))
                            #'churn-and-sweep)
                      (list "sleep and wake" 48 (lambda () (sleepers-woken-world family)) nil)
-                     (list "joints" 30 (lambda () (chain-world family)) nil))
+                     (list "joints" 30 (lambda () (chain-world family)) nil)
+                     (list "box bodies" 30 (lambda () (box-basin-world family)) nil))
             do (let ((runs (loop for counts in '((1) (2 3 4))
                                  collect (multiple-value-list (worker-run make steps counts :each each)))))
                  (check (= 1 (length (remove-duplicates runs :key #'first)))
@@ -8976,6 +8984,22 @@ overlaps, the contact table's cursor, misses and touched count, and the contacts
                "~D workers: the terrain never ran in pieces" (physics-world-workers w)))
       (mapc #'close-physics-world worlds))))
 ;; MYWP1C-terrain-pieces-as-one-walk ends here
+
+;; [[file:../physics.org::#MYWP1C][MYWP1C-a-body-counts-eight-rows]]
+(define-claim "MYWP1C" a-body-counts-eight-rows
+    "At the default split-rows, 512 bodies take the build and the terrain phase to the pool, 511 do not."
+  (dolist (balls '(512 511))
+    (let ((w (make-basin-world balls)))
+      (luv-physics::open-world-workers w 2)
+      (step-physics-world w)
+      (let ((spent (luv-physics::worker-pool-spent (luv-physics::physics-world-pool w)))
+            (want (= balls 512)))
+        (check (eq want (plusp (aref spent luv-physics::+job-pair-build+))) "~D balls: the build ~:[stayed whole~;ran through the pool~]"
+               balls (plusp (aref spent luv-physics::+job-pair-build+)))
+        (check (eq want (plusp (aref spent luv-physics::+job-terrain+))) "~D balls: the terrain ~:[stayed whole~;ran through the pool~]"
+               balls (plusp (aref spent luv-physics::+job-terrain+))))
+      (close-physics-world w))))
+;; MYWP1C-a-body-counts-eight-rows ends here
 
 ;; [[file:../physics.org::#B3NCHW][B3NCHW-worker-table-reads-its-figures]]
 (define-claim "B3NCHW" worker-table-reads-its-figures
