@@ -7254,6 +7254,26 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (check (eq t (validate-physics-world w)))))
 ;; BXCELL-turned-stack-stands ends here
 
+;; [[file:../physics.org::#BXCELL][BXCELL-turned-cubes-meet-face-to-face]]
+(define-claim "BXCELL" turned-cubes-meet-face-to-face
+    "Two cubes turned 30 degrees about y meet face to face along their x or z axis and share the speed without spinning."
+  (let* ((phi (/ pi 6)) (q (list (cos (/ phi 2)) 0 (sin (/ phi 2)) 0)) (c (cos phi)) (s (sin phi)))
+    ;; the cubes' own x axis in the world is (cos, 0, -sin), their z axis (sin, 0, cos)
+    (loop for (ux uz) in (list (list c (- s)) (list s c))
+          do (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+                    (struck (add-physics-box w 0 0 0 0.5 0.5 0.5 :orientation q))
+                    (sent (add-physics-box w (* -1.1 ux) 0 (* -1.1 uz) 0.5 0.5 0.5 :orientation q :vx ux :vz uz)))
+               (dotimes (i 15) (step-physics-world w))
+               (dolist (box (list struck sent))
+                 (multiple-value-bind (vx vy vz) (physics-body-velocity w box)
+                   (check (< (max (abs (- vx (* 0.5 ux))) (abs (- vz (* 0.5 uz)))) 2e-3)
+                          "along (~,3F 0 ~,3F): a cube moves at ~,5F ~,5F" ux uz vx vz)
+                   (check (< (abs vy) 1e-4) "along (~,3F 0 ~,3F): a cube moves up at ~,6F" ux uz vy))
+                 (let ((spin (sqrt (reduce #'+ (mapcar (lambda (v) (* v v))
+                                                       (multiple-value-list (physics-body-angular-velocity w box)))))))
+                   (check (< spin 1e-3) "along (~,3F 0 ~,3F): a cube spins at ~,5F rad/s" ux uz spin)))))))
+;; BXCELL-turned-cubes-meet-face-to-face ends here
+
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-families-agree-on-boxes]]
 (define-claim "BXSOLV" families-agree-on-boxes
     "A tumbling box and a sliding box end in the same state hash in every kernel family."
