@@ -13138,7 +13138,7 @@ Return the steps run. #H7P4CX"
                       :vz (f32 (physics-player-vz player)) :owner player)))
 ;; The player: a box that walks:1 ends here
 
-;; [[file:../physics.org::#H7P4CX][The player: a box that walks:11]]
+;; [[file:../physics.org::#H7P4CX][The player: a box that walks:12]]
 (defmethod print-object ((player physics-player) stream)
   (print-unreadable-object (player stream :type t)
     (format stream "at (~,3F ~,3F ~,3F) moving (~,3F ~,3F ~,3F) ~:[in the air~;standing~]"
@@ -13151,7 +13151,7 @@ Return the steps run. #H7P4CX"
           (loop for slot in '(x y z vx vy vz grounded jump-held half-width height eye-height
                               jump-speed walk-speed step-ahead)
                 collect (cons (string-downcase slot) (slot-value player slot)))))
-;; The player: a box that walks:11 ends here
+;; The player: a box that walks:12 ends here
 
 ;; [[file:../physics.org::#Q5V1EW][The bodies as a query sees them:1]]
 (defstruct (query-view (:constructor make-query-view ()))

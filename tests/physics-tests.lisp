@@ -2132,6 +2132,38 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
                  "~D pair contacts for ~D close pairs" (hash-table-count generated) (hash-table-count expected))))))))
 ;; D9W4CH-pairs-match-brute-force ends here
 
+;; [[file:../physics.org::#D9W4CH][D9W4CH-pair-list-holds-pairs-within-the-margin]]
+(define-claim "D9W4CH" pair-list-holds-pairs-within-the-margin
+    "In a lattice along (1,2,0), the dense grid's pair list holds all 48 pairs nearer than 0.6 m."
+  (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+         (k (/ 0.59 (sqrt 5.0))))
+    (dotimes (i 4)
+      (dotimes (j 4)
+        (dotimes (l 4)
+          (add-physics-body w (+ (* i k) (* 0.7 l)) (* i 2 k) (* 0.7 j) :radius 0.25))))
+    (step-physics-world w)
+    (check (luv-physics::hash-grid-dense (luv-physics::physics-world-awake-grid w)) "the grid is hashed")
+    (let* ((plist (luv-physics::physics-world-pair-list w))
+           (awake (luv-physics::physics-world-awake w))
+           (xs (luv-physics::body-columns-x awake)) (ys (luv-physics::body-columns-y awake))
+           (zs (luv-physics::body-columns-z awake))
+           (listed (make-hash-table :test 'equal))
+           (near '()))
+      (dotimes (q (luv-physics::pair-list-count plist))
+        (let* ((p (aref (luv-physics::pair-list-pairs plist) q)) (a (ash p -24)) (b (ldb (byte 24 0) p)))
+          (setf (gethash (list (min a b) (max a b)) listed) t)))
+      (dotimes (a 64)
+        (loop for b from (1+ a) below 64
+              when (< (+ (expt (- (aref xs a) (aref xs b)) 2) (expt (- (aref ys a) (aref ys b)) 2)
+                         (expt (- (aref zs a) (aref zs b)) 2))
+                      0.36)
+                do (push (list a b) near)))
+      (check (= 48 (length near)) "~D pairs within 0.6 m" (length near))
+      (let ((missed (remove-if (lambda (pair) (gethash pair listed)) near)))
+        (check (null missed) "~D of the ~D pairs within 0.6 m are not listed, e.g. rows ~S"
+               (length missed) (length near) (first missed))))))
+;; D9W4CH-pair-list-holds-pairs-within-the-margin ends here
+
 ;; [[file:../physics.org::#D9W4CH][D9W4CH-dense-bounds-at-the-limit]]
 (define-claim "D9W4CH" dense-bounds-at-the-limit
     "A grid is dense up to exactly 64 cells an item plus 64, and up to 4095 cells a side, and hashed past either."
@@ -3508,6 +3540,24 @@ use before it. #QKS4GZ"
              "the upper ball is ~,4F m above the lower" (- (body-y w upper) (body-y w lower))))))
 ;; F1LT3R-new-filter-drops-contacts ends here
 
+;; [[file:../physics.org::#F1LT3R][F1LT3R-new-filter-wakes-strictly-within-reach]]
+(define-claim "F1LT3R" new-filter-wakes-strictly-within-reach
+    "A new filter wakes a sleeper nearer than the reach, and not one at exactly the reach."
+  (dolist (nearer '(nil t))
+    (let* ((w (make-physics-world :gravity '(0 0 0)))
+           (r (+ (+ 0.25 (luv-physics::f32 (luv-physics::physics-world-margin w))) 0.25))
+           (x (if nearer (- r (* 2 single-float-epsilon r)) r))
+           (a (add-physics-body w 0 0 0 :radius 0.25))
+           (b (add-physics-body w x 0 0 :radius 0.25)))
+      (dotimes (i 120) (step-physics-world w))
+      (check (= 2 (physics-world-sleeping-count w)) "~D of 2 asleep" (physics-world-sleeping-count w))
+      (check (= x (physics-body-position w b)))
+      (set-physics-body-filter w a :category 2)
+      (check (physics-body-awake-p w a) "the body given the filter sleeps")
+      (check (eq nearer (physics-body-awake-p w b)) "the sleeper at ~,8F m, the reach ~,8F m: awake ~S"
+             x r (physics-body-awake-p w b)))))
+;; F1LT3R-new-filter-wakes-strictly-within-reach ends here
+
 ;; [[file:../physics.org::#S3NS0R][S3NS0R-rolling-ball-crosses-once]]
 (define-claim "S3NS0R" rolling-ball-crosses-once
     "A ball rolling at 10/7 m/s across a sensor enters at step 71 and leaves at step 111, once each."
@@ -4212,6 +4262,30 @@ use before it. #QKS4GZ"
                       "at ~,2F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
 ;; W4K3PH-wake-speed-is-the-edge ends here
 
+;; [[file:../physics.org::#P41BLD][P41BLD-crowded-build-lists-each-pair-once]]
+(define-claim "P41BLD" crowded-build-lists-each-pair-once
+    "In a crowd of 300 overlapping balls each built pair list names every pair at most once."
+  (let ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+        (next (luv-physics::fixed-sequence 3)))
+    (dotimes (i 300)
+      (add-physics-body w (* 1.2 (funcall next)) (* 1.2 (funcall next)) (* 1.2 (funcall next)) :radius 0.2))
+    (dotimes (step 3)
+      (step-physics-world w)
+      (let* ((plist (luv-physics::physics-world-pair-list w))
+             (seen (make-hash-table))
+             (twice (loop for q below (luv-physics::pair-list-count plist)
+                          for p = (aref (luv-physics::pair-list-pairs plist) q)
+                          for key = (let ((a (ash p -24)) (b (ldb (byte 24 0) p))) (+ (* 1000 (min a b)) (max a b)))
+                          count (gethash key seen)
+                          do (setf (gethash key seen) t))))
+        (check (= (1+ step) (luv-physics::pair-list-builds plist)) "step ~D: ~D builds" step
+               (luv-physics::pair-list-builds plist))
+        (check (= 300 (count-if (lambda (o) (>= o luv-physics::+overlaps-per-body+))
+                                (luv-physics::pair-list-overlaps plist) :end 300))
+               "step ~D: not every row took its share" step)
+        (check (zerop twice) "step ~D: ~D pairs listed twice" step twice)))))
+;; P41BLD-crowded-build-lists-each-pair-once ends here
+
 ;; [[file:../physics.org::#P41STG][P41STG-pair-list-finds-every-pair]]
 (define-claim "P41STG" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
@@ -4623,6 +4697,20 @@ use before it. #QKS4GZ"
     (check (and (> (first struck) 5.5) (> (second struck) 3.1) (> (third struck) 4.7))
            "the struck ball ends at ~S" struck)))
 ;; P41STG-pairs-on-every-side ends here
+
+;; [[file:../physics.org::#MYWCNT][MYWCNT-contact-strictly-under-the-speculative-distance]]
+(define-claim "MYWCNT" contact-strictly-under-the-speculative-distance
+    "A resting ball whose gap to the floor is exactly four slops has no contact; a rounding lower, one."
+  (dolist (lower '(nil t))
+    (let* ((w (make-physics-world :terrain (make-floor-terrain) :gravity '(0 0 0) :sleep nil))
+           (r (scale-float 1.0 -6))
+           (y (+ r (* 4.0 (luv-physics::f32 (luv-physics::physics-world-slop w)))))
+           (y (if lower (- y (* single-float-epsilon y)) y)))
+      (add-physics-body w 2.5 y 2.5 :radius r)
+      (step-physics-world w)
+      (check (= (if lower 1 0) (physics-world-last-step-contact-count w))
+             "the ball's centre at ~,9F: ~D contacts" y (physics-world-last-step-contact-count w)))))
+;; MYWCNT-contact-strictly-under-the-speculative-distance ends here
 
 ;; [[file:../physics.org::#MYWSTG][MYWSTG-clear-rows-skip-safely]]
 (define-claim "MYWSTG" clear-rows-skip-safely
@@ -5844,6 +5932,21 @@ the phases of a step before the prepare phase. #PR3PAR"
                  (check (equal want got) "~A: ~S, not ~S" label got want))))))
 ;; K3RNLS-entry-ranges-exact ends here
 
+;; [[file:../physics.org::#K3RNLS][K3RNLS-bias-switch-is-a-boolean]]
+(define-claim "K3RNLS" bias-switch-is-a-boolean
+    "physics-solve-contacts refuses a use-bias that is not T or NIL, naming it, the world unchanged."
+  (let* ((w (make-floor-world))
+         (k (luv-physics::physics-world-kernels w)))
+    (add-physics-body w 3.5 1.0 3.5)
+    (step-physics-world w)
+    (let ((hash (physics-world-state-hash w))
+          (got (handler-case (progn (physics-solve-contacts k w 60.0 :yes 0.0) :ran)
+                 (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+      (check (eq :use-bias got) "use-bias :yes: ~S" got)
+      (check (= hash (physics-world-state-hash w)))
+      (check (eq t (validate-physics-world w))))))
+;; K3RNLS-bias-switch-is-a-boolean ends here
+
 ;; [[file:../physics.org::#K3RNLS][K3RNLS-substep-kernels-call-no-generic-arithmetic]]
 (define-claim "K3RNLS" substep-kernels-call-no-generic-arithmetic
     "No kernel a substep runs on every row, in any family or standard feature set, calls SBCL's generic arithmetic."
@@ -6153,6 +6256,31 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (< (abs (- (/ got want) 1)) 0.002d0)
                "from ~,1F m: the hit reports ~,4F m/s, the impact was at ~,4F" h got want)))))
 ;; R3ST1T-hit-reports-impact-speed ends here
+
+;; [[file:../physics.org::#R3ST1T][R3ST1T-row-hits-report-impact-speed]]
+(define-claim "R3ST1T" row-hits-report-impact-speed
+    "Sixteen balls landing together each report their speed at impact in every family."
+  (dolist (family (available-kernel-families))
+    (let* ((world (make-physics-world :terrain (make-floor-terrain) :kernels family))
+           (r 0.25d0) (h 1d0) (slop (float *physics-linear-slop* 1d0))
+           (balls (loop for i below 16 collect (add-physics-body world (+ 0.5 i) (+ r h) 3.5 :radius r :restitution 0.5
+                                                                                              :report-hits t)))
+           (want (sqrt (* 2 9.81d0 (+ h slop))))
+           (got (make-hash-table)))
+      (loop repeat 120 until (= 16 (hash-table-count got)) do
+        (step-physics-world world)
+        (map-physics-events
+         (lambda (kind a b x y z speed datum)
+           (declare (ignore b x y z datum))
+           (when (and (eq kind :hit) (not (gethash a got))) (setf (gethash a got) speed)))
+         world))
+      (check (= 16 (hash-table-count got)) "~(~A~): ~D of 16 hits reported" family (hash-table-count got))
+      (dolist (ball balls)
+        (let ((speed (gethash ball got)))
+          (when speed
+            (check (< (abs (- (/ speed want) 1)) 0.002d0)
+                   "~(~A~): a hit reports ~,4F m/s, the impact was at ~,4F" family speed want)))))))
+;; R3ST1T-row-hits-report-impact-speed ends here
 
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-threshold-is-the-edge]]
 (define-claim "R3ST1T" threshold-is-the-edge
@@ -6498,6 +6626,22 @@ world, the balls and the joints. #J0S0LV"
            (mapcar (lambda (b) (physics-body-awake-p w b)) balls))
     (check (eq t (validate-physics-world w)))))
 ;; J0SL3P-groups-sleep-and-wake-together ends here
+
+;; [[file:../physics.org::#J0SL3P][J0SL3P-wake-counts-the-group]]
+(define-claim "J0SL3P" wake-counts-the-group
+    "The wake phase returns 4 when a chain of five asleep wakes with its lowest ball."
+  (let* ((w (make-floor-world))
+         (balls (loop for i from 1 to 5 collect (add-physics-body w 3.5 (- 10 (* 0.5 i)) 3.5 :radius 0.1))))
+    (add-physics-joint w :distance (first balls) nil :anchor-b '(3.5 10 3.5))
+    (loop for (p q) on balls while q do (add-physics-joint w :distance p q))
+    (dotimes (i 120) (step-physics-world w))
+    (check (= 5 (physics-world-sleeping-count w)) "~D of 5 asleep" (physics-world-sleeping-count w))
+    (apply-physics-impulse w (fifth balls) 0.5 0 0)
+    (check (= 4 (physics-world-sleeping-count w)))
+    (let ((woken (luv-physics::wake-phase w)))
+      (check (= 4 woken) "the wake phase says ~D woke" woken))
+    (check (every (lambda (b) (physics-body-awake-p w b)) balls))))
+;; J0SL3P-wake-counts-the-group ends here
 
 ;; [[file:../physics.org::#J0OBJT][J0OBJT-joint-describes-its-row]]
 (define-claim "J0OBJT" joint-describes-its-row
@@ -7078,6 +7222,42 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (check (eq t (validate-physics-world w)))))
 ;; BXCELL-turned-and-crossed-cubes ends here
 
+;; [[file:../physics.org::#BXCELL][BXCELL-turned-stack-stands]]
+(define-claim "BXCELL" turned-stack-stands
+    "Two cubes stacked and both turned 30 degrees about the vertical stand, one over the other, and sleep."
+  (let* ((phi (/ pi 6)) (q (list (cos (/ phi 2)) 0 (sin (/ phi 2)) 0))
+         (w (make-physics-world :terrain (make-floor-terrain)))
+         (low (add-physics-box w 2.5 0.5 2.5 0.5 0.5 0.5 :orientation q))
+         (high (add-physics-box w 2.5 1.5 2.5 0.5 0.5 0.5 :orientation q)))
+    (dotimes (i 120) (step-physics-world w))
+    (loop for box in (list low high) for rest in (list (- 0.5 *physics-linear-slop*) (- 1.5 (* 2 *physics-linear-slop*)))
+          do (multiple-value-bind (x y z) (physics-body-position w box)
+               (check (< (max (abs (- x 2.5)) (abs (- z 2.5)) (abs (- y rest))) 1e-2)
+                      "a cube of the stack is at ~,4F ~,4F ~,4F, not over (2.5, 2.5) at ~,4F" x y z rest)))
+    (check (not (physics-body-awake-p w high)) "the upper cube is awake at 2 s")
+    (check (eq t (validate-physics-world w)))))
+;; BXCELL-turned-stack-stands ends here
+
+;; [[file:../physics.org::#BXCELL][BXCELL-turned-cubes-meet-face-to-face]]
+(define-claim "BXCELL" turned-cubes-meet-face-to-face
+    "Two cubes turned 30 degrees about y meet face to face along their x or z axis and share the speed without spinning."
+  (let* ((phi (/ pi 6)) (q (list (cos (/ phi 2)) 0 (sin (/ phi 2)) 0)) (c (cos phi)) (s (sin phi)))
+    ;; the cubes' own x axis in the world is (cos, 0, -sin), their z axis (sin, 0, cos)
+    (loop for (ux uz) in (list (list c (- s)) (list s c))
+          do (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+                    (struck (add-physics-box w 0 0 0 0.5 0.5 0.5 :orientation q))
+                    (sent (add-physics-box w (* -1.1 ux) 0 (* -1.1 uz) 0.5 0.5 0.5 :orientation q :vx ux :vz uz)))
+               (dotimes (i 15) (step-physics-world w))
+               (dolist (box (list struck sent))
+                 (multiple-value-bind (vx vy vz) (physics-body-velocity w box)
+                   (check (< (max (abs (- vx (* 0.5 ux))) (abs (- vz (* 0.5 uz)))) 2e-3)
+                          "along (~,3F 0 ~,3F): a cube moves at ~,5F ~,5F" ux uz vx vz)
+                   (check (< (abs vy) 1e-4) "along (~,3F 0 ~,3F): a cube moves up at ~,6F" ux uz vy))
+                 (let ((spin (sqrt (reduce #'+ (mapcar (lambda (v) (* v v))
+                                                       (multiple-value-list (physics-body-angular-velocity w box)))))))
+                   (check (< spin 1e-3) "along (~,3F 0 ~,3F): a cube spins at ~,5F rad/s" ux uz spin)))))))
+;; BXCELL-turned-cubes-meet-face-to-face ends here
+
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-families-agree-on-boxes]]
 (define-claim "BXSOLV" families-agree-on-boxes
     "A tumbling box and a sliding box end in the same state hash in every kernel family."
@@ -7314,6 +7494,32 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
             (check (every (lambda (h) (= h (first hashes))) hashes)
                    "dt ~,3F thick ~A from ~A: the families end apart" dt thick start)))))))
 ;; BXSWEP-fast-boxes-stay-out-of-cells ends here
+
+;; [[file:../physics.org::#BXSWEP][BXSWEP-boxes-thrown-sideways-stop-at-walls]]
+(define-claim "BXSWEP" boxes-thrown-sideways-stop-at-walls
+    "A cube thrown at 50 m/s along x or z into a wall one cell thick reaches it and stays out of it."
+  (dolist (axis '(:x :z))
+    (dolist (dt (list (/ 1.0 60) (/ 1.0 20)))
+      (dolist (orientation '((1 0 0 0) (0.9 0.3 0.2 0.1)))
+        (let ((terrain (make-voxel-terrain)))
+          (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+          (if (eq axis :x)
+              (fill-terrain terrain 10 -16 -8 11 32 -3 t)
+              (fill-terrain terrain -16 -16 10 32 32 11 t))
+          (let* ((w (make-physics-world :terrain terrain :gravity '(0 0 0)))
+                 (box (if (eq axis :x)
+                          (add-physics-box w 2.5 2.5 -5.5 0.5 0.5 0.5 :vx 50 :orientation orientation)
+                          (add-physics-box w -5.5 12.5 0.5 0.5 0.5 0.5 :vz 50 :orientation orientation)))
+                 (farthest -100.0))
+            (dotimes (i (round 2 dt))
+              (step-physics-world w dt)
+              (multiple-value-bind (x y z) (physics-body-position w box)
+                (declare (ignore y))
+                (setf farthest (max farthest (if (eq axis :x) x z)))))
+            (check (< 9.2 farthest 9.51) "along ~(~A~), dt ~,3F, turned ~A: the centre went as far as ~,4F"
+                   axis dt (second orientation) farthest)
+            (check (eq t (validate-physics-world w)))))))))
+;; BXSWEP-boxes-thrown-sideways-stop-at-walls ends here
 
 ;; [[file:../physics.org::#PYR4MD][PYR4MD-the-pyramid-is-box3ds]]
 (define-claim "PYR4MD" the-pyramid-is-box3ds
@@ -7965,6 +8171,23 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (<= 2 colours 25) "~D colours" colours)
       (check (< 0d0 seconds 1d0) "the step took ~,6F s" seconds))))
 ;; IDVK7G-step-statistics ends here
+
+;; [[file:../physics.org::#IDVK7G][IDVK7G-phase-bytes-within-the-run]]
+(define-claim "IDVK7G" phase-bytes-within-the-run
+    "The phase clock's bytes over ten steps are no more than the image consed across them."
+  (let* ((w (make-basin-world 100))
+         (n (length *physics-phases*))
+         (clock (make-array (* 2 n) :element-type 'fixnum :initial-element 0)))
+    (step-physics-world w)
+    (setf (luv-physics::physics-world-phase-clock w) clock)
+    (let ((before (sb-ext:get-bytes-consed)))
+      (dotimes (i 10) (step-physics-world w))
+      (let ((run (- (sb-ext:get-bytes-consed) before))
+            (counted (reduce #'+ clock :start n)))
+        (setf (luv-physics::physics-world-phase-clock w) nil)
+        (check (every (lambda (b) (>= b 0)) (subseq clock n)) "bytes ~S" (subseq clock n))
+        (check (<= counted run) "the phases counted ~D bytes, the run consed ~D" counted run)))))
+;; IDVK7G-phase-bytes-within-the-run ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-failed-step-restores-sleeping-rows]]
 (define-claim "IDVK7G" failed-step-restores-sleeping-rows
@@ -9354,6 +9577,28 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
       (check (= 12 (physics-world-sleeping-count world)) "~D of 12 asleep" (physics-world-sleeping-count world)))))
 ;; SN4P0T-sleepers-cost-what-the-awake-cost ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-changed-pair-rows-restore]]
+(define-claim "SN4P0T" changed-pair-rows-restore
+    "A pair list built for rows that have since changed restores with its own handles."
+  (let* ((w (make-floor-world))
+         (a (add-physics-body w 2.5 0.25 2.5 :radius 0.25))
+         (b (add-physics-body w 6.5 3.0 6.5 :radius 0.25)))
+    (loop repeat 300 until (= 1 (physics-world-sleeping-count w)) do (step-physics-world w))
+    (check (and (not (physics-body-awake-p w a)) (physics-body-awake-p w b)) "not the resting ball alone asleep")
+    (add-physics-body w 10.5 2.0 2.5 :radius 0.25)
+    (flet ((rows (world)
+             (let* ((plist (luv-physics::physics-world-pair-list world))
+                    (n (max 0 (luv-physics::pair-list-rows plist))))
+               (list n (coerce (subseq (luv-physics::pair-list-handles plist) 0 n) 'list)))))
+      (let ((before (rows w))
+            (awake (coerce (subseq (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 0 2) 'list)))
+        (check (equal (second before) (list a b)) "the list was built for ~S" before)
+        (check (notany #'= (second before) awake) "the awake rows ~S share a handle with the list's ~S" awake before)
+        (let ((copy (make-floor-world)))
+          (restore-physics-world copy (snapshot-physics-world w))
+          (check (equal before (rows copy)) "restored, the list holds ~S, not ~S" (rows copy) before))))))
+;; SN4P0T-changed-pair-rows-restore ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-restore-trades-every-contact-column]]
 (define-claim "SN4P0T" restore-trades-every-contact-column
     "The contact columns a restore decodes and trades are every column of contact-columns, in order."
@@ -10074,6 +10319,20 @@ in the order of *physics-scene-features*. #K5DF9S"
                 do (check (every (lambda (a b) (< (abs (- a b)) 1d-6)) want got)
                           "~A, ~A: the walker ends at ~S, not ~S" twin name got want)))))))
 ;; H7P4CX-walker-on-every-axis ends here
+
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-looks-ahead-along-the-blocked-axis]]
+(define-claim "H7P4CX" walker-looks-ahead-along-the-blocked-axis
+    "A walker stopped along z alone climbs a one-cell ledge, though 0.3 cells ahead along x it rises to two."
+  (let ((terrain (make-floor-terrain))
+        (p (make-physics-player 1.6d0 0 2.7d0)))
+    (fill-terrain terrain -5 0 3 10 1 4 t)
+    (fill-terrain terrain 2 1 3 3 2 4 t)
+    (step-physics-player p terrain :move-x 0.05d0 :move-z 1d0)
+    (check (< (abs (- (physics-player-z p) 2.7d0)) 1d-9) "the ledge did not stop it: z = ~F" (physics-player-z p))
+    (check (= (physics-player-vy p) 5d0) "it did not jump: vy = ~F" (physics-player-vy p))
+    (step-physics-player p terrain :move-x 0.05d0 :move-z 1d0)
+    (check (> (physics-player-y p) 0d0) "its soles stayed on the floor")))
+;; H7P4CX-walker-looks-ahead-along-the-blocked-axis ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-limits-at-their-edges]]
 (define-claim "H7P4CX" walker-limits-at-their-edges
@@ -12112,6 +12371,28 @@ at rest near the start. #RH7T05"
         (check (null (physics-ray-cast w -5 0.35 0 1 0 0 20)) "~A: the ray over the top met it" state)))
     (check (eq t (validate-physics-world w)))))
 ;; C4STBX-casts-meet-box-bodies ends here
+
+;; [[file:../physics.org::#C4STBX][C4STBX-casts-meet-turned-boxes-where-they-stand]]
+(define-claim "C4STBX" casts-meet-turned-boxes-where-they-stand
+    "Rays along x, y and z meet a box turned about (1,0,1) off the origin on its faces; a ball beside it as a ball."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (s (sqrt 0.5))
+         (ball (add-physics-body w 10 2 -3 :radius 0.5))
+         (box (add-physics-box w 1 2 -3 0.5 0.3 0.4 :orientation (list 0 s 0 s))))
+    (loop for (ox oy oz ux uy uz want handle) in (list (list -4 2 -3 1 0 0 4.6 box) (list 1 -3 -3 0 1 0 4.7 box)
+                                                       (list 1 2 -8 0 0 1 4.5 box) (list 6 2 -3 1 0 0 3.5 ball))
+          do (let ((hit (physics-ray-cast w ox oy oz ux uy uz 20)))
+               (check (and hit (eql handle (physics-hit-handle hit))) "the ray along (~D ~D ~D) met ~S" ux uy uz
+                      (and hit (physics-hit-handle hit)))
+               (when hit
+                 (check (< (abs (- (physics-hit-distance hit) want)) 1e-5)
+                        "the ray along (~D ~D ~D) met it at ~,6F, not ~A" ux uy uz (physics-hit-distance hit) want)
+                 (check (< (max (abs (+ (physics-hit-nx hit) ux)) (abs (+ (physics-hit-ny hit) uy))
+                                (abs (+ (physics-hit-nz hit) uz)))
+                           1e-5)
+                        "the ray along (~D ~D ~D): normal ~,5F ~,5F ~,5F" ux uy uz
+                        (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit)))))))
+;; C4STBX-casts-meet-turned-boxes-where-they-stand ends here
 
 ;; [[file:../physics.org::#R4YC57][R4YC57-rays-match-brute-force]]
 (defun query-test-scene ()
