@@ -4378,7 +4378,7 @@ with the face the ray enters it through. #SW33P7"
                      (span (1+ (ceiling (* half (hash-grid-inv-cell grid))))))
                 (do-grid-neighbours (i grid ccx ccy ccz :span span)
                  (when (and (rows-meet-p filtering (aref flags i) (ash (aref filter b) +flag-filter-shift+))
-                            ;; a box body meets no posted box yet ([[#BXR0WS]])
+                            ;; a box body meets a posted box through its own points ([[#BXPUSH]])
                             (not (logtest (aref flags i) +flag-box-shape+)))
                   (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                          ;; the body's velocity relative to the box, and how far it can travel
@@ -6979,7 +6979,10 @@ feature), the handle of the box that found it, the normal (pushing the first sid
 second), the levers from both centres, the two tangents, the gap at the step's start, the
 effective masses, the friction, the three carried impulses, and each side's inverse mass and world
 inverse inertia's six entries, then the point's restitution, its largest push this step, the
-speed it struck at this step, its bounce and its normal velocity before the pass ([[#BXSOLV]]). #BXR0WS"
+speed it struck at this step, its bounce and its normal velocity before the pass ([[#BXSOLV]]), and,
+for a point against a posted box, the box's velocity as the first side's point velocity less the
+second's loses it, that velocity along the normal, and the cap of the point's normal impulse
+(the largest single-float for any other point, [[#BXPUSH]]). #BXR0WS"
   (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
   (sx single-float) (sy single-float) (sz single-float) (imb single-float)
   (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
@@ -6993,7 +6996,8 @@ speed it struck at this step, its bounce and its normal velocity before the pass
   (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
   (i22 single-float) (i23 single-float) (i33 single-float)
   (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float)
-  (approach single-float))
+  (approach single-float)
+  (kvx single-float) (kvy single-float) (kvz single-float) (kvn single-float) (push-cap single-float))
 
 (defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
   "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
@@ -7002,8 +7006,10 @@ and the count of every slot's points, the awake box rows of this step, their tur
 a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
 step's start (four floats a box), whether this step solves points, the soft coefficients of the
 step, its restitution threshold and gravity times the substep, whether some point of the step
-has restitution, and the grid of the awake spheres that may meet a box with its rows, centres and
-their largest travel this step, and room for the rows a walk of it finds ([[#BXSPHR]]). #BXR0WS"
+has restitution, the grid of the awake spheres that may meet a box with its rows, centres and
+their largest travel this step, and room for the rows a walk of it finds ([[#BXSPHR]]), the time
+of the substep's pass into the step, and whether some point of the step is against a posted box
+([[#BXPUSH]]). #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -7038,7 +7044,8 @@ their largest travel this step, and room for the rows a walk of it finds ([[#BXS
   (sy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (sz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (sphere-travel 0.0 :type single-float)
-  (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
+  (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (elapsed 0.0 :type single-float) (posted nil :type boolean))
 
 (defun box-set-room (set slots)
   "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
@@ -7241,8 +7248,12 @@ zeros. #BXCELL"
     (declare (type index k from) (type fixnum to))
     (with-box-point-columns ((r row) (rb row-b) (kc key) (hc handle) (cnx nx) (cny ny) (cnz nz)
                              (crx rx) (cry ry) (crz rz) (csx sx) (csy sy) (csz sz)
-                             separation normal-impulse tangent-impulse-1 tangent-impulse-2)
+                             separation normal-impulse tangent-impulse-1 tangent-impulse-2
+                             kvx kvy kvz kvn push-cap)
         points
+      ;; still cells and bodies: no kinematic velocity, no cap ([[#BXPUSH]])
+      (setf (aref kvx k) 0.0 (aref kvy k) 0.0 (aref kvz k) 0.0 (aref kvn k) 0.0
+            (aref push-cap k) most-positive-single-float)
       (setf (aref r k) row (aref rb k) row-b (aref kc k) key (aref hc k) handle
             (aref cnx k) nx (aref cny k) ny (aref cnz k) nz (aref crx k) rx (aref cry k) ry (aref crz k) rz
             (aref csx k) sx (aref csy k) sy (aref csz k) sz
@@ -7840,7 +7851,12 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h)))
                (near (and (= (physics-world-near-cells-step world) (physics-world-step-count world))
                           (physics-world-near-cells world)))
-               (rows (box-set-rows set)))
+               (rows (box-set-rows set))
+               (posted (plusp (box-columns-length (physics-world-boxes world))))
+               (gravity (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
+                                  (expt (physics-world-gravity-z world) 2)))))
+          (declare (type single-float gravity))
+          (setf (box-set-posted set) posted)
           (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
             (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
                   (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
@@ -7861,6 +7877,9 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                   ;; the finalize phase does not hold a box's path as a sphere's ([[#SQU33Z]])
                   (when near (setf (aref near i) most-positive-single-float))
                   (let ((reach (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))))
+                    ;; the posted boxes first, so that the cells' points, solved after them, hold ([[#BXPUSH]])
+                    (when posted (find-box-posted-points world set i reach dt
+                                                         (+ (* +posted-push-share+ push-max) (* h gravity))))
                     (find-box-points world set i reach)
                     ;; a box faster than its margin sweeps its corners ([[#BXSWEP]])
                     (when (> reach margin) (sweep-box-corners world set i reach))
@@ -7871,7 +7890,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                         (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))
             ;; the sleeping boxes, held still, against the awake spheres ([[#BXSPHR]])
             (find-sleeping-box-sphere-points world set margin dt gstep)))
-        (prepare-box-point-masses world set)))
+        (prepare-box-point-masses world set)
+        (when (box-set-posted set) (cap-posted-box-points set))))
     (setf (box-set-solving set) (plusp (box-point-columns-length (box-set-points set))))
     (and (box-set-solving set) set)))
 
@@ -7996,13 +8016,17 @@ the point, P/m and I^-1 (r x P) to the first side and their opposites to the sec
                         (aref ,v (+ ob 4)) (- (aref ,v (+ ob 4)) (+ (* (aref j12 ,k) ux) (* (aref j22 ,k) uy) (* (aref j23 ,k) uz)))
                         (aref ,v (+ ob 5)) (- (aref ,v (+ ob 5)) (+ (* (aref j13 ,k) ux) (* (aref j23 ,k) uy) (* (aref j33 ,k) uz)))))))
             (point-velocity ()
-              ;; (v + w x r) of the first side less that of the second
-              (values (- (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
-                         (+ (aref ,v ob) (- (* (aref ,v (+ ob 4)) (aref sz ,k)) (* (aref ,v (+ ob 5)) (aref sy ,k)))))
-                      (- (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
-                         (+ (aref ,v (+ ob 1)) (- (* (aref ,v (+ ob 5)) (aref sx ,k)) (* (aref ,v (+ ob 3)) (aref sz ,k)))))
-                      (- (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k))))
-                         (+ (aref ,v (+ ob 2)) (- (* (aref ,v (+ ob 3)) (aref sy ,k)) (* (aref ,v (+ ob 4)) (aref sx ,k))))))))
+              ;; (v + w x r) of the first side less that of the second, less a posted box's
+              ;; velocity (KVX KVY KVZ, zero but for a point against a posted box: x - 0.0 is x)
+              (values (- (- (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
+                            (+ (aref ,v ob) (- (* (aref ,v (+ ob 4)) (aref sz ,k)) (* (aref ,v (+ ob 5)) (aref sy ,k)))))
+                         (aref kvx ,k))
+                      (- (- (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
+                            (+ (aref ,v (+ ob 1)) (- (* (aref ,v (+ ob 5)) (aref sx ,k)) (* (aref ,v (+ ob 3)) (aref sz ,k)))))
+                         (aref kvy ,k))
+                      (- (- (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k))))
+                            (+ (aref ,v (+ ob 2)) (- (* (aref ,v (+ ob 3)) (aref sy ,k)) (* (aref ,v (+ ob 4)) (aref sx ,k)))))
+                         (aref kvz ,k)))))
        (declare (inline push! point-velocity) (ignorable #'point-velocity))
        ,@body)))
 
@@ -8010,7 +8034,7 @@ the point, P/m and I^-1 (r x P) to the first side and their opposites to the sec
   "Apply every box point's carried impulses again, at the start of a substep. #BXSOLV"
   (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
   (let ((points (box-set-points set)))
-    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-impulse
+    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-impulse
                              tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
                              imb j11 j12 j13 j22 j23 j33)
         points
@@ -8041,14 +8065,15 @@ friction, held in the cone. #BXSOLV"
   (let ((points (box-set-points set)) (turns (box-set-turns set))
         (bias-rate (box-set-bias-rate set)) (mass-scale (box-set-mass-scale set))
         (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set))
-        (threshold (box-set-threshold set))
+        (threshold (box-set-threshold set)) (elapsed (box-set-elapsed set))
         (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
     (declare (type f32-column turns)
-             (type single-float bias-rate mass-scale impulse-scale push-max threshold hgx hgy hgz))
-    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
+             (type single-float bias-rate mass-scale impulse-scale push-max threshold elapsed hgx hgy hgz))
+    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
                              normal-mass tangent-mass-1 tangent-mass-2 friction normal-impulse
                              tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed approach)
+                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed approach
+                             kvn push-cap)
         points
       ;; the normal velocity of each point that may strike, before this pass pushes any point:
       ;; the corners of a box landing flat all strike at the speed the first one does
@@ -8068,11 +8093,13 @@ friction, held in the cone. #BXSOLV"
                  (mx (aref sx k)) (my (aref sy k)) (mz (aref sz k))
                  (qx (aref turns tr)) (qy (aref turns (+ tr 1))) (qz (aref turns (+ tr 2)))
                  (ux (aref turns tb)) (uy (aref turns (+ tb 1))) (uz (aref turns (+ tb 2)))
-                 ;; the gap now: moved by each side's delta and turn (the dummy's are zero)
-                 (s (+ (aref separation k)
-                       (* ax (- (+ (aref d p) (- (* qy lz) (* qz ly))) (+ (aref d pb) (- (* uy mz) (* uz my)))))
-                       (* ay (- (+ (aref d (+ p 1)) (- (* qz lx) (* qx lz))) (+ (aref d (+ pb 1)) (- (* uz mx) (* ux mz)))))
-                       (* az (- (+ (aref d (+ p 2)) (- (* qx ly) (* qy lx))) (+ (aref d (+ pb 2)) (- (* ux my) (* uy mx)))))))
+                 ;; the gap now: moved by each side's delta and turn (the dummy's are zero), and
+                 ;; by a posted box's travel so far this step (zero for any other point)
+                 (s (- (+ (aref separation k)
+                          (* ax (- (+ (aref d p) (- (* qy lz) (* qz ly))) (+ (aref d pb) (- (* uy mz) (* uz my)))))
+                          (* ay (- (+ (aref d (+ p 1)) (- (* qz lx) (* qx lz))) (+ (aref d (+ pb 1)) (- (* uz mx) (* ux mz)))))
+                          (* az (- (+ (aref d (+ p 2)) (- (* qx ly) (* qy lx))) (+ (aref d (+ pb 2)) (- (* ux my) (* uy mx))))))
+                       (* (aref kvn k) elapsed)))
                  (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
                  (positive (> s 0.0))
                  (bias (cond (positive (* s inv-h))
@@ -8081,7 +8108,8 @@ friction, held in the cone. #BXSOLV"
                  (ms (if (and use-bias (not positive)) mass-scale 1.0))
                  (is (if (and use-bias (not positive)) impulse-scale 0.0))
                  (old (aref normal-impulse k))
-                 (new (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old))))
+                 ;; held to its cap, which only a point against a posted box has ([[#BXPUSH]])
+                 (new (min (aref push-cap k) (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old)))))
                  (pn (- new old)))
             (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
             ;; an impact: the first push this step of a point with restitution that approached,
@@ -8157,7 +8185,7 @@ which the velocity of the substep to come reaches less half that substep's gravi
   (let ((points (box-set-points set))
         (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
     (declare (type single-float hgx hgy hgz))
-    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
+    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
                              imb j11 j12 j13 j22 j23 j33 restitution impact-speed bounce)
         points
       (dotimes (pass +box-bounce-passes+)
@@ -8521,6 +8549,69 @@ the face it enters a solid cell through, with the box's centre on its air side, 
                                                ix iy iz axis step))))))))))))
   set)
 ;; Fast boxes sweep their corners through the cells:1 ends here
+
+;; [[file:../physics.org::#BXPUSH][A posted box pushes a box:1]]
+(defconstant +posted-push-share+ 0.1
+  "The share of the push-out speed a posted box may give a box body in a substep, beyond what
+gravity gives it in one. #BXPUSH")
+
+(defun find-box-posted-points (world set row reach dt speed)
+  "Append to SET's points those between the box at awake ROW of WORLD and each posted box its
+filter meets within REACH plus their relative travel over DT: the separating-axis test's points
+(box-pair-points, the posted box's side the dummy row), each given the posted box's velocity,
+that velocity along its normal, and SPEED as its cap, made an impulse by
+cap-posted-box-points. #BXPUSH"
+  (declare (type box-set set) (type index row) (type single-float reach dt speed) #.+kernel-policy+)
+  (let* ((boxes (physics-world-boxes world)) (awake (physics-world-awake world))
+         (dummy (body-columns-length awake)) (points (box-set-points set))
+         (filtering (physics-world-filtering world)))
+    (with-body-columns (x y z qw qx qy qz radius handle flags vx vy vz) awake
+      (let* ((owner (aref handle row)) (slot (handle-index owner))
+             (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
+             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot)))
+        (declare (type single-float cx cy cz r hx hy hz))
+        (with-box-columns (min-x min-y min-z max-x max-y max-z (ux vx) (uy vy) (uz vz) id filter) boxes
+          (dotimes (b (box-columns-length boxes))
+            (when (rows-meet-p filtering (aref flags row) (ash (aref filter b) +flag-filter-shift+))
+              (let* ((kx (aref ux b)) (ky (aref uy b)) (kz (aref uz b))
+                     (wx (- (aref vx row) kx)) (wy (- (aref vy row) ky)) (wz (- (aref vz row) kz))
+                     (reach (+ reach (* dt (fsqrt (+ (* wx wx) (* wy wy) (* wz wz))))))
+                     ;; the body's holding sphere against the posted box, grown by the reach
+                     (ox (max 0.0 (- (aref min-x b) cx) (- cx (aref max-x b))))
+                     (oy (max 0.0 (- (aref min-y b) cy) (- cy (aref max-y b))))
+                     (oz (max 0.0 (- (aref min-z b) cz) (- cz (aref max-z b))))
+                     (far (+ r reach)))
+                (declare (type single-float kx ky kz wx wy wz reach ox oy oz far))
+                (when (< (+ (* ox ox) (* oy oy) (* oz oz)) (* far far))
+                  (let ((start (box-point-columns-length points))
+                        (base (logior (ash slot 34) (ash 1 32) (ash 1 31) (ash (ldb (byte 15 0) (aref id b)) 16))))
+                    (box-pair-points set owner base row dummy reach cx cy cz
+                                     (aref qw row) (aref qx row) (aref qy row) (aref qz row) hx hy hz
+                                     (* 0.5 (+ (aref min-x b) (aref max-x b))) (* 0.5 (+ (aref min-y b) (aref max-y b)))
+                                     (* 0.5 (+ (aref min-z b) (aref max-z b))) 1.0 0.0 0.0 0.0
+                                     (* 0.5 (- (aref max-x b) (aref min-x b))) (* 0.5 (- (aref max-y b) (aref min-y b)))
+                                     (* 0.5 (- (aref max-z b) (aref min-z b))))
+                    (with-box-point-columns ((first row) nx ny nz kvx kvy kvz kvn push-cap) points
+                      (loop for k of-type index from start below (box-point-columns-length points)
+                            do (let* ((sign (if (= (aref first k) dummy) -1.0 1.0))
+                                      (sx (* sign kx)) (sy (* sign ky)) (sz (* sign kz))
+                                      (along (+ (* (aref nx k) sx) (* (aref ny k) sy) (* (aref nz k) sz))))
+                                 (declare (type single-float sign sx sy sz along))
+                                 (setf (aref kvx k) sx (aref kvy k) sy (aref kvz k) sz (aref kvn k) along
+                                       (aref push-cap k) speed)))))))))))))
+  set)
+
+(defun cap-posted-box-points (set)
+  "Turn the speed cap of each of SET's points against a posted box into an impulse, times the
+point's normal mass; the others keep the largest single-float. #BXPUSH"
+  (declare (type box-set set) #.+kernel-policy+)
+  (let ((points (box-set-points set)))
+    (with-box-point-columns (push-cap normal-mass) points
+      (dotimes (k (box-point-columns-length points))
+        (when (< (aref push-cap k) most-positive-single-float)
+          (setf (aref push-cap k) (* (aref normal-mass k) (aref push-cap k)))))))
+  set)
+;; A posted box pushes a box:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (declaim (inline held-marking-p mark-held))
@@ -9135,7 +9226,7 @@ bodies to half the push-out speed. #IDVK7G"
         ;; by colour with the contacts ([[#J0S0LV]])
         (when boxes (warm-start-box-points boxes v))
         (physics-warm-start kernels world)
-        (when boxes (solve-box-points boxes v d inv-h t))
+        (when boxes (setf (box-set-elapsed boxes) elapsed) (solve-box-points boxes v d inv-h t))
         (physics-solve-contacts kernels world inv-h t elapsed)
         (flet ((yield-boxes ()
                  ;; a box that yields squeezes what it presses: from then on the step holds it
@@ -9149,7 +9240,7 @@ bodies to half the push-out speed. #IDVK7G"
             (turn-jointed-orientations joints (physics-world-awake world) v h)
             (turn-joint-levers joints (physics-world-awake world)))
           (dotimes (k relaxes)
-            (when boxes (solve-box-points boxes v d inv-h nil))
+            (when boxes (setf (box-set-elapsed boxes) (+ elapsed h)) (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))

@@ -7521,6 +7521,77 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
             (check (eq t (validate-physics-world w)))))))))
 ;; BXSWEP-boxes-thrown-sideways-stop-at-walls ends here
 
+;; [[file:../physics.org::#BXPUSH][BXPUSH-walker-pushes-a-crate]]
+(defun pushed-crate (&key (friction 0.6) (speed 2.0) (steps 120) wall (kernels :scalar))
+  "A floor world, a cube of half-extent 0.4 m and 10 kg at (2.5, 0.4, 2.5) of FRICTION, and a
+posted box of the walker's size behind it at x = 1.3, posted before each of STEPS steps moving at
+SPEED along x; with WALL, a wall of cells from x = 5 up. Return the world, the crate, and the most
+its back face lay behind the walker's front face, and the least its front face lay before the
+wall. #BXPUSH"
+  (let* ((terrain (make-floor-terrain))
+         (w (progn (when wall (fill-terrain terrain 5 0 -16 32 4 32 t))
+                   (make-physics-world :terrain terrain :kernels kernels)))
+         (crate (add-physics-box w 2.5 0.4 2.5 0.4 0.4 0.4 :mass 10 :friction friction))
+         (behind 0.0) (before most-positive-single-float))
+    (dotimes (i steps)
+      (let ((wx (+ 1.3 (* speed i (/ 1.0 60)))))
+        (post-physics-box w wx 0.9 2.5 0.3 0.9 0.3 :vx speed)
+        (step-physics-world w)
+        (let ((x (physics-body-position w crate)))
+          (setf behind (max behind (- (+ wx 0.3 (* speed (/ 1.0 60))) (- x 0.4)))
+                before (min before (- 5.0 (+ x 0.4)))))))
+    (values w crate behind before)))
+
+(define-claim "BXPUSH" walker-pushes-a-crate
+    "A posted box pushes a crate along the floor at its speed, without tipping it or driving it into the floor."
+  (multiple-value-bind (w crate behind) (pushed-crate)
+    (multiple-value-bind (vx vy vz) (physics-body-velocity w crate)
+      (check (< (abs (- vx 2.0)) 0.02) "the crate moves at ~,4F m/s" vx)
+      (check (< (sqrt (+ (* vy vy) (* vz vz))) 1e-2) "across: ~,4F ~,4F m/s" vy vz))
+    (check (< behind 0.02) "the crate's back lay ~,4F m behind the walker's front" behind)
+    (check (< (abs (- (nth-value 1 (physics-body-position w crate)) (- 0.4 *physics-linear-slop*))) 5e-3)
+           "the crate's centre is at y = ~,4F" (nth-value 1 (physics-body-position w crate)))
+    (check (< (abs (- 1.0 (physics-body-orientation w crate))) 1e-2) "tipped: qw ~,5F" (physics-body-orientation w crate))
+    (check (eq t (validate-physics-world w))))
+  (multiple-value-bind (w crate) (pushed-crate :friction 0.0)
+    (check (< (abs (- (physics-body-velocity w crate) 2.0)) 0.02) "without friction: ~,4F m/s"
+           (physics-body-velocity w crate))))
+;; BXPUSH-walker-pushes-a-crate ends here
+
+;; [[file:../physics.org::#BXPUSH][BXPUSH-crate-squeezed-against-a-wall]]
+(defun crate-speed (world handle)
+  "The speed of the body HANDLE of WORLD. #BXPUSH"
+  (multiple-value-bind (vx vy vz) (physics-body-velocity world handle)
+    (sqrt (+ (* vx vx) (* vy vy) (* vz vz)))))
+
+(define-claim "BXPUSH" crate-squeezed-against-a-wall
+    "A crate pinned by the walker against a wall stays out of the wall, and is left still when the walker goes."
+  (multiple-value-bind (w crate behind before) (pushed-crate :steps 240 :wall t)
+    (declare (ignore behind))
+    (check (> before (- (+ *physics-linear-slop* 5e-3))) "the crate's front lay ~,4F m into the wall" (- before))
+    (check (< (crate-speed w crate) 0.5) "the pinned crate moves at ~,4F m/s" (crate-speed w crate))
+    (check (< (abs (- (nth-value 1 (physics-body-position w crate)) (- 0.4 *physics-linear-slop*))) 5e-3)
+           "the pinned crate's centre is at y = ~,4F" (nth-value 1 (physics-body-position w crate)))
+    (check (eq t (validate-physics-world w)))
+    (dotimes (i 60) (step-physics-world w))
+    (check (< (crate-speed w crate) 0.1) "left alone it moves at ~,4F m/s" (crate-speed w crate))))
+;; BXPUSH-crate-squeezed-against-a-wall ends here
+
+;; [[file:../physics.org::#BXPUSH][BXPUSH-push-bit-equal-and-quiet]]
+(define-claim "BXPUSH" push-bit-equal-and-quiet
+    "The walker pushing and pinning a crate reaches one state hash in every family; its steps cons nothing."
+  (let ((hashes (loop for family in (available-kernel-families)
+                      collect (physics-world-state-hash (pushed-crate :steps 240 :wall t :kernels family)))))
+    (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes))
+  (let* ((w (pushed-crate :steps 60)) (consed 0))
+    (dotimes (i 60)
+      (post-physics-box w (+ 1.3 (* 2.0 (+ 60 i) (/ 1.0 60))) 0.9 2.5 0.3 0.9 0.3 :vx 2.0)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (step-physics-world w)
+        (incf consed (- (sb-ext:get-bytes-consed) before))))
+    (check (zerop consed) "60 steps consed ~D bytes" consed)))
+;; BXPUSH-push-bit-equal-and-quiet ends here
+
 ;; [[file:../physics.org::#PYR4MD][PYR4MD-the-pyramid-is-box3ds]]
 (define-claim "PYR4MD" the-pyramid-is-box3ds
     "A pyramid of base 4: ten unit cubes of 100 kg in rows of 4, 3, 2, 1, touching, centred on x = 0."
@@ -9844,6 +9915,13 @@ hand: the world and the function to call before each step. #K5DF9S"
       (check (equal '(:bad :bodies) (refusal :bad terrain seconds features
                                              '(:bodies 3 :spawn luv-physics::basin-spawn-point :colour 1))))
       (check (equal '(:bad :bodies) (refusal :bad terrain seconds features '(:bodies 3 :radius 0.25))))
+      (check (equal '(:bad :bodies) (refusal :bad terrain seconds features
+                                             '(:bodies 3 :spawn luv-physics::basin-spawn-point :half-extents '(0.5 0.5 0.5)
+                                               :radius 0.25))))
+      (check (equal '(:bad :bodies) (refusal :bad terrain seconds features
+                                             '(:bodies 3 :spawn luv-physics::basin-spawn-point :half-extents '(0.5 0.5)))))
+      (check (null (refusal :good terrain seconds features
+                            '(:bodies 3 :spawn luv-physics::basin-spawn-point :half-extents '(0.5 0.25 0.5)))))
       (check (equal '(:bad :terrain) (refusal :bad '(:terrain (a b) (make-floor-terrain)) seconds features)))
       (check (equal '(:bad :seconds) (refusal :bad terrain seconds seconds features)))
       (check (equal '(:bad :seconds) (refusal :bad terrain features)))
@@ -11385,6 +11463,44 @@ and the world. #G4WXCJ"
                "the recorded boxes are not the player's")))))
 ;; G4WXCJ-recording-sees-boxes ends here
 
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-frames-hold-box-shapes]]
+(define-claim "G4WXCJ" frames-hold-box-shapes
+    "Each frame holds each box body's place, orientation and extents; the last frame's are the world's."
+  (let* ((w (make-floor-world))
+         (ball (add-physics-body w 6.5 0.3 6.5))
+         (cube (add-physics-box w 2.5 0.5 2.5 0.5 0.5 0.5 :orientation (list (cos (/ pi 12)) 0 (sin (/ pi 12)) 0)))
+         (flat (add-physics-box w 4.5 0.2 2.5 0.4 0.2 0.3)))
+    (declare (ignore ball))
+    (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w flat)))
+    (let ((recording (start-physics-recording w)))
+      (dotimes (i 10) (step-physics-world w))
+      (stop-physics-recording w)
+      (let* ((frames (luv-physics::physics-recording-frames recording))
+             (index (luv-physics::physics-recording-box-index recording))
+             (shape (luv-physics::physics-recording-box-shape recording))
+             (handles (luv-physics::physics-recording-handle recording)))
+        (check (= 11 (length frames)))
+        (check (= 22 (length index)) "~D box entries" (length index))
+        (check (= (* 7 (length index)) (length shape)))
+        (check (every (lambda (f)
+                        (let ((inside (loop for k across index count (<= (aref f 0) k (+ (aref f 0) (aref f 1) -1)))))
+                          (= 2 inside)))
+                      frames)
+               "a frame does not hold its two boxes")
+        (check (every (lambda (k) (member (aref handles k) (list cube flat))) index) "a box entry names a sphere")
+        (let ((last (aref frames 10)))
+          (dolist (box (list cube flat))
+            (let ((e (position-if (lambda (k) (and (>= k (aref last 0)) (= (aref handles k) box))) index)))
+              (check (not (null e)) "the last frame holds no entry for ~D" box)
+              (when e
+                (check (equal (coerce (subseq shape (* 7 e) (* 7 (1+ e))) 'list)
+                              (append (multiple-value-list (physics-body-orientation w box))
+                                      (multiple-value-list (physics-box-half-extents w box))))
+                       "box ~D recorded as ~S" box (subseq shape (* 7 e) (* 7 (1+ e)))))))))))
+  (multiple-value-bind (recording) (recorded-basin 30 5 1)
+    (check (zerop (length (luv-physics::physics-recording-box-index recording))))))
+;; G4WXCJ-frames-hold-box-shapes ends here
+
 ;; [[file:../physics.org::#G4WXCJ][G4WXCJ-frames-hold-every-column]]
 (define-claim "G4WXCJ" frames-hold-every-column
     "Frames hold each body's centre, radius and clamped style, and the step's figures, first frame and last."
@@ -11641,6 +11757,27 @@ and the world. #G4WXCJ"
              "~(~A~) declares ~S and uses ~S" name declared used))))
 ;; J0SCNE-joint-scenes-do-what-they-say ends here
 
+;; [[file:../physics.org::#BXSC3N][BXSC3N-tower-topples]]
+(define-claim "BXSC3N" tower-topples
+    "The leaning tower of eight blocks falls over onto the floor, no block above its start or into the floor."
+  (multiple-value-bind (w script scene) (make-scene-world :tower)
+    (let ((blocks (physics-world-handles w)) (highest 0.0))
+      (check (= 8 (length blocks)))
+      (check (every (lambda (h) (physics-body-box-p w h)) blocks))
+      (check (= 7.5 (reduce #'max (mapcar (lambda (h) (nth-value 1 (physics-body-position w h))) blocks))))
+      (dotimes (step (round (physics-scene-seconds scene) (luv-physics::physics-world-step-seconds w)))
+        (funcall script step)
+        (step-physics-world w)
+        (when (zerop (mod step 10))
+          (setf highest (max highest (reduce #'max (mapcar (lambda (h) (nth-value 1 (physics-body-position w h))) blocks))))))
+      (let ((heights (mapcar (lambda (h) (nth-value 1 (physics-body-position w h))) blocks))
+            (xs (mapcar (lambda (h) (physics-body-position w h)) blocks)))
+        (check (every (lambda (y) (< 0.45 y 2.0)) heights) "the blocks end at heights ~S" heights)
+        (check (<= highest 7.5) "a block rose to ~,3F m" highest)
+        (check (> (reduce #'max xs) -1.0) "the farthest block lies at x = ~,3F" (reduce #'max xs)))
+      (check (eq t (validate-physics-world w))))))
+;; BXSC3N-tower-topples ends here
+
 ;; [[file:../physics.org::#RH7T05][A viewer for the browser:2]]
 (defun repository-file (name)
   "The pathname of the file NAME of the repository. #RH7T05"
@@ -11857,6 +11994,45 @@ within FUZZ percent of COLOUR inside CROP (width height left top); NIL when ther
               (check (and (null handle) (equal text "")) "an empty pixel picks ~S (~S)" handle text))))))))
 ;; RH7T05-viewer-picks-a-body ends here
 
+;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-boxes-turned]]
+(define-claim "RH7T05" viewer-draws-boxes-turned
+    "In headless Chromium a box body is drawn turned by its orientation, and picked on its faces."
+  (with-chromium (chromium "RH7T05")
+    (let* ((square (repository-file "report/viewer-box-square.html"))
+           (turned (repository-file "report/viewer-box-turned.html"))
+           (square-shot (repository-file "report/viewer-box-square.png"))
+           (turned-shot (repository-file "report/viewer-box-turned.png"))
+           (q (let* ((a (/ pi 8)) (b (/ pi 12)))
+                ;; 45 degrees about y, then 30 degrees about x: (cos a, 0, sin a, 0) (cos b, sin b, 0, 0)
+                (list (* (cos a) (cos b)) (* (cos a) (sin b)) (* (sin a) (cos b)) (- (* (sin a) (sin b))))))
+           (handle nil))
+      (ensure-directories-exist square)
+      (loop for page in (list square turned) for orientation in (list '(1 0 0 0) q)
+            do (let ((w (make-physics-world :gravity '(0 0 0))))
+                 (setf handle (add-physics-box w 0 0 0 0.5 0.5 0.5 :orientation orientation))
+                 (write-world-viewer w page :steps 0 :title "a cube")))
+      (browser-screenshot-pair chromium "viewer-box-square.html#canvas=960x592" "viewer-box-turned.html#canvas=960x592"
+                               square-shot turned-shot)
+      (let ((all (* 960 640)))
+        (dolist (shot (list square-shot turned-shot))
+          (let ((other (pixels-differing shot "#d9822b" :fuzz 20)))
+            (check (and other (> (- all other) (* 0.02 all))) "~A: ~A pixels near the box's colour"
+                   (file-namestring shot) (and other (- all other)))))
+        (let ((moved (pixels-differing square-shot turned-shot)))
+          (check (and moved (> moved (* 0.01 all))) "the square and turned cubes differ in ~A pixels" moved)))
+      (let ((at (colour-middle turned-shot "#d9822b" :crop '(300 200 360 240))))
+        (check (not (null at)) "no orange in the middle of the turned cube's picture")
+        (when at
+          (let* ((dom (browser-document chromium (format nil "file://~A#canvas=960x592&pick=~D,~D"
+                                                         (namestring turned) (first at) (second at))))
+                 (mark (search "data-picked=\"" dom))
+                 (panel (search "<div id=\"picked\">" dom))
+                 (text (and panel (subseq dom (+ panel 17) (search "</div>" dom :start2 panel)))))
+            (check (and mark (eql handle (parse-integer dom :start (+ mark 13) :junk-allowed t)))
+                   "the cube's pixel ~S picks ~S" at (and mark (parse-integer dom :start (+ mark 13) :junk-allowed t)))
+            (check (and text (search "box 0.500 0.500 0.500 m" text)) "the panel reads ~S" text)))))))
+;; RH7T05-viewer-draws-boxes-turned ends here
+
 ;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-the-given-box]]
 (defun far-wall-world ()
   "A floor 40 m long on x and 8 m on z, its top at y = 0, a wall 3 m high at x = 36, and a ball
@@ -11996,6 +12172,39 @@ at rest near the start. #RH7T05"
       (check (< (abs (- 5 (reduce #'min xs))) 0.11) "the leftmost point is at ~,1F" (reduce #'min xs))
       (check (< (abs (- 295 (reduce #'max xs))) 0.11) "the rightmost point is at ~,1F" (reduce #'max xs)))))
 ;; UFK5EA-picture-of-one-cell ends here
+
+;; [[file:../physics.org::#UFK5EA][UFK5EA-picture-draws-box-faces]]
+(define-claim "UFK5EA" picture-draws-box-faces
+    "A turned box body is drawn as the three faces towards the viewer, whose corners are its own, all but the farthest."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (a (/ pi 12)) (b (/ pi 18))
+         (q (list (* (cos a) (cos b)) (* (cos a) (sin b)) (* (sin a) (cos b)) (- (* (sin a) (sin b))))))
+    (add-physics-box w 1.5 2.0 0.5 0.5 0.3 0.2 :orientation q)
+    (let ((recording (prog1 (start-physics-recording w) (stop-physics-recording w))))
+      (multiple-value-bind (across up toward) (luv-physics::view-basis 35 40)
+        (labels ((dot (u p) (+ (* (first u) (first p)) (* (second u) (second p)) (* (third u) (third p))))
+                 (project (p) (list (dot across p) (- (dot up p)))))
+          (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+              (apply #'luv-physics::box-axes (multiple-value-list (physics-body-orientation w (first (physics-world-handles w)))))
+            (let* ((corners (loop for k below 8
+                                  collect (let ((u (if (logbitp 0 k) 0.5 -0.5)) (v (if (logbitp 1 k) 0.3 -0.3))
+                                                (s (if (logbitp 2 k) 0.2 -0.2)))
+                                            (list (+ 1.5 (* r11 u) (* r12 v) (* r13 s)) (+ 2.0 (* r21 u) (* r22 v) (* r23 s))
+                                                  (+ 0.5 (* r31 u) (* r32 v) (* r33 s))))))
+                   (farthest (first (sort (copy-list corners) #'< :key (lambda (c) (dot toward c)))))
+                   (items (luv-physics::scene-picture-items recording 0 '() across up toward))
+                   (used '()))
+              (check (= 3 (length items)) "~D items" (length items))
+              (check (every (lambda (i) (and (eq :face (second i)) (= #xd9822b (third i)) (= 4 (length (cdddr i))))) items)
+                     "the items are ~S" (mapcar #'second items))
+              (dolist (item items)
+                (dolist (p (cdddr item))
+                  (let ((c (find-if (lambda (c) (every (lambda (x y) (< (abs (- x y)) 1d-5)) p (project c))) corners)))
+                    (check (not (null c)) "a face's corner ~S is no corner of the box" p)
+                    (when c (pushnew c used :test #'equal)))))
+              (check (= 7 (length used)) "the faces use ~D corners" (length used))
+              (check (not (member farthest used :test #'equal)) "the farthest corner is drawn"))))))))
+;; UFK5EA-picture-draws-box-faces ends here
 
 ;; [[file:../physics.org::#UFK5EA][UFK5EA-view-basis-from-angles]]
 (define-claim "UFK5EA" view-basis-from-angles
