@@ -1467,16 +1467,17 @@ is KEY do. #D9W4CH"
             (incf k))))))
   "For each 4-bit lane mask, its set lanes in rising order, four entries a mask. #D9W4CH")
 
-(defun grid-list-near (grid entry runs run-count reach2)
-  "List in GRID's NEAR column the places of the RUN-COUNT RUNS (as grid-half-runs fills them for
-ENTRY) whose centres lie closer than the square root of REACH2 to the centre of ENTRY, in run
-order, and return how many. The list grows by the sign bit of the squared distance minus
+(defun grid-list-near (grid entry runs run-count reach2 &optional (near (hash-grid-near grid)))
+  "List in NEAR (GRID's own column unless a worker gives its own) the places of the RUN-COUNT
+RUNS (as grid-half-runs fills them for ENTRY) whose centres lie closer than the square root of
+REACH2 to the centre of ENTRY, in run order, and return how many. The list grows by the sign bit of the squared distance minus
 REACH2, so the test costs no branch; a dense grid's runs are tested four places at a time.
 #D9W4CH"
   (declare (type hash-grid grid) (type index entry) (type fixnum-column runs)
-           (type (integer 0 14) run-count) (type single-float reach2) #.+kernel-policy+)
+           (type (integer 0 14) run-count) (type single-float reach2) (type fixnum-column near)
+           #.+kernel-policy+)
   (let* ((gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
-         (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+         (keys (hash-grid-keys grid))
          (x (aref gx entry)) (y (aref gy entry)) (z (aref gz entry))
          ;; the table in a local, read once a call, not once a lane
          (compress +lane-compress+)
@@ -3566,11 +3567,58 @@ from the distance it finds for the contact anyway. #P41RS7"
     (and (or (> ri rj) (< (aref overlaps i) +overlaps-per-body+))
          (or (< ri rj) (< (aref overlaps j) +overlaps-per-body+)))))
 
+(defstruct (pair-sink (:constructor make-pair-sink ()) (:copier nil))
+  "What one worker's piece of the pair phase found: in LIST, a pair list of its own, the pairs it
+listed, the candidates it examined and the overlaps it counted per awake row; COUNT touches, four
+fixnums each in TOUCHES (the contact row its probe found or -1, the key, the two handles) and
+seven floats each in GEOMETRY (the normal, the separation, the point); CURSOR, the row it guesses
+next; NEAR, its neighbour scratch. #P41RS7"
+  (list (make-pair-list) :type pair-list :read-only t)
+  (near (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (count 0 :type index)
+  (cursor 0 :type index)
+  (touches (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (geometry (make-array 0 :element-type 'single-float) :type f32-column))
+
+(defun pair-sink-grow (sink)
+  "Give SINK room for twice its touches (at least 256), keeping them. #P41RS7"
+  (declare (type pair-sink sink))
+  (let* ((room (max 256 (* 2 (floor (length (pair-sink-touches sink)) 4))))
+         (geometry (make-array (* 7 room) :element-type 'single-float :initial-element 0.0)))
+    (setf (pair-sink-touches sink) (fixnum-room (pair-sink-touches sink) (* 4 room))
+          (pair-sink-geometry sink) (replace geometry (pair-sink-geometry sink)))
+    sink))
+
+(declaim (inline pair-sink-touch))
+(defun pair-sink-touch (sink contacts table key ha hb nx ny nz separation px py pz)
+  "Write into SINK a touch of the pair contact under KEY, from handle HA to HB, with its normal,
+separation and point: with the row under SINK's cursor when it holds KEY, else the row
+CONTACTS' TABLE maps KEY to, or -1. Read CONTACTS and TABLE only. #P41RS7"
+  (declare (type pair-sink sink) (type contact-columns contacts) (type contact-table table)
+           (type fixnum key ha hb) (type single-float nx ny nz separation px py pz) #.+kernel-policy+)
+  (let* ((guess (pair-sink-cursor sink))
+         (row (if (and (< guess (contact-columns-length contacts))
+                       (= (aref (contact-columns-key contacts) guess) key))
+                  guess
+                  (contact-table-find table key)))
+         (k (pair-sink-count sink)))
+    (declare (type fixnum row) (type index guess k))
+    (when (>= row 0) (setf (pair-sink-cursor sink) (1+ row)))
+    (when (> (* 4 (1+ k)) (length (pair-sink-touches sink))) (pair-sink-grow sink))
+    (let ((f (pair-sink-touches sink)) (g (pair-sink-geometry sink)) (o (* 4 k)) (q (* 7 k)))
+      (declare (type index o q))
+      (setf (aref f o) row (aref f (+ o 1)) key (aref f (+ o 2)) ha (aref f (+ o 3)) hb
+            (aref g q) nx (aref g (+ q 1)) ny (aref g (+ q 2)) nz (aref g (+ q 3)) separation
+            (aref g (+ q 4)) px (aref g (+ q 5)) py (aref g (+ q 6)) pz))
+    (setf (pair-sink-count sink) (1+ k))
+    sink))
+
 (declaim (inline pair-contact))
 (defun pair-contact (contacts table overlaps margin slop dt gstep threshold impact
-                     xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
+                     xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj &optional sink)
   "Make or refresh the contact of two spheres (centres, radii, handles, velocities) when their
-gap is under the speculative distance. CI and CJ, the awake rows of a pair taken after
+gap is under the speculative distance; with a SINK, a worker's pair sink ([[#P41P1C]]), write
+the touch there instead. CI and CJ, the awake rows of a pair taken after
 overlap-room, have its overlap counted in OVERLAPS; -1 for a pair not counted. Return, first,
 true when the count made a row crowded; second, true when the pair strikes (closes faster than
 THRESHOLD across a gap) and IMPACT is false: then it was counted but no contact was touched. #P41RS7"
@@ -3624,19 +3672,23 @@ THRESHOLD across a gap) and IMPACT is false: then it was counted but no contact 
                   (values hi hj 1.0 (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)))
                   (values hj hi -1.0 (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))))
             (declare (type fixnum ha hb) (type single-float s px py pz))
-            (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
-                           +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
-                           0.0 0.0 0.0)))
+            (if sink
+                (pair-sink-touch sink contacts table (pair-key (handle-index ha) (handle-index hb))
+                                 ha hb (* s nx) (* s ny) (* s nz) sep px py pz)
+                (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
+                               +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
+                               0.0 0.0 0.0))))
         (values crowded nil)))))))
       (values nil nil))))
 
-(defun scan-listed-pairs (world start crowded)
-  "Take the listed pairs of WORLD's pair list from START on whose rows both stayed, as the pair
-phase takes them, CROWDED telling whether some row is crowded, but stop at a pair that strikes
-(pair-contact): return the place where the walk stopped (the list's count when it did not) and
-whether some row is crowded now. A function of its own, without the impact part, so that the
-walk keeps its values in registers. #P41RS7"
-  (declare (type index start) #.+kernel-policy+)
+(declaim (inline walk-listed-pairs))
+(defun walk-listed-pairs (world start end crowded sink overlaps)
+  "Take the listed pairs of WORLD's pair list from START below END whose rows both stayed, as the
+pair phase takes them, counting overlaps in OVERLAPS, CROWDED telling whether some row is
+crowded, but stop at a pair that strikes (pair-contact): return the place where the walk
+stopped (END when it did not) and whether some row is crowded now. With a SINK the touches go
+there (pair-contact). #P41RS7"
+  (declare (type index start end) (type fixnum-column overlaps) #.+kernel-policy+)
   (with-world-parameters (margin slop (threshold restitution-threshold)) world
     (let* ((awake (physics-world-awake world))
            (plist (physics-world-pair-list world))
@@ -3644,14 +3696,12 @@ walk keeps its values in registers. #P41RS7"
            (gstep (gravity-step world dt))
            (contacts (physics-world-contacts world))
            (table (physics-world-contact-table world))
-           (overlaps (pair-list-overlaps plist))
-           (pairs (pair-list-pairs plist)) (loose (pair-list-loose plist))
-           (count (pair-list-count plist)))
+           (pairs (pair-list-pairs plist)) (loose (pair-list-loose plist)))
       (declare (type single-float margin slop dt gstep threshold) (type body-columns awake)
                (type pair-list plist) (type contact-columns contacts) (type contact-table table)
-               (type fixnum-column overlaps pairs loose) (type index count))
+               (type fixnum-column pairs loose))
       (with-body-columns (x y z vx vy vz radius handle) awake
-        (loop for p of-type index from start below count do
+        (loop for p of-type index from start below end do
           (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
             (declare (type index i j))
             (when (and (zerop (logior (aref loose i) (aref loose j)))
@@ -3661,10 +3711,18 @@ walk keeps its values in registers. #P41RS7"
                                 (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
                                 (aref vx i) (aref vy i) (aref vz i)
                                 (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
-                                (aref vx j) (aref vy j) (aref vz j) i j)
+                                (aref vx j) (aref vy j) (aref vz j) i j sink)
                 (when full (setf crowded t))
-                (when strikes (return-from scan-listed-pairs (values p crowded)))))))
-        (values count crowded)))))
+                (when strikes (return-from walk-listed-pairs (values p crowded)))))))
+        (values end crowded)))))
+
+(defun scan-listed-pairs (world start crowded)
+  "Take the listed pairs of WORLD's pair list from START on (walk-listed-pairs), touching their
+contacts: return where the walk stopped and whether some row is crowded now. A function of its
+own, without the impact part, so that the walk keeps its values in registers. #P41RS7"
+  (declare (type index start))
+  (let ((plist (physics-world-pair-list world)))
+    (walk-listed-pairs world start (pair-list-count plist) crowded nil (pair-list-overlaps plist))))
 ;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
 ;; [[file:../physics.org::#P41HLD][The pairs of a list that holds:1]]
@@ -3746,7 +3804,7 @@ build: take each row within the widest reach plus the skin, in order, and stop a
                                  (when (>= (incf refused) +overlaps-per-body+)
                                    (return-from walk)))))))))
          (if (not crowd)
-             (take (grid-list-near grid e runs run-count reach2))
+             (take (grid-list-near grid e runs run-count reach2 near))
              ;; once a walk of this build was refused, each run is listed a
              ;; chunk at a time, so a walk that stops lists little beyond it
              (dotimes (q run-count)
@@ -3756,27 +3814,37 @@ build: take each row within the widest reach plus the skin, in order, and stop a
                        do (setf (aref chunk 1) (1+ e) (aref chunk 2) -1
                                 (aref chunk 3) start (aref chunk 4) (min end (+ start +crowded-walk-chunk+))
                                 (aref chunk 5) (aref runs (+ (* 3 q) 2)))
-                          (take (grid-list-near grid e chunk 2 reach2))))))))))
+                          (take (grid-list-near grid e chunk 2 reach2 near))))))))))
 
-(defmacro pair-list-build ()
-  "Build the pair list again, taking each pair as it is found: the half neighbourhood of each
-body's cell, in the grid's order, within the widest reach plus the skin; after a refused walk,
-each run a chunk at a time. Expanded in the pair phase. #P41BLD"
-  `(let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+(defmacro pair-list-walks (from to near-form)
+  "The walks of the bodies at places FROM below TO of the grid's order, listing their near places
+in the column NEAR-FORM gives: expanded in pair-list-build, and in a worker's piece of it
+([[#P41P1C]]). #P41BLD"
+  `(let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near ,near-form)
          (runs (make-array 42 :element-type 'fixnum))
          ;; a crowded walk's chunk: an empty first run, then a piece of one run
          (chunk (make-array 6 :element-type 'fixnum :initial-element 0))
          (cell-key -1) (run-count 0) (crowd nil))
      (declare (type fixnum-column items keys near runs chunk)
               (dynamic-extent runs chunk) (type fixnum cell-key) (type (integer 0 14) run-count))
+     (loop for e of-type index from ,from below ,to
+           do (let ((i (aref items e)))
+                (when (zerop (logand (aref flags i) +flag-terrain-only+))
+                  ;; the items of one cell are consecutive in the grid's order and share its runs
+                  (unless (= (aref keys e) cell-key)
+                    (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
+                  (pair-list-walk))))))
+
+(defmacro pair-list-build ()
+  "Build the pair list again, taking each pair as it is found: the half neighbourhood of each
+body's cell, in the grid's order, within the widest reach plus the skin; after a refused walk,
+each run a chunk at a time; with workers, in pieces ([[#P41P1C]]). Expanded in the pair
+phase. #P41BLD"
+  `(progn
      (setf (pair-list-count plist) 0 (pair-list-examined plist) 0)
-     (dotimes (e (hash-grid-count grid))
-       (let ((i (aref items e)))
-         (when (zerop (logand (aref flags i) +flag-terrain-only+))
-           ;; the items of one cell are consecutive in the grid's order and share its runs
-           (unless (= (aref keys e) cell-key)
-             (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
-           (pair-list-walk))))
+     (flet ((whole () (pair-list-walks 0 (hash-grid-count grid) (hash-grid-near grid))))
+       (declare (dynamic-extent #'whole))
+       (pairs-in-pieces world :build #'whole))
      (pair-list-anchor plist awake n cell)
      (setf (pair-list-built-step plist) (contact-table-step table)
            (pair-list-loose-count plist) 0)))
@@ -3879,8 +3947,10 @@ gap is under the speculative distance. #P41STG"
                       (loose-rows (pair-list-loose-rows plist)))
                   (declare (type fixnum-column pairs loose loose-rows))
                   ;; the walk stops at a pair that strikes, which is taken here again whole,
-                  ;; its overlap already counted
-                  (pair-listed-pairs)
+                  ;; its overlap already counted; with workers, in pieces ([[#P41P1C]])
+                  (flet ((whole () (pair-listed-pairs)))
+                    (declare (dynamic-extent #'whole))
+                    (pairs-in-pieces world :listed #'whole))
                   (pair-loose-rows)
                   (pair-loose-among-loose))
                 ;; build the list again: the half neighbourhood of each body's cell, in the
@@ -6931,8 +7001,9 @@ many boxes live, the contact points of this step and of the last one, each with 
 and the count of every slot's points, the awake box rows of this step, their turns (three floats
 a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
 step's start (four floats a box), whether this step solves points, the soft coefficients of the
-step, its restitution threshold and gravity times the substep, and whether some point of the
-step has restitution. #BXR0WS"
+step, its restitution threshold and gravity times the substep, whether some point of the step
+has restitution, and the grid of the awake spheres that may meet a box with its rows, centres and
+their largest travel this step, and room for the rows a walk of it finds ([[#BXSPHR]]). #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -6960,7 +7031,14 @@ step has restitution. #BXR0WS"
   (push-max 0.0 :type single-float)
   (threshold 0.0 :type single-float)
   (bouncy nil :type boolean)
-  (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float))
+  (hgx 0.0 :type single-float) (hgy 0.0 :type single-float) (hgz 0.0 :type single-float)
+  (spheres (make-hash-grid) :type hash-grid)
+  (sphere-rows (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (sx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (sy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (sz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
+  (sphere-travel 0.0 :type single-float)
+  (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
 
 (defun box-set-room (set slots)
   "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
@@ -7766,8 +7844,10 @@ box set when some point is to be solved, else NIL. #BXSOLV"
           (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
             (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
                   (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
-          ;; the awake boxes by cell, for the walk over their pairs ([[#BXCELL]])
+          ;; the awake boxes by cell, for the walk over their pairs ([[#BXCELL]]), and the
+          ;; awake spheres, for the walk of each box over the spheres near it ([[#BXSPHR]])
           (grid-awake-boxes world set n)
+          (grid-awake-spheres world set n dt gstep)
           (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
             (setf (box-set-threshold set) threshold (box-set-hgx set) hgx (box-set-hgy set) hgy
                   (box-set-hgz set) hgz))
@@ -8176,19 +8256,85 @@ FILTERING, a box of BOX-FLAGS. #BXSPHR"
   (and (not (logtest sphere-flags (logior +flag-box-shape+ +flag-terrain-only+)))
        (rows-meet-p filtering sphere-flags box-flags)))
 
+(defconstant +box-sphere-span+ 8
+  "The most cells each way a box walks in the grid of the awake spheres, or in the sleeping grids,
+to find the spheres it may meet; a reach spanning more visits every row instead. #BXSPHR")
+
+(defun grid-awake-spheres (world set n dt gstep)
+  "Bucket the awake spheres among the first N awake rows of WORLD that meet bodies into SET's grid
+of spheres, whose items are their rows, in cells of the largest diameter and the margin, and keep
+the largest travel among them in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
+  (declare (type box-set set) (type index n) (type single-float dt gstep) #.+kernel-policy+)
+  (let ((awake (physics-world-awake world)) (count 0) (travel 0.0))
+    (declare (type index count) (type single-float travel))
+    (when (< (length (box-set-sphere-rows set)) n)
+      (let ((m (max n (* 2 (length (box-set-sphere-rows set))))))
+        (setf (box-set-sphere-rows set) (make-array m :element-type 'fixnum :initial-element 0)
+              (box-set-sx set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-sy set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-sz set) (make-array m :element-type 'single-float :initial-element 0.0)
+              (box-set-found set) (make-array m :element-type 'fixnum :initial-element 0))
+        (hash-grid-reserve (box-set-spheres set) m)))
+    (let ((rows (box-set-sphere-rows set)) (sx (box-set-sx set)) (sy (box-set-sy set)) (sz (box-set-sz set)))
+      (with-body-columns (x y z vx vy vz flags) awake
+        (dotimes (i n)
+          (unless (logtest (aref flags i) (logior +flag-box-shape+ +flag-terrain-only+))
+            (setf (aref rows count) i (aref sx count) (aref x i) (aref sy count) (aref y i) (aref sz count) (aref z i)
+                  travel (max travel (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep)))
+            (incf count))))
+      (build-hash-grid (box-set-spheres set)
+                       (+ (* 2.0 (f32 (physics-world-max-radius world))) (f32 (physics-world-margin world)))
+                       count sx sy sz rows))
+    (setf (box-set-sphere-travel set) travel)
+    set))
+
+(defun near-sphere-rows (set x y z far)
+  "Write into SET's room for found rows, in increasing order, the rows of the awake spheres in
+SET's grid of spheres whose cells lie within FAR of the point X Y Z, and return their count; or
+return -1, writing nothing, when FAR spans more than +box-sphere-span+ cells. #BXSPHR"
+  (declare (type box-set set) (type single-float x y z far) #.+kernel-policy+)
+  (let* ((grid (box-set-spheres set)) (found (box-set-found set)) (count 0)
+         (cells (* far (hash-grid-inv-cell grid))))
+    (declare (type fixnum count) (type single-float cells))
+    (cond
+      ((zerop (hash-grid-count grid)) 0)
+      ((> cells (float +box-sphere-span+ 1.0)) -1)
+      (t
+       (do-grid-neighbours (j grid x y z :span (ceiling cells))
+         (setf (aref found count) j)
+         (incf count))
+       ;; the rows in increasing order, as a walk over every row meets them
+       (loop for i of-type fixnum from 1 below count
+             do (let ((v (aref found i)) (k i))
+                  (declare (type fixnum v k))
+                  (loop while (and (> k 0) (> (aref found (1- k)) v))
+                        do (setf (aref found k) (aref found (1- k)))
+                           (decf k))
+                  (setf (aref found k) v)))
+       count))))
+
 (defun find-box-sphere-points (world set row reach dt gstep)
   "Append to SET's points those between the awake box at ROW of WORLD and every sphere near it,
-awake or, held still, sleeping; REACH is the box's, grown to the travel of an awake sphere
+awake (found in SET's grid of spheres) or, held still, sleeping (found in the sleeping grids),
+each in the order of its rows; REACH is the box's, grown to the travel of an awake sphere
 relative to it in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
   (declare (type box-set set) (type index row) (type single-float reach dt gstep) #.+kernel-policy+)
   (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-         (n (body-columns-length awake)) (filtering (physics-world-filtering world)))
-    (declare (type index n))
+         (ids (physics-world-ids world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
+         (rmax (f32 (physics-world-max-radius world))))
+    (declare (type index n) (type single-float rmax))
     (with-body-columns (x y z vx vy vz qw qx qy qz radius handle flags) awake
       (let* ((owner (aref handle row)) (slot (handle-index owner)) (box-flags (aref flags row))
              (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
-             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot)))
-        (declare (type fixnum owner box-flags) (type single-float cx cy cz r hx hy hz))
+             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot))
+             (travel (step-travel (aref vx row) (aref vy row) (aref vz row) dt 0.0))
+             ;; the farthest centre an awake sphere may meet this box from, with a millimetre
+             ;; for the rounding of the travels
+             (far (+ r rmax (max reach (+ travel (box-set-sphere-travel set))) 1e-3))
+             (sleep-far (+ r rmax reach 1e-3))
+             (sleep-cells (/ sleep-far (the single-float (f32 (grid-cell-size world))))))
+        (declare (type fixnum owner box-flags) (type single-float cx cy cz r hx hy hz travel far sleep-far sleep-cells))
         (flet ((meet (buffer j row-j reach)
                  ;; the sphere at row J of BUFFER, at solver row ROW-J
                  (declare (type body-columns buffer) (type index j row-j) (type single-float reach))
@@ -8201,41 +8347,75 @@ relative to it in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
                                            (aref sx j) (aref sy j) (aref sz j) (aref sr j)
                                            cx cy cz (aref qw row) (aref qx row) (aref qy row) (aref qz row)
                                            hx hy hz)))))))
-          (dotimes (j n)
-            (meet awake j j (max reach (step-travel (- (aref vx j) (aref vx row)) (- (aref vy j) (aref vy row))
-                                                    (- (aref vz j) (aref vz row)) dt gstep))))
-          (dotimes (j (body-columns-length sleeping)) (meet sleeping j n reach))))))
+          (flet ((meet-awake (j)
+                   (declare (type index j))
+                   (meet awake j j (max reach (step-travel (- (aref vx j) (aref vx row)) (- (aref vy j) (aref vy row))
+                                                           (- (aref vz j) (aref vz row)) dt gstep)))))
+            (let ((count (near-sphere-rows set cx cy cz far)) (found (box-set-found set)))
+              (declare (type fixnum count) (type fixnum-column found))
+              (if (minusp count)
+                  (dotimes (j n) (meet-awake j))
+                  (dotimes (k count) (meet-awake (aref found k))))))
+          (let ((m (body-columns-length sleeping)))
+            (cond ((zerop m))
+                  ((> sleep-cells (float +box-sphere-span+ 1.0))
+                   (dotimes (j m) (meet sleeping j n reach)))
+                  (t
+                   (do-sleepers-in-row-order (h world cx cy cz :span (ceiling sleep-cells))
+                       (let ((s (handle-index h)))
+                         (and (= (aref (handle-table-set ids) s) +set-sleeping+)
+                              (= (aref (handle-table-generation ids) s) (handle-generation h))
+                              (not (logtest (aref (body-columns-flags sleeping) (aref (handle-table-local ids) s))
+                                            +flag-box-shape+))))
+                     (meet sleeping (aref (handle-table-local ids) (handle-index h)) n reach)))))))))
+  set)
+
+(defun sleeping-box-sphere-points (world set b margin dt gstep)
+  "Append to SET's points those between the sleeping box at row B of WORLD's sleeping buffer, held
+still, and every awake sphere near it (found in SET's grid of spheres, in the order of its rows),
+within MARGIN or the sphere's travel in a step of DT seconds in which gravity adds GSTEP. #BXSPHR"
+  (declare (type box-set set) (type index b) (type single-float margin dt gstep) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
+         (found (box-set-found set)) (rmax (f32 (physics-world-max-radius world))))
+    (declare (type index n) (type fixnum-column found) (type single-float rmax))
+    (with-body-columns ((bx x) (by y) (bz z) (bqw qw) (bqx qx) (bqy qy) (bqz qz) (br radius) (bh handle) (bf flags))
+        sleeping
+      (with-body-columns (x y z vx vy vz radius handle flags) awake
+        (let* ((slot (handle-index (aref bh b)))
+               (count (near-sphere-rows set (aref bx b) (aref by b) (aref bz b)
+                                        (+ (aref br b) rmax (max margin (box-set-sphere-travel set)) 1e-3))))
+          (declare (type fixnum count))
+          (flet ((meet (j)
+                   (declare (type index j))
+                   (when (sphere-meets-box-p filtering (aref flags j) (aref bf b))
+                     (let* ((reach (max margin (step-travel (aref vx j) (aref vy j) (aref vz j) dt gstep)))
+                            (dx (- (aref x j) (aref bx b))) (dy (- (aref y j) (aref by b))) (dz (- (aref z j) (aref bz b)))
+                            (near (+ (aref br b) (aref radius j) reach)))
+                       (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
+                         (box-sphere-point set (aref bh b) (box-sphere-key slot (handle-index (aref handle j))) j n reach
+                                           (aref x j) (aref y j) (aref z j) (aref radius j)
+                                           (aref bx b) (aref by b) (aref bz b) (aref bqw b) (aref bqx b) (aref bqy b)
+                                           (aref bqz b) (aref (box-set-hx set) slot) (aref (box-set-hy set) slot)
+                                           (aref (box-set-hz set) slot)))))))
+            (if (minusp count)
+                (dotimes (j n) (meet j))
+                (dotimes (k count) (meet (aref found k)))))))))
   set)
 
 (defun find-sleeping-box-sphere-points (world set margin dt gstep)
   "Append to SET's points those between each sleeping box of WORLD, held still, and every awake
-sphere near it, within MARGIN or the sphere's travel in a step of DT seconds in which gravity
-adds GSTEP; each such box's slot gets the first and the count of its points. #BXSPHR"
+sphere near it (sleeping-box-sphere-points); each such box's slot gets the first and the count of
+its points. #BXSPHR"
   (declare (type box-set set) (type single-float margin dt gstep) #.+kernel-policy+)
-  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-         (n (body-columns-length awake)) (filtering (physics-world-filtering world))
-         (points (box-set-points set)))
-    (declare (type index n))
-    (with-body-columns ((bx x) (by y) (bz z) (bqw qw) (bqx qx) (bqy qy) (bqz qz) (br radius) (bh handle) (bf flags))
-        sleeping
-      (with-body-columns (x y z vx vy vz radius handle flags) awake
-        (dotimes (b (body-columns-length sleeping))
-          (when (logtest (aref bf b) +flag-box-shape+)
-            (let* ((owner (aref bh b)) (slot (handle-index owner))
-                   (start (box-point-columns-length points)))
-              (dotimes (j n)
-                (when (sphere-meets-box-p filtering (aref flags j) (aref bf b))
-                  (let* ((reach (max margin (step-travel (aref vx j) (aref vy j) (aref vz j) dt gstep)))
-                         (dx (- (aref x j) (aref bx b))) (dy (- (aref y j) (aref by b))) (dz (- (aref z j) (aref bz b)))
-                         (near (+ (aref br b) (aref radius j) reach)))
-                    (when (< (+ (* dx dx) (* dy dy) (* dz dz)) (* near near))
-                      (box-sphere-point set owner (box-sphere-key slot (handle-index (aref handle j))) j n reach
-                                        (aref x j) (aref y j) (aref z j) (aref radius j)
-                                        (aref bx b) (aref by b) (aref bz b) (aref bqw b) (aref bqx b) (aref bqy b)
-                                        (aref bqz b) (aref (box-set-hx set) slot) (aref (box-set-hy set) slot)
-                                        (aref (box-set-hz set) slot))))))
-              (setf (aref (box-set-first set) slot) start
-                    (aref (box-set-count set) slot) (- (box-point-columns-length points) start))))))))
+  (let ((sleeping (physics-world-sleeping world)) (points (box-set-points set)))
+    (with-body-columns ((bh handle) (bf flags)) sleeping
+      (dotimes (b (body-columns-length sleeping))
+        (when (logtest (aref bf b) +flag-box-shape+)
+          (let ((slot (handle-index (aref bh b))) (start (box-point-columns-length points)))
+            (sleeping-box-sphere-points world set b margin dt gstep)
+            (setf (aref (box-set-first set) slot) start
+                  (aref (box-set-count set) slot) (- (box-point-columns-length points) start)))))))
   set)
 ;; A box against a sphere:1 ends here
 
@@ -9635,7 +9815,7 @@ core. #W0RKP1")
   "How long, in nanoseconds, a worker waiting for a job spins or yields at most before it parks:
 the jobs of a step follow each other within it, the gap between a game's frames does not. #W0RKP1")
 
-(defconstant +pool-jobs+ 10
+(defconstant +pool-jobs+ 12
   "How many kinds of job a pool keeps its calls and timings for ([[#SPL1T5]]). #W0RKP1")
 
 (defstruct (worker-pool (:constructor %make-worker-pool (count)) (:copier nil))
@@ -9670,12 +9850,16 @@ typed slots so that publishing a job conses nothing. #W0RKP1"
   (whole-ns (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
   ;; per job: the nanoseconds all its calls took, either way ([[#B3NCHW]] reads them)
   (spent (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  ;; per job: the part of spent its merges took on the calling thread alone ([[#P41P1C]])
+  (merged (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
   ;; a phase's own piece, a function of the worker and the count, while its job runs
   (piece nil :type (or null function))
   ;; the events of a phase's pieces, a buffer and its data for each worker but worker 0,
   ;; merged in worker order ([[#SPL1T5]])
   (events #() :type simple-vector)
   (event-data #() :type simple-vector)
+  ;; each worker's pair sink: the pairs and touches its piece of the pair phase found ([[#P41P1C]])
+  (pair-sinks #() :type simple-vector)
   ;; the parameters of the job, written by the caller before it publishes
   (wide nil) (narrow nil) (impact nil) (settle nil)
   (lanes 1 :type (integer 1 64))
@@ -9819,7 +10003,8 @@ condition of the earliest piece that signalled. #W0RKP1"
   "A pool of COUNT workers: COUNT - 1 threads, parked, and the caller. #W0RKP1"
   (let ((pool (%make-worker-pool count)))
     (setf (worker-pool-events pool) (map-into (make-array count) #'make-event-columns)
-          (worker-pool-event-data pool) (map-into (make-array count) (lambda () (make-array 8 :initial-element nil))))
+          (worker-pool-event-data pool) (map-into (make-array count) (lambda () (make-array 8 :initial-element nil)))
+          (worker-pool-pair-sinks pool) (map-into (make-array count) #'make-pair-sink))
     (handler-bind ((serious-condition (lambda (c) (declare (ignore c)) (close-worker-pool pool))))
       (loop for worker from 1 below count
             do (push (sb-thread:make-thread #'worker-loop :name "luv-physics worker"
@@ -10174,6 +10359,177 @@ the integration JOB on the workers. #SPL1T5"
     (run-colour-pass pool kernels world +job-frames+)
     (call-next-method)))
 ;; The step's loops cut into fixed pieces:1 ends here
+
+;; [[file:../physics.org::#P41P1C][The pair phase in pieces:1]]
+(defconstant +job-pairs+ 8 "The job: the pair phase's listed pairs, a share of the list each. #P41P1C")
+(defconstant +job-pair-build+ 9
+  "The job: the pair list's build, a share of the awake grid's places each. #P41P1C")
+
+(defun pair-sink-ready (sink rows near cursor)
+  "Empty SINK for a piece over ROWS awake rows, with a neighbour scratch of NEAR places and
+CURSOR, the contact table's, as its first guess. #P41P1C"
+  (declare (type pair-sink sink) (type index rows near cursor))
+  (let ((list (pair-sink-list sink)))
+    (setf (pair-list-overlaps list) (fixnum-room (pair-list-overlaps list) rows :keep 0)
+          (pair-list-count list) 0 (pair-list-examined list) 0)
+    (fill (pair-list-overlaps list) 0 :end rows))
+  (setf (pair-sink-near sink) (fixnum-room (pair-sink-near sink) near :keep 0)
+        (pair-sink-count sink) 0 (pair-sink-cursor sink) cursor)
+  sink)
+
+(defun struck-pair-piece (world sink packed)
+  "Take the listed pair PACKED, which strikes, whole, with its impact normal, into SINK, its
+overlap already counted: as the pair phase takes it after scan-listed-pairs. #P41P1C"
+  (declare (type pair-sink sink) (type fixnum packed))
+  (with-world-parameters (margin slop (threshold restitution-threshold)) world
+    (let* ((i (ash packed -24)) (j (logand packed #xFFFFFF))
+           (dt (physics-world-current-dt world)))
+      (declare (type index i j) (type single-float margin slop threshold dt))
+      (with-body-columns (x y z vx vy vz radius handle) (physics-world-awake world)
+        (pair-contact (physics-world-contacts world) (physics-world-contact-table world)
+                      (pair-list-overlaps (pair-sink-list sink)) margin slop dt (gravity-step world dt)
+                      threshold t
+                      (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
+                      (aref vx i) (aref vy i) (aref vz i)
+                      (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
+                      (aref vx j) (aref vy j) (aref vz j) -1 -1 sink))))
+  sink)
+
+(defun listed-pairs-piece (world sink from to)
+  "The listed pairs of WORLD's pair list at places FROM below TO, as the pair phase takes them
+(walk-listed-pairs, then each that strikes whole), into SINK. #P41P1C"
+  (declare (type pair-sink sink) (type index from to))
+  (let ((pairs (pair-list-pairs (physics-world-pair-list world)))
+        (overlaps (pair-list-overlaps (pair-sink-list sink)))
+        (p from))
+    (declare (type fixnum-column pairs overlaps) (type index p))
+    (loop (setf p (walk-listed-pairs world p to nil sink overlaps))
+          (when (>= p to) (return))
+          (struck-pair-piece world sink (aref pairs p))
+          (incf p))
+    sink))
+
+(defun build-pairs-piece (world sink from to)
+  "The walks of the bodies at places FROM below TO of WORLD's awake grid, as the pair list's
+build walks them (pair-list-walks), with SINK's neighbour scratch: its pairs, candidates and
+overlaps into SINK's list, its touches into SINK. #P41P1C"
+  (declare (type pair-sink sink) (type index from to))
+  (with-world-parameters (margin (skin pair-skin) slop (rmax max-radius) (threshold restitution-threshold)) world
+    (let* ((awake (physics-world-awake world))
+           (grid (physics-world-awake-grid world))
+           (plist (pair-sink-list sink))
+           (dt (physics-world-current-dt world))
+           (gstep (gravity-step world dt))
+           (contacts (physics-world-contacts world))
+           (table (physics-world-contact-table world))
+           (crowded nil)
+           (filtering (physics-world-filtering world)))
+      (declare (type single-float margin skin slop dt gstep rmax threshold) (type body-columns awake)
+               (type pair-list plist) (type contact-columns contacts) (type contact-table table)
+               (type hash-grid grid) #.+kernel-policy+)
+      (with-body-columns (x y z vx vy vz radius flags handle) awake
+        (macrolet ((pair-of-rows (i j)
+                     `(when (pair-contact contacts table (pair-list-overlaps plist) margin slop dt gstep threshold t
+                                          (aref x ,i) (aref y ,i) (aref z ,i) (aref radius ,i) (aref handle ,i)
+                                          (aref vx ,i) (aref vy ,i) (aref vz ,i)
+                                          (aref x ,j) (aref y ,j) (aref z ,j) (aref radius ,j) (aref handle ,j)
+                                          (aref vx ,j) (aref vy ,j) (aref vz ,j) ,i ,j sink)
+                        (setf crowded t))))
+          (pair-list-walks from to (pair-sink-near sink))))))
+  sink)
+
+(defun fold-piece-overlaps (pool plist rows)
+  "Make PLIST's overlap count of each of ROWS awake rows the sum of the counts of POOL's workers'
+sinks; return the largest. #P41P1C"
+  (declare (type worker-pool pool) (type pair-list plist) (type index rows))
+  (let ((overlaps (pair-list-overlaps plist)) (sinks (worker-pool-pair-sinks pool)) (most 0))
+    (declare (type fixnum-column overlaps) (type fixnum most))
+    (replace overlaps (pair-list-overlaps (pair-sink-list (svref sinks 0))) :end1 rows)
+    (loop for w from 1 below (worker-pool-count pool)
+          do (let ((more (pair-list-overlaps (pair-sink-list (svref sinks w)))))
+               (declare (type fixnum-column more))
+               (dotimes (i rows) (setf (aref overlaps i) (+ (aref overlaps i) (aref more i))))))
+    (dotimes (i rows most) (setf most (max most (aref overlaps i))))))
+
+(defun merge-pair-sink (world sink)
+  "Hand SINK's touches to WORLD's contacts in order, as one walk would have: the table's cursor
+set on each touch's row, and a miss counted where the cursor would not have guessed it. #P41P1C"
+  (declare (type pair-sink sink) (inline touch-contact))
+  (let ((contacts (physics-world-contacts world)) (table (physics-world-contact-table world))
+        (f (pair-sink-touches sink)) (g (pair-sink-geometry sink)))
+    (declare (type contact-columns contacts) (type contact-table table) (type fixnum-column f)
+             (type f32-column g))
+    (dotimes (k (pair-sink-count sink) sink)
+      (let ((row (aref f (* 4 k))) (key (aref f (+ (* 4 k) 1))) (q (* 7 k)))
+        (declare (type fixnum row key) (type index q))
+        (when (>= row 0)
+          (let ((guess (contact-table-cursor table)))
+            (unless (and (< guess (contact-columns-length contacts))
+                         (= (aref (contact-columns-key contacts) guess) key))
+              (incf (contact-table-misses table))
+              (setf (contact-table-cursor table) row))))
+        (touch-contact contacts table key +contact-pair+ (aref f (+ (* 4 k) 2)) (aref f (+ (* 4 k) 3))
+                       (aref g q) (aref g (+ q 1)) (aref g (+ q 2)) (aref g (+ q 3))
+                       (aref g (+ q 4)) (aref g (+ q 5)) (aref g (+ q 6)) 0.0 0.0 0.0)))))
+
+(defun gather-piece-pairs (pool plist)
+  "Append the pairs POOL's workers' sinks listed to PLIST, in worker order, and sum the candidates
+they examined. #P41P1C"
+  (declare (type worker-pool pool) (type pair-list plist))
+  (loop for w below (worker-pool-count pool)
+        do (let* ((list (pair-sink-list (svref (worker-pool-pair-sinks pool) w)))
+                  (k (pair-list-count plist)) (more (pair-list-count list)))
+             (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) (+ k more) :least 1024))
+             (replace (pair-list-pairs plist) (pair-list-pairs list) :start1 k :end2 more)
+             (setf (pair-list-count plist) (+ k more))
+             (incf (pair-list-examined plist) (pair-list-examined list))))
+  plist)
+
+(defun run-pair-pieces (pool world kind)
+  "Run the pair phase's walk KIND (:listed or :build) in pieces on POOL's workers, then merge
+their sinks into WORLD in worker order; return true, or NIL, having changed nothing, when some
+row's overlaps reach +overlaps-per-body+: then one walk would have become crowded. #P41P1C"
+  (declare (type worker-pool pool))
+  (let* ((build (eq kind :build))
+         (plist (physics-world-pair-list world))
+         (grid (physics-world-awake-grid world))
+         (places (if build (hash-grid-count grid) (pair-list-count plist)))
+         (rows (awake-rows world))
+         (near (length (hash-grid-near grid)))
+         (cursor (contact-table-cursor (physics-world-contact-table world)))
+         (sinks (worker-pool-pair-sinks pool)))
+    (declare (type index places rows near cursor))
+    (flet ((piece (worker count)
+             (declare (type fixnum worker count))
+             (let ((sink (svref sinks worker)))
+               (pair-sink-ready sink rows near cursor)
+               (multiple-value-bind (s e) (share-bounds 0 places worker count)
+                 (if build (build-pairs-piece world sink s e) (listed-pairs-piece world sink s e))))))
+      (declare (dynamic-extent #'piece))
+      (setf (worker-pool-piece pool) #'piece)
+      (unwind-protect (run-on-workers pool (if build +job-pair-build+ +job-pairs+) 1)
+        (setf (worker-pool-piece pool) nil)))
+    (let ((start (clock-ns)) (job (if build +job-pair-build+ +job-pairs+)))
+      (prog1 (if (>= (fold-piece-overlaps pool plist rows) +overlaps-per-body+)
+                 (progn (fill (pair-list-overlaps plist) 0 :end rows) nil)
+                 (progn (when build (gather-piece-pairs pool plist))
+                        (dotimes (w (worker-pool-count pool) t)
+                          (merge-pair-sink world (svref sinks w)))))
+        (incf (aref (worker-pool-merged pool) job) (- (clock-ns) start))))))
+
+(defun pairs-in-pieces (world kind whole)
+  "Take the pair phase's walk KIND (:listed or :build) in pieces on WORLD's workers when its pool
+splits the pass (tuned-split) and no row becomes crowded, else by calling WHOLE, the phase's own
+walk. #P41P1C"
+  (declare (type function whole))
+  (let ((job (if (eq kind :build) +job-pair-build+ +job-pairs+))
+        (places (if (eq kind :build)
+                    (hash-grid-count (physics-world-awake-grid world))
+                    (pair-list-count (physics-world-pair-list world)))))
+    (tuned-split (pool world places job)
+      (unless (run-pair-pieces pool world kind) (funcall whole))
+      (funcall whole))))
+;; The pair phase in pieces:1 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
 (deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))

@@ -7195,6 +7195,95 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
           (check (= got scalar) "~(~A~) ends with hash ~D, scalar ~D" family got scalar))))))
 ;; BXSPHR-families-agree-on-balls-and-boxes ends here
 
+;; [[file:../physics.org::#BXSPHR][BXSPHR-grid-finds-every-sphere]]
+(define-claim "BXSPHR" grid-finds-every-sphere
+    "The box-sphere points found through the grids are those of a walk over every row, in order."
+  (let* ((w (make-physics-world :terrain (make-floor-terrain) :gravity '(0 0 0)))
+         (state (sb-ext:seed-random-state 45))
+         (k 0))
+    (flet ((heap (count fast)
+             (loop while (plusp count)
+                   do (let ((i (mod k 6)) (j (mod (floor k 6) 6)) (l (floor k 36)))
+                        (incf k) (decf count)
+                        (let ((x (+ 2.0 (* 0.9 i) (- (random 0.2 state) 0.1))) (y (+ 4.0 (* 0.9 l) (random 0.1 state)))
+                              (z (+ 2.0 (* 0.9 j) (- (random 0.2 state) 0.1)))
+                              (v (if (and fast (zerop (mod k 3))) (list (- (random 60.0 state) 30) (- (random 20.0 state) 10) 0)
+                                     (list 0 0 0))))
+                          (if (evenp (+ i j l))
+                              (add-physics-box w x y z (+ 0.2 (random 0.25 state)) (+ 0.2 (random 0.25 state))
+                                               (+ 0.2 (random 0.25 state))
+                                               :orientation (list 1 (random 0.2 state) (random 0.2 state) (random 0.2 state))
+                                               :vx (first v) :vy (second v) :vz (third v))
+                              (add-physics-body w x y z :radius (+ 0.1 (random 0.3 state)) :collide-with-bodies (/= k 70)
+                                                        :vx (first v) :vy (second v) :vz (third v))))))))
+      (heap 60 nil)
+      (dotimes (i 60) (step-physics-world w))
+      (heap 120 t)
+      (step-physics-world w))
+    (let* ((set (luv-physics::physics-world-box-bodies w))
+           (awake (luv-physics::physics-world-awake w)) (sleeping (luv-physics::physics-world-sleeping w))
+           (n (luv-physics::body-columns-length awake))
+           (mine (luv-physics::%make-box-set))
+           (dt (luv-physics::physics-world-current-dt w))
+           (gstep (luv-physics::gravity-step w dt))
+           (margin (luv-physics::f32 (luv-physics::physics-world-margin w)))
+           (filtering (luv-physics::physics-world-filtering w)))
+      (check (plusp (luv-physics::body-columns-length sleeping)) "nothing sleeps")
+      (luv-physics::ensure-sleeping-grid w)
+      (luv-physics::prepare-box-points w (luv-physics::physics-world-current-h w))
+      (luv-physics::box-set-room mine (length (luv-physics::box-set-hx set)))
+      (replace (luv-physics::box-set-hx mine) (luv-physics::box-set-hx set))
+      (replace (luv-physics::box-set-hy mine) (luv-physics::box-set-hy set))
+      (replace (luv-physics::box-set-hz mine) (luv-physics::box-set-hz set))
+      (setf (luv-physics::box-set-dummy mine) n)
+      (flet ((col (name buffer j) (aref (funcall (intern (format nil "BODY-COLUMNS-~A" name) :luv-physics) buffer) j)))
+        (flet ((box-p (buffer j) (logtest (col "FLAGS" buffer j) luv-physics::+flag-box-shape+))
+               (travel (vx vy vz) (luv-physics::step-travel vx vy vz dt gstep))
+               (meet (box-buffer b sphere-buffer j row-a row-b reach)
+                 ;; the sphere at J of SPHERE-BUFFER against the box at B of BOX-BUFFER, by hand
+                 (when (luv-physics::sphere-meets-box-p filtering (col "FLAGS" sphere-buffer j) (col "FLAGS" box-buffer b))
+                   (let ((near (+ (col "RADIUS" box-buffer b) (col "RADIUS" sphere-buffer j) reach))
+                         (d2 (loop for c in '("X" "Y" "Z") sum (expt (- (col c sphere-buffer j) (col c box-buffer b)) 2)))
+                         (slot (luv-physics::handle-index (col "HANDLE" box-buffer b))))
+                     (when (< d2 (* near near))
+                       (luv-physics::box-sphere-point
+                        mine (col "HANDLE" box-buffer b)
+                        (luv-physics::box-sphere-key slot (luv-physics::handle-index (col "HANDLE" sphere-buffer j)))
+                        row-a row-b reach (col "X" sphere-buffer j) (col "Y" sphere-buffer j) (col "Z" sphere-buffer j)
+                        (col "RADIUS" sphere-buffer j) (col "X" box-buffer b) (col "Y" box-buffer b) (col "Z" box-buffer b)
+                        (col "QW" box-buffer b) (col "QX" box-buffer b) (col "QY" box-buffer b) (col "QZ" box-buffer b)
+                        (aref (luv-physics::box-set-hx set) slot) (aref (luv-physics::box-set-hy set) slot)
+                        (aref (luv-physics::box-set-hz set) slot))))))
+               (points (set slop)
+                 (let ((p (luv-physics::box-set-points set)))
+                   (loop for q below (luv-physics::box-point-columns-length p)
+                         for key = (aref (luv-physics::box-point-columns-key p) q)
+                         when (and (logbitp 32 key) (= 255 (logand key 255)))
+                           collect (list key (+ (aref (luv-physics::box-point-columns-separation p) q) slop)
+                                         (aref (luv-physics::box-point-columns-row p) q)
+                                         (aref (luv-physics::box-point-columns-row-b p) q))))))
+          (dotimes (b n)
+            (when (box-p awake b)
+              (let ((reach (max margin (travel (col "VX" awake b) (col "VY" awake b) (col "VZ" awake b)))))
+                (dotimes (j n)
+                  (meet awake b awake j j b (max reach (travel (- (col "VX" awake j) (col "VX" awake b))
+                                                               (- (col "VY" awake j) (col "VY" awake b))
+                                                               (- (col "VZ" awake j) (col "VZ" awake b))))))
+                (dotimes (j (luv-physics::body-columns-length sleeping))
+                  (meet awake b sleeping j n b reach)))))
+          (dotimes (b (luv-physics::body-columns-length sleeping))
+            (when (box-p sleeping b)
+              (dotimes (j n)
+                (meet sleeping b awake j j n (max margin (travel (col "VX" awake j) (col "VY" awake j) (col "VZ" awake j)))))))
+          (let ((grids (points set 0.0))
+                (every-row (points mine (luv-physics::f32 (luv-physics::physics-world-slop w)))))
+            (check (> (length grids) 60) "only ~D points between boxes and spheres" (length grids))
+            (check (some (lambda (p) (or (>= (third p) n) (>= (fourth p) n))) grids) "no point against a sleeper")
+            (check (some (lambda (p) (> (second p) margin)) grids) "no point beyond the margin")
+            (check (equal grids every-row) "~D points through the grids, ~D over every row"
+                   (length grids) (length every-row))))))))
+;; BXSPHR-grid-finds-every-sphere ends here
+
 ;; [[file:../physics.org::#BXSWEP][BXSWEP-fast-boxes-stay-out-of-cells]]
 (define-claim "BXSWEP" fast-boxes-stay-out-of-cells
     "A unit cube dropped at 50 m/s onto a floor, thick or one cell thick, stays above it."
@@ -8601,8 +8690,8 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
   "Make a world with MAKE (which returns it and a script, or NIL), give it a pool for each worker
 count of COUNTS (none for 1), splitting every pass, and run STEPS steps, step I taken by the
 pool of the (I mod length)th count (calling the script, and EACH with the world and the step,
-before each); return its state hash, its events in order, and whether some colour pass ran
-split. #SPL1T5"
+before each); return its state hash, its events in order, whether some colour pass ran split,
+and whether some walk of the pair phase ran in pieces. #SPL1T5"
   (multiple-value-bind (world script) (funcall make)
     (let ((pools (mapcar (lambda (n)
                            (when (> n 1)
@@ -8631,6 +8720,11 @@ split. #SPL1T5"
              (values (physics-world-state-hash world) (reverse events)
                      (some (lambda (pool)
                              (and pool (plusp (aref (luv-physics::worker-pool-spent pool) luv-physics::+job-solve+))))
+                           pools)
+                     ;; the pair phase's walks in pieces ([[#P41P1C]])
+                     (some (lambda (pool)
+                             (and pool (plusp (+ (aref (luv-physics::worker-pool-spent pool) luv-physics::+job-pairs+)
+                                                 (aref (luv-physics::worker-pool-spent pool) luv-physics::+job-pair-build+)))))
                            pools)))
         (setf (luv-physics::physics-world-pool world) nil)
         (dolist (pool pools) (when pool (luv-physics::close-worker-pool pool)))))))
@@ -8684,7 +8778,8 @@ solved by FAMILY. #SPL1T5"
                         "~(~A~), ~A: the events differ between 1 and 2-4 workers" family label)
                  (check (or (plusp (length (second (first runs)))) (string= label "joints"))
                         "~(~A~), ~A: no events to compare" family label)
-                 (check (third (second runs)) "~(~A~), ~A: no colour pass ran split" family label)))
+                 (check (third (second runs)) "~(~A~), ~A: no colour pass ran split" family label)
+                 (check (fourth (second runs)) "~(~A~), ~A: no pair walk ran in pieces" family label)))
     (dolist (scene '(:pile :fountain :lava :player))
       (let ((runs (loop for counts in '((1) (2 3 4))
                         collect (multiple-value-list
@@ -8763,6 +8858,76 @@ solved by FAMILY. #SPL1T5"
         (check (plusp (aref (luv-physics::worker-pool-whole-ns pool) job)) "the solve never ran whole")))
     (close-physics-world two)))
 ;; SPL1T5-tuned-pool-keeps-the-bits ends here
+
+;; [[file:../physics.org::#P41P1C][P41P1C-pieces-leave-the-walk]]
+(defun pair-walk-view (world)
+  "What the pair phase's walk leaves in WORLD: the pair list's pairs, examined count and
+overlaps, the contact table's cursor, misses and touched count, and the contacts' order. #P41P1C"
+  (let* ((plist (luv-physics::physics-world-pair-list world))
+         (table (luv-physics::physics-world-contact-table world))
+         (contacts (luv-physics::physics-world-contacts world))
+         (rows (luv-physics::contact-columns-length contacts)))
+    (list (subseq (luv-physics::pair-list-pairs plist) 0 (luv-physics::pair-list-count plist))
+          (luv-physics::pair-list-examined plist)
+          (subseq (luv-physics::pair-list-overlaps plist) 0 (luv-physics::awake-rows world))
+          (luv-physics::contact-table-cursor table) (luv-physics::contact-table-misses table)
+          (luv-physics::contact-table-touched table)
+          (subseq (luv-physics::contact-columns-order contacts) 0 rows))))
+
+(define-claim "P41P1C" pieces-leave-the-walk
+    "Pair pieces on 2 and 3 workers leave the pair list, overlaps and the contact table's walk as one worker, step by step."
+  (let ((worlds (loop for workers in '(1 2 3)
+                      collect (let ((w (make-basin-world 300)))
+                                (luv-physics::open-world-workers w workers)
+                                (let ((pool (luv-physics::physics-world-pool w)))
+                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                                w)))
+        (differ '()))
+    (dotimes (i 60)
+      (dolist (w worlds) (step-physics-world w))
+      (let ((views (mapcar #'pair-walk-view worlds)))
+        (unless (every (lambda (v) (equalp v (first views))) (rest views)) (push i differ))))
+    (check (null differ) "the walks differ after steps ~S" (reverse differ))
+    (dolist (w (rest worlds))
+      (let ((spent (luv-physics::worker-pool-spent (luv-physics::physics-world-pool w))))
+        (check (plusp (aref spent luv-physics::+job-pairs+)) "~D workers: the listed pairs never ran in pieces"
+               (physics-world-workers w))
+        (check (plusp (aref spent luv-physics::+job-pair-build+)) "~D workers: the build never ran in pieces"
+               (physics-world-workers w))))
+    (mapc #'close-physics-world worlds)))
+;; P41P1C-pieces-leave-the-walk ends here
+
+;; [[file:../physics.org::#P41P1C][P41P1C-crowded-walk-runs-whole]]
+(define-claim "P41P1C" crowded-walk-runs-whole
+    "A heap's crowded pieces are dropped and its walk runs whole, at one worker's hash; a basin's pieces are always merged."
+  (let ((merged '()))
+    (sb-int:encapsulate 'luv-physics::run-pair-pieces 'claim-crowded
+                        (lambda (f pool world kind) (let ((r (funcall f pool world kind))) (push r merged) r)))
+    (unwind-protect
+         (flet ((heap (workers)
+                  (let ((w (make-physics-world :gravity '(0 0 0))))
+                    (dotimes (i 40) (add-physics-body w 4.0 2.0 4.0 :radius 0.25))
+                    (luv-physics::open-world-workers w workers)
+                    (let ((pool (luv-physics::physics-world-pool w)))
+                      (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                    w)))
+           (let ((one (heap 1)) (two (heap 2)))
+             (step-physics-world one) (step-physics-world two)
+             (check (equal '(nil) merged) "the heap's first step merged its pieces: ~S" merged)
+             (check (= (physics-world-state-hash one) (physics-world-state-hash two)) "the heap's first step parts the hashes")
+             (dotimes (i 9)
+               (step-physics-world one) (step-physics-world two)
+               (check (= (physics-world-state-hash one) (physics-world-state-hash two)) "the heap's step ~D parts the hashes" (+ i 2)))
+             (close-physics-world two))
+           (let ((w (make-basin-world 300)))
+             (luv-physics::open-world-workers w 2)
+             (setf (luv-physics::worker-pool-split-rows (luv-physics::physics-world-pool w)) 0
+                   merged '())
+             (dotimes (i 30) (step-physics-world w))
+             (check (and merged (every #'identity merged)) "the basin's pieces were dropped: ~S" merged)
+             (close-physics-world w)))
+      (sb-int:unencapsulate 'luv-physics::run-pair-pieces 'claim-crowded))))
+;; P41P1C-crowded-walk-runs-whole ends here
 
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-every-scene-resumes-to-the-bit]]
 (defun resumed-scene-hashes (name family steps more &key (count 300))
