@@ -12266,13 +12266,34 @@ world's, and the table of their keys the check filled, traded the same way. #SN4
     (setf (contact-table-step table) step (contact-table-cursor table) 0 (contact-table-touched table) 0
           (contact-table-misses table) (snap-u64 buffer (+ wat 140)))))
 
-(defun apply-snapshot-pair-list (world buffer scratch)
+(defun snapshot-holds-grid-p (world buffer at grid-step)
+  "True when WORLD's awake grid, of step GRID-STEP, is already the one the pair list part at AT of
+the snapshot BUFFER would have bucketed: the world's grid is its pair list's build, and that
+build is the snapshot's, of as many rows, the same cell, the same count of builds and the same
+anchors to the bit. #SN4P0T"
+  (declare (type octets buffer) (type index at) (type fixnum grid-step))
+  (let* ((plist (physics-world-pair-list world)) (rows (snap-i32 buffer at)) (anchors (pair-list-anchors plist)))
+    (declare (type fixnum rows) (type f32-column anchors))
+    (and (>= rows 0) (= rows (pair-list-rows plist))
+         (= grid-step (pair-list-built-step plist) (snap-i64 buffer (+ at 24)))
+         (= (pair-list-builds plist) (snap-u32 buffer (+ at 8)))
+         (= (sb-kernel:single-float-bits (pair-list-cell plist)) (snap-i32 buffer (+ at 4)))
+         (<= (* 3 rows) (length anchors))
+         (sb-sys:with-pinned-objects (anchors)
+           (let ((sap (sb-sys:vector-sap anchors)) (from (+ at +snapshot-pair-head-bytes+)))
+             (loop for o of-type index from 0 below (* 12 rows) by 4
+                   always (= (sb-sys:sap-ref-32 sap o) (snap-u32 buffer (+ from o)))))))))
+
+(defun apply-snapshot-pair-list (world buffer scratch grid-step)
   "Put the pair list of the checked snapshot BUFFER into WORLD, the rows' handles the awake rows'
 own when the snapshot does not write them (the bodies are restored first), and the awake grid of
-its build when the world's grid still is that build's. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+its build when the snapshot's grid still is that build's, bucketed again unless WORLD's grid, of
+step GRID-STEP, is that grid already (snapshot-holds-grid-p). #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum grid-step) #.+kernel-policy+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
-         (form (snap-u32 buffer (+ at 36))) (plist (physics-world-pair-list world)))
+         (form (snap-u32 buffer (+ at 36))) (plist (physics-world-pair-list world))
+         ;; read before the list is overwritten
+         (kept (snapshot-holds-grid-p world buffer at grid-step)))
     (declare (type index at pairs) (type fixnum rows))
     (setf (pair-list-rows plist) rows (pair-list-terrain plist) nil (pair-list-terrain-edits plist) -1
           (pair-list-count plist) 0)
@@ -12306,7 +12327,7 @@ its build when the world's grid still is that build's. #SN4P0T"
       (setf (pair-list-count plist) pairs (pair-list-cell plist) (snap-f32 buffer (+ at 4))
             (pair-list-builds plist) (snap-u32 buffer (+ at 8)) (pair-list-loose-count plist) (snap-i32 buffer (+ at 12))
             (pair-list-step plist) (snap-i64 buffer (+ at 16)) (pair-list-built-step plist) (snap-i64 buffer (+ at 24)))
-      (when (= (physics-world-awake-grid-step world) (pair-list-built-step plist))
+      (when (and (= (physics-world-awake-grid-step world) (pair-list-built-step plist)) (not kept))
         ;; the grid of the list's build, bucketed again from the anchors it was built from
         (let ((xs (pair-list-loose-x plist)) (ys (pair-list-loose-y plist)) (zs (pair-list-loose-z plist))
               (anchors (pair-list-anchors plist)))
@@ -12325,8 +12346,10 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
          (ids (physics-world-ids world))
          (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4)))
          (step (snap-u64 buffer (+ wat 16)))
-         (flags (snap-u32 buffer (+ wat 8))))
-    (declare (type index wat hat count nfree step))
+         (flags (snap-u32 buffer (+ wat 8)))
+         ;; the step of the awake grid the world holds now, before the world part sets it
+         (grid-step (physics-world-awake-grid-step world)))
+    (declare (type index wat hat count nfree step) (type fixnum grid-step))
     ;; the world part: its numbers, parameters and the last step's statistics
     (setf (handle-table-tag ids) (snap-u32 buffer wat)
           (physics-world-filtering world) (logbitp 1 flags)
@@ -12388,7 +12411,7 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
               (loop for row of-type index below (body-columns-length sleeping) count (plusp (aref life row))))))
     ;; the contacts in their rows, then the pair list and its grid
     (apply-snapshot-contacts world buffer scratch)
-    (apply-snapshot-pair-list world buffer scratch)
+    (apply-snapshot-pair-list world buffer scratch grid-step)
     ;; the sleeping grids are built again from every sleeper at the next step
     (let ((of (sleeping-grid-of world)))
       (fill of 0)
@@ -12741,6 +12764,25 @@ the load average the run began and ended with when LOAD. make bench-rollback run
       (format stream "| rollback at ~D balls (2 s), ~D rounds | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~D % |~%"
               balls rounds median (round (/ median (/ 1000 60.0) 0.01)))))
   (when load (format stream "~%load average ~A at the end~%" (load-average))))
+
+(defun run-count-snapshots (&key (stream *standard-output*) (rounds 20))
+  "Print, as an Org table, the millions of instructions a snapshot and its restore of the
+3000-ball basin at 4 s run, and a step of the basin, each counted by valgrind's cachegrind in a
+process of the tool tools/snapshot-one.lisp (count-process): a process running ROUNDS rounds
+less one running none, over ROUNDS; then the share of a step. #SN4P0T"
+  (let* ((before (load-average))
+         (root (namestring (asdf:system-source-directory "luv-physics")))
+         (counts (mapcar #'sb-thread:join-thread
+                         (loop for (what n) in `(("none" 0) ("snapshot" ,rounds) ("step" ,rounds))
+                               collect (let ((what what) (n n))
+                                         (sb-thread:make-thread
+                                          (lambda () (values (count-process "snapshot" root what (princ-to-string n))))))))))
+    (destructuring-bind (none snapshot step) counts
+      (let ((per-round (/ (- snapshot none) (* 1d6 rounds))) (per-step (/ (- step none) (* 1d6 rounds))))
+        (format stream "~&#+caption: the 3000-ball basin at 4 s, millions of instructions (cachegrind: a process of ~D rounds less one of none, over ~D), widest family; ~A; load ~A before, ~A after~%"
+                rounds rounds (cpu-model-name) before (load-average))
+        (format stream "| basin of 3000 at 4 s | M instructions |~%|---+---|~%| snapshot and restore | ~,2F |~%| a step | ~,2F |~%| share of a step | ~,1F % |~%"
+                per-round per-step (* 100 (/ per-round per-step)))))))
 ;; A snapshot holds what decides the next step, part by part:8 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:15]]

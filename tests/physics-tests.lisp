@@ -9678,6 +9678,50 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
          luv-physics::+contact-columns-column-names+))
 ;; SN4P0T-restore-trades-every-contact-column ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-restore-keeps-a-held-grid]]
+(defun awake-grid-fingerprint (world)
+  "The fields of WORLD's awake grid a walk reads: count, form, box of cells, mask, and the items
+and their centres in their order. #SN4P0T"
+  (let* ((g (luv-physics::physics-world-awake-grid world)) (n (luv-physics::hash-grid-count g)))
+    (list n (luv-physics::hash-grid-dense g) (luv-physics::hash-grid-ox g) (luv-physics::hash-grid-oy g)
+          (luv-physics::hash-grid-oz g) (luv-physics::hash-grid-nx g) (luv-physics::hash-grid-ny g)
+          (luv-physics::hash-grid-nz g) (luv-physics::hash-grid-mask g)
+          (subseq (luv-physics::hash-grid-items g) 0 n) (subseq (luv-physics::hash-grid-xs g) 0 n)
+          (subseq (luv-physics::hash-grid-ys g) 0 n) (subseq (luv-physics::hash-grid-zs g) 0 n))))
+
+(define-claim "SN4P0T" restore-keeps-a-held-grid
+    "A restore keeps a world's awake grid when it is the snapshot's build and buckets it again when it is not; every world resumes to the source's hash."
+  (let ((source (make-basin-world 300 :kernels :scalar)) (snapshot nil))
+    (dotimes (i 120) (step-physics-world source))
+    (setf snapshot (subseq (snapshot-physics-world source) 0))
+    (check (= (luv-physics::physics-world-awake-grid-step source)
+              (luv-physics::pair-list-built-step (luv-physics::physics-world-pair-list source)))
+           "the source's grid is not its list's build: nothing to keep")
+    (dotimes (i 30) (step-physics-world source))
+    (let* ((fresh (make-basin-world 300 :kernels :scalar))
+           (built (progn (restore-physics-world fresh snapshot) (awake-grid-fingerprint fresh)))
+           (kept (progn (restore-physics-world fresh snapshot) (awake-grid-fingerprint fresh)))
+           (moved (make-basin-world 300 :kernels :scalar)))
+      (restore-physics-world moved snapshot)
+      (let* ((plist (luv-physics::physics-world-pair-list moved)) (rows (luv-physics::pair-list-rows plist))
+             (anchors (luv-physics::pair-list-anchors plist))
+             (xs (make-array rows :element-type 'single-float)) (ys (make-array rows :element-type 'single-float))
+             (zs (make-array rows :element-type 'single-float)))
+        (incf (aref anchors 0) 0.25)
+        (dotimes (i rows)
+          (setf (aref xs i) (aref anchors (* 3 i)) (aref ys i) (aref anchors (+ 1 (* 3 i))) (aref zs i) (aref anchors (+ 2 (* 3 i)))))
+        (luv-physics::build-hash-grid (luv-physics::physics-world-awake-grid moved) (luv-physics::pair-list-cell plist)
+                                      rows xs ys zs (luv-physics::awake-row-identities moved rows))
+        (check (not (equalp built (awake-grid-fingerprint moved))) "the moved anchors bucketed the same grid"))
+      (restore-physics-world moved snapshot)
+      (check (equalp built kept) "the kept grid is not the one a restore buckets")
+      (check (equalp built (awake-grid-fingerprint moved)) "a grid of other anchors was kept")
+      (dolist (world (list fresh moved))
+        (check (eq t (validate-physics-world world)))
+        (dotimes (i 30) (step-physics-world world))
+        (check (= (physics-world-state-hash source) (physics-world-state-hash world)))))))
+;; SN4P0T-restore-keeps-a-held-grid ends here
+
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
   "The solid cells of TERRAIN in [-16,32)^3. #K5DF9S"
