@@ -3569,33 +3569,36 @@ from the distance it finds for the contact anyway. #P41RS7"
 
 (defstruct (pair-sink (:constructor make-pair-sink ()) (:copier nil))
   "What one worker's piece of the pair phase found: in LIST, a pair list of its own, the pairs it
-listed, the candidates it examined and the overlaps it counted per awake row; COUNT touches, four
-fixnums each in TOUCHES (the contact row its probe found or -1, the key, the two handles) and
-seven floats each in GEOMETRY (the normal, the separation, the point); CURSOR, the row it guesses
-next; NEAR, its neighbour scratch. #P41RS7"
+listed, the candidates it examined and the overlaps it counted per awake row; COUNT touches, five
+fixnums each in TOUCHES (the contact row its probe found or -1, the key, the kind, the two
+handles) and seven floats each in GEOMETRY (the normal, the separation, the point); CURSOR, the
+row it guesses next; NEAR, its neighbour scratch; for the terrain phase, PROBE, its own terrain
+probe, and BURIED, the bodies its rows found buried. #P41RS7"
   (list (make-pair-list) :type pair-list :read-only t)
   (near (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
   (cursor 0 :type index)
   (touches (make-array 0 :element-type 'fixnum) :type fixnum-column)
-  (geometry (make-array 0 :element-type 'single-float) :type f32-column))
+  (geometry (make-array 0 :element-type 'single-float) :type f32-column)
+  (probe (make-terrain-probe) :type terrain-probe :read-only t)
+  (buried 0 :type fixnum))
 
 (defun pair-sink-grow (sink)
   "Give SINK room for twice its touches (at least 256), keeping them. #P41RS7"
   (declare (type pair-sink sink))
-  (let* ((room (max 256 (* 2 (floor (length (pair-sink-touches sink)) 4))))
+  (let* ((room (max 256 (* 2 (floor (length (pair-sink-touches sink)) 5))))
          (geometry (make-array (* 7 room) :element-type 'single-float :initial-element 0.0)))
-    (setf (pair-sink-touches sink) (fixnum-room (pair-sink-touches sink) (* 4 room))
+    (setf (pair-sink-touches sink) (fixnum-room (pair-sink-touches sink) (* 5 room))
           (pair-sink-geometry sink) (replace geometry (pair-sink-geometry sink)))
     sink))
 
 (declaim (inline pair-sink-touch))
-(defun pair-sink-touch (sink contacts table key ha hb nx ny nz separation px py pz)
-  "Write into SINK a touch of the pair contact under KEY, from handle HA to HB, with its normal,
-separation and point: with the row under SINK's cursor when it holds KEY, else the row
+(defun pair-sink-touch (sink contacts table key kind ha hb nx ny nz separation px py pz)
+  "Write into SINK a touch of the contact of KIND under KEY, from handle HA to HB, with its
+normal, separation and point: with the row under SINK's cursor when it holds KEY, else the row
 CONTACTS' TABLE maps KEY to, or -1. Read CONTACTS and TABLE only. #P41RS7"
   (declare (type pair-sink sink) (type contact-columns contacts) (type contact-table table)
-           (type fixnum key ha hb) (type single-float nx ny nz separation px py pz) #.+kernel-policy+)
+           (type fixnum key kind ha hb) (type single-float nx ny nz separation px py pz) #.+kernel-policy+)
   (let* ((guess (pair-sink-cursor sink))
          (row (if (and (< guess (contact-columns-length contacts))
                        (= (aref (contact-columns-key contacts) guess) key))
@@ -3604,10 +3607,10 @@ CONTACTS' TABLE maps KEY to, or -1. Read CONTACTS and TABLE only. #P41RS7"
          (k (pair-sink-count sink)))
     (declare (type fixnum row) (type index guess k))
     (when (>= row 0) (setf (pair-sink-cursor sink) (1+ row)))
-    (when (> (* 4 (1+ k)) (length (pair-sink-touches sink))) (pair-sink-grow sink))
-    (let ((f (pair-sink-touches sink)) (g (pair-sink-geometry sink)) (o (* 4 k)) (q (* 7 k)))
+    (when (> (* 5 (1+ k)) (length (pair-sink-touches sink))) (pair-sink-grow sink))
+    (let ((f (pair-sink-touches sink)) (g (pair-sink-geometry sink)) (o (* 5 k)) (q (* 7 k)))
       (declare (type index o q))
-      (setf (aref f o) row (aref f (+ o 1)) key (aref f (+ o 2)) ha (aref f (+ o 3)) hb
+      (setf (aref f o) row (aref f (+ o 1)) key (aref f (+ o 2)) kind (aref f (+ o 3)) ha (aref f (+ o 4)) hb
             (aref g q) nx (aref g (+ q 1)) ny (aref g (+ q 2)) nz (aref g (+ q 3)) separation
             (aref g (+ q 4)) px (aref g (+ q 5)) py (aref g (+ q 6)) pz))
     (setf (pair-sink-count sink) (1+ k))
@@ -3674,7 +3677,7 @@ THRESHOLD across a gap) and IMPACT is false: then it was counted but no contact 
             (declare (type fixnum ha hb) (type single-float s px py pz))
             (if sink
                 (pair-sink-touch sink contacts table (pair-key (handle-index ha) (handle-index hb))
-                                 ha hb (* s nx) (* s ny) (* s nz) sep px py pz)
+                                 +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz)
                 (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
                                +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
                                0.0 0.0 0.0))))
@@ -4165,8 +4168,11 @@ when its gap is under the speculative distance. Expanded in terrain-cell-contact
        (when (< sep (speculative-distance
                      (+ (* (aref vx i) nx) (* (aref vy i) ny) (* (aref vz i) nz))
                      dt slop ahead gstep))
-         (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
-                        nx ny nz sep px py pz 0.0 0.0 0.0)))))
+         (if sink
+             (pair-sink-touch sink contacts table key +contact-terrain+ (aref handle i) +no-body+
+                              nx ny nz sep px py pz)
+             (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
+                            nx ny nz sep px py pz 0.0 0.0 0.0))))))
 
 (defmacro terrain-inside-contact ()
   "Row I's contact with the solid cell IX IY IZ that holds its centre: pushed out through a
@@ -4177,8 +4183,11 @@ face (inside-face), and the body counted buried. Expanded in terrain-cell-contac
      (multiple-value-bind (nx ny nz px py pz sep)
          (inside-face probe cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0)
                       ix iy iz)
-       (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
-                      nx ny nz sep px py pz 0.0 0.0 0.0))))
+       (if sink
+           (pair-sink-touch sink contacts table key +contact-terrain+ (aref handle i) +no-body+
+                            nx ny nz sep px py pz)
+           (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
+                          nx ny nz sep px py pz 0.0 0.0 0.0)))))
 
 (defmacro terrain-cell-contacts ()
   "Offer a contact for each solid cell of row I's MASK: expanded in the terrain phase. #MYWCNT"
@@ -4204,17 +4213,14 @@ face (inside-face), and the body counted buried. Expanded in terrain-cell-contac
 ;; A contact per cell:1 ends here
 
 ;; [[file:../physics.org::#MYWSTG][The terrain phase, stage by stage:1]]
-(defun terrain-phase (world)
-  "The terrain phase: each awake body gathers the solid cells within its reach into a 27-bit mask and
-offers one contact per cell whose face, edge or corner passes the overshoot rule and whose gap
-is under the speculative distance. #MYWSTG"
-  (declare #.+kernel-policy+)
+(declaim (inline terrain-rows))
+(defun terrain-rows (world from to sink probe)
+  "The terrain phase's awake rows FROM below TO, their chunks read through PROBE, their touches
+into SINK when one is given: return how many of them lie buried. #MYWSTG"
+  (declare (type index from to) (type terrain-probe probe) #.+kernel-policy+)
   (let ((terrain (physics-world-terrain world)))
-    (when terrain
       (with-world-parameters (margin slop (limit reach-limit) (threshold restitution-threshold)) world
         (let* ((awake (physics-world-awake world))
-               (probe (physics-world-probe world))
-               (n (body-columns-length awake))
                (dt (physics-world-current-dt world))
                (gstep (gravity-step world dt))
                (contacts (physics-world-contacts world))
@@ -4230,21 +4236,13 @@ is under the speculative distance. #MYWSTG"
                                (= (pair-list-terrain-edits plist) (voxel-terrain-edits terrain))))
                (loose (pair-list-loose plist)) (clear (pair-list-clear plist))
                (widen (* 0.45 (f32 (physics-world-pair-skin world))))
-               ;; for each row, the square of the longest path the finalize phase may leave
-               ;; unchecked ([[#SQU33Z]]): as far as its reach, and short of the nearest solid cell
-               (near (let ((a (physics-world-near-cells world)))
-                       (if (> (length a) n)
-                           a
-                           (setf (physics-world-near-cells world) (make-array (* 2 (1+ n)) :element-type 'single-float)))))
+               (near (physics-world-near-cells world))
                ;; the bodies whose centre lies in a solid cell
                (buried 0)
                (boxes (physics-world-box-bodies world)))
           (declare (type single-float margin limit threshold slop dt gstep widen) (type fixnum last-key buried)
                    (type (or null chunk-storage) last-chunk) (type fixnum-column loose clear) (type f32-column near)
                    (type contact-columns contacts) (type contact-table table) (inline touch-contact))
-          (when fresh
-            (setf (pair-list-terrain plist) terrain (pair-list-terrain-edits plist) (voxel-terrain-edits terrain)))
-          (setf (physics-world-near-cells-step world) (contact-table-step table))
           (labels ((chunk-at (key)
                      (declare (type fixnum key))
                      (if (= key last-key)
@@ -4256,7 +4254,7 @@ is under the speculative distance. #MYWSTG"
                      (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))))
             (declare (inline chunk-at cell-solid-p))
           (with-body-columns (x y z vx vy vz radius handle flags) awake
-            (dotimes (i n)
+            (loop for i of-type index from from below to do
               (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                      ;; how far the body can travel this step; a body faster than its margin a
                      ;; step reaches that far, so that it meets an edge or a corner before it strikes
@@ -4281,10 +4279,32 @@ is under the speculative distance. #MYWSTG"
                 ;; a body that can travel past its margin this step also sweeps its path
                 (when (> travel margin)
                   (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
-                                         (aref vx i) (aref vy i) (aref vz i) (+ travel r)))
-                (terrain-cell-contacts)))))
-          (setf (physics-world-buried-count world) buried)))))
-    world))
+                                         (aref vx i) (aref vy i) (aref vz i) (+ travel r) sink))
+                (terrain-cell-contacts))))))
+          buried))))
+
+(defun terrain-phase (world)
+  "The terrain phase: each awake body gathers the solid cells within its reach into a 27-bit mask and
+offers one contact per cell whose face, edge or corner passes the overshoot rule and whose gap
+is under the speculative distance; with workers, its rows in pieces ([[#MYWP1C]]). #MYWSTG"
+  (let ((terrain (physics-world-terrain world)))
+    (when terrain
+      (let* ((n (body-columns-length (physics-world-awake world)))
+             (table (physics-world-contact-table world))
+             (plist (physics-world-pair-list world)))
+        ;; in the step that built the pair list, the clear marks are noted for this terrain
+        (when (and (= (pair-list-step plist) (contact-table-step table))
+                   (= (pair-list-built-step plist) (contact-table-step table)))
+          (setf (pair-list-terrain plist) terrain (pair-list-terrain-edits plist) (voxel-terrain-edits terrain)))
+        ;; for each row, the square of the longest path the finalize phase may leave
+        ;; unchecked ([[#SQU33Z]]): as far as its reach, and short of the nearest solid cell
+        (unless (> (length (physics-world-near-cells world)) n)
+          (setf (physics-world-near-cells world) (make-array (* 2 (1+ n)) :element-type 'single-float)))
+        (setf (physics-world-near-cells-step world) (contact-table-step table))
+        (flet ((whole () (terrain-rows world 0 n nil (physics-world-probe world))))
+          (declare (dynamic-extent #'whole))
+          (setf (physics-world-buried-count world) (terrain-in-pieces world #'whole))))))
+  world)
 ;; The terrain phase, stage by stage:1 ends here
 
 ;; [[file:../physics.org::#SW33P7][Fast bodies sweep their path through the cells:1]]
@@ -4322,10 +4342,11 @@ starts in a solid cell or meets none within LENGTH. #SW33P7"
                            (return (values axis at ix iy iz)))))
                   finally (return (values -1 0.0 ix iy iz))))))))
 
-(defun sweep-terrain-contact (contacts table probe handle cx cy cz r vx vy vz length)
+(defun sweep-terrain-contact (contacts table probe handle cx cy cz r vx vy vz length &optional sink)
   "Walk the cells along the ray from CX CY CZ in the direction of VX VY VZ for LENGTH metres;
 at the first solid cell, make HANDLE's body a speculative contact, in CONTACTS and TABLE,
-with the face the ray enters it through. #SW33P7"
+with the face the ray enters it through; or write the touch into SINK, a worker's pair sink
+([[#P41P1C]]). #SW33P7"
   (declare (type contact-columns contacts) (type contact-table table)
            (type single-float cx cy cz r vx vy vz length) (type fixnum handle) #.+kernel-policy+)
   (let* ((speed (fsqrt (+ (* vx vx) (* vy vy) (* vz vz))))
@@ -4347,9 +4368,13 @@ with the face the ray enters it through. #SW33P7"
                 (t (values 0.0 0.0 (float sz 1.0)
                            (* (float sz 1.0) (- (float (if (> sz 0) iz (1+ iz)) 1.0) cz)))))
             (declare (type single-float nx ny nz gap))
-            (touch-contact contacts table (terrain-key (handle-index handle) ix iy iz) +contact-terrain+
-                           handle +no-body+ nx ny nz (- gap r)
-                           (+ cx (* gap nx)) (+ cy (* gap ny)) (+ cz (* gap nz)) 0.0 0.0 0.0)))))))
+            (if sink
+                (pair-sink-touch sink contacts table (terrain-key (handle-index handle) ix iy iz) +contact-terrain+
+                                 handle +no-body+ nx ny nz (- gap r)
+                                 (+ cx (* gap nx)) (+ cy (* gap ny)) (+ cz (* gap nz)))
+                (touch-contact contacts table (terrain-key (handle-index handle) ix iy iz) +contact-terrain+
+                               handle +no-body+ nx ny nz (- gap r)
+                               (+ cx (* gap nx)) (+ cy (* gap ny)) (+ cz (* gap nz)) 0.0 0.0 0.0))))))))
 ;; Fast bodies sweep their path through the cells:1 ends here
 
 ;; [[file:../physics.org::#B0XPH5][Boxes touch as moving terrain:1]]
@@ -10551,7 +10576,7 @@ set on each touch's row, and a miss counted where the cursor would not have gues
     (declare (type contact-columns contacts) (type contact-table table) (type fixnum-column f)
              (type f32-column g))
     (dotimes (k (pair-sink-count sink) sink)
-      (let ((row (aref f (* 4 k))) (key (aref f (+ (* 4 k) 1))) (q (* 7 k)))
+      (let ((row (aref f (* 5 k))) (key (aref f (+ (* 5 k) 1))) (q (* 7 k)))
         (declare (type fixnum row key) (type index q))
         (when (>= row 0)
           (let ((guess (contact-table-cursor table)))
@@ -10559,7 +10584,7 @@ set on each touch's row, and a miss counted where the cursor would not have gues
                          (= (aref (contact-columns-key contacts) guess) key))
               (incf (contact-table-misses table))
               (setf (contact-table-cursor table) row))))
-        (touch-contact contacts table key +contact-pair+ (aref f (+ (* 4 k) 2)) (aref f (+ (* 4 k) 3))
+        (touch-contact contacts table key (aref f (+ (* 5 k) 2)) (aref f (+ (* 5 k) 3)) (aref f (+ (* 5 k) 4))
                        (aref g q) (aref g (+ q 1)) (aref g (+ q 2)) (aref g (+ q 3))
                        (aref g (+ q 4)) (aref g (+ q 5)) (aref g (+ q 6)) 0.0 0.0 0.0)))))
 
@@ -10621,6 +10646,53 @@ walk. #P41P1C"
       (unless (run-pair-pieces pool world kind) (funcall whole))
       (funcall whole))))
 ;; The pair phase in pieces:1 ends here
+
+;; [[file:../physics.org::#MYWP1C][The terrain phase in pieces:1]]
+(defconstant +job-terrain+ 10 "The job: the terrain phase, a share of the awake rows each. #MYWP1C")
+
+(defun terrain-rows-piece (world sink from to)
+  "The terrain phase's awake rows FROM below TO of WORLD (terrain-rows), read through SINK's own
+probe, their touches and their count of buried bodies into SINK. #MYWP1C"
+  (declare (type pair-sink sink) (type index from to))
+  (let ((probe (pair-sink-probe sink)))
+    (reset-terrain-probe probe (physics-world-terrain world))
+    (setf (pair-sink-buried sink) (terrain-rows world from to sink probe)))
+  sink)
+
+(defun run-terrain-pieces (pool world)
+  "Run WORLD's terrain rows in pieces on POOL's workers, then hand their touches to WORLD's
+contacts in worker order; return how many bodies lie buried. #MYWP1C"
+  (declare (type worker-pool pool))
+  (let ((rows (awake-rows world))
+        (cursor (contact-table-cursor (physics-world-contact-table world)))
+        (sinks (worker-pool-pair-sinks pool)))
+    (declare (type index rows cursor))
+    (flet ((piece (worker count)
+             (declare (type fixnum worker count))
+             (let ((sink (svref sinks worker)))
+               (setf (pair-sink-count sink) 0 (pair-sink-cursor sink) cursor)
+               (multiple-value-bind (s e) (share-bounds 0 rows worker count)
+                 (terrain-rows-piece world sink s e)))))
+      (declare (dynamic-extent #'piece))
+      (setf (worker-pool-piece pool) #'piece)
+      (unwind-protect (run-on-workers pool +job-terrain+ 1)
+        (setf (worker-pool-piece pool) nil)))
+    (let ((start (clock-ns)) (buried 0))
+      (declare (type fixnum buried))
+      (dotimes (w (worker-pool-count pool))
+        (merge-pair-sink world (svref sinks w))
+        (incf buried (pair-sink-buried (svref sinks w))))
+      (incf (aref (worker-pool-merged pool) +job-terrain+) (- (clock-ns) start))
+      buried)))
+
+(defun terrain-in-pieces (world whole)
+  "Take WORLD's terrain rows in pieces on its workers when its pool splits the pass (tuned-split),
+else by calling WHOLE, the phase's own walk; return how many bodies lie buried. #MYWP1C"
+  (declare (type function whole))
+  (tuned-split (pool world (awake-rows world) +job-terrain+)
+    (run-terrain-pieces pool world)
+    (funcall whole)))
+;; The terrain phase in pieces:1 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
 (deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))

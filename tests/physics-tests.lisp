@@ -9223,6 +9223,34 @@ overlaps, the contact table's cursor, misses and touched count, and the contacts
       (sb-int:unencapsulate 'luv-physics::run-pair-pieces 'claim-crowded))))
 ;; P41P1C-crowded-walk-runs-whole ends here
 
+;; [[file:../physics.org::#MYWP1C][MYWP1C-terrain-pieces-as-one-walk]]
+(define-claim "MYWP1C" terrain-pieces-as-one-walk
+    "Terrain rows in pieces on 2 and 3 workers count the buried, set the path bounds and reach the hash one worker does."
+  (let ((worlds (loop for workers in '(1 2 3)
+                      collect (let ((w (make-floor-world :sleep nil)))
+                                (dotimes (i 40)
+                                  (if (member i '(2 19 37))
+                                      (add-physics-body w (+ 0.5 (* 0.3 i)) -0.5 2.5 :radius 0.2 :inside-cells :push-out)
+                                      (add-physics-body w (+ 0.5 (* 0.3 i)) 0.5 2.5 :radius 0.2)))
+                                (luv-physics::open-world-workers w workers)
+                                (let ((pool (luv-physics::physics-world-pool w)))
+                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                                w))))
+    (flet ((near (w) (subseq (luv-physics::physics-world-near-cells w) 0 (luv-physics::awake-rows w))))
+      (dolist (w worlds) (step-physics-world w))
+      (check (equal '(3 3 3) (mapcar #'physics-world-last-step-buried-count worlds))
+             "buried ~S" (mapcar #'physics-world-last-step-buried-count worlds))
+      (check (every (lambda (w) (equalp (near w) (near (first worlds)))) (rest worlds)) "the path bounds differ")
+      (dolist (w worlds) (add-physics-body w 6.0 1.0 6.0 :radius 0.2 :vx 30.0 :vy -10.0))
+      (dotimes (i 30) (dolist (w worlds) (step-physics-world w)))
+      (check (= 1 (length (remove-duplicates (mapcar #'physics-world-state-hash worlds))))
+             "hashes ~S" (mapcar #'physics-world-state-hash worlds))
+      (dolist (w (rest worlds))
+        (check (plusp (aref (luv-physics::worker-pool-spent (luv-physics::physics-world-pool w)) luv-physics::+job-terrain+))
+               "~D workers: the terrain never ran in pieces" (physics-world-workers w)))
+      (mapc #'close-physics-world worlds))))
+;; MYWP1C-terrain-pieces-as-one-walk ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-every-scene-resumes-to-the-bit]]
 (defun resumed-scene-hashes (name family steps more &key (count 300))
   "Run scene NAME under FAMILY for STEPS steps, snapshot it, run MORE; then restore the snapshot
