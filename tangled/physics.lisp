@@ -1467,16 +1467,17 @@ is KEY do. #D9W4CH"
             (incf k))))))
   "For each 4-bit lane mask, its set lanes in rising order, four entries a mask. #D9W4CH")
 
-(defun grid-list-near (grid entry runs run-count reach2)
-  "List in GRID's NEAR column the places of the RUN-COUNT RUNS (as grid-half-runs fills them for
-ENTRY) whose centres lie closer than the square root of REACH2 to the centre of ENTRY, in run
-order, and return how many. The list grows by the sign bit of the squared distance minus
+(defun grid-list-near (grid entry runs run-count reach2 &optional (near (hash-grid-near grid)))
+  "List in NEAR (GRID's own column unless a worker gives its own) the places of the RUN-COUNT
+RUNS (as grid-half-runs fills them for ENTRY) whose centres lie closer than the square root of
+REACH2 to the centre of ENTRY, in run order, and return how many. The list grows by the sign bit of the squared distance minus
 REACH2, so the test costs no branch; a dense grid's runs are tested four places at a time.
 #D9W4CH"
   (declare (type hash-grid grid) (type index entry) (type fixnum-column runs)
-           (type (integer 0 14) run-count) (type single-float reach2) #.+kernel-policy+)
+           (type (integer 0 14) run-count) (type single-float reach2) (type fixnum-column near)
+           #.+kernel-policy+)
   (let* ((gx (hash-grid-xs grid)) (gy (hash-grid-ys grid)) (gz (hash-grid-zs grid))
-         (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+         (keys (hash-grid-keys grid))
          (x (aref gx entry)) (y (aref gy entry)) (z (aref gz entry))
          ;; the table in a local, read once a call, not once a lane
          (compress +lane-compress+)
@@ -3566,11 +3567,58 @@ from the distance it finds for the contact anyway. #P41RS7"
     (and (or (> ri rj) (< (aref overlaps i) +overlaps-per-body+))
          (or (< ri rj) (< (aref overlaps j) +overlaps-per-body+)))))
 
+(defstruct (pair-sink (:constructor make-pair-sink ()) (:copier nil))
+  "What one worker's piece of the pair phase found: in LIST, a pair list of its own, the pairs it
+listed, the candidates it examined and the overlaps it counted per awake row; COUNT touches, four
+fixnums each in TOUCHES (the contact row its probe found or -1, the key, the two handles) and
+seven floats each in GEOMETRY (the normal, the separation, the point); CURSOR, the row it guesses
+next; NEAR, its neighbour scratch. #P41RS7"
+  (list (make-pair-list) :type pair-list :read-only t)
+  (near (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (count 0 :type index)
+  (cursor 0 :type index)
+  (touches (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (geometry (make-array 0 :element-type 'single-float) :type f32-column))
+
+(defun pair-sink-grow (sink)
+  "Give SINK room for twice its touches (at least 256), keeping them. #P41RS7"
+  (declare (type pair-sink sink))
+  (let* ((room (max 256 (* 2 (floor (length (pair-sink-touches sink)) 4))))
+         (geometry (make-array (* 7 room) :element-type 'single-float :initial-element 0.0)))
+    (setf (pair-sink-touches sink) (fixnum-room (pair-sink-touches sink) (* 4 room))
+          (pair-sink-geometry sink) (replace geometry (pair-sink-geometry sink)))
+    sink))
+
+(declaim (inline pair-sink-touch))
+(defun pair-sink-touch (sink contacts table key ha hb nx ny nz separation px py pz)
+  "Write into SINK a touch of the pair contact under KEY, from handle HA to HB, with its normal,
+separation and point: with the row under SINK's cursor when it holds KEY, else the row
+CONTACTS' TABLE maps KEY to, or -1. Read CONTACTS and TABLE only. #P41RS7"
+  (declare (type pair-sink sink) (type contact-columns contacts) (type contact-table table)
+           (type fixnum key ha hb) (type single-float nx ny nz separation px py pz) #.+kernel-policy+)
+  (let* ((guess (pair-sink-cursor sink))
+         (row (if (and (< guess (contact-columns-length contacts))
+                       (= (aref (contact-columns-key contacts) guess) key))
+                  guess
+                  (contact-table-find table key)))
+         (k (pair-sink-count sink)))
+    (declare (type fixnum row) (type index guess k))
+    (when (>= row 0) (setf (pair-sink-cursor sink) (1+ row)))
+    (when (> (* 4 (1+ k)) (length (pair-sink-touches sink))) (pair-sink-grow sink))
+    (let ((f (pair-sink-touches sink)) (g (pair-sink-geometry sink)) (o (* 4 k)) (q (* 7 k)))
+      (declare (type index o q))
+      (setf (aref f o) row (aref f (+ o 1)) key (aref f (+ o 2)) ha (aref f (+ o 3)) hb
+            (aref g q) nx (aref g (+ q 1)) ny (aref g (+ q 2)) nz (aref g (+ q 3)) separation
+            (aref g (+ q 4)) px (aref g (+ q 5)) py (aref g (+ q 6)) pz))
+    (setf (pair-sink-count sink) (1+ k))
+    sink))
+
 (declaim (inline pair-contact))
 (defun pair-contact (contacts table overlaps margin slop dt gstep threshold impact
-                     xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj)
+                     xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj &optional sink)
   "Make or refresh the contact of two spheres (centres, radii, handles, velocities) when their
-gap is under the speculative distance. CI and CJ, the awake rows of a pair taken after
+gap is under the speculative distance; with a SINK, a worker's pair sink ([[#P41P1C]]), write
+the touch there instead. CI and CJ, the awake rows of a pair taken after
 overlap-room, have its overlap counted in OVERLAPS; -1 for a pair not counted. Return, first,
 true when the count made a row crowded; second, true when the pair strikes (closes faster than
 THRESHOLD across a gap) and IMPACT is false: then it was counted but no contact was touched. #P41RS7"
@@ -3624,19 +3672,23 @@ THRESHOLD across a gap) and IMPACT is false: then it was counted but no contact 
                   (values hi hj 1.0 (+ xi (* ri nx)) (+ yi (* ri ny)) (+ zi (* ri nz)))
                   (values hj hi -1.0 (- xj (* rj nx)) (- yj (* rj ny)) (- zj (* rj nz))))
             (declare (type fixnum ha hb) (type single-float s px py pz))
-            (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
-                           +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
-                           0.0 0.0 0.0)))
+            (if sink
+                (pair-sink-touch sink contacts table (pair-key (handle-index ha) (handle-index hb))
+                                 ha hb (* s nx) (* s ny) (* s nz) sep px py pz)
+                (touch-contact contacts table (pair-key (handle-index ha) (handle-index hb))
+                               +contact-pair+ ha hb (* s nx) (* s ny) (* s nz) sep px py pz
+                               0.0 0.0 0.0))))
         (values crowded nil)))))))
       (values nil nil))))
 
-(defun scan-listed-pairs (world start crowded)
-  "Take the listed pairs of WORLD's pair list from START on whose rows both stayed, as the pair
-phase takes them, CROWDED telling whether some row is crowded, but stop at a pair that strikes
-(pair-contact): return the place where the walk stopped (the list's count when it did not) and
-whether some row is crowded now. A function of its own, without the impact part, so that the
-walk keeps its values in registers. #P41RS7"
-  (declare (type index start) #.+kernel-policy+)
+(declaim (inline walk-listed-pairs))
+(defun walk-listed-pairs (world start end crowded sink overlaps)
+  "Take the listed pairs of WORLD's pair list from START below END whose rows both stayed, as the
+pair phase takes them, counting overlaps in OVERLAPS, CROWDED telling whether some row is
+crowded, but stop at a pair that strikes (pair-contact): return the place where the walk
+stopped (END when it did not) and whether some row is crowded now. With a SINK the touches go
+there (pair-contact). #P41RS7"
+  (declare (type index start end) (type fixnum-column overlaps) #.+kernel-policy+)
   (with-world-parameters (margin slop (threshold restitution-threshold)) world
     (let* ((awake (physics-world-awake world))
            (plist (physics-world-pair-list world))
@@ -3644,14 +3696,12 @@ walk keeps its values in registers. #P41RS7"
            (gstep (gravity-step world dt))
            (contacts (physics-world-contacts world))
            (table (physics-world-contact-table world))
-           (overlaps (pair-list-overlaps plist))
-           (pairs (pair-list-pairs plist)) (loose (pair-list-loose plist))
-           (count (pair-list-count plist)))
+           (pairs (pair-list-pairs plist)) (loose (pair-list-loose plist)))
       (declare (type single-float margin slop dt gstep threshold) (type body-columns awake)
                (type pair-list plist) (type contact-columns contacts) (type contact-table table)
-               (type fixnum-column overlaps pairs loose) (type index count))
+               (type fixnum-column pairs loose))
       (with-body-columns (x y z vx vy vz radius handle) awake
-        (loop for p of-type index from start below count do
+        (loop for p of-type index from start below end do
           (let* ((packed (aref pairs p)) (i (ash packed -24)) (j (logand packed #xFFFFFF)))
             (declare (type index i j))
             (when (and (zerop (logior (aref loose i) (aref loose j)))
@@ -3661,10 +3711,18 @@ walk keeps its values in registers. #P41RS7"
                                 (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
                                 (aref vx i) (aref vy i) (aref vz i)
                                 (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
-                                (aref vx j) (aref vy j) (aref vz j) i j)
+                                (aref vx j) (aref vy j) (aref vz j) i j sink)
                 (when full (setf crowded t))
-                (when strikes (return-from scan-listed-pairs (values p crowded)))))))
-        (values count crowded)))))
+                (when strikes (return-from walk-listed-pairs (values p crowded)))))))
+        (values end crowded)))))
+
+(defun scan-listed-pairs (world start crowded)
+  "Take the listed pairs of WORLD's pair list from START on (walk-listed-pairs), touching their
+contacts: return where the walk stopped and whether some row is crowded now. A function of its
+own, without the impact part, so that the walk keeps its values in registers. #P41RS7"
+  (declare (type index start))
+  (let ((plist (physics-world-pair-list world)))
+    (walk-listed-pairs world start (pair-list-count plist) crowded nil (pair-list-overlaps plist))))
 ;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
 ;; [[file:../physics.org::#P41HLD][The pairs of a list that holds:1]]
@@ -3746,7 +3804,7 @@ build: take each row within the widest reach plus the skin, in order, and stop a
                                  (when (>= (incf refused) +overlaps-per-body+)
                                    (return-from walk)))))))))
          (if (not crowd)
-             (take (grid-list-near grid e runs run-count reach2))
+             (take (grid-list-near grid e runs run-count reach2 near))
              ;; once a walk of this build was refused, each run is listed a
              ;; chunk at a time, so a walk that stops lists little beyond it
              (dotimes (q run-count)
@@ -3756,27 +3814,37 @@ build: take each row within the widest reach plus the skin, in order, and stop a
                        do (setf (aref chunk 1) (1+ e) (aref chunk 2) -1
                                 (aref chunk 3) start (aref chunk 4) (min end (+ start +crowded-walk-chunk+))
                                 (aref chunk 5) (aref runs (+ (* 3 q) 2)))
-                          (take (grid-list-near grid e chunk 2 reach2))))))))))
+                          (take (grid-list-near grid e chunk 2 reach2 near))))))))))
 
-(defmacro pair-list-build ()
-  "Build the pair list again, taking each pair as it is found: the half neighbourhood of each
-body's cell, in the grid's order, within the widest reach plus the skin; after a refused walk,
-each run a chunk at a time. Expanded in the pair phase. #P41BLD"
-  `(let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near (hash-grid-near grid))
+(defmacro pair-list-walks (from to near-form)
+  "The walks of the bodies at places FROM below TO of the grid's order, listing their near places
+in the column NEAR-FORM gives: expanded in pair-list-build, and in a worker's piece of it
+([[#P41P1C]]). #P41BLD"
+  `(let ((items (hash-grid-items grid)) (keys (hash-grid-keys grid)) (near ,near-form)
          (runs (make-array 42 :element-type 'fixnum))
          ;; a crowded walk's chunk: an empty first run, then a piece of one run
          (chunk (make-array 6 :element-type 'fixnum :initial-element 0))
          (cell-key -1) (run-count 0) (crowd nil))
      (declare (type fixnum-column items keys near runs chunk)
               (dynamic-extent runs chunk) (type fixnum cell-key) (type (integer 0 14) run-count))
+     (loop for e of-type index from ,from below ,to
+           do (let ((i (aref items e)))
+                (when (zerop (logand (aref flags i) +flag-terrain-only+))
+                  ;; the items of one cell are consecutive in the grid's order and share its runs
+                  (unless (= (aref keys e) cell-key)
+                    (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
+                  (pair-list-walk))))))
+
+(defmacro pair-list-build ()
+  "Build the pair list again, taking each pair as it is found: the half neighbourhood of each
+body's cell, in the grid's order, within the widest reach plus the skin; after a refused walk,
+each run a chunk at a time; with workers, in pieces ([[#P41P1C]]). Expanded in the pair
+phase. #P41BLD"
+  `(progn
      (setf (pair-list-count plist) 0 (pair-list-examined plist) 0)
-     (dotimes (e (hash-grid-count grid))
-       (let ((i (aref items e)))
-         (when (zerop (logand (aref flags i) +flag-terrain-only+))
-           ;; the items of one cell are consecutive in the grid's order and share its runs
-           (unless (= (aref keys e) cell-key)
-             (setf cell-key (aref keys e) run-count (grid-half-runs grid e runs)))
-           (pair-list-walk))))
+     (flet ((whole () (pair-list-walks 0 (hash-grid-count grid) (hash-grid-near grid))))
+       (declare (dynamic-extent #'whole))
+       (pairs-in-pieces world :build #'whole))
      (pair-list-anchor plist awake n cell)
      (setf (pair-list-built-step plist) (contact-table-step table)
            (pair-list-loose-count plist) 0)))
@@ -3879,8 +3947,10 @@ gap is under the speculative distance. #P41STG"
                       (loose-rows (pair-list-loose-rows plist)))
                   (declare (type fixnum-column pairs loose loose-rows))
                   ;; the walk stops at a pair that strikes, which is taken here again whole,
-                  ;; its overlap already counted
-                  (pair-listed-pairs)
+                  ;; its overlap already counted; with workers, in pieces ([[#P41P1C]])
+                  (flet ((whole () (pair-listed-pairs)))
+                    (declare (dynamic-extent #'whole))
+                    (pairs-in-pieces world :listed #'whole))
                   (pair-loose-rows)
                   (pair-loose-among-loose))
                 ;; build the list again: the half neighbourhood of each body's cell, in the
@@ -7137,14 +7207,6 @@ bounds, and the count of live boxes is theirs. #BXR0WS"
               (funcall fail "handle ~D: extent below ~A" h +box-min-half-extent+)))))
       (unless (= boxes (box-set-live set))
         (funcall fail "~D box rows but the box set counts ~D" boxes (box-set-live set))))))
-
-(defun refuse-box-snapshot (world)
-  "Signal invalid-physics-parameter naming :world when WORLD has had a box: a snapshot
-([[#SN4P0T]]) does not hold the box set yet, and a world restored without it would turn its boxes
-into spheres. #BXR0WS"
-  (when (physics-world-box-bodies world)
-    (error 'invalid-physics-parameter :world world :name :world :value world
-                                      :expected "a world that has had no box: a snapshot does not hold box bodies yet")))
 ;; A box is a row and a set of extents by slot:1 ends here
 
 ;; [[file:../physics.org::#BXCELL][A box against the cells:1]]
@@ -9821,7 +9883,7 @@ core. #W0RKP1")
   "How long, in nanoseconds, a worker waiting for a job spins or yields at most before it parks:
 the jobs of a step follow each other within it, the gap between a game's frames does not. #W0RKP1")
 
-(defconstant +pool-jobs+ 10
+(defconstant +pool-jobs+ 12
   "How many kinds of job a pool keeps its calls and timings for ([[#SPL1T5]]). #W0RKP1")
 
 (defstruct (worker-pool (:constructor %make-worker-pool (count)) (:copier nil))
@@ -9856,12 +9918,16 @@ typed slots so that publishing a job conses nothing. #W0RKP1"
   (whole-ns (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
   ;; per job: the nanoseconds all its calls took, either way ([[#B3NCHW]] reads them)
   (spent (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
+  ;; per job: the part of spent its merges took on the calling thread alone ([[#P41P1C]])
+  (merged (make-array +pool-jobs+ :element-type 'fixnum :initial-element 0) :type fixnum-column :read-only t)
   ;; a phase's own piece, a function of the worker and the count, while its job runs
   (piece nil :type (or null function))
   ;; the events of a phase's pieces, a buffer and its data for each worker but worker 0,
   ;; merged in worker order ([[#SPL1T5]])
   (events #() :type simple-vector)
   (event-data #() :type simple-vector)
+  ;; each worker's pair sink: the pairs and touches its piece of the pair phase found ([[#P41P1C]])
+  (pair-sinks #() :type simple-vector)
   ;; the parameters of the job, written by the caller before it publishes
   (wide nil) (narrow nil) (impact nil) (settle nil)
   (lanes 1 :type (integer 1 64))
@@ -10005,7 +10071,8 @@ condition of the earliest piece that signalled. #W0RKP1"
   "A pool of COUNT workers: COUNT - 1 threads, parked, and the caller. #W0RKP1"
   (let ((pool (%make-worker-pool count)))
     (setf (worker-pool-events pool) (map-into (make-array count) #'make-event-columns)
-          (worker-pool-event-data pool) (map-into (make-array count) (lambda () (make-array 8 :initial-element nil))))
+          (worker-pool-event-data pool) (map-into (make-array count) (lambda () (make-array 8 :initial-element nil)))
+          (worker-pool-pair-sinks pool) (map-into (make-array count) #'make-pair-sink))
     (handler-bind ((serious-condition (lambda (c) (declare (ignore c)) (close-worker-pool pool))))
       (loop for worker from 1 below count
             do (push (sb-thread:make-thread #'worker-loop :name "luv-physics worker"
@@ -10361,10 +10428,181 @@ the integration JOB on the workers. #SPL1T5"
     (call-next-method)))
 ;; The step's loops cut into fixed pieces:1 ends here
 
+;; [[file:../physics.org::#P41P1C][The pair phase in pieces:1]]
+(defconstant +job-pairs+ 8 "The job: the pair phase's listed pairs, a share of the list each. #P41P1C")
+(defconstant +job-pair-build+ 9
+  "The job: the pair list's build, a share of the awake grid's places each. #P41P1C")
+
+(defun pair-sink-ready (sink rows near cursor)
+  "Empty SINK for a piece over ROWS awake rows, with a neighbour scratch of NEAR places and
+CURSOR, the contact table's, as its first guess. #P41P1C"
+  (declare (type pair-sink sink) (type index rows near cursor))
+  (let ((list (pair-sink-list sink)))
+    (setf (pair-list-overlaps list) (fixnum-room (pair-list-overlaps list) rows :keep 0)
+          (pair-list-count list) 0 (pair-list-examined list) 0)
+    (fill (pair-list-overlaps list) 0 :end rows))
+  (setf (pair-sink-near sink) (fixnum-room (pair-sink-near sink) near :keep 0)
+        (pair-sink-count sink) 0 (pair-sink-cursor sink) cursor)
+  sink)
+
+(defun struck-pair-piece (world sink packed)
+  "Take the listed pair PACKED, which strikes, whole, with its impact normal, into SINK, its
+overlap already counted: as the pair phase takes it after scan-listed-pairs. #P41P1C"
+  (declare (type pair-sink sink) (type fixnum packed))
+  (with-world-parameters (margin slop (threshold restitution-threshold)) world
+    (let* ((i (ash packed -24)) (j (logand packed #xFFFFFF))
+           (dt (physics-world-current-dt world)))
+      (declare (type index i j) (type single-float margin slop threshold dt))
+      (with-body-columns (x y z vx vy vz radius handle) (physics-world-awake world)
+        (pair-contact (physics-world-contacts world) (physics-world-contact-table world)
+                      (pair-list-overlaps (pair-sink-list sink)) margin slop dt (gravity-step world dt)
+                      threshold t
+                      (aref x i) (aref y i) (aref z i) (aref radius i) (aref handle i)
+                      (aref vx i) (aref vy i) (aref vz i)
+                      (aref x j) (aref y j) (aref z j) (aref radius j) (aref handle j)
+                      (aref vx j) (aref vy j) (aref vz j) -1 -1 sink))))
+  sink)
+
+(defun listed-pairs-piece (world sink from to)
+  "The listed pairs of WORLD's pair list at places FROM below TO, as the pair phase takes them
+(walk-listed-pairs, then each that strikes whole), into SINK. #P41P1C"
+  (declare (type pair-sink sink) (type index from to))
+  (let ((pairs (pair-list-pairs (physics-world-pair-list world)))
+        (overlaps (pair-list-overlaps (pair-sink-list sink)))
+        (p from))
+    (declare (type fixnum-column pairs overlaps) (type index p))
+    (loop (setf p (walk-listed-pairs world p to nil sink overlaps))
+          (when (>= p to) (return))
+          (struck-pair-piece world sink (aref pairs p))
+          (incf p))
+    sink))
+
+(defun build-pairs-piece (world sink from to)
+  "The walks of the bodies at places FROM below TO of WORLD's awake grid, as the pair list's
+build walks them (pair-list-walks), with SINK's neighbour scratch: its pairs, candidates and
+overlaps into SINK's list, its touches into SINK. #P41P1C"
+  (declare (type pair-sink sink) (type index from to))
+  (with-world-parameters (margin (skin pair-skin) slop (rmax max-radius) (threshold restitution-threshold)) world
+    (let* ((awake (physics-world-awake world))
+           (grid (physics-world-awake-grid world))
+           (plist (pair-sink-list sink))
+           (dt (physics-world-current-dt world))
+           (gstep (gravity-step world dt))
+           (contacts (physics-world-contacts world))
+           (table (physics-world-contact-table world))
+           (crowded nil)
+           (filtering (physics-world-filtering world)))
+      (declare (type single-float margin skin slop dt gstep rmax threshold) (type body-columns awake)
+               (type pair-list plist) (type contact-columns contacts) (type contact-table table)
+               (type hash-grid grid) #.+kernel-policy+)
+      (with-body-columns (x y z vx vy vz radius flags handle) awake
+        (macrolet ((pair-of-rows (i j)
+                     `(when (pair-contact contacts table (pair-list-overlaps plist) margin slop dt gstep threshold t
+                                          (aref x ,i) (aref y ,i) (aref z ,i) (aref radius ,i) (aref handle ,i)
+                                          (aref vx ,i) (aref vy ,i) (aref vz ,i)
+                                          (aref x ,j) (aref y ,j) (aref z ,j) (aref radius ,j) (aref handle ,j)
+                                          (aref vx ,j) (aref vy ,j) (aref vz ,j) ,i ,j sink)
+                        (setf crowded t))))
+          (pair-list-walks from to (pair-sink-near sink))))))
+  sink)
+
+(defun fold-piece-overlaps (pool plist rows)
+  "Make PLIST's overlap count of each of ROWS awake rows the sum of the counts of POOL's workers'
+sinks; return the largest. #P41P1C"
+  (declare (type worker-pool pool) (type pair-list plist) (type index rows))
+  (let ((overlaps (pair-list-overlaps plist)) (sinks (worker-pool-pair-sinks pool)) (most 0))
+    (declare (type fixnum-column overlaps) (type fixnum most))
+    (replace overlaps (pair-list-overlaps (pair-sink-list (svref sinks 0))) :end1 rows)
+    (loop for w from 1 below (worker-pool-count pool)
+          do (let ((more (pair-list-overlaps (pair-sink-list (svref sinks w)))))
+               (declare (type fixnum-column more))
+               (dotimes (i rows) (setf (aref overlaps i) (+ (aref overlaps i) (aref more i))))))
+    (dotimes (i rows most) (setf most (max most (aref overlaps i))))))
+
+(defun merge-pair-sink (world sink)
+  "Hand SINK's touches to WORLD's contacts in order, as one walk would have: the table's cursor
+set on each touch's row, and a miss counted where the cursor would not have guessed it. #P41P1C"
+  (declare (type pair-sink sink) (inline touch-contact))
+  (let ((contacts (physics-world-contacts world)) (table (physics-world-contact-table world))
+        (f (pair-sink-touches sink)) (g (pair-sink-geometry sink)))
+    (declare (type contact-columns contacts) (type contact-table table) (type fixnum-column f)
+             (type f32-column g))
+    (dotimes (k (pair-sink-count sink) sink)
+      (let ((row (aref f (* 4 k))) (key (aref f (+ (* 4 k) 1))) (q (* 7 k)))
+        (declare (type fixnum row key) (type index q))
+        (when (>= row 0)
+          (let ((guess (contact-table-cursor table)))
+            (unless (and (< guess (contact-columns-length contacts))
+                         (= (aref (contact-columns-key contacts) guess) key))
+              (incf (contact-table-misses table))
+              (setf (contact-table-cursor table) row))))
+        (touch-contact contacts table key +contact-pair+ (aref f (+ (* 4 k) 2)) (aref f (+ (* 4 k) 3))
+                       (aref g q) (aref g (+ q 1)) (aref g (+ q 2)) (aref g (+ q 3))
+                       (aref g (+ q 4)) (aref g (+ q 5)) (aref g (+ q 6)) 0.0 0.0 0.0)))))
+
+(defun gather-piece-pairs (pool plist)
+  "Append the pairs POOL's workers' sinks listed to PLIST, in worker order, and sum the candidates
+they examined. #P41P1C"
+  (declare (type worker-pool pool) (type pair-list plist))
+  (loop for w below (worker-pool-count pool)
+        do (let* ((list (pair-sink-list (svref (worker-pool-pair-sinks pool) w)))
+                  (k (pair-list-count plist)) (more (pair-list-count list)))
+             (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) (+ k more) :least 1024))
+             (replace (pair-list-pairs plist) (pair-list-pairs list) :start1 k :end2 more)
+             (setf (pair-list-count plist) (+ k more))
+             (incf (pair-list-examined plist) (pair-list-examined list))))
+  plist)
+
+(defun run-pair-pieces (pool world kind)
+  "Run the pair phase's walk KIND (:listed or :build) in pieces on POOL's workers, then merge
+their sinks into WORLD in worker order; return true, or NIL, having changed nothing, when some
+row's overlaps reach +overlaps-per-body+: then one walk would have become crowded. #P41P1C"
+  (declare (type worker-pool pool))
+  (let* ((build (eq kind :build))
+         (plist (physics-world-pair-list world))
+         (grid (physics-world-awake-grid world))
+         (places (if build (hash-grid-count grid) (pair-list-count plist)))
+         (rows (awake-rows world))
+         (near (length (hash-grid-near grid)))
+         (cursor (contact-table-cursor (physics-world-contact-table world)))
+         (sinks (worker-pool-pair-sinks pool)))
+    (declare (type index places rows near cursor))
+    (flet ((piece (worker count)
+             (declare (type fixnum worker count))
+             (let ((sink (svref sinks worker)))
+               (pair-sink-ready sink rows near cursor)
+               (multiple-value-bind (s e) (share-bounds 0 places worker count)
+                 (if build (build-pairs-piece world sink s e) (listed-pairs-piece world sink s e))))))
+      (declare (dynamic-extent #'piece))
+      (setf (worker-pool-piece pool) #'piece)
+      (unwind-protect (run-on-workers pool (if build +job-pair-build+ +job-pairs+) 1)
+        (setf (worker-pool-piece pool) nil)))
+    (let ((start (clock-ns)) (job (if build +job-pair-build+ +job-pairs+)))
+      (prog1 (if (>= (fold-piece-overlaps pool plist rows) +overlaps-per-body+)
+                 (progn (fill (pair-list-overlaps plist) 0 :end rows) nil)
+                 (progn (when build (gather-piece-pairs pool plist))
+                        (dotimes (w (worker-pool-count pool) t)
+                          (merge-pair-sink world (svref sinks w)))))
+        (incf (aref (worker-pool-merged pool) job) (- (clock-ns) start))))))
+
+(defun pairs-in-pieces (world kind whole)
+  "Take the pair phase's walk KIND (:listed or :build) in pieces on WORLD's workers when its pool
+splits the pass (tuned-split) and no row becomes crowded, else by calling WHOLE, the phase's own
+walk. #P41P1C"
+  (declare (type function whole))
+  (let ((job (if (eq kind :build) +job-pair-build+ +job-pairs+))
+        (places (if (eq kind :build)
+                    (hash-grid-count (physics-world-awake-grid world))
+                    (pair-list-count (physics-world-pair-list world)))))
+    (tuned-split (pool world places job)
+      (unless (run-pair-pieces pool world kind) (funcall whole))
+      (funcall whole))))
+;; The pair phase in pieces:1 ends here
+
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
 (deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))
 
-(defconstant +snapshot-version+ 4 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
+(defconstant +snapshot-version+ 5 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
 
 (defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SN4P0T")
 
@@ -10402,6 +10640,19 @@ carried impulses. #SN4P0T")
 (defconstant +snapshot-pair-head-bytes+ 40 "Bytes of the pair list part's payload before its rows. #SN4P0T")
 
 (defconstant +snapshot-box-bytes+ 52 "Bytes of one posted box in a snapshot. #SN4P0T")
+
+(defconstant +snapshot-box-body-bytes+ 24
+  "Bytes of one box body's record in the box part of a snapshot: its slot, its three half-extents,
+and the first and the count of its points. #SN4P0T")
+
+(defconstant +snapshot-box-point-bytes+ 20
+  "Bytes of one box point of the last step in a snapshot: its key and its three carried impulses. #SN4P0T")
+
+(declaim (inline box-part-bytes))
+(defun box-part-bytes (boxes points)
+  "The payload bytes of a box part of BOXES box bodies and POINTS points. #SN4P0T"
+  (declare (type index boxes points))
+  (+ 8 (* +snapshot-box-body-bytes+ boxes) (* +snapshot-box-point-bytes+ points)))
 
 (defparameter +snapshot-magic+ (map 'octets #'char-code "LUVWORLD")
   "The eight bytes a snapshot starts with. #SN4P0T")
@@ -10596,7 +10847,7 @@ an earlier entry with the same words, found through the table, or K itself, then
 
 (defparameter +snapshot-parts+
   '((1 :world) (2 :handles) (3 :awake-bodies) (4 :sleeping-bodies) (5 :materials) (6 :contacts)
-    (7 :pair-list) (8 :boxes) (9 :pushes) (10 :joints :optional))
+    (7 :pair-list) (8 :boxes) (9 :pushes) (10 :joints :optional) (11 :box-bodies :optional))
   "The parts of a snapshot, in the order they are written, each its id and its name, and
 :optional for a part a world may not have (then it is not written and its size is -1): each part
 of the world's state is one entry. #SN4P0T")
@@ -10644,7 +10895,9 @@ and its pairs written out whole. #SN4P0T"
                                      (* 4 (loop with slot = (handle-table-free jids) while (>= slot 0)
                                                 count t do (setf slot (aref (handle-table-local jids) slot))))
                                      (* +snapshot-joint-bytes+ (joint-columns-length (joint-set-rows set)))))
-                                -1)))
+                                -1))
+          (aref sizes 11) (let ((set (physics-world-box-bodies world)))
+                            (if set (box-part-bytes (box-set-live set) (box-point-columns-length (box-set-points set))) -1)))
     (loop for (id) in +snapshot-parts+ unless (minusp (aref sizes id)) sum (+ 8 (aref sizes id)))))
 
 (declaim (inline same-material-p))
@@ -10695,7 +10948,6 @@ its materials column with each body's entry; return the palette's size. #SN4P0T"
 snapshot's bound (snapshot-part-bounds), else into a new one of that bound; return the buffer
 and the snapshot's size in bytes. Into a buffer large enough it conses nothing. #SN4P0T"
   (check-idle world 'snapshot-physics-world)
-  (refuse-box-snapshot world)
   (unless (or (null buffer) (typep buffer 'octets))
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "NIL or an octet vector, (simple-array (unsigned-byte 8) (*))"))
@@ -11073,7 +11325,8 @@ return its bytes. #SN4P0T"
                (+ 4 (* 16 slots)))
              (progn (setf (snap-u32 buffer at) 0) 4))))
     (10 (write-snapshot-joints world buffer at)
-        (aref (snapshot-scratch-sizes scratch) 10))))
+        (aref (snapshot-scratch-sizes scratch) 10))
+    (11 (write-snapshot-box-bodies world buffer at))))
 
 (defun world-parameter (world name)
   "The value of WORLD's parameter NAME, a keyword of +physics-parameters+. #SN4P0T"
@@ -11224,7 +11477,6 @@ sleep, and every number within its range. #SN4P0T"
       (dotimes (k 3) (ranged (+ at 28 (* 4 k)) (- +physics-max-gravity+) +physics-max-gravity+ "a gravity in range"))
       (ranged (+ at 40) 1e-9 1.0 "the last step's length")
       (ranged (+ at 44) 1e-9 1.0 "the last substep's length")
-      (ranged (+ at 48) 0.0 0.5 "the largest radius the world has had")
       (loop for (name nil low high kind) in +physics-parameters+
             for o from (+ at 52) by 4
             do (if (eq kind 'integer)
@@ -11234,7 +11486,9 @@ sleep, and every number within its range. #SN4P0T"
       (let ((margin (snap-f32 buffer (+ at 52 (* 4 (position :speculative-margin +physics-parameters+ :key #'first)))))
             (limit (snap-f32 buffer (+ at 52 (* 4 (position :reach-limit +physics-parameters+ :key #'first))))))
         (snapshot-check (>= limit (+ margin +physics-min-radius+)) physics-snapshot-other-layout (+ at 52)
-                        "a reach limit of at least the margin and the smallest radius" limit)))
+                        "a reach limit of at least the margin and the smallest radius" limit)
+        ;; a box's half diagonal may pass half a cell: the bound is the one add-physics-box keeps
+        (ranged (+ at 48) 0.0 (- limit margin) "the largest radius the world has had, within the reach limit less the margin")))
     (dolist (o '(124 132))
       (snapshot-check (typep (snap-i64 buffer (+ at o)) 'fixnum) physics-snapshot-other-layout (+ at o)
                       "a step number" (snap-i64 buffer (+ at o))))
@@ -11757,6 +12011,7 @@ what the restore reuses. #SN4P0T"
   (check-snapshot-pair-list buffer scratch)
   (check-snapshot-rest buffer scratch)
   (check-snapshot-joints buffer scratch)
+  (check-snapshot-box-bodies buffer scratch)
   buffer)
 
 (defun check-snapshot-jointed-flags (buffer scratch named mark)
@@ -12155,6 +12410,7 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
           (physics-world-undo-open world) nil)
     (incf (physics-world-rows-version world))
     (apply-snapshot-joints world buffer scratch)
+    (apply-snapshot-box-bodies world buffer scratch)
     world))
 
 (defun apply-snapshot-joints (world buffer scratch)
@@ -12231,7 +12487,6 @@ truncated, of another magic, version or layout, whose checksum fails, or of a wo
 features WORLD lacks, signals the physics-snapshot-invalid subtype naming the byte offset, and
 WORLD is left as it was. #SN4P0T"
   (check-idle world 'restore-physics-world)
-  (refuse-box-snapshot world)
   (unless (typep buffer 'octets)
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
                                       :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))
@@ -12346,12 +12601,16 @@ plist. #SN4P0T"
     (list :restored restored :refused refused :invalid invalid :crashes crashes)))
 
 (defun run-snapshot-fuzz-campaign (&key (seed 1) (count 2000))
-  "Fuzz the snapshots of the five standard scenes at 300 balls, each taken after 2 s, COUNT
-damaged copies each, from SEED; return a list of (SCENE BYTES . FIGURES). #SN4P0T"
+  "Fuzz the snapshots of the five standard scenes at 300 balls, each taken after 2 s, and of the
+box tower (snapshot-box-tower) at half a second, COUNT damaged copies each, from SEED; return a
+list of (SCENE BYTES . FIGURES). #SN4P0T"
   (let ((random (sb-ext:seed-random-state seed)))
-    (loop for scene in '(:basin :pile :fountain :lava :player)
-          collect (multiple-value-bind (world script) (make-scene-world scene :count 300)
-                    (dotimes (i 120) (funcall script i) (step-physics-world world))
+    (loop for scene in '(:basin :pile :fountain :lava :player :box-tower)
+          collect (multiple-value-bind (world script)
+                      (if (eq scene :box-tower)
+                          (values (snapshot-box-tower :auto) (lambda (i) (declare (ignore i))))
+                          (make-scene-world scene :count 300))
+                    (dotimes (i (if (eq scene :box-tower) 30 120)) (funcall script i) (step-physics-world world))
                     (multiple-value-bind (buffer size) (snapshot-physics-world world)
                       (let ((snapshot (subseq buffer 0 size)))
                         (list* scene size (fuzz-snapshot world snapshot count random))))))))
@@ -12371,15 +12630,16 @@ damaged copies each, from SEED; return a list of (SCENE BYTES . FIGURES). #SN4P0
 ;;; what a snapshot costs: make bench
 
 (defun snapshot-part-bytes (buffer id)
-  "The bytes part ID of the snapshot BUFFER takes, its own header of 8 included. #SN4P0T"
+  "The bytes part ID of the snapshot BUFFER takes, its own header of 8 included, the parts walked
+by their own ids; 0 when it has no such part. #SN4P0T"
   (loop with at = +snapshot-header-bytes+
-        for (part) in +snapshot-parts+
-        for size = (snap-u32 buffer (+ at 4))
-        when (= part id) return (+ 8 size)
-        do (incf at (+ 8 size))))
+        while (< at (snap-u64 buffer 16))
+        when (= (snap-u32 buffer at) id) return (+ 8 (snap-u32 buffer (+ at 4)))
+        do (incf at (+ 8 (snap-u32 buffer (+ at 4))))
+        finally (return 0)))
 
 (defun run-snapshot-benchmark (&key (stream *standard-output*) (balls 3000) (rounds 30))
-  "Measure snapshots: their size in the BALLS-ball basin and in the settled pile, snapshot plus
+  "Measure snapshots: their size in the BALLS-ball basin, in the settled pile and in the box tower, snapshot plus
 restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8-step rollback at
 1000 balls, and the bytes consed; print Org tables to STREAM. #SN4P0T"
   (format stream "load average ~A at the start~%~%" (load-average))
@@ -12429,6 +12689,14 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
                 (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile))
                 (physics-world-sleeping-count pile) size
                 (/ size (max 1 (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile)))))))
+    (let ((tower (snapshot-box-tower :auto)))
+      (dotimes (i 30) (step-physics-world tower))
+      (multiple-value-bind (buffer size) (snapshot-physics-world tower)
+        (format stream "| box tower at 0.5 s | bodies | boxes | box points | bytes | box part |~%|---+---+---+---+---+---|~%| 5 boxes, 2 balls | ~D | ~D | ~D | ~D | ~D |~%~%"
+                (+ (physics-world-awake-count tower) (physics-world-sleeping-count tower))
+                (box-set-live (physics-world-box-bodies tower))
+                (box-point-columns-length (box-set-points (physics-world-box-bodies tower)))
+                size (snapshot-part-bytes buffer 11))))
     (run-rollback-benchmark :stream stream :load nil))
   (format stream "~%load average ~A at the end~%" (load-average)))
 
@@ -12451,6 +12719,156 @@ the load average the run began and ended with when LOAD. make bench-rollback run
               balls rounds median (round (/ median (/ 1000 60.0) 0.01)))))
   (when load (format stream "~%load average ~A at the end~%" (load-average))))
 ;; A snapshot holds what decides the next step, part by part:8 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:15]]
+(defun write-snapshot-box-bodies (world buffer at)
+  "Write the box part of WORLD's snapshot into BUFFER from AT: the counts of box bodies and of the
+last step's points, each box's slot, half-extents, first point and count, then the points' keys
+and their three carried impulses, each a column copied whole; return its bytes. #SN4P0T"
+  (declare (type octets buffer) (type index at) #.+kernel-policy+)
+  (let* ((set (physics-world-box-bodies world)) (points (box-set-points set))
+         (p (box-point-columns-length points))
+         (hx (box-set-hx set)) (hy (box-set-hy set)) (hz (box-set-hz set))
+         (first (box-set-first set)) (count (box-set-count set))
+         (slots (min (length hx) (handle-table-count (physics-world-ids world)))) (b 0))
+    (declare (type box-set set) (type index p slots b) (type f32-column hx hy hz) (type fixnum-column first count))
+    (dotimes (slot slots)
+      (when (plusp (aref hx slot))
+        (let ((o (+ at 8 (* b +snapshot-box-body-bytes+))))
+          (declare (type index o))
+          (setf (snap-u32 buffer o) slot (snap-f32 buffer (+ o 4)) (aref hx slot)
+                (snap-f32 buffer (+ o 8)) (aref hy slot) (snap-f32 buffer (+ o 12)) (aref hz slot)
+                (snap-u32 buffer (+ o 16)) (if (zerop (aref count slot)) 0 (ldb (byte 32 0) (aref first slot)))
+                (snap-u32 buffer (+ o 20)) (ldb (byte 32 0) (aref count slot)))
+          (incf b))))
+    (setf (snap-u32 buffer at) b (snap-u32 buffer (+ at 4)) p)
+    (let ((o (+ at 8 (* b +snapshot-box-body-bytes+))))
+      (declare (type index o))
+      (sb-kernel:%byte-blt (box-point-columns-key points) 0 buffer o (+ o (* 8 p)))
+      (sb-kernel:%byte-blt (box-point-columns-normal-impulse points) 0 buffer (+ o (* 8 p)) (+ o (* 12 p)))
+      (sb-kernel:%byte-blt (box-point-columns-tangent-impulse-1 points) 0 buffer (+ o (* 12 p)) (+ o (* 16 p)))
+      (sb-kernel:%byte-blt (box-point-columns-tangent-impulse-2 points) 0 buffer (+ o (* 16 p)) (+ o (* 20 p))))
+    (box-part-bytes b p)))
+
+(defun check-snapshot-box-records (buffer scratch marks mark)
+  "Check the head and the box records of the box part of the snapshot in BUFFER: the feature
+:box-bodies, the size its counts give, each box's slot within the table and listed once (marked
+MARK in MARKS), its half-extents finite, each at least +box-min-half-extent+ and the half
+diagonal within the world's largest radius, and its points within the part's. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column marks) (type fixnum mark))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 11)) (wat (aref offsets 1))
+         (b (snap-u32 buffer at)) (p (snap-u32 buffer (+ at 4))) (count (snap-u32 buffer (aref offsets 2)))
+         (max-radius (snap-f32 buffer (+ wat 48))))
+    (declare (type index at wat count) (type (unsigned-byte 32) b p))
+    (snapshot-check (logbitp (position :box-bodies +physics-features+) (snap-u32 buffer (+ wat 4)))
+                    physics-snapshot-other-layout (+ wat 4) "the feature :box-bodies of a world with boxes"
+                    (snap-u32 buffer (+ wat 4)))
+    (snapshot-check (<= b count) physics-snapshot-other-layout at "no more boxes than slots" b)
+    (snapshot-check (< p (ash 1 26)) physics-snapshot-other-layout (+ at 4) "under 2^26 points" p)
+    (check-part-size scratch 11 (box-part-bytes b p))
+    (dotimes (k b)
+      (let* ((o (+ at 8 (* k +snapshot-box-body-bytes+))) (slot (snap-u32 buffer o)))
+        (snapshot-check (and (< slot count) (/= (aref marks slot) mark)) physics-snapshot-other-layout o
+                        "a box's slot of the table, listed once" slot)
+        (setf (aref marks slot) mark)
+        (let ((hx (snap-finite-f32 buffer (+ o 4))) (hy (snap-finite-f32 buffer (+ o 8)))
+              (hz (snap-finite-f32 buffer (+ o 12))))
+          (snapshot-check (and (<= +box-min-half-extent+ (min hx hy hz)) (<= (box-half-diagonal hx hy hz) max-radius))
+                          physics-snapshot-other-layout (+ o 4)
+                          "half-extents of at least the smallest, the half diagonal within the world's largest radius"
+                          (list hx hy hz)))
+        (snapshot-check (<= (+ (snap-u32 buffer (+ o 16)) (snap-u32 buffer (+ o 20))) p)
+                        physics-snapshot-other-layout (+ o 16) "a box's points among the part's"
+                        (list (snap-u32 buffer (+ o 16)) (snap-u32 buffer (+ o 20))))))))
+
+(defun check-snapshot-box-bodies (buffer scratch)
+  "Check the box part of the snapshot in BUFFER, when it has one: its records
+(check-snapshot-box-records), every point's key a fixnum's word and every carried impulse finite
+and of at most 10^9 N s; and, with it or without it, that a body has the box flag exactly when the
+part lists its slot. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 11))
+         (present (>= (aref (snapshot-scratch-sizes scratch) 11) 0))
+         (boxes (if present (snap-u32 buffer at) 0)) (flagged 0))
+    (declare (type index at boxes flagged))
+    (multiple-value-bind (marks stamp) (snapshot-marks scratch (snap-u32 buffer (aref offsets 2)))
+      (declare (type fixnum-column marks) (type fixnum stamp))
+      (when present
+        (check-snapshot-box-records buffer scratch marks (1+ stamp))
+        (let* ((p (snap-u32 buffer (+ at 4))) (keys (+ at 8 (* boxes +snapshot-box-body-bytes+)))
+               (impulses (+ keys (* 8 p)))
+               (wrong (snapshot-words-within buffer impulses (+ impulses (* 12 p)) (sb-kernel:single-float-bits 1e9))))
+          (declare (type index p keys impulses))
+          (dotimes (k p)
+            (snapshot-check (not (logtest 1 (snap-u64 buffer (+ keys (* 8 k))))) physics-snapshot-other-layout
+                            (+ keys (* 8 k)) "a point's key, a fixnum's word" (snap-u64 buffer (+ keys (* 8 k)))))
+          (snapshot-check (null wrong) physics-snapshot-other-layout wrong "a carried impulse of at most 10^9 N s"
+                          (and wrong (snap-f32 buffer wrong)))))
+      (dolist (id '(3 4))
+        (let* ((bat (aref offsets id)) (n (snap-u32 buffer bat))
+               (w (material-index-bytes (snap-u32 buffer (aref offsets 5)))))
+          (dotimes (row n)
+            (let ((o (+ bat (body-part-column n 18 w) (* 2 row)))
+                  (slot (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))))
+              (when (logtest +flag-box-shape+ (snap-u16 buffer o)) (incf flagged))
+              (snapshot-check (eq (logtest +flag-box-shape+ (snap-u16 buffer o)) (= (aref marks slot) (1+ stamp)))
+                              physics-snapshot-other-layout o
+                              "the box flag set exactly on a body whose slot the box part lists" (snap-u16 buffer o))))))
+      (snapshot-check (= flagged boxes) physics-snapshot-other-layout at "a body for each box the part lists" boxes))))
+
+(defun apply-snapshot-box-bodies (world buffer scratch)
+  "Make WORLD's box set the checked snapshot BUFFER's: none when it has no box part; else the
+half-extents by slot, zero where a slot holds no box, each box's first point and count, and the
+last step's points, their keys and carried impulses, every other number of a point zero. #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (if (minusp (aref (snapshot-scratch-sizes scratch) 11))
+      (setf (physics-world-box-bodies world) nil)
+      (let* ((at (aref (snapshot-scratch-offsets scratch) 11))
+             (b (snap-u32 buffer at)) (p (snap-u32 buffer (+ at 4)))
+             (set (or (physics-world-box-bodies world) (setf (physics-world-box-bodies world) (%make-box-set))))
+             (points (box-set-points set))
+             (o (+ at 8 (* b +snapshot-box-body-bytes+))))
+        (declare (type index at b p o) (type box-set set))
+        (box-set-room set (handle-table-count (physics-world-ids world)))
+        (fill (box-set-hx set) 0.0) (fill (box-set-hy set) 0.0) (fill (box-set-hz set) 0.0)
+        (fill (box-set-count set) 0) (fill (box-set-previous-count set) 0)
+        (box-point-columns-clear (box-set-previous set))
+        (box-point-columns-clear points)
+        (box-point-columns-ensure-capacity points p)
+        (setf (box-point-columns-length points) p)
+        (sb-kernel:%byte-blt buffer o (box-point-columns-key points) 0 (* 8 p))
+        (sb-kernel:%byte-blt buffer (+ o (* 8 p)) (box-point-columns-normal-impulse points) 0 (* 4 p))
+        (sb-kernel:%byte-blt buffer (+ o (* 12 p)) (box-point-columns-tangent-impulse-1 points) 0 (* 4 p))
+        (sb-kernel:%byte-blt buffer (+ o (* 16 p)) (box-point-columns-tangent-impulse-2 points) 0 (* 4 p))
+        (dotimes (k b)
+          (let ((r (+ at 8 (* k +snapshot-box-body-bytes+))))
+            (declare (type index r))
+            (let ((slot (snap-u32 buffer r)))
+              (setf (aref (box-set-hx set) slot) (snap-f32 buffer (+ r 4))
+                    (aref (box-set-hy set) slot) (snap-f32 buffer (+ r 8))
+                    (aref (box-set-hz set) slot) (snap-f32 buffer (+ r 12))
+                    (aref (box-set-first set) slot) (snap-u32 buffer (+ r 16))
+                    (aref (box-set-count set) slot) (snap-u32 buffer (+ r 20))))))
+        (setf (box-set-live set) b))))
+
+(defun snapshot-box-tower (kernels)
+  "A floor world under KERNELS with a tower of five boxes dropped from a little apart, the
+second turned, the fourth flat and long, and two balls falling beside and onto it: boxes meet
+the floor, each other and the balls within its first second. Return the world and the boxes'
+handles. #SN4P0T"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -8 -8 -8 16 16 16 nil)
+    (fill-terrain terrain -8 -1 -8 16 0 16 t)
+    (let ((world (make-physics-world :terrain terrain :kernels kernels)))
+      (values
+       world
+       (loop for (y hx hy hz orientation) in '((0.5 0.3 0.3 0.3 (1 0 0 0)) (1.3 0.3 0.3 0.3 (0.97 0 0.24 0))
+                                              (2.1 0.3 0.3 0.3 (1 0 0 0)) (2.8 0.5 0.15 0.3 (0.99 0.1 0 0))
+                                              (3.5 0.25 0.25 0.25 (1 0 0 0)))
+             collect (add-physics-box world 2.5 y 2.5 hx hy hz :density 500 :orientation orientation)
+             finally (add-physics-body world 2.55 4.6 2.45 :radius 0.2)
+                     (add-physics-body world 3.3 1.0 2.5 :radius 0.25 :vx -1.0))))))
+;; A snapshot holds what decides the next step, part by part:15 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:2]]
 (defun physics-world-handles (world)

@@ -1639,7 +1639,7 @@ the basin. #B3NCHW"
                             :radius 0.25 :mass 1.0 :friction 0.6 :restitution 0.0))))))
 
 (defparameter *job-phases*
-  '((substep-phase 0 1 2 3 4) (prepare-phase 5 6) (store-phase 7))
+  '((substep-phase 0 1 2 3 4) (prepare-phase 5 6) (store-phase 7) (pair-phase 8 9))
   "Each phase whose loops split, with the jobs ([[#SPL1T5]]) that run inside it. #B3NCHW")
 
 (defun make-bench-basin (count family)
@@ -1665,7 +1665,8 @@ whose pool of one worker (no thread) runs every pass that splits and times it. #
     (dotimes (i to)
       (when (= i from)
         (setf (physics-world-phase-clock probe) clock)
-        (fill (worker-pool-spent pool) 0))
+        (fill (worker-pool-spent pool) 0)
+        (fill (worker-pool-merged pool) 0))
       (step-physics-world probe)
       (loop for w in worlds for cell in times
             do (step-physics-world w)
@@ -1675,7 +1676,8 @@ whose pool of one worker (no thread) runs every pass that splits and times it. #
                         collect (list phase
                                       (/ (- (aref clock k)
                                             (loop for j in (rest (assoc phase *job-phases*))
-                                                  sum (aref (worker-pool-spent pool) j)))
+                                                  sum (- (aref (worker-pool-spent pool) j)
+                                                         (aref (worker-pool-merged pool) j))))
                                          (float total 1d0)))))
            (hashes (mapcar #'physics-world-state-hash (cons probe worlds))))
       (mapc #'close-physics-world worlds)

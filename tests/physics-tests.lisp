@@ -6736,22 +6736,6 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (dolist (r rows) (check (second r) "not held: ~A: ~A" (first r) (third r)))))
 ;; J0XTRM-joint-rows-hold ends here
 
-;; [[file:../physics.org::#BXR0WS][BXR0WS-snapshots-refuse-boxes]]
-(define-claim "BXR0WS" snapshots-refuse-boxes
-    "A world with a box is refused by snapshot and restore, unchanged."
-  (let* ((w (make-floor-world))
-         (plain (make-floor-world))
-         (bytes (progn (add-physics-body plain 2.5 1 2.5) (snapshot-physics-world plain))))
-    (add-physics-box w 2.5 1 2.5 0.5 0.5 0.5)
-    (step-physics-world w)
-    (let ((hash (physics-world-state-hash w)))
-      (dolist (call (list (lambda () (snapshot-physics-world w)) (lambda () (restore-physics-world w bytes))))
-        (check (eq :world (handler-case (progn (funcall call) :done)
-                            (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e))))))
-      (check (= hash (physics-world-state-hash w)))
-      (check (eq t (validate-physics-world w))))))
-;; BXR0WS-snapshots-refuse-boxes ends here
-
 ;; [[file:../physics.org::#BXR0WS][BXR0WS-bad-boxes-refused]]
 (define-claim "BXR0WS" bad-boxes-refused
     "Bad boxes are refused by name and leave the world unchanged."
@@ -8775,8 +8759,8 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
   "Make a world with MAKE (which returns it and a script, or NIL), give it a pool for each worker
 count of COUNTS (none for 1), splitting every pass, and run STEPS steps, step I taken by the
 pool of the (I mod length)th count (calling the script, and EACH with the world and the step,
-before each); return its state hash, its events in order, and whether some colour pass ran
-split. #SPL1T5"
+before each); return its state hash, its events in order, whether some colour pass ran split,
+and whether some walk of the pair phase ran in pieces. #SPL1T5"
   (multiple-value-bind (world script) (funcall make)
     (let ((pools (mapcar (lambda (n)
                            (when (> n 1)
@@ -8805,6 +8789,11 @@ split. #SPL1T5"
              (values (physics-world-state-hash world) (reverse events)
                      (some (lambda (pool)
                              (and pool (plusp (aref (luv-physics::worker-pool-spent pool) luv-physics::+job-solve+))))
+                           pools)
+                     ;; the pair phase's walks in pieces ([[#P41P1C]])
+                     (some (lambda (pool)
+                             (and pool (plusp (+ (aref (luv-physics::worker-pool-spent pool) luv-physics::+job-pairs+)
+                                                 (aref (luv-physics::worker-pool-spent pool) luv-physics::+job-pair-build+)))))
                            pools)))
         (setf (luv-physics::physics-world-pool world) nil)
         (dolist (pool pools) (when pool (luv-physics::close-worker-pool pool)))))))
@@ -8858,7 +8847,8 @@ solved by FAMILY. #SPL1T5"
                         "~(~A~), ~A: the events differ between 1 and 2-4 workers" family label)
                  (check (or (plusp (length (second (first runs)))) (string= label "joints"))
                         "~(~A~), ~A: no events to compare" family label)
-                 (check (third (second runs)) "~(~A~), ~A: no colour pass ran split" family label)))
+                 (check (third (second runs)) "~(~A~), ~A: no colour pass ran split" family label)
+                 (check (fourth (second runs)) "~(~A~), ~A: no pair walk ran in pieces" family label)))
     (dolist (scene '(:pile :fountain :lava :player))
       (let ((runs (loop for counts in '((1) (2 3 4))
                         collect (multiple-value-list
@@ -8938,6 +8928,76 @@ solved by FAMILY. #SPL1T5"
     (close-physics-world two)))
 ;; SPL1T5-tuned-pool-keeps-the-bits ends here
 
+;; [[file:../physics.org::#P41P1C][P41P1C-pieces-leave-the-walk]]
+(defun pair-walk-view (world)
+  "What the pair phase's walk leaves in WORLD: the pair list's pairs, examined count and
+overlaps, the contact table's cursor, misses and touched count, and the contacts' order. #P41P1C"
+  (let* ((plist (luv-physics::physics-world-pair-list world))
+         (table (luv-physics::physics-world-contact-table world))
+         (contacts (luv-physics::physics-world-contacts world))
+         (rows (luv-physics::contact-columns-length contacts)))
+    (list (subseq (luv-physics::pair-list-pairs plist) 0 (luv-physics::pair-list-count plist))
+          (luv-physics::pair-list-examined plist)
+          (subseq (luv-physics::pair-list-overlaps plist) 0 (luv-physics::awake-rows world))
+          (luv-physics::contact-table-cursor table) (luv-physics::contact-table-misses table)
+          (luv-physics::contact-table-touched table)
+          (subseq (luv-physics::contact-columns-order contacts) 0 rows))))
+
+(define-claim "P41P1C" pieces-leave-the-walk
+    "Pair pieces on 2 and 3 workers leave the pair list, overlaps and the contact table's walk as one worker, step by step."
+  (let ((worlds (loop for workers in '(1 2 3)
+                      collect (let ((w (make-basin-world 300)))
+                                (luv-physics::open-world-workers w workers)
+                                (let ((pool (luv-physics::physics-world-pool w)))
+                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                                w)))
+        (differ '()))
+    (dotimes (i 60)
+      (dolist (w worlds) (step-physics-world w))
+      (let ((views (mapcar #'pair-walk-view worlds)))
+        (unless (every (lambda (v) (equalp v (first views))) (rest views)) (push i differ))))
+    (check (null differ) "the walks differ after steps ~S" (reverse differ))
+    (dolist (w (rest worlds))
+      (let ((spent (luv-physics::worker-pool-spent (luv-physics::physics-world-pool w))))
+        (check (plusp (aref spent luv-physics::+job-pairs+)) "~D workers: the listed pairs never ran in pieces"
+               (physics-world-workers w))
+        (check (plusp (aref spent luv-physics::+job-pair-build+)) "~D workers: the build never ran in pieces"
+               (physics-world-workers w))))
+    (mapc #'close-physics-world worlds)))
+;; P41P1C-pieces-leave-the-walk ends here
+
+;; [[file:../physics.org::#P41P1C][P41P1C-crowded-walk-runs-whole]]
+(define-claim "P41P1C" crowded-walk-runs-whole
+    "A heap's crowded pieces are dropped and its walk runs whole, at one worker's hash; a basin's pieces are always merged."
+  (let ((merged '()))
+    (sb-int:encapsulate 'luv-physics::run-pair-pieces 'claim-crowded
+                        (lambda (f pool world kind) (let ((r (funcall f pool world kind))) (push r merged) r)))
+    (unwind-protect
+         (flet ((heap (workers)
+                  (let ((w (make-physics-world :gravity '(0 0 0))))
+                    (dotimes (i 40) (add-physics-body w 4.0 2.0 4.0 :radius 0.25))
+                    (luv-physics::open-world-workers w workers)
+                    (let ((pool (luv-physics::physics-world-pool w)))
+                      (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                    w)))
+           (let ((one (heap 1)) (two (heap 2)))
+             (step-physics-world one) (step-physics-world two)
+             (check (equal '(nil) merged) "the heap's first step merged its pieces: ~S" merged)
+             (check (= (physics-world-state-hash one) (physics-world-state-hash two)) "the heap's first step parts the hashes")
+             (dotimes (i 9)
+               (step-physics-world one) (step-physics-world two)
+               (check (= (physics-world-state-hash one) (physics-world-state-hash two)) "the heap's step ~D parts the hashes" (+ i 2)))
+             (close-physics-world two))
+           (let ((w (make-basin-world 300)))
+             (luv-physics::open-world-workers w 2)
+             (setf (luv-physics::worker-pool-split-rows (luv-physics::physics-world-pool w)) 0
+                   merged '())
+             (dotimes (i 30) (step-physics-world w))
+             (check (and merged (every #'identity merged)) "the basin's pieces were dropped: ~S" merged)
+             (close-physics-world w)))
+      (sb-int:unencapsulate 'luv-physics::run-pair-pieces 'claim-crowded))))
+;; P41P1C-crowded-walk-runs-whole ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-every-scene-resumes-to-the-bit]]
 (defun resumed-scene-hashes (name family steps more &key (count 300))
   "Run scene NAME under FAMILY for STEPS steps, snapshot it, run MORE; then restore the snapshot
@@ -8990,10 +9050,11 @@ into a second world of the scene stepped half as often, run MORE there. Return b
 
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-bad-snapshots-are-named-where-they-fail]]
 (defun snapshot-part-at (buffer id)
-  "Where the payload of part ID of the snapshot BUFFER begins. #SN4P0T"
+  "Where the payload of part ID of the snapshot BUFFER begins, the parts walked by their own ids
+(an optional part the world had not is not there). #SN4P0T"
   (loop with at = 32
-        for (part) in luv-physics::+snapshot-parts+
-        when (= part id) return (+ at 8)
+        while (< at (luv-physics::snap-u64 buffer 16))
+        when (= (luv-physics::snap-u32 buffer at) id) return (+ at 8)
         do (incf at (+ 8 (luv-physics::snap-u32 buffer (+ at 4))))))
 
 (defun refusal (world buffer)
@@ -9148,14 +9209,85 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
         (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
 ;; SN4P0T-damaged-joints-are-refused-at-their-byte ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-box-tower-resumes-to-the-bit]]
+(define-claim "SN4P0T" box-tower-resumes-to-the-bit
+    "A tower of boxes restored mid-fall resumes to the straight hash in every family, into any world; a box-free snapshot drops the box set."
+  (dolist (family (available-kernel-families))
+    (multiple-value-bind (world boxes) (luv-physics::snapshot-box-tower family)
+      (dotimes (i 30) (step-physics-world world))
+      (let ((snapshot (subseq (snapshot-physics-world world) 0)))
+        (check (plusp (luv-physics::box-point-columns-length
+                       (luv-physics::box-set-points (luv-physics::physics-world-box-bodies world))))
+               "no box point to carry at the snapshot")
+        (dotimes (i 60) (step-physics-world world))
+        (let ((straight (physics-world-state-hash world)))
+          (loop for (what target) in (list (list :same world)
+                                           (list :other-tower (let ((w (luv-physics::snapshot-box-tower family)))
+                                                                (dotimes (i 10) (step-physics-world w))
+                                                                w))
+                                           (list :no-boxes (settled-floor-world))
+                                           (list :fresh (make-physics-world :terrain (make-floor-terrain) :kernels family)))
+                do (restore-physics-world target snapshot)
+                   (check (eq t (validate-physics-world target)) "~(~A~) under ~(~A~) does not validate" what family)
+                   (check (= 5 (luv-physics::box-set-live (luv-physics::physics-world-box-bodies target))) "~(~A~): boxes" what)
+                   (check (equal '(0.5 0.15 0.3) (multiple-value-list (physics-box-half-extents target (fourth boxes))))
+                          "~(~A~): the flat box's half-extents" what)
+                   (dotimes (i 60) (step-physics-world target))
+                   (check (= straight (physics-world-state-hash target)) "~(~A~) under ~(~A~): ~D straight, ~D restored"
+                          what family straight (physics-world-state-hash target)))))
+      (restore-physics-world world (snapshot-physics-world (settled-floor-world)))
+      (check (null (luv-physics::physics-world-box-bodies world)) "the box set was kept")
+      (check (eq t (validate-physics-world world))))))
+;; SN4P0T-box-tower-resumes-to-the-bit ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-boxes-are-refused-at-their-byte]]
+(define-claim "SN4P0T" damaged-boxes-are-refused-at-their-byte
+    "A box part with a bad slot, extent, point range, key or impulse, or a box flag turned over, is refused at its byte, the world unchanged."
+  (let ((source (luv-physics::snapshot-box-tower :scalar)) (target (luv-physics::snapshot-box-tower :scalar)))
+    (dotimes (i 30) (step-physics-world source))
+    (dotimes (i 12) (step-physics-world target))
+    (let* ((good (subseq (snapshot-physics-world source) 0))
+           (at (snapshot-part-at good 11))
+           (boxes (luv-physics::snap-u32 good at))
+           (keys (+ at 8 (* 24 boxes)))
+           (impulses (+ keys (* 8 (luv-physics::snap-u32 good (+ at 4)))))
+           (before (world-fingerprint target)))
+      (flet ((bad (offset change)
+               (let ((b (copy-seq good)))
+                 (funcall change b)
+                 (let ((got (refusal target (luv-physics::reseal-snapshot b))))
+                   (check (equal (list 'physics-snapshot-other-layout offset) got) "at ~D: got ~S" offset got))
+                 (check (equal before (world-fingerprint target)) "the refused restore changed the world")
+                 (check (eq t (validate-physics-world target))))))
+        (check (= 5 boxes))
+        (bad (+ at 8) (lambda (b) (setf (luv-physics::snap-u32 b (+ at 8)) 99999)))
+        (bad (+ at 32) (lambda (b) (setf (luv-physics::snap-u32 b (+ at 32)) (luv-physics::snap-u32 b (+ at 8)))))
+        (bad (+ at 12) (lambda (b) (setf (luv-physics::snap-u32 b (+ at 12)) #x7FC00000)))
+        (bad (+ at 12) (lambda (b) (setf (luv-physics::snap-f32 b (+ at 20)) 0.01)))
+        (bad (+ at 12) (lambda (b) (setf (luv-physics::snap-f32 b (+ at 16)) 0.9)))
+        (bad (+ at 24) (lambda (b) (setf (luv-physics::snap-u32 b (+ at 28)) (1+ (luv-physics::snap-u32 b (+ at 4))))))
+        (bad keys (lambda (b) (setf (luv-physics::snap-u64 b keys) (logior 1 (luv-physics::snap-u64 b keys)))))
+        (bad impulses (lambda (b) (setf (luv-physics::snap-u32 b impulses) #x7FC00000)))
+        (bad (+ impulses 4) (lambda (b) (setf (luv-physics::snap-f32 b (+ impulses 4)) 1.5e9)))
+        (let ((flags (let ((part (snapshot-part-at good 3))) (+ part 4 (* 69 (luv-physics::snap-u32 good part))))))
+          (bad flags (lambda (b) (setf (luv-physics::snap-u16 b flags)
+                                       (logxor (luv-physics::snap-u16 b flags) luv-physics::+flag-box-shape+)))))
+        (check (eq :restored (refusal target good)))
+        (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
+;; SN4P0T-damaged-boxes-are-refused-at-their-byte ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-snapshots-leave-valid-worlds]]
 (define-claim "SN4P0T" damaged-snapshots-leave-valid-worlds
-    "300 damaged snapshots of a settled floor world, and 1000 of a jointed chain, leave no invalid world and crash nothing."
+    "300 damaged snapshots of a settled floor world, 1000 of a jointed chain and 500 of a box tower leave no invalid world and crash nothing."
   (loop for (world count) in (list (list (settled-floor-world) 300)
                                    (list (let ((w (jointed-snapshot-world :scalar)))
                                            (dotimes (i 40) (step-physics-world w))
                                            w)
-                                         1000))
+                                         1000)
+                                   (list (let ((w (luv-physics::snapshot-box-tower :scalar)))
+                                           (dotimes (i 30) (step-physics-world w))
+                                           w)
+                                         500))
         do (let* ((snapshot (subseq (snapshot-physics-world world) 0))
                   (result (luv-physics::fuzz-snapshot world snapshot count (sb-ext:seed-random-state 7))))
              (check (zerop (getf result :invalid)) "~S" result)
