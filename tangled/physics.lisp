@@ -7005,7 +7005,8 @@ a row), the grid of the awake boxes' centres with its rows and centres, their or
 step's start (four floats a box), whether this step solves points, the soft coefficients of the
 step, its restitution threshold and gravity times the substep, whether some point of the step
 has restitution, and the grid of the awake spheres that may meet a box with its rows, centres and
-their largest travel this step, and room for the rows a walk of it finds ([[#BXSPHR]]). #BXR0WS"
+their largest travel this step, room for the rows a walk of it finds ([[#BXSPHR]]), and each
+awake row's inverse mass and world inverse inertia this step, eight floats a row ([[#BXSOLV]]). #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -7040,7 +7041,8 @@ their largest travel this step, and room for the rows a walk of it finds ([[#BXS
   (sy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (sz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (sphere-travel 0.0 :type single-float)
-  (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
+  (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (inertias (make-array 128 :element-type 'single-float :initial-element 0.0) :type f32-column))
 
 (defun box-set-room (set slots)
   "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
@@ -7914,6 +7916,63 @@ past the awake ones, and for a sphere its scalar inverse inertia on the diagonal
                     (+ (* r21 r31 dx) (* r22 r32 dy) (* r23 r33 dz))
                     (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz)))))))))
 
+(defun fill-box-row-inertias (world set)
+  "Write into SET's inertias, eight floats a row, each awake row's inverse mass and world inverse
+inertia (box-row-inertia) and, past them, the dummy row's zeros. #BXSOLV"
+  (declare (type box-set set) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (n (body-columns-length awake)))
+    (declare (type index n))
+    (when (< (length (box-set-inertias set)) (* 8 (1+ n)))
+      (setf (box-set-inertias set) (make-array (* 16 (1+ n)) :element-type 'single-float :initial-element 0.0)))
+    (let ((table (box-set-inertias set)))
+      (declare (type f32-column table))
+      (dotimes (i (1+ n))
+        (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set i)
+          (let ((o (* 8 i)))
+            (declare (type index o))
+            (setf (aref table o) m (aref table (+ o 1)) e11 (aref table (+ o 2)) e12 (aref table (+ o 3)) e13
+                  (aref table (+ o 4)) e22 (aref table (+ o 5)) e23 (aref table (+ o 6)) e33))))))
+  set)
+
+(defun box-point-directions (points k)
+  "Write box point K of POINTS's angular parts, r x u and I^-1 (r x u) for its normal and both
+tangents on each side, and its effective masses along them, from its levers, directions, inverse
+masses and world inverse inertias. #BXSOLV"
+  (declare (type box-point-columns points) (type index k) #.+kernel-policy+)
+  (with-box-point-columns (nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
+                           tangent-mass-1 tangent-mass-2 im i11 i12 i13 i22 i23 i33
+                           imb j11 j12 j13 j22 j23 j33 jacobian)
+      points
+    (let ((o (* +box-jacobian-width+ k)))
+      (declare (type index o))
+      (flet ((lever (at lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz)
+               ;; r x u at AT, I^-1 (r x u) nine places on, and their product
+               (declare (type index at) (type single-float lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz))
+               (let* ((px (- (* ly uz) (* lz uy))) (py (- (* lz ux) (* lx uz))) (pz (- (* lx uy) (* ly ux)))
+                      (qx (+ (* e11 px) (* e12 py) (* e13 pz)))
+                      (qy (+ (* e12 px) (* e22 py) (* e23 pz)))
+                      (qz (+ (* e13 px) (* e23 py) (* e33 pz))))
+                 (setf (aref jacobian at) px (aref jacobian (+ at 1)) py (aref jacobian (+ at 2)) pz
+                       (aref jacobian (+ at 9)) qx (aref jacobian (+ at 10)) qy (aref jacobian (+ at 11)) qz)
+                 (+ (* px qx) (* py qy) (* pz qz)))))
+        (declare (inline lever))
+        (flet ((mass-along (along ux uy uz)
+                 ;; 1 / (1/m_a + 1/m_b + (r_a x u) . Ia^-1 (r_a x u) + (r_b x u) . Ib^-1 (r_b x u))
+                 (declare (type (integer 0 2) along) (type single-float ux uy uz))
+                 (let ((kk (+ (aref im k) (aref imb k)
+                              (lever (+ o (* 3 along)) (aref rx k) (aref ry k) (aref rz k)
+                                     (aref i11 k) (aref i12 k) (aref i13 k) (aref i22 k) (aref i23 k) (aref i33 k)
+                                     ux uy uz)
+                              (lever (+ o 18 (* 3 along)) (aref sx k) (aref sy k) (aref sz k)
+                                     (aref j11 k) (aref j12 k) (aref j13 k) (aref j22 k) (aref j23 k) (aref j33 k)
+                                     ux uy uz))))
+                   (declare (type single-float kk))
+                   (if (> kk 0.0) (/ 1.0 kk) 0.0))))
+          (setf (aref normal-mass k) (mass-along 0 (aref nx k) (aref ny k) (aref nz k))
+                (aref tangent-mass-1 k) (mass-along 1 (aref t1x k) (aref t1y k) (aref t1z k))
+                (aref tangent-mass-2 k) (mass-along 2 (aref t2x k) (aref t2y k) (aref t2z k)))))))
+  nil)
+
 (defun prepare-box-point-masses (world set)
   "Write each of SET's points' sides' inverse masses and world inverse inertias, its tangents,
 the angular parts of its three directions on each side (r x u and I^-1 (r x u)), effective
@@ -7921,8 +7980,9 @@ masses and friction (the larger side's, the mean of two boxes'); each gap gains 
 box rests a slop deep as a sphere does. #BXSOLV"
   (declare (type box-set set) #.+kernel-policy+)
   (let ((awake (physics-world-awake world)) (points (box-set-points set))
-        (slop (f32 (physics-world-slop world))))
-    (declare (type single-float slop))
+        (slop (f32 (physics-world-slop world)))
+        (table (box-set-inertias (fill-box-row-inertias world set))))
+    (declare (type single-float slop) (type f32-column table))
     (setf (box-set-bouncy set) nil)
     (with-body-columns ((fr friction) (re restitution)) awake
       (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
@@ -7940,45 +8000,21 @@ box rests a slop deep as a sphere does. #BXSOLV"
             (when (> (aref restitution k) 0.0) (setf (box-set-bouncy set) t)))
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
-            (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set a)
-              (setf (aref im k) m (aref i11 k) e11 (aref i12 k) e12 (aref i13 k) e13
-                    (aref i22 k) e22 (aref i23 k) e23 (aref i33 k) e33))
-            (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set b)
-              (setf (aref imb k) m (aref j11 k) e11 (aref j12 k) e12 (aref j13 k) e13
-                    (aref j22 k) e22 (aref j23 k) e23 (aref j33 k) e33))
+            ;; each side's inverse mass and world inverse inertia, from the rows' table
+            (let ((oa (* 8 (min a n))) (ob (* 8 (min b n))))
+              (declare (type index oa ob))
+              (setf (aref im k) (aref table oa) (aref i11 k) (aref table (+ oa 1)) (aref i12 k) (aref table (+ oa 2))
+                    (aref i13 k) (aref table (+ oa 3)) (aref i22 k) (aref table (+ oa 4))
+                    (aref i23 k) (aref table (+ oa 5)) (aref i33 k) (aref table (+ oa 6))
+                    (aref imb k) (aref table ob) (aref j11 k) (aref table (+ ob 1)) (aref j12 k) (aref table (+ ob 2))
+                    (aref j13 k) (aref table (+ ob 3)) (aref j22 k) (aref table (+ ob 4))
+                    (aref j23 k) (aref table (+ ob 5)) (aref j33 k) (aref table (+ ob 6))))
             (setf (aref friction k) (cond ((>= b n) (aref fr a))
                                           ((>= a n) (aref fr b))
                                           (t (fsqrt (* (aref fr a) (aref fr b)))))))
           (multiple-value-bind (ax ay az bx by bz) (box-tangents (aref nx k) (aref ny k) (aref nz k))
             (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
-          (let ((o (* +box-jacobian-width+ k)))
-            (declare (type index o))
-            (flet ((lever (at lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz)
-                     ;; r x u at AT, I^-1 (r x u) nine places on, and their product
-                     (declare (type index at) (type single-float lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz))
-                     (let* ((px (- (* ly uz) (* lz uy))) (py (- (* lz ux) (* lx uz))) (pz (- (* lx uy) (* ly ux)))
-                            (qx (+ (* e11 px) (* e12 py) (* e13 pz)))
-                            (qy (+ (* e12 px) (* e22 py) (* e23 pz)))
-                            (qz (+ (* e13 px) (* e23 py) (* e33 pz))))
-                       (setf (aref jacobian at) px (aref jacobian (+ at 1)) py (aref jacobian (+ at 2)) pz
-                             (aref jacobian (+ at 9)) qx (aref jacobian (+ at 10)) qy (aref jacobian (+ at 11)) qz)
-                       (+ (* px qx) (* py qy) (* pz qz)))))
-              (declare (inline lever))
-              (flet ((mass-along (along ux uy uz)
-                       ;; 1 / (1/m_a + 1/m_b + (r_a x u) . Ia^-1 (r_a x u) + (r_b x u) . Ib^-1 (r_b x u))
-                       (declare (type (integer 0 2) along) (type single-float ux uy uz))
-                       (let ((kk (+ (aref im k) (aref imb k)
-                                    (lever (+ o (* 3 along)) (aref rx k) (aref ry k) (aref rz k)
-                                           (aref i11 k) (aref i12 k) (aref i13 k) (aref i22 k) (aref i23 k) (aref i33 k)
-                                           ux uy uz)
-                                    (lever (+ o 18 (* 3 along)) (aref sx k) (aref sy k) (aref sz k)
-                                           (aref j11 k) (aref j12 k) (aref j13 k) (aref j22 k) (aref j23 k) (aref j33 k)
-                                           ux uy uz))))
-                         (declare (type single-float kk))
-                         (if (> kk 0.0) (/ 1.0 kk) 0.0))))
-                (setf (aref normal-mass k) (mass-along 0 (aref nx k) (aref ny k) (aref nz k))
-                      (aref tangent-mass-1 k) (mass-along 1 (aref t1x k) (aref t1y k) (aref t1z k))
-                      (aref tangent-mass-2 k) (mass-along 2 (aref t2x k) (aref t2y k) (aref t2z k))))))))))
+          (box-point-directions points k)))))
   set)
 
 (defmacro with-box-point ((v k) &body body)

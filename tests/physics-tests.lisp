@@ -7108,6 +7108,8 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (add-physics-box w 8.5 0.495 2.5 0.5 0.5 0.5)
     (add-physics-box w 8.7 1.8 2.4 0.5 0.4 0.3 :orientation '(0.95 0.1 0.2 0.2))
     (dotimes (i 40) (step-physics-world w))
+    ;; the points found again from where the boxes are, with the rows' inertias of now
+    (luv-physics::prepare-box-points w (luv-physics::physics-world-current-h w))
     (let* ((p (luv-physics::box-set-points (luv-physics::physics-world-box-bodies w)))
            (n (luv-physics::box-point-columns-length p))
            (jac (luv-physics::box-point-columns-jacobian p))
@@ -7117,6 +7119,20 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
           (let ((dummy (>= (aref (luv-physics::box-point-columns-row-b p) k)
                            (luv-physics::body-columns-length (luv-physics::physics-world-awake w)))))
             (if dummy (incf cells) (incf pairs))
+            (loop for (row-column m-column . tensor) in '(("ROW" "IM" "I11" "I12" "I13" "I22" "I23" "I33")
+                                                          ("ROW-B" "IMB" "J11" "J12" "J13" "J22" "J23" "J33"))
+                  for got = (mapcar (lambda (c) (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" c) :luv-physics) p) k))
+                                    (cons m-column tensor))
+                  for want = (multiple-value-list
+                              (luv-physics::box-row-inertia (luv-physics::physics-world-awake w)
+                                                            (luv-physics::physics-world-box-bodies w)
+                                                            (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" row-column)
+                                                                                   :luv-physics) p) k)))
+                  do (check (equal got want) "point ~D's ~A side: ~S, its row's ~S" k row-column got want))
+            (when dummy
+              (check (every #'zerop (loop for c in '("IMB" "J11" "J12" "J13" "J22" "J23" "J33")
+                                          collect (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" c) :luv-physics) p) k)))
+                     "point ~D against the cells: the dummy's inertia is not zero" k))
             (loop for (lx ly lz e11 e12 e13 e22 e23 e33) in '(("RX" "RY" "RZ" "I11" "I12" "I13" "I22" "I23" "I33")
                                                              ("SX" "SY" "SZ" "J11" "J12" "J13" "J22" "J23" "J33"))
                   for side from 0
