@@ -7004,10 +7004,11 @@ feature), the handle of the box that found it, the normal (pushing the first sid
 second), the levers from both centres, the two tangents, the gap at the step's start, the
 effective masses, the friction, the three carried impulses, and each side's inverse mass and world
 inverse inertia's six entries, then the point's restitution, its largest push this step, the
-speed it struck at this step, its bounce and its normal velocity before the pass ([[#BXSOLV]]), and,
-for a point against a posted box, the box's velocity as the first side's point velocity less the
-second's loses it, that velocity along the normal, and the cap of the point's normal impulse
-(the largest single-float for any other point, [[#BXPUSH]]). #BXR0WS"
+speed it struck at this step, its bounce and its normal velocity before the pass, the
+thirty-six numbers of its angular parts, r × u and I⁻¹(r × u) for the normal and both tangents
+and each side ([[#BXSOLV]]), and, for a point against a posted box, the box's velocity as the
+first side's point velocity less the second's loses it, that velocity along the normal, and the
+cap of the point's normal impulse (the largest single-float for any other point, [[#BXPUSH]]). #BXR0WS"
   (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
   (sx single-float) (sy single-float) (sz single-float) (imb single-float)
   (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
@@ -7021,7 +7022,7 @@ second's loses it, that velocity along the normal, and the cap of the point's no
   (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
   (i22 single-float) (i23 single-float) (i33 single-float)
   (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float)
-  (approach single-float)
+  (approach single-float) (jacobian single-float 36)
   (kvx single-float) (kvy single-float) (kvz single-float) (kvn single-float) (push-cap single-float))
 
 (defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
@@ -7032,9 +7033,10 @@ a row), the grid of the awake boxes' centres with its rows and centres, their or
 step's start (four floats a box), whether this step solves points, the soft coefficients of the
 step, its restitution threshold and gravity times the substep, whether some point of the step
 has restitution, the grid of the awake spheres that may meet a box with its rows, centres and
-their largest travel this step, and room for the rows a walk of it finds ([[#BXSPHR]]), the time
-of the substep's pass into the step, and whether some point of the step is against a posted box
-([[#BXPUSH]]). #BXR0WS"
+their largest travel this step, room for the rows a walk of it finds ([[#BXSPHR]]), each awake
+row's inverse mass and world inverse inertia this step, eight floats a row ([[#BXSOLV]]), the
+time of the substep's pass into the step, and whether some point of the step is against a
+posted box ([[#BXPUSH]]). #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -7070,7 +7072,8 @@ of the substep's pass into the step, and whether some point of the step is again
   (sz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (sphere-travel 0.0 :type single-float)
   (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
-  (elapsed 0.0 :type single-float) (posted nil :type boolean))
+  (elapsed 0.0 :type single-float) (posted nil :type boolean)
+  (inertias (make-array 128 :element-type 'single-float :initial-element 0.0) :type f32-column))
 
 (defun box-set-room (set slots)
   "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
@@ -7833,6 +7836,10 @@ which holds still as a cell does (box-pair-points). #BXCELL"
 ;; A box against the cells:1 ends here
 
 ;; [[file:../physics.org::#BXSOLV][Box points in the substeps:1]]
+(defconstant +box-jacobian-width+ 36
+  "The numbers of a box point's angular parts: for the first side r × n, r × t1, r × t2, then the
+world inverse inertia times each, and the same nine and nine for the second side. #BXSOLV")
+
 (defun box-tangents (nx ny nz)
   "Two unit tangents of the unit normal NX NY NZ, perpendicular to it and to each other, as six
 values: the first the normal crossed with the world axis it is least along. #BXSOLV"
@@ -7846,6 +7853,10 @@ values: the first the normal crossed with the world axis it is least along. #BXS
       (let ((t1x (* ax s)) (t1y (* ay s)) (t1z (* az s)))
         (values t1x t1y t1z
                 (- (* ny t1z) (* nz t1y)) (- (* nz t1x) (* nx t1z)) (- (* nx t1y) (* ny t1x)))))))
+
+(defconstant +posted-push-share+ 0.1
+  "The share of the push-out speed a posted box may give a box body in a substep, beyond what
+gravity gives it in one ([[#BXPUSH]]). #BXSOLV")
 
 (defun prepare-box-points (world h)
   "Find and prepare the points of every awake box of WORLD for the substeps of H: the last step's
@@ -7953,19 +7964,79 @@ past the awake ones, and for a sphere its scalar inverse inertia on the diagonal
                     (+ (* r21 r31 dx) (* r22 r32 dy) (* r23 r33 dz))
                     (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz)))))))))
 
+(defun fill-box-row-inertias (world set)
+  "Write into SET's inertias, eight floats a row, each awake row's inverse mass and world inverse
+inertia (box-row-inertia) and, past them, the dummy row's zeros. #BXSOLV"
+  (declare (type box-set set) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (n (body-columns-length awake)))
+    (declare (type index n))
+    (when (< (length (box-set-inertias set)) (* 8 (1+ n)))
+      (setf (box-set-inertias set) (make-array (* 16 (1+ n)) :element-type 'single-float :initial-element 0.0)))
+    (let ((table (box-set-inertias set)))
+      (declare (type f32-column table))
+      (dotimes (i (1+ n))
+        (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set i)
+          (let ((o (* 8 i)))
+            (declare (type index o))
+            (setf (aref table o) m (aref table (+ o 1)) e11 (aref table (+ o 2)) e12 (aref table (+ o 3)) e13
+                  (aref table (+ o 4)) e22 (aref table (+ o 5)) e23 (aref table (+ o 6)) e33))))))
+  set)
+
+(defun box-point-directions (points k)
+  "Write box point K of POINTS's angular parts, r x u and I^-1 (r x u) for its normal and both
+tangents on each side, and its effective masses along them, from its levers, directions, inverse
+masses and world inverse inertias. #BXSOLV"
+  (declare (type box-point-columns points) (type index k) #.+kernel-policy+)
+  (with-box-point-columns (nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
+                           tangent-mass-1 tangent-mass-2 im i11 i12 i13 i22 i23 i33
+                           imb j11 j12 j13 j22 j23 j33 jacobian)
+      points
+    (let ((o (* +box-jacobian-width+ k)))
+      (declare (type index o))
+      (flet ((lever (at lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz)
+               ;; r x u at AT, I^-1 (r x u) nine places on, and their product
+               (declare (type index at) (type single-float lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz))
+               (let* ((px (- (* ly uz) (* lz uy))) (py (- (* lz ux) (* lx uz))) (pz (- (* lx uy) (* ly ux)))
+                      (qx (+ (* e11 px) (* e12 py) (* e13 pz)))
+                      (qy (+ (* e12 px) (* e22 py) (* e23 pz)))
+                      (qz (+ (* e13 px) (* e23 py) (* e33 pz))))
+                 (setf (aref jacobian at) px (aref jacobian (+ at 1)) py (aref jacobian (+ at 2)) pz
+                       (aref jacobian (+ at 9)) qx (aref jacobian (+ at 10)) qy (aref jacobian (+ at 11)) qz)
+                 (+ (* px qx) (* py qy) (* pz qz)))))
+        (declare (inline lever))
+        (flet ((mass-along (along ux uy uz)
+                 ;; 1 / (1/m_a + 1/m_b + (r_a x u) . Ia^-1 (r_a x u) + (r_b x u) . Ib^-1 (r_b x u))
+                 (declare (type (integer 0 2) along) (type single-float ux uy uz))
+                 (let ((kk (+ (aref im k) (aref imb k)
+                              (lever (+ o (* 3 along)) (aref rx k) (aref ry k) (aref rz k)
+                                     (aref i11 k) (aref i12 k) (aref i13 k) (aref i22 k) (aref i23 k) (aref i33 k)
+                                     ux uy uz)
+                              (lever (+ o 18 (* 3 along)) (aref sx k) (aref sy k) (aref sz k)
+                                     (aref j11 k) (aref j12 k) (aref j13 k) (aref j22 k) (aref j23 k) (aref j33 k)
+                                     ux uy uz))))
+                   (declare (type single-float kk))
+                   (if (> kk 0.0) (/ 1.0 kk) 0.0))))
+          (setf (aref normal-mass k) (mass-along 0 (aref nx k) (aref ny k) (aref nz k))
+                (aref tangent-mass-1 k) (mass-along 1 (aref t1x k) (aref t1y k) (aref t1z k))
+                (aref tangent-mass-2 k) (mass-along 2 (aref t2x k) (aref t2y k) (aref t2z k)))))))
+  nil)
+
 (defun prepare-box-point-masses (world set)
   "Write each of SET's points' sides' inverse masses and world inverse inertias, its tangents,
-effective masses and friction (the larger side's, the mean of two boxes'); each gap gains the
-slop, so a box rests a slop deep as a sphere does. #BXSOLV"
+the angular parts of its three directions on each side (r x u and I^-1 (r x u)), effective
+masses and friction (the larger side's, the mean of two boxes'); each gap gains the slop, so a
+box rests a slop deep as a sphere does. #BXSOLV"
   (declare (type box-set set) #.+kernel-policy+)
   (let ((awake (physics-world-awake world)) (points (box-set-points set))
-        (slop (f32 (physics-world-slop world))))
-    (declare (type single-float slop))
+        (slop (f32 (physics-world-slop world)))
+        (table (box-set-inertias (fill-box-row-inertias world set))))
+    (declare (type single-float slop) (type f32-column table))
     (setf (box-set-bouncy set) nil)
     (with-body-columns ((fr friction) (re restitution)) awake
       (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
                                tangent-mass-1 tangent-mass-2 friction im i11 i12 i13 i22 i23 i33
-                               imb j11 j12 j13 j22 j23 j33 separation restitution pushed impact-speed bounce)
+                               imb j11 j12 j13 j22 j23 j33 separation restitution pushed impact-speed bounce
+                               jacobian)
           points
         (dotimes (k (box-point-columns-length points))
           (setf (aref separation k) (+ (aref separation k) slop))
@@ -7977,37 +8048,21 @@ slop, so a box rests a slop deep as a sphere does. #BXSOLV"
             (when (> (aref restitution k) 0.0) (setf (box-set-bouncy set) t)))
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
-            (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set a)
-              (setf (aref im k) m (aref i11 k) e11 (aref i12 k) e12 (aref i13 k) e13
-                    (aref i22 k) e22 (aref i23 k) e23 (aref i33 k) e33))
-            (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set b)
-              (setf (aref imb k) m (aref j11 k) e11 (aref j12 k) e12 (aref j13 k) e13
-                    (aref j22 k) e22 (aref j23 k) e23 (aref j33 k) e33))
+            ;; each side's inverse mass and world inverse inertia, from the rows' table
+            (let ((oa (* 8 (min a n))) (ob (* 8 (min b n))))
+              (declare (type index oa ob))
+              (setf (aref im k) (aref table oa) (aref i11 k) (aref table (+ oa 1)) (aref i12 k) (aref table (+ oa 2))
+                    (aref i13 k) (aref table (+ oa 3)) (aref i22 k) (aref table (+ oa 4))
+                    (aref i23 k) (aref table (+ oa 5)) (aref i33 k) (aref table (+ oa 6))
+                    (aref imb k) (aref table ob) (aref j11 k) (aref table (+ ob 1)) (aref j12 k) (aref table (+ ob 2))
+                    (aref j13 k) (aref table (+ ob 3)) (aref j22 k) (aref table (+ ob 4))
+                    (aref j23 k) (aref table (+ ob 5)) (aref j33 k) (aref table (+ ob 6))))
             (setf (aref friction k) (cond ((>= b n) (aref fr a))
                                           ((>= a n) (aref fr b))
                                           (t (fsqrt (* (aref fr a) (aref fr b)))))))
           (multiple-value-bind (ax ay az bx by bz) (box-tangents (aref nx k) (aref ny k) (aref nz k))
             (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
-          (flet ((mass-along (ux uy uz)
-                   (declare (type single-float ux uy uz))
-                   ;; 1 / (1/m_a + 1/m_b + (r_a x u) . Ia^-1 (r_a x u) + (r_b x u) . Ib^-1 (r_b x u))
-                   (let* ((px (- (* (aref ry k) uz) (* (aref rz k) uy)))
-                          (py (- (* (aref rz k) ux) (* (aref rx k) uz)))
-                          (pz (- (* (aref rx k) uy) (* (aref ry k) ux)))
-                          (qx (- (* (aref sy k) uz) (* (aref sz k) uy)))
-                          (qy (- (* (aref sz k) ux) (* (aref sx k) uz)))
-                          (qz (- (* (aref sx k) uy) (* (aref sy k) ux)))
-                          (kk (+ (aref im k) (aref imb k)
-                                 (* px (+ (* (aref i11 k) px) (* (aref i12 k) py) (* (aref i13 k) pz)))
-                                 (* py (+ (* (aref i12 k) px) (* (aref i22 k) py) (* (aref i23 k) pz)))
-                                 (* pz (+ (* (aref i13 k) px) (* (aref i23 k) py) (* (aref i33 k) pz)))
-                                 (* qx (+ (* (aref j11 k) qx) (* (aref j12 k) qy) (* (aref j13 k) qz)))
-                                 (* qy (+ (* (aref j12 k) qx) (* (aref j22 k) qy) (* (aref j23 k) qz)))
-                                 (* qz (+ (* (aref j13 k) qx) (* (aref j23 k) qy) (* (aref j33 k) qz))))))
-                     (if (> kk 0.0) (/ 1.0 kk) 0.0))))
-            (setf (aref normal-mass k) (mass-along (aref nx k) (aref ny k) (aref nz k))
-                  (aref tangent-mass-1 k) (mass-along (aref t1x k) (aref t1y k) (aref t1z k))
-                  (aref tangent-mass-2 k) (mass-along (aref t2x k) (aref t2y k) (aref t2z k))))))))
+          (box-point-directions points k)))))
   set)
 
 (defmacro with-box-point ((v k) &body body)
@@ -8055,20 +8110,58 @@ the point, P/m and I^-1 (r x P) to the first side and their opposites to the sec
        (declare (inline push! point-velocity) (ignorable #'point-velocity))
        ,@body)))
 
+(defmacro with-box-point-sides ((v k) &body body)
+  "Run BODY for box point K over the solver's velocities V with the two sides' velocities and
+spins as locals, AVX AVY AVZ AWX AWY AWZ and BVX .. BWZ, read once; (jac I) the point's angular part
+I ([[#BXSOLV]]'s +box-jacobian-width+); (apply! PX PY PZ WA WB) the impulse P at the point, P
+times the inverse mass added to the first side's velocity and taken from the second's, and the
+spin changes WA and WB, each three forms, added to the first and taken from the second; the
+sides are written back after BODY, the second only when it moves. Expanded inside
+with-box-point-columns of ROW, ROW-B, IM, IMB and JACOBIAN. #BXSOLV"
+  `(let* ((o (solver-row (aref row ,k))) (ob (solver-row (aref row-b ,k)))
+          (jo (* +box-jacobian-width+ ,k))
+          (m (aref im ,k)) (mb (aref imb ,k))
+          (avx (aref ,v o)) (avy (aref ,v (+ o 1))) (avz (aref ,v (+ o 2)))
+          (awx (aref ,v (+ o 3))) (awy (aref ,v (+ o 4))) (awz (aref ,v (+ o 5)))
+          (bvx (aref ,v ob)) (bvy (aref ,v (+ ob 1))) (bvz (aref ,v (+ ob 2)))
+          (bwx (aref ,v (+ ob 3))) (bwy (aref ,v (+ ob 4))) (bwz (aref ,v (+ ob 5))))
+     (declare (type index o ob jo) (type single-float m mb avx avy avz awx awy awz bvx bvy bvz bwx bwy bwz))
+     (macrolet ((jac (i) `(aref jacobian (+ jo ,i)))
+                (apply! (px py pz (wax way waz) (wbx wby wbz))
+                  `(let ((px ,px) (py ,py) (pz ,pz))
+                     (declare (type single-float px py pz))
+                     (setf avx (+ avx (* m px)) avy (+ avy (* m py)) avz (+ avz (* m pz))
+                           awx (+ awx ,wax) awy (+ awy ,way) awz (+ awz ,waz)
+                           bvx (- bvx (* mb px)) bvy (- bvy (* mb py)) bvz (- bvz (* mb pz))
+                           bwx (- bwx ,wbx) bwy (- bwy ,wby) bwz (- bwz ,wbz)))))
+       ,@body
+       (setf (aref ,v o) avx (aref ,v (+ o 1)) avy (aref ,v (+ o 2)) avz
+             (aref ,v (+ o 3)) awx (aref ,v (+ o 4)) awy (aref ,v (+ o 5)) awz)
+       ;; the dummy row, a cell's or a sleeper's, stays zero
+       (when (> mb 0.0)
+         (setf (aref ,v ob) bvx (aref ,v (+ ob 1)) bvy (aref ,v (+ ob 2)) bvz
+               (aref ,v (+ ob 3)) bwx (aref ,v (+ ob 4)) bwy (aref ,v (+ ob 5)) bwz)))))
+
 (defun warm-start-box-points (set v)
   "Apply every box point's carried impulses again, at the start of a substep. #BXSOLV"
   (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
   (let ((points (box-set-points set)))
-    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-impulse
-                             tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33)
+    (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z normal-impulse
+                             tangent-impulse-1 tangent-impulse-2 im imb jacobian)
         points
       (dotimes (k (box-point-columns-length points))
-        (with-box-point (v k)
+        (with-box-point-sides (v k)
           (let ((pn (aref normal-impulse k)) (p1 (aref tangent-impulse-1 k)) (p2 (aref tangent-impulse-2 k)))
-            (push! (+ (* pn (aref nx k)) (* p1 (aref t1x k)) (* p2 (aref t2x k)))
-                   (+ (* pn (aref ny k)) (* p1 (aref t1y k)) (* p2 (aref t2y k)))
-                   (+ (* pn (aref nz k)) (* p1 (aref t1z k)) (* p2 (aref t2z k)))))))))
+            (declare (type single-float pn p1 p2))
+            (apply! (+ (* pn (aref nx k)) (* p1 (aref t1x k)) (* p2 (aref t2x k)))
+                    (+ (* pn (aref ny k)) (* p1 (aref t1y k)) (* p2 (aref t2y k)))
+                    (+ (* pn (aref nz k)) (* p1 (aref t1z k)) (* p2 (aref t2z k)))
+                    ((+ (* pn (jac 9)) (* p1 (jac 12)) (* p2 (jac 15)))
+                     (+ (* pn (jac 10)) (* p1 (jac 13)) (* p2 (jac 16)))
+                     (+ (* pn (jac 11)) (* p1 (jac 14)) (* p2 (jac 17))))
+                    ((+ (* pn (jac 27)) (* p1 (jac 30)) (* p2 (jac 33)))
+                     (+ (* pn (jac 28)) (* p1 (jac 31)) (* p2 (jac 34)))
+                     (+ (* pn (jac 29)) (* p1 (jac 32)) (* p2 (jac 35))))))))))
   nil)
 
 (defmacro box-point-impact-speed (vn s positive biased inv-h dv)
@@ -8097,7 +8190,7 @@ friction, held in the cone. #BXSOLV"
     (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
                              normal-mass tangent-mass-1 tangent-mass-2 friction normal-impulse
                              tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed approach
+                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed approach jacobian
                              kvn push-cap)
         points
       ;; the normal velocity of each point that may strike, before this pass pushes any point:
@@ -8110,22 +8203,25 @@ friction, held in the cone. #BXSOLV"
                     (multiple-value-bind (ux uy uz) (point-velocity)
                       (+ (* ux (aref nx k)) (* uy (aref ny k)) (* uz (aref nz k)))))))))
       (dotimes (k (box-point-columns-length points))
-        (with-box-point (v k)
+        (with-box-point-sides (v k)
           (let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
                  (j (aref row-b k)) (pb (delta-row j)) (tb (* 3 j))
                  (ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
-                 (lx (aref rx k)) (ly (aref ry k)) (lz (aref rz k))
-                 (mx (aref sx k)) (my (aref sy k)) (mz (aref sz k))
-                 (qx (aref turns tr)) (qy (aref turns (+ tr 1))) (qz (aref turns (+ tr 2)))
-                 (ux (aref turns tb)) (uy (aref turns (+ tb 1))) (uz (aref turns (+ tb 2)))
-                 ;; the gap now: moved by each side's delta and turn (the dummy's are zero), and
-                 ;; by a posted box's travel so far this step (zero for any other point)
+                 ;; the gap now: moved by each side's delta and turn (the dummy's are zero),
+                 ;; n . (da - db) + ta . (ra x n) - tb . (rb x n), and by a posted box's travel
+                 ;; so far this step (zero for any other point)
                  (s (- (+ (aref separation k)
-                          (* ax (- (+ (aref d p) (- (* qy lz) (* qz ly))) (+ (aref d pb) (- (* uy mz) (* uz my)))))
-                          (* ay (- (+ (aref d (+ p 1)) (- (* qz lx) (* qx lz))) (+ (aref d (+ pb 1)) (- (* uz mx) (* ux mz)))))
-                          (* az (- (+ (aref d (+ p 2)) (- (* qx ly) (* qy lx))) (+ (aref d (+ pb 2)) (- (* ux my) (* uy mx))))))
+                          (+ (* ax (- (aref d p) (aref d pb))) (* ay (- (aref d (+ p 1)) (aref d (+ pb 1))))
+                             (* az (- (aref d (+ p 2)) (aref d (+ pb 2)))))
+                          (- (+ (* (aref turns tr) (jac 0)) (* (aref turns (+ tr 1)) (jac 1)) (* (aref turns (+ tr 2)) (jac 2)))
+                             (+ (* (aref turns tb) (jac 18)) (* (aref turns (+ tb 1)) (jac 19)) (* (aref turns (+ tb 2)) (jac 20)))))
                        (* (aref kvn k) elapsed)))
-                 (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
+                 ;; n . (va - vb) + wa . (ra x n) - wb . (rb x n), less a posted box's velocity
+                 ;; along the normal
+                 (vn (- (+ (+ (* ax (- avx bvx)) (* ay (- avy bvy)) (* az (- avz bvz)))
+                           (- (+ (* awx (jac 0)) (* awy (jac 1)) (* awz (jac 2)))
+                              (+ (* bwx (jac 18)) (* bwy (jac 19)) (* bwz (jac 20)))))
+                        (aref kvn k)))
                  (positive (> s 0.0))
                  (bias (cond (positive (* s inv-h))
                              (use-bias (max (* bias-rate s) (- push-max)))
@@ -8143,27 +8239,40 @@ friction, held in the cone. #BXSOLV"
                        (< (aref approach k) (- threshold)))
               (setf (aref impact-speed k)
                     (box-point-impact-speed (aref approach k) s positive use-bias inv-h
-                                            (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
+                                            (* (- (if (> m 0.0) 1.0 0.0) (if (> mb 0.0) 1.0 0.0))
                                                (+ (* hgx ax) (* hgy ay) (* hgz az))))))
             (setf (aref normal-impulse k) new
                   (aref pushed k) (max (aref pushed k) new))
-            (push! (* pn ax) (* pn ay) (* pn az))
+            (apply! (* pn ax) (* pn ay) (* pn az)
+                    ((* pn (jac 9)) (* pn (jac 10)) (* pn (jac 11)))
+                    ((* pn (jac 27)) (* pn (jac 28)) (* pn (jac 29))))
             ;; friction in the cone of mu times the normal impulse
-            (multiple-value-bind (ux uy uz) (point-velocity)
-              (let* ((o1 (aref tangent-impulse-1 k)) (o2 (aref tangent-impulse-2 k))
-                     (n1 (- o1 (* (aref tangent-mass-1 k) (+ (* ux (aref t1x k)) (* uy (aref t1y k)) (* uz (aref t1z k))))))
-                     (n2 (- o2 (* (aref tangent-mass-2 k) (+ (* ux (aref t2x k)) (* uy (aref t2y k)) (* uz (aref t2z k))))))
-                     (limit (* (aref friction k) new))
-                     (len2 (+ (* n1 n1) (* n2 n2))))
-                (declare (type single-float o1 o2 n1 n2 limit len2))
-                (when (> len2 (* limit limit))
-                  (let ((scale (if (> len2 0.0) (/ limit (fsqrt len2)) 0.0)))
-                    (setf n1 (* n1 scale) n2 (* n2 scale))))
-                (setf (aref tangent-impulse-1 k) n1 (aref tangent-impulse-2 k) n2)
-                (let ((d1 (- n1 o1)) (d2 (- n2 o2)))
-                  (push! (+ (* d1 (aref t1x k)) (* d2 (aref t2x k)))
-                         (+ (* d1 (aref t1y k)) (* d2 (aref t2y k)))
-                         (+ (* d1 (aref t1z k)) (* d2 (aref t2z k))))))))))))
+            (let* ((ux (- (- avx bvx) (aref kvx k))) (uy (- (- avy bvy) (aref kvy k))) (uz (- (- avz bvz) (aref kvz k)))
+                   (o1 (aref tangent-impulse-1 k)) (o2 (aref tangent-impulse-2 k))
+                   (u1 (+ (+ (* ux (aref t1x k)) (* uy (aref t1y k)) (* uz (aref t1z k)))
+                          (- (+ (* awx (jac 3)) (* awy (jac 4)) (* awz (jac 5)))
+                             (+ (* bwx (jac 21)) (* bwy (jac 22)) (* bwz (jac 23))))))
+                   (u2 (+ (+ (* ux (aref t2x k)) (* uy (aref t2y k)) (* uz (aref t2z k)))
+                          (- (+ (* awx (jac 6)) (* awy (jac 7)) (* awz (jac 8)))
+                             (+ (* bwx (jac 24)) (* bwy (jac 25)) (* bwz (jac 26))))))
+                   (n1 (- o1 (* (aref tangent-mass-1 k) u1)))
+                   (n2 (- o2 (* (aref tangent-mass-2 k) u2)))
+                   (limit (* (aref friction k) new))
+                   (len2 (+ (* n1 n1) (* n2 n2))))
+              (declare (type single-float ux uy uz o1 o2 u1 u2 n1 n2 limit len2))
+              (when (> len2 (* limit limit))
+                (let ((scale (if (> len2 0.0) (/ limit (fsqrt len2)) 0.0)))
+                  (setf n1 (* n1 scale) n2 (* n2 scale))))
+              (setf (aref tangent-impulse-1 k) n1 (aref tangent-impulse-2 k) n2)
+              (let ((d1 (- n1 o1)) (d2 (- n2 o2)))
+                (declare (type single-float d1 d2))
+                (apply! (+ (* d1 (aref t1x k)) (* d2 (aref t2x k)))
+                        (+ (* d1 (aref t1y k)) (* d2 (aref t2y k)))
+                        (+ (* d1 (aref t1z k)) (* d2 (aref t2z k)))
+                        ((+ (* d1 (jac 12)) (* d2 (jac 15))) (+ (* d1 (jac 13)) (* d2 (jac 16)))
+                         (+ (* d1 (jac 14)) (* d2 (jac 17))))
+                        ((+ (* d1 (jac 30)) (* d2 (jac 33))) (+ (* d1 (jac 31)) (* d2 (jac 34)))
+                         (+ (* d1 (jac 32)) (* d2 (jac 35))))))))))))
   nil)
 
 (defun turn-box-orientations (world)
@@ -8576,10 +8685,6 @@ the face it enters a solid cell through, with the box's centre on its air side, 
 ;; Fast boxes sweep their corners through the cells:1 ends here
 
 ;; [[file:../physics.org::#BXPUSH][A posted box pushes a box:1]]
-(defconstant +posted-push-share+ 0.1
-  "The share of the push-out speed a posted box may give a box body in a substep, beyond what
-gravity gives it in one. #BXPUSH")
-
 (defun find-box-posted-points (world set row reach dt speed)
   "Append to SET's points those between the box at awake ROW of WORLD and each posted box its
 filter meets within REACH plus their relative travel over DT: the separating-axis test's points

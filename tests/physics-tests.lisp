@@ -7278,6 +7278,91 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
           (check (= got scalar) "~(~A~) ends with hash ~D, scalar ~D" family got scalar))))))
 ;; BXSOLV-families-agree-on-boxes ends here
 
+;; [[file:../physics.org::#BXSOLV][BXSOLV-angular-parts-are-products]]
+(define-claim "BXSOLV" angular-parts-are-products
+    "Each box point's angular parts are r x u and I^-1 (r x u) of its levers, directions and tensors."
+  (let ((w (make-physics-world :terrain (make-floor-terrain) :kernels :scalar)))
+    (add-physics-box w -2.5 (- 0.5 *physics-linear-slop*) 2.5 0.5 0.5 0.5 :friction 0.5 :vx 4)
+    (let ((b (add-physics-box w 4.5 2.0 4.5 0.4 0.3 0.5 :orientation '(0.9 0.3 0.2 0.1) :vz -1)))
+      (set-physics-body-angular-velocity w b 1 2 3))
+    (add-physics-box w 8.5 0.495 2.5 0.5 0.5 0.5)
+    (add-physics-box w 8.7 1.8 2.4 0.5 0.4 0.3 :orientation '(0.95 0.1 0.2 0.2))
+    (dotimes (i 40) (step-physics-world w))
+    ;; the points found again from where the boxes are, with the rows' inertias of now
+    (luv-physics::prepare-box-points w (luv-physics::physics-world-current-h w))
+    (let* ((p (luv-physics::box-set-points (luv-physics::physics-world-box-bodies w)))
+           (n (luv-physics::box-point-columns-length p))
+           (jac (luv-physics::box-point-columns-jacobian p))
+           (cells 0) (pairs 0) (worst 0d0))
+      (flet ((col (name k) (float (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" name) :luv-physics) p) k) 1d0)))
+        (dotimes (k n)
+          (let ((dummy (>= (aref (luv-physics::box-point-columns-row-b p) k)
+                           (luv-physics::body-columns-length (luv-physics::physics-world-awake w)))))
+            (if dummy (incf cells) (incf pairs))
+            (loop for (row-column m-column . tensor) in '(("ROW" "IM" "I11" "I12" "I13" "I22" "I23" "I33")
+                                                          ("ROW-B" "IMB" "J11" "J12" "J13" "J22" "J23" "J33"))
+                  for got = (mapcar (lambda (c) (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" c) :luv-physics) p) k))
+                                    (cons m-column tensor))
+                  for want = (multiple-value-list
+                              (luv-physics::box-row-inertia (luv-physics::physics-world-awake w)
+                                                            (luv-physics::physics-world-box-bodies w)
+                                                            (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" row-column)
+                                                                                   :luv-physics) p) k)))
+                  do (check (equal got want) "point ~D's ~A side: ~S, its row's ~S" k row-column got want))
+            (when dummy
+              (check (every #'zerop (loop for c in '("IMB" "J11" "J12" "J13" "J22" "J23" "J33")
+                                          collect (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" c) :luv-physics) p) k)))
+                     "point ~D against the cells: the dummy's inertia is not zero" k))
+            (loop for (lx ly lz e11 e12 e13 e22 e23 e33) in '(("RX" "RY" "RZ" "I11" "I12" "I13" "I22" "I23" "I33")
+                                                             ("SX" "SY" "SZ" "J11" "J12" "J13" "J22" "J23" "J33"))
+                  for side from 0
+                  do (loop for (ux uy uz) in '(("NX" "NY" "NZ") ("T1X" "T1Y" "T1Z") ("T2X" "T2Y" "T2Z"))
+                           for along from 0
+                           do (let* ((rx (col lx k)) (ry (col ly k)) (rz (col lz k))
+                                     (vx (col ux k)) (vy (col uy k)) (vz (col uz k))
+                                     (cx (- (* ry vz) (* rz vy))) (cy (- (* rz vx) (* rx vz))) (cz (- (* rx vy) (* ry vx)))
+                                     (want (list cx cy cz
+                                                 (+ (* (col e11 k) cx) (* (col e12 k) cy) (* (col e13 k) cz))
+                                                 (+ (* (col e12 k) cx) (* (col e22 k) cy) (* (col e23 k) cz))
+                                                 (+ (* (col e13 k) cx) (* (col e23 k) cy) (* (col e33 k) cz))))
+                                     (at (+ (* 36 k) (* 18 side) (* 3 along)))
+                                     (got (list (aref jac at) (aref jac (+ at 1)) (aref jac (+ at 2))
+                                                (aref jac (+ at 9)) (aref jac (+ at 10)) (aref jac (+ at 11))))
+                                     (scale (max 1d0 (reduce #'max (mapcar #'abs want)))))
+                                (when (and dummy (= side 1))
+                                  (check (every #'zerop got) "point ~D against the cells: second side ~S" k got))
+                                (setf worst (max worst (/ (reduce #'max (mapcar (lambda (a b) (abs (- a b))) got want)) scale)))))))))
+      (check (and (plusp cells) (plusp pairs)) "~D points against the cells, ~D between boxes" cells pairs)
+      (check (< worst 1d-5) "an angular part is ~,3E of its entries off" worst)))
+  ;; one point, warm started by hand
+  (let* ((w (make-floor-world :sleep nil))
+         (box (add-physics-box w 2.5 1.2 2.5 0.5 0.4 0.3 :orientation '(0.9 0.3 0.2 0.1) :mass 2)))
+    (dotimes (i 30) (step-physics-world w))
+    (let* ((set (luv-physics::physics-world-box-bodies w))
+           (v (luv-physics::physics-world-velocities w))
+           (p (progn (luv-physics::prepare-box-points w (luv-physics::physics-world-current-h w))
+                     (luv-physics::box-set-points set))))
+      (check (plusp (luv-physics::box-point-columns-length p)) "the box has no point")
+      (setf (luv-physics::box-point-columns-length p) 1)
+      (setf (aref (luv-physics::box-point-columns-normal-impulse p) 0) 1.0
+            (aref (luv-physics::box-point-columns-tangent-impulse-1 p) 0) 0.0
+            (aref (luv-physics::box-point-columns-tangent-impulse-2 p) 0) 0.0)
+      (let* ((row (nth-value 1 (luv-physics::resolve-handle w box))) (o (luv-physics::solver-row row))
+             (before (loop for i below 6 collect (aref v (+ o i)))))
+        (luv-physics::warm-start-box-points set v)
+        (multiple-value-bind (m e11 e12 e13 e22 e23 e33)
+            (luv-physics::box-row-inertia (luv-physics::physics-world-awake w) set row)
+          (flet ((c (name) (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" name) :luv-physics) p) 0)))
+            (let* ((nx (c "NX")) (ny (c "NY")) (nz (c "NZ")) (rx (c "RX")) (ry (c "RY")) (rz (c "RZ"))
+                   (tx (- (* ry nz) (* rz ny))) (ty (- (* rz nx) (* rx nz))) (tz (- (* rx ny) (* ry nx)))
+                   (want (list (* m nx) (* m ny) (* m nz)
+                               (+ (* e11 tx) (* e12 ty) (* e13 tz)) (+ (* e12 tx) (* e22 ty) (* e23 tz))
+                               (+ (* e13 tx) (* e23 ty) (* e33 tz))))
+                   (got (loop for i below 6 for b in before collect (- (aref v (+ o i)) b))))
+              (check (every (lambda (a b) (< (abs (- a b)) (* 1e-6 (max 1.0 (abs b))))) got want)
+                     "one push changed ~S, not ~S" got want))))))))
+;; BXSOLV-angular-parts-are-products ends here
+
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-box-steps-cons-nothing]]
 (define-claim "BXSOLV" box-steps-cons-nothing
     "Sixty steps of ten boxes falling and landing allocate nothing."
