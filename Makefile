@@ -15,7 +15,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tangled/workshop.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-workers bench-rollback bench-peers bench-against bench-joint-grid bench-pyramid count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-workers bench-rollback bench-snapshots count-snapshots fuzz-snapshots bench-peers bench-against bench-joint-grid bench-pyramid count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -38,6 +38,10 @@ help:
 	@echo "make bench          measure the basin per kernel family and the queries; write the tables into $(ORG)"
 	@echo "make bench-workers  the basin with one worker and with two, stepped in turn; table into $(ORG)"
 	@echo "make bench-rollback an 8-step rollback at 1000 balls (restore and 8 steps) against a 60 Hz frame"
+	@echo "make bench-snapshots make bench's snapshot tables alone: sizes, snapshot and restore against a step"
+	@echo "make count-snapshots snapshot and restore of the 3000-ball basin against a step, in instructions"
+	@echo "                    counted by valgrind; table into $(ORG)"
+	@echo "make fuzz-snapshots make fuzz's damaged snapshots alone (SEED=1 COUNT=2000); figures into $(ORG)"
 	@echo "make bench-peers    the basin here (1 and 2 workers), in Debian's Bullet and in ODE, one run; with"
 	@echo "                    BOX3D_SRC=dir (a checkout of erincatto/box3d) in Box3D too, 1 and 2 workers"
 	@echo "make bench-against  this engine against the commits REVS='ce415a5 d9c8f94' in ROUNDS=5 rounds of"
@@ -125,6 +129,28 @@ bench-rollback: setup tangle
 	@mkdir -p report
 	@BENCH=run-rollback-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-rollback.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-rollback report/bench-rollback.org
+
+# make bench's snapshot tables alone (#SN4P0T), and the same measure in instructions, load-proof
+bench-snapshots: setup tangle
+	@mkdir -p report
+	@BENCH=run-snapshot-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-snapshots.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-snapshots report/bench-snapshots.org
+
+count-snapshots: setup tangle
+	@mkdir -p report
+	@command -v valgrind >/dev/null 2>&1 || { echo "count-snapshots: valgrind is not installed (make setup as root installs it)" >&2; exit 1; }
+	@rm -f report/count-snapshots-failed
+	@{ BENCH=run-count-snapshots $(LISP) --load tools/bench.lisp || touch report/count-snapshots-failed; } | tee report/count-snapshots.org
+	@test ! -e report/count-snapshots-failed
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp count-snapshots report/count-snapshots.org
+
+# make fuzz's damaged snapshots alone (#SN4P0T)
+fuzz-snapshots: setup tangle
+	@mkdir -p report
+	@rm -f report/fuzz-failed
+	@{ FUZZ=snapshot SEED="$(SEED)" $(if $(filter command line environment,$(origin COUNT)),COUNT="$(COUNT)") nice $(LISP) --load tools/fuzz.lisp || touch report/fuzz-failed; } | tee report/snapshot-fuzz.org
+	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp snapshot-fuzz report/snapshot-fuzz.org
+	@test ! -e report/fuzz-failed
 
 # the basin with one worker and with two, interleaved (#B3NCHW): cheap to run again alone
 bench-workers: setup tangle

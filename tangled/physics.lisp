@@ -4403,7 +4403,7 @@ with the face the ray enters it through; or write the touch into SINK, a worker'
                      (span (1+ (ceiling (* half (hash-grid-inv-cell grid))))))
                 (do-grid-neighbours (i grid ccx ccy ccz :span span)
                  (when (and (rows-meet-p filtering (aref flags i) (ash (aref filter b) +flag-filter-shift+))
-                            ;; a box body meets no posted box yet ([[#BXR0WS]])
+                            ;; a box body meets a posted box through its own points ([[#BXPUSH]])
                             (not (logtest (aref flags i) +flag-box-shape+)))
                   (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
                          ;; the body's velocity relative to the box, and how far it can travel
@@ -7004,7 +7004,11 @@ feature), the handle of the box that found it, the normal (pushing the first sid
 second), the levers from both centres, the two tangents, the gap at the step's start, the
 effective masses, the friction, the three carried impulses, and each side's inverse mass and world
 inverse inertia's six entries, then the point's restitution, its largest push this step, the
-speed it struck at this step, its bounce and its normal velocity before the pass ([[#BXSOLV]]). #BXR0WS"
+speed it struck at this step, its bounce and its normal velocity before the pass, the
+thirty-six numbers of its angular parts, r × u and I⁻¹(r × u) for the normal and both tangents
+and each side ([[#BXSOLV]]), and, for a point against a posted box, the box's velocity as the
+first side's point velocity less the second's loses it, that velocity along the normal, and the
+cap of the point's normal impulse (the largest single-float for any other point, [[#BXPUSH]]). #BXR0WS"
   (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
   (sx single-float) (sy single-float) (sz single-float) (imb single-float)
   (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
@@ -7018,7 +7022,8 @@ speed it struck at this step, its bounce and its normal velocity before the pass
   (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
   (i22 single-float) (i23 single-float) (i33 single-float)
   (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float)
-  (approach single-float))
+  (approach single-float) (jacobian single-float 36)
+  (kvx single-float) (kvy single-float) (kvz single-float) (kvn single-float) (push-cap single-float))
 
 (defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
   "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
@@ -7027,8 +7032,11 @@ and the count of every slot's points, the awake box rows of this step, their tur
 a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
 step's start (four floats a box), whether this step solves points, the soft coefficients of the
 step, its restitution threshold and gravity times the substep, whether some point of the step
-has restitution, and the grid of the awake spheres that may meet a box with its rows, centres and
-their largest travel this step, and room for the rows a walk of it finds ([[#BXSPHR]]). #BXR0WS"
+has restitution, the grid of the awake spheres that may meet a box with its rows, centres and
+their largest travel this step, room for the rows a walk of it finds ([[#BXSPHR]]), each awake
+row's inverse mass and world inverse inertia this step, eight floats a row ([[#BXSOLV]]), the
+time of the substep's pass into the step, and whether some point of the step is against a
+posted box ([[#BXPUSH]]). #BXR0WS"
   (hx (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (hz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
@@ -7063,7 +7071,9 @@ their largest travel this step, and room for the rows a walk of it finds ([[#BXS
   (sy (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (sz (make-array 16 :element-type 'single-float :initial-element 0.0) :type f32-column)
   (sphere-travel 0.0 :type single-float)
-  (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
+  (found (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
+  (elapsed 0.0 :type single-float) (posted nil :type boolean)
+  (inertias (make-array 128 :element-type 'single-float :initial-element 0.0) :type f32-column))
 
 (defun box-set-room (set slots)
   "Grow SET's columns by slot to hold SLOTS slots, keeping what they hold; return SET. #BXR0WS"
@@ -7266,8 +7276,12 @@ zeros. #BXCELL"
     (declare (type index k from) (type fixnum to))
     (with-box-point-columns ((r row) (rb row-b) (kc key) (hc handle) (cnx nx) (cny ny) (cnz nz)
                              (crx rx) (cry ry) (crz rz) (csx sx) (csy sy) (csz sz)
-                             separation normal-impulse tangent-impulse-1 tangent-impulse-2)
+                             separation normal-impulse tangent-impulse-1 tangent-impulse-2
+                             kvx kvy kvz kvn push-cap)
         points
+      ;; still cells and bodies: no kinematic velocity, no cap ([[#BXPUSH]])
+      (setf (aref kvx k) 0.0 (aref kvy k) 0.0 (aref kvz k) 0.0 (aref kvn k) 0.0
+            (aref push-cap k) most-positive-single-float)
       (setf (aref r k) row (aref rb k) row-b (aref kc k) key (aref hc k) handle
             (aref cnx k) nx (aref cny k) ny (aref cnz k) nz (aref crx k) rx (aref cry k) ry (aref crz k) rz
             (aref csx k) sx (aref csy k) sy (aref csz k) sz
@@ -7822,6 +7836,10 @@ which holds still as a cell does (box-pair-points). #BXCELL"
 ;; A box against the cells:1 ends here
 
 ;; [[file:../physics.org::#BXSOLV][Box points in the substeps:1]]
+(defconstant +box-jacobian-width+ 36
+  "The numbers of a box point's angular parts: for the first side r × n, r × t1, r × t2, then the
+world inverse inertia times each, and the same nine and nine for the second side. #BXSOLV")
+
 (defun box-tangents (nx ny nz)
   "Two unit tangents of the unit normal NX NY NZ, perpendicular to it and to each other, as six
 values: the first the normal crossed with the world axis it is least along. #BXSOLV"
@@ -7835,6 +7853,10 @@ values: the first the normal crossed with the world axis it is least along. #BXS
       (let ((t1x (* ax s)) (t1y (* ay s)) (t1z (* az s)))
         (values t1x t1y t1z
                 (- (* ny t1z) (* nz t1y)) (- (* nz t1x) (* nx t1z)) (- (* nx t1y) (* ny t1x)))))))
+
+(defconstant +posted-push-share+ 0.1
+  "The share of the push-out speed a posted box may give a box body in a substep, beyond what
+gravity gives it in one ([[#BXPUSH]]). #BXSOLV")
 
 (defun prepare-box-points (world h)
   "Find and prepare the points of every awake box of WORLD for the substeps of H: the last step's
@@ -7865,7 +7887,12 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h)))
                (near (and (= (physics-world-near-cells-step world) (physics-world-step-count world))
                           (physics-world-near-cells world)))
-               (rows (box-set-rows set)))
+               (rows (box-set-rows set))
+               (posted (plusp (box-columns-length (physics-world-boxes world))))
+               (gravity (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
+                                  (expt (physics-world-gravity-z world) 2)))))
+          (declare (type single-float gravity))
+          (setf (box-set-posted set) posted)
           (multiple-value-bind (bias-rate mass-scale impulse-scale) (physics-softness (* 2.0 hertz) zeta h)
             (setf (box-set-bias-rate set) bias-rate (box-set-mass-scale set) mass-scale
                   (box-set-impulse-scale set) impulse-scale (box-set-push-max set) push-max))
@@ -7886,6 +7913,9 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                   ;; the finalize phase does not hold a box's path as a sphere's ([[#SQU33Z]])
                   (when near (setf (aref near i) most-positive-single-float))
                   (let ((reach (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))))
+                    ;; the posted boxes first, so that the cells' points, solved after them, hold ([[#BXPUSH]])
+                    (when posted (find-box-posted-points world set i reach dt
+                                                         (+ (* +posted-push-share+ push-max) (* h gravity))))
                     (find-box-points world set i reach)
                     ;; a box faster than its margin sweeps its corners ([[#BXSWEP]])
                     (when (> reach margin) (sweep-box-corners world set i reach))
@@ -7896,7 +7926,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                         (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))
             ;; the sleeping boxes, held still, against the awake spheres ([[#BXSPHR]])
             (find-sleeping-box-sphere-points world set margin dt gstep)))
-        (prepare-box-point-masses world set)))
+        (prepare-box-point-masses world set)
+        (when (box-set-posted set) (cap-posted-box-points set))))
     (setf (box-set-solving set) (plusp (box-point-columns-length (box-set-points set))))
     (and (box-set-solving set) set)))
 
@@ -7933,19 +7964,79 @@ past the awake ones, and for a sphere its scalar inverse inertia on the diagonal
                     (+ (* r21 r31 dx) (* r22 r32 dy) (* r23 r33 dz))
                     (+ (* r31 r31 dx) (* r32 r32 dy) (* r33 r33 dz)))))))))
 
+(defun fill-box-row-inertias (world set)
+  "Write into SET's inertias, eight floats a row, each awake row's inverse mass and world inverse
+inertia (box-row-inertia) and, past them, the dummy row's zeros. #BXSOLV"
+  (declare (type box-set set) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (n (body-columns-length awake)))
+    (declare (type index n))
+    (when (< (length (box-set-inertias set)) (* 8 (1+ n)))
+      (setf (box-set-inertias set) (make-array (* 16 (1+ n)) :element-type 'single-float :initial-element 0.0)))
+    (let ((table (box-set-inertias set)))
+      (declare (type f32-column table))
+      (dotimes (i (1+ n))
+        (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set i)
+          (let ((o (* 8 i)))
+            (declare (type index o))
+            (setf (aref table o) m (aref table (+ o 1)) e11 (aref table (+ o 2)) e12 (aref table (+ o 3)) e13
+                  (aref table (+ o 4)) e22 (aref table (+ o 5)) e23 (aref table (+ o 6)) e33))))))
+  set)
+
+(defun box-point-directions (points k)
+  "Write box point K of POINTS's angular parts, r x u and I^-1 (r x u) for its normal and both
+tangents on each side, and its effective masses along them, from its levers, directions, inverse
+masses and world inverse inertias. #BXSOLV"
+  (declare (type box-point-columns points) (type index k) #.+kernel-policy+)
+  (with-box-point-columns (nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
+                           tangent-mass-1 tangent-mass-2 im i11 i12 i13 i22 i23 i33
+                           imb j11 j12 j13 j22 j23 j33 jacobian)
+      points
+    (let ((o (* +box-jacobian-width+ k)))
+      (declare (type index o))
+      (flet ((lever (at lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz)
+               ;; r x u at AT, I^-1 (r x u) nine places on, and their product
+               (declare (type index at) (type single-float lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz))
+               (let* ((px (- (* ly uz) (* lz uy))) (py (- (* lz ux) (* lx uz))) (pz (- (* lx uy) (* ly ux)))
+                      (qx (+ (* e11 px) (* e12 py) (* e13 pz)))
+                      (qy (+ (* e12 px) (* e22 py) (* e23 pz)))
+                      (qz (+ (* e13 px) (* e23 py) (* e33 pz))))
+                 (setf (aref jacobian at) px (aref jacobian (+ at 1)) py (aref jacobian (+ at 2)) pz
+                       (aref jacobian (+ at 9)) qx (aref jacobian (+ at 10)) qy (aref jacobian (+ at 11)) qz)
+                 (+ (* px qx) (* py qy) (* pz qz)))))
+        (declare (inline lever))
+        (flet ((mass-along (along ux uy uz)
+                 ;; 1 / (1/m_a + 1/m_b + (r_a x u) . Ia^-1 (r_a x u) + (r_b x u) . Ib^-1 (r_b x u))
+                 (declare (type (integer 0 2) along) (type single-float ux uy uz))
+                 (let ((kk (+ (aref im k) (aref imb k)
+                              (lever (+ o (* 3 along)) (aref rx k) (aref ry k) (aref rz k)
+                                     (aref i11 k) (aref i12 k) (aref i13 k) (aref i22 k) (aref i23 k) (aref i33 k)
+                                     ux uy uz)
+                              (lever (+ o 18 (* 3 along)) (aref sx k) (aref sy k) (aref sz k)
+                                     (aref j11 k) (aref j12 k) (aref j13 k) (aref j22 k) (aref j23 k) (aref j33 k)
+                                     ux uy uz))))
+                   (declare (type single-float kk))
+                   (if (> kk 0.0) (/ 1.0 kk) 0.0))))
+          (setf (aref normal-mass k) (mass-along 0 (aref nx k) (aref ny k) (aref nz k))
+                (aref tangent-mass-1 k) (mass-along 1 (aref t1x k) (aref t1y k) (aref t1z k))
+                (aref tangent-mass-2 k) (mass-along 2 (aref t2x k) (aref t2y k) (aref t2z k)))))))
+  nil)
+
 (defun prepare-box-point-masses (world set)
   "Write each of SET's points' sides' inverse masses and world inverse inertias, its tangents,
-effective masses and friction (the larger side's, the mean of two boxes'); each gap gains the
-slop, so a box rests a slop deep as a sphere does. #BXSOLV"
+the angular parts of its three directions on each side (r x u and I^-1 (r x u)), effective
+masses and friction (the larger side's, the mean of two boxes'); each gap gains the slop, so a
+box rests a slop deep as a sphere does. #BXSOLV"
   (declare (type box-set set) #.+kernel-policy+)
   (let ((awake (physics-world-awake world)) (points (box-set-points set))
-        (slop (f32 (physics-world-slop world))))
-    (declare (type single-float slop))
+        (slop (f32 (physics-world-slop world)))
+        (table (box-set-inertias (fill-box-row-inertias world set))))
+    (declare (type single-float slop) (type f32-column table))
     (setf (box-set-bouncy set) nil)
     (with-body-columns ((fr friction) (re restitution)) awake
       (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
                                tangent-mass-1 tangent-mass-2 friction im i11 i12 i13 i22 i23 i33
-                               imb j11 j12 j13 j22 j23 j33 separation restitution pushed impact-speed bounce)
+                               imb j11 j12 j13 j22 j23 j33 separation restitution pushed impact-speed bounce
+                               jacobian)
           points
         (dotimes (k (box-point-columns-length points))
           (setf (aref separation k) (+ (aref separation k) slop))
@@ -7957,37 +8048,21 @@ slop, so a box rests a slop deep as a sphere does. #BXSOLV"
             (when (> (aref restitution k) 0.0) (setf (box-set-bouncy set) t)))
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
-            (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set a)
-              (setf (aref im k) m (aref i11 k) e11 (aref i12 k) e12 (aref i13 k) e13
-                    (aref i22 k) e22 (aref i23 k) e23 (aref i33 k) e33))
-            (multiple-value-bind (m e11 e12 e13 e22 e23 e33) (box-row-inertia awake set b)
-              (setf (aref imb k) m (aref j11 k) e11 (aref j12 k) e12 (aref j13 k) e13
-                    (aref j22 k) e22 (aref j23 k) e23 (aref j33 k) e33))
+            ;; each side's inverse mass and world inverse inertia, from the rows' table
+            (let ((oa (* 8 (min a n))) (ob (* 8 (min b n))))
+              (declare (type index oa ob))
+              (setf (aref im k) (aref table oa) (aref i11 k) (aref table (+ oa 1)) (aref i12 k) (aref table (+ oa 2))
+                    (aref i13 k) (aref table (+ oa 3)) (aref i22 k) (aref table (+ oa 4))
+                    (aref i23 k) (aref table (+ oa 5)) (aref i33 k) (aref table (+ oa 6))
+                    (aref imb k) (aref table ob) (aref j11 k) (aref table (+ ob 1)) (aref j12 k) (aref table (+ ob 2))
+                    (aref j13 k) (aref table (+ ob 3)) (aref j22 k) (aref table (+ ob 4))
+                    (aref j23 k) (aref table (+ ob 5)) (aref j33 k) (aref table (+ ob 6))))
             (setf (aref friction k) (cond ((>= b n) (aref fr a))
                                           ((>= a n) (aref fr b))
                                           (t (fsqrt (* (aref fr a) (aref fr b)))))))
           (multiple-value-bind (ax ay az bx by bz) (box-tangents (aref nx k) (aref ny k) (aref nz k))
             (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
-          (flet ((mass-along (ux uy uz)
-                   (declare (type single-float ux uy uz))
-                   ;; 1 / (1/m_a + 1/m_b + (r_a x u) . Ia^-1 (r_a x u) + (r_b x u) . Ib^-1 (r_b x u))
-                   (let* ((px (- (* (aref ry k) uz) (* (aref rz k) uy)))
-                          (py (- (* (aref rz k) ux) (* (aref rx k) uz)))
-                          (pz (- (* (aref rx k) uy) (* (aref ry k) ux)))
-                          (qx (- (* (aref sy k) uz) (* (aref sz k) uy)))
-                          (qy (- (* (aref sz k) ux) (* (aref sx k) uz)))
-                          (qz (- (* (aref sx k) uy) (* (aref sy k) ux)))
-                          (kk (+ (aref im k) (aref imb k)
-                                 (* px (+ (* (aref i11 k) px) (* (aref i12 k) py) (* (aref i13 k) pz)))
-                                 (* py (+ (* (aref i12 k) px) (* (aref i22 k) py) (* (aref i23 k) pz)))
-                                 (* pz (+ (* (aref i13 k) px) (* (aref i23 k) py) (* (aref i33 k) pz)))
-                                 (* qx (+ (* (aref j11 k) qx) (* (aref j12 k) qy) (* (aref j13 k) qz)))
-                                 (* qy (+ (* (aref j12 k) qx) (* (aref j22 k) qy) (* (aref j23 k) qz)))
-                                 (* qz (+ (* (aref j13 k) qx) (* (aref j23 k) qy) (* (aref j33 k) qz))))))
-                     (if (> kk 0.0) (/ 1.0 kk) 0.0))))
-            (setf (aref normal-mass k) (mass-along (aref nx k) (aref ny k) (aref nz k))
-                  (aref tangent-mass-1 k) (mass-along (aref t1x k) (aref t1y k) (aref t1z k))
-                  (aref tangent-mass-2 k) (mass-along (aref t2x k) (aref t2y k) (aref t2z k))))))))
+          (box-point-directions points k)))))
   set)
 
 (defmacro with-box-point ((v k) &body body)
@@ -8021,30 +8096,72 @@ the point, P/m and I^-1 (r x P) to the first side and their opposites to the sec
                         (aref ,v (+ ob 4)) (- (aref ,v (+ ob 4)) (+ (* (aref j12 ,k) ux) (* (aref j22 ,k) uy) (* (aref j23 ,k) uz)))
                         (aref ,v (+ ob 5)) (- (aref ,v (+ ob 5)) (+ (* (aref j13 ,k) ux) (* (aref j23 ,k) uy) (* (aref j33 ,k) uz)))))))
             (point-velocity ()
-              ;; (v + w x r) of the first side less that of the second
-              (values (- (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
-                         (+ (aref ,v ob) (- (* (aref ,v (+ ob 4)) (aref sz ,k)) (* (aref ,v (+ ob 5)) (aref sy ,k)))))
-                      (- (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
-                         (+ (aref ,v (+ ob 1)) (- (* (aref ,v (+ ob 5)) (aref sx ,k)) (* (aref ,v (+ ob 3)) (aref sz ,k)))))
-                      (- (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k))))
-                         (+ (aref ,v (+ ob 2)) (- (* (aref ,v (+ ob 3)) (aref sy ,k)) (* (aref ,v (+ ob 4)) (aref sx ,k))))))))
+              ;; (v + w x r) of the first side less that of the second, less a posted box's
+              ;; velocity (KVX KVY KVZ, zero but for a point against a posted box: x - 0.0 is x)
+              (values (- (- (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
+                            (+ (aref ,v ob) (- (* (aref ,v (+ ob 4)) (aref sz ,k)) (* (aref ,v (+ ob 5)) (aref sy ,k)))))
+                         (aref kvx ,k))
+                      (- (- (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
+                            (+ (aref ,v (+ ob 1)) (- (* (aref ,v (+ ob 5)) (aref sx ,k)) (* (aref ,v (+ ob 3)) (aref sz ,k)))))
+                         (aref kvy ,k))
+                      (- (- (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k))))
+                            (+ (aref ,v (+ ob 2)) (- (* (aref ,v (+ ob 3)) (aref sy ,k)) (* (aref ,v (+ ob 4)) (aref sx ,k)))))
+                         (aref kvz ,k)))))
        (declare (inline push! point-velocity) (ignorable #'point-velocity))
        ,@body)))
+
+(defmacro with-box-point-sides ((v k) &body body)
+  "Run BODY for box point K over the solver's velocities V with the two sides' velocities and
+spins as locals, AVX AVY AVZ AWX AWY AWZ and BVX .. BWZ, read once; (jac I) the point's angular part
+I ([[#BXSOLV]]'s +box-jacobian-width+); (apply! PX PY PZ WA WB) the impulse P at the point, P
+times the inverse mass added to the first side's velocity and taken from the second's, and the
+spin changes WA and WB, each three forms, added to the first and taken from the second; the
+sides are written back after BODY, the second only when it moves. Expanded inside
+with-box-point-columns of ROW, ROW-B, IM, IMB and JACOBIAN. #BXSOLV"
+  `(let* ((o (solver-row (aref row ,k))) (ob (solver-row (aref row-b ,k)))
+          (jo (* +box-jacobian-width+ ,k))
+          (m (aref im ,k)) (mb (aref imb ,k))
+          (avx (aref ,v o)) (avy (aref ,v (+ o 1))) (avz (aref ,v (+ o 2)))
+          (awx (aref ,v (+ o 3))) (awy (aref ,v (+ o 4))) (awz (aref ,v (+ o 5)))
+          (bvx (aref ,v ob)) (bvy (aref ,v (+ ob 1))) (bvz (aref ,v (+ ob 2)))
+          (bwx (aref ,v (+ ob 3))) (bwy (aref ,v (+ ob 4))) (bwz (aref ,v (+ ob 5))))
+     (declare (type index o ob jo) (type single-float m mb avx avy avz awx awy awz bvx bvy bvz bwx bwy bwz))
+     (macrolet ((jac (i) `(aref jacobian (+ jo ,i)))
+                (apply! (px py pz (wax way waz) (wbx wby wbz))
+                  `(let ((px ,px) (py ,py) (pz ,pz))
+                     (declare (type single-float px py pz))
+                     (setf avx (+ avx (* m px)) avy (+ avy (* m py)) avz (+ avz (* m pz))
+                           awx (+ awx ,wax) awy (+ awy ,way) awz (+ awz ,waz)
+                           bvx (- bvx (* mb px)) bvy (- bvy (* mb py)) bvz (- bvz (* mb pz))
+                           bwx (- bwx ,wbx) bwy (- bwy ,wby) bwz (- bwz ,wbz)))))
+       ,@body
+       (setf (aref ,v o) avx (aref ,v (+ o 1)) avy (aref ,v (+ o 2)) avz
+             (aref ,v (+ o 3)) awx (aref ,v (+ o 4)) awy (aref ,v (+ o 5)) awz)
+       ;; the dummy row, a cell's or a sleeper's, stays zero
+       (when (> mb 0.0)
+         (setf (aref ,v ob) bvx (aref ,v (+ ob 1)) bvy (aref ,v (+ ob 2)) bvz
+               (aref ,v (+ ob 3)) bwx (aref ,v (+ ob 4)) bwy (aref ,v (+ ob 5)) bwz)))))
 
 (defun warm-start-box-points (set v)
   "Apply every box point's carried impulses again, at the start of a substep. #BXSOLV"
   (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
   (let ((points (box-set-points set)))
-    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-impulse
-                             tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33)
+    (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z normal-impulse
+                             tangent-impulse-1 tangent-impulse-2 im imb jacobian)
         points
       (dotimes (k (box-point-columns-length points))
-        (with-box-point (v k)
+        (with-box-point-sides (v k)
           (let ((pn (aref normal-impulse k)) (p1 (aref tangent-impulse-1 k)) (p2 (aref tangent-impulse-2 k)))
-            (push! (+ (* pn (aref nx k)) (* p1 (aref t1x k)) (* p2 (aref t2x k)))
-                   (+ (* pn (aref ny k)) (* p1 (aref t1y k)) (* p2 (aref t2y k)))
-                   (+ (* pn (aref nz k)) (* p1 (aref t1z k)) (* p2 (aref t2z k)))))))))
+            (declare (type single-float pn p1 p2))
+            (apply! (+ (* pn (aref nx k)) (* p1 (aref t1x k)) (* p2 (aref t2x k)))
+                    (+ (* pn (aref ny k)) (* p1 (aref t1y k)) (* p2 (aref t2y k)))
+                    (+ (* pn (aref nz k)) (* p1 (aref t1z k)) (* p2 (aref t2z k)))
+                    ((+ (* pn (jac 9)) (* p1 (jac 12)) (* p2 (jac 15)))
+                     (+ (* pn (jac 10)) (* p1 (jac 13)) (* p2 (jac 16)))
+                     (+ (* pn (jac 11)) (* p1 (jac 14)) (* p2 (jac 17))))
+                    ((+ (* pn (jac 27)) (* p1 (jac 30)) (* p2 (jac 33)))
+                     (+ (* pn (jac 28)) (* p1 (jac 31)) (* p2 (jac 34)))
+                     (+ (* pn (jac 29)) (* p1 (jac 32)) (* p2 (jac 35))))))))))
   nil)
 
 (defmacro box-point-impact-speed (vn s positive biased inv-h dv)
@@ -8066,14 +8183,15 @@ friction, held in the cone. #BXSOLV"
   (let ((points (box-set-points set)) (turns (box-set-turns set))
         (bias-rate (box-set-bias-rate set)) (mass-scale (box-set-mass-scale set))
         (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set))
-        (threshold (box-set-threshold set))
+        (threshold (box-set-threshold set)) (elapsed (box-set-elapsed set))
         (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
     (declare (type f32-column turns)
-             (type single-float bias-rate mass-scale impulse-scale push-max threshold hgx hgy hgz))
-    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
+             (type single-float bias-rate mass-scale impulse-scale push-max threshold elapsed hgx hgy hgz))
+    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
                              normal-mass tangent-mass-1 tangent-mass-2 friction normal-impulse
                              tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed approach)
+                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed approach jacobian
+                             kvn push-cap)
         points
       ;; the normal velocity of each point that may strike, before this pass pushes any point:
       ;; the corners of a box landing flat all strike at the speed the first one does
@@ -8085,20 +8203,25 @@ friction, held in the cone. #BXSOLV"
                     (multiple-value-bind (ux uy uz) (point-velocity)
                       (+ (* ux (aref nx k)) (* uy (aref ny k)) (* uz (aref nz k)))))))))
       (dotimes (k (box-point-columns-length points))
-        (with-box-point (v k)
+        (with-box-point-sides (v k)
           (let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
                  (j (aref row-b k)) (pb (delta-row j)) (tb (* 3 j))
                  (ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
-                 (lx (aref rx k)) (ly (aref ry k)) (lz (aref rz k))
-                 (mx (aref sx k)) (my (aref sy k)) (mz (aref sz k))
-                 (qx (aref turns tr)) (qy (aref turns (+ tr 1))) (qz (aref turns (+ tr 2)))
-                 (ux (aref turns tb)) (uy (aref turns (+ tb 1))) (uz (aref turns (+ tb 2)))
-                 ;; the gap now: moved by each side's delta and turn (the dummy's are zero)
-                 (s (+ (aref separation k)
-                       (* ax (- (+ (aref d p) (- (* qy lz) (* qz ly))) (+ (aref d pb) (- (* uy mz) (* uz my)))))
-                       (* ay (- (+ (aref d (+ p 1)) (- (* qz lx) (* qx lz))) (+ (aref d (+ pb 1)) (- (* uz mx) (* ux mz)))))
-                       (* az (- (+ (aref d (+ p 2)) (- (* qx ly) (* qy lx))) (+ (aref d (+ pb 2)) (- (* ux my) (* uy mx)))))))
-                 (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
+                 ;; the gap now: moved by each side's delta and turn (the dummy's are zero),
+                 ;; n . (da - db) + ta . (ra x n) - tb . (rb x n), and by a posted box's travel
+                 ;; so far this step (zero for any other point)
+                 (s (- (+ (aref separation k)
+                          (+ (* ax (- (aref d p) (aref d pb))) (* ay (- (aref d (+ p 1)) (aref d (+ pb 1))))
+                             (* az (- (aref d (+ p 2)) (aref d (+ pb 2)))))
+                          (- (+ (* (aref turns tr) (jac 0)) (* (aref turns (+ tr 1)) (jac 1)) (* (aref turns (+ tr 2)) (jac 2)))
+                             (+ (* (aref turns tb) (jac 18)) (* (aref turns (+ tb 1)) (jac 19)) (* (aref turns (+ tb 2)) (jac 20)))))
+                       (* (aref kvn k) elapsed)))
+                 ;; n . (va - vb) + wa . (ra x n) - wb . (rb x n), less a posted box's velocity
+                 ;; along the normal
+                 (vn (- (+ (+ (* ax (- avx bvx)) (* ay (- avy bvy)) (* az (- avz bvz)))
+                           (- (+ (* awx (jac 0)) (* awy (jac 1)) (* awz (jac 2)))
+                              (+ (* bwx (jac 18)) (* bwy (jac 19)) (* bwz (jac 20)))))
+                        (aref kvn k)))
                  (positive (> s 0.0))
                  (bias (cond (positive (* s inv-h))
                              (use-bias (max (* bias-rate s) (- push-max)))
@@ -8106,7 +8229,8 @@ friction, held in the cone. #BXSOLV"
                  (ms (if (and use-bias (not positive)) mass-scale 1.0))
                  (is (if (and use-bias (not positive)) impulse-scale 0.0))
                  (old (aref normal-impulse k))
-                 (new (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old))))
+                 ;; held to its cap, which only a point against a posted box has ([[#BXPUSH]])
+                 (new (min (aref push-cap k) (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old)))))
                  (pn (- new old)))
             (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
             ;; an impact: the first push this step of a point with restitution that approached,
@@ -8115,27 +8239,40 @@ friction, held in the cone. #BXSOLV"
                        (< (aref approach k) (- threshold)))
               (setf (aref impact-speed k)
                     (box-point-impact-speed (aref approach k) s positive use-bias inv-h
-                                            (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
+                                            (* (- (if (> m 0.0) 1.0 0.0) (if (> mb 0.0) 1.0 0.0))
                                                (+ (* hgx ax) (* hgy ay) (* hgz az))))))
             (setf (aref normal-impulse k) new
                   (aref pushed k) (max (aref pushed k) new))
-            (push! (* pn ax) (* pn ay) (* pn az))
+            (apply! (* pn ax) (* pn ay) (* pn az)
+                    ((* pn (jac 9)) (* pn (jac 10)) (* pn (jac 11)))
+                    ((* pn (jac 27)) (* pn (jac 28)) (* pn (jac 29))))
             ;; friction in the cone of mu times the normal impulse
-            (multiple-value-bind (ux uy uz) (point-velocity)
-              (let* ((o1 (aref tangent-impulse-1 k)) (o2 (aref tangent-impulse-2 k))
-                     (n1 (- o1 (* (aref tangent-mass-1 k) (+ (* ux (aref t1x k)) (* uy (aref t1y k)) (* uz (aref t1z k))))))
-                     (n2 (- o2 (* (aref tangent-mass-2 k) (+ (* ux (aref t2x k)) (* uy (aref t2y k)) (* uz (aref t2z k))))))
-                     (limit (* (aref friction k) new))
-                     (len2 (+ (* n1 n1) (* n2 n2))))
-                (declare (type single-float o1 o2 n1 n2 limit len2))
-                (when (> len2 (* limit limit))
-                  (let ((scale (if (> len2 0.0) (/ limit (fsqrt len2)) 0.0)))
-                    (setf n1 (* n1 scale) n2 (* n2 scale))))
-                (setf (aref tangent-impulse-1 k) n1 (aref tangent-impulse-2 k) n2)
-                (let ((d1 (- n1 o1)) (d2 (- n2 o2)))
-                  (push! (+ (* d1 (aref t1x k)) (* d2 (aref t2x k)))
-                         (+ (* d1 (aref t1y k)) (* d2 (aref t2y k)))
-                         (+ (* d1 (aref t1z k)) (* d2 (aref t2z k))))))))))))
+            (let* ((ux (- (- avx bvx) (aref kvx k))) (uy (- (- avy bvy) (aref kvy k))) (uz (- (- avz bvz) (aref kvz k)))
+                   (o1 (aref tangent-impulse-1 k)) (o2 (aref tangent-impulse-2 k))
+                   (u1 (+ (+ (* ux (aref t1x k)) (* uy (aref t1y k)) (* uz (aref t1z k)))
+                          (- (+ (* awx (jac 3)) (* awy (jac 4)) (* awz (jac 5)))
+                             (+ (* bwx (jac 21)) (* bwy (jac 22)) (* bwz (jac 23))))))
+                   (u2 (+ (+ (* ux (aref t2x k)) (* uy (aref t2y k)) (* uz (aref t2z k)))
+                          (- (+ (* awx (jac 6)) (* awy (jac 7)) (* awz (jac 8)))
+                             (+ (* bwx (jac 24)) (* bwy (jac 25)) (* bwz (jac 26))))))
+                   (n1 (- o1 (* (aref tangent-mass-1 k) u1)))
+                   (n2 (- o2 (* (aref tangent-mass-2 k) u2)))
+                   (limit (* (aref friction k) new))
+                   (len2 (+ (* n1 n1) (* n2 n2))))
+              (declare (type single-float ux uy uz o1 o2 u1 u2 n1 n2 limit len2))
+              (when (> len2 (* limit limit))
+                (let ((scale (if (> len2 0.0) (/ limit (fsqrt len2)) 0.0)))
+                  (setf n1 (* n1 scale) n2 (* n2 scale))))
+              (setf (aref tangent-impulse-1 k) n1 (aref tangent-impulse-2 k) n2)
+              (let ((d1 (- n1 o1)) (d2 (- n2 o2)))
+                (declare (type single-float d1 d2))
+                (apply! (+ (* d1 (aref t1x k)) (* d2 (aref t2x k)))
+                        (+ (* d1 (aref t1y k)) (* d2 (aref t2y k)))
+                        (+ (* d1 (aref t1z k)) (* d2 (aref t2z k)))
+                        ((+ (* d1 (jac 12)) (* d2 (jac 15))) (+ (* d1 (jac 13)) (* d2 (jac 16)))
+                         (+ (* d1 (jac 14)) (* d2 (jac 17))))
+                        ((+ (* d1 (jac 30)) (* d2 (jac 33))) (+ (* d1 (jac 31)) (* d2 (jac 34)))
+                         (+ (* d1 (jac 32)) (* d2 (jac 35))))))))))))
   nil)
 
 (defun turn-box-orientations (world)
@@ -8182,7 +8319,7 @@ which the velocity of the substep to come reaches less half that substep's gravi
   (let ((points (box-set-points set))
         (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
     (declare (type single-float hgx hgy hgz))
-    (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
+    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
                              imb j11 j12 j13 j22 j23 j33 restitution impact-speed bounce)
         points
       (dotimes (pass +box-bounce-passes+)
@@ -8546,6 +8683,65 @@ the face it enters a solid cell through, with the box's centre on its air side, 
                                                ix iy iz axis step))))))))))))
   set)
 ;; Fast boxes sweep their corners through the cells:1 ends here
+
+;; [[file:../physics.org::#BXPUSH][A posted box pushes a box:1]]
+(defun find-box-posted-points (world set row reach dt speed)
+  "Append to SET's points those between the box at awake ROW of WORLD and each posted box its
+filter meets within REACH plus their relative travel over DT: the separating-axis test's points
+(box-pair-points, the posted box's side the dummy row), each given the posted box's velocity,
+that velocity along its normal, and SPEED as its cap, made an impulse by
+cap-posted-box-points. #BXPUSH"
+  (declare (type box-set set) (type index row) (type single-float reach dt speed) #.+kernel-policy+)
+  (let* ((boxes (physics-world-boxes world)) (awake (physics-world-awake world))
+         (dummy (body-columns-length awake)) (points (box-set-points set))
+         (filtering (physics-world-filtering world)))
+    (with-body-columns (x y z qw qx qy qz radius handle flags vx vy vz) awake
+      (let* ((owner (aref handle row)) (slot (handle-index owner))
+             (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))
+             (hx (aref (box-set-hx set) slot)) (hy (aref (box-set-hy set) slot)) (hz (aref (box-set-hz set) slot)))
+        (declare (type single-float cx cy cz r hx hy hz))
+        (with-box-columns (min-x min-y min-z max-x max-y max-z (ux vx) (uy vy) (uz vz) id filter) boxes
+          (dotimes (b (box-columns-length boxes))
+            (when (rows-meet-p filtering (aref flags row) (ash (aref filter b) +flag-filter-shift+))
+              (let* ((kx (aref ux b)) (ky (aref uy b)) (kz (aref uz b))
+                     (wx (- (aref vx row) kx)) (wy (- (aref vy row) ky)) (wz (- (aref vz row) kz))
+                     (reach (+ reach (* dt (fsqrt (+ (* wx wx) (* wy wy) (* wz wz))))))
+                     ;; the body's holding sphere against the posted box, grown by the reach
+                     (ox (max 0.0 (- (aref min-x b) cx) (- cx (aref max-x b))))
+                     (oy (max 0.0 (- (aref min-y b) cy) (- cy (aref max-y b))))
+                     (oz (max 0.0 (- (aref min-z b) cz) (- cz (aref max-z b))))
+                     (far (+ r reach)))
+                (declare (type single-float kx ky kz wx wy wz reach ox oy oz far))
+                (when (< (+ (* ox ox) (* oy oy) (* oz oz)) (* far far))
+                  (let ((start (box-point-columns-length points))
+                        (base (logior (ash slot 34) (ash 1 32) (ash 1 31) (ash (ldb (byte 15 0) (aref id b)) 16))))
+                    (box-pair-points set owner base row dummy reach cx cy cz
+                                     (aref qw row) (aref qx row) (aref qy row) (aref qz row) hx hy hz
+                                     (* 0.5 (+ (aref min-x b) (aref max-x b))) (* 0.5 (+ (aref min-y b) (aref max-y b)))
+                                     (* 0.5 (+ (aref min-z b) (aref max-z b))) 1.0 0.0 0.0 0.0
+                                     (* 0.5 (- (aref max-x b) (aref min-x b))) (* 0.5 (- (aref max-y b) (aref min-y b)))
+                                     (* 0.5 (- (aref max-z b) (aref min-z b))))
+                    (with-box-point-columns ((first row) nx ny nz kvx kvy kvz kvn push-cap) points
+                      (loop for k of-type index from start below (box-point-columns-length points)
+                            do (let* ((sign (if (= (aref first k) dummy) -1.0 1.0))
+                                      (sx (* sign kx)) (sy (* sign ky)) (sz (* sign kz))
+                                      (along (+ (* (aref nx k) sx) (* (aref ny k) sy) (* (aref nz k) sz))))
+                                 (declare (type single-float sign sx sy sz along))
+                                 (setf (aref kvx k) sx (aref kvy k) sy (aref kvz k) sz (aref kvn k) along
+                                       (aref push-cap k) speed)))))))))))))
+  set)
+
+(defun cap-posted-box-points (set)
+  "Turn the speed cap of each of SET's points against a posted box into an impulse, times the
+point's normal mass; the others keep the largest single-float. #BXPUSH"
+  (declare (type box-set set) #.+kernel-policy+)
+  (let ((points (box-set-points set)))
+    (with-box-point-columns (push-cap normal-mass) points
+      (dotimes (k (box-point-columns-length points))
+        (when (< (aref push-cap k) most-positive-single-float)
+          (setf (aref push-cap k) (* (aref normal-mass k) (aref push-cap k)))))))
+  set)
+;; A posted box pushes a box:1 ends here
 
 ;; [[file:../physics.org::#ST0R3S][Store impulses, events and the step's error:1]]
 (declaim (inline held-marking-p mark-held))
@@ -9160,7 +9356,7 @@ bodies to half the push-out speed. #IDVK7G"
         ;; by colour with the contacts ([[#J0S0LV]])
         (when boxes (warm-start-box-points boxes v))
         (physics-warm-start kernels world)
-        (when boxes (solve-box-points boxes v d inv-h t))
+        (when boxes (setf (box-set-elapsed boxes) elapsed) (solve-box-points boxes v d inv-h t))
         (physics-solve-contacts kernels world inv-h t elapsed)
         (flet ((yield-boxes ()
                  ;; a box that yields squeezes what it presses: from then on the step holds it
@@ -9174,7 +9370,7 @@ bodies to half the push-out speed. #IDVK7G"
             (turn-jointed-orientations joints (physics-world-awake world) v h)
             (turn-joint-levers joints (physics-world-awake world)))
           (dotimes (k relaxes)
-            (when boxes (solve-box-points boxes v d inv-h nil))
+            (when boxes (setf (box-set-elapsed boxes) (+ elapsed h)) (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes))))
         (when held (hold-crowded-speeds world))
@@ -12257,13 +12453,34 @@ world's, and the table of their keys the check filled, traded the same way. #SN4
     (setf (contact-table-step table) step (contact-table-cursor table) 0 (contact-table-touched table) 0
           (contact-table-misses table) (snap-u64 buffer (+ wat 140)))))
 
-(defun apply-snapshot-pair-list (world buffer scratch)
+(defun snapshot-holds-grid-p (world buffer at grid-step)
+  "True when WORLD's awake grid, of step GRID-STEP, is already the one the pair list part at AT of
+the snapshot BUFFER would have bucketed: the world's grid is its pair list's build, and that
+build is the snapshot's, of as many rows, the same cell, the same count of builds and the same
+anchors to the bit. #SN4P0T"
+  (declare (type octets buffer) (type index at) (type fixnum grid-step))
+  (let* ((plist (physics-world-pair-list world)) (rows (snap-i32 buffer at)) (anchors (pair-list-anchors plist)))
+    (declare (type fixnum rows) (type f32-column anchors))
+    (and (>= rows 0) (= rows (pair-list-rows plist))
+         (= grid-step (pair-list-built-step plist) (snap-i64 buffer (+ at 24)))
+         (= (pair-list-builds plist) (snap-u32 buffer (+ at 8)))
+         (= (sb-kernel:single-float-bits (pair-list-cell plist)) (snap-i32 buffer (+ at 4)))
+         (<= (* 3 rows) (length anchors))
+         (sb-sys:with-pinned-objects (anchors)
+           (let ((sap (sb-sys:vector-sap anchors)) (from (+ at +snapshot-pair-head-bytes+)))
+             (loop for o of-type index from 0 below (* 12 rows) by 4
+                   always (= (sb-sys:sap-ref-32 sap o) (snap-u32 buffer (+ from o)))))))))
+
+(defun apply-snapshot-pair-list (world buffer scratch grid-step)
   "Put the pair list of the checked snapshot BUFFER into WORLD, the rows' handles the awake rows'
 own when the snapshot does not write them (the bodies are restored first), and the awake grid of
-its build when the world's grid still is that build's. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
+its build when the snapshot's grid still is that build's, bucketed again unless WORLD's grid, of
+step GRID-STEP, is that grid already (snapshot-holds-grid-p). #SN4P0T"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum grid-step) #.+kernel-policy+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
-         (form (snap-u32 buffer (+ at 36))) (plist (physics-world-pair-list world)))
+         (form (snap-u32 buffer (+ at 36))) (plist (physics-world-pair-list world))
+         ;; read before the list is overwritten
+         (kept (snapshot-holds-grid-p world buffer at grid-step)))
     (declare (type index at pairs) (type fixnum rows))
     (setf (pair-list-rows plist) rows (pair-list-terrain plist) nil (pair-list-terrain-edits plist) -1
           (pair-list-count plist) 0)
@@ -12297,7 +12514,7 @@ its build when the world's grid still is that build's. #SN4P0T"
       (setf (pair-list-count plist) pairs (pair-list-cell plist) (snap-f32 buffer (+ at 4))
             (pair-list-builds plist) (snap-u32 buffer (+ at 8)) (pair-list-loose-count plist) (snap-i32 buffer (+ at 12))
             (pair-list-step plist) (snap-i64 buffer (+ at 16)) (pair-list-built-step plist) (snap-i64 buffer (+ at 24)))
-      (when (= (physics-world-awake-grid-step world) (pair-list-built-step plist))
+      (when (and (= (physics-world-awake-grid-step world) (pair-list-built-step plist)) (not kept))
         ;; the grid of the list's build, bucketed again from the anchors it was built from
         (let ((xs (pair-list-loose-x plist)) (ys (pair-list-loose-y plist)) (zs (pair-list-loose-z plist))
               (anchors (pair-list-anchors plist)))
@@ -12316,8 +12533,10 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
          (ids (physics-world-ids world))
          (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4)))
          (step (snap-u64 buffer (+ wat 16)))
-         (flags (snap-u32 buffer (+ wat 8))))
-    (declare (type index wat hat count nfree step))
+         (flags (snap-u32 buffer (+ wat 8)))
+         ;; the step of the awake grid the world holds now, before the world part sets it
+         (grid-step (physics-world-awake-grid-step world)))
+    (declare (type index wat hat count nfree step) (type fixnum grid-step))
     ;; the world part: its numbers, parameters and the last step's statistics
     (setf (handle-table-tag ids) (snap-u32 buffer wat)
           (physics-world-filtering world) (logbitp 1 flags)
@@ -12379,7 +12598,7 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
               (loop for row of-type index below (body-columns-length sleeping) count (plusp (aref life row))))))
     ;; the contacts in their rows, then the pair list and its grid
     (apply-snapshot-contacts world buffer scratch)
-    (apply-snapshot-pair-list world buffer scratch)
+    (apply-snapshot-pair-list world buffer scratch grid-step)
     ;; the sleeping grids are built again from every sleeper at the next step
     (let ((of (sleeping-grid-of world)))
       (fill of 0)
@@ -12732,6 +12951,25 @@ the load average the run began and ended with when LOAD. make bench-rollback run
       (format stream "| rollback at ~D balls (2 s), ~D rounds | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~D % |~%"
               balls rounds median (round (/ median (/ 1000 60.0) 0.01)))))
   (when load (format stream "~%load average ~A at the end~%" (load-average))))
+
+(defun run-count-snapshots (&key (stream *standard-output*) (rounds 20))
+  "Print, as an Org table, the millions of instructions a snapshot and its restore of the
+3000-ball basin at 4 s run, and a step of the basin, each counted by valgrind's cachegrind in a
+process of the tool tools/snapshot-one.lisp (count-process): a process running ROUNDS rounds
+less one running none, over ROUNDS; then the share of a step. #SN4P0T"
+  (let* ((before (load-average))
+         (root (namestring (asdf:system-source-directory "luv-physics")))
+         (counts (mapcar #'sb-thread:join-thread
+                         (loop for (what n) in `(("none" 0) ("snapshot" ,rounds) ("step" ,rounds))
+                               collect (let ((what what) (n n))
+                                         (sb-thread:make-thread
+                                          (lambda () (values (count-process "snapshot" root what (princ-to-string n))))))))))
+    (destructuring-bind (none snapshot step) counts
+      (let ((per-round (/ (- snapshot none) (* 1d6 rounds))) (per-step (/ (- step none) (* 1d6 rounds))))
+        (format stream "~&#+caption: the 3000-ball basin at 4 s, millions of instructions (cachegrind: a process of ~D rounds less one of none, over ~D), widest family; ~A; load ~A before, ~A after~%"
+                rounds rounds (cpu-model-name) before (load-average))
+        (format stream "| basin of 3000 at 4 s | M instructions |~%|---+---|~%| snapshot and restore | ~,2F |~%| a step | ~,2F |~%| share of a step | ~,1F % |~%"
+                per-round per-step (* 100 (/ per-round per-step)))))))
 ;; A snapshot holds what decides the next step, part by part:8 ends here
 
 ;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:15]]
@@ -13220,7 +13458,7 @@ Return the steps run. #H7P4CX"
                       :vz (f32 (physics-player-vz player)) :owner player)))
 ;; The player: a box that walks:1 ends here
 
-;; [[file:../physics.org::#H7P4CX][The player: a box that walks:11]]
+;; [[file:../physics.org::#H7P4CX][The player: a box that walks:12]]
 (defmethod print-object ((player physics-player) stream)
   (print-unreadable-object (player stream :type t)
     (format stream "at (~,3F ~,3F ~,3F) moving (~,3F ~,3F ~,3F) ~:[in the air~;standing~]"
@@ -13233,7 +13471,7 @@ Return the steps run. #H7P4CX"
           (loop for slot in '(x y z vx vy vz grounded jump-held half-width height eye-height
                               jump-speed walk-speed step-ahead)
                 collect (cons (string-downcase slot) (slot-value player slot)))))
-;; The player: a box that walks:11 ends here
+;; The player: a box that walks:12 ends here
 
 ;; [[file:../physics.org::#Q5V1EW][The bodies as a query sees them:1]]
 (defstruct (query-view (:constructor make-query-view ()))

@@ -1742,7 +1742,8 @@ the clause's keyword, VALUE the clause. #K5DF9S"))
 
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter *physics-scene-features*
-    '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :events :mortal :joints)
+    '(:terrain :body-contacts :boxes :friction :rolling-resistance :restitution :sleep :events :mortal :joints
+      :box-bodies)
     "The features a scene may declare it uses. #K5DF9S")
 
   (defparameter *scene-body-arguments*
@@ -1790,7 +1791,8 @@ declare, as forms; or a clause error for the first clause that is not of its sha
               (:bodies
                (require-shape (and rest (typep (first rest) '(integer 0))) "(:bodies count :spawn f ...)")
                (let* ((options (scene-arguments scene clause (rest rest)
-                                                (list* :spawn :jitter :kind :masses :asleep body-keys)))
+                                                (list* :spawn :jitter :kind :masses :asleep :half-extents :orientation
+                                                       body-keys)))
                       (spawn (getf options :spawn)) (masses (getf options :masses)))
                  (flet ((function-p (f) (or (and f (symbolp f)) (and (consp f) (eq (first f) 'lambda)))))
                    (require-shape (function-p spawn)
@@ -1798,6 +1800,11 @@ declare, as forms; or a clause error for the first clause that is not of its sha
                    (require-shape (or (null masses) (function-p masses))
                                   "given :masses, if at all, the name of a function or a lambda form"))
                  (require-shape (typep (getf options :jitter 0) 'real) "given a real :jitter")
+                 (require-shape (or (null (getf options :half-extents))
+                                    (and (not (getf options :radius)) (consp (getf options :half-extents))
+                                         (eq 'quote (first (getf options :half-extents)))
+                                         (point (second (getf options :half-extents)))))
+                                "given :half-extents, a quoted list of three reals and no :radius")
                  (push `(make-scene-bodies
                          :count ,(first rest)
                          ;; every spawn is called with the index and the count
@@ -1974,8 +1981,13 @@ OVERRIDES in place of the group's; asleep, when the group is. #K5DF9S"
         (when jitter
           (incf x (* jitter (- (funcall next) 0.5)))
           (incf z (* jitter (- (funcall next) 0.5))))
-        (apply #'add-physics-body world x y z
-               (if masses (list* :mass (funcall masses (funcall next)) arguments) arguments))))
+        (let ((arguments (if masses (list* :mass (funcall masses (funcall next)) arguments) arguments)))
+          ;; a group given half-extents is of boxes ([[#BXR0WS]])
+          (if (getf arguments :half-extents)
+              (apply #'add-physics-box world x y z
+                     (append (getf arguments :half-extents)
+                             (loop for (k v) on arguments by #'cddr unless (eq k :half-extents) append (list k v))))
+              (apply #'add-physics-body world x y z arguments)))))
     ;; the last awake row is the group's last body, so each goes to sleep from its own row
     (when (scene-bodies-asleep group)
       (loop repeat count do (sleep-physics-body world (1- (physics-world-awake-count world)))))))
@@ -4695,8 +4707,10 @@ RADIUS, STYLE (its kind's number times two, plus one for a sleeper), HANDLE and 
 floats); each frame's first body, body count and figures (FRAMES); each frame's first contact in
 CONTACTS (CONTACT-STARTS), six floats a contact, point and normal; each frame's first joint in
 JOINTS (JOINT-STARTS), six floats a joint, its two anchors' points; the boxes posted for each
-recorded step (BOXES, a list of frame and centre and half extents); the world's TERRAIN, to draw
-its cells; and BOUNDS, NIL or the corners (x0 y0 z0 x1 y1 z1) of the terrain to draw. #G4WXCJ"
+recorded step (BOXES, a list of frame and centre and half extents); each box body's place among
+the bodies (BOX-INDEX) and its orientation and half-extents (BOX-SHAPE, seven floats a box: W X Y Z,
+then HX HY HZ); the world's TERRAIN, to draw its cells; and BOUNDS, NIL or the corners (x0 y0 z0
+x1 y1 z1) of the terrain to draw. #G4WXCJ"
   (terrain nil)
   (bounds nil)
   (every 1 :type (integer 1 3600))
@@ -4711,11 +4725,25 @@ its cells; and BOUNDS, NIL or the corners (x0 y0 z0 x1 y1 z1) of the terrain to 
   (joints (make-array 0 :element-type 'single-float :adjustable t :fill-pointer 0))
   (joint-starts (make-array 64 :element-type 'fixnum :adjustable t :fill-pointer 0))
   (frames (make-array 64 :adjustable t :fill-pointer 0))
-  (boxes '()))
+  (boxes '())
+  (box-index (make-array 0 :element-type 'fixnum :adjustable t :fill-pointer 0))
+  (box-shape (make-array 0 :element-type 'single-float :adjustable t :fill-pointer 0)))
+
+(defun record-box-body (recording world buffer row index)
+  "Append to RECORDING the box body at ROW of BUFFER, of WORLD, as the body INDEX of its bodies:
+its place, and its orientation and half-extents. #G4WXCJ"
+  (let ((set (physics-world-box-bodies world))
+        (slot (handle-index (aref (body-columns-handle buffer) row)))
+        (shape (physics-recording-box-shape recording)))
+    (vector-push-extend index (physics-recording-box-index recording))
+    (dolist (v (list (aref (body-columns-qw buffer) row) (aref (body-columns-qx buffer) row)
+                     (aref (body-columns-qy buffer) row) (aref (body-columns-qz buffer) row)
+                     (aref (box-set-hx set) slot) (aref (box-set-hy set) slot) (aref (box-set-hz set) slot)))
+      (vector-push-extend v shape))))
 
 (defun record-physics-frame (recording world)
-  "Append WORLD's present state to RECORDING as one frame: every body, awake ones first, the boxes
-posted for the step, the first +recorded-contacts+ touching contacts, every joint's two anchor
+  "Append WORLD's present state to RECORDING as one frame: every body, awake ones first (a box
+body's orientation and extents beside it, record-box-body), the boxes posted for the step, the first +recorded-contacts+ touching contacts, every joint's two anchor
 points ([[#J0STOR]]), and the frame's figures, a
 vector of the first body, the body count, the awake and sleeping counts, the contacts, the step's
 milliseconds and the simulated seconds. #G4WXCJ"
@@ -4725,6 +4753,8 @@ milliseconds and the simulated seconds. #G4WXCJ"
          (frame (fill-pointer (physics-recording-frames recording))))
     (flet ((take (buffer asleep)
              (dotimes (row (body-columns-length buffer))
+               (when (logtest (aref (body-columns-flags buffer) row) +flag-box-shape+)
+                 (record-box-body recording world buffer row (floor (fill-pointer xyz) 3)))
                (vector-push-extend (aref (body-columns-x buffer) row) xyz)
                (vector-push-extend (aref (body-columns-y buffer) row) xyz)
                (vector-push-extend (aref (body-columns-z buffer) row) xyz)
@@ -4906,6 +4936,22 @@ centre, and join each centre to the next by a stiff distance joint of the 0.5 m 
   (:features :body-contacts :restitution :sleep :joints))
 ;; Scenes of joints:1 ends here
 
+;; [[file:../physics.org::#BXSC3N][Scenes of boxes:1]]
+(defun tower-block-point (i)
+  "The centre of block I of the tower scene: on the floor's top at y = 0, each block a metre above
+the one below and 0.15 m further along x, the lowest at x = -3. #BXSC3N"
+  (values (+ -3.0 (* 0.15 i)) (+ 0.5 i) 0.5))
+
+(define-physics-scene :tower
+    "a leaning tower of eight unit blocks on a floor, past its balance: it topples #BXSC3N"
+  (:terrain () (joint-scene-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 8 :spawn tower-block-point :half-extents '(0.5 0.5 0.5) :mass 1.0 :friction 0.6)
+  (:seconds 6)
+  (:pictures 0.5 1.5 4)
+  (:features :friction :sleep :box-bodies))
+;; Scenes of boxes:1 ends here
+
 ;; [[file:../physics.org::#RH7T05][A viewer for the browser:1]]
 (defun write-base64 (octets stream)
   "Write the vector of octets OCTETS to STREAM in base64 (RFC 4648, padded with =). #RH7T05"
@@ -5011,6 +5057,14 @@ fastest component's range, and that range, m/s. #RH7T05"
               (aref octets (1+ (* 2 i))) (ldb (byte 8 8) q))))
     (values octets top)))
 
+(defun recording-box-bodies (recording)
+  "RECORDING's box bodies as a list of lists, each the body's place among the recorded bodies and
+its orientation W X Y Z and half-extents HX HY HZ. #RH7T05"
+  (let ((shape (physics-recording-box-shape recording)))
+    (loop for index across (physics-recording-box-index recording)
+          for k from 0 by 7
+          collect (cons index (coerce (subseq shape k (+ k 7)) 'list)))))
+
 (defun write-recording-json (recording title stream &optional (bounds (physics-recording-bounds recording)))
   "Write RECORDING to STREAM as the JavaScript object the viewer reads, titled TITLE, its terrain
 drawn within BOUNDS (recording-cells). #RH7T05"
@@ -5029,6 +5083,7 @@ drawn within BOUNDS (recording-cells). #RH7T05"
         (format stream "\"frames\": [~%~{[~{~D, ~D, ~D, ~D, ~D, ~,4F, ~,4F~}]~^,~%~}],~%"
                 (map 'list (lambda (f) (coerce f 'list)) frames))
         (format stream "\"boxes\": [~{[~{~D~@{, ~,4F~}~}]~^, ~}],~%" (reverse (physics-recording-boxes recording)))
+        (format stream "\"boxBodies\": [~{[~{~D~@{, ~,5F~}~}]~^, ~}],~%" (recording-box-bodies recording))
         (format stream "\"cells\": [~{~D~^,~}],~%" (recording-cells recording bounds))
         (multiple-value-bind (cell-lo cell-hi) (recording-cell-box recording bounds)
           (format stream "\"cellLo\": [~{~,4F~^, ~}], \"cellHi\": [~{~,4F~^, ~}],~%" cell-lo cell-hi))
@@ -5106,11 +5161,44 @@ three lists. #UFK5EA"
           (loop for shift in '(16 8 0)
                 collect (min 255 (round (* factor (ldb (byte 8 shift) colour)))))))
 
+(defun frame-box-shapes (recording frame)
+  "A table from the place of each box body of frame FRAME of RECORDING among its recorded bodies
+to that box's orientation and half-extents, a list of seven numbers. #UFK5EA"
+  (let* ((f (aref (physics-recording-frames recording) frame))
+         (from (aref f 0)) (to (+ from (aref f 1)))
+         (shape (physics-recording-box-shape recording))
+         (table (make-hash-table)))
+    (loop for index across (physics-recording-box-index recording)
+          for k from 0 by 7
+          when (and (<= from index) (< index to))
+            do (setf (gethash index table) (coerce (subseq shape k (+ k 7)) 'list)))
+    table))
+
+(defun box-body-faces (x y z shape toward project)
+  "The three faces of the box body centred at X Y Z of SHAPE (its orientation W X Y Z and
+half-extents) that look towards TOWARD, the unit vector to the viewer: each a list of the depth of
+its middle and its four corners, each projected by PROJECT, a function of three coordinates. #UFK5EA"
+  (destructuring-bind (qw qx qy qz hx hy hz) shape
+    (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+        (box-axes (float qw 1.0) (float qx 1.0) (float qy 1.0) (float qz 1.0))
+      (let ((axes (list (list r11 r21 r31) (list r12 r22 r32) (list r13 r23 r33)))
+            (half (list hx hy hz)))
+        (flet ((along (p axis amount) (mapcar (lambda (c a) (+ c (* amount a))) p (nth axis axes))))
+          (loop for axis below 3
+                for normal = (nth axis axes)
+                for sign = (if (minusp (reduce #'+ (mapcar #'* normal toward))) -1 1)
+                for middle = (along (list x y z) axis (* sign (nth axis half)))
+                for a = (mod (1+ axis) 3) for b = (mod (+ 2 axis) 3)
+                collect (cons (reduce #'+ (mapcar #'* middle toward))
+                              (loop for (u v) in '((-1 -1) (1 -1) (1 1) (-1 1))
+                                    collect (apply project (along (along middle a (* u (nth a half))) b (* v (nth b half))))))))))))
+
 (defun scene-picture-items (recording frame cells across up toward)
   "What frame FRAME of RECORDING shows, as a list of (DEPTH KIND COLOUR . POINTS), deepest first:
 the faces of CELLS (a flat list of X Y Z) that look towards the viewer and touch air (KIND :wall
 for an upright face, else :face), discs (KIND :disc, POINTS the centre's projection and the
-radius) and boxes' faces (:face), projected on ACROSS and UP. #UFK5EA"
+radius) or, for a box body, the three of its faces that look towards the viewer (:face), and
+posted boxes' faces (:face), projected on ACROSS and UP. #UFK5EA"
   (let ((terrain (physics-recording-terrain recording)) (items '())
         (xyz (physics-recording-xyz recording)) (f (aref (physics-recording-frames recording) frame)))
     (labels ((dot (u x y z) (+ (* (first u) x) (* (second u) y) (* (third u) z)))
@@ -5137,14 +5225,18 @@ radius) and boxes' faces (:face), projected on ACROSS and UP. #UFK5EA"
                                          (and (terrain-resident-p terrain nx ny nz)
                                               (not (terrain-solid-p terrain nx ny nz)))))
                               (face (if (= axis 1) :face :wall) colour x y z axis sign 1 1 1))))))
-      (loop for i from (aref f 0) below (+ (aref f 0) (aref f 1))
+      (loop with shapes = (frame-box-shapes recording frame)
+            for i from (aref f 0) below (+ (aref f 0) (aref f 1))
             do (let* ((x (aref xyz (* 3 i))) (y (aref xyz (+ 1 (* 3 i)))) (z (aref xyz (+ 2 (* 3 i))))
                       (style (aref (physics-recording-style recording) i))
                       (colour (if (oddp style) #x6a7a98
-                                  (nth (min 4 (ash style -1)) '(#xd9822b #xe0a030 #xc8c8d0 #x3f8fe0 #xe8401c)))))
-                 (push (list (dot toward x y z) :disc colour (project x y z)
-                             (aref (physics-recording-radius recording) i))
-                       items)))
+                                  (nth (min 4 (ash style -1)) '(#xd9822b #xe0a030 #xc8c8d0 #x3f8fe0 #xe8401c))))
+                      (shape (gethash i shapes)))
+                 (if shape
+                     (dolist (item (box-body-faces x y z shape toward #'project)) (push (list* (first item) :face colour (rest item)) items))
+                     (push (list (dot toward x y z) :disc colour (project x y z)
+                                 (aref (physics-recording-radius recording) i))
+                           items))))
       (dolist (box (physics-recording-boxes recording))
         (destructuring-bind (at x y z hx hy hz) box
           (when (= at frame)

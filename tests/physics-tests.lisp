@@ -2132,6 +2132,38 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
                  "~D pair contacts for ~D close pairs" (hash-table-count generated) (hash-table-count expected))))))))
 ;; D9W4CH-pairs-match-brute-force ends here
 
+;; [[file:../physics.org::#D9W4CH][D9W4CH-pair-list-holds-pairs-within-the-margin]]
+(define-claim "D9W4CH" pair-list-holds-pairs-within-the-margin
+    "In a lattice along (1,2,0), the dense grid's pair list holds all 48 pairs nearer than 0.6 m."
+  (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+         (k (/ 0.59 (sqrt 5.0))))
+    (dotimes (i 4)
+      (dotimes (j 4)
+        (dotimes (l 4)
+          (add-physics-body w (+ (* i k) (* 0.7 l)) (* i 2 k) (* 0.7 j) :radius 0.25))))
+    (step-physics-world w)
+    (check (luv-physics::hash-grid-dense (luv-physics::physics-world-awake-grid w)) "the grid is hashed")
+    (let* ((plist (luv-physics::physics-world-pair-list w))
+           (awake (luv-physics::physics-world-awake w))
+           (xs (luv-physics::body-columns-x awake)) (ys (luv-physics::body-columns-y awake))
+           (zs (luv-physics::body-columns-z awake))
+           (listed (make-hash-table :test 'equal))
+           (near '()))
+      (dotimes (q (luv-physics::pair-list-count plist))
+        (let* ((p (aref (luv-physics::pair-list-pairs plist) q)) (a (ash p -24)) (b (ldb (byte 24 0) p)))
+          (setf (gethash (list (min a b) (max a b)) listed) t)))
+      (dotimes (a 64)
+        (loop for b from (1+ a) below 64
+              when (< (+ (expt (- (aref xs a) (aref xs b)) 2) (expt (- (aref ys a) (aref ys b)) 2)
+                         (expt (- (aref zs a) (aref zs b)) 2))
+                      0.36)
+                do (push (list a b) near)))
+      (check (= 48 (length near)) "~D pairs within 0.6 m" (length near))
+      (let ((missed (remove-if (lambda (pair) (gethash pair listed)) near)))
+        (check (null missed) "~D of the ~D pairs within 0.6 m are not listed, e.g. rows ~S"
+               (length missed) (length near) (first missed))))))
+;; D9W4CH-pair-list-holds-pairs-within-the-margin ends here
+
 ;; [[file:../physics.org::#D9W4CH][D9W4CH-dense-bounds-at-the-limit]]
 (define-claim "D9W4CH" dense-bounds-at-the-limit
     "A grid is dense up to exactly 64 cells an item plus 64, and up to 4095 cells a side, and hashed past either."
@@ -3508,6 +3540,24 @@ use before it. #QKS4GZ"
              "the upper ball is ~,4F m above the lower" (- (body-y w upper) (body-y w lower))))))
 ;; F1LT3R-new-filter-drops-contacts ends here
 
+;; [[file:../physics.org::#F1LT3R][F1LT3R-new-filter-wakes-strictly-within-reach]]
+(define-claim "F1LT3R" new-filter-wakes-strictly-within-reach
+    "A new filter wakes a sleeper nearer than the reach, and not one at exactly the reach."
+  (dolist (nearer '(nil t))
+    (let* ((w (make-physics-world :gravity '(0 0 0)))
+           (r (+ (+ 0.25 (luv-physics::f32 (luv-physics::physics-world-margin w))) 0.25))
+           (x (if nearer (- r (* 2 single-float-epsilon r)) r))
+           (a (add-physics-body w 0 0 0 :radius 0.25))
+           (b (add-physics-body w x 0 0 :radius 0.25)))
+      (dotimes (i 120) (step-physics-world w))
+      (check (= 2 (physics-world-sleeping-count w)) "~D of 2 asleep" (physics-world-sleeping-count w))
+      (check (= x (physics-body-position w b)))
+      (set-physics-body-filter w a :category 2)
+      (check (physics-body-awake-p w a) "the body given the filter sleeps")
+      (check (eq nearer (physics-body-awake-p w b)) "the sleeper at ~,8F m, the reach ~,8F m: awake ~S"
+             x r (physics-body-awake-p w b)))))
+;; F1LT3R-new-filter-wakes-strictly-within-reach ends here
+
 ;; [[file:../physics.org::#S3NS0R][S3NS0R-rolling-ball-crosses-once]]
 (define-claim "S3NS0R" rolling-ball-crosses-once
     "A ball rolling at 10/7 m/s across a sensor enters at step 71 and leaves at step 111, once each."
@@ -4212,6 +4262,30 @@ use before it. #QKS4GZ"
                       "at ~,2F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
 ;; W4K3PH-wake-speed-is-the-edge ends here
 
+;; [[file:../physics.org::#P41BLD][P41BLD-crowded-build-lists-each-pair-once]]
+(define-claim "P41BLD" crowded-build-lists-each-pair-once
+    "In a crowd of 300 overlapping balls each built pair list names every pair at most once."
+  (let ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+        (next (luv-physics::fixed-sequence 3)))
+    (dotimes (i 300)
+      (add-physics-body w (* 1.2 (funcall next)) (* 1.2 (funcall next)) (* 1.2 (funcall next)) :radius 0.2))
+    (dotimes (step 3)
+      (step-physics-world w)
+      (let* ((plist (luv-physics::physics-world-pair-list w))
+             (seen (make-hash-table))
+             (twice (loop for q below (luv-physics::pair-list-count plist)
+                          for p = (aref (luv-physics::pair-list-pairs plist) q)
+                          for key = (let ((a (ash p -24)) (b (ldb (byte 24 0) p))) (+ (* 1000 (min a b)) (max a b)))
+                          count (gethash key seen)
+                          do (setf (gethash key seen) t))))
+        (check (= (1+ step) (luv-physics::pair-list-builds plist)) "step ~D: ~D builds" step
+               (luv-physics::pair-list-builds plist))
+        (check (= 300 (count-if (lambda (o) (>= o luv-physics::+overlaps-per-body+))
+                                (luv-physics::pair-list-overlaps plist) :end 300))
+               "step ~D: not every row took its share" step)
+        (check (zerop twice) "step ~D: ~D pairs listed twice" step twice)))))
+;; P41BLD-crowded-build-lists-each-pair-once ends here
+
 ;; [[file:../physics.org::#P41STG][P41STG-pair-list-finds-every-pair]]
 (define-claim "P41STG" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
@@ -4623,6 +4697,20 @@ use before it. #QKS4GZ"
     (check (and (> (first struck) 5.5) (> (second struck) 3.1) (> (third struck) 4.7))
            "the struck ball ends at ~S" struck)))
 ;; P41STG-pairs-on-every-side ends here
+
+;; [[file:../physics.org::#MYWCNT][MYWCNT-contact-strictly-under-the-speculative-distance]]
+(define-claim "MYWCNT" contact-strictly-under-the-speculative-distance
+    "A resting ball whose gap to the floor is exactly four slops has no contact; a rounding lower, one."
+  (dolist (lower '(nil t))
+    (let* ((w (make-physics-world :terrain (make-floor-terrain) :gravity '(0 0 0) :sleep nil))
+           (r (scale-float 1.0 -6))
+           (y (+ r (* 4.0 (luv-physics::f32 (luv-physics::physics-world-slop w)))))
+           (y (if lower (- y (* single-float-epsilon y)) y)))
+      (add-physics-body w 2.5 y 2.5 :radius r)
+      (step-physics-world w)
+      (check (= (if lower 1 0) (physics-world-last-step-contact-count w))
+             "the ball's centre at ~,9F: ~D contacts" y (physics-world-last-step-contact-count w)))))
+;; MYWCNT-contact-strictly-under-the-speculative-distance ends here
 
 ;; [[file:../physics.org::#MYWSTG][MYWSTG-clear-rows-skip-safely]]
 (define-claim "MYWSTG" clear-rows-skip-safely
@@ -5844,6 +5932,21 @@ the phases of a step before the prepare phase. #PR3PAR"
                  (check (equal want got) "~A: ~S, not ~S" label got want))))))
 ;; K3RNLS-entry-ranges-exact ends here
 
+;; [[file:../physics.org::#K3RNLS][K3RNLS-bias-switch-is-a-boolean]]
+(define-claim "K3RNLS" bias-switch-is-a-boolean
+    "physics-solve-contacts refuses a use-bias that is not T or NIL, naming it, the world unchanged."
+  (let* ((w (make-floor-world))
+         (k (luv-physics::physics-world-kernels w)))
+    (add-physics-body w 3.5 1.0 3.5)
+    (step-physics-world w)
+    (let ((hash (physics-world-state-hash w))
+          (got (handler-case (progn (physics-solve-contacts k w 60.0 :yes 0.0) :ran)
+                 (invalid-physics-parameter (e) (luv-physics::invalid-physics-parameter-name e)))))
+      (check (eq :use-bias got) "use-bias :yes: ~S" got)
+      (check (= hash (physics-world-state-hash w)))
+      (check (eq t (validate-physics-world w))))))
+;; K3RNLS-bias-switch-is-a-boolean ends here
+
 ;; [[file:../physics.org::#K3RNLS][K3RNLS-substep-kernels-call-no-generic-arithmetic]]
 (define-claim "K3RNLS" substep-kernels-call-no-generic-arithmetic
     "No kernel a substep runs on every row, in any family or standard feature set, calls SBCL's generic arithmetic."
@@ -6153,6 +6256,31 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (< (abs (- (/ got want) 1)) 0.002d0)
                "from ~,1F m: the hit reports ~,4F m/s, the impact was at ~,4F" h got want)))))
 ;; R3ST1T-hit-reports-impact-speed ends here
+
+;; [[file:../physics.org::#R3ST1T][R3ST1T-row-hits-report-impact-speed]]
+(define-claim "R3ST1T" row-hits-report-impact-speed
+    "Sixteen balls landing together each report their speed at impact in every family."
+  (dolist (family (available-kernel-families))
+    (let* ((world (make-physics-world :terrain (make-floor-terrain) :kernels family))
+           (r 0.25d0) (h 1d0) (slop (float *physics-linear-slop* 1d0))
+           (balls (loop for i below 16 collect (add-physics-body world (+ 0.5 i) (+ r h) 3.5 :radius r :restitution 0.5
+                                                                                              :report-hits t)))
+           (want (sqrt (* 2 9.81d0 (+ h slop))))
+           (got (make-hash-table)))
+      (loop repeat 120 until (= 16 (hash-table-count got)) do
+        (step-physics-world world)
+        (map-physics-events
+         (lambda (kind a b x y z speed datum)
+           (declare (ignore b x y z datum))
+           (when (and (eq kind :hit) (not (gethash a got))) (setf (gethash a got) speed)))
+         world))
+      (check (= 16 (hash-table-count got)) "~(~A~): ~D of 16 hits reported" family (hash-table-count got))
+      (dolist (ball balls)
+        (let ((speed (gethash ball got)))
+          (when speed
+            (check (< (abs (- (/ speed want) 1)) 0.002d0)
+                   "~(~A~): a hit reports ~,4F m/s, the impact was at ~,4F" family speed want)))))))
+;; R3ST1T-row-hits-report-impact-speed ends here
 
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-threshold-is-the-edge]]
 (define-claim "R3ST1T" threshold-is-the-edge
@@ -6498,6 +6626,22 @@ world, the balls and the joints. #J0S0LV"
            (mapcar (lambda (b) (physics-body-awake-p w b)) balls))
     (check (eq t (validate-physics-world w)))))
 ;; J0SL3P-groups-sleep-and-wake-together ends here
+
+;; [[file:../physics.org::#J0SL3P][J0SL3P-wake-counts-the-group]]
+(define-claim "J0SL3P" wake-counts-the-group
+    "The wake phase returns 4 when a chain of five asleep wakes with its lowest ball."
+  (let* ((w (make-floor-world))
+         (balls (loop for i from 1 to 5 collect (add-physics-body w 3.5 (- 10 (* 0.5 i)) 3.5 :radius 0.1))))
+    (add-physics-joint w :distance (first balls) nil :anchor-b '(3.5 10 3.5))
+    (loop for (p q) on balls while q do (add-physics-joint w :distance p q))
+    (dotimes (i 120) (step-physics-world w))
+    (check (= 5 (physics-world-sleeping-count w)) "~D of 5 asleep" (physics-world-sleeping-count w))
+    (apply-physics-impulse w (fifth balls) 0.5 0 0)
+    (check (= 4 (physics-world-sleeping-count w)))
+    (let ((woken (luv-physics::wake-phase w)))
+      (check (= 4 woken) "the wake phase says ~D woke" woken))
+    (check (every (lambda (b) (physics-body-awake-p w b)) balls))))
+;; J0SL3P-wake-counts-the-group ends here
 
 ;; [[file:../physics.org::#J0OBJT][J0OBJT-joint-describes-its-row]]
 (define-claim "J0OBJT" joint-describes-its-row
@@ -7078,6 +7222,42 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (check (eq t (validate-physics-world w)))))
 ;; BXCELL-turned-and-crossed-cubes ends here
 
+;; [[file:../physics.org::#BXCELL][BXCELL-turned-stack-stands]]
+(define-claim "BXCELL" turned-stack-stands
+    "Two cubes stacked and both turned 30 degrees about the vertical stand, one over the other, and sleep."
+  (let* ((phi (/ pi 6)) (q (list (cos (/ phi 2)) 0 (sin (/ phi 2)) 0))
+         (w (make-physics-world :terrain (make-floor-terrain)))
+         (low (add-physics-box w 2.5 0.5 2.5 0.5 0.5 0.5 :orientation q))
+         (high (add-physics-box w 2.5 1.5 2.5 0.5 0.5 0.5 :orientation q)))
+    (dotimes (i 120) (step-physics-world w))
+    (loop for box in (list low high) for rest in (list (- 0.5 *physics-linear-slop*) (- 1.5 (* 2 *physics-linear-slop*)))
+          do (multiple-value-bind (x y z) (physics-body-position w box)
+               (check (< (max (abs (- x 2.5)) (abs (- z 2.5)) (abs (- y rest))) 1e-2)
+                      "a cube of the stack is at ~,4F ~,4F ~,4F, not over (2.5, 2.5) at ~,4F" x y z rest)))
+    (check (not (physics-body-awake-p w high)) "the upper cube is awake at 2 s")
+    (check (eq t (validate-physics-world w)))))
+;; BXCELL-turned-stack-stands ends here
+
+;; [[file:../physics.org::#BXCELL][BXCELL-turned-cubes-meet-face-to-face]]
+(define-claim "BXCELL" turned-cubes-meet-face-to-face
+    "Two cubes turned 30 degrees about y meet face to face along their x or z axis and share the speed without spinning."
+  (let* ((phi (/ pi 6)) (q (list (cos (/ phi 2)) 0 (sin (/ phi 2)) 0)) (c (cos phi)) (s (sin phi)))
+    ;; the cubes' own x axis in the world is (cos, 0, -sin), their z axis (sin, 0, cos)
+    (loop for (ux uz) in (list (list c (- s)) (list s c))
+          do (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+                    (struck (add-physics-box w 0 0 0 0.5 0.5 0.5 :orientation q))
+                    (sent (add-physics-box w (* -1.1 ux) 0 (* -1.1 uz) 0.5 0.5 0.5 :orientation q :vx ux :vz uz)))
+               (dotimes (i 15) (step-physics-world w))
+               (dolist (box (list struck sent))
+                 (multiple-value-bind (vx vy vz) (physics-body-velocity w box)
+                   (check (< (max (abs (- vx (* 0.5 ux))) (abs (- vz (* 0.5 uz)))) 2e-3)
+                          "along (~,3F 0 ~,3F): a cube moves at ~,5F ~,5F" ux uz vx vz)
+                   (check (< (abs vy) 1e-4) "along (~,3F 0 ~,3F): a cube moves up at ~,6F" ux uz vy))
+                 (let ((spin (sqrt (reduce #'+ (mapcar (lambda (v) (* v v))
+                                                       (multiple-value-list (physics-body-angular-velocity w box)))))))
+                   (check (< spin 1e-3) "along (~,3F 0 ~,3F): a cube spins at ~,5F rad/s" ux uz spin)))))))
+;; BXCELL-turned-cubes-meet-face-to-face ends here
+
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-families-agree-on-boxes]]
 (define-claim "BXSOLV" families-agree-on-boxes
     "A tumbling box and a sliding box end in the same state hash in every kernel family."
@@ -7097,6 +7277,91 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
         (let ((got (run family)))
           (check (= got scalar) "~(~A~) ends with hash ~D, scalar ~D" family got scalar))))))
 ;; BXSOLV-families-agree-on-boxes ends here
+
+;; [[file:../physics.org::#BXSOLV][BXSOLV-angular-parts-are-products]]
+(define-claim "BXSOLV" angular-parts-are-products
+    "Each box point's angular parts are r x u and I^-1 (r x u) of its levers, directions and tensors."
+  (let ((w (make-physics-world :terrain (make-floor-terrain) :kernels :scalar)))
+    (add-physics-box w -2.5 (- 0.5 *physics-linear-slop*) 2.5 0.5 0.5 0.5 :friction 0.5 :vx 4)
+    (let ((b (add-physics-box w 4.5 2.0 4.5 0.4 0.3 0.5 :orientation '(0.9 0.3 0.2 0.1) :vz -1)))
+      (set-physics-body-angular-velocity w b 1 2 3))
+    (add-physics-box w 8.5 0.495 2.5 0.5 0.5 0.5)
+    (add-physics-box w 8.7 1.8 2.4 0.5 0.4 0.3 :orientation '(0.95 0.1 0.2 0.2))
+    (dotimes (i 40) (step-physics-world w))
+    ;; the points found again from where the boxes are, with the rows' inertias of now
+    (luv-physics::prepare-box-points w (luv-physics::physics-world-current-h w))
+    (let* ((p (luv-physics::box-set-points (luv-physics::physics-world-box-bodies w)))
+           (n (luv-physics::box-point-columns-length p))
+           (jac (luv-physics::box-point-columns-jacobian p))
+           (cells 0) (pairs 0) (worst 0d0))
+      (flet ((col (name k) (float (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" name) :luv-physics) p) k) 1d0)))
+        (dotimes (k n)
+          (let ((dummy (>= (aref (luv-physics::box-point-columns-row-b p) k)
+                           (luv-physics::body-columns-length (luv-physics::physics-world-awake w)))))
+            (if dummy (incf cells) (incf pairs))
+            (loop for (row-column m-column . tensor) in '(("ROW" "IM" "I11" "I12" "I13" "I22" "I23" "I33")
+                                                          ("ROW-B" "IMB" "J11" "J12" "J13" "J22" "J23" "J33"))
+                  for got = (mapcar (lambda (c) (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" c) :luv-physics) p) k))
+                                    (cons m-column tensor))
+                  for want = (multiple-value-list
+                              (luv-physics::box-row-inertia (luv-physics::physics-world-awake w)
+                                                            (luv-physics::physics-world-box-bodies w)
+                                                            (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" row-column)
+                                                                                   :luv-physics) p) k)))
+                  do (check (equal got want) "point ~D's ~A side: ~S, its row's ~S" k row-column got want))
+            (when dummy
+              (check (every #'zerop (loop for c in '("IMB" "J11" "J12" "J13" "J22" "J23" "J33")
+                                          collect (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" c) :luv-physics) p) k)))
+                     "point ~D against the cells: the dummy's inertia is not zero" k))
+            (loop for (lx ly lz e11 e12 e13 e22 e23 e33) in '(("RX" "RY" "RZ" "I11" "I12" "I13" "I22" "I23" "I33")
+                                                             ("SX" "SY" "SZ" "J11" "J12" "J13" "J22" "J23" "J33"))
+                  for side from 0
+                  do (loop for (ux uy uz) in '(("NX" "NY" "NZ") ("T1X" "T1Y" "T1Z") ("T2X" "T2Y" "T2Z"))
+                           for along from 0
+                           do (let* ((rx (col lx k)) (ry (col ly k)) (rz (col lz k))
+                                     (vx (col ux k)) (vy (col uy k)) (vz (col uz k))
+                                     (cx (- (* ry vz) (* rz vy))) (cy (- (* rz vx) (* rx vz))) (cz (- (* rx vy) (* ry vx)))
+                                     (want (list cx cy cz
+                                                 (+ (* (col e11 k) cx) (* (col e12 k) cy) (* (col e13 k) cz))
+                                                 (+ (* (col e12 k) cx) (* (col e22 k) cy) (* (col e23 k) cz))
+                                                 (+ (* (col e13 k) cx) (* (col e23 k) cy) (* (col e33 k) cz))))
+                                     (at (+ (* 36 k) (* 18 side) (* 3 along)))
+                                     (got (list (aref jac at) (aref jac (+ at 1)) (aref jac (+ at 2))
+                                                (aref jac (+ at 9)) (aref jac (+ at 10)) (aref jac (+ at 11))))
+                                     (scale (max 1d0 (reduce #'max (mapcar #'abs want)))))
+                                (when (and dummy (= side 1))
+                                  (check (every #'zerop got) "point ~D against the cells: second side ~S" k got))
+                                (setf worst (max worst (/ (reduce #'max (mapcar (lambda (a b) (abs (- a b))) got want)) scale)))))))))
+      (check (and (plusp cells) (plusp pairs)) "~D points against the cells, ~D between boxes" cells pairs)
+      (check (< worst 1d-5) "an angular part is ~,3E of its entries off" worst)))
+  ;; one point, warm started by hand
+  (let* ((w (make-floor-world :sleep nil))
+         (box (add-physics-box w 2.5 1.2 2.5 0.5 0.4 0.3 :orientation '(0.9 0.3 0.2 0.1) :mass 2)))
+    (dotimes (i 30) (step-physics-world w))
+    (let* ((set (luv-physics::physics-world-box-bodies w))
+           (v (luv-physics::physics-world-velocities w))
+           (p (progn (luv-physics::prepare-box-points w (luv-physics::physics-world-current-h w))
+                     (luv-physics::box-set-points set))))
+      (check (plusp (luv-physics::box-point-columns-length p)) "the box has no point")
+      (setf (luv-physics::box-point-columns-length p) 1)
+      (setf (aref (luv-physics::box-point-columns-normal-impulse p) 0) 1.0
+            (aref (luv-physics::box-point-columns-tangent-impulse-1 p) 0) 0.0
+            (aref (luv-physics::box-point-columns-tangent-impulse-2 p) 0) 0.0)
+      (let* ((row (nth-value 1 (luv-physics::resolve-handle w box))) (o (luv-physics::solver-row row))
+             (before (loop for i below 6 collect (aref v (+ o i)))))
+        (luv-physics::warm-start-box-points set v)
+        (multiple-value-bind (m e11 e12 e13 e22 e23 e33)
+            (luv-physics::box-row-inertia (luv-physics::physics-world-awake w) set row)
+          (flet ((c (name) (aref (funcall (intern (format nil "BOX-POINT-COLUMNS-~A" name) :luv-physics) p) 0)))
+            (let* ((nx (c "NX")) (ny (c "NY")) (nz (c "NZ")) (rx (c "RX")) (ry (c "RY")) (rz (c "RZ"))
+                   (tx (- (* ry nz) (* rz ny))) (ty (- (* rz nx) (* rx nz))) (tz (- (* rx ny) (* ry nx)))
+                   (want (list (* m nx) (* m ny) (* m nz)
+                               (+ (* e11 tx) (* e12 ty) (* e13 tz)) (+ (* e12 tx) (* e22 ty) (* e23 tz))
+                               (+ (* e13 tx) (* e23 ty) (* e33 tz))))
+                   (got (loop for i below 6 for b in before collect (- (aref v (+ o i)) b))))
+              (check (every (lambda (a b) (< (abs (- a b)) (* 1e-6 (max 1.0 (abs b))))) got want)
+                     "one push changed ~S, not ~S" got want))))))))
+;; BXSOLV-angular-parts-are-products ends here
 
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-box-steps-cons-nothing]]
 (define-claim "BXSOLV" box-steps-cons-nothing
@@ -7314,6 +7579,103 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
             (check (every (lambda (h) (= h (first hashes))) hashes)
                    "dt ~,3F thick ~A from ~A: the families end apart" dt thick start)))))))
 ;; BXSWEP-fast-boxes-stay-out-of-cells ends here
+
+;; [[file:../physics.org::#BXSWEP][BXSWEP-boxes-thrown-sideways-stop-at-walls]]
+(define-claim "BXSWEP" boxes-thrown-sideways-stop-at-walls
+    "A cube thrown at 50 m/s along x or z into a wall one cell thick reaches it and stays out of it."
+  (dolist (axis '(:x :z))
+    (dolist (dt (list (/ 1.0 60) (/ 1.0 20)))
+      (dolist (orientation '((1 0 0 0) (0.9 0.3 0.2 0.1)))
+        (let ((terrain (make-voxel-terrain)))
+          (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+          (if (eq axis :x)
+              (fill-terrain terrain 10 -16 -8 11 32 -3 t)
+              (fill-terrain terrain -16 -16 10 32 32 11 t))
+          (let* ((w (make-physics-world :terrain terrain :gravity '(0 0 0)))
+                 (box (if (eq axis :x)
+                          (add-physics-box w 2.5 2.5 -5.5 0.5 0.5 0.5 :vx 50 :orientation orientation)
+                          (add-physics-box w -5.5 12.5 0.5 0.5 0.5 0.5 :vz 50 :orientation orientation)))
+                 (farthest -100.0))
+            (dotimes (i (round 2 dt))
+              (step-physics-world w dt)
+              (multiple-value-bind (x y z) (physics-body-position w box)
+                (declare (ignore y))
+                (setf farthest (max farthest (if (eq axis :x) x z)))))
+            (check (< 9.2 farthest 9.51) "along ~(~A~), dt ~,3F, turned ~A: the centre went as far as ~,4F"
+                   axis dt (second orientation) farthest)
+            (check (eq t (validate-physics-world w)))))))))
+;; BXSWEP-boxes-thrown-sideways-stop-at-walls ends here
+
+;; [[file:../physics.org::#BXPUSH][BXPUSH-walker-pushes-a-crate]]
+(defun pushed-crate (&key (friction 0.6) (speed 2.0) (steps 120) wall (kernels :scalar))
+  "A floor world, a cube of half-extent 0.4 m and 10 kg at (2.5, 0.4, 2.5) of FRICTION, and a
+posted box of the walker's size behind it at x = 1.3, posted before each of STEPS steps moving at
+SPEED along x; with WALL, a wall of cells from x = 5 up. Return the world, the crate, and the most
+its back face lay behind the walker's front face, and the least its front face lay before the
+wall. #BXPUSH"
+  (let* ((terrain (make-floor-terrain))
+         (w (progn (when wall (fill-terrain terrain 5 0 -16 32 4 32 t))
+                   (make-physics-world :terrain terrain :kernels kernels)))
+         (crate (add-physics-box w 2.5 0.4 2.5 0.4 0.4 0.4 :mass 10 :friction friction))
+         (behind 0.0) (before most-positive-single-float))
+    (dotimes (i steps)
+      (let ((wx (+ 1.3 (* speed i (/ 1.0 60)))))
+        (post-physics-box w wx 0.9 2.5 0.3 0.9 0.3 :vx speed)
+        (step-physics-world w)
+        (let ((x (physics-body-position w crate)))
+          (setf behind (max behind (- (+ wx 0.3 (* speed (/ 1.0 60))) (- x 0.4)))
+                before (min before (- 5.0 (+ x 0.4)))))))
+    (values w crate behind before)))
+
+(define-claim "BXPUSH" walker-pushes-a-crate
+    "A posted box pushes a crate along the floor at its speed, without tipping it or driving it into the floor."
+  (multiple-value-bind (w crate behind) (pushed-crate)
+    (multiple-value-bind (vx vy vz) (physics-body-velocity w crate)
+      (check (< (abs (- vx 2.0)) 0.02) "the crate moves at ~,4F m/s" vx)
+      (check (< (sqrt (+ (* vy vy) (* vz vz))) 1e-2) "across: ~,4F ~,4F m/s" vy vz))
+    (check (< behind 0.02) "the crate's back lay ~,4F m behind the walker's front" behind)
+    (check (< (abs (- (nth-value 1 (physics-body-position w crate)) (- 0.4 *physics-linear-slop*))) 5e-3)
+           "the crate's centre is at y = ~,4F" (nth-value 1 (physics-body-position w crate)))
+    (check (< (abs (- 1.0 (physics-body-orientation w crate))) 1e-2) "tipped: qw ~,5F" (physics-body-orientation w crate))
+    (check (eq t (validate-physics-world w))))
+  (multiple-value-bind (w crate) (pushed-crate :friction 0.0)
+    (check (< (abs (- (physics-body-velocity w crate) 2.0)) 0.02) "without friction: ~,4F m/s"
+           (physics-body-velocity w crate))))
+;; BXPUSH-walker-pushes-a-crate ends here
+
+;; [[file:../physics.org::#BXPUSH][BXPUSH-crate-squeezed-against-a-wall]]
+(defun crate-speed (world handle)
+  "The speed of the body HANDLE of WORLD. #BXPUSH"
+  (multiple-value-bind (vx vy vz) (physics-body-velocity world handle)
+    (sqrt (+ (* vx vx) (* vy vy) (* vz vz)))))
+
+(define-claim "BXPUSH" crate-squeezed-against-a-wall
+    "A crate pinned by the walker against a wall stays out of the wall, and is left still when the walker goes."
+  (multiple-value-bind (w crate behind before) (pushed-crate :steps 240 :wall t)
+    (declare (ignore behind))
+    (check (> before (- (+ *physics-linear-slop* 5e-3))) "the crate's front lay ~,4F m into the wall" (- before))
+    (check (< (crate-speed w crate) 0.5) "the pinned crate moves at ~,4F m/s" (crate-speed w crate))
+    (check (< (abs (- (nth-value 1 (physics-body-position w crate)) (- 0.4 *physics-linear-slop*))) 5e-3)
+           "the pinned crate's centre is at y = ~,4F" (nth-value 1 (physics-body-position w crate)))
+    (check (eq t (validate-physics-world w)))
+    (dotimes (i 60) (step-physics-world w))
+    (check (< (crate-speed w crate) 0.1) "left alone it moves at ~,4F m/s" (crate-speed w crate))))
+;; BXPUSH-crate-squeezed-against-a-wall ends here
+
+;; [[file:../physics.org::#BXPUSH][BXPUSH-push-bit-equal-and-quiet]]
+(define-claim "BXPUSH" push-bit-equal-and-quiet
+    "The walker pushing and pinning a crate reaches one state hash in every family; its steps cons nothing."
+  (let ((hashes (loop for family in (available-kernel-families)
+                      collect (physics-world-state-hash (pushed-crate :steps 240 :wall t :kernels family)))))
+    (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes))
+  (let* ((w (pushed-crate :steps 60)) (consed 0))
+    (dotimes (i 60)
+      (post-physics-box w (+ 1.3 (* 2.0 (+ 60 i) (/ 1.0 60))) 0.9 2.5 0.3 0.9 0.3 :vx 2.0)
+      (let ((before (sb-ext:get-bytes-consed)))
+        (step-physics-world w)
+        (incf consed (- (sb-ext:get-bytes-consed) before))))
+    (check (zerop consed) "60 steps consed ~D bytes" consed)))
+;; BXPUSH-push-bit-equal-and-quiet ends here
 
 ;; [[file:../physics.org::#PYR4MD][PYR4MD-the-pyramid-is-box3ds]]
 (define-claim "PYR4MD" the-pyramid-is-box3ds
@@ -7965,6 +8327,23 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (<= 2 colours 25) "~D colours" colours)
       (check (< 0d0 seconds 1d0) "the step took ~,6F s" seconds))))
 ;; IDVK7G-step-statistics ends here
+
+;; [[file:../physics.org::#IDVK7G][IDVK7G-phase-bytes-within-the-run]]
+(define-claim "IDVK7G" phase-bytes-within-the-run
+    "The phase clock's bytes over ten steps are no more than the image consed across them."
+  (let* ((w (make-basin-world 100))
+         (n (length *physics-phases*))
+         (clock (make-array (* 2 n) :element-type 'fixnum :initial-element 0)))
+    (step-physics-world w)
+    (setf (luv-physics::physics-world-phase-clock w) clock)
+    (let ((before (sb-ext:get-bytes-consed)))
+      (dotimes (i 10) (step-physics-world w))
+      (let ((run (- (sb-ext:get-bytes-consed) before))
+            (counted (reduce #'+ clock :start n)))
+        (setf (luv-physics::physics-world-phase-clock w) nil)
+        (check (every (lambda (b) (>= b 0)) (subseq clock n)) "bytes ~S" (subseq clock n))
+        (check (<= counted run) "the phases counted ~D bytes, the run consed ~D" counted run)))))
+;; IDVK7G-phase-bytes-within-the-run ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-failed-step-restores-sleeping-rows]]
 (define-claim "IDVK7G" failed-step-restores-sleeping-rows
@@ -9452,6 +9831,28 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
       (check (= 12 (physics-world-sleeping-count world)) "~D of 12 asleep" (physics-world-sleeping-count world)))))
 ;; SN4P0T-sleepers-cost-what-the-awake-cost ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-changed-pair-rows-restore]]
+(define-claim "SN4P0T" changed-pair-rows-restore
+    "A pair list built for rows that have since changed restores with its own handles."
+  (let* ((w (make-floor-world))
+         (a (add-physics-body w 2.5 0.25 2.5 :radius 0.25))
+         (b (add-physics-body w 6.5 3.0 6.5 :radius 0.25)))
+    (loop repeat 300 until (= 1 (physics-world-sleeping-count w)) do (step-physics-world w))
+    (check (and (not (physics-body-awake-p w a)) (physics-body-awake-p w b)) "not the resting ball alone asleep")
+    (add-physics-body w 10.5 2.0 2.5 :radius 0.25)
+    (flet ((rows (world)
+             (let* ((plist (luv-physics::physics-world-pair-list world))
+                    (n (max 0 (luv-physics::pair-list-rows plist))))
+               (list n (coerce (subseq (luv-physics::pair-list-handles plist) 0 n) 'list)))))
+      (let ((before (rows w))
+            (awake (coerce (subseq (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 0 2) 'list)))
+        (check (equal (second before) (list a b)) "the list was built for ~S" before)
+        (check (notany #'= (second before) awake) "the awake rows ~S share a handle with the list's ~S" awake before)
+        (let ((copy (make-floor-world)))
+          (restore-physics-world copy (snapshot-physics-world w))
+          (check (equal before (rows copy)) "restored, the list holds ~S, not ~S" (rows copy) before))))))
+;; SN4P0T-changed-pair-rows-restore ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-restore-trades-every-contact-column]]
 (define-claim "SN4P0T" restore-trades-every-contact-column
     "The contact columns a restore decodes and trades are every column of contact-columns, in order."
@@ -9459,6 +9860,50 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
          "traded ~S, the layout's ~S" luv-physics::+snapshot-traded-contact-columns+
          luv-physics::+contact-columns-column-names+))
 ;; SN4P0T-restore-trades-every-contact-column ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-restore-keeps-a-held-grid]]
+(defun awake-grid-fingerprint (world)
+  "The fields of WORLD's awake grid a walk reads: count, form, box of cells, mask, and the items
+and their centres in their order. #SN4P0T"
+  (let* ((g (luv-physics::physics-world-awake-grid world)) (n (luv-physics::hash-grid-count g)))
+    (list n (luv-physics::hash-grid-dense g) (luv-physics::hash-grid-ox g) (luv-physics::hash-grid-oy g)
+          (luv-physics::hash-grid-oz g) (luv-physics::hash-grid-nx g) (luv-physics::hash-grid-ny g)
+          (luv-physics::hash-grid-nz g) (luv-physics::hash-grid-mask g)
+          (subseq (luv-physics::hash-grid-items g) 0 n) (subseq (luv-physics::hash-grid-xs g) 0 n)
+          (subseq (luv-physics::hash-grid-ys g) 0 n) (subseq (luv-physics::hash-grid-zs g) 0 n))))
+
+(define-claim "SN4P0T" restore-keeps-a-held-grid
+    "A restore keeps a world's awake grid when it is the snapshot's build and buckets it again when it is not; every world resumes to the source's hash."
+  (let ((source (make-basin-world 300 :kernels :scalar)) (snapshot nil))
+    (dotimes (i 120) (step-physics-world source))
+    (setf snapshot (subseq (snapshot-physics-world source) 0))
+    (check (= (luv-physics::physics-world-awake-grid-step source)
+              (luv-physics::pair-list-built-step (luv-physics::physics-world-pair-list source)))
+           "the source's grid is not its list's build: nothing to keep")
+    (dotimes (i 30) (step-physics-world source))
+    (let* ((fresh (make-basin-world 300 :kernels :scalar))
+           (built (progn (restore-physics-world fresh snapshot) (awake-grid-fingerprint fresh)))
+           (kept (progn (restore-physics-world fresh snapshot) (awake-grid-fingerprint fresh)))
+           (moved (make-basin-world 300 :kernels :scalar)))
+      (restore-physics-world moved snapshot)
+      (let* ((plist (luv-physics::physics-world-pair-list moved)) (rows (luv-physics::pair-list-rows plist))
+             (anchors (luv-physics::pair-list-anchors plist))
+             (xs (make-array rows :element-type 'single-float)) (ys (make-array rows :element-type 'single-float))
+             (zs (make-array rows :element-type 'single-float)))
+        (incf (aref anchors 0) 0.25)
+        (dotimes (i rows)
+          (setf (aref xs i) (aref anchors (* 3 i)) (aref ys i) (aref anchors (+ 1 (* 3 i))) (aref zs i) (aref anchors (+ 2 (* 3 i)))))
+        (luv-physics::build-hash-grid (luv-physics::physics-world-awake-grid moved) (luv-physics::pair-list-cell plist)
+                                      rows xs ys zs (luv-physics::awake-row-identities moved rows))
+        (check (not (equalp built (awake-grid-fingerprint moved))) "the moved anchors bucketed the same grid"))
+      (restore-physics-world moved snapshot)
+      (check (equalp built kept) "the kept grid is not the one a restore buckets")
+      (check (equalp built (awake-grid-fingerprint moved)) "a grid of other anchors was kept")
+      (dolist (world (list fresh moved))
+        (check (eq t (validate-physics-world world)))
+        (dotimes (i 30) (step-physics-world world))
+        (check (= (physics-world-state-hash source) (physics-world-state-hash world)))))))
+;; SN4P0T-restore-keeps-a-held-grid ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
@@ -9697,6 +10142,13 @@ hand: the world and the function to call before each step. #K5DF9S"
       (check (equal '(:bad :bodies) (refusal :bad terrain seconds features
                                              '(:bodies 3 :spawn luv-physics::basin-spawn-point :colour 1))))
       (check (equal '(:bad :bodies) (refusal :bad terrain seconds features '(:bodies 3 :radius 0.25))))
+      (check (equal '(:bad :bodies) (refusal :bad terrain seconds features
+                                             '(:bodies 3 :spawn luv-physics::basin-spawn-point :half-extents '(0.5 0.5 0.5)
+                                               :radius 0.25))))
+      (check (equal '(:bad :bodies) (refusal :bad terrain seconds features
+                                             '(:bodies 3 :spawn luv-physics::basin-spawn-point :half-extents '(0.5 0.5)))))
+      (check (null (refusal :good terrain seconds features
+                            '(:bodies 3 :spawn luv-physics::basin-spawn-point :half-extents '(0.5 0.25 0.5)))))
       (check (equal '(:bad :terrain) (refusal :bad '(:terrain (a b) (make-floor-terrain)) seconds features)))
       (check (equal '(:bad :seconds) (refusal :bad terrain seconds seconds features)))
       (check (equal '(:bad :seconds) (refusal :bad terrain features)))
@@ -10172,6 +10624,20 @@ in the order of *physics-scene-features*. #K5DF9S"
                 do (check (every (lambda (a b) (< (abs (- a b)) 1d-6)) want got)
                           "~A, ~A: the walker ends at ~S, not ~S" twin name got want)))))))
 ;; H7P4CX-walker-on-every-axis ends here
+
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-looks-ahead-along-the-blocked-axis]]
+(define-claim "H7P4CX" walker-looks-ahead-along-the-blocked-axis
+    "A walker stopped along z alone climbs a one-cell ledge, though 0.3 cells ahead along x it rises to two."
+  (let ((terrain (make-floor-terrain))
+        (p (make-physics-player 1.6d0 0 2.7d0)))
+    (fill-terrain terrain -5 0 3 10 1 4 t)
+    (fill-terrain terrain 2 1 3 3 2 4 t)
+    (step-physics-player p terrain :move-x 0.05d0 :move-z 1d0)
+    (check (< (abs (- (physics-player-z p) 2.7d0)) 1d-9) "the ledge did not stop it: z = ~F" (physics-player-z p))
+    (check (= (physics-player-vy p) 5d0) "it did not jump: vy = ~F" (physics-player-vy p))
+    (step-physics-player p terrain :move-x 0.05d0 :move-z 1d0)
+    (check (> (physics-player-y p) 0d0) "its soles stayed on the floor")))
+;; H7P4CX-walker-looks-ahead-along-the-blocked-axis ends here
 
 ;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-limits-at-their-edges]]
 (define-claim "H7P4CX" walker-limits-at-their-edges
@@ -11224,6 +11690,44 @@ and the world. #G4WXCJ"
                "the recorded boxes are not the player's")))))
 ;; G4WXCJ-recording-sees-boxes ends here
 
+;; [[file:../physics.org::#G4WXCJ][G4WXCJ-frames-hold-box-shapes]]
+(define-claim "G4WXCJ" frames-hold-box-shapes
+    "Each frame holds each box body's place, orientation and extents; the last frame's are the world's."
+  (let* ((w (make-floor-world))
+         (ball (add-physics-body w 6.5 0.3 6.5))
+         (cube (add-physics-box w 2.5 0.5 2.5 0.5 0.5 0.5 :orientation (list (cos (/ pi 12)) 0 (sin (/ pi 12)) 0)))
+         (flat (add-physics-box w 4.5 0.2 2.5 0.4 0.2 0.3)))
+    (declare (ignore ball))
+    (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w flat)))
+    (let ((recording (start-physics-recording w)))
+      (dotimes (i 10) (step-physics-world w))
+      (stop-physics-recording w)
+      (let* ((frames (luv-physics::physics-recording-frames recording))
+             (index (luv-physics::physics-recording-box-index recording))
+             (shape (luv-physics::physics-recording-box-shape recording))
+             (handles (luv-physics::physics-recording-handle recording)))
+        (check (= 11 (length frames)))
+        (check (= 22 (length index)) "~D box entries" (length index))
+        (check (= (* 7 (length index)) (length shape)))
+        (check (every (lambda (f)
+                        (let ((inside (loop for k across index count (<= (aref f 0) k (+ (aref f 0) (aref f 1) -1)))))
+                          (= 2 inside)))
+                      frames)
+               "a frame does not hold its two boxes")
+        (check (every (lambda (k) (member (aref handles k) (list cube flat))) index) "a box entry names a sphere")
+        (let ((last (aref frames 10)))
+          (dolist (box (list cube flat))
+            (let ((e (position-if (lambda (k) (and (>= k (aref last 0)) (= (aref handles k) box))) index)))
+              (check (not (null e)) "the last frame holds no entry for ~D" box)
+              (when e
+                (check (equal (coerce (subseq shape (* 7 e) (* 7 (1+ e))) 'list)
+                              (append (multiple-value-list (physics-body-orientation w box))
+                                      (multiple-value-list (physics-box-half-extents w box))))
+                       "box ~D recorded as ~S" box (subseq shape (* 7 e) (* 7 (1+ e)))))))))))
+  (multiple-value-bind (recording) (recorded-basin 30 5 1)
+    (check (zerop (length (luv-physics::physics-recording-box-index recording))))))
+;; G4WXCJ-frames-hold-box-shapes ends here
+
 ;; [[file:../physics.org::#G4WXCJ][G4WXCJ-frames-hold-every-column]]
 (define-claim "G4WXCJ" frames-hold-every-column
     "Frames hold each body's centre, radius and clamped style, and the step's figures, first frame and last."
@@ -11480,6 +11984,27 @@ and the world. #G4WXCJ"
              "~(~A~) declares ~S and uses ~S" name declared used))))
 ;; J0SCNE-joint-scenes-do-what-they-say ends here
 
+;; [[file:../physics.org::#BXSC3N][BXSC3N-tower-topples]]
+(define-claim "BXSC3N" tower-topples
+    "The leaning tower of eight blocks falls over onto the floor, no block above its start or into the floor."
+  (multiple-value-bind (w script scene) (make-scene-world :tower)
+    (let ((blocks (physics-world-handles w)) (highest 0.0))
+      (check (= 8 (length blocks)))
+      (check (every (lambda (h) (physics-body-box-p w h)) blocks))
+      (check (= 7.5 (reduce #'max (mapcar (lambda (h) (nth-value 1 (physics-body-position w h))) blocks))))
+      (dotimes (step (round (physics-scene-seconds scene) (luv-physics::physics-world-step-seconds w)))
+        (funcall script step)
+        (step-physics-world w)
+        (when (zerop (mod step 10))
+          (setf highest (max highest (reduce #'max (mapcar (lambda (h) (nth-value 1 (physics-body-position w h))) blocks))))))
+      (let ((heights (mapcar (lambda (h) (nth-value 1 (physics-body-position w h))) blocks))
+            (xs (mapcar (lambda (h) (physics-body-position w h)) blocks)))
+        (check (every (lambda (y) (< 0.45 y 2.0)) heights) "the blocks end at heights ~S" heights)
+        (check (<= highest 7.5) "a block rose to ~,3F m" highest)
+        (check (> (reduce #'max xs) -1.0) "the farthest block lies at x = ~,3F" (reduce #'max xs)))
+      (check (eq t (validate-physics-world w))))))
+;; BXSC3N-tower-topples ends here
+
 ;; [[file:../physics.org::#RH7T05][A viewer for the browser:2]]
 (defun repository-file (name)
   "The pathname of the file NAME of the repository. #RH7T05"
@@ -11696,6 +12221,45 @@ within FUZZ percent of COLOUR inside CROP (width height left top); NIL when ther
               (check (and (null handle) (equal text "")) "an empty pixel picks ~S (~S)" handle text))))))))
 ;; RH7T05-viewer-picks-a-body ends here
 
+;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-boxes-turned]]
+(define-claim "RH7T05" viewer-draws-boxes-turned
+    "In headless Chromium a box body is drawn turned by its orientation, and picked on its faces."
+  (with-chromium (chromium "RH7T05")
+    (let* ((square (repository-file "report/viewer-box-square.html"))
+           (turned (repository-file "report/viewer-box-turned.html"))
+           (square-shot (repository-file "report/viewer-box-square.png"))
+           (turned-shot (repository-file "report/viewer-box-turned.png"))
+           (q (let* ((a (/ pi 8)) (b (/ pi 12)))
+                ;; 45 degrees about y, then 30 degrees about x: (cos a, 0, sin a, 0) (cos b, sin b, 0, 0)
+                (list (* (cos a) (cos b)) (* (cos a) (sin b)) (* (sin a) (cos b)) (- (* (sin a) (sin b))))))
+           (handle nil))
+      (ensure-directories-exist square)
+      (loop for page in (list square turned) for orientation in (list '(1 0 0 0) q)
+            do (let ((w (make-physics-world :gravity '(0 0 0))))
+                 (setf handle (add-physics-box w 0 0 0 0.5 0.5 0.5 :orientation orientation))
+                 (write-world-viewer w page :steps 0 :title "a cube")))
+      (browser-screenshot-pair chromium "viewer-box-square.html#canvas=960x592" "viewer-box-turned.html#canvas=960x592"
+                               square-shot turned-shot)
+      (let ((all (* 960 640)))
+        (dolist (shot (list square-shot turned-shot))
+          (let ((other (pixels-differing shot "#d9822b" :fuzz 20)))
+            (check (and other (> (- all other) (* 0.02 all))) "~A: ~A pixels near the box's colour"
+                   (file-namestring shot) (and other (- all other)))))
+        (let ((moved (pixels-differing square-shot turned-shot)))
+          (check (and moved (> moved (* 0.01 all))) "the square and turned cubes differ in ~A pixels" moved)))
+      (let ((at (colour-middle turned-shot "#d9822b" :crop '(300 200 360 240))))
+        (check (not (null at)) "no orange in the middle of the turned cube's picture")
+        (when at
+          (let* ((dom (browser-document chromium (format nil "file://~A#canvas=960x592&pick=~D,~D"
+                                                         (namestring turned) (first at) (second at))))
+                 (mark (search "data-picked=\"" dom))
+                 (panel (search "<div id=\"picked\">" dom))
+                 (text (and panel (subseq dom (+ panel 17) (search "</div>" dom :start2 panel)))))
+            (check (and mark (eql handle (parse-integer dom :start (+ mark 13) :junk-allowed t)))
+                   "the cube's pixel ~S picks ~S" at (and mark (parse-integer dom :start (+ mark 13) :junk-allowed t)))
+            (check (and text (search "box 0.500 0.500 0.500 m" text)) "the panel reads ~S" text)))))))
+;; RH7T05-viewer-draws-boxes-turned ends here
+
 ;; [[file:../physics.org::#RH7T05][RH7T05-viewer-draws-the-given-box]]
 (defun far-wall-world ()
   "A floor 40 m long on x and 8 m on z, its top at y = 0, a wall 3 m high at x = 36, and a ball
@@ -11835,6 +12399,39 @@ at rest near the start. #RH7T05"
       (check (< (abs (- 5 (reduce #'min xs))) 0.11) "the leftmost point is at ~,1F" (reduce #'min xs))
       (check (< (abs (- 295 (reduce #'max xs))) 0.11) "the rightmost point is at ~,1F" (reduce #'max xs)))))
 ;; UFK5EA-picture-of-one-cell ends here
+
+;; [[file:../physics.org::#UFK5EA][UFK5EA-picture-draws-box-faces]]
+(define-claim "UFK5EA" picture-draws-box-faces
+    "A turned box body is drawn as the three faces towards the viewer, whose corners are its own, all but the farthest."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (a (/ pi 12)) (b (/ pi 18))
+         (q (list (* (cos a) (cos b)) (* (cos a) (sin b)) (* (sin a) (cos b)) (- (* (sin a) (sin b))))))
+    (add-physics-box w 1.5 2.0 0.5 0.5 0.3 0.2 :orientation q)
+    (let ((recording (prog1 (start-physics-recording w) (stop-physics-recording w))))
+      (multiple-value-bind (across up toward) (luv-physics::view-basis 35 40)
+        (labels ((dot (u p) (+ (* (first u) (first p)) (* (second u) (second p)) (* (third u) (third p))))
+                 (project (p) (list (dot across p) (- (dot up p)))))
+          (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+              (apply #'luv-physics::box-axes (multiple-value-list (physics-body-orientation w (first (physics-world-handles w)))))
+            (let* ((corners (loop for k below 8
+                                  collect (let ((u (if (logbitp 0 k) 0.5 -0.5)) (v (if (logbitp 1 k) 0.3 -0.3))
+                                                (s (if (logbitp 2 k) 0.2 -0.2)))
+                                            (list (+ 1.5 (* r11 u) (* r12 v) (* r13 s)) (+ 2.0 (* r21 u) (* r22 v) (* r23 s))
+                                                  (+ 0.5 (* r31 u) (* r32 v) (* r33 s))))))
+                   (farthest (first (sort (copy-list corners) #'< :key (lambda (c) (dot toward c)))))
+                   (items (luv-physics::scene-picture-items recording 0 '() across up toward))
+                   (used '()))
+              (check (= 3 (length items)) "~D items" (length items))
+              (check (every (lambda (i) (and (eq :face (second i)) (= #xd9822b (third i)) (= 4 (length (cdddr i))))) items)
+                     "the items are ~S" (mapcar #'second items))
+              (dolist (item items)
+                (dolist (p (cdddr item))
+                  (let ((c (find-if (lambda (c) (every (lambda (x y) (< (abs (- x y)) 1d-5)) p (project c))) corners)))
+                    (check (not (null c)) "a face's corner ~S is no corner of the box" p)
+                    (when c (pushnew c used :test #'equal)))))
+              (check (= 7 (length used)) "the faces use ~D corners" (length used))
+              (check (not (member farthest used :test #'equal)) "the farthest corner is drawn"))))))))
+;; UFK5EA-picture-draws-box-faces ends here
 
 ;; [[file:../physics.org::#UFK5EA][UFK5EA-view-basis-from-angles]]
 (define-claim "UFK5EA" view-basis-from-angles
@@ -12210,6 +12807,28 @@ at rest near the start. #RH7T05"
         (check (null (physics-ray-cast w -5 0.35 0 1 0 0 20)) "~A: the ray over the top met it" state)))
     (check (eq t (validate-physics-world w)))))
 ;; C4STBX-casts-meet-box-bodies ends here
+
+;; [[file:../physics.org::#C4STBX][C4STBX-casts-meet-turned-boxes-where-they-stand]]
+(define-claim "C4STBX" casts-meet-turned-boxes-where-they-stand
+    "Rays along x, y and z meet a box turned about (1,0,1) off the origin on its faces; a ball beside it as a ball."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (s (sqrt 0.5))
+         (ball (add-physics-body w 10 2 -3 :radius 0.5))
+         (box (add-physics-box w 1 2 -3 0.5 0.3 0.4 :orientation (list 0 s 0 s))))
+    (loop for (ox oy oz ux uy uz want handle) in (list (list -4 2 -3 1 0 0 4.6 box) (list 1 -3 -3 0 1 0 4.7 box)
+                                                       (list 1 2 -8 0 0 1 4.5 box) (list 6 2 -3 1 0 0 3.5 ball))
+          do (let ((hit (physics-ray-cast w ox oy oz ux uy uz 20)))
+               (check (and hit (eql handle (physics-hit-handle hit))) "the ray along (~D ~D ~D) met ~S" ux uy uz
+                      (and hit (physics-hit-handle hit)))
+               (when hit
+                 (check (< (abs (- (physics-hit-distance hit) want)) 1e-5)
+                        "the ray along (~D ~D ~D) met it at ~,6F, not ~A" ux uy uz (physics-hit-distance hit) want)
+                 (check (< (max (abs (+ (physics-hit-nx hit) ux)) (abs (+ (physics-hit-ny hit) uy))
+                                (abs (+ (physics-hit-nz hit) uz)))
+                           1e-5)
+                        "the ray along (~D ~D ~D): normal ~,5F ~,5F ~,5F" ux uy uz
+                        (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit)))))))
+;; C4STBX-casts-meet-turned-boxes-where-they-stand ends here
 
 ;; [[file:../physics.org::#R4YC57][R4YC57-rays-match-brute-force]]
 (defun query-test-scene ()
