@@ -6324,13 +6324,31 @@ two, and each body's count of joints and its jointed flag are right. #J0STOR"
 ;; Joints are rows, named by handles:1 ends here
 
 ;; [[file:../physics.org::#J0S0LV][Joints in the substeps:1]]
-(defconstant +joint-damping-ratio+ 2.0
-  "The damping ratio of a stiff joint: Box2D v3's. #J0S0LV")
+(defconstant +joint-damping-ratio+ 1.0
+  "The damping ratio of a stiff joint: critical. #J0S0LV")
 
 (defun joint-stiffness (world h)
-  "The frequency and damping ratio of a stiff joint of WORLD over substep H, as two values:
-twice the contact hertz capped at a quarter of the substep rate, and +joint-damping-ratio+. #J0S0LV"
-  (values (* 2.0 (min (f32 (physics-world-contact-hertz world)) (/ 0.25 h))) +joint-damping-ratio+))
+  "The frequency and damping ratio of a stiff joint of WORLD over substep H, as two values: a
+third of the substep rate, and +joint-damping-ratio+. #J0S0LV"
+  (declare (ignore world))
+  (values (/ 1.0 (* 3.0 h)) +joint-damping-ratio+))
+
+(defvar *joint-relax-passes* 2
+  "How many relax passes a substep gives its joints: one with the contacts, the others over the
+joints alone (relax-joints). #J0S0LV")
+
+(defun relax-joints (set v d inv-h)
+  "The joints' relax passes of a substep after the one they share with the contacts: the joints
+of SET solved this step, colour by colour and the overflow colour last, without bias, over the
+solver's velocities V and deltas D, *joint-relax-passes* less one times. #J0S0LV"
+  (declare (type joint-set set) (type f32-column v d) (type single-float inv-h))
+  (let ((js (joint-set-color-starts set)))
+    (declare (type fixnum-column js))
+    (loop repeat (1- (the fixnum *joint-relax-passes*))
+          do (dotimes (c (1+ +physics-max-colors+))
+               (let ((s (aref js c)) (e (aref js (1+ c))))
+                 (declare (type index s e))
+                 (when (< s e) (solve-joints set v d inv-h nil s e)))))))
 
 (defun spring-softness (hertz zeta h)
   "The soft coefficients of a spring joint of HERTZ and damping ratio ZETA over substep H: those of
@@ -6668,17 +6686,18 @@ colour's joints, then its contacts, as the wide families run them. #J0S0LV"
   "Run BODY for the prepared joint J, its columns bound by with-joint-columns, over the solver's velocities V and deltas D, with:
 OA OB the two solver rows, MA MB IA IB the masses, AX .. BZ the levers, CX CY CZ the separation
 now, (relative-velocity) the anchors' relative velocity as three values and (push! PX PY PZ) the
-impulse P applied to the second body and -P to the first. #J0S0LV"
+impulse P applied to the second body and -P to the first. CX CY CZ are read where they are
+used, so a pass that needs no separation, a point joint's relax or warm start, reads no delta. #J0S0LV"
   `(let* ((la (aref row-a ,j)) (lb (aref row-b ,j))
           (oa (solver-row la)) (ob (solver-row lb)) (da (delta-row la)) (db (delta-row lb))
           (ma (aref ima ,j)) (mb (aref imb ,j)) (ia (aref iia ,j)) (ib (aref iib ,j))
           (ax (aref rax ,j)) (ay (aref ray ,j)) (az (aref raz ,j))
-          (bx (aref rbx ,j)) (by (aref rby ,j)) (bz (aref rbz ,j))
-          (cx (+ (aref sx ,j) (- (aref ,d db) (aref ,d da)) (- bx ax)))
-          (cy (+ (aref sy ,j) (- (aref ,d (+ db 1)) (aref ,d (+ da 1))) (- by ay)))
-          (cz (+ (aref sz ,j) (- (aref ,d (+ db 2)) (aref ,d (+ da 2))) (- bz az))))
-     (declare (type index la lb oa ob da db) (type single-float ma mb ia ib ax ay az bx by bz cx cy cz)
-              (ignorable cx cy cz))
+          (bx (aref rbx ,j)) (by (aref rby ,j)) (bz (aref rbz ,j)))
+     (declare (type index la lb oa ob da db) (type single-float ma mb ia ib ax ay az bx by bz)
+              (ignorable da db))
+     (symbol-macrolet ((cx (+ (aref sx ,j) (- (aref ,d db) (aref ,d da)) (- bx ax)))
+                       (cy (+ (aref sy ,j) (- (aref ,d (+ db 1)) (aref ,d (+ da 1))) (- by ay)))
+                       (cz (+ (aref sz ,j) (- (aref ,d (+ db 2)) (aref ,d (+ da 2))) (- bz az))))
      (flet ((relative-velocity ()
               (let ((wax (aref ,v (+ oa 3))) (way (aref ,v (+ oa 4))) (waz (aref ,v (+ oa 5)))
                     (wbx (aref ,v (+ ob 3))) (wby (aref ,v (+ ob 4))) (wbz (aref ,v (+ ob 5))))
@@ -6702,7 +6721,7 @@ impulse P applied to the second body and -P to the first. #J0S0LV"
                       (aref ,v (+ ob 4)) (+ (aref ,v (+ ob 4)) (* ib (- (* bz px) (* bx pz))))
                       (aref ,v (+ ob 5)) (+ (aref ,v (+ ob 5)) (* ib (- (* bx py) (* by px))))))))
        (declare (inline relative-velocity push!) (ignorable #'relative-velocity))
-       ,@body)))
+       ,@body))))
 
 (defun warm-start-joints (set v d start end)
   "Apply again the carried impulse of each prepared joint of SET at rows START..END, at the start
@@ -6717,8 +6736,10 @@ of a substep. #J0S0LV"
           (with-joint-row (v d j)
             (if (= (aref kind j) +joint-point+)
                 (push! (aref impulse-x j) (aref impulse-y j) (aref impulse-z j))
-                (let* ((len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+                (let* ((cx cx) (cy cy) (cz cz)
+                       (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
                        (s (if (> len 1e-9) (/ (- (+ (aref impulse-x j) (aref impulse-y j)) (aref impulse-z j)) len) 0.0)))
+                  (declare (type single-float cx cy cz))
                   (push! (* s cx) (* s cy) (* s cz)))))))))
   nil)
 
@@ -6740,33 +6761,38 @@ solve once it is; then PUSH, a form that pushes the change Q. Expanded in solve-
 
 (defmacro solve-point-joint ()
   "One push of the point joint at row J: its three axes at once, through its prepared inverse
-effective mass K11 .. K33, soft with the bias in the solve, rigid without it in the relax.
-Expanded in solve-joints, within with-joint-row. #J0S0LV"
+effective mass K11 .. K33, soft with the bias in the solve, rigid without it in the relax, where
+it reads no separation. Expanded in solve-joints, within with-joint-row. #J0S0LV"
   `(multiple-value-bind (vx vy vz) (relative-velocity)
-     (let* ((br (if use-bias (aref bias-rate j) 0.0))
-            (ms (if use-bias (aref mass-scale j) 1.0))
-            (is (if use-bias (aref impulse-scale j) 0.0))
-            (rx (+ vx (* br cx))) (ry (+ vy (* br cy))) (rz (+ vz (* br cz)))
-            (px (- (- (* ms (+ (* (aref k11 j) rx) (* (aref k12 j) ry) (* (aref k13 j) rz))))
-                   (* is (aref impulse-x j))))
-            (py (- (- (* ms (+ (* (aref k12 j) rx) (* (aref k22 j) ry) (* (aref k23 j) rz))))
-                   (* is (aref impulse-y j))))
-            (pz (- (- (* ms (+ (* (aref k13 j) rx) (* (aref k23 j) ry) (* (aref k33 j) rz))))
-                   (* is (aref impulse-z j)))))
-       (setf (aref impulse-x j) (+ (aref impulse-x j) px)
-             (aref impulse-y j) (+ (aref impulse-y j) py)
-             (aref impulse-z j) (+ (aref impulse-z j) pz))
-       (push! px py pz))))
+     (flet ((apply-point (rx ry rz ms is)
+              (declare (type single-float rx ry rz ms is))
+              (let ((px (- (- (* ms (+ (* (aref k11 j) rx) (* (aref k12 j) ry) (* (aref k13 j) rz))))
+                           (* is (aref impulse-x j))))
+                    (py (- (- (* ms (+ (* (aref k12 j) rx) (* (aref k22 j) ry) (* (aref k23 j) rz))))
+                           (* is (aref impulse-y j))))
+                    (pz (- (- (* ms (+ (* (aref k13 j) rx) (* (aref k23 j) ry) (* (aref k33 j) rz))))
+                           (* is (aref impulse-z j)))))
+                (setf (aref impulse-x j) (+ (aref impulse-x j) px)
+                      (aref impulse-y j) (+ (aref impulse-y j) py)
+                      (aref impulse-z j) (+ (aref impulse-z j) pz))
+                (push! px py pz))))
+       (declare (inline apply-point))
+       (if use-bias
+           (let ((br (aref bias-rate j)))
+             (apply-point (+ vx (* br cx)) (+ vy (* br cy)) (+ vz (* br cz))
+                          (aref mass-scale j) (aref impulse-scale j)))
+           (apply-point vx vy vz 1.0 0.0)))))
 
 (defmacro solve-distance-joint ()
   "One push of the distance joint at row J along its axis: its length (a spring in the solve
 alone, a stiff length with the bias in the solve and without it in the relax), then its lower and
 upper bounds (solve-joint-bound). Expanded in solve-joints, within with-joint-row. #J0S0LV"
-  `(let* ((len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
+  `(let* ((cx cx) (cy cy) (cz cz)
+          (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
           (s (if (> len 1e-9) (/ 1.0 len) 0.0))
           (nx (* cx s)) (ny (* cy s)) (nz (* cz s))
           (k (aref k11 j)) (f (aref flags j)))
-     (declare (type single-float len s nx ny nz k) (type fixnum f))
+     (declare (type single-float cx cy cz len s nx ny nz k) (type fixnum f))
      (flet ((speed-along ()
               (multiple-value-bind (vx vy vz) (relative-velocity)
                 (+ (* vx nx) (* vy ny) (* vz nz)))))
@@ -6802,12 +6828,16 @@ coefficients. #J0S0LV"
                          k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale limit-scale
                          rest-length min-length max-length impulse-x impulse-y impulse-z)
         rows
-      (loop for j of-type index from start below end do
-        (progn
-          (with-joint-row (v d j)
-            (if (= (aref kind j) +joint-point+)
-                (solve-point-joint)
-                (solve-distance-joint)))))))
+      ;; a loop for the solve and one for the relax, each compiled for its own pass
+      (macrolet ((pass (biased)
+                   `(let ((use-bias ,biased))
+                      (loop for j of-type index from start below end do
+                        (progn
+                          (with-joint-row (v d j)
+                            (if (= (aref kind j) +joint-point+)
+                                (solve-point-joint)
+                                (solve-distance-joint))))))))
+        (if use-bias (pass t) (pass nil)))))
   nil)
 
 (defun break-joints (world set)
@@ -9372,7 +9402,9 @@ bodies to half the push-out speed. #IDVK7G"
           (dotimes (k relaxes)
             (when boxes (setf (box-set-elapsed boxes) (+ elapsed h)) (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
-            (when (plusp boxed) (yield-boxes))))
+            (when (plusp boxed) (yield-boxes)))
+          ;; the joints' second relax, over the joints alone ([[#J0S0LV]])
+          (when joints (relax-joints joints v d inv-h)))
         (when held (hold-crowded-speeds world))
         (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed))))
     ;; the box points that struck bounce once, after the substeps ([[#BXSOLV]])

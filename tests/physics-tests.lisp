@@ -6495,8 +6495,8 @@ world, the balls and the joints. #J0S0LV"
     (values w balls joints)))
 
 (define-claim "J0S0LV" surface-chain-holds
-    "Ten balls joined at their surfaces, let go at 60 deg, keep their gaps under 13.5 mm, spins under 87.5 rad/s, energy."
-  (let* ((m 1.0) (g 9.81) (inertia (* 0.4 m 0.4 0.4)) (omega (* 2 pi 60))
+    "Ten balls joined at their surfaces, let go at 60 deg, keep their gaps under 7.6 mm, spins under 87.5 rad/s, energy."
+  (let* ((m 1.0) (g 9.81) (inertia (* 0.4 m 0.4 0.4)) (omega (* 2 pi 80))
          (gap-bound (/ (* 2 10 m g (+ (/ 2 m) (/ (* 2 0.25) inertia))) (* omega omega)))
          (budget (* m g (loop for i below 10 sum (+ i 0.5)) (- 1 (cos (/ pi 3)))))
          (spin-bound (sqrt (/ (* 2 budget) inertia)))
@@ -6604,6 +6604,16 @@ world, the balls and the joints. #J0S0LV"
       (check (physics-joint-alive-p w joint))
       (check (< (abs (- 9 (nth-value 1 (physics-body-position w ball)))) 0.01)))))
 ;; J0S0LV-breaks-above-its-force ends here
+
+;; [[file:../physics.org::#J0S0LV][J0S0LV-relaxed-once-the-chain-swings]]
+(define-claim "J0S0LV" relaxed-once-the-chain-swings
+    "With one relax pass for joints, the 20-link chain under 100 kg swings from under 1 % to over 2 % stretch."
+  (multiple-value-bind (mean least most ok)
+      (let ((luv-physics::*joint-relax-passes* 1)) (luv-physics::hanging-chain-run 20 :heavy 100.0))
+    (declare (ignore mean))
+    (check (identity ok) "not finite or invalid")
+    (check (and (< least 0.01) (> most 0.02)) "relaxed once the stretch swings from ~,4F to ~,4F only" least most)))
+;; J0S0LV-relaxed-once-the-chain-swings ends here
 
 ;; [[file:../physics.org::#J0SL3P][J0SL3P-groups-sleep-and-wake-together]]
 (define-claim "J0SL3P" groups-sleep-and-wake-together
@@ -6717,16 +6727,16 @@ world, the balls and the joints. #J0S0LV"
 
 ;; [[file:../physics.org::#J0PHYS][J0PHYS-hanging-chain-stretch]]
 (define-claim "J0PHYS" hanging-chain-stretch
-    "A chain of 20 stretches < 0.5 %, < 3.5 % under a 100 kg ball, about the soft law's 2.87 %; a rope of 20 likewise, and taut."
-  (loop for (rope heavy bound) in '((nil 1.0 0.005) (nil 100.0 0.035) (t 1.0 0.005) (t 100.0 0.035))
+    "A chain of 20 stretches < 0.5 %, < 2 % under a 100 kg ball, about the soft law's 1.62 %; a rope of 20 likewise, and taut."
+  (loop for (rope heavy bound) in '((nil 1.0 0.005) (nil 100.0 0.02) (t 1.0 0.005) (t 100.0 0.02))
         do (let ((stretch (luv-physics::hanging-chain-stretch 20 :heavy heavy :rope rope)))
              (check (< 0 stretch bound) "~:[chain~;rope~] of 20, last ball ~A kg: stretch ~,3F %, bound ~,1F %"
                     rope heavy (* 100 stretch) (* 100 bound))))
   (multiple-value-bind (mean least most) (luv-physics::hanging-chain-run 20 :heavy 100.0)
     (let ((law (luv-physics::soft-chain-law 20 :heavy 100.0)))
-      (check (< 0.0285 law 0.0289) "the soft law gives ~,4F" law)
+      (check (< 0.0160 law 0.0164) "the soft law gives ~,4F" law)
       (check (< (abs (- mean law)) (* 0.02 law)) "under 100 kg the mean stretch is ~,4F, the law ~,4F" mean law)
-      (check (< (* 0.9 law) least most (* 1.1 law)) "under 100 kg the stretch swings from ~,4F to ~,4F" least most))))
+      (check (< (* 0.95 law) least most (* 1.05 law)) "under 100 kg the stretch swings from ~,4F to ~,4F" least most))))
 ;; J0PHYS-hanging-chain-stretch ends here
 
 ;; [[file:../physics.org::#J0PHYS][J0PHYS-cradle-on-strings]]
@@ -6832,9 +6842,9 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     "20 links under 1000 kg: the mean stretch of the last 10 s within 10 % of the soft law, the swing bounded, valid."
   (multiple-value-bind (mean least most ok) (luv-physics::hanging-chain-run 20 :heavy 1000.0)
     (let ((law (luv-physics::soft-chain-law 20 :heavy 1000.0)))
-      (check (< 0.25 law 0.28) "the law gives ~,4F" law)
+      (check (< 0.147 law 0.151) "the law gives ~,4F" law)
       (check (< (abs (- mean law)) (* 0.1 law)) "mean stretch ~,4F, the law ~,4F" mean law)
-      (check (and (< least 0.1) (< most 0.55)) "stretch from ~,4F to ~,4F" least most)
+      (check (and (< least 0.1) (< most 0.3)) "stretch from ~,4F to ~,4F" least most)
       (check (identity ok) "not finite or invalid"))))
 ;; J0XTRM-thousandfold-chain ends here
 
@@ -6844,7 +6854,7 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
   (multiple-value-bind (mean least most ok) (luv-physics::hanging-chain-run 200)
     (declare (ignore least most))
     (let ((law (luv-physics::soft-chain-law 200)))
-      (check (< 0.027 law 0.029) "the law gives ~,4F" law)
+      (check (< 0.0153 law 0.0157) "the law gives ~,4F" law)
       (check (< (abs (- mean law)) (* 0.1 law)) "mean stretch ~,4F, the law ~,4F" mean law)
       (check (identity ok) "not finite or invalid"))))
 ;; J0XTRM-chain-of-two-hundred ends here
