@@ -3314,7 +3314,9 @@ of WORLD faster than the wake speed; return how many woke. #W4K3PH"
         (when (and (> (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
                          (* (aref vz i) (aref vz i)))
                       wake2)
-                   (zerop (logand (aref flags i) +flag-terrain-only+)))
+                   ;; a box meets the terrain alone as a water drop does, but wakes ([[#BXPUSH]])
+                   (or (zerop (logand (aref flags i) +flag-terrain-only+))
+                       (logtest (aref flags i) +flag-box-shape+)))
           (let ((extra (+ (aref radius i) margin
                           (* dt (fsqrt (+ (* (aref vx i) (aref vx i)) (* (aref vy i) (aref vy i))
                                           (* (aref vz i) (aref vz i))))))))
@@ -7884,10 +7886,6 @@ values: the first the normal crossed with the world axis it is least along. #BXS
         (values t1x t1y t1z
                 (- (* ny t1z) (* nz t1y)) (- (* nz t1x) (* nx t1z)) (- (* nx t1y) (* ny t1x)))))))
 
-(defconstant +posted-push-share+ 0.1
-  "The share of the push-out speed a posted box may give a box body in a substep, beyond what
-gravity gives it in one ([[#BXPUSH]]). #BXSOLV")
-
 (defun prepare-box-points (world h)
   "Find and prepare the points of every awake box of WORLD for the substeps of H: the last step's
 points become the old ones, each awake box's are found anew from where it is ([[#BXCELL]]), and
@@ -7906,7 +7904,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
     (box-point-columns-clear (box-set-points set))
     (setf (box-set-row-count set) 0 (box-set-dummy set) n)
     (when (plusp (box-set-live set))
-      (when (< (length (box-set-rows set)) (* 3 n))
+      ;; the turns hold three floats for each awake row and for the dummy past them
+      (when (< (length (box-set-turns set)) (* 3 (1+ n)))
         (setf (box-set-rows set) (make-array (* 6 (1+ n)) :element-type 'fixnum :initial-element 0)
               (box-set-turns set) (make-array (* 6 (1+ n)) :element-type 'single-float :initial-element 0.0)))
       ;; the turns of the awake rows and of the dummy after them
@@ -7944,8 +7943,7 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                   (when near (setf (aref near i) most-positive-single-float))
                   (let ((reach (max margin (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))))
                     ;; the posted boxes first, so that the cells' points, solved after them, hold ([[#BXPUSH]])
-                    (when posted (find-box-posted-points world set i reach dt
-                                                         (+ (* +posted-push-share+ push-max) (* h gravity))))
+                    (when posted (find-box-posted-points world set i reach dt push-max (* h gravity)))
                     (find-box-points world set i reach)
                     ;; a box faster than its margin sweeps its corners ([[#BXSWEP]])
                     (when (> reach margin) (sweep-box-corners world set i reach))
@@ -8715,16 +8713,22 @@ the face it enters a solid cell through, with the box's centre on its air side, 
 ;; Fast boxes sweep their corners through the cells:1 ends here
 
 ;; [[file:../physics.org::#BXPUSH][A posted box pushes a box:1]]
-(defun find-box-posted-points (world set row reach dt speed)
+(defconstant +posted-push-share+ 0.1
+  "The share of the push-out speed a posted box may give a box body in a substep, beyond what
+gravity gives it in one. #BXPUSH")
+
+(defun find-box-posted-points (world set row reach dt push-max weight)
   "Append to SET's points those between the box at awake ROW of WORLD and each posted box its
 filter meets within REACH plus their relative travel over DT: the separating-axis test's points
 (box-pair-points, the posted box's side the dummy row), each given the posted box's velocity,
-that velocity along its normal, and SPEED as its cap, made an impulse by
-cap-posted-box-points. #BXPUSH"
-  (declare (type box-set set) (type index row) (type single-float reach dt speed) #.+kernel-policy+)
+that velocity along its normal, and as its cap the speed +posted-push-share+ of PUSH-MAX and
+WEIGHT (gravity times the substep), made an impulse by cap-posted-box-points. #BXPUSH"
+  (declare (type box-set set) (type index row) (type single-float reach dt push-max weight) #.+kernel-policy+)
   (let* ((boxes (physics-world-boxes world)) (awake (physics-world-awake world))
+         (speed (+ (* +posted-push-share+ push-max) weight))
          (dummy (body-columns-length awake)) (points (box-set-points set))
          (filtering (physics-world-filtering world)))
+    (declare (type single-float speed))
     (with-body-columns (x y z qw qx qy qz radius handle flags vx vy vz) awake
       (let* ((owner (aref handle row)) (slot (handle-index owner))
              (cx (aref x row)) (cy (aref y row)) (cz (aref z row)) (r (aref radius row))

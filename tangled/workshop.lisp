@@ -4950,6 +4950,35 @@ the one below and 0.15 m further along x, the lowest at x = -3. #BXSC3N"
   (:seconds 6)
   (:pictures 0.5 1.5 4)
   (:features :friction :sleep :box-bodies))
+
+(defun crate-point (i)
+  "The centre of crate I of the crates scene: four on the floor along x at z = 0.5, from x = -4,
+and a fifth on the second. #BXSC3N"
+  (if (= i 4)
+      (values -2.0 1.2 0.5)
+      (values (nth i '(-4.0 -2.0 0.0 2.0)) 0.4 0.5)))
+
+(defun crates-scene-input (step)
+  "The walker's input at STEP of the crates scene: still for a quarter second, then along +x at
+half its speed until 5.5 s, then still, as two values MOVE-X MOVE-Z. #BXSC3N"
+  (if (< 15 step 330) (values 0.5d0 0d0) (values 0d0 0d0)))
+
+(defun crates-scene-terrain ()
+  "The joints' scenes' floor (joint-scene-terrain) with a wall of cells 3 m high from x = 6 to
+its end at 8. #BXSC3N"
+  (let ((terrain (joint-scene-terrain)))
+    (fill-terrain terrain 6 0 -8 8 3 8 t)
+    terrain))
+
+(define-physics-scene :crates
+    "the walker pushing a row of crates along the floor until they jam against a wall #BXSC3N"
+  (:terrain () (crates-scene-terrain))
+  (:world :sleep t :kernels :auto)
+  (:bodies 5 :spawn crate-point :half-extents '(0.4 0.4 0.4) :mass 10.0 :friction 0.6)
+  (:player (-6d0 0d0 0.5d0) crates-scene-input)
+  (:seconds 7)
+  (:pictures 1 3.5 6)
+  (:features :boxes :friction :sleep :box-bodies))
 ;; Scenes of boxes:1 ends here
 
 ;; [[file:../physics.org::#RH7T05][A viewer for the browser:1]]

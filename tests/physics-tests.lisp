@@ -7139,7 +7139,7 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
                                            (+ 0.2 (random 0.3 state)) (+ 0.2 (random 0.3 state)) (+ 0.2 (random 0.3 state))
                                            :orientation (list 1 (random 0.2 state) (random 0.2 state) (random 0.2 state))))))))
       (heap 60)
-      (dotimes (i 60) (step-physics-world w))
+      (dotimes (i 180) (step-physics-world w))
       (heap 100)
       (step-physics-world w))
     (let* ((set (luv-physics::physics-world-box-bodies w))
@@ -7372,6 +7372,22 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
               (check (every (lambda (a b) (< (abs (- a b)) (* 1e-6 (max 1.0 (abs b))))) got want)
                      "one push changed ~S, not ~S" got want))))))))
 ;; BXSOLV-angular-parts-are-products ends here
+
+;; [[file:../physics.org::#BXSOLV][BXSOLV-turns-hold-every-row]]
+(define-claim "BXSOLV" turns-hold-every-row
+    "Worlds of 1 to 20 awake bodies with boxes among them step and validate."
+  (dolist (boxes '(t nil))
+    (loop for n from 1 to 20
+          do (let ((w (make-floor-world)))
+               (dotimes (i n)
+                 (let ((x (+ -8.5 (* 2 (mod i 10)))) (z (+ 0.5 (* 2 (floor i 10)))))
+                   (if (or (zerop i) boxes)
+                       (add-physics-box w x 0.6 z 0.4 0.4 0.4)
+                       (add-physics-body w x 0.6 z))))
+               (let ((outcome (handler-case (progn (dotimes (k 3) (step-physics-world w)) (validate-physics-world w))
+                                (error (e) (princ-to-string e)))))
+                 (check (eq t outcome) "~D bodies (~:[one box~;all boxes~]): ~A" n boxes outcome))))))
+;; BXSOLV-turns-hold-every-row ends here
 
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-box-steps-cons-nothing]]
 (define-claim "BXSOLV" box-steps-cons-nothing
@@ -7652,6 +7668,25 @@ wall. #BXPUSH"
     (check (< (abs (- (physics-body-velocity w crate) 2.0)) 0.02) "without friction: ~,4F m/s"
            (physics-body-velocity w crate))))
 ;; BXPUSH-walker-pushes-a-crate ends here
+
+;; [[file:../physics.org::#BXPUSH][BXPUSH-boxes-wake-what-they-reach]]
+(define-claim "BXPUSH" boxes-wake-what-they-reach
+    "A sliding box wakes a sleeping box it reaches and carries it on; that box wakes a sleeping ball."
+  (let* ((w (make-floor-world))
+         (a (add-physics-box w 2.5 0.4 2.5 0.4 0.4 0.4 :mass 10 :friction 0.0 :vx 3.0))
+         (b (add-physics-box w 4.5 0.4 2.5 0.4 0.4 0.4 :mass 10 :friction 0.0))
+         (ball (add-physics-body w 6.5 0.245 2.5 :radius 0.25 :friction 0.0))
+         (deepest 0.0))
+    (dolist (h (list b ball)) (luv-physics::sleep-physics-body w (nth-value 1 (luv-physics::resolve-handle w h))))
+    (check (not (physics-body-awake-p w b)))
+    (dotimes (i 120)
+      (step-physics-world w)
+      (setf deepest (max deepest (- (+ (physics-body-position w a) 0.4) (- (physics-body-position w b) 0.4)))))
+    (check (> (- (physics-body-position w b) 4.5) 1.0) "the sleeper moved ~,3F m" (- (physics-body-position w b) 4.5))
+    (check (> (physics-body-velocity w b) 1.0) "the sleeper moves at ~,3F m/s" (physics-body-velocity w b))
+    (check (< deepest 0.01) "the first cube lay ~,4F m inside the second" deepest)
+    (check (> (- (physics-body-position w ball) 6.5) 0.5) "the ball moved ~,3F m" (- (physics-body-position w ball) 6.5))))
+;; BXPUSH-boxes-wake-what-they-reach ends here
 
 ;; [[file:../physics.org::#BXPUSH][BXPUSH-crate-squeezed-against-a-wall]]
 (defun crate-speed (world handle)
@@ -12014,6 +12049,24 @@ and the world. #G4WXCJ"
         (check (> (reduce #'max xs) -1.0) "the farthest block lies at x = ~,3F" (reduce #'max xs)))
       (check (eq t (validate-physics-world w))))))
 ;; BXSC3N-tower-topples ends here
+
+;; [[file:../physics.org::#BXSC3N][BXSC3N-walker-pushes-the-crates]]
+(define-claim "BXSC3N" walker-pushes-the-crates
+    "The walker carries the row of crates along x and jams them against the wall, which holds them."
+  (multiple-value-bind (w script scene) (make-scene-world :crates)
+    (let* ((crates (physics-world-handles w))
+           (start (mapcar (lambda (h) (physics-body-position w h)) crates)))
+      (dotimes (step (round (physics-scene-seconds scene) (luv-physics::physics-world-step-seconds w)))
+        (funcall script step)
+        (step-physics-world w))
+      (let ((moved (mapcar (lambda (h x) (- (physics-body-position w h) x)) crates start)))
+        (check (every (lambda (d) (> d 1.0)) moved) "the crates moved ~S m" moved))
+      (dolist (h crates)
+        (multiple-value-bind (x y) (physics-body-position w h)
+          (check (< (+ x 0.4) (+ 6.0 *physics-linear-slop* 5e-3)) "a crate's front lies at x = ~,4F" (+ x 0.4))
+          (check (> y 0.39) "a crate sank to y = ~,4F" y)))
+      (check (eq t (validate-physics-world w))))))
+;; BXSC3N-walker-pushes-the-crates ends here
 
 ;; [[file:../physics.org::#RH7T05][A viewer for the browser:2]]
 (defun repository-file (name)
