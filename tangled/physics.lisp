@@ -10969,14 +10969,18 @@ range, a body in a solid cell. #SN4P0T"))
   "The 64-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4): four lanes
 of Fletcher's two sums over 64-bit words, lane K taking the words K, K + 4, K + 8 ... (A, the sum
 of its words, and B, the sum of its A's, both modulo 2^64) and lane 0 the last whole words; then
-the eight sums and a last 32-bit word folded by FNV-1a's step, in that order. A change within
-one word always changes its lane's A. #SN4P0T"
+the eight sums and a last 32-bit word folded by FNV-1a's step, in that order, each step followed
+by its high half shifted into its low. A change within one word always changes its lane's A, and
+the fold keeps it. #SN4P0T"
   (declare (type octets buffer) (type index start end) #.+kernel-policy+)
   (let ((a0 0) (a1 0) (a2 0) (a3 0) (b0 0) (b1 0) (b2 0) (b3 0) (i start))
     (declare (type (unsigned-byte 64) a0 a1 a2 a3 b0 b1 b2 b3) (type index i))
     (macrolet ((sum (a b word) `(setf ,a (logand (+ ,a ,word) #xFFFFFFFFFFFFFFFF)
                                       ,b (logand (+ ,b ,a) #xFFFFFFFFFFFFFFFF)))
-               (fnv (hash word) `(setf ,hash (logand (* (logxor ,hash ,word) 1099511628211) #xFFFFFFFFFFFFFFFF))))
+               ;; the shift carries a change in the top bits down, where the next multiply spreads
+               ;; it: without it a change of 2^63 in A and in B cancels
+               (fnv (hash word) `(setf ,hash (logand (* (logxor ,hash ,word) 1099511628211) #xFFFFFFFFFFFFFFFF)
+                                       ,hash (logxor ,hash (ash ,hash -32)))))
       (sb-sys:with-pinned-objects (buffer)
         (let ((sap (sb-sys:sap+ (sb-sys:vector-sap buffer) start)))
           ;; four chains of adds in flight at once, the pointer moved, not an index scaled
@@ -12569,9 +12573,7 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
          (ids (physics-world-ids world))
          (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4)))
          (step (snap-u64 buffer (+ wat 16)))
-         (flags (snap-u32 buffer (+ wat 8)))
-         ;; the step of the awake grid the world holds now, before the world part sets it
-         (grid-step (physics-world-awake-grid-step world)))
+         (flags (snap-u32 buffer (+ wat 8))) (grid-step (physics-world-awake-grid-step world)))
     (declare (type index wat hat count nfree step) (type fixnum grid-step))
     ;; the world part: its numbers, parameters and the last step's statistics
     (setf (handle-table-tag ids) (snap-u32 buffer wat)
@@ -13061,7 +13063,9 @@ diagonal within the world's largest radius, and its points within the part's. #S
         (setf (aref marks slot) mark)
         (let ((hx (snap-finite-f32 buffer (+ o 4))) (hy (snap-finite-f32 buffer (+ o 8)))
               (hz (snap-finite-f32 buffer (+ o 12))))
-          (snapshot-check (and (<= +box-min-half-extent+ (min hx hy hz)) (<= (box-half-diagonal hx hy hz) max-radius))
+          ;; each extent bounded first, so that the half diagonal's squares cannot overflow
+          (snapshot-check (and (<= +box-min-half-extent+ (min hx hy hz)) (<= (max hx hy hz) max-radius)
+                               (<= (box-half-diagonal hx hy hz) max-radius))
                           physics-snapshot-other-layout (+ o 4)
                           "half-extents of at least the smallest, the half diagonal within the world's largest radius"
                           (list hx hy hz)))

@@ -9729,6 +9729,23 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
         (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
 ;; SN4P0T-damaged-boxes-are-refused-at-their-byte ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-every-flipped-bit-fails-the-checksum]]
+(define-claim "SN4P0T" every-flipped-bit-fails-the-checksum
+    "Every single bit flipped past the header of a snapshot fails its checksum, the world unchanged."
+  (let ((world (luv-physics::snapshot-box-tower :scalar)) (missed '()))
+    (dotimes (i 30) (step-physics-world world))
+    (multiple-value-bind (buffer size) (snapshot-physics-world world)
+      (let ((good (subseq buffer 0 size)) (hash (physics-world-state-hash world)))
+        (loop for byte from 32 below size
+              do (dotimes (bit 8)
+                   (setf (aref good byte) (logxor (aref good byte) (ash 1 bit)))
+                   (unless (equal '(physics-snapshot-checksum-mismatch 24) (refusal world good))
+                     (push (list byte bit) missed))
+                   (setf (aref good byte) (logxor (aref good byte) (ash 1 bit)))))
+        (check (null missed) "~D flips not refused by the checksum, the first ~S" (length missed) (last missed))
+        (check (= hash (physics-world-state-hash world)))))))
+;; SN4P0T-every-flipped-bit-fails-the-checksum ends here
+
 ;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-snapshots-leave-valid-worlds]]
 (define-claim "SN4P0T" damaged-snapshots-leave-valid-worlds
     "300 damaged snapshots of a settled floor world, 1000 of a jointed chain and 500 of a box tower leave no invalid world and crash nothing."
