@@ -8717,6 +8717,23 @@ the face it enters a solid cell through, with the box's centre on its air side, 
   "The share of the push-out speed a posted box may give a box body in a substep, beyond what
 gravity gives it in one. #BXPUSH")
 
+(declaim (inline mark-posted-points))
+(defun mark-posted-points (points start dummy kx ky kz speed)
+  "Give each of POINTS from START, found against a posted box moving at KX KY KZ, that velocity
+as the first side's point velocity less the second's loses it (its sign turned where the first
+side is the DUMMY row), the velocity along the point's normal, and SPEED as its cap. #BXPUSH"
+  (declare (type box-point-columns points) (type index start dummy)
+           (type single-float kx ky kz speed) #.+kernel-policy+)
+  (with-box-point-columns ((first row) nx ny nz kvx kvy kvz kvn push-cap) points
+    (loop for k of-type index from start below (box-point-columns-length points)
+          do (let* ((sign (if (= (aref first k) dummy) -1.0 1.0))
+                    (sx (* sign kx)) (sy (* sign ky)) (sz (* sign kz))
+                    (along (+ (* (aref nx k) sx) (* (aref ny k) sy) (* (aref nz k) sz))))
+               (declare (type single-float sign sx sy sz along))
+               (setf (aref kvx k) sx (aref kvy k) sy (aref kvz k) sz (aref kvn k) along
+                     (aref push-cap k) speed))))
+  nil)
+
 (defun find-box-posted-points (world set row reach dt push-max weight)
   "Append to SET's points those between the box at awake ROW of WORLD and each posted box its
 filter meets within REACH plus their relative travel over DT: the separating-axis test's points
@@ -8755,14 +8772,7 @@ WEIGHT (gravity times the substep), made an impulse by cap-posted-box-points. #B
                                      (* 0.5 (+ (aref min-z b) (aref max-z b))) 1.0 0.0 0.0 0.0
                                      (* 0.5 (- (aref max-x b) (aref min-x b))) (* 0.5 (- (aref max-y b) (aref min-y b)))
                                      (* 0.5 (- (aref max-z b) (aref min-z b))))
-                    (with-box-point-columns ((first row) nx ny nz kvx kvy kvz kvn push-cap) points
-                      (loop for k of-type index from start below (box-point-columns-length points)
-                            do (let* ((sign (if (= (aref first k) dummy) -1.0 1.0))
-                                      (sx (* sign kx)) (sy (* sign ky)) (sz (* sign kz))
-                                      (along (+ (* (aref nx k) sx) (* (aref ny k) sy) (* (aref nz k) sz))))
-                                 (declare (type single-float sign sx sy sz along))
-                                 (setf (aref kvx k) sx (aref kvy k) sy (aref kvz k) sz (aref kvn k) along
-                                       (aref push-cap k) speed)))))))))))))
+                    (mark-posted-points points start dummy kx ky kz speed))))))))))
   set)
 
 (defun cap-posted-box-points (set)
