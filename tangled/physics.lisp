@@ -6577,6 +6577,22 @@ the order the rows' own again. #J0S0LV"
               do (setf (aref colors r) c))))
     set))
 
+(defmacro turn-row-orientation (v i hw qw qx qy qz)
+  "Turn row I's orientation, in the columns QW QX QY QZ, by its spin in the solver's velocities V
+over the time whose half is HW: q + hw (0, w) q, normalised. Expanded in place by the substeps'
+turn of the jointed spheres and by the finalize's fold ([[#F1NAL5]]), so both turn a row to the
+same bits. #J0S0LV"
+  `(let* ((o (solver-row ,i)) (hw ,hw)
+          (ax (aref ,v (+ o 3))) (ay (aref ,v (+ o 4))) (az (aref ,v (+ o 5)))
+          (w0 (aref ,qw ,i)) (x0 (aref ,qx ,i)) (y0 (aref ,qy ,i)) (z0 (aref ,qz ,i))
+          (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
+          (nx (+ x0 (* hw (+ (* ax w0) (- (* ay z0) (* az y0))))))
+          (ny (+ y0 (* hw (+ (* ay w0) (- (* az x0) (* ax z0))))))
+          (nz (+ z0 (* hw (+ (* az w0) (- (* ax y0) (* ay x0))))))
+          (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
+     (declare (type index o) (type single-float hw ax ay az w0 x0 y0 z0 nw nx ny nz s))
+     (setf (aref ,qw ,i) (* nw s) (aref ,qx ,i) (* nx s) (aref ,qy ,i) (* ny s) (aref ,qz ,i) (* nz s))))
+
 (defun turn-jointed-orientations (set awake v h)
   "Turn the orientation of each awake jointed sphere of AWAKE by its spin in V over the substep
 H, q + h/2 (0, w) q normalised, after the positions integrate, and note in SET that this step's
@@ -6588,15 +6604,7 @@ substeps turned them, so that the finalize phase does not turn them again. #J0S0
     (with-body-columns (qw qx qy qz flags) awake
       (dotimes (i (body-columns-length awake))
         (when (= (logand (aref flags i) (logior +flag-jointed+ +flag-box-shape+)) +flag-jointed+)
-          (let* ((o (solver-row i))
-                 (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5)))
-                 (w0 (aref qw i)) (x0 (aref qx i)) (y0 (aref qy i)) (z0 (aref qz i))
-                 (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
-                 (nx (+ x0 (* hw (+ (* ax w0) (- (* ay z0) (* az y0))))))
-                 (ny (+ y0 (* hw (+ (* ay w0) (- (* az x0) (* ax z0))))))
-                 (nz (+ z0 (* hw (+ (* az w0) (- (* ax y0) (* ay x0))))))
-                 (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
-            (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
+          (turn-row-orientation v i hw qw qx qy qz)))))
   nil)
 
 (defun turn-joint-levers (set awake)
@@ -8971,15 +8979,7 @@ three. #F1NAL5"
       (macrolet ((turn-rows (skip)
                    `(dotimes (i n)
                       (unless ,skip
-                        (let* ((o (solver-row i))
-                               (ax (aref v (+ o 3))) (ay (aref v (+ o 4))) (az (aref v (+ o 5)))
-                               (hw (* 0.5 dt)) (w0 (aref qw i)) (x0 (aref qx i)) (y0 (aref qy i)) (z0 (aref qz i))
-                               (nw (- w0 (* hw (+ (* ax x0) (* ay y0) (* az z0)))))
-                               (nx (+ x0 (* hw (+ (* ax w0) (- (* ay z0) (* az y0))))))
-                               (ny (+ y0 (* hw (+ (* ay w0) (- (* az x0) (* ax z0))))))
-                               (nz (+ z0 (* hw (+ (* az w0) (- (* ax y0) (* ay x0))))))
-                               (s (/ 1.0 (fsqrt (+ (* nw nw) (* nx nx) (* ny ny) (* nz nz))))))
-                          (setf (aref qw i) (* nw s) (aref qx i) (* nx s) (aref qy i) (* ny s) (aref qz i) (* nz s)))))))
+                        (turn-row-orientation v i (* 0.5 dt) qw qx qy qz)))))
         (if turned
             (turn-rows (= (logand (aref flags i) (logior +flag-jointed+ +flag-box-shape+)) +flag-jointed+))
             (turn-rows nil))))))
