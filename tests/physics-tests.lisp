@@ -9381,6 +9381,85 @@ overlaps, the contact table's cursor, misses and touched count, and the contacts
       (sb-int:unencapsulate 'luv-physics::run-pair-pieces 'claim-crowded))))
 ;; P41P1C-crowded-walk-runs-whole ends here
 
+;; [[file:../physics.org::#P41P1C][P41P1C-piece-fault-as-one-worker]]
+(defun piece-fault-run (site)
+  "Step 300-ball basins with pools of 1, 2 and 3 workers, splitting every pass, until SITE, a
+piece function of the pair or terrain phase made to signal in the last worker's share, fails a
+step: a list per world of the attempt, the fault's type and report, whether the world is valid
+and kept its hash, and its hash ten steps after. #P41P1C"
+  (let ((worlds (loop for workers from 1 to 3
+                      collect (let ((w (make-basin-world 300)))
+                                (if (= workers 1)
+                                    (setf (luv-physics::physics-world-pool w) (luv-physics::make-worker-pool 1))
+                                    (luv-physics::open-world-workers w workers))
+                                (let ((pool (luv-physics::physics-world-pool w)))
+                                  (setf (luv-physics::worker-pool-split-rows pool) 0
+                                        (luv-physics::worker-pool-park-spins pool) luv-physics::+worker-spins+))
+                                (dotimes (i 40) (step-physics-world w))
+                                w)))
+        (results '()))
+    (flet ((places (world)
+             (case site
+               (luv-physics::listed-pairs-piece (luv-physics::pair-list-count (luv-physics::physics-world-pair-list world)))
+               (luv-physics::build-pairs-piece (luv-physics::hash-grid-count (luv-physics::physics-world-awake-grid world)))
+               (t (luv-physics::awake-rows world)))))
+      (sb-int:encapsulate site 'claim-piece-fault
+                          (lambda (f world sink from to)
+                            (prog1 (funcall f world sink from to)
+                              (when (and (< from to) (= to (places world)))
+                                (error 'physics-world-invalid :world nil :invariant "the last piece is faulty")))))
+      (unwind-protect
+           (dolist (w worlds)
+             (let ((hash 0) (fault nil) (attempt 0))
+               (loop while (and (null fault) (< attempt 30))
+                     do (incf attempt)
+                        (when (eq site 'luv-physics::build-pairs-piece)
+                          (setf (luv-physics::pair-list-rows (luv-physics::physics-world-pair-list w)) -1))
+                        (setf hash (physics-world-state-hash w))
+                        (handler-case (step-physics-world w)
+                          (error (e) (setf fault (list (type-of e) (princ-to-string e))))))
+               (push (list attempt fault (eq t (validate-physics-world w)) (= hash (physics-world-state-hash w)) w)
+                     results)))
+        (sb-int:unencapsulate site 'claim-piece-fault))
+      (mapcar (lambda (r)
+                (let* ((w (fifth r)) (pool (luv-physics::physics-world-pool w))
+                       (parked (or (= 1 (luv-physics::worker-pool-count pool))
+                                   (loop repeat 500
+                                         thereis (= (luv-physics::worker-pool-parked pool)
+                                                    (1- (luv-physics::worker-pool-count pool)))
+                                         do (sleep 0.01)))))
+                  (dotimes (i 10) (step-physics-world w))
+                  (prog1 (append (subseq r 0 4) (list parked (physics-world-state-hash w)))
+                    (if (= 1 (luv-physics::worker-pool-count pool))
+                        (setf (luv-physics::physics-world-pool w) nil)
+                        (close-physics-world w)))))
+              (reverse results)))))
+
+(defun check-piece-fault (site before)
+  "Check what piece-fault-run gives for SITE: one attempt, fault and hash after for every world,
+each valid, as before the failed step, its workers parked; the image's worker threads BEFORE, a
+list, as they were. #P41P1C"
+  (let ((runs (piece-fault-run site)))
+    (check (eq 'physics-world-invalid (first (second (first runs)))) "~(~A~), one worker: ~S" site (first runs))
+    (check (= 1 (length (remove-duplicates runs :key #'first))) "~(~A~): the faults came at attempts ~S"
+           site (mapcar #'first runs))
+    (check (= 1 (length (remove-duplicates runs :key #'second :test #'equal))) "~(~A~): the faults differ: ~S"
+           site (mapcar #'second runs))
+    (check (every #'third runs) "~(~A~): a world is not valid after the fault" site)
+    (check (every #'fourth runs) "~(~A~): the failed step changed a hash" site)
+    (check (every #'fifth runs) "~(~A~): some worker did not park again" site)
+    (check (= 1 (length (remove-duplicates runs :key #'sixth))) "~(~A~), after the fault: hashes ~S"
+           site (mapcar #'sixth runs))
+    (check (= (length before) (length (worker-threads))) "~(~A~): ~D worker threads left, ~D before"
+           site (length (worker-threads)) (length before))))
+
+(define-claim "P41P1C" piece-fault-as-one-worker
+    "A fault in the last worker's piece of the listed pairs or of the build fails the step as with one worker: the world as before, valid, workers parked, no thread left."
+  (let ((before (worker-threads)))
+    (dolist (site '(luv-physics::listed-pairs-piece luv-physics::build-pairs-piece))
+      (check-piece-fault site before))))
+;; P41P1C-piece-fault-as-one-worker ends here
+
 ;; [[file:../physics.org::#MYWP1C][MYWP1C-terrain-pieces-as-one-walk]]
 (define-claim "MYWP1C" terrain-pieces-as-one-walk
     "Terrain rows in pieces on 2 and 3 workers count the buried, set the path bounds and reach the hash one worker does."
@@ -9424,6 +9503,12 @@ overlaps, the contact table's cursor, misses and touched count, and the contacts
                balls (plusp (aref spent luv-physics::+job-terrain+))))
       (close-physics-world w))))
 ;; MYWP1C-a-body-counts-eight-rows ends here
+
+;; [[file:../physics.org::#MYWP1C][MYWP1C-terrain-fault-as-one-worker]]
+(define-claim "MYWP1C" terrain-fault-as-one-worker
+    "A fault in the last worker's terrain piece fails the step as with one worker: the world as before, valid, workers parked, no thread left."
+  (check-piece-fault 'luv-physics::terrain-rows-piece (worker-threads)))
+;; MYWP1C-terrain-fault-as-one-worker ends here
 
 ;; [[file:../physics.org::#B3NCHW][B3NCHW-worker-table-reads-its-figures]]
 (define-claim "B3NCHW" worker-table-reads-its-figures
