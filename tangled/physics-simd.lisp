@@ -642,7 +642,7 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
        (let ((,start (aref ,starts +physics-max-colors+)) (,end (aref ,starts (1+ +physics-max-colors+))))
          (when (< ,start ,end) ,overflow-form)))))
 
-(macrolet ((define-family-methods (class width ws so si pf &optional settle)
+(macrolet ((define-family-methods (class width ws so si pf wj sj &optional settle)
              `(progn
                 (defmethod physics-prepare-frames ((kernels ,class) world)
                   (let* ((cbuf (physics-world-constraints world))
@@ -656,9 +656,9 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
                          (variant (world-kernel-variant world kernels))
                          (wide (kernel-variant-wide-warm-start variant))
                          (narrow (kernel-variant-warm-start variant)))
-                    ;; each colour's joints before its contacts, in scalar code ([[#J0S0LV]])
+                    ;; each colour's joints before its contacts, point joints in lanes ([[#J0LANE]])
                     (do-constraint-colours (s e world :settle ,settle
-                                                      :joints (set (warm-start-joints set v (physics-world-deltas world) s e)))
+                                                      :joints (set (,wj set v (physics-world-deltas world) s e)))
                       (funcall wide cbuf v s e) (funcall narrow cbuf v s e))))
                 (defmethod physics-solve-contacts ((kernels ,class) world inv-h use-bias elapsed)
                   (let* ((cbuf (physics-world-constraints world)) (v (physics-world-velocities world))
@@ -668,17 +668,17 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
                          (narrow (kernel-variant-solve variant)))
                     (multiple-value-bind (threshold hgx hgy hgz) (impact-parameters world)
                       (do-constraint-colours (s e world :settle ,settle
-                                                        :joints (set (solve-joints set v d inv-h use-bias s e)))
+                                                        :joints (set (,sj set v d inv-h use-bias s e)))
                         (solve-handing wide ',si ,width cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz)
                         (solve-handing narrow 'solve-impact-range 1
                                        cbuf v d s e inv-h use-bias elapsed push-max threshold hgx hgy hgz))))))))
   (define-family-methods sse-kernels 4 warm-start-blocks/sse solve-blocks/sse solve-impact-blocks/sse
-    prepare-frames-blocks/sse)
+    prepare-frames-blocks/sse warm-start-joints/sse solve-joints/sse)
   ;; after 256-bit code, clear the upper halves of the ymm registers before any legacy SSE
   ;; instruction runs: the scalar code SBCL emits is legacy SSE, and on this CPU it ran three
   ;; times slower for the rest of the step without it
   (define-family-methods avx2-kernels 8 warm-start-blocks/avx2 solve-blocks/avx2 solve-impact-blocks/avx2
-    prepare-frames-blocks/avx2
+    prepare-frames-blocks/avx2 warm-start-joints/avx2 solve-joints/avx2
     (sb-simd-avx:vzeroupper)))
 
 (register-kernel-family :sse 'sse-kernels :sse4.1)
@@ -688,6 +688,158 @@ OVERFLOW-FORM for the overflow colour's run. #F4M1LY"
 (precompile-featured-kernels (warm-start-blocks/sse solve-blocks/sse prepare-frames-blocks/sse
                               warm-start-blocks/avx2 solve-blocks/avx2 prepare-frames-blocks/avx2))
 ;; The SSE and AVX2 families:1 ends here
+
+;; [[file:../physics.org::#J0LANE][Point joints in lanes:1]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun joint-lane-operators (&key aref add sub mul broadcast xor gt if* transpose scatter)
+    "The macrolet definitions of the joint lanes' operators, each standing for the sb-simd
+function (or row macro) its keyword names: J+ J- J*, JC a broadcast, JNEG the sign flipped, J@
+and J! a joint column's lanes at row J, JKEEP the new value where a mass is above zero and the
+old elsewhere, JGATHER and JSCATTER the solver rows an index column names at J. #J0LANE"
+    `((j+ (a b) `(,',add ,a ,b)) (j- (a b) `(,',sub ,a ,b)) (j* (a b) `(,',mul ,a ,b))
+      (jc (x) `(,',broadcast ,x))
+      (jneg (a) `(,',xor ,a (,',broadcast -0.0)))
+      (j@ (column) `(,',aref ,column j))
+      (j! (column value) `(setf (,',aref ,column j) ,value))
+      (jkeep (mass new old) `(,',if* (,',gt ,mass (,',broadcast 0.0)) ,new ,old))
+      (jgather ((v index &rest columns) &body body) `(,',transpose (,v ,index j ,@columns) ,@body))
+      (jscatter (v index &rest columns) `(,',scatter ,v ,index j ,@columns)))))
+
+(defmacro wide-joint-push (px py pz)
+  "Push the lanes' impulses PX PY PZ (names) on the gathered rows: minus on body a's VAX .. WAZ,
+plus on body b's VBX .. WBZ where its mass is above zero, the scalar push! lane by lane.
+Expanded within the joint lanes' operators. #J0LANE"
+  `(let ((ma (j@ ima)) (ia (j@ iia)) (mb (j@ imb)) (ib (j@ iib)))
+     (setf vax (j- vax (j* ma ,px)) vay (j- vay (j* ma ,py)) vaz (j- vaz (j* ma ,pz))
+           wax (j- wax (j* ia (j- (j* ay ,pz) (j* az ,py))))
+           way (j- way (j* ia (j- (j* az ,px) (j* ax ,pz))))
+           waz (j- waz (j* ia (j- (j* ax ,py) (j* ay ,px)))))
+     (setf vbx (jkeep mb (j+ vbx (j* mb ,px)) vbx)
+           vby (jkeep mb (j+ vby (j* mb ,py)) vby)
+           vbz (jkeep mb (j+ vbz (j* mb ,pz)) vbz)
+           wbx (jkeep mb (j+ wbx (j* ib (j- (j* by ,pz) (j* bz ,py)))) wbx)
+           wby (jkeep mb (j+ wby (j* ib (j- (j* bz ,px) (j* bx ,pz)))) wby)
+           wbz (jkeep mb (j+ wbz (j* ib (j- (j* bx ,py) (j* by ,px)))) wbz))))
+
+(defmacro with-joint-block-rows (&body body)
+  "Run BODY over the block at J with both bodies' velocity rows gathered from V (VAX .. WAZ and
+VBX .. WBZ, with their spare slots), the levers AX .. BZ read, then scatter the rows back.
+Expanded within the joint lanes' operators. #J0LANE"
+  `(jgather (v row-a vax vay vaz wax way waz a6 a7)
+     (jgather (v row-b vbx vby vbz wbx wby wbz b6 b7)
+       (let ((ax (j@ rax)) (ay (j@ ray)) (az (j@ raz)) (bx (j@ rbx)) (by (j@ rby)) (bz (j@ rbz)))
+         ,@body)
+       (jscatter v row-a vax vay vaz wax way waz a6 a7)
+       (jscatter v row-b vbx vby vbz wbx wby wbz b6 b7))))
+
+(defmacro wide-point-warm-start ()
+  "The warm start of the block of point joints at J: each lane's carried impulse pushed again.
+#J0LANE"
+  `(with-joint-block-rows
+     (let ((px (j@ impulse-x)) (py (j@ impulse-y)) (pz (j@ impulse-z)))
+       (wide-joint-push px py pz))))
+
+(defmacro wide-point-impulse (px ix ka kb kc rx ry rz ms is)
+  "Bind PX to a lane's impulse along one axis, -(MS (KA RX + KB RY + KC RZ)) - IS IX, the scalar
+apply-point's chain. #J0LANE"
+  `(,px (j- (jneg (j* ,ms (j+ (j+ (j* (j@ ,ka) ,rx) (j* (j@ ,kb) ,ry)) (j* (j@ ,kc) ,rz))))
+            (j* ,is ,ix))))
+
+(defmacro with-lane-separation (biased &body body)
+  "Run BODY, when BIASED, with CX CY CZ bound to the lanes' separation of the anchors now, c0 +
+(delta b - delta a) + (r b - r a) summed as the scalar text sums it, both bodies' delta rows
+gathered from D; else BODY alone, which reads no delta. #J0LANE"
+  (if biased
+      `(jgather (d row-a dax day daz da3 da4 da5 da6 da7)
+         (jgather (d row-b dbx dby dbz db3 db4 db5 db6 db7)
+           (let ((cx (j+ (j+ (j@ sx) (j- dbx dax)) (j- bx ax)))
+                 (cy (j+ (j+ (j@ sy) (j- dby day)) (j- by ay)))
+                 (cz (j+ (j+ (j@ sz) (j- dbz daz)) (j- bz az))))
+             ,@body)))
+      `(progn ,@body)))
+
+(defmacro wide-point-solve (biased)
+  "One push of the block of point joints at J: the anchors' relative velocity, with the bias of
+the separation when BIASED (the solve) and rigid without it (the relax), through the prepared
+inverse effective mass; the impulses carried and pushed. #J0LANE"
+  `(with-joint-block-rows
+     (with-lane-separation ,biased
+       (let* ((vx (j- (j+ vbx (j- (j* wby bz) (j* wbz by))) (j+ vax (j- (j* way az) (j* waz ay)))))
+              (vy (j- (j+ vby (j- (j* wbz bx) (j* wbx bz))) (j+ vay (j- (j* waz ax) (j* wax az)))))
+              (vz (j- (j+ vbz (j- (j* wbx by) (j* wby bx))) (j+ vaz (j- (j* wax ay) (j* way ax)))))
+              ,@(if biased
+                    `((br (j@ bias-rate))
+                      (rx (j+ vx (j* br cx))) (ry (j+ vy (j* br cy))) (rz (j+ vz (j* br cz)))
+                      (ms (j@ mass-scale)) (is (j@ impulse-scale)))
+                    `((rx vx) (ry vy) (rz vz) (ms (jc 1.0)) (is (jc 0.0))))
+              (ix (j@ impulse-x)) (iy (j@ impulse-y)) (iz (j@ impulse-z))
+              ,(macroexpand-1 `(wide-point-impulse px ix k11 k12 k13 rx ry rz ms is))
+              ,(macroexpand-1 `(wide-point-impulse py iy k12 k22 k23 rx ry rz ms is))
+              ,(macroexpand-1 `(wide-point-impulse pz iz k13 k23 k33 rx ry rz ms is)))
+         (j! impulse-x (j+ ix px)) (j! impulse-y (j+ iy py)) (j! impulse-z (j+ iz pz))
+         (wide-joint-push px py pz)))))
+
+(defmacro do-joint-blocks ((width settle) wide-form scalar-form)
+  "Run, over the joints START..END of SET, WIDE-FORM for each block of WIDTH point joints at J,
+and SCALAR-FORM, SETTLE before it, for each other joint at J: every joint of the overflow colour,
+whose joints may share a body, and of a block that holds a distance joint or passes END; SETTLE
+again at the end. #J0LANE"
+  `(let ((overflow (aref (joint-set-color-starts set) +physics-max-colors+))
+         (j start))
+     (declare (type index overflow j))
+     (loop while (< j end)
+           do (if (and (<= (+ j ,width) end) (<= (+ j ,width) overflow)
+                       (loop for l of-type index from j below (+ j ,width)
+                             always (= (aref kind l) +joint-point+)))
+                  (progn ,wide-form (incf j ,width))
+                  (progn ,@(when settle (list settle)) ,scalar-form (incf j))))
+     ,@(when settle (list settle))))
+
+(defmacro define-joint-lanes (family width documentation settle &rest operators)
+  "Define the warm start and the solve of FAMILY's joints, WARM-START-JOINTS/FAMILY and
+SOLVE-JOINTS/FAMILY, with the arguments of warm-start-joints and solve-joints: blocks of WIDTH
+point joints in lanes of the OPERATORS (joint-lane-operators), described by DOCUMENTATION, which
+their docstrings quote, every other joint by the scalar functions, SETTLE before them and at the
+end. #J0LANE"
+  (let* ((says (string-right-trim " " (subseq documentation 0 (search "#" documentation :from-end t))))
+         (home (symbol-package family))
+         (warm (intern (format nil "WARM-START-JOINTS/~A" family) home))
+         (solve (intern (format nil "SOLVE-JOINTS/~A" family) home)))
+    `(macrolet ,(apply #'joint-lane-operators operators)
+       (defun ,warm (set v d start end)
+         ,(format nil "Warm start the joints START..END of SET, ~D point joints at a time (~A). #J0LANE" width says)
+         (declare (type joint-set set) (type f32-column v d) (type index start end) #.+kernel-policy+)
+         (with-joint-columns (kind row-a row-b rax ray raz rbx rby rbz ima imb iia iib impulse-x impulse-y impulse-z)
+             (joint-set-rows set)
+           (do-joint-blocks (,width ,settle) (wide-point-warm-start) (warm-start-joints set v d j (1+ j))))
+         nil)
+       (defun ,solve (set v d inv-h use-bias start end)
+         ,(format nil "Solve or relax the joints START..END of SET, ~D point joints at a time (~A). #J0LANE" width says)
+         (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) (type index start end)
+                  #.+kernel-policy+)
+         (with-joint-columns (kind row-a row-b rax ray raz rbx rby rbz sx sy sz ima imb iia iib
+                              k11 k12 k13 k22 k23 k33 bias-rate mass-scale impulse-scale impulse-x impulse-y impulse-z)
+             (joint-set-rows set)
+           (if use-bias
+               (do-joint-blocks (,width ,settle) (wide-point-solve t) (solve-joints set v d inv-h t j (1+ j)))
+               (do-joint-blocks (,width ,settle) (wide-point-solve nil) (solve-joints set v d inv-h nil j (1+ j)))))
+         nil))))
+
+(define-joint-lanes avx2 8 "Eight lanes of AVX2, the upper halves cleared before scalar code. #J0LANE"
+  (sb-simd-avx:vzeroupper)
+  :aref sb-simd-avx:f32.8-aref :add sb-simd-avx:f32.8+ :sub sb-simd-avx:f32.8- :mul sb-simd-avx:f32.8*
+  :broadcast sb-simd-avx:f32.8 :xor sb-simd-avx:f32.8-xor :gt sb-simd-avx:f32.8> :if* sb-simd-avx:f32.8-if
+  :transpose with-rows-8 :scatter scatter-rows-8)
+
+(define-joint-lanes sse 4 "Four lanes of SSE4.1. #J0LANE" nil
+  :aref sb-simd-sse:f32.4-aref :add sb-simd-sse:f32.4+ :sub sb-simd-sse:f32.4- :mul sb-simd-sse:f32.4*
+  :broadcast sb-simd-sse:f32.4 :xor sb-simd-sse:f32.4-xor :gt sb-simd-sse2:f32.4> :if* f32.4-select
+  :transpose with-rows-4 :scatter scatter-rows-4)
+
+(defmethod joint-kernels ((kernels avx2-kernels)) (values #'warm-start-joints/avx2 #'solve-joints/avx2))
+
+(defmethod joint-kernels ((kernels sse-kernels)) (values #'warm-start-joints/sse #'solve-joints/sse))
+;; Point joints in lanes:1 ends here
 
 ;; [[file:../physics.org::#L4NESW][Every core in lanes:1]]
 (defun settle-ymm ()

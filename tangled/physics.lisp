@@ -6339,18 +6339,27 @@ third of the substep rate, and +joint-damping-ratio+. #J0S0LV"
   "How many relax passes a substep gives its joints: one with the contacts, the others over the
 joints alone (relax-joints). #J0S0LV")
 
-(defun relax-joints (set v d inv-h)
+(defgeneric joint-kernels (kernels)
+  (:documentation "The warm start and the solve of KERNELS' joints, as two functions of the
+arguments of warm-start-joints and solve-joints: the scalar ones, or a wide family's lanes
+([[#J0LANE]]). #J0S0LV"))
+
+(defmethod joint-kernels ((kernels scalar-kernels)) (values #'warm-start-joints #'solve-joints))
+
+(defun relax-joints (set v d inv-h kernels)
   "The joints' relax passes of a substep after the one they share with the contacts: the joints
 of SET solved this step, colour by colour and the overflow colour last, without bias, over the
-solver's velocities V and deltas D, *joint-relax-passes* less one times. #J0S0LV"
+solver's velocities V and deltas D, *joint-relax-passes* less one times, by the solve of the
+family KERNELS (joint-kernels). #J0S0LV"
   (declare (type joint-set set) (type f32-column v d) (type single-float inv-h))
-  (let ((js (joint-set-color-starts set)))
-    (declare (type fixnum-column js))
+  (let ((js (joint-set-color-starts set))
+        (solve (nth-value 1 (joint-kernels kernels))))
+    (declare (type fixnum-column js) (type function solve))
     (loop repeat (1- (the fixnum *joint-relax-passes*))
           do (dotimes (c (1+ +physics-max-colors+))
                (let ((s (aref js c)) (e (aref js (1+ c))))
                  (declare (type index s e))
-                 (when (< s e) (solve-joints set v d inv-h nil s e)))))))
+                 (when (< s e) (funcall solve set v d inv-h nil s e)))))))
 
 (defun spring-softness (hertz zeta h)
   "The soft coefficients of a spring joint of HERTZ and damping ratio ZETA over substep H: those of
@@ -9418,7 +9427,7 @@ bodies to half the push-out speed. #IDVK7G"
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes)))
           ;; the joints' second relax, over the joints alone ([[#J0S0LV]])
-          (when joints (relax-joints joints v d inv-h)))
+          (when joints (relax-joints joints v d inv-h kernels)))
         (when held (hold-crowded-speeds world))
         (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed))))
     ;; the box points that struck bounce once, after the substeps ([[#BXSOLV]])

@@ -13994,6 +13994,37 @@ within reach of something. #S9WEEP"
                        (same family (list features (if biased :solve :relax)) scalar wide)))))))))
 ;; W1D3KF-lanes-are-scalar-rows ends here
 
+;; [[file:../physics.org::#J0LANE][J0LANE-lanes-agree-with-scalar]]
+(define-claim "J0LANE" lanes-agree-with-scalar
+    "A 12 x 12 joint grid with distance joints among its point joints steps to one hash in every family."
+  (let ((hashes '()))
+    (dolist (family (available-kernel-families))
+      (multiple-value-bind (w corner) (luv-physics::joint-grid-world 12 :kernels family)
+        (let ((balls '()))
+          (map-physics-bodies-in-box (lambda (h) (push h balls)) w 5.5 -6.5 0 7 7 1)
+          (setf balls (sort balls #'<))
+          (loop for (p q) on balls by #'cdddr while q
+                do (add-physics-joint w :distance p q :anchor-a '(0.3 -0.2 0) :anchor-b '(-0.3 0.2 0)))
+          (let ((start (multiple-value-list (physics-body-position w corner))))
+            (step-physics-world w)
+            (let* ((set (luv-physics::physics-world-joints w)) (rows (luv-physics::joint-set-rows set))
+                   (js (luv-physics::joint-set-color-starts set)) (kind (luv-physics::joint-columns-kind rows))
+                   (eight nil) (mixed nil))
+              (dotimes (c luv-physics::+physics-max-colors+)
+                (loop for j from (aref js c) below (aref js (1+ c))
+                      do (when (= (aref kind j) luv-physics::+joint-distance+) (setf mixed t))
+                         (when (and (<= (+ j 8) (aref js (1+ c)))
+                                    (loop for l from j below (+ j 8) always (= (aref kind l) luv-physics::+joint-point+)))
+                           (setf eight t))))
+              (check (identity eight) "no colour holds eight point joints in a row")
+              (check (identity mixed) "no colour holds a distance joint"))
+            (dotimes (i 39) (step-physics-world w))
+            (check (> (abs (- (second start) (nth-value 1 (physics-body-position w corner)))) 1e-3) "the grid did not move")
+            (check (eq t (validate-physics-world w)))
+            (push (physics-world-state-hash w) hashes)))))
+    (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes)))
+;; J0LANE-lanes-agree-with-scalar ends here
+
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-definitions-keep-the-bound]]
 (define-claim "LW3YHU" definitions-keep-the-bound
     "No top-level form of the engine's tangled files is over 120 lines or deeper than 16 parentheses."
