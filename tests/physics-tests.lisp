@@ -3316,6 +3316,22 @@ use before it. #QKS4GZ"
     (check (= 0.5 (physics-body-gravity-scale w a)))))
 ;; F0RC3S-walker-checks-pushes ends here
 
+;; [[file:../physics.org::#F0RC3S][F0RC3S-gravity-scale-restarts-sleep-keeps-life]]
+(define-claim "F0RC3S" gravity-scale-restarts-sleep-keeps-life
+    "Setting a gravity scale restarts the sleep timer and leaves the life alone."
+  (let* ((w (make-floor-world))
+         (h (add-physics-body w 3.5 0.245 3.5 :life 1.0)))
+    (dotimes (i 25) (step-physics-world w))
+    (check (physics-body-awake-p w h) "asleep before the call")
+    (set-physics-body-gravity-scale w h 1.0)
+    (let ((awake (loop for i from 26 to 70
+                       do (step-physics-world w)
+                       while (physics-body-alive-p w h)
+                       collect (cons i (physics-body-awake-p w h)))))
+      (check (equal (loop for i from 26 below 60 collect (cons i (< i 55))) awake)
+             "awake, then asleep, then gone: ~S" awake))))
+;; F0RC3S-gravity-scale-restarts-sleep-keeps-life ends here
+
 ;; [[file:../physics.org::#K1N3BX][K1N3BX-box-pushes-awake-ball]]
 (define-claim "K1N3BX" box-pushes-awake-ball
     "A box walking at 1 m/s pushes an awake ball ahead, overlapping it by at most slop + 0.001 m."
@@ -6615,6 +6631,32 @@ world, the balls and the joints. #J0S0LV"
     (check (and (< least 0.01) (> most 0.02)) "relaxed once the stretch swings from ~,4F to ~,4F only" least most)))
 ;; J0S0LV-relaxed-once-the-chain-swings ends here
 
+;; [[file:../physics.org::#J0S0LV][J0S0LV-distance-mass-along-the-separation]]
+(define-claim "J0S0LV" distance-mass-along-the-separation
+    "A distance joint's effective mass is 1/(ma + mb + ia |ra x n|^2 + ib |rb x n|^2) along the unit separation n."
+  (let* ((w (make-floor-world :gravity '(0 0 0)))
+         (a (add-physics-body w 3.5 5.0 3.5 :mass 2.0))
+         (b (add-physics-body w 4.0 5.5 4.5 :mass 0.5))
+         (joint (add-physics-joint w :distance a b :anchor-a '(0.2 0.1 -0.1) :anchor-b '(-0.1 0.2 0.15))))
+    (step-physics-world w)
+    (let* ((rows (luv-physics::joint-set-rows (luv-physics::physics-world-joints w)))
+           (j (luv-physics::resolve-joint w joint)))
+      (flet ((col (reader) (float (aref (funcall reader rows) j) 1d0)))
+        (let* ((cx 0.3d0) (cy 0.4d0) (cz 1.2d0) (len 1.3d0)
+               (nx (/ cx len)) (ny (/ cy len)) (nz (/ cz len))
+               (ax (col 'luv-physics::joint-columns-rax)) (ay (col 'luv-physics::joint-columns-ray))
+               (az (col 'luv-physics::joint-columns-raz)) (bx (col 'luv-physics::joint-columns-rbx))
+               (by (col 'luv-physics::joint-columns-rby)) (bz (col 'luv-physics::joint-columns-rbz))
+               (m (+ (col 'luv-physics::joint-columns-ima) (col 'luv-physics::joint-columns-imb)))
+               (lever-a (+ (expt (- (* ay nz) (* az ny)) 2) (expt (- (* az nx) (* ax nz)) 2) (expt (- (* ax ny) (* ay nx)) 2)))
+               (lever-b (+ (expt (- (* by nz) (* bz ny)) 2) (expt (- (* bz nx) (* bx nz)) 2) (expt (- (* bx ny) (* by nx)) 2)))
+               (k (+ m (* (col 'luv-physics::joint-columns-iia) lever-a) (* (col 'luv-physics::joint-columns-iib) lever-b))))
+          (luv-physics::joint-effective-mass rows j (float cx 1.0) (float cy 1.0) (float cz 1.0))
+          (let ((got (col 'luv-physics::joint-columns-k11)))
+            (check (< (abs (- got (/ 1 k))) (* 1d-5 (/ 1 k))) "k11 ~F, expected ~F" got (/ 1 k))
+            (check (< (/ 1 k) (* 0.8 (/ 1 m))) "the levers weigh too little to tell: ~F against ~F" (/ 1 k) (/ 1 m))))))))
+;; J0S0LV-distance-mass-along-the-separation ends here
+
 ;; [[file:../physics.org::#J0SL3P][J0SL3P-groups-sleep-and-wake-together]]
 (define-claim "J0SL3P" groups-sleep-and-wake-together
     "Five jointed balls sleep on one step; an impulse on the lowest wakes all five by the next step."
@@ -6699,6 +6741,20 @@ world, the balls and the joints. #J0S0LV"
         (check (search "length: 1.0" text) "inspect shows ~A" text)
         (check (search (format nil "bodies: (~D NIL)" bob) text) "inspect shows ~A" text)))))
 ;; J0OBJT-joint-describes-its-row ends here
+
+;; [[file:../physics.org::#J0OBJT][J0OBJT-summary-gives-each-anchor]]
+(define-claim "J0OBJT" summary-gives-each-anchor
+    "joint-summary lists each anchor's three components as the row holds them."
+  (let* ((w (make-floor-world))
+         (bob (add-physics-body w 3.5 9.0 3.5 :radius 0.25))
+         (rod (add-physics-joint w :distance bob nil :anchor-a '(0.1 -0.2 0.3) :anchor-b '(2.25 10 3.75)))
+         (lines (luv-physics::joint-summary (physics-joint w rod)))
+         (anchors (find "anchors" lines :key #'first :test #'string=)))
+    (check (equal '((0.1 -0.2 0.3) (2.25 10.0 3.75)) (third anchors)) "the anchors ~S" (third anchors))
+    (check (string= (format nil "0.1000 -0.2000 0.3000 in ~D's frame, 2.2500 10.0000 3.7500 of the world" bob)
+                    (second anchors))
+           "the anchors read ~S" (second anchors))))
+;; J0OBJT-summary-gives-each-anchor ends here
 
 ;; [[file:../physics.org::#J0PHYS][J0PHYS-pendulum-period-and-energy]]
 (define-claim "J0PHYS" pendulum-period-and-energy
@@ -6959,6 +7015,22 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (equal '(0.0 0.0 0.0) (multiple-value-list (physics-box-half-extents w next)))))
     (check (eq t (validate-physics-world w)))))
 ;; BXR0WS-a-box-is-a-body ends here
+
+;; [[file:../physics.org::#BXR0WS][BXR0WS-turned-box-corner-in-solid-refused]]
+(define-claim "BXR0WS" turned-box-corner-in-solid-refused
+    "A box turned 30 degrees about y is refused where its true corner is solid, accepted where only its mirror image would be."
+  (multiple-value-bind (w terrain) (make-floor-world)
+    (let ((turn (list (cos (/ pi 12)) 0 (sin (/ pi 12)) 0)))
+      (flet ((outcome ()
+               (handler-case (progn (add-physics-box w 3.7 1.5 3.1 0.5 0.3 0.1 :orientation turn) :added)
+                 (physics-body-in-solid-cell () :refused))))
+        (fill-terrain terrain 4 1 2 5 2 3 t)
+        (check (eq :refused (outcome)) "corner (4.16, 1.22, 2.93) lies in the solid cell 4 1 2")
+        (check (= 0 (physics-world-awake-count w)))
+        (fill-terrain terrain 4 1 2 5 2 3 nil)
+        (fill-terrain terrain 3 1 2 4 2 3 t)
+        (check (eq :added (outcome)) "no corner lies in cell 3 1 2")))))
+;; BXR0WS-turned-box-corner-in-solid-refused ends here
 
 ;; [[file:../physics.org::#BXCELL][BXCELL-box-rests-on-cells]]
 (define-claim "BXCELL" box-rests-on-cells
@@ -8638,6 +8710,32 @@ wall. #BXPUSH"
         (check (some (lambda (h) (logbitp 61 h)) (cons h0 hashes)) "no hash of ~S uses bit 61" (cons h0 hashes))))))
 ;; S6T2MV-one-ulp-changes-hash ends here
 
+;; [[file:../physics.org::#S6T2MV][S6T2MV-every-box-column-hashed]]
+(define-claim "S6T2MV" every-box-column-hashed
+    "One ulp of a box's orientation component or half-extent changes the hash, each to a hash of its own."
+  (let ((w (make-floor-world)))
+    (add-physics-box w 3.5 1.5 3.5 0.3 0.4 0.5 :orientation '(0.9 0.1 0.2 0.3))
+    (step-physics-world w)
+    (let* ((awake (luv-physics::physics-world-awake w))
+           (boxes (luv-physics::physics-world-box-bodies w))
+           (slot (luv-physics::handle-index (aref (luv-physics::body-columns-handle awake) 0)))
+           (h0 (physics-world-state-hash w)))
+      (flet ((nudged (column index)
+               (let ((old (aref column index)))
+                 (setf (aref column index) (sb-kernel:make-single-float (1+ (sb-kernel:single-float-bits old))))
+                 (prog1 (physics-world-state-hash w) (setf (aref column index) old)))))
+        (let ((hashes (loop for (column index) in (list (list (luv-physics::body-columns-qw awake) 0)
+                                                        (list (luv-physics::body-columns-qx awake) 0)
+                                                        (list (luv-physics::body-columns-qy awake) 0)
+                                                        (list (luv-physics::body-columns-qz awake) 0)
+                                                        (list (luv-physics::box-set-hx boxes) slot)
+                                                        (list (luv-physics::box-set-hy boxes) slot)
+                                                        (list (luv-physics::box-set-hz boxes) slot))
+                            collect (nudged column index))))
+          (check (= 8 (length (remove-duplicates (cons h0 hashes)))) "the hashes ~S of ~S" hashes h0)
+          (check (= h0 (physics-world-state-hash w)) "restoring the bits"))))))
+;; S6T2MV-every-box-column-hashed ends here
+
 ;; [[file:../physics.org::#V4L1D8][V4L1D8-each-invariant-named]]
 (define-claim "V4L1D8" each-invariant-named
     "A valid world broken in each of ten ways signals physics-world-invalid naming that invariant."
@@ -10052,6 +10150,21 @@ and their centres in their order. #SN4P0T"
         (check (= (physics-world-state-hash source) (physics-world-state-hash world)))))))
 ;; SN4P0T-restore-keeps-a-held-grid ends here
 
+;; [[file:../physics.org::#SN4P0T][SN4P0T-restore-refuses-what-is-not-octets]]
+(define-claim "SN4P0T" restore-refuses-what-is-not-octets
+    "A buffer that is not an octet vector is refused naming :buffer; the world keeps its hash."
+  (let* ((w (settled-floor-world))
+         (good (subseq (snapshot-physics-world w) 0))
+         (before (world-fingerprint w)))
+    (dolist (bad (list (coerce good 'list) (map 'string #'code-char (subseq good 0 64))
+                       (coerce good 'simple-vector) (make-array 64 :element-type '(unsigned-byte 16)) nil))
+      (let ((got (refusal-of (lambda () (restore-physics-world w bad)))))
+        (check (eq :buffer got) "a ~S was answered ~S" (type-of bad) got))
+      (check (equal before (world-fingerprint w)) "the refused restore changed the world")
+      (check (eq t (validate-physics-world w))))
+    (check (eq w (restore-physics-world w good)))))
+;; SN4P0T-restore-refuses-what-is-not-octets ends here
+
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
   "The solid cells of TERRAIN in [-16,32)^3. #K5DF9S"
@@ -10839,6 +10952,19 @@ in the order of *physics-scene-features*. #K5DF9S"
                     (inspect player)))))
       (check (search "0. x: 2.5" text) "inspect shows ~A" text))))
 ;; H7P4CX-walker-prints-where-it-stands ends here
+
+;; [[file:../physics.org::#H7P4CX][H7P4CX-walker-refuses-what-is-not-terrain]]
+(define-claim "H7P4CX" walker-refuses-what-is-not-terrain
+    "Both walker steps refuse a terrain that is not a voxel-terrain, naming :terrain, even for no step; the walker is unchanged."
+  (let* ((p (make-physics-player 1.5 0 1.5)) (before (copy-structure p)) (w (make-floor-world)))
+    (dolist (bad (list :bogus 42 w nil))
+      (dolist (call (list (lambda () (advance-physics-player p bad 0))
+                          (lambda () (advance-physics-player p bad 1/60))
+                          (lambda () (step-physics-player p bad :move-x 1))))
+        (let ((got (refusal-of call)))
+          (check (eq :terrain got) "~S was answered ~S" bad got))
+        (check (equalp p before) "the walker changed")))))
+;; H7P4CX-walker-refuses-what-is-not-terrain ends here
 
 ;; [[file:../physics.org::#B3NCH5][B3NCH5-far-balls-outside-the-walls]]
 (define-claim "B3NCH5" far-balls-outside-the-walls
@@ -14024,6 +14150,15 @@ within reach of something. #S9WEEP"
             (push (physics-world-state-hash w) hashes)))))
     (check (= 1 (length (remove-duplicates hashes))) "the families' hashes: ~S" hashes)))
 ;; J0LANE-lanes-agree-with-scalar ends here
+
+;; [[file:../physics.org::#L4NESW][L4NESW-each-family-its-lanes]]
+(define-claim "L4NESW" each-family-its-lanes
+    "The scalar family runs pieces of 1 lane, SSE of 4, AVX2 of 8 settled by settle-ymm."
+  (flet ((lanes (class) (multiple-value-list (luv-physics::kernel-lanes (make-instance class)))))
+    (check (equal '(1 nil) (lanes 'luv-physics::scalar-kernels)))
+    (check (equal '(4 nil) (lanes 'sse-kernels)))
+    (check (equal (list 8 #'luv-physics::settle-ymm) (lanes 'avx2-kernels)) "~S" (lanes 'avx2-kernels))))
+;; L4NESW-each-family-its-lanes ends here
 
 ;; [[file:../physics.org::#LW3YHU][LW3YHU-definitions-keep-the-bound]]
 (define-claim "LW3YHU" definitions-keep-the-bound
