@@ -6640,21 +6640,26 @@ substeps turned them, so that the finalize phase does not turn them again. #J0S0
 
 (defun turn-joint-levers (set awake)
   "Turn the levers of each joint of SET solved this step to its awake bodies' orientations in
-AWAKE as the substeps have turned them. #J0S0LV"
+AWAKE as the substeps have turned them: the first bodies' levers, then the second bodies', two
+loops that each touch few joint columns ([[#J0S0LV]]'s prepare). #J0S0LV"
   (declare (type joint-set set) (type body-columns awake) #.+kernel-policy+)
   (let ((rows (joint-set-rows set))
         (n (aref (joint-set-color-starts set) (1+ +physics-max-colors+))))
     (declare (type index n))
-    (with-joint-columns (ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz imb) rows
-      (with-body-columns (qw qx qy qz) awake
+    (with-body-columns (qw qx qy qz) awake
+      (with-joint-columns (ax ay az row-a rax ray raz) rows
         (dotimes (j n)
-          (let ((la (aref row-a j)) (lb (aref row-b j)))
-            (declare (type index la lb))
+          (let ((la (aref row-a j)))
+            (declare (type index la))
             (multiple-value-bind (x y z)
                 (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
-              (setf (aref rax j) x (aref ray j) y (aref raz j) z))
-            ;; a fixed point has no lever, a sleeper keeps its own
-            (when (> (aref imb j) 0.0)
+              (setf (aref rax j) x (aref ray j) y (aref raz j) z)))))
+      (with-joint-columns (bx by bz row-b rbx rby rbz imb) rows
+        (dotimes (j n)
+          ;; a fixed point has no lever, a sleeper keeps its own
+          (when (> (aref imb j) 0.0)
+            (let ((lb (aref row-b j)))
+              (declare (type index lb))
               (multiple-value-bind (x y z)
                   (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
                 (setf (aref rbx j) x (aref rby j) y (aref rbz j) z)))))))
