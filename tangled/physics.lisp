@@ -6368,49 +6368,67 @@ adds, and no less than zero. #J0S0LV"
   (declare (type single-float hertz zeta h))
   (physics-softness hertz (max 0.0 (- zeta (* 0.5 h 2.0 (f32 pi) hertz))) h))
 
-(defun place-joint (rows j dummy sets locals awake sleeping)
-  "Note, for joint J of ROWS, the two solver rows (DUMMY for a fixed point or a sleeping second
-body), the levers, its anchors turned by its bodies' orientations, the bodies' masses and the
-anchors' separation at the step's start; or -1 as its first row when its first body is not
-awake. SETS and LOCALS are the body handle table's, AWAKE and SLEEPING the body buffers. Return
-true when the joint is to be solved. #J0S0LV"
-  (declare (type joint-columns rows) (type index j dummy) (type fixnum-column sets locals)
+(defun place-joint-levers (rows dummy sets locals awake sleeping)
+  "Note, for each joint of ROWS, its two solver rows (DUMMY for a fixed point or a sleeping
+second body) and its levers, its anchors turned by its bodies' orientations (none for a fixed
+point); or -1 as its first row when its first body is not awake. SETS and LOCALS are the body
+handle table's, AWAKE and SLEEPING the body buffers. Return how many joints are to be solved.
+#J0S0LV"
+  (declare (type joint-columns rows) (type index dummy) (type fixnum-column sets locals)
            (type body-columns awake sleeping) #.+kernel-policy+)
-  (progn
-    (with-joint-columns (body-a body-b ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz sx sy sz
-                         ima imb iia iib)
-        rows
-      (flet ((place (h)
-               ;; the set and row of a live body, or 0 and -1 for none
-               (declare (type fixnum h))
-               (if (= h +no-body+) (values 0 -1) (values (aref sets (handle-index h)) (aref locals (handle-index h))))))
-        (multiple-value-bind (set-a la) (place (aref body-a j))
-          (when (/= set-a +set-awake+)
-            (setf (aref row-a j) -1)
-            (return-from place-joint nil))
-          (multiple-value-bind (set-b lb) (place (aref body-b j))
-            (let ((b-moves (= set-b +set-awake+)))
-              (setf (aref row-a j) la (aref row-b j) (if b-moves lb dummy))
-              (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) awake
-                (multiple-value-bind (rx ry rz)
-                    (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
-                  (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz
-                        (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la)
-                        (aref sx j) (- (aref x la)) (aref sy j) (- (aref y la)) (aref sz j) (- (aref z la)))))
-              (if (< lb 0)
-                  ;; a fixed point: no lever, no mass, the point itself
-                  (setf (aref rbx j) 0.0 (aref rby j) 0.0 (aref rbz j) 0.0 (aref imb j) 0.0 (aref iib j) 0.0
-                        (aref sx j) (+ (aref sx j) (aref bx j)) (aref sy j) (+ (aref sy j) (aref by j))
-                        (aref sz j) (+ (aref sz j) (aref bz j)))
-                  (with-body-columns (x y z qw qx qy qz inverse-mass inverse-inertia) (if b-moves awake sleeping)
+  (let ((active 0))
+    (declare (type index active))
+    (with-joint-columns (body-a body-b ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz) rows
+      (with-body-columns (qw qx qy qz) awake
+        (with-body-columns ((sqw qw) (sqx qx) (sqy qy) (sqz qz)) sleeping
+          (dotimes (j (joint-columns-length rows))
+            (let* ((ha (aref body-a j)) (hb (aref body-b j))
+                   (la (aref locals (handle-index ha)))
+                   (b-set (if (= hb +no-body+) 0 (aref sets (handle-index hb))))
+                   (lb (if (= hb +no-body+) -1 (aref locals (handle-index hb)))))
+              (declare (type fixnum ha hb la b-set lb))
+              (if (/= (aref sets (handle-index ha)) +set-awake+)
+                  (setf (aref row-a j) -1)
+                  (let ((b-moves (= b-set +set-awake+)))
+                    (incf active)
+                    (setf (aref row-a j) la (aref row-b j) (if b-moves lb dummy))
                     (multiple-value-bind (rx ry rz)
-                        (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
-                      (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz
-                            (aref imb j) (if b-moves (aref inverse-mass lb) 0.0)
-                            (aref iib j) (if b-moves (aref inverse-inertia lb) 0.0)
-                            (aref sx j) (+ (aref sx j) (aref x lb)) (aref sy j) (+ (aref sy j) (aref y lb))
-                            (aref sz j) (+ (aref sz j) (aref z lb))))))
-              t)))))))
+                        (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
+                      (setf (aref rax j) rx (aref ray j) ry (aref raz j) rz))
+                    (multiple-value-bind (rx ry rz)
+                        (cond ((< lb 0) (values 0.0 0.0 0.0))
+                              (b-moves (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb)
+                                                  (aref bx j) (aref by j) (aref bz j)))
+                              (t (rotate-by (aref sqw lb) (aref sqx lb) (aref sqy lb) (aref sqz lb)
+                                            (aref bx j) (aref by j) (aref bz j))))
+                      (setf (aref rbx j) rx (aref rby j) ry (aref rbz j) rz)))))))))
+    active))
+
+(defun place-joint-masses (rows dummy locals awake sleeping)
+  "Note, for each joint of ROWS placed by place-joint-levers, its bodies' masses (none for a
+fixed point or a sleeper; DUMMY is the row of both) and the separation of its bodies' centres,
+or of its centre and its fixed point, at the step's start. LOCALS is the body handle table's,
+AWAKE and SLEEPING the body buffers. #J0S0LV"
+  (declare (type joint-columns rows) (type index dummy) (type fixnum-column locals)
+           (type body-columns awake sleeping) #.+kernel-policy+)
+  (with-joint-columns (body-b bx by bz row-a row-b sx sy sz ima imb iia iib) rows
+    (with-body-columns (x y z inverse-mass inverse-inertia) awake
+      (with-body-columns ((s-x x) (s-y y) (s-z z)) sleeping
+        (dotimes (j (joint-columns-length rows))
+          (let ((la (aref row-a j)) (lb (aref row-b j)) (hb (aref body-b j)))
+            (declare (type fixnum la lb hb))
+            (when (>= la 0)
+              (setf (aref ima j) (aref inverse-mass la) (aref iia j) (aref inverse-inertia la))
+              (multiple-value-bind (px py pz)
+                  (cond ((= hb +no-body+) (values (aref bx j) (aref by j) (aref bz j)))
+                        ((/= lb dummy) (values (aref x lb) (aref y lb) (aref z lb)))
+                        (t (let ((sl (aref locals (handle-index hb))))
+                             (values (aref s-x sl) (aref s-y sl) (aref s-z sl)))))
+                (setf (aref imb j) (if (or (= hb +no-body+) (= lb dummy)) 0.0 (aref inverse-mass lb))
+                      (aref iib j) (if (or (= hb +no-body+) (= lb dummy)) 0.0 (aref inverse-inertia lb))
+                      (aref sx j) (+ (- (aref x la)) px) (aref sy j) (+ (- (aref y la)) py)
+                      (aref sz j) (+ (- (aref z la)) pz)))))))))
+  nil)
 
 (declaim (inline joint-effective-mass))
 (defun joint-effective-mass (rows j cx cy cz)
@@ -6464,10 +6482,11 @@ stiff impulse scale of its limits. #J0S0LV"
 
 (defun prepare-joints (world h)
   "Write, for every joint of WORLD whose first body is awake, what the substeps of H read, stage
-by stage: the solver rows, the turned levers, the masses and the separation (place-joint), the
-effective mass (joint-effective-mass), the soft coefficients (joint-soft-coefficients); then
-colour the joints (color-joints). Return the joint set when some joint is to be solved, else
-NIL. #J0S0LV"
+by stage, each a loop over the rows, which keeps the columns one loop reads and writes at once
+few: the solver rows and the turned levers (place-joint-levers), the masses and the separation
+(place-joint-masses), the effective mass (joint-effective-mass), the soft coefficients
+(joint-soft-coefficients); then colour the joints (color-joints). Return the joint set when
+some joint is to be solved, else NIL. #J0S0LV"
   (let* ((set (physics-world-joints world))
          (rows (and set (joint-set-rows set)))
          (ids (physics-world-ids world))
@@ -6480,14 +6499,17 @@ NIL. #J0S0LV"
       (multiple-value-bind (stiff-hertz stiff-zeta) (joint-stiffness world h)
         (multiple-value-bind (stiff-bias stiff-mass stiff-impulse) (physics-softness stiff-hertz stiff-zeta h)
           (setf (joint-set-limit-bias set) stiff-bias (joint-set-limit-mass set) stiff-mass)
-          (dotimes (j (joint-columns-length rows))
-            (when (place-joint rows j dummy (handle-table-set ids) (handle-table-local ids) awake sleeping)
-              (incf active)
-              (with-joint-columns (sx sy sz rax ray raz rbx rby rbz) rows
+          (setf active (place-joint-levers rows dummy (handle-table-set ids) (handle-table-local ids) awake sleeping))
+          (place-joint-masses rows dummy (handle-table-local ids) awake sleeping)
+          (with-joint-columns (row-a sx sy sz rax ray raz rbx rby rbz) rows
+            (dotimes (j (joint-columns-length rows))
+              (when (>= (aref row-a j) 0)
                 (joint-effective-mass rows j (- (+ (aref sx j) (aref rbx j)) (aref rax j))
                                       (- (+ (aref sy j) (aref rby j)) (aref ray j))
-                                      (- (+ (aref sz j) (aref rbz j)) (aref raz j))))
-              (joint-soft-coefficients rows j h stiff-bias stiff-mass stiff-impulse)))))
+                                      (- (+ (aref sz j) (aref rbz j)) (aref raz j)))))
+            (dotimes (j (joint-columns-length rows))
+              (when (>= (aref row-a j) 0)
+                (joint-soft-coefficients rows j h stiff-bias stiff-mass stiff-impulse))))))
       (when (plusp active) (color-joints world set))
       (setf (joint-set-solving set) (plusp active)))
     (and (plusp active) set)))
@@ -6618,21 +6640,26 @@ substeps turned them, so that the finalize phase does not turn them again. #J0S0
 
 (defun turn-joint-levers (set awake)
   "Turn the levers of each joint of SET solved this step to its awake bodies' orientations in
-AWAKE as the substeps have turned them. #J0S0LV"
+AWAKE as the substeps have turned them: the first bodies' levers, then the second bodies', two
+loops that each touch few joint columns ([[#J0S0LV]]'s prepare). #J0S0LV"
   (declare (type joint-set set) (type body-columns awake) #.+kernel-policy+)
   (let ((rows (joint-set-rows set))
         (n (aref (joint-set-color-starts set) (1+ +physics-max-colors+))))
     (declare (type index n))
-    (with-joint-columns (ax ay az bx by bz row-a row-b rax ray raz rbx rby rbz imb) rows
-      (with-body-columns (qw qx qy qz) awake
+    (with-body-columns (qw qx qy qz) awake
+      (with-joint-columns (ax ay az row-a rax ray raz) rows
         (dotimes (j n)
-          (let ((la (aref row-a j)) (lb (aref row-b j)))
-            (declare (type index la lb))
+          (let ((la (aref row-a j)))
+            (declare (type index la))
             (multiple-value-bind (x y z)
                 (rotate-by (aref qw la) (aref qx la) (aref qy la) (aref qz la) (aref ax j) (aref ay j) (aref az j))
-              (setf (aref rax j) x (aref ray j) y (aref raz j) z))
-            ;; a fixed point has no lever, a sleeper keeps its own
-            (when (> (aref imb j) 0.0)
+              (setf (aref rax j) x (aref ray j) y (aref raz j) z)))))
+      (with-joint-columns (bx by bz row-b rbx rby rbz imb) rows
+        (dotimes (j n)
+          ;; a fixed point has no lever, a sleeper keeps its own
+          (when (> (aref imb j) 0.0)
+            (let ((lb (aref row-b j)))
+              (declare (type index lb))
               (multiple-value-bind (x y z)
                   (rotate-by (aref qw lb) (aref qx lb) (aref qy lb) (aref qz lb) (aref bx j) (aref by j) (aref bz j))
                 (setf (aref rbx j) x (aref rby j) y (aref rbz j) z)))))))
