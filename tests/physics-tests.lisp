@@ -8232,6 +8232,38 @@ wall. #BXPUSH"
     (check (zerop misplaced) "~D cells of the reported blocks are not solid" misplaced)))
 ;; SQU33Z-blocks-up-to-three-high ends here
 
+;; [[file:../physics.org::#SQU33Z][SQU33Z-path-across-x-cut-for-its-own-row]]
+(define-claim "SQU33Z" path-across-x-cut-for-its-own-row
+    "A short fast path whose centre crosses an x face into a solid cell is cut at the face, for its own row only."
+  (multiple-value-bind (w terrain) (make-floor-world :sleep nil :gravity '(0 0 0))
+    (fill-terrain terrain 4 0 0 5 4 8 t)
+    (let* ((a (add-physics-body w 1.5 2.5 0.5 :radius 0.25 :vx 0.5))
+           (b (add-physics-body w 2.5 1.5 1.5 :radius 0.25 :vx 0.5))
+           (c (add-physics-body w 3.6 2.5 2.5 :radius 0.25 :vx 42.0))
+           (rows '())
+           (*physics-phases*
+             (phases-checked-after
+              'luv-physics::substep-phase
+              (lambda (w)
+                (let* ((awake (luv-physics::physics-world-awake w))
+                       (row (position c (luv-physics::body-columns-handle awake)
+                                      :end (luv-physics::body-columns-length awake)))
+                       (p (luv-physics::delta-row row)) (o (luv-physics::solver-row row))
+                       (d (luv-physics::physics-world-deltas w)) (v (luv-physics::physics-world-velocities w)))
+                  (setf (aref d p) 0.7 (aref d (+ p 1)) 0.0 (aref d (+ p 2)) 0.0
+                        (aref v o) 42.0 (aref v (+ o 1)) 0.0 (aref v (+ o 2)) 0.0)
+                  (push row rows))
+                w))))
+      (step-physics-world w)
+      (check (equal '(2) rows) "the fast ball is the row ~S of three" rows)
+      (multiple-value-bind (px py pz) (physics-body-position w c)
+        (check (and (< (abs (- px 3.75)) 1e-5) (= py 2.5) (= pz 2.5)) "the ball sent 0.7 m at the wall ends at ~,6F ~,4F ~,4F" px py pz))
+      (check (= 0.0 (physics-body-velocity w c)) "its velocity into the wall is ~,3F" (physics-body-velocity w c))
+      (check (= 1 (physics-world-last-step-held-out-count w)))
+      (dolist (h (list a b))
+        (check (= 0.5 (physics-body-velocity w h)) "the ball ~D in the air has vx ~,4F" h (physics-body-velocity w h))))))
+;; SQU33Z-path-across-x-cut-for-its-own-row ends here
+
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-stage-table-is-the-step]]
 (define-claim "IDVK7G" stage-table-is-the-step
     "The stage table lists *physics-phases* in order, links each to its section, and names the features that leave it out."
@@ -9557,6 +9589,32 @@ list, as they were. #P41P1C"
     (dolist (site '(luv-physics::listed-pairs-piece luv-physics::build-pairs-piece))
       (check-piece-fault site before))))
 ;; P41P1C-piece-fault-as-one-worker ends here
+
+;; [[file:../physics.org::#P41P1C][P41P1C-struck-listed-pairs-as-one-worker]]
+(define-claim "P41P1C" struck-listed-pairs-as-one-worker
+    "Pairs of balls that strike while listed reach one hash and one event order with 1 worker and with 2 and 3 taking the steps in turn."
+  (let ((struck 0))
+    (flet ((rows ()
+             (let ((w (make-floor-world :sleep nil :gravity '(0 0 0))))
+               ;; 25 pairs closing at 1.1 m/s, each from its own gap
+               (dotimes (k 25)
+                 (let ((x (+ 1.5 (* 2 (mod k 5)))) (z (+ 1.5 (* 2 (floor k 5)))) (gap (* 0.004 k)))
+                   (add-physics-body w x 2.5 z :radius 0.25 :restitution 1.0 :friction 0.0 :vx 0.55)
+                   (add-physics-body w (+ x 0.5 gap) 2.5 z :radius 0.25 :restitution 1.0 :friction 0.0 :vx -0.55)))
+               w)))
+      (sb-int:encapsulate 'luv-physics::struck-pair-piece 'claim-struck-count
+                          (lambda (f world sink packed) (incf struck) (funcall f world sink packed)))
+      (unwind-protect
+           (let ((runs (loop for counts in '((1) (2 3))
+                             collect (multiple-value-list (worker-run #'rows 30 counts)))))
+             (check (= 1 (length (remove-duplicates runs :key #'first))) "hashes ~S for 1 and 2-3 workers"
+                    (mapcar #'first runs))
+             (check (= 1 (length (remove-duplicates runs :key #'second :test #'equal))) "the events differ")
+             (check (plusp (length (second (first runs)))) "no events to compare")
+             (check (fourth (second runs)) "no pair walk ran in pieces"))
+        (sb-int:unencapsulate 'luv-physics::struck-pair-piece 'claim-struck-count))
+      (check (<= 6 struck) "only ~D listed pairs struck in the workers' pieces" struck))))
+;; P41P1C-struck-listed-pairs-as-one-worker ends here
 
 ;; [[file:../physics.org::#MYWP1C][MYWP1C-terrain-pieces-as-one-walk]]
 (define-claim "MYWP1C" terrain-pieces-as-one-walk
