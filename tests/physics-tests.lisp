@@ -5156,6 +5156,23 @@ use before it. #QKS4GZ"
                       speed found)))))
 ;; SW33P7-sweep-from-the-margin ends here
 
+;; [[file:../physics.org::#SW33P7][SW33P7-ray-along-a-face-crosses-none]]
+(define-claim "SW33P7" ray-along-a-face-crosses-none
+    "A ray along a cell's face, its component across it under 1e-12, never crosses that face."
+  (multiple-value-bind (w terrain) (make-floor-world)
+    (fill-terrain terrain 2 0 2 3 5 3 t)
+    (step-physics-world w)
+    (let ((probe (luv-physics::physics-world-probe w)))
+      (check (equal '(1 2.5 3 -1 2)
+                    (multiple-value-list (luv-physics::first-solid-on-ray probe 3.0 2.5 2.5 -7e-13 -1.0 0.0 4.0)))
+             "the ray down the face x = 3 answers ~S"
+             (multiple-value-list (luv-physics::first-solid-on-ray probe 3.0 2.5 2.5 -7e-13 -1.0 0.0 4.0)))
+      (check (equal '(0 0.5 2 2 2)
+                    (multiple-value-list (luv-physics::first-solid-on-ray probe 3.5 2.5 2.5 -1.0 0.0 0.0 4.0)))
+             "the ray along -x answers ~S"
+             (multiple-value-list (luv-physics::first-solid-on-ray probe 3.5 2.5 2.5 -1.0 0.0 0.0 4.0))))))
+;; SW33P7-ray-along-a-face-crosses-none ends here
+
 ;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
 (define-claim "B0XPH5" box-contact-geometry
     "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
@@ -7703,6 +7720,20 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
                    axis dt (second orientation) farthest)
             (check (eq t (validate-physics-world w)))))))))
 ;; BXSWEP-boxes-thrown-sideways-stop-at-walls ends here
+
+;; [[file:../physics.org::#BXSWEP][BXSWEP-corner-in-a-solid-cell-enters-none]]
+(define-claim "BXSWEP" corner-in-a-solid-cell-enters-none
+    "A corner that starts in a solid cell enters none; one in the air enters the first solid cell on its path."
+  (let* ((w (make-floor-world)) (probe (progn (step-physics-world w) (luv-physics::physics-world-probe w))))
+    (check (equal '(2 -1 2 -1 0)
+                  (multiple-value-list (luv-physics::corner-first-solid probe 2.5 -0.5 2.5 1.0 0.0 0.0 2.0)))
+           "from inside the floor: ~S"
+           (multiple-value-list (luv-physics::corner-first-solid probe 2.5 -0.5 2.5 1.0 0.0 0.0 2.0)))
+    (check (equal '(2 -1 2 1 -1)
+                  (multiple-value-list (luv-physics::corner-first-solid probe 2.5 0.5 2.5 0.0 -1.0 0.0 2.0)))
+           "from above the floor: ~S"
+           (multiple-value-list (luv-physics::corner-first-solid probe 2.5 0.5 2.5 0.0 -1.0 0.0 2.0)))))
+;; BXSWEP-corner-in-a-solid-cell-enters-none ends here
 
 ;; [[file:../physics.org::#BXPUSH][BXPUSH-walker-pushes-a-crate]]
 (defun pushed-crate (&key (friction 0.6) (speed 2.0) (steps 120) wall (kernels :scalar))
@@ -14058,6 +14089,24 @@ within reach of something. #S9WEEP"
                (class-name (class-of (luv-physics::physics-world-kernels
                                       (make-physics-world :kernels :auto))))))))
 ;; 7PAQ3M-choosing-a-family ends here
+
+;; [[file:../physics.org::#7PAQ3M][7PAQ3M-families-agree-under-tilted-gravity]]
+(define-claim "7PAQ3M" families-agree-under-tilted-gravity
+    "Families agree bit for bit on bouncing balls under a gravity with three unequal components."
+  (flet ((hash-after (kernels)
+           (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep nil
+                                            :gravity '(1.5 -9.81 -2.5))))
+             (dotimes (i 150)
+               (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+                 (add-physics-body world x y z :restitution 0.5 :friction 0.4)))
+             (dotimes (i 90) (step-physics-world world))
+             (list (physics-world-state-hash world)
+                   (luv-physics::contact-columns-length (luv-physics::physics-world-contacts world))))))
+    (let ((reference (hash-after :scalar)))
+      (check (< 100 (second reference)) "only ~D contacts" (second reference))
+      (dolist (family (remove :scalar (available-kernel-families)))
+        (check (equal reference (hash-after family)) "~A differs from scalar under the tilted gravity" family)))))
+;; 7PAQ3M-families-agree-under-tilted-gravity ends here
 
 ;; [[file:../physics.org::#W1D3KF][W1D3KF-kernels-say-their-width]]
 (define-claim "W1D3KF" kernels-say-their-width
