@@ -13781,6 +13781,29 @@ within reach of something. #S9WEEP"
                  (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))))))))
 ;; S9WEEP-starts-inside-against-the-cast ends here
 
+;; [[file:../physics.org::#S9WEEP][S9WEEP-cast-meets-a-cell-above-its-start]]
+(define-claim "S9WEEP" cast-meets-a-cell-above-its-start
+    "A sphere cast sinking slowly meets the edge of a solid cell that only its first metre's top reaches."
+  (multiple-value-bind (w terrain) (make-floor-world)
+    (fill-terrain terrain 3 2 6 4 3 7 t)
+    (let* ((hit (physics-sphere-cast w 2.5 2.5 5.8 0.3 0.99 0.0 -0.141 3.0))
+           (norm (sqrt (+ (* 0.99d0 0.99d0) (* 0.141d0 0.141d0))))
+           (ux (/ 0.99d0 norm)) (uz (/ -0.141d0 norm))
+           ;; the centre 0.3 m from the cell's edge x = 3, z = 6: (ux d - 0.5)^2 + (uz d - 0.2)^2 = 0.09
+           (qa (+ (* ux ux) (* uz uz))) (qb (* -2 (+ (* 0.5d0 ux) (* 0.2d0 uz)))) (qc (- (+ 0.25d0 0.04d0) 0.09d0))
+           (d (/ (- (- qb) (sqrt (- (* qb qb) (* 4 qa qc)))) (* 2 qa))))
+      (check (and hit (eq :cell (physics-hit-kind hit))
+                  (equal '(3 2 6) (list (physics-hit-cell-x hit) (physics-hit-cell-y hit) (physics-hit-cell-z hit))))
+             "the cast met ~S" hit)
+      (when hit
+        (check (< (abs (- (physics-hit-distance hit) d)) 1e-4) "met at ~,5F m, not ~,5F" (physics-hit-distance hit) d)
+        (check (every (lambda (got want) (< (abs (- got want)) 1e-3))
+                      (list (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit)
+                            (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))
+                      (list 3 2.5 6 (/ (- (+ 2.5 (* ux d)) 3) 0.3) 0 (/ (- (+ 5.8 (* uz d)) 6) 0.3)))
+               "the point and normal ~S" hit)))))
+;; S9WEEP-cast-meets-a-cell-above-its-start ends here
+
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-regions-match-brute-force]]
 (define-claim "OV3RLP" regions-match-brute-force
     "Sphere and box queries for bodies and cells equal brute force at six moments of sleeps, wakes, removals, additions and edits."
