@@ -14121,7 +14121,8 @@ within reach of something. #S9WEEP"
                                             :gravity '(1.5 -9.81 -2.5))))
              (dotimes (i 150)
                (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
-                 (add-physics-body world x y z :restitution 0.5 :friction 0.4)))
+                 (add-physics-body world x y z :restitution 0.5 :friction 0.4
+                                   :vx (if (evenp i) 4.0 -4.0) :vz (if (zerop (mod i 3)) 3.0 -3.0))))
              (dotimes (i 90) (step-physics-world world))
              (list (physics-world-state-hash world)
                    (luv-physics::contact-columns-length (luv-physics::physics-world-contacts world))))))
