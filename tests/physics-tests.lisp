@@ -5156,6 +5156,23 @@ use before it. #QKS4GZ"
                       speed found)))))
 ;; SW33P7-sweep-from-the-margin ends here
 
+;; [[file:../physics.org::#SW33P7][SW33P7-ray-along-a-face-crosses-none]]
+(define-claim "SW33P7" ray-along-a-face-crosses-none
+    "A ray along a cell's face, its component across it under 1e-12, never crosses that face."
+  (multiple-value-bind (w terrain) (make-floor-world)
+    (fill-terrain terrain 2 0 2 3 5 3 t)
+    (step-physics-world w)
+    (let ((probe (luv-physics::physics-world-probe w)))
+      (check (equal '(1 2.5 3 -1 2)
+                    (multiple-value-list (luv-physics::first-solid-on-ray probe 3.0 2.5 2.5 -7e-13 -1.0 0.0 4.0)))
+             "the ray down the face x = 3 answers ~S"
+             (multiple-value-list (luv-physics::first-solid-on-ray probe 3.0 2.5 2.5 -7e-13 -1.0 0.0 4.0)))
+      (check (equal '(0 0.5 2 2 2)
+                    (multiple-value-list (luv-physics::first-solid-on-ray probe 3.5 2.5 2.5 -1.0 0.0 0.0 4.0)))
+             "the ray along -x answers ~S"
+             (multiple-value-list (luv-physics::first-solid-on-ray probe 3.5 2.5 2.5 -1.0 0.0 0.0 4.0))))))
+;; SW33P7-ray-along-a-face-crosses-none ends here
+
 ;; [[file:../physics.org::#B0XPH5][B0XPH5-box-contact-geometry]]
 (define-claim "B0XPH5" box-contact-geometry
     "Box contacts: normal, separation and point are the closest point's, outside and inside, every column."
@@ -7704,6 +7721,20 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
             (check (eq t (validate-physics-world w)))))))))
 ;; BXSWEP-boxes-thrown-sideways-stop-at-walls ends here
 
+;; [[file:../physics.org::#BXSWEP][BXSWEP-corner-in-a-solid-cell-enters-none]]
+(define-claim "BXSWEP" corner-in-a-solid-cell-enters-none
+    "A corner that starts in a solid cell enters none; one in the air enters the first solid cell on its path."
+  (let* ((w (make-floor-world)) (probe (progn (step-physics-world w) (luv-physics::physics-world-probe w))))
+    (check (equal '(2 -1 2 -1 0)
+                  (multiple-value-list (luv-physics::corner-first-solid probe 2.5 -0.5 2.5 1.0 0.0 0.0 2.0)))
+           "from inside the floor: ~S"
+           (multiple-value-list (luv-physics::corner-first-solid probe 2.5 -0.5 2.5 1.0 0.0 0.0 2.0)))
+    (check (equal '(2 -1 2 1 -1)
+                  (multiple-value-list (luv-physics::corner-first-solid probe 2.5 0.5 2.5 0.0 -1.0 0.0 2.0)))
+           "from above the floor: ~S"
+           (multiple-value-list (luv-physics::corner-first-solid probe 2.5 0.5 2.5 0.0 -1.0 0.0 2.0)))))
+;; BXSWEP-corner-in-a-solid-cell-enters-none ends here
+
 ;; [[file:../physics.org::#BXPUSH][BXPUSH-walker-pushes-a-crate]]
 (defun pushed-crate (&key (friction 0.6) (speed 2.0) (steps 120) wall (kernels :scalar))
   "A floor world, a cube of half-extent 0.4 m and 10 kg at (2.5, 0.4, 2.5) of FRICTION, and a
@@ -8231,6 +8262,38 @@ wall. #BXPUSH"
     (check (equal '(1 2 3) (sort (remove-duplicates heights) #'<)) "the blocks' heights: ~S" heights)
     (check (zerop misplaced) "~D cells of the reported blocks are not solid" misplaced)))
 ;; SQU33Z-blocks-up-to-three-high ends here
+
+;; [[file:../physics.org::#SQU33Z][SQU33Z-path-across-x-cut-for-its-own-row]]
+(define-claim "SQU33Z" path-across-x-cut-for-its-own-row
+    "A short fast path whose centre crosses an x face into a solid cell is cut at the face, for its own row only."
+  (multiple-value-bind (w terrain) (make-floor-world :sleep nil :gravity '(0 0 0))
+    (fill-terrain terrain 4 0 0 5 4 8 t)
+    (let* ((a (add-physics-body w 1.5 2.5 0.5 :radius 0.25 :vx 0.5))
+           (b (add-physics-body w 2.5 1.5 1.5 :radius 0.25 :vx 0.5))
+           (c (add-physics-body w 3.6 2.5 2.5 :radius 0.25 :vx 42.0))
+           (rows '())
+           (*physics-phases*
+             (phases-checked-after
+              'luv-physics::substep-phase
+              (lambda (w)
+                (let* ((awake (luv-physics::physics-world-awake w))
+                       (row (position c (luv-physics::body-columns-handle awake)
+                                      :end (luv-physics::body-columns-length awake)))
+                       (p (luv-physics::delta-row row)) (o (luv-physics::solver-row row))
+                       (d (luv-physics::physics-world-deltas w)) (v (luv-physics::physics-world-velocities w)))
+                  (setf (aref d p) 0.7 (aref d (+ p 1)) 0.0 (aref d (+ p 2)) 0.0
+                        (aref v o) 42.0 (aref v (+ o 1)) 0.0 (aref v (+ o 2)) 0.0)
+                  (push row rows))
+                w))))
+      (step-physics-world w)
+      (check (equal '(2) rows) "the fast ball is the row ~S of three" rows)
+      (multiple-value-bind (px py pz) (physics-body-position w c)
+        (check (and (< (abs (- px 3.75)) 1e-5) (= py 2.5) (= pz 2.5)) "the ball sent 0.7 m at the wall ends at ~,6F ~,4F ~,4F" px py pz))
+      (check (= 0.0 (physics-body-velocity w c)) "its velocity into the wall is ~,3F" (physics-body-velocity w c))
+      (check (= 1 (physics-world-last-step-held-out-count w)))
+      (dolist (h (list a b))
+        (check (= 0.5 (physics-body-velocity w h)) "the ball ~D in the air has vx ~,4F" h (physics-body-velocity w h))))))
+;; SQU33Z-path-across-x-cut-for-its-own-row ends here
 
 ;; [[file:../physics.org::#IDVK7G][IDVK7G-stage-table-is-the-step]]
 (define-claim "IDVK7G" stage-table-is-the-step
@@ -9557,6 +9620,32 @@ list, as they were. #P41P1C"
     (dolist (site '(luv-physics::listed-pairs-piece luv-physics::build-pairs-piece))
       (check-piece-fault site before))))
 ;; P41P1C-piece-fault-as-one-worker ends here
+
+;; [[file:../physics.org::#P41P1C][P41P1C-struck-listed-pairs-as-one-worker]]
+(define-claim "P41P1C" struck-listed-pairs-as-one-worker
+    "Pairs of balls that strike while listed reach one hash and one event order with 1 worker and with 2 and 3 taking the steps in turn."
+  (let ((struck 0))
+    (flet ((rows ()
+             (let ((w (make-floor-world :sleep nil :gravity '(0 0 0))))
+               ;; 25 pairs closing at 1.1 m/s, each from its own gap
+               (dotimes (k 25)
+                 (let ((x (+ 1.5 (* 2 (mod k 5)))) (z (+ 1.5 (* 2 (floor k 5)))) (gap (* 0.004 k)))
+                   (add-physics-body w x 2.5 z :radius 0.25 :restitution 1.0 :friction 0.0 :vx 0.55)
+                   (add-physics-body w (+ x 0.5 gap) 2.5 z :radius 0.25 :restitution 1.0 :friction 0.0 :vx -0.55)))
+               w)))
+      (sb-int:encapsulate 'luv-physics::struck-pair-piece 'claim-struck-count
+                          (lambda (f world sink packed) (incf struck) (funcall f world sink packed)))
+      (unwind-protect
+           (let ((runs (loop for counts in '((1) (2 3))
+                             collect (multiple-value-list (worker-run #'rows 30 counts)))))
+             (check (= 1 (length (remove-duplicates runs :key #'first))) "hashes ~S for 1 and 2-3 workers"
+                    (mapcar #'first runs))
+             (check (= 1 (length (remove-duplicates runs :key #'second :test #'equal))) "the events differ")
+             (check (plusp (length (second (first runs)))) "no events to compare")
+             (check (fourth (second runs)) "no pair walk ran in pieces"))
+        (sb-int:unencapsulate 'luv-physics::struck-pair-piece 'claim-struck-count))
+      (check (<= 6 struck) "only ~D listed pairs struck in the workers' pieces" struck))))
+;; P41P1C-struck-listed-pairs-as-one-worker ends here
 
 ;; [[file:../physics.org::#MYWP1C][MYWP1C-terrain-pieces-as-one-walk]]
 (define-claim "MYWP1C" terrain-pieces-as-one-walk
@@ -13692,6 +13781,29 @@ within reach of something. #S9WEEP"
                  (list (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))))))))
 ;; S9WEEP-starts-inside-against-the-cast ends here
 
+;; [[file:../physics.org::#S9WEEP][S9WEEP-cast-meets-a-cell-above-its-start]]
+(define-claim "S9WEEP" cast-meets-a-cell-above-its-start
+    "A sphere cast sinking slowly meets the edge of a solid cell that only its first metre's top reaches."
+  (multiple-value-bind (w terrain) (make-floor-world)
+    (fill-terrain terrain 3 2 6 4 3 7 t)
+    (let* ((hit (physics-sphere-cast w 2.5 2.5 5.8 0.3 0.99 0.0 -0.141 3.0))
+           (norm (sqrt (+ (* 0.99d0 0.99d0) (* 0.141d0 0.141d0))))
+           (ux (/ 0.99d0 norm)) (uz (/ -0.141d0 norm))
+           ;; the centre 0.3 m from the cell's edge x = 3, z = 6: (ux d - 0.5)^2 + (uz d - 0.2)^2 = 0.09
+           (qa (+ (* ux ux) (* uz uz))) (qb (* -2 (+ (* 0.5d0 ux) (* 0.2d0 uz)))) (qc (- (+ 0.25d0 0.04d0) 0.09d0))
+           (d (/ (- (- qb) (sqrt (- (* qb qb) (* 4 qa qc)))) (* 2 qa))))
+      (check (and hit (eq :cell (physics-hit-kind hit))
+                  (equal '(3 2 6) (list (physics-hit-cell-x hit) (physics-hit-cell-y hit) (physics-hit-cell-z hit))))
+             "the cast met ~S" hit)
+      (when hit
+        (check (< (abs (- (physics-hit-distance hit) d)) 1e-4) "met at ~,5F m, not ~,5F" (physics-hit-distance hit) d)
+        (check (every (lambda (got want) (< (abs (- got want)) 1e-3))
+                      (list (physics-hit-x hit) (physics-hit-y hit) (physics-hit-z hit)
+                            (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit))
+                      (list 3 2.5 6 (/ (- (+ 2.5 (* ux d)) 3) 0.3) 0 (/ (- (+ 5.8 (* uz d)) 6) 0.3)))
+               "the point and normal ~S" hit)))))
+;; S9WEEP-cast-meets-a-cell-above-its-start ends here
+
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-regions-match-brute-force]]
 (define-claim "OV3RLP" regions-match-brute-force
     "Sphere and box queries for bodies and cells equal brute force at six moments of sleeps, wakes, removals, additions and edits."
@@ -14000,6 +14112,25 @@ within reach of something. #S9WEEP"
                (class-name (class-of (luv-physics::physics-world-kernels
                                       (make-physics-world :kernels :auto))))))))
 ;; 7PAQ3M-choosing-a-family ends here
+
+;; [[file:../physics.org::#7PAQ3M][7PAQ3M-families-agree-under-tilted-gravity]]
+(define-claim "7PAQ3M" families-agree-under-tilted-gravity
+    "Families agree bit for bit on bouncing balls under a gravity with three unequal components."
+  (flet ((hash-after (kernels)
+           (let ((world (make-physics-world :terrain (make-basin-terrain) :kernels kernels :sleep nil
+                                            :gravity '(1.5 -9.81 -2.5))))
+             (dotimes (i 150)
+               (multiple-value-bind (x y z) (luv-physics::basin-spawn-point i)
+                 (add-physics-body world x y z :restitution 0.5 :friction 0.4
+                                   :vx (if (evenp i) 4.0 -4.0) :vz (if (zerop (mod i 3)) 3.0 -3.0))))
+             (dotimes (i 90) (step-physics-world world))
+             (list (physics-world-state-hash world)
+                   (luv-physics::contact-columns-length (luv-physics::physics-world-contacts world))))))
+    (let ((reference (hash-after :scalar)))
+      (check (< 100 (second reference)) "only ~D contacts" (second reference))
+      (dolist (family (remove :scalar (available-kernel-families)))
+        (check (equal reference (hash-after family)) "~A differs from scalar under the tilted gravity" family)))))
+;; 7PAQ3M-families-agree-under-tilted-gravity ends here
 
 ;; [[file:../physics.org::#W1D3KF][W1D3KF-kernels-say-their-width]]
 (define-claim "W1D3KF" kernels-say-their-width
