@@ -18,7 +18,7 @@
    ;; Bad input is a condition that names the value (#C0ND1T)
    #:physics-error #:invalid-physics-number #:invalid-physics-radius #:invalid-physics-parameter
    #:stale-physics-handle #:physics-world-busy #:physics-world-invalid #:physics-budget-exceeded
-   #:+physics-min-radius+ #:+physics-min-mass+ #:+physics-max-mass+ #:+physics-max-friction+
+   #:+physics-min-radius+ #:+physics-max-radius+ #:+physics-min-mass+ #:+physics-max-mass+ #:+physics-max-friction+
    #:+physics-max-gravity+ #:+physics-min-step-seconds+
    ;; Terrain (#H2W9DJ)
    #:voxel-terrain #:make-voxel-terrain #:terrain-solid-p #:terrain-resident-p #:fill-terrain
@@ -246,6 +246,9 @@ velocities ends with. #V0CAB5"
 (defconstant +physics-min-radius+ 0.005
   "Smallest radius, m, a body may have. #C0ND1T")
 
+(defconstant +physics-max-radius+ 2.0
+  "Largest radius, m, a sphere may have, and largest half-extent a box may have: two cells. #C0ND1T")
+
 (defconstant +physics-min-mass+ 0.001
   "Smallest mass, kg, a body may have. #C0ND1T")
 
@@ -278,9 +281,9 @@ velocities ends with. #V0CAB5"
    (limit :initarg :limit :reader invalid-physics-radius-limit))
   (:report (lambda (c s)
              (format s "radius ~S is out of range: it must be from ~,3F to ~,3F, so that the ~
-                        solver's arithmetic holds and radius plus margin stays under one cell"
+                        solver's arithmetic holds and a body spans at most four cells"
                      (invalid-physics-radius-value c) +physics-min-radius+ (invalid-physics-radius-limit c))))
-  (:documentation "A radius of zero or less, or one whose reach would span a cell. #C0ND1T"))
+  (:documentation "A radius of zero or less, or one over +physics-max-radius+. #C0ND1T"))
 
 (define-condition invalid-physics-parameter (physics-error)
   ((name :initarg :name :reader invalid-physics-parameter-name)
@@ -2006,7 +2009,19 @@ under its body budget; below the budget its handle table has a slot for it ([[#B
                                       :requested (1+ count) :budget (physics-world-body-budget world)))))
 
 (defun max-radius-for (world)
-  "The largest radius a body of WORLD may have: reach (radius plus margin) stays under a cell. #M4K3WD"
+  "The largest radius a sphere of WORLD may have, and the largest half-extent of a box:
++physics-max-radius+, two cells ([[#B1GBDY]]). #M4K3WD"
+  (declare (ignore world))
+  +physics-max-radius+)
+
+(defvar *box-radius-limit* nil
+  "While add-physics-box adds a box's row, the largest radius add-physics-body takes: the half
+diagonal of the largest box; otherwise NIL, and the limit is max-radius-for. #M4K3WD")
+
+(defun small-radius-for (world)
+  "The largest radius of a body of WORLD whose reach (radius plus margin) stays under the reach
+limit, a cell: such a body gathers its cells as a 3x3x3 mask ([[#MYWGTH]]), a larger one cell by
+cell ([[#B1GBDY]]). #M4K3WD"
   (- (physics-world-reach-limit world) (physics-world-margin world)))
 
 (defun checked-material (world operation restitution friction rolling-resistance)
@@ -2063,7 +2078,7 @@ GRAVITY-SCALE multiplies the world's gravity for this body alone ([[#F0RC3S]]). 
          (vx (finite-f32 :vx vx world)) (vy (finite-f32 :vy vy world)) (vz (finite-f32 :vz vz world))
          (mortal (and life t))
          (life (if life (finite-f32 :life life world) 0.0))
-         (limit (max-radius-for world)))
+         (limit (or *box-radius-limit* (max-radius-for world))))
     (check-coordinate :x x world) (check-coordinate :y y world) (check-coordinate :z z world)
     (check-centre-in-air world 'add-physics-body x y z inside-cells)
     (unless (<= +physics-min-radius+ r limit)
@@ -4214,7 +4229,96 @@ face (inside-face), and the body counted buried. Expanded in terrain-cell-contac
                    (terrain-inside-contact))))))))))
 ;; A contact per cell:1 ends here
 
+;; [[file:../physics.org::#B1GBDY][Bodies larger than a cell:1]]
+(declaim (inline large-step-reach body-reach))
+(defun large-step-reach (r travel margin limit)
+  "How far from its centre a body larger than a cell (radius over LIMIT less MARGIN) looks for
+contacts: its radius plus the larger of the margin and its travel, the travel counted up to LIMIT
+(the sweep looks along the rest of its path). #B1GBDY"
+  (declare (type single-float r travel margin limit))
+  (+ r (min limit (max margin travel))))
+
+(defun body-reach (r travel margin limit)
+  "How far from its centre a body of radius R looks for contacts: step-reach when its reach stays
+under LIMIT, large-step-reach for a larger body. #B1GBDY"
+  (declare (type single-float r travel margin limit))
+  (if (> r (- limit margin))
+      (large-step-reach r travel margin limit)
+      (step-reach r travel margin limit)))
+
+(defmacro terrain-large-contacts ()
+  "Offer a contact for each solid cell of row I's span X0..X1, Y0..Y1, Z0..Z1, read cell by cell
+through its chunk: the contacts of terrain-cell-contacts, the overshoot rule asking the cells
+themselves. Expanded in terrain-large-row. #B1GBDY"
+  `(flet ((solid (ix iy iz)
+            (declare (type fixnum ix iy iz))
+            (cell-solid-p ix iy iz)))
+     (declare (inline solid))
+     (loop for iz of-type fixnum from z0 to z1 do
+       (loop for iy of-type fixnum from y0 to y1 do
+         (loop for ix of-type fixnum from x0 to x1 do
+           (when (solid ix iy iz)
+             (let ((fx (float ix 1.0)) (fy (float iy 1.0)) (fz (float iz 1.0))
+                   (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
+               (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
+                   (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
+                 (terrain-outside-contact)
+                 (terrain-inside-contact)))))))))
+
+(defmacro terrain-large-row ()
+  "Row I's contacts with the cells, for a body whose reach passes the reach limit: its reach
+(large-step-reach), the path check's bound, its sweep, and a contact per solid cell of its span,
+read one by one. Expanded in terrain-rows, whose variables it reads. #B1GBDY"
+  `(let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+          (travel (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))
+          (ahead (max margin travel))
+          (reach (large-step-reach r travel margin limit))
+          (x0 (cell-floor (- cx reach))) (x1 (cell-floor (+ cx reach)))
+          (y0 (cell-floor (- cy reach))) (y1 (cell-floor (+ cy reach)))
+          (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach))))
+     (declare (type fixnum x0 x1 y0 y1 z0 z1) (ignorable ahead))
+     ;; never skipped: a large row has no mask to skip
+     (when fresh (setf (aref clear i) 0))
+     (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
+     (unless (and boxes (logtest (aref flags i) +flag-box-shape+))
+       (when (> travel margin)
+         (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
+                                (aref vx i) (aref vy i) (aref vz i) (+ travel r) sink))
+       (terrain-large-contacts))))
+;; Bodies larger than a cell:1 ends here
+
 ;; [[file:../physics.org::#MYWSTG][The terrain phase, stage by stage:1]]
+(defmacro terrain-small-row ()
+  "Row I's contacts with the cells, for a body whose reach stays under the reach limit: its
+reach, the mask of its cells, the path check's bound, its sweep, and a contact per cell.
+Expanded in terrain-rows, whose variables it reads. #MYWSTG"
+  `(let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
+          ;; how far the body can travel this step; a body faster than its margin a
+          ;; step reaches that far, so that it meets an edge or a corner before it strikes
+          (travel (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))
+          (ahead (max margin travel))
+          (reach (step-reach r travel margin limit))
+          (x0 (cell-floor (- cx reach))) (x1 (cell-floor (+ cx reach)))
+          (y0 (cell-floor (- cy reach))) (y1 (cell-floor (+ cy reach)))
+          (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach)))
+          (mask 0))
+     (declare (type fixnum x0 x1 y0 y1 z0 z1) (type (unsigned-byte 27) mask))
+     ;; gather the solid cells of the (at most) 3x3x3 neighbourhood, unless the row
+     ;; stayed near its anchor and the anchor had no solid cell near it
+     (terrain-gather-mask)
+     ;; in the step that built the pair list, each row's anchor is its centre: note
+     ;; whether every cell within its reach plus 0.45 skins is air
+     (terrain-note-clear)
+     ;; as far as the cells gathered reach, until a solid one nearer is met below
+     (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
+     ;; a box's points are its own ([[#BXCELL]]), found when the world has boxes
+     (unless (and boxes (logtest (aref flags i) +flag-box-shape+))
+       ;; a body that can travel past its margin this step also sweeps its path
+       (when (> travel margin)
+         (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
+                                (aref vx i) (aref vy i) (aref vz i) (+ travel r) sink))
+       (terrain-cell-contacts))))
+
 (declaim (inline terrain-rows))
 (defun terrain-rows (world from to sink probe)
   "The terrain phase's awake rows FROM below TO, their chunks read through PROBE, their touches
@@ -4256,33 +4360,12 @@ into SINK when one is given: return how many of them lie buried. #MYWSTG"
                      (plusp (aref (the chunk-storage (chunk-at (chunk-key ix iy iz))) (cell-offset ix iy iz)))))
             (declare (inline chunk-at cell-solid-p))
           (with-body-columns (x y z vx vy vz radius handle flags) awake
-            (loop for i of-type index from from below to do
-              (let* ((cx (aref x i)) (cy (aref y i)) (cz (aref z i)) (r (aref radius i))
-                     ;; how far the body can travel this step; a body faster than its margin a
-                     ;; step reaches that far, so that it meets an edge or a corner before it strikes
-                     (travel (step-travel (aref vx i) (aref vy i) (aref vz i) dt gstep))
-                     (ahead (max margin travel))
-                     (reach (step-reach r travel margin limit))
-                     (x0 (cell-floor (- cx reach))) (x1 (cell-floor (+ cx reach)))
-                     (y0 (cell-floor (- cy reach))) (y1 (cell-floor (+ cy reach)))
-                     (z0 (cell-floor (- cz reach))) (z1 (cell-floor (+ cz reach)))
-                     (mask 0))
-                (declare (type fixnum x0 x1 y0 y1 z0 z1) (type (unsigned-byte 27) mask))
-                ;; gather the solid cells of the (at most) 3x3x3 neighbourhood, unless the row
-                ;; stayed near its anchor and the anchor had no solid cell near it
-                (terrain-gather-mask)
-                ;; in the step that built the pair list, each row's anchor is its centre: note
-                ;; whether every cell within its reach plus 0.45 skins is air
-                (terrain-note-clear)
-                ;; as far as the cells gathered reach, until a solid one nearer is met below
-                (setf (aref near i) (let ((looked (- reach r))) (* looked looked)))
-                ;; a box's points are its own ([[#BXCELL]]), found when the world has boxes
-                (unless (and boxes (logtest (aref flags i) +flag-box-shape+))
-                ;; a body that can travel past its margin this step also sweeps its path
-                (when (> travel margin)
-                  (sweep-terrain-contact contacts table probe (aref handle i) cx cy cz r
-                                         (aref vx i) (aref vy i) (aref vz i) (+ travel r) sink))
-                (terrain-cell-contacts))))))
+            ;; a world that has never had a body larger than a cell walks its rows as it
+            ;; always did; one that has tests each row's radius ([[#B1GBDY]])
+            (if (> (f32 (physics-world-max-radius world)) (- limit margin))
+                (loop for i of-type index from from below to do
+                  (if (> (aref radius i) (- limit margin)) (terrain-large-row) (terrain-small-row)))
+                (loop for i of-type index from from below to do (terrain-small-row)))))
           buried))))
 
 (defun terrain-phase (world)
@@ -4415,7 +4498,7 @@ with the face the ray enters it through; or write the touch into SINK, a worker'
                          (wx (- (aref bvx i) (aref vx b))) (wy (- (aref bvy i) (aref vy b)))
                          (wz (- (aref bvz i) (aref vz b)))
                          (travel (step-travel wx wy wz dt gstep))
-                         (reach (step-reach r travel margin limit))
+                         (reach (body-reach r travel margin limit))
                          (key (box-key (handle-index (aref handle i)) (aref id b))))
                     (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
                         (cx cy cz r bx0 by0 bz0 bx1 by1 bz1)
@@ -7169,15 +7252,14 @@ posted box ([[#BXPUSH]]). #BXR0WS"
   (fsqrt (+ (* hx hx) (* hy hy) (* hz hz))))
 
 (defun checked-box-extents (world hx hy hz)
-  "HX HY HZ as three single-floats, once each is finite and at least +box-min-half-extent+ and
-the half diagonal is at most the largest radius of WORLD; else invalid-physics-parameter naming
-:half-extents. #BXR0WS"
+  "HX HY HZ as three single-floats, once each is finite, at least +box-min-half-extent+ and at
+most the largest half-extent of WORLD (max-radius-for, 2 m: four cells a side); else
+invalid-physics-parameter naming :half-extents. #BXR0WS"
   (let* ((limit (max-radius-for world))
          (fx (finite-f32 :hx hx world)) (fy (finite-f32 :hy hy world)) (fz (finite-f32 :hz hz world)))
-    (unless (and (<= +box-min-half-extent+ (min fx fy fz))
-                 (<= (box-half-diagonal fx fy fz) limit))
+    (unless (<= +box-min-half-extent+ (min fx fy fz) (max fx fy fz) limit)
       (error 'invalid-physics-parameter :world world :name :half-extents :value (list hx hy hz)
-                                        :expected (format nil "each at least ~A m, the half diagonal at most ~,3F m"
+                                        :expected (format nil "each from ~A m to ~,3F m"
                                                           +box-min-half-extent+ limit)))
     (values fx fy fz)))
 
@@ -7256,10 +7338,11 @@ made without :box-bodies refuses it with physics-feature-omitted. #BXR0WS"
                                              :expected "a box clear of solid and non-resident cells"))
         (check-body-room world 'add-physics-box)
         ;; add-physics-body checks the rest before it touches the world
-        (let* ((handle (add-physics-body world fx fy fz :radius (box-half-diagonal hx hy hz) :mass m
-                                         :friction friction :restitution restitution :vx vx :vy vy :vz vz :life life
-                                         :collide-with-bodies nil :kind kind :inside-cells :push-out
-                                         :category category :mask mask :gravity-scale gravity-scale))
+        (let* ((handle (let ((*box-radius-limit* (let ((e (max-radius-for world))) (box-half-diagonal e e e))))
+                         (add-physics-body world fx fy fz :radius (box-half-diagonal hx hy hz) :mass m
+                                           :friction friction :restitution restitution :vx vx :vy vy :vz vz :life life
+                                           :collide-with-bodies nil :kind kind :inside-cells :push-out
+                                           :category category :mask mask :gravity-scale gravity-scale)))
                (set (or (physics-world-box-bodies world)
                         (setf (physics-world-box-bodies world) (%make-box-set))))
                (slot (handle-index handle))
@@ -9260,7 +9343,7 @@ adding GSTEP), moved the square root of MOVED2: farther than the terrain phase l
 MARGIN and past the travel that velocity promised (step-reach, at most LIMIT). #SQU33Z"
   (declare (type single-float moved2 r vx vy vz margin limit dt gstep))
   (and (> moved2 (* margin margin))
-       (let ((looked (- (step-reach r (step-travel vx vy vz dt gstep) margin limit) r)))
+       (let ((looked (- (body-reach r (step-travel vx vy vz dt gstep) margin limit) r)))
          (> moved2 (* looked looked)))))
 
 (defun surface-stop (at r along)
@@ -11783,8 +11866,9 @@ sleep, and every number within its range. #SN4P0T"
             (limit (snap-f32 buffer (+ at 52 (* 4 (position :reach-limit +physics-parameters+ :key #'first))))))
         (snapshot-check (>= limit (+ margin +physics-min-radius+)) physics-snapshot-other-layout (+ at 52)
                         "a reach limit of at least the margin and the smallest radius" limit)
-        ;; a box's half diagonal may pass half a cell: the bound is the one add-physics-box keeps
-        (ranged (+ at 48) 0.0 (- limit margin) "the largest radius the world has had, within the reach limit less the margin")))
+        ;; a box's half diagonal is its radius: the bound is the half diagonal of the largest box
+        (ranged (+ at 48) 0.0 (box-half-diagonal +physics-max-radius+ +physics-max-radius+ +physics-max-radius+)
+                "the largest radius the world has had, within the largest box's half diagonal")))
     (dolist (o '(124 132))
       (snapshot-check (typep (snap-i64 buffer (+ at o)) 'fixnum) physics-snapshot-other-layout (+ at o)
                       "a step number" (snap-i64 buffer (+ at o))))

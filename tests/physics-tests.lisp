@@ -1023,14 +1023,16 @@ return SCENE's record (run-twin). #T3STK1"
       (flet ((outcome (&rest args)
                (handler-case (progn (apply #'add-physics-body w 8.5 1 8.5 args) :no-error)
                  (error (e) (type-of e)))))
-        (check (< (abs (- (luv-physics::max-radius-for w) 0.88)) 1e-6))
-        (dolist (r '(0 0.0 -0.1 0.881 1.0 100))
+        (check (= (luv-physics::max-radius-for w) 2.0))
+        (check (< (abs (- (luv-physics::small-radius-for w) 0.88)) 1e-6))
+        (dolist (r '(0 0.0 -0.1 2.001 2.5 100))
           (check (eq 'invalid-physics-radius (outcome :radius r)) "radius ~S gave ~S" r (outcome :radius r)))
         (dolist (m '(0 0.0 -1))
           (check (eq 'invalid-physics-parameter (outcome :mass m)) "mass ~S gave ~S" m (outcome :mass m)))
         (check (equal before (world-fingerprint w)))
         (check (eq t (validate-physics-world w)))
-        (check (eq :no-error (outcome :radius (luv-physics::max-radius-for w))) "the limit radius itself is refused")))))
+        (check (eq :no-error (outcome :radius (luv-physics::max-radius-for w))) "the limit radius itself is refused")
+        (check (eq :no-error (outcome :radius (luv-physics::small-radius-for w))) "0.88 m is refused")))))
 ;; C0ND1T-bad-radius-and-mass ends here
 
 ;; [[file:../physics.org::#C0ND1T][C0ND1T-bad-pair-skin]]
@@ -6982,7 +6984,7 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
         (refused :half-extents (lambda () (add-physics-box w 5.5 2 5.5 0 0.5 0.5)))
         (refused :half-extents (lambda () (add-physics-box w 5.5 2 5.5 0.5 -0.5 0.5)))
         (refused :hy (lambda () (add-physics-box w 5.5 2 5.5 0.5 (sb-kernel:make-single-float -4194304) 0.5)))
-        (refused :half-extents (lambda () (add-physics-box w 5.5 2 5.5 0.5 0.5 0.6)))
+        (refused :half-extents (lambda () (add-physics-box w 5.5 2 5.5 0.5 0.5 2.001)))
         (refused :orientation (lambda () (add-physics-box w 5.5 2 5.5 0.2 0.2 0.2
                                                           :orientation (list 1 (sb-kernel:make-single-float -4194304) 0 0))))
         (refused :orientation (lambda () (add-physics-box w 5.5 2 5.5 0.2 0.2 0.2 :orientation '(0 0 0 0))))
