@@ -2902,12 +2902,39 @@ and forgets those no longer inside. #S3NS0R"
 ;; Sensors report who enters and who leaves:1 ends here
 
 ;; [[file:../physics.org::#G3NCNT][Contacts are made speculatively:1]]
+(declaim (inline refresh-contact))
+(defun refresh-contact (contacts row step place nx ny nz separation px py pz kvx kvy kvz)
+  "Give contact ROW of CONTACTS this step's geometry, the impulses it carries dropped when its
+normal turned, and stamp it seen at STEP with PLACE in the step's order; return true, or NIL,
+changing nothing, when it was seen at STEP already. #G3NCNT"
+  (declare (type contact-columns contacts) (type index row place) (type fixnum step)
+           (type single-float nx ny nz separation px py pz kvx kvy kvz) #.+kernel-policy+)
+  (with-contact-columns (seen order geometry) contacts
+    (let ((g (geometry-start row)))
+      (unless (= (aref seen row) step)
+        (setf (aref order row) place)
+        ;; carried impulses only make sense along a normal close to the one they were found on
+        (when (< (+ (* nx (contact-at geometry g nx)) (* ny (contact-at geometry g ny))
+                    (* nz (contact-at geometry g nz)))
+                 0.9)
+          (setf (contact-at geometry g normal-impulse) 0.0
+                (contact-at geometry g tangent-impulse-1) 0.0 (contact-at geometry g tangent-impulse-2) 0.0
+                (contact-at geometry g rolling-impulse-x) 0.0 (contact-at geometry g rolling-impulse-y) 0.0
+                (contact-at geometry g rolling-impulse-z) 0.0 (contact-at geometry g spin-impulse) 0.0))
+        (setf (aref seen row) step
+              (contact-at geometry g nx) nx (contact-at geometry g ny) ny (contact-at geometry g nz) nz (contact-at geometry g separation) separation
+              (contact-at geometry g px) px (contact-at geometry g py) py (contact-at geometry g pz) pz
+              (contact-at geometry g kvx) kvx (contact-at geometry g kvy) kvy (contact-at geometry g kvz) kvz)
+        t))))
+(declaim (notinline refresh-contact))
+
 (declaim (inline touch-contact))
 (defun touch-contact (contacts table key kind handle-a handle-b nx ny nz separation px py pz kvx kvy kvz)
   "Refresh the contact under KEY in CONTACTS and TABLE with this step's geometry, or add it with
 zero impulses; the row under the table's cursor is tried before the table. #G3NCNT"
   (declare (type contact-columns contacts) (type contact-table table) (type fixnum key kind handle-a handle-b)
-           (type single-float nx ny nz separation px py pz kvx kvy kvz) #.+kernel-policy+)
+           (type single-float nx ny nz separation px py pz kvx kvy kvz) #.+kernel-policy+
+           (inline refresh-contact))
   (let* ((step (contact-table-step table))
          (guess (contact-table-cursor table))
          (row (if (and (< guess (contact-columns-length contacts))
@@ -2923,23 +2950,9 @@ zero impulses; the row under the table's cursor is tried before the table. #G3NC
           (with-contact-columns ((a handle-a) (b handle-b) (k kind) (ky key)) contacts
             (setf (aref a row) handle-a (aref b row) handle-b (aref k row) kind (aref ky row) key)))
         (setf (contact-table-cursor table) (1+ row)))
-    (with-contact-columns (seen order geometry) contacts
-      (let ((g (geometry-start row)))
-      (unless (= (aref seen row) step)
-        (setf (aref order row) (contact-table-touched table))
-        (incf (contact-table-touched table))
-        ;; carried impulses only make sense along a normal close to the one they were found on
-        (when (< (+ (* nx (contact-at geometry g nx)) (* ny (contact-at geometry g ny))
-                    (* nz (contact-at geometry g nz)))
-                 0.9)
-          (setf (contact-at geometry g normal-impulse) 0.0
-                (contact-at geometry g tangent-impulse-1) 0.0 (contact-at geometry g tangent-impulse-2) 0.0
-                (contact-at geometry g rolling-impulse-x) 0.0 (contact-at geometry g rolling-impulse-y) 0.0
-                (contact-at geometry g rolling-impulse-z) 0.0 (contact-at geometry g spin-impulse) 0.0))
-        (setf (aref seen row) step
-              (contact-at geometry g nx) nx (contact-at geometry g ny) ny (contact-at geometry g nz) nz (contact-at geometry g separation) separation
-              (contact-at geometry g px) px (contact-at geometry g py) py (contact-at geometry g pz) pz
-              (contact-at geometry g kvx) kvx (contact-at geometry g kvy) kvy (contact-at geometry g kvz) kvz))))
+    (when (refresh-contact contacts row step (contact-table-touched table)
+                           nx ny nz separation px py pz kvx kvy kvz)
+      (incf (contact-table-touched table)))
     row))
 (declaim (notinline touch-contact))
 
@@ -3598,7 +3611,24 @@ probe, and BURIED, the bodies its rows found buried. #P41RS7"
   (touches (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (geometry (make-array 0 :element-type 'single-float) :type f32-column)
   (probe (make-terrain-probe) :type terrain-probe :read-only t)
-  (buried 0 :type fixnum))
+  (buried 0 :type fixnum)
+  ;; for a merge in pieces ([[#P41P1C]]): the misses its walk counted, the touches of rows found
+  ;; again and not yet seen this step, the first row it found again (-1 for none), the places of
+  ;; its NEW touches of new contacts, and ORDER, the step's order its first fresh touch takes
+  (misses 0 :type fixnum)
+  (fresh 0 :type index)
+  (first-row -1 :type fixnum)
+  (new-count 0 :type index)
+  (new (make-array 0 :element-type 'fixnum) :type fixnum-column)
+  (order 0 :type index))
+
+(defun pair-sink-start (sink cursor)
+  "Empty SINK's touches and what it counts of them, with CURSOR, the contact table's, as its first
+guess. #P41RS7"
+  (declare (type pair-sink sink) (type index cursor))
+  (setf (pair-sink-count sink) 0 (pair-sink-cursor sink) cursor (pair-sink-misses sink) 0
+        (pair-sink-fresh sink) 0 (pair-sink-first-row sink) -1 (pair-sink-new-count sink) 0)
+  sink)
 
 (defun pair-sink-grow (sink)
   "Give SINK room for twice its touches (at least 256), keeping them. #P41RS7"
@@ -3623,7 +3653,17 @@ CONTACTS' TABLE maps KEY to, or -1. Read CONTACTS and TABLE only. #P41RS7"
                   (contact-table-find table key)))
          (k (pair-sink-count sink)))
     (declare (type fixnum row) (type index guess k))
-    (when (>= row 0) (setf (pair-sink-cursor sink) (1+ row)))
+    (if (>= row 0)
+        (progn (unless (= guess row) (incf (pair-sink-misses sink)))
+               (when (< (pair-sink-first-row sink) 0) (setf (pair-sink-first-row sink) row))
+               (unless (= (aref (contact-columns-seen contacts) row) (contact-table-step table))
+                 (incf (pair-sink-fresh sink)))
+               (setf (pair-sink-cursor sink) (1+ row)))
+        (let ((n (pair-sink-new-count sink)))
+          (incf (pair-sink-misses sink))
+          (when (>= n (length (pair-sink-new sink)))
+            (setf (pair-sink-new sink) (fixnum-room (pair-sink-new sink) (1+ n))))
+          (setf (aref (pair-sink-new sink) n) k (pair-sink-new-count sink) (1+ n))))
     (when (> (* 5 (1+ k)) (length (pair-sink-touches sink))) (pair-sink-grow sink))
     (let ((f (pair-sink-touches sink)) (g (pair-sink-geometry sink)) (o (* 5 k)) (q (* 7 k)))
       (declare (type index o q))
@@ -10758,6 +10798,8 @@ the integration JOB on the workers. #SPL1T5"
 (defconstant +body-row-weight+ 8
   "How many rows a body counts as against a pool's split-rows in the passes that take a body a
 row: the list's build and the terrain phase. #P41P1C")
+(defconstant +job-pair-refresh+ 11
+  "The job: the merge of the pair phase's pieces, each worker refreshing its own sink's rows. #P41P1C")
 (defconstant +job-pair-build+ 9
   "The job: the pair list's build, a share of the awake grid's places each. #P41P1C")
 
@@ -10769,9 +10811,8 @@ CURSOR, the contact table's, as its first guess. #P41P1C"
     (setf (pair-list-overlaps list) (fixnum-room (pair-list-overlaps list) rows :keep 0)
           (pair-list-count list) 0 (pair-list-examined list) 0)
     (fill (pair-list-overlaps list) 0 :end rows))
-  (setf (pair-sink-near sink) (fixnum-room (pair-sink-near sink) near :keep 0)
-        (pair-sink-count sink) 0 (pair-sink-cursor sink) cursor)
-  sink)
+  (setf (pair-sink-near sink) (fixnum-room (pair-sink-near sink) near :keep 0))
+  (pair-sink-start sink cursor))
 
 (defun struck-pair-piece (world sink packed)
   "Take the listed pair PACKED, which strikes, whole, with its impact normal, into SINK, its
@@ -10868,6 +10909,62 @@ set on each touch's row, and a miss counted where the cursor would not have gues
                        (aref g q) (aref g (+ q 1)) (aref g (+ q 2)) (aref g (+ q 3))
                        (aref g (+ q 4)) (aref g (+ q 5)) (aref g (+ q 6)) 0.0 0.0 0.0)))))
 
+(defun place-piece-touches (pool world)
+  "Ready the touches of POOL's workers' sinks to be refreshed in pieces (refresh-sink-rows), as
+merge-pair-sink would take them in worker order: append a row for each new contact, in order,
+into WORLD's contacts and table, and note it in its touch; give each sink the place in the
+step's order of its first fresh touch; leave the table's cursor, misses and touched count as
+the merge leaves them. #P41P1C"
+  (declare (type worker-pool pool))
+  (let* ((contacts (physics-world-contacts world)) (table (physics-world-contact-table world))
+         (step (contact-table-step table))
+         (start (contact-table-cursor table)) (cursor start)
+         (misses (contact-table-misses table)) (touched (contact-table-touched table)))
+    (declare (type contact-columns contacts) (type contact-table table) (type fixnum step misses)
+             (type index start cursor touched))
+    (dotimes (w (worker-pool-count pool))
+      (let* ((sink (svref (worker-pool-pair-sinks pool) w))
+             (first (pair-sink-first-row sink)) (f (pair-sink-touches sink)) (new (pair-sink-new sink)))
+        (declare (type fixnum first) (type fixnum-column f new))
+        ;; the piece guessed its first row found again from START; the walk, from CURSOR
+        (incf misses (pair-sink-misses sink))
+        (when (>= first 0)
+          (unless (= start first) (decf misses))
+          (unless (= cursor first) (incf misses))
+          (setf cursor (pair-sink-cursor sink)))
+        (setf (pair-sink-order sink) touched)
+        (incf touched (pair-sink-fresh sink))
+        (dotimes (n (pair-sink-new-count sink))
+          (let* ((o (* 5 (aref new n))) (key (aref f (+ o 1))) (row (contact-columns-append contacts)))
+            (declare (type index o) (type fixnum key row))
+            (contact-table-put table key row)
+            (with-contact-columns ((a handle-a) (b handle-b) (k kind) (ky key) seen) contacts
+              (setf (aref a row) (aref f (+ o 3)) (aref b row) (aref f (+ o 4)) (aref k row) (aref f (+ o 2))
+                    (aref ky row) key)
+              (unless (= (aref seen row) step) (incf touched)))
+            (setf (aref f o) row)))))
+    (setf (contact-table-cursor table) cursor (contact-table-misses table) misses
+          (contact-table-touched table) touched)
+    pool))
+
+(defun refresh-sink-rows (world sink)
+  "Refresh the contact rows of SINK's touches, each found or placed (place-piece-touches), with
+their geometry, stamping each not yet seen this step with the next place of the step's order
+from SINK's: what merge-pair-sink does to them once their rows are known. #P41P1C"
+  (declare (type pair-sink sink) (inline refresh-contact))
+  (let* ((contacts (physics-world-contacts world))
+         (step (contact-table-step (physics-world-contact-table world)))
+         (f (pair-sink-touches sink)) (g (pair-sink-geometry sink)) (place (pair-sink-order sink)))
+    (declare (type contact-columns contacts) (type fixnum step) (type fixnum-column f) (type f32-column g)
+             (type index place))
+    (dotimes (k (pair-sink-count sink) sink)
+      (let ((q (* 7 k)))
+        (declare (type index q))
+        (when (refresh-contact contacts (aref f (* 5 k)) step place
+                               (aref g q) (aref g (+ q 1)) (aref g (+ q 2)) (aref g (+ q 3))
+                               (aref g (+ q 4)) (aref g (+ q 5)) (aref g (+ q 6)) 0.0 0.0 0.0)
+          (incf place))))))
+
 (defun gather-piece-pairs (pool plist)
   "Append the pairs POOL's workers' sinks listed to PLIST, in worker order, and sum the candidates
 they examined. #P41P1C"
@@ -10905,13 +11002,24 @@ row's overlaps reach +overlaps-per-body+: then one walk would have become crowde
       (setf (worker-pool-piece pool) #'piece)
       (unwind-protect (run-on-workers pool (if build +job-pair-build+ +job-pairs+) 1)
         (setf (worker-pool-piece pool) nil)))
-    (let ((start (clock-ns)) (job (if build +job-pair-build+ +job-pairs+)))
-      (prog1 (if (>= (fold-piece-overlaps pool plist rows) +overlaps-per-body+)
-                 (progn (fill (pair-list-overlaps plist) 0 :end rows) nil)
-                 (progn (when build (gather-piece-pairs pool plist))
-                        (dotimes (w (worker-pool-count pool) t)
-                          (merge-pair-sink world (svref sinks w)))))
-        (incf (aref (worker-pool-merged pool) job) (- (clock-ns) start))))))
+    (let* ((start (clock-ns)) (job (if build +job-pair-build+ +job-pairs+))
+           (merged (< (fold-piece-overlaps pool plist rows) +overlaps-per-body+)))
+      (if merged
+          (progn (when build (gather-piece-pairs pool plist))
+                 (place-piece-touches pool world))
+          (fill (pair-list-overlaps plist) 0 :end rows))
+      (incf (aref (worker-pool-merged pool) job) (- (clock-ns) start))
+      (when merged
+        (flet ((refresh (worker count)
+                 (declare (type fixnum worker) (ignore count))
+                 (refresh-sink-rows world (svref sinks worker))))
+          (declare (dynamic-extent #'refresh))
+          (setf (worker-pool-piece pool) #'refresh start (clock-ns))
+          (unwind-protect (run-on-workers pool +job-pair-refresh+ 1)
+            (setf (worker-pool-piece pool) nil))
+          ;; a part of its pair job's spent figure already: kept apart for the claims only
+          (incf (aref (worker-pool-spent pool) +job-pair-refresh+) (- (clock-ns) start))))
+      merged)))
 
 (defun pairs-in-pieces (world kind whole)
   "Take the pair phase's walk KIND (:listed or :build) in pieces on WORLD's workers when its pool
@@ -10950,7 +11058,7 @@ contacts in worker order; return how many bodies lie buried. #MYWP1C"
     (flet ((piece (worker count)
              (declare (type fixnum worker count))
              (let ((sink (svref sinks worker)))
-               (setf (pair-sink-count sink) 0 (pair-sink-cursor sink) cursor)
+               (pair-sink-start sink cursor)
                (multiple-value-bind (s e) (share-bounds 0 rows worker count)
                  (terrain-rows-piece world sink s e)))))
       (declare (dynamic-extent #'piece))

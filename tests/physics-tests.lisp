@@ -9487,10 +9487,16 @@ overlaps, the contact table's cursor, misses and touched count, and the contacts
           (subseq (luv-physics::pair-list-overlaps plist) 0 (luv-physics::awake-rows world))
           (luv-physics::contact-table-cursor table) (luv-physics::contact-table-misses table)
           (luv-physics::contact-table-touched table)
-          (subseq (luv-physics::contact-columns-order contacts) 0 rows))))
+          (subseq (luv-physics::contact-columns-key contacts) 0 rows)
+          (map 'vector #'luv-physics::handle-index (subseq (luv-physics::contact-columns-handle-a contacts) 0 rows))
+          (map 'vector #'luv-physics::handle-index (subseq (luv-physics::contact-columns-handle-b contacts) 0 rows))
+          (subseq (luv-physics::contact-columns-kind contacts) 0 rows)
+          (subseq (luv-physics::contact-columns-seen contacts) 0 rows)
+          (subseq (luv-physics::contact-columns-order contacts) 0 rows)
+          (subseq (luv-physics::contact-columns-geometry contacts) 0 (* 17 rows)))))
 
 (define-claim "P41P1C" pieces-leave-the-walk
-    "Pair pieces on 2 and 3 workers leave the pair list, overlaps and the contact table's walk as one worker, step by step."
+    "Pair pieces on 2 and 3 workers leave the pair list, overlaps, the contact table's walk and the contacts' rows as one worker, step by step."
   (let ((worlds (loop for workers in '(1 2 3)
                       collect (let ((w (make-basin-world 300)))
                                 (luv-physics::open-world-workers w workers)
@@ -9508,7 +9514,9 @@ overlaps, the contact table's cursor, misses and touched count, and the contacts
         (check (plusp (aref spent luv-physics::+job-pairs+)) "~D workers: the listed pairs never ran in pieces"
                (physics-world-workers w))
         (check (plusp (aref spent luv-physics::+job-pair-build+)) "~D workers: the build never ran in pieces"
-               (physics-world-workers w))))
+               (physics-world-workers w))
+        (check (plusp (aref spent luv-physics::+job-pair-refresh+))
+               "~D workers: the rows were never refreshed in pieces" (physics-world-workers w))))
     (mapc #'close-physics-world worlds)))
 ;; P41P1C-pieces-leave-the-walk ends here
 
