@@ -11243,8 +11243,7 @@ the fold keeps it. #SN4P0T"
 (TABLE), marks by handle slot (MARKS, stamped with STAMP), a contact table and contact rows
 filled while a snapshot is checked and traded for the world's when it is restored (CONTACTS,
 CONTACT-ROWS), the chunks found last (CHUNK-KEYS, CHUNKS), the contact streams' words
-(STREAMS), the listed pairs decoded while they are checked and traded for the world's (PAIRS),
-and each part's size and offset. #SN4P0T"
+(STREAMS), and each part's size and offset. #SN4P0T"
   (materials (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (palette (make-array 576 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
@@ -11256,7 +11255,6 @@ and each part's size and offset. #SN4P0T"
   (chunk-keys (make-array 16 :element-type 'fixnum :initial-element -1) :type fixnum-column)
   (chunks (make-array 16 :initial-element nil) :type simple-vector)
   (streams (make-array 0 :element-type '(unsigned-byte 32)) :type (simple-array (unsigned-byte 32) (*)))
-  (pairs (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (sizes (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (offsets (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column))
 
@@ -11566,36 +11564,32 @@ part's head. #SN4P0T"
               (s0 (sb-sys:vector-sap streams)) (s1 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 12 m)))
               (s2 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 16 m))) (s3 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 24 m)))
               (s4 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 36 m))))
-          ;; a contact's words read in 64-bit pairs where two lie side by side, and written so
-          (macrolet ((w32 (k) `(sb-sys:sap-ref-32 g ,(* 4 k)))
-                     (w64 (k) `(sb-sys:sap-ref-64 g ,(* 4 k)))
-                     (put (s present &rest words)
+          (macrolet ((word (k) `(sb-sys:sap-ref-32 g ,(* 4 k)))
+                     (put (s width first present)
                        ;; the words go in at the stream's end, which moves on only when present
-                       `(progn ,@(let ((o 0))
-                                   (loop for (width k) in words
-                                         collect `(setf (,(if (= width 2) 'sb-sys:sap-ref-64 'sb-sys:sap-ref-32) ,s ,o)
-                                                        (,(if (= width 2) 'w64 'w32) ,k))
-                                         do (incf o (* 4 width))))
-                               (setf ,s (sb-sys:sap+ ,s (* ,(* 4 (reduce #'+ words :key #'first)) ,present))))))
+                       `(progn ,@(loop for k below width collect `(setf (sb-sys:sap-ref-32 ,s ,(* 4 k)) (word ,(+ first k))))
+                               (setf ,s (sb-sys:sap+ ,s (* ,(* 4 width) ,present))))))
             (dotimes (row n)
-              (let* ((xy (w64 0)) (z (w32 2))
-                     (code (normal-code (ldb (byte 32 0) xy) (ash xy -32) z))
+              (let* ((code (normal-code (word 0) (word 1) (word 2)))
                      (p0 (if (zerop code) 1 0))
-                     (p1 (if (zerop (w32 #.(position 'normal-impulse +contact-fields+))) 0 1))
-                     (p2 (if (zerop (w64 #.(position 'tangent-impulse-1 +contact-fields+))) 0 1))
-                     (p3 (if (zerop (logior (w64 #.(position 'rolling-impulse-x +contact-fields+))
-                                            (w32 #.(+ 2 (position 'rolling-impulse-x +contact-fields+)))))
+                     (p1 (if (zerop (word #.(position 'normal-impulse +contact-fields+))) 0 1))
+                     (p2 (if (zerop (logior (word #.(position 'tangent-impulse-1 +contact-fields+))
+                                            (word #.(1+ (position 'tangent-impulse-1 +contact-fields+)))))
                              0 1))
-                     (p4 (if (zerop (w32 #.(position 'spin-impulse +contact-fields+))) 0 1)))
-                (declare (type (integer 0 6) code) (type bit p0 p1 p2 p3 p4) (type (unsigned-byte 64) xy))
+                     (p3 (if (zerop (logior (word #.(position 'rolling-impulse-x +contact-fields+))
+                                            (word #.(+ 1 (position 'rolling-impulse-x +contact-fields+)))
+                                            (word #.(+ 2 (position 'rolling-impulse-x +contact-fields+)))))
+                             0 1))
+                     (p4 (if (zerop (word #.(position 'spin-impulse +contact-fields+))) 0 1)))
+                (declare (type (integer 0 6) code) (type bit p0 p1 p2 p3 p4))
                 (setf (sb-sys:sap-ref-16 f 0)
                       (logior (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2) (ash code 2)
                               (ash p1 5) (ash p2 6) (ash p3 7) (ash p4 8)))
-                (put s0 p0 (2 0) (1 2))
-                (put s1 p1 (1 #.(position 'normal-impulse +contact-fields+)))
-                (put s2 p2 (2 #.(position 'tangent-impulse-1 +contact-fields+)))
-                (put s3 p3 (2 #.(position 'rolling-impulse-x +contact-fields+)) (1 #.(+ 2 (position 'rolling-impulse-x +contact-fields+))))
-                (put s4 p4 (1 #.(position 'spin-impulse +contact-fields+)))
+                (put s0 3 0 p0)
+                (put s1 1 #.(position 'normal-impulse +contact-fields+) p1)
+                (put s2 2 #.(position 'tangent-impulse-1 +contact-fields+) p2)
+                (put s3 3 #.(position 'rolling-impulse-x +contact-fields+) p3)
+                (put s4 1 #.(position 'spin-impulse +contact-fields+) p4)
                 (setf g (sb-sys:sap+ g #.(* 4 (length +contact-fields+))) f (sb-sys:sap+ f 2)))))
           ;; each stream's count, and its entry past the last, zeros
           (let ((base (sb-sys:vector-sap streams)))
@@ -12296,152 +12290,97 @@ or return NIL when KEY is there already. #SN4P0T"
         do (cond ((= e key) (return nil))
                  ((= e -1) (setf (aref slots (* 2 i)) key (aref slots (1+ (* 2 i))) row) (return t)))))
 
-(defun check-snapshot-contact-flags (buffer scratch)
-  "Check the flags of the contact part of the snapshot in BUFFER four at a time, each 64-bit word
-of them tested whole: every flag of 9 bits and a normal code from 0 to 6, and as many contacts
-flagged for each stream as its count, so that a decode reads each stream to its end and no
-further; the first flag at fault is named. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let* ((at (aref (snapshot-scratch-offsets scratch) 6)) (n (snap-u32 buffer at))
-         (flags (+ at +snapshot-contact-head-bytes+ (* 8 n))) (whole (logandc2 n 3))
-         (bad 0) (coded 0) (c1 0) (c2 0) (c3 0) (c4 0))
-    (declare (type index at n flags whole coded c1 c2 c3 c4) (type (unsigned-byte 64) bad))
-    (flet ((tally (w)
-             ;; four flags in the 16-bit lanes of W: bits past the ninth, a code of 7, and the
-             ;; lanes whose normal has a code and whose groups are present
-             (declare (type (unsigned-byte 64) w))
-             (setf bad (logior bad (logand w #xFE00FE00FE00FE00)
-                               (logand (ash w -2) (ash w -3) (ash w -4) #x0001000100010001))
-                   coded (+ coded (logcount (logand (logior (ash w -2) (ash w -3) (ash w -4)) #x0001000100010001)))
-                   c1 (+ c1 (logcount (logand w #x0020002000200020))) c2 (+ c2 (logcount (logand w #x0040004000400040)))
-                   c3 (+ c3 (logcount (logand w #x0080008000800080))) c4 (+ c4 (logcount (logand w #x0100010001000100))))))
-      (declare (inline tally))
-      (sb-sys:with-pinned-objects (buffer)
-        (let ((sap (sb-sys:vector-sap buffer)))
-          (loop for i of-type index from 0 below whole by 4
-                do (tally (sb-sys:sap-ref-64 sap (+ flags (* 2 i)))))
-          (loop for i of-type index from whole below n
-                do (tally (sb-sys:sap-ref-16 sap (+ flags (* 2 i))))))))
-    (unless (zerop bad)
-      (dotimes (row n)
-        (let ((f (snap-u16 buffer (+ flags (* 2 row)))))
-          (snapshot-check (and (< f 512) (/= 7 (ldb (byte 3 2) f))) physics-snapshot-other-layout (+ flags (* 2 row))
-                          "contact flags of 9 bits, a normal code from 0 to 6" f))))
-    (snapshot-check (and (= (- n coded) (snap-u32 buffer (+ at 4))) (= c1 (snap-u32 buffer (+ at 8)))
-                         (= c2 (snap-u32 buffer (+ at 12))) (= c3 (snap-u32 buffer (+ at 16)))
-                         (= c4 (snap-u32 buffer (+ at 20))))
-                    physics-snapshot-other-layout flags "as many contacts flagged for each stream as its count" n)))
-
-(defun check-snapshot-contact-keys (buffer scratch)
-  "Check each key of the contact part of the snapshot in BUFFER (check-snapshot-contact-key) and
-put it into SCRATCH's contact table mapped to its row, a key the table holds already refused as
-a duplicate. Run after check-snapshot-slots, whose marks it reads. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let* ((at (aref (snapshot-scratch-offsets scratch) 6)) (n (snap-u32 buffer at))
-         (count (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 2)))
-         (marks (snapshot-scratch-marks scratch)) (stamp (snapshot-scratch-stamp scratch))
-         (table (snapshot-scratch-contacts scratch)) (slots (snapshot-table-room table n))
-         (mask (contact-table-mask table)) (keys (+ at +snapshot-contact-head-bytes+)))
-    (declare (type index at n count keys) (type fixnum-column marks slots) (type fixnum stamp mask))
-    (sb-sys:with-pinned-objects (buffer)
-      (let ((base (sb-sys:vector-sap buffer)))
-        (dotimes (row n)
-          (let* ((o (+ keys (* 8 row))) (k (ash (sb-sys:signed-sap-ref-64 base o) -1)))
-            (declare (type fixnum k))
-            (check-snapshot-contact-key buffer o k count marks stamp)
-            (snapshot-check (snapshot-key-put slots mask k row) physics-snapshot-other-layout o
-                            "a key no other contact has" k)))))
-    (setf (contact-table-count table) n)
-    table))
-
-(defun decode-snapshot-contact-rows (buffer scratch rows)
-  "Write the checked contacts of the snapshot in BUFFER into ROWS but their floats: the key column
-copied whole from the keys, and each row's kind, the handles of its slots (of a free slot, the
-handle its body had before it expired, one generation back), seen, order and touching. #SN4P0T"
+(defun decode-snapshot-contacts (buffer scratch rows)
+  "Check the keys and flags of the contact part of the snapshot in BUFFER, each key once (into
+SCRATCH's contact table, mapped to its row), and write each contact into its row of ROWS: key,
+kind, the handles of its slots, seen, order, touching, its normal (written out, or the axis
+its code names) and its carried impulses, every other float zero. Run after
+check-snapshot-contact-streams and check-snapshot-slots, whose marks it reads. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type contact-columns rows) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 6)) (n (snap-u32 buffer at))
-         (generations (+ (aref offsets 2) 8)) (tag (snap-u32 buffer (aref offsets 1)))
-         (step (snap-u64 buffer (+ (aref offsets 1) 16)))
-         (marks (snapshot-scratch-marks scratch)) (free (1- (snapshot-scratch-stamp scratch)))
-         (keys (+ at +snapshot-contact-head-bytes+)) (flags (+ keys (* 8 n))))
-    (declare (type index at n generations keys flags step) (type (unsigned-byte 16) tag)
-             (type fixnum-column marks) (type fixnum free))
-    (with-contact-columns (handle-a handle-b kind key seen order touching) rows
-      ;; the key column's words are the keys' fixnum bits, as written
-      (sb-kernel:%byte-blt buffer keys key 0 (* 8 n))
-      (sb-sys:with-pinned-objects (buffer)
-        (let ((base (sb-sys:vector-sap buffer)) (high (ash tag (+ +handle-index-bits+ +handle-generation-bits+))))
-          (declare (type fixnum high))
-          (flet ((slot-handle (slot)
-                   (declare (type (unsigned-byte 24) slot))
-                   (let ((g (sb-sys:sap-ref-32 base (+ generations (* 4 slot)))))
-                     (declare (type (unsigned-byte 20) g))
-                     (logior high (ash (if (= (aref marks slot) free) (ldb (byte +handle-generation-bits+ 0) (1- g)) g)
-                                       +handle-index-bits+)
-                             slot))))
-            (declare (inline slot-handle))
-            (dotimes (row n)
-              (let ((k (aref key row)) (f (sb-sys:sap-ref-16 base (+ flags (* 2 row)))))
-                (declare (type fixnum k) (type (unsigned-byte 16) f))
-                (setf (aref kind row) (ldb (byte 4 58) k)
-                      (aref handle-a row) (slot-handle (ldb (byte 24 34) k))
-                      (aref handle-b row) (if (= (ldb (byte 4 58) k) +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
-                      (aref seen row) (if (logbitp 1 f) (1- step) step)
-                      (aref order row) row
-                      (aref touching row) (ldb (byte 1 0) f))))))))
-    rows))
-
-(defun decode-snapshot-contact-floats (buffer scratch rows)
-  "Write the floats of the checked contacts of the snapshot in BUFFER into ROWS, a row at a time:
-its normal, written out in stream 0 or the unit axis its code names, its carried impulses from
-the streams its flags name, every other float zero. The flags were counted against the streams
-(check-snapshot-contact-flags): each stream is read to its end and no further. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch) (type contact-columns rows) #.+kernel-policy+)
-  (let* ((at (aref (snapshot-scratch-offsets scratch) 6)) (n (snap-u32 buffer at)) (geometry (contact-columns-geometry rows)))
-    (declare (type index at n))
+         (hat (aref offsets 2)) (count (snap-u32 buffer hat)) (wat (aref offsets 1))
+         (tag (snap-u32 buffer wat)) (step (snap-u64 buffer (+ wat 16)))
+         (marks (snapshot-scratch-marks scratch)) (stamp (snapshot-scratch-stamp scratch))
+         (table (snapshot-scratch-contacts scratch)) (slots (snapshot-table-room table n))
+         (mask (contact-table-mask table)))
+    (declare (type index at n hat count wat step) (type (unsigned-byte 16) tag)
+             (type fixnum-column marks slots) (type fixnum stamp mask))
     (multiple-value-bind (keys flags s0 s1 s2 s3 s4 end) (snapshot-contact-layout buffer at)
-      (declare (type index keys flags s0 s1 s2 s3 s4 end) (ignore keys))
-      (sb-sys:with-pinned-objects (geometry buffer)
-        ;; pointers that move on, and each stream's closing zeros, read for an absent group
-        (let* ((base (sb-sys:vector-sap buffer)) (g (sb-sys:vector-sap geometry)) (fl (sb-sys:sap+ base flags))
-               (r0 (sb-sys:sap+ base s0)) (r1 (sb-sys:sap+ base s1)) (r2 (sb-sys:sap+ base s2))
-               (r3 (sb-sys:sap+ base s3)) (r4 (sb-sys:sap+ base s4))
-               (z1 (sb-sys:sap+ base (- s2 4))) (z2 (sb-sys:sap+ base (- s3 8)))
-               (z3 (sb-sys:sap+ base (- s4 12))) (z4 (sb-sys:sap+ base (- end 4))))
-          (macrolet ((take (r z width first bit)
-                       `(let ((from (if (logbitp ,bit f) ,r ,z)))
-                          ,@(loop for k below width
-                                  collect `(setf (sb-sys:sap-ref-32 g ,(* 4 (+ first k))) (sb-sys:sap-ref-32 from ,(* 4 k))))
-                          (setf ,r (sb-sys:sap+ ,r (* ,(* 4 width) (ldb (byte 1 ,bit) f)))))))
-            (dotimes (row n)
-              (let* ((f (sb-sys:sap-ref-16 fl 0)) (code (ldb (byte 3 2) f)))
-                (declare (type (unsigned-byte 16) f))
-                (if (zerop code)
-                    (setf (sb-sys:sap-ref-32 g 0) (sb-sys:sap-ref-32 r0 0) (sb-sys:sap-ref-32 g 4) (sb-sys:sap-ref-32 r0 4)
-                          (sb-sys:sap-ref-32 g 8) (sb-sys:sap-ref-32 r0 8) r0 (sb-sys:sap+ r0 12))
-                    (setf (sb-sys:sap-ref-32 g 0) 0 (sb-sys:sap-ref-32 g 4) 0 (sb-sys:sap-ref-32 g 8) 0
-                          (sb-sys:sap-ref-32 g (* 4 (ash (1- code) -1))) (if (oddp code) #x3F800000 #xBF800000)))
-                (setf (sb-sys:sap-ref-64 g 12) 0 (sb-sys:sap-ref-64 g 20) 0 (sb-sys:sap-ref-64 g 28) 0
-                      (sb-sys:sap-ref-32 g 36) 0)
-                (take r1 z1 1 #.(position 'normal-impulse +contact-fields+) 5)
-                (take r2 z2 2 #.(position 'tangent-impulse-1 +contact-fields+) 6)
-                (take r3 z3 3 #.(position 'rolling-impulse-x +contact-fields+) 7)
-                (take r4 z4 1 #.(position 'spin-impulse +contact-fields+) 8)
-                (setf g (sb-sys:sap+ g #.(* 4 (length +contact-fields+))) fl (sb-sys:sap+ fl 2))))))))
-    (setf (contact-columns-length rows) n)
-    rows))
+      (declare (type index keys flags s0 s1 s2 s3 s4 end))
+      (with-contact-columns (handle-a handle-b kind key seen order touching geometry) rows
+        (flet ((slot-handle (slot)
+                 ;; the handle of SLOT's body; of a free slot, the handle its body had before it
+                 ;; expired, one generation back
+                 (declare (type (unsigned-byte 24) slot))
+                 (let ((g (snap-u32 buffer (+ hat 8 (* 4 slot)))))
+                   (declare (type (unsigned-byte 20) g))
+                   (logior (ash tag (+ +handle-index-bits+ +handle-generation-bits+))
+                           (ash (if (= (aref marks slot) (1- stamp)) (ldb (byte +handle-generation-bits+ 0) (1- g)) g)
+                                +handle-index-bits+)
+                           slot))))
+          (declare (inline slot-handle))
+          (sb-sys:with-pinned-objects (geometry buffer)
+            ;; pointers that move on, and each stream's last entry, its closing zeros
+            (let* ((base (sb-sys:vector-sap buffer)) (g (sb-sys:vector-sap geometry))
+                   (r0 (sb-sys:sap+ base s0)) (r1 (sb-sys:sap+ base s1)) (r2 (sb-sys:sap+ base s2))
+                   (r3 (sb-sys:sap+ base s3)) (r4 (sb-sys:sap+ base s4))
+                   (z0 (sb-sys:sap+ base (- s1 12))) (z1 (sb-sys:sap+ base (- s2 4))) (z2 (sb-sys:sap+ base (- s3 8)))
+                   (z3 (sb-sys:sap+ base (- s4 12))) (z4 (sb-sys:sap+ base (- end 4))))
+              (macrolet ((take (r z width first bit)
+                           ;; a stream's next entry when the flag BIT is set, else its closing zeros;
+                           ;; never past them
+                           `(let ((from (if (and (logbitp ,bit f) (sb-sys:sap< ,r ,z)) ,r ,z)))
+                              ,@(loop for k below width
+                                      collect `(setf (sb-sys:sap-ref-32 g ,(* 4 (+ first k))) (sb-sys:sap-ref-32 from ,(* 4 k))))
+                              (setf ,r (sb-sys:sap+ ,r (* ,(* 4 width) (ldb (byte 1 ,bit) f)))))))
+                (dotimes (row n)
+                  (let* ((o (+ keys (* 8 row))) (k (ash (sb-sys:signed-sap-ref-64 base o) -1))
+                         (f (sb-sys:sap-ref-16 base (+ flags (* 2 row)))) (code (ldb (byte 3 2) f)))
+                    (declare (type fixnum k) (type (unsigned-byte 16) f))
+                    (check-snapshot-contact-key buffer o k count marks stamp)
+                    (snapshot-check (and (< f 512) (/= 7 code)) physics-snapshot-other-layout (+ flags (* 2 row))
+                                    "contact flags of 9 bits, a normal code from 0 to 6" f)
+                    ;; a key already in the table is a duplicate
+                    (snapshot-check (snapshot-key-put slots mask k row) physics-snapshot-other-layout o
+                                    "a key no other contact has" k)
+                    (setf (aref key row) k (aref kind row) (ldb (byte 4 58) k)
+                          (aref handle-a row) (slot-handle (ldb (byte 24 34) k))
+                          (aref handle-b row) (if (= (ldb (byte 4 58) k) +contact-pair+) (slot-handle (ldb (byte 24 0) k)) +no-body+)
+                          (aref seen row) (if (logbitp 1 f) (1- step) step)
+                          (aref order row) row
+                          (aref touching row) (ldb (byte 1 0) f))
+                    ;; the normal: written out, or the unit axis its code names
+                    (if (zerop code)
+                        (let ((from (if (sb-sys:sap< r0 z0) r0 z0)))
+                          (setf (sb-sys:sap-ref-32 g 0) (sb-sys:sap-ref-32 from 0) (sb-sys:sap-ref-32 g 4) (sb-sys:sap-ref-32 from 4)
+                                (sb-sys:sap-ref-32 g 8) (sb-sys:sap-ref-32 from 8)
+                                r0 (sb-sys:sap+ r0 12)))
+                        (setf (sb-sys:sap-ref-32 g 0) 0 (sb-sys:sap-ref-32 g 4) 0 (sb-sys:sap-ref-32 g 8) 0
+                              (sb-sys:sap-ref-32 g (* 4 (ash (1- code) -1))) (if (oddp code) #x3F800000 #xBF800000)))
+                    (setf (sb-sys:sap-ref-32 g 12) 0 (sb-sys:sap-ref-32 g 16) 0 (sb-sys:sap-ref-32 g 20) 0
+                          (sb-sys:sap-ref-32 g 24) 0 (sb-sys:sap-ref-32 g 28) 0 (sb-sys:sap-ref-32 g 32) 0
+                          (sb-sys:sap-ref-32 g 36) 0)
+                    (take r1 z1 1 #.(position 'normal-impulse +contact-fields+) 5)
+                    (take r2 z2 2 #.(position 'tangent-impulse-1 +contact-fields+) 6)
+                    (take r3 z3 3 #.(position 'rolling-impulse-x +contact-fields+) 7)
+                    (take r4 z4 1 #.(position 'spin-impulse +contact-fields+) 8)
+                    (setf g (sb-sys:sap+ g #.(* 4 (length +contact-fields+))))))
+                ;; every stream read to its end, no further
+                (snapshot-check (and (sb-sys:sap= r0 z0) (sb-sys:sap= r1 z1) (sb-sys:sap= r2 z2) (sb-sys:sap= r3 z3)
+                                     (sb-sys:sap= r4 z4))
+                                physics-snapshot-other-layout flags
+                                "as many contacts flagged for each stream as its count" n)))))))
+    (setf (contact-table-count table) n (contact-columns-length rows) n)
+    table))
 
 (defun check-snapshot-contacts (world buffer scratch)
-  "Check the contact part of the snapshot in BUFFER, stage by stage: its frame and streams, its
-flags against the streams, its keys into SCRATCH's contact table; then decode it into SCRATCH's
-rows, laid out as WORLD's contacts, for the restore to trade for the world's. #SN4P0T"
+  "Check the contact part of the snapshot in BUFFER, stage by stage: its frame and streams, then
+each contact's key and flags as it is decoded into SCRATCH's rows, laid out as WORLD's contacts,
+for the restore to trade for the world's. #SN4P0T"
   (declare (type octets buffer) (type snapshot-scratch scratch))
   (check-snapshot-contact-streams buffer scratch)
-  (check-snapshot-contact-flags buffer scratch)
-  (check-snapshot-contact-keys buffer scratch)
-  (let ((rows (snapshot-contact-rows world scratch (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 6)))))
-    (decode-snapshot-contact-rows buffer scratch rows)
-    (decode-snapshot-contact-floats buffer scratch rows)))
+  (decode-snapshot-contacts buffer scratch
+                            (snapshot-contact-rows world scratch (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 6)))))
 
 (defun check-snapshot-pair-list (buffer scratch)
   "Check the pair list part of the snapshot in BUFFER: its form and the size its counts give,
@@ -12482,45 +12421,29 @@ their handles are not written, and pairs of listed rows, written whole or as dif
                               (+ handles (* 8 i)) "a handle" (snap-i64 buffer (+ handles (* 8 i)))))
             (snapshot-check (<= n (snap-u32 buffer (aref offsets 3))) physics-snapshot-other-layout at
                             "no more listed rows than awake bodies, whose handles the rows had" rows))
-        (when (< (length (snapshot-scratch-pairs scratch)) pairs)
-          (setf (snapshot-scratch-pairs scratch) (fixnum-room (snapshot-scratch-pairs scratch) pairs :least 1024)))
-        (let ((list-pairs (snapshot-scratch-pairs scratch)))
-          (declare (type fixnum-column list-pairs))
-          (if (logbitp 1 form)
-              (check-snapshot-pair-differences buffer list pairs n list-pairs)
+        (if (logbitp 1 form)
+            ;; the rows the differences give, each a listed row
+            (let* ((a 0) (whole (padded (+ list (* 3 pairs)))) (wholes (snap-u32 buffer whole)) (taken 0))
+              (declare (type fixnum a) (type index whole wholes taken))
               (dotimes (k pairs)
-                (let ((p (snap-i64 buffer (+ list (* 8 k)))))
-                  (snapshot-check (and (>= p 0) (< (ash p -24) n) (< (ldb (byte 24 0) p) n))
-                                  physics-snapshot-other-layout (+ list (* 8 k)) "a pair of listed rows" p)
-                  (setf (aref list-pairs k) p)))))))))
-
-(defun check-snapshot-pair-differences (buffer list pairs n into)
-  "Check the PAIRS listed pairs written as differences from LIST of BUFFER, each a pair of the N
-listed rows, its row A a byte's difference from the last pair's or, at the byte -128, the next
-row listed whole, and as many rows listed whole as the pairs that need one; write each pair,
-row A times 2^24 plus row B, into INTO, for the restore to trade for the world's list. #SN4P0T"
-  (declare (type octets buffer) (type index list pairs n) (type fixnum-column into) #.+kernel-policy+)
-  (let* ((a 0) (whole (padded (+ list (* 3 pairs)))) (wholes (snap-u32 buffer whole)) (taken 0))
-    (declare (type fixnum a) (type index whole wholes taken))
-    (sb-sys:with-pinned-objects (buffer)
-      (let ((sap (sb-sys:vector-sap buffer)))
-        (dotimes (k pairs)
-          (let ((da (sb-sys:signed-sap-ref-8 sap (+ list k)))
-                (db (sb-sys:signed-sap-ref-16 sap (+ list pairs (* 2 k)))))
-            (if (= da -128)
-                (progn (snapshot-check (< taken wholes) physics-snapshot-other-layout (+ list k)
-                                       "a row listed whole for each pair that needs one" taken)
-                       (setf a (sb-sys:sap-ref-32 sap (+ whole 4 (* 4 taken))))
-                       (incf taken))
-                (incf a da))
-            (let ((b (+ a db)))
-              (declare (type fixnum b))
-              ;; A and B within 0 .. N - 1, each one unsigned comparison
-              (snapshot-check (and (< (ldb (byte 62 0) a) n) (< (ldb (byte 62 0) b) n)) physics-snapshot-other-layout
-                              (+ list k) "a pair of listed rows" (list a b))
-              (setf (aref into k) (logior (ash a 24) b)))))))
-    (snapshot-check (= taken wholes) physics-snapshot-other-layout whole
-                    "as many rows listed whole as pairs that need one" wholes)))
+                (let* ((da (snap-u8 buffer (+ list k))) (db (snap-u16 buffer (+ list pairs (* 2 k))))
+                       (b 0))
+                  (declare (type fixnum b))
+                  (if (= da 128)
+                      (progn (snapshot-check (< taken wholes) physics-snapshot-other-layout (+ list k)
+                                             "a row listed whole for each pair that needs one" taken)
+                             (setf a (snap-u32 buffer (+ whole 4 (* 4 taken))))
+                             (incf taken))
+                      (incf a (if (> da 128) (- da 256) da)))
+                  (setf b (+ a (if (>= db 32768) (- db 65536) db)))
+                  (snapshot-check (and (<= 0 a) (< a n) (<= 0 b) (< b n)) physics-snapshot-other-layout (+ list k)
+                                  "a pair of listed rows" (list a b))))
+              (snapshot-check (= taken wholes) physics-snapshot-other-layout whole
+                              "as many rows listed whole as pairs that need one" wholes))
+            (dotimes (k pairs)
+              (let ((p (snap-i64 buffer (+ list (* 8 k)))))
+                (snapshot-check (and (>= p 0) (< (ash p -24) n) (< (ldb (byte 24 0) p) n))
+                                physics-snapshot-other-layout (+ list (* 8 k)) "a pair of listed rows" p))))))))
 
 (defun check-snapshot-rest (buffer scratch)
   "Check the box and push parts of the snapshot in BUFFER: sizes, finite numbers, and pushes that
@@ -12852,8 +12775,20 @@ step GRID-STEP, is that grid already (snapshot-holds-grid-p). #SN4P0T"
         (if (logbitp 0 form)
             (dotimes (i rows) (setf (aref handles i) (snap-i64 buffer o)) (incf o 8))
             (replace handles (body-columns-handle (physics-world-awake world)) :end1 rows))
-        ;; the pairs the check decoded become the list's, and the list's the scratch's
-        (rotatef (pair-list-pairs plist) (snapshot-scratch-pairs scratch)))
+        (when (< (length (pair-list-pairs plist)) pairs)
+          (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) pairs :least 1024)))
+        (let ((list (pair-list-pairs plist)))
+          (declare (type fixnum-column list))
+          (if (logbitp 1 form)
+              (let ((a 0) (whole (+ (padded (+ o (* 3 pairs))) 4)))
+                (declare (type (unsigned-byte 24) a) (type index whole))
+                (dotimes (k pairs)
+                  (let ((da (snap-u8 buffer (+ o k))) (db (snap-u16 buffer (+ o pairs (* 2 k)))))
+                    (if (= da 128)
+                        (setf a (snap-u32 buffer whole) whole (+ whole 4))
+                        (setf a (+ a (if (> da 128) (- da 256) da))))
+                    (setf (aref list k) (logior (ash a 24) (+ a (if (>= db 32768) (- db 65536) db)))))))
+              (dotimes (k pairs) (setf (aref list k) (snap-i64 buffer (+ o (* 8 k))))))))
       (setf (pair-list-count plist) pairs (pair-list-cell plist) (snap-f32 buffer (+ at 4))
             (pair-list-builds plist) (snap-u32 buffer (+ at 8)) (pair-list-loose-count plist) (snap-i32 buffer (+ at 12))
             (pair-list-step plist) (snap-i64 buffer (+ at 16)) (pair-list-built-step plist) (snap-i64 buffer (+ at 24)))
