@@ -4246,27 +4246,33 @@ face (inside-face), and the body counted buried. Expanded in terrain-cell-contac
            (touch-contact contacts table key +contact-terrain+ (aref handle i) +no-body+
                           nx ny nz sep px py pz 0.0 0.0 0.0)))))
 
+(defmacro span-cell-contacts (solid)
+  "Offer a contact for each cell of row I's span X0..X1, Y0..Y1, Z0..Z1 that the form SOLID, read
+with IX IY IZ the cell, calls solid; SOLID also answers the overshoot rule's question about a
+neighbour. Expanded by terrain-cell-contacts and terrain-large-contacts. #MYWCNT"
+  `(flet ((solid (ix iy iz)
+            (declare (type fixnum ix iy iz))
+            ,solid))
+     (declare (inline solid))
+     (loop for iz of-type fixnum from z0 to z1 do
+       (loop for iy of-type fixnum from y0 to y1 do
+         (loop for ix of-type fixnum from x0 to x1 do
+           (when (solid ix iy iz)
+             (let ((fx (float ix 1.0)) (fy (float iy 1.0)) (fz (float iz 1.0))
+                   (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
+               (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
+                   (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
+                 ;; outside: the overshoot rule, the nearest solid cell so far, then
+                 ;; the contact. A cell the rule silences has a solid cell nearer
+                 ;; the centre, so the nearest is among those it keeps
+                 (terrain-outside-contact)
+                 ;; inside: push out through a face, and count the body buried
+                 (terrain-inside-contact)))))))))
+
 (defmacro terrain-cell-contacts ()
   "Offer a contact for each solid cell of row I's MASK: expanded in the terrain phase. #MYWCNT"
   `(unless (zerop mask)
-     (flet ((solid (ix iy iz)
-              (declare (type fixnum ix iy iz))
-              (logbitp (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))) mask)))
-       (declare (inline solid))
-       (loop for iz of-type fixnum from z0 to z1 do
-         (loop for iy of-type fixnum from y0 to y1 do
-           (loop for ix of-type fixnum from x0 to x1 do
-             (when (solid ix iy iz)
-               (let ((fx (float ix 1.0)) (fy (float iy 1.0)) (fz (float iz 1.0))
-                     (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
-                 (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
-                     (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
-                   ;; outside: the overshoot rule, the nearest solid cell so far, then
-                   ;; the contact. A cell the rule silences has a solid cell nearer
-                   ;; the centre, so the nearest is among those it keeps
-                   (terrain-outside-contact)
-                   ;; inside: push out through a face, and count the body buried
-                   (terrain-inside-contact))))))))))
+     (span-cell-contacts (logbitp (+ (- ix x0) (* 3 (- iy y0)) (* 9 (- iz z0))) mask))))
 ;; A contact per cell:1 ends here
 
 ;; [[file:../physics.org::#B1GBDY][Bodies larger than a cell:1]]
@@ -4290,20 +4296,7 @@ under LIMIT, large-step-reach for a larger body. #B1GBDY"
   "Offer a contact for each solid cell of row I's span X0..X1, Y0..Y1, Z0..Z1, read cell by cell
 through its chunk: the contacts of terrain-cell-contacts, the overshoot rule asking the cells
 themselves. Expanded in terrain-large-row. #B1GBDY"
-  `(flet ((solid (ix iy iz)
-            (declare (type fixnum ix iy iz))
-            (cell-solid-p ix iy iz)))
-     (declare (inline solid))
-     (loop for iz of-type fixnum from z0 to z1 do
-       (loop for iy of-type fixnum from y0 to y1 do
-         (loop for ix of-type fixnum from x0 to x1 do
-           (when (solid ix iy iz)
-             (let ((fx (float ix 1.0)) (fy (float iy 1.0)) (fz (float iz 1.0))
-                   (key (terrain-key (handle-index (aref handle i)) ix iy iz)))
-               (with-cell-closest-point (nx ny nz px py pz sep d2 ox oy oz)
-                   (cx cy cz r fx fy fz (+ fx 1.0) (+ fy 1.0) (+ fz 1.0))
-                 (terrain-outside-contact)
-                 (terrain-inside-contact)))))))))
+  `(span-cell-contacts (cell-solid-p ix iy iz)))
 
 (defmacro terrain-large-row ()
   "Row I's contacts with the cells, for a body whose reach passes the reach limit: its reach
