@@ -4730,6 +4730,132 @@ use before it. #QKS4GZ"
              "the ball's centre at ~,9F: ~D contacts" y (physics-world-last-step-contact-count w)))))
 ;; MYWCNT-contact-strictly-under-the-speculative-distance ends here
 
+;; [[file:../physics.org::#B1GBDY][B1GBDY-large-ball-rolls-at-five-sevenths]]
+(define-claim "B1GBDY" large-ball-rolls-at-five-sevenths
+    "A 2 m ball sliding at 5 m/s on friction 0.6 rolls at 5/7 of it across the seams, flat."
+  (let* ((w (make-floor-world :sleep nil))
+         (rest (- 2.0 *physics-linear-slop*))
+         (h (add-physics-body w -10.0 rest 2.5 :radius 2.0 :vx 5.0 :friction 0.6))
+         (worst-vy 0.0) (worst-dy 0.0))
+    (dotimes (i 180)
+      (step-physics-world w)
+      (setf worst-vy (max worst-vy (abs (nth-value 1 (physics-body-velocity w h))))
+            worst-dy (max worst-dy (abs (- (body-y w h) rest)))))
+    (let ((vx (physics-body-velocity w h)) (rolling (* 5/7 5d0)))
+      (check (< (abs (- vx rolling)) (* 1d-5 rolling)) "rolling at ~,7F m/s, 5/7 v0 is ~,7F" vx rolling))
+    (check (< worst-vy 1e-4) "vertical speed reached ~,3E m/s" worst-vy)
+    (check (< worst-dy 1e-3) "height strayed ~,3E m" worst-dy)
+    (check (> (physics-body-position w h) 0.0) "rolled only to x = ~,3F" (physics-body-position w h))
+    (check (eq t (validate-physics-world w)))))
+;; B1GBDY-large-ball-rolls-at-five-sevenths ends here
+
+;; [[file:../physics.org::#B1GBDY][B1GBDY-large-ball-rests-on-a-pit-rim]]
+(define-claim "B1GBDY" large-ball-rests-on-a-pit-rim
+    "A 2 m ball over a 2 x 2 pit rests on the four edges of its rim, sqrt 3 m above it less a slop along 30 degrees."
+  (dolist (sleep '(nil t))
+    (let ((terrain (make-floor-terrain)))
+      (fill-terrain terrain 2 -1 2 4 0 4 nil)
+      (let* ((w (make-physics-world :terrain terrain :sleep sleep))
+             (h (add-physics-body w 3.0 2.5 3.0 :radius 2.0))
+             (expected (- (sqrt 3d0) (/ (* 2 *physics-linear-slop*) (sqrt 3d0)))))
+        (dotimes (i 300) (step-physics-world w))
+        (multiple-value-bind (x y z) (physics-body-position w h)
+          (check (< (abs (- y expected)) 1d-4) "resting at y = ~,6F, expected ~,6F" y expected)
+          (check (and (< (abs (- x 3.0)) 1e-4) (< (abs (- z 3.0)) 1e-4)) "off the axis at ~,6F ~,6F" x z))
+        (if sleep
+            (check (not (physics-body-awake-p w h)) "still awake at 5 s")
+            (let ((contacts (terrain-contacts w h)))
+              (check (= 4 (length contacts)) "~D contacts" (length contacts))
+              (dolist (c contacts)
+                (check (< (abs (- (getf c :ny) (- (cos (/ pi 6))))) 1d-3) "a normal's vertical part ~,5F" (getf c :ny)))))
+        (check (eq t (validate-physics-world w)))))))
+;; B1GBDY-large-ball-rests-on-a-pit-rim ends here
+
+;; [[file:../physics.org::#B1GBDY][B1GBDY-large-box-slides-and-rests]]
+(define-claim "B1GBDY" large-box-slides-and-rests
+    "A frictionless 3 m cube slides across the seams at its speed, flat; a 4 m cube rests a slop deep and sleeps."
+  (let* ((w (make-floor-world :sleep nil))
+         (b (add-physics-box w -10.0 (- 1.5 *physics-linear-slop*) 2.5 1.5 1.5 1.5 :friction 0 :vx 5.0))
+         (worst-vy 0.0) (worst-speed 0.0))
+    (dotimes (i 240)
+      (step-physics-world w)
+      (multiple-value-bind (vx vy) (physics-body-velocity w b)
+        (setf worst-vy (max worst-vy (abs vy)) worst-speed (max worst-speed (abs (- vx 5.0))))))
+    (check (< worst-vy 1e-3) "vertical speed reached ~,6F m/s" worst-vy)
+    (check (< worst-speed 5e-3) "speed strayed ~,6F m/s from 5" worst-speed)
+    (check (>= (- (physics-body-position w b) -10.0) 19.0) "slid only ~,3F m" (- (physics-body-position w b) -10.0))
+    (check (eq t (validate-physics-world w))))
+  (let* ((w (make-floor-world :sleep t))
+         (b (add-physics-box w 2.0 2.5 2.0 2.0 2.0 2.0)))
+    (dotimes (i 300) (step-physics-world w))
+    (check (< (abs (- (body-y w b) (- 2.0 *physics-linear-slop*))) 2e-4) "resting at y = ~,6F" (body-y w b))
+    (check (not (physics-body-awake-p w b)) "still awake at 5 s")
+    (check (eq t (validate-physics-world w)))))
+;; B1GBDY-large-box-slides-and-rests ends here
+
+;; [[file:../physics.org::#B1GBDY][B1GBDY-large-drops-stop-at-the-floor]]
+(define-claim "B1GBDY" large-drops-stop-at-the-floor
+    "Balls and cubes of 1.5 and 2 m dropped at 50 m/s rest on the floor, a slop deep."
+  (loop for (shape r) in '((:ball 1.5) (:ball 2.0) (:box 1.5) (:box 2.0))
+        do (let* ((w (make-floor-world :sleep t))
+                  (h (if (eq shape :ball)
+                         (add-physics-body w 3.0 (+ r 6.0) 3.0 :radius r :vy -50.0)
+                         (add-physics-box w 3.0 (+ r 6.0) 3.0 r r r :vy -50.0))))
+             (dotimes (i 300) (step-physics-world w))
+             (multiple-value-bind (x y z) (physics-body-position w h)
+               (check (< (abs (- y (- r *physics-linear-slop*))) 1e-3) "~(~A~) ~A: resting at y = ~,5F" shape r y)
+               (when (eq shape :ball)
+                 (check (and (< (abs (- x 3.0)) 1e-4) (< (abs (- z 3.0)) 1e-4)) "ball ~A off its line: ~,5F ~,5F" r x z)))
+             (check (eq t (validate-physics-world w))))))
+;; B1GBDY-large-drops-stop-at-the-floor ends here
+
+;; [[file:../physics.org::#B1GBDY][B1GBDY-posted-box-pushes-a-large-ball]]
+(define-claim "B1GBDY" posted-box-pushes-a-large-ball
+    "A posted box walked into a 2 m ball pushes it at its surface, overlapping by at most slop + 0.001 m."
+  (let* ((w (make-floor-world :sleep nil))
+         (h (add-physics-body w 5.0 (- 2.0 *physics-linear-slop*) 3.5 :radius 2.0))
+         (bx 2.0) (dt (/ 1.0 60)) (worst -10.0))
+    (dotimes (i 30) (step-physics-world w))
+    (let ((x0 (physics-body-position w h)))
+      (dotimes (i 180)
+        (post-physics-box w bx 1.0 3.5 0.5 1.0 1.0 :vx 1.0 :owner :pusher)
+        (step-physics-world w)
+        (setf bx (+ bx dt)
+              worst (max worst (- (+ bx 0.5) (- (physics-body-position w h) 2.0)))))
+      (check (> (- (physics-body-position w h) x0) 2.0) "the ball moved only ~,3F m" (- (physics-body-position w h) x0))
+      (check (<= worst (+ (luv-physics::physics-world-slop w) 0.001)) "the box overlapped the ball by ~,5F m" worst)
+      (check (eq t (validate-physics-world w))))))
+;; B1GBDY-posted-box-pushes-a-large-ball ends here
+
+;; [[file:../physics.org::#B1GBDY][B1GBDY-large-bodies-agree-and-resume]]
+(defun large-bodies-world (family)
+  "A 2 m ball thrown down, a turned 3 x 4 x 2 m box, a 1.2 m ball and twenty small balls over the
+floor, solved by FAMILY. #B1GBDY"
+  (let ((w (make-physics-world :terrain (make-floor-terrain) :kernels family)))
+    (add-physics-body w 3.0 6.0 3.0 :radius 2.0 :vx 1.0 :vy -20.0)
+    (add-physics-box w 10.0 5.0 3.0 1.5 2.0 1.0 :orientation '(0.96 0.2 0 0.2) :vx -1.0)
+    (dotimes (i 20) (add-physics-body w (+ 1.0 (* 0.6 i)) (+ 1.0 (* 0.3 i)) 8.0 :radius 0.25 :vz -2.0))
+    (add-physics-body w 6.0 9.0 3.0 :radius 1.2)
+    w))
+
+(define-claim "B1GBDY" large-bodies-agree-and-resume
+    "Large balls and boxes reach one hash in every family, and resume from a snapshot to it."
+  (let ((hashes '()))
+    (dolist (family (available-kernel-families))
+      (let ((w (large-bodies-world family)) (snapshot nil))
+        (dotimes (i 240)
+          (when (= i 120) (setf snapshot (subseq (snapshot-physics-world w) 0)))
+          (step-physics-world w))
+        (push (physics-world-state-hash w) hashes)
+        (let ((again (large-bodies-world family)))
+          (restore-physics-world again snapshot)
+          (dotimes (i 120) (step-physics-world again))
+          (check (= (physics-world-state-hash w) (physics-world-state-hash again))
+                 "~(~A~): ~D straight, ~D resumed" family (physics-world-state-hash w) (physics-world-state-hash again)))
+        (check (eq t (validate-physics-world w)))))
+    (check (= 1 (length (remove-duplicates hashes))) "the families' hashes ~S" hashes)))
+;; B1GBDY-large-bodies-agree-and-resume ends here
+
 ;; [[file:../physics.org::#MYWSTG][MYWSTG-clear-rows-skip-safely]]
 (define-claim "MYWSTG" clear-rows-skip-safely
     "Rows skipped by the terrain probe have no solid cell in reach; an edit under a skipped ball is seen."
