@@ -573,40 +573,54 @@ between buffers. #L4Y0UT"
     "The layout NAME's permute: every row to its new place, column by column through a scratch
 buffer whose arrays it then takes. #L4Y0UT"
     (destructuring-bind (&key len cap ensure permute &allow-other-keys) (layout-names name)
-      `(defun ,permute (buffer scratch destinations count)
+      `(defun ,permute (buffer scratch destinations count &optional runner)
          ,(format nil "Move each row R of BUFFER, a ~A, to row (aref DESTINATIONS R), or drop it where
 that is negative; the places taken must be exactly 0 .. COUNT-1. The rows are written into
 SCRATCH, a buffer of the same layout and spare, whose arrays BUFFER then takes in exchange
-for its own; rows past COUNT read as zeros. Return BUFFER. #L4Y0UT" name)
+for its own; rows past COUNT read as zeros. RUNNER, when given, is called with the move of the
+rows FROM below TO, a function of the two, and the count of rows, and calls the move on
+ranges that cover the rows once each, in any order. Return BUFFER. #L4Y0UT" name)
          (declare (type ,name buffer scratch) (type fixnum-column destinations) (type index count)
-                  #.+kernel-policy+)
+                  (type (or null function) runner) #.+kernel-policy+)
          (,ensure scratch (max count (,cap buffer)))
          (let ((n (,len buffer)) (stale (,len scratch)))
            (declare (type index n stale))
            ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
-                   collect (layout-permute-column type width acc))
+                   collect (layout-permute-stale type width acc))
+           (flet ((move (lo hi)
+                    (declare (type index lo hi))
+                    ,@(loop for (nil type width) in columns for acc in (layout-accessors name columns)
+                            collect (layout-permute-column type width acc))))
+             (declare (dynamic-extent #'move))
+             (if runner (funcall runner #'move n) (move 0 n)))
+           ,@(loop for acc in (layout-accessors name columns)
+                   collect `(rotatef (,acc buffer) (,acc scratch)))
            (rotatef (,cap buffer) (,cap scratch))
            (setf (,len buffer) count (,len scratch) n))
          buffer)))
 
+  (defun layout-permute-stale (type width acc)
+    "Permute's clearing of one column of the scratch, read by ACC, of TYPE and WIDTH values a
+row: the rows it held from its last use, past COUNT, become zeros. #L4Y0UT"
+    `(let ((to (,acc scratch)))
+       (declare (type ,(column-array-type type) to))
+       (when (> stale count)
+         (fill to ,(column-zero type) :start (* count ,(or width 1)) :end (* stale ,(or width 1))))))
+
   (defun layout-permute-column (type width acc)
-    "Permute's pass over one column, read by ACC, of TYPE and WIDTH values a row. #L4Y0UT"
+    "Permute's pass over the rows LO below HI of one column, read by ACC, of TYPE and WIDTH values
+a row. #L4Y0UT"
     `(let ((from (,acc buffer)) (to (,acc scratch)))
        (declare (type ,(column-array-type type) from to))
-       ;; rows the scratch held from its last use, past COUNT, become zeros
-       (when (> stale count)
-         (fill to ,(column-zero type) :start (* count ,(or width 1))
-                                      :end (* stale ,(or width 1))))
-       (dotimes (r n)
-         (let ((d (aref destinations r)))
-           (declare (type fixnum d))
-           (when (>= d 0)
-             ,(if width
-                  `(loop for k of-type fixnum from 0 below ,width
-                         do (setf (aref to (+ (* d ,width) k))
-                                  (aref from (+ (* r ,width) k))))
-                  `(setf (aref to d) (aref from r))))))
-       (setf (,acc scratch) from (,acc buffer) to))))
+       (loop for r of-type index from lo below hi
+             do (let ((d (aref destinations r)))
+                  (declare (type fixnum d))
+                  (when (>= d 0)
+                    ,(if width
+                         `(loop for k of-type fixnum from 0 below ,width
+                                do (setf (aref to (+ (* d ,width) k))
+                                         (aref from (+ (* r ,width) k))))
+                         `(setf (aref to d) (aref from r)))))))))
 ;; One macro generates every columnar layout:3 ends here
 
 ;; [[file:../physics.org::#L4Y0UT][One macro generates every columnar layout:4]]
@@ -3242,7 +3256,10 @@ forwarding address, and make the grid's items the new rows. #G4R1D5"
     (let ((places (physics-world-row-places world)))
       (declare (type fixnum-column places))
       (dotimes (e n) (setf (aref places (aref items e)) e))
-      (body-columns-permute awake (physics-world-awake-scratch world) places n)
+      ;; the rows' moves in pieces, one a worker ([[#SPL1T5]]): each row goes to its own place
+      (flet ((runner (move rows) (run-row-pieces world rows :sort-rows move)))
+        (declare (dynamic-extent #'runner))
+        (body-columns-permute awake (physics-world-awake-scratch world) places n #'runner))
       (let ((handle (body-columns-handle awake)))
         (dotimes (i n)
           (setf (aref locals (handle-index (aref handle i))) i
@@ -4586,8 +4603,11 @@ the hole. #PRUN3D"
         (loop for i of-type fixnum from 0 below (length slots) by 2
               unless (= (aref slots i) -1)
                 do (setf (aref slots (1+ i)) (aref order (aref slots (1+ i)))))
-        (contact-columns-permute contacts (physics-world-contact-scratch world) order
-                                 (contact-table-touched table))
+        ;; the rows' moves in pieces, one a worker ([[#SPL1T5]]): each row goes to its own place
+        (flet ((runner (move rows) (run-row-pieces world rows :reorder move)))
+          (declare (dynamic-extent #'runner))
+          (contact-columns-permute contacts (physics-world-contact-scratch world) order
+                                   (contact-table-touched table) #'runner))
         (setf (contact-table-misses table) 0)))
     world))
 ;; Contacts not found this step are pruned:1 ends here
@@ -4788,7 +4808,6 @@ returns the number of colours used. #SSMPYW"
          (top -1))
     (declare (type fixnum-column masks colors rows starts sets locals) (type index m n)
              (type fixnum top) #.+kernel-policy+)
-    (fill masks 0 :end (1+ n))
     (fill starts 0)
     (with-contact-columns (handle-a handle-b) contacts
       (flet ((awake-row (h)
@@ -4797,13 +4816,27 @@ returns the number of colours used. #SSMPYW"
                    (aref locals (handle-index h))
                    -1)))
         (declare (inline awake-row))
+        ;; every contact's awake rows, and the masks cleared, in pieces, one a worker
+        ;; ([[#SPL1T5]]): each contact's rows and each body's mask are its own
+        (flet ((look-up (worker count)
+                 (declare (type fixnum worker count))
+                 (multiple-value-bind (from to) (piece-bounds 0 m worker count)
+                   (declare (type index from to))
+                   (loop for c of-type index from from below to
+                         do (setf (aref rows (* 2 c)) (awake-row (aref handle-a c))
+                                  (aref rows (1+ (* 2 c))) (awake-row (aref handle-b c)))))
+                 (multiple-value-bind (from to) (piece-bounds 0 (1+ n) worker count)
+                   (declare (type index from to))
+                   (fill masks 0 :start from :end to))))
+          (declare (dynamic-extent #'look-up))
+          (run-pieces world m :colour-rows #'look-up))
         ;; pass one: two-body contacts, lowest free colour
         (if (not two-body)
           (fill colors -1 :end m)
         (dotimes (c m)
-          (let ((la (awake-row (aref handle-a c))) (lb (awake-row (aref handle-b c))))
+          (let ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c)))))
             (declare (type fixnum la lb))
-            (setf (aref colors c) -1 (aref rows (* 2 c)) la (aref rows (1+ (* 2 c))) lb)
+            (setf (aref colors c) -1)
             (when (and (>= la 0) (>= lb 0))
               (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
                                   (1- (ash 1 +physics-dynamic-colors+))))
@@ -4820,11 +4853,6 @@ returns the number of colours used. #SSMPYW"
           (declare (type (unsigned-byte 32) used))
           (dotimes (c m)
             (when (= (aref colors c) -1)
-              ;; the first pass noted the awake rows of every contact; without it, they are
-              ;; noted here
-              (unless two-body
-                (setf (aref rows (* 2 c)) (awake-row (aref handle-a c))
-                      (aref rows (1+ (* 2 c))) (awake-row (aref handle-b c))))
               (let* ((l (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c)))))
                      (free (logand (lognot (aref masks l)) (1- (ash 1 +physics-max-colors+))))
                      (color +physics-max-colors+))
@@ -9113,28 +9141,29 @@ listed. #F1NAL5"
               (setf (aref held listed) i listed (1+ listed))
               (setf (aref x i) (+ (aref x i) dx) (aref y i) (+ (aref y i) dy) (aref z i) (+ (aref z i) dz))))))))
 
-(defun fold-solver-state (awake v dt &optional turned)
-  "Fold the solver's velocities V into AWAKE's rows, and turn each orientation by its angular
-velocity over DT, but, when TURNED, a jointed sphere's, which the substeps turned ([[#J0S0LV]]).
-Two loops that call nothing, each reading and writing at most eight arrays; with fold-positions,
-three. #F1NAL5"
-  (declare (type body-columns awake) (type f32-column v) (type single-float dt) #.+kernel-policy+)
-  (let ((n (body-columns-length awake)))
-    (with-body-columns (vx vy vz wx wy wz) awake
-      (dotimes (i n)
-        (let ((o (solver-row i)))
-          (setf (aref vx i) (aref v o) (aref vy i) (aref v (+ o 1)) (aref vz i) (aref v (+ o 2))
-                (aref wx i) (aref v (+ o 3)) (aref wy i) (aref v (+ o 4)) (aref wz i) (aref v (+ o 5))))))
-    ;; q += dt/2 (0,w) q, then normalise; when TURNED, a loop of its own that leaves the jointed
-    ;; spheres out, so that a world without joints runs the loop it always ran
-    (with-body-columns (qw qx qy qz flags) awake
-      (macrolet ((turn-rows (skip)
-                   `(dotimes (i n)
-                      (unless ,skip
-                        (turn-row-orientation v i (* 0.5 dt) qw qx qy qz)))))
-        (if turned
-            (turn-rows (= (logand (aref flags i) (logior +flag-jointed+ +flag-box-shape+)) +flag-jointed+))
-            (turn-rows nil))))))
+(defun fold-solver-state (awake v dt &optional turned (from 0) (to (body-columns-length awake)))
+  "Fold the solver's velocities V into AWAKE's rows FROM below TO (all of them by default), and
+turn each one's orientation by its angular velocity over DT, but, when TURNED, a jointed
+sphere's, which the substeps turned ([[#J0S0LV]]). Two loops that call nothing, each reading and
+writing at most eight arrays; with fold-positions, three. Each row is its own, so the rows may
+be folded in pieces. #F1NAL5"
+  (declare (type body-columns awake) (type f32-column v) (type single-float dt) (type index from to)
+           #.+kernel-policy+)
+  (with-body-columns (vx vy vz wx wy wz) awake
+    (loop for i of-type index from from below to
+          do (let ((o (solver-row i)))
+               (setf (aref vx i) (aref v o) (aref vy i) (aref v (+ o 1)) (aref vz i) (aref v (+ o 2))
+                     (aref wx i) (aref v (+ o 3)) (aref wy i) (aref v (+ o 4)) (aref wz i) (aref v (+ o 5))))))
+  ;; q += dt/2 (0,w) q, then normalise; when TURNED, a loop of its own that leaves the jointed
+  ;; spheres out, so that a world without joints runs the loop it always ran
+  (with-body-columns (qw qx qy qz flags) awake
+    (macrolet ((turn-rows (skip)
+                 `(loop for i of-type index from from below to
+                        do (unless ,skip
+                             (turn-row-orientation v i (* 0.5 dt) qw qx qy qz)))))
+      (if turned
+          (turn-rows (= (logand (aref flags i) (logior +flag-jointed+ +flag-box-shape+)) +flag-jointed+))
+          (turn-rows nil)))))
 
 (defconstant +departure-none+ 0
   "A row's fate in the finalize phase's first pass: it stays awake. #F1NAL5")
@@ -9205,7 +9234,11 @@ store phase's marks without body contacts and boxes, which alone make them. #F1N
     ;; paths are checked first ([[#SQU33Z]])
     (multiple-value-bind (check near held) (path-check-notes world)
       (hold-out-of-cells world held (fold-positions awake d check near held)))
-    (fold-solver-state awake v dt (joints-turned-p world))
+    ;; the velocities and turns, row by row, in pieces, one a worker ([[#SPL1T5]])
+    (let ((turned (joints-turned-p world)))
+      (flet ((fold (from to) (fold-solver-state awake v dt turned from to)))
+        (declare (dynamic-extent #'fold))
+        (run-row-pieces world (body-columns-length awake) :fold #'fold)))
     ;; a box whose points were solved turns by its substeps' turns ([[#BXSOLV]])
     (when (physics-world-box-bodies world) (turn-box-orientations world))
     ;; then ageing and sleep, in two passes: the first decides, in a loop that calls nothing,
@@ -10234,7 +10267,7 @@ core. #W0RKP1")
   "How long, in nanoseconds, a worker waiting for a job spins or yields at most before it parks:
 the jobs of a step follow each other within it, the gap between a game's frames does not. #W0RKP1")
 
-(defconstant +pool-jobs+ 12
+(defconstant +pool-jobs+ 16
   "How many kinds of job a pool keeps its calls and timings for ([[#SPL1T5]]). #W0RKP1")
 
 (defstruct (worker-pool (:constructor %make-worker-pool (count)) (:copier nil))
@@ -10618,9 +10651,35 @@ of the run START..END. #SPL1T5"
   (declare (type index start end) (type fixnum worker count))
   (share-bounds start end worker count))
 
+(defconstant +job-reorder+ 12
+  "The job: the prune phase's reordering of the contact rows, a share of the rows each. #SPL1T5")
+(defconstant +job-sort-rows+ 13
+  "The job: the grid phase's sort of the awake rows, a share of the rows each. #SPL1T5")
+(defconstant +job-fold+ 14
+  "The job: the finalize phase's fold of the solver's velocities, a share of the awake rows
+each. #SPL1T5")
+(defconstant +job-colour-rows+ 15
+  "The job: the colouring's look-up of each contact's awake rows and the clearing of the masks,
+a share of the contacts and of the rows each. #SPL1T5")
+
 (defun piece-job (kind)
-  "The job number of the phase piece KIND names: :fill or :store. #SPL1T5"
-  (ecase kind (:fill +job-fill+) (:store +job-store+)))
+  "The job number of the phase piece KIND names: :fill, :store, :reorder, :sort-rows, :fold or
+:colour-rows. #SPL1T5"
+  (ecase kind
+    (:fill +job-fill+) (:store +job-store+) (:reorder +job-reorder+) (:sort-rows +job-sort-rows+)
+    (:fold +job-fold+) (:colour-rows +job-colour-rows+)))
+
+(defun run-row-pieces (world rows kind move)
+  "Run MOVE, a function of the rows FROM below TO, over ROWS rows as a phase piece of KIND
+(run-pieces): once for each worker's share of them, or once over them all. #SPL1T5"
+  (declare (type index rows) (type function move))
+  (flet ((piece (worker count)
+           (declare (type fixnum worker count))
+           (multiple-value-bind (from to) (piece-bounds 0 rows worker count)
+             (declare (type index from to))
+             (when (< from to) (funcall move from to)))))
+    (declare (dynamic-extent #'piece))
+    (run-pieces world rows kind #'piece)))
 
 (defun push-piece-event (world worker kind handle-a handle-b x y z speed &optional datum)
   "Record an event found by WORKER's piece of a phase: worker 0's in WORLD's event buffer

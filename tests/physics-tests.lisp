@@ -1704,6 +1704,36 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
              "the kinds read ~S" (subseq (luv-physics::event-columns-kind b) 0 40)))))
 ;; L4Y0UT-permute-grows-its-scratch ends here
 
+;; [[file:../physics.org::#L4Y0UT][L4Y0UT-permute-in-pieces]]
+(define-claim "L4Y0UT" permute-in-pieces
+    "A permute whose runner moves the rows in pieces of seven, last first, leaves what one pass leaves."
+  (let ((buffers (loop repeat 2 collect (luv-physics::make-event-columns :capacity 8)))
+        (destinations (make-array 40 :element-type 'fixnum))
+        (handed nil))
+    (dotimes (i 40)
+      ;; a scrambled order of 0..37, rows 5 and 17 dropped
+      (setf (aref destinations i) (cond ((= i 5) -1) ((= i 17) -1) (t (mod (* 7 (- i (if (> i 17) 2 (if (> i 5) 1 0)))) 38)))))
+    (dolist (b buffers)
+      (dotimes (i 40)
+        (let ((row (luv-physics::event-columns-append b)))
+          (setf (aref (luv-physics::event-columns-kind b) row) i
+                (aref (luv-physics::event-columns-handle-a b) row) (* 3 i)
+                (aref (luv-physics::event-columns-x b) row) (* 0.5 i)))))
+    (luv-physics::event-columns-permute (first buffers) (luv-physics::make-event-columns :capacity 4) destinations 38)
+    (luv-physics::event-columns-permute (second buffers) (luv-physics::make-event-columns :capacity 4) destinations 38
+                                        (lambda (move rows)
+                                          (setf handed rows)
+                                          (loop for from downfrom (* 7 (floor (1- rows) 7)) to 0 by 7
+                                                do (funcall move from (min rows (+ from 7))))))
+    (check (eql 40 handed) "the runner was handed ~S rows" handed)
+    (check (= 38 (luv-physics::event-columns-length (first buffers)) (luv-physics::event-columns-length (second buffers))))
+    (dolist (column (list #'luv-physics::event-columns-kind #'luv-physics::event-columns-handle-a
+                          #'luv-physics::event-columns-handle-b #'luv-physics::event-columns-x
+                          #'luv-physics::event-columns-speed))
+      (check (equalp (subseq (funcall column (first buffers)) 0 38) (subseq (funcall column (second buffers)) 0 38))
+             "a column differs: ~S" column))))
+;; L4Y0UT-permute-in-pieces ends here
+
 ;; [[file:../physics.org::#B5N8JT][B5N8JT-handle-generations]]
 (define-claim "B5N8JT" handle-generations
     "A reused slot gets a new generation: the old handle is stale, the new one works."
@@ -9511,6 +9541,31 @@ solved by FAMILY. #SPL1T5"
         (check (= 1 (length (remove-duplicates runs :key #'second :test #'equal)))
                "~(~A~), ~(~A~): the events differ between 1 and 2-4 workers" family scene)))))
 ;; SPL1T5-same-bits-at-any-worker-count ends here
+
+;; [[file:../physics.org::#SPL1T5][SPL1T5-serial-loops-in-pieces]]
+(define-claim "SPL1T5" serial-loops-in-pieces
+    "The colouring's look-ups, the prune's reordering, the grid's sort and the finalize's fold in pieces on 2 and 3 workers keep one worker's hash, step by step."
+  (let ((worlds (loop for workers in '(1 2 3)
+                      collect (let ((w (make-basin-world 300)))
+                                (luv-physics::open-world-workers w workers)
+                                (let ((pool (luv-physics::physics-world-pool w)))
+                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                                w)))
+        (differ '()))
+    (dotimes (i 60)
+      (dolist (w worlds) (step-physics-world w))
+      (unless (= 1 (length (remove-duplicates (mapcar #'physics-world-state-hash worlds))))
+        (push i differ)))
+    (check (null differ) "the hashes differ after steps ~S" (reverse differ))
+    (dolist (w (rest worlds))
+      (let ((spent (luv-physics::worker-pool-spent (luv-physics::physics-world-pool w))))
+        (loop for (job name) in (list (list luv-physics::+job-colour-rows+ "the colouring's look-ups")
+                                      (list luv-physics::+job-reorder+ "the prune's reordering")
+                                      (list luv-physics::+job-sort-rows+ "the grid's sort")
+                                      (list luv-physics::+job-fold+ "the finalize's fold"))
+              do (check (plusp (aref spent job)) "~D workers: ~A never ran in pieces" (physics-world-workers w) name))))
+    (mapc #'close-physics-world worlds)))
+;; SPL1T5-serial-loops-in-pieces ends here
 
 ;; [[file:../physics.org::#SPL1T5][SPL1T5-worker-fault-as-one-worker]]
 (define-claim "SPL1T5" worker-fault-as-one-worker
