@@ -3907,6 +3907,54 @@ exp(-zeta omega T), relative. #J0PREC"
                         (* 100 (/ (- period want) want)) (* 100 ratio-error)))))))
 ;; The pendulum and the spring:1 ends here
 
+;; [[file:../physics.org::#BXPREC][A box on an incline and a box across the seams:1]]
+(defun box-incline-run (world-args &key (slope 0.7) (mu 0.5))
+  "A unit cube of friction MU set down at rest on the floor of open-air-world under gravity tilted
+by atan SLOPE about z, stepped 1.5 s under WORLD-ARGS: its acceleration along the slope between
+the last step before 0.5 s and the last step, the closed form g (sin theta - mu cos theta), and
+the wall seconds and the world. #BXPREC"
+  (let* ((theta (atan slope)) (g 9.81d0)
+         (world (apply #'open-air-world :floor t :gravity (list (* g (sin theta)) (- (* g (cos theta))) 0)
+                       world-args))
+         (box (add-physics-box world -10.5 (- 0.5 *physics-linear-slop*) 0.5 0.5 0.5 0.5 :friction mu))
+         (v0 0d0) (t0 0d0) (v1 0d0) (t1 0d0)
+         (wall (drive world 1.5d0 (lambda (time)
+                                    (let ((v (float (physics-body-velocity world box) 1d0)))
+                                      (when (<= time 0.5d0) (setf v0 v t0 time))
+                                      (setf v1 v t1 time))))))
+    (values (/ (- v1 v0) (- t1 t0)) (* g (- (sin theta) (* mu (cos theta)))) wall world)))
+
+(define-accuracy-scene box-incline ("acceleration error along the slope, relative" 0.01 :peers nil)
+  "A unit cube sliding down a tilted-gravity incline, tan theta 0.7, friction 0.5: its
+acceleration's error against g (sin theta - mu cos theta), relative. #BXPREC"
+  (multiple-value-bind (a want wall world) (box-incline-run world-args)
+    (values (/ (abs (- a want)) want) wall world
+            (format nil "a = ~,5F m/s^2, g(sin - mu cos) = ~,5F" a want))))
+
+(defun box-seams-run (world-args &key (v0 5d0) (after 0.5d0))
+  "A frictionless unit cube sliding at V0 along x over the floor of open-air-world for 8 s under
+WORLD-ARGS: its largest vertical speed and its largest loss of horizontal speed after AFTER
+seconds, the wall seconds and the world. #BXPREC"
+  (let* ((world (apply #'open-air-world :floor t world-args))
+         (box (add-physics-box world -11.5 (- 0.5 *physics-linear-slop*) 0.5 0.5 0.5 0.5
+                               :friction 0.0 :vx v0))
+         (rise 0d0) (loss 0d0)
+         (wall (drive world 8d0 (lambda (time)
+                                  (when (> time after)
+                                    (multiple-value-bind (vx vy vz) (physics-body-velocity world box)
+                                      (setf rise (max rise (abs vy))
+                                            loss (max loss (- v0 (sqrt (+ (* vx vx) (* vz vz))))))))))))
+    (values rise loss wall world)))
+
+(define-accuracy-scene box-seams ("worst of vertical speed and speed lost, / v0" 0.001 :peers nil)
+  "A frictionless unit cube sliding at 5 m/s across 37 cell seams: the worse of its largest
+vertical speed and its largest loss of speed, over 5 m/s. #BXPREC"
+  (multiple-value-bind (rise loss wall world) (box-seams-run world-args)
+    (values (/ (max rise loss) 5d0) wall world
+            (format nil "vertical speed up to ~,3F mm/s, speed lost up to ~,3F mm/s"
+                    (* 1000 rise) (* 1000 loss)))))
+;; A box on an incline and a box across the seams:1 ends here
+
 ;; [[file:../physics.org::#P33R5X][Error against run time, engine beside engine:1]]
 (defun peer-run (&key (gravity '(0 -9.81 0)) (seconds 1) sleep record-all boxes balls params)
   "One run of a peer scene as a plist: GRAVITY, SECONDS, SLEEP, RECORD-ALL, BOXES (each a list

@@ -12078,6 +12078,27 @@ in the order of *physics-scene-features*. #K5DF9S"
             do (check (< (abs (- (/ a b) 2)) 0.2) "the period's errors ~{~,3,,,,,'eE~^ ~} s do not halve" errors)))))
 ;; J0PREC-spring-period-is-first-order ends here
 
+;; [[file:../physics.org::#BXPREC][BXPREC-incline-at-every-setting]]
+(define-claim "BXPREC" incline-at-every-setting
+    "A box slides down a tilted-gravity incline at g(sin - mu cos) within 1e-4 at 30x1, 60x4 and 240x8."
+  (loop for (hz n) in '((30 1) (60 4) (240 8))
+        do (let ((args (list :step-seconds (/ 1 hz) :substeps n)))
+             (multiple-value-bind (a want) (luv-physics::box-incline-run args)
+               (check (< (abs (- a want)) (* 1e-4 want)) "~D Hz x ~D: a = ~,6F, g(sin - mu cos) = ~,6F" hz n a want)
+               (check (< (abs (- want 1.6073d0)) 1d-4) "the closed form gives ~,5F" want)
+               (check (= (luv-physics::accuracy-scene-box-incline args) (/ (abs (- a want)) want))
+                      "~D Hz x ~D: the scene's error is not the acceleration's" hz n)))))
+;; BXPREC-incline-at-every-setting ends here
+
+;; [[file:../physics.org::#BXPREC][BXPREC-seams-neither-lift-nor-slow]]
+(define-claim "BXPREC" seams-neither-lift-nor-slow
+    "A frictionless box at 5 m/s across 37 seams: vertical speed under 0.1 mm/s and no speed lost at 30x1, 60x4, 240x8."
+  (loop for (hz n) in '((30 1) (60 4) (240 8))
+        do (multiple-value-bind (rise loss) (luv-physics::box-seams-run (list :step-seconds (/ 1 hz) :substeps n))
+             (check (< rise 1d-4) "~D Hz x ~D: vertical speed ~,4F mm/s" hz n (* 1000 rise))
+             (check (<= loss 0d0) "~D Hz x ~D: ~,6F mm/s of speed lost" hz n (* 1000 loss)))))
+;; BXPREC-seams-neither-lift-nor-slow ends here
+
 ;; [[file:../physics.org::#P33R5X][P33R5X-data-scenes-are-the-scenes]]
 (define-claim "P33R5X" data-scenes-are-the-scenes
     "Every scene, written as data, read back and run here, measures as the scene's own function does."
