@@ -1723,6 +1723,187 @@ that ran split; with the machine and its load. #B3NCHW"
     (format stream "~&load ~A at the end~%" (load-average))))
 ;; What the workers gain:1 ends here
 
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:7]]
+;;; damaged snapshots, at random: make fuzz and a short run in the claims
+
+(defun reseal-snapshot (buffer)
+  "Write into BUFFER, a snapshot, the checksum of its bytes as they are now, so that a damage
+made to them meets the checks past the checksum; return BUFFER. #SN4P0T"
+  (declare (type octets buffer))
+  (setf (snap-u64 buffer 24) (snapshot-checksum buffer +snapshot-header-bytes+ (snap-u64 buffer 16)))
+  buffer)
+
+(defun fuzz-snapshot (world snapshot count random)
+  "Restore into WORLD COUNT damaged copies of SNAPSHOT, drawn from the random state RANDOM: a
+bit flipped anywhere; a bit flipped past the header and the copy resealed; or the copy cut
+short. After each, WORLD goes back to SNAPSHOT. Return the restores, the refusals, the invalid
+worlds (a restore that passed whose world fails validation or then signals in a step, or a
+refusal that changed the world) and the crashes (any error that is no physics-error), as a
+plist. #SN4P0T"
+  (let ((restored 0) (refused 0) (invalid 0) (crashes 0) (n (length snapshot)))
+    (dotimes (k count)
+      (let ((b (copy-seq snapshot)) (before (physics-world-state-hash world))
+            (awake (physics-world-awake-count world)))
+        (ecase (random 3 random)
+          (0 (let ((i (random n random))) (setf (aref b i) (logxor (aref b i) (ash 1 (random 8 random))))))
+          (1 (let ((i (+ +snapshot-header-bytes+ (random (- n +snapshot-header-bytes+) random))))
+               (setf (aref b i) (logxor (aref b i) (ash 1 (random 8 random))))
+               (reseal-snapshot b)))
+          (2 (setf b (subseq b 0 (random n random)))))
+        (handler-case
+            (progn (restore-physics-world world b)
+                   (incf restored)
+                   (handler-case (progn (validate-physics-world world) (step-physics-world world)
+                                        (validate-physics-world world))
+                     (physics-error () (incf invalid))))
+          (physics-snapshot-invalid ()
+            (incf refused)
+            (unless (and (= before (physics-world-state-hash world)) (= awake (physics-world-awake-count world))
+                         (handler-case (validate-physics-world world) (physics-error () nil)))
+              (incf invalid)))
+          (error () (incf crashes)))
+        (restore-physics-world world snapshot)))
+    (list :restored restored :refused refused :invalid invalid :crashes crashes)))
+
+(defun run-snapshot-fuzz-campaign (&key (seed 1) (count 2000))
+  "Fuzz the snapshots of the five standard scenes at 300 balls, each taken after 2 s, and of the
+box tower (snapshot-box-tower) at half a second, COUNT damaged copies each, from SEED; return a
+list of (SCENE BYTES . FIGURES). #SN4P0T"
+  (let ((random (sb-ext:seed-random-state seed)))
+    (loop for scene in '(:basin :pile :fountain :lava :player :box-tower)
+          collect (multiple-value-bind (world script)
+                      (if (eq scene :box-tower)
+                          (values (snapshot-box-tower :auto) (lambda (i) (declare (ignore i))))
+                          (make-scene-world scene :count 300))
+                    (dotimes (i (if (eq scene :box-tower) 30 120)) (funcall script i) (step-physics-world world))
+                    (multiple-value-bind (buffer size) (snapshot-physics-world world)
+                      (let ((snapshot (subseq buffer 0 size)))
+                        (list* scene size (fuzz-snapshot world snapshot count random))))))))
+
+(defun print-snapshot-fuzz-figures (rows seconds stream)
+  "Print the snapshot fuzz campaign's ROWS as an Org table to STREAM. #SN4P0T"
+  (format stream "| scene | snapshot bytes | damaged copies | restored | refused | invalid worlds | crashes |~%")
+  (format stream "|-------+----------------+----------------+----------+---------+----------------+---------|~%")
+  (dolist (row rows)
+    (destructuring-bind (scene size &key restored refused invalid crashes) row
+      (format stream "| ~(~A~) | ~D | ~D | ~D | ~D | ~D | ~D |~%" scene size (+ restored refused crashes)
+              restored refused invalid crashes)))
+  (format stream "~%~,1F s~%" seconds))
+;; A snapshot holds what decides the next step, part by part:7 ends here
+
+;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:8]]
+;;; what a snapshot costs: make bench
+
+(defun snapshot-part-bytes (buffer id)
+  "The bytes part ID of the snapshot BUFFER takes, its own header of 8 included, the parts walked
+by their own ids; 0 when it has no such part. #SN4P0T"
+  (loop with at = +snapshot-header-bytes+
+        while (< at (snap-u64 buffer 16))
+        when (= (snap-u32 buffer at) id) return (+ 8 (snap-u32 buffer (+ at 4)))
+        do (incf at (+ 8 (snap-u32 buffer (+ at 4))))
+        finally (return 0)))
+
+(defun run-snapshot-benchmark (&key (stream *standard-output*) (balls 3000) (rounds 30))
+  "Measure snapshots: their size in the BALLS-ball basin, in the settled pile and in the box tower, snapshot plus
+restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8-step rollback at
+1000 balls, and the bytes consed; print Org tables to STREAM. #SN4P0T"
+  (format stream "load average ~A at the start~%~%" (load-average))
+  (flet ((median (list) (let ((v (sort (coerce list 'vector) #'<))) (aref v (floor (length v) 2))))
+         (ms (f) (let ((t0 (clock-ns))) (funcall f) (* 1d-6 (- (clock-ns) t0)))))
+    (let* ((world (make-basin-world balls :kernels :auto))
+           (other (make-basin-world balls :kernels :auto))
+           (buffer nil) (steps '()) (saves '()) (snaps '()) (restores '()))
+      (dotimes (i 240) (step-physics-world world))
+      (setf buffer (snapshot-physics-world world))
+      (restore-physics-world other buffer)
+      (sb-ext:gc :full t)
+      (dotimes (k rounds)
+        (push (ms (lambda () (step-physics-world world))) steps)
+        (push (ms (lambda () (setf buffer (snapshot-physics-world world buffer)) (restore-physics-world other buffer))) saves)
+        (push (ms (lambda () (snapshot-physics-world world buffer))) snaps)
+        (push (ms (lambda () (restore-physics-world other buffer))) restores))
+      (let* ((size (nth-value 1 (snapshot-physics-world world buffer)))
+             (awake (physics-world-awake-count world)) (asleep (physics-world-sleeping-count world))
+             (contacts (contact-columns-length (physics-world-contacts world)))
+             (consed (let ((b (sb-ext:get-bytes-consed)))
+                       (dotimes (i 10) (snapshot-physics-world world buffer) (restore-physics-world other buffer))
+                       (- (sb-ext:get-bytes-consed) b))))
+        (format stream "| basin of ~D at 4 s | bytes | per awake body | per contact |~%" balls)
+        (format stream "|----------------------+-------+----------------+-------------|~%")
+        (format stream "| whole snapshot (~D awake, ~D asleep, ~D contacts) | ~D | ~,1F | |~%"
+                awake asleep contacts size (/ size (max 1 (+ awake asleep))))
+        (format stream "| bodies and materials | ~D | ~,1F | |~%"
+                (+ (snapshot-part-bytes buffer 3) (snapshot-part-bytes buffer 4) (snapshot-part-bytes buffer 5))
+                (/ (+ (snapshot-part-bytes buffer 3) (snapshot-part-bytes buffer 4) (snapshot-part-bytes buffer 5))
+                   (max 1 (+ awake asleep))))
+        (format stream "| contacts | ~D | | ~,1F |~%" (snapshot-part-bytes buffer 6)
+                (/ (snapshot-part-bytes buffer 6) (max 1 contacts)))
+        (format stream "| pair list (~D listed pairs) | ~D | ~,1F | |~%"
+                (pair-list-count (physics-world-pair-list world)) (snapshot-part-bytes buffer 7)
+                (/ (snapshot-part-bytes buffer 7) (max 1 awake)))
+        (format stream "| target: 80 a body and 40 a contact | ~D | 80 | 40 |~%~%" (+ (* 80 (+ awake asleep)) (* 40 contacts)))
+        (format stream "| basin of ~D at 4 s, ~D rounds | median ms |~%|---+---|~%" balls rounds)
+        (format stream "| a step | ~,3F |~%| snapshot | ~,3F |~%| restore | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%~%"
+                (median steps) (median snaps) (median restores) (median saves)
+                (* 100 (/ (median saves) (median steps))) consed)))
+    (multiple-value-bind (pile script) (make-scene-world :pile)
+      (dotimes (i (* 60 12)) (funcall script i) (step-physics-world pile))
+      (multiple-value-bind (buffer size) (snapshot-physics-world pile)
+        (declare (ignore buffer))
+        (format stream "| settled pile | bodies | asleep | bytes | per body |~%|---+---+---+---+---|~%| 12 s | ~D | ~D | ~D | ~,1F |~%~%"
+                (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile))
+                (physics-world-sleeping-count pile) size
+                (/ size (max 1 (+ (physics-world-awake-count pile) (physics-world-sleeping-count pile)))))))
+    (let ((tower (snapshot-box-tower :auto)))
+      (dotimes (i 30) (step-physics-world tower))
+      (multiple-value-bind (buffer size) (snapshot-physics-world tower)
+        (format stream "| box tower at 0.5 s | bodies | boxes | box points | bytes | box part |~%|---+---+---+---+---+---|~%| 5 boxes, 2 balls | ~D | ~D | ~D | ~D | ~D |~%~%"
+                (+ (physics-world-awake-count tower) (physics-world-sleeping-count tower))
+                (box-set-live (physics-world-box-bodies tower))
+                (box-point-columns-length (box-set-points (physics-world-box-bodies tower)))
+                size (snapshot-part-bytes buffer 11))))
+    (run-rollback-benchmark :stream stream :load nil))
+  (format stream "~%load average ~A at the end~%" (load-average)))
+
+(defun run-rollback-benchmark (&key (stream *standard-output*) (balls 1000) (rounds 20) (load t))
+  "Measure an 8-step rollback in the BALLS-ball basin at 2 s, under the widest family: a restore
+and eight steps, the median of ROUNDS, against a 60 Hz frame, as an Org table to STREAM, with
+the load average the run began and ended with when LOAD. make bench-rollback runs it alone. #SN4P0T"
+  (when load (format stream "load average ~A at the start~%~%" (load-average)))
+  (let* ((world (make-basin-world balls :kernels :auto)) (times '()))
+    (dotimes (i 120) (step-physics-world world))
+    (let ((buffer (snapshot-physics-world world)))
+      (sb-ext:gc :full t)
+      (dotimes (k rounds)
+        (let ((t0 (clock-ns)))
+          (restore-physics-world world buffer)
+          (dotimes (j 8) (step-physics-world world))
+          (push (* 1d-6 (- (clock-ns) t0)) times))))
+    (let ((median (aref (sort (coerce times 'vector) #'<) (floor (length times) 2))))
+      (format stream "| rollback at ~D balls (2 s), ~D rounds | median ms | share of a 60 Hz frame |~%|---+---+---|~%| restore and 8 steps | ~,2F | ~D % |~%"
+              balls rounds median (round (/ median (/ 1000 60.0) 0.01)))))
+  (when load (format stream "~%load average ~A at the end~%" (load-average))))
+
+(defun run-count-snapshots (&key (stream *standard-output*) (rounds 20))
+  "Print, as an Org table, the millions of instructions a snapshot and its restore of the
+3000-ball basin at 4 s run, and a step of the basin, each counted by valgrind's cachegrind in a
+process of the tool tools/snapshot-one.lisp (count-process): a process running ROUNDS rounds
+less one running none, over ROUNDS; then the share of a step. #SN4P0T"
+  (let* ((before (load-average))
+         (root (namestring (asdf:system-source-directory "luv-physics")))
+         (counts (mapcar #'sb-thread:join-thread
+                         (loop for (what n) in `(("none" 0) ("snapshot" ,rounds) ("step" ,rounds))
+                               collect (let ((what what) (n n))
+                                         (sb-thread:make-thread
+                                          (lambda () (values (count-process "snapshot" root what (princ-to-string n))))))))))
+    (destructuring-bind (none snapshot step) counts
+      (let ((per-round (/ (- snapshot none) (* 1d6 rounds))) (per-step (/ (- step none) (* 1d6 rounds))))
+        (format stream "~&#+caption: the 3000-ball basin at 4 s, millions of instructions (cachegrind: a process of ~D rounds less one of none, over ~D), widest family; ~A; load ~A before, ~A after~%"
+                rounds rounds (cpu-model-name) before (load-average))
+        (format stream "| basin of 3000 at 4 s | M instructions |~%|---+---|~%| snapshot and restore | ~,2F |~%| a step | ~,2F |~%| share of a step | ~,1F % |~%"
+                per-round per-step (* 100 (/ per-round per-step)))))))
+;; A snapshot holds what decides the next step, part by part:8 ends here
+
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:1]]
 (define-condition unknown-physics-scene (invalid-physics-parameter)
   ((operation :initarg :operation :reader unknown-physics-scene-operation))
