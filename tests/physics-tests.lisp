@@ -7669,6 +7669,26 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
                  "e ~,1F from ~,2F m: rebound ~A m, e^2 h ~,5F" e drop peak want))))))
 ;; BXSOLV-boxes-rebound-to-e-squared ends here
 
+;; [[file:../physics.org::#BXSOLV][BXSOLV-flat-landings-stay-put]]
+(define-claim "BXSOLV" flat-landings-stay-put
+    "Cubes dropped flat at 5, 20 and 50 m/s rest within 1 cm of where they fell, turned under 1 degree."
+  (dolist (half '(0.5 1.0))
+    (dolist (speed '(5 20 50))
+      (let* ((w (make-floor-world :sleep nil))
+             (rest (- half *physics-linear-slop*))
+             (box (add-physics-box w 2.5 (+ rest 1.0) 2.5 half half half :friction 0.6 :vy (- speed))))
+        (dotimes (i 300) (step-physics-world w))
+        (multiple-value-bind (x y z) (physics-body-position w box)
+          (let ((drift (sqrt (+ (expt (- x 2.5) 2) (expt (- z 2.5) 2))))
+                (turn (* (/ 180 pi) 2 (acos (min 1.0 (abs (physics-body-orientation w box))))))
+                (speed2 (multiple-value-bind (vx vy vz) (physics-body-velocity w box)
+                          (+ (* vx vx) (* vy vy) (* vz vz)))))
+            (check (< speed2 1e-4) "cube ~,1F m at ~D m/s still moves at ~,4F m/s" (* 2 half) speed (sqrt speed2))
+            (check (< (abs (- y rest)) 1e-3) "cube ~,1F m at ~D m/s rests at ~,4F, not ~,4F" (* 2 half) speed y rest)
+            (check (< drift 0.01) "cube ~,1F m at ~D m/s ends ~,4F m across" (* 2 half) speed drift)
+            (check (< turn 1.0) "cube ~,1F m at ~D m/s ends turned ~,3F degrees" (* 2 half) speed turn)))))))
+;; BXSOLV-flat-landings-stay-put ends here
+
 ;; [[file:../physics.org::#BXSPHR][BXSPHR-ball-strikes-box]]
 (define-claim "BXSPHR" ball-strikes-box
     "A ball sliding head on into a resting cube of its mass hands over its momentum as e says."
