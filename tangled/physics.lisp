@@ -7228,7 +7228,8 @@ speed it struck at this step, its bounce and its normal velocity before the pass
 thirty-six numbers of its angular parts, r × u and I⁻¹(r × u) for the normal and both tangents
 and each side ([[#BXSOLV]]), and, for a point against a posted box, the box's velocity as the
 first side's point velocity less the second's loses it, that velocity along the normal, and the
-cap of the point's normal impulse (the largest single-float for any other point, [[#BXPUSH]]). #BXR0WS"
+cap of the point's normal impulse (the largest single-float for any other point, [[#BXPUSH]]);
+last its lever arm, its distance from its manifold's friction centre ([[#BXSOLV]]). #BXR0WS"
   (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
   (sx single-float) (sy single-float) (sz single-float) (imb single-float)
   (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
@@ -7243,12 +7244,30 @@ cap of the point's normal impulse (the largest single-float for any other point,
   (i22 single-float) (i23 single-float) (i33 single-float)
   (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float)
   (approach single-float) (jacobian single-float 36)
-  (kvx single-float) (kvy single-float) (kvz single-float) (kvn single-float) (push-cap single-float))
+  (kvx single-float) (kvy single-float) (kvz single-float) (kvn single-float) (push-cap single-float)
+  (lever-arm single-float))
+
+(define-physics-layout box-manifold-columns
+  "The manifolds of the box points, one row a manifold, the points of one box against one side
+along one normal ([[#BXSOLV]]): the first of its points, which lie side by side, and their count,
+its friction, the friction centre's levers from both sides' centres, the mean of its points'
+first levers, the inverse of its 2 x 2 tangent mass and its twist mass, its friction impulse
+along the two tangents and its twist impulse about the normal, and thirty numbers: for each side
+the centre's lever crossed with each tangent and the world inverse inertia times each, then each
+side's world inverse inertia times the normal. #BXR0WS"
+  (first fixnum) (count fixnum) (friction single-float)
+  (cax single-float) (cay single-float) (caz single-float)
+  (cbx single-float) (cby single-float) (cbz single-float)
+  (ox single-float) (oy single-float) (oz single-float)
+  (k11 single-float) (k12 single-float) (k22 single-float) (twist-mass single-float)
+  (friction-impulse-1 single-float) (friction-impulse-2 single-float) (twist-impulse single-float)
+  (jacobian single-float 30))
 
 (defstruct (box-set (:constructor %make-box-set ()) (:copier nil))
   "A world's box bodies: the half-extents by handle slot (zero where a slot holds no box), how
 many boxes live, the contact points of this step and of the last one, each with the first row
-and the count of every slot's points, the awake box rows of this step, their turns (three floats
+and the count of every slot's points, this step's manifolds of points and room for a box's
+points while they are put into manifolds ([[#BXSOLV]]), the awake box rows of this step, their turns (three floats
 a row), the grid of the awake boxes' centres with its rows and centres, their orientations at the
 step's start (four floats a box), whether this step solves points, the soft coefficients of the
 step, its restitution threshold and gravity times the substep, whether some point of the step
@@ -7263,6 +7282,8 @@ posted box ([[#BXPUSH]]). #BXR0WS"
   (live 0 :type index)
   (points (make-box-point-columns) :type box-point-columns)
   (previous (make-box-point-columns) :type box-point-columns)
+  (manifolds (make-box-manifold-columns) :type box-manifold-columns)
+  (scratch (make-box-point-columns) :type box-point-columns)
   (first (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (count (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
   (previous-first (make-array 16 :element-type 'fixnum :initial-element 0) :type fixnum-column)
@@ -8090,6 +8111,7 @@ box set when some point is to be solved, else NIL. #BXSOLV"
     (rotatef (box-set-first set) (box-set-previous-first set))
     (rotatef (box-set-count set) (box-set-previous-count set))
     (box-point-columns-clear (box-set-points set))
+    (box-manifold-columns-clear (box-set-manifolds set))
     (setf (box-set-row-count set) 0 (box-set-dummy set) n)
     (when (plusp (box-set-live set))
       ;; the turns hold three floats for each awake row and for the dummy past them
@@ -8138,12 +8160,15 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                     (find-box-box-points world set i reach)
                     ;; the spheres near it ([[#BXSPHR]])
                     (find-box-sphere-points world set i reach dt gstep))
+                  ;; its points manifold by manifold
+                  (group-box-points set start)
                   (setf (aref (box-set-first set) slot) start
                         (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))
             ;; the sleeping boxes, held still, against the awake spheres ([[#BXSPHR]])
             (find-sleeping-box-sphere-points world set margin dt gstep)))
         (prepare-box-point-masses world set)
-        (when (box-set-posted set) (cap-posted-box-points set))))
+        (when (box-set-posted set) (cap-posted-box-points set))
+        (prepare-box-manifolds set margin)))
     (setf (box-set-solving set) (plusp (box-point-columns-length (box-set-points set))))
     (and (box-set-solving set) set)))
 
@@ -8249,10 +8274,8 @@ box rests a slop deep as a sphere does. #BXSOLV"
     (declare (type single-float slop) (type f32-column table))
     (setf (box-set-bouncy set) nil)
     (with-body-columns ((fr friction) (re restitution)) awake
-      (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
-                               tangent-mass-1 tangent-mass-2 friction im i11 i12 i13 i22 i23 i33
-                               imb j11 j12 j13 j22 j23 j33 separation restitution pushed impact-speed bounce
-                               jacobian)
+      (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z friction im i11 i12 i13 i22 i23 i33
+                               imb j11 j12 j13 j22 j23 j33 separation restitution pushed impact-speed bounce)
           points
         (dotimes (k (box-point-columns-length points))
           (setf (aref separation k) (+ (aref separation k) slop))
@@ -8280,6 +8303,193 @@ box rests a slop deep as a sphere does. #BXSOLV"
             (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
           (box-point-directions points k)))))
   set)
+
+(declaim (inline box-points-one-manifold-p))
+(defun box-points-one-manifold-p (points j k)
+  "Whether box points J and K of POINTS lie in one manifold: found by one box, between the same
+two sides, along the same normal, and both against one posted box's motion or neither. #BXSOLV"
+  (declare (type box-point-columns points) (type index j k) #.+kernel-policy+)
+  (with-box-point-columns (row row-b handle nx ny nz kvx kvy kvz push-cap) points
+    (and (= (aref row-b j) (aref row-b k)) (= (aref row j) (aref row k)) (= (aref handle j) (aref handle k))
+         (= (aref nx j) (aref nx k)) (= (aref ny j) (aref ny k)) (= (aref nz j) (aref nz k))
+         (= (aref kvx j) (aref kvx k)) (= (aref kvy j) (aref kvy k)) (= (aref kvz j) (aref kvz k))
+         (eq (< (aref push-cap j) most-positive-single-float) (< (aref push-cap k) most-positive-single-float)))))
+
+(defun group-box-points (set start)
+  "Lay the points of SET from START to the end, those one box found, manifold by manifold: each
+manifold where its first point was found, its points in the order they were found, so the
+manifolds against posted boxes stay before those against the cells ([[#BXPUSH]]). Points found
+manifold by manifold already, the common case, move nothing. #BXSOLV"
+  (declare (type box-set set) (type index start) #.+kernel-policy+)
+  (let* ((points (box-set-points set)) (end (box-point-columns-length points)))
+    (declare (type index end))
+    (flet ((head-p (k)
+             ;; the first point of its manifold in the range
+             (loop for j of-type index from start below k never (box-points-one-manifold-p points j k))))
+      (when (loop for k of-type index from (1+ start) below end
+                  thereis (and (not (box-points-one-manifold-p points (1- k) k)) (not (head-p k))))
+        (let ((scratch (box-point-columns-ensure-capacity (box-set-scratch set) (- end start))) (to 0))
+          (declare (type index to))
+          (loop for h of-type index from start below end
+                when (head-p h)
+                  do (loop for k of-type index from h below end
+                           when (box-points-one-manifold-p points h k)
+                             do (box-point-columns-copy-row points k scratch to) (incf to)))
+          (dotimes (i to) (box-point-columns-copy-row scratch i points (+ start i)))))))
+  set)
+
+(defun box-manifold-centre (points manifolds mi inv-tau)
+  "Write manifold MI's friction centre, its points' first levers and second levers averaged with
+Box3D's weights, 1 for a gap up to the margin (1/INV-TAU), falling to nothing at twice it, so a
+point that only may touch moves the centre little; its points' lever arms, their distances from
+it; and the plain mean of its first levers. #BXSOLV"
+  (declare (type box-point-columns points) (type box-manifold-columns manifolds) (type index mi)
+           (type single-float inv-tau) #.+kernel-policy+)
+  (with-box-point-columns (rx ry rz sx sy sz separation lever-arm) points
+    (with-box-manifold-columns ((mfirst first) (mcount count) cax cay caz cbx cby cbz ox oy oz) manifolds
+      (let* ((first (aref mfirst mi)) (end (+ first (aref mcount mi)))
+             (ws 0.0) (ax 0.0) (ay 0.0) (az 0.0) (bx 0.0) (by 0.0) (bz 0.0) (mx 0.0) (my 0.0) (mz 0.0))
+        (declare (type index first end) (type single-float ws ax ay az bx by bz mx my mz))
+        (loop for k of-type index from first below end
+              do (let ((w (min 1.0 (max 1e-10 (- 2.0 (* (aref separation k) inv-tau))))))
+                   (declare (type single-float w))
+                   (setf ws (+ ws w)
+                         ax (+ ax (* w (aref rx k))) ay (+ ay (* w (aref ry k))) az (+ az (* w (aref rz k)))
+                         bx (+ bx (* w (aref sx k))) by (+ by (* w (aref sy k))) bz (+ bz (* w (aref sz k)))
+                         mx (+ mx (aref rx k)) my (+ my (aref ry k)) mz (+ mz (aref rz k)))))
+        (let ((iw (/ 1.0 ws)) (in (/ 1.0 (float (- end first) 1.0))))
+          (declare (type single-float iw in))
+          (setf (aref cax mi) (* ax iw) (aref cay mi) (* ay iw) (aref caz mi) (* az iw)
+                (aref cbx mi) (* bx iw) (aref cby mi) (* by iw) (aref cbz mi) (* bz iw)
+                (aref ox mi) (* mx in) (aref oy mi) (* my in) (aref oz mi) (* mz in)))
+        (loop for k of-type index from first below end
+              do (let ((dx (- (aref rx k) (aref cax mi))) (dy (- (aref ry k) (aref cay mi)))
+                       (dz (- (aref rz k) (aref caz mi))))
+                   (declare (type single-float dx dy dz))
+                   (setf (aref lever-arm k) (fsqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))
+  nil)
+
+(defun box-manifold-masses (points manifolds mi)
+  "Write manifold MI's angular parts at its friction centre, c x t and I^-1 (c x t) for both
+tangents on each side and I^-1 n on each, from its first point's directions and inertias; the
+inverse of its 2 x 2 tangent mass, K11 = 1/m_a + 1/m_b + (c_a x t1) . Ia^-1 (c_a x t1) + (c_b x
+t1) . Ib^-1 (c_b x t1), K12 the same of t1 and t2 (zero when K is singular); its twist mass
+1/(n . Ia^-1 n + n . Ib^-1 n); and its friction, its first point's. #BXSOLV"
+  (declare (type box-point-columns points) (type box-manifold-columns manifolds) (type index mi) #.+kernel-policy+)
+  (with-box-point-columns (nx ny nz t1x t1y t1z t2x t2y t2z friction im i11 i12 i13 i22 i23 i33
+                           imb j11 j12 j13 j22 j23 j33)
+      points
+    (with-box-manifold-columns ((mfirst first) (mfriction friction) cax cay caz cbx cby cbz k11 k12 k22
+                                twist-mass (mj jacobian))
+        manifolds
+      (let ((k (aref mfirst mi)) (o (* 30 mi)))
+        (declare (type index k o))
+        (flet ((part (at lx ly lz ux uy uz e11 e12 e13 e22 e23 e33)
+                 ;; l x u at AT, I^-1 (l x u) six places on
+                 (declare (type index at) (type single-float lx ly lz ux uy uz e11 e12 e13 e22 e23 e33))
+                 (let ((px (- (* ly uz) (* lz uy))) (py (- (* lz ux) (* lx uz))) (pz (- (* lx uy) (* ly ux))))
+                   (declare (type single-float px py pz))
+                   (setf (aref mj at) px (aref mj (+ at 1)) py (aref mj (+ at 2)) pz
+                         (aref mj (+ at 6)) (+ (* e11 px) (* e12 py) (* e13 pz))
+                         (aref mj (+ at 7)) (+ (* e12 px) (* e22 py) (* e23 pz))
+                         (aref mj (+ at 8)) (+ (* e13 px) (* e23 py) (* e33 pz)))))
+               (dot (a b) (declare (type index a b))
+                 (+ (* (aref mj a) (aref mj b)) (* (aref mj (+ a 1)) (aref mj (+ b 1))) (* (aref mj (+ a 2)) (aref mj (+ b 2))))))
+          (declare (inline part dot))
+          (macrolet ((side (at lx ly lz e11 e12 e13 e22 e23 e33)
+                       `(progn (part ,at ,lx ,ly ,lz (aref t1x k) (aref t1y k) (aref t1z k) ,e11 ,e12 ,e13 ,e22 ,e23 ,e33)
+                               (part (+ ,at 3) ,lx ,ly ,lz (aref t2x k) (aref t2y k) (aref t2z k) ,e11 ,e12 ,e13 ,e22 ,e23 ,e33))))
+            (side o (aref cax mi) (aref cay mi) (aref caz mi) (aref i11 k) (aref i12 k) (aref i13 k) (aref i22 k) (aref i23 k) (aref i33 k))
+            (side (+ o 12) (aref cbx mi) (aref cby mi) (aref cbz mi) (aref j11 k) (aref j12 k) (aref j13 k) (aref j22 k) (aref j23 k) (aref j33 k)))
+          (let ((n1 (aref nx k)) (n2 (aref ny k)) (n3 (aref nz k)))
+            (declare (type single-float n1 n2 n3))
+            (setf (aref mj (+ o 24)) (+ (* (aref i11 k) n1) (* (aref i12 k) n2) (* (aref i13 k) n3))
+                  (aref mj (+ o 25)) (+ (* (aref i12 k) n1) (* (aref i22 k) n2) (* (aref i23 k) n3))
+                  (aref mj (+ o 26)) (+ (* (aref i13 k) n1) (* (aref i23 k) n2) (* (aref i33 k) n3))
+                  (aref mj (+ o 27)) (+ (* (aref j11 k) n1) (* (aref j12 k) n2) (* (aref j13 k) n3))
+                  (aref mj (+ o 28)) (+ (* (aref j12 k) n1) (* (aref j22 k) n2) (* (aref j23 k) n3))
+                  (aref mj (+ o 29)) (+ (* (aref j13 k) n1) (* (aref j23 k) n2) (* (aref j33 k) n3)))
+            (let* ((m (+ (aref im k) (aref imb k)))
+                   (a11 (+ m (dot o (+ o 6)) (dot (+ o 12) (+ o 18))))
+                   (a22 (+ m (dot (+ o 3) (+ o 9)) (dot (+ o 15) (+ o 21))))
+                   (a12 (+ (dot o (+ o 9)) (dot (+ o 12) (+ o 21))))
+                   (det (- (* a11 a22) (* a12 a12)))
+                   (inv (if (> det 0.0) (/ 1.0 det) 0.0))
+                   (tk (+ (* n1 (aref mj (+ o 24))) (* n2 (aref mj (+ o 25))) (* n3 (aref mj (+ o 26)))
+                          (* n1 (aref mj (+ o 27))) (* n2 (aref mj (+ o 28))) (* n3 (aref mj (+ o 29))))))
+              (declare (type single-float m a11 a22 a12 det inv tk))
+              (setf (aref k11 mi) (* a22 inv) (aref k12 mi) (- (* a12 inv)) (aref k22 mi) (* a11 inv)
+                    (aref twist-mass mi) (if (> tk 0.0) (/ 1.0 tk) 0.0)
+                    (aref mfriction mi) (aref friction k))))))))
+  nil)
+
+(defmacro do-box-manifold-shares ((mi k a b) &body body)
+  "Run BODY for each point K of manifold MI with A and B its first lever less the manifold's mean
+lever along the two tangents; expanded inside with-box-point-columns of RX RY RZ and T1X .. T2Z
+and with-box-manifold-columns of (MFIRST FIRST), (MCOUNT COUNT), OX, OY and OZ. #BXSOLV"
+  `(loop for ,k of-type index from (aref mfirst ,mi) below (+ (aref mfirst ,mi) (aref mcount ,mi))
+         do (let* ((dx (- (aref rx ,k) (aref ox ,mi))) (dy (- (aref ry ,k) (aref oy ,mi))) (dz (- (aref rz ,k) (aref oz ,mi)))
+                   (,a (+ (* dx (aref t1x ,k)) (* dy (aref t1y ,k)) (* dz (aref t1z ,k))))
+                   (,b (+ (* dx (aref t2x ,k)) (* dy (aref t2y ,k)) (* dz (aref t2z ,k)))))
+              (declare (type single-float dx dy dz ,a ,b))
+              ,@body)))
+
+(defun prepare-box-manifolds (set margin)
+  "Gather SET's points, laid manifold by manifold (group-box-points), into its manifolds: each run
+of points of one manifold is one, with its friction centre (box-manifold-centre, MARGIN the
+speculative margin), masses (box-manifold-masses) and the friction and twist impulses its points
+carried from the last step as shares (store-box-manifold-impulses): F the sum of the shares,
+the twist the sum of their moments about the mean lever. #BXSOLV"
+  (declare (type box-set set) (type single-float margin) #.+kernel-policy+)
+  (let* ((points (box-set-points set)) (manifolds (box-set-manifolds set))
+         (n (box-point-columns-length points)) (inv-tau (/ 1.0 (max margin 1e-6))) (k 0))
+    (declare (type index n k) (type single-float inv-tau))
+    (box-manifold-columns-clear manifolds)
+    (loop while (< k n)
+          do (let ((end (1+ k)) (mi (box-manifold-columns-append manifolds)))
+               (declare (type index end mi))
+               (loop while (and (< end n) (box-points-one-manifold-p points k end)) do (incf end))
+               (setf (aref (box-manifold-columns-first manifolds) mi) k
+                     (aref (box-manifold-columns-count manifolds) mi) (- end k))
+               (box-manifold-centre points manifolds mi inv-tau)
+               (box-manifold-masses points manifolds mi)
+               (with-box-point-columns (rx ry rz t1x t1y t1z t2x t2y t2z tangent-impulse-1 tangent-impulse-2) points
+                 (with-box-manifold-columns ((mfirst first) (mcount count) ox oy oz friction-impulse-1
+                                             friction-impulse-2 twist-impulse)
+                     manifolds
+                   (let ((f1 0.0) (f2 0.0) (tw 0.0))
+                     (declare (type single-float f1 f2 tw))
+                     (do-box-manifold-shares (mi j a b)
+                       (let ((s1 (aref tangent-impulse-1 j)) (s2 (aref tangent-impulse-2 j)))
+                         (setf f1 (+ f1 s1) f2 (+ f2 s2) tw (+ tw (- (* a s2) (* b s1))))))
+                     (setf (aref friction-impulse-1 mi) f1 (aref friction-impulse-2 mi) f2
+                           (aref twist-impulse mi) tw))))
+               (setf k end))))
+  set)
+
+(defun store-box-manifold-impulses (set)
+  "After the substeps, write each of SET's manifolds' friction and twist impulses into its points
+as shares, what their keys carry into the next step (add-box-point) and a snapshot holds: a
+point's share is F/N + tw (a t2 - b t1)/D, F the friction impulse, N the points, tw the twist,
+a and b the point's first lever less the mean one along the tangents and D the sum of a^2 + b^2
+(the twist left out when D is zero, a single point's), so the shares sum to F and their moments
+about the mean lever to tw. #BXSOLV"
+  (declare (type box-set set) #.+kernel-policy+)
+  (let ((points (box-set-points set)) (manifolds (box-set-manifolds set)))
+    (with-box-point-columns (rx ry rz t1x t1y t1z t2x t2y t2z tangent-impulse-1 tangent-impulse-2) points
+      (with-box-manifold-columns ((mfirst first) (mcount count) ox oy oz friction-impulse-1
+                                  friction-impulse-2 twist-impulse)
+          manifolds
+        (dotimes (mi (box-manifold-columns-length manifolds))
+          (let ((d 0.0) (in (/ 1.0 (float (aref mcount mi) 1.0))))
+            (declare (type single-float d in))
+            (do-box-manifold-shares (mi k a b) (setf d (+ d (* a a) (* b b))))
+            (let ((f1 (* in (aref friction-impulse-1 mi))) (f2 (* in (aref friction-impulse-2 mi)))
+                  (tw (if (> d 0.0) (/ (aref twist-impulse mi) d) 0.0)))
+              (declare (type single-float f1 f2 tw))
+              (do-box-manifold-shares (mi k a b)
+                (setf (aref tangent-impulse-1 k) (- f1 (* tw b)) (aref tangent-impulse-2 k) (+ f2 (* tw a))))))))))
+  nil)
 
 (defmacro with-box-point ((v k) &body body)
   "Run BODY for box point K, its columns bound by with-box-point-columns, over the solver's
@@ -8341,7 +8551,8 @@ with-box-point-columns of ROW, ROW-B, IM, IMB and JACOBIAN. #BXSOLV"
           (awx (aref ,v (+ o 3))) (awy (aref ,v (+ o 4))) (awz (aref ,v (+ o 5)))
           (bvx (aref ,v ob)) (bvy (aref ,v (+ ob 1))) (bvz (aref ,v (+ ob 2)))
           (bwx (aref ,v (+ ob 3))) (bwy (aref ,v (+ ob 4))) (bwz (aref ,v (+ ob 5))))
-     (declare (type index o ob jo) (type single-float m mb avx avy avz awx awy awz bvx bvy bvz bwx bwy bwz))
+     (declare (type index o ob jo) (type single-float m mb avx avy avz awx awy awz bvx bvy bvz bwx bwy bwz)
+              (ignorable jo))
      (macrolet ((jac (i) `(aref jacobian (+ jo ,i)))
                 (apply! (px py pz (wax way waz) (wbx wby wbz))
                   `(let ((px ,px) (py ,py) (pz ,pz))
@@ -8358,28 +8569,6 @@ with-box-point-columns of ROW, ROW-B, IM, IMB and JACOBIAN. #BXSOLV"
          (setf (aref ,v ob) bvx (aref ,v (+ ob 1)) bvy (aref ,v (+ ob 2)) bvz
                (aref ,v (+ ob 3)) bwx (aref ,v (+ ob 4)) bwy (aref ,v (+ ob 5)) bwz)))))
 
-(defun warm-start-box-points (set v)
-  "Apply every box point's carried impulses again, at the start of a substep. #BXSOLV"
-  (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
-  (let ((points (box-set-points set)))
-    (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z normal-impulse
-                             tangent-impulse-1 tangent-impulse-2 im imb jacobian)
-        points
-      (dotimes (k (box-point-columns-length points))
-        (with-box-point-sides (v k)
-          (let ((pn (aref normal-impulse k)) (p1 (aref tangent-impulse-1 k)) (p2 (aref tangent-impulse-2 k)))
-            (declare (type single-float pn p1 p2))
-            (apply! (+ (* pn (aref nx k)) (* p1 (aref t1x k)) (* p2 (aref t2x k)))
-                    (+ (* pn (aref ny k)) (* p1 (aref t1y k)) (* p2 (aref t2y k)))
-                    (+ (* pn (aref nz k)) (* p1 (aref t1z k)) (* p2 (aref t2z k)))
-                    ((+ (* pn (jac 9)) (* p1 (jac 12)) (* p2 (jac 15)))
-                     (+ (* pn (jac 10)) (* p1 (jac 13)) (* p2 (jac 16)))
-                     (+ (* pn (jac 11)) (* p1 (jac 14)) (* p2 (jac 17))))
-                    ((+ (* pn (jac 27)) (* p1 (jac 30)) (* p2 (jac 33)))
-                     (+ (* pn (jac 28)) (* p1 (jac 31)) (* p2 (jac 34)))
-                     (+ (* pn (jac 29)) (* p1 (jac 32)) (* p2 (jac 35))))))))))
-  nil)
-
 (defmacro box-point-impact-speed (vn s positive biased inv-h dv)
   "The speed at which a box point whose normal velocity is VN and whose gap is S strikes, as a
 sphere row's ([[#R3ST1T]]): VN taken at this instant of the substep (the solve pass, BIASED, runs
@@ -8391,23 +8580,163 @@ open, DV the change of VN over a substep under gravity. #BXSOLV"
      (declare (type single-float half c u2))
      (fsqrt (if (> u2 0.0) u2 0.0))))
 
+(defmacro with-box-manifold-friction ((mi) &body body)
+  "Run BODY for manifold MI with MO its offset among the manifolds' angular parts, (mj I) its
+angular part I, and F1 F2 TW its friction and twist impulses; expanded inside
+with-box-manifold-columns of (MJACOBIAN JACOBIAN), FRICTION-IMPULSE-1, FRICTION-IMPULSE-2 and
+TWIST-IMPULSE. #BXSOLV"
+  `(let* ((mo (* 30 ,mi))
+          (f1 (aref friction-impulse-1 ,mi)) (f2 (aref friction-impulse-2 ,mi)) (tw (aref twist-impulse ,mi)))
+     (declare (type index mo) (type single-float f1 f2 tw) (ignorable f1 f2 tw))
+     (macrolet ((mj (i) `(aref mjacobian (+ mo ,i))))
+       ,@body)))
+
+(defun warm-start-box-points (set v)
+  "Apply every box manifold's carried impulses again, at the start of a substep: each point's
+normal impulse at the point, then the manifold's friction at its centre and its twist. #BXSOLV"
+  (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
+  (let ((points (box-set-points set)) (manifolds (box-set-manifolds set)))
+    (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z normal-impulse im imb jacobian) points
+      (with-box-manifold-columns ((mfirst first) (mcount count) friction-impulse-1 friction-impulse-2
+                                  twist-impulse (mjacobian jacobian))
+          manifolds
+        (dotimes (mi (box-manifold-columns-length manifolds))
+          (let ((first (aref mfirst mi)))
+            (declare (type index first))
+            (with-box-point-sides (v first)
+              (loop for k of-type index from first below (+ first (aref mcount mi))
+                    do (let ((jo (* +box-jacobian-width+ k)) (pn (aref normal-impulse k)))
+                         (declare (type index jo) (type single-float pn))
+                         (apply! (* pn (aref nx k)) (* pn (aref ny k)) (* pn (aref nz k))
+                                 ((* pn (jac 9)) (* pn (jac 10)) (* pn (jac 11)))
+                                 ((* pn (jac 27)) (* pn (jac 28)) (* pn (jac 29))))))
+              (with-box-manifold-friction (mi)
+                (apply! (+ (* f1 (aref t1x first)) (* f2 (aref t2x first)))
+                        (+ (* f1 (aref t1y first)) (* f2 (aref t2y first)))
+                        (+ (* f1 (aref t1z first)) (* f2 (aref t2z first)))
+                        ((+ (* f1 (mj 6)) (* f2 (mj 9)) (* tw (mj 24)))
+                         (+ (* f1 (mj 7)) (* f2 (mj 10)) (* tw (mj 25)))
+                         (+ (* f1 (mj 8)) (* f2 (mj 11)) (* tw (mj 26))))
+                        ((+ (* f1 (mj 18)) (* f2 (mj 21)) (* tw (mj 27)))
+                         (+ (* f1 (mj 19)) (* f2 (mj 22)) (* tw (mj 28)))
+                         (+ (* f1 (mj 20)) (* f2 (mj 23)) (* tw (mj 29))))))))))))
+  nil)
+
+(defmacro box-point-normal-pass ()
+  "The normal impulse of box point K in a pass of solve-box-points: with the soft bias when
+USE-BIAS, clamped to push only and to the point's cap, the speed of an impact kept; the new
+impulse added to TOTAL and its lever arm times it to TWIST-LIMIT. Expanded in solve-box-points
+inside with-box-point-sides, whose variables it reads. #BXSOLV"
+  `(let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
+          (j (aref row-b k)) (pb (delta-row j)) (tb (* 3 j))
+          (ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
+          ;; the gap now: moved by each side's delta and turn (the dummy's are zero),
+          ;; n . (da - db) + ta . (ra x n) - tb . (rb x n), and by a posted box's travel
+          ;; so far this step (zero for any other point)
+          (s (- (+ (aref separation k)
+                   (+ (* ax (- (aref d p) (aref d pb))) (* ay (- (aref d (+ p 1)) (aref d (+ pb 1))))
+                      (* az (- (aref d (+ p 2)) (aref d (+ pb 2)))))
+                   (- (+ (* (aref turns tr) (jac 0)) (* (aref turns (+ tr 1)) (jac 1)) (* (aref turns (+ tr 2)) (jac 2)))
+                      (+ (* (aref turns tb) (jac 18)) (* (aref turns (+ tb 1)) (jac 19)) (* (aref turns (+ tb 2)) (jac 20)))))
+                (* (aref kvn k) elapsed)))
+          ;; n . (va - vb) + wa . (ra x n) - wb . (rb x n), less a posted box's velocity
+          ;; along the normal
+          (vn (- (+ (+ (* ax (- avx bvx)) (* ay (- avy bvy)) (* az (- avz bvz)))
+                    (- (+ (* awx (jac 0)) (* awy (jac 1)) (* awz (jac 2)))
+                       (+ (* bwx (jac 18)) (* bwy (jac 19)) (* bwz (jac 20)))))
+                 (aref kvn k)))
+          (positive (> s 0.0))
+          (bias (cond (positive (* s inv-h))
+                      (use-bias (max (* bias-rate s) (- push-max)))
+                      (t 0.0)))
+          (ms (if (and use-bias (not positive)) mass-scale 1.0))
+          (is (if (and use-bias (not positive)) impulse-scale 0.0))
+          (old (aref normal-impulse k))
+          ;; held to its cap, which only a point against a posted box has ([[#BXPUSH]])
+          (new (min (aref push-cap k) (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old)))))
+          (pn (- new old)))
+     (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
+     ;; an impact: the first push this step of a point with restitution that approached,
+     ;; before the pass, faster than the threshold; its speed is kept for the bounce
+     (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0) (> new 0.0)
+                (< (aref approach k) (- threshold)))
+       (setf (aref impact-speed k)
+             (box-point-impact-speed (aref approach k) s positive use-bias inv-h
+                                     (* (- (if (> m 0.0) 1.0 0.0) (if (> mb 0.0) 1.0 0.0))
+                                        (+ (* hgx ax) (* hgy ay) (* hgz az))))))
+     (setf (aref normal-impulse k) new
+           (aref pushed k) (max (aref pushed k) new)
+           total (+ total new) twist-limit (+ twist-limit (* (aref lever-arm k) new))
+           change (max change (abs pn)))
+     (apply! (* pn ax) (* pn ay) (* pn az)
+             ((* pn (jac 9)) (* pn (jac 10)) (* pn (jac 11)))
+             ((* pn (jac 27)) (* pn (jac 28)) (* pn (jac 29))))))
+
+(defmacro box-manifold-friction-pass ()
+  "The twist and then the friction of manifold MI in a relax pass of solve-box-points: the twist
+about the normal held within the manifold's friction times TWIST-LIMIT, its points' lever arms
+times their normal impulses; the two tangent impulses at its centre, through its 2 x 2 tangent
+mass, held together inside the cone of its friction times TOTAL, its points' normal impulses.
+Expanded inside with-box-point-sides of its first point FIRST, whose variables it reads. #BXSOLV"
+  `(with-box-manifold-friction (mi)
+     (let* ((mu (aref mfriction mi))
+            (n1 (aref nx first)) (n2 (aref ny first)) (n3 (aref nz first))
+            ;; the first side's spin less the second's, about the normal
+            (spin (+ (* n1 (- awx bwx)) (* n2 (- awy bwy)) (* n3 (- awz bwz))))
+            (bound (* mu twist-limit))
+            (new (max (- bound) (min bound (- tw (* (aref twist-mass mi) spin)))))
+            (dt (- new tw)))
+       (declare (type single-float mu n1 n2 n3 spin bound new dt))
+       (setf (aref twist-impulse mi) new)
+       (apply! 0.0 0.0 0.0 ((* dt (mj 24)) (* dt (mj 25)) (* dt (mj 26))) ((* dt (mj 27)) (* dt (mj 28)) (* dt (mj 29))))
+       ;; the velocity at the centre along the tangents, less a posted box's
+       (let* ((ux (- (- avx bvx) (aref kvx first))) (uy (- (- avy bvy) (aref kvy first))) (uz (- (- avz bvz) (aref kvz first)))
+              (u1 (+ (+ (* ux (aref t1x first)) (* uy (aref t1y first)) (* uz (aref t1z first)))
+                     (- (+ (* awx (mj 0)) (* awy (mj 1)) (* awz (mj 2))) (+ (* bwx (mj 12)) (* bwy (mj 13)) (* bwz (mj 14))))))
+              (u2 (+ (+ (* ux (aref t2x first)) (* uy (aref t2y first)) (* uz (aref t2z first)))
+                     (- (+ (* awx (mj 3)) (* awy (mj 4)) (* awz (mj 5))) (+ (* bwx (mj 15)) (* bwy (mj 16)) (* bwz (mj 17))))))
+              (g1 (- f1 (+ (* (aref k11 mi) u1) (* (aref k12 mi) u2))))
+              (g2 (- f2 (+ (* (aref k12 mi) u1) (* (aref k22 mi) u2))))
+              (limit (* mu total))
+              (len2 (+ (* g1 g1) (* g2 g2))))
+         (declare (type single-float ux uy uz u1 u2 g1 g2 limit len2))
+         (when (> len2 (* limit limit))
+           (let ((scale (if (> len2 0.0) (/ limit (fsqrt len2)) 0.0)))
+             (setf g1 (* g1 scale) g2 (* g2 scale))))
+         (setf (aref friction-impulse-1 mi) g1 (aref friction-impulse-2 mi) g2)
+         (let ((d1 (- g1 f1)) (d2 (- g2 f2)))
+           (declare (type single-float d1 d2))
+           (apply! (+ (* d1 (aref t1x first)) (* d2 (aref t2x first)))
+                   (+ (* d1 (aref t1y first)) (* d2 (aref t2y first)))
+                   (+ (* d1 (aref t1z first)) (* d2 (aref t2z first)))
+                   ((+ (* d1 (mj 6)) (* d2 (mj 9))) (+ (* d1 (mj 7)) (* d2 (mj 10))) (+ (* d1 (mj 8)) (* d2 (mj 11))))
+                   ((+ (* d1 (mj 18)) (* d2 (mj 21))) (+ (* d1 (mj 19)) (* d2 (mj 22)))
+                    (+ (* d1 (mj 20)) (* d2 (mj 23))))))))))
+
+(defconstant +box-normal-sweeps+ 4
+  "The most sweeps a pass makes over a box manifold's normal impulses. #BXSOLV")
+
+(defconstant +box-sweep-share+ 0.05
+  "The share of a box manifold's total normal impulse by which some point's must have changed in
+a sweep for the pass to sweep its normals again. #BXSOLV")
+
 (defun solve-box-points (set v d inv-h use-bias)
-  "One pass over the box points: each normal impulse, with the soft bias when USE-BIAS (the
-solve) and without it (the relax), clamped to push only, keeping the speed of an impact; then its
-friction, held in the cone. #BXSOLV"
+  "One pass over the box manifolds: each point's normal impulse, with the soft bias when USE-BIAS
+(the solve) and without it (the relax), clamped to push only, keeping the speed of an impact;
+then, in the relax alone, the manifold's twist and its friction at its centre, held in the
+cone. #BXSOLV"
   (declare (type box-set set) (type f32-column v d) (type single-float inv-h) #.+kernel-policy+)
-  (let ((points (box-set-points set)) (turns (box-set-turns set))
+  (let ((points (box-set-points set)) (manifolds (box-set-manifolds set)) (turns (box-set-turns set))
         (bias-rate (box-set-bias-rate set)) (mass-scale (box-set-mass-scale set))
         (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set))
         (threshold (box-set-threshold set)) (elapsed (box-set-elapsed set))
         (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
     (declare (type f32-column turns)
              (type single-float bias-rate mass-scale impulse-scale push-max threshold elapsed hgx hgy hgz))
-    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z separation
-                             normal-mass tangent-mass-1 tangent-mass-2 friction normal-impulse
-                             tangent-impulse-1 tangent-impulse-2 im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33 restitution pushed impact-speed approach jacobian
-                             kvn push-cap)
+    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz t1x t1y t1z t2x t2y t2z separation normal-mass
+                             normal-impulse im i11 i12 i13 i22 i23 i33 imb j11 j12 j13 j22 j23 j33
+                             restitution pushed impact-speed approach jacobian kvn push-cap lever-arm
+                             rx ry rz sx sy sz)
         points
       ;; the normal velocity of each point that may strike, before this pass pushes any point:
       ;; the corners of a box landing flat all strike at the speed the first one does
@@ -8418,77 +8747,23 @@ friction, held in the cone. #BXSOLV"
               (setf (aref approach k)
                     (multiple-value-bind (ux uy uz) (point-velocity)
                       (+ (* ux (aref nx k)) (* uy (aref ny k)) (* uz (aref nz k)))))))))
-      (dotimes (k (box-point-columns-length points))
-        (with-box-point-sides (v k)
-          (let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
-                 (j (aref row-b k)) (pb (delta-row j)) (tb (* 3 j))
-                 (ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
-                 ;; the gap now: moved by each side's delta and turn (the dummy's are zero),
-                 ;; n . (da - db) + ta . (ra x n) - tb . (rb x n), and by a posted box's travel
-                 ;; so far this step (zero for any other point)
-                 (s (- (+ (aref separation k)
-                          (+ (* ax (- (aref d p) (aref d pb))) (* ay (- (aref d (+ p 1)) (aref d (+ pb 1))))
-                             (* az (- (aref d (+ p 2)) (aref d (+ pb 2)))))
-                          (- (+ (* (aref turns tr) (jac 0)) (* (aref turns (+ tr 1)) (jac 1)) (* (aref turns (+ tr 2)) (jac 2)))
-                             (+ (* (aref turns tb) (jac 18)) (* (aref turns (+ tb 1)) (jac 19)) (* (aref turns (+ tb 2)) (jac 20)))))
-                       (* (aref kvn k) elapsed)))
-                 ;; n . (va - vb) + wa . (ra x n) - wb . (rb x n), less a posted box's velocity
-                 ;; along the normal
-                 (vn (- (+ (+ (* ax (- avx bvx)) (* ay (- avy bvy)) (* az (- avz bvz)))
-                           (- (+ (* awx (jac 0)) (* awy (jac 1)) (* awz (jac 2)))
-                              (+ (* bwx (jac 18)) (* bwy (jac 19)) (* bwz (jac 20)))))
-                        (aref kvn k)))
-                 (positive (> s 0.0))
-                 (bias (cond (positive (* s inv-h))
-                             (use-bias (max (* bias-rate s) (- push-max)))
-                             (t 0.0)))
-                 (ms (if (and use-bias (not positive)) mass-scale 1.0))
-                 (is (if (and use-bias (not positive)) impulse-scale 0.0))
-                 (old (aref normal-impulse k))
-                 ;; held to its cap, which only a point against a posted box has ([[#BXPUSH]])
-                 (new (min (aref push-cap k) (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old)))))
-                 (pn (- new old)))
-            (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
-            ;; an impact: the first push this step of a point with restitution that approached,
-            ;; before the pass, faster than the threshold; its speed is kept for the bounce
-            (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0) (> new 0.0)
-                       (< (aref approach k) (- threshold)))
-              (setf (aref impact-speed k)
-                    (box-point-impact-speed (aref approach k) s positive use-bias inv-h
-                                            (* (- (if (> m 0.0) 1.0 0.0) (if (> mb 0.0) 1.0 0.0))
-                                               (+ (* hgx ax) (* hgy ay) (* hgz az))))))
-            (setf (aref normal-impulse k) new
-                  (aref pushed k) (max (aref pushed k) new))
-            (apply! (* pn ax) (* pn ay) (* pn az)
-                    ((* pn (jac 9)) (* pn (jac 10)) (* pn (jac 11)))
-                    ((* pn (jac 27)) (* pn (jac 28)) (* pn (jac 29))))
-            ;; friction in the cone of mu times the normal impulse
-            (let* ((ux (- (- avx bvx) (aref kvx k))) (uy (- (- avy bvy) (aref kvy k))) (uz (- (- avz bvz) (aref kvz k)))
-                   (o1 (aref tangent-impulse-1 k)) (o2 (aref tangent-impulse-2 k))
-                   (u1 (+ (+ (* ux (aref t1x k)) (* uy (aref t1y k)) (* uz (aref t1z k)))
-                          (- (+ (* awx (jac 3)) (* awy (jac 4)) (* awz (jac 5)))
-                             (+ (* bwx (jac 21)) (* bwy (jac 22)) (* bwz (jac 23))))))
-                   (u2 (+ (+ (* ux (aref t2x k)) (* uy (aref t2y k)) (* uz (aref t2z k)))
-                          (- (+ (* awx (jac 6)) (* awy (jac 7)) (* awz (jac 8)))
-                             (+ (* bwx (jac 24)) (* bwy (jac 25)) (* bwz (jac 26))))))
-                   (n1 (- o1 (* (aref tangent-mass-1 k) u1)))
-                   (n2 (- o2 (* (aref tangent-mass-2 k) u2)))
-                   (limit (* (aref friction k) new))
-                   (len2 (+ (* n1 n1) (* n2 n2))))
-              (declare (type single-float ux uy uz o1 o2 u1 u2 n1 n2 limit len2))
-              (when (> len2 (* limit limit))
-                (let ((scale (if (> len2 0.0) (/ limit (fsqrt len2)) 0.0)))
-                  (setf n1 (* n1 scale) n2 (* n2 scale))))
-              (setf (aref tangent-impulse-1 k) n1 (aref tangent-impulse-2 k) n2)
-              (let ((d1 (- n1 o1)) (d2 (- n2 o2)))
-                (declare (type single-float d1 d2))
-                (apply! (+ (* d1 (aref t1x k)) (* d2 (aref t2x k)))
-                        (+ (* d1 (aref t1y k)) (* d2 (aref t2y k)))
-                        (+ (* d1 (aref t1z k)) (* d2 (aref t2z k)))
-                        ((+ (* d1 (jac 12)) (* d2 (jac 15))) (+ (* d1 (jac 13)) (* d2 (jac 16)))
-                         (+ (* d1 (jac 14)) (* d2 (jac 17))))
-                        ((+ (* d1 (jac 30)) (* d2 (jac 33))) (+ (* d1 (jac 31)) (* d2 (jac 34)))
-                         (+ (* d1 (jac 32)) (* d2 (jac 35))))))))))))
+      (with-box-manifold-columns ((mfirst first) (mcount count) (mfriction friction) k11 k12 k22 twist-mass
+                                  friction-impulse-1 friction-impulse-2 twist-impulse (mjacobian jacobian))
+          manifolds
+        (dotimes (mi (box-manifold-columns-length manifolds))
+          (let ((first (aref mfirst mi)) (total 0.0) (twist-limit 0.0) (change 0.0))
+            (declare (type index first) (type single-float total twist-limit change))
+            (with-box-point-sides (v first)
+              (loop for sweep of-type fixnum from 1
+                    do (setf total 0.0 twist-limit 0.0 change 0.0)
+                       (loop for k of-type index from first below (+ first (aref mcount mi))
+                             do (let ((jo (* +box-jacobian-width+ k)))
+                                  (declare (type index jo))
+                                  (box-point-normal-pass)))
+                    ;; again while a sweep still moved some point's impulse by a share of the total
+                    while (and (< sweep +box-normal-sweeps+) (> change (* +box-sweep-share+ total))))
+              ;; friction in the relax alone, as Box3D's solver gives it
+              (unless use-bias (box-manifold-friction-pass))))))))
   nil)
 
 (defun turn-box-orientations (world)
@@ -9607,7 +9882,10 @@ bodies to half the push-out speed. #IDVK7G"
         (when held (hold-crowded-speeds world))
         (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed))))
     ;; the box points that struck bounce once, after the substeps ([[#BXSOLV]])
-    (when boxes (bounce-box-points boxes v)))
+    (when boxes
+      (bounce-box-points boxes v)
+      ;; the manifolds' friction into their points, for the next step ([[#BXSOLV]])
+      (store-box-manifold-impulses boxes)))
     ;; the joints' colouring serves these substeps only: a pass run by hand solves contacts alone
     (when joints (setf (joint-set-solving joints) nil))
     world))
