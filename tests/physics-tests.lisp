@@ -7691,6 +7691,23 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
             (check (< turn 1.0) "cube ~,1F m at ~D m/s ends turned ~,3F degrees" (* 2 half) speed turn)))))))
 ;; BXSOLV-flat-landings-stay-put ends here
 
+;; [[file:../physics.org::#BXSOLV][BXSOLV-tilted-landings-gain-no-yaw]]
+(define-claim "BXSOLV" tilted-landings-gain-no-yaw
+    "A cube dropped tilted about x lands without turning about the vertical or moving along x."
+  (dolist (degrees '(2 5 10))
+    (let* ((w (make-floor-world :sleep nil))
+           (a (* 0.5 degrees (/ pi 180)))
+           (box (add-physics-box w 2.5 (+ (- 0.5 *physics-linear-slop*) 1.0) 2.5 0.5 0.5 0.5 :friction 0.6 :vy -5
+                                 :orientation (list (cos a) (sin a) 0 0))))
+      (dotimes (i 300) (step-physics-world w))
+      (multiple-value-bind (qw qx qy qz) (physics-body-orientation w box)
+        ;; the box's x axis in the world, the first column of its rotation, in the horizontal plane
+        (let ((yaw (* (/ 180 pi) (atan (* 2 (- (* qx qz) (* qw qy))) (- 1 (* 2 (+ (* qy qy) (* qz qz)))))))
+              (x (physics-body-position w box)))
+          (check (< (abs yaw) 1.0) "tilted ~D degrees: turned ~,3F degrees about the vertical" degrees yaw)
+          (check (< (abs (- x 2.5)) 0.01) "tilted ~D degrees: moved ~,4F m along x" degrees (- x 2.5)))))))
+;; BXSOLV-tilted-landings-gain-no-yaw ends here
+
 ;; [[file:../physics.org::#BXSPHR][BXSPHR-ball-strikes-box]]
 (define-claim "BXSPHR" ball-strikes-box
     "A ball sliding head on into a resting cube of its mass hands over its momentum as e says."
