@@ -8166,6 +8166,8 @@ box set when some point is to be solved, else NIL. #BXSOLV"
                         (aref (box-set-count set) slot) (- (box-point-columns-length (box-set-points set)) start)))))
             ;; the sleeping boxes, held still, against the awake spheres ([[#BXSPHR]])
             (find-sleeping-box-sphere-points world set margin dt gstep)))
+        ;; a braced side is static to a much heavier body on it ([[#BXBRAC]])
+        (brace-box-points world set)
         (prepare-box-point-masses world set)
         (when (box-set-posted set) (cap-posted-box-points set))
         (prepare-box-manifolds set margin)))
@@ -8844,6 +8846,113 @@ which the velocity of the substep to come reaches less half that substep's gravi
               (aref turns (+ tr 2)) (+ (aref turns (+ tr 2)) (* h (aref v (+ o 5))))))))
   nil)
 ;; Box points in the substeps:1 ends here
+
+;; [[file:../physics.org::#BXBRAC][Box points on a braced body:1]]
+(declaim (inline brace-still-row))
+(defun brace-still-row (braced flags v row still2 bit)
+  "Mark the awake ROW with BIT in BRACED when its solver velocity in V is still (STILL2, the sleep
+speed squared), and, for +brace-braced+, braced in its FLAGS. #BXBRAC"
+  (declare (type fixnum-column braced flags) (type f32-column v) (type index row) (type fixnum bit)
+           (type single-float still2))
+  (when (or (minusp still2) (still-row-p v (solver-row row) still2))
+    (setf (aref braced row) (logior (aref braced row) bit))
+    (when (= bit +brace-braced+)
+      (setf (aref flags row) (logior (aref flags row) +flag-braced+)))))
+
+(declaim (inline pressed-still-p))
+(defun pressed-still-p (v row sign nx ny nz still2)
+  "Whether the awake ROW's solver velocity in V, less its part into a support whose normal out of
+the support is SIGN times NX NY NZ, is slower than the sleep speed (STILL2, its square). #BXBRAC"
+  (declare (type f32-column v) (type index row) (type single-float sign nx ny nz still2))
+  (let* ((o (solver-row row))
+         (vx (aref v o)) (vy (aref v (+ o 1))) (vz (aref v (+ o 2)))
+         (out (* sign (+ (* vx nx) (* vy ny) (* vz nz))))
+         (into (min out 0.0)))
+    (declare (type index o) (type single-float vx vy vz out into))
+    (< (- (+ (* vx vx) (* vy vy) (* vz vz)) (* into into)) still2)))
+
+(defun note-box-supports (points braced flags v n still2 up-x up-y up-z)
+  "The box points' supports: brace each still awake row of the N held by one of POINTS that
+carried load from something static (the dummy row N on its other side); then mark, with
++brace-support+, each still awake row resting within 25 degrees of the vertical (UP-X UP-Y UP-Z
+against gravity) on a braced awake row through a point that carried load, and fold those marks
+into braced ones. #BXBRAC"
+  (declare (type box-point-columns points) (type fixnum-column braced flags) (type f32-column v)
+           (type index n) (type single-float still2 up-x up-y up-z) #.+kernel-policy+)
+  (with-box-point-columns (row row-b nx ny nz normal-impulse) points
+    (let ((m (box-point-columns-length points)))
+      (dotimes (k m)
+        (let ((a (aref row k)) (b (aref row-b k)))
+          (declare (type index a b))
+          (when (and (> (aref normal-impulse k) 0.0) (not (eq (< a n) (< b n)))
+                     ;; the awake side's velocity but for its part into the support: the normal
+                     ;; pushes the first side, so it points out of the support for the first
+                     (pressed-still-p v (min a b) (if (< a n) 1.0 -1.0) (aref nx k) (aref ny k) (aref nz k) still2))
+            (brace-still-row braced flags v (min a b) -1.0 +brace-braced+))))
+      ;; the normal pushes the first side off the second: rise is the first side's height over it
+      (dotimes (k m)
+        (let ((a (aref row k)) (b (aref row-b k))
+              (rise (upward-part (aref nx k) (aref ny k) (aref nz k) up-x up-y up-z)))
+          (declare (type index a b) (type single-float rise))
+          (when (and (> (aref normal-impulse k) 0.0) (< a n) (< b n))
+            (cond ((and (> rise 0.9) (logtest (aref braced b) +brace-braced+)
+                        (pressed-still-p v a 1.0 (aref nx k) (aref ny k) (aref nz k) still2))
+                   (brace-still-row braced flags v a -1.0 +brace-support+))
+                  ((and (< rise -0.9) (logtest (aref braced a) +brace-braced+)
+                        (pressed-still-p v b -1.0 (aref nx k) (aref ny k) (aref nz k) still2))
+                   (brace-still-row braced flags v b -1.0 +brace-support+)))))))
+    (dotimes (i n)
+      (when (logtest (aref braced i) +brace-support+)
+        (setf (aref braced i) (logior (logandc2 (aref braced i) +brace-support+) +brace-braced+)
+              (aref flags i) (logior (aref flags i) +flag-braced+))))))
+
+(defun brace-box-point-sides (points braced inverse-mass brace-ratio v n up-x up-y up-z)
+  "Give each of POINTS between two awake rows of the N, one of which rests on the other as on
+something static (rests-static-p), the dummy row N on that side, and zero the static side's
+solver velocity and spin in V. #BXBRAC"
+  (declare (type box-point-columns points) (type fixnum-column braced) (type f32-column inverse-mass v)
+           (type index n) (type single-float brace-ratio up-x up-y up-z) #.+kernel-policy+)
+  (with-box-point-columns (row row-b nx ny nz) points
+    (dotimes (k (box-point-columns-length points))
+      (let ((a (aref row k)) (b (aref row-b k)))
+        (declare (type index a b))
+        (when (and (< a n) (< b n))
+          (let ((rise (upward-part (aref nx k) (aref ny k) (aref nz k) up-x up-y up-z)))
+            (declare (type single-float rise))
+            (flet ((still (side)
+                     (declare (type index side))
+                     (let ((o (solver-row side))) (fill v 0.0 :start o :end (+ o 6)))))
+              (cond ((rests-static-p braced inverse-mass brace-ratio b a rise)
+                     (setf (aref row-b k) n)
+                     (still b))
+                    ((rests-static-p braced inverse-mass brace-ratio a b (- rise))
+                     (setf (aref row k) n)
+                     (still a))))))))))
+
+(defun brace-box-points (world set)
+  "The bracing of SET's points, this step's, in WORLD ([[#BXBRAC]]): when the contacts' bracing
+pass ran this step, mark the bodies the points brace (note-box-supports), then make one-sided
+each point on which a much heavier body rests on a braced one (brace-box-point-sides). #BXBRAC"
+  (declare (type box-set set) #.+kernel-policy+)
+  (when (= (physics-world-braced-step world) (physics-world-step-count world))
+    (let* ((awake (physics-world-awake world))
+           (n (body-columns-length awake))
+           (points (box-set-points set))
+           (v (physics-world-velocities world))
+           (braced (physics-world-braced world))
+           (g (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
+                        (expt (physics-world-gravity-z world) 2))))
+           (up-x (/ (- (physics-world-gravity-x world)) g))
+           (up-y (/ (- (physics-world-gravity-y world)) g))
+           (up-z (/ (- (physics-world-gravity-z world)) g)))
+      (declare (type index n) (type f32-column v) (type fixnum-column braced) (type single-float g up-x up-y up-z))
+      (with-world-parameters ((brace-ratio brace-mass-ratio)) world
+        (note-box-supports points braced (body-columns-flags awake) v n
+                           (f32 (expt (physics-world-sleep-speed world) 2)) up-x up-y up-z)
+        (brace-box-point-sides points braced (body-columns-inverse-mass awake) brace-ratio v n
+                               up-x up-y up-z))))
+  set)
+;; Box points on a braced body:1 ends here
 
 ;; [[file:../physics.org::#BXSPHR][A box against a sphere:1]]
 (declaim (inline box-sphere-key))

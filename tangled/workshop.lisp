@@ -3338,6 +3338,115 @@ its final height less its ideal resting height (radius less a slop), and whether
       (values (- (nth-value 1 (physics-body-position world ball)) (- radius *physics-linear-slop*))
               (not (physics-body-awake-p world ball))))))
 
+(defun make-plain-floor-world (&key (sleep t) (gravity '(0 -9.81 0)))
+  "A world that lets bodies SLEEP or not, under GRAVITY, over a floor of cells one thick, y in
+[-1,0), below resident air: the cells [-16,32) on each axis. #X7R3M5"
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (fill-terrain terrain -16 -1 -16 32 0 32 t)
+    (make-physics-world :terrain terrain :sleep sleep :gravity gravity)))
+
+(defun box-yaw (world handle)
+  "How far HANDLE's body is turned about the vertical, in degrees, read from its orientation as
+twice the angle of its quaternion's y part against its w part. #X7R3M5"
+  (multiple-value-bind (qw qx qy) (physics-body-orientation world handle)
+    (declare (ignore qx))
+    (* 2 (/ 180 pi) (atan (abs qy) (abs qw)))))
+
+(defun box-stack (densities &key (friction 0.6) (seconds 10) (sleep t))
+  "Stack unit cubes of DENSITIES, bottom first, on the floor, all of FRICTION, each at its ideal
+height (the k-th from the floor, from 0, at k + 0.5 m less k + 1 slops), in a world that lets
+bodies SLEEP or not, and run SECONDS. Return the list of the cubes' depths below their ideal
+heights at the end, in slops, bottom first; the farthest any centre moved across the floor at the
+end of any step, in metres; the largest turn of any about the vertical at the end, in degrees;
+and whether all sleep at the end. #X7R3M5"
+  (let* ((world (make-plain-floor-world :sleep sleep))
+         (slop *physics-linear-slop*)
+         (ideal (loop for k from 0 below (length densities) collect (- (+ k 0.5) (* (1+ k) slop))))
+         (cubes (loop for density in densities for y in ideal
+                      collect (add-physics-box world 2.5 y 2.5 0.5 0.5 0.5 :density density :friction friction)))
+         (drift 0.0))
+    (dotimes (i (round (* 60 seconds)))
+      (step-physics-world world)
+      (dolist (b cubes)
+        (multiple-value-bind (x y z) (physics-body-position world b)
+          (declare (ignore y))
+          (setf drift (max drift (sqrt (+ (expt (- x 2.5) 2) (expt (- z 2.5) 2))))))))
+    (values (loop for b in cubes for y in ideal
+                  collect (/ (- y (nth-value 1 (physics-body-position world b))) slop))
+            drift (reduce #'max cubes :key (lambda (b) (box-yaw world b)))
+            (notany (lambda (b) (physics-body-awake-p world b)) cubes))))
+
+(defun plank-on-end (degrees &key (seconds 5) (sleep t))
+  "Stand a plank of half-extents 0.1, 1 and 0.1 m (ten times as long as it is thick) on its end
+on the floor, tipped by DEGREES about z, its lower edge a slop into the floor, in a world that
+lets bodies SLEEP or not, and run SECONDS. Return the tilt of its long axis from the vertical at
+the end, in degrees; how far its centre moved across the floor, in metres; whether it sleeps; and
+the largest tilt at the end of any step. #X7R3M5"
+  (let* ((world (make-plain-floor-world :sleep sleep))
+         (a (* degrees (/ pi 180)))
+         ;; turned by A about z, the plank's lowest edge is its corner at (-0.1, -1) in its frame
+         (y (- (+ (cos a) (* 0.1 (sin a))) *physics-linear-slop*))
+         (plank (add-physics-box world 2.5 y 2.5 0.1 1.0 0.1 :orientation (list (cos (/ a 2)) 0 0 (sin (/ a 2)))))
+         (largest 0.0))
+    (flet ((tilt ()
+             ;; the long axis's upward part is the rotation matrix's middle entry, 1 - 2 (qx^2 + qz^2)
+             (multiple-value-bind (qw qx qy qz) (physics-body-orientation world plank)
+               (declare (ignore qw qy))
+               (* (/ 180 pi) (acos (max -1.0 (min 1.0 (- 1 (* 2 (+ (* qx qx) (* qz qz)))))))))))
+      (dotimes (i (round (* 60 seconds)))
+        (step-physics-world world)
+        (setf largest (max largest (tilt))))
+      (multiple-value-bind (x y z) (physics-body-position world plank)
+        (declare (ignore y))
+        (values (tilt) (sqrt (+ (expt (- x 2.5) 2) (expt (- z 2.5) 2)))
+                (not (physics-body-awake-p world plank)) largest)))))
+
+(defun plank-balance-angle (&key (low 5.0) (high 6.5) (halvings 6))
+  "Bisect the tilt at which the plank of plank-on-end, sleeping off, stops rocking back and
+topples (its tilt after 5 s above 45 degrees), from LOW (which must rock back) and HIGH (which
+must topple) by HALVINGS halvings; return the last tilt that rocked back and the first that
+toppled, in degrees. #X7R3M5"
+  (dotimes (i halvings (values low high))
+    (let ((mid (* 0.5 (+ low high))))
+      (if (> (plank-on-end mid :sleep nil) 45.0) (setf high mid) (setf low mid)))))
+
+(defun packed-boxes (&key (gravity '(0 -9.81 0)) (seconds 10) (spacing 0.8) (bottom 1.0))
+  "Pack 27 unit cubes in three layers of three by three, their centres SPACING apart (at 0.8 m
+each overlaps its face neighbours by 0.2 m), the lowest layer's centres BOTTOM metres over the
+floor, under GRAVITY, and run SECONDS. Return the fastest any cube moved; the fastest any two
+cubes whose centres lay nearer than a side less a slop (still overlapping, for cubes that have
+barely turned) moved apart; how many cubes end with a corner or the centre in the cells
+(box-in-cells-p); how many are awake at the end; and whether the world stayed finite and valid.
+#X7R3M5"
+  (let* ((world (make-plain-floor-world :gravity gravity))
+         (boxes (loop for i below 27
+                      collect (add-physics-box world (+ 2.5 (* spacing (- (mod i 3) 1))) (+ bottom (* spacing (floor i 9)))
+                                               (+ 2.5 (* spacing (- (mod (floor i 3) 3) 1))) 0.5 0.5 0.5)))
+         (fastest 0.0) (parting 0.0) (within (- 1.0 *physics-linear-slop*)))
+    (dotimes (i (round (* 60 seconds)))
+      (step-physics-world world)
+      (loop for (a . rest) on boxes
+            do (setf fastest (max fastest (speed-of world a)))
+               (multiple-value-bind (ax ay az) (physics-body-position world a)
+                 (multiple-value-bind (avx avy avz) (physics-body-velocity world a)
+                   (dolist (b rest)
+                     (multiple-value-bind (bx by bz) (physics-body-position world b)
+                       (let ((d (sqrt (+ (expt (- bx ax) 2) (expt (- by ay) 2) (expt (- bz az) 2)))))
+                         (when (< 1e-6 d within)
+                           (multiple-value-bind (bvx bvy bvz) (physics-body-velocity world b)
+                             (setf parting (max parting (/ (+ (* (- bx ax) (- bvx avx)) (* (- by ay) (- bvy avy))
+                                                              (* (- bz az) (- bvz avz)))
+                                                           d))))))))))))
+    (values fastest parting
+            (count-if (lambda (b)
+                        (multiple-value-bind (x y z) (physics-body-position world b)
+                          (multiple-value-bind (qw qx qy qz) (physics-body-orientation world b)
+                            (box-in-cells-p world x y z 0.5 0.5 0.5 qw qx qy qz))))
+                      boxes)
+            (physics-world-awake-count world)
+            (and (world-finite-p world) (validate-physics-world world)))))
+
 (defun run-stability-table (&key (stream *standard-output*) (full t) (crowd (and full 10000)))
   "Print, as an Org table, what each stiff or extreme scene measured and whether it held; with
 FULL false, only the rows whose scenes hold a few balls (not the piles, heaps and the fountain's

@@ -11831,6 +11831,53 @@ in the order of *physics-scene-features*. #K5DF9S"
     (check (> fastest 0.25) "the light ball, hit from the side, moved at most ~,3F m/s" fastest)))
 ;; X7R3M5-heavy-on-light-recovers ends here
 
+;; [[file:../physics.org::#X7R3M5][X7R3M5-heavy-box-on-light-box-rests]]
+(define-claim "X7R3M5" heavy-box-on-light-box-rests
+    "Cubes 100 or 10 times heavier set on light cubes on the floor rest where they were set and sleep, with friction and without."
+  (dolist (densities '((1 100) (1 10) (1 1 100)))
+    (dolist (friction '(0.6 0.0))
+      (multiple-value-bind (depths drift yaw asleep) (luv-physics::box-stack densities :friction friction)
+        (loop for depth in depths for k from 0
+              do (check (< (abs depth) 0.5) "~S, friction ~,1F: cube ~D is ~,3F slops below its height"
+                        densities friction k depth))
+        (check (< drift 0.01) "~S, friction ~,1F: a cube moved ~,4F m across the floor" densities friction drift)
+        (check (< yaw 0.5) "~S, friction ~,1F: a cube turned ~,3F degrees about the vertical" densities friction yaw)
+        (check (not (null asleep)) "~S, friction ~,1F: a cube is awake after 10 s" densities friction)))))
+;; X7R3M5-heavy-box-on-light-box-rests ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-plank-stands-and-tips]]
+(define-claim "X7R3M5" plank-stands-and-tips
+    "A 10:1 plank stands on its end and sleeps, rocks back tipped 5.3 degrees, topples at 6.1; bisection finds atan(0.1)."
+  (multiple-value-bind (tilt drift asleep) (luv-physics::plank-on-end 0.0)
+    (check (< tilt 0.5) "upright, the plank is tilted ~,3F degrees after 5 s" tilt)
+    (check (< drift 0.01) "upright, the plank moved ~,4F m" drift)
+    (check (not (null asleep)) "upright, the plank is awake after 5 s"))
+  (multiple-value-bind (back drift asleep largest) (luv-physics::plank-on-end 5.3 :sleep nil :seconds 10)
+    (declare (ignore drift asleep))
+    (check (< back 0.5) "tipped 5.3 degrees, the plank is tilted ~,3F degrees after 10 s" back)
+    (check (<= largest 5.31) "tipped 5.3 degrees, the plank tilted as far as ~,3F degrees" largest))
+  (let ((over (luv-physics::plank-on-end 6.1 :sleep nil)))
+    (check (> over 80.0) "tipped 6.1 degrees, the plank is tilted only ~,3F degrees after 5 s" over))
+  (let ((balance (* (/ 180 pi) (atan 0.1))))
+    (multiple-value-bind (low high) (luv-physics::plank-balance-angle)
+      (check (< (- balance 0.1) low balance high (+ balance 0.1))
+             "the bisection brackets the balance angle by ~,3F and ~,3F degrees, not ~,3F" low high balance))))
+;; X7R3M5-plank-stands-and-tips ends here
+
+;; [[file:../physics.org::#X7R3M5][X7R3M5-packed-boxes-part]]
+(define-claim "X7R3M5" packed-boxes-part
+    "27 cubes packed 0.2 m into each other part at the push-out speed and come to rest outside the cells."
+  (let ((push-max *physics-contact-push-max*))
+    (multiple-value-bind (fastest parting) (luv-physics::packed-boxes :gravity '(0 0 0) :seconds 2 :bottom 3.0)
+      (check (<= parting (* 1.25 push-max)) "without gravity a pair parted at ~,3F m/s" parting)
+      (check (< 0.0 fastest (* (sqrt 3) push-max)) "without gravity a cube moved at ~,3F m/s" fastest)))
+  (multiple-value-bind (fastest parting inside awake ok) (luv-physics::packed-boxes)
+    (declare (ignore fastest parting))
+    (check (zerop inside) "~D cubes end in the cells" inside)
+    (check (zerop awake) "~D cubes are awake after 10 s" awake)
+    (check (not (null ok)) "a number went non-finite or the world is invalid")))
+;; X7R3M5-packed-boxes-part ends here
+
 ;; [[file:../physics.org::#X7R3M5][X7R3M5-deep-overlap-resolves]]
 (define-claim "X7R3M5" deep-overlap-resolves
     "A crowd spawned inside one cell, and a heap at one point, separate without exploding."
