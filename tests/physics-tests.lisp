@@ -7708,6 +7708,80 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
           (check (< (abs (- x 2.5)) 0.01) "tilted ~D degrees: moved ~,4F m along x" degrees (- x 2.5)))))))
 ;; BXSOLV-tilted-landings-gain-no-yaw ends here
 
+;; [[file:../physics.org::#BXBRAC][BXBRAC-braced-boxes-marked]]
+(define-claim "BXBRAC" braced-boxes-marked
+    "In a 1, 1, 100 kg stack every cube is braced and the top cube's points take the dummy on the braced side."
+  (flet ((stack (masses)
+           (let* ((w (make-floor-world :sleep nil))
+                  (cubes (loop for m in masses for k from 0
+                               collect (add-physics-box w 2.5 (- (+ k 0.5) (* (1+ k) *physics-linear-slop*)) 2.5
+                                                        0.5 0.5 0.5 :mass m))))
+             (dotimes (i 60) (step-physics-world w))
+             (values w (mapcar (lambda (c) (nth-value 1 (luv-physics::resolve-handle w c))) cubes))))
+         (pairs (w)
+           ;; each point of the step as (row row-b)
+           (let ((p (luv-physics::box-set-points (luv-physics::physics-world-box-bodies w))))
+             (loop for k below (luv-physics::box-point-columns-length p)
+                   collect (list (aref (luv-physics::box-point-columns-row p) k)
+                                 (aref (luv-physics::box-point-columns-row-b p) k))))))
+    (multiple-value-bind (w rows) (stack '(1 1 100))
+      (let ((n (luv-physics::body-columns-length (luv-physics::physics-world-awake w)))
+            (flags (luv-physics::body-columns-flags (luv-physics::physics-world-awake w)))
+            (top 0) (lower 0))
+        (destructuring-bind (low middle high) rows
+          (dolist (row rows)
+            (check (logtest (aref (luv-physics::physics-world-braced w) row) luv-physics::+brace-braced+)
+                   "row ~D is not marked braced" row)
+            (check (logtest (aref flags row) luv-physics::+flag-braced+) "row ~D has no braced flag" row))
+          (dolist (pair (pairs w))
+            (cond ((member high pair)
+                   (incf top)
+                   (check (or (equal pair (list high n)) (equal pair (list n high)))
+                          "a point of the top cube holds rows ~S, not the top's and the dummy ~D" pair n))
+                  ((and (member low pair) (member middle pair))
+                   (incf lower)
+                   (check (not (member n pair)) "a point between the light cubes holds the dummy: ~S" pair))))
+          (check (and (plusp top) (plusp lower)) "~D points of the top cube, ~D between the light ones" top lower))))
+    (multiple-value-bind (w rows) (stack '(1 3))
+      ;; the 3 kg cube touches no cell, so a point of it with the dummy would be a braced one
+      (let ((n (luv-physics::body-columns-length (luv-physics::physics-world-awake w))) (between 0))
+        (dolist (pair (pairs w))
+          (when (member (second rows) pair)
+            (check (not (member n pair)) "a point of the 3 kg cube holds the dummy: ~S" pair)
+            (incf between)))
+        (check (plusp between) "no point between the 3 kg and the 1 kg cube")))))
+;; BXBRAC-braced-boxes-marked ends here
+
+;; [[file:../physics.org::#BXBRAC][BXBRAC-families-agree-on-braced-boxes]]
+(define-claim "BXBRAC" families-agree-on-braced-boxes
+    "Braced boxes end in the same state hash in every kernel family, and their steps cons nothing."
+  (flet ((scene (family)
+           (let ((w (make-physics-world :terrain (make-floor-terrain) :kernels family :sleep nil))
+                 (slop *physics-linear-slop*))
+             (loop for m in '(1 1 100) for k from 0
+                   do (add-physics-box w 2.5 (- (+ k 0.5) (* (1+ k) slop)) 2.5 0.5 0.5 0.5 :mass m :friction 0))
+             (add-physics-box w 6.5 (- 0.5 slop) 2.5 0.5 0.5 0.5 :mass 1)
+             (add-physics-box w 6.5 2.0 2.5 0.5 0.5 0.5 :mass 100)
+             (add-physics-box w 10.5 (- 0.5 slop) 2.5 0.5 0.5 0.5 :mass 1)
+             (add-physics-body w 10.5 (- 1.45 (* 2 slop)) 2.5 :radius 0.45 :mass 100)
+             w)))
+    (flet ((run (family)
+             (let ((w (scene family)))
+               (dotimes (i 180) (step-physics-world w))
+               (check (eq t (validate-physics-world w)))
+               (physics-world-state-hash w))))
+      (let ((scalar (run :scalar)) (families (available-kernel-families)))
+        (check (>= (length families) 2) "only the families ~S run here" families)
+        (dolist (family (rest families))
+          (let ((got (run family)))
+            (check (= got scalar) "~(~A~) ends with hash ~D, scalar ~D" family got scalar)))))
+    (let ((w (scene :auto)))
+      (dotimes (i 90) (step-physics-world w))
+      (let ((before (sb-ext:get-bytes-consed)))
+        (dotimes (i 60) (step-physics-world w))
+        (check (= before (sb-ext:get-bytes-consed)) "60 steps consed ~D bytes" (- (sb-ext:get-bytes-consed) before))))))
+;; BXBRAC-families-agree-on-braced-boxes ends here
+
 ;; [[file:../physics.org::#BXSPHR][BXSPHR-ball-strikes-box]]
 (define-claim "BXSPHR" ball-strikes-box
     "A ball sliding head on into a resting cube of its mass hands over its momentum as e says."
