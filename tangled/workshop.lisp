@@ -3447,6 +3447,37 @@ barely turned) moved apart; how many cubes end with a corner or the centre in th
             (physics-world-awake-count world)
             (and (world-finite-p world) (validate-physics-world world)))))
 
+(defun box-stability-rows (row)
+  "Call ROW, run-stability-table's (case held format argument...), for each box scene of the stiff
+and extreme cases ([[#BXBRAC]]): a cube of density 100 on one of density 1, with friction and
+without; the 10:1 plank on its end, and tipped either side of its balance angle; 27 cubes packed
+overlapping, without gravity and falling onto the floor. #X7R3M5"
+  (dolist (friction '(0.6 0.0))
+    (multiple-value-bind (depths drift yaw asleep) (box-stack '(1 100) :friction friction)
+      (funcall row (format nil "cube of density 100 set on a cube of density 1, friction ~,1F" friction)
+               (and (every (lambda (d) (< (abs d) 0.5)) depths) (< drift 0.01) (< yaw 0.5) asleep)
+               "after 10 s the lower ~,3F and the upper ~,3F slops below their heights; drift ~,4F m at ~
+                most, turned ~,2F degrees; ~:[awake~;asleep~]" (first depths) (second depths) drift yaw asleep)))
+  (multiple-value-bind (tilt drift asleep) (plank-on-end 0.0)
+    (funcall row "plank of half-extents 0.1, 1, 0.1 m standing on its end" (and (< tilt 0.5) (< drift 0.01) asleep)
+             "after 5 s tilted ~,3F degrees, moved ~,4F m; ~:[awake~;asleep~]" tilt drift asleep))
+  (let ((balance (* (/ 180 pi) (atan 0.1))))
+    (multiple-value-bind (low high) (plank-balance-angle)
+      (funcall row "that plank tipped about an edge of its foot, sleeping off"
+               (< (- balance 0.1) low balance high (+ balance 0.1))
+               "rocks back from ~,3F degrees, topples from ~,3F (bisection, 6 halvings); atan(0.1) = ~,3F"
+               low high balance)))
+  (let ((push-max *physics-contact-push-max*))
+    (multiple-value-bind (fastest parting) (packed-boxes :gravity '(0 0 0) :seconds 2 :bottom 3.0)
+      (funcall row "27 unit cubes packed 0.2 m into each other, no gravity"
+               (and (<= parting (* 1.25 push-max)) (< fastest (* (sqrt 3) push-max)))
+               "over 2 s the fastest cube ~,3F m/s, the fastest parting pair ~,3F m/s" fastest parting))
+    (multiple-value-bind (fastest parting inside awake ok) (packed-boxes)
+      (funcall row "27 unit cubes packed 0.2 m into each other, falling onto the floor"
+               (and (zerop inside) (zerop awake) ok)
+               "fastest cube ~,3F m/s, fastest parting pair ~,3F m/s; after 10 s ~D in the cells, ~D awake; ~
+                ~:[not finite or invalid~;finite and valid~]" fastest parting inside awake ok))))
+
 (defun run-stability-table (&key (stream *standard-output*) (full t) (crowd (and full 10000)))
   "Print, as an Org table, what each stiff or extreme scene measured and whether it held; with
 FULL false, only the rows whose scenes hold a few balls (not the piles, heaps and the fountain's
@@ -3470,6 +3501,8 @@ full table, none in the short one). #X7R3M5"
     (multiple-value-bind (pen speed drop left) (stack-in-shaft '(1000.0 1.0))
       (row "1 kg ball on a 1000 kg ball" (< pen 0.02)
            "deepest ~,4F m, fastest ~,3F m/s; after 10 s top ~,4F m low, overlap ~,4F m" pen speed drop left))
+    ;; boxes: a heavy cube on a light one, a plank on its end, cubes packed into each other
+    (box-stability-rows #'row)
     ;; bracing in a pile of many masses, and the same pile without it, each from twelve starts:
     ;; the deepest overlap of one start is the deepest of one moment, which one heavy landing sets
     (when full
