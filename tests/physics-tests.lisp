@@ -82,6 +82,39 @@
                 (macroexpand-1 '(check (= 1 1) "why ~A" 2)))))
 ;; BJSCR8-check-is-the-framework-assertion ends here
 
+;; [[file:../physics.org::#MUTDRW][MUTDRW-draw-ignores-other-sections]]
+(defun mutate-tool (name)
+  "The function NAME of tools/mutate.lisp, the file loaded first, without its main, if this
+image has not loaded it. #MUTDRW"
+  (unless (find-package '#:luv-mutate)
+    (require :sb-posix)
+    (funcall (find-symbol "SETENV" '#:sb-posix) "MUTATE_NO_MAIN" "1" 1)
+    (load (asdf:system-relative-pathname "luv-physics" "tools/mutate.lisp")))
+  (symbol-function (find-symbol (string name) '#:luv-mutate)))
+
+(define-claim "MUTDRW" draw-ignores-other-sections
+    "A section's mutants and its place in the draw do not depend on which other sections there are."
+  (let* ((units (let ((*default-pathname-defaults* (asdf:system-source-directory "luv-physics")))
+                  ;; relative names, as the tool reads its engine files
+                  (mapcan (mutate-tool 'read-units) (list "tangled/physics.lisp" "tangled/physics-simd.lisp"))))
+         (all (funcall (mutate-tool 'section-sites) units nil))
+         (some (loop for s in all for i from 0 when (zerop (mod i 3)) collect s))
+         (key (mutate-tool 'mutant-key))
+         (whole (funcall (mutate-tool 'drawn-sections) all 3))
+         (part (funcall (mutate-tool 'drawn-sections) some 3)))
+    (check (< 60 (length whole)) "only ~D sections with mutants" (length whole))
+    (check (equal (mapcar #'car part)
+                  (remove-if-not (lambda (a) (assoc a some :test #'string=)) (mapcar #'car whole)))
+           "the sections drawn alone come in another order")
+    (loop for (anchor . mutants) in part
+          do (check (equal (mapcar key mutants)
+                           (mapcar key (cdr (assoc anchor whole :test #'string=))))
+                    "section ~A draws other mutants beside fewer sections" anchor))
+    (check (not (equal (mapcar #'car whole)
+                       (mapcar #'car (funcall (mutate-tool 'drawn-sections) all 4))))
+           "seeds 3 and 4 order the sections alike")))
+;; MUTDRW-draw-ignores-other-sections ends here
+
 ;; [[file:../physics.org::#W0RKSH][W0RKSH-engine-loads-alone]]
 (define-claim "W0RKSH" engine-loads-alone
     "An SBCL that loads only luv-physics steps a ball as this image does and defines nothing of the workshop."
