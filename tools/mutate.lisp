@@ -757,13 +757,6 @@ NIL if all compiled without a warning; else a line saying what went wrong."
          (forms (cons (cons unit (funcall (mutant-rebuild mutant)))
                       (mapcar (lambda (u) (cons u (unit-form u))) (dependents unit units))))
          (texts (featured-texts)))
-    ;; a definition the mutant drops is gone, as from an image that loaded the mutated page,
-    ;; and not left as the unchanged engine defined it
-    (dolist (name (set-difference (unit-defines unit) (defined-names (cdr (first forms))) :test #'equal))
-      (when (and (or (symbolp name) (and (consp name) (eq (car name) 'setf)))
-                 (fboundp name) (not (typep (fdefinition name) 'generic-function))
-                 (not (and (symbolp name) (special-operator-p name))))
-        (fmakunbound name)))
     ;; a kernel whose defining form is evaluated again keeps the text that form keeps, or none
     (loop for (name) in texts
           when (some (lambda (f) (member name (unit-defines (car f)))) forms)
@@ -774,7 +767,17 @@ NIL if all compiled without a warning; else a line saying what went wrong."
                      (serious-condition (lambda (c) (return-from compile (format nil "~A: ~A" (type-of c) c)))))
         (let ((*compile-verbose* nil) (*compile-print* nil) (sb-ext:*evaluator-mode* :compile))
           (loop for (u . form) in forms
-                do (let ((*package* (unit-package u))
+                do (let ((*package* (unit-package u)))
+                     ;; a definition the mutant drops is gone, as from an image that loaded the
+                     ;; mutated page, and not left as the unchanged engine defined it: one dropped
+                     ;; from the mutated form, or from the expansion, by a mutated macro evaluated
+                     ;; before it, of a form evaluated again with it
+                     (dolist (name (set-difference (unit-defines u) (defined-names form) :test #'equal))
+                       (when (and (or (symbolp name) (and (consp name) (eq (car name) 'setf)))
+                                  (fboundp name) (not (typep (fdefinition name) 'generic-function))
+                                  (not (and (symbolp name) (special-operator-p name))))
+                         (fmakunbound name))))
+                   (let ((*package* (unit-package u))
                          (inline (remove-if-not (lambda (n) (and (symbolp n) (gethash n *inline-names*)))
                                                 (unit-defines u))))
                      ;; a function declared inline only around its definition keeps its
