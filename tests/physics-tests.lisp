@@ -6441,6 +6441,23 @@ the phases of a step before the prepare phase. #PR3PAR"
            (loop for (f . h) in (reverse hashes) collect f collect h))))
 ;; S0LSTG-frictionless-pile-alike ends here
 
+;; [[file:../physics.org::#S0LSTG][S0LSTG-wall-rebound-ignores-gravity-along-it]]
+(define-claim "S0LSTG" wall-rebound-ignores-gravity-along-it
+    "A ball falling past a wall it strikes along z leaves it at e times its speed across it."
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (fill-terrain terrain -16 -16 6 32 32 7 t)
+    (let* ((w (make-physics-world :terrain terrain :sleep nil))
+           (speed (* 2 *physics-restitution-threshold*))
+           (ball (add-physics-body w 4.5 12.0 5.0 :radius 0.25 :vz speed :restitution 0.5 :friction 0.0)))
+      (dotimes (i 60) (step-physics-world w))
+      (multiple-value-bind (vx vy vz) (physics-body-velocity w ball)
+        (declare (ignore vy))
+        (check (< (abs vx) 1e-6) "the ball moves along x at ~S m/s" vx)
+        (check (< (abs (- (- vz) (* 0.5 speed))) (* 1e-3 0.5 speed))
+               "sent at ~,3F m/s along z the ball leaves the wall at ~,5F m/s" speed (- vz))))))
+;; S0LSTG-wall-rebound-ignores-gravity-along-it ends here
+
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-rebound-ratios]]
 (define-claim "R3ST1T" rebound-ratios
     "Each rebound above the threshold climbs to within 2% of e^2 times the height before it."
@@ -14291,7 +14308,15 @@ within reach of something. #S9WEEP"
   (let ((w (make-floor-world)))
     (check (= 16 (map-physics-cells-in-box (lambda (i j k) (declare (ignore i j k))) w 3.0 -0.5 3.0 1.0 0.4 1.0))
            "~D floor cells meet the box [2,4] x [-0.9,-0.1] x [2,4]"
-           (map-physics-cells-in-box (lambda (i j k) (declare (ignore i j k))) w 3.0 -0.5 3.0 1.0 0.4 1.0))))
+           (map-physics-cells-in-box (lambda (i j k) (declare (ignore i j k))) w 3.0 -0.5 3.0 1.0 0.4 1.0))
+    (let ((cells '()))
+      (map-physics-cells-in-box (lambda (i j k) (push (list i j k) cells)) w 2.5 0.5 2.5 0.5 0.5 0.5)
+      (check (equal (sort (copy-list cells) #'< :key (lambda (c) (+ (* 100 (third c)) (first c))))
+                    (loop for k from 1 to 3 append (loop for i from 1 to 3 collect (list i -1 k))))
+             "the box on the floor meets the cells ~S" cells))
+    (let ((cells '()))
+      (map-physics-cells-in-sphere (lambda (i j k) (push (list i j k) cells)) w 2.5 0.25 2.5 0.25)
+      (check (equal cells '((2 -1 2))) "the ball on the floor meets the cells ~S" cells))))
 ;; OV3RLP-no-terrain-no-cells ends here
 
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-region-sizes-at-their-limits]]
