@@ -14677,6 +14677,7 @@ within reach of something. #S9WEEP"
           (setf balls (sort balls #'<))
           (loop for (p q) on balls by #'cdddr while q
                 do (add-physics-joint w :distance p q :anchor-a '(0.3 -0.2 0) :anchor-b '(-0.3 0.2 0)))
+          (loop for h in balls for i from 0 do (set-physics-body-velocity w h 0 0 (* 0.5 (mod i 3))))
           (let ((start (multiple-value-list (physics-body-position w corner))))
             (step-physics-world w)
             (let* ((set (luv-physics::physics-world-joints w)) (rows (luv-physics::joint-set-rows set))
