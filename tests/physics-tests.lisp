@@ -1979,6 +1979,22 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
     (check (not (terrain-solid-p terrain 20 5 5)) "the first fill was not applied")))
 ;; H2W9DJ-queued-edits-share-the-budget ends here
 
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-fills-inside-resident-chunks-need-no-room]]
+(define-claim "H2W9DJ" fills-inside-resident-chunks-need-no-room
+    "A terrain at its chunk budget takes fills inside its resident chunks, and refuses one that needs a new chunk."
+  (let* ((terrain (let ((*physics-terrain-chunk-budget* 8)) (make-voxel-terrain))))
+    (fill-terrain terrain 0 0 0 32 32 32 nil)
+    (check (= 8 (hash-table-count (luv-physics::voxel-terrain-chunks terrain))))
+    (dolist (box '((0 0 0 32 1 32 t) (3 4 5 29 30 31 t) (0 0 0 32 32 32 nil)))
+      (check (eq :filled (handler-case (progn (apply #'fill-terrain terrain box) :filled)
+                           (physics-budget-exceeded () :refused)))
+             "the fill ~S, inside the 8 resident chunks, is refused" box))
+    (check (eq :refused (handler-case (progn (fill-terrain terrain 0 0 0 33 1 1 t) :filled)
+                          (physics-budget-exceeded () :refused)))
+           "a fill reaching a ninth chunk is taken")
+    (check (= 8 (hash-table-count (luv-physics::voxel-terrain-chunks terrain))))))
+;; H2W9DJ-fills-inside-resident-chunks-need-no-room ends here
+
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-edit-in-a-resident-chunk]]
 (define-claim "H2W9DJ" edit-in-a-resident-chunk
     "At a budget of one chunk, a second cell of the resident chunk is set and a cell of another chunk refused."
