@@ -6761,6 +6761,29 @@ the phases of a step before the prepare phase. #PR3PAR"
       (delete-file path))))
 ;; J0STOR-recorded-joints ends here
 
+;; [[file:../physics.org::#J0STOR][J0STOR-joint-budget-refusal-counts-the-next]]
+(define-claim "J0STOR" joint-budget-refusal-counts-the-next
+    "At the joint budget, 2^24 - 1 joints, the next add is refused as needing one joint more than the budget."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (a (add-physics-body w 0.0 1.0 0.0)) (b (add-physics-body w 1.0 1.0 0.0))
+         (budget (1- (ash 1 24))))
+    (add-physics-joint w :distance a b)
+    (let* ((rows (luv-physics::joint-set-rows (luv-physics::physics-world-joints w)))
+           (real (luv-physics::joint-columns-length rows))
+           (refusal (progn
+                      ;; the count of a full set, the refusal being made before any row is touched
+                      (setf (luv-physics::joint-columns-length rows) budget)
+                      (unwind-protect
+                           (handler-case (progn (add-physics-joint w :distance a b) nil)
+                             (physics-budget-exceeded (e)
+                               (list (luv-physics::physics-budget-exceeded-resource e) (luv-physics::physics-budget-exceeded-requested e)
+                                     (luv-physics::physics-budget-exceeded-budget e))))
+                        (setf (luv-physics::joint-columns-length rows) real)))))
+      (check (equal refusal (list :joints (1+ budget) budget)) "at the budget the add answered ~S" refusal)
+      (check (= 1 (physics-world-joint-count w)) "the refused add left ~D joints" (physics-world-joint-count w))
+      (check (eq t (validate-physics-world w))))))
+;; J0STOR-joint-budget-refusal-counts-the-next ends here
+
 ;; [[file:../physics.org::#J0S0LV][J0S0LV-families-agree-with-joints]]
 (defun swinging-chain-world (kernels &key (links 8) (sleep t))
   "A floor world of family KERNELS with a chain of LINKS balls of radius 0.2 joined at their
@@ -10656,6 +10679,19 @@ and their centres in their order. #SN4P0T"
       (check (eq t (validate-physics-world w))))
     (check (eq w (restore-physics-world w good)))))
 ;; SN4P0T-restore-refuses-what-is-not-octets ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-rollback-share-of-a-frame]]
+(define-claim "SN4P0T" rollback-share-of-a-frame
+    "The rollback table gives its median as the share of a 60 Hz frame, 1000/60 ms."
+  (let* ((text (with-output-to-string (s) (luv-physics::run-rollback-benchmark :stream s :balls 300 :rounds 3 :load nil)))
+         (row (find-if (lambda (l) (search "restore and 8 steps" l)) (luv-physics::split-lines text)))
+         (cells (mapcar (lambda (c) (string-trim " %" c)) (uiop:split-string row :separator "|")))
+         (median (let ((*read-default-float-format* 'double-float)) (read-from-string (third cells))))
+         (share (parse-integer (fourth cells))))
+    (check (plusp median) "the median ~S ms" median)
+    (check (<= (abs (- share (* 100 (/ median (/ 1000d0 60))))) 0.55)
+           "a median of ~,2F ms is given as ~D % of a 60 Hz frame, not ~,1F %" median share (* 6 median))))
+;; SN4P0T-rollback-share-of-a-frame ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
