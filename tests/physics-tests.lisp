@@ -82,6 +82,39 @@
                 (macroexpand-1 '(check (= 1 1) "why ~A" 2)))))
 ;; BJSCR8-check-is-the-framework-assertion ends here
 
+;; [[file:../physics.org::#MUTDRW][MUTDRW-draw-ignores-other-sections]]
+(defun mutate-tool (name)
+  "The function NAME of tools/mutate.lisp, the file loaded first, without its main, if this
+image has not loaded it. #MUTDRW"
+  (unless (find-package '#:luv-mutate)
+    (require :sb-posix)
+    (funcall (find-symbol "SETENV" '#:sb-posix) "MUTATE_NO_MAIN" "1" 1)
+    (load (asdf:system-relative-pathname "luv-physics" "tools/mutate.lisp")))
+  (symbol-function (find-symbol (string name) '#:luv-mutate)))
+
+(define-claim "MUTDRW" draw-ignores-other-sections
+    "A section's mutants and its place in the draw do not depend on which other sections there are."
+  (let* ((units (let ((*default-pathname-defaults* (asdf:system-source-directory "luv-physics")))
+                  ;; relative names, as the tool reads its engine files
+                  (mapcan (mutate-tool 'read-units) (list "tangled/physics.lisp" "tangled/physics-simd.lisp"))))
+         (all (funcall (mutate-tool 'section-sites) units nil))
+         (some (loop for s in all for i from 0 when (zerop (mod i 3)) collect s))
+         (key (mutate-tool 'mutant-key))
+         (whole (funcall (mutate-tool 'drawn-sections) all 3))
+         (part (funcall (mutate-tool 'drawn-sections) some 3)))
+    (check (< 60 (length whole)) "only ~D sections with mutants" (length whole))
+    (check (equal (mapcar #'car part)
+                  (remove-if-not (lambda (a) (assoc a some :test #'string=)) (mapcar #'car whole)))
+           "the sections drawn alone come in another order")
+    (loop for (anchor . mutants) in part
+          do (check (equal (mapcar key mutants)
+                           (mapcar key (cdr (assoc anchor whole :test #'string=))))
+                    "section ~A draws other mutants beside fewer sections" anchor))
+    (check (not (equal (mapcar #'car whole)
+                       (mapcar #'car (funcall (mutate-tool 'drawn-sections) all 4))))
+           "seeds 3 and 4 order the sections alike")))
+;; MUTDRW-draw-ignores-other-sections ends here
+
 ;; [[file:../physics.org::#W0RKSH][W0RKSH-engine-loads-alone]]
 (define-claim "W0RKSH" engine-loads-alone
     "An SBCL that loads only luv-physics steps a ball as this image does and defines nothing of the workshop."
@@ -1946,6 +1979,22 @@ stale handle) and its report says NAME; else what is wrong, as a list. #C0ND1T"
     (check (not (terrain-solid-p terrain 20 5 5)) "the first fill was not applied")))
 ;; H2W9DJ-queued-edits-share-the-budget ends here
 
+;; [[file:../physics.org::#H2W9DJ][H2W9DJ-fills-inside-resident-chunks-need-no-room]]
+(define-claim "H2W9DJ" fills-inside-resident-chunks-need-no-room
+    "A terrain at its chunk budget takes fills inside its resident chunks, and refuses one that needs a new chunk."
+  (let* ((terrain (let ((*physics-terrain-chunk-budget* 8)) (make-voxel-terrain))))
+    (fill-terrain terrain 0 0 0 32 32 32 nil)
+    (check (= 8 (hash-table-count (luv-physics::voxel-terrain-chunks terrain))))
+    (dolist (box '((0 0 0 32 1 32 t) (3 4 5 29 30 31 t) (0 0 0 32 32 32 nil)))
+      (check (eq :filled (handler-case (progn (apply #'fill-terrain terrain box) :filled)
+                           (physics-budget-exceeded () :refused)))
+             "the fill ~S, inside the 8 resident chunks, is refused" box))
+    (check (eq :refused (handler-case (progn (fill-terrain terrain 0 0 0 33 1 1 t) :filled)
+                          (physics-budget-exceeded () :refused)))
+           "a fill reaching a ninth chunk is taken")
+    (check (= 8 (hash-table-count (luv-physics::voxel-terrain-chunks terrain))))))
+;; H2W9DJ-fills-inside-resident-chunks-need-no-room ends here
+
 ;; [[file:../physics.org::#H2W9DJ][H2W9DJ-edit-in-a-resident-chunk]]
 (define-claim "H2W9DJ" edit-in-a-resident-chunk
     "At a budget of one chunk, a second cell of the resident chunk is set and a cell of another chunk refused."
@@ -2994,6 +3043,26 @@ use before it. #QKS4GZ"
       (check (eq t (validate-physics-world w))))))
 ;; T3LPRT-teleport-drops-contacts ends here
 
+;; [[file:../physics.org::#T3LPRT][T3LPRT-queries-see-moves-between-them]]
+(define-claim "T3LPRT" queries-see-moves-between-them
+    "A region query after two moves and a body replaced, with no step between, finds each body where it is."
+  (let* ((w (make-floor-world :sleep nil))
+         (balls (loop for k below 10 append (loop for i below 10 collect (add-physics-body w (+ 0.5 i) 0.245 (+ 0.5 k)))))
+         (a (first balls))
+         (c (car (last balls))))
+    (flet ((found (x z) (let ((hs '()))
+                          (map-physics-bodies-in-box (lambda (h) (push h hs)) w x 1.0 z 0.3 1.0 0.3)
+                          hs)))
+      (check (equal (list a) (found 0.5 0.5)))
+      (set-physics-body-position w a 12.5 1.0 4.5)
+      (set-physics-body-position w a 14.5 1.0 14.5)
+      (remove-physics-body w c)
+      (let ((d (add-physics-body w 9.5 0.245 9.5)))
+        (check (equal '() (found 0.5 0.5)) "the moved body is still found where it was")
+        (check (equal (list a) (found 14.5 14.5)) "the moved body is not found where it is")
+        (check (equal (list d) (found 9.5 9.5)) "the body added in the removed one's place is not found")))))
+;; T3LPRT-queries-see-moves-between-them ends here
+
 ;; [[file:../physics.org::#1MPULS][1MPULS-impulse-gives-j-over-m]]
 (define-claim "1MPULS" impulse-gives-j-over-m
     "An impulse J on a 4 kg ball gives v = J/m to the bit, adds to a second, and is carried by the step."
@@ -3216,6 +3285,18 @@ use before it. #QKS4GZ"
       (check (= scale (physics-body-gravity-scale w (add-physics-body w 8.5 1.0 8.5 :gravity-scale scale)))))
     (check (eq t (validate-physics-world w)))))
 ;; F0RC3S-force-and-scale-refusals-named ends here
+
+;; [[file:../physics.org::#F0RC3S][F0RC3S-refused-force-is-reported]]
+(define-claim "F0RC3S" refused-force-is-reported
+    "A force refused for its length is reported as offered, component by component."
+  (let* ((w (make-floor-world))
+         (a (add-physics-body w 3.5 0.245 3.5)))
+    (check (equal '(:force (0.0 -8e5 -7e5))
+                  (handler-case (progn (apply-physics-force w a 0 -8e5 -7e5) :accepted)
+                    (invalid-physics-parameter (e)
+                      (list (luv-physics::invalid-physics-parameter-name e)
+                            (luv-physics::invalid-physics-parameter-value e))))))))
+;; F0RC3S-refused-force-is-reported ends here
 
 ;; [[file:../physics.org::#F0RC3S][F0RC3S-off-until-used]]
 (define-claim "F0RC3S" off-until-used
@@ -3628,6 +3709,23 @@ use before it. #QKS4GZ"
       (check (< (abs (- (physics-body-velocity w h) speed)) 1e-3) "the ball left at ~,4F m/s, entered at ~,4F"
              (physics-body-velocity w h) speed))))
 ;; S3NS0R-rolling-ball-crosses-once ends here
+
+;; [[file:../physics.org::#S3NS0R][S3NS0R-leaving-body-carries-its-speed]]
+(define-claim "S3NS0R" leaving-body-carries-its-speed
+    "A body leaving a sensor reports its speed, 5 m/s for a velocity of (3, 4, 0) m/s."
+  (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+         (h (add-physics-body w 0.0 0.0 0.0 :vx 3 :vy 4))
+         (sensor (add-physics-sensor w 1.5 2.0 0.0 0.5 0.5 0.5))
+         (events '()))
+    (dotimes (i 60)
+      (loop for (kind a b speed) in (step-events w)
+            when (member kind '(:sensor-enter :sensor-leave)) do (push (list kind a b speed) events)))
+    (setf events (reverse events))
+    (check (equal '(:sensor-enter :sensor-leave) (mapcar #'first events)) "the sensor's events ~S" events)
+    (check (every (lambda (e) (and (eql h (second e)) (eql sensor (third e)))) events))
+    (let ((leave (fourth (second events))))
+      (check (< (abs (- leave 5.0)) 1e-4) "the body left at ~S m/s, not 5" leave))))
+;; S3NS0R-leaving-body-carries-its-speed ends here
 
 ;; [[file:../physics.org::#S3NS0R][S3NS0R-resting-body-enters-once]]
 (define-claim "S3NS0R" resting-body-enters-once
@@ -5325,6 +5423,10 @@ floor, solved by FAMILY. #B1GBDY"
                     (multiple-value-list (luv-physics::first-solid-on-ray probe 3.0 2.5 2.5 -7e-13 -1.0 0.0 4.0)))
              "the ray down the face x = 3 answers ~S"
              (multiple-value-list (luv-physics::first-solid-on-ray probe 3.0 2.5 2.5 -7e-13 -1.0 0.0 4.0)))
+      (destructuring-bind (axis at &rest cell)
+          (multiple-value-list (luv-physics::first-solid-on-ray probe 3.0 2.5 2.5 -1.5e-12 -1.0 0.0 4.0))
+        (check (and (= axis 0) (= at 0.0) (equal cell '(2 2 2)))
+               "the ray down the face with an x component of -1.5e-12 answers ~S" (list* axis at cell)))
       (check (equal '(0 0.5 2 2 2)
                     (multiple-value-list (luv-physics::first-solid-on-ray probe 3.5 2.5 2.5 -1.0 0.0 0.0 4.0)))
              "the ray along -x answers ~S"
@@ -6356,6 +6458,23 @@ the phases of a step before the prepare phase. #PR3PAR"
            (loop for (f . h) in (reverse hashes) collect f collect h))))
 ;; S0LSTG-frictionless-pile-alike ends here
 
+;; [[file:../physics.org::#S0LSTG][S0LSTG-wall-rebound-ignores-gravity-along-it]]
+(define-claim "S0LSTG" wall-rebound-ignores-gravity-along-it
+    "A ball falling past a wall it strikes along z leaves it at e times its speed across it."
+  (let ((terrain (make-voxel-terrain)))
+    (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+    (fill-terrain terrain -16 -16 6 32 32 7 t)
+    (let* ((w (make-physics-world :terrain terrain :sleep nil))
+           (speed (* 2 *physics-restitution-threshold*))
+           (ball (add-physics-body w 4.5 12.0 5.0 :radius 0.25 :vz speed :restitution 0.5 :friction 0.0)))
+      (dotimes (i 60) (step-physics-world w))
+      (multiple-value-bind (vx vy vz) (physics-body-velocity w ball)
+        (declare (ignore vy))
+        (check (< (abs vx) 1e-6) "the ball moves along x at ~S m/s" vx)
+        (check (< (abs (- (- vz) (* 0.5 speed))) (* 1e-3 0.5 speed))
+               "sent at ~,3F m/s along z the ball leaves the wall at ~,5F m/s" speed (- vz))))))
+;; S0LSTG-wall-rebound-ignores-gravity-along-it ends here
+
 ;; [[file:../physics.org::#R3ST1T][R3ST1T-rebound-ratios]]
 (define-claim "R3ST1T" rebound-ratios
     "Each rebound above the threshold climbs to within 2% of e^2 times the height before it."
@@ -6641,6 +6760,29 @@ the phases of a step before the prepare phase. #PR3PAR"
         (check (search (format nil "~,3F" (first (first centres))) text)))
       (delete-file path))))
 ;; J0STOR-recorded-joints ends here
+
+;; [[file:../physics.org::#J0STOR][J0STOR-joint-budget-refusal-counts-the-next]]
+(define-claim "J0STOR" joint-budget-refusal-counts-the-next
+    "At the joint budget, 2^24 - 1 joints, the next add is refused as needing one joint more than the budget."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (a (add-physics-body w 0.0 1.0 0.0)) (b (add-physics-body w 1.0 1.0 0.0))
+         (budget (1- (ash 1 24))))
+    (add-physics-joint w :distance a b)
+    (let* ((rows (luv-physics::joint-set-rows (luv-physics::physics-world-joints w)))
+           (real (luv-physics::joint-columns-length rows))
+           (refusal (progn
+                      ;; the count of a full set, the refusal being made before any row is touched
+                      (setf (luv-physics::joint-columns-length rows) budget)
+                      (unwind-protect
+                           (handler-case (progn (add-physics-joint w :distance a b) nil)
+                             (physics-budget-exceeded (e)
+                               (list (luv-physics::physics-budget-exceeded-resource e) (luv-physics::physics-budget-exceeded-requested e)
+                                     (luv-physics::physics-budget-exceeded-budget e))))
+                        (setf (luv-physics::joint-columns-length rows) real)))))
+      (check (equal refusal (list :joints (1+ budget) budget)) "at the budget the add answered ~S" refusal)
+      (check (= 1 (physics-world-joint-count w)) "the refused add left ~D joints" (physics-world-joint-count w))
+      (check (eq t (validate-physics-world w))))))
+;; J0STOR-joint-budget-refusal-counts-the-next ends here
 
 ;; [[file:../physics.org::#J0S0LV][J0S0LV-families-agree-with-joints]]
 (defun swinging-chain-world (kernels &key (links 8) (sleep t))
@@ -7207,6 +7349,24 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
         (check (eq :added (outcome)) "no corner lies in cell 3 1 2")))))
 ;; BXR0WS-turned-box-corner-in-solid-refused ends here
 
+;; [[file:../physics.org::#BXR0WS][BXR0WS-every-corner-refuses-its-cell]]
+(define-claim "BXR0WS" every-corner-refuses-its-cell
+    "A box whose one corner alone reaches a solid cell is refused, for each of its eight corners."
+  (multiple-value-bind (w terrain) (make-floor-world)
+    (flet ((outcome ()
+             (handler-case (let ((h (add-physics-box w 4.5 2.5 4.5 0.9 0.9 0.9)))
+                             (remove-physics-body w h) :added)
+               (physics-body-in-solid-cell () :refused))))
+      (check (eq :added (outcome)) "the box is refused among air cells")
+      (dotimes (corner 8)
+        (let ((x (if (logbitp 0 corner) 5 3)) (y (if (logbitp 1 corner) 3 1)) (z (if (logbitp 2 corner) 5 3)))
+          (fill-terrain terrain x y z (1+ x) (1+ y) (1+ z) t)
+          (check (eq :refused (outcome)) "the corner ~D's cell ~D ~D ~D is solid, and the box is added" corner x y z)
+          (fill-terrain terrain x y z (1+ x) (1+ y) (1+ z) nil)))
+      (check (eq :added (outcome)) "the box is refused once the cells are air again")
+      (check (eq t (validate-physics-world w))))))
+;; BXR0WS-every-corner-refuses-its-cell ends here
+
 ;; [[file:../physics.org::#BXCELL][BXCELL-box-rests-on-cells]]
 (define-claim "BXCELL" box-rests-on-cells
     "A dropped unit cube rests a slop deep, sleeps, and does not drift over 60 s."
@@ -7622,6 +7782,32 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
                      "one push changed ~S, not ~S" got want))))))))
 ;; BXSOLV-angular-parts-are-products ends here
 
+;; [[file:../physics.org::#BXSOLV][BXSOLV-world-inertia-is-turned-box-inertia]]
+(define-claim "BXSOLV" world-inertia-is-turned-box-inertia
+    "A turned box's world inverse inertia is R diag(3/(m(b^2+c^2)), ...) R^T of its quaternion."
+  (dolist (turn '((0.9 0.3 0.2 0.1) (0.8 0.0 0.0 0.6) (0.5 -0.5 0.5 0.5)))
+    (let* ((w (make-physics-world :gravity '(0 0 0)))
+           (box (add-physics-box w 2.5 3.0 2.5 0.5 0.4 0.3 :orientation turn :mass 2))
+           (awake (luv-physics::physics-world-awake w))
+           (row (nth-value 1 (luv-physics::resolve-handle w box)))
+           (q (mapcar (lambda (c) (float (aref (funcall (intern (format nil "BODY-COLUMNS-~A" c) :luv-physics) awake) row) 1d0))
+                      '("QW" "QX" "QY" "QZ")))
+           (got (multiple-value-list (luv-physics::box-row-inertia awake (luv-physics::physics-world-box-bodies w) row))))
+      (destructuring-bind (qw qx qy qz) q
+        (let* ((r (make-array '(3 3) :initial-contents
+                              (list (list (- 1 (* 2 (+ (* qy qy) (* qz qz)))) (* 2 (- (* qx qy) (* qw qz))) (* 2 (+ (* qx qz) (* qw qy))))
+                                    (list (* 2 (+ (* qx qy) (* qw qz))) (- 1 (* 2 (+ (* qx qx) (* qz qz)))) (* 2 (- (* qy qz) (* qw qx))))
+                                    (list (* 2 (- (* qx qz) (* qw qy))) (* 2 (+ (* qy qz) (* qw qx))) (- 1 (* 2 (+ (* qx qx) (* qy qy))))))))
+               ;; a uniform box of mass 2 and half-extents 0.5 0.4 0.3: I = m (b^2 + c^2) / 3 about x
+               (d (list (/ 3 (* 2 (+ 0.16d0 0.09d0))) (/ 3 (* 2 (+ 0.25d0 0.09d0))) (/ 3 (* 2 (+ 0.25d0 0.16d0)))))
+               (want (cons 0.5d0 (loop for (i j) in '((0 0) (0 1) (0 2) (1 1) (1 2) (2 2))
+                                       collect (loop for k below 3 sum (* (aref r i k) (aref r j k) (nth k d))))))
+               (scale (reduce #'max (mapcar #'abs want))))
+          (check (< (abs (- 1 (loop for x in q sum (* x x)))) 1d-6) "the quaternion ~S is not a unit one" q)
+          (check (every (lambda (g e) (< (abs (- g e)) (* 1d-5 scale))) got want)
+                 "turned by ~S: box-row-inertia gives ~S, R D R^T is ~S" turn got want))))))
+;; BXSOLV-world-inertia-is-turned-box-inertia ends here
+
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-turns-hold-every-row]]
 (define-claim "BXSOLV" turns-hold-every-row
     "Worlds of 1 to 20 awake bodies with boxes among them step and validate."
@@ -8001,6 +8187,25 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
             (check (eq t (validate-physics-world w)))))))))
 ;; BXSWEP-boxes-thrown-sideways-stop-at-walls ends here
 
+;; [[file:../physics.org::#BXSWEP][BXSWEP-boxes-thrown-up-stop-at-ceilings]]
+(define-claim "BXSWEP" boxes-thrown-up-stop-at-ceilings
+    "A cube thrown up at 50 m/s into a ceiling one cell thick reaches it and stays out of it."
+  (dolist (dt (list (/ 1.0 60) (/ 1.0 20)))
+    (dolist (orientation '((1 0 0 0) (0.9 0.3 0.2 0.1)))
+      (let ((terrain (make-voxel-terrain)))
+        (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+        (fill-terrain terrain -8 10 -16 -3 11 32 t)
+        (let* ((w (make-physics-world :terrain terrain :gravity '(0 0 0)))
+               (box (add-physics-box w -5.5 2.5 0.5 0.5 0.5 0.5 :vy 50 :orientation orientation))
+               (farthest -100.0))
+          (dotimes (i (round 2 dt))
+            (step-physics-world w dt)
+            (setf farthest (max farthest (nth-value 1 (physics-body-position w box)))))
+          (check (< 9.2 farthest 9.51) "dt ~,3F, turned ~A: the centre went as high as ~,4F"
+                 dt (second orientation) farthest)
+          (check (eq t (validate-physics-world w))))))))
+;; BXSWEP-boxes-thrown-up-stop-at-ceilings ends here
+
 ;; [[file:../physics.org::#BXSWEP][BXSWEP-corner-in-a-solid-cell-enters-none]]
 (define-claim "BXSWEP" corner-in-a-solid-cell-enters-none
     "A corner that starts in a solid cell enters none; one in the air enters the first solid cell on its path."
@@ -8331,6 +8536,18 @@ wall. #BXPUSH"
       (check (not (physics-body-awake-p world ball)) "awake after ~D steps, with ~,4F s to sleep"
              (1+ steps) *physics-time-to-sleep*))))
 ;; F1NAL5-sleep-time-is-the-edge ends here
+
+;; [[file:../physics.org::#F1NAL5][F1NAL5-sleeps-when-still-time-reaches-time-to-sleep]]
+(define-claim "F1NAL5" sleeps-when-still-time-reaches-time-to-sleep
+    "A body at rest in steps of 1/64 s sleeps at the step its still time reaches 0.5 s exactly: the 32nd."
+  (let* ((w (make-physics-world :gravity '(0 0 0) :step-seconds 1/64))
+         (h (add-physics-body w 2.5 2.5 2.5)))
+    (check (= 0.5 (luv-physics::physics-world-time-to-sleep w)))
+    (let ((asleep (loop for step from 1 to 40
+                        do (step-physics-world w)
+                        unless (physics-body-awake-p w h) return step)))
+      (check (eql 32 asleep) "the body slept at step ~S" asleep))))
+;; F1NAL5-sleeps-when-still-time-reaches-time-to-sleep ends here
 
 ;; [[file:../physics.org::#F1NAL5][F1NAL5-limit-reached-is-crossed]]
 (define-claim "F1NAL5" limit-reached-is-crossed
@@ -9136,6 +9353,24 @@ wall. #BXPUSH"
           do (let ((said (named corrupt)))
                (check (and (stringp said) (search words said)) "broken to give ~S, the walker said ~S" words said)))))
 ;; V4L1D8-each-invariant-named ends here
+
+;; [[file:../physics.org::#V4L1D8][V4L1D8-force-past-the-opened-slots-named]]
+(define-claim "V4L1D8" force-past-the-opened-slots-named
+    "A force waiting in the slot past the handle table's opened ones is named, whatever the set column says there."
+  (let* ((w (make-floor-world))
+         (a (add-physics-body w 3.5 0.245 3.5)))
+    (apply-physics-force w a 1 0 0)
+    (check (eq t (validate-physics-world w)))
+    (let* ((ids (luv-physics::physics-world-ids w))
+           (count (luv-physics::handle-table-count ids))
+           (pushes (luv-physics::physics-world-pushes w)))
+      (check (< (* 4 count) (length pushes)) "the pushes hold no slot past the ~D opened" count)
+      (setf (aref (luv-physics::handle-table-set ids) count) luv-physics::+set-awake+
+            (aref pushes (* 4 count)) 1.0)
+      (let ((said (handler-case (progn (validate-physics-world w) :valid)
+                    (physics-world-invalid (e) (luv-physics::physics-world-invalid-invariant e)))))
+        (check (search "holds a force" (princ-to-string said)) "the walker said ~S" said)))))
+;; V4L1D8-force-past-the-opened-slots-named ends here
 
 ;; [[file:../physics.org::#B0DY0B][B0DY0B-body-prints-where-it-is]]
 (define-claim "B0DY0B" body-prints-where-it-is
@@ -10566,6 +10801,19 @@ and their centres in their order. #SN4P0T"
       (check (eq t (validate-physics-world w))))
     (check (eq w (restore-physics-world w good)))))
 ;; SN4P0T-restore-refuses-what-is-not-octets ends here
+
+;; [[file:../physics.org::#SN4P0T][SN4P0T-rollback-share-of-a-frame]]
+(define-claim "SN4P0T" rollback-share-of-a-frame
+    "The rollback table gives its median as the share of a 60 Hz frame, 1000/60 ms."
+  (let* ((text (with-output-to-string (s) (luv-physics::run-rollback-benchmark :stream s :balls 300 :rounds 3 :load nil)))
+         (row (find-if (lambda (l) (search "restore and 8 steps" l)) (luv-physics::split-lines text)))
+         (cells (mapcar (lambda (c) (string-trim " %" c)) (uiop:split-string row :separator "|")))
+         (median (let ((*read-default-float-format* 'double-float)) (read-from-string (third cells))))
+         (share (parse-integer (fourth cells))))
+    (check (plusp median) "the median ~S ms" median)
+    (check (<= (abs (- share (* 100 (/ median (/ 1000d0 60))))) 0.55)
+           "a median of ~,2F ms is given as ~D % of a 60 Hz frame, not ~,1F %" median share (* 6 median))))
+;; SN4P0T-rollback-share-of-a-frame ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
@@ -14282,7 +14530,15 @@ within reach of something. #S9WEEP"
   (let ((w (make-floor-world)))
     (check (= 16 (map-physics-cells-in-box (lambda (i j k) (declare (ignore i j k))) w 3.0 -0.5 3.0 1.0 0.4 1.0))
            "~D floor cells meet the box [2,4] x [-0.9,-0.1] x [2,4]"
-           (map-physics-cells-in-box (lambda (i j k) (declare (ignore i j k))) w 3.0 -0.5 3.0 1.0 0.4 1.0))))
+           (map-physics-cells-in-box (lambda (i j k) (declare (ignore i j k))) w 3.0 -0.5 3.0 1.0 0.4 1.0))
+    (let ((cells '()))
+      (map-physics-cells-in-box (lambda (i j k) (push (list i j k) cells)) w 2.5 0.5 2.5 0.5 0.5 0.5)
+      (check (equal (sort (copy-list cells) #'< :key (lambda (c) (+ (* 100 (third c)) (first c))))
+                    (loop for k from 1 to 3 append (loop for i from 1 to 3 collect (list i -1 k))))
+             "the box on the floor meets the cells ~S" cells))
+    (let ((cells '()))
+      (map-physics-cells-in-sphere (lambda (i j k) (push (list i j k) cells)) w 2.5 0.25 2.5 0.25)
+      (check (equal cells '((2 -1 2))) "the ball on the floor meets the cells ~S" cells))))
 ;; OV3RLP-no-terrain-no-cells ends here
 
 ;; [[file:../physics.org::#OV3RLP][OV3RLP-region-sizes-at-their-limits]]
@@ -14643,6 +14899,7 @@ within reach of something. #S9WEEP"
           (setf balls (sort balls #'<))
           (loop for (p q) on balls by #'cdddr while q
                 do (add-physics-joint w :distance p q :anchor-a '(0.3 -0.2 0) :anchor-b '(-0.3 0.2 0)))
+          (loop for h in balls for i from 0 do (set-physics-body-velocity w h 0 0 (* 0.5 (mod i 3))))
           (let ((start (multiple-value-list (physics-body-position w corner))))
             (step-physics-world w)
             (let* ((set (luv-physics::physics-world-joints w)) (rows (luv-physics::joint-set-rows set))

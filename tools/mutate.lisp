@@ -24,6 +24,11 @@
 
 (in-package #:luv-mutate)
 
+;; The file is loaded as source, each toplevel form compiled on its own, so a call of a
+;; function defined further down would be noted as undefined when its caller is compiled.
+(declaim (ftype function featured-texts now proper-list-p renew-featured-variants replace-nth
+                variable-symbol-p walk-call write-score-rows write-score-rows-by))
+
 (defparameter *engine-files* '("tangled/physics.lisp" "tangled/physics-simd.lisp")
   "The tangled files whose definitions are mutated.")
 
@@ -752,13 +757,6 @@ NIL if all compiled without a warning; else a line saying what went wrong."
          (forms (cons (cons unit (funcall (mutant-rebuild mutant)))
                       (mapcar (lambda (u) (cons u (unit-form u))) (dependents unit units))))
          (texts (featured-texts)))
-    ;; a definition the mutant drops is gone, as from an image that loaded the mutated page,
-    ;; and not left as the unchanged engine defined it
-    (dolist (name (set-difference (unit-defines unit) (defined-names (cdr (first forms))) :test #'equal))
-      (when (and (or (symbolp name) (and (consp name) (eq (car name) 'setf)))
-                 (fboundp name) (not (typep (fdefinition name) 'generic-function))
-                 (not (and (symbolp name) (special-operator-p name))))
-        (fmakunbound name)))
     ;; a kernel whose defining form is evaluated again keeps the text that form keeps, or none
     (loop for (name) in texts
           when (some (lambda (f) (member name (unit-defines (car f)))) forms)
@@ -769,7 +767,17 @@ NIL if all compiled without a warning; else a line saying what went wrong."
                      (serious-condition (lambda (c) (return-from compile (format nil "~A: ~A" (type-of c) c)))))
         (let ((*compile-verbose* nil) (*compile-print* nil) (sb-ext:*evaluator-mode* :compile))
           (loop for (u . form) in forms
-                do (let ((*package* (unit-package u))
+                do (let ((*package* (unit-package u)))
+                     ;; a definition the mutant drops is gone, as from an image that loaded the
+                     ;; mutated page, and not left as the unchanged engine defined it: one dropped
+                     ;; from the mutated form, or from the expansion, by a mutated macro evaluated
+                     ;; before it, of a form evaluated again with it
+                     (dolist (name (set-difference (unit-defines u) (defined-names form) :test #'equal))
+                       (when (and (or (symbolp name) (and (consp name) (eq (car name) 'setf)))
+                                  (fboundp name) (not (typep (fdefinition name) 'generic-function))
+                                  (not (and (symbolp name) (special-operator-p name))))
+                         (fmakunbound name))))
+                   (let ((*package* (unit-package u))
                          (inline (remove-if-not (lambda (n) (and (symbolp n) (gethash n *inline-names*)))
                                                 (unit-defines u))))
                      ;; a function declared inline only around its definition keeps its
@@ -853,6 +861,25 @@ writing each step to STATUS-PATH.  Never returns."
 
 ;;; ------------------------------------------------------------------------------------
 ;;; Sampling: sections round robin, each section's sites in a seeded order
+;;;
+;;; Each section's order comes from a random state seeded by SEED and a hash of its anchor
+;;; alone, and the sections are ordered by another such hash, so that an edit of one section,
+;;; which changes its sites, changes no other section's mutants or place in the draw.
+
+(defun fnv-1a (string &optional (hash 2166136261))
+  "The 32-bit FNV-1a hash of STRING's character codes, continued from HASH: a hash that,
+unlike SXHASH, is the same in every image and every version of the compiler."
+  (loop for c across string
+        do (setf hash (ldb (byte 32 0) (* (logxor hash (char-code c)) 16777619))))
+  hash)
+
+(defun anchor-hash (seed purpose anchor)
+  "A 32-bit hash of SEED, the word PURPOSE and ANCHOR, the same in every image."
+  (fnv-1a anchor (fnv-1a (format nil "~D ~A " seed purpose))))
+
+(defun section-random-state (seed anchor)
+  "The random state that orders the mutants of the section ANCHOR: from SEED and ANCHOR only."
+  (sb-ext:seed-random-state (anchor-hash seed "sites" anchor)))
 
 (defun shuffle (list state)
   (let ((v (coerce list 'vector)))
@@ -885,6 +912,21 @@ different operators however many sites each operator has there."
               (when (or (null match) (some (lambda (one) (search one (mutant-key m))) (uiop:split-string match :separator "|")))
                 (push m (cdr entry))))))))
     (mapcar (lambda (e) (cons (car e) (nreverse (cdr e)))) (nreverse table))))
+
+(defun drawn-sections (sections seed)
+  "SECTIONS, an alist from anchor to its mutants in file order, as the draw deals from them:
+each section's mutants shuffled and taken one operator at a time with its own random state
+(SECTION-RANDOM-STATE), and the sections, those with a mutant, ordered by a seeded hash of
+their anchors.  A section's order and its place among the others depend on SEED and its own
+anchor and mutants, not on which other sections there are."
+  (let ((drawn (loop for (anchor . mutants) in sections
+                     for state = (section-random-state seed anchor)
+                     when mutants
+                       collect (cons anchor (operators-in-turn (shuffle mutants state) state)))))
+    (flet ((before-p (a b)
+             (let ((ha (anchor-hash seed "order" a)) (hb (anchor-hash seed "order" b)))
+               (or (< ha hb) (and (= ha hb) (string< a b))))))
+      (stable-sort drawn #'before-p :key #'car))))
 
 ;;; ------------------------------------------------------------------------------------
 ;;; The parent: two children at a time, timeouts, replacements
@@ -1267,14 +1309,13 @@ as a finished run does.  Return the number of mutants read."
          (parts (setf *parts* (anchor-parts "physics.org")))
          (slow (setf *slow* (let ((v (sb-ext:posix-getenv "SLOW")))
                               (if (and v (plusp (length v))) (float (read-from-string v) 1d0) *slow*))))
-         (state (sb-ext:seed-random-state seed))
          (layouts (setf *layouts* (unit-layouts units)))
-         (sections (mapcar (lambda (s) (cons (car s) (operators-in-turn (shuffle (cdr s) state) state)))
-                           (remove-if-not #'cdr (section-sites units anchor (let ((m (sb-ext:posix-getenv "MATCH"))) (and (plusp (length m)) m))))))
-         (sections (shuffle sections state))
+         (sections (drawn-sections (section-sites units anchor (let ((m (sb-ext:posix-getenv "MATCH"))) (and (plusp (length m)) m)))
+                                   seed))
          (only-parts (let ((p (sb-ext:posix-getenv "PART")))
                        (and p (plusp (length p)) (uiop:split-string p :separator "|"))))
          (only '()))
+    (declare (ignore inline layouts))
     (when (null sections)
       (format t "~&mutate: no definitions to mutate~@[ in section ~A~]~%" anchor)
       (sb-ext:exit :code 1))
@@ -1314,7 +1355,7 @@ as a finished run does.  Return the number of mutants read."
              (saved (progn (ensure-directories-exist "report/") (write-record)))
              (wall (- (now) start))
              (reasons (page-reasons *mutant-records*)))
-        (declare (ignore dummy inline saved layouts))
+        (declare (ignore dummy saved))
         (ignore-errors (sb-ext:delete-directory directory :recursive t))
         (let ((n (length mutants)) (k (count-if #'killed-p mutants)))
           (format t "~&~%mutate: ~D of ~D mutants killed (~,1F %), ~D survived; ~,1F s in all, ~,1F s a mutant on average in its child; load ~A~%~%"
