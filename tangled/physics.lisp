@@ -1661,7 +1661,9 @@ handles, and the filters and lasting sensors. #W0RLD7"))
    (braced-step :initform -1 :type fixnum :accessor physics-world-braced-step)
    (column-watch :initform nil :accessor physics-world-column-watch)
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
-   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows))
+   (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows)
+   ;; the colouring's list of the contacts across two of its pieces ([[#SSMPYW]])
+   (contact-crosses :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-crosses))
   (:documentation "The arrays each step reuses to solve: the solver's rows of motion, the
 colours, and what the boxes and the cells brace, hold and squeeze. #W0RLD7"))
 
@@ -4770,7 +4772,8 @@ claims and the tools, which name a column rather than know its block. #SSMPYW"
             (physics-world-held world)
             (make-array rows :element-type 'fixnum :initial-element 0))))
   (setf (physics-world-contact-colors world) (fixnum-room (physics-world-contact-colors world) contacts :keep 0)
-        (physics-world-contact-rows world) (fixnum-room (physics-world-contact-rows world) (* 2 contacts) :keep 0))
+        (physics-world-contact-rows world) (fixnum-room (physics-world-contact-rows world) (* 2 contacts) :keep 0)
+        (physics-world-contact-crosses world) (fixnum-room (physics-world-contact-crosses world) contacts :keep 0))
   (constraint-columns-ensure-capacity (physics-world-constraints world) contacts)
   world)
 
@@ -4785,85 +4788,130 @@ claims and the tools, which name a column rather than know its block. #SSMPYW"
   (declare (type (unsigned-byte 32) x))
   (1- (integer-length x)))
 
+(defconstant +colour-pieces+ 4
+  "The most pieces the colouring cuts the awake rows into. #SSMPYW")
+
+(defconstant +colour-piece-rows+ 256
+  "The fewest awake rows a colouring piece holds. #SSMPYW")
+
+(defun colour-pieces (n)
+  "How many pieces the colouring cuts N awake rows into: one per +colour-piece-rows+ rows, at
+least one and at most +colour-pieces+. #SSMPYW"
+  (declare (type index n))
+  (max 1 (min +colour-pieces+ (floor n +colour-piece-rows+))))
+
+(defun colour-piece-scale (n pieces)
+  "The factor that takes an awake row of N to its piece of PIECES (colour-piece). #SSMPYW"
+  (declare (type index n pieces))
+  (if (zerop n) 0 (ceiling (ash pieces 40) n)))
+
+(declaim (inline colour-piece))
+(defun colour-piece (l scale last)
+  "The colouring piece of the awake row L: L times SCALE over 2^40, at most LAST. Without a
+division, and fixed by the rows and the pieces alone. #SSMPYW"
+  (declare (type index l last) (type (unsigned-byte 62) scale))
+  (min last (ash (ldb (byte 62 0) (* l scale)) -40)))
+
+(declaim (inline colour-two-body))
+(defun colour-two-body (masks colors c la lb)
+  "Give contact C, between the awake rows LA and LB, the lowest of colours 0-19 free at both in
+MASKS, or the overflow colour; mark it in both masks; return it. #SSMPYW"
+  (declare (type fixnum-column masks colors) (type index c la lb))
+  (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
+                      (1- (ash 1 +physics-dynamic-colors+))))
+        (color +physics-max-colors+))
+    (declare (type fixnum color))
+    (unless (zerop free)
+      (setf color (lowest-bit free))
+      (setf (aref masks la) (logior (aref masks la) (ash 1 color))
+            (aref masks lb) (logior (aref masks lb) (ash 1 color))))
+    (setf (aref colors c) color)))
+
+(declaim (inline colour-one-sided))
+(defun colour-one-sided (masks colors c l used)
+  "Give contact C, one-sided at the awake row L, the highest colour of USED free at L in MASKS,
+else the lowest free colour, else the overflow colour; mark it; return it. #SSMPYW"
+  (declare (type fixnum-column masks colors) (type index c l) (type (unsigned-byte 32) used))
+  (let ((free (logand (lognot (aref masks l)) (1- (ash 1 +physics-max-colors+))))
+        (color +physics-max-colors+))
+    (declare (type fixnum color))
+    (cond ((plusp (logand free used)) (setf color (highest-bit (logand free used))))
+          ((plusp free) (setf color (lowest-bit free))))
+    (when (< color +physics-max-colors+)
+      (setf (aref masks l) (logior (aref masks l) (ash 1 color))))
+    (setf (aref colors c) color)))
+
+(defmacro with-colour-pieces ((p0 p1) (pieces worker count) &body body)
+  "Run BODY with P0 and P1 bound to the first colouring piece of WORKER's share, of COUNT, of
+PIECES pieces, and the one after its last. #SSMPYW"
+  `(let ((,p0 (floor (* ,pieces ,worker) ,count)) (,p1 (floor (* ,pieces (1+ ,worker)) ,count)))
+     (declare (type index ,p0 ,p1))
+     ,@body))
+
 (defun color-contacts (world &optional (two-body t))
-  "Greedy colouring in two passes. First every two-body contact takes the lowest of colours
-0-19 free at both its bodies (a world without body contacts, TWO-BODY false, has none: every
-contact is one-sided, and the pass only marks them so). Then every one-sided contact takes, at its awake body, the
-highest free colour among those the two-body contacts used, or failing that the lowest free
-colour above them. Anything else goes to the overflow colour 24. Fills the colour of each
-contact, its two sides' awake rows (-1 for a side that is not an awake body) at 2c and 2c+1 of
-the world's contact rows, for the prepare phase to read instead of looking each handle up
-again, and the colour starts, each colour but the overflow starting on a multiple of eight;
-returns the number of colours used. #SSMPYW"
-  (let* ((contacts (physics-world-contacts world))
-         (m (contact-columns-length contacts))
-         (ids (physics-world-ids world))
+  "Greedy colouring in two passes, each in pieces of the awake rows. First every two-body
+contact takes the lowest of colours 0-19 free at both its bodies: the contacts within a piece by
+the piece, in contact order, then those across two pieces, in contact order (a world without body
+contacts, TWO-BODY false, has none: every contact is one-sided). Then every one-sided contact
+takes, at its awake body, the highest free colour among those the two-body contacts used, or
+failing that the lowest free colour above them, by its body's piece. Anything else goes to the
+overflow colour 24. Fills the colour of each contact, its two sides' awake rows (-1 for a side
+that is not an awake body) at 2c and 2c+1 of the world's contact rows, for the prepare phase to
+read instead of looking each handle up again, and the colour starts, each colour but the
+overflow starting on a multiple of eight; returns the number of colours used. #SSMPYW"
+  (let* ((m (contact-columns-length (physics-world-contacts world)))
          (n (body-columns-length (physics-world-awake world)))
+         (pieces (colour-pieces n))
+         (scale (colour-piece-scale n pieces))
+         (last (1- pieces))
          (masks (physics-world-color-masks world))
          (colors (physics-world-contact-colors world))
          (rows (physics-world-contact-rows world))
+         (crosses (physics-world-contact-crosses world))
          (starts (physics-world-color-starts world))
-         (sets (handle-table-set ids))
-         (locals (handle-table-local ids))
-         (top -1))
-    (declare (type fixnum-column masks colors rows starts sets locals) (type index m n)
-             (type fixnum top) #.+kernel-policy+)
+         (tops (make-array (1+ +colour-pieces+) :element-type 'fixnum :initial-element -1))
+         (counts (make-array (* +colour-pieces+ (1+ +physics-max-colors+)) :element-type 'fixnum))
+         ;; a place for each worker a world may have (+physics-max-workers+, [[#W0RKP1]])
+         (ends (make-array 64 :element-type 'fixnum))
+         (looked 1))
+    (declare (type fixnum-column masks colors rows crosses starts) (type index m n pieces last)
+             (type (unsigned-byte 62) scale) (type fixnum looked)
+             (dynamic-extent tops counts ends) #.+kernel-policy+)
+    (setf looked (look-up-contact-rows world m n scale last two-body crosses ends))
+    (when two-body
+      ;; pass one, within each piece: its contacts touch its bodies alone
+      (flet ((two-body-piece (worker count)
+               (declare (type fixnum worker count))
+               (with-colour-pieces (p0 p1) (pieces worker count)
+                 (when (< p0 p1)
+                   (dotimes (c m)
+                     (let ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c)))))
+                       (declare (type fixnum la lb))
+                       (when (and (>= la 0) (>= lb 0))
+                         (let ((p (colour-piece la scale last)))
+                           (when (and (= p (colour-piece lb scale last)) (<= p0 p) (< p p1))
+                             (let ((color (colour-two-body masks colors c la lb)))
+                               (when (< (aref tops p) color +physics-max-colors+)
+                                 (setf (aref tops p) color))))))))))))
+        (declare (dynamic-extent #'two-body-piece))
+        (run-pieces world m :colour-pairs #'two-body-piece))
+      ;; then the contacts across two pieces, in contact order: each share of the look-up
+      ;; listed its own from the share's first place on
+      (dotimes (w looked)
+        (loop for i of-type index from (piece-bounds 0 m w looked) below (aref ends w)
+              do (let* ((c (aref crosses i))
+                        (color (colour-two-body masks colors c (aref rows (* 2 c)) (aref rows (1+ (* 2 c))))))
+                   (declare (type index c))
+                   (when (< (aref tops +colour-pieces+) color +physics-max-colors+)
+                     (setf (aref tops +colour-pieces+) color))))))
+    (color-one-sided-contacts world m scale last
+                              (1- (ash 1 (1+ (loop for top across tops maximize top)))) counts)
+    ;; the colours' counts, piece by piece, then prefix sums, each colour but the overflow
+    ;; padded to a whole block of eight rows
     (fill starts 0)
-    (with-contact-columns (handle-a handle-b) contacts
-      (flet ((awake-row (h)
-               (declare (type fixnum h))
-               (if (and (>= h 0) (= (aref sets (handle-index h)) +set-awake+))
-                   (aref locals (handle-index h))
-                   -1)))
-        (declare (inline awake-row))
-        ;; every contact's awake rows, and the masks cleared, in pieces, one a worker
-        ;; ([[#SPL1T5]]): each contact's rows and each body's mask are its own
-        (flet ((look-up (worker count)
-                 (declare (type fixnum worker count))
-                 (multiple-value-bind (from to) (piece-bounds 0 m worker count)
-                   (declare (type index from to))
-                   (loop for c of-type index from from below to
-                         do (setf (aref rows (* 2 c)) (awake-row (aref handle-a c))
-                                  (aref rows (1+ (* 2 c))) (awake-row (aref handle-b c)))))
-                 (multiple-value-bind (from to) (piece-bounds 0 (1+ n) worker count)
-                   (declare (type index from to))
-                   (fill masks 0 :start from :end to))))
-          (declare (dynamic-extent #'look-up))
-          (run-pieces world m :colour-rows #'look-up))
-        ;; pass one: two-body contacts, lowest free colour
-        (if (not two-body)
-          (fill colors -1 :end m)
-        (dotimes (c m)
-          (let ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c)))))
-            (declare (type fixnum la lb))
-            (setf (aref colors c) -1)
-            (when (and (>= la 0) (>= lb 0))
-              (let ((free (logand (lognot (logior (aref masks la) (aref masks lb)))
-                                  (1- (ash 1 +physics-dynamic-colors+))))
-                    (color +physics-max-colors+))
-                (declare (type fixnum color))
-                (unless (zerop free)
-                  (setf color (lowest-bit free)
-                        top (max top color))
-                  (setf (aref masks la) (logior (aref masks la) (ash 1 color))
-                        (aref masks lb) (logior (aref masks lb) (ash 1 color))))
-                (setf (aref colors c) color))))))
-        ;; pass two: one-sided contacts, as late among the used colours as their body allows
-        (let ((used (1- (ash 1 (1+ top)))))
-          (declare (type (unsigned-byte 32) used))
-          (dotimes (c m)
-            (when (= (aref colors c) -1)
-              (let* ((l (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c)))))
-                     (free (logand (lognot (aref masks l)) (1- (ash 1 +physics-max-colors+))))
-                     (color +physics-max-colors+))
-                (declare (type fixnum l color))
-                (cond ((plusp (logand free used)) (setf color (highest-bit (logand free used))))
-                      ((plusp free) (setf color (lowest-bit free))))
-                (when (< color +physics-max-colors+)
-                  (setf (aref masks l) (logior (aref masks l) (ash 1 color))))
-                (setf (aref colors c) color))))))
-      (dotimes (c m) (incf (aref starts (1+ (aref colors c))))))
-    ;; prefix sums, each colour but the overflow padded to a whole block of eight rows
+    (dotimes (p pieces)
+      (dotimes (c (1+ +physics-max-colors+))
+        (incf (aref starts (1+ c)) (aref counts (+ (* p (1+ +physics-max-colors+)) c)))))
     (loop with at of-type index = 0
           for c from 0 to +physics-max-colors+
           for count of-type index = (aref starts (1+ c))
@@ -4872,6 +4920,84 @@ returns the number of colours used. #SSMPYW"
           count (plusp count) into used
           finally (setf (aref starts (1+ +physics-max-colors+)) at)
                   (return used))))
+
+(defun look-up-contact-rows (world m n scale last two-body crosses ends)
+  "The colouring's first job, in pieces: every one of WORLD's M contacts' awake rows into the
+contact rows and its colour unset (-1), the N awake rows' masks cleared; when TWO-BODY, each
+share lists the contacts whose two bodies lie in different pieces (colour-piece of SCALE and
+LAST) into
+CROSSES from its first contact's place on, and writes where its list ends into ENDS at its worker.
+Return how many shares ran. #SSMPYW"
+  (declare (type index m n last) (type (unsigned-byte 62) scale) (type fixnum-column crosses ends)
+           #.+kernel-policy+)
+  (let* ((ids (physics-world-ids world))
+         (masks (physics-world-color-masks world))
+         (colors (physics-world-contact-colors world))
+         (rows (physics-world-contact-rows world))
+         (sets (handle-table-set ids))
+         (locals (handle-table-local ids)))
+    (declare (type fixnum-column masks colors rows sets locals))
+    (with-contact-columns (handle-a handle-b) (physics-world-contacts world)
+      (flet ((awake-row (h)
+               (declare (type fixnum h))
+               (if (and (>= h 0) (= (aref sets (handle-index h)) +set-awake+))
+                   (aref locals (handle-index h))
+                   -1)))
+        (declare (inline awake-row))
+        ;; each contact's rows and each body's mask are its own ([[#SPL1T5]])
+        (flet ((look-up (worker count)
+                 (declare (type fixnum worker count))
+                 (multiple-value-bind (from to) (piece-bounds 0 m worker count)
+                   (declare (type index from to))
+                   (let ((at from))
+                     (declare (type index at))
+                     (loop for c of-type index from from below to
+                           do (let ((la (awake-row (aref handle-a c))) (lb (awake-row (aref handle-b c))))
+                                (declare (type fixnum la lb))
+                                (setf (aref rows (* 2 c)) la (aref rows (1+ (* 2 c))) lb
+                                      (aref colors c) -1)
+                                (when (and two-body (>= la 0) (>= lb 0)
+                                           (/= (colour-piece la scale last) (colour-piece lb scale last)))
+                                  (setf (aref crosses at) c)
+                                  (incf at))))
+                     (setf (aref ends worker) at)))
+                 (multiple-value-bind (from to) (piece-bounds 0 (1+ n) worker count)
+                   (declare (type index from to))
+                   (fill masks 0 :start from :end to)
+                   ;; the solver's body state, row by row ([[#PRLD5V]])
+                   (load-solver-bodies (physics-world-awake world) (physics-world-velocities world)
+                                       (physics-world-deltas world) n from to))))
+          (declare (dynamic-extent #'look-up))
+          (run-pieces world m :colour-rows #'look-up))))))
+
+(defun color-one-sided-contacts (world m scale last used counts)
+  "The colouring's second pass, in pieces: every one of WORLD's M contacts still without a colour
+takes one at its awake body (colour-one-sided, the colours USED by the first pass), by its body's
+piece (colour-piece of SCALE, the last LAST); and each piece counts into COUNTS, 25 a piece, the
+colours of the contacts whose last awake row is its own. #SSMPYW"
+  (declare (type index m last) (type (unsigned-byte 62) scale) (type (unsigned-byte 32) used)
+           (type fixnum-column counts) #.+kernel-policy+)
+  (let ((masks (physics-world-color-masks world))
+        (colors (physics-world-contact-colors world))
+        (rows (physics-world-contact-rows world)))
+    (declare (type fixnum-column masks colors rows))
+    (flet ((one-sided-piece (worker count)
+             (declare (type fixnum worker count))
+             (with-colour-pieces (p0 p1) ((1+ last) worker count)
+               (fill counts 0 :start (* p0 (1+ +physics-max-colors+)) :end (* p1 (1+ +physics-max-colors+)))
+               (when (< p0 p1)
+                 (dotimes (c m)
+                   (let* ((l (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c)))))
+                          (p (colour-piece l scale last)))
+                     (declare (type index l p))
+                     (when (and (<= p0 p) (< p p1))
+                       (let ((color (if (= (aref colors c) -1)
+                                        (colour-one-sided masks colors c l used)
+                                        (aref colors c))))
+                         (declare (type (integer 0 24) color))
+                         (incf (aref counts (+ (* p (1+ +physics-max-colors+)) color)))))))))))
+      (declare (dynamic-extent #'one-sided-piece))
+      (run-pieces world m :colour-sides #'one-sided-piece))))
 
 (defun physics-world-overflow-count (world)
   "How many of the last step's contacts fell into the overflow colour. #SSMPYW"
@@ -5009,17 +5135,19 @@ included, as the colouring laid them out. #PRLD5V"
     (setf (constraint-columns-length cbuf) rows)))
 
 (declaim (inline load-solver-bodies))
-(defun load-solver-bodies (awake v d n)
-  "Load the solver's body state: the velocities of AWAKE's N rows into their solver rows of V,
-zero velocities in the dummy row N, and zero deltas in D for every row and the dummy. #PRLD5V"
-  (declare (type body-columns awake) (type f32-column v d) (type index n))
+(defun load-solver-bodies (awake v d n from to)
+  "Load the solver's body state for the rows FROM below TO of AWAKE's N and the dummy row N after
+them: each awake row's velocities into its solver row of V, zero velocities in the dummy row,
+and zero deltas in D. Each row is its own, so the colouring's look-up loads the rows in its
+pieces ([[#SSMPYW]]). #PRLD5V"
+  (declare (type body-columns awake) (type f32-column v d) (type index n from to))
   (with-body-columns (vx vy vz wx wy wz) awake
-    (dotimes (i n)
-      (let ((o (solver-row i)))
-        (setf (aref v o) (aref vx i) (aref v (+ o 1)) (aref vy i) (aref v (+ o 2)) (aref vz i)
-              (aref v (+ o 3)) (aref wx i) (aref v (+ o 4)) (aref wy i) (aref v (+ o 5)) (aref wz i)))))
-  (fill v 0.0 :start (solver-row n) :end (solver-row (1+ n)))
-  (fill d 0.0 :end (delta-row (1+ n))))
+    (loop for i of-type index from from below (min to n)
+          do (let ((o (solver-row i)))
+               (setf (aref v o) (aref vx i) (aref v (+ o 1)) (aref vy i) (aref v (+ o 2)) (aref vz i)
+                     (aref v (+ o 3)) (aref wx i) (aref v (+ o 4)) (aref wy i) (aref v (+ o 5)) (aref wz i)))))
+  (when (< n to) (fill v 0.0 :start (solver-row n) :end (solver-row (1+ n))))
+  (when (< from to) (fill d 0.0 :start (if (zerop from) 0 (delta-row from)) :end (delta-row to))))
 ;; Loading the solver's bodies:1 ends here
 
 ;; [[file:../physics.org::#PRBR4C][Marking the braced bodies:1]]
@@ -5456,7 +5584,6 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
           (multiple-value-bind (st-bias st-mass st-impulse) (physics-softness (* 2.0 hertz) zeta h)
             (declare (type single-float st-bias st-mass st-impulse))
             (size-constraint-buffer world cbuf)
-            (load-solver-bodies awake v d n)
             (let ((cursor (make-array (+ +physics-max-colors+ 1) :element-type 'fixnum))
                   (color-starts (physics-world-color-starts world))
                   (sets (handle-table-set ids)) (locals (handle-table-local ids))
@@ -10654,7 +10781,7 @@ core. #W0RKP1")
   "How long, in nanoseconds, a worker waiting for a job spins or yields at most before it parks:
 the jobs of a step follow each other within it, the gap between a game's frames does not. #W0RKP1")
 
-(defconstant +pool-jobs+ 16
+(defconstant +pool-jobs+ 18
   "How many kinds of job a pool keeps its calls and timings for ([[#SPL1T5]]). #W0RKP1")
 
 (defstruct (worker-pool (:constructor %make-worker-pool (count)) (:copier nil))
@@ -11048,13 +11175,20 @@ each. #SPL1T5")
 (defconstant +job-colour-rows+ 15
   "The job: the colouring's look-up of each contact's awake rows and the clearing of the masks,
 a share of the contacts and of the rows each. #SPL1T5")
+(defconstant +job-colour-pairs+ 16
+  "The job: the colouring's first pass, over the two-body contacts within its pieces, a share of
+the pieces each. #SPL1T5")
+(defconstant +job-colour-sides+ 17
+  "The job: the colouring's second pass, over the one-sided contacts, a share of the pieces
+each. #SPL1T5")
 
 (defun piece-job (kind)
-  "The job number of the phase piece KIND names: :fill, :store, :reorder, :sort-rows, :fold or
-:colour-rows. #SPL1T5"
+  "The job number of the phase piece KIND names: :fill, :store, :reorder, :sort-rows, :fold,
+:colour-rows, :colour-pairs or :colour-sides. #SPL1T5"
   (ecase kind
     (:fill +job-fill+) (:store +job-store+) (:reorder +job-reorder+) (:sort-rows +job-sort-rows+)
-    (:fold +job-fold+) (:colour-rows +job-colour-rows+)))
+    (:fold +job-fold+) (:colour-rows +job-colour-rows+) (:colour-pairs +job-colour-pairs+)
+    (:colour-sides +job-colour-sides+)))
 
 (defun run-row-pieces (world rows kind move)
   "Run MOVE, a function of the rows FROM below TO, over ROWS rows as a phase piece of KIND
