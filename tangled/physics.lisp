@@ -1663,7 +1663,12 @@ handles, and the filters and lasting sensors. #W0RLD7"))
    (contact-colors :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-colors)
    (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows)
    ;; the colouring's list of the contacts across two of its pieces ([[#SSMPYW]])
-   (contact-crosses :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-crosses))
+   (contact-crosses :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-crosses)
+   ;; each colouring piece's count of each colour, and its next place in each colour's run
+   (colour-counts :initform (make-array 100 :element-type 'fixnum :initial-element 0)
+                  :reader physics-world-colour-counts)
+   (colour-places :initform (make-array 100 :element-type 'fixnum :initial-element 0)
+                  :reader physics-world-colour-places))
   (:documentation "The arrays each step reuses to solve: the solver's rows of motion, the
 colours, and what the boxes and the cells brace, hold and squeeze. #W0RLD7"))
 
@@ -4870,13 +4875,13 @@ overflow starting on a multiple of eight; returns the number of colours used. #S
          (crosses (physics-world-contact-crosses world))
          (starts (physics-world-color-starts world))
          (tops (make-array (1+ +colour-pieces+) :element-type 'fixnum :initial-element -1))
-         (counts (make-array (* +colour-pieces+ (1+ +physics-max-colors+)) :element-type 'fixnum))
+         (counts (physics-world-colour-counts world))
          ;; a place for each worker a world may have (+physics-max-workers+, [[#W0RKP1]])
          (ends (make-array 64 :element-type 'fixnum))
          (looked 1))
-    (declare (type fixnum-column masks colors rows crosses starts) (type index m n pieces last)
+    (declare (type fixnum-column masks colors rows crosses starts counts) (type index m n pieces last)
              (type (unsigned-byte 62) scale) (type fixnum looked)
-             (dynamic-extent tops counts ends) #.+kernel-policy+)
+             (dynamic-extent tops ends) #.+kernel-policy+)
     (setf looked (look-up-contact-rows world m n scale last two-body crosses ends))
     (when two-body
       ;; pass one, within each piece: its contacts touch its bodies alone
@@ -5321,15 +5326,46 @@ column is forming. Return whether some body is a link. #PRBR4C"
 ;; Marking the braced bodies:3 ends here
 
 ;; [[file:../physics.org::#PRCL0R][Ordering the rows by colour:1]]
-(declaim (inline order-rows-by-colour))
-(defun order-rows-by-colour (colors contact cursor m)
-  "Write into CONTACT, at each colour's CURSOR (which it advances), the M contacts of each colour
-of COLORS, in contact order. #PRCL0R"
-  (declare (type fixnum-column colors contact cursor) (type index m))
-  (dotimes (c m)
-    (let ((color (aref colors c)))
-      (setf (aref contact (aref cursor color)) c)
-      (incf (aref cursor color)))))
+(defun order-rows-by-colour (world contact cursor)
+  "Write into CONTACT, each colour's run from its start on, WORLD's contacts of that colour: by
+colouring piece (the piece of the contact's last awake row), in contact order within a piece;
+leave in CURSOR where each colour's contacts end. Each piece writes its own places, so the
+pieces run one a worker ([[#SPL1T5]]). #PRCL0R"
+  (declare (type fixnum-column contact cursor) #.+kernel-policy+)
+  (let* ((m (contact-columns-length (physics-world-contacts world)))
+         (n (body-columns-length (physics-world-awake world)))
+         (pieces (colour-pieces n))
+         (scale (colour-piece-scale n pieces))
+         (last (1- pieces))
+         (colors (physics-world-contact-colors world))
+         (rows (physics-world-contact-rows world))
+         (counts (physics-world-colour-counts world))
+         (places (physics-world-colour-places world))
+         (starts (physics-world-color-starts world)))
+    (declare (type index m n pieces last) (type (unsigned-byte 62) scale)
+             (type fixnum-column colors rows counts places starts))
+    ;; each piece's first place in each colour, after the pieces before it
+    (dotimes (color (1+ +physics-max-colors+))
+      (let ((at (aref starts color)))
+        (declare (type index at))
+        (dotimes (p pieces)
+          (let ((k (+ (* p (1+ +physics-max-colors+)) color)))
+            (setf (aref places k) at)
+            (incf at (aref counts k))))
+        (setf (aref cursor color) at)))
+    (flet ((order-piece (worker count)
+             (declare (type fixnum worker count))
+             (with-colour-pieces (p0 p1) (pieces worker count)
+               (when (< p0 p1)
+                 (dotimes (c m)
+                   (let ((p (colour-piece (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c)))) scale last)))
+                     (declare (type index p))
+                     (when (and (<= p0 p) (< p p1))
+                       (let ((k (+ (* p (1+ +physics-max-colors+)) (aref colors c))))
+                         (setf (aref contact (aref places k)) c)
+                         (incf (aref places k))))))))))
+      (declare (dynamic-extent #'order-piece))
+      (run-pieces world m :colour-order #'order-piece))))
 
 (declaim (inline pad-colour-rows))
 (defun pad-colour-rows (cursor color-starts contact body-a body-b data stride n)
@@ -5518,27 +5554,28 @@ short or the general path, complete them in the frame pass, and pad each colour.
 the prepare phase, whose variables it reads. #PRF1LL"
   `(with-contact-columns ((ha handle-a) (hb handle-b) geometry) contacts
      (with-constraint-block (contact body-a body-b) cbuf
-       (order-rows-by-colour colors contact cursor m)
-       ;; the side blocks start as zeros, padding rows' included: a row writes only the side
-       ;; columns that may be other than zero, the spin limit and impulse of a row with no
-       ;; radius on side b ([[#SSMPYW]])
-       (when (plusp (constraint-columns-length cbuf))
-         (fill (side-floats) 0.0 :end (+ +constraint-origin+
-                                         (* (ceiling (constraint-columns-length cbuf) 8)
-                                            (constraint-columns-side-block cbuf)))))
+       (order-rows-by-colour world contact cursor)
        (with-body-columns ((radius-c radius) (im-c inverse-mass) (ii-c inverse-inertia)
                            (fr-c friction) (re-c restitution) (ro-c rolling-resistance))
            awake
          (declare (ignorable re-c ro-c))
          ;; each row is written from its contact alone, so the rows may be cut into pieces
-         ;; of whole blocks, one a worker ([[#SPL1T5]])
+         ;; of whole blocks, one a worker ([[#SPL1T5]]); a piece first sets its side blocks,
+         ;; padding rows' included, to zeros: a row writes only the side columns that may be
+         ;; other than zero, the spin limit and impulse of a row with no radius on side b
+         ;; ([[#SSMPYW]])
          (flet ((fill-piece (worker count)
                   (declare (type fixnum worker count))
                   (dotimes (color (1+ +physics-max-colors+))
                     (multiple-value-bind (from to)
-                        (piece-bounds (aref color-starts color) (aref cursor color) worker count)
+                        (piece-bounds (aref color-starts color) (aref color-starts (1+ color)) worker count)
                       (declare (type index from to))
-                      (loop for k of-type index from from below to do (fill-constraint-row))))))
+                      (when (< from to)
+                        (fill (side-floats) 0.0
+                              :start (+ +constraint-origin+ (* (floor from 8) (constraint-columns-side-block cbuf)))
+                              :end (+ +constraint-origin+ (* (ceiling to 8) (constraint-columns-side-block cbuf)))))
+                      (loop for k of-type index from from below (min to (aref cursor color))
+                            do (fill-constraint-row))))))
            (declare (dynamic-extent #'fill-piece))
            (run-pieces world (constraint-columns-length cbuf) :fill #'fill-piece)))
        ;; the frames, the box velocities along them and the effective masses, in lanes where
@@ -5570,13 +5607,11 @@ do not read: restitution's, rolling resistance's, and the approach speed only ev
             (hertz (min (f32 (physics-world-contact-hertz world)) (/ 0.25 (the single-float h))))
             (ids (physics-world-ids world))
             (cbuf (physics-world-constraints world))
-            (colors (physics-world-contact-colors world))
             (v (physics-world-velocities world))
-            (d (physics-world-deltas world))
             (g (fsqrt (+ (expt (physics-world-gravity-x world) 2) (expt (physics-world-gravity-y world) 2)
                          (expt (physics-world-gravity-z world) 2))))
             (held-mass (held-mass-bound world)))
-        (declare (type f32-column v d) (type fixnum-column colors)
+        (declare (type f32-column v)
                  (type single-float slop hertz zeta g load-limit held-mass)
                  (type handle-table ids) (type constraint-columns cbuf))
         (multiple-value-bind (dyn-bias dyn-mass dyn-impulse) (physics-softness hertz zeta h)
@@ -10781,7 +10816,7 @@ core. #W0RKP1")
   "How long, in nanoseconds, a worker waiting for a job spins or yields at most before it parks:
 the jobs of a step follow each other within it, the gap between a game's frames does not. #W0RKP1")
 
-(defconstant +pool-jobs+ 18
+(defconstant +pool-jobs+ 19
   "How many kinds of job a pool keeps its calls and timings for ([[#SPL1T5]]). #W0RKP1")
 
 (defstruct (worker-pool (:constructor %make-worker-pool (count)) (:copier nil))
@@ -11181,14 +11216,17 @@ the pieces each. #SPL1T5")
 (defconstant +job-colour-sides+ 17
   "The job: the colouring's second pass, over the one-sided contacts, a share of the pieces
 each. #SPL1T5")
+(defconstant +job-colour-order+ 18
+  "The job: the prepare phase's ordering of the contacts by colour, a share of the colouring's
+pieces each. #SPL1T5")
 
 (defun piece-job (kind)
   "The job number of the phase piece KIND names: :fill, :store, :reorder, :sort-rows, :fold,
-:colour-rows, :colour-pairs or :colour-sides. #SPL1T5"
+:colour-rows, :colour-pairs, :colour-sides or :colour-order. #SPL1T5"
   (ecase kind
     (:fill +job-fill+) (:store +job-store+) (:reorder +job-reorder+) (:sort-rows +job-sort-rows+)
     (:fold +job-fold+) (:colour-rows +job-colour-rows+) (:colour-pairs +job-colour-pairs+)
-    (:colour-sides +job-colour-sides+)))
+    (:colour-sides +job-colour-sides+) (:colour-order +job-colour-order+)))
 
 (defun run-row-pieces (world rows kind move)
   "Run MOVE, a function of the rows FROM below TO, over ROWS rows as a phase piece of KIND
