@@ -5779,6 +5779,73 @@ floor, solved by FAMILY. #B1GBDY"
            (physics-world-overflow-count w) most-overflow)))
 ;; SSMPYW-big-pile-colours ends here
 
+;; [[file:../physics.org::#SSMPYW][SSMPYW-pieces-keep-the-bits]]
+(defun single-pass-colours (world)
+  "The colours a single greedy pass over WORLD's contacts in contact order uses, both passes, as
+the colouring of one piece runs them, on the contact rows its last step looked up. #SSMPYW"
+  (let* ((m (luv-physics::contact-columns-length (luv-physics::physics-world-contacts world)))
+         (rows (luv-physics::physics-world-contact-rows world))
+         (masks (make-array (1+ (physics-world-awake-count world)) :element-type 'fixnum :initial-element 0))
+         (colors (make-array m :element-type 'fixnum :initial-element -1))
+         (top -1))
+    (dotimes (c m)
+      (let ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c)))))
+        (when (and (>= la 0) (>= lb 0))
+          (let ((color (luv-physics::colour-two-body masks colors c la lb)))
+            (when (< color luv-physics::+physics-max-colors+) (setf top (max top color)))))))
+    (dotimes (c m)
+      (when (= -1 (aref colors c))
+        (luv-physics::colour-one-sided masks colors c (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c))))
+                                       (1- (ash 1 (1+ top))))))
+    (length (remove-duplicates (coerce colors 'list)))))
+
+(define-claim "SSMPYW" pieces-keep-the-bits
+    "A 1024-ball basin coloured in four pieces: one hash for 1, 2 and 3 workers step by step, the passes in pieces, colours disjoint, at most one more than a single pass."
+  (let ((worlds (loop for workers in '(1 2 3)
+                      collect (let ((w (make-basin-world 1024)))
+                                (luv-physics::open-world-workers w workers)
+                                (let ((pool (luv-physics::physics-world-pool w)))
+                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                                w)))
+        (differ '()))
+    (check (= 4 (luv-physics::colour-pieces 1024)))
+    (dotimes (i 30)
+      (dolist (w worlds) (step-physics-world w))
+      (unless (= 1 (length (remove-duplicates (mapcar #'physics-world-state-hash worlds))))
+        (push i differ)))
+    (check (null differ) "the hashes differ after steps ~S" (reverse differ))
+    (dolist (w (rest worlds))
+      (let ((spent (luv-physics::worker-pool-spent (luv-physics::physics-world-pool w))))
+        (loop for (job name) in (list (list luv-physics::+job-colour-pairs+ "pass one")
+                                      (list luv-physics::+job-colour-sides+ "pass two")
+                                      (list luv-physics::+job-colour-order+ "the ordering by colour"))
+              do (check (plusp (aref spent job)) "~D workers: ~A never ran in pieces" (physics-world-workers w) name))))
+    (let* ((w (first worlds))
+           (n (physics-world-awake-count w))
+           (rows (luv-physics::physics-world-contact-rows w))
+           (m (luv-physics::contact-columns-length (luv-physics::physics-world-contacts w)))
+           (cbuf (luv-physics::physics-world-constraints w))
+           (starts (luv-physics::physics-world-color-starts w))
+           (across (loop for c below m
+                         count (let ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c)))))
+                                 (and (>= la 0) (>= lb 0) (/= (floor (* 4 la) n) (floor (* 4 lb) n))))))
+           (clashes 0))
+      (check (plusp across) "no contact lies across two pieces")
+      (dotimes (c luv-physics::+physics-max-colors+)
+        (let ((seen (make-hash-table)))
+          (loop for k from (aref starts c) below (aref starts (1+ c))
+                do (dolist (body (list (aref (luv-physics::constraint-columns-body-a cbuf) k)
+                                       (aref (luv-physics::constraint-columns-body-b cbuf) k)))
+                     (unless (= body n)
+                       (when (gethash body seen) (incf clashes))
+                       (setf (gethash body seen) t))))))
+      (check (= 0 clashes) "~D constraints share a body with another of their colour" clashes)
+      (check (= 0 (physics-world-overflow-count w)) "~D in the overflow colour" (physics-world-overflow-count w))
+      (let ((single (single-pass-colours w)) (used (physics-world-last-step-color-count w)))
+        (check (<= used (1+ single)) "~D colours in pieces, ~D in one pass" used single)))
+    (mapc #'close-physics-world worlds)))
+;; SSMPYW-pieces-keep-the-bits ends here
+
 ;; [[file:../physics.org::#SSMPYW][SSMPYW-side-zero-where-unread]]
 (define-claim "SSMPYW" side-zero-where-unread
     "Spin columns are zero where rb is not, armed speeds where restitution is zero: after every prepare and substep phase."
