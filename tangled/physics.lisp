@@ -1664,6 +1664,8 @@ handles, and the filters and lasting sensors. #W0RLD7"))
    (contact-rows :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-rows)
    ;; the colouring's list of the contacts across two of its pieces ([[#SSMPYW]])
    (contact-crosses :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-crosses)
+   ;; the prune's list of the contact rows not seen this step ([[#PRUN3D]])
+   (contact-drops :initform (make-array 0 :element-type 'fixnum) :accessor physics-world-contact-drops)
    ;; each colouring piece's count of each colour, and its next place in each colour's run
    (colour-counts :initform (make-array 100 :element-type 'fixnum :initial-element 0)
                   :reader physics-world-colour-counts)
@@ -4591,18 +4593,27 @@ the hole. #PRUN3D"
     (declare (type contact-columns contacts) (type contact-table table) (type fixnum step))
     ;; the room a reordering needs grows with the contact buffer, so reordering never allocates
     (contact-columns-ensure-capacity (physics-world-contact-scratch world) (contact-columns-capacity contacts))
-    (loop for row of-type fixnum from (1- (contact-columns-length contacts)) downto 0
-          do (with-contact-columns (seen order touching key handle-a handle-b geometry) contacts
-               (unless (= (aref seen row) step)
-                 (when (= (aref touching row) 1)
-                   (push-event world +event-end+ (aref handle-a row) (aref handle-b row)
-                               (contact@ geometry row px) (contact@ geometry row py) (contact@ geometry row pz) 0.0))
-                 (contact-table-delete table (aref key row))
-                 (if reorder
-                     (setf (aref order row) -1)
-                     (let ((moved (contact-columns-swap-remove contacts row)))
-                       (when (>= moved 0)
-                         (contact-table-put table (aref key row) row)))))))
+    (let* ((m (contact-columns-length contacts))
+           (drops (setf (physics-world-contact-drops world)
+                        (fixnum-room (physics-world-contact-drops world) m :keep 0)))
+           ;; a place for each worker a world may have (+physics-max-workers+, [[#W0RKP1]])
+           (ends (make-array 64 :element-type 'fixnum))
+           (shares (list-unseen-rows world m step drops ends)))
+      (declare (type index m) (type fixnum-column drops) (type fixnum shares) (dynamic-extent ends))
+      ;; the rows not seen, from the last down: the last share's list first, each from its end
+      (loop for w of-type fixnum from (1- shares) downto 0
+            do (loop for i of-type fixnum from (1- (aref ends w)) downto (piece-bounds 0 m w shares)
+                     do (let ((row (aref drops i)))
+                          (with-contact-columns (order touching key handle-a handle-b geometry) contacts
+                            (when (= (aref touching row) 1)
+                              (push-event world +event-end+ (aref handle-a row) (aref handle-b row)
+                                          (contact@ geometry row px) (contact@ geometry row py) (contact@ geometry row pz) 0.0))
+                            (contact-table-delete table (aref key row))
+                            (if reorder
+                                (setf (aref order row) -1)
+                                (let ((moved (contact-columns-swap-remove contacts row)))
+                                  (when (>= moved 0)
+                                    (contact-table-put table (aref key row) row)))))))))
     (when reorder
       (let ((order (contact-columns-order contacts))
             (slots (contact-table-slots table)))
@@ -4617,6 +4628,27 @@ the hole. #PRUN3D"
                                    (contact-table-touched table) #'runner))
         (setf (contact-table-misses table) 0)))
     world))
+
+(defun list-unseen-rows (world m step drops ends)
+  "List, in DROPS, WORLD's contact rows among the first M not seen at STEP: in pieces, one a
+worker ([[#SPL1T5]]), each share of the rows listing its own in order from its first row's place
+on and writing where its list ends into ENDS at its worker. Return how many shares ran. #PRUN3D"
+  (declare (type index m) (type fixnum step) (type fixnum-column drops ends) #.+kernel-policy+)
+  (let ((seen (contact-columns-seen (physics-world-contacts world))))
+    (declare (type fixnum-column seen))
+    (flet ((unseen (worker count)
+             (declare (type fixnum worker count))
+             (multiple-value-bind (from to) (piece-bounds 0 m worker count)
+               (declare (type index from to))
+               (let ((at from))
+                 (declare (type index at))
+                 (loop for row of-type index from from below to
+                       unless (= (aref seen row) step)
+                         do (setf (aref drops at) row)
+                            (incf at))
+                 (setf (aref ends worker) at)))))
+      (declare (dynamic-extent #'unseen))
+      (run-pieces world m :unseen #'unseen))))
 ;; Contacts not found this step are pruned:1 ends here
 
 ;; [[file:../physics.org::#SSMPYW][Colours are the lanes:1]]
@@ -4796,7 +4828,7 @@ claims and the tools, which name a column rather than know its block. #SSMPYW"
 (defconstant +colour-pieces+ 4
   "The most pieces the colouring cuts the awake rows into. #SSMPYW")
 
-(defconstant +colour-piece-rows+ 256
+(defconstant +colour-piece-rows+ 1024
   "The fewest awake rows a colouring piece holds. #SSMPYW")
 
 (defun colour-pieces (n)
@@ -4812,10 +4844,10 @@ least one and at most +colour-pieces+. #SSMPYW"
 
 (declaim (inline colour-piece))
 (defun colour-piece (l scale last)
-  "The colouring piece of the awake row L: L times SCALE over 2^40, at most LAST. Without a
-division, and fixed by the rows and the pieces alone. #SSMPYW"
+  "The colouring piece of the awake row L: L times SCALE over 2^40, at most LAST (0 when LAST
+is). Without a division, and fixed by the rows and the pieces alone. #SSMPYW"
   (declare (type index l last) (type (unsigned-byte 62) scale))
-  (min last (ash (ldb (byte 62 0) (* l scale)) -40)))
+  (if (zerop last) 0 (min last (ash (ldb (byte 62 0) (* l scale)) -40))))
 
 (declaim (inline colour-two-body))
 (defun colour-two-body (masks colors c la lb)
@@ -4961,7 +4993,7 @@ Return how many shares ran. #SSMPYW"
                                 (declare (type fixnum la lb))
                                 (setf (aref rows (* 2 c)) la (aref rows (1+ (* 2 c))) lb
                                       (aref colors c) -1)
-                                (when (and two-body (>= la 0) (>= lb 0)
+                                (when (and two-body (plusp last) (>= la 0) (>= lb 0)
                                            (/= (colour-piece la scale last) (colour-piece lb scale last)))
                                   (setf (aref crosses at) c)
                                   (incf at))))
@@ -4992,15 +5024,16 @@ colours of the contacts whose last awake row is its own. #SSMPYW"
                (fill counts 0 :start (* p0 (1+ +physics-max-colors+)) :end (* p1 (1+ +physics-max-colors+)))
                (when (< p0 p1)
                  (dotimes (c m)
-                   (let* ((l (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c)))))
+                   (let* ((color (aref colors c))
+                          ;; one piece needs the rows only of a contact it colours
+                          (l (if (and (zerop last) (/= color -1))
+                                 0
+                                 (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c))))))
                           (p (colour-piece l scale last)))
-                     (declare (type index l p))
+                     (declare (type fixnum color) (type index l p))
                      (when (and (<= p0 p) (< p p1))
-                       (let ((color (if (= (aref colors c) -1)
-                                        (colour-one-sided masks colors c l used)
-                                        (aref colors c))))
-                         (declare (type (integer 0 24) color))
-                         (incf (aref counts (+ (* p (1+ +physics-max-colors+)) color)))))))))))
+                       (when (= color -1) (setf color (colour-one-sided masks colors c l used)))
+                       (incf (aref counts (+ (* p (1+ +physics-max-colors+)) color))))))))))
       (declare (dynamic-extent #'one-sided-piece))
       (run-pieces world m :colour-sides #'one-sided-piece))))
 
@@ -5358,7 +5391,9 @@ pieces run one a worker ([[#SPL1T5]]). #PRCL0R"
              (with-colour-pieces (p0 p1) (pieces worker count)
                (when (< p0 p1)
                  (dotimes (c m)
-                   (let ((p (colour-piece (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c)))) scale last)))
+                   (let ((p (if (zerop last)
+                                0
+                                (colour-piece (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c)))) scale last))))
                      (declare (type index p))
                      (when (and (<= p0 p) (< p p1))
                        (let ((k (+ (* p (1+ +physics-max-colors+)) (aref colors c))))
@@ -10816,7 +10851,7 @@ core. #W0RKP1")
   "How long, in nanoseconds, a worker waiting for a job spins or yields at most before it parks:
 the jobs of a step follow each other within it, the gap between a game's frames does not. #W0RKP1")
 
-(defconstant +pool-jobs+ 19
+(defconstant +pool-jobs+ 20
   "How many kinds of job a pool keeps its calls and timings for ([[#SPL1T5]]). #W0RKP1")
 
 (defstruct (worker-pool (:constructor %make-worker-pool (count)) (:copier nil))
@@ -11219,14 +11254,18 @@ each. #SPL1T5")
 (defconstant +job-colour-order+ 18
   "The job: the prepare phase's ordering of the contacts by colour, a share of the colouring's
 pieces each. #SPL1T5")
+(defconstant +job-unseen+ 19
+  "The job: the prune phase's listing of the contact rows not seen this step, a share of the rows
+each. #SPL1T5")
 
 (defun piece-job (kind)
   "The job number of the phase piece KIND names: :fill, :store, :reorder, :sort-rows, :fold,
-:colour-rows, :colour-pairs, :colour-sides or :colour-order. #SPL1T5"
+:colour-rows, :colour-pairs, :colour-sides, :colour-order or :unseen. #SPL1T5"
   (ecase kind
     (:fill +job-fill+) (:store +job-store+) (:reorder +job-reorder+) (:sort-rows +job-sort-rows+)
     (:fold +job-fold+) (:colour-rows +job-colour-rows+) (:colour-pairs +job-colour-pairs+)
-    (:colour-sides +job-colour-sides+) (:colour-order +job-colour-order+)))
+    (:colour-sides +job-colour-sides+) (:colour-order +job-colour-order+)
+    (:unseen +job-unseen+)))
 
 (defun run-row-pieces (world rows kind move)
   "Run MOVE, a function of the rows FROM below TO, over ROWS rows as a phase piece of KIND

@@ -1640,7 +1640,7 @@ the basin. #B3NCHW"
 
 (defparameter *job-phases*
   '((substep-phase 0 1 2 3 4) (prepare-phase 5 6 15 16 17 18) (store-phase 7) (pair-phase 8 9) (terrain-phase 10)
-    (prune-phase 12) (grid-phase 13) (finalize-phase 14))
+    (prune-phase 12 19) (grid-phase 13) (finalize-phase 14))
   "Each phase whose loops split, with the jobs ([[#SPL1T5]]) that run inside it. #B3NCHW")
 
 (defun make-bench-basin (count family)
