@@ -4901,20 +4901,78 @@ overflow starting on a multiple of eight; returns the number of colours used. #S
          (pieces (colour-pieces n))
          (scale (colour-piece-scale n pieces))
          (last (1- pieces))
-         (masks (physics-world-color-masks world))
-         (colors (physics-world-contact-colors world))
-         (rows (physics-world-contact-rows world))
          (crosses (physics-world-contact-crosses world))
-         (starts (physics-world-color-starts world))
-         (tops (make-array (1+ +colour-pieces+) :element-type 'fixnum :initial-element -1))
          (counts (physics-world-colour-counts world))
          ;; a place for each worker a world may have (+physics-max-workers+, [[#W0RKP1]])
          (ends (make-array 64 :element-type 'fixnum))
          (looked 1))
-    (declare (type fixnum-column masks colors rows crosses starts counts) (type index m n pieces last)
+    (declare (type fixnum-column crosses counts) (type index m n pieces last)
              (type (unsigned-byte 62) scale) (type fixnum looked)
-             (dynamic-extent tops ends) #.+kernel-policy+)
+             (dynamic-extent ends) #.+kernel-policy+)
     (setf looked (look-up-contact-rows world m n scale last two-body crosses ends))
+    (if (= pieces 1)
+        (color-one-piece world m two-body counts)
+        (color-pieces world m scale last two-body crosses ends looked counts)))
+  ;; the colours' counts, piece by piece, then prefix sums, each colour but the overflow
+  ;; padded to a whole block of eight rows
+  (let* ((n (body-columns-length (physics-world-awake world)))
+         (starts (physics-world-color-starts world))
+         (counts (physics-world-colour-counts world)))
+    (declare (type fixnum-column starts counts) (type index n))
+    (fill starts 0)
+    (dotimes (p (colour-pieces n))
+      (dotimes (c (1+ +physics-max-colors+))
+        (incf (aref starts (1+ c)) (aref counts (+ (* p (1+ +physics-max-colors+)) c)))))
+    (loop with at of-type index = 0
+          for c from 0 to +physics-max-colors+
+          for count of-type index = (aref starts (1+ c))
+          do (setf (aref starts c) at)
+             (incf at (if (< c +physics-max-colors+) (* 8 (ceiling count 8)) count))
+          count (plusp count) into used
+          finally (setf (aref starts (1+ +physics-max-colors+)) at)
+                  (return used))))
+
+(defun color-one-piece (world m two-body counts)
+  "The colouring's two passes over WORLD's M contacts as one piece, on one thread: pass one
+over the two-body contacts (when TWO-BODY) in contact order, then pass two; count the colours
+into the first 25 places of COUNTS. #SSMPYW"
+  (declare (type index m) (type fixnum-column counts) #.+kernel-policy+)
+  (let ((masks (physics-world-color-masks world))
+        (colors (physics-world-contact-colors world))
+        (rows (physics-world-contact-rows world))
+        (top -1))
+    (declare (type fixnum-column masks colors rows) (type fixnum top))
+    (when two-body
+      (dotimes (c m)
+        (let ((la (aref rows (* 2 c))) (lb (aref rows (1+ (* 2 c)))))
+          (declare (type fixnum la lb))
+          (when (and (>= la 0) (>= lb 0))
+            (let ((color (colour-two-body masks colors c la lb)))
+              (when (< top color +physics-max-colors+) (setf top color)))))))
+    (fill counts 0 :end (1+ +physics-max-colors+))
+    (let ((used (1- (ash 1 (1+ top)))))
+      (declare (type (unsigned-byte 32) used))
+      (dotimes (c m)
+        (let ((color (aref colors c)))
+          (declare (type fixnum color))
+          (when (= color -1)
+            (setf color (colour-one-sided masks colors c (max (aref rows (* 2 c)) (aref rows (1+ (* 2 c))))
+                                          used)))
+          (incf (aref counts color)))))))
+
+(defun color-pieces (world m scale last two-body crosses ends looked counts)
+  "The colouring's two passes over WORLD's M contacts in pieces (colour-piece of SCALE, the last
+LAST): pass one within each piece when TWO-BODY, then the contacts across pieces that the
+LOOKED shares of the look-up listed in CROSSES up to their ENDS, then pass two by piece
+(color-one-sided-contacts), counting into COUNTS. #SSMPYW"
+  (declare (type index m last) (type (unsigned-byte 62) scale) (type fixnum looked)
+           (type fixnum-column crosses ends counts) #.+kernel-policy+)
+  (let ((pieces (1+ last))
+        (masks (physics-world-color-masks world))
+        (colors (physics-world-contact-colors world))
+        (rows (physics-world-contact-rows world))
+        (tops (make-array (1+ +colour-pieces+) :element-type 'fixnum :initial-element -1)))
+    (declare (type index pieces) (type fixnum-column masks colors rows) (dynamic-extent tops))
     (when two-body
       ;; pass one, within each piece: its contacts touch its bodies alone
       (flet ((two-body-piece (worker count)
@@ -4942,21 +5000,7 @@ overflow starting on a multiple of eight; returns the number of colours used. #S
                    (when (< (aref tops +colour-pieces+) color +physics-max-colors+)
                      (setf (aref tops +colour-pieces+) color))))))
     (color-one-sided-contacts world m scale last
-                              (1- (ash 1 (1+ (loop for top across tops maximize top)))) counts)
-    ;; the colours' counts, piece by piece, then prefix sums, each colour but the overflow
-    ;; padded to a whole block of eight rows
-    (fill starts 0)
-    (dotimes (p pieces)
-      (dotimes (c (1+ +physics-max-colors+))
-        (incf (aref starts (1+ c)) (aref counts (+ (* p (1+ +physics-max-colors+)) c)))))
-    (loop with at of-type index = 0
-          for c from 0 to +physics-max-colors+
-          for count of-type index = (aref starts (1+ c))
-          do (setf (aref starts c) at)
-             (incf at (if (< c +physics-max-colors+) (* 8 (ceiling count 8)) count))
-          count (plusp count) into used
-          finally (setf (aref starts (1+ +physics-max-colors+)) at)
-                  (return used))))
+                              (1- (ash 1 (1+ (loop for top across tops maximize top)))) counts)))
 
 (defun look-up-contact-rows (world m n scale last two-body crosses ends)
   "The colouring's first job, in pieces: every one of WORLD's M contacts' awake rows into the
@@ -5172,7 +5216,6 @@ included, as the colouring laid them out. #PRLD5V"
     (constraint-columns-ensure-capacity cbuf rows)
     (setf (constraint-columns-length cbuf) rows)))
 
-(declaim (inline load-solver-bodies))
 (defun load-solver-bodies (awake v d n from to)
   "Load the solver's body state for the rows FROM below TO of AWAKE's N and the dummy row N after
 them: each awake row's velocities into its solver row of V, zero velocities in the dummy row,
@@ -5386,6 +5429,13 @@ pieces run one a worker ([[#SPL1T5]]). #PRCL0R"
             (setf (aref places k) at)
             (incf at (aref counts k))))
         (setf (aref cursor color) at)))
+    ;; one piece, in contact order on one thread; else a share of the pieces a worker
+    (when (= pieces 1)
+      (dotimes (c m)
+        (let ((k (aref colors c)))
+          (setf (aref contact (aref places k)) c)
+          (incf (aref places k))))
+      (return-from order-rows-by-colour))
     (flet ((order-piece (worker count)
              (declare (type fixnum worker count))
              (with-colour-pieces (p0 p1) (pieces worker count)
