@@ -3088,6 +3088,24 @@ omega squared. #X7R3M5"
   (multiple-value-bind (vx vy vz) (physics-body-velocity world handle)
     (sqrt (+ (* vx vx) (* vy vy) (* vz vz)))))
 
+(defun fastest-and-parting (world bodies within)
+  "The largest speed of BODIES in WORLD, and the largest speed at which two of them whose centres
+lie closer than WITHIN (and apart) move away from each other along the line of their centres. #X7R3M5"
+  (let ((fastest 0.0) (parting 0.0))
+    (loop for (a . rest) on bodies
+          do (setf fastest (max fastest (speed-of world a)))
+             (multiple-value-bind (ax ay az) (physics-body-position world a)
+               (multiple-value-bind (avx avy avz) (physics-body-velocity world a)
+                 (dolist (b rest)
+                   (multiple-value-bind (bx by bz) (physics-body-position world b)
+                     (let ((d (sqrt (+ (expt (- bx ax) 2) (expt (- by ay) 2) (expt (- bz az) 2)))))
+                       (when (< 1e-6 d within)
+                         (multiple-value-bind (bvx bvy bvz) (physics-body-velocity world b)
+                           (setf parting (max parting (/ (+ (* (- bx ax) (- bvx avx)) (* (- by ay) (- bvy avy))
+                                                            (* (- bz az) (- bvz avz)))
+                                                         d)))))))))))
+    (values fastest parting)))
+
 (defun make-shaft-world (&rest world-args)
   "A solid block with a one-cell shaft, x and z in [0,1), open from y = 0 upwards; WORLD-ARGS go
 to make-physics-world. #X7R3M5"
@@ -3127,18 +3145,8 @@ more than the slop (where push-out acts) moved apart, and the deepest overlap le
          (fastest 0.0) (parting 0.0) (within (- 0.5 *physics-linear-slop*)))
     (dotimes (i steps)
       (step-physics-world world)
-      (loop for (a . rest) on balls
-            do (setf fastest (max fastest (speed-of world a)))
-               (multiple-value-bind (ax ay az) (physics-body-position world a)
-                 (multiple-value-bind (avx avy avz) (physics-body-velocity world a)
-                   (dolist (b rest)
-                     (multiple-value-bind (bx by bz) (physics-body-position world b)
-                       (let ((d (sqrt (+ (expt (- bx ax) 2) (expt (- by ay) 2) (expt (- bz az) 2)))))
-                         (when (< 1e-6 d within)
-                           (multiple-value-bind (bvx bvy bvz) (physics-body-velocity world b)
-                             (setf parting (max parting (/ (+ (* (- bx ax) (- bvx avx)) (* (- by ay) (- bvy avy))
-                                                              (* (- bz az) (- bvz avz)))
-                                                           d))))))))))))
+      (multiple-value-bind (f p) (fastest-and-parting world balls within)
+        (setf fastest (max fastest f) parting (max parting p))))
     (values fastest parting (physics-world-max-penetration world))))
 
 (defun heap-footprint (count &key (steps 60) (gravity '(0 0 0)) (every 10))
@@ -3426,18 +3434,8 @@ barely turned) moved apart; how many cubes end with a corner or the centre in th
          (fastest 0.0) (parting 0.0) (within (- 1.0 *physics-linear-slop*)))
     (dotimes (i (round (* 60 seconds)))
       (step-physics-world world)
-      (loop for (a . rest) on boxes
-            do (setf fastest (max fastest (speed-of world a)))
-               (multiple-value-bind (ax ay az) (physics-body-position world a)
-                 (multiple-value-bind (avx avy avz) (physics-body-velocity world a)
-                   (dolist (b rest)
-                     (multiple-value-bind (bx by bz) (physics-body-position world b)
-                       (let ((d (sqrt (+ (expt (- bx ax) 2) (expt (- by ay) 2) (expt (- bz az) 2)))))
-                         (when (< 1e-6 d within)
-                           (multiple-value-bind (bvx bvy bvz) (physics-body-velocity world b)
-                             (setf parting (max parting (/ (+ (* (- bx ax) (- bvx avx)) (* (- by ay) (- bvy avy))
-                                                              (* (- bz az) (- bvz avz)))
-                                                           d))))))))))))
+      (multiple-value-bind (f p) (fastest-and-parting world boxes within)
+        (setf fastest (max fastest f) parting (max parting p))))
     (values fastest parting
             (count-if (lambda (b)
                         (multiple-value-bind (x y z) (physics-body-position world b)

@@ -5799,14 +5799,19 @@ the colouring of one piece runs them, on the contact rows its last step looked u
                                        (1- (ash 1 (1+ top))))))
     (length (remove-duplicates (coerce colors 'list)))))
 
+(defun split-basin-worlds (balls)
+  "Three basins of BALLS balls on 1, 2 and 3 workers, each pool splitting every pass however few
+its rows. #SSMPYW"
+  (loop for workers in '(1 2 3)
+        collect (let ((w (make-basin-world balls)))
+                  (luv-physics::open-world-workers w workers)
+                  (let ((pool (luv-physics::physics-world-pool w)))
+                    (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
+                  w)))
+
 (define-claim "SSMPYW" pieces-keep-the-bits
     "A 2048-ball basin coloured in two pieces: one hash for 1, 2 and 3 workers step by step, the passes in pieces, colours disjoint, at most two more than a single pass."
-  (let ((worlds (loop for workers in '(1 2 3)
-                      collect (let ((w (make-basin-world 2048)))
-                                (luv-physics::open-world-workers w workers)
-                                (let ((pool (luv-physics::physics-world-pool w)))
-                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
-                                w)))
+  (let ((worlds (split-basin-worlds 2048))
         (differ '()))
     (check (= 2 (luv-physics::colour-pieces 2048)))
     (dotimes (i 30)
@@ -9969,12 +9974,7 @@ solved by FAMILY. #SPL1T5"
 ;; [[file:../physics.org::#SPL1T5][SPL1T5-serial-loops-in-pieces]]
 (define-claim "SPL1T5" serial-loops-in-pieces
     "The colouring's look-ups, the prune's reordering, the grid's sort and the finalize's fold in pieces on 2 and 3 workers keep one worker's hash, step by step."
-  (let ((worlds (loop for workers in '(1 2 3)
-                      collect (let ((w (make-basin-world 300)))
-                                (luv-physics::open-world-workers w workers)
-                                (let ((pool (luv-physics::physics-world-pool w)))
-                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
-                                w)))
+  (let ((worlds (split-basin-worlds 300))
         (differ '()))
     (dotimes (i 60)
       (dolist (w worlds) (step-physics-world w))
@@ -10102,12 +10102,7 @@ overlaps, the contact table's cursor, misses and touched count, and the contacts
 
 (define-claim "P41P1C" pieces-leave-the-walk
     "Pair pieces on 2 and 3 workers leave the pair list, overlaps, the contact table's walk and the contacts' rows as one worker, step by step."
-  (let ((worlds (loop for workers in '(1 2 3)
-                      collect (let ((w (make-basin-world 300)))
-                                (luv-physics::open-world-workers w workers)
-                                (let ((pool (luv-physics::physics-world-pool w)))
-                                  (when pool (setf (luv-physics::worker-pool-split-rows pool) 0)))
-                                w)))
+  (let ((worlds (split-basin-worlds 300))
         (differ '()))
     (dotimes (i 60)
       (dolist (w worlds) (step-physics-world w))
