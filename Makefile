@@ -15,7 +15,7 @@ ORG    := physics.org
 OUT    := tangled/physics.lisp tangled/physics-simd.lisp tangled/workshop.lisp tests/physics-tests.lisp
 LISP   := $(SBCL) --dynamic-space-size $(HEAP) --noinform --non-interactive --no-sysinit --no-userinit
 
-.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-workers bench-rollback bench-snapshots count-snapshots fuzz-snapshots bench-peers bench-against bench-joint-grid bench-pyramid count-against count-features report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
+.PHONY: help setup tangle check-tangle check-anchors test fresh-compile-log editor-test demo load-time bench bench-workers bench-rollback bench-snapshots count-snapshots fuzz-snapshots bench-peers bench-against bench-joint-grid bench-pyramid count-against count-features count-pyramid report report-peers heaps mutate mutate-splice prose-count html view pictures fuzz soak clean
 .NOTPARALLEL:
 
 help:
@@ -52,6 +52,7 @@ help:
 	@echo "make bench-pyramid BOX3D_SRC=dir  Box3D's large pyramid (5050 cubes) here and in Box3D built"
 	@echo "                    from dir, ROUNDS=5 rounds of alternating processes; table into $(ORG)"
 	@echo "make count-features the feature table's scenes as instructions a step, by valgrind; table into $(ORG)"
+	@echo "make count-pyramid  a pyramid of 40 cubes at its base, instructions a step, by valgrind; table into $(ORG)"
 	@echo "make report         stiff and extreme cases, and error against run time; tables into $(ORG),"
 	@echo "                    diagrams into report/wp-*.svg"
 	@echo "make report-peers   every scene of the error-against-run-time sweep here, in Debian's Bullet and"
@@ -190,8 +191,8 @@ bench-against: setup tangle
 
 # Instructions a step, counted by valgrind's cachegrind, which the machine's load does not move:
 # count-against, the engines of REVS against this one (#B3NCH5); count-features, the feature
-# table's scenes general and specialised (#FBNCH9).
-count-against count-features: count-%: setup tangle
+# table's scenes general and specialised (#FBNCH9); count-pyramid, Box3D's pyramid smaller (#PYR4MD).
+count-against count-features count-pyramid: count-%: setup tangle
 	@mkdir -p report
 	@command -v valgrind >/dev/null 2>&1 || { echo "count-$*: valgrind is not installed (make setup as root installs it)" >&2; exit 1; }
 	@rm -f report/count-$*-failed

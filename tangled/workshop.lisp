@@ -1128,6 +1128,32 @@ over PROFILE-STEPS steps. #PYR4MD"
           (format stream "~&| ~(~{~A~^ ~}~) | ~A |~%" (butlast words) (car (last words))))))))
 ;; The large pyramid, beside Box3D:1 ends here
 
+;; [[file:../physics.org::#PYR4MD][The large pyramid, beside Box3D:2]]
+(defun run-count-pyramid (&key (stream *standard-output*) (base 40) (from 20) (to 40) counter
+                                (families (remove-duplicates (list :scalar (car (last (available-kernel-families)))))))
+  "Print, as an Org table, the millions of instructions a step of the pyramid of BASE cubes at
+its base (large-pyramid-world) runs in each of FAMILIES: a process of tools/pyramid-one.lisp
+stepping it TO times less one stepping it FROM times, over TO - FROM, counted by cachegrind
+(count-per-step), with the state hash the longer one ended with. COUNTER, when given, is called
+as count-per-step would be, in its place, and nothing is compiled first. #PYR4MD"
+  (let ((root (namestring (asdf:system-source-directory "luv-physics"))))
+    ;; the engine compiled first, outside valgrind
+    (unless counter (against-sample root '(:scalar) 0 0 0))
+    (format stream "~&#+caption: Box3D's pyramid, ~D cubes at the base (~D cubes), no sleep; millions of ~
+                    instructions a step over steps ~D-~D (cachegrind: a process of ~D steps less one of ~D); ~
+                    ~A; load ~A~%"
+            base (/ (* base (1+ base)) 2) from to to from (cpu-model-name) (load-average))
+    (format stream "~&| family | instructions | state hash |~%|--------+--------------+------------|~%")
+    (dolist (family families)
+      (multiple-value-bind (per-step hash)
+          (funcall (or counter #'count-per-step) "pyramid" from to
+                   (lambda (steps)
+                     (list root (format nil "hash-~(~A~)" family) (princ-to-string base) (princ-to-string steps))))
+        (format stream "~&| ~(~A~) | ~,2F | ~D |~%" family per-step hash)
+        (finish-output stream)))
+    (format stream "~&(after the run: load ~A)~%" (load-average))))
+;; The large pyramid, beside Box3D:2 ends here
+
 ;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:2]]
 (defun deepest-into-cells (terrain x y z r)
   "How deep the surface of a sphere of radius R centred at X Y Z reaches into the solid cells of

@@ -8382,6 +8382,41 @@ wall. #BXPUSH"
     (check (zerop consed) "60 steps consed ~D bytes" consed)))
 ;; BXPUSH-push-bit-equal-and-quiet ends here
 
+;; [[file:../physics.org::#PYR4MD][PYR4MD-pyramid-count-as-counted]]
+(define-claim "PYR4MD" pyramid-count-as-counted
+    "tools/pyramid-one.lisp hash-scalar prints this image's state hash of the pyramid; the count's table prints each family's row."
+  (let* ((root (asdf:system-source-directory "luv-physics"))
+         (text (uiop:run-program (list "sbcl" "--dynamic-space-size" "4Gb" "--script"
+                                       (namestring (merge-pathnames "tools/pyramid-one.lisp" root))
+                                       (namestring root) "hash-scalar" "4" "30")
+                                 :output :string :error-output :string))
+         (words (remove "" (uiop:split-string (string-trim '(#\Newline) text)) :test #'string=)))
+    (flet ((hash-after (steps)
+             (let ((w (luv-physics::large-pyramid-world 4 :kernels :scalar)))
+               (dotimes (i steps) (step-physics-world w))
+               (physics-world-state-hash w))))
+      (check (equal (subseq words 0 2) '("pyramid" "scalar")) "printed ~S" text)
+      (check (/= (hash-after 30) (hash-after 29)) "29 and 30 steps end in one state")
+      (check (= (parse-integer (third words)) (hash-after 30))
+             "the process's hash ~A, this image's ~D" (third words) (hash-after 30))))
+  (let* ((text (with-output-to-string (s)
+                 (luv-physics::run-count-pyramid
+                  :stream s :families '(:scalar :sse)
+                  :counter (lambda (script from to arguments)
+                             (declare (ignore to))
+                             (destructuring-bind (root family base steps) (funcall arguments from)
+                               (declare (ignore root))
+                               (check (and (string= script "pyramid") (string= base "40") (string= steps "20"))
+                                      "counted ~A ~A ~A" script base steps)
+                               (if (string= family "hash-scalar") (values 3.5d0 7) (values 2.25d0 9)))))))
+         (lines (with-input-from-string (in text)
+                  (loop for line = (read-line in nil) while line
+                        when (and (plusp (length line)) (char= #\| (char line 0))) collect line))))
+    (check (equal lines '("| family | instructions | state hash |" "|--------+--------------+------------|"
+                          "| scalar | 3.50 | 7 |" "| sse | 2.25 | 9 |"))
+           "~S" lines)))
+;; PYR4MD-pyramid-count-as-counted ends here
+
 ;; [[file:../physics.org::#PYR4MD][PYR4MD-the-pyramid-is-box3ds]]
 (define-claim "PYR4MD" the-pyramid-is-box3ds
     "A pyramid of base 4: ten unit cubes of 100 kg in rows of 4, 3, 2, 1, touching, centred on x = 0."

@@ -3,8 +3,8 @@
 ;;;;
 ;;;; BENCH in the environment names the benchmark function of the luv-physics package:
 ;;;; run-basin-benchmark (the default), run-scene-benchmark, run-sleeping-scale-benchmark,
-;;;; run-query-benchmark, run-feature-benchmark, run-against-benchmark, run-count-against or
-;;;; run-count-features.
+;;;; run-query-benchmark, run-feature-benchmark, run-against-benchmark, run-count-against,
+;;;; run-count-features or run-count-pyramid.
 
 (load (merge-pathnames "boot.lisp" *load-truename*))
 

@@ -5,7 +5,11 @@
 ;;;; cubes at its base (large-pyramid-world), and the top cube's centre at the end.  With FAMILIES
 ;;;; the word profile, it runs the scalar family under sb-sprof instead and prints one line
 ;;;;   profile FUNCTION SHARE
-;;;; for each function holding at least 1 % of the samples by itself.
+;;;; for each function holding at least 1 % of the samples by itself.  With FAMILIES the word hash-
+;;;; and a family (hash-scalar), make count-pyramid's process under valgrind, it steps that family's
+;;;; pyramid STEPS times and prints one line
+;;;;   pyramid FAMILY HASH
+;;;; with the world's state hash.
 ;;;;
 ;;;; Usage: sbcl --script tools/pyramid-one.lisp ROOT/ FAMILIES BASE STEPS   (FAMILIES as scalar,avx2)
 
@@ -42,8 +46,16 @@ family's pyramid of BASE, after two steps to settle the buffers."
 (destructuring-bind (root families base steps) *pyramid-arguments*
   (declare (ignore root))
   (let ((base (parse-integer base)) (steps (parse-integer steps)))
-    (if (string= families "profile")
-        (pyramid-profile base steps)
+    (cond
+      ((string= families "profile") (pyramid-profile base steps))
+      ((and (> (length families) 5) (string= (subseq families 0 5) "hash-"))
+       (let ((family (intern (string-upcase (subseq families 5)) :keyword)))
+         (let ((world (funcall (find-symbol "LARGE-PYRAMID-WORLD" :luv-physics) base :kernels family)))
+           (dotimes (i steps) (funcall (find-symbol "STEP-PHYSICS-WORLD" :luv-physics) world))
+           (format t "~&pyramid ~(~A~) ~D~%" family
+                   (funcall (find-symbol "PHYSICS-WORLD-STATE-HASH" :luv-physics) world))
+           (finish-output))))
+      (t
         (dolist (name (uiop:split-string families :separator ","))
           (let ((family (intern (string-upcase name) :keyword)))
             (multiple-value-bind (world top) (funcall (find-symbol "LARGE-PYRAMID-WORLD" :luv-physics) base :kernels family)
@@ -51,4 +63,4 @@ family's pyramid of BASE, after two steps to settle the buffers."
                 (dotimes (i steps) (funcall (find-symbol "STEP-PHYSICS-WORLD" :luv-physics) world))
                 (multiple-value-bind (x y) (funcall (find-symbol "PHYSICS-BODY-POSITION" :luv-physics) world top)
                   (format t "~&pyramid ~(~A~) ~,4F ~,4F ~,4F~%" family (/ (- (pyramid-cpu-ns) start) 1d6 steps) y x))
-                (finish-output))))))))
+                (finish-output)))))))))
