@@ -7467,11 +7467,11 @@ break force, last impulse. #J0OBJT"
 the dummy for a cell, the first the dummy for a sleeping box's corner), the point's key (its
 feature), the handle of the box that found it, the normal (pushing the first side off the
 second), the levers from both centres, the two tangents, the gap at the step's start, the
-effective masses, the friction, the three carried impulses, and each side's inverse mass and world
-inverse inertia's six entries, then the point's restitution, its largest push this step, the
-speed it struck at this step, its bounce and its normal velocity before the pass, the
-thirty-six numbers of its angular parts, r × u and I⁻¹(r × u) for the normal and both tangents
-and each side ([[#BXSOLV]]), and, for a point against a posted box, the box's velocity as the
+effective mass along the normal, the friction, the three carried impulses, and each side's inverse
+mass and world inverse inertia's six entries, then the point's restitution, its largest push this
+step, the speed it struck at this step, its bounce and its normal velocity before the pass, the
+twelve numbers of its angular parts along the normal, r × n and I⁻¹(r × n) for each side
+([[#BXSOLV]]), and, for a point against a posted box, the box's velocity as the
 first side's point velocity less the second's loses it, that velocity along the normal, and the
 cap of the point's normal impulse (the largest single-float for any other point, [[#BXPUSH]]);
 last its lever arm, its distance from its manifold's friction centre ([[#BXSOLV]]). #BXR0WS"
@@ -7482,13 +7482,12 @@ last its lever arm, its distance from its manifold's friction centre ([[#BXSOLV]
   (rx single-float) (ry single-float) (rz single-float)
   (t1x single-float) (t1y single-float) (t1z single-float)
   (t2x single-float) (t2y single-float) (t2z single-float)
-  (separation single-float) (normal-mass single-float) (tangent-mass-1 single-float)
-  (tangent-mass-2 single-float) (friction single-float)
+  (separation single-float) (normal-mass single-float) (friction single-float)
   (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
   (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
   (i22 single-float) (i23 single-float) (i33 single-float)
   (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float)
-  (approach single-float) (jacobian single-float 36)
+  (approach single-float) (jacobian single-float 12)
   (kvx single-float) (kvy single-float) (kvz single-float) (kvn single-float) (push-cap single-float)
   (lever-arm single-float))
 
@@ -8322,9 +8321,9 @@ which holds still as a cell does (box-pair-points). #BXCELL"
 ;; A box against the cells:1 ends here
 
 ;; [[file:../physics.org::#BXSOLV][Box points in the substeps:1]]
-(defconstant +box-jacobian-width+ 36
-  "The numbers of a box point's angular parts: for the first side r × n, r × t1, r × t2, then the
-world inverse inertia times each, and the same nine and nine for the second side. #BXSOLV")
+(defconstant +box-jacobian-width+ 12
+  "The numbers of a box point's angular parts along its normal: for the first side r × n, then the
+world inverse inertia times it, and the same three and three for the second side. #BXSOLV")
 
 (defun box-tangents (nx ny nz)
   "Two unit tangents of the unit normal NX NY NZ, perpendicular to it and to each other, as six
@@ -8471,48 +8470,40 @@ inertia (box-row-inertia) and, past them, the dummy row's zeros. #BXSOLV"
   set)
 
 (defun box-point-directions (points k)
-  "Write box point K of POINTS's angular parts, r x u and I^-1 (r x u) for its normal and both
-tangents on each side, and its effective masses along them, from its levers, directions, inverse
-masses and world inverse inertias. #BXSOLV"
+  "Write box point K of POINTS's angular parts along its normal, r x n and I^-1 (r x n) on each
+side, and its effective mass along it, from its levers, normal, inverse masses and world inverse
+inertias. #BXSOLV"
   (declare (type box-point-columns points) (type index k) #.+kernel-policy+)
-  (with-box-point-columns (nx ny nz rx ry rz sx sy sz t1x t1y t1z t2x t2y t2z normal-mass
-                           tangent-mass-1 tangent-mass-2 im i11 i12 i13 i22 i23 i33
+  (with-box-point-columns (nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
                            imb j11 j12 j13 j22 j23 j33 jacobian)
       points
-    (let ((o (* +box-jacobian-width+ k)))
-      (declare (type index o))
-      (flet ((lever (at lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz)
-               ;; r x u at AT, I^-1 (r x u) nine places on, and their product
-               (declare (type index at) (type single-float lx ly lz e11 e12 e13 e22 e23 e33 ux uy uz))
+    (let ((o (* +box-jacobian-width+ k)) (ux (aref nx k)) (uy (aref ny k)) (uz (aref nz k)))
+      (declare (type index o) (type single-float ux uy uz))
+      (flet ((lever (at lx ly lz e11 e12 e13 e22 e23 e33)
+               ;; r x n at AT, I^-1 (r x n) three places on, and their product
+               (declare (type index at) (type single-float lx ly lz e11 e12 e13 e22 e23 e33))
                (let* ((px (- (* ly uz) (* lz uy))) (py (- (* lz ux) (* lx uz))) (pz (- (* lx uy) (* ly ux)))
                       (qx (+ (* e11 px) (* e12 py) (* e13 pz)))
                       (qy (+ (* e12 px) (* e22 py) (* e23 pz)))
                       (qz (+ (* e13 px) (* e23 py) (* e33 pz))))
                  (setf (aref jacobian at) px (aref jacobian (+ at 1)) py (aref jacobian (+ at 2)) pz
-                       (aref jacobian (+ at 9)) qx (aref jacobian (+ at 10)) qy (aref jacobian (+ at 11)) qz)
+                       (aref jacobian (+ at 3)) qx (aref jacobian (+ at 4)) qy (aref jacobian (+ at 5)) qz)
                  (+ (* px qx) (* py qy) (* pz qz)))))
         (declare (inline lever))
-        (flet ((mass-along (along ux uy uz)
-                 ;; 1 / (1/m_a + 1/m_b + (r_a x u) . Ia^-1 (r_a x u) + (r_b x u) . Ib^-1 (r_b x u))
-                 (declare (type (integer 0 2) along) (type single-float ux uy uz))
-                 (let ((kk (+ (aref im k) (aref imb k)
-                              (lever (+ o (* 3 along)) (aref rx k) (aref ry k) (aref rz k)
-                                     (aref i11 k) (aref i12 k) (aref i13 k) (aref i22 k) (aref i23 k) (aref i33 k)
-                                     ux uy uz)
-                              (lever (+ o 18 (* 3 along)) (aref sx k) (aref sy k) (aref sz k)
-                                     (aref j11 k) (aref j12 k) (aref j13 k) (aref j22 k) (aref j23 k) (aref j33 k)
-                                     ux uy uz))))
-                   (declare (type single-float kk))
-                   (if (> kk 0.0) (/ 1.0 kk) 0.0))))
-          (setf (aref normal-mass k) (mass-along 0 (aref nx k) (aref ny k) (aref nz k))
-                (aref tangent-mass-1 k) (mass-along 1 (aref t1x k) (aref t1y k) (aref t1z k))
-                (aref tangent-mass-2 k) (mass-along 2 (aref t2x k) (aref t2y k) (aref t2z k)))))))
+        ;; 1 / (1/m_a + 1/m_b + (r_a x n) . Ia^-1 (r_a x n) + (r_b x n) . Ib^-1 (r_b x n))
+        (let ((kk (+ (aref im k) (aref imb k)
+                     (lever o (aref rx k) (aref ry k) (aref rz k)
+                            (aref i11 k) (aref i12 k) (aref i13 k) (aref i22 k) (aref i23 k) (aref i33 k))
+                     (lever (+ o 6) (aref sx k) (aref sy k) (aref sz k)
+                            (aref j11 k) (aref j12 k) (aref j13 k) (aref j22 k) (aref j23 k) (aref j33 k)))))
+          (declare (type single-float kk))
+          (setf (aref normal-mass k) (if (> kk 0.0) (/ 1.0 kk) 0.0))))))
   nil)
 
 (defun prepare-box-point-masses (world set)
   "Write each of SET's points' sides' inverse masses and world inverse inertias, its tangents,
-the angular parts of its three directions on each side (r x u and I^-1 (r x u)), effective
-masses and friction (the larger side's, the mean of two boxes'); each gap gains the slop, so a
+its angular parts along its normal on each side (r x n and I^-1 (r x n)), its normal's effective
+mass and friction (the larger side's, the mean of two boxes'); each gap gains the slop, so a
 box rests a slop deep as a sphere does. #BXSOLV"
   (declare (type box-set set) #.+kernel-policy+)
   (let ((awake (physics-world-awake world)) (points (box-set-points set))
@@ -8855,8 +8846,8 @@ normal impulse at the point, then the manifold's friction at its centre and its 
                     do (let ((jo (* +box-jacobian-width+ k)) (pn (aref normal-impulse k)))
                          (declare (type index jo) (type single-float pn))
                          (apply! (* pn (aref nx k)) (* pn (aref ny k)) (* pn (aref nz k))
-                                 ((* pn (jac 9)) (* pn (jac 10)) (* pn (jac 11)))
-                                 ((* pn (jac 27)) (* pn (jac 28)) (* pn (jac 29))))))
+                                 ((* pn (jac 3)) (* pn (jac 4)) (* pn (jac 5)))
+                                 ((* pn (jac 9)) (* pn (jac 10)) (* pn (jac 11))))))
               (with-box-manifold-friction (mi)
                 (apply! (+ (* f1 (aref t1x first)) (* f2 (aref t2x first)))
                         (+ (* f1 (aref t1y first)) (* f2 (aref t2y first)))
@@ -8884,13 +8875,13 @@ inside with-box-point-sides, whose variables it reads. #BXSOLV"
                    (+ (* ax (- (aref d p) (aref d pb))) (* ay (- (aref d (+ p 1)) (aref d (+ pb 1))))
                       (* az (- (aref d (+ p 2)) (aref d (+ pb 2)))))
                    (- (+ (* (aref turns tr) (jac 0)) (* (aref turns (+ tr 1)) (jac 1)) (* (aref turns (+ tr 2)) (jac 2)))
-                      (+ (* (aref turns tb) (jac 18)) (* (aref turns (+ tb 1)) (jac 19)) (* (aref turns (+ tb 2)) (jac 20)))))
+                      (+ (* (aref turns tb) (jac 6)) (* (aref turns (+ tb 1)) (jac 7)) (* (aref turns (+ tb 2)) (jac 8)))))
                 (* (aref kvn k) elapsed)))
           ;; n . (va - vb) + wa . (ra x n) - wb . (rb x n), less a posted box's velocity
           ;; along the normal
           (vn (- (+ (+ (* ax (- avx bvx)) (* ay (- avy bvy)) (* az (- avz bvz)))
                     (- (+ (* awx (jac 0)) (* awy (jac 1)) (* awz (jac 2)))
-                       (+ (* bwx (jac 18)) (* bwy (jac 19)) (* bwz (jac 20)))))
+                       (+ (* bwx (jac 6)) (* bwy (jac 7)) (* bwz (jac 8)))))
                  (aref kvn k)))
           (positive (> s 0.0))
           (bias (cond (positive (* s inv-h))
@@ -8916,8 +8907,8 @@ inside with-box-point-sides, whose variables it reads. #BXSOLV"
            total (+ total new) twist-limit (+ twist-limit (* (aref lever-arm k) new))
            change (max change (abs pn)))
      (apply! (* pn ax) (* pn ay) (* pn az)
-             ((* pn (jac 9)) (* pn (jac 10)) (* pn (jac 11)))
-             ((* pn (jac 27)) (* pn (jac 28)) (* pn (jac 29))))))
+             ((* pn (jac 3)) (* pn (jac 4)) (* pn (jac 5)))
+             ((* pn (jac 9)) (* pn (jac 10)) (* pn (jac 11))))))
 
 (defmacro box-manifold-friction-pass ()
   "The twist and then the friction of manifold MI in a relax pass of solve-box-points: the twist
