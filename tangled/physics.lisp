@@ -8860,22 +8860,34 @@ normal impulse at the point, then the manifold's friction at its centre and its 
                          (+ (* f1 (mj 20)) (* f2 (mj 23)) (* tw (mj 29))))))))))))
   nil)
 
+(defmacro with-box-manifold-motion ((first) &body body)
+  "Run BODY with what the points of the manifold whose first point is FIRST share in a pass: its
+normal AX AY AZ, the move of its gap by the sides' deltas, DN = n . (da - db), and the sides'
+turns so far, TAX TAY TAZ and TBX TBY TBZ (the dummy's zero); for every point of a manifold has
+the same two sides and normal (box-points-one-manifold-p), and a pass moves neither the deltas
+nor the turns. Expanded in solve-box-points inside with-box-point-columns of ROW, ROW-B, NX, NY
+and NZ, over the deltas D and TURNS. #BXSOLV"
+  `(let* ((p (delta-row (aref row ,first))) (pb (delta-row (aref row-b ,first)))
+          (tr (* 3 (aref row ,first))) (tb (* 3 (aref row-b ,first)))
+          (ax (aref nx ,first)) (ay (aref ny ,first)) (az (aref nz ,first))
+          (dn (+ (* ax (- (aref d p) (aref d pb))) (* ay (- (aref d (+ p 1)) (aref d (+ pb 1))))
+                 (* az (- (aref d (+ p 2)) (aref d (+ pb 2))))))
+          (tax (aref turns tr)) (tay (aref turns (+ tr 1))) (taz (aref turns (+ tr 2)))
+          (tbx (aref turns tb)) (tby (aref turns (+ tb 1))) (tbz (aref turns (+ tb 2))))
+     (declare (type index p pb tr tb) (type single-float ax ay az dn tax tay taz tbx tby tbz))
+     ,@body))
+
 (defmacro box-point-normal-pass ()
   "The normal impulse of box point K in a pass of solve-box-points: with the soft bias when
 USE-BIAS, clamped to push only and to the point's cap, the speed of an impact kept; the new
 impulse added to TOTAL and its lever arm times it to TWIST-LIMIT. Expanded in solve-box-points
-inside with-box-point-sides, whose variables it reads. #BXSOLV"
-  `(let* ((i (aref row k)) (p (delta-row i)) (tr (* 3 i))
-          (j (aref row-b k)) (pb (delta-row j)) (tb (* 3 j))
-          (ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
-          ;; the gap now: moved by each side's delta and turn (the dummy's are zero),
+inside with-box-point-sides and with-box-manifold-motion, whose variables it reads. #BXSOLV"
+  `(let* (;; the gap now: moved by each side's delta and turn (the dummy's are zero),
           ;; n . (da - db) + ta . (ra x n) - tb . (rb x n), and by a posted box's travel
           ;; so far this step (zero for any other point)
-          (s (- (+ (aref separation k)
-                   (+ (* ax (- (aref d p) (aref d pb))) (* ay (- (aref d (+ p 1)) (aref d (+ pb 1))))
-                      (* az (- (aref d (+ p 2)) (aref d (+ pb 2)))))
-                   (- (+ (* (aref turns tr) (jac 0)) (* (aref turns (+ tr 1)) (jac 1)) (* (aref turns (+ tr 2)) (jac 2)))
-                      (+ (* (aref turns tb) (jac 6)) (* (aref turns (+ tb 1)) (jac 7)) (* (aref turns (+ tb 2)) (jac 8)))))
+          (s (- (+ (aref separation k) dn
+                   (- (+ (* tax (jac 0)) (* tay (jac 1)) (* taz (jac 2)))
+                      (+ (* tbx (jac 6)) (* tby (jac 7)) (* tbz (jac 8)))))
                 (* (aref kvn k) elapsed)))
           ;; n . (va - vb) + wa . (ra x n) - wb . (rb x n), less a posted box's velocity
           ;; along the normal
@@ -8893,7 +8905,7 @@ inside with-box-point-sides, whose variables it reads. #BXSOLV"
           ;; held to its cap, which only a point against a posted box has ([[#BXPUSH]])
           (new (min (aref push-cap k) (max 0.0 (- old (* ms (aref normal-mass k) (+ vn bias)) (* is old)))))
           (pn (- new old)))
-     (declare (type index i p tr j pb tb) (type single-float s vn bias ms is old new pn))
+     (declare (type single-float s vn bias ms is old new pn))
      ;; an impact: the first push this step of a point with restitution that approached,
      ;; before the pass, faster than the threshold; its speed is kept for the bounce
      (when (and (> (aref restitution k) 0.0) (= (aref pushed k) 0.0) (> new 0.0)
@@ -8992,14 +9004,15 @@ cone. #BXSOLV"
           (let ((first (aref mfirst mi)) (total 0.0) (twist-limit 0.0) (change 0.0))
             (declare (type index first) (type single-float total twist-limit change))
             (with-box-point-sides (v first)
-              (loop for sweep of-type fixnum from 1
-                    do (setf total 0.0 twist-limit 0.0 change 0.0)
-                       (loop for k of-type index from first below (+ first (aref mcount mi))
-                             do (let ((jo (* +box-jacobian-width+ k)))
-                                  (declare (type index jo))
-                                  (box-point-normal-pass)))
-                    ;; again while a sweep still moved some point's impulse by a share of the total
-                    while (and (< sweep +box-normal-sweeps+) (> change (* +box-sweep-share+ total))))
+              (with-box-manifold-motion (first)
+                (loop for sweep of-type fixnum from 1
+                      do (setf total 0.0 twist-limit 0.0 change 0.0)
+                         (loop for k of-type index from first below (+ first (aref mcount mi))
+                               do (let ((jo (* +box-jacobian-width+ k)))
+                                    (declare (type index jo))
+                                    (box-point-normal-pass)))
+                      ;; again while a sweep still moved some point's impulse by a share of the total
+                      while (and (< sweep +box-normal-sweeps+) (> change (* +box-sweep-share+ total)))))
               ;; friction in the relax alone, as Box3D's solver gives it
               (unless use-bias (box-manifold-friction-pass))))))))
   nil)
