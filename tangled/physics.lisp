@@ -7467,25 +7467,21 @@ break force, last impulse. #J0OBJT"
 the dummy for a cell, the first the dummy for a sleeping box's corner), the point's key (its
 feature), the handle of the box that found it, the normal (pushing the first side off the
 second), the levers from both centres, the two tangents, the gap at the step's start, the
-effective mass along the normal, the friction, the three carried impulses, and each side's inverse
-mass and world inverse inertia's six entries, then the point's restitution, its largest push this
-step, the speed it struck at this step, its bounce and its normal velocity before the pass, the
+effective mass along the normal, the friction, the three carried impulses, then the point's
+restitution, its largest push this step, the speed it struck at this step, its bounce and its normal velocity before the pass, the
 twelve numbers of its angular parts along the normal, r × n and I⁻¹(r × n) for each side
 ([[#BXSOLV]]), and, for a point against a posted box, the box's velocity as the
 first side's point velocity less the second's loses it, that velocity along the normal, and the
 cap of the point's normal impulse (the largest single-float for any other point, [[#BXPUSH]]);
 last its lever arm, its distance from its manifold's friction centre ([[#BXSOLV]]). #BXR0WS"
   (row fixnum) (row-b fixnum) (key fixnum) (handle fixnum)
-  (sx single-float) (sy single-float) (sz single-float) (imb single-float)
-  (j11 single-float) (j12 single-float) (j13 single-float) (j22 single-float) (j23 single-float) (j33 single-float)
+  (sx single-float) (sy single-float) (sz single-float)
   (nx single-float) (ny single-float) (nz single-float)
   (rx single-float) (ry single-float) (rz single-float)
   (t1x single-float) (t1y single-float) (t1z single-float)
   (t2x single-float) (t2y single-float) (t2z single-float)
   (separation single-float) (normal-mass single-float) (friction single-float)
   (normal-impulse single-float) (tangent-impulse-1 single-float) (tangent-impulse-2 single-float)
-  (im single-float) (i11 single-float) (i12 single-float) (i13 single-float)
-  (i22 single-float) (i23 single-float) (i33 single-float)
   (restitution single-float) (pushed single-float) (impact-speed single-float) (bounce single-float)
   (approach single-float) (jacobian single-float 12)
   (kvx single-float) (kvy single-float) (kvz single-float) (kvn single-float) (push-cap single-float)
@@ -8469,14 +8465,23 @@ inertia (box-row-inertia) and, past them, the dummy row's zeros. #BXSOLV"
                   (aref table (+ o 4)) e22 (aref table (+ o 5)) e23 (aref table (+ o 6)) e33))))))
   set)
 
-(defun box-point-directions (points k)
+(defmacro with-box-point-inertias ((k) &body body)
+  "Run BODY with M and MB the inverse masses of box point K's two sides and (ia I) and (ib I) the
+entries of their world inverse inertias, I from 1 to 6 for 11 12 13 22 23 33, read from TABLE,
+the box set's rows' inertias, eight floats a row, DUMMY the dummy row past the awake ones. Expanded
+inside with-box-point-columns of ROW and ROW-B. #BXSOLV"
+  `(let* ((at-a (* 8 (min (aref row ,k) dummy))) (at-b (* 8 (min (aref row-b ,k) dummy)))
+          (m (aref table at-a)) (mb (aref table at-b)))
+     (declare (type index at-a at-b) (type single-float m mb) (ignorable m mb))
+     (macrolet ((ia (i) `(aref table (+ at-a ,i))) (ib (i) `(aref table (+ at-b ,i))))
+       ,@body)))
+
+(defun box-point-directions (points k table dummy)
   "Write box point K of POINTS's angular parts along its normal, r x n and I^-1 (r x n) on each
-side, and its effective mass along it, from its levers, normal, inverse masses and world inverse
-inertias. #BXSOLV"
-  (declare (type box-point-columns points) (type index k) #.+kernel-policy+)
-  (with-box-point-columns (nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
-                           imb j11 j12 j13 j22 j23 j33 jacobian)
-      points
+side, and its effective mass along it, from its levers, normal, and its sides' inverse masses and
+world inverse inertias in TABLE, the rows' (DUMMY the dummy row). #BXSOLV"
+  (declare (type box-point-columns points) (type index k dummy) (type f32-column table) #.+kernel-policy+)
+  (with-box-point-columns (row row-b nx ny nz rx ry rz sx sy sz normal-mass jacobian) points
     (let ((o (* +box-jacobian-width+ k)) (ux (aref nx k)) (uy (aref ny k)) (uz (aref nz k)))
       (declare (type index o) (type single-float ux uy uz))
       (flet ((lever (at lx ly lz e11 e12 e13 e22 e23 e33)
@@ -8491,18 +8496,17 @@ inertias. #BXSOLV"
                  (+ (* px qx) (* py qy) (* pz qz)))))
         (declare (inline lever))
         ;; 1 / (1/m_a + 1/m_b + (r_a x n) . Ia^-1 (r_a x n) + (r_b x n) . Ib^-1 (r_b x n))
-        (let ((kk (+ (aref im k) (aref imb k)
-                     (lever o (aref rx k) (aref ry k) (aref rz k)
-                            (aref i11 k) (aref i12 k) (aref i13 k) (aref i22 k) (aref i23 k) (aref i33 k))
-                     (lever (+ o 6) (aref sx k) (aref sy k) (aref sz k)
-                            (aref j11 k) (aref j12 k) (aref j13 k) (aref j22 k) (aref j23 k) (aref j33 k)))))
-          (declare (type single-float kk))
-          (setf (aref normal-mass k) (if (> kk 0.0) (/ 1.0 kk) 0.0))))))
+        (with-box-point-inertias (k)
+          (let ((kk (+ m mb
+                       (lever o (aref rx k) (aref ry k) (aref rz k) (ia 1) (ia 2) (ia 3) (ia 4) (ia 5) (ia 6))
+                       (lever (+ o 6) (aref sx k) (aref sy k) (aref sz k) (ib 1) (ib 2) (ib 3) (ib 4) (ib 5) (ib 6)))))
+            (declare (type single-float kk))
+            (setf (aref normal-mass k) (if (> kk 0.0) (/ 1.0 kk) 0.0)))))))
   nil)
 
 (defun prepare-box-point-masses (world set)
-  "Write each of SET's points' sides' inverse masses and world inverse inertias, its tangents,
-its angular parts along its normal on each side (r x n and I^-1 (r x n)), its normal's effective
+  "Write each awake row's inverse mass and world inverse inertia into SET's table of them
+(fill-box-row-inertias), and each of SET's points' tangents, its angular parts along its normal on each side (r x n and I^-1 (r x n)), its normal's effective
 mass and friction (the larger side's, the mean of two boxes'); each gap gains the slop, so a
 box rests a slop deep as a sphere does. #BXSOLV"
   (declare (type box-set set) #.+kernel-policy+)
@@ -8512,8 +8516,8 @@ box rests a slop deep as a sphere does. #BXSOLV"
     (declare (type single-float slop) (type f32-column table))
     (setf (box-set-bouncy set) nil)
     (with-body-columns ((fr friction) (re restitution)) awake
-      (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z friction im i11 i12 i13 i22 i23 i33
-                               imb j11 j12 j13 j22 j23 j33 separation restitution pushed impact-speed bounce)
+      (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z friction
+                               separation restitution pushed impact-speed bounce)
           points
         (dotimes (k (box-point-columns-length points))
           (setf (aref separation k) (+ (aref separation k) slop))
@@ -8525,21 +8529,12 @@ box rests a slop deep as a sphere does. #BXSOLV"
             (when (> (aref restitution k) 0.0) (setf (box-set-bouncy set) t)))
           (let ((a (aref row k)) (b (aref row-b k)) (n (body-columns-length awake)))
             (declare (type index a b n))
-            ;; each side's inverse mass and world inverse inertia, from the rows' table
-            (let ((oa (* 8 (min a n))) (ob (* 8 (min b n))))
-              (declare (type index oa ob))
-              (setf (aref im k) (aref table oa) (aref i11 k) (aref table (+ oa 1)) (aref i12 k) (aref table (+ oa 2))
-                    (aref i13 k) (aref table (+ oa 3)) (aref i22 k) (aref table (+ oa 4))
-                    (aref i23 k) (aref table (+ oa 5)) (aref i33 k) (aref table (+ oa 6))
-                    (aref imb k) (aref table ob) (aref j11 k) (aref table (+ ob 1)) (aref j12 k) (aref table (+ ob 2))
-                    (aref j13 k) (aref table (+ ob 3)) (aref j22 k) (aref table (+ ob 4))
-                    (aref j23 k) (aref table (+ ob 5)) (aref j33 k) (aref table (+ ob 6))))
             (setf (aref friction k) (cond ((>= b n) (aref fr a))
                                           ((>= a n) (aref fr b))
                                           (t (fsqrt (* (aref fr a) (aref fr b)))))))
           (multiple-value-bind (ax ay az bx by bz) (box-tangents (aref nx k) (aref ny k) (aref nz k))
             (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
-          (box-point-directions points k)))))
+          (box-point-directions points k table (body-columns-length awake))))))
   set)
 
 (declaim (inline box-points-one-manifold-p))
@@ -8607,58 +8602,59 @@ it; and the plain mean of its first levers. #BXSOLV"
                    (setf (aref lever-arm k) (fsqrt (+ (* dx dx) (* dy dy) (* dz dz)))))))))
   nil)
 
-(defun box-manifold-masses (points manifolds mi)
+(defun box-manifold-masses (points manifolds mi table dummy)
   "Write manifold MI's angular parts at its friction centre, c x t and I^-1 (c x t) for both
 tangents on each side and I^-1 n on each, from its first point's directions and inertias; the
 inverse of its 2 x 2 tangent mass, K11 = 1/m_a + 1/m_b + (c_a x t1) . Ia^-1 (c_a x t1) + (c_b x
 t1) . Ib^-1 (c_b x t1), K12 the same of t1 and t2 (zero when K is singular); its twist mass
-1/(n . Ia^-1 n + n . Ib^-1 n); and its friction, its first point's. #BXSOLV"
-  (declare (type box-point-columns points) (type box-manifold-columns manifolds) (type index mi) #.+kernel-policy+)
-  (with-box-point-columns (nx ny nz t1x t1y t1z t2x t2y t2z friction im i11 i12 i13 i22 i23 i33
-                           imb j11 j12 j13 j22 j23 j33)
-      points
+1/(n . Ia^-1 n + n . Ib^-1 n); and its friction, its first point's. The sides' inverse masses and
+inertias are read from TABLE, the rows' (DUMMY the dummy row). #BXSOLV"
+  (declare (type box-point-columns points) (type box-manifold-columns manifolds) (type index mi dummy)
+           (type f32-column table) #.+kernel-policy+)
+  (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z friction) points
     (with-box-manifold-columns ((mfirst first) (mfriction friction) cax cay caz cbx cby cbz k11 k12 k22
                                 twist-mass (mj jacobian))
         manifolds
-      (let ((k (aref mfirst mi)) (o (* 30 mi)))
-        (declare (type index k o))
-        (flet ((part (at lx ly lz ux uy uz e11 e12 e13 e22 e23 e33)
-                 ;; l x u at AT, I^-1 (l x u) six places on
-                 (declare (type index at) (type single-float lx ly lz ux uy uz e11 e12 e13 e22 e23 e33))
-                 (let ((px (- (* ly uz) (* lz uy))) (py (- (* lz ux) (* lx uz))) (pz (- (* lx uy) (* ly ux))))
-                   (declare (type single-float px py pz))
-                   (setf (aref mj at) px (aref mj (+ at 1)) py (aref mj (+ at 2)) pz
-                         (aref mj (+ at 6)) (+ (* e11 px) (* e12 py) (* e13 pz))
-                         (aref mj (+ at 7)) (+ (* e12 px) (* e22 py) (* e23 pz))
-                         (aref mj (+ at 8)) (+ (* e13 px) (* e23 py) (* e33 pz)))))
-               (dot (a b) (declare (type index a b))
-                 (+ (* (aref mj a) (aref mj b)) (* (aref mj (+ a 1)) (aref mj (+ b 1))) (* (aref mj (+ a 2)) (aref mj (+ b 2))))))
-          (declare (inline part dot))
-          (macrolet ((side (at lx ly lz e11 e12 e13 e22 e23 e33)
-                       `(progn (part ,at ,lx ,ly ,lz (aref t1x k) (aref t1y k) (aref t1z k) ,e11 ,e12 ,e13 ,e22 ,e23 ,e33)
-                               (part (+ ,at 3) ,lx ,ly ,lz (aref t2x k) (aref t2y k) (aref t2z k) ,e11 ,e12 ,e13 ,e22 ,e23 ,e33))))
-            (side o (aref cax mi) (aref cay mi) (aref caz mi) (aref i11 k) (aref i12 k) (aref i13 k) (aref i22 k) (aref i23 k) (aref i33 k))
-            (side (+ o 12) (aref cbx mi) (aref cby mi) (aref cbz mi) (aref j11 k) (aref j12 k) (aref j13 k) (aref j22 k) (aref j23 k) (aref j33 k)))
-          (let ((n1 (aref nx k)) (n2 (aref ny k)) (n3 (aref nz k)))
-            (declare (type single-float n1 n2 n3))
-            (setf (aref mj (+ o 24)) (+ (* (aref i11 k) n1) (* (aref i12 k) n2) (* (aref i13 k) n3))
-                  (aref mj (+ o 25)) (+ (* (aref i12 k) n1) (* (aref i22 k) n2) (* (aref i23 k) n3))
-                  (aref mj (+ o 26)) (+ (* (aref i13 k) n1) (* (aref i23 k) n2) (* (aref i33 k) n3))
-                  (aref mj (+ o 27)) (+ (* (aref j11 k) n1) (* (aref j12 k) n2) (* (aref j13 k) n3))
-                  (aref mj (+ o 28)) (+ (* (aref j12 k) n1) (* (aref j22 k) n2) (* (aref j23 k) n3))
-                  (aref mj (+ o 29)) (+ (* (aref j13 k) n1) (* (aref j23 k) n2) (* (aref j33 k) n3)))
-            (let* ((m (+ (aref im k) (aref imb k)))
-                   (a11 (+ m (dot o (+ o 6)) (dot (+ o 12) (+ o 18))))
-                   (a22 (+ m (dot (+ o 3) (+ o 9)) (dot (+ o 15) (+ o 21))))
-                   (a12 (+ (dot o (+ o 9)) (dot (+ o 12) (+ o 21))))
-                   (det (- (* a11 a22) (* a12 a12)))
-                   (inv (if (> det 0.0) (/ 1.0 det) 0.0))
-                   (tk (+ (* n1 (aref mj (+ o 24))) (* n2 (aref mj (+ o 25))) (* n3 (aref mj (+ o 26)))
-                          (* n1 (aref mj (+ o 27))) (* n2 (aref mj (+ o 28))) (* n3 (aref mj (+ o 29))))))
-              (declare (type single-float m a11 a22 a12 det inv tk))
-              (setf (aref k11 mi) (* a22 inv) (aref k12 mi) (- (* a12 inv)) (aref k22 mi) (* a11 inv)
-                    (aref twist-mass mi) (if (> tk 0.0) (/ 1.0 tk) 0.0)
-                    (aref mfriction mi) (aref friction k))))))))
+      (with-box-point-inertias ((aref mfirst mi))
+        (let ((k (aref mfirst mi)) (o (* 30 mi)))
+          (declare (type index k o))
+          (flet ((part (at lx ly lz ux uy uz e11 e12 e13 e22 e23 e33)
+                   ;; l x u at AT, I^-1 (l x u) six places on
+                   (declare (type index at) (type single-float lx ly lz ux uy uz e11 e12 e13 e22 e23 e33))
+                   (let ((px (- (* ly uz) (* lz uy))) (py (- (* lz ux) (* lx uz))) (pz (- (* lx uy) (* ly ux))))
+                     (declare (type single-float px py pz))
+                     (setf (aref mj at) px (aref mj (+ at 1)) py (aref mj (+ at 2)) pz
+                           (aref mj (+ at 6)) (+ (* e11 px) (* e12 py) (* e13 pz))
+                           (aref mj (+ at 7)) (+ (* e12 px) (* e22 py) (* e23 pz))
+                           (aref mj (+ at 8)) (+ (* e13 px) (* e23 py) (* e33 pz)))))
+                 (dot (a b) (declare (type index a b))
+                   (+ (* (aref mj a) (aref mj b)) (* (aref mj (+ a 1)) (aref mj (+ b 1))) (* (aref mj (+ a 2)) (aref mj (+ b 2))))))
+            (declare (inline part dot))
+            (macrolet ((side (at lx ly lz e11 e12 e13 e22 e23 e33)
+                         `(progn (part ,at ,lx ,ly ,lz (aref t1x k) (aref t1y k) (aref t1z k) ,e11 ,e12 ,e13 ,e22 ,e23 ,e33)
+                                 (part (+ ,at 3) ,lx ,ly ,lz (aref t2x k) (aref t2y k) (aref t2z k) ,e11 ,e12 ,e13 ,e22 ,e23 ,e33))))
+              (side o (aref cax mi) (aref cay mi) (aref caz mi) (ia 1) (ia 2) (ia 3) (ia 4) (ia 5) (ia 6))
+              (side (+ o 12) (aref cbx mi) (aref cby mi) (aref cbz mi) (ib 1) (ib 2) (ib 3) (ib 4) (ib 5) (ib 6)))
+            (let ((n1 (aref nx k)) (n2 (aref ny k)) (n3 (aref nz k)))
+              (declare (type single-float n1 n2 n3))
+              (setf (aref mj (+ o 24)) (+ (* (ia 1) n1) (* (ia 2) n2) (* (ia 3) n3))
+                    (aref mj (+ o 25)) (+ (* (ia 2) n1) (* (ia 4) n2) (* (ia 5) n3))
+                    (aref mj (+ o 26)) (+ (* (ia 3) n1) (* (ia 5) n2) (* (ia 6) n3))
+                    (aref mj (+ o 27)) (+ (* (ib 1) n1) (* (ib 2) n2) (* (ib 3) n3))
+                    (aref mj (+ o 28)) (+ (* (ib 2) n1) (* (ib 4) n2) (* (ib 5) n3))
+                    (aref mj (+ o 29)) (+ (* (ib 3) n1) (* (ib 5) n2) (* (ib 6) n3)))
+              (let* ((m (+ m mb))
+                     (a11 (+ m (dot o (+ o 6)) (dot (+ o 12) (+ o 18))))
+                     (a22 (+ m (dot (+ o 3) (+ o 9)) (dot (+ o 15) (+ o 21))))
+                     (a12 (+ (dot o (+ o 9)) (dot (+ o 12) (+ o 21))))
+                     (det (- (* a11 a22) (* a12 a12)))
+                     (inv (if (> det 0.0) (/ 1.0 det) 0.0))
+                     (tk (+ (* n1 (aref mj (+ o 24))) (* n2 (aref mj (+ o 25))) (* n3 (aref mj (+ o 26)))
+                            (* n1 (aref mj (+ o 27))) (* n2 (aref mj (+ o 28))) (* n3 (aref mj (+ o 29))))))
+                (declare (type single-float m a11 a22 a12 det inv tk))
+                (setf (aref k11 mi) (* a22 inv) (aref k12 mi) (- (* a12 inv)) (aref k22 mi) (* a11 inv)
+                      (aref twist-mass mi) (if (> tk 0.0) (/ 1.0 tk) 0.0)
+                      (aref mfriction mi) (aref friction k)))))))))
   nil)
 
 (defmacro do-box-manifold-shares ((mi k a b) &body body)
@@ -8690,7 +8686,7 @@ the twist the sum of their moments about the mean lever. #BXSOLV"
                (setf (aref (box-manifold-columns-first manifolds) mi) k
                      (aref (box-manifold-columns-count manifolds) mi) (- end k))
                (box-manifold-centre points manifolds mi inv-tau)
-               (box-manifold-masses points manifolds mi)
+               (box-manifold-masses points manifolds mi (box-set-inertias set) (box-set-dummy set))
                (with-box-point-columns (rx ry rz t1x t1y t1z t2x t2y t2z tangent-impulse-1 tangent-impulse-2) points
                  (with-box-manifold-columns ((mfirst first) (mcount count) ox oy oz friction-impulse-1
                                              friction-impulse-2 twist-impulse)
@@ -8733,32 +8729,33 @@ about the mean lever to tw. #BXSOLV"
   "Run BODY for box point K, its columns bound by with-box-point-columns, over the solver's
 velocities V, with O and OB the two sides' solver rows, (push! PX PY PZ) the impulse P applied at
 the point, P/m and I^-1 (r x P) to the first side and their opposites to the second, and
-(point-velocity) the first side's point velocity less the second's, v + w x r, as three values. #BXSOLV"
+(point-velocity) the first side's point velocity less the second's, v + w x r, as three values;
+the sides' inverse masses and inertias read from TABLE (with-box-point-inertias). #BXSOLV"
   `(let ((o (solver-row (aref row ,k))) (ob (solver-row (aref row-b ,k))))
      (declare (type index o ob))
      (flet ((push! (px py pz)
               (declare (type single-float px py pz))
-              (let* ((m (aref im ,k)) (mb (aref imb ,k))
-                     (tx (- (* (aref ry ,k) pz) (* (aref rz ,k) py)))
-                     (ty (- (* (aref rz ,k) px) (* (aref rx ,k) pz)))
-                     (tz (- (* (aref rx ,k) py) (* (aref ry ,k) px)))
-                     (ux (- (* (aref sy ,k) pz) (* (aref sz ,k) py)))
-                     (uy (- (* (aref sz ,k) px) (* (aref sx ,k) pz)))
-                     (uz (- (* (aref sx ,k) py) (* (aref sy ,k) px))))
-                (setf (aref ,v o) (+ (aref ,v o) (* m px))
-                      (aref ,v (+ o 1)) (+ (aref ,v (+ o 1)) (* m py))
-                      (aref ,v (+ o 2)) (+ (aref ,v (+ o 2)) (* m pz))
-                      (aref ,v (+ o 3)) (+ (aref ,v (+ o 3)) (+ (* (aref i11 ,k) tx) (* (aref i12 ,k) ty) (* (aref i13 ,k) tz)))
-                      (aref ,v (+ o 4)) (+ (aref ,v (+ o 4)) (+ (* (aref i12 ,k) tx) (* (aref i22 ,k) ty) (* (aref i23 ,k) tz)))
-                      (aref ,v (+ o 5)) (+ (aref ,v (+ o 5)) (+ (* (aref i13 ,k) tx) (* (aref i23 ,k) ty) (* (aref i33 ,k) tz))))
-                ;; the dummy row, a cell's or a sleeper's, stays zero
-                (when (> mb 0.0)
-                  (setf (aref ,v ob) (- (aref ,v ob) (* mb px))
-                        (aref ,v (+ ob 1)) (- (aref ,v (+ ob 1)) (* mb py))
-                        (aref ,v (+ ob 2)) (- (aref ,v (+ ob 2)) (* mb pz))
-                        (aref ,v (+ ob 3)) (- (aref ,v (+ ob 3)) (+ (* (aref j11 ,k) ux) (* (aref j12 ,k) uy) (* (aref j13 ,k) uz)))
-                        (aref ,v (+ ob 4)) (- (aref ,v (+ ob 4)) (+ (* (aref j12 ,k) ux) (* (aref j22 ,k) uy) (* (aref j23 ,k) uz)))
-                        (aref ,v (+ ob 5)) (- (aref ,v (+ ob 5)) (+ (* (aref j13 ,k) ux) (* (aref j23 ,k) uy) (* (aref j33 ,k) uz)))))))
+              (with-box-point-inertias (,k)
+                (let* ((tx (- (* (aref ry ,k) pz) (* (aref rz ,k) py)))
+                       (ty (- (* (aref rz ,k) px) (* (aref rx ,k) pz)))
+                       (tz (- (* (aref rx ,k) py) (* (aref ry ,k) px)))
+                       (ux (- (* (aref sy ,k) pz) (* (aref sz ,k) py)))
+                       (uy (- (* (aref sz ,k) px) (* (aref sx ,k) pz)))
+                       (uz (- (* (aref sx ,k) py) (* (aref sy ,k) px))))
+                  (setf (aref ,v o) (+ (aref ,v o) (* m px))
+                        (aref ,v (+ o 1)) (+ (aref ,v (+ o 1)) (* m py))
+                        (aref ,v (+ o 2)) (+ (aref ,v (+ o 2)) (* m pz))
+                        (aref ,v (+ o 3)) (+ (aref ,v (+ o 3)) (+ (* (ia 1) tx) (* (ia 2) ty) (* (ia 3) tz)))
+                        (aref ,v (+ o 4)) (+ (aref ,v (+ o 4)) (+ (* (ia 2) tx) (* (ia 4) ty) (* (ia 5) tz)))
+                        (aref ,v (+ o 5)) (+ (aref ,v (+ o 5)) (+ (* (ia 3) tx) (* (ia 5) ty) (* (ia 6) tz))))
+                  ;; the dummy row, a cell's or a sleeper's, stays zero
+                  (when (> mb 0.0)
+                    (setf (aref ,v ob) (- (aref ,v ob) (* mb px))
+                          (aref ,v (+ ob 1)) (- (aref ,v (+ ob 1)) (* mb py))
+                          (aref ,v (+ ob 2)) (- (aref ,v (+ ob 2)) (* mb pz))
+                          (aref ,v (+ ob 3)) (- (aref ,v (+ ob 3)) (+ (* (ib 1) ux) (* (ib 2) uy) (* (ib 3) uz)))
+                          (aref ,v (+ ob 4)) (- (aref ,v (+ ob 4)) (+ (* (ib 2) ux) (* (ib 4) uy) (* (ib 5) uz)))
+                          (aref ,v (+ ob 5)) (- (aref ,v (+ ob 5)) (+ (* (ib 3) ux) (* (ib 5) uy) (* (ib 6) uz))))))))
             (point-velocity ()
               ;; (v + w x r) of the first side less that of the second, less a posted box's
               ;; velocity (KVX KVY KVZ, zero but for a point against a posted box: x - 0.0 is x)
@@ -8781,10 +8778,11 @@ I ([[#BXSOLV]]'s +box-jacobian-width+); (apply! PX PY PZ WA WB) the impulse P at
 times the inverse mass added to the first side's velocity and taken from the second's, and the
 spin changes WA and WB, each three forms, added to the first and taken from the second; the
 sides are written back after BODY, the second only when it moves. Expanded inside
-with-box-point-columns of ROW, ROW-B, IM, IMB and JACOBIAN. #BXSOLV"
+with-box-point-columns of ROW, ROW-B and JACOBIAN, over TABLE, the rows' inverse masses, and
+DUMMY. #BXSOLV"
   `(let* ((o (solver-row (aref row ,k))) (ob (solver-row (aref row-b ,k)))
           (jo (* +box-jacobian-width+ ,k))
-          (m (aref im ,k)) (mb (aref imb ,k))
+          (m (aref table (* 8 (min (aref row ,k) dummy)))) (mb (aref table (* 8 (min (aref row-b ,k) dummy))))
           (avx (aref ,v o)) (avy (aref ,v (+ o 1))) (avz (aref ,v (+ o 2)))
           (awx (aref ,v (+ o 3))) (awy (aref ,v (+ o 4))) (awz (aref ,v (+ o 5)))
           (bvx (aref ,v ob)) (bvy (aref ,v (+ ob 1))) (bvz (aref ,v (+ ob 2)))
@@ -8833,8 +8831,10 @@ TWIST-IMPULSE. #BXSOLV"
   "Apply every box manifold's carried impulses again, at the start of a substep: each point's
 normal impulse at the point, then the manifold's friction at its centre and its twist. #BXSOLV"
   (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
-  (let ((points (box-set-points set)) (manifolds (box-set-manifolds set)))
-    (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z normal-impulse im imb jacobian) points
+  (let ((points (box-set-points set)) (manifolds (box-set-manifolds set))
+        (table (box-set-inertias set)) (dummy (box-set-dummy set)))
+    (declare (type f32-column table) (type index dummy))
+    (with-box-point-columns (row row-b nx ny nz t1x t1y t1z t2x t2y t2z normal-impulse jacobian) points
       (with-box-manifold-columns ((mfirst first) (mcount count) friction-impulse-1 friction-impulse-2
                                   twist-impulse (mjacobian jacobian))
           manifolds
@@ -8980,12 +8980,12 @@ cone. #BXSOLV"
         (bias-rate (box-set-bias-rate set)) (mass-scale (box-set-mass-scale set))
         (impulse-scale (box-set-impulse-scale set)) (push-max (box-set-push-max set))
         (threshold (box-set-threshold set)) (elapsed (box-set-elapsed set))
-        (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
-    (declare (type f32-column turns)
+        (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set))
+        (table (box-set-inertias set)) (dummy (box-set-dummy set)))
+    (declare (type f32-column turns table) (type index dummy)
              (type single-float bias-rate mass-scale impulse-scale push-max threshold elapsed hgx hgy hgz))
     (with-box-point-columns (row row-b kvx kvy kvz nx ny nz t1x t1y t1z t2x t2y t2z separation normal-mass
-                             normal-impulse im i11 i12 i13 i22 i23 i33 imb j11 j12 j13 j22 j23 j33
-                             restitution pushed impact-speed approach jacobian kvn push-cap lever-arm
+                             normal-impulse restitution pushed impact-speed approach jacobian kvn push-cap lever-arm
                              rx ry rz sx sy sz)
         points
       ;; the normal velocity of each point that may strike, before this pass pushes any point:
@@ -9059,10 +9059,11 @@ point's bounce a push of its own, never a pull. The speed is the instant's at th
 which the velocity of the substep to come reaches less half that substep's gravity. #BXSOLV"
   (declare (type box-set set) (type f32-column v) #.+kernel-policy+)
   (let ((points (box-set-points set))
-        (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set)))
-    (declare (type single-float hgx hgy hgz))
-    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz normal-mass im i11 i12 i13 i22 i23 i33
-                             imb j11 j12 j13 j22 j23 j33 restitution impact-speed bounce)
+        (hgx (box-set-hgx set)) (hgy (box-set-hgy set)) (hgz (box-set-hgz set))
+        (table (box-set-inertias set)) (dummy (box-set-dummy set)))
+    (declare (type single-float hgx hgy hgz) (type f32-column table) (type index dummy))
+    (with-box-point-columns (row row-b kvx kvy kvz nx ny nz rx ry rz sx sy sz normal-mass
+                             restitution impact-speed bounce)
         points
       (dotimes (pass +box-bounce-passes+)
         (dotimes (k (box-point-columns-length points))
@@ -9071,7 +9072,8 @@ which the velocity of the substep to come reaches less half that substep's gravi
               (let* ((ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
                      (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
                      ;; the change of vn over a substep under gravity
-                     (dv (* (- (if (> (aref im k) 0.0) 1.0 0.0) (if (> (aref imb k) 0.0) 1.0 0.0))
+                     (dv (* (- (if (> (aref table (* 8 (min (aref row k) dummy))) 0.0) 1.0 0.0)
+                               (if (> (aref table (* 8 (min (aref row-b k) dummy))) 0.0) 1.0 0.0))
                             (+ (* hgx ax) (* hgy ay) (* hgz az))))
                      (old (aref bounce k))
                      (new (bounce-impulse old (aref normal-mass k) (aref restitution k) (aref impact-speed k)
