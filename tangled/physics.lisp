@@ -8730,12 +8730,12 @@ about the mean lever to tw. #BXSOLV"
 velocities V, with O and OB the two sides' solver rows, (push! PX PY PZ) the impulse P applied at
 the point, P/m and I^-1 (r x P) to the first side and their opposites to the second, and
 (point-velocity) the first side's point velocity less the second's, v + w x r, as three values;
-the sides' inverse masses and inertias read from TABLE (with-box-point-inertias). #BXSOLV"
+M, MB, (ia I) and (ib I) the sides' inverse masses and inertias (with-box-point-inertias). #BXSOLV"
   `(let ((o (solver-row (aref row ,k))) (ob (solver-row (aref row-b ,k))))
      (declare (type index o ob))
-     (flet ((push! (px py pz)
-              (declare (type single-float px py pz))
-              (with-box-point-inertias (,k)
+     (with-box-point-inertias (,k)
+       (flet ((push! (px py pz)
+                (declare (type single-float px py pz))
                 (let* ((tx (- (* (aref ry ,k) pz) (* (aref rz ,k) py)))
                        (ty (- (* (aref rz ,k) px) (* (aref rx ,k) pz)))
                        (tz (- (* (aref rx ,k) py) (* (aref ry ,k) px)))
@@ -8755,21 +8755,21 @@ the sides' inverse masses and inertias read from TABLE (with-box-point-inertias)
                           (aref ,v (+ ob 2)) (- (aref ,v (+ ob 2)) (* mb pz))
                           (aref ,v (+ ob 3)) (- (aref ,v (+ ob 3)) (+ (* (ib 1) ux) (* (ib 2) uy) (* (ib 3) uz)))
                           (aref ,v (+ ob 4)) (- (aref ,v (+ ob 4)) (+ (* (ib 2) ux) (* (ib 4) uy) (* (ib 5) uz)))
-                          (aref ,v (+ ob 5)) (- (aref ,v (+ ob 5)) (+ (* (ib 3) ux) (* (ib 5) uy) (* (ib 6) uz))))))))
-            (point-velocity ()
-              ;; (v + w x r) of the first side less that of the second, less a posted box's
-              ;; velocity (KVX KVY KVZ, zero but for a point against a posted box: x - 0.0 is x)
-              (values (- (- (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
-                            (+ (aref ,v ob) (- (* (aref ,v (+ ob 4)) (aref sz ,k)) (* (aref ,v (+ ob 5)) (aref sy ,k)))))
-                         (aref kvx ,k))
-                      (- (- (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
-                            (+ (aref ,v (+ ob 1)) (- (* (aref ,v (+ ob 5)) (aref sx ,k)) (* (aref ,v (+ ob 3)) (aref sz ,k)))))
-                         (aref kvy ,k))
-                      (- (- (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k))))
-                            (+ (aref ,v (+ ob 2)) (- (* (aref ,v (+ ob 3)) (aref sy ,k)) (* (aref ,v (+ ob 4)) (aref sx ,k)))))
-                         (aref kvz ,k)))))
-       (declare (inline push! point-velocity) (ignorable #'point-velocity))
-       ,@body)))
+                          (aref ,v (+ ob 5)) (- (aref ,v (+ ob 5)) (+ (* (ib 3) ux) (* (ib 5) uy) (* (ib 6) uz)))))))
+              (point-velocity ()
+                ;; (v + w x r) of the first side less that of the second, less a posted box's
+                ;; velocity (KVX KVY KVZ, zero but for a point against a posted box: x - 0.0 is x)
+                (values (- (- (+ (aref ,v o) (- (* (aref ,v (+ o 4)) (aref rz ,k)) (* (aref ,v (+ o 5)) (aref ry ,k))))
+                              (+ (aref ,v ob) (- (* (aref ,v (+ ob 4)) (aref sz ,k)) (* (aref ,v (+ ob 5)) (aref sy ,k)))))
+                           (aref kvx ,k))
+                        (- (- (+ (aref ,v (+ o 1)) (- (* (aref ,v (+ o 5)) (aref rx ,k)) (* (aref ,v (+ o 3)) (aref rz ,k))))
+                              (+ (aref ,v (+ ob 1)) (- (* (aref ,v (+ ob 5)) (aref sx ,k)) (* (aref ,v (+ ob 3)) (aref sz ,k)))))
+                           (aref kvy ,k))
+                        (- (- (+ (aref ,v (+ o 2)) (- (* (aref ,v (+ o 3)) (aref ry ,k)) (* (aref ,v (+ o 4)) (aref rx ,k))))
+                              (+ (aref ,v (+ ob 2)) (- (* (aref ,v (+ ob 3)) (aref sy ,k)) (* (aref ,v (+ ob 4)) (aref sx ,k)))))
+                           (aref kvz ,k)))))
+         (declare (inline push! point-velocity) (ignorable #'point-velocity #'push!))
+         ,@body))))
 
 (defmacro with-box-point-sides ((v k) &body body)
   "Run BODY for box point K over the solver's velocities V with the two sides' velocities and
@@ -9072,8 +9072,7 @@ which the velocity of the substep to come reaches less half that substep's gravi
               (let* ((ax (aref nx k)) (ay (aref ny k)) (az (aref nz k))
                      (vn (multiple-value-bind (ux uy uz) (point-velocity) (+ (* ux ax) (* uy ay) (* uz az))))
                      ;; the change of vn over a substep under gravity
-                     (dv (* (- (if (> (aref table (* 8 (min (aref row k) dummy))) 0.0) 1.0 0.0)
-                               (if (> (aref table (* 8 (min (aref row-b k) dummy))) 0.0) 1.0 0.0))
+                     (dv (* (- (if (> m 0.0) 1.0 0.0) (if (> mb 0.0) 1.0 0.0))
                             (+ (* hgx ax) (* hgy ay) (* hgz az))))
                      (old (aref bounce k))
                      (new (bounce-impulse old (aref normal-mass k) (aref restitution k) (aref impact-speed k)
