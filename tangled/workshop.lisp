@@ -1232,7 +1232,7 @@ into the box (its radius, when the centre lies inside), and whether a centre lay
               fastest cells box inside-box))))
 ;; Squeezed between a box and the cells: the box yields, the cells hold:2 ends here
 
-;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:7]]
+;; [[file:../physics.org::#SQU33Z][Squeezed between a box and the cells: the box yields, the cells hold:8]]
 (defun squeeze-scene-world (next kernels)
   "A random scene for the squeeze campaign, drawn from the generator NEXT: a world solved by
 KERNELS over a floor three cells deep (top at y = 0) with blocks and pits in [-4, 4), and its
@@ -1335,7 +1335,7 @@ table. #SQU33Z"
   (format stream "~&| scenes | box-steps | body-steps | outside the air | over the bound | fastest / bound | fastest, m/s | held at a face | seconds |~%|-~%| ~D | ~D | ~D | ~D | ~D | ~,3F | ~,2F | ~D | ~,1F |~%"
           (getf figures :scenes) (getf figures :box-steps) (getf figures :body-steps) (getf figures :inside)
           (getf figures :over) (getf figures :worst) (getf figures :fastest) (getf figures :held) seconds))
-;; Squeezed between a box and the cells: the box yields, the cells hold:7 ends here
+;; Squeezed between a box and the cells: the box yields, the cells hold:8 ends here
 
 ;; [[file:../physics.org::#M9W5P7][Random operation sequences find what a hostile caller would:1]]
 (defparameter +fuzz-bad-values+

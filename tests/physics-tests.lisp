@@ -4432,6 +4432,30 @@ use before it. #QKS4GZ"
         (check (zerop twice) "step ~D: ~D pairs listed twice" step twice)))))
 ;; P41BLD-crowded-build-lists-each-pair-once ends here
 
+;; [[file:../physics.org::#P41BLD][P41BLD-crowded-rows-take-no-more-pairs]]
+(define-claim "P41BLD" crowded-rows-take-no-more-pairs
+    "In a crowd of 300 overlapping balls no row's overlap count passes the cap in a build."
+  (let* ((w (make-physics-world :gravity '(0 0 0) :sleep nil))
+         (next (luv-physics::fixed-sequence 3))
+         (counts '())
+         (*physics-phases*
+           (phases-checked-after
+            'luv-physics::pair-phase
+            (lambda (w)
+              (push (subseq (luv-physics::pair-list-overlaps (luv-physics::physics-world-pair-list w)) 0 300) counts)
+              w))))
+    (dotimes (i 300)
+      (add-physics-body w (* 1.2 (funcall next)) (* 1.2 (funcall next)) (* 1.2 (funcall next)) :radius 0.2))
+    (dotimes (step 3) (step-physics-world w))
+    (check (= 3 (length counts)) "~D pair phases seen" (length counts))
+    (loop for overlaps in (reverse counts)
+          for step from 0
+          do (check (<= (reduce #'max overlaps) luv-physics::+overlaps-per-body+)
+                    "step ~D: a row counted ~D overlaps" step (reduce #'max overlaps))
+             (check (> (count luv-physics::+overlaps-per-body+ overlaps) 150)
+                    "step ~D: only ~D rows counted sixteen" step (count luv-physics::+overlaps-per-body+ overlaps)))))
+;; P41BLD-crowded-rows-take-no-more-pairs ends here
+
 ;; [[file:../physics.org::#P41STG][P41STG-pair-list-finds-every-pair]]
 (define-claim "P41STG" pair-list-finds-every-pair
     "Pair contacts from the kept list = brute-force pairs under the speculative distance, while the list is mostly reused."
@@ -8290,26 +8314,70 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
            (multiple-value-list (luv-physics::corner-first-solid probe 2.5 0.5 2.5 0.0 -1.0 0.0 2.0)))))
 ;; BXSWEP-corner-in-a-solid-cell-enters-none ends here
 
+;; [[file:../physics.org::#BXSWEP][BXSWEP-swept-points-keep-their-keys]]
+(defun corner-point-keys (world steps &key (dt (/ 1.0 60)) (above -100.0) (below 100.0))
+  "The low bits of the keys (a corner times 6 and a face, the box's slot left out) of the corner
+points WORLD's box found in the last of STEPS steps of DT seconds, those whose gaps lie between
+ABOVE and BELOW, in increasing order. #BXSWEP"
+  (dotimes (i steps) (step-physics-world world dt))
+  (let ((points (luv-physics::box-set-points (luv-physics::physics-world-box-bodies world))))
+    (sort (loop for k below (luv-physics::box-point-columns-length points)
+                for key = (aref (luv-physics::box-point-columns-key points) k)
+                for gap = (aref (luv-physics::box-point-columns-separation points) k)
+                unless (or (logbitp luv-physics::+box-point-lattice-bit+ key) (<= gap above) (>= gap below))
+                  collect (ldb (byte 34 0) key))
+          #'<)))
+
+(define-claim "BXSWEP" swept-points-keep-their-keys
+    "A corner's swept point carries the key its point against the same face takes once the face is near."
+  (dolist (axis '(0 1 2))
+    (dolist (sign '(1 -1))
+      (let ((terrain (make-voxel-terrain))
+            (wall (list -16 -16 -16 32 32 32))
+            (thrown (list 0 0 0))
+            (face (+ (* 2 axis) (if (> sign 0) 1 0))))
+        (setf (nth axis wall) (if (> sign 0) 10 -6) (nth (+ 3 axis) wall) (if (> sign 0) 11 -5)
+              (nth axis thrown) (* sign 50))
+        (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+        (apply #'fill-terrain terrain (append wall '(t)))
+        (flet ((cube (along &rest velocity)
+                 ;; a world over TERRAIN with a unit cube whose centre is at ALONG on the axis
+                 (let ((w (make-physics-world :terrain terrain :gravity '(0 0 0)))
+                       (centre (list 2.5 2.5 2.5)))
+                   (setf (nth axis centre) along)
+                   (destructuring-bind (x y z) centre
+                     (destructuring-bind (vx vy vz) velocity
+                       (add-physics-box w x y z 0.5 0.5 0.5 :vx vx :vy vy :vz vz)))
+                   w)))
+          (let ((swept (corner-point-keys (apply #'cube 2.5 thrown) 3 :dt (/ 1.0 20) :above 1.0))
+                (near (corner-point-keys (cube (- (if (> sign 0) 10 -5) (* sign 0.51)) 0 0 0) 1 :below 0.05)))
+            (check (and (= 4 (length swept)) (every (lambda (k) (= face (mod k 6))) swept))
+                   "axis ~D, ~@D: the swept corners' keys are ~S" axis sign swept)
+            (check (equal swept near) "axis ~D, ~@D: swept ~S, near the face ~S" axis sign swept near)))))))
+;; BXSWEP-swept-points-keep-their-keys ends here
+
 ;; [[file:../physics.org::#BXPUSH][BXPUSH-walker-pushes-a-crate]]
-(defun pushed-crate (&key (friction 0.6) (speed 2.0) (steps 120) wall (kernels :scalar))
-  "A floor world, a cube of half-extent 0.4 m and 10 kg at (2.5, 0.4, 2.5) of FRICTION, and a
-posted box of the walker's size behind it at x = 1.3, posted before each of STEPS steps moving at
-SPEED along x; with WALL, a wall of cells from x = 5 up. Return the world, the crate, and the most
-its back face lay behind the walker's front face, and the least its front face lay before the
+(defun pushed-crate (&key (friction 0.6) (speed 2.0) (steps 120) wall (kernels :scalar) (half '(0.4 0.4 0.4)))
+  "A floor world, a box of 10 kg and FRICTION on the floor, of half-extents HALF (a cube of
+half-extent 0.4 m at (2.5, 0.4, 2.5) by default) with its back face at x = 2.1, and a posted box
+of the walker's size behind it at x = 1.3, posted before each of STEPS steps moving at SPEED
+along x; with WALL, a wall of cells from x = 5 up. Return the world, the crate, and the most its
+back face lay behind the walker's front face, and the least its front face lay before the
 wall. #BXPUSH"
-  (let* ((terrain (make-floor-terrain))
-         (w (progn (when wall (fill-terrain terrain 5 0 -16 32 4 32 t))
-                   (make-physics-world :terrain terrain :kernels kernels)))
-         (crate (add-physics-box w 2.5 0.4 2.5 0.4 0.4 0.4 :mass 10 :friction friction))
-         (behind 0.0) (before most-positive-single-float))
-    (dotimes (i steps)
-      (let ((wx (+ 1.3 (* speed i (/ 1.0 60)))))
-        (post-physics-box w wx 0.9 2.5 0.3 0.9 0.3 :vx speed)
-        (step-physics-world w)
-        (let ((x (physics-body-position w crate)))
-          (setf behind (max behind (- (+ wx 0.3 (* speed (/ 1.0 60))) (- x 0.4)))
-                before (min before (- 5.0 (+ x 0.4)))))))
-    (values w crate behind before)))
+  (destructuring-bind (hx hy hz) half
+    (let* ((terrain (make-floor-terrain))
+           (w (progn (when wall (fill-terrain terrain 5 0 -16 32 4 32 t))
+                     (make-physics-world :terrain terrain :kernels kernels)))
+           (crate (add-physics-box w (+ 2.1 hx) hy 2.5 hx hy hz :mass 10 :friction friction))
+           (behind 0.0) (before most-positive-single-float))
+      (dotimes (i steps)
+        (let ((wx (+ 1.3 (* speed i (/ 1.0 60)))))
+          (post-physics-box w wx 0.9 2.5 0.3 0.9 0.3 :vx speed)
+          (step-physics-world w)
+          (let ((x (physics-body-position w crate)))
+            (setf behind (max behind (- (+ wx 0.3 (* speed (/ 1.0 60))) (- x hx)))
+                  before (min before (- 5.0 (+ x hx)))))))
+      (values w crate behind before))))
 
 (define-claim "BXPUSH" walker-pushes-a-crate
     "A posted box pushes a crate along the floor at its speed, without tipping it or driving it into the floor."
@@ -8326,6 +8394,18 @@ wall. #BXPUSH"
     (check (< (abs (- (physics-body-velocity w crate) 2.0)) 0.02) "without friction: ~,4F m/s"
            (physics-body-velocity w crate))))
 ;; BXPUSH-walker-pushes-a-crate ends here
+
+;; [[file:../physics.org::#BXPUSH][BXPUSH-walker-pushes-a-plank-end-on]]
+(define-claim "BXPUSH" walker-pushes-a-plank-end-on
+    "A posted box pushes a plank end on at its speed, its push capped by the points' normal mass."
+  (multiple-value-bind (w plank behind) (pushed-crate :half '(1.2 0.2 0.2))
+    (check (< behind 0.01) "the plank's back lay ~,4F m behind the walker's front" behind)
+    (check (< (abs (- (physics-body-velocity w plank) 2.0)) 0.02) "the plank moves at ~,4F m/s"
+           (physics-body-velocity w plank))
+    (check (< (abs (- 1.0 (physics-body-orientation w plank))) 1e-2) "tipped: qw ~,5F"
+           (physics-body-orientation w plank))
+    (check (eq t (validate-physics-world w)))))
+;; BXPUSH-walker-pushes-a-plank-end-on ends here
 
 ;; [[file:../physics.org::#BXPUSH][BXPUSH-boxes-wake-what-they-reach]]
 (define-claim "BXPUSH" boxes-wake-what-they-reach
@@ -8783,58 +8863,70 @@ wall. #BXPUSH"
 ;; SQU33Z-box-rows-capped ends here
 
 ;; [[file:../physics.org::#SQU33Z][SQU33Z-paths-cut-at-faces]]
+(defun forced-path-step (x y z dx dy dz vx vy &optional wall)
+  "One step of a ball of radius 0.25 m at X Y Z over a floor world without gravity (with WALL, a
+wall of cells x in [4, 5)), its delta after the substeps forced to DX DY DZ and its velocity to
+VX VY 0: a list of its position, its velocity's x and y, the step's count of bodies held, its
+:held-out events as (kind handle speed), and its handle. #SQU33Z"
+  (multiple-value-bind (w terrain) (make-floor-world :sleep nil :gravity '(0 0 0))
+    (when wall (fill-terrain terrain 4 0 0 5 4 8 t))
+    (let* ((h (add-physics-body w x y z :radius 0.25))
+           (events '())
+           (*physics-phases*
+             (phases-checked-after
+              'luv-physics::substep-phase
+              (lambda (w)
+                (let ((p (luv-physics::delta-row 0)) (o (luv-physics::solver-row 0))
+                      (d (luv-physics::physics-world-deltas w)) (v (luv-physics::physics-world-velocities w)))
+                  (setf (aref d p) dx (aref d (+ p 1)) dy (aref d (+ p 2)) dz
+                        (aref v o) vx (aref v (+ o 1)) vy (aref v (+ o 2)) 0.0))
+                w))))
+      (step-physics-world w)
+      (map-physics-events
+       (lambda (kind a b ex ey ez speed datum)
+         (declare (ignore b ex ey ez datum))
+         (push (list kind a speed) events))
+       w)
+      (multiple-value-bind (px py pz) (physics-body-position w h)
+        (multiple-value-bind (wx wy) (physics-body-velocity w h)
+          (list px py pz wx wy (physics-world-last-step-held-out-count w)
+                (remove :held-out events :key #'first :test-not #'eq) h))))))
+
 (define-claim "SQU33Z" paths-cut-at-faces
     "A delta into a solid cell stops the body at its face, removes the velocity into it and reports :held-out."
-  (flet ((forced (x y z dx dy dz vx vy &optional wall)
-           ;; one step of a ball at X Y Z whose delta after the substeps is forced to DX DY DZ
-           ;; and its velocity to VX VY 0
-           (multiple-value-bind (w terrain) (make-floor-world :sleep nil :gravity '(0 0 0))
-             (when wall (fill-terrain terrain 4 0 0 5 4 8 t))
-             (let* ((h (add-physics-body w x y z :radius 0.25))
-                    (events '())
-                    (*physics-phases*
-                      (phases-checked-after
-                       'luv-physics::substep-phase
-                       (lambda (w)
-                         (let ((p (luv-physics::delta-row 0)) (o (luv-physics::solver-row 0))
-                               (d (luv-physics::physics-world-deltas w)) (v (luv-physics::physics-world-velocities w)))
-                           (setf (aref d p) dx (aref d (+ p 1)) dy (aref d (+ p 2)) dz
-                                 (aref v o) vx (aref v (+ o 1)) vy (aref v (+ o 2)) 0.0))
-                         w))))
-               (step-physics-world w)
-               (map-physics-events
-                (lambda (kind a b ex ey ez speed datum)
-                  (declare (ignore b ex ey ez datum))
-                  (push (list kind a speed) events))
-                w)
-               (multiple-value-bind (px py pz) (physics-body-position w h)
-                 (multiple-value-bind (wx wy) (physics-body-velocity w h)
-                   (list px py pz wx wy (physics-world-last-step-held-out-count w)
-                         (remove :held-out events :key #'first :test-not #'eq) h)))))))
-    (destructuring-bind (px py pz wx wy count held h) (forced 2.5 0.55 2.5 0.0 -0.6 0.0 1.0 -5.0)
-      (check (< (abs (- py 0.25)) 1e-5) "the ball forced into the floor ends at y = ~,6F" py)
-      (check (and (= px 2.5) (= pz 2.5)) "the ball forced into the floor moved sideways to ~,4F ~,4F" px pz)
-      (check (and (= wy 0.0) (= wx 1.0)) "its velocity is ~,3F ~,3F, not 1 and 0" wx wy)
-      (check (= count 1) "the step counts ~D bodies held" count)
-      (check (and (= 1 (length held)) (= (second (first held)) h) (< (abs (- (third (first held)) 5.0)) 1e-4))
-             "the :held-out events are ~S" held))
-    (destructuring-bind (px py pz wx wy count held h) (forced 3.05 2.5 2.5 0.9 0.0 0.0 0.0 0.0 t)
+  (destructuring-bind (px py pz wx wy count held h) (forced-path-step 2.5 0.55 2.5 0.0 -0.6 0.0 1.0 -5.0)
+    (check (< (abs (- py 0.25)) 1e-5) "the ball forced into the floor ends at y = ~,6F" py)
+    (check (and (= px 2.5) (= pz 2.5)) "the ball forced into the floor moved sideways to ~,4F ~,4F" px pz)
+    (check (and (= wy 0.0) (= wx 1.0)) "its velocity is ~,3F ~,3F, not 1 and 0" wx wy)
+    (check (= count 1) "the step counts ~D bodies held" count)
+    (check (and (= 1 (length held)) (= (second (first held)) h) (< (abs (- (third (first held)) 5.0)) 1e-4))
+           "the :held-out events are ~S" held))
+  (destructuring-bind (px py pz wx wy count held h) (forced-path-step 3.05 2.5 2.5 0.9 0.0 0.0 0.0 0.0 t)
+    (declare (ignore pz wx wy h))
+    (check (< (abs (- px 3.75)) 1e-5) "the ball sent 0.9 m at the wall ends at x = ~,6F" px)
+    (check (and (= py 2.5) (= count 1) (= 1 (length held))) "at the wall: y ~,4F, ~D held, events ~S" py count held))
+  ;; a path within the margin, from a centre 6 cm above the floor: the walk runs because the
+  ;; path reaches as far as the nearest solid cell
+  (destructuring-bind (px py pz wx wy count held h) (forced-path-step 2.5 0.06 2.5 0.0 -0.08 0.0 1.0 -5.0)
+    (declare (ignore px pz wx h))
+    (check (and (= py 0.06) (= wy 0.0) (= count 1) (= 1 (length held)))
+           "the ball sent 8 cm into the floor from 6 cm above it: y ~,6F, vy ~,3F, ~D held" py wy count))
+  (dolist (case '((0.1 0.0 0.05) (0.45 0.0 0.0)))
+    (destructuring-bind (px py pz wx wy count held h) (apply #'forced-path-step 2.3 0.55 2.5 (append case '(1.0 0.0)))
       (declare (ignore pz wx wy h))
-      (check (< (abs (- px 3.75)) 1e-5) "the ball sent 0.9 m at the wall ends at x = ~,6F" px)
-      (check (and (= py 2.5) (= count 1) (= 1 (length held))) "at the wall: y ~,4F, ~D held, events ~S" py count held))
-    ;; a path within the margin, from a centre 6 cm above the floor: the walk runs because the
-    ;; path reaches as far as the nearest solid cell
-    (destructuring-bind (px py pz wx wy count held h) (forced 2.5 0.06 2.5 0.0 -0.08 0.0 1.0 -5.0)
-      (declare (ignore px pz wx h))
-      (check (and (= py 0.06) (= wy 0.0) (= count 1) (= 1 (length held)))
-             "the ball sent 8 cm into the floor from 6 cm above it: y ~,6F, vy ~,3F, ~D held" py wy count))
-    (dolist (case '((0.1 0.0 0.05) (0.45 0.0 0.0)))
-      (destructuring-bind (px py pz wx wy count held h) (apply #'forced 2.3 0.55 2.5 (append case '(1.0 0.0)))
-        (declare (ignore pz wx wy h))
-        (check (and (< (abs (- px (+ 2.3 (first case)))) 1e-5) (< (abs (- py 0.55)) 1e-5))
-               "a delta ~S within the air ends at ~,4F ~,4F" case px py)
-        (check (and (zerop count) (null held)) "a delta ~S within the air was held (~D, ~S)" case count held)))))
+      (check (and (< (abs (- px (+ 2.3 (first case)))) 1e-5) (< (abs (- py 0.55)) 1e-5))
+             "a delta ~S within the air ends at ~,4F ~,4F" case px py)
+      (check (and (zerop count) (null held)) "a delta ~S within the air was held (~D, ~S)" case count held))))
 ;; SQU33Z-paths-cut-at-faces ends here
+
+;; [[file:../physics.org::#SQU33Z][SQU33Z-shortest-path-cut-at-its-face]]
+(define-claim "SQU33Z" shortest-path-cut-at-its-face
+    "A delta of 1.5e-12 m across the floor's top face is cut at the face, as a long one is."
+  (destructuring-bind (px py pz wx wy count held h) (forced-path-step 2.5 1.3e-12 2.5 0.0 -1.5e-12 0.0 1.0 -1.0)
+    (check (and (= px 2.5) (= py 1.3e-12) (= pz 2.5)) "the ball sent 1.5e-12 m down ends at ~S ~S ~S" px py pz)
+    (check (and (= wy 0.0) (= wx 1.0)) "its velocity is ~,3F ~,3F, not 1 and 0" wx wy)
+    (check (and (= count 1) (equal held (list (list :held-out h 1.0)))) "~D held, events ~S" count held)))
+;; SQU33Z-shortest-path-cut-at-its-face ends here
 
 ;; [[file:../physics.org::#SQU33Z][SQU33Z-random-squeezes-hold]]
 (define-claim "SQU33Z" random-squeezes-hold
