@@ -7735,6 +7735,29 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (check (eq t (validate-physics-world w)))))
 ;; BXCELL-turned-and-crossed-cubes ends here
 
+;; [[file:../physics.org::#BXCELL][BXCELL-crossed-edges-struck-sideways]]
+(define-claim "BXCELL" crossed-edges-struck-sideways
+    "Crossed edges struck along x or z meet on the line of the centres and share the speed without spinning."
+  (dolist (along '(:x :z))
+    (let* ((w (make-floor-world :sleep nil :gravity '(0 0 0)))
+           (c (cos (/ pi 8))) (s (sin (/ pi 8))) (off (+ (sqrt 2) 0.001))
+           ;; the struck cube's edges along y; the striking cube's leading edge across the strike
+           (struck (add-physics-box w 2.5 4.0 2.5 0.5 0.5 0.5 :orientation (list c 0 s 0)))
+           (striking (if (eq along :x)
+                         (add-physics-box w (- 2.5 off) 4.0 2.5 0.5 0.5 0.5 :orientation (list c 0 0 s) :vx 1)
+                         (add-physics-box w 2.5 4.0 (- 2.5 off) 0.5 0.5 0.5 :orientation (list c s 0 0) :vz 1))))
+      (dotimes (i 15) (step-physics-world w))
+      (loop for box in (list struck striking) for name in '("the struck cube" "the striking cube")
+            do (multiple-value-bind (vx vy vz) (physics-body-velocity w box)
+                 (multiple-value-bind (on across) (if (eq along :x) (values vx vz) (values vz vx))
+                   (check (< (abs (- on 0.5)) 1e-3) "along ~(~A~): ~A moves at ~,5F m/s" along name on)
+                   (check (< (max (abs across) (abs vy)) 1e-3) "along ~(~A~): ~A moves across at ~,5F ~,5F m/s"
+                          along name across vy)))
+               (let ((spin (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) (multiple-value-list (physics-body-angular-velocity w box)))))))
+                 (check (< spin 1e-3) "along ~(~A~): ~A spins at ~,5F rad/s" along name spin)))
+      (check (eq t (validate-physics-world w))))))
+;; BXCELL-crossed-edges-struck-sideways ends here
+
 ;; [[file:../physics.org::#BXCELL][BXCELL-turned-stack-stands]]
 (define-claim "BXCELL" turned-stack-stands
     "Two cubes stacked and both turned 30 degrees about the vertical stand, one over the other, and sleep."
