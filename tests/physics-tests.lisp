@@ -7974,6 +7974,23 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
                  "e ~,1F from ~,2F m: rebound ~A m, e^2 h ~,5F" e drop peak want))))))
 ;; BXSOLV-boxes-rebound-to-e-squared ends here
 
+;; [[file:../physics.org::#BXSOLV][BXSOLV-free-fall-boxes-bounce]]
+(define-claim "BXSOLV" free-fall-boxes-bounce
+    "Two cubes meeting face to face in free fall part at e times their approach speed, with gravity's momentum."
+  (dolist (family (available-kernel-families))
+    (dolist (e '(0.3 0.8))
+      (let* ((world (luv-physics::open-air-world :kernels family))
+             (a (add-physics-box world 4.0 8.0 4.0 0.5 0.5 0.5 :restitution e :vy 3))
+             (b (add-physics-box world 4.0 9.3 4.0 0.5 0.5 0.5 :restitution e :vy -3))
+             (fall (* -2 9.81d0 0.2d0)))
+        (dotimes (i 12) (step-physics-world world))
+        (let ((ay (nth-value 1 (physics-body-velocity world a))) (by (nth-value 1 (physics-body-velocity world b))))
+          (check (< (abs (- (- by ay) (* 6 e))) (* 1d-3 6 e))
+                 "~(~A~), e ~,1F: the cubes part at ~,6F m/s, not ~,2F" family e (- by ay) (* 6 e))
+          (check (< (abs (- (+ ay by) fall)) (* 1d-4 (abs fall)))
+                 "~(~A~), e ~,1F: their velocities along y sum to ~,6F, not ~,4F" family e (+ ay by) fall))))))
+;; BXSOLV-free-fall-boxes-bounce ends here
+
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-flat-landings-stay-put]]
 (define-claim "BXSOLV" flat-landings-stay-put
     "Cubes dropped flat at 5, 20 and 50 m/s rest within 1 cm of where they fell, turned under 1 degree."
