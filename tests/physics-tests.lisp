@@ -4408,6 +4408,41 @@ use before it. #QKS4GZ"
                       "at ~,2F of the wake speed the sleeper woke with the mover at ~S" factor woken-at)))))
 ;; W4K3PH-wake-speed-is-the-edge ends here
 
+;; [[file:../physics.org::#P41HLD][P41HLD-loose-walk-stops-at-its-sixteenth-refusal]]
+(define-claim "P41HLD" loose-walk-stops-at-its-sixteenth-refusal
+    "A loose row walking past sixteen crowded rows stops there and takes no pair after them."
+  (dolist (axis '(0 1 2))
+    (let* ((w (let ((*physics-contact-push-max* 0)) (make-physics-world :gravity '(0 0 0) :sleep nil)))
+           (c (+ 0.4 (luv-physics::physics-world-margin w) (luv-physics::physics-world-pair-skin w)))
+           (crowd '()) (partner nil) (loose nil) (counts nil) (met nil))
+      (flet ((add (along)
+               (let ((at (list 2.5 2.5 2.5)))
+                 (setf (nth axis at) along)
+                 (destructuring-bind (x y z) at (add-physics-body w x y z :radius 0.2)))))
+        (dotimes (i 16) (push (add (+ (* 4 c) 0.05)) crowd))
+        (add (- (* 4 c) 0.1))
+        (setf partner (add (+ (* 6 c) 0.15)))
+        (dotimes (i 2) (step-physics-world w))
+        (setf loose (add (- (* 6 c) 0.15))))
+      (let ((*physics-phases*
+              (phases-checked-after
+               'luv-physics::pair-phase
+               (lambda (w)
+                 (setf counts (mapcar (lambda (h) (aref (luv-physics::pair-list-overlaps (luv-physics::physics-world-pair-list w))
+                                                        (nth-value 1 (luv-physics::resolve-handle w h))))
+                                      crowd)
+                       met (some (lambda (row)
+                                   (and (eq (getf row :kind) :pair)
+                                        (subsetp (list (getf row :a) (getf row :b)) (list loose partner))))
+                                 (luv-physics::world-contacts-list w)))
+                 w))))
+        (step-physics-world w))
+      (check (= 1 (luv-physics::pair-list-builds (luv-physics::physics-world-pair-list w)))
+             "axis ~D: the list was built ~D times" axis (luv-physics::pair-list-builds (luv-physics::physics-world-pair-list w)))
+      (check (every (lambda (n) (= n 16)) counts) "axis ~D: the crowd counted ~S overlaps" axis counts)
+      (check (not met) "axis ~D: the loose ball took the pair after sixteen refusals" axis))))
+;; P41HLD-loose-walk-stops-at-its-sixteenth-refusal ends here
+
 ;; [[file:../physics.org::#P41BLD][P41BLD-crowded-build-lists-each-pair-once]]
 (define-claim "P41BLD" crowded-build-lists-each-pair-once
     "In a crowd of 300 overlapping balls each built pair list names every pair at most once."
