@@ -4917,6 +4917,25 @@ use before it. #QKS4GZ"
              "the ball's centre at ~,9F: ~D contacts" y (physics-world-last-step-contact-count w)))))
 ;; MYWCNT-contact-strictly-under-the-speculative-distance ends here
 
+;; [[file:../physics.org::#MYWCNT][MYWCNT-ball-strikes-a-ceiling-at-its-face]]
+(define-claim "MYWCNT" ball-strikes-a-ceiling-at-its-face
+    "A ball thrown up at 5 m/s into a ceiling one cell thick strikes its underside, not a cell below it."
+  (dolist (x '(2.5 2.9 2.97))
+    (let ((terrain (make-voxel-terrain)))
+      (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+      (fill-terrain terrain 0 5 0 3 6 5 t)
+      (let* ((w (make-physics-world :terrain terrain :gravity '(0 0 0)))
+             (ball (add-physics-body w x 2.5 2.5 :radius 0.25 :vy 5 :restitution 0.5))
+             (top 0.0))
+        (dotimes (i 60)
+          (step-physics-world w)
+          (setf top (max top (nth-value 1 (physics-body-position w ball)))))
+        (check (< (abs (- top 4.75)) 1e-3) "from x = ~A the ball rose to ~,4F" x top)
+        (multiple-value-bind (vx vy vz) (physics-body-velocity w ball)
+          (check (and (< (abs (+ vy 2.5)) 1e-3) (< (max (abs vx) (abs vz)) 1e-3))
+                 "from x = ~A the ball leaves at ~,4F ~,4F ~,4F" x vx vy vz))))))
+;; MYWCNT-ball-strikes-a-ceiling-at-its-face ends here
+
 ;; [[file:../physics.org::#B1GBDY][B1GBDY-large-ball-rolls-at-five-sevenths]]
 (define-claim "B1GBDY" large-ball-rolls-at-five-sevenths
     "A 2 m ball sliding at 5 m/s on friction 0.6 rolls at 5/7 of it across the seams, flat."
