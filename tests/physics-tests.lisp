@@ -14120,6 +14120,30 @@ at rest near the start. #RH7T05"
                         (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit)))))))
 ;; C4STBX-casts-meet-turned-boxes-where-they-stand ends here
 
+;; [[file:../physics.org::#C4STBX][C4STBX-casts-meet-a-box-turned-every-way]]
+(define-claim "C4STBX" casts-meet-a-box-turned-every-way
+    "Rays along each face normal of a box turned about no axis of the world meet that face with its normal."
+  (let* ((w (make-physics-world :gravity '(0 0 0)))
+         (box (add-physics-box w 1 2 -3 0.5 0.3 0.4 :orientation '(0.9 0.3 0.2 0.1)))
+         (axes (multiple-value-list (multiple-value-call #'luv-physics::box-axes (physics-body-orientation w box)))))
+    (dotimes (k 3)
+      (dolist (sign '(1 -1))
+        (let ((n (loop for row below 3 collect (* sign (nth (+ (* 3 row) k) axes))))
+              (half (nth k '(0.5 0.3 0.4))))
+          (destructuring-bind (nx ny nz) n
+            (let ((hit (physics-ray-cast w (+ 1 (* 5 nx)) (+ 2 (* 5 ny)) (+ -3 (* 5 nz)) (- nx) (- ny) (- nz) 20)))
+              (check (and hit (eql box (physics-hit-handle hit))) "axis ~D, ~@D: the ray met ~S" k sign
+                     (and hit (physics-hit-handle hit)))
+              (when hit
+                (check (< (abs (- (physics-hit-distance hit) (- 5 half))) 1e-5)
+                       "axis ~D, ~@D: met at ~,6F, not ~,2F" k sign (physics-hit-distance hit) (- 5 half))
+                (check (< (max (abs (- (physics-hit-nx hit) nx)) (abs (- (physics-hit-ny hit) ny))
+                               (abs (- (physics-hit-nz hit) nz)))
+                          1e-5)
+                       "axis ~D, ~@D: normal ~,5F ~,5F ~,5F, not ~,5F ~,5F ~,5F" k sign
+                       (physics-hit-nx hit) (physics-hit-ny hit) (physics-hit-nz hit) nx ny nz)))))))))
+;; C4STBX-casts-meet-a-box-turned-every-way ends here
+
 ;; [[file:../physics.org::#R4YC57][R4YC57-rays-match-brute-force]]
 (defun query-test-scene ()
   "The carved basin of the query claims: 400 balls that sleep, stepped 300 times, 20 more asleep
