@@ -1618,7 +1618,7 @@ twin and the table from handles to rows. #W0RLD7"))
   ((contacts :initform (make-contact-columns) :reader physics-world-contacts)
    (contact-table :initform (make-contact-table) :reader physics-world-contact-table)
    (contact-scratch :initform (make-contact-columns) :reader physics-world-contact-scratch)
-   ;; what its snapshots and restores reuse, made at the first ([[#SN4P0T]])
+   ;; what its snapshots and restores reuse, made at the first ([[#SNSCRT]])
    (snapshot-scratch :initform nil :accessor physics-world-snapshot-scratch)
    (constraints :initarg :constraints :initform (make-constraint-columns) :reader physics-world-constraints))
   (:documentation "The persistent contacts, their table by pair and their scratch twin, the
@@ -11785,63 +11785,65 @@ else by calling WHOLE, the phase's own walk; return how many bodies lie buried. 
     (funcall whole)))
 ;; The terrain phase in pieces:1 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:1]]
-(deftype octets () "A snapshot's bytes. #SN4P0T" '(simple-array (unsigned-byte 8) (*)))
+;; [[file:../physics.org::#SNFRMT][The format: a header, then parts padded to words:1]]
+(deftype octets () "A snapshot's bytes. #SNFRMT" '(simple-array (unsigned-byte 8) (*)))
 
-(defconstant +snapshot-version+ 5 "The version of the snapshot layout this engine writes and reads. #SN4P0T")
+(defconstant +snapshot-version+ 5 "The version of the snapshot layout this engine writes and reads. #SNFRMT")
 
-(defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SN4P0T")
+(defconstant +snapshot-header-bytes+ 32 "Bytes of a snapshot's header: magic, version, parts, size, checksum. #SNFRMT")
 
 (defconstant +snapshot-body-bytes+ 70
   "Bytes of one body's record in a snapshot but its material's index, which takes 1, 2 or 4 bytes
-as the palette has up to 256, up to 65536 or more entries (material-index-bytes). #SN4P0T")
+as the palette has up to 256, up to 65536 or more entries (material-index-bytes). #SNFRMT")
 
 (declaim (inline material-index-bytes body-record-bytes))
 (defun material-index-bytes (materials)
-  "The bytes a body's index into a palette of MATERIALS entries takes in a snapshot. #SN4P0T"
+  "The bytes a body's index into a palette of MATERIALS entries takes in a snapshot. #SNFRMT"
   (declare (type index materials))
   (cond ((<= materials 256) 1) ((<= materials 65536) 2) (t 4)))
 
 (defun body-record-bytes (materials)
-  "The bytes one body takes in a snapshot whose palette has MATERIALS entries. #SN4P0T"
+  "The bytes one body takes in a snapshot whose palette has MATERIALS entries. #SNFRMT"
   (declare (type index materials))
   (+ +snapshot-body-bytes+ (material-index-bytes materials)))
 
-(defconstant +snapshot-material-bytes+ 36 "Bytes of one entry of a snapshot's palette of materials. #SN4P0T")
+(defconstant +snapshot-material-bytes+ 36 "Bytes of one entry of a snapshot's palette of materials. #SNFRMT")
 
 (defconstant +snapshot-contact-bytes+ 10
   "Bytes every contact has in a snapshot: its key and its flags; its normal and its groups of
-carried impulses go into the part's streams when the flags say so. #SN4P0T")
+carried impulses go into the part's streams when the flags say so. #SNFRMT")
 
 (defconstant +snapshot-contact-head-bytes+ 24
   "Bytes of the contact part's payload before its keys: the count of contacts and the counts of
-its five streams. #SN4P0T")
+its five streams. #SNFRMT")
 
 (defconstant +snapshot-contact-most-bytes+ 50
   "The most bytes a contact takes in a snapshot: its key, its flags, its normal and every group of
-carried impulses. #SN4P0T")
+carried impulses. #SNFRMT")
 
-(defconstant +snapshot-pair-row-bytes+ 12 "Bytes of one row's anchor in the pair list of a snapshot. #SN4P0T")
+(defconstant +snapshot-pair-row-bytes+ 12 "Bytes of one row's anchor in the pair list of a snapshot. #SNFRMT")
 
-(defconstant +snapshot-pair-head-bytes+ 40 "Bytes of the pair list part's payload before its rows. #SN4P0T")
+(defconstant +snapshot-pair-head-bytes+ 40 "Bytes of the pair list part's payload before its rows. #SNFRMT")
 
-(defconstant +snapshot-box-bytes+ 52 "Bytes of one posted box in a snapshot. #SN4P0T")
+(defconstant +snapshot-box-bytes+ 52 "Bytes of one posted box in a snapshot. #SNFRMT")
 
 (defconstant +snapshot-box-body-bytes+ 24
   "Bytes of one box body's record in the box part of a snapshot: its slot, its three half-extents,
-and the first and the count of its points. #SN4P0T")
+and the first and the count of its points. #SNFRMT")
 
 (defconstant +snapshot-box-point-bytes+ 20
-  "Bytes of one box point of the last step in a snapshot: its key and its three carried impulses. #SN4P0T")
+  "Bytes of one box point of the last step in a snapshot: its key and its three carried impulses. #SNFRMT")
 
 (declaim (inline box-part-bytes))
 (defun box-part-bytes (boxes points)
-  "The payload bytes of a box part of BOXES box bodies and POINTS points. #SN4P0T"
+  "The payload bytes of a box part of BOXES box bodies and POINTS points. #SNFRMT"
   (declare (type index boxes points))
   (+ 8 (* +snapshot-box-body-bytes+ boxes) (* +snapshot-box-point-bytes+ points)))
+;; The format: a header, then parts padded to words:1 ends here
 
+;; [[file:../physics.org::#SNFRMT][The format: a header, then parts padded to words:2]]
 (defparameter +snapshot-magic+ (map 'octets #'char-code "LUVWORLD")
-  "The eight bytes a snapshot starts with. #SN4P0T")
+  "The eight bytes a snapshot starts with. #SNFRMT")
 
 (declaim (inline snap-u8 snap-u16 snap-u32 snap-i32 snap-u64 snap-i64 snap-f32 snap-f64
                  (setf snap-u8) (setf snap-u16) (setf snap-u32) (setf snap-i32) (setf snap-u64)
@@ -11849,11 +11851,11 @@ and the first and the count of its points. #SN4P0T")
 (macrolet ((def (name ref type)
              `(progn
                 (defun ,name (buffer offset)
-                  ,(format nil "The ~(~A~) at byte OFFSET of BUFFER, little-endian. #SN4P0T" type)
+                  ,(format nil "The ~(~A~) at byte OFFSET of BUFFER, little-endian. #SNFRMT" type)
                   (declare (type octets buffer) (type index offset) #.+kernel-policy+)
                   (sb-sys:with-pinned-objects (buffer) (,ref (sb-sys:vector-sap buffer) offset)))
                 (defun (setf ,name) (value buffer offset)
-                  ,(format nil "Write the ~(~A~) VALUE at byte OFFSET of BUFFER, little-endian. #SN4P0T" type)
+                  ,(format nil "Write the ~(~A~) VALUE at byte OFFSET of BUFFER, little-endian. #SNFRMT" type)
                   (declare (type octets buffer) (type index offset) (type ,type value) #.+kernel-policy+)
                   (sb-sys:with-pinned-objects (buffer) (setf (,ref (sb-sys:vector-sap buffer) offset) value))))))
   (def snap-u8 sb-sys:sap-ref-8 (unsigned-byte 8))
@@ -11866,44 +11868,35 @@ and the first and the count of its points. #SN4P0T")
   (def snap-f64 sb-sys:sap-ref-double double-float))
 
 #-little-endian
-(error "The snapshot's accessors read and write the machine's own byte order, which must be little-endian. #SN4P0T")
+(error "The snapshot's accessors read and write the machine's own byte order, which must be little-endian. #SNFRMT")
+;; The format: a header, then parts padded to words:2 ends here
 
-(define-condition physics-snapshot-invalid (physics-error)
-  ((operation :initarg :operation :reader physics-snapshot-invalid-operation)
-   (offset :initarg :offset :reader physics-snapshot-invalid-offset)
-   (expected :initarg :expected :reader physics-snapshot-invalid-expected)
-   (found :initarg :found :reader physics-snapshot-invalid-found))
-  (:report (lambda (c s)
-             (format s "~(~A~): the snapshot is refused at byte ~D: expected ~A, found ~S; the world is unchanged"
-                     (physics-snapshot-invalid-operation c) (physics-snapshot-invalid-offset c)
-                     (physics-snapshot-invalid-expected c) (physics-snapshot-invalid-found c))))
-  (:documentation "A snapshot that cannot be restored, naming the operation, the byte offset, what
-was expected there and what was found; the world restored into is left as it was. #SN4P0T"))
+;; [[file:../physics.org::#SNFRMT][The format: a header, then parts padded to words:3]]
+;;; the parts of a snapshot, in order: each part's id, its name and the bytes of its payload
 
-(define-condition physics-snapshot-truncated (physics-snapshot-invalid) ()
-  (:documentation "A snapshot shorter than its header or its recorded size. #SN4P0T"))
+(defparameter +snapshot-parts+
+  '((1 :world) (2 :handles) (3 :awake-bodies) (4 :sleeping-bodies) (5 :materials) (6 :contacts)
+    (7 :pair-list) (8 :boxes) (9 :pushes) (10 :joints :optional) (11 :box-bodies :optional))
+  "The parts of a snapshot, in the order they are written, each its id and its name, and
+:optional for a part a world may not have (then it is not written and its size is -1): each part
+of the world's state is one entry. #SNFRMT")
 
-(define-condition physics-snapshot-wrong-magic (physics-snapshot-invalid) ()
-  (:documentation "Bytes that do not start with the snapshot magic LUVWORLD. #SN4P0T"))
+(defconstant +snapshot-joint-bytes+ 88 "Bytes of one joint's record in a snapshot. #SNFRMT")
 
-(define-condition physics-snapshot-wrong-version (physics-snapshot-invalid) ()
-  (:documentation "A snapshot of a layout version this engine does not read. #SN4P0T"))
+(defconstant +snapshot-world-bytes+ 204 "Bytes of the world part's payload. #SNFRMT")
 
-(define-condition physics-snapshot-checksum-mismatch (physics-snapshot-invalid) ()
-  (:documentation "A snapshot whose bytes do not hash to its recorded checksum. #SN4P0T"))
+(declaim (inline padded))
+(defun padded (bytes)
+  "BYTES rounded up to a multiple of 4. #SNFRMT"
+  (declare (type index bytes))
+  (logandc2 (+ bytes 3) 3))
 
-(define-condition physics-snapshot-other-layout (physics-snapshot-invalid) ()
-  (:documentation "A snapshot whose parts, counts or values do not describe a world this engine
-can hold: parts out of order or of the wrong size, a slot out of range, a number out of its
-range, a body in a solid cell. #SN4P0T"))
+(defun features-mask (features)
+  "The bit mask of FEATURES, bit K for the K-th feature of +physics-features+. #SNFRMT"
+  (loop for f in features sum (ash 1 (position f +physics-features+))))
+;; The format: a header, then parts padded to words:3 ends here
 
-(define-condition physics-snapshot-missing-features (physics-snapshot-invalid) ()
-  (:documentation "A snapshot of a world that used a feature the target world was made without. #SN4P0T"))
-
-(defun snapshot-refuse (type operation offset expected found)
-  "Signal the physics-snapshot-invalid subtype TYPE. #SN4P0T"
-  (error type :operation operation :offset offset :expected expected :found found))
-
+;; [[file:../physics.org::#SNSUMS][A checksum of four lanes of two sums:1]]
 (declaim (inline snapshot-checksum))
 (defun snapshot-checksum (buffer start end)
   "The 64-bit checksum of the bytes START..END of BUFFER (END - START a multiple of 4): four lanes
@@ -11911,7 +11904,7 @@ of Fletcher's two sums over 64-bit words, lane K taking the words K, K + 4, K + 
 of its words, and B, the sum of its A's, both modulo 2^64) and lane 0 the last whole words; then
 the eight sums and a last 32-bit word folded by FNV-1a's step, in that order, each step followed
 by its high half shifted into its low. A change within one word always changes its lane's A, and
-the fold keeps it. #SN4P0T"
+the fold keeps it. #SNSUMS"
   (declare (type octets buffer) (type index start end) #.+kernel-policy+)
   (let ((a0 0) (a1 0) (a2 0) (a3 0) (b0 0) (b1 0) (b2 0) (b3 0) (i start))
     (declare (type (unsigned-byte 64) a0 a1 a2 a3 b0 b1 b2 b3) (type index i))
@@ -11937,7 +11930,9 @@ the fold keeps it. #SN4P0T"
             (fnv hash b0) (fnv hash b1) (fnv hash b2) (fnv hash b3)
             (when (< i end) (fnv hash (sb-sys:sap-ref-32 sap 0)))
             hash))))))
+;; A checksum of four lanes of two sums:1 ends here
 
+;; [[file:../physics.org::#SNSCRT][A scratch for each world:1]]
 ;;; the scratch a snapshot and a restore reuse: one set per image, grown by doubling
 
 (defstruct (snapshot-scratch (:constructor make-snapshot-scratch ()))
@@ -11946,7 +11941,7 @@ the fold keeps it. #SN4P0T"
 (TABLE), marks by handle slot (MARKS, stamped with STAMP), a contact table and contact rows
 filled while a snapshot is checked and traded for the world's when it is restored (CONTACTS,
 CONTACT-ROWS), the chunks found last (CHUNK-KEYS, CHUNKS), the contact streams' words
-(STREAMS), and each part's size and offset. #SN4P0T"
+(STREAMS), and each part's size and offset. #SNSCRT"
   (materials (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (palette (make-array 576 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
@@ -11963,14 +11958,14 @@ CONTACT-ROWS), the chunks found last (CHUNK-KEYS, CHUNKS), the contact streams' 
 
 (defun world-snapshot-scratch (world)
   "WORLD's snapshot scratch, made at its first snapshot or restore: each world has its own, so
-worlds stepped on different threads take and restore snapshots at the same time. #SN4P0T"
+worlds stepped on different threads take and restore snapshots at the same time. #SNSCRT"
   (or (physics-world-snapshot-scratch world)
       (setf (physics-world-snapshot-scratch world) (make-snapshot-scratch))))
 
 (defun snapshot-marks (scratch slots)
   "SCRATCH's marks, with room for SLOTS slots, under two fresh stamps: return the marks and the
 first, S, which marks free slots, while S + 1 marks live ones and is SCRATCH's stamp from now on;
-any mark below S is no mark. #SN4P0T"
+any mark below S is no mark. #SNSCRT"
   (declare (type snapshot-scratch scratch) (type index slots))
   (when (< (length (snapshot-scratch-marks scratch)) slots)
     (setf (snapshot-scratch-marks scratch)
@@ -11978,90 +11973,15 @@ any mark below S is no mark. #SN4P0T"
                                                                                  :initial-element 0)))
   (incf (snapshot-scratch-stamp scratch) 2)
   (values (snapshot-scratch-marks scratch) (1- (snapshot-scratch-stamp scratch))))
-;; A snapshot holds what decides the next step, part by part:1 ends here
+;; A scratch for each world:1 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:2]]
-;;; the palette of materials: what a body was given when it was added, shared by many bodies
-
-(defun material-words (bodies row words at)
-  "Write into WORDS from AT the nine words of the material of ROW of BODIES: the bits of its
-radius, inverse mass, inverse inertia, restitution, friction, rolling resistance and life, its
-kind, and its filter (the flags from bit 16). #SN4P0T"
-  (declare (type body-columns bodies) (type index row at) (type fixnum-column words) #.+kernel-policy+)
-  (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind flags)
-      bodies
-    (macrolet ((bits (column) `(ldb (byte 32 0) (sb-kernel:single-float-bits (aref ,column row)))))
-      (setf (aref words at) (bits radius) (aref words (+ at 1)) (bits inverse-mass)
-            (aref words (+ at 2)) (bits inverse-inertia) (aref words (+ at 3)) (bits restitution)
-            (aref words (+ at 4)) (bits friction) (aref words (+ at 5)) (bits rolling-resistance)
-            (aref words (+ at 6)) (bits life) (aref words (+ at 7)) (ldb (byte 32 0) (aref kind row))
-            (aref words (+ at 8)) (ldb (byte 32 0) (ash (aref flags row) -16))))))
-
-(defun palette-index (scratch bodies row)
-  "The index in SCRATCH's palette of the material of ROW of BODIES, added when new. #SN4P0T"
-  (declare (type snapshot-scratch scratch) (type body-columns bodies) (type index row) #.+kernel-policy+)
-  (let ((count (snapshot-scratch-count scratch)))
-    (when (> (* 9 (1+ count)) (length (snapshot-scratch-palette scratch)))
-      (setf (snapshot-scratch-palette scratch)
-            (replace (make-array (* 18 (1+ count)) :element-type 'fixnum) (snapshot-scratch-palette scratch))))
-    ;; when the table is half full it doubles, and every entry is put in again
-    (when (> (* 2 (1+ count)) (length (snapshot-scratch-table scratch)))
-      (let ((table (make-array (* 2 (length (snapshot-scratch-table scratch))) :element-type 'fixnum
-                                                                              :initial-element -1)))
-        (setf (snapshot-scratch-table scratch) table)
-        (dotimes (k count) (palette-place scratch k))))
-    (let ((words (snapshot-scratch-palette scratch)) (at (* 9 count)))
-      (material-words bodies row words at)
-      (let ((place (palette-place scratch count)))
-        (declare (type fixnum place))
-        (when (= place count) (incf (snapshot-scratch-count scratch)))
-        place))))
-
-(defun palette-place (scratch k)
-  "The palette index of the material whose nine words stand at entry K of SCRATCH's palette:
-an earlier entry with the same words, found through the table, or K itself, then entered. #SN4P0T"
-  (declare (type snapshot-scratch scratch) (type index k) #.+kernel-policy+)
-  (let* ((words (snapshot-scratch-palette scratch)) (table (snapshot-scratch-table scratch))
-         (mask (1- (length table))) (at (* 9 k)) (h 0))
-    (declare (type fixnum-column words table) (type fixnum mask) (type (unsigned-byte 62) h))
-    (dotimes (i 9) (setf h (ldb (byte 62 0) (+ (* h 1099511628211) (aref words (+ at i))))))
-    (loop for i of-type fixnum = (logand (ash h -7) mask) then (logand (1+ i) mask)
-          for e of-type fixnum = (aref table i)
-          do (cond ((= e -1) (setf (aref table i) k) (return k))
-                   ((loop for j below 9 always (= (aref words (+ (* 9 e) j)) (aref words (+ at j))))
-                    (return e))))))
-;; A snapshot holds what decides the next step, part by part:2 ends here
-
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:3]]
-;;; the parts of a snapshot, in order: each part's id, its name and the bytes of its payload
-
-(defparameter +snapshot-parts+
-  '((1 :world) (2 :handles) (3 :awake-bodies) (4 :sleeping-bodies) (5 :materials) (6 :contacts)
-    (7 :pair-list) (8 :boxes) (9 :pushes) (10 :joints :optional) (11 :box-bodies :optional))
-  "The parts of a snapshot, in the order they are written, each its id and its name, and
-:optional for a part a world may not have (then it is not written and its size is -1): each part
-of the world's state is one entry. #SN4P0T")
-
-(defconstant +snapshot-joint-bytes+ 88 "Bytes of one joint's record in a snapshot. #SN4P0T")
-
-(defconstant +snapshot-world-bytes+ 204 "Bytes of the world part's payload. #SN4P0T")
-
-(declaim (inline padded))
-(defun padded (bytes)
-  "BYTES rounded up to a multiple of 4. #SN4P0T"
-  (declare (type index bytes))
-  (logandc2 (+ bytes 3) 3))
-
-(defun features-mask (features)
-  "The bit mask of FEATURES, bit K for the K-th feature of +physics-features+. #SN4P0T"
-  (loop for f in features sum (ash 1 (position f +physics-features+))))
-
+;; [[file:../physics.org::#SNTAKE][Taking a snapshot: a bound, then each part in its order:1]]
 (defun snapshot-part-bounds (world materials sizes)
   "Write into SIZES, by part id, the most payload bytes each part of WORLD's snapshot may take,
 given its palette of MATERIALS entries (-1 for a part the world has not got), and return their
 sum with the parts' own headers: the exact size of every part but the contacts, whose records
 are bounded by +snapshot-contact-most-bytes+, and the pair list, bounded by its rows' handles
-and its pairs written out whole. #SN4P0T"
+and its pairs written out whole. #SNTAKE"
   (declare (type fixnum-column sizes) (type index materials) #.+kernel-policy+)
   (let* ((ids (physics-world-ids world))
          (free (loop with slot = (handle-table-free ids) while (>= slot 0)
@@ -12090,53 +12010,10 @@ and its pairs written out whole. #SN4P0T"
                             (if set (box-part-bytes (box-set-live set) (box-point-columns-length (box-set-points set))) -1)))
     (loop for (id) in +snapshot-parts+ unless (minusp (aref sizes id)) sum (+ 8 (aref sizes id)))))
 
-(declaim (inline same-material-p))
-(defun same-material-p (bodies row other)
-  "True when rows ROW and OTHER of BODIES have the same material, bit for bit: the nine words
-material-words writes. #SN4P0T"
-  (declare (type body-columns bodies) (type index row other) #.+kernel-policy+)
-  (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind flags)
-      bodies
-    (macrolet ((same (&rest columns)
-                 `(and ,@(loop for c in columns
-                               collect `(= (sb-kernel:single-float-bits (aref ,c row))
-                                           (sb-kernel:single-float-bits (aref ,c other)))))))
-      (and (same radius inverse-mass inverse-inertia restitution friction rolling-resistance life)
-           (= (aref kind row) (aref kind other))
-           (= (ldb (byte 32 16) (aref flags row)) (ldb (byte 32 16) (aref flags other)))))))
-
-(defun snapshot-materials (world scratch)
-  "Fill SCRATCH's palette with the materials of WORLD's bodies, awake rows then sleeping, and
-its materials column with each body's entry; return the palette's size. #SN4P0T"
-  (declare (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
-         (n (+ (body-columns-length awake) (body-columns-length sleeping))))
-    (when (< (length (snapshot-scratch-materials scratch)) n)
-      (setf (snapshot-scratch-materials scratch)
-            (make-array (max n (* 2 (length (snapshot-scratch-materials scratch)))) :element-type 'fixnum)))
-    (fill (snapshot-scratch-table scratch) -1)
-    (setf (snapshot-scratch-count scratch) 0)
-    (let ((materials (snapshot-scratch-materials scratch)) (k 0))
-      (declare (type fixnum-column materials) (type index k))
-      (flet ((walk (bodies)
-               (declare (type body-columns bodies))
-               (let ((last -1))
-                 (declare (type fixnum last))
-                 (dotimes (row (body-columns-length bodies))
-                   ;; most bodies share the material of the row before them: compared, not hashed
-                   (setf last (if (and (> row 0) (same-material-p bodies row (1- row)))
-                                  last
-                                  (palette-index scratch bodies row))
-                         (aref materials k) last)
-                   (incf k)))))
-        (walk awake)
-        (walk sleeping)))
-    (snapshot-scratch-count scratch)))
-
 (defun snapshot-physics-world (world &optional buffer)
   "Write WORLD's whole simulation state into BUFFER, an octet vector, when it has room for the
 snapshot's bound (snapshot-part-bounds), else into a new one of that bound; return the buffer
-and the snapshot's size in bytes. Into a buffer large enough it conses nothing. #SN4P0T"
+and the snapshot's size in bytes. Into a buffer large enough it conses nothing. #SNTAKE"
   (check-idle world 'snapshot-physics-world)
   (unless (or (null buffer) (typep buffer 'octets))
     (error 'invalid-physics-parameter :world world :name :buffer :value buffer
@@ -12162,304 +12039,12 @@ and the snapshot's size in bytes. Into a buffer large enough it conses nothing. 
       (setf (snap-u64 buffer 16) at
             (snap-u64 buffer 24) (snapshot-checksum buffer +snapshot-header-bytes+ at))
       (values buffer at))))
+;; Taking a snapshot: a bound, then each part in its order:1 ends here
 
-(eval-when (:compile-toplevel :load-toplevel :execute)
-  (defparameter +snapshot-body-floats+ '(x y z vx vy vz wx wy wz qw qx qy qz sleep-time)
-    "The single-float columns of a body that a body part of a snapshot holds, each as one block of
-its rows, in this order. #SN4P0T"))
-
-(defmacro do-snapshot-body-floats ((column k) bodies &body body)
-  "Run BODY once for each column of +snapshot-body-floats+, COLUMN bound to that column of BODIES
-and K to its place in the list, written out, not looped over. #SN4P0T"
-  (let ((b (gensym "BODIES")))
-    `(let ((,b ,bodies))
-       ,@(loop for c in +snapshot-body-floats+ for i from 0
-               collect `(let ((,column (,(intern (format nil "BODY-COLUMNS-~A" c) (symbol-package 'body-columns-x)) ,b)))
-                          (declare (type f32-column ,column) (ignorable ,column))
-                          (symbol-macrolet ((,k ,i)) ,@body))))))
-
-(declaim (inline body-part-column))
-(defun body-part-column (n k &optional (width 4))
-  "Where, from the count that starts a body part of N bodies, the block of its K-th column begins:
-the float columns of +snapshot-body-floats+ from 0, then age (14, two units), slot (16) and
-material (17), in 4-byte units, and the flags (18) after the materials' indices of WIDTH bytes
-each. #SN4P0T"
-  (declare (type index n) (type (integer 0 18) k) (type (member 1 2 4) width))
-  (the index (if (= k 18) (+ 4 (* (+ 68 width) n)) (+ 4 (* 4 k n)))))
-
-(declaim (inline snap-material-index (setf snap-material-index)))
-(defun snap-material-index (buffer offset width)
-  "The material index of WIDTH bytes at OFFSET of BUFFER. #SN4P0T"
-  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width))
-  (case width (1 (snap-u8 buffer offset)) (2 (snap-u16 buffer offset)) (t (snap-u32 buffer offset))))
-
-(defun (setf snap-material-index) (value buffer offset width)
-  "Write the material index VALUE in WIDTH bytes at OFFSET of BUFFER. #SN4P0T"
-  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width) (type (unsigned-byte 32) value))
-  (case width
-    (1 (setf (snap-u8 buffer offset) value))
-    (2 (setf (snap-u16 buffer offset) value))
-    (t (setf (snap-u32 buffer offset) value))))
-
-(defun write-snapshot-bodies (bodies buffer at materials first palette)
-  "Write the rows of BODIES into BUFFER from AT: their count, then each column as one block of
-every row's value, the float columns and the ages copied whole, the row's material being entry
-FIRST + row of MATERIALS, an index into a PALETTE of that many entries; return the padded bytes
-written. #SN4P0T"
-  (declare (type body-columns bodies) (type octets buffer) (type index at first palette)
-           (type fixnum-column materials) #.+kernel-policy+)
-  (let ((n (body-columns-length bodies)) (w (material-index-bytes palette)))
-    (setf (snap-u32 buffer at) n)
-    (do-snapshot-body-floats (column k) bodies
-      (sb-kernel:%byte-blt column 0 buffer (+ at (body-part-column n k)) (+ at (body-part-column n (1+ k)))))
-    (sb-kernel:%byte-blt (body-columns-age bodies) 0 buffer (+ at (body-part-column n 14)) (+ at (body-part-column n 16)))
-    (let ((handle (body-columns-handle bodies)) (flags (body-columns-flags bodies))
-          (s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18 w))))
-      (declare (type fixnum-column handle flags) (type index s m f))
-      (dotimes (row n)
-        (setf (snap-u32 buffer (+ s (* 4 row))) (ldb (byte +handle-index-bits+ 0) (aref handle row))
-              (snap-material-index buffer (+ m (* w row)) w) (aref materials (+ first row))
-              (snap-u16 buffer (+ f (* 2 row))) (ldb (byte 16 0) (aref flags row))))
-      ;; the padding reads as zeros
-      (loop for p of-type index from (+ f (* 2 n)) below (+ at (padded (+ 4 (* (body-record-bytes palette) n))))
-            do (setf (aref buffer p) 0)))
-    (padded (+ 4 (* (body-record-bytes palette) n)))))
-
-(declaim (inline normal-code))
-(defun normal-code (x y z)
-  "The code of the normal whose components have the bits X Y Z: 1 to 6 for the unit vectors +x
--x +y -y +z -z, exactly, and 0 for any other. #SN4P0T"
-  (declare (type (unsigned-byte 32) x y z))
-  ;; the bits of 1.0 and of -1.0
-  (flet ((code (v plus minus)
-           (declare (type (unsigned-byte 32) v) (type fixnum plus minus))
-           (cond ((= v #x3F800000) plus) ((= v #xBF800000) minus) (t 0))))
-    (declare (inline code))
-    (cond ((zerop (logior y z)) (code x 1 2))
-          ((zerop (logior x z)) (code y 3 4))
-          ((zerop (logior x y)) (code z 5 6))
-          (t 0))))
-
-(defun snapshot-stream-room (scratch n)
-  "SCRATCH's stream words, with room for N + 1 entries of each stream (ten words a contact). #SN4P0T"
-  (declare (type snapshot-scratch scratch) (type index n))
-  (let ((words (* 10 (1+ n))))
-    (when (< (length (snapshot-scratch-streams scratch)) words)
-      (setf (snapshot-scratch-streams scratch)
-            (make-array (max words (* 2 (length (snapshot-scratch-streams scratch)))) :element-type '(unsigned-byte 32))))
-    (snapshot-scratch-streams scratch)))
-
-(defun write-snapshot-contact-flags (world buffer at streams)
-  "One pass over WORLD's contacts in their row order: each one's flags into the contact part at AT
-of BUFFER, and its words into each stream it belongs to, stream K's entries from word (N + 1)
-times the widths before K of STREAMS, its entry past the last zero; each stream's count into the
-part's head. #SN4P0T"
-  (declare (type octets buffer) (type index at) (type (simple-array (unsigned-byte 32) (*)) streams)
-           #.+kernel-policy+)
-  (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts)) (m (1+ n))
-         (step (physics-world-step-count world)))
-    (declare (type index n m) (type fixnum step))
-    (with-contact-columns (seen touching geometry) contacts
-      (sb-sys:with-pinned-objects (geometry streams buffer)
-        ;; pointers that move on: a field is then one load at a fixed displacement
-        (let ((g (sb-sys:vector-sap geometry))
-              (f (sb-sys:sap+ (sb-sys:vector-sap buffer) (+ at +snapshot-contact-head-bytes+ (* 8 n))))
-              (s0 (sb-sys:vector-sap streams)) (s1 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 12 m)))
-              (s2 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 16 m))) (s3 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 24 m)))
-              (s4 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 36 m))))
-          (macrolet ((word (k) `(sb-sys:sap-ref-32 g ,(* 4 k)))
-                     (put (s width first present)
-                       ;; the words go in at the stream's end, which moves on only when present
-                       `(progn ,@(loop for k below width collect `(setf (sb-sys:sap-ref-32 ,s ,(* 4 k)) (word ,(+ first k))))
-                               (setf ,s (sb-sys:sap+ ,s (* ,(* 4 width) ,present))))))
-            (dotimes (row n)
-              (let* ((code (normal-code (word 0) (word 1) (word 2)))
-                     (p0 (if (zerop code) 1 0))
-                     (p1 (if (zerop (word #.(position 'normal-impulse +contact-fields+))) 0 1))
-                     (p2 (if (zerop (logior (word #.(position 'tangent-impulse-1 +contact-fields+))
-                                            (word #.(1+ (position 'tangent-impulse-1 +contact-fields+)))))
-                             0 1))
-                     (p3 (if (zerop (logior (word #.(position 'rolling-impulse-x +contact-fields+))
-                                            (word #.(+ 1 (position 'rolling-impulse-x +contact-fields+)))
-                                            (word #.(+ 2 (position 'rolling-impulse-x +contact-fields+)))))
-                             0 1))
-                     (p4 (if (zerop (word #.(position 'spin-impulse +contact-fields+))) 0 1)))
-                (declare (type (integer 0 6) code) (type bit p0 p1 p2 p3 p4))
-                (setf (sb-sys:sap-ref-16 f 0)
-                      (logior (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2) (ash code 2)
-                              (ash p1 5) (ash p2 6) (ash p3 7) (ash p4 8)))
-                (put s0 3 0 p0)
-                (put s1 1 #.(position 'normal-impulse +contact-fields+) p1)
-                (put s2 2 #.(position 'tangent-impulse-1 +contact-fields+) p2)
-                (put s3 3 #.(position 'rolling-impulse-x +contact-fields+) p3)
-                (put s4 1 #.(position 'spin-impulse +contact-fields+) p4)
-                (setf g (sb-sys:sap+ g #.(* 4 (length +contact-fields+))) f (sb-sys:sap+ f 2)))))
-          ;; each stream's count, and its entry past the last, zeros
-          (let ((base (sb-sys:vector-sap streams)))
-            (macrolet ((close-stream (s k start width)
-                         `(let ((count (floor (- (sb-sys:sap-int ,s) (sb-sys:sap-int base) ,(* 4 start) (* ,(* 4 start) n))
-                                              ,(* 4 width))))
-                            (dotimes (j ,width) (setf (sb-sys:sap-ref-32 ,s (* 4 j)) 0))
-                            (setf (snap-u32 buffer (+ at ,(+ 4 (* 4 k)))) count))))
-              (close-stream s0 0 0 3) (close-stream s1 1 3 1) (close-stream s2 2 4 2)
-              (close-stream s3 3 6 3) (close-stream s4 4 9 1))))))))
-
-(defun write-snapshot-contacts (world buffer at scratch)
-  "Write the contacts of WORLD into BUFFER from AT as columns: their count and the counts of the
-five streams, the keys (the key column's words, copied whole), each contact's flags, then the
-streams, each closed by an entry of zeros; return the padded bytes written. #SN4P0T"
-  (declare (type octets buffer) (type index at) (type snapshot-scratch scratch) #.+kernel-policy+)
-  (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts)) (m (1+ n))
-         (streams (snapshot-stream-room scratch n))
-         (keys (+ at +snapshot-contact-head-bytes+)) (o (+ keys (* 10 n))))
-    (declare (type index n m keys o) (type (simple-array (unsigned-byte 32) (*)) streams))
-    (setf (snap-u32 buffer at) n)
-    (sb-kernel:%byte-blt (contact-columns-key contacts) 0 buffer keys (+ keys (* 8 n)))
-    (write-snapshot-contact-flags world buffer at streams)
-    ;; each stream's entries and its closing zeros, copied whole
-    (loop for (start width) in '((0 3) (3 1) (4 2) (6 3) (9 1))
-          for k from 0
-          do (let ((bytes (* 4 width (1+ (snap-u32 buffer (+ at 4 (* 4 k)))))))
-               (declare (type index bytes))
-               (sb-kernel:%byte-blt streams (* 4 start m) buffer o (+ o bytes))
-               (incf o bytes)))
-    (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
-    (- o at)))
-
-(defun write-snapshot-pair-list (world buffer at)
-  "Write the pair list of WORLD into BUFFER from AT: its numbers, each row's anchor, the rows'
-clear marks as bits, the rows' handles unless they are the awake rows' own, and the pairs as
-differences of rows when they fit in a byte and a 16-bit word, else whole; return the padded
-bytes written. #SN4P0T"
-  (declare (type octets buffer) (type index at) #.+kernel-policy+)
-  (let* ((plist (physics-world-pair-list world)) (rows (pair-list-rows plist))
-         (n (max rows 0)) (pairs (if (>= rows 0) (pair-list-count plist) 0))
-         (awake (physics-world-awake world)) (handles (pair-list-handles plist))
-         (own (and (<= n (body-columns-length awake))
-                   (let ((now (body-columns-handle awake)))
-                     (declare (type fixnum-column now))
-                     (loop for i of-type index below n always (= (aref handles i) (aref now i))))))
-         (o (+ at +snapshot-pair-head-bytes+ (* +snapshot-pair-row-bytes+ n))))
-    (declare (type fixnum rows) (type index n pairs o))
-    (setf (snap-i32 buffer at) rows (snap-f32 buffer (+ at 4)) (pair-list-cell plist)
-          (snap-u32 buffer (+ at 8)) (pair-list-builds plist) (snap-i32 buffer (+ at 12)) (pair-list-loose-count plist)
-          (snap-i64 buffer (+ at 16)) (pair-list-step plist) (snap-i64 buffer (+ at 24)) (pair-list-built-step plist)
-          (snap-u32 buffer (+ at 32)) pairs)
-    (sb-kernel:%byte-blt (pair-list-anchors plist) 0 buffer (+ at +snapshot-pair-head-bytes+) o)
-    ;; the clear marks, a bit a row in 32-bit words
-    (let ((clear (pair-list-clear plist)))
-      (declare (type fixnum-column clear))
-      (dotimes (w (ceiling n 32))
-        (let ((word 0))
-          (declare (type (unsigned-byte 32) word))
-          (loop for i of-type index from (* 32 w) below (min n (* 32 (1+ w)))
-                do (when (= 1 (aref clear i)) (setf word (logior word (ash 1 (- i (* 32 w)))))))
-          (setf (snap-u32 buffer o) word)
-          (incf o 4))))
-    (unless own
-      (dotimes (i n) (setf (snap-i64 buffer o) (aref handles i)) (incf o 8)))
-    (let ((list (pair-list-pairs plist)) (deltas t))
-      (declare (type fixnum-column list))
-      ;; as deltas: a byte a pair, its row A less the pair before's, signed, or -128 when that does
-      ;; not fit and A is the next of the rows listed whole after; then a 16-bit word a pair, its row
-      ;; B less its row A, signed; whole pairs when some B - A does not fit
-      (let ((whole (padded (+ o (* 3 pairs)))) (wholes 0))
-        (declare (type index whole wholes))
-        (loop with last of-type fixnum = 0
-              for k of-type index below pairs
-              for a of-type fixnum = (ash (aref list k) -24)
-              for b of-type fixnum = (ldb (byte 24 0) (aref list k))
-              do (unless (<= -32768 (- b a) 32767) (return (setf deltas nil)))
-                 (if (< -128 (- a last) 128)
-                     (setf (snap-u8 buffer (+ o k)) (ldb (byte 8 0) (- a last)))
-                     (setf (snap-u8 buffer (+ o k)) 128
-                           (snap-u32 buffer (+ whole 4 (* 4 wholes))) a
-                           wholes (1+ wholes)))
-                 (setf (snap-u16 buffer (+ o pairs (* 2 k))) (ldb (byte 16 0) (- b a)) last a))
-        (if deltas
-            (progn (loop for q of-type index from (+ o (* 3 pairs)) below whole do (setf (aref buffer q) 0))
-                   (setf (snap-u32 buffer whole) wholes o (+ whole 4 (* 4 wholes))))
-            (dotimes (k pairs) (setf (snap-i64 buffer o) (aref list k)) (incf o 8))))
-      (setf (snap-u32 buffer (+ at 36)) (logior (if own 0 1) (if deltas 2 0))))
-    (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
-    (- o at)))
-
-(defun write-snapshot-world (world buffer at)
-  "Write the world part of WORLD's snapshot into BUFFER from AT: its numbers, its parameters and
-the last step's statistics. #SN4P0T"
-  (declare (type octets buffer) (type index at) #.+kernel-policy+)
-  (let ((stats (world-statistics world)) (terrain (physics-world-terrain world))
-        (name (symbol-name (kernel-family-name (physics-world-kernels world)))))
-    (setf (snap-u32 buffer at) (handle-table-tag (physics-world-ids world))
-          (snap-u32 buffer (+ at 4)) (features-mask (world-features world))
-          (snap-u32 buffer (+ at 8)) (logior (if (physics-world-sleep-enabled world) 1 0)
-                                             (if (physics-world-filtering world) 2 0)
-                                             (if (physics-world-column-watch world) 4 0)
-                                             (if (physics-world-pushed world) 8 0))
-          (snap-u32 buffer (+ at 12)) (physics-world-substeps world)
-          (snap-u64 buffer (+ at 16)) (physics-world-step-count world)
-          (snap-f32 buffer (+ at 24)) (physics-world-step-seconds world)
-          (snap-f32 buffer (+ at 28)) (physics-world-gravity-x world)
-          (snap-f32 buffer (+ at 32)) (physics-world-gravity-y world)
-          (snap-f32 buffer (+ at 36)) (physics-world-gravity-z world)
-          (snap-f32 buffer (+ at 40)) (physics-world-current-dt world)
-          (snap-f32 buffer (+ at 44)) (physics-world-current-h world)
-          (snap-f32 buffer (+ at 48)) (physics-world-max-radius world))
-    (loop for (name nil nil nil kind) in +physics-parameters+
-          for o of-type index from (+ at 52) by 4
-          for value = (world-parameter world name)
-          do (if (eq kind 'integer)
-                 (setf (snap-u32 buffer o) value)
-                 (setf (snap-f32 buffer o) value)))
-    (setf (snap-i64 buffer (+ at 124)) (physics-world-braced-step world)
-          (snap-i64 buffer (+ at 132)) (physics-world-awake-grid-step world)
-          (snap-u64 buffer (+ at 140)) (contact-table-misses (physics-world-contact-table world))
-          (snap-u32 buffer (+ at 148)) (step-statistics-contacts stats)
-          (snap-u32 buffer (+ at 152)) (step-statistics-colors stats)
-          (snap-f64 buffer (+ at 156)) (step-statistics-real-seconds stats)
-          (snap-f64 buffer (+ at 164)) (step-statistics-max-penetration stats)
-          (snap-f64 buffer (+ at 172)) (step-statistics-max-approach stats)
-          (snap-u64 buffer (+ at 180)) (if terrain (voxel-terrain-edits terrain) 0))
-    (dotimes (i (min 16 (length name)))
-      (setf (snap-u8 buffer (+ at 188 i)) (logand 127 (char-code (char name i)))))))
-
-(defun write-snapshot-joints (world buffer at)
-  "Write the joints part of WORLD's snapshot into BUFFER from AT: the joint handle table, the
-limits' softness and a record per joint. #SN4P0T"
-  (declare (type octets buffer) (type index at) #.+kernel-policy+)
-  (let* ((set (physics-world-joints world)) (jids (joint-set-ids set)) (count (handle-table-count jids))
-         (rows (joint-set-rows set)) (n (joint-columns-length rows))
-         (generations (handle-table-generation jids)) (nfree 0))
-    (declare (type index count n nfree))
-    (setf (snap-u32 buffer at) n (snap-u32 buffer (+ at 4)) count
-          (snap-f32 buffer (+ at 12)) (joint-set-limit-bias set) (snap-f32 buffer (+ at 16)) (joint-set-limit-mass set))
-    (dotimes (slot count) (setf (snap-u32 buffer (+ at 20 (* 4 slot))) (aref generations slot)))
-    (loop with slot of-type fixnum = (handle-table-free jids) while (>= slot 0)
-          do (setf (snap-u32 buffer (+ at 20 (* 4 count) (* 4 nfree))) slot)
-             (incf nfree)
-             (setf slot (aref (handle-table-local jids) slot)))
-    (setf (snap-u32 buffer (+ at 8)) nfree)
-    (with-joint-columns (kind flags handle body-a body-b ax ay az bx by bz rest-length min-length max-length
-                         hertz damping-ratio break-force impulse-x impulse-y impulse-z)
-        rows
-      (dotimes (row n)
-        (let ((o (+ at 20 (* 4 count) (* 4 nfree) (* row +snapshot-joint-bytes+)))
-              (a (aref body-a row)) (b (aref body-b row)))
-          (declare (type index o))
-          (setf (snap-u32 buffer o) (aref kind row) (snap-u32 buffer (+ o 4)) (aref flags row)
-                (snap-u32 buffer (+ o 8)) (handle-index (ldb (byte +handle-joint-bit+ 0) (aref handle row)))
-                (snap-u32 buffer (+ o 12)) (handle-index a) (snap-u32 buffer (+ o 16)) (handle-generation a)
-                (snap-u32 buffer (+ o 20)) (if (= b +no-body+) #xFFFFFFFF (handle-index b))
-                (snap-u32 buffer (+ o 24)) (if (= b +no-body+) 0 (handle-generation b)))
-          (macrolet ((floats (&rest columns)
-                       `(setf ,@(loop for c in columns for k from 28 by 4
-                                      append `((snap-f32 buffer (+ o ,k)) (aref ,c row))))))
-            (floats ax ay az bx by bz rest-length min-length max-length hertz damping-ratio
-                    break-force impulse-x impulse-y impulse-z)))))))
-
+;; [[file:../physics.org::#SNTAKE][Taking a snapshot: a bound, then each part in its order:2]]
 (defun write-snapshot-part (id world buffer at scratch)
   "Write the payload of part ID of WORLD's snapshot into BUFFER from AT, its padding zeroed, and
-return its bytes. #SN4P0T"
+return its bytes. #SNTAKE"
   (declare (type octets buffer) (type index at) (type snapshot-scratch scratch) #.+kernel-policy+)
   (ecase id
     (1 (fill buffer 0 :start at :end (+ at +snapshot-world-bytes+))
@@ -12517,9 +12102,372 @@ return its bytes. #SN4P0T"
     (10 (write-snapshot-joints world buffer at)
         (aref (snapshot-scratch-sizes scratch) 10))
     (11 (write-snapshot-box-bodies world buffer at))))
+;; Taking a snapshot: a bound, then each part in its order:2 ends here
+
+;; [[file:../physics.org::#SNWBOD][The bodies, a column at a time, their materials in a palette:1]]
+;;; the palette of materials: what a body was given when it was added, shared by many bodies
+
+(defun material-words (bodies row words at)
+  "Write into WORDS from AT the nine words of the material of ROW of BODIES: the bits of its
+radius, inverse mass, inverse inertia, restitution, friction, rolling resistance and life, its
+kind, and its filter (the flags from bit 16). #SNWBOD"
+  (declare (type body-columns bodies) (type index row at) (type fixnum-column words) #.+kernel-policy+)
+  (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind flags)
+      bodies
+    (macrolet ((bits (column) `(ldb (byte 32 0) (sb-kernel:single-float-bits (aref ,column row)))))
+      (setf (aref words at) (bits radius) (aref words (+ at 1)) (bits inverse-mass)
+            (aref words (+ at 2)) (bits inverse-inertia) (aref words (+ at 3)) (bits restitution)
+            (aref words (+ at 4)) (bits friction) (aref words (+ at 5)) (bits rolling-resistance)
+            (aref words (+ at 6)) (bits life) (aref words (+ at 7)) (ldb (byte 32 0) (aref kind row))
+            (aref words (+ at 8)) (ldb (byte 32 0) (ash (aref flags row) -16))))))
+
+(defun palette-index (scratch bodies row)
+  "The index in SCRATCH's palette of the material of ROW of BODIES, added when new. #SNWBOD"
+  (declare (type snapshot-scratch scratch) (type body-columns bodies) (type index row) #.+kernel-policy+)
+  (let ((count (snapshot-scratch-count scratch)))
+    (when (> (* 9 (1+ count)) (length (snapshot-scratch-palette scratch)))
+      (setf (snapshot-scratch-palette scratch)
+            (replace (make-array (* 18 (1+ count)) :element-type 'fixnum) (snapshot-scratch-palette scratch))))
+    ;; when the table is half full it doubles, and every entry is put in again
+    (when (> (* 2 (1+ count)) (length (snapshot-scratch-table scratch)))
+      (let ((table (make-array (* 2 (length (snapshot-scratch-table scratch))) :element-type 'fixnum
+                                                                              :initial-element -1)))
+        (setf (snapshot-scratch-table scratch) table)
+        (dotimes (k count) (palette-place scratch k))))
+    (let ((words (snapshot-scratch-palette scratch)) (at (* 9 count)))
+      (material-words bodies row words at)
+      (let ((place (palette-place scratch count)))
+        (declare (type fixnum place))
+        (when (= place count) (incf (snapshot-scratch-count scratch)))
+        place))))
+
+(defun palette-place (scratch k)
+  "The palette index of the material whose nine words stand at entry K of SCRATCH's palette:
+an earlier entry with the same words, found through the table, or K itself, then entered. #SNWBOD"
+  (declare (type snapshot-scratch scratch) (type index k) #.+kernel-policy+)
+  (let* ((words (snapshot-scratch-palette scratch)) (table (snapshot-scratch-table scratch))
+         (mask (1- (length table))) (at (* 9 k)) (h 0))
+    (declare (type fixnum-column words table) (type fixnum mask) (type (unsigned-byte 62) h))
+    (dotimes (i 9) (setf h (ldb (byte 62 0) (+ (* h 1099511628211) (aref words (+ at i))))))
+    (loop for i of-type fixnum = (logand (ash h -7) mask) then (logand (1+ i) mask)
+          for e of-type fixnum = (aref table i)
+          do (cond ((= e -1) (setf (aref table i) k) (return k))
+                   ((loop for j below 9 always (= (aref words (+ (* 9 e) j)) (aref words (+ at j))))
+                    (return e))))))
+
+(declaim (inline same-material-p))
+(defun same-material-p (bodies row other)
+  "True when rows ROW and OTHER of BODIES have the same material, bit for bit: the nine words
+material-words writes. #SNWBOD"
+  (declare (type body-columns bodies) (type index row other) #.+kernel-policy+)
+  (with-body-columns (radius inverse-mass inverse-inertia restitution friction rolling-resistance life kind flags)
+      bodies
+    (macrolet ((same (&rest columns)
+                 `(and ,@(loop for c in columns
+                               collect `(= (sb-kernel:single-float-bits (aref ,c row))
+                                           (sb-kernel:single-float-bits (aref ,c other)))))))
+      (and (same radius inverse-mass inverse-inertia restitution friction rolling-resistance life)
+           (= (aref kind row) (aref kind other))
+           (= (ldb (byte 32 16) (aref flags row)) (ldb (byte 32 16) (aref flags other)))))))
+
+(defun snapshot-materials (world scratch)
+  "Fill SCRATCH's palette with the materials of WORLD's bodies, awake rows then sleeping, and
+its materials column with each body's entry; return the palette's size. #SNWBOD"
+  (declare (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((awake (physics-world-awake world)) (sleeping (physics-world-sleeping world))
+         (n (+ (body-columns-length awake) (body-columns-length sleeping))))
+    (when (< (length (snapshot-scratch-materials scratch)) n)
+      (setf (snapshot-scratch-materials scratch)
+            (make-array (max n (* 2 (length (snapshot-scratch-materials scratch)))) :element-type 'fixnum)))
+    (fill (snapshot-scratch-table scratch) -1)
+    (setf (snapshot-scratch-count scratch) 0)
+    (let ((materials (snapshot-scratch-materials scratch)) (k 0))
+      (declare (type fixnum-column materials) (type index k))
+      (flet ((walk (bodies)
+               (declare (type body-columns bodies))
+               (let ((last -1))
+                 (declare (type fixnum last))
+                 (dotimes (row (body-columns-length bodies))
+                   ;; most bodies share the material of the row before them: compared, not hashed
+                   (setf last (if (and (> row 0) (same-material-p bodies row (1- row)))
+                                  last
+                                  (palette-index scratch bodies row))
+                         (aref materials k) last)
+                   (incf k)))))
+        (walk awake)
+        (walk sleeping)))
+    (snapshot-scratch-count scratch)))
+;; The bodies, a column at a time, their materials in a palette:1 ends here
+
+;; [[file:../physics.org::#SNWBOD][The bodies, a column at a time, their materials in a palette:2]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defparameter +snapshot-body-floats+ '(x y z vx vy vz wx wy wz qw qx qy qz sleep-time)
+    "The single-float columns of a body that a body part of a snapshot holds, each as one block of
+its rows, in this order. #SNWBOD"))
+
+(defmacro do-snapshot-body-floats ((column k) bodies &body body)
+  "Run BODY once for each column of +snapshot-body-floats+, COLUMN bound to that column of BODIES
+and K to its place in the list, written out, not looped over. #SNWBOD"
+  (let ((b (gensym "BODIES")))
+    `(let ((,b ,bodies))
+       ,@(loop for c in +snapshot-body-floats+ for i from 0
+               collect `(let ((,column (,(intern (format nil "BODY-COLUMNS-~A" c) (symbol-package 'body-columns-x)) ,b)))
+                          (declare (type f32-column ,column) (ignorable ,column))
+                          (symbol-macrolet ((,k ,i)) ,@body))))))
+
+(declaim (inline body-part-column))
+(defun body-part-column (n k &optional (width 4))
+  "Where, from the count that starts a body part of N bodies, the block of its K-th column begins:
+the float columns of +snapshot-body-floats+ from 0, then age (14, two units), slot (16) and
+material (17), in 4-byte units, and the flags (18) after the materials' indices of WIDTH bytes
+each. #SNWBOD"
+  (declare (type index n) (type (integer 0 18) k) (type (member 1 2 4) width))
+  (the index (if (= k 18) (+ 4 (* (+ 68 width) n)) (+ 4 (* 4 k n)))))
+
+(declaim (inline snap-material-index (setf snap-material-index)))
+(defun snap-material-index (buffer offset width)
+  "The material index of WIDTH bytes at OFFSET of BUFFER. #SNWBOD"
+  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width))
+  (case width (1 (snap-u8 buffer offset)) (2 (snap-u16 buffer offset)) (t (snap-u32 buffer offset))))
+
+(defun (setf snap-material-index) (value buffer offset width)
+  "Write the material index VALUE in WIDTH bytes at OFFSET of BUFFER. #SNWBOD"
+  (declare (type octets buffer) (type index offset) (type (member 1 2 4) width) (type (unsigned-byte 32) value))
+  (case width
+    (1 (setf (snap-u8 buffer offset) value))
+    (2 (setf (snap-u16 buffer offset) value))
+    (t (setf (snap-u32 buffer offset) value))))
+
+(defun write-snapshot-bodies (bodies buffer at materials first palette)
+  "Write the rows of BODIES into BUFFER from AT: their count, then each column as one block of
+every row's value, the float columns and the ages copied whole, the row's material being entry
+FIRST + row of MATERIALS, an index into a PALETTE of that many entries; return the padded bytes
+written. #SNWBOD"
+  (declare (type body-columns bodies) (type octets buffer) (type index at first palette)
+           (type fixnum-column materials) #.+kernel-policy+)
+  (let ((n (body-columns-length bodies)) (w (material-index-bytes palette)))
+    (setf (snap-u32 buffer at) n)
+    (do-snapshot-body-floats (column k) bodies
+      (sb-kernel:%byte-blt column 0 buffer (+ at (body-part-column n k)) (+ at (body-part-column n (1+ k)))))
+    (sb-kernel:%byte-blt (body-columns-age bodies) 0 buffer (+ at (body-part-column n 14)) (+ at (body-part-column n 16)))
+    (let ((handle (body-columns-handle bodies)) (flags (body-columns-flags bodies))
+          (s (+ at (body-part-column n 16))) (m (+ at (body-part-column n 17))) (f (+ at (body-part-column n 18 w))))
+      (declare (type fixnum-column handle flags) (type index s m f))
+      (dotimes (row n)
+        (setf (snap-u32 buffer (+ s (* 4 row))) (ldb (byte +handle-index-bits+ 0) (aref handle row))
+              (snap-material-index buffer (+ m (* w row)) w) (aref materials (+ first row))
+              (snap-u16 buffer (+ f (* 2 row))) (ldb (byte 16 0) (aref flags row))))
+      ;; the padding reads as zeros
+      (loop for p of-type index from (+ f (* 2 n)) below (+ at (padded (+ 4 (* (body-record-bytes palette) n))))
+            do (setf (aref buffer p) 0)))
+    (padded (+ 4 (* (body-record-bytes palette) n)))))
+;; The bodies, a column at a time, their materials in a palette:2 ends here
+
+;; [[file:../physics.org::#SNWCON][The contacts: keys copied whole, the rest in five streams:1]]
+(declaim (inline normal-code))
+(defun normal-code (x y z)
+  "The code of the normal whose components have the bits X Y Z: 1 to 6 for the unit vectors +x
+-x +y -y +z -z, exactly, and 0 for any other. #SNWCON"
+  (declare (type (unsigned-byte 32) x y z))
+  ;; the bits of 1.0 and of -1.0
+  (flet ((code (v plus minus)
+           (declare (type (unsigned-byte 32) v) (type fixnum plus minus))
+           (cond ((= v #x3F800000) plus) ((= v #xBF800000) minus) (t 0))))
+    (declare (inline code))
+    (cond ((zerop (logior y z)) (code x 1 2))
+          ((zerop (logior x z)) (code y 3 4))
+          ((zerop (logior x y)) (code z 5 6))
+          (t 0))))
+
+(defun snapshot-stream-room (scratch n)
+  "SCRATCH's stream words, with room for N + 1 entries of each stream (ten words a contact). #SNWCON"
+  (declare (type snapshot-scratch scratch) (type index n))
+  (let ((words (* 10 (1+ n))))
+    (when (< (length (snapshot-scratch-streams scratch)) words)
+      (setf (snapshot-scratch-streams scratch)
+            (make-array (max words (* 2 (length (snapshot-scratch-streams scratch)))) :element-type '(unsigned-byte 32))))
+    (snapshot-scratch-streams scratch)))
+
+(defun write-snapshot-contact-flags (world buffer at streams)
+  "One pass over WORLD's contacts in their row order: each one's flags into the contact part at AT
+of BUFFER, and its words into each stream it belongs to, stream K's entries from word (N + 1)
+times the widths before K of STREAMS, its entry past the last zero; each stream's count into the
+part's head. #SNWCON"
+  (declare (type octets buffer) (type index at) (type (simple-array (unsigned-byte 32) (*)) streams)
+           #.+kernel-policy+)
+  (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts)) (m (1+ n))
+         (step (physics-world-step-count world)))
+    (declare (type index n m) (type fixnum step))
+    (with-contact-columns (seen touching geometry) contacts
+      (sb-sys:with-pinned-objects (geometry streams buffer)
+        ;; pointers that move on: a field is then one load at a fixed displacement
+        (let ((g (sb-sys:vector-sap geometry))
+              (f (sb-sys:sap+ (sb-sys:vector-sap buffer) (+ at +snapshot-contact-head-bytes+ (* 8 n))))
+              (s0 (sb-sys:vector-sap streams)) (s1 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 12 m)))
+              (s2 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 16 m))) (s3 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 24 m)))
+              (s4 (sb-sys:sap+ (sb-sys:vector-sap streams) (* 36 m))))
+          (macrolet ((word (k) `(sb-sys:sap-ref-32 g ,(* 4 k)))
+                     (put (s width first present)
+                       ;; the words go in at the stream's end, which moves on only when present
+                       `(progn ,@(loop for k below width collect `(setf (sb-sys:sap-ref-32 ,s ,(* 4 k)) (word ,(+ first k))))
+                               (setf ,s (sb-sys:sap+ ,s (* ,(* 4 width) ,present))))))
+            (dotimes (row n)
+              (let* ((code (normal-code (word 0) (word 1) (word 2)))
+                     (p0 (if (zerop code) 1 0))
+                     (p1 (if (zerop (word #.(position 'normal-impulse +contact-fields+))) 0 1))
+                     (p2 (if (zerop (logior (word #.(position 'tangent-impulse-1 +contact-fields+))
+                                            (word #.(1+ (position 'tangent-impulse-1 +contact-fields+)))))
+                             0 1))
+                     (p3 (if (zerop (logior (word #.(position 'rolling-impulse-x +contact-fields+))
+                                            (word #.(+ 1 (position 'rolling-impulse-x +contact-fields+)))
+                                            (word #.(+ 2 (position 'rolling-impulse-x +contact-fields+)))))
+                             0 1))
+                     (p4 (if (zerop (word #.(position 'spin-impulse +contact-fields+))) 0 1)))
+                (declare (type (integer 0 6) code) (type bit p0 p1 p2 p3 p4))
+                (setf (sb-sys:sap-ref-16 f 0)
+                      (logior (if (= 1 (aref touching row)) 1 0) (if (= step (aref seen row)) 0 2) (ash code 2)
+                              (ash p1 5) (ash p2 6) (ash p3 7) (ash p4 8)))
+                (put s0 3 0 p0)
+                (put s1 1 #.(position 'normal-impulse +contact-fields+) p1)
+                (put s2 2 #.(position 'tangent-impulse-1 +contact-fields+) p2)
+                (put s3 3 #.(position 'rolling-impulse-x +contact-fields+) p3)
+                (put s4 1 #.(position 'spin-impulse +contact-fields+) p4)
+                (setf g (sb-sys:sap+ g #.(* 4 (length +contact-fields+))) f (sb-sys:sap+ f 2)))))
+          ;; each stream's count, and its entry past the last, zeros
+          (let ((base (sb-sys:vector-sap streams)))
+            (macrolet ((close-stream (s k start width)
+                         `(let ((count (floor (- (sb-sys:sap-int ,s) (sb-sys:sap-int base) ,(* 4 start) (* ,(* 4 start) n))
+                                              ,(* 4 width))))
+                            (dotimes (j ,width) (setf (sb-sys:sap-ref-32 ,s (* 4 j)) 0))
+                            (setf (snap-u32 buffer (+ at ,(+ 4 (* 4 k)))) count))))
+              (close-stream s0 0 0 3) (close-stream s1 1 3 1) (close-stream s2 2 4 2)
+              (close-stream s3 3 6 3) (close-stream s4 4 9 1))))))))
+
+(defun write-snapshot-contacts (world buffer at scratch)
+  "Write the contacts of WORLD into BUFFER from AT as columns: their count and the counts of the
+five streams, the keys (the key column's words, copied whole), each contact's flags, then the
+streams, each closed by an entry of zeros; return the padded bytes written. #SNWCON"
+  (declare (type octets buffer) (type index at) (type snapshot-scratch scratch) #.+kernel-policy+)
+  (let* ((contacts (physics-world-contacts world)) (n (contact-columns-length contacts)) (m (1+ n))
+         (streams (snapshot-stream-room scratch n))
+         (keys (+ at +snapshot-contact-head-bytes+)) (o (+ keys (* 10 n))))
+    (declare (type index n m keys o) (type (simple-array (unsigned-byte 32) (*)) streams))
+    (setf (snap-u32 buffer at) n)
+    (sb-kernel:%byte-blt (contact-columns-key contacts) 0 buffer keys (+ keys (* 8 n)))
+    (write-snapshot-contact-flags world buffer at streams)
+    ;; each stream's entries and its closing zeros, copied whole
+    (loop for (start width) in '((0 3) (3 1) (4 2) (6 3) (9 1))
+          for k from 0
+          do (let ((bytes (* 4 width (1+ (snap-u32 buffer (+ at 4 (* 4 k)))))))
+               (declare (type index bytes))
+               (sb-kernel:%byte-blt streams (* 4 start m) buffer o (+ o bytes))
+               (incf o bytes)))
+    (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
+    (- o at)))
+;; The contacts: keys copied whole, the rest in five streams:1 ends here
+
+;; [[file:../physics.org::#SNWPAR][The pair list and the world part:1]]
+(defun write-snapshot-pair-list (world buffer at)
+  "Write the pair list of WORLD into BUFFER from AT: its numbers, each row's anchor, the rows'
+clear marks as bits, the rows' handles unless they are the awake rows' own, and the pairs as
+differences of rows when they fit in a byte and a 16-bit word, else whole; return the padded
+bytes written. #SNWPAR"
+  (declare (type octets buffer) (type index at) #.+kernel-policy+)
+  (let* ((plist (physics-world-pair-list world)) (rows (pair-list-rows plist))
+         (n (max rows 0)) (pairs (if (>= rows 0) (pair-list-count plist) 0))
+         (awake (physics-world-awake world)) (handles (pair-list-handles plist))
+         (own (and (<= n (body-columns-length awake))
+                   (let ((now (body-columns-handle awake)))
+                     (declare (type fixnum-column now))
+                     (loop for i of-type index below n always (= (aref handles i) (aref now i))))))
+         (o (+ at +snapshot-pair-head-bytes+ (* +snapshot-pair-row-bytes+ n))))
+    (declare (type fixnum rows) (type index n pairs o))
+    (setf (snap-i32 buffer at) rows (snap-f32 buffer (+ at 4)) (pair-list-cell plist)
+          (snap-u32 buffer (+ at 8)) (pair-list-builds plist) (snap-i32 buffer (+ at 12)) (pair-list-loose-count plist)
+          (snap-i64 buffer (+ at 16)) (pair-list-step plist) (snap-i64 buffer (+ at 24)) (pair-list-built-step plist)
+          (snap-u32 buffer (+ at 32)) pairs)
+    (sb-kernel:%byte-blt (pair-list-anchors plist) 0 buffer (+ at +snapshot-pair-head-bytes+) o)
+    ;; the clear marks, a bit a row in 32-bit words
+    (let ((clear (pair-list-clear plist)))
+      (declare (type fixnum-column clear))
+      (dotimes (w (ceiling n 32))
+        (let ((word 0))
+          (declare (type (unsigned-byte 32) word))
+          (loop for i of-type index from (* 32 w) below (min n (* 32 (1+ w)))
+                do (when (= 1 (aref clear i)) (setf word (logior word (ash 1 (- i (* 32 w)))))))
+          (setf (snap-u32 buffer o) word)
+          (incf o 4))))
+    (unless own
+      (dotimes (i n) (setf (snap-i64 buffer o) (aref handles i)) (incf o 8)))
+    (let ((list (pair-list-pairs plist)) (deltas t))
+      (declare (type fixnum-column list))
+      ;; as deltas: a byte a pair, its row A less the pair before's, signed, or -128 when that does
+      ;; not fit and A is the next of the rows listed whole after; then a 16-bit word a pair, its row
+      ;; B less its row A, signed; whole pairs when some B - A does not fit
+      (let ((whole (padded (+ o (* 3 pairs)))) (wholes 0))
+        (declare (type index whole wholes))
+        (loop with last of-type fixnum = 0
+              for k of-type index below pairs
+              for a of-type fixnum = (ash (aref list k) -24)
+              for b of-type fixnum = (ldb (byte 24 0) (aref list k))
+              do (unless (<= -32768 (- b a) 32767) (return (setf deltas nil)))
+                 (if (< -128 (- a last) 128)
+                     (setf (snap-u8 buffer (+ o k)) (ldb (byte 8 0) (- a last)))
+                     (setf (snap-u8 buffer (+ o k)) 128
+                           (snap-u32 buffer (+ whole 4 (* 4 wholes))) a
+                           wholes (1+ wholes)))
+                 (setf (snap-u16 buffer (+ o pairs (* 2 k))) (ldb (byte 16 0) (- b a)) last a))
+        (if deltas
+            (progn (loop for q of-type index from (+ o (* 3 pairs)) below whole do (setf (aref buffer q) 0))
+                   (setf (snap-u32 buffer whole) wholes o (+ whole 4 (* 4 wholes))))
+            (dotimes (k pairs) (setf (snap-i64 buffer o) (aref list k)) (incf o 8))))
+      (setf (snap-u32 buffer (+ at 36)) (logior (if own 0 1) (if deltas 2 0))))
+    (loop while (logtest o 3) do (setf (aref buffer o) 0) (incf o))
+    (- o at)))
+;; The pair list and the world part:1 ends here
+
+;; [[file:../physics.org::#SNWPAR][The pair list and the world part:3]]
+(defun write-snapshot-world (world buffer at)
+  "Write the world part of WORLD's snapshot into BUFFER from AT: its numbers, its parameters and
+the last step's statistics. #SNWPAR"
+  (declare (type octets buffer) (type index at) #.+kernel-policy+)
+  (let ((stats (world-statistics world)) (terrain (physics-world-terrain world))
+        (name (symbol-name (kernel-family-name (physics-world-kernels world)))))
+    (setf (snap-u32 buffer at) (handle-table-tag (physics-world-ids world))
+          (snap-u32 buffer (+ at 4)) (features-mask (world-features world))
+          (snap-u32 buffer (+ at 8)) (logior (if (physics-world-sleep-enabled world) 1 0)
+                                             (if (physics-world-filtering world) 2 0)
+                                             (if (physics-world-column-watch world) 4 0)
+                                             (if (physics-world-pushed world) 8 0))
+          (snap-u32 buffer (+ at 12)) (physics-world-substeps world)
+          (snap-u64 buffer (+ at 16)) (physics-world-step-count world)
+          (snap-f32 buffer (+ at 24)) (physics-world-step-seconds world)
+          (snap-f32 buffer (+ at 28)) (physics-world-gravity-x world)
+          (snap-f32 buffer (+ at 32)) (physics-world-gravity-y world)
+          (snap-f32 buffer (+ at 36)) (physics-world-gravity-z world)
+          (snap-f32 buffer (+ at 40)) (physics-world-current-dt world)
+          (snap-f32 buffer (+ at 44)) (physics-world-current-h world)
+          (snap-f32 buffer (+ at 48)) (physics-world-max-radius world))
+    (loop for (name nil nil nil kind) in +physics-parameters+
+          for o of-type index from (+ at 52) by 4
+          for value = (world-parameter world name)
+          do (if (eq kind 'integer)
+                 (setf (snap-u32 buffer o) value)
+                 (setf (snap-f32 buffer o) value)))
+    (setf (snap-i64 buffer (+ at 124)) (physics-world-braced-step world)
+          (snap-i64 buffer (+ at 132)) (physics-world-awake-grid-step world)
+          (snap-u64 buffer (+ at 140)) (contact-table-misses (physics-world-contact-table world))
+          (snap-u32 buffer (+ at 148)) (step-statistics-contacts stats)
+          (snap-u32 buffer (+ at 152)) (step-statistics-colors stats)
+          (snap-f64 buffer (+ at 156)) (step-statistics-real-seconds stats)
+          (snap-f64 buffer (+ at 164)) (step-statistics-max-penetration stats)
+          (snap-f64 buffer (+ at 172)) (step-statistics-max-approach stats)
+          (snap-u64 buffer (+ at 180)) (if terrain (voxel-terrain-edits terrain) 0))
+    (dotimes (i (min 16 (length name)))
+      (setf (snap-u8 buffer (+ at 188 i)) (logand 127 (char-code (char name i)))))))
 
 (defun world-parameter (world name)
-  "The value of WORLD's parameter NAME, a keyword of +physics-parameters+. #SN4P0T"
+  "The value of WORLD's parameter NAME, a keyword of +physics-parameters+. #SNWPAR"
   (ecase name
     (:contact-hertz (physics-world-contact-hertz world))
     (:contact-damping-ratio (physics-world-damping-ratio world))
@@ -12541,7 +12489,7 @@ return its bytes. #SN4P0T"
     (:body-budget (physics-world-body-budget world))))
 
 (defun (setf world-parameter) (value world name)
-  "Set WORLD's parameter NAME, a keyword of +physics-parameters+, to VALUE. #SN4P0T"
+  "Set WORLD's parameter NAME, a keyword of +physics-parameters+, to VALUE. #SNWPAR"
   (ecase name
     (:contact-hertz (setf (physics-world-contact-hertz world) value))
     (:contact-damping-ratio (setf (physics-world-damping-ratio world) value))
@@ -12561,19 +12509,57 @@ return its bytes. #SN4P0T"
     (:reach-limit (setf (physics-world-reach-limit world) value))
     (:max-speed (setf (physics-world-max-speed world) value))
     (:body-budget (setf (physics-world-body-budget world) value))))
-;; A snapshot holds what decides the next step, part by part:3 ends here
+;; The pair list and the world part:3 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:4]]
+;; [[file:../physics.org::#SNCHCK][Bad bytes: every byte checked before any is written:1]]
+(define-condition physics-snapshot-invalid (physics-error)
+  ((operation :initarg :operation :reader physics-snapshot-invalid-operation)
+   (offset :initarg :offset :reader physics-snapshot-invalid-offset)
+   (expected :initarg :expected :reader physics-snapshot-invalid-expected)
+   (found :initarg :found :reader physics-snapshot-invalid-found))
+  (:report (lambda (c s)
+             (format s "~(~A~): the snapshot is refused at byte ~D: expected ~A, found ~S; the world is unchanged"
+                     (physics-snapshot-invalid-operation c) (physics-snapshot-invalid-offset c)
+                     (physics-snapshot-invalid-expected c) (physics-snapshot-invalid-found c))))
+  (:documentation "A snapshot that cannot be restored, naming the operation, the byte offset, what
+was expected there and what was found; the world restored into is left as it was. #SNCHCK"))
+
+(define-condition physics-snapshot-truncated (physics-snapshot-invalid) ()
+  (:documentation "A snapshot shorter than its header or its recorded size. #SNCHCK"))
+
+(define-condition physics-snapshot-wrong-magic (physics-snapshot-invalid) ()
+  (:documentation "Bytes that do not start with the snapshot magic LUVWORLD. #SNCHCK"))
+
+(define-condition physics-snapshot-wrong-version (physics-snapshot-invalid) ()
+  (:documentation "A snapshot of a layout version this engine does not read. #SNCHCK"))
+
+(define-condition physics-snapshot-checksum-mismatch (physics-snapshot-invalid) ()
+  (:documentation "A snapshot whose bytes do not hash to its recorded checksum. #SNCHCK"))
+
+(define-condition physics-snapshot-other-layout (physics-snapshot-invalid) ()
+  (:documentation "A snapshot whose parts, counts or values do not describe a world this engine
+can hold: parts out of order or of the wrong size, a slot out of range, a number out of its
+range, a body in a solid cell. #SNCHCK"))
+
+(define-condition physics-snapshot-missing-features (physics-snapshot-invalid) ()
+  (:documentation "A snapshot of a world that used a feature the target world was made without. #SNCHCK"))
+
+(defun snapshot-refuse (type operation offset expected found)
+  "Signal the physics-snapshot-invalid subtype TYPE. #SNCHCK"
+  (error type :operation operation :offset offset :expected expected :found found))
+;; Bad bytes: every byte checked before any is written:1 ends here
+
+;; [[file:../physics.org::#SNCHCK][Bad bytes: every byte checked before any is written:2]]
 ;;; reading a snapshot back: every byte is checked before the world is touched
 
 (defmacro snapshot-check (test type offset expected found)
   "Unless TEST, refuse the snapshot (a restore's) with the physics-snapshot-invalid subtype TYPE at
-OFFSET. #SN4P0T"
+OFFSET. #SNCHCK"
   `(unless ,test (snapshot-refuse ',type 'restore-physics-world ,offset ,expected ,found)))
 
 (declaim (inline snap-finite-f32 snap-finite-f64))
 (defun snap-finite-f32 (buffer offset)
-  "The single-float at OFFSET of BUFFER, or the snapshot refused there when it is not finite. #SN4P0T"
+  "The single-float at OFFSET of BUFFER, or the snapshot refused there when it is not finite. #SNCHCK"
   (declare (type octets buffer) (type index offset))
   (let ((bits (snap-u32 buffer offset)))
     (snapshot-check (/= (ldb (byte 8 23) bits) 255) physics-snapshot-other-layout offset
@@ -12581,16 +12567,32 @@ OFFSET. #SN4P0T"
     (snap-f32 buffer offset)))
 
 (defun snap-finite-f64 (buffer offset)
-  "The double-float at OFFSET of BUFFER, or the snapshot refused there when it is not finite. #SN4P0T"
+  "The double-float at OFFSET of BUFFER, or the snapshot refused there when it is not finite. #SNCHCK"
   (declare (type octets buffer) (type index offset))
   (let ((bits (snap-u64 buffer offset)))
     (snapshot-check (/= (ldb (byte 11 52) bits) 2047) physics-snapshot-other-layout offset
                     "a finite double-float" bits)
     (snap-f64 buffer offset)))
 
+(defun check-snapshot (world buffer scratch)
+  "Check every byte of the snapshot BUFFER for restoring into WORLD, signalling the
+physics-snapshot-invalid subtype that names the first fault and its byte offset; leave in SCRATCH
+what the restore reuses. #SNCHCK"
+  (check-snapshot-frame buffer scratch)
+  (check-snapshot-world world buffer scratch)
+  (check-snapshot-slots world buffer scratch)
+  (check-snapshot-contacts world buffer scratch)
+  (check-snapshot-pair-list buffer scratch)
+  (check-snapshot-rest buffer scratch)
+  (check-snapshot-joints buffer scratch)
+  (check-snapshot-box-bodies buffer scratch)
+  buffer)
+;; Bad bytes: every byte checked before any is written:2 ends here
+
+;; [[file:../physics.org::#SNCHCK][Bad bytes: every byte checked before any is written:3]]
 (defun check-snapshot-frame (buffer scratch)
   "Check BUFFER's header, checksum and part frames; note each part's payload offset and size in
-SCRATCH by part id; return the snapshot's size. #SN4P0T"
+SCRATCH by part id; return the snapshot's size. #SNCHCK"
   (declare (type octets buffer) (type snapshot-scratch scratch))
   (let ((length (length buffer)))
     (snapshot-check (>= length +snapshot-header-bytes+) physics-snapshot-truncated length
@@ -12632,15 +12634,17 @@ SCRATCH by part id; return the snapshot's size. #SN4P0T"
       total)))
 
 (defun check-part-size (scratch id expected)
-  "Refuse the snapshot unless part ID's payload, as SCRATCH noted it, is EXPECTED bytes. #SN4P0T"
+  "Refuse the snapshot unless part ID's payload, as SCRATCH noted it, is EXPECTED bytes. #SNCHCK"
   (declare (type snapshot-scratch scratch))
   (let ((size (aref (snapshot-scratch-sizes scratch) id)))
     (snapshot-check (= size expected) physics-snapshot-other-layout (- (aref (snapshot-scratch-offsets scratch) id) 4)
                     (format nil "~D bytes for part ~D as its counts give" expected id) size)))
+;; Bad bytes: every byte checked before any is written:3 ends here
 
+;; [[file:../physics.org::#SNCHCK][Bad bytes: every byte checked before any is written:4]]
 (defun check-snapshot-world (world buffer scratch)
   "Check the world part of the snapshot in BUFFER against WORLD: its features within WORLD's, its
-sleep, and every number within its range. #SN4P0T"
+sleep, and every number within its range. #SNCHCK"
   (declare (type octets buffer))
   (check-part-size scratch 1 +snapshot-world-bytes+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 1))
@@ -12689,11 +12693,13 @@ sleep, and every number within its range. #SN4P0T"
     (dolist (o '(156 164 172))
       (snapshot-check (<= (abs (snap-finite-f64 buffer (+ at o))) 1d30) physics-snapshot-other-layout (+ at o)
                       "a statistic of magnitude up to 1e30" (snap-f64 buffer (+ at o))))))
+;; Bad bytes: every byte checked before any is written:4 ends here
 
+;; [[file:../physics.org::#SNCHCK][Bad bytes: every byte checked before any is written:5]]
 (defun check-snapshot-handles (buffer scratch)
   "Check the handle part of the snapshot in BUFFER: its size as its counts give it, every
 generation, every added body and every free slot within the table, each free slot listed once;
-return SCRATCH's marks with the free slots marked, and the stamp that marks them. #SN4P0T"
+return SCRATCH's marks with the free slots marked, and the stamp that marks them. #SNCHCK"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((hat (aref (snapshot-scratch-offsets scratch) 2)) (count (snap-u32 buffer hat)) (nfree (snap-u32 buffer (+ hat 4))))
     (declare (type index hat) (type (unsigned-byte 32) count nfree))
@@ -12722,7 +12728,7 @@ return SCRATCH's marks with the free slots marked, and the stamp that marks them
 
 (defun check-snapshot-materials (buffer scratch)
   "Check the material part of the snapshot in BUFFER: its size, and each material's numbers
-within their ranges, its radius up to the world's largest. #SN4P0T"
+within their ranges, its radius up to the world's largest. #SNCHCK"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((mat (aref (snapshot-scratch-offsets scratch) 5)) (materials (snap-u32 buffer mat))
          (max-radius (snap-f32 buffer (+ (aref (snapshot-scratch-offsets scratch) 1) 48))))
@@ -12743,10 +12749,12 @@ within their ranges, its radius up to the world's largest. #SN4P0T"
           (ranged 6 0.0 1e30 "a life of 0 or more"))
         (snapshot-check (<= 0 (snap-i32 buffer (+ o 28)) 1000) physics-snapshot-other-layout (+ o 28)
                         "a kind from 0 to 1000" (snap-i32 buffer (+ o 28)))))))
+;; Bad bytes: every byte checked before any is written:5 ends here
 
+;; [[file:../physics.org::#SNCHBD][Checking the bodies on their bits:1]]
 (defun refuse-snapshot-body (buffer at n row max-speed)
   "Refuse the snapshot in BUFFER at the first number of body ROW, of the N of the body part at AT,
-that is not finite or not in its range, naming what was expected. #SN4P0T"
+that is not finite or not in its range, naming what was expected. #SNCHBD"
   (declare (type octets buffer) (type index at n row) (type single-float max-speed))
   (flet ((float-at (k) (+ at (body-part-column n k) (* 4 row))))
     (dotimes (k 14) (snap-finite-f32 buffer (float-at k)))
@@ -12778,7 +12786,7 @@ that is not finite or not in its range, naming what was expected. #SN4P0T"
 orientation number is finite and within its bound (a coordinate below the limit, a speed
 component up to MAX-SPEED, a spin below 10^6 rad/s, a quaternion component up to 1.1), each
 column tested whole, its words two at a time (snapshot-words-within); a column that fails has
-the row it fails at named by refuse-snapshot-body. #SN4P0T"
+the row it fails at named by refuse-snapshot-body. #SNCHBD"
   (declare (type octets buffer) (type index at n) (type single-float max-speed))
   (let ((coordinate (1- (sb-kernel:single-float-bits (float +physics-coordinate-limit+ 1.0))))
         (speed (sb-kernel:single-float-bits max-speed)) (spin (sb-kernel:single-float-bits 1e6))
@@ -12794,7 +12802,7 @@ the row it fails at named by refuse-snapshot-body. #SN4P0T"
 (defun check-snapshot-body-norms (buffer at n max-speed)
   "Refuse the body part of N bodies at AT of BUFFER unless every body's speed is within
 MAX-SPEED, its orientation of unit length within a tenth, its time still and its age of 0 or
-more and finite, a row at a time, the fault named by refuse-snapshot-body. #SN4P0T"
+more and finite, a row at a time, the fault named by refuse-snapshot-body. #SNCHBD"
   (declare (type octets buffer) (type index at n) (type single-float max-speed) #.+kernel-policy+)
   (let ((top (* 1.001 max-speed max-speed)) (still (sb-kernel:single-float-bits 1e30))
         (c3 (+ at (body-part-column n 3))) (c9 (+ at (body-part-column n 9))) (c13 (+ at (body-part-column n 13)))
@@ -12817,9 +12825,31 @@ more and finite, a row at a time, the fault named by refuse-snapshot-body. #SN4P
                 (refuse-snapshot-body buffer at n row max-speed)
                 (snapshot-check nil physics-snapshot-other-layout (+ at 4 (* 4 row)) "a body within its ranges" row)))))))))
 
+(defun snapshot-words-within (buffer start end limit)
+  "The offset of the first 32-bit word of BUFFER from START below END whose magnitude, its bits
+less the sign, exceeds LIMIT's bits, or NIL: two words at a time, each lane's bits raised by
+2^31 - 1 - LIMIT, which sets its top bit exactly when it exceeds LIMIT (a NaN's and an
+infinity's bits lie above every finite number's). #SNCHBD"
+  (declare (type octets buffer) (type index start end) (type (unsigned-byte 31) limit) #.+kernel-policy+)
+  (let ((raise (* (- #x7FFFFFFF limit) #x100000001)) (over 0) (i start))
+    (declare (type (unsigned-byte 64) raise over) (type index i))
+    (sb-sys:with-pinned-objects (buffer)
+      (let ((sap (sb-sys:vector-sap buffer)))
+        (loop while (<= (+ i 8) end)
+              do (setf over (logior over (logand (+ (logand (sb-sys:sap-ref-64 sap i) #x7FFFFFFF7FFFFFFF) raise)
+                                                 #xFFFFFFFFFFFFFFFF)))
+                 (incf i 8))
+        (when (< i end)
+          (setf over (logior over (+ (logand (sb-sys:sap-ref-32 sap i) #x7FFFFFFF) (- #x7FFFFFFF limit)))))))
+    (unless (zerop (logand over #x8000000080000000))
+      (loop for o of-type index from start below end by 4
+            unless (<= (logand (snap-u32 buffer o) #x7FFFFFFF) limit) return o))))
+;; Checking the bodies on their bits:1 ends here
+
+;; [[file:../physics.org::#SNCHBD][Checking the bodies on their bits:2]]
 (defun snapshot-chunk (scratch chunks key)
   "The chunk of the terrain's table CHUNKS under KEY, or NIL, through SCRATCH's cache of the
-chunks looked up last, one entry for each of sixteen places of the key's hash. #SN4P0T"
+chunks looked up last, one entry for each of sixteen places of the key's hash. #SNCHBD"
   (declare (type snapshot-scratch scratch) (type hash-table chunks) (type fixnum key) #.+kernel-policy+)
   (let ((keys (snapshot-scratch-chunk-keys scratch)) (place (logand (logxor key (ash key -19) (ash key -38)) 15)))
     (declare (type fixnum-column keys) (type (integer 0 15) place))
@@ -12834,7 +12864,7 @@ chunks looked up last, one entry for each of sixteen places of the key's hash. #
   "Check body part ID of the snapshot in BUFFER: its size, each body's numbers in range
 (check-snapshot-body-columns, check-snapshot-body-norms), its slot a slot of the table neither
 free nor another body's, marked in MARKS with STAMP + 1, its material one of the palette, and its
-centre in no solid cell of WORLD's terrain; return its count. #SN4P0T"
+centre in no solid cell of WORLD's terrain; return its count. #SNCHBD"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column marks) (type fixnum stamp)
            #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets id)) (n (snap-u32 buffer at))
@@ -12871,7 +12901,7 @@ centre in no solid cell of WORLD's terrain; return its count. #SN4P0T"
 (defun check-snapshot-slots (world buffer scratch)
   "Check the handle, material and body parts of the snapshot in BUFFER (check-snapshot-handles,
 check-snapshot-materials, check-snapshot-bodies), and that the free slots and the bodies'
-slots are every slot of the table. #SN4P0T"
+slots are every slot of the table. #SNCHBD"
   (declare (type octets buffer) (type snapshot-scratch scratch))
   (multiple-value-bind (marks stamp) (check-snapshot-handles buffer scratch)
     (check-snapshot-materials buffer scratch)
@@ -12881,10 +12911,12 @@ slots are every slot of the table. #SN4P0T"
                     (check-snapshot-bodies world buffer scratch 4 marks stamp))))
       (snapshot-check (= live count) physics-snapshot-other-layout hat
                       "as many slots as free slots and bodies" count))))
+;; Checking the bodies on their bits:2 ends here
 
+;; [[file:../physics.org::#SNCHCT][Checking the contacts while decoding them:1]]
 (defun snapshot-table-room (table n)
   "Give the contact table TABLE room for N keys under contact-table-put's load, emptied, and
-return its slots. #SN4P0T"
+return its slots. #SNCHCT"
   (declare (type contact-table table) (type index n))
   (loop while (>= (* 4 (1+ n)) (length (contact-table-slots table)))
         do (let ((size (* 2 (length (contact-table-slots table)))))
@@ -12894,29 +12926,9 @@ return its slots. #SN4P0T"
   (setf (contact-table-count table) 0)
   (contact-table-slots table))
 
-(defun snapshot-words-within (buffer start end limit)
-  "The offset of the first 32-bit word of BUFFER from START below END whose magnitude, its bits
-less the sign, exceeds LIMIT's bits, or NIL: two words at a time, each lane's bits raised by
-2^31 - 1 - LIMIT, which sets its top bit exactly when it exceeds LIMIT (a NaN's and an
-infinity's bits lie above every finite number's). #SN4P0T"
-  (declare (type octets buffer) (type index start end) (type (unsigned-byte 31) limit) #.+kernel-policy+)
-  (let ((raise (* (- #x7FFFFFFF limit) #x100000001)) (over 0) (i start))
-    (declare (type (unsigned-byte 64) raise over) (type index i))
-    (sb-sys:with-pinned-objects (buffer)
-      (let ((sap (sb-sys:vector-sap buffer)))
-        (loop while (<= (+ i 8) end)
-              do (setf over (logior over (logand (+ (logand (sb-sys:sap-ref-64 sap i) #x7FFFFFFF7FFFFFFF) raise)
-                                                 #xFFFFFFFFFFFFFFFF)))
-                 (incf i 8))
-        (when (< i end)
-          (setf over (logior over (+ (logand (sb-sys:sap-ref-32 sap i) #x7FFFFFFF) (- #x7FFFFFFF limit)))))))
-    (unless (zerop (logand over #x8000000080000000))
-      (loop for o of-type index from start below end by 4
-            unless (<= (logand (snap-u32 buffer o) #x7FFFFFFF) limit) return o))))
-
 (defun snapshot-contact-layout (buffer at)
   "Where the parts of the contact part at AT of BUFFER begin: its keys, its flags, then each of
-its five streams, and where it ends, as six values after the keys and the flags. #SN4P0T"
+its five streams, and where it ends, as six values after the keys and the flags. #SNCHCT"
   (declare (type octets buffer) (type index at))
   (let* ((n (snap-u32 buffer at)) (keys (+ at +snapshot-contact-head-bytes+)) (flags (+ keys (* 8 n)))
          (s0 (+ flags (* 2 n))) (s1 (+ s0 (* 12 (1+ (snap-u32 buffer (+ at 4))))))
@@ -12928,7 +12940,7 @@ its five streams, and where it ends, as six values after the keys and the flags.
   "Check the frame and the streams of the contact part of the snapshot in BUFFER: no stream
 longer than the contacts, its size as the counts give it, every normal written out of unit
 length at most, every carried impulse finite and of at most 10^9 N s, and each stream closed by
-an entry of zeros. #SN4P0T"
+an entry of zeros. #SNCHCT"
   (declare (type octets buffer) (type snapshot-scratch scratch))
   (let* ((at (aref (snapshot-scratch-offsets scratch) 6)) (n (snap-u32 buffer at)))
     (declare (type index at))
@@ -12953,7 +12965,7 @@ an entry of zeros. #SN4P0T"
 
 (defun snapshot-contact-rows (world scratch n)
   "SCRATCH's contact rows, laid out as WORLD's contacts, with room for N rows, every row past N
-zero again, and its length as many rows as may hold words. #SN4P0T"
+zero again, and its length as many rows as may hold words. #SNCHCT"
   (declare (type snapshot-scratch scratch) (type index n))
   (let ((rows (or (snapshot-scratch-contact-rows scratch)
                   (setf (snapshot-scratch-contact-rows scratch)
@@ -12964,12 +12976,14 @@ zero again, and its length as many rows as may hold words. #SN4P0T"
           do (contact-columns-zero-row rows row))
     (setf (contact-columns-length rows) (max n (contact-columns-length rows)))
     rows))
+;; Checking the contacts while decoding them:1 ends here
 
+;; [[file:../physics.org::#SNCHCT][Checking the contacts while decoding them:2]]
 (declaim (inline check-snapshot-contact-key))
 (defun check-snapshot-contact-key (buffer o key count marks stamp)
   "Refuse the contact key word at O of BUFFER, whose key is KEY, unless it is a fixnum's word of
 a contact kind and slots of the table (COUNT slots, marked in MARKS as free, STAMP - 1, or
-live, STAMP), live or freed in the last step, A below B for a pair. #SN4P0T"
+live, STAMP), live or freed in the last step, A below B for a pair. #SNCHCT"
   (declare (type octets buffer) (type index o count) (type fixnum key stamp) (type fixnum-column marks)
            #.+kernel-policy+)
   (let ((kind (ldb (byte 4 58) key)) (a (ldb (byte 24 34) key)))
@@ -12986,19 +13000,21 @@ live, STAMP), live or freed in the last step, A below B for a pair. #SN4P0T"
 (declaim (inline snapshot-key-put))
 (defun snapshot-key-put (slots mask key row)
   "Put KEY, mapped to ROW, into the contact table's SLOTS (MASK + 1 entries) and return true,
-or return NIL when KEY is there already. #SN4P0T"
+or return NIL when KEY is there already. #SNCHCT"
   (declare (type fixnum-column slots) (type fixnum mask key row) #.+kernel-policy+)
   (loop for i of-type fixnum = (contact-slot-hash key mask) then (logand (1+ i) mask)
         for e of-type fixnum = (aref slots (* 2 i))
         do (cond ((= e key) (return nil))
                  ((= e -1) (setf (aref slots (* 2 i)) key (aref slots (1+ (* 2 i))) row) (return t)))))
+;; Checking the contacts while decoding them:2 ends here
 
+;; [[file:../physics.org::#SNCHCT][Checking the contacts while decoding them:3]]
 (defun decode-snapshot-contacts (buffer scratch rows)
   "Check the keys and flags of the contact part of the snapshot in BUFFER, each key once (into
 SCRATCH's contact table, mapped to its row), and write each contact into its row of ROWS: key,
 kind, the handles of its slots, seen, order, touching, its normal (written out, or the axis
 its code names) and its carried impulses, every other float zero. Run after
-check-snapshot-contact-streams and check-snapshot-slots, whose marks it reads. #SN4P0T"
+check-snapshot-contact-streams and check-snapshot-slots, whose marks it reads. #SNCHCT"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type contact-columns rows) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 6)) (n (snap-u32 buffer at))
          (hat (aref offsets 2)) (count (snap-u32 buffer hat)) (wat (aref offsets 1))
@@ -13079,16 +13095,18 @@ check-snapshot-contact-streams and check-snapshot-slots, whose marks it reads. #
 (defun check-snapshot-contacts (world buffer scratch)
   "Check the contact part of the snapshot in BUFFER, stage by stage: its frame and streams, then
 each contact's key and flags as it is decoded into SCRATCH's rows, laid out as WORLD's contacts,
-for the restore to trade for the world's. #SN4P0T"
+for the restore to trade for the world's. #SNCHCT"
   (declare (type octets buffer) (type snapshot-scratch scratch))
   (check-snapshot-contact-streams buffer scratch)
   (decode-snapshot-contacts buffer scratch
                             (snapshot-contact-rows world scratch (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 6)))))
+;; Checking the contacts while decoding them:3 ends here
 
+;; [[file:../physics.org::#SNCHCT][Checking the contacts while decoding them:4]]
 (defun check-snapshot-pair-list (buffer scratch)
   "Check the pair list part of the snapshot in BUFFER: its form and the size its counts give,
 its numbers, finite anchors within the coordinate limit, no more rows than awake bodies when
-their handles are not written, and pairs of listed rows, written whole or as differences. #SN4P0T"
+their handles are not written, and pairs of listed rows, written whole or as differences. #SNCHCT"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch))
          (at (aref offsets 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
@@ -13147,10 +13165,12 @@ their handles are not written, and pairs of listed rows, written whole or as dif
               (let ((p (snap-i64 buffer (+ list (* 8 k)))))
                 (snapshot-check (and (>= p 0) (< (ash p -24) n) (< (ldb (byte 24 0) p) n))
                                 physics-snapshot-other-layout (+ list (* 8 k)) "a pair of listed rows" p))))))))
+;; Checking the contacts while decoding them:4 ends here
 
+;; [[file:../physics.org::#SNCHCT][Checking the contacts while decoding them:5]]
 (defun check-snapshot-rest (buffer scratch)
   "Check the box and push parts of the snapshot in BUFFER: sizes, finite numbers, and pushes that
-cover the table with nothing on a free slot. #SN4P0T"
+cover the table with nothing on a free slot. #SNCHCT"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 8)) (n (snap-u32 buffer at)))
     (declare (type index at))
@@ -13190,191 +13210,15 @@ cover the table with nothing on a free slot. #SN4P0T"
                           physics-snapshot-other-layout o "no force and a gravity scale of 1 on a free slot" slot)
           (snapshot-check (or pushed (not forced)) physics-snapshot-other-layout o
                           "no force unless one was applied" slot))))))
+;; Checking the contacts while decoding them:5 ends here
 
-(defun check-snapshot (world buffer scratch)
-  "Check every byte of the snapshot BUFFER for restoring into WORLD, signalling the
-physics-snapshot-invalid subtype that names the first fault and its byte offset; leave in SCRATCH
-what the restore reuses. #SN4P0T"
-  (check-snapshot-frame buffer scratch)
-  (check-snapshot-world world buffer scratch)
-  (check-snapshot-slots world buffer scratch)
-  (check-snapshot-contacts world buffer scratch)
-  (check-snapshot-pair-list buffer scratch)
-  (check-snapshot-rest buffer scratch)
-  (check-snapshot-joints buffer scratch)
-  (check-snapshot-box-bodies buffer scratch)
-  buffer)
-
-(defun check-snapshot-jointed-flags (buffer scratch named mark)
-  "Refuse the snapshot in BUFFER unless each body's jointed flag is set exactly when its slot is
-marked MARK in NAMED, the slots some joint names. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column named) (type fixnum mark))
-  (dolist (id '(3 4))
-    (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat))
-           (w (material-index-bytes (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 5)))))
-      (dotimes (row n)
-        (let ((o (+ bat (body-part-column n 18 w) (* 2 row)))
-              (slot (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))))
-          (snapshot-check (eq (logtest +flag-jointed+ (snap-u16 buffer o)) (= (aref named slot) mark))
-                          physics-snapshot-other-layout o
-                          "the jointed flag set exactly on a body some joint names" (snap-u16 buffer o)))))))
-
-(defun snapshot-joint-first (buffer at)
-  "Where the first joint's record begins in the joints part at AT of BUFFER. #SN4P0T"
-  (declare (type octets buffer) (type index at))
-  (+ at 20 (* 4 (snap-u32 buffer (+ at 4))) (* 4 (snap-u32 buffer (+ at 8)))))
-
-(defun check-snapshot-joint-table (buffer scratch)
-  "Check the head of the joints part of the snapshot in BUFFER: the feature :joints, a joint table
-of under 2^24 slots each free or held by a joint, the size its counts give, finite softness of
-the limits, and every generation under 2^20. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch))
-  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)) (wat (aref offsets 1))
-         (n (snap-u32 buffer at)) (count (snap-u32 buffer (+ at 4))) (nfree (snap-u32 buffer (+ at 8))))
-    (declare (type index at wat))
-    (snapshot-check (logbitp (position :joints +physics-features+) (snap-u32 buffer (+ wat 4)))
-                    physics-snapshot-other-layout (+ wat 4) "the feature :joints of a world with joints"
-                    (snap-u32 buffer (+ wat 4)))
-    (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout (+ at 4)
-                    "a joint table of under 2^24 slots" count)
-    (snapshot-check (= (+ n nfree) count) physics-snapshot-other-layout (+ at 8)
-                    "a joint for each slot that is not free" nfree)
-    (check-part-size scratch 10 (+ 20 (* 4 count) (* 4 nfree) (* +snapshot-joint-bytes+ n)))
-    (snap-finite-f32 buffer (+ at 12))
-    (snap-finite-f32 buffer (+ at 16))
-    (dotimes (slot count)
-      (snapshot-check (< (snap-u32 buffer (+ at 20 (* 4 slot))) (ash 1 +handle-generation-bits+))
-                      physics-snapshot-other-layout (+ at 20 (* 4 slot)) "a generation under 2^20"
-                      (snap-u32 buffer (+ at 20 (* 4 slot)))))))
-
-(defun mark-snapshot-bodies (buffer scratch slots)
-  "Mark in SCRATCH's marks, room made for SLOTS, the slot of every body of the snapshot in
-BUFFER; return the marks and the mark. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch) (type index slots))
-  (multiple-value-bind (marks stamp) (snapshot-marks scratch slots)
-    (declare (type fixnum-column marks) (type fixnum stamp))
-    (dolist (id '(3 4))
-      (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat)))
-        (dotimes (row n)
-          (setf (aref marks (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))) (1+ stamp)))))
-    (values marks (1+ stamp))))
-
-(defun check-snapshot-joint-bodies (buffer o hat bodies marks live)
-  "Refuse the joint record at O of BUFFER unless both its bodies are live bodies of the snapshot
-(marked LIVE in MARKS, within the BODIES slots of the handle part at HAT) of the generation that
-part gives, two bodies, not one; the second may be none, a fixed point. #SN4P0T"
-  (declare (type octets buffer) (type index o hat bodies) (type fixnum-column marks) (type fixnum live))
-  (loop for side in '(12 20)
-        for slot = (snap-u32 buffer (+ o side))
-        for generation = (snap-u32 buffer (+ o side 4))
-        unless (and (= side 20) (= slot #xFFFFFFFF) (zerop generation))
-          do (snapshot-check (and (< slot bodies) (= (aref marks slot) live)
-                                  (= generation (snap-u32 buffer (+ hat 8 (* 4 slot))))
-                                  (or (= side 12) (/= slot (snap-u32 buffer (+ o 12)))))
-                             physics-snapshot-other-layout (+ o side)
-                             "the slot of a live body of the snapshot, of its generation, not the joint's other body"
-                             slot)))
-
-(defun check-snapshot-joint-numbers (buffer o reach)
-  "Refuse the joint record at O of BUFFER unless its kind and flags are a joint's and each number
-is finite and in its range: anchors within REACH (a fixed point within the coordinate limit),
-lengths, softness and break force of 0 or more up to their largest, carried impulses up to
-10^9 N s. #SN4P0T"
-  (declare (type octets buffer) (type index o) (type single-float reach))
-  (snapshot-check (<= (snap-u32 buffer o) +joint-distance+) physics-snapshot-other-layout o
-                  "a joint kind, 0 or 1" (snap-u32 buffer o))
-  (snapshot-check (< (snap-u32 buffer (+ o 4)) 16) physics-snapshot-other-layout (+ o 4)
-                  "joint flags under 16" (snap-u32 buffer (+ o 4)))
-  (let ((fixed (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)))
-    (flet ((ranged (k low high what)
-             (let ((v (snap-finite-f32 buffer (+ o k))))
-               (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o k) what v)
-               v)))
-      (loop for k from 28 below 40 by 4
-            do (ranged k (- reach) reach "an anchor within the reach of the world's largest radius"))
-      (loop for k from 40 below 52 by 4
-            do (if fixed
-                   (ranged k (- +physics-coordinate-limit+) +physics-coordinate-limit+
-                           "a fixed point within the coordinate limit")
-                   (ranged k (- reach) reach "an anchor within the reach of the world's largest radius")))
-      (loop for k from 52 below 64 by 4
-            do (ranged k 0.0 +physics-max-joint-length+ "a length from 0 to the longest a joint may have"))
-      ;; a hertz of a few denormals would make the softness divide by zero
-      (let ((hertz (ranged 64 0.0 1000.0 "a hertz from 0 to 1000")))
-        (snapshot-check (or (= hertz 0.0) (>= hertz +physics-min-joint-hertz+)) physics-snapshot-other-layout (+ o 64)
-                        "a hertz of 0, or of 0.001 (+physics-min-joint-hertz+) or more" hertz))
-      (ranged 68 0.0 1000.0 "a damping ratio from 0 to 1000")
-      (ranged 72 0.0 +physics-max-break-force+ "a break force from 0 to the largest")
-      (loop for k from 76 below 88 by 4
-            do (ranged k -1e9 1e9 "a carried impulse up to 1e9 N s")))))
-
-(defun check-snapshot-joint-rows (buffer scratch)
-  "Check each joint record of the snapshot in BUFFER: its bodies (check-snapshot-joint-bodies)
-and its numbers (check-snapshot-joint-numbers). #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch))
-  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)) (hat (aref offsets 2))
-         (bodies (snap-u32 buffer hat)) (first (snapshot-joint-first buffer at))
-         (reach (* +joint-anchor-reach+ (snap-f32 buffer (+ (aref offsets 1) 48)))))
-    (declare (type index at hat bodies first))
-    (multiple-value-bind (marks live) (mark-snapshot-bodies buffer scratch (max bodies (snap-u32 buffer (+ at 4))))
-      (dotimes (row (snap-u32 buffer at))
-        (let ((o (+ first (* row +snapshot-joint-bytes+))))
-          (check-snapshot-joint-numbers buffer o reach)
-          (check-snapshot-joint-bodies buffer o hat bodies marks live))))))
-
-(defun check-snapshot-joint-names (buffer scratch)
-  "Refuse the snapshot in BUFFER unless a body's jointed flag is set exactly when some joint of
-its joints part names it. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch))
-  (let* ((at (aref (snapshot-scratch-offsets scratch) 10)) (first (snapshot-joint-first buffer at)))
-    (multiple-value-bind (named stamp) (snapshot-marks scratch (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 2)))
-      (declare (type fixnum-column named) (type fixnum stamp))
-      (dotimes (row (snap-u32 buffer at))
-        (let ((o (+ first (* row +snapshot-joint-bytes+))))
-          (setf (aref named (snap-u32 buffer (+ o 12))) (1+ stamp))
-          (unless (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)
-            (setf (aref named (snap-u32 buffer (+ o 20))) (1+ stamp)))))
-      (check-snapshot-jointed-flags buffer scratch named (1+ stamp)))))
-
-(defun check-snapshot-joint-slots (buffer scratch)
-  "Refuse the snapshot in BUFFER unless each free joint slot is listed once and each live one is
-held by one joint. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch))
-  (let* ((at (aref (snapshot-scratch-offsets scratch) 10)) (count (snap-u32 buffer (+ at 4)))
-         (first (snapshot-joint-first buffer at)))
-    (multiple-value-bind (marks stamp) (snapshot-marks scratch count)
-      (declare (type fixnum-column marks) (type fixnum stamp))
-      (flet ((take (o what)
-               (let ((slot (snap-u32 buffer o)))
-                 (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
-                                 what slot)
-                 (setf (aref marks slot) stamp))))
-        (dotimes (k (snap-u32 buffer (+ at 8)))
-          (take (+ at 20 (* 4 count) (* 4 k)) "a free joint slot of the table, listed once"))
-        (dotimes (row (snap-u32 buffer at))
-          (take (+ first (* row +snapshot-joint-bytes+) 8) "a joint slot of the table, neither free nor another joint's"))))))
-
-(defun check-snapshot-joints (buffer scratch)
-  "Check the joint part of the snapshot in BUFFER, when it has one, stage by stage: its table, each
-joint's record, the bodies' jointed flags and the joint slots; without one, that no body is
-flagged jointed. #SN4P0T"
-  (declare (type octets buffer) (type snapshot-scratch scratch))
-  (if (minusp (aref (snapshot-scratch-sizes scratch) 10))
-      (check-snapshot-jointed-flags buffer scratch (snapshot-scratch-marks scratch) -1)
-      (progn
-        (check-snapshot-joint-table buffer scratch)
-        (check-snapshot-joint-rows buffer scratch)
-        (check-snapshot-joint-names buffer scratch)
-        (check-snapshot-joint-slots buffer scratch))))
-;; A snapshot holds what decides the next step, part by part:4 ends here
-
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:5]]
+;; [[file:../physics.org::#SNPUTB][Putting a world back:1]]
 ;;; applying a checked snapshot: nothing here can fail
 
 (defun apply-snapshot-bodies (world bodies set buffer at mat)
   "Fill BODIES, WORLD's set SET, from the checked body part at AT of BUFFER, the float columns and
 the ages copied whole, its materials from the palette at MAT, and point each body's handle slot
-at its row; rows it held past the new count read as zeros again. #SN4P0T"
+at its row; rows it held past the new count read as zeros again. #SNPUTB"
   (declare (type body-columns bodies) (type octets buffer) (type index at mat) (type fixnum set)
            #.+kernel-policy+)
   (let* ((n (snap-u32 buffer at)) (old (body-columns-length bodies)) (ids (physics-world-ids world))
@@ -13411,11 +13255,11 @@ at its row; rows it held past the new count read as zeros again. #SN4P0T"
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defparameter +snapshot-traded-contact-columns+ '(handle-a handle-b kind key seen order touching geometry)
     "The columns of a contact that a restore decodes and trades for the world's: every column of
-contact-columns. #SN4P0T"))
+contact-columns. #SNPUTB"))
 
 (defun apply-snapshot-contacts (world buffer scratch)
   "Give WORLD the contacts the check decoded into SCRATCH's rows, by trading their columns for the
-world's, and the table of their keys the check filled, traded the same way. #SN4P0T"
+world's, and the table of their keys the check filled, traded the same way. #SNPUTB"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((wat (aref (snapshot-scratch-offsets scratch) 1)) (step (snap-u64 buffer (+ wat 16)))
          (contacts (physics-world-contacts world)) (rows (snapshot-scratch-contact-rows scratch))
@@ -13433,12 +13277,14 @@ world's, and the table of their keys the check filled, traded the same way. #SN4
     (rotatef (contact-table-count table) (contact-table-count full))
     (setf (contact-table-step table) step (contact-table-cursor table) 0 (contact-table-touched table) 0
           (contact-table-misses table) (snap-u64 buffer (+ wat 140)))))
+;; Putting a world back:1 ends here
 
+;; [[file:../physics.org::#SNPUTB][Putting a world back:2]]
 (defun snapshot-holds-grid-p (world buffer at grid-step)
   "True when WORLD's awake grid, of step GRID-STEP, is already the one the pair list part at AT of
 the snapshot BUFFER would have bucketed: the world's grid is its pair list's build, and that
 build is the snapshot's, of as many rows, the same cell, the same count of builds and the same
-anchors to the bit. #SN4P0T"
+anchors to the bit. #SNPUTB"
   (declare (type octets buffer) (type index at) (type fixnum grid-step))
   (let* ((plist (physics-world-pair-list world)) (rows (snap-i32 buffer at)) (anchors (pair-list-anchors plist)))
     (declare (type fixnum rows) (type f32-column anchors))
@@ -13456,7 +13302,7 @@ anchors to the bit. #SN4P0T"
   "Put the pair list of the checked snapshot BUFFER into WORLD, the rows' handles the awake rows'
 own when the snapshot does not write them (the bodies are restored first), and the awake grid of
 its build when the snapshot's grid still is that build's, bucketed again unless WORLD's grid, of
-step GRID-STEP, is that grid already (snapshot-holds-grid-p). #SN4P0T"
+step GRID-STEP, is that grid already (snapshot-holds-grid-p). #SNPUTB"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum grid-step) #.+kernel-policy+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
          (form (snap-u32 buffer (+ at 36))) (plist (physics-world-pair-list world))
@@ -13504,10 +13350,12 @@ step GRID-STEP, is that grid already (snapshot-holds-grid-p). #SN4P0T"
                   (aref zs i) (aref anchors (+ 2 (* 3 i)))))
           (build-hash-grid (physics-world-awake-grid world) (pair-list-cell plist) rows xs ys zs
                            (awake-row-identities world rows)))))))
+;; Putting a world back:2 ends here
 
+;; [[file:../physics.org::#SNPUTB][Putting a world back:3]]
 (defun apply-snapshot (world buffer scratch)
   "Put WORLD into the state of the checked snapshot BUFFER, whose parts SCRATCH located and whose
-contact keys SCRATCH's contact table holds. #SN4P0T"
+contact keys SCRATCH's contact table holds. #SNPUTB"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch))
          (wat (aref offsets 1)) (hat (aref offsets 2))
@@ -13624,11 +13472,128 @@ contact keys SCRATCH's contact table holds. #SN4P0T"
     (apply-snapshot-joints world buffer scratch)
     (apply-snapshot-box-bodies world buffer scratch)
     world))
+;; Putting a world back:3 ends here
 
+;; [[file:../physics.org::#SNPUTB][Putting a world back:4]]
+(defun restore-physics-world (world buffer)
+  "Put WORLD back into the state the snapshot BUFFER (from snapshot-physics-world) holds, and
+return WORLD; into a world whose buffers are large enough it conses nothing. A snapshot that is
+truncated, of another magic, version or layout, whose checksum fails, or of a world with
+features WORLD lacks, signals the physics-snapshot-invalid subtype naming the byte offset, and
+WORLD is left as it was. #SNPUTB"
+  (check-idle world 'restore-physics-world)
+  (unless (typep buffer 'octets)
+    (error 'invalid-physics-parameter :world world :name :buffer :value buffer
+                                      :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))
+  (let ((scratch (world-snapshot-scratch world)))
+    (check-snapshot world buffer scratch)
+    (sb-int:with-float-traps-masked (:inexact :underflow) (apply-snapshot world buffer scratch))
+    world))
+;; Putting a world back:4 ends here
+
+;; [[file:../physics.org::#SNDISK][On disk, and a saved world in the viewer:1]]
+;;; on disk: the same bytes, to a stream or a file
+
+(defun write-physics-world (world destination)
+  "Write WORLD's snapshot to DESTINATION, a binary output stream of octets or a pathname (a file
+made or replaced), and return the bytes written. #SNDISK"
+  (check-idle world 'write-physics-world)
+  (multiple-value-bind (buffer size) (snapshot-physics-world world)
+    (flet ((out (stream) (write-sequence buffer stream :end size)))
+      (if (streamp destination)
+          (out destination)
+          (with-open-file (stream destination :direction :output :element-type '(unsigned-byte 8)
+                                              :if-exists :supersede :if-does-not-exist :create)
+            (out stream))))
+    size))
+
+(defun read-snapshot-octets (source)
+  "The octets of the snapshot SOURCE holds, a binary input stream of octets or a pathname: the
+header, then as many bytes as it records, or as many as there are. #SNDISK"
+  (flet ((in (stream)
+           (let* ((header (make-array +snapshot-header-bytes+ :element-type '(unsigned-byte 8)))
+                  (got (read-sequence header stream)))
+             (if (or (< got +snapshot-header-bytes+) (mismatch header +snapshot-magic+ :end1 8))
+                 (subseq header 0 got)
+                 (let* ((total (min (snap-u64 header 16) (ash 1 34)))
+                        (buffer (make-array (max total +snapshot-header-bytes+) :element-type '(unsigned-byte 8))))
+                   (replace buffer header)
+                   (let ((end (read-sequence buffer stream :start +snapshot-header-bytes+)))
+                     (if (< end (length buffer)) (subseq buffer 0 end) buffer)))))))
+    (if (streamp source)
+        (in source)
+        (with-open-file (stream source :element-type '(unsigned-byte 8)) (in stream)))))
+
+(defun read-physics-world (source &key terrain into (kernels nil))
+  "Read the snapshot SOURCE holds (a binary input stream or a pathname, as write-physics-world
+wrote it) and return the world it describes: restored INTO that world when given, else into a
+new world over TERRAIN (the caller's, as the snapshot holds no cells) made with the snapshot's
+step, substeps, gravity, sleep and features, and KERNELS, or the family the snapshot names when
+this machine runs it. Bad bytes signal as restore-physics-world does. #SNDISK"
+  (let* ((buffer (coerce (read-snapshot-octets source) 'octets))
+         (scratch (make-snapshot-scratch)))
+    (if into
+        (restore-physics-world into buffer)
+        (progn
+          (check-snapshot-frame buffer scratch)
+          (check-part-size scratch 1 +snapshot-world-bytes+)
+          (let* ((at (aref (snapshot-scratch-offsets scratch) 1))
+                 (mask (snap-u32 buffer (+ at 4)))
+                 (name (map 'string #'code-char (remove 0 (subseq buffer (+ at 188) (+ at 204)))))
+                 (family (find-symbol name :keyword))
+                 (world (make-physics-world
+                         :terrain terrain
+                         :step-seconds (snap-finite-f32 buffer (+ at 24))
+                         :substeps (snap-u32 buffer (+ at 12))
+                         :gravity (loop for k below 3 collect (snap-finite-f32 buffer (+ at 28 (* 4 k))))
+                         :sleep (logbitp 0 (snap-u32 buffer (+ at 8)))
+                         :features (loop for f in +physics-features+ for k from 0 when (logbitp k mask) collect f)
+                         :kernels (or kernels
+                                      (if (and family (assoc family (runnable-kernel-families))) family :scalar)))))
+            (restore-physics-world world buffer))))))
+;; On disk, and a saved world in the viewer:1 ends here
+
+;; [[file:../physics.org::#SNJOIN][Joints in a snapshot:1]]
+(defun write-snapshot-joints (world buffer at)
+  "Write the joints part of WORLD's snapshot into BUFFER from AT: the joint handle table, the
+limits' softness and a record per joint. #SNJOIN"
+  (declare (type octets buffer) (type index at) #.+kernel-policy+)
+  (let* ((set (physics-world-joints world)) (jids (joint-set-ids set)) (count (handle-table-count jids))
+         (rows (joint-set-rows set)) (n (joint-columns-length rows))
+         (generations (handle-table-generation jids)) (nfree 0))
+    (declare (type index count n nfree))
+    (setf (snap-u32 buffer at) n (snap-u32 buffer (+ at 4)) count
+          (snap-f32 buffer (+ at 12)) (joint-set-limit-bias set) (snap-f32 buffer (+ at 16)) (joint-set-limit-mass set))
+    (dotimes (slot count) (setf (snap-u32 buffer (+ at 20 (* 4 slot))) (aref generations slot)))
+    (loop with slot of-type fixnum = (handle-table-free jids) while (>= slot 0)
+          do (setf (snap-u32 buffer (+ at 20 (* 4 count) (* 4 nfree))) slot)
+             (incf nfree)
+             (setf slot (aref (handle-table-local jids) slot)))
+    (setf (snap-u32 buffer (+ at 8)) nfree)
+    (with-joint-columns (kind flags handle body-a body-b ax ay az bx by bz rest-length min-length max-length
+                         hertz damping-ratio break-force impulse-x impulse-y impulse-z)
+        rows
+      (dotimes (row n)
+        (let ((o (+ at 20 (* 4 count) (* 4 nfree) (* row +snapshot-joint-bytes+)))
+              (a (aref body-a row)) (b (aref body-b row)))
+          (declare (type index o))
+          (setf (snap-u32 buffer o) (aref kind row) (snap-u32 buffer (+ o 4)) (aref flags row)
+                (snap-u32 buffer (+ o 8)) (handle-index (ldb (byte +handle-joint-bit+ 0) (aref handle row)))
+                (snap-u32 buffer (+ o 12)) (handle-index a) (snap-u32 buffer (+ o 16)) (handle-generation a)
+                (snap-u32 buffer (+ o 20)) (if (= b +no-body+) #xFFFFFFFF (handle-index b))
+                (snap-u32 buffer (+ o 24)) (if (= b +no-body+) 0 (handle-generation b)))
+          (macrolet ((floats (&rest columns)
+                       `(setf ,@(loop for c in columns for k from 28 by 4
+                                      append `((snap-f32 buffer (+ o ,k)) (aref ,c row))))))
+            (floats ax ay az bx by bz rest-length min-length max-length hertz damping-ratio
+                    break-force impulse-x impulse-y impulse-z)))))))
+;; Joints in a snapshot:1 ends here
+
+;; [[file:../physics.org::#SNJOIN][Joints in a snapshot:2]]
 (defun apply-snapshot-joints (world buffer scratch)
   "Make WORLD's joint set the checked snapshot BUFFER's: none when it has no joint part (the joint
 events out of the event mask again unless its features record them), else the rows, their
-handle table, each body's count of joints, and the groups, stale, to be found again. #SN4P0T"
+handle table, each body's count of joints, and the groups, stale, to be found again. #SNJOIN"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let ((at (aref (snapshot-scratch-offsets scratch) 10))
         (bits (logior (ash 1 +event-joint-break+) (ash 1 +event-joint-removed+))))
@@ -13691,90 +13656,179 @@ handle table, each body's count of joints, and the groups, stale, to be found ag
               (let ((b (aref (joint-columns-body-b rows) row)))
                 (unless (= b +no-body+) (incf (aref counts (handle-index b)))))))
           (setf (joint-set-groups-stale set) t)))))
+;; Joints in a snapshot:2 ends here
 
-(defun restore-physics-world (world buffer)
-  "Put WORLD back into the state the snapshot BUFFER (from snapshot-physics-world) holds, and
-return WORLD; into a world whose buffers are large enough it conses nothing. A snapshot that is
-truncated, of another magic, version or layout, whose checksum fails, or of a world with
-features WORLD lacks, signals the physics-snapshot-invalid subtype naming the byte offset, and
-WORLD is left as it was. #SN4P0T"
-  (check-idle world 'restore-physics-world)
-  (unless (typep buffer 'octets)
-    (error 'invalid-physics-parameter :world world :name :buffer :value buffer
-                                      :expected "an octet vector, (simple-array (unsigned-byte 8) (*))"))
-  (let ((scratch (world-snapshot-scratch world)))
-    (check-snapshot world buffer scratch)
-    (sb-int:with-float-traps-masked (:inexact :underflow) (apply-snapshot world buffer scratch))
-    world))
-;; A snapshot holds what decides the next step, part by part:5 ends here
+;; [[file:../physics.org::#SNJOIN][Joints in a snapshot:3]]
+(defun check-snapshot-jointed-flags (buffer scratch named mark)
+  "Refuse the snapshot in BUFFER unless each body's jointed flag is set exactly when its slot is
+marked MARK in NAMED, the slots some joint names. #SNJOIN"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column named) (type fixnum mark))
+  (dolist (id '(3 4))
+    (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat))
+           (w (material-index-bytes (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 5)))))
+      (dotimes (row n)
+        (let ((o (+ bat (body-part-column n 18 w) (* 2 row)))
+              (slot (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))))
+          (snapshot-check (eq (logtest +flag-jointed+ (snap-u16 buffer o)) (= (aref named slot) mark))
+                          physics-snapshot-other-layout o
+                          "the jointed flag set exactly on a body some joint names" (snap-u16 buffer o)))))))
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:6]]
-;;; on disk: the same bytes, to a stream or a file
+(defun snapshot-joint-first (buffer at)
+  "Where the first joint's record begins in the joints part at AT of BUFFER. #SNJOIN"
+  (declare (type octets buffer) (type index at))
+  (+ at 20 (* 4 (snap-u32 buffer (+ at 4))) (* 4 (snap-u32 buffer (+ at 8)))))
 
-(defun write-physics-world (world destination)
-  "Write WORLD's snapshot to DESTINATION, a binary output stream of octets or a pathname (a file
-made or replaced), and return the bytes written. #SN4P0T"
-  (check-idle world 'write-physics-world)
-  (multiple-value-bind (buffer size) (snapshot-physics-world world)
-    (flet ((out (stream) (write-sequence buffer stream :end size)))
-      (if (streamp destination)
-          (out destination)
-          (with-open-file (stream destination :direction :output :element-type '(unsigned-byte 8)
-                                              :if-exists :supersede :if-does-not-exist :create)
-            (out stream))))
-    size))
+(defun check-snapshot-joint-table (buffer scratch)
+  "Check the head of the joints part of the snapshot in BUFFER: the feature :joints, a joint table
+of under 2^24 slots each free or held by a joint, the size its counts give, finite softness of
+the limits, and every generation under 2^20. #SNJOIN"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)) (wat (aref offsets 1))
+         (n (snap-u32 buffer at)) (count (snap-u32 buffer (+ at 4))) (nfree (snap-u32 buffer (+ at 8))))
+    (declare (type index at wat))
+    (snapshot-check (logbitp (position :joints +physics-features+) (snap-u32 buffer (+ wat 4)))
+                    physics-snapshot-other-layout (+ wat 4) "the feature :joints of a world with joints"
+                    (snap-u32 buffer (+ wat 4)))
+    (snapshot-check (< count (ash 1 +handle-index-bits+)) physics-snapshot-other-layout (+ at 4)
+                    "a joint table of under 2^24 slots" count)
+    (snapshot-check (= (+ n nfree) count) physics-snapshot-other-layout (+ at 8)
+                    "a joint for each slot that is not free" nfree)
+    (check-part-size scratch 10 (+ 20 (* 4 count) (* 4 nfree) (* +snapshot-joint-bytes+ n)))
+    (snap-finite-f32 buffer (+ at 12))
+    (snap-finite-f32 buffer (+ at 16))
+    (dotimes (slot count)
+      (snapshot-check (< (snap-u32 buffer (+ at 20 (* 4 slot))) (ash 1 +handle-generation-bits+))
+                      physics-snapshot-other-layout (+ at 20 (* 4 slot)) "a generation under 2^20"
+                      (snap-u32 buffer (+ at 20 (* 4 slot)))))))
 
-(defun read-snapshot-octets (source)
-  "The octets of the snapshot SOURCE holds, a binary input stream of octets or a pathname: the
-header, then as many bytes as it records, or as many as there are. #SN4P0T"
-  (flet ((in (stream)
-           (let* ((header (make-array +snapshot-header-bytes+ :element-type '(unsigned-byte 8)))
-                  (got (read-sequence header stream)))
-             (if (or (< got +snapshot-header-bytes+) (mismatch header +snapshot-magic+ :end1 8))
-                 (subseq header 0 got)
-                 (let* ((total (min (snap-u64 header 16) (ash 1 34)))
-                        (buffer (make-array (max total +snapshot-header-bytes+) :element-type '(unsigned-byte 8))))
-                   (replace buffer header)
-                   (let ((end (read-sequence buffer stream :start +snapshot-header-bytes+)))
-                     (if (< end (length buffer)) (subseq buffer 0 end) buffer)))))))
-    (if (streamp source)
-        (in source)
-        (with-open-file (stream source :element-type '(unsigned-byte 8)) (in stream)))))
+(defun mark-snapshot-bodies (buffer scratch slots)
+  "Mark in SCRATCH's marks, room made for SLOTS, the slot of every body of the snapshot in
+BUFFER; return the marks and the mark. #SNJOIN"
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type index slots))
+  (multiple-value-bind (marks stamp) (snapshot-marks scratch slots)
+    (declare (type fixnum-column marks) (type fixnum stamp))
+    (dolist (id '(3 4))
+      (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat)))
+        (dotimes (row n)
+          (setf (aref marks (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))) (1+ stamp)))))
+    (values marks (1+ stamp))))
 
-(defun read-physics-world (source &key terrain into (kernels nil))
-  "Read the snapshot SOURCE holds (a binary input stream or a pathname, as write-physics-world
-wrote it) and return the world it describes: restored INTO that world when given, else into a
-new world over TERRAIN (the caller's, as the snapshot holds no cells) made with the snapshot's
-step, substeps, gravity, sleep and features, and KERNELS, or the family the snapshot names when
-this machine runs it. Bad bytes signal as restore-physics-world does. #SN4P0T"
-  (let* ((buffer (coerce (read-snapshot-octets source) 'octets))
-         (scratch (make-snapshot-scratch)))
-    (if into
-        (restore-physics-world into buffer)
-        (progn
-          (check-snapshot-frame buffer scratch)
-          (check-part-size scratch 1 +snapshot-world-bytes+)
-          (let* ((at (aref (snapshot-scratch-offsets scratch) 1))
-                 (mask (snap-u32 buffer (+ at 4)))
-                 (name (map 'string #'code-char (remove 0 (subseq buffer (+ at 188) (+ at 204)))))
-                 (family (find-symbol name :keyword))
-                 (world (make-physics-world
-                         :terrain terrain
-                         :step-seconds (snap-finite-f32 buffer (+ at 24))
-                         :substeps (snap-u32 buffer (+ at 12))
-                         :gravity (loop for k below 3 collect (snap-finite-f32 buffer (+ at 28 (* 4 k))))
-                         :sleep (logbitp 0 (snap-u32 buffer (+ at 8)))
-                         :features (loop for f in +physics-features+ for k from 0 when (logbitp k mask) collect f)
-                         :kernels (or kernels
-                                      (if (and family (assoc family (runnable-kernel-families))) family :scalar)))))
-            (restore-physics-world world buffer))))))
-;; A snapshot holds what decides the next step, part by part:6 ends here
+(defun check-snapshot-joint-bodies (buffer o hat bodies marks live)
+  "Refuse the joint record at O of BUFFER unless both its bodies are live bodies of the snapshot
+(marked LIVE in MARKS, within the BODIES slots of the handle part at HAT) of the generation that
+part gives, two bodies, not one; the second may be none, a fixed point. #SNJOIN"
+  (declare (type octets buffer) (type index o hat bodies) (type fixnum-column marks) (type fixnum live))
+  (loop for side in '(12 20)
+        for slot = (snap-u32 buffer (+ o side))
+        for generation = (snap-u32 buffer (+ o side 4))
+        unless (and (= side 20) (= slot #xFFFFFFFF) (zerop generation))
+          do (snapshot-check (and (< slot bodies) (= (aref marks slot) live)
+                                  (= generation (snap-u32 buffer (+ hat 8 (* 4 slot))))
+                                  (or (= side 12) (/= slot (snap-u32 buffer (+ o 12)))))
+                             physics-snapshot-other-layout (+ o side)
+                             "the slot of a live body of the snapshot, of its generation, not the joint's other body"
+                             slot)))
+;; Joints in a snapshot:3 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:15]]
+;; [[file:../physics.org::#SNJOIN][Joints in a snapshot:4]]
+(defun check-snapshot-joint-numbers (buffer o reach)
+  "Refuse the joint record at O of BUFFER unless its kind and flags are a joint's and each number
+is finite and in its range: anchors within REACH (a fixed point within the coordinate limit),
+lengths, softness and break force of 0 or more up to their largest, carried impulses up to
+10^9 N s. #SNJOIN"
+  (declare (type octets buffer) (type index o) (type single-float reach))
+  (snapshot-check (<= (snap-u32 buffer o) +joint-distance+) physics-snapshot-other-layout o
+                  "a joint kind, 0 or 1" (snap-u32 buffer o))
+  (snapshot-check (< (snap-u32 buffer (+ o 4)) 16) physics-snapshot-other-layout (+ o 4)
+                  "joint flags under 16" (snap-u32 buffer (+ o 4)))
+  (let ((fixed (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)))
+    (flet ((ranged (k low high what)
+             (let ((v (snap-finite-f32 buffer (+ o k))))
+               (snapshot-check (<= low v high) physics-snapshot-other-layout (+ o k) what v)
+               v)))
+      (loop for k from 28 below 40 by 4
+            do (ranged k (- reach) reach "an anchor within the reach of the world's largest radius"))
+      (loop for k from 40 below 52 by 4
+            do (if fixed
+                   (ranged k (- +physics-coordinate-limit+) +physics-coordinate-limit+
+                           "a fixed point within the coordinate limit")
+                   (ranged k (- reach) reach "an anchor within the reach of the world's largest radius")))
+      (loop for k from 52 below 64 by 4
+            do (ranged k 0.0 +physics-max-joint-length+ "a length from 0 to the longest a joint may have"))
+      ;; a hertz of a few denormals would make the softness divide by zero
+      (let ((hertz (ranged 64 0.0 1000.0 "a hertz from 0 to 1000")))
+        (snapshot-check (or (= hertz 0.0) (>= hertz +physics-min-joint-hertz+)) physics-snapshot-other-layout (+ o 64)
+                        "a hertz of 0, or of 0.001 (+physics-min-joint-hertz+) or more" hertz))
+      (ranged 68 0.0 1000.0 "a damping ratio from 0 to 1000")
+      (ranged 72 0.0 +physics-max-break-force+ "a break force from 0 to the largest")
+      (loop for k from 76 below 88 by 4
+            do (ranged k -1e9 1e9 "a carried impulse up to 1e9 N s")))))
+
+(defun check-snapshot-joint-rows (buffer scratch)
+  "Check each joint record of the snapshot in BUFFER: its bodies (check-snapshot-joint-bodies)
+and its numbers (check-snapshot-joint-numbers). #SNJOIN"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 10)) (hat (aref offsets 2))
+         (bodies (snap-u32 buffer hat)) (first (snapshot-joint-first buffer at))
+         (reach (* +joint-anchor-reach+ (snap-f32 buffer (+ (aref offsets 1) 48)))))
+    (declare (type index at hat bodies first))
+    (multiple-value-bind (marks live) (mark-snapshot-bodies buffer scratch (max bodies (snap-u32 buffer (+ at 4))))
+      (dotimes (row (snap-u32 buffer at))
+        (let ((o (+ first (* row +snapshot-joint-bytes+))))
+          (check-snapshot-joint-numbers buffer o reach)
+          (check-snapshot-joint-bodies buffer o hat bodies marks live))))))
+
+(defun check-snapshot-joint-names (buffer scratch)
+  "Refuse the snapshot in BUFFER unless a body's jointed flag is set exactly when some joint of
+its joints part names it. #SNJOIN"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 10)) (first (snapshot-joint-first buffer at)))
+    (multiple-value-bind (named stamp) (snapshot-marks scratch (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 2)))
+      (declare (type fixnum-column named) (type fixnum stamp))
+      (dotimes (row (snap-u32 buffer at))
+        (let ((o (+ first (* row +snapshot-joint-bytes+))))
+          (setf (aref named (snap-u32 buffer (+ o 12))) (1+ stamp))
+          (unless (= (snap-u32 buffer (+ o 20)) #xFFFFFFFF)
+            (setf (aref named (snap-u32 buffer (+ o 20))) (1+ stamp)))))
+      (check-snapshot-jointed-flags buffer scratch named (1+ stamp)))))
+
+(defun check-snapshot-joint-slots (buffer scratch)
+  "Refuse the snapshot in BUFFER unless each free joint slot is listed once and each live one is
+held by one joint. #SNJOIN"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (let* ((at (aref (snapshot-scratch-offsets scratch) 10)) (count (snap-u32 buffer (+ at 4)))
+         (first (snapshot-joint-first buffer at)))
+    (multiple-value-bind (marks stamp) (snapshot-marks scratch count)
+      (declare (type fixnum-column marks) (type fixnum stamp))
+      (flet ((take (o what)
+               (let ((slot (snap-u32 buffer o)))
+                 (snapshot-check (and (< slot count) (< (aref marks slot) stamp)) physics-snapshot-other-layout o
+                                 what slot)
+                 (setf (aref marks slot) stamp))))
+        (dotimes (k (snap-u32 buffer (+ at 8)))
+          (take (+ at 20 (* 4 count) (* 4 k)) "a free joint slot of the table, listed once"))
+        (dotimes (row (snap-u32 buffer at))
+          (take (+ first (* row +snapshot-joint-bytes+) 8) "a joint slot of the table, neither free nor another joint's"))))))
+
+(defun check-snapshot-joints (buffer scratch)
+  "Check the joint part of the snapshot in BUFFER, when it has one, stage by stage: its table, each
+joint's record, the bodies' jointed flags and the joint slots; without one, that no body is
+flagged jointed. #SNJOIN"
+  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (if (minusp (aref (snapshot-scratch-sizes scratch) 10))
+      (check-snapshot-jointed-flags buffer scratch (snapshot-scratch-marks scratch) -1)
+      (progn
+        (check-snapshot-joint-table buffer scratch)
+        (check-snapshot-joint-rows buffer scratch)
+        (check-snapshot-joint-names buffer scratch)
+        (check-snapshot-joint-slots buffer scratch))))
+;; Joints in a snapshot:4 ends here
+
+;; [[file:../physics.org::#SNBOXB][Box bodies in a snapshot:1]]
 (defun write-snapshot-box-bodies (world buffer at)
   "Write the box part of WORLD's snapshot into BUFFER from AT: the counts of box bodies and of the
 last step's points, each box's slot, half-extents, first point and count, then the points' keys
-and their three carried impulses, each a column copied whole; return its bytes. #SN4P0T"
+and their three carried impulses, each a column copied whole; return its bytes. #SNBOXB"
   (declare (type octets buffer) (type index at) #.+kernel-policy+)
   (let* ((set (physics-world-box-bodies world)) (points (box-set-points set))
          (p (box-point-columns-length points))
@@ -13799,12 +13853,14 @@ and their three carried impulses, each a column copied whole; return its bytes. 
       (sb-kernel:%byte-blt (box-point-columns-tangent-impulse-1 points) 0 buffer (+ o (* 12 p)) (+ o (* 16 p)))
       (sb-kernel:%byte-blt (box-point-columns-tangent-impulse-2 points) 0 buffer (+ o (* 16 p)) (+ o (* 20 p))))
     (box-part-bytes b p)))
+;; Box bodies in a snapshot:1 ends here
 
+;; [[file:../physics.org::#SNBOXB][Box bodies in a snapshot:2]]
 (defun check-snapshot-box-records (buffer scratch marks mark)
   "Check the head and the box records of the box part of the snapshot in BUFFER: the feature
 :box-bodies, the size its counts give, each box's slot within the table and listed once (marked
 MARK in MARKS), its half-extents finite, each at least +box-min-half-extent+ and the half
-diagonal within the world's largest radius, and its points within the part's. #SN4P0T"
+diagonal within the world's largest radius, and its points within the part's. #SNBOXB"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column marks) (type fixnum mark))
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 11)) (wat (aref offsets 1))
          (b (snap-u32 buffer at)) (p (snap-u32 buffer (+ at 4))) (count (snap-u32 buffer (aref offsets 2)))
@@ -13837,7 +13893,7 @@ diagonal within the world's largest radius, and its points within the part's. #S
   "Check the box part of the snapshot in BUFFER, when it has one: its records
 (check-snapshot-box-records), every point's key a fixnum's word and every carried impulse finite
 and of at most 10^9 N s; and, with it or without it, that a body has the box flag exactly when the
-part lists its slot. #SN4P0T"
+part lists its slot. #SNBOXB"
   (declare (type octets buffer) (type snapshot-scratch scratch))
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 11))
          (present (>= (aref (snapshot-scratch-sizes scratch) 11) 0))
@@ -13867,11 +13923,13 @@ part lists its slot. #SN4P0T"
                               physics-snapshot-other-layout o
                               "the box flag set exactly on a body whose slot the box part lists" (snap-u16 buffer o))))))
       (snapshot-check (= flagged boxes) physics-snapshot-other-layout at "a body for each box the part lists" boxes))))
+;; Box bodies in a snapshot:2 ends here
 
+;; [[file:../physics.org::#SNBOXB][Box bodies in a snapshot:3]]
 (defun apply-snapshot-box-bodies (world buffer scratch)
   "Make WORLD's box set the checked snapshot BUFFER's: none when it has no box part; else the
 half-extents by slot, zero where a slot holds no box, each box's first point and count, and the
-last step's points, their keys and carried impulses, every other number of a point zero. #SN4P0T"
+last step's points, their keys and carried impulses, every other number of a point zero. #SNBOXB"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (if (minusp (aref (snapshot-scratch-sizes scratch) 11))
       (setf (physics-world-box-bodies world) nil)
@@ -13902,12 +13960,14 @@ last step's points, their keys and carried impulses, every other number of a poi
                     (aref (box-set-first set) slot) (snap-u32 buffer (+ r 16))
                     (aref (box-set-count set) slot) (snap-u32 buffer (+ r 20))))))
         (setf (box-set-live set) b))))
+;; Box bodies in a snapshot:3 ends here
 
+;; [[file:../physics.org::#SNBOXB][Box bodies in a snapshot:4]]
 (defun snapshot-box-tower (kernels)
   "A floor world under KERNELS with a tower of five boxes dropped from a little apart, the
 second turned, the fourth flat and long, and two balls falling beside and onto it: boxes meet
 the floor, each other and the balls within its first second. Return the world and the boxes'
-handles. #SN4P0T"
+handles. #SNBOXB"
   (let ((terrain (make-voxel-terrain)))
     (fill-terrain terrain -8 -8 -8 16 16 16 nil)
     (fill-terrain terrain -8 -1 -8 16 0 16 t)
@@ -13920,7 +13980,7 @@ handles. #SN4P0T"
              collect (add-physics-box world 2.5 y 2.5 hx hy hz :density 500 :orientation orientation)
              finally (add-physics-body world 2.55 4.6 2.45 :radius 0.2)
                      (add-physics-body world 3.3 1.0 2.5 :radius 0.25 :vx -1.0))))))
-;; A snapshot holds what decides the next step, part by part:15 ends here
+;; Box bodies in a snapshot:4 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:2]]
 (defun physics-world-handles (world)

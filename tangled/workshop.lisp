@@ -1749,12 +1749,12 @@ that ran split; with the machine and its load. #B3NCHW"
     (format stream "~&load ~A at the end~%" (load-average))))
 ;; What the workers gain:1 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:7]]
+;; [[file:../physics.org::#SNFUZZ][Damaged snapshots, at random:1]]
 ;;; damaged snapshots, at random: make fuzz and a short run in the claims
 
 (defun reseal-snapshot (buffer)
   "Write into BUFFER, a snapshot, the checksum of its bytes as they are now, so that a damage
-made to them meets the checks past the checksum; return BUFFER. #SN4P0T"
+made to them meets the checks past the checksum; return BUFFER. #SNFUZZ"
   (declare (type octets buffer))
   (setf (snap-u64 buffer 24) (snapshot-checksum buffer +snapshot-header-bytes+ (snap-u64 buffer 16)))
   buffer)
@@ -1765,7 +1765,7 @@ bit flipped anywhere; a bit flipped past the header and the copy resealed; or th
 short. After each, WORLD goes back to SNAPSHOT. Return the restores, the refusals, the invalid
 worlds (a restore that passed whose world fails validation or then signals in a step, or a
 refusal that changed the world) and the crashes (any error that is no physics-error), as a
-plist. #SN4P0T"
+plist. #SNFUZZ"
   (let ((restored 0) (refused 0) (invalid 0) (crashes 0) (n (length snapshot)))
     (dotimes (k count)
       (let ((b (copy-seq snapshot)) (before (physics-world-state-hash world))
@@ -1794,7 +1794,7 @@ plist. #SN4P0T"
 (defun run-snapshot-fuzz-campaign (&key (seed 1) (count 2000))
   "Fuzz the snapshots of the five standard scenes at 300 balls, each taken after 2 s, and of the
 box tower (snapshot-box-tower) at half a second, COUNT damaged copies each, from SEED; return a
-list of (SCENE BYTES . FIGURES). #SN4P0T"
+list of (SCENE BYTES . FIGURES). #SNFUZZ"
   (let ((random (sb-ext:seed-random-state seed)))
     (loop for scene in '(:basin :pile :fountain :lava :player :box-tower)
           collect (multiple-value-bind (world script)
@@ -1807,7 +1807,7 @@ list of (SCENE BYTES . FIGURES). #SN4P0T"
                         (list* scene size (fuzz-snapshot world snapshot count random))))))))
 
 (defun print-snapshot-fuzz-figures (rows seconds stream)
-  "Print the snapshot fuzz campaign's ROWS as an Org table to STREAM. #SN4P0T"
+  "Print the snapshot fuzz campaign's ROWS as an Org table to STREAM. #SNFUZZ"
   (format stream "| scene | snapshot bytes | damaged copies | restored | refused | invalid worlds | crashes |~%")
   (format stream "|-------+----------------+----------------+----------+---------+----------------+---------|~%")
   (dolist (row rows)
@@ -1815,14 +1815,14 @@ list of (SCENE BYTES . FIGURES). #SN4P0T"
       (format stream "| ~(~A~) | ~D | ~D | ~D | ~D | ~D | ~D |~%" scene size (+ restored refused crashes)
               restored refused invalid crashes)))
   (format stream "~%~,1F s~%" seconds))
-;; A snapshot holds what decides the next step, part by part:7 ends here
+;; Damaged snapshots, at random:1 ends here
 
-;; [[file:../physics.org::#SN4P0T][A snapshot holds what decides the next step, part by part:8]]
+;; [[file:../physics.org::#SNCOST][What a snapshot costs:1]]
 ;;; what a snapshot costs: make bench
 
 (defun snapshot-part-bytes (buffer id)
   "The bytes part ID of the snapshot BUFFER takes, its own header of 8 included, the parts walked
-by their own ids; 0 when it has no such part. #SN4P0T"
+by their own ids; 0 when it has no such part. #SNCOST"
   (loop with at = +snapshot-header-bytes+
         while (< at (snap-u64 buffer 16))
         when (= (snap-u32 buffer at) id) return (+ 8 (snap-u32 buffer (+ at 4)))
@@ -1832,7 +1832,7 @@ by their own ids; 0 when it has no such part. #SN4P0T"
 (defun run-snapshot-benchmark (&key (stream *standard-output*) (balls 3000) (rounds 30))
   "Measure snapshots: their size in the BALLS-ball basin, in the settled pile and in the box tower, snapshot plus
 restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8-step rollback at
-1000 balls, and the bytes consed; print Org tables to STREAM. #SN4P0T"
+1000 balls, and the bytes consed; print Org tables to STREAM. #SNCOST"
   (format stream "load average ~A at the start~%~%" (load-average))
   (flet ((median (list) (let ((v (sort (coerce list 'vector) #'<))) (aref v (floor (length v) 2))))
          (ms (f) (let ((t0 (clock-ns))) (funcall f) (* 1d-6 (- (clock-ns) t0)))))
@@ -1890,11 +1890,13 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
                 size (snapshot-part-bytes buffer 11))))
     (run-rollback-benchmark :stream stream :load nil))
   (format stream "~%load average ~A at the end~%" (load-average)))
+;; What a snapshot costs:1 ends here
 
+;; [[file:../physics.org::#SNCOST][What a snapshot costs:2]]
 (defun run-rollback-benchmark (&key (stream *standard-output*) (balls 1000) (rounds 20) (load t))
   "Measure an 8-step rollback in the BALLS-ball basin at 2 s, under the widest family: a restore
 and eight steps, the median of ROUNDS, against a 60 Hz frame, as an Org table to STREAM, with
-the load average the run began and ended with when LOAD. make bench-rollback runs it alone. #SN4P0T"
+the load average the run began and ended with when LOAD. make bench-rollback runs it alone. #SNCOST"
   (when load (format stream "load average ~A at the start~%~%" (load-average)))
   (let* ((world (make-basin-world balls :kernels :auto)) (times '()))
     (dotimes (i 120) (step-physics-world world))
@@ -1914,7 +1916,7 @@ the load average the run began and ended with when LOAD. make bench-rollback run
   "Print, as an Org table, the millions of instructions a snapshot and its restore of the
 3000-ball basin at 4 s run, and a step of the basin, each counted by valgrind's cachegrind in a
 process of the tool tools/snapshot-one.lisp (count-process): a process running ROUNDS rounds
-less one running none, over ROUNDS; then the share of a step. #SN4P0T"
+less one running none, over ROUNDS; then the share of a step. #SNCOST"
   (let* ((before (load-average))
          (root (namestring (asdf:system-source-directory "luv-physics")))
          (counts (mapcar #'sb-thread:join-thread
@@ -1928,7 +1930,7 @@ less one running none, over ROUNDS; then the share of a step. #SN4P0T"
                 rounds rounds (cpu-model-name) before (load-average))
         (format stream "| basin of 3000 at 4 s | M instructions |~%|---+---|~%| snapshot and restore | ~,2F |~%| a step | ~,2F |~%| share of a step | ~,1F % |~%"
                 per-round per-step (* 100 (/ per-round per-step)))))))
-;; A snapshot holds what decides the next step, part by part:8 ends here
+;; What a snapshot costs:2 ends here
 
 ;; [[file:../physics.org::#K5DF9S][Scenes are definitions:1]]
 (define-condition unknown-physics-scene (invalid-physics-parameter)

@@ -10552,10 +10552,10 @@ list, as they were. #P41P1C"
                             "~(~A~): the bound ~A is not Amdahl's for ~A" family (nth (funcall at "bound, 2 w") c) serial))))))))
 ;; B3NCHW-worker-table-reads-its-figures ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-every-scene-resumes-to-the-bit]]
+;; [[file:../physics.org::#SNWHAT][SNWHAT-every-scene-resumes-to-the-bit]]
 (defun resumed-scene-hashes (name family steps more &key (count 300))
   "Run scene NAME under FAMILY for STEPS steps, snapshot it, run MORE; then restore the snapshot
-into a second world of the scene stepped half as often, run MORE there. Return both hashes. #SN4P0T"
+into a second world of the scene stepped half as often, run MORE there. Return both hashes. #SNWHAT"
   (multiple-value-bind (world script) (make-scene-world name :kernels family :count count)
     (dotimes (i steps) (funcall script i) (step-physics-world world))
     (let ((snapshot (snapshot-physics-world world)))
@@ -10568,57 +10568,119 @@ into a second world of the scene stepped half as often, run MORE there. Return b
         (dotimes (i more) (funcall other-script (+ steps i)) (step-physics-world other))
         (values (physics-world-state-hash world) (physics-world-state-hash other))))))
 
-(define-claim "SN4P0T" every-scene-resumes-to-the-bit
+(define-claim "SNWHAT" every-scene-resumes-to-the-bit
     "Each standard scene under each family resumes from a snapshot, in a world stepped otherwise, to the same hash."
   (dolist (family (available-kernel-families))
     (dolist (scene '(:basin :pile :fountain :lava :player))
       (multiple-value-bind (straight restored) (resumed-scene-hashes scene family 120 60)
         (check (= straight restored) "~(~A~) under ~(~A~): ~D straight, ~D restored" scene family straight restored)))))
-;; SN4P0T-every-scene-resumes-to-the-bit ends here
+;; SNWHAT-every-scene-resumes-to-the-bit ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-rollback-loop-ends-at-the-straight-hash]]
-(define-claim "SN4P0T" rollback-loop-ends-at-the-straight-hash
-    "Restoring 8 steps back and simulating them again, every step for 600 steps, ends at the straight run's hash."
-  (flet ((run (rollback)
-           (multiple-value-bind (world script) (make-scene-world :pile :count 200)
-             (declare (ignore script))
-             (let* ((handles (coerce (subseq (luv-physics::body-columns-handle (luv-physics::physics-world-awake world)) 0 200) (quote list)))
-                    (ring (make-array 9 :initial-element nil)))
-               (flet ((step-with-input (k)
-                        ;; the input of step K: a kick to one ball every 37 steps
-                        (when (zerop (mod k 37))
-                          (let ((h (nth (mod k 200) handles)))
-                            (when (physics-body-alive-p world h) (apply-physics-impulse world h 0.0 3.0 0.5))))
-                        (step-physics-world world)))
-                 (dotimes (k 600)
-                   (setf (aref ring (mod k 9)) (snapshot-physics-world world (aref ring (mod k 9))))
-                   (when (and rollback (>= k 8))
-                     ;; the late input arrives: back to step k - 8 and through the 8 steps again
-                     (restore-physics-world world (aref ring (mod (- k 8) 9)))
-                     (loop for j from (- k 8) below k do (step-with-input j)))
-                   (step-with-input k)))
-               (physics-world-state-hash world)))))
-    (let ((straight (run nil)) (rolled (run t)))
-      (check (= straight rolled) "straight ~D, rolled back ~D" straight rolled))))
-;; SN4P0T-rollback-loop-ends-at-the-straight-hash ends here
+;; [[file:../physics.org::#SNFRMT][SNFRMT-sleepers-cost-what-the-awake-cost]]
+(define-claim "SNFRMT" sleepers-cost-what-the-awake-cost
+    "Bodies take 71 bytes each, awake or asleep; one material, one palette entry of 36 bytes."
+  (let ((world (settled-floor-world)))
+    (flet ((bodies (buffer id)
+             (let ((n (luv-physics::snap-u32 buffer (snapshot-part-at buffer id))))
+               (values (luv-physics::snapshot-part-bytes buffer id) (+ 8 (* 4 (ceiling (+ 4 (* 71 n)) 4))) n))))
+      (dolist (steps '(0 360))
+        (dotimes (i steps) (step-physics-world world))
+        (let ((buffer (snapshot-physics-world world)))
+          (dolist (id '(3 4))
+            (multiple-value-bind (bytes expected n) (bodies buffer id)
+              (check (= bytes expected) "part ~D: ~D bytes for ~D bodies" id bytes n)))
+          (check (= 48 (luv-physics::snapshot-part-bytes buffer 5)) "the palette takes ~D bytes"
+                 (luv-physics::snapshot-part-bytes buffer 5))))
+      (check (= 12 (physics-world-sleeping-count world)) "~D of 12 asleep" (physics-world-sleeping-count world)))))
+;; SNFRMT-sleepers-cost-what-the-awake-cost ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-bad-snapshots-are-named-where-they-fail]]
+;; [[file:../physics.org::#SNSUMS][SNSUMS-every-flipped-bit-fails-the-checksum]]
+(define-claim "SNSUMS" every-flipped-bit-fails-the-checksum
+    "Every single bit flipped past the header of a snapshot fails its checksum, the world unchanged."
+  (let ((world (luv-physics::snapshot-box-tower :scalar)) (missed '()))
+    (dotimes (i 30) (step-physics-world world))
+    (multiple-value-bind (buffer size) (snapshot-physics-world world)
+      (let ((good (subseq buffer 0 size)) (hash (physics-world-state-hash world)))
+        (loop for byte from 32 below size
+              do (dotimes (bit 8)
+                   (setf (aref good byte) (logxor (aref good byte) (ash 1 bit)))
+                   (unless (equal '(physics-snapshot-checksum-mismatch 24) (refusal world good))
+                     (push (list byte bit) missed))
+                   (setf (aref good byte) (logxor (aref good byte) (ash 1 bit)))))
+        (check (null missed) "~D flips not refused by the checksum, the first ~S" (length missed) (last missed))
+        (check (= hash (physics-world-state-hash world)))))))
+;; SNSUMS-every-flipped-bit-fails-the-checksum ends here
+
+;; [[file:../physics.org::#SNSCRT][SNSCRT-worlds-snapshot-on-two-threads]]
+(define-claim "SNSCRT" worlds-snapshot-on-two-threads
+    "A basin and a pile snapshotted and restored 200 times each on two threads at once give the bytes and hashes each gives alone."
+  (flet ((pair (scene count)
+           (multiple-value-bind (world script) (make-scene-world scene :count count)
+             (dotimes (i 60) (funcall script i) (step-physics-world world))
+             (list world (make-scene-world scene :count count)
+                   (multiple-value-bind (bytes size) (snapshot-physics-world world) (subseq bytes 0 size))))))
+    (let* ((jobs (list (pair :basin 300) (pair :pile 200)))
+           (threads (loop for (world other alone) in jobs
+                          collect (let ((world world) (other other) (alone alone))
+                                    (sb-thread:make-thread
+                                     (lambda ()
+                                       ;; an error on the thread is a failed check, not a dead image
+                                       (handler-case
+                                           (let ((buffer nil) (same 0))
+                                             (dotimes (k 200)
+                                               (multiple-value-bind (bytes size) (snapshot-physics-world world buffer)
+                                                 (setf buffer bytes)
+                                                 (when (and (= size (length alone)) (not (mismatch alone bytes :end2 size)))
+                                                   (incf same)))
+                                               (restore-physics-world other buffer))
+                                             (list same (= (physics-world-state-hash world)
+                                                           (physics-world-state-hash other))))
+                                         (error (e) (list 0 (princ-to-string e))))))))))
+      (loop for thread in threads for scene in '(:basin :pile)
+            do (destructuring-bind (same hashes) (sb-thread:join-thread thread)
+                 (check (= 200 same) "~(~A~): ~D of 200 snapshots as taken alone" scene same)
+                 (check (eq hashes t) "~(~A~): the restored world's hash parts from its source's" scene))))))
+;; SNSCRT-worlds-snapshot-on-two-threads ends here
+
+;; [[file:../physics.org::#SNWPAR][SNWPAR-changed-pair-rows-restore]]
+(define-claim "SNWPAR" changed-pair-rows-restore
+    "A pair list built for rows that have since changed restores with its own handles."
+  (let* ((w (make-floor-world))
+         (a (add-physics-body w 2.5 0.25 2.5 :radius 0.25))
+         (b (add-physics-body w 6.5 3.0 6.5 :radius 0.25)))
+    (loop repeat 300 until (= 1 (physics-world-sleeping-count w)) do (step-physics-world w))
+    (check (and (not (physics-body-awake-p w a)) (physics-body-awake-p w b)) "not the resting ball alone asleep")
+    (add-physics-body w 10.5 2.0 2.5 :radius 0.25)
+    (flet ((rows (world)
+             (let* ((plist (luv-physics::physics-world-pair-list world))
+                    (n (max 0 (luv-physics::pair-list-rows plist))))
+               (list n (coerce (subseq (luv-physics::pair-list-handles plist) 0 n) 'list)))))
+      (let ((before (rows w))
+            (awake (coerce (subseq (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 0 2) 'list)))
+        (check (equal (second before) (list a b)) "the list was built for ~S" before)
+        (check (notany #'= (second before) awake) "the awake rows ~S share a handle with the list's ~S" awake before)
+        (let ((copy (make-floor-world)))
+          (restore-physics-world copy (snapshot-physics-world w))
+          (check (equal before (rows copy)) "restored, the list holds ~S, not ~S" (rows copy) before))))))
+;; SNWPAR-changed-pair-rows-restore ends here
+
+;; [[file:../physics.org::#SNCHCK][SNCHCK-bad-snapshots-are-named-where-they-fail]]
 (defun snapshot-part-at (buffer id)
   "Where the payload of part ID of the snapshot BUFFER begins, the parts walked by their own ids
-(an optional part the world had not is not there). #SN4P0T"
+(an optional part the world had not is not there). #SNCHCK"
   (loop with at = 32
         while (< at (luv-physics::snap-u64 buffer 16))
         when (= (luv-physics::snap-u32 buffer at) id) return (+ at 8)
         do (incf at (+ 8 (luv-physics::snap-u32 buffer (+ at 4))))))
 
 (defun refusal (world buffer)
-  "Restore BUFFER into WORLD; return the type and byte offset of the refusal, or :restored. #SN4P0T"
+  "Restore BUFFER into WORLD; return the type and byte offset of the refusal, or :restored. #SNCHCK"
   (handler-case (progn (restore-physics-world world buffer) :restored)
     (physics-snapshot-invalid (e) (list (type-of e) (luv-physics::physics-snapshot-invalid-offset e)))))
 
 (defun settled-floor-world (&rest features)
   "A floor world of twelve balls, with FEATURES when given, stepped 40 times: some awake, some
-asleep, all touching. #SN4P0T"
+asleep, all touching. #SNCHCK"
   (let* ((terrain (make-floor-terrain))
          (world (apply #'make-physics-world :terrain terrain (and features (list :features features)))))
     (dotimes (i 12) (add-physics-body world (+ 2.0 (* 0.6 (mod i 4))) (+ 0.5 (* 0.6 (floor i 4))) 3.5
@@ -10626,7 +10688,7 @@ asleep, all touching. #SN4P0T"
     (dotimes (i 40) (step-physics-world world))
     world))
 
-(define-claim "SN4P0T" bad-snapshots-are-named-where-they-fail
+(define-claim "SNCHCK" bad-snapshots-are-named-where-they-fail
     "Truncated, wrong magic or version, a bad checksum, another layout and missing features each signal their condition at their byte, the world unchanged."
   (let* ((source (settled-floor-world))
          (good (subseq (snapshot-physics-world source) 0))
@@ -10664,19 +10726,160 @@ asleep, all touching. #SN4P0T"
           (check (equal lean-before (world-fingerprint lean))))
         (check (eq :restored (refusal target good)))
         (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
-;; SN4P0T-bad-snapshots-are-named-where-they-fail ends here
+;; SNCHCK-bad-snapshots-are-named-where-they-fail ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-jointed-worlds-resume-to-the-bit]]
+;; [[file:../physics.org::#SNPUTB][SNPUTB-rollback-loop-ends-at-the-straight-hash]]
+(define-claim "SNPUTB" rollback-loop-ends-at-the-straight-hash
+    "Restoring 8 steps back and simulating them again, every step for 600 steps, ends at the straight run's hash."
+  (flet ((run (rollback)
+           (multiple-value-bind (world script) (make-scene-world :pile :count 200)
+             (declare (ignore script))
+             (let* ((handles (coerce (subseq (luv-physics::body-columns-handle (luv-physics::physics-world-awake world)) 0 200) (quote list)))
+                    (ring (make-array 9 :initial-element nil)))
+               (flet ((step-with-input (k)
+                        ;; the input of step K: a kick to one ball every 37 steps
+                        (when (zerop (mod k 37))
+                          (let ((h (nth (mod k 200) handles)))
+                            (when (physics-body-alive-p world h) (apply-physics-impulse world h 0.0 3.0 0.5))))
+                        (step-physics-world world)))
+                 (dotimes (k 600)
+                   (setf (aref ring (mod k 9)) (snapshot-physics-world world (aref ring (mod k 9))))
+                   (when (and rollback (>= k 8))
+                     ;; the late input arrives: back to step k - 8 and through the 8 steps again
+                     (restore-physics-world world (aref ring (mod (- k 8) 9)))
+                     (loop for j from (- k 8) below k do (step-with-input j)))
+                   (step-with-input k)))
+               (physics-world-state-hash world)))))
+    (let ((straight (run nil)) (rolled (run t)))
+      (check (= straight rolled) "straight ~D, rolled back ~D" straight rolled))))
+;; SNPUTB-rollback-loop-ends-at-the-straight-hash ends here
+
+;; [[file:../physics.org::#SNPUTB][SNPUTB-expired-bodies-contacts-restore]]
+(define-claim "SNPUTB" expired-bodies-contacts-restore
+    "Snapshots of the lava scene, with contacts of bodies that expired in the last step, restore."
+  (multiple-value-bind (world script) (make-scene-world :lava)
+    (let ((other (make-scene-world :lava)) (refused 0) (parted 0) (freed 0))
+      (dotimes (i 480)
+        (funcall script i) (step-physics-world world)
+        (when (>= i 420)
+          (let ((ids (luv-physics::physics-world-ids world)) (contacts (luv-physics::physics-world-contacts world)))
+            (when (loop for row below (luv-physics::contact-columns-length contacts)
+                        thereis (= luv-physics::+set-free+
+                                   (aref (luv-physics::handle-table-set ids)
+                                         (luv-physics::handle-index (aref (luv-physics::contact-columns-handle-a contacts) row)))))
+              (incf freed)))
+          (handler-case (progn (restore-physics-world other (snapshot-physics-world world))
+                               (validate-physics-world other)
+                               (unless (= (physics-world-state-hash world) (physics-world-state-hash other)) (incf parted)))
+            (physics-error () (incf refused)))))
+      (check (zerop refused) "~D of 60 snapshots refused" refused)
+      (check (zerop parted) "~D of 60 restores parted" parted)
+      (check (plusp freed) "no snapshot held a contact of a free slot"))))
+;; SNPUTB-expired-bodies-contacts-restore ends here
+
+;; [[file:../physics.org::#SNPUTB][SNPUTB-restore-trades-every-contact-column]]
+(define-claim "SNPUTB" restore-trades-every-contact-column
+    "The contact columns a restore decodes and trades are every column of contact-columns, in order."
+  (check (equal luv-physics::+snapshot-traded-contact-columns+ luv-physics::+contact-columns-column-names+)
+         "traded ~S, the layout's ~S" luv-physics::+snapshot-traded-contact-columns+
+         luv-physics::+contact-columns-column-names+))
+;; SNPUTB-restore-trades-every-contact-column ends here
+
+;; [[file:../physics.org::#SNPUTB][SNPUTB-restore-keeps-a-held-grid]]
+(defun awake-grid-fingerprint (world)
+  "The fields of WORLD's awake grid a walk reads: count, form, box of cells, mask, and the items
+and their centres in their order. #SNPUTB"
+  (let* ((g (luv-physics::physics-world-awake-grid world)) (n (luv-physics::hash-grid-count g)))
+    (list n (luv-physics::hash-grid-dense g) (luv-physics::hash-grid-ox g) (luv-physics::hash-grid-oy g)
+          (luv-physics::hash-grid-oz g) (luv-physics::hash-grid-nx g) (luv-physics::hash-grid-ny g)
+          (luv-physics::hash-grid-nz g) (luv-physics::hash-grid-mask g)
+          (subseq (luv-physics::hash-grid-items g) 0 n) (subseq (luv-physics::hash-grid-xs g) 0 n)
+          (subseq (luv-physics::hash-grid-ys g) 0 n) (subseq (luv-physics::hash-grid-zs g) 0 n))))
+
+(define-claim "SNPUTB" restore-keeps-a-held-grid
+    "A restore keeps a world's awake grid when it is the snapshot's build and buckets it again when it is not; every world resumes to the source's hash."
+  (let ((source (make-basin-world 300 :kernels :scalar)) (snapshot nil))
+    (dotimes (i 120) (step-physics-world source))
+    (setf snapshot (subseq (snapshot-physics-world source) 0))
+    (check (= (luv-physics::physics-world-awake-grid-step source)
+              (luv-physics::pair-list-built-step (luv-physics::physics-world-pair-list source)))
+           "the source's grid is not its list's build: nothing to keep")
+    (dotimes (i 30) (step-physics-world source))
+    (let* ((fresh (make-basin-world 300 :kernels :scalar))
+           (built (progn (restore-physics-world fresh snapshot) (awake-grid-fingerprint fresh)))
+           (kept (progn (restore-physics-world fresh snapshot) (awake-grid-fingerprint fresh)))
+           (moved (make-basin-world 300 :kernels :scalar)))
+      (restore-physics-world moved snapshot)
+      (let* ((plist (luv-physics::physics-world-pair-list moved)) (rows (luv-physics::pair-list-rows plist))
+             (anchors (luv-physics::pair-list-anchors plist))
+             (xs (make-array rows :element-type 'single-float)) (ys (make-array rows :element-type 'single-float))
+             (zs (make-array rows :element-type 'single-float)))
+        (incf (aref anchors 0) 0.25)
+        (dotimes (i rows)
+          (setf (aref xs i) (aref anchors (* 3 i)) (aref ys i) (aref anchors (+ 1 (* 3 i))) (aref zs i) (aref anchors (+ 2 (* 3 i)))))
+        (luv-physics::build-hash-grid (luv-physics::physics-world-awake-grid moved) (luv-physics::pair-list-cell plist)
+                                      rows xs ys zs (luv-physics::awake-row-identities moved rows))
+        (check (not (equalp built (awake-grid-fingerprint moved))) "the moved anchors bucketed the same grid"))
+      (restore-physics-world moved snapshot)
+      (check (equalp built kept) "the kept grid is not the one a restore buckets")
+      (check (equalp built (awake-grid-fingerprint moved)) "a grid of other anchors was kept")
+      (dolist (world (list fresh moved))
+        (check (eq t (validate-physics-world world)))
+        (dotimes (i 30) (step-physics-world world))
+        (check (= (physics-world-state-hash source) (physics-world-state-hash world)))))))
+;; SNPUTB-restore-keeps-a-held-grid ends here
+
+;; [[file:../physics.org::#SNPUTB][SNPUTB-restore-refuses-what-is-not-octets]]
+(define-claim "SNPUTB" restore-refuses-what-is-not-octets
+    "A buffer that is not an octet vector is refused naming :buffer; the world keeps its hash."
+  (let* ((w (settled-floor-world))
+         (good (subseq (snapshot-physics-world w) 0))
+         (before (world-fingerprint w)))
+    (dolist (bad (list (coerce good 'list) (map 'string #'code-char (subseq good 0 64))
+                       (coerce good 'simple-vector) (make-array 64 :element-type '(unsigned-byte 16)) nil))
+      (let ((got (refusal-of (lambda () (restore-physics-world w bad)))))
+        (check (eq :buffer got) "a ~S was answered ~S" (type-of bad) got))
+      (check (equal before (world-fingerprint w)) "the refused restore changed the world")
+      (check (eq t (validate-physics-world w))))
+    (check (eq w (restore-physics-world w good)))))
+;; SNPUTB-restore-refuses-what-is-not-octets ends here
+
+;; [[file:../physics.org::#SNDISK][SNDISK-file-from-another-image-resumes]]
+(define-claim "SNDISK" file-from-another-image-resumes
+    "A basin written to a file by a child SBCL, read here, reaches the straight run's hash after 60 more steps."
+  (let ((file (uiop:tmpize-pathname (merge-pathnames "snapshot-child.luv" (uiop:temporary-directory))))
+        (root (asdf:system-source-directory "luv-physics")))
+    (unwind-protect
+         (progn
+           (uiop:run-program
+            (list "sbcl" "--dynamic-space-size" "2Gb" "--noinform" "--non-interactive" "--no-sysinit" "--no-userinit"
+                  "--load" (namestring (merge-pathnames "tools/boot.lisp" root))
+                  "--eval" "(asdf:load-system \"luv-physics/workshop\")"
+                  "--eval" (format nil "(multiple-value-bind (w s) (physics:make-scene-world :basin :count 300 :kernels :scalar)
+                                          (dotimes (i 120) (funcall s i) (physics:step-physics-world w))
+                                          (physics:write-physics-world w ~S))" (namestring file)))
+            :output nil :error-output nil)
+           (multiple-value-bind (world script) (make-scene-world :basin :count 300 :kernels :scalar)
+             (dotimes (i 180) (funcall script i) (step-physics-world world))
+             (let ((read (read-physics-world file :terrain (make-basin-terrain))))
+               (check (eq t (validate-physics-world read)))
+               (dotimes (i 60) (step-physics-world read))
+               (check (= (physics-world-state-hash world) (physics-world-state-hash read))
+                      "straight ~D, read ~D" (physics-world-state-hash world) (physics-world-state-hash read)))))
+      (when (probe-file file) (delete-file file)))))
+;; SNDISK-file-from-another-image-resumes ends here
+
+;; [[file:../physics.org::#SNJOIN][SNJOIN-jointed-worlds-resume-to-the-bit]]
 (defun jointed-snapshot-world (kernels &key (links 8) (pendulum t))
   "The swinging chain of LINKS balls under KERNELS, and, with PENDULUM, a ball on a 1 m rigid
-distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0T"
+distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SNJOIN"
   (let ((w (swinging-chain-world kernels :links links)))
     (when pendulum
       (let ((bob (add-physics-body w 2.5 5.0 3.5 :radius 0.2)))
         (add-physics-joint w :distance bob nil :anchor-b '(1.5 5.0 3.5) :length 1.0)))
     w))
 
-(define-claim "SN4P0T" jointed-worlds-resume-to-the-bit
+(define-claim "SNJOIN" jointed-worlds-resume-to-the-bit
     "A jointed chain and pendulum resumes from its snapshot to the straight hash, in every family, into worlds of other joints, none, or fresh."
   (dolist (family (available-kernel-families))
     (let* ((world (jointed-snapshot-world family)) (snapshot nil))
@@ -10707,10 +10910,10 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
             (check (= fresh-mask (luv-physics::world-event-mask world)) "the event mask ~D, not ~D"
                    (luv-physics::world-event-mask world) fresh-mask)
             (check (eq t (validate-physics-world world)))))))))
-;; SN4P0T-jointed-worlds-resume-to-the-bit ends here
+;; SNJOIN-jointed-worlds-resume-to-the-bit ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-rollback-with-joints-ends-at-the-straight-hash]]
-(define-claim "SN4P0T" rollback-with-joints-ends-at-the-straight-hash
+;; [[file:../physics.org::#SNJOIN][SNJOIN-rollback-with-joints-ends-at-the-straight-hash]]
+(define-claim "SNJOIN" rollback-with-joints-ends-at-the-straight-hash
     "Rolling a jointed chain and pendulum back 8 steps every step for 300 steps ends at the straight run's hash."
   (flet ((run (rollback)
            (let* ((world (jointed-snapshot-world :scalar))
@@ -10729,10 +10932,10 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
              (physics-world-state-hash world))))
     (let ((straight (run nil)) (rolled (run t)))
       (check (= straight rolled) "straight ~D, rolled back ~D" straight rolled))))
-;; SN4P0T-rollback-with-joints-ends-at-the-straight-hash ends here
+;; SNJOIN-rollback-with-joints-ends-at-the-straight-hash ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-joints-are-refused-at-their-byte]]
-(define-claim "SN4P0T" damaged-joints-are-refused-at-their-byte
+;; [[file:../physics.org::#SNJOIN][SNJOIN-damaged-joints-are-refused-at-their-byte]]
+(define-claim "SNJOIN" damaged-joints-are-refused-at-their-byte
     "A joints part with a dead body, a bad kind, a NaN, a slot twice or a wrong count is refused at its byte, the world unchanged."
   (let* ((source (jointed-snapshot-world :scalar)) (target (jointed-snapshot-world :scalar :links 5)))
     (dotimes (i 40) (step-physics-world source))
@@ -10761,10 +10964,10 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
                                        (logxor (luv-physics::snap-u16 b flags) luv-physics::+flag-jointed+)))))
         (check (eq :restored (refusal target good)))
         (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
-;; SN4P0T-damaged-joints-are-refused-at-their-byte ends here
+;; SNJOIN-damaged-joints-are-refused-at-their-byte ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-box-tower-resumes-to-the-bit]]
-(define-claim "SN4P0T" box-tower-resumes-to-the-bit
+;; [[file:../physics.org::#SNBOXB][SNBOXB-box-tower-resumes-to-the-bit]]
+(define-claim "SNBOXB" box-tower-resumes-to-the-bit
     "A tower of boxes restored mid-fall resumes to the straight hash in every family, into any world; a box-free snapshot drops the box set."
   (dolist (family (available-kernel-families))
     (multiple-value-bind (world boxes) (luv-physics::snapshot-box-tower family)
@@ -10792,10 +10995,10 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
       (restore-physics-world world (snapshot-physics-world (settled-floor-world)))
       (check (null (luv-physics::physics-world-box-bodies world)) "the box set was kept")
       (check (eq t (validate-physics-world world))))))
-;; SN4P0T-box-tower-resumes-to-the-bit ends here
+;; SNBOXB-box-tower-resumes-to-the-bit ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-boxes-are-refused-at-their-byte]]
-(define-claim "SN4P0T" damaged-boxes-are-refused-at-their-byte
+;; [[file:../physics.org::#SNBOXB][SNBOXB-damaged-boxes-are-refused-at-their-byte]]
+(define-claim "SNBOXB" damaged-boxes-are-refused-at-their-byte
     "A box part with a bad slot, extent, point range, key or impulse, or a box flag turned over, is refused at its byte, the world unchanged."
   (let ((source (luv-physics::snapshot-box-tower :scalar)) (target (luv-physics::snapshot-box-tower :scalar)))
     (dotimes (i 30) (step-physics-world source))
@@ -10828,27 +11031,10 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
                                        (logxor (luv-physics::snap-u16 b flags) luv-physics::+flag-box-shape+)))))
         (check (eq :restored (refusal target good)))
         (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
-;; SN4P0T-damaged-boxes-are-refused-at-their-byte ends here
+;; SNBOXB-damaged-boxes-are-refused-at-their-byte ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-every-flipped-bit-fails-the-checksum]]
-(define-claim "SN4P0T" every-flipped-bit-fails-the-checksum
-    "Every single bit flipped past the header of a snapshot fails its checksum, the world unchanged."
-  (let ((world (luv-physics::snapshot-box-tower :scalar)) (missed '()))
-    (dotimes (i 30) (step-physics-world world))
-    (multiple-value-bind (buffer size) (snapshot-physics-world world)
-      (let ((good (subseq buffer 0 size)) (hash (physics-world-state-hash world)))
-        (loop for byte from 32 below size
-              do (dotimes (bit 8)
-                   (setf (aref good byte) (logxor (aref good byte) (ash 1 bit)))
-                   (unless (equal '(physics-snapshot-checksum-mismatch 24) (refusal world good))
-                     (push (list byte bit) missed))
-                   (setf (aref good byte) (logxor (aref good byte) (ash 1 bit)))))
-        (check (null missed) "~D flips not refused by the checksum, the first ~S" (length missed) (last missed))
-        (check (= hash (physics-world-state-hash world)))))))
-;; SN4P0T-every-flipped-bit-fails-the-checksum ends here
-
-;; [[file:../physics.org::#SN4P0T][SN4P0T-damaged-snapshots-leave-valid-worlds]]
-(define-claim "SN4P0T" damaged-snapshots-leave-valid-worlds
+;; [[file:../physics.org::#SNFUZZ][SNFUZZ-damaged-snapshots-leave-valid-worlds]]
+(define-claim "SNFUZZ" damaged-snapshots-leave-valid-worlds
     "300 damaged snapshots of a settled floor world, 1000 of a jointed chain and 500 of a box tower leave no invalid world and crash nothing."
   (loop for (world count) in (list (list (settled-floor-world) 300)
                                    (list (let ((w (jointed-snapshot-world :scalar)))
@@ -10864,41 +11050,10 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
              (check (zerop (getf result :invalid)) "~S" result)
              (check (zerop (getf result :crashes)) "~S" result)
              (check (plusp (getf result :refused)) "~S" result))))
-;; SN4P0T-damaged-snapshots-leave-valid-worlds ends here
+;; SNFUZZ-damaged-snapshots-leave-valid-worlds ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-worlds-snapshot-on-two-threads]]
-(define-claim "SN4P0T" worlds-snapshot-on-two-threads
-    "A basin and a pile snapshotted and restored 200 times each on two threads at once give the bytes and hashes each gives alone."
-  (flet ((pair (scene count)
-           (multiple-value-bind (world script) (make-scene-world scene :count count)
-             (dotimes (i 60) (funcall script i) (step-physics-world world))
-             (list world (make-scene-world scene :count count)
-                   (multiple-value-bind (bytes size) (snapshot-physics-world world) (subseq bytes 0 size))))))
-    (let* ((jobs (list (pair :basin 300) (pair :pile 200)))
-           (threads (loop for (world other alone) in jobs
-                          collect (let ((world world) (other other) (alone alone))
-                                    (sb-thread:make-thread
-                                     (lambda ()
-                                       ;; an error on the thread is a failed check, not a dead image
-                                       (handler-case
-                                           (let ((buffer nil) (same 0))
-                                             (dotimes (k 200)
-                                               (multiple-value-bind (bytes size) (snapshot-physics-world world buffer)
-                                                 (setf buffer bytes)
-                                                 (when (and (= size (length alone)) (not (mismatch alone bytes :end2 size)))
-                                                   (incf same)))
-                                               (restore-physics-world other buffer))
-                                             (list same (= (physics-world-state-hash world)
-                                                           (physics-world-state-hash other))))
-                                         (error (e) (list 0 (princ-to-string e))))))))))
-      (loop for thread in threads for scene in '(:basin :pile)
-            do (destructuring-bind (same hashes) (sb-thread:join-thread thread)
-                 (check (= 200 same) "~(~A~): ~D of 200 snapshots as taken alone" scene same)
-                 (check (eq hashes t) "~(~A~): the restored world's hash parts from its source's" scene))))))
-;; SN4P0T-worlds-snapshot-on-two-threads ends here
-
-;; [[file:../physics.org::#SN4P0T][SN4P0T-snapshots-into-room-cons-nothing]]
-(define-claim "SN4P0T" snapshots-into-room-cons-nothing
+;; [[file:../physics.org::#SNCOST][SNCOST-snapshots-into-room-cons-nothing]]
+(define-claim "SNCOST" snapshots-into-room-cons-nothing
     "Snapshot and restore of a 300-ball basin, and of a jointed chain and pendulum, into room already large enough cons no byte."
   (multiple-value-bind (world script) (make-scene-world :basin :count 300)
     (dotimes (i 150) (funcall script i) (step-physics-world world))
@@ -10926,165 +11081,10 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SN4P0
           (restore-physics-world other buffer))
         (let ((consed (- (sb-ext:get-bytes-consed) before)))
           (check (zerop consed) "~D bytes consed with joints" consed))))))
-;; SN4P0T-snapshots-into-room-cons-nothing ends here
+;; SNCOST-snapshots-into-room-cons-nothing ends here
 
-;; [[file:../physics.org::#SN4P0T][SN4P0T-file-from-another-image-resumes]]
-(define-claim "SN4P0T" file-from-another-image-resumes
-    "A basin written to a file by a child SBCL, read here, reaches the straight run's hash after 60 more steps."
-  (let ((file (uiop:tmpize-pathname (merge-pathnames "snapshot-child.luv" (uiop:temporary-directory))))
-        (root (asdf:system-source-directory "luv-physics")))
-    (unwind-protect
-         (progn
-           (uiop:run-program
-            (list "sbcl" "--dynamic-space-size" "2Gb" "--noinform" "--non-interactive" "--no-sysinit" "--no-userinit"
-                  "--load" (namestring (merge-pathnames "tools/boot.lisp" root))
-                  "--eval" "(asdf:load-system \"luv-physics/workshop\")"
-                  "--eval" (format nil "(multiple-value-bind (w s) (physics:make-scene-world :basin :count 300 :kernels :scalar)
-                                          (dotimes (i 120) (funcall s i) (physics:step-physics-world w))
-                                          (physics:write-physics-world w ~S))" (namestring file)))
-            :output nil :error-output nil)
-           (multiple-value-bind (world script) (make-scene-world :basin :count 300 :kernels :scalar)
-             (dotimes (i 180) (funcall script i) (step-physics-world world))
-             (let ((read (read-physics-world file :terrain (make-basin-terrain))))
-               (check (eq t (validate-physics-world read)))
-               (dotimes (i 60) (step-physics-world read))
-               (check (= (physics-world-state-hash world) (physics-world-state-hash read))
-                      "straight ~D, read ~D" (physics-world-state-hash world) (physics-world-state-hash read)))))
-      (when (probe-file file) (delete-file file)))))
-;; SN4P0T-file-from-another-image-resumes ends here
-
-;; [[file:../physics.org::#SN4P0T][SN4P0T-expired-bodies-contacts-restore]]
-(define-claim "SN4P0T" expired-bodies-contacts-restore
-    "Snapshots of the lava scene, with contacts of bodies that expired in the last step, restore."
-  (multiple-value-bind (world script) (make-scene-world :lava)
-    (let ((other (make-scene-world :lava)) (refused 0) (parted 0) (freed 0))
-      (dotimes (i 480)
-        (funcall script i) (step-physics-world world)
-        (when (>= i 420)
-          (let ((ids (luv-physics::physics-world-ids world)) (contacts (luv-physics::physics-world-contacts world)))
-            (when (loop for row below (luv-physics::contact-columns-length contacts)
-                        thereis (= luv-physics::+set-free+
-                                   (aref (luv-physics::handle-table-set ids)
-                                         (luv-physics::handle-index (aref (luv-physics::contact-columns-handle-a contacts) row)))))
-              (incf freed)))
-          (handler-case (progn (restore-physics-world other (snapshot-physics-world world))
-                               (validate-physics-world other)
-                               (unless (= (physics-world-state-hash world) (physics-world-state-hash other)) (incf parted)))
-            (physics-error () (incf refused)))))
-      (check (zerop refused) "~D of 60 snapshots refused" refused)
-      (check (zerop parted) "~D of 60 restores parted" parted)
-      (check (plusp freed) "no snapshot held a contact of a free slot"))))
-;; SN4P0T-expired-bodies-contacts-restore ends here
-
-;; [[file:../physics.org::#SN4P0T][SN4P0T-sleepers-cost-what-the-awake-cost]]
-(define-claim "SN4P0T" sleepers-cost-what-the-awake-cost
-    "Bodies take 71 bytes each, awake or asleep; one material, one palette entry of 36 bytes."
-  (let ((world (settled-floor-world)))
-    (flet ((bodies (buffer id)
-             (let ((n (luv-physics::snap-u32 buffer (snapshot-part-at buffer id))))
-               (values (luv-physics::snapshot-part-bytes buffer id) (+ 8 (* 4 (ceiling (+ 4 (* 71 n)) 4))) n))))
-      (dolist (steps '(0 360))
-        (dotimes (i steps) (step-physics-world world))
-        (let ((buffer (snapshot-physics-world world)))
-          (dolist (id '(3 4))
-            (multiple-value-bind (bytes expected n) (bodies buffer id)
-              (check (= bytes expected) "part ~D: ~D bytes for ~D bodies" id bytes n)))
-          (check (= 48 (luv-physics::snapshot-part-bytes buffer 5)) "the palette takes ~D bytes"
-                 (luv-physics::snapshot-part-bytes buffer 5))))
-      (check (= 12 (physics-world-sleeping-count world)) "~D of 12 asleep" (physics-world-sleeping-count world)))))
-;; SN4P0T-sleepers-cost-what-the-awake-cost ends here
-
-;; [[file:../physics.org::#SN4P0T][SN4P0T-changed-pair-rows-restore]]
-(define-claim "SN4P0T" changed-pair-rows-restore
-    "A pair list built for rows that have since changed restores with its own handles."
-  (let* ((w (make-floor-world))
-         (a (add-physics-body w 2.5 0.25 2.5 :radius 0.25))
-         (b (add-physics-body w 6.5 3.0 6.5 :radius 0.25)))
-    (loop repeat 300 until (= 1 (physics-world-sleeping-count w)) do (step-physics-world w))
-    (check (and (not (physics-body-awake-p w a)) (physics-body-awake-p w b)) "not the resting ball alone asleep")
-    (add-physics-body w 10.5 2.0 2.5 :radius 0.25)
-    (flet ((rows (world)
-             (let* ((plist (luv-physics::physics-world-pair-list world))
-                    (n (max 0 (luv-physics::pair-list-rows plist))))
-               (list n (coerce (subseq (luv-physics::pair-list-handles plist) 0 n) 'list)))))
-      (let ((before (rows w))
-            (awake (coerce (subseq (luv-physics::body-columns-handle (luv-physics::physics-world-awake w)) 0 2) 'list)))
-        (check (equal (second before) (list a b)) "the list was built for ~S" before)
-        (check (notany #'= (second before) awake) "the awake rows ~S share a handle with the list's ~S" awake before)
-        (let ((copy (make-floor-world)))
-          (restore-physics-world copy (snapshot-physics-world w))
-          (check (equal before (rows copy)) "restored, the list holds ~S, not ~S" (rows copy) before))))))
-;; SN4P0T-changed-pair-rows-restore ends here
-
-;; [[file:../physics.org::#SN4P0T][SN4P0T-restore-trades-every-contact-column]]
-(define-claim "SN4P0T" restore-trades-every-contact-column
-    "The contact columns a restore decodes and trades are every column of contact-columns, in order."
-  (check (equal luv-physics::+snapshot-traded-contact-columns+ luv-physics::+contact-columns-column-names+)
-         "traded ~S, the layout's ~S" luv-physics::+snapshot-traded-contact-columns+
-         luv-physics::+contact-columns-column-names+))
-;; SN4P0T-restore-trades-every-contact-column ends here
-
-;; [[file:../physics.org::#SN4P0T][SN4P0T-restore-keeps-a-held-grid]]
-(defun awake-grid-fingerprint (world)
-  "The fields of WORLD's awake grid a walk reads: count, form, box of cells, mask, and the items
-and their centres in their order. #SN4P0T"
-  (let* ((g (luv-physics::physics-world-awake-grid world)) (n (luv-physics::hash-grid-count g)))
-    (list n (luv-physics::hash-grid-dense g) (luv-physics::hash-grid-ox g) (luv-physics::hash-grid-oy g)
-          (luv-physics::hash-grid-oz g) (luv-physics::hash-grid-nx g) (luv-physics::hash-grid-ny g)
-          (luv-physics::hash-grid-nz g) (luv-physics::hash-grid-mask g)
-          (subseq (luv-physics::hash-grid-items g) 0 n) (subseq (luv-physics::hash-grid-xs g) 0 n)
-          (subseq (luv-physics::hash-grid-ys g) 0 n) (subseq (luv-physics::hash-grid-zs g) 0 n))))
-
-(define-claim "SN4P0T" restore-keeps-a-held-grid
-    "A restore keeps a world's awake grid when it is the snapshot's build and buckets it again when it is not; every world resumes to the source's hash."
-  (let ((source (make-basin-world 300 :kernels :scalar)) (snapshot nil))
-    (dotimes (i 120) (step-physics-world source))
-    (setf snapshot (subseq (snapshot-physics-world source) 0))
-    (check (= (luv-physics::physics-world-awake-grid-step source)
-              (luv-physics::pair-list-built-step (luv-physics::physics-world-pair-list source)))
-           "the source's grid is not its list's build: nothing to keep")
-    (dotimes (i 30) (step-physics-world source))
-    (let* ((fresh (make-basin-world 300 :kernels :scalar))
-           (built (progn (restore-physics-world fresh snapshot) (awake-grid-fingerprint fresh)))
-           (kept (progn (restore-physics-world fresh snapshot) (awake-grid-fingerprint fresh)))
-           (moved (make-basin-world 300 :kernels :scalar)))
-      (restore-physics-world moved snapshot)
-      (let* ((plist (luv-physics::physics-world-pair-list moved)) (rows (luv-physics::pair-list-rows plist))
-             (anchors (luv-physics::pair-list-anchors plist))
-             (xs (make-array rows :element-type 'single-float)) (ys (make-array rows :element-type 'single-float))
-             (zs (make-array rows :element-type 'single-float)))
-        (incf (aref anchors 0) 0.25)
-        (dotimes (i rows)
-          (setf (aref xs i) (aref anchors (* 3 i)) (aref ys i) (aref anchors (+ 1 (* 3 i))) (aref zs i) (aref anchors (+ 2 (* 3 i)))))
-        (luv-physics::build-hash-grid (luv-physics::physics-world-awake-grid moved) (luv-physics::pair-list-cell plist)
-                                      rows xs ys zs (luv-physics::awake-row-identities moved rows))
-        (check (not (equalp built (awake-grid-fingerprint moved))) "the moved anchors bucketed the same grid"))
-      (restore-physics-world moved snapshot)
-      (check (equalp built kept) "the kept grid is not the one a restore buckets")
-      (check (equalp built (awake-grid-fingerprint moved)) "a grid of other anchors was kept")
-      (dolist (world (list fresh moved))
-        (check (eq t (validate-physics-world world)))
-        (dotimes (i 30) (step-physics-world world))
-        (check (= (physics-world-state-hash source) (physics-world-state-hash world)))))))
-;; SN4P0T-restore-keeps-a-held-grid ends here
-
-;; [[file:../physics.org::#SN4P0T][SN4P0T-restore-refuses-what-is-not-octets]]
-(define-claim "SN4P0T" restore-refuses-what-is-not-octets
-    "A buffer that is not an octet vector is refused naming :buffer; the world keeps its hash."
-  (let* ((w (settled-floor-world))
-         (good (subseq (snapshot-physics-world w) 0))
-         (before (world-fingerprint w)))
-    (dolist (bad (list (coerce good 'list) (map 'string #'code-char (subseq good 0 64))
-                       (coerce good 'simple-vector) (make-array 64 :element-type '(unsigned-byte 16)) nil))
-      (let ((got (refusal-of (lambda () (restore-physics-world w bad)))))
-        (check (eq :buffer got) "a ~S was answered ~S" (type-of bad) got))
-      (check (equal before (world-fingerprint w)) "the refused restore changed the world")
-      (check (eq t (validate-physics-world w))))
-    (check (eq w (restore-physics-world w good)))))
-;; SN4P0T-restore-refuses-what-is-not-octets ends here
-
-;; [[file:../physics.org::#SN4P0T][SN4P0T-rollback-share-of-a-frame]]
-(define-claim "SN4P0T" rollback-share-of-a-frame
+;; [[file:../physics.org::#SNCOST][SNCOST-rollback-share-of-a-frame]]
+(define-claim "SNCOST" rollback-share-of-a-frame
     "The rollback table gives its median as the share of a 60 Hz frame, 1000/60 ms."
   (let* ((text (with-output-to-string (s) (luv-physics::run-rollback-benchmark :stream s :balls 300 :rounds 3 :load nil)))
          (row (find-if (lambda (l) (search "restore and 8 steps" l)) (luv-physics::split-lines text)))
@@ -11094,7 +11094,7 @@ and their centres in their order. #SN4P0T"
     (check (plusp median) "the median ~S ms" median)
     (check (<= (abs (- share (* 100 (/ median (/ 1000d0 60))))) 0.55)
            "a median of ~,2F ms is given as ~D % of a 60 Hz frame, not ~,1F %" median share (* 6 median))))
-;; SN4P0T-rollback-share-of-a-frame ends here
+;; SNCOST-rollback-share-of-a-frame ends here
 
 ;; [[file:../physics.org::#K5DF9S][K5DF9S-definition-builds-what-it-declares]]
 (defun solid-cell-count (terrain)
