@@ -125,13 +125,13 @@ bench: setup tangle
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-snapshots report/bench-snapshots.org
 	@$(MAKE) --no-print-directory bench-workers
 
-# an 8-step rollback at 1000 balls (#SN4P0T): cheap to run again alone, at a quiet moment
+# an 8-step rollback at 1000 balls (#SNCOST): cheap to run again alone, at a quiet moment
 bench-rollback: setup tangle
 	@mkdir -p report
 	@BENCH=run-rollback-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-rollback.org
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp bench-rollback report/bench-rollback.org
 
-# make bench's snapshot tables alone (#SN4P0T), and the same measure in instructions, load-proof
+# make bench's snapshot tables alone (#SNCOST), and the same measure in instructions, load-proof
 bench-snapshots: setup tangle
 	@mkdir -p report
 	@BENCH=run-snapshot-benchmark $(LISP) --load tools/bench.lisp | tee report/bench-snapshots.org
@@ -145,7 +145,7 @@ count-snapshots: setup tangle
 	@test ! -e report/count-snapshots-failed
 	@$(SBCL) --dynamic-space-size $(HEAP) --script tools/splice.lisp count-snapshots report/count-snapshots.org
 
-# make fuzz's damaged snapshots alone (#SN4P0T)
+# make fuzz's damaged snapshots alone (#SNFUZZ)
 fuzz-snapshots: setup tangle
 	@mkdir -p report
 	@rm -f report/fuzz-failed

@@ -11845,6 +11845,9 @@ and the first and the count of its points. #SNFRMT")
 (defparameter +snapshot-magic+ (map 'octets #'char-code "LUVWORLD")
   "The eight bytes a snapshot starts with. #SNFRMT")
 
+#-little-endian
+(error "The snapshot's accessors read and write the machine's own byte order, which must be little-endian. #SNFRMT")
+
 (declaim (inline snap-u8 snap-u16 snap-u32 snap-i32 snap-u64 snap-i64 snap-f32 snap-f64
                  (setf snap-u8) (setf snap-u16) (setf snap-u32) (setf snap-i32) (setf snap-u64)
                  (setf snap-i64) (setf snap-f32) (setf snap-f64)))
@@ -11866,9 +11869,6 @@ and the first and the count of its points. #SNFRMT")
   (def snap-i64 sb-sys:signed-sap-ref-64 (signed-byte 64))
   (def snap-f32 sb-sys:sap-ref-single single-float)
   (def snap-f64 sb-sys:sap-ref-double double-float))
-
-#-little-endian
-(error "The snapshot's accessors read and write the machine's own byte order, which must be little-endian. #SNFRMT")
 ;; The format: a header, then parts padded to words:2 ends here
 
 ;; [[file:../physics.org::#SNFRMT][The format: a header, then parts padded to words:3]]

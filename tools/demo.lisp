@@ -13,7 +13,7 @@
   (handler-case
       (let ((world (funcall run :scene scene))
             (save (sb-ext:posix-getenv "SAVE")))
-        ;; SAVE=file writes the world as the scene left it (#SN4P0T); make view FILE= can show it
+        ;; SAVE=file writes the world as the scene left it (#SNDISK); make view FILE= can show it
         (when (and save (string/= save ""))
           (format t "~&demo: wrote ~D bytes to ~A~%"
                   (funcall (find-symbol "WRITE-PHYSICS-WORLD" '#:luv-physics) world save) save)))

@@ -4,7 +4,7 @@
 ;;;; scenes (default 40) of STEPS steps (default 300).  Prints the figures as Org tables; exit
 ;;;; status 1 when a sequence broke a promise (its seed and shrunk sequence are printed first)
 ;;;; or a squeeze left a body outside the air or over its speed bound.  With FUZZ=snapshot it
-;;;; damages COUNT (default 2000) copies of each standard scene's snapshot (#SN4P0T); exit status
+;;;; damages COUNT (default 2000) copies of each standard scene's snapshot (#SNFUZZ); exit status
 ;;;; 1 when one left an invalid world or crashed.
 
 (load (merge-pathnames "boot.lisp" *load-truename*))

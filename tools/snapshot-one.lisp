@@ -1,4 +1,4 @@
-;;;; tools/snapshot-one.lisp -- one process of make count-snapshots (physics.org, #SN4P0T): load the
+;;;; tools/snapshot-one.lisp -- one process of make count-snapshots (physics.org, #SNCOST): load the
 ;;;; engine of the tree ROOT, run the 3000-ball basin 240 steps (4 s) under the widest family,
 ;;;; snapshot it and restore the snapshot into a second basin, then run ROUNDS rounds of WHAT
 ;;;; (snapshot: a snapshot of the first world and its restore into the second; step: a step of the
