@@ -10594,6 +10594,21 @@ into a second world of the scene stepped half as often, run MORE there. Return b
       (check (= 12 (physics-world-sleeping-count world)) "~D of 12 asleep" (physics-world-sleeping-count world)))))
 ;; SNFRMT-sleepers-cost-what-the-awake-cost ends here
 
+;; [[file:../physics.org::#SNFRMT][SNFRMT-palette-index-widths]]
+(define-claim "SNFRMT" palette-index-widths
+    "An index takes 1 byte up to 256 materials, 2 up to 65536, 4 beyond; 256 balls of their own radii take 71 bytes each, 257 take 72."
+  (check (equal '(1 1 2 2 4) (mapcar #'luv-physics::material-index-bytes '(1 256 257 65536 65537))))
+  (dolist (n '(256 257))
+    (let ((world (make-physics-world :terrain (make-floor-terrain))))
+      (dotimes (i n)
+        (add-physics-body world (+ -10.0 (* 0.6 (mod i 40))) 0.5 (+ -10.0 (* 0.6 (floor i 40)))
+                          :radius (+ 0.2 (* 0.0001 i))))
+      (let* ((bytes (snapshot-physics-world world)) (part (snapshot-part-at bytes 3)))
+        (check (= n (luv-physics::snap-u32 bytes (snapshot-part-at bytes 5))) "~D materials" n)
+        (check (= (* 4 (ceiling (+ 4 (* n (if (= n 256) 71 72))) 4)) (luv-physics::snap-u32 bytes (- part 4)))
+               "~D balls: a body part of ~D bytes" n (luv-physics::snap-u32 bytes (- part 4)))))))
+;; SNFRMT-palette-index-widths ends here
+
 ;; [[file:../physics.org::#SNSUMS][SNSUMS-every-flipped-bit-fails-the-checksum]]
 (define-claim "SNSUMS" every-flipped-bit-fails-the-checksum
     "Every single bit flipped past the header of a snapshot fails its checksum, the world unchanged."
@@ -10642,6 +10657,46 @@ into a second world of the scene stepped half as often, run MORE there. Return b
                  (check (eq hashes t) "~(~A~): the restored world's hash parts from its source's" scene))))))
 ;; SNSCRT-worlds-snapshot-on-two-threads ends here
 
+;; [[file:../physics.org::#SNTAKE][SNTAKE-posted-boxes-restore-as-posted]]
+(define-claim "SNTAKE" posted-boxes-restore-as-posted
+    "A posted box restores with its corners, velocity, id and filter, and the next step ends at the source's hash."
+  (let ((world (settled-floor-world)) (other (make-physics-world :terrain (make-floor-terrain))))
+    (post-physics-box world 2.5 1.2 3.0 0.4 0.3 0.2 :vx 0.5 :vy -0.25 :vz 0.125)
+    (restore-physics-world other (snapshot-physics-world world))
+    (let ((a (luv-physics::physics-world-boxes world)) (b (luv-physics::physics-world-boxes other)))
+      (check (= 1 (luv-physics::box-columns-length b)) "~D posted boxes" (luv-physics::box-columns-length b))
+      (loop for (name column) in (list (list :min-x #'luv-physics::box-columns-min-x) (list :min-y #'luv-physics::box-columns-min-y)
+                                       (list :min-z #'luv-physics::box-columns-min-z) (list :max-x #'luv-physics::box-columns-max-x)
+                                       (list :max-y #'luv-physics::box-columns-max-y) (list :max-z #'luv-physics::box-columns-max-z)
+                                       (list :vx #'luv-physics::box-columns-vx) (list :vy #'luv-physics::box-columns-vy)
+                                       (list :vz #'luv-physics::box-columns-vz) (list :id #'luv-physics::box-columns-id)
+                                       (list :filter #'luv-physics::box-columns-filter))
+            do (check (= (aref (funcall column a) 0) (aref (funcall column b) 0)) "~(~A~): ~S, restored ~S"
+                      name (aref (funcall column a) 0) (aref (funcall column b) 0))))
+    (step-physics-world world)
+    (step-physics-world other)
+    (check (= (physics-world-state-hash world) (physics-world-state-hash other)))))
+;; SNTAKE-posted-boxes-restore-as-posted ends here
+
+;; [[file:../physics.org::#SNWBOD][SNWBOD-kinds-keep-their-own-entries]]
+(define-claim "SNWBOD" kinds-keep-their-own-entries
+    "Balls alike but for their kinds, in alternate rows, take two palette entries and come back each with its kind."
+  (let ((world (make-physics-world :terrain (make-floor-terrain)))
+        (other (make-physics-world :terrain (make-floor-terrain))))
+    (dotimes (i 8)
+      (add-physics-body world (+ 2.0 (* 0.6 (mod i 4))) 0.5 (+ 3.0 (* 0.6 (floor i 4))) :kind (if (evenp i) 1 2)))
+    (step-physics-world world)
+    (let ((snapshot (subseq (snapshot-physics-world world) 0)))
+      (check (= 2 (luv-physics::snap-u32 snapshot (snapshot-part-at snapshot 5)))
+             "~D materials" (luv-physics::snap-u32 snapshot (snapshot-part-at snapshot 5)))
+      (restore-physics-world other snapshot)
+      (flet ((kinds (w) (coerce (subseq (luv-physics::body-columns-kind (luv-physics::physics-world-awake w)) 0 8) 'list)))
+        (check (equal '(1 2 1 2 1 2 1 2) (kinds world)) "the source's kinds ~S" (kinds world))
+        (check (equal (kinds world) (kinds other)) "restored kinds ~S" (kinds other)))
+      (dotimes (i 30) (step-physics-world world) (step-physics-world other))
+      (check (= (physics-world-state-hash world) (physics-world-state-hash other))))))
+;; SNWBOD-kinds-keep-their-own-entries ends here
+
 ;; [[file:../physics.org::#SNWPAR][SNWPAR-changed-pair-rows-restore]]
 (define-claim "SNWPAR" changed-pair-rows-restore
     "A pair list built for rows that have since changed restores with its own handles."
@@ -10663,6 +10718,26 @@ into a second world of the scene stepped half as often, run MORE there. Return b
           (restore-physics-world copy (snapshot-physics-world w))
           (check (equal before (rows copy)) "restored, the list holds ~S, not ~S" (rows copy) before))))))
 ;; SNWPAR-changed-pair-rows-restore ends here
+
+;; [[file:../physics.org::#SNWPAR][SNWPAR-restore-keeps-marks-and-statistics]]
+(define-claim "SNWPAR" restore-keeps-marks-and-statistics
+    "A restored basin has the source's clear marks, some clear, and its last step's contacts, colours, overlap and approach."
+  (multiple-value-bind (world script) (make-scene-world :basin :count 300)
+    (dotimes (i 120) (funcall script i) (step-physics-world world))
+    (let ((other (make-scene-world :basin :count 300)))
+      (restore-physics-world other (snapshot-physics-world world))
+      (let* ((rows (luv-physics::pair-list-rows (luv-physics::physics-world-pair-list world)))
+             (a (subseq (luv-physics::pair-list-clear (luv-physics::physics-world-pair-list world)) 0 rows))
+             (b (subseq (luv-physics::pair-list-clear (luv-physics::physics-world-pair-list other)) 0 rows)))
+        (check (plusp (count 1 a)) "no row of ~D is clear" rows)
+        (check (equalp a b) "~D of ~D rows clear, ~D restored" (count 1 a) rows (count 1 b)))
+      (flet ((figures (w)
+               (let ((s (luv-physics::world-statistics w)))
+                 (list (luv-physics::step-statistics-contacts s) (luv-physics::step-statistics-colors s)
+                       (luv-physics::step-statistics-max-penetration s) (luv-physics::step-statistics-max-approach s)))))
+        (check (plusp (first (figures world))))
+        (check (equal (figures world) (figures other)) "statistics ~S, restored ~S" (figures world) (figures other))))))
+;; SNWPAR-restore-keeps-marks-and-statistics ends here
 
 ;; [[file:../physics.org::#SNCHCK][SNCHCK-bad-snapshots-are-named-where-they-fail]]
 (defun snapshot-part-at (buffer id)
@@ -10727,6 +10802,81 @@ asleep, all touching. #SNCHCK"
         (check (eq :restored (refusal target good)))
         (check (= (physics-world-state-hash source) (physics-world-state-hash target)))))))
 ;; SNCHCK-bad-snapshots-are-named-where-they-fail ends here
+
+;; [[file:../physics.org::#SNCHCK][SNCHCK-every-part-is-the-size-its-counts-give]]
+(defun grown-part (buffer id)
+  "A copy of the snapshot BUFFER whose part ID is a 32-bit word of zeros longer, its size and the
+snapshot's counted again and its checksum made good. #SNCHCK"
+  (let* ((size (luv-physics::snap-u64 buffer 16)) (at (snapshot-part-at buffer id))
+         (end (+ at (luv-physics::snap-u32 buffer (- at 4))))
+         (grown (make-array (+ size 4) :element-type '(unsigned-byte 8) :initial-element 0)))
+    (replace grown buffer :end2 end)
+    (replace grown buffer :start1 (+ end 4) :start2 end :end2 size)
+    (setf (luv-physics::snap-u32 grown (- at 4)) (+ 4 (luv-physics::snap-u32 buffer (- at 4)))
+          (luv-physics::snap-u64 grown 16) (+ size 4))
+    (luv-physics::reseal-snapshot grown)))
+
+(define-claim "SNCHCK" every-part-is-the-size-its-counts-give
+    "Each part of the box tower's snapshot grown by a word is refused at its size, the world unchanged."
+  (let ((source (luv-physics::snapshot-box-tower :scalar)) (target (luv-physics::snapshot-box-tower :scalar)))
+    (dotimes (i 30) (step-physics-world source))
+    (dotimes (i 10) (step-physics-world target))
+    (let ((good (subseq (snapshot-physics-world source) 0)) (before (world-fingerprint target)))
+      (dolist (id '(1 2 3 4 5 6 7 8 9 11))
+        (let ((got (refusal target (grown-part good id))))
+          (check (equal (list 'physics-snapshot-other-layout (- (snapshot-part-at good id) 4)) got)
+                 "part ~D grown: ~S" id got)
+          (check (equal before (world-fingerprint target)) "part ~D: the refused restore changed the world" id)))
+      (check (eq :restored (refusal target good))))))
+;; SNCHCK-every-part-is-the-size-its-counts-give ends here
+
+;; [[file:../physics.org::#SNCHBD][SNCHBD-body-numbers-refused-at-their-byte]]
+(define-claim "SNCHBD" body-numbers-refused-at-their-byte
+    "A second body's bad time still (turned far about z), NaN velocity or huge spin is refused at its own byte."
+  (let* ((source (settled-floor-world)) (good (subseq (snapshot-physics-world source) 0))
+         (target (settled-floor-world)) (before (world-fingerprint target))
+         (id (if (>= (luv-physics::snap-u32 good (snapshot-part-at good 3)) 2) 3 4))
+         (part (snapshot-part-at good id)) (n (luv-physics::snap-u32 good part)))
+    (check (>= n 2) "~D bodies in part ~D" n id)
+    (flet ((at (k) (+ part (luv-physics::body-part-column n k) 4))
+           (bad (k change)
+             (let ((b (copy-seq good)))
+               (funcall change b)
+               (let ((got (refusal target (luv-physics::reseal-snapshot b)))
+                     (expected (+ part (luv-physics::body-part-column n k) 4)))
+                 (check (equal (list 'physics-snapshot-other-layout expected) got) "column ~D: expected ~D, got ~S" k expected got))
+               (check (equal before (world-fingerprint target)) "column ~D: the refused restore changed the world" k))))
+      (bad 13 (lambda (b) (setf (luv-physics::snap-f32 b (at 9)) 0.6 (luv-physics::snap-f32 b (at 10)) 0.0
+                                (luv-physics::snap-f32 b (at 11)) 0.0 (luv-physics::snap-f32 b (at 12)) 0.8
+                                (luv-physics::snap-f32 b (at 13)) -1.0)))
+      (bad 3 (lambda (b) (setf (luv-physics::snap-u32 b (at 3)) #x7FC00000)))
+      (bad 7 (lambda (b) (setf (luv-physics::snap-f32 b (at 7)) 2e6))))))
+;; SNCHBD-body-numbers-refused-at-their-byte ends here
+
+;; [[file:../physics.org::#SNCHCT][SNCHCT-pushes-beside-a-free-slot]]
+(define-claim "SNCHCT" pushes-beside-a-free-slot
+    "Pushes with a free slot restore; a free slot's gravity scale of 0.5 or a force on it is refused at its push."
+  (let* ((world (make-physics-world :terrain (make-floor-terrain)))
+         (balls (loop for i below 4 collect (add-physics-body world (+ 2.0 (* 0.6 i)) 0.5 3.5))))
+    (dotimes (i 10) (step-physics-world world))
+    (remove-physics-body world (second balls))
+    (apply-physics-force world (third balls) 3.0 0.0 0.0)
+    (set-physics-body-gravity-scale world (fourth balls) 0.5)
+    (let* ((good (subseq (snapshot-physics-world world) 0))
+           (other (make-physics-world :terrain (make-floor-terrain)))
+           (o (+ (snapshot-part-at good 9) 4 (* 16 (luv-physics::handle-index (second balls))))))
+      (check (eq :restored (refusal other good)))
+      (dotimes (i 20) (step-physics-world world) (step-physics-world other))
+      (check (= (physics-world-state-hash world) (physics-world-state-hash other)))
+      (let ((before (world-fingerprint other)))
+        (dolist (change (list (lambda (b) (setf (luv-physics::snap-f32 b (+ o 12)) 0.5))
+                              (lambda (b) (setf (luv-physics::snap-f32 b o) 1.0))))
+          (let ((b (copy-seq good)))
+            (funcall change b)
+            (let ((got (refusal other (luv-physics::reseal-snapshot b))))
+              (check (equal (list 'physics-snapshot-other-layout o) got) "expected ~D, got ~S" o got))
+            (check (equal before (world-fingerprint other)))))))))
+;; SNCHCT-pushes-beside-a-free-slot ends here
 
 ;; [[file:../physics.org::#SNPUTB][SNPUTB-rollback-loop-ends-at-the-straight-hash]]
 (define-claim "SNPUTB" rollback-loop-ends-at-the-straight-hash
