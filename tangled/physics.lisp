@@ -6298,7 +6298,7 @@ what a solve pass needs to bounce an impact. #R3ST1T"
 (defmethod physics-warm-start ((kernels scalar-kernels) world)
   (let ((cbuf (physics-world-constraints world)))
     (if (solving-joints world)
-        ;; joints are solved colour by colour with the contacts ([[#J0S0LV]])
+        ;; joints are solved colour by colour with the contacts ([[#J0FAML]])
         (warm-start-with-joints kernels world)
         (funcall (kernel-variant-warm-start (world-kernel-variant world kernels))
                  cbuf (physics-world-velocities world) 0 (constraint-columns-length cbuf)))))
@@ -6381,7 +6381,7 @@ of this step's limits, and the step's colouring of its joints. #J0STOR"
   (groups-stale nil)
   (limit-bias 0.0 :type single-float)
   (limit-mass 1.0 :type single-float)
-  ;; the step's colouring of the joints to solve ([[#J0S0LV]]): each joint's colour by row, the
+  ;; the step's colouring of the joints to solve ([[#J0COLR]]): each joint's colour by row, the
   ;; rows in colour order, each colour's run of them, the rows the sort into that order writes,
   ;; and whether the substeps are solving them
   (colors (make-array 0 :element-type 'fixnum) :type fixnum-column)
@@ -6390,7 +6390,7 @@ of this step's limits, and the step's colouring of its joints. #J0STOR"
   (color-starts (make-array (+ +physics-max-colors+ 2) :element-type 'fixnum :initial-element 0)
    :type fixnum-column)
   (solving nil)
-  ;; whether this step's substeps turned the jointed spheres' orientations ([[#J0S0LV]])
+  ;; whether this step's substeps turned the jointed spheres' orientations ([[#J0TURN]])
   (turned nil))
 
 (declaim (inline group-root))
@@ -6714,32 +6714,27 @@ two, and each body's count of joints and its jointed flag are right. #J0STOR"
                                 h set-code n (logtest +flag-jointed+ (aref (body-columns-flags buffer) row)))))))))))
 ;; Joints are rows, named by handles:1 ends here
 
-;; [[file:../physics.org::#J0S0LV][Joints in the substeps:1]]
+;; [[file:../physics.org::#J0STIF][Stiff, and how stiff:1]]
 (defconstant +joint-damping-ratio+ 1.0
-  "The damping ratio of a stiff joint: critical. #J0S0LV")
+  "The damping ratio of a stiff joint: critical. #J0STIF")
 
 (defun joint-stiffness (world h)
   "The frequency and damping ratio of a stiff joint of WORLD over substep H, as two values: a
-third of the substep rate, and +joint-damping-ratio+. #J0S0LV"
+third of the substep rate, and +joint-damping-ratio+. #J0STIF"
   (declare (ignore world))
   (values (/ 1.0 (* 3.0 h)) +joint-damping-ratio+))
 
 (defvar *joint-relax-passes* 2
   "How many relax passes a substep gives its joints: one with the contacts, the others over the
-joints alone (relax-joints). #J0S0LV")
+joints alone (relax-joints). #J0STIF")
+;; Stiff, and how stiff:1 ends here
 
-(defgeneric joint-kernels (kernels)
-  (:documentation "The warm start and the solve of KERNELS' joints, as two functions of the
-arguments of warm-start-joints and solve-joints: the scalar ones, or a wide family's lanes
-([[#J0LANE]]). #J0S0LV"))
-
-(defmethod joint-kernels ((kernels scalar-kernels)) (values #'warm-start-joints #'solve-joints))
-
+;; [[file:../physics.org::#J0STIF][Stiff, and how stiff:2]]
 (defun relax-joints (set v d inv-h kernels)
   "The joints' relax passes of a substep after the one they share with the contacts: the joints
 of SET solved this step, colour by colour and the overflow colour last, without bias, over the
 solver's velocities V and deltas D, *joint-relax-passes* less one times, by the solve of the
-family KERNELS (joint-kernels). #J0S0LV"
+family KERNELS (joint-kernels). #J0STIF"
   (declare (type joint-set set) (type f32-column v d) (type single-float inv-h))
   (let ((js (joint-set-color-starts set))
         (solve (nth-value 1 (joint-kernels kernels))))
@@ -6749,20 +6744,24 @@ family KERNELS (joint-kernels). #J0S0LV"
                (let ((s (aref js c)) (e (aref js (1+ c))))
                  (declare (type index s e))
                  (when (< s e) (funcall solve set v d inv-h nil s e)))))))
+;; Stiff, and how stiff:2 ends here
 
+;; [[file:../physics.org::#J0STIF][Stiff, and how stiff:3]]
 (defun spring-softness (hertz zeta h)
   "The soft coefficients of a spring joint of HERTZ and damping ratio ZETA over substep H: those of
 physics-softness for the damping ratio less the h omega / 2 that solving the spring implicitly
-adds, and no less than zero. #J0S0LV"
+adds, and no less than zero. #J0STIF"
   (declare (type single-float hertz zeta h))
   (physics-softness hertz (max 0.0 (- zeta (* 0.5 h 2.0 (f32 pi) hertz))) h))
+;; Stiff, and how stiff:3 ends here
 
+;; [[file:../physics.org::#J0PREP][The prepare:1]]
 (defun place-joint-levers (rows dummy sets locals awake sleeping)
   "Note, for each joint of ROWS, its two solver rows (DUMMY for a fixed point or a sleeping
 second body) and its levers, its anchors turned by its bodies' orientations (none for a fixed
 point); or -1 as its first row when its first body is not awake. SETS and LOCALS are the body
 handle table's, AWAKE and SLEEPING the body buffers. Return how many joints are to be solved.
-#J0S0LV"
+#J0PREP"
   (declare (type joint-columns rows) (type index dummy) (type fixnum-column sets locals)
            (type body-columns awake sleeping) #.+kernel-policy+)
   (let ((active 0))
@@ -6797,7 +6796,7 @@ handle table's, AWAKE and SLEEPING the body buffers. Return how many joints are 
   "Note, for each joint of ROWS placed by place-joint-levers, its bodies' masses (none for a
 fixed point or a sleeper; DUMMY is the row of both) and the separation of its bodies' centres,
 or of its centre and its fixed point, at the step's start. LOCALS is the body handle table's,
-AWAKE and SLEEPING the body buffers. #J0S0LV"
+AWAKE and SLEEPING the body buffers. #J0PREP"
   (declare (type joint-columns rows) (type index dummy) (type fixnum-column locals)
            (type body-columns awake sleeping) #.+kernel-policy+)
   (with-joint-columns (body-b bx by bz row-a row-b sx sy sz ima imb iia iib) rows
@@ -6818,12 +6817,14 @@ AWAKE and SLEEPING the body buffers. #J0S0LV"
                       (aref sx j) (+ (- (aref x la)) px) (aref sy j) (+ (- (aref y la)) py)
                       (aref sz j) (+ (- (aref z la)) pz)))))))))
   nil)
+;; The prepare:1 ends here
 
+;; [[file:../physics.org::#J0PREP][The prepare:2]]
 (declaim (inline joint-effective-mass))
 (defun joint-effective-mass (rows j cx cy cz)
   "Write the effective mass of the placed joint J of ROWS for its levers as they are: a point
 joint's matrix K of the anchors, inverted (its six entries), or a distance joint's axial mass
-along the anchors' separation CX CY CZ. #J0S0LV"
+along the anchors' separation CX CY CZ. #J0PREP"
   (declare (type joint-columns rows) (type index j) (type single-float cx cy cz) #.+kernel-policy+)
   (with-joint-columns (kind rax ray raz rbx rby rbz ima imb iia iib k11 k12 k13 k22 k23 k33) rows
     (let* ((m (+ (aref ima j) (aref imb j))) (ia (aref iia j)) (ib (aref iib j))
@@ -6856,7 +6857,7 @@ along the anchors' separation CX CY CZ. #J0S0LV"
 (defun joint-soft-coefficients (rows j h stiff-bias stiff-mass stiff-impulse)
   "Write the soft coefficients of the placed joint J of ROWS over substep H: its own hertz's (a
 spring's by spring-softness), or the stiff ones, STIFF-BIAS STIFF-MASS STIFF-IMPULSE; and the
-stiff impulse scale of its limits. #J0S0LV"
+stiff impulse scale of its limits. #J0PREP"
   (declare (type joint-columns rows) (type index j) (type single-float h stiff-bias stiff-mass stiff-impulse)
            #.+kernel-policy+)
   (with-joint-columns (flags hertz damping-ratio bias-rate mass-scale impulse-scale limit-scale) rows
@@ -6868,14 +6869,16 @@ stiff impulse scale of its limits. #J0S0LV"
                 (physics-softness (aref hertz j) (aref damping-ratio j) h))
           (setf (aref bias-rate j) br (aref mass-scale j) ms (aref impulse-scale j) is))
         (setf (aref bias-rate j) stiff-bias (aref mass-scale j) stiff-mass (aref impulse-scale j) stiff-impulse))))
+;; The prepare:2 ends here
 
+;; [[file:../physics.org::#J0PREP][The prepare:3]]
 (defun prepare-joints (world h)
   "Write, for every joint of WORLD whose first body is awake, what the substeps of H read, stage
 by stage, each a loop over the rows, which keeps the columns one loop reads and writes at once
 few: the solver rows and the turned levers (place-joint-levers), the masses and the separation
 (place-joint-masses), the effective mass (joint-effective-mass), the soft coefficients
 (joint-soft-coefficients); then colour the joints (color-joints). Return the joint set when
-some joint is to be solved, else NIL. #J0S0LV"
+some joint is to be solved, else NIL. #J0PREP"
   (let* ((set (physics-world-joints world))
          (rows (and set (joint-set-rows set)))
          (ids (physics-world-ids world))
@@ -6902,14 +6905,16 @@ some joint is to be solved, else NIL. #J0S0LV"
       (when (plusp active) (color-joints world set))
       (setf (joint-set-solving set) (plusp active)))
     (and (plusp active) set)))
+;; The prepare:3 ends here
 
+;; [[file:../physics.org::#J0COLR][Coloured with the contacts:1]]
 (defun color-joints (world set)
   "Colour the joints of SET prepared for this step on the colour masks the contacts' colouring
 left ([[#SSMPYW]]): first each joint of two awake bodies takes the lowest of colours 0-19 free at
 both, then each joint of one awake body takes, at it, the highest free colour among those in use,
 or failing that the lowest free colour; a joint that fits nowhere goes to the overflow colour 24.
 Then write SET's order, its prepared rows colour by colour and in row order within a colour,
-the others after them, and its colour starts, and sort its rows into that order. #J0S0LV"
+the others after them, and its colour starts, and sort its rows into that order. #J0COLR"
   (declare #.+kernel-policy+)
   (let* ((rows (joint-set-rows set)) (n (joint-columns-length rows))
          (masks (physics-world-color-masks world))
@@ -6976,7 +6981,7 @@ the others after them, and its colour starts, and sort its rows into that order.
 (defun sort-joint-rows (set)
   "Put the rows of SET in its colour order, when they are not yet, so that each colour's joints
 are consecutive rows: each joint's handle forwarded to its new row, its colour noted by row, and
-the order the rows' own again. #J0S0LV"
+the order the rows' own again. #J0COLR"
   (declare #.+kernel-policy+)
   (let* ((rows (joint-set-rows set)) (n (joint-columns-length rows))
          (order (joint-set-order set)) (colors (joint-set-colors set)) (starts (joint-set-color-starts set)))
@@ -6996,12 +7001,14 @@ the order the rows' own again. #J0S0LV"
         (loop for r of-type index from (aref starts c) below (aref starts (1+ c))
               do (setf (aref colors r) c))))
     set))
+;; Coloured with the contacts:1 ends here
 
+;; [[file:../physics.org::#J0TURN][Levers that turn in the substeps:1]]
 (defmacro turn-row-orientation (v i hw qw qx qy qz)
   "Turn row I's orientation, in the columns QW QX QY QZ, by its spin in the solver's velocities V
 over the time whose half is HW: q + hw (0, w) q, normalised. Expanded in place by the substeps'
 turn of the jointed spheres and by the finalize's fold ([[#F1NAL5]]), so both turn a row to the
-same bits. #J0S0LV"
+same bits. #J0TURN"
   `(let* ((o (solver-row ,i)) (hw ,hw)
           (ax (aref ,v (+ o 3))) (ay (aref ,v (+ o 4))) (az (aref ,v (+ o 5)))
           (w0 (aref ,qw ,i)) (x0 (aref ,qx ,i)) (y0 (aref ,qy ,i)) (z0 (aref ,qz ,i))
@@ -7016,7 +7023,7 @@ same bits. #J0S0LV"
 (defun turn-jointed-orientations (set awake v h)
   "Turn the orientation of each awake jointed sphere of AWAKE by its spin in V over the substep
 H, q + h/2 (0, w) q normalised, after the positions integrate, and note in SET that this step's
-substeps turned them, so that the finalize phase does not turn them again. #J0S0LV"
+substeps turned them, so that the finalize phase does not turn them again. #J0TURN"
   (declare (type joint-set set) (type body-columns awake) (type f32-column v) (type single-float h)
            #.+kernel-policy+)
   (setf (joint-set-turned set) t)
@@ -7030,7 +7037,7 @@ substeps turned them, so that the finalize phase does not turn them again. #J0S0
 (defun turn-joint-levers (set awake)
   "Turn the levers of each joint of SET solved this step to its awake bodies' orientations in
 AWAKE as the substeps have turned them: the first bodies' levers, then the second bodies', two
-loops that each touch few joint columns ([[#J0S0LV]]'s prepare). #J0S0LV"
+loops that each touch few joint columns ([[#J0PREP]]'s prepare). #J0TURN"
   (declare (type joint-set set) (type body-columns awake) #.+kernel-policy+)
   (let ((rows (joint-set-rows set))
         (n (aref (joint-set-color-starts set) (1+ +physics-max-colors+))))
@@ -7056,13 +7063,22 @@ loops that each touch few joint columns ([[#J0S0LV]]'s prepare). #J0S0LV"
 
 (defun joints-turned-p (world)
   "Whether WORLD's last substeps turned its jointed spheres' orientations, which the finalize
-phase then leaves as they are; the note is taken back as it is read. #J0S0LV"
+phase then leaves as they are; the note is taken back as it is read. #J0TURN"
   (let ((set (physics-world-joints world)))
     (and set (joint-set-turned set) (progn (setf (joint-set-turned set) nil) t))))
+;; Levers that turn in the substeps:1 ends here
+
+;; [[file:../physics.org::#J0FAML][One text for every family:1]]
+(defgeneric joint-kernels (kernels)
+  (:documentation "The warm start and the solve of KERNELS' joints, as two functions of the
+arguments of warm-start-joints and solve-joints: the scalar ones, or a wide family's lanes
+([[#J0LANE]]). #J0FAML"))
+
+(defmethod joint-kernels ((kernels scalar-kernels)) (values #'warm-start-joints #'solve-joints))
 
 (defun solving-joints (world)
   "The joint set whose joints WORLD's substeps are solving, or NIL: what the kernel families'
-constraint passes test once a call. #J0S0LV"
+constraint passes test once a call. #J0FAML"
   (let ((set (physics-world-joints world)))
     (and set (joint-set-solving set) set)))
 
@@ -7071,7 +7087,7 @@ constraint passes test once a call. #J0S0LV"
 bound to the joint set and START END to the colour's run of its rows, when the substeps solve
 joints and the colour has some (SETTLE first), then COLOUR-FORM with START END bound to the
 colour's run of the constraint buffer, when it has one; then SETTLE, then the overflow colour's
-joints and OVERFLOW-FORM. #J0S0LV"
+joints and OVERFLOW-FORM. #J0FAML"
   (let ((starts (gensym "STARTS")) (c (gensym "C")) (set (or (first joints) (gensym "SET"))))
     `(let ((,starts (physics-world-color-starts ,world))
            (,set (solving-joints ,world)))
@@ -7094,7 +7110,7 @@ joints and OVERFLOW-FORM. #J0S0LV"
 
 (defun warm-start-with-joints (kernels world)
   "The scalar family's warm start in a step that solves joints: colour by colour, the colour's
-joints, then its contacts, as the wide families run them. #J0S0LV"
+joints, then its contacts, as the wide families run them. #J0FAML"
   (let ((cbuf (physics-world-constraints world))
         (v (physics-world-velocities world)) (d (physics-world-deltas world))
         (warm (kernel-variant-warm-start (world-kernel-variant world kernels))))
@@ -7104,7 +7120,7 @@ joints, then its contacts, as the wide families run them. #J0S0LV"
 
 (defun solve-with-joints (kernels world inv-h use-bias elapsed)
   "The scalar family's solve or relax pass in a step that solves joints: colour by colour, the
-colour's joints, then its contacts, as the wide families run them. #J0S0LV"
+colour's joints, then its contacts, as the wide families run them. #J0FAML"
   (let ((cbuf (physics-world-constraints world))
         (v (physics-world-velocities world)) (d (physics-world-deltas world))
         (push-max (f32 (physics-world-push-max world)))
@@ -7116,13 +7132,15 @@ colour's joints, then its contacts, as the wide families run them. #J0S0LV"
         (do-constraint-colours (s e world :joints (set (solve-joints set v d inv-h use-bias s e)))
           (contacts s e)
           (contacts s e))))))
+;; One text for every family:1 ends here
 
+;; [[file:../physics.org::#J0PTDS][A point joint and a distance joint:1]]
 (defmacro with-joint-row ((v d j) &body body)
   "Run BODY for the prepared joint J, its columns bound by with-joint-columns, over the solver's velocities V and deltas D, with:
 OA OB the two solver rows, MA MB IA IB the masses, AX .. BZ the levers, CX CY CZ the separation
 now, (relative-velocity) the anchors' relative velocity as three values and (push! PX PY PZ) the
 impulse P applied to the second body and -P to the first. CX CY CZ are read where they are
-used, so a pass that needs no separation, a point joint's relax or warm start, reads no delta. #J0S0LV"
+used, so a pass that needs no separation, a point joint's relax or warm start, reads no delta. #J0PTDS"
   `(let* ((la (aref row-a ,j)) (lb (aref row-b ,j))
           (oa (solver-row la)) (ob (solver-row lb)) (da (delta-row la)) (db (delta-row lb))
           (ma (aref ima ,j)) (mb (aref imb ,j)) (ia (aref iia ,j)) (ib (aref iib ,j))
@@ -7160,7 +7178,7 @@ used, so a pass that needs no separation, a point joint's relax or warm start, r
 
 (defun warm-start-joints (set v d start end)
   "Apply again the carried impulse of each prepared joint of SET at rows START..END, at the start
-of a substep. #J0S0LV"
+of a substep. #J0PTDS"
   (declare (type joint-set set) (type f32-column v d) (type index start end) #.+kernel-policy+)
   (let ((rows (joint-set-rows set)))
     (with-joint-columns (kind row-a row-b rax ray raz rbx rby rbz sx sy sz ima imb iia iib
@@ -7177,13 +7195,15 @@ of a substep. #J0S0LV"
                   (declare (type single-float cx cy cz))
                   (push! (* s cx) (* s cy) (* s cz)))))))))
   nil)
+;; A point joint and a distance joint:1 ends here
 
+;; [[file:../physics.org::#J0PTDS][A point joint and a distance joint:2]]
 (defmacro solve-joint-bound (gap impulse along push)
   "Push on a distance joint's bound whose GAP (the length less the lower bound, or the upper
 bound less the length) the joint closes at the speed ALONG, carrying its impulse in the column
 IMPULSE: an impulse that only pushes, speculative while the bound is not reached, soft in the
 solve once it is; then PUSH, a form that pushes the change Q. Expanded in solve-distance-joint.
-#J0S0LV"
+#J0PTDS"
   `(let* ((c ,gap)
           (bias (cond ((> c 0.0) (* c inv-h)) (use-bias (* limit-bias c)) (t 0.0)))
           (ms (if (and (<= c 0.0) use-bias) limit-mass 1.0))
@@ -7197,7 +7217,7 @@ solve once it is; then PUSH, a form that pushes the change Q. Expanded in solve-
 (defmacro solve-point-joint ()
   "One push of the point joint at row J: its three axes at once, through its prepared inverse
 effective mass K11 .. K33, soft with the bias in the solve, rigid without it in the relax, where
-it reads no separation. Expanded in solve-joints, within with-joint-row. #J0S0LV"
+it reads no separation. Expanded in solve-joints, within with-joint-row. #J0PTDS"
   `(multiple-value-bind (vx vy vz) (relative-velocity)
      (flet ((apply-point (rx ry rz ms is)
               (declare (type single-float rx ry rz ms is))
@@ -7221,7 +7241,7 @@ it reads no separation. Expanded in solve-joints, within with-joint-row. #J0S0LV
 (defmacro solve-distance-joint ()
   "One push of the distance joint at row J along its axis: its length (a spring in the solve
 alone, a stiff length with the bias in the solve and without it in the relax), then its lower and
-upper bounds (solve-joint-bound). Expanded in solve-joints, within with-joint-row. #J0S0LV"
+upper bounds (solve-joint-bound). Expanded in solve-joints, within with-joint-row. #J0PTDS"
   `(let* ((cx cx) (cy cy) (cz cz)
           (len (fsqrt (+ (* cx cx) (* cy cy) (* cz cz))))
           (s (if (> len 1e-9) (/ 1.0 len) 0.0))
@@ -7253,7 +7273,7 @@ upper bounds (solve-joint-bound). Expanded in solve-joints, within with-joint-ro
 (defun solve-joints (set v d inv-h use-bias start end)
   "One pass over the prepared joints of SET at rows START..END: with the soft bias when USE-BIAS
 (the solve), without it (the relax), but for a spring's length, which keeps its own
-coefficients. #J0S0LV"
+coefficients. #J0PTDS"
   (declare (type joint-set set) (type f32-column v d) (type single-float inv-h) (type index start end)
            #.+kernel-policy+)
   (let ((rows (joint-set-rows set))
@@ -7274,10 +7294,12 @@ coefficients. #J0S0LV"
                                 (solve-distance-joint))))))))
         (if use-bias (pass t) (pass nil)))))
   nil)
+;; A point joint and a distance joint:2 ends here
 
+;; [[file:../physics.org::#J0BRAK][Breaking:1]]
 (defun break-joints (world set)
   "Remove every solved joint of SET whose last substep impulse over the substep exceeds its break
-force, each with a :joint-break event: both bodies, its first anchor's point, the force. #J0S0LV"
+force, each with a :joint-break event: both bodies, its first anchor's point, the force. #J0BRAK"
   (let* ((rows (joint-set-rows set))
          (inv-h (/ 1.0 (physics-world-current-h world))))
     (loop for j from (1- (joint-columns-length rows)) downto 0
@@ -7290,7 +7312,7 @@ force, each with a :joint-break event: both bodies, its first anchor's point, th
                                    (aref (joint-columns-body-b rows) j) x y z force
                                    (aref (joint-columns-handle rows) j)))
                      (remove-joint-row world set j))))))))
-;; Joints in the substeps:1 ends here
+;; Breaking:1 ends here
 
 ;; [[file:../physics.org::#J0SL3P][Joint groups sleep and wake together:1]]
 (defun refresh-joint-groups (world set)
@@ -9778,7 +9800,7 @@ listed. #F1NAL5"
 (defun fold-solver-state (awake v dt &optional turned (from 0) (to (body-columns-length awake)))
   "Fold the solver's velocities V into AWAKE's rows FROM below TO (all of them by default), and
 turn each one's orientation by its angular velocity over DT, but, when TURNED, a jointed
-sphere's, which the substeps turned ([[#J0S0LV]]). Two loops that call nothing, each reading and
+sphere's, which the substeps turned ([[#J0TURN]]). Two loops that call nothing, each reading and
 writing at most eight arrays; with fold-positions, three. Each row is its own, so the rows may
 be folded in pieces. #F1NAL5"
   (declare (type body-columns awake) (type f32-column v) (type single-float dt) (type index from to)
@@ -10205,7 +10227,7 @@ bodies to half the push-out speed. #IDVK7G"
          (boxed (if (= (physics-world-box-touch-step world) (physics-world-step-count world))
                     (note-box-rows world)
                     0))
-         ;; the joints to solve, prepared, or NIL ([[#J0S0LV]])
+         ;; the joints to solve, prepared, or NIL ([[#J0PREP]])
          (joints (and (physics-world-joints world) (prepare-joints world h)))
          ;; the boxes' points, found and prepared, or NIL ([[#BXSOLV]])
          (boxes (and (physics-world-box-bodies world) (prepare-box-points world h)))
@@ -10216,7 +10238,7 @@ bodies to half the push-out speed. #IDVK7G"
       (let ((elapsed (* h (float i 1.0))))
         (physics-integrate-velocities kernels world h)
         ;; the joints, when some are prepared, are solved inside the contacts' passes, colour
-        ;; by colour with the contacts ([[#J0S0LV]])
+        ;; by colour with the contacts ([[#J0FAML]])
         (when boxes (warm-start-box-points boxes v))
         (physics-warm-start kernels world)
         (when boxes (setf (box-set-elapsed boxes) elapsed) (solve-box-points boxes v d inv-h t))
@@ -10236,7 +10258,7 @@ bodies to half the push-out speed. #IDVK7G"
             (when boxes (setf (box-set-elapsed boxes) (+ elapsed h)) (solve-box-points boxes v d inv-h nil))
             (physics-solve-contacts kernels world inv-h nil (+ elapsed h))
             (when (plusp boxed) (yield-boxes)))
-          ;; the joints' second relax, over the joints alone ([[#J0S0LV]])
+          ;; the joints' second relax, over the joints alone ([[#J0STIF]])
           (when joints (relax-joints joints v d inv-h kernels)))
         (when held (hold-crowded-speeds world))
         (when squeezed (hold-row-speeds world (physics-world-squeezed world) 1 squeezed))))
@@ -10955,7 +10977,7 @@ typed slots so that publishing a job conses nothing. #W0RKP1"
   (wide nil) (narrow nil) (impact nil) (settle nil)
   (lanes 1 :type (integer 1 64))
   (cbuf nil)
-  ;; the joint set whose joints a colour pass solves with its contacts, or NIL ([[#J0S0LV]])
+  ;; the joint set whose joints a colour pass solves with its contacts, or NIL ([[#J0FAML]])
   (joints nil)
   (v (make-array 0 :element-type 'single-float) :type f32-column)
   (d (make-array 0 :element-type 'single-float) :type f32-column)
