@@ -10878,6 +10878,23 @@ snapshot's counted again and its checksum made good. #SNCHCK"
             (check (equal before (world-fingerprint other)))))))))
 ;; SNCHCT-pushes-beside-a-free-slot ends here
 
+;; [[file:../physics.org::#SNCHCT][SNCHCT-loose-rows-within-the-list]]
+(define-claim "SNCHCT" loose-rows-within-the-list
+    "A count of loose rows past the list's rows is refused at its byte, the condition naming the count."
+  (let* ((good (subseq (snapshot-physics-world (settled-floor-world)) 0)) (target (settled-floor-world))
+         (before (world-fingerprint target)) (at (snapshot-part-at good 7))
+         (rows (luv-physics::snap-i32 good at)) (b (copy-seq good)))
+    (check (plusp rows) "a list of ~D rows" rows)
+    (setf (luv-physics::snap-i32 b (+ at 12)) (1+ rows))
+    (handler-case (progn (restore-physics-world target (luv-physics::reseal-snapshot b)) (check nil "restored"))
+      (physics-snapshot-other-layout (e)
+        (check (= (+ at 12) (luv-physics::physics-snapshot-invalid-offset e)) "refused at ~D, not ~D"
+               (luv-physics::physics-snapshot-invalid-offset e) (+ at 12))
+        (check (eql (1+ rows) (luv-physics::physics-snapshot-invalid-found e)) "found ~S"
+               (luv-physics::physics-snapshot-invalid-found e))))
+    (check (equal before (world-fingerprint target)))))
+;; SNCHCT-loose-rows-within-the-list ends here
+
 ;; [[file:../physics.org::#SNPUTB][SNPUTB-rollback-loop-ends-at-the-straight-hash]]
 (define-claim "SNPUTB" rollback-loop-ends-at-the-straight-hash
     "Restoring 8 steps back and simulating them again, every step for 600 steps, ends at the straight run's hash."
