@@ -10850,7 +10850,15 @@ snapshot's counted again and its checksum made good. #SNCHCK"
                                 (luv-physics::snap-f32 b (at 11)) 0.0 (luv-physics::snap-f32 b (at 12)) 0.8
                                 (luv-physics::snap-f32 b (at 13)) -1.0)))
       (bad 3 (lambda (b) (setf (luv-physics::snap-u32 b (at 3)) #x7FC00000)))
-      (bad 7 (lambda (b) (setf (luv-physics::snap-f32 b (at 7)) 2e6))))))
+      (bad 7 (lambda (b) (setf (luv-physics::snap-f32 b (at 7)) 2e6)))))
+  (multiple-value-bind (basin script) (make-scene-world :basin :count 300)
+    (dotimes (i 120) (funcall script i) (step-physics-world basin))
+    (let* ((b (subseq (snapshot-physics-world basin) 0)) (part (snapshot-part-at b 3))
+           (n (luv-physics::snap-u32 b part)) (o (+ part (luv-physics::body-part-column n 3) 4)))
+      (check (> n 18) "~D awake bodies" n)
+      (setf (luv-physics::snap-u32 b o) #x7FC00000)
+      (let ((got (refusal basin (luv-physics::reseal-snapshot b))))
+        (check (equal (list 'physics-snapshot-other-layout o) got) "the basin: expected ~D, got ~S" o got)))))
 ;; SNCHBD-body-numbers-refused-at-their-byte ends here
 
 ;; [[file:../physics.org::#SNCHCT][SNCHCT-pushes-beside-a-free-slot]]
