@@ -7098,6 +7098,34 @@ that it swings, and a loose ball on the floor under it. Return the world and the
              (- (sb-ext:get-bytes-consed) before)))))
 ;; J0FAML-joint-steps-cons-nothing ends here
 
+;; [[file:../physics.org::#J0FAML][J0FAML-joints-leave-the-overflow-solved]]
+(define-claim "J0FAML" joints-leave-the-overflow-solved
+    "Thirty balls pressed into one, ten of them in the overflow colour, move alike with and without a joint far away."
+  (flet ((cluster (family joint)
+           (let* ((w (make-physics-world :kernels family :sleep nil :gravity '(0 0 0)))
+                  (balls (cons (add-physics-body w 3.5 3.0 3.5 :radius 0.85)
+                               (loop for i below 30
+                                     collect (let* ((y (- 1 (/ (+ i 0.5) 15))) (r (sqrt (- 1 (* y y)))) (a (* i 2.39996)))
+                                               (add-physics-body w (+ 3.5 (* 0.99 r (cos a))) (+ 3.0 (* 0.99 y))
+                                                                 (+ 3.5 (* 0.99 r (sin a))) :radius 0.15))))))
+             (when joint
+               (let ((p (add-physics-body w 23.5 3.0 3.5 :radius 0.2 :vz 1.0))
+                     (q (add-physics-body w 24.5 3.0 3.5 :radius 0.2)))
+                 (add-physics-joint w :distance p q)))
+             (dotimes (i 60) (step-physics-world w))
+             (check (eq t (validate-physics-world w)))
+             (mapcar (lambda (b) (multiple-value-list (physics-body-position w b))) balls))))
+    (dolist (family (available-kernel-families))
+      (let ((plain (cluster family nil)) (joined (cluster family t)))
+        (check (<= (loop for p in plain for q in joined maximize (reduce #'max (mapcar (lambda (a b) (abs (- a b))) p q)))
+                   1e-6)
+               "~(~A~): the cluster moved differently beside a joint" family)
+        (destructuring-bind (big . small) joined
+          (check (loop for p in small
+                       always (> (sqrt (reduce #'+ (mapcar (lambda (a b) (expt (- a b) 2)) p big))) (- 1.0 0.01)))
+                 "~(~A~): a small ball is still more than 1 cm inside the big one" family))))))
+;; J0FAML-joints-leave-the-overflow-solved ends here
+
 ;; [[file:../physics.org::#J0BRAK][J0BRAK-breaks-above-its-force]]
 (define-claim "J0BRAK" breaks-above-its-force
     "A 10 kg ball breaks a 50 N joint in its first step (event, force ~ 98.1 N) and not a 150 N one."
@@ -7123,6 +7151,24 @@ that it swings, and a loose ball on the floor under it. Return the world and the
       (check (physics-joint-alive-p w joint))
       (check (< (abs (- 9 (nth-value 1 (physics-body-position w ball)))) 0.01)))))
 ;; J0BRAK-breaks-above-its-force ends here
+
+;; [[file:../physics.org::#J0BRAK][J0BRAK-break-event-at-the-joint]]
+(define-claim "J0BRAK" break-event-at-the-joint
+    "A breaking joint's event carries its anchor's point, (2 9 5) within 1 cm."
+  (let* ((w (make-physics-world :sleep nil))
+         (ball (add-physics-body w 2 9 5 :mass 10))
+         (points '()))
+    (add-physics-joint w :distance ball nil :anchor-b '(2 10 5) :break-force 50)
+    (step-physics-world w)
+    (map-physics-events (lambda (kind a b x y z speed datum)
+                          (declare (ignore a b speed datum))
+                          (when (eq kind :joint-break) (push (list x y z) points)))
+                        w)
+    (check (= 1 (length points)) "~D break events" (length points))
+    (when points
+      (check (< (reduce #'max (mapcar (lambda (a b) (abs (- a b))) (first points) '(2 9 5))) 0.01)
+             "the event is at ~S" (first points)))))
+;; J0BRAK-break-event-at-the-joint ends here
 
 ;; [[file:../physics.org::#J0SL3P][J0SL3P-groups-sleep-and-wake-together]]
 (define-claim "J0SL3P" groups-sleep-and-wake-together
