@@ -8435,7 +8435,9 @@ box set when some point is to be solved, else NIL. #BXSOLV"
         (prepare-box-manifolds set margin)))
     (setf (box-set-solving set) (plusp (box-point-columns-length (box-set-points set))))
     (and (box-set-solving set) set)))
+;; Box points in the substeps:1 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:2]]
 (defun box-row-inertia (awake set i)
   "The inverse mass of the box at awake row I of AWAKE, a buffer of SET's world, and its world
 inverse inertia R D^-1 R^T as six entries 11 12 13 22 23 33: seven values, zeros for the dummy row
@@ -8497,7 +8499,9 @@ inside with-box-point-columns of ROW and ROW-B. #BXSOLV"
      (declare (type index at-a at-b) (type single-float m mb) (ignorable m mb))
      (macrolet ((ia (i) `(aref table (+ at-a ,i))) (ib (i) `(aref table (+ at-b ,i))))
        ,@body)))
+;; Box points in the substeps:2 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:3]]
 (defun box-point-directions (points k table dummy)
   "Write box point K of POINTS's angular parts along its normal, r x n and I^-1 (r x n) on each
 side, and its effective mass along it, from its levers, normal, and its sides' inverse masses and
@@ -8558,7 +8562,9 @@ box rests a slop deep as a sphere does. #BXSOLV"
             (setf (aref t1x k) ax (aref t1y k) ay (aref t1z k) az (aref t2x k) bx (aref t2y k) by (aref t2z k) bz))
           (box-point-directions points k table (body-columns-length awake))))))
   set)
+;; Box points in the substeps:3 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:4]]
 (declaim (inline box-points-one-manifold-p))
 (defun box-points-one-manifold-p (points j k)
   "Whether box points J and K of POINTS lie in one manifold: found by one box, between the same
@@ -8592,7 +8598,9 @@ manifold by manifold already, the common case, move nothing. #BXSOLV"
                              do (box-point-columns-copy-row points k scratch to) (incf to)))
           (dotimes (i to) (box-point-columns-copy-row scratch i points (+ start i)))))))
   set)
+;; Box points in the substeps:4 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:5]]
 (defun box-manifold-centre (points manifolds mi inv-tau)
   "Write manifold MI's friction centre, its points' first levers and second levers averaged with
 Box3D's weights, 1 for a gap up to the margin (1/INV-TAU), falling to nothing at twice it, so a
@@ -8689,7 +8697,9 @@ and with-box-manifold-columns of (MFIRST FIRST), (MCOUNT COUNT), OX, OY and OZ. 
                    (,b (+ (* dx (aref t2x ,k)) (* dy (aref t2y ,k)) (* dz (aref t2z ,k)))))
               (declare (type single-float dx dy dz ,a ,b))
               ,@body)))
+;; Box points in the substeps:5 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:6]]
 (defun prepare-box-manifolds (set margin)
   "Gather SET's points, laid manifold by manifold (group-box-points), into its manifolds: each run
 of points of one manifold is one, with its friction centre (box-manifold-centre, MARGIN the
@@ -8746,7 +8756,9 @@ about the mean lever to tw. #BXSOLV"
               (do-box-manifold-shares (mi k a b)
                 (setf (aref tangent-impulse-1 k) (- f1 (* tw b)) (aref tangent-impulse-2 k) (+ f2 (* tw a))))))))))
   nil)
+;; Box points in the substeps:6 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:7]]
 (defmacro with-box-point ((v k) &body body)
   "Run BODY for box point K, its columns bound by with-box-point-columns, over the solver's
 velocities V, with O and OB the two sides' solver rows, (push! PX PY PZ) the impulse P applied at
@@ -8848,7 +8860,9 @@ TWIST-IMPULSE. #BXSOLV"
      (declare (type index mo) (type single-float f1 f2 tw) (ignorable f1 f2 tw))
      (macrolet ((mj (i) `(aref mjacobian (+ mo ,i))))
        ,@body)))
+;; Box points in the substeps:7 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:8]]
 (defun warm-start-box-points (set v)
   "Apply every box manifold's carried impulses again, at the start of a substep: each point's
 normal impulse at the point, then the manifold's friction at its centre and its twist. #BXSOLV"
@@ -8898,7 +8912,9 @@ and NZ, over the deltas D and TURNS. #BXSOLV"
           (tbx (aref turns tb)) (tby (aref turns (+ tb 1))) (tbz (aref turns (+ tb 2))))
      (declare (type index p pb tr tb) (type single-float ax ay az dn tax tay taz tbx tby tbz))
      ,@body))
+;; Box points in the substeps:8 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:9]]
 (defmacro box-point-normal-pass ()
   "The normal impulse of box point K in a pass of solve-box-points: with the soft bias when
 USE-BIAS, clamped to push only and to the point's cap, the speed of an impact kept; the new
@@ -8984,7 +9000,9 @@ Expanded inside with-box-point-sides of its first point FIRST, whose variables i
                    ((+ (* d1 (mj 6)) (* d2 (mj 9))) (+ (* d1 (mj 7)) (* d2 (mj 10))) (+ (* d1 (mj 8)) (* d2 (mj 11))))
                    ((+ (* d1 (mj 18)) (* d2 (mj 21))) (+ (* d1 (mj 19)) (* d2 (mj 22)))
                     (+ (* d1 (mj 20)) (* d2 (mj 23))))))))))
+;; Box points in the substeps:9 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:10]]
 (defconstant +box-normal-sweeps+ 4
   "The most sweeps a pass makes over a box manifold's normal impulses. #BXSOLV")
 
@@ -9038,7 +9056,9 @@ cone. #BXSOLV"
               ;; friction in the relax alone, as Box3D's solver gives it
               (unless use-bias (box-manifold-friction-pass))))))))
   nil)
+;; Box points in the substeps:10 ends here
 
+;; [[file:../physics.org::#BXSOLV][Box points in the substeps:11]]
 (defun turn-box-orientations (world)
   "When WORLD's box set solved points this step, set each awake box's orientation to the one it
 had at the step's start turned by the sum of its substeps' turns, in place of the turn by its
@@ -9117,7 +9137,7 @@ which the velocity of the substep to come reaches less half that substep's gravi
               (aref turns (+ tr 1)) (+ (aref turns (+ tr 1)) (* h (aref v (+ o 4))))
               (aref turns (+ tr 2)) (+ (aref turns (+ tr 2)) (* h (aref v (+ o 5))))))))
   nil)
-;; Box points in the substeps:1 ends here
+;; Box points in the substeps:11 ends here
 
 ;; [[file:../physics.org::#BXBRAC][Box points on a braced body:1]]
 (declaim (inline brace-still-row))
