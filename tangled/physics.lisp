@@ -7796,7 +7796,9 @@ zeros. #BXCELL"
                          (aref tangent-impulse-2 k) (aref o2 j))
                    (return))))
     k))
+;; A box against the cells:1 ends here
 
+;; [[file:../physics.org::#BXCELL][A box against the cells:2]]
 (defmacro each-cell-face (form)
   "FORM once for each of a cell's six faces, with FACE (0 to 5: -x +x -y +y -z +z), the distance
 D to it (the variables D0 to D5), the offset OX OY OZ of the neighbour across it and the normal NX
@@ -7840,7 +7842,9 @@ whose variables it reads. #BXCELL"
            (each-cell-face (when (and (< d reach) (solid (+ ix ox) (+ iy oy) (+ iz oz))
                                  (< (+ (* nx rx) (* ny ry) (* nz rz)) 0.0))
                         (add-box-point set row h (box-corner-key slot corner face) nx ny nz rx ry rz d)))))))
+;; A box against the cells:2 ends here
 
+;; [[file:../physics.org::#BXCELL][A box against the cells:3]]
 (defmacro box-lattice-point ()
   "Add the point of the lattice point LX LY LZ, where SOLIDS of its eight cells meet (one to
 three: a convex corner of the cells) whose centres lie, summed, GX GY GZ from it: against the
@@ -7930,7 +7934,9 @@ against its faces. #BXCELL"
               ;; the convex lattice points of the cells against the faces of the box
               (box-lattice-points)))))))
   set)
+;; A box against the cells:3 ends here
 
+;; [[file:../physics.org::#BXCELL][A box against the cells:4]]
 (defconstant +box-axis-tolerance+ 5e-4
   "How much farther apart the second box's face must hold two boxes than the first's best for
 it to be the reference, in metres: a tenth of the slop, as Box2D's polygons do. #BXCELL")
@@ -7984,7 +7990,9 @@ through them; write their places into KEEP in increasing order and return 4. #BX
 (defmacro nth-of (k c1 c2 c3)
   "C1, C2 or C3, as K is 0, 1 or 2. #BXCELL"
   `(case ,k (0 ,c1) (1 ,c2) (t ,c3)))
+;; A box against the cells:4 ends here
 
+;; [[file:../physics.org::#BXCELL][A box against the cells:5]]
 (defmacro box-pair-axes ()
   "Find the separating axis of two boxes: the face axis along which they lie farthest apart (or
 overlap least), B's only when it beats A's by the axis tolerance, as BEST and BEST-SEP, and the
@@ -8076,7 +8084,9 @@ pushing B. Expanded in box-pair-points, whose variables it reads. #BXCELL"
       (when (< gap reach)
         (add-box-point set row-b owner (logior key-base (ash 7 5) edge) nx ny nz
                        (- mx bcx) (- my bcy) (- mz bcz) gap row-a (- mx acx) (- my acy) (- mz acz))))))
+;; A box against the cells:5 ends here
 
+;; [[file:../physics.org::#BXCELL][A box against the cells:6]]
 (defmacro with-box-roles (&body body)
   "Run BODY with the reference box's numbers bound as R... (centre RCX RCY RCZ, axes R11 .. R33,
 half-extents RHX RHY RHZ, row RROW), the incident box's as I..., and the reference face's AXIS:
@@ -8173,7 +8183,9 @@ box-face-points, whose variables it reads. #BXCELL"
            (add-box-point set irow owner
                           (logior key-base (ash (+ (if on-b 3 0) axis) 5) (aref ids i))
                           nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz))))))
+;; A box against the cells:6 ends here
 
+;; [[file:../physics.org::#BXCELL][A box against the cells:7]]
 (defmacro box-face-points ()
   "Add the points of the incident box's face most against the reference face (box B's when the
 separating axis BEST is one of B's, else A's), pushed off it along the face's normal: its corners
@@ -8253,7 +8265,9 @@ give one. KEY-BASE with the axis and the vertex's or the edges' feature is a poi
            ;; the reference box R owns the face; the incident box I is pushed off it along N
            (box-face-points))))))
   set)
+;; A box against the cells:7 ends here
 
+;; [[file:../physics.org::#BXCELL][A box against the cells:8]]
 (defun grid-awake-boxes (world set n)
   "Bucket the centres of the awake boxes among the first N awake rows of WORLD into SET's grid,
 whose items are their rows, in cells of the largest diameter and the margin, and keep their
@@ -8336,7 +8350,7 @@ which holds still as a cell does (box-pair-points). #BXCELL"
                                 +flag-box-shape+)))
               (meet sleeping (aref (handle-table-local ids) (handle-index h)) n)))))))
   set)
-;; A box against the cells:1 ends here
+;; A box against the cells:8 ends here
 
 ;; [[file:../physics.org::#BXSOLV][Box points in the substeps:1]]
 (defconstant +box-jacobian-width+ 12
