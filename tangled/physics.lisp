@@ -14670,7 +14670,9 @@ normal NX NY NZ pointing out of what was met, and the DISTANCE travelled along t
 
 (defparameter +hit-kinds+ #(nil :body :cell :box)
   "Hit kind keywords by code. #C4STRY")
+;; Casts: a search, its hits and the shapes it meets:1 ends here
 
+;; [[file:../physics.org::#C4STRY][Casts: a search, its hits and the shapes it meets:2]]
 (defstruct (query-search (:constructor make-query-search ()))
   "The state of one cast: origin O, unit direction U, the moving sphere's RADIUS (0 for a ray), the
 nearest hit so far (BEST, KIND, HANDLE, BOX, CX CY CZ, N) and the candidate being weighed (CT, CN),
@@ -14748,7 +14750,9 @@ cast that starts overlapping the sphere meets it at 0 when it heads deeper, else
                      (let ((inv (/ 1d0 rr)))
                        (candidate s tt (* inv (+ mx (* tt ux))) (* inv (+ my (* tt uy)))
                                   (* inv (+ mz (* tt uz))))))))))))))
+;; Casts: a search, its hits and the shapes it meets:2 ends here
 
+;; [[file:../physics.org::#C4STRY][Casts: a search, its hits and the shapes it meets:3]]
 (declaim (inline sweep-rounded-box))
 
 (defmacro push-out-face (bit d fx fy fz)
@@ -14809,7 +14813,9 @@ faces BX, BY and BZ, entered from outside; noted in BT, BNX BNY BNZ and FOUND. #
                      (let ((inv (/ 1d0 r)))
                        (setf bt tt bnx (* hx inv) bny (* hy inv) bnz (* hz inv)
                              found t))))))))))))
+;; Casts: a search, its hits and the shapes it meets:3 ends here
 
+;; [[file:../physics.org::#C4STRY][Casts: a search, its hits and the shapes it meets:4]]
 (defmacro rounded-edge-hits ()
   "The twelve edges of the box, each a rounded-edge-hit. #C4STRY"
   `(progn
@@ -14896,7 +14902,9 @@ owner is the excluded one. #C4STRY"
                                    63)
             (offer s +hit-box+ b))))))
   s)
+;; Casts: a search, its hits and the shapes it meets:4 ends here
 
+;; [[file:../physics.org::#C4STRY][Casts: a search, its hits and the shapes it meets:5]]
 (declaim (inline segment-box-range))
 
 (defun segment-box-range (s x0 y0 z0 x1 y1 z1 t-max)
@@ -15000,7 +15008,9 @@ are those within RHO of that piece (path-piece-cells), in do-grid-entries' order
                                     (do-grid-entries (,e ,g) (,i0 ,j0 ,k ,i1 ,j1 ,k) (,visit ,e)))))))
                           (when (or (<= (query-search-best ,q) ,t1) (>= ,t1 ,hi)) (return))
                           (setf ,t0 ,t1))))))))))
+;; Casts: a search, its hits and the shapes it meets:5 ends here
 
+;; [[file:../physics.org::#C4STRY][Casts: a search, its hits and the shapes it meets:6]]
 (defun sweep-awake (s view world)
   "Sweep cast S against the awake bodies of VIEW, through its own grid, each entry tested from the
 grid's columns of centre, radius and handle; the excluded body is passed over. #C4STRY"
@@ -15078,7 +15088,9 @@ one by one or through their grid. The excluded body is passed over. #C4STRY"
   "Sweep cast S against the bodies of VIEW, the awake ones and then the sleepers. #C4STRY"
   (sweep-awake s view world)
   (sweep-sleepers s view world))
+;; Casts: a search, its hits and the shapes it meets:6 ends here
 
+;; [[file:../physics.org::#C4STRY][Casts: a search, its hits and the shapes it meets:7]]
 (declaim (inline cast-argument))
 
 (defun cast-argument (world name value)
@@ -15169,7 +15181,7 @@ return NIL. #C4STRY"
                   (physics-hit-nx hit) (coerce nx 'single-float) (physics-hit-ny hit) (coerce ny 'single-float)
                   (physics-hit-nz hit) (coerce nz 'single-float) (physics-hit-distance hit) (coerce tt 'single-float))
             hit))))))
-;; Casts: a search, its hits and the shapes it meets:1 ends here
+;; Casts: a search, its hits and the shapes it meets:7 ends here
 
 ;; [[file:../physics.org::#C4STBX][A cast meets a box body on its faces:1]]
 (defun box-entry-p (boxes handle)
