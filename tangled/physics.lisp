@@ -4721,7 +4721,9 @@ first SIDE-BLOCK/8 of +constraint-side-columns+. #SSMPYW"
   (contact (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (body-a (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (body-b (make-array 0 :element-type 'fixnum) :type fixnum-column))
+;; Colours are the lanes:1 ends here
 
+;; [[file:../physics.org::#SSMPYW][Colours are the lanes:2]]
 (defun constraint-columns-ensure-capacity (buffer rows)
   "Grow BUFFER to hold ROWS constraints, in whole blocks; return it. #SSMPYW"
   (when (> rows (constraint-columns-capacity buffer))
@@ -4813,7 +4815,9 @@ claims and the tools, which name a column rather than know its block. #SSMPYW"
         (physics-world-contact-crosses world) (fixnum-room (physics-world-contact-crosses world) contacts :keep 0))
   (constraint-columns-ensure-capacity (physics-world-constraints world) contacts)
   world)
+;; Colours are the lanes:2 ends here
 
+;; [[file:../physics.org::#SSMPYW][Colours are the lanes:3]]
 (declaim (inline lowest-bit highest-bit))
 (defun lowest-bit (x)
   "The index of the lowest set bit of X > 0. #SSMPYW"
@@ -4884,7 +4888,9 @@ PIECES pieces, and the one after its last. #SSMPYW"
   `(let ((,p0 (floor (* ,pieces ,worker) ,count)) (,p1 (floor (* ,pieces (1+ ,worker)) ,count)))
      (declare (type index ,p0 ,p1))
      ,@body))
+;; Colours are the lanes:3 ends here
 
+;; [[file:../physics.org::#SSMPYW][Colours are the lanes:4]]
 (defun color-contacts (world &optional (two-body t))
   "Greedy colouring in two passes, each in pieces of the awake rows. First every two-body
 contact takes the lowest of colours 0-19 free at both its bodies: the contacts within a piece by
@@ -4931,7 +4937,9 @@ overflow starting on a multiple of eight; returns the number of colours used. #S
           count (plusp count) into used
           finally (setf (aref starts (1+ +physics-max-colors+)) at)
                   (return used))))
+;; Colours are the lanes:4 ends here
 
+;; [[file:../physics.org::#SSMPYW][Colours are the lanes:5]]
 (defun color-one-piece (world m two-body counts)
   "The colouring's two passes over WORLD's M contacts as one piece, on one thread: pass one
 over the two-body contacts (when TWO-BODY) in contact order, then pass two; count the colours
@@ -5001,7 +5009,9 @@ LOOKED shares of the look-up listed in CROSSES up to their ENDS, then pass two b
                      (setf (aref tops +colour-pieces+) color))))))
     (color-one-sided-contacts world m scale last
                               (1- (ash 1 (1+ (loop for top across tops maximize top)))) counts)))
+;; Colours are the lanes:5 ends here
 
+;; [[file:../physics.org::#SSMPYW][Colours are the lanes:6]]
 (defun look-up-contact-rows (world m n scale last two-body crosses ends)
   "The colouring's first job, in pieces: every one of WORLD's M contacts' awake rows into the
 contact rows and its colour unset (-1), the N awake rows' masks cleared; when TWO-BODY, each
@@ -5086,7 +5096,7 @@ colours of the contacts whose last awake row is its own. #SSMPYW"
   (check-world world 'physics-world-overflow-count)
   (let ((starts (physics-world-color-starts world)))
     (- (aref starts (1+ +physics-max-colors+)) (aref starts +physics-max-colors+))))
-;; Colours are the lanes:1 ends here
+;; Colours are the lanes:6 ends here
 
 ;; [[file:../physics.org::#KTXT7V][One kernel text for every feature set:1]]
 (eval-when (:compile-toplevel :load-toplevel :execute)
