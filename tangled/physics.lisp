@@ -6402,7 +6402,9 @@ of this step's limits, and the step's colouring of its joints. #J0STOR"
   (solving nil)
   ;; whether this step's substeps turned the jointed spheres' orientations ([[#J0TURN]])
   (turned nil))
+;; Joints are rows, named by handles:1 ends here
 
+;; [[file:../physics.org::#J0STOR][Joints are rows, named by handles:2]]
 (declaim (inline group-root))
 (defun group-root (parent slot)
   "The root of SLOT's joint group in PARENT, halving the path to it on the way: the groups of [[#J0SL3P]]. #J0STOR"
@@ -6455,7 +6457,9 @@ group of its own. #J0STOR"
     (when status (error 'stale-physics-handle :world world :handle joint :reason status))
     (aref (handle-table-local (joint-set-ids (physics-world-joints world)))
           (handle-index (ldb (byte +handle-joint-bit+ 0) joint)))))
+;; Joints are rows, named by handles:2 ends here
 
+;; [[file:../physics.org::#J0STOR][Joints are rows, named by handles:3]]
 (declaim (inline rotate-by))
 (defun rotate-by (qw qx qy qz x y z)
   "X Y Z turned by the unit quaternion QW QX QY QZ, as three values: with t = 2 u x v for u the
@@ -6498,7 +6502,9 @@ quaternion's vector part, v + w t + u x t. #J0STOR"
   (multiple-value-bind (set row) (resolve-handle world handle)
     (let ((flags (body-columns-flags (set-buffer world set))))
       (setf (aref flags row) (if on (logior (aref flags row) flag) (logandc2 (aref flags row) flag))))))
+;; Joints are rows, named by handles:3 ends here
 
+;; [[file:../physics.org::#J0STOR][Joints are rows, named by handles:4]]
 (defun add-physics-joint (world kind body-a body-b &key (anchor-a '(0 0 0)) anchor-b length min-length
                                                        max-length rope (hertz 0) (damping-ratio 0) break-force)
   "Join BODY-A to BODY-B (a handle, or NIL for a fixed point of the world) by a joint of KIND,
@@ -6584,7 +6590,9 @@ nothing. #J0STOR"
               (wake-handle world body-a)
               (when body-b (wake-handle world body-b))
               handle)))))))
+;; Joints are rows, named by handles:4 ends here
 
+;; [[file:../physics.org::#J0STOR][Joints are rows, named by handles:5]]
 (defun note-joint-bodies (world set body-a body-b change)
   "Count a joint more (CHANGE 1) or less (-1) at BODY-A and at BODY-B (a handle or NIL), flag a
 body +flag-jointed+ while its count is above zero, and join their groups when a joint is added
@@ -6637,7 +6645,9 @@ carrying the joint's handle. #J0STOR"
                    (push-event world +event-joint-removed+ a b 0.0 0.0 0.0 0.0
                                (aref (joint-columns-handle rows) row))
                    (remove-joint-row world set row)))))))
+;; Joints are rows, named by handles:5 ends here
 
+;; [[file:../physics.org::#J0STOR][Joints are rows, named by handles:6]]
 (defun physics-joint-alive-p (world joint)
   "True when JOINT names a joint of WORLD that has not been removed or broken. #J0STOR"
   (check-world world 'physics-joint-alive-p)
@@ -6722,7 +6732,7 @@ two, and each body's count of joints and its jointed flag are right. #J0STOR"
                      (unless (eq (plusp n) (logtest +flag-jointed+ (aref (body-columns-flags buffer) row)))
                        (funcall fail "body ~D in set ~D has ~D joints and its jointed flag ~:[clear~;set~]"
                                 h set-code n (logtest +flag-jointed+ (aref (body-columns-flags buffer) row)))))))))))
-;; Joints are rows, named by handles:1 ends here
+;; Joints are rows, named by handles:6 ends here
 
 ;; [[file:../physics.org::#J0STIF][Stiff, and how stiff:1]]
 (defconstant +joint-damping-ratio+ 1.0
