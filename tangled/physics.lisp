@@ -1213,7 +1213,9 @@ item's bucket there, and a walk lists the entries it keeps. #D9W4CH"
          (p (* (logand h #x1FFFFFFF) 2654435761)))
     (declare (type fixnum h) (type (unsigned-byte 62) p))
     (logand (ash p -11) mask)))
+;; The block world is the static tree; bodies need a hash grid:1 ends here
 
+;; [[file:../physics.org::#D9W4CH][The block world is the static tree; bodies need a hash grid:2]]
 (declaim (type (integer 0 1024) *physics-dense-grid-cells*))
 (defparameter *physics-dense-grid-cells* 64
   "The most cells per item the box of a dense grid may have; a larger box is hashed. #D9W4CH")
@@ -1269,7 +1271,9 @@ return GRID. #D9W4CH"
             (hash-grid-near grid) (kept (hash-grid-near grid) (+ n 4))
             (hash-grid-starts grid) (kept (hash-grid-starts grid) (max 2 (1+ buckets))))))
   grid)
+;; The block world is the static tree; bodies need a hash grid:2 ends here
 
+;; [[file:../physics.org::#D9W4CH][The block world is the static tree; bodies need a hash grid:3]]
 (defun build-hash-grid (grid cell-size n xs ys zs ids &key (dense-allowed t))
   "Bucket N items with centres XS YS ZS and identities IDS (row or handle) into GRID: densely
 when DENSE-ALLOWED and the box of their cells, one cell of padding around, has at most
@@ -1351,7 +1355,9 @@ so a walk over neighbouring cells reads positions from one run of memory. #D9W4C
           (replace starts starts :start1 0 :start2 1 :end2 (1+ buckets))
           (setf (aref starts buckets) n)))))
     grid))
+;; The block world is the static tree; bodies need a hash grid:3 ends here
 
+;; [[file:../physics.org::#D9W4CH][The block world is the static tree; bodies need a hash grid:4]]
 (defmacro do-dense-grid-runs ((entry grid) (i0 j0 k0 i1 j1 k1) &body body)
   "Run BODY with ENTRY bound to each place of the dense GRID's order whose cell lies from I0 J0 K0
 to I1 J1 K1 (fixnums), cut to the grid's own box: layer by layer along z, row by row along y,
@@ -1428,7 +1434,9 @@ of point X Y Z, cell by cell in a fixed order (do-grid-cells). #D9W4CH"
        (declare (type cell ,cx ,cy ,cz) (type (integer 0 ,(ash 1 22)) ,s))
        (do-grid-cells ((,item) ,g) ((- ,cx ,s) (- ,cy ,s) (- ,cz ,s) (+ ,cx ,s) (+ ,cy ,s) (+ ,cz ,s))
          ,@body))))
+;; The block world is the static tree; bodies need a hash grid:4 ends here
 
+;; [[file:../physics.org::#D9W4CH][The block world is the static tree; bodies need a hash grid:5]]
 (defun grid-half-runs (grid entry runs)
   "Fill RUNS with the half neighbourhood of the cell of ENTRY, a place in GRID's order, as
 triples (start end key) of places, and return how many triples. The first run starts at
@@ -1537,7 +1545,7 @@ REACH2, so the test costs no branch; a dense grid's runs are tested four places 
                          (setf (aref near found) f)
                          (incf found (within f))))))))
     found))
-;; The block world is the static tree; bodies need a hash grid:1 ends here
+;; The block world is the static tree; bodies need a hash grid:5 ends here
 
 ;; [[file:../physics.org::#W0RLD7][The world holds every buffer and its own parameters:1]]
 (eval-when (:compile-toplevel :load-toplevel :execute)
