@@ -3478,7 +3478,9 @@ across pairs, and opposite when the two are named the other way round. #P41RS7"
     (declare (type (unsigned-byte 24) lo hi) (type (integer 0 25) k))
     ;; direction k and direction 25-k are opposite
     (* 3 (if (< (handle-index ha) (handle-index hb)) k (- 25 k)))))
+;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
 
+;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:2]]
 (defstruct (pair-list (:constructor make-pair-list ()))
   "The awake pairs kept between steps: every pair of awake rows whose centres lay within the
 widest reach plus the skin when the list was built, packed as row A times 2^24 plus row B, in
@@ -3533,7 +3535,9 @@ allocates nothing. #P41RS7"
               (pair-list-overlaps plist) (grow (pair-list-overlaps plist) rows)))
       (hash-grid-reserve (pair-list-loose-grid plist) rows)))
   plist)
+;; Pairs: each awake pair once, and leaning on sleepers:2 ends here
 
+;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:3]]
 (defun pair-list-strays (plist awake n cell reach)
   "Mark as loose each of the N awake rows that holds another body than when PLIST was built
 (another handle, or a row added since) or whose centre lies farther than REACH from its
@@ -3612,7 +3616,9 @@ the step that built the list: then the grid's cells still serve the pair phase. 
     (and (pair-list-holds-p loose n)
          (= (physics-world-awake-grid-step world) (pair-list-built-step plist))
          (zerop (box-columns-length (physics-world-boxes world))))))
+;; Pairs: each awake pair once, and leaning on sleepers:3 ends here
 
+;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:4]]
 (defconstant +overlaps-per-body+ 16
   "Most overlapping pairs with bodies no smaller than itself an awake body takes in one step;
 past it the body is crowded and takes no more pairs with such bodies. #P41RS7")
@@ -3706,7 +3712,9 @@ CONTACTS' TABLE maps KEY to, or -1. Read CONTACTS and TABLE only. #P41RS7"
             (aref g (+ q 4)) px (aref g (+ q 5)) py (aref g (+ q 6)) pz))
     (setf (pair-sink-count sink) (1+ k))
     sink))
+;; Pairs: each awake pair once, and leaning on sleepers:4 ends here
 
+;; [[file:../physics.org::#P41RS7][Pairs: each awake pair once, and leaning on sleepers:5]]
 (declaim (inline pair-contact))
 (defun pair-contact (contacts table overlaps margin slop dt gstep threshold impact
                      xi yi zi ri hi vxi vyi vzi xj yj zj rj hj vxj vyj vzj ci cj &optional sink)
@@ -3817,7 +3825,7 @@ own, without the impact part, so that the walk keeps its values in registers. #P
   (declare (type index start))
   (let ((plist (physics-world-pair-list world)))
     (walk-listed-pairs world start (pair-list-count plist) crowded nil (pair-list-overlaps plist))))
-;; Pairs: each awake pair once, and leaning on sleepers:1 ends here
+;; Pairs: each awake pair once, and leaning on sleepers:5 ends here
 
 ;; [[file:../physics.org::#P41HLD][The pairs of a list that holds:1]]
 (defmacro pair-listed-pairs ()
