@@ -11329,7 +11329,9 @@ or relax them. #SPL1T5"
           (warm-start-joints set (worker-pool-v pool) (worker-pool-d pool) start end)
           (solve-joints set (worker-pool-v pool) (worker-pool-d pool) (worker-pool-inv-h pool)
                         (worker-pool-use-bias pool) start end)))))
+;; The step's loops cut into fixed pieces:1 ends here
 
+;; [[file:../physics.org::#SPL1T5][The step's loops cut into fixed pieces:2]]
 (defconstant +split-probe+ 64
   "Every so many calls of a pass, a tuned pool runs it the way it does not prefer. #SPL1T5")
 
@@ -11379,7 +11381,9 @@ nanoseconds to its job's spent figure. #SPL1T5"
 of the run START..END. #SPL1T5"
   (declare (type index start end) (type fixnum worker count))
   (share-bounds start end worker count))
+;; The step's loops cut into fixed pieces:2 ends here
 
+;; [[file:../physics.org::#SPL1T5][The step's loops cut into fixed pieces:3]]
 (defconstant +job-reorder+ 12
   "The job: the prune phase's reordering of the contact rows, a share of the rows each. #SPL1T5")
 (defconstant +job-sort-rows+ 13
@@ -11423,7 +11427,9 @@ each. #SPL1T5")
              (when (< from to) (funcall move from to)))))
     (declare (dynamic-extent #'piece))
     (run-pieces world rows kind #'piece)))
+;; The step's loops cut into fixed pieces:3 ends here
 
+;; [[file:../physics.org::#SPL1T5][The step's loops cut into fixed pieces:4]]
 (defun push-piece-event (world worker kind handle-a handle-b x y z speed &optional datum)
   "Record an event found by WORKER's piece of a phase: worker 0's in WORLD's event buffer
 (push-event), another worker's, when WORLD records its kind, in that worker's buffer of WORLD's
@@ -11474,7 +11480,9 @@ runs. #SPL1T5"
              (merge-piece-events pool world)
              (worker-pool-count pool))
       (progn (funcall piece 0 1) 1))))
+;; The step's loops cut into fixed pieces:4 ends here
 
+;; [[file:../physics.org::#SPL1T5][The step's loops cut into fixed pieces:5]]
 (defun splitting-pool (world rows)
   "WORLD's pool when it has one and ROWS, more than none, reach its split-rows, else NIL. #SPL1T5"
   (let ((pool (and (typep world 'physics-world) (physics-world-pool world))))
@@ -11545,7 +11553,9 @@ the integration JOB on the workers. #SPL1T5"
             (worker-pool-handles pool) (body-columns-handle awake)
             (worker-pool-masses pool) (body-columns-inverse-mass awake)))
     (run-on-workers pool job 1)))
+;; The step's loops cut into fixed pieces:5 ends here
 
+;; [[file:../physics.org::#SPL1T5][The step's loops cut into fixed pieces:6]]
 (defmethod physics-integrate-velocities :around ((kernels scalar-kernels) world h)
   (tuned-split (pool world (awake-rows world) +job-velocities+)
     (progn (check-solver-world 'physics-integrate-velocities world)
@@ -11585,7 +11595,7 @@ the integration JOB on the workers. #SPL1T5"
   (tuned-split (pool world (constraint-rows world) +job-frames+)
     (run-colour-pass pool kernels world +job-frames+)
     (call-next-method)))
-;; The step's loops cut into fixed pieces:1 ends here
+;; The step's loops cut into fixed pieces:6 ends here
 
 ;; [[file:../physics.org::#P41P1C][The pair phase in pieces:1]]
 (defconstant +job-pairs+ 8 "The job: the pair phase's listed pairs, a share of the list each. #P41P1C")
