@@ -7239,7 +7239,7 @@ that it swings, and a loose ball on the floor under it. Return the world and the
     (let ((text (with-output-to-string (s) (describe (physics-joint w rope) s))))
       (check (search "holds              no length of its own, at most 2.0000 m" text) "~A" text))
     (check (string= (format nil "#<PHYSICS-JOINT ~D removed>" (luv-physics::handle-index gone))
-                    (prin1-to-string (make-instance 'luv-physics::physics-joint :world w :handle gone))))
+                    (prin1-to-string (make-instance 'physics-joint :world w :handle gone))))
     (check (typep (handler-case (physics-joint w gone) (error (e) e)) 'stale-physics-handle))
     (let* ((described (with-output-to-string (s) (describe w s)))
            (lines (uiop:split-string (string-right-trim '(#\Newline) described) :separator '(#\Newline))))
@@ -7247,7 +7247,7 @@ that it swings, and a loose ball on the floor under it. Return the world and the
       (check (find-if (lambda (l) (search "joints     2 joints, 1 solved in the last step" l)) lines) "~A" described))
     (let* ((parts (luv-physics::world-inspected-parts w))
            (joints (cdr (assoc "joint rows" parts :test #'string=))))
-      (check (equal (list rod rope) (mapcar #'luv-physics::physics-joint-handle joints)) "joints ~S" joints)
+      (check (equal (list rod rope) (mapcar #'physics-joint-handle joints)) "joints ~S" joints)
       (let ((text (with-output-to-string (*standard-output*)
                     (let ((*standard-input* (make-string-input-stream (format nil "q~%"))))
                       (inspect (first joints))))))
@@ -15450,7 +15450,7 @@ within reach of something. #S9WEEP"
 (define-claim "L4NESW" each-family-its-lanes
     "The scalar family runs pieces of 1 lane, SSE of 4, AVX2 of 8 settled by settle-ymm."
   (flet ((lanes (class) (multiple-value-list (luv-physics::kernel-lanes (make-instance class)))))
-    (check (equal '(1 nil) (lanes 'luv-physics::scalar-kernels)))
+    (check (equal '(1 nil) (lanes 'scalar-kernels)))
     (check (equal '(4 nil) (lanes 'sse-kernels)))
     (check (equal (list 8 #'luv-physics::settle-ymm) (lanes 'avx2-kernels)) "~S" (lanes 'avx2-kernels))))
 ;; L4NESW-each-family-its-lanes ends here
