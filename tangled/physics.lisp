@@ -12042,8 +12042,9 @@ the fold keeps it. #SNSUMS"
 (MATERIALS), the palette's words (PALETTE, nine a material) and its open-addressing table
 (TABLE), marks by handle slot (MARKS, stamped with STAMP), a contact table and contact rows
 filled while a snapshot is checked and traded for the world's when it is restored (CONTACTS,
-CONTACT-ROWS), the chunks found last (CHUNK-KEYS, CHUNKS), the contact streams' words
-(STREAMS), and each part's size and offset. #SNSCRT"
+CONTACT-ROWS), the pair list's pairs decoded while a snapshot is checked and traded for the
+world's when it is restored (PAIRS), the chunks found last (CHUNK-KEYS, CHUNKS), the contact
+streams' words (STREAMS), and each part's size and offset. #SNSCRT"
   (materials (make-array 64 :element-type 'fixnum) :type fixnum-column)
   (palette (make-array 576 :element-type 'fixnum) :type fixnum-column)
   (count 0 :type index)
@@ -12052,6 +12053,7 @@ CONTACT-ROWS), the chunks found last (CHUNK-KEYS, CHUNKS), the contact streams' 
   (stamp 0 :type fixnum)
   (contacts (make-contact-table) :type contact-table)
   (contact-rows nil :type (or null contact-columns))
+  (pairs (make-array 0 :element-type 'fixnum) :type fixnum-column)
   (chunk-keys (make-array 16 :element-type 'fixnum :initial-element -1) :type fixnum-column)
   (chunks (make-array 16 :initial-element nil) :type simple-vector)
   (streams (make-array 0 :element-type '(unsigned-byte 32)) :type (simple-array (unsigned-byte 32) (*)))
@@ -13208,7 +13210,8 @@ for the restore to trade for the world's. #SNCHCT"
 (defun check-snapshot-pair-list (buffer scratch)
   "Check the pair list part of the snapshot in BUFFER: its form and the size its counts give,
 its numbers, finite anchors within the coordinate limit, no more rows than awake bodies when
-their handles are not written, and pairs of listed rows, written whole or as differences. #SNCHCT"
+their handles are not written, and pairs of listed rows, written whole or as differences, each
+pair left in SCRATCH's pairs as the list holds it. #SNCHCT"
   (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch))
          (at (aref offsets 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
@@ -13244,29 +13247,34 @@ their handles are not written, and pairs of listed rows, written whole or as dif
                               (+ handles (* 8 i)) "a handle" (snap-i64 buffer (+ handles (* 8 i)))))
             (snapshot-check (<= n (snap-u32 buffer (aref offsets 3))) physics-snapshot-other-layout at
                             "no more listed rows than awake bodies, whose handles the rows had" rows))
-        (if (logbitp 1 form)
-            ;; the rows the differences give, each a listed row
-            (let* ((a 0) (whole (padded (+ list (* 3 pairs)))) (wholes (snap-u32 buffer whole)) (taken 0))
-              (declare (type fixnum a) (type index whole wholes taken))
+        (let ((out (setf (snapshot-scratch-pairs scratch)
+                         (fixnum-room (snapshot-scratch-pairs scratch) pairs :keep 0 :least 1024))))
+          (declare (type fixnum-column out))
+          (if (logbitp 1 form)
+              ;; the rows the differences give, each a listed row, each pair kept as the list holds it
+              (let* ((a 0) (whole (padded (+ list (* 3 pairs)))) (wholes (snap-u32 buffer whole)) (taken 0))
+                (declare (type fixnum a) (type index whole wholes taken))
+                (dotimes (k pairs)
+                  (let* ((da (snap-u8 buffer (+ list k))) (db (snap-u16 buffer (+ list pairs (* 2 k))))
+                         (b 0))
+                    (declare (type fixnum b))
+                    (if (= da 128)
+                        (progn (snapshot-check (< taken wholes) physics-snapshot-other-layout (+ list k)
+                                               "a row listed whole for each pair that needs one" taken)
+                               (setf a (snap-u32 buffer (+ whole 4 (* 4 taken))))
+                               (incf taken))
+                        (incf a (if (> da 128) (- da 256) da)))
+                    (setf b (+ a (if (>= db 32768) (- db 65536) db)))
+                    (snapshot-check (and (<= 0 a) (< a n) (<= 0 b) (< b n)) physics-snapshot-other-layout (+ list k)
+                                    "a pair of listed rows" (list a b))
+                    (setf (aref out k) (logior (ash a 24) b))))
+                (snapshot-check (= taken wholes) physics-snapshot-other-layout whole
+                                "as many rows listed whole as pairs that need one" wholes))
               (dotimes (k pairs)
-                (let* ((da (snap-u8 buffer (+ list k))) (db (snap-u16 buffer (+ list pairs (* 2 k))))
-                       (b 0))
-                  (declare (type fixnum b))
-                  (if (= da 128)
-                      (progn (snapshot-check (< taken wholes) physics-snapshot-other-layout (+ list k)
-                                             "a row listed whole for each pair that needs one" taken)
-                             (setf a (snap-u32 buffer (+ whole 4 (* 4 taken))))
-                             (incf taken))
-                      (incf a (if (> da 128) (- da 256) da)))
-                  (setf b (+ a (if (>= db 32768) (- db 65536) db)))
-                  (snapshot-check (and (<= 0 a) (< a n) (<= 0 b) (< b n)) physics-snapshot-other-layout (+ list k)
-                                  "a pair of listed rows" (list a b))))
-              (snapshot-check (= taken wholes) physics-snapshot-other-layout whole
-                              "as many rows listed whole as pairs that need one" wholes))
-            (dotimes (k pairs)
-              (let ((p (snap-i64 buffer (+ list (* 8 k)))))
-                (snapshot-check (and (>= p 0) (< (ash p -24) n) (< (ldb (byte 24 0) p) n))
-                                physics-snapshot-other-layout (+ list (* 8 k)) "a pair of listed rows" p))))))))
+                (let ((p (snap-i64 buffer (+ list (* 8 k)))))
+                  (snapshot-check (and (>= p 0) (< (ash p -24) n) (< (ldb (byte 24 0) p) n))
+                                  physics-snapshot-other-layout (+ list (* 8 k)) "a pair of listed rows" p)
+                  (setf (aref out k) p)))))))))
 ;; Checking the contacts while decoding them:4 ends here
 
 ;; [[file:../physics.org::#SNCHCT][Checking the contacts while decoding them:5]]
@@ -13404,7 +13412,8 @@ anchors to the bit. #SNPUTB"
   "Put the pair list of the checked snapshot BUFFER into WORLD, the rows' handles the awake rows'
 own when the snapshot does not write them (the bodies are restored first), and the awake grid of
 its build when the snapshot's grid still is that build's, bucketed again unless WORLD's grid, of
-step GRID-STEP, is that grid already (snapshot-holds-grid-p). #SNPUTB"
+step GRID-STEP, is that grid already (snapshot-holds-grid-p); the pairs are those the check
+decoded into SCRATCH, traded for the list's. #SNPUTB"
   (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum grid-step) #.+kernel-policy+)
   (let* ((at (aref (snapshot-scratch-offsets scratch) 7)) (rows (snap-i32 buffer at)) (pairs (snap-u32 buffer (+ at 32)))
          (form (snap-u32 buffer (+ at 36))) (plist (physics-world-pair-list world))
@@ -13426,20 +13435,8 @@ step GRID-STEP, is that grid already (snapshot-holds-grid-p). #SNPUTB"
         (if (logbitp 0 form)
             (dotimes (i rows) (setf (aref handles i) (snap-i64 buffer o)) (incf o 8))
             (replace handles (body-columns-handle (physics-world-awake world)) :end1 rows))
-        (when (< (length (pair-list-pairs plist)) pairs)
-          (setf (pair-list-pairs plist) (fixnum-room (pair-list-pairs plist) pairs :least 1024)))
-        (let ((list (pair-list-pairs plist)))
-          (declare (type fixnum-column list))
-          (if (logbitp 1 form)
-              (let ((a 0) (whole (+ (padded (+ o (* 3 pairs))) 4)))
-                (declare (type (unsigned-byte 24) a) (type index whole))
-                (dotimes (k pairs)
-                  (let ((da (snap-u8 buffer (+ o k))) (db (snap-u16 buffer (+ o pairs (* 2 k)))))
-                    (if (= da 128)
-                        (setf a (snap-u32 buffer whole) whole (+ whole 4))
-                        (setf a (+ a (if (> da 128) (- da 256) da))))
-                    (setf (aref list k) (logior (ash a 24) (+ a (if (>= db 32768) (- db 65536) db)))))))
-              (dotimes (k pairs) (setf (aref list k) (snap-i64 buffer (+ o (* 8 k))))))))
+        ;; the pairs the check decoded
+        (rotatef (pair-list-pairs plist) (snapshot-scratch-pairs scratch)))
       (setf (pair-list-count plist) pairs (pair-list-cell plist) (snap-f32 buffer (+ at 4))
             (pair-list-builds plist) (snap-u32 buffer (+ at 8)) (pair-list-loose-count plist) (snap-i32 buffer (+ at 12))
             (pair-list-step plist) (snap-i64 buffer (+ at 16)) (pair-list-built-step plist) (snap-i64 buffer (+ at 24)))
@@ -13764,10 +13761,12 @@ handle table, each body's count of joints, and the groups, stale, to be found ag
 (defun check-snapshot-jointed-flags (buffer scratch named mark)
   "Refuse the snapshot in BUFFER unless each body's jointed flag is set exactly when its slot is
 marked MARK in NAMED, the slots some joint names. #SNJOIN"
-  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column named) (type fixnum mark))
+  (declare (type octets buffer) (type snapshot-scratch scratch) (type fixnum-column named) (type fixnum mark)
+           #.+kernel-policy+)
   (dolist (id '(3 4))
     (let* ((bat (aref (snapshot-scratch-offsets scratch) id)) (n (snap-u32 buffer bat))
            (w (material-index-bytes (snap-u32 buffer (aref (snapshot-scratch-offsets scratch) 5)))))
+      (declare (type index bat n))
       (dotimes (row n)
         (let ((o (+ bat (body-part-column n 18 w) (* 2 row)))
               (slot (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))))
@@ -13996,7 +13995,7 @@ diagonal within the world's largest radius, and its points within the part's. #S
 (check-snapshot-box-records), every point's key a fixnum's word and every carried impulse finite
 and of at most 10^9 N s; and, with it or without it, that a body has the box flag exactly when the
 part lists its slot. #SNBOXB"
-  (declare (type octets buffer) (type snapshot-scratch scratch))
+  (declare (type octets buffer) (type snapshot-scratch scratch) #.+kernel-policy+)
   (let* ((offsets (snapshot-scratch-offsets scratch)) (at (aref offsets 11))
          (present (>= (aref (snapshot-scratch-sizes scratch) 11) 0))
          (boxes (if present (snap-u32 buffer at) 0)) (flagged 0))
@@ -14017,6 +14016,7 @@ part lists its slot. #SNBOXB"
       (dolist (id '(3 4))
         (let* ((bat (aref offsets id)) (n (snap-u32 buffer bat))
                (w (material-index-bytes (snap-u32 buffer (aref offsets 5)))))
+          (declare (type index bat n))
           (dotimes (row n)
             (let ((o (+ bat (body-part-column n 18 w) (* 2 row)))
                   (slot (snap-u32 buffer (+ bat (body-part-column n 16) (* 4 row)))))
