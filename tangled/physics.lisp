@@ -7798,6 +7798,16 @@ FACE (0-5: -x +x -y +y -z +z). #BXCELL"
   (logior (ash slot 34) (ash 1 +box-point-lattice-bit+)
           (ash (ldb (byte 10 0) x) 23) (ash (ldb (byte 10 0) y) 13) (ash (ldb (byte 10 0) z) 3) face))
 
+(declaim (inline box-edge-key))
+(defun box-edge-key (slot x y z axis edge)
+  "The key of the cell edge from the lattice point X Y Z along AXIS (0-2: x y z) against edge EDGE
+(0-11) of the box in handle slot SLOT: the lattice bit, the point modulo 2^8 on each axis, and 7
+in the three low bits, where a lattice point's key has its face. #BXCELL"
+  (declare (type (unsigned-byte 24) slot) (type fixnum x y z) (type (integer 0 2) axis) (type (integer 0 11) edge))
+  (logior (ash slot 34) (ash 1 +box-point-lattice-bit+)
+          (ash (ldb (byte 8 0) x) 25) (ash (ldb (byte 8 0) y) 17) (ash (ldb (byte 8 0) z) 9)
+          (ash (+ (* 12 axis) edge) 3) 7))
+
 (defun add-box-point (set row handle key nx ny nz rx ry rz gap &optional (row-b (box-set-dummy set))
                                                                           (sx 0.0) (sy 0.0) (sz 0.0))
   "Append to SET's points the point KEY found by the box HANDLE, between the sides at solver rows
@@ -7923,27 +7933,118 @@ from the solid cells. Expanded in find-box-points, whose variables it reads. #BX
                (add-box-point set row h (box-lattice-key slot lx ly lz best)
                               nx ny nz rx ry rz gap))))))))
 
+(defconstant +box-edge-cone+ 0.6427876
+  "The cosine of the widest angle, 50 degrees, between the push a convex edge of the cells gives a
+box's edge and the way out of its solid cell: the edge's own cone of normals is 45 degrees
+either side of that way, between its two faces' normals. #BXCELL")
+
+(defun box-cell-edge-points (set row h qx qy qz axis gx gy gz cx cy cz hx hy hz
+                             r11 r12 r13 r21 r22 r23 r31 r32 r33 reach)
+  "Add the points where the box at solver ROW (handle H, centre CX CY CZ, half-extents HX HY HZ,
+axes the columns of R) crosses the convex edge of the cells from the lattice point QX QY QZ along
+AXIS, whose one solid cell lies GX GY GZ from the edge: for each of the box's three axes, the
+box's edge along it nearest the cells, when the two edges' common perpendicular pushes the box
+out of the solid cell within +box-edge-cone+, their nearest points lie within both edges, and
+the gap along it is under REACH and above the box's least half-extent less. #BXCELL"
+  (declare (type box-set set) (type index row) (type fixnum h qx qy qz) (type (integer 0 2) axis)
+           (type single-float gx gy gz cx cy cz hx hy hz r11 r12 r13 r21 r22 r23 r31 r32 r33 reach)
+           #.+kernel-policy+)
+  (let ((ex (float qx 1.0)) (ey (float qy 1.0)) (ez (float qz 1.0))
+        (cone (* +box-edge-cone+ (fsqrt (+ (* gx gx) (* gy gy) (* gz gz)))))
+        (slot (handle-index h)))
+    (declare (type single-float ex ey ez cone))
+    (flet ((axis-of (j) (case j (0 (values r11 r21 r31)) (1 (values r12 r22 r32)) (t (values r13 r23 r33))))
+           (half (j) (case j (0 hx) (1 hy) (t hz)))
+           (along (vx vy vz) (case axis (0 vx) (1 vy) (t vz))))
+      (declare (inline axis-of half along))
+      (dotimes (j 3)
+        (block edge
+          (multiple-value-bind (ux uy uz) (axis-of j)
+            (let* ((ua (along ux uy uz)) (denom (- 1.0 (* ua ua))))
+              ;; edges within a milliradian of parallel name no direction
+              (unless (> denom 1e-6) (return-from edge))
+              ;; the common perpendicular, the cell edge's axis crossed with the box's, out of the cells
+              (multiple-value-bind (nx ny nz)
+                  (case axis (0 (values 0.0 (- uz) uy)) (1 (values uz 0.0 (- ux))) (t (values (- uy) ux 0.0)))
+                (let* ((inv (/ (if (> (+ (* nx gx) (* ny gy) (* nz gz)) 0.0) -1.0 1.0) (fsqrt denom)))
+                       (nx (* nx inv)) (ny (* ny inv)) (nz (* nz inv)))
+                  (unless (>= (- (+ (* nx gx) (* ny gy) (* nz gz))) cone) (return-from edge))
+                  ;; the box's edge along J that lies farthest against the push, the support of -N
+                  (multiple-value-bind (kx ky kz) (axis-of (mod (+ j 1) 3))
+                    (multiple-value-bind (lx ly lz) (axis-of (mod (+ j 2) 3))
+                      (let* ((sk (if (> (+ (* nx kx) (* ny ky) (* nz kz)) 0.0) -1.0 1.0))
+                             (sl (if (> (+ (* nx lx) (* ny ly) (* nz lz)) 0.0) -1.0 1.0))
+                             (hk (* sk (half (mod (+ j 1) 3)))) (hl (* sl (half (mod (+ j 2) 3))))
+                             (px (+ cx (* hk kx) (* hl lx))) (py (+ cy (* hk ky) (* hl ly))) (pz (+ cz (* hk kz) (* hl lz)))
+                             (rx (- ex px)) (ry (- ey py)) (rz (- ez pz))
+                             (gap (- (+ (* nx rx) (* ny ry) (* nz rz)))))
+                        (unless (and (< gap reach) (> gap (- (min hx hy hz)))) (return-from edge))
+                        ;; the nearest points: T along the cell edge, S along the box's
+                        (let* ((f (+ (* ux rx) (* uy ry) (* uz rz)))
+                               (tt (/ (- (* ua f) (along rx ry rz)) denom)) (ss (+ f (* tt ua))))
+                          (unless (and (< 0.0 tt 1.0) (< (abs ss) (half j))) (return-from edge))
+                          ;; the point midway between them
+                          (let ((mx (* 0.5 (+ ex (if (= axis 0) tt 0.0) px (* ss ux))))
+                                (my (* 0.5 (+ ey (if (= axis 1) tt 0.0) py (* ss uy))))
+                                (mz (* 0.5 (+ ez (if (= axis 2) tt 0.0) pz (* ss uz)))))
+                            (add-box-point set row h
+                                           (box-edge-key slot qx qy qz axis
+                                                         (+ (* 4 j) (if (> sk 0.0) 1 0) (if (> sl 0.0) 2 0)))
+                                           nx ny nz (- mx cx) (- my cy) (- mz cz) gap)))))))))))))))
+
 (defmacro box-lattice-points ()
   "Add the points of the convex lattice points of the cells, within the reach of the box's
-bounding box, against the box's faces (box-lattice-point). Expanded in find-box-points, whose
-variables it reads. #BXCELL"
+bounding box, against the box's faces (box-lattice-point), and of the convex edges of the cells
+from them against the box's edges (box-cell-edge-points): each edge from a point up its axis, and
+from the lowest points of the range down it too, so every edge that meets the range is taken
+once. Expanded in find-box-points, whose variables it reads. #BXCELL"
   `(let* ((ex (+ (* (abs r11) hx) (* (abs r12) hy) (* (abs r13) hz) reach))
           (ey (+ (* (abs r21) hx) (* (abs r22) hy) (* (abs r23) hz) reach))
-          (ez (+ (* (abs r31) hx) (* (abs r32) hy) (* (abs r33) hz) reach)))
-     (declare (type single-float ex ey ez))
-     (loop for lx of-type fixnum from (- (cell-floor (- cx ex)) -1) to (cell-floor (+ cx ex)) do
-       (loop for ly of-type fixnum from (- (cell-floor (- cy ey)) -1) to (cell-floor (+ cy ey)) do
-         (loop for lz of-type fixnum from (- (cell-floor (- cz ez)) -1) to (cell-floor (+ cz ez)) do
-           (let ((solids 0) (gx 0.0) (gy 0.0) (gz 0.0))
-             (declare (type fixnum solids) (type single-float gx gy gz))
-             ;; how many of the eight cells are solid, and where they lie from the point
+          (ez (+ (* (abs r31) hx) (* (abs r32) hy) (* (abs r33) hz) reach))
+          ;; the lattice points within reach; a range no point falls in takes the one below
+          (x1 (cell-floor (+ cx ex))) (y1 (cell-floor (+ cy ey))) (z1 (cell-floor (+ cz ez)))
+          (x0 (min x1 (1+ (cell-floor (- cx ex))))) (y0 (min y1 (1+ (cell-floor (- cy ey)))))
+          (z0 (min z1 (1+ (cell-floor (- cz ez))))))
+     (declare (type single-float ex ey ez) (type fixnum x0 y0 z0 x1 y1 z1))
+     (loop for lx of-type fixnum from x0 to x1 do
+       (loop for ly of-type fixnum from y0 to y1 do
+         (loop for lz of-type fixnum from z0 to z1 do
+           (let ((solids 0) (bits 0) (gx 0.0) (gy 0.0) (gz 0.0))
+             (declare (type fixnum solids) (type (unsigned-byte 8) bits) (type single-float gx gy gz))
+             ;; how many of the eight cells are solid, which, and where they lie from the point
              (dotimes (k 8)
                (when (solid (- lx (if (logbitp 0 k) 0 1)) (- ly (if (logbitp 1 k) 0 1))
                             (- lz (if (logbitp 2 k) 0 1)))
                  (incf solids)
-                 (setf gx (+ gx (if (logbitp 0 k) 0.5 -0.5)) gy (+ gy (if (logbitp 1 k) 0.5 -0.5))
+                 (setf bits (logior bits (ash 1 k))
+                       gx (+ gx (if (logbitp 0 k) 0.5 -0.5)) gy (+ gy (if (logbitp 1 k) 0.5 -0.5))
                        gz (+ gz (if (logbitp 2 k) 0.5 -0.5)))))
-             (box-lattice-point)))))))
+             (box-lattice-point)
+             ;; a convex edge has one solid cell of its four, so its end has one to five of eight
+             (when (<= 1 solids 5)
+               (box-cell-edges bits lx ly lz x0 y0 z0))))))))
+
+(defmacro box-cell-edges (bits lx ly lz x0 y0 z0)
+  "Test the convex edges of the cells at the lattice point LX LY LZ, whose eight cells' solid ones
+BITS marks (bit K the cell below the point on each axis whose bit of K is clear), against the
+box's edges: along each axis, the edge up from the point, whose four cells are those of the
+point's eight on the axis's upper side, and, at the range's lowest point X0 Y0 Z0 on that axis,
+the edge down to it. Expanded in box-lattice-points. #BXCELL"
+  `(macrolet ((edge (axis mask qx qy qz)
+                ;; the edge's four cells are BITS under MASK; with one solid, its centre lies half a
+                ;; cell across each of the other two axes
+                `(let ((cells (logand ,',bits ,mask)))
+                   (when (= 1 (logcount cells))
+                     (let ((k (integer-length (1- cells))))
+                       (box-cell-edge-points set row h ,qx ,qy ,qz ,axis
+                                             (if (= ,axis 0) 0.0 (if (logbitp 0 k) 0.5 -0.5))
+                                             (if (= ,axis 1) 0.0 (if (logbitp 1 k) 0.5 -0.5))
+                                             (if (= ,axis 2) 0.0 (if (logbitp 2 k) 0.5 -0.5))
+                                             cx cy cz hx hy hz r11 r12 r13 r21 r22 r23 r31 r32 r33 reach))))))
+     (edge 0 #xAA ,lx ,ly ,lz) (edge 1 #xCC ,lx ,ly ,lz) (edge 2 #xF0 ,lx ,ly ,lz)
+     (when (= ,lx ,x0) (edge 0 #x55 (1- ,lx) ,ly ,lz))
+     (when (= ,ly ,y0) (edge 1 #x33 ,lx (1- ,ly) ,lz))
+     (when (= ,lz ,z0) (edge 2 #x0F ,lx ,ly (1- ,lz)))))
 
 (defun find-box-points (world set row reach)
   "Append to SET's points every point of the box at awake ROW of WORLD against the cells within
@@ -7972,7 +8073,7 @@ against its faces. #BXCELL"
   set)
 ;; A box against the cells:3 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:4]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:5]]
 (defconstant +box-axis-tolerance+ 5e-4
   "How much farther apart the second box's face must hold two boxes than the first's best for
 it to be the reference, in metres: a tenth of the slop, as Box2D's polygons do. #BXCELL")
@@ -8026,9 +8127,9 @@ through them; write their places into KEEP in increasing order and return 4. #BX
 (defmacro nth-of (k c1 c2 c3)
   "C1, C2 or C3, as K is 0, 1 or 2. #BXCELL"
   `(case ,k (0 ,c1) (1 ,c2) (t ,c3)))
-;; A box against the cells:4 ends here
+;; A box against the cells:5 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:5]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:6]]
 (defmacro box-pair-axes ()
   "Find the separating axis of two boxes: the face axis along which they lie farthest apart (or
 overlap least), B's only when it beats A's by the axis tolerance, as BEST and BEST-SEP, and the
@@ -8120,9 +8221,9 @@ pushing B. Expanded in box-pair-points, whose variables it reads. #BXCELL"
       (when (< gap reach)
         (add-box-point set row-b owner (logior key-base (ash 7 5) edge) nx ny nz
                        (- mx bcx) (- my bcy) (- mz bcz) gap row-a (- mx acx) (- my acy) (- mz acz))))))
-;; A box against the cells:5 ends here
+;; A box against the cells:6 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:6]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:7]]
 (defmacro with-box-roles (&body body)
   "Run BODY with the reference box's numbers bound as R... (centre RCX RCY RCZ, axes R11 .. R33,
 half-extents RHX RHY RHZ, row RROW), the incident box's as I..., and the reference face's AXIS:
@@ -8219,9 +8320,9 @@ box-face-points, whose variables it reads. #BXCELL"
            (add-box-point set irow owner
                           (logior key-base (ash (+ (if on-b 3 0) axis) 5) (aref ids i))
                           nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz))))))
-;; A box against the cells:6 ends here
+;; A box against the cells:7 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:7]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:8]]
 (defmacro box-face-points ()
   "Add the points of the incident box's face most against the reference face (box B's when the
 separating axis BEST is one of B's, else A's), pushed off it along the face's normal: its corners
@@ -8301,9 +8402,9 @@ give one. KEY-BASE with the axis and the vertex's or the edges' feature is a poi
            ;; the reference box R owns the face; the incident box I is pushed off it along N
            (box-face-points))))))
   set)
-;; A box against the cells:7 ends here
+;; A box against the cells:8 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:8]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:9]]
 (defun grid-awake-boxes (world set n)
   "Bucket the centres of the awake boxes among the first N awake rows of WORLD into SET's grid,
 whose items are their rows, in cells of the largest diameter and the margin, and keep their
@@ -8386,7 +8487,7 @@ which holds still as a cell does (box-pair-points). #BXCELL"
                                 +flag-box-shape+)))
               (meet sleeping (aref (handle-table-local ids) (handle-index h)) n)))))))
   set)
-;; A box against the cells:8 ends here
+;; A box against the cells:9 ends here
 
 ;; [[file:../physics.org::#BXSOLV][Box points in the substeps:1]]
 (defconstant +box-jacobian-width+ 12

@@ -1829,25 +1829,43 @@ by their own ids; 0 when it has no such part. #SNCOST"
         do (incf at (+ 8 (snap-u32 buffer (+ at 4))))
         finally (return 0)))
 
+(defun copy-contact-columns-whole (from to)
+  "Copy every column of the contact rows FROM into the contact rows TO, of room enough, whole, as
+replace copies them: the least a restore that writes a world's contacts can do. #SNCOST"
+  (declare (type contact-columns from to))
+  (let ((n (contact-columns-length from)))
+    (macrolet ((copy ()
+                 `(progn ,@(loop for c in +snapshot-traded-contact-columns+
+                                 for reader = (intern (format nil "CONTACT-COLUMNS-~A" c) (symbol-package 'contact-columns))
+                                 collect `(replace (,reader to) (,reader from)
+                                                   :end2 (* n ,(if (eq c 'geometry) (length +contact-fields+) 1)))))))
+      (copy))
+    to))
+
 (defun run-snapshot-benchmark (&key (stream *standard-output*) (balls 3000) (rounds 30))
   "Measure snapshots: their size in the BALLS-ball basin, in the settled pile and in the box tower, snapshot plus
-restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8-step rollback at
+restore against a step of the basin, and beside them the basin's contact columns copied whole and
+the snapshot's checksum alone, the least a restore does (medians of ROUNDS interleaved rounds), an 8-step rollback at
 1000 balls, and the bytes consed; print Org tables to STREAM. #SNCOST"
   (format stream "load average ~A at the start~%~%" (load-average))
   (flet ((median (list) (let ((v (sort (coerce list 'vector) #'<))) (aref v (floor (length v) 2))))
          (ms (f) (let ((t0 (clock-ns))) (funcall f) (* 1d-6 (- (clock-ns) t0)))))
     (let* ((world (make-basin-world balls :kernels :auto))
            (other (make-basin-world balls :kernels :auto))
-           (buffer nil) (steps '()) (saves '()) (snaps '()) (restores '()))
+           (buffer nil) (steps '()) (saves '()) (snaps '()) (restores '()) (copies '()) (sums '())
+           (rows (make-contact-columns)))
       (dotimes (i 240) (step-physics-world world))
       (setf buffer (snapshot-physics-world world))
       (restore-physics-world other buffer)
+      (contact-columns-ensure-capacity rows (* 2 (contact-columns-length (physics-world-contacts world))))
       (sb-ext:gc :full t)
       (dotimes (k rounds)
         (push (ms (lambda () (step-physics-world world))) steps)
         (push (ms (lambda () (setf buffer (snapshot-physics-world world buffer)) (restore-physics-world other buffer))) saves)
         (push (ms (lambda () (snapshot-physics-world world buffer))) snaps)
-        (push (ms (lambda () (restore-physics-world other buffer))) restores))
+        (push (ms (lambda () (restore-physics-world other buffer))) restores)
+        (push (ms (lambda () (copy-contact-columns-whole (physics-world-contacts world) rows))) copies)
+        (push (ms (lambda () (snapshot-checksum buffer +snapshot-header-bytes+ (snap-u64 buffer 16)))) sums))
       (let* ((size (nth-value 1 (snapshot-physics-world world buffer)))
              (awake (physics-world-awake-count world)) (asleep (physics-world-sleeping-count world))
              (contacts (contact-columns-length (physics-world-contacts world)))
@@ -1869,9 +1887,11 @@ restore against a step of the basin (medians of ROUNDS interleaved rounds), an 8
                 (/ (snapshot-part-bytes buffer 7) (max 1 awake)))
         (format stream "| target: 80 a body and 40 a contact | ~D | 80 | 40 |~%~%" (+ (* 80 (+ awake asleep)) (* 40 contacts)))
         (format stream "| basin of ~D at 4 s, ~D rounds | median ms |~%|---+---|~%" balls rounds)
-        (format stream "| a step | ~,3F |~%| snapshot | ~,3F |~%| restore | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%~%"
+        (format stream "| a step | ~,3F |~%| snapshot | ~,3F |~%| restore | ~,3F |~%| snapshot and restore | ~,3F |~%| share of a step | ~,1F % |~%| bytes consed by 10 snapshots and restores | ~D |~%"
                 (median steps) (median snaps) (median restores) (median saves)
-                (* 100 (/ (median saves) (median steps))) consed)))
+                (* 100 (/ (median saves) (median steps))) consed)
+        (format stream "| the contact columns copied whole, alone | ~,3F |~%| the checksum, alone | ~,3F |~%| the two, as a share of a step | ~,1F % |~%~%"
+                (median copies) (median sums) (* 100 (/ (+ (median copies) (median sums)) (median steps))))))
     (multiple-value-bind (pile script) (make-scene-world :pile)
       (dotimes (i (* 60 12)) (funcall script i) (step-physics-world pile))
       (multiple-value-bind (buffer size) (snapshot-physics-world pile)

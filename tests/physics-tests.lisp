@@ -7563,6 +7563,50 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
       (check (eq t (validate-physics-world w))))))
 ;; BXR0WS-every-corner-refuses-its-cell ends here
 
+;; [[file:../physics.org::#BXCELL][BXCELL-slanted-cube-tips-over-a-ledge-edge]]
+(defun ledge-edge-depth (world handle)
+  "How deep the deepest point of the ledge's edge, the line x = 0, y = 2, lies inside the box
+HANDLE of WORLD, sampled every 5 mm over z from -1 to 2; 0 when none is inside. #BXCELL"
+  (multiple-value-bind (cx cy cz) (physics-body-position world handle)
+    (multiple-value-bind (qw qx qy qz) (physics-body-orientation world handle)
+      (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+          (luv-physics::box-axes (float qw 1.0) (float qx 1.0) (float qy 1.0) (float qz 1.0))
+        (multiple-value-bind (hx hy hz) (physics-box-half-extents world handle)
+          (loop for k from 0 to 600
+                for z = (+ -1.0 (* 0.005 k))
+                maximize (let ((rx (- cx)) (ry (- 2.0 cy)) (rz (- z cz)))
+                           (max 0.0 (min (- hx (abs (+ (* r11 rx) (* r21 ry) (* r31 rz))))
+                                         (- hy (abs (+ (* r12 rx) (* r22 ry) (* r32 rz))))
+                                         (- hz (abs (+ (* r13 rx) (* r23 ry) (* r33 rz)))))))))))))
+
+(define-claim "BXCELL" slanted-cube-tips-over-a-ledge-edge
+    "A cube whose slanted edge crosses a ledge's edge between lattice points never takes it deeper than 1 cm, and falls to rest."
+  (let ((hashes '()))
+    (dolist (family (available-kernel-families))
+      (let ((terrain (make-floor-terrain)))
+        (fill-terrain terrain -8 0 -8 0 2 8 t)
+        (let* ((world (make-physics-world :terrain terrain :kernels family
+                                          :features '(:terrain :friction :sleep :box-bodies)))
+               ;; 45 degrees about x, then -15 about z: the lowest edge slopes down towards +x
+               (a (/ pi 8)) (b (/ (* -15 pi) 360))
+               (orientation (list (* (cos b) (cos a)) (* (cos b) (sin a)) (* (sin b) (sin a)) (* (sin b) (cos a))))
+               ;; the lowest edge's middle lies 0.7071 m straight below the centre before the turn
+               ;; about z, which swings it to 0.7071 (sin -15, -cos -15) from the centre: the centre
+               ;; goes as far the other way from the point above the ledge's edge
+               (d (* 0.5 (sqrt 2d0)))
+               (cube (add-physics-box world (- (* d (sin (* 2 b)))) (+ 2.02 (* d (cos (* 2 b)))) 0.5 0.5 0.5 0.5
+                                      :orientation orientation))
+               (worst 0.0))
+          (dotimes (i 120)
+            (step-physics-world world)
+            (setf worst (max worst (ledge-edge-depth world cube))))
+          (multiple-value-bind (x y) (physics-body-position world cube)
+            (check (< worst 0.01) "~(~A~): the ledge's edge ~,4F m inside the cube" family worst)
+            (check (and (> x 0.5) (< (abs (- y (- 0.5 0.005))) 0.002)) "~(~A~): the cube at x ~,3F, y ~,4F" family x y))
+          (push (physics-world-state-hash world) hashes))))
+    (check (= 1 (length (remove-duplicates hashes))) "the families end at ~S" hashes)))
+;; BXCELL-slanted-cube-tips-over-a-ledge-edge ends here
+
 ;; [[file:../physics.org::#BXCELL][BXCELL-box-rests-on-cells]]
 (define-claim "BXCELL" box-rests-on-cells
     "A dropped unit cube rests a slop deep, sleeps, and does not drift over 60 s."
