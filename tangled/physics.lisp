@@ -7938,59 +7938,75 @@ from the solid cells. Expanded in find-box-points, whose variables it reads. #BX
 box's edge and the way out of its solid cell: the edge's own cone of normals is 45 degrees
 either side of that way, between its two faces' normals. #BXCELL")
 
+(defun box-cell-edge-point (set row h qx qy qz axis gx gy gz cone cx cy cz axes halves j reach)
+  "Add the point where the box at solver ROW (handle H, centre CX CY CZ, half-extents HALVES, its
+axes the columns of AXES, row by row) crosses, with its edge along its axis J nearest the cells,
+the convex edge of the cells from the lattice point QX QY QZ along AXIS, whose one solid cell lies
+GX GY GZ from the edge: when the edges' common perpendicular, turned out of the solid cell, lies
+within CONE of that way (the cone's cosine times the length of G), their nearest points lie within
+both edges, and the gap along it is under REACH and above the box's least half-extent less. #BXCELL"
+  (declare (type box-set set) (type index row) (type fixnum h qx qy qz) (type (integer 0 2) axis j)
+           (type single-float gx gy gz cone cx cy cz reach)
+           (type (simple-array single-float (9)) axes) (type (simple-array single-float (3)) halves)
+           #.+kernel-policy+)
+  (let* ((k (mod (+ j 1) 3)) (l (mod (+ j 2) 3))
+         (ux (aref axes j)) (uy (aref axes (+ 3 j))) (uz (aref axes (+ 6 j)))
+         (ua (case axis (0 ux) (1 uy) (t uz))) (denom (- 1.0 (* ua ua))))
+    (declare (type (integer 0 2) k l) (type single-float ux uy uz ua denom))
+    ;; edges within a milliradian of parallel name no direction
+    (when (> denom 1e-6)
+      (let* ((norm (/ 1.0 (fsqrt denom)))
+             ;; the common perpendicular, the cell edge's axis crossed with the box's
+             (mx (* norm (case axis (0 0.0) (1 uz) (t (- uy)))))
+             (my (* norm (case axis (0 (- uz)) (1 0.0) (t ux))))
+             (mz (* norm (case axis (0 uy) (1 (- ux)) (t 0.0))))
+             ;; turned out of the solid cell
+             (out (if (> (+ (* mx gx) (* my gy) (* mz gz)) 0.0) -1.0 1.0))
+             (nx (* out mx)) (ny (* out my)) (nz (* out mz))
+             ;; the box's edge along J that lies farthest against the push, the support of -N
+             (hk (if (> (+ (* nx (aref axes k)) (* ny (aref axes (+ 3 k))) (* nz (aref axes (+ 6 k)))) 0.0)
+                     (- (aref halves k)) (aref halves k)))
+             (hl (if (> (+ (* nx (aref axes l)) (* ny (aref axes (+ 3 l))) (* nz (aref axes (+ 6 l)))) 0.0)
+                     (- (aref halves l)) (aref halves l)))
+             (px (+ cx (* hk (aref axes k)) (* hl (aref axes l))))
+             (py (+ cy (* hk (aref axes (+ 3 k))) (* hl (aref axes (+ 3 l)))))
+             (pz (+ cz (* hk (aref axes (+ 6 k))) (* hl (aref axes (+ 6 l)))))
+             (ex (float qx 1.0)) (ey (float qy 1.0)) (ez (float qz 1.0))
+             (rx (- ex px)) (ry (- ey py)) (rz (- ez pz))
+             (gap (- (+ (* nx rx) (* ny ry) (* nz rz))))
+             ;; the nearest points: TT along the cell edge, SS along the box's
+             (f (+ (* ux rx) (* uy ry) (* uz rz)))
+             (tt (/ (- (* ua f) (case axis (0 rx) (1 ry) (t rz))) denom))
+             (ss (+ f (* tt ua))))
+        (declare (type single-float norm mx my mz out nx ny nz hk hl px py pz ex ey ez rx ry rz gap f tt ss))
+        (when (and (>= (- (+ (* nx gx) (* ny gy) (* nz gz))) cone)
+                   (< gap reach) (> gap (- (min (aref halves 0) (aref halves 1) (aref halves 2))))
+                   (< 0.0 tt 1.0) (< (abs ss) (aref halves j)))
+          ;; the point midway between the nearest points
+          (add-box-point set row h
+                         (box-edge-key (handle-index h) qx qy qz axis (+ (* 4 j) (if (> hk 0.0) 1 0) (if (> hl 0.0) 2 0)))
+                         nx ny nz
+                         (- (* 0.5 (+ ex (if (= axis 0) tt 0.0) px (* ss ux))) cx)
+                         (- (* 0.5 (+ ey (if (= axis 1) tt 0.0) py (* ss uy))) cy)
+                         (- (* 0.5 (+ ez (if (= axis 2) tt 0.0) pz (* ss uz))) cz)
+                         gap))))))
+
 (defun box-cell-edge-points (set row h qx qy qz axis gx gy gz cx cy cz hx hy hz
                              r11 r12 r13 r21 r22 r23 r31 r32 r33 reach)
   "Add the points where the box at solver ROW (handle H, centre CX CY CZ, half-extents HX HY HZ,
 axes the columns of R) crosses the convex edge of the cells from the lattice point QX QY QZ along
-AXIS, whose one solid cell lies GX GY GZ from the edge: for each of the box's three axes, the
-box's edge along it nearest the cells, when the two edges' common perpendicular pushes the box
-out of the solid cell within +box-edge-cone+, their nearest points lie within both edges, and
-the gap along it is under REACH and above the box's least half-extent less. #BXCELL"
-  (declare (type box-set set) (type index row) (type fixnum h qx qy qz) (type (integer 0 2) axis)
-           (type single-float gx gy gz cx cy cz hx hy hz r11 r12 r13 r21 r22 r23 r31 r32 r33 reach)
-           #.+kernel-policy+)
-  (let ((ex (float qx 1.0)) (ey (float qy 1.0)) (ez (float qz 1.0))
-        (cone (* +box-edge-cone+ (fsqrt (+ (* gx gx) (* gy gy) (* gz gz)))))
-        (slot (handle-index h)))
-    (declare (type single-float ex ey ez cone))
-    (flet ((axis-of (j) (case j (0 (values r11 r21 r31)) (1 (values r12 r22 r32)) (t (values r13 r23 r33))))
-           (half (j) (case j (0 hx) (1 hy) (t hz)))
-           (along (vx vy vz) (case axis (0 vx) (1 vy) (t vz))))
-      (declare (inline axis-of half along))
-      (dotimes (j 3)
-        (block edge
-          (multiple-value-bind (ux uy uz) (axis-of j)
-            (let* ((ua (along ux uy uz)) (denom (- 1.0 (* ua ua))))
-              ;; edges within a milliradian of parallel name no direction
-              (unless (> denom 1e-6) (return-from edge))
-              ;; the common perpendicular, the cell edge's axis crossed with the box's, out of the cells
-              (multiple-value-bind (nx ny nz)
-                  (case axis (0 (values 0.0 (- uz) uy)) (1 (values uz 0.0 (- ux))) (t (values (- uy) ux 0.0)))
-                (let* ((inv (/ (if (> (+ (* nx gx) (* ny gy) (* nz gz)) 0.0) -1.0 1.0) (fsqrt denom)))
-                       (nx (* nx inv)) (ny (* ny inv)) (nz (* nz inv)))
-                  (unless (>= (- (+ (* nx gx) (* ny gy) (* nz gz))) cone) (return-from edge))
-                  ;; the box's edge along J that lies farthest against the push, the support of -N
-                  (multiple-value-bind (kx ky kz) (axis-of (mod (+ j 1) 3))
-                    (multiple-value-bind (lx ly lz) (axis-of (mod (+ j 2) 3))
-                      (let* ((sk (if (> (+ (* nx kx) (* ny ky) (* nz kz)) 0.0) -1.0 1.0))
-                             (sl (if (> (+ (* nx lx) (* ny ly) (* nz lz)) 0.0) -1.0 1.0))
-                             (hk (* sk (half (mod (+ j 1) 3)))) (hl (* sl (half (mod (+ j 2) 3))))
-                             (px (+ cx (* hk kx) (* hl lx))) (py (+ cy (* hk ky) (* hl ly))) (pz (+ cz (* hk kz) (* hl lz)))
-                             (rx (- ex px)) (ry (- ey py)) (rz (- ez pz))
-                             (gap (- (+ (* nx rx) (* ny ry) (* nz rz)))))
-                        (unless (and (< gap reach) (> gap (- (min hx hy hz)))) (return-from edge))
-                        ;; the nearest points: T along the cell edge, S along the box's
-                        (let* ((f (+ (* ux rx) (* uy ry) (* uz rz)))
-                               (tt (/ (- (* ua f) (along rx ry rz)) denom)) (ss (+ f (* tt ua))))
-                          (unless (and (< 0.0 tt 1.0) (< (abs ss) (half j))) (return-from edge))
-                          ;; the point midway between them
-                          (let ((mx (* 0.5 (+ ex (if (= axis 0) tt 0.0) px (* ss ux))))
-                                (my (* 0.5 (+ ey (if (= axis 1) tt 0.0) py (* ss uy))))
-                                (mz (* 0.5 (+ ez (if (= axis 2) tt 0.0) pz (* ss uz)))))
-                            (add-box-point set row h
-                                           (box-edge-key slot qx qy qz axis
-                                                         (+ (* 4 j) (if (> sk 0.0) 1 0) (if (> sl 0.0) 2 0)))
-                                           nx ny nz (- mx cx) (- my cy) (- mz cz) gap)))))))))))))))
+AXIS, whose one solid cell lies GX GY GZ from the edge: one for each of the box's three axes whose
+edge nearest the cells meets it (box-cell-edge-point), within +box-edge-cone+. #BXCELL"
+  (declare (type single-float gx gy gz hx hy hz r11 r12 r13 r21 r22 r23 r31 r32 r33) #.+kernel-policy+)
+  (let ((axes (make-array 9 :element-type 'single-float))
+        (halves (make-array 3 :element-type 'single-float))
+        (cone (* +box-edge-cone+ (fsqrt (+ (* gx gx) (* gy gy) (* gz gz))))))
+    (declare (dynamic-extent axes halves))
+    (setf (aref axes 0) r11 (aref axes 1) r12 (aref axes 2) r13 (aref axes 3) r21 (aref axes 4) r22
+          (aref axes 5) r23 (aref axes 6) r31 (aref axes 7) r32 (aref axes 8) r33
+          (aref halves 0) hx (aref halves 1) hy (aref halves 2) hz)
+    (dotimes (j 3)
+      (box-cell-edge-point set row h qx qy qz axis gx gy gz cone cx cy cz axes halves j reach))))
 
 (defmacro box-lattice-points ()
   "Add the points of the convex lattice points of the cells, within the reach of the box's
@@ -12136,7 +12152,7 @@ the fold keeps it. #SNSUMS"
 ;; A checksum of four lanes of two sums:1 ends here
 
 ;; [[file:../physics.org::#SNSCRT][A scratch for each world:1]]
-;;; the scratch a snapshot and a restore reuse: one set per image, grown by doubling
+;;; the scratch a snapshot and a restore reuse: one set per world, grown by doubling
 
 (defstruct (snapshot-scratch (:constructor make-snapshot-scratch ()))
   "What taking and restoring a world's snapshots reuse: the palette index of each body

@@ -11348,6 +11348,29 @@ distance joint from the fixed point 1.5 5 3.5, released a metre sideways. #SNJOI
           (check (zerop consed) "~D bytes consed with joints" consed))))))
 ;; SNCOST-snapshots-into-room-cons-nothing ends here
 
+;; [[file:../physics.org::#SNCOST][SNCOST-floor-copies-every-contact-column]]
+(define-claim "SNCOST" floor-copies-every-contact-column
+    "The floor's copy of a basin's contacts holds every column of the source, bit for bit."
+  (multiple-value-bind (world script) (make-scene-world :basin :count 300)
+    (dotimes (i 150) (funcall script i) (step-physics-world world))
+    (let* ((from (luv-physics::physics-world-contacts world)) (n (luv-physics::contact-columns-length from))
+           (hash (physics-world-state-hash world))
+           (to (luv-physics::make-contact-columns)))
+      (luv-physics::contact-columns-ensure-capacity to n)
+      (luv-physics::copy-contact-columns-whole from to)
+      (check (> n 100) "~D contacts" n)
+      (loop for (name width) in `((handle-a 1) (handle-b 1) (kind 1) (key 1) (seen 1) (order 1) (touching 1)
+                                  (geometry ,(length luv-physics::+contact-fields+)))
+            for reader = (find-symbol (format nil "CONTACT-COLUMNS-~A" name) :luv-physics)
+            do (let ((a (funcall reader from)) (b (funcall reader to)))
+                 (check (loop for k below (* width n)
+                              always (if (floatp (aref a k))
+                                         (= (sb-kernel:single-float-bits (aref a k)) (sb-kernel:single-float-bits (aref b k)))
+                                         (= (aref a k) (aref b k))))
+                        "the ~(~A~) column differs" name)))
+      (check (= hash (physics-world-state-hash world))))))
+;; SNCOST-floor-copies-every-contact-column ends here
+
 ;; [[file:../physics.org::#SNCOST][SNCOST-rollback-share-of-a-frame]]
 (define-claim "SNCOST" rollback-share-of-a-frame
     "The rollback table gives its median as the share of a 60 Hz frame, 1000/60 ms."
