@@ -7564,47 +7564,76 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
 ;; BXR0WS-every-corner-refuses-its-cell ends here
 
 ;; [[file:../physics.org::#BXCELL][BXCELL-slanted-cube-tips-over-a-ledge-edge]]
-(defun ledge-edge-depth (world handle)
-  "How deep the deepest point of the ledge's edge, the line x = 0, y = 2, lies inside the box
-HANDLE of WORLD, sampled every 5 mm over z from -1 to 2; 0 when none is inside. #BXCELL"
+(defun quaternion-product (a b)
+  "The product of the quaternions A and B, each a list W X Y Z: B's turn, then A's. #BXCELL"
+  (destructuring-bind (w1 x1 y1 z1) a
+    (destructuring-bind (w2 x2 y2 z2) b
+      (list (- (* w1 w2) (* x1 x2) (* y1 y2) (* z1 z2)) (+ (* w1 x2) (* x1 w2) (* y1 z2) (- (* z1 y2)))
+            (+ (* w1 y2) (- (* x1 z2)) (* y1 w2) (* z1 x2)) (+ (* w1 z2) (* x1 y2) (- (* y1 x2)) (* z1 w2))))))
+
+(defun turned-point (turn x y z)
+  "The point X Y Z turned by the quaternion TURN about the origin, as a list. #BXCELL"
+  (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
+      (apply #'luv-physics::box-axes (mapcar (lambda (c) (float c 1.0)) turn))
+    (list (+ (* r11 x) (* r12 y) (* r13 z)) (+ (* r21 x) (* r22 y) (* r23 z)) (+ (* r31 x) (* r32 y) (* r33 z)))))
+
+(defun turned-fill (terrain turn x0 y0 z0 x1 y1 z1 solid)
+  "Fill the cells [X0,X1) x [Y0,Y1) x [Z0,Z1) of TERRAIN turned by TURN, a quarter turn or a half
+about an axis, which takes the block of cells to a block of cells. #BXCELL"
+  (let ((a (mapcar #'round (turned-point turn x0 y0 z0))) (b (mapcar #'round (turned-point turn x1 y1 z1))))
+    (apply #'fill-terrain terrain (append (mapcar #'min a b) (mapcar #'max a b) (list solid)))))
+
+(defun ledge-edge-depth (world handle turn)
+  "How deep the deepest point of the ledge's edge, the line x = 0, y = 2 turned by TURN, lies inside
+the box HANDLE of WORLD, sampled every 5 mm from z = -1 to 2; 0 when none is inside. #BXCELL"
   (multiple-value-bind (cx cy cz) (physics-body-position world handle)
     (multiple-value-bind (qw qx qy qz) (physics-body-orientation world handle)
       (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
           (luv-physics::box-axes (float qw 1.0) (float qx 1.0) (float qy 1.0) (float qz 1.0))
         (multiple-value-bind (hx hy hz) (physics-box-half-extents world handle)
           (loop for k from 0 to 600
-                for z = (+ -1.0 (* 0.005 k))
-                maximize (let ((rx (- cx)) (ry (- 2.0 cy)) (rz (- z cz)))
-                           (max 0.0 (min (- hx (abs (+ (* r11 rx) (* r21 ry) (* r31 rz))))
-                                         (- hy (abs (+ (* r12 rx) (* r22 ry) (* r32 rz))))
-                                         (- hz (abs (+ (* r13 rx) (* r23 ry) (* r33 rz)))))))))))))
+                maximize (destructuring-bind (px py pz) (turned-point turn 0.0 2.0 (+ -1.0 (* 0.005 k)))
+                           (let ((rx (- px cx)) (ry (- py cy)) (rz (- pz cz)))
+                             (max 0.0 (min (- hx (abs (+ (* r11 rx) (* r21 ry) (* r31 rz))))
+                                           (- hy (abs (+ (* r12 rx) (* r22 ry) (* r32 rz))))
+                                           (- hz (abs (+ (* r13 rx) (* r23 ry) (* r33 rz))))))))))))))
 
 (define-claim "BXCELL" slanted-cube-tips-over-a-ledge-edge
-    "A cube whose slanted edge crosses a ledge's edge between lattice points never takes it deeper than 1 cm, and falls to rest."
-  (let ((hashes '()))
-    (dolist (family (available-kernel-families))
-      (let ((terrain (make-floor-terrain)))
-        (fill-terrain terrain -8 0 -8 0 2 8 t)
-        (let* ((world (make-physics-world :terrain terrain :kernels family
-                                          :features '(:terrain :friction :sleep :box-bodies)))
-               ;; 45 degrees about x, then -15 about z: the lowest edge slopes down towards +x
-               (a (/ pi 8)) (b (/ (* -15 pi) 360))
-               (orientation (list (* (cos b) (cos a)) (* (cos b) (sin a)) (* (sin b) (sin a)) (* (sin b) (cos a))))
-               ;; the lowest edge's middle lies 0.7071 m straight below the centre before the turn
-               ;; about z, which swings it to 0.7071 (sin -15, -cos -15) from the centre: the centre
-               ;; goes as far the other way from the point above the ledge's edge
-               (d (* 0.5 (sqrt 2d0)))
-               (cube (add-physics-box world (- (* d (sin (* 2 b)))) (+ 2.02 (* d (cos (* 2 b)))) 0.5 0.5 0.5 0.5
-                                      :orientation orientation))
-               (worst 0.0))
-          (dotimes (i 120)
-            (step-physics-world world)
-            (setf worst (max worst (ledge-edge-depth world cube))))
-          (multiple-value-bind (x y) (physics-body-position world cube)
-            (check (< worst 0.01) "~(~A~): the ledge's edge ~,4F m inside the cube" family worst)
-            (check (and (> x 0.5) (< (abs (- y (- 0.5 0.005))) 0.002)) "~(~A~): the cube at x ~,3F, y ~,4F" family x y))
-          (push (physics-world-state-hash world) hashes))))
-    (check (= 1 (length (remove-duplicates hashes))) "the families end at ~S" hashes)))
+    "A cube whose slanted edge crosses a ledge's edge between lattice points never takes it deeper than 1 cm, and falls to rest, the scene turned every way."
+  (let ((h (sqrt 0.5d0)))
+    (dolist (turn (list '(1 0 0 0) (list h 0 h 0) '(0 0 1 0) (list h h 0 0)))
+      (let ((hashes '()))
+        (dolist (family (available-kernel-families))
+          (let ((terrain (make-voxel-terrain)))
+            (turned-fill terrain turn -32 -32 -32 32 32 32 nil)
+            (turned-fill terrain turn -16 -1 -16 32 0 32 t)
+            (turned-fill terrain turn -8 0 -8 0 2 8 t)
+            (let* ((world (make-physics-world :terrain terrain :kernels family :gravity (turned-point turn 0.0 -9.81 0.0)
+                                              :features '(:terrain :friction :sleep :box-bodies)))
+                   ;; 45 degrees about x, then -15 about z: the lowest edge slopes down towards +x
+                   (a (/ pi 8)) (b (/ (* -15 pi) 360))
+                   (orientation (list (* (cos b) (cos a)) (* (cos b) (sin a)) (* (sin b) (sin a)) (* (sin b) (cos a))))
+                   ;; the lowest edge's middle lies 0.7071 m straight below the centre before the turn
+                   ;; about z, which swings it to 0.7071 (sin -15, -cos -15) from the centre: the centre
+                   ;; goes as far the other way from the point above the ledge's edge
+                   (d (* 0.5 (sqrt 2d0)))
+                   (cube (destructuring-bind (x y z)
+                             (turned-point turn (- (* d (sin (* 2 b)))) (+ 2.02 (* d (cos (* 2 b)))) 0.5)
+                           (add-physics-box world x y z 0.5 0.5 0.5 :orientation (quaternion-product turn orientation))))
+                   (worst 0.0))
+              (dotimes (i 120)
+                (step-physics-world world)
+                (setf worst (max worst (ledge-edge-depth world cube turn))))
+              ;; the resting centre, turned back
+              (destructuring-bind (x y z)
+                  (multiple-value-call #'turned-point (destructuring-bind (w i j k) turn (list w (- i) (- j) (- k)))
+                    (physics-body-position world cube))
+                (declare (ignore z))
+                (check (< worst 0.01) "turn ~S, ~(~A~): the ledge's edge ~,4F m inside the cube" turn family worst)
+                (check (and (> x 0.5) (< (abs (- y (- 0.5 0.005))) 0.002))
+                       "turn ~S, ~(~A~): the cube at x ~,3F, y ~,4F" turn family x y))
+              (push (physics-world-state-hash world) hashes))))
+        (check (= 1 (length (remove-duplicates hashes))) "turn ~S: the families end at ~S" turn hashes)))))
 ;; BXCELL-slanted-cube-tips-over-a-ledge-edge ends here
 
 ;; [[file:../physics.org::#BXCELL][BXCELL-box-rests-on-cells]]
