@@ -8149,51 +8149,86 @@ through them; write their places into KEEP in increasing order and return 4. #BX
 (defmacro box-pair-axes ()
   "Find the separating axis of two boxes: the face axis along which they lie farthest apart (or
 overlap least), B's only when it beats A's by the axis tolerance, as BEST and BEST-SEP, and the
-edge axis, A's axis I crossed with B's axis J, as EDGE (3I + J), EDGE-SEP and ELX ELY ELZ.
-Expanded in box-pair-points, whose variables it reads and sets. #BXCELL"
+edge axis, A's axis I crossed with B's axis J, as EDGE (3I + J), EDGE-SEP and ELX ELY ELZ; leave
+box-pair-points at once when an axis holds the boxes at least REACH apart. Expanded in
+box-pair-points, whose variables it reads and sets. #BXCELL"
+  (flet ((column (box k) (loop for m from 1 to 3 collect (intern (format nil "~A~D~D" box m k))))
+         (dot (u v) `(+ (* ,(first u) ,(first v)) (* ,(second u) ,(second v)) (* ,(third u) ,(third v)))))
+    (let ((a (loop for k from 1 to 3 collect (column "A" k)))
+          (b (loop for k from 1 to 3 collect (column "B" k)))
+          (d '(dx dy dz)))
+      `(let (;; the centres' offset along each axis, and the axes' products A_i . A_k, A_i . B_j,
+             ;; B_i . B_k, each the same sum in the same order as a product along the axis
+             ;; spelled out, so the face axes' distances keep their bits
+             ,@(loop for k below 3 collect `(,(intern (format nil "TA~D" k)) ,(dot d (nth k a))))
+             ,@(loop for k below 3 collect `(,(intern (format nil "TB~D" k)) ,(dot d (nth k b))))
+             ,@(loop for i below 3 append (loop for k from i below 3
+                                                collect `(,(intern (format nil "GA~D~D" i k)) ,(dot (nth i a) (nth k a)))))
+             ,@(loop for i below 3 append (loop for k from i below 3
+                                                collect `(,(intern (format nil "GB~D~D" i k)) ,(dot (nth i b) (nth k b)))))
+             ,@(loop for i below 3 append (loop for j below 3
+                                                collect `(,(intern (format nil "C~D~D" i j)) ,(dot (nth i a) (nth j b))))))
+         (declare (type single-float ta0 ta1 ta2 tb0 tb1 tb2 ga00 ga01 ga02 ga11 ga12 ga22
+                        gb00 gb01 gb02 gb11 gb12 gb22 c00 c01 c02 c10 c11 c12 c20 c21 c22))
+         (macrolet ((face (index along own other)
+                      ;; how far apart along a face axis: the offset less each box's half-extents
+                      ;; along it, A's first
+                      (destructuring-bind ((o1 o2 o3) (p1 p2 p3)) (if (< index 3) (list own other) (list other own))
+                        `(let ((sep (- (abs ,along)
+                                       (+ (* ahx (abs ,o1)) (* ahy (abs ,o2)) (* ahz (abs ,o3)))
+                                       (+ (* bhx (abs ,p1)) (* bhy (abs ,p2)) (* bhz (abs ,p3))))))
+                           (declare (type single-float sep))
+                           (when (> sep best-sep) (setf best ,index best-sep sep))))))
+           ;; B's face is taken only when it separates the boxes more than A's best by the
+           ;; axis tolerance, so that two faces lying on each other keep one reference
+           (let ((a-best -1) (a-sep most-negative-single-float))
+             (declare (type fixnum a-best) (type single-float a-sep))
+             (face 0 ta0 (ga00 ga01 ga02) (c00 c01 c02))
+             (face 1 ta1 (ga01 ga11 ga12) (c10 c11 c12))
+             (face 2 ta2 (ga02 ga12 ga22) (c20 c21 c22))
+             (when (>= best-sep reach) (return-from box-pair-points set))
+             (setf a-best best a-sep best-sep best -1 best-sep most-negative-single-float)
+             (face 3 tb0 (gb00 gb01 gb02) (c00 c10 c20))
+             (face 4 tb1 (gb01 gb11 gb12) (c01 c11 c21))
+             (face 5 tb2 (gb02 gb12 gb22) (c02 c12 c22))
+             (unless (> best-sep (+ a-sep +box-axis-tolerance+))
+               (setf best a-best best-sep a-sep))
+             (when (>= best-sep reach) (return-from box-pair-points set))))
+         (box-edge-axes)))))
+
+(defmacro box-edge-axes ()
+  "Find the edge axis along which two boxes lie farthest apart (or overlap least), A's axis I
+crossed with B's axis J, as EDGE (3I + J), EDGE-SEP and ELX ELY ELZ, but for edges near parallel;
+leave box-pair-points at once when one holds the boxes at least REACH apart. Expanded in
+box-pair-axes, whose variables it reads and sets. #BXCELL"
   `(flet ((apart (lx ly lz)
-           (declare (type single-float lx ly lz))
-           (- (abs (+ (* dx lx) (* dy ly) (* dz lz)))
-              (+ (* ahx (abs (+ (* a11 lx) (* a21 ly) (* a31 lz))))
-                 (* ahy (abs (+ (* a12 lx) (* a22 ly) (* a32 lz))))
-                 (* ahz (abs (+ (* a13 lx) (* a23 ly) (* a33 lz)))))
-              (+ (* bhx (abs (+ (* b11 lx) (* b21 ly) (* b31 lz))))
-                 (* bhy (abs (+ (* b12 lx) (* b22 ly) (* b32 lz))))
-                 (* bhz (abs (+ (* b13 lx) (* b23 ly) (* b33 lz))))))))
-    (declare (inline apart))
-    ;; B's face is taken only when it separates the boxes more than A's best by the
-    ;; axis tolerance, so that two faces lying on each other keep one reference
-    (let ((a-best -1) (a-sep most-negative-single-float))
-      (declare (type fixnum a-best) (type single-float a-sep))
-      (macrolet ((try (index lx ly lz)
-                   `(let ((sep (apart ,lx ,ly ,lz)))
-                      (when (> sep best-sep) (setf best ,index best-sep sep)))))
-        (try 0 a11 a21 a31) (try 1 a12 a22 a32) (try 2 a13 a23 a33)
-        (setf a-best best a-sep best-sep best -1 best-sep most-negative-single-float)
-        (try 3 b11 b21 b31) (try 4 b12 b22 b32) (try 5 b13 b23 b33))
-      (unless (> best-sep (+ a-sep +box-axis-tolerance+))
-        (setf best a-best best-sep a-sep)))
-    ;; the nine edge axes, A's axis I crossed with B's axis J, but for edges near parallel
-    (macrolet ((edges ()
-                 `(progn
-                    ,@(loop for i below 3
-                            append (loop for j below 3
-                                         collect (destructuring-bind ((ux uy uz) (vx vy vz))
-                                                     (list (nth i '((a11 a21 a31) (a12 a22 a32) (a13 a23 a33)))
-                                                           (nth j '((b11 b21 b31) (b12 b22 b32) (b13 b23 b33))))
-                                                   `(let* ((lx (- (* ,uy ,vz) (* ,uz ,vy)))
-                                                           (ly (- (* ,uz ,vx) (* ,ux ,vz)))
-                                                           (lz (- (* ,ux ,vy) (* ,uy ,vx)))
-                                                           (len2 (+ (* lx lx) (* ly ly) (* lz lz))))
-                                                      (declare (type single-float lx ly lz len2))
-                                                      (when (> len2 1e-6)
-                                                        (let* ((f (/ 1.0 (fsqrt len2)))
-                                                               (sep (apart (* f lx) (* f ly) (* f lz))))
-                                                          (declare (type single-float f sep))
-                                                          (when (> sep edge-sep)
-                                                            (setf edge ,(+ (* 3 i) j) edge-sep sep
-                                                                  elx (* f lx) ely (* f ly) elz (* f lz))))))))))))
-      (edges))))
+            (declare (type single-float lx ly lz))
+            (- (abs (+ (* dx lx) (* dy ly) (* dz lz)))
+               (+ (* ahx (abs (+ (* a11 lx) (* a21 ly) (* a31 lz))))
+                  (* ahy (abs (+ (* a12 lx) (* a22 ly) (* a32 lz))))
+                  (* ahz (abs (+ (* a13 lx) (* a23 ly) (* a33 lz)))))
+               (+ (* bhx (abs (+ (* b11 lx) (* b21 ly) (* b31 lz))))
+                  (* bhy (abs (+ (* b12 lx) (* b22 ly) (* b32 lz))))
+                  (* bhz (abs (+ (* b13 lx) (* b23 ly) (* b33 lz))))))))
+     (declare (inline apart))
+     ,@(loop for i below 3
+             append (loop for j below 3
+                          collect (destructuring-bind ((ux uy uz) (vx vy vz))
+                                      (list (nth i '((a11 a21 a31) (a12 a22 a32) (a13 a23 a33)))
+                                            (nth j '((b11 b21 b31) (b12 b22 b32) (b13 b23 b33))))
+                                    `(let* ((lx (- (* ,uy ,vz) (* ,uz ,vy)))
+                                            (ly (- (* ,uz ,vx) (* ,ux ,vz)))
+                                            (lz (- (* ,ux ,vy) (* ,uy ,vx)))
+                                            (len2 (+ (* lx lx) (* ly ly) (* lz lz))))
+                                       (declare (type single-float lx ly lz len2))
+                                       (when (> len2 1e-6)
+                                         (let* ((f (/ 1.0 (fsqrt len2)))
+                                                (sep (apart (* f lx) (* f ly) (* f lz))))
+                                           (declare (type single-float f sep))
+                                           (when (>= sep reach) (return-from box-pair-points set))
+                                           (when (> sep edge-sep)
+                                             (setf edge ,(+ (* 3 i) j) edge-sep sep
+                                                   elx (* f lx) ely (* f ly) elz (* f lz)))))))))))
 
 (defmacro box-edge-point ()
   "Add the point of an edge of box A against an edge of box B (EDGE, along ELX ELY ELZ): midway
@@ -8275,41 +8310,55 @@ box-face-points, whose variables it reads. #BXCELL"
                (aref poly (+ o 2)) (- (+ (* wx nx) (* wy ny) (* wz nz)) rh)
                (aref ids corner) corner)))))
 
+(defmacro clip-incident-side (plane)
+  "Clip the COUNT corners of POLY (numbered in IDS) against the reference face's side PLANE (0 to
+3: a <= E1, -a <= E1, b <= E2, -b <= E2) through NEXT and NEXT-IDS, leaving the clipped polygon in
+POLY and its COUNT; a side with every corner within it leaves them as they are, in place. DIST
+holds each corner's distance past the side. Expanded in clip-incident-face. #BXCELL"
+  (let ((along `(aref poly (+ (* 3 i) ,(if (< plane 2) 0 1))))
+        (limit (if (< plane 2) 'e1 'e2)))
+    `(let ((out 0))
+       (declare (type fixnum out))
+       ;; a corner within the tolerance of a side is on it, kept as it is, with its own key
+       (dotimes (i count)
+         (let ((d (- ,(if (evenp plane) along `(- ,along)) ,limit +box-clip-tolerance+)))
+           (declare (type single-float d))
+           (setf (aref dist i) d)
+           (when (> d 0.0) (incf out))))
+       (when (plusp out)
+         (let ((kept 0))
+           (declare (type fixnum kept))
+           (dotimes (i count)
+             (let* ((j (if (= (1+ i) count) 0 (1+ i)))
+                    (oi (* 3 i)) (oj (* 3 j))
+                    (di (aref dist i)) (dj (aref dist j)))
+               (declare (type fixnum j oi oj) (type single-float di dj))
+               (when (<= di 0.0)
+                 (let ((o (* 3 kept)))
+                   (setf (aref next o) (aref poly oi) (aref next (+ o 1)) (aref poly (+ oi 1))
+                         (aref next (+ o 2)) (aref poly (+ oi 2)) (aref next-ids kept) (aref ids i))
+                   (incf kept)))
+               (when (or (and (<= di 0.0) (> dj 0.0)) (and (> di 0.0) (<= dj 0.0)))
+                 ;; the edge crosses the side: the crossing, named by the side and the
+                 ;; corner the edge starts from
+                 (let ((f (/ di (- di dj))) (o (* 3 kept)))
+                   (declare (type single-float f))
+                   (dotimes (c 3)
+                     (setf (aref next (+ o c))
+                           (+ (aref poly (+ oi c)) (* f (- (aref poly (+ oj c)) (aref poly (+ oi c)))))))
+                   (setf (aref next-ids kept) (logand 31 (+ ,(+ 4 (* 4 plane)) (logand 3 (aref ids i)))))
+                   (incf kept)))))
+           (setf count kept)
+           (rotatef poly next) (rotatef ids next-ids))))))
+
 (defmacro clip-incident-face ()
   "Clip the COUNT corners of POLY (numbered in IDS) against the reference face's four sides, a <=
 E1, -a <= E1, b <= E2, -b <= E2, through NEXT and NEXT-IDS, leaving the clipped polygon in POLY
-and its COUNT. Expanded in box-face-points, whose variables it reads and sets. #BXCELL"
-  `(progn
-     ;; clip against the four sides: a <= e1, -a <= e1, b <= e2, -b <= e2
-     (dotimes (plane 4)
-       (let ((kept 0) (coordinate (if (< plane 2) 0 1))
-             (side (if (evenp plane) 1.0 -1.0)) (limit (if (< plane 2) e1 e2)))
-         (declare (type fixnum kept coordinate) (type single-float side limit))
-         (dotimes (i count)
-           (let* ((j (if (= (1+ i) count) 0 (1+ i)))
-                  (oi (* 3 i)) (oj (* 3 j))
-                  ;; a corner within the tolerance of a side is on it, kept as
-                  ;; it is, with its own key
-                  (di (- (* side (aref poly (+ oi coordinate))) limit +box-clip-tolerance+))
-                  (dj (- (* side (aref poly (+ oj coordinate))) limit +box-clip-tolerance+)))
-             (declare (type fixnum j oi oj) (type single-float di dj))
-             (when (<= di 0.0)
-               (let ((o (* 3 kept)))
-                 (setf (aref next o) (aref poly oi) (aref next (+ o 1)) (aref poly (+ oi 1))
-                       (aref next (+ o 2)) (aref poly (+ oi 2)) (aref next-ids kept) (aref ids i))
-                 (incf kept)))
-             (when (or (and (<= di 0.0) (> dj 0.0)) (and (> di 0.0) (<= dj 0.0)))
-               ;; the edge crosses the side: the crossing, named by the side and the
-               ;; corner the edge starts from
-               (let ((f (/ di (- di dj))) (o (* 3 kept)))
-                 (declare (type single-float f))
-                 (dotimes (c 3)
-                   (setf (aref next (+ o c))
-                         (+ (aref poly (+ oi c)) (* f (- (aref poly (+ oj c)) (aref poly (+ oi c)))))))
-                 (setf (aref next-ids kept) (logand 31 (+ 4 (* 4 plane) (logand 3 (aref ids i)))))
-                 (incf kept)))))
-         (setf count kept)
-         (rotatef poly next) (rotatef ids next-ids)))))
+and its COUNT (clip-incident-side). Expanded in box-face-points, whose variables it reads and
+sets. #BXCELL"
+  `(let ((dist (make-array 8 :element-type 'single-float)))
+     (declare (dynamic-extent dist) (type (simple-array single-float (8)) dist))
+     (clip-incident-side 0) (clip-incident-side 1) (clip-incident-side 2) (clip-incident-side 3)))
 
 (defmacro add-incident-points ()
   "Add as points of the incident box each vertex of the clipped POLY nearer than the reach, four
@@ -8406,10 +8455,10 @@ give one. KEY-BASE with the axis and the vertex's or the edges' feature is a poi
             (best -1) (best-sep most-negative-single-float)
             (edge -1) (edge-sep most-negative-single-float) (elx 0.0) (ely 0.0) (elz 0.0))
         (declare (type single-float dx dy dz best-sep edge-sep elx ely elz) (type fixnum best edge))
-        ;; the six face axes and the nine edge axes: how far apart the boxes are along each
+        ;; the six face axes and the nine edge axes: how far apart the boxes are along each,
+        ;; leaving as soon as one holds them REACH apart
         (box-pair-axes)
         (cond
-          ((>= (max best-sep edge-sep) reach))
           ((> edge-sep (+ best-sep +box-axis-tolerance+))
            ;; an edge of A against an edge of B: one point, midway between the edges' nearest
            ;; points, the normal their common perpendicular, from A towards B, pushing B
