@@ -8146,89 +8146,83 @@ through them; write their places into KEEP in increasing order and return 4. #BX
 ;; A box against the cells:5 ends here
 
 ;; [[file:../physics.org::#BXCELL][A box against the cells:6]]
-(defmacro box-pair-axes ()
-  "Find the separating axis of two boxes: the face axis along which they lie farthest apart (or
-overlap least), B's only when it beats A's by the axis tolerance, as BEST and BEST-SEP, and the
-edge axis, A's axis I crossed with B's axis J, as EDGE (3I + J), EDGE-SEP and ELX ELY ELZ; leave
-box-pair-points at once when an axis holds the boxes at least REACH apart. Expanded in
-box-pair-points, whose variables it reads and sets. #BXCELL"
-  (flet ((column (box k) (loop for m from 1 to 3 collect (intern (format nil "~A~D~D" box m k))))
-         (dot (u v) `(+ (* ,(first u) ,(first v)) (* ,(second u) ,(second v)) (* ,(third u) ,(third v)))))
-    (let ((a (loop for k from 1 to 3 collect (column "A" k)))
-          (b (loop for k from 1 to 3 collect (column "B" k)))
-          (d '(dx dy dz)))
-      `(let (;; the centres' offset along each axis, and the axes' products A_i . A_k, A_i . B_j,
-             ;; B_i . B_k, each the same sum in the same order as a product along the axis
-             ;; spelled out, so the face axes' distances keep their bits
-             ,@(loop for k below 3 collect `(,(intern (format nil "TA~D" k)) ,(dot d (nth k a))))
-             ,@(loop for k below 3 collect `(,(intern (format nil "TB~D" k)) ,(dot d (nth k b))))
-             ,@(loop for i below 3 append (loop for k from i below 3
-                                                collect `(,(intern (format nil "GA~D~D" i k)) ,(dot (nth i a) (nth k a)))))
-             ,@(loop for i below 3 append (loop for k from i below 3
-                                                collect `(,(intern (format nil "GB~D~D" i k)) ,(dot (nth i b) (nth k b)))))
-             ,@(loop for i below 3 append (loop for j below 3
-                                                collect `(,(intern (format nil "C~D~D" i j)) ,(dot (nth i a) (nth j b))))))
-         (declare (type single-float ta0 ta1 ta2 tb0 tb1 tb2 ga00 ga01 ga02 ga11 ga12 ga22
-                        gb00 gb01 gb02 gb11 gb12 gb22 c00 c01 c02 c10 c11 c12 c20 c21 c22))
-         (macrolet ((face (index along own other)
-                      ;; how far apart along a face axis: the offset less each box's half-extents
-                      ;; along it, A's first
-                      (destructuring-bind ((o1 o2 o3) (p1 p2 p3)) (if (< index 3) (list own other) (list other own))
-                        `(let ((sep (- (abs ,along)
-                                       (+ (* ahx (abs ,o1)) (* ahy (abs ,o2)) (* ahz (abs ,o3)))
-                                       (+ (* bhx (abs ,p1)) (* bhy (abs ,p2)) (* bhz (abs ,p3))))))
-                           (declare (type single-float sep))
-                           (when (> sep best-sep) (setf best ,index best-sep sep))))))
-           ;; B's face is taken only when it separates the boxes more than A's best by the
-           ;; axis tolerance, so that two faces lying on each other keep one reference
-           (let ((a-best -1) (a-sep most-negative-single-float))
-             (declare (type fixnum a-best) (type single-float a-sep))
-             (face 0 ta0 (ga00 ga01 ga02) (c00 c01 c02))
-             (face 1 ta1 (ga01 ga11 ga12) (c10 c11 c12))
-             (face 2 ta2 (ga02 ga12 ga22) (c20 c21 c22))
-             (when (>= best-sep reach) (return-from box-pair-points set))
-             (setf a-best best a-sep best-sep best -1 best-sep most-negative-single-float)
-             (face 3 tb0 (gb00 gb01 gb02) (c00 c10 c20))
-             (face 4 tb1 (gb01 gb11 gb12) (c01 c11 c21))
-             (face 5 tb2 (gb02 gb12 gb22) (c02 c12 c22))
-             (unless (> best-sep (+ a-sep +box-axis-tolerance+))
-               (setf best a-best best-sep a-sep))
-             (when (>= best-sep reach) (return-from box-pair-points set))))
-         (box-edge-axes)))))
+(defmacro box-separating-axes ()
+  "The body of box-separating-axis: the products C = A^T B and their magnitudes, the offset in
+A's frame and in B's, then the six face axes and the nine edge axes read from them, leaving with
+BEST -1 as soon as an axis holds the boxes REACH apart. #BXCELL"
+  (labels ((name (control &rest numbers) (intern (apply #'format nil control numbers)))
+           (a (m k) (name "A~D~D" (1+ m) (1+ k))) (b (m k) (name "B~D~D" (1+ m) (1+ k)))
+           (c (i j) (name "C~D~D" i j)) (ac (i j) (name "AC~D~D" i j))
+           (ta (k) (name "TA~D" k)) (tb (k) (name "TB~D" k))
+           (ah (k) (nth k '(ahx ahy ahz))) (bh (k) (nth k '(bhx bhy bhz)))
+           (dot (u v) `(+ ,@(loop for p in u for q in v collect `(* ,p ,q))))
+           (column (f k) (loop for m below 3 collect (funcall f m k))))
+    (let ((c-names (loop for i below 3 append (loop for j below 3 collect (c i j))))
+          (ac-names (loop for i below 3 append (loop for j below 3 collect (ac i j)))))
+      `(let* (,@(loop for i below 3 append (loop for j below 3 collect `(,(c i j) ,(dot (column #'a i) (column #'b j)))))
+              ,@(loop for i below 3 append (loop for j below 3 collect `(,(ac i j) (abs ,(c i j)))))
+              ,@(loop for k below 3 collect `(,(ta k) ,(dot '(dx dy dz) (column #'a k))))
+              ,@(loop for k below 3 collect `(,(tb k) ,(dot '(dx dy dz) (column #'b k))))
+              (best -1) (best-sep most-negative-single-float)
+              (edge -1) (edge-sep most-negative-single-float) (elx 0.0) (ely 0.0) (elz 0.0))
+         (declare (type single-float ,@c-names ,@ac-names ta0 ta1 ta2 tb0 tb1 tb2 best-sep edge-sep elx ely elz)
+                  (type fixnum best edge))
+         (if (block test
+               ;; A's faces: A's half-extent along its own axis, B's through |C|
+               ,@(loop for k below 3
+                       collect `(let ((sep (- (abs ,(ta k)) ,(ah k) ,(dot '(bhx bhy bhz) (list (ac k 0) (ac k 1) (ac k 2))))))
+                                  (declare (type single-float sep))
+                                  (when (> sep best-sep) (setf best ,k best-sep sep))))
+               (when (>= best-sep reach) (return-from test nil))
+               ;; B's faces, taken only when one holds the boxes apart by the axis tolerance
+               ;; more than A's best, so that two faces lying on each other keep one reference
+               (let ((a-best best) (a-sep best-sep))
+                 (declare (type fixnum a-best) (type single-float a-sep))
+                 (setf best -1 best-sep most-negative-single-float)
+                 ,@(loop for k below 3
+                         collect `(let ((sep (- (abs ,(tb k)) ,(dot '(ahx ahy ahz) (list (ac 0 k) (ac 1 k) (ac 2 k))) ,(bh k))))
+                                    (declare (type single-float sep))
+                                    (when (> sep best-sep) (setf best ,(+ 3 k) best-sep sep))))
+                 (unless (> best-sep (+ a-sep +box-axis-tolerance+))
+                   (setf best a-best best-sep a-sep)))
+               (when (>= best-sep reach) (return-from test nil))
+               ;; the edge axes A_i x B_j, of length sqrt(C_i1j^2 + C_i2j^2), but for edges
+               ;; near parallel
+               ,@(loop for i below 3
+                       append (loop for j below 3
+                                    collect (let ((i1 (mod (+ i 1) 3)) (i2 (mod (+ i 2) 3))
+                                                  (j1 (mod (+ j 1) 3)) (j2 (mod (+ j 2) 3)))
+                                              `(let ((len2 (+ (* ,(c i1 j) ,(c i1 j)) (* ,(c i2 j) ,(c i2 j)))))
+                                                 (declare (type single-float len2))
+                                                 (when (> len2 1e-6)
+                                                   (let* ((f (/ 1.0 (fsqrt len2)))
+                                                          (sep (* f (- (abs (- (* ,(ta i2) ,(c i1 j)) (* ,(ta i1) ,(c i2 j))))
+                                                                       (+ (* ,(ah i1) ,(ac i2 j)) (* ,(ah i2) ,(ac i1 j)))
+                                                                       (+ (* ,(bh j1) ,(ac i j2)) (* ,(bh j2) ,(ac i j1)))))))
+                                                     (declare (type single-float f sep))
+                                                     (when (>= sep reach) (return-from test nil))
+                                                     (when (> sep edge-sep)
+                                                       ,(destructuring-bind ((ux uy uz) (vx vy vz)) (list (column #'a i) (column #'b j))
+                                                         `(setf edge ,(+ (* 3 i) j) edge-sep sep
+                                                                elx (* f (- (* ,uy ,vz) (* ,uz ,vy)))
+                                                                ely (* f (- (* ,uz ,vx) (* ,ux ,vz)))
+                                                                elz (* f (- (* ,ux ,vy) (* ,uy ,vx))))))))))))
+               t)
+             (values best best-sep edge edge-sep elx ely elz)
+             (values -1 0.0 -1 0.0 0.0 0.0 0.0))))))
 
-(defmacro box-edge-axes ()
-  "Find the edge axis along which two boxes lie farthest apart (or overlap least), A's axis I
-crossed with B's axis J, as EDGE (3I + J), EDGE-SEP and ELX ELY ELZ, but for edges near parallel;
-leave box-pair-points at once when one holds the boxes at least REACH apart. Expanded in
-box-pair-axes, whose variables it reads and sets. #BXCELL"
-  `(flet ((apart (lx ly lz)
-            (declare (type single-float lx ly lz))
-            (- (abs (+ (* dx lx) (* dy ly) (* dz lz)))
-               (+ (* ahx (abs (+ (* a11 lx) (* a21 ly) (* a31 lz))))
-                  (* ahy (abs (+ (* a12 lx) (* a22 ly) (* a32 lz))))
-                  (* ahz (abs (+ (* a13 lx) (* a23 ly) (* a33 lz)))))
-               (+ (* bhx (abs (+ (* b11 lx) (* b21 ly) (* b31 lz))))
-                  (* bhy (abs (+ (* b12 lx) (* b22 ly) (* b32 lz))))
-                  (* bhz (abs (+ (* b13 lx) (* b23 ly) (* b33 lz))))))))
-     (declare (inline apart))
-     ,@(loop for i below 3
-             append (loop for j below 3
-                          collect (destructuring-bind ((ux uy uz) (vx vy vz))
-                                      (list (nth i '((a11 a21 a31) (a12 a22 a32) (a13 a23 a33)))
-                                            (nth j '((b11 b21 b31) (b12 b22 b32) (b13 b23 b33))))
-                                    `(let* ((lx (- (* ,uy ,vz) (* ,uz ,vy)))
-                                            (ly (- (* ,uz ,vx) (* ,ux ,vz)))
-                                            (lz (- (* ,ux ,vy) (* ,uy ,vx)))
-                                            (len2 (+ (* lx lx) (* ly ly) (* lz lz))))
-                                       (declare (type single-float lx ly lz len2))
-                                       (when (> len2 1e-6)
-                                         (let* ((f (/ 1.0 (fsqrt len2)))
-                                                (sep (apart (* f lx) (* f ly) (* f lz))))
-                                           (declare (type single-float f sep))
-                                           (when (>= sep reach) (return-from box-pair-points set))
-                                           (when (> sep edge-sep)
-                                             (setf edge ,(+ (* 3 i) j) edge-sep sep
-                                                   elx (* f lx) ely (* f ly) elz (* f lz)))))))))))
+(declaim (inline box-separating-axis))
+(defun box-separating-axis (reach dx dy dz a11 a12 a13 a21 a22 a23 a31 a32 a33 ahx ahy ahz
+                            b11 b12 b13 b21 b22 b23 b31 b32 b33 bhx bhy bhz)
+  "The separating axis of box A (axes A11 .. A33 row by row, half-extents AHX AHY AHZ) and box B
+(the same, B...), A's centre DX DY DZ from B's, as seven values: the face axis along which they
+lie farthest apart or overlap least (0-2 A's, 3-5 B's, B's only when it beats A's by the axis
+tolerance) and that distance, the edge axis, A's axis I crossed with B's axis J as 3I + J, and
+its distance and unit direction; the first value is -1 when some axis holds them at least REACH
+apart. #BXCELL"
+  (declare (type single-float reach dx dy dz a11 a12 a13 a21 a22 a23 a31 a32 a33 ahx ahy ahz
+                 b11 b12 b13 b21 b22 b23 b31 b32 b33 bhx bhy bhz))
+  (box-separating-axes))
 
 (defmacro box-edge-point ()
   "Add the point of an edge of box A against an edge of box B (EDGE, along ELX ELY ELZ): midway
@@ -8451,21 +8445,23 @@ give one. KEY-BASE with the axis and the vertex's or the edges' feature is a poi
   (multiple-value-bind (a11 a12 a13 a21 a22 a23 a31 a32 a33) (box-axes aqw aqx aqy aqz)
     (multiple-value-bind (b11 b12 b13 b21 b22 b23 b31 b32 b33) (box-axes bqw bqx bqy bqz)
       (declare (type single-float a11 a12 a13 a21 a22 a23 a31 a32 a33 b11 b12 b13 b21 b22 b23 b31 b32 b33))
-      (let ((dx (- acx bcx)) (dy (- acy bcy)) (dz (- acz bcz))
-            (best -1) (best-sep most-negative-single-float)
-            (edge -1) (edge-sep most-negative-single-float) (elx 0.0) (ely 0.0) (elz 0.0))
-        (declare (type single-float dx dy dz best-sep edge-sep elx ely elz) (type fixnum best edge))
-        ;; the six face axes and the nine edge axes: how far apart the boxes are along each,
-        ;; leaving as soon as one holds them REACH apart
-        (box-pair-axes)
-        (cond
-          ((> edge-sep (+ best-sep +box-axis-tolerance+))
-           ;; an edge of A against an edge of B: one point, midway between the edges' nearest
-           ;; points, the normal their common perpendicular, from A towards B, pushing B
-           (box-edge-point))
-          (t
-           ;; the reference box R owns the face; the incident box I is pushed off it along N
-           (box-face-points))))))
+      (let ((dx (- acx bcx)) (dy (- acy bcy)) (dz (- acz bcz)))
+        (declare (type single-float dx dy dz))
+        ;; the six face axes and the nine edge axes: how far apart the boxes are along each
+        (multiple-value-bind (best best-sep edge edge-sep elx ely elz)
+            (box-separating-axis reach dx dy dz a11 a12 a13 a21 a22 a23 a31 a32 a33 ahx ahy ahz
+                                 b11 b12 b13 b21 b22 b23 b31 b32 b33 bhx bhy bhz)
+          (declare (type fixnum best edge) (type single-float best-sep edge-sep elx ely elz))
+          (cond
+            ;; some axis holds them at least the reach apart: no point
+            ((< best 0))
+            ((> edge-sep (+ best-sep +box-axis-tolerance+))
+             ;; an edge of A against an edge of B: one point, midway between the edges' nearest
+             ;; points, the normal their common perpendicular, from A towards B, pushing B
+             (box-edge-point))
+            (t
+             ;; the reference box R owns the face; the incident box I is pushed off it along N
+             (box-face-points)))))))
   set)
 ;; A box against the cells:8 ends here
 

@@ -7970,6 +7970,82 @@ the box HANDLE of WORLD, sampled every 5 mm from z = -1 to 2; 0 when none is ins
                    (check (< spin 1e-3) "along (~,3F 0 ~,3F): a cube spins at ~,5F rad/s" ux uz spin)))))))
 ;; BXCELL-turned-cubes-meet-face-to-face ends here
 
+;; [[file:../physics.org::#BXCELL][BXCELL-separating-axis-from-products]]
+(define-claim "BXCELL" separating-axis-from-products
+    "The separating axis read from C = A^T B is the one the fifteen axes spelled out choose, and its distance theirs."
+  (let ((random (sb-ext:seed-random-state 44)) (reach 0.1) (apart 0) (near 0))
+    (labels ((uniform (lo hi) (+ lo (random (- hi lo) random)))
+             (unit-quaternion ()
+               (loop (let* ((q (loop repeat 4 collect (uniform -1.0 1.0)))
+                            (l (sqrt (reduce #'+ (mapcar (lambda (v) (* v v)) q)))))
+                       (when (< 0.1 l 1.0) (return (mapcar (lambda (v) (/ v l)) q))))))
+             (product (p q)
+               (destructuring-bind ((a b c d) (e f g h)) (list p q)
+                 (list (- (* a e) (* b f) (* c g) (* d h)) (+ (* a f) (* b e) (* c h) (- (* d g)))
+                       (+ (* a g) (- (* b h)) (* c e) (* d f)) (+ (* a h) (* b g) (- (* c f)) (* d e)))))
+             (axes (q) (multiple-value-list (apply #'luv-physics::box-axes (mapcar (lambda (v) (float v 1.0)) q))))
+             (column (m k) (list (nth k m) (nth (+ 3 k) m) (nth (+ 6 k) m)))
+             (dot (u v) (reduce #'+ (mapcar #'* u v)))
+             (cross (u v) (list (- (* (second u) (third v)) (* (third u) (second v)))
+                                (- (* (third u) (first v)) (* (first u) (third v)))
+                                (- (* (first u) (second v)) (* (second u) (first v))))))
+      (loop while (or (< apart 1000) (< near 1000)) repeat 20000
+            do (let* ((qa (unit-quaternion))
+                      (qb (case (random 4 random)
+                            (0 (unit-quaternion)) (1 qa)
+                            (t (let* ((angle (if (zerop (random 2 random)) 1e-5 0.01))
+                                      (axis (subseq (unit-quaternion) 1)) (l (sqrt (dot axis axis)))
+                                      (s (/ (sin (/ angle 2)) l)))
+                                 (product (list (cos (/ angle 2)) (* s (first axis)) (* s (second axis)) (* s (third axis)))
+                                          qa)))))
+                      (a (axes qa)) (b (axes qb))
+                      (ha (loop repeat 3 collect (uniform 0.05 2.0))) (hb (loop repeat 3 collect (uniform 0.05 2.0)))
+                      (far (+ (sqrt (dot ha ha)) (sqrt (dot hb hb))))
+                      (d (loop repeat 3 collect (uniform (- far) far)))
+                      (a-axes (loop for k below 3 collect (column a k))) (b-axes (loop for k below 3 collect (column b k))))
+                 (flet ((spelled (l)
+                          ;; how far apart along the unit axis L, from the world's vectors
+                          (- (abs (dot d l))
+                             (loop for u in a-axes for h in ha sum (* h (abs (dot u l))))
+                             (loop for u in b-axes for h in hb sum (* h (abs (dot u l)))))))
+                   (let* ((faces (mapcar #'spelled (append a-axes b-axes)))
+                          (a-best (reduce #'max (subseq faces 0 3))) (b-best (reduce #'max (subseq faces 3)))
+                          (face-best (if (> b-best (+ a-best 5e-4)) b-best a-best))
+                          (edges (loop for u in a-axes
+                                       append (loop for v in b-axes
+                                                    collect (let* ((l (cross u v)) (n (sqrt (dot l l))))
+                                                              (and (> n 1e-3) (spelled (mapcar (lambda (x) (/ x n)) l)))))))
+                          (edge-best (reduce #'max (remove nil edges) :initial-value most-negative-single-float))
+                          (most (max face-best edge-best)))
+                     (unless (or (< (abs (- most reach)) 1e-4) (< (abs (- b-best a-best 5e-4)) 1e-4)
+                                 (some (lambda (e) (and e (< (abs (- e reach)) 1e-4))) edges))
+                       (multiple-value-bind (best best-sep edge edge-sep)
+                           (apply #'luv-physics::box-separating-axis
+                                  (mapcar (lambda (v) (float v 1.0))
+                                          (append (list reach) d a ha b hb)))
+                         (cond
+                           ((> most reach)
+                            (incf apart)
+                            (check (= best -1) "held ~,6F m apart, reported not (~D ~,6F)" most best best-sep))
+                           (t
+                            (incf near)
+                            (check (>= best 0) "held ~,6F m apart, reported apart" most)
+                            (when (>= best 0)
+                              (check (< (abs (- (nth best faces) face-best)) 2e-5 ) "face ~D at ~,7F, the best ~,7F"
+                                     best (nth best faces) face-best)
+                              (check (< (abs (- best-sep face-best)) 2e-5) "face distance ~,7F, spelled out ~,7F"
+                                     best-sep face-best)
+                              (if (some #'identity edges)
+                                  (progn
+                                    (check (and (<= 0 edge 8) (nth edge edges)
+                                                (< (abs (- (nth edge edges) edge-best)) 2e-5))
+                                           "edge ~D at ~S, the best ~,7F" edge (and (<= 0 edge 8) (nth edge edges)) edge-best)
+                                    (check (< (abs (- edge-sep edge-best)) 2e-5) "edge distance ~,7F, spelled out ~,7F"
+                                           edge-sep edge-best))
+                                  (check (= edge -1) "edge ~D with every edge pair parallel" edge)))))))))))
+      (check (and (>= apart 1000) (>= near 1000)) "~D pairs apart, ~D near" apart near))))
+;; BXCELL-separating-axis-from-products ends here
+
 ;; [[file:../physics.org::#BXSOLV][BXSOLV-families-agree-on-boxes]]
 (define-claim "BXSOLV" families-agree-on-boxes
     "A tumbling box and a sliding box end in the same state hash in every kernel family."
