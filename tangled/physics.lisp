@@ -8146,33 +8146,66 @@ through them; write their places into KEEP in increasing order and return 4. #BX
 ;; A box against the cells:5 ends here
 
 ;; [[file:../physics.org::#BXCELL][A box against the cells:6]]
+(eval-when (:compile-toplevel :load-toplevel :execute)
+  (defun box-axis-name (control &rest numbers)
+    "The symbol CONTROL formats NUMBERS to, in this package: A12 (A's axes row 1 column 2), C01
+(A's axis 0 with B's axis 1), AC01 (its magnitude), TA0 (the offset along A's axis 0). #BXCELL"
+    (intern (apply #'format nil control numbers) (find-package :luv-physics))))
+
+(defmacro box-face-axis (index along own-half other-halves magnitudes)
+  "Set BEST and BEST-SEP to INDEX and the distance along the face axis INDEX when farther than
+BEST-SEP: the offset ALONG it less the axis's own box's half-extent OWN-HALF less the other's
+OTHER-HALVES times its axes' MAGNITUDES along it. Expanded in box-separating-axes. #BXCELL"
+  `(let ((sep (- (abs ,along) ,own-half (+ ,@(mapcar (lambda (h c) `(* ,h ,c)) other-halves magnitudes)))))
+     (declare (type single-float sep))
+     (when (> sep best-sep) (setf best ,index best-sep sep))))
+
+(defmacro box-edge-axis (i j)
+  "Leave the test with no axis when the edge axis of A's axis I crossed with B's axis J holds the
+boxes REACH apart, else set EDGE, EDGE-SEP and ELX ELY ELZ to it when farther than EDGE-SEP; but
+for edges near parallel. Expanded in box-separating-axes. #BXCELL"
+  (flet ((c (p q) (box-axis-name "C~D~D" p q)) (ac (p q) (box-axis-name "AC~D~D" p q))
+         (ta (k) (box-axis-name "TA~D" k)) (ah (k) (nth k '(ahx ahy ahz))) (bh (k) (nth k '(bhx bhy bhz)))
+         (a (m) (box-axis-name "A~D~D" (1+ m) (1+ i))) (b (m) (box-axis-name "B~D~D" (1+ m) (1+ j))))
+    (let ((i1 (mod (+ i 1) 3)) (i2 (mod (+ i 2) 3)) (j1 (mod (+ j 1) 3)) (j2 (mod (+ j 2) 3)))
+      `(let ((len2 (+ (* ,(c i1 j) ,(c i1 j)) (* ,(c i2 j) ,(c i2 j)))))
+         (declare (type single-float len2))
+         (when (> len2 1e-6)
+           (let* ((f (/ 1.0 (fsqrt len2)))
+                  (sep (* f (- (abs (- (* ,(ta i2) ,(c i1 j)) (* ,(ta i1) ,(c i2 j))))
+                               (+ (* ,(ah i1) ,(ac i2 j)) (* ,(ah i2) ,(ac i1 j)))
+                               (+ (* ,(bh j1) ,(ac i j2)) (* ,(bh j2) ,(ac i j1)))))))
+             (declare (type single-float f sep))
+             (when (>= sep reach) (return-from test nil))
+             (when (> sep edge-sep)
+               ;; the axis's direction in the world, A_i x B_j over its length
+               (setf edge ,(+ (* 3 i) j) edge-sep sep
+                     elx (* f (- (* ,(a 1) ,(b 2)) (* ,(a 2) ,(b 1))))
+                     ely (* f (- (* ,(a 2) ,(b 0)) (* ,(a 0) ,(b 2))))
+                     elz (* f (- (* ,(a 0) ,(b 1)) (* ,(a 1) ,(b 0))))))))))))
+
 (defmacro box-separating-axes ()
   "The body of box-separating-axis: the products C = A^T B and their magnitudes, the offset in
 A's frame and in B's, then the six face axes and the nine edge axes read from them, leaving with
 BEST -1 as soon as an axis holds the boxes REACH apart. #BXCELL"
-  (labels ((name (control &rest numbers) (intern (apply #'format nil control numbers)))
-           (a (m k) (name "A~D~D" (1+ m) (1+ k))) (b (m k) (name "B~D~D" (1+ m) (1+ k)))
-           (c (i j) (name "C~D~D" i j)) (ac (i j) (name "AC~D~D" i j))
-           (ta (k) (name "TA~D" k)) (tb (k) (name "TB~D" k))
-           (ah (k) (nth k '(ahx ahy ahz))) (bh (k) (nth k '(bhx bhy bhz)))
-           (dot (u v) `(+ ,@(loop for p in u for q in v collect `(* ,p ,q))))
-           (column (f k) (loop for m below 3 collect (funcall f m k))))
-    (let ((c-names (loop for i below 3 append (loop for j below 3 collect (c i j))))
-          (ac-names (loop for i below 3 append (loop for j below 3 collect (ac i j)))))
-      `(let* (,@(loop for i below 3 append (loop for j below 3 collect `(,(c i j) ,(dot (column #'a i) (column #'b j)))))
-              ,@(loop for i below 3 append (loop for j below 3 collect `(,(ac i j) (abs ,(c i j)))))
-              ,@(loop for k below 3 collect `(,(ta k) ,(dot '(dx dy dz) (column #'a k))))
-              ,@(loop for k below 3 collect `(,(tb k) ,(dot '(dx dy dz) (column #'b k))))
+  (flet ((c (i j) (box-axis-name "C~D~D" i j)) (ac (i j) (box-axis-name "AC~D~D" i j))
+         (column (box k) (loop for m from 1 to 3 collect (box-axis-name "~A~D~D" box m (1+ k))))
+         (dot (u v) `(+ ,@(mapcar (lambda (p q) `(* ,p ,q)) u v))))
+    (let ((pairs (loop for i below 3 append (loop for j below 3 collect (list i j)))))
+      `(let* (,@(loop for (i j) in pairs collect `(,(c i j) ,(dot (column "A" i) (column "B" j))))
+              ,@(loop for (i j) in pairs collect `(,(ac i j) (abs ,(c i j))))
+              ,@(loop for k below 3 collect `(,(box-axis-name "TA~D" k) ,(dot '(dx dy dz) (column "A" k))))
+              ,@(loop for k below 3 collect `(,(box-axis-name "TB~D" k) ,(dot '(dx dy dz) (column "B" k))))
               (best -1) (best-sep most-negative-single-float)
               (edge -1) (edge-sep most-negative-single-float) (elx 0.0) (ely 0.0) (elz 0.0))
-         (declare (type single-float ,@c-names ,@ac-names ta0 ta1 ta2 tb0 tb1 tb2 best-sep edge-sep elx ely elz)
+         (declare (type single-float ,@(loop for (i j) in pairs collect (c i j) collect (ac i j))
+                        ta0 ta1 ta2 tb0 tb1 tb2 best-sep edge-sep elx ely elz)
                   (type fixnum best edge))
          (if (block test
                ;; A's faces: A's half-extent along its own axis, B's through |C|
                ,@(loop for k below 3
-                       collect `(let ((sep (- (abs ,(ta k)) ,(ah k) ,(dot '(bhx bhy bhz) (list (ac k 0) (ac k 1) (ac k 2))))))
-                                  (declare (type single-float sep))
-                                  (when (> sep best-sep) (setf best ,k best-sep sep))))
+                       collect `(box-face-axis ,k ,(box-axis-name "TA~D" k) ,(nth k '(ahx ahy ahz)) (bhx bhy bhz)
+                                               ,(loop for j below 3 collect (ac k j))))
                (when (>= best-sep reach) (return-from test nil))
                ;; B's faces, taken only when one holds the boxes apart by the axis tolerance
                ;; more than A's best, so that two faces lying on each other keep one reference
@@ -8180,33 +8213,14 @@ BEST -1 as soon as an axis holds the boxes REACH apart. #BXCELL"
                  (declare (type fixnum a-best) (type single-float a-sep))
                  (setf best -1 best-sep most-negative-single-float)
                  ,@(loop for k below 3
-                         collect `(let ((sep (- (abs ,(tb k)) ,(dot '(ahx ahy ahz) (list (ac 0 k) (ac 1 k) (ac 2 k))) ,(bh k))))
-                                    (declare (type single-float sep))
-                                    (when (> sep best-sep) (setf best ,(+ 3 k) best-sep sep))))
+                         collect `(box-face-axis ,(+ 3 k) ,(box-axis-name "TB~D" k) ,(nth k '(bhx bhy bhz)) (ahx ahy ahz)
+                                                 ,(loop for i below 3 collect (ac i k))))
                  (unless (> best-sep (+ a-sep +box-axis-tolerance+))
                    (setf best a-best best-sep a-sep)))
                (when (>= best-sep reach) (return-from test nil))
                ;; the edge axes A_i x B_j, of length sqrt(C_i1j^2 + C_i2j^2), but for edges
                ;; near parallel
-               ,@(loop for i below 3
-                       append (loop for j below 3
-                                    collect (let ((i1 (mod (+ i 1) 3)) (i2 (mod (+ i 2) 3))
-                                                  (j1 (mod (+ j 1) 3)) (j2 (mod (+ j 2) 3)))
-                                              `(let ((len2 (+ (* ,(c i1 j) ,(c i1 j)) (* ,(c i2 j) ,(c i2 j)))))
-                                                 (declare (type single-float len2))
-                                                 (when (> len2 1e-6)
-                                                   (let* ((f (/ 1.0 (fsqrt len2)))
-                                                          (sep (* f (- (abs (- (* ,(ta i2) ,(c i1 j)) (* ,(ta i1) ,(c i2 j))))
-                                                                       (+ (* ,(ah i1) ,(ac i2 j)) (* ,(ah i2) ,(ac i1 j)))
-                                                                       (+ (* ,(bh j1) ,(ac i j2)) (* ,(bh j2) ,(ac i j1)))))))
-                                                     (declare (type single-float f sep))
-                                                     (when (>= sep reach) (return-from test nil))
-                                                     (when (> sep edge-sep)
-                                                       ,(destructuring-bind ((ux uy uz) (vx vy vz)) (list (column #'a i) (column #'b j))
-                                                         `(setf edge ,(+ (* 3 i) j) edge-sep sep
-                                                                elx (* f (- (* ,uy ,vz) (* ,uz ,vy)))
-                                                                ely (* f (- (* ,uz ,vx) (* ,ux ,vz)))
-                                                                elz (* f (- (* ,ux ,vy) (* ,uy ,vx))))))))))))
+               ,@(loop for (i j) in pairs collect `(box-edge-axis ,i ,j))
                t)
              (values best best-sep edge edge-sep elx ely elz)
              (values -1 0.0 -1 0.0 0.0 0.0 0.0))))))

@@ -7989,7 +7989,7 @@ the box HANDLE of WORLD, sampled every 5 mm from z = -1 to 2; 0 when none is ins
              (cross (u v) (list (- (* (second u) (third v)) (* (third u) (second v)))
                                 (- (* (third u) (first v)) (* (first u) (third v)))
                                 (- (* (first u) (second v)) (* (second u) (first v))))))
-      (loop while (or (< apart 1000) (< near 1000)) repeat 20000
+      (loop repeat 4000
             do (let* ((qa (unit-quaternion))
                       (qb (case (random 4 random)
                             (0 (unit-quaternion)) (1 qa)
@@ -8001,7 +8001,7 @@ the box HANDLE of WORLD, sampled every 5 mm from z = -1 to 2; 0 when none is ins
                       (a (axes qa)) (b (axes qb))
                       (ha (loop repeat 3 collect (uniform 0.05 2.0))) (hb (loop repeat 3 collect (uniform 0.05 2.0)))
                       (far (+ (sqrt (dot ha ha)) (sqrt (dot hb hb))))
-                      (d (loop repeat 3 collect (uniform (- far) far)))
+                      (d (loop repeat 3 collect (uniform (* -0.5 far) (* 0.5 far))))
                       (a-axes (loop for k below 3 collect (column a k))) (b-axes (loop for k below 3 collect (column b k))))
                  (flet ((spelled (l)
                           ;; how far apart along the unit axis L, from the world's vectors
