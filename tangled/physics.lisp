@@ -8109,7 +8109,7 @@ against its faces. #BXCELL"
   set)
 ;; A box against the cells:4 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:6]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:7]]
 (defconstant +box-axis-tolerance+ 5e-4
   "How much farther apart the second box's face must hold two boxes than the first's best for
 it to be the reference, in metres: a tenth of the slop, as Box2D's polygons do. #BXCELL")
@@ -8163,9 +8163,9 @@ through them; write their places into KEEP in increasing order and return 4. #BX
 (defmacro nth-of (k c1 c2 c3)
   "C1, C2 or C3, as K is 0, 1 or 2. #BXCELL"
   `(case ,k (0 ,c1) (1 ,c2) (t ,c3)))
-;; A box against the cells:6 ends here
+;; A box against the cells:7 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:7]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:8]]
 (eval-when (:compile-toplevel :load-toplevel :execute)
   (defun box-axis-name (control &rest numbers)
     "The symbol CONTROL formats NUMBERS to, in this package: A12 (A's axes row 1 column 2), C01
@@ -8300,9 +8300,9 @@ pushing B. Expanded in box-pair-points, whose variables it reads. #BXCELL"
       (when (< gap reach)
         (add-box-point set row-b owner (logior key-base (ash 7 5) edge) nx ny nz
                        (- mx bcx) (- my bcy) (- mz bcz) gap row-a (- mx acx) (- my acy) (- mz acz))))))
-;; A box against the cells:7 ends here
+;; A box against the cells:8 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:8]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:9]]
 (defmacro with-box-roles (&body body)
   "Run BODY with the reference box's numbers bound as R... (centre RCX RCY RCZ, axes R11 .. R33,
 half-extents RHX RHY RHZ, row RROW), the incident box's as I..., and the reference face's AXIS:
@@ -8413,9 +8413,9 @@ box-face-points, whose variables it reads. #BXCELL"
            (add-box-point set irow owner
                           (logior key-base (ash (+ (if on-b 3 0) axis) 5) (aref ids i))
                           nx ny nz (- fx ex) (- fy ey) (- fz ez) gap rrow fx fy fz))))))
-;; A box against the cells:8 ends here
+;; A box against the cells:9 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:9]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:10]]
 (defmacro box-face-points ()
   "Add the points of the incident box's face most against the reference face (box B's when the
 separating axis BEST is one of B's, else A's), pushed off it along the face's normal: its corners
@@ -8497,9 +8497,9 @@ give one. KEY-BASE with the axis and the vertex's or the edges' feature is a poi
              ;; the reference box R owns the face; the incident box I is pushed off it along N
              (box-face-points)))))))
   set)
-;; A box against the cells:9 ends here
+;; A box against the cells:10 ends here
 
-;; [[file:../physics.org::#BXCELL][A box against the cells:10]]
+;; [[file:../physics.org::#BXCELL][A box against the cells:11]]
 (defun grid-awake-boxes (world set n)
   "Bucket the centres of the awake boxes among the first N awake rows of WORLD into SET's grid,
 whose items are their rows, in cells of the largest diameter and the margin, and keep their
@@ -8582,7 +8582,7 @@ which holds still as a cell does (box-pair-points). #BXCELL"
                                 +flag-box-shape+)))
               (meet sleeping (aref (handle-table-local ids) (handle-index h)) n)))))))
   set)
-;; A box against the cells:10 ends here
+;; A box against the cells:11 ends here
 
 ;; [[file:../physics.org::#BXSOLV][Box points in the substeps:1]]
 (defconstant +box-jacobian-width+ 12

@@ -7639,6 +7639,64 @@ the box HANDLE of WORLD, sampled every 5 mm from z = -1 to 2; 0 when none is ins
                turn across hashes))))))
 ;; BXCELL-slanted-cube-tips-over-a-ledge-edge ends here
 
+;; [[file:../physics.org::#BXCELL][BXCELL-cell-edge-meets-box-edge-at-any-push]]
+(defun cross-product (a b)
+  "The cross product of the lists A and B of three numbers. #BXCELL"
+  (destructuring-bind (a1 a2 a3) a
+    (destructuring-bind (b1 b2 b3) b
+      (list (- (* a2 b3) (* a3 b2)) (- (* a3 b1) (* a1 b3)) (- (* a1 b2) (* a2 b1))))))
+
+(defun axes-quaternion (a b c)
+  "The unit quaternion W X Y Z of the rotation whose matrix has the columns A B C, for a rotation
+whose trace is above -1 or whose first diagonal entry is its largest. #BXCELL"
+  (destructuring-bind ((m00 m10 m20) (m01 m11 m21) (m02 m12 m22)) (list a b c)
+    (let ((trace (+ m00 m11 m22)))
+      (if (> trace 0)
+          (let ((s (* 2 (sqrt (+ 1 trace)))))
+            (list (* 0.25 s) (/ (- m21 m12) s) (/ (- m02 m20) s) (/ (- m10 m01) s)))
+          (let ((s (* 2 (sqrt (+ 1 m00 (- m11) (- m22))))))
+            (list (/ (- m21 m12) s) (* 0.25 s) (/ (+ m01 m10) s) (/ (+ m02 m20) s)))))))
+
+(define-claim "BXCELL" cell-edge-meets-box-edge-at-any-push
+    "A box's edge crossing a convex cell edge has one point there, its push, gap and place the lines give, at any push the cell edge's cone holds."
+  (dolist (degrees '(272 275 300 315 330 355 358))
+    (let ((terrain (make-voxel-terrain)))
+      (fill-terrain terrain -16 -16 -16 32 32 32 nil)
+      (fill-terrain terrain -1 0 -4 0 1 5 t)
+      (let* ((world (make-physics-world :terrain terrain :gravity '(0 0 0) :features '(:terrain :friction :sleep :box-bodies)))
+             (psi (* degrees (/ pi 180))) (beta (/ pi 6)) (gamma (/ pi 4))
+             (push (list (cos psi) (sin psi) 0d0))
+             ;; the cube's edge: square to the push, 30 degrees out of the xy plane
+             (u (list (* (sin psi) (cos beta)) (- (* (cos psi) (cos beta))) (sin beta)))
+             (p (mapcar (lambda (x y) (+ (* (cos gamma) x) (* (sin gamma) y))) push (cross-product u push)))
+             (w (cross-product u p))
+             ;; the centre lies the edge's distance from it, and 1 cm more, out along the push
+             (out (+ (* 0.5 (abs (reduce #'+ (mapcar #'* push p)))) (* 0.5 (abs (reduce #'+ (mapcar #'* push w)))) 0.01))
+             (centre (mapcar (lambda (q k) (+ q (* out k))) '(0d0 0d0 0.5d0) push)))
+        (destructuring-bind (x y z) centre (add-physics-box world x y z 0.5 0.5 0.5 :orientation (axes-quaternion u p w)))
+        (step-physics-world world)
+        (let* ((points (luv-physics::box-set-points (luv-physics::physics-world-box-bodies world)))
+               (on (loop for k below (luv-physics::box-point-columns-length points)
+                         for key = (aref (luv-physics::box-point-columns-key points) k)
+                         ;; the edge key of the lattice point 0 0 0 along z
+                         when (and (= 7 (ldb (byte 3 0) key)) (logbitp luv-physics::+box-point-lattice-bit+ key)
+                                   (= 2 (floor (ldb (byte 6 3) key) 12)) (zerop (ldb (byte 24 9) key)))
+                           collect k)))
+          (check (= 1 (length on)) "at ~D degrees: ~D points on the edge" degrees (length on))
+          (when on
+            (let ((k (first on)))
+              (flet ((col (name) (aref (funcall (find-symbol (format nil "BOX-POINT-COLUMNS-~A" name) :luv-physics) points) k)))
+                (check (< (max (abs (- (col "NX") (first push))) (abs (- (col "NY") (second push))) (abs (col "NZ"))) 1e-4)
+                       "at ~D degrees: the push ~,5F ~,5F ~,5F" degrees (col "NX") (col "NY") (col "NZ"))
+                ;; the prepare adds the slop to every point's gap
+                (check (< (abs (- (col "SEPARATION") (+ 0.01 *physics-linear-slop*))) 1e-4)
+                       "at ~D degrees: a gap and slop of ~,5F m" degrees (col "SEPARATION"))
+                (let ((at (mapcar #'+ centre (list (col "RX") (col "RY") (col "RZ"))))
+                      (midway (mapcar (lambda (q k) (+ q (* 0.005 k))) '(0d0 0d0 0.5d0) push)))
+                  (check (< (reduce #'max (mapcar (lambda (a b) (abs (- a b))) at midway)) 1e-4)
+                         "at ~D degrees: the point at ~{~,4F~^ ~}, not ~{~,4F~^ ~}" degrees at midway))))))))))
+;; BXCELL-cell-edge-meets-box-edge-at-any-push ends here
+
 ;; [[file:../physics.org::#BXCELL][BXCELL-box-rests-on-cells]]
 (define-claim "BXCELL" box-rests-on-cells
     "A dropped unit cube rests a slop deep, sleeps, and does not drift over 60 s."
