@@ -317,15 +317,18 @@ velocities ends with. #V0CAB5"
 (define-condition physics-body-in-solid-cell (invalid-physics-parameter)
   ((operation :initarg :operation :reader physics-body-in-solid-cell-operation)
    (cell :initarg :cell :reader physics-body-in-solid-cell-cell)
-   (resident :initarg :resident :reader physics-body-in-solid-cell-resident))
+   (resident :initarg :resident :reader physics-body-in-solid-cell-resident)
+   (part :initarg :part :initform "the centre" :reader physics-body-in-solid-cell-part))
   (:report (lambda (c s)
-             (format s "~(~A~): the centre ~S lies in the ~:[non-resident~;solid~] cell ~S; a body starts ~
+             (format s "~(~A~): ~A ~S lies in the ~:[non-resident~;solid~] cell ~S; a body starts ~
                         in an air cell of the resident terrain, or is added with :inside-cells :push-out ~
                         to be pushed out" (physics-body-in-solid-cell-operation c)
+                     (physics-body-in-solid-cell-part c)
                      (invalid-physics-parameter-value c) (physics-body-in-solid-cell-resident c)
                      (physics-body-in-solid-cell-cell c))))
   (:documentation "A body placed with its centre in a solid cell, or in a chunk that is not
-resident (which counts as solid). #C0ND1T"))
+resident (which counts as solid), or a box with a corner there: PART says which, the centre or a
+corner of the box centred at the position given, and CELL is that cell. #C0ND1T"))
 
 (define-condition physics-world-busy (physics-error)
   ((operation :initarg :operation :reader physics-world-busy-operation))
@@ -7665,24 +7668,28 @@ columns are the box's axes in the world. #BXR0WS"
             (* 2.0 (- xz wy)) (* 2.0 (+ yz wx)) (- 1.0 (* 2.0 (+ xx yy))))))
 
 (defun box-in-cells-p (world x y z hx hy hz qw qx qy qz)
-  "True when the centre X Y Z or a corner of the box of half-extents HX HY HZ turned by QW QX QY
-QZ, each pulled 0.02 m towards the centre, lies in a solid or non-resident cell of WORLD's
-terrain. #BXR0WS"
+  "The cell, as a list of its indices, in which the centre X Y Z or else a corner of the box of
+half-extents HX HY HZ turned by QW QX QY QZ, each pulled 0.02 m towards the centre, lies when that
+cell of WORLD's terrain is solid or not resident, and a second value, :centre or :corner, saying
+which; NIL when none does. #BXR0WS"
   (let ((terrain (physics-world-terrain world)))
     (and terrain
          (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33) (box-axes qw qx qy qz)
            (flet ((solid (px py pz)
                     (let ((ix (cell-floor px)) (iy (cell-floor py)) (iz (cell-floor pz)))
                       (let ((chunk (gethash (chunk-key ix iy iz) (voxel-terrain-chunks terrain))))
-                        (or (null chunk) (plusp (aref (the chunk-storage chunk) (cell-offset ix iy iz))))))))
-             (or (solid x y z)
+                        (and (or (null chunk) (plusp (aref (the chunk-storage chunk) (cell-offset ix iy iz))))
+                             (list ix iy iz))))))
+             (if (solid x y z)
+                 (values (solid x y z) :centre)
                  (loop for corner below 8
                        for a = (if (logbitp 0 corner) (- hx 0.02) (- 0.02 hx))
                        for b = (if (logbitp 1 corner) (- hy 0.02) (- 0.02 hy))
                        for c = (if (logbitp 2 corner) (- hz 0.02) (- 0.02 hz))
-                       thereis (solid (+ x (* r11 a) (* r12 b) (* r13 c))
-                                      (+ y (* r21 a) (* r22 b) (* r23 c))
-                                      (+ z (* r31 a) (* r32 b) (* r33 c))))))))))
+                       for cell = (solid (+ x (* r11 a) (* r12 b) (* r13 c))
+                                         (+ y (* r21 a) (* r22 b) (* r23 c))
+                                         (+ z (* r31 a) (* r32 b) (* r33 c)))
+                       when cell return (values cell :corner))))))))
 
 (defun add-physics-box (world x y z hx hy hz &key mass density (orientation '(1 0 0 0)) (friction 0.6)
                                                (restitution 0.0) (vx 0.0) (vy 0.0) (vz 0.0) life
@@ -7709,13 +7716,13 @@ made without :box-bodies refuses it with physics-feature-omitted. #BXR0WS"
         (unless (member inside-cells '(:refuse :push-out))
           (error 'invalid-physics-parameter :world world :name :inside-cells :value inside-cells
                                             :expected ":refuse or :push-out"))
-        (when (and (eq inside-cells :refuse) (box-in-cells-p world fx fy fz hx hy hz qw qx qy qz))
-          (error 'physics-body-in-solid-cell :world world :operation 'add-physics-box :name :position
-                                             :value (list x y z) :cell (list (cell-floor fx) (cell-floor fy) (cell-floor fz))
-                                             :resident (and (physics-world-terrain world)
-                                                            (terrain-resident-p (physics-world-terrain world)
-                                                                                (cell-floor fx) (cell-floor fy) (cell-floor fz)))
-                                             :expected "a box clear of solid and non-resident cells"))
+        (multiple-value-bind (cell part) (and (eq inside-cells :refuse) (box-in-cells-p world fx fy fz hx hy hz qw qx qy qz))
+          (when cell
+            (error 'physics-body-in-solid-cell :world world :operation 'add-physics-box :name :position
+                                               :value (list x y z) :cell cell
+                                               :part (if (eq part :centre) "the centre" "a corner of the box centred at")
+                                               :resident (apply #'terrain-resident-p (physics-world-terrain world) cell)
+                                               :expected "a box clear of solid and non-resident cells")))
         (check-body-room world 'add-physics-box)
         ;; add-physics-body checks the rest before it touches the world
         (let* ((handle (let ((*box-radius-limit* (let ((e (max-radius-for world))) (box-half-diagonal e e e))))

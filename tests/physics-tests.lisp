@@ -7536,7 +7536,11 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
     (let ((turn (list (cos (/ pi 12)) 0 (sin (/ pi 12)) 0)))
       (flet ((outcome ()
                (handler-case (progn (add-physics-box w 3.7 1.5 3.1 0.5 0.3 0.1 :orientation turn) :added)
-                 (physics-body-in-solid-cell () :refused))))
+                 (physics-body-in-solid-cell (c)
+                   (check (equal '(4 1 2) (luv-physics::physics-body-in-solid-cell-cell c)) "the refusal names the cell ~S"
+                          (luv-physics::physics-body-in-solid-cell-cell c))
+                   (check (search "a corner of the box" (princ-to-string c)) "the refusal says ~A" c)
+                   :refused))))
         (fill-terrain terrain 4 1 2 5 2 3 t)
         (check (eq :refused (outcome)) "corner (4.16, 1.22, 2.93) lies in the solid cell 4 1 2")
         (check (= 0 (physics-world-awake-count w)))
