@@ -7680,16 +7680,17 @@ which; NIL when none does. #BXR0WS"
                       (let ((chunk (gethash (chunk-key ix iy iz) (voxel-terrain-chunks terrain))))
                         (and (or (null chunk) (plusp (aref (the chunk-storage chunk) (cell-offset ix iy iz))))
                              (list ix iy iz))))))
-             (if (solid x y z)
-                 (values (solid x y z) :centre)
-                 (loop for corner below 8
-                       for a = (if (logbitp 0 corner) (- hx 0.02) (- 0.02 hx))
-                       for b = (if (logbitp 1 corner) (- hy 0.02) (- 0.02 hy))
-                       for c = (if (logbitp 2 corner) (- hz 0.02) (- 0.02 hz))
-                       for cell = (solid (+ x (* r11 a) (* r12 b) (* r13 c))
-                                         (+ y (* r21 a) (* r22 b) (* r23 c))
-                                         (+ z (* r31 a) (* r32 b) (* r33 c)))
-                       when cell return (values cell :corner))))))))
+             (let ((centre (solid x y z)))
+               (if centre
+                   (values centre :centre)
+                   (loop for corner below 8
+                         for a = (if (logbitp 0 corner) (- hx 0.02) (- 0.02 hx))
+                         for b = (if (logbitp 1 corner) (- hy 0.02) (- 0.02 hy))
+                         for c = (if (logbitp 2 corner) (- hz 0.02) (- 0.02 hz))
+                         for cell = (solid (+ x (* r11 a) (* r12 b) (* r13 c))
+                                           (+ y (* r21 a) (* r22 b) (* r23 c))
+                                           (+ z (* r31 a) (* r32 b) (* r33 c)))
+                         when cell return (values cell :corner)))))))))
 
 (defun add-physics-box (world x y z hx hy hz &key mass density (orientation '(1 0 0 0)) (friction 0.6)
                                                (restitution 0.0) (vx 0.0) (vy 0.0) (vz 0.0) life
@@ -8015,21 +8016,27 @@ edge nearest the cells meets it (box-cell-edge-point), within +box-edge-cone+. #
     (dotimes (j 3)
       (box-cell-edge-point set row h qx qy qz axis gx gy gz cone cx cy cz axes halves j reach))))
 
-(defmacro box-lattice-points ()
-  "Add the points of the convex lattice points of the cells, within the reach of the box's
-bounding box, against the box's faces (box-lattice-point), and of the convex edges of the cells
-from them against the box's edges (box-cell-edge-points): each edge from a point up its axis, and
-from the lowest points of the range down it too, so every edge that meets the range is taken
-once. Expanded in find-box-points, whose variables it reads. #BXCELL"
+(defmacro with-box-lattice-range (&body body)
+  "Run BODY with X0 Y0 Z0 and X1 Y1 Z1 bound to the lowest and highest lattice points within the
+reach of the box's bounding box on each axis (a range no point falls in takes the one below),
+for box-near-cells-p and box-lattice-points to share. Expanded in find-box-points, whose variables
+it reads. #BXCELL"
   `(let* ((ex (+ (* (abs r11) hx) (* (abs r12) hy) (* (abs r13) hz) reach))
           (ey (+ (* (abs r21) hx) (* (abs r22) hy) (* (abs r23) hz) reach))
           (ez (+ (* (abs r31) hx) (* (abs r32) hy) (* (abs r33) hz) reach))
-          ;; the lattice points within reach; a range no point falls in takes the one below
           (x1 (cell-floor (+ cx ex))) (y1 (cell-floor (+ cy ey))) (z1 (cell-floor (+ cz ez)))
           (x0 (min x1 (1+ (cell-floor (- cx ex))))) (y0 (min y1 (1+ (cell-floor (- cy ey)))))
           (z0 (min z1 (1+ (cell-floor (- cz ez))))))
      (declare (type single-float ex ey ez) (type fixnum x0 y0 z0 x1 y1 z1))
-     (loop for lx of-type fixnum from x0 to x1 do
+     ,@body))
+
+(defmacro box-lattice-points ()
+  "Add the points of the convex lattice points of the cells from X0 Y0 Z0 to X1 Y1 Z1
+(with-box-lattice-range) against the box's faces (box-lattice-point), and of the convex edges of
+the cells from them against the box's edges (box-cell-edge-points): each edge from a point up its
+axis, and from the lowest points of the range down it too, so every edge that meets the range is
+taken once. Expanded in find-box-points, whose variables it reads. #BXCELL"
+  `(loop for lx of-type fixnum from x0 to x1 do
        (loop for ly of-type fixnum from y0 to y1 do
          (loop for lz of-type fixnum from z0 to z1 do
            (let ((solids 0) (bits 0) (gx 0.0) (gy 0.0) (gz 0.0))
@@ -8045,7 +8052,7 @@ once. Expanded in find-box-points, whose variables it reads. #BXCELL"
              (box-lattice-point)
              ;; a convex edge has one solid cell of its four, so its end has one to five of eight
              (when (<= 1 solids 5)
-               (box-cell-edges bits lx ly lz x0 y0 z0))))))))
+               (box-cell-edges bits lx ly lz x0 y0 z0)))))))
 
 (defmacro box-cell-edges (bits lx ly lz x0 y0 z0)
   "Test the convex edges of the cells at the lattice point LX LY LZ, whose eight cells' solid ones
@@ -8073,19 +8080,12 @@ the edge down to it. Expanded in box-lattice-points. #BXCELL"
 ;; [[file:../physics.org::#BXCELL][A box against the cells:4]]
 (defmacro box-near-cells-p ()
   "True when some cell the scan of box-lattice-points reads is solid: the cells on either side of
-each lattice point within the reach of the box's bounding box, and of the point below a range no
-point falls in. Expanded in find-box-points, whose variables it reads. #BXCELL"
-  `(let* ((ex (+ (* (abs r11) hx) (* (abs r12) hy) (* (abs r13) hz) reach))
-          (ey (+ (* (abs r21) hx) (* (abs r22) hy) (* (abs r23) hz) reach))
-          (ez (+ (* (abs r31) hx) (* (abs r32) hy) (* (abs r33) hz) reach))
-          (x1 (cell-floor (+ cx ex))) (y1 (cell-floor (+ cy ey))) (z1 (cell-floor (+ cz ez)))
-          (x0 (min x1 (1+ (cell-floor (- cx ex))))) (y0 (min y1 (1+ (cell-floor (- cy ey)))))
-          (z0 (min z1 (1+ (cell-floor (- cz ez))))))
-     (declare (type single-float ex ey ez) (type fixnum x0 y0 z0 x1 y1 z1))
-     (loop for ix of-type fixnum from (1- x0) to x1
-             thereis (loop for iy of-type fixnum from (1- y0) to y1
-                             thereis (loop for iz of-type fixnum from (1- z0) to z1
-                                             thereis (solid ix iy iz))))))
+each lattice point from X0 Y0 Z0 to X1 Y1 Z1 (with-box-lattice-range). Expanded in
+find-box-points, whose variables it reads. #BXCELL"
+  `(loop for ix of-type fixnum from (1- x0) to x1
+         thereis (loop for iy of-type fixnum from (1- y0) to y1
+                       thereis (loop for iz of-type fixnum from (1- z0) to z1
+                                     thereis (solid ix iy iz)))))
 
 (defun find-box-points (world set row reach)
   "Append to SET's points every point of the box at awake ROW of WORLD against the cells within
@@ -8107,12 +8107,13 @@ against its faces. #BXCELL"
                      (declare (type fixnum ix iy iz))
                      (probe-solid-p probe ix iy iz)))
               (declare (inline solid))
-              ;; nothing to meet unless a cell the lattice points' scan reads is solid
-              (when (box-near-cells-p)
-                ;; the corners against the faces of the cells
-                (box-corner-points)
-                ;; the convex lattice points of the cells against the faces of the box
-                (box-lattice-points))))))))
+              (with-box-lattice-range
+                ;; nothing to meet unless a cell the lattice points' scan reads is solid
+                (when (box-near-cells-p)
+                  ;; the corners against the faces of the cells
+                  (box-corner-points)
+                  ;; the convex lattice points of the cells against the faces of the box
+                  (box-lattice-points)))))))))
   set)
 ;; A box against the cells:4 ends here
 

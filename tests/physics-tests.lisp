@@ -7576,10 +7576,9 @@ height 10, the first drawn back 30 degrees. Return the world, the balls and thei
             (+ (* w1 y2) (- (* x1 z2)) (* y1 w2) (* z1 x2)) (+ (* w1 z2) (* x1 y2) (- (* y1 x2)) (* z1 w2))))))
 
 (defun turned-point (turn x y z)
-  "The point X Y Z turned by the quaternion TURN about the origin, as a list. #BXCELL"
-  (multiple-value-bind (r11 r12 r13 r21 r22 r23 r31 r32 r33)
-      (apply #'luv-physics::box-axes (mapcar (lambda (c) (float c 1.0)) turn))
-    (list (+ (* r11 x) (* r12 y) (* r13 z)) (+ (* r21 x) (* r22 y) (* r23 z)) (+ (* r31 x) (* r32 y) (* r33 z)))))
+  "The point X Y Z turned by the quaternion TURN about the origin (the engine's rotate-by), as a
+list. #BXCELL"
+  (multiple-value-list (apply #'luv-physics::rotate-by (mapcar (lambda (c) (float c 1.0)) (append turn (list x y z))))))
 
 (defun turned-fill (terrain turn x0 y0 z0 x1 y1 z1 solid)
   "Fill the cells [X0,X1) x [Y0,Y1) x [Z0,Z1) of TERRAIN turned by TURN, a quarter turn or a half
